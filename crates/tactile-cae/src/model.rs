@@ -1,0 +1,214 @@
+//! The convolutional autoencoder of paper A, Table I.
+//!
+//! Encoder: four blocks of 3x3 'same' convolution + ReLU + 2x2 max-pool
+//! with Keras 'same' pooling (7 -> 4, done here with `ceil_mode`), giving
+//! 2x2xC features for a 28x28 pin image. Decoder: conv + ReLU + nearest
+//! up-sampling x2, mirrored, with a 'valid' convolution (16 -> 14) before the
+//! last up-sampling and a 1-channel output whose sigmoid is the
+//! reconstruction. Features are flattened in (row, column, channel) order,
+//! as Keras does, so they compare with the authors' released vectors.
+
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::PaddingConfig2d;
+use burn::nn::conv::{Conv2d, Conv2dConfig};
+use burn::nn::interpolate::{Interpolate2d, Interpolate2dConfig, InterpolateMode};
+use burn::nn::pool::{MaxPool2d, MaxPool2dConfig};
+use burn::tensor::activation::{relu, sigmoid};
+use burn::tensor::{Device, Tensor};
+
+/// Architecture of the autoencoder.
+#[derive(Config, Debug, PartialEq)]
+pub struct CaeConfig {
+    /// Encoder channel widths, block 1 to 4. Paper: `[16, 8, 8, 4]`; the
+    /// authors' released encoder: `[16, 16, 8, 4]`. The feature count is
+    /// `4 * widths[3]` (8/16/32/64 for 2/4/8/16).
+    #[config(default = "[16, 8, 8, 4]")]
+    pub widths: [usize; 4],
+    /// Side of the input pin image.
+    #[config(default = 28)]
+    pub input_px: usize,
+}
+
+impl CaeConfig {
+    /// Number of features the encoder outputs.
+    pub fn feature_count(&self) -> usize {
+        let s = self.latent_side();
+        s * s * self.widths[3]
+    }
+
+    /// Side of the latent map after four 'same' poolings.
+    pub fn latent_side(&self) -> usize {
+        (0..4).fold(self.input_px, |s, _| s.div_ceil(2))
+    }
+
+    /// The config with `feature_count` features (paper A's 8/16/32/64 sweep).
+    pub fn with_feature_count(self, features: usize) -> Result<Self, tactile_core::Error> {
+        let s2 = self.latent_side() * self.latent_side();
+        if features == 0 || features % s2 != 0 {
+            return Err(tactile_core::Error::Config(format!(
+                "feature count {features} must be a positive multiple of {s2}"
+            )));
+        }
+        let mut w = self.widths;
+        w[3] = features / s2;
+        Ok(self.with_widths(w))
+    }
+
+    /// Build the model with fresh weights.
+    pub fn init(&self, device: &Device) -> Cae {
+        let [c1, c2, c3, c4] = self.widths;
+        let same = |i, o| {
+            Conv2dConfig::new([i, o], [3, 3])
+                .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
+                .init(device)
+        };
+        let valid = |i, o| {
+            Conv2dConfig::new([i, o], [3, 3])
+                .with_padding(PaddingConfig2d::Valid)
+                .init(device)
+        };
+        Cae {
+            encoder: CaeEncoder {
+                conv1: same(1, c1),
+                conv2: same(c1, c2),
+                conv3: same(c2, c3),
+                conv4: same(c3, c4),
+                pool: MaxPool2dConfig::new([2, 2]).with_ceil_mode(true).init(),
+            },
+            decoder: CaeDecoder {
+                conv1: same(c4, c4),
+                conv2: same(c4, c3),
+                conv3: same(c3, c2),
+                conv4: valid(c2, c1),
+                conv5: same(c1, 1),
+                up: Interpolate2dConfig::new()
+                    .with_scale_factor(Some([2.0, 2.0]))
+                    .with_mode(InterpolateMode::Nearest)
+                    .init(),
+                latent_channels: c4,
+                latent_side: self.latent_side(),
+            },
+        }
+    }
+}
+
+/// Pin image -> features.
+#[derive(Module, Debug)]
+pub struct CaeEncoder {
+    pub conv1: Conv2d,
+    pub conv2: Conv2d,
+    pub conv3: Conv2d,
+    pub conv4: Conv2d,
+    pub pool: MaxPool2d,
+}
+
+impl CaeEncoder {
+    /// The latent map, `[N, C, 2, 2]`.
+    pub fn latent(&self, x: Tensor<4>) -> Tensor<4> {
+        let x = self.pool.forward(relu(self.conv1.forward(x)));
+        let x = self.pool.forward(relu(self.conv2.forward(x)));
+        let x = self.pool.forward(relu(self.conv3.forward(x)));
+        self.pool.forward(relu(self.conv4.forward(x)))
+    }
+
+    /// Features `[N, F]` in (row, column, channel) order, from pin images `[N, 1, 28, 28]`.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<2> {
+        let z = self.latent(x);
+        let [n, c, h, w] = z.dims();
+        z.permute([0, 2, 3, 1]).reshape([n, h * w * c])
+    }
+}
+
+/// Features -> reconstruction logits.
+#[derive(Module, Debug)]
+pub struct CaeDecoder {
+    pub conv1: Conv2d,
+    pub conv2: Conv2d,
+    pub conv3: Conv2d,
+    pub conv4: Conv2d,
+    pub conv5: Conv2d,
+    pub up: Interpolate2d,
+    pub latent_channels: usize,
+    pub latent_side: usize,
+}
+
+impl CaeDecoder {
+    /// Reconstruction logits `[N, 1, 28, 28]` from features `[N, F]`.
+    pub fn forward(&self, features: Tensor<2>) -> Tensor<4> {
+        let [n, _] = features.dims();
+        let s = self.latent_side;
+        let z = features
+            .reshape([n, s, s, self.latent_channels])
+            .permute([0, 3, 1, 2]);
+        let x = self.up.forward(relu(self.conv1.forward(z)));
+        let x = self.up.forward(relu(self.conv2.forward(x)));
+        let x = self.up.forward(relu(self.conv3.forward(x)));
+        let x = self.up.forward(relu(self.conv4.forward(x)));
+        self.conv5.forward(x)
+    }
+}
+
+/// The whole autoencoder.
+#[derive(Module, Debug)]
+pub struct Cae {
+    pub encoder: CaeEncoder,
+    pub decoder: CaeDecoder,
+}
+
+impl Cae {
+    /// Reconstruction logits (train with a stable BCE on these).
+    pub fn forward_logits(&self, x: Tensor<4>) -> Tensor<4> {
+        self.decoder.forward(self.encoder.forward(x))
+    }
+
+    /// Reconstruction in [0, 1] (the Keras model's sigmoid output).
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        sigmoid(self.forward_logits(x))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use burn::tensor::TensorData;
+
+    #[test]
+    fn shapes_follow_table_one() {
+        let device = Device::flex();
+        let cfg = CaeConfig::new();
+        assert_eq!(cfg.feature_count(), 16);
+        let m = cfg.init(&device);
+        let x = Tensor::<4>::zeros([3, 1, 28, 28], &device);
+        assert_eq!(m.encoder.latent(x.clone()).dims(), [3, 4, 2, 2]);
+        assert_eq!(m.encoder.forward(x.clone()).dims(), [3, 16]);
+        assert_eq!(m.forward(x).dims(), [3, 1, 28, 28]);
+        for f in [8, 16, 32, 64] {
+            let c = CaeConfig::new().with_feature_count(f).unwrap();
+            assert_eq!(c.feature_count(), f);
+            let m = c.init(&device);
+            assert_eq!(
+                m.encoder
+                    .forward(Tensor::<4>::zeros([1, 1, 28, 28], &device))
+                    .dims(),
+                [1, f]
+            );
+        }
+        assert!(CaeConfig::new().with_feature_count(10).is_err());
+    }
+
+    #[test]
+    fn pooling_is_keras_same() {
+        // 7 -> 4 with the last window covering only the last row/column.
+        let device = Device::flex();
+        let pool = MaxPool2dConfig::new([2, 2]).with_ceil_mode(true).init();
+        let x = Tensor::<4>::from_data(
+            TensorData::new((0..49).map(|v| v as f32).collect::<Vec<_>>(), [1, 1, 7, 7]),
+            &device,
+        );
+        let y: Vec<f32> = pool.forward(x).into_data().try_to_vec::<f32>().unwrap();
+        assert_eq!(y.len(), 16);
+        assert_eq!(&y[..4], &[8.0, 10.0, 12.0, 13.0]);
+        assert_eq!(y[15], 48.0);
+    }
+}

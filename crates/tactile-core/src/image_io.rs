@@ -1,0 +1,216 @@
+//! Loading and saving 8-bit PNG frames with errors that name the file.
+
+use std::path::Path;
+
+use image::{ColorType, DynamicImage, ImageReader};
+use kornia_image::{Image, ImageSize};
+
+use crate::{Error, Result};
+
+/// An 8-bit single-channel image (kornia layout, row-major).
+pub type GreyImage = Image<u8, 1>;
+/// An 8-bit three-channel RGB image (kornia layout, row-major, interleaved).
+pub type RgbImage = Image<u8, 3>;
+
+/// Build a grey image from row-major pixels.
+pub fn grey_image(width: usize, height: usize, data: Vec<u8>) -> Result<GreyImage> {
+    Image::new(ImageSize { width, height }, data)
+        .map_err(|e| Error::Invalid(format!("cannot build a {width}x{height} grey image: {e}")))
+}
+
+/// Build an RGB image from row-major interleaved pixels.
+pub fn rgb_image(width: usize, height: usize, data: Vec<u8>) -> Result<RgbImage> {
+    Image::new(ImageSize { width, height }, data)
+        .map_err(|e| Error::Invalid(format!("cannot build a {width}x{height} RGB image: {e}")))
+}
+
+fn describe(color: ColorType) -> &'static str {
+    match color {
+        ColorType::L8 => "8-bit greyscale",
+        ColorType::La8 => "8-bit greyscale with alpha",
+        ColorType::Rgb8 => "8-bit RGB",
+        ColorType::Rgba8 => "8-bit RGBA",
+        ColorType::L16 => "16-bit greyscale",
+        ColorType::La16 => "16-bit greyscale with alpha",
+        ColorType::Rgb16 => "16-bit RGB",
+        ColorType::Rgba16 => "16-bit RGBA",
+        ColorType::Rgb32F => "32-bit float RGB",
+        ColorType::Rgba32F => "32-bit float RGBA",
+        _ => "an unsupported pixel format",
+    }
+}
+
+fn decode(path: &Path) -> Result<DynamicImage> {
+    let reader = ImageReader::open(path)
+        .map_err(|e| Error::io(path, e))?
+        .with_guessed_format()
+        .map_err(|e| Error::io(path, e))?;
+    reader
+        .decode()
+        .map_err(|e| Error::image(path, format!("cannot decode image: {e}")))
+}
+
+/// Luma from RGB exactly as OpenCV's `cvtColor(RGB2GRAY)` does for 8-bit
+/// (14-bit fixed point, weights 0.299/0.587/0.114), so a colour capture
+/// preprocesses as it would in the authors' code.
+pub fn rgb_to_grey(rgb: &[u8]) -> Vec<u8> {
+    rgb.chunks_exact(3)
+        .map(|p| {
+            let v = p[0] as u32 * 4899 + p[1] as u32 * 9617 + p[2] as u32 * 1868 + (1 << 13);
+            (v >> 14) as u8
+        })
+        .collect()
+}
+
+/// Load an 8-bit greyscale PNG. 8-bit RGB is converted to grey; anything
+/// else (16-bit, alpha, palette that decodes with alpha) is rejected with an
+/// error naming the file and the format found.
+pub fn load_grey(path: impl AsRef<Path>) -> Result<GreyImage> {
+    let path = path.as_ref();
+    let img = decode(path)?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let data = match img {
+        DynamicImage::ImageLuma8(buf) => buf.into_raw(),
+        DynamicImage::ImageRgb8(buf) => rgb_to_grey(buf.as_raw()),
+        other => {
+            return Err(Error::image(
+                path,
+                format!(
+                    "{} image; expected 8-bit greyscale (or 8-bit RGB)",
+                    describe(other.color())
+                ),
+            ));
+        }
+    };
+    grey_image(w, h, data).map_err(|e| Error::image(path, e.to_string()))
+}
+
+/// Load an 8-bit RGB PNG. 8-bit greyscale is expanded to RGB; alpha and
+/// 16-bit images are rejected with an error naming the file.
+pub fn load_rgb(path: impl AsRef<Path>) -> Result<RgbImage> {
+    let path = path.as_ref();
+    let img = decode(path)?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let data = match img {
+        DynamicImage::ImageRgb8(buf) => buf.into_raw(),
+        DynamicImage::ImageLuma8(buf) => buf.as_raw().iter().flat_map(|&v| [v, v, v]).collect(),
+        other => {
+            return Err(Error::image(
+                path,
+                format!(
+                    "{} image; expected 8-bit RGB (or 8-bit greyscale)",
+                    describe(other.color())
+                ),
+            ));
+        }
+    };
+    rgb_image(w, h, data).map_err(|e| Error::image(path, e.to_string()))
+}
+
+/// Check an image's size, naming the file when it is wrong.
+pub fn expect_size(
+    path: impl AsRef<Path>,
+    width: usize,
+    height: usize,
+    expected: (usize, usize),
+) -> Result<()> {
+    if (width, height) != expected {
+        return Err(Error::image(
+            path,
+            format!(
+                "image is {width}x{height}, expected {}x{}",
+                expected.0, expected.1
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn encode_png(
+    width: usize,
+    height: usize,
+    data: &[u8],
+    color: image::ExtendedColorType,
+) -> std::io::Result<Vec<u8>> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(data, width as u32, height as u32, color)
+        .map_err(std::io::Error::other)?;
+    Ok(out)
+}
+
+/// Save an 8-bit grey PNG atomically.
+pub fn save_grey_png(
+    path: impl AsRef<Path>,
+    width: usize,
+    height: usize,
+    data: &[u8],
+) -> Result<()> {
+    let path = path.as_ref();
+    let bytes = encode_png(width, height, data, image::ExtendedColorType::L8)
+        .map_err(|e| Error::io(path, e))?;
+    crate::io::write_atomic(path, &bytes)
+}
+
+/// Save an 8-bit RGB PNG atomically.
+pub fn save_rgb_png(
+    path: impl AsRef<Path>,
+    width: usize,
+    height: usize,
+    data: &[u8],
+) -> Result<()> {
+    let path = path.as_ref();
+    let bytes = encode_png(width, height, data, image::ExtendedColorType::Rgb8)
+        .map_err(|e| Error::io(path, e))?;
+    crate::io::write_atomic(path, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn corrupt_and_truncated_png_name_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("frame.png");
+        save_grey_png(&p, 8, 8, &[7u8; 64]).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        let trunc = dir.path().join("truncated.png");
+        std::fs::write(&trunc, &bytes[..bytes.len() / 2]).unwrap();
+        let e = load_grey(&trunc).err().unwrap().to_string();
+        assert!(e.contains("truncated.png"), "{e}");
+        let junk = dir.path().join("junk.png");
+        std::fs::write(&junk, b"not a png at all").unwrap();
+        let e = load_grey(&junk).err().unwrap().to_string();
+        assert!(e.contains("junk.png"), "{e}");
+        assert_eq!(load_grey(&p).unwrap().as_slice(), &[7u8; 64][..]);
+    }
+
+    #[test]
+    fn sixteen_bit_and_rgba_are_rejected_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let p16 = dir.path().join("deep.png");
+        image::ImageBuffer::<image::Luma<u16>, _>::from_raw(4, 4, vec![1000u16; 16])
+            .unwrap()
+            .save(&p16)
+            .unwrap();
+        let e = load_grey(&p16).err().unwrap().to_string();
+        assert!(e.contains("deep.png") && e.contains("16-bit"), "{e}");
+        let pa = dir.path().join("alpha.png");
+        image::RgbaImage::from_raw(4, 4, vec![9u8; 64])
+            .unwrap()
+            .save(&pa)
+            .unwrap();
+        let e = load_grey(&pa).err().unwrap().to_string();
+        assert!(e.contains("alpha.png") && e.contains("RGBA"), "{e}");
+    }
+
+    #[test]
+    fn rgb_converts_like_opencv() {
+        assert_eq!(
+            rgb_to_grey(&[255, 255, 255, 0, 0, 0, 255, 0, 0]),
+            vec![255, 0, 76]
+        );
+    }
+}

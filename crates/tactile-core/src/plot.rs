@@ -1,0 +1,156 @@
+//! Small line plots (training curves, error-vs-size sweeps) written as PNG.
+//!
+//! Text needs a TrueType font; the first common system font found is used.
+//! On a machine without one the plot is still drawn, without text.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use plotters::prelude::*;
+
+use crate::{Error, Result};
+
+const FONT_CANDIDATES: &[&str] = &[
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/System/Library/Fonts/Supplemental/Arial.ttf",
+];
+
+fn font_available() -> bool {
+    static FONT: OnceLock<bool> = OnceLock::new();
+    *FONT.get_or_init(|| {
+        for p in FONT_CANDIDATES {
+            if let Ok(bytes) = std::fs::read(p) {
+                let leaked: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                if plotters::style::register_font("sans-serif", FontStyle::Normal, leaked).is_ok() {
+                    return true;
+                }
+            }
+        }
+        false
+    })
+}
+
+/// One named line of `(x, y)` points.
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+const COLOURS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+/// Draw `series` as lines (with point markers) and save a PNG atomically.
+/// `log_y` plots the y axis logarithmically (losses).
+pub fn line_plot(
+    path: impl AsRef<Path>,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    log_y: bool,
+) -> Result<()> {
+    let path = path.as_ref();
+    let (w, h) = (900u32, 560u32);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    let pts = series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .filter(|p| p.0.is_finite() && p.1.is_finite());
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for &(x, y) in pts {
+        if log_y && y <= 0.0 {
+            continue;
+        }
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    if !x0.is_finite() {
+        return Err(Error::Invalid(format!(
+            "{}: nothing to plot",
+            path.display()
+        )));
+    }
+    if x1 <= x0 {
+        x1 = x0 + 1.0;
+    }
+    if y1 <= y0 {
+        y1 = y0 + y0.abs().max(1e-6);
+    }
+    let text = font_available();
+    let mut draw = || -> std::result::Result<(), Box<dyn std::error::Error + '_>> {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .margin(20)
+            .x_label_area_size(if text { 45 } else { 5 })
+            .y_label_area_size(if text { 70 } else { 5 });
+        if text {
+            builder.caption(title, ("sans-serif", 24));
+        }
+        macro_rules! body {
+            ($chart:expr) => {{
+                let mut chart = $chart;
+                let mut mesh = chart.configure_mesh();
+                if text {
+                    mesh.x_desc(x_label).y_desc(y_label);
+                } else {
+                    mesh.disable_x_axis().disable_y_axis();
+                }
+                mesh.draw()?;
+                for (i, s) in series.iter().enumerate() {
+                    let c = COLOURS[i % COLOURS.len()];
+                    let pts: Vec<(f64, f64)> = s
+                        .points
+                        .iter()
+                        .copied()
+                        .filter(|p| p.0.is_finite() && p.1.is_finite() && (!log_y || p.1 > 0.0))
+                        .collect();
+                    let line =
+                        chart.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))?;
+                    if text {
+                        line.label(s.name.as_str()).legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                        });
+                    }
+                    chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
+                }
+                if text {
+                    chart
+                        .configure_series_labels()
+                        .background_style(WHITE.mix(0.8))
+                        .border_style(BLACK)
+                        .draw()?;
+                }
+            }};
+        }
+        if log_y {
+            body!(builder.build_cartesian_2d(x0..x1, (y0 * 0.9..y1 * 1.1).log_scale())?);
+        } else {
+            let pad = (y1 - y0) * 0.05;
+            body!(builder.build_cartesian_2d(x0..x1, y0 - pad..y1 + pad)?);
+        }
+        root.present()?;
+        Ok(())
+    };
+    let drawn = draw().map_err(|e| e.to_string());
+    drop(draw);
+    drawn.map_err(|e| Error::Invalid(format!("{}: cannot draw plot: {e}", path.display())))?;
+    crate::image_io::save_rgb_png(path, w as usize, h as usize, &buf)
+}
