@@ -1,1 +1,10 @@
+//! tactile-rs: one toolkit for vision-based tactile sensing.
+//!
+//! The workspace's crates, re-exported under short names so a user can
+//! depend on this one library.
 
+pub use datasets_synth as synth;
+pub use tactile_cae as cae;
+pub use tactile_core as core;
+pub use tactile_onnx as onnx;
+pub use tactile_preprocess as preprocess;
