@@ -5,11 +5,11 @@
 
 mod common;
 
-use tactile_rs::core::DeviceKind;
-use tactile_rs::core::dataset::Dataset;
 use tactile_rs::cae::authors::load_authors_encoder;
 use tactile_rs::cae::data::PinSet;
 use tactile_rs::cae::encode::encode_all;
+use tactile_rs::core::DeviceKind;
+use tactile_rs::core::dataset::Dataset;
 use tactile_rs::preprocess::PreprocessConfig;
 
 #[test]
@@ -22,7 +22,8 @@ fn authors_encoder_reproduces_golden_features_on_both_devices() {
     let by_file: std::collections::HashMap<_, _> = golden.into_iter().collect();
     for kind in DeviceKind::ALL {
         let device = kind.device();
-        let cae = load_authors_encoder(real.join("authors-encoder.safetensors"), &device).expect("load encoder");
+        let cae = load_authors_encoder(real.join("authors-encoder.safetensors"), &device)
+            .expect("load encoder");
         let feats = encode_all(&cae.encoder, &pins, 256, &device).expect("encode");
         let mut worst = 0f32;
         let mut worst_file = String::new();
@@ -38,6 +39,9 @@ fn authors_encoder_reproduces_golden_features_on_both_devices() {
             }
         }
         println!("{kind}: max abs error {worst:.2e} (at {worst_file})");
-        assert!(worst <= 1e-4, "{kind}: max abs error {worst} at {worst_file} exceeds 1e-4");
+        assert!(
+            worst <= 1e-4,
+            "{kind}: max abs error {worst} at {worst_file} exceeds 1e-4"
+        );
     }
 }

@@ -15,7 +15,7 @@ use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::interpolate::{Interpolate2d, Interpolate2dConfig, InterpolateMode};
 use burn::nn::pool::{MaxPool2d, MaxPool2dConfig};
 use burn::tensor::activation::{relu, sigmoid};
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Int, Tensor, TensorData};
 
 /// Architecture of the autoencoder.
 #[derive(Config, Debug, PartialEq)]
@@ -93,6 +93,52 @@ impl CaeConfig {
     }
 }
 
+fn index(values: impl IntoIterator<Item = usize>, device: &Device) -> Tensor<1, Int> {
+    let v: Vec<i64> = values.into_iter().map(|i| i as i64).collect();
+    let n = v.len();
+    Tensor::from_data(TensorData::new(v, [n]), device)
+}
+
+/// `[N, C, H, W]` -> `[N, H*W*C]` in (row, column, channel) order.
+///
+/// Written with gathers and a concatenation rather than a permute, because
+/// burn-onnx 0.22's exporter cannot lower `permute`; the result is the same
+/// to the bit.
+pub fn hwc_flatten(z: Tensor<4>) -> Tensor<2> {
+    let [n, c, h, w] = z.dims();
+    let device = z.device();
+    let cells = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (y, x)))
+        .map(|(y, x)| {
+            z.clone()
+                .select(2, index([y], &device))
+                .select(3, index([x], &device))
+                .reshape([n, c])
+        })
+        .collect();
+    Tensor::cat(cells, 1)
+}
+
+/// The inverse of [`hwc_flatten`]: `[N, H*W*C]` -> `[N, C, H, W]`.
+pub fn hwc_unflatten(f: Tensor<2>, c: usize, h: usize, w: usize) -> Tensor<4> {
+    let [n, _] = f.dims();
+    let device = f.device();
+    let rows = (0..h)
+        .map(|y| {
+            let cells = (0..w)
+                .map(|x| {
+                    let k = y * w + x;
+                    f.clone()
+                        .select(1, index(k * c..(k + 1) * c, &device))
+                        .reshape([n, c, 1, 1])
+                })
+                .collect();
+            Tensor::cat(cells, 3)
+        })
+        .collect();
+    Tensor::cat(rows, 2)
+}
+
 /// Pin image -> features.
 #[derive(Module, Debug)]
 pub struct CaeEncoder {
@@ -114,9 +160,7 @@ impl CaeEncoder {
 
     /// Features `[N, F]` in (row, column, channel) order, from pin images `[N, 1, 28, 28]`.
     pub fn forward(&self, x: Tensor<4>) -> Tensor<2> {
-        let z = self.latent(x);
-        let [n, c, h, w] = z.dims();
-        z.permute([0, 2, 3, 1]).reshape([n, h * w * c])
+        hwc_flatten(self.latent(x))
     }
 }
 
@@ -136,11 +180,12 @@ pub struct CaeDecoder {
 impl CaeDecoder {
     /// Reconstruction logits `[N, 1, 28, 28]` from features `[N, F]`.
     pub fn forward(&self, features: Tensor<2>) -> Tensor<4> {
-        let [n, _] = features.dims();
         let s = self.latent_side;
-        let z = features
-            .reshape([n, s, s, self.latent_channels])
-            .permute([0, 3, 1, 2]);
+        self.forward_latent(hwc_unflatten(features, self.latent_channels, s, s))
+    }
+
+    /// Reconstruction logits from the latent map `[N, C, 2, 2]`.
+    pub fn forward_latent(&self, z: Tensor<4>) -> Tensor<4> {
         let x = self.up.forward(relu(self.conv1.forward(z)));
         let x = self.up.forward(relu(self.conv2.forward(x)));
         let x = self.up.forward(relu(self.conv3.forward(x)));
@@ -159,7 +204,9 @@ pub struct Cae {
 impl Cae {
     /// Reconstruction logits (train with a stable BCE on these).
     pub fn forward_logits(&self, x: Tensor<4>) -> Tensor<4> {
-        self.decoder.forward(self.encoder.forward(x))
+        // Straight from the latent map: the same numbers as going through the
+        // flat feature vector, without a flatten/unflatten round trip.
+        self.decoder.forward_latent(self.encoder.latent(x))
     }
 
     /// Reconstruction in [0, 1] (the Keras model's sigmoid output).
@@ -171,7 +218,6 @@ impl Cae {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use burn::tensor::TensorData;
 
     #[test]
     fn shapes_follow_table_one() {
@@ -182,7 +228,10 @@ mod tests {
         let x = Tensor::<4>::zeros([3, 1, 28, 28], &device);
         assert_eq!(m.encoder.latent(x.clone()).dims(), [3, 4, 2, 2]);
         assert_eq!(m.encoder.forward(x.clone()).dims(), [3, 16]);
-        assert_eq!(m.forward(x).dims(), [3, 1, 28, 28]);
+        assert_eq!(m.forward(x.clone()).dims(), [3, 1, 28, 28]);
+        let via_features = m.decoder.forward(m.encoder.forward(x.clone()));
+        let direct = m.forward_logits(x);
+        assert_eq!(via_features.into_data(), direct.into_data());
         for f in [8, 16, 32, 64] {
             let c = CaeConfig::new().with_feature_count(f).unwrap();
             assert_eq!(c.feature_count(), f);
@@ -195,6 +244,24 @@ mod tests {
             );
         }
         assert!(CaeConfig::new().with_feature_count(10).is_err());
+    }
+
+    #[test]
+    fn hwc_flatten_is_row_column_channel_and_invertible() {
+        let device = Device::flex();
+        let z = Tensor::<4>::from_data(
+            TensorData::new((0..16).map(|v| v as f32).collect::<Vec<_>>(), [1, 4, 2, 2]),
+            &device,
+        );
+        let f = hwc_flatten(z.clone());
+        let v: Vec<f32> = f.clone().into_data().try_to_vec::<f32>().unwrap();
+        // element (c, y, x) = 4c + 2y + x; order is y, x, c
+        assert_eq!(&v[..8], &[0.0, 4.0, 8.0, 12.0, 1.0, 5.0, 9.0, 13.0]);
+        let back: Vec<f32> = hwc_unflatten(f, 4, 2, 2)
+            .into_data()
+            .try_to_vec::<f32>()
+            .unwrap();
+        assert_eq!(back, (0..16).map(|v| v as f32).collect::<Vec<_>>());
     }
 
     #[test]

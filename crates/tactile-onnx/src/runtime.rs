@@ -1,0 +1,123 @@
+//! onnxruntime through `ort` (`load-dynamic`): the shared library comes
+//! from the PyPI wheel `onnxruntime==1.31.1`
+//! (`onnxruntime/capi/libonnxruntime.so.1.31.1`). `ORT_DYLIB_PATH` names
+//! it; otherwise the folder the test and demo scripts install it into
+//! (`.ort/` at the workspace root) is searched.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use ort::environment::Environment;
+use ort::session::Session;
+use ort::value::Tensor;
+use tactile_core::{Error, Result};
+
+/// Where the scripts install the wheel, relative to the workspace root.
+pub const LOCAL_ORT_DIR: &str = ".ort";
+const LIB_IN_WHEEL: &str = "onnxruntime/capi/libonnxruntime.so.1.31.1";
+
+/// The onnxruntime shared library to load.
+pub fn ort_library_path() -> Result<PathBuf> {
+    if let Some(p) = std::env::var_os("ORT_DYLIB_PATH") {
+        let p = PathBuf::from(p);
+        return if p.is_file() {
+            Ok(p)
+        } else {
+            Err(Error::model(&p, "ORT_DYLIB_PATH does not name a file"))
+        };
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let candidates = [
+        root.join(LOCAL_ORT_DIR).join(LIB_IN_WHEEL),
+        PathBuf::from(LOCAL_ORT_DIR).join(LIB_IN_WHEEL),
+    ];
+    candidates.into_iter().find(|p| p.is_file()).ok_or_else(|| {
+        Error::Invalid(format!(
+            "onnxruntime not found: set ORT_DYLIB_PATH, or run `bash scripts/install-ort.sh` \
+             (installs the PyPI wheel onnxruntime==1.31.1 into {LOCAL_ORT_DIR}/)"
+        ))
+    })
+}
+
+fn environment() -> Result<&'static Environment> {
+    static ENV: OnceLock<std::result::Result<Environment, String>> = OnceLock::new();
+    ENV.get_or_init(|| {
+        let lib = ort_library_path().map_err(|e| e.to_string())?;
+        ort::init_from(&lib)
+            .map_err(|e| format!("{}: cannot load onnxruntime: {e}", lib.display()))?
+            .with_name("tactile-rs")
+            .build()
+            .map_err(|e| format!("cannot start onnxruntime: {e}"))
+    })
+    .as_ref()
+    .map_err(|e| Error::Invalid(e.clone()))
+}
+
+/// One ONNX model loaded into onnxruntime.
+pub struct OrtModel {
+    session: Session,
+}
+
+impl OrtModel {
+    /// Load a model from bytes, with `threads` intra-op threads (0 = ORT's default).
+    pub fn from_bytes(bytes: &[u8], threads: usize) -> Result<Self> {
+        let env = environment()?;
+        let err = |e: ort::Error| Error::Invalid(format!("onnxruntime rejected the model: {e}"));
+        let mut b = Session::builder(env).map_err(err)?;
+        if threads > 0 {
+            b = b.with_intra_threads(threads).map_err(|e| err(e.into()))?;
+        }
+        let session = b.commit_from_memory(bytes).map_err(err)?;
+        Ok(Self { session })
+    }
+
+    /// Load a model file.
+    pub fn from_file(path: impl AsRef<Path>, threads: usize) -> Result<Self> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Self::from_bytes(&bytes, threads).map_err(|e| Error::model(path, e.to_string()))
+    }
+
+    /// Run the model's single float input, returning its first output's shape and values.
+    pub fn run_f32(&mut self, shape: &[usize], data: Vec<f32>) -> Result<(Vec<usize>, Vec<f32>)> {
+        let err = |e: ort::Error| Error::Invalid(format!("onnxruntime run failed: {e}"));
+        let input = Tensor::from_array((shape.to_vec(), data)).map_err(err)?;
+        let outputs = self.session.run(ort::inputs![input]).map_err(err)?;
+        let (s, v) = outputs[0].try_extract_tensor::<f32>().map_err(err)?;
+        Ok((s.iter().map(|&d| d as usize).collect(), v.to_vec()))
+    }
+}
+
+/// Run `onnx.checker.check_model(path, full_check=True)` in Python (the
+/// `onnx` package from `$TACTILE_PYTHONPATH` or `.ort/`, as the scripts
+/// install it). Errors carry the checker's message.
+pub fn onnx_full_check(path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
+    let pythonpath = std::env::var_os("TACTILE_PYTHONPATH")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../..")
+                .join(LOCAL_ORT_DIR)
+        });
+    let out = std::process::Command::new("python3")
+        .env("PYTHONPATH", &pythonpath)
+        .args([
+            "-c",
+            "import sys, onnx; onnx.checker.check_model(sys.argv[1], full_check=True); print('ok')",
+        ])
+        .arg(path)
+        .output()
+        .map_err(|e| Error::io("python3", e))?;
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(Error::model(
+            path,
+            format!(
+                "onnx.checker failed: {}",
+                String::from_utf8_lossy(&out.stderr).trim()
+            ),
+        ))
+    }
+}

@@ -1,0 +1,135 @@
+//! Exported ONNX files pass `onnx.checker` (full check) and onnxruntime
+//! agrees with burn on ndarray and on flex within 1e-4 (max abs), for the
+//! CAE encoder and the whole autoencoder, with the authors' weights and
+//! with fresh paper-width weights.
+
+mod common;
+
+use burn::tensor::{Device, Tensor, TensorData};
+use tactile_rs::cae::artifact::{load_module, save_module};
+use tactile_rs::cae::authors::load_authors_encoder;
+use tactile_rs::cae::data::PinSet;
+use tactile_rs::cae::{Cae, CaeConfig};
+use tactile_rs::core::DeviceKind;
+use tactile_rs::core::dataset::Dataset;
+use tactile_rs::core::metrics::max_abs_diff;
+use tactile_rs::onnx::{OrtModel, export_cae, export_cae_encoder, onnx_full_check};
+use tactile_rs::preprocess::PreprocessConfig;
+
+const TOL: f32 = 1e-4;
+
+/// 8 real pin images plus 4 seeded random binary ones.
+fn inputs() -> (Vec<usize>, Vec<f32>) {
+    let real = common::shared_real().join("polic-shapes");
+    let ds = Dataset::open(&real).unwrap();
+    let pins = PinSet::from_dataset(&ds, &PreprocessConfig::binary_frames()).unwrap();
+    let mut data: Vec<f32> = (0..8)
+        .flat_map(|i| pins.images[i * 150].pixels.clone())
+        .collect();
+    let mut s = 12345u64;
+    for _ in 0..4 * 784 {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        data.push(((s >> 33) & 1) as f32);
+    }
+    (vec![12, 1, 28, 28], data)
+}
+
+fn burn_out(
+    f: impl Fn(Tensor<4>) -> Vec<f32>,
+    shape: &[usize],
+    data: &[f32],
+    device: &Device,
+) -> Vec<f32> {
+    f(Tensor::from_data(
+        TensorData::new(data.to_vec(), shape.to_vec()),
+        device,
+    ))
+}
+
+fn check(
+    name: &str,
+    bytes: &[u8],
+    shape: &[usize],
+    data: &[f32],
+    burn: impl Fn(&Device) -> Vec<f32>,
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(format!("{name}.onnx"));
+    std::fs::write(&path, bytes).unwrap();
+    onnx_full_check(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut ort = OrtModel::from_bytes(bytes, 1).unwrap();
+    let (_, ort_out) = ort.run_f32(shape, data.to_vec()).unwrap();
+    for kind in DeviceKind::ALL {
+        let b = burn(&kind.device());
+        assert_eq!(b.len(), ort_out.len(), "{name}: output sizes differ");
+        let d = max_abs_diff(&b, &ort_out);
+        println!("{name} {kind} vs onnxruntime: max abs diff {d:.2e}");
+        assert!(d <= TOL, "{name} on {kind}: max abs diff {d} > {TOL}");
+    }
+}
+
+/// A model built once on flex (its fresh weights are random), saved, and
+/// loaded again on whichever device asks, so every runtime sees the same weights.
+fn frozen(name: &str, cfg: CaeConfig, build: impl Fn() -> Cae) -> impl Fn(&Device) -> Cae {
+    let file =
+        std::env::temp_dir().join(format!("tactile-parity-{name}-{}.bpk", std::process::id()));
+    save_module(&build(), &file).unwrap();
+    move |d: &Device| load_module(cfg.init(d), &file).unwrap()
+}
+
+fn cae_models() -> Vec<(&'static str, Box<dyn Fn(&Device) -> Cae>)> {
+    let path = common::shared_real().join("polic-shapes/authors-encoder.safetensors");
+    let authors_cfg = CaeConfig::new().with_widths([16, 16, 8, 4]);
+    vec![
+        // The released encoder with a fresh decoder.
+        (
+            "authors",
+            Box::new(frozen("authors", authors_cfg, move || {
+                load_authors_encoder(&path, &Device::flex()).unwrap()
+            })),
+        ),
+        // Paper widths, fresh weights.
+        (
+            "paper-widths",
+            Box::new(frozen("paper", CaeConfig::new(), || {
+                CaeConfig::new().init(&Device::flex())
+            })),
+        ),
+    ]
+}
+
+#[test]
+fn cae_encoder_and_autoencoder_match_onnxruntime() {
+    let (shape, data) = inputs();
+    for (name, make) in cae_models() {
+        let m = make(&Device::flex());
+        let enc = export_cae_encoder(&m.encoder, 28).unwrap();
+        check(&format!("{name}-encoder"), &enc, &shape, &data, |d| {
+            let m = make(d);
+            burn_out(
+                |x| {
+                    m.encoder
+                        .forward(x)
+                        .into_data()
+                        .try_to_vec::<f32>()
+                        .unwrap()
+                },
+                &shape,
+                &data,
+                d,
+            )
+        });
+        let full = export_cae(&m, 28).unwrap();
+        check(&format!("{name}-autoencoder"), &full, &shape, &data, |d| {
+            let m = make(d);
+            burn_out(
+                |x| m.forward(x).into_data().try_to_vec::<f32>().unwrap(),
+                &shape,
+                &data,
+                d,
+            )
+        });
+    }
+}
