@@ -1,3 +1,4 @@
+#![allow(clippy::unwrap_used)]
 //! The authors' released encoder, loaded into our CAE, reproduces all 1200
 //! of their released feature vectors from the PNGs through our own
 //! preprocessing (OpenCV-exact resize, /255, round(x + 0.3)), on ndarray

@@ -1,3 +1,4 @@
+#![allow(clippy::unwrap_used)]
 //! Exported ONNX files pass `onnx.checker` (full check) and onnxruntime
 //! agrees with burn on ndarray and on flex within 1e-4 (max abs), for the
 //! CAE encoder and the whole autoencoder, with the authors' weights and
@@ -79,7 +80,9 @@ fn frozen(name: &str, cfg: CaeConfig, build: impl Fn() -> Cae) -> impl Fn(&Devic
     move |d: &Device| load_module(cfg.init(d), &file).unwrap()
 }
 
-fn cae_models() -> Vec<(&'static str, Box<dyn Fn(&Device) -> Cae>)> {
+type MakeModel = Box<dyn Fn(&Device) -> Cae>;
+
+fn cae_models() -> Vec<(&'static str, MakeModel)> {
     let path = common::shared_real().join("polic-shapes/authors-encoder.safetensors");
     let authors_cfg = CaeConfig::new().with_widths([16, 16, 8, 4]);
     vec![

@@ -1,3 +1,4 @@
+#![allow(clippy::unwrap_used)]
 //! Helpers shared by the workspace-level integration tests.
 #![allow(dead_code)]
 

@@ -145,6 +145,7 @@ impl ClassifierHead {
             })
             .collect();
         let ad = device.clone().autodiff();
+        ad.seed(config.seed);
         let mut mlp = config.init_mlp(&ad);
         let mut optim = AdamConfig::new().init();
         let loss_fn = CrossEntropyLossConfig::new().init(&ad);

@@ -45,7 +45,7 @@ impl CaeConfig {
     /// The config with `feature_count` features (paper A's 8/16/32/64 sweep).
     pub fn with_feature_count(self, features: usize) -> Result<Self, tactile_core::Error> {
         let s2 = self.latent_side() * self.latent_side();
-        if features == 0 || features % s2 != 0 {
+        if features == 0 || !features.is_multiple_of(s2) {
             return Err(tactile_core::Error::Config(format!(
                 "feature count {features} must be a positive multiple of {s2}"
             )));

@@ -36,6 +36,9 @@ pub struct CaeTrainingConfig {
     #[config(default = 1.0)]
     pub learning_rate: f64,
     pub optimizer: AdadeltaConfig,
+    /// `adadelta` (paper A) or `adam` (converges in far fewer epochs on 2 cores).
+    #[config(default = "String::from(\"adadelta\")")]
+    pub optimizer_kind: String,
     #[config(default = 42)]
     pub seed: u64,
 }
@@ -71,7 +74,7 @@ fn mean_loss(model: &Cae, data: &PinSet, idx: &[usize], batch: usize, device: &D
     total / idx.len().max(1) as f64
 }
 
-/// Train on `train` indices of `data`, validate on `val`, write everything into `out`.
+/// Train on the `(train, validation)` indices of `data`, write everything into `out`.
 ///
 /// `out` receives `cae.json`/`cae.bpk` (best model), `curves.csv`/`curves.png`,
 /// `training.json`, and `checkpoint/` (last epoch: model, optimiser and
@@ -81,8 +84,7 @@ pub fn train_cae(
     config: &CaeTrainingConfig,
     artifact: CaeArtifact,
     data: &PinSet,
-    train: &[usize],
-    val: &[usize],
+    (train, val): (&[usize], &[usize]),
     out: &Path,
     device: &Device,
     resume: bool,
@@ -97,8 +99,18 @@ pub fn train_cae(
     tactile_core::io::create_dir_all(out)?;
     let ckpt: PathBuf = out.join(CKPT_DIR);
     let ad = device.clone().autodiff();
+    // Seeded initial weights: the same config gives the same run.
+    ad.seed(config.seed);
     let mut model = config.cae.init(&ad);
-    let mut optim: ModuleOptimizer = config.optimizer.init();
+    let mut optim: ModuleOptimizer = match config.optimizer_kind.as_str() {
+        "adadelta" => config.optimizer.init(),
+        "adam" => burn::optim::AdamConfig::new().init(),
+        other => {
+            return Err(Error::Config(format!(
+                "unknown optimizer '{other}': expected adadelta or adam"
+            )));
+        }
+    };
     let mut state = CheckpointState {
         next_epoch: 0,
         early: EarlyStopping::new(config.patience),
@@ -160,7 +172,7 @@ pub fn train_cae(
             state.early.best, state.early.best_epoch
         ));
         let last = verdict == Verdict::Stop || epoch == config.max_epochs;
-        if last || epoch % 25 == 0 {
+        if last || epoch.is_multiple_of(25) {
             state.elapsed_s += start.elapsed().as_secs_f64();
             write_checkpoint(&ckpt, &model, &optim, &state)?;
             state.elapsed_s -= start.elapsed().as_secs_f64();

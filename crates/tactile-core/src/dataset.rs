@@ -216,14 +216,14 @@ impl Dataset {
                 ));
             };
             for col in file_columns {
-                if let Some(rel) = row.get(col) {
-                    if !self.root.join(rel).is_file() {
-                        return Err(Error::dataset(
-                            &labels,
-                            Some(row.line),
-                            format!("column '{col}': file '{rel}' does not exist"),
-                        ));
-                    }
+                if let Some(rel) = row.get(col)
+                    && !self.root.join(rel).is_file()
+                {
+                    return Err(Error::dataset(
+                        &labels,
+                        Some(row.line),
+                        format!("column '{col}': file '{rel}' does not exist"),
+                    ));
                 }
             }
             for col in number_columns {

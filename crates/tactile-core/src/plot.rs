@@ -150,7 +150,6 @@ pub fn line_plot(
         Ok(())
     };
     let drawn = draw().map_err(|e| e.to_string());
-    drop(draw);
     drawn.map_err(|e| Error::Invalid(format!("{}: cannot draw plot: {e}", path.display())))?;
     crate::image_io::save_rgb_png(path, w as usize, h as usize, &buf)
 }

@@ -1,1 +1,119 @@
-fn main() {}
+//! `tactile`: the command-line face of tactile-rs.
+
+mod bench;
+mod cae_cmds;
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use tactile_core::DeviceKind;
+
+#[derive(Parser)]
+#[command(
+    name = "tactile",
+    version,
+    about = "Vision-based tactile sensing: TacTip features, tendon perception, depth"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// `--device ndarray|flex`.
+pub fn parse_device(s: &str) -> std::result::Result<DeviceKind, String> {
+    s.parse().map_err(|e: tactile_core::Error| e.to_string())
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Train a model.
+    Train {
+        #[command(subcommand)]
+        model: TrainCmd,
+    },
+    /// Encode every frame of a TacTip dataset to a feature CSV.
+    Encode {
+        /// Model folder (cae.json + cae.bpk).
+        #[arg(long)]
+        model: PathBuf,
+        /// Dataset folder.
+        #[arg(long)]
+        data: PathBuf,
+        /// Output CSV (file,f0,f1,...).
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long, default_value = "flex", value_parser = parse_device)]
+        device: DeviceKind,
+    },
+    /// Export a model to ONNX.
+    Export {
+        /// Model folder.
+        #[arg(long)]
+        model: PathBuf,
+        /// Output .onnx file.
+        #[arg(long)]
+        out: PathBuf,
+        /// `encoder` (pin image -> features) or `autoencoder` (pin image -> reconstruction).
+        #[arg(long, default_value = "encoder")]
+        part: String,
+    },
+    /// Benchmark a model: latency and throughput per runtime, against its error.
+    Bench {
+        #[command(subcommand)]
+        model: BenchCmd,
+    },
+    /// Classify frames with the shipped encoder and shape head, printing features.
+    Demo {
+        /// Model folder with cae.json/cae.bpk and head/.
+        #[arg(long, default_value = "models/cae-shapes")]
+        model: PathBuf,
+        /// A TacTip dataset; the demo uses its `test` split (or all frames).
+        #[arg(long, default_value = "../shared/real/polic-shapes")]
+        data: PathBuf,
+        /// Frames per class to show.
+        #[arg(long, default_value_t = 2)]
+        per_class: usize,
+    },
+}
+
+#[derive(Subcommand)]
+enum TrainCmd {
+    /// Paper A's convolutional autoencoder.
+    Cae(cae_cmds::TrainCaeArgs),
+    /// A shallow shape classifier on the features of a trained encoder.
+    Head(cae_cmds::TrainHeadArgs),
+}
+
+#[derive(Subcommand)]
+enum BenchCmd {
+    /// The CAE encoder.
+    Cae(bench::BenchCaeArgs),
+}
+
+fn main() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Train {
+            model: TrainCmd::Cae(a),
+        } => cae_cmds::train_cae(a),
+        Command::Train {
+            model: TrainCmd::Head(a),
+        } => cae_cmds::train_head(a),
+        Command::Encode {
+            model,
+            data,
+            out,
+            device,
+        } => cae_cmds::encode(&model, &data, &out, device),
+        Command::Export { model, out, part } => cae_cmds::export(&model, &out, &part),
+        Command::Bench {
+            model: BenchCmd::Cae(a),
+        } => bench::bench_cae(a),
+        Command::Demo {
+            model,
+            data,
+            per_class,
+        } => cae_cmds::demo(&model, &data, per_class),
+    }
+}

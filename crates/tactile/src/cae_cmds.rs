@@ -1,0 +1,308 @@
+//! Paper A commands: train the CAE and its shape head, encode, export, demo.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rand::seq::SliceRandom;
+use tactile_cae::CaeArtifact;
+use tactile_cae::data::PinSet;
+use tactile_cae::encode::{encode_all, write_features_csv};
+use tactile_cae::head::{ClassifierHead, HeadConfig};
+use tactile_cae::model::CaeConfig;
+use tactile_cae::training::{CaeTrainingConfig, train_cae as run_training};
+use tactile_core::DeviceKind;
+use tactile_core::dataset::Dataset;
+use tactile_core::metrics::{accuracy, confusion};
+use tactile_core::optim::AdadeltaConfig;
+use tactile_preprocess::PreprocessConfig;
+
+use crate::parse_device;
+
+#[derive(Args)]
+pub struct TrainCaeArgs {
+    /// TacTip dataset folder; with a `split` column, only `train` rows are used.
+    #[arg(long)]
+    data: PathBuf,
+    /// Output model folder.
+    #[arg(long)]
+    out: PathBuf,
+    #[arg(long, default_value = "flex", value_parser = parse_device)]
+    device: DeviceKind,
+    /// Preprocessing preset: binary (already binarised frames), paper, lighting-compensated.
+    #[arg(long, default_value = "binary")]
+    preprocess: String,
+    /// Encoder widths, e.g. 16,8,8,4 (paper) or 16,16,8,4 (authors' release).
+    #[arg(long, value_delimiter = ',', default_values_t = [16, 8, 8, 4])]
+    widths: Vec<usize>,
+    /// Feature count (8/16/32/64): sets the last width.
+    #[arg(long)]
+    features: Option<usize>,
+    #[arg(long, default_value_t = 3000)]
+    max_epochs: usize,
+    #[arg(long, default_value_t = 300)]
+    patience: usize,
+    #[arg(long, default_value_t = 256)]
+    batch_size: usize,
+    /// Fraction of the training rows held out for early stopping.
+    #[arg(long, default_value_t = 0.2)]
+    val_fraction: f64,
+    #[arg(long, default_value_t = 42)]
+    seed: u64,
+    /// adadelta (paper A, lr 1.0) or adam.
+    #[arg(long, default_value = "adadelta")]
+    optimizer: String,
+    /// Learning rate (default: 1.0 for adadelta, 0.003 for adam).
+    #[arg(long)]
+    lr: Option<f64>,
+    /// Continue from the checkpoint in the output folder.
+    #[arg(long)]
+    resume: bool,
+}
+
+/// Split rows into (train, validation): the dataset's `train` split (or all
+/// rows), shuffled with `seed`, the last `val_fraction` held out.
+fn train_val(ds: &Dataset, val_fraction: f64, seed: u64) -> Result<(Vec<usize>, Vec<usize>)> {
+    let mut rows = ds
+        .split_indices("train")
+        .unwrap_or_else(|| (0..ds.len()).collect());
+    if rows.len() < 2 {
+        bail!(
+            "{}: need at least 2 training frames, found {}",
+            ds.root.display(),
+            rows.len()
+        );
+    }
+    if !(0.0..1.0).contains(&val_fraction) {
+        bail!("--val-fraction must be in [0, 1), got {val_fraction}");
+    }
+    rows.shuffle(&mut StdRng::seed_from_u64(seed));
+    let n_val = ((rows.len() as f64 * val_fraction).round() as usize).clamp(1, rows.len() - 1);
+    let val = rows.split_off(rows.len() - n_val);
+    Ok((rows, val))
+}
+
+pub fn train_cae(a: TrainCaeArgs) -> Result<()> {
+    let ds = Dataset::open(&a.data)?;
+    let pre = PreprocessConfig::preset(&a.preprocess)?;
+    let widths: [usize; 4] = a
+        .widths
+        .clone()
+        .try_into()
+        .map_err(|_| anyhow::anyhow!("--widths needs 4 values"))?;
+    let mut cae = CaeConfig::new().with_widths(widths);
+    if let Some(f) = a.features {
+        cae = cae.with_feature_count(f)?;
+    }
+    eprintln!("preprocessing {} frames ({})", ds.len(), a.preprocess);
+    let pins = PinSet::from_dataset(&ds, &pre)?;
+    let (train, val) = train_val(&ds, a.val_fraction, a.seed)?;
+    let config = CaeTrainingConfig::new(cae.clone(), AdadeltaConfig::new())
+        .with_batch_size(a.batch_size)
+        .with_max_epochs(a.max_epochs)
+        .with_patience(a.patience)
+        .with_seed(a.seed)
+        .with_learning_rate(a.lr.unwrap_or(if a.optimizer == "adam" { 3e-3 } else { 1.0 }))
+        .with_optimizer_kind(a.optimizer.clone());
+    let artifact = CaeArtifact {
+        cae,
+        preprocess: pre,
+        notes: serde_json::json!({ "trained_on": a.data.display().to_string(), "device": a.device.name() }),
+    };
+    let s = run_training(
+        &config,
+        artifact,
+        &pins,
+        (&train, &val),
+        &a.out,
+        &a.device.device(),
+        a.resume,
+    )?;
+    println!(
+        "trained {} epochs in {:.0} s; best validation BCE {:.4} at epoch {}; model in {}",
+        s.epochs_run,
+        s.seconds,
+        s.best_val_loss,
+        s.best_epoch,
+        a.out.display()
+    );
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct TrainHeadArgs {
+    /// Trained encoder folder; the head is written to ENCODER/head/.
+    #[arg(long)]
+    encoder: PathBuf,
+    /// Dataset with `shape` labels and a `split` column (train/test).
+    #[arg(long)]
+    data: PathBuf,
+    #[arg(long, default_value = "flex", value_parser = parse_device)]
+    device: DeviceKind,
+    #[arg(long, default_value_t = 0.2)]
+    val_fraction: f64,
+    #[arg(long, default_value_t = 7)]
+    seed: u64,
+}
+
+/// Features and shape labels of a dataset under an encoder.
+fn features_and_shapes(
+    model: &Path,
+    ds: &Dataset,
+    device: DeviceKind,
+) -> Result<(Vec<Vec<f32>>, Vec<String>)> {
+    let dev = device.device();
+    let (art, cae) = CaeArtifact::load(model, &dev)?;
+    let pins = PinSet::from_dataset(ds, &art.preprocess)?;
+    let feats = encode_all(&cae.encoder, &pins, 256, &dev)?;
+    let shapes = (0..ds.len())
+        .map(|i| ds.text(i, "shape").map(str::to_string))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((feats, shapes))
+}
+
+pub fn train_head(a: TrainHeadArgs) -> Result<()> {
+    let ds = Dataset::open(&a.data)?;
+    let (feats, shapes) = features_and_shapes(&a.encoder, &ds, a.device)?;
+    let mut classes: Vec<String> = shapes.clone();
+    classes.sort();
+    classes.dedup();
+    let y: Vec<usize> = shapes
+        .iter()
+        .map(|s| classes.iter().position(|c| c == s).unwrap_or(0))
+        .collect();
+    let (train, val) = train_val(&ds, a.val_fraction, a.seed)?;
+    let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
+        (
+            idx.iter().map(|&i| feats[i].clone()).collect(),
+            idx.iter().map(|&i| y[i]).collect(),
+        )
+    };
+    let (tx, ty) = pick(&train);
+    let (vx, vy) = pick(&val);
+    let cfg = HeadConfig::new(feats[0].len(), classes.clone()).with_seed(a.seed);
+    let dev = a.device.device();
+    let head = ClassifierHead::train(cfg, &tx, &ty, &vx, &vy, &dev)?;
+    head.save(a.encoder.join("head"))?;
+    if let Some(test) = ds.split_indices("test") {
+        let (sx, sy) = pick(&test);
+        let pred = head.predict(&sx, &dev)?;
+        let acc = accuracy(&pred, &sy);
+        println!(
+            "test-split shape accuracy: {:.1} % ({}/{})",
+            100.0 * acc,
+            pred.iter().zip(&sy).filter(|(a, b)| a == b).count(),
+            sy.len()
+        );
+        print_confusion(&classes, &confusion(&pred, &sy, classes.len()));
+    }
+    println!("head saved in {}", a.encoder.join("head").display());
+    Ok(())
+}
+
+fn print_confusion(classes: &[String], m: &[Vec<usize>]) {
+    println!(
+        "confusion (rows: truth, columns: predicted): {}",
+        classes.join(" ")
+    );
+    for (c, row) in classes.iter().zip(m) {
+        println!(
+            "  {c:>12} {}",
+            row.iter().map(|v| format!("{v:>5}")).collect::<String>()
+        );
+    }
+}
+
+pub fn encode(model: &Path, data: &Path, out: &Path, device: DeviceKind) -> Result<()> {
+    let ds = Dataset::open(data)?;
+    let dev = device.device();
+    let (art, cae) = CaeArtifact::load(model, &dev)?;
+    let pins = PinSet::from_dataset(&ds, &art.preprocess)?;
+    let feats = encode_all(&cae.encoder, &pins, 256, &dev)?;
+    write_features_csv(out, &pins.files, &feats)?;
+    println!(
+        "{} feature vectors of {} values written to {}",
+        feats.len(),
+        art.cae.feature_count(),
+        out.display()
+    );
+    Ok(())
+}
+
+pub fn export(model: &Path, out: &Path, part: &str) -> Result<()> {
+    let dev = DeviceKind::Flex.device();
+    let (art, cae) = CaeArtifact::load(model, &dev)?;
+    let bytes = match part {
+        "encoder" => tactile_onnx::export_cae_encoder(&cae.encoder, art.cae.input_px)?,
+        "autoencoder" => tactile_onnx::export_cae(&cae, art.cae.input_px)?,
+        other => bail!("unknown --part '{other}': expected encoder or autoencoder"),
+    };
+    tactile_onnx::export::save_onnx(out, &bytes)?;
+    println!(
+        "{part} exported to {} ({} bytes)",
+        out.display(),
+        bytes.len()
+    );
+    Ok(())
+}
+
+pub fn demo(model: &Path, data: &Path, per_class: usize) -> Result<()> {
+    let dev = DeviceKind::Flex.device();
+    let (art, cae) = CaeArtifact::load(model, &dev)
+        .with_context(|| format!("loading the shipped model from {}", model.display()))?;
+    let head = ClassifierHead::load(model.join("head"), &dev)?;
+    let ds = Dataset::open(data)
+        .with_context(|| format!("the demo reads TacTip frames from {}", data.display()))?;
+    let rows = ds
+        .split_indices("test")
+        .unwrap_or_else(|| (0..ds.len()).collect());
+    let mut picked = Vec::new();
+    for class in &head.config.classes {
+        picked.extend(
+            rows.iter()
+                .copied()
+                .filter(|&i| ds.text_opt(i, "shape") == Some(class.as_str()))
+                .take(per_class),
+        );
+    }
+    let paths: Vec<PathBuf> = picked
+        .iter()
+        .map(|&i| ds.path_of(i, "file"))
+        .collect::<Result<_, _>>()?;
+    let pins = tactile_preprocess::preprocess_files(&paths, &art.preprocess)?;
+    let set = PinSet {
+        files: picked
+            .iter()
+            .map(|&i| ds.text(i, "file").map(str::to_string))
+            .collect::<Result<_, _>>()?,
+        images: pins,
+    };
+    let feats = encode_all(&cae.encoder, &set, 256, &dev)?;
+    let pred = head.predict(&feats, &dev)?;
+    println!(
+        "encoder {:?}, {} features per frame; head classes {}",
+        art.cae.widths,
+        art.cae.feature_count(),
+        head.config.classes.join(", ")
+    );
+    let mut right = 0;
+    for ((file, f), p) in set.files.iter().zip(&feats).zip(&pred) {
+        let truth = ds
+            .text_opt(
+                picked[set.files.iter().position(|x| x == file).unwrap_or(0)],
+                "shape",
+            )
+            .unwrap_or("?");
+        let guess = &head.config.classes[*p];
+        right += usize::from(truth == guess);
+        let fs: Vec<String> = f.iter().map(|v| format!("{v:.2}")).collect();
+        println!(
+            "{file:<28} true {truth:<11} predicted {guess:<11} features [{}]",
+            fs.join(" ")
+        );
+    }
+    println!("{right}/{} frames classified correctly", feats.len());
+    Ok(())
+}

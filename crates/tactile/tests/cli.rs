@@ -1,0 +1,249 @@
+#![allow(clippy::unwrap_used)]
+//! The command line on bad input: a clear error naming the file (and line),
+//! a non-zero exit, and no partial output file.
+
+use std::path::Path;
+use std::process::Command;
+
+fn tactile(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_tactile"))
+        .args(args)
+        .output()
+        .expect("run tactile");
+    (
+        out.status.success(),
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        ),
+    )
+}
+
+fn write_png(path: &Path, w: u32, h: u32) {
+    image::GrayImage::from_pixel(w, h, image::Luma([0u8]))
+        .save(path)
+        .unwrap();
+}
+
+/// A tiny TacTip dataset with `n` valid 300x300 frames.
+fn dataset(dir: &Path, n: usize) {
+    std::fs::create_dir_all(dir.join("frames")).unwrap();
+    let mut labels = String::from("file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n\n");
+    for i in 0..n {
+        write_png(&dir.join(format!("frames/{i}.png")), 300, 300);
+        labels.push_str(&format!("frames/{i}.png,sphere,0,0,0,1,1\n"));
+    }
+    std::fs::write(dir.join("labels.csv"), labels).unwrap();
+    std::fs::write(
+        dir.join("manifest.json"),
+        format!(r#"{{"format":"tactile-dataset/1","kind":"tactip","sensor_spec":"test","width":300,"height":300,"generator":"test","seed":1,"count":{n}}}"#),
+    )
+    .unwrap();
+}
+
+/// A model folder with fresh weights, made by training for one epoch.
+fn model(dir: &Path, data: &Path) {
+    let (ok, out) = tactile(&[
+        "train",
+        "cae",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--max-epochs",
+        "1",
+        "--val-fraction",
+        "0.5",
+    ]);
+    assert!(ok, "{out}");
+}
+
+#[test]
+fn encode_names_corrupt_wrong_size_and_deep_frames_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("ds");
+    dataset(&data, 2);
+    let m = tmp.path().join("model");
+    model(&m, &data);
+    let out = tmp.path().join("features.csv");
+
+    // A truncated PNG.
+    let bytes = std::fs::read(data.join("frames/1.png")).unwrap();
+    std::fs::write(data.join("frames/1.png"), &bytes[..bytes.len() / 3]).unwrap();
+    let (ok, msg) = tactile(&[
+        "encode",
+        "--model",
+        m.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok && msg.contains("frames/1.png"), "{msg}");
+    assert!(!out.exists(), "partial output left behind");
+
+    // A frame smaller than the pin image.
+    write_png(&data.join("frames/1.png"), 20, 20);
+    let (ok, msg) = tactile(&[
+        "encode",
+        "--model",
+        m.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && msg.contains("frames/1.png") && msg.contains("20x20"),
+        "{msg}"
+    );
+
+    // A 16-bit PNG.
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(300, 300, vec![0u16; 90000])
+        .unwrap()
+        .save(data.join("frames/1.png"))
+        .unwrap();
+    let (ok, msg) = tactile(&[
+        "encode",
+        "--model",
+        m.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && msg.contains("frames/1.png") && msg.contains("16-bit"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+
+    // Valid again: the output appears, complete.
+    write_png(&data.join("frames/1.png"), 300, 300);
+    let (ok, msg) = tactile(&[
+        "encode",
+        "--model",
+        m.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    assert_eq!(std::fs::read_to_string(&out).unwrap().lines().count(), 3);
+}
+
+#[test]
+fn labels_with_missing_file_or_bad_number_name_the_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("ds");
+    dataset(&data, 2);
+    let labels = data.join("labels.csv");
+    let text = std::fs::read_to_string(&labels).unwrap();
+    std::fs::write(
+        &labels,
+        text.replace("frames/1.png,sphere,0", "frames/9.png,sphere,0"),
+    )
+    .unwrap();
+    let out = tmp.path().join("m");
+    let (ok, msg) = tactile(&[
+        "train",
+        "cae",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--max-epochs",
+        "1",
+    ]);
+    assert!(
+        !ok && msg.contains("labels.csv:3") && msg.contains("frames/9.png"),
+        "{msg}"
+    );
+    std::fs::write(
+        &labels,
+        text.replace("frames/1.png,sphere,0,0", "frames/1.png,sphere,0,zero"),
+    )
+    .unwrap();
+    let (ok, msg) = tactile(&[
+        "train",
+        "cae",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--max-epochs",
+        "1",
+    ]);
+    assert!(
+        !ok && msg.contains("labels.csv:3") && msg.contains("'zero'"),
+        "{msg}"
+    );
+    assert!(!out.exists(), "nothing may be written for a bad dataset");
+}
+
+#[test]
+fn training_resumes_to_the_same_result() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("ds");
+    dataset(&data, 4);
+    let d = data.to_str().unwrap();
+    let straight = tmp.path().join("straight");
+    let resumed = tmp.path().join("resumed");
+    let run = |out: &Path, epochs: &str, resume: bool| {
+        let mut args = vec![
+            "train",
+            "cae",
+            "--data",
+            d,
+            "--out",
+            out.to_str().unwrap(),
+            "--max-epochs",
+            epochs,
+            "--patience",
+            "100",
+            "--val-fraction",
+            "0.5",
+        ];
+        if resume {
+            args.push("--resume");
+        }
+        let (ok, msg) = tactile(&args);
+        assert!(ok, "{msg}");
+    };
+    run(&straight, "4", false);
+    run(&resumed, "2", false);
+    run(&resumed, "4", true);
+    let a = std::fs::read_to_string(straight.join("curves.csv")).unwrap();
+    let b = std::fs::read_to_string(resumed.join("curves.csv")).unwrap();
+    let losses = |s: &str| {
+        s.lines()
+            .map(|l| l.rsplit_once(',').unwrap().0.to_string())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        losses(&a),
+        losses(&b),
+        "resumed training diverged from the uninterrupted run"
+    );
+    // The kept models give the same features.
+    let feats = |m: &Path| {
+        let out = m.join("features.csv");
+        let (ok, msg) = tactile(&[
+            "encode",
+            "--model",
+            m.to_str().unwrap(),
+            "--data",
+            d,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+        std::fs::read_to_string(out).unwrap()
+    };
+    assert!(
+        feats(&straight) == feats(&resumed),
+        "resumed model differs from the uninterrupted one"
+    );
+}
