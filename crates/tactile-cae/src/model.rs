@@ -9,7 +9,7 @@
 //! as Keras does, so they compare with the authors' released vectors.
 
 use burn::config::Config;
-use burn::module::Module;
+use burn::module::{Initializer, Module, Param};
 use burn::nn::PaddingConfig2d;
 use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::interpolate::{Interpolate2d, Interpolate2dConfig, InterpolateMode};
@@ -58,16 +58,19 @@ impl CaeConfig {
     /// Build the model with fresh weights.
     pub fn init(&self, device: &Device) -> Cae {
         let [c1, c2, c3, c4] = self.widths;
-        let same = |i, o| {
-            Conv2dConfig::new([i, o], [3, 3])
-                .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
-                .init(device)
+        // Keras' initialisation (Glorot-uniform kernels, zero biases): with
+        // burn's default the 4-channel bottleneck's ReLUs tend to die early
+        // and every feature stays 0.
+        let conv = |i, o, padding| {
+            let mut c = Conv2dConfig::new([i, o], [3, 3])
+                .with_padding(padding)
+                .with_initializer(Initializer::XavierUniform { gain: 1.0 })
+                .init(device);
+            c.bias = c.bias.map(|b| Param::from_tensor(b.val().zeros_like()));
+            c
         };
-        let valid = |i, o| {
-            Conv2dConfig::new([i, o], [3, 3])
-                .with_padding(PaddingConfig2d::Valid)
-                .init(device)
-        };
+        let same = |i, o| conv(i, o, PaddingConfig2d::Explicit(1, 1, 1, 1));
+        let valid = |i, o| conv(i, o, PaddingConfig2d::Valid);
         Cae {
             encoder: CaeEncoder {
                 conv1: same(1, c1),
