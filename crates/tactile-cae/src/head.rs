@@ -175,7 +175,8 @@ impl ClassifierHead {
             }
             // Validation error rate, with cross-entropy as the tie-breaker.
             let v = mlp.valid();
-            let pred = argmax_rows(v.forward(vx.clone()));
+            let val_logits = v.forward(vx.clone());
+            let pred = argmax_rows(val_logits.clone());
             let err =
                 pred.iter().zip(val_y).filter(|(a, b)| a != b).count() as f64 / val_y.len() as f64;
             let vl = {
@@ -188,7 +189,7 @@ impl ClassifierHead {
                 );
                 let l: f32 = CrossEntropyLossConfig::new()
                     .init(device)
-                    .forward(v.forward(vx.clone()), vy)
+                    .forward(val_logits, vy)
                     .into_scalar();
                 l as f64
             };

@@ -288,13 +288,8 @@ pub fn demo(model: &Path, data: &Path, per_class: usize) -> Result<()> {
         head.config.classes.join(", ")
     );
     let mut right = 0;
-    for ((file, f), p) in set.files.iter().zip(&feats).zip(&pred) {
-        let truth = ds
-            .text_opt(
-                picked[set.files.iter().position(|x| x == file).unwrap_or(0)],
-                "shape",
-            )
-            .unwrap_or("?");
+    for (((file, f), p), &row) in set.files.iter().zip(&feats).zip(&pred).zip(&picked) {
+        let truth = ds.text_opt(row, "shape").unwrap_or("?");
         let guess = &head.config.classes[*p];
         right += usize::from(truth == guess);
         let fs: Vec<String> = f.iter().map(|v| format!("{v:.2}")).collect();

@@ -26,6 +26,23 @@ fn write_png(path: &Path, w: u32, h: u32) {
         .unwrap();
 }
 
+fn encode(model: &Path, data: &Path, out: &Path) -> (bool, String) {
+    tactile(&[
+        "encode",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+fn train_one_epoch(data: &Path, out: &Path) -> (bool, String) {
+    let [d, o] = [data, out].map(|p| p.to_str().unwrap());
+    tactile(&["train", "cae", "--data", d, "--out", o, "--max-epochs", "1"])
+}
+
 /// A tiny TacTip dataset with `n` valid 300x300 frames.
 fn dataset(dir: &Path, n: usize) {
     std::fs::create_dir_all(dir.join("frames")).unwrap();
@@ -71,29 +88,13 @@ fn encode_names_corrupt_wrong_size_and_deep_frames_and_writes_nothing() {
     // A truncated PNG.
     let bytes = std::fs::read(data.join("frames/1.png")).unwrap();
     std::fs::write(data.join("frames/1.png"), &bytes[..bytes.len() / 3]).unwrap();
-    let (ok, msg) = tactile(&[
-        "encode",
-        "--model",
-        m.to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (ok, msg) = encode(&m, &data, &out);
     assert!(!ok && msg.contains("frames/1.png"), "{msg}");
     assert!(!out.exists(), "partial output left behind");
 
     // A frame smaller than the pin image.
     write_png(&data.join("frames/1.png"), 20, 20);
-    let (ok, msg) = tactile(&[
-        "encode",
-        "--model",
-        m.to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (ok, msg) = encode(&m, &data, &out);
     assert!(
         !ok && msg.contains("frames/1.png") && msg.contains("20x20"),
         "{msg}"
@@ -104,15 +105,7 @@ fn encode_names_corrupt_wrong_size_and_deep_frames_and_writes_nothing() {
         .unwrap()
         .save(data.join("frames/1.png"))
         .unwrap();
-    let (ok, msg) = tactile(&[
-        "encode",
-        "--model",
-        m.to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (ok, msg) = encode(&m, &data, &out);
     assert!(
         !ok && msg.contains("frames/1.png") && msg.contains("16-bit"),
         "{msg}"
@@ -121,15 +114,7 @@ fn encode_names_corrupt_wrong_size_and_deep_frames_and_writes_nothing() {
 
     // Valid again: the output appears, complete.
     write_png(&data.join("frames/1.png"), 300, 300);
-    let (ok, msg) = tactile(&[
-        "encode",
-        "--model",
-        m.to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (ok, msg) = encode(&m, &data, &out);
     assert!(ok, "{msg}");
     assert_eq!(std::fs::read_to_string(&out).unwrap().lines().count(), 3);
 }
@@ -147,16 +132,7 @@ fn labels_with_missing_file_or_bad_number_name_the_line() {
     )
     .unwrap();
     let out = tmp.path().join("m");
-    let (ok, msg) = tactile(&[
-        "train",
-        "cae",
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--max-epochs",
-        "1",
-    ]);
+    let (ok, msg) = train_one_epoch(&data, &out);
     assert!(
         !ok && msg.contains("labels.csv:3") && msg.contains("frames/9.png"),
         "{msg}"
@@ -166,16 +142,7 @@ fn labels_with_missing_file_or_bad_number_name_the_line() {
         text.replace("frames/1.png,sphere,0,0", "frames/1.png,sphere,0,zero"),
     )
     .unwrap();
-    let (ok, msg) = tactile(&[
-        "train",
-        "cae",
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--max-epochs",
-        "1",
-    ]);
+    let (ok, msg) = train_one_epoch(&data, &out);
     assert!(
         !ok && msg.contains("labels.csv:3") && msg.contains("'zero'"),
         "{msg}"
