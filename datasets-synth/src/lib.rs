@@ -1,1 +1,24 @@
+//! datasets-synth: the two virtual sensors of `shared/spec/sensors.md`
+//! (version 1), written as datasets in the layout of `datasets.md`.
+//!
+//! - [`tactip`]: the virtual TacTip (paper A): 127 pins in a hemispherical
+//!   tip, seven contact shapes, position, orientation, depth and force.
+//! - [`visuotactile`]: the virtual visuo-tactile palpation sensor (paper B):
+//!   RGB frames, tendon masks, directions and depth maps, in palpation videos.
+//!
+//! Every sample has its own random stream keyed by the seed and its index,
+//! so datasets are byte-identical on every machine, render in parallel, and
+//! can be extended without changing earlier samples.
 
+pub mod npy;
+pub mod preview;
+pub mod raster;
+pub mod rng;
+pub mod tactip;
+pub mod visuotactile;
+pub mod write;
+
+pub use rng::Range;
+pub use tactip::{SHAPES, TactipConfig};
+pub use visuotactile::{TendonPath, VisuotactileConfig};
+pub use write::{GENERATOR, WriteOptions, write_tactip, write_visuotactile};

@@ -10,7 +10,7 @@ use burn::module::Module;
 use burn::nn::loss::CrossEntropyLossConfig;
 use burn::nn::{Linear, LinearConfig};
 use burn::optim::{AdamConfig, GradientsParams};
-use burn::tensor::activation::{relu, sigmoid};
+use burn::tensor::activation::{relu, sigmoid, softmax};
 use burn::tensor::{Device, Int, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
 use tactile_core::train::{EarlyStopping, Verdict, shuffled_batches};
@@ -45,6 +45,9 @@ pub struct HeadConfig {
     pub batch_size: usize,
     #[config(default = 7)]
     pub seed: u64,
+    /// Ensemble members (folds), at least 2.
+    #[config(default = 10)]
+    pub folds: usize,
 }
 
 /// The classifier network.
@@ -87,12 +90,12 @@ impl HeadConfig {
     }
 }
 
-/// A trained head: config, standardisation and network.
+/// A trained head: config, standardisation and the members' networks.
 pub struct ClassifierHead {
     pub config: HeadConfig,
     pub mean: Vec<f32>,
     pub std: Vec<f32>,
-    pub mlp: Mlp,
+    pub members: Vec<Mlp>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -117,22 +120,27 @@ fn to_tensor(x: &[Vec<f32>], mean: &[f32], std: &[f32], device: &Device) -> Tens
 }
 
 impl ClassifierHead {
-    /// Train on `(x, y)` with `val` for early stopping; keeps the best epoch.
-    pub fn train(
-        config: HeadConfig,
-        x: &[Vec<f32>],
-        y: &[usize],
-        val_x: &[Vec<f32>],
-        val_y: &[usize],
-        device: &Device,
-    ) -> Result<Self> {
-        if x.is_empty() || val_x.is_empty() {
-            return Err(Error::Invalid(
-                "classifier needs training and validation samples".into(),
-            ));
+    /// Train the k-fold ensemble on `(x, y)`.
+    pub fn train(config: HeadConfig, x: &[Vec<f32>], y: &[usize], device: &Device) -> Result<Self> {
+        if config.folds < 2 {
+            return Err(Error::Config(format!("head folds must be at least 2, got {}", config.folds)));
         }
-        if let Some(bad) = x.iter().chain(val_x).find(|v| v.len() != config.inputs) {
+        if x.len() < config.folds || x.len() != y.len() {
+            return Err(Error::Invalid(format!(
+                "classifier needs at least {} labelled samples, got {} vectors and {} labels",
+                config.folds,
+                x.len(),
+                y.len()
+            )));
+        }
+        if let Some(bad) = x.iter().find(|v| v.len() != config.inputs) {
             return Err(Error::shape("feature vector", config.inputs, bad.len()));
+        }
+        if let Some(&bad) = y.iter().find(|&&c| c >= config.classes.len()) {
+            return Err(Error::Invalid(format!(
+                "class index {bad} out of range for {} classes",
+                config.classes.len()
+            )));
         }
         let k = config.inputs;
         let n = x.len() as f32;
@@ -144,66 +152,38 @@ impl ClassifierHead {
                 ((x.iter().map(|v| (v[j] - mean[j]).powi(2)).sum::<f32>() / n).sqrt()).max(1e-6)
             })
             .collect();
-        let ad = device.clone().autodiff();
-        ad.seed(config.seed);
-        let mut mlp = config.init_mlp(&ad);
-        let mut optim = AdamConfig::new().init();
-        let loss_fn = CrossEntropyLossConfig::new().init(&ad);
-        let xt = to_tensor(x, &mean, &std, &ad);
-        let yt = Tensor::<1, Int>::from_data(
-            TensorData::new(y.iter().map(|&c| c as i64).collect::<Vec<_>>(), [y.len()]),
-            &ad,
-        );
-        let vx = to_tensor(val_x, &mean, &std, device);
-        let mut early = EarlyStopping::new(config.patience);
-        let mut best = mlp.valid();
-        let idx: Vec<usize> = (0..x.len()).collect();
-        for epoch in 0..config.max_epochs {
-            for b in shuffled_batches(
-                &idx,
-                config.batch_size,
-                config.seed.wrapping_add(epoch as u64),
-            ) {
-                let bi = Tensor::<1, Int>::from_data(
-                    TensorData::new(b.iter().map(|&i| i as i64).collect::<Vec<_>>(), [b.len()]),
-                    &ad,
-                );
-                let logits = mlp.forward(xt.clone().select(0, bi.clone()));
-                let loss = loss_fn.forward(logits, yt.clone().select(0, bi));
-                let grads = GradientsParams::from_grads(loss.backward(), &mlp);
-                mlp = optim.step(config.learning_rate, mlp, grads);
+        // Folds from one seeded shuffle.
+        let order = shuffled_batches(&(0..x.len()).collect::<Vec<_>>(), x.len(), config.seed)
+            .concat();
+        let mut members = Vec::with_capacity(config.folds);
+        for fold in 0..config.folds {
+            let (mut tr, mut va) = (Vec::new(), Vec::new());
+            for (pos, &i) in order.iter().enumerate() {
+                if pos % config.folds == fold {
+                    va.push(i);
+                } else {
+                    tr.push(i);
+                }
             }
-            // Validation error rate, with cross-entropy as the tie-breaker.
-            let v = mlp.valid();
-            let val_logits = v.forward(vx.clone());
-            let pred = argmax_rows(val_logits.clone());
-            let err =
-                pred.iter().zip(val_y).filter(|(a, b)| a != b).count() as f64 / val_y.len() as f64;
-            let vl = {
-                let vy = Tensor::<1, Int>::from_data(
-                    TensorData::new(
-                        val_y.iter().map(|&c| c as i64).collect::<Vec<_>>(),
-                        [val_y.len()],
-                    ),
-                    device,
-                );
-                let l: f32 = CrossEntropyLossConfig::new()
-                    .init(device)
-                    .forward(val_logits, vy)
-                    .into_scalar();
-                l as f64
+            let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
+                (idx.iter().map(|&i| x[i].clone()).collect(), idx.iter().map(|&i| y[i]).collect())
             };
-            match early.update(epoch, err + 1e-3 * vl) {
-                Verdict::Improved => best = v,
-                Verdict::Stop => break,
-                Verdict::Continue => {}
-            }
+            let (tx, ty) = pick(&tr);
+            let (vx, vy) = pick(&va);
+            members.push(train_member(
+                &config,
+                config.seed.wrapping_add(1000 * fold as u64),
+                (&tx, &ty),
+                (&vx, &vy),
+                (&mean, &std),
+                device,
+            ));
         }
         Ok(Self {
             config,
             mean,
             std,
-            mlp: best,
+            members,
         })
     }
 
@@ -219,17 +199,31 @@ impl ClassifierHead {
         if x.is_empty() {
             return Ok(Vec::new());
         }
-        Ok(argmax_rows(
-            self.mlp
-                .forward(to_tensor(x, &self.mean, &self.std, device)),
-        ))
+        Ok(argmax_rows(self.probabilities(x, device)))
     }
 
-    /// Save as `head.json` + `head.bpk` in `dir`.
+    /// Mean class probabilities of the members, `[N, classes]`.
+    fn probabilities(&self, x: &[Vec<f32>], device: &Device) -> Tensor<2> {
+        let xt = to_tensor(x, &self.mean, &self.std, device);
+        let mut sum: Option<Tensor<2>> = None;
+        for m in &self.members {
+            let p = softmax(m.forward(xt.clone()), 1);
+            sum = Some(match sum {
+                Some(s) => s + p,
+                None => p,
+            });
+        }
+        sum.map(|s| s / self.members.len() as f32)
+            .unwrap_or_else(|| Tensor::zeros([x.len(), self.config.classes.len()], device))
+    }
+
+    /// Save as `head.json` + `member<k>.bpk` in `dir`.
     pub fn save(&self, dir: impl AsRef<Path>) -> Result<()> {
         let dir = dir.as_ref();
         tactile_core::io::create_dir_all(dir)?;
-        save_module(&self.mlp, &dir.join("head.bpk"))?;
+        for (i, m) in self.members.iter().enumerate() {
+            save_module(m, &dir.join(format!("member{i}.bpk")))?;
+        }
         tactile_core::io::write_json_atomic(
             dir.join("head.json"),
             &HeadFile {
@@ -244,14 +238,71 @@ impl ClassifierHead {
     pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<Self> {
         let dir = dir.as_ref();
         let f: HeadFile = tactile_core::io::read_json(dir.join("head.json"))?;
-        let mlp = load_module(f.config.init_mlp(device), &dir.join("head.bpk"))?;
+        let members = (0..f.config.folds)
+            .map(|i| load_module(f.config.init_mlp(device), &dir.join(format!("member{i}.bpk"))))
+            .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             config: f.config,
             mean: f.mean,
             std: f.std,
-            mlp,
+            members,
         })
     }
+}
+
+/// One member: Adam on `train`, early stopping on the `val` error rate.
+fn train_member(
+    config: &HeadConfig,
+    seed: u64,
+    (x, y): (&[Vec<f32>], &[usize]),
+    (val_x, val_y): (&[Vec<f32>], &[usize]),
+    (mean, std): (&[f32], &[f32]),
+    device: &Device,
+) -> Mlp {
+    let ad = device.clone().autodiff();
+    ad.seed(seed);
+    let mut mlp = config.init_mlp(&ad);
+    let mut optim = AdamConfig::new().init();
+    let loss_fn = CrossEntropyLossConfig::new().init(&ad);
+    let xt = to_tensor(x, mean, std, &ad);
+    let yt = Tensor::<1, Int>::from_data(
+        TensorData::new(y.iter().map(|&c| c as i64).collect::<Vec<_>>(), [y.len()]),
+        &ad,
+    );
+    let vx = to_tensor(val_x, mean, std, device);
+    let vy = Tensor::<1, Int>::from_data(
+        TensorData::new(val_y.iter().map(|&c| c as i64).collect::<Vec<_>>(), [val_y.len()]),
+        device,
+    );
+    let val_loss = CrossEntropyLossConfig::new().init(device);
+    let mut early = EarlyStopping::new(config.patience);
+    let mut best = mlp.valid();
+    let idx: Vec<usize> = (0..x.len()).collect();
+    for epoch in 0..config.max_epochs {
+        for b in shuffled_batches(&idx, config.batch_size, seed.wrapping_add(epoch as u64)) {
+            let bi = Tensor::<1, Int>::from_data(
+                TensorData::new(b.iter().map(|&i| i as i64).collect::<Vec<_>>(), [b.len()]),
+                &ad,
+            );
+            let logits = mlp.forward(xt.clone().select(0, bi.clone()));
+            let loss = loss_fn.forward(logits, yt.clone().select(0, bi));
+            let grads = GradientsParams::from_grads(loss.backward(), &mlp);
+            mlp = optim.step(config.learning_rate, mlp, grads);
+        }
+        // Validation error rate, with cross-entropy as the tie-breaker.
+        let v = mlp.valid();
+        let val_logits = v.forward(vx.clone());
+        let pred = argmax_rows(val_logits.clone());
+        let err =
+            pred.iter().zip(val_y).filter(|(a, b)| a != b).count() as f64 / val_y.len() as f64;
+        let vl: f32 = val_loss.forward(val_logits, vy.clone()).into_scalar();
+        match early.update(epoch, err + 1e-3 * vl as f64) {
+            Verdict::Improved => best = v,
+            Verdict::Stop => break,
+            Verdict::Continue => {}
+        }
+    }
+    best
 }
 
 fn argmax_rows(logits: Tensor<2>) -> Vec<usize> {

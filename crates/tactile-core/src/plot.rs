@@ -153,3 +153,77 @@ pub fn line_plot(
     drawn.map_err(|e| Error::Invalid(format!("{}: cannot draw plot: {e}", path.display())))?;
     crate::image_io::save_rgb_png(path, w as usize, h as usize, &buf)
 }
+
+/// Something to draw over an image (contact sheets, overlays).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Mark {
+    /// A straight line, pixel coordinates.
+    Line {
+        from: (i32, i32),
+        to: (i32, i32),
+        colour: [u8; 3],
+        width: u32,
+    },
+    /// A filled dot.
+    Dot {
+        at: (i32, i32),
+        radius: u32,
+        colour: [u8; 3],
+    },
+    /// Text with its top-left corner at `at` (skipped when no font is found).
+    Text {
+        at: (i32, i32),
+        text: String,
+        size: u32,
+        colour: [u8; 3],
+    },
+}
+
+/// Draw `marks` over an RGB buffer in place.
+pub fn draw_marks(rgb: &mut [u8], width: usize, height: usize, marks: &[Mark]) -> Result<()> {
+    if rgb.len() != width * height * 3 {
+        return Err(Error::shape("RGB buffer", width * height * 3, rgb.len()));
+    }
+    let text = font_available();
+    let mut draw = || -> std::result::Result<(), Box<dyn std::error::Error + '_>> {
+        let root =
+            BitMapBackend::with_buffer(rgb, (width as u32, height as u32)).into_drawing_area();
+        for m in marks {
+            match m {
+                Mark::Line {
+                    from,
+                    to,
+                    colour,
+                    width,
+                } => {
+                    let c = RGBColor(colour[0], colour[1], colour[2]);
+                    root.draw(&PathElement::new(
+                        vec![*from, *to],
+                        c.stroke_width(*width),
+                    ))?;
+                }
+                Mark::Dot { at, radius, colour } => {
+                    let c = RGBColor(colour[0], colour[1], colour[2]);
+                    root.draw(&Circle::new(*at, *radius, c.filled()))?;
+                }
+                Mark::Text {
+                    at,
+                    text: t,
+                    size,
+                    colour,
+                } if text => {
+                    let c = RGBColor(colour[0], colour[1], colour[2]);
+                    root.draw(&Text::new(
+                        t.clone(),
+                        *at,
+                        ("sans-serif", *size).into_font().color(&c),
+                    ))?;
+                }
+                Mark::Text { .. } => {}
+            }
+        }
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| Error::Invalid(format!("cannot draw overlay: {e}")))
+}

@@ -134,15 +134,23 @@ pub fn train_cae(a: TrainCaeArgs) -> Result<()> {
 #[derive(Args)]
 pub struct TrainHeadArgs {
     /// Trained encoder folder; the head is written to ENCODER/head/.
+    #[arg(long, required_unless_present = "features")]
+    encoder: Option<PathBuf>,
+    /// Precomputed feature CSV (file,f0,f1,...) instead of an encoder,
+    /// e.g. the authors' golden-features.csv; needs --out.
+    #[arg(long, conflicts_with = "encoder", requires = "out")]
+    features: Option<PathBuf>,
+    /// Head folder (default: ENCODER/head).
     #[arg(long)]
-    encoder: PathBuf,
+    out: Option<PathBuf>,
     /// Dataset with `shape` labels and a `split` column (train/test).
     #[arg(long)]
     data: PathBuf,
     #[arg(long, default_value = "flex", value_parser = parse_device)]
     device: DeviceKind,
-    #[arg(long, default_value_t = 0.2)]
-    val_fraction: f64,
+    /// Ensemble members; each early-stops on its own fold of the train split.
+    #[arg(long, default_value_t = 10)]
+    folds: usize,
     #[arg(long, default_value_t = 7)]
     seed: u64,
 }
@@ -163,9 +171,41 @@ fn features_and_shapes(
     Ok((feats, shapes))
 }
 
+/// Rows of a feature CSV aligned with the dataset's rows by `file`.
+fn features_from_csv(csv: &Path, ds: &Dataset) -> Result<(Vec<Vec<f32>>, Vec<String>)> {
+    let (files, feats) = tactile_cae::encode::read_features_csv(csv)?;
+    let by_file: std::collections::HashMap<&str, &Vec<f32>> =
+        files.iter().map(String::as_str).zip(&feats).collect();
+    let mut out = Vec::with_capacity(ds.len());
+    let mut shapes = Vec::with_capacity(ds.len());
+    for i in 0..ds.len() {
+        let file = ds.text(i, "file")?;
+        let f = by_file.get(file).with_context(|| {
+            format!(
+                "{}: no feature row for '{file}' (labels.csv line {})",
+                csv.display(),
+                i + 2
+            )
+        })?;
+        out.push((*f).clone());
+        shapes.push(ds.text(i, "shape")?.to_string());
+    }
+    Ok((out, shapes))
+}
+
 pub fn train_head(a: TrainHeadArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
-    let (feats, shapes) = features_and_shapes(&a.encoder, &ds, a.device)?;
+    let (feats, shapes, out) = match (&a.features, &a.encoder) {
+        (Some(csv), _) => {
+            let (f, s) = features_from_csv(csv, &ds)?;
+            (f, s, a.out.clone().context("--features needs --out")?)
+        }
+        (None, Some(enc)) => {
+            let (f, s) = features_and_shapes(enc, &ds, a.device)?;
+            (f, s, a.out.clone().unwrap_or_else(|| enc.join("head")))
+        }
+        (None, None) => bail!("give --encoder DIR or --features CSV"),
+    };
     let mut classes: Vec<String> = shapes.clone();
     classes.sort();
     classes.dedup();
@@ -173,7 +213,9 @@ pub fn train_head(a: TrainHeadArgs) -> Result<()> {
         .iter()
         .map(|s| classes.iter().position(|c| c == s).unwrap_or(0))
         .collect();
-    let (train, val) = train_val(&ds, a.val_fraction, a.seed)?;
+    let train = ds
+        .split_indices("train")
+        .unwrap_or_else(|| (0..ds.len()).collect());
     let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
         (
             idx.iter().map(|&i| feats[i].clone()).collect(),
@@ -181,11 +223,13 @@ pub fn train_head(a: TrainHeadArgs) -> Result<()> {
         )
     };
     let (tx, ty) = pick(&train);
-    let (vx, vy) = pick(&val);
-    let cfg = HeadConfig::new(feats[0].len(), classes.clone()).with_seed(a.seed);
+    let cfg = HeadConfig::new(feats[0].len(), classes.clone())
+        .with_seed(a.seed)
+        .with_folds(a.folds);
     let dev = a.device.device();
-    let head = ClassifierHead::train(cfg, &tx, &ty, &vx, &vy, &dev)?;
-    head.save(a.encoder.join("head"))?;
+    eprintln!("training a {}-fold head ensemble on {} frames", a.folds, tx.len());
+    let head = ClassifierHead::train(cfg, &tx, &ty, &dev)?;
+    head.save(&out)?;
     if let Some(test) = ds.split_indices("test") {
         let (sx, sy) = pick(&test);
         let pred = head.predict(&sx, &dev)?;
@@ -198,7 +242,7 @@ pub fn train_head(a: TrainHeadArgs) -> Result<()> {
         );
         print_confusion(&classes, &confusion(&pred, &sy, classes.len()));
     }
-    println!("head saved in {}", a.encoder.join("head").display());
+    println!("head saved in {}", out.display());
     Ok(())
 }
 

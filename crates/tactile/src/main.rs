@@ -2,6 +2,7 @@
 
 mod bench;
 mod cae_cmds;
+mod synth_cmds;
 
 use std::path::PathBuf;
 
@@ -27,6 +28,11 @@ pub fn parse_device(s: &str) -> std::result::Result<DeviceKind, String> {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Generate a synthetic dataset from a virtual sensor (sensors.md).
+    Synth {
+        #[command(subcommand)]
+        sensor: SynthCmd,
+    },
     /// Train a model.
     Train {
         #[command(subcommand)]
@@ -78,6 +84,14 @@ enum Command {
 }
 
 #[derive(Subcommand)]
+enum SynthCmd {
+    /// Virtual TacTip frames (paper A): shapes, position, orientation, depth, force.
+    Tactip(synth_cmds::TactipArgs),
+    /// Virtual visuo-tactile palpation videos (paper B): RGB, masks, directions, depth.
+    Visuotactile(synth_cmds::VisuotactileArgs),
+}
+
+#[derive(Subcommand)]
 enum TrainCmd {
     /// Paper A's convolutional autoencoder.
     Cae(cae_cmds::TrainCaeArgs),
@@ -94,6 +108,12 @@ enum BenchCmd {
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
+        Command::Synth {
+            sensor: SynthCmd::Tactip(a),
+        } => synth_cmds::tactip(a),
+        Command::Synth {
+            sensor: SynthCmd::Visuotactile(a),
+        } => synth_cmds::visuotactile(a),
         Command::Train {
             model: TrainCmd::Cae(a),
         } => cae_cmds::train_cae(a),

@@ -1,0 +1,182 @@
+//! Contact sheets: frames sampled evenly through a dataset, with their
+//! labels drawn over them (TacTip: contact position and orientation;
+//! visuo-tactile: tendon mask and direction arrow), for a person to look at.
+//! Works on any dataset in the `datasets.md` layout, not only synthetic ones.
+
+use std::path::Path;
+
+use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::image_io::{load_grey, load_rgb, save_rgb_png};
+use tactile_core::plot::{Mark, draw_marks};
+use tactile_core::{Error, Result};
+
+const COLUMNS: usize = 4;
+const CAPTION_PX: usize = 22;
+const YELLOW: [u8; 3] = [255, 220, 0];
+const CYAN: [u8; 3] = [0, 220, 255];
+const WHITE: [u8; 3] = [255, 255, 255];
+
+/// Area-average RGB downscale by an integer factor.
+fn downscale(rgb: &[u8], w: usize, h: usize, k: usize) -> (Vec<u8>, usize, usize) {
+    let (ow, oh) = (w / k, h / k);
+    let mut out = vec![0u8; ow * oh * 3];
+    for y in 0..oh {
+        for x in 0..ow {
+            for c in 0..3 {
+                let mut s = 0u32;
+                for dy in 0..k {
+                    for dx in 0..k {
+                        s += rgb[((y * k + dy) * w + x * k + dx) * 3 + c] as u32;
+                    }
+                }
+                out[(y * ow + x) * 3 + c] = (s / (k * k) as u32) as u8;
+            }
+        }
+    }
+    (out, ow, oh)
+}
+
+/// Evenly spaced rows (at most `n`).
+fn pick(len: usize, n: usize) -> Vec<usize> {
+    let n = n.min(len);
+    (0..n).map(|i| i * len / n.max(1)).collect()
+}
+
+fn arrow(centre: (f64, f64), deg: f64, len: f64, colour: [u8; 3]) -> Vec<Mark> {
+    let (c, s) = (deg.to_radians().cos(), deg.to_radians().sin());
+    let tip = (centre.0 + c * len, centre.1 + s * len);
+    let tail = (centre.0 - c * len, centre.1 - s * len);
+    let p = |q: (f64, f64)| (q.0.round() as i32, q.1.round() as i32);
+    let head = |a: f64| {
+        let (hc, hs) = ((deg + a).to_radians().cos(), (deg + a).to_radians().sin());
+        Mark::Line {
+            from: p(tip),
+            to: p((tip.0 - hc * len * 0.3, tip.1 - hs * len * 0.3)),
+            colour,
+            width: 2,
+        }
+    };
+    vec![
+        Mark::Line {
+            from: p(tail),
+            to: p(tip),
+            colour,
+            width: 2,
+        },
+        head(30.0),
+        head(-30.0),
+    ]
+}
+
+/// Write a contact sheet of up to `n` frames of the dataset at `data` to `out`.
+pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
+    let ds = Dataset::open(data)?;
+    let rows = pick(ds.len(), n.max(1));
+    let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
+    let k = w.div_ceil(320).max(1);
+    let (tw, th) = (w / k, h / k);
+    let cols = COLUMNS.min(rows.len());
+    let lines = rows.len().div_ceil(cols);
+    let (sw, sh) = (cols * tw, lines * (th + CAPTION_PX));
+    let mut sheet = vec![0u8; sw * sh * 3];
+    let mut marks = Vec::new();
+    for (slot, &row) in rows.iter().enumerate() {
+        let (ox, oy) = ((slot % cols) * tw, (slot / cols) * (th + CAPTION_PX));
+        let frame_path = ds.path_of(row, "file")?;
+        let mut rgb = match ds.manifest.kind {
+            DatasetKind::Tactip => {
+                let g = load_grey(&frame_path)?;
+                tactile_core::image_io::expect_size(&frame_path, g.width(), g.height(), (w, h))?;
+                g.as_slice().iter().flat_map(|&v| [v, v, v]).collect::<Vec<u8>>()
+            }
+            DatasetKind::Visuotactile => {
+                let c = load_rgb(&frame_path)?;
+                tactile_core::image_io::expect_size(&frame_path, c.width(), c.height(), (w, h))?;
+                c.as_slice().to_vec()
+            }
+        };
+        let caption;
+        let scale = 1.0 / k as f64;
+        match ds.manifest.kind {
+            DatasetKind::Tactip => {
+                let shape = ds.text_opt(row, "shape").unwrap_or("?");
+                let depth = ds.number_opt(row, "depth_mm")?;
+                let force = ds.number_opt(row, "force_n")?;
+                caption = format!(
+                    "{shape} d {} F {}",
+                    depth.map(|d| format!("{d:.1}")).unwrap_or("-".into()),
+                    force.map(|f| format!("{f:.1}")).unwrap_or("-".into())
+                );
+                let x = ds.number_opt(row, "x_mm")?;
+                let y = ds.number_opt(row, "y_mm")?;
+                let theta = ds.number_opt(row, "theta_deg")?;
+                let to_px = |xm: f64, ym: f64| {
+                    let (u, v) = crate::tactip::mm_to_px(xm, ym);
+                    (ox as f64 + u * scale * w as f64 / 300.0, oy as f64 + v * scale * h as f64 / 300.0)
+                };
+                if let (Some(x), Some(t)) = (x, theta) {
+                    // Contact point; for an edge, the point of the edge line nearest the centre.
+                    let (cx, cy) = if shape == "edge" {
+                        let t = t.to_radians();
+                        (-t.sin() * x, t.cos() * x)
+                    } else {
+                        (x, y.unwrap_or(0.0))
+                    };
+                    marks.extend(arrow(to_px(cx, cy), t, 18.0, YELLOW));
+                } else if let Some(x) = x {
+                    let (u, v) = to_px(x, y.unwrap_or(0.0));
+                    marks.push(Mark::Dot {
+                        at: (u.round() as i32, v.round() as i32),
+                        radius: 4,
+                        colour: YELLOW,
+                    });
+                }
+            }
+            DatasetKind::Visuotactile => {
+                let mask_path = ds.path_of(row, "mask")?;
+                let m = load_grey(&mask_path)?;
+                tactile_core::image_io::expect_size(&mask_path, m.width(), m.height(), (w, h))?;
+                for (px, &mv) in rgb.chunks_exact_mut(3).zip(m.as_slice()) {
+                    if mv > 127 {
+                        px[0] = ((px[0] as u32 + 255) / 2) as u8;
+                        px[1] /= 2;
+                        px[2] /= 2;
+                    }
+                }
+                let tendon = ds.number_opt(row, "tendon")?.unwrap_or(0.0) > 0.5;
+                let dir = ds.number_opt(row, "direction_deg")?;
+                let path = ds.text_opt(row, "path").unwrap_or("?");
+                let press = ds.number_opt(row, "press_mm")?.unwrap_or(0.0);
+                caption = format!(
+                    "seq {} f {} press {press:.2} {}",
+                    ds.text_opt(row, "sequence").unwrap_or("?"),
+                    ds.text_opt(row, "frame_index").unwrap_or("?"),
+                    if tendon {
+                        format!("{path} {:.0} deg", dir.unwrap_or(f64::NAN))
+                    } else {
+                        "no tendon".into()
+                    }
+                );
+                if let (true, Some(d)) = (tendon, dir) {
+                    let c = (ox as f64 + tw as f64 / 2.0, oy as f64 + th as f64 / 2.0);
+                    marks.extend(arrow(c, d, tw as f64 * 0.18, CYAN));
+                }
+            }
+        }
+        let (small, _, _) = downscale(&rgb, w, h, k);
+        for y in 0..th {
+            let src = &small[y * tw * 3..(y + 1) * tw * 3];
+            let dst = ((oy + y) * sw + ox) * 3;
+            sheet[dst..dst + tw * 3].copy_from_slice(src);
+        }
+        marks.push(Mark::Text {
+            at: (ox as i32 + 4, (oy + th + 3) as i32),
+            text: caption,
+            size: 15,
+            colour: WHITE,
+        });
+    }
+    draw_marks(&mut sheet, sw, sh, &marks)?;
+    save_rgb_png(out, sw, sh, &sheet)
+        .map_err(|e| Error::Invalid(format!("writing preview: {e}")))
+}

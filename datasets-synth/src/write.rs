@@ -1,0 +1,246 @@
+//! Writing synthetic datasets in the layout of `datasets.md`.
+//!
+//! Samples are rendered in parallel (rayon) into a hidden staging folder
+//! next to the output, which is renamed into place only when every file and
+//! the labels are written: an interrupted run leaves no half dataset.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use tactile_core::dataset::{DatasetKind, DatasetWriter, FORMAT, Manifest};
+use tactile_core::image_io::{save_grey_png, save_rgb_png};
+use tactile_core::{Error, Result};
+
+use crate::tactip::{self, FRAME_PX, TactipConfig};
+use crate::visuotactile::{self, NATIVE, VisuotactileConfig};
+
+/// Name and version of this generator, recorded in every manifest.
+pub const GENERATOR: &str = concat!("datasets-synth ", env!("CARGO_PKG_VERSION"));
+
+/// How to write.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct WriteOptions {
+    /// Replace an existing non-empty output folder.
+    pub force: bool,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+}
+
+/// Check the output folder before any work: refuse a non-empty one without `force`.
+pub fn check_output(out: &Path, force: bool) -> Result<()> {
+    if out.is_file() {
+        return Err(Error::Invalid(format!(
+            "{}: output exists and is a file, not a folder",
+            out.display()
+        )));
+    }
+    let non_empty = std::fs::read_dir(out)
+        .map(|mut d| d.next().is_some())
+        .unwrap_or(false);
+    if non_empty && !force {
+        return Err(Error::Invalid(format!(
+            "{}: output folder exists and is not empty (use --force to overwrite)",
+            out.display()
+        )));
+    }
+    Ok(())
+}
+
+fn staging_dir(out: &Path) -> Result<PathBuf> {
+    let name = out
+        .file_name()
+        .ok_or_else(|| Error::Invalid(format!("{}: not a folder name", out.display())))?;
+    let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    tactile_core::io::create_dir_all(parent)?;
+    let staging = parent.join(format!(".{}.partial", name.to_string_lossy()));
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging).map_err(|e| Error::io(&staging, e))?;
+    }
+    Ok(staging)
+}
+
+/// Render rows in parallel into a staging folder, then move it to `out`.
+fn write_dataset<F>(
+    out: &Path,
+    kind: DatasetKind,
+    extra_columns: &[&str],
+    count: usize,
+    manifest: Manifest,
+    options: WriteOptions,
+    subdirs: &[&str],
+    row: F,
+) -> Result<PathBuf>
+where
+    F: Fn(&Path, usize) -> Result<Vec<String>> + Sync,
+{
+    check_output(out, options.force)?;
+    let staging = staging_dir(out)?;
+    let result = (|| {
+        let mut writer = DatasetWriter::create(&staging, kind, extra_columns, true)?;
+        for d in subdirs {
+            tactile_core::io::create_dir_all(staging.join(d))?;
+        }
+        let pb = tactile_core::train::progress_bar(count as u64, "synth");
+        if !options.progress {
+            pb.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+        }
+        let rows: Vec<Vec<String>> = (0..count)
+            .into_par_iter()
+            .map(|i| {
+                let r = row(&staging, i);
+                pb.inc(1);
+                r
+            })
+            .collect::<Result<_>>()?;
+        pb.finish_and_clear();
+        for r in rows {
+            writer.push_row(r)?;
+        }
+        writer.finish(manifest)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_dir_all(&staging);
+        return Err(e);
+    }
+    if out.exists() {
+        std::fs::remove_dir_all(out).map_err(|e| Error::io(out, e))?;
+    }
+    std::fs::rename(&staging, out).map_err(|e| Error::io(out, e))?;
+    Ok(out.to_path_buf())
+}
+
+fn num(v: f64, decimals: usize) -> String {
+    format!("{v:.decimals$}")
+}
+
+fn opt(v: Option<f64>, decimals: usize) -> String {
+    v.map(|v| num(v, decimals)).unwrap_or_default()
+}
+
+/// Write `count` virtual TacTip frames with their labels to `out`.
+pub fn write_tactip(
+    config: &TactipConfig,
+    count: usize,
+    seed: u64,
+    out: &Path,
+    options: WriteOptions,
+) -> Result<PathBuf> {
+    config.validate()?;
+    if count == 0 {
+        return Err(Error::Config("count: must be at least 1".into()));
+    }
+    let mut extra = serde_json::Map::new();
+    extra.insert("config".into(), serde_json::to_value(config).map_err(|e| Error::Invalid(e.to_string()))?);
+    let manifest = Manifest {
+        format: FORMAT.into(),
+        kind: DatasetKind::Tactip,
+        sensor_spec: "virtual-tactip/1".into(),
+        width: FRAME_PX as u32,
+        height: FRAME_PX as u32,
+        generator: GENERATOR.into(),
+        seed: Some(seed),
+        count,
+        extra,
+    };
+    write_dataset(
+        out,
+        DatasetKind::Tactip,
+        &["radius_mm"],
+        count,
+        manifest,
+        options,
+        &["frames"],
+        |root, i| {
+            let (scene, frame) = tactip::sample(config, seed, i as u64);
+            let file = format!("frames/{i:06}.png");
+            save_grey_png(root.join(&file), FRAME_PX, FRAME_PX, &frame.pixels)?;
+            let s = &scene.shape;
+            let radius = match s {
+                tactip::Shape::Sphere { radius_mm } => Some(*radius_mm),
+                _ => None,
+            };
+            Ok(vec![
+                file,
+                s.name().to_string(),
+                opt(s.has_position().then_some(scene.x_mm), 4),
+                opt(s.has_position().then_some(scene.y_mm), 4),
+                opt(s.has_orientation().then_some(scene.theta_deg), 3),
+                num(scene.depth_mm, 4),
+                num(frame.force_n, 4),
+                opt(radius, 4),
+            ])
+        },
+    )
+}
+
+/// Frames and sequences of a visuo-tactile dataset: `count` frames in
+/// videos of `config.frames_per_sequence` (the last one may be cut short).
+pub fn write_visuotactile(
+    config: &VisuotactileConfig,
+    count: usize,
+    seed: u64,
+    out: &Path,
+    options: WriteOptions,
+) -> Result<PathBuf> {
+    config.validate()?;
+    if count == 0 {
+        return Err(Error::Config("count: must be at least 1".into()));
+    }
+    let fps = config.frames_per_sequence;
+    let sequences = count.div_ceil(fps);
+    let mut extra = serde_json::Map::new();
+    extra.insert("config".into(), serde_json::to_value(config).map_err(|e| Error::Invalid(e.to_string()))?);
+    extra.insert(
+        "native".into(),
+        serde_json::json!({ "width": NATIVE.0, "height": NATIVE.1,
+            "scale": format!("1/{}", config.scale_divisor()), "fps": visuotactile::FPS }),
+    );
+    extra.insert("sequences".into(), sequences.into());
+    let manifest = Manifest {
+        format: FORMAT.into(),
+        kind: DatasetKind::Visuotactile,
+        sensor_spec: "virtual-visuotactile/1".into(),
+        width: config.width,
+        height: config.height,
+        generator: GENERATOR.into(),
+        seed: Some(seed),
+        count,
+        extra,
+    };
+    write_dataset(
+        out,
+        DatasetKind::Visuotactile,
+        &["tendon_radius_mm", "burial_mm", "ridge_mm"],
+        count,
+        manifest,
+        options,
+        &["frames", "masks", "depth"],
+        |root, i| {
+            let (seq, f) = (i / fps, i % fps);
+            let (scene, frame) = visuotactile::sample(config, seed, seq as u64, f);
+            let stem = format!("{i:06}");
+            let (file, mask, depth) = (
+                format!("frames/{stem}.png"),
+                format!("masks/{stem}.png"),
+                format!("depth/{stem}.npy"),
+            );
+            save_rgb_png(root.join(&file), frame.width, frame.height, &frame.rgb)?;
+            save_grey_png(root.join(&mask), frame.width, frame.height, &frame.mask)?;
+            crate::npy::write_depth_npy(root.join(&depth), frame.width, frame.height, &frame.depth_m)?;
+            Ok(vec![
+                file,
+                mask,
+                depth,
+                u8::from(frame.tendon).to_string(),
+                opt(frame.direction_deg, 3),
+                scene.path.name().to_string(),
+                num(frame.press_mm, 4),
+                seq.to_string(),
+                f.to_string(),
+                num(scene.tendon_radius_mm, 4),
+                num(scene.burial_mm, 4),
+                num(frame.ridge_mm, 5),
+            ])
+        },
+    )
+}
