@@ -87,7 +87,10 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
             DatasetKind::Tactip => {
                 let g = load_grey(&frame_path)?;
                 tactile_core::image_io::expect_size(&frame_path, g.width(), g.height(), (w, h))?;
-                g.as_slice().iter().flat_map(|&v| [v, v, v]).collect::<Vec<u8>>()
+                g.as_slice()
+                    .iter()
+                    .flat_map(|&v| [v, v, v])
+                    .collect::<Vec<u8>>()
             }
             DatasetKind::Visuotactile => {
                 let c = load_rgb(&frame_path)?;
@@ -112,7 +115,10 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
                 let theta = ds.number_opt(row, "theta_deg")?;
                 let to_px = |xm: f64, ym: f64| {
                     let (u, v) = crate::tactip::mm_to_px(xm, ym);
-                    (ox as f64 + u * scale * w as f64 / 300.0, oy as f64 + v * scale * h as f64 / 300.0)
+                    (
+                        ox as f64 + u * scale * w as f64 / 300.0,
+                        oy as f64 + v * scale * h as f64 / 300.0,
+                    )
                 };
                 if let (Some(x), Some(t)) = (x, theta) {
                     // Contact point; for an edge, the point of the edge line nearest the centre.
@@ -177,6 +183,5 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
         });
     }
     draw_marks(&mut sheet, sw, sh, &marks)?;
-    save_rgb_png(out, sw, sh, &sheet)
-        .map_err(|e| Error::Invalid(format!("writing preview: {e}")))
+    save_rgb_png(out, sw, sh, &sheet).map_err(|e| Error::Invalid(format!("writing preview: {e}")))
 }

@@ -88,7 +88,9 @@ impl SampleRng {
     /// The generator of sample `index` in `stream` (streams separate, e.g.,
     /// a sequence's scene from its frames' noise) under the dataset `seed`.
     pub fn new(seed: u64, stream: u64, index: u64) -> Self {
-        let key = splitmix64(seed ^ splitmix64(stream.wrapping_mul(0xA24B_AED4_963E_E407) ^ splitmix64(index)));
+        let key = splitmix64(
+            seed ^ splitmix64(stream.wrapping_mul(0xA24B_AED4_963E_E407) ^ splitmix64(index)),
+        );
         Self {
             rng: Xoshiro256PlusPlus::seed_from_u64(key),
             spare_normal: None,
@@ -137,14 +139,23 @@ mod tests {
     fn streams_are_reproducible_and_independent() {
         let a: Vec<f64> = (0..4).map(|_| SampleRng::new(1, 0, 5).uniform()).collect();
         assert!(a.windows(2).all(|w| w[0] == w[1]));
-        assert_ne!(SampleRng::new(1, 0, 5).uniform(), SampleRng::new(1, 0, 6).uniform());
-        assert_ne!(SampleRng::new(1, 0, 5).uniform(), SampleRng::new(1, 1, 5).uniform());
+        assert_ne!(
+            SampleRng::new(1, 0, 5).uniform(),
+            SampleRng::new(1, 0, 6).uniform()
+        );
+        assert_ne!(
+            SampleRng::new(1, 0, 5).uniform(),
+            SampleRng::new(1, 1, 5).uniform()
+        );
         let mut r = SampleRng::new(3, 0, 0);
         let n = 20000;
         let xs: Vec<f64> = (0..n).map(|_| r.normal()).collect();
         let mean = xs.iter().sum::<f64>() / n as f64;
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
-        assert!(mean.abs() < 0.03 && (var - 1.0).abs() < 0.05, "{mean} {var}");
+        assert!(
+            mean.abs() < 0.03 && (var - 1.0).abs() < 0.05,
+            "{mean} {var}"
+        );
     }
 
     #[test]
@@ -152,7 +163,10 @@ mod tests {
         let r: Range = "1, 2.5".parse().unwrap();
         assert_eq!(r, Range::new(1.0, 2.5));
         assert!("x,1".parse::<Range>().is_err());
-        let e = Range::new(3.0, 1.0).check("depth_mm", 0.0, 5.0).unwrap_err().to_string();
+        let e = Range::new(3.0, 1.0)
+            .check("depth_mm", 0.0, 5.0)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("depth_mm") && e.contains("inverted"), "{e}");
         assert!(Range::new(0.0, 9.0).check("depth_mm", 0.0, 5.0).is_err());
     }

@@ -308,8 +308,9 @@ impl PenetrationField {
                 Shape::Cuboid => (along.abs() <= CUBOID_FACE_MM.0 / 2.0
                     && across.abs() <= CUBOID_FACE_MM.1 / 2.0)
                     .then_some(0.0),
-                Shape::Cylinder { radius_mm: r } => (across.abs() < r)
-                    .then(|| r - libm::sqrt(r * r - across * across)),
+                Shape::Cylinder { radius_mm: r } => {
+                    (across.abs() < r).then(|| r - libm::sqrt(r * r - across * across))
+                }
                 Shape::Prism => Some(3f64.sqrt() * across.abs()),
                 // The object covers n . (x, y) <= x_mm, n = (-sin, cos).
                 Shape::Edge => (-x * s + y * c <= scene.x_mm).then_some(0.0),
@@ -405,7 +406,11 @@ pub fn pin_rest_positions_mm() -> Vec<(f64, f64)> {
     }
     let angle = |x: f64, y: f64| {
         let a = libm::atan2(y, x);
-        if a < -1e-9 { a + 2.0 * std::f64::consts::PI } else { a.max(0.0) }
+        if a < -1e-9 {
+            a + 2.0 * std::f64::consts::PI
+        } else {
+            a.max(0.0)
+        }
     };
     pins.sort_by(|a, b| {
         a.0.cmp(&b.0)
@@ -467,8 +472,14 @@ pub fn render(scene: &TactipScene, rng: &mut SampleRng) -> TactipFrame {
     let mut cover = vec![0.0f32; n * n];
     for pin in &pins {
         let r = pin.radius_px + 1.0;
-        let (u0, u1) = ((pin.u - r).floor().max(0.0) as usize, ((pin.u + r).ceil() as usize).min(n - 1));
-        let (v0, v1) = ((pin.v - r).floor().max(0.0) as usize, ((pin.v + r).ceil() as usize).min(n - 1));
+        let (u0, u1) = (
+            (pin.u - r).floor().max(0.0) as usize,
+            ((pin.u + r).ceil() as usize).min(n - 1),
+        );
+        let (v0, v1) = (
+            (pin.v - r).floor().max(0.0) as usize,
+            ((pin.v + r).ceil() as usize).min(n - 1),
+        );
         for v in v0..=v1 {
             for u in u0..=u1 {
                 let d = libm::hypot(u as f64 - pin.u, v as f64 - pin.v);
@@ -525,7 +536,10 @@ mod tests {
         let pins = pin_rest_positions_mm();
         assert_eq!(pins.len(), 127);
         assert_eq!(pins[0], (0.0, 0.0));
-        let far = pins.iter().map(|&(x, y)| libm::hypot(x, y)).fold(0.0, f64::max);
+        let far = pins
+            .iter()
+            .map(|&(x, y)| libm::hypot(x, y))
+            .fold(0.0, f64::max);
         // Outer ring: s = 15.6 mm on the surface, R sin(s/R) from the axis.
         assert!((far - 20.0 * (15.6f64 / 20.0).sin()).abs() < 1e-9, "{far}");
         assert!(far * PX_PER_MM < CENTRE_PX);

@@ -156,18 +156,23 @@ impl VisuotactileConfig {
             )));
         }
         if self.paths.is_empty() {
-            return Err(Error::Config("paths: at least one tendon path is needed".into()));
+            return Err(Error::Config(
+                "paths: at least one tendon path is needed".into(),
+            ));
         }
         self.tendon_radius_mm.check("tendon_radius_mm", 0.1, 20.0)?;
         self.burial_mm.check("burial_mm", 0.0, 20.0)?;
-        self.curvature_radius_mm.check("curvature_radius_mm", 1.0, 1000.0)?;
+        self.curvature_radius_mm
+            .check("curvature_radius_mm", 1.0, 1000.0)?;
         self.press_mm.check("press_mm", 0.0, 10.0)?;
         Range::fixed(self.centre_fraction).check("centre_fraction", 0.0, 1.0)?;
         Range::fixed(self.out_of_view_fraction).check("out_of_view_fraction", 0.0, 1.0)?;
         self.exposure_jitter.check("exposure_jitter", -0.9, 0.9)?;
         self.noise_sigma.check("noise_sigma", 0.0, 100.0)?;
         if self.frames_per_sequence == 0 {
-            return Err(Error::Config("frames_per_sequence: must be at least 1".into()));
+            return Err(Error::Config(
+                "frames_per_sequence: must be at least 1".into(),
+            ));
         }
         Ok(())
     }
@@ -336,7 +341,10 @@ impl CentreLine {
         let mut pieces = Vec::new();
         // Forward half along +tangent, backward half along -tangent. For one
         // circle the backward half (walking -tangent) bends the other way.
-        let halves = [(tangent, bend), (scale(tangent, -1.0), if s_curve { bend } else { -bend })];
+        let halves = [
+            (tangent, bend),
+            (scale(tangent, -1.0), if s_curve { bend } else { -bend }),
+        ];
         for (dir, sign) in halves {
             let centre = add(anchor, scale(perp(dir), sign * radius));
             let d = sub(anchor, centre);
@@ -432,20 +440,31 @@ impl SequenceScene {
         let bend = if rng.chance(0.5) { 1.0 } else { -1.0 };
         let offset_u = rng.uniform();
         let margin_u = rng.uniform();
-        let half_width_mm = camera.to_mm(camera.cx + camera.width as f64 / 2.0, camera.cy).0;
+        let half_width_mm = camera
+            .to_mm(camera.cx + camera.width as f64 / 2.0, camera.cy)
+            .0;
         let half_diag_mm = camera.r_max * NOMINAL_DEPTH_MM / camera.fx;
         // The tangent at the anchor is perpendicular to the radial direction,
         // so the anchor is the line's point nearest the frame centre.
-        let tangent = if forward { perp(radial) } else { scale(perp(radial), -1.0) };
+        let tangent = if forward {
+            perp(radial)
+        } else {
+            scale(perp(radial), -1.0)
+        };
         let w = RIDGE_WIDTH.0 * tendon_radius_mm + RIDGE_WIDTH.1 * burial_mm;
         let (line, path) = if in_view {
             let anchor = scale(radial, offset_u * config.centre_fraction * half_width_mm);
             let half_angle = (half_diag_mm / curvature_radius_mm).min(PI / 2.0);
             let line = match path {
                 TendonPath::Straight => CentreLine::straight(anchor, tangent),
-                TendonPath::Arc => {
-                    CentreLine::curved(anchor, tangent, curvature_radius_mm, half_angle, bend, false)
-                }
+                TendonPath::Arc => CentreLine::curved(
+                    anchor,
+                    tangent,
+                    curvature_radius_mm,
+                    half_angle,
+                    bend,
+                    false,
+                ),
                 TendonPath::SCurve => {
                     CentreLine::curved(anchor, tangent, curvature_radius_mm, half_angle, bend, true)
                 }

@@ -50,7 +50,10 @@ fn staging_dir(out: &Path) -> Result<PathBuf> {
     let name = out
         .file_name()
         .ok_or_else(|| Error::Invalid(format!("{}: not a folder name", out.display())))?;
-    let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     tactile_core::io::create_dir_all(parent)?;
     let staging = parent.join(format!(".{}.partial", name.to_string_lossy()));
     if staging.exists() {
@@ -130,7 +133,10 @@ pub fn write_tactip(
         return Err(Error::Config("count: must be at least 1".into()));
     }
     let mut extra = serde_json::Map::new();
-    extra.insert("config".into(), serde_json::to_value(config).map_err(|e| Error::Invalid(e.to_string()))?);
+    extra.insert(
+        "config".into(),
+        serde_json::to_value(config).map_err(|e| Error::Invalid(e.to_string()))?,
+    );
     let manifest = Manifest {
         format: FORMAT.into(),
         kind: DatasetKind::Tactip,
@@ -189,7 +195,10 @@ pub fn write_visuotactile(
     let fps = config.frames_per_sequence;
     let sequences = count.div_ceil(fps);
     let mut extra = serde_json::Map::new();
-    extra.insert("config".into(), serde_json::to_value(config).map_err(|e| Error::Invalid(e.to_string()))?);
+    extra.insert(
+        "config".into(),
+        serde_json::to_value(config).map_err(|e| Error::Invalid(e.to_string()))?,
+    );
     extra.insert(
         "native".into(),
         serde_json::json!({ "width": NATIVE.0, "height": NATIVE.1,
@@ -226,7 +235,12 @@ pub fn write_visuotactile(
             );
             save_rgb_png(root.join(&file), frame.width, frame.height, &frame.rgb)?;
             save_grey_png(root.join(&mask), frame.width, frame.height, &frame.mask)?;
-            crate::npy::write_depth_npy(root.join(&depth), frame.width, frame.height, &frame.depth_m)?;
+            crate::npy::write_depth_npy(
+                root.join(&depth),
+                frame.width,
+                frame.height,
+                &frame.depth_m,
+            )?;
             Ok(vec![
                 file,
                 mask,

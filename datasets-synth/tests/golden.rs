@@ -12,7 +12,8 @@ use sha2::{Digest, Sha256};
 use tactile_core::image_io::{load_grey, load_rgb};
 
 const TACTIP_GOLDEN: &str = "e4e547b3d2e05079fbea2363c1f71956e560e8153250e164a9e6bf284c506f38";
-const VISUOTACTILE_GOLDEN: &str = "5a507232cd3019026418e86a1d9006630ebbbaab6e120a1ce788de071b728707";
+const VISUOTACTILE_GOLDEN: &str =
+    "5a507232cd3019026418e86a1d9006630ebbbaab6e120a1ce788de071b728707";
 
 fn dataset_hash(root: &Path) -> String {
     let mut files: Vec<String> = Vec::new();
@@ -40,7 +41,8 @@ fn dataset_hash(root: &Path) -> String {
             }
         } else if f == "manifest.json" {
             // The generator's version string is not content.
-            let mut m: serde_json::Value = serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
+            let mut m: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
             m["generator"] = serde_json::Value::Null;
             serde_json::to_vec(&m).unwrap()
         } else {
@@ -55,8 +57,14 @@ fn dataset_hash(root: &Path) -> String {
 fn tactip_golden() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("t");
-    datasets_synth::write_tactip(&TactipConfig::default(), 6, 2024, &out, WriteOptions::default())
-        .unwrap();
+    datasets_synth::write_tactip(
+        &TactipConfig::default(),
+        6,
+        2024,
+        &out,
+        WriteOptions::default(),
+    )
+    .unwrap();
     let got = dataset_hash(&out);
     assert_eq!(got, TACTIP_GOLDEN, "virtual TacTip output changed");
 }
@@ -73,5 +81,8 @@ fn visuotactile_golden() {
     };
     datasets_synth::write_visuotactile(&cfg, 10, 2024, &out, WriteOptions::default()).unwrap();
     let got = dataset_hash(&out);
-    assert_eq!(got, VISUOTACTILE_GOLDEN, "virtual visuo-tactile output changed");
+    assert_eq!(
+        got, VISUOTACTILE_GOLDEN,
+        "virtual visuo-tactile output changed"
+    );
 }

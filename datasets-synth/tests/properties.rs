@@ -26,7 +26,9 @@ fn principal_axis_deg(mask: &[u8], width: usize) -> f64 {
         .map(|(i, _)| ((i % width) as f64, (i / width) as f64))
         .collect();
     let n = pts.len() as f64;
-    let (mu, mv) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0 / n, a.1 + p.1 / n));
+    let (mu, mv) = pts
+        .iter()
+        .fold((0.0, 0.0), |a, p| (a.0 + p.0 / n, a.1 + p.1 / n));
     let (mut suu, mut svv, mut suv) = (0.0, 0.0, 0.0);
     for p in &pts {
         suu += (p.0 - mu).powi(2);
@@ -55,7 +57,11 @@ fn visuotactile_labels_match_masks_depth_and_press() {
         let set = mask.as_slice().iter().filter(|&&m| m == 255).count();
         assert!(mask.as_slice().iter().all(|&m| m == 0 || m == 255));
         let tendon = ds.number(i, "tendon").unwrap() == 1.0;
-        assert_eq!(set > 0, tendon, "row {i}: mask pixels {set}, tendon {tendon}");
+        assert_eq!(
+            set > 0,
+            tendon,
+            "row {i}: mask pixels {set}, tendon {tendon}"
+        );
         assert_eq!(ds.number_opt(i, "direction_deg").unwrap().is_some(), tendon);
         if let Some(d) = ds.number_opt(i, "direction_deg").unwrap() {
             assert!((0.0..180.0).contains(&d));
@@ -120,14 +126,33 @@ fn skin_at_rest_is_uniform_grey_and_contact_shades_it() {
         ..small_visuo()
     };
     let cam = visuotactile::Camera::new(cfg.width, cfg.height);
-    let scene = visuotactile::SequenceScene::draw(&cfg, &cam, &mut datasets_synth::rng::SampleRng::new(1, 1, 0));
-    let rest = visuotactile::render(&cfg, &scene, 0.0, &mut datasets_synth::rng::SampleRng::new(1, 2, 0));
+    let scene = visuotactile::SequenceScene::draw(
+        &cfg,
+        &cam,
+        &mut datasets_synth::rng::SampleRng::new(1, 1, 0),
+    );
+    let rest = visuotactile::render(
+        &cfg,
+        &scene,
+        0.0,
+        &mut datasets_synth::rng::SampleRng::new(1, 2, 0),
+    );
     // Centre pixel, away from the glare: albedo 0.8 * (0.25 + sin 30) = 0.6 -> 153.
     let i = (90 * 320 + 160) * 3;
     assert_eq!(&rest.rgb[i..i + 3], &[153, 153, 153]);
     assert!(!rest.tendon && rest.mask.iter().all(|&m| m == 0));
-    let pressed = visuotactile::render(&cfg, &scene, 3.0, &mut datasets_synth::rng::SampleRng::new(1, 2, 0));
-    let diff: u64 = pressed.rgb.iter().zip(&rest.rgb).map(|(a, b)| a.abs_diff(*b) as u64).sum();
+    let pressed = visuotactile::render(
+        &cfg,
+        &scene,
+        3.0,
+        &mut datasets_synth::rng::SampleRng::new(1, 2, 0),
+    );
+    let diff: u64 = pressed
+        .rgb
+        .iter()
+        .zip(&rest.rgb)
+        .map(|(a, b)| a.abs_diff(*b) as u64)
+        .sum();
     assert!(diff > 1000, "contact changed the image by only {diff}");
 }
 
@@ -180,7 +205,13 @@ fn force_grows_with_depth() {
 #[test]
 fn pins_move_away_from_a_sphere_and_grow_under_it() {
     let contact = (2.0, -1.5);
-    let scene = TactipScene::clean(Shape::Sphere { radius_mm: 6.0 }, contact.0, contact.1, 0.0, 3.0);
+    let scene = TactipScene::clean(
+        Shape::Sphere { radius_mm: 6.0 },
+        contact.0,
+        contact.1,
+        0.0,
+        3.0,
+    );
     let field = PenetrationField::new(&scene);
     let moved = tactip::deform_pins(&field);
     let rest = tactip::pin_rest_positions_mm();
@@ -204,15 +235,25 @@ fn pins_move_away_from_a_sphere_and_grow_under_it() {
         }
     }
     assert!(checked >= 6, "{checked}");
-    assert!(cos_sum / checked as f64 > 0.97, "mean cos {}", cos_sum / checked as f64);
+    assert!(
+        cos_sum / checked as f64 > 0.97,
+        "mean cos {}",
+        cos_sum / checked as f64
+    );
 }
 
 #[test]
 fn tactip_labels_follow_the_spec() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("tt");
-    datasets_synth::write_tactip(&TactipConfig::default(), 40, 3, &out, WriteOptions::default())
-        .unwrap();
+    datasets_synth::write_tactip(
+        &TactipConfig::default(),
+        40,
+        3,
+        &out,
+        WriteOptions::default(),
+    )
+    .unwrap();
     let ds = Dataset::open(&out).unwrap();
     let mut shapes = std::collections::BTreeSet::new();
     for i in 0..ds.len() {
@@ -248,18 +289,70 @@ fn same_seed_same_bytes_and_extending_keeps_earlier_samples() {
     datasets_synth::write_visuotactile(&cfg, 10, 9, &a, WriteOptions::default()).unwrap();
     datasets_synth::write_visuotactile(&cfg, 14, 9, &b, WriteOptions::default()).unwrap();
     for i in 0..10 {
-        for f in [format!("frames/{i:06}.png"), format!("masks/{i:06}.png"), format!("depth/{i:06}.npy")] {
-            assert_eq!(std::fs::read(a.join(&f)).unwrap(), std::fs::read(b.join(&f)).unwrap(), "{f}");
+        for f in [
+            format!("frames/{i:06}.png"),
+            format!("masks/{i:06}.png"),
+            format!("depth/{i:06}.npy"),
+        ] {
+            assert_eq!(
+                std::fs::read(a.join(&f)).unwrap(),
+                std::fs::read(b.join(&f)).unwrap(),
+                "{f}"
+            );
         }
     }
     let la = std::fs::read_to_string(a.join("labels.csv")).unwrap();
     let lb = std::fs::read_to_string(b.join("labels.csv")).unwrap();
     assert!(lb.starts_with(&la));
     let (t1, t2) = (dir.path().join("t1"), dir.path().join("t2"));
-    datasets_synth::write_tactip(&TactipConfig::default(), 3, 9, &t1, WriteOptions::default()).unwrap();
-    datasets_synth::write_tactip(&TactipConfig::default(), 5, 9, &t2, WriteOptions::default()).unwrap();
+    datasets_synth::write_tactip(&TactipConfig::default(), 3, 9, &t1, WriteOptions::default())
+        .unwrap();
+    datasets_synth::write_tactip(&TactipConfig::default(), 5, 9, &t2, WriteOptions::default())
+        .unwrap();
     for i in 0..3 {
         let f = format!("frames/{i:06}.png");
-        assert_eq!(std::fs::read(t1.join(&f)).unwrap(), std::fs::read(t2.join(&f)).unwrap());
+        assert_eq!(
+            std::fs::read(t1.join(&f)).unwrap(),
+            std::fs::read(t2.join(&f)).unwrap()
+        );
     }
+}
+
+#[test]
+fn numpy_reads_the_depth_maps() {
+    // numpy comes with the onnx wheel that scripts/install-ort.sh installs.
+    let pythonpath = std::env::var_os("TACTILE_PYTHONPATH")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../.ort"));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("vt");
+    let cfg = VisuotactileConfig {
+        frames_per_sequence: 1,
+        press_mm: Range::new(3.0, 3.0),
+        ..small_visuo()
+    };
+    datasets_synth::write_visuotactile(&cfg, 1, 4, &out, WriteOptions::default()).unwrap();
+    let (_, _, ours) = datasets_synth::npy::read_depth_npy(out.join("depth/000000.npy")).unwrap();
+    let run = std::process::Command::new("python3")
+        .env("PYTHONPATH", &pythonpath)
+        .args([
+            "-c",
+            "import sys, numpy as np; a = np.load(sys.argv[1]); \
+             print(a.dtype, a.shape, repr(float(a.min())), repr(float(a.max())))",
+        ])
+        .arg(out.join("depth/000000.npy"))
+        .output()
+        .expect("python3");
+    let text = String::from_utf8_lossy(&run.stdout).to_string();
+    assert!(
+        run.status.success(),
+        "numpy could not read the depth map (run the tests through scripts/test.sh, \
+         which installs numpy): {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let parts: Vec<&str> = text.split_whitespace().collect();
+    assert_eq!(parts[0], "float32", "{text}");
+    assert_eq!(parts[1..3].join(" "), "(180, 320)", "{text}");
+    let lo = ours.iter().copied().fold(f32::MAX, f32::min) as f64;
+    assert_eq!(parts[3].parse::<f64>().unwrap(), lo, "{text}");
 }

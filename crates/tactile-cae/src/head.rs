@@ -123,7 +123,10 @@ impl ClassifierHead {
     /// Train the k-fold ensemble on `(x, y)`.
     pub fn train(config: HeadConfig, x: &[Vec<f32>], y: &[usize], device: &Device) -> Result<Self> {
         if config.folds < 2 {
-            return Err(Error::Config(format!("head folds must be at least 2, got {}", config.folds)));
+            return Err(Error::Config(format!(
+                "head folds must be at least 2, got {}",
+                config.folds
+            )));
         }
         if x.len() < config.folds || x.len() != y.len() {
             return Err(Error::Invalid(format!(
@@ -153,8 +156,8 @@ impl ClassifierHead {
             })
             .collect();
         // Folds from one seeded shuffle.
-        let order = shuffled_batches(&(0..x.len()).collect::<Vec<_>>(), x.len(), config.seed)
-            .concat();
+        let order =
+            shuffled_batches(&(0..x.len()).collect::<Vec<_>>(), x.len(), config.seed).concat();
         let mut members = Vec::with_capacity(config.folds);
         for fold in 0..config.folds {
             let (mut tr, mut va) = (Vec::new(), Vec::new());
@@ -166,7 +169,10 @@ impl ClassifierHead {
                 }
             }
             let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
-                (idx.iter().map(|&i| x[i].clone()).collect(), idx.iter().map(|&i| y[i]).collect())
+                (
+                    idx.iter().map(|&i| x[i].clone()).collect(),
+                    idx.iter().map(|&i| y[i]).collect(),
+                )
             };
             let (tx, ty) = pick(&tr);
             let (vx, vy) = pick(&va);
@@ -239,7 +245,12 @@ impl ClassifierHead {
         let dir = dir.as_ref();
         let f: HeadFile = tactile_core::io::read_json(dir.join("head.json"))?;
         let members = (0..f.config.folds)
-            .map(|i| load_module(f.config.init_mlp(device), &dir.join(format!("member{i}.bpk"))))
+            .map(|i| {
+                load_module(
+                    f.config.init_mlp(device),
+                    &dir.join(format!("member{i}.bpk")),
+                )
+            })
             .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             config: f.config,
@@ -271,7 +282,10 @@ fn train_member(
     );
     let vx = to_tensor(val_x, mean, std, device);
     let vy = Tensor::<1, Int>::from_data(
-        TensorData::new(val_y.iter().map(|&c| c as i64).collect::<Vec<_>>(), [val_y.len()]),
+        TensorData::new(
+            val_y.iter().map(|&c| c as i64).collect::<Vec<_>>(),
+            [val_y.len()],
+        ),
         device,
     );
     let val_loss = CrossEntropyLossConfig::new().init(device);

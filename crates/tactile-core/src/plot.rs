@@ -197,10 +197,7 @@ pub fn draw_marks(rgb: &mut [u8], width: usize, height: usize, marks: &[Mark]) -
                     width,
                 } => {
                     let c = RGBColor(colour[0], colour[1], colour[2]);
-                    root.draw(&PathElement::new(
-                        vec![*from, *to],
-                        c.stroke_width(*width),
-                    ))?;
+                    root.draw(&PathElement::new(vec![*from, *to], c.stroke_width(*width)))?;
                 }
                 Mark::Dot { at, radius, colour } => {
                     let c = RGBColor(colour[0], colour[1], colour[2]);

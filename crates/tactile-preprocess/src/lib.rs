@@ -88,7 +88,10 @@ impl PreprocessConfig {
             equalize: false,
             threshold: None,
             mask_radius_px: Some(145.0),
-            open_px: 2,
+            // No 2x2 opening: with an even kernel OpenCV's (and kornia's)
+            // erode-then-dilate moves every pin by one pixel down and right;
+            // the 3x3 denoise already removes isolated noise pixels.
+            open_px: 0,
             crop_px: 300,
             output_px: 28,
             binarise_offset: 0.3,

@@ -227,7 +227,11 @@ pub fn train_head(a: TrainHeadArgs) -> Result<()> {
         .with_seed(a.seed)
         .with_folds(a.folds);
     let dev = a.device.device();
-    eprintln!("training a {}-fold head ensemble on {} frames", a.folds, tx.len());
+    eprintln!(
+        "training a {}-fold head ensemble on {} frames",
+        a.folds,
+        tx.len()
+    );
     let head = ClassifierHead::train(cfg, &tx, &ty, &dev)?;
     head.save(&out)?;
     if let Some(test) = ds.split_indices("test") {

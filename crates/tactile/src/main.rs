@@ -103,6 +103,8 @@ enum TrainCmd {
 enum BenchCmd {
     /// The CAE encoder.
     Cae(bench::BenchCaeArgs),
+    /// The virtual sensors: frames/s rendered and written.
+    Synth(bench::BenchSynthArgs),
 }
 
 fn main() -> Result<()> {
@@ -130,6 +132,9 @@ fn main() -> Result<()> {
         Command::Bench {
             model: BenchCmd::Cae(a),
         } => bench::bench_cae(a),
+        Command::Bench {
+            model: BenchCmd::Synth(a),
+        } => bench::bench_synth(a),
         Command::Demo {
             model,
             data,

@@ -99,7 +99,8 @@ fn load_config<T: serde::de::DeserializeOwned + Default>(path: Option<&Path>) ->
         Some(p) => {
             let text = std::fs::read_to_string(p)
                 .with_context(|| format!("reading generator config {}", p.display()))?;
-            serde_json::from_str(&text).with_context(|| format!("{}: invalid generator config", p.display()))
+            serde_json::from_str(&text)
+                .with_context(|| format!("{}: invalid generator config", p.display()))
         }
     }
 }
@@ -125,7 +126,14 @@ pub fn tactip(a: TactipArgs) -> Result<()> {
     macro_rules! set {
         ($($f:ident),*) => { $( if let Some(v) = a.$f { cfg.$f = v; } )* };
     }
-    set!(depth_mm, x_mm, y_mm, theta_deg, noise_sigma, blob_probability);
+    set!(
+        depth_mm,
+        x_mm,
+        y_mm,
+        theta_deg,
+        noise_sigma,
+        blob_probability
+    );
     let count = a.common.count.context("--count is required")?;
     let t = std::time::Instant::now();
     let out = write_tactip(
@@ -138,7 +146,13 @@ pub fn tactip(a: TactipArgs) -> Result<()> {
             progress: true,
         },
     )?;
-    finish(&a.common, &out, "virtual TacTip", count, t.elapsed().as_secs_f64())
+    finish(
+        &a.common,
+        &out,
+        "virtual TacTip",
+        count,
+        t.elapsed().as_secs_f64(),
+    )
 }
 
 pub fn visuotactile(a: VisuotactileArgs) -> Result<()> {
@@ -158,7 +172,13 @@ pub fn visuotactile(a: VisuotactileArgs) -> Result<()> {
     macro_rules! set {
         ($($f:ident),*) => { $( if let Some(v) = a.$f { cfg.$f = v; } )* };
     }
-    set!(frames_per_sequence, press_mm, tendon_radius_mm, burial_mm, noise_sigma);
+    set!(
+        frames_per_sequence,
+        press_mm,
+        tendon_radius_mm,
+        burial_mm,
+        noise_sigma
+    );
     let count = match (a.common.count, a.sequences) {
         (Some(c), None) => c,
         (None, Some(k)) => k * cfg.frames_per_sequence,
@@ -180,5 +200,11 @@ pub fn visuotactile(a: VisuotactileArgs) -> Result<()> {
             progress: true,
         },
     )?;
-    finish(&a.common, &out, "virtual visuo-tactile", count, t.elapsed().as_secs_f64())
+    finish(
+        &a.common,
+        &out,
+        "virtual visuo-tactile",
+        count,
+        t.elapsed().as_secs_f64(),
+    )
 }

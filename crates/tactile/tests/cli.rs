@@ -214,3 +214,140 @@ fn training_resumes_to_the_same_result() {
         "resumed model differs from the uninterrupted one"
     );
 }
+
+/// Files and folders directly in `dir` (sorted), to show nothing was written.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn synth_rejects_bad_configuration_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("ds");
+    let o = out.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["synth", "tactip", "--count", "-3", "--out", o], "-3"),
+        (vec!["synth", "tactip", "--count", "0", "--out", o], "count"),
+        (
+            vec![
+                "synth",
+                "tactip",
+                "--count",
+                "2",
+                "--out",
+                o,
+                "--depth-mm",
+                "4,1",
+            ],
+            "inverted",
+        ),
+        (
+            vec![
+                "synth",
+                "tactip",
+                "--count",
+                "2",
+                "--out",
+                o,
+                "--shapes",
+                "cube,sphere",
+            ],
+            "unknown shape 'cube'",
+        ),
+        (
+            vec![
+                "synth",
+                "visuotactile",
+                "--count",
+                "2",
+                "--out",
+                o,
+                "--width",
+                "500",
+                "--height",
+                "300",
+            ],
+            "integer fraction",
+        ),
+        (
+            vec![
+                "synth",
+                "visuotactile",
+                "--count",
+                "2",
+                "--out",
+                o,
+                "--paths",
+                "zigzag",
+            ],
+            "zigzag",
+        ),
+    ];
+    for (args, expect) in cases {
+        let (ok, msg) = tactile(&args);
+        assert!(!ok && msg.contains(expect), "{args:?}: {msg}");
+        assert!(
+            listing(tmp.path()).is_empty(),
+            "{args:?} left {:?}",
+            listing(tmp.path())
+        );
+    }
+    // A config file with an unknown key names the file.
+    let cfg = tmp.path().join("gen.json");
+    std::fs::write(&cfg, r#"{"depth_mm": {"min": 0, "max": 2}, "colour": 3}"#).unwrap();
+    let (ok, msg) = tactile(&[
+        "synth",
+        "tactip",
+        "--count",
+        "2",
+        "--out",
+        o,
+        "--config",
+        cfg.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && msg.contains("gen.json") && msg.contains("colour"),
+        "{msg}"
+    );
+    assert_eq!(listing(tmp.path()), vec!["gen.json"]);
+}
+
+#[test]
+fn synth_keeps_a_non_empty_folder_unless_forced() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("ds");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let o = out.to_str().unwrap();
+    let (ok, msg) = tactile(&["synth", "tactip", "--count", "2", "--out", o]);
+    assert!(
+        !ok && msg.contains("not empty") && msg.contains("--force"),
+        "{msg}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    assert_eq!(listing(tmp.path()), vec!["ds"]);
+    let preview = tmp.path().join("preview.png");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "tactip",
+        "--count",
+        "3",
+        "--out",
+        o,
+        "--force",
+        "--preview",
+        preview.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    assert_eq!(listing(&out), vec!["frames", "labels.csv", "manifest.json"]);
+    assert!(image::open(&preview).unwrap().width() > 300);
+    assert_eq!(listing(tmp.path()), vec!["ds", "preview.png"]);
+}
