@@ -16,7 +16,7 @@ ci:
 
 # Train paper A's CAE on the shapes set (train split), then its shape head; writes models/cae-shapes.
 train-cae out="models/cae-shapes":
-    cargo run --release -p tactile -- train cae --data {{real}}/polic-shapes --out {{out}} --max-epochs 3000 --patience 300
+    cargo run --release -p tactile -- train cae --data {{real}}/polic-shapes --out {{out}} --widths 16,16,8,4 --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 2500 --patience 300
     cargo run --release -p tactile -- train head --encoder {{out}} --data {{real}}/polic-shapes
 
 # Encode the shapes set with the shipped encoder.
@@ -30,3 +30,29 @@ export out="cae-encoder.onnx":
 # Benchmark the CAE (ndarray, flex, onnxruntime) and write docs/bench-cae.md.
 bench-cae:
     eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench cae --out docs/bench-cae.md
+
+# Synthetic data: a training and a test set of the virtual TacTip, and a palpation set.
+synth-tactip out="data/synth-tactip":
+    cargo run --release -p tactile -- synth tactip --count 3000 --seed 100 --out {{out}}-train --preview {{out}}-train.png
+    cargo run --release -p tactile -- synth tactip --count 700 --seed 200 --out {{out}}-test
+
+synth-visuotactile out="data/synth-vt":
+    cargo run --release -p tactile -- synth visuotactile --sequences 100 --seed 100 --out {{out}} --preview {{out}}.png
+
+# The contact sheets in docs/.
+synth-previews:
+    cargo run --release -p tactile -- synth tactip --count 8 --seed 1 --out target/prev-t --force --preview docs/synth-tactip-preview.png --preview-frames 8
+    cargo run --release -p tactile -- synth visuotactile --sequences 4 --seed 3 --out target/prev-v --force --preview docs/synth-visuotactile-preview.png --preview-frames 8
+
+# The demo's shipped sample frames (held-out seed).
+samples:
+    cargo run --release -p tactile -- synth tactip --count 14 --seed 300 --out samples/virtual-tactip --force
+
+# Train the CAE and a 7-shape head on the virtual TacTip (lighting-compensated preprocessing); writes models/cae-synth.
+train-cae-synth out="models/cae-synth": synth-tactip
+    cargo run --release -p tactile -- train cae --data data/synth-tactip-train --out {{out}} --preprocess lighting-compensated --widths 16,16,8,4 --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 500 --patience 80
+    cargo run --release -p tactile -- train head --encoder {{out}} --data data/synth-tactip-train --test data/synth-tactip-test
+
+# Frames/s of both virtual sensors; writes docs/bench-synth.md.
+bench-synth:
+    cargo run --release -p tactile -- bench synth --out docs/bench-synth.md

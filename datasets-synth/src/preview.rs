@@ -73,7 +73,7 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
     let ds = Dataset::open(data)?;
     let rows = pick(ds.len(), n.max(1));
     let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
-    let k = w.div_ceil(320).max(1);
+    let k = w.div_ceil(240).max(1);
     let (tw, th) = (w / k, h / k);
     let cols = COLUMNS.min(rows.len());
     let lines = rows.len().div_ceil(cols);
@@ -154,11 +154,11 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
                 let path = ds.text_opt(row, "path").unwrap_or("?");
                 let press = ds.number_opt(row, "press_mm")?.unwrap_or(0.0);
                 caption = format!(
-                    "seq {} f {} press {press:.2} {}",
+                    "s{} f{} press {press:.1} {}",
                     ds.text_opt(row, "sequence").unwrap_or("?"),
                     ds.text_opt(row, "frame_index").unwrap_or("?"),
                     if tendon {
-                        format!("{path} {:.0} deg", dir.unwrap_or(f64::NAN))
+                        format!("{path} {:.0}°", dir.unwrap_or(f64::NAN))
                     } else {
                         "no tendon".into()
                     }
@@ -178,7 +178,7 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
         marks.push(Mark::Text {
             at: (ox as i32 + 4, (oy + th + 3) as i32),
             text: caption,
-            size: 15,
+            size: 13,
             colour: WHITE,
         });
     }

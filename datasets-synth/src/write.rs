@@ -65,7 +65,6 @@ fn staging_dir(out: &Path) -> Result<PathBuf> {
 /// Render rows in parallel into a staging folder, then move it to `out`.
 fn write_dataset<F>(
     out: &Path,
-    kind: DatasetKind,
     extra_columns: &[&str],
     count: usize,
     manifest: Manifest,
@@ -79,7 +78,7 @@ where
     check_output(out, options.force)?;
     let staging = staging_dir(out)?;
     let result = (|| {
-        let mut writer = DatasetWriter::create(&staging, kind, extra_columns, true)?;
+        let mut writer = DatasetWriter::create(&staging, manifest.kind, extra_columns, true)?;
         for d in subdirs {
             tactile_core::io::create_dir_all(staging.join(d))?;
         }
@@ -150,7 +149,6 @@ pub fn write_tactip(
     };
     write_dataset(
         out,
-        DatasetKind::Tactip,
         &["radius_mm"],
         count,
         manifest,
@@ -218,7 +216,6 @@ pub fn write_visuotactile(
     };
     write_dataset(
         out,
-        DatasetKind::Visuotactile,
         &["tendon_radius_mm", "burial_mm", "ridge_mm"],
         count,
         manifest,

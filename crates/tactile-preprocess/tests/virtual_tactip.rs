@@ -36,6 +36,7 @@ fn ideal(pins: &[tactip::Pin]) -> PinImage {
 
 fn full(mut c: PreprocessConfig) -> PreprocessConfig {
     c.output_px = FRAME_PX;
+    c.grow_px = 0;
     c
 }
 

@@ -143,6 +143,9 @@ pub struct TrainHeadArgs {
     /// Head folder (default: ENCODER/head).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// A separate test dataset (default: the `test` split of --data).
+    #[arg(long)]
+    test: Option<PathBuf>,
     /// Dataset with `shape` labels and a `split` column (train/test).
     #[arg(long)]
     data: PathBuf,
@@ -234,12 +237,34 @@ pub fn train_head(a: TrainHeadArgs) -> Result<()> {
     );
     let head = ClassifierHead::train(cfg, &tx, &ty, &dev)?;
     head.save(&out)?;
-    if let Some(test) = ds.split_indices("test") {
-        let (sx, sy) = pick(&test);
+    // Test: a separate dataset (--test, encoder only) or the `test` split.
+    let test_set: Option<(Vec<Vec<f32>>, Vec<usize>)> = match (&a.test, &a.encoder) {
+        (Some(t), Some(enc)) => {
+            let tds = Dataset::open(t)?;
+            let (f, s) = features_and_shapes(enc, &tds, a.device)?;
+            let y = s
+                .iter()
+                .enumerate()
+                .map(|(i, s)| {
+                    classes.iter().position(|c| c == s).with_context(|| {
+                        format!(
+                            "{}: labels.csv line {}: shape '{s}' was not in the training set",
+                            t.display(),
+                            i + 2
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Some((f, y))
+        }
+        (Some(_), None) => bail!("--test needs --encoder"),
+        (None, _) => ds.split_indices("test").map(|t| pick(&t)),
+    };
+    if let Some((sx, sy)) = test_set {
         let pred = head.predict(&sx, &dev)?;
         let acc = accuracy(&pred, &sy);
         println!(
-            "test-split shape accuracy: {:.1} % ({}/{})",
+            "test shape accuracy: {:.1} % ({}/{})",
             100.0 * acc,
             pred.iter().zip(&sy).filter(|(a, b)| a == b).count(),
             sy.len()

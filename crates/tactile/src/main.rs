@@ -71,11 +71,13 @@ enum Command {
     },
     /// Classify frames with the shipped encoder and shape head, printing features.
     Demo {
-        /// Model folder with cae.json/cae.bpk and head/.
-        #[arg(long, default_value = "models/cae-shapes")]
+        /// Model folder with cae.json/cae.bpk and head/ (also shipped:
+        /// models/cae-shapes, trained on the real shapes set).
+        #[arg(long, default_value = "models/cae-synth")]
         model: PathBuf,
         /// A TacTip dataset; the demo uses its `test` split (or all frames).
-        #[arg(long, default_value = "../shared/real/polic-shapes")]
+        /// The default is shipped: virtual TacTip frames of a held-out seed.
+        #[arg(long, default_value = "samples/virtual-tactip")]
         data: PathBuf,
         /// Frames per class to show.
         #[arg(long, default_value_t = 2)]
