@@ -32,6 +32,14 @@ where
         write(&mut buf).map_err(|e| Error::io(path, e))?;
         buf.flush().map_err(|e| Error::io(path, e))?;
     }
+    // Temporary files are private (0600); a finished output is an ordinary file.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| Error::io(path, e))?;
+    }
     tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
 }
@@ -70,6 +78,12 @@ mod tests {
         assert_eq!(std::fs::read(&p).unwrap(), b"two");
         let n = std::fs::read_dir(dir.path()).unwrap().count();
         assert_eq!(n, 1, "temporary files left behind");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, 0o644, "outputs must be readable by others, got {mode:o}");
+        }
     }
 
     #[test]
