@@ -82,7 +82,10 @@ mod tests {
         {
             use std::os::unix::fs::PermissionsExt;
             let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
-            assert_eq!(mode, 0o644, "outputs must be readable by others, got {mode:o}");
+            assert_eq!(
+                mode, 0o644,
+                "outputs must be readable by others, got {mode:o}"
+            );
         }
     }
 
