@@ -48,6 +48,10 @@ pub struct HeadConfig {
     /// Ensemble members (folds), at least 2.
     #[config(default = 10)]
     pub folds: usize,
+    /// Repeats of the k-fold split with fresh shuffles (repeated k-fold);
+    /// the ensemble has `folds x repeats` members.
+    #[config(default = 3)]
+    pub repeats: usize,
 }
 
 /// The classifier network.
@@ -155,35 +159,43 @@ impl ClassifierHead {
                 ((x.iter().map(|v| (v[j] - mean[j]).powi(2)).sum::<f32>() / n).sqrt()).max(1e-6)
             })
             .collect();
-        // Folds from one seeded shuffle.
-        let order =
-            shuffled_batches(&(0..x.len()).collect::<Vec<_>>(), x.len(), config.seed).concat();
-        let mut members = Vec::with_capacity(config.folds);
-        for fold in 0..config.folds {
-            let (mut tr, mut va) = (Vec::new(), Vec::new());
-            for (pos, &i) in order.iter().enumerate() {
-                if pos % config.folds == fold {
-                    va.push(i);
-                } else {
-                    tr.push(i);
+        let mut members = Vec::with_capacity(config.folds * config.repeats.max(1));
+        for repeat in 0..config.repeats.max(1) {
+            // Folds from one seeded shuffle per repeat.
+            let order = shuffled_batches(
+                &(0..x.len()).collect::<Vec<_>>(),
+                x.len(),
+                config.seed.wrapping_add(7919 * repeat as u64),
+            )
+            .concat();
+            for fold in 0..config.folds {
+                let (mut tr, mut va) = (Vec::new(), Vec::new());
+                for (pos, &i) in order.iter().enumerate() {
+                    if pos % config.folds == fold {
+                        va.push(i);
+                    } else {
+                        tr.push(i);
+                    }
                 }
+                let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
+                    (
+                        idx.iter().map(|&i| x[i].clone()).collect(),
+                        idx.iter().map(|&i| y[i]).collect(),
+                    )
+                };
+                let (tx, ty) = pick(&tr);
+                let (vx, vy) = pick(&va);
+                members.push(train_member(
+                    &config,
+                    config
+                        .seed
+                        .wrapping_add(1000 * fold as u64 + 100_000 * repeat as u64),
+                    (&tx, &ty),
+                    (&vx, &vy),
+                    (&mean, &std),
+                    device,
+                ));
             }
-            let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
-                (
-                    idx.iter().map(|&i| x[i].clone()).collect(),
-                    idx.iter().map(|&i| y[i]).collect(),
-                )
-            };
-            let (tx, ty) = pick(&tr);
-            let (vx, vy) = pick(&va);
-            members.push(train_member(
-                &config,
-                config.seed.wrapping_add(1000 * fold as u64),
-                (&tx, &ty),
-                (&vx, &vy),
-                (&mean, &std),
-                device,
-            ));
         }
         Ok(Self {
             config,
@@ -244,7 +256,7 @@ impl ClassifierHead {
     pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<Self> {
         let dir = dir.as_ref();
         let f: HeadFile = tactile_core::io::read_json(dir.join("head.json"))?;
-        let members = (0..f.config.folds)
+        let members = (0..f.config.folds * f.config.repeats.max(1))
             .map(|i| {
                 load_module(
                     f.config.init_mlp(device),
@@ -329,4 +341,74 @@ fn argmax_rows(logits: Tensor<2>) -> Vec<usize> {
         .try_to_vec::<i64>()
         .unwrap_or_default();
     idx.into_iter().map(|i| i as usize).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tactile_core::DeviceKind;
+
+    /// Three noisy clusters in 4-D, seeded.
+    fn clusters(n: usize, seed: u64) -> (Vec<Vec<f32>>, Vec<usize>) {
+        let mut s = seed;
+        let mut noise = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 33) as f32 / (1u64 << 31) as f32) - 0.5
+        };
+        let centres = [
+            [2.0, 0.0, 0.0, 1.0],
+            [0.0, 2.0, 0.0, 1.0],
+            [0.0, 0.0, 2.0, 1.0],
+        ];
+        let mut x = Vec::new();
+        let mut y = Vec::new();
+        for i in 0..n {
+            let c = i % 3;
+            x.push(centres[c].iter().map(|v| v + noise()).collect());
+            y.push(c);
+        }
+        (x, y)
+    }
+
+    #[test]
+    fn ensemble_learns_and_round_trips() {
+        let dev = DeviceKind::Flex.device();
+        let (x, y) = clusters(90, 1);
+        let cfg = HeadConfig::new(4, vec!["a".into(), "b".into(), "c".into()])
+            .with_max_epochs(60)
+            .with_patience(20)
+            .with_folds(3)
+            .with_repeats(2);
+        let head = ClassifierHead::train(cfg, &x, &y, &dev).unwrap();
+        assert_eq!(head.members.len(), 6);
+        let (tx, ty) = clusters(60, 2);
+        let pred = head.predict(&tx, &dev).unwrap();
+        let acc = pred.iter().zip(&ty).filter(|(a, b)| a == b).count() as f64 / 60.0;
+        assert!(acc > 0.9, "accuracy {acc}");
+        let dir = tempfile::tempdir().unwrap();
+        head.save(dir.path()).unwrap();
+        let back = ClassifierHead::load(dir.path(), &dev).unwrap();
+        assert_eq!(back.predict(&tx, &dev).unwrap(), pred);
+    }
+
+    #[test]
+    fn bad_inputs_are_errors() {
+        let dev = DeviceKind::Flex.device();
+        let (x, y) = clusters(9, 1);
+        let cfg = HeadConfig::new(4, vec!["a".into(), "b".into(), "c".into()]).with_folds(3);
+        let e = ClassifierHead::train(cfg.clone().with_folds(1), &x, &y, &dev);
+        assert!(e.err().unwrap().to_string().contains("folds"));
+        let mut wide = cfg.clone();
+        wide.inputs = 5;
+        let e = ClassifierHead::train(wide, &x, &y, &dev);
+        assert!(e.err().unwrap().to_string().contains("feature vector"));
+        let mut bad = y.clone();
+        bad[0] = 7;
+        let e = ClassifierHead::train(cfg.clone(), &x, &bad, &dev);
+        assert!(e.err().unwrap().to_string().contains("class index 7"));
+        let e = ClassifierHead::train(cfg.with_folds(10), &x, &y, &dev);
+        assert!(e.err().unwrap().to_string().contains("at least 10"));
+    }
 }

@@ -154,6 +154,9 @@ pub struct TrainHeadArgs {
     /// Ensemble members; each early-stops on its own fold of the train split.
     #[arg(long, default_value_t = 10)]
     folds: usize,
+    /// Repeats of the k-fold split (members = folds x repeats).
+    #[arg(long, default_value_t = 3)]
+    repeats: usize,
     #[arg(long, default_value_t = 7)]
     seed: u64,
 }
@@ -228,7 +231,8 @@ pub fn train_head(a: TrainHeadArgs) -> Result<()> {
     let (tx, ty) = pick(&train);
     let cfg = HeadConfig::new(feats[0].len(), classes.clone())
         .with_seed(a.seed)
-        .with_folds(a.folds);
+        .with_folds(a.folds)
+        .with_repeats(a.repeats);
     let dev = a.device.device();
     eprintln!(
         "training a {}-fold head ensemble on {} frames",
