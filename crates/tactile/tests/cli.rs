@@ -351,3 +351,32 @@ fn synth_keeps_a_non_empty_folder_unless_forced() {
     assert!(image::open(&preview).unwrap().width() > 300);
     assert_eq!(listing(tmp.path()), vec!["ds", "preview.png"]);
 }
+
+#[test]
+fn demo_runs_on_the_shipped_model_and_samples() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let (ok, msg) = tactile(&[
+        "demo",
+        "--model",
+        root.join("models/cae-synth").to_str().unwrap(),
+        "--data",
+        root.join("samples/virtual-tactip").to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    // Every shown frame prints 16 features; the shipped head beats chance (1 in 7).
+    let rows: Vec<&str> = msg.lines().filter(|l| l.contains("features [")).collect();
+    assert!(rows.len() >= 7, "{msg}");
+    assert!(rows.iter().all(|l| {
+        l.split("features [")
+            .nth(1)
+            .unwrap()
+            .split_whitespace()
+            .count()
+            == 16
+    }));
+    let right = rows.iter().filter(|l| {
+        let w: Vec<&str> = l.split_whitespace().collect();
+        w[2] == w[4]
+    });
+    assert!(right.count() * 7 > rows.len() * 2, "{msg}");
+}
