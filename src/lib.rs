@@ -6,5 +6,6 @@
 pub use datasets_synth as synth;
 pub use tactile_cae as cae;
 pub use tactile_core as core;
+pub use tactile_estimate as estimate;
 pub use tactile_onnx as onnx;
 pub use tactile_preprocess as preprocess;

@@ -63,7 +63,19 @@ pub struct Mlp {
 }
 
 impl Mlp {
-    /// Class logits `[N, classes]`.
+    /// Layers of sizes `dims` (inputs, hidden..., outputs) with burn's default
+    /// initialisation; `activations` follow each hidden layer.
+    pub fn new(dims: &[usize], activations: &[Activation], device: &Device) -> Self {
+        Mlp {
+            layers: dims
+                .windows(2)
+                .map(|w| LinearConfig::new(w[0], w[1]).init(device))
+                .collect(),
+            activations: activations.to_vec(),
+        }
+    }
+
+    /// Outputs `[N, last]` (class logits for a classifier).
     pub fn forward(&self, mut x: Tensor<2>) -> Tensor<2> {
         let last = self.layers.len() - 1;
         for (i, layer) in self.layers.iter().enumerate() {
@@ -84,13 +96,8 @@ impl HeadConfig {
         let mut dims = vec![self.inputs];
         dims.extend(self.hidden.iter().map(|h| h.0));
         dims.push(self.classes.len());
-        Mlp {
-            layers: dims
-                .windows(2)
-                .map(|w| LinearConfig::new(w[0], w[1]).init(device))
-                .collect(),
-            activations: self.hidden.iter().map(|h| h.1).collect(),
-        }
+        let acts: Vec<Activation> = self.hidden.iter().map(|h| h.1).collect();
+        Mlp::new(&dims, &acts, device)
     }
 }
 

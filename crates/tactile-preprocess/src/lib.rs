@@ -122,14 +122,17 @@ impl PreprocessConfig {
         }
     }
 
-    /// Look a preset up by name (`paper`, `lighting-compensated`, `binary`).
+    /// Look a preset up by name (`paper`, `lighting-compensated`, `binary`),
+    /// or read a whole configuration from a `.json` file.
     pub fn preset(name: &str) -> Result<Self> {
         match name {
             "paper" => Ok(Self::paper()),
             "lighting-compensated" => Ok(Self::lighting_compensated()),
             "binary" => Ok(Self::binary_frames()),
+            path if path.ends_with(".json") => tactile_core::io::read_json(path),
             other => Err(Error::Config(format!(
-                "unknown preprocessing preset '{other}': expected paper, lighting-compensated or binary"
+                "unknown preprocessing preset '{other}': expected paper, lighting-compensated, \
+                 binary or a JSON file of a PreprocessConfig"
             ))),
         }
     }

@@ -161,16 +161,21 @@ pub struct TrainHeadArgs {
     seed: u64,
 }
 
+/// Feature vectors of every frame of a dataset under a trained encoder.
+pub fn encode_dataset(model: &Path, ds: &Dataset, device: DeviceKind) -> Result<Vec<Vec<f32>>> {
+    let dev = device.device();
+    let (art, cae) = CaeArtifact::load(model, &dev)?;
+    let pins = PinSet::from_dataset(ds, &art.preprocess)?;
+    Ok(encode_all(&cae.encoder, &pins, 256, &dev)?)
+}
+
 /// Features and shape labels of a dataset under an encoder.
 fn features_and_shapes(
     model: &Path,
     ds: &Dataset,
     device: DeviceKind,
 ) -> Result<(Vec<Vec<f32>>, Vec<String>)> {
-    let dev = device.device();
-    let (art, cae) = CaeArtifact::load(model, &dev)?;
-    let pins = PinSet::from_dataset(ds, &art.preprocess)?;
-    let feats = encode_all(&cae.encoder, &pins, 256, &dev)?;
+    let feats = encode_dataset(model, ds, device)?;
     let shapes = (0..ds.len())
         .map(|i| ds.text(i, "shape").map(str::to_string))
         .collect::<Result<Vec<_>, _>>()?;

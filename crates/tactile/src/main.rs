@@ -2,6 +2,7 @@
 
 mod bench;
 mod cae_cmds;
+mod estimate_cmds;
 mod synth_cmds;
 
 use std::path::PathBuf;
@@ -99,6 +100,8 @@ enum TrainCmd {
     Cae(cae_cmds::TrainCaeArgs),
     /// A shallow shape classifier on the features of a trained encoder.
     Head(cae_cmds::TrainHeadArgs),
+    /// A regressor (pose, depth, force; angles on the circle) on features.
+    Regressor(estimate_cmds::TrainRegressorArgs),
 }
 
 #[derive(Subcommand)]
@@ -124,6 +127,9 @@ fn main() -> Result<()> {
         Command::Train {
             model: TrainCmd::Head(a),
         } => cae_cmds::train_head(a),
+        Command::Train {
+            model: TrainCmd::Regressor(a),
+        } => estimate_cmds::train_regressor(a),
         Command::Encode {
             model,
             data,

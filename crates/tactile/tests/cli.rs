@@ -380,3 +380,53 @@ fn demo_runs_on_the_shipped_model_and_samples() {
     });
     assert!(right.count() * 7 > rows.len() * 2, "{msg}");
 }
+
+#[test]
+fn regressor_names_a_missing_label_and_a_bad_target() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("spheres");
+    let d = data.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth", "tactip", "--count", "12", "--shapes", "sphere", "--out", d,
+    ]);
+    assert!(ok, "{msg}");
+    let csv = tmp.path().join("f.csv");
+    let mut text = String::from("file,f0,f1\n");
+    for i in 0..12 {
+        text.push_str(&format!("frames/{i:06}.png,{i},{}\n", i % 3));
+    }
+    std::fs::write(&csv, text).unwrap();
+    let out = tmp.path().join("reg");
+    let base = [
+        "train",
+        "regressor",
+        "--features",
+        csv.to_str().unwrap(),
+        "--data",
+        d,
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    // Spheres have no orientation: the theta column is empty.
+    let (ok, msg) = tactile(&[&base[..], &["--targets", "depth_mm,theta_deg:180"]].concat());
+    assert!(
+        !ok && msg.contains("labels.csv:2") && msg.contains("theta_deg"),
+        "{msg}"
+    );
+    let (ok, msg) = tactile(&[&base[..], &["--targets", "theta_deg:zero"]].concat());
+    assert!(!ok && msg.contains("period"), "{msg}");
+    assert!(!out.exists());
+    // Depth is labelled everywhere: a regressor is trained and scored.
+    let (ok, msg) = tactile(
+        &[
+            &base[..],
+            &["--targets", "depth_mm,force_n", "--test-fraction", "0.25"],
+        ]
+        .concat(),
+    );
+    assert!(
+        ok && msg.contains("depth_mm") && msg.contains("force_n"),
+        "{msg}"
+    );
+    assert!(out.join("regressor.json").is_file() && out.join("regressor.bpk").is_file());
+}

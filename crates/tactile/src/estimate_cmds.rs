@@ -1,0 +1,152 @@
+//! `tactile train regressor`: pose, depth and force estimators on features.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rand::seq::SliceRandom;
+use tactile_core::DeviceKind;
+use tactile_core::dataset::Dataset;
+use tactile_estimate::{Regressor, RegressorConfig, Target};
+
+use crate::cae_cmds::encode_dataset;
+use crate::parse_device;
+
+#[derive(Args)]
+pub struct TrainRegressorArgs {
+    /// Trained encoder folder (features are computed from the frames).
+    #[arg(long, required_unless_present = "features")]
+    encoder: Option<PathBuf>,
+    /// Precomputed feature CSV (file,f0,f1,...) instead of an encoder.
+    #[arg(long, conflicts_with = "encoder")]
+    features: Option<PathBuf>,
+    /// Dataset with the target label columns.
+    #[arg(long)]
+    data: PathBuf,
+    /// Targets: label columns, angles with their period, e.g. x_mm,theta_deg:180,depth_mm.
+    #[arg(long, value_delimiter = ',', required = true)]
+    targets: Vec<String>,
+    /// Output folder (default: ENCODER/regressor).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Without a `split` column: fraction of frames held out for testing.
+    #[arg(long, default_value_t = 0.2)]
+    test_fraction: f64,
+    /// Fraction of the training frames used for early stopping.
+    #[arg(long, default_value_t = 0.2)]
+    val_fraction: f64,
+    #[arg(long, default_value_t = 7)]
+    seed: u64,
+    #[arg(long, default_value = "flex", value_parser = parse_device)]
+    device: DeviceKind,
+}
+
+/// `(train, val, test)` rows: the dataset's split column when it has one,
+/// else a seeded shuffle.
+pub fn three_way_split(
+    ds: &Dataset,
+    test_fraction: f64,
+    val_fraction: f64,
+    seed: u64,
+) -> Result<(Vec<usize>, Vec<usize>, Vec<usize>)> {
+    for (name, f) in [
+        ("--test-fraction", test_fraction),
+        ("--val-fraction", val_fraction),
+    ] {
+        if !(0.0..1.0).contains(&f) || f == 0.0 {
+            bail!("{name} must be in (0, 1), got {f}");
+        }
+    }
+    let mut rng = StdRng::seed_from_u64(seed);
+    let (mut train, test) = match (ds.split_indices("train"), ds.split_indices("test")) {
+        (Some(tr), Some(te)) => (tr, te),
+        _ => {
+            let mut all: Vec<usize> = (0..ds.len()).collect();
+            all.shuffle(&mut rng);
+            let n_test = ((all.len() as f64 * test_fraction).round() as usize).max(1);
+            let test = all.split_off(all.len().saturating_sub(n_test));
+            (all, test)
+        }
+    };
+    train.shuffle(&mut rng);
+    let n_val = ((train.len() as f64 * val_fraction).round() as usize).max(1);
+    if train.len() <= n_val || test.is_empty() {
+        bail!(
+            "{}: too few frames ({}) for train, validation and test sets",
+            ds.root.display(),
+            ds.len()
+        );
+    }
+    let val = train.split_off(train.len() - n_val);
+    Ok((train, val, test))
+}
+
+pub fn train_regressor(a: TrainRegressorArgs) -> Result<()> {
+    let ds = Dataset::open(&a.data)?;
+    let targets: Vec<Target> = a
+        .targets
+        .iter()
+        .map(|t| Target::parse(t))
+        .collect::<Result<_, _>>()?;
+    let (feats, out) = match (&a.features, &a.encoder) {
+        (Some(csv), _) => {
+            let (files, f) = tactile_cae::encode::read_features_csv(csv)?;
+            let by_file: std::collections::HashMap<&str, &Vec<f32>> =
+                files.iter().map(String::as_str).zip(&f).collect();
+            let feats = (0..ds.len())
+                .map(|i| {
+                    let file = ds.text(i, "file")?;
+                    by_file
+                        .get(file)
+                        .map(|v| (*v).clone())
+                        .with_context(|| format!("{}: no feature row for '{file}'", csv.display()))
+                })
+                .collect::<Result<Vec<_>>>()?;
+            (feats, a.out.clone().context("--features needs --out")?)
+        }
+        (None, Some(enc)) => (
+            encode_dataset(enc, &ds, a.device)?,
+            a.out.clone().unwrap_or_else(|| enc.join("regressor")),
+        ),
+        (None, None) => bail!("give --encoder DIR or --features CSV"),
+    };
+    // Every target must be labelled on every frame used.
+    let labels = (0..ds.len())
+        .map(|i| {
+            targets
+                .iter()
+                .map(|t| ds.number(i, &t.name))
+                .collect::<Result<Vec<f64>, _>>()
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let (train, val, test) = three_way_split(&ds, a.test_fraction, a.val_fraction, a.seed)?;
+    let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<Vec<f64>>) {
+        (
+            idx.iter().map(|&i| feats[i].clone()).collect(),
+            idx.iter().map(|&i| labels[i].clone()).collect(),
+        )
+    };
+    let (tx, ty) = pick(&train);
+    let (vx, vy) = pick(&val);
+    let (sx, sy) = pick(&test);
+    eprintln!(
+        "training a regressor for {} on {} frames ({} validation, {} test)",
+        a.targets.join(", "),
+        tx.len(),
+        vx.len(),
+        sx.len()
+    );
+    let dev = a.device.device();
+    let cfg = RegressorConfig::new(feats[0].len(), targets.clone()).with_seed(a.seed);
+    let reg = Regressor::train(cfg, (&tx, &ty), (&vx, &vy), &dev)?;
+    reg.save(&out)?;
+    let err = reg.evaluate(&sx, &sy, &dev)?;
+    println!("test mean absolute error ({} frames):", sx.len());
+    for (t, e) in targets.iter().zip(&err) {
+        println!("  {:<14} {e:.4}", t.name);
+    }
+    println!("regressor saved in {}", out.display());
+    Ok(())
+}
