@@ -37,6 +37,9 @@ pub struct TrainRegressorArgs {
     /// Fraction of the training frames used for early stopping.
     #[arg(long, default_value_t = 0.2)]
     val_fraction: f64,
+    /// Hidden layer widths (ReLU), e.g. 32,16 (the authors' force head).
+    #[arg(long, value_delimiter = ',', default_values_t = [32, 16])]
+    hidden: Vec<usize>,
     #[arg(long, default_value_t = 7)]
     seed: u64,
     #[arg(long, default_value = "flex", value_parser = parse_device)]
@@ -139,7 +142,14 @@ pub fn train_regressor(a: TrainRegressorArgs) -> Result<()> {
         sx.len()
     );
     let dev = a.device.device();
-    let cfg = RegressorConfig::new(feats[0].len(), targets.clone()).with_seed(a.seed);
+    let cfg = RegressorConfig::new(feats[0].len(), targets.clone())
+        .with_seed(a.seed)
+        .with_hidden(
+            a.hidden
+                .iter()
+                .map(|&w| (w, tactile_cae::head::Activation::Relu))
+                .collect(),
+        );
     let reg = Regressor::train(cfg, (&tx, &ty), (&vx, &vy), &dev)?;
     reg.save(&out)?;
     let err = reg.evaluate(&sx, &sy, &dev)?;
@@ -148,5 +158,119 @@ pub fn train_regressor(a: TrainRegressorArgs) -> Result<()> {
         println!("  {:<14} {e:.4}", t.name);
     }
     println!("regressor saved in {}", out.display());
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct PerceiveArgs {
+    /// Trained encoder folder.
+    #[arg(long)]
+    encoder: PathBuf,
+    /// Estimator folders: classifier heads (head.json) and regressors
+    /// (regressor.json), all run on the same feature vector (default:
+    /// ENCODER/head and ENCODER/regressor when present).
+    #[arg(long, num_args = 1..)]
+    heads: Vec<PathBuf>,
+    /// Dataset of frames to perceive.
+    #[arg(long)]
+    data: PathBuf,
+    /// Also write every estimate to this CSV.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Frames to print (all go to --out).
+    #[arg(long, default_value_t = 10)]
+    show: usize,
+    #[arg(long, default_value = "flex", value_parser = parse_device)]
+    device: DeviceKind,
+}
+
+enum Estimator {
+    Classifier(tactile_cae::head::ClassifierHead),
+    Regressor(Regressor),
+}
+
+/// Paper A's simultaneous deployment: one encoding per frame, every
+/// estimator on the same features.
+pub fn perceive(a: PerceiveArgs) -> Result<()> {
+    let dev = a.device.device();
+    let mut dirs = a.heads.clone();
+    if dirs.is_empty() {
+        dirs = ["head", "regressor"]
+            .iter()
+            .map(|d| a.encoder.join(d))
+            .filter(|d| d.is_dir())
+            .collect();
+    }
+    if dirs.is_empty() {
+        bail!("no estimators: give --heads DIR... (folders with head.json or regressor.json)");
+    }
+    let mut estimators = Vec::new();
+    for d in &dirs {
+        if d.join("head.json").is_file() {
+            estimators.push(Estimator::Classifier(
+                tactile_cae::head::ClassifierHead::load(d, &dev)?,
+            ));
+        } else if d.join("regressor.json").is_file() {
+            estimators.push(Estimator::Regressor(Regressor::load(d, &dev)?));
+        } else {
+            bail!(
+                "{}: neither head.json nor regressor.json found",
+                d.display()
+            );
+        }
+    }
+    let ds = Dataset::open(&a.data)?;
+    let t0 = std::time::Instant::now();
+    let feats = encode_dataset(&a.encoder, &ds, a.device)?;
+    let t_enc = t0.elapsed().as_secs_f64();
+    let mut header = vec!["file".to_string()];
+    let mut columns: Vec<Vec<String>> = Vec::new();
+    let t1 = std::time::Instant::now();
+    for e in &estimators {
+        match e {
+            Estimator::Classifier(h) => {
+                header.push("shape".into());
+                let p = h.predict(&feats, &dev)?;
+                columns.push(p.iter().map(|&c| h.config.classes[c].clone()).collect());
+            }
+            Estimator::Regressor(r) => {
+                let p = r.predict(&feats, &dev)?;
+                for (j, t) in r.config.targets.iter().enumerate() {
+                    header.push(t.name.clone());
+                    columns.push(p.iter().map(|row| format!("{:.4}", row[j])).collect());
+                }
+            }
+        }
+    }
+    let t_est = t1.elapsed().as_secs_f64();
+    let rows: Vec<Vec<String>> = (0..ds.len())
+        .map(|i| {
+            let mut r = vec![ds.text(i, "file").unwrap_or("?").to_string()];
+            r.extend(columns.iter().map(|c| c[i].clone()));
+            r
+        })
+        .collect();
+    println!("{}", header.join("\t"));
+    for r in rows.iter().take(a.show) {
+        println!("{}", r.join("\t"));
+    }
+    println!(
+        "{} frames: encoding {:.3} ms/frame (preprocessing included), {} estimators {:.4} ms/frame",
+        ds.len(),
+        1e3 * t_enc / ds.len().max(1) as f64,
+        estimators.len(),
+        1e3 * t_est / ds.len().max(1) as f64
+    );
+    if let Some(out) = &a.out {
+        tactile_core::io::write_atomic_with(out, |w| {
+            let mut csv = csv::Writer::from_writer(w);
+            csv.write_record(&header)?;
+            for r in &rows {
+                csv.write_record(r)?;
+            }
+            csv.flush()
+        })?;
+        println!("estimates written to {}", out.display());
+    }
     Ok(())
 }

@@ -53,6 +53,8 @@ enum Command {
         #[arg(long, default_value = "flex", value_parser = parse_device)]
         device: DeviceKind,
     },
+    /// Run several estimators on one encoding per frame (paper A's simultaneous deployment).
+    Perceive(estimate_cmds::PerceiveArgs),
     /// Export a model to ONNX.
     Export {
         /// Model folder.
@@ -136,6 +138,7 @@ fn main() -> Result<()> {
             out,
             device,
         } => cae_cmds::encode(&model, &data, &out, device),
+        Command::Perceive(a) => estimate_cmds::perceive(a),
         Command::Export { model, out, part } => cae_cmds::export(&model, &out, &part),
         Command::Bench {
             model: BenchCmd::Cae(a),

@@ -430,3 +430,42 @@ fn regressor_names_a_missing_label_and_a_bad_target() {
     );
     assert!(out.join("regressor.json").is_file() && out.join("regressor.bpk").is_file());
 }
+
+#[test]
+fn perceive_runs_every_shipped_estimator_on_one_encoding() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("estimates.csv");
+    let (ok, msg) = tactile(&[
+        "perceive",
+        "--encoder",
+        root.join("models/cae-synth").to_str().unwrap(),
+        "--data",
+        root.join("samples/virtual-tactip").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "file,shape,depth_mm,force_n");
+    assert_eq!(lines.len(), 15);
+    // Depth estimates stay near the 0-5 mm the sensor was trained on.
+    for l in &lines[1..] {
+        let depth: f64 = l.split(',').nth(2).unwrap().parse().unwrap();
+        assert!((-1.0..6.0).contains(&depth), "{l}");
+    }
+    let (ok, msg) = tactile(&[
+        "perceive",
+        "--encoder",
+        root.join("models/cae-synth").to_str().unwrap(),
+        "--heads",
+        tmp.path().to_str().unwrap(),
+        "--data",
+        root.join("samples/virtual-tactip").to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && msg.contains("neither head.json nor regressor.json"),
+        "{msg}"
+    );
+}
