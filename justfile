@@ -56,3 +56,10 @@ train-cae-synth out="models/cae-synth": synth-tactip
 # Frames/s of both virtual sensors; writes docs/bench-synth.md.
 bench-synth:
     cargo run --release -p tactile -- bench synth --out docs/bench-synth.md
+
+# Paper A on the real 127-pin edge set: CAE (train split made by seed), then every feature set x estimator; writes docs/paper-a-edge-compare.md.
+train-cae-edge out="models/cae-edge":
+    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out {{out}} --preprocess configs/preprocess/tactip127-edge.json --widths 16,16,8,4 --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 250 --patience 40
+
+compare-edge:
+    cargo run --release -p tactile -- compare --encoder models/cae-edge --data {{real}}/tactip127-edge --targets x_mm,theta_deg:180,depth_mm --out docs/paper-a-edge-compare.md

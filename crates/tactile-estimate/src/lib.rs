@@ -2,6 +2,7 @@
 //! estimators"): regression of contact pose, depth and force, with angles
 //! handled on the circle.
 
+pub mod classical;
 pub mod regressor;
 pub mod target;
 

@@ -274,3 +274,144 @@ pub fn perceive(a: PerceiveArgs) -> Result<()> {
     }
     Ok(())
 }
+
+#[derive(Args)]
+pub struct CompareArgs {
+    /// Trained encoder (its preprocessing also makes the pixel baselines).
+    #[arg(long)]
+    encoder: PathBuf,
+    /// Dataset with the target labels.
+    #[arg(long)]
+    data: PathBuf,
+    /// Targets, e.g. x_mm,theta_deg:180,depth_mm.
+    #[arg(long, value_delimiter = ',', required = true)]
+    targets: Vec<String>,
+    #[arg(long, default_value_t = 0.2)]
+    test_fraction: f64,
+    #[arg(long, default_value_t = 0.2)]
+    val_fraction: f64,
+    #[arg(long, default_value_t = 7)]
+    seed: u64,
+    /// Also write the table to this Markdown file.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    #[arg(long, default_value = "flex", value_parser = parse_device)]
+    device: DeviceKind,
+}
+
+/// Feature sets x estimators on one split: CAE features against PCA of
+/// the pin image and the raw pin image, each with the MLP, ridge and k-NN.
+pub fn compare(a: CompareArgs) -> Result<()> {
+    use tactile_estimate::classical;
+    let ds = Dataset::open(&a.data)?;
+    let targets: Vec<Target> = a
+        .targets
+        .iter()
+        .map(|t| Target::parse(t))
+        .collect::<Result<_, _>>()?;
+    let labels = (0..ds.len())
+        .map(|i| {
+            targets
+                .iter()
+                .map(|t| ds.number(i, &t.name))
+                .collect::<Result<Vec<f64>, _>>()
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let dev = a.device.device();
+    let (art, cae) = tactile_cae::CaeArtifact::load(&a.encoder, &dev)?;
+    eprintln!("preprocessing {} frames", ds.len());
+    let pins = tactile_cae::data::PinSet::from_dataset(&ds, &art.preprocess)?;
+    let cae_feats = tactile_cae::encode::encode_all(&cae.encoder, &pins, 256, &dev)?;
+    let raw: Vec<Vec<f32>> = pins.images.iter().map(|p| p.pixels.clone()).collect();
+    let (train, val, test) = three_way_split(&ds, a.test_fraction, a.val_fraction, a.seed)?;
+    let pick_x = |f: &[Vec<f32>], idx: &[usize]| -> Vec<Vec<f32>> {
+        idx.iter().map(|&i| f[i].clone()).collect()
+    };
+    let pick_y =
+        |idx: &[usize]| -> Vec<Vec<f64>> { idx.iter().map(|&i| labels[i].clone()).collect() };
+    let (ty, vy, sy) = (pick_y(&train), pick_y(&val), pick_y(&test));
+    let mut sets: Vec<(String, [Vec<Vec<f32>>; 3])> = vec![(
+        format!("CAE-{}", art.cae.feature_count()),
+        [
+            pick_x(&cae_feats, &train),
+            pick_x(&cae_feats, &val),
+            pick_x(&cae_feats, &test),
+        ],
+    )];
+    let (rtr, rva, rte) = (
+        pick_x(&raw, &train),
+        pick_x(&raw, &val),
+        pick_x(&raw, &test),
+    );
+    for k in [16, 64] {
+        let p = classical::pca(&rtr, &[&rtr, &rva, &rte], k)?;
+        let [p0, p1, p2]: [Vec<Vec<f32>>; 3] =
+            p.try_into().map_err(|_| anyhow::anyhow!("PCA output"))?;
+        sets.push((format!("PCA-{k}"), [p0, p1, p2]));
+    }
+    sets.push((
+        format!("raw {0}x{0}", art.preprocess.output_px),
+        [rtr, rva, rte],
+    ));
+    let mut md = format!(
+        "Machine: {}\n\n{} on {} ({} train, {} validation, {} test frames, seed {}); mean absolute error on the test frames (angles the short way round).\n\n| features | estimator | {} | fit + predict (s) |\n|---|---|{}---|\n",
+        tactile_core::bench::Machine::detect().describe(),
+        a.targets.join(", "),
+        a.data.display(),
+        train.len(),
+        val.len(),
+        test.len(),
+        a.seed,
+        targets
+            .iter()
+            .map(|t| t.name.as_str())
+            .collect::<Vec<_>>()
+            .join(" | "),
+        "---|".repeat(targets.len())
+    );
+    for (name, [tx, vx, sx]) in &sets {
+        for est in ["MLP 128-64", "ridge", "k-NN (k=5)"] {
+            eprintln!("{name} + {est}");
+            let t0 = std::time::Instant::now();
+            let pred = match est {
+                "ridge" => classical::ridge(&targets, (tx, &ty), sx, 1e-3)?,
+                "k-NN (k=5)" => {
+                    // k-NN uses the training and validation frames (no early stopping).
+                    let mut x = tx.clone();
+                    x.extend(vx.iter().cloned());
+                    let mut y = ty.clone();
+                    y.extend(vy.iter().cloned());
+                    classical::knn(&targets, (&x, &y), sx, 5)?
+                }
+                _ => {
+                    let cfg = RegressorConfig::new(tx[0].len(), targets.clone())
+                        .with_seed(a.seed)
+                        .with_hidden(vec![
+                            (128, tactile_cae::head::Activation::Relu),
+                            (64, tactile_cae::head::Activation::Relu),
+                        ]);
+                    Regressor::train(cfg, (tx, &ty), (vx, &vy), &dev)?.predict(sx, &dev)?
+                }
+            };
+            let secs = t0.elapsed().as_secs_f64();
+            let errs: Vec<String> = targets
+                .iter()
+                .enumerate()
+                .map(|(j, t)| {
+                    let p: Vec<f64> = pred.iter().map(|r| r[j]).collect();
+                    let tr: Vec<f64> = sy.iter().map(|r| r[j]).collect();
+                    format!("{:.3}", t.mae(&p, &tr))
+                })
+                .collect();
+            md.push_str(&format!(
+                "| {name} | {est} | {} | {secs:.1} |\n",
+                errs.join(" | ")
+            ));
+        }
+    }
+    print!("{md}");
+    if let Some(out) = &a.out {
+        tactile_core::io::write_atomic(out, md.as_bytes())?;
+    }
+    Ok(())
+}

@@ -53,6 +53,8 @@ enum Command {
         #[arg(long, default_value = "flex", value_parser = parse_device)]
         device: DeviceKind,
     },
+    /// Compare feature sets (CAE, PCA, raw pixels) x estimators (MLP, ridge, k-NN) on one split.
+    Compare(estimate_cmds::CompareArgs),
     /// Run several estimators on one encoding per frame (paper A's simultaneous deployment).
     Perceive(estimate_cmds::PerceiveArgs),
     /// Export a model to ONNX.
@@ -139,6 +141,7 @@ fn main() -> Result<()> {
             device,
         } => cae_cmds::encode(&model, &data, &out, device),
         Command::Perceive(a) => estimate_cmds::perceive(a),
+        Command::Compare(a) => estimate_cmds::compare(a),
         Command::Export { model, out, part } => cae_cmds::export(&model, &out, &part),
         Command::Bench {
             model: BenchCmd::Cae(a),

@@ -469,3 +469,48 @@ fn perceive_runs_every_shipped_estimator_on_one_encoding() {
         "{msg}"
     );
 }
+
+#[test]
+fn compare_writes_a_table_of_every_feature_set_and_estimator() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("tt");
+    let d = data.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth", "tactip", "--count", "120", "--seed", "3", "--out", d,
+    ]);
+    assert!(ok, "{msg}");
+    let m = tmp.path().join("cae");
+    let (ok, msg) = tactile(&[
+        "train",
+        "cae",
+        "--data",
+        d,
+        "--out",
+        m.to_str().unwrap(),
+        "--max-epochs",
+        "1",
+        "--preprocess",
+        "lighting-compensated",
+    ]);
+    assert!(ok, "{msg}");
+    let out = tmp.path().join("table.md");
+    let (ok, msg) = tactile(&[
+        "compare",
+        "--encoder",
+        m.to_str().unwrap(),
+        "--data",
+        d,
+        "--targets",
+        "depth_mm,force_n",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let table = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<&str> = table
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| features"))
+        .collect();
+    assert_eq!(rows.len(), 12, "{table}");
+    assert!(table.contains("Machine:") && table.contains("PCA-16") && table.contains("raw 28x28"));
+}
