@@ -13,6 +13,8 @@ use kornia_image::{Image, ImageSize};
 use kornia_imgproc::interpolation::InterpolationMode;
 use kornia_imgproc::morphology::{self, Kernel};
 use kornia_imgproc::padding::PaddingMode;
+
+pub mod pins;
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::GreyImage;
 use tactile_core::{Error, Result};

@@ -300,7 +300,8 @@ pub struct CompareArgs {
 }
 
 /// Feature sets x estimators on one split: CAE features against PCA of
-/// the pin image and the raw pin image, each with the MLP, ridge and k-NN.
+/// the pin image, the raw pin image and pin tracking, each with the MLP,
+/// ridge and k-NN.
 pub fn compare(a: CompareArgs) -> Result<()> {
     use tactile_estimate::classical;
     let ds = Dataset::open(&a.data)?;
@@ -352,6 +353,33 @@ pub fn compare(a: CompareArgs) -> Result<()> {
     sets.push((
         format!("raw {0}x{0}", art.preprocess.output_px),
         [rtr, rva, rte],
+    ));
+    // Pin tracking: blob centroids at full resolution, matched to the pins
+    // of the first training frame; displacements as features.
+    eprintln!("tracking pins");
+    let centroids = {
+        use rayon::prelude::*;
+        (0..ds.len())
+            .into_par_iter()
+            .map(|i| -> Result<Vec<(f32, f32)>> {
+                let path = ds.path_of(i, "file")?;
+                let frame = tactile_core::image_io::load_grey(&path)?;
+                let binary =
+                    tactile_preprocess::pins::full_resolution_binary(&frame, &art.preprocess)
+                        .with_context(|| path.display().to_string())?;
+                Ok(tactile_preprocess::pins::pin_centroids(&binary, 4)?)
+            })
+            .collect::<Result<Vec<_>>>()?
+    };
+    let tracker = tactile_preprocess::pins::PinTracker::new(centroids[train[0]].clone())?;
+    let tracked: Vec<Vec<f32>> = centroids.iter().map(|c| tracker.displacements(c)).collect();
+    sets.push((
+        format!("pin tracking ({} pins)", tracker.reference.len()),
+        [
+            pick_x(&tracked, &train),
+            pick_x(&tracked, &val),
+            pick_x(&tracked, &test),
+        ],
     ));
     let mut md = format!(
         "Machine: {}\n\n{} on {} ({} train, {} validation, {} test frames, seed {}); mean absolute error on the test frames (angles the short way round).\n\n| features | estimator | {} | fit + predict (s) |\n|---|---|{}---|\n",

@@ -511,6 +511,11 @@ fn compare_writes_a_table_of_every_feature_set_and_estimator() {
         .lines()
         .filter(|l| l.starts_with("| ") && !l.starts_with("| features"))
         .collect();
-    assert_eq!(rows.len(), 12, "{table}");
-    assert!(table.contains("Machine:") && table.contains("PCA-16") && table.contains("raw 28x28"));
+    assert_eq!(rows.len(), 15, "{table}");
+    assert!(
+        table.contains("Machine:")
+            && table.contains("PCA-16")
+            && table.contains("raw 28x28")
+            && table.contains("pin tracking")
+    );
 }
