@@ -145,6 +145,43 @@ pub fn knn(
     Ok(decode(targets, &out))
 }
 
+/// k-nearest-neighbour classification: the majority class of the `k`
+/// nearest training vectors (ties go to the nearest of the tied classes).
+pub fn knn_classify(
+    x: &[Vec<f32>],
+    y: &[usize],
+    test: &[Vec<f32>],
+    k: usize,
+) -> Result<Vec<usize>> {
+    let (xs, t) = standardise(&array(x)?, &[&array(test)?]);
+    let algo = if xs.ncols() <= 32 {
+        CommonNearestNeighbour::KdTree
+    } else {
+        CommonNearestNeighbour::BallTree
+    };
+    let index = algo
+        .from_batch(&xs, L2Dist)
+        .map_err(|e| lerr("nearest-neighbour index", e))?;
+    let classes = y.iter().copied().max().map_or(0, |m| m + 1);
+    t[0].outer_iter()
+        .map(|p| {
+            let near = index
+                .k_nearest(p, k)
+                .map_err(|e| lerr("nearest neighbours", e))?;
+            let mut votes = vec![0usize; classes];
+            for (_, j) in &near {
+                votes[y[*j]] += 1;
+            }
+            let top = votes.iter().copied().max().unwrap_or(0);
+            Ok(near
+                .iter()
+                .map(|(_, j)| y[*j])
+                .find(|c| votes[*c] == top)
+                .unwrap_or(0))
+        })
+        .collect()
+}
+
 /// Gaussian naive Bayes classes for `test`.
 pub fn gaussian_nb(x: &[Vec<f32>], y: &[usize], test: &[Vec<f32>]) -> Result<Vec<usize>> {
     let ds = Dataset::new(array(x)?, Array1::from(y.to_vec()));
@@ -195,6 +232,9 @@ mod tests {
         let cls: Vec<usize> = y.iter().map(|r| usize::from(r[0] > 0.5)).collect();
         let tcls: Vec<usize> = ty.iter().map(|r| usize::from(r[0] > 0.5)).collect();
         let pred = gaussian_nb(&x, &cls, &tx).unwrap();
+        let acc = pred.iter().zip(&tcls).filter(|(a, b)| a == b).count();
+        assert!(acc > 40, "{acc}/50");
+        let pred = knn_classify(&x, &cls, &tx, 5).unwrap();
         let acc = pred.iter().zip(&tcls).filter(|(a, b)| a == b).count();
         assert!(acc > 40, "{acc}/50");
     }

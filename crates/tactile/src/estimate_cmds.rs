@@ -283,9 +283,12 @@ pub struct CompareArgs {
     /// Dataset with the target labels.
     #[arg(long)]
     data: PathBuf,
-    /// Targets, e.g. x_mm,theta_deg:180,depth_mm.
-    #[arg(long, value_delimiter = ',', required = true)]
+    /// Regression targets, e.g. x_mm,theta_deg:180,depth_mm.
+    #[arg(long, value_delimiter = ',', required_unless_present = "classify")]
     targets: Vec<String>,
+    /// A class column to classify too (e.g. shape).
+    #[arg(long)]
+    classify: Option<String>,
     #[arg(long, default_value_t = 0.2)]
     test_fraction: f64,
     #[arg(long, default_value_t = 0.2)]
@@ -382,14 +385,63 @@ pub fn compare(a: CompareArgs) -> Result<()> {
         ],
     ));
     let mut md = format!(
-        "Machine: {}\n\n{} on {} ({} train, {} validation, {} test frames, seed {}); mean absolute error on the test frames (angles the short way round).\n\n| features | estimator | {} | fit + predict (s) |\n|---|---|{}---|\n",
+        "Machine: {}\n\nDataset {} ({} train, {} validation, {} test frames, seed {}).\n\n",
         tactile_core::bench::Machine::detect().describe(),
-        a.targets.join(", "),
         a.data.display(),
         train.len(),
         val.len(),
         test.len(),
         a.seed,
+    );
+    if !targets.is_empty() {
+        md.push_str(&regression_table(
+            &sets,
+            &targets,
+            (&ty, &vy, &sy),
+            a.seed,
+            &dev,
+        )?);
+    }
+    if let Some(col) = &a.classify {
+        let names: Vec<String> = (0..ds.len())
+            .map(|i| ds.text(i, col).map(str::to_string))
+            .collect::<Result<_, _>>()?;
+        let mut classes = names.clone();
+        classes.sort();
+        classes.dedup();
+        let y: Vec<usize> = names
+            .iter()
+            .map(|n| classes.iter().position(|c| c == n).unwrap_or(0))
+            .collect();
+        let pick = |idx: &[usize]| -> Vec<usize> { idx.iter().map(|&i| y[i]).collect() };
+        md.push_str(&classification_table(
+            &sets,
+            &classes,
+            (&pick(&train), &pick(&val), &pick(&test)),
+            a.seed,
+            &dev,
+        )?);
+    }
+    print!("{md}");
+    if let Some(out) = &a.out {
+        tactile_core::io::write_atomic(out, md.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// One feature set: name and (train, validation, test) vectors.
+type FeatureSet = (String, [Vec<Vec<f32>>; 3]);
+
+fn regression_table(
+    sets: &[FeatureSet],
+    targets: &[Target],
+    (ty, vy, sy): (&[Vec<f64>], &[Vec<f64>], &[Vec<f64>]),
+    seed: u64,
+    dev: &burn::tensor::Device,
+) -> Result<String> {
+    use tactile_estimate::classical;
+    let mut md = format!(
+        "Regression: mean absolute error on the test frames (angles the short way round).\n\n| features | estimator | {} | fit + predict (s) |\n|---|---|{}---|\n",
         targets
             .iter()
             .map(|t| t.name.as_str())
@@ -397,28 +449,26 @@ pub fn compare(a: CompareArgs) -> Result<()> {
             .join(" | "),
         "---|".repeat(targets.len())
     );
-    for (name, [tx, vx, sx]) in &sets {
+    for (name, [tx, vx, sx]) in sets {
         for est in ["MLP 128-64", "ridge", "k-NN (k=5)"] {
             eprintln!("{name} + {est}");
             let t0 = std::time::Instant::now();
             let pred = match est {
-                "ridge" => classical::ridge(&targets, (tx, &ty), sx, 1e-3)?,
+                "ridge" => classical::ridge(targets, (tx, ty), sx, 1e-3)?,
                 "k-NN (k=5)" => {
                     // k-NN uses the training and validation frames (no early stopping).
-                    let mut x = tx.clone();
-                    x.extend(vx.iter().cloned());
-                    let mut y = ty.clone();
-                    y.extend(vy.iter().cloned());
-                    classical::knn(&targets, (&x, &y), sx, 5)?
+                    let x: Vec<Vec<f32>> = tx.iter().chain(vx).cloned().collect();
+                    let y: Vec<Vec<f64>> = ty.iter().chain(vy).cloned().collect();
+                    classical::knn(targets, (&x, &y), sx, 5)?
                 }
                 _ => {
-                    let cfg = RegressorConfig::new(tx[0].len(), targets.clone())
-                        .with_seed(a.seed)
+                    let cfg = RegressorConfig::new(tx[0].len(), targets.to_vec())
+                        .with_seed(seed)
                         .with_hidden(vec![
                             (128, tactile_cae::head::Activation::Relu),
                             (64, tactile_cae::head::Activation::Relu),
                         ]);
-                    Regressor::train(cfg, (tx, &ty), (vx, &vy), &dev)?.predict(sx, &dev)?
+                    Regressor::train(cfg, (tx, ty), (vx, vy), dev)?.predict(sx, dev)?
                 }
             };
             let secs = t0.elapsed().as_secs_f64();
@@ -437,9 +487,52 @@ pub fn compare(a: CompareArgs) -> Result<()> {
             ));
         }
     }
-    print!("{md}");
-    if let Some(out) = &a.out {
-        tactile_core::io::write_atomic(out, md.as_bytes())?;
+    md.push('\n');
+    Ok(md)
+}
+
+fn classification_table(
+    sets: &[FeatureSet],
+    classes: &[String],
+    (ty, vy, sy): (&[usize], &[usize], &[usize]),
+    seed: u64,
+    dev: &burn::tensor::Device,
+) -> Result<String> {
+    use tactile_estimate::classical;
+    let mut md = format!(
+        "Classification of {} classes ({}): accuracy on the test frames.\n\n| features | estimator | accuracy | fit + predict (s) |\n|---|---|---|---|\n",
+        classes.len(),
+        classes.join(", ")
+    );
+    for (name, [tx, vx, sx]) in sets {
+        // Classifiers fit on train + validation (the MLP makes its own folds).
+        let x: Vec<Vec<f32>> = tx.iter().chain(vx).cloned().collect();
+        let y: Vec<usize> = ty.iter().chain(vy).copied().collect();
+        for est in [
+            "MLP 16-64-32 (10-fold)",
+            "Gaussian naive Bayes",
+            "k-NN (k=5)",
+        ] {
+            eprintln!("{name} + {est}");
+            let t0 = std::time::Instant::now();
+            let pred = match est {
+                "Gaussian naive Bayes" => classical::gaussian_nb(&x, &y, sx)?,
+                "k-NN (k=5)" => classical::knn_classify(&x, &y, sx, 5)?,
+                _ => {
+                    let cfg = tactile_cae::head::HeadConfig::new(x[0].len(), classes.to_vec())
+                        .with_seed(seed)
+                        .with_repeats(1);
+                    tactile_cae::head::ClassifierHead::train(cfg, &x, &y, dev)?.predict(sx, dev)?
+                }
+            };
+            let secs = t0.elapsed().as_secs_f64();
+            let acc = tactile_core::metrics::accuracy(&pred, sy);
+            md.push_str(&format!(
+                "| {name} | {est} | {:.1} % | {secs:.1} |\n",
+                100.0 * acc
+            ));
+        }
     }
-    Ok(())
+    md.push('\n');
+    Ok(md)
 }

@@ -502,6 +502,8 @@ fn compare_writes_a_table_of_every_feature_set_and_estimator() {
         d,
         "--targets",
         "depth_mm,force_n",
+        "--classify",
+        "shape",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -511,7 +513,9 @@ fn compare_writes_a_table_of_every_feature_set_and_estimator() {
         .lines()
         .filter(|l| l.starts_with("| ") && !l.starts_with("| features"))
         .collect();
-    assert_eq!(rows.len(), 15, "{table}");
+    // Five feature sets x three estimators, for regression and for classification.
+    assert_eq!(rows.len(), 30, "{table}");
+    assert!(table.contains("Gaussian naive Bayes") && table.contains("accuracy"));
     assert!(
         table.contains("Machine:")
             && table.contains("PCA-16")
