@@ -431,11 +431,13 @@ pub fn compare(a: CompareArgs) -> Result<()> {
 
 /// One feature set: name and (train, validation, test) vectors.
 type FeatureSet = (String, [Vec<Vec<f32>>; 3]);
+/// Labels of the (train, validation, test) frames.
+type SplitLabels<'a, T> = (&'a [T], &'a [T], &'a [T]);
 
 fn regression_table(
     sets: &[FeatureSet],
     targets: &[Target],
-    (ty, vy, sy): (&[Vec<f64>], &[Vec<f64>], &[Vec<f64>]),
+    (ty, vy, sy): SplitLabels<'_, Vec<f64>>,
     seed: u64,
     dev: &burn::tensor::Device,
 ) -> Result<String> {
@@ -494,7 +496,7 @@ fn regression_table(
 fn classification_table(
     sets: &[FeatureSet],
     classes: &[String],
-    (ty, vy, sy): (&[usize], &[usize], &[usize]),
+    (ty, vy, sy): SplitLabels<'_, usize>,
     seed: u64,
     dev: &burn::tensor::Device,
 ) -> Result<String> {
