@@ -63,3 +63,6 @@ train-cae-edge out="models/cae-edge":
 
 compare-edge:
     cargo run --release -p tactile -- compare --encoder models/cae-edge --data {{real}}/tactip127-edge --targets x_mm,theta_deg:180,depth_mm --out docs/paper-a-edge-compare.md
+
+compare-shapes:
+    cargo run --release -p tactile -- compare --encoder models/cae-shapes --data {{real}}/polic-shapes --classify shape --out docs/paper-a-shapes-compare.md
