@@ -66,3 +66,8 @@ compare-edge:
 
 compare-shapes:
     cargo run --release -p tactile -- compare --encoder models/cae-shapes --data {{real}}/polic-shapes --classify shape --out docs/paper-a-shapes-compare.md
+
+# Paper A's feature-count search on the shapes set: trains 8/16/32/64-feature CAEs into data/sweep, then writes docs/paper-a-sweep.md and its plots.
+sweep:
+    for f in 8 16 32 64; do cargo run --release -p tactile -- train cae --data {{real}}/polic-shapes --out data/sweep/cae-$f --widths 16,16,8,4 --features $f --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 600 --patience 100; done
+    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- sweep --data {{real}}/polic-shapes --out docs/paper-a-sweep.md --encoders data/sweep/cae-8 data/sweep/cae-16 data/sweep/cae-32 data/sweep/cae-64

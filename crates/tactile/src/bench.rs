@@ -76,56 +76,7 @@ pub fn bench_cae(a: BenchCaeArgs) -> Result<()> {
         }
         Err(_) => None,
     };
-    let px = art.cae.input_px;
-    let idx1: Vec<usize> = vec![0];
-    let idx_b: Vec<usize> = (0..a.batch).map(|i| i % pins.len()).collect();
-    let flat = |idx: &[usize]| -> Vec<f32> {
-        idx.iter()
-            .flat_map(|&i| pins.images[i].pixels.clone())
-            .collect()
-    };
-    let threads = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1);
-    let mut rows_out = Vec::new();
-    for kind in DeviceKind::ALL {
-        let dev = kind.device();
-        let (_, m) = CaeArtifact::load(&a.model, &dev)?;
-        let x1 = Tensor::<4>::from_data(TensorData::new(flat(&idx1), [1, 1, px, px]), &dev);
-        let xb = Tensor::<4>::from_data(TensorData::new(flat(&idx_b), [a.batch, 1, px, px]), &dev);
-        let t1 = median_seconds(5, a.runs, || {
-            let _ = m.encoder.forward(x1.clone()).into_data();
-        });
-        let tb = median_seconds(2, a.runs.div_ceil(3).max(3), || {
-            let _ = m.encoder.forward(xb.clone()).into_data();
-        });
-        rows_out.push((
-            format!("burn {kind}"),
-            format!("{threads} (rayon)"),
-            t1,
-            a.batch as f64 / tb,
-        ));
-    }
-    let onnx = tactile_onnx::export_cae_encoder(&cae.encoder, px)?;
-    match OrtModel::from_bytes(&onnx, threads) {
-        Ok(mut ort) => {
-            let d1 = flat(&idx1);
-            let db = flat(&idx_b);
-            let t1 = median_seconds(5, a.runs, || {
-                let _ = ort.run_f32(&[1, 1, px, px], d1.clone());
-            });
-            let tb = median_seconds(2, a.runs.div_ceil(3).max(3), || {
-                let _ = ort.run_f32(&[a.batch, 1, px, px], db.clone());
-            });
-            rows_out.push((
-                "onnxruntime 1.31.1".into(),
-                format!("{threads} (intra-op)"),
-                t1,
-                a.batch as f64 / tb,
-            ));
-        }
-        Err(e) => eprintln!("onnxruntime skipped: {e}"),
-    }
+    let rows_out = measure_encoder(&a.model, &pins, a.batch, a.runs)?;
     let machine = Machine::detect();
     let mut md = String::new();
     md.push_str(&format!("Machine: {}\n\n", machine.describe()));
@@ -248,4 +199,67 @@ pub fn bench_synth(a: BenchSynthArgs) -> Result<()> {
         tactile_core::io::write_atomic(&out, md.as_bytes())?;
     }
     Ok(())
+}
+
+/// Median latency at batch 1 and throughput at `batch` of an encoder on
+/// every runtime: `(runtime, threads, seconds per batch-1 call, frames/s)`.
+pub fn measure_encoder(
+    model: &std::path::Path,
+    pins: &PinSet,
+    batch: usize,
+    runs: usize,
+) -> Result<Vec<(String, String, f64, f64)>> {
+    let flex = DeviceKind::Flex.device();
+    let (art, cae) = CaeArtifact::load(model, &flex)?;
+    let px = art.cae.input_px;
+    let idx1: Vec<usize> = vec![0];
+    let idx_b: Vec<usize> = (0..batch).map(|i| i % pins.len()).collect();
+    let flat = |idx: &[usize]| -> Vec<f32> {
+        idx.iter()
+            .flat_map(|&i| pins.images[i].pixels.clone())
+            .collect()
+    };
+    let threads = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    let mut rows_out = Vec::new();
+    for kind in DeviceKind::ALL {
+        let dev = kind.device();
+        let (_, m) = CaeArtifact::load(&model, &dev)?;
+        let x1 = Tensor::<4>::from_data(TensorData::new(flat(&idx1), [1, 1, px, px]), &dev);
+        let xb = Tensor::<4>::from_data(TensorData::new(flat(&idx_b), [batch, 1, px, px]), &dev);
+        let t1 = median_seconds(5, runs, || {
+            let _ = m.encoder.forward(x1.clone()).into_data();
+        });
+        let tb = median_seconds(2, runs.div_ceil(3).max(3), || {
+            let _ = m.encoder.forward(xb.clone()).into_data();
+        });
+        rows_out.push((
+            format!("burn {kind}"),
+            format!("{threads} (rayon)"),
+            t1,
+            batch as f64 / tb,
+        ));
+    }
+    let onnx = tactile_onnx::export_cae_encoder(&cae.encoder, px)?;
+    match OrtModel::from_bytes(&onnx, threads) {
+        Ok(mut ort) => {
+            let d1 = flat(&idx1);
+            let db = flat(&idx_b);
+            let t1 = median_seconds(5, runs, || {
+                let _ = ort.run_f32(&[1, 1, px, px], d1.clone());
+            });
+            let tb = median_seconds(2, runs.div_ceil(3).max(3), || {
+                let _ = ort.run_f32(&[batch, 1, px, px], db.clone());
+            });
+            rows_out.push((
+                "onnxruntime 1.31.1".into(),
+                format!("{threads} (intra-op)"),
+                t1,
+                batch as f64 / tb,
+            ));
+        }
+        Err(e) => eprintln!("onnxruntime skipped: {e}"),
+    }
+    Ok(rows_out)
 }

@@ -3,6 +3,7 @@
 mod bench;
 mod cae_cmds;
 mod estimate_cmds;
+mod sweep;
 mod synth_cmds;
 
 use std::path::PathBuf;
@@ -53,6 +54,8 @@ enum Command {
         #[arg(long, default_value = "flex", value_parser = parse_device)]
         device: DeviceKind,
     },
+    /// Paper A's feature-count search: error and latency per trained encoder, table and plots.
+    Sweep(sweep::SweepArgs),
     /// Compare feature sets (CAE, PCA, raw pixels) x estimators (MLP, ridge, k-NN) on one split.
     Compare(estimate_cmds::CompareArgs),
     /// Run several estimators on one encoding per frame (paper A's simultaneous deployment).
@@ -142,6 +145,7 @@ fn main() -> Result<()> {
         } => cae_cmds::encode(&model, &data, &out, device),
         Command::Perceive(a) => estimate_cmds::perceive(a),
         Command::Compare(a) => estimate_cmds::compare(a),
+        Command::Sweep(a) => sweep::sweep(a),
         Command::Export { model, out, part } => cae_cmds::export(&model, &out, &part),
         Command::Bench {
             model: BenchCmd::Cae(a),

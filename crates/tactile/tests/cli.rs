@@ -523,3 +523,55 @@ fn compare_writes_a_table_of_every_feature_set_and_estimator() {
             && table.contains("pin tracking")
     );
 }
+
+#[test]
+fn sweep_tabulates_and_plots_every_encoder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("tt");
+    let d = data.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth", "tactip", "--count", "60", "--seed", "5", "--out", d,
+    ]);
+    assert!(ok, "{msg}");
+    let mut encoders = Vec::new();
+    for f in ["8", "16"] {
+        let m = tmp.path().join(format!("cae-{f}"));
+        let (ok, msg) = tactile(&[
+            "train",
+            "cae",
+            "--data",
+            d,
+            "--out",
+            m.to_str().unwrap(),
+            "--max-epochs",
+            "1",
+            "--features",
+            f,
+            "--preprocess",
+            "lighting-compensated",
+        ]);
+        assert!(ok, "{msg}");
+        encoders.push(m.to_str().unwrap().to_string());
+    }
+    let out = tmp.path().join("sweep.md");
+    let mut args = vec![
+        "sweep",
+        "--data",
+        d,
+        "--runs",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+        "--encoders",
+    ];
+    args.extend(encoders.iter().map(String::as_str));
+    let (ok, msg) = tactile(&args);
+    assert!(ok, "{msg}");
+    let table = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        table.contains("| cae-8 | 8 |") && table.contains("| cae-16 | 16 |"),
+        "{table}"
+    );
+    assert!(tmp.path().join("sweep-features.png").is_file());
+    assert!(tmp.path().join("sweep-latency.png").is_file());
+}
