@@ -225,7 +225,7 @@ pub fn measure_encoder(
     let mut rows_out = Vec::new();
     for kind in DeviceKind::ALL {
         let dev = kind.device();
-        let (_, m) = CaeArtifact::load(&model, &dev)?;
+        let (_, m) = CaeArtifact::load(model, &dev)?;
         let x1 = Tensor::<4>::from_data(TensorData::new(flat(&idx1), [1, 1, px, px]), &dev);
         let xb = Tensor::<4>::from_data(TensorData::new(flat(&idx_b), [batch, 1, px, px]), &dev);
         let t1 = median_seconds(5, runs, || {
