@@ -48,10 +48,13 @@ synth-previews:
 samples:
     cargo run --release -p tactile -- synth tactip --count 14 --seed 300 --out samples/virtual-tactip --force
 
-# Train the CAE and a 7-shape head on the virtual TacTip (lighting-compensated preprocessing); writes models/cae-synth.
+# Train the CAE (grey-level area-downsampled pin images, linear latent) and every estimator on the virtual TacTip; writes models/cae-synth.
 train-cae-synth out="models/cae-synth": synth-tactip
-    cargo run --release -p tactile -- train cae --data data/synth-tactip-train --out {{out}} --preprocess lighting-compensated --widths 16,16,8,4 --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 500 --patience 80
+    cargo run --release -p tactile -- train cae --data data/synth-tactip-train --out {{out}} --preprocess configs/preprocess/virtual-tactip-area.json --widths 16,16,8,4 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 300 --patience 40
     cargo run --release -p tactile -- train head --encoder {{out}} --data data/synth-tactip-train --test data/synth-tactip-test
+    cargo run --release -p tactile -- train regressor --encoder {{out}} --data data/synth-tactip-train --targets depth_mm,force_n --hidden 128,64 --out {{out}}/regressor
+    cargo run --release -p tactile -- train regressor --encoder {{out}} --data data/synth-tactip-train --targets x_mm,y_mm --only-labelled --hidden 128,64 --out {{out}}/position
+    cargo run --release -p tactile -- train regressor --encoder {{out}} --data data/synth-tactip-train --targets theta_deg:180 --only-labelled --hidden 128,64 --out {{out}}/theta
 
 # Frames/s of both virtual sensors; writes docs/bench-synth.md.
 bench-synth:

@@ -3,8 +3,6 @@
 
 use std::path::{Path, PathBuf};
 
-use burn::module::Module;
-use burn::store::ModuleRecord;
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
 use tactile_core::{Error, Result};
@@ -26,31 +24,7 @@ pub struct CaeArtifact {
 pub const CONFIG_FILE: &str = "cae.json";
 pub const WEIGHTS_FILE: &str = "cae.bpk";
 
-/// Serialise a module's weights to burnpack bytes.
-pub fn module_bytes<M: Module>(module: &M, path: &Path) -> Result<Vec<u8>> {
-    let bytes = module
-        .clone()
-        .into_record()
-        .into_bytes()
-        .map_err(|e| Error::model(path, format!("cannot serialise weights: {e}")))?;
-    Ok(bytes.to_vec())
-}
-
-/// Save a module's weights atomically.
-pub fn save_module<M: Module>(module: &M, path: &Path) -> Result<()> {
-    tactile_core::io::write_atomic(path, &module_bytes(module, path)?)
-}
-
-/// Load weights into a freshly built module; errors name the file.
-pub fn load_module<M: Module>(module: M, path: &Path) -> Result<M> {
-    if !path.is_file() {
-        return Err(Error::model(path, "weights file does not exist"));
-    }
-    let record = ModuleRecord::load(path).map_err(|e| Error::model(path, e.to_string()))?;
-    module
-        .try_load_record(record)
-        .map_err(|e| Error::model(path, e.to_string()))
-}
+pub use tactile_core::module_io::{load_module, module_bytes, save_module};
 
 impl CaeArtifact {
     /// Save config and weights into `dir` (created if needed).

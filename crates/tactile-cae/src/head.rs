@@ -161,11 +161,12 @@ impl ClassifierHead {
         let mean: Vec<f32> = (0..k)
             .map(|j| x.iter().map(|v| v[j]).sum::<f32>() / n)
             .collect();
-        let std: Vec<f32> = (0..k)
-            .map(|j| {
-                ((x.iter().map(|v| (v[j] - mean[j]).powi(2)).sum::<f32>() / n).sqrt()).max(1e-6)
-            })
-            .collect();
+        let std: Vec<f32> = tactile_core::metrics::safe_scales((0..k).map(|j| {
+            ((x.iter().map(|v| (v[j] - mean[j]).powi(2)).sum::<f32>() / n).sqrt()) as f64
+        }))
+        .into_iter()
+        .map(|s| s as f32)
+        .collect();
         let mut members = Vec::with_capacity(config.folds * config.repeats.max(1));
         for repeat in 0..config.repeats.max(1) {
             // Folds from one seeded shuffle per repeat.

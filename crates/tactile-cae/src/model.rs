@@ -28,6 +28,12 @@ pub struct CaeConfig {
     /// Side of the input pin image.
     #[config(default = 28)]
     pub input_px: usize,
+    /// ReLU before the last pooling (Table I). Trained on grey-level pin
+    /// images, 7 of 16 such features died (zero on every frame of the
+    /// edge set); without it the features are the max-pooled linear
+    /// responses and none can die.
+    #[config(default = true)]
+    pub latent_relu: bool,
 }
 
 impl CaeConfig {
@@ -78,6 +84,7 @@ impl CaeConfig {
                 conv3: same(c2, c3),
                 conv4: same(c3, c4),
                 pool: MaxPool2dConfig::new([2, 2]).with_ceil_mode(true).init(),
+                latent_relu: self.latent_relu,
             },
             decoder: CaeDecoder {
                 conv1: same(c4, c4),
@@ -150,6 +157,7 @@ pub struct CaeEncoder {
     pub conv3: Conv2d,
     pub conv4: Conv2d,
     pub pool: MaxPool2d,
+    pub latent_relu: bool,
 }
 
 impl CaeEncoder {
@@ -158,7 +166,9 @@ impl CaeEncoder {
         let x = self.pool.forward(relu(self.conv1.forward(x)));
         let x = self.pool.forward(relu(self.conv2.forward(x)));
         let x = self.pool.forward(relu(self.conv3.forward(x)));
-        self.pool.forward(relu(self.conv4.forward(x)))
+        let x = self.conv4.forward(x);
+        self.pool
+            .forward(if self.latent_relu { relu(x) } else { x })
     }
 
     /// Features `[N, F]` in (row, column, channel) order, from pin images `[N, 1, 28, 28]`.

@@ -1,22 +1,18 @@
 //! Training the autoencoder: Adadelta, stable BCE, batch 256, early
 //! stopping on validation loss, best checkpoint kept, resumable.
 
-use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::path::Path;
 
 use burn::config::Config;
-use burn::module::Module;
-use burn::optim::{GradientsParams, ModuleOptimizer};
+use burn::optim::ModuleOptimizer;
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
 use tactile_core::nn::bce_with_logits;
 use tactile_core::optim::AdadeltaConfig;
-use tactile_core::train::{
-    EarlyStopping, EpochRecord, TrainingLog, Verdict, ensure_finite, progress_bar, shuffled_batches,
-};
+use tactile_core::train::{FitConfig, fit};
 use tactile_core::{Error, Result};
 
-use crate::artifact::{CaeArtifact, load_module, save_module};
+use crate::artifact::CaeArtifact;
 use crate::data::PinSet;
 use crate::model::{Cae, CaeConfig};
 
@@ -54,16 +50,6 @@ pub struct TrainSummary {
     pub val_frames: usize,
 }
 
-#[derive(Serialize, Deserialize)]
-struct CheckpointState {
-    next_epoch: usize,
-    early: EarlyStopping,
-    log: TrainingLog,
-    elapsed_s: f64,
-}
-
-const CKPT_DIR: &str = "checkpoint";
-
 fn mean_loss(model: &Cae, data: &PinSet, idx: &[usize], batch: usize, device: &Device) -> f64 {
     let mut total = 0.0;
     for chunk in idx.chunks(batch.max(1)) {
@@ -96,13 +82,11 @@ pub fn train_cae(
             val.len()
         )));
     }
-    tactile_core::io::create_dir_all(out)?;
-    let ckpt: PathBuf = out.join(CKPT_DIR);
     let ad = device.clone().autodiff();
     // Seeded initial weights: the same config gives the same run.
     ad.seed(config.seed);
-    let mut model = config.cae.init(&ad);
-    let mut optim: ModuleOptimizer = match config.optimizer_kind.as_str() {
+    let model = config.cae.init(&ad);
+    let optim: ModuleOptimizer = match config.optimizer_kind.as_str() {
         "adadelta" => config.optimizer.init(),
         "adam" => burn::optim::AdamConfig::new().init(),
         other => {
@@ -111,83 +95,34 @@ pub fn train_cae(
             )));
         }
     };
-    let mut state = CheckpointState {
-        next_epoch: 0,
-        early: EarlyStopping::new(config.patience),
-        log: TrainingLog::default(),
-        elapsed_s: 0.0,
+    let fit_cfg = FitConfig {
+        max_epochs: config.max_epochs,
+        patience: config.patience,
+        batch_size: config.batch_size,
+        learning_rate: config.learning_rate,
+        seed: config.seed,
+        title: "CAE training (binary cross-entropy)".into(),
+        checkpoint_every: 25,
     };
-    if resume {
-        let st = ckpt.join("state.json");
-        if !st.is_file() {
-            return Err(Error::model(
-                &st,
-                "nothing to resume: no checkpoint in the output folder",
-            ));
-        }
-        state = tactile_core::io::read_json(&st)?;
-        model = load_module(model, &ckpt.join("model.bpk"))?;
-        let opt_path = ckpt.join("optim.bpk");
-        optim = optim
-            .load(&opt_path)
-            .map_err(|e| Error::model(&opt_path, format!("cannot load optimiser state: {e}")))?;
-    }
-    let start = Instant::now();
-    let pb = progress_bar(config.max_epochs as u64, "train cae");
-    pb.set_position(state.next_epoch as u64);
-    let mut epoch = state.next_epoch;
-    while epoch < config.max_epochs {
-        let t0 = Instant::now();
-        let mut train_total = 0.0;
-        for batch in shuffled_batches(
-            train,
-            config.batch_size,
-            config.seed.wrapping_add(epoch as u64),
-        ) {
-            let x = data.batch(&batch, &ad);
-            let loss = bce_with_logits(model.forward_logits(x.clone()), x);
-            let l: f32 = loss.clone().into_scalar();
-            train_total += l as f64 * batch.len() as f64;
-            let grads = GradientsParams::from_grads(loss.backward(), &model);
-            model = optim.step(config.learning_rate, model, grads);
-        }
-        let train_loss = ensure_finite("training loss", train_total / train.len() as f64)?;
-        let valid = model.valid();
-        let val_loss = mean_loss(&valid, data, val, config.batch_size, device);
-        state.log.epochs.push(EpochRecord {
-            epoch,
-            train_loss,
-            val_loss,
-            seconds: t0.elapsed().as_secs_f64(),
-        });
-        let verdict = state.early.update(epoch, val_loss);
-        if verdict == Verdict::Improved {
-            artifact.save(&valid, out)?;
-        }
-        epoch += 1;
-        state.next_epoch = epoch;
-        pb.set_position(epoch as u64);
-        pb.set_message(format!(
-            "loss {train_loss:.4} val {val_loss:.4} best {:.4}@{}",
-            state.early.best, state.early.best_epoch
-        ));
-        let last = verdict == Verdict::Stop || epoch == config.max_epochs;
-        if last || epoch.is_multiple_of(25) {
-            state.elapsed_s += start.elapsed().as_secs_f64();
-            write_checkpoint(&ckpt, &model, &optim, &state)?;
-            state.elapsed_s -= start.elapsed().as_secs_f64();
-            state.log.save(out, "CAE training (binary cross-entropy)")?;
-        }
-        if verdict == Verdict::Stop {
-            break;
-        }
-    }
-    pb.finish_and_clear();
+    let (_, s) = fit(
+        &fit_cfg,
+        model,
+        optim,
+        train,
+        out,
+        resume,
+        |m: &Cae, batch, _| {
+            let x = data.batch(batch, &ad);
+            Ok(bce_with_logits(m.forward_logits(x.clone()), x))
+        },
+        |m| Ok((mean_loss(m, data, val, config.batch_size, device), None)),
+        |m| artifact.save(m, out),
+    )?;
     let summary = TrainSummary {
-        epochs_run: state.next_epoch,
-        best_epoch: state.early.best_epoch,
-        best_val_loss: state.early.best,
-        seconds: state.elapsed_s + start.elapsed().as_secs_f64(),
+        epochs_run: s.epochs_run,
+        best_epoch: s.best_epoch,
+        best_val_loss: s.best_val_loss,
+        seconds: s.seconds,
         train_frames: train.len(),
         val_frames: val.len(),
     };
@@ -199,20 +134,4 @@ pub fn train_cae(
         }),
     )?;
     Ok(summary)
-}
-
-fn write_checkpoint(
-    dir: &Path,
-    model: &Cae,
-    optim: &ModuleOptimizer,
-    state: &CheckpointState,
-) -> Result<()> {
-    tactile_core::io::create_dir_all(dir)?;
-    save_module(model, &dir.join("model.bpk"))?;
-    let opt_path = dir.join("optim.bpk");
-    let bytes = optim
-        .into_bytes()
-        .map_err(|e| Error::model(&opt_path, format!("cannot serialise optimiser state: {e}")))?;
-    tactile_core::io::write_atomic(&opt_path, &bytes)?;
-    tactile_core::io::write_json_atomic(dir.join("state.json"), state)
 }

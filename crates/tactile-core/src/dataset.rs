@@ -300,6 +300,52 @@ impl Dataset {
                 .collect(),
         )
     }
+
+    /// `(train, validation)` rows split by the `sequence` column, never by
+    /// frame, so no palpation video leaks across the split: the sequences
+    /// are shuffled with `seed` and the last `val_fraction` of them (at
+    /// least one) validate. Rows with no sequence are each their own group.
+    pub fn split_by_sequence(
+        &self,
+        val_fraction: f64,
+        seed: u64,
+    ) -> Result<(Vec<usize>, Vec<usize>)> {
+        use rand::SeedableRng;
+        use rand::seq::SliceRandom;
+        if !(0.0..1.0).contains(&val_fraction) || val_fraction == 0.0 {
+            return Err(Error::Config(format!(
+                "validation fraction must be in (0, 1), got {val_fraction}"
+            )));
+        }
+        let mut groups: std::collections::BTreeMap<String, Vec<usize>> = Default::default();
+        for i in 0..self.len() {
+            let key = match self.text_opt(i, "sequence") {
+                Some(s) => format!("s{s}"),
+                None => format!("f{i}"),
+            };
+            groups.entry(key).or_default().push(i);
+        }
+        let mut keys: Vec<&String> = groups.keys().collect();
+        if keys.len() < 2 {
+            return Err(Error::dataset(
+                self.labels_path(),
+                None,
+                format!(
+                    "{} sequence(s): need at least 2 to split by sequence",
+                    keys.len()
+                ),
+            ));
+        }
+        keys.shuffle(&mut rand::rngs::StdRng::seed_from_u64(seed));
+        let n_val = ((keys.len() as f64 * val_fraction).round() as usize).clamp(1, keys.len() - 1);
+        let (tr, va) = keys.split_at(keys.len() - n_val);
+        let rows = |ks: &[&String]| -> Vec<usize> {
+            let mut r: Vec<usize> = ks.iter().flat_map(|k| groups[*k].iter().copied()).collect();
+            r.sort_unstable();
+            r
+        };
+        Ok((rows(tr), rows(va)))
+    }
 }
 
 /// Writes a dataset folder: files first, `labels.csv` and `manifest.json`

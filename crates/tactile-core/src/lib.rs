@@ -11,6 +11,7 @@ pub mod error;
 pub mod image_io;
 pub mod io;
 pub mod metrics;
+pub mod module_io;
 pub mod nn;
 pub mod optim;
 pub mod plot;

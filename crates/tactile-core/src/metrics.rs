@@ -87,4 +87,113 @@ mod tests {
         assert_eq!(percentile(&[0.0, 10.0], 90.0), 9.0);
         assert_eq!(max_abs_diff(&[1.0, 2.0], &[1.5, 2.0]), 0.5);
     }
+
+    #[test]
+    fn binary_scores_count_each_cell() {
+        let s = binary_scores(
+            &[true, true, false, false, true],
+            &[true, false, false, true, true],
+        );
+        assert_eq!(
+            (s.true_pos, s.false_pos, s.true_neg, s.false_neg),
+            (2, 1, 1, 1)
+        );
+        assert_eq!(s.accuracy, 0.6);
+        assert!((s.precision - 2.0 / 3.0).abs() < 1e-12 && (s.recall - 2.0 / 3.0).abs() < 1e-12);
+        let none = binary_scores(&[false, false], &[false, false]);
+        assert_eq!((none.accuracy, none.precision, none.f1), (1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn iou_of_masks() {
+        assert_eq!(iou(&[true, true, false], &[true, false, false]), 0.5);
+        assert_eq!(iou(&[false; 3], &[false; 3]), 1.0);
+        assert_eq!(iou(&[true, false], &[false, true]), 0.0);
+    }
+
+    #[test]
+    fn scales_never_blow_a_nearly_constant_column_up() {
+        // A pixel lit in one training frame of thousands: std 1e-4.
+        assert_eq!(
+            safe_scales([0.3, 1e-4, 0.0, f64::NAN]),
+            [0.3, 0.003, 0.003, 0.003]
+        );
+        assert_eq!(safe_scales([0.0, 0.0]), [1.0, 1.0]);
+    }
+}
+
+/// Binary classification scores, positives = `true`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BinaryScores {
+    pub frames: usize,
+    pub accuracy: f64,
+    pub precision: f64,
+    pub recall: f64,
+    pub f1: f64,
+    pub true_pos: usize,
+    pub false_pos: usize,
+    pub true_neg: usize,
+    pub false_neg: usize,
+}
+
+/// Accuracy, precision, recall and F1 (0 when undefined, e.g. no positive
+/// predicted).
+pub fn binary_scores(pred: &[bool], truth: &[bool]) -> BinaryScores {
+    let mut c = [0usize; 4];
+    for (&p, &t) in pred.iter().zip(truth) {
+        c[(p as usize) << 1 | t as usize] += 1;
+    }
+    let [tn, fneg, fp, tp] = c;
+    let div = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f64 / b as f64 };
+    let (precision, recall) = (div(tp, tp + fp), div(tp, tp + fneg));
+    let f1 = if precision + recall > 0.0 {
+        2.0 * precision * recall / (precision + recall)
+    } else {
+        0.0
+    };
+    BinaryScores {
+        frames: truth.len(),
+        accuracy: div(tp + tn, truth.len()),
+        precision,
+        recall,
+        f1,
+        true_pos: tp,
+        false_pos: fp,
+        true_neg: tn,
+        false_neg: fneg,
+    }
+}
+
+/// Intersection over union of two binary masks; 1 when both are empty
+/// (nothing to find, nothing found).
+pub fn iou(pred: &[bool], truth: &[bool]) -> f64 {
+    let (mut inter, mut union) = (0usize, 0usize);
+    for (&p, &t) in pred.iter().zip(truth) {
+        inter += (p && t) as usize;
+        union += (p || t) as usize;
+    }
+    if union == 0 {
+        1.0
+    } else {
+        inter as f64 / union as f64
+    }
+}
+
+/// Standardisation scales from per-column standard deviations.
+///
+/// A column that barely varies in training (a pixel that a few frames touch)
+/// would be divided by a tiny number and turn a small change at test time
+/// into a huge input; every scale is therefore at least 1 % of the largest
+/// (and 1 when every column is constant).
+pub fn safe_scales(std: impl IntoIterator<Item = f64>) -> Vec<f64> {
+    let std: Vec<f64> = std.into_iter().collect();
+    let max = std
+        .iter()
+        .copied()
+        .filter(|s| s.is_finite())
+        .fold(0.0, f64::max);
+    let floor = if max > 0.0 { 0.01 * max } else { 1.0 };
+    std.into_iter()
+        .map(|s| if s.is_finite() && s > floor { s } else { floor })
+        .collect()
 }

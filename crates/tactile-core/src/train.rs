@@ -68,6 +68,9 @@ pub struct EpochRecord {
     pub train_loss: f64,
     pub val_loss: f64,
     pub seconds: f64,
+    /// The model's own validation metric (accuracy, IoU), when it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub val_metric: Option<f64>,
 }
 
 /// The curves of a run, written as `curves.csv` and `curves.png`.
@@ -82,13 +85,23 @@ impl TrainingLog {
         let dir = dir.as_ref();
         let csv_path = dir.join("curves.csv");
         crate::io::write_atomic_with(&csv_path, |w| {
-            writeln!(w, "epoch,train_loss,val_loss,seconds")?;
+            let metric = self.epochs.iter().any(|e| e.val_metric.is_some());
+            writeln!(
+                w,
+                "epoch,train_loss,val_loss,seconds{}",
+                if metric { ",val_metric" } else { "" }
+            )?;
             for e in &self.epochs {
-                writeln!(
+                write!(
                     w,
                     "{},{},{},{:.3}",
                     e.epoch, e.train_loss, e.val_loss, e.seconds
                 )?;
+                match (metric, e.val_metric) {
+                    (true, Some(m)) => writeln!(w, ",{m}")?,
+                    (true, None) => writeln!(w, ",")?,
+                    _ => writeln!(w)?,
+                }
             }
             Ok(())
         })?;
@@ -122,6 +135,161 @@ impl TrainingLog {
             true,
         )
     }
+}
+
+/// Settings of [`fit`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FitConfig {
+    pub max_epochs: usize,
+    /// Epochs without a better validation loss before stopping.
+    pub patience: usize,
+    pub batch_size: usize,
+    pub learning_rate: f64,
+    /// Seeds the weights (by the caller) and each epoch's shuffle.
+    pub seed: u64,
+    /// Title of the curves plot and prefix of the progress bar.
+    pub title: String,
+    /// Save a resumable checkpoint every this many epochs (and at the end).
+    pub checkpoint_every: usize,
+}
+
+/// What a [`fit`] run ended with.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FitSummary {
+    pub epochs_run: usize,
+    pub best_epoch: usize,
+    pub best_val_loss: f64,
+    /// The validation metric of the best epoch.
+    pub best_val_metric: Option<f64>,
+    pub seconds: f64,
+    pub train_items: usize,
+}
+
+#[derive(Serialize, Deserialize)]
+struct FitState {
+    next_epoch: usize,
+    early: EarlyStopping,
+    log: TrainingLog,
+    elapsed_s: f64,
+}
+
+/// The shared training loop: seeded shuffled mini-batches, one optimiser
+/// step per batch on the loss `batch_loss` returns, validation each epoch
+/// (`validate` gets the model without autodiff and returns the loss that
+/// early stopping watches plus an optional metric), `save_best` on every
+/// new best, `curves.csv`/`curves.png` and a resumable `checkpoint/` in
+/// `out`. Resuming gives the same result as an uninterrupted run.
+#[allow(clippy::too_many_arguments)]
+pub fn fit<M: burn::module::Module>(
+    cfg: &FitConfig,
+    mut model: M,
+    mut optim: burn::optim::ModuleOptimizer,
+    train: &[usize],
+    out: &Path,
+    resume: bool,
+    mut batch_loss: impl FnMut(&M, &[usize], usize) -> Result<burn::tensor::Tensor<1>>,
+    mut validate: impl FnMut(&M) -> Result<(f64, Option<f64>)>,
+    mut save_best: impl FnMut(&M) -> Result<()>,
+) -> Result<(M, FitSummary)> {
+    use burn::optim::GradientsParams;
+    if train.is_empty() {
+        return Err(Error::Invalid("no training items".into()));
+    }
+    crate::io::create_dir_all(out)?;
+    let ckpt = out.join("checkpoint");
+    let mut state = FitState {
+        next_epoch: 0,
+        early: EarlyStopping::new(cfg.patience),
+        log: TrainingLog::default(),
+        elapsed_s: 0.0,
+    };
+    if resume {
+        let st = ckpt.join("state.json");
+        if !st.is_file() {
+            return Err(Error::model(
+                &st,
+                "nothing to resume: no checkpoint in the output folder",
+            ));
+        }
+        state = crate::io::read_json(&st)?;
+        model = crate::module_io::load_module(model, &ckpt.join("model.bpk"))?;
+        let opt_path = ckpt.join("optim.bpk");
+        optim = optim
+            .load(&opt_path)
+            .map_err(|e| Error::model(&opt_path, format!("cannot load optimiser state: {e}")))?;
+    }
+    let start = std::time::Instant::now();
+    let pb = progress_bar(cfg.max_epochs as u64, &cfg.title);
+    pb.set_position(state.next_epoch as u64);
+    let mut epoch = state.next_epoch;
+    let mut best_metric = state
+        .log
+        .epochs
+        .iter()
+        .find(|e| e.epoch == state.early.best_epoch)
+        .and_then(|e| e.val_metric);
+    while epoch < cfg.max_epochs {
+        let t0 = std::time::Instant::now();
+        let mut total = 0.0;
+        for batch in shuffled_batches(train, cfg.batch_size, cfg.seed.wrapping_add(epoch as u64)) {
+            let loss = batch_loss(&model, &batch, epoch)?;
+            let l: f32 = loss.clone().into_scalar();
+            total += l as f64 * batch.len() as f64;
+            let grads = GradientsParams::from_grads(loss.backward(), &model);
+            model = optim.step(cfg.learning_rate, model, grads);
+        }
+        let train_loss = ensure_finite("training loss", total / train.len() as f64)?;
+        let valid = model.valid();
+        let (val_loss, val_metric) = validate(&valid)?;
+        state.log.epochs.push(EpochRecord {
+            epoch,
+            train_loss,
+            val_loss,
+            seconds: t0.elapsed().as_secs_f64(),
+            val_metric,
+        });
+        let verdict = state.early.update(epoch, val_loss);
+        if verdict == Verdict::Improved {
+            save_best(&valid)?;
+            best_metric = val_metric;
+        }
+        epoch += 1;
+        state.next_epoch = epoch;
+        pb.set_position(epoch as u64);
+        pb.set_message(format!(
+            "loss {train_loss:.4} val {val_loss:.4}{} best {:.4}@{}",
+            val_metric.map(|m| format!(" ({m:.4})")).unwrap_or_default(),
+            state.early.best,
+            state.early.best_epoch
+        ));
+        let last = verdict == Verdict::Stop || epoch == cfg.max_epochs;
+        if last || epoch.is_multiple_of(cfg.checkpoint_every.max(1)) {
+            state.elapsed_s += start.elapsed().as_secs_f64();
+            crate::io::create_dir_all(&ckpt)?;
+            crate::module_io::save_module(&model, &ckpt.join("model.bpk"))?;
+            let opt_path = ckpt.join("optim.bpk");
+            let bytes = optim.into_bytes().map_err(|e| {
+                Error::model(&opt_path, format!("cannot serialise optimiser state: {e}"))
+            })?;
+            crate::io::write_atomic(&opt_path, &bytes)?;
+            crate::io::write_json_atomic(ckpt.join("state.json"), &state)?;
+            state.elapsed_s -= start.elapsed().as_secs_f64();
+            state.log.save(out, &cfg.title)?;
+        }
+        if verdict == Verdict::Stop {
+            break;
+        }
+    }
+    pb.finish_and_clear();
+    let summary = FitSummary {
+        epochs_run: state.next_epoch,
+        best_epoch: state.early.best_epoch,
+        best_val_loss: state.early.best,
+        best_val_metric: best_metric,
+        seconds: state.elapsed_s + start.elapsed().as_secs_f64(),
+        train_items: train.len(),
+    };
+    Ok((model, summary))
 }
 
 /// A progress bar with position, rate and ETA; hidden when stderr is not a terminal.

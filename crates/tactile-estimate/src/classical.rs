@@ -32,9 +32,9 @@ fn standardise(x: &Array2<f64>, others: &[&Array2<f64>]) -> (Array2<f64>, Vec<Ar
     let mean = x
         .mean_axis(ndarray016::Axis(0))
         .unwrap_or_else(|| Array1::zeros(x.ncols()));
-    let std = x
-        .std_axis(ndarray016::Axis(0), 0.0)
-        .mapv(|s| if s > 1e-9 { s } else { 1.0 });
+    let std = Array1::from(tactile_core::metrics::safe_scales(
+        x.std_axis(ndarray016::Axis(0), 0.0).iter().copied(),
+    ));
     let f = |a: &Array2<f64>| (a - &mean) / &std;
     (f(x), others.iter().map(|o| f(o)).collect())
 }

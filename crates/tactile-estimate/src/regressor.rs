@@ -65,13 +65,9 @@ impl Scaler {
         let mean: Vec<f64> = (0..k)
             .map(|j| rows.iter().map(|r| r[j]).sum::<f64>() / n)
             .collect();
-        let std = (0..k)
-            .map(|j| {
-                (rows.iter().map(|r| (r[j] - mean[j]).powi(2)).sum::<f64>() / n)
-                    .sqrt()
-                    .max(1e-9)
-            })
-            .collect();
+        let std = tactile_core::metrics::safe_scales(
+            (0..k).map(|j| (rows.iter().map(|r| (r[j] - mean[j]).powi(2)).sum::<f64>() / n).sqrt()),
+        );
         Self { mean, std }
     }
 

@@ -15,6 +15,7 @@ use kornia_imgproc::morphology::{self, Kernel};
 use kornia_imgproc::padding::PaddingMode;
 
 pub mod pins;
+pub mod visuo;
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::GreyImage;
 use tactile_core::{Error, Result};
@@ -65,6 +66,31 @@ pub struct PreprocessConfig {
     pub output_px: usize,
     /// Offset of the final rounding `round(x/255 + offset)` (authors: 0.3).
     pub binarise_offset: f64,
+    /// How the crop shrinks to `output_px` (authors: bilinear sampling).
+    #[serde(default)]
+    pub downsample: Downsample,
+    /// Round to {0, 1} (paper A). `false` keeps the grey levels in [0, 1],
+    /// which with [`Downsample::Area`] keep each pin's sub-pixel position:
+    /// the fraction of an output pixel it covers.
+    #[serde(default = "yes")]
+    pub binarise: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// Shrinking the crop to the pin image.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Downsample {
+    /// OpenCV's `INTER_LINEAR` (what the authors ran): samples a 2x2
+    /// neighbourhood, so at a 10x shrink most pixels are never read.
+    #[default]
+    Linear,
+    /// Mean over each output pixel's footprint, with fractional coverage at
+    /// its borders: every input pixel counts.
+    Area,
 }
 
 impl PreprocessConfig {
@@ -80,6 +106,8 @@ impl PreprocessConfig {
             crop_px: 300,
             output_px: 28,
             binarise_offset: 0.3,
+            downsample: Downsample::Linear,
+            binarise: true,
         }
     }
 
@@ -105,6 +133,8 @@ impl PreprocessConfig {
             crop_px: 300,
             output_px: 28,
             binarise_offset: 0.3,
+            downsample: Downsample::Linear,
+            binarise: true,
         }
     }
 
@@ -121,6 +151,8 @@ impl PreprocessConfig {
             crop_px: 300,
             output_px: 28,
             binarise_offset: 0.3,
+            downsample: Downsample::Linear,
+            binarise: true,
         }
     }
 
@@ -140,7 +172,8 @@ impl PreprocessConfig {
     }
 }
 
-/// A binary pin image: `side x side` values in {0, 1}, row-major.
+/// A pin image: `side x side` values in {0, 1} (or grey levels in [0, 1]
+/// when the chain does not binarise), row-major.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PinImage {
     pub side: usize,
@@ -329,6 +362,78 @@ pub fn resize_linear(img: &GreyImage, width: usize, height: usize) -> Result<Gre
     Ok(dst)
 }
 
+/// Area-average resize to `width x height`, values scaled to [0, 1].
+pub fn resize_area(img: &GreyImage, width: usize, height: usize) -> Result<Vec<f32>> {
+    resize_area_interleaved(
+        img.as_slice(),
+        (img.width(), img.height(), 1),
+        width,
+        height,
+    )
+}
+
+/// Area-average resize of interleaved 8-bit pixels (`channels` per pixel)
+/// to `width x height`, values scaled to [0, 1], still interleaved.
+///
+/// Separable: each output column (row) is a weighted mean of the input
+/// columns (rows) its footprint overlaps, weights = overlap length. Only
+/// shrinks (each output pixel must cover at least one input pixel).
+pub fn resize_area_interleaved(
+    src: &[u8],
+    (w, h, c): (usize, usize, usize),
+    width: usize,
+    height: usize,
+) -> Result<Vec<f32>> {
+    if width == 0 || height == 0 || width > w || height > h || src.len() != w * h * c {
+        return Err(Error::Invalid(format!(
+            "area resize {w}x{h} -> {width}x{height}: can only shrink to a non-empty size"
+        )));
+    }
+    // (first input index, weights) per output index; weights sum to 1.
+    let taps = |n_in: usize, n_out: usize| -> Vec<(usize, Vec<f64>)> {
+        let scale = n_in as f64 / n_out as f64;
+        (0..n_out)
+            .map(|o| {
+                let (a, b) = (o as f64 * scale, (o + 1) as f64 * scale);
+                let first = a.floor() as usize;
+                let last = (b.ceil() as usize).min(n_in);
+                let wts = (first..last)
+                    .map(|i| ((i + 1) as f64).min(b) - (i as f64).max(a))
+                    .map(|len| len / scale)
+                    .collect();
+                (first, wts)
+            })
+            .collect()
+    };
+    let (tx, ty) = (taps(w, width), taps(h, height));
+    // Rows first: h x width x c.
+    let mut rows = vec![0f64; h * width * c];
+    for y in 0..h {
+        let line = &src[y * w * c..(y + 1) * w * c];
+        for (ox, (first, wts)) in tx.iter().enumerate() {
+            for ch in 0..c {
+                rows[(y * width + ox) * c + ch] = wts
+                    .iter()
+                    .enumerate()
+                    .map(|(k, wt)| wt * line[(first + k) * c + ch] as f64)
+                    .sum();
+            }
+        }
+    }
+    let mut out = vec![0f32; width * height * c];
+    for (oy, (first, wts)) in ty.iter().enumerate() {
+        for i in 0..width * c {
+            let v: f64 = wts
+                .iter()
+                .enumerate()
+                .map(|(k, wt)| wt * rows[(first + k) * width * c + i])
+                .sum();
+            out[oy * width * c + i] = (v / 255.0).clamp(0.0, 1.0) as f32;
+        }
+    }
+    Ok(out)
+}
+
 /// `round(v/255 + offset)` with NumPy's round-half-to-even, per pixel.
 pub fn binarise(img: &GreyImage, offset: f64) -> Vec<f32> {
     img.as_slice()
@@ -391,11 +496,33 @@ pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage>
         img = dilate(&img, cfg.grow_px)?;
     }
     img = centre_crop(&img, cfg.crop_px.min(img.width()).min(img.height()))?;
-    let small = resize_linear(&img, cfg.output_px, cfg.output_px)?;
-    Ok(PinImage {
-        side: cfg.output_px,
-        pixels: binarise(&small, cfg.binarise_offset),
-    })
+    let side = cfg.output_px;
+    let pixels = match (cfg.downsample, cfg.binarise) {
+        // Bit-exact with the authors' u8 chain.
+        (Downsample::Linear, true) => {
+            binarise(&resize_linear(&img, side, side)?, cfg.binarise_offset)
+        }
+        (Downsample::Linear, false) => resize_linear(&img, side, side)?
+            .as_slice()
+            .iter()
+            .map(|&v| v as f32 / 255.0)
+            .collect(),
+        (Downsample::Area, b) => {
+            let soft = resize_area(&img, side, side)?;
+            if b {
+                soft.iter()
+                    .map(|&v| {
+                        (v as f64 + cfg.binarise_offset)
+                            .round_ties_even()
+                            .clamp(0.0, 1.0) as f32
+                    })
+                    .collect()
+            } else {
+                soft
+            }
+        }
+    };
+    Ok(PinImage { side, pixels })
 }
 
 /// Load a frame from disk and preprocess it; errors name the file.
@@ -420,6 +547,52 @@ pub fn preprocess_files(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn area_resize_keeps_the_mean_and_sees_sub_pixel_motion() {
+        // A 4x4 white square on a 256x256 frame, moved by one input pixel:
+        // 1/9 of an output pixel at a 256 -> 28 shrink.
+        let frame = |x0: usize| {
+            let mut d = vec![0u8; 256 * 256];
+            for y in 100..104 {
+                for x in x0..x0 + 4 {
+                    d[y * 256 + x] = 255;
+                }
+            }
+            tactile_core::image_io::grey_image(256, 256, d).unwrap()
+        };
+        let (a, b) = (frame(100), frame(101));
+        let (sa, sb) = (
+            resize_area(&a, 28, 28).unwrap(),
+            resize_area(&b, 28, 28).unwrap(),
+        );
+        let sum = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>();
+        let expected = 16.0 / (256.0 * 256.0) * 784.0;
+        assert!(
+            (sum(&sa) - expected).abs() < 1e-5,
+            "{} vs {expected}",
+            sum(&sa)
+        );
+        assert!((sum(&sb) - expected).abs() < 1e-5);
+        // The centroid moves right by a fraction of an output pixel (28/256
+        // of one in the continuous limit; on the pixel grid a step).
+        let cx = |v: &[f32]| {
+            v.iter()
+                .enumerate()
+                .map(|(i, &p)| (i % 28) as f64 * p as f64)
+                .sum::<f64>()
+                / sum(v)
+        };
+        let shift = cx(&sb) - cx(&sa);
+        assert!(shift > 0.05 && shift < 0.25, "centroid shift {shift}");
+        // Bilinear sampling of the same two frames cannot tell them apart.
+        let (la, lb) = (
+            resize_linear(&a, 28, 28).unwrap(),
+            resize_linear(&b, 28, 28).unwrap(),
+        );
+        assert_eq!(binarise(&la, 0.3), binarise(&lb, 0.3));
+        assert!(resize_area(&a, 300, 28).is_err());
+    }
 
     #[test]
     fn separable_box_morphology_equals_kornia() {

@@ -40,6 +40,9 @@ pub struct TrainCaeArgs {
     /// Feature count (8/16/32/64): sets the last width.
     #[arg(long)]
     features: Option<usize>,
+    /// No ReLU before the last pooling: features cannot die (see CaeConfig).
+    #[arg(long)]
+    linear_latent: bool,
     #[arg(long, default_value_t = 3000)]
     max_epochs: usize,
     #[arg(long, default_value_t = 300)]
@@ -51,6 +54,14 @@ pub struct TrainCaeArgs {
     val_fraction: f64,
     #[arg(long, default_value_t = 42)]
     seed: u64,
+    /// Without a `split` column: leave out the test frames that `tactile
+    /// compare`/`train regressor` with this --test-fraction and
+    /// --split-seed hold out, so the encoder never sees them.
+    #[arg(long)]
+    exclude_test: Option<f64>,
+    /// The seed of that split (compare's --seed).
+    #[arg(long, default_value_t = 7)]
+    split_seed: u64,
     /// adadelta (paper A, lr 1.0) or adam.
     #[arg(long, default_value = "adadelta")]
     optimizer: String,
@@ -64,10 +75,23 @@ pub struct TrainCaeArgs {
 
 /// Split rows into (train, validation): the dataset's `train` split (or all
 /// rows), shuffled with `seed`, the last `val_fraction` held out.
-fn train_val(ds: &Dataset, val_fraction: f64, seed: u64) -> Result<(Vec<usize>, Vec<usize>)> {
-    let mut rows = ds
-        .split_indices("train")
-        .unwrap_or_else(|| (0..ds.len()).collect());
+fn train_val(
+    ds: &Dataset,
+    val_fraction: f64,
+    seed: u64,
+    exclude_test: Option<(f64, u64)>,
+) -> Result<(Vec<usize>, Vec<usize>)> {
+    let mut rows = match (ds.split_indices("train"), exclude_test) {
+        (Some(train), _) => train,
+        (None, Some((test_fraction, split_seed))) => {
+            let (mut train, val, _test) =
+                crate::estimate_cmds::three_way_split(ds, test_fraction, 0.2, split_seed)?;
+            train.extend(val);
+            train.sort_unstable();
+            train
+        }
+        (None, None) => (0..ds.len()).collect(),
+    };
     if rows.len() < 2 {
         bail!(
             "{}: need at least 2 training frames, found {}",
@@ -92,13 +116,20 @@ pub fn train_cae(a: TrainCaeArgs) -> Result<()> {
         .clone()
         .try_into()
         .map_err(|_| anyhow::anyhow!("--widths needs 4 values"))?;
-    let mut cae = CaeConfig::new().with_widths(widths);
+    let mut cae = CaeConfig::new()
+        .with_widths(widths)
+        .with_latent_relu(!a.linear_latent);
     if let Some(f) = a.features {
         cae = cae.with_feature_count(f)?;
     }
     eprintln!("preprocessing {} frames ({})", ds.len(), a.preprocess);
     let pins = PinSet::from_dataset(&ds, &pre)?;
-    let (train, val) = train_val(&ds, a.val_fraction, a.seed)?;
+    let (train, val) = train_val(
+        &ds,
+        a.val_fraction,
+        a.seed,
+        a.exclude_test.map(|f| (f, a.split_seed)),
+    )?;
     let config = CaeTrainingConfig::new(cae.clone(), AdadeltaConfig::new())
         .with_batch_size(a.batch_size)
         .with_max_epochs(a.max_epochs)
@@ -109,7 +140,11 @@ pub fn train_cae(a: TrainCaeArgs) -> Result<()> {
     let artifact = CaeArtifact {
         cae,
         preprocess: pre,
-        notes: serde_json::json!({ "trained_on": a.data.display().to_string(), "device": a.device.name() }),
+        notes: serde_json::json!({
+            "trained_on": a.data.display().to_string(),
+            "device": a.device.name(),
+            "excluded_test": a.exclude_test.map(|f| serde_json::json!({ "test_fraction": f, "split_seed": a.split_seed })),
+        }),
     };
     let s = run_training(
         &config,

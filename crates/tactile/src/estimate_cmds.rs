@@ -12,6 +12,7 @@ use tactile_core::dataset::Dataset;
 use tactile_estimate::{Regressor, RegressorConfig, Target};
 
 use crate::cae_cmds::encode_dataset;
+use crate::eval_cmds::{Estimator, load_estimators};
 use crate::parse_device;
 
 #[derive(Args)]
@@ -44,6 +45,10 @@ pub struct TrainRegressorArgs {
     seed: u64,
     #[arg(long, default_value = "flex", value_parser = parse_device)]
     device: DeviceKind,
+    /// Use only frames where every target is labelled (e.g. theta_deg,
+    /// empty for spheres and flats); otherwise an empty label is an error.
+    #[arg(long)]
+    only_labelled: bool,
 }
 
 /// `(train, val, test)` rows: the dataset's split column when it has one,
@@ -115,16 +120,36 @@ pub fn train_regressor(a: TrainRegressorArgs) -> Result<()> {
         ),
         (None, None) => bail!("give --encoder DIR or --features CSV"),
     };
-    // Every target must be labelled on every frame used.
+    // Every target must be labelled on every frame used: with
+    // --only-labelled, frames missing one are left out of every split.
     let labels = (0..ds.len())
-        .map(|i| {
-            targets
-                .iter()
-                .map(|t| ds.number(i, &t.name))
-                .collect::<Result<Vec<f64>, _>>()
+        .map(|i| -> Result<Option<Vec<f64>>> {
+            let mut row = Vec::with_capacity(targets.len());
+            for t in &targets {
+                match (ds.number_opt(i, &t.name)?, a.only_labelled) {
+                    (Some(v), _) => row.push(v),
+                    (None, true) => return Ok(None),
+                    (None, false) => row.push(ds.number(i, &t.name)?),
+                }
+            }
+            Ok(Some(row))
         })
-        .collect::<Result<Vec<_>, _>>()?;
-    let (train, val, test) = three_way_split(&ds, a.test_fraction, a.val_fraction, a.seed)?;
+        .collect::<Result<Vec<_>>>()?;
+    let (mut train, mut val, mut test) =
+        three_way_split(&ds, a.test_fraction, a.val_fraction, a.seed)?;
+    for rows in [&mut train, &mut val, &mut test] {
+        rows.retain(|&i| labels[i].is_some());
+    }
+    if train.is_empty() || val.is_empty() || test.is_empty() {
+        bail!(
+            "{}: too few frames with every target labelled ({} train, {} validation, {} test)",
+            ds.labels_path().display(),
+            train.len(),
+            val.len(),
+            test.len()
+        );
+    }
+    let labels: Vec<Vec<f64>> = labels.into_iter().map(Option::unwrap_or_default).collect();
     let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<Vec<f64>>) {
         (
             idx.iter().map(|&i| feats[i].clone()).collect(),
@@ -168,7 +193,7 @@ pub struct PerceiveArgs {
     encoder: PathBuf,
     /// Estimator folders: classifier heads (head.json) and regressors
     /// (regressor.json), all run on the same feature vector (default:
-    /// ENCODER/head and ENCODER/regressor when present).
+    /// every such folder inside ENCODER).
     #[arg(long, num_args = 1..)]
     heads: Vec<PathBuf>,
     /// Dataset of frames to perceive.
@@ -184,41 +209,11 @@ pub struct PerceiveArgs {
     device: DeviceKind,
 }
 
-enum Estimator {
-    Classifier(tactile_cae::head::ClassifierHead),
-    Regressor(Regressor),
-}
-
 /// Paper A's simultaneous deployment: one encoding per frame, every
 /// estimator on the same features.
 pub fn perceive(a: PerceiveArgs) -> Result<()> {
     let dev = a.device.device();
-    let mut dirs = a.heads.clone();
-    if dirs.is_empty() {
-        dirs = ["head", "regressor"]
-            .iter()
-            .map(|d| a.encoder.join(d))
-            .filter(|d| d.is_dir())
-            .collect();
-    }
-    if dirs.is_empty() {
-        bail!("no estimators: give --heads DIR... (folders with head.json or regressor.json)");
-    }
-    let mut estimators = Vec::new();
-    for d in &dirs {
-        if d.join("head.json").is_file() {
-            estimators.push(Estimator::Classifier(
-                tactile_cae::head::ClassifierHead::load(d, &dev)?,
-            ));
-        } else if d.join("regressor.json").is_file() {
-            estimators.push(Estimator::Regressor(Regressor::load(d, &dev)?));
-        } else {
-            bail!(
-                "{}: neither head.json nor regressor.json found",
-                d.display()
-            );
-        }
-    }
+    let estimators = load_estimators(&a.encoder, &a.heads, &dev)?;
     let ds = Dataset::open(&a.data)?;
     let t0 = std::time::Instant::now();
     let feats = encode_dataset(&a.encoder, &ds, a.device)?;
@@ -300,6 +295,10 @@ pub struct CompareArgs {
     out: Option<PathBuf>,
     #[arg(long, default_value = "flex", value_parser = parse_device)]
     device: DeviceKind,
+    /// Preprocess with this preset or JSON file instead of the encoder's
+    /// own (an encoder trained on one dataset applied to another).
+    #[arg(long)]
+    preprocess: Option<String>,
 }
 
 /// Feature sets x estimators on one split: CAE features against PCA of
@@ -322,7 +321,10 @@ pub fn compare(a: CompareArgs) -> Result<()> {
         })
         .collect::<Result<Vec<_>, _>>()?;
     let dev = a.device.device();
-    let (art, cae) = tactile_cae::CaeArtifact::load(&a.encoder, &dev)?;
+    let (mut art, cae) = tactile_cae::CaeArtifact::load(&a.encoder, &dev)?;
+    if let Some(p) = &a.preprocess {
+        art.preprocess = tactile_preprocess::PreprocessConfig::preset(p)?;
+    }
     eprintln!("preprocessing {} frames", ds.len());
     let pins = tactile_cae::data::PinSet::from_dataset(&ds, &art.preprocess)?;
     let cae_feats = tactile_cae::encode::encode_all(&cae.encoder, &pins, 256, &dev)?;
@@ -385,13 +387,19 @@ pub fn compare(a: CompareArgs) -> Result<()> {
         ],
     ));
     let mut md = format!(
-        "Machine: {}\n\nDataset {} ({} train, {} validation, {} test frames, seed {}).\n\n",
+        "Machine: {}\n\nDataset {} ({} train, {} validation, {} test frames, seed {}). Encoder {} (trained on {}); preprocessing: {}.\n\n",
         tactile_core::bench::Machine::detect().describe(),
         a.data.display(),
         train.len(),
         val.len(),
         test.len(),
         a.seed,
+        a.encoder.display(),
+        art.notes
+            .get("trained_on")
+            .and_then(|v| v.as_str())
+            .unwrap_or("unknown data"),
+        a.preprocess.as_deref().unwrap_or("the encoder's own"),
     );
     if !targets.is_empty() {
         md.push_str(&regression_table(

@@ -2,7 +2,10 @@
 
 mod bench;
 mod cae_cmds;
+mod detect_cmds;
 mod estimate_cmds;
+mod eval_cmds;
+mod segment_cmds;
 mod sweep;
 mod synth_cmds;
 
@@ -60,6 +63,15 @@ enum Command {
     Compare(estimate_cmds::CompareArgs),
     /// Run several estimators on one encoding per frame (paper A's simultaneous deployment).
     Perceive(estimate_cmds::PerceiveArgs),
+    /// Score every estimator of an encoder on a labelled dataset: accuracy per class, errors per shape.
+    Evaluate(eval_cmds::EvaluateArgs),
+    /// Estimator errors when test frames get more noise, an illumination gradient, a light blob or a rotation.
+    Robustness(eval_cmds::RobustnessArgs),
+    /// Score a paper B model on a visuo-tactile dataset (last line: JSON metrics).
+    Eval {
+        #[command(subcommand)]
+        model: EvalCmd,
+    },
     /// Export a model to ONNX.
     Export {
         /// Model folder.
@@ -109,6 +121,18 @@ enum TrainCmd {
     Head(cae_cmds::TrainHeadArgs),
     /// A regressor (pose, depth, force; angles on the circle) on features.
     Regressor(estimate_cmds::TrainRegressorArgs),
+    /// Paper B's tendon detector on visuo-tactile frames.
+    Detector(detect_cmds::TrainDetectorArgs),
+    /// Paper B's U-Net tendon segmenter on visuo-tactile tendon frames.
+    Segmenter(segment_cmds::TrainSegmenterArgs),
+}
+
+#[derive(Subcommand)]
+enum EvalCmd {
+    /// Tendon detector: accuracy, precision, recall, F1, onset/release frames.
+    Detector(detect_cmds::EvalDetectorArgs),
+    /// Tendon segmenter: IoU per tendon path, direction error of the post-processed mask.
+    Segmenter(segment_cmds::EvalSegmenterArgs),
 }
 
 #[derive(Subcommand)]
@@ -137,6 +161,18 @@ fn main() -> Result<()> {
         Command::Train {
             model: TrainCmd::Regressor(a),
         } => estimate_cmds::train_regressor(a),
+        Command::Train {
+            model: TrainCmd::Detector(a),
+        } => detect_cmds::train(a),
+        Command::Eval {
+            model: EvalCmd::Detector(a),
+        } => detect_cmds::eval(a),
+        Command::Train {
+            model: TrainCmd::Segmenter(a),
+        } => segment_cmds::train(a),
+        Command::Eval {
+            model: EvalCmd::Segmenter(a),
+        } => segment_cmds::eval(a),
         Command::Encode {
             model,
             data,
@@ -144,6 +180,8 @@ fn main() -> Result<()> {
             device,
         } => cae_cmds::encode(&model, &data, &out, device),
         Command::Perceive(a) => estimate_cmds::perceive(a),
+        Command::Evaluate(a) => eval_cmds::evaluate(a),
+        Command::Robustness(a) => eval_cmds::robustness(a),
         Command::Compare(a) => estimate_cmds::compare(a),
         Command::Sweep(a) => sweep::sweep(a),
         Command::Export { model, out, part } => cae_cmds::export(&model, &out, &part),

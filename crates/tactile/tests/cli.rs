@@ -413,6 +413,18 @@ fn regressor_names_a_missing_label_and_a_bad_target() {
         !ok && msg.contains("labels.csv:2") && msg.contains("theta_deg"),
         "{msg}"
     );
+    // Leaving unlabelled frames out leaves nothing here, and says so.
+    let (ok, msg) = tactile(
+        &[
+            &base[..],
+            &["--targets", "depth_mm,theta_deg:180", "--only-labelled"],
+        ]
+        .concat(),
+    );
+    assert!(
+        !ok && msg.contains("too few frames with every target labelled"),
+        "{msg}"
+    );
     let (ok, msg) = tactile(&[&base[..], &["--targets", "theta_deg:zero"]].concat());
     assert!(!ok && msg.contains("period"), "{msg}");
     assert!(!out.exists());
@@ -448,11 +460,11 @@ fn perceive_runs_every_shipped_estimator_on_one_encoding() {
     assert!(ok, "{msg}");
     let text = std::fs::read_to_string(&out).unwrap();
     let lines: Vec<&str> = text.lines().collect();
-    assert_eq!(lines[0], "file,shape,depth_mm,force_n");
+    assert_eq!(lines[0], "file,shape,x_mm,y_mm,depth_mm,force_n,theta_deg");
     assert_eq!(lines.len(), 15);
     // Depth estimates stay near the 0-5 mm the sensor was trained on.
     for l in &lines[1..] {
-        let depth: f64 = l.split(',').nth(2).unwrap().parse().unwrap();
+        let depth: f64 = l.split(',').nth(4).unwrap().parse().unwrap();
         assert!((-1.0..6.0).contains(&depth), "{l}");
     }
     let (ok, msg) = tactile(&[
@@ -468,6 +480,61 @@ fn perceive_runs_every_shipped_estimator_on_one_encoding() {
         !ok && msg.contains("neither head.json nor regressor.json"),
         "{msg}"
     );
+}
+
+#[test]
+fn evaluate_and_robustness_score_the_shipped_estimators() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let enc = root.join("models/cae-synth");
+    let data = root.join("samples/virtual-tactip");
+    let (ok, msg) = tactile(&[
+        "evaluate",
+        "--encoder",
+        enc.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let json: serde_json::Value = serde_json::from_str(msg.lines().last().unwrap()).unwrap();
+    let acc = json["accuracy"].as_f64().unwrap();
+    // 7 shapes: chance is 1/7; the shipped head must at least double it.
+    assert!(acc >= 2.0 / 7.0, "{msg}");
+    let per_class: u64 = json["per_class"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g["frames"].as_u64().unwrap())
+        .sum();
+    assert_eq!(per_class, 14);
+    let depth = &json["targets"][0];
+    assert_eq!(depth["target"], "depth_mm");
+    // Depth is drawn from 0-5 mm: guessing the middle gives about 1.25 mm.
+    assert!(depth["mae"].as_f64().unwrap() < 0.8, "{msg}");
+
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("robust.md");
+    let (ok, msg) = tactile(&[
+        "robustness",
+        "--encoder",
+        enc.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let table = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<&str> = table
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| condition"))
+        .collect();
+    assert_eq!(rows.len(), 13, "{table}");
+    // The clean row is what `evaluate` measured.
+    assert!(
+        rows[0].contains(&format!("{:.1} %", 100.0 * acc)),
+        "{table}"
+    );
+    assert!(tmp.path().join("robust.png").is_file());
 }
 
 #[test]
@@ -516,6 +583,23 @@ fn compare_writes_a_table_of_every_feature_set_and_estimator() {
     // Five feature sets x three estimators, for regression and for classification.
     assert_eq!(rows.len(), 30, "{table}");
     assert!(table.contains("Gaussian naive Bayes") && table.contains("accuracy"));
+    // Tiny data (96 training frames), yet the best feature set and estimator
+    // must clearly beat guessing: depth is uniform on 0-5 mm (predicting the
+    // mean errs by 1.25 mm), and there are 7 shapes (chance 14 %).
+    let cell = |row: &str, col: usize| -> f64 {
+        row.split('|')
+            .nth(col)
+            .unwrap()
+            .trim()
+            .trim_end_matches(" %")
+            .parse()
+            .unwrap()
+    };
+    let (reg, cls) = rows.split_at(15);
+    let best_depth = reg.iter().map(|r| cell(r, 3)).fold(f64::INFINITY, f64::min);
+    let best_acc = cls.iter().map(|r| cell(r, 3)).fold(0.0, f64::max);
+    assert!(best_depth < 0.9, "{table}");
+    assert!(best_acc > 2.0 * 100.0 / 7.0, "{table}");
     assert!(
         table.contains("Machine:")
             && table.contains("PCA-16")

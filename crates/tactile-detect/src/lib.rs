@@ -1,0 +1,88 @@
+//! Paper B's tendon detector: does this visuo-tactile frame show a tendon
+//! under the skin? A MobileNetV3-small-style network (or the ResNet-18-style
+//! baseline) on the frame resized to a fixed input and normalised with
+//! training-set statistics saved beside the weights.
+
+pub mod data;
+pub mod model;
+pub mod training;
+
+use std::path::Path;
+
+use burn::tensor::activation::sigmoid;
+use burn::tensor::{Device, Tensor, TensorData};
+use serde::{Deserialize, Serialize};
+use tactile_core::module_io::{load_module, save_module};
+use tactile_core::{Error, Result};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage};
+
+pub use data::DetectionSet;
+pub use model::{Architecture, Detector, DetectorConfig};
+
+/// File names inside a detector folder.
+pub const CONFIG_FILE: &str = "detector.json";
+pub const WEIGHTS_FILE: &str = "detector.bpk";
+
+/// Everything needed to rebuild and run a saved detector.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct DetectorArtifact {
+    pub detector: DetectorConfig,
+    /// Per-channel statistics of the training frames.
+    pub stats: ChannelStats,
+    /// Probability above which a frame counts as showing a tendon.
+    pub threshold: f64,
+    #[serde(default)]
+    pub notes: serde_json::Value,
+}
+
+impl DetectorArtifact {
+    pub fn save(&self, model: &Detector, dir: impl AsRef<Path>) -> Result<()> {
+        let dir = dir.as_ref();
+        tactile_core::io::create_dir_all(dir)?;
+        save_module(model, &dir.join(WEIGHTS_FILE))?;
+        tactile_core::io::write_json_atomic(dir.join(CONFIG_FILE), self)
+    }
+
+    pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<(Self, Detector)> {
+        let dir = dir.as_ref();
+        let cfg = dir.join(CONFIG_FILE);
+        if !cfg.is_file() {
+            return Err(Error::model(
+                &cfg,
+                "not a detector folder: missing detector.json",
+            ));
+        }
+        let art: Self = tactile_core::io::read_json(&cfg)?;
+        let model = load_module(art.detector.init(device), &dir.join(WEIGHTS_FILE))?;
+        Ok((art, model))
+    }
+
+    /// Normalised `[N, 3, H, W]` input from frames already at the input size.
+    pub fn input(&self, frames: &[FloatImage], device: &Device) -> Result<Tensor<4>> {
+        let [w, h] = self.detector.input_size;
+        let mut data = Vec::with_capacity(frames.len() * 3 * w * h);
+        for f in frames {
+            if (f.width, f.height) != (w, h) {
+                return Err(Error::Invalid(format!(
+                    "frame is {}x{}, the detector takes {w}x{h}: resize it first",
+                    f.width, f.height
+                )));
+            }
+            data.extend(self.stats.to_chw(f)?);
+        }
+        Ok(Tensor::from_data(
+            TensorData::new(data, [frames.len(), 3, h, w]),
+            device,
+        ))
+    }
+}
+
+impl Detector {
+    /// Tendon probabilities of a normalised batch.
+    pub fn probabilities(&self, x: Tensor<4>) -> Result<Vec<f32>> {
+        sigmoid(self.forward(x))
+            .into_data()
+            .try_to_vec::<f32>()
+            .map_err(|e| Error::Invalid(format!("detector output: {e:?}")))
+    }
+}

@@ -1,0 +1,343 @@
+//! Visuo-tactile frames (paper B) as model inputs: resizing, the
+//! segmenter's rotated square window, tendon masks, and per-channel
+//! normalisation with training-set statistics.
+//!
+//! Images here are interleaved `H x W x C` `f32` in [0, 1] until
+//! [`ChannelStats::to_chw`] turns them into a normalised `C x H x W` input.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use tactile_core::image_io::{GreyImage, RgbImage};
+use tactile_core::{Error, Result};
+
+use crate::resize_area_interleaved;
+
+/// Largest frame accepted, in pixels (8K UHD): bigger inputs are rejected
+/// before any buffer is allocated for them.
+pub const MAX_FRAME_PIXELS: usize = 7680 * 4320;
+
+/// An interleaved float image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FloatImage {
+    pub width: usize,
+    pub height: usize,
+    pub channels: usize,
+    pub data: Vec<f32>,
+}
+
+impl FloatImage {
+    fn at(&self, x: isize, y: isize, c: usize) -> f32 {
+        if x < 0 || y < 0 || x >= self.width as isize || y >= self.height as isize {
+            0.0
+        } else {
+            self.data[(y as usize * self.width + x as usize) * self.channels + c]
+        }
+    }
+}
+
+fn check_size(width: usize, height: usize) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::Invalid(format!("empty {width}x{height} image")));
+    }
+    if width.saturating_mul(height) > MAX_FRAME_PIXELS {
+        return Err(Error::Invalid(format!(
+            "{width}x{height} image is larger than 8K ({MAX_FRAME_PIXELS} pixels)"
+        )));
+    }
+    Ok(())
+}
+
+/// Resize interleaved 8-bit pixels to `width x height`: the mean over each
+/// output pixel's footprint when shrinking on both axes (no aliasing of
+/// thin ridges), bilinear with half-pixel centres otherwise.
+pub fn resize_u8(
+    src: &[u8],
+    (w, h, c): (usize, usize, usize),
+    width: usize,
+    height: usize,
+) -> Result<FloatImage> {
+    check_size(w, h)?;
+    check_size(width, height)?;
+    let data = if width <= w && height <= h {
+        resize_area_interleaved(src, (w, h, c), width, height)?
+    } else {
+        let f = FloatImage {
+            width: w,
+            height: h,
+            channels: c,
+            data: src.iter().map(|&v| v as f32 / 255.0).collect(),
+        };
+        let (sx, sy) = (w as f64 / width as f64, h as f64 / height as f64);
+        let mut out = Vec::with_capacity(width * height * c);
+        for y in 0..height {
+            let fy = ((y as f64 + 0.5) * sy - 0.5).clamp(0.0, (h - 1) as f64);
+            for x in 0..width {
+                let fx = ((x as f64 + 0.5) * sx - 0.5).clamp(0.0, (w - 1) as f64);
+                for ch in 0..c {
+                    out.push(bilinear(&f, fx, fy, ch, true));
+                }
+            }
+        }
+        out
+    };
+    Ok(FloatImage {
+        width,
+        height,
+        channels: c,
+        data,
+    })
+}
+
+/// Bilinear sample at `(x, y)`; outside the image counts as 0 unless
+/// `clamp_edges` holds the border pixels.
+fn bilinear(img: &FloatImage, x: f64, y: f64, c: usize, clamp_edges: bool) -> f32 {
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+    let (mut x0, mut y0) = (x0 as isize, y0 as isize);
+    let (mut x1, mut y1) = (x0 + 1, y0 + 1);
+    if clamp_edges {
+        let (mw, mh) = (img.width as isize - 1, img.height as isize - 1);
+        x0 = x0.clamp(0, mw);
+        x1 = x1.clamp(0, mw);
+        y0 = y0.clamp(0, mh);
+        y1 = y1.clamp(0, mh);
+    }
+    img.at(x0, y0, c) * (1.0 - fx) * (1.0 - fy)
+        + img.at(x1, y0, c) * fx * (1.0 - fy)
+        + img.at(x0, y1, c) * (1.0 - fx) * fy
+        + img.at(x1, y1, c) * fx * fy
+}
+
+/// An RGB frame resized to `width x height`.
+pub fn resize_rgb(img: &RgbImage, width: usize, height: usize) -> Result<FloatImage> {
+    resize_u8(
+        img.as_slice(),
+        (img.width(), img.height(), 3),
+        width,
+        height,
+    )
+}
+
+/// A grey image (a mask) resized to `width x height`.
+pub fn resize_grey(img: &GreyImage, width: usize, height: usize) -> Result<FloatImage> {
+    resize_u8(
+        img.as_slice(),
+        (img.width(), img.height(), 1),
+        width,
+        height,
+    )
+}
+
+/// Load an RGB frame (greyscale is expanded) resized to `width x height`;
+/// errors name the file.
+pub fn load_frame(path: impl AsRef<Path>, width: usize, height: usize) -> Result<FloatImage> {
+    let path = path.as_ref();
+    let img = tactile_core::image_io::load_rgb(path)?;
+    resize_rgb(&img, width, height).map_err(|e| Error::image(path, e.to_string()))
+}
+
+/// How the segmenter looks at a frame: a square window of `side` pixels
+/// cut from the frame's centre after scaling the frame so that its height
+/// is `side * sqrt(2)`. Any rotation of that square about the centre stays
+/// inside the scaled frame, so rotated copies (paper B's augmentation) have
+/// no empty corners.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SquareWindow {
+    pub side: usize,
+}
+
+impl SquareWindow {
+    /// Size the frame is scaled to before the cut, for a `w x h` frame.
+    pub fn scaled_size(&self, w: usize, h: usize) -> (usize, usize) {
+        let sh = (self.side as f64 * std::f64::consts::SQRT_2).ceil() as usize;
+        let sw = ((w as f64 * sh as f64 / h.max(1) as f64).round() as usize).max(sh);
+        (sw, sh)
+    }
+
+    /// Scale factor from frame pixels to window pixels.
+    pub fn scale(&self, h: usize) -> f64 {
+        self.scaled_size(1, h).1 as f64 / h.max(1) as f64
+    }
+
+    /// The window of an image already scaled by [`Self::scaled_size`],
+    /// rotated by `deg` about its centre (bilinear; masks are thresholded
+    /// by the caller).
+    pub fn cut(&self, scaled: &FloatImage, deg: f64) -> FloatImage {
+        let s = self.side;
+        let c = scaled.channels;
+        let (cx, cy) = (
+            (scaled.width as f64 - 1.0) / 2.0,
+            (scaled.height as f64 - 1.0) / 2.0,
+        );
+        let (sin, cos) = deg.to_radians().sin_cos();
+        let half = (s as f64 - 1.0) / 2.0;
+        let mut data = Vec::with_capacity(s * s * c);
+        for y in 0..s {
+            for x in 0..s {
+                let (u, v) = (x as f64 - half, y as f64 - half);
+                // Output pixel (u, v) shows the input point rotated by -deg.
+                let (px, py) = (cos * u + sin * v + cx, -sin * u + cos * v + cy);
+                for ch in 0..c {
+                    data.push(bilinear(scaled, px, py, ch, false));
+                }
+            }
+        }
+        FloatImage {
+            width: s,
+            height: s,
+            channels: c,
+            data,
+        }
+    }
+}
+
+/// 1 where a resized or rotated mask is at least half tendon.
+pub fn binarise_mask(mask: &FloatImage) -> Vec<f32> {
+    mask.data
+        .iter()
+        .map(|&v| if v >= 0.5 { 1.0 } else { 0.0 })
+        .collect()
+}
+
+/// Per-channel mean and standard deviation of the training frames, saved
+/// with a model and applied to every input.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelStats {
+    pub mean: Vec<f32>,
+    pub std: Vec<f32>,
+}
+
+impl ChannelStats {
+    /// Statistics over every pixel of `images` (all with the same channel count).
+    pub fn from_images<'a>(images: impl IntoIterator<Item = &'a FloatImage>) -> Result<Self> {
+        let mut sum: Vec<f64> = Vec::new();
+        let mut sq: Vec<f64> = Vec::new();
+        let mut n = 0usize;
+        for img in images {
+            if sum.is_empty() {
+                sum = vec![0.0; img.channels];
+                sq = vec![0.0; img.channels];
+            }
+            if img.channels != sum.len() {
+                return Err(Error::Invalid(
+                    "images with different channel counts".into(),
+                ));
+            }
+            for px in img.data.chunks_exact(img.channels) {
+                for (c, &v) in px.iter().enumerate() {
+                    sum[c] += v as f64;
+                    sq[c] += (v as f64) * (v as f64);
+                }
+            }
+            n += img.width * img.height;
+        }
+        if n == 0 {
+            return Err(Error::Invalid("no images to compute statistics on".into()));
+        }
+        let mean: Vec<f64> = sum.iter().map(|s| s / n as f64).collect();
+        let std = tactile_core::metrics::safe_scales(
+            sq.iter()
+                .zip(&mean)
+                .map(|(q, m)| (q / n as f64 - m * m).max(0.0).sqrt()),
+        );
+        Ok(Self {
+            mean: mean.iter().map(|&m| m as f32).collect(),
+            std: std.iter().map(|&s| s.max(1e-3) as f32).collect(),
+        })
+    }
+
+    /// Normalised `C x H x W` values of an interleaved image.
+    pub fn to_chw(&self, img: &FloatImage) -> Result<Vec<f32>> {
+        if img.channels != self.mean.len() {
+            return Err(Error::Invalid(format!(
+                "image has {} channels, the model expects {}",
+                img.channels,
+                self.mean.len()
+            )));
+        }
+        let (c, hw) = (img.channels, img.width * img.height);
+        let mut out = vec![0f32; c * hw];
+        for (i, px) in img.data.chunks_exact(c).enumerate() {
+            for (ch, &v) in px.iter().enumerate() {
+                out[ch * hw + i] = (v - self.mean[ch]) / self.std[ch];
+            }
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp(w: usize, h: usize) -> FloatImage {
+        FloatImage {
+            width: w,
+            height: h,
+            channels: 1,
+            data: (0..w * h).map(|i| (i % w) as f32 / w as f32).collect(),
+        }
+    }
+
+    #[test]
+    fn rotated_windows_have_no_empty_corners() {
+        let win = SquareWindow { side: 40 };
+        let (sw, sh) = win.scaled_size(640, 360);
+        assert_eq!(sh, 57);
+        assert!(sw > sh);
+        let img = FloatImage {
+            width: sw,
+            height: sh,
+            channels: 1,
+            data: vec![1.0; sw * sh],
+        };
+        for deg in [0.0, 17.0, 45.0, 90.0, 133.0, 271.0] {
+            let cut = win.cut(&img, deg);
+            let min = cut.data.iter().copied().fold(f32::INFINITY, f32::min);
+            assert!(min > 0.99, "{deg} deg: a corner fell outside ({min})");
+        }
+        // 90 degrees turns a left-to-right ramp into a top-to-bottom one.
+        let r = ramp(sw, sh);
+        let cut = win.cut(&r, 90.0);
+        let col = |x: usize, y: usize| cut.data[y * 40 + x];
+        assert!(
+            col(20, 35) > col(20, 5) + 0.2,
+            "{} {}",
+            col(20, 35),
+            col(20, 5)
+        );
+        assert!((col(5, 20) - col(35, 20)).abs() < 0.02);
+    }
+
+    #[test]
+    fn stats_normalise_to_zero_mean_unit_std() {
+        let imgs = [ramp(10, 4), ramp(10, 4)];
+        let st = ChannelStats::from_images(&imgs).unwrap();
+        let v = st.to_chw(&imgs[0]).unwrap();
+        let mean = v.iter().sum::<f32>() / v.len() as f32;
+        let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f32>() / v.len() as f32;
+        assert!(mean.abs() < 1e-5 && (var - 1.0).abs() < 1e-4);
+        // A constant (black) training set does not divide by zero.
+        let black = FloatImage {
+            data: vec![0.0; 40],
+            ..ramp(10, 4)
+        };
+        let st = ChannelStats::from_images([&black]).unwrap();
+        assert!(st.to_chw(&black).unwrap().iter().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn resize_shrinks_by_area_grows_bilinearly_and_refuses_absurd_sizes() {
+        let src: Vec<u8> = (0..8 * 4)
+            .map(|i| if i % 8 < 4 { 0 } else { 255 })
+            .collect();
+        let small = resize_u8(&src, (8, 4, 1), 2, 1).unwrap();
+        assert_eq!(small.data, vec![0.0, 1.0]);
+        let big = resize_u8(&src, (8, 4, 1), 16, 8).unwrap();
+        assert_eq!(big.data.len(), 128);
+        assert!(big.data.iter().all(|v| (0.0..=1.0).contains(v)));
+        assert!(resize_u8(&[], (0, 0, 1), 2, 2).is_err());
+        assert!(resize_u8(&src, (8, 4, 1), 10_000, 10_000).is_err());
+    }
+}

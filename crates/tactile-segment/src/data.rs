@@ -1,0 +1,188 @@
+//! Tendon frames as segmenter windows: the frame and its mask scaled and
+//! cut to the square window, optionally as rotated copies (paper B's
+//! augmentation).
+
+use burn::tensor::{Device, Tensor, TensorData};
+use rayon::prelude::*;
+use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::{Error, Result};
+use tactile_preprocess::visuo::{
+    ChannelStats, FloatImage, SquareWindow, binarise_mask, load_frame, resize_grey,
+};
+
+/// One window: 8-bit `S x S x 3` pixels, its 0/1 mask and where it came from.
+#[derive(Debug, Clone)]
+pub struct Window {
+    pub row: usize,
+    /// Rotation applied, degrees.
+    pub rotation_deg: f64,
+    pub pixels: Vec<u8>,
+    pub mask: Vec<bool>,
+}
+
+/// Windows of a dataset's frames with their labels.
+pub struct SegmentSet {
+    pub window: SquareWindow,
+    pub windows: Vec<Window>,
+    /// Per dataset row: `direction_deg` and `path` labels when present.
+    pub direction_deg: Vec<Option<f64>>,
+    pub path: Vec<Option<String>>,
+}
+
+/// The window of one frame (and mask), rotated by `deg`.
+pub fn cut_frame(
+    frame: &FloatImage,
+    mask: Option<&FloatImage>,
+    window: SquareWindow,
+    deg: f64,
+) -> (Vec<u8>, Option<Vec<bool>>) {
+    let img = window.cut(frame, deg);
+    let bytes = img
+        .data
+        .iter()
+        .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
+        .collect();
+    let m = mask.map(|m| {
+        binarise_mask(&window.cut(m, deg))
+            .into_iter()
+            .map(|v| v > 0.5)
+            .collect()
+    });
+    (bytes, m)
+}
+
+/// `copies` seeded angles, one in each of `copies` equal parts of 360
+/// degrees (paper B); one copy means no rotation.
+pub fn rotation_angles(copies: usize, seed: u64, row: usize) -> Vec<f64> {
+    if copies <= 1 {
+        return vec![0.0];
+    }
+    // SplitMix64 of (seed, row): reproducible and independent per frame.
+    let mut s = seed ^ (row as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut next = || {
+        s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let part = 360.0 / copies as f64;
+    (0..copies).map(|k| part * (k as f64 + next())).collect()
+}
+
+impl SegmentSet {
+    /// Windows of `rows` (each `copies` times, rotated; masks required).
+    pub fn from_dataset(
+        ds: &Dataset,
+        rows: &[usize],
+        window: SquareWindow,
+        copies: usize,
+        seed: u64,
+    ) -> Result<Self> {
+        if ds.manifest.kind != DatasetKind::Visuotactile {
+            return Err(Error::dataset(
+                ds.root.join("manifest.json"),
+                None,
+                "kind is not 'visuotactile': the segmenter reads visuo-tactile datasets",
+            ));
+        }
+        let (sw, sh) = window.scaled_size(ds.manifest.width as usize, ds.manifest.height as usize);
+        let windows: Vec<Vec<Window>> = rows
+            .par_iter()
+            .map(|&row| -> Result<Vec<Window>> {
+                let frame = load_frame(ds.path_of(row, "file")?, sw, sh)?;
+                let mask_path = ds.path_of(row, "mask")?;
+                let m = tactile_core::image_io::load_grey(&mask_path)?;
+                let mask =
+                    resize_grey(&m, sw, sh).map_err(|e| Error::image(&mask_path, e.to_string()))?;
+                Ok(rotation_angles(copies, seed, row)
+                    .into_iter()
+                    .map(|deg| {
+                        let (pixels, m) = cut_frame(&frame, Some(&mask), window, deg);
+                        Window {
+                            row,
+                            rotation_deg: deg,
+                            pixels,
+                            mask: m.unwrap_or_default(),
+                        }
+                    })
+                    .collect())
+            })
+            .collect::<Result<_>>()?;
+        let direction_deg = (0..ds.len())
+            .map(|i| ds.number_opt(i, "direction_deg"))
+            .collect::<Result<_>>()?;
+        let path = (0..ds.len())
+            .map(|i| ds.text_opt(i, "path").map(str::to_string))
+            .collect();
+        Ok(Self {
+            window,
+            windows: windows.into_iter().flatten().collect(),
+            direction_deg,
+            path,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.windows.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.windows.is_empty()
+    }
+
+    /// The window's pixels as a float image in [0, 1].
+    pub fn image(&self, i: usize) -> FloatImage {
+        let s = self.window.side;
+        FloatImage {
+            width: s,
+            height: s,
+            channels: 3,
+            data: self.windows[i]
+                .pixels
+                .iter()
+                .map(|&v| v as f32 / 255.0)
+                .collect(),
+        }
+    }
+
+    /// Normalised `[N, 3, S, S]` inputs and `[N, 1, S, S]` masks.
+    pub fn batch(
+        &self,
+        idx: &[usize],
+        stats: &ChannelStats,
+        device: &Device,
+    ) -> Result<(Tensor<4>, Tensor<4>)> {
+        let s = self.window.side;
+        let mut x = Vec::with_capacity(idx.len() * 3 * s * s);
+        let mut y = Vec::with_capacity(idx.len() * s * s);
+        for &i in idx {
+            x.extend(stats.to_chw(&self.image(i))?);
+            y.extend(self.windows[i].mask.iter().map(|&m| m as u8 as f32));
+        }
+        Ok((
+            Tensor::from_data(TensorData::new(x, [idx.len(), 3, s, s]), device),
+            Tensor::from_data(TensorData::new(y, [idx.len(), 1, s, s]), device),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn angles_fall_one_per_equal_part_and_repeat_per_seed() {
+        let a = rotation_angles(4, 7, 12);
+        assert_eq!(a.len(), 4);
+        for (k, d) in a.iter().enumerate() {
+            assert!(
+                (90.0 * k as f64..90.0 * (k + 1) as f64).contains(d),
+                "{a:?}"
+            );
+        }
+        assert_eq!(a, rotation_angles(4, 7, 12));
+        assert_ne!(a, rotation_angles(4, 8, 12));
+        assert_eq!(rotation_angles(1, 7, 12), vec![0.0]);
+    }
+}

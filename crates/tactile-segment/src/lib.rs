@@ -1,0 +1,96 @@
+//! Paper B's tendon segmenter: a small U-Net on a square window of the
+//! visuo-tactile frame, then post-processing (largest region, LED-glare
+//! override) and the region's direction by PCA.
+
+pub mod data;
+pub mod model;
+pub mod postprocess;
+pub mod training;
+
+use std::path::Path;
+
+use burn::tensor::activation::sigmoid;
+use burn::tensor::{Device, Tensor, TensorData};
+use serde::{Deserialize, Serialize};
+use tactile_core::module_io::{load_module, save_module};
+use tactile_core::{Error, Result};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage, SquareWindow};
+
+pub use data::SegmentSet;
+pub use model::{UNet, UNetConfig};
+pub use postprocess::{Direction, NoDirection, PostprocessConfig, Tendon, TendonMask, postprocess};
+
+pub const CONFIG_FILE: &str = "segmenter.json";
+pub const WEIGHTS_FILE: &str = "segmenter.bpk";
+
+/// Everything needed to rebuild and run a saved segmenter.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SegmenterArtifact {
+    pub unet: UNetConfig,
+    pub stats: ChannelStats,
+    /// Probability above which a pixel is tendon.
+    pub threshold: f32,
+    pub postprocess: PostprocessConfig,
+    #[serde(default)]
+    pub notes: serde_json::Value,
+}
+
+impl SegmenterArtifact {
+    pub fn window(&self) -> SquareWindow {
+        SquareWindow {
+            side: self.unet.side,
+        }
+    }
+
+    pub fn save(&self, model: &UNet, dir: impl AsRef<Path>) -> Result<()> {
+        let dir = dir.as_ref();
+        tactile_core::io::create_dir_all(dir)?;
+        save_module(model, &dir.join(WEIGHTS_FILE))?;
+        tactile_core::io::write_json_atomic(dir.join(CONFIG_FILE), self)
+    }
+
+    pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<(Self, UNet)> {
+        let dir = dir.as_ref();
+        let cfg = dir.join(CONFIG_FILE);
+        if !cfg.is_file() {
+            return Err(Error::model(
+                &cfg,
+                "not a segmenter folder: missing segmenter.json",
+            ));
+        }
+        let art: Self = tactile_core::io::read_json(&cfg)?;
+        let model = load_module(art.unet.init(device)?, &dir.join(WEIGHTS_FILE))?;
+        Ok((art, model))
+    }
+
+    /// Normalised `[N, 3, S, S]` input from windows.
+    pub fn input(&self, windows: &[FloatImage], device: &Device) -> Result<Tensor<4>> {
+        let s = self.unet.side;
+        let mut data = Vec::with_capacity(windows.len() * 3 * s * s);
+        for w in windows {
+            if (w.width, w.height) != (s, s) {
+                return Err(Error::Invalid(format!(
+                    "window is {}x{}, the segmenter takes {s}x{s}",
+                    w.width, w.height
+                )));
+            }
+            data.extend(self.stats.to_chw(w)?);
+        }
+        Ok(Tensor::from_data(
+            TensorData::new(data, [windows.len(), 3, s, s]),
+            device,
+        ))
+    }
+}
+
+impl UNet {
+    /// Per-pixel tendon probabilities, one `S*S` vector per window.
+    pub fn probabilities(&self, x: Tensor<4>) -> Result<Vec<Vec<f32>>> {
+        let [n, _, h, w] = x.dims();
+        let v = sigmoid(self.forward(x))
+            .into_data()
+            .try_to_vec::<f32>()
+            .map_err(|e| Error::Invalid(format!("segmenter output: {e:?}")))?;
+        Ok(v.chunks(h * w).take(n).map(<[f32]>::to_vec).collect())
+    }
+}

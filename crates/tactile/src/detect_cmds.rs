@@ -1,0 +1,179 @@
+//! `tactile train detector` and `tactile eval detector`.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use clap::Args;
+use tactile_core::DeviceKind;
+use tactile_core::dataset::Dataset;
+use tactile_core::metrics::binary_scores;
+use tactile_detect::training::{DetectorTrainingConfig, predict, train_detector};
+use tactile_detect::{Architecture, DetectionSet, DetectorArtifact, DetectorConfig};
+
+use crate::parse_device;
+
+/// `WIDTHxHEIGHT`, e.g. `160x120`.
+pub fn parse_size(s: &str) -> std::result::Result<[usize; 2], String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT, e.g. 160x120"))?;
+    let p = |v: &str| {
+        v.parse::<usize>()
+            .ok()
+            .filter(|&n| n >= 16)
+            .ok_or_else(|| format!("'{s}': sizes must be whole numbers of at least 16 pixels"))
+    };
+    Ok([p(w)?, p(h)?])
+}
+
+#[derive(Args)]
+pub struct TrainDetectorArgs {
+    /// Visuo-tactile dataset (split by `sequence` into train and validation).
+    #[arg(long)]
+    data: PathBuf,
+    /// Output model folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// mobilenet-v3-small or resnet18.
+    #[arg(long, default_value = "mobilenet-v3-small")]
+    architecture: String,
+    /// Channel width multiplier.
+    #[arg(long, default_value_t = 0.5)]
+    width: f64,
+    /// Input size WIDTHxHEIGHT (paper B: 320x240).
+    #[arg(long, default_value = "160x120", value_parser = parse_size)]
+    input: [usize; 2],
+    #[arg(long, default_value_t = 12)]
+    max_epochs: usize,
+    #[arg(long, default_value_t = 4)]
+    patience: usize,
+    #[arg(long, default_value_t = 16)]
+    batch_size: usize,
+    #[arg(long, default_value_t = 1e-3)]
+    lr: f64,
+    /// Fraction of the sequences that validate.
+    #[arg(long, default_value_t = 0.2)]
+    val_fraction: f64,
+    #[arg(long, default_value_t = 42)]
+    seed: u64,
+    #[arg(long, default_value = "flex", value_parser = parse_device)]
+    device: DeviceKind,
+    /// Continue from the checkpoint in the output folder.
+    #[arg(long)]
+    resume: bool,
+}
+
+fn architecture(s: &str) -> Result<Architecture> {
+    Ok(match s {
+        "mobilenet-v3-small" | "mobilenet" => Architecture::MobilenetV3Small,
+        "resnet18" | "resnet-18" => Architecture::Resnet18,
+        other => bail!("unknown architecture '{other}': expected mobilenet-v3-small or resnet18"),
+    })
+}
+
+pub fn train(a: TrainDetectorArgs) -> Result<()> {
+    let ds = Dataset::open(&a.data)?;
+    let cfg = DetectorConfig::new()
+        .with_architecture(architecture(&a.architecture)?)
+        .with_width(a.width)
+        .with_input_size(a.input);
+    if !(a.width > 0.0 && a.width <= 4.0) {
+        bail!("--width must be in (0, 4], got {}", a.width);
+    }
+    let (train, val) = ds.split_by_sequence(a.val_fraction, a.seed)?;
+    eprintln!(
+        "loading {} frames at {}x{} ({} train, {} validation, split by sequence)",
+        ds.len(),
+        a.input[0],
+        a.input[1],
+        train.len(),
+        val.len()
+    );
+    let data = DetectionSet::from_dataset(&ds, a.input)?;
+    let config = DetectorTrainingConfig::new(cfg)
+        .with_batch_size(a.batch_size)
+        .with_max_epochs(a.max_epochs)
+        .with_patience(a.patience)
+        .with_learning_rate(a.lr)
+        .with_seed(a.seed);
+    let s = train_detector(
+        &config,
+        &data,
+        (&train, &val),
+        &a.out,
+        &a.device.device(),
+        a.resume,
+        serde_json::json!({ "trained_on": a.data.display().to_string(), "device": a.device.name() }),
+    )?;
+    println!(
+        "best epoch {} of {}: validation loss {:.4}, accuracy {:.4}; {:.0} s; model in {}",
+        s.best_epoch,
+        s.epochs_run,
+        s.best_val_loss,
+        s.best_val_metric.unwrap_or(f64::NAN),
+        s.seconds,
+        a.out.display()
+    );
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct EvalDetectorArgs {
+    /// Detector folder (detector.json + detector.bpk).
+    #[arg(long)]
+    model: PathBuf,
+    /// Visuo-tactile dataset with `tendon` labels.
+    #[arg(long)]
+    data: PathBuf,
+    #[arg(long, default_value = "flex", value_parser = parse_device)]
+    device: DeviceKind,
+}
+
+/// Scores on a dataset; the last line printed is the metrics as JSON.
+pub fn eval(a: EvalDetectorArgs) -> Result<()> {
+    let dev = a.device.device();
+    let (art, model) = DetectorArtifact::load(&a.model, &dev)?;
+    let ds = Dataset::open(&a.data)?;
+    let data = DetectionSet::from_dataset(&ds, art.detector.input_size)?;
+    let all: Vec<usize> = (0..data.len()).collect();
+    let t0 = std::time::Instant::now();
+    let p = predict(&model, &data, &all, &art.stats, 32, &dev)?;
+    let ms = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
+    let pred: Vec<bool> = p.iter().map(|&q| q as f64 >= art.threshold).collect();
+    let s = binary_scores(&pred, &data.tendon);
+    let tr: Vec<usize> = all
+        .iter()
+        .copied()
+        .filter(|&i| data.transition[i])
+        .collect();
+    let st = binary_scores(
+        &tr.iter().map(|&i| pred[i]).collect::<Vec<_>>(),
+        &tr.iter().map(|&i| data.tendon[i]).collect::<Vec<_>>(),
+    );
+    println!(
+        "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
+        s.frames,
+        s.true_pos + s.false_neg,
+        s.accuracy,
+        s.precision,
+        s.recall,
+        s.f1
+    );
+    println!(
+        "confusion: {} true positive, {} false positive, {} true negative, {} false negative",
+        s.true_pos, s.false_pos, s.true_neg, s.false_neg
+    );
+    println!(
+        "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
+        st.frames, st.accuracy, st.false_pos, st.false_neg
+    );
+    println!(
+        "{ms:.2} ms per frame ({}, batch 32, resize excluded)",
+        a.device.name()
+    );
+    println!(
+        "{}",
+        serde_json::json!({ "model": a.model, "data": a.data, "all": s, "onset_release": st, "ms_per_frame": ms })
+    );
+    Ok(())
+}
