@@ -354,12 +354,15 @@ mod tests {
                     train_loss: 1.0 / (e + 1) as f64,
                     val_loss: 1.2 / (e + 1) as f64,
                     seconds: 0.1,
+                    val_metric: (e > 0).then_some(0.5),
                 })
                 .collect(),
         };
         log.save(d.path(), "test").unwrap();
         let csv = std::fs::read_to_string(d.path().join("curves.csv")).unwrap();
         assert_eq!(csv.lines().count(), 4);
+        assert!(csv.starts_with("epoch,train_loss,val_loss,seconds,val_metric\n"));
+        assert!(csv.lines().nth(1).unwrap().ends_with(','));
         let png = crate::image_io::load_rgb(d.path().join("curves.png")).unwrap();
         assert_eq!(png.width(), 900);
     }
