@@ -136,3 +136,77 @@ fn cae_encoder_and_autoencoder_match_onnxruntime() {
         });
     }
 }
+
+/// Seeded values in [-2, 2): stand-ins for normalised frames.
+fn frames(n: usize, seed: u64) -> Vec<f32> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 40) as f32 / (1u64 << 24) as f32) * 4.0 - 2.0
+        })
+        .collect()
+}
+
+/// Any module built once on flex, saved, and rebuilt on each device.
+fn frozen_any<M: burn::module::Module>(
+    name: &str,
+    build: impl Fn(&Device) -> M,
+) -> impl Fn(&Device) -> M {
+    let file =
+        std::env::temp_dir().join(format!("tactile-parity-{name}-{}.bpk", std::process::id()));
+    save_module(&build(&Device::flex()), &file).unwrap();
+    move |d: &Device| load_module(build(d), &file).unwrap()
+}
+
+#[test]
+fn detectors_match_onnxruntime() {
+    use tactile_rs::detect::{Architecture, DetectorConfig};
+    use tactile_rs::onnx::export_detector;
+    // Hard-swish and hard-sigmoid are exported as Relu/Add/Sub/Mul/Div:
+    // parity here is what proves that form exact.
+    for (name, arch) in [
+        ("mobilenet", Architecture::MobilenetV3Small),
+        ("resnet18", Architecture::Resnet18),
+    ] {
+        let cfg = DetectorConfig::new()
+            .with_architecture(arch)
+            .with_width(0.25)
+            .with_input_size([64, 48]);
+        let make = frozen_any(name, |d| cfg.init(d));
+        let bytes = export_detector(&make(&Device::flex()), [64, 48]).unwrap();
+        let shape = [3usize, 3, 48, 64];
+        let data = frames(shape.iter().product(), 99);
+        check(&format!("detector-{name}"), &bytes, &shape, &data, |d| {
+            let m = make(d);
+            burn_out(
+                |x| m.forward(x).into_data().try_to_vec::<f32>().unwrap(),
+                &shape,
+                &data,
+                d,
+            )
+        });
+    }
+}
+
+#[test]
+fn segmenter_matches_onnxruntime() {
+    use tactile_rs::onnx::export_segmenter;
+    use tactile_rs::segment::UNetConfig;
+    let cfg = UNetConfig::new().with_base(4).with_side(48);
+    let make = frozen_any("unet", |d| cfg.init(d).unwrap());
+    let bytes = export_segmenter(&make(&Device::flex()), 48).unwrap();
+    let shape = [2usize, 3, 48, 48];
+    let data = frames(shape.iter().product(), 7);
+    check("segmenter", &bytes, &shape, &data, |d| {
+        let m = make(d);
+        burn_out(
+            |x| m.forward(x).into_data().try_to_vec::<f32>().unwrap(),
+            &shape,
+            &data,
+            d,
+        )
+    });
+}

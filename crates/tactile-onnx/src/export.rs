@@ -51,6 +51,20 @@ pub fn export_cae(cae: &Cae, input_px: usize) -> Result<Vec<u8>> {
     export_module_batch_dynamic(cae, [1, 1, input_px, input_px], |m: &Cae, x| m.forward(x))
 }
 
+/// The tendon detector: `[N, 3, H, W]` normalised frames -> `[N, 1]` logits.
+pub fn export_detector(model: &tactile_detect::Detector, [w, h]: [usize; 2]) -> Result<Vec<u8>> {
+    export_module_batch_dynamic(model, [1, 3, h, w], |m: &tactile_detect::Detector, x| {
+        m.forward(x)
+    })
+}
+
+/// The U-Net segmenter: `[N, 3, S, S]` normalised windows -> `[N, 1, S, S]` logits.
+pub fn export_segmenter(model: &tactile_segment::UNet, side: usize) -> Result<Vec<u8>> {
+    export_module_batch_dynamic(model, [1, 3, side, side], |m: &tactile_segment::UNet, x| {
+        m.forward(x)
+    })
+}
+
 /// Write ONNX bytes atomically.
 pub fn save_onnx(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     tactile_core::io::write_atomic(path, bytes)
