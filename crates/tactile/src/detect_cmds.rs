@@ -129,27 +129,42 @@ pub struct EvalDetectorArgs {
     device: DeviceKind,
 }
 
-/// Scores on a dataset; the last line printed is the metrics as JSON.
-pub fn eval(a: EvalDetectorArgs) -> Result<()> {
-    let dev = a.device.device();
-    let (art, model) = DetectorArtifact::load(&a.model, &dev)?;
-    let ds = Dataset::open(&a.data)?;
-    let data = DetectionSet::from_dataset(&ds, art.detector.input_size)?;
+/// A detector's scores on a dataset.
+pub struct DetectorScores {
+    pub all: tactile_core::metrics::BinaryScores,
+    pub onset_release: tactile_core::metrics::BinaryScores,
+    pub ms_per_frame: f64,
+}
+
+/// Score a detector on every frame of `data` (frames resized on load).
+pub fn score(model: &std::path::Path, data: &DetectionSet, device: DeviceKind) -> Result<DetectorScores> {
+    let dev = device.device();
+    let (art, m) = DetectorArtifact::load(model, &dev)?;
+    if (data.width, data.height) != (art.detector.input_size[0], art.detector.input_size[1]) {
+        bail!("frames loaded at {}x{}, {} takes {:?}", data.width, data.height, model.display(), art.detector.input_size);
+    }
     let all: Vec<usize> = (0..data.len()).collect();
     let t0 = std::time::Instant::now();
-    let p = predict(&model, &data, &all, &art.stats, 32, &dev)?;
-    let ms = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
+    let p = predict(&m, data, &all, &art.stats, 32, &dev)?;
+    let ms_per_frame = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
     let pred: Vec<bool> = p.iter().map(|&q| q as f64 >= art.threshold).collect();
-    let s = binary_scores(&pred, &data.tendon);
-    let tr: Vec<usize> = all
-        .iter()
-        .copied()
-        .filter(|&i| data.transition[i])
-        .collect();
-    let st = binary_scores(
-        &tr.iter().map(|&i| pred[i]).collect::<Vec<_>>(),
-        &tr.iter().map(|&i| data.tendon[i]).collect::<Vec<_>>(),
-    );
+    let tr: Vec<usize> = all.iter().copied().filter(|&i| data.transition[i]).collect();
+    Ok(DetectorScores {
+        all: binary_scores(&pred, &data.tendon),
+        onset_release: binary_scores(
+            &tr.iter().map(|&i| pred[i]).collect::<Vec<_>>(),
+            &tr.iter().map(|&i| data.tendon[i]).collect::<Vec<_>>(),
+        ),
+        ms_per_frame,
+    })
+}
+
+/// Scores on a dataset; the last line printed is the metrics as JSON.
+pub fn eval(a: EvalDetectorArgs) -> Result<()> {
+    let (art, _) = DetectorArtifact::load(&a.model, &a.device.device())?;
+    let ds = Dataset::open(&a.data)?;
+    let data = DetectionSet::from_dataset(&ds, art.detector.input_size)?;
+    let DetectorScores { all: s, onset_release: st, ms_per_frame: ms } = score(&a.model, &data, a.device)?;
     println!(
         "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
         s.frames,
@@ -167,10 +182,7 @@ pub fn eval(a: EvalDetectorArgs) -> Result<()> {
         "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
         st.frames, st.accuracy, st.false_pos, st.false_neg
     );
-    println!(
-        "{ms:.2} ms per frame ({}, batch 32, resize excluded)",
-        a.device.name()
-    );
+    println!("{ms:.2} ms per frame ({}, batch 32, resize excluded)", a.device.name());
     println!(
         "{}",
         serde_json::json!({ "model": a.model, "data": a.data, "all": s, "onset_release": st, "ms_per_frame": ms })

@@ -1,6 +1,7 @@
 //! `tactile`: the command-line face of tactile-rs.
 
 mod bench;
+mod bench_b;
 mod cae_cmds;
 mod detect_cmds;
 mod estimate_cmds;
@@ -141,6 +142,10 @@ enum BenchCmd {
     Cae(bench::BenchCaeArgs),
     /// The virtual sensors: frames/s rendered and written.
     Synth(bench::BenchSynthArgs),
+    /// Tendon detectors of a sweep: accuracy against latency per runtime.
+    Detector(bench_b::BenchModelsArgs),
+    /// Segmenters of a sweep: IoU and direction error against latency per runtime.
+    Segmenter(bench_b::BenchModelsArgs),
 }
 
 fn main() -> Result<()> {
@@ -191,6 +196,12 @@ fn main() -> Result<()> {
         Command::Bench {
             model: BenchCmd::Synth(a),
         } => bench::bench_synth(a),
+        Command::Bench {
+            model: BenchCmd::Detector(a),
+        } => bench_b::bench_detector(a),
+        Command::Bench {
+            model: BenchCmd::Segmenter(a),
+        } => bench_b::bench_segmenter(a),
         Command::Demo {
             model,
             data,

@@ -122,30 +122,29 @@ pub struct EvalSegmenterArgs {
 }
 
 #[derive(serde::Serialize)]
-struct PathScores {
-    path: String,
-    frames: usize,
-    mean_iou: f64,
-    direction_frames: usize,
-    no_direction: usize,
-    direction_median_deg: f64,
-    direction_p90_deg: f64,
+pub struct PathScores {
+    pub path: String,
+    pub frames: usize,
+    pub mean_iou: f64,
+    pub direction_frames: usize,
+    pub no_direction: usize,
+    pub direction_median_deg: f64,
+    pub direction_p90_deg: f64,
 }
 
-/// IoU over all tendon frames and per path, direction error of the
-/// post-processed mask; the last line is the metrics as JSON.
-pub fn eval(a: EvalSegmenterArgs) -> Result<()> {
-    let dev = a.device.device();
-    let (art, model) = SegmenterArtifact::load(&a.model, &dev)?;
-    let ds = Dataset::open(&a.data)?;
-    let rows = tendon_rows(&ds, &(0..ds.len()).collect::<Vec<_>>())?;
+/// IoU over all tendon frames, curved ones and per path, and the direction
+/// error of the post-processed mask; with the inference time per window.
+pub fn score(model: &std::path::Path, ds: &Dataset, device: DeviceKind) -> Result<(Vec<PathScores>, f64)> {
+    let dev = device.device();
+    let (art, m) = SegmenterArtifact::load(model, &dev)?;
+    let rows = tendon_rows(ds, &(0..ds.len()).collect::<Vec<_>>())?;
     if rows.is_empty() {
         bail!("{}: no tendon frames to score", ds.labels_path().display());
     }
-    let set = SegmentSet::from_dataset(&ds, &rows, art.window(), 1, 0)?;
+    let set = SegmentSet::from_dataset(ds, &rows, art.window(), 1, 0)?;
     let idx: Vec<usize> = (0..set.len()).collect();
     let t0 = std::time::Instant::now();
-    let probs = predict(&model, &set, &idx, &art.stats, &dev)?;
+    let probs = predict(&m, &set, &idx, &art.stats, &dev)?;
     let ms = 1e3 * t0.elapsed().as_secs_f64() / set.len() as f64;
     let s = art.unet.side;
     let mut per: Vec<(String, f64, Option<f64>)> = Vec::new();
@@ -173,25 +172,22 @@ pub fn eval(a: EvalSegmenterArgs) -> Result<()> {
             mean_iou: sel.iter().map(|p| p.1).sum::<f64>() / sel.len().max(1) as f64,
             direction_frames: errs.len(),
             no_direction: sel.len() - errs.len(),
-            direction_median_deg: if errs.is_empty() {
-                f64::NAN
-            } else {
-                median(&errs)
-            },
-            direction_p90_deg: if errs.is_empty() {
-                f64::NAN
-            } else {
-                percentile(&errs, 90.0)
-            },
+            direction_median_deg: if errs.is_empty() { f64::NAN } else { median(&errs) },
+            direction_p90_deg: if errs.is_empty() { f64::NAN } else { percentile(&errs, 90.0) },
         }
     };
     let mut table = vec![summarise("all", &|_| true)];
-    table.push(summarise("curved (arc + s-curve)", &|p| {
-        p == "arc" || p == "s-curve"
-    }));
+    table.push(summarise("curved (arc + s-curve)", &|p| p == "arc" || p == "s-curve"));
     for p in &paths {
         table.push(summarise(p, &|q| q == p));
     }
+    Ok((table, ms))
+}
+
+/// Print [`score`]; the last line is the metrics as JSON.
+pub fn eval(a: EvalSegmenterArgs) -> Result<()> {
+    let ds = Dataset::open(&a.data)?;
+    let (table, ms) = score(&a.model, &ds, a.device)?;
     println!(
         "| tendon path | frames | mean IoU | direction median (deg) | direction p90 (deg) | no direction |"
     );

@@ -1,0 +1,212 @@
+//! `tactile bench detector|segmenter`: for every size of a sweep, the error
+//! on a held-out dataset beside the median batch-1 latency on each runtime
+//! (burn ndarray, burn flex, onnxruntime), as a Markdown table and a plot of
+//! error against milliseconds.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use burn::module::Module;
+use burn::tensor::{Device, Tensor, TensorData};
+use clap::Args;
+use tactile_core::DeviceKind;
+use tactile_core::bench::{Machine, median_seconds};
+use tactile_core::dataset::Dataset;
+use tactile_core::plot::{Series, line_plot};
+use tactile_onnx::OrtModel;
+
+/// Median batch-1 milliseconds of `run` on each burn device, then of the
+/// ONNX model in onnxruntime (skipped with a note when it cannot load).
+fn latencies(
+    shape: [usize; 4],
+    data: &[f32],
+    runs: usize,
+    run: &dyn Fn(&Device) -> Result<Box<dyn Fn(Tensor<4>)>>,
+    onnx: &[u8],
+) -> Result<Vec<(String, f64)>> {
+    let mut out = Vec::new();
+    for kind in DeviceKind::ALL {
+        let dev = kind.device();
+        let f = run(&dev)?;
+        let x = Tensor::<4>::from_data(TensorData::new(data.to_vec(), shape), &dev);
+        let s = median_seconds(3, runs, || f(x.clone()));
+        out.push((format!("burn {kind}"), 1e3 * s));
+    }
+    let threads = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    match OrtModel::from_bytes(onnx, threads) {
+        Ok(mut ort) => {
+            let s = median_seconds(3, runs, || {
+                let _ = ort.run_f32(&shape, data.to_vec());
+            });
+            out.push(("onnxruntime 1.31.1".into(), 1e3 * s));
+        }
+        Err(e) => eprintln!("onnxruntime skipped: {e}"),
+    }
+    Ok(out)
+}
+
+/// Seeded stand-in input values (latency does not depend on them).
+fn input(n: usize) -> Vec<f32> {
+    (0..n).map(|i| ((i * 7919) % 255) as f32 / 128.0 - 1.0).collect()
+}
+
+#[derive(Args)]
+pub struct BenchModelsArgs {
+    /// Model folders of the sweep.
+    #[arg(long, num_args = 1.., required = true)]
+    models: Vec<PathBuf>,
+    /// Held-out visuo-tactile dataset for the error column.
+    #[arg(long)]
+    data: PathBuf,
+    /// Timed runs per latency (median reported).
+    #[arg(long, default_value_t = 20)]
+    runs: usize,
+    /// Markdown table; the plot goes beside it as NAME.png.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+fn header(what: &str, data: &Path, runs: usize) -> String {
+    let threads = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    format!(
+        "Machine: {}. Threads: burn devices use rayon over {threads} cores; onnxruntime {threads} intra-op threads. \
+         Latency: median of {runs} runs at batch 1, inference only (loading and resizing excluded). \
+         {what} on {} (held out: never used in training or in any choice).\n\n",
+        Machine::detect().describe(),
+        data.display()
+    )
+}
+
+fn finish(out: &Option<PathBuf>, mut md: String, title: &str, y_label: &str, series: Vec<Series>) -> Result<()> {
+    print!("{md}");
+    if let Some(out) = out {
+        let png = out.with_extension("png");
+        line_plot(&png, title, "latency, batch 1 (ms)", y_label, &series, false)?;
+        let name = png.file_name().unwrap_or_default().to_string_lossy();
+        md.push_str(&format!("\n![{title}]({name})\n"));
+        tactile_core::io::write_atomic(out, md.as_bytes())?;
+        eprintln!("wrote {} and {}", out.display(), png.display());
+    }
+    Ok(())
+}
+
+/// Add one point per runtime to the per-runtime series.
+fn add_points(series: &mut Vec<Series>, lat: &[(String, f64)], error: f64) {
+    for (name, ms) in lat {
+        match series.iter_mut().find(|s| &s.name == name) {
+            Some(s) => s.points.push((*ms, error)),
+            None => series.push(Series {
+                name: name.clone(),
+                points: vec![(*ms, error)],
+            }),
+        }
+    }
+}
+
+pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
+    use tactile_detect::{DetectionSet, DetectorArtifact};
+    let ds = Dataset::open(&a.data)?;
+    let mut md = header("Accuracy and F1", &a.data, a.runs);
+    md.push_str("| model | architecture | width | input | parameters | accuracy | F1 | onset/release accuracy | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let mut series = Vec::new();
+    let mut cache: Vec<([usize; 2], DetectionSet)> = Vec::new();
+    for m in &a.models {
+        let (art, model) = DetectorArtifact::load(m, &DeviceKind::Flex.device())?;
+        let size = art.detector.input_size;
+        if !cache.iter().any(|(s, _)| *s == size) {
+            eprintln!("loading {} at {}x{}", a.data.display(), size[0], size[1]);
+            cache.push((size, DetectionSet::from_dataset(&ds, size)?));
+        }
+        let data = &cache.iter().find(|(s, _)| *s == size).expect("cached").1;
+        let sc = crate::detect_cmds::score(m, data, DeviceKind::Flex)?;
+        let onnx = tactile_onnx::export_detector(&model, size)?;
+        let shape = [1, 3, size[1], size[0]];
+        let lat = latencies(
+            shape,
+            &input(shape.iter().product()),
+            a.runs,
+            &|d| {
+                let (_, m) = DetectorArtifact::load(m, d)?;
+                Ok(Box::new(move |x| {
+                    let _ = m.forward(x).into_data();
+                }))
+            },
+            &onnx,
+        )?;
+        let ms = |k: &str| lat.iter().find(|l| l.0.contains(k)).map_or("-".into(), |l| format!("{:.2}", l.1));
+        md.push_str(&format!(
+            "| {} | {:?} | {} | {}x{} | {} | {:.4} | {:.4} | {:.4} | {} | {} | {} |\n",
+            m.file_name().unwrap_or_default().to_string_lossy(),
+            art.detector.architecture,
+            art.detector.width,
+            size[0],
+            size[1],
+            model.num_params(),
+            sc.all.accuracy,
+            sc.all.f1,
+            sc.onset_release.accuracy,
+            ms("ndarray"),
+            ms("flex"),
+            ms("onnxruntime"),
+        ));
+        add_points(&mut series, &lat, 100.0 * (1.0 - sc.all.accuracy));
+    }
+    md.push_str("\nPaper B: MobileNetV3-small 0.958 test accuracy at 11 ms, ResNet-18 85 ms (Intel i7).\n");
+    finish(&a.out, md, "Detector: error against latency", "error (%)", series)
+}
+
+pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
+    use tactile_segment::SegmenterArtifact;
+    let ds = Dataset::open(&a.data)?;
+    let mut md = header("Mean IoU and direction error", &a.data, a.runs);
+    md.push_str("| model | window | base | parameters | IoU all | IoU curved | direction straight median / p90 (deg) | direction curved median / p90 (deg) | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let mut series = Vec::new();
+    for m in &a.models {
+        let (art, model) = SegmenterArtifact::load(m, &DeviceKind::Flex.device())?;
+        let (table, _) = crate::segment_cmds::score(m, &ds, DeviceKind::Flex)?;
+        let row = |p: &str| table.iter().find(|r| r.path == p);
+        let side = art.unet.side;
+        let onnx = tactile_onnx::export_segmenter(&model, side)?;
+        let shape = [1, 3, side, side];
+        let lat = latencies(
+            shape,
+            &input(shape.iter().product()),
+            a.runs,
+            &|d| {
+                let (_, m) = SegmenterArtifact::load(m, d)?;
+                Ok(Box::new(move |x| {
+                    let _ = m.forward(x).into_data();
+                }))
+            },
+            &onnx,
+        )?;
+        let ms = |k: &str| lat.iter().find(|l| l.0.contains(k)).map_or("-".into(), |l| format!("{:.2}", l.1));
+        let iou = |p: &str| row(p).map_or("-".into(), |r| format!("{:.4}", r.mean_iou));
+        let dir = |p: &str| {
+            row(p).map_or("-".into(), |r| {
+                format!("{:.2} / {:.2}", r.direction_median_deg, r.direction_p90_deg)
+            })
+        };
+        md.push_str(&format!(
+            "| {} | {side}x{side} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            m.file_name().unwrap_or_default().to_string_lossy(),
+            art.unet.base,
+            model.num_params(),
+            iou("all"),
+            iou("curved (arc + s-curve)"),
+            dir("straight"),
+            dir("curved (arc + s-curve)"),
+            ms("ndarray"),
+            ms("flex"),
+            ms("onnxruntime"),
+        ));
+        let all = row("all").map_or(f64::NAN, |r| r.mean_iou);
+        add_points(&mut series, &lat, 1.0 - all);
+    }
+    md.push_str("\nPaper B: IoU 0.879 validation, 0.196 on the curved test tendon; 69 ms (Intel i7).\n");
+    finish(&a.out, md, "Segmenter: 1 - IoU against latency", "1 - mean IoU", series)
+}
