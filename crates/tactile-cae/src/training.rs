@@ -103,6 +103,7 @@ pub fn train_cae(
         seed: config.seed,
         title: "CAE training (binary cross-entropy)".into(),
         checkpoint_every: 25,
+        lr_decay: 1.0,
     };
     let (_, s) = fit(
         &fit_cfg,

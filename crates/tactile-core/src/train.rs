@@ -151,6 +151,13 @@ pub struct FitConfig {
     pub title: String,
     /// Save a resumable checkpoint every this many epochs (and at the end).
     pub checkpoint_every: usize,
+    /// Learning rate of epoch `e` is `learning_rate * lr_decay^e` (1 = constant).
+    #[serde(default = "one")]
+    pub lr_decay: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// What a [`fit`] run ended with.
@@ -231,12 +238,13 @@ pub fn fit<M: burn::module::Module>(
     while epoch < cfg.max_epochs {
         let t0 = std::time::Instant::now();
         let mut total = 0.0;
+        let lr = cfg.learning_rate * cfg.lr_decay.powi(epoch as i32);
         for batch in shuffled_batches(train, cfg.batch_size, cfg.seed.wrapping_add(epoch as u64)) {
             let loss = batch_loss(&model, &batch, epoch)?;
             let l: f32 = loss.clone().into_scalar();
             total += l as f64 * batch.len() as f64;
             let grads = GradientsParams::from_grads(loss.backward(), &model);
-            model = optim.step(cfg.learning_rate, model, grads);
+            model = optim.step(lr, model, grads);
         }
         let train_loss = ensure_finite("training loss", total / train.len() as f64)?;
         let valid = model.valid();

@@ -77,6 +77,69 @@ impl DetectorArtifact {
     }
 }
 
+/// Standard deviation (in [0, 1] units, all channels) below which a
+/// frame is blank: half a grey level, under the sensor's own noise.
+pub const BLANK_FRAME_STD: f32 = 0.5 / 255.0;
+
+/// True when the image has (almost) no variation at all.
+pub fn is_blank(img: &FloatImage) -> bool {
+    let n = img.data.len().max(1) as f64;
+    let mean = img.data.iter().map(|&v| v as f64).sum::<f64>() / n;
+    let var = img
+        .data
+        .iter()
+        .map(|&v| (v as f64 - mean).powi(2))
+        .sum::<f64>()
+        / n;
+    (var.sqrt() as f32) < BLANK_FRAME_STD
+}
+
+/// A loaded detector, ready for frames of any size.
+pub struct TendonDetector {
+    pub artifact: DetectorArtifact,
+    pub model: Detector,
+    pub device: Device,
+}
+
+impl TendonDetector {
+    pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<Self> {
+        let (artifact, model) = DetectorArtifact::load(dir, device)?;
+        Ok(Self {
+            artifact,
+            model,
+            device: device.clone(),
+        })
+    }
+
+    /// Tendon probability of an RGB frame of any size (resized to the
+    /// input). A blank frame (black, saturated, one colour: no pixel
+    /// differs from the mean by [`BLANK_FRAME_STD`]) cannot show a tendon
+    /// and gets 0 without running the network, whose answer on such
+    /// far-from-training inputs would be arbitrary.
+    pub fn probability(&self, frame: &tactile_core::image_io::RgbImage) -> Result<f32> {
+        let [w, h] = self.artifact.detector.input_size;
+        let img = tactile_preprocess::visuo::resize_rgb(frame, w, h)?;
+        if is_blank(&img) {
+            return Ok(0.0);
+        }
+        let x = self.artifact.input(&[img], &self.device)?;
+        Ok(self.model.probabilities(x)?[0])
+    }
+
+    /// Tendon probability of a frame file; errors name the file.
+    pub fn probability_of_file(&self, path: impl AsRef<Path>) -> Result<f32> {
+        let path = path.as_ref();
+        let frame = tactile_core::image_io::load_rgb(path)?;
+        self.probability(&frame)
+            .map_err(|e| Error::image(path, e.to_string()))
+    }
+
+    /// Whether the probability reaches the saved threshold.
+    pub fn is_tendon(&self, p: f32) -> bool {
+        p as f64 >= self.artifact.threshold
+    }
+}
+
 impl Detector {
     /// Tendon probabilities of a normalised batch.
     pub fn probabilities(&self, x: Tensor<4>) -> Result<Vec<f32>> {

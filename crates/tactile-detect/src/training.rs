@@ -24,6 +24,9 @@ pub struct DetectorTrainingConfig {
     pub patience: usize,
     #[config(default = 1e-3)]
     pub learning_rate: f64,
+    /// Learning-rate factor per epoch.
+    #[config(default = 0.8)]
+    pub lr_decay: f64,
     #[config(default = 42)]
     pub seed: u64,
 }
@@ -109,6 +112,7 @@ pub fn train_detector(
         seed: config.seed,
         title: "detector training (class-weighted BCE)".into(),
         checkpoint_every: 1,
+        lr_decay: config.lr_decay,
     };
     let val_truth: Vec<bool> = val.iter().map(|&i| data.tendon[i]).collect();
     let (_, summary) = fit(

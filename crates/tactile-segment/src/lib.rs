@@ -83,6 +83,46 @@ impl SegmenterArtifact {
     }
 }
 
+/// A loaded segmenter with its post-processing, ready for frames of any size.
+pub struct TendonSegmenter {
+    pub artifact: SegmenterArtifact,
+    pub model: UNet,
+    pub device: Device,
+}
+
+impl TendonSegmenter {
+    pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<Self> {
+        let (artifact, model) = SegmenterArtifact::load(dir, device)?;
+        Ok(Self {
+            artifact,
+            model,
+            device: device.clone(),
+        })
+    }
+
+    /// Predicted mask of the frame's window, post-processed: the kept region
+    /// and its direction (or why there is none).
+    pub fn segment(&self, frame: &tactile_core::image_io::RgbImage) -> Result<Tendon> {
+        let win = self.artifact.window();
+        let (sw, sh) = win.scaled_size(frame.width(), frame.height());
+        let scaled = tactile_preprocess::visuo::resize_rgb(frame, sw, sh)?;
+        let cut = win.cut(&scaled, 0.0);
+        let x = self.artifact.input(&[cut], &self.device)?;
+        let p = self.model.probabilities(x)?.remove(0);
+        let s = win.side;
+        let mask = TendonMask::from_probabilities(s, s, &p, self.artifact.threshold)?;
+        postprocess(&mask, &self.artifact.postprocess)
+    }
+
+    /// [`Self::segment`] of a frame file; errors name the file.
+    pub fn segment_file(&self, path: impl AsRef<Path>) -> Result<Tendon> {
+        let path = path.as_ref();
+        let frame = tactile_core::image_io::load_rgb(path)?;
+        self.segment(&frame)
+            .map_err(|e| Error::image(path, e.to_string()))
+    }
+}
+
 impl UNet {
     /// Per-pixel tendon probabilities, one `S*S` vector per window.
     pub fn probabilities(&self, x: Tensor<4>) -> Result<Vec<Vec<f32>>> {

@@ -25,6 +25,9 @@ pub struct SegmenterTrainingConfig {
     pub patience: usize,
     #[config(default = 1e-3)]
     pub learning_rate: f64,
+    /// Learning-rate factor per epoch.
+    #[config(default = 0.8)]
+    pub lr_decay: f64,
     #[config(default = 42)]
     pub seed: u64,
 }
@@ -96,6 +99,7 @@ pub fn train_segmenter(
         seed: config.seed,
         title: "segmenter training (BCE + Dice)".into(),
         checkpoint_every: 1,
+        lr_decay: config.lr_decay,
     };
     let train: Vec<usize> = (0..train_set.len()).collect();
     let val: Vec<usize> = (0..val_set.len()).collect();

@@ -49,7 +49,9 @@ fn latencies(
 
 /// Seeded stand-in input values (latency does not depend on them).
 fn input(n: usize) -> Vec<f32> {
-    (0..n).map(|i| ((i * 7919) % 255) as f32 / 128.0 - 1.0).collect()
+    (0..n)
+        .map(|i| ((i * 7919) % 255) as f32 / 128.0 - 1.0)
+        .collect()
 }
 
 #[derive(Args)]
@@ -81,11 +83,24 @@ fn header(what: &str, data: &Path, runs: usize) -> String {
     )
 }
 
-fn finish(out: &Option<PathBuf>, mut md: String, title: &str, y_label: &str, series: Vec<Series>) -> Result<()> {
+fn finish(
+    out: &Option<PathBuf>,
+    mut md: String,
+    title: &str,
+    y_label: &str,
+    series: Vec<Series>,
+) -> Result<()> {
     print!("{md}");
     if let Some(out) = out {
         let png = out.with_extension("png");
-        line_plot(&png, title, "latency, batch 1 (ms)", y_label, &series, false)?;
+        line_plot(
+            &png,
+            title,
+            "latency, batch 1 (ms)",
+            y_label,
+            &series,
+            false,
+        )?;
         let name = png.file_name().unwrap_or_default().to_string_lossy();
         md.push_str(&format!("\n![{title}]({name})\n"));
         tactile_core::io::write_atomic(out, md.as_bytes())?;
@@ -137,7 +152,11 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
             },
             &onnx,
         )?;
-        let ms = |k: &str| lat.iter().find(|l| l.0.contains(k)).map_or("-".into(), |l| format!("{:.2}", l.1));
+        let ms = |k: &str| {
+            lat.iter()
+                .find(|l| l.0.contains(k))
+                .map_or("-".into(), |l| format!("{:.2}", l.1))
+        };
         md.push_str(&format!(
             "| {} | {:?} | {} | {}x{} | {} | {:.4} | {:.4} | {:.4} | {} | {} | {} |\n",
             m.file_name().unwrap_or_default().to_string_lossy(),
@@ -155,8 +174,16 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
         ));
         add_points(&mut series, &lat, 100.0 * (1.0 - sc.all.accuracy));
     }
-    md.push_str("\nPaper B: MobileNetV3-small 0.958 test accuracy at 11 ms, ResNet-18 85 ms (Intel i7).\n");
-    finish(&a.out, md, "Detector: error against latency", "error (%)", series)
+    md.push_str(
+        "\nPaper B: MobileNetV3-small 0.958 test accuracy at 11 ms, ResNet-18 85 ms (Intel i7).\n",
+    );
+    finish(
+        &a.out,
+        md,
+        "Detector: error against latency",
+        "error (%)",
+        series,
+    )
 }
 
 pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
@@ -184,7 +211,11 @@ pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
             },
             &onnx,
         )?;
-        let ms = |k: &str| lat.iter().find(|l| l.0.contains(k)).map_or("-".into(), |l| format!("{:.2}", l.1));
+        let ms = |k: &str| {
+            lat.iter()
+                .find(|l| l.0.contains(k))
+                .map_or("-".into(), |l| format!("{:.2}", l.1))
+        };
         let iou = |p: &str| row(p).map_or("-".into(), |r| format!("{:.4}", r.mean_iou));
         let dir = |p: &str| {
             row(p).map_or("-".into(), |r| {
@@ -207,6 +238,14 @@ pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
         let all = row("all").map_or(f64::NAN, |r| r.mean_iou);
         add_points(&mut series, &lat, 1.0 - all);
     }
-    md.push_str("\nPaper B: IoU 0.879 validation, 0.196 on the curved test tendon; 69 ms (Intel i7).\n");
-    finish(&a.out, md, "Segmenter: 1 - IoU against latency", "1 - mean IoU", series)
+    md.push_str(
+        "\nPaper B: IoU 0.879 validation, 0.196 on the curved test tendon; 69 ms (Intel i7).\n",
+    );
+    finish(
+        &a.out,
+        md,
+        "Segmenter: 1 - IoU against latency",
+        "1 - mean IoU",
+        series,
+    )
 }

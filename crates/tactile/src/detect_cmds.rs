@@ -51,6 +51,9 @@ pub struct TrainDetectorArgs {
     batch_size: usize,
     #[arg(long, default_value_t = 1e-3)]
     lr: f64,
+    /// Learning-rate factor per epoch.
+    #[arg(long, default_value_t = 0.8)]
+    lr_decay: f64,
     /// Fraction of the sequences that validate.
     #[arg(long, default_value_t = 0.2)]
     val_fraction: f64,
@@ -95,6 +98,7 @@ pub fn train(a: TrainDetectorArgs) -> Result<()> {
         .with_max_epochs(a.max_epochs)
         .with_patience(a.patience)
         .with_learning_rate(a.lr)
+        .with_lr_decay(a.lr_decay)
         .with_seed(a.seed);
     let s = train_detector(
         &config,
@@ -137,18 +141,32 @@ pub struct DetectorScores {
 }
 
 /// Score a detector on every frame of `data` (frames resized on load).
-pub fn score(model: &std::path::Path, data: &DetectionSet, device: DeviceKind) -> Result<DetectorScores> {
+pub fn score(
+    model: &std::path::Path,
+    data: &DetectionSet,
+    device: DeviceKind,
+) -> Result<DetectorScores> {
     let dev = device.device();
     let (art, m) = DetectorArtifact::load(model, &dev)?;
     if (data.width, data.height) != (art.detector.input_size[0], art.detector.input_size[1]) {
-        bail!("frames loaded at {}x{}, {} takes {:?}", data.width, data.height, model.display(), art.detector.input_size);
+        bail!(
+            "frames loaded at {}x{}, {} takes {:?}",
+            data.width,
+            data.height,
+            model.display(),
+            art.detector.input_size
+        );
     }
     let all: Vec<usize> = (0..data.len()).collect();
     let t0 = std::time::Instant::now();
     let p = predict(&m, data, &all, &art.stats, 32, &dev)?;
     let ms_per_frame = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
     let pred: Vec<bool> = p.iter().map(|&q| q as f64 >= art.threshold).collect();
-    let tr: Vec<usize> = all.iter().copied().filter(|&i| data.transition[i]).collect();
+    let tr: Vec<usize> = all
+        .iter()
+        .copied()
+        .filter(|&i| data.transition[i])
+        .collect();
     Ok(DetectorScores {
         all: binary_scores(&pred, &data.tendon),
         onset_release: binary_scores(
@@ -164,7 +182,11 @@ pub fn eval(a: EvalDetectorArgs) -> Result<()> {
     let (art, _) = DetectorArtifact::load(&a.model, &a.device.device())?;
     let ds = Dataset::open(&a.data)?;
     let data = DetectionSet::from_dataset(&ds, art.detector.input_size)?;
-    let DetectorScores { all: s, onset_release: st, ms_per_frame: ms } = score(&a.model, &data, a.device)?;
+    let DetectorScores {
+        all: s,
+        onset_release: st,
+        ms_per_frame: ms,
+    } = score(&a.model, &data, a.device)?;
     println!(
         "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
         s.frames,
@@ -182,7 +204,10 @@ pub fn eval(a: EvalDetectorArgs) -> Result<()> {
         "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
         st.frames, st.accuracy, st.false_pos, st.false_neg
     );
-    println!("{ms:.2} ms per frame ({}, batch 32, resize excluded)", a.device.name());
+    println!(
+        "{ms:.2} ms per frame ({}, batch 32, resize excluded)",
+        a.device.name()
+    );
     println!(
         "{}",
         serde_json::json!({ "model": a.model, "data": a.data, "all": s, "onset_release": st, "ms_per_frame": ms })

@@ -38,6 +38,9 @@ pub struct TrainSegmenterArgs {
     batch_size: usize,
     #[arg(long, default_value_t = 1e-3)]
     lr: f64,
+    /// Learning-rate factor per epoch.
+    #[arg(long, default_value_t = 0.8)]
+    lr_decay: f64,
     #[arg(long, default_value_t = 0.2)]
     val_fraction: f64,
     #[arg(long, default_value_t = 42)]
@@ -87,6 +90,7 @@ pub fn train(a: TrainSegmenterArgs) -> Result<()> {
         .with_max_epochs(a.max_epochs)
         .with_patience(a.patience)
         .with_learning_rate(a.lr)
+        .with_lr_decay(a.lr_decay)
         .with_seed(a.seed);
     let s = train_segmenter(
         &config,
@@ -134,7 +138,11 @@ pub struct PathScores {
 
 /// IoU over all tendon frames, curved ones and per path, and the direction
 /// error of the post-processed mask; with the inference time per window.
-pub fn score(model: &std::path::Path, ds: &Dataset, device: DeviceKind) -> Result<(Vec<PathScores>, f64)> {
+pub fn score(
+    model: &std::path::Path,
+    ds: &Dataset,
+    device: DeviceKind,
+) -> Result<(Vec<PathScores>, f64)> {
     let dev = device.device();
     let (art, m) = SegmenterArtifact::load(model, &dev)?;
     let rows = tendon_rows(ds, &(0..ds.len()).collect::<Vec<_>>())?;
@@ -172,12 +180,22 @@ pub fn score(model: &std::path::Path, ds: &Dataset, device: DeviceKind) -> Resul
             mean_iou: sel.iter().map(|p| p.1).sum::<f64>() / sel.len().max(1) as f64,
             direction_frames: errs.len(),
             no_direction: sel.len() - errs.len(),
-            direction_median_deg: if errs.is_empty() { f64::NAN } else { median(&errs) },
-            direction_p90_deg: if errs.is_empty() { f64::NAN } else { percentile(&errs, 90.0) },
+            direction_median_deg: if errs.is_empty() {
+                f64::NAN
+            } else {
+                median(&errs)
+            },
+            direction_p90_deg: if errs.is_empty() {
+                f64::NAN
+            } else {
+                percentile(&errs, 90.0)
+            },
         }
     };
     let mut table = vec![summarise("all", &|_| true)];
-    table.push(summarise("curved (arc + s-curve)", &|p| p == "arc" || p == "s-curve"));
+    table.push(summarise("curved (arc + s-curve)", &|p| {
+        p == "arc" || p == "s-curve"
+    }));
     for p in &paths {
         table.push(summarise(p, &|q| q == p));
     }
