@@ -1,11 +1,11 @@
 //! A trained model on disk: `cae.json` (architecture + preprocessing +
 //! training summary) beside `cae.bpk` (burnpack weights).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
-use tactile_core::{Error, Result};
+use tactile_core::Result;
 use tactile_preprocess::PreprocessConfig;
 
 use crate::model::{Cae, CaeConfig};
@@ -29,24 +29,21 @@ pub use tactile_core::module_io::{load_module, module_bytes, save_module};
 impl CaeArtifact {
     /// Save config and weights into `dir` (created if needed).
     pub fn save(&self, model: &Cae, dir: impl AsRef<Path>) -> Result<()> {
-        let dir = dir.as_ref();
-        tactile_core::io::create_dir_all(dir)?;
-        save_module(model, &dir.join(WEIGHTS_FILE))?;
-        tactile_core::io::write_json_atomic(dir.join(CONFIG_FILE), self)
+        tactile_core::module_io::save_artifact(
+            dir.as_ref(),
+            (CONFIG_FILE, WEIGHTS_FILE),
+            self,
+            model,
+        )
     }
 
     /// Load config and weights from `dir` onto `device`.
     pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<(Self, Cae)> {
-        let dir = dir.as_ref();
-        let cfg_path: PathBuf = dir.join(CONFIG_FILE);
-        if !cfg_path.is_file() {
-            return Err(Error::model(
-                &cfg_path,
-                "not a model folder: missing cae.json",
-            ));
-        }
-        let art: CaeArtifact = tactile_core::io::read_json(&cfg_path)?;
-        let model = load_module(art.cae.init(device), &dir.join(WEIGHTS_FILE))?;
-        Ok((art, model))
+        tactile_core::module_io::load_artifact(
+            dir.as_ref(),
+            (CONFIG_FILE, WEIGHTS_FILE),
+            "model",
+            |a: &Self| Ok(a.cae.init(device)),
+        )
     }
 }

@@ -12,7 +12,7 @@ use std::path::Path;
 use burn::tensor::activation::sigmoid;
 use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
-use tactile_core::module_io::{load_module, save_module};
+use tactile_core::module_io::{load_artifact, save_artifact};
 use tactile_core::{Error, Result};
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, SquareWindow};
 
@@ -43,24 +43,16 @@ impl SegmenterArtifact {
     }
 
     pub fn save(&self, model: &UNet, dir: impl AsRef<Path>) -> Result<()> {
-        let dir = dir.as_ref();
-        tactile_core::io::create_dir_all(dir)?;
-        save_module(model, &dir.join(WEIGHTS_FILE))?;
-        tactile_core::io::write_json_atomic(dir.join(CONFIG_FILE), self)
+        save_artifact(dir.as_ref(), (CONFIG_FILE, WEIGHTS_FILE), self, model)
     }
 
     pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<(Self, UNet)> {
-        let dir = dir.as_ref();
-        let cfg = dir.join(CONFIG_FILE);
-        if !cfg.is_file() {
-            return Err(Error::model(
-                &cfg,
-                "not a segmenter folder: missing segmenter.json",
-            ));
-        }
-        let art: Self = tactile_core::io::read_json(&cfg)?;
-        let model = load_module(art.unet.init(device)?, &dir.join(WEIGHTS_FILE))?;
-        Ok((art, model))
+        load_artifact(
+            dir.as_ref(),
+            (CONFIG_FILE, WEIGHTS_FILE),
+            "segmenter",
+            |a: &Self| a.unet.init(device),
+        )
     }
 
     /// Normalised `[N, 3, S, S]` input from windows.

@@ -299,6 +299,9 @@ pub struct CompareArgs {
     /// own (an encoder trained on one dataset applied to another).
     #[arg(long)]
     preprocess: Option<String>,
+    /// Hidden widths of the regression MLP (the same for every feature set).
+    #[arg(long, value_delimiter = ',', default_values_t = [256, 128])]
+    hidden: Vec<usize>,
 }
 
 /// Feature sets x estimators on one split: CAE features against PCA of
@@ -406,7 +409,7 @@ pub fn compare(a: CompareArgs) -> Result<()> {
             &sets,
             &targets,
             (&ty, &vy, &sy),
-            a.seed,
+            (&a.hidden, a.seed),
             &dev,
         )?);
     }
@@ -446,9 +449,13 @@ fn regression_table(
     sets: &[FeatureSet],
     targets: &[Target],
     (ty, vy, sy): SplitLabels<'_, Vec<f64>>,
-    seed: u64,
+    (hidden, seed): (&[usize], u64),
     dev: &burn::tensor::Device,
 ) -> Result<String> {
+    let mlp = format!(
+        "MLP {}",
+        hidden.iter().map(usize::to_string).collect::<Vec<_>>().join("-")
+    );
     use tactile_estimate::classical;
     let mut md = format!(
         "Regression: mean absolute error on the test frames (angles the short way round).\n\n| features | estimator | {} | fit + predict (s) |\n|---|---|{}---|\n",
@@ -460,7 +467,7 @@ fn regression_table(
         "---|".repeat(targets.len())
     );
     for (name, [tx, vx, sx]) in sets {
-        for est in ["MLP 128-64", "ridge", "k-NN (k=5)"] {
+        for est in [mlp.as_str(), "ridge", "k-NN (k=5)"] {
             eprintln!("{name} + {est}");
             let t0 = std::time::Instant::now();
             let pred = match est {
@@ -474,10 +481,12 @@ fn regression_table(
                 _ => {
                     let cfg = RegressorConfig::new(tx[0].len(), targets.to_vec())
                         .with_seed(seed)
-                        .with_hidden(vec![
-                            (128, tactile_cae::head::Activation::Relu),
-                            (64, tactile_cae::head::Activation::Relu),
-                        ]);
+                        .with_hidden(
+                            hidden
+                                .iter()
+                                .map(|&w| (w, tactile_cae::head::Activation::Relu))
+                                .collect(),
+                        );
                     Regressor::train(cfg, (tx, ty), (vx, vy), dev)?.predict(sx, dev)?
                 }
             };
