@@ -60,17 +60,34 @@ train-cae-synth out="models/cae-synth": synth-tactip
 bench-synth:
     cargo run --release -p tactile -- bench synth --out docs/bench-synth.md
 
-# Paper A on the real 127-pin edge set: CAE (train split made by seed), then every feature set x estimator; writes docs/paper-a-edge-compare.md.
-train-cae-edge out="models/cae-edge":
-    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out {{out}} --preprocess configs/preprocess/tactip127-edge.json --widths 16,16,8,4 --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 250 --patience 40
+# Paper A on the real 127-pin edge set: the grey-level CAE (never sees the frames `compare --seed 7` tests on) and the binary one of the paper.
+train-cae-edge:
+    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out models/cae-edge --preprocess configs/preprocess/tactip127-edge-area.json --widths 32,32,16,4 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 400 --patience 40 --exclude-test 0.2
+    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out models/cae-edge-binary --preprocess configs/preprocess/tactip127-edge.json --widths 16,16,8,4 --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 250 --patience 40 --exclude-test 0.2
 
-compare-edge:
-    cargo run --release -p tactile -- compare --encoder models/cae-edge --data {{real}}/tactip127-edge --targets x_mm,theta_deg:180,depth_mm --out docs/paper-a-edge-compare.md
-
-compare-shapes:
-    cargo run --release -p tactile -- compare --encoder models/cae-shapes --data {{real}}/polic-shapes --classify shape --out docs/paper-a-shapes-compare.md
-
-# Paper A's feature-count search on the shapes set: trains 8/16/32/64-feature CAEs into data/sweep, then writes docs/paper-a-sweep.md and its plots.
+# Paper A's feature-count search on the shapes set: trains 8/16/32/64-feature CAEs into data/sweep, then writes docs/paper-a/sweep.md and its plots.
 sweep:
     for f in 8 16 32 64; do cargo run --release -p tactile -- train cae --data {{real}}/polic-shapes --out data/sweep/cae-$f --widths 16,16,8,4 --features $f --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 600 --patience 100; done
-    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- sweep --data {{real}}/polic-shapes --out docs/paper-a-sweep.md --encoders data/sweep/cae-8 data/sweep/cae-16 data/sweep/cae-32 data/sweep/cae-64
+    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- sweep --data {{real}}/polic-shapes --out docs/paper-a/sweep.md --encoders data/sweep/cae-8 data/sweep/cae-16 data/sweep/cae-32 data/sweep/cae-64
+
+# Every paper A table and plot (shapes, sweep, edge set, synthetic, robustness, cross-dataset) into docs/paper-a.md and docs/paper-a/.
+paper-a:
+    bash scripts/paper-a.sh
+
+# Paper B data: palpation videos of the virtual visuo-tactile sensor (all tendon paths), a training set and a held-out one.
+synth-vt:
+    cargo run --release -p tactile -- synth visuotactile --sequences 120 --frames-per-sequence 25 --seed 100 --out data/vt-train --preview data/vt-train.png
+    cargo run --release -p tactile -- synth visuotactile --sequences 40 --frames-per-sequence 25 --seed 200 --out data/vt-test
+
+# The detector sweep (three MobileNetV3-small sizes and the ResNet-18 baseline) into data/det; the shipped one is copied to models/detector.
+sweep-detector: synth-vt
+    for spec in "mobilenet-v3-small 0.25 80x60" "mobilenet-v3-small 0.5 160x120" "mobilenet-v3-small 0.75 240x180" "resnet18 0.25 160x120"; do set -- $spec; cargo run --release -p tactile -- train detector --data data/vt-train --out data/det/$1-w$2-$3 --architecture $1 --width $2 --input $3 --max-epochs 12 --patience 4; done
+
+# The segmenter sweep (four window sizes and widths) into data/seg; the shipped one is copied to models/segmenter.
+sweep-segmenter: synth-vt
+    for spec in "48 4" "64 8" "96 8" "128 12"; do set -- $spec; cargo run --release -p tactile -- train segmenter --data data/vt-train --out data/seg/unet-s$1-b$2 --side $1 --base $2 --copies 4 --max-epochs 8 --patience 3; done
+
+# Error against latency per runtime for every size of both sweeps; writes docs/bench-detector.md and docs/bench-segmenter.md with plots.
+bench-paper-b:
+    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench detector --data data/vt-test --out docs/bench-detector.md --models data/det/*
+    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench segmenter --data data/vt-test --out docs/bench-segmenter.md --models data/seg/unet-*

@@ -62,6 +62,39 @@ pub fn predict(
     Ok(out)
 }
 
+/// The probability threshold (0.05 to 0.95 in steps of 0.05) with the
+/// best accuracy on `val`; ties go to the one nearest 0.5.
+pub fn best_threshold(probs: &[f32], truth: &[bool]) -> (f64, f64) {
+    let mut best: (f64, f64) = (0.5, -1.0);
+    for k in 1..20 {
+        let t = k as f64 * 0.05;
+        let pred: Vec<bool> = probs.iter().map(|&p| p as f64 >= t).collect();
+        let acc = tactile_core::metrics::binary_scores(&pred, truth).accuracy;
+        let closer = (t - 0.5).abs() < (best.0 - 0.5).abs();
+        if acc > best.1 + 1e-12 || ((acc - best.1).abs() <= 1e-12 && closer) {
+            best = (t, acc);
+        }
+    }
+    best
+}
+
+/// Set the saved detector's threshold to [`best_threshold`] on `val`;
+/// returns (threshold, validation accuracy).
+pub fn calibrate(
+    out: &Path,
+    data: &DetectionSet,
+    val: &[usize],
+    device: &Device,
+) -> Result<(f64, f64)> {
+    let (mut art, model) = DetectorArtifact::load(out, device)?;
+    let p = predict(&model, data, val, &art.stats, 64, device)?;
+    let truth: Vec<bool> = val.iter().map(|&i| data.tendon[i]).collect();
+    let (t, acc) = best_threshold(&p, &truth);
+    art.threshold = t;
+    art.save(&model, out)?;
+    Ok((t, acc))
+}
+
 /// Train on `train`, validate on `val`; the best model goes to `out`.
 pub fn train_detector(
     config: &DetectorTrainingConfig,

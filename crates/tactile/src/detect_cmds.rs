@@ -64,6 +64,10 @@ pub struct TrainDetectorArgs {
     /// Continue from the checkpoint in the output folder.
     #[arg(long)]
     resume: bool,
+    /// Only re-choose the threshold of the model already in --out on the
+    /// validation sequences (training ends with this step anyway).
+    #[arg(long)]
+    calibrate_only: bool,
 }
 
 fn architecture(s: &str) -> Result<Architecture> {
@@ -93,6 +97,15 @@ pub fn train(a: TrainDetectorArgs) -> Result<()> {
         val.len()
     );
     let data = DetectionSet::from_dataset(&ds, a.input)?;
+    let dev = a.device.device();
+    if a.calibrate_only {
+        let (t, acc) = tactile_detect::training::calibrate(&a.out, &data, &val, &dev)?;
+        println!(
+            "threshold {t:.2}: validation accuracy {acc:.4}; saved in {}",
+            a.out.display()
+        );
+        return Ok(());
+    }
     let config = DetectorTrainingConfig::new(cfg)
         .with_batch_size(a.batch_size)
         .with_max_epochs(a.max_epochs)
@@ -105,12 +118,13 @@ pub fn train(a: TrainDetectorArgs) -> Result<()> {
         &data,
         (&train, &val),
         &a.out,
-        &a.device.device(),
+        &dev,
         a.resume,
         serde_json::json!({ "trained_on": a.data.display().to_string(), "device": a.device.name() }),
     )?;
+    let (t, acc) = tactile_detect::training::calibrate(&a.out, &data, &val, &dev)?;
     println!(
-        "best epoch {} of {}: validation loss {:.4}, accuracy {:.4}; {:.0} s; model in {}",
+        "best epoch {} of {}: validation loss {:.4}, accuracy {:.4} at threshold 0.5, {acc:.4} at the chosen {t:.2}; {:.0} s; model in {}",
         s.best_epoch,
         s.epochs_run,
         s.best_val_loss,

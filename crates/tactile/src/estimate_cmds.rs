@@ -454,7 +454,11 @@ fn regression_table(
 ) -> Result<String> {
     let mlp = format!(
         "MLP {}",
-        hidden.iter().map(usize::to_string).collect::<Vec<_>>().join("-")
+        hidden
+            .iter()
+            .map(usize::to_string)
+            .collect::<Vec<_>>()
+            .join("-")
     );
     use tactile_estimate::classical;
     let mut md = format!(

@@ -1,0 +1,142 @@
+#![allow(clippy::unwrap_used)]
+//! Paper B's shipped detector and segmenter on frames they were never meant
+//! to see: each case has a defined outcome (no tendon, an empty mask, no
+//! direction, a resize, or an error naming the file), never a panic.
+
+use std::path::{Path, PathBuf};
+
+use burn::tensor::Device;
+use tactile_rs::core::image_io::{RgbImage, rgb_image, save_rgb_png};
+use tactile_rs::detect::TendonDetector;
+use tactile_rs::segment::{NoDirection, TendonSegmenter};
+use tactile_rs::synth::VisuotactileConfig;
+use tactile_rs::synth::visuotactile::sample;
+
+fn models() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("models")
+}
+
+fn detector() -> TendonDetector {
+    TendonDetector::load(models().join("detector"), &Device::flex()).unwrap()
+}
+
+fn segmenter() -> TendonSegmenter {
+    TendonSegmenter::load(models().join("segmenter"), &Device::flex()).unwrap()
+}
+
+fn solid(w: usize, h: usize, rgb: [u8; 3]) -> RgbImage {
+    rgb_image(w, h, (0..w * h).flat_map(|_| rgb).collect()).unwrap()
+}
+
+/// Frame `frame` of sequence `seq` of the virtual sensor (640 x 360).
+fn virtual_frame(seed: u64, seq: u64, frame: usize) -> (RgbImage, bool) {
+    let cfg = VisuotactileConfig::default();
+    let (_, f) = sample(&cfg, seed, seq, frame);
+    (rgb_image(f.width, f.height, f.rgb).unwrap(), f.tendon)
+}
+
+#[test]
+fn blank_frames_show_no_tendon() {
+    let det = detector();
+    let seg = segmenter();
+    for (name, img) in [
+        ("black", solid(640, 360, [0, 0, 0])),
+        ("saturated", solid(640, 360, [255, 255, 255])),
+        ("single colour", solid(640, 360, [40, 200, 90])),
+        ("1x1", solid(1, 1, [128, 128, 128])),
+    ] {
+        let p = det.probability(&img).unwrap();
+        assert!(!det.is_tendon(p), "{name}: p = {p}");
+        // Even when asked, the segmenter finds nothing to point along.
+        let t = seg.segment(&img).unwrap();
+        assert!(
+            t.direction.is_err() || t.region.area() == 0,
+            "{name}: {t:?}"
+        );
+    }
+}
+
+#[test]
+fn glare_only_frames_before_contact_show_no_tendon() {
+    let det = detector();
+    // Frame 0 of every sequence is before first touch: skin at rest, only
+    // the LED glare in view.
+    for seq in 0..8 {
+        let (img, tendon) = virtual_frame(901, seq, 0);
+        assert!(!tendon);
+        let p = det.probability(&img).unwrap();
+        assert!(!det.is_tendon(p), "sequence {seq}: p = {p}");
+    }
+}
+
+#[test]
+fn other_sizes_are_resized_and_still_detected() {
+    let det = detector();
+    // The middle of a palpation: full press. Find a tendon frame.
+    let (img, _) = (0..20)
+        .map(|s| virtual_frame(902, s, 12))
+        .find(|(_, t)| *t)
+        .unwrap();
+    let p_native = det.probability(&img).unwrap();
+    assert!(det.is_tendon(p_native), "{p_native}");
+    // The same frame at another size and aspect: resized, same verdict.
+    let small = tactile_rs::preprocess::visuo::resize_rgb(&img, 213, 120).unwrap();
+    let bytes: Vec<u8> = small
+        .data
+        .iter()
+        .map(|&v| (v * 255.0).round() as u8)
+        .collect();
+    let small = rgb_image(213, 120, bytes).unwrap();
+    assert!(det.is_tendon(det.probability(&small).unwrap()));
+    let seg = segmenter();
+    assert!(seg.segment(&small).unwrap().region.area() > 0);
+}
+
+#[test]
+fn wrong_channel_counts_are_converted_or_rejected_naming_the_file() {
+    let det = detector();
+    let dir = tempfile::tempdir().unwrap();
+    // Greyscale is expanded to RGB.
+    let grey = dir.path().join("grey.png");
+    image::GrayImage::from_pixel(64, 36, image::Luma([90]))
+        .save(&grey)
+        .unwrap();
+    assert!(!det.is_tendon(det.probability_of_file(&grey).unwrap()));
+    // RGBA and 16-bit are refused, naming the file and the format.
+    let rgba = dir.path().join("rgba.png");
+    image::RgbaImage::from_pixel(64, 36, image::Rgba([1, 2, 3, 4]))
+        .save(&rgba)
+        .unwrap();
+    let e = det.probability_of_file(&rgba).unwrap_err().to_string();
+    assert!(e.contains("rgba.png") && e.contains("RGBA"), "{e}");
+    let deep = dir.path().join("deep.png");
+    image::ImageBuffer::<image::Rgb<u16>, Vec<u16>>::from_pixel(8, 8, image::Rgb([1, 2, 3]))
+        .save(&deep)
+        .unwrap();
+    let e = det.probability_of_file(&deep).unwrap_err().to_string();
+    assert!(e.contains("deep.png") && e.contains("16-bit"), "{e}");
+    // A truncated PNG is an error naming the file, not a panic.
+    let (img, _) = virtual_frame(903, 0, 10);
+    let good = dir.path().join("good.png");
+    save_rgb_png(&good, img.width(), img.height(), img.as_slice()).unwrap();
+    let bytes = std::fs::read(&good).unwrap();
+    let cut = dir.path().join("cut.png");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let e = det.probability_of_file(&cut).unwrap_err().to_string();
+    assert!(e.contains("cut.png"), "{e}");
+    let seg = segmenter();
+    let e = seg.segment_file(&cut).unwrap_err().to_string();
+    assert!(e.contains("cut.png"), "{e}");
+}
+
+#[test]
+fn an_empty_mask_has_no_direction() {
+    use tactile_rs::segment::{PostprocessConfig, TendonMask, postprocess};
+    let m = TendonMask {
+        width: 32,
+        height: 32,
+        pixels: vec![false; 1024],
+    };
+    let t = postprocess(&m, &PostprocessConfig::default()).unwrap();
+    assert_eq!(t.direction, Err(NoDirection::EmptyMask));
+}
