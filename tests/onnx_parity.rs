@@ -210,3 +210,41 @@ fn segmenter_matches_onnxruntime() {
         )
     });
 }
+
+#[test]
+fn shipped_detector_and_segmenter_match_onnxruntime() {
+    use tactile_rs::detect::DetectorArtifact;
+    use tactile_rs::onnx::{export_detector, export_segmenter};
+    use tactile_rs::segment::SegmenterArtifact;
+    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    let det = models.join("detector");
+    let (art, m) = DetectorArtifact::load(&det, &Device::flex()).unwrap();
+    let [w, h] = art.detector.input_size;
+    let bytes = export_detector(&m, [w, h]).unwrap();
+    let shape = [2usize, 3, h, w];
+    let data = frames(shape.iter().product(), 3);
+    check("shipped-detector", &bytes, &shape, &data, |d| {
+        let (_, m) = DetectorArtifact::load(&det, d).unwrap();
+        burn_out(
+            |x| m.forward(x).into_data().try_to_vec::<f32>().unwrap(),
+            &shape,
+            &data,
+            d,
+        )
+    });
+    let seg = models.join("segmenter");
+    let (art, m) = SegmenterArtifact::load(&seg, &Device::flex()).unwrap();
+    let s = art.unet.side;
+    let bytes = export_segmenter(&m, s).unwrap();
+    let shape = [2usize, 3, s, s];
+    let data = frames(shape.iter().product(), 4);
+    check("shipped-segmenter", &bytes, &shape, &data, |d| {
+        let (_, m) = SegmenterArtifact::load(&seg, d).unwrap();
+        burn_out(
+            |x| m.forward(x).into_data().try_to_vec::<f32>().unwrap(),
+            &shape,
+            &data,
+            d,
+        )
+    });
+}

@@ -350,6 +350,30 @@ pub fn encode(model: &Path, data: &Path, out: &Path, device: DeviceKind) -> Resu
 
 pub fn export(model: &Path, out: &Path, part: &str) -> Result<()> {
     let dev = DeviceKind::Flex.device();
+    // Paper B's models: the folder says which (the input is normalised
+    // with the statistics in its JSON).
+    if model.join(tactile_detect::CONFIG_FILE).is_file() {
+        let (art, m) = tactile_detect::DetectorArtifact::load(model, &dev)?;
+        let bytes = tactile_onnx::export_detector(&m, art.detector.input_size)?;
+        tactile_onnx::export::save_onnx(out, &bytes)?;
+        println!(
+            "detector exported to {} ({} bytes)",
+            out.display(),
+            bytes.len()
+        );
+        return Ok(());
+    }
+    if model.join(tactile_segment::CONFIG_FILE).is_file() {
+        let (art, m) = tactile_segment::SegmenterArtifact::load(model, &dev)?;
+        let bytes = tactile_onnx::export_segmenter(&m, art.unet.side)?;
+        tactile_onnx::export::save_onnx(out, &bytes)?;
+        println!(
+            "segmenter exported to {} ({} bytes)",
+            out.display(),
+            bytes.len()
+        );
+        return Ok(());
+    }
     let (art, cae) = CaeArtifact::load(model, &dev)?;
     let bytes = match part {
         "encoder" => tactile_onnx::export_cae_encoder(&cae.encoder, art.cae.input_px)?,
