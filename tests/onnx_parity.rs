@@ -211,18 +211,36 @@ fn segmenter_matches_onnxruntime() {
     });
 }
 
+/// Two virtual palpation frames (before contact, full press) at `w x h`.
+fn palpation_frames(w: usize, h: usize) -> Vec<tactile_rs::preprocess::visuo::FloatImage> {
+    use tactile_rs::synth::VisuotactileConfig;
+    use tactile_rs::synth::visuotactile::sample;
+    [0usize, 12]
+        .iter()
+        .map(|&f| {
+            let (_, fr) = sample(&VisuotactileConfig::default(), 31, 2, f);
+            let img = tactile_rs::core::image_io::rgb_image(fr.width, fr.height, fr.rgb).unwrap();
+            tactile_rs::preprocess::visuo::resize_rgb(&img, w, h).unwrap()
+        })
+        .collect()
+}
+
 #[test]
 fn shipped_detector_and_segmenter_match_onnxruntime() {
     use tactile_rs::detect::DetectorArtifact;
     use tactile_rs::onnx::{export_detector, export_segmenter};
     use tactile_rs::segment::SegmenterArtifact;
     let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    // Real inputs: virtual frames normalised with each model's statistics.
     let det = models.join("detector");
     let (art, m) = DetectorArtifact::load(&det, &Device::flex()).unwrap();
     let [w, h] = art.detector.input_size;
     let bytes = export_detector(&m, [w, h]).unwrap();
     let shape = [2usize, 3, h, w];
-    let data = frames(shape.iter().product(), 3);
+    let data: Vec<f32> = palpation_frames(w, h)
+        .iter()
+        .flat_map(|f| art.stats.to_chw(f).unwrap())
+        .collect();
     check("shipped-detector", &bytes, &shape, &data, |d| {
         let (_, m) = DetectorArtifact::load(&det, d).unwrap();
         burn_out(
@@ -237,7 +255,12 @@ fn shipped_detector_and_segmenter_match_onnxruntime() {
     let s = art.unet.side;
     let bytes = export_segmenter(&m, s).unwrap();
     let shape = [2usize, 3, s, s];
-    let data = frames(shape.iter().product(), 4);
+    let win = art.window();
+    let (sw, sh) = win.scaled_size(640, 360);
+    let data: Vec<f32> = palpation_frames(sw, sh)
+        .iter()
+        .flat_map(|f| art.stats.to_chw(&win.cut(f, 0.0)).unwrap())
+        .collect();
     check("shipped-segmenter", &bytes, &shape, &data, |d| {
         let (_, m) = SegmenterArtifact::load(&seg, d).unwrap();
         burn_out(
