@@ -6,6 +6,7 @@
 pub use datasets_synth as synth;
 pub use tactile_cae as cae;
 pub use tactile_core as core;
+pub use tactile_depth as depth;
 pub use tactile_detect as detect;
 pub use tactile_estimate as estimate;
 pub use tactile_onnx as onnx;

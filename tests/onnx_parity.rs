@@ -271,3 +271,28 @@ fn shipped_detector_and_segmenter_match_onnxruntime() {
         )
     });
 }
+
+#[test]
+fn densenet121_depth_network_matches_onnxruntime() {
+    use tactile_rs::depth::{DenseNetConfig, DepthNetConfig, HeadKind};
+    use tactile_rs::onnx::export_depth;
+    // The real DenseNet-121 encoder (random weights) with the custom head
+    // and the mask channel, at a small input to keep the test quick.
+    let cfg = DepthNetConfig::new(DenseNetConfig::preset("densenet121").unwrap(), [64, 64])
+        .with_in_channels(4)
+        .with_head(HeadKind::Custom)
+        .with_decoder_width(32);
+    let make = frozen_any("densenet121", |d| cfg.init(d).unwrap());
+    let bytes = export_depth(&make(&Device::flex()), 4, [64, 64]).unwrap();
+    let shape = [1usize, 4, 64, 64];
+    let data = frames(shape.iter().product(), 21);
+    check("depth-densenet121", &bytes, &shape, &data, |d| {
+        let m = make(d);
+        burn_out(
+            |x| m.forward(x).into_data().try_to_vec::<f32>().unwrap(),
+            &shape,
+            &data,
+            d,
+        )
+    });
+}

@@ -10,7 +10,7 @@
 //! so datasets are byte-identical on every machine, render in parallel, and
 //! can be extended without changing earlier samples.
 
-pub mod npy;
+pub use tactile_core::npy;
 pub mod preview;
 pub mod raster;
 pub mod rng;

@@ -13,6 +13,7 @@ pub mod io;
 pub mod metrics;
 pub mod module_io;
 pub mod nn;
+pub mod npy;
 pub mod optim;
 pub mod plot;
 pub mod train;

@@ -112,6 +112,28 @@ mod tests {
     }
 
     #[test]
+    fn ssim_of_flat_equal_and_different_maps() {
+        let flat = vec![15.0f32; 100];
+        assert_eq!(ssim(&flat, &flat, 10, 10, 6.0), 1.0);
+        let other = vec![15.5f32; 100];
+        let s = ssim(&flat, &other, 10, 10, 6.0);
+        assert!(s.is_finite() && s < 1.0 && s > 0.0, "{s}");
+        let ramp: Vec<f32> = (0..100).map(|i| (i % 10) as f32).collect();
+        assert!((ssim(&ramp, &ramp, 10, 10, 9.0) - 1.0).abs() < 1e-12);
+        let neg: Vec<f32> = ramp.iter().map(|v| 9.0 - v).collect();
+        assert!(ssim(&ramp, &neg, 10, 10, 9.0) < 0.0);
+    }
+
+    #[test]
+    fn masked_errors() {
+        let (p, t) = ([1.0f32, 2.0, 4.0], [1.0f32, 1.0, 1.0]);
+        assert_eq!(masked_mae(&p, &t, None), Some(4.0 / 3.0));
+        assert_eq!(masked_mae(&p, &t, Some(&[false, true, false])), Some(1.0));
+        assert_eq!(masked_mae(&p, &t, Some(&[false; 3])), None);
+        assert_eq!(masked_rmse(&p, &t, Some(&[false, false, true])), Some(3.0));
+    }
+
+    #[test]
     fn scales_never_blow_a_nearly_constant_column_up() {
         // A pixel lit in one training frame of thousands: std 1e-4.
         assert_eq!(
@@ -176,6 +198,72 @@ pub fn iou(pred: &[bool], truth: &[bool]) -> f64 {
         1.0
     } else {
         inter as f64 / union as f64
+    }
+}
+
+/// Mean absolute error over the pixels where `mask` holds (all when
+/// `None`); `None` when no pixel counts.
+pub fn masked_mae(pred: &[f32], truth: &[f32], mask: Option<&[bool]>) -> Option<f64> {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (i, (&p, &t)) in pred.iter().zip(truth).enumerate() {
+        if mask.is_none_or(|m| m[i]) {
+            sum += (p as f64 - t as f64).abs();
+            n += 1;
+        }
+    }
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// Root mean square error over the pixels where `mask` holds.
+pub fn masked_rmse(pred: &[f32], truth: &[f32], mask: Option<&[bool]>) -> Option<f64> {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (i, (&p, &t)) in pred.iter().zip(truth).enumerate() {
+        if mask.is_none_or(|m| m[i]) {
+            sum += (p as f64 - t as f64).powi(2);
+            n += 1;
+        }
+    }
+    (n > 0).then(|| (sum / n as f64).sqrt())
+}
+
+/// Side of the SSIM window.
+pub const SSIM_WINDOW: usize = 7;
+
+/// Mean structural similarity (Wang et al. 2004) of two `w x h` maps over
+/// all 7x7 windows, with the paper's constants `C1 = (0.01 L)^2` and
+/// `C2 = (0.03 L)^2` for a dynamic range `L`: two flat maps compare
+/// without dividing by zero (equal ones give exactly 1).
+pub fn ssim(a: &[f32], b: &[f32], w: usize, h: usize, range: f64) -> f64 {
+    let k = SSIM_WINDOW.min(w).min(h).max(1);
+    let (c1, c2) = ((0.01 * range).powi(2), (0.03 * range).powi(2));
+    let n = (k * k) as f64;
+    let (mut total, mut count) = (0.0, 0usize);
+    for y0 in 0..=h.saturating_sub(k) {
+        for x0 in 0..=w.saturating_sub(k) {
+            let (mut sa, mut sb, mut saa, mut sbb, mut sab) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            for y in y0..y0 + k {
+                for x in x0..x0 + k {
+                    let (p, q) = (a[y * w + x] as f64, b[y * w + x] as f64);
+                    sa += p;
+                    sb += q;
+                    saa += p * p;
+                    sbb += q * q;
+                    sab += p * q;
+                }
+            }
+            let (ma, mb) = (sa / n, sb / n);
+            let va = (saa / n - ma * ma).max(0.0);
+            let vb = (sbb / n - mb * mb).max(0.0);
+            let cov = sab / n - ma * mb;
+            total += ((2.0 * ma * mb + c1) * (2.0 * cov + c2))
+                / ((ma * ma + mb * mb + c1) * (va + vb + c2));
+            count += 1;
+        }
+    }
+    if count == 0 {
+        1.0
+    } else {
+        total / count as f64
     }
 }
 

@@ -51,6 +51,49 @@ pub fn dice_loss_with_logits(logits: Tensor<4>, targets: Tensor<4>) -> Tensor<1>
     dice.neg().add_scalar(1.0).mean()
 }
 
+/// Mean absolute error.
+pub fn l1_loss(pred: Tensor<4>, target: Tensor<4>) -> Tensor<1> {
+    (pred - target).abs().mean()
+}
+
+/// Mean squared error.
+pub fn mse_loss(pred: Tensor<4>, target: Tensor<4>) -> Tensor<1> {
+    (pred - target).square().mean()
+}
+
+/// Mean absolute difference of the horizontal and vertical finite
+/// differences (DenseTact's gradient term): edges in the right place.
+pub fn gradient_loss(pred: Tensor<4>, target: Tensor<4>) -> Tensor<1> {
+    let [n, c, h, w] = pred.dims();
+    let dx = |t: Tensor<4>| {
+        t.clone().slice([0..n, 0..c, 0..h, 1..w]) - t.slice([0..n, 0..c, 0..h, 0..w - 1])
+    };
+    let dy = |t: Tensor<4>| {
+        t.clone().slice([0..n, 0..c, 1..h, 0..w]) - t.slice([0..n, 0..c, 0..h - 1, 0..w])
+    };
+    (dx(pred.clone()) - dx(target.clone())).abs().mean() + (dy(pred) - dy(target)).abs().mean()
+}
+
+/// `(1 - SSIM) / 2` over 7x7 uniform windows, constants `(0.01 L)^2` and
+/// `(0.03 L)^2` for a dynamic range `L` in the maps' units (the same SSIM
+/// as [`crate::metrics::ssim`], differentiable).
+pub fn ssim_loss(pred: Tensor<4>, target: Tensor<4>, range: f64) -> Tensor<1> {
+    let k = crate::metrics::SSIM_WINDOW;
+    let avg = burn::nn::pool::AvgPool2dConfig::new([k, k])
+        .with_strides([1, 1])
+        .init();
+    let pool = |t: Tensor<4>| avg.forward(t);
+    let (c1, c2) = ((0.01 * range).powi(2), (0.03 * range).powi(2));
+    let (ma, mb) = (pool(pred.clone()), pool(target.clone()));
+    let va = pool(pred.clone().square()) - ma.clone().square();
+    let vb = pool(target.clone().square()) - mb.clone().square();
+    let cov = pool(pred * target) - ma.clone() * mb.clone();
+    let num = (ma.clone() * mb.clone()).mul_scalar(2.0).add_scalar(c1)
+        * cov.mul_scalar(2.0).add_scalar(c2);
+    let den = (ma.square() + mb.square()).add_scalar(c1) * (va + vb).add_scalar(c2);
+    (num / den).mean().neg().add_scalar(1.0).div_scalar(2.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -69,6 +112,37 @@ mod tests {
         assert!(v[0].abs() < 1e-6 && v[1].abs() < 1e-6);
         assert!((v[2] - std::f32::consts::LN_2).abs() < 1e-6);
         assert!((v[3] - (1.0 + 2f32.exp()).ln()).abs() < 1e-5);
+    }
+
+    #[test]
+    fn depth_losses_vanish_on_equal_maps_and_ssim_agrees_with_the_metric() {
+        let device = Device::flex();
+        let w = 12;
+        let a: Vec<f32> = (0..w * w)
+            .map(|i| ((i * 37) % 11) as f32 * 0.1 + 15.0)
+            .collect();
+        let b: Vec<f32> = a
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + 0.05 * (i % 3) as f32)
+            .collect();
+        let t = |v: &Vec<f32>| {
+            Tensor::<4>::from_data(
+                burn::tensor::TensorData::new(v.clone(), [1, 1, w, w]),
+                &device,
+            )
+        };
+        let zero = |l: Tensor<1>| -> f32 { l.into_scalar() };
+        assert_eq!(zero(l1_loss(t(&a), t(&a))), 0.0);
+        assert_eq!(zero(mse_loss(t(&a), t(&a))), 0.0);
+        assert_eq!(zero(gradient_loss(t(&a), t(&a))), 0.0);
+        assert!(zero(ssim_loss(t(&a), t(&a), 6.0)).abs() < 1e-5);
+        let l: f32 = ssim_loss(t(&a), t(&b), 6.0).into_scalar();
+        let m = crate::metrics::ssim(&a, &b, w, w, 6.0);
+        assert!((l as f64 - (1.0 - m) / 2.0).abs() < 1e-4, "{l} vs {m}");
+        // Flat maps: finite, no division by zero.
+        let flat = vec![15.0f32; w * w];
+        assert!(zero(ssim_loss(t(&flat), t(&flat), 6.0)).is_finite());
     }
 
     #[test]

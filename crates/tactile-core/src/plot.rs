@@ -224,3 +224,56 @@ pub fn draw_marks(rgb: &mut [u8], width: usize, height: usize, marks: &[Mark]) -
     };
     draw().map_err(|e| Error::Invalid(format!("cannot draw overlay: {e}")))
 }
+
+/// A perceptually ordered colour (dark blue -> teal -> yellow, close to
+/// viridis) for `t` in [0, 1].
+pub fn colour(t: f64) -> [u8; 3] {
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    } * 4.0;
+    let i = (t.floor() as usize).min(3);
+    let f = t - i as f64;
+    let mut out = [0u8; 3];
+    for (c, o) in out.iter_mut().enumerate() {
+        *o = (STOPS[i][c] * (1.0 - f) + STOPS[i + 1][c] * f).round() as u8;
+    }
+    out
+}
+
+/// Maps of the same size side by side as heat maps on one shared colour
+/// scale (min to max over all of them), 4 px apart, saved atomically.
+pub fn heat_maps(path: impl AsRef<Path>, maps: &[&[f32]], (w, h): (usize, usize)) -> Result<()> {
+    if maps.is_empty() || maps.iter().any(|m| m.len() != w * h) {
+        return Err(Error::Invalid(format!("heat maps must all be {w}x{h}")));
+    }
+    let (lo, hi) = maps
+        .iter()
+        .flat_map(|m| m.iter())
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v as f64), b.max(v as f64))
+        });
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    let gap = 4;
+    let width = maps.len() * w + (maps.len() - 1) * gap;
+    let mut rgb = vec![255u8; width * h * 3];
+    for (k, m) in maps.iter().enumerate() {
+        for y in 0..h {
+            for x in 0..w {
+                let c = colour((m[y * w + x] as f64 - lo) / span);
+                let o = (y * width + k * (w + gap) + x) * 3;
+                rgb[o..o + 3].copy_from_slice(&c);
+            }
+        }
+    }
+    crate::image_io::save_rgb_png(path, width, h, &rgb)
+}

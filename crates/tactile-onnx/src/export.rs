@@ -65,6 +65,20 @@ pub fn export_segmenter(model: &tactile_segment::UNet, side: usize) -> Result<Ve
     })
 }
 
+/// The depth network: `[N, C, H, W]` normalised frames (C = 3, or 4 with
+/// the mask) -> `[N, 1, H, W]` depth in model units.
+pub fn export_depth(
+    model: &tactile_depth::DepthNet,
+    channels: usize,
+    [w, h]: [usize; 2],
+) -> Result<Vec<u8>> {
+    export_module_batch_dynamic(
+        model,
+        [1, channels, h, w],
+        |m: &tactile_depth::DepthNet, x| m.forward(x),
+    )
+}
+
 /// Write ONNX bytes atomically.
 pub fn save_onnx(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     tactile_core::io::write_atomic(path, bytes)

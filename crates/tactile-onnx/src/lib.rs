@@ -6,6 +6,7 @@ pub mod export;
 pub mod runtime;
 
 pub use export::{
-    export_cae, export_cae_encoder, export_detector, export_module_batch_dynamic, export_segmenter,
+    export_cae, export_cae_encoder, export_depth, export_detector, export_module_batch_dynamic,
+    export_segmenter,
 };
 pub use runtime::{OrtModel, onnx_full_check, ort_library_path};

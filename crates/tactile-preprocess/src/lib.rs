@@ -374,21 +374,56 @@ pub fn resize_area(img: &GreyImage, width: usize, height: usize) -> Result<Vec<f
 
 /// Area-average resize of interleaved 8-bit pixels (`channels` per pixel)
 /// to `width x height`, values scaled to [0, 1], still interleaved.
-///
-/// Separable: each output column (row) is a weighted mean of the input
-/// columns (rows) its footprint overlaps, weights = overlap length. Only
-/// shrinks (each output pixel must cover at least one input pixel).
 pub fn resize_area_interleaved(
     src: &[u8],
     (w, h, c): (usize, usize, usize),
     width: usize,
     height: usize,
 ) -> Result<Vec<f32>> {
-    if width == 0 || height == 0 || width > w || height > h || src.len() != w * h * c {
+    check_area(src.len(), (w, h, c), width, height)?;
+    Ok(area_core(|i| src[i] as f64, (w, h, c), width, height)
+        .into_iter()
+        .map(|v| (v / 255.0).clamp(0.0, 1.0) as f32)
+        .collect())
+}
+
+/// Area-average resize of a float map (a depth map), `w x h` -> `width x height`.
+pub fn resize_area_f32(
+    src: &[f32],
+    (w, h): (usize, usize),
+    width: usize,
+    height: usize,
+) -> Result<Vec<f32>> {
+    check_area(src.len(), (w, h, 1), width, height)?;
+    Ok(area_core(|i| src[i] as f64, (w, h, 1), width, height)
+        .into_iter()
+        .map(|v| v as f32)
+        .collect())
+}
+
+fn check_area(
+    len: usize,
+    (w, h, c): (usize, usize, usize),
+    width: usize,
+    height: usize,
+) -> Result<()> {
+    if width == 0 || height == 0 || width > w || height > h || len != w * h * c {
         return Err(Error::Invalid(format!(
             "area resize {w}x{h} -> {width}x{height}: can only shrink to a non-empty size"
         )));
     }
+    Ok(())
+}
+
+/// Separable area averaging: each output column (row) is a weighted mean
+/// of the input columns (rows) its footprint overlaps, weights = overlap
+/// length. Only shrinks (checked by the callers).
+fn area_core(
+    src: impl Fn(usize) -> f64,
+    (w, h, c): (usize, usize, usize),
+    width: usize,
+    height: usize,
+) -> Vec<f64> {
     // (first input index, weights) per output index; weights sum to 1.
     let taps = |n_in: usize, n_out: usize| -> Vec<(usize, Vec<f64>)> {
         let scale = n_in as f64 / n_out as f64;
@@ -409,29 +444,27 @@ pub fn resize_area_interleaved(
     // Rows first: h x width x c.
     let mut rows = vec![0f64; h * width * c];
     for y in 0..h {
-        let line = &src[y * w * c..(y + 1) * w * c];
         for (ox, (first, wts)) in tx.iter().enumerate() {
             for ch in 0..c {
                 rows[(y * width + ox) * c + ch] = wts
                     .iter()
                     .enumerate()
-                    .map(|(k, wt)| wt * line[(first + k) * c + ch] as f64)
+                    .map(|(k, wt)| wt * src((y * w + first + k) * c + ch))
                     .sum();
             }
         }
     }
-    let mut out = vec![0f32; width * height * c];
+    let mut out = vec![0f64; width * height * c];
     for (oy, (first, wts)) in ty.iter().enumerate() {
         for i in 0..width * c {
-            let v: f64 = wts
+            out[oy * width * c + i] = wts
                 .iter()
                 .enumerate()
                 .map(|(k, wt)| wt * rows[(first + k) * width * c + i])
                 .sum();
-            out[oy * width * c + i] = (v / 255.0).clamp(0.0, 1.0) as f32;
         }
     }
-    Ok(out)
+    out
 }
 
 /// `round(v/255 + offset)` with NumPy's round-half-to-even, per pixel.

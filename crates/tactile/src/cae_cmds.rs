@@ -374,6 +374,17 @@ pub fn export(model: &Path, out: &Path, part: &str) -> Result<()> {
         );
         return Ok(());
     }
+    if model.join(tactile_depth::CONFIG_FILE).is_file() {
+        let (art, m) = tactile_depth::DepthArtifact::load(model, &dev)?;
+        let bytes = tactile_onnx::export_depth(&m, art.net.in_channels, art.net.input_size)?;
+        tactile_onnx::export::save_onnx(out, &bytes)?;
+        println!(
+            "depth network exported to {} ({} bytes)",
+            out.display(),
+            bytes.len()
+        );
+        return Ok(());
+    }
     let (art, cae) = CaeArtifact::load(model, &dev)?;
     let bytes = match part {
         "encoder" => tactile_onnx::export_cae_encoder(&cae.encoder, art.cae.input_px)?,

@@ -3,6 +3,7 @@
 mod bench;
 mod bench_b;
 mod cae_cmds;
+mod depth_cmds;
 mod detect_cmds;
 mod estimate_cmds;
 mod eval_cmds;
@@ -126,6 +127,8 @@ enum TrainCmd {
     Detector(detect_cmds::TrainDetectorArgs),
     /// Paper B's U-Net tendon segmenter on visuo-tactile tendon frames.
     Segmenter(segment_cmds::TrainSegmenterArgs),
+    /// Paper B's depth U-Net with a DenseNet encoder.
+    Depth(depth_cmds::TrainDepthArgs),
 }
 
 #[derive(Subcommand)]
@@ -134,6 +137,8 @@ enum EvalCmd {
     Detector(detect_cmds::EvalDetectorArgs),
     /// Tendon segmenter: IoU per tendon path, direction error of the post-processed mask.
     Segmenter(segment_cmds::EvalSegmenterArgs),
+    /// Depth network: MAE (window, tendon mask), RMSE, SSIM; optional heat maps.
+    Depth(depth_cmds::EvalDepthArgs),
 }
 
 #[derive(Subcommand)]
@@ -146,6 +151,8 @@ enum BenchCmd {
     Detector(bench_b::BenchModelsArgs),
     /// Segmenters of a sweep: IoU and direction error against latency per runtime.
     Segmenter(bench_b::BenchModelsArgs),
+    /// Depth networks of a sweep or ablation: MAE, SSIM against latency per runtime.
+    Depth(bench_b::BenchModelsArgs),
 }
 
 fn main() -> Result<()> {
@@ -178,6 +185,12 @@ fn main() -> Result<()> {
         Command::Eval {
             model: EvalCmd::Segmenter(a),
         } => segment_cmds::eval(a),
+        Command::Train {
+            model: TrainCmd::Depth(a),
+        } => depth_cmds::train(a),
+        Command::Eval {
+            model: EvalCmd::Depth(a),
+        } => depth_cmds::eval(a),
         Command::Encode {
             model,
             data,
@@ -202,6 +215,9 @@ fn main() -> Result<()> {
         Command::Bench {
             model: BenchCmd::Segmenter(a),
         } => bench_b::bench_segmenter(a),
+        Command::Bench {
+            model: BenchCmd::Depth(a),
+        } => bench_b::bench_depth(a),
         Command::Demo {
             model,
             data,

@@ -2,9 +2,9 @@
 
 use std::path::Path;
 
+use crate::{Error, Result};
 use ndarray::Array2;
 use ndarray_npy::{ReadNpyExt, WriteNpyExt};
-use tactile_core::{Error, Result};
 
 /// Write a depth map atomically; refuses non-finite values.
 pub fn write_depth_npy(
@@ -24,7 +24,7 @@ pub fn write_depth_npy(
     }
     let a = Array2::from_shape_vec((height, width), depth_m.to_vec())
         .map_err(|e| Error::shape("depth map", format!("{height}x{width}"), e.to_string()))?;
-    tactile_core::io::write_atomic_with(path, |w| a.write_npy(w).map_err(std::io::Error::other))
+    crate::io::write_atomic_with(path, |w| a.write_npy(w).map_err(std::io::Error::other))
 }
 
 /// Read a depth map: `(width, height, metres)`; names the file on any problem

@@ -1,0 +1,144 @@
+//! Visuo-tactile frames with their depth maps (and tendon masks) at the
+//! network's input size.
+
+use burn::tensor::{Device, Tensor, TensorData};
+use rayon::prelude::*;
+use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::{Error, Result};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage, load_frame, resize_grey};
+
+/// One sample at the input size.
+pub struct DepthSample {
+    /// `H x W x 3` bytes.
+    pub rgb: Vec<u8>,
+    /// Camera-to-skin distance, millimetres, `H x W`.
+    pub depth_mm: Vec<f32>,
+    pub mask: Vec<bool>,
+    pub tendon: bool,
+    /// The peak press of the frame, mm (for reporting the extremes).
+    pub press_mm: Option<f64>,
+}
+
+/// Samples of a dataset, with the sensing window at the input size.
+pub struct DepthSet {
+    pub width: usize,
+    pub height: usize,
+    pub samples: Vec<DepthSample>,
+    /// Pixels inside the ellipse inscribed in the frame (the sensing window).
+    pub window: Vec<bool>,
+}
+
+/// The inscribed ellipse of a `w x h` image.
+pub fn window_mask(w: usize, h: usize) -> Vec<bool> {
+    let (cx, cy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+    let (rx, ry) = (w as f64 / 2.0, h as f64 / 2.0);
+    (0..w * h)
+        .map(|i| {
+            let (u, v) = ((i % w) as f64, (i / w) as f64);
+            ((u - cx) / rx).powi(2) + ((v - cy) / ry).powi(2) <= 1.0
+        })
+        .collect()
+}
+
+/// Read a depth map (metres on disk) and resize it to `w x h` in mm; any
+/// NaN, infinity, wrong dtype or shape is an error naming the file (and the
+/// pixel).
+pub fn load_depth_mm(path: &std::path::Path, w: usize, h: usize) -> Result<Vec<f32>> {
+    let (dw, dh, m) = tactile_core::npy::read_depth_npy(path)?;
+    let mm: Vec<f32> = m.iter().map(|v| v * 1000.0).collect();
+    tactile_preprocess::resize_area_f32(&mm, (dw, dh), w, h)
+        .map_err(|e| Error::dataset(path, None, e.to_string()))
+}
+
+impl DepthSet {
+    /// Load `rows` of a visuo-tactile dataset at `w x h`.
+    pub fn from_dataset(ds: &Dataset, rows: &[usize], [w, h]: [usize; 2]) -> Result<Self> {
+        if ds.manifest.kind != DatasetKind::Visuotactile {
+            return Err(Error::dataset(
+                ds.root.join("manifest.json"),
+                None,
+                "kind is not 'visuotactile': depth reads visuo-tactile datasets",
+            ));
+        }
+        let samples = rows
+            .par_iter()
+            .map(|&i| -> Result<DepthSample> {
+                let frame = load_frame(ds.path_of(i, "file")?, w, h)?;
+                let depth_mm = load_depth_mm(&ds.path_of(i, "depth")?, w, h)?;
+                let mpath = ds.path_of(i, "mask")?;
+                let m = tactile_core::image_io::load_grey(&mpath)?;
+                let mask = resize_grey(&m, w, h)
+                    .map_err(|e| Error::image(&mpath, e.to_string()))?
+                    .data
+                    .iter()
+                    .map(|&v| v >= 0.5)
+                    .collect();
+                Ok(DepthSample {
+                    rgb: frame
+                        .data
+                        .iter()
+                        .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
+                        .collect(),
+                    depth_mm,
+                    mask,
+                    tendon: ds.number_opt(i, "tendon")? == Some(1.0),
+                    press_mm: ds.number_opt(i, "press_mm")?,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Self {
+            width: w,
+            height: h,
+            samples,
+            window: window_mask(w, h),
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    pub fn image(&self, i: usize) -> FloatImage {
+        FloatImage {
+            width: self.width,
+            height: self.height,
+            channels: 3,
+            data: self.samples[i]
+                .rgb
+                .iter()
+                .map(|&v| v as f32 / 255.0)
+                .collect(),
+        }
+    }
+
+    /// Inputs `[N, C, H, W]` (RGB normalised, plus the mask as 0/1 when
+    /// `with_mask`) and targets `[N, 1, H, W]` in model units.
+    pub fn batch(
+        &self,
+        idx: &[usize],
+        stats: &ChannelStats,
+        scale: &crate::DepthScale,
+        with_mask: bool,
+        device: &Device,
+    ) -> Result<(Tensor<4>, Tensor<4>)> {
+        let (w, h) = (self.width, self.height);
+        let c = 3 + with_mask as usize;
+        let mut x = Vec::with_capacity(idx.len() * c * w * h);
+        let mut y = Vec::with_capacity(idx.len() * w * h);
+        for &i in idx {
+            x.extend(stats.to_chw(&self.image(i))?);
+            if with_mask {
+                x.extend(self.samples[i].mask.iter().map(|&m| m as u8 as f32));
+            }
+            y.extend(self.samples[i].depth_mm.iter().map(|&d| scale.to_model(d)));
+        }
+        Ok((
+            Tensor::from_data(TensorData::new(x, [idx.len(), c, h, w]), device),
+            Tensor::from_data(TensorData::new(y, [idx.len(), 1, h, w]), device),
+        ))
+    }
+}

@@ -1,0 +1,371 @@
+//! The depth network of paper B: a DenseNet encoder (Huang et al. 2017:
+//! dense blocks of BN-ReLU-1x1 bottleneck and BN-ReLU-3x3 layers that each
+//! add `growth_rate` channels, transitions that compress and halve) with a
+//! U-Net decoder fed by skips from the stem and every dense block, and a
+//! 1x1 or a small custom head. The real `densenet121` and `densenet161`
+//! presets build, run and export; the small presets train on this machine.
+
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::conv::{Conv2d, Conv2dConfig};
+use burn::nn::interpolate::{Interpolate2d, Interpolate2dConfig, InterpolateMode};
+use burn::nn::pool::{AvgPool2d, AvgPool2dConfig, MaxPool2d, MaxPool2dConfig};
+use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d};
+use burn::tensor::activation::relu;
+use burn::tensor::{Device, Tensor};
+use serde::{Deserialize, Serialize};
+use tactile_core::{Error, Result};
+
+/// DenseNet hyper-parameters (torchvision's names).
+#[derive(Config, Debug, PartialEq)]
+pub struct DenseNetConfig {
+    /// Channels each dense layer adds.
+    pub growth_rate: usize,
+    /// Dense layers per block (four blocks).
+    pub block_config: Vec<usize>,
+    /// Channels of the stem convolution.
+    pub num_init_features: usize,
+    /// Bottleneck width, in multiples of the growth rate.
+    #[config(default = 4)]
+    pub bn_size: usize,
+    /// Fraction of channels a transition keeps.
+    #[config(default = 0.5)]
+    pub compression: f64,
+}
+
+impl DenseNetConfig {
+    /// A preset by name: `densenet121`, `densenet161` (the published
+    /// networks), or `tiny`, `small`, `medium` for this machine.
+    pub fn preset(name: &str) -> Result<Self> {
+        Ok(match name {
+            "densenet121" => Self::new(32, vec![6, 12, 24, 16], 64),
+            "densenet161" => Self::new(48, vec![6, 12, 36, 24], 96),
+            "tiny" => Self::new(8, vec![2, 2, 2, 2], 16),
+            "small" => Self::new(12, vec![2, 3, 4, 3], 24),
+            "medium" => Self::new(16, vec![3, 4, 6, 4], 32),
+            other => {
+                return Err(Error::Config(format!(
+                    "unknown encoder '{other}': expected densenet121, densenet161, tiny, small or medium"
+                )));
+            }
+        })
+    }
+
+    /// Channels after the stem and after each block (skip widths).
+    pub fn skip_channels(&self) -> Vec<usize> {
+        let mut c = self.num_init_features;
+        let mut out = vec![c];
+        for (i, &n) in self.block_config.iter().enumerate() {
+            c += n * self.growth_rate;
+            out.push(c);
+            if i + 1 < self.block_config.len() {
+                c = (c as f64 * self.compression).floor() as usize;
+            }
+        }
+        out
+    }
+}
+
+/// The head on the decoder's last features.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum HeadKind {
+    /// One 1x1 convolution (paper B's choice).
+    Conv1x1,
+    /// Two 3x3 convolutions with ReLU, then 1x1 (paper B's "custom").
+    Custom,
+}
+
+/// The whole network.
+#[derive(Config, Debug, PartialEq)]
+pub struct DepthNetConfig {
+    pub encoder: DenseNetConfig,
+    /// Input width and height; both multiples of 32.
+    pub input_size: [usize; 2],
+    /// 3 (RGB) or 4 (RGB + tendon mask).
+    #[config(default = 3)]
+    pub in_channels: usize,
+    /// Channels of the deepest decoder block (halved at each level up, at least 8).
+    #[config(default = 64)]
+    pub decoder_width: usize,
+    #[config(default = "HeadKind::Conv1x1")]
+    pub head: HeadKind,
+}
+
+fn bn(c: usize, device: &Device) -> BatchNorm {
+    BatchNormConfig::new(c).init(device)
+}
+
+fn conv(i: usize, o: usize, k: usize, bias: bool, device: &Device) -> Conv2d {
+    let p = k / 2;
+    Conv2dConfig::new([i, o], [k, k])
+        .with_padding(PaddingConfig2d::Explicit(p, p, p, p))
+        .with_bias(bias)
+        .init(device)
+}
+
+/// BN-ReLU-1x1 (bn_size x growth) then BN-ReLU-3x3 (growth).
+#[derive(Module, Debug)]
+pub struct DenseLayer {
+    pub norm1: BatchNorm,
+    pub conv1: Conv2d,
+    pub norm2: BatchNorm,
+    pub conv2: Conv2d,
+}
+
+impl DenseLayer {
+    fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        let y = self.conv1.forward(relu(self.norm1.forward(x)));
+        self.conv2.forward(relu(self.norm2.forward(y)))
+    }
+}
+
+/// Layers whose outputs are concatenated onto the input, one by one.
+#[derive(Module, Debug)]
+pub struct DenseBlock {
+    pub layers: Vec<DenseLayer>,
+}
+
+impl DenseBlock {
+    fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        let mut feats = x;
+        for l in &self.layers {
+            let y = l.forward(feats.clone());
+            feats = Tensor::cat(vec![feats, y], 1);
+        }
+        feats
+    }
+}
+
+/// BN-ReLU-1x1 (compress) then 2x2 average pooling.
+#[derive(Module, Debug)]
+pub struct Transition {
+    pub norm: BatchNorm,
+    pub conv: Conv2d,
+    pub pool: AvgPool2d,
+}
+
+/// The DenseNet feature extractor, returning the five skip tensors.
+#[derive(Module, Debug)]
+pub struct DenseNetEncoder {
+    pub conv0: Conv2d,
+    pub norm0: BatchNorm,
+    pub pool0: MaxPool2d,
+    pub blocks: Vec<DenseBlock>,
+    pub transitions: Vec<Transition>,
+    pub norm5: BatchNorm,
+}
+
+impl DenseNetEncoder {
+    /// Stem (1/2), blocks 1-3 (1/4, 1/8, 1/16) and block 4 after the final
+    /// norm (1/32).
+    pub fn forward(&self, x: Tensor<4>) -> Vec<Tensor<4>> {
+        let s0 = relu(self.norm0.forward(self.conv0.forward(x)));
+        let mut x = self.pool0.forward(s0.clone());
+        let mut skips = vec![s0];
+        for (i, b) in self.blocks.iter().enumerate() {
+            x = b.forward(x);
+            if let Some(t) = self.transitions.get(i) {
+                skips.push(x.clone());
+                x = t.pool.forward(t.conv.forward(relu(t.norm.forward(x))));
+            }
+        }
+        skips.push(relu(self.norm5.forward(x)));
+        skips
+    }
+}
+
+/// Upsample x2, concatenate the skip, two 3x3 conv + ReLU.
+#[derive(Module, Debug)]
+pub struct UpBlock {
+    pub conv1: Conv2d,
+    pub conv2: Conv2d,
+}
+
+/// Frame `[N, C, H, W]` (normalised) -> depth `[N, 1, H, W]` in the
+/// model's units (see [`crate::DepthScale`]).
+#[derive(Module, Debug)]
+pub struct DepthNet {
+    pub encoder: DenseNetEncoder,
+    pub bottleneck: Conv2d,
+    pub up: Vec<UpBlock>,
+    pub head: Vec<Conv2d>,
+    pub upsample: Interpolate2d,
+}
+
+impl DenseNetConfig {
+    /// The encoder with fresh weights, for `in_channels` inputs.
+    pub fn init(&self, in_channels: usize, device: &Device) -> DenseNetEncoder {
+        let mut c = self.num_init_features;
+        let mut blocks = Vec::new();
+        let mut transitions = Vec::new();
+        for (i, &n) in self.block_config.iter().enumerate() {
+            let layers = (0..n)
+                .map(|j| {
+                    let cin = c + j * self.growth_rate;
+                    let mid = self.bn_size * self.growth_rate;
+                    DenseLayer {
+                        norm1: bn(cin, device),
+                        conv1: conv(cin, mid, 1, false, device),
+                        norm2: bn(mid, device),
+                        conv2: conv(mid, self.growth_rate, 3, false, device),
+                    }
+                })
+                .collect();
+            blocks.push(DenseBlock { layers });
+            c += n * self.growth_rate;
+            if i + 1 < self.block_config.len() {
+                let o = (c as f64 * self.compression).floor() as usize;
+                transitions.push(Transition {
+                    norm: bn(c, device),
+                    conv: conv(c, o, 1, false, device),
+                    pool: AvgPool2dConfig::new([2, 2]).with_strides([2, 2]).init(),
+                });
+                c = o;
+            }
+        }
+        DenseNetEncoder {
+            conv0: Conv2dConfig::new([in_channels, self.num_init_features], [7, 7])
+                .with_stride([2, 2])
+                .with_padding(PaddingConfig2d::Explicit(3, 3, 3, 3))
+                .with_bias(false)
+                .init(device),
+            norm0: bn(self.num_init_features, device),
+            pool0: MaxPool2dConfig::new([3, 3])
+                .with_strides([2, 2])
+                .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
+                .init(),
+            blocks,
+            transitions,
+            norm5: bn(c, device),
+        }
+    }
+}
+
+impl DepthNetConfig {
+    /// Check the sizes and build with fresh weights.
+    pub fn init(&self, device: &Device) -> Result<DepthNet> {
+        let [w, h] = self.input_size;
+        if w == 0 || h == 0 || !w.is_multiple_of(32) || !h.is_multiple_of(32) {
+            return Err(Error::Config(format!(
+                "depth input {w}x{h}: both sides must be positive multiples of 32"
+            )));
+        }
+        if self.encoder.block_config.len() != 4 {
+            return Err(Error::Config(
+                "the DenseNet encoder needs four blocks".into(),
+            ));
+        }
+        if !(3..=4).contains(&self.in_channels) {
+            return Err(Error::Config(format!(
+                "{} input channels: expected 3 (RGB) or 4 (RGB + mask)",
+                self.in_channels
+            )));
+        }
+        let skips = self.encoder.skip_channels();
+        let widths: Vec<usize> = (0..4).map(|k| (self.decoder_width >> k).max(8)).collect();
+        let mut c = widths[0];
+        let bottleneck = conv(skips[4], c, 1, true, device);
+        let up = (0..4)
+            .map(|k| {
+                let skip = skips[3 - k];
+                let o = widths[k];
+                let b = UpBlock {
+                    conv1: conv(c + skip, o, 3, true, device),
+                    conv2: conv(o, o, 3, true, device),
+                };
+                c = o;
+                b
+            })
+            .collect();
+        let head = match self.head {
+            HeadKind::Conv1x1 => vec![conv(c, 1, 1, true, device)],
+            HeadKind::Custom => vec![
+                conv(c, c, 3, true, device),
+                conv(c, c, 3, true, device),
+                conv(c, 1, 1, true, device),
+            ],
+        };
+        Ok(DepthNet {
+            encoder: self.encoder.init(self.in_channels, device),
+            bottleneck,
+            up,
+            head,
+            upsample: Interpolate2dConfig::new()
+                .with_scale_factor(Some([2.0, 2.0]))
+                .with_mode(InterpolateMode::Linear)
+                .with_align_corners(false)
+                .init(),
+        })
+    }
+}
+
+impl DepthNet {
+    /// Depth in model units, `[N, 1, H, W]`.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        let mut skips = self.encoder.forward(x);
+        let mut y = self.bottleneck.forward(skips.pop().expect("five skips"));
+        for b in &self.up {
+            let skip = skips.pop().expect("one skip per up block");
+            y = Tensor::cat(vec![self.upsample.forward(y), skip], 1);
+            y = relu(b.conv2.forward(relu(b.conv1.forward(y))));
+        }
+        let n = self.head.len();
+        for (i, c) in self.head.iter().enumerate() {
+            y = c.forward(y);
+            if i + 1 < n {
+                y = relu(y);
+            }
+        }
+        self.upsample.forward(y)
+    }
+
+    /// Stop gradients into the encoder (paper B's frozen ImageNet encoder).
+    pub fn freeze_encoder(mut self) -> Self {
+        self.encoder = self.encoder.no_grad();
+        self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_have_the_published_widths() {
+        // torchvision: densenet121 ends with 1024 channels, densenet161 with 2208.
+        assert_eq!(
+            *DenseNetConfig::preset("densenet121")
+                .unwrap()
+                .skip_channels()
+                .last()
+                .unwrap(),
+            1024
+        );
+        assert_eq!(
+            *DenseNetConfig::preset("densenet161")
+                .unwrap()
+                .skip_channels()
+                .last()
+                .unwrap(),
+            2208
+        );
+        assert!(DenseNetConfig::preset("densenet999").is_err());
+    }
+
+    #[test]
+    fn depth_has_the_input_size_for_every_head_and_channel_count() {
+        let device = Device::flex();
+        for (head, ch) in [(HeadKind::Conv1x1, 3), (HeadKind::Custom, 4)] {
+            let cfg = DepthNetConfig::new(DenseNetConfig::preset("tiny").unwrap(), [64, 32])
+                .with_head(head)
+                .with_in_channels(ch)
+                .with_decoder_width(16);
+            let m = cfg.init(&device).unwrap();
+            let y = m.forward(Tensor::<4>::zeros([2, ch, 32, 64], &device));
+            assert_eq!(y.dims(), [2, 1, 32, 64]);
+        }
+        let bad = DepthNetConfig::new(DenseNetConfig::preset("tiny").unwrap(), [60, 32]);
+        assert!(bad.init(&device).is_err());
+    }
+}
