@@ -12,23 +12,7 @@ use tactile_core::{Error, Result};
 
 use crate::model::{Cae, CaeConfig};
 
-fn tensor_f32(st: &SafeTensors, path: &Path, name: &str) -> Result<(Vec<usize>, Vec<f32>)> {
-    let t = st
-        .tensor(name)
-        .map_err(|e| Error::model(path, format!("tensor '{name}': {e}")))?;
-    if t.dtype() != safetensors::Dtype::F32 {
-        return Err(Error::model(
-            path,
-            format!("tensor '{name}' is {:?}, expected F32", t.dtype()),
-        ));
-    }
-    let data = t
-        .data()
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect();
-    Ok((t.shape().to_vec(), data))
-}
+use tactile_core::module_io::safetensors_f32 as tensor_f32;
 
 fn load_conv(
     conv: &mut Conv2d,

@@ -66,3 +66,27 @@ pub fn load_artifact<A: serde::de::DeserializeOwned, M: Module>(
     let model = load_module(build(&art)?, &dir.join(weights_file))?;
     Ok((art, model))
 }
+
+/// A float32 tensor of a safetensors file: `(shape, values)`; errors name
+/// the file and the tensor (missing, or another dtype).
+pub fn safetensors_f32(
+    st: &safetensors::SafeTensors,
+    path: &Path,
+    name: &str,
+) -> Result<(Vec<usize>, Vec<f32>)> {
+    let t = st
+        .tensor(name)
+        .map_err(|e| Error::model(path, format!("tensor '{name}': {e}")))?;
+    if t.dtype() != safetensors::Dtype::F32 {
+        return Err(Error::model(
+            path,
+            format!("tensor '{name}' is {:?}, expected F32", t.dtype()),
+        ));
+    }
+    let data = t
+        .data()
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    Ok((t.shape().to_vec(), data))
+}

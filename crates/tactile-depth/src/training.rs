@@ -41,6 +41,10 @@ pub struct DepthTrainingConfig {
     /// Train the decoder only.
     #[config(default = false)]
     pub freeze_encoder: bool,
+    /// torchvision DenseNet weights (safetensors, see [`crate::torchvision`])
+    /// to start the encoder from.
+    #[config(default = "None")]
+    pub pretrained: Option<String>,
     #[config(default = 42)]
     pub seed: u64,
 }
@@ -168,6 +172,9 @@ pub fn train_depth(
     let ad = device.clone().autodiff();
     ad.seed(config.seed);
     let mut model = net.init(&ad)?;
+    if let Some(p) = &config.pretrained {
+        model.encoder = crate::torchvision::load_torchvision_encoder(p, model.encoder, &ad)?;
+    }
     if config.freeze_encoder {
         model = model.freeze_encoder();
     }

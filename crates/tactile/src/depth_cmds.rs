@@ -37,6 +37,10 @@ pub struct TrainDepthArgs {
     /// Train the decoder only.
     #[arg(long)]
     freeze_encoder: bool,
+    /// torchvision DenseNet weights as safetensors (key mapping: the
+    /// tactile-depth `torchvision` module docs); the preset must match.
+    #[arg(long)]
+    pretrained: Option<PathBuf>,
     /// Millimetres per model unit (1 = millimetres; 1000 = metres, which stalls and is refused).
     #[arg(long, default_value_t = 1.0)]
     unit_mm: f32,
@@ -96,6 +100,7 @@ pub fn train(a: TrainDepthArgs) -> Result<()> {
         .with_unit_mm(a.unit_mm)
         .with_with_mask(a.with_mask)
         .with_freeze_encoder(a.freeze_encoder)
+        .with_pretrained(a.pretrained.as_ref().map(|p| p.display().to_string()))
         .with_seed(a.seed);
     let s = train_depth(
         &config,
