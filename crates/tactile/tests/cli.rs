@@ -834,3 +834,82 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
         "{msg}"
     );
 }
+
+#[test]
+fn depth_trains_in_millimetres_refuses_metres_and_draws_heat_maps() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("vt");
+    let d = data.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--sequences",
+        "3",
+        "--frames-per-sequence",
+        "6",
+        "--seed",
+        "8",
+        "--out",
+        d,
+    ]);
+    assert!(ok, "{msg}");
+    let out = tmp.path().join("depth");
+    let o = out.to_str().unwrap();
+    let base = [
+        "train",
+        "depth",
+        "--data",
+        d,
+        "--out",
+        o,
+        "--encoder",
+        "tiny",
+        "--input",
+        "64x32",
+        "--decoder-width",
+        "16",
+        "--max-epochs",
+        "1",
+        "--val-fraction",
+        "0.34",
+    ];
+    // Metres: the targets barely vary; refused before training, and why.
+    let (ok, msg) = tactile(&[&base[..], &["--unit-mm", "1000"]].concat());
+    assert!(
+        !ok && msg.contains("stall") && msg.contains("millimetres"),
+        "{msg}"
+    );
+    assert!(!out.join("depth.bpk").exists());
+    let (ok, msg) = tactile(
+        &[
+            &base[..],
+            &["--loss", "l1-grad-ssim", "--head", "custom", "--with-mask"],
+        ]
+        .concat(),
+    );
+    assert!(ok, "{msg}");
+    let png = tmp.path().join("png");
+    let (ok, msg) = tactile(&[
+        "eval",
+        "depth",
+        "--model",
+        o,
+        "--data",
+        d,
+        "--save-png",
+        png.to_str().unwrap(),
+        "--png-frames",
+        "2",
+    ]);
+    assert!(ok, "{msg}");
+    let v: serde_json::Value = serde_json::from_str(msg.lines().last().unwrap()).unwrap();
+    let mae = v["scores"]["mae_mm"].as_f64().unwrap();
+    let ssim = v["scores"]["ssim"].as_f64().unwrap();
+    assert!(
+        mae.is_finite() && mae >= 0.0 && (-1.0..=1.0).contains(&ssim),
+        "{msg}"
+    );
+    assert!(png.join("depth-000.png").is_file() && png.join("depth-001.png").is_file());
+    let (ok, msg) = tactile(&["train", "depth", "--data", d, "--out", o, "--loss", "huber"]);
+    assert!(!ok && msg.contains("huber"), "{msg}");
+}
