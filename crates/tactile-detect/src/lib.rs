@@ -69,22 +69,7 @@ impl DetectorArtifact {
     }
 }
 
-/// Standard deviation (in [0, 1] units, all channels) below which a
-/// frame is blank: half a grey level, under the sensor's own noise.
-pub const BLANK_FRAME_STD: f32 = 0.5 / 255.0;
-
-/// True when the image has (almost) no variation at all.
-pub fn is_blank(img: &FloatImage) -> bool {
-    let n = img.data.len().max(1) as f64;
-    let mean = img.data.iter().map(|&v| v as f64).sum::<f64>() / n;
-    let var = img
-        .data
-        .iter()
-        .map(|&v| (v as f64 - mean).powi(2))
-        .sum::<f64>()
-        / n;
-    (var.sqrt() as f32) < BLANK_FRAME_STD
-}
+pub use tactile_preprocess::visuo::{BLANK_FRAME_STD, is_blank};
 
 /// A loaded detector, ready for frames of any size.
 pub struct TendonDetector {

@@ -93,15 +93,27 @@ impl TendonSegmenter {
     }
 
     /// Predicted mask of the frame's window, post-processed: the kept region
-    /// and its direction (or why there is none).
+    /// and its direction (or why there is none). A blank window (see
+    /// [`tactile_preprocess::visuo::is_blank`]) gives an empty mask.
     pub fn segment(&self, frame: &tactile_core::image_io::RgbImage) -> Result<Tendon> {
         let win = self.artifact.window();
         let (sw, sh) = win.scaled_size(frame.width(), frame.height());
         let scaled = tactile_preprocess::visuo::resize_rgb(frame, sw, sh)?;
         let cut = win.cut(&scaled, 0.0);
+        let s = win.side;
+        if tactile_preprocess::visuo::is_blank(&cut) {
+            // Nothing to segment: an empty mask, hence no direction.
+            return postprocess(
+                &TendonMask {
+                    width: s,
+                    height: s,
+                    pixels: vec![false; s * s],
+                },
+                &self.artifact.postprocess,
+            );
+        }
         let x = self.artifact.input(&[cut], &self.device)?;
         let p = self.model.probabilities(x)?.remove(0);
-        let s = win.side;
         let mask = TendonMask::from_probabilities(s, s, &p, self.artifact.threshold)?;
         postprocess(&mask, &self.artifact.postprocess)
     }
