@@ -93,5 +93,5 @@ synth-vt-select:
 
 # Error against latency per runtime for every size of both sweeps; writes docs/bench-detector.md and docs/bench-segmenter.md with plots.
 bench-paper-b:
-    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench detector --data data/vt-test --out docs/bench-detector.md --models data/det/*
-    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench segmenter --data data/vt-test --out docs/bench-segmenter.md --models data/seg/unet-*
+    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench detector --data data/vt-test --select data/vt-select --out docs/bench-detector.md --models data/det/mobilenet-v3-small-w0.25-80x60 data/det/mobilenet-v3-small-w0.5-160x120 data/det/mobilenet-v3-small-w0.75-240x180 data/det/resnet18-w0.25-160x120
+    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench segmenter --data data/vt-test --select data/vt-select --out docs/bench-segmenter.md --models data/seg/unet-s48-b4 data/seg/unet-s64-b8 data/seg/unet-s96-b8

@@ -68,6 +68,10 @@ pub struct BenchModelsArgs {
     /// Markdown table; the plot goes beside it as NAME.png.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// A second held-out dataset, the one sizes are chosen on: its score
+    /// gets a column of its own.
+    #[arg(long)]
+    select: Option<PathBuf>,
 }
 
 fn header(what: &str, data: &Path, runs: usize) -> String {
@@ -126,7 +130,8 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
     use tactile_detect::{DetectionSet, DetectorArtifact};
     let ds = Dataset::open(&a.data)?;
     let mut md = header("Accuracy and F1", &a.data, a.runs);
-    md.push_str("| model | architecture | width | input | parameters | accuracy | F1 | onset/release accuracy | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    md.push_str("| model | architecture | width | input | parameters | accuracy (selection set) | accuracy | F1 | onset/release accuracy | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let sel_ds = a.select.as_ref().map(Dataset::open).transpose()?;
     let mut series = Vec::new();
     let mut cache: Vec<([usize; 2], DetectionSet)> = Vec::new();
     for m in &a.models {
@@ -138,6 +143,13 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
         }
         let data = &cache.iter().find(|(s, _)| *s == size).expect("cached").1;
         let sc = crate::detect_cmds::score(m, data, DeviceKind::Flex)?;
+        let sel = match &sel_ds {
+            Some(ds) => {
+                let d = DetectionSet::from_dataset(ds, size)?;
+                format!("{:.4}", crate::detect_cmds::score(m, &d, DeviceKind::Flex)?.all.accuracy)
+            }
+            None => "-".into(),
+        };
         let onnx = tactile_onnx::export_detector(&model, size)?;
         let shape = [1, 3, size[1], size[0]];
         let lat = latencies(
@@ -158,7 +170,7 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
                 .map_or("-".into(), |l| format!("{:.2}", l.1))
         };
         md.push_str(&format!(
-            "| {} | {:?} | {} | {}x{} | {} | {:.4} | {:.4} | {:.4} | {} | {} | {} |\n",
+            "| {} | {:?} | {} | {}x{} | {} | {sel} | {:.4} | {:.4} | {:.4} | {} | {} | {} |\n",
             m.file_name().unwrap_or_default().to_string_lossy(),
             art.detector.architecture,
             art.detector.width,
@@ -190,12 +202,17 @@ pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
     use tactile_segment::SegmenterArtifact;
     let ds = Dataset::open(&a.data)?;
     let mut md = header("Mean IoU and direction error", &a.data, a.runs);
-    md.push_str("| model | window | base | parameters | IoU all | IoU curved | direction straight median / p90 (deg) | direction curved median / p90 (deg) | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    md.push_str("| model | window | base | parameters | IoU all (selection set) | IoU all | IoU curved | direction straight median / p90 (deg) | direction curved median / p90 (deg) | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let sel_ds = a.select.as_ref().map(Dataset::open).transpose()?;
     let mut series = Vec::new();
     for m in &a.models {
         let (art, model) = SegmenterArtifact::load(m, &DeviceKind::Flex.device())?;
         let (table, _) = crate::segment_cmds::score(m, &ds, DeviceKind::Flex)?;
         let row = |p: &str| table.iter().find(|r| r.path == p);
+        let sel = match &sel_ds {
+            Some(ds) => format!("{:.4}", crate::segment_cmds::score(m, ds, DeviceKind::Flex)?.0[0].mean_iou),
+            None => "-".into(),
+        };
         let side = art.unet.side;
         let onnx = tactile_onnx::export_segmenter(&model, side)?;
         let shape = [1, 3, side, side];
@@ -223,7 +240,7 @@ pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
             })
         };
         md.push_str(&format!(
-            "| {} | {side}x{side} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {side}x{side} | {} | {} | {sel} | {} | {} | {} | {} | {} | {} | {} |\n",
             m.file_name().unwrap_or_default().to_string_lossy(),
             art.unet.base,
             model.num_params(),
