@@ -28,12 +28,13 @@ pub struct CaeConfig {
     /// Side of the input pin image.
     #[config(default = 28)]
     pub input_px: usize,
-    /// ReLU before the last pooling (Table I). Trained on grey-level pin
-    /// images, 7 of 16 such features died (zero on every frame of the
-    /// edge set); without it the features are the max-pooled linear
-    /// responses and none can die.
-    #[config(default = true)]
-    pub latent_relu: bool,
+    /// ReLU before the last pooling (Table I; `None` means yes, so model
+    /// files written before this option load unchanged). Trained on
+    /// grey-level pin images, 7 of 16 such features died (zero on every
+    /// frame of the edge set); without it the features are the max-pooled
+    /// linear responses and none can die.
+    #[config(default = "None")]
+    pub latent_relu: Option<bool>,
 }
 
 impl CaeConfig {
@@ -84,7 +85,7 @@ impl CaeConfig {
                 conv3: same(c2, c3),
                 conv4: same(c3, c4),
                 pool: MaxPool2dConfig::new([2, 2]).with_ceil_mode(true).init(),
-                latent_relu: self.latent_relu,
+                latent_relu: self.latent_relu.unwrap_or(true),
             },
             decoder: CaeDecoder {
                 conv1: same(c4, c4),

@@ -146,7 +146,12 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
         let sel = match &sel_ds {
             Some(ds) => {
                 let d = DetectionSet::from_dataset(ds, size)?;
-                format!("{:.4}", crate::detect_cmds::score(m, &d, DeviceKind::Flex)?.all.accuracy)
+                format!(
+                    "{:.4}",
+                    crate::detect_cmds::score(m, &d, DeviceKind::Flex)?
+                        .all
+                        .accuracy
+                )
             }
             None => "-".into(),
         };
@@ -210,7 +215,10 @@ pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
         let (table, _) = crate::segment_cmds::score(m, &ds, DeviceKind::Flex)?;
         let row = |p: &str| table.iter().find(|r| r.path == p);
         let sel = match &sel_ds {
-            Some(ds) => format!("{:.4}", crate::segment_cmds::score(m, ds, DeviceKind::Flex)?.0[0].mean_iou),
+            Some(ds) => format!(
+                "{:.4}",
+                crate::segment_cmds::score(m, ds, DeviceKind::Flex)?.0[0].mean_iou
+            ),
             None => "-".into(),
         };
         let side = art.unet.side;

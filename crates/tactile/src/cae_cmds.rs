@@ -118,7 +118,7 @@ pub fn train_cae(a: TrainCaeArgs) -> Result<()> {
         .map_err(|_| anyhow::anyhow!("--widths needs 4 values"))?;
     let mut cae = CaeConfig::new()
         .with_widths(widths)
-        .with_latent_relu(!a.linear_latent);
+        .with_latent_relu(a.linear_latent.then_some(false));
     if let Some(f) = a.features {
         cae = cae.with_feature_count(f)?;
     }
