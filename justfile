@@ -95,3 +95,26 @@ synth-vt-select:
 bench-paper-b:
     eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench detector --data data/vt-test --select data/vt-select --out docs/bench-detector.md --models data/det/mobilenet-v3-small-w0.25-80x60 data/det/mobilenet-v3-small-w0.5-160x120 data/det/mobilenet-v3-small-w0.75-240x180 data/det/resnet18-w0.25-160x120
     eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench segmenter --data data/vt-test --select data/vt-select --out docs/bench-segmenter.md --models data/seg/unet-s48-b4 data/seg/unet-s64-b8 data/seg/unet-s96-b8
+
+# Depth reconstruction: held-out sets at the press extremes, then three encoder sizes x two inputs into data/depth.
+synth-vt-depth:
+    cargo run --release -p tactile -- synth visuotactile --sequences 16 --frames-per-sequence 15 --seed 300 --press-mm 3.6,4.0 --out data/vt-depth-test
+
+sweep-depth: synth-vt
+    for spec in "tiny 96x64" "tiny 160x96" "small 96x64" "small 160x96" "medium 96x64" "medium 160x96"; do set -- $spec; cargo run --release -p tactile -- train depth --data data/vt-train --out data/depth/$1-$2 --encoder $1 --input $2 --max-epochs 6 --patience 2 --decoder-width 32; done
+
+# Loss, head and mask-channel ablations on the tiny encoder at 160x96 (the L1 / 1x1 / RGB run is data/depth/tiny-160x96).
+ablate-depth: synth-vt
+    cargo run --release -p tactile -- train depth --data data/vt-train --out data/depth/ablate-mse --encoder tiny --input 160x96 --loss mse --max-epochs 6 --patience 2 --decoder-width 32
+    cargo run --release -p tactile -- train depth --data data/vt-train --out data/depth/ablate-l1-grad-ssim --encoder tiny --input 160x96 --loss l1-grad-ssim --max-epochs 6 --patience 2 --decoder-width 32
+    cargo run --release -p tactile -- train depth --data data/vt-train --out data/depth/ablate-custom-head --encoder tiny --input 160x96 --head custom --max-epochs 6 --patience 2 --decoder-width 32
+    cargo run --release -p tactile -- train depth --data data/vt-train --out data/depth/ablate-mask --encoder tiny --input 160x96 --with-mask --max-epochs 6 --patience 2 --decoder-width 32
+
+# The shipped depth model: the small encoder at 96x64 with L1 + gradient + SSIM.
+train-depth:
+    cargo run --release -p tactile -- train depth --data data/vt-train --out data/depth/small-96x64-l1gs --encoder small --input 96x64 --loss l1-grad-ssim --max-epochs 12 --patience 3 --decoder-width 32
+
+# docs/bench-depth.md (size sweep) and docs/depth-ablation.md (losses, heads, mask channel), with plots.
+bench-depth:
+    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench depth --data data/vt-test --extreme data/vt-depth-test --select data/vt-select --out docs/bench-depth.md --models data/depth/tiny-96x64 data/depth/tiny-160x96 data/depth/small-96x64 data/depth/small-160x96 data/depth/medium-96x64 data/depth/medium-160x96 data/depth/small-96x64-l1gs
+    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench depth --data data/vt-test --extreme data/vt-depth-test --select data/vt-select --out docs/depth-ablation.md --models data/depth/tiny-160x96 data/depth/ablate-mse data/depth/ablate-l1-grad-ssim data/depth/ablate-custom-head data/depth/ablate-mask

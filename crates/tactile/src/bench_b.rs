@@ -15,13 +15,16 @@ use tactile_core::dataset::Dataset;
 use tactile_core::plot::{Series, line_plot};
 use tactile_onnx::OrtModel;
 
+/// Builds, for a device, a closure that runs the model once on an input.
+type RunOn<'a> = &'a dyn Fn(&Device) -> Result<Box<dyn Fn(Tensor<4>)>>;
+
 /// Median batch-1 milliseconds of `run` on each burn device, then of the
 /// ONNX model in onnxruntime (skipped with a note when it cannot load).
 fn latencies(
     shape: [usize; 4],
     data: &[f32],
     runs: usize,
-    run: &dyn Fn(&Device) -> Result<Box<dyn Fn(Tensor<4>)>>,
+    run: RunOn<'_>,
     onnx: &[u8],
 ) -> Result<Vec<(String, f64)>> {
     let mut out = Vec::new();
@@ -72,6 +75,9 @@ pub struct BenchModelsArgs {
     /// gets a column of its own.
     #[arg(long)]
     select: Option<PathBuf>,
+    /// Depth only: a held-out set at the press extremes, scored in columns of its own.
+    #[arg(long)]
+    extreme: Option<PathBuf>,
 }
 
 fn header(what: &str, data: &Path, runs: usize) -> String {
@@ -279,11 +285,32 @@ pub fn bench_depth(a: BenchModelsArgs) -> Result<()> {
     use tactile_depth::DepthArtifact;
     let ds = Dataset::open(&a.data)?;
     let mut md = header("Depth error", &a.data, a.runs);
-    md.push_str("| model | encoder | input | head | loss | mask channel | parameters | MAE window (mm) | MAE tendon (mm) | RMSE (mm) | SSIM | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    md.push_str("| model | encoder | input | head | loss | mask channel | parameters | MAE window, selection set (mm) | MAE window (mm) | MAE tendon (mm) | RMSE (mm) | SSIM | extreme presses: MAE window / tendon (mm), SSIM | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let sel_ds = a.select.as_ref().map(Dataset::open).transpose()?;
+    let ext_ds = a.extreme.as_ref().map(Dataset::open).transpose()?;
     let mut series = Vec::new();
     for m in &a.models {
         let (art, model) = DepthArtifact::load(m, &DeviceKind::Flex.device())?;
         let (s, _) = crate::depth_cmds::score(m, &ds, DeviceKind::Flex)?;
+        let sel = match &sel_ds {
+            Some(d) => format!(
+                "{:.4}",
+                crate::depth_cmds::score(m, d, DeviceKind::Flex)?.0.mae_mm
+            ),
+            None => "-".into(),
+        };
+        let ext = match &ext_ds {
+            Some(d) => {
+                let e = crate::depth_cmds::score(m, d, DeviceKind::Flex)?.0;
+                format!(
+                    "{:.4} / {} , {:.4}",
+                    e.mae_mm,
+                    e.mae_tendon_mm.map_or("-".into(), |v| format!("{v:.4}")),
+                    e.ssim
+                )
+            }
+            None => "-".into(),
+        };
         let [w, h] = art.net.input_size;
         let onnx = tactile_onnx::export_depth(&model, art.net.in_channels, [w, h])?;
         let shape = [1, art.net.in_channels, h, w];
@@ -307,7 +334,7 @@ pub fn bench_depth(a: BenchModelsArgs) -> Result<()> {
         let training: serde_json::Value =
             tactile_core::io::read_json(m.join("training.json")).unwrap_or_default();
         md.push_str(&format!(
-            "| {} | {} | {w}x{h} | {:?} | {} | {} | {} | {:.4} | {} | {:.4} | {:.4} | {} | {} | {} |\n",
+            "| {} | {} | {w}x{h} | {:?} | {} | {} | {} | {sel} | {:.4} | {} | {:.4} | {:.4} | {ext} | {} | {} | {} |\n",
             m.file_name().unwrap_or_default().to_string_lossy(),
             art.notes.get("encoder").and_then(|v| v.as_str()).unwrap_or("?"),
             art.net.head,
