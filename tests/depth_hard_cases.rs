@@ -100,3 +100,51 @@ fn ssim_of_constant_maps_is_defined() {
     let s = ssim(&a, &b, 8, 8, 6.0);
     assert!(s.is_finite() && (0.0..1.0).contains(&s), "{s}");
 }
+
+/// Window MAE (mm) of the shipped depth model on frame `frame` of
+/// sequences `seqs` rendered with `cfg`.
+fn shipped_mae(
+    cfg: &tactile_rs::synth::VisuotactileConfig,
+    seqs: std::ops::Range<u64>,
+    frame: usize,
+) -> f64 {
+    use tactile_rs::depth::DepthEstimator;
+    use tactile_rs::depth::data::window_mask;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/depth");
+    let est = DepthEstimator::load(&root, &burn::tensor::Device::flex()).unwrap();
+    let [w, h] = est.artifact.net.input_size;
+    let window = window_mask(w, h);
+    let mut total = 0.0;
+    for s in seqs.clone() {
+        let (_, f) = tactile_rs::synth::visuotactile::sample(cfg, 77, s, frame);
+        let img = tactile_rs::core::image_io::rgb_image(f.width, f.height, f.rgb).unwrap();
+        let mm: Vec<f32> = f.depth_m.iter().map(|v| v * 1000.0).collect();
+        let truth =
+            tactile_rs::preprocess::resize_area_f32(&mm, (f.width, f.height), w, h).unwrap();
+        let mask = est.artifact.with_mask.then(|| {
+            let m: Vec<f32> = f.mask.iter().map(|&v| v as f32 / 255.0).collect();
+            tactile_rs::preprocess::resize_area_f32(&m, (f.width, f.height), w, h)
+                .unwrap()
+                .iter()
+                .map(|&v| v >= 0.5)
+                .collect::<Vec<bool>>()
+        });
+        let pred = est.depth_mm(&img, mask.as_deref()).unwrap();
+        assert!(pred.iter().all(|v| v.is_finite()));
+        total += tactile_rs::core::metrics::masked_mae(&pred, &truth, Some(&window)).unwrap();
+    }
+    total / (seqs.end - seqs.start) as f64
+}
+
+#[test]
+fn shipped_depth_model_handles_flat_skin_and_the_deepest_press() {
+    let mut cfg = tactile_rs::synth::VisuotactileConfig::default();
+    // Before first touch: the skin at rest (the dome), no deformation.
+    let flat = shipped_mae(&cfg, 0..4, 0);
+    // The deepest press of the range at the middle of each video.
+    cfg.press_mm = tactile_rs::synth::Range { min: 4.0, max: 4.0 };
+    let mid = cfg.frames_per_sequence / 2;
+    let deepest = shipped_mae(&cfg, 0..4, mid);
+    assert!(flat < 0.05, "flat skin: MAE {flat} mm");
+    assert!(deepest < 0.15, "deepest press: MAE {deepest} mm");
+}

@@ -296,3 +296,33 @@ fn densenet121_depth_network_matches_onnxruntime() {
         )
     });
 }
+
+#[test]
+fn shipped_depth_model_matches_onnxruntime() {
+    use tactile_rs::depth::DepthArtifact;
+    use tactile_rs::onnx::export_depth;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/depth");
+    let (art, m) = DepthArtifact::load(&dir, &Device::flex()).unwrap();
+    let [w, h] = art.net.input_size;
+    let c = art.net.in_channels;
+    let bytes = export_depth(&m, c, [w, h]).unwrap();
+    let shape = [2usize, c, h, w];
+    let data: Vec<f32> = palpation_frames(w, h)
+        .iter()
+        .flat_map(|f| {
+            let mut x = art.stats.to_chw(f).unwrap();
+            x.resize(c * w * h, 0.0);
+            x
+        })
+        .collect();
+    // Within 1e-4 mm: stricter than the 1e-4 of the 6 mm depth range.
+    check("shipped-depth", &bytes, &shape, &data, |d| {
+        let (_, m) = DepthArtifact::load(&dir, d).unwrap();
+        burn_out(
+            |x| m.forward(x).into_data().try_to_vec::<f32>().unwrap(),
+            &shape,
+            &data,
+            d,
+        )
+    });
+}

@@ -156,3 +156,55 @@ impl DepthScorer {
         }
     }
 }
+
+/// A loaded depth network, ready for frames of any size.
+pub struct DepthEstimator {
+    pub artifact: DepthArtifact,
+    pub model: DepthNet,
+    pub device: Device,
+}
+
+impl DepthEstimator {
+    pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<Self> {
+        let (artifact, model) = DepthArtifact::load(dir, device)?;
+        Ok(Self {
+            artifact,
+            model,
+            device: device.clone(),
+        })
+    }
+
+    /// Depth in mm at the network's input size (`width * height` values,
+    /// row-major) for an RGB frame of any size; `mask` (at the input size)
+    /// is required exactly when the network takes the mask channel.
+    pub fn depth_mm(
+        &self,
+        frame: &tactile_core::image_io::RgbImage,
+        mask: Option<&[bool]>,
+    ) -> Result<Vec<f32>> {
+        use burn::tensor::{Tensor, TensorData};
+        let [w, h] = self.artifact.net.input_size;
+        let img = tactile_preprocess::visuo::resize_rgb(frame, w, h)?;
+        let mut x = self.artifact.stats.to_chw(&img)?;
+        match (self.artifact.with_mask, mask) {
+            (true, Some(m)) if m.len() == w * h => x.extend(m.iter().map(|&b| b as u8 as f32)),
+            (true, _) => {
+                return Err(Error::Invalid(format!(
+                    "this depth network takes a {w}x{h} tendon mask as a fourth channel"
+                )));
+            }
+            (false, _) => {}
+        }
+        let c = self.artifact.net.in_channels;
+        let t = Tensor::<4>::from_data(TensorData::new(x, [1, c, h, w]), &self.device);
+        let v = self
+            .model
+            .forward(t)
+            .into_data()
+            .try_to_vec::<f32>()
+            .map_err(|e| Error::Invalid(format!("depth output: {e:?}")))?;
+        Ok(v.into_iter()
+            .map(|m| self.artifact.scale.to_mm(m))
+            .collect())
+    }
+}
