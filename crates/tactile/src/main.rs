@@ -7,6 +7,7 @@ mod depth_cmds;
 mod detect_cmds;
 mod estimate_cmds;
 mod eval_cmds;
+mod run_cmd;
 mod segment_cmds;
 mod sweep;
 mod synth_cmds;
@@ -74,6 +75,8 @@ enum Command {
         #[command(subcommand)]
         model: EvalCmd,
     },
+    /// Paper B's palpation pipeline over frames: detect, then segment, point and reconstruct depth on tendon frames.
+    Run(run_cmd::RunArgs),
     /// Export a model to ONNX.
     Export {
         /// Model folder.
@@ -199,6 +202,7 @@ fn main() -> Result<()> {
         } => cae_cmds::encode(&model, &data, &out, device),
         Command::Perceive(a) => estimate_cmds::perceive(a),
         Command::Evaluate(a) => eval_cmds::evaluate(a),
+        Command::Run(a) => run_cmd::run(a),
         Command::Robustness(a) => eval_cmds::robustness(a),
         Command::Compare(a) => estimate_cmds::compare(a),
         Command::Sweep(a) => sweep::sweep(a),

@@ -913,3 +913,69 @@ fn depth_trains_in_millimetres_refuses_metres_and_draws_heat_maps() {
     let (ok, msg) = tactile(&["train", "depth", "--data", d, "--out", o, "--loss", "huber"]);
     assert!(!ok && msg.contains("huber"), "{msg}");
 }
+
+#[test]
+fn run_gates_frames_and_agrees_across_runtimes() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("vt");
+    let d = data.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--sequences",
+        "2",
+        "--frames-per-sequence",
+        "12",
+        "--seed",
+        "61",
+        "--out",
+        d,
+    ]);
+    assert!(ok, "{msg}");
+    let mut flags = Vec::new();
+    for rt in ["onnx", "burn-flex", "burn-ndarray"] {
+        let out = tmp.path().join(format!("{rt}.jsonl"));
+        let (ok, msg) = tactile(&[
+            "run",
+            "--data",
+            d,
+            "--models",
+            root.join("models").to_str().unwrap(),
+            "--runtime",
+            rt,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{rt}: {msg}");
+        let recs: Vec<serde_json::Value> = std::fs::read_to_string(&out)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        assert_eq!(recs.len(), 24);
+        for r in &recs {
+            // A frame without a tendon costs one detector pass, nothing more.
+            let tendon = r["tendon"].as_bool().unwrap();
+            assert_eq!(r["ms_segment"].is_null(), !tendon, "{r}");
+            assert_eq!(r["ms_depth"].is_null(), !tendon, "{r}");
+            if tendon {
+                let mean = r["depth_mean_mm"].as_f64().unwrap();
+                assert!((12.0..18.0).contains(&mean), "{r}");
+            }
+        }
+        // Before first touch (frame 0 of each video): no tendon.
+        assert!(!recs[0]["tendon"].as_bool().unwrap() && !recs[12]["tendon"].as_bool().unwrap());
+        flags.push(
+            recs.iter()
+                .map(|r| r["tendon"].as_bool().unwrap())
+                .collect::<Vec<_>>(),
+        );
+    }
+    assert!(
+        flags.windows(2).all(|w| w[0] == w[1]),
+        "runtimes disagree: {flags:?}"
+    );
+    let (ok, msg) = tactile(&["run", "--data", d, "--runtime", "tensorflow"]);
+    assert!(!ok && msg.contains("tensorflow"), "{msg}");
+}

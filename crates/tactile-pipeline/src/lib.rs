@@ -1,0 +1,236 @@
+//! Paper B's palpation pipeline, frame by frame: the detector runs on
+//! every frame; only when it sees a tendon do the segmenter, the
+//! post-processing (largest region, glare override, PCA direction) and the
+//! depth network run. The networks run on burn (ndarray or flex) or in
+//! onnxruntime from their exported graphs; the preprocessing is the same.
+
+use std::path::Path;
+use std::time::Instant;
+
+use burn::tensor::{Device, Tensor, TensorData};
+use serde::{Deserialize, Serialize};
+use tactile_core::image_io::RgbImage;
+use tactile_core::{DeviceKind, Error, Result};
+use tactile_depth::{DepthArtifact, DepthNet};
+use tactile_detect::{Detector, DetectorArtifact};
+use tactile_onnx::OrtModel;
+use tactile_preprocess::visuo::{is_blank, resize_rgb};
+use tactile_segment::{SegmenterArtifact, TendonMask, UNet, postprocess};
+
+/// Where the networks run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Runtime {
+    BurnNdarray,
+    BurnFlex,
+    Onnx,
+}
+
+impl std::str::FromStr for Runtime {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "burn-ndarray" => Ok(Self::BurnNdarray),
+            "burn-flex" => Ok(Self::BurnFlex),
+            "onnx" => Ok(Self::Onnx),
+            o => Err(Error::Config(format!(
+                "unknown runtime '{o}': expected burn-ndarray, burn-flex or onnx"
+            ))),
+        }
+    }
+}
+
+/// One network on one runtime: normalised input in, raw output out.
+enum Net {
+    Detector(Detector, Device),
+    Segmenter(UNet, Device),
+    Depth(DepthNet, Device),
+    Ort(OrtModel),
+}
+
+impl Net {
+    fn run(&mut self, shape: [usize; 4], x: Vec<f32>) -> Result<Vec<f32>> {
+        let out = |t: Tensor<4>| -> Result<Vec<f32>> {
+            t.into_data()
+                .try_to_vec::<f32>()
+                .map_err(|e| Error::Invalid(format!("network output: {e:?}")))
+        };
+        match self {
+            Net::Detector(m, d) => {
+                let t = Tensor::<4>::from_data(TensorData::new(x, shape), &*d);
+                out(m.forward(t).reshape([shape[0], 1, 1, 1]))
+            }
+            Net::Segmenter(m, d) => {
+                out(m.forward(Tensor::from_data(TensorData::new(x, shape), &*d)))
+            }
+            Net::Depth(m, d) => out(m.forward(Tensor::from_data(TensorData::new(x, shape), &*d))),
+            Net::Ort(o) => Ok(o.run_f32(&shape, x)?.1),
+        }
+    }
+}
+
+/// What the pipeline made of one frame (one JSON Lines record).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FrameRecord {
+    pub frame: String,
+    pub tendon: bool,
+    /// Detector probability.
+    pub score: f32,
+    pub direction_deg: Option<f64>,
+    pub anisotropy: Option<f64>,
+    /// Why there is no direction on a tendon frame (empty, too small, isotropic).
+    pub no_direction: Option<String>,
+    /// Pixels of the kept region in the segmenter's window.
+    pub mask_area_px: usize,
+    /// Camera-to-skin distance inside the sensing window, mm.
+    pub depth_min_mm: Option<f32>,
+    pub depth_mean_mm: Option<f32>,
+    pub depth_max_mm: Option<f32>,
+    pub ms_detect: f64,
+    pub ms_segment: Option<f64>,
+    pub ms_depth: Option<f64>,
+    pub ms_total: f64,
+}
+
+/// The three models and their runtimes.
+pub struct Pipeline {
+    det: DetectorArtifact,
+    seg: SegmenterArtifact,
+    depth: DepthArtifact,
+    det_net: Net,
+    seg_net: Net,
+    depth_net: Net,
+    window: Vec<bool>,
+}
+
+impl Pipeline {
+    /// Load `models/{detector,segmenter,depth}` from `dir` onto `runtime`
+    /// (`threads` intra-op threads for onnxruntime).
+    pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
+        let dir = dir.as_ref();
+        let flex = DeviceKind::Flex.device();
+        let device = match runtime {
+            Runtime::BurnNdarray => DeviceKind::Ndarray.device(),
+            _ => flex.clone(),
+        };
+        let (det, d) = DetectorArtifact::load(dir.join("detector"), &device)?;
+        let (seg, s) = SegmenterArtifact::load(dir.join("segmenter"), &device)?;
+        let (depth, p) = DepthArtifact::load(dir.join("depth"), &device)?;
+        let (det_net, seg_net, depth_net) = match runtime {
+            Runtime::Onnx => (
+                Net::Ort(OrtModel::from_bytes(
+                    &tactile_onnx::export_detector(&d, det.detector.input_size)?,
+                    threads,
+                )?),
+                Net::Ort(OrtModel::from_bytes(
+                    &tactile_onnx::export_segmenter(&s, seg.unet.side)?,
+                    threads,
+                )?),
+                Net::Ort(OrtModel::from_bytes(
+                    &tactile_onnx::export_depth(&p, depth.net.in_channels, depth.net.input_size)?,
+                    threads,
+                )?),
+            ),
+            _ => (
+                Net::Detector(d, device.clone()),
+                Net::Segmenter(s, device.clone()),
+                Net::Depth(p, device),
+            ),
+        };
+        let [w, h] = depth.net.input_size;
+        Ok(Self {
+            det,
+            seg,
+            depth,
+            det_net,
+            seg_net,
+            depth_net,
+            window: tactile_depth::data::window_mask(w, h),
+        })
+    }
+
+    /// Run on one frame. Frames without a tendon cost one detector pass.
+    pub fn process(&mut self, name: &str, frame: &RgbImage) -> Result<FrameRecord> {
+        let t0 = Instant::now();
+        let [dw, dh] = self.det.detector.input_size;
+        let small = resize_rgb(frame, dw, dh)?;
+        let score = if is_blank(&small) {
+            0.0
+        } else {
+            let z = self
+                .det_net
+                .run([1, 3, dh, dw], self.det.stats.to_chw(&small)?)?;
+            1.0 / (1.0 + (-z[0]).exp())
+        };
+        let tendon = score as f64 >= self.det.threshold;
+        let ms_detect = 1e3 * t0.elapsed().as_secs_f64();
+        let mut rec = FrameRecord {
+            frame: name.to_string(),
+            tendon,
+            score,
+            direction_deg: None,
+            anisotropy: None,
+            no_direction: None,
+            mask_area_px: 0,
+            depth_min_mm: None,
+            depth_mean_mm: None,
+            depth_max_mm: None,
+            ms_detect,
+            ms_segment: None,
+            ms_depth: None,
+            ms_total: ms_detect,
+        };
+        if !tendon {
+            return Ok(rec);
+        }
+        // Segment and point.
+        let t1 = Instant::now();
+        let win = self.seg.window();
+        let (sw, sh) = win.scaled_size(frame.width(), frame.height());
+        let cut = win.cut(&resize_rgb(frame, sw, sh)?, 0.0);
+        let side = win.side;
+        let probs: Vec<f32> = if is_blank(&cut) {
+            vec![0.0; side * side]
+        } else {
+            let z = self
+                .seg_net
+                .run([1, 3, side, side], self.seg.stats.to_chw(&cut)?)?;
+            z.iter().map(|&v| 1.0 / (1.0 + (-v).exp())).collect()
+        };
+        let mask = TendonMask::from_probabilities(side, side, &probs, self.seg.threshold)?;
+        let t = postprocess(&mask, &self.seg.postprocess)?;
+        rec.mask_area_px = t.region.area();
+        match t.direction {
+            Ok(d) => {
+                rec.direction_deg = Some(d.angle_deg);
+                rec.anisotropy = Some(d.anisotropy);
+            }
+            Err(why) => rec.no_direction = Some(format!("{why:?}")),
+        }
+        rec.ms_segment = Some(1e3 * t1.elapsed().as_secs_f64());
+        // Depth.
+        let t2 = Instant::now();
+        let [w, h] = self.depth.net.input_size;
+        let img = resize_rgb(frame, w, h)?;
+        let mut x = self.depth.stats.to_chw(&img)?;
+        if self.depth.with_mask {
+            return Err(Error::Config(
+                "the pipeline's depth model must take RGB only (mask-channel models are for evaluation)".into(),
+            ));
+        }
+        x.truncate(3 * w * h);
+        let z = self.depth_net.run([1, 3, h, w], x)?;
+        let mm: Vec<f32> = z
+            .iter()
+            .zip(&self.window)
+            .filter(|(_, inside)| **inside)
+            .map(|(&v, _)| self.depth.scale.to_mm(v))
+            .collect();
+        rec.depth_min_mm = mm.iter().copied().reduce(f32::min);
+        rec.depth_max_mm = mm.iter().copied().reduce(f32::max);
+        rec.depth_mean_mm = Some(mm.iter().sum::<f32>() / mm.len().max(1) as f32);
+        rec.ms_depth = Some(1e3 * t2.elapsed().as_secs_f64());
+        rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+        Ok(rec)
+    }
+}
