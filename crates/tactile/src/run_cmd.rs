@@ -29,6 +29,11 @@ pub struct RunArgs {
     /// Process at most this many frames.
     #[arg(long)]
     limit: Option<usize>,
+    /// Write an overlay PNG per tendon frame into this folder: the
+    /// segmenter's window with the kept region in green and the direction
+    /// in red, beside the depth heat map (paper B's figure 3).
+    #[arg(long)]
+    render: Option<PathBuf>,
 }
 
 fn frames(dir: &std::path::Path) -> Result<Vec<PathBuf>> {
@@ -67,7 +72,13 @@ pub fn run(a: RunArgs) -> Result<()> {
             .unwrap_or_default()
             .to_string_lossy()
             .to_string();
-        records.push(p.process(&name, &frame)?);
+        let (rec, views) = p.process_with_views(&name, &frame)?;
+        if let (Some(dir), Some(v)) = (&a.render, views) {
+            tactile_core::io::create_dir_all(dir)?;
+            let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+            v.save_png(&dir.join(format!("{stem}-overlay.png")), 4)?;
+        }
+        records.push(rec);
         pb.inc(1);
     }
     pb.finish_and_clear();

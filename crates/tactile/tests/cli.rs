@@ -936,6 +936,7 @@ fn run_gates_frames_and_agrees_across_runtimes() {
     let mut flags = Vec::new();
     for rt in ["onnx", "burn-flex", "burn-ndarray"] {
         let out = tmp.path().join(format!("{rt}.jsonl"));
+        let render = tmp.path().join(format!("render-{rt}"));
         let (ok, msg) = tactile(&[
             "run",
             "--data",
@@ -946,6 +947,8 @@ fn run_gates_frames_and_agrees_across_runtimes() {
             rt,
             "--out",
             out.to_str().unwrap(),
+            "--render",
+            render.to_str().unwrap(),
         ]);
         assert!(ok, "{rt}: {msg}");
         let recs: Vec<serde_json::Value> = std::fs::read_to_string(&out)
@@ -964,6 +967,13 @@ fn run_gates_frames_and_agrees_across_runtimes() {
                 assert!((12.0..18.0).contains(&mean), "{r}");
             }
         }
+        // One overlay per tendon frame, none for the others.
+        let overlays = std::fs::read_dir(&render).map_or(0, |r| r.count());
+        let tendon_frames = recs
+            .iter()
+            .filter(|r| r["tendon"].as_bool().unwrap())
+            .count();
+        assert_eq!(overlays, tendon_frames);
         // Before first touch (frame 0 of each video): no tendon.
         assert!(!recs[0]["tendon"].as_bool().unwrap() && !recs[12]["tendon"].as_bool().unwrap());
         flags.push(
