@@ -86,10 +86,53 @@ pub struct FrameRecord {
     pub depth_min_mm: Option<f32>,
     pub depth_mean_mm: Option<f32>,
     pub depth_max_mm: Option<f32>,
+    /// The detector's own threshold decision (before any hysteresis).
+    pub tendon_raw: bool,
     pub ms_detect: f64,
     pub ms_segment: Option<f64>,
     pub ms_depth: Option<f64>,
     pub ms_total: f64,
+}
+
+/// A two-threshold filter on the detector's probability over a sequence:
+/// a tendon appears when the probability reaches `on` and disappears when
+/// it falls below `off` (`off <= on`), so a score hovering around one
+/// threshold at an onset or release does not flicker.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hysteresis {
+    pub on: f32,
+    pub off: f32,
+    pub state: bool,
+}
+
+impl Hysteresis {
+    pub fn new(on: f32, off: f32) -> Result<Self> {
+        if !(0.0..=1.0).contains(&off) || !(0.0..=1.0).contains(&on) || off > on {
+            return Err(Error::Config(format!(
+                "hysteresis thresholds must satisfy 0 <= off <= on <= 1, got on {on}, off {off}"
+            )));
+        }
+        Ok(Self {
+            on,
+            off,
+            state: false,
+        })
+    }
+
+    /// The decision for the next frame of the sequence.
+    pub fn update(&mut self, p: f32) -> bool {
+        self.state = if self.state {
+            p >= self.off
+        } else {
+            p >= self.on
+        };
+        self.state
+    }
+
+    /// Start a new sequence (no tendon yet).
+    pub fn reset(&mut self) {
+        self.state = false;
+    }
 }
 
 /// What a tendon frame looked like to the pipeline, for overlays.
@@ -182,6 +225,11 @@ pub struct Pipeline {
 impl Pipeline {
     /// Load `models/{detector,segmenter,depth}` from `dir` onto `runtime`
     /// (`threads` intra-op threads for onnxruntime).
+    /// The detector's probability threshold.
+    pub fn threshold(&self) -> f64 {
+        self.det.threshold
+    }
+
     pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
         let dir = dir.as_ref();
         let flex = DeviceKind::Flex.device();
@@ -236,6 +284,17 @@ impl Pipeline {
         name: &str,
         frame: &RgbImage,
     ) -> Result<(FrameRecord, Option<FrameViews>)> {
+        self.process_filtered(name, frame, None)
+    }
+
+    /// [`Self::process_with_views`] with the tendon decision taken by a
+    /// hysteresis filter over the sequence instead of the fixed threshold.
+    pub fn process_filtered(
+        &mut self,
+        name: &str,
+        frame: &RgbImage,
+        filter: Option<&mut Hysteresis>,
+    ) -> Result<(FrameRecord, Option<FrameViews>)> {
         let t0 = Instant::now();
         let [dw, dh] = self.det.detector.input_size;
         let small = resize_rgb(frame, dw, dh)?;
@@ -247,12 +306,16 @@ impl Pipeline {
                 .run([1, 3, dh, dw], self.det.stats.to_chw(&small)?)?;
             1.0 / (1.0 + (-z[0]).exp())
         };
-        let tendon = score as f64 >= self.det.threshold;
+        let tendon = match filter {
+            Some(h) => h.update(score),
+            None => score as f64 >= self.det.threshold,
+        };
         let ms_detect = 1e3 * t0.elapsed().as_secs_f64();
         let mut rec = FrameRecord {
             frame: name.to_string(),
             tendon,
             score,
+            tendon_raw: score as f64 >= self.det.threshold,
             direction_deg: None,
             anisotropy: None,
             no_direction: None,
@@ -328,5 +391,24 @@ impl Pipeline {
             depth_size: [w, h],
         };
         Ok((rec, Some(views)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hysteresis_holds_through_a_dip_and_resets_per_sequence() {
+        let mut h = Hysteresis::new(0.6, 0.2).unwrap();
+        let p = [0.1, 0.5, 0.7, 0.4, 0.3, 0.1, 0.5, 0.9];
+        let got: Vec<bool> = p.iter().map(|&v| h.update(v)).collect();
+        assert_eq!(got, [false, false, true, true, true, false, false, true]);
+        h.reset();
+        assert!(!h.update(0.5));
+        assert!(Hysteresis::new(0.2, 0.6).is_err());
+        assert!(Hysteresis::new(1.5, 0.2).is_err());
+        assert!("tensorflow".parse::<Runtime>().is_err());
+        assert_eq!("burn-flex".parse::<Runtime>().unwrap(), Runtime::BurnFlex);
     }
 }

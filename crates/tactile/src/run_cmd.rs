@@ -34,12 +34,27 @@ pub struct RunArgs {
     /// in red, beside the depth heat map (paper B's figure 3).
     #[arg(long)]
     render: Option<PathBuf>,
+    /// Hysteresis on the detector over each sequence: ON,OFF probabilities
+    /// (a tendon appears at ON and disappears below OFF).
+    #[arg(long, value_delimiter = ',')]
+    hysteresis: Option<Vec<f32>>,
 }
 
-fn frames(dir: &std::path::Path) -> Result<Vec<PathBuf>> {
+/// Frames in order, with their sequence (when known) and `tendon` label.
+type Frame = (PathBuf, Option<String>, Option<bool>);
+
+fn frames(dir: &std::path::Path) -> Result<Vec<Frame>> {
     if dir.join("labels.csv").is_file() {
         let ds = tactile_core::dataset::Dataset::open(dir)?;
-        return (0..ds.len()).map(|i| Ok(ds.path_of(i, "file")?)).collect();
+        return (0..ds.len())
+            .map(|i| {
+                Ok((
+                    ds.path_of(i, "file")?,
+                    ds.text_opt(i, "sequence").map(str::to_string),
+                    ds.number_opt(i, "tendon")?.map(|v| v == 1.0),
+                ))
+            })
+            .collect();
     }
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?
@@ -50,7 +65,27 @@ fn frames(dir: &std::path::Path) -> Result<Vec<PathBuf>> {
     if v.is_empty() {
         bail!("{}: no labels.csv and no PNG frames", dir.display());
     }
-    Ok(v)
+    Ok(v.into_iter().map(|p| (p, None, None)).collect())
+}
+
+/// Accuracy against the labels and decision changes within sequences.
+fn decisions(
+    records: &[tactile_pipeline::FrameRecord],
+    frames: &[Frame],
+    raw: bool,
+) -> (Option<f64>, usize) {
+    let pick = |r: &tactile_pipeline::FrameRecord| if raw { r.tendon_raw } else { r.tendon };
+    let labelled: Vec<(bool, bool)> = records
+        .iter()
+        .zip(frames)
+        .filter_map(|(r, f)| f.2.map(|t| (pick(r), t)))
+        .collect();
+    let acc = (!labelled.is_empty())
+        .then(|| labelled.iter().filter(|(p, t)| p == t).count() as f64 / labelled.len() as f64);
+    let changes = (1..records.len())
+        .filter(|&i| frames[i].1 == frames[i - 1].1 && pick(&records[i]) != pick(&records[i - 1]))
+        .count();
+    (acc, changes)
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
@@ -62,17 +97,27 @@ pub fn run(a: RunArgs) -> Result<()> {
     if let Some(n) = a.limit {
         paths.truncate(n);
     }
+    let mut filter = match &a.hysteresis {
+        Some(v) if v.len() == 2 => Some(tactile_pipeline::Hysteresis::new(v[0], v[1])?),
+        Some(v) => bail!("--hysteresis takes ON,OFF (two probabilities), got {v:?}"),
+        None => None,
+    };
     let pb = tactile_core::train::progress_bar(paths.len() as u64, "run");
     let t0 = std::time::Instant::now();
     let mut records = Vec::with_capacity(paths.len());
-    for path in &paths {
+    for (k, (path, seq, _)) in paths.iter().enumerate() {
         let frame = tactile_core::image_io::load_rgb(path)?;
         let name = path
             .file_name()
             .unwrap_or_default()
             .to_string_lossy()
             .to_string();
-        let (rec, views) = p.process_with_views(&name, &frame)?;
+        if let Some(h) = filter.as_mut()
+            && (k == 0 || paths[k - 1].1 != *seq)
+        {
+            h.reset();
+        }
+        let (rec, views) = p.process_filtered(&name, &frame, filter.as_mut())?;
         if let (Some(dir), Some(v)) = (&a.render, views) {
             tactile_core::io::create_dir_all(dir)?;
             let stem = path.file_stem().unwrap_or_default().to_string_lossy();
@@ -104,6 +149,11 @@ pub fn run(a: RunArgs) -> Result<()> {
         }
     };
     let gated = records.iter().filter(|r| !r.tendon).count();
+    let (acc_raw, flips_raw) = decisions(&records, &paths, true);
+    let (acc, flips) = decisions(&records, &paths, false);
+    let truth_changes = (1..paths.len())
+        .filter(|&i| paths[i].1 == paths[i - 1].1 && paths[i].2 != paths[i - 1].2)
+        .count();
     let summary = serde_json::json!({
         "frames": records.len(),
         "runtime": a.runtime,
@@ -111,6 +161,12 @@ pub fn run(a: RunArgs) -> Result<()> {
         "fps": records.len() as f64 / wall.max(1e-9),
         "gated_out": gated,
         "tendon_frames": records.len() - gated,
+        "detector_accuracy": acc,
+        "decision_changes": flips,
+        "detector_accuracy_threshold_only": acc_raw,
+        "decision_changes_threshold_only": flips_raw,
+        "label_changes": truth_changes,
+        "hysteresis": a.hysteresis,
     });
     println!(
         "{} frames in {:.2} s ({:.1} frames/s, {:?}, decoding included); {} without a tendon cost one detector pass",
@@ -127,6 +183,13 @@ pub fn run(a: RunArgs) -> Result<()> {
         stage(&|r| r.ms_depth),
         stage(&|r| Some(r.ms_total))
     );
+    if let Some(acc) = acc {
+        println!(
+            "tendon decisions: accuracy {acc:.4} with {flips} changes within sequences ({} changes in the labels); the detector's threshold alone: {:.4}, {flips_raw} changes",
+            truth_changes,
+            acc_raw.unwrap_or(f64::NAN)
+        );
+    }
     if let Some(out) = &a.out {
         println!("records in {}", out.display());
     }
