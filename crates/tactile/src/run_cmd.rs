@@ -75,6 +75,31 @@ fn frames(dir: &std::path::Path) -> Result<Vec<Frame>> {
     Ok(v.into_iter().map(|p| (p, None, None)).collect())
 }
 
+/// Frame numbers missing from a numbered sequence of files (`000007.png`):
+/// the gaps between consecutive numbers, in order. A video with a dropped
+/// frame still runs; the summary says how many frames are missing.
+fn missing_frames(frames: &[Frame]) -> Vec<u64> {
+    let number = |p: &PathBuf| -> Option<u64> {
+        let stem = p.file_stem()?.to_str()?;
+        let digits: String = stem
+            .chars()
+            .rev()
+            .take_while(char::is_ascii_digit)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .rev()
+            .collect();
+        digits.parse().ok()
+    };
+    let nums: Vec<u64> = frames.iter().filter_map(|f| number(&f.0)).collect();
+    if nums.len() != frames.len() {
+        return Vec::new();
+    }
+    nums.windows(2)
+        .flat_map(|w| (w[0] + 1..w[1]).collect::<Vec<_>>())
+        .collect()
+}
+
 /// Accuracy against the labels and decision changes within sequences.
 fn decisions(
     records: &[tactile_pipeline::FrameRecord],
@@ -97,10 +122,24 @@ fn decisions(
 
 pub fn run(a: RunArgs) -> Result<()> {
     let threads = a.threads.max(1);
-    let mut p = Pipeline::load(&a.models, a.runtime, threads)?;
+    // The input first: a bad folder is reported before any model loads.
     let mut paths = frames(&a.data)?;
+    let mut p = Pipeline::load(&a.models, a.runtime, threads)?;
     if let Some(n) = a.limit {
         paths.truncate(n);
+    }
+    // Only a folder of frames is a video; a dataset lists what it has.
+    let missing = if a.data.join("labels.csv").is_file() {
+        Vec::new()
+    } else {
+        missing_frames(&paths)
+    };
+    if !missing.is_empty() {
+        eprintln!(
+            "warning: {} frame(s) missing from the numbering, e.g. {:?}",
+            missing.len(),
+            &missing[..missing.len().min(5)]
+        );
     }
     let mut filter = match &a.hysteresis {
         Some(v) if v.len() == 2 => Some(tactile_pipeline::Hysteresis::new(v[0], v[1])?),
@@ -186,6 +225,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     let summary = serde_json::json!({
         "frames": records.len(),
         "overlapped_decoding": overlap,
+        "missing_frames": missing.len(),
         "runtime": a.runtime,
         "threads": threads,
         "fps": records.len() as f64 / wall.max(1e-9),

@@ -989,3 +989,44 @@ fn run_gates_frames_and_agrees_across_runtimes() {
     let (ok, msg) = tactile(&["run", "--data", d, "--runtime", "tensorflow"]);
     assert!(!ok && msg.contains("tensorflow"), "{msg}");
 }
+
+#[test]
+fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("vt");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--sequences",
+        "1",
+        "--frames-per-sequence",
+        "6",
+        "--seed",
+        "62",
+        "--out",
+        data.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    // A 30 fps video as numbered PNGs, frame 3 lost.
+    let video = data.join("frames");
+    std::fs::remove_file(video.join("000003.png")).unwrap();
+    let (ok, msg) = tactile(&[
+        "run",
+        "--data",
+        video.to_str().unwrap(),
+        "--models",
+        root.join("models").to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    assert!(msg.contains("1 frame(s) missing"), "{msg}");
+    let json = msg.lines().find(|l| l.starts_with('{')).unwrap();
+    let v: serde_json::Value = serde_json::from_str(json).unwrap();
+    assert_eq!(v["frames"], 5);
+    assert_eq!(v["missing_frames"], 1);
+    // A folder with no frames at all is an error naming it.
+    let empty = tmp.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let (ok, msg) = tactile(&["run", "--data", empty.to_str().unwrap()]);
+    assert!(!ok && msg.contains("no PNG frames"), "{msg}");
+}
