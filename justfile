@@ -119,3 +119,7 @@ train-depth:
 bench-depth:
     eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench depth --data data/vt-test --extreme data/vt-depth-test --select data/vt-select --out docs/bench-depth.md --models data/depth/tiny-96x64 data/depth/tiny-160x96 data/depth/small-96x64 data/depth/small-160x96 data/depth/medium-96x64 data/depth/medium-160x96 data/depth/tiny-96x64-l1gs data/depth/small-96x64-l1gs
     eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- bench depth --data data/vt-test --extreme data/vt-depth-test --select data/vt-select --out docs/depth-ablation.md --models data/depth/tiny-160x96 data/depth/ablate-mse data/depth/ablate-l1-grad-ssim data/depth/ablate-custom-head data/depth/ablate-mask
+
+# docs/results.md: every shipped model's speed against its error and the pipeline's, regenerated from fresh held-out data.
+report:
+    eval "$(bash scripts/install-ort.sh)" && cargo run --release -p tactile -- report --real {{real}}

@@ -7,6 +7,7 @@ mod depth_cmds;
 mod detect_cmds;
 mod estimate_cmds;
 mod eval_cmds;
+mod report_cmd;
 mod run_cmd;
 mod segment_cmds;
 mod sweep;
@@ -77,6 +78,8 @@ enum Command {
     },
     /// Paper B's palpation pipeline over frames: detect, then segment, point and reconstruct depth on tendon frames.
     Run(run_cmd::RunArgs),
+    /// Regenerate docs/results.md: every shipped model's speed against its error, and the pipeline's.
+    Report(report_cmd::ReportArgs),
     /// Export a model to ONNX.
     Export {
         /// Model folder.
@@ -203,6 +206,7 @@ fn main() -> Result<()> {
         Command::Perceive(a) => estimate_cmds::perceive(a),
         Command::Evaluate(a) => eval_cmds::evaluate(a),
         Command::Run(a) => run_cmd::run(a),
+        Command::Report(a) => report_cmd::report(a),
         Command::Robustness(a) => eval_cmds::robustness(a),
         Command::Compare(a) => estimate_cmds::compare(a),
         Command::Sweep(a) => sweep::sweep(a),
