@@ -1030,3 +1030,37 @@ fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
     let (ok, msg) = tactile(&["run", "--data", empty.to_str().unwrap()]);
     assert!(!ok && msg.contains("no PNG frames"), "{msg}");
 }
+
+#[test]
+fn the_demo_palpation_video_is_detected_segmented_and_pointed() {
+    // samples/palpation: 12 frames of one virtual palpation over an arc
+    // tendon whose direction label is 117.3 degrees; frames 0 and 11 are
+    // before and after contact.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("r.jsonl");
+    let (ok, msg) = tactile(&[
+        "run",
+        "--data",
+        root.join("samples/palpation").to_str().unwrap(),
+        "--models",
+        root.join("models").to_str().unwrap(),
+        "--runtime",
+        "burn-flex",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let recs: Vec<serde_json::Value> = std::fs::read_to_string(&out)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(recs.len(), 12);
+    assert!(!recs[0]["tendon"].as_bool().unwrap() && !recs[11]["tendon"].as_bool().unwrap());
+    for r in &recs[3..=8] {
+        assert!(r["tendon"].as_bool().unwrap(), "{r}");
+        let d = r["direction_deg"].as_f64().unwrap();
+        assert!((d - 117.3).abs() < 5.0, "{r}");
+    }
+}
