@@ -140,3 +140,51 @@ fn an_empty_mask_has_no_direction() {
     let t = postprocess(&m, &PostprocessConfig::default()).unwrap();
     assert_eq!(t.direction, Err(NoDirection::EmptyMask));
 }
+
+/// CRC-32 (PNG's) of `bytes`.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xFFFF_FFFFu32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xEDB8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+#[test]
+fn a_frame_larger_than_8k_is_refused_before_decoding() {
+    // Only the signature, a header claiming 20000 x 20000 RGB pixels and
+    // no pixel data:
+    // decoding would need 1.2 GB; the header alone must be enough to refuse.
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(20000u32.to_be_bytes());
+    ihdr.extend(20000u32.to_be_bytes());
+    ihdr.extend([8, 2, 0, 0, 0]);
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend(13u32.to_be_bytes());
+    png.extend(&ihdr);
+    png.extend(crc32(&ihdr).to_be_bytes());
+    // An empty image-data chunk, then the end: the header is all there is.
+    for tag in [b"IDAT", b"IEND"] {
+        png.extend(0u32.to_be_bytes());
+        png.extend(tag);
+        png.extend(crc32(tag).to_be_bytes());
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("huge.png");
+    std::fs::write(&path, png).unwrap();
+    let e = detector()
+        .probability_of_file(&path)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("huge.png") && e.contains("20000x20000") && e.contains("8K"),
+        "{e}"
+    );
+}

@@ -40,12 +40,29 @@ fn describe(color: ColorType) -> &'static str {
     }
 }
 
+/// Largest image decoded, in pixels (8K UHD, 7680 x 4320): the header is
+/// read first, so a bigger file is refused before its pixels are allocated.
+pub const MAX_IMAGE_PIXELS: u64 = 7680 * 4320;
+
 fn decode(path: &Path) -> Result<DynamicImage> {
-    let reader = ImageReader::open(path)
-        .map_err(|e| Error::io(path, e))?
-        .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?;
-    reader
+    let open = || -> Result<ImageReader<std::io::BufReader<std::fs::File>>> {
+        ImageReader::open(path)
+            .map_err(|e| Error::io(path, e))?
+            .with_guessed_format()
+            .map_err(|e| Error::io(path, e))
+    };
+    let (w, h) = open()?
+        .into_dimensions()
+        .map_err(|e| Error::image(path, format!("cannot read the image header: {e}")))?;
+    if w as u64 * h as u64 > MAX_IMAGE_PIXELS {
+        return Err(Error::image(
+            path,
+            format!(
+                "image is {w}x{h}, larger than 8K ({MAX_IMAGE_PIXELS} pixels); refusing to decode it"
+            ),
+        ));
+    }
+    open()?
         .decode()
         .map_err(|e| Error::image(path, format!("cannot decode image: {e}")))
 }
