@@ -172,6 +172,21 @@ pub struct FitSummary {
     pub train_items: usize,
 }
 
+impl FitSummary {
+    /// One line for the command line: best epoch, its validation loss and
+    /// metric (called `metric`), and the training time.
+    pub fn describe(&self, metric: &str) -> String {
+        format!(
+            "best epoch {} of {}: validation loss {:.4}, {metric} {:.4}; {:.0} s",
+            self.best_epoch,
+            self.epochs_run,
+            self.best_val_loss,
+            self.best_val_metric.unwrap_or(f64::NAN),
+            self.seconds
+        )
+    }
+}
+
 #[derive(Serialize, Deserialize)]
 struct FitState {
     next_epoch: usize,

@@ -111,15 +111,7 @@ pub fn train(a: TrainDepthArgs) -> Result<()> {
         a.resume,
         serde_json::json!({ "trained_on": a.data.display().to_string(), "device": a.device.name(), "encoder": a.encoder }),
     )?;
-    println!(
-        "best epoch {} of {}: validation loss {:.4}, MAE {:.4} mm; {:.0} s; model in {}",
-        s.best_epoch,
-        s.epochs_run,
-        s.best_val_loss,
-        s.best_val_metric.unwrap_or(f64::NAN),
-        s.seconds,
-        a.out.display()
-    );
+    println!("{}; model in {}", s.describe("MAE (mm)"), a.out.display());
     Ok(())
 }
 

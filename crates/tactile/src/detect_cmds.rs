@@ -124,12 +124,8 @@ pub fn train(a: TrainDetectorArgs) -> Result<()> {
     )?;
     let (t, acc) = tactile_detect::training::calibrate(&a.out, &data, &val, &dev)?;
     println!(
-        "best epoch {} of {}: validation loss {:.4}, accuracy {:.4} at threshold 0.5, {acc:.4} at the chosen {t:.2}; {:.0} s; model in {}",
-        s.best_epoch,
-        s.epochs_run,
-        s.best_val_loss,
-        s.best_val_metric.unwrap_or(f64::NAN),
-        s.seconds,
+        "{} (accuracy {acc:.4} at the chosen threshold {t:.2}); model in {}",
+        s.describe("accuracy at threshold 0.5"),
         a.out.display()
     );
     Ok(())

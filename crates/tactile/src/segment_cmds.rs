@@ -101,15 +101,7 @@ pub fn train(a: TrainSegmenterArgs) -> Result<()> {
         a.resume,
         serde_json::json!({ "trained_on": a.data.display().to_string(), "device": a.device.name(), "copies": a.copies }),
     )?;
-    println!(
-        "best epoch {} of {}: validation loss {:.4}, mean IoU {:.4}; {:.0} s; model in {}",
-        s.best_epoch,
-        s.epochs_run,
-        s.best_val_loss,
-        s.best_val_metric.unwrap_or(f64::NAN),
-        s.seconds,
-        a.out.display()
-    );
+    println!("{}; model in {}", s.describe("mean IoU"), a.out.display());
     Ok(())
 }
 
