@@ -188,3 +188,50 @@ fn a_frame_larger_than_8k_is_refused_before_decoding() {
         "{e}"
     );
 }
+
+/// A PNG chunk: length, tag, data, CRC.
+fn chunk(tag: &[u8; 4], data: &[u8]) -> Vec<u8> {
+    let mut body = tag.to_vec();
+    body.extend(data);
+    let mut out = (data.len() as u32).to_be_bytes().to_vec();
+    out.extend(&body);
+    out.extend(crc32(&body).to_be_bytes());
+    out
+}
+
+#[test]
+fn a_palette_png_is_expanded_to_rgb() {
+    // 64 x 36, 8-bit palette of two colours, stored (uncompressed) deflate.
+    let (w, h) = (64u32, 36u32);
+    let mut raw = Vec::new();
+    for y in 0..h {
+        raw.push(0); // filter: none
+        raw.extend((0..w).map(|x| ((x / 8 + y / 8) % 2) as u8));
+    }
+    let mut z = vec![0x78, 0x01, 0x01];
+    z.extend((raw.len() as u16).to_le_bytes());
+    z.extend((!(raw.len() as u16)).to_le_bytes());
+    z.extend(&raw);
+    let (mut a, mut b) = (1u32, 0u32);
+    for &v in &raw {
+        a = (a + v as u32) % 65521;
+        b = (b + a) % 65521;
+    }
+    z.extend(((b << 16) | a).to_be_bytes());
+    let mut ihdr = w.to_be_bytes().to_vec();
+    ihdr.extend(h.to_be_bytes());
+    ihdr.extend([8, 3, 0, 0, 0]);
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend(chunk(b"IHDR", &ihdr));
+    png.extend(chunk(b"PLTE", &[20, 20, 20, 200, 200, 200]));
+    png.extend(chunk(b"IDAT", &z));
+    png.extend(chunk(b"IEND", &[]));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("palette.png");
+    std::fs::write(&path, png).unwrap();
+    let img = tactile_rs::core::image_io::load_rgb(&path).unwrap();
+    assert_eq!((img.width(), img.height()), (64, 36));
+    assert_eq!(&img.as_slice()[..3], &[20, 20, 20]);
+    let p = detector().probability_of_file(&path).unwrap();
+    assert!(p.is_finite());
+}
