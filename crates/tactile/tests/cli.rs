@@ -147,6 +147,22 @@ fn labels_with_missing_file_or_bad_number_name_the_line() {
         !ok && msg.contains("labels.csv:3") && msg.contains("'zero'"),
         "{msg}"
     );
+    // NaN and infinity in a label are refused, naming the line and the value.
+    for bad in ["NaN", "inf", "-inf"] {
+        std::fs::write(
+            &labels,
+            text.replace(
+                "frames/1.png,sphere,0,0",
+                &format!("frames/1.png,sphere,0,{bad}"),
+            ),
+        )
+        .unwrap();
+        let (ok, msg) = train_one_epoch(&data, &out);
+        assert!(
+            !ok && msg.contains("labels.csv:3") && msg.contains("not a finite number"),
+            "{bad}: {msg}"
+        );
+    }
     assert!(!out.exists(), "nothing may be written for a bad dataset");
 }
 
