@@ -49,6 +49,20 @@ impl DetectorArtifact {
         )
     }
 
+    /// The normalised `3 x H x W` input of an RGB frame of any size, or
+    /// `None` for a blank frame (see [`is_blank`]), which shows no tendon.
+    pub fn frame_input(
+        &self,
+        frame: &tactile_core::image_io::RgbImage,
+    ) -> Result<Option<Vec<f32>>> {
+        let [w, h] = self.detector.input_size;
+        let img = tactile_preprocess::visuo::resize_rgb(frame, w, h)?;
+        if is_blank(&img) {
+            return Ok(None);
+        }
+        Ok(Some(self.stats.to_chw(&img)?))
+    }
+
     /// Normalised `[N, 3, H, W]` input from frames already at the input size.
     pub fn input(&self, frames: &[FloatImage], device: &Device) -> Result<Tensor<4>> {
         let [w, h] = self.detector.input_size;
@@ -95,12 +109,13 @@ impl TendonDetector {
     /// far-from-training inputs would be arbitrary.
     pub fn probability(&self, frame: &tactile_core::image_io::RgbImage) -> Result<f32> {
         let [w, h] = self.artifact.detector.input_size;
-        let img = tactile_preprocess::visuo::resize_rgb(frame, w, h)?;
-        if is_blank(&img) {
-            return Ok(0.0);
+        match self.artifact.frame_input(frame)? {
+            None => Ok(0.0),
+            Some(x) => {
+                let t = Tensor::from_data(TensorData::new(x, [1, 3, h, w]), &self.device);
+                Ok(self.model.probabilities(t)?[0])
+            }
         }
-        let x = self.artifact.input(&[img], &self.device)?;
-        Ok(self.model.probabilities(x)?[0])
     }
 
     /// Tendon probability of a frame file; errors name the file.

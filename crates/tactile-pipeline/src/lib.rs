@@ -15,7 +15,7 @@ use tactile_depth::{DepthArtifact, DepthNet};
 use tactile_detect::{Detector, DetectorArtifact};
 use tactile_onnx::OrtModel;
 use tactile_preprocess::visuo::{is_blank, resize_rgb};
-use tactile_segment::{SegmenterArtifact, TendonMask, UNet, postprocess};
+use tactile_segment::{SegmenterArtifact, UNet};
 
 /// Where the networks run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -297,14 +297,12 @@ impl Pipeline {
     ) -> Result<(FrameRecord, Option<FrameViews>)> {
         let t0 = Instant::now();
         let [dw, dh] = self.det.detector.input_size;
-        let small = resize_rgb(frame, dw, dh)?;
-        let score = if is_blank(&small) {
-            0.0
-        } else {
-            let z = self
-                .det_net
-                .run([1, 3, dh, dw], self.det.stats.to_chw(&small)?)?;
-            1.0 / (1.0 + (-z[0]).exp())
+        let score = match self.det.frame_input(frame)? {
+            None => 0.0,
+            Some(x) => {
+                let z = self.det_net.run([1, 3, dh, dw], x)?;
+                1.0 / (1.0 + (-z[0]).exp())
+            }
         };
         let tendon = match filter {
             Some(h) => h.update(score),
@@ -333,20 +331,17 @@ impl Pipeline {
         }
         // Segment and point.
         let t1 = Instant::now();
-        let win = self.seg.window();
-        let (sw, sh) = win.scaled_size(frame.width(), frame.height());
-        let cut = win.cut(&resize_rgb(frame, sw, sh)?, 0.0);
-        let side = win.side;
-        let probs: Vec<f32> = if is_blank(&cut) {
-            vec![0.0; side * side]
+        let cut = self.seg.frame_window(frame)?;
+        let side = self.seg.unet.side;
+        let t = if is_blank(&cut) {
+            self.seg.tendon(None)?
         } else {
             let z = self
                 .seg_net
                 .run([1, 3, side, side], self.seg.stats.to_chw(&cut)?)?;
-            z.iter().map(|&v| 1.0 / (1.0 + (-v).exp())).collect()
+            let probs: Vec<f32> = z.iter().map(|&v| 1.0 / (1.0 + (-v).exp())).collect();
+            self.seg.tendon(Some(&probs))?
         };
-        let mask = TendonMask::from_probabilities(side, side, &probs, self.seg.threshold)?;
-        let t = postprocess(&mask, &self.seg.postprocess)?;
         rec.mask_area_px = t.region.area();
         let mut direction = None;
         match t.direction {

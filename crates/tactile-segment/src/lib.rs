@@ -55,6 +55,29 @@ impl SegmenterArtifact {
         )
     }
 
+    /// The segmenter's (unrotated) window of an RGB frame of any size.
+    pub fn frame_window(&self, frame: &tactile_core::image_io::RgbImage) -> Result<FloatImage> {
+        let win = self.window();
+        let (sw, sh) = win.scaled_size(frame.width(), frame.height());
+        Ok(win.cut(&tactile_preprocess::visuo::resize_rgb(frame, sw, sh)?, 0.0))
+    }
+
+    /// Post-processed tendon from the window's per-pixel probabilities;
+    /// `None` (a blank window: nothing to segment) gives an empty mask and
+    /// hence no direction.
+    pub fn tendon(&self, probabilities: Option<&[f32]>) -> Result<Tendon> {
+        let s = self.unet.side;
+        let mask = match probabilities {
+            Some(p) => TendonMask::from_probabilities(s, s, p, self.threshold)?,
+            None => TendonMask {
+                width: s,
+                height: s,
+                pixels: vec![false; s * s],
+            },
+        };
+        postprocess(&mask, &self.postprocess)
+    }
+
     /// Normalised `[N, 3, S, S]` input from windows.
     pub fn input(&self, windows: &[FloatImage], device: &Device) -> Result<Tensor<4>> {
         let s = self.unet.side;
@@ -96,26 +119,13 @@ impl TendonSegmenter {
     /// and its direction (or why there is none). A blank window (see
     /// [`tactile_preprocess::visuo::is_blank`]) gives an empty mask.
     pub fn segment(&self, frame: &tactile_core::image_io::RgbImage) -> Result<Tendon> {
-        let win = self.artifact.window();
-        let (sw, sh) = win.scaled_size(frame.width(), frame.height());
-        let scaled = tactile_preprocess::visuo::resize_rgb(frame, sw, sh)?;
-        let cut = win.cut(&scaled, 0.0);
-        let s = win.side;
+        let cut = self.artifact.frame_window(frame)?;
         if tactile_preprocess::visuo::is_blank(&cut) {
-            // Nothing to segment: an empty mask, hence no direction.
-            return postprocess(
-                &TendonMask {
-                    width: s,
-                    height: s,
-                    pixels: vec![false; s * s],
-                },
-                &self.artifact.postprocess,
-            );
+            return self.artifact.tendon(None);
         }
         let x = self.artifact.input(&[cut], &self.device)?;
         let p = self.model.probabilities(x)?.remove(0);
-        let mask = TendonMask::from_probabilities(s, s, &p, self.artifact.threshold)?;
-        postprocess(&mask, &self.artifact.postprocess)
+        self.artifact.tendon(Some(&p))
     }
 
     /// [`Self::segment`] of a frame file; errors name the file.

@@ -50,6 +50,13 @@ fn latencies(
     Ok(out)
 }
 
+/// The latency (ms) of the runtime whose name contains `k`, or "-".
+fn ms_cell(lat: &[(String, f64)], k: &str) -> String {
+    lat.iter()
+        .find(|l| l.0.contains(k))
+        .map_or("-".into(), |l| format!("{:.2}", l.1))
+}
+
 /// Seeded stand-in input values (latency does not depend on them).
 fn input(n: usize) -> Vec<f32> {
     (0..n)
@@ -139,26 +146,29 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
     md.push_str("| model | architecture | width | input | parameters | accuracy (selection set) | accuracy | F1 | onset/release accuracy | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     let sel_ds = a.select.as_ref().map(Dataset::open).transpose()?;
     let mut series = Vec::new();
-    let mut cache: Vec<([usize; 2], DetectionSet)> = Vec::new();
+    // Frames are loaded once per input size (test and selection sets).
+    type Sets = ([usize; 2], DetectionSet, Option<DetectionSet>);
+    let mut cache: Vec<Sets> = Vec::new();
     for m in &a.models {
         let (art, model) = DetectorArtifact::load(m, &DeviceKind::Flex.device())?;
         let size = art.detector.input_size;
-        if !cache.iter().any(|(s, _)| *s == size) {
+        if !cache.iter().any(|c| c.0 == size) {
             eprintln!("loading {} at {}x{}", a.data.display(), size[0], size[1]);
-            cache.push((size, DetectionSet::from_dataset(&ds, size)?));
+            let sel = sel_ds
+                .as_ref()
+                .map(|d| DetectionSet::from_dataset(d, size))
+                .transpose()?;
+            cache.push((size, DetectionSet::from_dataset(&ds, size)?, sel));
         }
-        let data = &cache.iter().find(|(s, _)| *s == size).expect("cached").1;
+        let (_, data, sel_data) = cache.iter().find(|c| c.0 == size).expect("cached");
         let sc = crate::detect_cmds::score(m, data, DeviceKind::Flex)?;
-        let sel = match &sel_ds {
-            Some(ds) => {
-                let d = DetectionSet::from_dataset(ds, size)?;
-                format!(
-                    "{:.4}",
-                    crate::detect_cmds::score(m, &d, DeviceKind::Flex)?
-                        .all
-                        .accuracy
-                )
-            }
+        let sel = match sel_data {
+            Some(d) => format!(
+                "{:.4}",
+                crate::detect_cmds::score(m, d, DeviceKind::Flex)?
+                    .all
+                    .accuracy
+            ),
             None => "-".into(),
         };
         let onnx = tactile_onnx::export_detector(&model, size)?;
@@ -175,11 +185,7 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
             },
             &onnx,
         )?;
-        let ms = |k: &str| {
-            lat.iter()
-                .find(|l| l.0.contains(k))
-                .map_or("-".into(), |l| format!("{:.2}", l.1))
-        };
+        let ms = |k: &str| ms_cell(&lat, k);
         md.push_str(&format!(
             "| {} | {:?} | {} | {}x{} | {} | {sel} | {:.4} | {:.4} | {:.4} | {} | {} | {} |\n",
             m.file_name().unwrap_or_default().to_string_lossy(),
@@ -242,11 +248,7 @@ pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
             },
             &onnx,
         )?;
-        let ms = |k: &str| {
-            lat.iter()
-                .find(|l| l.0.contains(k))
-                .map_or("-".into(), |l| format!("{:.2}", l.1))
-        };
+        let ms = |k: &str| ms_cell(&lat, k);
         let iou = |p: &str| row(p).map_or("-".into(), |r| format!("{:.4}", r.mean_iou));
         let dir = |p: &str| {
             row(p).map_or("-".into(), |r| {
@@ -326,11 +328,7 @@ pub fn bench_depth(a: BenchModelsArgs) -> Result<()> {
             },
             &onnx,
         )?;
-        let ms = |k: &str| {
-            lat.iter()
-                .find(|l| l.0.contains(k))
-                .map_or("-".into(), |l| format!("{:.2}", l.1))
-        };
+        let ms = |k: &str| ms_cell(&lat, k);
         let training: serde_json::Value =
             tactile_core::io::read_json(m.join("training.json")).unwrap_or_default();
         md.push_str(&format!(
