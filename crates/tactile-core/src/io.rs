@@ -65,6 +65,35 @@ pub fn create_dir_all(path: impl AsRef<Path>) -> Result<()> {
     std::fs::create_dir_all(path).map_err(|e| Error::io(path, e))
 }
 
+/// Create `dir` if needed and prove a file can be written in it (a
+/// temporary file, removed at once), so a command fails before its work,
+/// naming the folder, instead of after it.
+pub fn ensure_writable_dir(dir: impl AsRef<Path>) -> Result<()> {
+    let dir = dir.as_ref();
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    create_dir_all(dir)?;
+    tempfile::Builder::new()
+        .prefix(".tactile-probe-")
+        .tempfile_in(dir)
+        .map(drop)
+        .map_err(|e| {
+            Error::Invalid(format!(
+                "{}: cannot write in this folder ({})",
+                dir.display(),
+                e.kind()
+            ))
+        })
+}
+
+/// [`ensure_writable_dir`] for the folder an output file will go into.
+pub fn ensure_writable_parent(file: impl AsRef<Path>) -> Result<()> {
+    ensure_writable_dir(file.as_ref().parent().unwrap_or(Path::new(".")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -18,6 +18,9 @@ pub struct DetectionSet {
     /// Frames within two frames of a label change in their sequence (the
     /// onset and release of contact with the tendon).
     pub transition: Vec<bool>,
+    /// The ridge amplitude `A` (mm) of each frame where the dataset gives
+    /// one (`ridge_mm`, written by datasets-synth); used for soft labels.
+    pub ridge_mm: Vec<Option<f64>>,
 }
 
 impl DetectionSet {
@@ -52,6 +55,9 @@ impl DetectionSet {
             })
             .collect::<Result<Vec<_>>>()?;
         let transition = transitions(ds, &tendon)?;
+        let ridge_mm = (0..ds.len())
+            .map(|i| ds.number_opt(i, "ridge_mm"))
+            .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             width,
             height,
@@ -59,11 +65,30 @@ impl DetectionSet {
             frames,
             tendon,
             transition,
+            ridge_mm,
         })
     }
 
     pub fn len(&self) -> usize {
         self.frames.len()
+    }
+
+    /// Append another set loaded at the same size (training on several
+    /// datasets); its frames follow this set's, so its indices shift by
+    /// the old `len()`.
+    pub fn append(&mut self, other: DetectionSet) -> Result<()> {
+        if (other.width, other.height) != (self.width, self.height) {
+            return Err(Error::Invalid(format!(
+                "cannot join frames loaded at {}x{} to frames at {}x{}",
+                other.width, other.height, self.width, self.height
+            )));
+        }
+        self.files.extend(other.files);
+        self.frames.extend(other.frames);
+        self.tendon.extend(other.tendon);
+        self.transition.extend(other.transition);
+        self.ridge_mm.extend(other.ridge_mm);
+        Ok(())
     }
 
     pub fn is_empty(&self) -> bool {
@@ -97,6 +122,65 @@ impl DetectionSet {
         let v: Vec<f32> = idx.iter().map(|&i| self.tendon[i] as u8 as f32).collect();
         Tensor::from_data(TensorData::new(v, [idx.len(), 1]), device)
     }
+
+    /// `[N, 1]` training targets: the 0/1 labels, or with `soft` the
+    /// [`SoftLabels::target`] of each frame's ridge amplitude.
+    pub fn targets(&self, idx: &[usize], soft: Option<&SoftLabels>, device: &Device) -> Tensor<2> {
+        let Some(soft) = soft else {
+            return self.labels(idx, device);
+        };
+        let v: Vec<f32> = idx
+            .iter()
+            .map(|&i| soft.target(self.tendon[i], self.ridge_mm[i]))
+            .collect();
+        Tensor::from_data(TensorData::new(v, [idx.len(), 1]), device)
+    }
+
+    /// Refuse soft labels for a dataset without `ridge_mm`.
+    pub fn check_soft_labels(&self, labels_file: &std::path::Path) -> Result<()> {
+        match self.ridge_mm.iter().position(Option::is_none) {
+            None => Ok(()),
+            Some(i) => Err(Error::dataset(
+                labels_file,
+                None,
+                format!(
+                    "soft labels need the column 'ridge_mm' on every frame ({} has none)",
+                    self.files[i]
+                ),
+            )),
+        }
+    }
+}
+
+/// Soft detector targets from the ridge amplitude: the label is a hard
+/// threshold on `A` (sensors.md: `tendon` needs `A >= 0.03` mm), so frames
+/// near it are nearly indistinguishable; training the logit toward
+/// `ln(A / threshold) / width` teaches the network to measure the ridge
+/// rather than to memorise which side of the line each frame fell on.
+#[derive(burn::config::Config, Debug, PartialEq)]
+pub struct SoftLabels {
+    /// The label's amplitude threshold (mm).
+    pub threshold_mm: f64,
+    /// Width of the transition in natural-log units of `A`.
+    pub width: f64,
+}
+
+impl SoftLabels {
+    /// The target probability; frames labelled 0 although their ridge is
+    /// above the threshold (tendon out of view) stay at 0, and the target
+    /// never contradicts the label.
+    pub fn target(&self, tendon: bool, ridge_mm: Option<f64>) -> f32 {
+        let hard = tendon as u8 as f32;
+        let Some(a) = ridge_mm.filter(|a| a.is_finite()) else {
+            return hard;
+        };
+        if !tendon && a >= self.threshold_mm {
+            return 0.0;
+        }
+        let z = (a.max(1e-6) / self.threshold_mm).ln() / self.width.max(1e-6);
+        let p = (1.0 / (1.0 + (-z).exp())) as f32;
+        if tendon { p.max(0.5) } else { p.min(0.5) }
+    }
 }
 
 /// Quantise a [0, 1] image to bytes.
@@ -128,4 +212,26 @@ fn transitions(ds: &Dataset, tendon: &[bool]) -> Result<Vec<bool>> {
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SoftLabels;
+
+    #[test]
+    fn soft_targets_follow_the_ridge_and_never_contradict_the_label() {
+        let s = SoftLabels::new(0.03, 0.2);
+        // At the threshold the target is one half; far from it, the label.
+        assert!((s.target(true, Some(0.03)) - 0.5).abs() < 1e-6);
+        assert!(s.target(true, Some(0.3)) > 0.999);
+        assert!(s.target(false, Some(0.001)) < 1e-3);
+        // Graded near the threshold, monotone in the amplitude.
+        let (lo, hi) = (s.target(false, Some(0.027)), s.target(true, Some(0.034)));
+        assert!(lo > 0.3 && lo < 0.5 && hi > 0.5 && hi < 0.7, "{lo} {hi}");
+        // A tendon out of view (label 0, big ridge) stays a hard negative.
+        assert_eq!(s.target(false, Some(0.5)), 0.0);
+        // No amplitude, or a NaN one: the hard label.
+        assert_eq!(s.target(true, None), 1.0);
+        assert_eq!(s.target(false, Some(f64::NAN)), 0.0);
+    }
 }

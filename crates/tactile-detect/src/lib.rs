@@ -16,7 +16,7 @@ use tactile_core::module_io::{load_artifact, save_artifact};
 use tactile_core::{Error, Result};
 use tactile_preprocess::visuo::{ChannelStats, FloatImage};
 
-pub use data::DetectionSet;
+pub use data::{DetectionSet, SoftLabels};
 pub use model::{Architecture, Detector, DetectorConfig};
 
 /// File names inside a detector folder.

@@ -10,7 +10,7 @@ use tactile_core::train::{FitConfig, FitSummary, fit};
 use tactile_core::{Error, Result};
 use tactile_preprocess::visuo::ChannelStats;
 
-use crate::{DetectionSet, Detector, DetectorArtifact, DetectorConfig};
+use crate::{DetectionSet, Detector, DetectorArtifact, DetectorConfig, SoftLabels};
 
 #[derive(Config, Debug)]
 pub struct DetectorTrainingConfig {
@@ -29,6 +29,8 @@ pub struct DetectorTrainingConfig {
     pub lr_decay: f64,
     #[config(default = 42)]
     pub seed: u64,
+    /// Train toward soft targets from the ridge amplitude (None: 0/1).
+    pub soft_labels: Option<SoftLabels>,
 }
 
 /// Weights that make both classes count equally: `n / (2 n_class)`.
@@ -157,7 +159,8 @@ pub fn train_detector(
         resume,
         |m: &Detector, batch, _| {
             let x = data.batch(batch, &stats, &ad)?;
-            Ok(weighted_bce(m.forward(x), data.labels(batch, &ad), weights))
+            let y = data.targets(batch, config.soft_labels.as_ref(), &ad);
+            Ok(weighted_bce(m.forward(x), y, weights))
         },
         |m| {
             let p = predict(m, data, val, &stats, 64, device)?;

@@ -102,6 +102,19 @@ pub fn bench_cae(a: BenchCaeArgs) -> Result<()> {
     print!("{md}");
     if let Some(out) = a.out {
         tactile_core::io::write_atomic(&out, md.as_bytes())?;
+        // The same numbers for `tactile report`, beside the table.
+        let ms: serde_json::Map<String, serde_json::Value> = rows_out
+            .iter()
+            .map(|(name, _, t1, _)| (name.clone(), serde_json::json!(t1 * 1e3)))
+            .collect();
+        tactile_core::io::write_json_atomic(
+            out.with_extension("json"),
+            &serde_json::json!([{
+                "model": a.model.file_name().unwrap_or_default().to_string_lossy(),
+                "metrics": { "reconstruction_bce": bce, "shape_accuracy": head_acc },
+                "ms": ms,
+            }]),
+        )?;
     }
     Ok(())
 }

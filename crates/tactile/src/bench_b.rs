@@ -100,15 +100,33 @@ fn header(what: &str, data: &Path, runs: usize) -> String {
     )
 }
 
+/// One model's row for the JSON beside the table: its error metrics and
+/// the median milliseconds per runtime (read back by `tactile report`).
+fn row_json(model: &Path, metrics: serde_json::Value, lat: &[(String, f64)]) -> serde_json::Value {
+    let ms: serde_json::Map<String, serde_json::Value> = lat
+        .iter()
+        .map(|(k, v)| (k.clone(), serde_json::json!(v)))
+        .collect();
+    serde_json::json!({
+        "model": model.file_name().unwrap_or_default().to_string_lossy(),
+        "metrics": metrics,
+        "ms": ms,
+    })
+}
+
+/// Print the table; with `out`, write it, its plot (NAME.png) and its rows
+/// as JSON (NAME.json).
 fn finish(
     out: &Option<PathBuf>,
     mut md: String,
     title: &str,
     y_label: &str,
     series: Vec<Series>,
+    rows: Vec<serde_json::Value>,
 ) -> Result<()> {
     print!("{md}");
     if let Some(out) = out {
+        tactile_core::io::write_json_atomic(out.with_extension("json"), &rows)?;
         let png = out.with_extension("png");
         line_plot(
             &png,
@@ -146,6 +164,7 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
     md.push_str("| model | architecture | width | input | parameters | accuracy (selection set) | accuracy | F1 | onset/release accuracy | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     let sel_ds = a.select.as_ref().map(Dataset::open).transpose()?;
     let mut series = Vec::new();
+    let mut rows = Vec::new();
     // Frames are loaded once per input size (test and selection sets).
     type Sets = ([usize; 2], DetectionSet, Option<DetectionSet>);
     let mut cache: Vec<Sets> = Vec::new();
@@ -162,15 +181,15 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
         }
         let (_, data, sel_data) = cache.iter().find(|c| c.0 == size).expect("cached");
         let sc = crate::detect_cmds::score(m, data, DeviceKind::Flex)?;
-        let sel = match sel_data {
-            Some(d) => format!(
-                "{:.4}",
+        let sel_acc = match sel_data {
+            Some(d) => Some(
                 crate::detect_cmds::score(m, d, DeviceKind::Flex)?
                     .all
-                    .accuracy
+                    .accuracy,
             ),
-            None => "-".into(),
+            None => None,
         };
+        let sel = sel_acc.map_or("-".into(), |v| format!("{v:.4}"));
         let onnx = tactile_onnx::export_detector(&model, size)?;
         let shape = [1, 3, size[1], size[0]];
         let lat = latencies(
@@ -202,6 +221,16 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
             ms("onnxruntime"),
         ));
         add_points(&mut series, &lat, 100.0 * (1.0 - sc.all.accuracy));
+        rows.push(row_json(
+            m,
+            serde_json::json!({
+                "accuracy": sc.all.accuracy,
+                "f1": sc.all.f1,
+                "onset_release_accuracy": sc.onset_release.accuracy,
+                "selection_accuracy": sel_acc,
+            }),
+            &lat,
+        ));
     }
     md.push_str(
         "\nThe shipped `models/detector` is the smallest whose selection-set accuracy reaches the 0.99 target. Paper B: MobileNetV3-small 0.958 test accuracy at 11 ms, ResNet-18 85 ms (Intel i7).\n",
@@ -212,6 +241,7 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
         "Detector: error against latency",
         "error (%)",
         series,
+        rows,
     )
 }
 
@@ -222,6 +252,7 @@ pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
     md.push_str("| model | window | base | parameters | IoU all (selection set) | IoU all | IoU curved | direction straight median / p90 (deg) | direction curved median / p90 (deg) | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     let sel_ds = a.select.as_ref().map(Dataset::open).transpose()?;
     let mut series = Vec::new();
+    let mut rows = Vec::new();
     for m in &a.models {
         let (art, model) = SegmenterArtifact::load(m, &DeviceKind::Flex.device())?;
         let (table, _) = crate::segment_cmds::score(m, &ds, DeviceKind::Flex)?;
@@ -270,6 +301,17 @@ pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
         ));
         let all = row("all").map_or(f64::NAN, |r| r.mean_iou);
         add_points(&mut series, &lat, 1.0 - all);
+        let num = |p: &str, f: fn(&crate::segment_cmds::PathScores) -> f64| row(p).map(f);
+        rows.push(row_json(
+            m,
+            serde_json::json!({
+                "iou": num("all", |r| r.mean_iou),
+                "iou_curved": num("curved (arc + s-curve)", |r| r.mean_iou),
+                "direction_straight_median_deg": num("straight", |r| r.direction_median_deg),
+                "direction_straight_p90_deg": num("straight", |r| r.direction_p90_deg),
+            }),
+            &lat,
+        ));
     }
     md.push_str(
         "\nThe shipped `models/segmenter` is the smallest meeting every target on the selection set (IoU 0.85 over all tendon frames, 0.80 on curved ones, straight-tendon direction median 3 and 90th percentile 10 degrees). Paper B: IoU 0.879 validation, 0.196 on the curved test tendon; 69 ms (Intel i7).\n",
@@ -280,6 +322,7 @@ pub fn bench_segmenter(a: BenchModelsArgs) -> Result<()> {
         "Segmenter: 1 - IoU against latency",
         "1 - mean IoU",
         series,
+        rows,
     )
 }
 
@@ -291,6 +334,7 @@ pub fn bench_depth(a: BenchModelsArgs) -> Result<()> {
     let sel_ds = a.select.as_ref().map(Dataset::open).transpose()?;
     let ext_ds = a.extreme.as_ref().map(Dataset::open).transpose()?;
     let mut series = Vec::new();
+    let mut rows = Vec::new();
     for m in &a.models {
         let (art, model) = DepthArtifact::load(m, &DeviceKind::Flex.device())?;
         let (s, _) = crate::depth_cmds::score(m, &ds, DeviceKind::Flex)?;
@@ -348,6 +392,16 @@ pub fn bench_depth(a: BenchModelsArgs) -> Result<()> {
             ms("onnxruntime"),
         ));
         add_points(&mut series, &lat, s.mae_mm);
+        rows.push(row_json(
+            m,
+            serde_json::json!({
+                "mae_window_mm": s.mae_mm,
+                "mae_tendon_mm": s.mae_tendon_mm,
+                "rmse_mm": s.rmse_mm,
+                "ssim": s.ssim,
+            }),
+            &lat,
+        ));
     }
     md.push_str("\nThe shipped `models/depth` is the smallest meeting every target on the selection set (MAE at most 0.05 mm in the window and 0.10 mm over the tendon mask, SSIM at least 0.97). Paper B: MAE 0.050 mm and SSIM 0.960 on validation, 4.18 mm and 0.941 on an independent run. DenseTact: 0.28 mm.\n");
     finish(
@@ -356,5 +410,6 @@ pub fn bench_depth(a: BenchModelsArgs) -> Result<()> {
         "Depth: MAE against latency",
         "MAE in the window (mm)",
         series,
+        rows,
     )
 }

@@ -110,6 +110,8 @@ fn train_val(
 
 pub fn train_cae(a: TrainCaeArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
+    // An unwritable output folder fails now, not at the first checkpoint.
+    tactile_core::io::ensure_writable_dir(&a.out)?;
     let pre = PreprocessConfig::preset(&a.preprocess)?;
     let widths: [usize; 4] = a
         .widths

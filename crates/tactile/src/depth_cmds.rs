@@ -75,6 +75,7 @@ fn head(s: &str) -> Result<HeadKind> {
 
 pub fn train(a: TrainDepthArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
+    tactile_core::io::ensure_writable_dir(&a.out)?;
     let net = DepthNetConfig::new(DenseNetConfig::preset(&a.encoder)?, a.input)
         .with_head(head(&a.head)?)
         .with_decoder_width(a.decoder_width)

@@ -2,13 +2,13 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use tactile_core::DeviceKind;
 use tactile_core::dataset::Dataset;
 use tactile_core::metrics::binary_scores;
 use tactile_detect::training::{DetectorTrainingConfig, predict, train_detector};
-use tactile_detect::{Architecture, DetectionSet, DetectorArtifact, DetectorConfig};
+use tactile_detect::{Architecture, DetectionSet, DetectorArtifact, DetectorConfig, SoftLabels};
 
 use crate::parse_device;
 
@@ -28,9 +28,11 @@ pub fn parse_size(s: &str) -> std::result::Result<[usize; 2], String> {
 
 #[derive(Args)]
 pub struct TrainDetectorArgs {
-    /// Visuo-tactile dataset (split by `sequence` into train and validation).
-    #[arg(long)]
-    data: PathBuf,
+    /// Visuo-tactile dataset(s), each split by `sequence` into train and
+    /// validation (e.g. the default distribution plus a set of light
+    /// presses that crowds the frames near the label's threshold).
+    #[arg(long, num_args = 1.., required = true)]
+    data: Vec<PathBuf>,
     /// Output model folder.
     #[arg(long)]
     out: PathBuf,
@@ -64,6 +66,12 @@ pub struct TrainDetectorArgs {
     /// Continue from the checkpoint in the output folder.
     #[arg(long)]
     resume: bool,
+    /// Train toward soft targets from each frame's ridge amplitude
+    /// (`ridge_mm`): sigmoid(ln(A / 0.03 mm) / WIDTH), 0.03 mm being the
+    /// spec's label threshold. Frames near the threshold then teach the
+    /// network to measure the ridge. Suggested width: 0.2.
+    #[arg(long, value_name = "WIDTH")]
+    soft_labels: Option<f64>,
     /// Only re-choose the threshold of the model already in --out on the
     /// validation sequences (training ends with this step anyway).
     #[arg(long)]
@@ -79,7 +87,6 @@ fn architecture(s: &str) -> Result<Architecture> {
 }
 
 pub fn train(a: TrainDetectorArgs) -> Result<()> {
-    let ds = Dataset::open(&a.data)?;
     let cfg = DetectorConfig::new()
         .with_architecture(architecture(&a.architecture)?)
         .with_width(a.width)
@@ -87,16 +94,44 @@ pub fn train(a: TrainDetectorArgs) -> Result<()> {
     if !(a.width > 0.0 && a.width <= 4.0) {
         bail!("--width must be in (0, 4], got {}", a.width);
     }
-    let (train, val) = ds.split_by_sequence(a.val_fraction, a.seed)?;
-    eprintln!(
-        "loading {} frames at {}x{} ({} train, {} validation, split by sequence)",
-        ds.len(),
-        a.input[0],
-        a.input[1],
-        train.len(),
-        val.len()
-    );
-    let data = DetectionSet::from_dataset(&ds, a.input)?;
+    tactile_core::io::ensure_writable_dir(&a.out)?;
+    // Every dataset is split by its own sequences; indices of later
+    // datasets shift by the frames before them.
+    let (mut train, mut val) = (Vec::new(), Vec::new());
+    let mut data: Option<DetectionSet> = None;
+    for path in &a.data {
+        let ds = Dataset::open(path)?;
+        let (t, v) = ds.split_by_sequence(a.val_fraction, a.seed)?;
+        eprintln!(
+            "loading {} frames of {} at {}x{} ({} train, {} validation, split by sequence)",
+            ds.len(),
+            path.display(),
+            a.input[0],
+            a.input[1],
+            t.len(),
+            v.len()
+        );
+        let set = DetectionSet::from_dataset(&ds, a.input)?;
+        if a.soft_labels.is_some() {
+            set.check_soft_labels(&ds.labels_path())?;
+        }
+        let offset = data.as_ref().map_or(0, DetectionSet::len);
+        train.extend(t.into_iter().map(|i| i + offset));
+        val.extend(v.into_iter().map(|i| i + offset));
+        match data.as_mut() {
+            None => data = Some(set),
+            Some(d) => d.append(set)?,
+        }
+    }
+    let data = data.context("--data names no dataset")?;
+    let soft_labels = match a.soft_labels {
+        None => None,
+        Some(w) if w > 0.0 && w.is_finite() => Some(SoftLabels::new(
+            datasets_synth::visuotactile::TENDON_MIN_AMPLITUDE_MM,
+            w,
+        )),
+        Some(w) => bail!("--soft-labels must be a positive width, got {w}"),
+    };
     let dev = a.device.device();
     if a.calibrate_only {
         let (t, acc) = tactile_detect::training::calibrate(&a.out, &data, &val, &dev)?;
@@ -112,7 +147,8 @@ pub fn train(a: TrainDetectorArgs) -> Result<()> {
         .with_patience(a.patience)
         .with_learning_rate(a.lr)
         .with_lr_decay(a.lr_decay)
-        .with_seed(a.seed);
+        .with_seed(a.seed)
+        .with_soft_labels(soft_labels);
     let s = train_detector(
         &config,
         &data,
@@ -120,7 +156,10 @@ pub fn train(a: TrainDetectorArgs) -> Result<()> {
         &a.out,
         &dev,
         a.resume,
-        serde_json::json!({ "trained_on": a.data.display().to_string(), "device": a.device.name() }),
+        serde_json::json!({
+            "trained_on": a.data.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(" + "),
+            "device": a.device.name(),
+        }),
     )?;
     let (t, acc) = tactile_detect::training::calibrate(&a.out, &data, &val, &dev)?;
     println!(
@@ -141,6 +180,11 @@ pub struct EvalDetectorArgs {
     data: PathBuf,
     #[arg(long, default_value = "flex", value_parser = parse_device)]
     device: DeviceKind,
+    /// Also write every frame's probability and decision to this CSV
+    /// (file, tendon, probability, predicted, onset_release), to look at
+    /// the frames it gets wrong.
+    #[arg(long)]
+    frames: Option<PathBuf>,
 }
 
 /// A detector's scores on a dataset.
@@ -148,6 +192,9 @@ pub struct DetectorScores {
     pub all: tactile_core::metrics::BinaryScores,
     pub onset_release: tactile_core::metrics::BinaryScores,
     pub ms_per_frame: f64,
+    /// Per-frame tendon probability, in dataset order.
+    pub probabilities: Vec<f32>,
+    pub threshold: f64,
 }
 
 /// Score a detector on every frame of `data` (frames resized on load).
@@ -184,6 +231,8 @@ pub fn score(
             &tr.iter().map(|&i| data.tendon[i]).collect::<Vec<_>>(),
         ),
         ms_per_frame,
+        probabilities: p,
+        threshold: art.threshold,
     })
 }
 
@@ -196,7 +245,23 @@ pub fn eval(a: EvalDetectorArgs) -> Result<()> {
         all: s,
         onset_release: st,
         ms_per_frame: ms,
+        probabilities,
+        threshold,
     } = score(&a.model, &data, a.device)?;
+    if let Some(path) = &a.frames {
+        let mut csv = String::from("file,tendon,probability,predicted,onset_release\n");
+        for (i, p) in probabilities.iter().enumerate() {
+            csv.push_str(&format!(
+                "{},{},{p:.6},{},{}\n",
+                data.files[i],
+                data.tendon[i] as u8,
+                (*p as f64 >= threshold) as u8,
+                data.transition[i] as u8
+            ));
+        }
+        tactile_core::io::write_atomic(path, csv.as_bytes())?;
+        eprintln!("per-frame decisions in {}", path.display());
+    }
     println!(
         "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
         s.frames,

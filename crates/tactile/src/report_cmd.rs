@@ -23,6 +23,145 @@ pub struct ReportArgs {
     /// The page; its tables and plots go into a folder beside it.
     #[arg(long, default_value = "docs/results.md")]
     out: PathBuf,
+    /// Also put the headline table into this file, between the lines
+    /// `<!-- headline:begin -->` and `<!-- headline:end -->` (the README).
+    #[arg(long)]
+    readme: Option<PathBuf>,
+    /// Sequences of 25 frames in the held-out test set (seed 200).
+    #[arg(long, default_value_t = 40)]
+    sequences: usize,
+    /// Sequences of 15 frames at the deepest presses (seed 300).
+    #[arg(long, default_value_t = 16)]
+    extreme_sequences: usize,
+    /// Timed runs per latency in the model benches (median reported).
+    #[arg(long, default_value_t = 20)]
+    runs: usize,
+}
+
+const HEADLINE_BEGIN: &str = "<!-- headline:begin -->";
+const HEADLINE_END: &str = "<!-- headline:end -->";
+
+/// `text` with the lines between the headline markers replaced by `table`;
+/// an error naming `file` when the markers are missing or out of order.
+fn replace_headline(text: &str, table: &str, file: &Path) -> Result<String> {
+    let (Some(b), Some(e)) = (text.find(HEADLINE_BEGIN), text.find(HEADLINE_END)) else {
+        bail!(
+            "{}: no `{HEADLINE_BEGIN}` ... `{HEADLINE_END}` lines to put the headline table between",
+            file.display()
+        );
+    };
+    if e < b {
+        bail!(
+            "{}: `{HEADLINE_END}` comes before `{HEADLINE_BEGIN}`",
+            file.display()
+        );
+    }
+    Ok(format!(
+        "{}{HEADLINE_BEGIN}\n{table}{}",
+        &text[..b],
+        &text[e..]
+    ))
+}
+
+/// The rows a bench wrote beside its table (NAME.json).
+fn bench_rows(table: &Path) -> Result<Vec<serde_json::Value>> {
+    tactile_core::io::read_json(table.with_extension("json")).map_err(Into::into)
+}
+
+/// A runtime's milliseconds in a bench row, or "-".
+fn ms_of(row: &serde_json::Value, key: &str) -> String {
+    row["ms"]
+        .as_object()
+        .and_then(|m| m.iter().find(|(k, _)| k.contains(key)))
+        .and_then(|(_, v)| v.as_f64())
+        .map_or("-".into(), |v| format!("{v:.2}"))
+}
+
+/// A metric of a bench row, formatted, or "-".
+fn metric(row: &serde_json::Value, key: &str, f: impl Fn(f64) -> String) -> String {
+    row["metrics"][key].as_f64().map_or("-".into(), f)
+}
+
+/// One line per model and one for the whole pipeline: error on held-out
+/// data beside the paper's number and the milliseconds per runtime.
+fn headline(
+    cae: &serde_json::Value,
+    det: &serde_json::Value,
+    seg: &serde_json::Value,
+    depth: &serde_json::Value,
+    pipeline: &[(String, serde_json::Value)],
+) -> String {
+    let mut t = String::from(
+        "| stage | error on held-out data (ours) | paper | onnxruntime ms | burn flex ms | burn ndarray ms |\n|---|---|---|---|---|---|\n",
+    );
+    let mut line = |stage: &str, ours: String, paper: &str, r: &serde_json::Value| {
+        t.push_str(&format!(
+            "| {stage} | {ours} | {paper} | {} | {} | {} |\n",
+            ms_of(r, "onnxruntime"),
+            ms_of(r, "flex"),
+            ms_of(r, "ndarray")
+        ));
+    };
+    line(
+        "paper A: CAE-16 + shape head, real shapes set",
+        metric(cae, "shape_accuracy", |v| {
+            format!("accuracy {:.1} %", 100.0 * v)
+        }),
+        "96.7 %",
+        cae,
+    );
+    line(
+        "paper B: tendon detector",
+        format!(
+            "accuracy {} (onset/release frames {})",
+            metric(det, "accuracy", |v| format!("{v:.3}")),
+            metric(det, "onset_release_accuracy", |v| format!("{v:.3}"))
+        ),
+        "accuracy 0.958",
+        det,
+    );
+    line(
+        "paper B: tendon segmenter + direction",
+        format!(
+            "IoU {} (curved {}); straight direction median {} deg",
+            metric(seg, "iou", |v| format!("{v:.3}")),
+            metric(seg, "iou_curved", |v| format!("{v:.3}")),
+            metric(seg, "direction_straight_median_deg", |v| format!("{v:.2}"))
+        ),
+        "IoU 0.879 val, 0.196 curved test",
+        seg,
+    );
+    line(
+        "paper B: depth U-Net (DenseNet encoder)",
+        format!(
+            "MAE {} mm (tendon {} mm), SSIM {}",
+            metric(depth, "mae_window_mm", |v| format!("{v:.3}")),
+            metric(depth, "mae_tendon_mm", |v| format!("{v:.3}")),
+            metric(depth, "ssim", |v| format!("{v:.3}"))
+        ),
+        "MAE 0.050 mm, SSIM 0.960",
+        depth,
+    );
+    let ms: serde_json::Map<String, serde_json::Value> = pipeline
+        .iter()
+        .map(|(rt, j)| (rt.clone(), j["stages_ms"]["tendon_frame"][0].clone()))
+        .collect();
+    let fps = pipeline
+        .iter()
+        .find(|(rt, _)| rt == "onnx")
+        .and_then(|(_, j)| j["stages_ms"]["tendon_frame"][0].as_f64())
+        .map_or("-".into(), |m| format!("{:.0} tendon frames/s", 1e3 / m));
+    line(
+        "pipeline, tendon frame (detect, segment, direction, depth)",
+        fps,
+        "80 ms (detect + segment, i7)",
+        &serde_json::json!({ "ms": {
+            "onnxruntime": ms.get("onnx"),
+            "flex": ms.get("burn-flex"),
+            "ndarray": ms.get("burn-ndarray"),
+        }}),
+    );
+    t
 }
 
 /// Run this binary with `args`; its stdout, or an error with its stderr.
@@ -55,45 +194,61 @@ fn body(path: &Path, prefix: &str) -> Result<String> {
         .join("\n"))
 }
 
+/// A held-out set of `sequences` x `frames` at `seed` in `dir`, generated
+/// unless one with exactly that seed and count is there.
+fn held_out(dir: &Path, seed: u64, sequences: usize, frames: usize, extra: &[&str]) -> Result<()> {
+    let have: Option<serde_json::Value> =
+        tactile_core::io::read_json(dir.join("manifest.json")).ok();
+    let fits = have.is_some_and(|m| {
+        m["seed"].as_u64() == Some(seed) && m["count"].as_u64() == Some((sequences * frames) as u64)
+    }) && dir.join("labels.csv").is_file();
+    if fits {
+        return Ok(());
+    }
+    let (seq, fr, sd) = (sequences.to_string(), frames.to_string(), seed.to_string());
+    let mut args = vec![
+        "synth",
+        "visuotactile",
+        "--sequences",
+        &seq,
+        "--frames-per-sequence",
+        &fr,
+        "--seed",
+        &sd,
+        "--out",
+        s(dir),
+        "--force",
+    ];
+    args.extend_from_slice(extra);
+    tactile(&args)?;
+    Ok(())
+}
+
 pub fn report(a: ReportArgs) -> Result<()> {
+    if a.sequences == 0 || a.extreme_sequences == 0 || a.runs == 0 {
+        bail!("--sequences, --extreme-sequences and --runs must be at least 1");
+    }
+    // A README without its markers fails now, not after the benches.
+    if let Some(readme) = &a.readme {
+        let text = std::fs::read_to_string(readme)
+            .with_context(|| format!("{}: cannot read", readme.display()))?;
+        replace_headline(&text, "", readme)?;
+    }
     let dir = a.out.with_extension("");
     tactile_core::io::create_dir_all(&dir)?;
     tactile_core::io::create_dir_all(&a.work)?;
     // Held-out synthetic sets: seeds no model was trained or chosen on.
     let test = a.work.join("vt-test");
     let extreme = a.work.join("vt-extreme");
-    if !test.join("labels.csv").is_file() {
-        tactile(&[
-            "synth",
-            "visuotactile",
-            "--sequences",
-            "40",
-            "--frames-per-sequence",
-            "25",
-            "--seed",
-            "200",
-            "--out",
-            s(&test),
-            "--force",
-        ])?;
-    }
-    if !extreme.join("labels.csv").is_file() {
-        tactile(&[
-            "synth",
-            "visuotactile",
-            "--sequences",
-            "16",
-            "--frames-per-sequence",
-            "15",
-            "--seed",
-            "300",
-            "--press-mm",
-            "3.6,4.0",
-            "--out",
-            s(&extreme),
-            "--force",
-        ])?;
-    }
+    held_out(&test, 200, a.sequences, 25, &[])?;
+    held_out(
+        &extreme,
+        300,
+        a.extreme_sequences,
+        15,
+        &["--press-mm", "3.6,4.0"],
+    )?;
+    let runs = a.runs.to_string();
     let m = |name: &str| a.models.join(name);
     let t = |name: &str| dir.join(name);
     let shapes = a.real.join("polic-shapes");
@@ -104,6 +259,8 @@ pub fn report(a: ReportArgs) -> Result<()> {
         s(&m("cae-shapes")),
         "--data",
         s(&shapes),
+        "--runs",
+        &runs,
         "--out",
         s(&t("cae.md")),
     ])?;
@@ -114,6 +271,8 @@ pub fn report(a: ReportArgs) -> Result<()> {
         s(&m("detector")),
         "--data",
         s(&test),
+        "--runs",
+        &runs,
         "--out",
         s(&t("detector.md")),
     ])?;
@@ -124,6 +283,8 @@ pub fn report(a: ReportArgs) -> Result<()> {
         s(&m("segmenter")),
         "--data",
         s(&test),
+        "--runs",
+        &runs,
         "--out",
         s(&t("segmenter.md")),
     ])?;
@@ -136,12 +297,15 @@ pub fn report(a: ReportArgs) -> Result<()> {
         s(&test),
         "--extreme",
         s(&extreme),
+        "--runs",
+        &runs,
         "--out",
         s(&t("depth.md")),
     ])?;
     let mut pipeline = String::from(
-        "| runtime | frames/s (decoding included) | whole tendon frame, median / p95 | per stage, median / p95 |\n|---|---|---|---|\n",
+        "| runtime | frames/s (decoding included) | whole tendon frame, median / p95 | tendon frame against onnxruntime | per stage, median / p95 |\n|---|---|---|---|---|\n",
     );
+    let mut summaries = Vec::new();
     for rt in ["onnx", "burn-flex", "burn-ndarray"] {
         let out = tactile(&[
             "run",
@@ -157,21 +321,45 @@ pub fn report(a: ReportArgs) -> Result<()> {
             .rev()
             .find_map(|l| serde_json::from_str(l).ok())
             .context("no summary from tactile run")?;
-        let stages = out
-            .lines()
-            .find(|l| l.starts_with("median / p95 per stage"))
-            .unwrap_or_default();
-        let whole = stages.rsplit("whole frame ").next().unwrap_or("-");
-        let per = stages
-            .trim_start_matches("median / p95 per stage: ")
-            .split(", whole frame")
-            .next()
-            .unwrap_or("-");
+        let st = &json["stages_ms"];
+        let cell = |k: &str| match (st[k][0].as_f64(), st[k][1].as_f64()) {
+            (Some(m), Some(p)) => format!("{m:.2} / {p:.2} ms"),
+            _ => "-".into(),
+        };
+        // The first runtime is onnxruntime: every ratio is to it, same run.
+        let tendon_ms = st["tendon_frame"][0].as_f64();
+        let ort_ms = summaries
+            .first()
+            .map_or(tendon_ms, |(_, j): &(String, serde_json::Value)| {
+                j["stages_ms"]["tendon_frame"][0].as_f64()
+            });
+        let ratio = match (tendon_ms, ort_ms) {
+            (Some(t), Some(o)) if o > 0.0 => format!("{:.2}x", t / o),
+            _ => "-".into(),
+        };
         pipeline.push_str(&format!(
-            "| {rt} | {:.0} | {whole} | {per} |\n",
-            json["fps"].as_f64().unwrap_or(f64::NAN)
+            "| {rt} | {:.0} | {} | {ratio} | detect {}, segment + direction {}, depth {} |\n",
+            json["fps"].as_f64().unwrap_or(f64::NAN),
+            cell("tendon_frame"),
+            cell("detect"),
+            cell("segment"),
+            cell("depth"),
         ));
+        summaries.push((rt.to_string(), json));
     }
+    let first = |name: &str| -> Result<serde_json::Value> {
+        bench_rows(&t(name))?
+            .into_iter()
+            .next()
+            .with_context(|| format!("{}: no rows", t(name).with_extension("json").display()))
+    };
+    let headline = headline(
+        &first("cae.md")?,
+        &first("detector.md")?,
+        &first("segmenter.md")?,
+        &first("depth.md")?,
+        &summaries,
+    );
     let rustc = Command::new("rustc")
         .arg("-V")
         .output()
@@ -192,8 +380,9 @@ pub fn report(a: ReportArgs) -> Result<()> {
          (all tendon paths) and seed 300 (the deepest presses), generated by this command; real data: \
          the authors' shapes set. Size sweeps and their Pareto plots: `docs/bench-detector.md`, \
          `docs/bench-segmenter.md`, `docs/bench-depth.md`, `docs/paper-a.md`.\n\n\
+         ## Headline\n\n{headline}\n\
          ## The palpation pipeline (`tactile run`)\n\nDetector on every frame; segmenter, direction and depth only on tendon frames. \
-         Paper B: 80 ms per frame (12.5 Hz) for detect + segment on an Intel i7. Target here: 30 frames/s.\n\n{pipeline}\n\
+         Paper B: 80 ms per frame (12.5 Hz) for detect + segment on an Intel i7. Target here: 30 frames/s; burn flex within 2x and ndarray within 5x of onnxruntime.\n\n{pipeline}\n\
          ## Paper A encoder on the real shapes set (`{}`)\n\n{}\n\n\
          ## Tendon detector (`{}`)\n\n{}\n\n\
          ## Tendon segmenter (`{}`)\n\n{}\n\n\
@@ -208,6 +397,19 @@ pub fn report(a: ReportArgs) -> Result<()> {
         body(&t("depth.md"), &prefix)?,
     );
     tactile_core::io::write_atomic(&a.out, md.as_bytes())?;
+    if let Some(readme) = &a.readme {
+        let text = std::fs::read_to_string(readme)
+            .with_context(|| format!("{}: cannot read", readme.display()))?;
+        let block = format!(
+            "{headline}\nMeasured on {machine} by `tactile report` (`just report`); the full tables and plots are in `{}`.\n",
+            a.out.display()
+        );
+        tactile_core::io::write_atomic(
+            readme,
+            replace_headline(&text, &block, readme)?.as_bytes(),
+        )?;
+        println!("headline table in {}", readme.display());
+    }
     println!(
         "wrote {} and the tables in {}",
         a.out.display(),

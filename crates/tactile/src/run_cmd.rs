@@ -124,6 +124,13 @@ pub fn run(a: RunArgs) -> Result<()> {
     let threads = a.threads.max(1);
     // The input first: a bad folder is reported before any model loads.
     let mut paths = frames(&a.data)?;
+    // Outputs next: an unwritable folder fails now, not after the run.
+    if let Some(out) = &a.out {
+        tactile_core::io::ensure_writable_parent(out)?;
+    }
+    if let Some(dir) = &a.render {
+        tactile_core::io::ensure_writable_dir(dir)?;
+    }
     let mut p = Pipeline::load(&a.models, a.runtime, threads)?;
     if let Some(n) = a.limit {
         paths.truncate(n);
@@ -183,7 +190,6 @@ pub fn run(a: RunArgs) -> Result<()> {
         }
         let (rec, views) = p.process_filtered(&name, &frame, filter.as_mut())?;
         if let (Some(dir), Some(v)) = (&a.render, views) {
-            tactile_core::io::create_dir_all(dir)?;
             let stem = path.file_stem().unwrap_or_default().to_string_lossy();
             v.save_png(&dir.join(format!("{stem}-overlay.png")), 4)?;
         }
@@ -208,14 +214,21 @@ pub fn run(a: RunArgs) -> Result<()> {
             Ok(())
         })?;
     }
-    let stage = |f: &dyn Fn(&tactile_pipeline::FrameRecord) -> Option<f64>| -> String {
+    // Median and p95 milliseconds of a stage over the frames that ran it.
+    let stats = |f: &dyn Fn(&tactile_pipeline::FrameRecord) -> Option<f64>| -> Option<[f64; 2]> {
         let v: Vec<f64> = records.iter().filter_map(f).collect();
-        if v.is_empty() {
-            "-".into()
-        } else {
-            format!("{:.2} / {:.2} ms", median(&v), percentile(&v, 95.0))
-        }
+        (!v.is_empty()).then(|| [median(&v), percentile(&v, 95.0)])
     };
+    let stage = |f: &dyn Fn(&tactile_pipeline::FrameRecord) -> Option<f64>| -> String {
+        stats(f).map_or("-".into(), |[m, p]| format!("{m:.2} / {p:.2} ms"))
+    };
+    let stages_ms = serde_json::json!({
+        "detect": stats(&|r| Some(r.ms_detect)),
+        "segment": stats(&|r| r.ms_segment),
+        "depth": stats(&|r| r.ms_depth),
+        "frame": stats(&|r| Some(r.ms_total)),
+        "tendon_frame": stats(&|r| r.tendon.then_some(r.ms_total)),
+    });
     let gated = records.iter().filter(|r| !r.tendon).count();
     let (acc_raw, flips_raw) = decisions(&records, &paths, true);
     let (acc, flips) = decisions(&records, &paths, false);
@@ -237,6 +250,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         "decision_changes_threshold_only": flips_raw,
         "label_changes": truth_changes,
         "hysteresis": a.hysteresis,
+        "stages_ms": stages_ms,
     });
     println!(
         "{} frames in {:.2} s ({:.1} frames/s, {:?}, decoding included); {} without a tendon cost one detector pass",

@@ -64,6 +64,7 @@ fn tendon_rows(ds: &Dataset, rows: &[usize]) -> Result<Vec<usize>> {
 
 pub fn train(a: TrainSegmenterArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
+    tactile_core::io::ensure_writable_dir(&a.out)?;
     let unet = UNetConfig::new().with_base(a.base).with_side(a.side);
     unet.init(&tactile_core::DeviceKind::Flex.device())?;
     let (train, val) = ds.split_by_sequence(a.val_fraction, a.seed)?;

@@ -1080,3 +1080,273 @@ fn the_demo_palpation_video_is_detected_segmented_and_pointed() {
         assert!((d - 117.3).abs() < 5.0, "{r}");
     }
 }
+
+/// A folder this process cannot write in: a read-only (0555) temporary
+/// folder, or, under root (which ignores permission bits), `/sys`, which
+/// refuses new files even to root. None when neither exists here.
+fn unwritable_folder(tmp: &Path) -> Option<std::path::PathBuf> {
+    use std::os::unix::fs::PermissionsExt;
+    let writable = |d: &Path| {
+        let p = d.join(".tactile-test-probe");
+        let ok = std::fs::write(&p, b"x").is_ok();
+        let _ = std::fs::remove_file(&p);
+        ok
+    };
+    let ro = tmp.join("read-only");
+    std::fs::create_dir(&ro).unwrap();
+    std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
+    if !writable(&ro) {
+        return Some(ro);
+    }
+    let sys = Path::new("/sys");
+    (sys.join("kernel").is_dir() && !writable(sys)).then(|| sys.to_path_buf())
+}
+
+#[test]
+fn run_refuses_an_unwritable_output_folder_before_any_work() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let Some(ro) = unwritable_folder(tmp.path()) else {
+        eprintln!("no unwritable folder on this machine; nothing to test");
+        return;
+    };
+    let before = listing(&ro);
+    let samples = root.join("samples/palpation");
+    let models = root.join("models");
+    let records = ro.join("records.jsonl");
+    let renders = ro.join("overlays");
+    for args in [
+        vec!["--out", records.to_str().unwrap()],
+        vec!["--render", renders.to_str().unwrap()],
+        vec!["--render", ro.to_str().unwrap()],
+    ] {
+        let mut cmd = vec![
+            "run",
+            "--data",
+            samples.to_str().unwrap(),
+            "--models",
+            models.to_str().unwrap(),
+        ];
+        cmd.extend(args);
+        let (ok, msg) = tactile(&cmd);
+        assert!(!ok, "{msg}");
+        assert!(
+            msg.contains(ro.to_str().unwrap()),
+            "the folder is not named: {msg}"
+        );
+        assert!(!msg.contains("frames/s"), "it ran before failing: {msg}");
+    }
+    // Training fails before loading its data, not at its first checkpoint.
+    let model = ro.join("detector");
+    let (ok, msg) = tactile(&[
+        "train",
+        "detector",
+        "--data",
+        samples.to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    assert!(!ok && msg.contains(ro.to_str().unwrap()), "{msg}");
+    assert!(!msg.contains("loading"), "{msg}");
+    assert_eq!(listing(&ro), before, "something was written");
+}
+
+#[test]
+fn report_regenerates_the_results_page_and_the_readme_headline() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let real = std::env::var_os("TACTILE_SHARED_REAL")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join("../shared/real"));
+    assert!(
+        real.join("polic-shapes/manifest.json").is_file(),
+        "real TacTip data not found at {} (set TACTILE_SHARED_REAL)",
+        real.display()
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let readme = tmp.path().join("README.md");
+    let out = tmp.path().join("docs/results.md");
+    let before = "# A project\n\nintro\n\n<!-- headline:begin -->\nstale table\n<!-- headline:end -->\n\nthe rest\n";
+    std::fs::write(&readme, before).unwrap();
+    let args = |readme: &Path| {
+        vec![
+            "report".to_string(),
+            "--real".into(),
+            real.to_str().unwrap().into(),
+            "--models".into(),
+            root.join("models").to_str().unwrap().into(),
+            "--work".into(),
+            tmp.path().join("work").to_str().unwrap().into(),
+            "--out".into(),
+            out.to_str().unwrap().into(),
+            "--readme".into(),
+            readme.to_str().unwrap().into(),
+            "--sequences".into(),
+            "2".into(),
+            "--extreme-sequences".into(),
+            "1".into(),
+            "--runs".into(),
+            "2".into(),
+        ]
+    };
+    // A README without the markers is refused before any work, untouched.
+    let bare = tmp.path().join("BARE.md");
+    std::fs::write(&bare, "# no markers\n").unwrap();
+    let a = args(&bare);
+    let (ok, msg) = tactile(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        !ok && msg.contains("BARE.md") && msg.contains("headline:begin"),
+        "{msg}"
+    );
+    assert_eq!(std::fs::read_to_string(&bare).unwrap(), "# no markers\n");
+    assert!(
+        !out.exists() && !tmp.path().join("work").exists(),
+        "work done before the check"
+    );
+
+    let a = args(&readme);
+    let (ok, msg) = tactile(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(ok, "{msg}");
+    let page = std::fs::read_to_string(&out).unwrap();
+    // Every section, the machine, and a plot per model bench.
+    for needle in [
+        "Machine:",
+        "## Headline",
+        "## The palpation pipeline",
+        "| onnx |",
+        "| burn-flex |",
+        "| burn-ndarray |",
+        "## Tendon detector",
+        "## Tendon segmenter",
+        "## Depth",
+    ] {
+        assert!(page.contains(needle), "{needle} missing from:\n{page}");
+    }
+    for png in ["detector.png", "segmenter.png", "depth.png"] {
+        assert!(tmp.path().join("docs/results").join(png).is_file(), "{png}");
+    }
+    // The README's block is the headline table, with numbers; the rest kept.
+    let text = std::fs::read_to_string(&readme).unwrap();
+    assert!(
+        text.starts_with("# A project\n\nintro\n\n<!-- headline:begin -->\n| stage |"),
+        "{text}"
+    );
+    assert!(
+        text.ends_with("<!-- headline:end -->\n\nthe rest\n"),
+        "{text}"
+    );
+    assert!(!text.contains("stale table"), "{text}");
+    let detector = text
+        .lines()
+        .find(|l| l.starts_with("| paper B: tendon detector"))
+        .unwrap();
+    let cells: Vec<&str> = detector.split('|').map(str::trim).collect();
+    // accuracy on the 50 held-out frames, then onnxruntime / flex / ndarray ms.
+    let acc: f64 = cells[2]
+        .trim_start_matches("accuracy ")
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(acc > 0.8, "{detector}");
+    for ms in &cells[4..7] {
+        let v: f64 = ms.parse().unwrap_or_else(|_| panic!("{detector}"));
+        assert!(v > 0.0 && v < 1000.0, "{detector}");
+    }
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("| pipeline, tendon frame") && l.contains("tendon frames/s")),
+        "{text}"
+    );
+}
+
+#[test]
+fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
+    let tmp = tempfile::tempdir().unwrap();
+    let synth = |name: &str, seed: &str, press: &str| {
+        let out = tmp.path().join(name);
+        let (ok, msg) = tactile(&[
+            "synth",
+            "visuotactile",
+            "--sequences",
+            "4",
+            "--frames-per-sequence",
+            "6",
+            "--seed",
+            seed,
+            "--press-mm",
+            press,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+        out
+    };
+    let a = synth("a", "7", "0.0,4.0");
+    let b = synth("b", "8", "0.1,0.6");
+    let det = tmp.path().join("det");
+    let train = |data: &[&Path], soft: &str| {
+        let mut args = vec!["train", "detector", "--data"];
+        args.extend(data.iter().map(|p| p.to_str().unwrap()));
+        args.extend([
+            "--out",
+            det.to_str().unwrap(),
+            "--width",
+            "0.25",
+            "--input",
+            "64x48",
+            "--max-epochs",
+            "1",
+            "--val-fraction",
+            "0.25",
+            "--soft-labels",
+            soft,
+        ]);
+        tactile(&args)
+    };
+    let (ok, msg) = train(&[&a, &b], "0.2");
+    assert!(ok, "{msg}");
+    let t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(det.join("training.json")).unwrap()).unwrap();
+    // 3 of 4 sequences of each dataset train: 2 x 3 x 6 frames.
+    assert_eq!(t["train_frames"], 36, "{t}");
+    assert_eq!(t["config"]["soft_labels"]["width"], 0.2, "{t}");
+    assert_eq!(t["config"]["soft_labels"]["threshold_mm"], 0.03, "{t}");
+    // Per-frame decisions, one line per frame.
+    let csv = tmp.path().join("decisions.csv");
+    let (ok, msg) = tactile(&[
+        "eval",
+        "detector",
+        "--model",
+        det.to_str().unwrap(),
+        "--data",
+        a.to_str().unwrap(),
+        "--frames",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "file,tendon,probability,predicted,onset_release");
+    assert_eq!(lines.len(), 1 + 24);
+    for l in &lines[1..] {
+        let p: f64 = l.split(',').nth(2).unwrap().parse().unwrap();
+        assert!((0.0..=1.0).contains(&p), "{l}");
+    }
+    // Soft labels need the ridge amplitude: a dataset without it is named.
+    let labels = b.join("labels.csv");
+    let stripped: String = std::fs::read_to_string(&labels)
+        .unwrap()
+        .lines()
+        .map(|l| l.rsplit_once(',').unwrap().0.to_string() + "\n")
+        .collect();
+    assert!(!stripped.contains("ridge_mm"));
+    std::fs::write(&labels, stripped).unwrap();
+    let (ok, msg) = train(&[&a, &b], "0.2");
+    assert!(
+        !ok && msg.contains("ridge_mm") && msg.contains(labels.to_str().unwrap()),
+        "{msg}"
+    );
+    let (ok, msg) = train(&[&a], "0");
+    assert!(!ok && msg.contains("--soft-labels"), "{msg}");
+}
