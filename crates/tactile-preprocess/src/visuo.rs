@@ -192,23 +192,23 @@ impl SquareWindow {
     }
 }
 
-/// Standard deviation (in [0, 1] units, all channels) below which a
+/// Standard deviation (in [0, 1] units, of each channel) below which a
 /// frame is blank: half a grey level, under the sensor's own noise.
 pub const BLANK_FRAME_STD: f32 = 0.5 / 255.0;
 
-/// True when the image has (almost) no variation at all (black, saturated,
-/// one colour): it cannot show a tendon, and a network's answer on such a
-/// far-from-training input would be arbitrary.
+/// True when no channel of the image varies (black, saturated, one colour
+/// of any hue): it cannot show a tendon, and a network's answer on such a
+/// far-from-training input would be arbitrary. Each channel is measured on
+/// its own, so a uniform green frame is as blank as a black one.
 pub fn is_blank(img: &FloatImage) -> bool {
-    let n = img.data.len().max(1) as f64;
-    let mean = img.data.iter().map(|&v| v as f64).sum::<f64>() / n;
-    let var = img
-        .data
-        .iter()
-        .map(|&v| (v as f64 - mean).powi(2))
-        .sum::<f64>()
-        / n;
-    (var.sqrt() as f32) < BLANK_FRAME_STD
+    let c = img.channels.max(1);
+    (0..c).all(|ch| {
+        let values = || img.data.iter().skip(ch).step_by(c).map(|&v| v as f64);
+        let n = values().count().max(1) as f64;
+        let mean = values().sum::<f64>() / n;
+        let var = values().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+        (var.sqrt() as f32) < BLANK_FRAME_STD
+    })
 }
 
 /// 1 where a resized or rotated mask is at least half tendon.
@@ -327,6 +327,25 @@ mod tests {
             col(20, 5)
         );
         assert!((col(5, 20) - col(35, 20)).abs() < 0.02);
+    }
+
+    #[test]
+    fn blank_means_no_channel_varies_whatever_the_colour() {
+        let solid = |rgb: [f32; 3]| FloatImage {
+            width: 8,
+            height: 4,
+            channels: 3,
+            data: (0..32).flat_map(|_| rgb).collect(),
+        };
+        assert!(is_blank(&solid([0.0, 0.0, 0.0])));
+        assert!(is_blank(&solid([1.0, 1.0, 1.0])));
+        // Channels differ from each other, but none varies over the frame.
+        assert!(is_blank(&solid([0.16, 0.78, 0.35])));
+        // One bright pixel in one channel is a picture.
+        let mut img = solid([0.16, 0.78, 0.35]);
+        img.data[3 * 5 + 1] += 1.0 / 255.0 * 16.0;
+        assert!(!is_blank(&img));
+        assert!(!is_blank(&ramp(16, 4)));
     }
 
     #[test]

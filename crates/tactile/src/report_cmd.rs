@@ -224,6 +224,71 @@ fn held_out(dir: &Path, seed: u64, sequences: usize, frames: usize, extra: &[&st
     Ok(())
 }
 
+/// ON and OFF probabilities of the hysteresis the report measures.
+const HYSTERESIS: [&str; 2] = ["0.6", "0.3"];
+
+/// The detector's decisions over each sequence with its threshold alone
+/// (from the onnxruntime run in `summaries`) and with hysteresis: accuracy
+/// against the labels and how often the decision changes within a
+/// sequence, beside how often the label does.
+fn temporal_filter(
+    test: &Path,
+    models: &Path,
+    summaries: &[(String, serde_json::Value)],
+) -> Result<String> {
+    let plain = &summaries
+        .first()
+        .context("no onnxruntime run to compare the filter with")?
+        .1;
+    let on_off = HYSTERESIS.join(",");
+    let out = tactile(&[
+        "run",
+        "--data",
+        s(test),
+        "--models",
+        s(models),
+        "--runtime",
+        "onnx",
+        "--hysteresis",
+        &on_off,
+    ])?;
+    let filtered: serde_json::Value = out
+        .lines()
+        .rev()
+        .find_map(|l| serde_json::from_str(l).ok())
+        .context("no summary from tactile run --hysteresis")?;
+    let acc = |j: &serde_json::Value, k: &str| j[k].as_f64().unwrap_or(f64::NAN);
+    let changes = |j: &serde_json::Value, k: &str| j[k].as_u64().unwrap_or(0);
+    let labels = changes(plain, "label_changes");
+    let (a0, c0) = (
+        acc(plain, "detector_accuracy_threshold_only"),
+        changes(plain, "decision_changes_threshold_only"),
+    );
+    let (a1, c1) = (
+        acc(&filtered, "detector_accuracy"),
+        changes(&filtered, "decision_changes"),
+    );
+    let verdict = if c1 < c0 {
+        format!(
+            "Hysteresis removes {} decision change(s) at an accuracy change of {:+.4}.",
+            c0 - c1,
+            a1 - a0
+        )
+    } else {
+        format!(
+            "Hysteresis removes no flicker here (the threshold alone changes its decision {c0} times against {labels} label changes) and costs {:.4} accuracy, so `tactile run` leaves it off unless `--hysteresis ON,OFF` is given.",
+            a0 - a1
+        )
+    };
+    Ok(format!(
+        "Flicker at onsets and releases (the same held-out sequences, onnxruntime):\n\n\
+         | decision rule | accuracy | decision changes within sequences | label changes |\n|---|---|---|---|\n\
+         | the detector's saved threshold | {a0:.4} | {c0} | {labels} |\n\
+         | hysteresis ON {}, OFF {} | {a1:.4} | {c1} | {labels} |\n\n{verdict}\n",
+        HYSTERESIS[0], HYSTERESIS[1]
+    ))
+}
+
 pub fn report(a: ReportArgs) -> Result<()> {
     if a.sequences == 0 || a.extreme_sequences == 0 || a.runs == 0 {
         bail!("--sequences, --extreme-sequences and --runs must be at least 1");
@@ -347,6 +412,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
         ));
         summaries.push((rt.to_string(), json));
     }
+    let filter = temporal_filter(&test, &a.models, &summaries)?;
     let first = |name: &str| -> Result<serde_json::Value> {
         bench_rows(&t(name))?
             .into_iter()
@@ -382,7 +448,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
          `docs/bench-segmenter.md`, `docs/bench-depth.md`, `docs/paper-a.md`.\n\n\
          ## Headline\n\n{headline}\n\
          ## The palpation pipeline (`tactile run`)\n\nDetector on every frame; segmenter, direction and depth only on tendon frames. \
-         Paper B: 80 ms per frame (12.5 Hz) for detect + segment on an Intel i7. Target here: 30 frames/s; burn flex within 2x and ndarray within 5x of onnxruntime.\n\n{pipeline}\n\
+         Paper B: 80 ms per frame (12.5 Hz) for detect + segment on an Intel i7. Target here: 30 frames/s; burn flex within 2x and ndarray within 5x of onnxruntime.\n\n{pipeline}\n{filter}\n\
          ## Paper A encoder on the real shapes set (`{}`)\n\n{}\n\n\
          ## Tendon detector (`{}`)\n\n{}\n\n\
          ## Tendon segmenter (`{}`)\n\n{}\n\n\

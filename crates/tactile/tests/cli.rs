@@ -1215,6 +1215,7 @@ fn report_regenerates_the_results_page_and_the_readme_headline() {
         "| onnx |",
         "| burn-flex |",
         "| burn-ndarray |",
+        "| hysteresis ON 0.6, OFF 0.3 |",
         "## Tendon detector",
         "## Tendon segmenter",
         "## Depth",
