@@ -701,8 +701,12 @@ fn shipped_detector_and_segmenter_meet_their_targets_on_fresh_palpations() {
     ]);
     assert!(ok, "{msg}");
     let last_json = |msg: &str| -> serde_json::Value {
-        serde_json::from_str(msg.lines().last().unwrap()).unwrap()
+        msg.lines()
+            .rev()
+            .find_map(|l| serde_json::from_str(l).ok())
+            .unwrap()
     };
+    let frames_csv = tmp.path().join("decisions.csv");
     let (ok, msg) = tactile(&[
         "eval",
         "detector",
@@ -710,11 +714,51 @@ fn shipped_detector_and_segmenter_meet_their_targets_on_fresh_palpations() {
         root.join("models/detector").to_str().unwrap(),
         "--data",
         d,
+        "--frames",
+        frames_csv.to_str().unwrap(),
     ]);
     assert!(ok, "{msg}");
     let acc = last_json(&msg)["all"]["accuracy"].as_f64().unwrap();
     // The target is 0.99 on 1000 held-out frames; 120 frames are noisier.
     assert!(acc >= 0.95, "{msg}");
+    // The live pipeline sees each frame exactly as eval does (same device):
+    // the same probability, so eval's accuracy is the pipeline's.
+    let records = tmp.path().join("run.jsonl");
+    let (ok, msg) = tactile(&[
+        "run",
+        "--data",
+        d,
+        "--models",
+        root.join("models").to_str().unwrap(),
+        "--runtime",
+        "burn-flex",
+        "--out",
+        records.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let live: std::collections::HashMap<String, f64> = std::fs::read_to_string(&records)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let r: serde_json::Value = serde_json::from_str(l).unwrap();
+            (
+                r["frame"].as_str().unwrap().to_string(),
+                r["score"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    let csv = std::fs::read_to_string(&frames_csv).unwrap();
+    let mut compared = 0;
+    for line in csv.lines().skip(1) {
+        let cols: Vec<&str> = line.split(',').collect();
+        let name = Path::new(cols[0]).file_name().unwrap().to_str().unwrap();
+        let p: f64 = cols[2].parse().unwrap();
+        let q = live[name];
+        // eval writes six decimals.
+        assert!((p - q).abs() <= 2e-6, "{name}: eval {p}, run {q}");
+        compared += 1;
+    }
+    assert_eq!(compared, 120);
     let (ok, msg) = tactile(&[
         "eval",
         "segmenter",
