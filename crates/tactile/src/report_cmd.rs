@@ -191,7 +191,9 @@ fn body(path: &Path, prefix: &str) -> Result<String> {
         .filter(|l| !l.starts_with("Machine:"))
         .map(|l| l.replace("](", &format!("]({prefix}/")))
         .collect::<Vec<_>>()
-        .join("\n"))
+        .join("\n")
+        .trim_start()
+        .to_string())
 }
 
 /// A held-out set of `sequences` x `frames` at `seed` in `dir`, generated
