@@ -74,11 +74,7 @@ impl DepthSet {
                     .map(|&v| v >= 0.5)
                     .collect();
                 Ok(DepthSample {
-                    rgb: frame
-                        .data
-                        .iter()
-                        .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
-                        .collect(),
+                    rgb: frame.to_bytes(),
                     depth_mm,
                     mask,
                     tendon: ds.number_opt(i, "tendon")? == Some(1.0),
@@ -103,16 +99,7 @@ impl DepthSet {
     }
 
     pub fn image(&self, i: usize) -> FloatImage {
-        FloatImage {
-            width: self.width,
-            height: self.height,
-            channels: 3,
-            data: self.samples[i]
-                .rgb
-                .iter()
-                .map(|&v| v as f32 / 255.0)
-                .collect(),
-        }
+        FloatImage::from_bytes(self.width, self.height, 3, &self.samples[i].rgb)
     }
 
     /// Inputs `[N, C, H, W]` (RGB normalised, plus the mask as 0/1 when

@@ -91,6 +91,31 @@ impl DepthArtifact {
             |a: &Self| a.net.init(device),
         )
     }
+
+    /// The normalised `C x H x W` input of an RGB frame of any size
+    /// (resized, then 8 bits per channel as in training, see
+    /// [`FloatImage::quantised`](tactile_preprocess::visuo::FloatImage::quantised));
+    /// `mask` (at the input size) is required exactly when the network
+    /// takes the mask channel.
+    pub fn frame_input(
+        &self,
+        frame: &tactile_core::image_io::RgbImage,
+        mask: Option<&[bool]>,
+    ) -> Result<Vec<f32>> {
+        let [w, h] = self.net.input_size;
+        let img = tactile_preprocess::visuo::resize_rgb(frame, w, h)?.quantised();
+        let mut x = self.stats.to_chw(&img)?;
+        match (self.with_mask, mask) {
+            (true, Some(m)) if m.len() == w * h => x.extend(m.iter().map(|&b| b as u8 as f32)),
+            (true, _) => {
+                return Err(Error::Invalid(format!(
+                    "this depth network takes a {w}x{h} tendon mask as a fourth channel"
+                )));
+            }
+            (false, _) => {}
+        }
+        Ok(x)
+    }
 }
 
 /// Depth metrics of predictions against truth, in millimetres.
@@ -184,17 +209,7 @@ impl DepthEstimator {
     ) -> Result<Vec<f32>> {
         use burn::tensor::{Tensor, TensorData};
         let [w, h] = self.artifact.net.input_size;
-        let img = tactile_preprocess::visuo::resize_rgb(frame, w, h)?;
-        let mut x = self.artifact.stats.to_chw(&img)?;
-        match (self.artifact.with_mask, mask) {
-            (true, Some(m)) if m.len() == w * h => x.extend(m.iter().map(|&b| b as u8 as f32)),
-            (true, _) => {
-                return Err(Error::Invalid(format!(
-                    "this depth network takes a {w}x{h} tendon mask as a fourth channel"
-                )));
-            }
-            (false, _) => {}
-        }
+        let x = self.artifact.frame_input(frame, mask)?;
         let c = self.artifact.net.in_channels;
         let t = Tensor::<4>::from_data(TensorData::new(x, [1, c, h, w]), &self.device);
         let v = self

@@ -51,7 +51,7 @@ impl DetectionSet {
             .par_iter()
             .map(|f| {
                 let img = load_frame(ds.root.join(f), width, height)?;
-                Ok(to_bytes(&img))
+                Ok(img.to_bytes())
             })
             .collect::<Result<Vec<_>>>()?;
         let transition = transitions(ds, &tendon)?;
@@ -97,7 +97,7 @@ impl DetectionSet {
 
     /// The frame as a float image in [0, 1].
     pub fn image(&self, i: usize) -> FloatImage {
-        from_bytes(self.width, self.height, &self.frames[i])
+        FloatImage::from_bytes(self.width, self.height, 3, &self.frames[i])
     }
 
     /// Normalised `[N, 3, H, W]` batch of the frames at `idx`.
@@ -176,33 +176,6 @@ impl SoftLabels {
         let p = (1.0 / (1.0 + (-z).exp())) as f32;
         if tendon { p.max(0.5) } else { p.min(0.5) }
     }
-}
-
-/// Quantise a [0, 1] image to bytes.
-pub fn to_bytes(img: &FloatImage) -> Vec<u8> {
-    img.data
-        .iter()
-        .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
-        .collect()
-}
-
-/// An RGB float image in [0, 1] from its bytes.
-pub fn from_bytes(width: usize, height: usize, bytes: &[u8]) -> FloatImage {
-    FloatImage {
-        width,
-        height,
-        channels: 3,
-        data: bytes.iter().map(|&v| v as f32 / 255.0).collect(),
-    }
-}
-
-/// A resized frame as the detector is trained on it: 8 bits per channel,
-/// the way [`DetectionSet`] stores it. Inference goes through this too, so
-/// a frame near the decision threshold gets the same answer in `tactile
-/// run` as in `tactile eval` (without it, probabilities differed by up to
-/// 0.07 on onset frames).
-pub fn as_trained(img: &FloatImage) -> FloatImage {
-    from_bytes(img.width, img.height, &to_bytes(img))
 }
 
 /// Frames within two frames (same sequence, by `frame_index`) of a frame

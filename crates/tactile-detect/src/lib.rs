@@ -51,13 +51,14 @@ impl DetectorArtifact {
 
     /// The normalised `3 x H x W` input of an RGB frame of any size
     /// (resized, then 8 bits per channel as in training, see
-    /// [`data::as_trained`]), or `None` for a blank frame (see [`is_blank`]), which shows no tendon.
+    /// [`FloatImage::quantised`]), or `None` for a blank frame (see
+    /// [`is_blank`]), which shows no tendon.
     pub fn frame_input(
         &self,
         frame: &tactile_core::image_io::RgbImage,
     ) -> Result<Option<Vec<f32>>> {
         let [w, h] = self.detector.input_size;
-        let img = data::as_trained(&tactile_preprocess::visuo::resize_rgb(frame, w, h)?);
+        let img = tactile_preprocess::visuo::resize_rgb(frame, w, h)?.quantised();
         if is_blank(&img) {
             return Ok(None);
         }

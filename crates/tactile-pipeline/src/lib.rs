@@ -14,7 +14,7 @@ use tactile_core::{DeviceKind, Error, Result};
 use tactile_depth::{DepthArtifact, DepthNet};
 use tactile_detect::{Detector, DetectorArtifact};
 use tactile_onnx::OrtModel;
-use tactile_preprocess::visuo::{is_blank, resize_rgb};
+use tactile_preprocess::visuo::is_blank;
 use tactile_segment::{SegmenterArtifact, UNet};
 
 /// Where the networks run.
@@ -240,6 +240,11 @@ impl Pipeline {
         let (det, d) = DetectorArtifact::load(dir.join("detector"), &device)?;
         let (seg, s) = SegmenterArtifact::load(dir.join("segmenter"), &device)?;
         let (depth, p) = DepthArtifact::load(dir.join("depth"), &device)?;
+        if depth.with_mask {
+            return Err(Error::Config(
+                "the pipeline's depth model must take RGB only (mask-channel models are for evaluation)".into(),
+            ));
+        }
         let (det_net, seg_net, depth_net) = match runtime {
             Runtime::Onnx => (
                 Net::Ort(OrtModel::from_bytes(
@@ -356,15 +361,9 @@ impl Pipeline {
         // Depth.
         let t2 = Instant::now();
         let [w, h] = self.depth.net.input_size;
-        let img = resize_rgb(frame, w, h)?;
-        let mut x = self.depth.stats.to_chw(&img)?;
-        if self.depth.with_mask {
-            return Err(Error::Config(
-                "the pipeline's depth model must take RGB only (mask-channel models are for evaluation)".into(),
-            ));
-        }
-        x.truncate(3 * w * h);
-        let z = self.depth_net.run([1, 3, h, w], x)?;
+        let z = self
+            .depth_net
+            .run([1, 3, h, w], self.depth.frame_input(frame, None)?)?;
         let depth_mm: Vec<f32> = z.iter().map(|&v| self.depth.scale.to_mm(v)).collect();
         let mm: Vec<f32> = depth_mm
             .iter()

@@ -36,12 +36,7 @@ pub fn cut_frame(
     window: SquareWindow,
     deg: f64,
 ) -> (Vec<u8>, Option<Vec<bool>>) {
-    let img = window.cut(frame, deg);
-    let bytes = img
-        .data
-        .iter()
-        .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
-        .collect();
+    let bytes = window.cut(frame, deg).to_bytes();
     let m = mask.map(|m| {
         binarise_mask(&window.cut(m, deg))
             .into_iter()
@@ -134,16 +129,7 @@ impl SegmentSet {
     /// The window's pixels as a float image in [0, 1].
     pub fn image(&self, i: usize) -> FloatImage {
         let s = self.window.side;
-        FloatImage {
-            width: s,
-            height: s,
-            channels: 3,
-            data: self.windows[i]
-                .pixels
-                .iter()
-                .map(|&v| v as f32 / 255.0)
-                .collect(),
-        }
+        FloatImage::from_bytes(s, s, 3, &self.windows[i].pixels)
     }
 
     /// Normalised `[N, 3, S, S]` inputs and `[N, 1, S, S]` masks.

@@ -55,11 +55,14 @@ impl SegmenterArtifact {
         )
     }
 
-    /// The segmenter's (unrotated) window of an RGB frame of any size.
+    /// The segmenter's (unrotated) window of an RGB frame of any size, at 8
+    /// bits per channel as in training ([`FloatImage::quantised`]).
     pub fn frame_window(&self, frame: &tactile_core::image_io::RgbImage) -> Result<FloatImage> {
         let win = self.window();
         let (sw, sh) = win.scaled_size(frame.width(), frame.height());
-        Ok(win.cut(&tactile_preprocess::visuo::resize_rgb(frame, sw, sh)?, 0.0))
+        Ok(win
+            .cut(&tactile_preprocess::visuo::resize_rgb(frame, sw, sh)?, 0.0)
+            .quantised())
     }
 
     /// Post-processed tendon from the window's per-pixel probabilities;
