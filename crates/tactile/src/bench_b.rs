@@ -165,8 +165,7 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
     let sel_ds = a.select.as_ref().map(Dataset::open).transpose()?;
     let mut series = Vec::new();
     let mut rows = Vec::new();
-    // ((parameters, input pixels), folder, selection accuracy, selection frames)
-    let mut candidates: Vec<((usize, usize), PathBuf, f64, usize)> = Vec::new();
+    let mut candidates: Vec<Candidate> = Vec::new();
     // Frames are loaded once per input size (test and selection sets).
     type Sets = ([usize; 2], DetectionSet, Option<DetectionSet>);
     let mut cache: Vec<Sets> = Vec::new();
@@ -192,12 +191,13 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
             None => None,
         };
         if let (Some(acc), Some(d)) = (sel_acc, sel_data) {
-            candidates.push((
-                (model.num_params(), size[0] * size[1]),
-                m.clone(),
-                acc,
-                d.len(),
-            ));
+            candidates.push(Candidate {
+                parameters: model.num_params(),
+                input_pixels: size[0] * size[1],
+                folder: m.clone(),
+                accuracy: acc,
+                frames: d.len(),
+            });
         }
         let sel = sel_acc.map_or("-".into(), |v| format!("{v:.4}"));
         let onnx = tactile_onnx::export_detector(&model, size)?;
@@ -256,23 +256,37 @@ pub fn bench_detector(a: BenchModelsArgs) -> Result<()> {
     )
 }
 
-/// The selection rule's verdict on ((parameters, input pixels), folder,
-/// selection accuracy, selection frames), as a sentence; the smallest is
-/// the one with fewest parameters, then fewest input pixels.
-fn choose_detector(candidates: &[((usize, usize), PathBuf, f64, usize)]) -> String {
+/// A detector of the sweep as the selection rule sees it.
+struct Candidate {
+    parameters: usize,
+    input_pixels: usize,
+    folder: PathBuf,
+    /// Accuracy on the selection set, of `frames` frames.
+    accuracy: f64,
+    frames: usize,
+}
+
+/// The selection rule's verdict, as a sentence; the smallest is the one
+/// with fewest parameters, then fewest input pixels.
+fn choose_detector(candidates: &[Candidate]) -> String {
     if candidates.is_empty() {
         return String::new();
     }
     let rule = "Selection rule: the smallest model whose selection-set accuracy exceeds the 0.99 target by at least one standard error, sqrt(a (1 - a) / n) (a selection set cannot otherwise tell 0.990 from 0.995).";
-    let mut ok: Vec<&((usize, usize), PathBuf, f64, usize)> = candidates
+    let chosen = candidates
         .iter()
-        .filter(|(_, _, a, n)| a - (a * (1.0 - a) / (*n).max(1) as f64).sqrt() >= 0.99)
-        .collect();
-    ok.sort_by_key(|c| c.0);
-    match ok.first() {
-        Some(((p, _), m, a, n)) => format!(
-            "{rule} It picks `{}` ({p} parameters, {a:.4} on {n} selection frames). ",
-            m.file_name().unwrap_or_default().to_string_lossy()
+        .filter(|c| {
+            let (a, n) = (c.accuracy, c.frames.max(1) as f64);
+            a - (a * (1.0 - a) / n).sqrt() >= 0.99
+        })
+        .min_by_key(|c| (c.parameters, c.input_pixels));
+    match chosen {
+        Some(c) => format!(
+            "{rule} It picks `{}` ({} parameters, {:.4} on {} selection frames). ",
+            c.folder.file_name().unwrap_or_default().to_string_lossy(),
+            c.parameters,
+            c.accuracy,
+            c.frames
         ),
         None => format!("{rule} No model here meets it. "),
     }

@@ -226,6 +226,31 @@ fn held_out(dir: &Path, seed: u64, sequences: usize, frames: usize, extra: &[&st
     Ok(())
 }
 
+/// The summary (the last JSON line) of `tactile run` over `test` on
+/// `runtime`, with `extra` options.
+fn run_summary(
+    test: &Path,
+    models: &Path,
+    runtime: &str,
+    extra: &[&str],
+) -> Result<serde_json::Value> {
+    let mut args = vec![
+        "run",
+        "--data",
+        s(test),
+        "--models",
+        s(models),
+        "--runtime",
+        runtime,
+    ];
+    args.extend_from_slice(extra);
+    tactile(&args)?
+        .lines()
+        .rev()
+        .find_map(|l| serde_json::from_str(l).ok())
+        .with_context(|| format!("no summary from tactile {}", args.join(" ")))
+}
+
 /// ON and OFF probabilities of the hysteresis the report measures.
 const HYSTERESIS: [&str; 2] = ["0.6", "0.3"];
 
@@ -243,22 +268,7 @@ fn temporal_filter(
         .context("no onnxruntime run to compare the filter with")?
         .1;
     let on_off = HYSTERESIS.join(",");
-    let out = tactile(&[
-        "run",
-        "--data",
-        s(test),
-        "--models",
-        s(models),
-        "--runtime",
-        "onnx",
-        "--hysteresis",
-        &on_off,
-    ])?;
-    let filtered: serde_json::Value = out
-        .lines()
-        .rev()
-        .find_map(|l| serde_json::from_str(l).ok())
-        .context("no summary from tactile run --hysteresis")?;
+    let filtered = run_summary(test, models, "onnx", &["--hysteresis", &on_off])?;
     let acc = |j: &serde_json::Value, k: &str| j[k].as_f64().unwrap_or(f64::NAN);
     let changes = |j: &serde_json::Value, k: &str| j[k].as_u64().unwrap_or(0);
     let labels = changes(plain, "label_changes");
@@ -373,20 +383,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
     );
     let mut summaries = Vec::new();
     for rt in ["onnx", "burn-flex", "burn-ndarray"] {
-        let out = tactile(&[
-            "run",
-            "--data",
-            s(&test),
-            "--models",
-            s(&a.models),
-            "--runtime",
-            rt,
-        ])?;
-        let json: serde_json::Value = out
-            .lines()
-            .rev()
-            .find_map(|l| serde_json::from_str(l).ok())
-            .context("no summary from tactile run")?;
+        let json = run_summary(&test, &a.models, rt, &[])?;
         let st = &json["stages_ms"];
         let cell = |k: &str| match (st[k][0].as_f64(), st[k][1].as_f64()) {
             (Some(m), Some(p)) => format!("{m:.2} / {p:.2} ms"),
