@@ -4,6 +4,7 @@
 //! depend on this one library.
 
 pub use datasets_synth as synth;
+pub use tactile_bench as bench;
 pub use tactile_cae as cae;
 pub use tactile_core as core;
 pub use tactile_depth as depth;

@@ -111,8 +111,8 @@ fn shipped_mae(
     use tactile_rs::depth::DepthEstimator;
     use tactile_rs::depth::data::window_mask;
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/depth");
-    let est = DepthEstimator::load(&root, &burn::tensor::Device::flex()).unwrap();
-    let [w, h] = est.artifact.net.input_size;
+    let mut est = DepthEstimator::load(&root, tactile_rs::core::Runtime::BurnFlex, 0).unwrap();
+    let [w, h] = est.artifact.model.input_size;
     let window = window_mask(w, h);
     let mut total = 0.0;
     for s in seqs.clone() {

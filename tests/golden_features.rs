@@ -6,11 +6,12 @@
 
 mod common;
 
-use tactile_rs::cae::authors::load_authors_encoder;
+use tactile_rs::cae::authors::{authors_widths, load_authors_encoder};
 use tactile_rs::cae::data::PinSet;
-use tactile_rs::cae::encode::encode_all;
-use tactile_rs::core::DeviceKind;
+use tactile_rs::cae::{CaeArtifact, CaeConfig, TactipEncoder};
 use tactile_rs::core::dataset::Dataset;
+use tactile_rs::core::runtime::BurnNetwork;
+use tactile_rs::core::{DeviceKind, Runtime};
 use tactile_rs::preprocess::PreprocessConfig;
 
 #[test]
@@ -23,9 +24,17 @@ fn authors_encoder_reproduces_golden_features_on_both_devices() {
     let by_file: std::collections::HashMap<_, _> = golden.into_iter().collect();
     for kind in DeviceKind::ALL {
         let device = kind.device();
-        let cae = load_authors_encoder(real.join("authors-encoder.safetensors"), &device)
-            .expect("load encoder");
-        let feats = encode_all(&cae.encoder, &pins, 256, &device).expect("encode");
+        let file = real.join("authors-encoder.safetensors");
+        let cae = load_authors_encoder(&file, &device).expect("load encoder");
+        let artifact = CaeArtifact {
+            model: CaeConfig::new().with_widths(authors_widths(&file).unwrap()),
+            preprocess: PreprocessConfig::binary_frames(),
+            notes: Default::default(),
+        };
+        let net = Box::new(BurnNetwork::new(cae, kind));
+        let feats = TactipEncoder::from_network(artifact, net)
+            .encode(&pins.images)
+            .expect("encode");
         let mut worst = 0f32;
         let mut worst_file = String::new();
         for (file, f) in pins.files.iter().zip(&feats) {
@@ -50,22 +59,19 @@ fn authors_encoder_reproduces_golden_features_on_both_devices() {
 #[test]
 fn shipped_shapes_model_still_loads_and_classifies_the_real_test_split() {
     // models/cae-shapes predates later config fields: it must keep loading.
-    use tactile_rs::cae::CaeArtifact;
-    use tactile_rs::cae::head::ClassifierHead;
+    use tactile_rs::estimate::ClassifierHead;
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/cae-shapes");
-    let device = DeviceKind::Flex.device();
-    let (art, cae) = CaeArtifact::load(&root, &device).unwrap();
-    let head = ClassifierHead::load(root.join("head"), &device).unwrap();
+    let mut encoder = TactipEncoder::load(&root, Runtime::BurnFlex, 0).unwrap();
+    let head = ClassifierHead::load(root.join("head"), &DeviceKind::Flex.device()).unwrap();
     let ds = Dataset::open(common::shared_real().join("polic-shapes")).unwrap();
     let test = ds.split_indices("test").unwrap();
-    let pins = PinSet::from_dataset(&ds, &art.preprocess).unwrap();
-    let feats = encode_all(&cae.encoder, &pins, 256, &device).unwrap();
+    let (_, feats) = encoder.encode_dataset(&ds).unwrap();
     let x: Vec<Vec<f32>> = test.iter().map(|&i| feats[i].clone()).collect();
-    let pred = head.predict(&x, &device).unwrap();
+    let pred = head.predict(&x).unwrap();
     let right = test
         .iter()
         .zip(&pred)
-        .filter(|(i, p)| ds.text(**i, "shape").unwrap() == head.config.classes[**p])
+        .filter(|(i, p)| ds.text(**i, "shape").unwrap() == head.classes()[**p])
         .count();
     let acc = right as f64 / test.len() as f64;
     // Measured 97.1 % (461/475); the paper's MLP: 96.7 %.

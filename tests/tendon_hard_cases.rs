@@ -5,8 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
-use burn::tensor::Device;
 use tactile_rs::core::image_io::{RgbImage, rgb_image, save_rgb_png};
+use tactile_rs::core::{Artifact, Runtime};
 use tactile_rs::detect::TendonDetector;
 use tactile_rs::segment::{NoDirection, TendonSegmenter};
 use tactile_rs::synth::VisuotactileConfig;
@@ -17,11 +17,11 @@ fn models() -> PathBuf {
 }
 
 fn detector() -> TendonDetector {
-    TendonDetector::load(models().join("detector"), &Device::flex()).unwrap()
+    TendonDetector::load(models().join("detector"), Runtime::BurnFlex, 0).unwrap()
 }
 
 fn segmenter() -> TendonSegmenter {
-    TendonSegmenter::load(models().join("segmenter"), &Device::flex()).unwrap()
+    TendonSegmenter::load(models().join("segmenter"), Runtime::BurnFlex, 0).unwrap()
 }
 
 fn solid(w: usize, h: usize, rgb: [u8; 3]) -> RgbImage {
@@ -37,8 +37,8 @@ fn virtual_frame(seed: u64, seq: u64, frame: usize) -> (RgbImage, bool) {
 
 #[test]
 fn blank_frames_show_no_tendon() {
-    let det = detector();
-    let seg = segmenter();
+    let mut det = detector();
+    let mut seg = segmenter();
     for (name, img) in [
         ("black", solid(640, 360, [0, 0, 0])),
         ("saturated", solid(640, 360, [255, 255, 255])),
@@ -50,7 +50,7 @@ fn blank_frames_show_no_tendon() {
         // Even when asked, the segmenter finds nothing to point along.
         let t = seg.segment(&img).unwrap();
         assert!(
-            t.direction.is_err() || t.region.area() == 0,
+            t.tendon.direction.is_err() || t.tendon.region.area() == 0,
             "{name}: {t:?}"
         );
     }
@@ -58,7 +58,7 @@ fn blank_frames_show_no_tendon() {
 
 #[test]
 fn glare_only_frames_before_contact_show_no_tendon() {
-    let det = detector();
+    let mut det = detector();
     // Frame 0 of every sequence is before first touch: skin at rest, only
     // the LED glare in view.
     for seq in 0..8 {
@@ -71,7 +71,7 @@ fn glare_only_frames_before_contact_show_no_tendon() {
 
 #[test]
 fn other_sizes_are_resized_and_still_detected() {
-    let det = detector();
+    let mut det = detector();
     // The middle of a palpation: full press. Find a tendon frame.
     let (img, _) = (0..20)
         .map(|s| virtual_frame(902, s, 12))
@@ -87,21 +87,23 @@ fn other_sizes_are_resized_and_still_detected() {
         .map(|&v| (v * 255.0).round() as u8)
         .collect();
     let small = rgb_image(213, 120, bytes).unwrap();
-    assert!(det.is_tendon(det.probability(&small).unwrap()));
-    let seg = segmenter();
-    assert!(seg.segment(&small).unwrap().region.area() > 0);
+    let p = det.probability(&small).unwrap();
+    assert!(det.is_tendon(p));
+    let mut seg = segmenter();
+    assert!(seg.segment(&small).unwrap().tendon.region.area() > 0);
 }
 
 #[test]
 fn wrong_channel_counts_are_converted_or_rejected_naming_the_file() {
-    let det = detector();
+    let mut det = detector();
     let dir = tempfile::tempdir().unwrap();
     // Greyscale is expanded to RGB.
     let grey = dir.path().join("grey.png");
     image::GrayImage::from_pixel(64, 36, image::Luma([90]))
         .save(&grey)
         .unwrap();
-    assert!(!det.is_tendon(det.probability_of_file(&grey).unwrap()));
+    let p = det.probability_of_file(&grey).unwrap();
+    assert!(!det.is_tendon(p));
     // RGBA and 16-bit are refused, naming the file and the format.
     let rgba = dir.path().join("rgba.png");
     image::RgbaImage::from_pixel(64, 36, image::Rgba([1, 2, 3, 4]))
@@ -124,7 +126,7 @@ fn wrong_channel_counts_are_converted_or_rejected_naming_the_file() {
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
     let e = det.probability_of_file(&cut).unwrap_err().to_string();
     assert!(e.contains("cut.png"), "{e}");
-    let seg = segmenter();
+    let mut seg = segmenter();
     let e = seg.segment_file(&cut).unwrap_err().to_string();
     assert!(e.contains("cut.png"), "{e}");
 }
@@ -256,13 +258,12 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
     tactile_rs::synth::write::write_visuotactile(&cfg, 6, 7, &dir, Default::default()).unwrap();
     let ds = Dataset::open(&dir).unwrap();
     let rows: Vec<usize> = (0..ds.len()).collect();
-    let device = Device::flex();
-    let (det, _) = DetectorArtifact::load(models().join("detector"), &device).unwrap();
-    let (seg, _) = SegmenterArtifact::load(models().join("segmenter"), &device).unwrap();
-    let (depth, _) = DepthArtifact::load(models().join("depth"), &device).unwrap();
-    let det_set = DetectionSet::from_dataset(&ds, det.detector.input_size).unwrap();
+    let det = DetectorArtifact::read(&models().join("detector")).unwrap();
+    let seg = SegmenterArtifact::read(&models().join("segmenter")).unwrap();
+    let depth = DepthArtifact::read(&models().join("depth")).unwrap();
+    let det_set = DetectionSet::from_dataset(&ds, det.model.input_size).unwrap();
     let seg_set = SegmentSet::from_dataset(&ds, &rows, seg.window(), 1, 0).unwrap();
-    let depth_set = DepthSet::from_dataset(&ds, &rows, depth.net.input_size).unwrap();
+    let depth_set = DepthSet::from_dataset(&ds, &rows, depth.model.input_size).unwrap();
     for i in rows {
         let frame = load_rgb(ds.path_of(i, "file").unwrap()).unwrap();
         let trained = det.stats.to_chw(&det_set.image(i)).unwrap();

@@ -10,10 +10,12 @@
 //! so datasets are byte-identical on every machine, render in parallel, and
 //! can be extended without changing earlier samples.
 
+mod error;
+pub use error::{Error, Result};
 pub use tactile_core::npy;
 pub mod preview;
 pub mod raster;
-pub mod rng;
+pub use tactile_core::rng;
 pub mod tactip;
 pub mod visuotactile;
 pub mod write;

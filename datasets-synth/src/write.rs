@@ -7,9 +7,11 @@
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
+use tactile_core::Error;
 use tactile_core::dataset::{DatasetKind, DatasetWriter, FORMAT, Manifest};
 use tactile_core::image_io::{save_grey_png, save_rgb_png};
-use tactile_core::{Error, Result};
+
+use crate::Result;
 
 use crate::tactip::{self, FRAME_PX, TactipConfig};
 use crate::visuotactile::{self, NATIVE, VisuotactileConfig};
@@ -29,24 +31,22 @@ pub struct WriteOptions {
 /// Check the output folder before any work: refuse a non-empty one without `force`.
 pub fn check_output(out: &Path, force: bool) -> Result<()> {
     if out.is_file() {
-        return Err(Error::Invalid(format!(
-            "{}: output exists and is a file, not a folder",
-            out.display()
-        )));
+        return Err(crate::Error::OutputIsFile {
+            path: out.to_path_buf(),
+        });
     }
     let non_empty = std::fs::read_dir(out)
         .map(|mut d| d.next().is_some())
         .unwrap_or(false);
     if non_empty && !force {
-        return Err(Error::Invalid(format!(
-            "{}: output folder exists and is not empty (use --force to overwrite)",
-            out.display()
-        )));
+        return Err(crate::Error::OutputNotEmpty {
+            path: out.to_path_buf(),
+        });
     }
     Ok(())
 }
 
-fn staging_dir(out: &Path) -> Result<PathBuf> {
+fn staging_dir(out: &Path) -> tactile_core::Result<PathBuf> {
     let name = out
         .file_name()
         .ok_or_else(|| Error::Invalid(format!("{}: not a folder name", out.display())))?;
@@ -73,7 +73,7 @@ fn write_dataset<F>(
     row: F,
 ) -> Result<PathBuf>
 where
-    F: Fn(&Path, usize) -> Result<Vec<String>> + Sync,
+    F: Fn(&Path, usize) -> tactile_core::Result<Vec<String>> + Sync,
 {
     check_output(out, options.force)?;
     let staging = staging_dir(out)?;
@@ -93,7 +93,7 @@ where
                 pb.inc(1);
                 r
             })
-            .collect::<Result<_>>()?;
+            .collect::<tactile_core::Result<_>>()?;
         pb.finish_and_clear();
         for r in rows {
             writer.push_row(r)?;
@@ -102,7 +102,7 @@ where
     })();
     if let Err(e) = result {
         let _ = std::fs::remove_dir_all(&staging);
-        return Err(e);
+        return Err(e.into());
     }
     if out.exists() {
         std::fs::remove_dir_all(out).map_err(|e| Error::io(out, e))?;
@@ -129,7 +129,7 @@ pub fn write_tactip(
 ) -> Result<PathBuf> {
     config.validate()?;
     if count == 0 {
-        return Err(Error::Config("count: must be at least 1".into()));
+        return Err(Error::Config("count: must be at least 1".into()).into());
     }
     let mut extra = serde_json::Map::new();
     extra.insert(
@@ -188,7 +188,7 @@ pub fn write_visuotactile(
 ) -> Result<PathBuf> {
     config.validate()?;
     if count == 0 {
-        return Err(Error::Config("count: must be at least 1".into()));
+        return Err(Error::Config("count: must be at least 1".into()).into());
     }
     let fps = config.frames_per_sequence;
     let sequences = count.div_ceil(fps);

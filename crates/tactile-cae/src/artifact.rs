@@ -1,11 +1,10 @@
-//! A trained model on disk: `cae.json` (architecture + preprocessing +
-//! training summary) beside `cae.bpk` (burnpack weights).
-
-use std::path::Path;
+//! A trained autoencoder on disk: `cae.json` (architecture, the
+//! preprocessing that makes its pin images, provenance) beside `cae.bpk`.
 
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
-use tactile_core::Result;
+use tactile_core::Artifact;
+use tactile_onnx::Exportable;
 use tactile_preprocess::PreprocessConfig;
 
 use crate::model::{Cae, CaeConfig};
@@ -13,37 +12,32 @@ use crate::model::{Cae, CaeConfig};
 /// Everything needed to rebuild and use a saved autoencoder.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct CaeArtifact {
-    pub cae: CaeConfig,
+    /// The architecture.
+    #[serde(alias = "cae")]
+    pub model: CaeConfig,
+    /// How a frame becomes the pin image it encodes.
     pub preprocess: PreprocessConfig,
     /// Free-form provenance: how it was trained, on what, with which result.
     #[serde(default)]
     pub notes: serde_json::Value,
 }
 
-/// File names inside a model folder.
-pub const CONFIG_FILE: &str = "cae.json";
-pub const WEIGHTS_FILE: &str = "cae.bpk";
+impl Artifact for CaeArtifact {
+    type Model = Cae;
+    const KIND: &'static str = "CAE model";
+    const CONFIG_FILE: &'static str = "cae.json";
+    const WEIGHTS_FILE: &'static str = "cae.bpk";
 
-pub use tactile_core::module_io::{load_module, module_bytes, save_module};
-
-impl CaeArtifact {
-    /// Save config and weights into `dir` (created if needed).
-    pub fn save(&self, model: &Cae, dir: impl AsRef<Path>) -> Result<()> {
-        tactile_core::module_io::save_artifact(
-            dir.as_ref(),
-            (CONFIG_FILE, WEIGHTS_FILE),
-            self,
-            model,
-        )
+    fn init(&self, device: &Device) -> tactile_core::Result<Cae> {
+        Ok(self.model.init(device))
     }
+}
 
-    /// Load config and weights from `dir` onto `device`.
-    pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<(Self, Cae)> {
-        tactile_core::module_io::load_artifact(
-            dir.as_ref(),
-            (CONFIG_FILE, WEIGHTS_FILE),
-            "model",
-            |a: &Self| Ok(a.cae.init(device)),
-        )
+impl Exportable for CaeArtifact {
+    /// The encoder: `[N, 1, S, S]` pin images -> `[N, F]` features (what
+    /// runs at inference; [`crate::export::autoencoder_onnx`] exports the
+    /// whole autoencoder).
+    fn onnx(&self, model: &Cae) -> tactile_onnx::Result<Vec<u8>> {
+        crate::export::encoder_onnx(model, self.model.input_px)
     }
 }

@@ -8,7 +8,9 @@ use burn::module::Param;
 use burn::nn::conv::Conv2d;
 use burn::tensor::{Device, Tensor, TensorData};
 use safetensors::SafeTensors;
-use tactile_core::{Error, Result};
+use tactile_core::Error;
+
+use crate::Result;
 
 use crate::model::{Cae, CaeConfig};
 
@@ -24,11 +26,11 @@ fn load_conv(
     let (shape, hwio) = tensor_f32(st, path, &format!("conv{k}.weight_hwio"))?;
     let [o, i, kh, kw] = conv.weight.val().dims();
     if shape != [kh, kw, i, o] {
-        return Err(Error::shape(
+        return Err(crate::Error::Core(Error::shape(
             format!("{}: conv{k}.weight_hwio", path.display()),
             format!("{:?}", [kh, kw, i, o]),
             format!("{shape:?}"),
-        ));
+        )));
     }
     // HWIO -> OIHW. Keras and burn both compute cross-correlation: no flip.
     let mut oihw = vec![0f32; hwio.len()];
@@ -48,7 +50,8 @@ fn load_conv(
             format!("{}: conv{k}.bias", path.display()),
             format!("[{o}]"),
             format!("{bshape:?}"),
-        ));
+        )
+        .into());
     }
     conv.weight = Param::from_tensor(Tensor::from_data(
         TensorData::new(oihw, [o, i, kh, kw]),

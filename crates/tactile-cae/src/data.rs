@@ -4,31 +4,42 @@ use std::path::PathBuf;
 
 use burn::tensor::{Device, Tensor, TensorData};
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_core::{Error, Result};
 use tactile_preprocess::{PinImage, PreprocessConfig, preprocess_files};
+
+use crate::Result;
 
 /// Pin images of a TacTip dataset, in `labels.csv` order.
 pub struct PinSet {
+    /// Each frame's `file` label.
     pub files: Vec<String>,
+    /// Each frame's pin image.
     pub images: Vec<PinImage>,
 }
 
 impl PinSet {
     /// Preprocess every frame of `ds` (in parallel).
     pub fn from_dataset(ds: &Dataset, cfg: &PreprocessConfig) -> Result<Self> {
-        if ds.manifest.kind != DatasetKind::Tactip {
-            return Err(Error::dataset(
-                ds.root.join("manifest.json"),
-                None,
-                "kind is not 'tactip': the autoencoder reads TacTip datasets",
-            ));
-        }
-        let files: Vec<String> = (0..ds.len())
-            .map(|i| ds.text(i, "file").map(str::to_string))
-            .collect::<Result<_>>()?;
+        Self::from_rows(ds, &(0..ds.len()).collect::<Vec<_>>(), cfg)
+    }
+
+    /// Preprocess the frames of `rows` of `ds` (in parallel, in order).
+    pub fn from_rows(ds: &Dataset, rows: &[usize], cfg: &PreprocessConfig) -> Result<Self> {
+        ds.expect_kind(DatasetKind::Tactip)?;
+        let files: Vec<String> = rows
+            .iter()
+            .map(|&i| ds.text(i, "file").map(str::to_string))
+            .collect::<tactile_core::Result<_>>()?;
         let paths: Vec<PathBuf> = files.iter().map(|f| ds.root.join(f)).collect();
         let images = preprocess_files(&paths, cfg)?;
         Ok(Self { files, images })
+    }
+
+    /// Pin images alone (perturbed or live frames), without file names.
+    pub fn from_images(images: Vec<PinImage>) -> Self {
+        Self {
+            files: Vec::new(),
+            images,
+        }
     }
 
     /// Number of images.

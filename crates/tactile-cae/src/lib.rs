@@ -1,15 +1,23 @@
-//! Paper A's convolutional autoencoder: the model (Table I), loading the
-//! authors' released encoder, training (Adadelta, early stopping,
-//! resumable), encoding datasets to feature CSVs, and a shallow classifier
-//! head that proves the features.
+//! Paper A's convolutional autoencoder (Table I), alone: the model, its
+//! folder ([`CaeArtifact`]), training, the encoder at inference
+//! ([`TactipEncoder`]: frames to pin images to features, on any runtime),
+//! its ONNX export, and the authors' released encoder. The estimators that
+//! use its features are in `tactile-estimate`.
+
+#![deny(missing_docs)]
 
 pub mod artifact;
 pub mod authors;
 pub mod data;
-pub mod encode;
-pub mod head;
+mod error;
+pub mod eval;
+pub mod export;
+pub mod inference;
 pub mod model;
 pub mod training;
 
 pub use artifact::CaeArtifact;
+pub use error::{Error, Result};
+pub use inference::TactipEncoder;
 pub use model::{Cae, CaeConfig, CaeDecoder, CaeEncoder};
+pub use training::{CaeTrainingConfig, Optimizer};

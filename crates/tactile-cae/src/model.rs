@@ -16,6 +16,7 @@ use burn::nn::interpolate::{Interpolate2d, Interpolate2dConfig, InterpolateMode}
 use burn::nn::pool::{MaxPool2d, MaxPool2dConfig};
 use burn::tensor::activation::{relu, sigmoid};
 use burn::tensor::{Device, Int, Tensor, TensorData};
+use tactile_core::runtime::Forward;
 
 /// Architecture of the autoencoder.
 #[derive(Config, Debug, PartialEq)]
@@ -50,12 +51,13 @@ impl CaeConfig {
     }
 
     /// The config with `feature_count` features (paper A's 8/16/32/64 sweep).
-    pub fn with_feature_count(self, features: usize) -> Result<Self, tactile_core::Error> {
+    pub fn with_feature_count(self, features: usize) -> crate::Result<Self> {
         let s2 = self.latent_side() * self.latent_side();
         if features == 0 || !features.is_multiple_of(s2) {
-            return Err(tactile_core::Error::Config(format!(
-                "feature count {features} must be a positive multiple of {s2}"
-            )));
+            return Err(crate::Error::FeatureCount {
+                features,
+                cells: s2,
+            });
         }
         let mut w = self.widths;
         w[3] = features / s2;
@@ -153,16 +155,26 @@ pub fn hwc_unflatten(f: Tensor<2>, c: usize, h: usize, w: usize) -> Tensor<4> {
 /// Pin image -> features.
 #[derive(Module, Debug)]
 pub struct CaeEncoder {
+    /// Block 1 convolution.
     pub conv1: Conv2d,
+    /// Block 2 convolution.
     pub conv2: Conv2d,
+    /// Block 3 convolution.
     pub conv3: Conv2d,
+    /// Block 4 convolution (its channels are the features).
     pub conv4: Conv2d,
+    /// Keras 'same' 2x2 max-pooling.
     pub pool: MaxPool2d,
+    /// ReLU before the last pooling.
     pub latent_relu: bool,
 }
 
 impl CaeEncoder {
-    /// The latent map, `[N, C, 2, 2]`.
+    /// The latent map.
+    ///
+    /// # Shapes
+    /// - `x`: `[N, 1, 28, 28]`
+    /// - output: `[N, C, 2, 2]`
     pub fn latent(&self, x: Tensor<4>) -> Tensor<4> {
         let x = self.pool.forward(relu(self.conv1.forward(x)));
         let x = self.pool.forward(relu(self.conv2.forward(x)));
@@ -172,7 +184,11 @@ impl CaeEncoder {
             .forward(if self.latent_relu { relu(x) } else { x })
     }
 
-    /// Features `[N, F]` in (row, column, channel) order, from pin images `[N, 1, 28, 28]`.
+    /// Features in (row, column, channel) order.
+    ///
+    /// # Shapes
+    /// - `x`: `[N, 1, 28, 28]` pin images
+    /// - output: `[N, F]`
     pub fn forward(&self, x: Tensor<4>) -> Tensor<2> {
         hwc_flatten(self.latent(x))
     }
@@ -181,13 +197,21 @@ impl CaeEncoder {
 /// Features -> reconstruction logits.
 #[derive(Module, Debug)]
 pub struct CaeDecoder {
+    /// First convolution, on the latent map.
     pub conv1: Conv2d,
+    /// Second.
     pub conv2: Conv2d,
+    /// Third.
     pub conv3: Conv2d,
+    /// The 'valid' convolution (16 -> 14).
     pub conv4: Conv2d,
+    /// To one channel of logits.
     pub conv5: Conv2d,
+    /// Nearest up-sampling x2.
     pub up: Interpolate2d,
+    /// Channels of the latent map.
     pub latent_channels: usize,
+    /// Side of the latent map.
     pub latent_side: usize,
 }
 
@@ -211,7 +235,9 @@ impl CaeDecoder {
 /// The whole autoencoder.
 #[derive(Module, Debug)]
 pub struct Cae {
+    /// Pin image to features.
     pub encoder: CaeEncoder,
+    /// Features to reconstruction.
     pub decoder: CaeDecoder,
 }
 
@@ -226,6 +252,13 @@ impl Cae {
     /// Reconstruction in [0, 1] (the Keras model's sigmoid output).
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
         sigmoid(self.forward_logits(x))
+    }
+}
+
+impl Forward for Cae {
+    /// At inference the autoencoder is its encoder: pin images to features.
+    fn forward_data(&self, x: Tensor<4>) -> TensorData {
+        self.encoder.forward(x).into_data()
     }
 }
 

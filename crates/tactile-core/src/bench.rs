@@ -6,8 +6,11 @@ use std::time::Instant;
 /// What a benchmark ran on.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Machine {
+    /// CPU model name.
     pub cpu: String,
+    /// Logical cores available to this process.
     pub logical_cores: usize,
+    /// Operating system and architecture.
     pub os: String,
 }
 

@@ -7,6 +7,7 @@ use burn::tensor::Device;
 
 /// The CPU devices burn offers that tactile-rs runs every model on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum DeviceKind {
     /// burn's NdArray backend: the device the design names (deprecated upstream).

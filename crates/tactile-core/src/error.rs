@@ -1,5 +1,8 @@
-//! One error type for every library crate, so a user sees the same shape of
-//! message (which file, which line, what is wrong) wherever it comes from.
+//! The foundation's error type. Every crate of the workspace wraps it in its
+//! own enum, so a user sees the same shape of message (which file, which
+//! line, what is wrong) wherever it comes from, and a caller can match the
+//! variant (a missing file, the wrong kind of model folder, a wrong shape)
+//! instead of parsing text.
 
 use std::path::{Path, PathBuf};
 
@@ -10,35 +13,81 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
+    #[error("{}: {source}", path.display())]
     Io {
+        /// The file or folder.
         path: PathBuf,
+        /// What the operating system said.
         #[source]
         source: std::io::Error,
     },
+    /// A file or folder that must exist does not.
+    #[error("{}: {what} does not exist", path.display())]
+    NotFound {
+        /// The missing path.
+        path: PathBuf,
+        /// What it should have been ("dataset folder", "weights file").
+        what: String,
+    },
+    /// A folder holds something else than the command needs (a segmenter
+    /// where a detector was asked for, a TacTip dataset for a palpation
+    /// model).
+    #[error("{}: not a {expected} ({found})", path.display())]
+    WrongKind {
+        /// The folder or file.
+        path: PathBuf,
+        /// What was asked for.
+        expected: String,
+        /// What is there instead.
+        found: String,
+    },
     /// An image could not be decoded or has the wrong format or size.
-    #[error("{path}: {message}")]
-    Image { path: PathBuf, message: String },
-    /// A dataset file is malformed; `line` is 1-based when known.
+    #[error("{}: {message}", path.display())]
+    Image {
+        /// The image file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A dataset file is malformed (a bad label, a bad manifest).
     #[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
     Dataset {
+        /// The file (`labels.csv`, `manifest.json`, a depth map).
         path: PathBuf,
+        /// 1-based line, when known.
         line: Option<usize>,
+        /// What is wrong.
         message: String,
     },
     /// A model or its configuration could not be loaded, saved or run.
-    #[error("{path}: {message}")]
-    Model { path: PathBuf, message: String },
-    /// A tensor or array has the wrong shape.
+    #[error("{}: {message}", path.display())]
+    Model {
+        /// The model file or folder.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A tensor, image or array has the wrong shape.
     #[error("wrong shape for {what}: expected {expected}, found {found}")]
     Shape {
+        /// What has the shape.
         what: String,
+        /// The shape that was needed.
         expected: String,
+        /// The shape that was given.
         found: String,
     },
     /// A configuration value is invalid.
     #[error("invalid configuration: {0}")]
     Config(String),
+    /// Training produced a non-finite loss.
+    #[error("{what} is {value}: training diverged")]
+    Diverged {
+        /// The quantity ("training loss").
+        what: String,
+        /// Its value (NaN or infinite).
+        value: f64,
+    },
     /// Any other invalid input, described in words.
     #[error("{0}")]
     Invalid(String),
@@ -50,6 +99,27 @@ impl Error {
         Error::Io {
             path: path.as_ref().to_path_buf(),
             source,
+        }
+    }
+
+    /// `path` (a `what`) does not exist.
+    pub fn not_found(path: impl AsRef<Path>, what: impl Into<String>) -> Self {
+        Error::NotFound {
+            path: path.as_ref().to_path_buf(),
+            what: what.into(),
+        }
+    }
+
+    /// `path` is not a `expected`; it holds `found`.
+    pub fn wrong_kind(
+        path: impl AsRef<Path>,
+        expected: impl Into<String>,
+        found: impl Into<String>,
+    ) -> Self {
+        Error::WrongKind {
+            path: path.as_ref().to_path_buf(),
+            expected: expected.into(),
+            found: found.into(),
         }
     }
 
@@ -89,5 +159,38 @@ impl Error {
             expected: expected.to_string(),
             found: found.to_string(),
         }
+    }
+
+    /// True when the error is a missing file or folder (the front ends map
+    /// it to "file not found", e.g. Python's `FileNotFoundError`).
+    pub fn is_not_found(&self) -> bool {
+        match self {
+            Error::NotFound { .. } => true,
+            Error::Io { source, .. } => source.kind() == std::io::ErrorKind::NotFound,
+            _ => false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_name_the_file_and_line() {
+        let e = Error::dataset(
+            "ds/labels.csv",
+            Some(7),
+            "column 'x_mm': 'a' is not a number",
+        );
+        assert_eq!(
+            e.to_string(),
+            "ds/labels.csv:7: column 'x_mm': 'a' is not a number"
+        );
+        let e = Error::wrong_kind("models/segmenter", "detector folder", "no detector.json");
+        assert!(e.to_string().contains("not a detector folder"));
+        assert!(Error::not_found("x", "dataset folder").is_not_found());
+        assert!(Error::io("x", std::io::Error::from(std::io::ErrorKind::NotFound)).is_not_found());
+        assert!(!Error::Invalid("x".into()).is_not_found());
     }
 }

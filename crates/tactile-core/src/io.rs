@@ -7,7 +7,7 @@ use std::path::Path;
 
 use crate::{Error, Result};
 
-/// Write `bytes` to `path` atomically.
+/// Write `bytes` to `path` atomically (its folder is created if needed).
 pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     write_atomic_with(path, |w| w.write_all(bytes))
 }
@@ -22,6 +22,7 @@ where
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(path, e))?;
     let mut tmp = tempfile::Builder::new()
         .prefix(".tactile-")
         .suffix(".tmp")
@@ -65,9 +66,11 @@ pub fn create_dir_all(path: impl AsRef<Path>) -> Result<()> {
     std::fs::create_dir_all(path).map_err(|e| Error::io(path, e))
 }
 
-/// Create `dir` if needed and prove a file can be written in it (a
-/// temporary file, removed at once), so a command fails before its work,
-/// naming the folder, instead of after it.
+/// Prove a file can be written in `dir` (a temporary file, removed at
+/// once), so a command fails before its work, naming the folder, instead
+/// of after it. A folder that does not exist yet is not created: its
+/// nearest existing ancestor is probed instead, so a failed command leaves
+/// no empty folder behind.
 pub fn ensure_writable_dir(dir: impl AsRef<Path>) -> Result<()> {
     let dir = dir.as_ref();
     let dir = if dir.as_os_str().is_empty() {
@@ -75,18 +78,31 @@ pub fn ensure_writable_dir(dir: impl AsRef<Path>) -> Result<()> {
     } else {
         dir
     };
-    create_dir_all(dir)?;
+    let probe = dir
+        .ancestors()
+        .find(|a| a.is_dir() || a.as_os_str().is_empty())
+        .map(|a| {
+            if a.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                a
+            }
+        })
+        .unwrap_or(Path::new("."));
+    let refuse = |why: String| {
+        Error::Invalid(format!(
+            "{}: cannot write in this folder ({why})",
+            dir.display()
+        ))
+    };
+    if dir.exists() && !dir.is_dir() {
+        return Err(refuse("it is a file".into()));
+    }
     tempfile::Builder::new()
         .prefix(".tactile-probe-")
-        .tempfile_in(dir)
+        .tempfile_in(probe)
         .map(drop)
-        .map_err(|e| {
-            Error::Invalid(format!(
-                "{}: cannot write in this folder ({})",
-                dir.display(),
-                e.kind()
-            ))
-        })
+        .map_err(|e| refuse(e.kind().to_string()))
 }
 
 /// [`ensure_writable_dir`] for the folder an output file will go into.

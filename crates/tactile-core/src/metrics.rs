@@ -147,14 +147,23 @@ mod tests {
 /// Binary classification scores, positives = `true`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BinaryScores {
+    /// Frames scored.
     pub frames: usize,
+    /// Fraction of right decisions.
     pub accuracy: f64,
+    /// True positives over predicted positives.
     pub precision: f64,
+    /// True positives over actual positives.
     pub recall: f64,
+    /// Harmonic mean of precision and recall.
     pub f1: f64,
+    /// Positives predicted positive.
     pub true_pos: usize,
+    /// Negatives predicted positive.
     pub false_pos: usize,
+    /// Negatives predicted negative.
     pub true_neg: usize,
+    /// Positives predicted negative.
     pub false_neg: usize,
 }
 

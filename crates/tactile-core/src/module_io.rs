@@ -33,40 +33,6 @@ pub fn load_module<M: Module>(module: M, path: &Path) -> Result<M> {
         .map_err(|e| Error::model(path, e.to_string()))
 }
 
-/// Save a model folder: `config_file` (JSON of `artifact`: architecture,
-/// preprocessing, provenance) beside `weights_file` (burnpack).
-pub fn save_artifact<A: serde::Serialize, M: Module>(
-    dir: &Path,
-    (config_file, weights_file): (&str, &str),
-    artifact: &A,
-    model: &M,
-) -> Result<()> {
-    crate::io::create_dir_all(dir)?;
-    save_module(model, &dir.join(weights_file))?;
-    crate::io::write_json_atomic(dir.join(config_file), artifact)
-}
-
-/// Load a model folder written by [`save_artifact`]: the JSON, then the
-/// weights into the module `build` makes from it. A folder without the JSON
-/// is "not a `what` folder", naming the file.
-pub fn load_artifact<A: serde::de::DeserializeOwned, M: Module>(
-    dir: &Path,
-    (config_file, weights_file): (&str, &str),
-    what: &str,
-    build: impl FnOnce(&A) -> Result<M>,
-) -> Result<(A, M)> {
-    let cfg = dir.join(config_file);
-    if !cfg.is_file() {
-        return Err(Error::model(
-            &cfg,
-            format!("not a {what} folder: missing {config_file}"),
-        ));
-    }
-    let art: A = crate::io::read_json(&cfg)?;
-    let model = load_module(build(&art)?, &dir.join(weights_file))?;
-    Ok((art, model))
-}
-
 /// A float32 tensor of a safetensors file: `(shape, values)`; errors name
 /// the file and the tensor (missing, or another dtype).
 pub fn safetensors_f32(

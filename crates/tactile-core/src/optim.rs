@@ -27,7 +27,9 @@ pub struct Adadelta {
 /// Per-parameter running averages of squared gradients and squared updates.
 #[derive(Clone)]
 pub struct AdadeltaState<const D: usize> {
+    /// Running mean of squared gradients.
     pub square_avg: Tensor<D>,
+    /// Running mean of squared updates.
     pub acc_delta: Tensor<D>,
 }
 

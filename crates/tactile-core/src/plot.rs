@@ -35,7 +35,9 @@ fn font_available() -> bool {
 
 /// One named line of `(x, y)` points.
 pub struct Series {
+    /// Legend entry.
     pub name: String,
+    /// The points, in drawing order.
     pub points: Vec<(f64, f64)>,
 }
 
@@ -48,8 +50,76 @@ const COLOURS: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
-/// Draw `series` as lines (with point markers) and save a PNG atomically.
-/// `log_y` plots the y axis logarithmically (losses).
+/// Bounds that hold every point with a margin: 5 % of the span on each
+/// side (on a log axis, of the span of the logarithms), and a visible span
+/// around a single value.
+fn padded(lo: f64, hi: f64, log: bool) -> (f64, f64) {
+    if log {
+        let (a, b) = padded(lo.log10(), hi.log10(), false);
+        return (10f64.powf(a), 10f64.powf(b));
+    }
+    let span = hi - lo;
+    if span > 0.0 {
+        (lo - 0.05 * span, hi + 0.05 * span)
+    } else {
+        let half = (lo.abs() * 0.1).max(1e-6);
+        (lo - half, hi + half)
+    }
+}
+
+/// Tick label of `v` on an axis whose ticks are about `step` apart: whole
+/// numbers without decimals, otherwise as many decimals as the step needs.
+fn tick_label(v: f64, step: f64, integers: bool) -> String {
+    if integers {
+        return format!("{}", v.round() as i64);
+    }
+    let decimals = if step > 0.0 && step.is_finite() {
+        (-(step.log10().floor()) as i32).clamp(0, 6) as usize
+    } else {
+        2
+    };
+    format!("{v:.decimals$}")
+}
+
+/// The corner of the plot with the fewest points under where a legend
+/// would go, so the legend hides none it can avoid.
+fn legend_corner(
+    pts: &[(f64, f64)],
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+    log_y: bool,
+) -> SeriesLabelPosition {
+    let ny = |y: f64| {
+        if log_y {
+            (y.log10() - y0.log10()) / (y1.log10() - y0.log10())
+        } else {
+            (y - y0) / (y1 - y0)
+        }
+    };
+    let under = |left: bool, top: bool| {
+        pts.iter()
+            .filter(|&&(x, y)| {
+                let (u, v) = ((x - x0) / (x1 - x0), ny(y));
+                (if left { u < 0.35 } else { u > 0.65 }) && (if top { v > 0.7 } else { v < 0.3 })
+            })
+            .count()
+    };
+    [
+        (SeriesLabelPosition::UpperRight, under(false, true)),
+        (SeriesLabelPosition::UpperLeft, under(true, true)),
+        (SeriesLabelPosition::LowerRight, under(false, false)),
+        (SeriesLabelPosition::LowerLeft, under(true, false)),
+    ]
+    .into_iter()
+    .min_by_key(|c| c.1)
+    .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+}
+
+/// Draw `series` as lines with a dot at every point and save a PNG
+/// atomically. `log_y` plots the y axis logarithmically (losses). The
+/// axes hold every point, tick labels are plain numbers (whole numbers on
+/// an axis of whole numbers, such as epochs), and each legend entry shows
+/// its series' line and dot.
 pub fn line_plot(
     path: impl AsRef<Path>,
     title: &str,
@@ -61,37 +131,32 @@ pub fn line_plot(
     let path = path.as_ref();
     let (w, h) = (900u32, 560u32);
     let mut buf = vec![255u8; (w * h * 3) as usize];
-    let pts = series
+    let keep = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite() && (!log_y || p.1 > 0.0);
+    let pts: Vec<(f64, f64)> = series
         .iter()
         .flat_map(|s| s.points.iter())
-        .filter(|p| p.0.is_finite() && p.1.is_finite());
-    let (mut x0, mut x1, mut y0, mut y1) = (
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    );
-    for &(x, y) in pts {
-        if log_y && y <= 0.0 {
-            continue;
-        }
-        x0 = x0.min(x);
-        x1 = x1.max(x);
-        y0 = y0.min(y);
-        y1 = y1.max(y);
-    }
-    if !x0.is_finite() {
+        .filter(keep)
+        .copied()
+        .collect();
+    if pts.is_empty() {
         return Err(Error::Invalid(format!(
             "{}: nothing to plot",
             path.display()
         )));
     }
-    if x1 <= x0 {
-        x1 = x0 + 1.0;
-    }
-    if y1 <= y0 {
-        y1 = y0 + y0.abs().max(1e-6);
-    }
+    let fold = |f: fn(&(f64, f64)) -> f64| {
+        pts.iter()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            })
+    };
+    let (x0, x1) = fold(|p| p.0);
+    let (y0, y1) = fold(|p| p.1);
+    let x_integers = pts.iter().all(|p| p.0.fract() == 0.0);
+    let (x0, x1) = padded(x0, x1, false);
+    let (y0, y1) = padded(y0, y1, log_y);
+    let (x_step, y_step) = ((x1 - x0) / 10.0, (y1 - y0) / 10.0);
     let text = font_available();
     let mut draw = || -> std::result::Result<(), Box<dyn std::error::Error + '_>> {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
@@ -104,29 +169,39 @@ pub fn line_plot(
         if text {
             builder.caption(title, ("sans-serif", 24));
         }
+        let x_fmt = |v: &f64| tick_label(*v, x_step, x_integers);
+        let y_fmt = |v: &f64| {
+            if log_y {
+                // A log axis spans decades: each label to its own scale.
+                tick_label(*v, v.abs() / 10.0, false)
+            } else {
+                tick_label(*v, y_step, false)
+            }
+        };
+        let corner = legend_corner(&pts, (x0, x1), (y0, y1), log_y);
         macro_rules! body {
             ($chart:expr) => {{
                 let mut chart = $chart;
                 let mut mesh = chart.configure_mesh();
                 if text {
-                    mesh.x_desc(x_label).y_desc(y_label);
+                    mesh.x_desc(x_label)
+                        .y_desc(y_label)
+                        .x_label_formatter(&x_fmt)
+                        .y_label_formatter(&y_fmt);
                 } else {
                     mesh.disable_x_axis().disable_y_axis();
                 }
                 mesh.draw()?;
                 for (i, s) in series.iter().enumerate() {
                     let c = COLOURS[i % COLOURS.len()];
-                    let pts: Vec<(f64, f64)> = s
-                        .points
-                        .iter()
-                        .copied()
-                        .filter(|p| p.0.is_finite() && p.1.is_finite() && (!log_y || p.1 > 0.0))
-                        .collect();
+                    let pts: Vec<(f64, f64)> = s.points.iter().filter(keep).copied().collect();
                     let line =
                         chart.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))?;
                     if text {
                         line.label(s.name.as_str()).legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                            EmptyElement::at((x, y))
+                                + PathElement::new(vec![(0, 0), (20, 0)], c.stroke_width(2))
+                                + Circle::new((10, 0), 3, c.filled())
                         });
                     }
                     chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
@@ -134,6 +209,7 @@ pub fn line_plot(
                 if text {
                     chart
                         .configure_series_labels()
+                        .position(corner)
                         .background_style(WHITE.mix(0.8))
                         .border_style(BLACK)
                         .draw()?;
@@ -141,10 +217,9 @@ pub fn line_plot(
             }};
         }
         if log_y {
-            body!(builder.build_cartesian_2d(x0..x1, (y0 * 0.9..y1 * 1.1).log_scale())?);
+            body!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())?);
         } else {
-            let pad = (y1 - y0) * 0.05;
-            body!(builder.build_cartesian_2d(x0..x1, y0 - pad..y1 + pad)?);
+            body!(builder.build_cartesian_2d(x0..x1, y0..y1)?);
         }
         root.present()?;
         Ok(())
@@ -159,22 +234,33 @@ pub fn line_plot(
 pub enum Mark {
     /// A straight line, pixel coordinates.
     Line {
+        /// Start, pixels.
         from: (i32, i32),
+        /// End, pixels.
         to: (i32, i32),
+        /// RGB.
         colour: [u8; 3],
+        /// Stroke width, pixels.
         width: u32,
     },
     /// A filled dot.
     Dot {
+        /// Centre, pixels.
         at: (i32, i32),
+        /// Radius, pixels.
         radius: u32,
+        /// RGB.
         colour: [u8; 3],
     },
     /// Text with its top-left corner at `at` (skipped when no font is found).
     Text {
+        /// Top-left corner, pixels.
         at: (i32, i32),
+        /// The words.
         text: String,
+        /// Font size, pixels.
         size: u32,
+        /// RGB.
         colour: [u8; 3],
     },
 }
@@ -276,4 +362,29 @@ pub fn heat_maps(path: impl AsRef<Path>, maps: &[&[f32]], (w, h): (usize, usize)
         }
     }
     crate::image_io::save_rgb_png(path, width, h, &rgb)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axes_hold_every_point_and_ticks_are_plain_numbers() {
+        let (a, b) = padded(1.0, 3.0, false);
+        assert!(a < 1.0 && b > 3.0);
+        let (a, b) = padded(2.0, 2.0, false);
+        assert!(a < 2.0 && b > 2.0);
+        let (a, b) = padded(0.01, 1.0, true);
+        assert!(a < 0.01 && b > 1.0 && a > 0.0);
+        assert_eq!(tick_label(4.0, 2.0, true), "4");
+        assert_eq!(tick_label(0.126, 0.01, false), "0.13");
+        assert_eq!(tick_label(12.5, 5.0, false), "12");
+        let d = tempfile::tempdir().unwrap();
+        let one = [Series {
+            name: "one point".into(),
+            points: vec![(0.4, 1.0)],
+        }];
+        line_plot(d.path().join("p.png"), "t", "x", "y", &one, false).unwrap();
+        line_plot(d.path().join("l.png"), "t", "x", "y", &one, true).unwrap();
+    }
 }

@@ -1,8 +1,13 @@
-//! Training bookkeeping shared by every model: early stopping, the curve
-//! log (CSV + PNG), progress bars and seeded mini-batches.
+//! The one training skeleton every model uses: a [`Schedule`] (batch size,
+//! epochs, patience, learning rate and its decay, seed) embedded in each
+//! model's training config, the loop [`fit`] (seeded mini-batches, early
+//! stopping, best model kept, resumable checkpoints, curves), and the
+//! [`FitSummary`] every trainer returns.
 
-use std::path::Path;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
 
+use burn::config::Config;
 use indicatif::{ProgressBar, ProgressStyle};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
@@ -12,12 +17,57 @@ use serde::{Deserialize, Serialize};
 use crate::plot::{Series, line_plot};
 use crate::{Error, Result};
 
+/// How long and how fast a model trains. Each model's training config
+/// embeds one, with that model's defaults.
+#[derive(Config, Debug, PartialEq)]
+pub struct Schedule {
+    /// Items per optimiser step.
+    pub batch_size: usize,
+    /// Upper bound on epochs.
+    pub max_epochs: usize,
+    /// Epochs without a better validation loss before stopping.
+    pub patience: usize,
+    /// Learning rate of the first epoch.
+    pub learning_rate: f64,
+    /// Learning rate of epoch `e` is `learning_rate * lr_decay^e` (1 = constant).
+    #[config(default = 1.0)]
+    pub lr_decay: f64,
+    /// Seeds the initial weights, every shuffle and every split.
+    #[config(default = 42)]
+    pub seed: u64,
+}
+
+impl Schedule {
+    /// Check the values before any data is loaded.
+    pub fn check(&self) -> Result<()> {
+        if self.batch_size == 0 || self.max_epochs == 0 {
+            return Err(Error::Config(format!(
+                "batch size ({}) and epochs ({}) must be at least 1",
+                self.batch_size, self.max_epochs
+            )));
+        }
+        for (name, v) in [
+            ("learning rate", self.learning_rate),
+            ("learning-rate decay", self.lr_decay),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::Config(format!("{name} must be positive, got {v}")));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Early stopping on a validation loss, resumable (it is saved in checkpoints).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct EarlyStopping {
+    /// Epochs without a new best before stopping.
     pub patience: usize,
+    /// Best validation loss so far.
     pub best: f64,
+    /// Epoch of that loss.
     pub best_epoch: usize,
+    /// Epochs since it.
     pub epochs_since_best: usize,
 }
 
@@ -64,9 +114,13 @@ impl EarlyStopping {
 /// One epoch of a training run.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct EpochRecord {
+    /// 0-based epoch.
     pub epoch: usize,
+    /// Mean training loss.
     pub train_loss: f64,
+    /// Validation loss (what early stopping watches).
     pub val_loss: f64,
+    /// Wall time of the epoch.
     pub seconds: f64,
     /// The model's own validation metric (accuracy, IoU), when it has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -76,6 +130,7 @@ pub struct EpochRecord {
 /// The curves of a run, written as `curves.csv` and `curves.png`.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct TrainingLog {
+    /// Every epoch run so far.
     pub epochs: Vec<EpochRecord>,
 }
 
@@ -137,39 +192,71 @@ impl TrainingLog {
     }
 }
 
-/// Settings of [`fit`].
-#[derive(Debug, Clone, Serialize, Deserialize)]
+/// A [`Schedule`] and what [`fit`] says and saves along the way.
+#[derive(Debug, Clone)]
 pub struct FitConfig {
-    pub max_epochs: usize,
-    /// Epochs without a better validation loss before stopping.
-    pub patience: usize,
-    pub batch_size: usize,
-    pub learning_rate: f64,
-    /// Seeds the weights (by the caller) and each epoch's shuffle.
-    pub seed: u64,
-    /// Title of the curves plot and prefix of the progress bar.
+    /// Epochs, batches, learning rate, seed.
+    pub schedule: Schedule,
+    /// Title of the curves plot and prefix of the progress output.
     pub title: String,
+    /// The model folder: checkpoints and curves go there. `None` trains in
+    /// memory (the small estimators, fitted by the dozen).
+    pub out: Option<PathBuf>,
+    /// Continue from the checkpoint in `out`.
+    pub resume: bool,
     /// Save a resumable checkpoint every this many epochs (and at the end).
     pub checkpoint_every: usize,
-    /// Learning rate of epoch `e` is `learning_rate * lr_decay^e` (1 = constant).
-    #[serde(default = "one")]
-    pub lr_decay: f64,
+    /// Report each epoch (a bar, or a line when stderr is not a terminal).
+    pub progress: bool,
 }
 
-fn one() -> f64 {
-    1.0
+impl FitConfig {
+    /// `schedule` in memory, without progress output.
+    pub fn new(schedule: &Schedule, title: impl Into<String>) -> Self {
+        Self {
+            schedule: schedule.clone(),
+            title: title.into(),
+            out: None,
+            resume: false,
+            checkpoint_every: 1,
+            progress: false,
+        }
+    }
+
+    /// Checkpoints, curves and progress for a model trained into `out`,
+    /// continuing from its checkpoint when `resume`.
+    pub fn saving_to(mut self, out: &Path, resume: bool) -> Self {
+        self.out = Some(out.to_path_buf());
+        self.resume = resume;
+        self.progress = true;
+        self
+    }
+
+    /// Checkpoint every `epochs` epochs instead (for many short epochs).
+    pub fn with_checkpoint_every(mut self, epochs: usize) -> Self {
+        self.checkpoint_every = epochs.max(1);
+        self
+    }
 }
 
-/// What a [`fit`] run ended with.
+/// What a training run ended with; every trainer returns one.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FitSummary {
+    /// Epochs run in all (across resumes).
     pub epochs_run: usize,
+    /// The epoch whose model was kept.
     pub best_epoch: usize,
+    /// Its validation loss.
     pub best_val_loss: f64,
     /// The validation metric of the best epoch.
     pub best_val_metric: Option<f64>,
+    /// Training time across resumes.
     pub seconds: f64,
+    /// Training items (frames, windows).
     pub train_items: usize,
+    /// Validation items.
+    #[serde(default)]
+    pub val_items: usize,
 }
 
 impl FitSummary {
@@ -195,43 +282,47 @@ struct FitState {
     elapsed_s: f64,
 }
 
-/// The shared training loop: seeded shuffled mini-batches, one optimiser
-/// step per batch on the loss `batch_loss` returns, validation each epoch
+/// The training loop: seeded shuffled mini-batches, one optimiser step per
+/// batch on the loss `batch_loss` returns, validation each epoch
 /// (`validate` gets the model without autodiff and returns the loss that
 /// early stopping watches plus an optional metric), `save_best` on every
-/// new best, `curves.csv`/`curves.png` and a resumable `checkpoint/` in
-/// `out`. Resuming gives the same result as an uninterrupted run.
-#[allow(clippy::too_many_arguments)]
-pub fn fit<M: burn::module::Module>(
+/// new best; with an output folder, `curves.csv`/`curves.png` and a
+/// resumable `checkpoint/` there. Resuming gives the same result as an
+/// uninterrupted run.
+///
+/// The callbacks may fail with any error `E` the foundation's errors
+/// convert into (each crate's own error type).
+pub fn fit<M: burn::module::Module, E: From<Error>>(
     cfg: &FitConfig,
     mut model: M,
     mut optim: burn::optim::ModuleOptimizer,
-    train: &[usize],
-    out: &Path,
-    resume: bool,
-    mut batch_loss: impl FnMut(&M, &[usize], usize) -> Result<burn::tensor::Tensor<1>>,
-    mut validate: impl FnMut(&M) -> Result<(f64, Option<f64>)>,
-    mut save_best: impl FnMut(&M) -> Result<()>,
-) -> Result<(M, FitSummary)> {
+    (train, val_items): (&[usize], usize),
+    mut batch_loss: impl FnMut(&M, &[usize], usize) -> Result<burn::tensor::Tensor<1>, E>,
+    mut validate: impl FnMut(&M) -> Result<(f64, Option<f64>), E>,
+    mut save_best: impl FnMut(&M) -> Result<(), E>,
+) -> Result<(M, FitSummary), E> {
     use burn::optim::GradientsParams;
+    let s = &cfg.schedule;
+    s.check()?;
     if train.is_empty() {
-        return Err(Error::Invalid("no training items".into()));
+        return Err(Error::Invalid("no training items".into()).into());
     }
-    crate::io::create_dir_all(out)?;
-    let ckpt = out.join("checkpoint");
+    if let Some(out) = &cfg.out {
+        crate::io::create_dir_all(out)?;
+    }
+    let ckpt = cfg.out.as_ref().map(|o| o.join("checkpoint"));
     let mut state = FitState {
         next_epoch: 0,
-        early: EarlyStopping::new(cfg.patience),
+        early: EarlyStopping::new(s.patience),
         log: TrainingLog::default(),
         elapsed_s: 0.0,
     };
-    if resume {
+    if let (true, Some(ckpt)) = (cfg.resume, &ckpt) {
         let st = ckpt.join("state.json");
         if !st.is_file() {
-            return Err(Error::model(
-                &st,
-                "nothing to resume: no checkpoint in the output folder",
-            ));
+            return Err(
+                Error::model(&st, "nothing to resume: no checkpoint in the output folder").into(),
+            );
         }
         state = crate::io::read_json(&st)?;
         model = crate::module_io::load_module(model, &ckpt.join("model.bpk"))?;
@@ -241,8 +332,8 @@ pub fn fit<M: burn::module::Module>(
             .map_err(|e| Error::model(&opt_path, format!("cannot load optimiser state: {e}")))?;
     }
     let start = std::time::Instant::now();
-    let pb = progress_bar(cfg.max_epochs as u64, &cfg.title);
-    pb.set_position(state.next_epoch as u64);
+    let mut progress = Progress::new(s.max_epochs, &cfg.title, cfg.progress);
+    progress.set_position(state.next_epoch);
     let mut epoch = state.next_epoch;
     let mut best_metric = state
         .log
@@ -250,11 +341,11 @@ pub fn fit<M: burn::module::Module>(
         .iter()
         .find(|e| e.epoch == state.early.best_epoch)
         .and_then(|e| e.val_metric);
-    while epoch < cfg.max_epochs {
+    while epoch < s.max_epochs {
         let t0 = std::time::Instant::now();
         let mut total = 0.0;
-        let lr = cfg.learning_rate * cfg.lr_decay.powi(epoch as i32);
-        for batch in shuffled_batches(train, cfg.batch_size, cfg.seed.wrapping_add(epoch as u64)) {
+        let lr = s.learning_rate * s.lr_decay.powi(epoch as i32);
+        for batch in shuffled_batches(train, s.batch_size, s.seed.wrapping_add(epoch as u64)) {
             let loss = batch_loss(&model, &batch, epoch)?;
             let l: f32 = loss.clone().into_scalar();
             total += l as f64 * batch.len() as f64;
@@ -264,13 +355,13 @@ pub fn fit<M: burn::module::Module>(
         let train_loss = ensure_finite("training loss", total / train.len() as f64)?;
         let valid = model.valid();
         let (val_loss, val_metric) = validate(&valid)?;
-        state.log.epochs.push(EpochRecord {
+        let record = EpochRecord {
             epoch,
             train_loss,
             val_loss,
             seconds: t0.elapsed().as_secs_f64(),
             val_metric,
-        });
+        };
         let verdict = state.early.update(epoch, val_loss);
         if verdict == Verdict::Improved {
             save_best(&valid)?;
@@ -278,17 +369,18 @@ pub fn fit<M: burn::module::Module>(
         }
         epoch += 1;
         state.next_epoch = epoch;
-        pb.set_position(epoch as u64);
-        pb.set_message(format!(
-            "loss {train_loss:.4} val {val_loss:.4}{} best {:.4}@{}",
-            val_metric.map(|m| format!(" ({m:.4})")).unwrap_or_default(),
-            state.early.best,
-            state.early.best_epoch
-        ));
-        let last = verdict == Verdict::Stop || epoch == cfg.max_epochs;
-        if last || epoch.is_multiple_of(cfg.checkpoint_every.max(1)) {
+        progress.epoch_done(
+            &record,
+            &state.early,
+            state.elapsed_s + start.elapsed().as_secs_f64(),
+        );
+        state.log.epochs.push(record);
+        let last = verdict == Verdict::Stop || epoch == s.max_epochs;
+        if let (Some(out), Some(ckpt)) = (&cfg.out, &ckpt)
+            && (last || epoch.is_multiple_of(cfg.checkpoint_every.max(1)))
+        {
             state.elapsed_s += start.elapsed().as_secs_f64();
-            crate::io::create_dir_all(&ckpt)?;
+            crate::io::create_dir_all(ckpt)?;
             crate::module_io::save_module(&model, &ckpt.join("model.bpk"))?;
             let opt_path = ckpt.join("optim.bpk");
             let bytes = optim.into_bytes().map_err(|e| {
@@ -303,7 +395,7 @@ pub fn fit<M: burn::module::Module>(
             break;
         }
     }
-    pb.finish_and_clear();
+    progress.finish();
     let summary = FitSummary {
         epochs_run: state.next_epoch,
         best_epoch: state.early.best_epoch,
@@ -311,11 +403,86 @@ pub fn fit<M: burn::module::Module>(
         best_val_metric: best_metric,
         seconds: state.elapsed_s + start.elapsed().as_secs_f64(),
         train_items: train.len(),
+        val_items,
     };
     Ok((model, summary))
 }
 
-/// A progress bar with position, rate and ETA; hidden when stderr is not a terminal.
+/// Progress of a training run: a bar on a terminal; one line per epoch
+/// (losses, metric, elapsed, ETA) when stderr is a log file or a pipe, where
+/// a bar would be hidden.
+struct Progress {
+    shown: bool,
+    bar: Option<ProgressBar>,
+    max_epochs: usize,
+    title: String,
+    first: usize,
+    started: std::time::Instant,
+}
+
+impl Progress {
+    fn new(max_epochs: usize, title: &str, shown: bool) -> Self {
+        let bar = (shown && std::io::stderr().is_terminal())
+            .then(|| progress_bar(max_epochs as u64, title));
+        Self {
+            shown,
+            bar,
+            max_epochs,
+            title: title.to_string(),
+            first: 0,
+            started: std::time::Instant::now(),
+        }
+    }
+
+    fn set_position(&mut self, epoch: usize) {
+        self.first = epoch;
+        if let Some(b) = &self.bar {
+            b.set_position(epoch as u64);
+        }
+    }
+
+    fn epoch_done(&self, r: &EpochRecord, early: &EarlyStopping, elapsed_s: f64) {
+        let metric = r
+            .val_metric
+            .map(|m| format!(", metric {m:.4}"))
+            .unwrap_or_default();
+        match &self.bar {
+            Some(b) => {
+                b.set_position(r.epoch as u64 + 1);
+                b.set_message(format!(
+                    "loss {:.4} val {:.4}{metric} best {:.4}@{}",
+                    r.train_loss, r.val_loss, early.best, early.best_epoch
+                ));
+            }
+            None if self.shown => {
+                let done = r.epoch + 1 - self.first;
+                let per_epoch = self.started.elapsed().as_secs_f64() / done.max(1) as f64;
+                let eta = per_epoch * self.max_epochs.saturating_sub(r.epoch + 1) as f64;
+                eprintln!(
+                    "{}: epoch {}/{}: train loss {:.4}, validation loss {:.4}{metric}; best {:.4} at epoch {}; elapsed {:.0} s, ETA {:.0} s at most",
+                    self.title,
+                    r.epoch + 1,
+                    self.max_epochs,
+                    r.train_loss,
+                    r.val_loss,
+                    early.best,
+                    early.best_epoch,
+                    elapsed_s,
+                    eta
+                );
+            }
+            None => {}
+        }
+    }
+
+    fn finish(self) {
+        if let Some(b) = self.bar {
+            b.finish_and_clear();
+        }
+    }
+}
+
+/// A progress bar with position, rate and ETA (drawn only on a terminal).
 pub fn progress_bar(len: u64, what: &str) -> ProgressBar {
     let pb = ProgressBar::new(len);
     let style = ProgressStyle::with_template(
@@ -339,7 +506,10 @@ pub fn ensure_finite(what: &str, v: f64) -> Result<f64> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(Error::Invalid(format!("{what} is {v}: training diverged")))
+        Err(Error::Diverged {
+            what: what.to_string(),
+            value: v,
+        })
     }
 }
 
@@ -365,6 +535,19 @@ mod tests {
         all.sort();
         assert_eq!(all, idx);
         assert_eq!(a.len(), 3);
+    }
+
+    #[test]
+    fn schedules_are_checked() {
+        assert!(Schedule::new(16, 10, 3, 1e-3).check().is_ok());
+        assert!(Schedule::new(0, 10, 3, 1e-3).check().is_err());
+        assert!(Schedule::new(16, 10, 3, f64::NAN).check().is_err());
+        assert!(
+            Schedule::new(16, 10, 3, 1e-3)
+                .with_lr_decay(0.0)
+                .check()
+                .is_err()
+        );
     }
 
     #[test]

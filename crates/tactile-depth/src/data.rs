@@ -3,9 +3,11 @@
 
 use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
+use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_core::{Error, Result};
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, load_frame, resize_grey};
+
+use crate::Result;
 
 /// One sample at the input size.
 pub struct DepthSample {
@@ -13,7 +15,9 @@ pub struct DepthSample {
     pub rgb: Vec<u8>,
     /// Camera-to-skin distance, millimetres, `H x W`.
     pub depth_mm: Vec<f32>,
+    /// Tendon pixels.
     pub mask: Vec<bool>,
+    /// The frame's `tendon` label.
     pub tendon: bool,
     /// The peak press of the frame, mm (for reporting the extremes).
     pub press_mm: Option<f64>,
@@ -21,8 +25,11 @@ pub struct DepthSample {
 
 /// Samples of a dataset, with the sensing window at the input size.
 pub struct DepthSet {
+    /// Input width.
     pub width: usize,
+    /// Input height.
     pub height: usize,
+    /// The frames, in row order.
     pub samples: Vec<DepthSample>,
     /// Pixels inside the ellipse inscribed in the frame (the sensing window).
     pub window: Vec<bool>,
@@ -47,19 +54,13 @@ pub fn load_depth_mm(path: &std::path::Path, w: usize, h: usize) -> Result<Vec<f
     let (dw, dh, m) = tactile_core::npy::read_depth_npy(path)?;
     let mm: Vec<f32> = m.iter().map(|v| v * 1000.0).collect();
     tactile_preprocess::resize_area_f32(&mm, (dw, dh), w, h)
-        .map_err(|e| Error::dataset(path, None, e.to_string()))
+        .map_err(|e| Error::dataset(path, None, e.to_string()).into())
 }
 
 impl DepthSet {
     /// Load `rows` of a visuo-tactile dataset at `w x h`.
     pub fn from_dataset(ds: &Dataset, rows: &[usize], [w, h]: [usize; 2]) -> Result<Self> {
-        if ds.manifest.kind != DatasetKind::Visuotactile {
-            return Err(Error::dataset(
-                ds.root.join("manifest.json"),
-                None,
-                "kind is not 'visuotactile': depth reads visuo-tactile datasets",
-            ));
-        }
+        ds.expect_kind(DatasetKind::Visuotactile)?;
         let samples = rows
             .par_iter()
             .map(|&i| -> Result<DepthSample> {
@@ -68,7 +69,7 @@ impl DepthSet {
                 let mpath = ds.path_of(i, "mask")?;
                 let m = tactile_core::image_io::load_grey(&mpath)?;
                 let mask = resize_grey(&m, w, h)
-                    .map_err(|e| Error::image(&mpath, e.to_string()))?
+                    .map_err(|e| e.in_file(&mpath))?
                     .data
                     .iter()
                     .map(|&v| v >= 0.5)
@@ -90,16 +91,33 @@ impl DepthSet {
         })
     }
 
+    /// Frames held.
     pub fn len(&self) -> usize {
         self.samples.len()
     }
 
+    /// True when it holds no frame.
     pub fn is_empty(&self) -> bool {
         self.samples.is_empty()
     }
 
+    /// Frame `i` as a float image in [0, 1].
     pub fn image(&self, i: usize) -> FloatImage {
         FloatImage::from_bytes(self.width, self.height, 3, &self.samples[i].rgb)
+    }
+
+    /// Normalised `C x H x W` inputs of the frames at `idx` (RGB, plus
+    /// the mask as 0/1 when `with_mask`), end to end.
+    pub fn inputs(&self, idx: &[usize], stats: &ChannelStats, with_mask: bool) -> Result<Vec<f32>> {
+        let c = 3 + with_mask as usize;
+        let mut x = Vec::with_capacity(idx.len() * c * self.width * self.height);
+        for &i in idx {
+            x.extend(stats.to_chw(&self.image(i))?);
+            if with_mask {
+                x.extend(self.samples[i].mask.iter().map(|&m| m as u8 as f32));
+            }
+        }
+        Ok(x)
     }
 
     /// Inputs `[N, C, H, W]` (RGB normalised, plus the mask as 0/1 when
@@ -108,19 +126,15 @@ impl DepthSet {
         &self,
         idx: &[usize],
         stats: &ChannelStats,
-        scale: &crate::DepthScale,
+        scale: &crate::artifact::DepthScale,
         with_mask: bool,
         device: &Device,
     ) -> Result<(Tensor<4>, Tensor<4>)> {
         let (w, h) = (self.width, self.height);
         let c = 3 + with_mask as usize;
-        let mut x = Vec::with_capacity(idx.len() * c * w * h);
+        let x = self.inputs(idx, stats, with_mask)?;
         let mut y = Vec::with_capacity(idx.len() * w * h);
         for &i in idx {
-            x.extend(stats.to_chw(&self.image(i))?);
-            if with_mask {
-                x.extend(self.samples[i].mask.iter().map(|&m| m as u8 as f32));
-            }
             y.extend(self.samples[i].depth_mm.iter().map(|&d| scale.to_model(d)));
         }
         Ok((

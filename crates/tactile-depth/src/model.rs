@@ -12,8 +12,9 @@ use burn::nn::interpolate::{Interpolate2d, Interpolate2dConfig, InterpolateMode}
 use burn::nn::pool::{AvgPool2d, AvgPool2dConfig, MaxPool2d, MaxPool2dConfig};
 use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d};
 use burn::tensor::activation::relu;
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
+use tactile_core::runtime::Forward;
 use tactile_core::{Error, Result};
 
 /// DenseNet hyper-parameters (torchvision's names).
@@ -33,22 +34,117 @@ pub struct DenseNetConfig {
     pub compression: f64,
 }
 
-impl DenseNetConfig {
-    /// A preset by name: `densenet121`, `densenet161` (the published
-    /// networks), or `tiny`, `small`, `medium` for this machine.
-    pub fn preset(name: &str) -> Result<Self> {
-        Ok(match name {
-            "densenet121" => Self::new(32, vec![6, 12, 24, 16], 64),
-            "densenet161" => Self::new(48, vec![6, 12, 36, 24], 96),
-            "tiny" => Self::new(8, vec![2, 2, 2, 2], 16),
-            "small" => Self::new(12, vec![2, 3, 4, 3], 24),
-            "medium" => Self::new(16, vec![3, 4, 6, 4], 32),
-            other => {
-                return Err(Error::Config(format!(
-                    "unknown encoder '{other}': expected densenet121, densenet161, tiny, small or medium"
-                )));
-            }
+/// The encoders: the published DenseNets and smaller ones that train on
+/// this machine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum DenseNetPreset {
+    /// Growth 8, blocks 2-2-2-2.
+    Tiny,
+    /// Growth 12, blocks 2-3-4-3.
+    Small,
+    /// Growth 16, blocks 3-4-6-4.
+    Medium,
+    /// torchvision's `densenet121`.
+    Densenet121,
+    /// torchvision's `densenet161`.
+    Densenet161,
+}
+
+impl DenseNetPreset {
+    /// The preset's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Tiny => "tiny",
+            Self::Small => "small",
+            Self::Medium => "medium",
+            Self::Densenet121 => "densenet121",
+            Self::Densenet161 => "densenet161",
+        }
+    }
+
+    /// The preset `config` is, if any.
+    pub fn of(config: &DenseNetConfig) -> Option<Self> {
+        [
+            Self::Tiny,
+            Self::Small,
+            Self::Medium,
+            Self::Densenet121,
+            Self::Densenet161,
+        ]
+        .into_iter()
+        .find(|p| p.config() == *config)
+    }
+
+    /// Its hyper-parameters.
+    pub fn config(self) -> DenseNetConfig {
+        match self {
+            Self::Tiny => DenseNetConfig::tiny(),
+            Self::Small => DenseNetConfig::small(),
+            Self::Medium => DenseNetConfig::medium(),
+            Self::Densenet121 => DenseNetConfig::densenet121(),
+            Self::Densenet161 => DenseNetConfig::densenet161(),
+        }
+    }
+}
+
+impl std::str::FromStr for DenseNetPreset {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        [
+            Self::Tiny,
+            Self::Small,
+            Self::Medium,
+            Self::Densenet121,
+            Self::Densenet161,
+        ]
+        .into_iter()
+        .find(|p| p.name() == s)
+        .ok_or_else(|| {
+            Error::Config(format!(
+                "unknown encoder '{s}': expected densenet121, densenet161, tiny, small or medium"
+            ))
         })
+    }
+}
+
+/// Largest growth rate, stem width and decoder width accepted.
+pub const MAX_CHANNELS: usize = 1024;
+/// Largest number of layers in a dense block.
+pub const MAX_BLOCK_LAYERS: usize = 64;
+/// Largest input side accepted, pixels.
+pub const MAX_INPUT_SIDE: usize = 2048;
+
+impl DenseNetConfig {
+    /// torchvision's `densenet121`.
+    pub fn densenet121() -> Self {
+        Self::new(32, vec![6, 12, 24, 16], 64)
+    }
+
+    /// torchvision's `densenet161`.
+    pub fn densenet161() -> Self {
+        Self::new(48, vec![6, 12, 36, 24], 96)
+    }
+
+    /// The smallest: growth 8, two layers per block.
+    pub fn tiny() -> Self {
+        Self::new(8, vec![2, 2, 2, 2], 16)
+    }
+
+    /// Growth 12, blocks 2-3-4-3.
+    pub fn small() -> Self {
+        Self::new(12, vec![2, 3, 4, 3], 24)
+    }
+
+    /// Growth 16, blocks 3-4-6-4.
+    pub fn medium() -> Self {
+        Self::new(16, vec![3, 4, 6, 4], 32)
+    }
+
+    /// A preset by name (see [`DenseNetPreset`]).
+    pub fn preset(name: &str) -> Result<Self> {
+        Ok(name.parse::<DenseNetPreset>()?.config())
     }
 
     /// Channels after the stem and after each block (skip widths).
@@ -68,9 +164,11 @@ impl DenseNetConfig {
 
 /// The head on the decoder's last features.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum HeadKind {
     /// One 1x1 convolution (paper B's choice).
+    #[cfg_attr(feature = "clap", value(alias = "1x1"))]
     Conv1x1,
     /// Two 3x3 convolutions with ReLU, then 1x1 (paper B's "custom").
     Custom,
@@ -79,6 +177,7 @@ pub enum HeadKind {
 /// The whole network.
 #[derive(Config, Debug, PartialEq)]
 pub struct DepthNetConfig {
+    /// The DenseNet encoder.
     pub encoder: DenseNetConfig,
     /// Input width and height; both multiples of 32.
     pub input_size: [usize; 2],
@@ -89,6 +188,7 @@ pub struct DepthNetConfig {
     #[config(default = 64)]
     pub decoder_width: usize,
     #[config(default = "HeadKind::Conv1x1")]
+    /// The head.
     pub head: HeadKind,
 }
 
@@ -107,9 +207,13 @@ fn conv(i: usize, o: usize, k: usize, bias: bool, device: &Device) -> Conv2d {
 /// BN-ReLU-1x1 (bn_size x growth) then BN-ReLU-3x3 (growth).
 #[derive(Module, Debug)]
 pub struct DenseLayer {
+    /// Before the bottleneck.
     pub norm1: BatchNorm,
+    /// 1x1 bottleneck to `bn_size x growth` channels.
     pub conv1: Conv2d,
+    /// Before the 3x3.
     pub norm2: BatchNorm,
+    /// 3x3 to `growth` channels.
     pub conv2: Conv2d,
 }
 
@@ -123,6 +227,7 @@ impl DenseLayer {
 /// Layers whose outputs are concatenated onto the input, one by one.
 #[derive(Module, Debug)]
 pub struct DenseBlock {
+    /// Its layers.
     pub layers: Vec<DenseLayer>,
 }
 
@@ -140,26 +245,35 @@ impl DenseBlock {
 /// BN-ReLU-1x1 (compress) then 2x2 average pooling.
 #[derive(Module, Debug)]
 pub struct Transition {
+    /// Before the compression.
     pub norm: BatchNorm,
+    /// 1x1 compression.
     pub conv: Conv2d,
+    /// 2x2 average pooling.
     pub pool: AvgPool2d,
 }
 
 /// The DenseNet feature extractor, returning the five skip tensors.
 #[derive(Module, Debug)]
 pub struct DenseNetEncoder {
+    /// 7x7 stride-2 stem.
     pub conv0: Conv2d,
+    /// Its norm.
     pub norm0: BatchNorm,
+    /// 3x3 stride-2 max-pooling.
     pub pool0: MaxPool2d,
+    /// The four dense blocks.
     pub blocks: Vec<DenseBlock>,
+    /// Between the blocks.
     pub transitions: Vec<Transition>,
+    /// After the last block.
     pub norm5: BatchNorm,
 }
 
 impl DenseNetEncoder {
-    /// Stem (1/2), blocks 1-3 (1/4, 1/8, 1/16) and block 4 after the final
-    /// norm (1/32).
-    pub fn forward(&self, x: Tensor<4>) -> Vec<Tensor<4>> {
+    /// The skips, shallow first: the stem (1/2) and blocks 1-3 (1/4, 1/8,
+    /// 1/16); and the deepest features, block 4 after the final norm (1/32).
+    pub fn forward(&self, x: Tensor<4>) -> (Vec<Tensor<4>>, Tensor<4>) {
         let s0 = relu(self.norm0.forward(self.conv0.forward(x)));
         let mut x = self.pool0.forward(s0.clone());
         let mut skips = vec![s0];
@@ -170,26 +284,32 @@ impl DenseNetEncoder {
                 x = t.pool.forward(t.conv.forward(relu(t.norm.forward(x))));
             }
         }
-        skips.push(relu(self.norm5.forward(x)));
-        skips
+        (skips, relu(self.norm5.forward(x)))
     }
 }
 
 /// Upsample x2, concatenate the skip, two 3x3 conv + ReLU.
 #[derive(Module, Debug)]
 pub struct UpBlock {
+    /// On the upsampled features and the skip.
     pub conv1: Conv2d,
+    /// Second 3x3.
     pub conv2: Conv2d,
 }
 
 /// Frame `[N, C, H, W]` (normalised) -> depth `[N, 1, H, W]` in the
-/// model's units (see [`crate::DepthScale`]).
+/// model's units (the folder's depth scale turns them into millimetres).
 #[derive(Module, Debug)]
 pub struct DepthNet {
+    /// The DenseNet.
     pub encoder: DenseNetEncoder,
+    /// 1x1 on the deepest features.
     pub bottleneck: Conv2d,
+    /// One per skip, deepest first.
     pub up: Vec<UpBlock>,
+    /// 1x1, or two 3x3 then 1x1.
     pub head: Vec<Conv2d>,
+    /// Bilinear x2, half-pixel centres.
     pub upsample: Interpolate2d,
 }
 
@@ -243,15 +363,23 @@ impl DenseNetConfig {
 }
 
 impl DepthNetConfig {
-    /// Check the sizes and build with fresh weights.
-    pub fn init(&self, device: &Device) -> Result<DepthNet> {
+    /// Check the sizes against the documented limits before anything is
+    /// allocated for them.
+    pub fn check(&self) -> Result<()> {
         let [w, h] = self.input_size;
-        if w == 0 || h == 0 || !w.is_multiple_of(32) || !h.is_multiple_of(32) {
+        if w == 0
+            || h == 0
+            || !w.is_multiple_of(32)
+            || !h.is_multiple_of(32)
+            || w > MAX_INPUT_SIDE
+            || h > MAX_INPUT_SIDE
+        {
             return Err(Error::Config(format!(
-                "depth input {w}x{h}: both sides must be positive multiples of 32"
+                "depth input {w}x{h}: both sides must be multiples of 32 from 32 to {MAX_INPUT_SIDE}"
             )));
         }
-        if self.encoder.block_config.len() != 4 {
+        let e = &self.encoder;
+        if e.block_config.len() != 4 {
             return Err(Error::Config(
                 "the DenseNet encoder needs four blocks".into(),
             ));
@@ -262,6 +390,40 @@ impl DepthNetConfig {
                 self.in_channels
             )));
         }
+        let channels = [
+            ("growth rate", e.growth_rate),
+            ("stem width", e.num_init_features),
+            ("bottleneck size", e.bn_size),
+            ("decoder width", self.decoder_width),
+        ];
+        for (name, v) in channels {
+            if v == 0 || v > MAX_CHANNELS {
+                return Err(Error::Config(format!(
+                    "depth network {name} must be 1 to {MAX_CHANNELS}, got {v}"
+                )));
+            }
+        }
+        if let Some(&n) = e
+            .block_config
+            .iter()
+            .find(|&&n| n == 0 || n > MAX_BLOCK_LAYERS)
+        {
+            return Err(Error::Config(format!(
+                "dense blocks need 1 to {MAX_BLOCK_LAYERS} layers, got {n}"
+            )));
+        }
+        if !(e.compression > 0.0 && e.compression <= 1.0) {
+            return Err(Error::Config(format!(
+                "transition compression must be in (0, 1], got {}",
+                e.compression
+            )));
+        }
+        Ok(())
+    }
+
+    /// Check the sizes and build with fresh weights.
+    pub fn init(&self, device: &Device) -> Result<DepthNet> {
+        self.check()?;
         let skips = self.encoder.skip_channels();
         let widths: Vec<usize> = (0..4).map(|k| (self.decoder_width >> k).max(8)).collect();
         let mut c = widths[0];
@@ -300,13 +462,24 @@ impl DepthNetConfig {
     }
 }
 
+impl Forward for DepthNet {
+    fn forward_data(&self, x: Tensor<4>) -> TensorData {
+        self.forward(x).into_data()
+    }
+}
+
 impl DepthNet {
-    /// Depth in model units, `[N, 1, H, W]`.
+    /// Depth in the model's units (the folder's depth scale turns them into millimetres).
+    ///
+    /// # Shapes
+    /// - `x`: `[N, C, H, W]`, RGB normalised with the training statistics
+    ///   (and the tendon mask as a fourth channel when it takes one)
+    /// - output: `[N, 1, H, W]`
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
-        let mut skips = self.encoder.forward(x);
-        let mut y = self.bottleneck.forward(skips.pop().expect("five skips"));
+        let (mut skips, deepest) = self.encoder.forward(x);
+        let mut y = self.bottleneck.forward(deepest);
         for b in &self.up {
-            let skip = skips.pop().expect("one skip per up block");
+            let Some(skip) = skips.pop() else { break };
             y = Tensor::cat(vec![self.upsample.forward(y), skip], 1);
             y = relu(b.conv2.forward(relu(b.conv1.forward(y))));
         }

@@ -1,41 +1,69 @@
 //! Training the depth network: L1, MSE or L1 + gradient + SSIM on depth in
 //! model units, Adam with a decaying rate, validation MAE (mm, inside the
-//! window) each epoch, best model kept, resumable.
+//! window) each epoch, best model kept, resumable. Files hold metres; the
+//! network works in millimetres around the training mean (metres stalled
+//! paper B's training: the targets barely vary, which is refused here).
 
 use std::path::Path;
 
 use burn::config::Config;
-use burn::tensor::{Device, Tensor};
+use burn::tensor::Tensor;
+use serde::{Deserialize, Serialize};
+use tactile_core::dataset::Dataset;
 use tactile_core::nn::{gradient_loss, l1_loss, mse_loss, ssim_loss};
-use tactile_core::train::{FitConfig, FitSummary, fit};
-use tactile_core::{Error, Result};
+use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
+use tactile_core::{Artifact, DeviceKind};
 use tactile_preprocess::visuo::ChannelStats;
 
-use crate::{
-    DEPTH_RANGE_MM, DepthArtifact, DepthNet, DepthNetConfig, DepthScale, DepthScorer, DepthScores,
-    DepthSet, LossKind,
-};
+use crate::artifact::{DepthArtifact, DepthScale};
+use crate::eval::{DEPTH_RANGE_MM, score};
+use crate::model::{DenseNetConfig, DepthNet, DepthNetConfig};
+use crate::{DepthSet, Error, Result};
 
+/// Which loss trains the network.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum LossKind {
+    /// Mean absolute error (paper B).
+    L1,
+    /// Mean squared error.
+    Mse,
+    /// L1 + gradient + SSIM (DenseTact).
+    L1GradSsim,
+}
+
+impl std::str::FromStr for LossKind {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "l1" => Ok(Self::L1),
+            "mse" => Ok(Self::Mse),
+            "l1-grad-ssim" => Ok(Self::L1GradSsim),
+            o => Err(tactile_core::Error::Config(format!(
+                "unknown loss '{o}': expected l1, mse or l1-grad-ssim"
+            ))
+            .into()),
+        }
+    }
+}
+
+/// Everything a depth network's training is set by.
 #[derive(Config, Debug)]
 pub struct DepthTrainingConfig {
-    pub net: DepthNetConfig,
+    /// Encoder, input size (paper B: 256x256), decoder and head.
+    #[config(default = "DepthNetConfig::new(DenseNetConfig::small(), [160, 96])")]
+    pub model: DepthNetConfig,
+    /// Paper B: batch 8.
+    #[config(default = "Schedule::new(8, 12, 3, 1e-3).with_lr_decay(0.9)")]
+    pub schedule: Schedule,
+    /// The loss.
     #[config(default = "LossKind::L1")]
     pub loss: LossKind,
-    /// Paper B: 8.
-    #[config(default = 8)]
-    pub batch_size: usize,
-    #[config(default = 20)]
-    pub max_epochs: usize,
-    #[config(default = 4)]
-    pub patience: usize,
-    #[config(default = 1e-3)]
-    pub learning_rate: f64,
-    #[config(default = 0.9)]
-    pub lr_decay: f64,
     /// Millimetres per model unit (1: millimetres, paper B's fix; 1000: metres).
     #[config(default = 1.0)]
     pub unit_mm: f32,
-    /// Feed the tendon mask as a fourth channel.
+    /// Feed the ground-truth tendon mask as a fourth channel.
     #[config(default = false)]
     pub with_mask: bool,
     /// Train the decoder only.
@@ -45,8 +73,9 @@ pub struct DepthTrainingConfig {
     /// to start the encoder from.
     #[config(default = "None")]
     pub pretrained: Option<String>,
-    #[config(default = 42)]
-    pub seed: u64,
+    /// Fraction of the sequences that validate.
+    #[config(default = 0.2)]
+    pub val_fraction: f64,
 }
 
 /// The loss of `kind` on model-unit depth maps.
@@ -62,23 +91,23 @@ pub fn depth_loss(kind: LossKind, pred: Tensor<4>, target: Tensor<4>, range: f64
     }
 }
 
-/// Predicted depth in mm, one `H*W` map per sample of `idx`.
-pub fn predict_mm(
+/// Predicted depth in mm of the samples at `idx`, straight from the module.
+fn predict_mm(
     model: &DepthNet,
     art: &DepthArtifact,
     data: &DepthSet,
-    idx: &[usize],
-    device: &Device,
+    device: &burn::tensor::Device,
 ) -> Result<Vec<Vec<f32>>> {
     let hw = data.width * data.height;
+    let idx: Vec<usize> = (0..data.len()).collect();
     let mut out = Vec::with_capacity(idx.len());
-    for chunk in idx.chunks(16) {
+    for chunk in idx.chunks(crate::eval::EVAL_BATCH) {
         let (x, _) = data.batch(chunk, &art.stats, &art.scale, art.with_mask, device)?;
         let v = model
             .forward(x)
             .into_data()
             .try_to_vec::<f32>()
-            .map_err(|e| Error::Invalid(format!("depth output: {e:?}")))?;
+            .map_err(|e| tactile_core::Error::Invalid(format!("depth output: {e:?}")))?;
         out.extend(
             v.chunks(hw)
                 .map(|c| c.iter().map(|&m| art.scale.to_mm(m)).collect::<Vec<_>>()),
@@ -87,51 +116,43 @@ pub fn predict_mm(
     Ok(out)
 }
 
-/// Score a model on every sample of `data`.
-pub fn evaluate(
-    model: &DepthNet,
-    art: &DepthArtifact,
-    data: &DepthSet,
-    device: &Device,
-) -> Result<DepthScores> {
-    let idx: Vec<usize> = (0..data.len()).collect();
-    let preds = predict_mm(model, art, data, &idx, device)?;
-    let mut sc = DepthScorer::default();
-    for (i, p) in preds.iter().enumerate() {
-        let s = &data.samples[i];
-        sc.add(
-            p,
-            &s.depth_mm,
-            &data.window,
-            &s.mask,
-            (data.width, data.height),
-        );
-    }
-    Ok(sc.finish())
-}
-
-/// Train on `train_set`, validate on `val_set`; the best model goes to `out`.
-pub fn train_depth(
+/// Train on `data` (split by sequence) into `out`.
+pub fn train(
     config: &DepthTrainingConfig,
-    train_set: &DepthSet,
-    val_set: &DepthSet,
+    data: &Dataset,
     out: &Path,
-    device: &Device,
+    device: DeviceKind,
     resume: bool,
-    notes: serde_json::Value,
 ) -> Result<FitSummary> {
+    config.schedule.check()?;
+    let mut net = config.model.clone();
+    net.in_channels = 3 + config.with_mask as usize;
+    net.check()?;
+    if !(config.unit_mm.is_finite() && config.unit_mm > 0.0) {
+        return Err(tactile_core::Error::Config(format!(
+            "unit_mm must be positive, got {}",
+            config.unit_mm
+        ))
+        .into());
+    }
+    tactile_core::io::ensure_writable_dir(out)?;
+    let (train, val) = data.split_by_sequence(config.val_fraction, config.schedule.seed)?;
+    let [w, h] = net.input_size;
+    eprintln!(
+        "loading {} frames at {w}x{h} ({} train, {} validation, split by sequence)",
+        data.len(),
+        train.len(),
+        val.len()
+    );
+    let train_set = DepthSet::from_dataset(data, &train, [w, h])?;
+    let val_set = DepthSet::from_dataset(data, &val, [w, h])?;
     if train_set.is_empty() || val_set.is_empty() {
-        return Err(Error::Invalid(format!(
+        return Err(tactile_core::Error::Invalid(format!(
             "need training and validation frames (got {} and {})",
             train_set.len(),
             val_set.len()
-        )));
-    }
-    if !(config.unit_mm.is_finite() && config.unit_mm > 0.0) {
-        return Err(Error::Config(format!(
-            "unit_mm must be positive, got {}",
-            config.unit_mm
-        )));
+        ))
+        .into());
     }
     let images: Vec<_> = (0..train_set.len()).map(|i| train_set.image(i)).collect();
     let stats = ChannelStats::from_images(images.iter())?;
@@ -154,23 +175,26 @@ pub fn train_depth(
     // targets vary by about a thousandth of a unit.
     let std_units = std_mm / config.unit_mm as f64;
     if std_units < 1e-2 {
-        return Err(Error::Config(format!(
-            "the depth targets vary by only {std_units:.2e} model units ({std_mm:.3} mm at {} mm per unit): \
-             the loss would barely move and training would stall; use millimetres (unit 1 mm)",
-            config.unit_mm
-        )));
+        return Err(Error::Stall {
+            std_units,
+            std_mm,
+            unit_mm: config.unit_mm,
+        });
     }
-    let mut net = config.net.clone();
-    net.in_channels = 3 + config.with_mask as usize;
     let artifact = DepthArtifact {
-        net: net.clone(),
+        model: net.clone(),
         stats: stats.clone(),
         scale,
         with_mask: config.with_mask,
-        notes,
+        notes: serde_json::json!({
+            "trained_on": data.root.display().to_string(),
+            "device": device.name(),
+            "encoder": crate::DenseNetPreset::of(&net.encoder).map_or("custom", |p| p.name()),
+        }),
     };
-    let ad = device.clone().autodiff();
-    ad.seed(config.seed);
+    let dev = device.device();
+    let ad = dev.clone().autodiff();
+    ad.seed(config.schedule.seed);
     let mut model = net.init(&ad)?;
     if let Some(p) = &config.pretrained {
         model.encoder = crate::torchvision::load_torchvision_encoder(p, model.encoder, &ad)?;
@@ -179,24 +203,17 @@ pub fn train_depth(
         model = model.freeze_encoder();
     }
     let range = DEPTH_RANGE_MM / config.unit_mm as f64;
-    let fit_cfg = FitConfig {
-        max_epochs: config.max_epochs,
-        patience: config.patience,
-        batch_size: config.batch_size,
-        learning_rate: config.learning_rate,
-        seed: config.seed,
-        title: format!("depth training ({:?})", config.loss),
-        checkpoint_every: 1,
-        lr_decay: config.lr_decay,
-    };
-    let train: Vec<usize> = (0..train_set.len()).collect();
-    let (_, summary) = fit(
+    let fit_cfg = FitConfig::new(
+        &config.schedule,
+        format!("depth training ({:?})", config.loss),
+    )
+    .saving_to(out, resume);
+    let train_idx: Vec<usize> = (0..train_set.len()).collect();
+    let (_, summary) = fit::<_, Error>(
         &fit_cfg,
         model,
         burn::optim::AdamConfig::new().init(),
-        &train,
-        out,
-        resume,
+        (&train_idx, val_set.len()),
         |m: &DepthNet, batch, _| {
             let (x, y) = train_set.batch(batch, &stats, &scale, config.with_mask, &ad)?;
             Ok(depth_loss(config.loss, m.forward(x), y, range))
@@ -204,19 +221,21 @@ pub fn train_depth(
         |m| {
             let (mut loss, mut k) = (0.0, 0usize);
             for chunk in (0..val_set.len()).collect::<Vec<_>>().chunks(16) {
-                let (x, y) = val_set.batch(chunk, &stats, &scale, config.with_mask, device)?;
+                let (x, y) = val_set.batch(chunk, &stats, &scale, config.with_mask, &dev)?;
                 let l: f32 = depth_loss(config.loss, m.forward(x), y, range).into_scalar();
                 loss += l as f64 * chunk.len() as f64;
                 k += chunk.len();
             }
-            let sc = evaluate(m, &artifact, val_set, device)?;
-            Ok((loss / k.max(1) as f64, Some(sc.mae_mm)))
+            let preds = predict_mm(m, &artifact, &val_set, &dev)?;
+            Ok((loss / k.max(1) as f64, Some(score(&val_set, &preds).mae_mm)))
         },
-        |m| artifact.save(m, out),
+        |m| Ok(artifact.save(m, out)?),
     )?;
-    tactile_core::io::write_json_atomic(
-        out.join("training.json"),
-        &serde_json::json!({ "config": config, "summary": summary, "train_frames": train_set.len(), "val_frames": val_set.len() }),
+    tactile_core::artifact::write_training_record(
+        out,
+        config,
+        &summary,
+        serde_json::json!({ "train_frames": train_set.len(), "val_frames": val_set.len() }),
     )?;
     Ok(summary)
 }

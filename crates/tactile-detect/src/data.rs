@@ -2,18 +2,24 @@
 
 use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
+use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_core::{Error, Result};
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, load_frame};
+
+use crate::Result;
 
 /// Frames of a dataset resized to the detector's input, kept as 8-bit to
 /// hold thousands in memory, with their labels.
 pub struct DetectionSet {
+    /// Input width the frames were resized to.
     pub width: usize,
+    /// Input height.
     pub height: usize,
+    /// Each frame's `file` label.
     pub files: Vec<String>,
     /// `H x W x 3` bytes per frame.
     pub frames: Vec<Vec<u8>>,
+    /// Each frame's `tendon` label.
     pub tendon: Vec<bool>,
     /// Frames within two frames of a label change in their sequence (the
     /// onset and release of contact with the tendon).
@@ -26,13 +32,7 @@ pub struct DetectionSet {
 impl DetectionSet {
     /// Load and resize every frame (in parallel); `tendon` must be 0 or 1.
     pub fn from_dataset(ds: &Dataset, [width, height]: [usize; 2]) -> Result<Self> {
-        if ds.manifest.kind != DatasetKind::Visuotactile {
-            return Err(Error::dataset(
-                ds.root.join("manifest.json"),
-                None,
-                "kind is not 'visuotactile': the detector reads visuo-tactile datasets",
-            ));
-        }
+        ds.expect_kind(DatasetKind::Visuotactile)?;
         let tendon = (0..ds.len())
             .map(|i| match ds.number(i, "tendon")? {
                 0.0 => Ok(false),
@@ -43,10 +43,10 @@ impl DetectionSet {
                     format!("column 'tendon': {v} is neither 0 nor 1"),
                 )),
             })
-            .collect::<Result<Vec<_>>>()?;
+            .collect::<tactile_core::Result<Vec<_>>>()?;
         let files: Vec<String> = (0..ds.len())
             .map(|i| ds.text(i, "file").map(str::to_string))
-            .collect::<Result<_>>()?;
+            .collect::<tactile_core::Result<_>>()?;
         let frames = files
             .par_iter()
             .map(|f| {
@@ -57,7 +57,7 @@ impl DetectionSet {
         let transition = transitions(ds, &tendon)?;
         let ridge_mm = (0..ds.len())
             .map(|i| ds.number_opt(i, "ridge_mm"))
-            .collect::<Result<Vec<_>>>()?;
+            .collect::<tactile_core::Result<Vec<_>>>()?;
         Ok(Self {
             width,
             height,
@@ -69,6 +69,7 @@ impl DetectionSet {
         })
     }
 
+    /// Frames held.
     pub fn len(&self) -> usize {
         self.frames.len()
     }
@@ -78,10 +79,10 @@ impl DetectionSet {
     /// the old `len()`.
     pub fn append(&mut self, other: DetectionSet) -> Result<()> {
         if (other.width, other.height) != (self.width, self.height) {
-            return Err(Error::Invalid(format!(
-                "cannot join frames loaded at {}x{} to frames at {}x{}",
-                other.width, other.height, self.width, self.height
-            )));
+            return Err(crate::Error::InputSize {
+                expected: [self.width, self.height],
+                found: [other.width, other.height],
+            });
         }
         self.files.extend(other.files);
         self.frames.extend(other.frames);
@@ -91,6 +92,7 @@ impl DetectionSet {
         Ok(())
     }
 
+    /// True when it holds no frame.
     pub fn is_empty(&self) -> bool {
         self.frames.is_empty()
     }
@@ -100,14 +102,22 @@ impl DetectionSet {
         FloatImage::from_bytes(self.width, self.height, 3, &self.frames[i])
     }
 
-    /// Normalised `[N, 3, H, W]` batch of the frames at `idx`.
-    pub fn batch(&self, idx: &[usize], stats: &ChannelStats, device: &Device) -> Result<Tensor<4>> {
+    /// Normalised `3 x H x W` inputs of the frames at `idx`, end to end.
+    pub fn inputs(&self, idx: &[usize], stats: &ChannelStats) -> Result<Vec<f32>> {
         let mut data = Vec::with_capacity(idx.len() * 3 * self.width * self.height);
         for &i in idx {
             data.extend(stats.to_chw(&self.image(i))?);
         }
+        Ok(data)
+    }
+
+    /// Normalised `[N, 3, H, W]` batch of the frames at `idx`.
+    pub fn batch(&self, idx: &[usize], stats: &ChannelStats, device: &Device) -> Result<Tensor<4>> {
         Ok(Tensor::from_data(
-            TensorData::new(data, [idx.len(), 3, self.height, self.width]),
+            TensorData::new(
+                self.inputs(idx, stats)?,
+                [idx.len(), 3, self.height, self.width],
+            ),
             device,
         ))
     }
@@ -135,16 +145,55 @@ impl DetectionSet {
     pub fn check_soft_labels(&self, labels_file: &std::path::Path) -> Result<()> {
         match self.ridge_mm.iter().position(Option::is_none) {
             None => Ok(()),
-            Some(i) => Err(Error::dataset(
+            Some(i) => Err(crate::Error::Core(Error::dataset(
                 labels_file,
                 None,
                 format!(
                     "soft labels need the column 'ridge_mm' on every frame ({} has none)",
                     self.files[i]
                 ),
-            )),
+            ))),
         }
     }
+}
+
+/// Frames of several datasets at one input size, each split by its own
+/// sequences into training and validation: `(frames, train, validation)`
+/// with indices into the joined set.
+pub fn load_split(
+    datasets: &[Dataset],
+    input: [usize; 2],
+    val_fraction: f64,
+    seed: u64,
+    soft_labels: bool,
+) -> Result<(DetectionSet, Vec<usize>, Vec<usize>)> {
+    let (mut train, mut val) = (Vec::new(), Vec::new());
+    let mut data: Option<DetectionSet> = None;
+    for ds in datasets {
+        let (t, v) = ds.split_by_sequence(val_fraction, seed)?;
+        eprintln!(
+            "loading {} frames of {} at {}x{} ({} train, {} validation, split by sequence)",
+            ds.len(),
+            ds.root.display(),
+            input[0],
+            input[1],
+            t.len(),
+            v.len()
+        );
+        let set = DetectionSet::from_dataset(ds, input)?;
+        if soft_labels {
+            set.check_soft_labels(&ds.labels_path())?;
+        }
+        let offset = data.as_ref().map_or(0, DetectionSet::len);
+        train.extend(t.into_iter().map(|i| i + offset));
+        val.extend(v.into_iter().map(|i| i + offset));
+        match data.as_mut() {
+            None => data = Some(set),
+            Some(d) => d.append(set)?,
+        }
+    }
+    let data = data.ok_or_else(|| tactile_core::Error::Config("no dataset to train on".into()))?;
+    Ok((data, train, val))
 }
 
 /// Soft detector targets from the ridge amplitude: the label is a hard
@@ -180,7 +229,7 @@ impl SoftLabels {
 
 /// Frames within two frames (same sequence, by `frame_index`) of a frame
 /// with the other label. Datasets without sequences have none.
-fn transitions(ds: &Dataset, tendon: &[bool]) -> Result<Vec<bool>> {
+fn transitions(ds: &Dataset, tendon: &[bool]) -> tactile_core::Result<Vec<bool>> {
     let mut by_seq: std::collections::HashMap<String, Vec<(i64, usize)>> = Default::default();
     for i in 0..ds.len() {
         if let (Some(s), Some(f)) = (ds.text_opt(i, "sequence"), ds.number_opt(i, "frame_index")?) {

@@ -10,17 +10,21 @@ use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::pool::{AdaptiveAvgPool2d, AdaptiveAvgPool2dConfig, MaxPool2d, MaxPool2dConfig};
 use burn::nn::{BatchNorm, BatchNormConfig, Linear, LinearConfig, PaddingConfig2d};
 use burn::tensor::activation::relu;
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
 use tactile_core::nn::{hard_sigmoid, hard_swish};
+use tactile_core::runtime::Forward;
 
 /// Which network.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Architecture {
     /// MobileNetV3-small (Howard et al. 2019, Table 2).
+    #[cfg_attr(feature = "clap", value(alias = "mobilenet"))]
     MobilenetV3Small,
     /// ResNet-18 (two basic blocks per stage), paper B's slower baseline.
+    #[cfg_attr(feature = "clap", value(name = "resnet18", alias = "resnet-18"))]
     Resnet18,
 }
 
@@ -28,6 +32,7 @@ pub enum Architecture {
 #[derive(Config, Debug, PartialEq)]
 pub struct DetectorConfig {
     #[config(default = "Architecture::MobilenetV3Small")]
+    /// Which network.
     pub architecture: Architecture,
     /// Channel width multiplier (1.0 = the published network).
     #[config(default = 1.0)]
@@ -68,7 +73,9 @@ fn act(a: Act, x: Tensor<4>) -> Tensor<4> {
 /// Conv + batch norm (no bias: the norm has one).
 #[derive(Module, Debug)]
 pub struct ConvBn {
+    /// The convolution, without bias.
     pub conv: Conv2d,
+    /// Its batch norm.
     pub bn: BatchNorm,
 }
 
@@ -94,8 +101,11 @@ impl ConvBn {
 /// Squeeze-and-excite: channel weights from the global average.
 #[derive(Module, Debug)]
 pub struct SqueezeExcite {
+    /// Global average.
     pub pool: AdaptiveAvgPool2d,
+    /// To a quarter of the channels.
     pub reduce: Conv2d,
+    /// Back to every channel.
     pub expand: Conv2d,
 }
 
@@ -119,11 +129,17 @@ impl SqueezeExcite {
 /// Inverted residual: 1x1 expand, k x k depthwise, optional SE, 1x1 project.
 #[derive(Module, Debug)]
 pub struct InvertedResidual {
+    /// 1x1 expansion (absent when the expansion equals the input width).
     pub expand: Option<ConvBn>,
+    /// k x k depthwise convolution.
     pub depthwise: ConvBn,
+    /// Squeeze-and-excite, in the blocks that have it.
     pub se: Option<SqueezeExcite>,
+    /// 1x1 projection, linear.
     pub project: ConvBn,
+    /// Hard-swish (else ReLU) after expansion and depthwise.
     pub hard_swish: bool,
+    /// Add the input (stride 1, same width).
     pub residual: bool,
 }
 
@@ -165,8 +181,11 @@ const MOBILENET_V3_SMALL: [(usize, usize, usize, bool, bool, usize); 11] = [
 /// ResNet basic block: two 3x3 conv-BN, identity or 1x1 projection shortcut.
 #[derive(Module, Debug)]
 pub struct BasicBlock {
+    /// First 3x3 conv-BN (carries the stride).
     pub conv1: ConvBn,
+    /// Second 3x3 conv-BN.
     pub conv2: ConvBn,
+    /// 1x1 projection when the shape changes.
     pub shortcut: Option<ConvBn>,
 }
 
@@ -195,34 +214,81 @@ impl BasicBlock {
 #[allow(clippy::large_enum_variant)]
 #[derive(Module, Debug)]
 pub enum Backbone {
+    /// MobileNetV3-small.
     Mobilenet(MobilenetBody),
+    /// ResNet-18.
     Resnet(ResnetBody),
 }
 
+/// MobileNetV3-small's stem, blocks and last 1x1 convolution.
 #[derive(Module, Debug)]
 pub struct MobilenetBody {
+    /// 3x3 stride-2 stem.
     pub stem: ConvBn,
+    /// The eleven inverted residuals.
     pub blocks: Vec<InvertedResidual>,
+    /// 1x1 to six times the last width.
     pub last: ConvBn,
 }
 
+/// ResNet-18's stem, pooling and eight basic blocks.
 #[derive(Module, Debug)]
 pub struct ResnetBody {
+    /// 7x7 stride-2 stem.
     pub stem: ConvBn,
+    /// 3x3 stride-2 max-pooling.
     pub pool: MaxPool2d,
+    /// Two blocks per stage.
     pub blocks: Vec<BasicBlock>,
 }
 
 /// Frame `[N, 3, H, W]` (normalised) -> tendon logit `[N, 1]`.
 #[derive(Module, Debug)]
 pub struct Detector {
+    /// Feature extractor.
     pub backbone: Backbone,
+    /// Global average.
     pub pool: AdaptiveAvgPool2d,
+    /// Paper B's FC 256.
     pub fc1: Linear,
+    /// To one logit.
     pub fc2: Linear,
 }
 
+/// Largest channel width multiplier accepted.
+pub const MAX_WIDTH: f64 = 4.0;
+/// Input sides accepted, pixels.
+pub const INPUT_SIDE: std::ops::RangeInclusive<usize> = 16..=2048;
+/// Largest hidden width of the head.
+pub const MAX_HEAD_HIDDEN: usize = 4096;
+
 impl DetectorConfig {
+    /// Check the sizes against the documented limits before anything is
+    /// allocated for them.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        let [w, h] = self.input_size;
+        if !(self.width > 0.0 && self.width <= MAX_WIDTH) {
+            return Err(tactile_core::Error::Config(format!(
+                "detector width must be in (0, {MAX_WIDTH}], got {}",
+                self.width
+            )));
+        }
+        if !INPUT_SIDE.contains(&w) || !INPUT_SIDE.contains(&h) {
+            return Err(tactile_core::Error::Config(format!(
+                "detector input {w}x{h}: each side must be {} to {} pixels",
+                INPUT_SIDE.start(),
+                INPUT_SIDE.end()
+            )));
+        }
+        if self.head_hidden == 0 || self.head_hidden > MAX_HEAD_HIDDEN {
+            return Err(tactile_core::Error::Config(format!(
+                "detector head width must be 1 to {MAX_HEAD_HIDDEN}, got {}",
+                self.head_hidden
+            )));
+        }
+        Ok(())
+    }
+
     /// Build with fresh weights.
     pub fn init(&self, device: &Device) -> Detector {
         let w = self.width;
@@ -292,8 +358,18 @@ impl DetectorConfig {
     }
 }
 
+impl Forward for Detector {
+    fn forward_data(&self, x: Tensor<4>) -> TensorData {
+        self.forward(x).into_data()
+    }
+}
+
 impl Detector {
-    /// Tendon logits `[N, 1]`; `sigmoid` of it is the tendon probability.
+    /// Tendon logits; their sigmoid is the tendon probability.
+    ///
+    /// # Shapes
+    /// - `x`: `[N, 3, H, W]`, normalised with the training statistics
+    /// - output: `[N, 1]`
     pub fn forward(&self, x: Tensor<4>) -> Tensor<2> {
         let (x, hs) = match &self.backbone {
             Backbone::Mobilenet(m) => {

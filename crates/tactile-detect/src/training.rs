@@ -1,35 +1,37 @@
-//! Training the detector: class-balanced stable BCE on logits, Adam,
-//! validation accuracy each epoch, best model kept, resumable.
+//! Training the detector: class-balanced stable BCE on logits (toward 0/1
+//! labels or soft targets from the ridge amplitude), Adam with a decaying
+//! rate, validation accuracy each epoch, best model kept, resumable; then
+//! the decision threshold is calibrated on the validation sequences.
 
 use std::path::Path;
 
 use burn::config::Config;
 use burn::tensor::{Device, Tensor, TensorData};
+use tactile_core::dataset::Dataset;
 use tactile_core::nn::elementwise_bce_with_logits;
-use tactile_core::train::{FitConfig, FitSummary, fit};
-use tactile_core::{Error, Result};
+use tactile_core::runtime::sigmoid;
+use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
+use tactile_core::{Artifact, DeviceKind};
 use tactile_preprocess::visuo::ChannelStats;
 
-use crate::{DetectionSet, Detector, DetectorArtifact, DetectorConfig, SoftLabels};
+use crate::data::{SoftLabels, load_split};
+use crate::{DetectionSet, Detector, DetectorArtifact, DetectorConfig, Error, Result};
 
+/// Everything a detector's training is set by.
 #[derive(Config, Debug)]
 pub struct DetectorTrainingConfig {
-    pub detector: DetectorConfig,
-    /// Paper B: 8.
-    #[config(default = 16)]
-    pub batch_size: usize,
-    #[config(default = 20)]
-    pub max_epochs: usize,
-    #[config(default = 5)]
-    pub patience: usize,
-    #[config(default = 1e-3)]
-    pub learning_rate: f64,
-    /// Learning-rate factor per epoch.
-    #[config(default = 0.8)]
-    pub lr_decay: f64,
-    #[config(default = 42)]
-    pub seed: u64,
+    /// Architecture and input size (paper B: width 1.0 at 320x240; this
+    /// machine's default: width 0.5 at 160x120).
+    #[config(default = "DetectorConfig::new().with_width(0.5).with_input_size([160, 120])")]
+    pub model: DetectorConfig,
+    /// Paper B: batch 8.
+    #[config(default = "Schedule::new(16, 12, 4, 1e-3).with_lr_decay(0.8)")]
+    pub schedule: Schedule,
+    /// Fraction of each dataset's sequences that validate.
+    #[config(default = 0.2)]
+    pub val_fraction: f64,
     /// Train toward soft targets from the ridge amplitude (None: 0/1).
+    #[config(default = "None")]
     pub soft_labels: Option<SoftLabels>,
 }
 
@@ -48,18 +50,23 @@ fn weighted_bce(logits: Tensor<2>, targets: Tensor<2>, (wn, wp): (f32, f32)) -> 
     (elementwise_bce_with_logits(logits, targets) * w).mean()
 }
 
-/// Probabilities of the frames at `idx`, in batches.
-pub fn predict(
+/// Probabilities of the frames at `idx`, in batches, straight from the
+/// module being trained.
+fn predict(
     model: &Detector,
     data: &DetectionSet,
     idx: &[usize],
     stats: &ChannelStats,
-    batch: usize,
     device: &Device,
 ) -> Result<Vec<f32>> {
     let mut out = Vec::with_capacity(idx.len());
-    for chunk in idx.chunks(batch.max(1)) {
-        out.extend(model.probabilities(data.batch(chunk, stats, device)?)?);
+    for chunk in idx.chunks(64) {
+        let z = model
+            .forward(data.batch(chunk, stats, device)?)
+            .into_data()
+            .try_to_vec::<f32>()
+            .map_err(|e| tactile_core::Error::Invalid(format!("detector output: {e:?}")))?;
+        out.extend(z.into_iter().map(sigmoid));
     }
     Ok(out)
 }
@@ -86,41 +93,81 @@ pub fn calibrate(
     out: &Path,
     data: &DetectionSet,
     val: &[usize],
-    device: &Device,
+    device: DeviceKind,
 ) -> Result<(f64, f64)> {
-    let (mut art, model) = DetectorArtifact::load(out, device)?;
-    let p = predict(&model, data, val, &art.stats, 64, device)?;
+    let loaded = DetectorArtifact::load(out, &device.device())?;
+    let mut art = loaded.artifact;
+    let p = predict(&loaded.model, data, val, &art.stats, &loaded.device)?;
     let truth: Vec<bool> = val.iter().map(|&i| data.tendon[i]).collect();
     let (t, acc) = best_threshold(&p, &truth);
     art.threshold = t;
-    art.save(&model, out)?;
+    art.save(&loaded.model, out)?;
     Ok((t, acc))
 }
 
-/// Train on `train`, validate on `val`; the best model goes to `out`.
-pub fn train_detector(
+/// What a training run ended with, the calibrated threshold included.
+#[derive(Debug, Clone)]
+pub struct DetectorFit {
+    /// The run.
+    pub summary: FitSummary,
+    /// The threshold chosen on the validation sequences.
+    pub threshold: f64,
+    /// Validation accuracy at that threshold.
+    pub val_accuracy: f64,
+}
+
+/// Train on `datasets` (each split by its own sequences) into `out`, then
+/// calibrate the threshold. With `calibrate_only`, only re-choose the
+/// threshold of the model already in `out`.
+pub fn train(
     config: &DetectorTrainingConfig,
-    data: &DetectionSet,
-    (train, val): (&[usize], &[usize]),
+    datasets: &[Dataset],
     out: &Path,
-    device: &Device,
+    device: DeviceKind,
     resume: bool,
-    notes: serde_json::Value,
-) -> Result<FitSummary> {
+    calibrate_only: bool,
+) -> Result<DetectorFit> {
+    config.schedule.check()?;
+    config.model.check()?;
+    tactile_core::io::ensure_writable_dir(out)?;
+    let [w, h] = config.model.input_size;
+    let (data, train, val) = load_split(
+        datasets,
+        [w, h],
+        config.val_fraction,
+        config.schedule.seed,
+        config.soft_labels.is_some(),
+    )?;
+    if calibrate_only {
+        let (threshold, val_accuracy) = calibrate(out, &data, &val, device)?;
+        let summary: FitSummary =
+            tactile_core::io::read_json::<serde_json::Value>(out.join("training.json"))
+                .ok()
+                .and_then(|v| serde_json::from_value(v["summary"].clone()).ok())
+                .ok_or_else(|| {
+                    tactile_core::Error::not_found(out.join("training.json"), "training record")
+                })?;
+        return Ok(DetectorFit {
+            summary,
+            threshold,
+            val_accuracy,
+        });
+    }
     if train.is_empty() || val.is_empty() {
-        return Err(Error::Invalid(format!(
+        return Err(tactile_core::Error::Invalid(format!(
             "need training and validation frames (got {} and {})",
             train.len(),
             val.len()
-        )));
+        ))
+        .into());
     }
-    let [w, h] = config.detector.input_size;
     if (data.width, data.height) != (w, h) {
-        return Err(Error::Invalid(format!(
-            "frames were loaded at {}x{}, the detector takes {w}x{h}",
-            data.width, data.height
-        )));
+        return Err(Error::InputSize {
+            expected: [w, h],
+            found: [data.width, data.height],
+        });
     }
+    let dev = device.device();
     let stats = ChannelStats::from_images(
         train
             .iter()
@@ -131,39 +178,32 @@ pub fn train_detector(
     let labels: Vec<bool> = train.iter().map(|&i| data.tendon[i]).collect();
     let weights = class_weights(&labels);
     let artifact = DetectorArtifact {
-        detector: config.detector.clone(),
+        model: config.model.clone(),
         stats: stats.clone(),
         threshold: 0.5,
-        notes,
+        notes: serde_json::json!({
+            "trained_on": datasets.iter().map(|d| d.root.display().to_string()).collect::<Vec<_>>().join(" + "),
+            "device": device.name(),
+        }),
     };
-    let ad = device.clone().autodiff();
-    ad.seed(config.seed);
-    let model = config.detector.init(&ad);
-    let fit_cfg = FitConfig {
-        max_epochs: config.max_epochs,
-        patience: config.patience,
-        batch_size: config.batch_size,
-        learning_rate: config.learning_rate,
-        seed: config.seed,
-        title: "detector training (class-weighted BCE)".into(),
-        checkpoint_every: 1,
-        lr_decay: config.lr_decay,
-    };
+    let ad = dev.clone().autodiff();
+    ad.seed(config.schedule.seed);
+    let model = config.model.init(&ad);
+    let fit_cfg = FitConfig::new(&config.schedule, "detector training (class-weighted BCE)")
+        .saving_to(out, resume);
     let val_truth: Vec<bool> = val.iter().map(|&i| data.tendon[i]).collect();
-    let (_, summary) = fit(
+    let (_, summary) = fit::<_, Error>(
         &fit_cfg,
         model,
         burn::optim::AdamConfig::new().init(),
-        train,
-        out,
-        resume,
+        (&train, val.len()),
         |m: &Detector, batch, _| {
             let x = data.batch(batch, &stats, &ad)?;
             let y = data.targets(batch, config.soft_labels.as_ref(), &ad);
             Ok(weighted_bce(m.forward(x), y, weights))
         },
         |m| {
-            let p = predict(m, data, val, &stats, 64, device)?;
+            let p = predict(m, &data, &val, &stats, &dev)?;
             // Validation loss with the same class weights, from probabilities.
             let logits: Vec<f32> = p
                 .iter()
@@ -172,17 +212,24 @@ pub fn train_detector(
                     (q / (1.0 - q)).ln()
                 })
                 .collect();
-            let z = Tensor::<2>::from_data(TensorData::new(logits, [val.len(), 1]), device);
-            let loss: f32 = weighted_bce(z, data.labels(val, device), weights).into_scalar();
+            let z = Tensor::<2>::from_data(TensorData::new(logits, [val.len(), 1]), &dev);
+            let loss: f32 = weighted_bce(z, data.labels(&val, &dev), weights).into_scalar();
             let pred: Vec<bool> = p.iter().map(|&q| q as f64 >= 0.5).collect();
             let acc = tactile_core::metrics::binary_scores(&pred, &val_truth).accuracy;
             Ok((loss as f64, Some(acc)))
         },
-        |m| artifact.save(m, out),
+        |m| Ok(artifact.save(m, out)?),
     )?;
-    tactile_core::io::write_json_atomic(
-        out.join("training.json"),
-        &serde_json::json!({ "config": config, "summary": summary, "train_frames": train.len(), "val_frames": val.len() }),
+    tactile_core::artifact::write_training_record(
+        out,
+        config,
+        &summary,
+        serde_json::json!({ "train_frames": train.len(), "val_frames": val.len() }),
     )?;
-    Ok(summary)
+    let (threshold, val_accuracy) = calibrate(out, &data, &val, device)?;
+    Ok(DetectorFit {
+        summary,
+        threshold,
+        val_accuracy,
+    })
 }

@@ -3,6 +3,7 @@
 //! naive Bayes (paper A's Bayes baseline). Inputs are standardised with
 //! training statistics; angle targets go through their sin/cos encoding.
 
+use crate::{Error, Result};
 use linfa::prelude::*;
 use linfa_bayes::GaussianNb;
 use linfa_elasticnet::ElasticNet;
@@ -10,12 +11,14 @@ use linfa_nn::distance::L2Dist;
 use linfa_nn::{CommonNearestNeighbour, NearestNeighbour};
 use linfa_reduction::Pca;
 use ndarray016::{Array1, Array2};
-use tactile_core::{Error, Result};
 
 use crate::target::Target;
 
 fn lerr(what: &str, e: impl std::fmt::Display) -> Error {
-    Error::Invalid(format!("{what}: {e}"))
+    Error::Linfa {
+        what: what.into(),
+        message: e.to_string(),
+    }
 }
 
 fn array(x: &[Vec<f32>]) -> Result<Array2<f64>> {

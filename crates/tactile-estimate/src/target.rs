@@ -7,8 +7,9 @@
 //! `(sin 2 pi a / P, cos 2 pi a / P)`, decoded with `atan2`, and its error
 //! is the shortest way round the circle.
 
+use crate::Result;
 use serde::{Deserialize, Serialize};
-use tactile_core::{Error, Result};
+use tactile_core::Error;
 
 /// How a target is encoded and scored.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -18,17 +19,25 @@ pub enum TargetKind {
     Linear,
     /// An angle in degrees with this period; decoded into
     /// `[start_deg, start_deg + period_deg)`.
-    Angle { period_deg: f64, start_deg: f64 },
+    Angle {
+        /// Degrees after which the angle repeats (360, or 180 for an axis).
+        period_deg: f64,
+        /// Start of the interval predictions are decoded into.
+        start_deg: f64,
+    },
 }
 
 /// A named label column of a dataset.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Target {
+    /// The label column.
     pub name: String,
+    /// How it is encoded and scored.
     pub kind: TargetKind,
 }
 
 impl Target {
+    /// A quantity on the real line.
     pub fn linear(name: &str) -> Self {
         Self {
             name: name.into(),
@@ -59,9 +68,7 @@ impl Target {
                 })?;
                 Ok(Self::angle(name, period))
             }
-            _ => Err(Error::Config(format!(
-                "target '{s}': expected NAME or NAME:PERIOD"
-            ))),
+            _ => Err(Error::Config(format!("target '{s}': expected NAME or NAME:PERIOD")).into()),
         }
     }
 
@@ -119,6 +126,13 @@ impl Target {
             .map(|(p, t)| self.error(*p, *t))
             .sum::<f64>()
             / truth.len() as f64
+    }
+}
+
+impl std::str::FromStr for Target {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Self::parse(s)
     }
 }
 

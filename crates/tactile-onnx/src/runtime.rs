@@ -10,7 +10,9 @@ use std::sync::OnceLock;
 use ort::environment::Environment;
 use ort::session::Session;
 use ort::value::Tensor;
-use tactile_core::{Error, Result};
+use tactile_core::runtime::{Network, Runtime};
+
+use crate::{Error, Result};
 
 /// Where the scripts install the wheel, relative to the workspace root.
 pub const LOCAL_ORT_DIR: &str = ".ort";
@@ -23,7 +25,7 @@ pub fn ort_library_path() -> Result<PathBuf> {
         return if p.is_file() {
             Ok(p)
         } else {
-            Err(Error::model(&p, "ORT_DYLIB_PATH does not name a file"))
+            Err(tactile_core::Error::model(&p, "ORT_DYLIB_PATH does not name a file").into())
         };
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -32,7 +34,7 @@ pub fn ort_library_path() -> Result<PathBuf> {
         PathBuf::from(LOCAL_ORT_DIR).join(LIB_IN_WHEEL),
     ];
     candidates.into_iter().find(|p| p.is_file()).ok_or_else(|| {
-        Error::Invalid(format!(
+        Error::Library(format!(
             "onnxruntime not found: set ORT_DYLIB_PATH, or run `bash scripts/install-ort.sh` \
              (installs the PyPI wheel onnxruntime==1.31.1 into {LOCAL_ORT_DIR}/)"
         ))
@@ -50,7 +52,7 @@ fn environment() -> Result<&'static Environment> {
             .map_err(|e| format!("cannot start onnxruntime: {e}"))
     })
     .as_ref()
-    .map_err(|e| Error::Invalid(e.clone()))
+    .map_err(|e| Error::Library(e.clone()))
 }
 
 /// One ONNX model loaded into onnxruntime.
@@ -62,7 +64,7 @@ impl OrtModel {
     /// Load a model from bytes, with `threads` intra-op threads (0 = ORT's default).
     pub fn from_bytes(bytes: &[u8], threads: usize) -> Result<Self> {
         let env = environment()?;
-        let err = |e: ort::Error| Error::Invalid(format!("onnxruntime rejected the model: {e}"));
+        let err = |e: ort::Error| Error::Run(format!("rejected the model: {e}"));
         let mut b = Session::builder(env).map_err(err)?;
         if threads > 0 {
             b = b.with_intra_threads(threads).map_err(|e| err(e.into()))?;
@@ -74,17 +76,28 @@ impl OrtModel {
     /// Load a model file.
     pub fn from_file(path: impl AsRef<Path>, threads: usize) -> Result<Self> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Self::from_bytes(&bytes, threads).map_err(|e| Error::model(path, e.to_string()))
+        let bytes = std::fs::read(path).map_err(|e| tactile_core::Error::io(path, e))?;
+        Self::from_bytes(&bytes, threads)
+            .map_err(|e| tactile_core::Error::model(path, e.to_string()).into())
     }
 
     /// Run the model's single float input, returning its first output's shape and values.
     pub fn run_f32(&mut self, shape: &[usize], data: Vec<f32>) -> Result<(Vec<usize>, Vec<f32>)> {
-        let err = |e: ort::Error| Error::Invalid(format!("onnxruntime run failed: {e}"));
+        let err = |e: ort::Error| Error::Run(format!("run failed: {e}"));
         let input = Tensor::from_array((shape.to_vec(), data)).map_err(err)?;
         let outputs = self.session.run(ort::inputs![input]).map_err(err)?;
         let (s, v) = outputs[0].try_extract_tensor::<f32>().map_err(err)?;
         Ok((s.iter().map(|&d| d as usize).collect(), v.to_vec()))
+    }
+}
+
+impl Network for OrtModel {
+    fn run(&mut self, shape: [usize; 4], input: Vec<f32>) -> tactile_core::Result<Vec<f32>> {
+        Ok(self.run_f32(&shape, input)?.1)
+    }
+
+    fn runtime(&self) -> Runtime {
+        Runtime::Onnx
     }
 }
 
@@ -108,16 +121,17 @@ pub fn onnx_full_check(path: impl AsRef<Path>) -> Result<()> {
         ])
         .arg(path)
         .output()
-        .map_err(|e| Error::io("python3", e))?;
+        .map_err(|e| tactile_core::Error::io("python3", e))?;
     if out.status.success() {
         Ok(())
     } else {
-        Err(Error::model(
+        Err(tactile_core::Error::model(
             path,
             format!(
                 "onnx.checker failed: {}",
                 String::from_utf8_lossy(&out.stderr).trim()
             ),
-        ))
+        )
+        .into())
     }
 }

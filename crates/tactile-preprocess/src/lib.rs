@@ -8,17 +8,26 @@
 //! The lighting compensation (white top-hat plus a threshold relative to the
 //! local pin contrast) is what makes raw frames with illumination gradients,
 //! light blobs and noise come out as clean pin images.
+//!
+//! Also here: visuo-tactile frames as model inputs ([`visuo`]), pin tracking
+//! ([`pins`]) and the camera perturbations of the robustness study
+//! ([`perturb`]).
+
+#![deny(missing_docs)]
 
 use kornia_image::{Image, ImageSize};
 use kornia_imgproc::interpolation::InterpolationMode;
 use kornia_imgproc::morphology::{self, Kernel};
 use kornia_imgproc::padding::PaddingMode;
 
+mod error;
+pub mod perturb;
 pub mod pins;
 pub mod visuo;
+
+pub use error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::GreyImage;
-use tactile_core::{Error, Result};
 
 /// How uneven illumination is removed before thresholding.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -32,9 +41,13 @@ pub enum Lighting {
     /// maximum (a box of `peak_window_px`) and that maximum is at least
     /// `min_contrast` grey levels. Gains, gradients and blobs cancel out.
     TopHat {
+        /// Side of the opening box (larger than a pin), pixels.
         background_window_px: usize,
+        /// Side of the local-maximum box, pixels.
         peak_window_px: usize,
+        /// Fraction of the local top-hat maximum a pin pixel reaches.
         relative_threshold: f32,
+        /// Smallest local maximum that counts as a pin, grey levels.
         min_contrast: u8,
         /// Box-blur size applied first to tame sensor noise (1 = off).
         denoise_px: usize,
@@ -44,6 +57,7 @@ pub enum Lighting {
 /// Every step of the chain; see the presets.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PreprocessConfig {
+    /// Illumination compensation.
     pub lighting: Lighting,
     /// Histogram equalisation (authors: on; pointless after top-hat).
     pub equalize: bool,
@@ -163,11 +177,8 @@ impl PreprocessConfig {
             "paper" => Ok(Self::paper()),
             "lighting-compensated" => Ok(Self::lighting_compensated()),
             "binary" => Ok(Self::binary_frames()),
-            path if path.ends_with(".json") => tactile_core::io::read_json(path),
-            other => Err(Error::Config(format!(
-                "unknown preprocessing preset '{other}': expected paper, lighting-compensated, \
-                 binary or a JSON file of a PreprocessConfig"
-            ))),
+            path if path.ends_with(".json") => Ok(tactile_core::io::read_json(path)?),
+            other => Err(Error::UnknownPreset(other.to_string())),
         }
     }
 }
@@ -176,16 +187,14 @@ impl PreprocessConfig {
 /// when the chain does not binarise), row-major.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PinImage {
+    /// Side, pixels.
     pub side: usize,
+    /// `side * side` values, row-major.
     pub pixels: Vec<f32>,
 }
 
-fn kimg(e: kornia_image::ImageError) -> Error {
-    Error::Invalid(format!("image operation failed: {e}"))
-}
-
 fn blank(like: &GreyImage) -> Result<GreyImage> {
-    Image::from_size_val(like.size(), 0u8).map_err(kimg)
+    Ok(Image::from_size_val(like.size(), 0u8)?)
 }
 
 fn box_kernel(side: usize) -> Kernel {
@@ -203,8 +212,7 @@ fn erode(src: &GreyImage, side: usize) -> Result<GreyImage> {
         &box_kernel(side),
         PaddingMode::Replicate,
         [0],
-    )
-    .map_err(kimg)?;
+    )?;
     Ok(dst)
 }
 
@@ -219,8 +227,7 @@ fn dilate(src: &GreyImage, side: usize) -> Result<GreyImage> {
         &box_kernel(side),
         PaddingMode::Replicate,
         [0],
-    )
-    .map_err(kimg)?;
+    )?;
     Ok(dst)
 }
 
@@ -255,7 +262,7 @@ fn box_extreme(src: &GreyImage, side: usize, max: bool) -> Result<GreyImage> {
             out[y * w + x] = v;
         }
     }
-    tactile_core::image_io::grey_image(w, h, out)
+    Ok(tactile_core::image_io::grey_image(w, h, out)?)
 }
 
 /// Box mean over `side x side`, replicate borders (integer, rounded).
@@ -281,7 +288,7 @@ fn box_mean(src: &GreyImage, side: usize) -> Result<GreyImage> {
             out[y * w + x] = ((sum + n / 2) / n) as u8;
         }
     }
-    tactile_core::image_io::grey_image(w, h, out)
+    Ok(tactile_core::image_io::grey_image(w, h, out)?)
 }
 
 fn top_hat_binary(
@@ -314,7 +321,11 @@ fn top_hat_binary(
             }
         })
         .collect();
-    tactile_core::image_io::grey_image(src.width(), src.height(), out)
+    Ok(tactile_core::image_io::grey_image(
+        src.width(),
+        src.height(),
+        out,
+    )?)
 }
 
 fn circular_mask(img: &mut GreyImage, radius: f32) {
@@ -333,11 +344,12 @@ fn circular_mask(img: &mut GreyImage, radius: f32) {
 fn centre_crop(img: &GreyImage, side: usize) -> Result<GreyImage> {
     let (w, h) = (img.width(), img.height());
     if side > w || side > h {
-        return Err(Error::shape(
+        return Err(tactile_core::Error::shape(
             "frame for cropping",
             format!("at least {side}x{side}"),
             format!("{w}x{h}"),
-        ));
+        )
+        .into());
     }
     if side == w && side == h {
         return Ok(img.clone());
@@ -351,14 +363,13 @@ fn centre_crop(img: &GreyImage, side: usize) -> Result<GreyImage> {
                 .copied()
         })
         .collect();
-    tactile_core::image_io::grey_image(side, side, data)
+    Ok(tactile_core::image_io::grey_image(side, side, data)?)
 }
 
 /// OpenCV `INTER_LINEAR` resize of an 8-bit image (byte-exact with `cv2.resize`).
 pub fn resize_linear(img: &GreyImage, width: usize, height: usize) -> Result<GreyImage> {
-    let mut dst = Image::from_size_val(ImageSize { width, height }, 0u8).map_err(kimg)?;
-    kornia_imgproc::resize::resize_opencv_u8(img, &mut dst, InterpolationMode::Bilinear)
-        .map_err(kimg)?;
+    let mut dst = Image::from_size_val(ImageSize { width, height }, 0u8)?;
+    kornia_imgproc::resize::resize_opencv_u8(img, &mut dst, InterpolationMode::Bilinear)?;
     Ok(dst)
 }
 
@@ -408,9 +419,11 @@ fn check_area(
     height: usize,
 ) -> Result<()> {
     if width == 0 || height == 0 || width > w || height > h || len != w * h * c {
-        return Err(Error::Invalid(format!(
-            "area resize {w}x{h} -> {width}x{height}: can only shrink to a non-empty size"
-        )));
+        return Err(Error::ImageSize {
+            width,
+            height,
+            why: format!("an area resize of a {w}x{h} image can only shrink to a non-empty size"),
+        });
     }
     Ok(())
 }
@@ -482,13 +495,11 @@ pub fn binarise(img: &GreyImage, offset: f64) -> Vec<f32> {
 /// Run the full configured chain on one frame.
 pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage> {
     if frame.width() < cfg.output_px || frame.height() < cfg.output_px {
-        return Err(Error::Invalid(format!(
-            "frame is {}x{}, smaller than the {}x{} pin image",
-            frame.width(),
-            frame.height(),
-            cfg.output_px,
-            cfg.output_px
-        )));
+        return Err(Error::FrameTooSmall {
+            width: frame.width(),
+            height: frame.height(),
+            needed: cfg.output_px,
+        });
     }
     let mut img = frame.clone();
     if let Lighting::TopHat {
@@ -510,13 +521,13 @@ pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage>
     }
     if cfg.equalize {
         let mut dst = blank(&img)?;
-        kornia_imgproc::histogram::equalize_hist(&img, &mut dst).map_err(kimg)?;
+        kornia_imgproc::histogram::equalize_hist(&img, &mut dst)?;
         img = dst;
     }
     if let Some(t) = cfg.threshold {
         let mut dst = blank(&img)?;
         // OpenCV THRESH_BINARY: value > t -> 255.
-        kornia_imgproc::threshold::threshold_binary(&img, &mut dst, t, 255).map_err(kimg)?;
+        kornia_imgproc::threshold::threshold_binary(&img, &mut dst, t, 255)?;
         img = dst;
     }
     if let Some(r) = cfg.mask_radius_px {
@@ -565,7 +576,7 @@ pub fn preprocess_file(
 ) -> Result<PinImage> {
     let path = path.as_ref();
     let frame = tactile_core::image_io::load_grey(path)?;
-    preprocess(&frame, cfg).map_err(|e| Error::image(path, e.to_string()))
+    preprocess(&frame, cfg).map_err(|e| e.in_file(path))
 }
 
 /// Preprocess many files in parallel (rayon), in order; the first error wins.

@@ -3,10 +3,10 @@
 //! pin `i` is the same physical pin in every frame; features are the pins'
 //! displacements from the reference (two numbers per pin).
 
+use crate::{Error, Result};
 use kornia_image::{Image, ImageSize};
 use kornia_imgproc::connected_components::{Connectivity, connected_components};
 use tactile_core::image_io::GreyImage;
-use tactile_core::{Error, Result};
 
 use crate::{PinImage, PreprocessConfig, preprocess};
 
@@ -19,10 +19,9 @@ pub fn pin_centroids(binary: &GreyImage, min_area: usize) -> Result<Vec<(f32, f3
             height: binary.height(),
         },
         0,
-    )
-    .map_err(|e| Error::Invalid(format!("labels image: {e}")))?;
+    )?;
     let n = connected_components(binary, &mut labels, Connectivity::Eight)
-        .map_err(|e| Error::Invalid(format!("connected components: {e}")))?;
+        .map_err(|e| Error::Kornia(format!("connected components: {e}")))?;
     let n = n.max(1) as usize;
     let (mut su, mut sv, mut area) = (vec![0f64; n], vec![0f64; n], vec![0usize; n]);
     let w = binary.width();
@@ -52,19 +51,20 @@ pub fn full_resolution_binary(frame: &GreyImage, cfg: &PreprocessConfig) -> Resu
     c.grow_px = 0;
     c.output_px = cfg.crop_px.min(frame.width()).min(frame.height());
     let PinImage { side, pixels } = preprocess(frame, &c)?;
-    tactile_core::image_io::grey_image(
+    Ok(tactile_core::image_io::grey_image(
         side,
         side,
         pixels
             .iter()
             .map(|&p| if p > 0.5 { 255 } else { 0 })
             .collect(),
-    )
+    )?)
 }
 
 /// Pins of a reference frame; matches other frames' centroids to them.
 #[derive(Debug, Clone)]
 pub struct PinTracker {
+    /// Pin centroids of the reference frame, pixels.
     pub reference: Vec<(f32, f32)>,
     /// A centroid further than this from a reference pin is not that pin.
     pub max_shift_px: f32,
@@ -75,10 +75,11 @@ impl PinTracker {
     /// median nearest-neighbour spacing of the reference pins.
     pub fn new(reference: Vec<(f32, f32)>) -> Result<Self> {
         if reference.len() < 2 {
-            return Err(Error::Invalid(format!(
+            return Err(tactile_core::Error::Invalid(format!(
                 "pin tracking needs a reference frame with at least 2 pins, found {}",
                 reference.len()
-            )));
+            ))
+            .into());
         }
         let mut nn: Vec<f32> = reference
             .iter()

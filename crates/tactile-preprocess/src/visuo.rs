@@ -7,9 +7,9 @@
 
 use std::path::Path;
 
+use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::{GreyImage, RgbImage};
-use tactile_core::{Error, Result};
 
 use crate::resize_area_interleaved;
 
@@ -20,9 +20,13 @@ pub const MAX_FRAME_PIXELS: usize = 7680 * 4320;
 /// An interleaved float image.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FloatImage {
+    /// Width, pixels.
     pub width: usize,
+    /// Height, pixels.
     pub height: usize,
+    /// Values per pixel.
     pub channels: usize,
+    /// `height * width * channels` values in [0, 1], interleaved.
     pub data: Vec<f32>,
 }
 
@@ -66,12 +70,18 @@ impl FloatImage {
 
 fn check_size(width: usize, height: usize) -> Result<()> {
     if width == 0 || height == 0 {
-        return Err(Error::Invalid(format!("empty {width}x{height} image")));
+        return Err(Error::ImageSize {
+            width,
+            height,
+            why: "empty".into(),
+        });
     }
     if width.saturating_mul(height) > MAX_FRAME_PIXELS {
-        return Err(Error::Invalid(format!(
-            "{width}x{height} image is larger than 8K ({MAX_FRAME_PIXELS} pixels)"
-        )));
+        return Err(Error::ImageSize {
+            width,
+            height,
+            why: format!("larger than 8K ({MAX_FRAME_PIXELS} pixels)"),
+        });
     }
     Ok(())
 }
@@ -157,7 +167,7 @@ pub fn resize_grey(img: &GreyImage, width: usize, height: usize) -> Result<Float
 pub fn load_frame(path: impl AsRef<Path>, width: usize, height: usize) -> Result<FloatImage> {
     let path = path.as_ref();
     let img = tactile_core::image_io::load_rgb(path)?;
-    resize_rgb(&img, width, height).map_err(|e| Error::image(path, e.to_string()))
+    resize_rgb(&img, width, height).map_err(|e| e.in_file(path))
 }
 
 /// How the segmenter looks at a frame: a square window of `side` pixels
@@ -167,6 +177,7 @@ pub fn load_frame(path: impl AsRef<Path>, width: usize, height: usize) -> Result
 /// no empty corners.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SquareWindow {
+    /// Side of the window, pixels.
     pub side: usize,
 }
 
@@ -246,7 +257,9 @@ pub fn binarise_mask(mask: &FloatImage) -> Vec<f32> {
 /// with a model and applied to every input.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChannelStats {
+    /// Mean per channel, in [0, 1] units.
     pub mean: Vec<f32>,
+    /// Standard deviation per channel (at least 1e-3).
     pub std: Vec<f32>,
 }
 
@@ -262,9 +275,10 @@ impl ChannelStats {
                 sq = vec![0.0; img.channels];
             }
             if img.channels != sum.len() {
-                return Err(Error::Invalid(
-                    "images with different channel counts".into(),
-                ));
+                return Err(Error::Channels {
+                    expected: sum.len(),
+                    found: img.channels,
+                });
             }
             for px in img.data.chunks_exact(img.channels) {
                 for (c, &v) in px.iter().enumerate() {
@@ -275,7 +289,9 @@ impl ChannelStats {
             n += img.width * img.height;
         }
         if n == 0 {
-            return Err(Error::Invalid("no images to compute statistics on".into()));
+            return Err(
+                tactile_core::Error::Invalid("no images to compute statistics on".into()).into(),
+            );
         }
         let mean: Vec<f64> = sum.iter().map(|s| s / n as f64).collect();
         let std = tactile_core::metrics::safe_scales(
@@ -292,11 +308,10 @@ impl ChannelStats {
     /// Normalised `C x H x W` values of an interleaved image.
     pub fn to_chw(&self, img: &FloatImage) -> Result<Vec<f32>> {
         if img.channels != self.mean.len() {
-            return Err(Error::Invalid(format!(
-                "image has {} channels, the model expects {}",
-                img.channels,
-                self.mean.len()
-            )));
+            return Err(Error::Channels {
+                expected: self.mean.len(),
+                found: img.channels,
+            });
         }
         let (c, hw) = (img.channels, img.width * img.height);
         let mut out = vec![0f32; c * hw];

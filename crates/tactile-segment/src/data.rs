@@ -2,10 +2,10 @@
 //! cut to the square window, optionally as rotated copies (paper B's
 //! augmentation).
 
+use crate::Result;
 use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_core::{Error, Result};
 use tactile_preprocess::visuo::{
     ChannelStats, FloatImage, SquareWindow, binarise_mask, load_frame, resize_grey,
 };
@@ -13,19 +13,25 @@ use tactile_preprocess::visuo::{
 /// One window: 8-bit `S x S x 3` pixels, its 0/1 mask and where it came from.
 #[derive(Debug, Clone)]
 pub struct Window {
+    /// Dataset row it was cut from.
     pub row: usize,
     /// Rotation applied, degrees.
     pub rotation_deg: f64,
+    /// `S x S x 3` bytes.
     pub pixels: Vec<u8>,
+    /// `S x S` tendon flags.
     pub mask: Vec<bool>,
 }
 
 /// Windows of a dataset's frames with their labels.
 pub struct SegmentSet {
+    /// The window every frame was cut with.
     pub window: SquareWindow,
+    /// The windows, `copies` per row, in row order.
     pub windows: Vec<Window>,
     /// Per dataset row: `direction_deg` and `path` labels when present.
     pub direction_deg: Vec<Option<f64>>,
+    /// Per dataset row: the `path` label.
     pub path: Vec<Option<String>>,
 }
 
@@ -74,13 +80,7 @@ impl SegmentSet {
         copies: usize,
         seed: u64,
     ) -> Result<Self> {
-        if ds.manifest.kind != DatasetKind::Visuotactile {
-            return Err(Error::dataset(
-                ds.root.join("manifest.json"),
-                None,
-                "kind is not 'visuotactile': the segmenter reads visuo-tactile datasets",
-            ));
-        }
+        ds.expect_kind(DatasetKind::Visuotactile)?;
         let (sw, sh) = window.scaled_size(ds.manifest.width as usize, ds.manifest.height as usize);
         let windows: Vec<Vec<Window>> = rows
             .par_iter()
@@ -88,8 +88,7 @@ impl SegmentSet {
                 let frame = load_frame(ds.path_of(row, "file")?, sw, sh)?;
                 let mask_path = ds.path_of(row, "mask")?;
                 let m = tactile_core::image_io::load_grey(&mask_path)?;
-                let mask =
-                    resize_grey(&m, sw, sh).map_err(|e| Error::image(&mask_path, e.to_string()))?;
+                let mask = resize_grey(&m, sw, sh).map_err(|e| e.in_file(&mask_path))?;
                 Ok(rotation_angles(copies, seed, row)
                     .into_iter()
                     .map(|deg| {
@@ -106,7 +105,7 @@ impl SegmentSet {
             .collect::<Result<_>>()?;
         let direction_deg = (0..ds.len())
             .map(|i| ds.number_opt(i, "direction_deg"))
-            .collect::<Result<_>>()?;
+            .collect::<tactile_core::Result<_>>()?;
         let path = (0..ds.len())
             .map(|i| ds.text_opt(i, "path").map(str::to_string))
             .collect();
@@ -118,10 +117,12 @@ impl SegmentSet {
         })
     }
 
+    /// Windows held.
     pub fn len(&self) -> usize {
         self.windows.len()
     }
 
+    /// True when there is no window.
     pub fn is_empty(&self) -> bool {
         self.windows.is_empty()
     }

@@ -10,7 +10,13 @@ use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::interpolate::{Interpolate2d, Interpolate2dConfig, InterpolateMode};
 use burn::nn::pool::{MaxPool2d, MaxPool2dConfig};
 use burn::tensor::activation::relu;
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Tensor, TensorData};
+use tactile_core::runtime::Forward;
+
+/// Largest window side accepted, pixels.
+pub const MAX_SIDE: usize = 1024;
+/// Largest first-block width accepted.
+pub const MAX_BASE: usize = 256;
 
 /// Width and input side of a U-Net.
 #[derive(Config, Debug, PartialEq)]
@@ -29,11 +35,17 @@ pub struct UNetConfig {
 /// Frame window `[N, C, S, S]` (normalised) -> tendon logits `[N, 1, S, S]`.
 #[derive(Module, Debug)]
 pub struct UNet {
+    /// The four encoder convolutions.
     pub enc: Vec<Conv2d>,
+    /// At 1/16 of the input.
     pub bottleneck: Conv2d,
+    /// The four decoder convolutions.
     pub dec: Vec<Conv2d>,
+    /// 1x1 to one logit per pixel.
     pub head: Conv2d,
+    /// 2x2 max-pooling.
     pub pool: MaxPool2d,
+    /// Bilinear x2, half-pixel centres.
     pub up: Interpolate2d,
 }
 
@@ -49,14 +61,26 @@ impl UNetConfig {
         [1, 2, 4, 8].map(|k| self.base * k)
     }
 
-    /// Check the side and build with fresh weights.
-    pub fn init(&self, device: &Device) -> tactile_core::Result<UNet> {
-        if self.side == 0 || !self.side.is_multiple_of(16) || self.base == 0 {
+    /// Check the sizes against the documented limits.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        if self.side == 0
+            || !self.side.is_multiple_of(16)
+            || self.side > MAX_SIDE
+            || self.base == 0
+            || self.base > MAX_BASE
+            || !(1..=4).contains(&self.in_channels)
+        {
             return Err(tactile_core::Error::Config(format!(
-                "U-Net side {} must be a positive multiple of 16 and base {} positive",
-                self.side, self.base
+                "U-Net side {} must be a multiple of 16 from 16 to {MAX_SIDE}, base {} from 1 to {MAX_BASE}, and input channels {} from 1 to 4",
+                self.side, self.base, self.in_channels
             )));
         }
+        Ok(())
+    }
+
+    /// Check the sizes and build with fresh weights.
+    pub fn init(&self, device: &Device) -> tactile_core::Result<UNet> {
+        self.check()?;
         let w = self.widths();
         let enc = vec![
             conv3(self.in_channels, w[0], device),
@@ -87,8 +111,18 @@ impl UNetConfig {
     }
 }
 
+impl Forward for UNet {
+    fn forward_data(&self, x: Tensor<4>) -> TensorData {
+        self.forward(x).into_data()
+    }
+}
+
 impl UNet {
     /// Per-pixel tendon logits.
+    ///
+    /// # Shapes
+    /// - `x`: `[N, 3, S, S]` windows, normalised with the training statistics
+    /// - output: `[N, 1, S, S]`
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
         let mut skips = Vec::with_capacity(4);
         let mut x = x;
@@ -99,7 +133,7 @@ impl UNet {
         }
         x = relu(self.bottleneck.forward(x));
         for conv in &self.dec {
-            let skip = skips.pop().expect("one skip per decoder block");
+            let Some(skip) = skips.pop() else { break };
             x = self.up.forward(relu(conv.forward(x)));
             x = Tensor::cat(vec![x, skip], 1);
         }

@@ -3,35 +3,50 @@
 //! edge of the window (the LED glare), and take the first principal axis of
 //! the region's pixels. A pure function of the mask.
 
+use crate::{Error, Result};
 use kornia_image::{Image, ImageSize};
 use kornia_imgproc::connected_components::{Connectivity, connected_components};
 use serde::{Deserialize, Serialize};
-use tactile_core::{Error, Result};
 
 /// A binary mask, row-major, `true` = tendon.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TendonMask {
+    /// Width, pixels.
     pub width: usize,
+    /// Height, pixels.
     pub height: usize,
+    /// `width * height` flags, row-major.
     pub pixels: Vec<bool>,
 }
 
 impl TendonMask {
-    /// A mask from probabilities (or logits' sigmoid) thresholded at `t`.
-    pub fn from_probabilities(width: usize, height: usize, p: &[f32], t: f32) -> Result<Self> {
+    /// A mask from probabilities thresholded at `t`.
+    pub fn from_probabilities(width: usize, height: usize, p: &[f32], t: f64) -> Result<Self> {
         if p.len() != width * height {
-            return Err(Error::Invalid(format!(
-                "{} probabilities for a {width}x{height} mask",
-                p.len()
-            )));
+            return Err(tactile_core::Error::shape(
+                "probabilities",
+                format!("{width}x{height}"),
+                p.len(),
+            )
+            .into());
         }
         Ok(Self {
             width,
             height,
-            pixels: p.iter().map(|&v| v >= t).collect(),
+            pixels: p.iter().map(|&v| v as f64 >= t).collect(),
         })
     }
 
+    /// A mask with no tendon pixel.
+    pub fn empty(width: usize, height: usize) -> Self {
+        Self {
+            width,
+            height,
+            pixels: vec![false; width * height],
+        }
+    }
+
+    /// Tendon pixels.
     pub fn area(&self) -> usize {
         self.pixels.iter().filter(|&&p| p).count()
     }
@@ -104,9 +119,11 @@ pub struct Direction {
 pub struct Tendon {
     /// The kept region (empty when none).
     pub region: TendonMask,
-    /// Regions found, and how many lay on the edge and were dropped.
+    /// Regions found.
     pub regions: usize,
+    /// Regions that lay on the edge and were dropped.
     pub dropped_on_edge: usize,
+    /// The region's direction, or why there is none.
     pub direction: std::result::Result<Direction, NoDirection>,
 }
 
@@ -115,17 +132,12 @@ pub struct Tendon {
 pub fn postprocess(mask: &TendonMask, cfg: &PostprocessConfig) -> Result<Tendon> {
     let (w, h) = (mask.width, mask.height);
     if mask.pixels.len() != w * h {
-        return Err(Error::Invalid(format!(
-            "mask has {} pixels, expected {w}x{h}",
-            mask.pixels.len()
-        )));
+        return Err(
+            tactile_core::Error::shape("mask", format!("{w}x{h}"), mask.pixels.len()).into(),
+        );
     }
     let empty = |regions, dropped, why| Tendon {
-        region: TendonMask {
-            width: w,
-            height: h,
-            pixels: vec![false; w * h],
-        },
+        region: TendonMask::empty(w, h),
         regions,
         dropped_on_edge: dropped,
         direction: Err(why),
@@ -142,11 +154,11 @@ pub fn postprocess(mask: &TendonMask, cfg: &PostprocessConfig) -> Result<Tendon>
         .iter()
         .map(|&p| if p { 255 } else { 0 })
         .collect();
-    let img = Image::<u8, 1>::new(size, bytes).map_err(|e| Error::Invalid(e.to_string()))?;
-    let mut labels =
-        Image::<i32, 1>::from_size_val(size, 0).map_err(|e| Error::Invalid(e.to_string()))?;
+    let kornia = |e: String| Error::Preprocess(tactile_preprocess::Error::Kornia(e));
+    let img = Image::<u8, 1>::new(size, bytes).map_err(|e| kornia(e.to_string()))?;
+    let mut labels = Image::<i32, 1>::from_size_val(size, 0).map_err(|e| kornia(e.to_string()))?;
     connected_components(&img, &mut labels, Connectivity::Eight)
-        .map_err(|e| Error::Invalid(format!("connected components: {e}")))?;
+        .map_err(|e| kornia(format!("connected components: {e}")))?;
     // Per label: area, edge-band pixels, first raster index.
     let (cx, cy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
     let (rx, ry) = (w as f64 / 2.0, h as f64 / 2.0);

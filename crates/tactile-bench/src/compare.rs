@@ -1,0 +1,270 @@
+//! Feature sets against estimators on one split: the CAE's features beside
+//! PCA of the pin image, the raw pin image and pin tracking, each with an
+//! MLP, ridge and k-NN (regression) or an MLP head, Gaussian naive Bayes and
+//! k-NN (classification).
+
+use std::path::PathBuf;
+
+use burn::tensor::Device;
+use rayon::prelude::*;
+use tactile_cae::data::PinSet;
+use tactile_cae::{CaeArtifact, TactipEncoder};
+use tactile_core::dataset::Dataset;
+use tactile_core::{Artifact, DeviceKind, Runtime};
+use tactile_estimate::classical;
+use tactile_estimate::{
+    Activation, ClassifierHead, HeadConfig, Regressor, RegressorConfig, Target,
+};
+use tactile_pipeline::tactip::classes_of;
+use tactile_preprocess::PreprocessConfig;
+
+use crate::Result;
+
+/// What is compared.
+#[derive(Debug, Clone)]
+pub struct Compare {
+    /// Trained encoder (its preprocessing also makes the pixel baselines).
+    pub encoder: PathBuf,
+    /// Dataset with the target labels.
+    pub data: PathBuf,
+    /// Regression targets.
+    pub targets: Vec<Target>,
+    /// A class column to classify too.
+    pub classify: Option<String>,
+    /// Without a `split` column: fraction of frames held out for testing.
+    pub test_fraction: f64,
+    /// Fraction of the training frames for early stopping.
+    pub val_fraction: f64,
+    /// Split and weight seed.
+    pub seed: u64,
+    /// Preprocess with this instead of the encoder's own (an encoder
+    /// trained on one dataset applied to another).
+    pub preprocess: Option<(String, PreprocessConfig)>,
+    /// Hidden widths of the regression MLP (the same for every feature set).
+    pub hidden: Vec<usize>,
+}
+
+/// The comparison's Markdown.
+pub fn compare(c: &Compare) -> Result<String> {
+    let ds = Dataset::open(&c.data)?;
+    let labels = (0..ds.len())
+        .map(|i| {
+            c.targets
+                .iter()
+                .map(|t| ds.number(i, &t.name))
+                .collect::<tactile_core::Result<Vec<f64>>>()
+        })
+        .collect::<tactile_core::Result<Vec<_>>>()?;
+    let dev = DeviceKind::Flex.device();
+    let mut art = CaeArtifact::read(&c.encoder)?;
+    if let Some((_, p)) = &c.preprocess {
+        art.preprocess = p.clone();
+    }
+    let (_, net) = tactile_onnx::load_network::<CaeArtifact>(&c.encoder, Runtime::BurnFlex, 0)?;
+    let mut encoder = TactipEncoder::from_network(art.clone(), net);
+    eprintln!("preprocessing {} frames", ds.len());
+    let pins = PinSet::from_dataset(&ds, &art.preprocess)?;
+    let cae_feats = encoder.encode(&pins.images)?;
+    let raw: Vec<Vec<f32>> = pins.images.iter().map(|p| p.pixels.clone()).collect();
+    let split = ds.three_way_split(c.test_fraction, c.val_fraction, c.seed)?;
+    let (train, val, test) = (&split.train, &split.val, &split.test);
+    let pick_x = |f: &[Vec<f32>], idx: &[usize]| -> Vec<Vec<f32>> {
+        idx.iter().map(|&i| f[i].clone()).collect()
+    };
+    let pick_y =
+        |idx: &[usize]| -> Vec<Vec<f64>> { idx.iter().map(|&i| labels[i].clone()).collect() };
+    let (ty, vy, sy) = (pick_y(train), pick_y(val), pick_y(test));
+    let mut sets: Vec<FeatureSet> = vec![(
+        format!("CAE-{}", art.model.feature_count()),
+        [
+            pick_x(&cae_feats, train),
+            pick_x(&cae_feats, val),
+            pick_x(&cae_feats, test),
+        ],
+    )];
+    let (rtr, rva, rte) = (pick_x(&raw, train), pick_x(&raw, val), pick_x(&raw, test));
+    for k in [16, 64] {
+        let mut p = classical::pca(&rtr, &[&rtr, &rva, &rte], k)?.into_iter();
+        let (Some(p0), Some(p1), Some(p2)) = (p.next(), p.next(), p.next()) else {
+            continue;
+        };
+        sets.push((format!("PCA-{k}"), [p0, p1, p2]));
+    }
+    sets.push((
+        format!("raw {0}x{0}", art.preprocess.output_px),
+        [rtr, rva, rte],
+    ));
+    // Pin tracking: blob centroids at full resolution, matched to the pins
+    // of the first training frame; displacements as features.
+    eprintln!("tracking pins");
+    let centroids = (0..ds.len())
+        .into_par_iter()
+        .map(|i| -> Result<Vec<(f32, f32)>> {
+            let path = ds.path_of(i, "file")?;
+            let frame = tactile_core::image_io::load_grey(&path)?;
+            let binary = tactile_preprocess::pins::full_resolution_binary(&frame, &art.preprocess)
+                .map_err(|e| e.in_file(&path))?;
+            Ok(tactile_preprocess::pins::pin_centroids(&binary, 4)?)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let tracker = tactile_preprocess::pins::PinTracker::new(centroids[train[0]].clone())?;
+    let tracked: Vec<Vec<f32>> = centroids.iter().map(|c| tracker.displacements(c)).collect();
+    sets.push((
+        format!("pin tracking ({} pins)", tracker.reference.len()),
+        [
+            pick_x(&tracked, train),
+            pick_x(&tracked, val),
+            pick_x(&tracked, test),
+        ],
+    ));
+    let mut md = format!(
+        "Machine: {}\n\nDataset {} ({} train, {} validation, {} test frames, seed {}). Encoder {} (trained on {}); preprocessing: {}.\n\n",
+        tactile_core::bench::Machine::detect().describe(),
+        c.data.display(),
+        train.len(),
+        val.len(),
+        test.len(),
+        c.seed,
+        c.encoder.display(),
+        art.notes
+            .get("trained_on")
+            .and_then(|v| v.as_str())
+            .unwrap_or("unknown data"),
+        c.preprocess
+            .as_ref()
+            .map_or("the encoder's own", |p| p.0.as_str()),
+    );
+    if !c.targets.is_empty() {
+        md.push_str(&regression_table(
+            &sets,
+            &c.targets,
+            (&ty, &vy, &sy),
+            (&c.hidden, c.seed),
+            &dev,
+        )?);
+    }
+    if let Some(col) = &c.classify {
+        let (classes, y) = classes_of(&ds, col)?;
+        let pick = |idx: &[usize]| -> Vec<usize> { idx.iter().map(|&i| y[i]).collect() };
+        md.push_str(&classification_table(
+            &sets,
+            &classes,
+            (&pick(train), &pick(val), &pick(test)),
+            c.seed,
+            &dev,
+        )?);
+    }
+    Ok(md)
+}
+
+/// One feature set: name and (train, validation, test) vectors.
+type FeatureSet = (String, [Vec<Vec<f32>>; 3]);
+/// Labels of the (train, validation, test) frames.
+type SplitLabels<'a, T> = (&'a [T], &'a [T], &'a [T]);
+
+fn regression_table(
+    sets: &[FeatureSet],
+    targets: &[Target],
+    (ty, vy, sy): SplitLabels<'_, Vec<f64>>,
+    (hidden, seed): (&[usize], u64),
+    dev: &Device,
+) -> Result<String> {
+    let mlp = format!(
+        "MLP {}",
+        hidden
+            .iter()
+            .map(usize::to_string)
+            .collect::<Vec<_>>()
+            .join("-")
+    );
+    let mut md = format!(
+        "Regression: mean absolute error on the test frames (angles the short way round).\n\n| features | estimator | {} | fit + predict (s) |\n|---|---|{}---|\n",
+        targets
+            .iter()
+            .map(|t| t.name.as_str())
+            .collect::<Vec<_>>()
+            .join(" | "),
+        "---|".repeat(targets.len())
+    );
+    for (name, [tx, vx, sx]) in sets {
+        for est in [mlp.as_str(), "ridge", "k-NN (k=5)"] {
+            eprintln!("{name} + {est}");
+            let t0 = std::time::Instant::now();
+            let pred = match est {
+                "ridge" => classical::ridge(targets, (tx, ty), sx, 1e-3)?,
+                "k-NN (k=5)" => {
+                    // k-NN uses the training and validation frames (no early stopping).
+                    let x: Vec<Vec<f32>> = tx.iter().chain(vx).cloned().collect();
+                    let y: Vec<Vec<f64>> = ty.iter().chain(vy).cloned().collect();
+                    classical::knn(targets, (&x, &y), sx, 5)?
+                }
+                _ => {
+                    let mut cfg = RegressorConfig::new(tx[0].len(), targets.to_vec())
+                        .with_hidden(hidden.iter().map(|&w| (w, Activation::Relu)).collect());
+                    cfg.schedule.seed = seed;
+                    Regressor::train(cfg, (tx, ty), (vx, vy), dev)?.predict(sx)?
+                }
+            };
+            let secs = t0.elapsed().as_secs_f64();
+            let errs: Vec<String> = targets
+                .iter()
+                .enumerate()
+                .map(|(j, t)| {
+                    let p: Vec<f64> = pred.iter().map(|r| r[j]).collect();
+                    let tr: Vec<f64> = sy.iter().map(|r| r[j]).collect();
+                    format!("{:.3}", t.mae(&p, &tr))
+                })
+                .collect();
+            md.push_str(&format!(
+                "| {name} | {est} | {} | {secs:.1} |\n",
+                errs.join(" | ")
+            ));
+        }
+    }
+    md.push('\n');
+    Ok(md)
+}
+
+fn classification_table(
+    sets: &[FeatureSet],
+    classes: &[String],
+    (ty, vy, sy): SplitLabels<'_, usize>,
+    seed: u64,
+    dev: &Device,
+) -> Result<String> {
+    let mut md = format!(
+        "Classification of {} classes ({}): accuracy on the test frames.\n\n| features | estimator | accuracy | fit + predict (s) |\n|---|---|---|---|\n",
+        classes.len(),
+        classes.join(", ")
+    );
+    for (name, [tx, vx, sx]) in sets {
+        // Classifiers fit on train + validation (the MLP makes its own folds).
+        let x: Vec<Vec<f32>> = tx.iter().chain(vx).cloned().collect();
+        let y: Vec<usize> = ty.iter().chain(vy).copied().collect();
+        for est in [
+            "MLP 16-64-32 (10-fold)",
+            "Gaussian naive Bayes",
+            "k-NN (k=5)",
+        ] {
+            eprintln!("{name} + {est}");
+            let t0 = std::time::Instant::now();
+            let pred = match est {
+                "Gaussian naive Bayes" => classical::gaussian_nb(&x, &y, sx)?,
+                "k-NN (k=5)" => classical::knn_classify(&x, &y, sx, 5)?,
+                _ => {
+                    let mut cfg = HeadConfig::new(x[0].len(), classes.to_vec()).with_repeats(1);
+                    cfg.schedule.seed = seed;
+                    ClassifierHead::train(cfg, &x, &y, dev)?.predict(sx)?
+                }
+            };
+            let secs = t0.elapsed().as_secs_f64();
+            let acc = tactile_core::metrics::accuracy(&pred, sy);
+            md.push_str(&format!(
+                "| {name} | {est} | {:.1} % | {secs:.1} |\n",
+                100.0 * acc
+            ));
+        }
+    }
+    md.push('\n');
+    Ok(md)
+}

@@ -1,0 +1,166 @@
+//! Paper A, section V: the error of every estimator on clean frames and on
+//! copies with more noise, an illumination gradient, a light blob or a
+//! rotated mounting, three strengths each.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use tactile_cae::data::PinSet;
+use tactile_core::Runtime;
+use tactile_core::dataset::Dataset;
+use tactile_core::image_io::GreyImage;
+use tactile_core::plot::{Series, line_plot};
+use tactile_core::rng::SampleRng;
+use tactile_estimate::eval::Scores;
+use tactile_pipeline::tactip::TactipPerception;
+use tactile_preprocess::perturb::Perturbation;
+
+use crate::Result;
+
+/// What the study runs on.
+#[derive(Debug, Clone)]
+pub struct Robustness {
+    /// Trained encoder folder.
+    pub encoder: PathBuf,
+    /// Estimator folders (default: every one inside the encoder's).
+    pub heads: Vec<PathBuf>,
+    /// Labelled dataset of raw frames.
+    pub data: PathBuf,
+    /// Use at most this many frames (the first ones).
+    pub limit: Option<usize>,
+    /// Seed of the perturbations.
+    pub seed: u64,
+}
+
+/// Errors of every estimator on clean frames and on perturbed copies.
+pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
+    let mut perception = TactipPerception::load(&r.encoder, &r.heads, Runtime::BurnFlex)?;
+    let preprocess = perception.encoder.artifact.preprocess.clone();
+    let estimators = perception.estimators.len();
+    let ds = Dataset::open(&r.data)?;
+    let n = r.limit.unwrap_or(ds.len()).min(ds.len());
+    let frames = (0..n)
+        .into_par_iter()
+        .map(|i| Ok(tactile_core::image_io::load_grey(ds.path_of(i, "file")?)?))
+        .collect::<Result<Vec<GreyImage>>>()?;
+    let mut run = |p: Option<Perturbation>, stream: u64| -> Result<Scores> {
+        let images = frames
+            .par_iter()
+            .enumerate()
+            .map(|(i, f)| {
+                let img = match p {
+                    Some(p) => p.apply(f, &mut SampleRng::new(r.seed, stream, i as u64))?,
+                    None => f.clone(),
+                };
+                tactile_preprocess::preprocess(&img, &preprocess)
+                    .map_err(|e| e.in_file(ds.path_of(i, "file").unwrap_or_default()))
+            })
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        Ok(perception.evaluate_pins(&PinSet::from_images(images), &ds)?)
+    };
+    let clean = run(None, 0)?;
+    let columns = |s: &Scores| -> Vec<(String, f64)> {
+        let mut c = Vec::new();
+        if let Some(acc) = s.accuracy {
+            c.push(("shape accuracy".to_string(), 100.0 * acc));
+        }
+        c.extend(
+            s.targets
+                .iter()
+                .map(|t| (format!("{} MAE", t.target), t.mae)),
+        );
+        c
+    };
+    let header = columns(&clean);
+    let mut md = format!(
+        "Encoder {} with {} estimator(s) on the first {n} frames of {}; each perturbation is applied to the raw frames before preprocessing (seed {}).\n\n| condition |",
+        r.encoder.display(),
+        estimators,
+        r.data.display(),
+        r.seed
+    );
+    for (name, _) in &header {
+        md.push_str(&format!(" {name} |"));
+    }
+    md.push_str("\n|---|");
+    md.push_str(&"---|".repeat(header.len()));
+    md.push('\n');
+    let row = |md: &mut String, label: &str, s: &Scores| {
+        md.push_str(&format!("| {label} |"));
+        for (name, v) in columns(s) {
+            if name == "shape accuracy" {
+                md.push_str(&format!(" {v:.1} % |"));
+            } else {
+                md.push_str(&format!(" {v:.3} |"));
+            }
+        }
+        md.push('\n');
+    };
+    row(&mut md, "clean", &clean);
+    // Relative degradation per perturbation kind, for the plot.
+    let mut series: Vec<Series> = Vec::new();
+    let study = Perturbation::study();
+    let progress =
+        indicatif::ProgressBar::new(study.iter().map(|s| s.1.len()).sum::<usize>() as u64);
+    for (stream, (kind, levels)) in study.iter().enumerate() {
+        let mut points = vec![(0.0, 1.0)];
+        for (l, p) in levels.iter().enumerate() {
+            let s = run(Some(*p), 1 + (stream * 10 + l) as u64)?;
+            row(&mut md, &p.describe(), &s);
+            // Mean over targets of error / clean error (accuracy: error rate).
+            let ratio = |s: &Scores| -> Vec<f64> {
+                let mut r: Vec<f64> = s.targets.iter().map(|t| t.mae).collect();
+                if let Some(acc) = s.accuracy {
+                    r.push(1.0 - acc);
+                }
+                r
+            };
+            let (now, base) = (ratio(&s), ratio(&clean));
+            let rel = now
+                .iter()
+                .zip(&base)
+                .map(|(x, b)| x / b.max(1e-9))
+                .sum::<f64>()
+                / now.len().max(1) as f64;
+            points.push(((l + 1) as f64, rel));
+            progress.inc(1);
+        }
+        series.push(Series {
+            name: kind.to_string(),
+            points,
+        });
+    }
+    progress.finish_and_clear();
+    md.push_str("\nThe plot shows each error (shape error rate, target MAEs) divided by its clean value, averaged over the estimators' outputs, against the strength step (0 = clean, 1-3 = the rows above, in order).\n");
+    Ok(RobustnessResult {
+        markdown: md,
+        series,
+    })
+}
+
+/// The table and the plot's series.
+pub struct RobustnessResult {
+    /// Markdown, without the plot's link.
+    pub markdown: String,
+    /// Error growth per perturbation kind.
+    pub series: Vec<Series>,
+}
+
+impl RobustnessResult {
+    /// Write the table to `out` and its plot beside it (`NAME.png`).
+    pub fn write(&self, out: &Path) -> Result<()> {
+        let png = out.with_extension("png");
+        line_plot(
+            &png,
+            "Error growth under perturbed camera conditions",
+            "strength step",
+            "error / clean error",
+            &self.series,
+            false,
+        )?;
+        let name = png.file_name().unwrap_or_default().to_string_lossy();
+        let md = format!("{}\n![robustness]({name})\n", self.markdown);
+        tactile_core::io::write_atomic(out, md.as_bytes())?;
+        Ok(())
+    }
+}

@@ -1,0 +1,204 @@
+//! Paper A's search over the feature count: for each trained encoder, the
+//! reconstruction error and shape accuracy on the test split, and the
+//! encoder's latency on every runtime; a table and two plots (error against
+//! features, error against latency).
+
+use std::path::{Path, PathBuf};
+
+use tactile_cae::data::PinSet;
+use tactile_cae::eval::reconstruction_bce;
+use tactile_cae::{CaeArtifact, TactipEncoder};
+use tactile_core::dataset::Dataset;
+use tactile_core::metrics::accuracy;
+use tactile_core::plot::{Series, line_plot};
+use tactile_core::{Artifact, DeviceKind, Runtime};
+use tactile_estimate::{ClassifierHead, HeadConfig};
+use tactile_pipeline::tactip::classes_of;
+
+use crate::Result;
+use crate::cae::measure_encoder;
+use crate::output::folder_name;
+
+/// What the sweep compares.
+#[derive(Debug, Clone)]
+pub struct Sweep {
+    /// Trained encoders (e.g. 8, 16, 32 and 64 features).
+    pub encoders: Vec<PathBuf>,
+    /// Dataset with a class column (its split column when present).
+    pub data: PathBuf,
+    /// The class column.
+    pub classify: String,
+    /// Split and head seed.
+    pub seed: u64,
+    /// Timed runs per latency.
+    pub runs: usize,
+}
+
+/// One encoder's row.
+#[derive(Debug, Clone)]
+pub struct SweepRow {
+    /// Folder name.
+    pub name: String,
+    /// Features.
+    pub features: usize,
+    /// Test reconstruction BCE.
+    pub bce: f64,
+    /// Test accuracy of a 10-fold head.
+    pub accuracy: f64,
+    /// `(runtime, ms at batch 1, frames/s at batch 256)`.
+    pub speed: Vec<(String, f64, f64)>,
+}
+
+/// The table and its rows.
+pub struct SweepResult {
+    /// Markdown.
+    pub markdown: String,
+    /// Rows, by feature count.
+    pub rows: Vec<SweepRow>,
+    classify: String,
+}
+
+/// Run the sweep.
+pub fn sweep(s: &Sweep) -> Result<SweepResult> {
+    let ds = Dataset::open(&s.data)?;
+    let split = ds.three_way_split(0.2, 0.2, s.seed)?;
+    let (train, test) = ([split.train, split.val].concat(), split.test);
+    let (classes, y) = classes_of(&ds, &s.classify)?;
+    if classes.len() < 2 {
+        return Err(tactile_core::Error::dataset(
+            ds.labels_path(),
+            None,
+            format!("column '{}' has fewer than 2 classes", s.classify),
+        )
+        .into());
+    }
+    let dev = DeviceKind::Flex.device();
+    let mut rows = Vec::new();
+    for enc in &s.encoders {
+        eprintln!("{}", enc.display());
+        let loaded = CaeArtifact::load(enc, &dev)?;
+        let art = &loaded.artifact;
+        let pins = PinSet::from_dataset(&ds, &art.preprocess)?;
+        let feats = TactipEncoder::load(enc, Runtime::BurnFlex, 0)?.encode(&pins.images)?;
+        let bce = reconstruction_bce(&loaded.model, &pins, &test, 256, &dev);
+        let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
+            (
+                idx.iter().map(|&i| feats[i].clone()).collect(),
+                idx.iter().map(|&i| y[i]).collect(),
+            )
+        };
+        let (tx, ty) = pick(&train);
+        let (sx, sy) = pick(&test);
+        let mut cfg = HeadConfig::new(art.model.feature_count(), classes.clone()).with_repeats(1);
+        cfg.schedule.seed = s.seed;
+        let head = ClassifierHead::train(cfg, &tx, &ty, &dev)?;
+        let acc = accuracy(&head.predict(&sx)?, &sy);
+        let speed = measure_encoder(enc, &pins, 256, s.runs)?
+            .into_iter()
+            .map(|sp| (sp.runtime, sp.batch1_s * 1e3, sp.fps))
+            .collect();
+        rows.push(SweepRow {
+            name: folder_name(enc),
+            features: art.model.feature_count(),
+            bce,
+            accuracy: acc,
+            speed,
+        });
+    }
+    rows.sort_by_key(|r| r.features);
+    let runtimes: Vec<String> = rows
+        .first()
+        .map(|r| r.speed.iter().map(|s| s.0.clone()).collect())
+        .unwrap_or_default();
+    let mut md = format!(
+        "Machine: {}\n\n{} ({} train, {} test frames); `{}` accuracy of a 10-fold MLP head on each encoder's features; latency: median at batch 1, throughput at batch 256.\n\n| encoder | features | test BCE | accuracy | {} |\n|---|---|---|---|{}\n",
+        tactile_core::bench::Machine::detect().describe(),
+        s.data.display(),
+        train.len(),
+        test.len(),
+        s.classify,
+        runtimes
+            .iter()
+            .map(|r| format!("{r} ms, frames/s"))
+            .collect::<Vec<_>>()
+            .join(" | "),
+        "---|".repeat(runtimes.len())
+    );
+    for r in &rows {
+        md.push_str(&format!(
+            "| {} | {} | {:.4} | {:.1} % | {} |\n",
+            r.name,
+            r.features,
+            r.bce,
+            100.0 * r.accuracy,
+            r.speed
+                .iter()
+                .map(|(_, ms, fps)| format!("{ms:.3}, {fps:.0}"))
+                .collect::<Vec<_>>()
+                .join(" | ")
+        ));
+    }
+    Ok(SweepResult {
+        markdown: md,
+        rows,
+        classify: s.classify.clone(),
+    })
+}
+
+impl SweepResult {
+    /// Write the table to `out` and the plots beside it
+    /// (`NAME-features.png`, `NAME-latency.png`).
+    pub fn write(&self, out: &Path) -> Result<()> {
+        tactile_core::io::write_atomic(out, self.markdown.as_bytes())?;
+        let stem = out.with_extension("");
+        let name = stem.file_name().unwrap_or_default().to_string_lossy();
+        let err = |r: &SweepRow| 100.0 * (1.0 - r.accuracy);
+        line_plot(
+            stem.with_file_name(format!("{name}-features.png")),
+            "Test error against feature count",
+            "features",
+            "error (%) / test BCE x 100",
+            &[
+                Series {
+                    name: format!("{} error (%)", self.classify),
+                    points: self
+                        .rows
+                        .iter()
+                        .map(|r| (r.features as f64, err(r)))
+                        .collect(),
+                },
+                Series {
+                    name: "reconstruction BCE x 100".into(),
+                    points: self
+                        .rows
+                        .iter()
+                        .map(|r| (r.features as f64, 100.0 * r.bce))
+                        .collect(),
+                },
+            ],
+            false,
+        )?;
+        let runtimes: Vec<String> = self
+            .rows
+            .first()
+            .map(|r| r.speed.iter().map(|s| s.0.clone()).collect())
+            .unwrap_or_default();
+        let series: Vec<Series> = runtimes
+            .iter()
+            .enumerate()
+            .map(|(k, rt)| Series {
+                name: rt.clone(),
+                points: self.rows.iter().map(|r| (r.speed[k].1, err(r))).collect(),
+            })
+            .collect();
+        line_plot(
+            stem.with_file_name(format!("{name}-latency.png")),
+            "Test error against encoder latency (batch 1)",
+            "latency (ms)",
+            "error (%)",
+            &series,
+            false,
+        )?;
+        Ok(())
+    }
+}

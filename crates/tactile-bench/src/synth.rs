@@ -1,0 +1,87 @@
+//! How fast the virtual sensors render and write datasets.
+
+use std::path::PathBuf;
+
+use tactile_core::bench::Machine;
+
+use crate::Result;
+
+/// Median single-thread render time per frame over distinct samples.
+fn median_render(n: usize, mut render: impl FnMut(usize)) -> f64 {
+    let mut t: Vec<f64> = (0..n.max(1))
+        .map(|i| {
+            let s = std::time::Instant::now();
+            render(i);
+            s.elapsed().as_secs_f64()
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+/// Frames/s of writing a whole dataset (render + PNG/NPY encode + disk), all threads.
+fn write_rate(
+    n: usize,
+    write: impl Fn(&std::path::Path) -> datasets_synth::Result<PathBuf>,
+) -> Result<f64> {
+    let dir = std::env::temp_dir().join(format!("tactile-bench-synth-{}", std::process::id()));
+    let mut rates = Vec::new();
+    for _ in 0..3 {
+        let out = dir.join("ds");
+        let s = std::time::Instant::now();
+        write(&out)?;
+        rates.push(n as f64 / s.elapsed().as_secs_f64());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+    rates.sort_by(f64::total_cmp);
+    Ok(rates[1])
+}
+
+/// Frames/s of both virtual sensors: render (one thread) and write (all
+/// threads), `frames` per measurement (fewer at 1920x1080); the Markdown.
+pub fn bench_synth(frames: usize) -> Result<String> {
+    use datasets_synth::{TactipConfig, VisuotactileConfig, WriteOptions, tactip, visuotactile};
+    let threads = rayon::current_num_threads();
+    let opts = WriteOptions::default();
+    let mut rows = Vec::new();
+    let tc = TactipConfig::default();
+    eprintln!("virtual TacTip 300x300");
+    let t1 = median_render(frames, |i| {
+        let _ = tactip::sample(&tc, 1, i as u64);
+    });
+    let w = write_rate(frames, |out| {
+        datasets_synth::write_tactip(&tc, frames, 1, out, opts)
+    })?;
+    rows.push(("virtual TacTip", "300x300".to_string(), t1, w));
+    for (wd, ht, n) in [(640u32, 360u32, frames), (1920, 1080, (frames / 8).max(3))] {
+        eprintln!("virtual visuo-tactile {wd}x{ht}");
+        let vc = VisuotactileConfig {
+            width: wd,
+            height: ht,
+            ..Default::default()
+        };
+        let f = vc.frames_per_sequence;
+        let t1 = median_render(n, |i| {
+            let _ = visuotactile::sample(&vc, 1, (i / f) as u64, i % f);
+        });
+        let w = write_rate(n, |out| {
+            datasets_synth::write_visuotactile(&vc, n, 1, out, opts)
+        })?;
+        rows.push(("virtual visuo-tactile", format!("{wd}x{ht}"), t1, w));
+    }
+    let mut md = format!(
+        "Machine: {}\n\nRender: one frame with its labels in memory, one thread, median over distinct samples. \
+         Write: a whole dataset to disk (render, PNG and NPY encoding, files) with {threads} rayon threads, median of 3 runs.\n\n\
+         | sensor | size | render, 1 thread (ms/frame) | render, 1 thread (frames/s) | write, {threads} threads (frames/s) |\n|---|---|---|---|---|\n",
+        Machine::detect().describe()
+    );
+    for (name, size, t1, w) in &rows {
+        md.push_str(&format!(
+            "| {name} | {size} | {:.1} | {:.1} | {:.1} |\n",
+            t1 * 1e3,
+            1.0 / t1,
+            w
+        ));
+    }
+    Ok(md)
+}

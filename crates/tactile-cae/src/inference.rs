@@ -1,0 +1,180 @@
+//! A trained encoder at work: frames to pin images to feature vectors, on
+//! any runtime, in batches. The commands, the Python package, the benches
+//! and paper A's perception all encode through [`TactipEncoder`].
+
+use std::path::Path;
+
+use tactile_core::dataset::Dataset;
+use tactile_core::image_io::GreyImage;
+use tactile_core::{Network, Runtime};
+use tactile_preprocess::PinImage;
+
+use crate::artifact::CaeArtifact;
+use crate::data::PinSet;
+use crate::{Error, Result};
+
+/// Pin images per network call.
+pub const ENCODE_BATCH: usize = 256;
+
+/// A loaded encoder with its preprocessing.
+pub struct TactipEncoder {
+    /// Architecture and preprocessing.
+    pub artifact: CaeArtifact,
+    net: Box<dyn Network>,
+}
+
+impl TactipEncoder {
+    /// Load the model in `dir` onto `runtime` (`threads` intra-op threads
+    /// for onnxruntime).
+    pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
+        let (artifact, net) =
+            tactile_onnx::load_network::<CaeArtifact>(dir.as_ref(), runtime, threads)?;
+        Ok(Self { artifact, net })
+    }
+
+    /// An encoder from a config and a network already built.
+    pub fn from_network(artifact: CaeArtifact, net: Box<dyn Network>) -> Self {
+        Self { artifact, net }
+    }
+
+    /// Features per frame.
+    pub fn feature_count(&self) -> usize {
+        self.artifact.model.feature_count()
+    }
+
+    /// Where it runs.
+    pub fn runtime(&self) -> Runtime {
+        self.net.runtime()
+    }
+
+    /// A raw greyscale frame as the pin image this encoder reads.
+    pub fn preprocess(&self, frame: &GreyImage) -> Result<PinImage> {
+        Ok(tactile_preprocess::preprocess(
+            frame,
+            &self.artifact.preprocess,
+        )?)
+    }
+
+    /// Features of pin images, `[N][F]`, in batches of [`ENCODE_BATCH`].
+    pub fn encode(&mut self, pins: &[PinImage]) -> Result<Vec<Vec<f32>>> {
+        let side = self.artifact.model.input_px;
+        let k = self.feature_count();
+        let mut out = Vec::with_capacity(pins.len());
+        for chunk in pins.chunks(ENCODE_BATCH) {
+            let mut x = Vec::with_capacity(chunk.len() * side * side);
+            for p in chunk {
+                if p.side != side {
+                    return Err(tactile_core::Error::shape(
+                        "pin image",
+                        format!("{side}x{side}"),
+                        format!("{0}x{0}", p.side),
+                    )
+                    .into());
+                }
+                x.extend_from_slice(&p.pixels);
+            }
+            let v = self.net.run([chunk.len(), 1, side, side], x)?;
+            out.extend(v.chunks(k).map(<[f32]>::to_vec));
+        }
+        Ok(out)
+    }
+
+    /// Preprocess and encode every frame of a TacTip dataset.
+    pub fn encode_dataset(&mut self, ds: &Dataset) -> Result<(PinSet, Vec<Vec<f32>>)> {
+        let pins = PinSet::from_dataset(ds, &self.artifact.preprocess)?;
+        let feats = self.encode(&pins.images)?;
+        Ok((pins, feats))
+    }
+}
+
+/// Write `file,f0,f1,...` rows atomically (the layout of the authors' golden features).
+pub fn write_features_csv(
+    path: impl AsRef<Path>,
+    files: &[String],
+    features: &[Vec<f32>],
+) -> Result<()> {
+    let k = features.first().map_or(0, Vec::len);
+    Ok(tactile_core::io::write_atomic_with(path, |w| {
+        let mut csv = csv::Writer::from_writer(w);
+        let mut header = vec!["file".to_string()];
+        header.extend((0..k).map(|i| format!("f{i}")));
+        csv.write_record(&header)?;
+        for (f, v) in files.iter().zip(features) {
+            let mut row = vec![f.clone()];
+            row.extend(v.iter().map(|x| format!("{x:.6}")));
+            csv.write_record(&row)?;
+        }
+        csv.flush()
+    })?)
+}
+
+/// Read a feature CSV: `file` column, then every column named `f<i>`.
+pub fn read_features_csv(path: impl AsRef<Path>) -> Result<(Vec<String>, Vec<Vec<f32>>)> {
+    use tactile_core::Error as E;
+    let path = path.as_ref();
+    let mut r = csv::Reader::from_path(path).map_err(|e| E::dataset(path, None, e.to_string()))?;
+    let header = r
+        .headers()
+        .map_err(|e| E::dataset(path, Some(1), e.to_string()))?
+        .clone();
+    let file_col = header
+        .iter()
+        .position(|h| h == "file")
+        .ok_or_else(|| E::dataset(path, Some(1), "no 'file' column"))?;
+    let cols: Vec<usize> = header
+        .iter()
+        .enumerate()
+        .filter(|(_, h)| h.starts_with('f') && h[1..].parse::<usize>().is_ok())
+        .map(|(i, _)| i)
+        .collect();
+    if cols.is_empty() {
+        return Err(E::dataset(path, Some(1), "no feature columns f0, f1, ...").into());
+    }
+    let (mut files, mut feats) = (Vec::new(), Vec::new());
+    for (i, rec) in r.records().enumerate() {
+        let line = i + 2;
+        let rec = rec.map_err(|e| E::dataset(path, Some(line), e.to_string()))?;
+        files.push(rec.get(file_col).unwrap_or_default().to_string());
+        let v = cols
+            .iter()
+            .map(|&c| {
+                let s = rec.get(c).unwrap_or_default();
+                s.parse::<f32>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| {
+                        E::dataset(
+                            path,
+                            Some(line),
+                            format!("column '{}': '{s}' is not a finite number", &header[c]),
+                        )
+                    })
+            })
+            .collect::<tactile_core::Result<Vec<f32>>>()?;
+        feats.push(v);
+    }
+    Ok((files, feats))
+}
+
+/// The rows of a feature CSV in the order of `ds`'s rows, matched by
+/// `file`; a frame without a row is an error naming it and its line.
+pub fn features_for_dataset(csv: &Path, ds: &Dataset) -> Result<Vec<Vec<f32>>> {
+    let (files, feats) = read_features_csv(csv)?;
+    let by_file: std::collections::HashMap<&str, &Vec<f32>> =
+        files.iter().map(String::as_str).zip(&feats).collect();
+    (0..ds.len())
+        .map(|i| {
+            let file = ds.text(i, "file")?;
+            by_file.get(file).map(|v| (*v).clone()).ok_or_else(|| {
+                Error::Core(tactile_core::Error::dataset(
+                    csv,
+                    None,
+                    format!(
+                        "no feature row for '{file}' (labels.csv line {})",
+                        ds.rows[i].line
+                    ),
+                ))
+            })
+        })
+        .collect()
+}

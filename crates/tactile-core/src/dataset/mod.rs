@@ -1,0 +1,455 @@
+//! The on-disk dataset layout of `datasets.md`: one folder with
+//! `manifest.json`, `labels.csv` and the files it references. Opening a
+//! dataset checks it first and names the file and line of anything wrong.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, Result};
+
+mod split;
+mod writer;
+
+pub use split::{Splits, TestHoldout, hold_out};
+pub use writer::DatasetWriter;
+
+/// The format tag every manifest carries.
+pub const FORMAT: &str = "tactile-dataset/1";
+
+/// Which sensor a dataset holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DatasetKind {
+    /// TacTip frames (paper A), greyscale.
+    Tactip,
+    /// Visuo-tactile palpation frames (paper B), RGB, with masks and depth.
+    Visuotactile,
+}
+
+impl DatasetKind {
+    /// The manifest's name of the kind.
+    pub fn name(self) -> &'static str {
+        match self {
+            DatasetKind::Tactip => "tactip",
+            DatasetKind::Visuotactile => "visuotactile",
+        }
+    }
+
+    /// The kind in words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            DatasetKind::Tactip => "TacTip",
+            DatasetKind::Visuotactile => "visuotactile",
+        }
+    }
+
+    /// The required `labels.csv` columns, in order.
+    pub fn columns(self) -> &'static [&'static str] {
+        match self {
+            DatasetKind::Tactip => &[
+                "file",
+                "shape",
+                "x_mm",
+                "y_mm",
+                "theta_deg",
+                "depth_mm",
+                "force_n",
+            ],
+            DatasetKind::Visuotactile => &[
+                "file",
+                "mask",
+                "depth",
+                "tendon",
+                "direction_deg",
+                "path",
+                "press_mm",
+                "sequence",
+                "frame_index",
+            ],
+        }
+    }
+}
+
+/// `manifest.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Manifest {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Which sensor.
+    pub kind: DatasetKind,
+    /// The sensor contract or free text for a real sensor.
+    pub sensor_spec: String,
+    /// Frame width, pixels.
+    pub width: u32,
+    /// Frame height, pixels.
+    pub height: u32,
+    /// Name and version of what wrote it, or how it was captured.
+    pub generator: String,
+    /// The generator's seed, when there is one.
+    pub seed: Option<u64>,
+    /// Number of rows of `labels.csv`.
+    pub count: usize,
+    /// Anything else a writer recorded (a generator's config, for instance).
+    #[serde(flatten)]
+    pub extra: serde_json::Map<String, serde_json::Value>,
+}
+
+/// One row of `labels.csv`: the raw cells by column name, with its line.
+#[derive(Debug, Clone)]
+pub struct LabelRow {
+    /// 1-based line in `labels.csv` (the header is line 1).
+    pub line: usize,
+    cells: HashMap<String, String>,
+}
+
+impl LabelRow {
+    /// The raw cell, `None` when the column is absent or the cell empty.
+    pub fn get(&self, column: &str) -> Option<&str> {
+        self.cells
+            .get(column)
+            .map(|s| s.trim())
+            .filter(|s| !s.is_empty())
+    }
+}
+
+/// A dataset folder, checked on open.
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    /// The dataset folder.
+    pub root: PathBuf,
+    /// `manifest.json`.
+    pub manifest: Manifest,
+    /// `labels.csv`, in order.
+    pub rows: Vec<LabelRow>,
+}
+
+fn parse_number(labels: &Path, row: &LabelRow, column: &str) -> Result<Option<f64>> {
+    match row.get(column) {
+        None => Ok(None),
+        Some(s) => match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(Some(v)),
+            Ok(_) => Err(Error::dataset(
+                labels,
+                Some(row.line),
+                format!("column '{column}': '{s}' is not a finite number"),
+            )),
+            Err(_) => Err(Error::dataset(
+                labels,
+                Some(row.line),
+                format!("column '{column}': '{s}' is not a number"),
+            )),
+        },
+    }
+}
+
+impl Dataset {
+    /// Open and check a dataset folder: the manifest parses and has the
+    /// right format, `labels.csv` has the kind's columns in order, every
+    /// number parses and is finite, and every referenced file exists.
+    pub fn open(root: impl AsRef<Path>) -> Result<Self> {
+        let root = root.as_ref().to_path_buf();
+        if !root.is_dir() {
+            return Err(Error::dataset(&root, None, "dataset folder does not exist"));
+        }
+        let manifest_path = root.join("manifest.json");
+        if !manifest_path.is_file() {
+            return Err(Error::dataset(
+                &manifest_path,
+                None,
+                "missing manifest.json",
+            ));
+        }
+        let manifest: Manifest = crate::io::read_json(&manifest_path)?;
+        if manifest.format != FORMAT {
+            return Err(Error::dataset(
+                &manifest_path,
+                None,
+                format!("format is '{}', expected '{FORMAT}'", manifest.format),
+            ));
+        }
+        let labels = root.join("labels.csv");
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .flexible(false)
+            .from_path(&labels)
+            .map_err(|e| Error::dataset(&labels, None, format!("cannot read: {e}")))?;
+        let header: Vec<String> = reader
+            .headers()
+            .map_err(|e| Error::dataset(&labels, Some(1), format!("bad header: {e}")))?
+            .iter()
+            .map(|s| s.trim().to_string())
+            .collect();
+        let required = manifest.kind.columns();
+        if header.len() < required.len() || header[..required.len()] != *required {
+            return Err(Error::dataset(
+                &labels,
+                Some(1),
+                format!(
+                    "header must start with {} (found {})",
+                    required.join(","),
+                    header.join(",")
+                ),
+            ));
+        }
+        let mut rows = Vec::new();
+        for (i, rec) in reader.records().enumerate() {
+            let line = i + 2;
+            let rec = rec.map_err(|e| Error::dataset(&labels, Some(line), e.to_string()))?;
+            let cells = header
+                .iter()
+                .cloned()
+                .zip(rec.iter().map(str::to_string))
+                .collect();
+            rows.push(LabelRow { line, cells });
+        }
+        if rows.len() != manifest.count {
+            return Err(Error::dataset(
+                &manifest_path,
+                None,
+                format!(
+                    "count is {} but labels.csv has {} rows",
+                    manifest.count,
+                    rows.len()
+                ),
+            ));
+        }
+        let ds = Dataset {
+            root,
+            manifest,
+            rows,
+        };
+        ds.check_rows()?;
+        Ok(ds)
+    }
+
+    fn check_rows(&self) -> Result<()> {
+        let labels = self.labels_path();
+        let file_columns: &[&str] = match self.manifest.kind {
+            DatasetKind::Tactip => &["file"],
+            DatasetKind::Visuotactile => &["file", "mask", "depth"],
+        };
+        let number_columns: &[&str] = match self.manifest.kind {
+            DatasetKind::Tactip => &["x_mm", "y_mm", "theta_deg", "depth_mm", "force_n"],
+            DatasetKind::Visuotactile => &[
+                "tendon",
+                "direction_deg",
+                "press_mm",
+                "sequence",
+                "frame_index",
+            ],
+        };
+        for row in &self.rows {
+            let Some(_) = row.get("file") else {
+                return Err(Error::dataset(
+                    &labels,
+                    Some(row.line),
+                    "column 'file' is empty",
+                ));
+            };
+            for col in file_columns {
+                if let Some(rel) = row.get(col)
+                    && !self.root.join(rel).is_file()
+                {
+                    return Err(Error::dataset(
+                        &labels,
+                        Some(row.line),
+                        format!("column '{col}': file '{rel}' does not exist"),
+                    ));
+                }
+            }
+            for col in number_columns {
+                parse_number(&labels, row, col)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Refuse a dataset of another kind than `kind`, naming its manifest.
+    pub fn expect_kind(&self, kind: DatasetKind) -> Result<()> {
+        if self.manifest.kind == kind {
+            return Ok(());
+        }
+        Err(Error::wrong_kind(
+            self.root.join("manifest.json"),
+            format!("{} dataset", kind.describe()),
+            format!("its kind is '{}'", self.manifest.kind.name()),
+        ))
+    }
+
+    /// Path of `labels.csv`.
+    pub fn labels_path(&self) -> PathBuf {
+        self.root.join("labels.csv")
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// True when the dataset has no frames.
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// Absolute path of the file named in `column` of row `i`.
+    pub fn path_of(&self, i: usize, column: &str) -> Result<PathBuf> {
+        self.text(i, column).map(|rel| self.root.join(rel))
+    }
+
+    /// A text label that the calling command needs; an empty cell is an error
+    /// naming the line.
+    pub fn text(&self, i: usize, column: &str) -> Result<&str> {
+        let row = &self.rows[i];
+        row.get(column).ok_or_else(|| {
+            Error::dataset(
+                self.labels_path(),
+                Some(row.line),
+                format!("column '{column}' is empty, but this command needs it"),
+            )
+        })
+    }
+
+    /// A text label, `None` when empty.
+    pub fn text_opt(&self, i: usize, column: &str) -> Option<&str> {
+        self.rows[i].get(column)
+    }
+
+    /// A numeric label that the calling command needs.
+    pub fn number(&self, i: usize, column: &str) -> Result<f64> {
+        let row = &self.rows[i];
+        parse_number(&self.labels_path(), row, column)?.ok_or_else(|| {
+            Error::dataset(
+                self.labels_path(),
+                Some(row.line),
+                format!("column '{column}' is empty, but this command needs it"),
+            )
+        })
+    }
+
+    /// A numeric label, `None` when empty.
+    pub fn number_opt(&self, i: usize, column: &str) -> Result<Option<f64>> {
+        parse_number(&self.labels_path(), &self.rows[i], column)
+    }
+
+    /// Indices of the rows whose `split` column equals `split`; when the
+    /// dataset has no `split` column, `None`.
+    pub fn split_indices(&self, split: &str) -> Option<Vec<usize>> {
+        if self.rows.first().map(|r| r.cells.contains_key("split")) != Some(true) {
+            return None;
+        }
+        Some(
+            (0..self.len())
+                .filter(|&i| self.text_opt(i, "split") == Some(split))
+                .collect(),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn manifest(kind: DatasetKind, count: usize) -> Manifest {
+        Manifest {
+            format: FORMAT.into(),
+            kind,
+            sensor_spec: "test".into(),
+            width: 4,
+            height: 4,
+            generator: "test".into(),
+            seed: Some(1),
+            count,
+            extra: Default::default(),
+        }
+    }
+
+    fn tiny(dir: &Path, labels: &str) {
+        std::fs::create_dir_all(dir.join("frames")).unwrap();
+        crate::image_io::save_grey_png(dir.join("frames/a.png"), 4, 4, &[0; 16]).unwrap();
+        let n = labels.lines().count() - 1;
+        crate::io::write_json_atomic(dir.join("manifest.json"), &manifest(DatasetKind::Tactip, n))
+            .unwrap();
+        std::fs::write(dir.join("labels.csv"), labels).unwrap();
+    }
+
+    const HEADER: &str = "file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n\n";
+
+    #[test]
+    fn good_dataset_opens_and_reads_labels() {
+        let d = tempfile::tempdir().unwrap();
+        tiny(
+            d.path(),
+            &format!("{HEADER}frames/a.png,sphere,1.5,,0,2,3.4\n"),
+        );
+        let ds = Dataset::open(d.path()).unwrap();
+        assert_eq!(ds.number(0, "x_mm").unwrap(), 1.5);
+        assert_eq!(ds.number_opt(0, "y_mm").unwrap(), None);
+        let e = ds.number(0, "y_mm").unwrap_err().to_string();
+        assert!(e.contains("labels.csv:2") && e.contains("y_mm"), "{e}");
+    }
+
+    #[test]
+    fn missing_file_and_bad_number_name_the_line() {
+        let d = tempfile::tempdir().unwrap();
+        tiny(
+            d.path(),
+            &format!("{HEADER}frames/a.png,sphere,1,0,0,2,3\nframes/gone.png,sphere,1,0,0,2,3\n"),
+        );
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(e.contains("labels.csv:3") && e.contains("gone.png"), "{e}");
+        tiny(
+            d.path(),
+            &format!("{HEADER}frames/a.png,sphere,abc,0,0,2,3\n"),
+        );
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(e.contains("labels.csv:2") && e.contains("'abc'"), "{e}");
+        tiny(
+            d.path(),
+            &format!("{HEADER}frames/a.png,sphere,NaN,0,0,2,3\n"),
+        );
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(e.contains("finite"), "{e}");
+    }
+
+    #[test]
+    fn wrong_header_and_manifest_are_named() {
+        let d = tempfile::tempdir().unwrap();
+        tiny(d.path(), "file,x_mm\nframes/a.png,1\n");
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(e.contains("labels.csv:1"), "{e}");
+        std::fs::write(d.path().join("manifest.json"), "{ not json").unwrap();
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(e.contains("manifest.json"), "{e}");
+    }
+
+    #[test]
+    fn writer_refuses_non_empty_folder_and_round_trips() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("keep.txt"), "x").unwrap();
+        assert!(DatasetWriter::create(d.path(), DatasetKind::Tactip, &[], false).is_err());
+        assert_eq!(
+            std::fs::read_to_string(d.path().join("keep.txt")).unwrap(),
+            "x"
+        );
+        let out = d.path().join("ds");
+        let mut w = DatasetWriter::create(&out, DatasetKind::Tactip, &["split"], false).unwrap();
+        crate::image_io::save_grey_png(out.join("a.png"), 4, 4, &[0; 16]).unwrap();
+        w.push_row(vec![
+            "a.png".into(),
+            "flat".into(),
+            "0".into(),
+            "0".into(),
+            "0".into(),
+            "1".into(),
+            "0.5".into(),
+            "train".into(),
+        ])
+        .unwrap();
+        w.finish(manifest(DatasetKind::Tactip, 0)).unwrap();
+        let ds = Dataset::open(&out).unwrap();
+        assert_eq!(ds.split_indices("train"), Some(vec![0]));
+        assert_eq!(ds.manifest.count, 1);
+    }
+}

@@ -1,0 +1,177 @@
+//! Train, validation and test rows of a dataset: its `split` column when it
+//! has one, else seeded shuffles; palpation videos are split by sequence,
+//! never by frame. Every command and the Python package split through these,
+//! so one seed means one split everywhere.
+
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rand::seq::SliceRandom;
+
+use super::Dataset;
+use crate::{Error, Result};
+
+/// Train, validation and test rows.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Splits {
+    /// Rows to fit on.
+    pub train: Vec<usize>,
+    /// Rows for early stopping and choices.
+    pub val: Vec<usize>,
+    /// Rows to report on.
+    pub test: Vec<usize>,
+}
+
+/// The test rows a later evaluation holds out (a `compare` or `train
+/// regressor` with this test fraction and seed), so an encoder trained
+/// before it never sees them.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TestHoldout {
+    /// Fraction of the frames held out for testing.
+    pub test_fraction: f64,
+    /// Seed of that split.
+    pub split_seed: u64,
+}
+
+fn check_fraction(name: &str, f: f64) -> Result<()> {
+    if f > 0.0 && f < 1.0 {
+        Ok(())
+    } else {
+        Err(Error::Config(format!("{name} must be in (0, 1), got {f}")))
+    }
+}
+
+/// Shuffle `rows` with `seed` and hold out the last `val_fraction` of them
+/// (at least one, and at least one left): `(train, validation)`.
+pub fn hold_out(
+    mut rows: Vec<usize>,
+    val_fraction: f64,
+    seed: u64,
+) -> Result<(Vec<usize>, Vec<usize>)> {
+    if !(0.0..1.0).contains(&val_fraction) {
+        return Err(Error::Config(format!(
+            "validation fraction must be in [0, 1), got {val_fraction}"
+        )));
+    }
+    if rows.len() < 2 {
+        return Err(Error::Invalid(format!(
+            "need at least 2 training frames, found {}",
+            rows.len()
+        )));
+    }
+    rows.shuffle(&mut StdRng::seed_from_u64(seed));
+    let n_val = ((rows.len() as f64 * val_fraction).round() as usize).clamp(1, rows.len() - 1);
+    let val = rows.split_off(rows.len() - n_val);
+    Ok((rows, val))
+}
+
+impl Dataset {
+    /// `(train, validation, test)` rows: the `split` column's train and
+    /// test rows when the dataset has both, else a seeded shuffle with
+    /// `test_fraction` held out; then `val_fraction` of the training rows
+    /// validate.
+    pub fn three_way_split(
+        &self,
+        test_fraction: f64,
+        val_fraction: f64,
+        seed: u64,
+    ) -> Result<Splits> {
+        check_fraction("test fraction", test_fraction)?;
+        check_fraction("validation fraction", val_fraction)?;
+        let mut rng = StdRng::seed_from_u64(seed);
+        let (mut train, test) = match (self.split_indices("train"), self.split_indices("test")) {
+            (Some(tr), Some(te)) => (tr, te),
+            _ => {
+                let mut all: Vec<usize> = (0..self.len()).collect();
+                all.shuffle(&mut rng);
+                let n_test = ((all.len() as f64 * test_fraction).round() as usize).max(1);
+                let test = all.split_off(all.len().saturating_sub(n_test));
+                (all, test)
+            }
+        };
+        train.shuffle(&mut rng);
+        let n_val = ((train.len() as f64 * val_fraction).round() as usize).max(1);
+        if train.len() <= n_val || test.is_empty() {
+            return Err(Error::dataset(
+                self.labels_path(),
+                None,
+                format!(
+                    "too few frames ({}) for train, validation and test sets",
+                    self.len()
+                ),
+            ));
+        }
+        let val = train.split_off(train.len() - n_val);
+        Ok(Splits { train, val, test })
+    }
+
+    /// The rows a model may train on: the `split` column's `train` rows
+    /// when there is one; otherwise every row, less the test rows of
+    /// `holdout` when given.
+    pub fn training_rows(&self, holdout: Option<TestHoldout>) -> Result<Vec<usize>> {
+        Ok(match (self.split_indices("train"), holdout) {
+            (Some(train), _) => train,
+            (None, Some(h)) => {
+                let s = self.three_way_split(h.test_fraction, 0.2, h.split_seed)?;
+                let mut rows = [s.train, s.val].concat();
+                rows.sort_unstable();
+                rows
+            }
+            (None, None) => (0..self.len()).collect(),
+        })
+    }
+
+    /// Rows of `rows` whose `tendon` label is 1.
+    pub fn tendon_rows(&self, rows: &[usize]) -> Result<Vec<usize>> {
+        let mut out = Vec::new();
+        for &i in rows {
+            if self.number(i, "tendon")? == 1.0 {
+                out.push(i);
+            }
+        }
+        Ok(out)
+    }
+
+    /// `(train, validation)` rows split by the `sequence` column, never by
+    /// frame, so no palpation video leaks across the split: the sequences
+    /// are shuffled with `seed` and the last `val_fraction` of them (at
+    /// least one) validate. Rows with no sequence are each their own group.
+    pub fn split_by_sequence(
+        &self,
+        val_fraction: f64,
+        seed: u64,
+    ) -> Result<(Vec<usize>, Vec<usize>)> {
+        if !(0.0..1.0).contains(&val_fraction) || val_fraction == 0.0 {
+            return Err(Error::Config(format!(
+                "validation fraction must be in (0, 1), got {val_fraction}"
+            )));
+        }
+        let mut groups: std::collections::BTreeMap<String, Vec<usize>> = Default::default();
+        for i in 0..self.len() {
+            let key = match self.text_opt(i, "sequence") {
+                Some(s) => format!("s{s}"),
+                None => format!("f{i}"),
+            };
+            groups.entry(key).or_default().push(i);
+        }
+        let mut keys: Vec<&String> = groups.keys().collect();
+        if keys.len() < 2 {
+            return Err(Error::dataset(
+                self.labels_path(),
+                None,
+                format!(
+                    "{} sequence(s): need at least 2 to split by sequence",
+                    keys.len()
+                ),
+            ));
+        }
+        keys.shuffle(&mut StdRng::seed_from_u64(seed));
+        let n_val = ((keys.len() as f64 * val_fraction).round() as usize).clamp(1, keys.len() - 1);
+        let (tr, va) = keys.split_at(keys.len() - n_val);
+        let rows = |ks: &[&String]| -> Vec<usize> {
+            let mut r: Vec<usize> = ks.iter().flat_map(|k| groups[*k].iter().copied()).collect();
+            r.sort_unstable();
+            r
+        };
+        Ok((rows(tr), rows(va)))
+    }
+}

@@ -1,0 +1,93 @@
+//! A trained depth network on disk: `depth.json` (architecture, the
+//! training frames' channel statistics, the depth scale, whether the mask
+//! is an input) beside `depth.bpk`.
+
+use burn::tensor::Device;
+use serde::{Deserialize, Serialize};
+use tactile_core::Artifact;
+use tactile_core::image_io::RgbImage;
+use tactile_onnx::{Exportable, export_batch_dynamic};
+use tactile_preprocess::visuo::{ChannelStats, resize_rgb};
+
+use crate::model::{DepthNet, DepthNetConfig};
+use crate::{Error, Result};
+
+/// How depth is represented inside the network: `(depth_mm - offset_mm) /
+/// unit_mm`. With `unit_mm = 1` the network works in millimetres; 1000
+/// would be metres.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DepthScale {
+    /// Depth the model's 0 stands for (the training mean), mm.
+    pub offset_mm: f32,
+    /// Millimetres per model unit.
+    pub unit_mm: f32,
+}
+
+impl DepthScale {
+    /// Millimetres to model units.
+    pub fn to_model(&self, depth_mm: f32) -> f32 {
+        (depth_mm - self.offset_mm) / self.unit_mm
+    }
+
+    /// Model units to millimetres.
+    pub fn to_mm(&self, v: f32) -> f32 {
+        v * self.unit_mm + self.offset_mm
+    }
+}
+
+/// Everything needed to rebuild and run a saved depth network.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct DepthArtifact {
+    /// Encoder, decoder, head and input size.
+    #[serde(alias = "net")]
+    pub model: DepthNetConfig,
+    /// Per-channel statistics of the training frames.
+    pub stats: ChannelStats,
+    /// Millimetres and model units.
+    pub scale: DepthScale,
+    /// True when the fourth input channel is the tendon mask.
+    pub with_mask: bool,
+    /// Provenance.
+    #[serde(default)]
+    pub notes: serde_json::Value,
+}
+
+impl Artifact for DepthArtifact {
+    type Model = DepthNet;
+    const KIND: &'static str = "depth model";
+    const CONFIG_FILE: &'static str = "depth.json";
+    const WEIGHTS_FILE: &'static str = "depth.bpk";
+
+    fn init(&self, device: &Device) -> tactile_core::Result<DepthNet> {
+        self.model.init(device)
+    }
+}
+
+impl Exportable for DepthArtifact {
+    /// `[N, C, H, W]` normalised frames (C = 3, or 4 with the mask) ->
+    /// `[N, 1, H, W]` depth in model units.
+    fn onnx(&self, model: &DepthNet) -> tactile_onnx::Result<Vec<u8>> {
+        let [w, h] = self.model.input_size;
+        let c = self.model.in_channels;
+        export_batch_dynamic(model, [1, c, h, w], |m: &DepthNet, x| m.forward(x))
+    }
+}
+
+impl DepthArtifact {
+    /// The normalised `C x H x W` input of an RGB frame of any size
+    /// (resized, then 8 bits per channel as in training, see
+    /// [`FloatImage::quantised`](tactile_preprocess::visuo::FloatImage::quantised));
+    /// `mask` (at the input size) is required exactly when the network
+    /// takes the mask channel.
+    pub fn frame_input(&self, frame: &RgbImage, mask: Option<&[bool]>) -> Result<Vec<f32>> {
+        let [w, h] = self.model.input_size;
+        let img = resize_rgb(frame, w, h)?.quantised();
+        let mut x = self.stats.to_chw(&img)?;
+        match (self.with_mask, mask) {
+            (true, Some(m)) if m.len() == w * h => x.extend(m.iter().map(|&b| b as u8 as f32)),
+            (true, _) => return Err(Error::MaskRequired { size: [w, h] }),
+            (false, _) => {}
+        }
+        Ok(x)
+    }
+}

@@ -1,0 +1,143 @@
+//! The depth network scored on a labelled dataset: MAE inside the sensing
+//! window and over the tendon mask, RMSE and SSIM, all in millimetres; and
+//! heat maps of truth beside prediction.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use tactile_core::dataset::Dataset;
+
+use crate::Result;
+use crate::data::DepthSet;
+use crate::inference::DepthEstimator;
+
+/// Frames per network call when scoring.
+pub const EVAL_BATCH: usize = 16;
+
+/// Depth metrics of predictions against truth, in millimetres.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct DepthScores {
+    /// Frames scored.
+    pub frames: usize,
+    /// Mean absolute error inside the sensing window.
+    pub mae_mm: f64,
+    /// Mean absolute error over the tendon mask (frames with a tendon).
+    pub mae_tendon_mm: Option<f64>,
+    /// Root mean squared error inside the window, over frames.
+    pub rmse_mm: f64,
+    /// Mean SSIM over frames (dynamic range: the 12-18 mm of the spec).
+    pub ssim: f64,
+}
+
+/// Dynamic range used by SSIM, mm (sensors.md: depths lie in 12-18 mm).
+pub const DEPTH_RANGE_MM: f64 = 6.0;
+
+/// Accumulates per-frame metrics.
+#[derive(Default)]
+pub struct DepthScorer {
+    n: usize,
+    mae: f64,
+    rmse_sq: f64,
+    ssim: f64,
+    tendon_abs: f64,
+    tendon_px: usize,
+}
+
+impl DepthScorer {
+    /// Add one frame (`w x h` maps in mm).
+    pub fn add(
+        &mut self,
+        pred: &[f32],
+        truth: &[f32],
+        window: &[bool],
+        mask: &[bool],
+        (w, h): (usize, usize),
+    ) {
+        use tactile_core::metrics::{masked_mae, masked_rmse, ssim};
+        self.n += 1;
+        self.mae += masked_mae(pred, truth, Some(window)).unwrap_or(0.0);
+        self.rmse_sq += masked_rmse(pred, truth, Some(window))
+            .unwrap_or(0.0)
+            .powi(2);
+        self.ssim += ssim(pred, truth, w, h, DEPTH_RANGE_MM);
+        for i in 0..pred.len() {
+            if mask[i] {
+                self.tendon_abs += (pred[i] as f64 - truth[i] as f64).abs();
+                self.tendon_px += 1;
+            }
+        }
+    }
+
+    /// The scores of every frame added.
+    pub fn finish(&self) -> DepthScores {
+        let n = self.n.max(1) as f64;
+        DepthScores {
+            frames: self.n,
+            mae_mm: self.mae / n,
+            mae_tendon_mm: (self.tendon_px > 0).then(|| self.tendon_abs / self.tendon_px as f64),
+            rmse_mm: (self.rmse_sq / n).sqrt(),
+            ssim: self.ssim / n,
+        }
+    }
+}
+
+/// Predicted depth in mm of every sample of `data`, one map per sample.
+pub fn predict_mm(estimator: &mut DepthEstimator, data: &DepthSet) -> Result<Vec<Vec<f32>>> {
+    let art = estimator.artifact.clone();
+    let idx: Vec<usize> = (0..data.len()).collect();
+    let mut out = Vec::with_capacity(data.len());
+    for chunk in idx.chunks(EVAL_BATCH) {
+        let x = data.inputs(chunk, &art.stats, art.with_mask)?;
+        out.extend(estimator.depth_mm_of_inputs(&x, chunk.len())?);
+    }
+    Ok(out)
+}
+
+/// Score `estimator` on every frame of `ds`; also the inference time per
+/// frame (batches of [`EVAL_BATCH`], loading excluded).
+pub fn evaluate(estimator: &mut DepthEstimator, ds: &Dataset) -> Result<(DepthScores, f64)> {
+    let rows: Vec<usize> = (0..ds.len()).collect();
+    let data = DepthSet::from_dataset(ds, &rows, estimator.artifact.model.input_size)?;
+    let t0 = std::time::Instant::now();
+    let preds = predict_mm(estimator, &data)?;
+    let ms = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
+    Ok((score(&data, &preds), ms))
+}
+
+/// Scores of predicted maps against a set's truth.
+pub fn score(data: &DepthSet, preds: &[Vec<f32>]) -> DepthScores {
+    let mut sc = DepthScorer::default();
+    for (s, p) in data.samples.iter().zip(preds) {
+        sc.add(
+            p,
+            &s.depth_mm,
+            &data.window,
+            &s.mask,
+            (data.width, data.height),
+        );
+    }
+    sc.finish()
+}
+
+/// Heat maps (truth | prediction, one shared colour scale per frame) of the
+/// first `frames` frames of `ds`, as `depth-000.png`, ... in `dir`; returns
+/// how many were written.
+pub fn save_heat_maps(
+    estimator: &mut DepthEstimator,
+    ds: &Dataset,
+    dir: &Path,
+    frames: usize,
+) -> Result<usize> {
+    let rows: Vec<usize> = (0..ds.len().min(frames)).collect();
+    let data = DepthSet::from_dataset(ds, &rows, estimator.artifact.model.input_size)?;
+    let preds = predict_mm(estimator, &data)?;
+    tactile_core::io::create_dir_all(dir)?;
+    for (i, p) in preds.iter().enumerate() {
+        tactile_core::plot::heat_maps(
+            dir.join(format!("depth-{i:03}.png")),
+            &[&data.samples[i].depth_mm, p],
+            (data.width, data.height),
+        )?;
+    }
+    Ok(preds.len())
+}

@@ -1,0 +1,67 @@
+//! A trained detector on disk: `detector.json` (architecture, training-set
+//! channel statistics, the calibrated threshold, provenance) beside
+//! `detector.bpk`.
+
+use burn::tensor::Device;
+use serde::{Deserialize, Serialize};
+use tactile_core::Artifact;
+use tactile_core::image_io::RgbImage;
+use tactile_onnx::{Exportable, export_batch_dynamic};
+use tactile_preprocess::visuo::{ChannelStats, is_blank, resize_rgb};
+
+use crate::Result;
+use crate::model::{Detector, DetectorConfig};
+
+/// Everything needed to rebuild and run a saved detector.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct DetectorArtifact {
+    /// The architecture and input size.
+    #[serde(alias = "detector")]
+    pub model: DetectorConfig,
+    /// Per-channel statistics of the training frames.
+    pub stats: ChannelStats,
+    /// Probability above which a frame counts as showing a tendon.
+    pub threshold: f64,
+    /// Provenance.
+    #[serde(default)]
+    pub notes: serde_json::Value,
+}
+
+impl Artifact for DetectorArtifact {
+    type Model = Detector;
+    const KIND: &'static str = "detector";
+    const CONFIG_FILE: &'static str = "detector.json";
+    const WEIGHTS_FILE: &'static str = "detector.bpk";
+
+    fn init(&self, device: &Device) -> tactile_core::Result<Detector> {
+        Ok(self.model.init(device))
+    }
+}
+
+impl Exportable for DetectorArtifact {
+    /// `[N, 3, H, W]` normalised frames -> `[N, 1]` logits.
+    fn onnx(&self, model: &Detector) -> tactile_onnx::Result<Vec<u8>> {
+        let [w, h] = self.model.input_size;
+        export_batch_dynamic(model, [1, 3, h, w], |m: &Detector, x| m.forward(x))
+    }
+}
+
+impl DetectorArtifact {
+    /// The normalised `3 x H x W` input of an RGB frame of any size
+    /// (resized, then 8 bits per channel as in training, see
+    /// [`FloatImage::quantised`](tactile_preprocess::visuo::FloatImage::quantised)),
+    /// or `None` for a blank frame (see [`is_blank`]), which shows no tendon.
+    pub fn frame_input(&self, frame: &RgbImage) -> Result<Option<Vec<f32>>> {
+        let [w, h] = self.model.input_size;
+        let img = resize_rgb(frame, w, h)?.quantised();
+        if is_blank(&img) {
+            return Ok(None);
+        }
+        Ok(Some(self.stats.to_chw(&img)?))
+    }
+
+    /// Whether probability `p` reaches the saved threshold.
+    pub fn is_tendon(&self, p: f32) -> bool {
+        p as f64 >= self.threshold
+    }
+}

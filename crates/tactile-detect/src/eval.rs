@@ -1,0 +1,84 @@
+//! The detector scored on a labelled dataset: accuracy, precision, recall
+//! and F1 over every frame and over the onset and release frames, with the
+//! probability of each frame.
+
+use std::path::Path;
+
+use serde::Serialize;
+use tactile_core::metrics::{BinaryScores, binary_scores};
+
+use crate::data::DetectionSet;
+use crate::inference::TendonDetector;
+use crate::{Error, Result};
+
+/// Frames per network call when scoring.
+pub const EVAL_BATCH: usize = 32;
+
+/// A detector's scores on a dataset.
+#[derive(Debug, Clone, Serialize)]
+pub struct DetectorScores {
+    /// Over every frame.
+    pub all: BinaryScores,
+    /// Over frames within two frames of a label change.
+    pub onset_release: BinaryScores,
+    /// Inference time per frame (batches of [`EVAL_BATCH`], resizing excluded).
+    pub ms_per_frame: f64,
+    /// Per-frame tendon probability, in dataset order.
+    #[serde(skip)]
+    pub probabilities: Vec<f32>,
+    /// The threshold the decisions used.
+    pub threshold: f64,
+}
+
+/// Score `detector` on every frame of `data` (loaded at its input size).
+pub fn evaluate(detector: &mut TendonDetector, data: &DetectionSet) -> Result<DetectorScores> {
+    let size = detector.artifact.model.input_size;
+    if [data.width, data.height] != size {
+        return Err(Error::InputSize {
+            expected: size,
+            found: [data.width, data.height],
+        });
+    }
+    let stats = detector.artifact.stats.clone();
+    let t0 = std::time::Instant::now();
+    let mut p = Vec::with_capacity(data.len());
+    let all: Vec<usize> = (0..data.len()).collect();
+    for chunk in all.chunks(EVAL_BATCH) {
+        let x = data.inputs(chunk, &stats)?;
+        p.extend(detector.probabilities(&x, chunk.len())?);
+    }
+    let ms_per_frame = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
+    let pred: Vec<bool> = p.iter().map(|&q| detector.is_tendon(q)).collect();
+    let tr: Vec<usize> = all
+        .iter()
+        .copied()
+        .filter(|&i| data.transition[i])
+        .collect();
+    Ok(DetectorScores {
+        all: binary_scores(&pred, &data.tendon),
+        onset_release: binary_scores(
+            &tr.iter().map(|&i| pred[i]).collect::<Vec<_>>(),
+            &tr.iter().map(|&i| data.tendon[i]).collect::<Vec<_>>(),
+        ),
+        ms_per_frame,
+        probabilities: p,
+        threshold: detector.artifact.threshold,
+    })
+}
+
+/// Every frame's probability and decision as CSV (`file, tendon,
+/// probability, predicted, onset_release`), to look at the frames it gets
+/// wrong.
+pub fn write_decisions_csv(path: &Path, data: &DetectionSet, s: &DetectorScores) -> Result<()> {
+    let mut csv = String::from("file,tendon,probability,predicted,onset_release\n");
+    for (i, p) in s.probabilities.iter().enumerate() {
+        csv.push_str(&format!(
+            "{},{},{p:.6},{},{}\n",
+            data.files[i],
+            data.tendon[i] as u8,
+            (*p as f64 >= s.threshold) as u8,
+            data.transition[i] as u8
+        ));
+    }
+    Ok(tactile_core::io::write_atomic(path, csv.as_bytes())?)
+}

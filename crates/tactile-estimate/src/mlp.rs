@@ -1,0 +1,125 @@
+//! The multilayer perceptron every estimator is made of, and the one loop
+//! that fits one in memory on feature vectors.
+
+use burn::module::Module;
+use burn::nn::{Linear, LinearConfig};
+use burn::optim::AdamConfig;
+use burn::tensor::activation::{relu, sigmoid};
+use burn::tensor::{Device, Int, Tensor, TensorData};
+use serde::{Deserialize, Serialize};
+use tactile_core::train::{FitConfig, Schedule, fit};
+
+use crate::Result;
+
+/// Hidden-layer activation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Activation {
+    /// `max(0, x)`.
+    Relu,
+    /// The logistic function (the authors' shape head).
+    Sigmoid,
+}
+
+/// Fully connected layers with an activation after each hidden one.
+#[derive(Module, Debug)]
+pub struct Mlp {
+    /// Input to first hidden, ..., last hidden to output.
+    pub layers: Vec<Linear>,
+    /// One per hidden layer.
+    #[module(skip)]
+    pub activations: Vec<Activation>,
+}
+
+impl Mlp {
+    /// Layers of sizes `dims` (inputs, hidden..., outputs) with burn's
+    /// default initialisation; `activations` follow each hidden layer.
+    pub fn new(dims: &[usize], activations: &[Activation], device: &Device) -> Self {
+        Mlp {
+            layers: dims
+                .windows(2)
+                .map(|w| LinearConfig::new(w[0], w[1]).init(device))
+                .collect(),
+            activations: activations.to_vec(),
+        }
+    }
+
+    /// `inputs -> hidden... -> outputs`.
+    pub fn with_hidden(
+        inputs: usize,
+        hidden: &[(usize, Activation)],
+        outputs: usize,
+        device: &Device,
+    ) -> Self {
+        let mut dims = vec![inputs];
+        dims.extend(hidden.iter().map(|h| h.0));
+        dims.push(outputs);
+        let acts: Vec<Activation> = hidden.iter().map(|h| h.1).collect();
+        Self::new(&dims, &acts, device)
+    }
+
+    /// Outputs `[N, last]` (class logits, or standardised targets).
+    ///
+    /// # Shapes
+    /// - `x`: `[N, inputs]`
+    /// - output: `[N, outputs]`
+    pub fn forward(&self, mut x: Tensor<2>) -> Tensor<2> {
+        let last = self.layers.len().saturating_sub(1);
+        for (i, layer) in self.layers.iter().enumerate() {
+            x = layer.forward(x);
+            if i < last {
+                x = match self.activations[i] {
+                    Activation::Relu => relu(x),
+                    Activation::Sigmoid => sigmoid(x),
+                };
+            }
+        }
+        x
+    }
+}
+
+/// A `[rows, cols]` tensor of row-major values.
+pub fn matrix(rows: usize, cols: usize, data: Vec<f32>, device: &Device) -> Tensor<2> {
+    Tensor::from_data(TensorData::new(data, [rows, cols]), device)
+}
+
+/// Indices as an integer tensor.
+pub fn indices(idx: &[usize], device: &Device) -> Tensor<1, Int> {
+    Tensor::from_data(
+        TensorData::new(
+            idx.iter().map(|&i| i as i64).collect::<Vec<_>>(),
+            [idx.len()],
+        ),
+        device,
+    )
+}
+
+/// Fit `mlp` (built on an autodiff device) with Adam on the rows of `x`
+/// (`n` of them, already on that device) through the workspace's one
+/// training loop, in memory: `loss` gets the model, the rows of a batch
+/// and the batch's indices; `validate` returns the loss early stopping
+/// watches. Returns the best epoch's model.
+pub fn fit_in_memory(
+    schedule: &Schedule,
+    mlp: Mlp,
+    n: usize,
+    mut loss: impl FnMut(&Mlp, Tensor<1, Int>) -> Tensor<1>,
+    mut validate: impl FnMut(&Mlp) -> Result<f64>,
+    device: &Device,
+) -> Result<Mlp> {
+    let mut best: Option<Mlp> = None;
+    let items: Vec<usize> = (0..n).collect();
+    let (last, _) = fit::<_, crate::Error>(
+        &FitConfig::new(schedule, "estimator"),
+        mlp,
+        AdamConfig::new().init(),
+        (&items, 0),
+        |m: &Mlp, batch, _| Ok(loss(m, indices(batch, device))),
+        |m| Ok((validate(m)?, None)),
+        |m| {
+            best = Some(m.clone());
+            Ok(())
+        },
+    )?;
+    Ok(best.unwrap_or_else(|| last.valid()))
+}

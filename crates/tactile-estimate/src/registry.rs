@@ -1,0 +1,180 @@
+//! The estimators of an encoder folder: every sub-folder holding a
+//! classifier head (`head.json`) or a regressor (`regressor.json`), run on
+//! one encoding per frame (paper A's simultaneous deployment).
+
+use std::path::{Path, PathBuf};
+
+use burn::tensor::Device;
+use tactile_core::Artifact;
+
+use crate::head::{ClassifierHead, HeadArtifact};
+use crate::regressor::{Regressor, RegressorArtifact};
+use crate::{Error, Result};
+
+/// A trained estimator on an encoder's features.
+pub enum Estimator {
+    /// A shape classifier.
+    Classifier(ClassifierHead),
+    /// A regressor of one or more targets.
+    Regressor(Regressor),
+}
+
+/// The name of a classifier's output column.
+pub const CLASS_COLUMN: &str = "shape";
+
+impl Estimator {
+    /// True when `dir` holds an estimator.
+    pub fn is_in(dir: &Path) -> bool {
+        HeadArtifact::is_in(dir) || RegressorArtifact::is_in(dir)
+    }
+
+    /// Load the estimator in `dir`.
+    pub fn load(dir: &Path, device: &Device) -> Result<Self> {
+        if HeadArtifact::is_in(dir) {
+            Ok(Self::Classifier(ClassifierHead::load(dir, device)?))
+        } else if RegressorArtifact::is_in(dir) {
+            Ok(Self::Regressor(Regressor::load(dir, device)?))
+        } else {
+            Err(tactile_core::Error::wrong_kind(
+                dir,
+                "estimator folder",
+                "neither head.json nor regressor.json",
+            )
+            .into())
+        }
+    }
+
+    /// Feature count it takes.
+    pub fn inputs(&self) -> usize {
+        match self {
+            Self::Classifier(h) => h.artifact.model.inputs,
+            Self::Regressor(r) => r.artifact.model.inputs,
+        }
+    }
+
+    /// Names of its output columns.
+    pub fn columns(&self) -> Vec<String> {
+        match self {
+            Self::Classifier(_) => vec![CLASS_COLUMN.to_string()],
+            Self::Regressor(r) => r.targets().iter().map(|t| t.name.clone()).collect(),
+        }
+    }
+}
+
+/// Values of one output column, one per frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Column {
+    /// Class names.
+    Class(Vec<String>),
+    /// Numbers in the label's own units.
+    Number(Vec<f64>),
+}
+
+/// Every estimator's outputs for a set of feature vectors.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Estimates {
+    /// `(name, values)`, in estimator order.
+    pub columns: Vec<(String, Column)>,
+}
+
+impl Estimates {
+    /// The column called `name`.
+    pub fn get(&self, name: &str) -> Option<&Column> {
+        self.columns.iter().find(|c| c.0 == name).map(|c| &c.1)
+    }
+
+    /// Cell `i` of every column as text (numbers with 4 decimals).
+    pub fn row(&self, i: usize) -> Vec<String> {
+        self.columns
+            .iter()
+            .map(|(_, c)| match c {
+                Column::Class(v) => v[i].clone(),
+                Column::Number(v) => format!("{:.4}", v[i]),
+            })
+            .collect()
+    }
+}
+
+/// Several estimators over one feature space.
+pub struct Estimators {
+    /// Folder and estimator, in name order.
+    pub items: Vec<(PathBuf, Estimator)>,
+}
+
+impl Estimators {
+    /// The estimators in `dirs`, or, when `dirs` is empty, every estimator
+    /// folder inside `encoder` (in name order).
+    pub fn load(encoder: &Path, dirs: &[PathBuf], device: &Device) -> Result<Self> {
+        let mut dirs = dirs.to_vec();
+        if dirs.is_empty()
+            && let Ok(entries) = std::fs::read_dir(encoder)
+        {
+            dirs = entries
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|d| Estimator::is_in(d))
+                .collect();
+            dirs.sort();
+        }
+        if dirs.is_empty() {
+            return Err(Error::NoEstimators(format!(
+                "{} has no folder with head.json or regressor.json; name estimator folders explicitly",
+                encoder.display()
+            )));
+        }
+        let items = dirs
+            .into_iter()
+            .map(|d| Ok((d.clone(), Estimator::load(&d, device)?)))
+            .collect::<Result<_>>()?;
+        Ok(Self { items })
+    }
+
+    /// How many there are.
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// True when there are none.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+
+    /// Refuse estimators trained on features of another length than the
+    /// encoder's `features`, naming the estimator's folder.
+    pub fn check_inputs(&self, features: usize) -> Result<()> {
+        for (dir, e) in &self.items {
+            if e.inputs() != features {
+                return Err(tactile_core::Error::model(
+                    dir,
+                    format!(
+                        "this estimator takes {} features, the encoder gives {features}: it was trained on another encoder",
+                        e.inputs()
+                    ),
+                )
+                .into());
+            }
+        }
+        Ok(())
+    }
+
+    /// Every estimator on the same feature vectors.
+    pub fn estimate(&self, feats: &[Vec<f32>]) -> Result<Estimates> {
+        let mut columns = Vec::new();
+        for (_, e) in &self.items {
+            match e {
+                Estimator::Classifier(h) => {
+                    let p = h.predict(feats)?;
+                    let names = p.iter().map(|&c| h.classes()[c].clone()).collect();
+                    columns.push((CLASS_COLUMN.to_string(), Column::Class(names)));
+                }
+                Estimator::Regressor(r) => {
+                    let p = r.predict(feats)?;
+                    for (j, t) in r.targets().iter().enumerate() {
+                        let v = p.iter().map(|row| row[j]).collect();
+                        columns.push((t.name.clone(), Column::Number(v)));
+                    }
+                }
+            }
+        }
+        Ok(Estimates { columns })
+    }
+}

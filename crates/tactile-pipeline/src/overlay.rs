@@ -1,0 +1,84 @@
+//! Paper B's figure 3 as a picture of one tendon frame: the segmenter's
+//! window with the kept region and its direction, beside the depth heat map.
+
+use std::path::Path;
+
+use tactile_core::Result;
+
+/// What a tendon frame looked like to the pipeline, for overlays.
+pub struct FrameViews {
+    /// The segmenter's window, `side x side x 3` in [0, 1].
+    pub window: Vec<f32>,
+    /// Its side, pixels.
+    pub side: usize,
+    /// The kept region.
+    pub region: Vec<bool>,
+    /// Direction (degrees) and centroid in window pixels.
+    pub direction: Option<(f64, (f64, f64))>,
+    /// Depth in mm at the depth network's input size.
+    pub depth_mm: Vec<f32>,
+    /// The depth network's input width and height.
+    pub depth_size: [usize; 2],
+}
+
+impl FrameViews {
+    /// Paper B's figure 3 style: the window enlarged `zoom` times with the
+    /// kept region in green and the direction as a red line, and beside it
+    /// the depth heat map at the same height. Written atomically as PNG.
+    pub fn save_png(&self, path: &Path, zoom: usize) -> Result<()> {
+        let s = self.side * zoom;
+        let [dw, dh] = self.depth_size;
+        let dscale = s as f64 / dh as f64;
+        let dwz = (dw as f64 * dscale).round() as usize;
+        let gap = 6;
+        let width = s + gap + dwz;
+        let mut rgb = vec![255u8; width * s * 3];
+        for y in 0..s {
+            for x in 0..s {
+                let i = (y / zoom) * self.side + x / zoom;
+                let o = (y * width + x) * 3;
+                for c in 0..3 {
+                    let mut v = self.window[i * 3 + c];
+                    if self.region[i] {
+                        // Blend 45 % green over the tendon.
+                        let g = if c == 1 { 1.0 } else { 0.0 };
+                        v = 0.55 * v + 0.45 * g;
+                    }
+                    rgb[o + c] = (v * 255.0).round().clamp(0.0, 255.0) as u8;
+                }
+            }
+        }
+        let (lo, hi) = self
+            .depth_mm
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        let span = if hi > lo { hi - lo } else { 1.0 };
+        for y in 0..s {
+            for x in 0..dwz {
+                let (sx, sy) = (
+                    ((x as f64) / dscale) as usize,
+                    ((y as f64) / dscale) as usize,
+                );
+                let v = self.depth_mm[sy.min(dh - 1) * dw + sx.min(dw - 1)];
+                let c = tactile_core::plot::colour(((v - lo) / span) as f64);
+                let o = (y * width + s + gap + x) * 3;
+                rgb[o..o + 3].copy_from_slice(&c);
+            }
+        }
+        if let Some((deg, (cx, cy))) = self.direction {
+            let (sn, cs) = deg.to_radians().sin_cos();
+            let half = s as f64 * 0.45;
+            let (px, py) = ((cx + 0.5) * zoom as f64, (cy + 0.5) * zoom as f64);
+            let marks = [tactile_core::plot::Mark::Line {
+                from: ((px - cs * half) as i32, (py - sn * half) as i32),
+                to: ((px + cs * half) as i32, (py + sn * half) as i32),
+                colour: [230, 30, 30],
+                width: 3,
+            }];
+            tactile_core::plot::draw_marks(&mut rgb, width, s, &marks)?;
+        }
+        tactile_core::image_io::save_rgb_png(path, width, s, &rgb)
+    }
+}

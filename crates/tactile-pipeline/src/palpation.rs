@@ -1,0 +1,177 @@
+//! Paper B's palpation pipeline, frame by frame: the detector runs on every
+//! frame; only when it sees a tendon do the segmenter, its post-processing
+//! (largest region, glare override, direction) and the depth network run.
+//! It composes the three model wrappers; each prepares its own input the
+//! same way on every runtime.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+use tactile_core::Runtime;
+use tactile_core::image_io::RgbImage;
+use tactile_depth::DepthEstimator;
+use tactile_detect::TendonDetector;
+use tactile_segment::TendonSegmenter;
+
+use crate::hysteresis::Hysteresis;
+use crate::overlay::FrameViews;
+use crate::{Error, Result};
+
+/// What the pipeline made of one frame (one JSON Lines record).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FrameRecord {
+    /// The frame's file name.
+    pub frame: String,
+    /// The tendon decision (the detector's threshold, or the hysteresis).
+    pub tendon: bool,
+    /// Detector probability.
+    pub score: f32,
+    /// Direction of the tendon, degrees in [0, 180).
+    pub direction_deg: Option<f64>,
+    /// Major / minor eigenvalue of the kept region.
+    pub anisotropy: Option<f64>,
+    /// Why there is no direction on a tendon frame (empty, too small, isotropic).
+    pub no_direction: Option<String>,
+    /// Pixels of the kept region in the segmenter's window.
+    pub mask_area_px: usize,
+    /// Smallest camera-to-skin distance inside the sensing window, mm.
+    pub depth_min_mm: Option<f32>,
+    /// Mean camera-to-skin distance inside the sensing window, mm.
+    pub depth_mean_mm: Option<f32>,
+    /// Largest camera-to-skin distance inside the sensing window, mm.
+    pub depth_max_mm: Option<f32>,
+    /// The detector's own threshold decision (before any hysteresis).
+    pub tendon_raw: bool,
+    /// Time of the detector, ms.
+    pub ms_detect: f64,
+    /// Time of the segmenter and direction, ms (tendon frames).
+    pub ms_segment: Option<f64>,
+    /// Time of the depth network, ms (tendon frames).
+    pub ms_depth: Option<f64>,
+    /// Time of the whole frame, ms.
+    pub ms_total: f64,
+}
+
+/// The three models on one runtime.
+pub struct Pipeline {
+    /// Tendon or not.
+    pub detector: TendonDetector,
+    /// Where and which way.
+    pub segmenter: TendonSegmenter,
+    /// How deep the skin is.
+    pub depth: DepthEstimator,
+    /// onnxruntime intra-op threads it was loaded with.
+    pub threads: usize,
+    window: Vec<bool>,
+}
+
+impl Pipeline {
+    /// Load `detector/`, `segmenter/` and `depth/` from `dir` onto
+    /// `runtime` (`threads` intra-op threads for onnxruntime).
+    pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
+        let dir = dir.as_ref();
+        let depth = DepthEstimator::load(dir.join("depth"), runtime, threads)?;
+        if depth.artifact.with_mask {
+            return Err(Error::Core(tactile_core::Error::model(
+                dir.join("depth"),
+                "the pipeline's depth model must take RGB only (mask-channel models are for evaluation)",
+            )));
+        }
+        let [w, h] = depth.artifact.model.input_size;
+        Ok(Self {
+            detector: TendonDetector::load(dir.join("detector"), runtime, threads)?,
+            segmenter: TendonSegmenter::load(dir.join("segmenter"), runtime, threads)?,
+            depth,
+            threads,
+            window: tactile_depth::data::window_mask(w, h),
+        })
+    }
+
+    /// The detector's probability threshold.
+    pub fn threshold(&self) -> f64 {
+        self.detector.artifact.threshold
+    }
+
+    /// Run on one frame. Frames without a tendon cost one detector pass.
+    pub fn process(&mut self, name: &str, frame: &RgbImage) -> Result<FrameRecord> {
+        Ok(self.process_filtered(name, frame, None)?.0)
+    }
+
+    /// [`Self::process`], the tendon decision taken by a hysteresis filter
+    /// over the sequence when one is given, also returning what a tendon
+    /// frame looked like.
+    pub fn process_filtered(
+        &mut self,
+        name: &str,
+        frame: &RgbImage,
+        filter: Option<&mut Hysteresis>,
+    ) -> Result<(FrameRecord, Option<FrameViews>)> {
+        let t0 = Instant::now();
+        let score = self.detector.probability(frame)?;
+        let tendon_raw = self.detector.is_tendon(score);
+        let tendon = match filter {
+            Some(h) => h.update(score),
+            None => tendon_raw,
+        };
+        let ms_detect = 1e3 * t0.elapsed().as_secs_f64();
+        let mut rec = FrameRecord {
+            frame: name.to_string(),
+            tendon,
+            score,
+            tendon_raw,
+            direction_deg: None,
+            anisotropy: None,
+            no_direction: None,
+            mask_area_px: 0,
+            depth_min_mm: None,
+            depth_mean_mm: None,
+            depth_max_mm: None,
+            ms_detect,
+            ms_segment: None,
+            ms_depth: None,
+            ms_total: ms_detect,
+        };
+        if !tendon {
+            return Ok((rec, None));
+        }
+        // Segment and point.
+        let t1 = Instant::now();
+        let seg = self.segmenter.segment(frame)?;
+        let t = seg.tendon;
+        rec.mask_area_px = t.region.area();
+        let mut direction = None;
+        match t.direction {
+            Ok(d) => {
+                rec.direction_deg = Some(d.angle_deg);
+                rec.anisotropy = Some(d.anisotropy);
+                direction = Some((d.angle_deg, d.centroid));
+            }
+            Err(why) => rec.no_direction = Some(format!("{why:?}")),
+        }
+        rec.ms_segment = Some(1e3 * t1.elapsed().as_secs_f64());
+        // Depth.
+        let t2 = Instant::now();
+        let depth_mm = self.depth.depth_mm(frame, None)?;
+        let mm: Vec<f32> = depth_mm
+            .iter()
+            .zip(&self.window)
+            .filter(|(_, inside)| **inside)
+            .map(|(&v, _)| v)
+            .collect();
+        rec.depth_min_mm = mm.iter().copied().reduce(f32::min);
+        rec.depth_max_mm = mm.iter().copied().reduce(f32::max);
+        rec.depth_mean_mm = Some(mm.iter().sum::<f32>() / mm.len().max(1) as f32);
+        rec.ms_depth = Some(1e3 * t2.elapsed().as_secs_f64());
+        rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+        let views = FrameViews {
+            window: seg.window.data,
+            side: self.segmenter.artifact.model.side,
+            region: t.region.pixels,
+            direction,
+            depth_mm,
+            depth_size: self.depth.artifact.model.input_size,
+        };
+        Ok((rec, Some(views)))
+    }
+}

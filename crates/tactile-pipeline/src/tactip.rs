@@ -1,0 +1,345 @@
+//! Paper A composed: one encoder, many cheap estimators. Features of a
+//! dataset (from an encoder folder or a feature CSV), training the shape
+//! head and the regressors on them, every estimator of a folder on one
+//! encoding per frame, and their scores.
+
+use std::path::{Path, PathBuf};
+
+use tactile_cae::TactipEncoder;
+use tactile_cae::data::PinSet;
+use tactile_cae::inference::features_for_dataset;
+use tactile_core::Runtime;
+use tactile_core::dataset::Dataset;
+use tactile_core::metrics::{accuracy, confusion};
+use tactile_estimate::eval::{Scores, score};
+use tactile_estimate::{
+    Activation, ClassifierHead, Estimates, Estimators, HeadConfig, Regressor, RegressorConfig,
+    Target,
+};
+
+use crate::Result;
+
+/// Where feature vectors come from.
+#[derive(Debug, Clone)]
+pub enum FeatureSource {
+    /// A trained encoder folder: frames are preprocessed and encoded.
+    Encoder(PathBuf),
+    /// A feature CSV (`file,f0,f1,...`), rows matched to the dataset by file.
+    Csv(PathBuf),
+}
+
+/// Feature vectors of every frame of `ds`, in row order.
+pub fn dataset_features(
+    source: &FeatureSource,
+    ds: &Dataset,
+    runtime: Runtime,
+) -> Result<Vec<Vec<f32>>> {
+    Ok(match source {
+        FeatureSource::Encoder(dir) => TactipEncoder::load(dir, runtime, 0)?.encode_dataset(ds)?.1,
+        FeatureSource::Csv(csv) => features_for_dataset(csv, ds)?,
+    })
+}
+
+/// The encoder and every estimator of its folder (or the folders given).
+pub struct TactipPerception {
+    /// Frames to features.
+    pub encoder: TactipEncoder,
+    /// Features to shape, pose, depth, force.
+    pub estimators: Estimators,
+}
+
+/// What perception made of a dataset.
+pub struct Perception {
+    /// Each frame's `file` label.
+    pub files: Vec<String>,
+    /// Every estimator's outputs.
+    pub estimates: Estimates,
+    /// Preprocessing and encoding time per frame, ms.
+    pub ms_encode: f64,
+    /// Time of all estimators per frame, ms.
+    pub ms_estimate: f64,
+}
+
+impl TactipPerception {
+    /// Load `encoder` onto `runtime` and the estimators in `heads` (every
+    /// estimator folder inside `encoder` when empty); estimators trained on
+    /// features of another length are refused.
+    pub fn load(encoder: &Path, heads: &[PathBuf], runtime: Runtime) -> Result<Self> {
+        let encoder_net = TactipEncoder::load(encoder, runtime, 0)?;
+        let device = runtime
+            .device()
+            .unwrap_or(tactile_core::DeviceKind::Flex)
+            .device();
+        let estimators = Estimators::load(encoder, heads, &device)?;
+        estimators.check_inputs(encoder_net.feature_count())?;
+        Ok(Self {
+            encoder: encoder_net,
+            estimators,
+        })
+    }
+
+    /// Every estimator on one encoding of each pin image.
+    pub fn estimate(&mut self, pins: &[tactile_preprocess::PinImage]) -> Result<Estimates> {
+        let feats = self.encoder.encode(pins)?;
+        Ok(self.estimators.estimate(&feats)?)
+    }
+
+    /// Perceive every frame of a dataset, timing encoding and estimation.
+    pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
+        let t0 = std::time::Instant::now();
+        let (pins, feats) = self.encoder.encode_dataset(ds)?;
+        let ms_encode = 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64;
+        let t1 = std::time::Instant::now();
+        let estimates = self.estimators.estimate(&feats)?;
+        let ms_estimate = 1e3 * t1.elapsed().as_secs_f64() / ds.len().max(1) as f64;
+        Ok(Perception {
+            files: pins.files,
+            estimates,
+            ms_encode,
+            ms_estimate,
+        })
+    }
+
+    /// Score every estimator on a labelled dataset.
+    pub fn evaluate(&mut self, ds: &Dataset) -> Result<Scores> {
+        let (_, feats) = self.encoder.encode_dataset(ds)?;
+        Ok(score(&self.estimators, &feats, ds)?)
+    }
+
+    /// Score every estimator on pin images made otherwise (perturbed
+    /// frames) and labelled by the rows of `ds`.
+    pub fn evaluate_pins(&mut self, pins: &PinSet, ds: &Dataset) -> Result<Scores> {
+        let feats = self.encoder.encode(&pins.images)?;
+        Ok(score(&self.estimators, &feats, ds)?)
+    }
+}
+
+/// Sorted class names of a column and each row's class index.
+pub fn classes_of(ds: &Dataset, column: &str) -> Result<(Vec<String>, Vec<usize>)> {
+    let names: Vec<String> = (0..ds.len())
+        .map(|i| ds.text(i, column).map(str::to_string))
+        .collect::<tactile_core::Result<_>>()?;
+    let mut classes = names.clone();
+    classes.sort();
+    classes.dedup();
+    let y = names
+        .iter()
+        .map(|n| classes.iter().position(|c| c == n).unwrap_or(0))
+        .collect();
+    Ok((classes, y))
+}
+
+/// A head's accuracy on test frames.
+pub struct HeadTest {
+    /// Fraction right.
+    pub accuracy: f64,
+    /// Frames right.
+    pub right: usize,
+    /// Frames tested.
+    pub frames: usize,
+    /// `confusion[truth][predicted]`.
+    pub confusion: Vec<Vec<usize>>,
+}
+
+/// Train the shape head on the `train` split of `ds` (or every row) and
+/// save it in `out`; test it on `test` (another dataset, features from the
+/// same encoder) or on the `test` split when there is one.
+pub fn train_head(
+    config: HeadConfig,
+    source: &FeatureSource,
+    ds: &Dataset,
+    test: Option<&Dataset>,
+    out: &Path,
+    runtime: Runtime,
+) -> Result<(ClassifierHead, Option<HeadTest>)> {
+    if ds.is_empty() {
+        return Err(
+            tactile_core::Error::dataset(ds.labels_path(), None, "no frames to train on").into(),
+        );
+    }
+    tactile_core::io::ensure_writable_dir(out)?;
+    let feats = dataset_features(source, ds, runtime)?;
+    let (classes, y) = classes_of(ds, "shape")?;
+    let train = ds
+        .split_indices("train")
+        .unwrap_or_else(|| (0..ds.len()).collect());
+    let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
+        (
+            idx.iter().map(|&i| feats[i].clone()).collect(),
+            idx.iter().map(|&i| y[i]).collect(),
+        )
+    };
+    let (tx, ty) = pick(&train);
+    let config = HeadConfig {
+        inputs: feats[0].len(),
+        classes: classes.clone(),
+        ..config
+    };
+    eprintln!(
+        "training a {}-fold head ensemble on {} frames",
+        config.folds,
+        tx.len()
+    );
+    let device = runtime
+        .device()
+        .unwrap_or(tactile_core::DeviceKind::Flex)
+        .device();
+    let head = ClassifierHead::train(config, &tx, &ty, &device)?;
+    head.save(out)?;
+    let test_set: Option<(Vec<Vec<f32>>, Vec<usize>)> = match test {
+        Some(t) => {
+            let f = dataset_features(source, t, runtime)?;
+            let y = (0..t.len())
+                .map(|i| {
+                    let s = t.text(i, "shape")?;
+                    classes.iter().position(|c| c == s).ok_or_else(|| {
+                        tactile_core::Error::dataset(
+                            t.labels_path(),
+                            Some(t.rows[i].line),
+                            format!("shape '{s}' was not in the training set"),
+                        )
+                    })
+                })
+                .collect::<tactile_core::Result<Vec<_>>>()?;
+            Some((f, y))
+        }
+        None => ds.split_indices("test").map(|t| pick(&t)),
+    };
+    let tested = match test_set {
+        Some((sx, sy)) => {
+            let pred = head.predict(&sx)?;
+            Some(HeadTest {
+                accuracy: accuracy(&pred, &sy),
+                right: pred.iter().zip(&sy).filter(|(a, b)| a == b).count(),
+                frames: sy.len(),
+                confusion: confusion(&pred, &sy, classes.len()),
+            })
+        }
+        None => None,
+    };
+    Ok((head, tested))
+}
+
+/// How a regressor is trained on a dataset.
+#[derive(Debug, Clone)]
+pub struct RegressorPlan {
+    /// What it predicts.
+    pub targets: Vec<Target>,
+    /// Hidden widths (ReLU).
+    pub hidden: Vec<usize>,
+    /// Without a `split` column: fraction of frames held out for testing.
+    pub test_fraction: f64,
+    /// Fraction of the training frames used for early stopping.
+    pub val_fraction: f64,
+    /// Split and weight seed.
+    pub seed: u64,
+    /// Use only frames where every target is labelled; otherwise an empty
+    /// label is an error.
+    pub only_labelled: bool,
+}
+
+impl RegressorPlan {
+    /// The defaults: the regressor's own hidden widths and seed, 20 % of the
+    /// frames for testing and 20 % of the rest for early stopping.
+    pub fn new(targets: Vec<Target>) -> Self {
+        let defaults = RegressorConfig::new(0, Vec::new());
+        Self {
+            targets,
+            hidden: defaults.hidden.iter().map(|h| h.0).collect(),
+            test_fraction: 0.2,
+            val_fraction: 0.2,
+            seed: defaults.schedule.seed,
+            only_labelled: false,
+        }
+    }
+}
+
+/// A trained regressor and its test error.
+pub struct RegressorFit {
+    /// The regressor.
+    pub regressor: Regressor,
+    /// Frames of each split: train, validation, test.
+    pub frames: [usize; 3],
+    /// Mean absolute error per target on the test frames.
+    pub test_mae: Vec<f64>,
+}
+
+/// Train a regressor on `ds` and save it in `out`.
+pub fn train_regressor(
+    plan: &RegressorPlan,
+    source: &FeatureSource,
+    ds: &Dataset,
+    out: &Path,
+    runtime: Runtime,
+) -> Result<RegressorFit> {
+    tactile_core::io::ensure_writable_dir(out)?;
+    let feats = dataset_features(source, ds, runtime)?;
+    // Every target must be labelled on every frame used: with
+    // `only_labelled`, frames missing one are left out of every split.
+    let labels = (0..ds.len())
+        .map(|i| -> tactile_core::Result<Option<Vec<f64>>> {
+            let mut row = Vec::with_capacity(plan.targets.len());
+            for t in &plan.targets {
+                match (ds.number_opt(i, &t.name)?, plan.only_labelled) {
+                    (Some(v), _) => row.push(v),
+                    (None, true) => return Ok(None),
+                    (None, false) => row.push(ds.number(i, &t.name)?),
+                }
+            }
+            Ok(Some(row))
+        })
+        .collect::<tactile_core::Result<Vec<_>>>()?;
+    let mut s = ds.three_way_split(plan.test_fraction, plan.val_fraction, plan.seed)?;
+    for rows in [&mut s.train, &mut s.val, &mut s.test] {
+        rows.retain(|&i| labels[i].is_some());
+    }
+    if s.train.is_empty() || s.val.is_empty() || s.test.is_empty() {
+        return Err(tactile_core::Error::dataset(
+            ds.labels_path(),
+            None,
+            format!(
+                "too few frames with every target labelled ({} train, {} validation, {} test)",
+                s.train.len(),
+                s.val.len(),
+                s.test.len()
+            ),
+        )
+        .into());
+    }
+    let labels: Vec<Vec<f64>> = labels.into_iter().map(Option::unwrap_or_default).collect();
+    let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<Vec<f64>>) {
+        (
+            idx.iter().map(|&i| feats[i].clone()).collect(),
+            idx.iter().map(|&i| labels[i].clone()).collect(),
+        )
+    };
+    let (tx, ty) = pick(&s.train);
+    let (vx, vy) = pick(&s.val);
+    let (sx, sy) = pick(&s.test);
+    eprintln!(
+        "training a regressor for {} on {} frames ({} validation, {} test)",
+        plan.targets
+            .iter()
+            .map(|t| t.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+        tx.len(),
+        vx.len(),
+        sx.len()
+    );
+    let mut cfg = RegressorConfig::new(feats[0].len(), plan.targets.clone())
+        .with_hidden(plan.hidden.iter().map(|&w| (w, Activation::Relu)).collect());
+    cfg.schedule.seed = plan.seed;
+    let device = runtime
+        .device()
+        .unwrap_or(tactile_core::DeviceKind::Flex)
+        .device();
+    let regressor = Regressor::train(cfg, (&tx, &ty), (&vx, &vy), &device)?;
+    regressor.save(out)?;
+    let test_mae = regressor.evaluate(&sx, &sy)?;
+    Ok(RegressorFit {
+        regressor,
+        frames: [tx.len(), vx.len(), sx.len()],
+        test_mae,
+    })
+}

@@ -1,0 +1,161 @@
+//! Changes of camera conditions applied to raw TacTip frames (paper A,
+//! section V): more sensor noise, an illumination gradient, an external
+//! light blob, a rotated mounting. The robustness study measures how every
+//! estimator's error grows under each.
+
+use tactile_core::image_io::GreyImage;
+use tactile_core::rng::SampleRng;
+
+use crate::Result;
+
+/// A change of camera conditions applied to raw frames.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Perturbation {
+    /// Extra Gaussian sensor noise.
+    Noise {
+        /// Standard deviation, grey levels.
+        sigma: f64,
+    },
+    /// A linear gain ramp `1 + slope * r` across the frame (r in [-1, 1]
+    /// along a random direction) on top of the sensor's own.
+    Gradient {
+        /// Gain change at the frame's edge.
+        slope: f64,
+    },
+    /// An external Gaussian light blob of this amplitude (grey levels),
+    /// sigma 30 px, centred somewhere within 100 px of the middle.
+    Blob {
+        /// Peak, grey levels.
+        amplitude: f64,
+    },
+    /// The sensor turned about the camera axis.
+    Rotation {
+        /// Angle, degrees.
+        deg: f64,
+    },
+}
+
+impl Perturbation {
+    /// The study: three strengths of each (the clean frames come first).
+    pub fn study() -> Vec<(&'static str, Vec<Perturbation>)> {
+        use Perturbation::*;
+        vec![
+            (
+                "noise",
+                [6.0, 12.0, 24.0].map(|sigma| Noise { sigma }).to_vec(),
+            ),
+            (
+                "gradient",
+                [0.3, 0.6, 0.9].map(|slope| Gradient { slope }).to_vec(),
+            ),
+            (
+                "blob",
+                [60.0, 120.0, 180.0]
+                    .map(|amplitude| Blob { amplitude })
+                    .to_vec(),
+            ),
+            (
+                "rotation",
+                [2.0, 5.0, 10.0].map(|deg| Rotation { deg }).to_vec(),
+            ),
+        ]
+    }
+
+    /// Human-readable strength.
+    pub fn describe(&self) -> String {
+        match *self {
+            Self::Noise { sigma } => format!("noise sigma {sigma} grey levels"),
+            Self::Gradient { slope } => format!("gain gradient +-{:.0} %", 100.0 * slope),
+            Self::Blob { amplitude } => format!("light blob {amplitude} grey levels"),
+            Self::Rotation { deg } => format!("rotated {deg} deg"),
+        }
+    }
+
+    /// Apply to one frame; `rng` makes the random parts (noise, direction,
+    /// position) reproducible per frame.
+    pub fn apply(&self, img: &GreyImage, rng: &mut SampleRng) -> Result<GreyImage> {
+        let (w, h) = (img.width(), img.height());
+        let src = img.as_slice();
+        let (cu, cv) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+        let half = cu.max(cv).max(1.0);
+        let mut out = vec![0u8; w * h];
+        match *self {
+            Self::Noise { sigma } => {
+                for (o, &s) in out.iter_mut().zip(src) {
+                    *o = (s as f64 + sigma * rng.normal()).round().clamp(0.0, 255.0) as u8;
+                }
+            }
+            Self::Gradient { slope } => {
+                let a = 2.0 * std::f64::consts::PI * rng.uniform();
+                let (du, dv) = (a.cos(), a.sin());
+                for (k, o) in out.iter_mut().enumerate() {
+                    let (u, v) = ((k % w) as f64 - cu, (k / w) as f64 - cv);
+                    let r = (u * du + v * dv) / half;
+                    *o = (src[k] as f64 * (1.0 + slope * r))
+                        .round()
+                        .clamp(0.0, 255.0) as u8;
+                }
+            }
+            Self::Blob { amplitude } => {
+                let (a, d) = (
+                    2.0 * std::f64::consts::PI * rng.uniform(),
+                    100.0 * rng.uniform().sqrt(),
+                );
+                let (bu, bv) = (cu + d * a.cos(), cv + d * a.sin());
+                for (k, o) in out.iter_mut().enumerate() {
+                    let (u, v) = ((k % w) as f64 - bu, (k / w) as f64 - bv);
+                    let g = (-(u * u + v * v) / (2.0 * 30.0 * 30.0)).exp();
+                    *o = (src[k] as f64 + amplitude * g).round().clamp(0.0, 255.0) as u8;
+                }
+            }
+            Self::Rotation { deg } => {
+                // Inverse mapping with bilinear interpolation; outside -> 0.
+                let (s, c) = deg.to_radians().sin_cos();
+                let at = |x: isize, y: isize| -> f64 {
+                    if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
+                        0.0
+                    } else {
+                        src[y as usize * w + x as usize] as f64
+                    }
+                };
+                for (k, o) in out.iter_mut().enumerate() {
+                    let (u, v) = ((k % w) as f64 - cu, (k / w) as f64 - cv);
+                    let (x, y) = (c * u + s * v + cu, -s * u + c * v + cv);
+                    let (x0, y0) = (x.floor(), y.floor());
+                    let (fx, fy) = (x - x0, y - y0);
+                    let (x0, y0) = (x0 as isize, y0 as isize);
+                    let v = at(x0, y0) * (1.0 - fx) * (1.0 - fy)
+                        + at(x0 + 1, y0) * fx * (1.0 - fy)
+                        + at(x0, y0 + 1) * (1.0 - fx) * fy
+                        + at(x0 + 1, y0 + 1) * fx * fy;
+                    *o = v.round().clamp(0.0, 255.0) as u8;
+                }
+            }
+        }
+        Ok(tactile_core::image_io::grey_image(w, h, out)?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn perturbations_keep_the_size_and_are_seeded() {
+        let img = tactile_core::image_io::grey_image(
+            40,
+            30,
+            (0..1200).map(|i| (i % 251) as u8).collect(),
+        )
+        .unwrap();
+        for (_, levels) in Perturbation::study() {
+            for p in levels {
+                let a = p.apply(&img, &mut SampleRng::new(1, 2, 3)).unwrap();
+                let b = p.apply(&img, &mut SampleRng::new(1, 2, 3)).unwrap();
+                assert_eq!((a.width(), a.height()), (40, 30));
+                assert_eq!(a.as_slice(), b.as_slice(), "{}", p.describe());
+                assert_ne!(a.as_slice(), img.as_slice(), "{}", p.describe());
+            }
+        }
+    }
+}

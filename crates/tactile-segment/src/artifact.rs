@@ -1,0 +1,92 @@
+//! A trained segmenter on disk: `segmenter.json` (the U-Net's size, the
+//! training windows' channel statistics, the pixel threshold and the
+//! post-processing settings) beside `segmenter.bpk`.
+
+use burn::tensor::Device;
+use serde::{Deserialize, Serialize};
+use tactile_core::Artifact;
+use tactile_core::image_io::RgbImage;
+use tactile_onnx::{Exportable, export_batch_dynamic};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage, SquareWindow, resize_rgb};
+
+use crate::model::{UNet, UNetConfig};
+use crate::postprocess::{PostprocessConfig, Tendon, TendonMask, postprocess};
+use crate::{Error, Result};
+
+/// Everything needed to rebuild and run a saved segmenter.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SegmenterArtifact {
+    /// The U-Net and its window side.
+    #[serde(alias = "unet")]
+    pub model: UNetConfig,
+    /// Per-channel statistics of the training windows.
+    pub stats: ChannelStats,
+    /// Probability above which a pixel is tendon.
+    pub threshold: f64,
+    /// From mask to kept region and direction.
+    pub postprocess: PostprocessConfig,
+    /// Provenance.
+    #[serde(default)]
+    pub notes: serde_json::Value,
+}
+
+impl Artifact for SegmenterArtifact {
+    type Model = UNet;
+    const KIND: &'static str = "segmenter";
+    const CONFIG_FILE: &'static str = "segmenter.json";
+    const WEIGHTS_FILE: &'static str = "segmenter.bpk";
+
+    fn init(&self, device: &Device) -> tactile_core::Result<UNet> {
+        self.model.init(device)
+    }
+}
+
+impl Exportable for SegmenterArtifact {
+    /// `[N, 3, S, S]` normalised windows -> `[N, 1, S, S]` logits.
+    fn onnx(&self, model: &UNet) -> tactile_onnx::Result<Vec<u8>> {
+        let s = self.model.side;
+        export_batch_dynamic(model, [1, 3, s, s], |m: &UNet, x| m.forward(x))
+    }
+}
+
+impl SegmenterArtifact {
+    /// The square window the segmenter looks at.
+    pub fn window(&self) -> SquareWindow {
+        SquareWindow {
+            side: self.model.side,
+        }
+    }
+
+    /// The segmenter's (unrotated) window of an RGB frame of any size, at 8
+    /// bits per channel as in training ([`FloatImage::quantised`]).
+    pub fn frame_window(&self, frame: &RgbImage) -> Result<FloatImage> {
+        let win = self.window();
+        let (sw, sh) = win.scaled_size(frame.width(), frame.height());
+        Ok(win.cut(&resize_rgb(frame, sw, sh)?, 0.0).quantised())
+    }
+
+    /// The normalised `3 x S x S` input of a window.
+    pub fn window_input(&self, window: &FloatImage) -> Result<Vec<f32>> {
+        let s = self.model.side;
+        if (window.width, window.height) != (s, s) {
+            return Err(Error::WindowSize {
+                what: "window",
+                expected: [s, s],
+                found: [window.width, window.height],
+            });
+        }
+        Ok(self.stats.to_chw(window)?)
+    }
+
+    /// Post-processed tendon from the window's per-pixel probabilities;
+    /// `None` (a blank window: nothing to segment) gives an empty mask and
+    /// hence no direction.
+    pub fn tendon(&self, probabilities: Option<&[f32]>) -> Result<Tendon> {
+        let s = self.model.side;
+        let mask = match probabilities {
+            Some(p) => TendonMask::from_probabilities(s, s, p, self.threshold)?,
+            None => TendonMask::empty(s, s),
+        };
+        postprocess(&mask, &self.postprocess)
+    }
+}

@@ -1,0 +1,172 @@
+//! `tactile eval detector|segmenter|depth`: a paper B model scored on a
+//! labelled dataset; the last line printed is the metrics as JSON.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Args, Subcommand};
+use tactile_core::DeviceKind;
+use tactile_core::dataset::Dataset;
+use tactile_depth::DepthEstimator;
+use tactile_detect::{DetectionSet, TendonDetector};
+use tactile_segment::TendonSegmenter;
+
+#[derive(Subcommand)]
+pub(crate) enum EvalCmd {
+    /// Tendon detector: accuracy, precision, recall, F1, onset/release frames.
+    Detector(DetectorArgs),
+    /// Tendon segmenter: IoU per tendon path, direction error of the post-processed mask.
+    Segmenter(ModelArgs),
+    /// Depth network: MAE (window, tendon mask), RMSE, SSIM; optional heat maps.
+    Depth(DepthArgs),
+}
+
+#[derive(Args)]
+pub(crate) struct ModelArgs {
+    /// Model folder.
+    #[arg(long)]
+    model: PathBuf,
+    /// Visuo-tactile dataset with labels.
+    #[arg(long)]
+    data: PathBuf,
+    /// Device the network runs on.
+    #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
+    device: DeviceKind,
+}
+
+#[derive(Args)]
+pub(crate) struct DetectorArgs {
+    #[command(flatten)]
+    m: ModelArgs,
+    /// Also write every frame's probability and decision to this CSV
+    /// (file, tendon, probability, predicted, onset_release), to look at
+    /// the frames it gets wrong.
+    #[arg(long)]
+    frames: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub(crate) struct DepthArgs {
+    #[command(flatten)]
+    m: ModelArgs,
+    /// Write true | predicted heat maps (one shared colour scale per frame)
+    /// for the first frames into this folder.
+    #[arg(long)]
+    save_png: Option<PathBuf>,
+    /// How many frames `--save-png` writes.
+    #[arg(long, default_value_t = 8)]
+    png_frames: usize,
+}
+
+pub(crate) fn main(cmd: EvalCmd) -> Result<()> {
+    match cmd {
+        EvalCmd::Detector(a) => detector(a),
+        EvalCmd::Segmenter(a) => segmenter(a),
+        EvalCmd::Depth(a) => depth(a),
+    }
+}
+
+fn detector(a: DetectorArgs) -> Result<()> {
+    let m = &a.m;
+    let mut det = TendonDetector::load(&m.model, m.device.runtime(), 0)?;
+    let ds = Dataset::open(&m.data)?;
+    let data = DetectionSet::from_dataset(&ds, det.artifact.model.input_size)?;
+    let sc = tactile_detect::evaluate(&mut det, &data)?;
+    if let Some(path) = &a.frames {
+        tactile_detect::eval::write_decisions_csv(path, &data, &sc)?;
+        eprintln!("per-frame decisions in {}", path.display());
+    }
+    let (s, st) = (&sc.all, &sc.onset_release);
+    println!(
+        "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
+        s.frames,
+        s.true_pos + s.false_neg,
+        s.accuracy,
+        s.precision,
+        s.recall,
+        s.f1
+    );
+    println!(
+        "confusion: {} true positive, {} false positive, {} true negative, {} false negative",
+        s.true_pos, s.false_pos, s.true_neg, s.false_neg
+    );
+    println!(
+        "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
+        st.frames, st.accuracy, st.false_pos, st.false_neg
+    );
+    println!(
+        "{:.2} ms per frame ({}, batch {}, resize excluded)",
+        sc.ms_per_frame,
+        m.device,
+        tactile_detect::eval::EVAL_BATCH
+    );
+    println!(
+        "{}",
+        serde_json::json!({ "model": m.model, "data": m.data, "all": s, "onset_release": st, "ms_per_frame": sc.ms_per_frame })
+    );
+    Ok(())
+}
+
+fn segmenter(m: ModelArgs) -> Result<()> {
+    let mut seg = TendonSegmenter::load(&m.model, m.device.runtime(), 0)?;
+    let ds = Dataset::open(&m.data)?;
+    let sc = tactile_segment::evaluate(&mut seg, &ds)?;
+    println!(
+        "| tendon path | frames | mean IoU | direction median (deg) | direction p90 (deg) | no direction |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for r in &sc.paths {
+        println!(
+            "| {} | {} | {:.4} | {:.2} | {:.2} | {} |",
+            r.path,
+            r.frames,
+            r.mean_iou,
+            r.direction_median_deg,
+            r.direction_p90_deg,
+            r.no_direction
+        );
+    }
+    println!(
+        "{:.2} ms per window ({}, batch {}, cut excluded)",
+        sc.ms_per_window,
+        m.device,
+        tactile_segment::eval::EVAL_BATCH
+    );
+    println!(
+        "{}",
+        serde_json::json!({ "model": m.model, "data": m.data, "paths": sc.paths, "ms_per_window": sc.ms_per_window })
+    );
+    Ok(())
+}
+
+fn depth(a: DepthArgs) -> Result<()> {
+    let m = &a.m;
+    let mut est = DepthEstimator::load(&m.model, m.device.runtime(), 0)?;
+    let ds = Dataset::open(&m.data)?;
+    let (s, ms) = tactile_depth::evaluate(&mut est, &ds)?;
+    println!(
+        "{} frames: MAE {:.4} mm in the window, {} over the tendon mask, RMSE {:.4} mm, SSIM {:.4}",
+        s.frames,
+        s.mae_mm,
+        s.mae_tendon_mm.map_or("-".into(), |v| format!("{v:.4} mm")),
+        s.rmse_mm,
+        s.ssim
+    );
+    println!(
+        "{ms:.2} ms per frame ({}, batch {}, loading excluded)",
+        m.device,
+        tactile_depth::eval::EVAL_BATCH
+    );
+    if let Some(dir) = &a.save_png {
+        let n = tactile_depth::eval::save_heat_maps(&mut est, &ds, dir, a.png_frames)?;
+        println!(
+            "{n} heat maps (true | predicted, shared scale) in {}",
+            dir.display()
+        );
+    }
+    println!(
+        "{}",
+        serde_json::json!({ "model": m.model, "data": m.data, "scores": s, "ms_per_frame": ms })
+    );
+    Ok(())
+}

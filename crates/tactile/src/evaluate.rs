@@ -1,0 +1,50 @@
+//! `tactile evaluate`: every estimator of an encoder scored on a labelled
+//! dataset, per class and per shape.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use tactile_core::DeviceKind;
+use tactile_core::dataset::Dataset;
+use tactile_estimate::eval::scores_markdown;
+use tactile_pipeline::tactip::TactipPerception;
+
+#[derive(Args)]
+pub(crate) struct EvaluateArgs {
+    /// Trained encoder folder.
+    #[arg(long)]
+    encoder: PathBuf,
+    /// Estimator folders (default: every folder in ENCODER with head.json or regressor.json).
+    #[arg(long, num_args = 1..)]
+    heads: Vec<PathBuf>,
+    /// Labelled dataset (e.g. held-out synthetic frames).
+    #[arg(long)]
+    data: PathBuf,
+    /// Also write the tables to this Markdown file.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Device the networks run on.
+    #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
+    device: DeviceKind,
+}
+
+/// Score every estimator on a dataset; the last line is the scores as JSON.
+pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
+    let mut p = TactipPerception::load(&a.encoder, &a.heads, a.device.runtime())?;
+    let ds = Dataset::open(&a.data)?;
+    let s = p.evaluate(&ds)?;
+    let md = format!(
+        "Encoder {} on {} ({} frames).\n\n{}",
+        a.encoder.display(),
+        a.data.display(),
+        ds.len(),
+        scores_markdown(&s)
+    );
+    print!("{md}");
+    if let Some(out) = &a.out {
+        tactile_core::io::write_atomic(out, md.as_bytes())?;
+    }
+    println!("{}", serde_json::to_string(&s)?);
+    Ok(())
+}

@@ -1,0 +1,32 @@
+//! `tactile export`: a model folder to ONNX.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use tactile_pipeline::export::{Part, export_model};
+
+#[derive(Args)]
+pub(crate) struct ExportArgs {
+    /// Model folder (CAE, detector, segmenter or depth).
+    #[arg(long)]
+    model: PathBuf,
+    /// Output .onnx file.
+    #[arg(long)]
+    out: PathBuf,
+    /// For a CAE: the encoder (pin image -> features) or the whole autoencoder.
+    #[arg(long, value_enum, default_value_t = Part::Encoder)]
+    part: Part,
+}
+
+pub(crate) fn main(a: ExportArgs) -> Result<()> {
+    let e = export_model(&a.model, a.part)?;
+    tactile_onnx::save_onnx(&a.out, &e.bytes)?;
+    println!(
+        "{} exported to {} ({} bytes)",
+        e.kind,
+        a.out.display(),
+        e.bytes.len()
+    );
+    Ok(())
+}

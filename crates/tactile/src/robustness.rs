@@ -1,0 +1,45 @@
+//! `tactile robustness`: estimator errors under perturbed camera conditions.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use tactile_bench::robustness::{Robustness, robustness};
+
+#[derive(Args)]
+pub(crate) struct RobustnessArgs {
+    /// Trained encoder folder.
+    #[arg(long)]
+    encoder: PathBuf,
+    /// Estimator folders (default: every folder in ENCODER with head.json or regressor.json).
+    #[arg(long, num_args = 1..)]
+    heads: Vec<PathBuf>,
+    /// Labelled dataset of raw frames (held-out synthetic TacTip frames).
+    #[arg(long)]
+    data: PathBuf,
+    /// Use at most this many frames (the first ones).
+    #[arg(long)]
+    limit: Option<usize>,
+    /// Markdown table; the plot goes beside it.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Seed of the perturbations.
+    #[arg(long, default_value_t = 11)]
+    seed: u64,
+}
+
+pub(crate) fn main(a: RobustnessArgs) -> Result<()> {
+    let r = robustness(&Robustness {
+        encoder: a.encoder,
+        heads: a.heads,
+        data: a.data,
+        limit: a.limit,
+        seed: a.seed,
+    })?;
+    print!("{}", r.markdown);
+    if let Some(out) = &a.out {
+        r.write(out)?;
+        eprintln!("wrote {} and its plot", out.display());
+    }
+    Ok(())
+}

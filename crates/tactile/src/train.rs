@@ -1,0 +1,480 @@
+//! `tactile train cae|head|regressor|detector|segmenter|depth`. Every
+//! default comes from the model's training config.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand};
+use tactile_cae::{CaeConfig, CaeTrainingConfig, Optimizer};
+use tactile_core::DeviceKind;
+use tactile_core::dataset::{Dataset, TestHoldout};
+use tactile_core::train::Schedule;
+use tactile_depth::{DenseNetPreset, DepthTrainingConfig, HeadKind, LossKind};
+use tactile_detect::{Architecture, DetectorTrainingConfig, SoftLabels};
+use tactile_estimate::{HeadConfig, RegressorConfig, Target};
+use tactile_pipeline::tactip::{FeatureSource, RegressorPlan, train_head, train_regressor};
+use tactile_segment::SegmenterTrainingConfig;
+
+use crate::args::{Preprocess, Size};
+
+#[derive(Subcommand)]
+pub(crate) enum TrainCmd {
+    /// Paper A's convolutional autoencoder.
+    Cae(CaeArgs),
+    /// A shallow shape classifier on the features of a trained encoder.
+    Head(HeadArgs),
+    /// A regressor (pose, depth, force; angles on the circle) on features.
+    Regressor(RegressorArgs),
+    /// Paper B's tendon detector on visuo-tactile frames.
+    Detector(DetectorArgs),
+    /// Paper B's U-Net tendon segmenter on visuo-tactile tendon frames.
+    Segmenter(SegmenterArgs),
+    /// Paper B's depth U-Net with a DenseNet encoder.
+    Depth(DepthArgs),
+}
+
+/// The schedule flags of one model, their defaults from its training config.
+macro_rules! schedule_args {
+    ($name:ident, $default:expr) => {
+        #[derive(Args)]
+        pub(crate) struct $name {
+            /// Upper bound on epochs.
+            #[arg(long, default_value_t = $default.max_epochs)]
+            max_epochs: usize,
+            /// Epochs without a better validation loss before stopping.
+            #[arg(long, default_value_t = $default.patience)]
+            patience: usize,
+            /// Items per optimiser step.
+            #[arg(long, default_value_t = $default.batch_size)]
+            batch_size: usize,
+            /// Learning rate of the first epoch [default: the model's; for the
+            /// CAE, Adadelta 1.0 or Adam 0.003].
+            #[arg(long)]
+            lr: Option<f64>,
+            /// Learning-rate factor per epoch.
+            #[arg(long, default_value_t = $default.lr_decay)]
+            lr_decay: f64,
+            /// Seeds the weights, every shuffle and every split.
+            #[arg(long, default_value_t = $default.seed)]
+            seed: u64,
+            /// Training device.
+            #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
+            device: DeviceKind,
+            /// Continue from the checkpoint in the output folder.
+            #[arg(long)]
+            resume: bool,
+        }
+
+        impl $name {
+            fn schedule(&self, default_lr: f64) -> Schedule {
+                Schedule::new(
+                    self.batch_size,
+                    self.max_epochs,
+                    self.patience,
+                    self.lr.unwrap_or(default_lr),
+                )
+                .with_lr_decay(self.lr_decay)
+                .with_seed(self.seed)
+            }
+        }
+    };
+}
+
+schedule_args!(CaeSchedule, CaeTrainingConfig::new().schedule);
+schedule_args!(DetectorSchedule, DetectorTrainingConfig::new().schedule);
+schedule_args!(SegmenterSchedule, SegmenterTrainingConfig::new().schedule);
+schedule_args!(DepthSchedule, DepthTrainingConfig::new().schedule);
+
+#[derive(Args)]
+pub(crate) struct CaeArgs {
+    /// TacTip dataset folder; with a `split` column, only `train` rows are used.
+    #[arg(long)]
+    data: PathBuf,
+    /// Output model folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Preprocessing: binary (already binarised frames), paper, lighting-compensated, or a JSON file.
+    #[arg(long, default_value = "binary")]
+    preprocess: Preprocess,
+    /// Encoder widths, e.g. 16,8,8,4 (paper) or 16,16,8,4 (authors' release).
+    #[arg(long, value_delimiter = ',', default_values_t = CaeConfig::new().widths)]
+    widths: Vec<usize>,
+    /// Feature count (8/16/32/64): sets the last width.
+    #[arg(long)]
+    features: Option<usize>,
+    /// No ReLU before the last pooling: features cannot die (see CaeConfig).
+    #[arg(long)]
+    linear_latent: bool,
+    /// Adadelta (paper A) or Adam.
+    #[arg(long, value_enum, default_value_t = CaeTrainingConfig::new().optimizer)]
+    optimizer: Optimizer,
+    /// Fraction of the training rows held out for early stopping.
+    #[arg(long, default_value_t = CaeTrainingConfig::new().val_fraction)]
+    val_fraction: f64,
+    /// Without a `split` column: leave out the test frames that `tactile
+    /// compare`/`train regressor` with this test fraction and --split-seed
+    /// hold out, so the encoder never sees them.
+    #[arg(long)]
+    exclude_test: Option<f64>,
+    /// The seed of that split (compare's --seed).
+    #[arg(long, default_value_t = 7)]
+    split_seed: u64,
+    #[command(flatten)]
+    schedule: CaeSchedule,
+}
+
+#[derive(Args)]
+pub(crate) struct FeatureArgs {
+    /// Trained encoder folder (features are computed from the frames).
+    #[arg(long, required_unless_present = "features")]
+    encoder: Option<PathBuf>,
+    /// Precomputed feature CSV (file,f0,f1,...) instead of an encoder,
+    /// e.g. the authors' golden-features.csv; needs --out.
+    #[arg(long, conflicts_with = "encoder", requires = "out")]
+    features: Option<PathBuf>,
+}
+
+impl FeatureArgs {
+    fn source(&self) -> Result<FeatureSource> {
+        match (&self.encoder, &self.features) {
+            (_, Some(csv)) => Ok(FeatureSource::Csv(csv.clone())),
+            (Some(e), None) => Ok(FeatureSource::Encoder(e.clone())),
+            (None, None) => bail!("give --encoder DIR or --features CSV"),
+        }
+    }
+
+    /// `out`, or `ENCODER/name`.
+    fn out(&self, out: &Option<PathBuf>, name: &str) -> Result<PathBuf> {
+        out.clone()
+            .or_else(|| self.encoder.as_ref().map(|e| e.join(name)))
+            .context("--features needs --out")
+    }
+}
+
+#[derive(Args)]
+pub(crate) struct HeadArgs {
+    #[command(flatten)]
+    features: FeatureArgs,
+    /// Dataset with `shape` labels (and a `split` column: train/test).
+    #[arg(long)]
+    data: PathBuf,
+    /// Head folder (default: ENCODER/head).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// A separate test dataset (default: the `test` split of --data).
+    #[arg(long, requires = "encoder")]
+    test: Option<PathBuf>,
+    /// Ensemble members; each early-stops on its own fold of the train split.
+    #[arg(long, default_value_t = HeadConfig::new(0, vec![]).folds)]
+    folds: usize,
+    /// Repeats of the k-fold split (members = folds x repeats).
+    #[arg(long, default_value_t = HeadConfig::new(0, vec![]).repeats)]
+    repeats: usize,
+    /// Fold and weight seed.
+    #[arg(long, default_value_t = HeadConfig::new(0, vec![]).schedule.seed)]
+    seed: u64,
+    /// Training device.
+    #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
+    device: DeviceKind,
+}
+
+#[derive(Args)]
+pub(crate) struct RegressorArgs {
+    #[command(flatten)]
+    features: FeatureArgs,
+    /// Dataset with the target label columns.
+    #[arg(long)]
+    data: PathBuf,
+    /// Targets: label columns, angles with their period, e.g. x_mm,theta_deg:180,depth_mm.
+    #[arg(long, value_delimiter = ',', required = true)]
+    targets: Vec<Target>,
+    /// Output folder (default: ENCODER/regressor).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Without a `split` column: fraction of frames held out for testing.
+    #[arg(long, default_value_t = RegressorPlan::new(vec![]).test_fraction)]
+    test_fraction: f64,
+    /// Fraction of the training frames used for early stopping.
+    #[arg(long, default_value_t = RegressorPlan::new(vec![]).val_fraction)]
+    val_fraction: f64,
+    /// Hidden layer widths (ReLU), e.g. 32,16 (the authors' force head).
+    #[arg(long, value_delimiter = ',', default_values_t = RegressorPlan::new(vec![]).hidden)]
+    hidden: Vec<usize>,
+    /// Split and weight seed.
+    #[arg(long, default_value_t = RegressorConfig::new(0, vec![]).schedule.seed)]
+    seed: u64,
+    /// Training device.
+    #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
+    device: DeviceKind,
+    /// Use only frames where every target is labelled (e.g. theta_deg,
+    /// empty for spheres and flats); otherwise an empty label is an error.
+    #[arg(long)]
+    only_labelled: bool,
+}
+
+#[derive(Args)]
+pub(crate) struct DetectorArgs {
+    /// Visuo-tactile dataset(s), each split by `sequence` into train and
+    /// validation (e.g. the default distribution plus a set of light
+    /// presses that crowds the frames near the label's threshold).
+    #[arg(long, num_args = 1.., required = true)]
+    data: Vec<PathBuf>,
+    /// Output model folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// The network.
+    #[arg(long, value_enum, default_value_t = DetectorTrainingConfig::new().model.architecture)]
+    architecture: Architecture,
+    /// Channel width multiplier.
+    #[arg(long, default_value_t = DetectorTrainingConfig::new().model.width)]
+    width: f64,
+    /// Input size WIDTHxHEIGHT (paper B: 320x240).
+    #[arg(long, default_value_t = Size(DetectorTrainingConfig::new().model.input_size))]
+    input: Size,
+    /// Fraction of each dataset's sequences that validate.
+    #[arg(long, default_value_t = DetectorTrainingConfig::new().val_fraction)]
+    val_fraction: f64,
+    /// Train toward soft targets from each frame's ridge amplitude
+    /// (`ridge_mm`): sigmoid(ln(A / 0.03 mm) / WIDTH), 0.03 mm being the
+    /// spec's label threshold. Suggested width: 0.2.
+    #[arg(long, value_name = "WIDTH")]
+    soft_labels: Option<f64>,
+    /// Only re-choose the threshold of the model already in --out on the
+    /// validation sequences (training ends with this step anyway).
+    #[arg(long)]
+    calibrate_only: bool,
+    #[command(flatten)]
+    schedule: DetectorSchedule,
+}
+
+#[derive(Args)]
+pub(crate) struct SegmenterArgs {
+    /// Visuo-tactile dataset; its tendon frames are split by `sequence`.
+    #[arg(long)]
+    data: PathBuf,
+    /// Output model folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Side of the square window (a multiple of 16; paper B: 160).
+    #[arg(long, default_value_t = SegmenterTrainingConfig::new().model.side)]
+    side: usize,
+    /// Channels of the first U-Net block.
+    #[arg(long, default_value_t = SegmenterTrainingConfig::new().model.base)]
+    base: usize,
+    /// Rotated copies of each training frame (paper B's augmentation).
+    #[arg(long, default_value_t = SegmenterTrainingConfig::new().copies)]
+    copies: usize,
+    /// Fraction of the sequences that validate.
+    #[arg(long, default_value_t = SegmenterTrainingConfig::new().val_fraction)]
+    val_fraction: f64,
+    #[command(flatten)]
+    schedule: SegmenterSchedule,
+}
+
+#[derive(Args)]
+pub(crate) struct DepthArgs {
+    /// Visuo-tactile dataset (split by `sequence`).
+    #[arg(long)]
+    data: PathBuf,
+    /// Output model folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// DenseNet encoder preset.
+    #[arg(long, value_enum, default_value_t = DenseNetPreset::Small)]
+    encoder: DenseNetPreset,
+    /// Input WIDTHxHEIGHT, multiples of 32 (paper B: 256x256).
+    #[arg(long, default_value_t = Size(DepthTrainingConfig::new().model.input_size))]
+    input: Size,
+    /// conv1x1 (paper B) or custom (two 3x3 conv + ReLU, then 1x1).
+    #[arg(long, value_enum, default_value_t = DepthTrainingConfig::new().model.head)]
+    head: HeadKind,
+    /// l1 (paper B), mse, or l1-grad-ssim (DenseTact).
+    #[arg(long, value_enum, default_value_t = DepthTrainingConfig::new().loss)]
+    loss: LossKind,
+    /// Feed the ground-truth tendon mask as a fourth channel.
+    #[arg(long)]
+    with_mask: bool,
+    /// Train the decoder only.
+    #[arg(long)]
+    freeze_encoder: bool,
+    /// torchvision DenseNet weights as safetensors (key mapping: the
+    /// tactile-depth `torchvision` module docs); the preset must match.
+    #[arg(long)]
+    pretrained: Option<PathBuf>,
+    /// Millimetres per model unit (1 = millimetres; 1000 = metres, which stalls and is refused).
+    #[arg(long, default_value_t = DepthTrainingConfig::new().unit_mm)]
+    unit_mm: f32,
+    /// Channels of the deepest decoder block.
+    #[arg(long, default_value_t = DepthTrainingConfig::new().model.decoder_width)]
+    decoder_width: usize,
+    /// Fraction of the sequences that validate.
+    #[arg(long, default_value_t = DepthTrainingConfig::new().val_fraction)]
+    val_fraction: f64,
+    #[command(flatten)]
+    schedule: DepthSchedule,
+}
+
+pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
+    match cmd {
+        TrainCmd::Cae(a) => {
+            let ds = Dataset::open(&a.data)?;
+            let widths: [usize; 4] = a
+                .widths
+                .try_into()
+                .map_err(|_| anyhow::anyhow!("--widths needs 4 values"))?;
+            let mut model = CaeConfig::new()
+                .with_widths(widths)
+                .with_latent_relu(a.linear_latent.then_some(false));
+            if let Some(f) = a.features {
+                model = model.with_feature_count(f)?;
+            }
+            let config = CaeTrainingConfig::new()
+                .with_model(model)
+                .with_preprocess(a.preprocess.config)
+                .with_schedule(a.schedule.schedule(a.optimizer.default_learning_rate()))
+                .with_optimizer(a.optimizer)
+                .with_val_fraction(a.val_fraction)
+                .with_holdout(a.exclude_test.map(|f| TestHoldout {
+                    test_fraction: f,
+                    split_seed: a.split_seed,
+                }));
+            let s = tactile_cae::training::train(
+                &config,
+                &ds,
+                &a.out,
+                a.schedule.device,
+                a.schedule.resume,
+            )?;
+            println!(
+                "trained {} epochs in {:.0} s; best validation BCE {:.4} at epoch {}; model in {}",
+                s.epochs_run,
+                s.seconds,
+                s.best_val_loss,
+                s.best_epoch,
+                a.out.display()
+            );
+        }
+        TrainCmd::Head(a) => {
+            let ds = Dataset::open(&a.data)?;
+            let test = a.test.as_ref().map(Dataset::open).transpose()?;
+            let out = a.features.out(&a.out, "head")?;
+            let mut config = HeadConfig::new(0, vec![])
+                .with_folds(a.folds)
+                .with_repeats(a.repeats);
+            config.schedule.seed = a.seed;
+            let rt = a.device.runtime();
+            let (head, tested) =
+                train_head(config, &a.features.source()?, &ds, test.as_ref(), &out, rt)?;
+            if let Some(t) = tested {
+                println!(
+                    "test shape accuracy: {:.1} % ({}/{})",
+                    100.0 * t.accuracy,
+                    t.right,
+                    t.frames
+                );
+                let classes = head.classes();
+                println!(
+                    "confusion (rows: truth, columns: predicted): {}",
+                    classes.join(" ")
+                );
+                for (c, row) in classes.iter().zip(&t.confusion) {
+                    let cells: String = row.iter().map(|v| format!("{v:>5}")).collect();
+                    println!("  {c:>12} {cells}");
+                }
+            }
+            println!("head saved in {}", out.display());
+        }
+        TrainCmd::Regressor(a) => {
+            let ds = Dataset::open(&a.data)?;
+            let out = a.features.out(&a.out, "regressor")?;
+            let plan = RegressorPlan {
+                hidden: a.hidden,
+                test_fraction: a.test_fraction,
+                val_fraction: a.val_fraction,
+                seed: a.seed,
+                only_labelled: a.only_labelled,
+                ..RegressorPlan::new(a.targets)
+            };
+            let fit = train_regressor(&plan, &a.features.source()?, &ds, &out, a.device.runtime())?;
+            println!("test mean absolute error ({} frames):", fit.frames[2]);
+            for (t, e) in plan.targets.iter().zip(&fit.test_mae) {
+                println!("  {:<14} {e:.4}", t.name);
+            }
+            println!("regressor saved in {}", out.display());
+        }
+        TrainCmd::Detector(a) => {
+            let datasets = a
+                .data
+                .iter()
+                .map(Dataset::open)
+                .collect::<Result<Vec<_>, _>>()?;
+            let soft_labels = match a.soft_labels {
+                None => None,
+                Some(w) if w > 0.0 && w.is_finite() => Some(SoftLabels::new(
+                    datasets_synth::visuotactile::TENDON_MIN_AMPLITUDE_MM,
+                    w,
+                )),
+                Some(w) => bail!("--soft-labels must be a positive width, got {w}"),
+            };
+            let d = DetectorTrainingConfig::new();
+            let config = DetectorTrainingConfig::new()
+                .with_model(
+                    d.model
+                        .with_architecture(a.architecture)
+                        .with_width(a.width)
+                        .with_input_size(a.input.0),
+                )
+                .with_schedule(a.schedule.schedule(d.schedule.learning_rate))
+                .with_val_fraction(a.val_fraction)
+                .with_soft_labels(soft_labels);
+            let s = &a.schedule;
+            let fit = tactile_detect::training::train(
+                &config,
+                &datasets,
+                &a.out,
+                s.device,
+                s.resume,
+                a.calibrate_only,
+            )?;
+            println!(
+                "{} (accuracy {:.4} at the chosen threshold {:.2}); model in {}",
+                fit.summary.describe("accuracy at threshold 0.5"),
+                fit.val_accuracy,
+                fit.threshold,
+                a.out.display()
+            );
+        }
+        TrainCmd::Segmenter(a) => {
+            let ds = Dataset::open(&a.data)?;
+            let d = SegmenterTrainingConfig::new();
+            let config = SegmenterTrainingConfig::new()
+                .with_model(d.model.with_side(a.side).with_base(a.base))
+                .with_schedule(a.schedule.schedule(d.schedule.learning_rate))
+                .with_copies(a.copies)
+                .with_val_fraction(a.val_fraction);
+            let s = &a.schedule;
+            let fit = tactile_segment::training::train(&config, &ds, &a.out, s.device, s.resume)?;
+            println!("{}; model in {}", fit.describe("mean IoU"), a.out.display());
+        }
+        TrainCmd::Depth(a) => {
+            let ds = Dataset::open(&a.data)?;
+            let d = DepthTrainingConfig::new();
+            let model = tactile_depth::DepthNetConfig::new(a.encoder.config(), a.input.0)
+                .with_head(a.head)
+                .with_decoder_width(a.decoder_width);
+            let config = DepthTrainingConfig::new()
+                .with_model(model)
+                .with_schedule(a.schedule.schedule(d.schedule.learning_rate))
+                .with_loss(a.loss)
+                .with_unit_mm(a.unit_mm)
+                .with_with_mask(a.with_mask)
+                .with_freeze_encoder(a.freeze_encoder)
+                .with_pretrained(a.pretrained.map(|p| p.display().to_string()))
+                .with_val_fraction(a.val_fraction);
+            let s = &a.schedule;
+            let fit = tactile_depth::training::train(&config, &ds, &a.out, s.device, s.resume)?;
+            println!("{}; model in {}", fit.describe("MAE (mm)"), a.out.display());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,26 @@
+//! What can go wrong generating a dataset.
+
+use std::path::PathBuf;
+
+/// Result alias of this crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Errors of the virtual sensors and the dataset writer.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A configuration, file or image problem.
+    #[error(transparent)]
+    Core(#[from] tactile_core::Error),
+    /// The output folder holds files and `force` was not given.
+    #[error("{}: output folder exists and is not empty (use --force to overwrite)", path.display())]
+    OutputNotEmpty {
+        /// The folder.
+        path: PathBuf,
+    },
+    /// The output path is a file.
+    #[error("{}: output exists and is a file, not a folder", path.display())]
+    OutputIsFile {
+        /// The file.
+        path: PathBuf,
+    },
+}
