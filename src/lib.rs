@@ -3,6 +3,8 @@
 //! The workspace's crates, re-exported under short names so a user can
 //! depend on this one library.
 
+#![deny(missing_docs)]
+
 pub use datasets_synth as synth;
 pub use tactile_bench as bench;
 pub use tactile_cae as cae;

@@ -1,3 +1,4 @@
+#![deny(missing_docs)]
 //! datasets-synth: the two virtual sensors of `shared/spec/sensors.md`
 //! (version 1), written as datasets in the layout of `datasets.md`.
 //!

@@ -59,11 +59,23 @@ pub const SHAPES: [&str; 7] = [
 /// An object pressed into the tip.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shape {
+/// A box face 9 x 27 mm, long side along theta.
     Cuboid,
-    Cylinder { radius_mm: f64 },
+/// A cylinder lying with its axis along theta.
+    Cylinder {
+        /// Radius, mm.
+        radius_mm: f64,
+    },
+/// A triangular prism on a side, its 60-degree ridge along theta.
     Prism,
+/// A half-plane with its edge along theta.
     Edge,
-    Sphere { radius_mm: f64 },
+/// A sphere.
+    Sphere {
+        /// Radius, mm.
+        radius_mm: f64,
+    },
+/// A plane.
     Flat,
 }
 
@@ -99,12 +111,19 @@ impl Shape {
 pub struct TactipConfig {
     /// Shapes drawn uniformly, by name (see [`SHAPES`]).
     pub shapes: Vec<String>,
+/// Indentation past first touch, mm.
     pub depth_mm: Range,
+/// Contact x, mm.
     pub x_mm: Range,
+/// Contact y, mm.
     pub y_mm: Range,
+/// In-plane orientation, degrees.
     pub theta_deg: Range,
+/// Sphere radius, mm.
     pub sphere_radius_mm: Range,
+/// Grey level of a pin at rest.
     pub pin_grey: Range,
+/// Grey level of the background.
     pub background_grey: Range,
     /// `g0` of the illumination field.
     pub gain: Range,
@@ -112,8 +131,11 @@ pub struct TactipConfig {
     pub gradient: Range,
     /// Probability of an external light blob.
     pub blob_probability: f64,
+/// Light blob width, pixels.
     pub blob_sigma_px: Range,
+/// Light blob amplitude, grey levels.
     pub blob_amplitude: Range,
+/// Sensor noise, grey levels.
     pub noise_sigma: Range,
     /// Relative standard deviation of the load-cell noise on `force_n`.
     pub force_noise: f64,
@@ -176,30 +198,46 @@ impl TactipConfig {
 /// An external light blob (additive Gaussian), in pixels and grey levels.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LightBlob {
+    /// Centre column, pixels.
     pub u: f64,
+    /// Centre row, pixels.
     pub v: f64,
+    /// Width, pixels.
     pub sigma_px: f64,
+    /// Peak, grey levels.
     pub amplitude: f64,
 }
 
 /// Everything that makes one frame, drawn from a [`TactipConfig`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct TactipScene {
+    /// The object.
     pub shape: Shape,
     /// Contact position, mm (for `edge`: signed distance of the edge line).
     pub x_mm: f64,
+    /// Contact y, mm.
     pub y_mm: f64,
+    /// In-plane orientation, degrees.
     pub theta_deg: f64,
+    /// Indentation past first touch, mm.
     pub depth_mm: f64,
+    /// Grey level of a pin at rest.
     pub pin_grey: f64,
+    /// Grey level of the background.
     pub background_grey: f64,
+    /// `g0` of the illumination field.
     pub gain: f64,
+    /// `a` of the illumination field.
     pub gradient_u: f64,
+    /// `b` of the illumination field.
     pub gradient_v: f64,
+    /// The external light blob, in 30 % of frames.
     pub blob: Option<LightBlob>,
+    /// Sensor noise, grey levels.
     pub noise_sigma: f64,
     /// Standard-normal draw for the load-cell noise.
     pub force_noise_draw: f64,
+    /// Relative standard deviation of the load-cell noise.
     pub force_noise: f64,
 }
 
@@ -427,8 +465,11 @@ pub fn mm_to_px(x: f64, y: f64) -> (f64, f64) {
 /// A pin as the camera sees it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pin {
+    /// Column, pixels.
     pub u: f64,
+    /// Row, pixels.
     pub v: f64,
+    /// Disc radius, pixels.
     pub radius_px: f64,
 }
 

@@ -24,6 +24,7 @@ pub const FPS: f64 = 30.0;
 pub const NOMINAL_DEPTH_MM: f64 = 15.0;
 /// Rest dome: `d0(r) = 15 + 3 (r / r_max)^2` mm.
 pub const DOME_BASE_MM: f64 = 15.0;
+/// Rise of the rest dome from centre to corner, mm.
 pub const DOME_RISE_MM: f64 = 3.0;
 /// Whole-window displacement per mm of press at the centre.
 pub const WINDOW_PUSH: f64 = 0.4;
@@ -33,22 +34,28 @@ pub const RIDGE_GAIN: f64 = 0.35;
 pub const RIDGE_WIDTH: (f64, f64) = (0.6, 0.3);
 /// Mask threshold: ridge above `max(0.3 A, 0.02 mm)`.
 pub const MASK_FRACTION: f64 = 0.3;
+/// Smallest ridge height in the mask, mm.
 pub const MASK_FLOOR_MM: f64 = 0.02;
 /// Smallest ridge amplitude that counts as a visible tendon, mm.
 pub const TENDON_MIN_AMPLITUDE_MM: f64 = 0.03;
 /// Skin albedo and ambient term.
 pub const ALBEDO: f64 = 0.8;
+/// Ambient light term.
 pub const AMBIENT: f64 = 0.25;
 /// Light elevation and azimuths (red, green, blue), degrees.
 pub const LIGHT_ELEVATION_DEG: f64 = 30.0;
+/// Light azimuths (red, green, blue), degrees.
 pub const LIGHT_AZIMUTH_DEG: [f64; 3] = [90.0, 210.0, 330.0];
 /// Housing colour, 8-bit RGB.
 pub const HOUSING_RGB: [f64; 3] = [10.0, 10.0, 12.0];
 /// LED glare: sigma as a fraction of the width, amplitude, position on the
 /// window ellipse (fraction of its radii, direction in degrees).
 pub const GLARE_SIGMA_FRACTION: f64 = 0.03;
+/// LED glare amplitude, in [0, 1] channel units.
 pub const GLARE_AMPLITUDE: f64 = 0.6;
+/// LED glare position: fraction of the window ellipse's radii.
 pub const GLARE_RADIUS_FRACTION: f64 = 0.92;
+/// LED glare position: direction from the centre, degrees.
 pub const GLARE_DIRECTION_DEG: f64 = -45.0;
 /// Optical blur, pixels.
 pub const BLUR_PX: f64 = 1.0;
@@ -58,17 +65,22 @@ const RAY_MM: f64 = 1000.0;
 /// The tendon centre-line families.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum TendonPath {
+    /// A straight line.
     #[serde(rename = "straight")]
     Straight,
+    /// A circular arc.
     #[serde(rename = "arc")]
     Arc,
+    /// Two opposite arcs.
     #[serde(rename = "s-curve")]
     SCurve,
 }
 
 impl TendonPath {
+    /// Every path.
     pub const ALL: [TendonPath; 3] = [TendonPath::Straight, TendonPath::Arc, TendonPath::SCurve];
 
+    /// The label's name.
     pub fn name(self) -> &'static str {
         match self {
             TendonPath::Straight => "straight",
@@ -99,10 +111,13 @@ impl std::str::FromStr for TendonPath {
 pub struct VisuotactileConfig {
     /// Rendered size: an exact integer fraction of 1920 x 1080.
     pub width: u32,
+    /// Rendered height.
     pub height: u32,
     /// Tendon paths drawn uniformly.
     pub paths: Vec<TendonPath>,
+    /// Tendon radius, mm.
     pub tendon_radius_mm: Range,
+    /// Depth of the tendon under the phantom's surface, mm.
     pub burial_mm: Range,
     /// Radius of curvature of `arc` and `s-curve` paths.
     pub curvature_radius_mm: Range,
@@ -186,16 +201,22 @@ impl VisuotactileConfig {
 /// The camera of a frame size: pinhole, 90-degree horizontal field of view.
 #[derive(Debug, Clone, Copy)]
 pub struct Camera {
+    /// Frame width, pixels.
     pub width: usize,
+    /// Frame height, pixels.
     pub height: usize,
+    /// Focal length, pixels (`width / 2`).
     pub fx: f64,
+    /// Principal point, column.
     pub cx: f64,
+    /// Principal point, row.
     pub cy: f64,
     /// Half-diagonal of the frame, pixels.
     pub r_max: f64,
 }
 
 impl Camera {
+    /// The camera of a `width x height` frame.
     pub fn new(width: u32, height: u32) -> Self {
         let (w, h) = (width as f64, height as f64);
         Self {
@@ -225,6 +246,7 @@ impl Camera {
         (self.width as f64 / 2.0, self.height as f64 / 2.0)
     }
 
+    /// True inside the sensing window (the inscribed ellipse).
     pub fn in_window(&self, u: f64, v: f64) -> bool {
         let (a, b) = self.window_radii();
         let (du, dv) = ((u - self.cx) / a, (v - self.cy) / b);
@@ -309,6 +331,7 @@ pub struct CentreLine {
     pieces: Vec<Piece>,
     /// The point nearest the frame centre and the unit tangent there.
     pub anchor: P2,
+    /// The unit tangent there.
     pub tangent: P2,
 }
 
@@ -402,12 +425,19 @@ pub fn fold_180(deg: f64) -> f64 {
 /// The phantom and palpation of one video.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SequenceScene {
+    /// The centre line's family.
     pub path: TendonPath,
+    /// Tendon radius, mm.
     pub tendon_radius_mm: f64,
+    /// Burial depth, mm.
     pub burial_mm: f64,
+    /// Radius of curvature of curved paths, mm.
     pub curvature_radius_mm: f64,
+    /// The centre line.
     pub line: CentreLine,
+    /// False when the centre line stays outside the window.
     pub in_view: bool,
+    /// Peak press of the video, mm.
     pub peak_press_mm: f64,
 }
 
@@ -504,7 +534,9 @@ pub fn press_profile(peak_mm: f64, index: usize, frames: usize) -> f64 {
 
 /// A rendered frame with its labels.
 pub struct VisuotactileFrame {
+    /// Width, pixels.
     pub width: usize,
+    /// Height, pixels.
     pub height: usize,
     /// RGB, row-major interleaved.
     pub rgb: Vec<u8>,
@@ -512,6 +544,7 @@ pub struct VisuotactileFrame {
     pub mask: Vec<u8>,
     /// Camera-to-skin distance, metres.
     pub depth_m: Vec<f32>,
+    /// The `tendon` label.
     pub tendon: bool,
     /// Present when `tendon`.
     pub direction_deg: Option<f64>,

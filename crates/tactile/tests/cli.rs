@@ -813,6 +813,11 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
     let run = |v: Vec<String>| tactile(&v.iter().map(String::as_str).collect::<Vec<_>>());
     let (ok, msg) = run(args("1"));
     assert!(ok, "{msg}");
+    // Not a terminal: one line per epoch instead of a hidden progress bar.
+    assert!(
+        msg.contains("epoch 1/1: train loss") && msg.contains("ETA"),
+        "{msg}"
+    );
     // One more epoch from the checkpoint.
     let mut more = args("2");
     more.push("--resume".into());
