@@ -17,6 +17,12 @@ pub enum Error {
         /// The folder.
         path: PathBuf,
     },
+    /// `--force` on a non-empty folder that is not a dataset.
+    #[error("{}: not a dataset (no manifest.json): --force replaces only a dataset folder or an empty one, never other files", path.display())]
+    NotADataset {
+        /// The folder.
+        path: PathBuf,
+    },
     /// The output path is a file.
     #[error("{}: output exists and is a file, not a folder", path.display())]
     OutputIsFile {

@@ -59,23 +59,23 @@ pub const SHAPES: [&str; 7] = [
 /// An object pressed into the tip.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shape {
-/// A box face 9 x 27 mm, long side along theta.
+    /// A box face 9 x 27 mm, long side along theta.
     Cuboid,
-/// A cylinder lying with its axis along theta.
+    /// A cylinder lying with its axis along theta.
     Cylinder {
         /// Radius, mm.
         radius_mm: f64,
     },
-/// A triangular prism on a side, its 60-degree ridge along theta.
+    /// A triangular prism on a side, its 60-degree ridge along theta.
     Prism,
-/// A half-plane with its edge along theta.
+    /// A half-plane with its edge along theta.
     Edge,
-/// A sphere.
+    /// A sphere.
     Sphere {
         /// Radius, mm.
         radius_mm: f64,
     },
-/// A plane.
+    /// A plane.
     Flat,
 }
 
@@ -111,19 +111,19 @@ impl Shape {
 pub struct TactipConfig {
     /// Shapes drawn uniformly, by name (see [`SHAPES`]).
     pub shapes: Vec<String>,
-/// Indentation past first touch, mm.
+    /// Indentation past first touch, mm.
     pub depth_mm: Range,
-/// Contact x, mm.
+    /// Contact x, mm.
     pub x_mm: Range,
-/// Contact y, mm.
+    /// Contact y, mm.
     pub y_mm: Range,
-/// In-plane orientation, degrees.
+    /// In-plane orientation, degrees.
     pub theta_deg: Range,
-/// Sphere radius, mm.
+    /// Sphere radius, mm.
     pub sphere_radius_mm: Range,
-/// Grey level of a pin at rest.
+    /// Grey level of a pin at rest.
     pub pin_grey: Range,
-/// Grey level of the background.
+    /// Grey level of the background.
     pub background_grey: Range,
     /// `g0` of the illumination field.
     pub gain: Range,
@@ -131,11 +131,11 @@ pub struct TactipConfig {
     pub gradient: Range,
     /// Probability of an external light blob.
     pub blob_probability: f64,
-/// Light blob width, pixels.
+    /// Light blob width, pixels.
     pub blob_sigma_px: Range,
-/// Light blob amplitude, grey levels.
+    /// Light blob amplitude, grey levels.
     pub blob_amplitude: Range,
-/// Sensor noise, grey levels.
+    /// Sensor noise, grey levels.
     pub noise_sigma: Range,
     /// Relative standard deviation of the load-cell noise on `force_n`.
     pub force_noise: f64,

@@ -18,6 +18,8 @@ use crate::rng::{Range, SampleRng};
 
 /// The native frame of the sensor.
 pub const NATIVE: (u32, u32) = (1920, 1080);
+/// Longest palpation video, frames.
+pub const MAX_FRAMES_PER_SEQUENCE: usize = 100_000;
 /// Frames per second of a palpation video.
 pub const FPS: f64 = 30.0;
 /// Nominal skin depth used for the tendon geometry, mm.
@@ -184,10 +186,10 @@ impl VisuotactileConfig {
         Range::fixed(self.out_of_view_fraction).check("out_of_view_fraction", 0.0, 1.0)?;
         self.exposure_jitter.check("exposure_jitter", -0.9, 0.9)?;
         self.noise_sigma.check("noise_sigma", 0.0, 100.0)?;
-        if self.frames_per_sequence == 0 {
-            return Err(Error::Config(
-                "frames_per_sequence: must be at least 1".into(),
-            ));
+        if self.frames_per_sequence == 0 || self.frames_per_sequence > MAX_FRAMES_PER_SEQUENCE {
+            return Err(Error::Config(format!(
+                "frames_per_sequence: must be 1 to {MAX_FRAMES_PER_SEQUENCE}"
+            )));
         }
         Ok(())
     }

@@ -28,9 +28,11 @@ pub struct WriteOptions {
     pub progress: bool,
 }
 
-/// Check the output folder before any work: refuse a non-empty one without `force`.
+/// Check the output folder before any work: a non-empty folder is refused
+/// without `force`, and even with it unless it is a dataset (it has a
+/// `manifest.json`): `--force` replaces a dataset, never other files.
 pub fn check_output(out: &Path, force: bool) -> Result<()> {
-    if out.is_file() {
+    if out.exists() && !out.is_dir() {
         return Err(crate::Error::OutputIsFile {
             path: out.to_path_buf(),
         });
@@ -43,26 +45,17 @@ pub fn check_output(out: &Path, force: bool) -> Result<()> {
             path: out.to_path_buf(),
         });
     }
+    if non_empty && !out.join("manifest.json").is_file() {
+        return Err(crate::Error::NotADataset {
+            path: out.to_path_buf(),
+        });
+    }
     Ok(())
 }
 
-fn staging_dir(out: &Path) -> tactile_core::Result<PathBuf> {
-    let name = out
-        .file_name()
-        .ok_or_else(|| Error::Invalid(format!("{}: not a folder name", out.display())))?;
-    let parent = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    tactile_core::io::create_dir_all(parent)?;
-    let staging = parent.join(format!(".{}.partial", name.to_string_lossy()));
-    if staging.exists() {
-        std::fs::remove_dir_all(&staging).map_err(|e| Error::io(&staging, e))?;
-    }
-    Ok(staging)
-}
-
-/// Render rows in parallel into a staging folder, then move it to `out`.
+/// Render rows in parallel into a staging folder of this run's own, then
+/// move it to `out` whole: an interrupted run leaves nothing, and two runs
+/// into one folder never mix.
 fn write_dataset<F>(
     out: &Path,
     extra_columns: &[&str],
@@ -76,39 +69,33 @@ where
     F: Fn(&Path, usize) -> tactile_core::Result<Vec<String>> + Sync,
 {
     check_output(out, options.force)?;
-    let staging = staging_dir(out)?;
-    let result = (|| {
-        let mut writer = DatasetWriter::create(&staging, manifest.kind, extra_columns, true)?;
-        for d in subdirs {
-            tactile_core::io::create_dir_all(staging.join(d))?;
-        }
-        let pb = tactile_core::train::progress_bar(count as u64, "synth");
-        if !options.progress {
-            pb.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-        }
-        let rows: Vec<Vec<String>> = (0..count)
-            .into_par_iter()
-            .map(|i| {
-                let r = row(&staging, i);
-                pb.inc(1);
-                r
-            })
-            .collect::<tactile_core::Result<_>>()?;
-        pb.finish_and_clear();
-        for r in rows {
-            writer.push_row(r)?;
-        }
-        writer.finish(manifest)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_dir_all(&staging);
-        return Err(e.into());
+    let staged = tactile_core::io::StagedDir::new(out)?;
+    let staging = staged.path().to_path_buf();
+    let mut writer = DatasetWriter::create(&staging, manifest.kind, extra_columns, true)?;
+    for d in subdirs {
+        tactile_core::io::create_dir_all(staging.join(d))?;
     }
-    if out.exists() {
-        std::fs::remove_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let pb = tactile_core::train::progress_bar(count as u64, "synth");
+    if !options.progress {
+        pb.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    std::fs::rename(&staging, out).map_err(|e| Error::io(out, e))?;
-    Ok(out.to_path_buf())
+    let rows: Vec<Vec<String>> = (0..count)
+        .into_par_iter()
+        .map(|i| {
+            tactile_core::interrupt::check()?;
+            let r = row(&staging, i);
+            pb.inc(1);
+            r
+        })
+        .collect::<tactile_core::Result<_>>()?;
+    pb.finish_and_clear();
+    for r in rows {
+        writer.push_row(r)?;
+    }
+    writer.finish(manifest)?;
+    // Checked again: another run may have filled the folder meanwhile.
+    check_output(out, options.force)?;
+    Ok(staged.commit(options.force)?)
 }
 
 fn num(v: f64, decimals: usize) -> String {
@@ -117,6 +104,15 @@ fn num(v: f64, decimals: usize) -> String {
 
 fn opt(v: Option<f64>, decimals: usize) -> String {
     v.map(|v| num(v, decimals)).unwrap_or_default()
+}
+
+/// Refuse a frame count of 0 or more than a dataset may hold.
+fn check_count(count: usize) -> Result<()> {
+    let max = tactile_core::dataset::MAX_ROWS;
+    if count == 0 || count > max {
+        return Err(Error::Config(format!("count: must be 1 to {max} frames, got {count}")).into());
+    }
+    Ok(())
 }
 
 /// Write `count` virtual TacTip frames with their labels to `out`.
@@ -128,9 +124,7 @@ pub fn write_tactip(
     options: WriteOptions,
 ) -> Result<PathBuf> {
     config.validate()?;
-    if count == 0 {
-        return Err(Error::Config("count: must be at least 1".into()).into());
-    }
+    check_count(count)?;
     let mut extra = serde_json::Map::new();
     extra.insert(
         "config".into(),
@@ -187,9 +181,7 @@ pub fn write_visuotactile(
     options: WriteOptions,
 ) -> Result<PathBuf> {
     config.validate()?;
-    if count == 0 {
-        return Err(Error::Config("count: must be at least 1".into()).into());
-    }
+    check_count(count)?;
     let fps = config.frames_per_sequence;
     let sequences = count.div_ceil(fps);
     let mut extra = serde_json::Map::new();

@@ -19,6 +19,9 @@ use crate::Result;
 use crate::latency::{RuntimeMs, threads};
 use crate::output::{BenchRow, folder_name};
 
+/// Largest throughput batch, frames.
+pub const MAX_BATCH: usize = 65_536;
+
 /// One runtime's speed.
 #[derive(Debug, Clone)]
 pub struct EncoderSpeed {
@@ -42,6 +45,15 @@ pub fn measure_encoder(
 ) -> Result<Vec<EncoderSpeed>> {
     let art = CaeArtifact::read(model)?;
     let px = art.model.input_px;
+    if pins.is_empty() {
+        return Err(tactile_core::Error::Invalid("no frames to time the encoder on".into()).into());
+    }
+    if batch == 0 || batch > MAX_BATCH {
+        return Err(tactile_core::Error::Config(format!(
+            "the throughput batch must be 1 to {MAX_BATCH} frames, got {batch}"
+        ))
+        .into());
+    }
     let flat = |n: usize| -> Vec<f32> {
         (0..n)
             .flat_map(|i| pins.images[i % pins.len()].pixels.clone())
@@ -53,7 +65,7 @@ pub fn measure_encoder(
         let mut net = match load_network::<CaeArtifact>(model, runtime, threads()) {
             Ok((_, net)) => net,
             Err(e) if runtime == Runtime::Onnx => {
-                eprintln!("onnxruntime skipped: {e}");
+                tactile_core::note!("onnxruntime skipped: {e}");
                 continue;
             }
             Err(e) => return Err(e.into()),

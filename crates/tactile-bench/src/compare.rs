@@ -62,7 +62,7 @@ pub fn compare(c: &Compare) -> Result<String> {
     }
     let (_, net) = tactile_onnx::load_network::<CaeArtifact>(&c.encoder, Runtime::BurnFlex, 0)?;
     let mut encoder = TactipEncoder::from_network(art.clone(), net);
-    eprintln!("preprocessing {} frames", ds.len());
+    tactile_core::note!("preprocessing {} frames", ds.len());
     let pins = PinSet::from_dataset(&ds, &art.preprocess)?;
     let cae_feats = encoder.encode(&pins.images)?;
     let raw: Vec<Vec<f32>> = pins.images.iter().map(|p| p.pixels.clone()).collect();
@@ -96,12 +96,12 @@ pub fn compare(c: &Compare) -> Result<String> {
     ));
     // Pin tracking: blob centroids at full resolution, matched to the pins
     // of the first training frame; displacements as features.
-    eprintln!("tracking pins");
+    tactile_core::note!("tracking pins");
     let centroids = (0..ds.len())
         .into_par_iter()
         .map(|i| -> Result<Vec<(f32, f32)>> {
             let path = ds.path_of(i, "file")?;
-            let frame = tactile_core::image_io::load_grey(&path)?;
+            let frame = ds.load_grey(i, "file")?;
             let binary = tactile_preprocess::pins::full_resolution_binary(&frame, &art.preprocess)
                 .map_err(|e| e.in_file(&path))?;
             Ok(tactile_preprocess::pins::pin_centroids(&binary, 4)?)
@@ -188,7 +188,7 @@ fn regression_table(
     );
     for (name, [tx, vx, sx]) in sets {
         for est in [mlp.as_str(), "ridge", "k-NN (k=5)"] {
-            eprintln!("{name} + {est}");
+            tactile_core::note!("{name} + {est}");
             let t0 = std::time::Instant::now();
             let pred = match est {
                 "ridge" => classical::ridge(targets, (tx, ty), sx, 1e-3)?,
@@ -246,7 +246,7 @@ fn classification_table(
             "Gaussian naive Bayes",
             "k-NN (k=5)",
         ] {
-            eprintln!("{name} + {est}");
+            tactile_core::note!("{name} + {est}");
             let t0 = std::time::Instant::now();
             let pred = match est {
                 "Gaussian naive Bayes" => classical::gaussian_nb(&x, &y, sx)?,

@@ -94,7 +94,7 @@ where
     for runtime in [Runtime::BurnNdarray, Runtime::BurnFlex, Runtime::Onnx] {
         match load_network::<A>(dir, runtime, threads()) {
             Ok((_, mut net)) => out.set(runtime, time_network(net.as_mut(), shape, &input, runs)),
-            Err(e) if runtime == Runtime::Onnx => eprintln!("onnxruntime skipped: {e}"),
+            Err(e) if runtime == Runtime::Onnx => tactile_core::note!("onnxruntime skipped: {e}"),
             Err(e) => return Err(e.into()),
         }
     }

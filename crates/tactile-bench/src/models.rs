@@ -111,7 +111,7 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
         let art = det.artifact.clone();
         let size = art.model.input_size;
         if !cache.iter().any(|c| c.0 == size) {
-            eprintln!("loading {} at {}x{}", b.data.display(), size[0], size[1]);
+            tactile_core::note!("loading {} at {}x{}", b.data.display(), size[0], size[1]);
             let sel = sel_ds
                 .as_ref()
                 .map(|d| DetectionSet::from_dataset(d, size))

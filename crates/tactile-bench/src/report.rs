@@ -98,7 +98,7 @@ fn held_out(
     if let Some(p) = press_mm {
         cfg.press_mm = p;
     }
-    eprintln!(
+    tactile_core::note!(
         "generating {} ({sequences} palpations, seed {seed})",
         dir.display()
     );
@@ -123,7 +123,7 @@ fn run_pipeline(
     runtime: Runtime,
     hysteresis: Option<(f32, f32)>,
 ) -> Result<RunSummary> {
-    eprintln!(
+    tactile_core::note!(
         "pipeline on {runtime}{}",
         if hysteresis.is_some() {
             " with hysteresis"
@@ -310,7 +310,7 @@ pub fn report(r: &Report) -> Result<String> {
         .unwrap_or_default()
         .to_string_lossy()
         .to_string();
-    eprintln!("bench cae");
+    tactile_core::note!("bench cae");
     let cae = bench_cae(&CaeBench {
         model: r.models.join("cae-shapes"),
         data: r.real.join("polic-shapes"),
@@ -325,13 +325,13 @@ pub fn report(r: &Report) -> Result<String> {
         extreme,
         runs: r.runs,
     };
-    eprintln!("bench detector");
+    tactile_core::note!("bench detector");
     let det = bench_detectors(&bench("detector", None))?;
     let det_md = det.write(&t("detector.md"))?;
-    eprintln!("bench segmenter");
+    tactile_core::note!("bench segmenter");
     let seg = bench_segmenters(&bench("segmenter", None))?;
     let seg_md = seg.write(&t("segmenter.md"))?;
-    eprintln!("bench depth");
+    tactile_core::note!("bench depth");
     let depth = bench_depth(&bench("depth", Some(extreme)))?;
     let depth_md = depth.write(&t("depth.md"))?;
     let mut pipeline = String::from(

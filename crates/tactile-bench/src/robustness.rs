@@ -41,7 +41,7 @@ pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
     let n = r.limit.unwrap_or(ds.len()).min(ds.len());
     let frames = (0..n)
         .into_par_iter()
-        .map(|i| Ok(tactile_core::image_io::load_grey(ds.path_of(i, "file")?)?))
+        .map(|i| Ok(ds.load_grey(i, "file")?))
         .collect::<Result<Vec<GreyImage>>>()?;
     let mut run = |p: Option<Perturbation>, stream: u64| -> Result<Scores> {
         let images = frames

@@ -75,7 +75,7 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
     let dev = DeviceKind::Flex.device();
     let mut rows = Vec::new();
     for enc in &s.encoders {
-        eprintln!("{}", enc.display());
+        tactile_core::note!("{}", enc.display());
         let loaded = CaeArtifact::load(enc, &dev)?;
         let art = &loaded.artifact;
         let pins = PinSet::from_dataset(&ds, &art.preprocess)?;

@@ -45,7 +45,7 @@ pub fn bench_synth(frames: usize) -> Result<String> {
     let opts = WriteOptions::default();
     let mut rows = Vec::new();
     let tc = TactipConfig::default();
-    eprintln!("virtual TacTip 300x300");
+    tactile_core::note!("virtual TacTip 300x300");
     let t1 = median_render(frames, |i| {
         let _ = tactip::sample(&tc, 1, i as u64);
     });
@@ -54,7 +54,7 @@ pub fn bench_synth(frames: usize) -> Result<String> {
     })?;
     rows.push(("virtual TacTip", "300x300".to_string(), t1, w));
     for (wd, ht, n) in [(640u32, 360u32, frames), (1920, 1080, (frames / 8).max(3))] {
-        eprintln!("virtual visuo-tactile {wd}x{ht}");
+        tactile_core::note!("virtual visuo-tactile {wd}x{ht}");
         let vc = VisuotactileConfig {
             width: wd,
             height: ht,

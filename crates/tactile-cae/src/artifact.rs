@@ -29,7 +29,24 @@ impl Artifact for CaeArtifact {
     const WEIGHTS_FILE: &'static str = "cae.bpk";
 
     fn init(&self, device: &Device) -> tactile_core::Result<Cae> {
+        self.model.check()?;
         Ok(self.model.init(device))
+    }
+
+    fn check(&self, file: &std::path::Path) -> tactile_core::Result<()> {
+        use tactile_core::artifact::in_config;
+        in_config(file, self.model.check())?;
+        in_config(file, self.preprocess.check())?;
+        if self.preprocess.output_px != self.model.input_px {
+            return Err(tactile_core::Error::model(
+                file,
+                format!(
+                    "preprocessing makes {0}x{0} pin images, the encoder takes {1}x{1}",
+                    self.preprocess.output_px, self.model.input_px
+                ),
+            ));
+        }
+        Ok(())
     }
 }
 

@@ -1,10 +1,9 @@
 //! From a dataset folder to pin-image tensors.
 
-use std::path::PathBuf;
-
 use burn::tensor::{Device, Tensor, TensorData};
+use rayon::prelude::*;
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_preprocess::{PinImage, PreprocessConfig, preprocess_files};
+use tactile_preprocess::{PinImage, PreprocessConfig, preprocess};
 
 use crate::Result;
 
@@ -29,8 +28,14 @@ impl PinSet {
             .iter()
             .map(|&i| ds.text(i, "file").map(str::to_string))
             .collect::<tactile_core::Result<_>>()?;
-        let paths: Vec<PathBuf> = files.iter().map(|f| ds.root.join(f)).collect();
-        let images = preprocess_files(&paths, cfg)?;
+        let images = rows
+            .par_iter()
+            .map(|&i| {
+                let frame = ds.load_grey(i, "file")?;
+                let path = ds.path_of(i, "file")?;
+                preprocess(&frame, cfg).map_err(|e| crate::Error::from(e.in_file(path)))
+            })
+            .collect::<Result<Vec<_>>>()?;
         Ok(Self { files, images })
     }
 

@@ -38,7 +38,29 @@ pub struct CaeConfig {
     pub latent_relu: Option<bool>,
 }
 
+/// Widest encoder block accepted.
+pub const MAX_WIDTH: usize = 1024;
+
 impl CaeConfig {
+    /// Check the sizes against the documented limits before anything is
+    /// allocated for them: every width 1 to [`MAX_WIDTH`], and the 28 px
+    /// input Table I's decoder reconstructs.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        if let Some(w) = self.widths.iter().find(|&&w| w == 0 || w > MAX_WIDTH) {
+            return Err(tactile_core::Error::Config(format!(
+                "CAE widths must be 1 to {MAX_WIDTH}, got {w} in {:?}",
+                self.widths
+            )));
+        }
+        if self.input_px != 28 {
+            return Err(tactile_core::Error::Config(format!(
+                "the CAE takes 28x28 pin images (Table I's decoder), got input_px {}",
+                self.input_px
+            )));
+        }
+        Ok(())
+    }
+
     /// Number of features the encoder outputs.
     pub fn feature_count(&self) -> usize {
         let s = self.latent_side();

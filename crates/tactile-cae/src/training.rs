@@ -82,11 +82,13 @@ pub fn train(
     resume: bool,
 ) -> Result<FitSummary> {
     config.schedule.check()?;
-    tactile_core::io::ensure_writable_dir(out)?;
+    config.model.check()?;
+    config.preprocess.check()?;
+    tactile_core::io::check_output_dir(out, &[data])?;
     let rows = data.training_rows(config.holdout)?;
     let (train, val) = hold_out(rows, config.val_fraction, config.schedule.seed)
         .map_err(|e| tactile_core::Error::dataset(data.labels_path(), None, e.to_string()))?;
-    eprintln!(
+    tactile_core::note!(
         "preprocessing {} frames ({} train, {} validation)",
         data.len(),
         train.len(),
@@ -113,7 +115,9 @@ pub fn train(
     };
     let fit_cfg = FitConfig::new(&config.schedule, "CAE training (binary cross-entropy)")
         .saving_to(out, resume)
-        .with_checkpoint_every(25);
+        .with_checkpoint_every(25)
+        .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
+    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
     let (_, summary) = fit::<_, crate::Error>(
         &fit_cfg,
         model,
@@ -135,5 +139,6 @@ pub fn train(
         &summary,
         serde_json::json!({ "train_frames": train.len(), "val_frames": val.len() }),
     )?;
+    unfinished.finish()?;
     Ok(summary)
 }

@@ -47,8 +47,24 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
         crate::io::write_json_atomic(dir.join(Self::CONFIG_FILE), self)
     }
 
-    /// Read and check the config alone.
+    /// Read and check the config alone; a folder whose training did not
+    /// finish (see [`Unfinished`]) is refused.
     fn read(dir: &Path) -> Result<Self> {
+        if dir.join(INCOMPLETE_FILE).exists() {
+            return Err(Error::model(
+                dir,
+                format!(
+                    "this {} did not finish training (interrupted or failed): resume it with --resume or train it again",
+                    Self::KIND
+                ),
+            ));
+        }
+        Self::read_unfinished(dir)
+    }
+
+    /// [`Self::read`] of a folder still being trained (for the trainer's
+    /// own last steps, such as calibrating a threshold).
+    fn read_unfinished(dir: &Path) -> Result<Self> {
         let file = dir.join(Self::CONFIG_FILE);
         if !dir.is_dir() {
             return Err(Error::not_found(dir, format!("{} folder", Self::KIND)));
@@ -67,9 +83,16 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
 
     /// Load config and weights from `dir` onto `device`.
     fn load(dir: &Path, device: &Device) -> Result<Loaded<Self>> {
-        let artifact = Self::read(dir)?;
-        let model =
-            crate::module_io::load_module(artifact.init(device)?, &dir.join(Self::WEIGHTS_FILE))?;
+        Self::read(dir)?;
+        Self::load_unfinished(dir, device)
+    }
+
+    /// [`Self::load`] of a folder still being trained.
+    fn load_unfinished(dir: &Path, device: &Device) -> Result<Loaded<Self>> {
+        let artifact = Self::read_unfinished(dir)?;
+        let weights = dir.join(Self::WEIGHTS_FILE);
+        let model = crate::module_io::load_module(artifact.init(device)?, &weights)?;
+        crate::module_io::check_finite(&model, &weights)?;
         Ok(Loaded {
             artifact,
             model,
@@ -77,6 +100,58 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
             device: device.clone(),
         })
     }
+}
+
+/// The file that marks a model folder whose training has not finished.
+pub const INCOMPLETE_FILE: &str = "INCOMPLETE";
+
+/// A training run in progress in a model folder: while it exists the folder
+/// holds [`INCOMPLETE_FILE`] and every loader refuses it, so an interrupted
+/// or failed run never leaves a complete-looking model (with an
+/// uncalibrated threshold, say).
+#[must_use = "call finish() when the model is complete"]
+pub struct Unfinished {
+    marker: PathBuf,
+}
+
+impl Unfinished {
+    /// Mark `dir` (created if needed) as being trained.
+    pub fn begin(dir: &Path) -> Result<Self> {
+        let marker = dir.join(INCOMPLETE_FILE);
+        crate::io::write_atomic(
+            &marker,
+            b"training in progress, or interrupted: this model is not complete\n",
+        )?;
+        Ok(Self { marker })
+    }
+
+    /// The model is complete: remove the mark.
+    pub fn finish(self) -> Result<()> {
+        std::fs::remove_file(&self.marker).map_err(|e| Error::io(&self.marker, e))
+    }
+}
+
+/// The identity of a training run: its config (less the epoch budget,
+/// which a resumed run may extend) and each dataset's manifest and labels.
+/// A checkpoint records it; resuming with another one is refused.
+pub fn run_fingerprint(
+    config: &impl Serialize,
+    datasets: &[&crate::dataset::Dataset],
+) -> Result<String> {
+    use sha2::Digest;
+    let mut json = serde_json::to_value(config)
+        .map_err(|e| Error::Invalid(format!("cannot serialise the training config: {e}")))?;
+    if let Some(s) = json.get_mut("schedule").and_then(|s| s.as_object_mut()) {
+        s.remove("max_epochs");
+    }
+    let mut h = sha2::Sha256::new();
+    h.update(json.to_string().as_bytes());
+    for ds in datasets {
+        for f in [ds.root.join("manifest.json"), ds.labels_path()] {
+            h.update(std::fs::read(&f).map_err(|e| Error::io(&f, e))?);
+        }
+    }
+    Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
 }
 
 /// A model loaded from its folder: config, network and where it runs.
@@ -89,6 +164,47 @@ pub struct Loaded<A: Artifact> {
     pub dir: PathBuf,
     /// The device it is on.
     pub device: Device,
+}
+
+/// The identity of a model folder's weights: `sha256:` and the hex digest
+/// of its weights file. An estimator records the fingerprint of the
+/// encoder it was trained on, so it is never run on another one's features.
+pub fn fingerprint<A: Artifact>(dir: &Path) -> Result<String> {
+    use sha2::Digest;
+    let path = dir.join(A::WEIGHTS_FILE);
+    let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, e))?;
+    let digest = sha2::Sha256::digest(&bytes);
+    Ok(format!(
+        "sha256:{}",
+        digest
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect::<String>()
+    ))
+}
+
+/// A config value checked on load: refuse `value` unless `ok`, naming the
+/// config `file` and the `field`.
+pub fn check_field(
+    file: &Path,
+    field: &str,
+    ok: bool,
+    value: impl std::fmt::Display,
+    need: &str,
+) -> Result<()> {
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::model(file, format!("{field} is {value}: {need}")))
+    }
+}
+
+/// Refuse a configuration error of a loaded config, naming its `file`.
+pub fn in_config<T>(file: &Path, r: Result<T>) -> Result<T> {
+    r.map_err(|e| match e {
+        Error::Config(m) => Error::model(file, m),
+        other => other,
+    })
 }
 
 /// Write `training.json` beside a trained model: the training config,

@@ -88,6 +88,9 @@ pub enum Error {
         /// Its value (NaN or infinite).
         value: f64,
     },
+    /// Stopped on request (Ctrl-C, SIGTERM): nothing half-written is left.
+    #[error("interrupted: stopped before finishing, nothing partial was kept")]
+    Interrupted,
     /// Any other invalid input, described in words.
     #[error("{0}")]
     Invalid(String),

@@ -105,9 +105,140 @@ pub fn ensure_writable_dir(dir: impl AsRef<Path>) -> Result<()> {
         .map_err(|e| refuse(e.kind().to_string()))
 }
 
+/// Before any work: the output file `out` can be written and is none of
+/// the files of the input `datasets`.
+pub fn check_output_file(out: &Path, datasets: &[&crate::dataset::Dataset]) -> Result<()> {
+    for ds in datasets {
+        ds.refuse_as_output(out)?;
+    }
+    if out.is_dir() {
+        return Err(Error::Invalid(format!(
+            "{}: is a folder; give a file name for this output",
+            out.display()
+        )));
+    }
+    ensure_writable_parent(out)
+}
+
+/// Before any work: the output folder `out` can be written and is not
+/// part of the input `datasets`.
+pub fn check_output_dir(out: &Path, datasets: &[&crate::dataset::Dataset]) -> Result<()> {
+    for ds in datasets {
+        ds.refuse_as_output(out)?;
+    }
+    ensure_writable_dir(out)
+}
+
 /// [`ensure_writable_dir`] for the folder an output file will go into.
 pub fn ensure_writable_parent(file: impl AsRef<Path>) -> Result<()> {
     ensure_writable_dir(file.as_ref().parent().unwrap_or(Path::new(".")))
+}
+
+/// A folder written in full before it appears. Files go into a hidden
+/// staging folder beside the target (`.NAME.partial-PID-XXXX`), unique to
+/// the run, so concurrent runs never mix; [`StagedDir::commit`] renames it
+/// into place. Dropped without a commit (an error, an interrupt), it is
+/// removed; one left by a killed process is removed by the next run.
+pub struct StagedDir {
+    staging: tempfile::TempDir,
+    target: std::path::PathBuf,
+}
+
+fn process_alive(pid: u32) -> bool {
+    !cfg!(target_os = "linux") || Path::new(&format!("/proc/{pid}")).exists()
+}
+
+impl StagedDir {
+    /// A staging folder for `target` (whose parent is created if needed).
+    pub fn new(target: impl AsRef<Path>) -> Result<Self> {
+        let target = target.as_ref().to_path_buf();
+        let name = target
+            .file_name()
+            .ok_or_else(|| Error::Invalid(format!("{}: not a folder name", target.display())))?
+            .to_string_lossy()
+            .into_owned();
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => std::path::PathBuf::from("."),
+        };
+        create_dir_all(&parent)?;
+        let prefix = format!(".{name}.partial-");
+        // Staging folders of runs that were killed.
+        if let Ok(entries) = std::fs::read_dir(&parent) {
+            for e in entries.flatten() {
+                let file = e.file_name().to_string_lossy().into_owned();
+                let pid = file
+                    .strip_prefix(&prefix)
+                    .and_then(|rest| rest.split('-').next())
+                    .and_then(|p| p.parse::<u32>().ok());
+                if let Some(pid) = pid
+                    && !process_alive(pid)
+                {
+                    let _ = std::fs::remove_dir_all(e.path());
+                }
+            }
+        }
+        let staging = tempfile::Builder::new()
+            .prefix(&format!("{prefix}{}-", std::process::id()))
+            .tempdir_in(&parent)
+            .map_err(|e| Error::io(&parent, e))?;
+        Ok(Self { staging, target })
+    }
+
+    /// Where to write.
+    pub fn path(&self) -> &Path {
+        self.staging.path()
+    }
+
+    /// Move the staging folder into place. With `replace`, an existing
+    /// target is swapped out first and removed after; without, a target
+    /// that exists and is not empty (another run's result) is left alone
+    /// and this run fails.
+    pub fn commit(self, replace: bool) -> Result<std::path::PathBuf> {
+        let staging = self.staging.keep();
+        let target = self.target;
+        let fail = |e: std::io::Error, staging: &Path| {
+            let _ = std::fs::remove_dir_all(staging);
+            Error::io(&target, e)
+        };
+        if replace && target.exists() {
+            let old = tempfile::Builder::new()
+                .prefix(".tactile-old-")
+                .tempdir_in(staging.parent().unwrap_or(Path::new(".")))
+                .map_err(|e| fail(e, &staging))?
+                .keep();
+            let aside = old.join("x");
+            std::fs::rename(&target, &aside).map_err(|e| fail(e, &staging))?;
+            std::fs::rename(&staging, &target).map_err(|e| fail(e, &staging))?;
+            let _ = std::fs::remove_dir_all(&old);
+        } else {
+            std::fs::rename(&staging, &target).map_err(|e| {
+                if target.is_dir() {
+                    let _ = std::fs::remove_dir_all(&staging);
+                    Error::Invalid(format!(
+                        "{}: another run wrote this folder meanwhile; this run's output was discarded",
+                        target.display()
+                    ))
+                } else {
+                    fail(e, &staging)
+                }
+            })?;
+        }
+        Ok(target)
+    }
+
+    /// Move every file of the staging folder into the target folder
+    /// (created if needed), keeping what else it holds.
+    pub fn commit_into(self) -> Result<std::path::PathBuf> {
+        create_dir_all(&self.target)?;
+        let entries = std::fs::read_dir(self.staging.path())
+            .map_err(|e| Error::io(self.staging.path(), e))?;
+        for e in entries.flatten() {
+            let to = self.target.join(e.file_name());
+            std::fs::rename(e.path(), &to).map_err(|err| Error::io(&to, err))?;
+        }
+        Ok(self.target.clone())
+    }
 }
 
 #[cfg(test)]
@@ -141,6 +272,38 @@ mod tests {
         let r = write_atomic_with(&p, |_| Err(std::io::Error::other("boom")));
         assert!(r.unwrap_err().to_string().contains("out.txt"));
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn staged_folders_appear_whole_and_never_mix() {
+        let d = tempfile::tempdir().unwrap();
+        let target = d.path().join("out");
+        let a = StagedDir::new(&target).unwrap();
+        let b = StagedDir::new(&target).unwrap();
+        assert_ne!(a.path(), b.path());
+        std::fs::write(a.path().join("f"), b"a").unwrap();
+        std::fs::write(b.path().join("f"), b"b").unwrap();
+        assert!(!target.exists());
+        a.commit(false).unwrap();
+        let e = b.commit(false).unwrap_err().to_string();
+        assert!(e.contains("another run"), "{e}");
+        assert_eq!(std::fs::read(target.join("f")).unwrap(), b"a");
+        // Replacing swaps the whole folder.
+        let c = StagedDir::new(&target).unwrap();
+        std::fs::write(c.path().join("g"), b"c").unwrap();
+        c.commit(true).unwrap();
+        assert!(!target.join("f").exists() && target.join("g").exists());
+        // Dropped without a commit: nothing is left beside the target.
+        drop(StagedDir::new(&target).unwrap());
+        let names: Vec<String> = std::fs::read_dir(d.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, vec!["out".to_string()]);
+        // A stale staging folder of a dead process is removed.
+        std::fs::create_dir(d.path().join(".out.partial-999999999-abc")).unwrap();
+        drop(StagedDir::new(&target).unwrap());
+        assert!(!d.path().join(".out.partial-999999999-abc").exists());
     }
 
     #[test]

@@ -14,6 +14,7 @@ pub mod dataset;
 pub mod device;
 pub mod error;
 pub mod image_io;
+pub mod interrupt;
 pub mod io;
 pub mod metrics;
 pub mod module_io;
@@ -24,6 +25,16 @@ pub mod plot;
 pub mod rng;
 pub mod runtime;
 pub mod train;
+
+/// A progress note on stderr. Unlike `crate::note!` it never panics: a note
+/// that cannot be written (stderr closed, a full pipe) is dropped.
+#[macro_export]
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
 
 pub use artifact::{Artifact, Loaded};
 pub use device::DeviceKind;

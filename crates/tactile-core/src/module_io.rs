@@ -22,6 +22,38 @@ pub fn save_module<M: Module>(module: &M, path: &Path) -> Result<()> {
     crate::io::write_atomic(path, &module_bytes(module, path)?)
 }
 
+/// Refuse a module with a NaN or infinite weight, naming `path`.
+pub fn check_finite<M: Module>(module: &M, path: &Path) -> Result<()> {
+    struct Finite {
+        bad: Option<String>,
+    }
+    impl burn::module::ModuleVisitor for Finite {
+        fn visit_float<const D: usize>(
+            &mut self,
+            param: &burn::module::Param<burn::tensor::Tensor<D>>,
+        ) {
+            if self.bad.is_some() {
+                return;
+            }
+            let v = param.val().into_data().convert::<f32>();
+            if let Ok(v) = v.as_slice::<f32>()
+                && let Some(x) = v.iter().find(|x| !x.is_finite())
+            {
+                self.bad = Some(format!(
+                    "a weight of parameter {:?} is {x}: the model is corrupt (training diverged?)",
+                    param.id
+                ));
+            }
+        }
+    }
+    let mut f = Finite { bad: None };
+    module.visit(&mut f);
+    match f.bad {
+        Some(why) => Err(Error::model(path, why)),
+        None => Ok(()),
+    }
+}
+
 /// Load weights into a freshly built module; errors name the file.
 pub fn load_module<M: Module>(module: M, path: &Path) -> Result<M> {
     if !path.is_file() {

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use crate::{Error, Result};
 use ndarray::Array2;
-use ndarray_npy::{ReadNpyExt, WriteNpyExt};
+use ndarray_npy::WriteNpyExt;
 
 /// Write a depth map atomically; refuses non-finite values.
 pub fn write_depth_npy(
@@ -27,27 +27,81 @@ pub fn write_depth_npy(
     crate::io::write_atomic_with(path, |w| a.write_npy(w).map_err(std::io::Error::other))
 }
 
-/// Read a depth map: `(width, height, metres)`; names the file on any problem
-/// (not float32, not 2-D, a NaN or infinity).
+/// Largest depth map read, in pixels (8K UHD).
+pub const MAX_DEPTH_PIXELS: usize = 7680 * 4320;
+
+/// Depths outside this range, metres, are no camera-to-skin distance.
+pub const PLAUSIBLE_DEPTH_M: std::ops::Range<f32> = 0.0..1.0;
+
+/// Bytes before an `.npy` header: the magic string, the version and the
+/// header's length (2 bytes in version 1, 4 in versions 2 and 3).
+fn header_end(bytes: &[u8]) -> Option<usize> {
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return None;
+    }
+    let (len, start): (usize, usize) = match bytes[6] {
+        1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
+        2 | 3 if bytes.len() >= 12 => (
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+            12,
+        ),
+        _ => return None,
+    };
+    start.checked_add(len).filter(|&end| end <= bytes.len())
+}
+
+/// Read a depth map: `(width, height, metres)`; names the file on any
+/// problem: not a 2-D float32 array, larger than 8K, a header that claims
+/// more than the file holds, a value that is not a finite distance between
+/// 0 and 1 m (the pixel is named). Every size is checked before anything
+/// is allocated for it.
 pub fn read_depth_npy(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>)> {
+    use ndarray::ArrayView2;
+    use ndarray_npy::ViewNpyExt;
     let path = path.as_ref();
-    let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let a = Array2::<f32>::read_npy(std::io::BufReader::new(f)).map_err(|e| {
-        Error::dataset(path, None, format!("not a 2-D float32 .npy depth map: {e}"))
-    })?;
+    crate::image_io::expect_regular_file(path)?;
+    let bad = |m: String| Error::dataset(path, None, m);
+    let size = std::fs::metadata(path)
+        .map_err(|e| Error::io(path, e))?
+        .len();
+    let limit = (MAX_DEPTH_PIXELS * 4 + (1 << 20)) as u64;
+    if size > limit {
+        return Err(bad(format!(
+            "{size} bytes: larger than any 8K depth map ({limit} bytes at most)"
+        )));
+    }
+    // Read into 4-byte-aligned storage so the floats can be viewed in place.
+    let mut words = vec![0u32; (size as usize).div_ceil(4)];
+    {
+        use std::io::Read;
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut words);
+        std::fs::File::open(path)
+            .and_then(|mut f| f.read_exact(&mut bytes[..size as usize]))
+            .map_err(|e| Error::io(path, e))?;
+    }
+    let bytes = &bytemuck::cast_slice::<u32, u8>(&words)[..size as usize];
+    if header_end(bytes).is_none() {
+        return Err(bad("not an .npy file, or its header is cut short".into()));
+    }
+    let a = ArrayView2::<f32>::view_npy(bytes)
+        .map_err(|e| bad(format!("not a 2-D float32 .npy depth map: {e}")))?;
     let (h, w) = a.dim();
+    if w == 0 || h == 0 || w.saturating_mul(h) > MAX_DEPTH_PIXELS {
+        return Err(bad(format!(
+            "{w}x{h} depth map: must be non-empty and at most 8K ({MAX_DEPTH_PIXELS} pixels)"
+        )));
+    }
     let v: Vec<f32> = a.iter().copied().collect();
-    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-        return Err(Error::dataset(
-            path,
-            None,
-            format!(
-                "depth at pixel ({}, {}) is {}",
-                i % w.max(1),
-                i / w.max(1),
-                v[i]
-            ),
-        ));
+    if let Some(i) = v
+        .iter()
+        .position(|x| !PLAUSIBLE_DEPTH_M.contains(x) || *x == 0.0)
+    {
+        return Err(bad(format!(
+            "depth at pixel ({}, {}) is {} m: not a camera-to-skin distance (expected more than 0 and less than 1 m)",
+            i % w,
+            i / w,
+            v[i]
+        )));
     }
     Ok((w, h, v))
 }

@@ -208,6 +208,9 @@ pub struct FitConfig {
     pub checkpoint_every: usize,
     /// Report each epoch (a bar, or a line when stderr is not a terminal).
     pub progress: bool,
+    /// The run's identity (see [`crate::artifact::run_fingerprint`]):
+    /// recorded in the checkpoint, and a resume with another is refused.
+    pub run_id: Option<String>,
 }
 
 impl FitConfig {
@@ -220,7 +223,15 @@ impl FitConfig {
             resume: false,
             checkpoint_every: 1,
             progress: false,
+            run_id: None,
         }
+    }
+
+    /// Record the run's identity in the checkpoint; resuming with another
+    /// dataset or other settings is then refused.
+    pub fn with_run_id(mut self, id: String) -> Self {
+        self.run_id = Some(id);
+        self
     }
 
     /// Checkpoints, curves and progress for a model trained into `out`,
@@ -280,6 +291,8 @@ struct FitState {
     early: EarlyStopping,
     log: TrainingLog,
     elapsed_s: f64,
+    #[serde(default)]
+    run_id: Option<String>,
 }
 
 /// The training loop: seeded shuffled mini-batches, one optimiser step per
@@ -316,6 +329,7 @@ pub fn fit<M: burn::module::Module, E: From<Error>>(
         early: EarlyStopping::new(s.patience),
         log: TrainingLog::default(),
         elapsed_s: 0.0,
+        run_id: cfg.run_id.clone(),
     };
     if let (true, Some(ckpt)) = (cfg.resume, &ckpt) {
         let st = ckpt.join("state.json");
@@ -325,6 +339,16 @@ pub fn fit<M: burn::module::Module, E: From<Error>>(
             );
         }
         state = crate::io::read_json(&st)?;
+        if let (Some(was), Some(now)) = (&state.run_id, &cfg.run_id)
+            && was != now
+        {
+            return Err(Error::model(
+                &st,
+                "this checkpoint was made on another dataset or with other settings (only --max-epochs may change on --resume): train into a new folder",
+            )
+            .into());
+        }
+        state.run_id = cfg.run_id.clone();
         model = crate::module_io::load_module(model, &ckpt.join("model.bpk"))?;
         let opt_path = ckpt.join("optim.bpk");
         optim = optim
@@ -346,6 +370,7 @@ pub fn fit<M: burn::module::Module, E: From<Error>>(
         let mut total = 0.0;
         let lr = s.learning_rate * s.lr_decay.powi(epoch as i32);
         for batch in shuffled_batches(train, s.batch_size, s.seed.wrapping_add(epoch as u64)) {
+            crate::interrupt::check()?;
             let loss = batch_loss(&model, &batch, epoch)?;
             let l: f32 = loss.clone().into_scalar();
             total += l as f64 * batch.len() as f64;
@@ -458,7 +483,7 @@ impl Progress {
                 let done = r.epoch + 1 - self.first;
                 let per_epoch = self.started.elapsed().as_secs_f64() / done.max(1) as f64;
                 let eta = per_epoch * self.max_epochs.saturating_sub(r.epoch + 1) as f64;
-                eprintln!(
+                crate::note!(
                     "{}: epoch {}/{}: train loss {:.4}, validation loss {:.4}{metric}; best {:.4} at epoch {}; elapsed {:.0} s, ETA {:.0} s at most",
                     self.title,
                     r.epoch + 1,

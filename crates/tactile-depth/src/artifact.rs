@@ -61,6 +61,35 @@ impl Artifact for DepthArtifact {
     fn init(&self, device: &Device) -> tactile_core::Result<DepthNet> {
         self.model.init(device)
     }
+
+    fn check(&self, file: &std::path::Path) -> tactile_core::Result<()> {
+        use tactile_core::artifact::{check_field, in_config};
+        in_config(file, self.model.check())?;
+        in_config(file, self.stats.check(3))?;
+        let s = &self.scale;
+        check_field(
+            file,
+            "scale.unit_mm",
+            s.unit_mm.is_finite() && s.unit_mm > 0.0,
+            s.unit_mm,
+            "a positive number of millimetres",
+        )?;
+        check_field(
+            file,
+            "scale.offset_mm",
+            s.offset_mm.is_finite(),
+            s.offset_mm,
+            "a finite number of millimetres",
+        )?;
+        let c = self.model.in_channels;
+        check_field(
+            file,
+            "model.in_channels",
+            c == 3 + self.with_mask as usize,
+            c,
+            "3, or 4 with the mask channel (with_mask)",
+        )
+    }
 }
 
 impl Exportable for DepthArtifact {

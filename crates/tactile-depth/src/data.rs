@@ -5,7 +5,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_preprocess::visuo::{ChannelStats, FloatImage, load_frame, resize_grey};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_grey, resize_rgb};
 
 use crate::Result;
 
@@ -52,9 +52,18 @@ pub fn window_mask(w: usize, h: usize) -> Vec<bool> {
 /// pixel).
 pub fn load_depth_mm(path: &std::path::Path, w: usize, h: usize) -> Result<Vec<f32>> {
     let (dw, dh, m) = tactile_core::npy::read_depth_npy(path)?;
+    depth_m_to_mm(&m, (dw, dh), w, h).map_err(|e| Error::dataset(path, None, e.to_string()).into())
+}
+
+/// A depth map in metres, `dw x dh`, as millimetres at `w x h`.
+pub fn depth_m_to_mm(
+    m: &[f32],
+    (dw, dh): (usize, usize),
+    w: usize,
+    h: usize,
+) -> tactile_preprocess::Result<Vec<f32>> {
     let mm: Vec<f32> = m.iter().map(|v| v * 1000.0).collect();
     tactile_preprocess::resize_area_f32(&mm, (dw, dh), w, h)
-        .map_err(|e| Error::dataset(path, None, e.to_string()).into())
 }
 
 impl DepthSet {
@@ -64,10 +73,18 @@ impl DepthSet {
         let samples = rows
             .par_iter()
             .map(|&i| -> Result<DepthSample> {
-                let frame = load_frame(ds.path_of(i, "file")?, w, h)?;
-                let depth_mm = load_depth_mm(&ds.path_of(i, "depth")?, w, h)?;
+                let frame = resize_rgb(&ds.load_rgb(i)?, w, h)
+                    .map_err(|e| e.in_file(ds.path_of(i, "file").unwrap_or_default()))?;
+                let (dw, dh, m) = ds.load_depth_m(i)?;
+                let depth_mm = depth_m_to_mm(&m, (dw, dh), w, h).map_err(|e| {
+                    Error::dataset(
+                        ds.path_of(i, "depth").unwrap_or_default(),
+                        None,
+                        e.to_string(),
+                    )
+                })?;
                 let mpath = ds.path_of(i, "mask")?;
-                let m = tactile_core::image_io::load_grey(&mpath)?;
+                let m = ds.load_grey(i, "mask")?;
                 let mask = resize_grey(&m, w, h)
                     .map_err(|e| e.in_file(&mpath))?
                     .data

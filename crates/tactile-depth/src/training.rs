@@ -135,10 +135,10 @@ pub fn train(
         ))
         .into());
     }
-    tactile_core::io::ensure_writable_dir(out)?;
+    tactile_core::io::check_output_dir(out, &[data])?;
     let (train, val) = data.split_by_sequence(config.val_fraction, config.schedule.seed)?;
     let [w, h] = net.input_size;
-    eprintln!(
+    tactile_core::note!(
         "loading {} frames at {w}x{h} ({} train, {} validation, split by sequence)",
         data.len(),
         train.len(),
@@ -207,7 +207,9 @@ pub fn train(
         &config.schedule,
         format!("depth training ({:?})", config.loss),
     )
-    .saving_to(out, resume);
+    .saving_to(out, resume)
+    .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
+    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
     let train_idx: Vec<usize> = (0..train_set.len()).collect();
     let (_, summary) = fit::<_, Error>(
         &fit_cfg,
@@ -237,5 +239,6 @@ pub fn train(
         &summary,
         serde_json::json!({ "train_frames": train_set.len(), "val_frames": val_set.len() }),
     )?;
+    unfinished.finish()?;
     Ok(summary)
 }

@@ -34,7 +34,22 @@ impl Artifact for DetectorArtifact {
     const WEIGHTS_FILE: &'static str = "detector.bpk";
 
     fn init(&self, device: &Device) -> tactile_core::Result<Detector> {
+        self.model.check()?;
         Ok(self.model.init(device))
+    }
+
+    fn check(&self, file: &std::path::Path) -> tactile_core::Result<()> {
+        use tactile_core::artifact::{check_field, in_config};
+        in_config(file, self.model.check())?;
+        in_config(file, self.stats.check(3))?;
+        let t = self.threshold;
+        check_field(
+            file,
+            "threshold",
+            (0.0..=1.0).contains(&t),
+            t,
+            "a probability in [0, 1]",
+        )
     }
 }
 

@@ -4,7 +4,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_preprocess::visuo::{ChannelStats, FloatImage, load_frame};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_rgb};
 
 use crate::Result;
 
@@ -47,10 +47,11 @@ impl DetectionSet {
         let files: Vec<String> = (0..ds.len())
             .map(|i| ds.text(i, "file").map(str::to_string))
             .collect::<tactile_core::Result<_>>()?;
-        let frames = files
-            .par_iter()
-            .map(|f| {
-                let img = load_frame(ds.root.join(f), width, height)?;
+        let frames = (0..ds.len())
+            .into_par_iter()
+            .map(|i| {
+                let img = resize_rgb(&ds.load_rgb(i)?, width, height)
+                    .map_err(|e| e.in_file(ds.root.join(&files[i])))?;
                 Ok(img.to_bytes())
             })
             .collect::<Result<Vec<_>>>()?;
@@ -171,7 +172,7 @@ pub fn load_split(
     let mut data: Option<DetectionSet> = None;
     for ds in datasets {
         let (t, v) = ds.split_by_sequence(val_fraction, seed)?;
-        eprintln!(
+        tactile_core::note!(
             "loading {} frames of {} at {}x{} ({} train, {} validation, split by sequence)",
             ds.len(),
             ds.root.display(),

@@ -95,7 +95,7 @@ pub fn calibrate(
     val: &[usize],
     device: DeviceKind,
 ) -> Result<(f64, f64)> {
-    let loaded = DetectorArtifact::load(out, &device.device())?;
+    let loaded = DetectorArtifact::load_unfinished(out, &device.device())?;
     let mut art = loaded.artifact;
     let p = predict(&loaded.model, data, val, &art.stats, &loaded.device)?;
     let truth: Vec<bool> = val.iter().map(|&i| data.tendon[i]).collect();
@@ -129,7 +129,8 @@ pub fn train(
 ) -> Result<DetectorFit> {
     config.schedule.check()?;
     config.model.check()?;
-    tactile_core::io::ensure_writable_dir(out)?;
+    let refs: Vec<&Dataset> = datasets.iter().collect();
+    tactile_core::io::check_output_dir(out, &refs)?;
     let [w, h] = config.model.input_size;
     let (data, train, val) = load_split(
         datasets,
@@ -189,8 +190,11 @@ pub fn train(
     let ad = dev.clone().autodiff();
     ad.seed(config.schedule.seed);
     let model = config.model.init(&ad);
+    let ds_refs: Vec<&Dataset> = datasets.iter().collect();
     let fit_cfg = FitConfig::new(&config.schedule, "detector training (class-weighted BCE)")
-        .saving_to(out, resume);
+        .saving_to(out, resume)
+        .with_run_id(tactile_core::artifact::run_fingerprint(config, &ds_refs)?);
+    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
     let val_truth: Vec<bool> = val.iter().map(|&i| data.tendon[i]).collect();
     let (_, summary) = fit::<_, Error>(
         &fit_cfg,
@@ -227,6 +231,7 @@ pub fn train(
         serde_json::json!({ "train_frames": train.len(), "val_frames": val.len() }),
     )?;
     let (threshold, val_accuracy) = calibrate(out, &data, &val, device)?;
+    unfinished.finish()?;
     Ok(DetectorFit {
         summary,
         threshold,

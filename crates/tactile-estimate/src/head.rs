@@ -71,6 +71,28 @@ pub struct HeadArtifact {
     pub mean: Vec<f32>,
     /// Feature standard deviations of the training set.
     pub std: Vec<f32>,
+    /// Fingerprint of the encoder whose features it was trained on (see
+    /// `tactile_core::artifact::fingerprint`); `None` for features read from
+    /// a file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub encoder: Option<String>,
+}
+
+/// Most ensemble members accepted.
+pub const MAX_MEMBERS: usize = 1024;
+
+impl HeadConfig {
+    /// Check the sizes against the limits before anything is built.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        crate::mlp::check_sizes(self.inputs, &self.hidden, self.classes.len())?;
+        if self.folds < 2 || self.members() > MAX_MEMBERS {
+            return Err(tactile_core::Error::Config(format!(
+                "a head needs at least 2 folds and at most {MAX_MEMBERS} members, got {} folds x {} repeats",
+                self.folds, self.repeats
+            )));
+        }
+        Ok(())
+    }
 }
 
 impl Artifact for HeadArtifact {
@@ -80,11 +102,21 @@ impl Artifact for HeadArtifact {
     const WEIGHTS_FILE: &'static str = "head.bpk";
 
     fn init(&self, device: &Device) -> tactile_core::Result<HeadEnsemble> {
+        self.model.check()?;
         Ok(HeadEnsemble {
             members: (0..self.model.members())
                 .map(|_| self.model.init_mlp(device))
                 .collect(),
         })
+    }
+
+    fn check(&self, file: &Path) -> tactile_core::Result<()> {
+        use tactile_core::artifact::in_config;
+        in_config(file, self.model.check())?;
+        in_config(
+            file,
+            crate::mlp::check_scaler("feature scaling", &self.mean, &self.std, self.model.inputs),
+        )
     }
 }
 
@@ -130,6 +162,7 @@ impl ClassifierHead {
 
     /// Train the k-fold ensemble on `(x, y)` (class indices).
     pub fn train(config: HeadConfig, x: &[Vec<f32>], y: &[usize], device: &Device) -> Result<Self> {
+        config.schedule.check()?;
         if config.folds < 2 {
             return Err(tactile_core::Error::Config(format!(
                 "head folds must be at least 2, got {}",
@@ -146,6 +179,7 @@ impl ClassifierHead {
             )));
         }
         check_features(x, config.inputs)?;
+        config.check()?;
         if let Some(&bad) = y.iter().find(|&&c| c >= config.classes.len()) {
             return Err(tactile_core::Error::Invalid(format!(
                 "class index {bad} out of range for {} classes",
@@ -207,6 +241,7 @@ impl ClassifierHead {
                 model: config,
                 mean,
                 std,
+                encoder: None,
             },
             net: HeadEnsemble { members },
             device: device.clone(),

@@ -21,6 +21,74 @@ pub enum Activation {
     Sigmoid,
 }
 
+/// Most features an estimator takes.
+pub const MAX_INPUTS: usize = 1 << 16;
+/// Widest hidden layer accepted.
+pub const MAX_HIDDEN_WIDTH: usize = 4096;
+/// Most hidden layers accepted.
+pub const MAX_HIDDEN_LAYERS: usize = 16;
+
+/// Check an MLP's sizes against the limits before it is built.
+pub fn check_sizes(
+    inputs: usize,
+    hidden: &[(usize, Activation)],
+    outputs: usize,
+) -> tactile_core::Result<()> {
+    let bad = |m: String| Err(tactile_core::Error::Config(m));
+    if inputs == 0 || inputs > MAX_INPUTS {
+        return bad(format!("{inputs} inputs: must be 1 to {MAX_INPUTS}"));
+    }
+    if outputs == 0 || outputs > MAX_INPUTS {
+        return bad(format!("{outputs} outputs: must be 1 to {MAX_INPUTS}"));
+    }
+    if hidden.len() > MAX_HIDDEN_LAYERS {
+        return bad(format!(
+            "{} hidden layers: at most {MAX_HIDDEN_LAYERS}",
+            hidden.len()
+        ));
+    }
+    if let Some((w, _)) = hidden
+        .iter()
+        .find(|(w, _)| *w == 0 || *w > MAX_HIDDEN_WIDTH)
+    {
+        return bad(format!("hidden width {w}: must be 1 to {MAX_HIDDEN_WIDTH}"));
+    }
+    Ok(())
+}
+
+/// Refuse standardisation statistics of another length than `n`, or with
+/// a non-finite mean or a scale that is not a positive finite number.
+pub fn check_scaler<T: Into<f64> + Copy>(
+    what: &str,
+    mean: &[T],
+    std: &[T],
+    n: usize,
+) -> tactile_core::Result<()> {
+    let bad = |m: String| Err(tactile_core::Error::Config(format!("{what}: {m}")));
+    if mean.len() != n || std.len() != n {
+        return bad(format!(
+            "{} means and {} deviations for {n} values",
+            mean.len(),
+            std.len()
+        ));
+    }
+    if let Some(m) = mean
+        .iter()
+        .map(|&m| m.into())
+        .find(|m: &f64| !m.is_finite())
+    {
+        return bad(format!("a mean is {m}"));
+    }
+    if let Some(s) = std
+        .iter()
+        .map(|&s| s.into())
+        .find(|s: &f64| !(s.is_finite() && *s > 0.0))
+    {
+        return bad(format!("a standard deviation is {s}: it must be positive"));
+    }
+    Ok(())
+}
+
 /// Fully connected layers with an activation after each hidden one.
 #[derive(Module, Debug)]
 pub struct Mlp {

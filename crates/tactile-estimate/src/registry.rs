@@ -52,6 +52,14 @@ impl Estimator {
         }
     }
 
+    /// Fingerprint of the encoder it was trained on, when recorded.
+    pub fn encoder(&self) -> Option<&str> {
+        match self {
+            Self::Classifier(h) => h.artifact.encoder.as_deref(),
+            Self::Regressor(r) => r.artifact.encoder.as_deref(),
+        }
+    }
+
     /// Names of its output columns.
     pub fn columns(&self) -> Vec<String> {
         match self {
@@ -138,10 +146,20 @@ impl Estimators {
         self.items.is_empty()
     }
 
-    /// Refuse estimators trained on features of another length than the
-    /// encoder's `features`, naming the estimator's folder.
-    pub fn check_inputs(&self, features: usize) -> Result<()> {
+    /// Refuse estimators trained on another encoder than the one whose
+    /// fingerprint is `encoder` (when they record one), or on features of
+    /// another length than its `features`, naming the estimator's folder.
+    pub fn check_encoder(&self, encoder: &str, features: usize) -> Result<()> {
         for (dir, e) in &self.items {
+            if let Some(fp) = e.encoder()
+                && fp != encoder
+            {
+                return Err(tactile_core::Error::model(
+                    dir,
+                    "this estimator was trained on another encoder's features (its encoder fingerprint differs): retrain it on this encoder",
+                )
+                .into());
+            }
             if e.inputs() != features {
                 return Err(tactile_core::Error::model(
                     dir,

@@ -83,6 +83,10 @@ pub struct RegressorArtifact {
     pub inputs: Scaler,
     /// Output standardisation (identity on sin/cos columns).
     pub outputs: Scaler,
+    /// Fingerprint of the encoder whose features it was trained on; `None`
+    /// for features read from a file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub encoder: Option<String>,
 }
 
 impl Artifact for RegressorArtifact {
@@ -93,7 +97,35 @@ impl Artifact for RegressorArtifact {
 
     fn init(&self, device: &Device) -> tactile_core::Result<Mlp> {
         let m = &self.model;
+        crate::mlp::check_sizes(m.inputs, &m.hidden, m.outputs())?;
         Ok(Mlp::with_hidden(m.inputs, &m.hidden, m.outputs(), device))
+    }
+
+    fn check(&self, file: &Path) -> tactile_core::Result<()> {
+        use tactile_core::artifact::in_config;
+        let m = &self.model;
+        in_config(
+            file,
+            crate::mlp::check_sizes(m.inputs, &m.hidden, m.outputs()),
+        )?;
+        in_config(
+            file,
+            crate::mlp::check_scaler(
+                "feature scaling",
+                &self.inputs.mean,
+                &self.inputs.std,
+                m.inputs,
+            ),
+        )?;
+        in_config(
+            file,
+            crate::mlp::check_scaler(
+                "target scaling",
+                &self.outputs.mean,
+                &self.outputs.std,
+                m.outputs(),
+            ),
+        )
     }
 }
 
@@ -168,6 +200,8 @@ impl Regressor {
         }
         check_features(x, config.inputs)?;
         check_features(val_x, config.inputs)?;
+        config.schedule.check()?;
+        crate::mlp::check_sizes(config.inputs, &config.hidden, config.outputs())?;
         let nt = config.targets.len();
         if let Some(bad) = y.iter().chain(val_y).find(|r| r.len() != nt) {
             return Err(tactile_core::Error::shape("label row", nt, bad.len()).into());
@@ -192,6 +226,7 @@ impl Regressor {
             model: config,
             inputs,
             outputs,
+            encoder: None,
         };
         let mlp = artifact.init(&ad)?;
         let xt = matrix(x.len(), k, artifact.inputs.apply(&x64), &ad);

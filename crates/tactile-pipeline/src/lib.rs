@@ -21,5 +21,5 @@ pub use hysteresis::Hysteresis;
 pub use overlay::FrameViews;
 pub use palpation::{FrameRecord, Pipeline};
 pub use run::{RunOptions, RunOutcome, RunSummary, run};
-pub use source::{FrameEntry, FrameList};
+pub use source::{FrameEntry, FrameList, MissingFrames};
 pub use tactile_core::Runtime;

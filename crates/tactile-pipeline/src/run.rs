@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 use tactile_core::Runtime;
-use tactile_core::image_io::{RgbImage, load_rgb};
+use tactile_core::image_io::RgbImage;
 use tactile_core::metrics::{median, percentile};
 
 use crate::hysteresis::Hysteresis;
@@ -51,7 +51,7 @@ pub struct RunSummary {
     /// Whether decoding overlapped the models.
     pub overlapped_decoding: bool,
     /// Frames missing from a numbered folder.
-    pub missing_frames: usize,
+    pub missing_frames: u64,
     /// Where the networks ran.
     pub runtime: Runtime,
     /// onnxruntime intra-op threads.
@@ -112,9 +112,15 @@ pub fn run(
     frames: &FrameList,
     options: &RunOptions,
 ) -> Result<RunOutcome> {
-    if let Some(dir) = &options.render {
-        tactile_core::io::ensure_writable_dir(dir)?;
-    }
+    // Overlays go to a staging folder first: an error or an interrupt
+    // leaves no half set of them.
+    let render = match &options.render {
+        Some(dir) => {
+            tactile_core::io::ensure_writable_dir(dir)?;
+            Some(tactile_core::io::StagedDir::new(dir)?)
+        }
+        None => None,
+    };
     let mut filter = options
         .hysteresis
         .map(|(on, off)| Hysteresis::new(on, off))
@@ -126,17 +132,18 @@ pub fn run(
     // Decode the next frames on another thread while this one runs the
     // models (a queue of 4), or each frame just before it is processed.
     let (tx, rx) = std::sync::mpsc::sync_channel::<tactile_core::Result<RgbImage>>(4);
-    let paths: Vec<PathBuf> = list.iter().map(|f| f.path.clone()).collect();
+    let entries = list.clone();
     let decoder = options.overlap.then(|| {
         std::thread::spawn(move || {
-            for p in paths {
-                if tx.send(load_rgb(&p)).is_err() {
+            for e in entries {
+                if tx.send(e.load()).is_err() {
                     break;
                 }
             }
         })
     });
     for (k, entry) in list.iter().enumerate() {
+        tactile_core::interrupt::check()?;
         let frame = if options.overlap {
             rx.recv().map_err(|_| {
                 Error::Core(tactile_core::Error::Invalid(
@@ -144,7 +151,7 @@ pub fn run(
                 ))
             })??
         } else {
-            load_rgb(&entry.path)?
+            entry.load()?
         };
         let name = entry
             .path
@@ -158,9 +165,9 @@ pub fn run(
             h.reset();
         }
         let (rec, views) = pipeline.process_filtered(&name, &frame, filter.as_mut())?;
-        if let (Some(dir), Some(v)) = (&options.render, views) {
+        if let (Some(staged), Some(v)) = (&render, views) {
             let stem = entry.path.file_stem().unwrap_or_default().to_string_lossy();
-            v.save_png(&dir.join(format!("{stem}-overlay.png")), 4)?;
+            v.save_png(&staged.path().join(format!("{stem}-overlay.png")), 4)?;
         }
         records.push(rec);
         pb.inc(1);
@@ -170,6 +177,9 @@ pub fn run(
         let _ = d.join();
     }
     pb.finish_and_clear();
+    if let Some(staged) = render {
+        staged.commit_into()?;
+    }
     let wall = t0.elapsed().as_secs_f64();
     let stats = |f: &dyn Fn(&FrameRecord) -> Option<f64>| -> Option<Spread> {
         let v: Vec<f64> = records.iter().filter_map(f).collect();
@@ -193,7 +203,7 @@ pub fn run(
     let summary = RunSummary {
         frames: records.len(),
         overlapped_decoding: options.overlap,
-        missing_frames: frames.missing_frames().len(),
+        missing_frames: frames.missing_frames().count,
         runtime: pipeline.detector.runtime(),
         threads: pipeline.threads,
         fps: records.len() as f64 / wall.max(1e-9),

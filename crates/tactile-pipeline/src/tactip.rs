@@ -40,6 +40,16 @@ pub fn dataset_features(
     })
 }
 
+/// The fingerprint of the encoder features come from (none for a CSV).
+fn encoder_fingerprint(source: &FeatureSource) -> Result<Option<String>> {
+    Ok(match source {
+        FeatureSource::Encoder(dir) => Some(tactile_core::artifact::fingerprint::<
+            tactile_cae::CaeArtifact,
+        >(dir)?),
+        FeatureSource::Csv(_) => None,
+    })
+}
+
 /// The encoder and every estimator of its folder (or the folders given).
 pub struct TactipPerception {
     /// Frames to features.
@@ -71,7 +81,8 @@ impl TactipPerception {
             .unwrap_or(tactile_core::DeviceKind::Flex)
             .device();
         let estimators = Estimators::load(encoder, heads, &device)?;
-        estimators.check_inputs(encoder_net.feature_count())?;
+        let fp = tactile_core::artifact::fingerprint::<tactile_cae::CaeArtifact>(encoder)?;
+        estimators.check_encoder(&fp, encoder_net.feature_count())?;
         Ok(Self {
             encoder: encoder_net,
             estimators,
@@ -157,7 +168,7 @@ pub fn train_head(
             tactile_core::Error::dataset(ds.labels_path(), None, "no frames to train on").into(),
         );
     }
-    tactile_core::io::ensure_writable_dir(out)?;
+    tactile_core::io::check_output_dir(out, &[ds])?;
     let feats = dataset_features(source, ds, runtime)?;
     let (classes, y) = classes_of(ds, "shape")?;
     let train = ds
@@ -175,7 +186,7 @@ pub fn train_head(
         classes: classes.clone(),
         ..config
     };
-    eprintln!(
+    tactile_core::note!(
         "training a {}-fold head ensemble on {} frames",
         config.folds,
         tx.len()
@@ -184,7 +195,8 @@ pub fn train_head(
         .device()
         .unwrap_or(tactile_core::DeviceKind::Flex)
         .device();
-    let head = ClassifierHead::train(config, &tx, &ty, &device)?;
+    let mut head = ClassifierHead::train(config, &tx, &ty, &device)?;
+    head.artifact.encoder = encoder_fingerprint(source)?;
     head.save(out)?;
     let test_set: Option<(Vec<Vec<f32>>, Vec<usize>)> = match test {
         Some(t) => {
@@ -272,7 +284,7 @@ pub fn train_regressor(
     out: &Path,
     runtime: Runtime,
 ) -> Result<RegressorFit> {
-    tactile_core::io::ensure_writable_dir(out)?;
+    tactile_core::io::check_output_dir(out, &[ds])?;
     let feats = dataset_features(source, ds, runtime)?;
     // Every target must be labelled on every frame used: with
     // `only_labelled`, frames missing one are left out of every split.
@@ -316,7 +328,7 @@ pub fn train_regressor(
     let (tx, ty) = pick(&s.train);
     let (vx, vy) = pick(&s.val);
     let (sx, sy) = pick(&s.test);
-    eprintln!(
+    tactile_core::note!(
         "training a regressor for {} on {} frames ({} validation, {} test)",
         plan.targets
             .iter()
@@ -334,7 +346,8 @@ pub fn train_regressor(
         .device()
         .unwrap_or(tactile_core::DeviceKind::Flex)
         .device();
-    let regressor = Regressor::train(cfg, (&tx, &ty), (&vx, &vy), &device)?;
+    let mut regressor = Regressor::train(cfg, (&tx, &ty), (&vx, &vy), &device)?;
+    regressor.artifact.encoder = encoder_fingerprint(source)?;
     regressor.save(out)?;
     let test_mae = regressor.evaluate(&sx, &sy)?;
     Ok(RegressorFit {

@@ -170,6 +170,54 @@ impl PreprocessConfig {
         }
     }
 
+    /// Check every size and value against its limit: windows and boxes up
+    /// to [`MAX_WINDOW_PX`], the crop up to 8K, the pin image no larger
+    /// than the crop, thresholds and offsets finite.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        let bad = |m: String| Err(tactile_core::Error::Config(format!("preprocessing: {m}")));
+        let windows = [("open_px", self.open_px), ("grow_px", self.grow_px)];
+        let lighting = match &self.lighting {
+            Lighting::None => vec![],
+            Lighting::TopHat {
+                background_window_px,
+                peak_window_px,
+                relative_threshold,
+                denoise_px,
+                ..
+            } => {
+                if !(0.0..=1.0).contains(relative_threshold) {
+                    return bad(format!(
+                        "relative_threshold {relative_threshold} must be in [0, 1]"
+                    ));
+                }
+                vec![
+                    ("background_window_px", *background_window_px),
+                    ("peak_window_px", *peak_window_px),
+                    ("denoise_px", *denoise_px),
+                ]
+            }
+        };
+        for (name, v) in windows.into_iter().chain(lighting) {
+            if v > MAX_WINDOW_PX {
+                return bad(format!("{name} {v} is larger than {MAX_WINDOW_PX} pixels"));
+            }
+        }
+        if self.crop_px == 0 || self.crop_px > 7680 {
+            return bad(format!("crop_px {} must be 1 to 7680", self.crop_px));
+        }
+        if self.output_px == 0 || self.output_px > self.crop_px {
+            return bad(format!(
+                "output_px {} must be 1 to the crop ({})",
+                self.output_px, self.crop_px
+            ));
+        }
+        if !self.binarise_offset.is_finite() || self.mask_radius_px.is_some_and(|r| !r.is_finite())
+        {
+            return bad("binarise_offset and mask_radius_px must be finite".into());
+        }
+        Ok(())
+    }
+
     /// Look a preset up by name (`paper`, `lighting-compensated`, `binary`),
     /// or read a whole configuration from a `.json` file.
     pub fn preset(name: &str) -> Result<Self> {
@@ -177,11 +225,18 @@ impl PreprocessConfig {
             "paper" => Ok(Self::paper()),
             "lighting-compensated" => Ok(Self::lighting_compensated()),
             "binary" => Ok(Self::binary_frames()),
-            path if path.ends_with(".json") => Ok(tactile_core::io::read_json(path)?),
+            path if path.ends_with(".json") => {
+                let c: Self = tactile_core::io::read_json(path)?;
+                tactile_core::artifact::in_config(std::path::Path::new(path), c.check())?;
+                Ok(c)
+            }
             other => Err(Error::UnknownPreset(other.to_string())),
         }
     }
 }
+
+/// Largest morphology window or box accepted, pixels.
+pub const MAX_WINDOW_PX: usize = 255;
 
 /// A pin image: `side x side` values in {0, 1} (or grey levels in [0, 1]
 /// when the chain does not binarise), row-major.
@@ -494,6 +549,7 @@ pub fn binarise(img: &GreyImage, offset: f64) -> Vec<f32> {
 
 /// Run the full configured chain on one frame.
 pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage> {
+    cfg.check()?;
     if frame.width() < cfg.output_px || frame.height() < cfg.output_px {
         return Err(Error::FrameTooSmall {
             width: frame.width(),

@@ -305,6 +305,29 @@ impl ChannelStats {
         })
     }
 
+    /// Refuse statistics that cannot normalise a `channels`-channel image:
+    /// another length, a non-finite mean, a standard deviation that is not
+    /// a positive finite number.
+    pub fn check(&self, channels: usize) -> tactile_core::Result<()> {
+        let bad = |m: String| Err(tactile_core::Error::Config(m));
+        if self.mean.len() != channels || self.std.len() != channels {
+            return bad(format!(
+                "channel statistics have {} means and {} standard deviations, the model takes {channels} channels",
+                self.mean.len(),
+                self.std.len()
+            ));
+        }
+        if let Some(m) = self.mean.iter().find(|m| !m.is_finite()) {
+            return bad(format!("a channel mean is {m}"));
+        }
+        if let Some(s) = self.std.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+            return bad(format!(
+                "a channel standard deviation is {s}: it must be a positive number"
+            ));
+        }
+        Ok(())
+    }
+
     /// Normalised `C x H x W` values of an interleaved image.
     pub fn to_chw(&self, img: &FloatImage) -> Result<Vec<f32>> {
         if img.channels != self.mean.len() {

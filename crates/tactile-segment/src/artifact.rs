@@ -39,6 +39,44 @@ impl Artifact for SegmenterArtifact {
     fn init(&self, device: &Device) -> tactile_core::Result<UNet> {
         self.model.init(device)
     }
+
+    fn check(&self, file: &std::path::Path) -> tactile_core::Result<()> {
+        use tactile_core::artifact::{check_field, in_config};
+        in_config(file, self.model.check())?;
+        in_config(file, self.stats.check(self.model.in_channels))?;
+        let t = self.threshold;
+        check_field(
+            file,
+            "threshold",
+            (0.0..=1.0).contains(&t),
+            t,
+            "a probability in [0, 1]",
+        )?;
+        let p = &self.postprocess;
+        let unit = |v: f64| (0.0..=1.0).contains(&v);
+        check_field(
+            file,
+            "postprocess.edge_band",
+            unit(p.edge_band),
+            p.edge_band,
+            "a fraction in [0, 1]",
+        )?;
+        check_field(
+            file,
+            "postprocess.edge_fraction",
+            unit(p.edge_fraction),
+            p.edge_fraction,
+            "a fraction in [0, 1]",
+        )?;
+        let a = p.min_anisotropy;
+        check_field(
+            file,
+            "postprocess.min_anisotropy",
+            a.is_finite() && a >= 1.0,
+            a,
+            "a ratio of at least 1",
+        )
+    }
 }
 
 impl Exportable for SegmenterArtifact {

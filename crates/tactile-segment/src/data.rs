@@ -7,7 +7,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::dataset::{Dataset, DatasetKind};
 use tactile_preprocess::visuo::{
-    ChannelStats, FloatImage, SquareWindow, binarise_mask, load_frame, resize_grey,
+    ChannelStats, FloatImage, SquareWindow, binarise_mask, resize_grey, resize_rgb,
 };
 
 /// One window: 8-bit `S x S x 3` pixels, its 0/1 mask and where it came from.
@@ -85,9 +85,10 @@ impl SegmentSet {
         let windows: Vec<Vec<Window>> = rows
             .par_iter()
             .map(|&row| -> Result<Vec<Window>> {
-                let frame = load_frame(ds.path_of(row, "file")?, sw, sh)?;
+                let frame = resize_rgb(&ds.load_rgb(row)?, sw, sh)
+                    .map_err(|e| e.in_file(ds.path_of(row, "file").unwrap_or_default()))?;
                 let mask_path = ds.path_of(row, "mask")?;
-                let m = tactile_core::image_io::load_grey(&mask_path)?;
+                let m = ds.load_grey(row, "mask")?;
                 let mask = resize_grey(&m, sw, sh).map_err(|e| e.in_file(&mask_path))?;
                 Ok(rotation_angles(copies, seed, row)
                     .into_iter()

@@ -94,7 +94,7 @@ pub fn train(
         ))
         .into());
     }
-    tactile_core::io::ensure_writable_dir(out)?;
+    tactile_core::io::check_output_dir(out, &[data])?;
     let (train, val) = data.split_by_sequence(config.val_fraction, config.schedule.seed)?;
     let (train, val) = (data.tendon_rows(&train)?, data.tendon_rows(&val)?);
     if train.is_empty() || val.is_empty() {
@@ -106,7 +106,7 @@ pub fn train(
     let window = tactile_preprocess::visuo::SquareWindow {
         side: config.model.side,
     };
-    eprintln!(
+    tactile_core::note!(
         "cutting {0}x{0} windows: {1} training frames x {2} rotations, {3} validation frames",
         window.side,
         train.len(),
@@ -134,8 +134,10 @@ pub fn train(
     let ad = dev.clone().autodiff();
     ad.seed(seed);
     let model = config.model.init(&ad)?;
-    let fit_cfg =
-        FitConfig::new(&config.schedule, "segmenter training (BCE + Dice)").saving_to(out, resume);
+    let fit_cfg = FitConfig::new(&config.schedule, "segmenter training (BCE + Dice)")
+        .saving_to(out, resume)
+        .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
+    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
     let train_idx: Vec<usize> = (0..train_set.len()).collect();
     let val_idx: Vec<usize> = (0..val_set.len()).collect();
     let (_, summary) = fit::<_, Error>(
@@ -160,5 +162,6 @@ pub fn train(
         &summary,
         serde_json::json!({ "train_windows": train_set.len(), "val_windows": val_set.len() }),
     )?;
+    unfinished.finish()?;
     Ok(summary)
 }

@@ -74,6 +74,14 @@ pub(crate) struct ModelsArgs {
 }
 
 pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
+    let out = match &cmd {
+        BenchCmd::Cae(a) => &a.out,
+        BenchCmd::Synth(a) => &a.out,
+        BenchCmd::Detector(a) | BenchCmd::Segmenter(a) | BenchCmd::Depth(a) => &a.out,
+    };
+    if let Some(out) = out {
+        tactile_core::io::check_output_file(out, &[])?;
+    }
     let models = |a: ModelsArgs| {
         let b = ModelBench {
             models: a.models,
@@ -92,14 +100,14 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
                 batch: a.batch,
                 runs: a.runs,
             })?;
-            print!("{}", r.markdown);
+            say_raw!("{}", r.markdown);
             if let Some(out) = &a.out {
                 r.write(out)?;
             }
         }
         BenchCmd::Synth(a) => {
             let md = tactile_bench::synth::bench_synth(a.frames)?;
-            print!("{md}");
+            say_raw!("{md}");
             if let Some(out) = &a.out {
                 tactile_core::io::write_atomic(out, md.as_bytes())?;
             }
@@ -107,7 +115,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Detector(a) => {
             let (b, out) = models(a);
             let t = bench_detectors(&b)?;
-            print!("{}", t.markdown);
+            say_raw!("{}", t.markdown);
             if let Some(out) = &out {
                 t.write(out)?;
             }
@@ -115,7 +123,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Segmenter(a) => {
             let (b, out) = models(a);
             let t = bench_segmenters(&b)?;
-            print!("{}", t.markdown);
+            say_raw!("{}", t.markdown);
             if let Some(out) = &out {
                 t.write(out)?;
             }
@@ -123,7 +131,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Depth(a) => {
             let (b, out) = models(a);
             let t = bench_depth(&b)?;
-            print!("{}", t.markdown);
+            say_raw!("{}", t.markdown);
             if let Some(out) = &out {
                 t.write(out)?;
             }

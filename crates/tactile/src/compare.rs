@@ -45,6 +45,10 @@ pub(crate) struct CompareArgs {
 }
 
 pub(crate) fn main(a: CompareArgs) -> Result<()> {
+    if let Some(out) = &a.out {
+        let ds = tactile_core::dataset::Dataset::open(&a.data)?;
+        tactile_core::io::check_output_file(out, &[&ds])?;
+    }
     let md = compare(&Compare {
         encoder: a.encoder,
         data: a.data,
@@ -56,7 +60,7 @@ pub(crate) fn main(a: CompareArgs) -> Result<()> {
         preprocess: a.preprocess.map(|p| (p.name, p.config)),
         hidden: a.hidden,
     })?;
-    print!("{md}");
+    say_raw!("{md}");
     if let Some(out) = &a.out {
         tactile_core::io::write_atomic(out, md.as_bytes())?;
     }

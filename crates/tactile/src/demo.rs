@@ -47,7 +47,7 @@ pub(crate) fn main(a: DemoArgs) -> Result<()> {
     let set = PinSet::from_rows(&ds, &picked, &enc.artifact.preprocess)?;
     let feats = enc.encode(&set.images)?;
     let pred = head.predict(&feats)?;
-    println!(
+    say!(
         "encoder {:?}, {} features per frame; head classes {}",
         enc.artifact.model.widths,
         enc.feature_count(),
@@ -59,11 +59,11 @@ pub(crate) fn main(a: DemoArgs) -> Result<()> {
         let guess = &head.classes()[*p];
         right += usize::from(truth == guess);
         let fs: Vec<String> = f.iter().map(|v| format!("{v:.2}")).collect();
-        println!(
+        say!(
             "{file:<28} true {truth:<11} predicted {guess:<11} features [{}]",
             fs.join(" ")
         );
     }
-    println!("{right}/{} frames classified correctly", feats.len());
+    say!("{right}/{} frames classified correctly", feats.len());
     Ok(())
 }

@@ -27,10 +27,11 @@ pub(crate) struct EncodeArgs {
 
 pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
+    tactile_core::io::check_output_file(&a.out, &[&ds])?;
     let mut enc = TactipEncoder::load(&a.model, a.device.runtime(), 0)?;
     let (pins, feats) = enc.encode_dataset(&ds)?;
     write_features_csv(&a.out, &pins.files, &feats)?;
-    println!(
+    say!(
         "{} feature vectors of {} values written to {}",
         feats.len(),
         enc.feature_count(),

@@ -68,16 +68,19 @@ pub(crate) fn main(cmd: EvalCmd) -> Result<()> {
 
 fn detector(a: DetectorArgs) -> Result<()> {
     let m = &a.m;
-    let mut det = TendonDetector::load(&m.model, m.device.runtime(), 0)?;
     let ds = Dataset::open(&m.data)?;
+    if let Some(out) = &a.frames {
+        tactile_core::io::check_output_file(out, &[&ds])?;
+    }
+    let mut det = TendonDetector::load(&m.model, m.device.runtime(), 0)?;
     let data = DetectionSet::from_dataset(&ds, det.artifact.model.input_size)?;
     let sc = tactile_detect::evaluate(&mut det, &data)?;
     if let Some(path) = &a.frames {
         tactile_detect::eval::write_decisions_csv(path, &data, &sc)?;
-        eprintln!("per-frame decisions in {}", path.display());
+        tactile_core::note!("per-frame decisions in {}", path.display());
     }
     let (s, st) = (&sc.all, &sc.onset_release);
-    println!(
+    say!(
         "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
         s.frames,
         s.true_pos + s.false_neg,
@@ -86,21 +89,27 @@ fn detector(a: DetectorArgs) -> Result<()> {
         s.recall,
         s.f1
     );
-    println!(
+    say!(
         "confusion: {} true positive, {} false positive, {} true negative, {} false negative",
-        s.true_pos, s.false_pos, s.true_neg, s.false_neg
+        s.true_pos,
+        s.false_pos,
+        s.true_neg,
+        s.false_neg
     );
-    println!(
+    say!(
         "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
-        st.frames, st.accuracy, st.false_pos, st.false_neg
+        st.frames,
+        st.accuracy,
+        st.false_pos,
+        st.false_neg
     );
-    println!(
+    say!(
         "{:.2} ms per frame ({}, batch {}, resize excluded)",
         sc.ms_per_frame,
         m.device,
         tactile_detect::eval::EVAL_BATCH
     );
-    println!(
+    say!(
         "{}",
         serde_json::json!({ "model": m.model, "data": m.data, "all": s, "onset_release": st, "ms_per_frame": sc.ms_per_frame })
     );
@@ -111,12 +120,12 @@ fn segmenter(m: ModelArgs) -> Result<()> {
     let mut seg = TendonSegmenter::load(&m.model, m.device.runtime(), 0)?;
     let ds = Dataset::open(&m.data)?;
     let sc = tactile_segment::evaluate(&mut seg, &ds)?;
-    println!(
+    say!(
         "| tendon path | frames | mean IoU | direction median (deg) | direction p90 (deg) | no direction |"
     );
-    println!("|---|---|---|---|---|---|");
+    say!("|---|---|---|---|---|---|");
     for r in &sc.paths {
-        println!(
+        say!(
             "| {} | {} | {:.4} | {:.2} | {:.2} | {} |",
             r.path,
             r.frames,
@@ -126,13 +135,13 @@ fn segmenter(m: ModelArgs) -> Result<()> {
             r.no_direction
         );
     }
-    println!(
+    say!(
         "{:.2} ms per window ({}, batch {}, cut excluded)",
         sc.ms_per_window,
         m.device,
         tactile_segment::eval::EVAL_BATCH
     );
-    println!(
+    say!(
         "{}",
         serde_json::json!({ "model": m.model, "data": m.data, "paths": sc.paths, "ms_per_window": sc.ms_per_window })
     );
@@ -141,10 +150,13 @@ fn segmenter(m: ModelArgs) -> Result<()> {
 
 fn depth(a: DepthArgs) -> Result<()> {
     let m = &a.m;
-    let mut est = DepthEstimator::load(&m.model, m.device.runtime(), 0)?;
     let ds = Dataset::open(&m.data)?;
+    if let Some(dir) = &a.save_png {
+        tactile_core::io::check_output_dir(dir, &[&ds])?;
+    }
+    let mut est = DepthEstimator::load(&m.model, m.device.runtime(), 0)?;
     let (s, ms) = tactile_depth::evaluate(&mut est, &ds)?;
-    println!(
+    say!(
         "{} frames: MAE {:.4} mm in the window, {} over the tendon mask, RMSE {:.4} mm, SSIM {:.4}",
         s.frames,
         s.mae_mm,
@@ -152,19 +164,19 @@ fn depth(a: DepthArgs) -> Result<()> {
         s.rmse_mm,
         s.ssim
     );
-    println!(
+    say!(
         "{ms:.2} ms per frame ({}, batch {}, loading excluded)",
         m.device,
         tactile_depth::eval::EVAL_BATCH
     );
     if let Some(dir) = &a.save_png {
         let n = tactile_depth::eval::save_heat_maps(&mut est, &ds, dir, a.png_frames)?;
-        println!(
+        say!(
             "{n} heat maps (true | predicted, shared scale) in {}",
             dir.display()
         );
     }
-    println!(
+    say!(
         "{}",
         serde_json::json!({ "model": m.model, "data": m.data, "scores": s, "ms_per_frame": ms })
     );

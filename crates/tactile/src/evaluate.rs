@@ -31,8 +31,11 @@ pub(crate) struct EvaluateArgs {
 
 /// Score every estimator on a dataset; the last line is the scores as JSON.
 pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
-    let mut p = TactipPerception::load(&a.encoder, &a.heads, a.device.runtime())?;
     let ds = Dataset::open(&a.data)?;
+    if let Some(out) = &a.out {
+        tactile_core::io::check_output_file(out, &[&ds])?;
+    }
+    let mut p = TactipPerception::load(&a.encoder, &a.heads, a.device.runtime())?;
     let s = p.evaluate(&ds)?;
     let md = format!(
         "Encoder {} on {} ({} frames).\n\n{}",
@@ -41,10 +44,10 @@ pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
         ds.len(),
         scores_markdown(&s)
     );
-    print!("{md}");
+    say_raw!("{md}");
     if let Some(out) = &a.out {
         tactile_core::io::write_atomic(out, md.as_bytes())?;
     }
-    println!("{}", serde_json::to_string(&s)?);
+    say!("{}", serde_json::to_string(&s)?);
     Ok(())
 }

@@ -20,9 +20,10 @@ pub(crate) struct ExportArgs {
 }
 
 pub(crate) fn main(a: ExportArgs) -> Result<()> {
+    tactile_core::io::check_output_file(&a.out, &[])?;
     let e = export_model(&a.model, a.part)?;
     tactile_onnx::save_onnx(&a.out, &e.bytes)?;
-    println!(
+    say!(
         "{} exported to {} ({} bytes)",
         e.kind,
         a.out.display(),

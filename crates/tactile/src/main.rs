@@ -1,6 +1,29 @@
 //! `tactile`: the command-line face of tactile-rs. Each verb's module
 //! parses its arguments, calls the library and prints; none holds logic.
 
+/// `println!` to stdout that ends the program quietly when stdout is
+/// closed (`tactile run ... | head -1`), instead of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let mut out = std::io::stdout().lock();
+        if let Err(e) = writeln!(out, $($arg)*).and_then(|_| out.flush()) {
+            $crate::stdout_failed(e);
+        }
+    }};
+}
+
+/// [`say!`] without the newline.
+macro_rules! say_raw {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let mut out = std::io::stdout().lock();
+        if let Err(e) = write!(out, $($arg)*).and_then(|_| out.flush()) {
+            $crate::stdout_failed(e);
+        }
+    }};
+}
+
 mod args;
 mod bench;
 mod compare;
@@ -67,8 +90,37 @@ enum Command {
     Demo(demo::DemoArgs),
 }
 
-fn main() -> Result<()> {
-    match Cli::parse().command {
+/// Stdout is gone: a closed pipe ends the run quietly; anything else
+/// (a full disk) is said on stderr.
+pub(crate) fn stdout_failed(e: std::io::Error) {
+    if e.kind() != std::io::ErrorKind::BrokenPipe {
+        tactile_core::note!("error: cannot write to standard output: {e}");
+        std::process::exit(1);
+    }
+    std::process::exit(0);
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    if let Err(e) = tactile_core::interrupt::install() {
+        tactile_core::note!("warning: {e}");
+    }
+    match dispatch(cli.command) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        // Ctrl-C or SIGTERM: the work stopped cleanly, nothing partial kept.
+        Err(_) if tactile_core::interrupt::requested() => {
+            tactile_core::note!("interrupted: stopped, nothing partial was kept");
+            std::process::ExitCode::from(130)
+        }
+        Err(e) => {
+            tactile_core::note!("Error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn dispatch(command: Command) -> Result<()> {
+    match command {
         Command::Synth(c) => synth::main(c),
         Command::Train(c) => train::main(c),
         Command::Encode(a) => encode::main(a),

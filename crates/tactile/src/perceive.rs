@@ -34,8 +34,11 @@ pub(crate) struct PerceiveArgs {
 }
 
 pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
-    let mut p = TactipPerception::load(&a.encoder, &a.heads, a.device.runtime())?;
     let ds = Dataset::open(&a.data)?;
+    if let Some(out) = &a.out {
+        tactile_core::io::check_output_file(out, &[&ds])?;
+    }
+    let mut p = TactipPerception::load(&a.encoder, &a.heads, a.device.runtime())?;
     let r = p.perceive(&ds)?;
     let mut header = vec!["file".to_string()];
     header.extend(r.estimates.columns.iter().map(|c| c.0.clone()));
@@ -45,11 +48,11 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
         .enumerate()
         .map(|(i, f)| [vec![f.clone()], r.estimates.row(i)].concat())
         .collect();
-    println!("{}", header.join("\t"));
+    say!("{}", header.join("\t"));
     for row in rows.iter().take(a.show) {
-        println!("{}", row.join("\t"));
+        say!("{}", row.join("\t"));
     }
-    println!(
+    say!(
         "{} frames: encoding {:.3} ms/frame (preprocessing included), {} estimators {:.4} ms/frame",
         ds.len(),
         r.ms_encode,
@@ -65,7 +68,7 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
             }
             csv.flush()
         })?;
-        println!("estimates written to {}", out.display());
+        say!("estimates written to {}", out.display());
     }
     Ok(())
 }

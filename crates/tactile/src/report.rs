@@ -36,6 +36,7 @@ pub(crate) struct ReportArgs {
 }
 
 pub(crate) fn main(a: ReportArgs) -> Result<()> {
+    tactile_core::io::check_output_file(&a.out, &[])?;
     report(&Report {
         real: a.real,
         models: a.models,
@@ -47,8 +48,8 @@ pub(crate) fn main(a: ReportArgs) -> Result<()> {
         runs: a.runs,
     })?;
     if let Some(readme) = &a.readme {
-        println!("headline table in {}", readme.display());
+        say!("headline table in {}", readme.display());
     }
-    println!("wrote {} and the tables beside it", a.out.display());
+    say!("wrote {} and the tables beside it", a.out.display());
     Ok(())
 }

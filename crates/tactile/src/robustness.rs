@@ -29,6 +29,10 @@ pub(crate) struct RobustnessArgs {
 }
 
 pub(crate) fn main(a: RobustnessArgs) -> Result<()> {
+    if let Some(out) = &a.out {
+        let ds = tactile_core::dataset::Dataset::open(&a.data)?;
+        tactile_core::io::check_output_file(out, &[&ds])?;
+    }
     let r = robustness(&Robustness {
         encoder: a.encoder,
         heads: a.heads,
@@ -36,10 +40,10 @@ pub(crate) fn main(a: RobustnessArgs) -> Result<()> {
         limit: a.limit,
         seed: a.seed,
     })?;
-    print!("{}", r.markdown);
+    say_raw!("{}", r.markdown);
     if let Some(out) = &a.out {
         r.write(out)?;
-        eprintln!("wrote {} and its plot", out.display());
+        tactile_core::note!("wrote {} and its plot", out.display());
     }
     Ok(())
 }

@@ -24,8 +24,8 @@ pub(crate) struct RunArgs {
     /// enough that a second thread costs more than it gains (measured:
     /// 159 against 350 frames/s without overlap), and the other core
     /// decodes the next frames.
-    #[arg(long, default_value_t = 1)]
-    threads: usize,
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=256))]
+    threads: u16,
     /// JSON Lines output, one record per frame (written when the run ends).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -55,23 +55,29 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     };
     // The input first: a bad folder is reported before any model loads.
     let mut frames = FrameList::open(&a.data)?;
-    // Outputs next: an unwritable folder fails now, not after the run.
+    // Outputs next: an unwritable folder, or one of the inputs, fails now,
+    // not after the run.
+    let input = match frames.is_dataset {
+        true => Some(tactile_core::dataset::Dataset::open(&a.data)?),
+        false => None,
+    };
+    let inputs: Vec<_> = input.iter().collect();
     if let Some(out) = &a.out {
-        tactile_core::io::ensure_writable_parent(out)?;
+        tactile_core::io::check_output_file(out, &inputs)?;
     }
     if let Some(dir) = &a.render {
-        tactile_core::io::ensure_writable_dir(dir)?;
+        tactile_core::io::check_output_dir(dir, &inputs)?;
     }
-    let mut pipeline = Pipeline::load(&a.models, a.runtime, a.threads.max(1))?;
+    let mut pipeline = Pipeline::load(&a.models, a.runtime, a.threads as usize)?;
     if let Some(n) = a.limit {
         frames.truncate(n);
     }
     let missing = frames.missing_frames();
-    if !missing.is_empty() {
-        eprintln!(
+    if missing.count > 0 {
+        tactile_core::note!(
             "warning: {} frame(s) missing from the numbering, e.g. {:?}",
-            missing.len(),
-            &missing[..missing.len().min(5)]
+            missing.count,
+            missing.first
         );
     }
     let options = RunOptions {
@@ -94,11 +100,14 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     }
     let s = &r.summary;
     let stage = |v: Option<[f64; 2]>| v.map_or("-".into(), |[m, p]| format!("{m:.2} / {p:.2} ms"));
-    println!(
+    say!(
         "{} frames ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass",
-        s.frames, s.fps, s.runtime, s.gated_out
+        s.frames,
+        s.fps,
+        s.runtime,
+        s.gated_out
     );
-    println!(
+    say!(
         "median / p95 per stage: detect {}, segment + direction {}, depth {}, whole frame {}",
         stage(s.stages_ms.detect),
         stage(s.stages_ms.segment),
@@ -106,7 +115,7 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         stage(s.stages_ms.frame)
     );
     if let Some(acc) = s.detector_accuracy {
-        println!(
+        say!(
             "tendon decisions: accuracy {acc:.4} with {} changes within sequences ({} changes in the labels); the detector's threshold alone: {:.4}, {} changes",
             s.decision_changes,
             s.label_changes,
@@ -115,8 +124,8 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         );
     }
     if let Some(out) = &a.out {
-        println!("records in {}", out.display());
+        say!("records in {}", out.display());
     }
-    println!("{}", serde_json::to_string(s)?);
+    say!("{}", serde_json::to_string(s)?);
     Ok(())
 }

@@ -29,6 +29,10 @@ pub(crate) struct SweepArgs {
 }
 
 pub(crate) fn main(a: SweepArgs) -> Result<()> {
+    if let Some(out) = &a.out {
+        let ds = tactile_core::dataset::Dataset::open(&a.data)?;
+        tactile_core::io::check_output_file(out, &[&ds])?;
+    }
     let r = sweep(&Sweep {
         encoders: a.encoders,
         data: a.data,
@@ -36,10 +40,10 @@ pub(crate) fn main(a: SweepArgs) -> Result<()> {
         seed: a.seed,
         runs: a.runs,
     })?;
-    print!("{}", r.markdown);
+    say_raw!("{}", r.markdown);
     if let Some(out) = &a.out {
         r.write(out)?;
-        println!("table and plots written beside {}", out.display());
+        say!("table and plots written beside {}", out.display());
     }
     Ok(())
 }

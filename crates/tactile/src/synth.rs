@@ -119,14 +119,14 @@ fn finish(
     t: std::time::Instant,
 ) -> Result<()> {
     let secs = t.elapsed().as_secs_f64();
-    println!(
+    say!(
         "{count} {what} frames written to {} in {secs:.1} s ({:.1} frames/s)",
         out.display(),
         count as f64 / secs.max(1e-9)
     );
     if let Some(p) = &c.preview {
         datasets_synth::preview::contact_sheet(&out, p, c.preview_frames)?;
-        println!("preview: {}", p.display());
+        say!("preview: {}", p.display());
     }
     Ok(())
 }
@@ -137,6 +137,13 @@ macro_rules! set {
 
 pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
     let t = std::time::Instant::now();
+    let common = match &cmd {
+        SynthCmd::Tactip(a) => &a.common,
+        SynthCmd::Visuotactile(a) => &a.common,
+    };
+    if let Some(p) = &common.preview {
+        tactile_core::io::check_output_file(p, &[])?;
+    }
     match cmd {
         SynthCmd::Tactip(a) => {
             let mut cfg: TactipConfig = config(&a.common)?;
@@ -155,10 +162,15 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
             let mut cfg: VisuotactileConfig = config(&a.common)?;
             set!(cfg, a: paths, width, height, frames_per_sequence, press_mm, tendon_radius_mm, burial_mm, noise_sigma);
             let f = cfg.frames_per_sequence;
+            let frames = |k: usize| {
+                k.checked_mul(f).ok_or_else(|| {
+                    anyhow::anyhow!("--sequences {k} x {f} frames is too many frames")
+                })
+            };
             let count = match (a.common.count, a.sequences) {
                 (Some(c), None) => c,
-                (None, Some(k)) => k * f,
-                (Some(c), Some(k)) if c == k * f => c,
+                (None, Some(k)) => frames(k)?,
+                (Some(c), Some(k)) if c == frames(k)? => c,
                 (Some(c), Some(k)) => {
                     bail!("--count {c} disagrees with --sequences {k} x {f} frames per sequence")
                 }

@@ -315,6 +315,18 @@ pub(crate) struct DepthArgs {
 }
 
 pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
+    // An unwritable output folder fails first, before any data is read.
+    let out = match &cmd {
+        TrainCmd::Cae(a) => Some(&a.out),
+        TrainCmd::Detector(a) => Some(&a.out),
+        TrainCmd::Segmenter(a) => Some(&a.out),
+        TrainCmd::Depth(a) => Some(&a.out),
+        TrainCmd::Head(a) => a.out.as_ref(),
+        TrainCmd::Regressor(a) => a.out.as_ref(),
+    };
+    if let Some(out) = out {
+        tactile_core::io::ensure_writable_dir(out)?;
+    }
     match cmd {
         TrainCmd::Cae(a) => {
             let ds = Dataset::open(&a.data)?;
@@ -345,7 +357,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 a.schedule.device,
                 a.schedule.resume,
             )?;
-            println!(
+            say!(
                 "trained {} epochs in {:.0} s; best validation BCE {:.4} at epoch {}; model in {}",
                 s.epochs_run,
                 s.seconds,
@@ -366,23 +378,23 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             let (head, tested) =
                 train_head(config, &a.features.source()?, &ds, test.as_ref(), &out, rt)?;
             if let Some(t) = tested {
-                println!(
+                say!(
                     "test shape accuracy: {:.1} % ({}/{})",
                     100.0 * t.accuracy,
                     t.right,
                     t.frames
                 );
                 let classes = head.classes();
-                println!(
+                say!(
                     "confusion (rows: truth, columns: predicted): {}",
                     classes.join(" ")
                 );
                 for (c, row) in classes.iter().zip(&t.confusion) {
                     let cells: String = row.iter().map(|v| format!("{v:>5}")).collect();
-                    println!("  {c:>12} {cells}");
+                    say!("  {c:>12} {cells}");
                 }
             }
-            println!("head saved in {}", out.display());
+            say!("head saved in {}", out.display());
         }
         TrainCmd::Regressor(a) => {
             let ds = Dataset::open(&a.data)?;
@@ -396,11 +408,11 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 ..RegressorPlan::new(a.targets)
             };
             let fit = train_regressor(&plan, &a.features.source()?, &ds, &out, a.device.runtime())?;
-            println!("test mean absolute error ({} frames):", fit.frames[2]);
+            say!("test mean absolute error ({} frames):", fit.frames[2]);
             for (t, e) in plan.targets.iter().zip(&fit.test_mae) {
-                println!("  {:<14} {e:.4}", t.name);
+                say!("  {:<14} {e:.4}", t.name);
             }
-            println!("regressor saved in {}", out.display());
+            say!("regressor saved in {}", out.display());
         }
         TrainCmd::Detector(a) => {
             let datasets = a
@@ -436,7 +448,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 s.resume,
                 a.calibrate_only,
             )?;
-            println!(
+            say!(
                 "{} (accuracy {:.4} at the chosen threshold {:.2}); model in {}",
                 fit.summary.describe("accuracy at threshold 0.5"),
                 fit.val_accuracy,
@@ -454,7 +466,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 .with_val_fraction(a.val_fraction);
             let s = &a.schedule;
             let fit = tactile_segment::training::train(&config, &ds, &a.out, s.device, s.resume)?;
-            println!("{}; model in {}", fit.describe("mean IoU"), a.out.display());
+            say!("{}; model in {}", fit.describe("mean IoU"), a.out.display());
         }
         TrainCmd::Depth(a) => {
             let ds = Dataset::open(&a.data)?;
@@ -473,7 +485,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 .with_val_fraction(a.val_fraction);
             let s = &a.schedule;
             let fit = tactile_depth::training::train(&config, &ds, &a.out, s.device, s.resume)?;
-            println!("{}; model in {}", fit.describe("MAE (mm)"), a.out.display());
+            say!("{}; model in {}", fit.describe("MAE (mm)"), a.out.display());
         }
     }
     Ok(())

@@ -345,11 +345,18 @@ fn synth_keeps_a_non_empty_folder_unless_forced() {
         !ok && msg.contains("not empty") && msg.contains("--force"),
         "{msg}"
     );
+    // --force replaces a dataset, never a folder of the user's own files.
+    let (ok, msg) = tactile(&["synth", "tactip", "--count", "2", "--out", o, "--force"]);
+    assert!(!ok && msg.contains("not a dataset"), "{msg}");
     assert_eq!(
         std::fs::read_to_string(out.join("notes.txt")).unwrap(),
         "mine"
     );
     assert_eq!(listing(tmp.path()), vec!["ds"]);
+    let ds = tmp.path().join("ds2");
+    let d = ds.to_str().unwrap();
+    let (ok, msg) = tactile(&["synth", "tactip", "--count", "2", "--out", d]);
+    assert!(ok, "{msg}");
     let preview = tmp.path().join("preview.png");
     let (ok, msg) = tactile(&[
         "synth",
@@ -357,15 +364,16 @@ fn synth_keeps_a_non_empty_folder_unless_forced() {
         "--count",
         "3",
         "--out",
-        o,
+        d,
         "--force",
         "--preview",
         preview.to_str().unwrap(),
     ]);
     assert!(ok, "{msg}");
-    assert_eq!(listing(&out), vec!["frames", "labels.csv", "manifest.json"]);
+    assert_eq!(listing(&ds), vec!["frames", "labels.csv", "manifest.json"]);
+    assert_eq!(std::fs::read_dir(ds.join("frames")).unwrap().count(), 3);
     assert!(image::open(&preview).unwrap().width() > 300);
-    assert_eq!(listing(tmp.path()), vec!["ds", "preview.png"]);
+    assert_eq!(listing(tmp.path()), vec!["ds", "ds2", "preview.png"]);
 }
 
 #[test]

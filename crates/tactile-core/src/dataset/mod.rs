@@ -9,14 +9,21 @@ use serde::{Deserialize, Serialize};
 
 use crate::{Error, Result};
 
+mod paths;
 mod split;
 mod writer;
 
+pub use paths::{Escape, resolve_inside};
 pub use split::{Splits, TestHoldout, hold_out};
 pub use writer::DatasetWriter;
 
 /// The format tag every manifest carries.
 pub const FORMAT: &str = "tactile-dataset/1";
+
+/// Most rows a `labels.csv` may have.
+pub const MAX_ROWS: usize = 10_000_000;
+/// Largest frame side a manifest may declare, pixels (8K UHD's width).
+pub const MAX_SIDE: u32 = 7680;
 
 /// Which sensor a dataset holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -151,7 +158,7 @@ impl Dataset {
     pub fn open(root: impl AsRef<Path>) -> Result<Self> {
         let root = root.as_ref().to_path_buf();
         if !root.is_dir() {
-            return Err(Error::dataset(&root, None, "dataset folder does not exist"));
+            return Err(Error::not_found(&root, "dataset folder"));
         }
         let manifest_path = root.join("manifest.json");
         if !manifest_path.is_file() {
@@ -169,6 +176,21 @@ impl Dataset {
                 format!("format is '{}', expected '{FORMAT}'", manifest.format),
             ));
         }
+        let (w, h) = (manifest.width, manifest.height);
+        if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
+            return Err(Error::dataset(
+                &manifest_path,
+                None,
+                format!("width and height must be 1 to {MAX_SIDE} pixels, found {w}x{h}"),
+            ));
+        }
+        if manifest.count > MAX_ROWS {
+            return Err(Error::dataset(
+                &manifest_path,
+                None,
+                format!("count {} is more than {MAX_ROWS} frames", manifest.count),
+            ));
+        }
         let labels = root.join("labels.csv");
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(true)
@@ -181,6 +203,17 @@ impl Dataset {
             .iter()
             .map(|s| s.trim().to_string())
             .collect();
+        if let Some((i, dup)) = header
+            .iter()
+            .enumerate()
+            .find(|(i, c)| header[..*i].contains(c))
+        {
+            return Err(Error::dataset(
+                &labels,
+                Some(1),
+                format!("column '{dup}' appears twice (again as column {})", i + 1),
+            ));
+        }
         let required = manifest.kind.columns();
         if header.len() < required.len() || header[..required.len()] != *required {
             return Err(Error::dataset(
@@ -196,7 +229,18 @@ impl Dataset {
         let mut rows = Vec::new();
         for (i, rec) in reader.records().enumerate() {
             let line = i + 2;
-            let rec = rec.map_err(|e| Error::dataset(&labels, Some(line), e.to_string()))?;
+            let rec = rec.map_err(|e| {
+                let at = e.position().map_or(line, |p| p.line() as usize);
+                Error::dataset(&labels, Some(at), e.to_string())
+            })?;
+            let line = rec.position().map_or(line, |p| p.line() as usize);
+            if rows.len() >= MAX_ROWS {
+                return Err(Error::dataset(
+                    &labels,
+                    Some(line),
+                    format!("more than {MAX_ROWS} rows"),
+                ));
+            }
             let cells = header
                 .iter()
                 .cloned()
@@ -226,6 +270,10 @@ impl Dataset {
 
     fn check_rows(&self) -> Result<()> {
         let labels = self.labels_path();
+        let canonical = self
+            .root
+            .canonicalize()
+            .map_err(|e| Error::io(&self.root, e))?;
         let file_columns: &[&str] = match self.manifest.kind {
             DatasetKind::Tactip => &["file"],
             DatasetKind::Visuotactile => &["file", "mask", "depth"],
@@ -249,14 +297,21 @@ impl Dataset {
                 ));
             };
             for col in file_columns {
-                if let Some(rel) = row.get(col)
-                    && !self.root.join(rel).is_file()
-                {
-                    return Err(Error::dataset(
+                let Some(rel) = row.get(col) else { continue };
+                let bad = |why: &str| {
+                    Error::dataset(
                         &labels,
                         Some(row.line),
-                        format!("column '{col}': file '{rel}' does not exist"),
-                    ));
+                        format!("column '{col}': '{rel}' {why}"),
+                    )
+                };
+                let path = resolve_inside(&canonical, rel).map_err(|e| bad(e.describe()))?;
+                match std::fs::metadata(&path) {
+                    Err(_) => return Err(bad("does not exist")),
+                    Ok(m) if !m.is_file() => {
+                        return Err(bad("is not a regular file (a folder, a pipe or a device)"));
+                    }
+                    Ok(_) => {}
                 }
             }
             for col in number_columns {
@@ -276,6 +331,85 @@ impl Dataset {
             format!("{} dataset", kind.describe()),
             format!("its kind is '{}'", self.manifest.kind.name()),
         ))
+    }
+
+    /// The frame of row `i` as RGB, refused (naming the file) when its
+    /// size is not the manifest's.
+    pub fn load_rgb(&self, i: usize) -> Result<crate::image_io::RgbImage> {
+        let path = self.path_of(i, "file")?;
+        let img = crate::image_io::load_rgb(&path)?;
+        self.expect_frame_size(&path, img.width(), img.height())?;
+        Ok(img)
+    }
+
+    /// The greyscale image in `column` (`file`, `mask`) of row `i`, refused
+    /// (naming the file) when its size is not the manifest's.
+    pub fn load_grey(&self, i: usize, column: &str) -> Result<crate::image_io::GreyImage> {
+        let path = self.path_of(i, column)?;
+        let img = crate::image_io::load_grey(&path)?;
+        self.expect_frame_size(&path, img.width(), img.height())?;
+        Ok(img)
+    }
+
+    /// The depth map of row `i` in metres, `(width, height, values)`,
+    /// refused (naming the file) when its size is not the manifest's.
+    pub fn load_depth_m(&self, i: usize) -> Result<(usize, usize, Vec<f32>)> {
+        let path = self.path_of(i, "depth")?;
+        let (w, h, d) = crate::npy::read_depth_npy(&path)?;
+        self.expect_frame_size(&path, w, h)?;
+        Ok((w, h, d))
+    }
+
+    /// Refuse a file of `path` whose size is not the manifest's frame size.
+    pub fn expect_frame_size(&self, path: &Path, width: usize, height: usize) -> Result<()> {
+        let (mw, mh) = (self.manifest.width as usize, self.manifest.height as usize);
+        if (width, height) != (mw, mh) {
+            return Err(Error::image(
+                path,
+                format!("is {width}x{height}, but manifest.json says the frames are {mw}x{mh}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Refuse `out` as an output when writing it would change this dataset:
+    /// the dataset folder itself, its manifest or labels, a file it
+    /// references or a folder holding them (`encode --out DS/labels.csv`).
+    pub fn refuse_as_output(&self, out: &Path) -> Result<()> {
+        let canonical = |p: &Path| -> Option<PathBuf> {
+            p.canonicalize().ok().or_else(|| {
+                let parent = p
+                    .parent()
+                    .filter(|q| !q.as_os_str().is_empty())
+                    .unwrap_or(Path::new("."));
+                Some(parent.canonicalize().ok()?.join(p.file_name()?))
+            })
+        };
+        let (Some(root), Some(out_c)) = (canonical(&self.root), canonical(out)) else {
+            return Ok(());
+        };
+        let Ok(rel) = out_c.strip_prefix(&root) else {
+            return Ok(());
+        };
+        let protected = |r: &Path| {
+            r.as_os_str().is_empty()
+                || r == Path::new("manifest.json")
+                || r == Path::new("labels.csv")
+                || self.rows.iter().any(|row| {
+                    ["file", "mask", "depth"].iter().any(|c| {
+                        row.get(c)
+                            .is_some_and(|f| Path::new(f) == r || Path::new(f).starts_with(r))
+                    })
+                })
+        };
+        if protected(rel) {
+            return Err(Error::Invalid(format!(
+                "{}: this output is part of the input dataset {}; writing it would change the dataset, so nothing was done",
+                out.display(),
+                self.root.display()
+            )));
+        }
+        Ok(())
     }
 
     /// Path of `labels.csv`.
