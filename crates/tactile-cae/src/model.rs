@@ -39,7 +39,7 @@ pub struct CaeConfig {
 }
 
 /// Widest encoder block accepted.
-pub const MAX_WIDTH: usize = 1024;
+pub const MAX_WIDTH: usize = 256;
 
 impl CaeConfig {
     /// Check the sizes against the documented limits before anything is

@@ -102,6 +102,20 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
     }
 }
 
+/// Most parameters any model may have (400 MB of weights): a config that
+/// would build a larger one is refused before anything is allocated.
+pub const MAX_PARAMETERS: u64 = 100_000_000;
+
+/// Refuse `parameters` above [`MAX_PARAMETERS`].
+pub fn check_parameters(what: &str, parameters: u64) -> Result<()> {
+    if parameters > MAX_PARAMETERS {
+        return Err(Error::Config(format!(
+            "this {what} would have about {parameters} parameters, more than the {MAX_PARAMETERS} allowed"
+        )));
+    }
+    Ok(())
+}
+
 /// The file that marks a model folder whose training has not finished.
 pub const INCOMPLETE_FILE: &str = "INCOMPLETE";
 

@@ -109,7 +109,8 @@ impl std::str::FromStr for DenseNetPreset {
     }
 }
 
-/// Largest growth rate, stem width and decoder width accepted.
+/// Largest growth rate, stem width and decoder width accepted (the whole
+/// network is also bounded by [`tactile_core::artifact::MAX_PARAMETERS`]).
 pub const MAX_CHANNELS: usize = 1024;
 /// Largest number of layers in a dense block.
 pub const MAX_BLOCK_LAYERS: usize = 64;
@@ -418,7 +419,31 @@ impl DepthNetConfig {
                 e.compression
             )));
         }
-        Ok(())
+        tactile_core::artifact::check_parameters("depth network", self.parameter_bound())
+    }
+
+    /// An upper bound on the parameter count from the channel widths: the
+    /// convolutions of every dense layer, transition, decoder block and head.
+    pub fn parameter_bound(&self) -> u64 {
+        let e = &self.encoder;
+        let (g, mid) = (e.growth_rate as u64, (e.bn_size * e.growth_rate) as u64);
+        let mut p = self.in_channels as u64 * e.num_init_features as u64 * 49;
+        let mut c = e.num_init_features as u64;
+        for (i, &n) in e.block_config.iter().enumerate() {
+            for j in 0..n as u64 {
+                let cin = c.saturating_add(j.saturating_mul(g));
+                p = p.saturating_add(cin.saturating_mul(mid) + mid * g * 9 + 4 * (cin + mid));
+            }
+            c = c.saturating_add((n as u64).saturating_mul(g));
+            if i + 1 < e.block_config.len() {
+                let o = (c as f64 * e.compression) as u64;
+                p = p.saturating_add(c.saturating_mul(o));
+                c = o;
+            }
+        }
+        let d = self.decoder_width as u64;
+        // The decoder: each up block sees at most the deepest width plus a skip.
+        p.saturating_add(4 * (c + d) * d * 9 * 2 + d * d * 9 * 2)
     }
 
     /// Check the sizes and build with fresh weights.

@@ -256,7 +256,7 @@ pub struct Detector {
 }
 
 /// Largest channel width multiplier accepted.
-pub const MAX_WIDTH: f64 = 4.0;
+pub const MAX_WIDTH: f64 = 2.0;
 /// Input sides accepted, pixels.
 pub const INPUT_SIDE: std::ops::RangeInclusive<usize> = 16..=2048;
 /// Largest hidden width of the head.

@@ -85,6 +85,11 @@ impl HeadConfig {
     /// Check the sizes against the limits before anything is built.
     pub fn check(&self) -> tactile_core::Result<()> {
         crate::mlp::check_sizes(self.inputs, &self.hidden, self.classes.len())?;
+        let each = crate::mlp::parameters(self.inputs, &self.hidden, self.classes.len());
+        tactile_core::artifact::check_parameters(
+            "head ensemble",
+            each.saturating_mul(self.members() as u64),
+        )?;
         if self.folds < 2 || self.members() > MAX_MEMBERS {
             return Err(tactile_core::Error::Config(format!(
                 "a head needs at least 2 folds and at most {MAX_MEMBERS} members, got {} folds x {} repeats",

@@ -53,7 +53,19 @@ pub fn check_sizes(
     {
         return bad(format!("hidden width {w}: must be 1 to {MAX_HIDDEN_WIDTH}"));
     }
-    Ok(())
+    tactile_core::artifact::check_parameters("MLP", parameters(inputs, hidden, outputs))
+}
+
+/// Weights and biases of an MLP.
+pub fn parameters(inputs: usize, hidden: &[(usize, Activation)], outputs: usize) -> u64 {
+    let dims: Vec<u64> = std::iter::once(inputs)
+        .chain(hidden.iter().map(|h| h.0))
+        .chain(std::iter::once(outputs))
+        .map(|d| d as u64)
+        .collect();
+    dims.windows(2)
+        .map(|w| w[0].saturating_mul(w[1]).saturating_add(w[1]))
+        .fold(0u64, u64::saturating_add)
 }
 
 /// Refuse standardisation statistics of another length than `n`, or with

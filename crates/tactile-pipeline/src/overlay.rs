@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use tactile_core::Result;
+use tactile_preprocess::visuo::SquareWindow;
 
 /// What a tendon frame looked like to the pipeline, for overlays.
 pub struct FrameViews {
@@ -22,6 +23,42 @@ pub struct FrameViews {
 }
 
 impl FrameViews {
+    /// The kept region at the frame's resolution (`width x height`,
+    /// row-major): each frame pixel takes the window pixel it was cut into
+    /// (nearest); pixels the window does not see are not tendon.
+    pub fn mask_at(&self, width: usize, height: usize) -> Vec<bool> {
+        let win = SquareWindow { side: self.side };
+        let s = self.side as isize;
+        (0..width * height)
+            .map(|i| {
+                let (x, y) =
+                    win.frame_to_window(((i % width) as f64, (i / width) as f64), (width, height));
+                let (x, y) = (x.round() as isize, y.round() as isize);
+                (0..s).contains(&x) && (0..s).contains(&y) && self.region[(y * s + x) as usize]
+            })
+            .collect()
+    }
+
+    /// The depth at the frame's resolution in metres (bilinear from the
+    /// network's output, half-pixel centres).
+    pub fn depth_m_at(&self, width: usize, height: usize) -> Vec<f32> {
+        let [dw, dh] = self.depth_size;
+        let at = |x: usize, y: usize| self.depth_mm[y.min(dh - 1) * dw + x.min(dw - 1)];
+        (0..width * height)
+            .map(|i| {
+                let fx = (((i % width) as f64 + 0.5) * dw as f64 / width as f64 - 0.5)
+                    .clamp(0.0, (dw - 1) as f64);
+                let fy = (((i / width) as f64 + 0.5) * dh as f64 / height as f64 - 0.5)
+                    .clamp(0.0, (dh - 1) as f64);
+                let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
+                let (tx, ty) = ((fx - x0 as f64) as f32, (fy - y0 as f64) as f32);
+                let top = at(x0, y0) * (1.0 - tx) + at(x0 + 1, y0) * tx;
+                let bottom = at(x0, y0 + 1) * (1.0 - tx) + at(x0 + 1, y0 + 1) * tx;
+                (top * (1.0 - ty) + bottom * ty) / 1000.0
+            })
+            .collect()
+    }
+
     /// Paper B's figure 3 style: the window enlarged `zoom` times with the
     /// kept region in green and the direction as a red line, and beside it
     /// the depth heat map at the same height. Written atomically as PNG.

@@ -194,6 +194,21 @@ impl SquareWindow {
         self.scaled_size(1, h).1 as f64 / h.max(1) as f64
     }
 
+    /// Where the centre of pixel `(u, v)` of a `w x h` frame falls in the
+    /// (unrotated) window, in window pixels: the inverse of scaling the
+    /// frame and cutting the window. Outside `[0, side)` the window does
+    /// not see that pixel.
+    pub fn frame_to_window(&self, (u, v): (f64, f64), (w, h): (usize, usize)) -> (f64, f64) {
+        let (sw, sh) = self.scaled_size(w, h);
+        let sx = (u + 0.5) * sw as f64 / w.max(1) as f64 - 0.5;
+        let sy = (v + 0.5) * sh as f64 / h.max(1) as f64 - 0.5;
+        let half = (self.side as f64 - 1.0) / 2.0;
+        (
+            sx - (sw as f64 - 1.0) / 2.0 + half,
+            sy - (sh as f64 - 1.0) / 2.0 + half,
+        )
+    }
+
     /// The window of an image already scaled by [`Self::scaled_size`],
     /// rotated by `deg` about its centre (bilinear; masks are thresholded
     /// by the caller).
@@ -350,6 +365,43 @@ impl ChannelStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn frame_pixels_map_onto_the_window_they_were_cut_into() {
+        let win = SquareWindow { side: 48 };
+        let (w, h) = (640, 360);
+        let (sw, sh) = win.scaled_size(w, h);
+        // A frame with one bright pixel per 8 x 8 block, scaled and cut.
+        let mut bytes = vec![0u8; w * h];
+        for v in (4..h).step_by(16) {
+            for u in (4..w).step_by(16) {
+                bytes[v * w + u] = 255;
+            }
+        }
+        let frame = crate::visuo::resize_u8(&bytes, (w, h, 1), sw, sh).unwrap();
+        let cut = win.cut(&frame, 0.0);
+        // The window's brightest pixel is where the mapping puts a bright frame pixel.
+        let (best, _) = cut
+            .data
+            .iter()
+            .enumerate()
+            .fold((0, 0.0f32), |b, (i, &x)| if x > b.1 { (i, x) } else { b });
+        let (bx, by) = ((best % 48) as f64, (best / 48) as f64);
+        let near = (4..h)
+            .step_by(16)
+            .flat_map(|v| (4..w).step_by(16).map(move |u| (u, v)))
+            .any(|(u, v)| {
+                let (x, y) = win.frame_to_window((u as f64, v as f64), (w, h));
+                (x - bx).abs() <= 1.0 && (y - by).abs() <= 1.0
+            });
+        assert!(near, "window pixel ({bx}, {by})");
+        // The frame's centre is the window's centre.
+        let (x, y) = win.frame_to_window((319.5, 179.5), (w, h));
+        assert!(
+            (x - 23.5).abs() < 1e-9 && (y - 23.5).abs() < 1e-9,
+            "{x} {y}"
+        );
+    }
 
     fn ramp(w: usize, h: usize) -> FloatImage {
         FloatImage {

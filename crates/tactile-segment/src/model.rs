@@ -16,7 +16,7 @@ use tactile_core::runtime::Forward;
 /// Largest window side accepted, pixels.
 pub const MAX_SIDE: usize = 1024;
 /// Largest first-block width accepted.
-pub const MAX_BASE: usize = 256;
+pub const MAX_BASE: usize = 64;
 
 /// Width and input side of a U-Net.
 #[derive(Config, Debug, PartialEq)]

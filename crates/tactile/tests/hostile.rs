@@ -1,0 +1,658 @@
+#![allow(clippy::unwrap_used)]
+//! The command line against careless and hostile input (issue 16): every
+//! command runs under `ulimit -v 4000000` (about 4 GB of address space),
+//! so an allocation sized from a file or a flag aborts the test instead of
+//! passing; each case must end with a clear error (never a panic, an abort
+//! or a hang), read nothing outside the dataset, and leave every file it
+//! did not make as it was.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_tactile")
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Run `tactile args` under the address-space limit: (success, output).
+fn tactile(args: &[&str]) -> (bool, String) {
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg("ulimit -v 4000000; exec \"$@\"")
+        .arg("tactile")
+        .arg(bin())
+        .args(args)
+        .output()
+        .unwrap();
+    let msg = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        !msg.contains("panicked") && !msg.contains("memory allocation"),
+        "{args:?} panicked or aborted:\n{msg}"
+    );
+    assert!(
+        out.status.code().is_some(),
+        "{args:?} died of a signal ({:?}):\n{msg}",
+        out.status
+    );
+    (out.status.success(), msg)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn png(path: &Path, w: u32, h: u32) {
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    image::GrayImage::from_pixel(w, h, image::Luma([0u8]))
+        .save(path)
+        .unwrap();
+}
+
+/// A TacTip dataset of `n` black 300x300 frames with these label rows
+/// (`file` first); `n` frames are written as frames/0.png...
+fn tactip(dir: &Path, n: usize, rows: &[String]) {
+    std::fs::create_dir_all(dir).unwrap();
+    for i in 0..n {
+        png(&dir.join(format!("frames/{i}.png")), 300, 300);
+    }
+    let mut labels = String::from("file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n\n");
+    for r in rows {
+        labels.push_str(r);
+        labels.push('\n');
+    }
+    std::fs::write(dir.join("labels.csv"), labels).unwrap();
+    std::fs::write(
+        dir.join("manifest.json"),
+        format!(r#"{{"format":"tactile-dataset/1","kind":"tactip","sensor_spec":"test","width":300,"height":300,"generator":"test","seed":1,"count":{}}}"#, rows.len()),
+    )
+    .unwrap();
+}
+
+fn row(file: &str) -> String {
+    format!("{file},sphere,0,0,0,1,1")
+}
+
+/// A small visuo-tactile dataset made by the virtual sensor.
+fn palpations(dir: &Path, sequences: &str, frames: &str, seed: &str) {
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--sequences",
+        sequences,
+        "--frames-per-sequence",
+        frames,
+        "--seed",
+        seed,
+        "--out",
+        s(dir),
+    ]);
+    assert!(ok, "{msg}");
+}
+
+fn encode(data: &Path, out: &Path) -> (bool, String) {
+    let model = root().join("models/cae-shapes");
+    tactile(&[
+        "encode",
+        "--model",
+        s(&model),
+        "--data",
+        s(data),
+        "--out",
+        s(out),
+    ])
+}
+
+#[test]
+fn reads_stay_inside_the_dataset_and_do_not_reveal_outside_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let outside = tmp.path().join("secret.png");
+    png(&outside, 300, 300);
+    let ds = tmp.path().join("ds");
+    let out = tmp.path().join("f.csv");
+    let cases: Vec<(String, &str)> = vec![
+        ("../secret.png".into(), "goes up with '..'"),
+        ("../missing.png".into(), "goes up with '..'"),
+        (s(&outside).into(), "is absolute"),
+        ("/definitely/not/here.png".into(), "is absolute"),
+    ];
+    for (file, why) in &cases {
+        let _ = std::fs::remove_dir_all(&ds);
+        tactip(&ds, 1, &[row("frames/0.png"), row(file)]);
+        let (ok, msg) = encode(&ds, &out);
+        assert!(
+            !ok && msg.contains("labels.csv:3") && msg.contains(why),
+            "{file}: {msg}"
+        );
+        assert!(!msg.contains("does not exist"), "{file}: {msg}");
+        assert!(!out.exists());
+    }
+    // A symbolic link under frames/ that leaves: the same answer whether
+    // its target exists or not.
+    for target in [outside.clone(), tmp.path().join("missing.png")] {
+        let _ = std::fs::remove_dir_all(&ds);
+        tactip(&ds, 1, &[row("frames/0.png"), row("frames/link.png")]);
+        std::os::unix::fs::symlink(&target, ds.join("frames/link.png")).unwrap();
+        let (ok, msg) = encode(&ds, &out);
+        assert!(
+            !ok && msg.contains("labels.csv:3") && msg.contains("leaves the dataset folder"),
+            "{msg}"
+        );
+        assert!(!msg.contains("does not exist"), "{msg}");
+    }
+    // A column named twice is an error, not "the last one wins".
+    let _ = std::fs::remove_dir_all(&ds);
+    tactip(&ds, 1, &[row("frames/0.png")]);
+    std::fs::write(
+        ds.join("labels.csv"),
+        "file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n,file\nframes/0.png,sphere,0,0,0,1,1,../secret.png\n",
+    )
+    .unwrap();
+    let (ok, msg) = encode(&ds, &out);
+    assert!(
+        !ok && msg.contains("labels.csv:1") && msg.contains("'file' appears twice"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn what_a_dataset_says_must_agree_with_what_it_holds() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A TacTip frame of another size than the manifest's.
+    let ds = tmp.path().join("ds");
+    tactip(&ds, 2, &[row("frames/0.png"), row("frames/1.png")]);
+    png(&ds.join("frames/1.png"), 320, 300);
+    let (ok, msg) = encode(&ds, &tmp.path().join("f.csv"));
+    assert!(
+        !ok && msg.contains("frames/1.png")
+            && msg.contains("320x300")
+            && msg.contains("manifest.json says"),
+        "{msg}"
+    );
+    // A transposed depth map and a mask of the wrong size beside 640x360 frames.
+    let vt = tmp.path().join("vt");
+    palpations(&vt, "1", "4", "3");
+    let depth = vt.join("depth/000001.npy");
+    let bytes = std::fs::read(&depth).unwrap();
+    let at = bytes.windows(10).position(|w| w == b"(360, 640)").unwrap();
+    let mut t = bytes.clone();
+    t[at..at + 10].copy_from_slice(b"(640, 360)");
+    std::fs::write(&depth, t).unwrap();
+    let model = root().join("models/depth");
+    let (ok, msg) = tactile(&["eval", "depth", "--model", s(&model), "--data", s(&vt)]);
+    assert!(
+        !ok && msg.contains("000001.npy") && msg.contains("360x640"),
+        "{msg}"
+    );
+    std::fs::write(&depth, bytes).unwrap();
+    image::GrayImage::from_pixel(320, 180, image::Luma([0u8]))
+        .save(vt.join("masks/000002.png"))
+        .unwrap();
+    let (ok, msg) = tactile(&["eval", "depth", "--model", s(&model), "--data", s(&vt)]);
+    assert!(
+        !ok && msg.contains("masks/000002.png") && msg.contains("320x180"),
+        "{msg}"
+    );
+}
+
+/// An `.npy` header for a float32 array of `shape`, version 1.
+fn npy_header(shape: &str) -> Vec<u8> {
+    let mut h = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {shape}, }}");
+    while (10 + h.len() + 1) % 64 != 0 {
+        h.push(' ');
+    }
+    h.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend((h.len() as u16).to_le_bytes());
+    out.extend(h.as_bytes());
+    out
+}
+
+#[test]
+fn every_size_is_bounded_before_anything_is_allocated() {
+    let tmp = tempfile::tempdir().unwrap();
+    let vt = tmp.path().join("vt");
+    palpations(&vt, "1", "3", "4");
+    let model = root().join("models/depth");
+    let eval_depth = || tactile(&["eval", "depth", "--model", s(&model), "--data", s(&vt)]);
+    // A 200-byte .npy claiming 100000 x 100000 floats; a version-2 header
+    // claiming 4 GB of header.
+    let depth = vt.join("depth/000000.npy");
+    std::fs::write(&depth, npy_header("(100000, 100000)")).unwrap();
+    let (ok, msg) = eval_depth();
+    assert!(!ok && msg.contains("000000.npy"), "{msg}");
+    let mut v2 = b"\x93NUMPY\x02\x00".to_vec();
+    v2.extend(u32::MAX.to_le_bytes());
+    v2.extend([b' '; 100]);
+    std::fs::write(&depth, v2).unwrap();
+    let (ok, msg) = eval_depth();
+    assert!(
+        !ok && msg.contains("000000.npy") && msg.contains("header"),
+        "{msg}"
+    );
+    // Depth values no camera sees: refused naming the file and the pixel.
+    let mut far = npy_header("(360, 640)");
+    for i in 0..360 * 640 {
+        let v: f32 = if i == 7 { 1e36 } else { 0.015 };
+        far.extend(v.to_le_bytes());
+    }
+    std::fs::write(&depth, far).unwrap();
+    let (ok, msg) = eval_depth();
+    assert!(
+        !ok && msg.contains("000000.npy") && msg.contains("pixel (7, 0)"),
+        "{msg}"
+    );
+    // A detector config with width 1e9: refused naming the file and the field.
+    let det = tmp.path().join("det");
+    std::fs::create_dir(&det).unwrap();
+    let shipped = root().join("models/detector");
+    let text = std::fs::read_to_string(shipped.join("detector.json")).unwrap();
+    std::fs::write(
+        det.join("detector.json"),
+        text.replace("\"width\": 0.5", "\"width\": 1e9"),
+    )
+    .unwrap();
+    std::fs::copy(shipped.join("detector.bpk"), det.join("detector.bpk")).unwrap();
+    let (ok, msg) = tactile(&["eval", "detector", "--model", s(&det), "--data", s(&vt)]);
+    assert!(
+        !ok && msg.contains("detector.json") && msg.contains("width"),
+        "{msg}"
+    );
+    // Counts near 2^63 are refused, not wrapped.
+    let out = tmp.path().join("huge");
+    for args in [
+        vec![
+            "synth",
+            "visuotactile",
+            "--sequences",
+            "9223372036854775807",
+            "--out",
+            s(&out),
+        ],
+        vec![
+            "synth",
+            "tactip",
+            "--count",
+            "9223372036854775807",
+            "--out",
+            s(&out),
+        ],
+        vec!["run", "--data", s(&vt), "--threads", "100000"],
+    ] {
+        let (ok, msg) = tactile(&args);
+        assert!(!ok, "{args:?}: {msg}");
+    }
+    assert!(!out.exists());
+    // Frames named by nanosecond timestamps: the gap is counted, not listed.
+    let video = tmp.path().join("video");
+    std::fs::create_dir(&video).unwrap();
+    for n in ["1700000000000000000", "1700000000033333333"] {
+        std::fs::copy(vt.join("frames/000001.png"), video.join(format!("{n}.png"))).unwrap();
+    }
+    let models = root().join("models");
+    let t0 = Instant::now();
+    let (ok, msg) = tactile(&["run", "--data", s(&video), "--models", s(&models)]);
+    assert!(ok && msg.contains("33333332 frame(s) missing"), "{msg}");
+    assert!(t0.elapsed() < Duration::from_secs(60));
+}
+
+#[test]
+fn nothing_panics_on_empty_datasets_bad_configs_or_a_closed_stdout() {
+    let tmp = tempfile::tempdir().unwrap();
+    let empty = tmp.path().join("empty");
+    tactip(&empty, 0, &[]);
+    let enc = root().join("models/cae-shapes");
+    for args in [
+        vec![
+            "train",
+            "head",
+            "--encoder",
+            s(&enc),
+            "--data",
+            s(&empty),
+            "--out",
+            s(&tmp.path().join("h")),
+        ],
+        vec!["bench", "cae", "--model", s(&enc), "--data", s(&empty)],
+        vec!["evaluate", "--encoder", s(&enc), "--data", s(&empty)],
+        vec![
+            "train",
+            "cae",
+            "--data",
+            s(&empty),
+            "--out",
+            s(&tmp.path().join("c")),
+        ],
+        vec![
+            "compare",
+            "--encoder",
+            s(&enc),
+            "--data",
+            s(&empty),
+            "--classify",
+            "shape",
+        ],
+    ] {
+        let (ok, msg) = tactile(&args);
+        assert!(!ok, "{args:?}: {msg}");
+    }
+    // Zero widths are refused before a model is saved.
+    let ds = tmp.path().join("ds");
+    tactip(&ds, 2, &[row("frames/0.png"), row("frames/1.png")]);
+    let cae = tmp.path().join("cae");
+    let (ok, msg) = tactile(&[
+        "train",
+        "cae",
+        "--data",
+        s(&ds),
+        "--out",
+        s(&cae),
+        "--widths",
+        "0,8,8,4",
+    ]);
+    assert!(!ok && msg.contains("widths"), "{msg}");
+    assert!(!cae.exists());
+    // Channel statistics of the wrong length in a model config.
+    let seg = tmp.path().join("seg");
+    std::fs::create_dir(&seg).unwrap();
+    let shipped = root().join("models/segmenter");
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(shipped.join("segmenter.json")).unwrap())
+            .unwrap();
+    j["stats"]["mean"] = serde_json::json!([0.5, 0.5]);
+    std::fs::write(seg.join("segmenter.json"), j.to_string()).unwrap();
+    std::fs::copy(shipped.join("segmenter.bpk"), seg.join("segmenter.bpk")).unwrap();
+    let vt = tmp.path().join("vt");
+    palpations(&vt, "1", "4", "5");
+    let (ok, msg) = tactile(&["eval", "segmenter", "--model", s(&seg), "--data", s(&vt)]);
+    assert!(
+        !ok && msg.contains("segmenter.json") && msg.contains("2 means"),
+        "{msg}"
+    );
+    // A closed stdout ends the run quietly.
+    let mut child = Command::new(bin())
+        .args([
+            "run",
+            "--data",
+            s(&vt),
+            "--models",
+            s(&root().join("models")),
+        ])
+        .args(["--runtime", "burn-flex"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn models_and_labels_are_checked_when_loaded() {
+    let tmp = tempfile::tempdir().unwrap();
+    let vt = tmp.path().join("vt");
+    palpations(&vt, "1", "4", "6");
+    let shipped = root().join("models/detector");
+    let json = std::fs::read_to_string(shipped.join("detector.json")).unwrap();
+    let det = tmp.path().join("det");
+    std::fs::create_dir(&det).unwrap();
+    std::fs::copy(shipped.join("detector.bpk"), det.join("detector.bpk")).unwrap();
+    for (from, to, why) in [
+        ("\"threshold\": 0.45", "\"threshold\": 1.5", "threshold"),
+        ("0.23066123", "0.0", "standard deviation"),
+    ] {
+        std::fs::write(det.join("detector.json"), json.replace(from, to)).unwrap();
+        let (ok, msg) = tactile(&["eval", "detector", "--model", s(&det), "--data", s(&vt)]);
+        assert!(
+            !ok && msg.contains("detector.json") && msg.contains(why),
+            "{msg}"
+        );
+    }
+    // A weight that is not a number: refused at load, naming the file.
+    let seg = tmp.path().join("seg");
+    std::fs::create_dir(&seg).unwrap();
+    let shipped = root().join("models/segmenter");
+    std::fs::copy(shipped.join("segmenter.json"), seg.join("segmenter.json")).unwrap();
+    let mut w = std::fs::read(shipped.join("segmenter.bpk")).unwrap();
+    let n = w.len();
+    w[n - 4..].copy_from_slice(&f32::NAN.to_le_bytes());
+    std::fs::write(seg.join("segmenter.bpk"), w).unwrap();
+    let (ok, msg) = tactile(&["eval", "segmenter", "--model", s(&seg), "--data", s(&vt)]);
+    assert!(
+        !ok && msg.contains("segmenter.bpk") && msg.contains("NaN"),
+        "{msg}"
+    );
+    // A head trained on another encoder is refused by perceive.
+    let synth = root().join("models/cae-synth");
+    let shapes_head = root().join("models/cae-shapes/head");
+    let frames = root().join("samples/virtual-tactip");
+    let (ok, msg) = tactile(&[
+        "perceive",
+        "--encoder",
+        s(&synth),
+        "--heads",
+        s(&shapes_head),
+        "--data",
+        s(&frames),
+    ]);
+    assert!(!ok && msg.contains("another encoder"), "{msg}");
+}
+
+#[test]
+fn outputs_never_corrupt_destroy_or_half_exist() {
+    let tmp = tempfile::tempdir().unwrap();
+    // An output that is one of the inputs is refused before any work.
+    let ds = tmp.path().join("ds");
+    tactip(&ds, 1, &[row("frames/0.png")]);
+    let labels = std::fs::read_to_string(ds.join("labels.csv")).unwrap();
+    let (ok, msg) = encode(&ds, &ds.join("labels.csv"));
+    assert!(!ok && msg.contains("part of the input dataset"), "{msg}");
+    assert_eq!(
+        std::fs::read_to_string(ds.join("labels.csv")).unwrap(),
+        labels
+    );
+    // Two runs writing one folder at once never mix.
+    let out = tmp.path().join("shared");
+    let spawn = |seed: &str| {
+        Command::new(bin())
+            .args([
+                "synth",
+                "visuotactile",
+                "--sequences",
+                "2",
+                "--frames-per-sequence",
+                "6",
+            ])
+            .args(["--seed", seed, "--out", s(&out), "--force"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    let (mut a, mut b) = (spawn("1"), spawn("2"));
+    let (sa, sb) = (a.wait().unwrap(), b.wait().unwrap());
+    assert!(sa.success() || sb.success());
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    let seed = manifest["seed"].as_u64().unwrap().to_string();
+    let clean = tmp.path().join("clean");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--sequences",
+        "2",
+        "--frames-per-sequence",
+        "6",
+        "--seed",
+        &seed,
+        "--out",
+        s(&clean),
+    ]);
+    assert!(ok, "{msg}");
+    for f in ["labels.csv", "frames/000007.png", "depth/000011.npy"] {
+        assert_eq!(
+            std::fs::read(out.join(f)).unwrap(),
+            std::fs::read(clean.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    // Ctrl-C during synth: exit 130, no output, no staging folder.
+    let big = tmp.path().join("big");
+    let mut child = Command::new(bin())
+        .args([
+            "synth",
+            "visuotactile",
+            "--sequences",
+            "400",
+            "--out",
+            s(&big),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+    let left: Vec<String> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".big") || n == "big")
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+    // After SIGKILL the next run removes the stale staging folder.
+    let mut child = Command::new(bin())
+        .args([
+            "synth",
+            "visuotactile",
+            "--sequences",
+            "400",
+            "--out",
+            s(&big),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--sequences",
+        "1",
+        "--out",
+        s(&big),
+    ]);
+    assert!(ok, "{msg}");
+    let stale = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with(".big")
+        })
+        .count();
+    assert_eq!(stale, 0);
+    // A pipe named like a frame is refused, not read forever.
+    let video = tmp.path().join("video");
+    std::fs::create_dir(&video).unwrap();
+    Command::new("mkfifo")
+        .arg(video.join("000001.png"))
+        .status()
+        .unwrap();
+    let t0 = Instant::now();
+    let (ok, msg) = tactile(&[
+        "run",
+        "--data",
+        s(&video),
+        "--models",
+        s(&root().join("models")),
+    ]);
+    assert!(
+        !ok && msg.contains("000001.png") && msg.contains("not a regular file"),
+        "{msg}"
+    );
+    assert!(t0.elapsed() < Duration::from_secs(30));
+}
+
+#[test]
+fn interrupted_training_is_marked_and_resume_checks_its_checkpoint() {
+    let tmp = tempfile::tempdir().unwrap();
+    let vt = tmp.path().join("vt");
+    palpations(&vt, "4", "8", "7");
+    let det = tmp.path().join("det");
+    let train = |extra: &[&str]| -> Vec<String> {
+        let mut v: Vec<String> = ["train", "detector", "--data", s(&vt), "--out", s(&det)]
+            .iter()
+            .map(|a| a.to_string())
+            .collect();
+        v.extend(
+            [
+                "--width",
+                "0.25",
+                "--input",
+                "64x48",
+                "--val-fraction",
+                "0.25",
+                "--patience",
+                "400",
+            ]
+            .map(String::from),
+        );
+        v.extend(extra.iter().map(|a| a.to_string()));
+        v
+    };
+    // Interrupted after its first epoch: the folder says it is incomplete.
+    let mut child = Command::new(bin())
+        .args(train(&["--max-epochs", "400"]))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = child.stderr.take().unwrap();
+    let mut seen = String::new();
+    let t0 = Instant::now();
+    while !seen.contains("epoch 2/") && t0.elapsed() < Duration::from_secs(120) {
+        let mut buf = [0u8; 256];
+        let n = std::io::Read::read(&mut err, &mut buf).unwrap();
+        if n == 0 {
+            break;
+        }
+        seen.push_str(&String::from_utf8_lossy(&buf[..n]));
+    }
+    Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert_eq!(child.wait().unwrap().code(), Some(130), "{seen}");
+    assert!(det.join("INCOMPLETE").is_file());
+    let (ok, msg) = tactile(&["eval", "detector", "--model", s(&det), "--data", s(&vt)]);
+    assert!(!ok && msg.contains("did not finish"), "{msg}");
+    // Resuming with other settings is refused; with the same, it finishes.
+    let args = train(&["--max-epochs", "3", "--resume", "--lr", "0.5"]);
+    let (ok, msg) = tactile(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(!ok && msg.contains("other settings"), "{msg}");
+    let args = train(&["--max-epochs", "3", "--resume"]);
+    let (ok, msg) = tactile(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(ok, "{msg}");
+    assert!(!det.join("INCOMPLETE").exists());
+    let (ok, msg) = tactile(&["eval", "detector", "--model", s(&det), "--data", s(&vt)]);
+    assert!(ok, "{msg}");
+}

@@ -1,0 +1,116 @@
+#![allow(clippy::unwrap_used)]
+//! Property: a model config read from a file, however hostile its numbers,
+//! is either refused by its checks with an error or builds its network;
+//! it never panics and never asks for an allocation the limits do not
+//! allow (issue 16). Each case mutates numbers of a shipped config to
+//! extremes (0, 1, huge, negative, fractional) and runs the loader's own
+//! path: parse, check, build.
+
+use std::path::Path;
+
+use burn::tensor::Device;
+use proptest::prelude::*;
+use serde_json::Value;
+use tactile_rs::core::Artifact;
+
+/// Every numeric leaf of `v`, as JSON pointers.
+fn numbers(v: &Value, at: String, out: &mut Vec<String>) {
+    match v {
+        Value::Number(_) => out.push(at),
+        Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| numbers(x, format!("{at}/{i}"), out)),
+        Value::Object(o) => o
+            .iter()
+            .for_each(|(k, x)| numbers(x, format!("{at}/{k}"), out)),
+        _ => {}
+    }
+}
+
+const EXTREMES: [f64; 14] = [
+    0.0, 1.0, 2.0, 3.0, 16.0, 64.0, 1e3, 1e6, 1e9, 1.8e19, -1.0, 0.5, 1e-30, 1e300,
+];
+
+/// `template` with the numbers at `picks` (leaf index, extreme index) replaced.
+fn mutate(template: &Value, picks: &[(usize, usize)]) -> Value {
+    let mut leaves = Vec::new();
+    numbers(template, String::new(), &mut leaves);
+    let mut v = template.clone();
+    for &(leaf, x) in picks {
+        let ptr = &leaves[leaf % leaves.len()];
+        let e = EXTREMES[x % EXTREMES.len()];
+        let n = if e.fract() == 0.0 && (0.0..1.8e19).contains(&e) {
+            serde_json::json!(e as u64)
+        } else {
+            serde_json::json!(e)
+        };
+        if let Some(slot) = v.pointer_mut(ptr) {
+            *slot = n;
+        }
+    }
+    v
+}
+
+/// Parse, check and build `json` as an `A`; Ok(built) or a clean refusal.
+fn load<A: Artifact>(json: &Value) -> bool {
+    let Ok(a) = serde_json::from_value::<A>(json.clone()) else {
+        return false;
+    };
+    if a.check(Path::new("config.json")).is_err() {
+        return false;
+    }
+    a.init(&Device::flex()).is_ok()
+}
+
+fn template(path: &str) -> Value {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
+    serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn detector_configs(picks in proptest::collection::vec((0usize..64, 0usize..14), 1..4)) {
+        load::<tactile_rs::detect::DetectorArtifact>(&mutate(&template("models/detector/detector.json"), &picks));
+    }
+
+    #[test]
+    fn segmenter_configs(picks in proptest::collection::vec((0usize..64, 0usize..14), 1..4)) {
+        load::<tactile_rs::segment::SegmenterArtifact>(&mutate(&template("models/segmenter/segmenter.json"), &picks));
+    }
+
+    #[test]
+    fn depth_configs(picks in proptest::collection::vec((0usize..64, 0usize..14), 1..4)) {
+        load::<tactile_rs::depth::DepthArtifact>(&mutate(&template("models/depth/depth.json"), &picks));
+    }
+
+    #[test]
+    fn cae_configs(picks in proptest::collection::vec((0usize..64, 0usize..14), 1..4)) {
+        load::<tactile_rs::cae::CaeArtifact>(&mutate(&template("models/cae-synth/cae.json"), &picks));
+    }
+
+    #[test]
+    fn head_configs(picks in proptest::collection::vec((0usize..64, 0usize..14), 1..4)) {
+        load::<tactile_rs::estimate::HeadArtifact>(&mutate(&template("models/cae-synth/head/head.json"), &picks));
+    }
+
+    #[test]
+    fn regressor_configs(picks in proptest::collection::vec((0usize..64, 0usize..14), 1..4)) {
+        load::<tactile_rs::estimate::RegressorArtifact>(&mutate(&template("models/cae-synth/position/regressor.json"), &picks));
+    }
+}
+
+#[test]
+fn the_shipped_configs_load() {
+    assert!(load::<tactile_rs::detect::DetectorArtifact>(&template(
+        "models/detector/detector.json"
+    )));
+    assert!(load::<tactile_rs::depth::DepthArtifact>(&template(
+        "models/depth/depth.json"
+    )));
+    assert!(load::<tactile_rs::estimate::HeadArtifact>(&template(
+        "models/cae-synth/head/head.json"
+    )));
+}
