@@ -30,6 +30,10 @@ for f in ../models/*/*.json ../models/*/*/*.json; do
     i=$((i + 1))
 done
 cp ../models/segmenter/segmenter.bpk "$corpus/weights/segmenter"
+# The fuzz builds (nightly, AddressSanitizer) get their own target folder,
+# fuzz/target: in the workspace's they would hold its lock for the whole
+# sanitizer build of burn.
+unset CARGO_TARGET_DIR
 for target in dataset npy model_config weights; do
     log=$(mktemp)
     set +e

@@ -1,12 +1,30 @@
 #!/usr/bin/env bash
-# Run every test of the workspace on a fresh machine: installs onnxruntime
-# (and onnx, for onnx.checker) from PyPI when ORT_DYLIB_PATH is unset, then
-# runs the whole test suite in the release profile (the one profile this
-# project builds burn in).
+# Run every test of the project on a fresh machine:
+#  1. installs onnxruntime (and onnx, for onnx.checker) from PyPI when
+#     ORT_DYLIB_PATH is unset;
+#  2. runs the Rust workspace's tests in the release profile (the one
+#     profile this project builds burn in);
+#  3. builds the Python package (crates/tactile-py, with maturin from PyPI)
+#     into a fresh virtual environment, sharing the cargo target folder so
+#     burn is not built again, and runs its pytest suite against the
+#     `tactile` binary built in step 2.
+# Arguments go to `cargo test`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+root="$(pwd)"
 if [ -z "${ORT_DYLIB_PATH:-}" ]; then
     eval "$(bash scripts/install-ort.sh)"
     export ORT_DYLIB_PATH TACTILE_PYTHONPATH
 fi
 cargo test --release --workspace "$@"
+
+target="${CARGO_TARGET_DIR:-$root/target}"
+venv="$(mktemp -d "${TMPDIR:-/tmp}/tactile-venv.XXXXXX")"
+trap 'rm -rf "$venv"' EXIT
+echo "Python package: building into a fresh virtual environment ($venv)" >&2
+python3 -m venv "$venv"
+export PATH="$venv/bin:$PATH" VIRTUAL_ENV="$venv"
+pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
+"${pip[@]}" install "maturin>=1.16,<2" "numpy>=1.21" "pytest>=7"
+"${pip[@]}" install --no-build-isolation "$root/crates/tactile-py"
+TACTILE_BIN="$target/release/tactile" "$venv/bin/python" -m pytest -q "$root/crates/tactile-py/tests"

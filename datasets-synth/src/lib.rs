@@ -24,4 +24,7 @@ pub mod write;
 pub use rng::Range;
 pub use tactip::{SHAPES, TactipConfig};
 pub use visuotactile::{TendonPath, VisuotactileConfig};
-pub use write::{GENERATOR, WriteOptions, write_tactip, write_visuotactile};
+pub use write::{
+    GENERATOR, TactipLabels, WriteOptions, check_count, visuotactile_position, write_tactip,
+    write_visuotactile,
+};

@@ -107,12 +107,51 @@ fn opt(v: Option<f64>, decimals: usize) -> String {
 }
 
 /// Refuse a frame count of 0 or more than a dataset may hold.
-fn check_count(count: usize) -> Result<()> {
+pub fn check_count(count: usize) -> Result<()> {
     let max = tactile_core::dataset::MAX_ROWS;
     if count == 0 || count > max {
         return Err(Error::Config(format!("count: must be 1 to {max} frames, got {count}")).into());
     }
     Ok(())
+}
+
+/// The labels of one virtual TacTip frame, as `labels.csv` holds them
+/// (the columns a shape does not have are `None`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TactipLabels {
+    /// Shape name.
+    pub shape: &'static str,
+    /// Contact x, mm (shapes with a position).
+    pub x_mm: Option<f64>,
+    /// Contact y, mm (shapes with a position).
+    pub y_mm: Option<f64>,
+    /// Orientation, degrees (shapes with an orientation).
+    pub theta_deg: Option<f64>,
+    /// Indentation, mm.
+    pub depth_mm: f64,
+    /// Force with the load-cell noise, N.
+    pub force_n: f64,
+    /// Sphere radius, mm (spheres).
+    pub radius_mm: Option<f64>,
+}
+
+impl TactipLabels {
+    /// The labels of a rendered sample.
+    pub fn of(scene: &tactip::TactipScene, frame: &tactip::TactipFrame) -> Self {
+        let s = &scene.shape;
+        Self {
+            shape: s.name(),
+            x_mm: s.has_position().then_some(scene.x_mm),
+            y_mm: s.has_position().then_some(scene.y_mm),
+            theta_deg: s.has_orientation().then_some(scene.theta_deg),
+            depth_mm: scene.depth_mm,
+            force_n: frame.force_n,
+            radius_mm: match s {
+                tactip::Shape::Sphere { radius_mm } => Some(*radius_mm),
+                _ => None,
+            },
+        }
+    }
 }
 
 /// Write `count` virtual TacTip frames with their labels to `out`.
@@ -152,23 +191,25 @@ pub fn write_tactip(
             let (scene, frame) = tactip::sample(config, seed, i as u64);
             let file = format!("frames/{i:06}.png");
             save_grey_png(root.join(&file), FRAME_PX, FRAME_PX, &frame.pixels)?;
-            let s = &scene.shape;
-            let radius = match s {
-                tactip::Shape::Sphere { radius_mm } => Some(*radius_mm),
-                _ => None,
-            };
+            let l = TactipLabels::of(&scene, &frame);
             Ok(vec![
                 file,
-                s.name().to_string(),
-                opt(s.has_position().then_some(scene.x_mm), 4),
-                opt(s.has_position().then_some(scene.y_mm), 4),
-                opt(s.has_orientation().then_some(scene.theta_deg), 3),
-                num(scene.depth_mm, 4),
-                num(frame.force_n, 4),
-                opt(radius, 4),
+                l.shape.to_string(),
+                opt(l.x_mm, 4),
+                opt(l.y_mm, 4),
+                opt(l.theta_deg, 3),
+                num(l.depth_mm, 4),
+                num(l.force_n, 4),
+                opt(l.radius_mm, 4),
             ])
         },
     )
+}
+
+/// Sequence and frame within it of row `i` of a visuo-tactile dataset.
+pub fn visuotactile_position(config: &VisuotactileConfig, i: usize) -> (usize, usize) {
+    let fps = config.frames_per_sequence.max(1);
+    (i / fps, i % fps)
 }
 
 /// Frames and sequences of a visuo-tactile dataset: `count` frames in
@@ -214,7 +255,7 @@ pub fn write_visuotactile(
         options,
         &["frames", "masks", "depth"],
         |root, i| {
-            let (seq, f) = (i / fps, i % fps);
+            let (seq, f) = visuotactile_position(config, i);
             let (scene, frame) = visuotactile::sample(config, seed, seq as u64, f);
             let stem = format!("{i:06}");
             let (file, mask, depth) = (

@@ -87,7 +87,9 @@ impl TactipEncoder {
     }
 }
 
-/// Write `file,f0,f1,...` rows atomically (the layout of the authors' golden features).
+/// Write `file,f0,f1,...` rows atomically (the layout of the authors'
+/// golden features). Each value is the shortest decimal that reads back as
+/// the same `f32`, so features survive the file bit for bit.
 pub fn write_features_csv(
     path: impl AsRef<Path>,
     files: &[String],
@@ -101,7 +103,7 @@ pub fn write_features_csv(
         csv.write_record(&header)?;
         for (f, v) in files.iter().zip(features) {
             let mut row = vec![f.clone()];
-            row.extend(v.iter().map(|x| format!("{x:.6}")));
+            row.extend(v.iter().map(|x| x.to_string()));
             csv.write_record(&row)?;
         }
         csv.flush()

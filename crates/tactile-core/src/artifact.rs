@@ -54,7 +54,7 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
             return Err(Error::model(
                 dir,
                 format!(
-                    "this {} did not finish training (interrupted or failed): resume it with --resume or train it again",
+                    "this {} did not finish training (interrupted or failed): resume it (--resume; resume=True in Python) or train it again",
                     Self::KIND
                 ),
             ));

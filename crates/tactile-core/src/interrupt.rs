@@ -40,6 +40,12 @@ pub fn request() {
     flag().store(true, Ordering::Relaxed);
 }
 
+/// Forget a stop request once the work it stopped has ended: for an
+/// embedding program (the Python package) that goes on after a Ctrl-C.
+pub fn reset() {
+    flag().store(false, Ordering::Relaxed);
+}
+
 /// `Err(Interrupted)` once a stop was requested.
 pub fn check() -> Result<()> {
     if requested() {

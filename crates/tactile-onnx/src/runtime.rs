@@ -60,9 +60,19 @@ pub struct OrtModel {
     session: Session,
 }
 
+/// Most onnxruntime intra-op threads a model may ask for.
+pub const MAX_THREADS: usize = 256;
+
 impl OrtModel {
-    /// Load a model from bytes, with `threads` intra-op threads (0 = ORT's default).
+    /// Load a model from bytes, with `threads` intra-op threads (0 = ORT's
+    /// default; at most [`MAX_THREADS`]).
     pub fn from_bytes(bytes: &[u8], threads: usize) -> Result<Self> {
+        if threads > MAX_THREADS {
+            return Err(tactile_core::Error::Config(format!(
+                "threads: {threads} onnxruntime threads asked, at most {MAX_THREADS}"
+            ))
+            .into());
+        }
         let env = environment()?;
         let err = |e: ort::Error| Error::Run(format!("rejected the model: {e}"));
         let mut b = Session::builder(env).map_err(err)?;

@@ -128,6 +128,8 @@ pub struct Dataset {
     pub root: PathBuf,
     /// `manifest.json`.
     pub manifest: Manifest,
+    /// The columns of `labels.csv`, in header order.
+    pub columns: Vec<String>,
     /// `labels.csv`, in order.
     pub rows: Vec<LabelRow>,
 }
@@ -262,6 +264,7 @@ impl Dataset {
         let ds = Dataset {
             root,
             manifest,
+            columns: header,
             rows,
         };
         ds.check_rows()?;

@@ -1,0 +1,83 @@
+"""tactile-rs: vision-based tactile sensing on the CPU, from Rust.
+
+Paper B's palpation pipeline on numpy frames::
+
+    import tactile
+    pipe = tactile.Pipeline("models")        # detector/, segmenter/, depth/
+    r = pipe.process(frame)                  # (H, W, 3) uint8 RGB, any size
+    r.tendon, r.direction_deg, r.mask, r.depth_m, r.ms
+
+Paper A's encoder and its estimators::
+
+    enc = tactile.TactipEncoder("models/cae-synth")
+    enc.encode(frames)                       # (N, 16) float32
+    enc.estimate(frames)                     # {"shape": ..., "x_mm": ...}
+
+Datasets, generators, training and evaluation: ``tactile.Dataset``,
+``tactile.synth``, ``tactile.train``, ``tactile.eval``.
+
+Errors are Python exceptions with the command line's message:
+``FileNotFoundError`` for a missing model or dataset folder, ``ValueError``
+for bad input (a frame of the wrong shape, a bad label), ``TypeError`` for a
+wrong dtype, ``RuntimeError`` when onnxruntime is missing or fails.
+"""
+
+from __future__ import annotations
+
+import os
+from importlib.util import find_spec as _find_spec
+from pathlib import Path as _Path
+
+
+def _find_onnxruntime() -> None:
+    """Point the native module at the onnxruntime wheel's shared library.
+
+    The ``onnx`` runtime loads ``libonnxruntime`` at run time; unless
+    ``ORT_DYLIB_PATH`` names one already, the copy inside the installed
+    ``onnxruntime`` wheel (a dependency of this package) is used. The
+    module is located, not imported.
+    """
+    if os.environ.get("ORT_DYLIB_PATH"):
+        return
+    spec = _find_spec("onnxruntime")
+    if spec is None or not spec.submodule_search_locations:
+        return
+    for root in spec.submodule_search_locations:
+        libs = sorted((_Path(root) / "capi").glob("libonnxruntime.so*"))
+        libs = [p for p in libs if p.is_file()]
+        if libs:
+            os.environ["ORT_DYLIB_PATH"] = str(libs[-1])
+            return
+
+
+_find_onnxruntime()
+
+from ._tactile import (  # noqa: E402
+    MAX_ARRAY_BYTES,
+    MAX_BATCH,
+    MAX_FRAME_SIDE,
+    Dataset,
+    FrameResult,
+    Pipeline,
+    TactipEncoder,
+    __version__,
+    read_grey,
+    read_rgb,
+)
+from . import eval, synth, train  # noqa: E402
+
+__all__ = [
+    "Dataset",
+    "FrameResult",
+    "MAX_ARRAY_BYTES",
+    "MAX_BATCH",
+    "MAX_FRAME_SIDE",
+    "Pipeline",
+    "TactipEncoder",
+    "__version__",
+    "eval",
+    "read_grey",
+    "read_rgb",
+    "synth",
+    "train",
+]

@@ -1,0 +1,46 @@
+"""Evaluation, as ``tactile eval ...`` and ``tactile evaluate``: each
+returns the dict those commands print as their last line."""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, Optional, Sequence, Union
+
+from . import _tactile
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def detector(model: PathLike, data: PathLike, *, runtime: str = "burn-flex") -> Dict[str, Any]:
+    """Accuracy, precision, recall, F1 and the onset/release frames of a
+    tendon detector on a labelled visuo-tactile dataset."""
+    return _tactile.eval_detector(os.fspath(model), os.fspath(data), runtime=runtime)
+
+
+def segmenter(model: PathLike, data: PathLike, *, runtime: str = "burn-flex") -> Dict[str, Any]:
+    """Mean IoU and direction error per tendon path of a segmenter."""
+    return _tactile.eval_segmenter(os.fspath(model), os.fspath(data), runtime=runtime)
+
+
+def depth(model: PathLike, data: PathLike, *, runtime: str = "burn-flex") -> Dict[str, Any]:
+    """MAE (sensing window and tendon), RMSE and SSIM of a depth network, mm."""
+    return _tactile.eval_depth(os.fspath(model), os.fspath(data), runtime=runtime)
+
+
+def tactip(
+    encoder: PathLike,
+    data: PathLike,
+    *,
+    estimators: Optional[Sequence[PathLike]] = None,
+    runtime: str = "burn-flex",
+) -> Dict[str, Any]:
+    """Every estimator of an encoder scored on a labelled TacTip dataset."""
+    return _tactile.eval_tactip(
+        os.fspath(encoder),
+        os.fspath(data),
+        estimators=None if estimators is None else [os.fspath(e) for e in estimators],
+        runtime=runtime,
+    )
+
+
+__all__ = ["depth", "detector", "segmenter", "tactip"]

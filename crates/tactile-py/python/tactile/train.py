@@ -1,0 +1,273 @@
+"""Training, with the options of ``tactile train ...``.
+
+Every option left as None keeps the model's default (the same default the
+command line shows in ``--help``). Schedule options: ``max_epochs``,
+``patience``, ``batch_size``, ``lr``, ``lr_decay`` and ``seed``. Training runs
+with the interpreter free for other threads, prints a line per epoch (a
+progress bar on a terminal), writes the same model folder as the command
+line, and returns a summary dict. Ctrl-C stops it cleanly: the folder is
+marked incomplete (``resume=True`` continues it) and ``KeyboardInterrupt``
+is raised.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, Optional, Sequence, Tuple, Union
+
+from . import _tactile
+
+PathLike = Union[str, "os.PathLike[str]"]
+Size = Tuple[int, int]
+
+
+def _schedule(**kw: Any) -> Optional[Dict[str, Any]]:
+    d = {k: v for k, v in kw.items() if v is not None}
+    return d or None
+
+
+def _path(p: Optional[PathLike]) -> Optional[str]:
+    return None if p is None else os.fspath(p)
+
+
+def cae(
+    data: PathLike,
+    out: PathLike,
+    *,
+    preprocess: str = "binary",
+    widths: Optional[Sequence[int]] = None,
+    features: Optional[int] = None,
+    linear_latent: bool = False,
+    optimizer: str = "adadelta",
+    val_fraction: Optional[float] = None,
+    exclude_test: Optional[float] = None,
+    split_seed: int = 7,
+    device: str = "flex",
+    resume: bool = False,
+    max_epochs: Optional[int] = None,
+    patience: Optional[int] = None,
+    batch_size: Optional[int] = None,
+    lr: Optional[float] = None,
+    lr_decay: Optional[float] = None,
+    seed: Optional[int] = None,
+) -> Dict[str, Any]:
+    """Paper A's convolutional autoencoder on a TacTip dataset.
+
+    ``preprocess``: "binary" (frames already binarised), "paper",
+    "lighting-compensated" or a JSON file. ``widths``: four encoder widths,
+    e.g. (16, 8, 8, 4); ``features`` sets the last one. ``optimizer``:
+    "adadelta" (paper A) or "adam". ``device``: "flex" or "ndarray".
+    """
+    return _tactile.train_cae(
+        os.fspath(data),
+        os.fspath(out),
+        preprocess=preprocess,
+        widths=None if widths is None else list(widths),
+        features=features,
+        linear_latent=linear_latent,
+        optimizer=optimizer,
+        val_fraction=val_fraction,
+        exclude_test=exclude_test,
+        split_seed=split_seed,
+        device=device,
+        resume=resume,
+        schedule=_schedule(
+            max_epochs=max_epochs, patience=patience, batch_size=batch_size,
+            lr=lr, lr_decay=lr_decay, seed=seed,
+        ),
+    )
+
+
+def detector(
+    data: Union[PathLike, Sequence[PathLike]],
+    out: PathLike,
+    *,
+    architecture: Optional[str] = None,
+    width: Optional[float] = None,
+    input: Optional[Size] = None,
+    val_fraction: Optional[float] = None,
+    soft_labels: Optional[float] = None,
+    calibrate_only: bool = False,
+    device: str = "flex",
+    resume: bool = False,
+    max_epochs: Optional[int] = None,
+    patience: Optional[int] = None,
+    batch_size: Optional[int] = None,
+    lr: Optional[float] = None,
+    lr_decay: Optional[float] = None,
+    seed: Optional[int] = None,
+) -> Dict[str, Any]:
+    """Paper B's tendon detector on one or more visuo-tactile datasets.
+
+    ``architecture``: "mobilenet-v3-small" (default) or "resnet18";
+    ``input``: (width, height), paper B's (320, 240). The summary includes
+    the threshold chosen on the validation sequences.
+    """
+    paths = [data] if isinstance(data, (str, os.PathLike)) else list(data)
+    return _tactile.train_detector(
+        [os.fspath(p) for p in paths],
+        os.fspath(out),
+        architecture=architecture,
+        width=width,
+        input=input,
+        val_fraction=val_fraction,
+        soft_labels=soft_labels,
+        calibrate_only=calibrate_only,
+        device=device,
+        resume=resume,
+        schedule=_schedule(
+            max_epochs=max_epochs, patience=patience, batch_size=batch_size,
+            lr=lr, lr_decay=lr_decay, seed=seed,
+        ),
+    )
+
+
+def segmenter(
+    data: PathLike,
+    out: PathLike,
+    *,
+    side: Optional[int] = None,
+    base: Optional[int] = None,
+    copies: Optional[int] = None,
+    val_fraction: Optional[float] = None,
+    device: str = "flex",
+    resume: bool = False,
+    max_epochs: Optional[int] = None,
+    patience: Optional[int] = None,
+    batch_size: Optional[int] = None,
+    lr: Optional[float] = None,
+    lr_decay: Optional[float] = None,
+    seed: Optional[int] = None,
+) -> Dict[str, Any]:
+    """Paper B's U-Net tendon segmenter (``side``: window, a multiple of 16)."""
+    return _tactile.train_segmenter(
+        os.fspath(data),
+        os.fspath(out),
+        side=side,
+        base=base,
+        copies=copies,
+        val_fraction=val_fraction,
+        device=device,
+        resume=resume,
+        schedule=_schedule(
+            max_epochs=max_epochs, patience=patience, batch_size=batch_size,
+            lr=lr, lr_decay=lr_decay, seed=seed,
+        ),
+    )
+
+
+def depth(
+    data: PathLike,
+    out: PathLike,
+    *,
+    encoder: str = "small",
+    input: Optional[Size] = None,
+    head: Optional[str] = None,
+    loss: Optional[str] = None,
+    with_mask: bool = False,
+    freeze_encoder: bool = False,
+    pretrained: Optional[PathLike] = None,
+    unit_mm: Optional[float] = None,
+    decoder_width: Optional[int] = None,
+    val_fraction: Optional[float] = None,
+    device: str = "flex",
+    resume: bool = False,
+    max_epochs: Optional[int] = None,
+    patience: Optional[int] = None,
+    batch_size: Optional[int] = None,
+    lr: Optional[float] = None,
+    lr_decay: Optional[float] = None,
+    seed: Optional[int] = None,
+) -> Dict[str, Any]:
+    """Paper B's depth U-Net with a DenseNet encoder.
+
+    ``encoder``: a DenseNet preset ("small", "densenet121", ...);
+    ``input``: (width, height), multiples of 32; ``head``: "conv1x1" or
+    "custom"; ``loss``: "l1", "mse" or "l1-grad-ssim".
+    """
+    return _tactile.train_depth(
+        os.fspath(data),
+        os.fspath(out),
+        encoder=encoder,
+        input=input,
+        head=head,
+        loss=loss,
+        with_mask=with_mask,
+        freeze_encoder=freeze_encoder,
+        pretrained=_path(pretrained),
+        unit_mm=unit_mm,
+        decoder_width=decoder_width,
+        val_fraction=val_fraction,
+        device=device,
+        resume=resume,
+        schedule=_schedule(
+            max_epochs=max_epochs, patience=patience, batch_size=batch_size,
+            lr=lr, lr_decay=lr_decay, seed=seed,
+        ),
+    )
+
+
+def head(
+    data: PathLike,
+    *,
+    encoder: Optional[PathLike] = None,
+    features: Optional[PathLike] = None,
+    out: Optional[PathLike] = None,
+    test: Optional[PathLike] = None,
+    folds: Optional[int] = None,
+    repeats: Optional[int] = None,
+    seed: Optional[int] = None,
+    device: str = "flex",
+) -> Dict[str, Any]:
+    """Paper A's shape head on an encoder's features (or a feature CSV).
+
+    Saved in ``out`` (default ``ENCODER/head``); tested on ``test`` or the
+    ``test`` split, the accuracy and confusion matrix are in the result.
+    """
+    return _tactile.train_head_py(
+        os.fspath(data),
+        encoder=_path(encoder),
+        features=_path(features),
+        out=_path(out),
+        test=_path(test),
+        folds=folds,
+        repeats=repeats,
+        seed=seed,
+        device=device,
+    )
+
+
+def regressor(
+    data: PathLike,
+    targets: Sequence[str],
+    *,
+    encoder: Optional[PathLike] = None,
+    features: Optional[PathLike] = None,
+    out: Optional[PathLike] = None,
+    test_fraction: Optional[float] = None,
+    val_fraction: Optional[float] = None,
+    hidden: Optional[Sequence[int]] = None,
+    seed: Optional[int] = None,
+    device: str = "flex",
+    only_labelled: bool = False,
+) -> Dict[str, Any]:
+    """A regressor on an encoder's features: ``targets`` are label columns,
+    angles with their period (e.g. ``["x_mm", "theta_deg:180"]``). Saved in
+    ``out`` (default ``ENCODER/regressor``); returns the test MAE per target.
+    """
+    return _tactile.train_regressor_py(
+        os.fspath(data),
+        list(targets),
+        encoder=_path(encoder),
+        features=_path(features),
+        out=_path(out),
+        test_fraction=test_fraction,
+        val_fraction=val_fraction,
+        hidden=None if hidden is None else list(hidden),
+        seed=seed,
+        device=device,
+        only_labelled=only_labelled,
+    )
+
+
+__all__ = ["cae", "depth", "detector", "head", "regressor", "segmenter"]

@@ -1,0 +1,213 @@
+//! `tactile.Dataset`: a dataset folder of the documented layout, its
+//! labels as arrays and its frames, masks and depth maps read on access.
+
+use std::path::PathBuf;
+
+use numpy::{IntoPyArray, PyArray1};
+use pyo3::exceptions::{PyIndexError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use tactile_core::dataset::{Dataset, DatasetKind};
+
+use crate::errors::PyResultExt;
+
+/// A dataset folder (`manifest.json`, `labels.csv`, frames and, for
+/// visuo-tactile data, masks and depth maps), checked when opened. Labels
+/// are read at once; images only when asked for (`ds[i]`, `ds.frame(i)`).
+#[pyclass(module = "tactile", name = "Dataset", frozen)]
+pub struct PyDataset {
+    ds: Dataset,
+}
+
+impl PyDataset {
+    fn index(&self, i: isize) -> PyResult<usize> {
+        let n = self.ds.len() as isize;
+        let j = if i < 0 { i + n } else { i };
+        if !(0..n).contains(&j) {
+            return Err(PyIndexError::new_err(format!(
+                "index {i} out of range for a dataset of {n} frames"
+            )));
+        }
+        Ok(j as usize)
+    }
+
+    fn has(&self, column: &str) -> bool {
+        self.ds.columns.iter().any(|c| c == column)
+    }
+}
+
+fn array2<T: numpy::Element>(
+    py: Python<'_>,
+    h: usize,
+    w: usize,
+    data: Vec<T>,
+) -> PyResult<Bound<'_, PyAny>> {
+    Ok(ndarray::Array2::from_shape_vec((h, w), data)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?
+        .into_pyarray(py)
+        .into_any())
+}
+
+#[pymethods]
+impl PyDataset {
+    /// Open and check the dataset folder `path`.
+    #[new]
+    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let ds = py.detach(move || Dataset::open(&path)).py()?;
+        Ok(Self { ds })
+    }
+
+    fn __len__(&self) -> usize {
+        self.ds.len()
+    }
+
+    /// The folder.
+    #[getter]
+    fn path(&self) -> PathBuf {
+        self.ds.root.clone()
+    }
+
+    /// "tactip" or "visuotactile".
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.ds.manifest.kind.name()
+    }
+
+    /// Frame width, pixels.
+    #[getter]
+    fn width(&self) -> u32 {
+        self.ds.manifest.width
+    }
+
+    /// Frame height, pixels.
+    #[getter]
+    fn height(&self) -> u32 {
+        self.ds.manifest.height
+    }
+
+    /// The columns of labels.csv, in order.
+    #[getter]
+    fn columns(&self) -> Vec<String> {
+        self.ds.columns.clone()
+    }
+
+    /// manifest.json as a dict.
+    #[getter]
+    fn manifest<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        crate::json::to_py(py, &self.ds.manifest)
+    }
+
+    /// Every column of labels.csv: numbers as float64 arrays (NaN where a
+    /// cell is empty), anything else as a list of str (None where empty).
+    #[getter]
+    fn labels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for col in &self.ds.columns {
+            let cells: Vec<Option<&str>> = (0..self.ds.len())
+                .map(|i| self.ds.text_opt(i, col))
+                .collect();
+            let numbers: Option<Vec<f64>> = cells
+                .iter()
+                .map(|c| match c {
+                    None => Some(f64::NAN),
+                    Some(s) => s.parse::<f64>().ok(),
+                })
+                .collect();
+            let numeric = numbers.filter(|_| cells.iter().any(Option::is_some));
+            match numeric {
+                Some(v) => out.set_item(col, PyArray1::from_vec(py, v))?,
+                None => out.set_item(col, PyList::new(py, cells)?)?,
+            }
+        }
+        Ok(out)
+    }
+
+    /// Frame `i`: `(H, W)` uint8 grey for TacTip data, `(H, W, 3)` uint8
+    /// RGB for visuo-tactile data.
+    fn frame<'py>(&self, py: Python<'py>, i: isize) -> PyResult<Bound<'py, PyAny>> {
+        let i = self.index(i)?;
+        let (w, h) = (
+            self.ds.manifest.width as usize,
+            self.ds.manifest.height as usize,
+        );
+        match self.ds.manifest.kind {
+            DatasetKind::Tactip => {
+                let img = py.detach(|| self.ds.load_grey(i, "file")).py()?;
+                array2(py, h, w, img.into_vec())
+            }
+            DatasetKind::Visuotactile => {
+                let img = py.detach(|| self.ds.load_rgb(i)).py()?;
+                Ok(ndarray::Array3::from_shape_vec((h, w, 3), img.into_vec())
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?
+                    .into_pyarray(py)
+                    .into_any())
+            }
+        }
+    }
+
+    /// Tendon mask of frame `i`, `(H, W)` bool; None without a mask column
+    /// or an empty cell.
+    fn mask<'py>(&self, py: Python<'py>, i: isize) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let i = self.index(i)?;
+        if !self.has("mask") || self.ds.text_opt(i, "mask").is_none() {
+            return Ok(None);
+        }
+        let img = py.detach(|| self.ds.load_grey(i, "mask")).py()?;
+        let (w, h) = (img.width(), img.height());
+        let bits = img.as_slice().iter().map(|&v| v >= 128).collect();
+        array2(py, h, w, bits).map(Some)
+    }
+
+    /// Depth map of frame `i`, `(H, W)` float32 metres; None without a
+    /// depth column or an empty cell.
+    fn depth_m<'py>(&self, py: Python<'py>, i: isize) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let i = self.index(i)?;
+        if !self.has("depth") || self.ds.text_opt(i, "depth").is_none() {
+            return Ok(None);
+        }
+        let (w, h, d) = py.detach(|| self.ds.load_depth_m(i)).py()?;
+        array2(py, h, w, d).map(Some)
+    }
+
+    /// Sample `i` as a dict: `frame`, `mask` and `depth_m` where the
+    /// dataset has them, and every other label of the row (numbers as
+    /// float, empty cells as None; `file` and `depth` stay file names).
+    fn __getitem__<'py>(&self, py: Python<'py>, i: isize) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        out.set_item("frame", self.frame(py, i)?)?;
+        if let Some(m) = self.mask(py, i)? {
+            out.set_item("mask", m)?;
+        }
+        if let Some(d) = self.depth_m(py, i)? {
+            out.set_item("depth_m", d)?;
+        }
+        let j = self.index(i)?;
+        for col in &self.ds.columns {
+            // The mask array stands in for its file name.
+            if out.contains(col)? {
+                continue;
+            }
+            match self.ds.text_opt(j, col) {
+                None => out.set_item(col, py.None())?,
+                Some(s) => match s.parse::<f64>() {
+                    Ok(v) if !matches!(col.as_str(), "file" | "mask" | "depth") => {
+                        out.set_item(col, v)?
+                    }
+                    _ => out.set_item(col, s)?,
+                },
+            }
+        }
+        Ok(out)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Dataset('{}', kind='{}', frames={}, size={}x{})",
+            self.ds.root.display(),
+            self.ds.manifest.kind.name(),
+            self.ds.len(),
+            self.ds.manifest.width,
+            self.ds.manifest.height
+        )
+    }
+}

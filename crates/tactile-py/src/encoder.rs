@@ -1,0 +1,257 @@
+//! `tactile.TactipEncoder`: paper A's encoder and every estimator of its
+//! folder on numpy frames.
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use numpy::{IntoPyArray, PyArray2};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rayon::prelude::*;
+use tactile_cae::TactipEncoder;
+use tactile_estimate::{Column, Estimators};
+use tactile_pipeline::tactip::TactipPerception;
+use tactile_preprocess::PinImage;
+
+use crate::errors::PyResultExt;
+use crate::frame::{FrameArg, Layout, Pixels};
+
+/// Most frames one call takes (a batch of 8K frames would be 2 GB).
+pub(crate) const MAX_BATCH: usize = 100_000;
+
+struct Models {
+    encoder: TactipEncoder,
+    estimators: Option<Estimators>,
+}
+
+/// Paper A's convolutional encoder with its preprocessing, and the
+/// estimators (shape head, regressors) trained on its features.
+#[pyclass(module = "tactile", name = "TactipEncoder")]
+pub struct PyTactipEncoder {
+    models: Mutex<Models>,
+    model_dir: PathBuf,
+    runtime: tactile_core::Runtime,
+    feature_count: usize,
+    pin_side: usize,
+    names: Vec<String>,
+    preprocess: tactile_preprocess::PreprocessConfig,
+}
+
+/// Every frame of `frames` (one 2-D frame, an `(N, H, W)` or
+/// `(N, H, W, 3)` array, or an iterable of frames), checked.
+fn frame_args<'py>(frames: &Bound<'py, PyAny>) -> PyResult<Vec<FrameArg<'py>>> {
+    if let Ok(a) = frames.cast::<numpy::PyUntypedArray>() {
+        use numpy::PyUntypedArrayMethods;
+        if a.ndim() == 2 {
+            return Ok(vec![FrameArg::new(frames, Layout::GreyOrRgb, "frame")?]);
+        }
+        if a.ndim() != 3 && a.ndim() != 4 {
+            return Err(PyValueError::new_err(format!(
+                "frames: expected one (H, W) frame, an (N, H, W) or (N, H, W, 3) uint8 array, or a list of frames; got shape {}",
+                crate::frame::py_shape(a.shape())
+            )));
+        }
+    }
+    let mut out = Vec::new();
+    for (i, f) in frames.try_iter()?.enumerate() {
+        if i >= MAX_BATCH {
+            return Err(PyValueError::new_err(format!(
+                "frames: more than {MAX_BATCH} frames in one call; pass them in batches"
+            )));
+        }
+        out.push(FrameArg::new(
+            &f?,
+            Layout::GreyOrRgb,
+            &format!("frames[{i}]"),
+        )?);
+    }
+    Ok(out)
+}
+
+impl PyTactipEncoder {
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Models>> {
+        self.models
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the encoder failed in another thread"))
+    }
+
+    /// Pin images of frames, preprocessed in parallel as a dataset's are.
+    fn pins(&self, px: &[Pixels<'_>]) -> PyResult<Vec<PinImage>> {
+        let cfg = &self.preprocess;
+        px.par_iter()
+            .map(|p| -> tactile_preprocess::Result<PinImage> {
+                tactile_preprocess::preprocess(&p.grey()?, cfg)
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .py()
+    }
+}
+
+#[pymethods]
+impl PyTactipEncoder {
+    /// Load the encoder in `model_dir` (cae.json + cae.bpk) onto `runtime`
+    /// and its estimators: the folders in `estimators`, or every estimator
+    /// folder inside `model_dir`.
+    #[new]
+    #[pyo3(signature = (model_dir, runtime="burn-flex", *, estimators=None))]
+    fn new(
+        py: Python<'_>,
+        model_dir: PathBuf,
+        runtime: &str,
+        estimators: Option<Vec<PathBuf>>,
+    ) -> PyResult<Self> {
+        let rt = crate::pipeline::runtime(runtime)?;
+        let dir = model_dir.clone();
+        let named = estimators.unwrap_or_default();
+        let models = py
+            .detach(move || -> Result<Models, tactile_pipeline::Error> {
+                match TactipPerception::load(&dir, &named, rt) {
+                    Ok(p) => Ok(Models {
+                        encoder: p.encoder,
+                        estimators: Some(p.estimators),
+                    }),
+                    // An encoder without estimators still encodes.
+                    Err(tactile_pipeline::Error::Estimate(
+                        tactile_estimate::Error::NoEstimators(_),
+                    )) if named.is_empty() => Ok(Models {
+                        encoder: TactipEncoder::load(&dir, rt, 0)?,
+                        estimators: None,
+                    }),
+                    Err(e) => Err(e),
+                }
+            })
+            .py()?;
+        let names = models
+            .estimators
+            .as_ref()
+            .map(|e| {
+                e.items
+                    .iter()
+                    .map(|(d, _)| {
+                        d.file_name()
+                            .map_or(String::new(), |n| n.to_string_lossy().into_owned())
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        Ok(Self {
+            preprocess: models.encoder.artifact.preprocess.clone(),
+            feature_count: models.encoder.feature_count(),
+            pin_side: models.encoder.artifact.model.input_px,
+            models: Mutex::new(models),
+            model_dir,
+            runtime: rt,
+            names,
+        })
+    }
+
+    /// The pin image the encoder reads, `(S, S)` float32 in [0, 1], from an
+    /// `(H, W)` grey or `(H, W, 3)` RGB uint8 frame.
+    fn preprocess<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let arg = FrameArg::new(frame, Layout::GreyOrRgb, "frame")?;
+        let px = [arg.view()];
+        let pin = py
+            .detach(|| self.pins(&px))?
+            .pop()
+            .ok_or_else(|| PyRuntimeError::new_err("no pin image"))?;
+        let arr = ndarray::Array2::from_shape_vec((pin.side, pin.side), pin.pixels)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(arr.into_pyarray(py))
+    }
+
+    /// Features of frames, `(N, F)` float32: `frames` is one `(H, W)`
+    /// frame, an `(N, H, W)` grey or `(N, H, W, 3)` RGB uint8 array, or a
+    /// list of frames.
+    fn encode<'py>(
+        &self,
+        py: Python<'py>,
+        frames: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let args = frame_args(frames)?;
+        let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
+        let k = self.feature_count;
+        let feats = py.detach(|| -> PyResult<Vec<Vec<f32>>> {
+            let pins = self.pins(&px)?;
+            self.lock()?.encoder.encode(&pins).py()
+        })?;
+        let flat: Vec<f32> = feats.concat();
+        let arr = ndarray::Array2::from_shape_vec((feats.len(), k), flat)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(arr.into_pyarray(py))
+    }
+
+    /// Every estimator of the encoder on one encoding of each frame
+    /// (paper A's simultaneous deployment): estimator output name to an
+    /// array with one value per frame (class names for the shape head).
+    fn estimate<'py>(
+        &self,
+        py: Python<'py>,
+        frames: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        if self.names.is_empty() {
+            return Err(PyValueError::new_err(format!(
+                "{}: this encoder has no estimators (no folder with head.json or regressor.json); train one or pass estimators=[...]",
+                self.model_dir.display()
+            )));
+        }
+        let args = frame_args(frames)?;
+        let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
+        let est = py.detach(|| -> PyResult<tactile_estimate::Estimates> {
+            let pins = self.pins(&px)?;
+            let mut m = self.lock()?;
+            let feats = m.encoder.encode(&pins).py()?;
+            match &m.estimators {
+                Some(e) => e.estimate(&feats).py(),
+                None => Err(PyValueError::new_err("no estimators")),
+            }
+        })?;
+        let np = py.import("numpy")?;
+        let out = PyDict::new(py);
+        for (name, col) in est.columns {
+            match col {
+                Column::Number(v) => out.set_item(name, v.into_pyarray(py))?,
+                Column::Class(v) => out.set_item(name, np.call_method1("array", (v,))?)?,
+            }
+        }
+        Ok(out)
+    }
+
+    /// Features per frame.
+    #[getter]
+    fn feature_count(&self) -> usize {
+        self.feature_count
+    }
+
+    /// Side of the pin image, pixels.
+    #[getter]
+    fn pin_side(&self) -> usize {
+        self.pin_side
+    }
+
+    /// The estimator folders' names, in the order `estimate` runs them.
+    #[getter]
+    fn estimators(&self) -> Vec<String> {
+        self.names.clone()
+    }
+
+    /// Where the encoder runs.
+    #[getter]
+    fn runtime(&self) -> &'static str {
+        self.runtime.name()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "TactipEncoder('{}', runtime='{}', features={}, estimators={:?})",
+            self.model_dir.display(),
+            self.runtime,
+            self.feature_count,
+            self.names
+        )
+    }
+}

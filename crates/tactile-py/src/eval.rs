@@ -1,0 +1,102 @@
+//! `tactile.eval`: every evaluation of the command line, returning the
+//! dict `tactile eval ...` prints as its last line.
+
+use std::path::PathBuf;
+
+use pyo3::prelude::*;
+use tactile_core::dataset::Dataset;
+use tactile_depth::DepthEstimator;
+use tactile_detect::{DetectionSet, TendonDetector};
+use tactile_pipeline::tactip::TactipPerception;
+use tactile_segment::TendonSegmenter;
+
+use crate::errors::PyResultExt;
+use crate::pipeline::runtime;
+use crate::work::interruptible;
+
+/// Score a tendon detector on a labelled visuo-tactile dataset.
+#[pyfunction]
+#[pyo3(signature = (model, data, *, runtime="burn-flex"))]
+pub(crate) fn eval_detector<'py>(
+    py: Python<'py>,
+    model: PathBuf,
+    data: PathBuf,
+    runtime: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let rt = self::runtime(runtime)?;
+    let v = interruptible(py, || {
+        let ds = Dataset::open(&data).py()?;
+        let mut det = TendonDetector::load(&model, rt, 0).py()?;
+        let set = DetectionSet::from_dataset(&ds, det.artifact.model.input_size).py()?;
+        let sc = tactile_detect::evaluate(&mut det, &set).py()?;
+        Ok(
+            serde_json::json!({ "model": model, "data": data, "all": sc.all,
+            "onset_release": sc.onset_release, "ms_per_frame": sc.ms_per_frame }),
+        )
+    })?;
+    crate::json::to_py(py, &v)
+}
+
+/// Score a tendon segmenter: IoU and direction error per tendon path.
+#[pyfunction]
+#[pyo3(signature = (model, data, *, runtime="burn-flex"))]
+pub(crate) fn eval_segmenter<'py>(
+    py: Python<'py>,
+    model: PathBuf,
+    data: PathBuf,
+    runtime: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let rt = self::runtime(runtime)?;
+    let v = interruptible(py, || {
+        let mut seg = TendonSegmenter::load(&model, rt, 0).py()?;
+        let ds = Dataset::open(&data).py()?;
+        let sc = tactile_segment::evaluate(&mut seg, &ds).py()?;
+        Ok(
+            serde_json::json!({ "model": model, "data": data, "paths": sc.paths,
+            "ms_per_window": sc.ms_per_window }),
+        )
+    })?;
+    crate::json::to_py(py, &v)
+}
+
+/// Score a depth network: MAE in the window and over the tendon, RMSE, SSIM.
+#[pyfunction]
+#[pyo3(signature = (model, data, *, runtime="burn-flex"))]
+pub(crate) fn eval_depth<'py>(
+    py: Python<'py>,
+    model: PathBuf,
+    data: PathBuf,
+    runtime: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let rt = self::runtime(runtime)?;
+    let v = interruptible(py, || {
+        let ds = Dataset::open(&data).py()?;
+        let mut est = DepthEstimator::load(&model, rt, 0).py()?;
+        let (s, ms) = tactile_depth::evaluate(&mut est, &ds).py()?;
+        Ok(serde_json::json!({ "model": model, "data": data, "scores": s, "ms_per_frame": ms }))
+    })?;
+    crate::json::to_py(py, &v)
+}
+
+/// Score every estimator of an encoder (shape accuracy, pose, depth and
+/// force errors) on a labelled TacTip dataset, as `tactile evaluate` does.
+#[pyfunction]
+#[pyo3(signature = (encoder, data, *, estimators=None, runtime="burn-flex"))]
+pub(crate) fn eval_tactip<'py>(
+    py: Python<'py>,
+    encoder: PathBuf,
+    data: PathBuf,
+    estimators: Option<Vec<PathBuf>>,
+    runtime: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let rt = self::runtime(runtime)?;
+    let named = estimators.unwrap_or_default();
+    let v = interruptible(py, || {
+        let ds = Dataset::open(&data).py()?;
+        let mut p = TactipPerception::load(&encoder, &named, rt).py()?;
+        let sc = p.evaluate(&ds).py()?;
+        serde_json::to_value(&sc)
+            .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
+    })?;
+    crate::json::to_py(py, &v)
+}

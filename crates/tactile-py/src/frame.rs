@@ -1,0 +1,192 @@
+//! numpy arrays in: an `(H, W, 3)` uint8 RGB frame or an `(H, W)` uint8
+//! grey frame, checked for type and shape with a message that says what
+//! was given. A C-contiguous array is read in place (no copy); any other
+//! layout (a slice, a channel-reversed view of an OpenCV BGR frame) is
+//! copied once into a contiguous buffer.
+
+use std::sync::Arc;
+
+use kornia_image::{Image, ImageSize};
+use numpy::{
+    PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+
+/// Largest frame side accepted, pixels (8K UHD is 7680 wide).
+pub(crate) const MAX_SIDE: usize = 7680;
+
+/// Channels a frame must have.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Layout {
+    /// `(H, W, 3)`.
+    Rgb,
+    /// `(H, W)`, or `(H, W, 3)` converted to grey.
+    GreyOrRgb,
+}
+
+/// A checked frame whose pixels are borrowed from numpy or copied.
+pub(crate) struct FrameArg<'py> {
+    array: PyReadonlyArrayDyn<'py, u8>,
+    copy: Option<Vec<u8>>,
+    /// Width, pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// 1 or 3.
+    pub channels: usize,
+}
+
+/// A shape as Python prints it: `(180, 320, 3)`, `(5,)`.
+pub(crate) fn py_shape(shape: &[usize]) -> String {
+    let parts: Vec<String> = shape.iter().map(usize::to_string).collect();
+    match parts.len() {
+        1 => format!("({},)", parts[0]),
+        _ => format!("({})", parts.join(", ")),
+    }
+}
+
+fn describe(obj: &Bound<'_, PyAny>) -> String {
+    match obj.cast::<PyUntypedArray>() {
+        Ok(a) => format!("a {} array of shape {}", a.dtype(), py_shape(a.shape())),
+        Err(_) => match obj.get_type().name() {
+            Ok(n) => format!("a {n}"),
+            Err(_) => "another type".into(),
+        },
+    }
+}
+
+impl<'py> FrameArg<'py> {
+    /// Check `obj` (named `what` in messages) and borrow its pixels.
+    pub fn new(obj: &Bound<'py, PyAny>, layout: Layout, what: &str) -> PyResult<Self> {
+        let want = match layout {
+            Layout::Rgb => "an (H, W, 3) uint8 RGB array",
+            Layout::GreyOrRgb => "an (H, W) uint8 grey or (H, W, 3) uint8 RGB array",
+        };
+        let arr = obj.cast::<PyUntypedArray>().map_err(|_| {
+            PyTypeError::new_err(format!("{what}: expected {want}, got {}", describe(obj)))
+        })?;
+        if !arr.dtype().is_equiv_to(&numpy::dtype::<u8>(obj.py())) {
+            return Err(PyTypeError::new_err(format!(
+                "{what}: expected {want}, got {} (convert with .astype(numpy.uint8) if the values are 0-255)",
+                describe(obj)
+            )));
+        }
+        let shape = arr.shape().to_vec();
+        let (height, width, channels) = match (layout, shape.as_slice()) {
+            (_, &[h, w, 3]) => (h, w, 3),
+            (Layout::GreyOrRgb, &[h, w]) => (h, w, 1),
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "{what}: expected {want}, got shape {}",
+                    py_shape(&shape)
+                )));
+            }
+        };
+        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+            return Err(PyValueError::new_err(format!(
+                "{what}: {width}x{height} frame; width and height must be 1 to {MAX_SIDE} pixels"
+            )));
+        }
+        let typed = obj.cast::<PyArrayDyn<u8>>()?;
+        let array = typed
+            .try_readonly()
+            .map_err(|e| PyValueError::new_err(format!("{what}: cannot read the array ({e})")))?;
+        let copy = match array.as_slice() {
+            Ok(_) => None,
+            Err(_) => Some(array.as_array().iter().copied().collect()),
+        };
+        Ok(Self {
+            array,
+            copy,
+            width,
+            height,
+            channels,
+        })
+    }
+
+    /// The pixels, row-major interleaved.
+    pub fn pixels(&self) -> &[u8] {
+        match &self.copy {
+            Some(v) => v,
+            // Checked contiguous in `new`.
+            None => self.array.as_slice().unwrap_or(&[]),
+        }
+    }
+}
+
+/// Borrowed pixels that can cross into a GIL-free closure.
+#[derive(Clone, Copy)]
+pub(crate) struct Pixels<'a> {
+    /// Row-major interleaved.
+    pub data: &'a [u8],
+    /// Width, pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// 1 or 3.
+    pub channels: usize,
+}
+
+impl<'py> FrameArg<'py> {
+    /// The pixels as a plain borrowed view.
+    pub fn view(&self) -> Pixels<'_> {
+        Pixels {
+            data: self.pixels(),
+            width: self.width,
+            height: self.height,
+            channels: self.channels,
+        }
+    }
+}
+
+impl Pixels<'_> {
+    /// Run `f` on the frame as a kornia RGB image that reads these pixels
+    /// in place. Grey frames are expanded to RGB (a copy).
+    pub fn with_rgb<R>(
+        &self,
+        f: impl FnOnce(&tactile_core::image_io::RgbImage) -> R,
+    ) -> tactile_core::Result<R> {
+        let size = ImageSize {
+            width: self.width,
+            height: self.height,
+        };
+        if self.channels != 3 {
+            let rgb: Vec<u8> = self.data.iter().flat_map(|&v| [v, v, v]).collect();
+            return Ok(f(&tactile_core::image_io::rgb_image(
+                self.width,
+                self.height,
+                rgb,
+            )?));
+        }
+        if self.data.len() != size.width * size.height * 3 {
+            return Err(tactile_core::Error::shape(
+                "frame",
+                format!("{} bytes", size.width * size.height * 3),
+                format!("{} bytes", self.data.len()),
+            ));
+        }
+        // SAFETY: `data` holds exactly width * height * 3 bytes (checked
+        // above) and outlives the image, which is dropped before this
+        // function returns; the image is read-only, and its keep-alive owns
+        // nothing because the borrow of `data` already keeps the memory.
+        #[allow(unsafe_code)]
+        let img = unsafe {
+            Image::<u8, 3>::from_borrowed_host_readonly(size, self.data.as_ptr(), Arc::new(()))
+        }
+        .map_err(|e| tactile_core::Error::Invalid(format!("frame: {e}")))?;
+        Ok(f(&img))
+    }
+
+    /// The frame in grey levels: as given, or RGB converted the way a
+    /// colour PNG is on load (OpenCV's weights).
+    pub fn grey(&self) -> tactile_core::Result<tactile_core::image_io::GreyImage> {
+        let data = if self.channels == 3 {
+            tactile_core::image_io::rgb_to_grey(self.data)
+        } else {
+            self.data.to_vec()
+        };
+        tactile_core::image_io::grey_image(self.width, self.height, data)
+    }
+}

@@ -1,0 +1,48 @@
+//! The native part of the Python package `tactile` (distribution
+//! `tactile-rs`): thin bindings over the library. Each class or function
+//! parses its Python arguments, releases the interpreter lock, calls the
+//! same library code as the `tactile` command line, and turns the result
+//! into numpy arrays, dicts or Python exceptions. The typed Python API,
+//! with its docstrings and stubs, is in `python/tactile/`.
+
+mod dataset;
+mod encoder;
+mod errors;
+mod eval;
+mod frame;
+mod image;
+mod json;
+mod pipeline;
+mod synth;
+mod train;
+mod work;
+
+use pyo3::prelude::*;
+
+/// tactile-rs native module: see the `tactile` package.
+#[pymodule]
+fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("MAX_FRAME_SIDE", frame::MAX_SIDE)?;
+    m.add("MAX_BATCH", encoder::MAX_BATCH)?;
+    m.add("MAX_ARRAY_BYTES", synth::MAX_ARRAY_BYTES)?;
+    m.add_class::<pipeline::PyPipeline>()?;
+    m.add_class::<pipeline::FrameResult>()?;
+    m.add_class::<encoder::PyTactipEncoder>()?;
+    m.add_class::<dataset::PyDataset>()?;
+    m.add_function(wrap_pyfunction!(image::read_rgb, m)?)?;
+    m.add_function(wrap_pyfunction!(image::read_grey, m)?)?;
+    m.add_function(wrap_pyfunction!(synth::synth_tactip, m)?)?;
+    m.add_function(wrap_pyfunction!(synth::synth_visuotactile, m)?)?;
+    m.add_function(wrap_pyfunction!(train::train_cae, m)?)?;
+    m.add_function(wrap_pyfunction!(train::train_detector, m)?)?;
+    m.add_function(wrap_pyfunction!(train::train_segmenter, m)?)?;
+    m.add_function(wrap_pyfunction!(train::train_depth, m)?)?;
+    m.add_function(wrap_pyfunction!(train::train_head_py, m)?)?;
+    m.add_function(wrap_pyfunction!(train::train_regressor_py, m)?)?;
+    m.add_function(wrap_pyfunction!(eval::eval_detector, m)?)?;
+    m.add_function(wrap_pyfunction!(eval::eval_segmenter, m)?)?;
+    m.add_function(wrap_pyfunction!(eval::eval_depth, m)?)?;
+    m.add_function(wrap_pyfunction!(eval::eval_tactip, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,369 @@
+//! `tactile.Pipeline`: paper B's palpation pipeline on numpy frames.
+
+use std::path::PathBuf;
+use std::sync::{Mutex, OnceLock};
+
+use numpy::{IntoPyArray, PyArray2};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use tactile_core::Runtime;
+use tactile_pipeline::{FrameRecord, FrameViews, Hysteresis, Pipeline};
+
+use crate::errors::PyResultExt;
+use crate::frame::{FrameArg, Layout};
+
+/// Parse a runtime name as the command line does.
+pub(crate) fn runtime(name: &str) -> PyResult<Runtime> {
+    name.parse::<Runtime>().py()
+}
+
+struct State {
+    pipeline: Pipeline,
+    filter: Option<Hysteresis>,
+    frames: u64,
+}
+
+/// Paper B's palpation pipeline: the detector on every frame; the
+/// segmenter, the direction and the depth network only on tendon frames.
+///
+/// Thread-safe: calls from several threads take turns on the models, and
+/// the interpreter lock is released while a frame is processed.
+#[pyclass(module = "tactile", name = "Pipeline")]
+pub struct PyPipeline {
+    state: Mutex<State>,
+    models: PathBuf,
+    runtime: Runtime,
+    threads: usize,
+    hysteresis: Option<(f32, f32)>,
+    threshold: f64,
+}
+
+impl PyPipeline {
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, State>> {
+        self.state
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the pipeline failed in another thread"))
+    }
+}
+
+#[pymethods]
+impl PyPipeline {
+    /// Load `detector/`, `segmenter/` and `depth/` from `models` onto
+    /// `runtime` ("onnx", "burn-flex" or "burn-ndarray"). `threads` is
+    /// onnxruntime's intra-op threads (1 to 256); `hysteresis=(on, off)`
+    /// filters the tendon decision over a sequence (see `reset`).
+    #[new]
+    #[pyo3(signature = (models=PathBuf::from("models"), runtime="onnx", *, threads=1, hysteresis=None))]
+    fn new(
+        py: Python<'_>,
+        models: PathBuf,
+        runtime: &str,
+        threads: usize,
+        hysteresis: Option<(f32, f32)>,
+    ) -> PyResult<Self> {
+        let rt = crate::pipeline::runtime(runtime)?;
+        if threads == 0 || threads > tactile_onnx::runtime::MAX_THREADS {
+            return Err(PyValueError::new_err(format!(
+                "threads: must be 1 to {}, got {threads}",
+                tactile_onnx::runtime::MAX_THREADS
+            )));
+        }
+        let filter = hysteresis
+            .map(|(on, off)| Hysteresis::new(on, off))
+            .transpose()
+            .py()?;
+        let dir = models.clone();
+        let pipeline = py.detach(move || Pipeline::load(&dir, rt, threads)).py()?;
+        let threshold = pipeline.threshold();
+        Ok(Self {
+            state: Mutex::new(State {
+                pipeline,
+                filter,
+                frames: 0,
+            }),
+            models,
+            runtime: rt,
+            threads,
+            hysteresis,
+            threshold,
+        })
+    }
+
+    /// Process one `(H, W, 3)` uint8 RGB frame of any size.
+    fn process(&self, py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<FrameResult> {
+        let arg = FrameArg::new(frame, Layout::Rgb, "frame")?;
+        let px = arg.view();
+        let (rec, views) = py.detach(|| -> PyResult<_> {
+            let mut st = self.lock()?;
+            let State {
+                pipeline,
+                filter,
+                frames,
+            } = &mut *st;
+            let name = frames.to_string();
+            let out = px
+                .with_rgb(|img| pipeline.process_filtered(&name, img, filter.as_mut()))
+                .py()?
+                .py()?;
+            *frames += 1;
+            Ok(out)
+        })?;
+        Ok(FrameResult {
+            record: rec,
+            views,
+            size: (px.width, px.height),
+            mask: OnceLock::new(),
+            depth: OnceLock::new(),
+        })
+    }
+
+    /// Process frames in order: an `(N, H, W, 3)` array or any iterable of
+    /// `(H, W, 3)` frames. Returns one result per frame.
+    fn process_many(
+        &self,
+        py: Python<'_>,
+        frames: &Bound<'_, PyAny>,
+    ) -> PyResult<Vec<FrameResult>> {
+        let mut out = Vec::new();
+        for f in frames.try_iter()? {
+            out.push(self.process(py, &f?)?);
+        }
+        Ok(out)
+    }
+
+    /// Time the pipeline inside Rust on `frame`, `repeats` times, without
+    /// the Python call around it: milliseconds per run. With the same loop
+    /// over `process`, this measures what the binding costs.
+    #[pyo3(signature = (frame, repeats=100))]
+    fn time_in_rust(
+        &self,
+        py: Python<'_>,
+        frame: &Bound<'_, PyAny>,
+        repeats: usize,
+    ) -> PyResult<Vec<f64>> {
+        if repeats == 0 || repeats > 1_000_000 {
+            return Err(PyValueError::new_err(format!(
+                "repeats: must be 1 to 1000000, got {repeats}"
+            )));
+        }
+        let arg = FrameArg::new(frame, Layout::Rgb, "frame")?;
+        let px = arg.view();
+        py.detach(|| -> PyResult<Vec<f64>> {
+            let mut st = self.lock()?;
+            let State {
+                pipeline, filter, ..
+            } = &mut *st;
+            px.with_rgb(|img| -> PyResult<Vec<f64>> {
+                (0..repeats)
+                    .map(|_| {
+                        let t = std::time::Instant::now();
+                        pipeline.process_filtered("", img, filter.as_mut()).py()?;
+                        Ok(1e3 * t.elapsed().as_secs_f64())
+                    })
+                    .collect()
+            })
+            .py()?
+        })
+    }
+
+    /// Start a new sequence: the hysteresis forgets its state and frame
+    /// numbering starts again at 0.
+    fn reset(&self) -> PyResult<()> {
+        let mut st = self.lock()?;
+        if let Some(f) = st.filter.as_mut() {
+            f.reset();
+        }
+        st.frames = 0;
+        Ok(())
+    }
+
+    /// The detector's probability threshold.
+    #[getter]
+    fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    /// Where the networks run.
+    #[getter]
+    fn runtime(&self) -> &'static str {
+        self.runtime.name()
+    }
+
+    /// The models folder.
+    #[getter]
+    fn models(&self) -> PathBuf {
+        self.models.clone()
+    }
+
+    /// onnxruntime intra-op threads.
+    #[getter]
+    fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// The hysteresis `(on, off)`, or None.
+    #[getter]
+    fn hysteresis(&self) -> Option<(f32, f32)> {
+        self.hysteresis
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Pipeline(models='{}', runtime='{}', threads={}, hysteresis={:?})",
+            self.models.display(),
+            self.runtime,
+            self.threads,
+            self.hysteresis
+        )
+    }
+}
+
+/// What the pipeline made of one frame. `mask` and `depth_m` are built at
+/// the frame's resolution on first access.
+#[pyclass(module = "tactile", name = "FrameResult", frozen)]
+pub struct FrameResult {
+    record: FrameRecord,
+    views: Option<FrameViews>,
+    size: (usize, usize),
+    mask: OnceLock<Py<PyArray2<bool>>>,
+    depth: OnceLock<Option<Py<PyArray2<f32>>>>,
+}
+
+#[pymethods]
+impl FrameResult {
+    /// Whether a tendon is under the skin (the detector's threshold, or
+    /// the hysteresis when the pipeline has one).
+    #[getter]
+    fn tendon(&self) -> bool {
+        self.record.tendon
+    }
+
+    /// The detector's own threshold decision (before any hysteresis).
+    #[getter]
+    fn tendon_raw(&self) -> bool {
+        self.record.tendon_raw
+    }
+
+    /// Detector probability.
+    #[getter]
+    fn score(&self) -> f32 {
+        self.record.score
+    }
+
+    /// Direction of the tendon in degrees, [0, 180), image axes (x right,
+    /// y down); None without a tendon or a clear direction.
+    #[getter]
+    fn direction_deg(&self) -> Option<f64> {
+        self.record.direction_deg
+    }
+
+    /// Major / minor eigenvalue of the kept region; None without a direction.
+    #[getter]
+    fn anisotropy(&self) -> Option<f64> {
+        self.record.anisotropy
+    }
+
+    /// Why a tendon frame has no direction (empty, too small, isotropic).
+    #[getter]
+    fn no_direction(&self) -> Option<String> {
+        self.record.no_direction.clone()
+    }
+
+    /// Pixels of the kept region in the segmenter's window.
+    #[getter]
+    fn mask_area_px(&self) -> usize {
+        self.record.mask_area_px
+    }
+
+    /// The kept tendon region, `(H, W)` bool at the frame's resolution
+    /// (all False on frames without a tendon).
+    #[getter]
+    fn mask<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<bool>>> {
+        let (w, h) = self.size;
+        // Built outside the cell: a thread waiting on a OnceLock while
+        // holding the interpreter would deadlock the one building it.
+        if self.mask.get().is_none() {
+            let data = match &self.views {
+                Some(v) => py.detach(|| v.mask_at(w, h)),
+                None => vec![false; w * h],
+            };
+            let arr = ndarray::Array2::from_shape_vec((h, w), data)
+                .map_err(|e| PyValueError::new_err(e.to_string()))?;
+            let _ = self.mask.set(arr.into_pyarray(py).unbind());
+        }
+        match self.mask.get() {
+            Some(m) => Ok(m.bind(py).clone()),
+            None => Err(PyRuntimeError::new_err("mask unavailable")),
+        }
+    }
+
+    /// Camera-to-skin distance, `(H, W)` float32 metres at the frame's
+    /// resolution; None on frames gated out by the detector.
+    #[getter]
+    fn depth_m<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f32>>>> {
+        let (w, h) = self.size;
+        if self.depth.get().is_none() {
+            let made = match &self.views {
+                Some(v) => {
+                    let data = py.detach(|| v.depth_m_at(w, h)).py()?;
+                    let arr = ndarray::Array2::from_shape_vec((h, w), data)
+                        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+                    Some(arr.into_pyarray(py).unbind())
+                }
+                None => None,
+            };
+            let _ = self.depth.set(made);
+        }
+        Ok(self
+            .depth
+            .get()
+            .and_then(|d| d.as_ref().map(|a| a.bind(py).clone())))
+    }
+
+    /// Smallest, mean and largest camera-to-skin distance inside the
+    /// sensing window, mm; None when gated out.
+    #[getter]
+    fn depth_mm_stats(&self) -> Option<(f32, f32, f32)> {
+        let r = &self.record;
+        Some((r.depth_min_mm?, r.depth_mean_mm?, r.depth_max_mm?))
+    }
+
+    /// Milliseconds per stage: detect, segment (segmenter and direction),
+    /// depth, total. Stages a frame did not run are absent.
+    #[getter]
+    fn ms<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let r = &self.record;
+        let d = PyDict::new(py);
+        d.set_item("detect", r.ms_detect)?;
+        if let Some(v) = r.ms_segment {
+            d.set_item("segment", v)?;
+        }
+        if let Some(v) = r.ms_depth {
+            d.set_item("depth", v)?;
+        }
+        d.set_item("total", r.ms_total)?;
+        Ok(d)
+    }
+
+    /// The record `tactile run` writes for this frame (one JSON Lines
+    /// object), as a dict.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        crate::json::to_py(py, &self.record)
+    }
+
+    fn __repr__(&self) -> String {
+        let r = &self.record;
+        match (r.tendon, r.direction_deg) {
+            (false, _) => format!("FrameResult(tendon=False, score={:.3})", r.score),
+            (true, Some(d)) => format!(
+                "FrameResult(tendon=True, score={:.3}, direction_deg={d:.1})",
+                r.score
+            ),
+            (true, None) => format!(
+                "FrameResult(tendon=True, score={:.3}, direction_deg=None)",
+                r.score
+            ),
+        }
+    }
+}

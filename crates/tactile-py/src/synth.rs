@@ -1,0 +1,222 @@
+//! `tactile.synth`: the virtual sensors of `sensors.md`, as arrays in
+//! memory or written as a dataset.
+
+use std::path::PathBuf;
+
+use datasets_synth::{
+    TactipConfig, TactipLabels, VisuotactileConfig, WriteOptions, tactip, visuotactile,
+};
+use numpy::{IntoPyArray, PyArray1};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use rayon::prelude::*;
+
+use crate::errors::PyResultExt;
+
+/// Most bytes of arrays one call may return (a bigger set is written to
+/// disk with `out=`).
+pub(crate) const MAX_ARRAY_BYTES: usize = 4 << 30;
+
+/// A generator config from its JSON overrides (keys of the config; every
+/// other key keeps the spec's default), validated.
+fn config<T: serde::de::DeserializeOwned + Default>(json: Option<&str>) -> PyResult<T> {
+    match json {
+        None => Ok(T::default()),
+        Some(text) => serde_json::from_str(text)
+            .map_err(|e| PyValueError::new_err(format!("synth config: {e}"))),
+    }
+}
+
+fn check_in_memory(count: usize, bytes_per_frame: usize) -> PyResult<()> {
+    datasets_synth::check_count(count).py()?;
+    let bytes = count.saturating_mul(bytes_per_frame);
+    if bytes > MAX_ARRAY_BYTES {
+        return Err(PyValueError::new_err(format!(
+            "count: {count} frames would take {:.1} GB in memory (limit {} GB); write them to disk with out=...",
+            bytes as f64 / 1e9,
+            MAX_ARRAY_BYTES >> 30
+        )));
+    }
+    Ok(())
+}
+
+fn options(force: bool, progress: bool) -> WriteOptions {
+    WriteOptions { force, progress }
+}
+
+fn column<'py>(py: Python<'py>, v: Vec<Option<f64>>) -> Bound<'py, PyArray1<f64>> {
+    PyArray1::from_vec(py, v.into_iter().map(|x| x.unwrap_or(f64::NAN)).collect())
+}
+
+/// Virtual TacTip frames: written to `out` (returns the folder), or
+/// returned as `(frames (N, 300, 300) uint8, labels dict)`.
+#[pyfunction]
+#[pyo3(signature = (count, seed, out, config_json, force, progress))]
+pub(crate) fn synth_tactip(
+    py: Python<'_>,
+    count: usize,
+    seed: u64,
+    out: Option<PathBuf>,
+    config_json: Option<String>,
+    force: bool,
+    progress: bool,
+) -> PyResult<Py<PyAny>> {
+    let cfg: TactipConfig = config(config_json.as_deref())?;
+    cfg.validate().py()?;
+    if let Some(out) = out {
+        let path = crate::work::interruptible(py, || {
+            datasets_synth::write_tactip(&cfg, count, seed, &out, options(force, progress)).py()
+        })?;
+        return Ok(path.into_pyobject(py)?.into_any().unbind());
+    }
+    let n = tactip::FRAME_PX;
+    check_in_memory(count, n * n)?;
+    let samples: Vec<(Vec<u8>, TactipLabels)> = crate::work::interruptible(py, || {
+        (0..count)
+            .into_par_iter()
+            .map(|i| {
+                tactile_core::interrupt::check()?;
+                let (scene, frame) = tactip::sample(&cfg, seed, i as u64);
+                let labels = TactipLabels::of(&scene, &frame);
+                Ok((frame.pixels, labels))
+            })
+            .collect::<tactile_core::Result<_>>()
+            .py()
+    })?;
+    let (pixels, labels): (Vec<Vec<u8>>, Vec<TactipLabels>) = samples.into_iter().unzip();
+    let frames = ndarray::Array3::from_shape_vec((count, n, n), pixels.concat())
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let d = PyDict::new(py);
+    d.set_item("shape", PyList::new(py, labels.iter().map(|l| l.shape))?)?;
+    d.set_item("x_mm", column(py, labels.iter().map(|l| l.x_mm).collect()))?;
+    d.set_item("y_mm", column(py, labels.iter().map(|l| l.y_mm).collect()))?;
+    d.set_item(
+        "theta_deg",
+        column(py, labels.iter().map(|l| l.theta_deg).collect()),
+    )?;
+    d.set_item(
+        "depth_mm",
+        column(py, labels.iter().map(|l| Some(l.depth_mm)).collect()),
+    )?;
+    d.set_item(
+        "force_n",
+        column(py, labels.iter().map(|l| Some(l.force_n)).collect()),
+    )?;
+    d.set_item(
+        "radius_mm",
+        column(py, labels.iter().map(|l| l.radius_mm).collect()),
+    )?;
+    Ok((frames.into_pyarray(py), d)
+        .into_pyobject(py)?
+        .into_any()
+        .unbind())
+}
+
+/// Virtual visuo-tactile palpation videos: written to `out` (returns the
+/// folder), or returned as a dict of `frames (N, H, W, 3) uint8`,
+/// `masks (N, H, W) bool`, `depth_m (N, H, W) float32` and the labels.
+#[pyfunction]
+#[pyo3(signature = (count, seed, out, config_json, force, progress))]
+pub(crate) fn synth_visuotactile(
+    py: Python<'_>,
+    count: usize,
+    seed: u64,
+    out: Option<PathBuf>,
+    config_json: Option<String>,
+    force: bool,
+    progress: bool,
+) -> PyResult<Py<PyAny>> {
+    let cfg: VisuotactileConfig = config(config_json.as_deref())?;
+    cfg.validate().py()?;
+    if let Some(out) = out {
+        let path = crate::work::interruptible(py, || {
+            datasets_synth::write_visuotactile(&cfg, count, seed, &out, options(force, progress))
+                .py()
+        })?;
+        return Ok(path.into_pyobject(py)?.into_any().unbind());
+    }
+    let (w, h) = (cfg.width as usize, cfg.height as usize);
+    check_in_memory(count, w * h * (3 + 1 + 4))?;
+    struct Sample {
+        frame: visuotactile::VisuotactileFrame,
+        path: &'static str,
+        sequence: usize,
+        index: usize,
+        tendon_radius_mm: f64,
+        burial_mm: f64,
+    }
+    let samples: Vec<Sample> = crate::work::interruptible(py, || {
+        (0..count)
+            .into_par_iter()
+            .map(|i| {
+                tactile_core::interrupt::check()?;
+                let (sequence, index) = datasets_synth::visuotactile_position(&cfg, i);
+                let (scene, frame) = visuotactile::sample(&cfg, seed, sequence as u64, index);
+                Ok(Sample {
+                    frame,
+                    path: scene.path.name(),
+                    sequence,
+                    index,
+                    tendon_radius_mm: scene.tendon_radius_mm,
+                    burial_mm: scene.burial_mm,
+                })
+            })
+            .collect::<tactile_core::Result<_>>()
+            .py()
+    })?;
+    let mut rgb = Vec::with_capacity(count * w * h * 3);
+    let mut mask = Vec::with_capacity(count * w * h);
+    let mut depth = Vec::with_capacity(count * w * h);
+    for s in &samples {
+        rgb.extend_from_slice(&s.frame.rgb);
+        mask.extend(s.frame.mask.iter().map(|&v| v >= 128));
+        depth.extend_from_slice(&s.frame.depth_m);
+    }
+    let shape_err = |e: ndarray::ShapeError| PyValueError::new_err(e.to_string());
+    let d = PyDict::new(py);
+    d.set_item(
+        "frames",
+        ndarray::Array4::from_shape_vec((count, h, w, 3), rgb)
+            .map_err(shape_err)?
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "masks",
+        ndarray::Array3::from_shape_vec((count, h, w), mask)
+            .map_err(shape_err)?
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "depth_m",
+        ndarray::Array3::from_shape_vec((count, h, w), depth)
+            .map_err(shape_err)?
+            .into_pyarray(py),
+    )?;
+    let f = |g: &dyn Fn(&Sample) -> f64| -> Vec<f64> { samples.iter().map(g).collect() };
+    d.set_item(
+        "tendon",
+        PyArray1::from_vec(py, samples.iter().map(|s| s.frame.tendon).collect()),
+    )?;
+    d.set_item(
+        "direction_deg",
+        column(py, samples.iter().map(|s| s.frame.direction_deg).collect()),
+    )?;
+    d.set_item("path", PyList::new(py, samples.iter().map(|s| s.path))?)?;
+    d.set_item("press_mm", PyArray1::from_vec(py, f(&|s| s.frame.press_mm)))?;
+    d.set_item(
+        "sequence",
+        PyArray1::from_vec(py, samples.iter().map(|s| s.sequence as i64).collect()),
+    )?;
+    d.set_item(
+        "frame_index",
+        PyArray1::from_vec(py, samples.iter().map(|s| s.index as i64).collect()),
+    )?;
+    d.set_item(
+        "tendon_radius_mm",
+        PyArray1::from_vec(py, f(&|s| s.tendon_radius_mm)),
+    )?;
+    d.set_item("burial_mm", PyArray1::from_vec(py, f(&|s| s.burial_mm)))?;
+    d.set_item("ridge_mm", PyArray1::from_vec(py, f(&|s| s.frame.ridge_mm)))?;
+    Ok(d.into_any().unbind())
+}

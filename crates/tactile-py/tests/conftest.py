@@ -1,0 +1,68 @@
+"""Shared fixtures: the repository's shipped models and samples, and the
+`tactile` command line the package is compared against."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tactile
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+@pytest.fixture(scope="session")
+def root() -> Path:
+    return ROOT
+
+
+@pytest.fixture(scope="session")
+def tactile_bin() -> Path:
+    """The `tactile` binary built from the same tree (TACTILE_BIN, or the
+    release build in the cargo target folder)."""
+    env = os.environ.get("TACTILE_BIN")
+    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+    candidates = [Path(env)] if env else [target / "release" / "tactile"]
+    for c in candidates:
+        if c.is_file():
+            return c
+    found = shutil.which("tactile")
+    if found:
+        return Path(found)
+    pytest.fail(
+        "the tactile binary was not found: build it (cargo build --release -p tactile) "
+        "or set TACTILE_BIN"
+    )
+
+
+def run_cli(binary: Path, *args: str) -> str:
+    r = subprocess.run([str(binary), *args], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 0, f"tactile {' '.join(args)} failed:\n{r.stderr}"
+    return r.stdout
+
+
+@pytest.fixture(scope="session")
+def palpation_frames(root: Path) -> list[np.ndarray]:
+    """The shipped sample video (12 frames, 320x180), as RGB arrays."""
+    files = sorted((root / "samples" / "palpation").glob("*.png"))
+    assert len(files) == 12
+    return [tactile.read_rgb(f) for f in files]
+
+
+@pytest.fixture(scope="session")
+def pipeline(root: Path) -> tactile.Pipeline:
+    return tactile.Pipeline(root / "models", "onnx")
+
+
+@pytest.fixture(scope="session")
+def tendon_frame_640(root: Path) -> np.ndarray:
+    """A 640x360 tendon frame of the virtual sensor at full press."""
+    v = tactile.synth.visuotactile(sequences=1, frames_per_sequence=9, seed=5, progress=False)
+    tendon = np.flatnonzero(v["tendon"])
+    assert tendon.size > 0
+    return v["frames"][tendon[len(tendon) // 2]]

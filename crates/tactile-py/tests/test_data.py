@@ -1,0 +1,87 @@
+"""Datasets and the virtual sensors from Python."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import tactile
+
+
+def test_tactip_arrays_equal_the_written_dataset(tmp_path):
+    frames, labels = tactile.synth.tactip(6, seed=3, progress=False)
+    assert frames.shape == (6, 300, 300) and frames.dtype == np.uint8
+    out = tactile.synth.tactip(6, seed=3, out=tmp_path / "tt", progress=False)
+    ds = tactile.Dataset(out)
+    assert ds.kind == "tactip" and len(ds) == 6 and (ds.width, ds.height) == (300, 300)
+    for i in range(6):
+        assert np.array_equal(ds.frame(i), frames[i])
+    assert ds.labels["shape"] == labels["shape"]
+    np.testing.assert_allclose(ds.labels["depth_mm"], labels["depth_mm"], atol=1e-4)
+    np.testing.assert_allclose(ds.labels["x_mm"], labels["x_mm"], atol=1e-4)  # NaN where none
+    assert ds[2]["shape"] == labels["shape"][2]
+    assert ds[-1]["file"] == "frames/000005.png"
+
+
+def test_visuotactile_arrays_equal_the_written_dataset(tmp_path):
+    v = tactile.synth.visuotactile(sequences=1, frames_per_sequence=4, width=320, height=180,
+                                   seed=2, progress=False)
+    assert v["frames"].shape == (4, 180, 320, 3)
+    assert v["masks"].dtype == np.bool_ and v["depth_m"].dtype == np.float32
+    out = tactile.synth.visuotactile(count=4, frames_per_sequence=4, width=320, height=180,
+                                     seed=2, out=tmp_path / "vt", progress=False)
+    ds = tactile.Dataset(out)
+    for i in range(4):
+        s = ds[i]
+        assert np.array_equal(s["frame"], v["frames"][i])
+        assert np.array_equal(s["mask"], v["masks"][i])
+        assert np.array_equal(s["depth_m"], v["depth_m"][i])
+        assert bool(s["tendon"]) == bool(v["tendon"][i])
+    assert list(ds.labels["sequence"]) == [0, 0, 0, 0]
+
+
+def test_dataset_errors_name_the_file(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        tactile.Dataset(tmp_path / "missing")
+    out = tactile.synth.tactip(3, seed=1, out=tmp_path / "d", progress=False)
+    ds = tactile.Dataset(out)
+    with pytest.raises(IndexError):
+        ds[3]
+    assert len(list(ds)) == 3
+    labels = out / "labels.csv"
+    lines = labels.read_text().splitlines()
+    lines[2] = lines[2].replace("frames/000001.png", "../../etc/passwd")
+    labels.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ValueError) as e:
+        tactile.Dataset(out)
+    assert "labels.csv:3" in str(e.value)
+
+
+def test_synth_refuses_bad_counts_and_foreign_folders(tmp_path):
+    with pytest.raises(ValueError, match="count"):
+        tactile.synth.tactip(0)
+    with pytest.raises(ValueError, match="count"):
+        tactile.synth.tactip(2**63 - 1)
+    with pytest.raises(ValueError, match="memory"):
+        tactile.synth.tactip(60_000)
+    with pytest.raises(ValueError, match="x_mm"):
+        tactile.synth.tactip(2, x_mm=(5.0, -5.0))
+    with pytest.raises(ValueError, match="unknown field"):
+        tactile.synth.tactip(2, config={"no_such_key": 1})
+    user = tmp_path / "mine"
+    user.mkdir()
+    (user / "notes.txt").write_text("keep me")
+    with pytest.raises(FileExistsError):
+        tactile.synth.tactip(2, out=user, progress=False)
+    with pytest.raises(FileExistsError):
+        tactile.synth.tactip(2, out=user, force=True, progress=False)
+    assert (user / "notes.txt").read_text() == "keep me"
+
+
+def test_manifest_and_columns(root):
+    ds = tactile.Dataset(root / "samples/virtual-tactip")
+    assert ds.columns[:2] == ["file", "shape"]
+    assert ds.manifest["kind"] == "tactip"
+    json.dumps(ds.manifest)

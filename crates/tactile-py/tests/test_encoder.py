@@ -1,0 +1,80 @@
+"""Paper A's encoder from Python: bit-for-bit the features of `tactile
+encode`, the estimates of `tactile perceive`, and clear errors."""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+import tactile
+from conftest import run_cli
+
+
+def _frames(ds: tactile.Dataset) -> np.ndarray:
+    return np.stack([ds.frame(i) for i in range(len(ds))])
+
+
+def test_encode_equals_tactile_encode_bit_for_bit(tactile_bin, root, tmp_path):
+    out = tmp_path / "features.csv"
+    run_cli(tactile_bin, "encode", "--model", "models/cae-synth", "--data",
+            "samples/virtual-tactip", "--out", str(out), "--device", "flex")
+    with open(out) as f:
+        rows = list(csv.reader(f))[1:]
+    cli = np.array([[np.float32(v) for v in r[1:]] for r in rows], dtype=np.float32)
+    enc = tactile.TactipEncoder(root / "models/cae-synth", "burn-flex")
+    ds = tactile.Dataset(root / "samples/virtual-tactip")
+    got = enc.encode(_frames(ds))
+    assert got.dtype == np.float32 and got.shape == (len(ds), enc.feature_count)
+    assert np.array_equal(got.view(np.uint32), cli.view(np.uint32))
+    # A list of frames, and frames given as RGB, encode the same.
+    assert np.array_equal(enc.encode([ds.frame(i) for i in range(len(ds))]), got)
+    rgb = np.repeat(_frames(ds)[..., None], 3, axis=-1)
+    assert np.array_equal(enc.encode(rgb), got)
+
+
+def test_estimate_matches_tactile_perceive(tactile_bin, root, tmp_path):
+    out = tmp_path / "estimates.csv"
+    run_cli(tactile_bin, "perceive", "--encoder", "models/cae-synth", "--data",
+            "samples/virtual-tactip", "--out", str(out), "--device", "flex")
+    with open(out) as f:
+        rows = list(csv.DictReader(f))
+    enc = tactile.TactipEncoder(root / "models/cae-synth")
+    ds = tactile.Dataset(root / "samples/virtual-tactip")
+    est = enc.estimate(_frames(ds))
+    assert set(est) == set(rows[0]) - {"file"}
+    for name, values in est.items():
+        assert len(values) == len(ds)
+        for v, row in zip(values, rows):
+            if values.dtype.kind in "fc":
+                assert abs(v - float(row[name])) <= 5e-5, name
+            else:
+                assert v == row[name], name
+
+
+def test_preprocess_gives_the_pin_image(root):
+    enc = tactile.TactipEncoder(root / "models/cae-synth")
+    ds = tactile.Dataset(root / "samples/virtual-tactip")
+    pin = enc.preprocess(ds.frame(0))
+    assert pin.shape == (enc.pin_side, enc.pin_side) and pin.dtype == np.float32
+    assert 0.0 <= pin.min() and pin.max() <= 1.0 and pin.std() > 0.0
+
+
+def test_encoder_errors(root, tmp_path):
+    with pytest.raises(FileNotFoundError):
+        tactile.TactipEncoder(tmp_path / "missing")
+    with pytest.raises(ValueError, match="cae"):
+        tactile.TactipEncoder(root / "models/detector")
+    enc = tactile.TactipEncoder(root / "models/cae-edge")
+    assert enc.estimators == []
+    frames = np.zeros((2, 300, 300), np.uint8)
+    assert enc.encode(frames).shape == (2, enc.feature_count)
+    with pytest.raises(ValueError, match="no estimators"):
+        enc.estimate(frames)
+    with pytest.raises(TypeError, match="float64"):
+        enc.encode(np.zeros((2, 300, 300)))
+    with pytest.raises(ValueError, match=r"\(2, 300, 300, 3, 1\)"):
+        enc.encode(np.zeros((2, 300, 300, 3, 1), np.uint8))
+    with pytest.raises(ValueError, match=r"frames\[1\]"):
+        enc.encode([np.zeros((300, 300), np.uint8), np.zeros((300, 300, 2), np.uint8)])

@@ -1,0 +1,191 @@
+"""The palpation pipeline from Python: the same answers as `tactile run`,
+frame-resolution outputs, bad input, threads and memory."""
+
+from __future__ import annotations
+
+import json
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tactile
+from conftest import run_cli
+
+# Python and the command line run the same code on the same pixels; only
+# float formatting through JSON can differ.
+DIRECTION_TOL_DEG = 1e-9
+DEPTH_TOL_MM = 1e-5
+SCORE_TOL = 1e-6
+
+
+def test_process_matches_tactile_run(tactile_bin, root, tmp_path, pipeline, palpation_frames):
+    out = tmp_path / "records.jsonl"
+    run_cli(tactile_bin, "run", "--data", "samples/palpation", "--models", "models",
+            "--runtime", "onnx", "--out", str(out))
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    assert len(records) == len(palpation_frames)
+    pipeline.reset()
+    tendon_frames = 0
+    for rec, frame in zip(records, palpation_frames):
+        r = pipeline.process(frame)
+        assert r.tendon == rec["tendon"]
+        assert abs(r.score - rec["score"]) <= SCORE_TOL
+        assert r.mask_area_px == rec["mask_area_px"]
+        if rec["direction_deg"] is None:
+            assert r.direction_deg is None
+        else:
+            assert abs(r.direction_deg - rec["direction_deg"]) <= DIRECTION_TOL_DEG
+        if rec["tendon"]:
+            tendon_frames += 1
+            lo, mean, hi = r.depth_mm_stats
+            assert abs(lo - rec["depth_min_mm"]) <= DEPTH_TOL_MM
+            assert abs(mean - rec["depth_mean_mm"]) <= DEPTH_TOL_MM
+            assert abs(hi - rec["depth_max_mm"]) <= DEPTH_TOL_MM
+        d = r.to_dict()
+        for key in ("tendon", "tendon_raw", "mask_area_px", "no_direction"):
+            assert d[key] == rec[key]
+    assert tendon_frames == 8, "the sample video has 8 tendon frames"
+
+
+def _segmenter_side(root) -> int:
+    cfg = json.loads((root / "models/segmenter/segmenter.json").read_text())
+    return int(cfg["model"]["side"])
+
+
+def test_outputs_at_frame_resolution(root, pipeline, palpation_frames):
+    pipeline.reset()
+    r = pipeline.process(palpation_frames[5])
+    assert r.tendon
+    h, w = palpation_frames[5].shape[:2]
+    assert r.mask.shape == (h, w) and r.mask.dtype == np.bool_
+    assert r.depth_m.shape == (h, w) and r.depth_m.dtype == np.float32
+    # The depth map upsampled to the frame keeps the window's statistics.
+    lo, mean, hi = r.depth_mm_stats
+    centre = r.depth_m[h // 2 - 10 : h // 2 + 10, w // 2 - 10 : w // 2 + 10] * 1000
+    assert lo - 0.05 <= centre.min() and centre.max() <= hi + 0.05
+    assert 5.0 < mean < 30.0
+    # The mask at frame resolution covers the window's tendon area, scaled.
+    side = _segmenter_side(root)
+    scale = np.ceil(side * np.sqrt(2)) / h
+    expected = r.mask_area_px / scale**2
+    assert abs(r.mask.sum() - expected) / expected < 0.05
+    assert set(r.ms) == {"detect", "segment", "depth", "total"}
+
+
+def test_gated_out_frame_has_no_depth(pipeline, palpation_frames):
+    r = pipeline.process(palpation_frames[0])
+    assert not r.tendon
+    assert r.depth_m is None and r.depth_mm_stats is None and r.direction_deg is None
+    assert not r.mask.any()
+    assert set(r.ms) == {"detect", "total"}
+
+
+def test_non_contiguous_and_batched_input(pipeline, palpation_frames):
+    frame = palpation_frames[4]
+    bgr = np.ascontiguousarray(frame[:, :, ::-1])
+    rgb_view = bgr[:, :, ::-1]  # a view OpenCV users make; not contiguous
+    assert not rgb_view.flags["C_CONTIGUOUS"]
+    a, b = pipeline.process(frame), pipeline.process(rgb_view)
+    assert a.score == b.score and a.direction_deg == b.direction_deg
+    stack = np.stack(palpation_frames[:4])
+    many = pipeline.process_many(stack)
+    one = [pipeline.process(f) for f in palpation_frames[:4]]
+    assert [m.score for m in many] == [o.score for o in one]
+    assert len(pipeline.process_many(iter(palpation_frames[:3]))) == 3
+
+
+def test_hysteresis_and_reset(root, palpation_frames):
+    p = tactile.Pipeline(root / "models", hysteresis=(0.6, 0.3))
+    first = [p.process(f).tendon for f in palpation_frames]
+    p.reset()
+    again = [p.process(f).tendon for f in palpation_frames]
+    assert first == again
+    assert p.hysteresis == pytest.approx((0.6, 0.3))
+
+
+@pytest.mark.parametrize(
+    "frame, error, words",
+    [
+        (np.zeros((180, 320, 3), np.float32), TypeError, "float32"),
+        (np.zeros((180, 320, 3), np.uint16), TypeError, "uint16"),
+        (np.zeros((180, 320, 4), np.uint8), ValueError, "(180, 320, 4)"),
+        (np.zeros((180, 320), np.uint8), ValueError, "(180, 320)"),
+        (np.zeros((0, 320, 3), np.uint8), ValueError, "320x0"),
+        (np.zeros((9000, 2, 3), np.uint8), ValueError, "7680"),
+        ([[1, 2, 3]], TypeError, "list"),
+        ("frame.png", TypeError, "str"),
+    ],
+)
+def test_bad_frames_raise_clear_errors(pipeline, frame, error, words):
+    with pytest.raises(error) as e:
+        pipeline.process(frame)
+    assert words in str(e.value)
+    assert "frame" in str(e.value)
+
+
+def test_bad_construction(root, tmp_path):
+    with pytest.raises(FileNotFoundError) as e:
+        tactile.Pipeline(tmp_path / "no-models")
+    assert "no-models" in str(e.value)
+    with pytest.raises(ValueError, match="unknown runtime 'gpu'"):
+        tactile.Pipeline(root / "models", "gpu")
+    with pytest.raises(ValueError, match="threads"):
+        tactile.Pipeline(root / "models", threads=0)
+    with pytest.raises(ValueError, match="hysteresis"):
+        tactile.Pipeline(root / "models", hysteresis=(0.2, 0.6))
+    # A segmenter where the detector should be: the kind is named.
+    bad = tmp_path / "models"
+    bad.mkdir()
+    for name in ("detector", "segmenter", "depth"):
+        (bad / name).symlink_to(root / "models" / ("segmenter" if name == "detector" else name))
+    with pytest.raises(ValueError) as e:
+        tactile.Pipeline(bad)
+    assert "detector" in str(e.value)
+
+
+def test_two_threads_give_the_same_results(root, palpation_frames):
+    p = tactile.Pipeline(root / "models")
+    expected = [(r.tendon, r.score, r.direction_deg) for r in map(p.process, palpation_frames)]
+    results: dict[int, list] = {}
+    errors: list[BaseException] = []
+
+    def work(k: int) -> None:
+        try:
+            got = []
+            for _ in range(5):
+                got.extend((r.tendon, r.score, r.direction_deg) for r in map(p.process, palpation_frames))
+            results[k] = got
+        except BaseException as e:  # pragma: no cover - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors, errors
+    for k in range(2):
+        assert results[k] == expected * 5
+
+
+def _rss_mb() -> float:
+    with open("/proc/self/statm") as f:
+        pages = int(f.read().split()[1])
+    import os
+
+    return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def test_memory_does_not_grow(pipeline, palpation_frames):
+    frame = palpation_frames[5]
+    for _ in range(200):  # warm up allocators and caches
+        r = pipeline.process(frame)
+        r.mask, r.depth_m
+    before = _rss_mb()
+    for _ in range(2000):
+        r = pipeline.process(frame)
+        r.mask, r.depth_m
+    grown = _rss_mb() - before
+    assert grown < 16, f"resident memory grew by {grown:.1f} MB over 2000 calls"

@@ -1,0 +1,74 @@
+"""Training and evaluation from Python: the command line's options and
+results, errors as exceptions, and Ctrl-C leaving a folder marked incomplete."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+import tactile
+
+
+@pytest.fixture(scope="module")
+def small_vt(tmp_path_factory):
+    out = tmp_path_factory.mktemp("vt") / "vt"
+    return tactile.synth.visuotactile(sequences=4, frames_per_sequence=6, width=320, height=180,
+                                      seed=11, out=out, progress=False)
+
+
+def test_train_then_eval_detector(small_vt, tmp_path):
+    out = tmp_path / "det"
+    s = tactile.train.detector(small_vt, out, width=0.25, input=(64, 48), max_epochs=2,
+                               batch_size=8, seed=1)
+    assert s["epochs_run"] == 2 and 0.0 <= s["threshold"] <= 1.0
+    assert (out / "detector.json").is_file()
+    e = tactile.eval.detector(out, small_vt)
+    assert e["all"]["frames"] == 24 and 0.0 <= e["all"]["accuracy"] <= 1.0
+    assert set(e) >= {"all", "onset_release", "ms_per_frame"}
+
+
+def test_training_errors(small_vt, tmp_path):
+    with pytest.raises(FileNotFoundError):
+        tactile.train.segmenter(tmp_path / "missing", tmp_path / "seg")
+    with pytest.raises(ValueError, match="architecture"):
+        tactile.train.detector(small_vt, tmp_path / "d", architecture="vgg")
+    with pytest.raises(ValueError, match="batch size"):
+        tactile.train.detector(small_vt, tmp_path / "d", batch_size=0, max_epochs=1)
+    with pytest.raises(ValueError, match="device"):
+        tactile.train.depth(small_vt, tmp_path / "dp", device="cuda")
+
+
+def test_eval_on_the_wrong_kind_of_model(root, small_vt):
+    with pytest.raises(ValueError, match="segmenter"):
+        tactile.eval.segmenter(root / "models/detector", small_vt)
+
+
+def test_ctrl_c_stops_training_and_marks_it_incomplete(small_vt, tmp_path):
+    out = tmp_path / "det"
+    code = (
+        "import tactile\n"
+        f"tactile.train.detector({str(small_vt)!r}, {str(out)!r}, width=0.25, input=(64, 48),"
+        " max_epochs=100000, patience=100000, batch_size=8)\n"
+    )
+    p = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while not (out / "checkpoint").exists():
+        assert p.poll() is None, p.stderr.read()
+        assert time.time() < deadline, "training never wrote a checkpoint"
+        time.sleep(0.2)
+    p.send_signal(signal.SIGINT)
+    try:
+        _, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        raise
+    assert p.returncode != 0
+    assert "KeyboardInterrupt" in err
+    assert (out / "INCOMPLETE").is_file()
+    with pytest.raises(ValueError, match="did not finish training"):
+        tactile.eval.detector(out, small_vt)
