@@ -8,10 +8,13 @@
 #     into a fresh virtual environment, sharing the cargo target folder so
 #     burn is not built again, and runs its pytest suite against the
 #     `tactile` binary built in step 2.
+#  0. installs FFmpeg from the distribution's packages when missing (video
+#     sources are tested through it);
 # Arguments go to `cargo test`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$(pwd)"
+bash scripts/install-ffmpeg.sh
 if [ -z "${ORT_DYLIB_PATH:-}" ]; then
     eval "$(bash scripts/install-ort.sh)"
     export ORT_DYLIB_PATH TACTILE_PYTHONPATH

@@ -14,6 +14,7 @@ pub mod latency;
 pub mod models;
 pub mod output;
 pub mod report;
+pub mod resolution;
 pub mod robustness;
 pub mod sweep;
 pub mod synth;

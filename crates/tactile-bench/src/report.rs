@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use datasets_synth::{Range, VisuotactileConfig, WriteOptions, write_visuotactile};
 use tactile_core::Runtime;
 use tactile_core::dataset::Manifest;
-use tactile_pipeline::{FrameList, Pipeline, RunOptions, RunSummary};
+use tactile_pipeline::{FrameSource, Pipeline, RunOptions, RunSummary, SourceOptions, SourceSpec};
 
 use crate::Result;
 use crate::cae::{CaeBench, CaeMetrics, bench_cae};
@@ -131,14 +131,16 @@ fn run_pipeline(
             ""
         }
     );
-    let frames = FrameList::open(test)?;
     let mut pipeline = Pipeline::load(models, runtime, 1)?;
+    let mut frames = FrameSource::open(
+        &SourceSpec::Path(test.to_path_buf()),
+        SourceOptions::default(),
+    )?;
     let options = RunOptions {
         hysteresis,
-        overlap: true,
         render: None,
     };
-    Ok(tactile_pipeline::run(&mut pipeline, &frames, &options)?.summary)
+    Ok(tactile_pipeline::run_collect(&mut pipeline, &mut frames, &options)?.summary)
 }
 
 fn median_of(s: Option<[f64; 2]>) -> Option<f64> {

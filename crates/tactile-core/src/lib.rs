@@ -25,6 +25,7 @@ pub mod plot;
 pub mod rng;
 pub mod runtime;
 pub mod train;
+pub mod video;
 
 /// A progress note on stderr. Unlike `crate::note!` it never panics: a note
 /// that cannot be written (stderr closed, a full pipe) is dropped.

@@ -294,3 +294,91 @@ pub fn safe_scales(std: impl IntoIterator<Item = f64>) -> Vec<f64> {
         .map(|s| if s.is_finite() && s > floor { s } else { floor })
         .collect()
 }
+
+/// A uniform sample of at most `capacity` values of a stream of any
+/// length (reservoir sampling, a fixed seed): medians and percentiles of a
+/// day-long live run in bounded memory, exact while the stream fits.
+#[derive(Debug, Clone)]
+pub struct Reservoir {
+    values: Vec<f64>,
+    capacity: usize,
+    seen: u64,
+    state: u64,
+}
+
+impl Reservoir {
+    /// Values kept by [`Reservoir::default`].
+    pub const DEFAULT_CAPACITY: usize = 1 << 16;
+
+    /// An empty sample of at most `capacity` values.
+    pub fn new(capacity: usize) -> Self {
+        Self {
+            values: Vec::new(),
+            capacity: capacity.max(1),
+            seen: 0,
+            state: 0x9E37_79B9_7F4A_7C15,
+        }
+    }
+
+    /// Offer one value.
+    pub fn push(&mut self, v: f64) {
+        self.seen += 1;
+        if self.values.len() < self.capacity {
+            self.values.push(v);
+            return;
+        }
+        // xorshift64*: a slot in 0..seen; kept when it falls in the sample.
+        self.state ^= self.state >> 12;
+        self.state ^= self.state << 25;
+        self.state ^= self.state >> 27;
+        let r = self.state.wrapping_mul(0x2545_F491_4F6C_DD1D) % self.seen;
+        if (r as usize) < self.capacity {
+            self.values[r as usize] = v;
+        }
+    }
+
+    /// Values offered so far.
+    pub fn seen(&self) -> u64 {
+        self.seen
+    }
+
+    /// Median and 95th percentile of the sample; `None` when empty.
+    pub fn median_p95(&self) -> Option<[f64; 2]> {
+        (!self.values.is_empty()).then(|| [median(&self.values), percentile(&self.values, 95.0)])
+    }
+}
+
+impl Default for Reservoir {
+    fn default() -> Self {
+        Self::new(Self::DEFAULT_CAPACITY)
+    }
+}
+
+/// The process's peak resident memory (VmHWM), MB, where the system
+/// reports it (Linux).
+pub fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+#[cfg(test)]
+mod reservoir_tests {
+    use super::*;
+
+    #[test]
+    fn reservoir_is_exact_while_it_fits_and_bounded_after() {
+        let mut r = Reservoir::new(1000);
+        for i in 0..101 {
+            r.push(i as f64);
+        }
+        assert_eq!(r.median_p95().unwrap()[0], 50.0);
+        for i in 0..100_000 {
+            r.push((i % 101) as f64);
+        }
+        assert_eq!(r.values.len(), 1000);
+        let m = r.median_p95().unwrap()[0];
+        assert!((m - 50.0).abs() < 6.0, "median of a uniform stream: {m}");
+    }
+}

@@ -20,6 +20,8 @@ pub use error::{Error, Result};
 pub use hysteresis::Hysteresis;
 pub use overlay::FrameViews;
 pub use palpation::{FrameRecord, Pipeline};
-pub use run::{RunOptions, RunOutcome, RunSummary, run};
-pub use source::{FrameEntry, FrameList, MissingFrames};
+pub use run::{Flow, RunOptions, RunOutcome, RunSummary, run, run_collect};
+pub use source::{
+    Frame, FrameEntry, FrameList, FrameSource, MissingFrames, SourceKind, SourceOptions, SourceSpec,
+};
 pub use tactile_core::Runtime;

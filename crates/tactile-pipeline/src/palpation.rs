@@ -43,6 +43,14 @@ pub struct FrameRecord {
     pub depth_max_mm: Option<f32>,
     /// The detector's own threshold decision (before any hysteresis).
     pub tendon_raw: bool,
+    /// Time to bring a large frame down to the working resolution, ms
+    /// (0 for frames already near it).
+    #[serde(default)]
+    pub ms_prepare: f64,
+    /// Live sources: from the frame's arrival to this record, ms (queueing
+    /// included).
+    #[serde(default)]
+    pub latency_ms: Option<f64>,
     /// Time of the detector, ms.
     pub ms_detect: f64,
     /// Time of the segmenter and direction, ms (tendon frames).
@@ -63,6 +71,9 @@ pub struct Pipeline {
     pub depth: DepthEstimator,
     /// onnxruntime intra-op threads it was loaded with.
     pub threads: usize,
+    /// Frames at least twice this tall are box-averaged once to about it
+    /// before the models ([`tactile_preprocess::visuo::working_frame`]).
+    pub working_height: usize,
     window: Vec<bool>,
 }
 
@@ -84,6 +95,7 @@ impl Pipeline {
             segmenter: TendonSegmenter::load(dir.join("segmenter"), runtime, threads)?,
             depth,
             threads,
+            working_height: tactile_preprocess::visuo::WORKING_HEIGHT,
             window: tactile_depth::data::window_mask(w, h),
         })
     }
@@ -108,13 +120,18 @@ impl Pipeline {
         filter: Option<&mut Hysteresis>,
     ) -> Result<(FrameRecord, Option<FrameViews>)> {
         let t0 = Instant::now();
+        // One downsample of a large frame; every model reads the result.
+        let working = tactile_preprocess::visuo::working_frame(frame, self.working_height)?;
+        let frame = working.as_ref().unwrap_or(frame);
+        let ms_prepare = 1e3 * t0.elapsed().as_secs_f64();
+        let t_detect = Instant::now();
         let score = self.detector.probability(frame)?;
         let tendon_raw = self.detector.is_tendon(score);
         let tendon = match filter {
             Some(h) => h.update(score),
             None => tendon_raw,
         };
-        let ms_detect = 1e3 * t0.elapsed().as_secs_f64();
+        let ms_detect = 1e3 * t_detect.elapsed().as_secs_f64();
         let mut rec = FrameRecord {
             frame: name.to_string(),
             tendon,
@@ -127,10 +144,12 @@ impl Pipeline {
             depth_min_mm: None,
             depth_mean_mm: None,
             depth_max_mm: None,
+            ms_prepare,
+            latency_ms: None,
             ms_detect,
             ms_segment: None,
             ms_depth: None,
-            ms_total: ms_detect,
+            ms_total: 1e3 * t0.elapsed().as_secs_f64(),
         };
         if !tendon {
             return Ok((rec, None));

@@ -1,26 +1,23 @@
-//! The palpation pipeline over a list of frames: decoding on a second
-//! thread ahead of the models, an optional hysteresis per sequence,
-//! overlays, and a summary of speed and decisions.
+//! The palpation pipeline over a source of frames: records streamed to the
+//! caller as they are made, an optional hysteresis per sequence, overlays,
+//! and a summary of speed, latency and decisions kept in bounded memory.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 use tactile_core::Runtime;
-use tactile_core::image_io::RgbImage;
-use tactile_core::metrics::{median, percentile};
+use tactile_core::metrics::Reservoir;
 
+use crate::Result;
 use crate::hysteresis::Hysteresis;
 use crate::palpation::{FrameRecord, Pipeline};
-use crate::source::FrameList;
-use crate::{Error, Result};
+use crate::source::{FrameSource, SourceKind};
 
 /// How a run goes.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct RunOptions {
     /// Two-threshold filter on the detector per sequence: `(on, off)`.
     pub hysteresis: Option<(f32, f32)>,
-    /// Decode the next frames on a second thread while the models run.
-    pub overlap: bool,
     /// Write an overlay PNG per tendon frame into this folder.
     pub render: Option<PathBuf>,
 }
@@ -31,6 +28,8 @@ pub type Spread = [f64; 2];
 /// Per-stage times over the frames that ran each stage.
 #[derive(Debug, Clone, Serialize)]
 pub struct StageTimes {
+    /// Bringing a large frame to the working resolution (every frame).
+    pub prepare: Option<Spread>,
     /// The detector (every frame).
     pub detect: Option<Spread>,
     /// Segmenter and direction (tendon frames).
@@ -46,12 +45,17 @@ pub struct StageTimes {
 /// What a run did, how fast and how well.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunSummary {
+    /// What the frames came from.
+    pub source: SourceKind,
     /// Frames processed.
     pub frames: usize,
     /// Whether decoding overlapped the models.
     pub overlapped_decoding: bool,
     /// Frames missing from a numbered folder.
     pub missing_frames: u64,
+    /// Live frames dropped because processing fell behind (the oldest
+    /// waiting ones); 0 for recorded sources, which drop nothing.
+    pub dropped_frames: u64,
     /// Where the networks ran.
     pub runtime: Runtime,
     /// onnxruntime intra-op threads.
@@ -76,42 +80,53 @@ pub struct RunSummary {
     pub hysteresis: Option<[f32; 2]>,
     /// Median and p95 per stage.
     pub stages_ms: StageTimes,
+    /// Live sources: median and p95 from a frame's arrival to its record.
+    pub latency_ms: Option<Spread>,
+    /// The process's peak resident memory, MB (Linux).
+    pub peak_rss_mb: Option<f64>,
 }
 
-/// Every frame's record and the summary.
-pub struct RunOutcome {
-    /// One record per frame, in order.
-    pub records: Vec<FrameRecord>,
-    /// Speed and decisions.
-    pub summary: RunSummary,
+/// What the consumer of records wants next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flow {
+    /// Go on with the next frame.
+    Continue,
+    /// Stop the run here (e.g. the reader of the records has gone).
+    Stop,
 }
 
-/// Accuracy against the labels and decision changes within sequences.
-fn decisions(records: &[FrameRecord], frames: &FrameList, raw: bool) -> (Option<f64>, usize) {
-    let f = &frames.frames;
-    let pick = |r: &FrameRecord| if raw { r.tendon_raw } else { r.tendon };
-    let labelled: Vec<(bool, bool)> = records
-        .iter()
-        .zip(f)
-        .filter_map(|(r, e)| e.tendon.map(|t| (pick(r), t)))
-        .collect();
-    let acc = (!labelled.is_empty())
-        .then(|| labelled.iter().filter(|(p, t)| p == t).count() as f64 / labelled.len() as f64);
-    let changes = (1..records.len())
-        .filter(|&i| {
-            f[i].sequence == f[i - 1].sequence && pick(&records[i]) != pick(&records[i - 1])
-        })
-        .count();
-    (acc, changes)
+/// Accuracy and decision changes, counted as records arrive.
+#[derive(Default)]
+struct Decisions {
+    labelled: usize,
+    correct: usize,
+    changes: usize,
 }
 
-/// Run `pipeline` over `frames`. Overlays of tendon frames go to
-/// `options.render` as `NAME-overlay.png`.
+impl Decisions {
+    fn add(&mut self, decision: bool, label: Option<bool>, prev: Option<bool>) {
+        if let Some(t) = label {
+            self.labelled += 1;
+            self.correct += usize::from(decision == t);
+        }
+        self.changes += usize::from(prev.is_some_and(|p| p != decision));
+    }
+
+    fn accuracy(&self) -> Option<f64> {
+        (self.labelled > 0).then(|| self.correct as f64 / self.labelled as f64)
+    }
+}
+
+/// Run `pipeline` over every frame of `source`, handing each record to
+/// `sink` as soon as it is made (memory stays bounded however long the
+/// source). Overlays of tendon frames go to `options.render` as
+/// `NAME-overlay.png`, staged and moved in when the run ends.
 pub fn run(
     pipeline: &mut Pipeline,
-    frames: &FrameList,
+    source: &mut FrameSource,
     options: &RunOptions,
-) -> Result<RunOutcome> {
+    sink: &mut dyn FnMut(&FrameRecord) -> Result<Flow>,
+) -> Result<RunSummary> {
     // Overlays go to a staging folder first: an error or an interrupt
     // leaves no half set of them.
     let render = match &options.render {
@@ -125,97 +140,129 @@ pub fn run(
         .hysteresis
         .map(|(on, off)| Hysteresis::new(on, off))
         .transpose()?;
-    let list = &frames.frames;
-    let pb = tactile_core::train::progress_bar(list.len() as u64, "run");
+    let known = source.list().map(|l| l.frames.len() as u64);
+    let pb = match known {
+        Some(n) => tactile_core::train::progress_bar(n, "run"),
+        None => tactile_core::train::progress_bar(0, "run"),
+    };
     let t0 = std::time::Instant::now();
-    let mut records = Vec::with_capacity(list.len());
-    // Decode the next frames on another thread while this one runs the
-    // models (a queue of 4), or each frame just before it is processed.
-    let (tx, rx) = std::sync::mpsc::sync_channel::<tactile_core::Result<RgbImage>>(4);
-    let entries = list.clone();
-    let decoder = options.overlap.then(|| {
-        std::thread::spawn(move || {
-            for e in entries {
-                if tx.send(e.load()).is_err() {
-                    break;
-                }
-            }
-        })
-    });
-    for (k, entry) in list.iter().enumerate() {
-        tactile_core::interrupt::check()?;
-        let frame = if options.overlap {
-            rx.recv().map_err(|_| {
-                Error::Core(tactile_core::Error::Invalid(
-                    "the frame decoder stopped".into(),
-                ))
-            })??
-        } else {
-            entry.load()?
-        };
-        let name = entry
-            .path
-            .file_name()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .to_string();
+    let mut times: [Reservoir; 7] = Default::default();
+    let (mut frames, mut gated) = (0usize, 0usize);
+    let (mut final_d, mut raw_d, mut labels) = (
+        Decisions::default(),
+        Decisions::default(),
+        Decisions::default(),
+    );
+    // The previous frame's sequence and decisions, for changes within one.
+    let mut prev: Option<(Option<String>, bool, bool, Option<bool>)> = None;
+    while let Some(frame) = source.next_frame()? {
+        let same_sequence = prev.as_ref().is_some_and(|p| p.0 == frame.sequence);
         if let Some(h) = filter.as_mut()
-            && (k == 0 || list[k - 1].sequence != entry.sequence)
+            && !same_sequence
         {
             h.reset();
         }
-        let (rec, views) = pipeline.process_filtered(&name, &frame, filter.as_mut())?;
+        let (mut rec, views) =
+            pipeline.process_filtered(&frame.name, &frame.image, filter.as_mut())?;
+        rec.latency_ms = frame.arrived.map(|t| 1e3 * t.elapsed().as_secs_f64());
         if let (Some(staged), Some(v)) = (&render, views) {
-            let stem = entry.path.file_stem().unwrap_or_default().to_string_lossy();
+            let stem = Path::new(&frame.name)
+                .file_stem()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
             v.save_png(&staged.path().join(format!("{stem}-overlay.png")), 4)?;
         }
-        records.push(rec);
+        let p = prev.as_ref().filter(|_| same_sequence);
+        final_d.add(rec.tendon, frame.tendon, p.map(|p| p.1));
+        raw_d.add(rec.tendon_raw, frame.tendon, p.map(|p| p.2));
+        if let Some(t) = frame.tendon {
+            labels.add(t, None, p.and_then(|p| p.3));
+        }
+        for (r, v) in times.iter_mut().zip([
+            Some(rec.ms_prepare),
+            Some(rec.ms_detect),
+            rec.ms_segment,
+            rec.ms_depth,
+            Some(rec.ms_total),
+            rec.tendon.then_some(rec.ms_total),
+            rec.latency_ms,
+        ]) {
+            if let Some(v) = v {
+                r.push(v);
+            }
+        }
+        frames += 1;
+        gated += usize::from(!rec.tendon);
+        prev = Some((frame.sequence, rec.tendon, rec.tendon_raw, frame.tendon));
         pb.inc(1);
-    }
-    drop(rx);
-    if let Some(d) = decoder {
-        let _ = d.join();
+        if sink(&rec)? == Flow::Stop {
+            break;
+        }
     }
     pb.finish_and_clear();
     if let Some(staged) = render {
         staged.commit_into()?;
     }
     let wall = t0.elapsed().as_secs_f64();
-    let stats = |f: &dyn Fn(&FrameRecord) -> Option<f64>| -> Option<Spread> {
-        let v: Vec<f64> = records.iter().filter_map(f).collect();
-        (!v.is_empty()).then(|| [median(&v), percentile(&v, 95.0)])
-    };
-    let stages_ms = StageTimes {
-        detect: stats(&|r| Some(r.ms_detect)),
-        segment: stats(&|r| r.ms_segment),
-        depth: stats(&|r| r.ms_depth),
-        frame: stats(&|r| Some(r.ms_total)),
-        tendon_frame: stats(&|r| r.tendon.then_some(r.ms_total)),
-    };
-    let gated = records.iter().filter(|r| !r.tendon).count();
-    let (acc_raw, flips_raw) = decisions(&records, frames, true);
-    let (acc, flips) = decisions(&records, frames, false);
-    let label_changes = (1..list.len())
-        .filter(|&i| {
-            list[i].sequence == list[i - 1].sequence && list[i].tendon != list[i - 1].tendon
-        })
-        .count();
-    let summary = RunSummary {
-        frames: records.len(),
-        overlapped_decoding: options.overlap,
-        missing_frames: frames.missing_frames().count,
+    let [
+        prepare,
+        detect,
+        segment,
+        depth,
+        frame,
+        tendon_frame,
+        latency,
+    ] = times.map(|r| r.median_p95());
+    Ok(RunSummary {
+        source: source.kind(),
+        frames,
+        overlapped_decoding: source.overlapped(),
+        missing_frames: source.list().map_or(0, |l| l.missing_frames().count),
+        dropped_frames: source.dropped(),
         runtime: pipeline.detector.runtime(),
         threads: pipeline.threads,
-        fps: records.len() as f64 / wall.max(1e-9),
+        fps: frames as f64 / wall.max(1e-9),
         gated_out: gated,
-        tendon_frames: records.len() - gated,
-        detector_accuracy: acc,
-        decision_changes: flips,
-        detector_accuracy_threshold_only: acc_raw,
-        decision_changes_threshold_only: flips_raw,
-        label_changes,
+        tendon_frames: frames - gated,
+        detector_accuracy: final_d.accuracy(),
+        decision_changes: final_d.changes,
+        detector_accuracy_threshold_only: raw_d.accuracy(),
+        decision_changes_threshold_only: raw_d.changes,
+        label_changes: labels.changes,
         hysteresis: options.hysteresis.map(|(on, off)| [on, off]),
-        stages_ms,
-    };
+        stages_ms: StageTimes {
+            prepare,
+            detect,
+            segment,
+            depth,
+            frame,
+            tendon_frame,
+        },
+        latency_ms: latency,
+        peak_rss_mb: tactile_core::metrics::peak_rss_mb(),
+    })
+}
+
+/// Run over `source` keeping every record: for tests, reports and short
+/// recorded sources.
+pub fn run_collect(
+    pipeline: &mut Pipeline,
+    source: &mut FrameSource,
+    options: &RunOptions,
+) -> Result<RunOutcome> {
+    let mut records = Vec::new();
+    let summary = run(pipeline, source, options, &mut |r| {
+        records.push(r.clone());
+        Ok(Flow::Continue)
+    })?;
     Ok(RunOutcome { records, summary })
+}
+
+/// Every frame's record and the summary.
+pub struct RunOutcome {
+    /// One record per frame, in order.
+    pub records: Vec<FrameRecord>,
+    /// Speed and decisions.
+    pub summary: RunSummary,
 }

@@ -1,9 +1,22 @@
 //! Where frames come from: a dataset (frames in `labels.csv` order, with
-//! their sequences and labels) or a folder of numbered frames (a video).
+//! their sequences and labels), a folder of PNG or JPEG frames, a video
+//! file, a V4L2 camera, or raw RGB frames on stdin ([`FrameSource`]).
+//!
+//! Recorded sources (datasets, folders, files) give every frame, decoded
+//! on a second thread ahead of the models when asked. Live sources (a
+//! camera, stdin) are read as frames arrive into a small queue; when the
+//! models fall behind, the oldest waiting frame is dropped and counted, so
+//! memory stays bounded and results stay current. Each live frame carries
+//! its arrival time, from which a record's latency is measured.
 
+use std::collections::VecDeque;
+use std::io::Read;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
 
 use tactile_core::dataset::Dataset;
+use tactile_core::image_io::{MAX_IMAGE_PIXELS, RgbImage};
 use tactile_core::{Error, Result};
 
 /// One frame to process.
@@ -48,11 +61,25 @@ pub struct FrameList {
     /// True for a dataset, whose rows say what it holds; false for a
     /// folder of frames, which may have dropped some.
     pub is_dataset: bool,
+    /// Files of a folder of frames that are not PNG or JPEG frames (sorted;
+    /// they are reported, not read).
+    pub ignored: Vec<PathBuf>,
+}
+
+/// Extensions of the frame files a folder may hold.
+pub const FRAME_EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
+
+/// True for a file named like a PNG or JPEG frame.
+pub fn is_frame_file(p: &Path) -> bool {
+    p.extension()
+        .and_then(|x| x.to_str())
+        .is_some_and(|x| FRAME_EXTENSIONS.iter().any(|e| x.eq_ignore_ascii_case(e)))
 }
 
 impl FrameList {
     /// The frames of `dir`: a dataset when it has `labels.csv`, else its
-    /// PNG files in name order.
+    /// PNG and JPEG files in name order (anything else is listed in
+    /// [`FrameList::ignored`]).
     pub fn open(dir: &Path) -> Result<Self> {
         if dir.join("labels.csv").is_file() {
             let ds = Dataset::open(dir)?;
@@ -69,22 +96,27 @@ impl FrameList {
             return Ok(Self {
                 frames,
                 is_dataset: true,
+                ignored: Vec::new(),
             });
         }
-        let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        let (mut v, mut ignored): (Vec<PathBuf>, Vec<PathBuf>) = std::fs::read_dir(dir)
             .map_err(|e| Error::io(dir, e))?
             .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("png")))
-            .collect();
+            .partition(|p| is_frame_file(p));
         // A pipe or a device named like a frame would block the reader.
         for p in &v {
             tactile_core::image_io::expect_regular_file(p)?;
         }
         v.sort();
+        ignored.sort();
         if v.is_empty() {
             return Err(Error::Invalid(format!(
-                "{}: no labels.csv and no PNG frames",
-                dir.display()
+                "{}: no labels.csv and no PNG or JPEG frames{}",
+                dir.display(),
+                match ignored.len() {
+                    0 => String::new(),
+                    n => format!(" ({n} other files)"),
+                }
             )));
         }
         Ok(Self {
@@ -98,6 +130,7 @@ impl FrameList {
                 })
                 .collect(),
             is_dataset: false,
+            ignored,
         })
     }
 
@@ -154,4 +187,482 @@ pub struct MissingFrames {
 impl MissingFrames {
     /// How many skipped numbers are kept as examples.
     pub const EXAMPLES: usize = 5;
+}
+
+/// What a source is; recorded kinds give every frame, live kinds drop the
+/// oldest waiting frames when processing falls behind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SourceKind {
+    /// A dataset (labels.csv).
+    Dataset,
+    /// A folder of PNG or JPEG frames, or one image file.
+    Folder,
+    /// A video file decoded by FFmpeg.
+    Video,
+    /// A V4L2 camera, live.
+    Camera,
+    /// Raw rgb24 frames on stdin, live.
+    Stdin,
+}
+
+impl SourceKind {
+    /// True for sources read as frames arrive.
+    pub fn is_live(self) -> bool {
+        matches!(self, SourceKind::Camera | SourceKind::Stdin)
+    }
+}
+
+/// Where to read frames from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SourceSpec {
+    /// A dataset, a folder of frames, one image, a video file or a camera
+    /// device (`/dev/videoN`), told apart by what the path is.
+    Path(PathBuf),
+    /// Raw frames on stdin: `width * height * 3` bytes each, rgb24.
+    Stdin {
+        /// Width, pixels.
+        width: usize,
+        /// Height, pixels.
+        height: usize,
+    },
+}
+
+/// How a source is read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SourceOptions {
+    /// Decode recorded frames on a second thread ahead of the models.
+    pub overlap: bool,
+    /// Live sources: frames that may wait; more arriving drop the oldest.
+    pub live_queue: usize,
+    /// Give at most this many frames.
+    pub limit: Option<u64>,
+}
+
+impl Default for SourceOptions {
+    fn default() -> Self {
+        Self {
+            overlap: true,
+            live_queue: 2,
+            limit: None,
+        }
+    }
+}
+
+/// The largest live queue allowed (frames of up to 8K each wait in it).
+pub const MAX_LIVE_QUEUE: usize = 64;
+
+/// One frame from a source.
+pub struct Frame {
+    /// The pixels.
+    pub image: RgbImage,
+    /// The file name, or the frame's number in a stream (`000042`).
+    pub name: String,
+    /// Its palpation sequence, when a dataset says.
+    pub sequence: Option<String>,
+    /// Its `tendon` label, when a dataset says.
+    pub tendon: Option<bool>,
+    /// When a live frame arrived (read whole from the camera or stdin).
+    pub arrived: Option<Instant>,
+}
+
+/// Reads one frame after another.
+trait Reader: Send {
+    fn next_frame(&mut self) -> Result<Option<Frame>>;
+}
+
+struct ListReader {
+    entries: std::vec::IntoIter<FrameEntry>,
+}
+
+impl Reader for ListReader {
+    fn next_frame(&mut self) -> Result<Option<Frame>> {
+        let Some(e) = self.entries.next() else {
+            return Ok(None);
+        };
+        Ok(Some(Frame {
+            image: e.load()?,
+            name: e
+                .path
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned(),
+            sequence: e.sequence,
+            tendon: e.tendon,
+            arrived: None,
+        }))
+    }
+}
+
+/// Frames of a stream, named by their number.
+struct StreamReader<R> {
+    read: R,
+    number: u64,
+    live: bool,
+}
+
+impl<R: FnMut() -> Result<Option<RgbImage>> + Send> Reader for StreamReader<R> {
+    fn next_frame(&mut self) -> Result<Option<Frame>> {
+        let Some(image) = (self.read)()? else {
+            return Ok(None);
+        };
+        let name = format!("{:06}", self.number);
+        self.number += 1;
+        Ok(Some(Frame {
+            image,
+            name,
+            sequence: None,
+            tendon: None,
+            arrived: self.live.then(Instant::now),
+        }))
+    }
+}
+
+/// Raw rgb24 frames of a fixed size from `input`.
+fn raw_frames(
+    mut input: impl Read + Send,
+    width: usize,
+    height: usize,
+) -> impl FnMut() -> Result<Option<RgbImage>> + Send {
+    move || {
+        let len = width * height * 3;
+        let mut buf = vec![0u8; len];
+        let got = tactile_core::video::read_full(&mut input, &mut buf)
+            .map_err(|e| Error::io("<stdin>", e))?;
+        match got {
+            0 => Ok(None),
+            n if n == len => tactile_core::image_io::rgb_image(width, height, buf).map(Some),
+            n => Err(Error::Invalid(format!(
+                "stdin ended inside a frame: {n} of {len} bytes ({width}x{height} rgb24)"
+            ))),
+        }
+    }
+}
+
+/// What live frames wait in: at most `capacity`, the oldest dropped.
+struct LiveQueue {
+    state: Mutex<LiveState>,
+    ready: Condvar,
+    capacity: usize,
+}
+
+struct LiveState {
+    items: VecDeque<Result<Frame>>,
+    finished: bool,
+    dropped: u64,
+}
+
+impl LiveQueue {
+    fn push(&self, item: Result<Frame>, last: bool) {
+        let Ok(mut s) = self.state.lock() else { return };
+        while s.items.len() >= self.capacity {
+            s.items.pop_front();
+            s.dropped += 1;
+        }
+        s.items.push_back(item);
+        s.finished |= last;
+        self.ready.notify_one();
+    }
+
+    fn finish(&self) {
+        if let Ok(mut s) = self.state.lock() {
+            s.finished = true;
+            self.ready.notify_one();
+        }
+    }
+
+    fn pop(&self) -> Result<Option<Frame>> {
+        let mut s = self
+            .state
+            .lock()
+            .map_err(|_| Error::Invalid("the live frame queue's lock was poisoned".into()))?;
+        loop {
+            if let Some(item) = s.items.pop_front() {
+                return item.map(Some);
+            }
+            if s.finished {
+                return Ok(None);
+            }
+            // Wake now and then to honour Ctrl-C while a camera is silent.
+            tactile_core::interrupt::check()?;
+            s = self
+                .ready
+                .wait_timeout(s, Duration::from_millis(100))
+                .map_err(|_| Error::Invalid("the live frame queue's lock was poisoned".into()))?
+                .0;
+        }
+    }
+}
+
+enum Feed {
+    Direct(Box<dyn Reader>),
+    Prefetched(std::sync::mpsc::Receiver<Result<Frame>>),
+    Live(Arc<LiveQueue>),
+}
+
+/// Frames from any [`SourceSpec`], in order, one at a time.
+pub struct FrameSource {
+    kind: SourceKind,
+    list: Option<FrameList>,
+    feed: Feed,
+    limit: Option<u64>,
+    given: u64,
+    size: Option<(usize, usize)>,
+    stopper: Option<tactile_core::video::VideoStopper>,
+}
+
+impl FrameSource {
+    /// Open `spec`: a folder (a dataset with labels.csv, else its PNG and
+    /// JPEG frames), one image file, a character device (a V4L2 camera,
+    /// live), any other file as a video through FFmpeg, or stdin (live).
+    pub fn open(spec: &SourceSpec, options: SourceOptions) -> Result<Self> {
+        if options.live_queue == 0 || options.live_queue > MAX_LIVE_QUEUE {
+            return Err(Error::Config(format!(
+                "live queue: must be 1 to {MAX_LIVE_QUEUE} frames, got {}",
+                options.live_queue
+            )));
+        }
+        use tactile_core::video::{DecodeOptions, VideoInput, VideoReader};
+        let (kind, list, reader, size, stopper): (_, _, Box<dyn Reader>, _, _) = match spec {
+            SourceSpec::Stdin { width, height } => {
+                let (w, h) = (*width, *height);
+                if w == 0 || h == 0 || (w as u64).saturating_mul(h as u64) > MAX_IMAGE_PIXELS {
+                    return Err(Error::Config(format!(
+                        "stdin frame size {w}x{h}: frames must be 1 to {MAX_IMAGE_PIXELS} pixels (8K)"
+                    )));
+                }
+                let read = raw_frames(std::io::stdin(), w, h);
+                let r = StreamReader {
+                    read,
+                    number: 0,
+                    live: true,
+                };
+                (
+                    SourceKind::Stdin,
+                    None,
+                    Box::new(r) as Box<dyn Reader>,
+                    Some((w, h)),
+                    None,
+                )
+            }
+            SourceSpec::Path(path) => {
+                let meta = std::fs::metadata(path).map_err(|e| match e.kind() {
+                    std::io::ErrorKind::NotFound => Error::not_found(path, "input"),
+                    _ => Error::io(path, e),
+                })?;
+                use std::os::unix::fs::FileTypeExt;
+                if meta.is_dir() || (meta.is_file() && is_frame_file(path)) {
+                    let list = match meta.is_dir() {
+                        true => FrameList::open(path)?,
+                        false => FrameList {
+                            frames: vec![FrameEntry {
+                                path: path.clone(),
+                                sequence: None,
+                                tendon: None,
+                                size: None,
+                            }],
+                            is_dataset: false,
+                            ignored: Vec::new(),
+                        },
+                    };
+                    let kind = match list.is_dataset {
+                        true => SourceKind::Dataset,
+                        false => SourceKind::Folder,
+                    };
+                    let size = list.frames.first().and_then(|f| f.size);
+                    let r = ListReader {
+                        entries: list.frames.clone().into_iter(),
+                    };
+                    (kind, Some(list), Box::new(r) as Box<dyn Reader>, size, None)
+                } else if meta.file_type().is_char_device() {
+                    let mut v = VideoReader::open(
+                        &VideoInput::Camera(path.clone()),
+                        DecodeOptions::default(),
+                    )?;
+                    let info = v.info();
+                    let stopper = v.stopper();
+                    let read = move || v.next_frame();
+                    let r = StreamReader {
+                        read,
+                        number: 0,
+                        live: true,
+                    };
+                    let size = Some((info.width, info.height));
+                    (
+                        SourceKind::Camera,
+                        None,
+                        Box::new(r) as Box<dyn Reader>,
+                        size,
+                        Some(stopper),
+                    )
+                } else if meta.is_file() {
+                    let mut v = VideoReader::open(
+                        &VideoInput::File(path.clone()),
+                        DecodeOptions::default(),
+                    )?;
+                    let info = v.info();
+                    let stopper = v.stopper();
+                    let read = move || v.next_frame();
+                    let r = StreamReader {
+                        read,
+                        number: 0,
+                        live: false,
+                    };
+                    let size = Some((info.width, info.height));
+                    (
+                        SourceKind::Video,
+                        None,
+                        Box::new(r) as Box<dyn Reader>,
+                        size,
+                        Some(stopper),
+                    )
+                } else {
+                    return Err(Error::image(
+                        path,
+                        "is a pipe or a socket; give a file, a folder, a camera device or --stdin",
+                    ));
+                }
+            }
+        };
+        let feed = if kind.is_live() {
+            let queue = Arc::new(LiveQueue {
+                state: Mutex::new(LiveState {
+                    items: VecDeque::new(),
+                    finished: false,
+                    dropped: 0,
+                }),
+                ready: Condvar::new(),
+                capacity: options.live_queue,
+            });
+            let q = Arc::clone(&queue);
+            let mut reader = reader;
+            std::thread::spawn(move || {
+                loop {
+                    // The consumer gone (only its handle left): stop reading.
+                    if Arc::strong_count(&q) == 1 {
+                        break;
+                    }
+                    match reader.next_frame() {
+                        Ok(Some(f)) => q.push(Ok(f), false),
+                        Ok(None) => break,
+                        Err(e) => {
+                            q.push(Err(e), true);
+                            break;
+                        }
+                    }
+                }
+                q.finish();
+            });
+            Feed::Live(queue)
+        } else if options.overlap {
+            // A queue of 4 decoded frames ahead of the models.
+            let (tx, rx) = std::sync::mpsc::sync_channel::<Result<Frame>>(4);
+            let mut reader = reader;
+            std::thread::spawn(move || {
+                loop {
+                    let item = reader.next_frame();
+                    let end = !matches!(item, Ok(Some(_)));
+                    match item.transpose() {
+                        Some(item) => {
+                            if tx.send(item).is_err() {
+                                break;
+                            }
+                        }
+                        None => break,
+                    }
+                    if end {
+                        break;
+                    }
+                }
+            });
+            Feed::Prefetched(rx)
+        } else {
+            Feed::Direct(reader)
+        };
+        Ok(Self {
+            kind,
+            list,
+            feed,
+            limit: options.limit,
+            given: 0,
+            size,
+            stopper,
+        })
+    }
+
+    /// What the source is.
+    pub fn kind(&self) -> SourceKind {
+        self.kind
+    }
+
+    /// The frames of a dataset or folder source.
+    pub fn list(&self) -> Option<&FrameList> {
+        self.list.as_ref()
+    }
+
+    /// The frame size, when known before reading (streams, datasets).
+    pub fn size(&self) -> Option<(usize, usize)> {
+        self.size
+    }
+
+    /// Frames given so far.
+    pub fn given(&self) -> u64 {
+        self.given
+    }
+
+    /// True when frames are read on another thread while the models run.
+    pub fn overlapped(&self) -> bool {
+        !matches!(self.feed, Feed::Direct(_))
+    }
+
+    /// Live frames dropped so far because processing fell behind.
+    pub fn dropped(&self) -> u64 {
+        match &self.feed {
+            Feed::Live(q) => q.state.lock().map_or(0, |s| s.dropped),
+            _ => 0,
+        }
+    }
+
+    /// The next frame, or `None` at the end (or after the limit).
+    pub fn next_frame(&mut self) -> Result<Option<Frame>> {
+        if self.limit.is_some_and(|n| self.given >= n) {
+            self.stop();
+            return Ok(None);
+        }
+        tactile_core::interrupt::check()?;
+        let frame = match &mut self.feed {
+            Feed::Direct(r) => r.next_frame()?,
+            Feed::Prefetched(rx) => match rx.recv() {
+                Ok(item) => Some(item?),
+                Err(_) => None,
+            },
+            Feed::Live(q) => q.pop()?,
+        };
+        if frame.is_some() {
+            self.given += 1;
+        }
+        Ok(frame)
+    }
+
+    /// Stop a decoder or camera early.
+    fn stop(&self) {
+        if let Some(s) = &self.stopper {
+            s.stop();
+        }
+    }
+}
+
+impl Iterator for FrameSource {
+    type Item = Result<Frame>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        self.next_frame().transpose()
+    }
+}
+
+impl Drop for FrameSource {
+    fn drop(&mut self) {
+        self.stop();
+    }
 }

@@ -329,12 +329,14 @@ impl FrameResult {
         Some((r.depth_min_mm?, r.depth_mean_mm?, r.depth_max_mm?))
     }
 
-    /// Milliseconds per stage: detect, segment (segmenter and direction),
+    /// Milliseconds per stage: prepare (a large frame brought down to the
+    /// working resolution), detect, segment (segmenter and direction),
     /// depth, total. Stages a frame did not run are absent.
     #[getter]
     fn ms<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.record;
         let d = PyDict::new(py);
+        d.set_item("prepare", r.ms_prepare)?;
         d.set_item("detect", r.ms_detect)?;
         if let Some(v) = r.ms_segment {
             d.set_item("segment", v)?;

@@ -71,7 +71,7 @@ def test_outputs_at_frame_resolution(root, pipeline, palpation_frames):
     scale = np.ceil(side * np.sqrt(2)) / h
     expected = r.mask_area_px / scale**2
     assert abs(r.mask.sum() - expected) / expected < 0.05
-    assert set(r.ms) == {"detect", "segment", "depth", "total"}
+    assert set(r.ms) == {"prepare", "detect", "segment", "depth", "total"}
 
 
 def test_gated_out_frame_has_no_depth(pipeline, palpation_frames):
@@ -79,7 +79,7 @@ def test_gated_out_frame_has_no_depth(pipeline, palpation_frames):
     assert not r.tendon
     assert r.depth_m is None and r.depth_mm_stats is None and r.direction_deg is None
     assert not r.mask.any()
-    assert set(r.ms) == {"detect", "total"}
+    assert set(r.ms) == {"prepare", "detect", "total"}
 
 
 def test_non_contiguous_and_batched_input(pipeline, palpation_frames):

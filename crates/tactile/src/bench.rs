@@ -1,4 +1,4 @@
-//! `tactile bench cae|synth|detector|segmenter|depth`: speed against error.
+//! `tactile bench cae|synth|resolution|detector|segmenter|depth`: speed against error.
 
 use std::path::PathBuf;
 
@@ -13,6 +13,9 @@ pub(crate) enum BenchCmd {
     Cae(CaeArgs),
     /// The virtual sensors: frames/s rendered and written.
     Synth(SynthArgs),
+    /// The palpation pipeline per stage at 640x360 against the sensor's
+    /// native 1920x1080, and FFmpeg's 1080p H.264 decoding rate.
+    Resolution(ResolutionArgs),
     /// Tendon detectors of a sweep: accuracy against latency per runtime.
     Detector(ModelsArgs),
     /// Segmenters of a sweep: IoU and direction error against latency per runtime.
@@ -36,6 +39,25 @@ pub(crate) struct CaeArgs {
     #[arg(long, default_value_t = 30)]
     runs: usize,
     /// Also write the table (and its row as JSON beside it).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub(crate) struct ResolutionArgs {
+    /// Folder with detector/, segmenter/ and depth/.
+    #[arg(long, default_value = "models")]
+    models: PathBuf,
+    /// Where the networks run.
+    #[arg(long, value_enum, default_value_t = tactile_core::Runtime::Onnx)]
+    runtime: tactile_core::Runtime,
+    /// Tendon frames rendered per size.
+    #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u16).range(1..=1000))]
+    frames: u16,
+    /// Timed passes over the frames.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u16).range(1..=1000))]
+    repeats: u16,
+    /// Also write the table to this Markdown file (its rows as JSON beside it).
     #[arg(long)]
     out: Option<PathBuf>,
 }
@@ -77,6 +99,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
     let out = match &cmd {
         BenchCmd::Cae(a) => &a.out,
         BenchCmd::Synth(a) => &a.out,
+        BenchCmd::Resolution(a) => &a.out,
         BenchCmd::Detector(a) | BenchCmd::Segmenter(a) | BenchCmd::Depth(a) => &a.out,
     };
     if let Some(out) = out {
@@ -110,6 +133,21 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             say_raw!("{md}");
             if let Some(out) = &a.out {
                 tactile_core::io::write_atomic(out, md.as_bytes())?;
+            }
+        }
+        BenchCmd::Resolution(a) => {
+            let r = tactile_bench::resolution::bench_resolution(
+                &a.models,
+                a.runtime,
+                &[(640, 360), (1920, 1080)],
+                a.frames as usize,
+                a.repeats as usize,
+            )?;
+            let md = r.markdown();
+            say_raw!("{md}");
+            if let Some(out) = &a.out {
+                tactile_core::io::write_atomic(out, md.as_bytes())?;
+                tactile_core::io::write_json_atomic(out.with_extension("json"), &r)?;
             }
         }
         BenchCmd::Detector(a) => {

@@ -1,19 +1,29 @@
-//! `tactile run`: the palpation pipeline over a dataset or a folder of
-//! frames; JSON Lines records and a speed summary.
+//! `tactile run`: the palpation pipeline over any source of frames (a
+//! dataset, a folder, a video file, a camera, stdin); JSON Lines records
+//! as they are made and a summary of speed, latency and decisions.
 
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
 use tactile_core::Runtime;
-use tactile_pipeline::{FrameList, Pipeline, RunOptions};
+use tactile_pipeline::{Flow, FrameSource, Pipeline, RunOptions, SourceOptions, SourceSpec};
 
 #[derive(Args)]
 pub(crate) struct RunArgs {
-    /// A visuo-tactile dataset (frames in labels.csv order) or a folder of
-    /// PNG frames (in name order, e.g. a 30 fps video as numbered PNGs).
-    #[arg(long)]
-    data: PathBuf,
+    /// The frames: a visuo-tactile dataset (frames in labels.csv order), a
+    /// folder of PNG or JPEG frames (in name order), one image, a video
+    /// file (mp4, mkv, avi; decoded by FFmpeg, every frame) or a V4L2
+    /// camera such as /dev/video0 (live).
+    #[arg(long, required_unless_present = "stdin", conflicts_with = "stdin")]
+    data: Option<PathBuf>,
+    /// Read raw rgb24 frames of --size from standard input (live), e.g.
+    /// `ffmpeg -i cam -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size 640x360`.
+    #[arg(long, requires = "size")]
+    stdin: bool,
+    /// The size of the frames on stdin, WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(usize, usize)>,
     /// Folder with detector/, segmenter/ and depth/.
     #[arg(long, default_value = "models")]
     models: PathBuf,
@@ -26,12 +36,14 @@ pub(crate) struct RunArgs {
     /// decodes the next frames.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=256))]
     threads: u16,
-    /// JSON Lines output, one record per frame (written when the run ends).
+    /// JSON Lines, one record per frame as it is made: a file (it appears
+    /// when the run ends) or `-` for standard output, flushed per frame
+    /// (the summary then goes to standard error).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Process at most this many frames.
     #[arg(long)]
-    limit: Option<usize>,
+    limit: Option<u64>,
     /// Write an overlay PNG per tendon frame into this folder: the
     /// segmenter's window with the kept region in green and the direction
     /// in red, beside the depth heat map (paper B's figure 3).
@@ -42,9 +54,26 @@ pub(crate) struct RunArgs {
     #[arg(long, value_delimiter = ',')]
     hysteresis: Option<Vec<f32>>,
     /// Decode each frame just before it is processed instead of on a
-    /// second thread ahead of the models.
+    /// second thread ahead of the models (recorded sources).
     #[arg(long)]
     no_overlap: bool,
+    /// Live sources (camera, stdin): frames that may wait while the models
+    /// run; when more arrive the oldest is dropped and counted.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u16).range(1..=64))]
+    live_queue: u16,
+}
+
+/// `WIDTHxHEIGHT`.
+fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("{s:?}: expected WIDTHxHEIGHT, e.g. 640x360"))?;
+    let n = |v: &str| {
+        v.trim()
+            .parse::<usize>()
+            .map_err(|_| format!("{s:?}: expected WIDTHxHEIGHT with whole numbers, e.g. 640x360"))
+    };
+    Ok((n(w)?, n(h)?))
 }
 
 pub(crate) fn main(a: RunArgs) -> Result<()> {
@@ -53,79 +82,135 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         Some(&[on, off]) => Some((on, off)),
         Some(v) => bail!("--hysteresis takes ON,OFF (two probabilities), got {v:?}"),
     };
-    // The input first: a bad folder is reported before any model loads.
-    let mut frames = FrameList::open(&a.data)?;
+    let spec = match (&a.data, a.size) {
+        (Some(p), _) => SourceSpec::Path(p.clone()),
+        (None, Some((width, height))) => SourceSpec::Stdin { width, height },
+        (None, None) => bail!("give --data PATH or --stdin --size WIDTHxHEIGHT"),
+    };
+    // The input first: a bad folder or video is reported before any model
+    // loads (a camera's first frames wait in its queue meanwhile).
+    let mut source = FrameSource::open(
+        &spec,
+        SourceOptions {
+            overlap: !a.no_overlap,
+            live_queue: a.live_queue as usize,
+            limit: a.limit,
+        },
+    )?;
+    let to_stdout = a.out.as_deref() == Some(std::path::Path::new("-"));
     // Outputs next: an unwritable folder, or one of the inputs, fails now,
     // not after the run.
-    let input = match frames.is_dataset {
-        true => Some(tactile_core::dataset::Dataset::open(&a.data)?),
-        false => None,
+    let input = match &a.data {
+        Some(d) if d.join("labels.csv").is_file() => Some(tactile_core::dataset::Dataset::open(d)?),
+        _ => None,
     };
     let inputs: Vec<_> = input.iter().collect();
-    if let Some(out) = &a.out {
+    if let (Some(out), false) = (&a.out, to_stdout) {
         tactile_core::io::check_output_file(out, &inputs)?;
     }
     if let Some(dir) = &a.render {
         tactile_core::io::check_output_dir(dir, &inputs)?;
     }
+    if let Some(list) = source.list() {
+        let missing = list.missing_frames();
+        if missing.count > 0 {
+            tactile_core::note!(
+                "warning: {} frame(s) missing from the numbering, e.g. {:?}",
+                missing.count,
+                missing.first
+            );
+        }
+        if !list.ignored.is_empty() {
+            let names: Vec<_> = list
+                .ignored
+                .iter()
+                .take(5)
+                .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
+                .collect();
+            tactile_core::note!(
+                "warning: {} file(s) that are not PNG or JPEG frames were not read: {}{}",
+                list.ignored.len(),
+                names.join(", "),
+                if list.ignored.len() > 5 { ", ..." } else { "" }
+            );
+        }
+    }
     let mut pipeline = Pipeline::load(&a.models, a.runtime, a.threads as usize)?;
-    if let Some(n) = a.limit {
-        frames.truncate(n);
-    }
-    let missing = frames.missing_frames();
-    if missing.count > 0 {
-        tactile_core::note!(
-            "warning: {} frame(s) missing from the numbering, e.g. {:?}",
-            missing.count,
-            missing.first
-        );
-    }
     let options = RunOptions {
         hysteresis,
-        overlap: !a.no_overlap,
         render: a.render.clone(),
     };
-    let r = tactile_pipeline::run(&mut pipeline, &frames, &options)?;
-    if let Some(out) = &a.out {
-        tactile_core::io::write_atomic_with(out, |w| {
-            for rec in &r.records {
-                writeln!(
-                    w,
-                    "{}",
-                    serde_json::to_string(rec).map_err(std::io::Error::other)?
-                )?;
-            }
-            Ok(())
+    let mut file = match (&a.out, to_stdout) {
+        (Some(out), false) => Some(tactile_core::io::AtomicFile::create(out)?),
+        _ => None,
+    };
+    let mut stdout = std::io::stdout().lock();
+    let s = tactile_pipeline::run(&mut pipeline, &mut source, &options, &mut |rec| {
+        let line = serde_json::to_string(rec).map_err(|e| {
+            tactile_core::Error::Invalid(format!("cannot write a record as JSON: {e}"))
         })?;
+        if to_stdout {
+            use std::io::Write as _;
+            if let Err(e) = writeln!(stdout, "{line}").and_then(|_| stdout.flush()) {
+                // The reader has gone (`| head`): stop quietly.
+                if e.kind() == std::io::ErrorKind::BrokenPipe {
+                    return Ok(Flow::Stop);
+                }
+                return Err(tactile_core::Error::io("<stdout>", e).into());
+            }
+        } else if let Some(f) = file.as_mut() {
+            f.write_line(&line)?;
+        }
+        Ok(Flow::Continue)
+    })?;
+    drop(stdout);
+    if let Some(f) = file {
+        f.commit()?;
     }
-    let s = &r.summary;
+    // With records on stdout, the summary goes to stderr.
+    let report = |line: String| {
+        if to_stdout {
+            tactile_core::note!("{line}");
+        } else {
+            say!("{line}");
+        }
+    };
     let stage = |v: Option<[f64; 2]>| v.map_or("-".into(), |[m, p]| format!("{m:.2} / {p:.2} ms"));
-    say!(
-        "{} frames ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass",
+    report(format!(
+        "{} frames from a {} ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass",
         s.frames,
+        serde_json::to_value(s.source)?.as_str().unwrap_or("source"),
         s.fps,
         s.runtime,
         s.gated_out
-    );
-    say!(
-        "median / p95 per stage: detect {}, segment + direction {}, depth {}, whole frame {}",
+    ));
+    report(format!(
+        "median / p95 per stage: prepare {}, detect {}, segment + direction {}, depth {}, whole frame {}",
+        stage(s.stages_ms.prepare),
         stage(s.stages_ms.detect),
         stage(s.stages_ms.segment),
         stage(s.stages_ms.depth),
         stage(s.stages_ms.frame)
-    );
+    ));
+    if s.source.is_live() {
+        report(format!(
+            "live: {} frame(s) dropped while the models were busy; arrival to record {}",
+            s.dropped_frames,
+            stage(s.latency_ms)
+        ));
+    }
     if let Some(acc) = s.detector_accuracy {
-        say!(
+        report(format!(
             "tendon decisions: accuracy {acc:.4} with {} changes within sequences ({} changes in the labels); the detector's threshold alone: {:.4}, {} changes",
             s.decision_changes,
             s.label_changes,
             s.detector_accuracy_threshold_only.unwrap_or(f64::NAN),
             s.decision_changes_threshold_only
-        );
+        ));
     }
-    if let Some(out) = &a.out {
-        say!("records in {}", out.display());
+    if let (Some(out), false) = (&a.out, to_stdout) {
+        report(format!("records in {}", out.display()));
     }
-    say!("{}", serde_json::to_string(s)?);
+    report(serde_json::to_string(&s)?);
     Ok(())
 }

@@ -1101,7 +1101,7 @@ fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
     let empty = tmp.path().join("empty");
     std::fs::create_dir(&empty).unwrap();
     let (ok, msg) = tactile(&["run", "--data", empty.to_str().unwrap()]);
-    assert!(!ok && msg.contains("no PNG frames"), "{msg}");
+    assert!(!ok && msg.contains("no PNG or JPEG frames"), "{msg}");
 }
 
 #[test]

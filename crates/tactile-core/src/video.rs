@@ -1,0 +1,444 @@
+//! Video in and out through the system's FFmpeg, driven as a process: it
+//! decodes any container and codec it knows (mp4, mkv, avi; H.264, MJPEG,
+//! ...) and a V4L2 camera to raw RGB frames on a pipe, which are read here
+//! one frame at a time. No codec is written here.
+//!
+//! The size of the stream is read with `ffprobe` first and checked against
+//! [`MAX_IMAGE_PIXELS`] before any frame buffer is allocated. Inputs are
+//! passed as `file:` URLs, so a file name is never taken for an option or
+//! another protocol.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Child, ChildStdout, Command, Stdio};
+use std::sync::{Arc, Mutex};
+
+use crate::image_io::{MAX_IMAGE_PIXELS, RgbImage, rgb_image};
+use crate::{Error, Result};
+
+/// What to install when FFmpeg is missing.
+const INSTALL_HINT: &str = "reading video needs FFmpeg (ffmpeg and ffprobe on PATH); on Debian or Ubuntu: apt-get install ffmpeg";
+
+/// How much of FFmpeg's stderr is kept for an error message.
+const STDERR_TAIL: usize = 4096;
+
+/// True when `ffmpeg` and `ffprobe` run.
+pub fn ffmpeg_available() -> bool {
+    ["ffmpeg", "ffprobe"].iter().all(|tool| {
+        Command::new(tool)
+            .arg("-version")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    })
+}
+
+/// A video file's path as an FFmpeg input that cannot be read as an option
+/// or a protocol.
+fn file_url(path: &Path) -> Result<String> {
+    let abs = std::path::absolute(path).map_err(|e| Error::io(path, e))?;
+    let s = abs.to_str().ok_or_else(|| {
+        Error::image(
+            path,
+            "the path is not valid UTF-8, which FFmpeg cannot be given",
+        )
+    })?;
+    Ok(format!("file:{s}"))
+}
+
+/// Where frames come from: a file, or a V4L2 camera device.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum VideoInput {
+    /// A video file (mp4, mkv, avi, ...).
+    File(PathBuf),
+    /// A V4L2 camera (`/dev/videoN`), read live.
+    Camera(PathBuf),
+}
+
+impl VideoInput {
+    /// The file or device.
+    pub fn path(&self) -> &Path {
+        match self {
+            VideoInput::File(p) | VideoInput::Camera(p) => p,
+        }
+    }
+
+    fn input_args(&self) -> Result<Vec<String>> {
+        Ok(match self {
+            VideoInput::File(p) => vec!["-i".into(), file_url(p)?],
+            VideoInput::Camera(p) => vec![
+                "-f".into(),
+                "v4l2".into(),
+                "-i".into(),
+                p.to_str()
+                    .ok_or_else(|| Error::image(p, "the device path is not valid UTF-8"))?
+                    .into(),
+            ],
+        })
+    }
+}
+
+/// The first video stream's size and rate, from `ffprobe`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VideoInfo {
+    /// Width, pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// Frames per second, when the container says.
+    pub fps: Option<f64>,
+}
+
+/// The size and rate of `input`'s first video stream, checked: a stream
+/// larger than 8K or without a video stream is an error naming the file.
+pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
+    let path = input.path();
+    let mut cmd = Command::new("ffprobe");
+    cmd.args(["-v", "error", "-select_streams", "v:0"])
+        .args(["-show_entries", "stream=width,height,avg_frame_rate"])
+        .args(["-of", "json"]);
+    if let VideoInput::Camera(_) = input {
+        cmd.args(["-f", "v4l2"]);
+    }
+    let out = cmd
+        .arg(match input {
+            VideoInput::File(p) => file_url(p)?,
+            VideoInput::Camera(p) => p.to_string_lossy().into_owned(),
+        })
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => Error::Invalid(INSTALL_HINT.into()),
+            _ => Error::io(path, e),
+        })?;
+    if !out.status.success() {
+        let why = String::from_utf8_lossy(&out.stderr);
+        let why = why.lines().last().unwrap_or("ffprobe failed").trim();
+        return Err(Error::image(path, format!("cannot read as video: {why}")));
+    }
+    #[derive(serde::Deserialize)]
+    struct Probe {
+        #[serde(default)]
+        streams: Vec<Stream>,
+    }
+    #[derive(serde::Deserialize)]
+    struct Stream {
+        width: Option<u64>,
+        height: Option<u64>,
+        avg_frame_rate: Option<String>,
+    }
+    let probe: Probe = serde_json::from_slice(&out.stdout)
+        .map_err(|e| Error::image(path, format!("unreadable ffprobe output: {e}")))?;
+    let Some(s) = probe.streams.first() else {
+        return Err(Error::image(path, "has no video stream"));
+    };
+    let (Some(w), Some(h)) = (s.width, s.height) else {
+        return Err(Error::image(path, "the video stream has no frame size"));
+    };
+    if w == 0 || h == 0 || w.saturating_mul(h) > MAX_IMAGE_PIXELS {
+        return Err(Error::image(
+            path,
+            format!("video frames are {w}x{h}; frames must be 1 to {MAX_IMAGE_PIXELS} pixels (8K)"),
+        ));
+    }
+    let fps = s.avg_frame_rate.as_deref().and_then(|r| {
+        let (n, d) = r.split_once('/')?;
+        let (n, d): (f64, f64) = (n.parse().ok()?, d.parse().ok()?);
+        (d > 0.0 && n > 0.0).then(|| n / d)
+    });
+    Ok(VideoInfo {
+        width: w as usize,
+        height: h as usize,
+        fps,
+    })
+}
+
+/// How FFmpeg decodes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DecodeOptions {
+    /// Decoding threads (FFmpeg's `-threads`); 1 leaves the other core to
+    /// the models.
+    pub threads: usize,
+}
+
+impl Default for DecodeOptions {
+    fn default() -> Self {
+        Self { threads: 1 }
+    }
+}
+
+/// Frames of a video file or a camera, decoded by an FFmpeg process to
+/// rgb24 and read one at a time. The process is killed when the reader is
+/// dropped.
+pub struct VideoReader {
+    input: VideoInput,
+    info: VideoInfo,
+    child: Arc<Mutex<Child>>,
+    stdout: ChildStdout,
+    stderr: Option<std::thread::JoinHandle<Vec<u8>>>,
+    done: bool,
+}
+
+impl VideoReader {
+    /// Start decoding `input`: probed first (size checked), then an FFmpeg
+    /// process that writes raw RGB frames of that size.
+    pub fn open(input: &VideoInput, options: DecodeOptions) -> Result<Self> {
+        let path = input.path();
+        if let VideoInput::File(p) = input {
+            crate::image_io::expect_regular_file(p)?;
+        }
+        let info = probe(input)?;
+        let threads = options.threads.clamp(1, 64).to_string();
+        let mut child = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
+            .args(["-threads", &threads])
+            .arg("-noautorotate")
+            .args(input.input_args()?)
+            .args(["-map", "0:v:0", "-an", "-sn", "-dn"])
+            .args(["-f", "rawvideo", "-pix_fmt", "rgb24"])
+            // The probed size, whatever the stream does later.
+            .args(["-s", &format!("{}x{}", info.width, info.height)])
+            .arg("pipe:1")
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| match e.kind() {
+                std::io::ErrorKind::NotFound => Error::Invalid(INSTALL_HINT.into()),
+                _ => Error::io(path, e),
+            })?;
+        let stdout = child
+            .stdout
+            .take()
+            .ok_or_else(|| Error::Invalid("ffmpeg started without an output pipe".into()))?;
+        // Drain stderr on its own thread (a full pipe would stall FFmpeg),
+        // keeping only its tail for an error message.
+        let stderr = child.stderr.take().map(|mut err| {
+            std::thread::spawn(move || {
+                let mut tail = Vec::new();
+                let mut buf = [0u8; 1024];
+                while let Ok(n) = err.read(&mut buf) {
+                    if n == 0 {
+                        break;
+                    }
+                    tail.extend_from_slice(&buf[..n]);
+                    if tail.len() > STDERR_TAIL {
+                        tail.drain(..tail.len() - STDERR_TAIL);
+                    }
+                }
+                tail
+            })
+        });
+        Ok(Self {
+            input: input.clone(),
+            info,
+            child: Arc::new(Mutex::new(child)),
+            stdout,
+            stderr,
+            done: false,
+        })
+    }
+
+    /// The stream's size and rate.
+    pub fn info(&self) -> VideoInfo {
+        self.info
+    }
+
+    /// A handle that stops the decoder from another thread (a live reader
+    /// blocked on the pipe returns at once).
+    pub fn stopper(&self) -> VideoStopper {
+        VideoStopper(Arc::clone(&self.child))
+    }
+
+    /// The next frame, or `None` at the end of the stream. A stream that
+    /// ends inside a frame or an FFmpeg failure is an error naming the file
+    /// with FFmpeg's last words.
+    pub fn next_frame(&mut self) -> Result<Option<RgbImage>> {
+        if self.done {
+            return Ok(None);
+        }
+        let len = self.info.width * self.info.height * 3;
+        let mut buf = vec![0u8; len];
+        let got =
+            read_full(&mut self.stdout, &mut buf).map_err(|e| Error::io(self.input.path(), e))?;
+        if got == len {
+            return rgb_image(self.info.width, self.info.height, buf).map(Some);
+        }
+        self.done = true;
+        let status = self
+            .child
+            .lock()
+            .map_err(|_| Error::Invalid("the video decoder's lock was poisoned".into()))?
+            .wait()
+            .map_err(|e| Error::io(self.input.path(), e))?;
+        crate::interrupt::check()?;
+        let tail = self
+            .stderr
+            .take()
+            .and_then(|t| t.join().ok())
+            .map(|t| String::from_utf8_lossy(&t).trim().to_string())
+            .unwrap_or_default();
+        let last = tail.lines().last().unwrap_or("").to_string();
+        if !status.success() {
+            return Err(Error::image(
+                self.input.path(),
+                format!("FFmpeg could not decode it ({status}): {last}"),
+            ));
+        }
+        if got > 0 {
+            return Err(Error::image(
+                self.input.path(),
+                format!("the stream ended inside a frame ({got} of {len} bytes)"),
+            ));
+        }
+        Ok(None)
+    }
+}
+
+impl Drop for VideoReader {
+    fn drop(&mut self) {
+        if let Ok(mut c) = self.child.lock() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+/// Stops a [`VideoReader`]'s FFmpeg process from another thread.
+#[derive(Clone)]
+pub struct VideoStopper(Arc<Mutex<Child>>);
+
+impl VideoStopper {
+    /// Kill the decoder; its reader then sees the end of the stream.
+    pub fn stop(&self) {
+        if let Ok(mut c) = self.0.lock() {
+            let _ = c.kill();
+        }
+    }
+}
+
+/// Read until `buf` is full or the stream ends; how many bytes were read.
+pub fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match r.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
+}
+
+/// How [`encode`] compresses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VideoCodec {
+    /// H.264 (libx264, 4:4:4 chroma as FFmpeg picks for RGB input) at a
+    /// constant rate factor: 0 is lossless in YUV, 23 FFmpeg's default.
+    H264 {
+        /// libx264's `-crf`, 0 to 51.
+        crf: u8,
+    },
+    /// H.264 coding RGB itself losslessly (libx264rgb, `-qp 0`): the
+    /// decoded frames are the encoded ones, bit for bit.
+    H264LosslessRgb,
+    /// Motion JPEG at FFmpeg's best quality scale (`-q:v 2`).
+    Mjpeg,
+}
+
+impl VideoCodec {
+    fn args(self) -> Vec<String> {
+        let v: Vec<String> = match self {
+            VideoCodec::H264 { crf } => vec![
+                "-c:v".into(),
+                "libx264".into(),
+                "-crf".into(),
+                crf.min(51).to_string(),
+                "-pix_fmt".into(),
+                "yuv444p".into(),
+            ],
+            VideoCodec::H264LosslessRgb => {
+                vec!["-c:v".into(), "libx264rgb".into(), "-qp".into(), "0".into()]
+            }
+            VideoCodec::Mjpeg => vec![
+                "-c:v".into(),
+                "mjpeg".into(),
+                "-q:v".into(),
+                "2".into(),
+                "-pix_fmt".into(),
+                "yuvj444p".into(),
+            ],
+        };
+        v
+    }
+}
+
+/// Encode `frames` (all one size) as a video at `fps` with FFmpeg, written
+/// to a temporary file and renamed to `out` (the container from its
+/// extension: `.mp4`, `.mkv`, `.avi`): for tests, benchmarks and recorded
+/// demos.
+pub fn encode(frames: &[&RgbImage], fps: u32, codec: VideoCodec, out: &Path) -> Result<()> {
+    encode_with(frames, fps, out, &codec.args())
+}
+
+fn encode_with(frames: &[&RgbImage], fps: u32, out: &Path, codec: &[String]) -> Result<()> {
+    use std::io::Write;
+    let Some(first) = frames.first() else {
+        return Err(Error::Invalid("no frames to encode".into()));
+    };
+    let (w, h) = (first.width(), first.height());
+    if let Some(f) = frames.iter().find(|f| (f.width(), f.height()) != (w, h)) {
+        return Err(Error::Shape {
+            what: "a frame of the video".into(),
+            expected: format!("{w}x{h}"),
+            found: format!("{}x{}", f.width(), f.height()),
+        });
+    }
+    crate::io::ensure_writable_parent(out)?;
+    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("mp4");
+    let tmp = out.with_extension(format!("partial-{}.{ext}", std::process::id()));
+    let mut child = Command::new("ffmpeg")
+        .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
+        .args([
+            "-f",
+            "rawvideo",
+            "-pix_fmt",
+            "rgb24",
+            "-s",
+            &format!("{w}x{h}"),
+        ])
+        .args(["-r", &fps.to_string(), "-i", "pipe:0"])
+        .args(codec)
+        .arg(file_url(&tmp)?)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => Error::Invalid(INSTALL_HINT.into()),
+            _ => Error::io(out, e),
+        })?;
+    let write = (|| -> std::io::Result<()> {
+        let mut stdin = child.stdin.take().ok_or(std::io::ErrorKind::BrokenPipe)?;
+        for f in frames {
+            stdin.write_all(f.as_slice())?;
+        }
+        Ok(())
+    })();
+    let result = child.wait_with_output().map_err(|e| Error::io(out, e))?;
+    if let Err(e) = write.and_then(|_| {
+        result.status.success().then_some(()).ok_or_else(|| {
+            std::io::Error::other(String::from_utf8_lossy(&result.stderr).trim().to_string())
+        })
+    }) {
+        std::fs::remove_file(&tmp).ok();
+        return Err(Error::image(
+            out,
+            format!("FFmpeg could not encode it: {e}"),
+        ));
+    }
+    std::fs::rename(&tmp, out).map_err(|e| Error::io(out, e))
+}

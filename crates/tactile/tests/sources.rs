@@ -1,0 +1,281 @@
+#![allow(clippy::unwrap_used)]
+//! Every source `tactile run` reads: a video file (H.264 and MJPEG, decoded
+//! by FFmpeg), raw frames on stdin, a folder of JPEG frames, and the live
+//! queue that drops the oldest frames when the models fall behind. Each is
+//! checked against the run over the shipped PNG frames.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+
+use serde_json::Value;
+
+const SAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../samples/palpation");
+const MODELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models");
+
+fn tactile() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tactile"))
+}
+
+/// Records (stdout, `--out -`) and the summary (last line of stderr).
+fn run(args: &[&str], stdin: Option<Vec<u8>>) -> (Vec<Value>, Value, String) {
+    let mut cmd = tactile();
+    cmd.args(["run", "--models", MODELS, "--out", "-"])
+        .args(args);
+    cmd.stdin(if stdin.is_some() {
+        Stdio::piped()
+    } else {
+        Stdio::null()
+    })
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped());
+    let mut child = cmd.spawn().unwrap();
+    if let Some(bytes) = stdin {
+        let mut pipe = child.stdin.take().unwrap();
+        std::thread::spawn(move || {
+            let _ = pipe.write_all(&bytes);
+        });
+    }
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "tactile run {args:?} failed: {err}");
+    let records = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let summary = serde_json::from_str(err.lines().last().unwrap()).unwrap();
+    (records, summary, err)
+}
+
+fn sample_frames() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(SAMPLES)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "png"))
+        .collect();
+    v.sort();
+    v
+}
+
+fn images() -> Vec<tactile_core::image_io::RgbImage> {
+    sample_frames()
+        .iter()
+        .map(|p| tactile_core::image_io::load_rgb(p).unwrap())
+        .collect()
+}
+
+fn angle_diff(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(180.0);
+    d.min(180.0 - d)
+}
+
+/// Same decisions on every frame, and directions within `tol_deg`.
+fn assert_agree(reference: &[Value], other: &[Value], tol_deg: f64) {
+    assert_eq!(reference.len(), other.len());
+    for (i, (a, b)) in reference.iter().zip(other).enumerate() {
+        assert_eq!(a["tendon"], b["tendon"], "frame {i}: {a} vs {b}");
+        match (a["direction_deg"].as_f64(), b["direction_deg"].as_f64()) {
+            (Some(x), Some(y)) => assert!(
+                angle_diff(x, y) <= tol_deg,
+                "frame {i}: direction {x} vs {y} (tolerance {tol_deg} deg)"
+            ),
+            (x, y) => assert_eq!(
+                x.is_some(),
+                y.is_some(),
+                "frame {i}: direction {x:?} vs {y:?}"
+            ),
+        }
+    }
+}
+
+fn reference() -> Vec<Value> {
+    run(&["--data", SAMPLES], None).0
+}
+
+#[test]
+fn a_video_file_gives_the_decisions_and_directions_of_its_frames() {
+    use tactile_core::video::{VideoCodec, encode};
+    let dir = tempfile::tempdir().unwrap();
+    let imgs = images();
+    let refs: Vec<_> = imgs.iter().collect();
+    let expected = reference();
+    // (codec, file, direction tolerance in degrees): lossless RGB decodes to
+    // the very frames, so records match exactly; visually lossless H.264
+    // and best-quality MJPEG move pixels, and with them the direction a
+    // little (measured: 0.7 and 3.8 degrees at most; compression at
+    // FFmpeg's default crf 23 moves it up to 4 degrees).
+    for (codec, name, tol) in [
+        (VideoCodec::H264LosslessRgb, "lossless.mp4", 0.0),
+        (VideoCodec::H264 { crf: 6 }, "palpation.mkv", 2.0),
+        (VideoCodec::Mjpeg, "palpation.avi", 5.0),
+    ] {
+        let video = dir.path().join(name);
+        encode(&refs, 30, codec, &video).unwrap();
+        let (records, summary, _) = run(&["--data", video.to_str().unwrap()], None);
+        assert_eq!(summary["source"], "video");
+        assert_eq!(
+            summary["frames"],
+            imgs.len() as u64,
+            "every frame, none dropped"
+        );
+        assert_eq!(summary["dropped_frames"], 0);
+        assert_agree(&expected, &records, tol);
+        assert_eq!(records[3]["frame"], "000003");
+        if tol == 0.0 {
+            for (a, b) in expected.iter().zip(&records) {
+                assert_eq!(a["score"], b["score"], "{name}");
+                assert_eq!(a["depth_max_mm"], b["depth_max_mm"], "{name}");
+            }
+        }
+    }
+}
+
+#[test]
+fn raw_frames_on_stdin_give_the_same_records_as_the_files() {
+    let expected = reference();
+    let imgs = images();
+    let bytes: Vec<u8> = imgs.iter().flat_map(|i| i.as_slice().to_vec()).collect();
+    // A queue as long as the input: nothing dropped, so every frame compares.
+    let (records, summary, _) = run(
+        &["--stdin", "--size", "320x180", "--live-queue", "64"],
+        Some(bytes),
+    );
+    assert_eq!(summary["source"], "stdin");
+    assert_eq!(
+        records.len() as u64 + summary["dropped_frames"].as_u64().unwrap(),
+        12
+    );
+    if summary["dropped_frames"] == 0 {
+        assert_agree(&expected, &records, 0.0);
+    }
+    assert!(
+        records
+            .iter()
+            .all(|r| r["latency_ms"].as_f64().is_some_and(|v| v >= 0.0))
+    );
+}
+
+#[test]
+fn stdin_that_ends_inside_a_frame_is_an_error_that_says_so() {
+    let mut bytes = images()[0].as_slice().to_vec();
+    bytes.truncate(1000);
+    let mut child = tactile()
+        .args(["run", "--models", MODELS, "--stdin", "--size", "320x180"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(&bytes).unwrap();
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("stdin ended inside a frame"), "{err}");
+}
+
+#[test]
+fn a_live_source_that_outruns_the_models_drops_the_oldest_frames_in_bounded_memory() {
+    // 200 native 1920x1080 frames (1.2 GB) pushed as fast as a pipe takes
+    // them: the models cannot keep up, so most are dropped from a queue of 2.
+    let small = image::open(&sample_frames()[4]).unwrap().to_rgb8();
+    let frame = image::imageops::resize(&small, 1920, 1080, image::imageops::FilterType::Triangle)
+        .into_raw();
+    let n = 200usize;
+    let mut child = tactile()
+        .args([
+            "run",
+            "--models",
+            MODELS,
+            "--out",
+            "-",
+            "--stdin",
+            "--size",
+            "1920x1080",
+        ])
+        .args(["--live-queue", "2"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut pipe = child.stdin.take().unwrap();
+    let writer = std::thread::spawn(move || {
+        for _ in 0..n {
+            pipe.write_all(&frame).unwrap();
+        }
+    });
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let summary: Value = serde_json::from_str(err.lines().last().unwrap()).unwrap();
+    let (frames, dropped) = (
+        summary["frames"].as_u64().unwrap(),
+        summary["dropped_frames"].as_u64().unwrap(),
+    );
+    assert_eq!(frames + dropped, n as u64, "{summary}");
+    assert!(dropped > 0, "the models kept up with a pipe? {summary}");
+    assert!(err.contains("dropped while the models were busy"), "{err}");
+    // Models, runtime and a few frames take well under 300 MB; keeping
+    // every frame would take 1.2 GB.
+    let rss = summary["peak_rss_mb"].as_f64().unwrap();
+    assert!(rss < 300.0, "peak memory {rss} MB");
+    let lines = String::from_utf8_lossy(&out.stdout).lines().count() as u64;
+    assert_eq!(lines, frames);
+}
+
+#[test]
+fn a_folder_of_jpeg_frames_runs_and_other_files_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    for (i, p) in sample_frames().iter().enumerate() {
+        let img = image::open(p).unwrap().to_rgb8();
+        let out = std::fs::File::create(dir.path().join(format!("{i:06}.jpg"))).unwrap();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(out, 95)
+            .encode_image(&img)
+            .unwrap();
+    }
+    std::fs::write(dir.path().join("notes.txt"), "recorded on day 3").unwrap();
+    let (records, summary, err) = run(&["--data", dir.path().to_str().unwrap()], None);
+    assert_eq!(summary["source"], "folder");
+    assert!(
+        err.contains("1 file(s) that are not PNG or JPEG frames were not read: notes.txt"),
+        "{err}"
+    );
+    assert_agree(&reference(), &records, 2.0);
+}
+
+#[test]
+fn a_file_that_is_not_a_video_is_an_error_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("clip.mp4");
+    std::fs::write(&f, b"not a video at all").unwrap();
+    let out = tactile()
+        .args(["run", "--models", MODELS, "--data", f.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("clip.mp4") && err.contains("cannot read as video"),
+        "{err}"
+    );
+}
+
+#[test]
+fn records_on_stdout_stop_quietly_when_the_reader_goes() {
+    let mut child = tactile()
+        .args(["run", "--models", MODELS, "--data", SAMPLES, "--out", "-"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Read one record, then close the pipe.
+    let mut stdout = child.stdout.take().unwrap();
+    let mut first = [0u8; 16];
+    std::io::Read::read_exact(&mut stdout, &mut first).unwrap();
+    drop(stdout);
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("panicked") && !err.contains("error"), "{err}");
+}
