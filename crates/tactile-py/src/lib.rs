@@ -13,6 +13,7 @@ mod frame;
 mod image;
 mod json;
 mod pipeline;
+mod source;
 mod synth;
 mod train;
 mod work;
@@ -30,6 +31,9 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<pipeline::FrameResult>()?;
     m.add_class::<encoder::PyTactipEncoder>()?;
     m.add_class::<dataset::PyDataset>()?;
+    m.add_class::<source::PyFrameSource>()?;
+    m.add_class::<source::PyFrame>()?;
+    m.add_function(wrap_pyfunction!(source::frames, m)?)?;
     m.add_function(wrap_pyfunction!(image::read_rgb, m)?)?;
     m.add_function(wrap_pyfunction!(image::read_grey, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synth_tactip, m)?)?;

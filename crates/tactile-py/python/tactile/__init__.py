@@ -13,6 +13,11 @@ Paper A's encoder and its estimators::
     enc.encode(frames)                       # (N, 16) float32
     enc.estimate(frames)                     # {"shape": ..., "x_mm": ...}
 
+Frames from a video file, a camera, a folder or a dataset::
+
+    for f in tactile.frames("palpation.mp4"):   # or "/dev/video0", a folder
+        r = pipe.process(f.image)
+
 Datasets, generators, training and evaluation: ``tactile.Dataset``,
 ``tactile.synth``, ``tactile.train``, ``tactile.eval``.
 
@@ -57,10 +62,13 @@ from ._tactile import (  # noqa: E402
     MAX_BATCH,
     MAX_FRAME_SIDE,
     Dataset,
+    Frame,
     FrameResult,
+    FrameSource,
     Pipeline,
     TactipEncoder,
     __version__,
+    frames,
     read_grey,
     read_rgb,
 )
@@ -68,7 +76,9 @@ from . import eval, synth, train  # noqa: E402
 
 __all__ = [
     "Dataset",
+    "Frame",
     "FrameResult",
+    "FrameSource",
     "MAX_ARRAY_BYTES",
     "MAX_BATCH",
     "MAX_FRAME_SIDE",
@@ -76,6 +86,7 @@ __all__ = [
     "TactipEncoder",
     "__version__",
     "eval",
+    "frames",
     "read_grey",
     "read_rgb",
     "synth",

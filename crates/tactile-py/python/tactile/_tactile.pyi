@@ -119,6 +119,42 @@ class Dataset:
     def mask(self, i: int) -> Optional[npt.NDArray[np.bool_]]: ...
     def depth_m(self, i: int) -> Optional[npt.NDArray[np.float32]]: ...
 
+class Frame:
+    """One frame of a source: `image` is (H, W, 3) uint8 RGB."""
+
+    @property
+    def image(self) -> npt.NDArray[np.uint8]: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def sequence(self) -> Optional[str]: ...
+    @property
+    def tendon(self) -> Optional[bool]: ...
+    @property
+    def age_ms(self) -> Optional[float]: ...
+
+class FrameSource:
+    """Frames from a dataset, a folder, an image, a video file, a camera or stdin, in order."""
+
+    def __iter__(self) -> FrameSource: ...
+    def __next__(self) -> Frame: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def dropped(self) -> int: ...
+    @property
+    def size(self) -> Optional[Tuple[int, int]]: ...
+
+def frames(
+    source: Optional[_Path] = None,
+    *,
+    stdin_size: Optional[Tuple[int, int]] = None,
+    live_queue: int = 2,
+    limit: Optional[int] = None,
+    prefetch: bool = True,
+) -> FrameSource:
+    """Open a source of frames (a dataset, a folder, an image, a video file, a camera, or stdin)."""
+
 def read_rgb(path: _Path) -> npt.NDArray[np.uint8]:
     """An 8-bit PNG as (H, W, 3) uint8 RGB, decoded as the command line does."""
 

@@ -1,0 +1,138 @@
+//! `tactile.frames`: every source the command line reads (a dataset, a
+//! folder of PNG or JPEG frames, a video file, a V4L2 camera, raw frames
+//! on stdin) as a Python iterator of numpy frames.
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use numpy::IntoPyArray;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use tactile_pipeline::{FrameSource, SourceOptions, SourceSpec};
+
+use crate::errors::PyResultExt;
+
+/// One frame of a source: `image` is `(H, W, 3)` uint8 RGB; `name` the
+/// file name or the frame's number in a stream; `sequence` and `tendon`
+/// what a dataset's labels say (else None); `age_ms` how long ago a live
+/// frame arrived, when it was handed over (None for recorded sources).
+#[pyclass(module = "tactile", name = "Frame", frozen, get_all)]
+pub struct PyFrame {
+    image: Py<PyAny>,
+    name: String,
+    sequence: Option<String>,
+    tendon: Option<bool>,
+    age_ms: Option<f64>,
+}
+
+#[pymethods]
+impl PyFrame {
+    fn __repr__(&self) -> String {
+        format!("Frame(name={:?})", self.name)
+    }
+}
+
+/// Frames from a dataset, a folder, an image, a video file, a camera or
+/// stdin, in order. Iterate it; `kind`, `dropped` and `size` say what it is,
+/// how many live frames were dropped and the frame size when known.
+#[pyclass(module = "tactile", name = "FrameSource")]
+pub struct PyFrameSource {
+    source: Mutex<FrameSource>,
+}
+
+impl PyFrameSource {
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, FrameSource>> {
+        self.source
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the frame source failed in another thread"))
+    }
+}
+
+#[pymethods]
+impl PyFrameSource {
+    /// What the source is: "dataset", "folder", "video", "camera" or "stdin".
+    #[getter]
+    fn kind(&self) -> PyResult<String> {
+        let k = self.lock()?.kind();
+        Ok(serde_json::to_value(k)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default())
+    }
+
+    /// Live frames dropped so far because they were not taken fast enough.
+    #[getter]
+    fn dropped(&self) -> PyResult<u64> {
+        Ok(self.lock()?.dropped())
+    }
+
+    /// `(width, height)` when known before reading (videos, stdin, datasets).
+    #[getter]
+    fn size(&self) -> PyResult<Option<(usize, usize)>> {
+        Ok(self.lock()?.size())
+    }
+
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__(&self, py: Python<'_>) -> PyResult<Option<PyFrame>> {
+        let next = py.detach(|| -> PyResult<_> { self.lock()?.next_frame().py() })?;
+        let Some(f) = next else { return Ok(None) };
+        let (w, h) = (f.image.width(), f.image.height());
+        let age_ms = f.arrived.map(|t| 1e3 * t.elapsed().as_secs_f64());
+        let image = ndarray::Array3::from_shape_vec((h, w, 3), f.image.into_vec())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .into_pyarray(py)
+            .into_any()
+            .unbind();
+        Ok(Some(PyFrame {
+            image,
+            name: f.name,
+            sequence: f.sequence,
+            tendon: f.tendon,
+            age_ms,
+        }))
+    }
+}
+
+/// Open a source of frames: `source` is a dataset folder, a folder of PNG or
+/// JPEG frames, an image, a video file (decoded by the system's FFmpeg,
+/// every frame) or a camera device such as "/dev/video0" (live); or give
+/// `stdin_size=(width, height)` (and no source) to read raw rgb24 frames
+/// from standard input (live). Live sources keep at most `live_queue`
+/// frames waiting and drop the oldest when more arrive.
+#[pyfunction]
+#[pyo3(signature = (source=None, *, stdin_size=None, live_queue=2, limit=None, prefetch=true))]
+pub(crate) fn frames(
+    py: Python<'_>,
+    source: Option<PathBuf>,
+    stdin_size: Option<(usize, usize)>,
+    live_queue: usize,
+    limit: Option<u64>,
+    prefetch: bool,
+) -> PyResult<PyFrameSource> {
+    let spec = match (source, stdin_size) {
+        (Some(p), None) => SourceSpec::Path(p),
+        (None, Some((width, height))) => SourceSpec::Stdin { width, height },
+        (Some(_), Some(_)) => {
+            return Err(PyValueError::new_err(
+                "give a source path or stdin_size, not both",
+            ));
+        }
+        (None, None) => {
+            return Err(PyValueError::new_err(
+                "give a source path, or stdin_size=(width, height) for raw frames on stdin",
+            ));
+        }
+    };
+    let options = SourceOptions {
+        overlap: prefetch,
+        live_queue,
+        limit,
+    };
+    let source = py.detach(move || FrameSource::open(&spec, options)).py()?;
+    Ok(PyFrameSource {
+        source: Mutex::new(source),
+    })
+}

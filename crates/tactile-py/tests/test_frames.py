@@ -1,0 +1,56 @@
+"""`tactile.frames`: a video file made by FFmpeg, a folder and a dataset give
+the frames `tactile run` reads, and the pipeline's decisions on them."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tactile
+
+
+def test_folder_frames_are_the_files(root, palpation_frames):
+    src = tactile.frames(root / "samples" / "palpation")
+    assert src.kind == "folder"
+    got = list(src)
+    assert [f.name for f in got] == [f"{i:06d}.png" for i in range(12)]
+    for f, expected in zip(got, palpation_frames):
+        assert f.image.dtype == np.uint8 and f.image.shape == (180, 320, 3)
+        assert np.array_equal(f.image, expected)
+        assert f.age_ms is None and f.tendon is None
+
+
+@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
+def test_lossless_video_gives_the_pipeline_the_same_frames(root, tmp_path, pipeline, palpation_frames):
+    video = tmp_path / "palpation.mp4"
+    subprocess.run(
+        ["ffmpeg", "-nostdin", "-loglevel", "error", "-framerate", "30",
+         "-i", str(root / "samples" / "palpation" / "%06d.png"),
+         "-c:v", "libx264rgb", "-qp", "0", str(video)],
+        check=True,
+    )
+    src = tactile.frames(video)
+    assert src.kind == "video" and src.size == (320, 180)
+    got = list(src)
+    assert len(got) == 12 and got[5].name == "000005"
+    for f, expected in zip(got, palpation_frames):
+        assert np.array_equal(f.image, expected)
+    pipeline.reset()
+    decisions = [pipeline.process(f.image).tendon for f in got]
+    assert decisions == [pipeline.process(x).tendon for x in palpation_frames]
+
+
+def test_limit_and_bad_sources(root, tmp_path):
+    assert len(list(tactile.frames(root / "samples" / "palpation", limit=3))) == 3
+    with pytest.raises(FileNotFoundError, match="missing"):
+        tactile.frames(tmp_path / "missing")
+    bad = tmp_path / "clip.mp4"
+    bad.write_bytes(b"not a video")
+    with pytest.raises(ValueError, match="clip.mp4"):
+        tactile.frames(bad)
+    with pytest.raises(ValueError, match="stdin_size"):
+        tactile.frames()
