@@ -10,6 +10,7 @@
 mod error;
 pub mod export;
 pub mod hysteresis;
+pub mod import;
 pub mod overlay;
 pub mod palpation;
 pub mod run;

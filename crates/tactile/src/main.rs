@@ -27,6 +27,7 @@ macro_rules! say_raw {
 mod args;
 mod bench;
 mod compare;
+mod dataset;
 mod demo;
 mod encode;
 mod eval;
@@ -59,6 +60,9 @@ enum Command {
     /// Generate a synthetic dataset from a virtual sensor (sensors.md).
     #[command(subcommand)]
     Synth(synth::SynthCmd),
+    /// Make a dataset of your own sensor's frames (docs/datasets.md).
+    #[command(subcommand)]
+    Dataset(dataset::DatasetCmd),
     /// Train a model.
     #[command(subcommand)]
     Train(train::TrainCmd),
@@ -122,6 +126,7 @@ fn main() -> std::process::ExitCode {
 fn dispatch(command: Command) -> Result<()> {
     match command {
         Command::Synth(c) => synth::main(c),
+        Command::Dataset(c) => dataset::main(c),
         Command::Train(c) => train::main(c),
         Command::Encode(a) => encode::main(a),
         Command::Sweep(a) => sweep::main(a),

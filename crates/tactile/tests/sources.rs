@@ -5,7 +5,7 @@
 //! checked against the run over the shipped PNG frames.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 use serde_json::Value;
@@ -278,4 +278,69 @@ fn records_on_stdout_stop_quietly_when_the_reader_goes() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(!err.contains("panicked") && !err.contains("error"), "{err}");
+}
+
+#[test]
+fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
+    use tactile_core::video::{VideoCodec, encode};
+    let dir = tempfile::tempdir().unwrap();
+    let imgs = images();
+    let refs: Vec<_> = imgs.iter().collect();
+    let video = dir.path().join("clip.mp4");
+    encode(&refs, 30, VideoCodec::H264LosslessRgb, &video).unwrap();
+    // Frames 2-9 press on the tendon; frame 11 is left unlabelled.
+    let mut csv = String::from("frame,tendon,direction_deg,sequence,operator\n");
+    for i in 0..11 {
+        let t = (2..=9).contains(&i);
+        let d = if t { "117.3" } else { "" };
+        csv.push_str(&format!("{i},{},{d},0,ana\n", u8::from(t)));
+    }
+    let labels = dir.path().join("labels.csv");
+    std::fs::write(&labels, csv).unwrap();
+    let out = dir.path().join("ds");
+    let import = |labels: &Path, out: &Path| {
+        tactile()
+            .args(["dataset", "from-video", "--kind", "visuotactile"])
+            .args([
+                "--video",
+                video.to_str().unwrap(),
+                "--labels",
+                labels.to_str().unwrap(),
+            ])
+            .args(["--out", out.to_str().unwrap()])
+            .output()
+            .unwrap()
+    };
+    let r = import(&labels, &out);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
+    assert_eq!(ds.len(), 11);
+    assert_eq!(ds.columns.last().map(String::as_str), Some("operator"));
+    assert_eq!(ds.text_opt(4, "operator"), Some("ana"));
+    // The frames are the video's, bit for bit (lossless), and the run over
+    // the dataset scores its decisions against the labels.
+    let f3 = tactile_core::image_io::load_rgb(ds.path_of(3, "file").unwrap()).unwrap();
+    assert_eq!(f3.as_slice(), imgs[3].as_slice());
+    let (_, summary, _) = run(&["--data", out.to_str().unwrap()], None);
+    assert_eq!(summary["detector_accuracy"], 1.0, "{summary}");
+    // A second import over it is refused; a frame beyond the video and a
+    // mask outside the labels' folder are errors naming the line.
+    let r = import(&labels, &out);
+    assert!(String::from_utf8_lossy(&r.stderr).contains("exists and is not empty"));
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(&bad, "frame,tendon\n3,1\n40,1\n").unwrap();
+    let r = import(&bad, &dir.path().join("ds2"));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("bad.csv:3: frame 40 is not in"), "{err}");
+    std::fs::write(&bad, "frame,tendon,mask\n3,1,../../etc/passwd\n").unwrap();
+    let r = import(&bad, &dir.path().join("ds2"));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("bad.csv:2") && err.contains("goes up with '..'"),
+        "{err}"
+    );
+    assert!(
+        !dir.path().join("ds2").exists(),
+        "nothing left by a failed import"
+    );
 }

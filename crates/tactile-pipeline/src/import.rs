@@ -1,0 +1,288 @@
+//! Bring your own sensor: a video (or a folder of frames) and a CSV of
+//! labels become a dataset of the documented layout (`docs/datasets.md`)
+//! that every command reads.
+//!
+//! The labels CSV has a `frame` column naming each labelled frame: its
+//! number in the video (0-based), or a file name of the folder. Its other
+//! columns are the kind's labels (`docs/datasets.md`); a label column it
+//! lacks is left empty (unknown), and columns the kind does not know are
+//! kept. For visuo-tactile data, `mask` and `depth` cells name files
+//! relative to the labels CSV's folder (kept inside it), copied into the
+//! dataset. Frames without a row are not written.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use tactile_core::dataset::resolve_inside;
+use tactile_core::dataset::{Dataset, DatasetKind, DatasetWriter, FORMAT, MAX_ROWS, Manifest};
+use tactile_core::io::StagedDir;
+use tactile_core::{Error, Result};
+
+use crate::source::{FrameSource, SourceOptions, SourceSpec};
+
+/// What to import.
+#[derive(Debug, Clone)]
+pub struct ImportOptions {
+    /// The video file or folder of frames.
+    pub frames: PathBuf,
+    /// The labels CSV (a `frame` column and the kind's labels).
+    pub labels: PathBuf,
+    /// Which sensor the frames are from.
+    pub kind: DatasetKind,
+    /// The dataset folder to write.
+    pub out: PathBuf,
+    /// Free text for the manifest's `sensor_spec` (the rig, the camera).
+    pub sensor: String,
+    /// Replace an existing dataset at `out`.
+    pub force: bool,
+}
+
+/// What an import wrote.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ImportSummary {
+    /// The dataset folder.
+    pub out: PathBuf,
+    /// Frames written (one per labels row).
+    pub frames: usize,
+    /// Frames of the source read through.
+    pub frames_read: u64,
+    /// Frame width and height.
+    pub size: (usize, usize),
+}
+
+/// The labels CSV: its header and, per frame key, the line and the cells.
+struct Labels {
+    header: Vec<String>,
+    rows: BTreeMap<FrameKey, (usize, Vec<String>)>,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+enum FrameKey {
+    Number(u64),
+    Name(String),
+}
+
+fn read_labels(path: &Path) -> Result<Labels> {
+    tactile_core::image_io::expect_regular_file(path)?;
+    let bad = |line: usize, message: String| Error::Dataset {
+        path: path.to_path_buf(),
+        line: Some(line),
+        message,
+    };
+    let mut csv = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(std::fs::File::open(path).map_err(|e| Error::io(path, e))?);
+    let header: Vec<String> = csv
+        .headers()
+        .map_err(|e| bad(1, e.to_string()))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    for (i, h) in header.iter().enumerate() {
+        if header[..i].contains(h) {
+            return Err(bad(1, format!("column {h:?} appears twice")));
+        }
+    }
+    let Some(frame_col) = header.iter().position(|h| h == "frame") else {
+        return Err(bad(
+            1,
+            "no `frame` column: name each labelled frame by its number in the video (from 0) or its file name".into(),
+        ));
+    };
+    if header.iter().any(|h| h == "file") {
+        return Err(bad(
+            1,
+            "a `file` column: the dataset names its own frame files; give `frame` instead".into(),
+        ));
+    }
+    let mut rows = BTreeMap::new();
+    for (k, rec) in csv.records().enumerate() {
+        let line = k + 2;
+        if rows.len() >= MAX_ROWS {
+            return Err(bad(line, format!("more than {MAX_ROWS} rows")));
+        }
+        let rec = rec.map_err(|e| bad(line, e.to_string()))?;
+        let cells: Vec<String> = rec.iter().map(str::to_string).collect();
+        let key = &cells[frame_col];
+        if key.is_empty() {
+            return Err(bad(line, "empty `frame`".into()));
+        }
+        let key = match key.parse::<u64>() {
+            Ok(n) => FrameKey::Number(n),
+            Err(_) => FrameKey::Name(key.clone()),
+        };
+        if let Some((first, _)) = rows.get(&key) {
+            return Err(bad(
+                line,
+                format!("frame {key:?} is labelled twice (also on line {first})"),
+            ));
+        }
+        rows.insert(key, (line, cells));
+    }
+    if rows.is_empty() {
+        return Err(bad(2, "no labelled frames".into()));
+    }
+    Ok(Labels { header, rows })
+}
+
+/// Import `options.frames` with `options.labels` into a new dataset at
+/// `options.out`, written in a staging folder, checked by reading it back
+/// as every command will, then moved into place.
+pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
+    let out = &options.out;
+    if !options.force && std::fs::read_dir(out).is_ok_and(|mut entries| entries.next().is_some()) {
+        return Err(Error::Invalid(format!(
+            "{}: output folder exists and is not empty (use --force to replace a dataset)",
+            out.display()
+        )));
+    }
+    let labels = read_labels(&options.labels)?;
+    let parent = match options.labels.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let labels_dir = std::fs::canonicalize(parent).map_err(|e| Error::io(parent, e))?;
+    let kind_cols = options.kind.columns();
+    // Columns the kind does not know are kept after its own.
+    let extra: Vec<&str> = labels
+        .header
+        .iter()
+        .map(String::as_str)
+        .filter(|h| *h != "frame" && !kind_cols.contains(h))
+        .collect();
+    let col = |name: &str| labels.header.iter().position(|h| h == name);
+    let is_folder = options.frames.is_dir();
+    let mut source = FrameSource::open(
+        &SourceSpec::Path(options.frames.clone()),
+        SourceOptions::default(),
+    )?;
+    let staged = StagedDir::new(&options.out)?;
+    let root = staged.path().to_path_buf();
+    let mut writer = DatasetWriter::create(&root, options.kind, &extra, true)?;
+    for sub in ["frames", "masks", "depth"] {
+        tactile_core::io::create_dir_all(root.join(sub))?;
+    }
+    let mut size = None;
+    let (mut written, mut read) = (0usize, 0u64);
+    let mut done = std::collections::BTreeSet::new();
+    let pb = tactile_core::train::progress_bar(labels.rows.len() as u64, "import");
+    while done.len() < labels.rows.len() {
+        let Some(frame) = source.next_frame()? else {
+            break;
+        };
+        let number = read;
+        read += 1;
+        let key_num = FrameKey::Number(number);
+        let key_name = FrameKey::Name(frame.name.clone());
+        let (key, (line, cells)) = match (
+            labels.rows.get_key_value(&key_num),
+            is_folder
+                .then(|| labels.rows.get_key_value(&key_name))
+                .flatten(),
+        ) {
+            (Some(hit), _) | (None, Some(hit)) => hit,
+            (None, None) => continue,
+        };
+        let (w, h) = (frame.image.width(), frame.image.height());
+        match size {
+            None => size = Some((w, h)),
+            Some(s) if s != (w, h) => {
+                return Err(Error::image(
+                    &options.frames,
+                    format!(
+                        "frame {} is {w}x{h}, the first was {}x{}",
+                        frame.name, s.0, s.1
+                    ),
+                ));
+            }
+            Some(_) => {}
+        }
+        let file = format!("frames/{written:06}.png");
+        match options.kind {
+            DatasetKind::Visuotactile => tactile_core::image_io::save_rgb_png(
+                root.join(&file),
+                w,
+                h,
+                frame.image.as_slice(),
+            )?,
+            DatasetKind::Tactip => {
+                let grey = tactile_core::image_io::rgb_to_grey(frame.image.as_slice());
+                tactile_core::image_io::save_grey_png(root.join(&file), w, h, &grey)?
+            }
+        }
+        let mut row = Vec::with_capacity(kind_cols.len() + extra.len());
+        for c in kind_cols {
+            let cell = col(c).map(|i| cells[i].clone()).unwrap_or_default();
+            row.push(match *c {
+                "file" => file.clone(),
+                "mask" | "depth" if !cell.is_empty() => {
+                    let from =
+                        resolve_inside(&labels_dir, &cell).map_err(|why| Error::Dataset {
+                            path: options.labels.clone(),
+                            line: Some(*line),
+                            message: format!("{c} {cell:?} {}", why.describe()),
+                        })?;
+                    let ext = if *c == "mask" { "png" } else { "npy" };
+                    let dir = if *c == "mask" { "masks" } else { "depth" };
+                    let to = format!("{dir}/{:06}.{ext}", written);
+                    tactile_core::image_io::expect_regular_file(&from)?;
+                    std::fs::copy(&from, root.join(&to)).map_err(|e| Error::io(&from, e))?;
+                    to
+                }
+                "frame_index" if cell.is_empty() => number.to_string(),
+                _ => cell,
+            });
+        }
+        for c in &extra {
+            row.push(col(c).map(|i| cells[i].clone()).unwrap_or_default());
+        }
+        writer.push_row(row)?;
+        done.insert(key.clone());
+        written += 1;
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    if let Some((key, (line, _))) = labels.rows.iter().find(|(k, _)| !done.contains(*k)) {
+        return Err(Error::Dataset {
+            path: options.labels.clone(),
+            line: Some(*line),
+            message: format!(
+                "frame {} is not in {} ({read} frames read)",
+                match key {
+                    FrameKey::Number(n) => n.to_string(),
+                    FrameKey::Name(s) => format!("{s:?}"),
+                },
+                options.frames.display()
+            ),
+        });
+    }
+    let (w, h) = size.unwrap_or((0, 0));
+    writer.finish(Manifest {
+        format: FORMAT.into(),
+        kind: options.kind,
+        sensor_spec: options.sensor.clone(),
+        width: w as u32,
+        height: h as u32,
+        generator: format!(
+            "tactile dataset from-video {} (tactile-rs {})",
+            options
+                .frames
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy(),
+            env!("CARGO_PKG_VERSION")
+        ),
+        seed: None,
+        count: written,
+        extra: Default::default(),
+    })?;
+    // Read back as every command will: a bad label fails here, not later.
+    Dataset::open(&root)?;
+    let out = staged.commit(options.force)?;
+    Ok(ImportSummary {
+        out,
+        frames: written,
+        frames_read: read,
+        size: (w, h),
+    })
+}

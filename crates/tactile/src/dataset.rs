@@ -1,0 +1,75 @@
+//! `tactile dataset from-video`: a video or a folder of frames with a CSV
+//! of labels becomes a dataset every command reads.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Args, Subcommand, ValueEnum};
+use tactile_core::dataset::DatasetKind;
+use tactile_pipeline::import::{ImportOptions, import_dataset};
+
+#[derive(Subcommand)]
+pub(crate) enum DatasetCmd {
+    /// A video file (or a folder of PNG/JPEG frames) and a labels CSV with a
+    /// `frame` column (the frame's number from 0, or its file name) become
+    /// a dataset of the documented layout; unlabelled frames are skipped.
+    FromVideo(FromVideoArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Kind {
+    /// TacTip frames (paper A): saved grey.
+    Tactip,
+    /// Visuo-tactile palpation frames (paper B): saved RGB.
+    Visuotactile,
+}
+
+#[derive(Args)]
+pub(crate) struct FromVideoArgs {
+    /// The video file (anything FFmpeg decodes) or folder of frames.
+    #[arg(long)]
+    video: PathBuf,
+    /// Labels CSV: a `frame` column and the kind's label columns
+    /// (docs/datasets.md); `mask` and `depth` name files beside it.
+    #[arg(long)]
+    labels: PathBuf,
+    /// Which sensor the frames are from.
+    #[arg(long, value_enum)]
+    kind: Kind,
+    /// The dataset folder to write.
+    #[arg(long)]
+    out: PathBuf,
+    /// The manifest's `sensor_spec`: your rig and camera, in words.
+    #[arg(long, default_value = "real sensor")]
+    sensor: String,
+    /// Replace an existing dataset at --out.
+    #[arg(long)]
+    force: bool,
+}
+
+pub(crate) fn main(cmd: DatasetCmd) -> Result<()> {
+    match cmd {
+        DatasetCmd::FromVideo(a) => {
+            let s = import_dataset(&ImportOptions {
+                frames: a.video,
+                labels: a.labels,
+                kind: match a.kind {
+                    Kind::Tactip => DatasetKind::Tactip,
+                    Kind::Visuotactile => DatasetKind::Visuotactile,
+                },
+                out: a.out,
+                sensor: a.sensor,
+                force: a.force,
+            })?;
+            say!(
+                "{} labelled frames ({}x{}) of {} read written to {}",
+                s.frames,
+                s.size.0,
+                s.size.1,
+                s.frames_read,
+                s.out.display()
+            );
+        }
+    }
+    Ok(())
+}
