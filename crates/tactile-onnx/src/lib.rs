@@ -11,6 +11,7 @@
 mod error;
 pub mod export;
 pub mod runtime;
+pub mod standalone;
 
 use std::path::Path;
 

@@ -99,6 +99,16 @@ impl OrtModel {
         let (s, v) = outputs[0].try_extract_tensor::<f32>().map_err(err)?;
         Ok((s.iter().map(|&d| d as usize).collect(), v.to_vec()))
     }
+
+    /// Run the model's single uint8 input (a standalone model's `frame`),
+    /// returning its first output's shape and values.
+    pub fn run_u8(&mut self, shape: &[usize], data: Vec<u8>) -> Result<(Vec<usize>, Vec<f32>)> {
+        let err = |e: ort::Error| Error::Run(format!("run failed: {e}"));
+        let input = Tensor::from_array((shape.to_vec(), data)).map_err(err)?;
+        let outputs = self.session.run(ort::inputs![input]).map_err(err)?;
+        let (s, v) = outputs[0].try_extract_tensor::<f32>().map_err(err)?;
+        Ok((s.iter().map(|&d| d as usize).collect(), v.to_vec()))
+    }
 }
 
 impl Network for OrtModel {

@@ -59,3 +59,109 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
     };
     Ok(Exported { kind, bytes })
 }
+
+/// Export the detector, segmenter or depth network in `dir` as a model
+/// that stands alone ([`tactile_onnx::standalone`]): input `frame`, uint8
+/// `[N, H, W, 3]` at the model's input size (the segmenter's: its square
+/// window); output `tendon_probability` `[N, 1]`, `mask_probability`
+/// `[N, 1, S, S]` or `depth_mm` `[N, 1, H, W]`; the threshold, statistics,
+/// input size and toolkit version in its metadata.
+pub fn export_standalone(dir: &Path) -> Result<Exported> {
+    use tactile_onnx::standalone::{StandaloneOutput, StandaloneSpec, make_standalone};
+    let device = DeviceKind::Flex.device();
+    let list = |v: &[f32]| serde_json::to_string(v).unwrap_or_default();
+    let common = |kind: &str, w: usize, h: usize, mean: &[f32], std: &[f32]| {
+        vec![
+            ("tactile.model".to_string(), kind.to_string()),
+            ("tactile.version".into(), env!("CARGO_PKG_VERSION").into()),
+            ("input_size".into(), format!("{w}x{h}")),
+            ("input".into(), format!("frame: uint8 [N, {h}, {w}, 3] RGB")),
+            ("channel_mean".into(), list(mean)),
+            ("channel_std".into(), list(std)),
+        ]
+    };
+    let (kind, bytes) = if DetectorArtifact::is_in(dir) {
+        let l = DetectorArtifact::load(dir, &device)?;
+        let a = &l.artifact;
+        let [w, h] = a.model.input_size;
+        let mut metadata = common("detector", w, h, &a.stats.mean, &a.stats.std);
+        metadata.push(("threshold".into(), a.threshold.to_string()));
+        metadata.push((
+            "output".into(),
+            "tendon_probability: float32 [N, 1]; a tendon at >= threshold".into(),
+        ));
+        let spec = StandaloneSpec {
+            height: h,
+            width: w,
+            mean: a.stats.mean.clone(),
+            std: a.stats.std.clone(),
+            output: StandaloneOutput::Probability {
+                name: "tendon_probability".into(),
+            },
+            metadata,
+        };
+        ("detector", make_standalone(&a.onnx(&l.model)?, &spec)?)
+    } else if SegmenterArtifact::is_in(dir) {
+        let l = SegmenterArtifact::load(dir, &device)?;
+        let a = &l.artifact;
+        let s = a.model.side;
+        let mut metadata = common("segmenter", s, s, &a.stats.mean, &a.stats.std);
+        metadata.push(("threshold".into(), a.threshold.to_string()));
+        metadata.push((
+            "output".into(),
+            format!("mask_probability: float32 [N, 1, {s}, {s}]; tendon pixels at >= threshold"),
+        ));
+        metadata.push((
+            "window".into(),
+            format!("the frame scaled so its shorter side is {s} px, the centred {s} x {s} square"),
+        ));
+        let spec = StandaloneSpec {
+            height: s,
+            width: s,
+            mean: a.stats.mean.clone(),
+            std: a.stats.std.clone(),
+            output: StandaloneOutput::Probability {
+                name: "mask_probability".into(),
+            },
+            metadata,
+        };
+        ("segmenter", make_standalone(&a.onnx(&l.model)?, &spec)?)
+    } else if DepthArtifact::is_in(dir) {
+        let l = DepthArtifact::load(dir, &device)?;
+        let a = &l.artifact;
+        if a.with_mask {
+            return Err(tactile_core::Error::Invalid(format!(
+                "{}: this depth network also takes a mask channel; a standalone export takes the frame only",
+                dir.display()
+            ))
+            .into());
+        }
+        let [w, h] = a.model.input_size;
+        let mut metadata = common("depth", w, h, &a.stats.mean, &a.stats.std);
+        metadata.push((
+            "output".into(),
+            format!("depth_mm: float32 [N, 1, {h}, {w}], camera to skin, mm"),
+        ));
+        let spec = StandaloneSpec {
+            height: h,
+            width: w,
+            mean: a.stats.mean.clone(),
+            std: a.stats.std.clone(),
+            output: StandaloneOutput::Affine {
+                name: "depth_mm".into(),
+                scale: a.scale.unit_mm,
+                offset: a.scale.offset_mm,
+            },
+            metadata,
+        };
+        ("depth network", make_standalone(&a.onnx(&l.model)?, &spec)?)
+    } else {
+        return Err(tactile_core::Error::wrong_kind(
+            dir,
+            "detector, segmenter or depth model folder",
+            "no detector.json, segmenter.json or depth.json",
+        )
+        .into());
+    };
+    Ok(Exported { kind, bytes })
+}

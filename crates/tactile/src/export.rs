@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use tactile_pipeline::export::{Part, export_model};
+use tactile_pipeline::export::{Part, export_model, export_standalone};
 
 #[derive(Args)]
 pub(crate) struct ExportArgs {
@@ -17,11 +17,21 @@ pub(crate) struct ExportArgs {
     /// For a CAE: the encoder (pin image -> features) or the whole autoencoder.
     #[arg(long, value_enum, default_value_t = Part::Encoder)]
     part: Part,
+    /// Paper B models: a model that stands alone (docs/onnx.md): input
+    /// `frame`, uint8 [N, H, W, 3] at the model's input size, normalisation
+    /// and the sigmoid (or the millimetre scale) inside, named outputs
+    /// (tendon_probability, mask_probability, depth_mm), the threshold,
+    /// statistics, input size and version in its metadata.
+    #[arg(long)]
+    standalone: bool,
 }
 
 pub(crate) fn main(a: ExportArgs) -> Result<()> {
     tactile_core::io::check_output_file(&a.out, &[])?;
-    let e = export_model(&a.model, a.part)?;
+    let e = match a.standalone {
+        true => export_standalone(&a.model)?,
+        false => export_model(&a.model, a.part)?,
+    };
     tactile_onnx::save_onnx(&a.out, &e.bytes)?;
     say!(
         "{} exported to {} ({} bytes)",

@@ -1,0 +1,239 @@
+//! ONNX models that stand alone: the graph takes the frame as a user has
+//! it and gives what a user wants, so onnxruntime (or any ONNX runtime)
+//! needs no toolkit code around it.
+//!
+//! An exported network takes normalised `[N, C, H, W]` float values and
+//! gives raw outputs. [`make_standalone`] edits its graph: the input
+//! becomes `frame`, `uint8` `[N, H, W, C]`, cast, scaled to `[0, 1]`,
+//! normalised by the training statistics and transposed inside; the
+//! output passes a sigmoid (a probability) or an affine map (a depth in
+//! millimetres) and takes a name that says what it is. The model's own
+//! numbers (threshold, statistics, input size, toolkit version) go into
+//! its metadata.
+
+use onnx_ir::{AttributeProto, AttributeType, Message, ModelProto, NodeProto, TensorProto};
+
+use crate::{Error, Result};
+
+/// ONNX's element type codes used here.
+const FLOAT: i32 = 1;
+const UINT8: i32 = 2;
+
+/// What the standalone output is.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StandaloneOutput {
+    /// The sigmoid of the network's logits, named `name`.
+    Probability {
+        /// Output name (`tendon_probability`, `mask_probability`).
+        name: String,
+    },
+    /// `raw * scale + offset`, named `name` (a depth in mm).
+    Affine {
+        /// Output name (`depth_mm`).
+        name: String,
+        /// Multiplier.
+        scale: f32,
+        /// Offset.
+        offset: f32,
+    },
+}
+
+/// How to wrap a network.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StandaloneSpec {
+    /// The frame's height and width the network takes.
+    pub height: usize,
+    /// See `height`.
+    pub width: usize,
+    /// Per-channel mean of the `[0, 1]` training pixels.
+    pub mean: Vec<f32>,
+    /// Per-channel standard deviation of the `[0, 1]` training pixels.
+    pub std: Vec<f32>,
+    /// The output.
+    pub output: StandaloneOutput,
+    /// Key-value pairs for the model's metadata.
+    pub metadata: Vec<(String, String)>,
+}
+
+fn constant(name: &str, dims: &[i64], values: Vec<f32>) -> TensorProto {
+    TensorProto {
+        name: name.to_string(),
+        dims: dims.to_vec(),
+        data_type: FLOAT,
+        float_data: values,
+        ..Default::default()
+    }
+}
+
+fn node(op: &str, name: &str, inputs: &[&str], output: &str) -> NodeProto {
+    NodeProto {
+        op_type: op.to_string(),
+        name: name.to_string(),
+        input: inputs.iter().map(|s| s.to_string()).collect(),
+        output: vec![output.to_string()],
+        ..Default::default()
+    }
+}
+
+fn int_attribute(name: &str, value: i64) -> AttributeProto {
+    AttributeProto {
+        name: name.to_string(),
+        type_: AttributeType::INT.into(),
+        i: value,
+        ..Default::default()
+    }
+}
+
+fn ints_attribute(name: &str, values: &[i64]) -> AttributeProto {
+    AttributeProto {
+        name: name.to_string(),
+        type_: AttributeType::INTS.into(),
+        ints: values.to_vec(),
+        ..Default::default()
+    }
+}
+
+/// Wrap the exported network `onnx` (one `[N, C, H, W]` float input, one
+/// output) as `spec` says; the new model's bytes.
+pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
+    let bad = |m: String| Error::Export(format!("standalone export: {m}"));
+    let channels = spec.mean.len();
+    if channels == 0 || spec.std.len() != channels {
+        return Err(bad(format!(
+            "{} means and {} standard deviations",
+            channels,
+            spec.std.len()
+        )));
+    }
+    let mut model = ModelProto::parse_from_bytes(onnx)
+        .map_err(|e| bad(format!("cannot read the export: {e}")))?;
+    let graph = model.graph.mut_or_insert_default();
+    let initialised: std::collections::HashSet<String> =
+        graph.initializer.iter().map(|t| t.name.clone()).collect();
+    let inputs: Vec<usize> = (0..graph.input.len())
+        .filter(|&i| !initialised.contains(&graph.input[i].name))
+        .collect();
+    let (&[input], [_]) = (inputs.as_slice(), graph.output.as_slice()) else {
+        return Err(bad(format!(
+            "the network has {} inputs and {} outputs; one of each is needed",
+            inputs.len(),
+            graph.output.len()
+        )));
+    };
+    let old_in = graph.input[input].name.clone();
+    let old_out = graph.output[0].name.clone();
+    // The batch axis as the export names it (symbolic), kept.
+    let batch = graph.input[input]
+        .type_
+        .tensor_type()
+        .shape
+        .dim
+        .first()
+        .cloned()
+        .unwrap_or_default();
+
+    // frame (uint8 NHWC) -> normalised float NCHW, the network's input.
+    let c = channels as i64;
+    graph
+        .initializer
+        .push(constant("frame_scale", &[], vec![255.0]));
+    graph
+        .initializer
+        .push(constant("channel_mean", &[1, 1, 1, c], spec.mean.clone()));
+    graph
+        .initializer
+        .push(constant("channel_std", &[1, 1, 1, c], spec.std.clone()));
+    let mut cast = node("Cast", "frame_to_float", &["frame"], "frame_f32");
+    cast.attribute.push(int_attribute("to", FLOAT as i64));
+    let mut transpose = node("Transpose", "frame_to_nchw", &["frame_normalised"], &old_in);
+    transpose
+        .attribute
+        .push(ints_attribute("perm", &[0, 3, 1, 2]));
+    let prefix = vec![
+        cast,
+        node(
+            "Div",
+            "frame_to_unit",
+            &["frame_f32", "frame_scale"],
+            "frame_unit",
+        ),
+        node(
+            "Sub",
+            "frame_centre",
+            &["frame_unit", "channel_mean"],
+            "frame_centred",
+        ),
+        node(
+            "Div",
+            "frame_normalise",
+            &["frame_centred", "channel_std"],
+            "frame_normalised",
+        ),
+        transpose,
+    ];
+    let tail = std::mem::take(&mut graph.node);
+    graph.node = prefix.into_iter().chain(tail).collect();
+    let frame = &mut graph.input[input];
+    frame.name = "frame".into();
+    let tensor = frame.type_.mut_or_insert_default().mut_tensor_type();
+    tensor.elem_type = UINT8;
+    let shape = tensor.shape.mut_or_insert_default();
+    shape.dim.clear();
+    for v in [spec.height as i64, spec.width as i64, c] {
+        let mut d = batch.clone();
+        d.set_dim_value(v);
+        shape.dim.push(d);
+    }
+    shape.dim.insert(0, batch);
+
+    // The network's output -> what the user wants, named.
+    let name = match &spec.output {
+        StandaloneOutput::Probability { name } => {
+            graph
+                .node
+                .push(node("Sigmoid", "to_probability", &[&old_out], name));
+            name
+        }
+        StandaloneOutput::Affine {
+            name,
+            scale,
+            offset,
+        } => {
+            graph
+                .initializer
+                .push(constant("output_scale", &[], vec![*scale]));
+            graph
+                .initializer
+                .push(constant("output_offset", &[], vec![*offset]));
+            graph.node.push(node(
+                "Mul",
+                "output_scaled",
+                &[&old_out, "output_scale"],
+                "output_scaled",
+            ));
+            graph.node.push(node(
+                "Add",
+                "output_shifted",
+                &["output_scaled", "output_offset"],
+                name,
+            ));
+            name
+        }
+    };
+    graph.output[0].name = name.clone();
+    graph.output[0]
+        .type_
+        .mut_or_insert_default()
+        .mut_tensor_type()
+        .elem_type = FLOAT;
+    for (k, v) in &spec.metadata {
+        model.metadata_props.push(Default::default());
+        if let Some(entry) = model.metadata_props.last_mut() {
+            entry.key = k.clone();
+            entry.value = v.clone();
+        }
+    }
+    model
+        .write_to_bytes()
+        .map_err(|e| bad(format!("cannot write the model: {e}")))
+}

@@ -1,0 +1,119 @@
+#![allow(clippy::unwrap_used)]
+//! A standalone export (`tactile export --standalone`) gives in
+//! onnxruntime, from the frame's bytes alone, what the toolkit's own path
+//! gives: the detector's probability, the segmenter's mask probabilities
+//! and the depth in mm, on the shipped models and sample frames.
+
+use std::path::{Path, PathBuf};
+
+use tactile_core::Runtime;
+use tactile_depth::DepthEstimator;
+use tactile_detect::TendonDetector;
+use tactile_onnx::runtime::OrtModel;
+use tactile_pipeline::export::export_standalone;
+use tactile_preprocess::visuo::resize_rgb;
+use tactile_segment::TendonSegmenter;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn frames() -> Vec<tactile_core::image_io::RgbImage> {
+    (0..12)
+        .map(|i| {
+            tactile_core::image_io::load_rgb(root().join(format!("samples/palpation/{i:06}.png")))
+                .unwrap()
+        })
+        .collect()
+}
+
+fn standalone(model: &str) -> OrtModel {
+    let e = export_standalone(&root().join("models").join(model)).unwrap();
+    OrtModel::from_bytes(&e.bytes, 1).unwrap()
+}
+
+fn max_diff(a: &[f32], b: &[f32]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn the_standalone_detector_gives_the_toolkits_probabilities() {
+    let mut det = TendonDetector::load(root().join("models/detector"), Runtime::Onnx, 1).unwrap();
+    let mut alone = standalone("detector");
+    let [w, h] = det.artifact.model.input_size;
+    for f in frames() {
+        let bytes = resize_rgb(&f, w, h).unwrap().to_bytes();
+        let (shape, p) = alone.run_u8(&[1, h, w, 3], bytes).unwrap();
+        assert_eq!(shape, [1, 1]);
+        let q = det.probability(&f).unwrap();
+        assert!(
+            (p[0] - q).abs() < 1e-5,
+            "standalone {} vs toolkit {q}",
+            p[0]
+        );
+        assert_eq!(det.is_tendon(p[0]), det.is_tendon(q));
+    }
+}
+
+#[test]
+fn the_standalone_segmenter_gives_the_toolkits_mask_probabilities() {
+    let mut seg = TendonSegmenter::load(root().join("models/segmenter"), Runtime::Onnx, 1).unwrap();
+    let mut alone = standalone("segmenter");
+    let s = seg.artifact.model.side;
+    for f in frames() {
+        let window = seg.artifact.frame_window(&f).unwrap();
+        let (shape, p) = alone.run_u8(&[1, s, s, 3], window.to_bytes()).unwrap();
+        assert_eq!(shape, [1, 1, s, s]);
+        let input = seg.artifact.window_input(&window).unwrap();
+        let q = seg.probabilities(&input, 1).unwrap().remove(0);
+        assert!(
+            max_diff(&p, &q) < 1e-5,
+            "max difference {}",
+            max_diff(&p, &q)
+        );
+    }
+}
+
+#[test]
+fn the_standalone_depth_network_gives_the_toolkits_depth_in_mm() {
+    let mut depth = DepthEstimator::load(root().join("models/depth"), Runtime::Onnx, 1).unwrap();
+    let mut alone = standalone("depth");
+    let [w, h] = depth.artifact.model.input_size;
+    for f in frames() {
+        let bytes = resize_rgb(&f, w, h).unwrap().to_bytes();
+        let (shape, mm) = alone.run_u8(&[1, h, w, 3], bytes).unwrap();
+        assert_eq!(shape, [1, 1, h, w]);
+        let q = depth.depth_mm(&f, None).unwrap();
+        assert!(
+            max_diff(&mm, &q) < 1e-4,
+            "max difference {} mm",
+            max_diff(&mm, &q)
+        );
+    }
+}
+
+#[test]
+fn the_standalone_model_says_what_it_is_in_its_metadata() {
+    let e = export_standalone(&root().join("models/detector")).unwrap();
+    let text = String::from_utf8_lossy(&e.bytes);
+    for key in [
+        "threshold",
+        "channel_mean",
+        "input_size",
+        "tactile.version",
+        "tendon_probability",
+    ] {
+        assert!(text.contains(key), "{key} missing from the model");
+    }
+    let err = export_standalone(&root().join("models/cae-synth"))
+        .err()
+        .unwrap();
+    assert!(
+        err.to_string().contains("detector, segmenter or depth"),
+        "{err}"
+    );
+}
