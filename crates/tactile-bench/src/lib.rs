@@ -9,6 +9,7 @@
 
 pub mod cae;
 pub mod compare;
+pub mod devices;
 mod error;
 pub mod latency;
 pub mod models;

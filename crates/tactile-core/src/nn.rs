@@ -1,4 +1,5 @@
-//! Numerically stable losses shared by every model.
+//! Numerically stable losses shared by every model, and folding a batch
+//! norm into its convolution for inference.
 
 use burn::tensor::Tensor;
 use burn::tensor::activation::relu;
@@ -94,6 +95,25 @@ pub fn ssim_loss(pred: Tensor<4>, target: Tensor<4>, range: f64) -> Tensor<1> {
     (num / den).mean().neg().add_scalar(1.0).div_scalar(2.0)
 }
 
+/// Fold the eval-mode batch norm `bn` that follows `conv` into `conv`'s
+/// weights and bias, so the convolution alone gives what both gave:
+/// `s = gamma / sqrt(var + eps)`, `w' = w * s` per output channel,
+/// `b' = (b - mean) * s + beta`. For inference only (the running
+/// statistics are baked in).
+pub fn fold_batch_norm(conv: &mut burn::nn::conv::Conv2d, bn: &burn::nn::BatchNorm) {
+    use burn::module::Param;
+    let s = bn.gamma.val() / (bn.running_var.value() + bn.epsilon).sqrt();
+    let [o, _, _, _] = conv.weight.dims();
+    let w = conv.weight.val() * s.clone().reshape([o, 1, 1, 1]);
+    let b = match &conv.bias {
+        Some(b) => b.val(),
+        None => Tensor::zeros([o], &w.device()),
+    };
+    let b = (b - bn.running_mean.value()) * s + bn.beta.val();
+    conv.weight = Param::from_tensor(w);
+    conv.bias = Some(Param::from_tensor(b));
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -178,5 +198,30 @@ mod tests {
         let wrong = y.clone().mul_scalar(-2000.0).add_scalar(1000.0);
         let l: f32 = dice_loss_with_logits(wrong, y).into_scalar();
         assert!(l.is_finite() && l > 0.4, "{l}");
+    }
+
+    #[test]
+    fn a_folded_batch_norm_gives_what_conv_and_norm_gave() {
+        use burn::module::Param;
+        use burn::nn::BatchNormConfig;
+        use burn::nn::conv::Conv2dConfig;
+        let device = crate::DeviceKind::Flex.device();
+        let mut conv = Conv2dConfig::new([3, 4], [3, 3]).init(&device);
+        let mut bn = BatchNormConfig::new(4).init(&device);
+        let t = |v: [f32; 4]| Tensor::<1>::from_floats(v, &device);
+        bn.gamma = Param::from_tensor(t([0.5, 2.0, -1.0, 1.5]));
+        bn.beta = Param::from_tensor(t([0.1, -0.2, 0.3, 0.0]));
+        bn.running_mean = burn::module::RunningState::new(t([0.2, -0.1, 0.05, 1.0]));
+        bn.running_var = burn::module::RunningState::new(t([0.5, 2.0, 0.01, 1.0]));
+        let x = Tensor::<4>::random(
+            [2, 3, 8, 8],
+            burn::tensor::Distribution::Normal(0.0, 1.0),
+            &device,
+        );
+        let before = bn.forward(conv.forward(x.clone()));
+        fold_batch_norm(&mut conv, &bn);
+        let after = conv.forward(x);
+        let diff = (before - after).abs().max().into_scalar::<f32>();
+        assert!(diff < 1e-4, "largest difference {diff}");
     }
 }

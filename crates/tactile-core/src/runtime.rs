@@ -92,6 +92,16 @@ pub trait Network: Send {
 pub trait Forward: Module {
     /// The raw output of `x`, as data.
     fn forward_data(&self, x: Tensor<4>) -> TensorData;
+
+    /// The module made for inference only, giving the same outputs faster
+    /// (batch norms folded into the convolutions before them, see
+    /// [`crate::nn::fold_batch_norm`]); the default keeps it as it is.
+    fn for_inference(self) -> Self
+    where
+        Self: Sized,
+    {
+        self
+    }
 }
 
 /// A burn module on a burn device.
@@ -102,8 +112,19 @@ pub struct BurnNetwork<M> {
 }
 
 impl<M: Forward> BurnNetwork<M> {
-    /// Wrap `model`, which lives on `kind`'s device.
+    /// Wrap `model`, which lives on `kind`'s device, made for inference
+    /// ([`Forward::for_inference`]).
     pub fn new(model: M, kind: DeviceKind) -> Self {
+        Self {
+            model: model.for_inference(),
+            device: kind.device(),
+            kind,
+        }
+    }
+
+    /// Wrap `model` as it is, without [`Forward::for_inference`]: what the
+    /// benches compare the inference form against.
+    pub fn as_trained(model: M, kind: DeviceKind) -> Self {
         Self {
             model,
             device: kind.device(),

@@ -216,12 +216,29 @@ pub struct DenseLayer {
     pub norm2: BatchNorm,
     /// 3x3 to `growth` channels.
     pub conv2: Conv2d,
+    /// True once `norm2` is folded into `conv1` (inference only).
+    #[module(skip)]
+    pub folded: bool,
 }
 
 impl DenseLayer {
     fn forward(&self, x: Tensor<4>) -> Tensor<4> {
         let y = self.conv1.forward(relu(self.norm1.forward(x)));
-        self.conv2.forward(relu(self.norm2.forward(y)))
+        let y = if self.folded {
+            y
+        } else {
+            self.norm2.forward(y)
+        };
+        self.conv2.forward(relu(y))
+    }
+
+    /// `norm2` folded into `conv1`, the convolution before it (`norm1`
+    /// normalises the concatenated features and stays).
+    fn fold(&mut self) {
+        if !self.folded {
+            tactile_core::nn::fold_batch_norm(&mut self.conv1, &self.norm2);
+            self.folded = true;
+        }
     }
 }
 
@@ -269,13 +286,35 @@ pub struct DenseNetEncoder {
     pub transitions: Vec<Transition>,
     /// After the last block.
     pub norm5: BatchNorm,
+    /// True once `norm0` is folded into `conv0` (inference only).
+    #[module(skip)]
+    pub folded: bool,
 }
 
 impl DenseNetEncoder {
+    /// Every norm that follows a convolution folded into it: the stem's
+    /// and each dense layer's second (inference only).
+    pub fn fold_batch_norms(&mut self) {
+        if !self.folded {
+            tactile_core::nn::fold_batch_norm(&mut self.conv0, &self.norm0);
+            self.folded = true;
+        }
+        for b in &mut self.blocks {
+            for l in &mut b.layers {
+                l.fold();
+            }
+        }
+    }
+
     /// The skips, shallow first: the stem (1/2) and blocks 1-3 (1/4, 1/8,
     /// 1/16); and the deepest features, block 4 after the final norm (1/32).
     pub fn forward(&self, x: Tensor<4>) -> (Vec<Tensor<4>>, Tensor<4>) {
-        let s0 = relu(self.norm0.forward(self.conv0.forward(x)));
+        let s0 = self.conv0.forward(x);
+        let s0 = relu(if self.folded {
+            s0
+        } else {
+            self.norm0.forward(s0)
+        });
         let mut x = self.pool0.forward(s0.clone());
         let mut skips = vec![s0];
         for (i, b) in self.blocks.iter().enumerate() {
@@ -330,6 +369,7 @@ impl DenseNetConfig {
                         conv1: conv(cin, mid, 1, false, device),
                         norm2: bn(mid, device),
                         conv2: conv(mid, self.growth_rate, 3, false, device),
+                        folded: false,
                     }
                 })
                 .collect();
@@ -359,6 +399,7 @@ impl DenseNetConfig {
             blocks,
             transitions,
             norm5: bn(c, device),
+            folded: false,
         }
     }
 }
@@ -490,6 +531,12 @@ impl DepthNetConfig {
 impl Forward for DepthNet {
     fn forward_data(&self, x: Tensor<4>) -> TensorData {
         self.forward(x).into_data()
+    }
+
+    /// The encoder's foldable batch norms folded into their convolutions.
+    fn for_inference(mut self) -> Self {
+        self.encoder.fold_batch_norms();
+        self
     }
 }
 

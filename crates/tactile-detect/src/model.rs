@@ -77,6 +77,9 @@ pub struct ConvBn {
     pub conv: Conv2d,
     /// Its batch norm.
     pub bn: BatchNorm,
+    /// True once the norm is folded into the convolution (inference only).
+    #[module(skip)]
+    pub folded: bool,
 }
 
 impl ConvBn {
@@ -90,11 +93,21 @@ impl ConvBn {
                 .with_bias(false)
                 .init(device),
             bn: BatchNormConfig::new(o).init(device),
+            folded: false,
         }
     }
 
     fn forward(&self, x: Tensor<4>) -> Tensor<4> {
-        self.bn.forward(self.conv.forward(x))
+        let y = self.conv.forward(x);
+        if self.folded { y } else { self.bn.forward(y) }
+    }
+
+    /// Fold the norm into the convolution: one op instead of two.
+    fn fold(&mut self) {
+        if !self.folded {
+            tactile_core::nn::fold_batch_norm(&mut self.conv, &self.bn);
+            self.folded = true;
+        }
     }
 }
 
@@ -361,6 +374,34 @@ impl DetectorConfig {
 impl Forward for Detector {
     fn forward_data(&self, x: Tensor<4>) -> TensorData {
         self.forward(x).into_data()
+    }
+
+    /// Every batch norm folded into its convolution.
+    fn for_inference(mut self) -> Self {
+        match &mut self.backbone {
+            Backbone::Mobilenet(m) => {
+                m.stem.fold();
+                for b in &mut m.blocks {
+                    if let Some(e) = b.expand.as_mut() {
+                        e.fold();
+                    }
+                    b.depthwise.fold();
+                    b.project.fold();
+                }
+                m.last.fold();
+            }
+            Backbone::Resnet(r) => {
+                r.stem.fold();
+                for b in &mut r.blocks {
+                    b.conv1.fold();
+                    b.conv2.fold();
+                    if let Some(s) = b.shortcut.as_mut() {
+                        s.fold();
+                    }
+                }
+            }
+        }
+        self
     }
 }
 

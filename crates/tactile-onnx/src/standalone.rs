@@ -237,3 +237,17 @@ pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
         .write_to_bytes()
         .map_err(|e| bad(format!("cannot write the model: {e}")))
 }
+
+/// How many operations (nodes) an ONNX model's graph has, by kind, most
+/// frequent first: what a runtime with a fixed cost per operation pays for.
+pub fn op_counts(onnx: &[u8]) -> Result<Vec<(String, usize)>> {
+    let model = ModelProto::parse_from_bytes(onnx)
+        .map_err(|e| Error::Export(format!("cannot read the model: {e}")))?;
+    let mut counts = std::collections::BTreeMap::<String, usize>::new();
+    for n in &model.graph.node {
+        *counts.entry(n.op_type.clone()).or_default() += 1;
+    }
+    let mut v: Vec<_> = counts.into_iter().collect();
+    v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    Ok(v)
+}

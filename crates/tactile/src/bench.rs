@@ -1,4 +1,4 @@
-//! `tactile bench cae|synth|resolution|detector|segmenter|depth`: speed against error.
+//! `tactile bench cae|synth|resolution|devices|detector|segmenter|depth`: speed against error.
 
 use std::path::PathBuf;
 
@@ -16,6 +16,9 @@ pub(crate) enum BenchCmd {
     /// The palpation pipeline per stage at 640x360 against the sensor's
     /// native 1920x1080, and FFmpeg's 1080p H.264 decoding rate.
     Resolution(ResolutionArgs),
+    /// The shipped paper B models at batch 1 on every device, as trained and
+    /// with batch norms folded, beside onnxruntime.
+    Devices(DevicesArgs),
     /// Tendon detectors of a sweep: accuracy against latency per runtime.
     Detector(ModelsArgs),
     /// Segmenters of a sweep: IoU and direction error against latency per runtime.
@@ -39,6 +42,19 @@ pub(crate) struct CaeArgs {
     #[arg(long, default_value_t = 30)]
     runs: usize,
     /// Also write the table (and its row as JSON beside it).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub(crate) struct DevicesArgs {
+    /// Folder with detector/, segmenter/ and depth/.
+    #[arg(long, default_value = "models")]
+    models: PathBuf,
+    /// Timed runs per measurement (median reported).
+    #[arg(long, default_value_t = 200, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    runs: u32,
+    /// Also write the table to this Markdown file (its rows as JSON beside it).
     #[arg(long)]
     out: Option<PathBuf>,
 }
@@ -100,6 +116,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Cae(a) => &a.out,
         BenchCmd::Synth(a) => &a.out,
         BenchCmd::Resolution(a) => &a.out,
+        BenchCmd::Devices(a) => &a.out,
         BenchCmd::Detector(a) | BenchCmd::Segmenter(a) | BenchCmd::Depth(a) => &a.out,
     };
     if let Some(out) = out {
@@ -133,6 +150,17 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             say_raw!("{md}");
             if let Some(out) = &a.out {
                 tactile_core::io::write_atomic(out, md.as_bytes())?;
+            }
+        }
+        BenchCmd::Devices(a) => {
+            let rows = tactile_bench::devices::bench_devices(&a.models, a.runs as usize)?;
+            let probes = tactile_bench::devices::conv_probes(a.runs as usize)?;
+            let md = tactile_bench::devices::devices_markdown(&rows, &probes, a.runs as usize);
+            say_raw!("{md}");
+            if let Some(out) = &a.out {
+                tactile_core::io::write_atomic(out, md.as_bytes())?;
+                let json = serde_json::json!({"models": rows, "convolutions": probes});
+                tactile_core::io::write_json_atomic(out.with_extension("json"), &json)?;
             }
         }
         BenchCmd::Resolution(a) => {
