@@ -100,3 +100,11 @@ pub fn header(what: &str, data: &Path, runs: usize) -> String {
         data.display()
     )
 }
+
+/// Write a bench's Markdown to `out` and its rows as JSON beside it
+/// (`out` with the extension `json`), each atomically.
+pub fn write_markdown_and_json<T: Serialize>(out: &Path, markdown: &str, rows: &T) -> Result<()> {
+    tactile_core::io::write_atomic(out, markdown.as_bytes())?;
+    tactile_core::io::write_json_atomic(out.with_extension("json"), rows)?;
+    Ok(())
+}

@@ -40,6 +40,10 @@ pub struct ResolutionBench {
     pub rows: Vec<ResolutionRow>,
     /// Where the networks ran.
     pub runtime: Runtime,
+    /// One 1920x1080 frame to 640x360, ms (median): `fast_image_resize`'s
+    /// box filter (the working frame) and the toolkit's own area resize
+    /// (`visuo::resize_rgb`, what each model did to the full frame before).
+    pub downsample_ms: Option<[f64; 2]>,
     /// Frames per second FFmpeg decoded a 1920 x 1080 H.264 stream at, one
     /// decoding thread, when FFmpeg is installed.
     pub decode_fps_1080p: Option<f64>,
@@ -71,6 +75,13 @@ impl ResolutionBench {
                 r.depth_ms,
                 r.total_ms,
                 r.total_ms / base
+            ));
+        }
+        if let Some([fir, area]) = self.downsample_ms {
+            md.push_str(&format!(
+                "\nOne 1920x1080 frame to 640x360: fast_image_resize's box filter {fir:.2} ms, \
+                 the toolkit's own area resize (to floats) {area:.2} ms; before the working frame, \
+                 each of the three models resized the full frame itself.\n"
             ));
         }
         if let Some(fps) = self.decode_fps_1080p {
@@ -162,6 +173,19 @@ pub fn bench_resolution(
             }
         })
         .collect();
+    let downsample_ms = match sizes.iter().position(|&s| s == (1920, 1080)) {
+        Some(k) if !sets[k].is_empty() => {
+            let f = &sets[k][0];
+            let fir = tactile_core::bench::median_seconds(3, 30, || {
+                let _ = tactile_preprocess::visuo::working_frame(f, 360);
+            });
+            let area = tactile_core::bench::median_seconds(3, 30, || {
+                let _ = tactile_preprocess::visuo::resize_rgb(f, 640, 360);
+            });
+            Some([1e3 * fir, 1e3 * area])
+        }
+        _ => None,
+    };
     let decode_fps_1080p = match sizes.iter().position(|&s| s == (1920, 1080)) {
         Some(k) => decode_rate(&sets[k])?,
         None => None,
@@ -169,6 +193,7 @@ pub fn bench_resolution(
     Ok(ResolutionBench {
         rows,
         runtime,
+        downsample_ms,
         decode_fps_1080p,
     })
 }

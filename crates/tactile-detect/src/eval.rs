@@ -30,6 +30,36 @@ pub struct DetectorScores {
     pub threshold: f64,
 }
 
+impl DetectorScores {
+    /// The scores in a few lines for a person (`device`: where it ran).
+    pub fn describe(&self, device: impl std::fmt::Display) -> Vec<String> {
+        let (s, st) = (&self.all, &self.onset_release);
+        vec![
+            format!(
+                "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
+                s.frames,
+                s.true_pos + s.false_neg,
+                s.accuracy,
+                s.precision,
+                s.recall,
+                s.f1
+            ),
+            format!(
+                "confusion: {} true positive, {} false positive, {} true negative, {} false negative",
+                s.true_pos, s.false_pos, s.true_neg, s.false_neg
+            ),
+            format!(
+                "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
+                st.frames, st.accuracy, st.false_pos, st.false_neg
+            ),
+            format!(
+                "{:.2} ms per frame ({device}, batch {EVAL_BATCH}, resize excluded)",
+                self.ms_per_frame
+            ),
+        ]
+    }
+}
+
 /// Score `detector` on every frame of `data` (loaded at its input size).
 pub fn evaluate(detector: &mut TendonDetector, data: &DetectionSet) -> Result<DetectorScores> {
     let size = detector.artifact.model.input_size;

@@ -86,6 +86,99 @@ pub struct RunSummary {
     pub peak_rss_mb: Option<f64>,
 }
 
+impl RunSummary {
+    /// The summary in a few lines for a person.
+    pub fn describe(&self) -> Vec<String> {
+        let stage =
+            |v: Option<Spread>| v.map_or("-".into(), |[m, p]| format!("{m:.2} / {p:.2} ms"));
+        let source = serde_json::to_value(self.source).ok();
+        let mut lines = vec![
+            format!(
+                "{} frames from a {} ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass",
+                self.frames,
+                source.as_ref().and_then(|v| v.as_str()).unwrap_or("source"),
+                self.fps,
+                self.runtime,
+                self.gated_out
+            ),
+            format!(
+                "median / p95 per stage: prepare {}, detect {}, segment + direction {}, depth {}, whole frame {}",
+                stage(self.stages_ms.prepare),
+                stage(self.stages_ms.detect),
+                stage(self.stages_ms.segment),
+                stage(self.stages_ms.depth),
+                stage(self.stages_ms.frame)
+            ),
+        ];
+        if self.source.is_live() {
+            lines.push(format!(
+                "live: {} frame(s) dropped while the models were busy; arrival to record {}",
+                self.dropped_frames,
+                stage(self.latency_ms)
+            ));
+        }
+        if let Some(acc) = self.detector_accuracy {
+            lines.push(format!(
+                "tendon decisions: accuracy {acc:.4} with {} changes within sequences ({} changes in the labels); the detector's threshold alone: {:.4}, {} changes",
+                self.decision_changes,
+                self.label_changes,
+                self.detector_accuracy_threshold_only.unwrap_or(f64::NAN),
+                self.decision_changes_threshold_only
+            ));
+        }
+        lines
+    }
+}
+
+/// Where records go as JSON Lines: standard output (flushed per record;
+/// a reader that has gone stops the run quietly) or a file that appears
+/// when [`JsonLines::finish`] is called.
+pub enum JsonLines {
+    /// Standard output.
+    Stdout,
+    /// A file, written atomically.
+    File(tactile_core::io::AtomicFile),
+}
+
+impl JsonLines {
+    /// `-` for standard output, else a file.
+    pub fn create(out: &Path) -> Result<Self> {
+        Ok(match out == Path::new("-") {
+            true => JsonLines::Stdout,
+            false => JsonLines::File(tactile_core::io::AtomicFile::create(out)?),
+        })
+    }
+
+    /// Write one record; [`Flow::Stop`] when standard output was closed.
+    pub fn write(&mut self, rec: &FrameRecord) -> Result<Flow> {
+        let line = serde_json::to_string(rec).map_err(|e| {
+            tactile_core::Error::Invalid(format!("cannot write a record as JSON: {e}"))
+        })?;
+        match self {
+            JsonLines::File(f) => f.write_line(&line)?,
+            JsonLines::Stdout => {
+                use std::io::Write as _;
+                let mut out = std::io::stdout().lock();
+                if let Err(e) = writeln!(out, "{line}").and_then(|_| out.flush()) {
+                    if e.kind() == std::io::ErrorKind::BrokenPipe {
+                        return Ok(Flow::Stop);
+                    }
+                    return Err(tactile_core::Error::io("<stdout>", e).into());
+                }
+            }
+        }
+        Ok(Flow::Continue)
+    }
+
+    /// Move a file into place.
+    pub fn finish(self) -> Result<()> {
+        if let JsonLines::File(f) = self {
+            f.commit()?;
+        }
+        Ok(())
+    }
+}
+
 /// What the consumer of records wants next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Flow {

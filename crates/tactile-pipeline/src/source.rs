@@ -134,6 +134,31 @@ impl FrameList {
         })
     }
 
+    /// What a user should know before the run: frames missing from the
+    /// numbering, files that are not frames.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let missing = self.missing_frames();
+        if missing.count > 0 {
+            w.push(format!(
+                "warning: {} frame(s) missing from the numbering, e.g. {:?}",
+                missing.count, missing.first
+            ));
+        }
+        if !self.ignored.is_empty() {
+            let names: Vec<_> = (self.ignored.iter().take(5))
+                .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
+                .collect();
+            w.push(format!(
+                "warning: {} file(s) that are not PNG or JPEG frames were not read: {}{}",
+                self.ignored.len(),
+                names.join(", "),
+                if self.ignored.len() > 5 { ", ..." } else { "" }
+            ));
+        }
+        w
+    }
+
     /// Keep the first `n` frames.
     pub fn truncate(&mut self, n: usize) {
         self.frames.truncate(n);

@@ -46,6 +46,31 @@ pub struct SegmenterScores {
 }
 
 impl SegmenterScores {
+    /// The scores as a Markdown table per path and a timing line
+    /// (`device`: where it ran).
+    pub fn describe(&self, device: impl std::fmt::Display) -> Vec<String> {
+        let mut lines = vec![
+            "| tendon path | frames | mean IoU | direction median (deg) | direction p90 (deg) | no direction |".to_string(),
+            "|---|---|---|---|---|---|".to_string(),
+        ];
+        for r in &self.paths {
+            lines.push(format!(
+                "| {} | {} | {:.4} | {:.2} | {:.2} | {} |",
+                r.path,
+                r.frames,
+                r.mean_iou,
+                r.direction_median_deg,
+                r.direction_p90_deg,
+                r.no_direction
+            ));
+        }
+        lines.push(format!(
+            "{:.2} ms per window ({device}, batch {EVAL_BATCH}, cut excluded)",
+            self.ms_per_window
+        ));
+        lines
+    }
+
     /// The row of `path` (`all`, [`CURVED`], `straight`, ...).
     pub fn path(&self, path: &str) -> Option<&PathScores> {
         self.paths.iter().find(|r| r.path == path)

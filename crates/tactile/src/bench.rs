@@ -6,6 +6,7 @@ use anyhow::Result;
 use clap::{Args, Subcommand};
 use tactile_bench::cae::{CaeBench, bench_cae};
 use tactile_bench::models::{ModelBench, bench_depth, bench_detectors, bench_segmenters};
+use tactile_bench::output::write_markdown_and_json;
 
 #[derive(Subcommand)]
 pub(crate) enum BenchCmd {
@@ -158,9 +159,8 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             let md = tactile_bench::devices::devices_markdown(&rows, &probes, a.runs as usize);
             say_raw!("{md}");
             if let Some(out) = &a.out {
-                tactile_core::io::write_atomic(out, md.as_bytes())?;
                 let json = serde_json::json!({"models": rows, "convolutions": probes});
-                tactile_core::io::write_json_atomic(out.with_extension("json"), &json)?;
+                write_markdown_and_json(out, &md, &json)?;
             }
         }
         BenchCmd::Resolution(a) => {
@@ -174,8 +174,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             let md = r.markdown();
             say_raw!("{md}");
             if let Some(out) = &a.out {
-                tactile_core::io::write_atomic(out, md.as_bytes())?;
-                tactile_core::io::write_json_atomic(out.with_extension("json"), &r)?;
+                write_markdown_and_json(out, &md, &r)?;
             }
         }
         BenchCmd::Detector(a) => {

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use clap::{Args, Subcommand, ValueEnum};
+use clap::{Args, Subcommand};
 use tactile_core::dataset::DatasetKind;
 use tactile_pipeline::import::{ImportOptions, import_dataset};
 
@@ -16,14 +16,6 @@ pub(crate) enum DatasetCmd {
     FromVideo(FromVideoArgs),
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum Kind {
-    /// TacTip frames (paper A): saved grey.
-    Tactip,
-    /// Visuo-tactile palpation frames (paper B): saved RGB.
-    Visuotactile,
-}
-
 #[derive(Args)]
 pub(crate) struct FromVideoArgs {
     /// The video file (anything FFmpeg decodes) or folder of frames.
@@ -33,9 +25,9 @@ pub(crate) struct FromVideoArgs {
     /// (docs/datasets.md); `mask` and `depth` name files beside it.
     #[arg(long)]
     labels: PathBuf,
-    /// Which sensor the frames are from.
+    /// Which sensor the frames are from (TacTip frames are saved grey).
     #[arg(long, value_enum)]
-    kind: Kind,
+    kind: DatasetKind,
     /// The dataset folder to write.
     #[arg(long)]
     out: PathBuf,
@@ -53,10 +45,7 @@ pub(crate) fn main(cmd: DatasetCmd) -> Result<()> {
             let s = import_dataset(&ImportOptions {
                 frames: a.video,
                 labels: a.labels,
-                kind: match a.kind {
-                    Kind::Tactip => DatasetKind::Tactip,
-                    Kind::Visuotactile => DatasetKind::Visuotactile,
-                },
+                kind: a.kind,
                 out: a.out,
                 sensor: a.sensor,
                 force: a.force,

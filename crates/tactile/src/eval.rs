@@ -80,35 +80,7 @@ fn detector(a: DetectorArgs) -> Result<()> {
         tactile_core::note!("per-frame decisions in {}", path.display());
     }
     let (s, st) = (&sc.all, &sc.onset_release);
-    say!(
-        "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
-        s.frames,
-        s.true_pos + s.false_neg,
-        s.accuracy,
-        s.precision,
-        s.recall,
-        s.f1
-    );
-    say!(
-        "confusion: {} true positive, {} false positive, {} true negative, {} false negative",
-        s.true_pos,
-        s.false_pos,
-        s.true_neg,
-        s.false_neg
-    );
-    say!(
-        "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
-        st.frames,
-        st.accuracy,
-        st.false_pos,
-        st.false_neg
-    );
-    say!(
-        "{:.2} ms per frame ({}, batch {}, resize excluded)",
-        sc.ms_per_frame,
-        m.device,
-        tactile_detect::eval::EVAL_BATCH
-    );
+    sc.describe(m.device).iter().for_each(|l| say!("{l}"));
     say!(
         "{}",
         serde_json::json!({ "model": m.model, "data": m.data, "all": s, "onset_release": st, "ms_per_frame": sc.ms_per_frame })
@@ -120,27 +92,7 @@ fn segmenter(m: ModelArgs) -> Result<()> {
     let mut seg = TendonSegmenter::load(&m.model, m.device.runtime(), 0)?;
     let ds = Dataset::open(&m.data)?;
     let sc = tactile_segment::evaluate(&mut seg, &ds)?;
-    say!(
-        "| tendon path | frames | mean IoU | direction median (deg) | direction p90 (deg) | no direction |"
-    );
-    say!("|---|---|---|---|---|---|");
-    for r in &sc.paths {
-        say!(
-            "| {} | {} | {:.4} | {:.2} | {:.2} | {} |",
-            r.path,
-            r.frames,
-            r.mean_iou,
-            r.direction_median_deg,
-            r.direction_p90_deg,
-            r.no_direction
-        );
-    }
-    say!(
-        "{:.2} ms per window ({}, batch {}, cut excluded)",
-        sc.ms_per_window,
-        m.device,
-        tactile_segment::eval::EVAL_BATCH
-    );
+    sc.describe(m.device).iter().for_each(|l| say!("{l}"));
     say!(
         "{}",
         serde_json::json!({ "model": m.model, "data": m.data, "paths": sc.paths, "ms_per_window": sc.ms_per_window })

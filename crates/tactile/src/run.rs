@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args;
 use tactile_core::Runtime;
+use tactile_pipeline::run::JsonLines;
 use tactile_pipeline::{Flow, FrameSource, Pipeline, RunOptions, SourceOptions, SourceSpec};
 
 #[derive(Args)]
@@ -111,103 +112,29 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     if let Some(dir) = &a.render {
         tactile_core::io::check_output_dir(dir, &inputs)?;
     }
-    if let Some(list) = source.list() {
-        let missing = list.missing_frames();
-        if missing.count > 0 {
-            tactile_core::note!(
-                "warning: {} frame(s) missing from the numbering, e.g. {:?}",
-                missing.count,
-                missing.first
-            );
-        }
-        if !list.ignored.is_empty() {
-            let names: Vec<_> = list
-                .ignored
-                .iter()
-                .take(5)
-                .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
-                .collect();
-            tactile_core::note!(
-                "warning: {} file(s) that are not PNG or JPEG frames were not read: {}{}",
-                list.ignored.len(),
-                names.join(", "),
-                if list.ignored.len() > 5 { ", ..." } else { "" }
-            );
-        }
+    for w in source.list().map(|l| l.warnings()).unwrap_or_default() {
+        tactile_core::note!("{w}");
     }
     let mut pipeline = Pipeline::load(&a.models, a.runtime, a.threads as usize)?;
     let options = RunOptions {
         hysteresis,
         render: a.render.clone(),
     };
-    let mut file = match (&a.out, to_stdout) {
-        (Some(out), false) => Some(tactile_core::io::AtomicFile::create(out)?),
-        _ => None,
-    };
-    let mut stdout = std::io::stdout().lock();
+    let mut records = a.out.as_deref().map(JsonLines::create).transpose()?;
     let s = tactile_pipeline::run(&mut pipeline, &mut source, &options, &mut |rec| {
-        let line = serde_json::to_string(rec).map_err(|e| {
-            tactile_core::Error::Invalid(format!("cannot write a record as JSON: {e}"))
-        })?;
-        if to_stdout {
-            use std::io::Write as _;
-            if let Err(e) = writeln!(stdout, "{line}").and_then(|_| stdout.flush()) {
-                // The reader has gone (`| head`): stop quietly.
-                if e.kind() == std::io::ErrorKind::BrokenPipe {
-                    return Ok(Flow::Stop);
-                }
-                return Err(tactile_core::Error::io("<stdout>", e).into());
-            }
-        } else if let Some(f) = file.as_mut() {
-            f.write_line(&line)?;
-        }
-        Ok(Flow::Continue)
+        records
+            .as_mut()
+            .map_or(Ok(Flow::Continue), |r| r.write(rec))
     })?;
-    drop(stdout);
-    if let Some(f) = file {
-        f.commit()?;
+    if let Some(r) = records {
+        r.finish()?;
     }
     // With records on stdout, the summary goes to stderr.
-    let report = |line: String| {
-        if to_stdout {
-            tactile_core::note!("{line}");
-        } else {
-            say!("{line}");
-        }
+    let report = |line: String| match to_stdout {
+        true => tactile_core::note!("{line}"),
+        false => say!("{line}"),
     };
-    let stage = |v: Option<[f64; 2]>| v.map_or("-".into(), |[m, p]| format!("{m:.2} / {p:.2} ms"));
-    report(format!(
-        "{} frames from a {} ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass",
-        s.frames,
-        serde_json::to_value(s.source)?.as_str().unwrap_or("source"),
-        s.fps,
-        s.runtime,
-        s.gated_out
-    ));
-    report(format!(
-        "median / p95 per stage: prepare {}, detect {}, segment + direction {}, depth {}, whole frame {}",
-        stage(s.stages_ms.prepare),
-        stage(s.stages_ms.detect),
-        stage(s.stages_ms.segment),
-        stage(s.stages_ms.depth),
-        stage(s.stages_ms.frame)
-    ));
-    if s.source.is_live() {
-        report(format!(
-            "live: {} frame(s) dropped while the models were busy; arrival to record {}",
-            s.dropped_frames,
-            stage(s.latency_ms)
-        ));
-    }
-    if let Some(acc) = s.detector_accuracy {
-        report(format!(
-            "tendon decisions: accuracy {acc:.4} with {} changes within sequences ({} changes in the labels); the detector's threshold alone: {:.4}, {} changes",
-            s.decision_changes,
-            s.label_changes,
-            s.detector_accuracy_threshold_only.unwrap_or(f64::NAN),
-            s.decision_changes_threshold_only
-        ));
-    }
+    s.describe().into_iter().for_each(report);
     if let (Some(out), false) = (&a.out, to_stdout) {
         report(format!("records in {}", out.display()));
     }

@@ -27,6 +27,7 @@ pub const MAX_SIDE: u32 = 7680;
 
 /// Which sensor a dataset holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum DatasetKind {
     /// TacTip frames (paper A), greyscale.
