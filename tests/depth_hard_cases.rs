@@ -148,3 +148,45 @@ fn shipped_depth_model_handles_flat_skin_and_the_deepest_press() {
     assert!(flat < 0.05, "flat skin: MAE {flat} mm");
     assert!(deepest < 0.15, "deepest press: MAE {deepest} mm");
 }
+
+#[test]
+fn displacement_from_the_rest_dome_is_zero_at_rest_and_shows_the_ridge_when_pressed() {
+    use datasets_synth::{VisuotactileConfig, visuotactile};
+    use tactile_rs::depth::data::displacement_mm;
+    let vc = VisuotactileConfig::default();
+    let (w, h) = (vc.width as usize, vc.height as usize);
+    let aspect = w as f64 / h as f64;
+    // The generator's own labels, at rest and at the deepest press.
+    let mut sequence = 0;
+    let (rest, pressed) = loop {
+        let (_, rest) = visuotactile::sample(&vc, 3, sequence, 0);
+        let (_, pressed) = visuotactile::sample(&vc, 3, sequence, vc.frames_per_sequence / 2);
+        if pressed.tendon && rest.press_mm == 0.0 {
+            break (rest, pressed);
+        }
+        sequence += 1;
+    };
+    let mm = |f: &datasets_synth::visuotactile::VisuotactileFrame| -> Vec<f32> {
+        f.depth_m.iter().map(|d| d * 1000.0).collect()
+    };
+    let at_rest = displacement_mm(&mm(&rest), w, h, aspect);
+    let worst = at_rest.iter().fold(0f32, |a, v| a.max(v.abs()));
+    assert!(worst < 0.01, "a frame at rest is {worst} mm off the dome");
+    // Pressed on a tendon: the push is largest on the tendon's mask.
+    let d = displacement_mm(&mm(&pressed), w, h, aspect);
+    let mean = |on: bool| {
+        let v: Vec<f32> = d
+            .iter()
+            .zip(&pressed.mask)
+            .filter(|(_, m)| (**m > 0) == on)
+            .map(|(v, _)| *v)
+            .collect();
+        v.iter().sum::<f32>() / v.len().max(1) as f32
+    };
+    assert!(
+        mean(true) > mean(false) + 0.1,
+        "tendon {} vs elsewhere {}",
+        mean(true),
+        mean(false)
+    );
+}

@@ -335,33 +335,78 @@ pub fn colour(t: f64) -> [u8; 3] {
     out
 }
 
-/// Maps of the same size side by side as heat maps on one shared colour
-/// scale (min to max over all of them), 4 px apart, saved atomically.
-pub fn heat_maps(path: impl AsRef<Path>, maps: &[&[f32]], (w, h): (usize, usize)) -> Result<()> {
-    if maps.is_empty() || maps.iter().any(|m| m.len() != w * h) {
+/// Heat maps side by side, each `zoom` times enlarged, on one colour
+/// scale over `range` (or their own range, 0 included), with a colour bar
+/// on the right labelled with its values and `unit` (e.g.
+/// "displacement, mm"). Written as PNG; without a font, without text.
+pub fn heat_maps_with_bar(
+    path: impl AsRef<Path>,
+    maps: &[&[f32]],
+    (w, h): (usize, usize),
+    zoom: usize,
+    unit: &str,
+) -> Result<()> {
+    if maps.is_empty() || maps.iter().any(|m| m.len() != w * h) || w == 0 || h == 0 {
         return Err(Error::Invalid(format!("heat maps must all be {w}x{h}")));
     }
-    let (lo, hi) = maps
-        .iter()
-        .flat_map(|m| m.iter())
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v as f64), b.max(v as f64))
-        });
-    let span = if hi > lo { hi - lo } else { 1.0 };
-    let gap = 4;
-    let width = maps.len() * w + (maps.len() - 1) * gap;
-    let mut rgb = vec![255u8; width * h * 3];
+    let (lo, hi) = colour_range(maps.iter().flat_map(|m| m.iter().copied()));
+    let zoom = zoom.clamp(1, 16);
+    let (zw, zh) = (w * zoom, h * zoom);
+    let (gap, bar, labels) = (6, 16, 185);
+    let width = maps.len() * zw + maps.len() * gap + bar + labels;
+    let mut rgb = vec![255u8; width * zh * 3];
+    let t = |v: f64| (v - lo) / (hi - lo);
     for (k, m) in maps.iter().enumerate() {
-        for y in 0..h {
-            for x in 0..w {
-                let c = colour((m[y * w + x] as f64 - lo) / span);
-                let o = (y * width + k * (w + gap) + x) * 3;
+        for y in 0..zh {
+            for x in 0..zw {
+                let c = colour(t(m[(y / zoom) * w + x / zoom] as f64));
+                let o = (y * width + k * (zw + gap) + x) * 3;
                 rgb[o..o + 3].copy_from_slice(&c);
             }
         }
     }
-    crate::image_io::save_rgb_png(path, width, h, &rgb)
+    let x0 = maps.len() * (zw + gap);
+    let mut marks = Vec::new();
+    for y in 0..zh {
+        let c = colour(1.0 - y as f64 / (zh - 1).max(1) as f64);
+        for x in x0..x0 + bar {
+            let o = (y * width + x) * 3;
+            rgb[o..o + 3].copy_from_slice(&c);
+        }
+    }
+    for k in 0..=4 {
+        let v = hi - (hi - lo) * k as f64 / 4.0;
+        let y = ((zh - 1) as f64 * k as f64 / 4.0) as i32;
+        marks.push(Mark::Text {
+            at: (x0 as i32 + bar as i32 + 4, (y - 6).clamp(0, zh as i32 - 14)),
+            text: format!("{v:.2}"),
+            size: 13,
+            colour: [0, 0, 0],
+        });
+    }
+    marks.push(Mark::Text {
+        at: (x0 as i32 + bar as i32 + 50, zh as i32 / 2 - 6),
+        text: unit.to_string(),
+        size: 13,
+        colour: [0, 0, 0],
+    });
+    draw_marks(&mut rgb, width, zh, &marks)?;
+    crate::image_io::save_rgb_png(path, width, zh, &rgb)
+}
+
+/// The finite range of `values` with 0 inside it (displacements start
+/// from rest); never empty.
+pub fn colour_range(values: impl Iterator<Item = f32>) -> (f64, f64) {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((0.0f64, 0.0f64), |(a, b), v| {
+            (a.min(v as f64), b.max(v as f64))
+        });
+    if hi > lo {
+        (lo, hi)
+    } else {
+        (lo - 0.5, hi + 0.5)
+    }
 }
 
 #[cfg(test)]

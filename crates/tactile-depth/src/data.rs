@@ -47,6 +47,41 @@ pub fn window_mask(w: usize, h: usize) -> Vec<bool> {
         .collect()
 }
 
+/// The skin at rest (`sensors.md`): camera-to-skin distance
+/// `d0(r) = 15 + 3 (r / r_max)^2` mm, `r` from the frame centre and `r_max`
+/// the half-diagonal, sampled on a `w x h` map that covers a frame of
+/// aspect `frame_aspect` (width / height; a map may be stretched to the
+/// network's input).
+pub fn rest_dome_mm(w: usize, h: usize, frame_aspect: f64) -> Vec<f32> {
+    let a = if frame_aspect.is_finite() && frame_aspect > 0.0 {
+        frame_aspect
+    } else {
+        1.0
+    };
+    let r_max2 = (a / 2.0).powi(2) + 0.25;
+    let mut out = Vec::with_capacity(w * h);
+    for y in 0..h {
+        let dv = (y as f64 + 0.5) / h as f64 - 0.5;
+        for x in 0..w {
+            let du = ((x as f64 + 0.5) / w as f64 - 0.5) * a;
+            out.push((15.0 + 3.0 * (du * du + dv * dv) / r_max2) as f32);
+        }
+    }
+    out
+}
+
+/// How far the skin is pushed towards the camera from its rest dome, mm
+/// (positive: a ridge or a press), for a `w x h` depth map in mm of a frame
+/// of aspect `frame_aspect`: what shows the tendon in a picture, where the
+/// depth itself is mostly the dome's bowl.
+pub fn displacement_mm(depth_mm: &[f32], w: usize, h: usize, frame_aspect: f64) -> Vec<f32> {
+    rest_dome_mm(w, h, frame_aspect)
+        .iter()
+        .zip(depth_mm)
+        .map(|(rest, d)| rest - d)
+        .collect()
+}
+
 /// Read a depth map (metres on disk) and resize it to `w x h` in mm; any
 /// NaN, infinity, wrong dtype or shape is an error naming the file (and the
 /// pixel).

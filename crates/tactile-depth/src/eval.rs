@@ -119,9 +119,10 @@ pub fn score(data: &DepthSet, preds: &[Vec<f32>]) -> DepthScores {
     sc.finish()
 }
 
-/// Heat maps (truth | prediction, one shared colour scale per frame) of the
-/// first `frames` frames of `ds`, as `depth-000.png`, ... in `dir`; returns
-/// how many were written.
+/// Heat maps of the displacement from the rest dome in mm (truth |
+/// prediction, one colour scale per frame with its colour bar) of the first
+/// `frames` frames of `ds`, as `depth-000.png`, ... in `dir`; returns how
+/// many were written.
 pub fn save_heat_maps(
     estimator: &mut DepthEstimator,
     ds: &Dataset,
@@ -132,11 +133,17 @@ pub fn save_heat_maps(
     let data = DepthSet::from_dataset(ds, &rows, estimator.artifact.model.input_size)?;
     let preds = predict_mm(estimator, &data)?;
     tactile_core::io::create_dir_all(dir)?;
+    let aspect = ds.manifest.width as f64 / ds.manifest.height.max(1) as f64;
+    let (w, h) = (data.width, data.height);
     for (i, p) in preds.iter().enumerate() {
-        tactile_core::plot::heat_maps(
+        let truth = crate::data::displacement_mm(&data.samples[i].depth_mm, w, h, aspect);
+        let pred = crate::data::displacement_mm(p, w, h, aspect);
+        tactile_core::plot::heat_maps_with_bar(
             dir.join(format!("depth-{i:03}.png")),
-            &[&data.samples[i].depth_mm, p],
-            (data.width, data.height),
+            &[&truth, &pred],
+            (w, h),
+            4,
+            "push from rest, mm",
         )?;
     }
     Ok(preds.len())

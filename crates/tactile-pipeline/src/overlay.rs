@@ -20,6 +20,8 @@ pub struct FrameViews {
     pub depth_mm: Vec<f32>,
     /// The depth network's input width and height.
     pub depth_size: [usize; 2],
+    /// The frame's width / height (the depth map may be stretched).
+    pub frame_aspect: f64,
 }
 
 impl FrameViews {
@@ -83,14 +85,16 @@ impl FrameViews {
 
     /// Paper B's figure 3 style: the window enlarged `zoom` times with the
     /// kept region in green and the direction as a red line, and beside it
-    /// the depth heat map at the same height. Written atomically as PNG.
+    /// the skin's displacement from its rest dome (mm, so the tendon ridge
+    /// shows) at the same height, with a labelled colour bar. Written
+    /// atomically as PNG.
     pub fn save_png(&self, path: &Path, zoom: usize) -> Result<()> {
         let s = self.side * zoom;
         let [dw, dh] = self.depth_size;
         let dscale = s as f64 / dh as f64;
         let dwz = (dw as f64 * dscale).round() as usize;
-        let gap = 6;
-        let width = s + gap + dwz;
+        let (gap, bar, labels) = (6, 14, 185);
+        let width = s + gap + dwz + gap + bar + labels;
         let mut rgb = vec![255u8; width * s * 3];
         for y in 0..s {
             for x in 0..s {
@@ -107,25 +111,45 @@ impl FrameViews {
                 }
             }
         }
-        let (lo, hi) = self
-            .depth_mm
-            .iter()
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| {
-                (a.min(v), b.max(v))
-            });
-        let span = if hi > lo { hi - lo } else { 1.0 };
+        let disp = tactile_depth::data::displacement_mm(&self.depth_mm, dw, dh, self.frame_aspect);
+        let (lo, hi) = tactile_core::plot::colour_range(disp.iter().copied());
+        let t = |v: f64| (v - lo) / (hi - lo);
         for y in 0..s {
             for x in 0..dwz {
                 let (sx, sy) = (
                     ((x as f64) / dscale) as usize,
                     ((y as f64) / dscale) as usize,
                 );
-                let v = self.depth_mm[sy.min(dh - 1) * dw + sx.min(dw - 1)];
-                let c = tactile_core::plot::colour(((v - lo) / span) as f64);
+                let v = disp[sy.min(dh - 1) * dw + sx.min(dw - 1)];
+                let c = tactile_core::plot::colour(t(v as f64));
                 let o = (y * width + s + gap + x) * 3;
                 rgb[o..o + 3].copy_from_slice(&c);
             }
+            let c = tactile_core::plot::colour(1.0 - y as f64 / (s - 1).max(1) as f64);
+            for x in 0..bar {
+                let o = (y * width + s + gap + dwz + gap + x) * 3;
+                rgb[o..o + 3].copy_from_slice(&c);
+            }
         }
+        let x_bar = (s + gap + dwz + gap + bar + 4) as i32;
+        let mut marks: Vec<tactile_core::plot::Mark> = (0..=4)
+            .map(|k| tactile_core::plot::Mark::Text {
+                at: (
+                    x_bar,
+                    (((s - 1) * k / 4) as i32 - 6).clamp(0, s as i32 - 14),
+                ),
+                text: format!("{:.2}", hi - (hi - lo) * k as f64 / 4.0),
+                size: 13,
+                colour: [0, 0, 0],
+            })
+            .collect();
+        marks.push(tactile_core::plot::Mark::Text {
+            at: (x_bar + 46, s as i32 / 2 - 6),
+            text: "push from rest, mm".into(),
+            size: 13,
+            colour: [0, 0, 0],
+        });
+        tactile_core::plot::draw_marks(&mut rgb, width, s, &marks)?;
         if let Some((deg, (cx, cy))) = self.direction {
             let (sn, cs) = deg.to_radians().sin_cos();
             let half = s as f64 * 0.45;

@@ -190,6 +190,7 @@ impl Pipeline {
             direction,
             depth_mm,
             depth_size: self.depth.artifact.model.input_size,
+            frame_aspect: frame.width() as f64 / frame.height().max(1) as f64,
         };
         Ok((rec, Some(views)))
     }

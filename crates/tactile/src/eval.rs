@@ -49,8 +49,9 @@ pub(crate) struct DetectorArgs {
 pub(crate) struct DepthArgs {
     #[command(flatten)]
     m: ModelArgs,
-    /// Write true | predicted heat maps (one shared colour scale per frame)
-    /// for the first frames into this folder.
+    /// Write heat maps of the skin's displacement from its rest dome in mm
+    /// (true | predicted, one colour scale with its bar) for the first
+    /// frames into this folder.
     #[arg(long)]
     save_png: Option<PathBuf>,
     /// How many frames `--save-png` writes.
@@ -124,7 +125,7 @@ fn depth(a: DepthArgs) -> Result<()> {
     if let Some(dir) = &a.save_png {
         let n = tactile_depth::eval::save_heat_maps(&mut est, &ds, dir, a.png_frames)?;
         say!(
-            "{n} heat maps (true | predicted, shared scale) in {}",
+            "{n} heat maps of the push from the rest dome, mm (true | predicted, one scale) in {}",
             dir.display()
         );
     }
