@@ -160,6 +160,7 @@ fn detectors_match_onnxruntime() {
                 .with_input_size([64, 48]),
             stats: unit_stats(3),
             threshold: 0.5,
+            input_profile: None,
             notes: Default::default(),
         };
         let dir = folder(tmp.path(), name, &art, &art.init(&Device::flex()).unwrap());

@@ -285,3 +285,34 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
         );
     }
 }
+
+#[test]
+fn frames_of_another_sensor_are_flagged_and_get_no_tendon() {
+    use tactile_rs::synth::{TactipConfig, tactip, visuotactile};
+    let mut p = tactile_rs::pipeline::Pipeline::load(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/models"),
+        Runtime::Onnx,
+        1,
+    )
+    .unwrap();
+    // Virtual TacTip frames: another sensor.
+    for i in 0..5 {
+        let (_, f) = tactip::sample(&TactipConfig::default(), 77, i);
+        let rgb: Vec<u8> = f.pixels.iter().flat_map(|&v| [v, v, v]).collect();
+        let img = rgb_image(300, 300, rgb).unwrap();
+        let r = p.process("tactip", &img).unwrap();
+        assert!(
+            r.out_of_distribution && !r.tendon,
+            "TacTip frame {i}: {r:?}"
+        );
+    }
+    // Frames of the sensor itself, a new seed: none flagged.
+    let vc = VisuotactileConfig::default();
+    for s in 0..4 {
+        let (_, f) = visuotactile::sample(&vc, 78, s, vc.frames_per_sequence / 2);
+        let img = rgb_image(f.width, f.height, f.rgb).unwrap();
+        let r = p.process("own", &img).unwrap();
+        assert!(!r.out_of_distribution, "own frame flagged: {r:?}");
+        assert!(r.input_score.unwrap() < 3.0, "{r:?}");
+    }
+}

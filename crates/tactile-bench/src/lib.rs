@@ -13,6 +13,7 @@ pub mod devices;
 mod error;
 pub mod latency;
 pub mod models;
+pub mod ood;
 pub mod output;
 pub mod report;
 pub mod resolution;

@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 use tactile_core::Artifact;
 use tactile_core::image_io::RgbImage;
 use tactile_onnx::{Exportable, export_batch_dynamic};
-use tactile_preprocess::visuo::{ChannelStats, is_blank, resize_rgb};
+use tactile_preprocess::profile::{InputProfile, descriptor};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage, is_blank, resize_rgb};
 
 use crate::Result;
 use crate::model::{Detector, DetectorConfig};
@@ -22,6 +23,11 @@ pub struct DetectorArtifact {
     pub stats: ChannelStats,
     /// Probability above which a frame counts as showing a tendon.
     pub threshold: f64,
+    /// The training frames' input statistics: frames far outside them are
+    /// flagged as another sensor's and get no answer (`tactile train
+    /// profile` adds it to a trained detector).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_profile: Option<InputProfile>,
     /// Provenance.
     #[serde(default)]
     pub notes: serde_json::Value,
@@ -42,6 +48,10 @@ impl Artifact for DetectorArtifact {
         use tactile_core::artifact::{check_field, in_config};
         in_config(file, self.model.check())?;
         in_config(file, self.stats.check(3))?;
+        if let Some(p) = &self.input_profile {
+            p.validate()
+                .map_err(|m| tactile_core::Error::Config(format!("{}: {m}", file.display())))?;
+        }
         let t = self.threshold;
         check_field(
             file,
@@ -67,12 +77,28 @@ impl DetectorArtifact {
     /// [`FloatImage::quantised`](tactile_preprocess::visuo::FloatImage::quantised)),
     /// or `None` for a blank frame (see [`is_blank`]), which shows no tendon.
     pub fn frame_input(&self, frame: &RgbImage) -> Result<Option<Vec<f32>>> {
-        let [w, h] = self.model.input_size;
-        let img = resize_rgb(frame, w, h)?.quantised();
+        let img = self.frame_image(frame)?;
         if is_blank(&img) {
             return Ok(None);
         }
         Ok(Some(self.stats.to_chw(&img)?))
+    }
+
+    /// The frame as the detector sees it (resized to its input, 8 bits
+    /// per channel), from which both its input and its input statistics
+    /// are taken.
+    pub fn frame_image(&self, frame: &RgbImage) -> Result<FloatImage> {
+        let [w, h] = self.model.input_size;
+        Ok(resize_rgb(frame, w, h)?.quantised())
+    }
+
+    /// How far `frame` lies from the training frames' input statistics
+    /// ([`InputProfile::score`]), when the detector has a profile.
+    pub fn input_score(&self, image: &FloatImage) -> Result<Option<f32>> {
+        match &self.input_profile {
+            Some(p) => Ok(Some(p.score(&descriptor(image)?))),
+            None => Ok(None),
+        }
     }
 
     /// Whether probability `p` reaches the saved threshold.

@@ -18,6 +18,19 @@ pub struct TendonDetector {
     net: Box<dyn Network>,
 }
 
+/// What the detector makes of one frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Assessment {
+    /// Tendon probability; 0 for a blank frame or one out of distribution.
+    pub probability: f32,
+    /// Distance from the training frames' input statistics, in spreads
+    /// (None without an input profile).
+    pub input_score: Option<f32>,
+    /// Far outside the training frames: another sensor, an image that is
+    /// not a sensor frame; no tendon, direction or depth is given.
+    pub out_of_distribution: bool,
+}
+
 impl TendonDetector {
     /// Load the detector in `dir` onto `runtime` (`threads` intra-op
     /// threads for onnxruntime; 0 = its default).
@@ -41,6 +54,27 @@ impl TendonDetector {
             None => Ok(0.0),
             Some(x) => Ok(self.probabilities(&x, 1)?[0]),
         }
+    }
+
+    /// The tendon probability and, with an input profile, how far the
+    /// frame lies from the training frames (see [`Assessment`]).
+    pub fn assess(&mut self, frame: &RgbImage) -> Result<Assessment> {
+        let img = self.artifact.frame_image(frame)?;
+        let input_score = self.artifact.input_score(&img)?;
+        let out_of_distribution = match (&self.artifact.input_profile, input_score) {
+            (Some(p), Some(s)) => s > p.threshold,
+            _ => false,
+        };
+        let probability = if out_of_distribution || tactile_preprocess::visuo::is_blank(&img) {
+            0.0
+        } else {
+            self.probabilities(&self.artifact.stats.to_chw(&img)?, 1)?[0]
+        };
+        Ok(Assessment {
+            probability,
+            input_score,
+            out_of_distribution,
+        })
     }
 
     /// Tendon probabilities of `n` normalised inputs laid end to end (as

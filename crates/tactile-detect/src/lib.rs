@@ -12,13 +12,14 @@ mod error;
 pub mod eval;
 pub mod inference;
 pub mod model;
+pub mod profile;
 pub mod training;
 
 pub use artifact::DetectorArtifact;
 pub use data::{DetectionSet, SoftLabels};
 pub use error::{Error, Result};
 pub use eval::{DetectorScores, evaluate};
-pub use inference::TendonDetector;
+pub use inference::{Assessment, TendonDetector};
 pub use model::{Architecture, Detector, DetectorConfig};
 pub use tactile_preprocess::visuo::{BLANK_FRAME_STD, is_blank};
 pub use training::DetectorTrainingConfig;

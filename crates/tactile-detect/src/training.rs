@@ -182,6 +182,7 @@ pub fn train(
         model: config.model.clone(),
         stats: stats.clone(),
         threshold: 0.5,
+        input_profile: Some(crate::profile::fit_input_profile_of(&data, &train)?),
         notes: serde_json::json!({
             "trained_on": datasets.iter().map(|d| d.root.display().to_string()).collect::<Vec<_>>().join(" + "),
             "device": device.name(),

@@ -43,6 +43,14 @@ pub struct FrameRecord {
     pub depth_max_mm: Option<f32>,
     /// The detector's own threshold decision (before any hysteresis).
     pub tendon_raw: bool,
+    /// How far the frame's input statistics lie from the training frames',
+    /// in spreads (with a detector that has an input profile).
+    #[serde(default)]
+    pub input_score: Option<f32>,
+    /// Far outside the training frames (another sensor, not a sensor
+    /// frame): no tendon, direction or depth is given.
+    #[serde(default)]
+    pub out_of_distribution: bool,
     /// Time to bring a large frame down to the working resolution, ms
     /// (0 for frames already near it).
     #[serde(default)]
@@ -125,7 +133,8 @@ impl Pipeline {
         let frame = working.as_ref().unwrap_or(frame);
         let ms_prepare = 1e3 * t0.elapsed().as_secs_f64();
         let t_detect = Instant::now();
-        let score = self.detector.probability(frame)?;
+        let assessment = self.detector.assess(frame)?;
+        let score = assessment.probability;
         let tendon_raw = self.detector.is_tendon(score);
         let tendon = match filter {
             Some(h) => h.update(score),
@@ -144,6 +153,8 @@ impl Pipeline {
             depth_min_mm: None,
             depth_mean_mm: None,
             depth_max_mm: None,
+            input_score: assessment.input_score,
+            out_of_distribution: assessment.out_of_distribution,
             ms_prepare,
             latency_ms: None,
             ms_detect,

@@ -64,6 +64,9 @@ pub struct RunSummary {
     pub fps: f64,
     /// Frames the detector gated out.
     pub gated_out: usize,
+    /// Frames flagged as far from the training frames (another sensor,
+    /// not a sensor frame): answered with no tendon.
+    pub out_of_distribution: usize,
     /// Frames that went through every stage.
     pub tendon_frames: usize,
     /// Accuracy of the decisions against the labels, when there are labels.
@@ -110,6 +113,12 @@ impl RunSummary {
                 stage(self.stages_ms.frame)
             ),
         ];
+        if self.out_of_distribution > 0 {
+            lines.push(format!(
+                "warning: {} of {} frames do not look like this sensor's (input statistics far from the training frames'): they got no tendon, direction or depth",
+                self.out_of_distribution, self.frames
+            ));
+        }
         if self.source.is_live() {
             lines.push(format!(
                 "live: {} frame(s) dropped while the models were busy; arrival to record {}",
@@ -240,7 +249,7 @@ pub fn run(
     };
     let t0 = std::time::Instant::now();
     let mut times: [Reservoir; 7] = Default::default();
-    let (mut frames, mut gated) = (0usize, 0usize);
+    let (mut frames, mut gated, mut ood) = (0usize, 0usize, 0usize);
     let (mut final_d, mut raw_d, mut labels) = (
         Decisions::default(),
         Decisions::default(),
@@ -287,6 +296,7 @@ pub fn run(
         }
         frames += 1;
         gated += usize::from(!rec.tendon);
+        ood += usize::from(rec.out_of_distribution);
         prev = Some((frame.sequence, rec.tendon, rec.tendon_raw, frame.tendon));
         pb.inc(1);
         if sink(&rec)? == Flow::Stop {
@@ -317,6 +327,7 @@ pub fn run(
         threads: pipeline.threads,
         fps: frames as f64 / wall.max(1e-9),
         gated_out: gated,
+        out_of_distribution: ood,
         tendon_frames: frames - gated,
         detector_accuracy: final_d.accuracy(),
         decision_changes: final_d.changes,

@@ -152,6 +152,29 @@ pub struct HeadTest {
     pub confusion: Vec<Vec<usize>>,
 }
 
+impl HeadTest {
+    /// The accuracy and the confusion table (rows: truth) for a person.
+    pub fn describe(&self, classes: &[String]) -> Vec<String> {
+        let mut lines = vec![
+            format!(
+                "test shape accuracy: {:.1} % ({}/{})",
+                100.0 * self.accuracy,
+                self.right,
+                self.frames
+            ),
+            format!(
+                "confusion (rows: truth, columns: predicted): {}",
+                classes.join(" ")
+            ),
+        ];
+        for (c, row) in classes.iter().zip(&self.confusion) {
+            let cells: String = row.iter().map(|v| format!("{v:>5}")).collect();
+            lines.push(format!("  {c:>12} {cells}"));
+        }
+        lines
+    }
+}
+
 /// Train the shape head on the `train` split of `ds` (or every row) and
 /// save it in `out`; test it on `test` (another dataset, features from the
 /// same encoder) or on the `test` split when there is one.

@@ -23,6 +23,7 @@ use kornia_imgproc::padding::PaddingMode;
 mod error;
 pub mod perturb;
 pub mod pins;
+pub mod profile;
 pub mod visuo;
 
 pub use error::{Error, Result};

@@ -245,6 +245,21 @@ impl FrameResult {
         self.record.tendon_raw
     }
 
+    /// True when the frame does not look like the sensor's (its input
+    /// statistics are far from the training frames'): no tendon, direction
+    /// or depth is given.
+    #[getter]
+    fn out_of_distribution(&self) -> bool {
+        self.record.out_of_distribution
+    }
+
+    /// How far the frame's input statistics lie from the training frames',
+    /// in spreads (None when the detector has no input profile).
+    #[getter]
+    fn input_score(&self) -> Option<f32> {
+        self.record.input_score
+    }
+
     /// Detector probability.
     #[getter]
     fn score(&self) -> f32 {

@@ -20,6 +20,9 @@ pub(crate) enum BenchCmd {
     /// The shipped paper B models at batch 1 on every device, as trained and
     /// with batch norms folded, beside onnxruntime.
     Devices(DevicesArgs),
+    /// Frames of another sensor: flagged and tendon rates on fresh own
+    /// frames and on frames that are not the sensor's.
+    Ood(DevicesArgs),
     /// Tendon detectors of a sweep: accuracy against latency per runtime.
     Detector(ModelsArgs),
     /// Segmenters of a sweep: IoU and direction error against latency per runtime.
@@ -117,7 +120,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Cae(a) => &a.out,
         BenchCmd::Synth(a) => &a.out,
         BenchCmd::Resolution(a) => &a.out,
-        BenchCmd::Devices(a) => &a.out,
+        BenchCmd::Devices(a) | BenchCmd::Ood(a) => &a.out,
         BenchCmd::Detector(a) | BenchCmd::Segmenter(a) | BenchCmd::Depth(a) => &a.out,
     };
     if let Some(out) = out {
@@ -151,6 +154,18 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             say_raw!("{md}");
             if let Some(out) = &a.out {
                 tactile_core::io::write_atomic(out, md.as_bytes())?;
+            }
+        }
+        BenchCmd::Ood(a) => {
+            let rows = tactile_bench::ood::bench_ood(&a.models, tactile_core::Runtime::Onnx)?;
+            let det = <tactile_detect::DetectorArtifact as tactile_core::Artifact>::read(
+                &a.models.join("detector"),
+            )?;
+            let t = det.input_profile.map(|p| p.threshold);
+            let md = tactile_bench::ood::ood_markdown(&rows, t);
+            say_raw!("{md}");
+            if let Some(out) = &a.out {
+                write_markdown_and_json(out, &md, &rows)?;
             }
         }
         BenchCmd::Devices(a) => {

@@ -31,6 +31,20 @@ pub(crate) enum TrainCmd {
     Segmenter(SegmenterArgs),
     /// Paper B's depth U-Net with a DenseNet encoder.
     Depth(DepthArgs),
+    /// The input profile of a trained detector: its training frames' input
+    /// statistics, saved in detector.json, so frames of another sensor are
+    /// flagged and get no answer (a detector trained now has one already).
+    Profile(ProfileArgs),
+}
+
+#[derive(Args)]
+pub(crate) struct ProfileArgs {
+    /// The detector folder.
+    #[arg(long)]
+    model: PathBuf,
+    /// Its training dataset(s).
+    #[arg(long, num_args = 1.., required = true)]
+    data: Vec<PathBuf>,
 }
 
 /// The schedule flags of one model, their defaults from its training config.
@@ -321,6 +335,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Detector(a) => Some(&a.out),
         TrainCmd::Segmenter(a) => Some(&a.out),
         TrainCmd::Depth(a) => Some(&a.out),
+        TrainCmd::Profile(a) => Some(&a.model),
         TrainCmd::Head(a) => a.out.as_ref(),
         TrainCmd::Regressor(a) => a.out.as_ref(),
     };
@@ -378,21 +393,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             let (head, tested) =
                 train_head(config, &a.features.source()?, &ds, test.as_ref(), &out, rt)?;
             if let Some(t) = tested {
-                say!(
-                    "test shape accuracy: {:.1} % ({}/{})",
-                    100.0 * t.accuracy,
-                    t.right,
-                    t.frames
-                );
-                let classes = head.classes();
-                say!(
-                    "confusion (rows: truth, columns: predicted): {}",
-                    classes.join(" ")
-                );
-                for (c, row) in classes.iter().zip(&t.confusion) {
-                    let cells: String = row.iter().map(|v| format!("{v:>5}")).collect();
-                    say!("  {c:>12} {cells}");
-                }
+                t.describe(head.classes()).iter().for_each(|l| say!("{l}"));
             }
             say!("head saved in {}", out.display());
         }
@@ -415,11 +416,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             say!("regressor saved in {}", out.display());
         }
         TrainCmd::Detector(a) => {
-            let datasets = a
-                .data
-                .iter()
-                .map(Dataset::open)
-                .collect::<Result<Vec<_>, _>>()?;
+            let datasets: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
             let soft_labels = match a.soft_labels {
                 None => None,
                 Some(w) if w > 0.0 && w.is_finite() => Some(SoftLabels::new(
@@ -467,6 +464,16 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             let s = &a.schedule;
             let fit = tactile_segment::training::train(&config, &ds, &a.out, s.device, s.resume)?;
             say!("{}; model in {}", fit.describe("mean IoU"), a.out.display());
+        }
+        TrainCmd::Profile(a) => {
+            let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
+            let p = tactile_detect::profile::add_input_profile(&a.model, &data)?;
+            say!(
+                "input profile of {} frames saved in {}: flags scores above {:.1}",
+                p.frames,
+                a.model.join("detector.json").display(),
+                p.threshold
+            );
         }
         TrainCmd::Depth(a) => {
             let ds = Dataset::open(&a.data)?;

@@ -1,0 +1,49 @@
+//! The detector's input profile: the training frames' input statistics,
+//! saved in `detector.json`, against which a frame of another sensor is
+//! recognised and refused ([`tactile_preprocess::profile`]).
+
+use std::path::Path;
+
+use tactile_core::Artifact;
+use tactile_core::dataset::Dataset;
+use tactile_preprocess::profile::{InputProfile, descriptor};
+
+use crate::{DetectionSet, DetectorArtifact, Result};
+
+/// How far above the training frames' 99.9th-percentile score the
+/// threshold sits: room for renderings and captures that differ within the
+/// sensor's specification.
+pub const PROFILE_MARGIN: f32 = 1.5;
+
+/// The input profile of every frame of `sets`, as the detector sees them.
+pub fn fit_input_profile(sets: &[&DetectionSet]) -> Result<InputProfile> {
+    let descriptors = sets
+        .iter()
+        .flat_map(|s| (0..s.frames.len()).map(move |i| descriptor(&s.image(i))))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    Ok(InputProfile::fit(&descriptors, PROFILE_MARGIN)?)
+}
+
+/// The input profile of the frames `idx` of `set` (a training split).
+pub fn fit_input_profile_of(set: &DetectionSet, idx: &[usize]) -> Result<InputProfile> {
+    let descriptors = idx
+        .iter()
+        .map(|&i| descriptor(&set.image(i)))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    Ok(InputProfile::fit(&descriptors, PROFILE_MARGIN)?)
+}
+
+/// Fit the input profile of the detector in `dir` on `datasets` (its
+/// training data) and save it in the detector's config, atomically; the
+/// weights are not touched.
+pub fn add_input_profile(dir: &Path, datasets: &[Dataset]) -> Result<InputProfile> {
+    let mut artifact = DetectorArtifact::read(dir)?;
+    let sets = datasets
+        .iter()
+        .map(|d| DetectionSet::from_dataset(d, artifact.model.input_size))
+        .collect::<Result<Vec<_>>>()?;
+    let profile = fit_input_profile(&sets.iter().collect::<Vec<_>>())?;
+    artifact.input_profile = Some(profile.clone());
+    tactile_core::io::write_json_atomic(dir.join(DetectorArtifact::CONFIG_FILE), &artifact)?;
+    Ok(profile)
+}
