@@ -14,6 +14,8 @@ use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_core::{Artifact, DeviceKind};
 use tactile_preprocess::visuo::ChannelStats;
 
+use tactile_preprocess::profile::InputProfile;
+
 use crate::data::{SoftLabels, load_split};
 use crate::{DetectionSet, Detector, DetectorArtifact, DetectorConfig, Error, Result};
 
@@ -182,7 +184,10 @@ pub fn train(
         model: config.model.clone(),
         stats: stats.clone(),
         threshold: 0.5,
-        input_profile: Some(crate::profile::fit_input_profile_of(&data, &train)?),
+        // A profile needs a few frames; tiny test sets train without one.
+        input_profile: (train.len() >= InputProfile::MIN_FRAMES)
+            .then(|| crate::profile::fit_input_profile_of(&data, &train))
+            .transpose()?,
         notes: serde_json::json!({
             "trained_on": datasets.iter().map(|d| d.root.display().to_string()).collect::<Vec<_>>().join(" + "),
             "device": device.name(),

@@ -106,15 +106,19 @@ pub struct InputProfile {
 }
 
 impl InputProfile {
+    /// Fewest training frames a profile is fitted on.
+    pub const MIN_FRAMES: usize = 20;
+
     /// Fit on the descriptors of the training frames: the threshold is
     /// `margin` times their 99.9th-percentile score (at least 6 scales).
     pub fn fit(descriptors: &[Vec<f32>], margin: f32) -> Result<Self> {
         let k = DESCRIPTOR.len();
-        if descriptors.len() < 20 || descriptors.iter().any(|d| d.len() != k) {
-            return Err(Error::Kornia(format!(
-                "an input profile needs at least 20 frames with {k} statistics each, got {}",
+        if descriptors.len() < Self::MIN_FRAMES || descriptors.iter().any(|d| d.len() != k) {
+            return Err(Error::Core(tactile_core::Error::Invalid(format!(
+                "an input profile needs at least {} frames with {k} statistics each, got {}",
+                Self::MIN_FRAMES,
                 descriptors.len()
-            )));
+            ))));
         }
         let median = |mut v: Vec<f32>| {
             v.sort_by(f32::total_cmp);
