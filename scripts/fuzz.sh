@@ -12,6 +12,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
 seconds="${1:-600}"
+# Further arguments pick targets (default: all four).
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(dataset npy model_config weights)
 corpus=corpus
 mkdir -p "$corpus"/{dataset,npy,model_config,weights}
 # Seeds: real inputs of each parser.
@@ -34,7 +38,7 @@ cp ../models/segmenter/segmenter.bpk "$corpus/weights/segmenter"
 # fuzz/target: in the workspace's they would hold its lock for the whole
 # sanitizer build of burn.
 unset CARGO_TARGET_DIR
-for target in dataset npy model_config weights; do
+for target in "${targets[@]}"; do
     log=$(mktemp)
     set +e
     cargo +nightly fuzz run -O "$target" "$corpus/$target" -- \
