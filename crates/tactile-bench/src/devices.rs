@@ -51,21 +51,31 @@ pub struct OpRow {
     pub onnxruntime_us: Option<f64>,
 }
 
-/// A convolution of the paper B models' kinds, as a module on its own.
+/// Convolutions of one of the paper B models' kinds in a chain (in -> out,
+/// out -> in, ...), so a runtime's fixed cost per call is shared by all.
 #[derive(burn::module::Module, Debug)]
 struct ConvProbe {
-    conv: burn::nn::conv::Conv2d,
+    convs: Vec<burn::nn::conv::Conv2d>,
+}
+
+impl ConvProbe {
+    fn forward(&self, x: burn::tensor::Tensor<4>) -> burn::tensor::Tensor<4> {
+        self.convs.iter().fold(x, |x, c| c.forward(x))
+    }
 }
 
 impl Forward for ConvProbe {
     fn forward_data(&self, x: burn::tensor::Tensor<4>) -> burn::tensor::TensorData {
-        self.conv.forward(x).into_data()
+        self.forward(x).into_data()
     }
 }
 
+/// Convolutions per probe chain.
+const CHAIN: usize = 8;
+
 /// Convolutions like the models' (k x k, in -> out channels, groups, at
-/// H x W), each timed alone on ndarray, flex and onnxruntime: where burn's
-/// time goes.
+/// H x W), timed per convolution in a chain on ndarray, flex and
+/// onnxruntime: where burn's time goes.
 pub fn conv_probes(runs: usize) -> Result<Vec<OpRow>> {
     use burn::nn::PaddingConfig2d;
     use burn::nn::conv::Conv2dConfig;
@@ -118,23 +128,29 @@ pub fn conv_probes(runs: usize) -> Result<Vec<OpRow>> {
         let shape = [1, i, h, w];
         let input = stand_in_input(shape.iter().product());
         let make = |device: &burn::tensor::Device| ConvProbe {
-            conv: Conv2dConfig::new([i, o], [k, k])
-                .with_groups(g)
-                .with_padding(PaddingConfig2d::Explicit(k / 2, k / 2, k / 2, k / 2))
-                .init(device),
+            convs: (0..CHAIN)
+                .map(|j| {
+                    let io = if j % 2 == 0 { [i, o] } else { [o, i] };
+                    Conv2dConfig::new(io, [k, k])
+                        .with_groups(g)
+                        .with_padding(PaddingConfig2d::Explicit(k / 2, k / 2, k / 2, k / 2))
+                        .init(device)
+                })
+                .collect(),
         };
+        let per_conv = CHAIN as f64 / 1e3;
         let us = |kind: DeviceKind| {
             let mut net = BurnNetwork::new(make(&kind.device()), kind);
-            1e3 * time_network(&mut net, shape, &input, runs)
+            time_network(&mut net, shape, &input, runs) / per_conv
         };
         let (ndarray_us, flex_us) = (us(DeviceKind::Ndarray), us(DeviceKind::Flex));
         let probe = make(&DeviceKind::Flex.device());
         let bytes =
             tactile_onnx::export::export_batch_dynamic(&probe, shape, |m: &ConvProbe, x| {
-                m.conv.forward(x)
+                m.forward(x)
             })?;
         let onnxruntime_us = match tactile_onnx::runtime::OrtModel::from_bytes(&bytes, threads()) {
-            Ok(mut m) => Some(1e3 * time_network(&mut m, shape, &input, runs)),
+            Ok(mut m) => Some(time_network(&mut m, shape, &input, runs) / per_conv),
             Err(_) => None,
         };
         rows.push(OpRow {
@@ -245,9 +261,9 @@ pub fn devices_markdown(rows: &[DeviceRow], probes: &[OpRow], runs: usize) -> St
         ));
     }
     md.push_str(
-        "\nWhat limits burn here: the convolutions. Each below is timed alone on every runtime \
-         (the same module exported to ONNX for onnxruntime); the models are mostly such small \
-         convolutions, where burn's kernels cost several times onnxruntime's:\n\n\
+        "\nWhere burn's time goes: convolutions of the models' kinds, each timed per convolution \
+         in a chain of 8 (so a runtime's fixed cost per call is shared) on every runtime (the \
+         same module exported to ONNX for onnxruntime):\n\n\
          | convolution | ndarray (µs) | flex (µs) | onnxruntime (µs) | flex / onnxruntime |\n|---|---|---|---|---|\n",
     );
     for p in probes {
