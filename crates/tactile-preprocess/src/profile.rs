@@ -41,35 +41,31 @@ pub fn descriptor(img: &FloatImage) -> Result<Vec<f32>> {
             found: img.channels,
         });
     }
-    let luma = |i: usize| {
-        let p = &img.data[i * 3..i * 3 + 3];
-        0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2]
-    };
-    let r2 = |x: usize, y: usize| {
-        let (u, v) = (
-            (x as f32 + 0.5) / w as f32 - 0.5,
-            (y as f32 + 0.5) / h as f32 - 0.5,
-        );
-        4.0 * (u * u + v * v)
-    };
-    let (mut inside, mut outside) = (Vec::new(), Vec::new());
-    let mut texture = Vec::new();
+    let luma: Vec<f32> = img
+        .data
+        .chunks_exact(3)
+        .map(|p| 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2])
+        .collect();
+    let (mut inside, mut outside) = (Vec::with_capacity(w * h), Vec::new());
+    let mut texture = Vec::with_capacity(w * h);
     let mut rgb = [0f64; 3];
     for y in 0..h {
+        let v = (y as f32 + 0.5) / h as f32 - 0.5;
         for x in 0..w {
             let i = y * w + x;
-            let r = r2(x, y);
+            let u = (x as f32 + 0.5) / w as f32 - 0.5;
+            let r = 4.0 * (u * u + v * v);
             if r <= 0.8 {
-                inside.push(luma(i));
+                inside.push(luma[i]);
                 for (c, acc) in rgb.iter_mut().enumerate() {
                     *acc += img.data[i * 3 + c] as f64;
                 }
                 if x > 0 && y > 0 && x + 1 < w && y + 1 < h {
-                    let lap = 4.0 * luma(i) - luma(i - 1) - luma(i + 1) - luma(i - w) - luma(i + w);
+                    let lap = 4.0 * luma[i] - luma[i - 1] - luma[i + 1] - luma[i - w] - luma[i + w];
                     texture.push(lap.abs());
                 }
             } else if r >= 1.3 {
-                outside.push(luma(i));
+                outside.push(luma[i]);
             }
         }
     }
