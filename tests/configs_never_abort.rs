@@ -114,3 +114,27 @@ fn the_shipped_configs_load() {
         "models/cae-synth/head/head.json"
     )));
 }
+
+/// Every single number of every shipped config set to every extreme, in
+/// turn: a deterministic sweep beside the random pairs and triples above
+/// (it holds the case a clean CI run found: a depth transition compression
+/// of 1e-30 left a transition with no channels).
+#[test]
+fn every_single_extreme_value_is_loaded_or_refused() {
+    fn sweep<A: Artifact>(path: &str) {
+        let t = template(path);
+        let mut leaves = Vec::new();
+        numbers(&t, String::new(), &mut leaves);
+        for leaf in 0..leaves.len() {
+            for x in 0..EXTREMES.len() {
+                load::<A>(&mutate(&t, &[(leaf, x)]));
+            }
+        }
+    }
+    sweep::<tactile_rs::detect::DetectorArtifact>("models/detector/detector.json");
+    sweep::<tactile_rs::segment::SegmenterArtifact>("models/segmenter/segmenter.json");
+    sweep::<tactile_rs::depth::DepthArtifact>("models/depth/depth.json");
+    sweep::<tactile_rs::cae::CaeArtifact>("models/cae-synth/cae.json");
+    sweep::<tactile_rs::estimate::HeadArtifact>("models/cae-synth/head/head.json");
+    sweep::<tactile_rs::estimate::RegressorArtifact>("models/cae-synth/position/regressor.json");
+}

@@ -460,6 +460,21 @@ impl DepthNetConfig {
                 e.compression
             )));
         }
+        // Every transition must keep at least one channel (as init builds them).
+        let mut c = e.num_init_features;
+        for (i, &n) in e.block_config.iter().enumerate() {
+            c += n * e.growth_rate;
+            if i + 1 < e.block_config.len() {
+                c = (c as f64 * e.compression).floor() as usize;
+                if c == 0 {
+                    return Err(Error::Config(format!(
+                        "transition compression {} leaves transition {} with no channels",
+                        e.compression,
+                        i + 1
+                    )));
+                }
+            }
+        }
         tactile_core::artifact::check_parameters("depth network", self.parameter_bound())
     }
 
