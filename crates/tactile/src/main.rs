@@ -72,7 +72,8 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Compare feature sets (CAE, PCA, raw pixels, pin tracking) x estimators on one split.
     Compare(compare::CompareArgs),
-    /// Run several estimators on one encoding per frame (paper A's simultaneous deployment).
+    /// Run several estimators on one encoding per frame (paper A's simultaneous deployment); `predict --model DIR` is the same.
+    #[command(visible_alias = "predict")]
     Perceive(perceive::PerceiveArgs),
     /// Score every estimator of an encoder on a labelled dataset: accuracy per class, errors per shape.
     Evaluate(evaluate::EvaluateArgs),

@@ -11,8 +11,8 @@ use tactile_pipeline::tactip::TactipPerception;
 
 #[derive(Args)]
 pub(crate) struct PerceiveArgs {
-    /// Trained encoder folder.
-    #[arg(long)]
+    /// Trained encoder folder (its estimator subfolders run by default).
+    #[arg(long, visible_alias = "model")]
     encoder: PathBuf,
     /// Estimator folders: classifier heads (head.json) and regressors
     /// (regressor.json), all run on the same feature vector (default:

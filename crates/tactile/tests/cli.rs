@@ -1408,3 +1408,57 @@ fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
     let (ok, msg) = train(&[&a], "0");
     assert!(!ok && msg.contains("--soft-labels"), "{msg}");
 }
+
+#[test]
+fn predict_writes_every_estimate_of_an_encoder_folder_in_the_labels_units() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let real = std::env::var_os("TACTILE_SHARED_REAL")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join("../shared/real"));
+    let data = real.join("tactip127-edge");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("estimates.csv");
+    let model = root.join("models/cae-edge");
+    let (ok, msg) = tactile(&[
+        "predict",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("file,x_mm,theta_deg,depth_mm"));
+    let labels: std::collections::HashMap<String, Vec<f64>> =
+        std::fs::read_to_string(data.join("labels.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let c: Vec<&str> = l.split(',').collect();
+                let n = |i: usize| c[i].parse::<f64>().unwrap();
+                (c[0].to_string(), vec![n(2), n(4), n(5)])
+            })
+            .collect();
+    let mut err = [0.0f64; 3];
+    let mut n = 0;
+    for l in lines {
+        let c: Vec<&str> = l.split(',').collect();
+        let truth = &labels[c[0]];
+        for k in 0..3 {
+            err[k] += (c[k + 1].parse::<f64>().unwrap() - truth[k]).abs();
+        }
+        n += 1;
+    }
+    assert_eq!(n, 3762);
+    // Mean absolute error over every frame (most of them its training
+    // frames): the estimates are in the labels' units and ranges.
+    let [x, theta, depth] = err.map(|e| e / n as f64);
+    assert!(
+        x < 0.5 && theta < 5.0 && depth < 0.1,
+        "{x} mm, {theta} deg, {depth} mm"
+    );
+}
