@@ -4,6 +4,7 @@ encode`, the estimates of `tactile perceive`, and clear errors."""
 from __future__ import annotations
 
 import csv
+import shutil
 
 import numpy as np
 import pytest
@@ -66,8 +67,13 @@ def test_encoder_errors(root, tmp_path):
         tactile.TactipEncoder(tmp_path / "missing")
     with pytest.raises(ValueError, match="cae"):
         tactile.TactipEncoder(root / "models/detector")
-    enc = tactile.TactipEncoder(root / "models/cae-edge")
+    bare = tmp_path / "bare"  # an encoder folder without estimator subfolders
+    bare.mkdir()
+    for f in ("cae.json", "cae.bpk"):
+        shutil.copy(root / "models/cae-edge" / f, bare / f)
+    enc = tactile.TactipEncoder(bare)
     assert enc.estimators == []
+    assert tactile.TactipEncoder(root / "models/cae-edge").estimators == ["pose"]
     frames = np.zeros((2, 300, 300), np.uint8)
     assert enc.encode(frames).shape == (2, enc.feature_count)
     with pytest.raises(ValueError, match="no estimators"):
