@@ -114,8 +114,17 @@ fn outside_housing(frame: &RgbImage) -> tactile_core::Result<RgbImage> {
     rgb_image(w, h, rgb)
 }
 
+/// What the bench measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct OodBench {
+    /// One row per set.
+    pub rows: Vec<OodRow>,
+    /// The detector's input-profile threshold (None without a profile).
+    pub threshold: Option<f32>,
+}
+
 /// Run the pipeline in `models` over every set; one row per set.
-pub fn bench_ood(models: &Path, runtime: Runtime) -> Result<Vec<OodRow>> {
+pub fn bench_ood(models: &Path, runtime: Runtime) -> Result<OodBench> {
     use datasets_synth::{TactipConfig, tactip};
     let mut pipeline = Pipeline::load(models, runtime, 1)?;
     let mut sets: Vec<(String, bool, Vec<RgbImage>)> = vec![
@@ -196,11 +205,13 @@ pub fn bench_ood(models: &Path, runtime: Runtime) -> Result<Vec<OodRow>> {
             score_range: range,
         });
     }
-    Ok(rows)
+    let threshold = (pipeline.detector.artifact.input_profile.as_ref()).map(|p| p.threshold);
+    Ok(OodBench { rows, threshold })
 }
 
 /// The table.
-pub fn ood_markdown(rows: &[OodRow], threshold: Option<f32>) -> String {
+pub fn ood_markdown(bench: &OodBench) -> String {
+    let (rows, threshold) = (&bench.rows, bench.threshold);
     let mut md = format!(
         "The palpation pipeline's input profile (the detector's training frames' input statistics, \
          `models/detector/detector.json`) flags frames whose score exceeds {}; flagged frames get no \

@@ -352,8 +352,8 @@ pub fn heat_maps_with_bar(
     let (lo, hi) = colour_range(maps.iter().flat_map(|m| m.iter().copied()));
     let zoom = zoom.clamp(1, 16);
     let (zw, zh) = (w * zoom, h * zoom);
-    let (gap, bar, labels) = (6, 16, 185);
-    let width = maps.len() * zw + maps.len() * gap + bar + labels;
+    let gap = 6;
+    let width = maps.len() * (zw + gap) + COLOUR_BAR_WIDTH;
     let mut rgb = vec![255u8; width * zh * 3];
     let t = |v: f64| (v - lo) / (hi - lo);
     for (k, m) in maps.iter().enumerate() {
@@ -365,33 +365,58 @@ pub fn heat_maps_with_bar(
             }
         }
     }
-    let x0 = maps.len() * (zw + gap);
-    let mut marks = Vec::new();
-    for y in 0..zh {
-        let c = colour(1.0 - y as f64 / (zh - 1).max(1) as f64);
+    draw_colour_bar(&mut rgb, width, zh, maps.len() * (zw + gap), (lo, hi), unit)?;
+    crate::image_io::save_rgb_png(path, width, zh, &rgb)
+}
+
+/// Pixels a colour bar with its labels takes ([`draw_colour_bar`]).
+pub const COLOUR_BAR_WIDTH: usize = 16 + 185;
+
+/// A vertical colour bar for values `lo..hi` (high at the top) at column
+/// `x0` of an RGB buffer `width x height`, its values at five ticks and
+/// `unit` beside it; it takes [`COLOUR_BAR_WIDTH`] columns.
+pub fn draw_colour_bar(
+    rgb: &mut [u8],
+    width: usize,
+    height: usize,
+    x0: usize,
+    (lo, hi): (f64, f64),
+    unit: &str,
+) -> Result<()> {
+    let bar = 16;
+    if x0 + COLOUR_BAR_WIDTH > width || rgb.len() != width * height * 3 || height == 0 {
+        return Err(Error::Invalid(format!(
+            "a colour bar at column {x0} does not fit a {width}x{height} image"
+        )));
+    }
+    for y in 0..height {
+        let c = colour(1.0 - y as f64 / (height - 1).max(1) as f64);
         for x in x0..x0 + bar {
             let o = (y * width + x) * 3;
             rgb[o..o + 3].copy_from_slice(&c);
         }
     }
-    for k in 0..=4 {
-        let v = hi - (hi - lo) * k as f64 / 4.0;
-        let y = ((zh - 1) as f64 * k as f64 / 4.0) as i32;
-        marks.push(Mark::Text {
-            at: (x0 as i32 + bar as i32 + 4, (y - 6).clamp(0, zh as i32 - 14)),
-            text: format!("{v:.2}"),
+    let x_text = (x0 + bar + 4) as i32;
+    // Tick labels stay inside the image (also when it is shorter than a label).
+    let tick_y = |k: usize| {
+        let y = ((height - 1) as f64 * k as f64 / 4.0) as i32 - 6;
+        y.min(height as i32 - 14).max(0)
+    };
+    let mut marks: Vec<Mark> = (0..=4)
+        .map(|k| Mark::Text {
+            at: (x_text, tick_y(k)),
+            text: format!("{:.2}", hi - (hi - lo) * k as f64 / 4.0),
             size: 13,
             colour: [0, 0, 0],
-        });
-    }
+        })
+        .collect();
     marks.push(Mark::Text {
-        at: (x0 as i32 + bar as i32 + 50, zh as i32 / 2 - 6),
+        at: (x_text + 46, height as i32 / 2 - 6),
         text: unit.to_string(),
         size: 13,
         colour: [0, 0, 0],
     });
-    draw_marks(&mut rgb, width, zh, &marks)?;
-    crate::image_io::save_rgb_png(path, width, zh, &rgb)
+    draw_marks(rgb, width, height, &marks)
 }
 
 /// The finite range of `values` with 0 inside it (displacements start

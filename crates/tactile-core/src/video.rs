@@ -22,6 +22,15 @@ const INSTALL_HINT: &str = "reading video needs FFmpeg (ffmpeg and ffprobe on PA
 /// How much of FFmpeg's stderr is kept for an error message.
 const STDERR_TAIL: usize = 4096;
 
+/// An FFmpeg tool that could not be started for `path`: missing (say how
+/// to install it) or another I/O failure.
+fn spawn_error(path: &Path, e: std::io::Error) -> Error {
+    match e.kind() {
+        std::io::ErrorKind::NotFound => Error::Invalid(INSTALL_HINT.into()),
+        _ => Error::io(path, e),
+    }
+}
+
 /// True when `ffmpeg` and `ffprobe` run.
 pub fn ffmpeg_available() -> bool {
     ["ffmpeg", "ffprobe"].iter().all(|tool| {
@@ -109,10 +118,7 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
         })
         .stdin(Stdio::null())
         .output()
-        .map_err(|e| match e.kind() {
-            std::io::ErrorKind::NotFound => Error::Invalid(INSTALL_HINT.into()),
-            _ => Error::io(path, e),
-        })?;
+        .map_err(|e| spawn_error(path, e))?;
     if !out.status.success() {
         let why = String::from_utf8_lossy(&out.stderr);
         let why = why.lines().last().unwrap_or("ffprobe failed").trim();
@@ -205,10 +211,7 @@ impl VideoReader {
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
-            .map_err(|e| match e.kind() {
-                std::io::ErrorKind::NotFound => Error::Invalid(INSTALL_HINT.into()),
-                _ => Error::io(path, e),
-            })?;
+            .map_err(|e| spawn_error(path, e))?;
         let stdout = child
             .stdout
             .take()
@@ -417,10 +420,7 @@ fn encode_with(frames: &[&RgbImage], fps: u32, out: &Path, codec: &[String]) -> 
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| match e.kind() {
-            std::io::ErrorKind::NotFound => Error::Invalid(INSTALL_HINT.into()),
-            _ => Error::io(out, e),
-        })?;
+        .map_err(|e| spawn_error(out, e))?;
     let write = (|| -> std::io::Result<()> {
         let mut stdin = child.stdin.take().ok_or(std::io::ErrorKind::BrokenPipe)?;
         for f in frames {

@@ -17,18 +17,19 @@ pub const PROFILE_MARGIN: f32 = 1.5;
 
 /// The input profile of every frame of `sets`, as the detector sees them.
 pub fn fit_input_profile(sets: &[&DetectionSet]) -> Result<InputProfile> {
-    let descriptors = sets
+    fit(sets
         .iter()
-        .flat_map(|s| (0..s.frames.len()).map(move |i| descriptor(&s.image(i))))
-        .collect::<std::result::Result<Vec<_>, _>>()?;
-    Ok(InputProfile::fit(&descriptors, PROFILE_MARGIN)?)
+        .flat_map(|s| (0..s.frames.len()).map(move |i| (*s, i))))
 }
 
 /// The input profile of the frames `idx` of `set` (a training split).
 pub fn fit_input_profile_of(set: &DetectionSet, idx: &[usize]) -> Result<InputProfile> {
-    let descriptors = idx
-        .iter()
-        .map(|&i| descriptor(&set.image(i)))
+    fit(idx.iter().map(|&i| (set, i)))
+}
+
+fn fit<'a>(frames: impl Iterator<Item = (&'a DetectionSet, usize)>) -> Result<InputProfile> {
+    let descriptors = frames
+        .map(|(s, i)| descriptor(&s.image(i)))
         .collect::<std::result::Result<Vec<_>, _>>()?;
     Ok(InputProfile::fit(&descriptors, PROFILE_MARGIN)?)
 }

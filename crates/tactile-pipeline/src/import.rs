@@ -151,11 +151,12 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
         .filter(|h| *h != "frame" && !kind_cols.contains(h))
         .collect();
     let col = |name: &str| labels.header.iter().position(|h| h == name);
-    let is_folder = options.frames.is_dir();
     let mut source = FrameSource::open(
         &SourceSpec::Path(options.frames.clone()),
         SourceOptions::default(),
     )?;
+    // Files (a folder, an image) can be labelled by name; stream frames by number.
+    let is_folder = source.list().is_some();
     let staged = StagedDir::new(&options.out)?;
     let root = staged.path().to_path_buf();
     let mut writer = DatasetWriter::create(&root, options.kind, &extra, true)?;

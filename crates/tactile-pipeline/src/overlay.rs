@@ -93,8 +93,8 @@ impl FrameViews {
         let [dw, dh] = self.depth_size;
         let dscale = s as f64 / dh as f64;
         let dwz = (dw as f64 * dscale).round() as usize;
-        let (gap, bar, labels) = (6, 14, 185);
-        let width = s + gap + dwz + gap + bar + labels;
+        let gap = 6;
+        let width = s + gap + dwz + gap + tactile_core::plot::COLOUR_BAR_WIDTH;
         let mut rgb = vec![255u8; width * s * 3];
         for y in 0..s {
             for x in 0..s {
@@ -125,31 +125,15 @@ impl FrameViews {
                 let o = (y * width + s + gap + x) * 3;
                 rgb[o..o + 3].copy_from_slice(&c);
             }
-            let c = tactile_core::plot::colour(1.0 - y as f64 / (s - 1).max(1) as f64);
-            for x in 0..bar {
-                let o = (y * width + s + gap + dwz + gap + x) * 3;
-                rgb[o..o + 3].copy_from_slice(&c);
-            }
         }
-        let x_bar = (s + gap + dwz + gap + bar + 4) as i32;
-        let mut marks: Vec<tactile_core::plot::Mark> = (0..=4)
-            .map(|k| tactile_core::plot::Mark::Text {
-                at: (
-                    x_bar,
-                    (((s - 1) * k / 4) as i32 - 6).clamp(0, s as i32 - 14),
-                ),
-                text: format!("{:.2}", hi - (hi - lo) * k as f64 / 4.0),
-                size: 13,
-                colour: [0, 0, 0],
-            })
-            .collect();
-        marks.push(tactile_core::plot::Mark::Text {
-            at: (x_bar + 46, s as i32 / 2 - 6),
-            text: "push from rest, mm".into(),
-            size: 13,
-            colour: [0, 0, 0],
-        });
-        tactile_core::plot::draw_marks(&mut rgb, width, s, &marks)?;
+        tactile_core::plot::draw_colour_bar(
+            &mut rgb,
+            width,
+            s,
+            s + gap + dwz + gap,
+            (lo, hi),
+            "push from rest, mm",
+        )?;
         if let Some((deg, (cx, cy))) = self.direction {
             let (sn, cs) = deg.to_radians().sin_cos();
             let half = s as f64 * 0.45;

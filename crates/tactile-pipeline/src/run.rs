@@ -242,11 +242,9 @@ pub fn run(
         .hysteresis
         .map(|(on, off)| Hysteresis::new(on, off))
         .transpose()?;
-    let known = source.list().map(|l| l.frames.len() as u64);
-    let pb = match known {
-        Some(n) => tactile_core::train::progress_bar(n, "run"),
-        None => tactile_core::train::progress_bar(0, "run"),
-    };
+    // A stream's length is unknown: its bar counts without a total.
+    let known = source.list().map_or(0, |l| l.frames.len() as u64);
+    let pb = tactile_core::train::progress_bar(known, "run");
     let t0 = std::time::Instant::now();
     let mut times: [Reservoir; 7] = Default::default();
     let (mut frames, mut gated, mut ood) = (0usize, 0usize, 0usize);

@@ -500,43 +500,23 @@ impl FrameSource {
                         entries: list.frames.clone().into_iter(),
                     };
                     (kind, Some(list), Box::new(r) as Box<dyn Reader>, size, None)
-                } else if meta.file_type().is_char_device() {
-                    let mut v = VideoReader::open(
-                        &VideoInput::Camera(path.clone()),
-                        DecodeOptions::default(),
-                    )?;
+                } else if meta.file_type().is_char_device() || meta.is_file() {
+                    // A character device is a camera, read live; a file a video.
+                    let (input, kind) = match meta.is_file() {
+                        true => (VideoInput::File(path.clone()), SourceKind::Video),
+                        false => (VideoInput::Camera(path.clone()), SourceKind::Camera),
+                    };
+                    let mut v = VideoReader::open(&input, DecodeOptions::default())?;
                     let info = v.info();
                     let stopper = v.stopper();
-                    let read = move || v.next_frame();
                     let r = StreamReader {
-                        read,
+                        read: move || v.next_frame(),
                         number: 0,
-                        live: true,
+                        live: kind.is_live(),
                     };
                     let size = Some((info.width, info.height));
                     (
-                        SourceKind::Camera,
-                        None,
-                        Box::new(r) as Box<dyn Reader>,
-                        size,
-                        Some(stopper),
-                    )
-                } else if meta.is_file() {
-                    let mut v = VideoReader::open(
-                        &VideoInput::File(path.clone()),
-                        DecodeOptions::default(),
-                    )?;
-                    let info = v.info();
-                    let stopper = v.stopper();
-                    let read = move || v.next_frame();
-                    let r = StreamReader {
-                        read,
-                        number: 0,
-                        live: false,
-                    };
-                    let size = Some((info.width, info.height));
-                    (
-                        SourceKind::Video,
+                        kind,
                         None,
                         Box::new(r) as Box<dyn Reader>,
                         size,

@@ -157,15 +157,11 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             }
         }
         BenchCmd::Ood(a) => {
-            let rows = tactile_bench::ood::bench_ood(&a.models, tactile_core::Runtime::Onnx)?;
-            let det = <tactile_detect::DetectorArtifact as tactile_core::Artifact>::read(
-                &a.models.join("detector"),
-            )?;
-            let t = det.input_profile.map(|p| p.threshold);
-            let md = tactile_bench::ood::ood_markdown(&rows, t);
+            let r = tactile_bench::ood::bench_ood(&a.models, tactile_core::Runtime::Onnx)?;
+            let md = tactile_bench::ood::ood_markdown(&r);
             say_raw!("{md}");
             if let Some(out) = &a.out {
-                write_markdown_and_json(out, &md, &rows)?;
+                write_markdown_and_json(out, &md, &r.rows)?;
             }
         }
         BenchCmd::Devices(a) => {

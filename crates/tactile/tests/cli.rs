@@ -20,6 +20,21 @@ fn tactile(args: &[&str]) -> (bool, String) {
     )
 }
 
+/// The project's real TacTip data (`../shared/real` beside the clone, or
+/// TACTILE_SHARED_REAL).
+fn shared_real() -> std::path::PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let real = std::env::var_os("TACTILE_SHARED_REAL")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join("../shared/real"));
+    assert!(
+        real.join("polic-shapes/manifest.json").is_file(),
+        "real TacTip data not found at {} (set TACTILE_SHARED_REAL)",
+        real.display()
+    );
+    real
+}
+
 fn write_png(path: &Path, w: u32, h: u32) {
     image::GrayImage::from_pixel(w, h, image::Luma([0u8]))
         .save(path)
@@ -1211,14 +1226,7 @@ fn run_refuses_an_unwritable_output_folder_before_any_work() {
 #[test]
 fn report_regenerates_the_results_page_and_the_readme_headline() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let real = std::env::var_os("TACTILE_SHARED_REAL")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| root.join("../shared/real"));
-    assert!(
-        real.join("polic-shapes/manifest.json").is_file(),
-        "real TacTip data not found at {} (set TACTILE_SHARED_REAL)",
-        real.display()
-    );
+    let real = shared_real();
     let tmp = tempfile::tempdir().unwrap();
     let readme = tmp.path().join("README.md");
     let out = tmp.path().join("docs/results.md");
@@ -1412,10 +1420,7 @@ fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
 #[test]
 fn predict_writes_every_estimate_of_an_encoder_folder_in_the_labels_units() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let real = std::env::var_os("TACTILE_SHARED_REAL")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| root.join("../shared/real"));
-    let data = real.join("tactip127-edge");
+    let data = shared_real().join("tactip127-edge");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("estimates.csv");
     let model = root.join("models/cae-edge");
