@@ -133,13 +133,13 @@ fn wrong_channel_counts_are_converted_or_rejected_naming_the_file() {
 
 #[test]
 fn an_empty_mask_has_no_direction() {
-    use tactile_rs::segment::{PostprocessConfig, TendonMask, postprocess};
+    use tactile_rs::segment::{Evidence, PostprocessConfig, TendonMask, postprocess};
     let m = TendonMask {
         width: 32,
         height: 32,
         pixels: vec![false; 1024],
     };
-    let t = postprocess(&m, &PostprocessConfig::default()).unwrap();
+    let t = postprocess(&m, Evidence::default(), &PostprocessConfig::default()).unwrap();
     assert_eq!(t.direction, Err(NoDirection::EmptyMask));
 }
 

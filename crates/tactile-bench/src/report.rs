@@ -189,11 +189,17 @@ fn headline(
     line(
         "paper B: tendon segmenter + direction",
         format!(
-            "IoU {} (curved {}); straight direction median {} deg",
+            "IoU {} (curved {}); direction on {} of tendon frames, median {} / p90 {} deg",
             f3(seg.metrics.iou),
             f3(seg.metrics.iou_curved),
             seg.metrics
-                .direction_straight_median_deg
+                .direction_coverage
+                .map_or("-".into(), |v| format!("{:.1} %", 100.0 * v)),
+            seg.metrics
+                .direction_median_deg
+                .map_or("-".into(), |v| format!("{v:.2}")),
+            seg.metrics
+                .direction_p90_deg
                 .map_or("-".into(), |v| format!("{v:.2}"))
         ),
         "IoU 0.879 val, 0.196 curved test",

@@ -175,7 +175,7 @@ impl Pipeline {
             Ok(d) => {
                 rec.direction_deg = Some(d.angle_deg);
                 rec.anisotropy = Some(d.anisotropy);
-                direction = Some((d.angle_deg, d.centroid));
+                direction = Some((d.angle_deg, d.point));
             }
             Err(why) => rec.no_direction = Some(format!("{why:?}")),
         }

@@ -10,7 +10,7 @@ use tactile_onnx::{Exportable, export_batch_dynamic};
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, SquareWindow, resize_rgb};
 
 use crate::model::{UNet, UNetConfig};
-use crate::postprocess::{PostprocessConfig, Tendon, TendonMask, postprocess};
+use crate::postprocess::{Evidence, PostprocessConfig, Tendon, TendonMask, postprocess};
 use crate::{Error, Result};
 
 /// Everything needed to rebuild and run a saved segmenter.
@@ -119,12 +119,16 @@ impl SegmenterArtifact {
     /// Post-processed tendon from the window's per-pixel probabilities;
     /// `None` (a blank window: nothing to segment) gives an empty mask and
     /// hence no direction.
-    pub fn tendon(&self, probabilities: Option<&[f32]>) -> Result<Tendon> {
+    pub fn tendon(&self, probabilities: Option<&[f32]>, window: &FloatImage) -> Result<Tendon> {
         let s = self.model.side;
         let mask = match probabilities {
             Some(p) => TendonMask::from_probabilities(s, s, p, self.threshold)?,
             None => TendonMask::empty(s, s),
         };
-        postprocess(&mask, &self.postprocess)
+        let evidence = Evidence {
+            probabilities,
+            window: Some(window),
+        };
+        postprocess(&mask, evidence, &self.postprocess)
     }
 }

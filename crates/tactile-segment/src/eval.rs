@@ -1,6 +1,7 @@
 //! The segmenter scored on the tendon frames of a labelled dataset: mean
 //! IoU of the thresholded mask over all frames, curved tendons and each
-//! path, and the direction error of the post-processed region.
+//! path, and the direction error of the post-processed region, by the
+//! artifact's direction method and by the principal-axis baseline.
 
 use serde::Serialize;
 use tactile_core::dataset::Dataset;
@@ -8,7 +9,9 @@ use tactile_core::metrics::{iou, median, percentile};
 
 use crate::data::SegmentSet;
 use crate::inference::TendonSegmenter;
-use crate::postprocess::{TendonMask, direction_error_deg, postprocess};
+use crate::postprocess::{
+    DirectionMethod, Evidence, PostprocessConfig, TendonMask, direction_error_deg, postprocess,
+};
 use crate::{Error, Result};
 
 /// Windows per network call when scoring.
@@ -26,14 +29,44 @@ pub struct PathScores {
     pub frames: usize,
     /// Mean IoU of the thresholded mask.
     pub mean_iou: f64,
+    /// Direction by the artifact's method.
+    pub direction: DirectionScores,
+    /// Direction by the principal axis of the region (paper B's baseline).
+    pub principal_axis: DirectionScores,
+}
+
+/// Direction errors over one group of tendon frames.
+#[derive(Debug, Clone, Serialize)]
+pub struct DirectionScores {
     /// Frames with a direction and a direction label.
-    pub direction_frames: usize,
+    pub frames: usize,
     /// Frames without a direction.
     pub no_direction: usize,
+    /// Fraction of the group's frames with a direction.
+    pub coverage: f64,
     /// Median direction error, degrees.
-    pub direction_median_deg: f64,
+    pub median_deg: f64,
     /// 90th percentile of the direction error, degrees.
-    pub direction_p90_deg: f64,
+    pub p90_deg: f64,
+}
+
+impl DirectionScores {
+    fn new(frames: usize, errors: &[f64]) -> Self {
+        let stat = |f: &dyn Fn(&[f64]) -> f64| {
+            if errors.is_empty() {
+                f64::NAN
+            } else {
+                f(errors)
+            }
+        };
+        Self {
+            frames: errors.len(),
+            no_direction: frames - errors.len(),
+            coverage: errors.len() as f64 / frames.max(1) as f64,
+            median_deg: stat(&median),
+            p90_deg: stat(&|e| percentile(e, 90.0)),
+        }
+    }
 }
 
 /// A segmenter's scores on a dataset.
@@ -50,18 +83,23 @@ impl SegmenterScores {
     /// (`device`: where it ran).
     pub fn describe(&self, device: impl std::fmt::Display) -> Vec<String> {
         let mut lines = vec![
-            "| tendon path | frames | mean IoU | direction median (deg) | direction p90 (deg) | no direction |".to_string(),
-            "|---|---|---|---|---|---|".to_string(),
+            "| tendon path | frames | mean IoU | direction coverage | direction median / p90 (deg) | principal axis (baseline): coverage | median / p90 (deg) |".to_string(),
+            "|---|---|---|---|---|---|---|".to_string(),
         ];
         for r in &self.paths {
+            let (d, b) = (&r.direction, &r.principal_axis);
             lines.push(format!(
-                "| {} | {} | {:.4} | {:.2} | {:.2} | {} |",
+                "| {} | {} | {:.4} | {:.1} % ({} without) | {:.2} / {:.2} | {:.1} % | {:.2} / {:.2} |",
                 r.path,
                 r.frames,
                 r.mean_iou,
-                r.direction_median_deg,
-                r.direction_p90_deg,
-                r.no_direction
+                100.0 * d.coverage,
+                d.no_direction,
+                d.median_deg,
+                d.p90_deg,
+                100.0 * b.coverage,
+                b.median_deg,
+                b.p90_deg,
             ));
         }
         lines.push(format!(
@@ -100,34 +138,46 @@ pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<Segment
     }
     let ms_per_window = 1e3 * t0.elapsed().as_secs_f64() / set.len() as f64;
     let s = art.model.side;
-    let mut per: Vec<(String, f64, Option<f64>)> = Vec::new();
+    let baseline = PostprocessConfig {
+        direction: DirectionMethod::PrincipalAxis,
+        ..art.postprocess
+    };
+    // (path, IoU, error by the artifact's method, error by the baseline)
+    let mut per: Vec<(String, f64, Option<f64>, Option<f64>)> = Vec::new();
     for (i, p) in probs.iter().enumerate() {
         let w = &set.windows[i];
         let mask = TendonMask::from_probabilities(s, s, p, art.threshold)?;
         let score = iou(&mask.pixels, &w.mask);
-        let t = postprocess(&mask, &art.postprocess)?;
-        let err = match (t.direction, set.direction_deg[w.row]) {
-            (Ok(d), Some(truth)) => Some(direction_error_deg(d.angle_deg, truth)),
-            _ => None,
+        let truth = set.direction_deg[w.row];
+        let image = set.image(i);
+        let error = |cfg: &PostprocessConfig| -> Result<Option<f64>> {
+            let evidence = Evidence {
+                probabilities: Some(p),
+                window: Some(&image),
+            };
+            let t = postprocess(&mask, evidence, cfg)?;
+            Ok(match (t.direction, truth) {
+                (Ok(d), Some(truth)) => Some(direction_error_deg(d.angle_deg, truth)),
+                _ => None,
+            })
         };
         let path = set.path[w.row].clone().unwrap_or_else(|| "unknown".into());
-        per.push((path, score, err));
+        let (e1, e2) = (error(&art.postprocess)?, error(&baseline)?);
+        per.push((path, score, e1, e2));
     }
     let mut paths: Vec<String> = per.iter().map(|p| p.0.clone()).collect();
     paths.sort();
     paths.dedup();
     let summarise = |name: &str, keep: &dyn Fn(&str) -> bool| {
-        let sel: Vec<&(String, f64, Option<f64>)> = per.iter().filter(|p| keep(&p.0)).collect();
+        let sel: Vec<_> = per.iter().filter(|p| keep(&p.0)).collect();
         let errs: Vec<f64> = sel.iter().filter_map(|p| p.2).collect();
-        let stat = |f: &dyn Fn(&[f64]) -> f64| if errs.is_empty() { f64::NAN } else { f(&errs) };
+        let base: Vec<f64> = sel.iter().filter_map(|p| p.3).collect();
         PathScores {
             path: name.to_string(),
             frames: sel.len(),
             mean_iou: sel.iter().map(|p| p.1).sum::<f64>() / sel.len().max(1) as f64,
-            direction_frames: errs.len(),
-            no_direction: sel.len() - errs.len(),
-            direction_median_deg: stat(&median),
-            direction_p90_deg: stat(&|e| percentile(e, 90.0)),
+            direction: DirectionScores::new(sel.len(), &errs),
+            principal_axis: DirectionScores::new(sel.len(), &base),
         }
     };
     let mut table = vec![summarise("all", &|_| true)];

@@ -66,7 +66,7 @@ impl TendonSegmenter {
             let x = self.artifact.window_input(&window)?;
             self.probabilities(&x, 1)?.pop()
         };
-        let tendon = self.artifact.tendon(probabilities.as_deref())?;
+        let tendon = self.artifact.tendon(probabilities.as_deref(), &window)?;
         Ok(Segmentation {
             window,
             probabilities,

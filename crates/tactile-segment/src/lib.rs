@@ -16,8 +16,11 @@ pub mod training;
 pub use artifact::SegmenterArtifact;
 pub use data::SegmentSet;
 pub use error::{Error, Result};
-pub use eval::{PathScores, SegmenterScores, evaluate};
+pub use eval::{DirectionScores, PathScores, SegmenterScores, evaluate};
 pub use inference::{Segmentation, TendonSegmenter};
 pub use model::{UNet, UNetConfig};
-pub use postprocess::{Direction, NoDirection, PostprocessConfig, Tendon, TendonMask, postprocess};
+pub use postprocess::{
+    Direction, DirectionMethod, Evidence, NoDirection, PostprocessConfig, Tendon, TendonMask,
+    postprocess,
+};
 pub use training::SegmenterTrainingConfig;

@@ -794,6 +794,13 @@ fn shipped_detector_and_segmenter_meet_their_targets_on_fresh_palpations() {
     let all = &last_json(&msg)["paths"][0];
     assert_eq!(all["path"], "all");
     assert!(all["mean_iou"].as_f64().unwrap() >= 0.85, "{msg}");
+    // The centre-line direction: on every tendon frame, within the targets
+    // (98 % coverage, median 2, p90 5 degrees).
+    let dir = &all["direction"];
+    assert!(dir["coverage"].as_f64().unwrap() >= 0.98, "{msg}");
+    assert!(dir["median_deg"].as_f64().unwrap() <= 2.0, "{msg}");
+    assert!(dir["p90_deg"].as_f64().unwrap() <= 5.0, "{msg}");
+    assert!(msg.contains("principal axis (baseline)"), "{msg}");
 }
 
 #[test]
