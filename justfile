@@ -98,6 +98,12 @@ ablate-detector: synth-vt-detector
     cargo run --release -p tactile -- train detector --data data/vt-train2 --out data/det/soft-w0.5-80x60 --width 0.5 --input 80x60 --max-epochs 20 --patience 6 --soft-labels 0.2
     cargo run --release -p tactile -- train detector --data data/vt-train2 data/vt-train-onset --out data/det/onset-hard-w0.5-80x60 --width 0.5 --input 80x60 --max-epochs 20 --patience 6
 
+# Calibrate the shipped detector's probabilities (one logit scale about the threshold, decisions unchanged) on frames no detector was trained, chosen or tested on: the default distribution (seed 610) and light presses (seed 611).
+calibrate-detector:
+    cargo run --release -p tactile -- synth visuotactile --count 600 --seed 610 --out data/vt-cal
+    cargo run --release -p tactile -- synth visuotactile --count 300 --seed 611 --press-mm 0.05,0.5 --out data/vt-cal-light
+    cargo run --release -p tactile -- train calibrate --model models/detector --data data/vt-cal data/vt-cal-light
+
 # The segmenter sweep (four window sizes and widths) into data/seg; the shipped one is copied to models/segmenter.
 sweep-segmenter: synth-vt
     for spec in "48 4" "64 8" "96 8"; do set -- $spec; cargo run --release -p tactile -- train segmenter --data data/vt-train --out data/seg/unet-s$1-b$2 --side $1 --base $2 --copies 4 --max-epochs 8 --patience 3; done

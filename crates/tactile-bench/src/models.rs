@@ -53,6 +53,8 @@ pub struct DetectorMetrics {
     pub onset_release_accuracy: f64,
     /// Accuracy on the selection set.
     pub selection_accuracy: Option<f64>,
+    /// Reliability of the probabilities on the test set.
+    pub calibration: tactile_core::metrics::Calibration,
 }
 
 /// A detector of the sweep as the selection rule sees it.
@@ -101,7 +103,7 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
     let ds = Dataset::open(&b.data)?;
     let sel_ds = b.select.as_ref().map(Dataset::open).transpose()?;
     let mut md = header("Accuracy and F1", &b.data, b.runs);
-    md.push_str("| model | architecture | width | input | parameters | accuracy (selection set) | accuracy | F1 | onset/release accuracy | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    md.push_str("| model | architecture | width | input | parameters | accuracy (selection set) | accuracy | F1 | onset/release accuracy | calibration error: all / p in 0.1-0.9 | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     let (mut series, mut rows, mut candidates) = (Vec::new(), Vec::new(), Vec::new());
     // Frames are loaded once per input size (test and selection sets).
     type Sets = ([usize; 2], DetectionSet, Option<DetectionSet>);
@@ -138,7 +140,7 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
         }
         let ms = model_latencies::<DetectorArtifact>(m, [1, 3, size[1], size[0]], b.runs)?;
         md.push_str(&format!(
-            "| {} | {:?} | {} | {}x{} | {params} | {} | {:.4} | {:.4} | {:.4} | {} | {} | {} |\n",
+            "| {} | {:?} | {} | {}x{} | {params} | {} | {:.4} | {:.4} | {:.4} | {:.3} / {:.3} | {} | {} | {} |\n",
             folder_name(m),
             art.model.architecture,
             art.model.width,
@@ -148,6 +150,8 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
             sc.all.accuracy,
             sc.all.f1,
             sc.onset_release.accuracy,
+            sc.calibration.ece,
+            sc.calibration.ece_uncertain,
             ms_cell(ms.ndarray),
             ms_cell(ms.flex),
             ms_cell(ms.onnxruntime),
@@ -160,6 +164,7 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
                 f1: sc.all.f1,
                 onset_release_accuracy: sc.onset_release.accuracy,
                 selection_accuracy: sel_acc,
+                calibration: sc.calibration.clone(),
             },
             ms,
         ));

@@ -195,6 +195,100 @@ pub fn binary_scores(pred: &[bool], truth: &[bool]) -> BinaryScores {
     }
 }
 
+/// One bin of a reliability diagram.
+#[derive(Debug, Clone, serde::Serialize, PartialEq)]
+pub struct CalibrationBin {
+    /// Lower edge of the predicted probability.
+    pub low: f64,
+    /// Upper edge.
+    pub high: f64,
+    /// Frames whose probability falls in the bin.
+    pub frames: usize,
+    /// Their mean predicted probability.
+    pub mean_probability: f64,
+    /// The fraction of them that are positive.
+    pub observed: f64,
+}
+
+/// How well predicted probabilities match observed frequencies.
+#[derive(Debug, Clone, serde::Serialize, PartialEq)]
+pub struct Calibration {
+    /// Equal-width bins over [0, 1] (empty bins included, `frames` 0).
+    pub bins: Vec<CalibrationBin>,
+    /// Expected calibration error: the frame-weighted mean of
+    /// |observed - mean probability| over the bins.
+    pub ece: f64,
+    /// The same over frames with a probability in [0.1, 0.9], the ones
+    /// near the decision threshold (NaN when there are none).
+    pub ece_uncertain: f64,
+    /// Frames with a probability in [0.1, 0.9].
+    pub uncertain_frames: usize,
+    /// Mean squared difference of probability and label.
+    pub brier: f64,
+}
+
+/// Reliability over `bins` equal-width bins (at least 1) of the predicted
+/// probabilities `p` against the labels `truth`. Non-finite probabilities
+/// count in no bin.
+pub fn calibration(p: &[f32], truth: &[bool], bins: usize) -> Calibration {
+    let bins = bins.max(1);
+    let mut acc = vec![(0usize, 0.0f64, 0usize); bins];
+    let mut brier = (0.0, 0usize);
+    let mut uncertain = vec![(0usize, 0.0f64, 0usize); bins];
+    for (&q, &t) in p.iter().zip(truth) {
+        if !q.is_finite() {
+            continue;
+        }
+        let q = (q as f64).clamp(0.0, 1.0);
+        let b = ((q * bins as f64) as usize).min(bins - 1);
+        for (target, keep) in [(&mut acc, true), (&mut uncertain, (0.1..=0.9).contains(&q))] {
+            if keep {
+                target[b].0 += 1;
+                target[b].1 += q;
+                target[b].2 += usize::from(t);
+            }
+        }
+        brier.0 += (q - f64::from(u8::from(t))).powi(2);
+        brier.1 += 1;
+    }
+    let ece = |a: &[(usize, f64, usize)]| {
+        let n: usize = a.iter().map(|b| b.0).sum();
+        if n == 0 {
+            return f64::NAN;
+        }
+        a.iter()
+            .filter(|b| b.0 > 0)
+            .map(|&(k, sum, pos)| (pos as f64 / k as f64 - sum / k as f64).abs() * k as f64)
+            .sum::<f64>()
+            / n as f64
+    };
+    Calibration {
+        bins: acc
+            .iter()
+            .enumerate()
+            .map(|(i, &(k, sum, pos))| CalibrationBin {
+                low: i as f64 / bins as f64,
+                high: (i + 1) as f64 / bins as f64,
+                frames: k,
+                mean_probability: if k > 0 { sum / k as f64 } else { f64::NAN },
+                observed: if k > 0 {
+                    pos as f64 / k as f64
+                } else {
+                    f64::NAN
+                },
+            })
+            .collect(),
+        ece: ece(&acc),
+        ece_uncertain: ece(&uncertain),
+        uncertain_frames: uncertain.iter().map(|b| b.0).sum(),
+        brier: if brier.1 > 0 {
+            brier.0 / brier.1 as f64
+        } else {
+            f64::NAN
+        },
+    }
+}
+
 /// Intersection over union of two binary masks; 1 when both are empty
 /// (nothing to find, nothing found).
 pub fn iou(pred: &[bool], truth: &[bool]) -> f64 {
@@ -380,5 +474,26 @@ mod reservoir_tests {
         assert_eq!(r.values.len(), 1000);
         let m = r.median_p95().unwrap()[0];
         assert!((m - 50.0).abs() < 6.0, "median of a uniform stream: {m}");
+    }
+
+    #[test]
+    fn calibration_is_zero_for_honest_probabilities_and_large_for_overconfident_ones() {
+        // Probability 0.3 on 10 frames, 3 positive: perfectly calibrated.
+        let p = vec![0.3f32; 10];
+        let t: Vec<bool> = (0..10).map(|i| i < 3).collect();
+        let c = calibration(&p, &t, 10);
+        assert!(c.ece.abs() < 1e-6, "{c:?}");
+        assert_eq!(c.bins[3].frames, 10);
+        assert_eq!(c.uncertain_frames, 10);
+        // Probability 0.95 on frames that are positive half the time.
+        let p = vec![0.95f32; 10];
+        let t: Vec<bool> = (0..10).map(|i| i % 2 == 0).collect();
+        let c = calibration(&p, &t, 10);
+        assert!((c.ece - 0.45).abs() < 1e-6, "{c:?}");
+        assert!(c.ece_uncertain.is_nan());
+        assert!((c.brier - (0.5 * 0.05f64.powi(2) + 0.5 * 0.95f64.powi(2))).abs() < 1e-6);
+        // NaN probabilities are skipped, not binned.
+        let c = calibration(&[f32::NAN, 1.0], &[true, true], 5);
+        assert_eq!(c.bins.iter().map(|b| b.frames).sum::<usize>(), 1);
     }
 }

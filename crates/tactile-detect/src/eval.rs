@@ -1,11 +1,12 @@
 //! The detector scored on a labelled dataset: accuracy, precision, recall
-//! and F1 over every frame and over the onset and release frames, with the
-//! probability of each frame.
+//! and F1 over every frame and over the onset and release frames, how well
+//! its probabilities are calibrated, with the probability of each frame.
 
 use std::path::Path;
 
 use serde::Serialize;
-use tactile_core::metrics::{BinaryScores, binary_scores};
+use tactile_core::metrics::{BinaryScores, Calibration, binary_scores, calibration};
+use tactile_core::plot::{Series, line_plot};
 
 use crate::data::DetectionSet;
 use crate::inference::TendonDetector;
@@ -13,6 +14,9 @@ use crate::{Error, Result};
 
 /// Frames per network call when scoring.
 pub const EVAL_BATCH: usize = 32;
+
+/// Bins of the reliability diagram.
+pub const CALIBRATION_BINS: usize = 10;
 
 /// A detector's scores on a dataset.
 #[derive(Debug, Clone, Serialize)]
@@ -23,6 +27,8 @@ pub struct DetectorScores {
     pub onset_release: BinaryScores,
     /// Inference time per frame (batches of [`EVAL_BATCH`], resizing excluded).
     pub ms_per_frame: f64,
+    /// Reliability of the probabilities over [`CALIBRATION_BINS`] bins.
+    pub calibration: Calibration,
     /// Per-frame tendon probability, in dataset order.
     #[serde(skip)]
     pub probabilities: Vec<f32>,
@@ -53,11 +59,78 @@ impl DetectorScores {
                 st.frames, st.accuracy, st.false_pos, st.false_neg
             ),
             format!(
+                "calibration: expected calibration error {:.4} over {CALIBRATION_BINS} bins, {:.4} over the {} frames with a probability in [0.1, 0.9]; Brier score {:.4}",
+                self.calibration.ece,
+                self.calibration.ece_uncertain,
+                self.calibration.uncertain_frames,
+                self.calibration.brier
+            ),
+            format!(
                 "{:.2} ms per frame ({device}, batch {EVAL_BATCH}, resize excluded)",
                 self.ms_per_frame
             ),
         ]
     }
+
+    /// The reliability diagram as a Markdown table.
+    pub fn reliability_table(&self) -> Vec<String> {
+        let mut lines = vec![
+            "| probability | frames | mean probability | observed tendon fraction |".to_string(),
+            "|---|---|---|---|".to_string(),
+        ];
+        for b in &self.calibration.bins {
+            let f = |v: f64| {
+                if v.is_finite() {
+                    format!("{v:.3}")
+                } else {
+                    "-".into()
+                }
+            };
+            lines.push(format!(
+                "| {:.1}-{:.1} | {} | {} | {} |",
+                b.low,
+                b.high,
+                b.frames,
+                f(b.mean_probability),
+                f(b.observed)
+            ));
+        }
+        lines
+    }
+
+    /// Save the reliability diagram: see [`save_reliability_plot`].
+    pub fn save_reliability_plot(&self, path: &Path, title: &str) -> Result<()> {
+        save_reliability_plot(&self.calibration, path, title)
+    }
+}
+
+/// Save a reliability diagram (observed tendon fraction against mean
+/// probability per bin, beside the diagonal of perfect calibration) as a PNG.
+pub fn save_reliability_plot(c: &Calibration, path: &Path, title: &str) -> Result<()> {
+    let points: Vec<(f64, f64)> = c
+        .bins
+        .iter()
+        .filter(|b| b.frames > 0)
+        .map(|b| (b.mean_probability, b.observed))
+        .collect();
+    let series = [
+        Series {
+            name: "perfect calibration".into(),
+            points: vec![(0.0, 0.0), (1.0, 1.0)],
+        },
+        Series {
+            name: format!("detector (ECE {:.3})", c.ece),
+            points,
+        },
+    ];
+    Ok(line_plot(
+        path,
+        title,
+        "mean predicted tendon probability (per bin)",
+        "observed tendon fraction",
+        &series,
+        false,
+    )?)
 }
 
 /// Score `detector` on every frame of `data` (loaded at its input size).
@@ -91,6 +164,7 @@ pub fn evaluate(detector: &mut TendonDetector, data: &DetectionSet) -> Result<De
             &tr.iter().map(|&i| data.tendon[i]).collect::<Vec<_>>(),
         ),
         ms_per_frame,
+        calibration: calibration(&p, &data.tendon, CALIBRATION_BINS),
         probabilities: p,
         threshold: detector.artifact.threshold,
     })

@@ -43,6 +43,10 @@ pub(crate) struct DetectorArgs {
     /// the frames it gets wrong.
     #[arg(long)]
     frames: Option<PathBuf>,
+    /// Also save the reliability diagram (observed tendon fraction against
+    /// predicted probability) as this PNG.
+    #[arg(long)]
+    reliability: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -70,7 +74,7 @@ pub(crate) fn main(cmd: EvalCmd) -> Result<()> {
 fn detector(a: DetectorArgs) -> Result<()> {
     let m = &a.m;
     let ds = Dataset::open(&m.data)?;
-    if let Some(out) = &a.frames {
+    for out in a.frames.iter().chain(&a.reliability) {
         tactile_core::io::check_output_file(out, &[&ds])?;
     }
     let mut det = TendonDetector::load(&m.model, m.device.runtime(), 0)?;
@@ -82,9 +86,14 @@ fn detector(a: DetectorArgs) -> Result<()> {
     }
     let (s, st) = (&sc.all, &sc.onset_release);
     sc.describe(m.device).iter().for_each(|l| say!("{l}"));
+    sc.reliability_table().iter().for_each(|l| say!("{l}"));
+    if let Some(path) = &a.reliability {
+        sc.save_reliability_plot(path, "Tendon detector: reliability")?;
+        tactile_core::note!("reliability diagram in {}", path.display());
+    }
     say!(
         "{}",
-        serde_json::json!({ "model": m.model, "data": m.data, "all": s, "onset_release": st, "ms_per_frame": sc.ms_per_frame })
+        serde_json::json!({ "model": m.model, "data": m.data, "all": s, "onset_release": st, "calibration": sc.calibration, "ms_per_frame": sc.ms_per_frame })
     );
     Ok(())
 }

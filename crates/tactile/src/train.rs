@@ -35,6 +35,20 @@ pub(crate) enum TrainCmd {
     /// statistics, saved in detector.json, so frames of another sensor are
     /// flagged and get no answer (a detector trained now has one already).
     Profile(ProfileArgs),
+    /// Calibrate a trained detector's probabilities on frames it was not
+    /// trained on: one logit scale about the threshold, fitted by maximum
+    /// likelihood and folded into its last layer (decisions unchanged).
+    Calibrate(CalibrateArgs),
+}
+
+#[derive(Args)]
+pub(crate) struct CalibrateArgs {
+    /// The detector folder.
+    #[arg(long)]
+    model: PathBuf,
+    /// Labelled visuo-tactile dataset(s) the detector was not trained on.
+    #[arg(long, num_args = 1.., required = true)]
+    data: Vec<PathBuf>,
 }
 
 #[derive(Args)]
@@ -336,6 +350,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Segmenter(a) => Some(&a.out),
         TrainCmd::Depth(a) => Some(&a.out),
         TrainCmd::Profile(a) => Some(&a.model),
+        TrainCmd::Calibrate(a) => Some(&a.model),
         TrainCmd::Head(a) => a.out.as_ref(),
         TrainCmd::Regressor(a) => a.out.as_ref(),
     };
@@ -474,6 +489,11 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 a.model.join("detector.json").display(),
                 p.threshold
             );
+        }
+        TrainCmd::Calibrate(a) => {
+            let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
+            let fit = tactile_detect::calibrate::calibrate_on(&a.model, &data)?;
+            say!("{}; detector in {}", fit.describe(), a.model.display());
         }
         TrainCmd::Depth(a) => {
             let ds = Dataset::open(&a.data)?;

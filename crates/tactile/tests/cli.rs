@@ -1474,3 +1474,108 @@ fn predict_writes_every_estimate_of_an_encoder_folder_in_the_labels_units() {
         "{x} mm, {theta} deg, {depth} mm"
     );
 }
+
+#[test]
+fn calibrating_the_detector_keeps_every_decision_and_lowers_its_calibration_error() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("detector");
+    std::fs::create_dir_all(&model).unwrap();
+    for f in ["detector.json", "detector.bpk"] {
+        std::fs::copy(root.join("models/detector").join(f), model.join(f)).unwrap();
+    }
+    let (fit, test) = (tmp.path().join("fit"), tmp.path().join("test"));
+    for (dir, seed) in [(&fit, "5151"), (&test, "5252")] {
+        let (ok, msg) = tactile(&[
+            "synth",
+            "visuotactile",
+            "--sequences",
+            "6",
+            "--frames-per-sequence",
+            "20",
+            "--press-mm",
+            "0.05,1.0",
+            "--seed",
+            seed,
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+    }
+    let decisions = |name: &str| {
+        let csv = tmp.path().join(name);
+        let (ok, msg) = tactile(&[
+            "eval",
+            "detector",
+            "--model",
+            model.to_str().unwrap(),
+            "--data",
+            test.to_str().unwrap(),
+            "--frames",
+            csv.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+        assert!(msg.contains("expected calibration error"), "{msg}");
+        let rows: Vec<(String, f64)> = std::fs::read_to_string(&csv)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let c: Vec<&str> = l.split(',').collect();
+                (c[3].to_string(), c[2].parse().unwrap())
+            })
+            .collect();
+        rows
+    };
+    let before = decisions("before.csv");
+    // A set with one class (no contact: no tendon) cannot be fitted:
+    // refused, the model untouched.
+    let none = tmp.path().join("none");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--count",
+        "30",
+        "--press-mm",
+        "0,0",
+        "--out",
+        none.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let weights = std::fs::read(model.join("detector.bpk")).unwrap();
+    let (ok, msg) = tactile(&[
+        "train",
+        "calibrate",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        none.to_str().unwrap(),
+    ]);
+    assert!(!ok && msg.contains("with and without"), "{msg}");
+    assert_eq!(std::fs::read(model.join("detector.bpk")).unwrap(), weights);
+    let (ok, msg) = tactile(&[
+        "train",
+        "calibrate",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        fit.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    assert!(msg.contains("decisions unchanged"), "{msg}");
+    let after = decisions("after.csv");
+    assert_eq!(before.len(), after.len());
+    let moved: f64 = before
+        .iter()
+        .zip(&after)
+        .map(|(a, b)| (a.1 - b.1).abs())
+        .sum();
+    assert!(moved > 0.0, "the probabilities did not change");
+    for (a, b) in before.iter().zip(&after) {
+        assert_eq!(a.0, b.0, "a decision changed: {a:?} -> {b:?}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(model.join("detector.json")).unwrap())
+            .unwrap();
+    assert!(json["notes"]["calibration"]["scale"].as_f64().unwrap() > 0.0);
+}

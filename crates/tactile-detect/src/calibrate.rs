@@ -1,0 +1,215 @@
+//! Probability calibration of a trained detector: one temperature, fitted by
+//! maximum likelihood on frames the detector was not trained on, that
+//! sharpens or softens its logits about the decision threshold. The
+//! threshold's logit is the fixed point, so every decision stays the same;
+//! only what the probability says about confidence changes. The temperature
+//! is folded into the last layer's weights, so every runtime and every ONNX
+//! export gives the calibrated probability with nothing else to apply.
+
+use std::path::Path;
+
+use serde::Serialize;
+use tactile_core::dataset::Dataset;
+use tactile_core::metrics::{Calibration, calibration};
+use tactile_core::{Artifact, DeviceKind, Runtime};
+
+use crate::eval::{CALIBRATION_BINS, EVAL_BATCH};
+use crate::{DetectionSet, DetectorArtifact, Error, Result, TendonDetector};
+
+/// Smallest and largest logit scale searched.
+pub const SCALE_RANGE: (f64, f64) = (0.05, 20.0);
+
+/// Fewest frames of each class a fit needs.
+pub const MIN_FRAMES_PER_CLASS: usize = 20;
+
+/// What a calibration did.
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrationFit {
+    /// Factor applied to the logits about the threshold's logit (above 1
+    /// sharpens an under-confident detector).
+    pub scale: f64,
+    /// Frames fitted on.
+    pub frames: usize,
+    /// Mean negative log-likelihood before and after.
+    pub nll: [f64; 2],
+    /// Reliability on the fitting frames before.
+    pub before: Calibration,
+    /// And after.
+    pub after: Calibration,
+}
+
+impl CalibrationFit {
+    /// One line for a person.
+    pub fn describe(&self) -> String {
+        format!(
+            "logit scale {:.3} fitted on {} frames: negative log-likelihood {:.4} -> {:.4}, expected calibration error {:.4} -> {:.4} (decisions unchanged)",
+            self.scale, self.frames, self.nll[0], self.nll[1], self.before.ece, self.after.ece
+        )
+    }
+}
+
+fn logit(p: f64) -> f64 {
+    let p = p.clamp(1e-7, 1.0 - 1e-7);
+    (p / (1.0 - p)).ln()
+}
+
+fn scaled(z: f64, scale: f64, centre: f64) -> f64 {
+    1.0 / (1.0 + (-(scale * (z - centre) + centre)).exp())
+}
+
+fn nll(z: &[f64], truth: &[bool], scale: f64, centre: f64) -> f64 {
+    z.iter()
+        .zip(truth)
+        .map(|(&z, &t)| {
+            let q = scaled(z, scale, centre).clamp(1e-12, 1.0 - 1e-12);
+            if t { -q.ln() } else { -(1.0 - q).ln() }
+        })
+        .sum::<f64>()
+        / z.len().max(1) as f64
+}
+
+/// The logit scale about `threshold` that maximises the likelihood of
+/// `truth` under probabilities `p` (golden-section search on log scale; the
+/// negative log-likelihood is convex in the scale). Needs both classes.
+pub fn fit_scale(p: &[f32], truth: &[bool], threshold: f64) -> Result<CalibrationFit> {
+    let positives = truth.iter().filter(|&&t| t).count();
+    let negatives = truth.len() - positives;
+    if positives.min(negatives) < MIN_FRAMES_PER_CLASS {
+        return Err(Error::Core(tactile_core::Error::Invalid(format!(
+            "calibration needs at least {MIN_FRAMES_PER_CLASS} frames with and without a tendon; found {positives} and {negatives}"
+        ))));
+    }
+    let z: Vec<f64> = p.iter().map(|&q| logit(q as f64)).collect();
+    let centre = logit(threshold);
+    let f = |log_s: f64| nll(&z, truth, log_s.exp(), centre);
+    let (mut a, mut b) = (SCALE_RANGE.0.ln(), SCALE_RANGE.1.ln());
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+    let (mut fc, mut fd) = (f(c), f(d));
+    for _ in 0..80 {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = f(d);
+        }
+    }
+    let scale = ((a + b) / 2.0).exp();
+    let after: Vec<f32> = z.iter().map(|&z| scaled(z, scale, centre) as f32).collect();
+    Ok(CalibrationFit {
+        scale,
+        frames: p.len(),
+        nll: [f(0.0), f(scale.ln())],
+        before: calibration(p, truth, CALIBRATION_BINS),
+        after: calibration(&after, truth, CALIBRATION_BINS),
+    })
+}
+
+/// Fit the logit scale of the detector in `dir` on `sets` (frames it was
+/// not trained on) and fold it into its last layer: weights first, then the
+/// config with the fit in its notes, each written atomically.
+pub fn calibrate(dir: &Path, sets: &[&DetectionSet]) -> Result<CalibrationFit> {
+    let mut det = TendonDetector::load(dir, Runtime::BurnFlex, 0)?;
+    let stats = det.artifact.stats.clone();
+    let (mut p, mut truth) = (Vec::new(), Vec::new());
+    for set in sets {
+        let size = det.artifact.model.input_size;
+        if [set.width, set.height] != size {
+            return Err(Error::InputSize {
+                expected: size,
+                found: [set.width, set.height],
+            });
+        }
+        let all: Vec<usize> = (0..set.len()).collect();
+        for chunk in all.chunks(EVAL_BATCH) {
+            let x = set.inputs(chunk, &stats)?;
+            p.extend(det.probabilities(&x, chunk.len())?);
+        }
+        truth.extend(set.tendon.iter().copied());
+    }
+    let fit = fit_scale(&p, &truth, det.artifact.threshold)?;
+    let mut loaded = DetectorArtifact::load(dir, &DeviceKind::Flex.device())?;
+    let centre = logit(loaded.artifact.threshold);
+    {
+        use burn::module::Param;
+        let fc2 = &mut loaded.model.fc2;
+        let w = fc2.weight.val() * fit.scale;
+        fc2.weight = Param::from_tensor(w);
+        if let Some(b) = &fc2.bias {
+            let b = b.val() * fit.scale + (1.0 - fit.scale) * centre;
+            fc2.bias = Some(Param::from_tensor(b));
+        }
+    }
+    let mut artifact = loaded.artifact.clone();
+    if let serde_json::Value::Object(notes) = &mut artifact.notes {
+        let previous = notes
+            .get("calibration")
+            .and_then(|c| c.get("scale"))
+            .and_then(|s| s.as_f64())
+            .unwrap_or(1.0);
+        notes.insert(
+            "calibration".into(),
+            serde_json::json!({
+                "scale": fit.scale * previous,
+                "frames": fit.frames,
+                "ece_before": fit.before.ece,
+                "ece_after": fit.after.ece,
+            }),
+        );
+    }
+    tactile_core::module_io::save_module(&loaded.model, &dir.join(DetectorArtifact::WEIGHTS_FILE))?;
+    tactile_core::io::write_json_atomic(dir.join(DetectorArtifact::CONFIG_FILE), &artifact)?;
+    Ok(fit)
+}
+
+/// [`calibrate`] on labelled visuo-tactile datasets, read at the
+/// detector's input size.
+pub fn calibrate_on(dir: &Path, datasets: &[Dataset]) -> Result<CalibrationFit> {
+    let size = DetectorArtifact::read(dir)?.model.input_size;
+    let sets = datasets
+        .iter()
+        .map(|d| DetectionSet::from_dataset(d, size))
+        .collect::<Result<Vec<_>>>()?;
+    calibrate(dir, &sets.iter().collect::<Vec<_>>())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_under_confident_detector_is_sharpened_and_its_decisions_kept() {
+        // Logits 1/3 of the truth's: the right scale is 3.
+        let mut rng = tactile_core::rng::SampleRng::new(5, 0, 0);
+        let (mut p, mut t) = (Vec::new(), Vec::new());
+        for _ in 0..4000 {
+            let z: f64 = 8.0 * (rng.uniform() - 0.5);
+            let truth = rng.uniform() < 1.0 / (1.0 + (-z).exp());
+            p.push((1.0 / (1.0 + (z / 3.0f64).exp().recip())) as f32);
+            t.push(truth);
+        }
+        let fit = fit_scale(&p, &t, 0.5).unwrap();
+        assert!((fit.scale - 3.0).abs() < 0.4, "{}", fit.describe());
+        assert!(fit.after.ece < fit.before.ece, "{}", fit.describe());
+        assert!(fit.nll[1] < fit.nll[0]);
+        // The threshold is the fixed point: no decision moves.
+        let centre = logit(0.45);
+        for z in [-3.0, -0.3, centre - 1e-3, centre + 1e-3, 0.5, 4.0] {
+            let q = scaled(z, fit.scale, centre);
+            assert_eq!(q >= 0.45, 1.0 / (1.0 + (-z).exp()) >= 0.45, "{z}");
+        }
+    }
+
+    #[test]
+    fn one_class_is_refused() {
+        let e = fit_scale(&[0.9; 50], &[true; 50], 0.5).unwrap_err();
+        assert!(e.to_string().contains("with and without"), "{e}");
+    }
+}
