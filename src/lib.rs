@@ -14,5 +14,6 @@ pub use tactile_detect as detect;
 pub use tactile_estimate as estimate;
 pub use tactile_onnx as onnx;
 pub use tactile_pipeline as pipeline;
+pub use tactile_pose as pose;
 pub use tactile_preprocess as preprocess;
 pub use tactile_segment as segment;

@@ -48,7 +48,8 @@ pub struct Scaler {
 }
 
 impl Scaler {
-    fn fit(rows: &[Vec<f64>]) -> Self {
+    /// Means and deviations of the columns of `rows`.
+    pub fn fit(rows: &[Vec<f64>]) -> Self {
         let k = rows.first().map_or(0, Vec::len);
         let n = rows.len().max(1) as f64;
         let mean: Vec<f64> = (0..k)
@@ -60,7 +61,8 @@ impl Scaler {
         Self { mean, std }
     }
 
-    fn apply(&self, rows: &[Vec<f64>]) -> Vec<f32> {
+    /// `rows` standardised, row-major.
+    pub fn apply(&self, rows: &[Vec<f64>]) -> Vec<f32> {
         rows.iter()
             .flat_map(|r| {
                 r.iter()
@@ -146,7 +148,7 @@ fn to64(v: &[Vec<f32>]) -> Vec<Vec<f64>> {
 }
 
 /// Encode label rows (one value per target) into network columns.
-fn encode(targets: &[Target], y: &[Vec<f64>]) -> Vec<Vec<f64>> {
+pub fn encode(targets: &[Target], y: &[Vec<f64>]) -> Vec<Vec<f64>> {
     y.iter()
         .map(|r| {
             targets
@@ -154,6 +156,41 @@ fn encode(targets: &[Target], y: &[Vec<f64>]) -> Vec<Vec<f64>> {
                 .zip(r)
                 .flat_map(|(t, v)| t.encode(*v))
                 .collect()
+        })
+        .collect()
+}
+
+/// The output standardisation of encoded target columns: linear columns
+/// standardised, sin/cos columns left on the unit circle.
+pub fn output_scaler(targets: &[Target], encoded: &[Vec<f64>]) -> Scaler {
+    let mut outputs = Scaler::fit(encoded);
+    let mut col = 0;
+    for t in targets {
+        if let TargetKind::Angle { .. } = t.kind {
+            outputs.mean[col..col + 2].copy_from_slice(&[0.0, 0.0]);
+            outputs.std[col..col + 2].copy_from_slice(&[1.0, 1.0]);
+        }
+        col += t.width();
+    }
+    outputs
+}
+
+/// One network output row (standardised columns) back to one value per
+/// target, in the labels' units.
+pub fn decode(targets: &[Target], outputs: &Scaler, row: &[f32]) -> Vec<f64> {
+    let cols: Vec<f64> = row
+        .iter()
+        .zip(&outputs.mean)
+        .zip(&outputs.std)
+        .map(|((v, mu), s)| *v as f64 * s + mu)
+        .collect();
+    let mut at = 0;
+    targets
+        .iter()
+        .map(|t| {
+            let v = t.decode(&cols[at..(at + t.width()).min(cols.len())]);
+            at += t.width();
+            v
         })
         .collect()
 }
@@ -209,16 +246,7 @@ impl Regressor {
         let (x64, vx64) = (to64(x), to64(val_x));
         let inputs = Scaler::fit(&x64);
         let (ey, evy) = (encode(&config.targets, y), encode(&config.targets, val_y));
-        // Standardise linear columns; sin/cos columns stay on the unit circle.
-        let mut outputs = Scaler::fit(&ey);
-        let mut col = 0;
-        for t in &config.targets {
-            if let TargetKind::Angle { .. } = t.kind {
-                outputs.mean[col..col + 2].copy_from_slice(&[0.0, 0.0]);
-                outputs.std[col..col + 2].copy_from_slice(&[1.0, 1.0]);
-            }
-            col += t.width();
-        }
+        let outputs = output_scaler(&config.targets, &ey);
         let (k, m) = (config.inputs, config.outputs());
         let ad = device.clone().autodiff();
         ad.seed(config.schedule.seed);
@@ -282,24 +310,7 @@ impl Regressor {
             .map_err(|e| tactile_core::Error::Invalid(format!("reading predictions: {e:?}")))?;
         Ok(out
             .chunks(m)
-            .map(|r| {
-                let cols: Vec<f64> = r
-                    .iter()
-                    .zip(&a.outputs.mean)
-                    .zip(&a.outputs.std)
-                    .map(|((v, mu), s)| *v as f64 * s + mu)
-                    .collect();
-                let mut at = 0;
-                a.model
-                    .targets
-                    .iter()
-                    .map(|t| {
-                        let v = t.decode(&cols[at..at + t.width()]);
-                        at += t.width();
-                        v
-                    })
-                    .collect()
-            })
+            .map(|r| decode(&a.model.targets, &a.outputs, r))
             .collect())
     }
 

@@ -30,6 +30,9 @@ pub enum Error {
     /// Export or onnxruntime.
     #[error(transparent)]
     Onnx(#[from] tactile_onnx::Error),
+    /// The pose network.
+    #[error(transparent)]
+    Pose(#[from] tactile_pose::Error),
 }
 
 impl Error {
@@ -44,6 +47,7 @@ impl Error {
             Error::Segment(e) => e.core(),
             Error::Depth(e) => e.core(),
             Error::Onnx(e) => e.core(),
+            Error::Pose(e) => e.core(),
         }
     }
 }

@@ -58,6 +58,65 @@ pub struct TactipPerception {
     pub estimators: Estimators,
 }
 
+/// Anything that estimates targets from TacTip frames: an encoder with its
+/// estimators (paper A), or a pose network (`pose.json`), which estimates
+/// its targets directly.
+pub enum Predictor {
+    /// An encoder folder and its estimators.
+    Encoder(TactipPerception),
+    /// A supervised pose network.
+    PoseNetwork(tactile_pose::PoseEstimator),
+}
+
+impl Predictor {
+    /// The model in `dir`: a pose network when it holds `pose.json`, else an
+    /// encoder with the estimators in `heads` (every estimator folder
+    /// inside it when empty).
+    pub fn load(dir: &Path, heads: &[PathBuf], runtime: Runtime) -> Result<Self> {
+        use tactile_core::Artifact;
+        if tactile_pose::PoseArtifact::is_in(dir) {
+            Ok(Self::PoseNetwork(tactile_pose::PoseEstimator::load(
+                dir, runtime, 0,
+            )?))
+        } else {
+            Ok(Self::Encoder(TactipPerception::load(dir, heads, runtime)?))
+        }
+    }
+
+    /// Every frame of `ds`: one column per target (per estimator output).
+    pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
+        match self {
+            Self::Encoder(p) => p.perceive(ds),
+            Self::PoseNetwork(p) => {
+                let r = p.predict_dataset(ds)?;
+                let columns = r
+                    .names
+                    .iter()
+                    .enumerate()
+                    .map(|(j, n)| {
+                        let v = r.values.iter().map(|row| row[j]).collect();
+                        (n.clone(), tactile_estimate::Column::Number(v))
+                    })
+                    .collect();
+                Ok(Perception {
+                    files: r.files,
+                    estimates: Estimates { columns },
+                    ms_encode: r.ms_per_frame,
+                    ms_estimate: 0.0,
+                })
+            }
+        }
+    }
+
+    /// Estimators run per frame (the pose network counts as one).
+    pub fn estimators(&self) -> usize {
+        match self {
+            Self::Encoder(p) => p.estimators.len(),
+            Self::PoseNetwork(_) => 1,
+        }
+    }
+}
+
 /// What perception made of a dataset.
 pub struct Perception {
     /// Each frame's `file` label.

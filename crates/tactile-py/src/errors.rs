@@ -148,6 +148,7 @@ impl LibraryError for tactile_pipeline::Error {
             E::Segment(e) => e.kind(),
             E::Depth(e) => e.kind(),
             E::Onnx(e) => onnx_kind(e),
+            E::Pose(e) => e.core().map_or(Kind::Value, core_kind),
         }
     }
 }

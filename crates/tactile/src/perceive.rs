@@ -7,11 +7,12 @@ use anyhow::Result;
 use clap::Args;
 use tactile_core::DeviceKind;
 use tactile_core::dataset::Dataset;
-use tactile_pipeline::tactip::TactipPerception;
+use tactile_pipeline::tactip::Predictor;
 
 #[derive(Args)]
 pub(crate) struct PerceiveArgs {
-    /// Trained encoder folder (its estimator subfolders run by default).
+    /// Trained encoder folder (its estimator subfolders run by default), or
+    /// a pose-network folder.
     #[arg(long, visible_alias = "model")]
     encoder: PathBuf,
     /// Estimator folders: classifier heads (head.json) and regressors
@@ -38,7 +39,7 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
     if let Some(out) = &a.out {
         tactile_core::io::check_output_file(out, &[&ds])?;
     }
-    let mut p = TactipPerception::load(&a.encoder, &a.heads, a.device.runtime())?;
+    let mut p = Predictor::load(&a.encoder, &a.heads, a.device.runtime())?;
     let r = p.perceive(&ds)?;
     let mut header = vec!["file".to_string()];
     header.extend(r.estimates.columns.iter().map(|c| c.0.clone()));
@@ -56,7 +57,7 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
         "{} frames: encoding {:.3} ms/frame (preprocessing included), {} estimators {:.4} ms/frame",
         ds.len(),
         r.ms_encode,
-        p.estimators.len(),
+        p.estimators(),
         r.ms_estimate
     );
     if let Some(out) = &a.out {

@@ -13,6 +13,7 @@ use tactile_depth::{DenseNetPreset, DepthTrainingConfig, HeadKind, LossKind};
 use tactile_detect::{Architecture, DetectorTrainingConfig, SoftLabels};
 use tactile_estimate::{HeadConfig, RegressorConfig, Target};
 use tactile_pipeline::tactip::{FeatureSource, RegressorPlan, train_head, train_regressor};
+use tactile_pose::PoseTrainingConfig;
 use tactile_segment::SegmenterTrainingConfig;
 
 use crate::args::{Preprocess, Size};
@@ -25,6 +26,8 @@ pub(crate) enum TrainCmd {
     Head(HeadArgs),
     /// A regressor (pose, depth, force; angles on the circle) on features.
     Regressor(RegressorArgs),
+    /// A supervised pose network (CNN on grey pin images) on TacTip frames.
+    Pose(PoseArgs),
     /// Paper B's tendon detector on visuo-tactile frames.
     Detector(DetectorArgs),
     /// Paper B's U-Net tendon segmenter on visuo-tactile tendon frames.
@@ -38,17 +41,7 @@ pub(crate) enum TrainCmd {
     /// Calibrate a trained detector's probabilities on frames it was not
     /// trained on: one logit scale about the threshold, fitted by maximum
     /// likelihood and folded into its last layer (decisions unchanged).
-    Calibrate(CalibrateArgs),
-}
-
-#[derive(Args)]
-pub(crate) struct CalibrateArgs {
-    /// The detector folder.
-    #[arg(long)]
-    model: PathBuf,
-    /// Labelled visuo-tactile dataset(s) the detector was not trained on.
-    #[arg(long, num_args = 1.., required = true)]
-    data: Vec<PathBuf>,
+    Calibrate(ProfileArgs),
 }
 
 #[derive(Args)]
@@ -56,7 +49,8 @@ pub(crate) struct ProfileArgs {
     /// The detector folder.
     #[arg(long)]
     model: PathBuf,
-    /// Its training dataset(s).
+    /// Labelled dataset(s): the detector's training data for `profile`,
+    /// frames it was not trained on for `calibrate`.
     #[arg(long, num_args = 1.., required = true)]
     data: Vec<PathBuf>,
 }
@@ -109,6 +103,42 @@ macro_rules! schedule_args {
 }
 
 schedule_args!(CaeSchedule, CaeTrainingConfig::new().schedule);
+schedule_args!(PoseSchedule, pose_defaults().schedule);
+
+fn pose_defaults() -> PoseTrainingConfig {
+    PoseTrainingConfig::new(vec![])
+}
+
+#[derive(Args)]
+pub(crate) struct PoseArgs {
+    /// TacTip dataset folder; with a `split` column, only `train` rows are used.
+    #[arg(long)]
+    data: PathBuf,
+    /// Output model folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Targets: label columns, NAME:PERIOD for an angle.
+    #[arg(long, num_args = 1.., default_values = ["x_mm", "theta_deg", "depth_mm"])]
+    targets: Vec<String>,
+    /// A training config (JSON: model widths and hidden units, pin-image
+    /// preprocessing, augmentation); the schedule flags set its schedule.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Side of the grey pin image.
+    #[arg(long)]
+    input_px: Option<usize>,
+    /// Leave out the test frames of this fraction and --split-seed.
+    #[arg(long)]
+    exclude_test: Option<f64>,
+    /// The seed of that split.
+    #[arg(long, default_value_t = 7)]
+    split_seed: u64,
+    /// Train on every training row for exactly --max-epochs (the final model).
+    #[arg(long)]
+    all_rows: bool,
+    #[command(flatten)]
+    schedule: PoseSchedule,
+}
 schedule_args!(DetectorSchedule, DetectorTrainingConfig::new().schedule);
 schedule_args!(SegmenterSchedule, SegmenterTrainingConfig::new().schedule);
 schedule_args!(DepthSchedule, DepthTrainingConfig::new().schedule);
@@ -349,8 +379,8 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Detector(a) => Some(&a.out),
         TrainCmd::Segmenter(a) => Some(&a.out),
         TrainCmd::Depth(a) => Some(&a.out),
-        TrainCmd::Profile(a) => Some(&a.model),
-        TrainCmd::Calibrate(a) => Some(&a.model),
+        TrainCmd::Profile(a) | TrainCmd::Calibrate(a) => Some(&a.model),
+        TrainCmd::Pose(a) => Some(&a.out),
         TrainCmd::Head(a) => a.out.as_ref(),
         TrainCmd::Regressor(a) => a.out.as_ref(),
     };
@@ -429,6 +459,41 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 say!("  {:<14} {e:.4}", t.name);
             }
             say!("regressor saved in {}", out.display());
+        }
+        TrainCmd::Pose(a) => {
+            let ds = Dataset::open(&a.data)?;
+            let mut config = match &a.config {
+                Some(p) => tactile_core::io::read_json::<PoseTrainingConfig>(p)?,
+                None => pose_defaults(),
+            };
+            config.targets = a
+                .targets
+                .iter()
+                .map(|t| Target::parse(t))
+                .collect::<Result<_, _>>()?;
+            if let Some(px) = a.input_px {
+                config.preprocess.output_px = px;
+            }
+            let holdout = a.exclude_test.map(|f| TestHoldout {
+                test_fraction: f,
+                split_seed: a.split_seed,
+            });
+            let lr = config.schedule.learning_rate;
+            let config = config
+                .with_schedule(a.schedule.schedule(lr))
+                .with_holdout(holdout)
+                .with_all_rows(a.all_rows);
+            let s = &a.schedule;
+            let fit = tactile_pose::training::train(&config, &ds, &a.out, s.device, s.resume)?;
+            say!(
+                "{}; model in {}",
+                fit.describe(&a.targets[0]),
+                a.out.display()
+            );
+            if let Some(h) = holdout {
+                let r = tactile_pose::training::test_scores(&a.out, &ds, h, s.device.runtime())?;
+                say!("{}", r.describe());
+            }
         }
         TrainCmd::Detector(a) => {
             let datasets: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;

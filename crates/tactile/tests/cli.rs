@@ -1424,13 +1424,12 @@ fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
     assert!(!ok && msg.contains("--soft-labels"), "{msg}");
 }
 
-#[test]
-fn predict_writes_every_estimate_of_an_encoder_folder_in_the_labels_units() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+/// `tactile predict` with `model` over the real edge set: the CSV's
+/// header and the mean absolute error of each target over every frame.
+fn predict_edge_errors(model: &Path) -> [f64; 3] {
     let data = shared_real().join("tactip127-edge");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("estimates.csv");
-    let model = root.join("models/cae-edge");
     let (ok, msg) = tactile(&[
         "predict",
         "--model",
@@ -1466,13 +1465,77 @@ fn predict_writes_every_estimate_of_an_encoder_folder_in_the_labels_units() {
         n += 1;
     }
     assert_eq!(n, 3762);
+    err.map(|e| e / n as f64)
+}
+
+#[test]
+fn predict_writes_every_estimate_of_an_encoder_folder_in_the_labels_units() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     // Mean absolute error over every frame (most of them its training
     // frames): the estimates are in the labels' units and ranges.
-    let [x, theta, depth] = err.map(|e| e / n as f64);
+    let [x, theta, depth] = predict_edge_errors(&root.join("models/cae-edge"));
     assert!(
         x < 0.5 && theta < 5.0 && depth < 0.1,
         "{x} mm, {theta} deg, {depth} mm"
     );
+}
+
+#[test]
+fn a_pose_network_trains_scores_its_held_out_frames_and_predicts() {
+    let data = shared_real().join("tactip127-edge");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("pose");
+    let (ok, msg) = tactile(&[
+        "train",
+        "pose",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--input-px",
+        "32",
+        "--exclude-test",
+        "0.2",
+        "--max-epochs",
+        "3",
+    ]);
+    assert!(ok, "{msg}");
+    assert!(out.join("pose.json").is_file() && out.join("curves.png").is_file());
+    // The 752 frames of the split were never trained on; three epochs of a
+    // 32 px network already beat guessing the mean (x spans +-5 mm).
+    let line = msg
+        .lines()
+        .find(|l| l.contains("held-out test frames"))
+        .unwrap();
+    assert!(line.starts_with("752 "), "{line}");
+    let x: f64 = line
+        .split("x_mm ")
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(x < 1.5, "{line}");
+    let [x, theta, depth] = predict_edge_errors(&out);
+    assert!(
+        x < 1.5 && theta < 15.0 && depth < 0.4,
+        "{x} {theta} {depth}"
+    );
+    // A network that cannot be built is refused before any frame is read.
+    let (ok, msg) = tactile(&[
+        "train",
+        "pose",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        tmp.path().join("p2").to_str().unwrap(),
+        "--input-px",
+        "30",
+    ]);
+    assert!(!ok && msg.contains("input side 30"), "{msg}");
+    assert!(!tmp.path().join("p2").join("pose.json").exists());
 }
 
 #[test]

@@ -1,0 +1,21 @@
+//! A supervised pose network for TacTip frames: a small CNN on the grey pin
+//! image with a dense head that predicts contact pose (edge position,
+//! orientation, depth) directly, beside paper A's route of one
+//! unsupervised encoder and cheap estimators on its features. The model,
+//! its folder ([`PoseArtifact`]), training with label-preserving
+//! augmentation, and inference on any runtime ([`PoseEstimator`]).
+
+#![deny(missing_docs)]
+
+pub mod artifact;
+pub mod data;
+mod error;
+pub mod inference;
+pub mod model;
+pub mod training;
+
+pub use artifact::PoseArtifact;
+pub use error::{Error, Result};
+pub use inference::{PoseEstimates, PoseEstimator};
+pub use model::{PoseNet, PoseNetConfig};
+pub use training::PoseTrainingConfig;

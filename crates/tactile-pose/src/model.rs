@@ -1,0 +1,212 @@
+//! The pose network: stages of 3x3 convolution, batch norm, ReLU and 2x2
+//! max pooling halve the grey pin image down to a small map, which a dense
+//! head (flattened, so where the pins moved still counts) turns into the
+//! standardised target columns.
+
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::conv::{Conv2d, Conv2dConfig};
+use burn::nn::pool::{MaxPool2d, MaxPool2dConfig};
+use burn::nn::{BatchNorm, BatchNormConfig, Linear, LinearConfig, PaddingConfig2d};
+use burn::tensor::activation::relu;
+use burn::tensor::{Device, Tensor, TensorData};
+use tactile_core::runtime::Forward;
+
+/// Largest input side accepted, pixels.
+pub const MAX_INPUT_PX: usize = 512;
+/// Largest channel width of a stage.
+pub const MAX_WIDTH: usize = 512;
+/// Largest hidden width of the head.
+pub const MAX_HIDDEN: usize = 4096;
+/// Most output columns.
+pub const MAX_OUTPUTS: usize = 64;
+
+/// Architecture of a [`PoseNet`].
+#[derive(Config, Debug, PartialEq)]
+pub struct PoseNetConfig {
+    /// Side of the square grey pin image.
+    #[config(default = 64)]
+    pub input_px: usize,
+    /// Channels of each stage; each stage halves the side.
+    #[config(default = "vec![16, 32, 64, 64]")]
+    pub widths: Vec<usize>,
+    /// Hidden units of the dense head.
+    #[config(default = 128)]
+    pub hidden: usize,
+    /// Output columns (an angle takes two).
+    #[config(default = 3)]
+    pub outputs: usize,
+}
+
+impl PoseNetConfig {
+    /// Side of the last stage's map.
+    pub fn map_px(&self) -> usize {
+        self.input_px >> self.widths.len()
+    }
+
+    /// Check every size against its limit before anything is allocated.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        let bad = |m: String| Err(tactile_core::Error::Config(m));
+        if self.widths.is_empty() || self.widths.len() > 6 {
+            return bad(format!(
+                "pose network: 1 to 6 stages, got {}",
+                self.widths.len()
+            ));
+        }
+        if self.widths.iter().any(|&w| w == 0 || w > MAX_WIDTH) {
+            return bad(format!(
+                "pose network: stage widths must be 1-{MAX_WIDTH}, got {:?}",
+                self.widths
+            ));
+        }
+        let step = 1usize << self.widths.len();
+        if self.input_px == 0 || self.input_px > MAX_INPUT_PX || !self.input_px.is_multiple_of(step) {
+            return bad(format!(
+                "pose network: input side {} must be a multiple of {step} (one halving per stage) up to {MAX_INPUT_PX}",
+                self.input_px
+            ));
+        }
+        if self.hidden == 0 || self.hidden > MAX_HIDDEN {
+            return bad(format!(
+                "pose network: hidden width must be 1-{MAX_HIDDEN}, got {}",
+                self.hidden
+            ));
+        }
+        if self.outputs == 0 || self.outputs > MAX_OUTPUTS {
+            return bad(format!(
+                "pose network: outputs must be 1-{MAX_OUTPUTS}, got {}",
+                self.outputs
+            ));
+        }
+        let flat = self.widths[self.widths.len() - 1] * self.map_px() * self.map_px();
+        tactile_core::artifact::check_parameters(
+            "pose network",
+            (flat * self.hidden) as u64
+                + self.widths.iter().map(|&w| (w * w * 9) as u64).sum::<u64>(),
+        )
+    }
+
+    /// A network with fresh weights.
+    pub fn init(&self, device: &Device) -> PoseNet {
+        let mut stages = Vec::with_capacity(self.widths.len());
+        let mut c = 1;
+        for &w in &self.widths {
+            stages.push(Stage {
+                conv: Conv2dConfig::new([c, w], [3, 3])
+                    .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
+                    .with_bias(false)
+                    .init(device),
+                bn: BatchNormConfig::new(w).init(device),
+                folded: false,
+            });
+            c = w;
+        }
+        let flat = c * self.map_px() * self.map_px();
+        PoseNet {
+            stages,
+            pool: MaxPool2dConfig::new([2, 2]).init(),
+            fc1: LinearConfig::new(flat, self.hidden).init(device),
+            fc2: LinearConfig::new(self.hidden, self.outputs).init(device),
+        }
+    }
+}
+
+/// Convolution, batch norm (folded into the convolution for inference),
+/// ReLU.
+#[derive(Module, Debug)]
+pub struct Stage {
+    /// 3x3, no bias (the norm has one).
+    pub conv: Conv2d,
+    /// Its batch norm.
+    pub bn: BatchNorm,
+    /// True once the norm is folded into the convolution.
+    #[module(skip)]
+    pub folded: bool,
+}
+
+impl Stage {
+    fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        let y = self.conv.forward(x);
+        relu(if self.folded { y } else { self.bn.forward(y) })
+    }
+}
+
+/// Grey pin image `[N, 1, S, S]` -> standardised target columns `[N, K]`.
+#[derive(Module, Debug)]
+pub struct PoseNet {
+    /// The convolution stages.
+    pub stages: Vec<Stage>,
+    /// 2x2 max pooling after each stage.
+    pub pool: MaxPool2d,
+    /// Flattened map to the hidden units.
+    pub fc1: Linear,
+    /// Hidden units to the target columns.
+    pub fc2: Linear,
+}
+
+impl PoseNet {
+    /// Standardised target columns.
+    ///
+    /// # Shapes
+    /// - `x`: `[N, 1, S, S]` grey pin images in [0, 1]
+    /// - output: `[N, K]`
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<2> {
+        let mut x = x;
+        for s in &self.stages {
+            x = self.pool.forward(s.forward(x));
+        }
+        let [n, c, h, w] = x.dims();
+        let x = x.reshape([n, c * h * w]);
+        self.fc2.forward(relu(self.fc1.forward(x)))
+    }
+}
+
+impl Forward for PoseNet {
+    fn forward_data(&self, x: Tensor<4>) -> TensorData {
+        self.forward(x).into_data()
+    }
+
+    fn for_inference(mut self) -> Self {
+        for s in &mut self.stages {
+            if !s.folded {
+                tactile_core::nn::fold_batch_norm(&mut s.conv, &s.bn);
+                s.folded = true;
+            }
+        }
+        self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tactile_core::DeviceKind;
+
+    #[test]
+    fn shapes_limits_and_folding() {
+        let dev = DeviceKind::Flex.device();
+        let cfg = PoseNetConfig::new()
+            .with_input_px(32)
+            .with_widths(vec![4, 8]);
+        cfg.check().unwrap();
+        let net = cfg.init(&dev);
+        let x = Tensor::<4>::ones([2, 1, 32, 32], &dev) * 0.5;
+        let y = net.forward(x.clone());
+        assert_eq!(y.dims(), [2, 3]);
+        let a: Vec<f32> = y.into_data().try_to_vec::<f32>().unwrap();
+        let b: Vec<f32> = net.for_inference().forward(x).into_data().try_to_vec::<f32>().unwrap();
+        for (p, q) in a.iter().zip(&b) {
+            assert!((p - q).abs() < 1e-4, "{p} {q}");
+        }
+        for bad in [
+            PoseNetConfig::new().with_input_px(30),
+            PoseNetConfig::new().with_widths(vec![]),
+            PoseNetConfig::new().with_widths(vec![0, 4]),
+            PoseNetConfig::new().with_hidden(0),
+            PoseNetConfig::new().with_outputs(10_000),
+            PoseNetConfig::new().with_input_px(1 << 40),
+        ] {
+            assert!(bad.check().is_err(), "{bad:?}");
+        }
+    }
+}

@@ -1,0 +1,297 @@
+//! Training the pose network: Adam on the mean squared error of the
+//! standardised target columns, label-preserving augmentation, early
+//! stopping on the validation loss, best model kept, resumable.
+
+use std::path::Path;
+
+use burn::config::Config;
+use burn::tensor::{Device, Tensor, TensorData};
+use tactile_core::dataset::{Dataset, TestHoldout, hold_out};
+use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
+use tactile_core::{Artifact, DeviceKind};
+use tactile_estimate::Target;
+use tactile_estimate::regressor::{decode, encode, output_scaler};
+use tactile_preprocess::{Downsample, Lighting, PreprocessConfig};
+
+use crate::artifact::PoseArtifact;
+use crate::data::{Augment, PoseSet};
+use crate::model::{PoseNet, PoseNetConfig};
+use crate::{Error, Result};
+
+/// Grey pin images of `side` pixels from 256 px TacTip frames: the
+/// central 256 px, a 100 px circular mask (the sensor's tip), area
+/// downsampling, grey levels kept (each pin's sub-pixel position is the
+/// fraction of an output pixel it covers).
+pub fn grey_pin_images(side: usize) -> PreprocessConfig {
+    PreprocessConfig {
+        lighting: Lighting::None,
+        equalize: false,
+        threshold: None,
+        mask_radius_px: Some(100.0),
+        open_px: 0,
+        grow_px: 0,
+        crop_px: 256,
+        output_px: side,
+        binarise_offset: 0.3,
+        downsample: Downsample::Area,
+        binarise: false,
+    }
+}
+
+/// Training settings.
+#[derive(Config, Debug)]
+pub struct PoseTrainingConfig {
+    /// What it predicts, each a label column (`theta_deg` may be an angle).
+    pub targets: Vec<Target>,
+    /// The architecture (its `input_px` must be the preprocessing's side
+    /// and its `outputs` the targets' columns; [`Self::checked`] sets both).
+    #[config(default = "PoseNetConfig::new()")]
+    pub model: PoseNetConfig,
+    /// How frames become pin images (saved with the model).
+    #[config(default = "grey_pin_images(64)")]
+    pub preprocess: PreprocessConfig,
+    /// Adam, batch 32, learning rate 1e-3 decaying 3 % per epoch.
+    #[config(default = "Schedule::new(32, 80, 12, 1e-3).with_lr_decay(0.97).with_seed(7)")]
+    pub schedule: Schedule,
+    /// Label-preserving augmentation of the training frames.
+    #[config(default = "Augment::new()")]
+    pub augment: Augment,
+    /// Fraction of the training rows held out for early stopping.
+    #[config(default = 0.2)]
+    pub val_fraction: f64,
+    /// Without a `split` column: leave out the test frames a later
+    /// evaluation with this split holds out.
+    #[config(default = "None")]
+    pub holdout: Option<TestHoldout>,
+    /// Train on every training row for exactly `max_epochs` (the final
+    /// model, its epoch count chosen on a validated run); the loss on the
+    /// training rows is what the curves show.
+    #[config(default = false)]
+    pub all_rows: bool,
+}
+
+impl PoseTrainingConfig {
+    /// The config with the model's input side and outputs made to agree
+    /// with the preprocessing and targets, and every value checked.
+    pub fn checked(mut self) -> Result<Self> {
+        self.model.input_px = self.preprocess.output_px;
+        self.model.outputs = self.targets.iter().map(Target::width).sum();
+        self.model.check()?;
+        self.preprocess.check()?;
+        self.schedule.check()?;
+        self.augment.check()?;
+        if self.targets.is_empty() {
+            return Err(tactile_core::Error::Config("no targets to predict".into()).into());
+        }
+        Ok(self)
+    }
+}
+
+/// Frames per network call when predicting.
+pub const PREDICT_BATCH: usize = 128;
+
+/// Standardised output columns of `model` on the frames `rows` of `set`.
+pub fn predict_columns(
+    model: &PoseNet,
+    set: &PoseSet,
+    rows: &[usize],
+    device: &Device,
+) -> Result<Vec<Vec<f32>>> {
+    let mut out = Vec::with_capacity(rows.len());
+    for chunk in rows.chunks(PREDICT_BATCH) {
+        let x = set.batch(chunk, &Augment::none(), (0, 0), device);
+        let y = model.forward(x);
+        let k = y.dims()[1];
+        let v: Vec<f32> = y
+            .into_data()
+            .convert::<f32>()
+            .try_to_vec::<f32>()
+            .map_err(|e| tactile_core::Error::Invalid(format!("reading predictions: {e:?}")))?;
+        out.extend(v.chunks(k).map(<[f32]>::to_vec));
+    }
+    Ok(out)
+}
+
+/// Mean absolute error per target of `predictions` (labels' units).
+pub fn target_mae(targets: &[Target], predictions: &[Vec<f64>], truth: &[Vec<f64>]) -> Vec<f64> {
+    targets
+        .iter()
+        .enumerate()
+        .map(|(j, t)| {
+            let p: Vec<f64> = predictions.iter().map(|r| r[j]).collect();
+            let y: Vec<f64> = truth.iter().map(|r| r[j]).collect();
+            t.mae(&p, &y)
+        })
+        .collect()
+}
+
+/// Train on the training rows of `data` and write everything into `out`:
+/// `pose.json`/`pose.bpk` (best model), `curves.csv`/`curves.png`,
+/// `training.json` (with the kept model's validation MAE per target) and
+/// `checkpoint/`.
+pub fn train(
+    config: &PoseTrainingConfig,
+    data: &Dataset,
+    out: &Path,
+    device: DeviceKind,
+    resume: bool,
+) -> Result<FitSummary> {
+    let config = &config.clone().checked()?;
+    tactile_core::io::check_output_dir(out, &[data])?;
+    tactile_core::note!("preprocessing {} frames", data.len());
+    let set = PoseSet::from_dataset(data, &config.preprocess, &config.targets)?;
+    let rows = set.labelled(&data.training_rows(config.holdout)?);
+    let (train, val) = if config.all_rows {
+        (rows.clone(), rows)
+    } else {
+        hold_out(rows, config.val_fraction, config.schedule.seed)
+            .map_err(|e| tactile_core::Error::dataset(data.labels_path(), None, e.to_string()))?
+    };
+    let encoded = encode(&config.targets, &set.label_rows(&train));
+    let outputs = output_scaler(&config.targets, &encoded);
+    let k = config.model.outputs;
+    // Standardised target columns of every row, for the loss.
+    let mut columns = vec![Vec::new(); set.pins.len()];
+    for (&i, e) in train.iter().zip(outputs.apply(&encoded).chunks(k)) {
+        columns[i] = e.to_vec();
+    }
+    let val_truth = set.label_rows(&val);
+    let artifact = PoseArtifact {
+        model: config.model.clone(),
+        preprocess: config.preprocess.clone(),
+        targets: config.targets.clone(),
+        outputs: outputs.clone(),
+        notes: serde_json::json!({
+            "trained_on": data.root.display().to_string(),
+            "device": device.name(),
+            "excluded_test": config.holdout,
+            "all_rows": config.all_rows,
+        }),
+    };
+    let dev = device.device();
+    let ad = dev.clone().autodiff();
+    ad.seed(config.schedule.seed);
+    let model = config.model.init(&ad);
+    let fit_cfg = FitConfig::new(
+        &config.schedule,
+        "Pose network training (MSE, standardised)",
+    )
+    .saving_to(out, resume)
+    .with_checkpoint_every(5)
+    .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
+    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
+    let seed = config.schedule.seed;
+    let last_mae = std::cell::RefCell::new(Vec::new());
+    let (_, summary) = fit::<_, Error>(
+        &fit_cfg,
+        model,
+        burn::optim::AdamConfig::new().init(),
+        (&train, val.len()),
+        |m: &PoseNet, batch, epoch| {
+            let x = set.batch(batch, &config.augment, (seed, epoch as u64 + 1), &ad);
+            let y: Vec<f32> = batch.iter().flat_map(|&i| columns[i].clone()).collect();
+            let y = Tensor::<2>::from_data(TensorData::new(y, [batch.len(), k]), &ad);
+            Ok((m.forward(x) - y).powi_scalar(2).mean())
+        },
+        |m| {
+            let cols = predict_columns(m, &set, &val, &dev)?;
+            let pred: Vec<Vec<f64>> = cols
+                .iter()
+                .map(|r| decode(&config.targets, &outputs, r))
+                .collect();
+            let mse = cols
+                .iter()
+                .zip(
+                    outputs
+                        .apply(&encode(&config.targets, &val_truth))
+                        .chunks(k),
+                )
+                .map(|(p, t)| {
+                    p.iter()
+                        .zip(t)
+                        .map(|(a, b)| ((a - b) as f64).powi(2))
+                        .sum::<f64>()
+                })
+                .sum::<f64>()
+                / (cols.len() * k).max(1) as f64;
+            let mae = target_mae(&config.targets, &pred, &val_truth);
+            let first = mae.first().copied();
+            *last_mae.borrow_mut() = mae;
+            Ok((mse, first))
+        },
+        |m| {
+            let mut a = artifact.clone();
+            if let serde_json::Value::Object(n) = &mut a.notes {
+                n.insert(
+                    "validation_mae".into(),
+                    serde_json::json!(*last_mae.borrow()),
+                );
+            }
+            Ok(a.save(m, out)?)
+        },
+    )?;
+    let kept = PoseArtifact::read_unfinished(out)?;
+    let mae: Vec<f64> = kept
+        .notes
+        .get("validation_mae")
+        .and_then(|v| serde_json::from_value(v.clone()).ok())
+        .unwrap_or_default();
+    tactile_core::artifact::write_training_record(
+        out,
+        config,
+        &summary,
+        serde_json::json!({ "train_frames": train.len(), "val_frames": val.len(), "validation_mae": mae }),
+    )?;
+    unfinished.finish()?;
+    Ok(summary)
+}
+
+/// A pose network's errors on the test rows of a split.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PoseScores {
+    /// Target names.
+    pub targets: Vec<String>,
+    /// Mean absolute error per target, labels' units.
+    pub mae: Vec<f64>,
+    /// Test frames scored.
+    pub frames: usize,
+}
+
+impl PoseScores {
+    /// One line for a person.
+    pub fn describe(&self) -> String {
+        let parts: Vec<String> = self
+            .targets
+            .iter()
+            .zip(&self.mae)
+            .map(|(t, m)| format!("{t} {m:.4}"))
+            .collect();
+        format!(
+            "{} held-out test frames (never trained on): MAE {}",
+            self.frames,
+            parts.join(", ")
+        )
+    }
+}
+
+/// Score the pose network in `dir` on the test rows that `holdout` leaves
+/// out of `data` (the frames [`train`] with that holdout never saw).
+pub fn test_scores(
+    dir: &Path,
+    data: &Dataset,
+    holdout: TestHoldout,
+    runtime: tactile_core::Runtime,
+) -> Result<PoseScores> {
+    let mut est = crate::PoseEstimator::load(dir, runtime, 0)?;
+    let split = data.three_way_split(holdout.test_fraction, 0.2, holdout.split_seed)?;
+    let targets = est.artifact.targets.clone();
+    let set = PoseSet::from_dataset(data, &est.artifact.preprocess, &targets)?;
+    let rows = set.labelled(&split.test);
+    let pins: Vec<_> = rows.iter().map(|&i| set.pins.images[i].clone()).collect();
+    let pred = est.predict(&pins)?;
+    Ok(PoseScores {
+        targets: targets.iter().map(|t| t.name.clone()).collect(),
+        mae: target_mae(&targets, &pred, &set.label_rows(&rows)),
+        frames: rows.len(),
+    })
+}
