@@ -11,6 +11,7 @@
 //! so datasets are byte-identical on every machine, render in parallel, and
 //! can be extended without changing earlier samples.
 
+pub mod alternate;
 mod error;
 pub use error::{Error, Result};
 pub use tactile_core::npy;
@@ -23,7 +24,7 @@ pub mod write;
 
 pub use rng::Range;
 pub use tactip::{SHAPES, TactipConfig};
-pub use visuotactile::{TendonPath, VisuotactileConfig};
+pub use visuotactile::{Renderer, TendonPath, VisuotactileConfig};
 pub use write::{
     GENERATOR, TactipLabels, WriteOptions, check_count, visuotactile_position, write_tactip,
     write_visuotactile,

@@ -135,6 +135,33 @@ pub struct VisuotactileConfig {
     pub noise_sigma: Range,
     /// Frames per palpation video.
     pub frames_per_sequence: usize,
+    /// Which renderer draws the frames (the labels are the same).
+    pub renderer: Renderer,
+}
+
+/// The renderers of the sensor.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Renderer {
+    /// One analytic sample per pixel ([`render`]); what models train on.
+    #[default]
+    Reference,
+    /// Another raster and shading path of the same spec
+    /// ([`crate::alternate::render_alternate`]): a cross-check set.
+    Alternate,
+}
+
+impl std::str::FromStr for Renderer {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "reference" => Ok(Self::Reference),
+            "alternate" => Ok(Self::Alternate),
+            _ => Err(Error::Config(format!(
+                "renderer: unknown '{s}' (known: reference, alternate)"
+            ))),
+        }
+    }
 }
 
 impl Default for VisuotactileConfig {
@@ -152,6 +179,7 @@ impl Default for VisuotactileConfig {
             exposure_jitter: Range::new(-0.1, 0.1),
             noise_sigma: Range::new(1.0, 3.0),
             frames_per_sequence: 30,
+            renderer: Renderer::Reference,
         }
     }
 }
@@ -556,6 +584,54 @@ pub struct VisuotactileFrame {
     pub ridge_mm: f64,
 }
 
+/// The skin at one point of the window under contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surface {
+    /// Displacement toward the camera, mm.
+    pub disp: f64,
+    /// Its gradient along image x, mm per mm.
+    pub gx: f64,
+    /// Along image y.
+    pub gy: f64,
+    /// The tendon ridge's part of `disp`, mm.
+    pub ridge: f64,
+}
+
+/// The displacement of the skin at pixel `(u, v)` (any real position) and
+/// its analytic gradient: the whole-window push and the tendon ridge.
+pub fn surface(cam: &Camera, scene: &SequenceScene, press_mm: f64, u: f64, v: f64) -> Surface {
+    if press_mm <= 0.0 {
+        return Surface {
+            disp: 0.0,
+            gx: 0.0,
+            gy: 0.0,
+            ridge: 0.0,
+        };
+    }
+    let amp = scene.ridge_amplitude_mm(press_mm);
+    let width_mm = scene.ridge_width_mm();
+    let mm_per_px = NOMINAL_DEPTH_MM / cam.fx;
+    let r2 = (u - cam.cx).powi(2) + (v - cam.cy).powi(2);
+    let rm2 = cam.r_max * cam.r_max;
+    let mut disp = WINDOW_PUSH * press_mm * (1.0 - r2 / rm2);
+    // d/dx of (1 - r^2/rm^2) with r in pixels and x in mm.
+    let k = WINDOW_PUSH * press_mm * (-2.0 / rm2) / mm_per_px;
+    let (mut gx, mut gy) = (k * (u - cam.cx), k * (v - cam.cy));
+    let p = cam.to_mm(u, v);
+    let q = scene.line.nearest(p);
+    let (dx, dy) = sub(p, q);
+    let ridge = amp * libm::exp(-(dx * dx + dy * dy) / (2.0 * width_mm * width_mm));
+    disp += ridge;
+    gx -= ridge * dx / (width_mm * width_mm);
+    gy -= ridge * dy / (width_mm * width_mm);
+    Surface {
+        disp,
+        gx,
+        gy,
+        ridge,
+    }
+}
+
 /// Render one frame of `scene` at `press_mm`; `rng` supplies the frame's
 /// exposure and noise.
 pub fn render(
@@ -570,9 +646,7 @@ pub fn render(
     let noise_sigma = rng.draw(config.noise_sigma);
     let contact = press_mm > 0.0;
     let amp = scene.ridge_amplitude_mm(press_mm);
-    let width_mm = scene.ridge_width_mm();
     let threshold = (MASK_FRACTION * amp).max(MASK_FLOOR_MM);
-    let mm_per_px = NOMINAL_DEPTH_MM / cam.fx;
     let elev = LIGHT_ELEVATION_DEG.to_radians();
     let lights: Vec<[f64; 3]> = LIGHT_AZIMUTH_DEG
         .iter()
@@ -601,26 +675,14 @@ pub fn render(
                 }
                 continue;
             }
-            // Displacement toward the camera and its gradient (per mm).
-            let (mut disp, mut gx, mut gy) = (0.0, 0.0, 0.0);
-            if contact {
-                let r2 = (uf - cam.cx).powi(2) + (vf - cam.cy).powi(2);
-                let rm2 = cam.r_max * cam.r_max;
-                disp += WINDOW_PUSH * press_mm * (1.0 - r2 / rm2);
-                // d/dx of (1 - r^2/rm^2) with r in pixels and x in mm.
-                let k = WINDOW_PUSH * press_mm * (-2.0 / rm2) / mm_per_px;
-                gx += k * (uf - cam.cx);
-                gy += k * (vf - cam.cy);
-                let p = cam.to_mm(uf, vf);
-                let q = scene.line.nearest(p);
-                let (dx, dy) = sub(p, q);
-                let ridge = amp * libm::exp(-(dx * dx + dy * dy) / (2.0 * width_mm * width_mm));
-                disp += ridge;
-                gx -= ridge * dx / (width_mm * width_mm);
-                gy -= ridge * dy / (width_mm * width_mm);
-                if ridge > threshold {
-                    mask[i] = 255;
-                }
+            let Surface {
+                disp,
+                gx,
+                gy,
+                ridge,
+            } = surface(&cam, scene, press_mm, uf, vf);
+            if ridge > threshold {
+                mask[i] = 255;
             }
             depth_m[i] = ((d0 - disp) * 1e-3) as f32;
             // e = depth - d0 = -disp; n = normalize(de/dx, de/dy, -1).
@@ -689,7 +751,13 @@ pub fn sample(
     let scene = SequenceScene::draw(config, &cam, &mut SampleRng::new(seed, 1, sequence));
     let press = press_profile(scene.peak_press_mm, frame, config.frames_per_sequence);
     let mut rng = SampleRng::new(seed, 2 + sequence, frame as u64);
-    let out = render(config, &scene, press, &mut rng);
+    let out = match config.renderer {
+        Renderer::Reference => render(config, &scene, press, &mut rng),
+        Renderer::Alternate => {
+            let mut glare = SampleRng::new(seed, u64::MAX, sequence);
+            crate::alternate::render_alternate(config, &scene, press, &mut rng, &mut glare)
+        }
+    };
     (scene, out)
 }
 

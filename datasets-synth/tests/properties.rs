@@ -356,3 +356,48 @@ fn numpy_reads_the_depth_maps() {
     let lo = ours.iter().copied().fold(f32::MAX, f32::min) as f64;
     assert_eq!(parts[3].parse::<f64>().unwrap(), lo, "{text}");
 }
+
+#[test]
+fn the_alternate_renderer_draws_the_same_scene_with_the_same_labels() {
+    let reference = VisuotactileConfig {
+        press_mm: Range::new(1.0, 3.0),
+        ..small_visuo()
+    };
+    let alternate = VisuotactileConfig {
+        renderer: visuotactile::Renderer::Alternate,
+        ..reference.clone()
+    };
+    let mut tendons = 0;
+    for seq in 0..4 {
+        for frame in [0, 3, 5] {
+            let (_, a) = visuotactile::sample(&reference, 11, seq, frame);
+            let (_, b) = visuotactile::sample(&alternate, 11, seq, frame);
+            // Labels are geometry: identical.
+            assert_eq!(a.mask, b.mask);
+            assert_eq!(a.tendon, b.tendon);
+            assert_eq!(a.direction_deg, b.direction_deg);
+            assert_eq!(a.depth_m, b.depth_m);
+            tendons += usize::from(a.tendon);
+            // The pictures differ (another raster and shading path) but
+            // show the same skin: a few levels apart on average.
+            let diff: f64 = a
+                .rgb
+                .iter()
+                .zip(&b.rgb)
+                .map(|(x, y)| x.abs_diff(*y) as f64)
+                .sum::<f64>()
+                / a.rgb.len() as f64;
+            assert!(
+                diff > 0.3 && diff < 8.0,
+                "sequence {seq} frame {frame}: {diff}"
+            );
+        }
+    }
+    assert!(tendons > 0);
+    let bad: Result<visuotactile::Renderer, _> = "raytraced".parse();
+    assert!(
+        bad.unwrap_err()
+            .to_string()
+            .contains("reference, alternate")
+    );
+}

@@ -112,6 +112,31 @@ impl DetectionSet {
         Ok(data)
     }
 
+    /// [`Self::batch`] with every frame changed by `augment`, frame `i`
+    /// with the stream `(seed, round, i)` (round: the epoch).
+    pub fn augmented_batch(
+        &self,
+        idx: &[usize],
+        stats: &ChannelStats,
+        augment: &crate::augment::PhotometricAugment,
+        (seed, round): (u64, u64),
+        device: &Device,
+    ) -> Result<Tensor<4>> {
+        let mut data = Vec::with_capacity(idx.len() * 3 * self.width * self.height);
+        for &i in idx {
+            let mut img = self.image(i);
+            augment.apply(
+                &mut img,
+                &mut tactile_core::rng::SampleRng::new(seed, round, i as u64),
+            );
+            data.extend(stats.to_chw(&img)?);
+        }
+        Ok(Tensor::from_data(
+            TensorData::new(data, [idx.len(), 3, self.height, self.width]),
+            device,
+        ))
+    }
+
     /// Normalised `[N, 3, H, W]` batch of the frames at `idx`.
     pub fn batch(&self, idx: &[usize], stats: &ChannelStats, device: &Device) -> Result<Tensor<4>> {
         Ok(Tensor::from_data(

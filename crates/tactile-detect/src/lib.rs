@@ -7,6 +7,7 @@
 #![deny(missing_docs)]
 
 pub mod artifact;
+pub mod augment;
 pub mod calibrate;
 pub mod data;
 mod error;

@@ -16,6 +16,7 @@ use tactile_preprocess::visuo::ChannelStats;
 
 use tactile_preprocess::profile::InputProfile;
 
+use crate::augment::PhotometricAugment;
 use crate::data::{SoftLabels, load_split};
 use crate::{DetectionSet, Detector, DetectorArtifact, DetectorConfig, Error, Result};
 
@@ -35,6 +36,9 @@ pub struct DetectorTrainingConfig {
     /// Train toward soft targets from the ridge amplitude (None: 0/1).
     #[config(default = "None")]
     pub soft_labels: Option<SoftLabels>,
+    /// Photometric augmentation of the training frames (None: off).
+    #[config(default = "None")]
+    pub augment: Option<PhotometricAugment>,
 }
 
 /// Weights that make both classes count equally: `n / (2 n_class)`.
@@ -130,6 +134,9 @@ pub fn train(
     calibrate_only: bool,
 ) -> Result<DetectorFit> {
     config.schedule.check()?;
+    if let Some(a) = &config.augment {
+        a.check()?;
+    }
     config.model.check()?;
     let refs: Vec<&Dataset> = datasets.iter().collect();
     tactile_core::io::check_output_dir(out, &refs)?;
@@ -207,8 +214,17 @@ pub fn train(
         model,
         burn::optim::AdamConfig::new().init(),
         (&train, val.len()),
-        |m: &Detector, batch, _| {
-            let x = data.batch(batch, &stats, &ad)?;
+        |m: &Detector, batch, epoch| {
+            let x = match &config.augment {
+                Some(a) => data.augmented_batch(
+                    batch,
+                    &stats,
+                    a,
+                    (config.schedule.seed, epoch as u64 + 1),
+                    &ad,
+                )?,
+                None => data.batch(batch, &stats, &ad)?,
+            };
             let y = data.targets(batch, config.soft_labels.as_ref(), &ad);
             Ok(weighted_bce(m.forward(x), y, weights))
         },

@@ -60,7 +60,8 @@ impl PoseNetConfig {
             ));
         }
         let step = 1usize << self.widths.len();
-        if self.input_px == 0 || self.input_px > MAX_INPUT_PX || !self.input_px.is_multiple_of(step) {
+        if self.input_px == 0 || self.input_px > MAX_INPUT_PX || !self.input_px.is_multiple_of(step)
+        {
             return bad(format!(
                 "pose network: input side {} must be a multiple of {step} (one halving per stage) up to {MAX_INPUT_PX}",
                 self.input_px
@@ -194,7 +195,12 @@ mod tests {
         let y = net.forward(x.clone());
         assert_eq!(y.dims(), [2, 3]);
         let a: Vec<f32> = y.into_data().try_to_vec::<f32>().unwrap();
-        let b: Vec<f32> = net.for_inference().forward(x).into_data().try_to_vec::<f32>().unwrap();
+        let b: Vec<f32> = net
+            .for_inference()
+            .forward(x)
+            .into_data()
+            .try_to_vec::<f32>()
+            .unwrap();
         for (p, q) in a.iter().zip(&b) {
             assert!((p - q).abs() < 1e-4, "{p} {q}");
         }

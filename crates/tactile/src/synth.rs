@@ -102,6 +102,10 @@ pub(crate) struct VisuotactileArgs {
     /// Sensor noise range, 8-bit levels: MIN,MAX.
     #[arg(long)]
     noise_sigma: Option<Range>,
+    /// reference (what models train on) or alternate (another raster and
+    /// shading path of the same spec, a cross-check set).
+    #[arg(long)]
+    renderer: Option<datasets_synth::Renderer>,
 }
 
 fn config<T: serde::de::DeserializeOwned + Default>(c: &CommonArgs) -> Result<T> {
@@ -160,7 +164,7 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
         }
         SynthCmd::Visuotactile(a) => {
             let mut cfg: VisuotactileConfig = config(&a.common)?;
-            set!(cfg, a: paths, width, height, frames_per_sequence, press_mm, tendon_radius_mm, burial_mm, noise_sigma);
+            set!(cfg, a: paths, width, height, frames_per_sequence, press_mm, tendon_radius_mm, burial_mm, noise_sigma, renderer);
             let f = cfg.frames_per_sequence;
             let frames = |k: usize| {
                 k.checked_mul(f).ok_or_else(|| {

@@ -297,6 +297,10 @@ pub(crate) struct DetectorArgs {
     /// spec's label threshold. Suggested width: 0.2.
     #[arg(long, value_name = "WIDTH")]
     soft_labels: Option<f64>,
+    /// Photometric augmentation of the training frames (exposure, LED
+    /// balance, blur, noise, glare, JPEG; see PhotometricAugment).
+    #[arg(long)]
+    augment: bool,
     /// Only re-choose the threshold of the model already in --out on the
     /// validation sequences (training ends with this step anyway).
     #[arg(long)]
@@ -515,7 +519,11 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 )
                 .with_schedule(a.schedule.schedule(d.schedule.learning_rate))
                 .with_val_fraction(a.val_fraction)
-                .with_soft_labels(soft_labels);
+                .with_soft_labels(soft_labels)
+                .with_augment(
+                    a.augment
+                        .then(tactile_detect::augment::PhotometricAugment::new),
+                );
             let s = &a.schedule;
             let fit = tactile_detect::training::train(
                 &config,
