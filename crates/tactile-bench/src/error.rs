@@ -33,7 +33,8 @@ via_pipeline!(
     tactile_detect::Error,
     tactile_segment::Error,
     tactile_depth::Error,
-    tactile_onnx::Error
+    tactile_onnx::Error,
+    tactile_pose::Error
 );
 
 impl Error {

@@ -15,6 +15,7 @@ pub mod latency;
 pub mod models;
 pub mod ood;
 pub mod output;
+pub mod pose;
 pub mod report;
 pub mod resolution;
 pub mod robustness;

@@ -35,7 +35,7 @@ pub struct ModelBench {
 /// The device every score is computed on (scores do not depend on it).
 const SCORE_RUNTIME: Runtime = Runtime::BurnFlex;
 
-fn parameters<A: Artifact>(dir: &Path) -> Result<usize>
+pub(crate) fn parameters<A: Artifact>(dir: &Path) -> Result<usize>
 where
     A::Model: Module,
 {

@@ -29,6 +29,24 @@ pub struct DepthScores {
     pub ssim: f64,
 }
 
+impl DepthScores {
+    /// The scores and a timing line (`ms` per frame on `device`).
+    pub fn describe(&self, ms: f64, device: impl std::fmt::Display) -> Vec<String> {
+        vec![
+            format!(
+                "{} frames: MAE {:.4} mm in the window, {} over the tendon mask, RMSE {:.4} mm, SSIM {:.4}",
+                self.frames,
+                self.mae_mm,
+                self.mae_tendon_mm
+                    .map_or("-".into(), |v| format!("{v:.4} mm")),
+                self.rmse_mm,
+                self.ssim
+            ),
+            format!("{ms:.2} ms per frame ({device}, batch {EVAL_BATCH}, loading excluded)"),
+        ]
+    }
+}
+
 /// Dynamic range used by SSIM, mm (sensors.md: depths lie in 12-18 mm).
 pub const DEPTH_RANGE_MM: f64 = 6.0;
 

@@ -236,6 +236,18 @@ pub struct SoftLabels {
 }
 
 impl SoftLabels {
+    /// Soft labels about the spec's tendon threshold (a ridge of 0.03 mm)
+    /// with transition `width`, which must be positive.
+    pub fn about_spec_threshold(width: f64) -> Result<Self> {
+        if !(width > 0.0 && width.is_finite()) {
+            return Err(tactile_core::Error::Config(format!(
+                "soft-label width must be positive, got {width}"
+            ))
+            .into());
+        }
+        Ok(Self::new(SPEC_TENDON_THRESHOLD_MM, width))
+    }
+
     /// The target probability; frames labelled 0 although their ridge is
     /// above the threshold (tendon out of view) stay at 0, and the target
     /// never contradicts the label.
@@ -252,6 +264,9 @@ impl SoftLabels {
         if tendon { p.max(0.5) } else { p.min(0.5) }
     }
 }
+
+/// The spec's smallest ridge amplitude that counts as a tendon (mm).
+pub const SPEC_TENDON_THRESHOLD_MM: f64 = 0.03;
 
 /// Frames within two frames (same sequence, by `frame_index`) of a frame
 /// with the other label. Datasets without sequences have none.

@@ -37,10 +37,11 @@ pub struct DetectorScores {
 }
 
 impl DetectorScores {
-    /// The scores in a few lines for a person (`device`: where it ran).
+    /// The scores in a few lines for a person (`device`: where it ran),
+    /// the reliability table last.
     pub fn describe(&self, device: impl std::fmt::Display) -> Vec<String> {
         let (s, st) = (&self.all, &self.onset_release);
-        vec![
+        let mut lines = vec![
             format!(
                 "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
                 s.frames,
@@ -69,7 +70,9 @@ impl DetectorScores {
                 "{:.2} ms per frame ({device}, batch {EVAL_BATCH}, resize excluded)",
                 self.ms_per_frame
             ),
-        ]
+        ];
+        lines.extend(self.reliability_table());
+        lines
     }
 
     /// The reliability diagram as a Markdown table.

@@ -7,7 +7,9 @@ use burn::config::Config;
 use burn::module::Module;
 use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::pool::{MaxPool2d, MaxPool2dConfig};
-use burn::nn::{BatchNorm, BatchNormConfig, Linear, LinearConfig, PaddingConfig2d};
+use burn::nn::{
+    BatchNorm, BatchNormConfig, Dropout, DropoutConfig, Linear, LinearConfig, PaddingConfig2d,
+};
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
 use tactile_core::runtime::Forward;
@@ -36,6 +38,9 @@ pub struct PoseNetConfig {
     /// Output columns (an angle takes two).
     #[config(default = 3)]
     pub outputs: usize,
+    /// Dropout before each dense layer while training (0 = none).
+    #[config(default = 0.0)]
+    pub dropout: f64,
 }
 
 impl PoseNetConfig {
@@ -79,6 +84,12 @@ impl PoseNetConfig {
                 self.outputs
             ));
         }
+        if !(0.0..0.95).contains(&self.dropout) {
+            return bad(format!(
+                "pose network: dropout must be in [0, 0.95), got {}",
+                self.dropout
+            ));
+        }
         let flat = self.widths[self.widths.len() - 1] * self.map_px() * self.map_px();
         tactile_core::artifact::check_parameters(
             "pose network",
@@ -108,6 +119,7 @@ impl PoseNetConfig {
             pool: MaxPool2dConfig::new([2, 2]).init(),
             fc1: LinearConfig::new(flat, self.hidden).init(device),
             fc2: LinearConfig::new(self.hidden, self.outputs).init(device),
+            dropout: DropoutConfig::new(self.dropout).init(),
         }
     }
 }
@@ -143,6 +155,8 @@ pub struct PoseNet {
     pub fc1: Linear,
     /// Hidden units to the target columns.
     pub fc2: Linear,
+    /// Before each dense layer, while training only.
+    pub dropout: Dropout,
 }
 
 impl PoseNet {
@@ -158,7 +172,8 @@ impl PoseNet {
         }
         let [n, c, h, w] = x.dims();
         let x = x.reshape([n, c * h * w]);
-        self.fc2.forward(relu(self.fc1.forward(x)))
+        let x = relu(self.fc1.forward(self.dropout.forward(x)));
+        self.fc2.forward(self.dropout.forward(x))
     }
 }
 

@@ -19,10 +19,11 @@ impl FromStr for Size {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
         let (w, h) = s
-            .split_once('x')
+            .split_once(['x', 'X'])
             .ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT, e.g. 160x120"))?;
         let p = |v: &str| {
-            v.parse::<usize>()
+            v.trim()
+                .parse::<usize>()
                 .ok()
                 .filter(|&n| n >= 16)
                 .ok_or_else(|| format!("'{s}': sizes must be whole numbers of at least 16 pixels"))

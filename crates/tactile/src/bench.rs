@@ -29,6 +29,9 @@ pub(crate) enum BenchCmd {
     Segmenter(ModelsArgs),
     /// Depth networks of a sweep or ablation: MAE, SSIM against latency per runtime.
     Depth(ModelsArgs),
+    /// Edge pose on the real TacTip edge set: pose networks and encoders
+    /// with estimators, error on their held-out frames against latency.
+    Pose(ModelsArgs),
 }
 
 #[derive(Args)]
@@ -121,21 +124,13 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Synth(a) => &a.out,
         BenchCmd::Resolution(a) => &a.out,
         BenchCmd::Devices(a) | BenchCmd::Ood(a) => &a.out,
-        BenchCmd::Detector(a) | BenchCmd::Segmenter(a) | BenchCmd::Depth(a) => &a.out,
+        BenchCmd::Detector(a) | BenchCmd::Segmenter(a) | BenchCmd::Depth(a) | BenchCmd::Pose(a) => {
+            &a.out
+        }
     };
     if let Some(out) = out {
         tactile_core::io::check_output_file(out, &[])?;
     }
-    let models = |a: ModelsArgs| {
-        let b = ModelBench {
-            models: a.models,
-            data: a.data,
-            select: a.select,
-            extreme: a.extreme,
-            runs: a.runs,
-        };
-        (b, a.out)
-    };
     match cmd {
         BenchCmd::Cae(a) => {
             let r = bench_cae(&CaeBench {
@@ -188,30 +183,30 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
                 write_markdown_and_json(out, &md, &r)?;
             }
         }
-        BenchCmd::Detector(a) => {
-            let (b, out) = models(a);
-            let t = bench_detectors(&b)?;
-            say_raw!("{}", t.markdown);
-            if let Some(out) = &out {
-                t.write(out)?;
-            }
-        }
-        BenchCmd::Segmenter(a) => {
-            let (b, out) = models(a);
-            let t = bench_segmenters(&b)?;
-            say_raw!("{}", t.markdown);
-            if let Some(out) = &out {
-                t.write(out)?;
-            }
-        }
-        BenchCmd::Depth(a) => {
-            let (b, out) = models(a);
-            let t = bench_depth(&b)?;
-            say_raw!("{}", t.markdown);
-            if let Some(out) = &out {
-                t.write(out)?;
-            }
-        }
+        BenchCmd::Detector(a) => show(a, bench_detectors)?,
+        BenchCmd::Segmenter(a) => show(a, bench_segmenters)?,
+        BenchCmd::Depth(a) => show(a, bench_depth)?,
+        BenchCmd::Pose(a) => show(a, tactile_bench::pose::bench_pose)?,
+    }
+    Ok(())
+}
+
+/// Run a model bench, print its table and write it (with plot and rows) to `out`.
+fn show<M: serde::Serialize>(
+    a: ModelsArgs,
+    bench: fn(&ModelBench) -> tactile_bench::Result<tactile_bench::output::Table<M>>,
+) -> Result<()> {
+    let (models, data, select, extreme, runs) = (a.models, a.data, a.select, a.extreme, a.runs);
+    let t = bench(&ModelBench {
+        models,
+        data,
+        select,
+        extreme,
+        runs,
+    })?;
+    say_raw!("{}", t.markdown);
+    if let Some(out) = &a.out {
+        t.write(out)?;
     }
     Ok(())
 }

@@ -84,16 +84,14 @@ fn detector(a: DetectorArgs) -> Result<()> {
         tactile_detect::eval::write_decisions_csv(path, &data, &sc)?;
         tactile_core::note!("per-frame decisions in {}", path.display());
     }
-    let (s, st) = (&sc.all, &sc.onset_release);
     sc.describe(m.device).iter().for_each(|l| say!("{l}"));
-    sc.reliability_table().iter().for_each(|l| say!("{l}"));
     if let Some(path) = &a.reliability {
         sc.save_reliability_plot(path, "Tendon detector: reliability")?;
         tactile_core::note!("reliability diagram in {}", path.display());
     }
     say!(
         "{}",
-        serde_json::json!({ "model": m.model, "data": m.data, "all": s, "onset_release": st, "calibration": sc.calibration, "ms_per_frame": sc.ms_per_frame })
+        serde_json::json!({ "model": m.model, "data": m.data, "all": sc.all, "onset_release": sc.onset_release, "calibration": sc.calibration, "ms_per_frame": sc.ms_per_frame })
     );
     Ok(())
 }
@@ -118,19 +116,7 @@ fn depth(a: DepthArgs) -> Result<()> {
     }
     let mut est = DepthEstimator::load(&m.model, m.device.runtime(), 0)?;
     let (s, ms) = tactile_depth::evaluate(&mut est, &ds)?;
-    say!(
-        "{} frames: MAE {:.4} mm in the window, {} over the tendon mask, RMSE {:.4} mm, SSIM {:.4}",
-        s.frames,
-        s.mae_mm,
-        s.mae_tendon_mm.map_or("-".into(), |v| format!("{v:.4} mm")),
-        s.rmse_mm,
-        s.ssim
-    );
-    say!(
-        "{ms:.2} ms per frame ({}, batch {}, loading excluded)",
-        m.device,
-        tactile_depth::eval::EVAL_BATCH
-    );
+    s.describe(ms, m.device).iter().for_each(|l| say!("{l}"));
     if let Some(dir) = &a.save_png {
         let n = tactile_depth::eval::save_heat_maps(&mut est, &ds, dir, a.png_frames)?;
         say!(

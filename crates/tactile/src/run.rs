@@ -23,8 +23,8 @@ pub(crate) struct RunArgs {
     #[arg(long, requires = "size")]
     stdin: bool,
     /// The size of the frames on stdin, WIDTHxHEIGHT.
-    #[arg(long, value_parser = parse_size)]
-    size: Option<(usize, usize)>,
+    #[arg(long)]
+    size: Option<crate::args::Size>,
     /// Folder with detector/, segmenter/ and depth/.
     #[arg(long, default_value = "models")]
     models: PathBuf,
@@ -64,19 +64,6 @@ pub(crate) struct RunArgs {
     live_queue: u16,
 }
 
-/// `WIDTHxHEIGHT`.
-fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("{s:?}: expected WIDTHxHEIGHT, e.g. 640x360"))?;
-    let n = |v: &str| {
-        v.trim()
-            .parse::<usize>()
-            .map_err(|_| format!("{s:?}: expected WIDTHxHEIGHT with whole numbers, e.g. 640x360"))
-    };
-    Ok((n(w)?, n(h)?))
-}
-
 pub(crate) fn main(a: RunArgs) -> Result<()> {
     let hysteresis = match a.hysteresis.as_deref() {
         None => None,
@@ -85,7 +72,7 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     };
     let spec = match (&a.data, a.size) {
         (Some(p), _) => SourceSpec::Path(p.clone()),
-        (None, Some((width, height))) => SourceSpec::Stdin { width, height },
+        (None, Some(crate::args::Size([width, height]))) => SourceSpec::Stdin { width, height },
         (None, None) => bail!("give --data PATH or --stdin --size WIDTHxHEIGHT"),
     };
     // The input first: a bad folder or video is reported before any model

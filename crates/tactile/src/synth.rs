@@ -165,21 +165,7 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
         SynthCmd::Visuotactile(a) => {
             let mut cfg: VisuotactileConfig = config(&a.common)?;
             set!(cfg, a: paths, width, height, frames_per_sequence, press_mm, tendon_radius_mm, burial_mm, noise_sigma, renderer);
-            let f = cfg.frames_per_sequence;
-            let frames = |k: usize| {
-                k.checked_mul(f).ok_or_else(|| {
-                    anyhow::anyhow!("--sequences {k} x {f} frames is too many frames")
-                })
-            };
-            let count = match (a.common.count, a.sequences) {
-                (Some(c), None) => c,
-                (None, Some(k)) => frames(k)?,
-                (Some(c), Some(k)) if c == frames(k)? => c,
-                (Some(c), Some(k)) => {
-                    bail!("--count {c} disagrees with --sequences {k} x {f} frames per sequence")
-                }
-                (None, None) => bail!("give --count N or --sequences K"),
-            };
+            let count = cfg.frame_count(a.common.count, a.sequences)?;
             let opts = WriteOptions {
                 force: a.common.force,
                 progress: true,

@@ -8,7 +8,6 @@ use clap::{Args, Subcommand};
 use tactile_cae::{CaeConfig, CaeTrainingConfig, Optimizer};
 use tactile_core::DeviceKind;
 use tactile_core::dataset::{Dataset, TestHoldout};
-use tactile_core::train::Schedule;
 use tactile_depth::{DenseNetPreset, DepthTrainingConfig, HeadKind, LossKind};
 use tactile_detect::{Architecture, DetectorTrainingConfig, SoftLabels};
 use tactile_estimate::{HeadConfig, RegressorConfig, Target};
@@ -55,55 +54,8 @@ pub(crate) struct ProfileArgs {
     data: Vec<PathBuf>,
 }
 
-/// The schedule flags of one model, their defaults from its training config.
-macro_rules! schedule_args {
-    ($name:ident, $default:expr) => {
-        #[derive(Args)]
-        pub(crate) struct $name {
-            /// Upper bound on epochs.
-            #[arg(long, default_value_t = $default.max_epochs)]
-            max_epochs: usize,
-            /// Epochs without a better validation loss before stopping.
-            #[arg(long, default_value_t = $default.patience)]
-            patience: usize,
-            /// Items per optimiser step.
-            #[arg(long, default_value_t = $default.batch_size)]
-            batch_size: usize,
-            /// Learning rate of the first epoch [default: the model's; for the
-            /// CAE, Adadelta 1.0 or Adam 0.003].
-            #[arg(long)]
-            lr: Option<f64>,
-            /// Learning-rate factor per epoch.
-            #[arg(long, default_value_t = $default.lr_decay)]
-            lr_decay: f64,
-            /// Seeds the weights, every shuffle and every split.
-            #[arg(long, default_value_t = $default.seed)]
-            seed: u64,
-            /// Training device.
-            #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
-            device: DeviceKind,
-            /// Continue from the checkpoint in the output folder.
-            #[arg(long)]
-            resume: bool,
-        }
-
-        impl $name {
-            fn schedule(&self, default_lr: f64) -> Schedule {
-                Schedule::new(
-                    self.batch_size,
-                    self.max_epochs,
-                    self.patience,
-                    self.lr.unwrap_or(default_lr),
-                )
-                .with_lr_decay(self.lr_decay)
-                .with_seed(self.seed)
-            }
-        }
-    };
-}
-
-schedule_args!(CaeSchedule, CaeTrainingConfig::new().schedule);
-schedule_args!(PoseSchedule, pose_defaults().schedule);
+tactile_core::schedule_args!(CaeSchedule, CaeTrainingConfig::new().schedule);
+tactile_core::schedule_args!(PoseSchedule, pose_defaults().schedule);
 
 fn pose_defaults() -> PoseTrainingConfig {
     PoseTrainingConfig::new(vec![])
@@ -118,8 +70,8 @@ pub(crate) struct PoseArgs {
     #[arg(long)]
     out: PathBuf,
     /// Targets: label columns, NAME:PERIOD for an angle.
-    #[arg(long, num_args = 1.., default_values = ["x_mm", "theta_deg", "depth_mm"])]
-    targets: Vec<String>,
+    #[arg(long, value_delimiter = ',', default_value = "x_mm,theta_deg,depth_mm")]
+    targets: Vec<Target>,
     /// A training config (JSON: model widths and hidden units, pin-image
     /// preprocessing, augmentation); the schedule flags set its schedule.
     #[arg(long)]
@@ -139,9 +91,9 @@ pub(crate) struct PoseArgs {
     #[command(flatten)]
     schedule: PoseSchedule,
 }
-schedule_args!(DetectorSchedule, DetectorTrainingConfig::new().schedule);
-schedule_args!(SegmenterSchedule, SegmenterTrainingConfig::new().schedule);
-schedule_args!(DepthSchedule, DepthTrainingConfig::new().schedule);
+tactile_core::schedule_args!(DetectorSchedule, DetectorTrainingConfig::new().schedule);
+tactile_core::schedule_args!(SegmenterSchedule, SegmenterTrainingConfig::new().schedule);
+tactile_core::schedule_args!(DepthSchedule, DepthTrainingConfig::new().schedule);
 
 #[derive(Args)]
 pub(crate) struct CaeArgs {
@@ -470,28 +422,23 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 Some(p) => tactile_core::io::read_json::<PoseTrainingConfig>(p)?,
                 None => pose_defaults(),
             };
-            config.targets = a
-                .targets
-                .iter()
-                .map(|t| Target::parse(t))
-                .collect::<Result<_, _>>()?;
-            if let Some(px) = a.input_px {
-                config.preprocess.output_px = px;
-            }
-            let holdout = a.exclude_test.map(|f| TestHoldout {
-                test_fraction: f,
+            config.preprocess.output_px = a.input_px.unwrap_or(config.preprocess.output_px);
+            let holdout = a.exclude_test.map(|test_fraction| TestHoldout {
+                test_fraction,
                 split_seed: a.split_seed,
             });
-            let lr = config.schedule.learning_rate;
-            let config = config
-                .with_schedule(a.schedule.schedule(lr))
-                .with_holdout(holdout)
-                .with_all_rows(a.all_rows);
-            let s = &a.schedule;
+            let (s, lr) = (&a.schedule, config.schedule.learning_rate);
+            let config = PoseTrainingConfig {
+                targets: a.targets.clone(),
+                schedule: s.schedule(lr),
+                holdout,
+                all_rows: a.all_rows,
+                ..config
+            };
             let fit = tactile_pose::training::train(&config, &ds, &a.out, s.device, s.resume)?;
             say!(
                 "{}; model in {}",
-                fit.describe(&a.targets[0]),
+                fit.describe(&a.targets[0].name),
                 a.out.display()
             );
             if let Some(h) = holdout {
@@ -501,14 +448,10 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         }
         TrainCmd::Detector(a) => {
             let datasets: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
-            let soft_labels = match a.soft_labels {
-                None => None,
-                Some(w) if w > 0.0 && w.is_finite() => Some(SoftLabels::new(
-                    datasets_synth::visuotactile::TENDON_MIN_AMPLITUDE_MM,
-                    w,
-                )),
-                Some(w) => bail!("--soft-labels must be a positive width, got {w}"),
-            };
+            let soft_labels = a
+                .soft_labels
+                .map(SoftLabels::about_spec_threshold)
+                .transpose()?;
             let d = DetectorTrainingConfig::new();
             let config = DetectorTrainingConfig::new()
                 .with_model(

@@ -1421,7 +1421,10 @@ fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
         "{msg}"
     );
     let (ok, msg) = train(&[&a], "0");
-    assert!(!ok && msg.contains("--soft-labels"), "{msg}");
+    assert!(
+        !ok && msg.contains("soft-label width must be positive, got 0"),
+        "{msg}"
+    );
 }
 
 /// `tactile predict` with `model` over the real edge set: the CSV's

@@ -1,0 +1,152 @@
+//! Edge pose on the real TacTip edge set: every candidate (pose networks,
+//! encoders with their estimators) scored on the frames its training left
+//! out, against its latency, beside the field's published figure.
+
+use serde::Serialize;
+use tactile_cae::CaeArtifact;
+use tactile_core::Artifact;
+use tactile_core::dataset::{Dataset, TestHoldout};
+use tactile_core::plot::Series;
+use tactile_pipeline::tactip::Predictor;
+use tactile_pose::PoseArtifact;
+
+use crate::Result;
+use crate::latency::{RuntimeMs, ms_cell};
+use crate::models::ModelBench;
+use crate::output::{BenchRow, Table, add_points, folder_name, header};
+
+/// The targets scored, in the labels' units.
+pub const TARGETS: [&str; 3] = ["x_mm", "theta_deg", "depth_mm"];
+
+/// The field's best published result on this sensor's 2-D edge task (a
+/// five-layer CNN on 128x128 images from the group that built the TacTip):
+/// x and theta mean absolute errors.
+pub const PUBLISHED: (f64, f64) = (0.15, 1.45);
+
+/// The split every candidate is scored on when its folder names none.
+pub const DEFAULT_HOLDOUT: TestHoldout = TestHoldout {
+    test_fraction: 0.2,
+    split_seed: 7,
+};
+
+/// A candidate's errors, for the JSON and the report.
+#[derive(Debug, Clone, Serialize)]
+pub struct PoseMetrics {
+    /// Mean absolute error of x_mm, theta_deg and depth_mm on the test frames.
+    pub mae: [f64; 3],
+    /// Test frames scored.
+    pub frames: usize,
+    /// True when the model trained on every frame (its errors are then on
+    /// frames it saw, not held-out ones).
+    pub saw_test_frames: bool,
+    /// `pose network` or `encoder + estimators`.
+    pub kind: String,
+}
+
+fn excluded_test(notes: &serde_json::Value) -> Option<TestHoldout> {
+    notes
+        .get("excluded_test")
+        .and_then(|v| serde_json::from_value(v.clone()).ok())
+}
+
+/// Score every model folder of `b.models` (pose networks and encoder
+/// folders with estimators) on `b.data` (the real edge set).
+pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
+    let ds = Dataset::open(&b.data)?;
+    let mut md = header("Mean absolute error of edge pose", &b.data, b.runs);
+    md.push_str(&format!(
+        "Each model is scored on the test frames its own training left out (split seed {}, fraction {} unless its folder names another); a model trained on every frame is marked, its errors being on frames it saw. The encoder's latency is the CAE's; its MLP estimator adds about 0.01 ms.\n\n",
+        DEFAULT_HOLDOUT.split_seed, DEFAULT_HOLDOUT.test_fraction
+    ));
+    md.push_str("| model | kind | input | parameters | test frames | x MAE (mm) | theta MAE (deg) | depth MAE (mm) | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let (mut series, mut rows) = (Vec::new(), Vec::new());
+    let mut slowest: f64 = 0.0;
+    for m in &b.models {
+        let (kind, notes, input, params, ms): (&str, serde_json::Value, usize, usize, RuntimeMs) =
+            if PoseArtifact::is_in(m) {
+                let a = PoseArtifact::read(m)?;
+                let s = a.model.input_px;
+                let p = crate::models::parameters::<PoseArtifact>(m)?;
+                let ms = crate::latency::model_latencies::<PoseArtifact>(m, [1, 1, s, s], b.runs)?;
+                ("pose network", a.notes, s, p, ms)
+            } else {
+                let a = CaeArtifact::read(m)?;
+                let s = a.model.input_px;
+                let p = crate::models::parameters::<CaeArtifact>(m)?;
+                let ms = crate::latency::model_latencies::<CaeArtifact>(m, [1, 1, s, s], b.runs)?;
+                ("encoder + estimators", a.notes, s, p, ms)
+            };
+        let holdout = excluded_test(&notes);
+        let saw = holdout.is_none();
+        let split = ds.three_way_split(
+            holdout.unwrap_or(DEFAULT_HOLDOUT).test_fraction,
+            0.2,
+            holdout.unwrap_or(DEFAULT_HOLDOUT).split_seed,
+        )?;
+        let mut predictor = Predictor::load(m, &[], tactile_core::Runtime::BurnFlex)?;
+        let all = predictor.perceive(&ds)?;
+        let mut mae = [f64::NAN; 3];
+        for (k, name) in TARGETS.iter().enumerate() {
+            let Some(tactile_estimate::Column::Number(v)) = all.estimates.get(name) else {
+                continue;
+            };
+            let errs: Vec<f64> = split
+                .test
+                .iter()
+                .filter_map(|&i| {
+                    let truth = ds.number_opt(i, name).ok().flatten()?;
+                    Some((v[i] - truth).abs())
+                })
+                .collect();
+            mae[k] = errs.iter().sum::<f64>() / errs.len().max(1) as f64;
+        }
+        md.push_str(&format!(
+            "| {}{} | {kind} | {input}x{input} | {params} | {} | {:.3} | {:.2} | {:.3} | {} | {} | {} |\n",
+            folder_name(m),
+            if saw { " (trained on every frame)" } else { "" },
+            split.test.len(),
+            mae[0],
+            mae[1],
+            mae[2],
+            ms_cell(ms.ndarray),
+            ms_cell(ms.flex),
+            ms_cell(ms.onnxruntime),
+        ));
+        slowest = ms
+            .named()
+            .iter()
+            .filter_map(|v| v.1)
+            .fold(slowest, f64::max);
+        if !saw {
+            add_points(&mut series, &ms, mae[0]);
+        }
+        rows.push(BenchRow::new(
+            m,
+            PoseMetrics {
+                mae,
+                frames: split.test.len(),
+                saw_test_frames: saw,
+                kind: kind.to_string(),
+            },
+            ms,
+        ));
+    }
+    series.push(Series {
+        name: format!(
+            "published 5-layer CNN, 128x128 (x {} mm; latency not published)",
+            PUBLISHED.0
+        ),
+        points: vec![(0.0, PUBLISHED.0), (slowest.max(0.1), PUBLISHED.0)],
+    });
+    md.push_str(&format!(
+        "\nThe field's best published result on this task: x {} mm, theta {} deg (a five-layer CNN on 128x128 images). Targets here: x <= 0.15 mm, theta <= 1.45 deg, depth <= 0.05 mm at <= 1 ms through onnxruntime; the CAE route within 1.5x of the best model on every target.\n",
+        PUBLISHED.0, PUBLISHED.1
+    ));
+    Ok(Table {
+        markdown: md,
+        title: "Edge pose: x error against latency".into(),
+        y_label: "x MAE (mm)".into(),
+        series,
+        rows,
+    })
+}
