@@ -135,7 +135,9 @@ pub struct VisuotactileConfig {
     pub noise_sigma: Range,
     /// Frames per palpation video.
     pub frames_per_sequence: usize,
-    /// Which renderer draws the frames (the labels are the same).
+    /// Which renderer draws the frames (the labels are the same). Left out
+    /// of a reference dataset's manifest, which thus stays byte-identical.
+    #[serde(skip_serializing_if = "Renderer::is_reference")]
     pub renderer: Renderer,
 }
 
@@ -149,6 +151,13 @@ pub enum Renderer {
     /// Another raster and shading path of the same spec
     /// ([`crate::alternate::render_alternate`]): a cross-check set.
     Alternate,
+}
+
+impl Renderer {
+    /// True for [`Renderer::Reference`].
+    pub fn is_reference(&self) -> bool {
+        *self == Self::Reference
+    }
 }
 
 impl std::str::FromStr for Renderer {
