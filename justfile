@@ -98,6 +98,11 @@ ablate-detector: synth-vt-detector
     cargo run --release -p tactile -- train detector --data data/vt-train2 --out data/det/soft-w0.5-80x60 --width 0.5 --input 80x60 --max-epochs 20 --patience 6 --soft-labels 0.2
     cargo run --release -p tactile -- train detector --data data/vt-train2 data/vt-train-onset --out data/det/onset-hard-w0.5-80x60 --width 0.5 --input 80x60 --max-epochs 20 --patience 6
 
+# Pose networks on the real edge set: each candidate trained without the test frames of the split every candidate is scored on (seed 7, 0.2), then the chosen one (p128) on all 3,762 frames for the epochs its validated run needed; `bench pose` (in `bash scripts/paper-a.sh`) tabulates them.
+train-pose:
+    for c in p64 p128; do cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out data/pose/$c --config configs/pose/$c.json --exclude-test 0.2 --max-epochs 60 --patience 12; done
+    cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out models/pose-edge --config configs/pose/p128.json --all-rows --max-epochs 45 --patience 45
+
 # Calibrate the shipped detector's probabilities (one logit scale about the threshold, decisions unchanged) on frames no detector was trained, chosen or tested on: the default distribution (seed 610) and light presses (seed 611).
 calibrate-detector:
     cargo run --release -p tactile -- synth visuotactile --count 600 --seed 610 --out data/vt-cal

@@ -208,7 +208,7 @@ pub fn bench_segmenters(b: &ModelBench) -> Result<Table<SegmenterMetrics>> {
     let ds = Dataset::open(&b.data)?;
     let sel_ds = b.select.as_ref().map(Dataset::open).transpose()?;
     let mut md = header("Mean IoU and direction error", &b.data, b.runs);
-    md.push_str("| model | window | base | parameters | IoU all (selection set) | IoU all | IoU curved | direction: coverage, median / p90 (deg) | curved: median / p90 (deg) | principal axis (baseline): coverage, median / p90 (deg) | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    md.push_str("| model | window | base | parameters | IoU all (selection set) | IoU all | IoU curved | direction: coverage, median / p90 (deg) | curved: median / p90 (deg) | principal axis (baseline): coverage, median / p90 (deg) | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     let (mut series, mut rows) = (Vec::new(), Vec::new());
     for m in &b.models {
         let mut seg = TendonSegmenter::load(m, SCORE_RUNTIME, 0)?;

@@ -76,6 +76,9 @@ pub struct SegmenterScores {
     pub paths: Vec<PathScores>,
     /// Inference time per window (batches of [`EVAL_BATCH`], cutting excluded).
     pub ms_per_window: f64,
+    /// Post-processing time per window (regions and direction): by the
+    /// artifact's method, and by the principal-axis baseline.
+    pub ms_postprocess: [f64; 2],
 }
 
 impl SegmenterScores {
@@ -103,8 +106,8 @@ impl SegmenterScores {
             ));
         }
         lines.push(format!(
-            "{:.2} ms per window ({device}, batch {EVAL_BATCH}, cut excluded)",
-            self.ms_per_window
+            "{:.2} ms per window ({device}, batch {EVAL_BATCH}, cut excluded); post-processing {:.3} ms per window (principal axis {:.3} ms)",
+            self.ms_per_window, self.ms_postprocess[0], self.ms_postprocess[1]
         ));
         lines
     }
@@ -144,6 +147,7 @@ pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<Segment
     };
     // (path, IoU, error by the artifact's method, error by the baseline)
     let mut per: Vec<(String, f64, Option<f64>, Option<f64>)> = Vec::new();
+    let mut post = [0.0f64; 2];
     for (i, p) in probs.iter().enumerate() {
         let w = &set.windows[i];
         let mask = TendonMask::from_probabilities(s, s, p, art.threshold)?;
@@ -162,7 +166,12 @@ pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<Segment
             })
         };
         let path = set.path[w.row].clone().unwrap_or_else(|| "unknown".into());
-        let (e1, e2) = (error(&art.postprocess)?, error(&baseline)?);
+        let t1 = std::time::Instant::now();
+        let e1 = error(&art.postprocess)?;
+        let t2 = std::time::Instant::now();
+        let e2 = error(&baseline)?;
+        post[0] += (t2 - t1).as_secs_f64();
+        post[1] += t2.elapsed().as_secs_f64();
         per.push((path, score, e1, e2));
     }
     let mut paths: Vec<String> = per.iter().map(|p| p.0.clone()).collect();
@@ -188,5 +197,6 @@ pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<Segment
     Ok(SegmenterScores {
         paths: table,
         ms_per_window,
+        ms_postprocess: post.map(|t| 1e3 * t / set.len().max(1) as f64),
     })
 }

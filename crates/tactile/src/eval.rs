@@ -103,7 +103,7 @@ fn segmenter(m: ModelArgs) -> Result<()> {
     sc.describe(m.device).iter().for_each(|l| say!("{l}"));
     say!(
         "{}",
-        serde_json::json!({ "model": m.model, "data": m.data, "paths": sc.paths, "ms_per_window": sc.ms_per_window })
+        serde_json::json!({ "model": m.model, "data": m.data, "paths": sc.paths, "ms_per_window": sc.ms_per_window, "ms_postprocess": sc.ms_postprocess })
     );
     Ok(())
 }

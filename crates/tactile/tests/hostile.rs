@@ -339,6 +339,14 @@ fn nothing_panics_on_empty_datasets_bad_configs_or_a_closed_stdout() {
             "--classify",
             "shape",
         ],
+        vec![
+            "train",
+            "pose",
+            "--data",
+            s(&empty),
+            "--out",
+            s(&tmp.path().join("p")),
+        ],
     ] {
         let (ok, msg) = tactile(&args);
         assert!(!ok, "{args:?}: {msg}");
@@ -655,4 +663,41 @@ fn interrupted_training_is_marked_and_resume_checks_its_checkpoint() {
     assert!(!det.join("INCOMPLETE").exists());
     let (ok, msg) = tactile(&["eval", "detector", "--model", s(&det), "--data", s(&vt)]);
     assert!(ok, "{msg}");
+}
+
+#[test]
+fn a_pose_network_folder_is_checked_when_loaded() {
+    let tmp = tempfile::tempdir().unwrap();
+    let shipped = root().join("models/pose-edge");
+    let text = std::fs::read_to_string(shipped.join("pose.json")).unwrap();
+    let data = root().join("../shared/real/tactip127-edge");
+    let data = std::env::var_os("TACTILE_SHARED_REAL")
+        .map(|p| PathBuf::from(p).join("tactip127-edge"))
+        .unwrap_or(data);
+    for (name, from, to, says) in [
+        (
+            "huge",
+            "\"input_px\": 128",
+            "\"input_px\": 1000000000",
+            "input side",
+        ),
+        (
+            "wide",
+            "\"hidden\": 256",
+            "\"hidden\": 100000000",
+            "hidden width",
+        ),
+        ("columns", "\"outputs\": 3", "\"outputs\": 5", "columns"),
+    ] {
+        let dir = tmp.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        assert!(text.contains(from), "{from}");
+        std::fs::write(dir.join("pose.json"), text.replace(from, to)).unwrap();
+        std::fs::copy(shipped.join("pose.bpk"), dir.join("pose.bpk")).unwrap();
+        let (ok, msg) = tactile(&["predict", "--model", s(&dir), "--data", s(&data)]);
+        assert!(
+            !ok && msg.contains("pose.json") && msg.contains(says),
+            "{name}: {msg}"
+        );
+    }
 }
