@@ -404,12 +404,21 @@ pub fn centre_line(
         (w as f64 / 2.0 - 4.0).max(1.0),
         (h as f64 / 2.0 - 4.0).max(1.0),
     );
+    // Only real edges: the blur's far tails (below a thousandth of the
+    // strongest edge's squared gradient) carry no direction, only cost.
+    let strongest = gx
+        .as_slice()
+        .iter()
+        .zip(gy.as_slice())
+        .map(|(a, b)| a * a + b * b)
+        .fold(0.0f32, f32::max) as f64;
+    let floor = (1e-3 * strongest).max(1e-12);
     let edges: Vec<(f64, f64, f64, f64)> = (0..w * h)
         .filter_map(|i| {
             let (u, v) = ((i % w) as f64, (i / w) as f64);
             let (dx, dy) = (gx.as_slice()[i] as f64, gy.as_slice()[i] as f64);
             let inside = ((u - cx) / rx).powi(2) + ((v - cy) / ry).powi(2) <= 1.0;
-            (inside && dx * dx + dy * dy > 1e-12).then_some((u, v, dx, dy))
+            (inside && dx * dx + dy * dy > floor).then_some((u, v, dx, dy))
         })
         .collect();
     if edges.is_empty() {
@@ -479,11 +488,17 @@ pub fn centre_line(
             None => f64::from(u8::from(region.pixels[i])),
         };
         let sigma = w.min(h) as f64 * SHADING_SIGMA_PER_SIDE;
+        // Pixels beyond 3 sigma of the point, outside the window's ellipse
+        // or off the region weigh (next to) nothing: skipped.
+        let reach2 = 9.0 * sigma * sigma;
         let found = dominant_normal(shading.iter().filter_map(|&(i, dx, dy)| {
             let (u, v) = ((i % w) as f64, (i / w) as f64);
-            let inside = ((u - cx) / rx).powi(2) + ((v - cy) / ry).powi(2) <= 1.0;
             let d2 = (u - point.0).powi(2) + (v - point.1).powi(2);
-            inside.then(|| (weight(i) * (-d2 / (2.0 * sigma * sigma)).exp(), dx, dy))
+            if d2 > reach2 || ((u - cx) / rx).powi(2) + ((v - cy) / ry).powi(2) > 1.0 {
+                return None;
+            }
+            let p = weight(i);
+            (p > 0.0).then(|| (p * (-d2 / (2.0 * sigma * sigma)).exp(), dx, dy))
         }));
         if let Some((normal, anisotropy)) = found {
             result = Some((normal + std::f64::consts::FRAC_PI_2, anisotropy));
