@@ -40,7 +40,7 @@ pub struct PyTactipEncoder {
 
 /// Every frame of `frames` (one 2-D frame, an `(N, H, W)` or
 /// `(N, H, W, 3)` array, or an iterable of frames), checked.
-fn frame_args<'py>(frames: &Bound<'py, PyAny>) -> PyResult<Vec<FrameArg<'py>>> {
+pub(crate) fn frame_args<'py>(frames: &Bound<'py, PyAny>) -> PyResult<Vec<FrameArg<'py>>> {
     if let Ok(a) = frames.cast::<numpy::PyUntypedArray>() {
         use numpy::PyUntypedArrayMethods;
         if a.ndim() == 2 {
@@ -78,14 +78,21 @@ impl PyTactipEncoder {
 
     /// Pin images of frames, preprocessed in parallel as a dataset's are.
     fn pins(&self, px: &[Pixels<'_>]) -> PyResult<Vec<PinImage>> {
-        let cfg = &self.preprocess;
-        px.par_iter()
-            .map(|p| -> tactile_preprocess::Result<PinImage> {
-                tactile_preprocess::preprocess(&p.grey()?, cfg)
-            })
-            .collect::<Result<Vec<_>, _>>()
-            .py()
+        pin_images(px, &self.preprocess)
     }
+}
+
+/// Pin images of frames by `cfg`, preprocessed in parallel as a dataset's are.
+pub(crate) fn pin_images(
+    px: &[Pixels<'_>],
+    cfg: &tactile_preprocess::PreprocessConfig,
+) -> PyResult<Vec<PinImage>> {
+    px.par_iter()
+        .map(|p| -> tactile_preprocess::Result<PinImage> {
+            tactile_preprocess::preprocess(&p.grey()?, cfg)
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .py()
 }
 
 #[pymethods]

@@ -13,6 +13,7 @@ mod frame;
 mod image;
 mod json;
 mod pipeline;
+mod pose;
 mod source;
 mod synth;
 mod train;
@@ -30,6 +31,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<pipeline::PyPipeline>()?;
     m.add_class::<pipeline::FrameResult>()?;
     m.add_class::<encoder::PyTactipEncoder>()?;
+    m.add_class::<pose::PyPoseEstimator>()?;
     m.add_class::<dataset::PyDataset>()?;
     m.add_class::<source::PyFrameSource>()?;
     m.add_class::<source::PyFrame>()?;

@@ -4,7 +4,9 @@ encode`, the estimates of `tactile perceive`, and clear errors."""
 from __future__ import annotations
 
 import csv
+import os
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -84,3 +86,27 @@ def test_encoder_errors(root, tmp_path):
         enc.encode(np.zeros((2, 300, 300, 3, 1), np.uint8))
     with pytest.raises(ValueError, match=r"frames\[1\]"):
         enc.encode([np.zeros((300, 300), np.uint8), np.zeros((300, 300, 2), np.uint8)])
+
+
+def test_pose_estimator_matches_tactile_predict(tactile_bin, root, tmp_path):
+    """The pose network from Python gives `tactile predict`'s estimates."""
+    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
+    data = real / "tactip127-edge"
+    out = tmp_path / "estimates.csv"
+    run_cli(tactile_bin, "predict", "--model", "models/pose-edge", "--data", str(data),
+            "--out", str(out), "--device", "flex")
+    with open(out) as f:
+        rows = list(csv.DictReader(f))[:40]
+    pose = tactile.PoseEstimator(root / "models/pose-edge", "burn-flex")
+    assert pose.targets == ["x_mm", "theta_deg", "depth_mm"]
+    frames = np.stack([tactile.read_grey(data / r["file"]) for r in rows])
+    got = pose.estimate(frames)
+    for name in pose.targets:
+        cli = np.array([float(r[name]) for r in rows])
+        # predict writes four decimals.
+        assert np.allclose(got[name], cli, atol=6e-5), name
+    assert pose.preprocess(frames[0]).shape == (pose.pin_side, pose.pin_side)
+    with pytest.raises(ValueError):
+        pose.estimate(np.zeros((2, 3, 4, 5, 6), dtype=np.uint8))
+    with pytest.raises(FileNotFoundError):
+        tactile.PoseEstimator(tmp_path / "nowhere")

@@ -47,7 +47,7 @@ def test_everything_public_has_a_docstring():
             obj = getattr(mod, name)
             if callable(obj):
                 assert obj.__doc__, f"{mod.__name__}.{name} has no docstring"
-    for cls in (tactile.Pipeline, tactile.FrameResult, tactile.TactipEncoder, tactile.Dataset):
+    for cls in (tactile.Pipeline, tactile.FrameResult, tactile.TactipEncoder, tactile.PoseEstimator, tactile.Dataset):
         for m, v in vars(cls).items():
             if not m.startswith("_"):
                 assert getattr(v, "__doc__", None), f"{cls.__name__}.{m} has no docstring"

@@ -13,6 +13,11 @@ Paper A's encoder and its estimators::
     enc.encode(frames)                       # (N, 16) float32
     enc.estimate(frames)                     # {"shape": ..., "x_mm": ...}
 
+A pose network (x, theta, depth straight from the frame)::
+
+    pose = tactile.PoseEstimator("models/pose-edge")
+    pose.estimate(frames)                    # {"x_mm": ..., "theta_deg": ..., "depth_mm": ...}
+
 Frames from a video file, a camera, a folder or a dataset::
 
     for f in tactile.frames("palpation.mp4"):   # or "/dev/video0", a folder
@@ -66,6 +71,7 @@ from ._tactile import (  # noqa: E402
     FrameResult,
     FrameSource,
     Pipeline,
+    PoseEstimator,
     TactipEncoder,
     __version__,
     frames,
@@ -83,6 +89,7 @@ __all__ = [
     "MAX_BATCH",
     "MAX_FRAME_SIDE",
     "Pipeline",
+    "PoseEstimator",
     "TactipEncoder",
     "__version__",
     "eval",

@@ -1,0 +1,124 @@
+//! `tactile.PoseEstimator`: a supervised pose network (x, theta, depth
+//! directly from the frame) on numpy frames.
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use numpy::{IntoPyArray, PyArray2};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use tactile_pose::PoseEstimator;
+
+use crate::encoder::{frame_args, pin_images};
+use crate::errors::PyResultExt;
+use crate::frame::{FrameArg, Layout, Pixels};
+
+/// A pose network folder (`pose.json` + `pose.bpk`) with its preprocessing.
+#[pyclass(module = "tactile", name = "PoseEstimator")]
+pub struct PyPoseEstimator {
+    estimator: Mutex<PoseEstimator>,
+    model_dir: PathBuf,
+    runtime: tactile_core::Runtime,
+    targets: Vec<String>,
+    preprocess: tactile_preprocess::PreprocessConfig,
+}
+
+#[pymethods]
+impl PyPoseEstimator {
+    /// Load the pose network in `model_dir` onto `runtime`.
+    #[new]
+    #[pyo3(signature = (model_dir, runtime="burn-flex"))]
+    fn new(py: Python<'_>, model_dir: PathBuf, runtime: &str) -> PyResult<Self> {
+        let rt = crate::pipeline::runtime(runtime)?;
+        let dir = model_dir.clone();
+        let estimator = py
+            .detach(move || PoseEstimator::load(&dir, rt, 0))
+            .map_err(tactile_pipeline::Error::from)
+            .py()?;
+        Ok(Self {
+            targets: estimator
+                .artifact
+                .targets
+                .iter()
+                .map(|t| t.name.clone())
+                .collect(),
+            preprocess: estimator.artifact.preprocess.clone(),
+            estimator: Mutex::new(estimator),
+            model_dir,
+            runtime: rt,
+        })
+    }
+
+    /// The grey pin image the network reads, `(S, S)` float32 in [0, 1],
+    /// from an `(H, W)` grey or `(H, W, 3)` RGB uint8 frame.
+    fn preprocess<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let arg = FrameArg::new(frame, Layout::GreyOrRgb, "frame")?;
+        let px = [arg.view()];
+        let pin = py
+            .detach(|| pin_images(&px, &self.preprocess))?
+            .pop()
+            .ok_or_else(|| PyRuntimeError::new_err("no pin image"))?;
+        let arr = ndarray::Array2::from_shape_vec((pin.side, pin.side), pin.pixels)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(arr.into_pyarray(py))
+    }
+
+    /// Each target (`x_mm`, `theta_deg`, `depth_mm`, ...) to an array with
+    /// one value per frame, in the labels' units: `frames` is one `(H, W)`
+    /// frame, an `(N, H, W)` grey or `(N, H, W, 3)` RGB uint8 array, or a
+    /// list of frames.
+    fn estimate<'py>(
+        &self,
+        py: Python<'py>,
+        frames: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let args = frame_args(frames)?;
+        let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
+        let rows = py.detach(|| -> PyResult<Vec<Vec<f64>>> {
+            let pins = pin_images(&px, &self.preprocess)?;
+            let mut e = self
+                .estimator
+                .lock()
+                .map_err(|_| PyRuntimeError::new_err("the estimator failed in another thread"))?;
+            e.predict(&pins).map_err(tactile_pipeline::Error::from).py()
+        })?;
+        let out = PyDict::new(py);
+        for (j, name) in self.targets.iter().enumerate() {
+            let v: Vec<f64> = rows.iter().map(|r| r[j]).collect();
+            out.set_item(name, v.into_pyarray(py))?;
+        }
+        Ok(out)
+    }
+
+    /// The targets, in column order.
+    #[getter]
+    fn targets(&self) -> Vec<String> {
+        self.targets.clone()
+    }
+
+    /// Side of the pin image, pixels.
+    #[getter]
+    fn pin_side(&self) -> usize {
+        self.preprocess.output_px
+    }
+
+    /// Where the network runs.
+    #[getter]
+    fn runtime(&self) -> &'static str {
+        self.runtime.name()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "PoseEstimator('{}', runtime='{}', targets={:?})",
+            self.model_dir.display(),
+            self.runtime,
+            self.targets
+        )
+    }
+}
