@@ -39,7 +39,7 @@ step edge compare --encoder models/cae-edge --data "$REAL/tactip127-edge" \
     --targets x_mm,theta_deg:180,depth_mm --out "$OUT/edge-compare.md"
 step edge_binary compare --encoder models/cae-edge-binary --data "$REAL/tactip127-edge" \
     --targets x_mm,theta_deg:180,depth_mm --out "$OUT/edge-compare-binary.md"
-POSE_MODELS=(models/pose-edge models/cae-edge models/cae-edge-binary)
+POSE_MODELS=(models/pose-edge models/cae-edge)
 for m in data/pose/*/; do [ -f "$m/pose.json" ] && [ ! -e "$m/INCOMPLETE" ] && POSE_MODELS+=("${m%/}"); done
 step pose bench pose --models "${POSE_MODELS[@]}" --data "$REAL/tactip127-edge" --runs 200 --out "$OUT/edge-pose.md"
 step synthetic evaluate --encoder models/cae-synth --data "$SYNTH_TEST" --out "$OUT/synthetic.md"
@@ -91,9 +91,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     echo
     echo "Every candidate on the frames its own training left out (a network trained on every frame is marked), against its latency at batch 1; the candidates in \`data/pose\` were trained by \`tactile train pose --config configs/pose/NAME.json --exclude-test 0.2\` and \`models/pose-edge\` by the chosen config on all 3,762 frames. \`${CMD[pose]}\`"
     echo
-    body "$OUT/edge-pose.md"
-    echo
-    echo "![edge pose: error against latency](paper-a/edge-pose.png)"
+    body "$OUT/edge-pose.md" | sed 's#](edge-pose.png)#](paper-a/edge-pose.png)#'
     echo
     echo "## 4. All seven shapes on held-out synthetic frames"
     echo
