@@ -223,9 +223,8 @@ pub fn postprocess(
         .iter()
         .map(|&p| if p { 255 } else { 0 })
         .collect();
-    let kornia = |e: String| Error::Preprocess(tactile_preprocess::Error::Kornia(e));
-    let img = Image::<u8, 1>::new(size, bytes).map_err(|e| kornia(e.to_string()))?;
-    let mut labels = Image::<i32, 1>::from_size_val(size, 0).map_err(|e| kornia(e.to_string()))?;
+    let img = Image::<u8, 1>::new(size, bytes).map_err(kornia)?;
+    let mut labels = Image::<i32, 1>::from_size_val(size, 0).map_err(kornia)?;
     connected_components(&img, &mut labels, Connectivity::Eight)
         .map_err(|e| kornia(format!("connected components: {e}")))?;
     // Per label: area, edge-band pixels, first raster index.
@@ -375,9 +374,6 @@ pub fn centre_line(
         width: w,
         height: h,
     };
-    let kornia = |e: kornia_image::ImageError| {
-        Error::Preprocess(tactile_preprocess::Error::Kornia(e.to_string()))
-    };
     let bytes: Vec<u8> = region.pixels.iter().map(|&p| u8::from(p)).collect();
     let img = Image::<u8, 1>::new(size, bytes).map_err(kornia)?;
     let mut near = Image::<u8, 1>::from_size_val(size, 0).map_err(kornia)?;
@@ -390,12 +386,7 @@ pub fn centre_line(
             (_, None) => f32::from(u8::from(region.pixels[i])),
         })
         .collect();
-    let soft = Image::<f32, 1>::new(size, soft).map_err(kornia)?;
-    let mut q = Image::<f32, 1>::from_size_val(size, 0.0).map_err(kornia)?;
-    gaussian_blur(&soft, &mut q, (0, 0), (1.0, 1.0)).map_err(kornia)?;
-    let mut gx = Image::<f32, 1>::from_size_val(size, 0.0).map_err(kornia)?;
-    let mut gy = Image::<f32, 1>::from_size_val(size, 0.0).map_err(kornia)?;
-    spatial_gradient_float(&q, &mut gx, &mut gy).map_err(kornia)?;
+    let (q, gx, gy) = smoothed_gradients(soft, size)?;
     let q = q.as_slice();
     // Gradients that count: inside the inscribed ellipse, 4 px (the blur's
     // reach) from its rim, so the window's border is no edge.
@@ -538,27 +529,38 @@ fn dominant_normal(gradients: impl Iterator<Item = (f64, f64, f64)>) -> Option<(
     Some((0.5 * (2.0 * jxy).atan2(jxx - jyy), anisotropy))
 }
 
+/// Errors of kornia's image operations as this crate's.
+fn kornia(e: impl std::fmt::Display) -> Error {
+    Error::Preprocess(tactile_preprocess::Error::Kornia(e.to_string()))
+}
+
+/// `plane` smoothed (Gaussian, sigma 1 px) and the smoothed plane's x and y
+/// derivatives (Sobel).
+fn smoothed_gradients(
+    plane: Vec<f32>,
+    size: ImageSize,
+) -> Result<(Image<f32, 1>, Image<f32, 1>, Image<f32, 1>)> {
+    let plane = Image::<f32, 1>::new(size, plane).map_err(kornia)?;
+    let mut smooth = Image::<f32, 1>::from_size_val(size, 0.0).map_err(kornia)?;
+    gaussian_blur(&plane, &mut smooth, (0, 0), (1.0, 1.0)).map_err(kornia)?;
+    let mut gx = Image::<f32, 1>::from_size_val(size, 0.0).map_err(kornia)?;
+    let mut gy = Image::<f32, 1>::from_size_val(size, 0.0).map_err(kornia)?;
+    spatial_gradient_float(&smooth, &mut gx, &mut gy).map_err(kornia)?;
+    Ok((smooth, gx, gy))
+}
+
 /// Per pixel `(index, dx, dy)` of the window's shading, summed over the
 /// three channels' structure tensors by listing each channel's gradient:
 /// every channel smoothed (sigma 1 px) and differentiated.
 fn shading_gradients(img: &FloatImage) -> Result<Vec<(usize, f64, f64)>> {
-    let (w, h) = (img.width, img.height);
     let size = ImageSize {
-        width: w,
-        height: h,
+        width: img.width,
+        height: img.height,
     };
-    let kornia = |e: kornia_image::ImageError| {
-        Error::Preprocess(tactile_preprocess::Error::Kornia(e.to_string()))
-    };
-    let mut out = Vec::with_capacity(3 * w * h);
+    let mut out = Vec::with_capacity(3 * img.width * img.height);
     for c in 0..3 {
         let channel: Vec<f32> = img.data.iter().skip(c).step_by(3).copied().collect();
-        let channel = Image::<f32, 1>::new(size, channel).map_err(kornia)?;
-        let mut smooth = Image::<f32, 1>::from_size_val(size, 0.0).map_err(kornia)?;
-        gaussian_blur(&channel, &mut smooth, (0, 0), (1.0, 1.0)).map_err(kornia)?;
-        let mut gx = Image::<f32, 1>::from_size_val(size, 0.0).map_err(kornia)?;
-        let mut gy = Image::<f32, 1>::from_size_val(size, 0.0).map_err(kornia)?;
-        spatial_gradient_float(&smooth, &mut gx, &mut gy).map_err(kornia)?;
+        let (_, gx, gy) = smoothed_gradients(channel, size)?;
         out.extend(
             gx.as_slice()
                 .iter()
