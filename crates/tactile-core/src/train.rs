@@ -538,6 +538,17 @@ pub fn ensure_finite(what: &str, v: f64) -> Result<f64> {
     }
 }
 
+/// Check every augmentation amount is in [0, 1], or fail naming the first
+/// that is not (each model's augmentation config checks its fields here).
+pub fn check_augment_amounts(amounts: &[(&str, f64)]) -> Result<()> {
+    match amounts.iter().find(|(_, v)| !(0.0..=1.0).contains(v)) {
+        Some((name, v)) => Err(Error::Config(format!(
+            "augmentation {name} must be in [0, 1], got {v}"
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// A front end's schedule flags for one model (`--max-epochs`,
 /// `--patience`, `--batch-size`, `--lr`, `--lr-decay`, `--seed`,
 /// `--device`, `--resume`), their defaults from that model's training

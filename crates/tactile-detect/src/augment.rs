@@ -41,7 +41,7 @@ pub struct PhotometricAugment {
 impl PhotometricAugment {
     /// Check every amount is in [0, 1].
     pub fn check(&self) -> tactile_core::Result<()> {
-        for (name, v) in [
+        tactile_core::train::check_augment_amounts(&[
             ("exposure", self.exposure),
             ("led_balance", self.led_balance),
             ("offset", self.offset),
@@ -49,14 +49,7 @@ impl PhotometricAugment {
             ("noise", self.noise),
             ("glare_chance", self.glare_chance),
             ("jpeg_chance", self.jpeg_chance),
-        ] {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(tactile_core::Error::Config(format!(
-                    "augmentation {name} must be in [0, 1], got {v}"
-                )));
-            }
-        }
-        Ok(())
+        ])
     }
 
     /// `img` changed with the draws of `rng`, values kept in [0, 1].

@@ -34,18 +34,11 @@ impl Augment {
 
     /// Check the amounts (each in [0, 1]).
     pub fn check(&self) -> tactile_core::Result<()> {
-        for (name, v) in [
+        tactile_core::train::check_augment_amounts(&[
             ("gain", self.gain),
             ("offset", self.offset),
             ("noise", self.noise),
-        ] {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(tactile_core::Error::Config(format!(
-                    "augmentation {name} must be in [0, 1], got {v}"
-                )));
-            }
-        }
-        Ok(())
+        ])
     }
 
     /// `pixels` augmented with the draws of `rng`, clipped to [0, 1].
@@ -74,9 +67,21 @@ pub struct PoseSet {
 impl PoseSet {
     /// Preprocess every frame of `ds` and read `targets`' columns.
     pub fn from_dataset(ds: &Dataset, cfg: &PreprocessConfig, targets: &[Target]) -> Result<Self> {
-        let pins = PinSet::from_dataset(ds, cfg)?;
-        let labels = (0..ds.len())
-            .map(|i| {
+        Self::from_rows(ds, &(0..ds.len()).collect::<Vec<_>>(), cfg, targets)
+    }
+
+    /// [`Self::from_dataset`] of the frames at `rows` alone (set row `k` is
+    /// dataset row `rows[k]`), so scoring a split reads only its frames.
+    pub fn from_rows(
+        ds: &Dataset,
+        rows: &[usize],
+        cfg: &PreprocessConfig,
+        targets: &[Target],
+    ) -> Result<Self> {
+        let pins = PinSet::from_rows(ds, rows, cfg)?;
+        let labels = rows
+            .iter()
+            .map(|&i| {
                 targets
                     .iter()
                     .map(|t| ds.number_opt(i, &t.name))
