@@ -95,6 +95,24 @@ pub(crate) fn pin_images(
         .py()
 }
 
+/// One frame's pin image as numpy, `(S, S)` float32 in [0, 1]: what
+/// `preprocess()` returns on every model that reads pin images.
+pub(crate) fn pin_image_array<'py>(
+    py: Python<'py>,
+    frame: &Bound<'py, PyAny>,
+    cfg: &tactile_preprocess::PreprocessConfig,
+) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    let arg = FrameArg::new(frame, Layout::GreyOrRgb, "frame")?;
+    let px = [arg.view()];
+    let pin = py
+        .detach(|| pin_images(&px, cfg))?
+        .pop()
+        .ok_or_else(|| PyRuntimeError::new_err("no pin image"))?;
+    let arr = ndarray::Array2::from_shape_vec((pin.side, pin.side), pin.pixels)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(arr.into_pyarray(py))
+}
+
 #[pymethods]
 impl PyTactipEncoder {
     /// Load the encoder in `model_dir` (cae.json + cae.bpk) onto `runtime`
@@ -160,15 +178,7 @@ impl PyTactipEncoder {
         py: Python<'py>,
         frame: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        let arg = FrameArg::new(frame, Layout::GreyOrRgb, "frame")?;
-        let px = [arg.view()];
-        let pin = py
-            .detach(|| self.pins(&px))?
-            .pop()
-            .ok_or_else(|| PyRuntimeError::new_err("no pin image"))?;
-        let arr = ndarray::Array2::from_shape_vec((pin.side, pin.side), pin.pixels)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(arr.into_pyarray(py))
+        pin_image_array(py, frame, &self.preprocess)
     }
 
     /// Features of frames, `(N, F)` float32: `frames` is one `(H, W)`

@@ -5,14 +5,14 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use numpy::{IntoPyArray, PyArray2};
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_pose::PoseEstimator;
 
-use crate::encoder::{frame_args, pin_images};
+use crate::encoder::{frame_args, pin_image_array, pin_images};
 use crate::errors::PyResultExt;
-use crate::frame::{FrameArg, Layout, Pixels};
+use crate::frame::{FrameArg, Pixels};
 
 /// A pose network folder (`pose.json` + `pose.bpk`) with its preprocessing.
 #[pyclass(module = "tactile", name = "PoseEstimator")]
@@ -57,15 +57,7 @@ impl PyPoseEstimator {
         py: Python<'py>,
         frame: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        let arg = FrameArg::new(frame, Layout::GreyOrRgb, "frame")?;
-        let px = [arg.view()];
-        let pin = py
-            .detach(|| pin_images(&px, &self.preprocess))?
-            .pop()
-            .ok_or_else(|| PyRuntimeError::new_err("no pin image"))?;
-        let arr = ndarray::Array2::from_shape_vec((pin.side, pin.side), pin.pixels)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(arr.into_pyarray(py))
+        pin_image_array(py, frame, &self.preprocess)
     }
 
     /// Each target (`x_mm`, `theta_deg`, `depth_mm`, ...) to an array with
