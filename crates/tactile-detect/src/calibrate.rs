@@ -11,10 +11,11 @@ use std::path::Path;
 use serde::Serialize;
 use tactile_core::dataset::Dataset;
 use tactile_core::metrics::{Calibration, calibration};
-use tactile_core::{Artifact, DeviceKind, Runtime};
+use tactile_core::{Artifact, DeviceKind};
 
-use crate::eval::{CALIBRATION_BINS, EVAL_BATCH};
-use crate::{DetectionSet, DetectorArtifact, Error, Result, TendonDetector};
+use crate::eval::CALIBRATION_BINS;
+use crate::training::predict;
+use crate::{DetectionSet, DetectorArtifact, Error, Result};
 
 /// Smallest and largest logit scale searched.
 pub const SCALE_RANGE: (f64, f64) = (0.05, 20.0);
@@ -116,11 +117,11 @@ pub fn fit_scale(p: &[f32], truth: &[bool], threshold: f64) -> Result<Calibratio
 /// not trained on) and fold it into its last layer: weights first, then the
 /// config with the fit in its notes, each written atomically.
 pub fn calibrate(dir: &Path, sets: &[&DetectionSet]) -> Result<CalibrationFit> {
-    let mut det = TendonDetector::load(dir, Runtime::BurnFlex, 0)?;
-    let stats = det.artifact.stats.clone();
+    let device = DeviceKind::Flex.device();
+    let mut loaded = DetectorArtifact::load(dir, &device)?;
+    let (size, stats) = (loaded.artifact.model.input_size, &loaded.artifact.stats);
     let (mut p, mut truth) = (Vec::new(), Vec::new());
     for set in sets {
-        let size = det.artifact.model.input_size;
         if [set.width, set.height] != size {
             return Err(Error::InputSize {
                 expected: size,
@@ -128,14 +129,10 @@ pub fn calibrate(dir: &Path, sets: &[&DetectionSet]) -> Result<CalibrationFit> {
             });
         }
         let all: Vec<usize> = (0..set.len()).collect();
-        for chunk in all.chunks(EVAL_BATCH) {
-            let x = set.inputs(chunk, &stats)?;
-            p.extend(det.probabilities(&x, chunk.len())?);
-        }
+        p.extend(predict(&loaded.model, set, &all, stats, &device)?);
         truth.extend(set.tendon.iter().copied());
     }
-    let fit = fit_scale(&p, &truth, det.artifact.threshold)?;
-    let mut loaded = DetectorArtifact::load(dir, &DeviceKind::Flex.device())?;
+    let fit = fit_scale(&p, &truth, loaded.artifact.threshold)?;
     let centre = logit(loaded.artifact.threshold);
     {
         use burn::module::Param;
@@ -164,8 +161,7 @@ pub fn calibrate(dir: &Path, sets: &[&DetectionSet]) -> Result<CalibrationFit> {
             }),
         );
     }
-    tactile_core::module_io::save_module(&loaded.model, &dir.join(DetectorArtifact::WEIGHTS_FILE))?;
-    tactile_core::io::write_json_atomic(dir.join(DetectorArtifact::CONFIG_FILE), &artifact)?;
+    artifact.save(&loaded.model, dir)?;
     Ok(fit)
 }
 

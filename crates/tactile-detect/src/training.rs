@@ -57,8 +57,8 @@ fn weighted_bce(logits: Tensor<2>, targets: Tensor<2>, (wn, wp): (f32, f32)) -> 
 }
 
 /// Probabilities of the frames at `idx`, in batches, straight from the
-/// module being trained.
-fn predict(
+/// module being trained (or a loaded one).
+pub(crate) fn predict(
     model: &Detector,
     data: &DetectionSet,
     idx: &[usize],
