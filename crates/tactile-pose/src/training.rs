@@ -285,8 +285,8 @@ pub fn test_scores(
     let mut est = crate::PoseEstimator::load(dir, runtime, 0)?;
     let split = data.three_way_split(holdout.test_fraction, 0.2, holdout.split_seed)?;
     let targets = est.artifact.targets.clone();
-    let set = PoseSet::from_dataset(data, &est.artifact.preprocess, &targets)?;
-    let rows = set.labelled(&split.test);
+    let set = PoseSet::from_rows(data, &split.test, &est.artifact.preprocess, &targets)?;
+    let rows = set.labelled(&(0..split.test.len()).collect::<Vec<_>>());
     let pins: Vec<_> = rows.iter().map(|&i| set.pins.images[i].clone()).collect();
     let pred = est.predict(&pins)?;
     Ok(PoseScores {
