@@ -22,10 +22,8 @@
 use crate::raster::to_u8;
 use crate::rng::SampleRng;
 use crate::visuotactile::{
-    ALBEDO, AMBIENT, Camera, GLARE_AMPLITUDE, GLARE_DIRECTION_DEG, GLARE_RADIUS_FRACTION,
-    GLARE_SIGMA_FRACTION, HOUSING_RGB, LIGHT_AZIMUTH_DEG, LIGHT_ELEVATION_DEG, MASK_FLOOR_MM,
-    MASK_FRACTION, NOMINAL_DEPTH_MM, SequenceScene, TENDON_MIN_AMPLITUDE_MM, VisuotactileConfig,
-    VisuotactileFrame, surface,
+    Camera, GLARE_AMPLITUDE, GLARE_SIGMA_FRACTION, NOMINAL_DEPTH_MM, Raster, SequenceScene,
+    VisuotactileConfig, VisuotactileFrame, light_vectors, shade, surface,
 };
 
 /// Finite-difference step for the normals, pixels.
@@ -45,76 +43,33 @@ pub fn render_alternate(
     let (w, h) = (cam.width, cam.height);
     let exposure = 1.0 + rng.draw(config.exposure_jitter);
     let noise_sigma = rng.draw(config.noise_sigma);
-    let amp = scene.ridge_amplitude_mm(press_mm);
-    let threshold = (MASK_FRACTION * amp).max(MASK_FLOOR_MM);
     let mm_per_px = NOMINAL_DEPTH_MM / cam.fx;
-    let elev = LIGHT_ELEVATION_DEG.to_radians();
-    let lights: Vec<[f64; 3]> = LIGHT_AZIMUTH_DEG
-        .iter()
-        .map(|az| {
-            let az = az.to_radians();
-            [elev.cos() * az.cos(), elev.cos() * az.sin(), -elev.sin()]
-        })
-        .collect();
+    let lights = light_vectors();
     let disp = |u: f64, v: f64| surface(&cam, scene, press_mm, u, v).disp;
-    let mut planes = vec![vec![0.0f32; w * h]; 3];
-    let mut mask = vec![0u8; w * h];
-    let mut depth_m = vec![0.0f32; w * h];
-    for v in 0..h {
-        for u in 0..w {
-            let (uf, vf) = (u as f64, v as f64);
-            let i = v * w + u;
-            let d0 = cam.rest_depth_mm(uf, vf);
-            if !cam.in_window(uf, vf) {
-                depth_m[i] = (d0 * 1e-3) as f32;
-                for (c, plane) in planes.iter_mut().enumerate() {
-                    plane[i] = (HOUSING_RGB[c] / 255.0) as f32;
-                }
-                continue;
-            }
-            let centre = surface(&cam, scene, press_mm, uf, vf);
-            if centre.ridge > threshold {
-                mask[i] = 255;
-            }
-            depth_m[i] = ((d0 - centre.disp) * 1e-3) as f32;
-            let mut shade = [0.0f64; 3];
-            for (su, sv) in [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)] {
-                let (x, y) = (uf + su, vf + sv);
-                // de/dx with e = -disp, per mm.
-                let ex =
-                    -(disp(x + STEP_PX, y) - disp(x - STEP_PX, y)) / (2.0 * STEP_PX * mm_per_px);
-                let ey =
-                    -(disp(x, y + STEP_PX) - disp(x, y - STEP_PX)) / (2.0 * STEP_PX * mm_per_px);
-                let len = (ex * ex + ey * ey + 1.0).sqrt();
-                for (c, l) in lights.iter().enumerate() {
-                    let ndl = (ex * l[0] + ey * l[1] - l[2]) / len;
-                    shade[c] += 0.25 * ALBEDO * (AMBIENT + ndl.max(0.0));
-                }
-            }
-            for (c, plane) in planes.iter_mut().enumerate() {
-                plane[i] = shade[c] as f32;
+    // A 2x2 grid of samples per pixel, each with finite-difference normals.
+    let mut raster = Raster::new(&cam, scene, press_mm, |uf, vf, _| {
+        let mut sum = [0.0f64; 3];
+        for (su, sv) in [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)] {
+            let (x, y) = (uf + su, vf + sv);
+            // de/dx with e = -disp, per mm.
+            let ex = -(disp(x + STEP_PX, y) - disp(x - STEP_PX, y)) / (2.0 * STEP_PX * mm_per_px);
+            let ey = -(disp(x, y + STEP_PX) - disp(x, y - STEP_PX)) / (2.0 * STEP_PX * mm_per_px);
+            for (s, v) in sum.iter_mut().zip(shade(ex, ey, &lights)) {
+                *s += 0.25 * v;
             }
         }
-    }
-    let tendon = press_mm > 0.0 && amp >= TENDON_MIN_AMPLITUDE_MM && mask.iter().any(|&m| m > 0);
-    if !tendon {
-        mask.fill(0);
-    }
+        sum
+    });
     // The glare, jittered per sequence.
-    let (a, b) = cam.window_radii();
-    let g_angle = GLARE_DIRECTION_DEG.to_radians();
     let jitter = 0.015 * w as f64;
+    let (gu, gv) = cam.glare_centre();
     let (gu, gv) = (
-        cam.cx
-            + GLARE_RADIUS_FRACTION * a * g_angle.cos()
-            + jitter * (2.0 * glare_rng.uniform() - 1.0),
-        cam.cy
-            + GLARE_RADIUS_FRACTION * b * g_angle.sin()
-            + jitter * (2.0 * glare_rng.uniform() - 1.0),
+        gu + jitter * (2.0 * glare_rng.uniform() - 1.0),
+        gv + jitter * (2.0 * glare_rng.uniform() - 1.0),
     );
     let g_sigma =
         GLARE_SIGMA_FRACTION * w as f64 * (1.0 + 0.15 * (2.0 * glare_rng.uniform() - 1.0));
-    for plane in planes.iter_mut() {
+    for plane in raster.planes.iter_mut() {
         for (i, p) in plane.iter_mut().enumerate() {
             let (u, v) = ((i % w) as f64, (i / w) as f64);
             let d2 = (u - gu).powi(2) + (v - gv).powi(2);
@@ -128,23 +83,13 @@ pub fn render_alternate(
     let mut rgb = vec![0u8; w * h * 3];
     for i in 0..w * h {
         for c in 0..3 {
-            let x = planes[c][i].max(0.0) as f64;
+            let x = raster.planes[c][i].max(0.0) as f64;
             let sigma = noise_sigma * (x / 0.6).sqrt();
             let value = x * 255.0 + sigma * rng.normal() + rng.uniform() - 0.5;
             rgb[i * 3 + c] = to_u8(value as f32);
         }
     }
-    VisuotactileFrame {
-        width: w,
-        height: h,
-        rgb,
-        mask,
-        depth_m,
-        tendon,
-        direction_deg: tendon.then(|| scene.line.direction_deg()),
-        press_mm: press_mm.max(0.0),
-        ridge_mm: amp,
-    }
+    raster.into_frame(&cam, scene, press_mm, rgb)
 }
 
 /// The spec's 1 px blur the fast way: a 3-tap box (variance 2/3) then

@@ -308,6 +308,17 @@ impl Camera {
         (self.width as f64 / 2.0, self.height as f64 / 2.0)
     }
 
+    /// Centre of the LED glare, pixels: on the window's rim ellipse
+    /// ([`GLARE_RADIUS_FRACTION`] of the way out) at [`GLARE_DIRECTION_DEG`].
+    pub fn glare_centre(&self) -> (f64, f64) {
+        let (a, b) = self.window_radii();
+        let angle = GLARE_DIRECTION_DEG.to_radians();
+        (
+            self.cx + GLARE_RADIUS_FRACTION * a * libm::cos(angle),
+            self.cy + GLARE_RADIUS_FRACTION * b * libm::sin(angle),
+        )
+    }
+
     /// True inside the sensing window (the inscribed ellipse).
     pub fn in_window(&self, u: f64, v: f64) -> bool {
         let (a, b) = self.window_radii();
@@ -664,6 +675,116 @@ pub fn surface(cam: &Camera, scene: &SequenceScene, press_mm: f64, u: f64, v: f6
     }
 }
 
+/// The three LEDs' unit directions (light travelling into the skin), one
+/// per colour channel.
+pub(crate) fn light_vectors() -> [[f64; 3]; 3] {
+    let elev = LIGHT_ELEVATION_DEG.to_radians();
+    LIGHT_AZIMUTH_DEG.map(|az| {
+        let az = az.to_radians();
+        [
+            libm::cos(elev) * libm::cos(az),
+            libm::cos(elev) * libm::sin(az),
+            -libm::sin(elev),
+        ]
+    })
+}
+
+/// Lambert shading with ambient, per channel, of skin whose depth slope is
+/// `(ex, ey)`: `de/dx`, `de/dy` with `e = depth - d0 = -disp`, per mm. The
+/// normal is `normalize(ex, ey, -1)`.
+pub(crate) fn shade(ex: f64, ey: f64, lights: &[[f64; 3]; 3]) -> [f64; 3] {
+    let len = libm::sqrt(ex * ex + ey * ey + 1.0);
+    lights.map(|l| {
+        let ndl = (ex * l[0] + ey * l[1] - l[2]) / len;
+        ALBEDO * (AMBIENT + ndl.max(0.0))
+    })
+}
+
+/// A frame before the camera: linear colour planes and the labels, which
+/// are geometry and the same for every renderer.
+pub(crate) struct Raster {
+    /// One linear plane per channel, [0, 1] before exposure and glare.
+    pub planes: Vec<Vec<f32>>,
+    mask: Vec<u8>,
+    depth_m: Vec<f32>,
+    tendon: bool,
+    ridge_mm: f64,
+}
+
+impl Raster {
+    /// Every pixel of `scene` at `press_mm`: the housing colour outside the
+    /// window, `shade_px(u, v, surface)` inside it, and the mask, depth and
+    /// tendon labels.
+    pub(crate) fn new(
+        cam: &Camera,
+        scene: &SequenceScene,
+        press_mm: f64,
+        mut shade_px: impl FnMut(f64, f64, &Surface) -> [f64; 3],
+    ) -> Self {
+        let (w, h) = (cam.width, cam.height);
+        let amp = scene.ridge_amplitude_mm(press_mm);
+        let threshold = (MASK_FRACTION * amp).max(MASK_FLOOR_MM);
+        let mut planes = vec![vec![0.0f32; w * h]; 3];
+        let mut mask = vec![0u8; w * h];
+        let mut depth_m = vec![0.0f32; w * h];
+        for v in 0..h {
+            for u in 0..w {
+                let (uf, vf) = (u as f64, v as f64);
+                let i = v * w + u;
+                let d0 = cam.rest_depth_mm(uf, vf);
+                if !cam.in_window(uf, vf) {
+                    depth_m[i] = (d0 * 1e-3) as f32;
+                    for (c, plane) in planes.iter_mut().enumerate() {
+                        plane[i] = (HOUSING_RGB[c] / 255.0) as f32;
+                    }
+                    continue;
+                }
+                let at = surface(cam, scene, press_mm, uf, vf);
+                if at.ridge > threshold {
+                    mask[i] = 255;
+                }
+                depth_m[i] = ((d0 - at.disp) * 1e-3) as f32;
+                for (plane, value) in planes.iter_mut().zip(shade_px(uf, vf, &at)) {
+                    plane[i] = value as f32;
+                }
+            }
+        }
+        let tendon =
+            press_mm > 0.0 && amp >= TENDON_MIN_AMPLITUDE_MM && mask.iter().any(|&m| m > 0);
+        if !tendon {
+            mask.fill(0);
+        }
+        Self {
+            planes,
+            mask,
+            depth_m,
+            tendon,
+            ridge_mm: amp,
+        }
+    }
+
+    /// The finished frame: the camera's 8-bit `rgb` with these labels.
+    pub(crate) fn into_frame(
+        self,
+        cam: &Camera,
+        scene: &SequenceScene,
+        press_mm: f64,
+        rgb: Vec<u8>,
+    ) -> VisuotactileFrame {
+        VisuotactileFrame {
+            width: cam.width,
+            height: cam.height,
+            rgb,
+            mask: self.mask,
+            depth_m: self.depth_m,
+            tendon: self.tendon,
+            direction_deg: self.tendon.then(|| scene.line.direction_deg()),
+            press_mm: press_mm.max(0.0),
+            ridge_mm: self.ridge_mm,
+        }
+    }
+}
+
 /// Render one frame of `scene` at `press_mm`; `rng` supplies the frame's
 /// exposure and noise.
 pub fn render(
@@ -676,69 +797,14 @@ pub fn render(
     let (w, h) = (cam.width, cam.height);
     let exposure = 1.0 + rng.draw(config.exposure_jitter);
     let noise_sigma = rng.draw(config.noise_sigma);
-    let contact = press_mm > 0.0;
-    let amp = scene.ridge_amplitude_mm(press_mm);
-    let threshold = (MASK_FRACTION * amp).max(MASK_FLOOR_MM);
-    let elev = LIGHT_ELEVATION_DEG.to_radians();
-    let lights: Vec<[f64; 3]> = LIGHT_AZIMUTH_DEG
-        .iter()
-        .map(|az| {
-            let az = az.to_radians();
-            [
-                libm::cos(elev) * libm::cos(az),
-                libm::cos(elev) * libm::sin(az),
-                -libm::sin(elev),
-            ]
-        })
-        .collect();
-
-    let mut planes = vec![vec![0.0f32; w * h]; 3];
-    let mut mask = vec![0u8; w * h];
-    let mut depth_m = vec![0.0f32; w * h];
-    for v in 0..h {
-        for u in 0..w {
-            let (uf, vf) = (u as f64, v as f64);
-            let i = v * w + u;
-            let d0 = cam.rest_depth_mm(uf, vf);
-            if !cam.in_window(uf, vf) {
-                depth_m[i] = (d0 * 1e-3) as f32;
-                for (c, plane) in planes.iter_mut().enumerate() {
-                    plane[i] = (HOUSING_RGB[c] / 255.0) as f32;
-                }
-                continue;
-            }
-            let Surface {
-                disp,
-                gx,
-                gy,
-                ridge,
-            } = surface(&cam, scene, press_mm, uf, vf);
-            if ridge > threshold {
-                mask[i] = 255;
-            }
-            depth_m[i] = ((d0 - disp) * 1e-3) as f32;
-            // e = depth - d0 = -disp; n = normalize(de/dx, de/dy, -1).
-            let n = [-gx, -gy, -1.0];
-            let len = libm::sqrt(n[0] * n[0] + n[1] * n[1] + 1.0);
-            for (c, plane) in planes.iter_mut().enumerate() {
-                let l = lights[c];
-                let ndl = (n[0] * l[0] + n[1] * l[1] + n[2] * l[2]) / len;
-                plane[i] = (ALBEDO * (AMBIENT + ndl.max(0.0))) as f32;
-            }
-        }
-    }
-    let tendon = contact && amp >= TENDON_MIN_AMPLITUDE_MM && mask.iter().any(|&m| m > 0);
-    if !tendon {
-        mask.fill(0);
-    }
+    let lights = light_vectors();
+    // One analytic sample per pixel.
+    let mut raster = Raster::new(&cam, scene, press_mm, |_, _, at| {
+        shade(-at.gx, -at.gy, &lights)
+    });
 
     // Camera: exposure, LED glare, optical blur, noise, 8 bits.
-    let (a, b) = cam.window_radii();
-    let g_angle = GLARE_DIRECTION_DEG.to_radians();
-    let (gu, gv) = (
-        cam.cx + GLARE_RADIUS_FRACTION * a * libm::cos(g_angle),
-        cam.cy + GLARE_RADIUS_FRACTION * b * libm::sin(g_angle),
-    );
+    let (gu, gv) = cam.glare_centre();
     let g_sigma = GLARE_SIGMA_FRACTION * w as f64;
     let glare: Vec<f32> = (0..w * h)
         .map(|i| {
@@ -747,7 +813,7 @@ pub fn render(
             (GLARE_AMPLITUDE * libm::exp(-d2 / (2.0 * g_sigma * g_sigma))) as f32
         })
         .collect();
-    for plane in planes.iter_mut() {
+    for plane in raster.planes.iter_mut() {
         for (p, g) in plane.iter_mut().zip(&glare) {
             *p = *p * exposure as f32 + g;
         }
@@ -756,20 +822,11 @@ pub fn render(
     let mut rgb = vec![0u8; w * h * 3];
     for i in 0..w * h {
         for c in 0..3 {
-            rgb[i * 3 + c] = to_u8(planes[c][i] * 255.0 + (noise_sigma * rng.normal()) as f32);
+            rgb[i * 3 + c] =
+                to_u8(raster.planes[c][i] * 255.0 + (noise_sigma * rng.normal()) as f32);
         }
     }
-    VisuotactileFrame {
-        width: w,
-        height: h,
-        rgb,
-        mask,
-        depth_m,
-        tendon,
-        direction_deg: tendon.then(|| scene.line.direction_deg()),
-        press_mm: press_mm.max(0.0),
-        ridge_mm: amp,
-    }
+    raster.into_frame(&cam, scene, press_mm, rgb)
 }
 
 /// Frame `frame` of sequence `sequence` of a dataset.
