@@ -9,13 +9,15 @@ use serde::{Deserialize, Serialize};
 use tactile_core::dataset::{Dataset, TestHoldout, hold_out};
 use tactile_core::nn::bce_with_logits;
 use tactile_core::optim::AdadeltaConfig;
+use tactile_core::rng::SampleRng;
 use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_core::{Artifact, DeviceKind};
-use tactile_preprocess::PreprocessConfig;
+use tactile_preprocess::perturb::RotationAugment;
+use tactile_preprocess::{PinImage, PreprocessConfig};
 
 use crate::Result;
 use crate::artifact::CaeArtifact;
-use crate::data::PinSet;
+use crate::data::{PinSet, batch_tensor};
 use crate::eval::reconstruction_bce;
 use crate::model::{Cae, CaeConfig};
 
@@ -67,6 +69,11 @@ pub struct CaeTrainingConfig {
     /// evaluation with this split holds out, so the encoder never sees them.
     #[config(default = "None")]
     pub holdout: Option<TestHoldout>,
+    /// Rotation augmentation: each epoch, each training frame is seen as
+    /// it is or as one of its turned copies (equally likely), so the
+    /// features also describe frames of a sensor mounted turned.
+    #[config(default = "None")]
+    pub rotation: Option<RotationAugment>,
 }
 
 /// Train on the training rows of `data` (see
@@ -95,6 +102,19 @@ pub fn train(
         val.len()
     );
     let pins = PinSet::from_dataset(data, &config.preprocess)?;
+    // Per training row, its turned copies (none without augmentation).
+    let turned: std::collections::HashMap<usize, Vec<PinImage>> = match &config.rotation {
+        Some(aug) => {
+            tactile_core::note!(
+                "turning {} training frames {} times",
+                train.len(),
+                aug.copies
+            );
+            let copies = aug.dataset_pins(data, &train, &config.preprocess)?;
+            train.iter().copied().zip(copies).collect()
+        }
+        None => Default::default(),
+    };
     let artifact = CaeArtifact {
         model: config.model.clone(),
         preprocess: config.preprocess.clone(),
@@ -123,8 +143,16 @@ pub fn train(
         model,
         optim,
         (&train, val.len()),
-        |m: &Cae, batch, _| {
-            let x = pins.batch(batch, &ad);
+        |m: &Cae, batch, epoch| {
+            let x = batch_tensor(
+                batch.iter().map(|&i| {
+                    let copies = turned.get(&i).map_or(&[][..], Vec::as_slice);
+                    let mut rng = SampleRng::new(config.schedule.seed, epoch as u64, i as u64);
+                    let pick = (rng.uniform() * (copies.len() + 1) as f64) as usize;
+                    copies.get(pick).unwrap_or(&pins.images[i])
+                }),
+                &ad,
+            );
             Ok(bce_with_logits(m.forward_logits(x.clone()), x))
         },
         |m| {

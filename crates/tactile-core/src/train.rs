@@ -272,15 +272,14 @@ pub struct FitSummary {
 
 impl FitSummary {
     /// One line for the command line: best epoch, its validation loss and
-    /// metric (called `metric`), and the training time.
+    /// metric (called `metric`, when there is one), and the training time.
     pub fn describe(&self, metric: &str) -> String {
+        let m = self
+            .best_val_metric
+            .map_or(String::new(), |v| format!(", {metric} {v:.4}"));
         format!(
-            "best epoch {} of {}: validation loss {:.4}, {metric} {:.4}; {:.0} s",
-            self.best_epoch,
-            self.epochs_run,
-            self.best_val_loss,
-            self.best_val_metric.unwrap_or(f64::NAN),
-            self.seconds
+            "best epoch {} of {}: validation loss {:.4}{m}; {:.0} s",
+            self.best_epoch, self.epochs_run, self.best_val_loss, self.seconds
         )
     }
 }

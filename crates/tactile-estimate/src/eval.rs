@@ -5,7 +5,7 @@
 use tactile_core::dataset::Dataset;
 
 use crate::Result;
-use crate::registry::{Estimator, Estimators};
+use crate::registry::{Column, Estimator, Estimators};
 
 /// A number of frames and a score over them.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -46,6 +46,125 @@ pub struct Scores {
     pub classes: Vec<String>,
     /// Every regressor target's errors.
     pub targets: Vec<TargetScore>,
+    /// Contact position scored only where a frame shows it, when the
+    /// estimators predict both `x_mm` and `y_mm`.
+    pub position: Option<PositionScore>,
+}
+
+/// Shallowest contact whose position is scored, mm: at zero depth the
+/// object only touches, no pin moves, and nothing shows where it is.
+pub const OBSERVABLE_DEPTH_MM: f64 = 0.5;
+
+/// Contact position scored only where a frame can show it
+/// (`sensors.md` section 1): a sphere's and a cuboid's x and y (and the
+/// cuboid's offset across its long side, which often outreaches the
+/// contact); for
+/// cylinders and prisms only the offset across their axis (their position
+/// along it changes nothing in the frame); for an edge its signed distance
+/// along the normal (the `x_mm` label itself); nothing for a flat. Frames
+/// shallower than [`OBSERVABLE_DEPTH_MM`] are left out.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PositionScore {
+    /// One row per shape with an observable position.
+    pub per_shape: Vec<PositionGroup>,
+    /// Frames left out as too shallow.
+    pub shallow: usize,
+}
+
+/// The observable position error of one shape.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PositionGroup {
+    /// The shape.
+    pub name: String,
+    /// Frames scored.
+    pub frames: usize,
+    /// Mean absolute x and y errors, mm (spheres and cuboids).
+    pub xy_mm: Option<[f64; 2]>,
+    /// Mean absolute error across the axis (cylinders, prisms, cuboids) or
+    /// along the edge's normal, mm.
+    pub across_mm: Option<f64>,
+}
+
+/// What of the position a shape's frame shows.
+enum Observable {
+    /// x and y.
+    Point,
+    /// The offset across an axis along theta.
+    Across,
+    /// The signed distance along the normal: the `x_mm` label.
+    EdgeDistance,
+}
+
+fn observable(shape: &str) -> Option<Observable> {
+    match shape {
+        "sphere" | "cuboid" => Some(Observable::Point),
+        "cylinderR4" | "cylinderR8" | "prism" => Some(Observable::Across),
+        "edge" => Some(Observable::EdgeDistance),
+        _ => None,
+    }
+}
+
+/// [`PositionScore`] of predicted `x` and `y` (mm, one per row of `ds`).
+pub fn position_score(x: &[f64], y: &[f64], ds: &Dataset) -> Result<PositionScore> {
+    let mut groups: Vec<(String, Vec<[f64; 3]>)> = Vec::new();
+    let mut shallow = 0;
+    for i in 0..ds.len().min(x.len()).min(y.len()) {
+        let Some(shape) = ds.text_opt(i, "shape") else {
+            continue;
+        };
+        let Some(kind) = observable(shape) else {
+            continue;
+        };
+        let (Some(tx), Some(ty), Some(depth)) = (
+            ds.number_opt(i, "x_mm")?,
+            ds.number_opt(i, "y_mm")?,
+            ds.number_opt(i, "depth_mm")?,
+        ) else {
+            continue;
+        };
+        if depth < OBSERVABLE_DEPTH_MM {
+            shallow += 1;
+            continue;
+        }
+        let (dx, dy) = (x[i] - tx, y[i] - ty);
+        // Across the axis along theta: the component along n = (-sin, cos).
+        let theta = ds.number_opt(i, "theta_deg")?;
+        let across = theta.map_or(f64::NAN, |t| {
+            let (s, c) = t.to_radians().sin_cos();
+            (-s * dx + c * dy).abs()
+        });
+        let err = match kind {
+            Observable::Point => [dx.abs(), dy.abs(), across],
+            Observable::EdgeDistance => [f64::NAN, f64::NAN, dx.abs()],
+            Observable::Across if across.is_finite() => [f64::NAN, f64::NAN, across],
+            Observable::Across => continue,
+        };
+        match groups.iter_mut().find(|(n, _)| n == shape) {
+            Some((_, v)) => v.push(err),
+            None => groups.push((shape.to_string(), vec![err])),
+        }
+    }
+    groups.sort_by(|a, b| a.0.cmp(&b.0));
+    let per_shape = groups
+        .into_iter()
+        .map(|(name, errs)| {
+            let mean = |k: usize| {
+                let v: Vec<f64> = errs
+                    .iter()
+                    .map(|e| e[k])
+                    .filter(|e| e.is_finite())
+                    .collect();
+                (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+            };
+            PositionGroup {
+                name,
+                frames: errs.len(),
+                xy_mm: mean(0).zip(mean(1)).map(|(a, b)| [a, b]),
+                across_mm: mean(2),
+            }
+        })
+        .collect();
+    Ok(PositionScore { per_shape, shallow })
 }
 
 /// Score every estimator on `feats`, row `i` labelled by row `i` of `ds`.
@@ -63,7 +182,9 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
         confusion: Vec::new(),
         classes: Vec::new(),
         targets: Vec::new(),
+        position: None,
     };
+
     for (_, e) in &estimators.items {
         match e {
             Estimator::Classifier(h) => {
@@ -112,13 +233,18 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
             }
             Estimator::Regressor(r) => {
                 let pred = r.predict(feats)?;
+                // A specialised regressor is scored on frames of its shapes.
+                let only = &r.artifact.shapes;
+                let mine = |i: usize| {
+                    only.is_empty() || shapes[i].is_some_and(|s| only.iter().any(|k| k == s))
+                };
                 for (j, t) in r.targets().iter().enumerate() {
                     let truth = (0..ds.len())
                         .map(|i| ds.number_opt(i, &t.name))
                         .collect::<Result<Vec<_>, _>>()?;
                     let mae_of = |rows: &mut dyn Iterator<Item = usize>| {
                         let (mut sum, mut n) = (0.0, 0usize);
-                        for i in rows {
+                        for i in rows.filter(|&i| mine(i)) {
                             if let Some(v) = truth[i] {
                                 sum += t.error(pred[i][j], v);
                                 n += 1;
@@ -148,7 +274,10 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
                         })
                         .collect();
                     out.targets.push(TargetScore {
-                        target: t.name.clone(),
+                        target: match only.is_empty() {
+                            true => t.name.clone(),
+                            false => format!("{} ({})", t.name, only.join(", ")),
+                        },
                         mae,
                         frames,
                         per_shape,
@@ -156,6 +285,13 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
                 }
             }
         }
+    }
+    // Position as the estimators answer together (a specialised
+    // regressor where the head puts a frame in its shapes).
+    let est = estimators.estimate(feats)?;
+    if let (Some(Column::Number(x)), Some(Column::Number(y))) = (est.get("x_mm"), est.get("y_mm")) {
+        let p = position_score(x, y, ds)?;
+        out.position = (!p.per_shape.is_empty()).then_some(p);
     }
     Ok(out)
 }
@@ -221,5 +357,74 @@ pub fn scores_markdown(s: &Scores) -> String {
         }
         md.push('\n');
     }
+    if let Some(p) = &s.position {
+        md.push_str(&format!(
+            "Contact position where the frame shows it: x and y of spheres and cuboids, the offset across the axis of cylinders, prisms and cuboids, an edge's distance along its normal; frames shallower than {OBSERVABLE_DEPTH_MM} mm left out ({} frames). Mean absolute error, mm:\n\n| shape | frames | x | y | across |\n|---|---|---|---|---|\n",
+            p.shallow
+        ));
+        let cell = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+        for g in &p.per_shape {
+            md.push_str(&format!(
+                "| {} | {} | {} | {} | {} |\n",
+                g.name,
+                g.frames,
+                cell(g.xy_mm.map(|v| v[0])),
+                cell(g.xy_mm.map(|v| v[1])),
+                cell(g.across_mm)
+            ));
+        }
+        md.push('\n');
+    }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A TacTip dataset of labels alone (the frames are empty files).
+    fn labels(rows: &[&str]) -> (tempfile::TempDir, Dataset) {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("manifest.json"),
+            r#"{"format": "tactile-dataset/1", "kind": "tactip", "sensor_spec": "virtual-tactip/1", "width": 300, "height": 300, "generator": "test", "seed": 0, "count": 5}"#,
+        )
+        .unwrap();
+        std::fs::create_dir(dir.path().join("frames")).unwrap();
+        let mut csv = String::from("file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n\n");
+        for (i, r) in rows.iter().enumerate() {
+            std::fs::write(dir.path().join(format!("frames/{i}.png")), b"").unwrap();
+            csv.push_str(&format!("frames/{i}.png,{r}\n"));
+        }
+        std::fs::write(dir.path().join("labels.csv"), csv).unwrap();
+        let ds = Dataset::open(dir.path()).unwrap();
+        (dir, ds)
+    }
+
+    #[test]
+    fn position_is_scored_only_where_the_frame_shows_it() {
+        let (_dir, ds) = labels(&[
+            "sphere,1.0,2.0,,3.0,1.0",
+            // Along a cylinder's axis (theta 0: the x axis) nothing shows.
+            "cylinderR4,0.0,1.0,0.0,2.0,1.0",
+            // An edge's x is its distance along the normal.
+            "edge,1.5,0.0,90.0,2.0,1.0",
+            "flat,0.0,0.0,,2.0,1.0",
+            // Too shallow to move a pin.
+            "sphere,0.0,0.0,,0.1,0.0",
+        ]);
+        // Predictions: sphere off by (0.2, -0.1); cylinder off by 5 mm along
+        // its axis and 0.3 across; edge off by 0.4; the rest wildly wrong.
+        let x = [1.2, 5.0, 1.9, 9.0, 9.0];
+        let y = [1.9, 1.3, 7.0, 9.0, 9.0];
+        let p = position_score(&x, &y, &ds).unwrap();
+        assert_eq!(p.shallow, 1);
+        let by = |n: &str| p.per_shape.iter().find(|g| g.name == n).unwrap();
+        let sphere = by("sphere").xy_mm.unwrap();
+        assert!((sphere[0] - 0.2).abs() < 1e-9 && (sphere[1] - 0.1).abs() < 1e-9);
+        assert!((by("cylinderR4").across_mm.unwrap() - 0.3).abs() < 1e-9);
+        assert!(by("cylinderR4").xy_mm.is_none());
+        assert!((by("edge").across_mm.unwrap() - 0.4).abs() < 1e-9);
+        assert!(p.per_shape.iter().all(|g| g.name != "flat"));
+    }
 }

@@ -76,6 +76,9 @@ pub struct HeadArtifact {
     /// a file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub encoder: Option<String>,
+    /// How it was trained beyond its config (the augmentation, for one).
+    #[serde(default, skip_serializing_if = "serde_json::Value::is_null")]
+    pub notes: serde_json::Value,
 }
 
 /// Most ensemble members accepted.
@@ -247,6 +250,7 @@ impl ClassifierHead {
                 mean,
                 std,
                 encoder: None,
+                notes: serde_json::Value::Null,
             },
             net: HeadEnsemble { members },
             device: device.clone(),

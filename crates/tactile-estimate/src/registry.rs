@@ -177,6 +177,7 @@ impl Estimators {
     /// Every estimator on the same feature vectors.
     pub fn estimate(&self, feats: &[Vec<f32>]) -> Result<Estimates> {
         let mut columns = Vec::new();
+        let mut specialised = Vec::new();
         for (_, e) in &self.items {
             match e {
                 Estimator::Classifier(h) => {
@@ -184,10 +185,43 @@ impl Estimators {
                     let names = p.iter().map(|&c| h.classes()[c].clone()).collect();
                     columns.push((CLASS_COLUMN.to_string(), Column::Class(names)));
                 }
+                Estimator::Regressor(r) if !r.artifact.shapes.is_empty() => specialised.push(r),
                 Estimator::Regressor(r) => {
                     let p = r.predict(feats)?;
                     for (j, t) in r.targets().iter().enumerate() {
                         let v = p.iter().map(|row| row[j]).collect();
+                        columns.push((t.name.clone(), Column::Number(v)));
+                    }
+                }
+            }
+        }
+        // A regressor trained on some shapes answers for the frames the
+        // shape head puts in them (every frame without a head), replacing
+        // a general regressor's value of the same column there.
+        let shapes = match columns.iter().find(|c| c.0 == CLASS_COLUMN) {
+            Some((_, Column::Class(names))) => Some(names.clone()),
+            _ => None,
+        };
+        for r in specialised {
+            let p = r.predict(feats)?;
+            let applies = |i: usize| {
+                shapes
+                    .as_ref()
+                    .is_none_or(|s| r.artifact.shapes.contains(&s[i]))
+            };
+            for (j, t) in r.targets().iter().enumerate() {
+                match columns.iter_mut().find(|c| c.0 == t.name) {
+                    Some((_, Column::Number(v))) => {
+                        for (i, x) in v.iter_mut().enumerate() {
+                            if applies(i) {
+                                *x = p[i][j];
+                            }
+                        }
+                    }
+                    _ => {
+                        let v = (0..p.len())
+                            .map(|i| if applies(i) { p[i][j] } else { f64::NAN })
+                            .collect();
                         columns.push((t.name.clone(), Column::Number(v)));
                     }
                 }

@@ -89,6 +89,12 @@ pub struct RegressorArtifact {
     /// for features read from a file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub encoder: Option<String>,
+    /// The contact shapes it was trained on, when only some (a sphere's
+    /// position, say): its estimates are for frames of those shapes, and
+    /// beside a shape head they replace the other regressors' on the
+    /// frames the head puts in them (see `Estimators::estimate`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shapes: Vec<String>,
 }
 
 impl Artifact for RegressorArtifact {
@@ -255,6 +261,7 @@ impl Regressor {
             inputs,
             outputs,
             encoder: None,
+            shapes: Vec::new(),
         };
         let mlp = artifact.init(&ad)?;
         let xt = matrix(x.len(), k, artifact.inputs.apply(&x64), &ad);

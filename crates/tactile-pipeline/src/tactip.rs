@@ -16,6 +16,8 @@ use tactile_estimate::{
     Activation, ClassifierHead, Estimates, Estimators, HeadConfig, Regressor, RegressorConfig,
     Target,
 };
+use tactile_preprocess::PinImage;
+pub use tactile_preprocess::perturb::RotationAugment;
 
 use crate::Result;
 
@@ -234,6 +236,32 @@ impl HeadTest {
     }
 }
 
+/// Features of the turned copies ([`RotationAugment`]) of the frames at
+/// `rows` of `ds`: for each row in order, `copies` feature vectors.
+pub fn rotated_features(
+    aug: &RotationAugment,
+    encoder: &mut TactipEncoder,
+    ds: &Dataset,
+    rows: &[usize],
+) -> Result<Vec<Vec<f32>>> {
+    aug.check()?;
+    let cfg = encoder.artifact.preprocess.clone();
+    let bar = tactile_core::train::progress_bar(rows.len() as u64, "rotated copies");
+    let mut out = Vec::with_capacity(rows.len() * aug.copies);
+    // A few hundred frames at a time keeps the pin images' memory small.
+    for chunk in rows.chunks(256) {
+        let pins: Vec<PinImage> = aug
+            .dataset_pins(ds, chunk, &cfg)?
+            .into_iter()
+            .flatten()
+            .collect();
+        out.extend(encoder.encode(&pins)?);
+        bar.inc(chunk.len() as u64);
+    }
+    bar.finish_and_clear();
+    Ok(out)
+}
+
 /// Train the shape head on the `train` split of `ds` (or every row) and
 /// save it in `out`; test it on `test` (another dataset, features from the
 /// same encoder) or on the `test` split when there is one.
@@ -244,6 +272,7 @@ pub fn train_head(
     test: Option<&Dataset>,
     out: &Path,
     runtime: Runtime,
+    rotation: Option<RotationAugment>,
 ) -> Result<(ClassifierHead, Option<HeadTest>)> {
     if ds.is_empty() {
         return Err(
@@ -262,7 +291,23 @@ pub fn train_head(
             idx.iter().map(|&i| y[i]).collect(),
         )
     };
-    let (tx, ty) = pick(&train);
+    let (mut tx, mut ty) = pick(&train);
+    if let Some(aug) = rotation {
+        aug.check()?;
+        let FeatureSource::Encoder(dir) = source else {
+            return Err(tactile_core::Error::Invalid(
+                "rotation augmentation turns the frames, so it needs an encoder, not a feature file"
+                    .into(),
+            )
+            .into());
+        };
+        let mut encoder = TactipEncoder::load(dir, runtime, 0)?;
+        let turned = rotated_features(&aug, &mut encoder, ds, &train)?;
+        for (k, f) in turned.into_iter().enumerate() {
+            tx.push(f);
+            ty.push(y[train[k / aug.copies]]);
+        }
+    }
     let config = HeadConfig {
         inputs: feats[0].len(),
         classes: classes.clone(),
@@ -279,6 +324,9 @@ pub fn train_head(
         .device();
     let mut head = ClassifierHead::train(config, &tx, &ty, &device)?;
     head.artifact.encoder = encoder_fingerprint(source)?;
+    if let Some(aug) = rotation {
+        head.artifact.notes = serde_json::json!({ "rotation_augment": aug });
+    }
     head.save(out)?;
     let test_set: Option<(Vec<Vec<f32>>, Vec<usize>)> = match test {
         Some(t) => {
@@ -330,6 +378,10 @@ pub struct RegressorPlan {
     /// Use only frames where every target is labelled; otherwise an empty
     /// label is an error.
     pub only_labelled: bool,
+    /// Train only on frames of these shapes (the `shape` label): a
+    /// specialised regressor, such as a sphere's position. Empty: every
+    /// frame.
+    pub shapes: Vec<String>,
 }
 
 impl RegressorPlan {
@@ -344,6 +396,7 @@ impl RegressorPlan {
             val_fraction: 0.2,
             seed: defaults.schedule.seed,
             only_labelled: false,
+            shapes: Vec::new(),
         }
     }
 }
@@ -372,6 +425,14 @@ pub fn train_regressor(
     // `only_labelled`, frames missing one are left out of every split.
     let labels = (0..ds.len())
         .map(|i| -> tactile_core::Result<Option<Vec<f64>>> {
+            if !plan.shapes.is_empty()
+                && !plan
+                    .shapes
+                    .iter()
+                    .any(|k| Some(k.as_str()) == ds.text_opt(i, "shape"))
+            {
+                return Ok(None);
+            }
             let mut row = Vec::with_capacity(plan.targets.len());
             for t in &plan.targets {
                 match (ds.number_opt(i, &t.name)?, plan.only_labelled) {
@@ -392,7 +453,7 @@ pub fn train_regressor(
             ds.labels_path(),
             None,
             format!(
-                "too few frames with every target labelled ({} train, {} validation, {} test)",
+                "too few frames with every target labelled (and of the shapes asked for): {} train, {} validation, {} test",
                 s.train.len(),
                 s.val.len(),
                 s.test.len()
@@ -430,6 +491,7 @@ pub fn train_regressor(
         .device();
     let mut regressor = Regressor::train(cfg, (&tx, &ty), (&vx, &vy), &device)?;
     regressor.artifact.encoder = encoder_fingerprint(source)?;
+    regressor.artifact.shapes = plan.shapes.clone();
     regressor.save(out)?;
     let test_mae = regressor.evaluate(&sx, &sy)?;
     Ok(RegressorFit {

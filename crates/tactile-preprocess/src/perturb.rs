@@ -136,9 +136,138 @@ impl Perturbation {
     }
 }
 
+/// Most turned copies of each training frame.
+pub const MAX_ROTATED_COPIES: usize = 32;
+
+/// Largest augmentation angle accepted, degrees.
+pub const MAX_ROTATION_DEG: f64 = 45.0;
+
+/// Rotation augmentation of training frames: besides each frame as it is,
+/// a model sees `copies` versions of it turned about the camera axis by
+/// angles uniform in `[-max_deg, max_deg]`, as a sensor mounted turned
+/// would show it. Frames are turned before preprocessing, the way
+/// [`Perturbation::Rotation`] turns them in the robustness study.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RotationAugment {
+    /// Turned copies of each training frame.
+    pub copies: usize,
+    /// Largest angle, degrees.
+    pub max_deg: f64,
+    /// Seed of the angles.
+    pub seed: u64,
+}
+
+impl RotationAugment {
+    /// `copies` turned copies up to `max_deg` degrees, or none when
+    /// `copies` is 0 (a front end's flags as given).
+    pub fn optional(copies: usize, max_deg: f64, seed: u64) -> Option<Self> {
+        (copies > 0).then_some(Self {
+            copies,
+            max_deg,
+            seed,
+        })
+    }
+
+    /// Check the copies (1 to [`MAX_ROTATED_COPIES`]) and the angle (above
+    /// 0, at most [`MAX_ROTATION_DEG`]).
+    pub fn check(&self) -> Result<()> {
+        if !(1..=MAX_ROTATED_COPIES).contains(&self.copies) {
+            return Err(tactile_core::Error::Config(format!(
+                "rotation augmentation: copies must be 1 to {MAX_ROTATED_COPIES}, got {}",
+                self.copies
+            ))
+            .into());
+        }
+        if !(self.max_deg > 0.0 && self.max_deg <= MAX_ROTATION_DEG) {
+            return Err(tactile_core::Error::Config(format!(
+                "rotation augmentation: the largest angle must be above 0 and at most {MAX_ROTATION_DEG} degrees, got {}",
+                self.max_deg
+            ))
+            .into());
+        }
+        Ok(())
+    }
+
+    /// The angle of copy `copy` of dataset row `row`, degrees.
+    pub fn angle_deg(&self, row: usize, copy: usize) -> f64 {
+        let mut rng = SampleRng::new(self.seed, copy as u64, row as u64);
+        self.max_deg * (2.0 * rng.uniform() - 1.0)
+    }
+
+    /// The pin images of the turned copies of `frame` (dataset row `row`).
+    pub fn pins(
+        &self,
+        frame: &GreyImage,
+        row: usize,
+        cfg: &crate::PreprocessConfig,
+    ) -> Result<Vec<crate::PinImage>> {
+        (0..self.copies)
+            .map(|k| {
+                let deg = self.angle_deg(row, k);
+                // A rotation draws nothing from its stream.
+                let turned =
+                    Perturbation::Rotation { deg }.apply(frame, &mut SampleRng::new(0, 0, 0))?;
+                crate::preprocess(&turned, cfg)
+            })
+            .collect()
+    }
+
+    /// [`Self::pins`] of the frames at `rows` of `ds`, in parallel; an
+    /// error names the frame's file.
+    pub fn dataset_pins(
+        &self,
+        ds: &tactile_core::dataset::Dataset,
+        rows: &[usize],
+        cfg: &crate::PreprocessConfig,
+    ) -> Result<Vec<Vec<crate::PinImage>>> {
+        use rayon::prelude::*;
+        self.check()?;
+        rows.par_iter()
+            .map(|&i| {
+                let frame = ds.load_grey(i, "file")?;
+                self.pins(&frame, i, cfg)
+                    .map_err(|e| e.in_file(ds.path_of(i, "file").unwrap_or_default()))
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rotation_augment_checks_its_flags_and_draws_seeded_angles_in_range() {
+        assert!(RotationAugment::optional(0, 6.0, 1).is_none());
+        let aug = RotationAugment::optional(4, 6.0, 1).unwrap();
+        aug.check().unwrap();
+        let angles: Vec<f64> = (0..50)
+            .flat_map(|r| (0..4).map(move |k| (r, k)))
+            .map(|(r, k)| aug.angle_deg(r, k))
+            .collect();
+        assert!(angles.iter().all(|a| a.abs() <= 6.0));
+        assert!(angles.iter().any(|&a| a > 3.0) && angles.iter().any(|&a| a < -3.0));
+        assert_eq!(aug.angle_deg(7, 2), aug.angle_deg(7, 2));
+        assert_ne!(aug.angle_deg(7, 2), aug.angle_deg(7, 3));
+        for bad in [
+            RotationAugment { copies: 33, ..aug },
+            RotationAugment {
+                max_deg: 0.0,
+                ..aug
+            },
+            RotationAugment {
+                max_deg: f64::NAN,
+                ..aug
+            },
+            RotationAugment {
+                max_deg: 90.0,
+                ..aug
+            },
+        ] {
+            let e = bad.check().unwrap_err().to_string();
+            assert!(e.contains("rotation augmentation"), "{e}");
+        }
+    }
 
     #[test]
     fn perturbations_keep_the_size_and_are_seeded() {

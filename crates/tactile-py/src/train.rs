@@ -14,7 +14,9 @@ use tactile_core::train::Schedule;
 use tactile_depth::{DenseNetPreset, DepthTrainingConfig, HeadKind, LossKind};
 use tactile_detect::{Architecture, DetectorTrainingConfig, SoftLabels};
 use tactile_estimate::{HeadConfig, RegressorConfig, Target};
-use tactile_pipeline::tactip::{FeatureSource, RegressorPlan, train_head, train_regressor};
+use tactile_pipeline::tactip::{
+    FeatureSource, RegressorPlan, RotationAugment, train_head, train_regressor,
+};
 use tactile_preprocess::PreprocessConfig;
 use tactile_segment::SegmenterTrainingConfig;
 
@@ -359,7 +361,7 @@ fn out_or(encoder: &Option<PathBuf>, out: Option<PathBuf>, name: &str) -> PyResu
 
 /// Train the shape head (an ensemble of shallow classifiers) on features.
 #[pyfunction]
-#[pyo3(signature = (data, *, encoder=None, features=None, out=None, test=None, folds=None, repeats=None, seed=None, device="flex"))]
+#[pyo3(signature = (data, *, encoder=None, features=None, out=None, test=None, folds=None, repeats=None, seed=None, device="flex", rotate_copies=0, rotate_deg=6.0))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn train_head_py<'py>(
     py: Python<'py>,
@@ -372,20 +374,24 @@ pub(crate) fn train_head_py<'py>(
     repeats: Option<usize>,
     seed: Option<u64>,
     device: &str,
+    rotate_copies: usize,
+    rotate_deg: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::device(device)?.runtime();
     let src = source(&encoder, &features)?;
     let out = out_or(&encoder, out, "head")?;
+    let d = HeadConfig::new(0, vec![]);
+    let rotation =
+        RotationAugment::optional(rotate_copies, rotate_deg, seed.unwrap_or(d.schedule.seed));
     tactile_core::io::ensure_writable_dir(&out).py()?;
     let ds = open(py, data)?;
     let test = test.map(|t| open(py, t)).transpose()?;
-    let d = HeadConfig::new(0, vec![]);
     let mut config = HeadConfig::new(0, vec![])
         .with_folds(folds.unwrap_or(d.folds))
         .with_repeats(repeats.unwrap_or(d.repeats));
     config.schedule.seed = seed.unwrap_or(d.schedule.seed);
     let (head, tested) = interruptible(py, || {
-        train_head(config, &src, &ds, test.as_ref(), &out, rt).py()
+        train_head(config, &src, &ds, test.as_ref(), &out, rt, rotation).py()
     })?;
     let test = tested.map(|t| {
         serde_json::json!({
@@ -401,7 +407,7 @@ pub(crate) fn train_head_py<'py>(
 
 /// Train a regressor (pose, depth, force; angles on the circle) on features.
 #[pyfunction]
-#[pyo3(signature = (data, targets, *, encoder=None, features=None, out=None, test_fraction=None, val_fraction=None, hidden=None, seed=None, device="flex", only_labelled=false))]
+#[pyo3(signature = (data, targets, *, encoder=None, features=None, out=None, test_fraction=None, val_fraction=None, hidden=None, seed=None, device="flex", only_labelled=false, shapes=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn train_regressor_py<'py>(
     py: Python<'py>,
@@ -416,6 +422,7 @@ pub(crate) fn train_regressor_py<'py>(
     seed: Option<u64>,
     device: &str,
     only_labelled: bool,
+    shapes: Vec<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::device(device)?.runtime();
     let targets = targets
@@ -439,6 +446,7 @@ pub(crate) fn train_regressor_py<'py>(
         val_fraction: val_fraction.unwrap_or(d.val_fraction),
         seed: seed.unwrap_or(RegressorConfig::new(0, vec![]).schedule.seed),
         only_labelled,
+        shapes,
         ..RegressorPlan::new(targets)
     };
     let fit = interruptible(py, || train_regressor(&plan, &src, &ds, &out, rt).py())?;

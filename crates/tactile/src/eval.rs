@@ -38,13 +38,10 @@ pub(crate) struct ModelArgs {
 pub(crate) struct DetectorArgs {
     #[command(flatten)]
     m: ModelArgs,
-    /// Also write every frame's probability and decision to this CSV
-    /// (file, tendon, probability, predicted, onset_release), to look at
-    /// the frames it gets wrong.
+    /// Also write every frame's probability and decision to this CSV (file, tendon, probability, predicted, onset_release), to look at the frames it gets wrong.
     #[arg(long)]
     frames: Option<PathBuf>,
-    /// Also save the reliability diagram (observed tendon fraction against
-    /// predicted probability) as this PNG.
+    /// Also save the reliability diagram (observed tendon fraction against predicted probability) as this PNG.
     #[arg(long)]
     reliability: Option<PathBuf>,
 }
@@ -53,9 +50,7 @@ pub(crate) struct DetectorArgs {
 pub(crate) struct DepthArgs {
     #[command(flatten)]
     m: ModelArgs,
-    /// Write heat maps of the skin's displacement from its rest dome in mm
-    /// (true | predicted, one colour scale with its bar) for the first
-    /// frames into this folder.
+    /// Write heat maps of the skin's displacement from its rest dome in mm (true | predicted, one colour scale with its bar) for the first frames into this folder.
     #[arg(long)]
     save_png: Option<PathBuf>,
     /// How many frames `--save-png` writes.

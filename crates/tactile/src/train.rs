@@ -11,7 +11,9 @@ use tactile_core::dataset::{Dataset, TestHoldout};
 use tactile_depth::{DenseNetPreset, DepthTrainingConfig, HeadKind, LossKind};
 use tactile_detect::{Architecture, DetectorTrainingConfig, SoftLabels};
 use tactile_estimate::{HeadConfig, RegressorConfig, Target};
-use tactile_pipeline::tactip::{FeatureSource, RegressorPlan, train_head, train_regressor};
+use tactile_pipeline::tactip::{
+    FeatureSource, RegressorPlan, RotationAugment, train_head, train_regressor,
+};
 use tactile_pose::PoseTrainingConfig;
 use tactile_segment::SegmenterTrainingConfig;
 
@@ -33,13 +35,9 @@ pub(crate) enum TrainCmd {
     Segmenter(SegmenterArgs),
     /// Paper B's depth U-Net with a DenseNet encoder.
     Depth(DepthArgs),
-    /// The input profile of a trained detector: its training frames' input
-    /// statistics, saved in detector.json, so frames of another sensor are
-    /// flagged and get no answer (a detector trained now has one already).
+    /// The input profile of a trained detector: its training frames' input statistics, saved in detector.json, so frames of another sensor are flagged and get no answer (a detector trained now has one already).
     Profile(ProfileArgs),
-    /// Calibrate a trained detector's probabilities on frames it was not
-    /// trained on: one logit scale about the threshold, fitted by maximum
-    /// likelihood and folded into its last layer (decisions unchanged).
+    /// Calibrate a trained detector's probabilities on frames it was not trained on: one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer (decisions unchanged).
     Calibrate(ProfileArgs),
 }
 
@@ -48,8 +46,7 @@ pub(crate) struct ProfileArgs {
     /// The detector folder.
     #[arg(long)]
     model: PathBuf,
-    /// Labelled dataset(s): the detector's training data for `profile`,
-    /// frames it was not trained on for `calibrate`.
+    /// Labelled dataset(s): the detector's training data for `profile`, frames it was not trained on for `calibrate`.
     #[arg(long, num_args = 1.., required = true)]
     data: Vec<PathBuf>,
 }
@@ -72,8 +69,7 @@ pub(crate) struct PoseArgs {
     /// Targets: label columns, NAME:PERIOD for an angle.
     #[arg(long, value_delimiter = ',', default_value = "x_mm,theta_deg,depth_mm")]
     targets: Vec<Target>,
-    /// A training config (JSON: model widths and hidden units, pin-image
-    /// preprocessing, augmentation); the schedule flags set its schedule.
+    /// A training config (JSON: model widths and hidden units, pin-image preprocessing, augmentation); the schedule flags set its schedule.
     #[arg(long)]
     config: Option<PathBuf>,
     /// Side of the grey pin image.
@@ -121,9 +117,7 @@ pub(crate) struct CaeArgs {
     /// Fraction of the training rows held out for early stopping.
     #[arg(long, default_value_t = CaeTrainingConfig::new().val_fraction)]
     val_fraction: f64,
-    /// Without a `split` column: leave out the test frames that `tactile
-    /// compare`/`train regressor` with this test fraction and --split-seed
-    /// hold out, so the encoder never sees them.
+    /// Without a `split` column: leave out the test frames that `tactile compare`/`train regressor` with this test fraction and --split-seed hold out, so the encoder never sees them.
     #[arg(long)]
     exclude_test: Option<f64>,
     /// The seed of that split (compare's --seed).
@@ -131,6 +125,8 @@ pub(crate) struct CaeArgs {
     split_seed: u64,
     #[command(flatten)]
     schedule: CaeSchedule,
+    #[command(flatten)]
+    rotate: RotateArgs,
 }
 
 #[derive(Args)]
@@ -138,8 +134,7 @@ pub(crate) struct FeatureArgs {
     /// Trained encoder folder (features are computed from the frames).
     #[arg(long, required_unless_present = "features")]
     encoder: Option<PathBuf>,
-    /// Precomputed feature CSV (file,f0,f1,...) instead of an encoder,
-    /// e.g. the authors' golden-features.csv; needs --out.
+    /// Precomputed feature CSV (file,f0,f1,...) instead of an encoder, e.g. the authors' golden-features.csv; needs --out.
     #[arg(long, conflicts_with = "encoder", requires = "out")]
     features: Option<PathBuf>,
 }
@@ -186,6 +181,25 @@ pub(crate) struct HeadArgs {
     /// Training device.
     #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
     device: DeviceKind,
+    #[command(flatten)]
+    rotate: RotateArgs,
+}
+
+/// Rotation augmentation (`train cae`, `train head`).
+#[derive(Args)]
+pub(crate) struct RotateArgs {
+    /// Also train on this many copies of each frame turned by up to --rotate-deg (a sensor mounted turned).
+    #[arg(long, default_value_t = 0)]
+    rotate_copies: usize,
+    /// Largest turn of those copies, degrees.
+    #[arg(long, default_value_t = 6.0)]
+    rotate_deg: f64,
+}
+
+impl RotateArgs {
+    fn augment(&self, seed: u64) -> Option<RotationAugment> {
+        RotationAugment::optional(self.rotate_copies, self.rotate_deg, seed)
+    }
 }
 
 #[derive(Args)]
@@ -216,17 +230,17 @@ pub(crate) struct RegressorArgs {
     /// Training device.
     #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
     device: DeviceKind,
-    /// Use only frames where every target is labelled (e.g. theta_deg,
-    /// empty for spheres and flats); otherwise an empty label is an error.
+    /// Use only frames where every target is labelled (e.g. theta_deg, empty for spheres and flats); otherwise an empty label is an error.
     #[arg(long)]
     only_labelled: bool,
+    /// Train only on frames of these shapes: a specialised regressor (a sphere's position, say) that answers where the head sees them.
+    #[arg(long, value_delimiter = ',')]
+    shapes: Vec<String>,
 }
 
 #[derive(Args)]
 pub(crate) struct DetectorArgs {
-    /// Visuo-tactile dataset(s), each split by `sequence` into train and
-    /// validation (e.g. the default distribution plus a set of light
-    /// presses that crowds the frames near the label's threshold).
+    /// Visuo-tactile dataset(s), each split by `sequence` into train and validation (e.g. the default distribution plus a set of light presses that crowds the frames near the label's threshold).
     #[arg(long, num_args = 1.., required = true)]
     data: Vec<PathBuf>,
     /// Output model folder.
@@ -244,17 +258,13 @@ pub(crate) struct DetectorArgs {
     /// Fraction of each dataset's sequences that validate.
     #[arg(long, default_value_t = DetectorTrainingConfig::new().val_fraction)]
     val_fraction: f64,
-    /// Train toward soft targets from each frame's ridge amplitude
-    /// (`ridge_mm`): sigmoid(ln(A / 0.03 mm) / WIDTH), 0.03 mm being the
-    /// spec's label threshold. Suggested width: 0.2.
+    /// Train toward soft targets from each frame's ridge amplitude (`ridge_mm`): sigmoid(ln(A / 0.03 mm) / WIDTH), 0.03 mm being the spec's label threshold. Suggested width: 0.2.
     #[arg(long, value_name = "WIDTH")]
     soft_labels: Option<f64>,
-    /// Photometric augmentation of the training frames (exposure, LED
-    /// balance, blur, noise, glare, JPEG; see PhotometricAugment).
+    /// Photometric augmentation of the training frames (exposure, LED balance, blur, noise, glare, JPEG; see PhotometricAugment).
     #[arg(long)]
     augment: bool,
-    /// Only re-choose the threshold of the model already in --out on the
-    /// validation sequences (training ends with this step anyway).
+    /// Only re-choose the threshold of the model already in --out on the validation sequences (training ends with this step anyway).
     #[arg(long)]
     calibrate_only: bool,
     #[command(flatten)]
@@ -311,8 +321,7 @@ pub(crate) struct DepthArgs {
     /// Train the decoder only.
     #[arg(long)]
     freeze_encoder: bool,
-    /// torchvision DenseNet weights as safetensors (key mapping: the
-    /// tactile-depth `torchvision` module docs); the preset must match.
+    /// torchvision DenseNet weights as safetensors (key mapping: the tactile-depth `torchvision` module docs); the preset must match.
     #[arg(long)]
     pretrained: Option<PathBuf>,
     /// Millimetres per model unit (1 = millimetres; 1000 = metres, which stalls and is refused).
@@ -365,7 +374,8 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 .with_holdout(a.exclude_test.map(|f| TestHoldout {
                     test_fraction: f,
                     split_seed: a.split_seed,
-                }));
+                }))
+                .with_rotation(a.rotate.augment(a.schedule.seed));
             let s = tactile_cae::training::train(
                 &config,
                 &ds,
@@ -373,14 +383,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 a.schedule.device,
                 a.schedule.resume,
             )?;
-            say!(
-                "trained {} epochs in {:.0} s; best validation BCE {:.4} at epoch {}; model in {}",
-                s.epochs_run,
-                s.seconds,
-                s.best_val_loss,
-                s.best_epoch,
-                a.out.display()
-            );
+            say!("CAE {}; model in {}", s.describe(""), a.out.display());
         }
         TrainCmd::Head(a) => {
             let ds = Dataset::open(&a.data)?;
@@ -391,8 +394,9 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 .with_repeats(a.repeats);
             config.schedule.seed = a.seed;
             let rt = a.device.runtime();
-            let (head, tested) =
-                train_head(config, &a.features.source()?, &ds, test.as_ref(), &out, rt)?;
+            let rotation = a.rotate.augment(a.seed);
+            let src = a.features.source()?;
+            let (head, tested) = train_head(config, &src, &ds, test.as_ref(), &out, rt, rotation)?;
             if let Some(t) = tested {
                 t.describe(head.classes()).iter().for_each(|l| say!("{l}"));
             }
@@ -407,6 +411,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 val_fraction: a.val_fraction,
                 seed: a.seed,
                 only_labelled: a.only_labelled,
+                shapes: a.shapes,
                 ..RegressorPlan::new(a.targets)
             };
             let fit = train_regressor(&plan, &a.features.source()?, &ds, &out, a.device.runtime())?;

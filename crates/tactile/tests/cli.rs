@@ -1658,3 +1658,112 @@ fn calibrating_the_detector_keeps_every_decision_and_lowers_its_calibration_erro
             .unwrap();
     assert!(json["notes"]["calibration"]["scale"].as_f64().unwrap() > 0.0);
 }
+
+#[test]
+fn a_sphere_position_regressor_answers_for_spheres_and_evaluate_scores_what_frames_show() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let enc = root.join("models/cae-synth");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("ds");
+    let d = data.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth", "tactip", "--count", "70", "--seed", "5", "--out", d,
+    ]);
+    assert!(ok, "{msg}");
+    let reg = tmp.path().join("position-sphere");
+    let train = |shapes: &str| {
+        tactile(&[
+            "train",
+            "regressor",
+            "--encoder",
+            enc.to_str().unwrap(),
+            "--data",
+            d,
+            "--targets",
+            "x_mm,y_mm",
+            "--shapes",
+            shapes,
+            "--out",
+            reg.to_str().unwrap(),
+        ])
+    };
+    let (ok, msg) = train("teapot");
+    assert!(!ok && msg.contains("shapes asked for"), "{msg}");
+    let (ok, msg) = train("sphere");
+    assert!(ok, "{msg}");
+    let json = std::fs::read_to_string(reg.join("regressor.json")).unwrap();
+    assert!(
+        json.contains("\"shapes\"") && json.contains("sphere"),
+        "{json}"
+    );
+    let (ok, msg) = tactile(&[
+        "evaluate",
+        "--encoder",
+        enc.to_str().unwrap(),
+        "--data",
+        d,
+        "--heads",
+        enc.join("head").to_str().unwrap(),
+        enc.join("position").to_str().unwrap(),
+        reg.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    // The specialised regressor is scored on spheres alone; position only
+    // where a frame shows it (no flat row; cylinders across their axis).
+    assert!(msg.contains("x_mm (sphere)"), "{msg}");
+    let section = msg
+        .split("Contact position where the frame shows it")
+        .nth(1)
+        .unwrap();
+    let table: Vec<&str> = section
+        .lines()
+        .take_while(|l| !l.starts_with('{'))
+        .collect();
+    assert!(table.iter().any(|l| l.starts_with("| sphere |")), "{msg}");
+    assert!(!table.iter().any(|l| l.starts_with("| flat |")), "{msg}");
+    let json = msg.lines().last().unwrap();
+    assert!(json.contains("\"position\":{\"per_shape\""), "{json}");
+}
+
+#[test]
+fn a_head_trains_on_turned_copies_and_records_the_augmentation() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let enc = root.join("models/cae-synth");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("ds");
+    let d = data.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth", "tactip", "--count", "30", "--seed", "6", "--out", d,
+    ]);
+    assert!(ok, "{msg}");
+    let out = tmp.path().join("head");
+    let head = |copies: &str, deg: &str| {
+        tactile(&[
+            "train",
+            "head",
+            "--encoder",
+            enc.to_str().unwrap(),
+            "--data",
+            d,
+            "--folds",
+            "2",
+            "--repeats",
+            "1",
+            "--rotate-copies",
+            copies,
+            "--rotate-deg",
+            deg,
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let (ok, msg) = head("2", "90");
+    assert!(!ok && msg.contains("at most 45 degrees"), "{msg}");
+    let (ok, msg) = head("2", "5");
+    assert!(ok && msg.contains("on 90 frames"), "{msg}");
+    let json = std::fs::read_to_string(out.join("head.json")).unwrap();
+    assert!(
+        json.contains("rotation_augment") && json.contains("\"max_deg\": 5.0"),
+        "{json}"
+    );
+}

@@ -218,11 +218,16 @@ def head(
     repeats: Optional[int] = None,
     seed: Optional[int] = None,
     device: str = "flex",
+    rotate_copies: int = 0,
+    rotate_deg: float = 6.0,
 ) -> Dict[str, Any]:
     """Paper A's shape head on an encoder's features (or a feature CSV).
 
     Saved in ``out`` (default ``ENCODER/head``); tested on ``test`` or the
     ``test`` split, the accuracy and confusion matrix are in the result.
+    ``rotate_copies`` > 0 also trains on that many copies of each frame
+    turned by up to ``rotate_deg`` degrees (needs ``encoder``), for a head
+    that holds on a sensor mounted turned.
     """
     return _tactile.train_head_py(
         os.fspath(data),
@@ -234,6 +239,8 @@ def head(
         repeats=repeats,
         seed=seed,
         device=device,
+        rotate_copies=rotate_copies,
+        rotate_deg=rotate_deg,
     )
 
 
@@ -250,10 +257,14 @@ def regressor(
     seed: Optional[int] = None,
     device: str = "flex",
     only_labelled: bool = False,
+    shapes: Sequence[str] = (),
 ) -> Dict[str, Any]:
     """A regressor on an encoder's features: ``targets`` are label columns,
     angles with their period (e.g. ``["x_mm", "theta_deg:180"]``). Saved in
     ``out`` (default ``ENCODER/regressor``); returns the test MAE per target.
+    ``shapes`` trains it on frames of those shapes only (a sphere's
+    position, say); beside a shape head it then answers for the frames the
+    head puts in them.
     """
     return _tactile.train_regressor_py(
         os.fspath(data),
@@ -267,6 +278,7 @@ def regressor(
         seed=seed,
         device=device,
         only_labelled=only_labelled,
+        shapes=list(shapes),
     )
 
 
