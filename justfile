@@ -35,6 +35,7 @@ bench-cae:
 synth-tactip out="data/synth-tactip":
     cargo run --release -p tactile -- synth tactip --count 3000 --seed 100 --out {{out}}-train --preview {{out}}-train.png
     cargo run --release -p tactile -- synth tactip --count 700 --seed 200 --out {{out}}-test
+    cargo run --release -p tactile -- synth tactip --count 9000 --seed 120 --shapes sphere --out data/synth-sphere-train
 
 synth-visuotactile out="data/synth-vt":
     cargo run --release -p tactile -- synth visuotactile --sequences 100 --seed 100 --out {{out}} --preview {{out}}.png
@@ -49,12 +50,18 @@ samples:
     cargo run --release -p tactile -- synth tactip --count 14 --seed 300 --out samples/virtual-tactip --force
 
 # Train the CAE (grey-level area-downsampled pin images, linear latent) and every estimator on the virtual TacTip; writes models/cae-synth.
+# Spheres have their own position regressor, used where the head sees a sphere.
 train-cae-synth out="models/cae-synth": synth-tactip
     cargo run --release -p tactile -- train cae --data data/synth-tactip-train --out {{out}} --preprocess configs/preprocess/virtual-tactip-area.json --widths 16,16,8,4 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 300 --patience 40
     cargo run --release -p tactile -- train head --encoder {{out}} --data data/synth-tactip-train --test data/synth-tactip-test
     cargo run --release -p tactile -- train regressor --encoder {{out}} --data data/synth-tactip-train --targets depth_mm,force_n --hidden 128,64 --out {{out}}/regressor
     cargo run --release -p tactile -- train regressor --encoder {{out}} --data data/synth-tactip-train --targets x_mm,y_mm --only-labelled --hidden 128,64 --out {{out}}/position
     cargo run --release -p tactile -- train regressor --encoder {{out}} --data data/synth-tactip-train --targets theta_deg:180 --only-labelled --hidden 128,64 --out {{out}}/theta
+    cargo run --release -p tactile -- train regressor --encoder {{out}} --data data/synth-sphere-train --targets x_mm,y_mm --shapes sphere --hidden 128,64 --out {{out}}/position-sphere
+
+# A shape head for models/cae-synth trained with rotation augmentation (4 copies of each frame turned by up to 6 degrees): robust to a sensor mounted turned, 3 points less on straight frames; scripts/paper-a.sh compares it.
+train-turned-head out="data/cae-synth-turned-head": synth-tactip
+    cargo run --release -p tactile -- train head --encoder models/cae-synth --data data/synth-tactip-train --test data/synth-tactip-test --rotate-copies 4 --rotate-deg 6 --out {{out}}
 
 # Frames/s of both virtual sensors; writes docs/bench-synth.md.
 bench-synth:

@@ -133,7 +133,7 @@ fn summary<'py>(
 
 /// Train paper A's convolutional autoencoder.
 #[pyfunction]
-#[pyo3(signature = (data, out, *, preprocess="binary", widths=None, features=None, linear_latent=false, optimizer="adadelta", val_fraction=None, exclude_test=None, split_seed=7, device="flex", resume=false, schedule=None))]
+#[pyo3(signature = (data, out, *, preprocess="binary", widths=None, features=None, linear_latent=false, optimizer="adadelta", val_fraction=None, exclude_test=None, split_seed=7, device="flex", resume=false, schedule=None, rotate_copies=0, rotate_deg=6.0))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn train_cae<'py>(
     py: Python<'py>,
@@ -150,6 +150,8 @@ pub(crate) fn train_cae<'py>(
     device: &str,
     resume: bool,
     schedule: Option<&Bound<'py, PyDict>>,
+    rotate_copies: usize,
+    rotate_deg: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let schedule = ScheduleArgs::from_dict(schedule)?;
     let dev = self::device(device)?;
@@ -175,6 +177,8 @@ pub(crate) fn train_cae<'py>(
             test_fraction: f,
             split_seed,
         }));
+    let seed = config.schedule.seed;
+    let config = config.with_rotation(RotationAugment::optional(rotate_copies, rotate_deg, seed));
     let s = interruptible(py, || {
         tactile_cae::training::train(&config, &ds, &out, dev, resume).py()
     })?;

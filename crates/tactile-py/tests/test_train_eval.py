@@ -3,6 +3,7 @@ results, errors as exceptions, and Ctrl-C leaving a folder marked incomplete."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -72,3 +73,22 @@ def test_ctrl_c_stops_training_and_marks_it_incomplete(small_vt, tmp_path):
     assert (out / "INCOMPLETE").is_file()
     with pytest.raises(ValueError, match="did not finish training"):
         tactile.eval.detector(out, small_vt)
+
+
+def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
+    data = tactile.synth.tactip(count=30, seed=6, out=tmp_path / "ds", progress=False)
+    spheres = tactile.synth.tactip(count=20, seed=7, out=tmp_path / "spheres", shapes=["sphere"],
+                                   progress=False)
+    enc = root / "models/cae-synth"
+    out = tmp_path / "position-sphere"
+    s = tactile.train.regressor(spheres, ["x_mm", "y_mm"], encoder=enc, out=out,
+                                shapes=["sphere"], test_fraction=0.25)
+    assert set(s["test_mae"]) == {"x_mm", "y_mm"}
+    assert json.loads((out / "regressor.json").read_text())["shapes"] == ["sphere"]
+    head = tmp_path / "head"
+    tactile.train.head(data, encoder=enc, out=head, folds=2, repeats=1, rotate_copies=1,
+                       rotate_deg=4.0)
+    notes = json.loads((head / "head.json").read_text())["notes"]
+    assert notes["rotation_augment"]["copies"] == 1
+    with pytest.raises(ValueError, match="rotation augmentation"):
+        tactile.train.head(data, encoder=enc, out=tmp_path / "h2", rotate_copies=99)

@@ -50,6 +50,8 @@ def cae(
     lr: Optional[float] = None,
     lr_decay: Optional[float] = None,
     seed: Optional[int] = None,
+    rotate_copies: int = 0,
+    rotate_deg: float = 6.0,
 ) -> Dict[str, Any]:
     """Paper A's convolutional autoencoder on a TacTip dataset.
 
@@ -57,6 +59,8 @@ def cae(
     "lighting-compensated" or a JSON file. ``widths``: four encoder widths,
     e.g. (16, 8, 8, 4); ``features`` sets the last one. ``optimizer``:
     "adadelta" (paper A) or "adam". ``device``: "flex" or "ndarray".
+    ``rotate_copies`` > 0: each epoch, each training frame is seen as it is
+    or as one of that many copies turned by up to ``rotate_deg`` degrees.
     """
     return _tactile.train_cae(
         os.fspath(data),
@@ -75,6 +79,8 @@ def cae(
             max_epochs=max_epochs, patience=patience, batch_size=batch_size,
             lr=lr, lr_decay=lr_decay, seed=seed,
         ),
+        rotate_copies=rotate_copies,
+        rotate_deg=rotate_deg,
     )
 
 
