@@ -1723,6 +1723,24 @@ fn a_sphere_position_regressor_answers_for_spheres_and_evaluate_scores_what_fram
     assert!(!table.iter().any(|l| l.starts_with("| flat |")), "{msg}");
     let json = msg.lines().last().unwrap();
     assert!(json.contains("\"position\":{\"per_shape\""), "{json}");
+    // On frames without a sphere it has nothing to score, and that is no error.
+    let edges = tmp.path().join("edges");
+    let e = edges.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth", "tactip", "--count", "8", "--shapes", "edge", "--out", e,
+    ]);
+    assert!(ok, "{msg}");
+    let (ok, msg) = tactile(&[
+        "evaluate",
+        "--encoder",
+        enc.to_str().unwrap(),
+        "--data",
+        e,
+        "--heads",
+        enc.join("position").to_str().unwrap(),
+        reg.to_str().unwrap(),
+    ]);
+    assert!(ok && !msg.contains("x_mm (sphere)"), "{msg}");
 }
 
 #[test]
