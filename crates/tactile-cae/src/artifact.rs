@@ -58,3 +58,28 @@ impl Exportable for CaeArtifact {
         crate::export::encoder_onnx(model, self.model.input_px)
     }
 }
+
+/// Measure the pin lattice's orientation on `datasets`' frames (the
+/// encoder's training frames) and save it in the encoder folder `dir`'s
+/// preprocessing, so frames of a sensor mounted turned are turned back
+/// before they are encoded (see [`tactile_preprocess::align`]). The
+/// weights are untouched, so the estimators trained on it still match.
+/// Returns the alignment and the frames it was measured on.
+pub fn add_pin_alignment(
+    dir: &std::path::Path,
+    datasets: &[tactile_core::dataset::Dataset],
+) -> crate::Result<(tactile_preprocess::align::PinAlign, usize)> {
+    let mut artifact = CaeArtifact::read(dir)?;
+    let mut frames = Vec::new();
+    for ds in datasets {
+        ds.expect_kind(tactile_core::dataset::DatasetKind::Tactip)?;
+        for i in 0..ds.len() {
+            frames.push(ds.load_grey(i, "file")?);
+        }
+    }
+    let (align, measured) =
+        tactile_preprocess::align::fit_pin_align(&frames, &artifact.preprocess)?;
+    artifact.preprocess.align = Some(align);
+    tactile_core::io::write_json_atomic(dir.join(CaeArtifact::CONFIG_FILE), &artifact)?;
+    Ok((align, measured))
+}

@@ -13,11 +13,13 @@ mod error;
 pub mod eval;
 pub mod export;
 pub mod inference;
+pub mod joint;
 pub mod model;
 pub mod training;
 
 pub use artifact::CaeArtifact;
 pub use error::{Error, Result};
 pub use inference::TactipEncoder;
+pub use joint::JointTargets;
 pub use model::{Cae, CaeConfig, CaeDecoder, CaeEncoder};
 pub use training::{CaeTrainingConfig, Optimizer};

@@ -18,8 +18,8 @@ use tactile_preprocess::{PinImage, PreprocessConfig};
 use crate::Result;
 use crate::artifact::CaeArtifact;
 use crate::data::{PinSet, batch_tensor};
-use crate::eval::reconstruction_bce;
-use crate::model::{Cae, CaeConfig};
+use crate::joint::{JointCae, JointLabels, JointTargets};
+use crate::model::CaeConfig;
 
 /// The optimiser.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -74,6 +74,11 @@ pub struct CaeTrainingConfig {
     /// features also describe frames of a sensor mounted turned.
     #[config(default = "None")]
     pub rotation: Option<RotationAugment>,
+    /// Semi-supervised: the features also feed a head trained to predict
+    /// these label columns (see [`crate::joint`]); only the autoencoder is
+    /// saved.
+    #[config(default = "None")]
+    pub joint: Option<JointTargets>,
 }
 
 /// Train on the training rows of `data` (see
@@ -91,6 +96,9 @@ pub fn train(
     config.schedule.check()?;
     config.model.check()?;
     config.preprocess.check()?;
+    if let Some(j) = &config.joint {
+        j.check()?;
+    }
     tactile_core::io::check_output_dir(out, &[data])?;
     let rows = data.training_rows(config.holdout)?;
     let (train, val) = hold_out(rows, config.val_fraction, config.schedule.seed)
@@ -102,6 +110,10 @@ pub fn train(
         val.len()
     );
     let pins = PinSet::from_dataset(data, &config.preprocess)?;
+    let labels = match &config.joint {
+        Some(j) => Some(JointLabels::read(data, j, &train)?),
+        None => None,
+    };
     // Per training row, its turned copies (none without augmentation).
     let turned: std::collections::HashMap<usize, Vec<PinImage>> = match &config.rotation {
         Some(aug) => {
@@ -128,7 +140,13 @@ pub fn train(
     let ad = dev.clone().autodiff();
     // Seeded initial weights: the same config gives the same run.
     ad.seed(config.schedule.seed);
-    let model = config.model.init(&ad);
+    let model = JointCae::new(
+        config.model.init(&ad),
+        config.joint.as_ref(),
+        config.model.feature_count(),
+        &ad,
+    );
+    let weight = config.joint.as_ref().map_or(0.0, |j| j.weight) as f32;
     let optim: ModuleOptimizer = match config.optimizer {
         Optimizer::Adadelta => config.adadelta.init(),
         Optimizer::Adam => burn::optim::AdamConfig::new().init(),
@@ -143,7 +161,7 @@ pub fn train(
         model,
         optim,
         (&train, val.len()),
-        |m: &Cae, batch, epoch| {
+        |m: &JointCae, batch, epoch| {
             let x = batch_tensor(
                 batch.iter().map(|&i| {
                     let copies = turned.get(&i).map_or(&[][..], Vec::as_slice);
@@ -153,13 +171,30 @@ pub fn train(
                 }),
                 &ad,
             );
-            Ok(bce_with_logits(m.forward_logits(x.clone()), x))
+            let (logits, columns) = m.forward(x.clone());
+            let loss = bce_with_logits(logits, x);
+            Ok(match (columns, &labels) {
+                (Some(c), Some(l)) => loss + l.mse(c, batch) * weight,
+                _ => loss,
+            })
         },
         |m| {
-            let bce = reconstruction_bce(m, &pins, &val, config.schedule.batch_size, &dev);
-            Ok((bce, None))
+            // Validation loss: the training loss's two terms on the held-out rows.
+            let (mut bce, mut mse) = (0.0, 0.0);
+            for chunk in val.chunks(config.schedule.batch_size.max(1)) {
+                let x = pins.batch(chunk, &dev);
+                let (logits, columns) = m.forward(x.clone());
+                let n = chunk.len() as f64;
+                bce += bce_with_logits(logits, x).into_scalar::<f32>() as f64 * n;
+                if let (Some(c), Some(l)) = (columns, &labels) {
+                    mse += l.mse(c, chunk).into_scalar::<f32>() as f64 * n;
+                }
+            }
+            let n = val.len().max(1) as f64;
+            let metric = labels.as_ref().map(|_| mse / n);
+            Ok(((bce + weight as f64 * mse) / n, metric))
         },
-        |m| Ok(artifact.save(m, out)?),
+        |m| Ok(artifact.save(&m.cae, out)?),
     )?;
     tactile_core::artifact::write_training_record(
         out,

@@ -369,7 +369,8 @@ pub struct RegressorPlan {
     pub targets: Vec<Target>,
     /// Hidden widths (ReLU).
     pub hidden: Vec<usize>,
-    /// Without a `split` column: fraction of frames held out for testing.
+    /// Without a `split` column: fraction of frames held out for testing
+    /// (0: none, every frame trains; the final model).
     pub test_fraction: f64,
     /// Fraction of the training frames used for early stopping.
     pub val_fraction: f64,
@@ -407,7 +408,8 @@ pub struct RegressorFit {
     pub regressor: Regressor,
     /// Frames of each split: train, validation, test.
     pub frames: [usize; 3],
-    /// Mean absolute error per target on the test frames.
+    /// Mean absolute error per target on the test frames (empty with no
+    /// test frames).
     pub test_mae: Vec<f64>,
 }
 
@@ -444,11 +446,24 @@ pub fn train_regressor(
             Ok(Some(row))
         })
         .collect::<tactile_core::Result<Vec<_>>>()?;
-    let mut s = ds.three_way_split(plan.test_fraction, plan.val_fraction, plan.seed)?;
+    let mut s = if plan.test_fraction == 0.0 {
+        // The final model: every frame trains, a share of them for early
+        // stopping; nothing is left to test on.
+        let (train, val) =
+            tactile_core::dataset::hold_out(ds.training_rows(None)?, plan.val_fraction, plan.seed)
+                .map_err(|e| tactile_core::Error::dataset(ds.labels_path(), None, e.to_string()))?;
+        tactile_core::dataset::Splits {
+            train,
+            val,
+            test: Vec::new(),
+        }
+    } else {
+        ds.three_way_split(plan.test_fraction, plan.val_fraction, plan.seed)?
+    };
     for rows in [&mut s.train, &mut s.val, &mut s.test] {
         rows.retain(|&i| labels[i].is_some());
     }
-    if s.train.is_empty() || s.val.is_empty() || s.test.is_empty() {
+    if s.train.is_empty() || s.val.is_empty() || (s.test.is_empty() && plan.test_fraction > 0.0) {
         return Err(tactile_core::Error::dataset(
             ds.labels_path(),
             None,
@@ -493,7 +508,11 @@ pub fn train_regressor(
     regressor.artifact.encoder = encoder_fingerprint(source)?;
     regressor.artifact.shapes = plan.shapes.clone();
     regressor.save(out)?;
-    let test_mae = regressor.evaluate(&sx, &sy)?;
+    let test_mae = if sx.is_empty() {
+        Vec::new()
+    } else {
+        regressor.evaluate(&sx, &sy)?
+    };
     Ok(RegressorFit {
         regressor,
         frames: [tx.len(), vx.len(), sx.len()],

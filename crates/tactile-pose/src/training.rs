@@ -35,6 +35,7 @@ pub fn grey_pin_images(side: usize) -> PreprocessConfig {
         binarise_offset: 0.3,
         downsample: Downsample::Area,
         binarise: false,
+        align: None,
     }
 }
 

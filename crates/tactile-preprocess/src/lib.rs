@@ -20,6 +20,7 @@ use kornia_imgproc::interpolation::InterpolationMode;
 use kornia_imgproc::morphology::{self, Kernel};
 use kornia_imgproc::padding::PaddingMode;
 
+pub mod align;
 mod error;
 pub mod perturb;
 pub mod pins;
@@ -89,6 +90,10 @@ pub struct PreprocessConfig {
     /// the fraction of an output pixel it covers.
     #[serde(default = "yes")]
     pub binarise: bool,
+    /// Turn each frame back to the training frames' pin lattice first
+    /// ([`align`]: a sensor mounted turned); `None` = off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub align: Option<align::PinAlign>,
 }
 
 fn yes() -> bool {
@@ -123,6 +128,7 @@ impl PreprocessConfig {
             binarise_offset: 0.3,
             downsample: Downsample::Linear,
             binarise: true,
+            align: None,
         }
     }
 
@@ -150,6 +156,7 @@ impl PreprocessConfig {
             binarise_offset: 0.3,
             downsample: Downsample::Linear,
             binarise: true,
+            align: None,
         }
     }
 
@@ -168,6 +175,7 @@ impl PreprocessConfig {
             binarise_offset: 0.3,
             downsample: Downsample::Linear,
             binarise: true,
+            align: None,
         }
     }
 
@@ -215,6 +223,9 @@ impl PreprocessConfig {
         if !self.binarise_offset.is_finite() || self.mask_radius_px.is_some_and(|r| !r.is_finite())
         {
             return bad("binarise_offset and mask_radius_px must be finite".into());
+        }
+        if let Some(a) = &self.align {
+            a.check()?;
         }
         Ok(())
     }
@@ -558,7 +569,10 @@ pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage>
             needed: cfg.output_px,
         });
     }
-    let mut img = frame.clone();
+    let mut img = match &cfg.align {
+        Some(a) => align::aligned(frame, cfg, a)?.unwrap_or_else(|| frame.clone()),
+        None => frame.clone(),
+    };
     if let Lighting::TopHat {
         background_window_px,
         peak_window_px,

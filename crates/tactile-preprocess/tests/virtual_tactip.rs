@@ -87,3 +87,55 @@ fn lighting_compensation_recovers_the_ideal_pin_image() {
         paper.0
     );
 }
+
+/// A sensor mounted turned: the pin lattice of a frame turned by a few
+/// degrees is measured and turned back to the straight frames' lattice.
+#[test]
+fn a_turned_mounting_is_measured_and_turned_back() {
+    use tactile_core::rng::SampleRng;
+    use tactile_preprocess::align::{aligned, fit_pin_align, frame_lattice_angle_deg};
+    use tactile_preprocess::perturb::Perturbation;
+    let cfg = TactipConfig::default();
+    let chain = PreprocessConfig::lighting_compensated();
+    let frames: Vec<_> = (0..16)
+        .map(|i| {
+            let (_, f) = tactip::sample(&cfg, 91, i);
+            grey_image(FRAME_PX, FRAME_PX, f.pixels).unwrap()
+        })
+        .collect();
+    let (align, measured) = fit_pin_align(&frames, &chain).unwrap();
+    assert!(measured >= 14, "{measured} of 16 frames measured");
+    assert!(align.tolerance_deg < 1.5, "{align:?}");
+    for (k, deg) in [(0, 5.0), (1, -3.0), (2, 10.0)] {
+        let turned = Perturbation::Rotation { deg }
+            .apply(&frames[k], &mut SampleRng::new(0, 0, 0))
+            .unwrap();
+        let seen = frame_lattice_angle_deg(&turned, &chain).unwrap().unwrap();
+        assert!(
+            (seen - align.reference_deg - deg).abs() < 1.0,
+            "turned {deg}: lattice at {seen}, reference {}",
+            align.reference_deg
+        );
+        let back = aligned(&turned, &chain, &align)
+            .unwrap()
+            .expect("turned back");
+        let after = frame_lattice_angle_deg(&back, &chain).unwrap().unwrap();
+        assert!(
+            (after - align.reference_deg).abs() < 1.0,
+            "turned {deg}: {after} after alignment, reference {}",
+            align.reference_deg
+        );
+    }
+    // A straight frame is left as it is.
+    let mut on = chain.clone();
+    on.align = Some(align);
+    let straight = frames
+        .iter()
+        .filter(|f| aligned(f, &chain, &align).unwrap().is_none())
+        .count();
+    assert!(
+        straight >= 14,
+        "{straight} of 16 straight frames left alone"
+    );
+    assert_eq!(preprocess(&frames[3], &on).unwrap().side, 28);
+}

@@ -133,7 +133,7 @@ fn summary<'py>(
 
 /// Train paper A's convolutional autoencoder.
 #[pyfunction]
-#[pyo3(signature = (data, out, *, preprocess="binary", widths=None, features=None, linear_latent=false, optimizer="adadelta", val_fraction=None, exclude_test=None, split_seed=7, device="flex", resume=false, schedule=None, rotate_copies=0, rotate_deg=6.0))]
+#[pyo3(signature = (data, out, *, preprocess="binary", widths=None, features=None, linear_latent=false, optimizer="adadelta", val_fraction=None, exclude_test=None, split_seed=7, device="flex", resume=false, schedule=None, rotate_copies=0, rotate_deg=6.0, joint_targets=None, joint_weight=1.0, joint_hidden=64))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn train_cae<'py>(
     py: Python<'py>,
@@ -152,10 +152,19 @@ pub(crate) fn train_cae<'py>(
     schedule: Option<&Bound<'py, PyDict>>,
     rotate_copies: usize,
     rotate_deg: f64,
+    joint_targets: Option<Vec<String>>,
+    joint_weight: f64,
+    joint_hidden: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     let schedule = ScheduleArgs::from_dict(schedule)?;
     let dev = self::device(device)?;
     let optimizer: Optimizer = parse("optimizer", optimizer)?;
+    let joint = tactile_cae::JointTargets::from_names(
+        &joint_targets.unwrap_or_default(),
+        joint_weight,
+        joint_hidden,
+    )
+    .py()?;
     let pre = PreprocessConfig::preset(preprocess).py()?;
     tactile_core::io::ensure_writable_dir(&out).py()?;
     let ds = open(py, data)?;
@@ -178,7 +187,9 @@ pub(crate) fn train_cae<'py>(
             split_seed,
         }));
     let seed = config.schedule.seed;
-    let config = config.with_rotation(RotationAugment::optional(rotate_copies, rotate_deg, seed));
+    let config = config
+        .with_rotation(RotationAugment::optional(rotate_copies, rotate_deg, seed))
+        .with_joint(joint);
     let s = interruptible(py, || {
         tactile_cae::training::train(&config, &ds, &out, dev, resume).py()
     })?;

@@ -92,3 +92,18 @@ def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
     assert notes["rotation_augment"]["copies"] == 1
     with pytest.raises(ValueError, match="rotation augmentation"):
         tactile.train.head(data, encoder=enc, out=tmp_path / "h2", rotate_copies=99)
+
+
+def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):
+    data = root / "samples/virtual-tactip"
+    out = tmp_path / "joint"
+    s = tactile.train.cae(data, out, preprocess="lighting-compensated", optimizer="adam",
+                          linear_latent=True, joint_targets=["depth_mm", "force_n"],
+                          joint_weight=10.0, max_epochs=2, patience=2)
+    assert (out / "cae.json").is_file()
+    record = json.loads((out / "training.json").read_text())
+    assert [t["name"] for t in record["config"]["joint"]["targets"]] == ["depth_mm", "force_n"]
+    assert record["summary"]["best_val_metric"] is not None
+    with pytest.raises(ValueError, match="weight"):
+        tactile.train.cae(data, tmp_path / "bad", joint_targets=["depth_mm"], joint_weight=0.0)
+    assert not (tmp_path / "bad" / "cae.json").exists()

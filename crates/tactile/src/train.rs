@@ -39,14 +39,16 @@ pub(crate) enum TrainCmd {
     Profile(ProfileArgs),
     /// Calibrate a trained detector's probabilities on frames it was not trained on: one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer (decisions unchanged).
     Calibrate(ProfileArgs),
+    /// Measure the pin lattice's orientation on an encoder's training frames and save it with the encoder, so frames of a sensor mounted turned are turned back before encoding.
+    Align(ProfileArgs),
 }
 
 #[derive(Args)]
 pub(crate) struct ProfileArgs {
-    /// The detector folder.
+    /// The detector folder (the encoder folder for `align`).
     #[arg(long)]
     model: PathBuf,
-    /// Labelled dataset(s): the detector's training data for `profile`, frames it was not trained on for `calibrate`.
+    /// Labelled dataset(s): the detector's training data for `profile` (the encoder's for `align`), frames it was not trained on for `calibrate`.
     #[arg(long, num_args = 1.., required = true)]
     data: Vec<PathBuf>,
 }
@@ -127,6 +129,8 @@ pub(crate) struct CaeArgs {
     schedule: CaeSchedule,
     #[command(flatten)]
     rotate: RotateArgs,
+    #[command(flatten)]
+    joint: tactile_cae::joint::JointArgs,
 }
 
 #[derive(Args)]
@@ -215,7 +219,7 @@ pub(crate) struct RegressorArgs {
     /// Output folder (default: ENCODER/regressor).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Without a `split` column: fraction of frames held out for testing.
+    /// Without a `split` column: fraction of frames held out for testing (0: none, every frame trains).
     #[arg(long, default_value_t = RegressorPlan::new(vec![]).test_fraction)]
     test_fraction: f64,
     /// Fraction of the training frames used for early stopping.
@@ -344,7 +348,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Detector(a) => Some(&a.out),
         TrainCmd::Segmenter(a) => Some(&a.out),
         TrainCmd::Depth(a) => Some(&a.out),
-        TrainCmd::Profile(a) | TrainCmd::Calibrate(a) => Some(&a.model),
+        TrainCmd::Profile(a) | TrainCmd::Calibrate(a) | TrainCmd::Align(a) => Some(&a.model),
         TrainCmd::Pose(a) => Some(&a.out),
         TrainCmd::Head(a) => a.out.as_ref(),
         TrainCmd::Regressor(a) => a.out.as_ref(),
@@ -375,7 +379,8 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                     test_fraction: f,
                     split_seed: a.split_seed,
                 }))
-                .with_rotation(a.rotate.augment(a.schedule.seed));
+                .with_rotation(a.rotate.augment(a.schedule.seed))
+                .with_joint(a.joint.config()?);
             let s = tactile_cae::training::train(
                 &config,
                 &ds,
@@ -415,7 +420,14 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 ..RegressorPlan::new(a.targets)
             };
             let fit = train_regressor(&plan, &a.features.source()?, &ds, &out, a.device.runtime())?;
-            say!("test mean absolute error ({} frames):", fit.frames[2]);
+            if fit.frames[2] == 0 {
+                say!(
+                    "every frame trained ({} for early stopping); no test frames",
+                    fit.frames[1]
+                );
+            } else {
+                say!("test mean absolute error ({} frames):", fit.frames[2]);
+            }
             for (t, e) in plan.targets.iter().zip(&fit.test_mae) {
                 say!("  {:<14} {e:.4}", t.name);
             }
@@ -509,6 +521,16 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 p.frames,
                 a.model.join("detector.json").display(),
                 p.threshold
+            );
+        }
+        TrainCmd::Align(a) => {
+            let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
+            let (p, n) = tactile_cae::artifact::add_pin_alignment(&a.model, &data)?;
+            say!(
+                "pin lattice at {:.2} deg over {n} frames; turns of {:.2} to {:.0} deg are undone",
+                p.reference_deg,
+                p.tolerance_deg,
+                p.max_turn_deg
             );
         }
         TrainCmd::Calibrate(a) => {

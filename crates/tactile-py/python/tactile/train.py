@@ -52,6 +52,9 @@ def cae(
     seed: Optional[int] = None,
     rotate_copies: int = 0,
     rotate_deg: float = 6.0,
+    joint_targets: Optional[Sequence[str]] = None,
+    joint_weight: float = 1.0,
+    joint_hidden: int = 64,
 ) -> Dict[str, Any]:
     """Paper A's convolutional autoencoder on a TacTip dataset.
 
@@ -61,6 +64,10 @@ def cae(
     "adadelta" (paper A) or "adam". ``device``: "flex" or "ndarray".
     ``rotate_copies`` > 0: each epoch, each training frame is seen as it is
     or as one of that many copies turned by up to ``rotate_deg`` degrees.
+    ``joint_targets`` (e.g. ``["x_mm", "theta_deg:180", "depth_mm"]``):
+    semi-supervised, the features also feed a head of ``joint_hidden``
+    units trained to predict those label columns, its loss weighted by
+    ``joint_weight``; only the autoencoder is saved.
     """
     return _tactile.train_cae(
         os.fspath(data),
@@ -81,6 +88,9 @@ def cae(
         ),
         rotate_copies=rotate_copies,
         rotate_deg=rotate_deg,
+        joint_targets=None if joint_targets is None else list(joint_targets),
+        joint_weight=joint_weight,
+        joint_hidden=joint_hidden,
     )
 
 

@@ -1,0 +1,257 @@
+//! Semi-supervised training of the autoencoder: besides reconstructing
+//! its input, the encoder's features feed a small head that predicts label
+//! columns, so the features keep what those labels need. Paper A's encoder
+//! learns its features unsupervised; on the real edge set its 16 features
+//! lose most of the edge pose (an MLP on them is 2x the error of one on the
+//! raw pixels). Only the autoencoder is saved: estimators are then trained
+//! on its features as for any encoder, so "one encoder, many cheap heads"
+//! still holds.
+
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::{Linear, LinearConfig};
+use burn::tensor::activation::relu;
+use burn::tensor::{Device, Tensor, TensorData};
+use tactile_core::dataset::Dataset;
+use tactile_estimate::Target;
+use tactile_estimate::regressor::{Scaler, encode, output_scaler};
+
+use crate::model::{Cae, hwc_flatten};
+
+/// Widest head accepted.
+pub const MAX_HEAD_HIDDEN: usize = 4096;
+
+/// What the features are also trained to predict.
+#[derive(Config, Debug, PartialEq)]
+pub struct JointTargets {
+    /// Label columns the head predicts (an angle takes two columns).
+    pub targets: Vec<Target>,
+    /// Weight of the head's mean squared error (standardised columns)
+    /// beside the reconstruction's binary cross-entropy.
+    #[config(default = 1.0)]
+    pub weight: f64,
+    /// Hidden units of the head (one ReLU layer).
+    #[config(default = 64)]
+    pub hidden: usize,
+}
+
+impl JointTargets {
+    /// Check every value before anything is allocated.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        let bad = |m: String| Err(tactile_core::Error::Config(m));
+        if self.targets.is_empty() || self.targets.len() > 32 {
+            return bad(format!(
+                "joint training: 1 to 32 targets, got {}",
+                self.targets.len()
+            ));
+        }
+        if !(self.weight.is_finite() && self.weight > 0.0 && self.weight <= 1e3) {
+            return bad(format!(
+                "joint training: the head's weight must be in (0, 1000], got {}",
+                self.weight
+            ));
+        }
+        if self.hidden == 0 || self.hidden > MAX_HEAD_HIDDEN {
+            return bad(format!(
+                "joint training: the head's hidden width must be 1 to {MAX_HEAD_HIDDEN}, got {}",
+                self.hidden
+            ));
+        }
+        Ok(())
+    }
+
+    /// Joint training on the targets named as `NAME` or `NAME:PERIOD`
+    /// (checked); `None` when no name is given.
+    pub fn from_names(names: &[String], weight: f64, hidden: usize) -> crate::Result<Option<Self>> {
+        if names.is_empty() {
+            return Ok(None);
+        }
+        let targets = names
+            .iter()
+            .map(|t| Target::parse(t).map_err(|e| tactile_core::Error::Config(e.to_string())))
+            .collect::<tactile_core::Result<Vec<_>>>()?;
+        let j = Self::new(targets).with_weight(weight).with_hidden(hidden);
+        j.check()?;
+        Ok(Some(j))
+    }
+
+    /// Network columns of the targets.
+    pub fn columns(&self) -> usize {
+        self.targets.iter().map(Target::width).sum()
+    }
+}
+
+/// The autoencoder with an optional head on its features.
+#[derive(Module, Debug)]
+pub struct JointCae {
+    /// The autoencoder (what is saved).
+    pub cae: Cae,
+    /// Features to hidden units, hidden units to standardised columns.
+    pub head: Option<(Linear, Linear)>,
+}
+
+impl JointCae {
+    /// `cae` with a fresh head for `joint` on its `features`.
+    pub fn new(cae: Cae, joint: Option<&JointTargets>, features: usize, device: &Device) -> Self {
+        let head = joint.map(|j| {
+            (
+                LinearConfig::new(features, j.hidden).init(device),
+                LinearConfig::new(j.hidden, j.columns()).init(device),
+            )
+        });
+        Self { cae, head }
+    }
+
+    /// Reconstruction logits and, with a head, its standardised columns.
+    ///
+    /// # Shapes
+    /// - `x`: `[N, 1, 28, 28]`
+    /// - output: `[N, 1, 28, 28]` and `[N, K]`
+    pub fn forward(&self, x: Tensor<4>) -> (Tensor<4>, Option<Tensor<2>>) {
+        let z = self.cae.encoder.latent(x);
+        let columns = self
+            .head
+            .as_ref()
+            .map(|(a, b)| b.forward(relu(a.forward(hwc_flatten(z.clone())))));
+        (self.cae.decoder.forward_latent(z), columns)
+    }
+}
+
+/// Standardised label columns of every row of a dataset (`None` where a
+/// target is unlabelled), with the scaler fitted on `fit_rows`.
+pub struct JointLabels {
+    /// Per dataset row.
+    pub columns: Vec<Option<Vec<f32>>>,
+    /// The standardisation.
+    pub scaler: Scaler,
+}
+
+impl JointLabels {
+    /// Read and standardise `joint`'s targets.
+    pub fn read(ds: &Dataset, joint: &JointTargets, fit_rows: &[usize]) -> crate::Result<Self> {
+        let mut raw = Vec::with_capacity(ds.len());
+        for i in 0..ds.len() {
+            let row: Vec<Option<f64>> = joint
+                .targets
+                .iter()
+                .map(|t| ds.number_opt(i, &t.name))
+                .collect::<tactile_core::Result<_>>()?;
+            raw.push(
+                row.into_iter()
+                    .map(|v| v.filter(|v| v.is_finite()))
+                    .collect::<Option<Vec<f64>>>(),
+            );
+        }
+        let fit: Vec<Vec<f64>> = fit_rows.iter().filter_map(|&i| raw[i].clone()).collect();
+        if fit.is_empty() {
+            return Err(tactile_core::Error::dataset(
+                ds.labels_path(),
+                None,
+                format!(
+                    "joint training: no training row has every target labelled ({})",
+                    joint
+                        .targets
+                        .iter()
+                        .map(|t| t.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+            .into());
+        }
+        let scaler = output_scaler(&joint.targets, &encode(&joint.targets, &fit));
+        let columns = raw
+            .into_iter()
+            .map(|r| r.map(|r| scaler.apply(&encode(&joint.targets, &[r]))))
+            .collect();
+        Ok(Self { columns, scaler })
+    }
+
+    /// Mean squared error of `predicted` columns against the labels of
+    /// `rows` (unlabelled rows count for nothing).
+    pub fn mse(&self, predicted: Tensor<2>, rows: &[usize]) -> Tensor<1> {
+        let device = predicted.device();
+        let [n, k] = predicted.dims();
+        let (mut y, mut mask) = (Vec::with_capacity(n * k), Vec::with_capacity(n));
+        for &i in rows {
+            match &self.columns[i] {
+                Some(c) => {
+                    y.extend_from_slice(c);
+                    mask.push(1.0f32);
+                }
+                None => {
+                    y.extend(std::iter::repeat_n(0.0, k));
+                    mask.push(0.0);
+                }
+            }
+        }
+        let labelled = mask.iter().sum::<f32>().max(1.0);
+        let y = Tensor::<2>::from_data(TensorData::new(y, [n, k]), &device);
+        let mask = Tensor::<2>::from_data(TensorData::new(mask, [n, 1]), &device);
+        ((predicted - y).powi_scalar(2) * mask).sum() / (labelled * k as f32)
+    }
+}
+
+/// The command-line flags of joint training.
+#[cfg(feature = "clap")]
+#[derive(clap::Args, Debug)]
+pub struct JointArgs {
+    /// Semi-supervised: also train the features to predict these label columns through a small head, e.g. x_mm,theta_deg:180,depth_mm (only the autoencoder is saved).
+    #[arg(long, value_delimiter = ',')]
+    pub joint_targets: Vec<String>,
+    /// Weight of the head's loss beside the reconstruction's.
+    #[arg(long, default_value_t = 1.0)]
+    pub joint_weight: f64,
+    /// Hidden units of the joint head.
+    #[arg(long, default_value_t = 64)]
+    pub joint_hidden: usize,
+}
+
+#[cfg(feature = "clap")]
+impl JointArgs {
+    /// `None` without `--joint-targets`.
+    pub fn config(&self) -> crate::Result<Option<JointTargets>> {
+        JointTargets::from_names(&self.joint_targets, self.joint_weight, self.joint_hidden)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unlabelled_rows_count_for_nothing_and_values_are_checked() {
+        let device = Device::flex();
+        let labels = JointLabels {
+            columns: vec![Some(vec![0.0, 0.0]), None, Some(vec![1.0, 1.0])],
+            scaler: Scaler {
+                mean: vec![0.0; 2],
+                std: vec![1.0; 2],
+            },
+        };
+        let pred = Tensor::<2>::from_data(
+            TensorData::new(vec![1.0f32, 1.0, 50.0, 50.0, 1.0, 3.0], [3, 2]),
+            &device,
+        );
+        // Row 0 is off by 1 and 1, row 2 by 0 and 2; row 1 has no label.
+        let mse = labels.mse(pred, &[0, 1, 2]).into_scalar::<f32>();
+        assert!((mse - 6.0 / 4.0).abs() < 1e-6, "{mse}");
+        let ok = JointTargets::new(vec![Target::linear("x_mm")]);
+        ok.check().unwrap();
+        for bad in [
+            JointTargets::new(vec![]),
+            ok.clone().with_weight(0.0),
+            ok.clone().with_weight(f64::NAN),
+            ok.clone().with_hidden(0),
+        ] {
+            assert!(bad.check().is_err(), "{bad:?}");
+        }
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        assert!(JointTargets::from_names(&[], 1.0, 64).unwrap().is_none());
+        let j = JointTargets::from_names(&names(&["x_mm", "theta_deg:180"]), 1.0, 64)
+            .unwrap()
+            .unwrap();
+        assert_eq!(j.columns(), 3);
+        assert!(JointTargets::from_names(&names(&["theta_deg:-5"]), 1.0, 64).is_err());
+    }
+}
