@@ -5,7 +5,10 @@
 //! (a tip screwed on a few degrees off) is turned back before the rest of
 //! the chain, so a model trained on straight frames sees what it knows. A
 //! contact moves some pins, but the mean over every neighbour pair of ~127
-//! pins barely moves with it.
+//! pins barely moves with it. The chain measures the lattice on its own
+//! binary image (after the lighting step and the mask), so a straight
+//! frame costs one connected-components pass; a turned one is turned back
+//! raw and lit again.
 
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::GreyImage;
@@ -114,6 +117,25 @@ fn lattice_delta(a: f64, b: f64) -> f64 {
     (a - b + 30.0).rem_euclid(60.0) - 30.0
 }
 
+/// The turn, degrees, of the pin lattice in a binary image (pins non-zero)
+/// from `align`'s reference, when it is one to undo: above the tolerance
+/// and at most the largest turn. `None` otherwise, or when no lattice is
+/// found.
+pub fn turn_to_undo(binary: &GreyImage, align: &PinAlign) -> Result<Option<f64>> {
+    let Some(angle) = lattice_angle_deg(&pin_centroids(binary, MIN_PIN_AREA_PX)?) else {
+        return Ok(None);
+    };
+    let turn = lattice_delta(angle, align.reference_deg);
+    Ok((turn.abs() > align.tolerance_deg && turn.abs() <= align.max_turn_deg).then_some(turn))
+}
+
+/// `image` turned about its centre by `-turn` degrees (bilinear), undoing
+/// a lattice turned by `turn`.
+pub fn turn_back(image: &GreyImage, turn: f64) -> Result<GreyImage> {
+    // `Rotation { deg }` adds `deg` to every in-image direction angle.
+    Perturbation::Rotation { deg: -turn }.apply(image, &mut SampleRng::new(0, 0, 0))
+}
+
 /// `frame` turned so its lattice sits at `align`'s reference, or `None`
 /// when it already does (within the tolerance), the turn is beyond the
 /// largest corrected, or no lattice is found.
@@ -122,16 +144,12 @@ pub fn aligned(
     cfg: &PreprocessConfig,
     align: &PinAlign,
 ) -> Result<Option<GreyImage>> {
-    let Some(angle) = frame_lattice_angle_deg(frame, cfg)? else {
-        return Ok(None);
-    };
-    let turn = lattice_delta(angle, align.reference_deg);
-    if turn.abs() <= align.tolerance_deg || turn.abs() > align.max_turn_deg {
-        return Ok(None);
+    let mut plain = cfg.clone();
+    plain.align = None;
+    match turn_to_undo(&full_resolution_binary(frame, &plain)?, align)? {
+        Some(turn) => Ok(Some(turn_back(frame, turn)?)),
+        None => Ok(None),
     }
-    // `Rotation { deg }` adds `deg` to every in-image direction angle.
-    let back = Perturbation::Rotation { deg: -turn };
-    Ok(Some(back.apply(frame, &mut SampleRng::new(0, 0, 0))?))
 }
 
 /// Fit the alignment on training frames: the reference is the median

@@ -90,8 +90,10 @@ pub struct PreprocessConfig {
     /// the fraction of an output pixel it covers.
     #[serde(default = "yes")]
     pub binarise: bool,
-    /// Turn each frame back to the training frames' pin lattice first
-    /// ([`align`]: a sensor mounted turned); `None` = off.
+    /// Turn each frame whose pin lattice (measured on the binary image
+    /// after the lighting step and the mask) is turned from the training
+    /// frames' back before the chain ([`align`]: a sensor mounted turned);
+    /// `None` = off.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub align: Option<align::PinAlign>,
 }
@@ -559,20 +561,9 @@ pub fn binarise(img: &GreyImage, offset: f64) -> Vec<f32> {
         .collect()
 }
 
-/// Run the full configured chain on one frame.
-pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage> {
-    cfg.check()?;
-    if frame.width() < cfg.output_px || frame.height() < cfg.output_px {
-        return Err(Error::FrameTooSmall {
-            width: frame.width(),
-            height: frame.height(),
-            needed: cfg.output_px,
-        });
-    }
-    let mut img = match &cfg.align {
-        Some(a) => align::aligned(frame, cfg, a)?.unwrap_or_else(|| frame.clone()),
-        None => frame.clone(),
-    };
+/// The chain's first steps: lighting, equalisation, threshold, mask.
+fn lit_and_masked(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<GreyImage> {
+    let mut img = frame.clone();
     if let Lighting::TopHat {
         background_window_px,
         peak_window_px,
@@ -603,6 +594,28 @@ pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage>
     }
     if let Some(r) = cfg.mask_radius_px {
         circular_mask(&mut img, r);
+    }
+    Ok(img)
+}
+
+/// Run the full configured chain on one frame.
+pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage> {
+    cfg.check()?;
+    if frame.width() < cfg.output_px || frame.height() < cfg.output_px {
+        return Err(Error::FrameTooSmall {
+            width: frame.width(),
+            height: frame.height(),
+            needed: cfg.output_px,
+        });
+    }
+    let mut img = lit_and_masked(frame, cfg)?;
+    if let Some(a) = &cfg.align
+        && let Some(turn) = align::turn_to_undo(&img, a)?
+    {
+        // Measured on the chain's own binary image (cheap, so a straight
+        // frame costs one connected-components pass); a turned frame is
+        // turned back raw and lit again, as a straight one would have been.
+        img = lit_and_masked(&align::turn_back(frame, turn)?, cfg)?;
     }
     if cfg.open_px > 0 {
         img = dilate(&erode(&img, cfg.open_px)?, cfg.open_px)?;

@@ -137,5 +137,22 @@ fn a_turned_mounting_is_measured_and_turned_back() {
         straight >= 14,
         "{straight} of 16 straight frames left alone"
     );
-    assert_eq!(preprocess(&frames[3], &on).unwrap().side, 28);
+    // Through the whole chain: the pin image of a frame turned by 5
+    // degrees comes out as the straight frame's, not as the turned one's.
+    let pins = |f: &tactile_core::image_io::GreyImage, c: &PreprocessConfig| {
+        preprocess(f, c).unwrap().pixels
+    };
+    let differ = |a: &[f32], b: &[f32]| {
+        a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum::<f32>() / a.len() as f32
+    };
+    let (mut fixed, mut raw) = (0.0, 0.0);
+    for f in &frames[..6] {
+        let turned = Perturbation::Rotation { deg: 5.0 }
+            .apply(f, &mut SampleRng::new(0, 0, 0))
+            .unwrap();
+        let straight = pins(f, &chain);
+        fixed += differ(&pins(&turned, &on), &straight);
+        raw += differ(&pins(&turned, &chain), &straight);
+    }
+    assert!(fixed < 0.4 * raw, "aligned {fixed} vs not {raw}");
 }
