@@ -59,6 +59,10 @@ train-cae-synth out="models/cae-synth": synth-tactip
     cargo run --release -p tactile -- train regressor --encoder {{out}} --data data/synth-tactip-train --targets theta_deg:180 --only-labelled --hidden 128,64 --out {{out}}/theta
     cargo run --release -p tactile -- train regressor --encoder {{out}} --data data/synth-sphere-train --targets x_mm,y_mm --shapes sphere --hidden 128,64 --out {{out}}/position-sphere
 
+# Measure the pin lattice's orientation on models/cae-synth's training frames and save it with the encoder: frames of a sensor mounted turned are turned back before encoding (scripts/paper-a.sh's robustness table).
+align-cae-synth: synth-tactip
+    cargo run --release -p tactile -- train align --model models/cae-synth --data data/synth-tactip-train
+
 # A shape head for models/cae-synth trained with rotation augmentation (4 copies of each frame turned by up to 6 degrees): robust to a sensor mounted turned, 3 points less on straight frames; scripts/paper-a.sh compares it.
 train-turned-head out="data/cae-synth-turned-head": synth-tactip
     cargo run --release -p tactile -- train head --encoder models/cae-synth --data data/synth-tactip-train --test data/synth-tactip-test --rotate-copies 4 --rotate-deg 6 --out {{out}}
@@ -69,8 +73,15 @@ bench-synth:
 
 # Paper A on the real 127-pin edge set: the grey-level CAE (never sees the frames `compare --seed 7` tests on) and the binary one of the paper.
 train-cae-edge:
-    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out models/cae-edge --preprocess configs/preprocess/tactip127-edge-area.json --widths 32,32,16,4 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 400 --patience 40 --exclude-test 0.2
+    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out models/cae-edge-unsupervised --preprocess configs/preprocess/tactip127-edge-area.json --widths 32,32,16,4 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 400 --patience 40 --exclude-test 0.2
     cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out models/cae-edge-binary --preprocess configs/preprocess/tactip127-edge.json --widths 16,16,8,4 --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 250 --patience 40 --exclude-test 0.2
+
+# The CAE route trained jointly with the edge-pose heads (semi-supervised: reconstruction plus a 64-unit head on the features predicting x, theta, depth, its loss weighted 10; only the autoencoder is kept). Scored runs (weights 1 and 10, 32 features) without the test frames `compare --seed 7` scores, each with its MLP estimator; then the shipped one (weight 10) on every frame with its estimator trained on every frame.
+train-cae-edge-joint:
+    for w in 1 10; do cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out data/cae-joint-32-w$w --preprocess configs/preprocess/tactip127-edge-area.json --widths 32,32,16,4 --features 32 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 150 --patience 25 --exclude-test 0.2 --joint-targets x_mm,theta_deg:180,depth_mm --joint-weight $w; done
+    for w in 1 10; do cargo run --release -p tactile -- train regressor --encoder data/cae-joint-32-w$w --data {{real}}/tactip127-edge --targets x_mm,theta_deg:180,depth_mm --hidden 256,128 --out data/cae-joint-32-w$w/pose; done
+    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out models/cae-edge --preprocess configs/preprocess/tactip127-edge-area.json --widths 32,32,16,4 --features 32 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 150 --patience 25 --joint-targets x_mm,theta_deg:180,depth_mm --joint-weight 10
+    cargo run --release -p tactile -- train regressor --encoder models/cae-edge --data {{real}}/tactip127-edge --targets x_mm,theta_deg:180,depth_mm --hidden 256,128 --test-fraction 0 --out models/cae-edge/pose
 
 # Paper A's feature-count search on the shapes set: trains 8/16/32/64-feature CAEs into data/sweep, then writes docs/paper-a/sweep.md and its plots.
 sweep:
