@@ -16,17 +16,19 @@ cargo build --release -q -p tactile
 BIN="${CARGO_TARGET_DIR:-target}/release/tactile"
 
 # Each step: the command line (kept for the document) and its run.
+# PAPER_A_ASSEMBLE_ONLY=1 runs none of them and rebuilds the page from the
+# tables already in docs/paper-a/.
 declare -A CMD
 step() {
     local name=$1
     shift
     CMD[$name]="tactile $*"
     echo ">> tactile $*" >&2
-    "$BIN" "$@" >/dev/null
+    [ -n "${PAPER_A_ASSEMBLE_ONLY:-}" ] || "$BIN" "$@" >/dev/null
 }
 
 SYNTH_TEST=data/paper-a-synth-test
-[ -d "$SYNTH_TEST" ] || "$BIN" synth tactip --count 700 --seed 200 --out "$SYNTH_TEST"
+[ -d "$SYNTH_TEST" ] || [ -n "${PAPER_A_ASSEMBLE_ONLY:-}" ] || "$BIN" synth tactip --count 700 --seed 200 --out "$SYNTH_TEST"
 
 step shapes compare --encoder models/cae-shapes --data "$REAL/polic-shapes" --classify shape --out "$OUT/shapes-compare.md"
 if [ -d data/sweep/cae-64 ]; then
@@ -80,6 +82,8 @@ step robustness_unaligned robustness --encoder "$UNALIGNED" --data "$SYNTH_TEST"
 TURNED=data/cae-synth-turned-head
 if [ -f "$TURNED/head.json" ]; then
     step robustness_turned robustness --encoder "$UNALIGNED" --heads "$TURNED" --data "$SYNTH_TEST" --out "$OUT/robustness-turned-head.md"
+elif [ -f "$OUT/robustness-turned-head.md" ]; then
+    CMD[robustness_turned]="tactile robustness --encoder $UNALIGNED --heads $TURNED --data $SYNTH_TEST --out $OUT/robustness-turned-head.md (after just train-turned-head; the last table is kept)"
 fi
 step cross compare --encoder models/cae-shapes --data "$REAL/tactip127-edge" \
     --preprocess configs/preprocess/tactip127-edge.json \
