@@ -15,7 +15,7 @@ use tactile_core::image_io::GreyImage;
 use tactile_core::rng::SampleRng;
 
 use crate::perturb::Perturbation;
-use crate::pins::{full_resolution_binary, pin_centroids};
+use crate::pins::{full_resolution_binary, median_spacing_px, pin_centroids};
 use crate::{PreprocessConfig, Result};
 
 /// Largest turn corrected, degrees: beyond half the lattice's 60 degree
@@ -71,20 +71,7 @@ pub fn lattice_angle_deg(points: &[(f32, f32)]) -> Option<f64> {
         return None;
     }
     let d = |a: &(f32, f32), b: &(f32, f32)| ((a.0 - b.0) as f64).hypot((a.1 - b.1) as f64);
-    let mut nearest: Vec<f64> = points
-        .iter()
-        .enumerate()
-        .map(|(i, a)| {
-            points
-                .iter()
-                .enumerate()
-                .filter(|(j, _)| *j != i)
-                .map(|(_, b)| d(a, b))
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    nearest.sort_by(f64::total_cmp);
-    let reach = 1.4 * nearest[nearest.len() / 2];
+    let reach = 1.4 * median_spacing_px(points)? as f64;
     let (mut s, mut c, mut n) = (0.0, 0.0, 0usize);
     for (i, a) in points.iter().enumerate() {
         for b in &points[i + 1..] {

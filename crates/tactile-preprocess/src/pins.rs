@@ -61,6 +61,28 @@ pub fn full_resolution_binary(frame: &GreyImage, cfg: &PreprocessConfig) -> Resu
     )?)
 }
 
+/// The median over `points` of the distance to the nearest other point
+/// (a pin lattice's spacing), pixels; `None` for fewer than 2 points.
+pub fn median_spacing_px(points: &[(f32, f32)]) -> Option<f32> {
+    if points.len() < 2 {
+        return None;
+    }
+    let mut nn: Vec<f32> = points
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            points
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, b)| (a.0 - b.0).hypot(a.1 - b.1))
+                .fold(f32::INFINITY, f32::min)
+        })
+        .collect();
+    nn.sort_by(f32::total_cmp);
+    Some(nn[nn.len() / 2])
+}
+
 /// Pins of a reference frame; matches other frames' centroids to them.
 #[derive(Debug, Clone)]
 pub struct PinTracker {
@@ -81,21 +103,9 @@ impl PinTracker {
             ))
             .into());
         }
-        let mut nn: Vec<f32> = reference
-            .iter()
-            .enumerate()
-            .map(|(i, a)| {
-                reference
-                    .iter()
-                    .enumerate()
-                    .filter(|(j, _)| *j != i)
-                    .map(|(_, b)| (a.0 - b.0).hypot(a.1 - b.1))
-                    .fold(f32::INFINITY, f32::min)
-            })
-            .collect();
-        nn.sort_by(f32::total_cmp);
+        let spacing = median_spacing_px(&reference).unwrap_or(0.0);
         Ok(Self {
-            max_shift_px: nn[nn.len() / 2] / 2.0,
+            max_shift_px: spacing / 2.0,
             reference,
         })
     }
