@@ -69,16 +69,24 @@ pub fn add_pin_alignment(
     dir: &std::path::Path,
     datasets: &[tactile_core::dataset::Dataset],
 ) -> crate::Result<(tactile_preprocess::align::PinAlign, usize)> {
+    use rayon::prelude::*;
     let mut artifact = CaeArtifact::read(dir)?;
-    let mut frames = Vec::new();
+    let mut angles = Vec::new();
     for ds in datasets {
         ds.expect_kind(tactile_core::dataset::DatasetKind::Tactip)?;
-        for i in 0..ds.len() {
-            frames.push(ds.load_grey(i, "file")?);
-        }
+        // One frame at a time per thread: only the angles are kept.
+        let measured = (0..ds.len())
+            .into_par_iter()
+            .map(|i| {
+                let frame = ds.load_grey(i, "file")?;
+                let path = ds.path_of(i, "file")?;
+                tactile_preprocess::align::frame_lattice_angle_deg(&frame, &artifact.preprocess)
+                    .map_err(|e| crate::Error::from(e.in_file(path)))
+            })
+            .collect::<crate::Result<Vec<_>>>()?;
+        angles.extend(measured);
     }
-    let (align, measured) =
-        tactile_preprocess::align::fit_pin_align(&frames, &artifact.preprocess)?;
+    let (align, measured) = tactile_preprocess::align::fit_pin_align_to(&angles)?;
     artifact.preprocess.align = Some(align);
     tactile_core::io::write_json_atomic(dir.join(CaeArtifact::CONFIG_FILE), &artifact)?;
     Ok((align, measured))

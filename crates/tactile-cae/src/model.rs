@@ -72,6 +72,29 @@ impl CaeConfig {
         (0..4).fold(self.input_px, |s, _| s.div_ceil(2))
     }
 
+    /// The config the training front ends ask for: four encoder `widths`,
+    /// optionally a feature count (sets the last width), and the linear
+    /// latent (no ReLU before the last pooling).
+    pub fn from_options(
+        widths: &[usize],
+        features: Option<usize>,
+        linear_latent: bool,
+    ) -> crate::Result<Self> {
+        let widths: [usize; 4] = widths.try_into().map_err(|_| {
+            tactile_core::Error::Config(format!(
+                "CAE widths: 4 values needed, got {}",
+                widths.len()
+            ))
+        })?;
+        let model = Self::new()
+            .with_widths(widths)
+            .with_latent_relu(linear_latent.then_some(false));
+        match features {
+            Some(f) => model.with_feature_count(f),
+            None => Ok(model),
+        }
+    }
+
     /// The config with `feature_count` features (paper A's 8/16/32/64 sweep).
     pub fn with_feature_count(self, features: usize) -> crate::Result<Self> {
         let s2 = self.latent_side() * self.latent_side();

@@ -413,6 +413,24 @@ pub struct RegressorFit {
     pub test_mae: Vec<f64>,
 }
 
+impl RegressorFit {
+    /// Lines for a person: the test error per target, or that every
+    /// frame trained.
+    pub fn describe(&self, targets: &[Target]) -> String {
+        if self.frames[2] == 0 {
+            return format!(
+                "every frame trained ({} for early stopping); no test frames",
+                self.frames[1]
+            );
+        }
+        let mut s = format!("test mean absolute error ({} frames):", self.frames[2]);
+        for (t, e) in targets.iter().zip(&self.test_mae) {
+            s.push_str(&format!("\n  {:<14} {e:.4}", t.name));
+        }
+        s
+    }
+}
+
 /// Train a regressor on `ds` and save it in `out`.
 pub fn train_regressor(
     plan: &RegressorPlan,

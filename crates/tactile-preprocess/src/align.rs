@@ -15,7 +15,7 @@ use tactile_core::image_io::GreyImage;
 use tactile_core::rng::SampleRng;
 
 use crate::perturb::Perturbation;
-use crate::pins::{full_resolution_binary, median_spacing_px, pin_centroids};
+use crate::pins::{median_spacing_px, pin_centroids};
 use crate::{PreprocessConfig, Result};
 
 /// Largest turn corrected, degrees: beyond half the lattice's 60 degree
@@ -47,6 +47,21 @@ pub struct PinAlign {
 }
 
 impl PinAlign {
+    /// The turn from the reference of a lattice at `angle_deg`, when it is
+    /// one to undo: above the tolerance and at most the largest turn.
+    pub fn turn_to_undo(&self, angle_deg: f64) -> Option<f64> {
+        let turn = lattice_delta(angle_deg, self.reference_deg);
+        (turn.abs() > self.tolerance_deg && turn.abs() <= self.max_turn_deg).then_some(turn)
+    }
+
+    /// One line for a person: the reference and the turns undone.
+    pub fn describe(&self, frames: usize) -> String {
+        format!(
+            "pin lattice at {:.2} deg over {frames} frames; turns of {:.2} to {:.0} deg are undone",
+            self.reference_deg, self.tolerance_deg, self.max_turn_deg
+        )
+    }
+
     /// Check the angles.
     pub fn check(&self) -> tactile_core::Result<()> {
         let ok = |v: f64, lo: f64, hi: f64| v.is_finite() && (lo..=hi).contains(&v);
@@ -90,12 +105,11 @@ pub fn lattice_angle_deg(points: &[(f32, f32)]) -> Option<f64> {
     Some(s.atan2(c).to_degrees() / 6.0)
 }
 
-/// The pin lattice's orientation in `frame` as `cfg`'s chain binarises it
-/// (without its alignment step), degrees.
+/// The pin lattice's orientation in `frame`, measured on the binary image
+/// `cfg`'s chain makes of it before any turn (what [`crate::preprocess`]
+/// measures), degrees.
 pub fn frame_lattice_angle_deg(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<Option<f64>> {
-    let mut plain = cfg.clone();
-    plain.align = None;
-    let binary = full_resolution_binary(frame, &plain)?;
+    let binary = crate::lit_and_masked(frame, cfg)?;
     Ok(lattice_angle_deg(&pin_centroids(&binary, MIN_PIN_AREA_PX)?))
 }
 
@@ -112,8 +126,7 @@ pub fn turn_to_undo(binary: &GreyImage, align: &PinAlign) -> Result<Option<f64>>
     let Some(angle) = lattice_angle_deg(&pin_centroids(binary, MIN_PIN_AREA_PX)?) else {
         return Ok(None);
     };
-    let turn = lattice_delta(angle, align.reference_deg);
-    Ok((turn.abs() > align.tolerance_deg && turn.abs() <= align.max_turn_deg).then_some(turn))
+    Ok(align.turn_to_undo(angle))
 }
 
 /// `image` turned about its centre by `-turn` degrees (bilinear), undoing
@@ -131,9 +144,7 @@ pub fn aligned(
     cfg: &PreprocessConfig,
     align: &PinAlign,
 ) -> Result<Option<GreyImage>> {
-    let mut plain = cfg.clone();
-    plain.align = None;
-    match turn_to_undo(&full_resolution_binary(frame, &plain)?, align)? {
+    match frame_lattice_angle_deg(frame, cfg)?.and_then(|a| align.turn_to_undo(a)) {
         Some(turn) => Ok(Some(turn_back(frame, turn)?)),
         None => Ok(None),
     }
@@ -146,18 +157,22 @@ pub fn aligned(
 /// measured frames is an error.
 pub fn fit_pin_align(frames: &[GreyImage], cfg: &PreprocessConfig) -> Result<(PinAlign, usize)> {
     use rayon::prelude::*;
-    let angles: Vec<f64> = frames
+    let angles = frames
         .par_iter()
         .map(|f| frame_lattice_angle_deg(f, cfg))
-        .collect::<Result<Vec<_>>>()?
-        .into_iter()
-        .flatten()
-        .collect();
+        .collect::<Result<Vec<_>>>()?;
+    fit_pin_align_to(&angles)
+}
+
+/// [`fit_pin_align`] on each frame's measured lattice angle (`None` where
+/// a frame shows no lattice), so frames need not all be held in memory.
+pub fn fit_pin_align_to(frame_angles: &[Option<f64>]) -> Result<(PinAlign, usize)> {
+    let angles: Vec<f64> = frame_angles.iter().flatten().copied().collect();
     if angles.len() < 10 {
         return Err(tactile_core::Error::Invalid(format!(
             "pin alignment: a pin lattice was found in {} of {} frames, at least 10 are needed",
             angles.len(),
-            frames.len()
+            frame_angles.len()
         ))
         .into());
     }

@@ -561,8 +561,9 @@ pub fn binarise(img: &GreyImage, offset: f64) -> Vec<f32> {
         .collect()
 }
 
-/// The chain's first steps: lighting, equalisation, threshold, mask.
-fn lit_and_masked(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<GreyImage> {
+/// The chain's first steps: lighting, equalisation, threshold, mask (the
+/// binary image the pin alignment measures).
+pub(crate) fn lit_and_masked(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<GreyImage> {
     let mut img = frame.clone();
     if let Lighting::TopHat {
         background_window_px,

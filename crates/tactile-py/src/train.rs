@@ -169,13 +169,12 @@ pub(crate) fn train_cae<'py>(
     tactile_core::io::ensure_writable_dir(&out).py()?;
     let ds = open(py, data)?;
     let d = CaeTrainingConfig::new();
-    let mut model = CaeConfig::new().with_latent_relu(linear_latent.then_some(false));
-    if let Some(w) = widths {
-        model = model.with_widths(w);
-    }
-    if let Some(f) = features {
-        model = model.with_feature_count(f).py()?;
-    }
+    let model = CaeConfig::from_options(
+        &widths.unwrap_or(CaeConfig::new().widths),
+        features,
+        linear_latent,
+    )
+    .py()?;
     let config = CaeTrainingConfig::new()
         .with_model(model)
         .with_preprocess(pre)

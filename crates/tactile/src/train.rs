@@ -359,16 +359,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
     match cmd {
         TrainCmd::Cae(a) => {
             let ds = Dataset::open(&a.data)?;
-            let widths: [usize; 4] = a
-                .widths
-                .try_into()
-                .map_err(|_| anyhow::anyhow!("--widths needs 4 values"))?;
-            let mut model = CaeConfig::new()
-                .with_widths(widths)
-                .with_latent_relu(a.linear_latent.then_some(false));
-            if let Some(f) = a.features {
-                model = model.with_feature_count(f)?;
-            }
+            let model = CaeConfig::from_options(&a.widths, a.features, a.linear_latent)?;
             let config = CaeTrainingConfig::new()
                 .with_model(model)
                 .with_preprocess(a.preprocess.config)
@@ -420,17 +411,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 ..RegressorPlan::new(a.targets)
             };
             let fit = train_regressor(&plan, &a.features.source()?, &ds, &out, a.device.runtime())?;
-            if fit.frames[2] == 0 {
-                say!(
-                    "every frame trained ({} for early stopping); no test frames",
-                    fit.frames[1]
-                );
-            } else {
-                say!("test mean absolute error ({} frames):", fit.frames[2]);
-            }
-            for (t, e) in plan.targets.iter().zip(&fit.test_mae) {
-                say!("  {:<14} {e:.4}", t.name);
-            }
+            say!("{}", fit.describe(&plan.targets));
             say!("regressor saved in {}", out.display());
         }
         TrainCmd::Pose(a) => {
@@ -526,12 +507,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Align(a) => {
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
             let (p, n) = tactile_cae::artifact::add_pin_alignment(&a.model, &data)?;
-            say!(
-                "pin lattice at {:.2} deg over {n} frames; turns of {:.2} to {:.0} deg are undone",
-                p.reference_deg,
-                p.tolerance_deg,
-                p.max_turn_deg
-            );
+            say!("{}", p.describe(n));
         }
         TrainCmd::Calibrate(a) => {
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
