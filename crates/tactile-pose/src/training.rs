@@ -39,6 +39,29 @@ pub fn grey_pin_images(side: usize) -> PreprocessConfig {
     }
 }
 
+/// What the optimiser minimises on the standardised target columns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum PoseLoss {
+    /// Mean squared error: the usual choice, pulls hardest on outliers.
+    #[default]
+    Mse,
+    /// Mean absolute error: the loss of the metric reported (MAE), so the
+    /// network is not pulled towards a few hard frames at the median's cost.
+    L1,
+}
+
+impl PoseLoss {
+    /// Its name in configs and curves.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mse => "MSE",
+            Self::L1 => "L1",
+        }
+    }
+}
+
 /// Training settings.
 #[derive(Config, Debug)]
 pub struct PoseTrainingConfig {
@@ -69,6 +92,10 @@ pub struct PoseTrainingConfig {
     /// training rows is what the curves show.
     #[config(default = false)]
     pub all_rows: bool,
+    /// The training loss, MSE when absent (configs written before it
+    /// load unchanged); early stopping always compares the validation MSE.
+    #[config(default = "None")]
+    pub loss: Option<PoseLoss>,
 }
 
 impl PoseTrainingConfig {
@@ -173,13 +200,14 @@ pub fn train(
     let ad = dev.clone().autodiff();
     ad.seed(config.schedule.seed);
     let model = config.model.init(&ad);
-    let fit_cfg = FitConfig::new(
-        &config.schedule,
-        "Pose network training (MSE, standardised)",
-    )
-    .saving_to(out, resume)
-    .with_checkpoint_every(5)
-    .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
+    let title = format!(
+        "Pose network training ({}, standardised)",
+        config.loss.unwrap_or_default().name()
+    );
+    let fit_cfg = FitConfig::new(&config.schedule, &title)
+        .saving_to(out, resume)
+        .with_checkpoint_every(5)
+        .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
     let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
     let seed = config.schedule.seed;
     let last_mae = std::cell::RefCell::new(Vec::new());
@@ -192,7 +220,11 @@ pub fn train(
             let x = set.batch(batch, &config.augment, (seed, epoch as u64 + 1), &ad);
             let y: Vec<f32> = batch.iter().flat_map(|&i| columns[i].clone()).collect();
             let y = Tensor::<2>::from_data(TensorData::new(y, [batch.len(), k]), &ad);
-            Ok((m.forward(x) - y).powi_scalar(2).mean())
+            let diff = m.forward(x) - y;
+            Ok(match config.loss.unwrap_or_default() {
+                PoseLoss::Mse => diff.powi_scalar(2).mean(),
+                PoseLoss::L1 => diff.abs().mean(),
+            })
         },
         |m| {
             let cols = predict_columns(m, &set, &val, &dev)?;
@@ -295,4 +327,27 @@ pub fn test_scores(
         mae: target_mae(&targets, &pred, &set.label_rows(&rows)),
         frames: rows.len(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Configs written before the loss option load as MSE; `"l1"` is read
+    /// and written back by name; an unknown loss is refused, not ignored.
+    #[test]
+    fn the_loss_is_optional_named_and_checked() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/pose/p128.json");
+        let old: PoseTrainingConfig =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        assert_eq!(old.loss, None);
+        assert_eq!(old.loss.unwrap_or_default(), PoseLoss::Mse);
+        let mut v = serde_json::to_value(&old).unwrap();
+        v["loss"] = "l1".into();
+        let l1: PoseTrainingConfig = serde_json::from_value(v.clone()).unwrap();
+        assert_eq!(l1.loss, Some(PoseLoss::L1));
+        assert_eq!(serde_json::to_value(&l1).unwrap()["loss"], "l1");
+        v["loss"] = "huber".into();
+        assert!(serde_json::from_value::<PoseTrainingConfig>(v).is_err());
+    }
 }

@@ -86,6 +86,9 @@ pub(crate) struct PoseArgs {
     /// Train on every training row for exactly --max-epochs (the final model).
     #[arg(long)]
     all_rows: bool,
+    /// Training loss on the standardised targets [default: the config's, else mse].
+    #[arg(long, value_enum)]
+    loss: Option<tactile_pose::training::PoseLoss>,
     #[command(flatten)]
     schedule: PoseSchedule,
 }
@@ -431,6 +434,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 schedule: s.schedule(lr),
                 holdout,
                 all_rows: a.all_rows,
+                loss: a.loss.or(config.loss),
                 ..config
             };
             let fit = tactile_pose::training::train(&config, &ds, &a.out, s.device, s.resume)?;
