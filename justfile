@@ -123,8 +123,8 @@ train-pose:
 
 # The L1 recipe (loss on the standardised columns, learning rate decayed 8 % per epoch to 2 % of its start) validated on the 80 % of frames the split's test leaves (no early stopping: 45 epochs, about 67 minutes on 2 cores): 0.155 mm / 1.49 deg / 0.034 mm on the 752 test frames. `train-pose-edge-l1` trains the shipped model with it on every frame.
 train-pose-l1:
-    cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out data/pose/p128-l1d --config configs/pose/p128.json --exclude-test 0.2 --all-rows --max-epochs 45 --patience 45 --lr-decay 0.92 --loss l1
-    cargo run --release -p tactile -- bench pose --models data/pose/p128-l1d --data {{real}}/tactip127-edge --runs 200 --out docs/paper-a/edge-pose-l1.md
+    cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out data/pose-l1/p128-l1d --config configs/pose/p128.json --exclude-test 0.2 --all-rows --max-epochs 45 --patience 45 --lr-decay 0.92 --loss l1
+    cargo run --release -p tactile -- bench pose --models data/pose-l1/p128-l1d --data {{real}}/tactip127-edge --runs 200 --out docs/paper-a/edge-pose-l1.md
 
 train-pose-edge-l1:
     cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out models/pose-edge --config configs/pose/p128.json --all-rows --max-epochs 45 --patience 45 --lr-decay 0.92 --loss l1

@@ -146,6 +146,12 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     echo
     body "$OUT/edge-pose.md" | sed 's#](edge-pose.png)#](paper-a/edge-pose.png)#'
     echo
+    if [ -f "$OUT/edge-pose-l1.md" ]; then
+        echo "The same 128 px network trained on the L1 loss of the standardised columns with the learning rate decayed 8 % per epoch, on all 3,010 frames the test leaves (45 epochs, no early stopping; \`just train-pose-l1\`, which writes this table):"
+        echo
+        body "$OUT/edge-pose-l1.md" | sed 's#](edge-pose-l1.png)#](paper-a/edge-pose-l1.png)#'
+        echo
+    fi
     echo "The CAE routes beside the shipped pose network (the jointly trained encoders are scored on the frames they never saw; \`models/cae-edge\` and \`models/pose-edge\` trained on every frame, so their rows are on frames they saw). \`${CMD[pose_cae]}\`"
     echo
     body "$OUT/edge-pose-cae.md" | sed 's#](edge-pose-cae.png)#](paper-a/edge-pose-cae.png)#'
