@@ -200,10 +200,8 @@ pub fn train(
     let ad = dev.clone().autodiff();
     ad.seed(config.schedule.seed);
     let model = config.model.init(&ad);
-    let title = format!(
-        "Pose network training ({}, standardised)",
-        config.loss.unwrap_or_default().name()
-    );
+    let loss = config.loss.unwrap_or_default();
+    let title = format!("Pose network training ({}, standardised)", loss.name());
     let fit_cfg = FitConfig::new(&config.schedule, &title)
         .saving_to(out, resume)
         .with_checkpoint_every(5)
@@ -221,7 +219,7 @@ pub fn train(
             let y: Vec<f32> = batch.iter().flat_map(|&i| columns[i].clone()).collect();
             let y = Tensor::<2>::from_data(TensorData::new(y, [batch.len(), k]), &ad);
             let diff = m.forward(x) - y;
-            Ok(match config.loss.unwrap_or_default() {
+            Ok(match loss {
                 PoseLoss::Mse => diff.powi_scalar(2).mean(),
                 PoseLoss::L1 => diff.abs().mean(),
             })

@@ -181,10 +181,7 @@ pub(crate) fn train_cae<'py>(
         .with_schedule(schedule.apply(d.schedule, optimizer.default_learning_rate()))
         .with_optimizer(optimizer)
         .with_val_fraction(val_fraction.unwrap_or(d.val_fraction))
-        .with_holdout(exclude_test.map(|f| TestHoldout {
-            test_fraction: f,
-            split_seed,
-        }));
+        .with_holdout(TestHoldout::excluding(exclude_test, split_seed));
     let seed = config.schedule.seed;
     let config = config
         .with_rotation(RotationAugment::optional(rotate_copies, rotate_deg, seed))

@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use tactile_cae::{CaeConfig, CaeTrainingConfig, Optimizer};
 use tactile_core::DeviceKind;
-use tactile_core::dataset::{Dataset, TestHoldout};
+use tactile_core::dataset::{Dataset, TestHoldoutArgs};
 use tactile_depth::{DenseNetPreset, DepthTrainingConfig, HeadKind, LossKind};
 use tactile_detect::{Architecture, DetectorTrainingConfig, SoftLabels};
 use tactile_estimate::{HeadConfig, RegressorConfig, Target};
@@ -77,12 +77,8 @@ pub(crate) struct PoseArgs {
     /// Side of the grey pin image.
     #[arg(long)]
     input_px: Option<usize>,
-    /// Leave out the test frames of this fraction and --split-seed.
-    #[arg(long)]
-    exclude_test: Option<f64>,
-    /// The seed of that split.
-    #[arg(long, default_value_t = 7)]
-    split_seed: u64,
+    #[command(flatten)]
+    holdout: TestHoldoutArgs,
     /// Train on every training row for exactly --max-epochs (the final model).
     #[arg(long)]
     all_rows: bool,
@@ -122,12 +118,8 @@ pub(crate) struct CaeArgs {
     /// Fraction of the training rows held out for early stopping.
     #[arg(long, default_value_t = CaeTrainingConfig::new().val_fraction)]
     val_fraction: f64,
-    /// Without a `split` column: leave out the test frames that `tactile compare`/`train regressor` with this test fraction and --split-seed hold out, so the encoder never sees them.
-    #[arg(long)]
-    exclude_test: Option<f64>,
-    /// The seed of that split (compare's --seed).
-    #[arg(long, default_value_t = 7)]
-    split_seed: u64,
+    #[command(flatten)]
+    holdout: TestHoldoutArgs,
     #[command(flatten)]
     schedule: CaeSchedule,
     #[command(flatten)]
@@ -369,10 +361,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 .with_schedule(a.schedule.schedule(a.optimizer.default_learning_rate()))
                 .with_optimizer(a.optimizer)
                 .with_val_fraction(a.val_fraction)
-                .with_holdout(a.exclude_test.map(|f| TestHoldout {
-                    test_fraction: f,
-                    split_seed: a.split_seed,
-                }))
+                .with_holdout(a.holdout.holdout())
                 .with_rotation(a.rotate.augment(a.schedule.seed))
                 .with_joint(a.joint.config()?);
             let s = tactile_cae::training::train(
@@ -424,10 +413,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 None => pose_defaults(),
             };
             config.preprocess.output_px = a.input_px.unwrap_or(config.preprocess.output_px);
-            let holdout = a.exclude_test.map(|test_fraction| TestHoldout {
-                test_fraction,
-                split_seed: a.split_seed,
-            });
+            let holdout = a.holdout.holdout();
             let (s, lr) = (&a.schedule, config.schedule.learning_rate);
             let config = PoseTrainingConfig {
                 targets: a.targets.clone(),

@@ -14,6 +14,8 @@ mod split;
 mod writer;
 
 pub use paths::{Escape, resolve_inside};
+#[cfg(feature = "clap")]
+pub use split::TestHoldoutArgs;
 pub use split::{Splits, TestHoldout, hold_out};
 pub use writer::DatasetWriter;
 
