@@ -36,6 +36,23 @@ impl RuntimeMs {
         ]
     }
 
+    /// Models run one after another (an ensemble's members): per runtime
+    /// the sum, where every model has a time.
+    pub fn sum(parts: &[RuntimeMs]) -> RuntimeMs {
+        let add = |f: fn(&RuntimeMs) -> Option<f64>| {
+            parts
+                .iter()
+                .map(f)
+                .sum::<Option<f64>>()
+                .filter(|_| !parts.is_empty())
+        };
+        RuntimeMs {
+            ndarray: add(|r| r.ndarray),
+            flex: add(|r| r.flex),
+            onnxruntime: add(|r| r.onnxruntime),
+        }
+    }
+
     /// The milliseconds of `runtime`.
     pub fn get(&self, runtime: Runtime) -> Option<f64> {
         match runtime {

@@ -106,21 +106,22 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
     md.push_str("| model | architecture | width | input | parameters | accuracy (selection set) | accuracy | F1 | onset/release accuracy | calibration error: all / p in 0.1-0.9 | burn ndarray ms | burn flex ms | onnxruntime ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     let (mut series, mut rows, mut candidates) = (Vec::new(), Vec::new(), Vec::new());
     // Frames are loaded once per input size (test and selection sets).
-    type Sets = ([usize; 2], DetectionSet, Option<DetectionSet>);
+    type Sets = (([usize; 2], u8), DetectionSet, Option<DetectionSet>);
     let mut cache: Vec<Sets> = Vec::new();
     for m in &b.models {
         let mut det = TendonDetector::load(m, SCORE_RUNTIME, 0)?;
         let art = det.artifact.clone();
         let size = art.model.input_size;
-        if !cache.iter().any(|c| c.0 == size) {
+        let key = (size, art.model.bits());
+        if !cache.iter().any(|c| c.0 == key) {
             tactile_core::note!("loading {} at {}x{}", b.data.display(), size[0], size[1]);
             let sel = sel_ds
                 .as_ref()
-                .map(|d| DetectionSet::from_dataset(d, size))
+                .map(|d| DetectionSet::from_dataset(d, &art.model))
                 .transpose()?;
-            cache.push((size, DetectionSet::from_dataset(&ds, size)?, sel));
+            cache.push((key, DetectionSet::from_dataset(&ds, &art.model)?, sel));
         }
-        let Some((_, data, sel_data)) = cache.iter().find(|c| c.0 == size) else {
+        let Some((_, data, sel_data)) = cache.iter().find(|c| c.0 == key) else {
             continue;
         };
         let sc = tactile_detect::evaluate(&mut det, data)?;

@@ -8,7 +8,7 @@ use tactile_core::Artifact;
 use tactile_core::dataset::{Dataset, TestHoldout};
 use tactile_core::plot::Series;
 use tactile_pipeline::tactip::Predictor;
-use tactile_pose::PoseArtifact;
+use tactile_pose::{PoseArtifact, PoseEnsemble};
 
 use crate::Result;
 use crate::latency::{RuntimeMs, ms_cell};
@@ -39,7 +39,7 @@ pub struct PoseMetrics {
     /// True when the model trained on every frame (its errors are then on
     /// frames it saw, not held-out ones).
     pub saw_test_frames: bool,
-    /// `pose network` or `encoder + estimators`.
+    /// `pose network`, `pose ensemble` or `encoder + estimators`.
     pub kind: String,
 }
 
@@ -66,7 +66,21 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
     );
     for m in &b.models {
         let (kind, notes, input, params, ms): (&str, serde_json::Value, usize, usize, RuntimeMs) =
-            if PoseArtifact::is_in(m) {
+            if PoseEnsemble::is_in(m) {
+                // Members run one after another: latencies and sizes add up.
+                let e = PoseEnsemble::read(m)?;
+                let (mut p, mut ms, mut s) = (0, Vec::new(), 0);
+                for d in e.member_dirs(m) {
+                    s = PoseArtifact::read(&d)?.model.input_px;
+                    p += crate::models::parameters::<PoseArtifact>(&d)?;
+                    ms.push(crate::latency::model_latencies::<PoseArtifact>(
+                        &d,
+                        [1, 1, s, s],
+                        b.runs,
+                    )?);
+                }
+                ("pose ensemble", e.notes, s, p, RuntimeMs::sum(&ms))
+            } else if PoseArtifact::is_in(m) {
                 let a = PoseArtifact::read(m)?;
                 let s = a.model.input_px;
                 let p = crate::models::parameters::<PoseArtifact>(m)?;

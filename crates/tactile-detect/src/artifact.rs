@@ -73,23 +73,29 @@ impl Exportable for DetectorArtifact {
 
 impl DetectorArtifact {
     /// The normalised `3 x H x W` input of an RGB frame of any size
-    /// (resized, then 8 bits per channel as in training, see
-    /// [`FloatImage::quantised`](tactile_preprocess::visuo::FloatImage::quantised)),
+    /// (resized, then rounded to the input's bits as in training, see
+    /// [`FloatImage::quantised_to`](tactile_preprocess::visuo::FloatImage::quantised_to)),
     /// or `None` for a blank frame (see [`is_blank`]), which shows no tendon.
     pub fn frame_input(&self, frame: &RgbImage) -> Result<Option<Vec<f32>>> {
         let img = self.frame_image(frame)?;
         if is_blank(&img) {
             return Ok(None);
         }
-        Ok(Some(self.stats.to_chw(&img)?))
+        Ok(Some(self.network_input(img)?))
     }
 
-    /// The frame as the detector sees it (resized to its input, 8 bits
-    /// per channel), from which both its input and its input statistics
-    /// are taken.
+    /// The frame as the detector sees it (resized to its input, rounded
+    /// to its bits per channel), from which both its input and its input
+    /// statistics are taken.
     pub fn frame_image(&self, frame: &RgbImage) -> Result<FloatImage> {
         let [w, h] = self.model.input_size;
-        Ok(resize_rgb(frame, w, h)?.quantised())
+        Ok(resize_rgb(frame, w, h)?.quantised_to(self.model.bits()))
+    }
+
+    /// The normalised `3 x H x W` network input of a frame image made by
+    /// [`Self::frame_image`].
+    pub fn network_input(&self, img: FloatImage) -> Result<Vec<f32>> {
+        Ok(self.stats.to_chw(&self.model.network_view(img))?)
     }
 
     /// How far `frame` lies from the training frames' input statistics

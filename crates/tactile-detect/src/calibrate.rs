@@ -168,10 +168,10 @@ pub fn calibrate(dir: &Path, sets: &[&DetectionSet]) -> Result<CalibrationFit> {
 /// [`calibrate`] on labelled visuo-tactile datasets, read at the
 /// detector's input size.
 pub fn calibrate_on(dir: &Path, datasets: &[Dataset]) -> Result<CalibrationFit> {
-    let size = DetectorArtifact::read(dir)?.model.input_size;
+    let model = DetectorArtifact::read(dir)?.model;
     let sets = datasets
         .iter()
-        .map(|d| DetectionSet::from_dataset(d, size))
+        .map(|d| DetectionSet::from_dataset(d, &model))
         .collect::<Result<Vec<_>>>()?;
     calibrate(dir, &sets.iter().collect::<Vec<_>>())
 }

@@ -6,19 +6,25 @@ use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_rgb};
 
-use crate::Result;
+use crate::{DetectorConfig, Result};
 
-/// Frames of a dataset resized to the detector's input, kept as 8-bit to
-/// hold thousands in memory, with their labels.
+/// Frames of a dataset resized to the detector's input, kept as whole
+/// levels of the detector's input code (8 or 16 bits) to hold thousands in
+/// memory, with their labels.
 pub struct DetectionSet {
     /// Input width the frames were resized to.
     pub width: usize,
     /// Input height.
     pub height: usize,
+    /// Bits per channel the frames are held at (the detector's `input_bits`).
+    pub bits: u8,
+    /// The detector's input form, whose [`DetectorConfig::network_view`]
+    /// turns a held frame into what the network takes.
+    pub detector: DetectorConfig,
     /// Each frame's `file` label.
     pub files: Vec<String>,
-    /// `H x W x 3` bytes per frame.
-    pub frames: Vec<Vec<u8>>,
+    /// `H x W x 3` levels per frame.
+    pub frames: Vec<Vec<u16>>,
     /// Each frame's `tendon` label.
     pub tendon: Vec<bool>,
     /// Frames within two frames of a label change in their sequence (the
@@ -30,8 +36,11 @@ pub struct DetectionSet {
 }
 
 impl DetectionSet {
-    /// Load and resize every frame (in parallel); `tendon` must be 0 or 1.
-    pub fn from_dataset(ds: &Dataset, [width, height]: [usize; 2]) -> Result<Self> {
+    /// Load and resize every frame (in parallel) to the input of
+    /// `detector`, held at its bits; `tendon` must be 0 or 1.
+    pub fn from_dataset(ds: &Dataset, detector: &DetectorConfig) -> Result<Self> {
+        let [width, height] = detector.input_size;
+        let bits = detector.bits();
         ds.expect_kind(DatasetKind::Visuotactile)?;
         let tendon = (0..ds.len())
             .map(|i| match ds.number(i, "tendon")? {
@@ -52,7 +61,7 @@ impl DetectionSet {
             .map(|i| {
                 let img = resize_rgb(&ds.load_rgb(i)?, width, height)
                     .map_err(|e| e.in_file(ds.root.join(&files[i])))?;
-                Ok(img.to_bytes())
+                Ok(img.to_levels(bits))
             })
             .collect::<Result<Vec<_>>>()?;
         let transition = transitions(ds, &tendon)?;
@@ -62,6 +71,8 @@ impl DetectionSet {
         Ok(Self {
             width,
             height,
+            bits,
+            detector: detector.clone(),
             files,
             frames,
             tendon,
@@ -85,6 +96,15 @@ impl DetectionSet {
                 found: [other.width, other.height],
             });
         }
+        if other.bits != self.bits
+            || other.detector.normalises_exposure() != self.detector.normalises_exposure()
+        {
+            return Err(tactile_core::Error::Invalid(format!(
+                "cannot join frames held for another input form ({} bits) to these ({} bits)",
+                other.bits, self.bits
+            ))
+            .into());
+        }
         self.files.extend(other.files);
         self.frames.extend(other.frames);
         self.tendon.extend(other.tendon);
@@ -98,16 +118,22 @@ impl DetectionSet {
         self.frames.is_empty()
     }
 
-    /// The frame as a float image in [0, 1].
+    /// The frame as a float image in [0, 1], as the camera gave it (the
+    /// input profile's view).
     pub fn image(&self, i: usize) -> FloatImage {
-        FloatImage::from_bytes(self.width, self.height, 3, &self.frames[i])
+        FloatImage::from_levels(self.width, self.height, 3, &self.frames[i], self.bits)
+    }
+
+    /// The frame as the network takes it, before the channel statistics.
+    pub fn view(&self, i: usize) -> FloatImage {
+        self.detector.network_view(self.image(i))
     }
 
     /// Normalised `3 x H x W` inputs of the frames at `idx`, end to end.
     pub fn inputs(&self, idx: &[usize], stats: &ChannelStats) -> Result<Vec<f32>> {
         let mut data = Vec::with_capacity(idx.len() * 3 * self.width * self.height);
         for &i in idx {
-            data.extend(stats.to_chw(&self.image(i))?);
+            data.extend(stats.to_chw(&self.view(i))?);
         }
         Ok(data)
     }
@@ -129,7 +155,7 @@ impl DetectionSet {
                 &mut img,
                 &mut tactile_core::rng::SampleRng::new(seed, round, i as u64),
             );
-            data.extend(stats.to_chw(&img)?);
+            data.extend(stats.to_chw(&self.detector.network_view(img))?);
         }
         Ok(Tensor::from_data(
             TensorData::new(data, [idx.len(), 3, self.height, self.width]),
@@ -188,7 +214,7 @@ impl DetectionSet {
 /// with indices into the joined set.
 pub fn load_split(
     datasets: &[Dataset],
-    input: [usize; 2],
+    detector: &DetectorConfig,
     val_fraction: f64,
     seed: u64,
     soft_labels: bool,
@@ -201,12 +227,12 @@ pub fn load_split(
             "loading {} frames of {} at {}x{} ({} train, {} validation, split by sequence)",
             ds.len(),
             ds.root.display(),
-            input[0],
-            input[1],
+            detector.input_size[0],
+            detector.input_size[1],
             t.len(),
             v.len()
         );
-        let set = DetectionSet::from_dataset(ds, input)?;
+        let set = DetectionSet::from_dataset(ds, detector)?;
         if soft_labels {
             set.check_soft_labels(&ds.labels_path())?;
         }

@@ -68,7 +68,7 @@ impl TendonDetector {
         let probability = if out_of_distribution || tactile_preprocess::visuo::is_blank(&img) {
             0.0
         } else {
-            self.probabilities(&self.artifact.stats.to_chw(&img)?, 1)?[0]
+            self.probabilities(&self.artifact.network_input(img)?, 1)?[0]
         };
         Ok(Assessment {
             probability,

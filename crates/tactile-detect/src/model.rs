@@ -14,6 +14,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
 use tactile_core::nn::{hard_sigmoid, hard_swish};
 use tactile_core::runtime::Forward;
+use tactile_preprocess::visuo::{FloatImage, normalise_exposure};
 
 /// Which network.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -43,6 +44,20 @@ pub struct DetectorConfig {
     /// Hidden width of the head (paper B: 256).
     #[config(default = 256)]
     pub head_hidden: usize,
+    /// Bits per channel the resized input keeps (8 or 16). A light press
+    /// shades the skin by a grey level or two; averaging the frame down to
+    /// the input recovers a fraction of a level from the sensor's noise,
+    /// which 8 bits round away and 16 keep. None (folders saved before
+    /// it existed): 8.
+    #[config(default = "None")]
+    pub input_bits: Option<u8>,
+    /// Divide each channel by its level at the window's centre before the
+    /// network (see [`normalise_exposure`]): the label is a threshold on the
+    /// ridge's height, and the shading contrast a height makes scales with
+    /// the exposure and the LEDs. None (folders saved before it existed):
+    /// off.
+    #[config(default = "None")]
+    pub normalise_exposure: Option<bool>,
 }
 
 /// `v * width`, rounded to a multiple of 8 and not below 90 % of it, as in
@@ -293,6 +308,12 @@ impl DetectorConfig {
                 INPUT_SIDE.end()
             )));
         }
+        if !tactile_preprocess::visuo::INPUT_BITS.contains(&self.bits()) {
+            return Err(tactile_core::Error::Config(format!(
+                "detector input bits must be 8 or 16, got {}",
+                self.bits()
+            )));
+        }
         if self.head_hidden == 0 || self.head_hidden > MAX_HEAD_HIDDEN {
             return Err(tactile_core::Error::Config(format!(
                 "detector head width must be 1 to {MAX_HEAD_HIDDEN}, got {}",
@@ -300,6 +321,25 @@ impl DetectorConfig {
             )));
         }
         Ok(())
+    }
+
+    /// Bits per channel of the input (8 unless `input_bits` says).
+    pub fn bits(&self) -> u8 {
+        self.input_bits.unwrap_or(8)
+    }
+
+    /// Whether inputs are divided by their window level.
+    pub fn normalises_exposure(&self) -> bool {
+        self.normalise_exposure.unwrap_or(false)
+    }
+
+    /// The resized, quantised frame as the network takes it (before the
+    /// channel statistics): with `normalise_exposure`, its gain divided out.
+    pub fn network_view(&self, mut img: FloatImage) -> FloatImage {
+        if self.normalises_exposure() {
+            normalise_exposure(&mut img);
+        }
+        img
     }
 
     /// Build with fresh weights.
@@ -444,6 +484,26 @@ pub fn parameter_count(m: &Detector) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn folders_saved_before_the_input_form_existed_read_as_eight_bits_unnormalised() {
+        let old = r#"{"architecture": "mobilenet-v3-small", "width": 0.5, "input_size": [80, 60], "head_hidden": 256}"#;
+        let cfg: DetectorConfig = serde_json::from_str(old).unwrap();
+        assert_eq!((cfg.bits(), cfg.normalises_exposure()), (8, false));
+        assert!(cfg.check().is_ok());
+        let twelve = cfg.clone().with_input_bits(Some(12)).check().unwrap_err();
+        assert!(twelve.to_string().contains("8 or 16"), "{twelve}");
+        // Off, the view is the frame itself; on, its gain is divided out.
+        let img = FloatImage {
+            width: 4,
+            height: 4,
+            channels: 3,
+            data: vec![0.3; 48],
+        };
+        assert_eq!(cfg.network_view(img.clone()), img);
+        let on = cfg.with_normalise_exposure(Some(true)).network_view(img);
+        assert!(on.data.iter().all(|&v| (v - 0.6).abs() < 1e-6));
+    }
 
     #[test]
     fn both_architectures_give_one_logit_per_frame() {

@@ -41,7 +41,7 @@ pub fn add_input_profile(dir: &Path, datasets: &[Dataset]) -> Result<InputProfil
     let mut artifact = DetectorArtifact::read(dir)?;
     let sets = datasets
         .iter()
-        .map(|d| DetectionSet::from_dataset(d, artifact.model.input_size))
+        .map(|d| DetectionSet::from_dataset(d, &artifact.model))
         .collect::<Result<Vec<_>>>()?;
     let profile = fit_input_profile(&sets.iter().collect::<Vec<_>>())?;
     artifact.input_profile = Some(profile.clone());

@@ -122,6 +122,18 @@ pub struct DetectorFit {
     pub val_accuracy: f64,
 }
 
+impl DetectorFit {
+    /// One line: the run, then the accuracy at the chosen threshold.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} (accuracy {:.4} at the chosen threshold {:.2})",
+            self.summary.describe("accuracy at threshold 0.5"),
+            self.val_accuracy,
+            self.threshold
+        )
+    }
+}
+
 /// Train on `datasets` (each split by its own sequences) into `out`, then
 /// calibrate the threshold. With `calibrate_only`, only re-choose the
 /// threshold of the model already in `out`.
@@ -143,7 +155,7 @@ pub fn train(
     let [w, h] = config.model.input_size;
     let (data, train, val) = load_split(
         datasets,
-        [w, h],
+        &config.model,
         config.val_fraction,
         config.schedule.seed,
         config.soft_labels.is_some(),
@@ -181,7 +193,7 @@ pub fn train(
     let stats = ChannelStats::from_images(
         train
             .iter()
-            .map(|&i| data.image(i))
+            .map(|&i| data.view(i))
             .collect::<Vec<_>>()
             .iter(),
     )?;
@@ -239,7 +251,11 @@ pub fn train(
                 })
                 .collect();
             let z = Tensor::<2>::from_data(TensorData::new(logits, [val.len(), 1]), &dev);
-            let loss: f32 = weighted_bce(z, data.labels(&val, &dev), weights).into_scalar();
+            // Against the targets training aims at: with soft labels the
+            // best epoch is the one that measures the ridge best, not the
+            // most confident one.
+            let targets = data.targets(&val, config.soft_labels.as_ref(), &dev);
+            let loss: f32 = weighted_bce(z, targets, weights).into_scalar();
             let pred: Vec<bool> = p.iter().map(|&q| q as f64 >= 0.5).collect();
             let acc = tactile_core::metrics::binary_scores(&pred, &val_truth).accuracy;
             Ok((loss as f64, Some(acc)))

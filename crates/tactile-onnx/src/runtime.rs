@@ -103,6 +103,19 @@ impl OrtModel {
     /// Run the model's single uint8 input (a standalone model's `frame`),
     /// returning its first output's shape and values.
     pub fn run_u8(&mut self, shape: &[usize], data: Vec<u8>) -> Result<(Vec<usize>, Vec<f32>)> {
+        self.run_frame(shape, data)
+    }
+
+    /// Run the model's single uint16 input (the `frame` of a standalone
+    /// model whose network reads 16-bit levels).
+    pub fn run_u16(&mut self, shape: &[usize], data: Vec<u16>) -> Result<(Vec<usize>, Vec<f32>)> {
+        self.run_frame(shape, data)
+    }
+
+    fn run_frame<T>(&mut self, shape: &[usize], data: Vec<T>) -> Result<(Vec<usize>, Vec<f32>)>
+    where
+        T: ort::value::PrimitiveTensorElementType + std::fmt::Debug + Clone + 'static,
+    {
         let err = |e: ort::Error| Error::Run(format!("run failed: {e}"));
         let input = Tensor::from_array((shape.to_vec(), data)).map_err(err)?;
         let outputs = self.session.run(ort::inputs![input]).map_err(err)?;

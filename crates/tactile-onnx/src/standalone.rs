@@ -18,6 +18,8 @@ use crate::{Error, Result};
 /// ONNX's element type codes used here.
 const FLOAT: i32 = 1;
 const UINT8: i32 = 2;
+const UINT16: i32 = 4;
+const INT64: i32 = 7;
 
 /// What the standalone output is.
 #[derive(Debug, Clone, PartialEq)]
@@ -53,6 +55,23 @@ pub struct StandaloneSpec {
     pub output: StandaloneOutput,
     /// Key-value pairs for the model's metadata.
     pub metadata: Vec<(String, String)>,
+    /// Bits per channel of the frame: 8 (`uint8`) or 16 (`uint16`).
+    pub input_bits: u8,
+    /// Divide each channel by its median over these pixels (row-major
+    /// indices into the `H x W` frame) and multiply by the level, before
+    /// the statistics, as `tactile_preprocess::visuo::normalise_exposure`
+    /// does; a channel whose median is under one 8-bit level is left alone.
+    pub exposure_level: Option<ExposureLevel>,
+}
+
+/// Where and to what each channel's level is set (see
+/// [`StandaloneSpec::exposure_level`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExposureLevel {
+    /// The pixels whose median sets the level.
+    pub pixels: Vec<usize>,
+    /// What the median is mapped to.
+    pub level: f32,
 }
 
 fn constant(name: &str, dims: &[i64], values: Vec<f32>) -> TensorProto {
@@ -61,6 +80,16 @@ fn constant(name: &str, dims: &[i64], values: Vec<f32>) -> TensorProto {
         dims: dims.to_vec(),
         data_type: FLOAT,
         float_data: values,
+        ..Default::default()
+    }
+}
+
+fn int64_constant(name: &str, dims: &[i64], values: Vec<i64>) -> TensorProto {
+    TensorProto {
+        name: name.to_string(),
+        dims: dims.to_vec(),
+        data_type: INT64,
+        int64_data: values,
         ..Default::default()
     }
 }
@@ -91,6 +120,97 @@ fn ints_attribute(name: &str, values: &[i64]) -> AttributeProto {
         ints: values.to_vec(),
         ..Default::default()
     }
+}
+
+/// The nodes that set each channel of `input` (`[N, H, W, C]` in [0, 1])
+/// to `e.level` at the median of `e.pixels`: gather those pixels, take the
+/// upper half with TopK, its minimum is the median (the element a sort
+/// puts at index `K / 2`, as `select_nth_unstable` picks it).
+fn exposure_nodes(
+    e: &ExposureLevel,
+    c: i64,
+    input: &str,
+    output: &str,
+) -> std::result::Result<(Vec<TensorProto>, Vec<NodeProto>), &'static str> {
+    let k = e.pixels.len();
+    if k == 0 {
+        return Err("no pixels set the exposure level");
+    }
+    let upper = (k - k / 2) as i64;
+    let ini = vec![
+        int64_constant("level_flat_shape", &[3], vec![0, -1, c]),
+        int64_constant(
+            "level_pixels",
+            &[k as i64],
+            e.pixels.iter().map(|&i| i as i64).collect(),
+        ),
+        int64_constant("level_upper_half", &[1], vec![upper]),
+        int64_constant("level_axis", &[1], vec![1]),
+        int64_constant("level_shape", &[4], vec![0, 1, 1, c]),
+        constant("level_target", &[], vec![e.level]),
+        constant("level_dark", &[], vec![1.0 / 255.0]),
+        constant("level_one", &[], vec![1.0]),
+    ];
+    let mut gather = node(
+        "Gather",
+        "level_gather",
+        &["level_flat", "level_pixels"],
+        "level_centre",
+    );
+    gather.attribute.push(int_attribute("axis", 1));
+    let mut topk = node(
+        "TopK",
+        "level_topk",
+        &["level_centre", "level_upper_half"],
+        "level_top",
+    );
+    topk.output.push("level_top_indices".into());
+    topk.attribute.push(int_attribute("axis", 1));
+    topk.attribute.push(int_attribute("largest", 1));
+    let mut min = node(
+        "ReduceMin",
+        "level_median",
+        &["level_top", "level_axis"],
+        "level_median3",
+    );
+    min.attribute.push(int_attribute("keepdims", 1));
+    let nodes = vec![
+        node(
+            "Reshape",
+            "level_flatten",
+            &[input, "level_flat_shape"],
+            "level_flat",
+        ),
+        gather,
+        topk,
+        min,
+        node(
+            "Reshape",
+            "level_per_channel",
+            &["level_median3", "level_shape"],
+            "level_median",
+        ),
+        node(
+            "Div",
+            "level_gain",
+            &["level_target", "level_median"],
+            "level_gain_raw",
+        ),
+        node(
+            "Less",
+            "level_is_dark",
+            &["level_median", "level_dark"],
+            "level_dark_channel",
+        ),
+        node(
+            "Where",
+            "level_gain_kept",
+            &["level_dark_channel", "level_one", "level_gain_raw"],
+            "level_gain_used",
+        ),
+        node("Mul", "level_apply", &[input, "level_gain_used"], output),
+    ];
+    Ok((ini, nodes))
 }
 
 /// Wrap the exported network `onnx` (one `[N, C, H, W]` float input, one
@@ -132,11 +252,16 @@ pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
         .cloned()
         .unwrap_or_default();
 
-    // frame (uint8 NHWC) -> normalised float NCHW, the network's input.
+    // frame (uint8 or uint16 NHWC) -> normalised float NCHW, the network's input.
     let c = channels as i64;
+    let (elem, top) = match spec.input_bits {
+        8 => (UINT8, 255.0),
+        16 => (UINT16, 65535.0),
+        b => return Err(bad(format!("{b} bits per channel; 8 or 16 are exported"))),
+    };
     graph
         .initializer
-        .push(constant("frame_scale", &[], vec![255.0]));
+        .push(constant("frame_scale", &[], vec![top]));
     graph
         .initializer
         .push(constant("channel_mean", &[1, 1, 1, c], spec.mean.clone()));
@@ -149,7 +274,7 @@ pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
     transpose
         .attribute
         .push(ints_attribute("perm", &[0, 3, 1, 2]));
-    let prefix = vec![
+    let mut prefix = vec![
         cast,
         node(
             "Div",
@@ -157,10 +282,22 @@ pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
             &["frame_f32", "frame_scale"],
             "frame_unit",
         ),
+    ];
+    let levelled = match &spec.exposure_level {
+        None => "frame_unit",
+        Some(e) => {
+            let (ini, nodes) = exposure_nodes(e, c, "frame_unit", "frame_levelled")
+                .map_err(|m| bad(m.to_string()))?;
+            graph.initializer.extend(ini);
+            prefix.extend(nodes);
+            "frame_levelled"
+        }
+    };
+    prefix.extend([
         node(
             "Sub",
             "frame_centre",
-            &["frame_unit", "channel_mean"],
+            &[levelled, "channel_mean"],
             "frame_centred",
         ),
         node(
@@ -170,13 +307,13 @@ pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
             "frame_normalised",
         ),
         transpose,
-    ];
+    ]);
     let tail = std::mem::take(&mut graph.node);
     graph.node = prefix.into_iter().chain(tail).collect();
     let frame = &mut graph.input[input];
     frame.name = "frame".into();
     let tensor = frame.type_.mut_or_insert_default().mut_tensor_type();
-    tensor.elem_type = UINT8;
+    tensor.elem_type = elem;
     let shape = tensor.shape.mut_or_insert_default();
     shape.dim.clear();
     for v in [spec.height as i64, spec.width as i64, c] {

@@ -67,7 +67,9 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
 /// `[N, 1, S, S]` or `depth_mm` `[N, 1, H, W]`; the threshold, statistics,
 /// input size and toolkit version in its metadata.
 pub fn export_standalone(dir: &Path) -> Result<Exported> {
-    use tactile_onnx::standalone::{StandaloneOutput, StandaloneSpec, make_standalone};
+    use tactile_onnx::standalone::{
+        ExposureLevel, StandaloneOutput, StandaloneSpec, make_standalone,
+    };
     let device = DeviceKind::Flex.device();
     let list = |v: &[f32]| serde_json::to_string(v).unwrap_or_default();
     let common = |kind: &str, w: usize, h: usize, mean: &[f32], std: &[f32]| {
@@ -85,6 +87,20 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
         let a = &l.artifact;
         let [w, h] = a.model.input_size;
         let mut metadata = common("detector", w, h, &a.stats.mean, &a.stats.std);
+        let bits = a.model.bits();
+        if bits == 16 {
+            metadata.retain(|(k, _)| k != "input");
+            metadata.push((
+                "input".into(),
+                format!("frame: uint16 [N, {h}, {w}, 3] RGB (the resized frame times 65535)"),
+            ));
+        }
+        if a.model.normalises_exposure() {
+            metadata.push((
+                "exposure".into(),
+                "each channel divided by its median over the frame's centre (in the graph)".into(),
+            ));
+        }
         metadata.push(("threshold".into(), a.threshold.to_string()));
         metadata.push((
             "output".into(),
@@ -99,6 +115,11 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
                 name: "tendon_probability".into(),
             },
             metadata,
+            input_bits: bits,
+            exposure_level: a.model.normalises_exposure().then(|| ExposureLevel {
+                pixels: tactile_preprocess::visuo::exposure_pixels(w, h),
+                level: tactile_preprocess::visuo::FLAT_SKIN_LEVEL,
+            }),
         };
         ("detector", make_standalone(&a.onnx(&l.model)?, &spec)?)
     } else if SegmenterArtifact::is_in(dir) {
@@ -124,6 +145,8 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
                 name: "mask_probability".into(),
             },
             metadata,
+            input_bits: 8,
+            exposure_level: None,
         };
         ("segmenter", make_standalone(&a.onnx(&l.model)?, &spec)?)
     } else if DepthArtifact::is_in(dir) {
@@ -153,6 +176,8 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
                 offset: a.scale.offset_mm,
             },
             metadata,
+            input_bits: 8,
+            exposure_level: None,
         };
         ("depth network", make_standalone(&a.onnx(&l.model)?, &spec)?)
     } else {

@@ -50,6 +50,20 @@ pub struct ImportSummary {
     pub size: (usize, usize),
 }
 
+impl ImportSummary {
+    /// One line: what was written where.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} labelled frames ({}x{}) of {} read written to {}",
+            self.frames,
+            self.size.0,
+            self.size.1,
+            self.frames_read,
+            self.out.display()
+        )
+    }
+}
+
 /// The labels CSV: its header and, per frame key, the line and the cells.
 struct Labels {
     header: Vec<String>,

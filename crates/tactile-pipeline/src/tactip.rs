@@ -71,12 +71,13 @@ pub enum Predictor {
 }
 
 impl Predictor {
-    /// The model in `dir`: a pose network when it holds `pose.json`, else an
+    /// The model in `dir`: a pose network when it holds `pose.json` (an
+    /// ensemble of them with `ensemble.json`), else an
     /// encoder with the estimators in `heads` (every estimator folder
     /// inside it when empty).
     pub fn load(dir: &Path, heads: &[PathBuf], runtime: Runtime) -> Result<Self> {
         use tactile_core::Artifact;
-        if tactile_pose::PoseArtifact::is_in(dir) {
+        if tactile_pose::PoseArtifact::is_in(dir) || tactile_pose::PoseEnsemble::is_in(dir) {
             Ok(Self::PoseNetwork(tactile_pose::PoseEstimator::load(
                 dir, runtime, 0,
             )?))

@@ -60,6 +60,47 @@ fn the_standalone_detector_gives_the_toolkits_probabilities() {
 }
 
 #[test]
+fn a_sixteen_bit_exposure_normalised_detector_stands_alone_too() {
+    // The shipped network read through the other input form: 16-bit
+    // levels, each channel divided by its median at the window's centre.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("detector");
+    std::fs::create_dir(&dir).unwrap();
+    let shipped = root().join("models/detector");
+    let mut cfg: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(shipped.join("detector.json")).unwrap())
+            .unwrap();
+    cfg["model"]["input_bits"] = 16.into();
+    cfg["model"]["normalise_exposure"] = true.into();
+    std::fs::write(dir.join("detector.json"), cfg.to_string()).unwrap();
+    std::fs::copy(shipped.join("detector.bpk"), dir.join("detector.bpk")).unwrap();
+    let mut det = TendonDetector::load(&dir, Runtime::Onnx, 1).unwrap();
+    let e = export_standalone(&dir).unwrap();
+    let mut alone = OrtModel::from_bytes(&e.bytes, 1).unwrap();
+    let [w, h] = det.artifact.model.input_size;
+    for (i, f) in frames().iter().enumerate() {
+        // A darker exposure too: the graph divides it out as the toolkit does.
+        let mut img = resize_rgb(f, w, h).unwrap();
+        if i % 2 == 1 {
+            img.data.iter_mut().for_each(|v| *v *= 0.85);
+        }
+        let (shape, p) = alone.run_u16(&[1, h, w, 3], img.to_levels(16)).unwrap();
+        assert_eq!(shape, [1, 1]);
+        let q = det
+            .probabilities(
+                &det.artifact.network_input(img.quantised_to(16)).unwrap(),
+                1,
+            )
+            .unwrap()[0];
+        assert!(
+            (p[0] - q).abs() < 1e-4,
+            "frame {i}: standalone {} vs toolkit {q}",
+            p[0]
+        );
+    }
+}
+
+#[test]
 fn the_standalone_segmenter_gives_the_toolkits_mask_probabilities() {
     let mut seg = TendonSegmenter::load(root().join("models/segmenter"), Runtime::Onnx, 1).unwrap();
     let mut alone = standalone("segmenter");

@@ -7,18 +7,20 @@ use std::path::Path;
 use rayon::prelude::*;
 use tactile_core::dataset::Dataset;
 use tactile_core::{Network, Runtime};
-use tactile_estimate::regressor::decode;
+use tactile_estimate::regressor::{Scaler, decode};
 use tactile_preprocess::PinImage;
 
 use crate::Result;
-use crate::artifact::PoseArtifact;
+use crate::artifact::{PoseArtifact, PoseEnsemble, check_alike};
 use crate::training::PREDICT_BATCH;
 
-/// A loaded pose network with its preprocessing.
+/// A loaded pose network with its preprocessing, or an ensemble of them
+/// ([`PoseEnsemble`]) whose estimates are averaged.
 pub struct PoseEstimator {
-    /// Architecture, preprocessing, targets.
+    /// Architecture, preprocessing, targets (an ensemble's first member's).
     pub artifact: PoseArtifact,
-    net: Box<dyn Network>,
+    /// Each member's target scaling and network.
+    members: Vec<(Scaler, Box<dyn Network>)>,
 }
 
 /// Estimates for a dataset.
@@ -37,15 +39,38 @@ pub struct PoseEstimates {
 impl PoseEstimator {
     /// Load the network in `dir` onto `runtime` (`threads` intra-op
     /// threads for onnxruntime; 0 = its default).
+    /// An ensemble folder loads every member.
     pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
-        let (artifact, net) =
-            tactile_onnx::load_network::<PoseArtifact>(dir.as_ref(), runtime, threads)?;
-        Ok(Self { artifact, net })
+        let dir = dir.as_ref();
+        let dirs = if PoseEnsemble::is_in(dir) {
+            PoseEnsemble::read(dir)?.member_dirs(dir)
+        } else {
+            vec![dir.to_path_buf()]
+        };
+        let mut first: Option<PoseArtifact> = None;
+        let mut members = Vec::with_capacity(dirs.len());
+        for d in &dirs {
+            let (artifact, net) = tactile_onnx::load_network::<PoseArtifact>(d, runtime, threads)?;
+            match &first {
+                Some(f) => check_alike(f, &artifact, d)?,
+                None => first = Some(artifact.clone()),
+            }
+            members.push((artifact.outputs, net));
+        }
+        let artifact = first.ok_or_else(|| tactile_core::Error::not_found(dir, "pose network"))?;
+        Ok(Self { artifact, members })
     }
 
     /// Where it runs.
     pub fn runtime(&self) -> Runtime {
-        self.net.runtime()
+        self.members
+            .first()
+            .map_or(Runtime::BurnFlex, |(_, n)| n.runtime())
+    }
+
+    /// Networks whose estimates are averaged (1 unless an ensemble).
+    pub fn members(&self) -> usize {
+        self.members.len()
     }
 
     /// Target values of grey pin images, one row per image.
@@ -61,11 +86,25 @@ impl PoseEstimator {
                 .iter()
                 .flat_map(|p| p.pixels.iter().copied())
                 .collect();
-            let y = self.net.run([chunk.len(), 1, side, side], x)?;
-            out.extend(
-                y.chunks(k)
-                    .map(|r| decode(&self.artifact.targets, &self.artifact.outputs, r)),
-            );
+            // Each member's columns in the targets' encoded units, averaged,
+            // then decoded once (an angle's cos/sin pair averages well where
+            // the angles themselves would not across the wrap).
+            let mut sum = vec![0f64; chunk.len() * k];
+            for (scaler, net) in &mut self.members {
+                let y = net.run([chunk.len(), 1, side, side], x.clone())?;
+                for (j, (s, v)) in sum.iter_mut().zip(&y).enumerate() {
+                    *s += *v as f64 * scaler.std[j % k] + scaler.mean[j % k];
+                }
+            }
+            let n = self.members.len() as f64;
+            let identity = Scaler {
+                mean: vec![0.0; k],
+                std: vec![1.0; k],
+            };
+            out.extend(sum.chunks(k).map(|r| {
+                let mean: Vec<f32> = r.iter().map(|v| (v / n) as f32).collect();
+                decode(&self.artifact.targets, &identity, &mean)
+            }));
         }
         Ok(out)
     }
@@ -99,5 +138,62 @@ impl PoseEstimator {
             .par_iter()
             .map(|f| Ok(tactile_preprocess::preprocess(f, cfg)?))
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use tactile_core::Artifact;
+
+    #[test]
+    fn an_ensemble_averages_its_members_and_reads_nothing_outside_its_folder() {
+        let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/pose-edge");
+        let tmp = tempfile::tempdir().unwrap();
+        // A second member: the same settings, fresh weights.
+        let art = PoseArtifact::read(&shipped).unwrap();
+        let other = tmp.path().join("other");
+        let device = burn::tensor::Device::flex();
+        art.save(&art.init(&device).unwrap(), &other).unwrap();
+        let ens = tmp.path().join("ensemble");
+        PoseEnsemble::assemble(&[shipped.clone(), other.clone()], &ens).unwrap();
+        let s = art.model.input_px;
+        let pins: Vec<PinImage> = (0..3)
+            .map(|k| PinImage {
+                side: s,
+                pixels: (0..s * s)
+                    .map(|i| ((i * (k + 3)) % 17) as f32 / 17.0)
+                    .collect(),
+            })
+            .collect();
+        let run = |d: &Path| {
+            let mut p = PoseEstimator::load(d, Runtime::BurnFlex, 0).unwrap();
+            (p.members(), p.predict(&pins).unwrap())
+        };
+        let ((n1, a), (_, b), (n, e)) = (run(&shipped), run(&other), run(&ens));
+        assert_eq!((n1, n), (1, 2));
+        // x_mm and depth_mm are linear: the ensemble's is the members' mean.
+        for i in 0..pins.len() {
+            for j in [0, 2] {
+                let mean = (a[i][j] + b[i][j]) / 2.0;
+                assert!((e[i][j] - mean).abs() < 1e-4, "{} vs {mean}", e[i][j]);
+            }
+        }
+        // A member named by a path is refused, naming the file.
+        std::fs::write(ens.join("ensemble.json"), r#"{"members": ["../other"]}"#).unwrap();
+        let err = PoseEstimator::load(&ens, Runtime::BurnFlex, 0)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            err.contains("ensemble.json") && err.contains("plain folder name"),
+            "{err}"
+        );
+        std::fs::write(ens.join("ensemble.json"), r#"{"members": []}"#).unwrap();
+        assert!(PoseEstimator::load(&ens, Runtime::BurnFlex, 0).is_err());
+        // An existing folder is left alone.
+        assert!(PoseEnsemble::assemble(&[shipped], &ens).is_err());
+        assert!(ens.join("member-1").is_dir());
     }
 }

@@ -14,7 +14,7 @@ pub mod inference;
 pub mod model;
 pub mod training;
 
-pub use artifact::PoseArtifact;
+pub use artifact::{PoseArtifact, PoseEnsemble};
 pub use error::{Error, Result};
 pub use inference::{PoseEstimates, PoseEstimator};
 pub use model::{PoseNet, PoseNetConfig};

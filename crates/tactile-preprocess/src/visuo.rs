@@ -17,6 +17,15 @@ use crate::resize_area_interleaved;
 /// before any buffer is allocated for them.
 pub const MAX_FRAME_PIXELS: usize = 7680 * 4320;
 
+/// Bits per channel a model's input may be held at.
+pub const INPUT_BITS: [u8; 2] = [8, 16];
+
+/// The top level of a `bits`-bit code (`bits` is 8 or 16; anything else
+/// counts as 16).
+fn level_max(bits: u8) -> f32 {
+    if bits == 8 { 255.0 } else { 65535.0 }
+}
+
 /// An interleaved float image.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FloatImage {
@@ -57,6 +66,46 @@ impl FloatImage {
     /// up to 0.07 on onset frames).
     pub fn quantised(&self) -> Self {
         Self::from_bytes(self.width, self.height, self.channels, &self.to_bytes())
+    }
+
+    /// The values as whole levels of a `bits`-bit code (8 or 16; clamped
+    /// to [0, 1]): 16 bits keep the fraction of a grey level that averaging
+    /// a frame down to a model's input recovers from its noise.
+    pub fn to_levels(&self, bits: u8) -> Vec<u16> {
+        let top = level_max(bits);
+        self.data
+            .iter()
+            .map(|&v| (v * top).round().clamp(0.0, top) as u16)
+            .collect()
+    }
+
+    /// A float image in [0, 1] from interleaved levels of a `bits`-bit code.
+    pub fn from_levels(
+        width: usize,
+        height: usize,
+        channels: usize,
+        levels: &[u16],
+        bits: u8,
+    ) -> Self {
+        let top = level_max(bits);
+        Self {
+            width,
+            height,
+            channels,
+            data: levels.iter().map(|&v| v as f32 / top).collect(),
+        }
+    }
+
+    /// The image rounded to `bits` bits per channel, as a model trained on
+    /// frames held at that precision saw them ([`Self::quantised`] for 8).
+    pub fn quantised_to(&self, bits: u8) -> Self {
+        Self::from_levels(
+            self.width,
+            self.height,
+            self.channels,
+            &self.to_levels(bits),
+            bits,
+        )
     }
 
     fn at(&self, x: isize, y: isize, c: usize) -> f32 {
@@ -296,6 +345,75 @@ pub fn is_blank(img: &FloatImage) -> bool {
     })
 }
 
+/// Grey level of a flat skin at rest under the spec's lights (albedo 0.8
+/// times 0.25 + sin 30 deg): what [`normalise_exposure`] maps each
+/// channel's typical window level to.
+pub const FLAT_SKIN_LEVEL: f32 = 0.6;
+
+/// Fraction of the window ellipse's radii whose pixels set the level in
+/// [`normalise_exposure`]: inside the window, clear of the housing and of
+/// the LED glare on the rim.
+const LEVEL_REGION: f64 = 0.6;
+
+/// Divide each channel by its median over the window's centre, so the
+/// frame's flat skin sits at [`FLAT_SKIN_LEVEL`] whatever the exposure and
+/// the balance of the LEDs. Shading contrast scales with both, while a
+/// tendon's label is a threshold on the ridge's height: once the gain is
+/// divided out, a contrast means one height. A channel whose centre is
+/// nearly black (under 1 grey level) is left alone.
+pub fn normalise_exposure(img: &mut FloatImage) {
+    exposure_levels(img)
+        .into_iter()
+        .enumerate()
+        .filter_map(|(ch, level)| level.map(|l| (ch, l)))
+        .for_each(|(ch, level)| {
+            let gain = FLAT_SKIN_LEVEL / level;
+            let c = img.channels;
+            img.data
+                .iter_mut()
+                .skip(ch)
+                .step_by(c)
+                .for_each(|v| *v *= gain);
+        });
+}
+
+/// The pixels (row-major indices of a `w x h` image) whose median sets a
+/// channel's level in [`normalise_exposure`]: the ellipse at
+/// `LEVEL_REGION` of the window's radii.
+pub fn exposure_pixels(w: usize, h: usize) -> Vec<usize> {
+    let (cx, cy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+    let (rx, ry) = (LEVEL_REGION * w as f64 / 2.0, LEVEL_REGION * h as f64 / 2.0);
+    (0..w * h)
+        .filter(|&i| {
+            let (dx, dy) = (((i % w) as f64 - cx) / rx, ((i / w) as f64 - cy) / ry);
+            dx * dx + dy * dy <= 1.0
+        })
+        .collect()
+}
+
+/// Each channel's median over the window's centre (None where it is under
+/// one grey level, or the image is empty).
+fn exposure_levels(img: &FloatImage) -> Vec<Option<f32>> {
+    let (w, h, c) = (img.width, img.height, img.channels);
+    if w == 0 || h == 0 || c == 0 {
+        return vec![None; c];
+    }
+    let centre = exposure_pixels(w, h);
+    if centre.is_empty() {
+        return vec![None; c];
+    }
+    let mut values = Vec::with_capacity(centre.len());
+    (0..c)
+        .map(|ch| {
+            values.clear();
+            values.extend(centre.iter().map(|&i| img.data[i * c + ch]));
+            let mid = values.len() / 2;
+            let (_, &mut median, _) = values.select_nth_unstable_by(mid, f32::total_cmp);
+            (median >= 1.0 / 255.0).then_some(median)
+        })
+        .collect()
+}
+
 /// 1 where a resized or rotated mask is at least half tendon.
 pub fn binarise_mask(mask: &FloatImage) -> Vec<f32> {
     mask.data
@@ -401,6 +519,85 @@ impl ChannelStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sixteen_bits_keep_a_fraction_of_a_grey_level_that_eight_round_away() {
+        // A smooth ramp of a third of a grey level, as averaging recovers it.
+        let data: Vec<f32> = (0..30).map(|i| (150.0 + i as f32 / 90.0) / 255.0).collect();
+        let img = FloatImage {
+            width: 10,
+            height: 1,
+            channels: 3,
+            data,
+        };
+        let eight = img.quantised_to(8);
+        let sixteen = img.quantised_to(16);
+        assert!(
+            eight.data.iter().all(|&v| v == 150.0 / 255.0),
+            "8 bits: one level"
+        );
+        let err = |q: &FloatImage| {
+            q.data
+                .iter()
+                .zip(&img.data)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0f32, f32::max)
+        };
+        assert!(
+            err(&sixteen) < 1e-5,
+            "16 bits within 1e-5: {}",
+            err(&sixteen)
+        );
+        assert_eq!(
+            img.quantised_to(8),
+            img.quantised(),
+            "8 bits is the old quantisation"
+        );
+    }
+
+    #[test]
+    fn normalising_the_exposure_takes_out_gain_and_led_balance_but_keeps_contrast() {
+        // A flat skin with a vertical band one level brighter, under two
+        // exposures and LED balances.
+        let frame = |gain: [f32; 3]| {
+            let (w, h) = (80, 60);
+            let mut data = Vec::with_capacity(w * h * 3);
+            for i in 0..w * h {
+                let band = if (35..45).contains(&(i % w)) {
+                    1.0 / 255.0
+                } else {
+                    0.0
+                };
+                data.extend(gain.map(|g| g * (FLAT_SKIN_LEVEL + band)));
+            }
+            FloatImage {
+                width: w,
+                height: h,
+                channels: 3,
+                data,
+            }
+        };
+        let (mut a, mut b) = (frame([1.0, 1.0, 1.0]), frame([1.1, 0.92, 1.05]));
+        normalise_exposure(&mut a);
+        normalise_exposure(&mut b);
+        for (x, y) in a.data.iter().zip(&b.data) {
+            assert!((x - y).abs() < 1e-6, "{x} {y}");
+        }
+        assert!((a.data[0] - FLAT_SKIN_LEVEL).abs() < 1e-6);
+        assert!(
+            (a.data[40 * 3] - a.data[0] - 1.0 / 255.0).abs() < 1e-6,
+            "contrast kept"
+        );
+        // A black frame is left alone rather than blown up.
+        let mut black = FloatImage {
+            width: 8,
+            height: 6,
+            channels: 3,
+            data: vec![0.0; 144],
+        };
+        normalise_exposure(&mut black);
+        assert!(black.data.iter().all(|&v| v == 0.0));
+    }
 
     #[test]
     fn frame_pixels_map_onto_the_window_they_were_cut_into() {

@@ -27,7 +27,7 @@ pub(crate) fn eval_detector<'py>(
     let v = interruptible(py, || {
         let ds = Dataset::open(&data).py()?;
         let mut det = TendonDetector::load(&model, rt, 0).py()?;
-        let set = DetectionSet::from_dataset(&ds, det.artifact.model.input_size).py()?;
+        let set = DetectionSet::from_dataset(&ds, &det.artifact.model).py()?;
         let sc = tactile_detect::evaluate(&mut det, &set).py()?;
         Ok(
             serde_json::json!({ "model": model, "data": data, "all": sc.all,

@@ -50,14 +50,7 @@ pub(crate) fn main(cmd: DatasetCmd) -> Result<()> {
                 sensor: a.sensor,
                 force: a.force,
             })?;
-            say!(
-                "{} labelled frames ({}x{}) of {} read written to {}",
-                s.frames,
-                s.size.0,
-                s.size.1,
-                s.frames_read,
-                s.out.display()
-            );
+            say!("{}", s.describe());
         }
     }
     Ok(())

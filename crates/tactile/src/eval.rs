@@ -73,7 +73,7 @@ fn detector(a: DetectorArgs) -> Result<()> {
         tactile_core::io::check_output_file(out, &[&ds])?;
     }
     let mut det = TendonDetector::load(&m.model, m.device.runtime(), 0)?;
-    let data = DetectionSet::from_dataset(&ds, det.artifact.model.input_size)?;
+    let data = DetectionSet::from_dataset(&ds, &det.artifact.model)?;
     let sc = tactile_detect::evaluate(&mut det, &data)?;
     if let Some(path) = &a.frames {
         tactile_detect::eval::write_decisions_csv(path, &data, &sc)?;

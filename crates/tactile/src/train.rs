@@ -39,6 +39,8 @@ pub(crate) enum TrainCmd {
     Profile(ProfileArgs),
     /// Calibrate a trained detector's probabilities on frames it was not trained on: one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer (decisions unchanged).
     Calibrate(ProfileArgs),
+    /// Average pose networks trained alike but for their seed: copies them into one folder that `predict`, `bench pose` and Python load as one model.
+    PoseEnsemble(EnsembleArgs),
     /// Measure the pin lattice's orientation on an encoder's training frames and save it with the encoder, so frames of a sensor mounted turned are turned back before encoding.
     Align(ProfileArgs),
 }
@@ -51,6 +53,16 @@ pub(crate) struct ProfileArgs {
     /// Labelled dataset(s): the detector's training data for `profile` (the encoder's for `align`), frames it was not trained on for `calibrate`.
     #[arg(long, num_args = 1.., required = true)]
     data: Vec<PathBuf>,
+}
+
+#[derive(Args)]
+pub(crate) struct EnsembleArgs {
+    /// The member pose-network folders.
+    #[arg(long, num_args = 1.., required = true)]
+    members: Vec<PathBuf>,
+    /// The new ensemble folder (an existing one is left alone).
+    #[arg(long)]
+    out: PathBuf,
 }
 
 tactile_core::schedule_args!(CaeSchedule, CaeTrainingConfig::new().schedule);
@@ -254,6 +266,12 @@ pub(crate) struct DetectorArgs {
     /// Input size WIDTHxHEIGHT (paper B: 320x240).
     #[arg(long, default_value_t = Size(DetectorTrainingConfig::new().model.input_size))]
     input: Size,
+    /// Bits per channel the resized input keeps: 16 keeps the fraction of a grey level a light press shades the skin by, which averaging down to the input recovers and 8 rounds away.
+    #[arg(long, default_value_t = DetectorTrainingConfig::new().model.bits(), value_parser = clap::builder::TypedValueParser::map(clap::builder::PossibleValuesParser::new(["8", "16"]), |s: String| s.parse::<u8>().unwrap_or(8)))]
+    input_bits: u8,
+    /// Divide each input channel by its level at the window's centre, so a shading contrast means one ridge height whatever the exposure and LED balance.
+    #[arg(long)]
+    normalise_exposure: bool,
     /// Fraction of each dataset's sequences that validate.
     #[arg(long, default_value_t = DetectorTrainingConfig::new().val_fraction)]
     val_fraction: f64,
@@ -345,6 +363,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Depth(a) => Some(&a.out),
         TrainCmd::Profile(a) | TrainCmd::Calibrate(a) | TrainCmd::Align(a) => Some(&a.model),
         TrainCmd::Pose(a) => Some(&a.out),
+        TrainCmd::PoseEnsemble(a) => Some(&a.out),
         TrainCmd::Head(a) => a.out.as_ref(),
         TrainCmd::Regressor(a) => a.out.as_ref(),
     };
@@ -446,7 +465,9 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                     d.model
                         .with_architecture(a.architecture)
                         .with_width(a.width)
-                        .with_input_size(a.input.0),
+                        .with_input_size(a.input.0)
+                        .with_input_bits(Some(a.input_bits))
+                        .with_normalise_exposure(Some(a.normalise_exposure)),
                 )
                 .with_schedule(a.schedule.schedule(d.schedule.learning_rate))
                 .with_val_fraction(a.val_fraction)
@@ -464,13 +485,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 s.resume,
                 a.calibrate_only,
             )?;
-            say!(
-                "{} (accuracy {:.4} at the chosen threshold {:.2}); model in {}",
-                fit.summary.describe("accuracy at threshold 0.5"),
-                fit.val_accuracy,
-                fit.threshold,
-                a.out.display()
-            );
+            say!("{}; model in {}", fit.describe(), a.out.display());
         }
         TrainCmd::Segmenter(a) => {
             let ds = Dataset::open(&a.data)?;
@@ -492,6 +507,14 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 p.frames,
                 a.model.join("detector.json").display(),
                 p.threshold
+            );
+        }
+        TrainCmd::PoseEnsemble(a) => {
+            let e = tactile_pose::PoseEnsemble::assemble(&a.members, &a.out)?;
+            say!(
+                "{} pose networks averaged in {}",
+                e.members.len(),
+                a.out.display()
             );
         }
         TrainCmd::Align(a) => {
