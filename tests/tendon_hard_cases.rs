@@ -261,7 +261,7 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
     let det = DetectorArtifact::read(&models().join("detector")).unwrap();
     let seg = SegmenterArtifact::read(&models().join("segmenter")).unwrap();
     let depth = DepthArtifact::read(&models().join("depth")).unwrap();
-    let det_set = DetectionSet::from_dataset(&ds, det.model.input_size).unwrap();
+    let det_set = DetectionSet::from_dataset(&ds, &det.model).unwrap();
     let seg_set = SegmentSet::from_dataset(&ds, &rows, seg.window(), 1, 0).unwrap();
     let depth_set = DepthSet::from_dataset(&ds, &rows, depth.model.input_size).unwrap();
     for i in rows {
