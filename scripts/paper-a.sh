@@ -152,6 +152,12 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
         body "$OUT/edge-pose-l1.md" | sed 's#](edge-pose-l1.png)#](paper-a/edge-pose-l1.png)#'
         echo
     fi
+    if [ -f "$OUT/edge-pose-l1-seed8.md" ]; then
+        echo "The same recipe with another seed (\`--seed 8\`; the shuffles and the initial weights differ, the 752 test frames are the same; \`just train-pose-l1-ensemble\`, which writes this table). Two seeds of one recipe differ by more than the recipe changes above: the recipe's mean over seeds 7 and 8 is what to compare with the published figure."
+        echo
+        body "$OUT/edge-pose-l1-seed8.md" | sed 's#](edge-pose-l1-seed8.png)#](paper-a/edge-pose-l1-seed8.png)#'
+        echo
+    fi
     echo "The CAE routes beside the shipped pose network (the jointly trained encoders are scored on the frames they never saw; \`models/cae-edge\` and \`models/pose-edge\` trained on every frame, so their rows are on frames they saw). \`${CMD[pose_cae]}\`"
     echo
     body "$OUT/edge-pose-cae.md" | sed 's#](edge-pose-cae.png)#](paper-a/edge-pose-cae.png)#'

@@ -266,7 +266,7 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
     let depth_set = DepthSet::from_dataset(&ds, &rows, depth.model.input_size).unwrap();
     for i in rows {
         let frame = load_rgb(ds.path_of(i, "file").unwrap()).unwrap();
-        let trained = det.stats.to_chw(&det_set.image(i)).unwrap();
+        let trained = det.stats.to_chw(&det_set.view(i)).unwrap();
         assert_eq!(
             det.frame_input(&frame).unwrap(),
             Some(trained),

@@ -46,8 +46,13 @@ fn the_standalone_detector_gives_the_toolkits_probabilities() {
     let mut alone = standalone("detector");
     let [w, h] = det.artifact.model.input_size;
     for f in frames() {
-        let bytes = resize_rgb(&f, w, h).unwrap().to_bytes();
-        let (shape, p) = alone.run_u8(&[1, h, w, 3], bytes).unwrap();
+        // The frame at the detector's input size, in its bits per channel.
+        let img = resize_rgb(&f, w, h).unwrap();
+        let (shape, p) = match det.artifact.model.bits() {
+            16 => alone.run_u16(&[1, h, w, 3], img.to_levels(16)),
+            _ => alone.run_u8(&[1, h, w, 3], img.to_bytes()),
+        }
+        .unwrap();
         assert_eq!(shape, [1, 1]);
         let q = det.probability(&f).unwrap();
         assert!(

@@ -19,14 +19,18 @@ def test_standalone_detector_matches_tactile_run(tactile_bin, root, tmp_path, pa
     threshold = float(meta["threshold"])
     width, height = map(int, meta["input_size"].split("x"))
     (inp,) = session.get_inputs()
-    assert inp.name == "frame" and inp.type == "tensor(uint8)"
+    assert inp.name == "frame" and inp.type in ("tensor(uint8)", "tensor(uint16)")
     assert session.get_outputs()[0].name == "tendon_probability"
 
     # The user's own resize: 320x180 frames averaged over 4x3 blocks.
     frames = np.stack(palpation_frames)
     n, h, w, _ = frames.shape
     small = frames.reshape(n, height, h // height, width, w // width, 3).mean(axis=(2, 4))
-    batch = np.round(small).astype(np.uint8)
+    if inp.type == "tensor(uint16)":
+        # A 16-bit detector reads levels of 65535: the resized frame times 257.
+        batch = np.round(small * 257.0).astype(np.uint16)
+    else:
+        batch = np.round(small).astype(np.uint8)
     (probability,) = session.run(["tendon_probability"], {"frame": batch})
 
     out = run_cli(tactile_bin, "run", "--data", "samples/palpation", "--out", "-")

@@ -414,11 +414,14 @@ fn models_and_labels_are_checked_when_loaded() {
     let det = tmp.path().join("det");
     std::fs::create_dir(&det).unwrap();
     std::fs::copy(shipped.join("detector.bpk"), det.join("detector.bpk")).unwrap();
-    for (from, to, why) in [
-        ("\"threshold\": 0.45", "\"threshold\": 1.5", "threshold"),
-        ("0.23066123", "0.0", "standard deviation"),
+    let json: serde_json::Value = serde_json::from_str(&json).unwrap();
+    for (field, to, why) in [
+        ("/threshold", 1.5, "threshold"),
+        ("/stats/std/0", 0.0, "standard deviation"),
     ] {
-        std::fs::write(det.join("detector.json"), json.replace(from, to)).unwrap();
+        let mut bad = json.clone();
+        *bad.pointer_mut(field).unwrap() = to.into();
+        std::fs::write(det.join("detector.json"), bad.to_string()).unwrap();
         let (ok, msg) = tactile(&["eval", "detector", "--model", s(&det), "--data", s(&vt)]);
         assert!(
             !ok && msg.contains("detector.json") && msg.contains(why),
