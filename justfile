@@ -140,6 +140,14 @@ train-detector-light: synth-vt-detector-light
     cargo run --release -p tactile -- train detector --data data/vt-train2 data/vt-train-onset data/vt-train-onset2 data/vt-train-light150 data/vt-train-light160 data/vt-train-light170 data/vt-train-light180 --out data/det/light --width 0.5 --input 80x60 --input-bits 16 --normalise-exposure --max-epochs 25 --patience 25 --soft-labels 0.6
     for d in sel2-light-ref sel2-light-alt sel-default; do cargo run --release -p tactile -- eval detector --model data/det/light --data data/$d; done
 
+# The light-press detector's test, on sets rendered after the choice (docs/detector-light-presses.md): light presses on both renderers and the default distribution on both (the alternate at 960x540).
+test-detector-light:
+    cargo run --release -p tactile -- synth visuotactile --count 3000 --seed 740 --press-mm 0.05,0.4 --out data/test-light-ref
+    cargo run --release -p tactile -- synth visuotactile --count 2400 --seed 741 --press-mm 0.05,0.4 --renderer alternate --out data/test-light-alt
+    cargo run --release -p tactile -- synth visuotactile --count 1200 --seed 742 --renderer alternate --width 960 --height 540 --out data/test-default-alt-960
+    cargo run --release -p tactile -- synth visuotactile --count 1200 --seed 743 --out data/test-default-ref
+    for d in test-light-ref test-light-alt test-default-alt-960 test-default-ref; do cargo run --release -p tactile -- eval detector --model models/detector --data data/$d; done
+
 # A second seed of the L1 pose recipe on the same 80 % of frames, and the two averaged (`train pose-ensemble`); `bench pose` scores both members and the ensemble on the 752 test frames with the ensemble's latency (the members' sum).
 train-pose-l1-ensemble: train-pose-l1
     cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out data/pose-l1/p128-l1d-s8 --config configs/pose/p128.json --exclude-test 0.2 --all-rows --max-epochs 45 --patience 45 --lr-decay 0.92 --loss l1 --seed 8
