@@ -121,7 +121,7 @@ train-pose:
     for c in p64 p128; do cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out data/pose/$c --config configs/pose/$c.json --exclude-test 0.2 --max-epochs 60 --patience 12; done
     cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out models/pose-edge --config configs/pose/p128.json --all-rows --max-epochs 45 --patience 45
 
-# The L1 recipe (loss on the standardised columns, learning rate decayed 8 % per epoch to 2 % of its start) validated on the 80 % of frames the split's test leaves (no early stopping: 45 epochs, about 67 minutes on 2 cores): 0.155 mm / 1.49 deg / 0.034 mm on the 752 test frames. `train-pose-edge-l1` trains the shipped model with it on every frame.
+# The L1 recipe (loss on the standardised columns, learning rate decayed 8 % per epoch to 2 % of its start) validated on the 80 % of frames the split's test leaves (no early stopping: 45 epochs, about 67 minutes on 2 cores): 0.155 mm / 1.49 deg / 0.034 mm on the 752 test frames (seed 8: 0.137 / 1.32 / 0.031). `train-pose-edge-l1` trains the shipped model with it on every frame (seed 8; 45 min).
 train-pose-l1:
     cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out data/pose-l1/p128-l1d --config configs/pose/p128.json --exclude-test 0.2 --all-rows --max-epochs 45 --patience 45 --lr-decay 0.92 --loss l1
     cargo run --release -p tactile -- bench pose --models data/pose-l1/p128-l1d --data {{real}}/tactip127-edge --runs 200 --out docs/paper-a/edge-pose-l1.md

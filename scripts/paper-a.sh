@@ -142,7 +142,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     echo
     echo "### The field's best, and a pose network beside the CAE"
     echo
-    echo "Every candidate on the frames its own training left out (a network trained on every frame is marked), against its latency at batch 1; the candidates in \`data/pose\` were trained by \`tactile train pose --config configs/pose/NAME.json --exclude-test 0.2\` and \`models/pose-edge\` by the chosen config on all 3,762 frames. \`${CMD[pose]}\`"
+    echo "Every candidate on the frames its own training left out (a network trained on every frame is marked), against its latency at batch 1; the candidates in \`data/pose\` were trained by \`tactile train pose --config configs/pose/NAME.json --exclude-test 0.2\` and \`models/pose-edge\` by the L1 recipe below (seed 8) on all 3,762 frames (\`just train-pose-edge-l1\`). \`${CMD[pose]}\`"
     echo
     body "$OUT/edge-pose.md" | sed 's#](edge-pose.png)#](paper-a/edge-pose.png)#'
     echo
