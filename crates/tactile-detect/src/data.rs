@@ -16,10 +16,9 @@ pub struct DetectionSet {
     pub width: usize,
     /// Input height.
     pub height: usize,
-    /// Bits per channel the frames are held at (the detector's `input_bits`).
-    pub bits: u8,
-    /// The detector's input form, whose [`DetectorConfig::network_view`]
-    /// turns a held frame into what the network takes.
+    /// The detector's input form: the bits per channel the frames are held
+    /// at, and its [`DetectorConfig::network_view`] that turns a held frame
+    /// into what the network takes.
     pub detector: DetectorConfig,
     /// Each frame's `file` label.
     pub files: Vec<String>,
@@ -71,7 +70,6 @@ impl DetectionSet {
         Ok(Self {
             width,
             height,
-            bits,
             detector: detector.clone(),
             files,
             frames,
@@ -96,12 +94,12 @@ impl DetectionSet {
                 found: [other.width, other.height],
             });
         }
-        if other.bits != self.bits
-            || other.detector.normalises_exposure() != self.detector.normalises_exposure()
-        {
+        let form = |d: &DetectorConfig| (d.bits(), d.normalises_exposure());
+        if form(&other.detector) != form(&self.detector) {
             return Err(tactile_core::Error::Invalid(format!(
                 "cannot join frames held for another input form ({} bits) to these ({} bits)",
-                other.bits, self.bits
+                other.detector.bits(),
+                self.detector.bits()
             ))
             .into());
         }
@@ -121,7 +119,13 @@ impl DetectionSet {
     /// The frame as a float image in [0, 1], as the camera gave it (the
     /// input profile's view).
     pub fn image(&self, i: usize) -> FloatImage {
-        FloatImage::from_levels(self.width, self.height, 3, &self.frames[i], self.bits)
+        FloatImage::from_levels(
+            self.width,
+            self.height,
+            3,
+            &self.frames[i],
+            self.detector.bits(),
+        )
     }
 
     /// The frame as the network takes it, before the channel statistics.

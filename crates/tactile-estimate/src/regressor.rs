@@ -72,6 +72,15 @@ impl Scaler {
             })
             .collect()
     }
+
+    /// One standardised row back in its columns' own units.
+    pub fn unscale(&self, row: &[f32]) -> Vec<f64> {
+        row.iter()
+            .zip(&self.mean)
+            .zip(&self.std)
+            .map(|((v, mu), s)| *v as f64 * s + mu)
+            .collect()
+    }
 }
 
 /// A regressor on disk: `regressor.json` (config and both scalers) beside
@@ -184,12 +193,12 @@ pub fn output_scaler(targets: &[Target], encoded: &[Vec<f64>]) -> Scaler {
 /// One network output row (standardised columns) back to one value per
 /// target, in the labels' units.
 pub fn decode(targets: &[Target], outputs: &Scaler, row: &[f32]) -> Vec<f64> {
-    let cols: Vec<f64> = row
-        .iter()
-        .zip(&outputs.mean)
-        .zip(&outputs.std)
-        .map(|((v, mu), s)| *v as f64 * s + mu)
-        .collect();
+    decode_columns(targets, &outputs.unscale(row))
+}
+
+/// Encoded columns, in their own units (an angle's cos/sin pair), to one
+/// value per target in the labels' units.
+pub fn decode_columns(targets: &[Target], cols: &[f64]) -> Vec<f64> {
     let mut at = 0;
     targets
         .iter()

@@ -72,12 +72,20 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
     };
     let device = DeviceKind::Flex.device();
     let list = |v: &[f32]| serde_json::to_string(v).unwrap_or_default();
-    let common = |kind: &str, w: usize, h: usize, mean: &[f32], std: &[f32]| {
+    let common = |kind: &str, w: usize, h: usize, bits: u8, mean: &[f32], std: &[f32]| {
+        let levels = if bits == 16 {
+            " (the resized frame times 65535)"
+        } else {
+            ""
+        };
         vec![
             ("tactile.model".to_string(), kind.to_string()),
             ("tactile.version".into(), env!("CARGO_PKG_VERSION").into()),
             ("input_size".into(), format!("{w}x{h}")),
-            ("input".into(), format!("frame: uint8 [N, {h}, {w}, 3] RGB")),
+            (
+                "input".into(),
+                format!("frame: uint{bits} [N, {h}, {w}, 3] RGB{levels}"),
+            ),
             ("channel_mean".into(), list(mean)),
             ("channel_std".into(), list(std)),
         ]
@@ -86,15 +94,8 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
         let l = DetectorArtifact::load(dir, &device)?;
         let a = &l.artifact;
         let [w, h] = a.model.input_size;
-        let mut metadata = common("detector", w, h, &a.stats.mean, &a.stats.std);
         let bits = a.model.bits();
-        if bits == 16 {
-            metadata.retain(|(k, _)| k != "input");
-            metadata.push((
-                "input".into(),
-                format!("frame: uint16 [N, {h}, {w}, 3] RGB (the resized frame times 65535)"),
-            ));
-        }
+        let mut metadata = common("detector", w, h, bits, &a.stats.mean, &a.stats.std);
         if a.model.normalises_exposure() {
             metadata.push((
                 "exposure".into(),
@@ -126,7 +127,7 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
         let l = SegmenterArtifact::load(dir, &device)?;
         let a = &l.artifact;
         let s = a.model.side;
-        let mut metadata = common("segmenter", s, s, &a.stats.mean, &a.stats.std);
+        let mut metadata = common("segmenter", s, s, 8, &a.stats.mean, &a.stats.std);
         metadata.push(("threshold".into(), a.threshold.to_string()));
         metadata.push((
             "output".into(),
@@ -160,7 +161,7 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
             .into());
         }
         let [w, h] = a.model.input_size;
-        let mut metadata = common("depth", w, h, &a.stats.mean, &a.stats.std);
+        let mut metadata = common("depth", w, h, 8, &a.stats.mean, &a.stats.std);
         metadata.push((
             "output".into(),
             format!("depth_mm: float32 [N, 1, {h}, {w}], camera to skin, mm"),

@@ -120,12 +120,8 @@ impl PoseEnsemble {
         let file = dir.join(Self::FILE);
         let e: Self = tactile_core::io::read_json(&file)?;
         let bad = |m: String| Err(tactile_core::Error::model(&file, m));
-        if e.members.is_empty() || e.members.len() > Self::MAX_MEMBERS {
-            return bad(format!(
-                "an ensemble takes 1 to {} members, this one names {}",
-                Self::MAX_MEMBERS,
-                e.members.len()
-            ));
+        if let Some(m) = Self::count_problem(e.members.len()) {
+            return bad(m);
         }
         for m in &e.members {
             let plain = !m.is_empty()
@@ -148,6 +144,25 @@ impl PoseEnsemble {
         Ok(e)
     }
 
+    /// What is wrong with `n` members, if anything.
+    fn count_problem(n: usize) -> Option<String> {
+        (n == 0 || n > Self::MAX_MEMBERS).then(|| {
+            format!(
+                "an ensemble takes 1 to {} members, got {n}",
+                Self::MAX_MEMBERS
+            )
+        })
+    }
+
+    /// One line: how many networks are averaged, and where.
+    pub fn describe(&self, dir: &Path) -> String {
+        format!(
+            "{} pose networks averaged in {}",
+            self.members.len(),
+            dir.display()
+        )
+    }
+
     /// The member folders.
     pub fn member_dirs(&self, dir: &Path) -> Vec<std::path::PathBuf> {
         self.members.iter().map(|m| dir.join(m)).collect()
@@ -158,12 +173,8 @@ impl PoseEnsemble {
     /// alone). Their preprocessing and targets must agree; the ensemble's
     /// `excluded_test` is theirs when they all share one.
     pub fn assemble(members: &[std::path::PathBuf], out: &Path) -> tactile_core::Result<Self> {
-        if members.is_empty() || members.len() > Self::MAX_MEMBERS {
-            return Err(tactile_core::Error::Invalid(format!(
-                "an ensemble takes 1 to {} members, got {}",
-                Self::MAX_MEMBERS,
-                members.len()
-            )));
+        if let Some(m) = Self::count_problem(members.len()) {
+            return Err(tactile_core::Error::Invalid(m));
         }
         let arts = members
             .iter()

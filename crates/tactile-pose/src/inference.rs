@@ -7,7 +7,7 @@ use std::path::Path;
 use rayon::prelude::*;
 use tactile_core::dataset::Dataset;
 use tactile_core::{Network, Runtime};
-use tactile_estimate::regressor::{Scaler, decode};
+use tactile_estimate::regressor::{Scaler, decode_columns};
 use tactile_preprocess::PinImage;
 
 use crate::Result;
@@ -88,22 +88,24 @@ impl PoseEstimator {
                 .collect();
             // Each member's columns in the targets' encoded units, averaged,
             // then decoded once (an angle's cos/sin pair averages well where
-            // the angles themselves would not across the wrap).
-            let mut sum = vec![0f64; chunk.len() * k];
-            for (scaler, net) in &mut self.members {
-                let y = net.run([chunk.len(), 1, side, side], x.clone())?;
-                for (j, (s, v)) in sum.iter_mut().zip(&y).enumerate() {
-                    *s += *v as f64 * scaler.std[j % k] + scaler.mean[j % k];
+            // the angles themselves would not across the wrap). One member
+            // gives exactly its own decoded row.
+            let mut sum = vec![vec![0f64; k]; chunk.len()];
+            let mut x = Some(x);
+            let last = self.members.len().saturating_sub(1);
+            for (m, (scaler, net)) in self.members.iter_mut().enumerate() {
+                let input = if m == last { x.take() } else { x.clone() };
+                let y = net.run([chunk.len(), 1, side, side], input.unwrap_or_default())?;
+                for (acc, row) in sum.iter_mut().zip(y.chunks(k)) {
+                    acc.iter_mut()
+                        .zip(scaler.unscale(row))
+                        .for_each(|(a, v)| *a += v);
                 }
             }
             let n = self.members.len() as f64;
-            let identity = Scaler {
-                mean: vec![0.0; k],
-                std: vec![1.0; k],
-            };
-            out.extend(sum.chunks(k).map(|r| {
-                let mean: Vec<f32> = r.iter().map(|v| (v / n) as f32).collect();
-                decode(&self.artifact.targets, &identity, &mean)
+            out.extend(sum.iter_mut().map(|cols| {
+                cols.iter_mut().for_each(|v| *v /= n);
+                decode_columns(&self.artifact.targets, cols)
             }));
         }
         Ok(out)

@@ -362,19 +362,16 @@ const LEVEL_REGION: f64 = 0.6;
 /// divided out, a contrast means one height. A channel whose centre is
 /// nearly black (under 1 grey level) is left alone.
 pub fn normalise_exposure(img: &mut FloatImage) {
-    exposure_levels(img)
-        .into_iter()
-        .enumerate()
-        .filter_map(|(ch, level)| level.map(|l| (ch, l)))
-        .for_each(|(ch, level)| {
-            let gain = FLAT_SKIN_LEVEL / level;
-            let c = img.channels;
-            img.data
-                .iter_mut()
-                .skip(ch)
-                .step_by(c)
-                .for_each(|v| *v *= gain);
-        });
+    let c = img.channels;
+    for (ch, level) in exposure_levels(img).into_iter().enumerate() {
+        let Some(level) = level else { continue };
+        let gain = FLAT_SKIN_LEVEL / level;
+        img.data
+            .iter_mut()
+            .skip(ch)
+            .step_by(c)
+            .for_each(|v| *v *= gain);
+    }
 }
 
 /// The pixels (row-major indices of a `w x h` image) whose median sets a

@@ -511,11 +511,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         }
         TrainCmd::PoseEnsemble(a) => {
             let e = tactile_pose::PoseEnsemble::assemble(&a.members, &a.out)?;
-            say!(
-                "{} pose networks averaged in {}",
-                e.members.len(),
-                a.out.display()
-            );
+            say!("{}", e.describe(&a.out));
         }
         TrainCmd::Align(a) => {
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
