@@ -98,12 +98,22 @@ fn pin_inputs() -> Vec<f32> {
     data
 }
 
+/// `data` (`[N, 1, 28, 28]` images) nearest-upsampled to `[N, 1, 56, 56]`.
+fn upsampled_twice(data: &[f32]) -> Vec<f32> {
+    data.chunks(784)
+        .flat_map(|img| (0..56 * 56).map(move |k| img[(k / 56 / 2) * 28 + (k % 56) / 2]))
+        .collect()
+}
+
 #[test]
 fn cae_encoder_and_autoencoder_match_onnxruntime() {
     let tmp = tempfile::tempdir().unwrap();
-    let data = pin_inputs();
-    let shape = [12, 1, 28, 28];
+    let data28 = pin_inputs();
     let authors = common::shared_real().join("polic-shapes/authors-encoder.safetensors");
+    let stem = CaeConfig::new()
+        .with_input_px(56)
+        .with_feature_count(32)
+        .unwrap();
     let models: Vec<(&str, CaeConfig, Cae)> = vec![
         // The released encoder with a fresh decoder.
         (
@@ -117,18 +127,29 @@ fn cae_encoder_and_autoencoder_match_onnxruntime() {
             CaeConfig::new(),
             CaeConfig::new().init(&Device::flex()),
         ),
+        // 56 px pin images through a stem block, fresh weights.
+        ("stem-56", stem.clone(), stem.init(&Device::flex())),
     ];
     for (name, cfg, cae) in models {
+        let px = cfg.input_px;
+        let shape = [12, 1, px, px];
+        let data = match px {
+            28 => data28.clone(),
+            _ => upsampled_twice(&data28),
+        };
         let art = CaeArtifact {
             model: cfg,
-            preprocess: PreprocessConfig::binary_frames(),
+            preprocess: PreprocessConfig {
+                output_px: px,
+                ..PreprocessConfig::binary_frames()
+            },
             notes: Default::default(),
         };
         let dir = folder(tmp.path(), name, &art, &cae);
         // The encoder, through the inference path.
         check::<CaeArtifact>(&format!("{name}-encoder"), &dir, shape, &data);
         // The whole autoencoder's export against burn's reconstruction.
-        let bytes = tactile_rs::cae::export::autoencoder_onnx(&cae, 28).unwrap();
+        let bytes = tactile_rs::cae::export::autoencoder_onnx(&cae, px).unwrap();
         let (_, ort) = OrtModel::from_bytes(&bytes, 1)
             .unwrap()
             .run_f32(&shape, data.clone())

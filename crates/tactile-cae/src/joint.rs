@@ -13,6 +13,7 @@ use burn::nn::{Linear, LinearConfig};
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
 use tactile_core::dataset::Dataset;
+use tactile_core::nn::RegressionLoss;
 use tactile_estimate::Target;
 use tactile_estimate::regressor::{Scaler, encode, output_scaler};
 
@@ -26,10 +27,14 @@ pub const MAX_HEAD_HIDDEN: usize = 4096;
 pub struct JointTargets {
     /// Label columns the head predicts (an angle takes two columns).
     pub targets: Vec<Target>,
-    /// Weight of the head's mean squared error (standardised columns)
-    /// beside the reconstruction's binary cross-entropy.
+    /// Weight of the head's loss (on standardised columns) beside the
+    /// reconstruction's binary cross-entropy.
     #[config(default = 1.0)]
     pub weight: f64,
+    /// The head's loss (`None`: mean squared error, as configs written
+    /// before this option were trained).
+    #[config(default = "None")]
+    pub loss: Option<RegressionLoss>,
     /// Hidden units of the head (one ReLU layer).
     #[config(default = 64)]
     pub hidden: usize,
@@ -62,7 +67,12 @@ impl JointTargets {
 
     /// Joint training on the targets named as `NAME` or `NAME:PERIOD`
     /// (checked); `None` when no name is given.
-    pub fn from_names(names: &[String], weight: f64, hidden: usize) -> crate::Result<Option<Self>> {
+    pub fn from_names(
+        names: &[String],
+        weight: f64,
+        hidden: usize,
+        loss: RegressionLoss,
+    ) -> crate::Result<Option<Self>> {
         if names.is_empty() {
             return Ok(None);
         }
@@ -70,7 +80,10 @@ impl JointTargets {
             .iter()
             .map(|t| Target::parse(t).map_err(|e| tactile_core::Error::Config(e.to_string())))
             .collect::<tactile_core::Result<Vec<_>>>()?;
-        let j = Self::new(targets).with_weight(weight).with_hidden(hidden);
+        let j = Self::new(targets)
+            .with_weight(weight)
+            .with_hidden(hidden)
+            .with_loss(Some(loss));
         j.check()?;
         Ok(Some(j))
     }
@@ -167,9 +180,9 @@ impl JointLabels {
         Ok(Self { columns, scaler })
     }
 
-    /// Mean squared error of `predicted` columns against the labels of
-    /// `rows` (unlabelled rows count for nothing).
-    pub fn mse(&self, predicted: Tensor<2>, rows: &[usize]) -> Tensor<1> {
+    /// Mean `loss` of `predicted` columns against the labels of `rows`
+    /// (unlabelled rows count for nothing).
+    pub fn loss(&self, predicted: Tensor<2>, rows: &[usize], loss: RegressionLoss) -> Tensor<1> {
         let device = predicted.device();
         let [n, k] = predicted.dims();
         let (mut y, mut mask) = (Vec::with_capacity(n * k), Vec::with_capacity(n));
@@ -188,7 +201,7 @@ impl JointLabels {
         let labelled = mask.iter().sum::<f32>().max(1.0);
         let y = Tensor::<2>::from_data(TensorData::new(y, [n, k]), &device);
         let mask = Tensor::<2>::from_data(TensorData::new(mask, [n, 1]), &device);
-        ((predicted - y).powi_scalar(2) * mask).sum() / (labelled * k as f32)
+        (loss.penalty(predicted - y) * mask).sum() / (labelled * k as f32)
     }
 }
 
@@ -205,13 +218,21 @@ pub struct JointArgs {
     /// Hidden units of the joint head.
     #[arg(long, default_value_t = 64)]
     pub joint_hidden: usize,
+    /// The joint head's loss on the standardised columns.
+    #[arg(long, value_enum, default_value_t = RegressionLoss::Mse)]
+    pub joint_loss: RegressionLoss,
 }
 
 #[cfg(feature = "clap")]
 impl JointArgs {
     /// `None` without `--joint-targets`.
     pub fn config(&self) -> crate::Result<Option<JointTargets>> {
-        JointTargets::from_names(&self.joint_targets, self.joint_weight, self.joint_hidden)
+        JointTargets::from_names(
+            &self.joint_targets,
+            self.joint_weight,
+            self.joint_hidden,
+            self.joint_loss,
+        )
     }
 }
 
@@ -234,8 +255,14 @@ mod tests {
             &device,
         );
         // Row 0 is off by 1 and 1, row 2 by 0 and 2; row 1 has no label.
-        let mse = labels.mse(pred, &[0, 1, 2]).into_scalar::<f32>();
+        let mse = labels
+            .loss(pred.clone(), &[0, 1, 2], RegressionLoss::Mse)
+            .into_scalar::<f32>();
         assert!((mse - 6.0 / 4.0).abs() < 1e-6, "{mse}");
+        let l1 = labels
+            .loss(pred, &[0, 1, 2], RegressionLoss::L1)
+            .into_scalar::<f32>();
+        assert!((l1 - 4.0 / 4.0).abs() < 1e-6, "{l1}");
         let ok = JointTargets::new(vec![Target::linear("x_mm")]);
         ok.check().unwrap();
         for bad in [
@@ -247,11 +274,16 @@ mod tests {
             assert!(bad.check().is_err(), "{bad:?}");
         }
         let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-        assert!(JointTargets::from_names(&[], 1.0, 64).unwrap().is_none());
-        let j = JointTargets::from_names(&names(&["x_mm", "theta_deg:180"]), 1.0, 64)
+        let l1 = RegressionLoss::L1;
+        assert!(
+            JointTargets::from_names(&[], 1.0, 64, l1)
+                .unwrap()
+                .is_none()
+        );
+        let j = JointTargets::from_names(&names(&["x_mm", "theta_deg:180"]), 1.0, 64, l1)
             .unwrap()
             .unwrap();
-        assert_eq!(j.columns(), 3);
-        assert!(JointTargets::from_names(&names(&["theta_deg:-5"]), 1.0, 64).is_err());
+        assert_eq!((j.columns(), j.loss), (3, Some(l1)));
+        assert!(JointTargets::from_names(&names(&["theta_deg:-5"]), 1.0, 64, l1).is_err());
     }
 }

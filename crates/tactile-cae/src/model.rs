@@ -7,6 +7,12 @@
 //! last up-sampling and a 1-channel output whose sigmoid is the
 //! reconstruction. Features are flattened in (row, column, channel) order,
 //! as Keras does, so they compare with the authors' released vectors.
+//!
+//! Larger pin images (56 or 112 px) keep where inside a 28 px cell a pin
+//! sits, which the edge pose needs. They go through a stem of extra
+//! conv + ReLU + pool blocks down to 28x28 before Table I's encoder, and
+//! the decoder ends with as many conv + ReLU + up-sampling blocks, so the
+//! latent map (and the feature count) is Table I's whatever the input.
 
 use burn::config::Config;
 use burn::module::{Initializer, Module, Param};
@@ -26,9 +32,13 @@ pub struct CaeConfig {
     /// `4 * widths[3]` (8/16/32/64 for 2/4/8/16).
     #[config(default = "[16, 8, 8, 4]")]
     pub widths: [usize; 4],
-    /// Side of the input pin image.
+    /// Side of the input pin image: 28 (Table I), 56 or 112 (one or two
+    /// stem blocks in front).
     #[config(default = 28)]
     pub input_px: usize,
+    /// Channels of each stem block (`None`: 16); unused at 28 px.
+    #[config(default = "None")]
+    pub stem_width: Option<usize>,
     /// ReLU before the last pooling (Table I; `None` means yes, so model
     /// files written before this option load unchanged). Trained on
     /// grey-level pin images, 7 of 16 such features died (zero on every
@@ -41,24 +51,42 @@ pub struct CaeConfig {
 /// Widest encoder block accepted.
 pub const MAX_WIDTH: usize = 256;
 
+/// Pin-image sides the autoencoder takes.
+pub const INPUT_SIDES: [usize; 3] = [28, 56, 112];
+
 impl CaeConfig {
     /// Check the sizes against the documented limits before anything is
-    /// allocated for them: every width 1 to [`MAX_WIDTH`], and the 28 px
-    /// input Table I's decoder reconstructs.
+    /// allocated for them: every width 1 to [`MAX_WIDTH`], and an input
+    /// side of 28 px (Table I's decoder) times 1, 2 or 4.
     pub fn check(&self) -> tactile_core::Result<()> {
-        if let Some(w) = self.widths.iter().find(|&&w| w == 0 || w > MAX_WIDTH) {
+        if let Some(w) = self
+            .widths
+            .iter()
+            .chain(&self.stem_width)
+            .find(|&&w| w == 0 || w > MAX_WIDTH)
+        {
             return Err(tactile_core::Error::Config(format!(
-                "CAE widths must be 1 to {MAX_WIDTH}, got {w} in {:?}",
-                self.widths
+                "CAE widths must be 1 to {MAX_WIDTH}, got {w} in {:?} (stem {:?})",
+                self.widths, self.stem_width
             )));
         }
-        if self.input_px != 28 {
+        if !INPUT_SIDES.contains(&self.input_px) {
             return Err(tactile_core::Error::Config(format!(
-                "the CAE takes 28x28 pin images (Table I's decoder), got input_px {}",
+                "the CAE takes pin images of {INPUT_SIDES:?} px (Table I's 28, or 28 after a stem of 1 or 2 pooling blocks), got input_px {}",
                 self.input_px
             )));
         }
         Ok(())
+    }
+
+    /// Stem blocks in front of Table I's encoder: 0, 1 or 2.
+    pub fn stem_blocks(&self) -> usize {
+        (self.input_px / 28).max(1).ilog2() as usize
+    }
+
+    /// Channels of each stem block.
+    pub fn stem_channels(&self) -> usize {
+        self.stem_width.unwrap_or(16)
     }
 
     /// Number of features the encoder outputs.
@@ -67,18 +95,21 @@ impl CaeConfig {
         s * s * self.widths[3]
     }
 
-    /// Side of the latent map after four 'same' poolings.
+    /// Side of the latent map after the stem's and Table I's four 'same'
+    /// poolings.
     pub fn latent_side(&self) -> usize {
-        (0..4).fold(self.input_px, |s, _| s.div_ceil(2))
+        (0..4 + self.stem_blocks()).fold(self.input_px, |s, _| s.div_ceil(2))
     }
 
     /// The config the training front ends ask for: four encoder `widths`,
-    /// optionally a feature count (sets the last width), and the linear
-    /// latent (no ReLU before the last pooling).
+    /// optionally a feature count (sets the last width), the linear
+    /// latent (no ReLU before the last pooling), and the pin images' side
+    /// (the preprocessing's output).
     pub fn from_options(
         widths: &[usize],
         features: Option<usize>,
         linear_latent: bool,
+        input_px: usize,
     ) -> crate::Result<Self> {
         let widths: [usize; 4] = widths.try_into().map_err(|_| {
             tactile_core::Error::Config(format!(
@@ -88,7 +119,9 @@ impl CaeConfig {
         })?;
         let model = Self::new()
             .with_widths(widths)
+            .with_input_px(input_px)
             .with_latent_relu(linear_latent.then_some(false));
+        model.check()?;
         match features {
             Some(f) => model.with_feature_count(f),
             None => Ok(model),
@@ -125,9 +158,15 @@ impl CaeConfig {
         };
         let same = |i, o| conv(i, o, PaddingConfig2d::Explicit(1, 1, 1, 1));
         let valid = |i, o| conv(i, o, PaddingConfig2d::Valid);
+        let (blocks, s) = (self.stem_blocks(), self.stem_channels());
+        // Stem: 1 -> s -> s channels; tail: c1 -> s -> s, then conv5 to 1.
+        let stem = (0..blocks).map(|b| same(if b == 0 { 1 } else { s }, s));
+        let tail = (0..blocks).map(|b| same(if b == 0 { c1 } else { s }, s));
+        let into_conv1 = if blocks > 0 { s } else { 1 };
         Cae {
             encoder: CaeEncoder {
-                conv1: same(1, c1),
+                stem: stem.collect(),
+                conv1: same(into_conv1, c1),
                 conv2: same(c1, c2),
                 conv3: same(c2, c3),
                 conv4: same(c3, c4),
@@ -139,7 +178,8 @@ impl CaeConfig {
                 conv2: same(c4, c3),
                 conv3: same(c3, c2),
                 conv4: valid(c2, c1),
-                conv5: same(c1, 1),
+                tail: tail.collect(),
+                conv5: same(if blocks > 0 { s } else { c1 }, 1),
                 up: Interpolate2dConfig::new()
                     .with_scale_factor(Some([2.0, 2.0]))
                     .with_mode(InterpolateMode::Nearest)
@@ -200,6 +240,8 @@ pub fn hwc_unflatten(f: Tensor<2>, c: usize, h: usize, w: usize) -> Tensor<4> {
 /// Pin image -> features.
 #[derive(Module, Debug)]
 pub struct CaeEncoder {
+    /// Stem convolutions (each + ReLU + pool) down to 28 px; none at 28 px.
+    pub stem: Vec<Conv2d>,
     /// Block 1 convolution.
     pub conv1: Conv2d,
     /// Block 2 convolution.
@@ -218,9 +260,13 @@ impl CaeEncoder {
     /// The latent map.
     ///
     /// # Shapes
-    /// - `x`: `[N, 1, 28, 28]`
+    /// - `x`: `[N, 1, S, S]`, S = 28 times 1, 2 or 4
     /// - output: `[N, C, 2, 2]`
     pub fn latent(&self, x: Tensor<4>) -> Tensor<4> {
+        let x = self
+            .stem
+            .iter()
+            .fold(x, |x, c| self.pool.forward(relu(c.forward(x))));
         let x = self.pool.forward(relu(self.conv1.forward(x)));
         let x = self.pool.forward(relu(self.conv2.forward(x)));
         let x = self.pool.forward(relu(self.conv3.forward(x)));
@@ -232,7 +278,7 @@ impl CaeEncoder {
     /// Features in (row, column, channel) order.
     ///
     /// # Shapes
-    /// - `x`: `[N, 1, 28, 28]` pin images
+    /// - `x`: `[N, 1, S, S]` pin images
     /// - output: `[N, F]`
     pub fn forward(&self, x: Tensor<4>) -> Tensor<2> {
         hwc_flatten(self.latent(x))
@@ -250,6 +296,9 @@ pub struct CaeDecoder {
     pub conv3: Conv2d,
     /// The 'valid' convolution (16 -> 14).
     pub conv4: Conv2d,
+    /// Tail convolutions (each + ReLU + up-sampling) from 28 px back to the
+    /// input's side; none at 28 px.
+    pub tail: Vec<Conv2d>,
     /// To one channel of logits.
     pub conv5: Conv2d,
     /// Nearest up-sampling x2.
@@ -261,7 +310,7 @@ pub struct CaeDecoder {
 }
 
 impl CaeDecoder {
-    /// Reconstruction logits `[N, 1, 28, 28]` from features `[N, F]`.
+    /// Reconstruction logits `[N, 1, S, S]` from features `[N, F]`.
     pub fn forward(&self, features: Tensor<2>) -> Tensor<4> {
         let s = self.latent_side;
         self.forward_latent(hwc_unflatten(features, self.latent_channels, s, s))
@@ -273,6 +322,10 @@ impl CaeDecoder {
         let x = self.up.forward(relu(self.conv2.forward(x)));
         let x = self.up.forward(relu(self.conv3.forward(x)));
         let x = self.up.forward(relu(self.conv4.forward(x)));
+        let x = self
+            .tail
+            .iter()
+            .fold(x, |x, c| self.up.forward(relu(c.forward(x))));
         self.conv5.forward(x)
     }
 }
@@ -336,6 +389,36 @@ mod tests {
             );
         }
         assert!(CaeConfig::new().with_feature_count(10).is_err());
+    }
+
+    #[test]
+    fn larger_inputs_keep_table_one_latent() {
+        let device = Device::flex();
+        for (px, blocks) in [(56, 1), (112, 2)] {
+            let cfg = CaeConfig::new()
+                .with_input_px(px)
+                .with_feature_count(32)
+                .unwrap();
+            cfg.check().unwrap();
+            assert_eq!((cfg.stem_blocks(), cfg.latent_side()), (blocks, 2));
+            let m = cfg.init(&device);
+            let x = Tensor::<4>::zeros([2, 1, px, px], &device);
+            assert_eq!(m.encoder.forward(x.clone()).dims(), [2, 32]);
+            assert_eq!(m.forward(x).dims(), [2, 1, px, px]);
+        }
+        for bad in [27, 64, 128, 224] {
+            assert!(
+                CaeConfig::new().with_input_px(bad).check().is_err(),
+                "{bad}"
+            );
+        }
+        assert!(
+            CaeConfig::new()
+                .with_input_px(56)
+                .with_stem_width(Some(0))
+                .check()
+                .is_err()
+        );
     }
 
     #[test]

@@ -147,11 +147,24 @@ pub fn train(
         &ad,
     );
     let weight = config.joint.as_ref().map_or(0.0, |j| j.weight) as f32;
+    let head_loss = config
+        .joint
+        .as_ref()
+        .and_then(|j| j.loss)
+        .unwrap_or_default();
     let optim: ModuleOptimizer = match config.optimizer {
         Optimizer::Adadelta => config.adadelta.init(),
         Optimizer::Adam => burn::optim::AdamConfig::new().init(),
     };
-    let fit_cfg = FitConfig::new(&config.schedule, "CAE training (binary cross-entropy)")
+    let title = match &config.joint {
+        Some(j) => format!(
+            "CAE training (binary cross-entropy + {} x the head's {})",
+            j.weight,
+            head_loss.name()
+        ),
+        None => "CAE training (binary cross-entropy)".into(),
+    };
+    let fit_cfg = FitConfig::new(&config.schedule, &title)
         .saving_to(out, resume)
         .with_checkpoint_every(25)
         .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
@@ -174,25 +187,25 @@ pub fn train(
             let (logits, columns) = m.forward(x.clone());
             let loss = bce_with_logits(logits, x);
             Ok(match (columns, &labels) {
-                (Some(c), Some(l)) => loss + l.mse(c, batch) * weight,
+                (Some(c), Some(l)) => loss + l.loss(c, batch, head_loss) * weight,
                 _ => loss,
             })
         },
         |m| {
             // Validation loss: the training loss's two terms on the held-out rows.
-            let (mut bce, mut mse) = (0.0, 0.0);
+            let (mut bce, mut head) = (0.0, 0.0);
             for chunk in val.chunks(config.schedule.batch_size.max(1)) {
                 let x = pins.batch(chunk, &dev);
                 let (logits, columns) = m.forward(x.clone());
                 let n = chunk.len() as f64;
                 bce += bce_with_logits(logits, x).into_scalar::<f32>() as f64 * n;
                 if let (Some(c), Some(l)) = (columns, &labels) {
-                    mse += l.mse(c, chunk).into_scalar::<f32>() as f64 * n;
+                    head += l.loss(c, chunk, head_loss).into_scalar::<f32>() as f64 * n;
                 }
             }
             let n = val.len().max(1) as f64;
-            let metric = labels.as_ref().map(|_| mse / n);
-            Ok(((bce + weight as f64 * mse) / n, metric))
+            let metric = labels.as_ref().map(|_| head / n);
+            Ok(((bce + weight as f64 * head) / n, metric))
         },
         |m| Ok(artifact.save(&m.cae, out)?),
     )?;

@@ -23,6 +23,38 @@ pub fn elementwise_bce_with_logits<const D: usize>(
     relu - logits * targets + soft
 }
 
+/// The loss on standardised regression columns (pose networks, the
+/// autoencoder's joint head).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum RegressionLoss {
+    /// Mean squared error: the usual choice, pulls hardest on outliers.
+    #[default]
+    Mse,
+    /// Mean absolute error: the loss of the metric reported (MAE), so the
+    /// network is not pulled towards a few hard frames at the median's cost.
+    L1,
+}
+
+impl RegressionLoss {
+    /// Its name in configs and curves.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mse => "MSE",
+            Self::L1 => "L1",
+        }
+    }
+
+    /// Elementwise penalty of `diff` (prediction minus label).
+    pub fn penalty<const D: usize>(self, diff: Tensor<D>) -> Tensor<D> {
+        match self {
+            Self::Mse => diff.powi_scalar(2),
+            Self::L1 => diff.abs(),
+        }
+    }
+}
+
 /// `relu6(x + 3) / 6`, MobileNetV3's hard sigmoid.
 ///
 /// Written as `(relu(x + 3) - relu(x - 3)) / 6`: burn-onnx 0.22 exports

@@ -39,28 +39,9 @@ pub fn grey_pin_images(side: usize) -> PreprocessConfig {
     }
 }
 
-/// What the optimiser minimises on the standardised target columns.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum PoseLoss {
-    /// Mean squared error: the usual choice, pulls hardest on outliers.
-    #[default]
-    Mse,
-    /// Mean absolute error: the loss of the metric reported (MAE), so the
-    /// network is not pulled towards a few hard frames at the median's cost.
-    L1,
-}
-
-impl PoseLoss {
-    /// Its name in configs and curves.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Mse => "MSE",
-            Self::L1 => "L1",
-        }
-    }
-}
+/// The pose network's training loss (shared with the autoencoder's joint
+/// head).
+pub use tactile_core::nn::RegressionLoss as PoseLoss;
 
 /// Training settings.
 #[derive(Config, Debug)]
@@ -219,10 +200,7 @@ pub fn train(
             let y: Vec<f32> = batch.iter().flat_map(|&i| columns[i].clone()).collect();
             let y = Tensor::<2>::from_data(TensorData::new(y, [batch.len(), k]), &ad);
             let diff = m.forward(x) - y;
-            Ok(match loss {
-                PoseLoss::Mse => diff.powi_scalar(2).mean(),
-                PoseLoss::L1 => diff.abs().mean(),
-            })
+            Ok(loss.penalty(diff).mean())
         },
         |m| {
             let cols = predict_columns(m, &set, &val, &dev)?;

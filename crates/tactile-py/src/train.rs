@@ -133,7 +133,7 @@ fn summary<'py>(
 
 /// Train paper A's convolutional autoencoder.
 #[pyfunction]
-#[pyo3(signature = (data, out, *, preprocess="binary", widths=None, features=None, linear_latent=false, optimizer="adadelta", val_fraction=None, exclude_test=None, split_seed=7, device="flex", resume=false, schedule=None, rotate_copies=0, rotate_deg=6.0, joint_targets=None, joint_weight=1.0, joint_hidden=64))]
+#[pyo3(signature = (data, out, *, preprocess="binary", widths=None, features=None, linear_latent=false, optimizer="adadelta", val_fraction=None, exclude_test=None, split_seed=7, device="flex", resume=false, schedule=None, rotate_copies=0, rotate_deg=6.0, joint_targets=None, joint_weight=1.0, joint_hidden=64, joint_loss="mse"))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn train_cae<'py>(
     py: Python<'py>,
@@ -155,6 +155,7 @@ pub(crate) fn train_cae<'py>(
     joint_targets: Option<Vec<String>>,
     joint_weight: f64,
     joint_hidden: usize,
+    joint_loss: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let schedule = ScheduleArgs::from_dict(schedule)?;
     let dev = self::device(device)?;
@@ -163,6 +164,7 @@ pub(crate) fn train_cae<'py>(
         &joint_targets.unwrap_or_default(),
         joint_weight,
         joint_hidden,
+        parse("joint_loss", joint_loss)?,
     )
     .py()?;
     let pre = PreprocessConfig::preset(preprocess).py()?;
@@ -173,6 +175,7 @@ pub(crate) fn train_cae<'py>(
         &widths.unwrap_or(CaeConfig::new().widths),
         features,
         linear_latent,
+        pre.output_px,
     )
     .py()?;
     let config = CaeTrainingConfig::new()

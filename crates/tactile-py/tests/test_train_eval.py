@@ -99,11 +99,15 @@ def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):
     out = tmp_path / "joint"
     s = tactile.train.cae(data, out, preprocess="lighting-compensated", optimizer="adam",
                           linear_latent=True, joint_targets=["depth_mm", "force_n"],
-                          joint_weight=10.0, max_epochs=2, patience=2)
+                          joint_weight=10.0, joint_loss="l1", max_epochs=2, patience=2)
     assert (out / "cae.json").is_file()
     record = json.loads((out / "training.json").read_text())
     assert [t["name"] for t in record["config"]["joint"]["targets"]] == ["depth_mm", "force_n"]
+    assert record["config"]["joint"]["loss"] == "l1"
     assert record["summary"]["best_val_metric"] is not None
     with pytest.raises(ValueError, match="weight"):
         tactile.train.cae(data, tmp_path / "bad", joint_targets=["depth_mm"], joint_weight=0.0)
+    assert not (tmp_path / "bad" / "cae.json").exists()
+    with pytest.raises(ValueError, match="joint_loss"):
+        tactile.train.cae(data, tmp_path / "bad", joint_targets=["depth_mm"], joint_loss="l3")
     assert not (tmp_path / "bad" / "cae.json").exists()

@@ -373,7 +373,8 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
     match cmd {
         TrainCmd::Cae(a) => {
             let ds = Dataset::open(&a.data)?;
-            let model = CaeConfig::from_options(&a.widths, a.features, a.linear_latent)?;
+            let px = a.preprocess.config.output_px;
+            let model = CaeConfig::from_options(&a.widths, a.features, a.linear_latent, px)?;
             let config = CaeTrainingConfig::new()
                 .with_model(model)
                 .with_preprocess(a.preprocess.config)

@@ -1827,7 +1827,12 @@ fn joint_training_keeps_the_pose_in_the_features() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("edge");
     edge_subset(&data, 300);
-    let train = |out: &Path, extra: &[&str]| {
+    let edge_area = |px: &str| {
+        let name = format!("configs/preprocess/tactip127-edge-area{px}.json");
+        root.join(name).to_str().unwrap().to_string()
+    };
+    let pre28 = edge_area("");
+    let train = |out: &Path, pre: &str, extra: &[&str]| {
         let mut args = vec![
             "train",
             "cae",
@@ -1836,27 +1841,32 @@ fn joint_training_keeps_the_pose_in_the_features() {
             "--out",
             out.to_str().unwrap(),
             "--preprocess",
-        ];
-        let pre = root.join("configs/preprocess/tactip127-edge-area.json");
-        args.push(pre.to_str().unwrap());
-        args.extend([
-            "--widths",
-            "16,16,8,4",
+            pre,
             "--linear-latent",
             "--optimizer",
             "adam",
-            "--max-epochs",
-            "30",
-            "--patience",
-            "30",
             "--batch-size",
             "32",
-        ]);
+        ];
+        if !extra.contains(&"--max-epochs") {
+            args.extend([
+                "--widths",
+                "16,16,8,4",
+                "--max-epochs",
+                "30",
+                "--patience",
+                "30",
+            ]);
+        }
         args.extend(extra);
         tactile(&args)
     };
     let joint = tmp.path().join("joint");
-    let (ok, msg) = train(&joint, &["--joint-targets", "x_mm,theta_deg:180,depth_mm"]);
+    let (ok, msg) = train(
+        &joint,
+        &pre28,
+        &["--joint-targets", "x_mm,theta_deg:180,depth_mm"],
+    );
     assert!(ok, "{msg}");
     // The head's validation error (standardised columns: 1 is guessing
     // the mean) on 60 frames it never trained on.
@@ -1895,9 +1905,50 @@ fn joint_training_keeps_the_pose_in_the_features() {
     // A target the labels do not have, and a weight out of range, are
     // refused before training, naming what is wrong; nothing is saved.
     let bad = tmp.path().join("bad");
-    let (ok, msg) = train(&bad, &["--joint-targets", "teapot_mm"]);
+    let (ok, msg) = train(&bad, &pre28, &["--joint-targets", "teapot_mm"]);
     assert!(!ok && msg.contains("teapot_mm"), "{msg}");
-    let (ok, msg) = train(&bad, &["--joint-targets", "x_mm", "--joint-weight", "1e9"]);
+    let (ok, msg) = train(
+        &bad,
+        &pre28,
+        &["--joint-targets", "x_mm", "--joint-weight", "1e9"],
+    );
     assert!(!ok && msg.contains("weight"), "{msg}");
+    assert!(!bad.join("cae.json").exists());
+    // 56 px pin images (a stem block in front of Table I's encoder) with
+    // the head on the L1 loss: 32 features, the pin side from the
+    // preprocessing; a side the decoder cannot give back is refused.
+    let pre56 = edge_area("-56");
+    let train56 = |out: &Path, pre: &str| {
+        let head = [
+            "--joint-targets",
+            "x_mm,theta_deg:180,depth_mm",
+            "--joint-loss",
+            "l1",
+        ];
+        train(
+            out,
+            pre,
+            &[&["--features", "32", "--max-epochs", "2"][..], &head].concat(),
+        )
+    };
+    let big = tmp.path().join("joint56");
+    let (ok, msg) = train56(&big, &pre56);
+    assert!(ok, "{msg}");
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(big.join("training.json")).unwrap()).unwrap();
+    assert_eq!(record["config"]["joint"]["loss"], "l1");
+    assert_eq!(record["config"]["model"]["input_px"], 56);
+    let feats56 = tmp.path().join("features56.csv");
+    let (ok, msg) = encode(&big, &data, &feats56);
+    assert!(ok, "{msg}");
+    let header = std::fs::read_to_string(&feats56).unwrap();
+    assert_eq!(header.lines().next().unwrap().split(',').count(), 33);
+    let pre64 = tmp.path().join("pre64.json");
+    let text = std::fs::read_to_string(root.join("configs/preprocess/tactip127-edge-area.json"))
+        .unwrap()
+        .replace("\"output_px\": 28", "\"output_px\": 64");
+    std::fs::write(&pre64, text).unwrap();
+    let (ok, msg) = train56(&bad, pre64.to_str().unwrap());
+    assert!(!ok && msg.contains("input_px 64"), "{msg}");
     assert!(!bad.join("cae.json").exists());
 }

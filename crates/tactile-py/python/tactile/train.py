@@ -55,6 +55,7 @@ def cae(
     joint_targets: Optional[Sequence[str]] = None,
     joint_weight: float = 1.0,
     joint_hidden: int = 64,
+    joint_loss: str = "mse",
 ) -> Dict[str, Any]:
     """Paper A's convolutional autoencoder on a TacTip dataset.
 
@@ -66,8 +67,11 @@ def cae(
     or as one of that many copies turned by up to ``rotate_deg`` degrees.
     ``joint_targets`` (e.g. ``["x_mm", "theta_deg:180", "depth_mm"]``):
     semi-supervised, the features also feed a head of ``joint_hidden``
-    units trained to predict those label columns, its loss weighted by
-    ``joint_weight``; only the autoencoder is saved.
+    units trained to predict those label columns, its loss ("mse" or
+    "l1") weighted by ``joint_weight``; only the autoencoder is saved. The
+    pin images' side (the preprocessing's ``output_px``: 28, 56 or 112)
+    sets the encoder's input; larger ones pass through stem blocks down to
+    Table I's 28.
     """
     return _tactile.train_cae(
         os.fspath(data),
@@ -91,6 +95,7 @@ def cae(
         joint_targets=None if joint_targets is None else list(joint_targets),
         joint_weight=joint_weight,
         joint_hidden=joint_hidden,
+        joint_loss=joint_loss,
     )
 
 
