@@ -76,12 +76,25 @@ train-cae-edge:
     cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out models/cae-edge-unsupervised --preprocess configs/preprocess/tactip127-edge-area.json --widths 32,32,16,4 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 400 --patience 40 --exclude-test 0.2
     cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out models/cae-edge-binary --preprocess configs/preprocess/tactip127-edge.json --widths 16,16,8,4 --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 250 --patience 40 --exclude-test 0.2
 
-# The CAE route trained jointly with the edge-pose heads (semi-supervised: reconstruction plus a 64-unit head on the features predicting x, theta, depth, its loss weighted 10; only the autoencoder is kept). Scored runs (weights 1 and 10, 32 features) without the test frames `compare --seed 7` scores, each with its MLP estimator; then the shipped one (weight 10) on every frame with its estimator trained on every frame.
+# The CAE route trained jointly with the edge-pose heads on 28 px pin images (semi-supervised: reconstruction plus a 64-unit head on the features predicting x, theta, depth, its mean squared error weighted 1 or 10; only the autoencoder is kept). Scored runs (32 features) without the test frames `compare --seed 7` scores, each with its MLP estimator. The shipped models/cae-edge is the 112 px recipe of train-cae-edge-large (ship-cae-edge).
 train-cae-edge-joint:
     for w in 1 10; do cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out data/cae-joint-32-w$w --preprocess configs/preprocess/tactip127-edge-area.json --widths 32,32,16,4 --features 32 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 150 --patience 25 --exclude-test 0.2 --joint-targets x_mm,theta_deg:180,depth_mm --joint-weight $w; done
     for w in 1 10; do cargo run --release -p tactile -- train regressor --encoder data/cae-joint-32-w$w --data {{real}}/tactip127-edge --targets x_mm,theta_deg:180,depth_mm --hidden 256,128 --out data/cae-joint-32-w$w/pose; done
-    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out models/cae-edge --preprocess configs/preprocess/tactip127-edge-area.json --widths 32,32,16,4 --features 32 --linear-latent --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 150 --patience 25 --joint-targets x_mm,theta_deg:180,depth_mm --joint-weight 10
-    cargo run --release -p tactile -- train regressor --encoder models/cae-edge --data {{real}}/tactip127-edge --targets x_mm,theta_deg:180,depth_mm --hidden 256,128 --test-fraction 0 --out models/cae-edge/pose
+
+# The CAE route on larger pin images: 56 and 112 px through one or two stem blocks down to Table I's 28 px, 32 features, the joint head on the L1 loss (weight 10) and the learning rate decayed per epoch; trained and scored without the test frames of split seed 7, each with its MLP estimator, beside the best pose network of that split (`just train-pose-l1-ensemble` trains it). Writes docs/paper-a/edge-pose-cae-large.md.
+train-cae-edge-large:
+    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out data/cae-joint-56 --preprocess configs/preprocess/tactip127-edge-area-56.json --widths 32,32,16,4 --features 32 --linear-latent --optimizer adam --lr 1e-3 --lr-decay 0.98 --batch-size 32 --max-epochs 120 --patience 120 --exclude-test 0.2 --joint-targets x_mm,theta_deg:180,depth_mm --joint-weight 10 --joint-loss l1
+    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out data/cae-joint-112 --preprocess configs/preprocess/tactip127-edge-area-112.json --widths 32,32,16,4 --features 32 --linear-latent --optimizer adam --lr 1e-3 --lr-decay 0.97 --batch-size 32 --max-epochs 80 --patience 80 --exclude-test 0.2 --joint-targets x_mm,theta_deg:180,depth_mm --joint-weight 10 --joint-loss l1
+    for px in 56 112; do cargo run --release -p tactile -- train regressor --encoder data/cae-joint-$px --data {{real}}/tactip127-edge --targets x_mm,theta_deg:180,depth_mm --hidden 256,128 --out data/cae-joint-$px/pose; done
+    cargo run --release -p tactile -- bench pose --models data/pose-l1/p128-l1d-s8 data/cae-joint-112 data/cae-joint-56 --data {{real}}/tactip127-edge --runs 200 --out docs/paper-a/edge-pose-cae-large.md
+
+# The shipped models/cae-edge: the 112 px recipe of train-cae-edge-large on every frame (80 epochs; 20 % of the frames choose the best epoch), its MLP estimator trained on every frame. About 45 min on 2 cores; staged in data/ and then put in place.
+ship-cae-edge:
+    rm -rf data/cae-edge-112-all
+    cargo run --release -p tactile -- train cae --data {{real}}/tactip127-edge --out data/cae-edge-112-all --preprocess configs/preprocess/tactip127-edge-area-112.json --widths 32,32,16,4 --features 32 --linear-latent --optimizer adam --lr 1e-3 --lr-decay 0.97 --batch-size 32 --max-epochs 80 --patience 80 --joint-targets x_mm,theta_deg:180,depth_mm --joint-weight 10 --joint-loss l1
+    cargo run --release -p tactile -- train regressor --encoder data/cae-edge-112-all --data {{real}}/tactip127-edge --targets x_mm,theta_deg:180,depth_mm --hidden 256,128 --test-fraction 0 --out data/cae-edge-112-all/pose
+    rm -rf models/.cae-edge-new && mkdir -p models/.cae-edge-new/pose && cp data/cae-edge-112-all/cae.* data/cae-edge-112-all/curves.* data/cae-edge-112-all/training.json models/.cae-edge-new/ && cp data/cae-edge-112-all/pose/regressor.* models/.cae-edge-new/pose/
+    rm -rf models/cae-edge && mv models/.cae-edge-new models/cae-edge
 
 # Paper A's feature-count search on the shapes set: trains 8/16/32/64-feature CAEs into data/sweep, then writes docs/paper-a/sweep.md and its plots.
 sweep:

@@ -158,6 +158,15 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
         body "$OUT/edge-pose-l1-seed8.md" | sed 's#](edge-pose-l1-seed8.png)#](paper-a/edge-pose-l1-seed8.png)#'
         echo
     fi
+    if [ -f "$OUT/edge-pose-cae-large.md" ]; then
+        echo "### The CAE route on larger pin images"
+        echo
+        echo "At 28 px a pin covers about one output pixel; the pose network reads 128 px. \`tactile train cae\` takes 56 and 112 px pin images (the preprocessing's \`output_px\`): one or two stem blocks (16 channels, 3x3 conv + ReLU + 2x2 pool) bring them to 28 px for Table I's encoder, so the features are still 32 (a 2x2x8 latent map), and the decoder ends with as many conv + ReLU + up-sampling blocks. The joint head is trained on the L1 loss (\`--joint-loss l1\`, weight 10) with the learning rate decayed per epoch; the MLP estimator (256-128) is trained on the features afterwards, as for any encoder. Both encoders left out the 752 test frames; beside them the pose network of the same split (the L1 recipe, seed 8). \`just train-cae-edge-large\`, which writes this table:"
+        echo
+        body "$OUT/edge-pose-cae-large.md" | sed 's#](edge-pose-cae-large.png)#](paper-a/edge-pose-cae-large.png)#'
+        echo
+        [ -f docs/paper-a-cae-large.md ] && cat docs/paper-a-cae-large.md && echo
+    fi
     echo "The CAE routes beside the shipped pose network (the jointly trained encoders are scored on the frames they never saw; \`models/cae-edge\` and \`models/pose-edge\` trained on every frame, so their rows are on frames they saw). \`${CMD[pose_cae]}\`"
     echo
     body "$OUT/edge-pose-cae.md" | sed 's#](edge-pose-cae.png)#](paper-a/edge-pose-cae.png)#'
