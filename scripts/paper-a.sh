@@ -63,7 +63,7 @@ step pose_cae bench pose --models models/pose-edge models/cae-edge "${JOINT[@]}"
 if [ "$CANDIDATES" = 1 ]; then
     step pose bench pose --models "${POSE_MODELS[@]}" --data "$REAL/tactip127-edge" --runs 200 --out "$OUT/edge-pose.md"
 else
-    CMD[pose]="tactile bench pose --models ${POSE_MODELS[*]} data/pose/p128 data/pose/p64 --data $REAL/tactip127-edge --runs 200 --out $OUT/edge-pose.md (after just train-pose; the last table is kept)"
+    CMD[pose]="tactile bench pose --models ${POSE_MODELS[*]} data/pose/p128 data/pose/p64 --data $REAL/tactip127-edge --runs 200 --out $OUT/edge-pose.md (after just train-pose; the last table is kept, its models/pose-edge and models/cae-edge rows from the models shipped when it was written: the MSE p128 network and the 28 px joint CAE; the last table of this section has today's)"
 fi
 step synthetic evaluate --encoder models/cae-synth --data "$SYNTH_TEST" --out "$OUT/synthetic.md"
 step robustness robustness --encoder models/cae-synth --data "$SYNTH_TEST" --out "$OUT/robustness.md"
