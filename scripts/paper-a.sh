@@ -126,7 +126,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     echo
     echo "### The CAE trained jointly with the pose heads"
     echo
-    echo "Unsupervised, the 16 features keep too little of the edge pose: an MLP on them is twice the error of one on the raw pixels. Trained jointly (\`tactile train cae --joint-targets x_mm,theta_deg:180,depth_mm\`: the reconstruction's cross-entropy plus, weighted 1 or 10, the mean squared error of a 64-unit head on the features predicting the standardised targets; only the autoencoder is kept), the features carry the pose, and the cheap estimators are trained on them afterwards as on any encoder's. 32 features (widths 32,32,16,8), the same split; neither encoder saw its test frames (\`--exclude-test 0.2\`, \`just train-cae-edge-joint\`). The shipped \`models/cae-edge\` is the weight-10 recipe trained on every frame."
+    echo "Unsupervised, the 16 features keep too little of the edge pose: an MLP on them is twice the error of one on the raw pixels. Trained jointly (\`tactile train cae --joint-targets x_mm,theta_deg:180,depth_mm\`: the reconstruction's cross-entropy plus, weighted 1 or 10, the mean squared error of a 64-unit head on the features predicting the standardised targets; only the autoencoder is kept), the features carry the pose, and the cheap estimators are trained on them afterwards as on any encoder's. 32 features (widths 32,32,16,8), the same split; neither encoder saw its test frames (\`--exclude-test 0.2\`, \`just train-cae-edge-joint\`). Until this round the shipped \`models/cae-edge\` was the weight-10 recipe trained on every frame; it is now the 112 px recipe of 'The CAE route on larger pin images' below (\`just ship-cae-edge\`)."
     echo
     echo "Head weight 10: \`${CMD[joint10]}\`"
     echo
