@@ -88,6 +88,20 @@ impl JointTargets {
         Ok(Some(j))
     }
 
+    /// The head's loss (mean squared error when the config names none).
+    pub fn head_loss(&self) -> RegressionLoss {
+        self.loss.unwrap_or_default()
+    }
+
+    /// What training minimises, for the curves' title.
+    pub fn describe(&self) -> String {
+        format!(
+            "binary cross-entropy + {} x the head's {}",
+            self.weight,
+            self.head_loss().name()
+        )
+    }
+
     /// Network columns of the targets.
     pub fn columns(&self) -> usize {
         self.targets.iter().map(Target::width).sum()

@@ -146,22 +146,18 @@ pub fn train(
         config.model.feature_count(),
         &ad,
     );
-    let weight = config.joint.as_ref().map_or(0.0, |j| j.weight) as f32;
-    let head_loss = config
+    let (weight, head_loss) = config
         .joint
         .as_ref()
-        .and_then(|j| j.loss)
-        .unwrap_or_default();
+        .map_or((0.0, Default::default()), |j| {
+            (j.weight as f32, j.head_loss())
+        });
     let optim: ModuleOptimizer = match config.optimizer {
         Optimizer::Adadelta => config.adadelta.init(),
         Optimizer::Adam => burn::optim::AdamConfig::new().init(),
     };
     let title = match &config.joint {
-        Some(j) => format!(
-            "CAE training (binary cross-entropy + {} x the head's {})",
-            j.weight,
-            head_loss.name()
-        ),
+        Some(j) => format!("CAE training ({})", j.describe()),
         None => "CAE training (binary cross-entropy)".into(),
     };
     let fit_cfg = FitConfig::new(&config.schedule, &title)

@@ -1850,25 +1850,23 @@ fn joint_training_keeps_the_pose_in_the_features() {
             "--batch-size",
             "32",
         ];
-        if !extra.contains(&"--max-epochs") {
-            args.extend([
-                "--widths",
-                "16,16,8,4",
-                "--max-epochs",
-                "30",
-                "--patience",
-                "30",
-            ]);
-        }
         args.extend(extra);
         tactile(&args)
     };
+    // 28 px pin images, small widths, 30 epochs.
+    let train28 = |out: &Path, extra: &[&str]| {
+        let quick = [
+            "--widths",
+            "16,16,8,4",
+            "--max-epochs",
+            "30",
+            "--patience",
+            "30",
+        ];
+        train(out, &pre28, &[&quick[..], extra].concat())
+    };
     let joint = tmp.path().join("joint");
-    let (ok, msg) = train(
-        &joint,
-        &pre28,
-        &["--joint-targets", "x_mm,theta_deg:180,depth_mm"],
-    );
+    let (ok, msg) = train28(&joint, &["--joint-targets", "x_mm,theta_deg:180,depth_mm"]);
     assert!(ok, "{msg}");
     // The head's validation error (standardised columns: 1 is guessing
     // the mean) on 60 frames it never trained on.
@@ -1907,13 +1905,9 @@ fn joint_training_keeps_the_pose_in_the_features() {
     // A target the labels do not have, and a weight out of range, are
     // refused before training, naming what is wrong; nothing is saved.
     let bad = tmp.path().join("bad");
-    let (ok, msg) = train(&bad, &pre28, &["--joint-targets", "teapot_mm"]);
+    let (ok, msg) = train28(&bad, &["--joint-targets", "teapot_mm"]);
     assert!(!ok && msg.contains("teapot_mm"), "{msg}");
-    let (ok, msg) = train(
-        &bad,
-        &pre28,
-        &["--joint-targets", "x_mm", "--joint-weight", "1e9"],
-    );
+    let (ok, msg) = train28(&bad, &["--joint-targets", "x_mm", "--joint-weight", "1e9"]);
     assert!(!ok && msg.contains("weight"), "{msg}");
     assert!(!bad.join("cae.json").exists());
     // 56 px pin images (a stem block in front of Table I's encoder) with
