@@ -161,11 +161,11 @@ test-detector-light:
     cargo run --release -p tactile -- synth visuotactile --count 1200 --seed 743 --out data/test-default-ref
     for d in test-light-ref test-light-alt test-default-alt-960 test-default-ref; do cargo run --release -p tactile -- eval detector --model models/detector --data data/$d; done
 
-# A second seed of the L1 pose recipe on the same 80 % of frames, and the two averaged (`train pose-ensemble`); `bench pose` scores both members and the ensemble on the 752 test frames with the ensemble's latency (the members' sum).
+# A second seed of the L1 pose recipe on the same 80 % of frames, and the two averaged (`train ensemble`); `bench pose` scores both members and the ensemble on the 752 test frames with the ensemble's latency (the members' sum).
 train-pose-l1-ensemble: train-pose-l1
     cargo run --release -p tactile -- train pose --data {{real}}/tactip127-edge --out data/pose-l1/p128-l1d-s8 --config configs/pose/p128.json --exclude-test 0.2 --all-rows --max-epochs 45 --patience 45 --lr-decay 0.92 --loss l1 --seed 8
     cargo run --release -p tactile -- bench pose --models data/pose-l1/p128-l1d-s8 --data {{real}}/tactip127-edge --runs 200 --out docs/paper-a/edge-pose-l1-seed8.md
-    cargo run --release -p tactile -- train pose-ensemble --members data/pose-l1/p128-l1d data/pose-l1/p128-l1d-s8 --out data/pose-l1/ensemble-2
+    cargo run --release -p tactile -- train ensemble --members data/pose-l1/p128-l1d data/pose-l1/p128-l1d-s8 --out data/pose-l1/ensemble-2
     cargo run --release -p tactile -- bench pose --models data/pose-l1/p128-l1d data/pose-l1/p128-l1d-s8 data/pose-l1/ensemble-2 --data {{real}}/tactip127-edge --runs 200 --out docs/paper-a/edge-pose-ensemble.md
 
 # Calibrate the shipped detector's probabilities (one logit scale about the threshold, decisions unchanged) on frames no detector was trained, chosen or tested on: the default distribution (seed 610) and light presses (seed 611).

@@ -216,8 +216,7 @@ pub fn bench_devices(models: &Path, runs: usize) -> Result<Vec<DeviceRow>> {
     use tactile_detect::DetectorArtifact;
     use tactile_segment::SegmenterArtifact;
     let d: PathBuf = models.join("detector");
-    let det = DetectorArtifact::read(&d)?;
-    let [w, h] = det.model.input_size;
+    let [w, h] = tactile_detect::ensemble::read_config(&d)?.model.input_size;
     let s_dir = models.join("segmenter");
     let s = SegmenterArtifact::read(&s_dir)?.model.side;
     let z_dir = models.join("depth");
@@ -225,7 +224,11 @@ pub fn bench_devices(models: &Path, runs: usize) -> Result<Vec<DeviceRow>> {
     let [zw, zh] = dep.model.input_size;
     let zc = 3 + usize::from(dep.with_mask);
     Ok(vec![
-        row::<DetectorArtifact>("detector", &d, [1, 3, h, w], runs)?,
+        if tactile_detect::DetectorEnsembleArtifact::is_in(&d) {
+            row::<tactile_detect::DetectorEnsembleArtifact>("detector", &d, [1, 3, h, w], runs)?
+        } else {
+            row::<DetectorArtifact>("detector", &d, [1, 3, h, w], runs)?
+        },
         row::<SegmenterArtifact>("segmenter", &s_dir, [1, 3, s, s], runs)?,
         row::<DepthArtifact>("depth", &z_dir, [1, zc, zh, zw], runs)?,
     ])

@@ -12,6 +12,7 @@ pub mod artifact;
 pub mod bench;
 pub mod dataset;
 pub mod device;
+pub mod ensemble;
 pub mod error;
 pub mod image_io;
 pub mod interrupt;

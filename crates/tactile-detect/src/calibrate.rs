@@ -11,11 +11,13 @@ use std::path::Path;
 use serde::Serialize;
 use tactile_core::dataset::Dataset;
 use tactile_core::metrics::{Calibration, calibration};
-use tactile_core::{Artifact, DeviceKind};
+use tactile_core::{Artifact, DeviceKind, Runtime};
 
-use crate::eval::CALIBRATION_BINS;
-use crate::training::predict;
-use crate::{DetectionSet, DetectorArtifact, Error, Result};
+use crate::eval::{CALIBRATION_BINS, evaluate};
+use crate::{
+    DetectionSet, Detector, DetectorArtifact, DetectorEnsembleArtifact, Error, Result,
+    TendonDetector,
+};
 
 /// Smallest and largest logit scale searched.
 pub const SCALE_RANGE: (f64, f64) = (0.05, 20.0);
@@ -113,39 +115,60 @@ pub fn fit_scale(p: &[f32], truth: &[bool], threshold: f64) -> Result<Calibratio
     })
 }
 
-/// Fit the logit scale of the detector in `dir` on `sets` (frames it was
-/// not trained on) and fold it into its last layer: weights first, then the
-/// config with the fit in its notes, each written atomically.
+/// Fit the logit scale of the detector in `dir` (one network or an
+/// ensemble, whose mean logit is scaled) on `sets` (frames it was not
+/// trained on) and fold it into its last layer, every member's for an
+/// ensemble: weights first, then the config with the fit in its notes,
+/// each written atomically.
 pub fn calibrate(dir: &Path, sets: &[&DetectionSet]) -> Result<CalibrationFit> {
-    let device = DeviceKind::Flex.device();
-    let mut loaded = DetectorArtifact::load(dir, &device)?;
-    let (size, stats) = (loaded.artifact.model.input_size, &loaded.artifact.stats);
+    let mut detector = TendonDetector::load(dir, Runtime::BurnFlex, 0)?;
     let (mut p, mut truth) = (Vec::new(), Vec::new());
     for set in sets {
-        if [set.width, set.height] != size {
-            return Err(Error::InputSize {
-                expected: size,
-                found: [set.width, set.height],
-            });
-        }
-        let all: Vec<usize> = (0..set.len()).collect();
-        p.extend(predict(&loaded.model, set, &all, stats, &device)?);
+        p.extend(evaluate(&mut detector, set)?.probabilities);
         truth.extend(set.tendon.iter().copied());
     }
-    let fit = fit_scale(&p, &truth, loaded.artifact.threshold)?;
-    let centre = logit(loaded.artifact.threshold);
-    {
-        use burn::module::Param;
-        let fc2 = &mut loaded.model.fc2;
-        let w = fc2.weight.val() * fit.scale;
-        fc2.weight = Param::from_tensor(w);
-        if let Some(b) = &fc2.bias {
-            let b = b.val() * fit.scale + (1.0 - fit.scale) * centre;
-            fc2.bias = Some(Param::from_tensor(b));
+    let threshold = detector.artifact.threshold;
+    let fit = fit_scale(&p, &truth, threshold)?;
+    let centre = logit(threshold);
+    let device = DeviceKind::Flex.device();
+    if DetectorEnsembleArtifact::is_in(dir) {
+        let mut loaded = DetectorEnsembleArtifact::load(dir, &device)?;
+        for (m, a) in loaded
+            .model
+            .members
+            .iter_mut()
+            .zip(&mut loaded.artifact.members)
+        {
+            scale_logit(m, fit.scale, centre);
+            note_calibration(&mut a.notes, &fit);
         }
+        note_calibration(&mut loaded.artifact.ensemble.notes, &fit);
+        loaded.artifact.save(&loaded.model, dir)?;
+    } else {
+        let mut loaded = DetectorArtifact::load(dir, &device)?;
+        scale_logit(&mut loaded.model, fit.scale, centre);
+        note_calibration(&mut loaded.artifact.notes, &fit);
+        loaded.artifact.save(&loaded.model, dir)?;
     }
-    let mut artifact = loaded.artifact.clone();
-    if let serde_json::Value::Object(notes) = &mut artifact.notes {
+    Ok(fit)
+}
+
+/// `z -> scale (z - centre) + centre` folded into the last layer.
+fn scale_logit(model: &mut Detector, scale: f64, centre: f64) {
+    use burn::module::Param;
+    let fc2 = &mut model.fc2;
+    let w = fc2.weight.val() * scale;
+    fc2.weight = Param::from_tensor(w);
+    if let Some(b) = &fc2.bias {
+        let b = b.val() * scale + (1.0 - scale) * centre;
+        fc2.bias = Some(Param::from_tensor(b));
+    }
+}
+
+/// Record the fit in a model's notes, its scale composed with any earlier
+/// calibration's.
+fn note_calibration(notes: &mut serde_json::Value, fit: &CalibrationFit) {
+    if let serde_json::Value::Object(notes) = notes {
         let previous = notes
             .get("calibration")
             .and_then(|c| c.get("scale"))
@@ -161,14 +184,12 @@ pub fn calibrate(dir: &Path, sets: &[&DetectionSet]) -> Result<CalibrationFit> {
             }),
         );
     }
-    artifact.save(&loaded.model, dir)?;
-    Ok(fit)
 }
 
 /// [`calibrate`] on labelled visuo-tactile datasets, read at the
 /// detector's input size.
 pub fn calibrate_on(dir: &Path, datasets: &[Dataset]) -> Result<CalibrationFit> {
-    let model = DetectorArtifact::read(dir)?.model;
+    let model = crate::ensemble::read_config(dir)?.model;
     let sets = datasets
         .iter()
         .map(|d| DetectionSet::from_dataset(d, &model))

@@ -6,10 +6,11 @@ use std::path::Path;
 
 use tactile_core::image_io::RgbImage;
 use tactile_core::runtime::sigmoid;
-use tactile_core::{Network, Runtime};
+use tactile_core::{Artifact, Network, Runtime};
 
 use crate::Result;
 use crate::artifact::DetectorArtifact;
+use crate::ensemble::DetectorEnsembleArtifact;
 
 /// A loaded detector, ready for frames of any size.
 pub struct TendonDetector {
@@ -33,10 +34,18 @@ pub struct Assessment {
 
 impl TendonDetector {
     /// Load the detector in `dir` onto `runtime` (`threads` intra-op
-    /// threads for onnxruntime; 0 = its default).
+    /// threads for onnxruntime; 0 = its default). An ensemble folder
+    /// ([`DetectorEnsembleArtifact`]) loads as one network, used with its
+    /// first member's config.
     pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
-        let (artifact, net) =
-            tactile_onnx::load_network::<DetectorArtifact>(dir.as_ref(), runtime, threads)?;
+        let dir = dir.as_ref();
+        let (artifact, net) = if DetectorEnsembleArtifact::is_in(dir) {
+            let (e, net) =
+                tactile_onnx::load_network::<DetectorEnsembleArtifact>(dir, runtime, threads)?;
+            (e.lead()?.clone(), net)
+        } else {
+            tactile_onnx::load_network::<DetectorArtifact>(dir, runtime, threads)?
+        };
         Ok(Self { artifact, net })
     }
 

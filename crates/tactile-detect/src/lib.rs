@@ -10,6 +10,7 @@ pub mod artifact;
 pub mod augment;
 pub mod calibrate;
 pub mod data;
+pub mod ensemble;
 mod error;
 pub mod eval;
 pub mod inference;
@@ -19,6 +20,7 @@ pub mod training;
 
 pub use artifact::DetectorArtifact;
 pub use data::{DetectionSet, SoftLabels};
+pub use ensemble::{DetectorEnsemble, DetectorEnsembleArtifact};
 pub use error::{Error, Result};
 pub use eval::{DetectorScores, evaluate};
 pub use inference::{Assessment, TendonDetector};

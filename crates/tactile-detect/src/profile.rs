@@ -36,8 +36,20 @@ fn fit<'a>(frames: impl Iterator<Item = (&'a DetectionSet, usize)>) -> Result<In
 
 /// Fit the input profile of the detector in `dir` on `datasets` (its
 /// training data) and save it in the detector's config, atomically; the
-/// weights are not touched.
+/// weights are not touched. For an ensemble, every member's (the first
+/// member's is the one used).
 pub fn add_input_profile(dir: &Path, datasets: &[Dataset]) -> Result<InputProfile> {
+    if crate::DetectorEnsembleArtifact::is_in(dir) {
+        let e = tactile_core::ensemble::Ensemble::read::<DetectorArtifact>(dir)?;
+        let mut first = None;
+        for d in e.member_dirs(dir) {
+            let p = add_input_profile(&d, datasets)?;
+            first.get_or_insert(p);
+        }
+        return first.ok_or_else(|| {
+            tactile_core::Error::Invalid("an ensemble without members".into()).into()
+        });
+    }
     let mut artifact = DetectorArtifact::read(dir)?;
     let sets = datasets
         .iter()

@@ -6,7 +6,7 @@ use std::path::Path;
 use tactile_cae::CaeArtifact;
 use tactile_core::{Artifact, DeviceKind};
 use tactile_depth::DepthArtifact;
-use tactile_detect::DetectorArtifact;
+use tactile_detect::ensemble::{detector_onnx, is_detector};
 use tactile_onnx::Exportable;
 use tactile_segment::SegmenterArtifact;
 
@@ -41,8 +41,8 @@ where
 
 /// Export the model in `dir`.
 pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
-    let (kind, bytes) = if DetectorArtifact::is_in(dir) {
-        ("detector", export::<DetectorArtifact>(dir)?)
+    let (kind, bytes) = if is_detector(dir) {
+        ("detector", detector_onnx(dir)?.1)
     } else if SegmenterArtifact::is_in(dir) {
         ("segmenter", export::<SegmenterArtifact>(dir)?)
     } else if DepthArtifact::is_in(dir) {
@@ -90,9 +90,8 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
             ("channel_std".into(), list(std)),
         ]
     };
-    let (kind, bytes) = if DetectorArtifact::is_in(dir) {
-        let l = DetectorArtifact::load(dir, &device)?;
-        let a = &l.artifact;
+    let (kind, bytes) = if is_detector(dir) {
+        let (a, onnx) = detector_onnx(dir)?;
         let [w, h] = a.model.input_size;
         let bits = a.model.bits();
         let mut metadata = common("detector", w, h, bits, &a.stats.mean, &a.stats.std);
@@ -122,7 +121,7 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
                 level: tactile_preprocess::visuo::FLAT_SKIN_LEVEL,
             }),
         };
-        ("detector", make_standalone(&a.onnx(&l.model)?, &spec)?)
+        ("detector", make_standalone(&onnx, &spec)?)
     } else if SegmenterArtifact::is_in(dir) {
         let l = SegmenterArtifact::load(dir, &device)?;
         let a = &l.artifact;

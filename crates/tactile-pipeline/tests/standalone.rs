@@ -65,6 +65,52 @@ fn the_standalone_detector_gives_the_toolkits_probabilities() {
 }
 
 #[test]
+fn a_detector_ensemble_runs_on_every_runtime_and_stands_alone_as_one_network() {
+    // Two members: the shipped detector and its weights read with other
+    // channel statistics (so the graph renormalises for the second).
+    let tmp = tempfile::tempdir().unwrap();
+    let shipped = root().join("models/detector");
+    let other = tmp.path().join("other");
+    std::fs::create_dir(&other).unwrap();
+    let mut cfg: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(shipped.join("detector.json")).unwrap())
+            .unwrap();
+    cfg["stats"]["mean"] = serde_json::json!([0.45, 0.5, 0.52]);
+    cfg["stats"]["std"] = serde_json::json!([0.2, 0.25, 0.22]);
+    std::fs::write(other.join("detector.json"), cfg.to_string()).unwrap();
+    std::fs::copy(shipped.join("detector.bpk"), other.join("detector.bpk")).unwrap();
+    let ens = tmp.path().join("ensemble");
+    let said =
+        tactile_pipeline::ensemble::assemble_ensemble(&[shipped.clone(), other.clone()], &ens)
+            .unwrap();
+    assert!(said.starts_with("2 detectors"), "{said}");
+    let mut burn = TendonDetector::load(&ens, Runtime::BurnFlex, 1).unwrap();
+    let mut ort = TendonDetector::load(&ens, Runtime::Onnx, 1).unwrap();
+    let mut one = TendonDetector::load(&shipped, Runtime::Onnx, 1).unwrap();
+    let e = export_standalone(&ens).unwrap();
+    let mut alone = OrtModel::from_bytes(&e.bytes, 1).unwrap();
+    let [w, h] = ort.artifact.model.input_size;
+    let mut differs = false;
+    for f in frames() {
+        let (p, q) = (ort.probability(&f).unwrap(), burn.probability(&f).unwrap());
+        assert!((p - q).abs() < 1e-4, "onnxruntime {p} vs burn {q}");
+        differs |= (p - one.probability(&f).unwrap()).abs() > 1e-3;
+        let img = resize_rgb(&f, w, h).unwrap();
+        let (_, s) = match ort.artifact.model.bits() {
+            16 => alone.run_u16(&[1, h, w, 3], img.to_levels(16)),
+            _ => alone.run_u8(&[1, h, w, 3], img.to_bytes()),
+        }
+        .unwrap();
+        assert!(
+            (s[0] - p).abs() < 1e-5,
+            "standalone {} vs toolkit {p}",
+            s[0]
+        );
+    }
+    assert!(differs, "the second member changed no probability");
+}
+
+#[test]
 fn a_sixteen_bit_exposure_normalised_detector_stands_alone_too() {
     // The shipped network read through the other input form: 16-bit
     // levels, each channel divided by its median at the window's centre.

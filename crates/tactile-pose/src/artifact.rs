@@ -7,6 +7,7 @@ use std::path::Path;
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
 use tactile_core::Artifact;
+use tactile_core::ensemble::Ensemble;
 use tactile_estimate::Target;
 use tactile_estimate::regressor::Scaler;
 use tactile_onnx::{Exportable, export_batch_dynamic};
@@ -88,135 +89,43 @@ impl Exportable for PoseArtifact {
 }
 
 /// A folder of pose networks trained alike but for their seed, whose
-/// estimates are averaged: `ensemble.json` names the member folders inside
-/// it. Averaging cancels the part of each network's error its seed made,
-/// at the sum of the members' latencies (`tactile bench pose` reports
-/// both).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct PoseEnsemble {
-    /// Member folder names, inside the ensemble's folder.
-    pub members: Vec<String>,
-    /// Provenance; `excluded_test` as a member's when every member left
-    /// out the same test frames.
-    #[serde(default)]
-    pub notes: serde_json::Value,
-}
+/// estimates are averaged (see [`Ensemble`]; `tactile bench pose` reports
+/// the gain beside the summed latency).
+pub struct PoseEnsemble;
 
 impl PoseEnsemble {
-    /// The file that makes a folder an ensemble.
-    pub const FILE: &'static str = "ensemble.json";
-    /// Most members an ensemble may name.
-    pub const MAX_MEMBERS: usize = 8;
-
     /// Whether `dir` holds an ensemble.
     pub fn is_in(dir: &Path) -> bool {
-        dir.join(Self::FILE).is_file()
+        Ensemble::is_in(dir)
     }
 
-    /// Read and check `dir/ensemble.json`: 1 to [`Self::MAX_MEMBERS`]
-    /// members, each a plain folder name inside `dir` (no path), each a
-    /// pose-network folder.
-    pub fn read(dir: &Path) -> tactile_core::Result<Self> {
-        let file = dir.join(Self::FILE);
-        let e: Self = tactile_core::io::read_json(&file)?;
-        let bad = |m: String| Err(tactile_core::Error::model(&file, m));
-        if let Some(m) = Self::count_problem(e.members.len()) {
-            return bad(m);
-        }
-        for m in &e.members {
-            let plain = !m.is_empty()
-                && m != "."
-                && m != ".."
-                && m.chars()
-                    .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
-            if !plain {
-                return bad(format!(
-                    "member {m:?} is not a plain folder name inside the ensemble"
-                ));
-            }
-            if !PoseArtifact::is_in(&dir.join(m)) {
-                return bad(format!(
-                    "member {m:?} holds no {}",
-                    PoseArtifact::CONFIG_FILE
-                ));
-            }
-        }
-        Ok(e)
-    }
-
-    /// What is wrong with `n` members, if anything.
-    fn count_problem(n: usize) -> Option<String> {
-        (n == 0 || n > Self::MAX_MEMBERS).then(|| {
-            format!(
-                "an ensemble takes 1 to {} members, got {n}",
-                Self::MAX_MEMBERS
-            )
-        })
-    }
-
-    /// One line: how many networks are averaged, and where.
-    pub fn describe(&self, dir: &Path) -> String {
-        format!(
-            "{} pose networks averaged in {}",
-            self.members.len(),
-            dir.display()
-        )
-    }
-
-    /// The member folders.
-    pub fn member_dirs(&self, dir: &Path) -> Vec<std::path::PathBuf> {
-        self.members.iter().map(|m| dir.join(m)).collect()
+    /// Read and check `dir/ensemble.json` (see [`Ensemble::read`]).
+    pub fn read(dir: &Path) -> tactile_core::Result<Ensemble> {
+        Ensemble::read::<PoseArtifact>(dir)
     }
 
     /// Copy the pose-network folders `members` into a new ensemble folder
-    /// `out` (staged, then moved into place; an existing `out` is left
-    /// alone). Their preprocessing and targets must agree; the ensemble's
-    /// `excluded_test` is theirs when they all share one.
-    pub fn assemble(members: &[std::path::PathBuf], out: &Path) -> tactile_core::Result<Self> {
-        if let Some(m) = Self::count_problem(members.len()) {
-            return Err(tactile_core::Error::Invalid(m));
-        }
+    /// `out` (see [`Ensemble::assemble`]). Their preprocessing and targets
+    /// must agree; the ensemble's `excluded_test` is theirs, which they
+    /// must share.
+    pub fn assemble(members: &[std::path::PathBuf], out: &Path) -> tactile_core::Result<Ensemble> {
         let arts = members
             .iter()
             .map(|m| PoseArtifact::read(m))
             .collect::<tactile_core::Result<Vec<_>>>()?;
-        for (m, a) in members.iter().zip(&arts).skip(1) {
-            check_alike(&arts[0], a, m)?;
-        }
         let tests: Vec<_> = arts.iter().map(|a| a.notes.get("excluded_test")).collect();
-        let excluded_test = if tests.iter().all(|t| *t == tests[0]) {
-            tests[0].cloned()
-        } else {
-            return Err(tactile_core::Error::Invalid(
-                "the members left out different test frames; an ensemble's score would mix them"
-                    .into(),
-            ));
-        };
-        let staged = tactile_core::io::StagedDir::new(out)?;
-        let mut names = Vec::new();
-        for (k, m) in members.iter().enumerate() {
-            let name = format!("member-{k}");
-            let to = staged.path().join(&name);
-            tactile_core::io::create_dir_all(&to)?;
-            for f in [PoseArtifact::CONFIG_FILE, PoseArtifact::WEIGHTS_FILE] {
-                std::fs::copy(m.join(f), to.join(f))
-                    .map_err(|e| tactile_core::Error::io(m.join(f), e))?;
+        let mut notes = serde_json::json!({});
+        match tests.first() {
+            Some(first) if tests.iter().any(|t| t != first) => {
+                return Err(tactile_core::Error::Invalid(
+                    "the members left out different test frames; an ensemble's score would mix them"
+                        .into(),
+                ));
             }
-            names.push(name);
+            Some(Some(t)) => notes["excluded_test"] = (*t).clone(),
+            _ => {}
         }
-        let mut notes = serde_json::json!({
-            "members_from": members.iter().map(|m| m.display().to_string()).collect::<Vec<_>>(),
-        });
-        if let Some(t) = excluded_test {
-            notes["excluded_test"] = t;
-        }
-        let e = Self {
-            members: names,
-            notes,
-        };
-        tactile_core::io::write_json_atomic(staged.path().join(Self::FILE), &e)?;
-        staged.commit(false)?;
-        Ok(e)
+        Ensemble::assemble(members, out, check_alike, notes)
     }
 }
 

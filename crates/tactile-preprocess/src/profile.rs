@@ -102,6 +102,15 @@ pub struct InputProfile {
 }
 
 impl InputProfile {
+    /// One line for a person: how many frames it was fitted on and where it
+    /// flags a frame.
+    pub fn describe(&self) -> String {
+        format!(
+            "input profile of {} frames: flags scores above {:.1}",
+            self.frames, self.threshold
+        )
+    }
+
     /// Fewest training frames a profile is fitted on.
     pub const MIN_FRAMES: usize = 20;
 

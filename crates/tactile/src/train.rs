@@ -39,8 +39,9 @@ pub(crate) enum TrainCmd {
     Profile(ProfileArgs),
     /// Calibrate a trained detector's probabilities on frames it was not trained on: one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer (decisions unchanged).
     Calibrate(ProfileArgs),
-    /// Average pose networks trained alike but for their seed: copies them into one folder that `predict`, `bench pose` and Python load as one model.
-    PoseEnsemble(EnsembleArgs),
+    /// Average models trained apart (pose networks, or detectors reading frames alike): copies them into one folder that every command and Python load as one model.
+    #[command(alias = "pose-ensemble")]
+    Ensemble(EnsembleArgs),
     /// Measure the pin lattice's orientation on an encoder's training frames and save it with the encoder, so frames of a sensor mounted turned are turned back before encoding.
     Align(ProfileArgs),
 }
@@ -57,7 +58,7 @@ pub(crate) struct ProfileArgs {
 
 #[derive(Args)]
 pub(crate) struct EnsembleArgs {
-    /// The member pose-network folders.
+    /// The member folders (pose networks or detectors).
     #[arg(long, num_args = 1.., required = true)]
     members: Vec<PathBuf>,
     /// The new ensemble folder (an existing one is left alone).
@@ -363,7 +364,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Depth(a) => Some(&a.out),
         TrainCmd::Profile(a) | TrainCmd::Calibrate(a) | TrainCmd::Align(a) => Some(&a.model),
         TrainCmd::Pose(a) => Some(&a.out),
-        TrainCmd::PoseEnsemble(a) => Some(&a.out),
+        TrainCmd::Ensemble(a) => Some(&a.out),
         TrainCmd::Head(a) => a.out.as_ref(),
         TrainCmd::Regressor(a) => a.out.as_ref(),
     };
@@ -503,16 +504,13 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Profile(a) => {
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
             let p = tactile_detect::profile::add_input_profile(&a.model, &data)?;
-            say!(
-                "input profile of {} frames saved in {}: flags scores above {:.1}",
-                p.frames,
-                a.model.join("detector.json").display(),
-                p.threshold
-            );
+            say!("{} saved in {}", p.describe(), a.model.display());
         }
-        TrainCmd::PoseEnsemble(a) => {
-            let e = tactile_pose::PoseEnsemble::assemble(&a.members, &a.out)?;
-            say!("{}", e.describe(&a.out));
+        TrainCmd::Ensemble(a) => {
+            say!(
+                "{}",
+                tactile_pipeline::ensemble::assemble_ensemble(&a.members, &a.out)?
+            );
         }
         TrainCmd::Align(a) => {
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;

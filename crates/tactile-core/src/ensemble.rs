@@ -1,0 +1,134 @@
+//! A folder of models trained alike, whose outputs are averaged:
+//! `ensemble.json` names member folders inside it. Averaging cancels the
+//! part of each model's error its own training made, at the sum of the
+//! members' costs. Reading, checking and assembling such a folder is
+//! written once, here, for every kind of model ([`Artifact`]).
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Artifact, Error, Result};
+
+/// What `ensemble.json` holds.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Ensemble {
+    /// Member folder names, inside the ensemble's folder.
+    pub members: Vec<String>,
+    /// Provenance: where the members were copied from, and what the kind
+    /// of model adds (a pose ensemble's `excluded_test`, a detector
+    /// ensemble's calibration).
+    #[serde(default)]
+    pub notes: serde_json::Value,
+}
+
+impl Ensemble {
+    /// The file that makes a folder an ensemble.
+    pub const FILE: &'static str = "ensemble.json";
+    /// Most members an ensemble may name.
+    pub const MAX_MEMBERS: usize = 8;
+
+    /// Whether `dir` holds an ensemble.
+    pub fn is_in(dir: &Path) -> bool {
+        dir.join(Self::FILE).is_file()
+    }
+
+    /// Read and check `dir/ensemble.json`: 1 to [`Self::MAX_MEMBERS`]
+    /// members, each a plain folder name inside `dir` (no path, so nothing
+    /// outside the folder is read), each holding an `A`.
+    pub fn read<A: Artifact>(dir: &Path) -> Result<Self> {
+        let file = dir.join(Self::FILE);
+        let e: Self = crate::io::read_json(&file)?;
+        let bad = |m: String| Err(Error::model(&file, m));
+        if let Some(m) = Self::count_problem(e.members.len()) {
+            return bad(m);
+        }
+        for m in &e.members {
+            let plain = !m.is_empty()
+                && m != "."
+                && m != ".."
+                && m.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
+            if !plain {
+                return bad(format!(
+                    "member {m:?} is not a plain folder name inside the ensemble"
+                ));
+            }
+            if !A::is_in(&dir.join(m)) {
+                return bad(format!("member {m:?} holds no {}", A::CONFIG_FILE));
+            }
+        }
+        Ok(e)
+    }
+
+    /// What is wrong with `n` members, if anything.
+    fn count_problem(n: usize) -> Option<String> {
+        (n == 0 || n > Self::MAX_MEMBERS).then(|| {
+            format!(
+                "an ensemble takes 1 to {} members, got {n}",
+                Self::MAX_MEMBERS
+            )
+        })
+    }
+
+    /// One line: how many models (`what`, plural) are averaged, and where.
+    pub fn describe(&self, dir: &Path, what: &str) -> String {
+        format!(
+            "{} {what} averaged in {}",
+            self.members.len(),
+            dir.display()
+        )
+    }
+
+    /// The member folders.
+    pub fn member_dirs(&self, dir: &Path) -> Vec<PathBuf> {
+        self.members.iter().map(|m| dir.join(m)).collect()
+    }
+
+    /// Copy the `A` folders `members` (config and weights) into a new
+    /// ensemble folder `out` as `member-0`, `member-1`, ... (staged, then
+    /// moved into place; an existing `out` is left alone). `alike` refuses
+    /// a member that does not read its input or give its output as the
+    /// first one does; `notes` are merged into the ensemble's provenance.
+    pub fn assemble<A: Artifact>(
+        members: &[PathBuf],
+        out: &Path,
+        alike: impl Fn(&A, &A, &Path) -> Result<()>,
+        notes: serde_json::Value,
+    ) -> Result<Self> {
+        if let Some(m) = Self::count_problem(members.len()) {
+            return Err(Error::Invalid(m));
+        }
+        let arts = members
+            .iter()
+            .map(|m| A::read(m))
+            .collect::<Result<Vec<_>>>()?;
+        for (m, a) in members.iter().zip(&arts).skip(1) {
+            alike(&arts[0], a, m)?;
+        }
+        let staged = crate::io::StagedDir::new(out)?;
+        let mut names = Vec::new();
+        for (k, m) in members.iter().enumerate() {
+            let name = format!("member-{k}");
+            let to = staged.path().join(&name);
+            crate::io::create_dir_all(&to)?;
+            for f in [A::CONFIG_FILE, A::WEIGHTS_FILE] {
+                std::fs::copy(m.join(f), to.join(f)).map_err(|e| Error::io(m.join(f), e))?;
+            }
+            names.push(name);
+        }
+        let mut all_notes = serde_json::json!({
+            "members_from": members.iter().map(|m| m.display().to_string()).collect::<Vec<_>>(),
+        });
+        if let (Some(all), serde_json::Value::Object(more)) = (all_notes.as_object_mut(), notes) {
+            all.extend(more);
+        }
+        let e = Self {
+            members: names,
+            notes: all_notes,
+        };
+        crate::io::write_json_atomic(staged.path().join(Self::FILE), &e)?;
+        staged.commit(false)?;
+        Ok(e)
+    }
+}

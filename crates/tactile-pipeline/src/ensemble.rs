@@ -1,0 +1,35 @@
+//! Models trained apart, averaged as one ([`tactile_core::ensemble`]): the
+//! kind of the member folders says which.
+
+use std::path::{Path, PathBuf};
+
+use tactile_core::Artifact;
+use tactile_detect::{DetectorArtifact, DetectorEnsembleArtifact};
+use tactile_pose::{PoseArtifact, PoseEnsemble};
+
+use crate::Result;
+
+/// Copy the member folders (pose networks or detectors, all of one kind)
+/// into a new ensemble folder `out` (staged; an existing `out` is left
+/// alone) that every front end loads as one model; returns one line saying
+/// what was made.
+pub fn assemble_ensemble(members: &[PathBuf], out: &Path) -> Result<String> {
+    let first = members
+        .first()
+        .map(PathBuf::as_path)
+        .unwrap_or(Path::new(""));
+    if DetectorArtifact::is_in(first) {
+        let e = DetectorEnsembleArtifact::assemble(members, out)?;
+        Ok(e.describe(out, "detectors"))
+    } else if PoseArtifact::is_in(first) {
+        let e = PoseEnsemble::assemble(members, out)?;
+        Ok(e.describe(out, "pose networks"))
+    } else {
+        Err(tactile_core::Error::wrong_kind(
+            first,
+            "detector or pose-network folder",
+            "no detector.json or pose.json",
+        )
+        .into())
+    }
+}
