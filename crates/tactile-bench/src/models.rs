@@ -9,7 +9,7 @@ use serde::Serialize;
 use tactile_core::dataset::Dataset;
 use tactile_core::{Artifact, DeviceKind, Runtime};
 use tactile_depth::{DepthArtifact, DepthEstimator, DepthScores};
-use tactile_detect::{DetectionSet, DetectorArtifact, TendonDetector};
+use tactile_detect::{DetectionSet, DetectorArtifact, DetectorEnsembleArtifact, TendonDetector};
 use tactile_segment::eval::CURVED;
 use tactile_segment::{SegmenterArtifact, SegmenterScores, TendonSegmenter};
 
@@ -129,7 +129,11 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
             Some(d) => Some(tactile_detect::evaluate(&mut det, d)?.all.accuracy),
             None => None,
         };
-        let params = parameters::<DetectorArtifact>(m)?;
+        let ensemble = DetectorEnsembleArtifact::is_in(m);
+        let params = match ensemble {
+            true => parameters::<DetectorEnsembleArtifact>(m)?,
+            false => parameters::<DetectorArtifact>(m)?,
+        };
         if let (Some(acc), Some(d)) = (sel_acc, sel_data) {
             candidates.push(Candidate {
                 parameters: params,
@@ -139,7 +143,11 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
                 frames: d.len(),
             });
         }
-        let ms = model_latencies::<DetectorArtifact>(m, [1, 3, size[1], size[0]], b.runs)?;
+        let shape = [1, 3, size[1], size[0]];
+        let ms = match ensemble {
+            true => model_latencies::<DetectorEnsembleArtifact>(m, shape, b.runs)?,
+            false => model_latencies::<DetectorArtifact>(m, shape, b.runs)?,
+        };
         md.push_str(&format!(
             "| {} | {:?} | {} | {}x{} | {params} | {} | {:.4} | {:.4} | {:.4} | {:.3} / {:.3} | {} | {} | {} |\n",
             folder_name(m),

@@ -221,6 +221,9 @@ pub fn in_config<T>(file: &Path, r: Result<T>) -> Result<T> {
     })
 }
 
+/// The training record beside a model trained here.
+pub const TRAINING_FILE: &str = "training.json";
+
 /// Write `training.json` beside a trained model: the training config,
 /// the run's summary and anything else worth keeping (`extra`, an object).
 pub fn write_training_record(
@@ -233,5 +236,5 @@ pub fn write_training_record(
     if let (Some(r), serde_json::Value::Object(e)) = (record.as_object_mut(), extra) {
         r.extend(e);
     }
-    crate::io::write_json_atomic(dir.join("training.json"), &record)
+    crate::io::write_json_atomic(dir.join(TRAINING_FILE), &record)
 }

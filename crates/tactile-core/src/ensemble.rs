@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::artifact::TRAINING_FILE;
 use crate::{Artifact, Error, Result};
 
 /// What `ensemble.json` holds.
@@ -85,7 +86,8 @@ impl Ensemble {
         self.members.iter().map(|m| dir.join(m)).collect()
     }
 
-    /// Copy the `A` folders `members` (config and weights) into a new
+    /// Copy the `A` folders `members` (config, weights and the training
+    /// record when there is one) into a new
     /// ensemble folder `out` as `member-0`, `member-1`, ... (staged, then
     /// moved into place; an existing `out` is left alone). `alike` refuses
     /// a member that does not read its input or give its output as the
@@ -112,7 +114,10 @@ impl Ensemble {
             let name = format!("member-{k}");
             let to = staged.path().join(&name);
             crate::io::create_dir_all(&to)?;
-            for f in [A::CONFIG_FILE, A::WEIGHTS_FILE] {
+            for f in [A::CONFIG_FILE, A::WEIGHTS_FILE, TRAINING_FILE] {
+                if f == TRAINING_FILE && !m.join(f).is_file() {
+                    continue;
+                }
                 std::fs::copy(m.join(f), to.join(f)).map_err(|e| Error::io(m.join(f), e))?;
             }
             names.push(name);

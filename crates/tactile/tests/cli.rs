@@ -35,6 +35,18 @@ fn shared_real() -> std::path::PathBuf {
     real
 }
 
+/// Copy a model folder with its subfolders (an ensemble's members).
+fn copy_model(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        match e.file_type().unwrap().is_dir() {
+            true => copy_model(&e.path(), &to.join(e.file_name())),
+            false => drop(std::fs::copy(e.path(), to.join(e.file_name())).unwrap()),
+        }
+    }
+}
+
 fn write_png(path: &Path, w: u32, h: u32) {
     image::GrayImage::from_pixel(w, h, image::Luma([0u8]))
         .save(path)
@@ -1574,11 +1586,9 @@ fn a_pose_network_trains_scores_its_held_out_frames_and_predicts() {
 fn calibrating_the_detector_keeps_every_decision_and_lowers_its_calibration_error() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let tmp = tempfile::tempdir().unwrap();
+    // The shipped detector as it is: one network or an ensemble.
     let model = tmp.path().join("detector");
-    std::fs::create_dir_all(&model).unwrap();
-    for f in ["detector.json", "detector.bpk"] {
-        std::fs::copy(root.join("models/detector").join(f), model.join(f)).unwrap();
-    }
+    copy_model(&root.join("models/detector"), &model);
     let (fit, test) = (tmp.path().join("fit"), tmp.path().join("test"));
     for (dir, seed) in [(&fit, "5151"), (&test, "5252")] {
         let (ok, msg) = tactile(&[
@@ -1669,9 +1679,13 @@ fn calibrating_the_detector_keeps_every_decision_and_lowers_its_calibration_erro
     for (a, b) in before.iter().zip(&after) {
         assert_eq!(a.0, b.0, "a decision changed: {a:?} -> {b:?}");
     }
+    let config = ["ensemble.json", "detector.json"]
+        .map(|f| model.join(f))
+        .into_iter()
+        .find(|f| f.is_file())
+        .unwrap();
     let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(model.join("detector.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(config).unwrap()).unwrap();
     assert!(json["notes"]["calibration"]["scale"].as_f64().unwrap() > 0.0);
 }
 

@@ -18,6 +18,16 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
+/// One network of the shipped detector (its first member when it is an
+/// ensemble), for tests that edit a detector's config.
+fn shipped_network() -> PathBuf {
+    let d = root().join("models/detector");
+    match d.join("ensemble.json").is_file() {
+        true => d.join("member-0"),
+        false => d,
+    }
+}
+
 /// Run `tactile args` under the address-space limit: (success, output).
 fn tactile(args: &[&str]) -> (bool, String) {
     let out = Command::new("bash")
@@ -252,7 +262,7 @@ fn every_size_is_bounded_before_anything_is_allocated() {
     // A detector config with width 1e9: refused naming the file and the field.
     let det = tmp.path().join("det");
     std::fs::create_dir(&det).unwrap();
-    let shipped = root().join("models/detector");
+    let shipped = shipped_network();
     let text = std::fs::read_to_string(shipped.join("detector.json")).unwrap();
     std::fs::write(
         det.join("detector.json"),
@@ -409,7 +419,7 @@ fn models_and_labels_are_checked_when_loaded() {
     let tmp = tempfile::tempdir().unwrap();
     let vt = tmp.path().join("vt");
     palpations(&vt, "1", "4", "6");
-    let shipped = root().join("models/detector");
+    let shipped = shipped_network();
     let json = std::fs::read_to_string(shipped.join("detector.json")).unwrap();
     let det = tmp.path().join("det");
     std::fs::create_dir(&det).unwrap();
