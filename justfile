@@ -153,6 +153,31 @@ train-detector-light: synth-vt-detector-light
     cargo run --release -p tactile -- train detector --data data/vt-train2 data/vt-train-onset data/vt-train-onset2 data/vt-train-light150 data/vt-train-light160 data/vt-train-light170 data/vt-train-light180 --out data/det/light --width 0.5 --input 80x60 --input-bits 16 --normalise-exposure --max-epochs 25 --patience 25 --soft-labels 0.6
     for d in sel2-light-ref sel2-light-alt sel-default; do cargo run --release -p tactile -- eval detector --model data/det/light --data data/$d; done
 
+# The shipped detector (#20, round three): the light-press recipe on four more light-press sets (seeds 510-540, peak 0.05-0.4 mm), averaged with the light-press recipe's network (`train ensemble`: the mean logit, one network to every runtime and export), calibrated on seeds 610/611, staged, then put in place.
+train-detector-ensemble: train-detector-light
+    for s in 510 520 530 540; do cargo run --release -p tactile -- synth visuotactile --sequences 100 --frames-per-sequence 25 --seed $s --press-mm 0.05,0.4 --out data/vt-train-light$s; done
+    cargo run --release -p tactile -- train detector --data data/vt-train2 data/vt-train-onset data/vt-train-onset2 data/vt-train-light150 data/vt-train-light160 data/vt-train-light170 data/vt-train-light180 data/vt-train-light510 data/vt-train-light520 data/vt-train-light530 data/vt-train-light540 --out data/det/light8 --width 0.5 --input 80x60 --input-bits 16 --normalise-exposure --max-epochs 25 --patience 25 --soft-labels 0.6
+    rm -rf data/det/ensemble && cargo run --release -p tactile -- train ensemble --members data/det/light8 data/det/light --out data/det/ensemble
+    for d in sel2-light-ref sel2-light-alt sel-default sel-light-ref sel-light-alt; do cargo run --release -p tactile -- eval detector --model data/det/ensemble --data data/$d; done
+
+ship-detector-ensemble: calibrate-detector-data
+    rm -rf models/.detector-new && cp -r data/det/ensemble models/.detector-new
+    cargo run --release -p tactile -- train calibrate --model models/.detector-new --data data/vt-cal data/vt-cal-light
+    rm -rf models/detector && mv models/.detector-new models/detector
+
+# The calibration frames: the default distribution (seed 610) and light presses (seed 611), no detector trained, chosen or tested on them.
+calibrate-detector-data:
+    cargo run --release -p tactile -- synth visuotactile --count 600 --seed 610 --out data/vt-cal
+    cargo run --release -p tactile -- synth visuotactile --count 300 --seed 611 --press-mm 0.05,0.5 --out data/vt-cal-light
+
+# The ensemble's test, on sets rendered after the choice: light presses on both renderers (3,000 frames each) and the default distribution on both (the alternate at 960x540).
+test-detector-ensemble:
+    cargo run --release -p tactile -- synth visuotactile --count 3000 --seed 750 --press-mm 0.05,0.4 --out data/test2-light-ref
+    cargo run --release -p tactile -- synth visuotactile --count 3000 --seed 751 --press-mm 0.05,0.4 --renderer alternate --out data/test2-light-alt
+    cargo run --release -p tactile -- synth visuotactile --count 1200 --seed 752 --renderer alternate --width 960 --height 540 --out data/test2-default-alt-960
+    cargo run --release -p tactile -- synth visuotactile --count 1200 --seed 753 --out data/test2-default-ref
+    for d in test2-light-ref test2-light-alt test2-default-ref test2-default-alt-960; do cargo run --release -p tactile -- eval detector --model models/detector --data data/$d; done
+
 # The light-press detector's test, on sets rendered after the choice (docs/detector-light-presses.md): light presses on both renderers and the default distribution on both (the alternate at 960x540).
 test-detector-light:
     cargo run --release -p tactile -- synth visuotactile --count 3000 --seed 740 --press-mm 0.05,0.4 --out data/test-light-ref
@@ -169,9 +194,7 @@ train-pose-l1-ensemble: train-pose-l1
     cargo run --release -p tactile -- bench pose --models data/pose-l1/p128-l1d data/pose-l1/p128-l1d-s8 data/pose-l1/ensemble-2 --data {{real}}/tactip127-edge --runs 200 --out docs/paper-a/edge-pose-ensemble.md
 
 # Calibrate the shipped detector's probabilities (one logit scale about the threshold, decisions unchanged) on frames no detector was trained, chosen or tested on: the default distribution (seed 610) and light presses (seed 611).
-calibrate-detector:
-    cargo run --release -p tactile -- synth visuotactile --count 600 --seed 610 --out data/vt-cal
-    cargo run --release -p tactile -- synth visuotactile --count 300 --seed 611 --press-mm 0.05,0.5 --out data/vt-cal-light
+calibrate-detector: calibrate-detector-data
     cargo run --release -p tactile -- train calibrate --model models/detector --data data/vt-cal data/vt-cal-light
 
 # The segmenter sweep (four window sizes and widths) into data/seg; the shipped one is copied to models/segmenter.

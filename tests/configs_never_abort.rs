@@ -73,7 +73,7 @@ proptest! {
 
     #[test]
     fn detector_configs(picks in proptest::collection::vec((0usize..64, 0usize..14), 1..4)) {
-        load::<tactile_rs::detect::DetectorArtifact>(&mutate(&template("models/detector/detector.json"), &picks));
+        load::<tactile_rs::detect::DetectorArtifact>(&mutate(&template("models/detector/member-0/detector.json"), &picks));
     }
 
     #[test]
@@ -105,8 +105,12 @@ proptest! {
 #[test]
 fn the_shipped_configs_load() {
     assert!(load::<tactile_rs::detect::DetectorArtifact>(&template(
-        "models/detector/detector.json"
+        "models/detector/member-0/detector.json"
     )));
+    // The shipped detector is an ensemble: its folder reads whole.
+    let detector = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/detector");
+    let ensemble = tactile_rs::detect::DetectorEnsembleArtifact::read(&detector).unwrap();
+    assert_eq!(ensemble.members.len(), ensemble.ensemble.members.len());
     assert!(load::<tactile_rs::depth::DepthArtifact>(&template(
         "models/depth/depth.json"
     )));
@@ -131,7 +135,7 @@ fn every_single_extreme_value_is_loaded_or_refused() {
             }
         }
     }
-    sweep::<tactile_rs::detect::DetectorArtifact>("models/detector/detector.json");
+    sweep::<tactile_rs::detect::DetectorArtifact>("models/detector/member-0/detector.json");
     sweep::<tactile_rs::segment::SegmenterArtifact>("models/segmenter/segmenter.json");
     sweep::<tactile_rs::depth::DepthArtifact>("models/depth/depth.json");
     sweep::<tactile_rs::cae::CaeArtifact>("models/cae-synth/cae.json");

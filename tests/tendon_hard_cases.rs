@@ -247,7 +247,7 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
     use tactile_rs::core::dataset::Dataset;
     use tactile_rs::core::image_io::load_rgb;
     use tactile_rs::depth::{DepthArtifact, DepthSet};
-    use tactile_rs::detect::{DetectionSet, DetectorArtifact};
+    use tactile_rs::detect::DetectionSet;
     use tactile_rs::segment::{SegmentSet, SegmenterArtifact};
     let tmp = tempfile::tempdir().unwrap();
     let cfg = VisuotactileConfig {
@@ -258,7 +258,7 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
     tactile_rs::synth::write::write_visuotactile(&cfg, 6, 7, &dir, Default::default()).unwrap();
     let ds = Dataset::open(&dir).unwrap();
     let rows: Vec<usize> = (0..ds.len()).collect();
-    let det = DetectorArtifact::read(&models().join("detector")).unwrap();
+    let det = tactile_rs::detect::ensemble::read_config(&models().join("detector")).unwrap();
     let seg = SegmenterArtifact::read(&models().join("segmenter")).unwrap();
     let depth = DepthArtifact::read(&models().join("depth")).unwrap();
     let det_set = DetectionSet::from_dataset(&ds, &det.model).unwrap();

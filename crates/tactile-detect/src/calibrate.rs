@@ -20,7 +20,7 @@ use crate::{
 };
 
 /// Smallest and largest logit scale searched.
-pub const SCALE_RANGE: (f64, f64) = (0.02, 100.0);
+pub const SCALE_RANGE: (f64, f64) = (0.01, 1000.0);
 
 /// Fewest frames of each class a fit needs.
 pub const MIN_FRAMES_PER_CLASS: usize = 20;
