@@ -153,11 +153,12 @@ train-detector-light: synth-vt-detector-light
     cargo run --release -p tactile -- train detector --data data/vt-train2 data/vt-train-onset data/vt-train-onset2 data/vt-train-light150 data/vt-train-light160 data/vt-train-light170 data/vt-train-light180 --out data/det/light --width 0.5 --input 80x60 --input-bits 16 --normalise-exposure --max-epochs 25 --patience 25 --soft-labels 0.6
     for d in sel2-light-ref sel2-light-alt sel-default; do cargo run --release -p tactile -- eval detector --model data/det/light --data data/$d; done
 
-# The shipped detector (#20, round three): the light-press recipe on four more light-press sets (seeds 510-540, peak 0.05-0.4 mm), averaged with the light-press recipe's network (`train ensemble`: the mean logit, one network to every runtime and export), calibrated on seeds 610/611, staged, then put in place.
+# The shipped detector (#20, round three): the light-press recipe on four more light-press sets (seeds 510-540, peak 0.05-0.4 mm), averaged with the light-press recipe's network and its photometrically augmented twin (`train ensemble`: the mean logit, one network to every runtime and export); ship-detector-ensemble calibrates it on seeds 610/611 (staged, then put in place).
 train-detector-ensemble: train-detector-light
     for s in 510 520 530 540; do cargo run --release -p tactile -- synth visuotactile --sequences 100 --frames-per-sequence 25 --seed $s --press-mm 0.05,0.4 --out data/vt-train-light$s; done
     cargo run --release -p tactile -- train detector --data data/vt-train2 data/vt-train-onset data/vt-train-onset2 data/vt-train-light150 data/vt-train-light160 data/vt-train-light170 data/vt-train-light180 data/vt-train-light510 data/vt-train-light520 data/vt-train-light530 data/vt-train-light540 --out data/det/light8 --width 0.5 --input 80x60 --input-bits 16 --normalise-exposure --max-epochs 25 --patience 25 --soft-labels 0.6
-    rm -rf data/det/ensemble && cargo run --release -p tactile -- train ensemble --members data/det/light8 data/det/light --out data/det/ensemble
+    cargo run --release -p tactile -- train detector --data data/vt-train2 data/vt-train-onset data/vt-train-onset2 data/vt-train-light150 data/vt-train-light160 data/vt-train-light170 data/vt-train-light180 --out data/det/light-aug --width 0.5 --input 80x60 --input-bits 16 --normalise-exposure --max-epochs 25 --patience 25 --soft-labels 0.6 --augment
+    rm -rf data/det/ensemble && cargo run --release -p tactile -- train ensemble --members data/det/light8 data/det/light data/det/light-aug --out data/det/ensemble
     for d in sel2-light-ref sel2-light-alt sel-default sel-light-ref sel-light-alt; do cargo run --release -p tactile -- eval detector --model data/det/ensemble --data data/$d; done
 
 ship-detector-ensemble: calibrate-detector-data

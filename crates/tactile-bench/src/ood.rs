@@ -214,7 +214,7 @@ pub fn ood_markdown(bench: &OodBench) -> String {
     let (rows, threshold) = (&bench.rows, bench.threshold);
     let mut md = format!(
         "The palpation pipeline's input profile (the detector's training frames' input statistics, \
-         `models/detector/detector.json`) flags frames whose score exceeds {}; flagged frames get no \
+         saved in the detector's `detector.json`, its first member's for an ensemble) flags frames whose score exceeds {}; flagged frames get no \
          tendon, direction or depth. Sets rendered in process with fixed seeds.\n\n\
          | frames | own sensor | frames | flagged | flagged (%) | tendon reported | input score (min - max) |\n\
          |---|---|---|---|---|---|---|\n",
