@@ -1,6 +1,10 @@
 #!/usr/bin/env python3
 """Accuracy of two detectors' logits averaged, from their per-frame CSVs.
 
+An analysis aid: the toolkit's own ensemble is `tactile train ensemble`
+(one network averaging its members' logits), whose `tactile eval detector`
+accuracy this reproduces; this adds how many frames both get wrong.
+
 Each argument pair is the `--frames` CSV of `tactile eval detector` for
 detector A and detector B on the same set (same frames, same order). Prints
 each one's accuracy at probability 0.5 and that of the average of their
