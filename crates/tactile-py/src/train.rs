@@ -479,3 +479,10 @@ pub(crate) fn train_regressor_py<'py>(
         }),
     )
 }
+
+/// Average models trained apart (pose networks, or detectors that read a
+/// frame alike) in a new ensemble folder; returns what was made, in words.
+#[pyfunction]
+pub(crate) fn train_ensemble(members: Vec<PathBuf>, out: PathBuf) -> PyResult<String> {
+    tactile_pipeline::ensemble::assemble_ensemble(&members, &out).py()
+}

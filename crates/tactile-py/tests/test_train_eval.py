@@ -33,6 +33,25 @@ def test_train_then_eval_detector(small_vt, tmp_path):
     assert set(e) >= {"all", "onset_release", "ms_per_frame"}
 
 
+def test_two_detectors_average_as_one(root, small_vt, tmp_path):
+    # The shipped detector's first network, twice: the ensemble's answer is
+    # that network's, and members that read frames differently are refused.
+    member = root / "models/detector/member-0"
+    if not member.is_dir():
+        member = root / "models/detector"
+    said = tactile.train.ensemble([member, member], tmp_path / "ens")
+    assert said.startswith("2 detectors"), said
+    one = tactile.eval.detector(member, small_vt)
+    two = tactile.eval.detector(tmp_path / "ens", small_vt)
+    assert two["all"] == one["all"]
+    small = tmp_path / "det"
+    tactile.train.detector(small_vt, small, width=0.25, input=(64, 48), max_epochs=1,
+                           batch_size=8, seed=1)
+    with pytest.raises(ValueError, match="differ from the first member"):
+        tactile.train.ensemble([member, small], tmp_path / "bad")
+    assert not (tmp_path / "bad").exists()
+
+
 def test_training_errors(small_vt, tmp_path):
     with pytest.raises(FileNotFoundError):
         tactile.train.segmenter(tmp_path / "missing", tmp_path / "seg")

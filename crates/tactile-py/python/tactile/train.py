@@ -303,4 +303,15 @@ def regressor(
     )
 
 
-__all__ = ["cae", "depth", "detector", "head", "regressor", "segmenter"]
+def ensemble(members: Sequence[PathLike], out: PathLike) -> str:
+    """Average models trained apart: pose networks, or detectors that read a
+    frame alike (input size, bits, exposure normalisation, threshold).
+    Copies them into the new folder ``out`` (an existing one is left alone)
+    that ``PoseEstimator``, ``Pipeline`` and ``tactile.eval`` load as one
+    model; a detector ensemble is one network (the members' mean logit).
+    Returns what was made, in words.
+    """
+    return _tactile.train_ensemble([os.fspath(m) for m in members], os.fspath(out))
+
+
+__all__ = ["cae", "depth", "detector", "ensemble", "head", "regressor", "segmenter"]
