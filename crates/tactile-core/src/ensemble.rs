@@ -91,12 +91,13 @@ impl Ensemble {
     /// ensemble folder `out` as `member-0`, `member-1`, ... (staged, then
     /// moved into place; an existing `out` is left alone). `alike` refuses
     /// a member that does not read its input or give its output as the
-    /// first one does; `notes` are merged into the ensemble's provenance.
+    /// first one does; `notes` makes what the kind of model adds to the
+    /// ensemble's provenance from the members' configs (or refuses them).
     pub fn assemble<A: Artifact>(
         members: &[PathBuf],
         out: &Path,
         alike: impl Fn(&A, &A, &Path) -> Result<()>,
-        notes: serde_json::Value,
+        notes: impl FnOnce(&[A]) -> Result<serde_json::Value>,
     ) -> Result<Self> {
         if let Some(m) = Self::count_problem(members.len()) {
             return Err(Error::Invalid(m));
@@ -108,6 +109,7 @@ impl Ensemble {
         for (m, a) in members.iter().zip(&arts).skip(1) {
             alike(&arts[0], a, m)?;
         }
+        let notes = notes(&arts)?;
         let staged = crate::io::StagedDir::new(out)?;
         let mut names = Vec::new();
         for (k, m) in members.iter().enumerate() {

@@ -173,7 +173,7 @@ impl DetectorEnsembleArtifact {
             members,
             out,
             check_alike,
-            serde_json::json!({}),
+            |_| Ok(serde_json::json!({})),
         )?)
     }
 

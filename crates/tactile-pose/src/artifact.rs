@@ -109,23 +109,21 @@ impl PoseEnsemble {
     /// must agree; the ensemble's `excluded_test` is theirs, which they
     /// must share.
     pub fn assemble(members: &[std::path::PathBuf], out: &Path) -> tactile_core::Result<Ensemble> {
-        let arts = members
-            .iter()
-            .map(|m| PoseArtifact::read(m))
-            .collect::<tactile_core::Result<Vec<_>>>()?;
-        let tests: Vec<_> = arts.iter().map(|a| a.notes.get("excluded_test")).collect();
-        let mut notes = serde_json::json!({});
-        match tests.first() {
-            Some(first) if tests.iter().any(|t| t != first) => {
-                return Err(tactile_core::Error::Invalid(
-                    "the members left out different test frames; an ensemble's score would mix them"
-                        .into(),
-                ));
+        Ensemble::assemble(members, out, check_alike, |arts: &[PoseArtifact]| {
+            let tests: Vec<_> = arts.iter().map(|a| a.notes.get("excluded_test")).collect();
+            let mut notes = serde_json::json!({});
+            match tests.first() {
+                Some(first) if tests.iter().any(|t| t != first) => {
+                    return Err(tactile_core::Error::Invalid(
+                        "the members left out different test frames; an ensemble's score would mix them"
+                            .into(),
+                    ));
+                }
+                Some(Some(t)) => notes["excluded_test"] = (*t).clone(),
+                _ => {}
             }
-            Some(Some(t)) => notes["excluded_test"] = (*t).clone(),
-            _ => {}
-        }
-        Ensemble::assemble(members, out, check_alike, notes)
+            Ok(notes)
+        })
     }
 }
 

@@ -35,6 +35,14 @@ fn shared_real() -> std::path::PathBuf {
     real
 }
 
+/// The last line of a command's output that is JSON (its result).
+fn last_json(msg: &str) -> serde_json::Value {
+    msg.lines()
+        .rev()
+        .find_map(|l| serde_json::from_str(l).ok())
+        .unwrap()
+}
+
 /// Copy a model folder with its subfolders (an ensemble's members).
 fn copy_model(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
@@ -766,11 +774,7 @@ fn the_shipped_detector_holds_on_light_presses_of_the_second_renderer() {
         d,
     ]);
     assert!(ok, "{msg}");
-    let scores: serde_json::Value = msg
-        .lines()
-        .rev()
-        .find_map(|l| serde_json::from_str(l).ok())
-        .unwrap();
+    let scores = last_json(&msg);
     // The target is 0.98 on 3,000 such frames; on 400 one standard error
     // is about 0.007, so two of them below it.
     let acc = scores["all"]["accuracy"].as_f64().unwrap();
@@ -801,12 +805,6 @@ fn shipped_detector_and_segmenter_meet_their_targets_on_fresh_palpations() {
         d,
     ]);
     assert!(ok, "{msg}");
-    let last_json = |msg: &str| -> serde_json::Value {
-        msg.lines()
-            .rev()
-            .find_map(|l| serde_json::from_str(l).ok())
-            .unwrap()
-    };
     let frames_csv = tmp.path().join("decisions.csv");
     let (ok, msg) = tactile(&[
         "eval",
