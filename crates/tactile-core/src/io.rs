@@ -199,6 +199,9 @@ pub fn ensure_writable_parent(file: impl AsRef<Path>) -> Result<()> {
 pub struct StagedDir {
     staging: tempfile::TempDir,
     target: std::path::PathBuf,
+    /// The target held something when the run began (so a refusal to
+    /// overwrite it is not another run's doing).
+    existed: bool,
 }
 
 fn process_alive(pid: u32) -> bool {
@@ -239,7 +242,12 @@ impl StagedDir {
             .prefix(&format!("{prefix}{}-", std::process::id()))
             .tempdir_in(&parent)
             .map_err(|e| Error::io(&parent, e))?;
-        Ok(Self { staging, target })
+        let existed = std::fs::read_dir(&target).is_ok_and(|mut d| d.next().is_some());
+        Ok(Self {
+            staging,
+            target,
+            existed,
+        })
     }
 
     /// Where to write.
@@ -253,7 +261,7 @@ impl StagedDir {
     /// and this run fails.
     pub fn commit(self, replace: bool) -> Result<std::path::PathBuf> {
         let staging = self.staging.keep();
-        let target = self.target;
+        let (target, existed) = (self.target, self.existed);
         let fail = |e: std::io::Error, staging: &Path| {
             let _ = std::fs::remove_dir_all(staging);
             Error::io(&target, e)
@@ -272,8 +280,12 @@ impl StagedDir {
             std::fs::rename(&staging, &target).map_err(|e| {
                 if target.is_dir() {
                     let _ = std::fs::remove_dir_all(&staging);
+                    let why = match existed {
+                        true => "the folder already exists and is left alone (choose a new one)",
+                        false => "another run wrote this folder meanwhile",
+                    };
                     Error::Invalid(format!(
-                        "{}: another run wrote this folder meanwhile; this run's output was discarded",
+                        "{}: {why}; this run's output was discarded",
                         target.display()
                     ))
                 } else {
@@ -344,6 +356,11 @@ mod tests {
         a.commit(false).unwrap();
         let e = b.commit(false).unwrap_err().to_string();
         assert!(e.contains("another run"), "{e}");
+        assert_eq!(std::fs::read(target.join("f")).unwrap(), b"a");
+        // A folder that held something before the run is named as such.
+        let late = StagedDir::new(&target).unwrap();
+        let e = late.commit(false).unwrap_err().to_string();
+        assert!(e.contains("already exists"), "{e}");
         assert_eq!(std::fs::read(target.join("f")).unwrap(), b"a");
         // Replacing swaps the whole folder.
         let c = StagedDir::new(&target).unwrap();
