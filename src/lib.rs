@@ -7,6 +7,7 @@
 
 pub use datasets_synth as synth;
 pub use tactile_bench as bench;
+pub use tactile_burn as nn;
 pub use tactile_cae as cae;
 pub use tactile_core as core;
 pub use tactile_depth as depth;

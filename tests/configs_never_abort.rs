@@ -11,7 +11,7 @@ use std::path::Path;
 use burn::tensor::Device;
 use proptest::prelude::*;
 use serde_json::Value;
-use tactile_rs::core::Artifact;
+use tactile_rs::nn::Artifact;
 
 /// Every numeric leaf of `v`, as JSON pointers.
 fn numbers(v: &Value, at: String, out: &mut Vec<String>) {

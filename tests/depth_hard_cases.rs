@@ -108,12 +108,12 @@ fn shipped_mae(
     seqs: std::ops::Range<u64>,
     frame: usize,
 ) -> f64 {
+    use tactile_rs::core::spec::visuotactile::Window;
     use tactile_rs::depth::DepthEstimator;
-    use tactile_rs::depth::data::window_mask;
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/depth");
-    let mut est = DepthEstimator::load(&root, tactile_rs::core::Runtime::BurnFlex, 0).unwrap();
+    let mut est = DepthEstimator::load(&root, tactile_rs::nn::Runtime::BurnFlex, 0).unwrap();
     let [w, h] = est.artifact.model.input_size;
-    let window = window_mask(w, h);
+    let window = Window::mask(w, h);
     let mut total = 0.0;
     for s in seqs.clone() {
         let (_, f) = tactile_rs::synth::visuotactile::sample(cfg, 77, s, frame);

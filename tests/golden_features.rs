@@ -10,8 +10,8 @@ use tactile_rs::cae::authors::{authors_widths, load_authors_encoder};
 use tactile_rs::cae::data::PinSet;
 use tactile_rs::cae::{CaeArtifact, CaeConfig, TactipEncoder};
 use tactile_rs::core::dataset::Dataset;
-use tactile_rs::core::runtime::BurnNetwork;
-use tactile_rs::core::{DeviceKind, Runtime};
+use tactile_rs::nn::runtime::BurnNetwork;
+use tactile_rs::nn::{DeviceKind, Runtime};
 use tactile_rs::preprocess::PreprocessConfig;
 
 #[test]

@@ -6,8 +6,8 @@
 use std::path::{Path, PathBuf};
 
 use tactile_rs::core::image_io::{RgbImage, rgb_image, save_rgb_png};
-use tactile_rs::core::{Artifact, Runtime};
 use tactile_rs::detect::TendonDetector;
+use tactile_rs::nn::{Artifact, Runtime};
 use tactile_rs::segment::{NoDirection, TendonSegmenter};
 use tactile_rs::synth::VisuotactileConfig;
 use tactile_rs::synth::visuotactile::sample;
@@ -269,7 +269,7 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
         let trained = det.stats.to_chw(&det_set.view(i)).unwrap();
         assert_eq!(
             det.frame_input(&frame).unwrap(),
-            Some(trained),
+            trained,
             "detector, frame {i}"
         );
         assert_eq!(

@@ -11,6 +11,7 @@
 use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
+use tactile_core::spec::visuotactile as spec;
 use tactile_core::{Error, Result};
 
 use crate::raster::{Border, gaussian_blur, to_u8};
@@ -24,10 +25,7 @@ pub const MAX_FRAMES_PER_SEQUENCE: usize = 100_000;
 pub const FPS: f64 = 30.0;
 /// Nominal skin depth used for the tendon geometry, mm.
 pub const NOMINAL_DEPTH_MM: f64 = 15.0;
-/// Rest dome: `d0(r) = 15 + 3 (r / r_max)^2` mm.
-pub const DOME_BASE_MM: f64 = 15.0;
-/// Rise of the rest dome from centre to corner, mm.
-pub const DOME_RISE_MM: f64 = 3.0;
+pub use tactile_core::spec::visuotactile::{DOME_BASE_MM, DOME_RISE_MM, TENDON_MIN_AMPLITUDE_MM};
 /// Whole-window displacement per mm of press at the centre.
 pub const WINDOW_PUSH: f64 = 0.4;
 /// Ridge amplitude factor: `A = 0.35 press radius / (radius + burial)`.
@@ -38,8 +36,6 @@ pub const RIDGE_WIDTH: (f64, f64) = (0.6, 0.3);
 pub const MASK_FRACTION: f64 = 0.3;
 /// Smallest ridge height in the mask, mm.
 pub const MASK_FLOOR_MM: f64 = 0.02;
-/// Smallest ridge amplitude that counts as a visible tendon, mm.
-pub const TENDON_MIN_AMPLITUDE_MM: f64 = 0.03;
 /// Skin albedo and ambient term.
 pub const ALBEDO: f64 = 0.8;
 /// Ambient light term.
@@ -321,15 +317,13 @@ impl Camera {
 
     /// True inside the sensing window (the inscribed ellipse).
     pub fn in_window(&self, u: f64, v: f64) -> bool {
-        let (a, b) = self.window_radii();
-        let (du, dv) = ((u - self.cx) / a, (v - self.cy) / b);
-        du * du + dv * dv <= 1.0
+        spec::Window::of_frame(self.width as f64, self.height as f64).contains(u, v)
     }
 
     /// Rest depth `d0` at pixel `(u, v)`, mm.
     pub fn rest_depth_mm(&self, u: f64, v: f64) -> f64 {
         let r2 = (u - self.cx).powi(2) + (v - self.cy).powi(2);
-        DOME_BASE_MM + DOME_RISE_MM * r2 / (self.r_max * self.r_max)
+        spec::rest_depth_mm(r2 / (self.r_max * self.r_max))
     }
 }
 

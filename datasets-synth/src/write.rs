@@ -75,7 +75,7 @@ where
     for d in subdirs {
         tactile_core::io::create_dir_all(staging.join(d))?;
     }
-    let pb = tactile_core::train::progress_bar(count as u64, "synth");
+    let pb = tactile_core::progress::progress_bar(count as u64, "synth");
     if !options.progress {
         pb.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use burn::tensor::Device;
 use libfuzzer_sys::fuzz_target;
-use tactile_core::Artifact;
+use tactile_burn::Artifact;
 
 fn load<A: Artifact>(json: &[u8]) {
     if let Ok(a) = serde_json::from_slice::<A>(json)

@@ -4,7 +4,7 @@
 
 use burn::tensor::Device;
 use libfuzzer_sys::fuzz_target;
-use tactile_core::Artifact;
+use tactile_burn::Artifact;
 
 const CONFIG: &str = r#"{"model":{"base":4,"side":16,"in_channels":3},"stats":{"mean":[0.5,0.5,0.5],"std":[0.1,0.1,0.1]},"threshold":0.5,"postprocess":{"edge_band":0.12,"edge_fraction":0.8,"min_anisotropy":1.5,"min_area":3,"axis_within_window":true}}"#;
 

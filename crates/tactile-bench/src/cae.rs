@@ -5,13 +5,13 @@
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
+use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_cae::CaeArtifact;
 use tactile_cae::data::PinSet;
 use tactile_cae::eval::reconstruction_bce;
 use tactile_core::bench::{Machine, median_seconds};
 use tactile_core::dataset::Dataset;
 use tactile_core::metrics::accuracy;
-use tactile_core::{Artifact, DeviceKind, Runtime};
 use tactile_estimate::ClassifierHead;
 use tactile_onnx::load_network;
 

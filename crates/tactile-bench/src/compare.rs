@@ -7,10 +7,10 @@ use std::path::PathBuf;
 
 use burn::tensor::Device;
 use rayon::prelude::*;
+use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_cae::data::PinSet;
 use tactile_cae::{CaeArtifact, TactipEncoder};
 use tactile_core::dataset::Dataset;
-use tactile_core::{Artifact, DeviceKind, Runtime};
 use tactile_estimate::classical;
 use tactile_estimate::{
     Activation, ClassifierHead, HeadConfig, Regressor, RegressorConfig, Target,

@@ -6,9 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
+use tactile_burn::runtime::{BurnNetwork, Forward};
+use tactile_burn::{Artifact, DeviceKind, Network, Runtime};
 use tactile_core::bench::Machine;
-use tactile_core::runtime::{BurnNetwork, Forward};
-use tactile_core::{Artifact, DeviceKind, Network, Runtime};
 use tactile_onnx::{Exportable, load_network};
 
 use crate::Result;

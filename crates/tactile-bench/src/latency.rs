@@ -1,12 +1,12 @@
 //! Timing a saved model on every runtime through the same
-//! [`Network`](tactile_core::Network) path inference uses.
+//! [`Network`](tactile_burn::Network) path inference uses.
 
 use std::path::Path;
 
 use serde::Serialize;
+use tactile_burn::runtime::Forward;
+use tactile_burn::{Network, Runtime};
 use tactile_core::bench::median_seconds;
-use tactile_core::runtime::Forward;
-use tactile_core::{Network, Runtime};
 use tactile_onnx::{Exportable, load_network};
 
 use crate::Result;

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use burn::module::Module;
 use serde::Serialize;
+use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_core::dataset::Dataset;
-use tactile_core::{Artifact, DeviceKind, Runtime};
 use tactile_depth::{DepthArtifact, DepthEstimator, DepthScores};
 use tactile_detect::{DetectionSet, DetectorArtifact, DetectorEnsembleArtifact, TendonDetector};
 use tactile_segment::eval::CURVED;

@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use serde::Serialize;
-use tactile_core::Runtime;
+use tactile_burn::Runtime;
 use tactile_core::image_io::{RgbImage, rgb_image};
 use tactile_pipeline::palpation::Pipeline;
 

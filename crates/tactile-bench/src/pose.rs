@@ -3,8 +3,8 @@
 //! out, against its latency, beside the field's published figure.
 
 use serde::Serialize;
+use tactile_burn::Artifact;
 use tactile_cae::CaeArtifact;
-use tactile_core::Artifact;
 use tactile_core::dataset::{Dataset, TestHoldout};
 use tactile_core::plot::Series;
 use tactile_pipeline::tactip::Predictor;
@@ -100,7 +100,7 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
             0.2,
             holdout.unwrap_or(DEFAULT_HOLDOUT).split_seed,
         )?;
-        let mut predictor = Predictor::load(m, &[], tactile_core::Runtime::BurnFlex)?;
+        let mut predictor = Predictor::load(m, &[], tactile_burn::Runtime::BurnFlex)?;
         let all = predictor.perceive(&ds)?;
         // Per test frame: |error| of each target (NaN when unlabelled).
         let mut errors = vec![[f64::NAN; 3]; split.test.len()];

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use datasets_synth::{Range, VisuotactileConfig, WriteOptions, write_visuotactile};
-use tactile_core::Runtime;
+use tactile_burn::Runtime;
 use tactile_core::dataset::Manifest;
 use tactile_pipeline::{FrameSource, Pipeline, RunOptions, RunSummary, SourceOptions, SourceSpec};
 

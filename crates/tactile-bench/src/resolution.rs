@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use serde::Serialize;
-use tactile_core::Runtime;
+use tactile_burn::Runtime;
 use tactile_core::bench::Machine;
 use tactile_core::image_io::{RgbImage, rgb_image};
 use tactile_core::metrics::median;
@@ -142,7 +142,7 @@ pub fn bench_resolution(
             pipeline.process("warm-up", f)?;
         }
     }
-    let pb = tactile_core::train::progress_bar((repeats * frames * sizes.len()) as u64, "bench");
+    let pb = tactile_core::progress::progress_bar((repeats * frames * sizes.len()) as u64, "bench");
     for _ in 0..repeats {
         for i in 0..frames {
             for (s, set) in sets.iter().enumerate() {
@@ -200,7 +200,7 @@ pub fn bench_resolution(
 
 /// Frames/s of decoding `frames`, encoded as a 30 fps H.264 stream (FFmpeg's
 /// default quality) and
-/// looped to at least 300 frames, through [`tactile_pipeline::source`]'s
+/// looped to at least 300 frames, through [`tactile_core::source`]'s
 /// video reader; `None` without FFmpeg.
 fn decode_rate(frames: &[RgbImage]) -> Result<Option<f64>> {
     use tactile_core::video;

@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
+use tactile_burn::Runtime;
 use tactile_cae::data::PinSet;
-use tactile_core::Runtime;
 use tactile_core::dataset::Dataset;
 use tactile_core::image_io::GreyImage;
 use tactile_core::plot::{Series, line_plot};

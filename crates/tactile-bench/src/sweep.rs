@@ -5,13 +5,13 @@
 
 use std::path::{Path, PathBuf};
 
+use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_cae::data::PinSet;
 use tactile_cae::eval::reconstruction_bce;
 use tactile_cae::{CaeArtifact, TactipEncoder};
 use tactile_core::dataset::Dataset;
 use tactile_core::metrics::accuracy;
 use tactile_core::plot::{Series, line_plot};
-use tactile_core::{Artifact, DeviceKind, Runtime};
 use tactile_estimate::{ClassifierHead, HeadConfig};
 use tactile_pipeline::tactip::classes_of;
 

@@ -3,7 +3,7 @@
 
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
-use tactile_core::Artifact;
+use tactile_burn::Artifact;
 use tactile_onnx::Exportable;
 use tactile_preprocess::PreprocessConfig;
 
@@ -34,7 +34,7 @@ impl Artifact for CaeArtifact {
     }
 
     fn check(&self, file: &std::path::Path) -> tactile_core::Result<()> {
-        use tactile_core::artifact::in_config;
+        use tactile_core::error::in_config;
         in_config(file, self.model.check())?;
         in_config(file, self.preprocess.check())?;
         if self.preprocess.output_px != self.model.input_px {

@@ -14,7 +14,7 @@ use crate::Result;
 
 use crate::model::{Cae, CaeConfig};
 
-use tactile_core::module_io::safetensors_f32 as tensor_f32;
+use tactile_burn::module_io::safetensors_f32 as tensor_f32;
 
 fn load_conv(
     conv: &mut Conv2d,

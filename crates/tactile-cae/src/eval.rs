@@ -1,7 +1,7 @@
 //! How well the autoencoder reconstructs its input.
 
 use burn::tensor::Device;
-use tactile_core::nn::bce_with_logits;
+use tactile_burn::nn::bce_with_logits;
 
 use crate::data::PinSet;
 use crate::model::Cae;

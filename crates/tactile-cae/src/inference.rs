@@ -4,9 +4,9 @@
 
 use std::path::Path;
 
+use tactile_burn::{Network, Runtime};
 use tactile_core::dataset::Dataset;
 use tactile_core::image_io::GreyImage;
-use tactile_core::{Network, Runtime};
 use tactile_preprocess::PinImage;
 
 use crate::artifact::CaeArtifact;

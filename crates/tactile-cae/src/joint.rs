@@ -12,8 +12,8 @@ use burn::module::Module;
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
+use tactile_burn::nn::RegressionLoss;
 use tactile_core::dataset::Dataset;
-use tactile_core::nn::RegressionLoss;
 use tactile_estimate::Target;
 use tactile_estimate::regressor::{Scaler, encode, output_scaler};
 

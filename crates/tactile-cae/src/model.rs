@@ -22,7 +22,7 @@ use burn::nn::interpolate::{Interpolate2d, Interpolate2dConfig, InterpolateMode}
 use burn::nn::pool::{MaxPool2d, MaxPool2dConfig};
 use burn::tensor::activation::{relu, sigmoid};
 use burn::tensor::{Device, Int, Tensor, TensorData};
-use tactile_core::runtime::Forward;
+use tactile_burn::runtime::Forward;
 
 /// Architecture of the autoencoder.
 #[derive(Config, Debug, PartialEq)]

@@ -6,12 +6,12 @@ use std::path::Path;
 use burn::config::Config;
 use burn::optim::ModuleOptimizer;
 use serde::{Deserialize, Serialize};
+use tactile_burn::nn::bce_with_logits;
+use tactile_burn::optim::AdadeltaConfig;
+use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
+use tactile_burn::{Artifact, DeviceKind};
 use tactile_core::dataset::{Dataset, TestHoldout, hold_out};
-use tactile_core::nn::bce_with_logits;
-use tactile_core::optim::AdadeltaConfig;
 use tactile_core::rng::SampleRng;
-use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
-use tactile_core::{Artifact, DeviceKind};
 use tactile_preprocess::perturb::RotationAugment;
 use tactile_preprocess::{PinImage, PreprocessConfig};
 
@@ -99,7 +99,7 @@ pub fn train(
     if let Some(j) = &config.joint {
         j.check()?;
     }
-    tactile_core::io::check_output_dir(out, &[data])?;
+    tactile_core::dataset::check_output_dir(out, &[data])?;
     let rows = data.training_rows(config.holdout)?;
     let (train, val) = hold_out(rows, config.val_fraction, config.schedule.seed)
         .map_err(|e| tactile_core::Error::dataset(data.labels_path(), None, e.to_string()))?;
@@ -163,8 +163,8 @@ pub fn train(
     let fit_cfg = FitConfig::new(&config.schedule, &title)
         .saving_to(out, resume)
         .with_checkpoint_every(25)
-        .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
-    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
+        .with_run_id(tactile_burn::artifact::run_fingerprint(config, &[data])?);
+    let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
     let (_, summary) = fit::<_, crate::Error>(
         &fit_cfg,
         model,
@@ -205,7 +205,7 @@ pub fn train(
         },
         |m| Ok(artifact.save(&m.cae, out)?),
     )?;
-    tactile_core::artifact::write_training_record(
+    tactile_burn::artifact::write_training_record(
         out,
         config,
         &summary,

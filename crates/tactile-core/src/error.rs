@@ -175,6 +175,14 @@ impl Error {
     }
 }
 
+/// Refuse a configuration error of a loaded config, naming its `file`.
+pub fn in_config<T>(file: &Path, r: Result<T>) -> Result<T> {
+    r.map_err(|e| match e {
+        Error::Config(m) => Error::model(file, m),
+        other => other,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

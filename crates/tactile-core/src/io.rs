@@ -162,28 +162,25 @@ pub fn ensure_writable_dir(dir: impl AsRef<Path>) -> Result<()> {
         .map_err(|e| refuse(e.kind().to_string()))
 }
 
-/// Before any work: the output file `out` can be written and is none of
-/// the files of the input `datasets`.
-pub fn check_output_file(out: &Path, datasets: &[&crate::dataset::Dataset]) -> Result<()> {
-    for ds in datasets {
-        ds.refuse_as_output(out)?;
+/// A result record as both front ends print it: `model` and `data`, then
+/// every field of the library's `result` (serialised as it is, never picked
+/// field by field, so a new score reaches the command line and Python at
+/// once).
+pub fn scored_record(
+    model: &Path,
+    data: &Path,
+    result: &impl serde::Serialize,
+) -> Result<serde_json::Value> {
+    let mut v = serde_json::json!({ "model": model, "data": data });
+    let r = serde_json::to_value(result).map_err(|e| Error::Invalid(e.to_string()))?;
+    match (v.as_object_mut(), r) {
+        (Some(m), serde_json::Value::Object(r)) => m.extend(r),
+        (Some(m), other) => {
+            m.insert("result".into(), other);
+        }
+        _ => {}
     }
-    if out.is_dir() {
-        return Err(Error::Invalid(format!(
-            "{}: is a folder; give a file name for this output",
-            out.display()
-        )));
-    }
-    ensure_writable_parent(out)
-}
-
-/// Before any work: the output folder `out` can be written and is not
-/// part of the input `datasets`.
-pub fn check_output_dir(out: &Path, datasets: &[&crate::dataset::Dataset]) -> Result<()> {
-    for ds in datasets {
-        ds.refuse_as_output(out)?;
-    }
-    ensure_writable_dir(out)
+    Ok(v)
 }
 
 /// [`ensure_writable_dir`] for the folder an output file will go into.

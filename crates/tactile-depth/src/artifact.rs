@@ -4,7 +4,7 @@
 
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
-use tactile_core::Artifact;
+use tactile_burn::Artifact;
 use tactile_core::image_io::RgbImage;
 use tactile_onnx::{Exportable, export_batch_dynamic};
 use tactile_preprocess::visuo::{ChannelStats, resize_rgb};
@@ -63,7 +63,8 @@ impl Artifact for DepthArtifact {
     }
 
     fn check(&self, file: &std::path::Path) -> tactile_core::Result<()> {
-        use tactile_core::artifact::{check_field, in_config};
+        use tactile_burn::artifact::check_field;
+        use tactile_core::error::in_config;
         in_config(file, self.model.check())?;
         in_config(file, self.stats.check(3))?;
         let s = &self.scale;

@@ -5,6 +5,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::spec::visuotactile as spec;
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_grey, resize_rgb};
 
 use crate::Result;
@@ -35,18 +36,6 @@ pub struct DepthSet {
     pub window: Vec<bool>,
 }
 
-/// The inscribed ellipse of a `w x h` image.
-pub fn window_mask(w: usize, h: usize) -> Vec<bool> {
-    let (cx, cy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
-    let (rx, ry) = (w as f64 / 2.0, h as f64 / 2.0);
-    (0..w * h)
-        .map(|i| {
-            let (u, v) = ((i % w) as f64, (i / w) as f64);
-            ((u - cx) / rx).powi(2) + ((v - cy) / ry).powi(2) <= 1.0
-        })
-        .collect()
-}
-
 /// The skin at rest (`sensors.md`): camera-to-skin distance
 /// `d0(r) = 15 + 3 (r / r_max)^2` mm, `r` from the frame centre and `r_max`
 /// the half-diagonal, sampled on a `w x h` map that covers a frame of
@@ -64,7 +53,7 @@ pub fn rest_dome_mm(w: usize, h: usize, frame_aspect: f64) -> Vec<f32> {
         let dv = (y as f64 + 0.5) / h as f64 - 0.5;
         for x in 0..w {
             let du = ((x as f64 + 0.5) / w as f64 - 0.5) * a;
-            out.push((15.0 + 3.0 * (du * du + dv * dv) / r_max2) as f32);
+            out.push(spec::rest_depth_mm((du * du + dv * dv) / r_max2) as f32);
         }
     }
     out
@@ -139,7 +128,7 @@ impl DepthSet {
             width: w,
             height: h,
             samples,
-            window: window_mask(w, h),
+            window: spec::Window::mask(w, h),
         })
     }
 

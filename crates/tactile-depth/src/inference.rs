@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
+use tactile_burn::{Network, Runtime};
 use tactile_core::image_io::RgbImage;
-use tactile_core::{Network, Runtime};
 
 use crate::Result;
 use crate::artifact::DepthArtifact;

@@ -14,7 +14,7 @@ use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d};
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
-use tactile_core::runtime::Forward;
+use tactile_burn::runtime::Forward;
 use tactile_core::{Error, Result};
 
 /// DenseNet hyper-parameters (torchvision's names).
@@ -110,7 +110,7 @@ impl std::str::FromStr for DenseNetPreset {
 }
 
 /// Largest growth rate, stem width and decoder width accepted (the whole
-/// network is also bounded by [`tactile_core::artifact::MAX_PARAMETERS`]).
+/// network is also bounded by [`tactile_burn::artifact::MAX_PARAMETERS`]).
 pub const MAX_CHANNELS: usize = 1024;
 /// Largest number of layers in a dense block.
 pub const MAX_BLOCK_LAYERS: usize = 64;
@@ -236,7 +236,7 @@ impl DenseLayer {
     /// normalises the concatenated features and stays).
     fn fold(&mut self) {
         if !self.folded {
-            tactile_core::nn::fold_batch_norm(&mut self.conv1, &self.norm2);
+            tactile_burn::nn::fold_batch_norm(&mut self.conv1, &self.norm2);
             self.folded = true;
         }
     }
@@ -296,7 +296,7 @@ impl DenseNetEncoder {
     /// and each dense layer's second (inference only).
     pub fn fold_batch_norms(&mut self) {
         if !self.folded {
-            tactile_core::nn::fold_batch_norm(&mut self.conv0, &self.norm0);
+            tactile_burn::nn::fold_batch_norm(&mut self.conv0, &self.norm0);
             self.folded = true;
         }
         for b in &mut self.blocks {
@@ -475,7 +475,7 @@ impl DepthNetConfig {
                 }
             }
         }
-        tactile_core::artifact::check_parameters("depth network", self.parameter_bound())
+        tactile_burn::artifact::check_parameters("depth network", self.parameter_bound())
     }
 
     /// An upper bound on the parameter count from the channel widths: the

@@ -28,7 +28,7 @@ use burn::nn::BatchNorm;
 use burn::nn::conv::Conv2d;
 use burn::tensor::{Device, Tensor, TensorData};
 use safetensors::SafeTensors;
-use tactile_core::module_io::safetensors_f32;
+use tactile_burn::module_io::safetensors_f32;
 use tactile_core::{Error, Result};
 
 use crate::model::DenseNetEncoder;

@@ -9,10 +9,10 @@ use std::path::Path;
 use burn::config::Config;
 use burn::tensor::Tensor;
 use serde::{Deserialize, Serialize};
+use tactile_burn::nn::{gradient_loss, l1_loss, mse_loss, ssim_loss};
+use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
+use tactile_burn::{Artifact, DeviceKind};
 use tactile_core::dataset::Dataset;
-use tactile_core::nn::{gradient_loss, l1_loss, mse_loss, ssim_loss};
-use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
-use tactile_core::{Artifact, DeviceKind};
 use tactile_preprocess::visuo::ChannelStats;
 
 use crate::artifact::{DepthArtifact, DepthScale};
@@ -135,7 +135,7 @@ pub fn train(
         ))
         .into());
     }
-    tactile_core::io::check_output_dir(out, &[data])?;
+    tactile_core::dataset::check_output_dir(out, &[data])?;
     let (train, val) = data.split_by_sequence(config.val_fraction, config.schedule.seed)?;
     let [w, h] = net.input_size;
     tactile_core::note!(
@@ -208,8 +208,8 @@ pub fn train(
         format!("depth training ({:?})", config.loss),
     )
     .saving_to(out, resume)
-    .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
-    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
+    .with_run_id(tactile_burn::artifact::run_fingerprint(config, &[data])?);
+    let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
     let train_idx: Vec<usize> = (0..train_set.len()).collect();
     let (_, summary) = fit::<_, Error>(
         &fit_cfg,
@@ -233,7 +233,7 @@ pub fn train(
         },
         |m| Ok(artifact.save(m, out)?),
     )?;
-    tactile_core::artifact::write_training_record(
+    tactile_burn::artifact::write_training_record(
         out,
         config,
         &summary,

@@ -4,11 +4,11 @@
 
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
-use tactile_core::Artifact;
+use tactile_burn::Artifact;
 use tactile_core::image_io::RgbImage;
 use tactile_onnx::{Exportable, export_batch_dynamic};
 use tactile_preprocess::profile::{InputProfile, descriptor};
-use tactile_preprocess::visuo::{ChannelStats, FloatImage, is_blank, resize_rgb};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_rgb};
 
 use crate::Result;
 use crate::model::{Detector, DetectorConfig};
@@ -45,7 +45,8 @@ impl Artifact for DetectorArtifact {
     }
 
     fn check(&self, file: &std::path::Path) -> tactile_core::Result<()> {
-        use tactile_core::artifact::{check_field, in_config};
+        use tactile_burn::artifact::check_field;
+        use tactile_core::error::in_config;
         in_config(file, self.model.check())?;
         in_config(file, self.stats.check(3))?;
         if let Some(p) = &self.input_profile {
@@ -72,16 +73,13 @@ impl Exportable for DetectorArtifact {
 }
 
 impl DetectorArtifact {
-    /// The normalised `3 x H x W` input of an RGB frame of any size
+    /// The normalised `3 x H x W` network input of an RGB frame of any size
     /// (resized, then rounded to the input's bits as in training, see
-    /// [`FloatImage::quantised_to`](tactile_preprocess::visuo::FloatImage::quantised_to)),
-    /// or `None` for a blank frame (see [`is_blank`]), which shows no tendon.
-    pub fn frame_input(&self, frame: &RgbImage) -> Result<Option<Vec<f32>>> {
-        let img = self.frame_image(frame)?;
-        if is_blank(&img) {
-            return Ok(None);
-        }
-        Ok(Some(self.network_input(img)?))
+    /// [`FloatImage::quantised_to`](tactile_preprocess::visuo::FloatImage::quantised_to)).
+    /// No gate is applied: a frame's answer is
+    /// [`TendonDetector::assess`](crate::TendonDetector::assess)'s.
+    pub fn frame_input(&self, frame: &RgbImage) -> Result<Vec<f32>> {
+        self.network_input(self.frame_image(frame)?)
     }
 
     /// The frame as the detector sees it (resized to its input, rounded

@@ -41,7 +41,7 @@ pub struct PhotometricAugment {
 impl PhotometricAugment {
     /// Check every amount is in [0, 1].
     pub fn check(&self) -> tactile_core::Result<()> {
-        tactile_core::train::check_augment_amounts(&[
+        tactile_burn::train::check_augment_amounts(&[
             ("exposure", self.exposure),
             ("led_balance", self.led_balance),
             ("offset", self.offset),

@@ -9,9 +9,9 @@
 use std::path::Path;
 
 use serde::Serialize;
+use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_core::dataset::Dataset;
 use tactile_core::metrics::{Calibration, calibration};
-use tactile_core::{Artifact, DeviceKind, Runtime};
 
 use crate::eval::{CALIBRATION_BINS, evaluate};
 use crate::{

@@ -275,7 +275,10 @@ impl SoftLabels {
             ))
             .into());
         }
-        Ok(Self::new(SPEC_TENDON_THRESHOLD_MM, width))
+        Ok(Self::new(
+            tactile_core::spec::visuotactile::TENDON_MIN_AMPLITUDE_MM,
+            width,
+        ))
     }
 
     /// The target probability; frames labelled 0 although their ridge is
@@ -294,9 +297,6 @@ impl SoftLabels {
         if tendon { p.max(0.5) } else { p.min(0.5) }
     }
 }
-
-/// The spec's smallest ridge amplitude that counts as a tendon (mm).
-pub const SPEC_TENDON_THRESHOLD_MM: f64 = 0.03;
 
 /// Frames within two frames (same sequence, by `frame_index`) of a frame
 /// with the other label. Datasets without sequences have none.

@@ -17,9 +17,9 @@ use std::path::Path;
 use burn::module::{Module, Param};
 use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
-use tactile_core::Artifact;
-use tactile_core::ensemble::Ensemble;
-use tactile_core::runtime::Forward;
+use tactile_burn::Artifact;
+use tactile_burn::ensemble::Ensemble;
+use tactile_burn::runtime::Forward;
 use tactile_onnx::{Exportable, export_batch_dynamic};
 
 use crate::Result;
@@ -146,7 +146,7 @@ pub fn is_detector(dir: &Path) -> bool {
 /// The ONNX graph of the detector in `dir` (one network or an ensemble)
 /// with the config it is used with (see [`read_config`]).
 pub fn detector_onnx(dir: &Path) -> Result<(DetectorArtifact, Vec<u8>)> {
-    let device = tactile_core::DeviceKind::Flex.device();
+    let device = tactile_burn::DeviceKind::Flex.device();
     if DetectorEnsembleArtifact::is_in(dir) {
         let l = DetectorEnsembleArtifact::load(dir, &device)?;
         Ok((l.artifact.lead()?.clone(), l.artifact.onnx(&l.model)?))
@@ -249,7 +249,7 @@ impl Artifact for DetectorEnsembleArtifact {
     fn load_unfinished(
         dir: &Path,
         device: &Device,
-    ) -> tactile_core::Result<tactile_core::Loaded<Self>> {
+    ) -> tactile_core::Result<tactile_burn::Loaded<Self>> {
         let artifact = Self::read_unfinished(dir)?;
         let members = artifact
             .ensemble
@@ -261,7 +261,7 @@ impl Artifact for DetectorEnsembleArtifact {
             members,
             renormalise: artifact.renormalise(device),
         };
-        Ok(tactile_core::Loaded {
+        Ok(tactile_burn::Loaded {
             artifact,
             model,
             dir: dir.to_path_buf(),
@@ -302,7 +302,7 @@ mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
     use crate::TendonDetector;
-    use tactile_core::Runtime;
+    use tactile_burn::Runtime;
 
     fn root() -> std::path::PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")

@@ -18,20 +18,31 @@ pub const EVAL_BATCH: usize = 32;
 /// Bins of the reliability diagram.
 pub const CALIBRATION_BINS: usize = 10;
 
-/// A detector's scores on a dataset.
+/// A detector's scores on a dataset, on the answers `tactile run` and the
+/// Python package give ([`TendonDetector::assess`]: gates applied).
 #[derive(Debug, Clone, Serialize)]
 pub struct DetectorScores {
     /// Over every frame.
     pub all: BinaryScores,
+    /// Over every frame, on the network's own probabilities (no gate): what
+    /// the gates change.
+    pub ungated: BinaryScores,
+    /// Frames a gate stopped: blank ones.
+    pub gated_blank: usize,
+    /// Frames a gate stopped: foreign ones (outside the input profile).
+    pub gated_foreign: usize,
     /// Over frames within two frames of a label change.
     pub onset_release: BinaryScores,
     /// Inference time per frame (batches of [`EVAL_BATCH`], resizing excluded).
     pub ms_per_frame: f64,
     /// Reliability of the probabilities over [`CALIBRATION_BINS`] bins.
     pub calibration: Calibration,
-    /// Per-frame tendon probability, in dataset order.
+    /// Per-frame tendon probability (the answer's), in dataset order.
     #[serde(skip)]
     pub probabilities: Vec<f32>,
+    /// Per-frame decision (the answer's), in dataset order.
+    #[serde(skip)]
+    pub decisions: Vec<bool>,
     /// The threshold the decisions used.
     pub threshold: f64,
 }
@@ -54,6 +65,10 @@ impl DetectorScores {
             format!(
                 "confusion: {} true positive, {} false positive, {} true negative, {} false negative",
                 s.true_pos, s.false_pos, s.true_neg, s.false_neg
+            ),
+            format!(
+                "gates: {} blank and {} foreign frames answered without the network; without gates accuracy {:.4}",
+                self.gated_blank, self.gated_foreign, self.ungated.accuracy
             ),
             format!(
                 "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
@@ -136,7 +151,9 @@ pub fn save_reliability_plot(c: &Calibration, path: &Path, title: &str) -> Resul
     )?)
 }
 
-/// Score `detector` on every frame of `data` (loaded at its input size).
+/// Score `detector` on every frame of `data` (loaded at its input size):
+/// each frame gets [`TendonDetector::answer`], the answer `tactile run`
+/// gives it, and the network's own probabilities are scored beside it.
 pub fn evaluate(detector: &mut TendonDetector, data: &DetectionSet) -> Result<DetectorScores> {
     let size = detector.artifact.model.input_size;
     if [data.width, data.height] != size {
@@ -146,15 +163,27 @@ pub fn evaluate(detector: &mut TendonDetector, data: &DetectionSet) -> Result<De
         });
     }
     let stats = detector.artifact.stats.clone();
-    let t0 = std::time::Instant::now();
-    let mut p = Vec::with_capacity(data.len());
     let all: Vec<usize> = (0..data.len()).collect();
+    let gates = all
+        .iter()
+        .map(|&i| detector.gate(&data.image(i)))
+        .collect::<Result<Vec<_>>>()?;
+    let t0 = std::time::Instant::now();
+    let mut network = Vec::with_capacity(data.len());
     for chunk in all.chunks(EVAL_BATCH) {
         let x = data.inputs(chunk, &stats)?;
-        p.extend(detector.probabilities(&x, chunk.len())?);
+        network.extend(detector.network_probabilities(&x, chunk.len())?);
     }
     let ms_per_frame = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
-    let pred: Vec<bool> = p.iter().map(|&q| detector.is_tendon(q)).collect();
+    let answers: Vec<_> = gates
+        .iter()
+        .zip(&network)
+        .map(|(&g, &q)| detector.answer(g, Some(q)))
+        .collect();
+    let count = |gate| answers.iter().filter(|a| a.gate == Some(gate)).count();
+    let p: Vec<f32> = answers.iter().map(|a| a.probability).collect();
+    let pred: Vec<bool> = answers.iter().map(|a| a.tendon).collect();
+    let ungated: Vec<bool> = network.iter().map(|&q| detector.is_tendon(q)).collect();
     let tr: Vec<usize> = all
         .iter()
         .copied()
@@ -162,6 +191,9 @@ pub fn evaluate(detector: &mut TendonDetector, data: &DetectionSet) -> Result<De
         .collect();
     Ok(DetectorScores {
         all: binary_scores(&pred, &data.tendon),
+        ungated: binary_scores(&ungated, &data.tendon),
+        gated_blank: count(crate::Gate::Blank),
+        gated_foreign: count(crate::Gate::Foreign),
         onset_release: binary_scores(
             &tr.iter().map(|&i| pred[i]).collect::<Vec<_>>(),
             &tr.iter().map(|&i| data.tendon[i]).collect::<Vec<_>>(),
@@ -169,6 +201,7 @@ pub fn evaluate(detector: &mut TendonDetector, data: &DetectionSet) -> Result<De
         ms_per_frame,
         calibration: calibration(&p, &data.tendon, CALIBRATION_BINS),
         probabilities: p,
+        decisions: pred,
         threshold: detector.artifact.threshold,
     })
 }
@@ -181,10 +214,7 @@ pub fn write_decisions_csv(path: &Path, data: &DetectionSet, s: &DetectorScores)
     for (i, p) in s.probabilities.iter().enumerate() {
         csv.push_str(&format!(
             "{},{},{p:.6},{},{}\n",
-            data.files[i],
-            data.tendon[i] as u8,
-            (*p as f64 >= s.threshold) as u8,
-            data.transition[i] as u8
+            data.files[i], data.tendon[i] as u8, s.decisions[i] as u8, data.transition[i] as u8
         ));
     }
     Ok(tactile_core::io::write_atomic(path, csv.as_bytes())?)

@@ -4,9 +4,10 @@
 
 use std::path::Path;
 
+use tactile_burn::runtime::sigmoid;
+use tactile_burn::{Artifact, Network, Runtime};
 use tactile_core::image_io::RgbImage;
-use tactile_core::runtime::sigmoid;
-use tactile_core::{Artifact, Network, Runtime};
+use tactile_preprocess::visuo::FloatImage;
 
 use crate::Result;
 use crate::artifact::DetectorArtifact;
@@ -19,16 +20,43 @@ pub struct TendonDetector {
     net: Box<dyn Network>,
 }
 
-/// What the detector makes of one frame.
+/// Why a frame got no answer from the network: the gates every caller
+/// shares (`tactile run`, `tactile eval detector`, Python, the benches).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Gate {
+    /// No channel varies (black, saturated, one colour): no tendon can
+    /// show, and a network's answer on such an input would be arbitrary.
+    Blank,
+    /// Far outside the training frames' input statistics (another
+    /// sensor, an image that is not a sensor frame).
+    Foreign,
+}
+
+impl Gate {
+    /// The gate's name in records ("blank", "foreign").
+    pub fn name(self) -> &'static str {
+        match self {
+            Gate::Blank => "blank",
+            Gate::Foreign => "foreign",
+        }
+    }
+}
+
+/// What the detector makes of one frame: the one answer every caller gets.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Assessment {
-    /// Tendon probability; 0 for a blank frame or one out of distribution.
+    /// Tendon probability; 0 for a gated frame.
     pub probability: f32,
+    /// The decision: `probability` against the saved threshold.
+    pub tendon: bool,
+    /// The gate that stopped the frame before the network, if any.
+    pub gate: Option<Gate>,
     /// Distance from the training frames' input statistics, in spreads
     /// (None without an input profile).
     pub input_score: Option<f32>,
-    /// Far outside the training frames: another sensor, an image that is
-    /// not a sensor frame; no tendon, direction or depth is given.
+    /// Far outside the training frames (`gate` is [`Gate::Foreign`]): no
+    /// tendon, direction or depth is given.
     pub out_of_distribution: bool,
 }
 
@@ -54,41 +82,93 @@ impl TendonDetector {
         self.net.runtime()
     }
 
-    /// Tendon probability of an RGB frame of any size (resized to the
-    /// input). A blank frame (black, saturated, one colour) cannot show a
-    /// tendon and gets 0 without running the network, whose answer on such
-    /// far-from-training inputs would be arbitrary.
+    /// Tendon probability of an RGB frame of any size: [`Self::assess`]'s.
     pub fn probability(&mut self, frame: &RgbImage) -> Result<f32> {
-        match self.artifact.frame_input(frame)? {
-            None => Ok(0.0),
-            Some(x) => Ok(self.probabilities(&x, 1)?[0]),
-        }
+        Ok(self.assess(frame)?.probability)
     }
 
-    /// The tendon probability and, with an input profile, how far the
-    /// frame lies from the training frames (see [`Assessment`]).
+    /// The answer for an RGB frame of any size (resized to the input).
     pub fn assess(&mut self, frame: &RgbImage) -> Result<Assessment> {
         let img = self.artifact.frame_image(frame)?;
-        let input_score = self.artifact.input_score(&img)?;
-        let out_of_distribution = match (&self.artifact.input_profile, input_score) {
+        Ok(self.assess_images(vec![img])?.remove(0))
+    }
+
+    /// The gate a frame image (made by
+    /// [`DetectorArtifact::frame_image`]) meets, and its input score. The
+    /// input profile is asked first: a foreign frame is foreign even when
+    /// it is also blank.
+    pub fn gate(&self, img: &FloatImage) -> Result<(Option<Gate>, Option<f32>)> {
+        let input_score = self.artifact.input_score(img)?;
+        let foreign = match (&self.artifact.input_profile, input_score) {
             (Some(p), Some(s)) => s > p.threshold,
             _ => false,
         };
-        let probability = if out_of_distribution || tactile_preprocess::visuo::is_blank(&img) {
-            0.0
+        let gate = if foreign {
+            Some(Gate::Foreign)
+        } else if tactile_preprocess::visuo::is_blank(img) {
+            Some(Gate::Blank)
         } else {
-            self.probabilities(&self.artifact.network_input(img)?, 1)?[0]
+            None
         };
-        Ok(Assessment {
-            probability,
-            input_score,
-            out_of_distribution,
-        })
+        Ok((gate, input_score))
     }
 
-    /// Tendon probabilities of `n` normalised inputs laid end to end (as
-    /// [`DetectorArtifact::frame_input`] makes them).
-    pub fn probabilities(&mut self, inputs: &[f32], n: usize) -> Result<Vec<f32>> {
+    /// The answer for a frame that met `gate` and, when it passed, whose
+    /// network probability is `network`: the one rule that turns both
+    /// into a decision.
+    pub fn answer(
+        &self,
+        (gate, input_score): (Option<Gate>, Option<f32>),
+        network: Option<f32>,
+    ) -> Assessment {
+        let probability = match gate {
+            Some(_) => 0.0,
+            None => network.unwrap_or(0.0),
+        };
+        Assessment {
+            probability,
+            tendon: gate.is_none() && self.is_tendon(probability),
+            gate,
+            input_score,
+            out_of_distribution: gate == Some(Gate::Foreign),
+        }
+    }
+
+    /// The answers for frame images made by
+    /// [`DetectorArtifact::frame_image`], the network run once on the
+    /// frames no gate stopped.
+    pub fn assess_images(&mut self, images: Vec<FloatImage>) -> Result<Vec<Assessment>> {
+        let gates = images
+            .iter()
+            .map(|img| self.gate(img))
+            .collect::<Result<Vec<_>>>()?;
+        let mut inputs = Vec::new();
+        let mut passed = 0;
+        for (img, (gate, _)) in images.into_iter().zip(&gates) {
+            if gate.is_none() {
+                inputs.extend(self.artifact.network_input(img)?);
+                passed += 1;
+            }
+        }
+        let mut p = if passed > 0 {
+            self.network_probabilities(&inputs, passed)?.into_iter()
+        } else {
+            Vec::new().into_iter()
+        };
+        Ok(gates
+            .into_iter()
+            .map(|g| {
+                let network = if g.0.is_none() { p.next() } else { None };
+                self.answer(g, network)
+            })
+            .collect())
+    }
+
+    /// The network's own tendon probabilities of `n` normalised inputs laid
+    /// end to end (as [`DetectorArtifact::network_input`] makes them), no
+    /// gate applied: for training, calibration and the ungated scores of
+    /// an evaluation. A frame's answer is [`Self::assess`]'s.
+    pub fn network_probabilities(&mut self, inputs: &[f32], n: usize) -> Result<Vec<f32>> {
         let [w, h] = self.artifact.model.input_size;
         let z = self.net.run([n, 3, h, w], inputs.to_vec())?;
         Ok(z.into_iter().map(sigmoid).collect())

@@ -15,6 +15,7 @@ mod error;
 pub mod eval;
 pub mod inference;
 pub mod model;
+pub mod options;
 pub mod profile;
 pub mod training;
 
@@ -23,7 +24,8 @@ pub use data::{DetectionSet, SoftLabels};
 pub use ensemble::{DetectorEnsemble, DetectorEnsembleArtifact};
 pub use error::{Error, Result};
 pub use eval::{DetectorScores, evaluate};
-pub use inference::{Assessment, TendonDetector};
+pub use inference::{Assessment, Gate, TendonDetector};
 pub use model::{Architecture, Detector, DetectorConfig};
+pub use options::DetectorOptions;
 pub use tactile_preprocess::visuo::{BLANK_FRAME_STD, is_blank};
 pub use training::DetectorTrainingConfig;

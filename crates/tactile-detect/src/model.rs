@@ -12,20 +12,21 @@ use burn::nn::{BatchNorm, BatchNormConfig, Linear, LinearConfig, PaddingConfig2d
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
-use tactile_core::nn::{hard_sigmoid, hard_swish};
-use tactile_core::runtime::Forward;
+use tactile_burn::nn::{hard_sigmoid, hard_swish};
+use tactile_burn::runtime::Forward;
 use tactile_preprocess::visuo::{FloatImage, normalise_exposure};
 
 /// Which network.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Architecture {
     /// MobileNetV3-small (Howard et al. 2019, Table 2).
-    #[cfg_attr(feature = "clap", value(alias = "mobilenet"))]
+    #[value(alias = "mobilenet")]
+    #[serde(alias = "mobilenet")]
     MobilenetV3Small,
     /// ResNet-18 (two basic blocks per stage), paper B's slower baseline.
-    #[cfg_attr(feature = "clap", value(name = "resnet18", alias = "resnet-18"))]
+    #[value(name = "resnet18", alias = "resnet-18")]
+    #[serde(alias = "resnet-18")]
     Resnet18,
 }
 
@@ -120,7 +121,7 @@ impl ConvBn {
     /// Fold the norm into the convolution: one op instead of two.
     fn fold(&mut self) {
         if !self.folded {
-            tactile_core::nn::fold_batch_norm(&mut self.conv, &self.bn);
+            tactile_burn::nn::fold_batch_norm(&mut self.conv, &self.bn);
             self.folded = true;
         }
     }

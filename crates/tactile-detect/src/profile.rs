@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use tactile_core::Artifact;
+use tactile_burn::Artifact;
 use tactile_core::dataset::Dataset;
 use tactile_preprocess::profile::{InputProfile, descriptor};
 
@@ -40,7 +40,7 @@ fn fit<'a>(frames: impl Iterator<Item = (&'a DetectionSet, usize)>) -> Result<In
 /// member's is the one used).
 pub fn add_input_profile(dir: &Path, datasets: &[Dataset]) -> Result<InputProfile> {
     if crate::DetectorEnsembleArtifact::is_in(dir) {
-        let e = tactile_core::ensemble::Ensemble::read::<DetectorArtifact>(dir)?;
+        let e = tactile_burn::ensemble::Ensemble::read::<DetectorArtifact>(dir)?;
         let mut first = None;
         for d in e.member_dirs(dir) {
             let p = add_input_profile(&d, datasets)?;

@@ -7,11 +7,11 @@ use std::path::Path;
 
 use burn::config::Config;
 use burn::tensor::{Device, Tensor, TensorData};
+use tactile_burn::nn::elementwise_bce_with_logits;
+use tactile_burn::runtime::sigmoid;
+use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
+use tactile_burn::{Artifact, DeviceKind};
 use tactile_core::dataset::Dataset;
-use tactile_core::nn::elementwise_bce_with_logits;
-use tactile_core::runtime::sigmoid;
-use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
-use tactile_core::{Artifact, DeviceKind};
 use tactile_preprocess::visuo::ChannelStats;
 
 use tactile_preprocess::profile::InputProfile;
@@ -112,9 +112,10 @@ pub fn calibrate(
 }
 
 /// What a training run ended with, the calibrated threshold included.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct DetectorFit {
     /// The run.
+    #[serde(flatten)]
     pub summary: FitSummary,
     /// The threshold chosen on the validation sequences.
     pub threshold: f64,
@@ -151,7 +152,7 @@ pub fn train(
     }
     config.model.check()?;
     let refs: Vec<&Dataset> = datasets.iter().collect();
-    tactile_core::io::check_output_dir(out, &refs)?;
+    tactile_core::dataset::check_output_dir(out, &refs)?;
     let [w, h] = config.model.input_size;
     let (data, train, val) = load_split(
         datasets,
@@ -218,8 +219,8 @@ pub fn train(
     let ds_refs: Vec<&Dataset> = datasets.iter().collect();
     let fit_cfg = FitConfig::new(&config.schedule, "detector training (class-weighted BCE)")
         .saving_to(out, resume)
-        .with_run_id(tactile_core::artifact::run_fingerprint(config, &ds_refs)?);
-    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
+        .with_run_id(tactile_burn::artifact::run_fingerprint(config, &ds_refs)?);
+    let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
     let val_truth: Vec<bool> = val.iter().map(|&i| data.tendon[i]).collect();
     let (_, summary) = fit::<_, Error>(
         &fit_cfg,
@@ -262,7 +263,7 @@ pub fn train(
         },
         |m| Ok(artifact.save(m, out)?),
     )?;
-    tactile_core::artifact::write_training_record(
+    tactile_burn::artifact::write_training_record(
         out,
         config,
         &summary,

@@ -12,8 +12,8 @@ use burn::nn::loss::CrossEntropyLossConfig;
 use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Tensor};
 use serde::{Deserialize, Serialize};
-use tactile_core::Artifact;
-use tactile_core::train::{Schedule, shuffled_batches};
+use tactile_burn::Artifact;
+use tactile_burn::train::{Schedule, shuffled_batches};
 
 use crate::mlp::{Activation, Mlp, fit_in_memory, indices, matrix};
 use crate::{Error, Result};
@@ -72,7 +72,7 @@ pub struct HeadArtifact {
     /// Feature standard deviations of the training set.
     pub std: Vec<f32>,
     /// Fingerprint of the encoder whose features it was trained on (see
-    /// `tactile_core::artifact::fingerprint`); `None` for features read from
+    /// `tactile_burn::artifact::fingerprint`); `None` for features read from
     /// a file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub encoder: Option<String>,
@@ -89,7 +89,7 @@ impl HeadConfig {
     pub fn check(&self) -> tactile_core::Result<()> {
         crate::mlp::check_sizes(self.inputs, &self.hidden, self.classes.len())?;
         let each = crate::mlp::parameters(self.inputs, &self.hidden, self.classes.len());
-        tactile_core::artifact::check_parameters(
+        tactile_burn::artifact::check_parameters(
             "head ensemble",
             each.saturating_mul(self.members() as u64),
         )?;
@@ -119,7 +119,7 @@ impl Artifact for HeadArtifact {
     }
 
     fn check(&self, file: &Path) -> tactile_core::Result<()> {
-        use tactile_core::artifact::in_config;
+        use tactile_core::error::in_config;
         in_config(file, self.model.check())?;
         in_config(
             file,
@@ -349,7 +349,7 @@ fn argmax_rows(logits: Tensor<2>) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tactile_core::DeviceKind;
+    use tactile_burn::DeviceKind;
 
     /// Three noisy clusters in 4-D, seeded.
     fn clusters(n: usize, seed: u64) -> (Vec<Vec<f32>>, Vec<usize>) {

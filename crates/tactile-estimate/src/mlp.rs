@@ -7,7 +7,7 @@ use burn::optim::AdamConfig;
 use burn::tensor::activation::{relu, sigmoid};
 use burn::tensor::{Device, Int, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
-use tactile_core::train::{FitConfig, Schedule, fit};
+use tactile_burn::train::{FitConfig, Schedule, fit};
 
 use crate::Result;
 
@@ -53,7 +53,7 @@ pub fn check_sizes(
     {
         return bad(format!("hidden width {w}: must be 1 to {MAX_HIDDEN_WIDTH}"));
     }
-    tactile_core::artifact::check_parameters("MLP", parameters(inputs, hidden, outputs))
+    tactile_burn::artifact::check_parameters("MLP", parameters(inputs, hidden, outputs))
 }
 
 /// Weights and biases of an MLP.

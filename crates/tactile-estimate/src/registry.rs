@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use burn::tensor::Device;
-use tactile_core::Artifact;
+use tactile_burn::Artifact;
 
 use crate::head::{ClassifierHead, HeadArtifact};
 use crate::regressor::{Regressor, RegressorArtifact};

@@ -8,8 +8,8 @@ use std::path::Path;
 use burn::config::Config;
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
-use tactile_core::Artifact;
-use tactile_core::train::Schedule;
+use tactile_burn::Artifact;
+use tactile_burn::train::Schedule;
 
 use crate::head::check_features;
 use crate::mlp::{Activation, Mlp, fit_in_memory, matrix};
@@ -119,7 +119,7 @@ impl Artifact for RegressorArtifact {
     }
 
     fn check(&self, file: &Path) -> tactile_core::Result<()> {
-        use tactile_core::artifact::in_config;
+        use tactile_core::error::in_config;
         let m = &self.model;
         in_config(
             file,
@@ -290,7 +290,7 @@ impl Regressor {
                     .powi_scalar(2)
                     .mean()
                     .into_scalar();
-                Ok(tactile_core::train::ensure_finite(
+                Ok(tactile_burn::train::ensure_finite(
                     "the regressor's validation loss",
                     vl as f64,
                 )?)
@@ -349,7 +349,7 @@ impl Regressor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tactile_core::DeviceKind;
+    use tactile_burn::DeviceKind;
 
     /// `y = (2 x0 - x1, angle 40 x2 degrees)` with small noise-free structure.
     fn data(n: usize, offset: usize) -> (Vec<Vec<f32>>, Vec<Vec<f64>>) {

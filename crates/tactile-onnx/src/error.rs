@@ -31,7 +31,7 @@ impl Error {
 }
 
 impl From<Error> for tactile_core::Error {
-    /// For [`tactile_core::Network::run`], whose errors are the foundation's.
+    /// For [`tactile_burn::Network::run`], whose errors are the foundation's.
     fn from(e: Error) -> Self {
         match e {
             Error::Core(c) => c,

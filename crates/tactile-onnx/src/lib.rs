@@ -3,7 +3,7 @@
 //! each model crate says how its own network exports by implementing
 //! [`Exportable`], so this crate knows no model. The exported graph runs
 //! in onnxruntime (through `ort`, loaded dynamically from the PyPI wheel's
-//! `libonnxruntime.so`) as a [`Network`](tactile_core::Network), beside
+//! `libonnxruntime.so`) as a [`Network`](tactile_burn::Network), beside
 //! burn's devices: [`load_network`] gives any saved model on any runtime.
 
 #![deny(missing_docs)]
@@ -18,8 +18,8 @@ use std::path::Path;
 pub use error::{Error, Result};
 pub use export::{export_batch_dynamic, save_onnx};
 pub use runtime::{OrtModel, onnx_full_check, ort_library_path};
-use tactile_core::runtime::{BurnNetwork, Forward};
-use tactile_core::{Artifact, DeviceKind, Loaded, Network, Runtime};
+use tactile_burn::runtime::{BurnNetwork, Forward};
+use tactile_burn::{Artifact, DeviceKind, Loaded, Network, Runtime};
 
 /// A saved model whose network exports to ONNX.
 pub trait Exportable: Artifact

@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 use ort::environment::Environment;
 use ort::session::Session;
 use ort::value::Tensor;
-use tactile_core::runtime::{Network, Runtime};
+use tactile_burn::runtime::{Network, Runtime};
 
 use crate::{Error, Result};
 
@@ -81,14 +81,6 @@ impl OrtModel {
         }
         let session = b.commit_from_memory(bytes).map_err(err)?;
         Ok(Self { session })
-    }
-
-    /// Load a model file.
-    pub fn from_file(path: impl AsRef<Path>, threads: usize) -> Result<Self> {
-        let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|e| tactile_core::Error::io(path, e))?;
-        Self::from_bytes(&bytes, threads)
-            .map_err(|e| tactile_core::Error::model(path, e.to_string()).into())
     }
 
     /// Run the model's single float input, returning its first output's shape and values.

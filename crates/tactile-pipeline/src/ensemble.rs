@@ -1,9 +1,9 @@
-//! Models trained apart, averaged as one ([`tactile_core::ensemble`]): the
+//! Models trained apart, averaged as one ([`tactile_burn::ensemble`]): the
 //! kind of the member folders says which.
 
 use std::path::{Path, PathBuf};
 
-use tactile_core::Artifact;
+use tactile_burn::Artifact;
 use tactile_detect::{DetectorArtifact, DetectorEnsembleArtifact};
 use tactile_pose::{PoseArtifact, PoseEnsemble};
 

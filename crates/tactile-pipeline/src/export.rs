@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
+use tactile_burn::{Artifact, DeviceKind};
 use tactile_cae::CaeArtifact;
-use tactile_core::{Artifact, DeviceKind};
 use tactile_depth::DepthArtifact;
 use tactile_detect::ensemble::{detector_onnx, is_detector};
 use tactile_onnx::Exportable;
@@ -33,7 +33,7 @@ pub struct Exported {
 fn export<A>(dir: &Path) -> Result<Vec<u8>>
 where
     A: Exportable,
-    A::Model: tactile_core::runtime::Forward + Send + 'static,
+    A::Model: tactile_burn::runtime::Forward + Send + 'static,
 {
     let l = A::load(dir, &DeviceKind::Flex.device())?;
     Ok(l.artifact.onnx(&l.model)?)

@@ -11,11 +11,9 @@ pub mod ensemble;
 mod error;
 pub mod export;
 pub mod hysteresis;
-pub mod import;
 pub mod overlay;
 pub mod palpation;
 pub mod run;
-pub mod source;
 pub mod tactip;
 
 pub use error::{Error, Result};
@@ -23,7 +21,7 @@ pub use hysteresis::Hysteresis;
 pub use overlay::FrameViews;
 pub use palpation::{FrameRecord, Pipeline};
 pub use run::{Flow, RunOptions, RunOutcome, RunSummary, run, run_collect};
-pub use source::{
+pub use tactile_burn::Runtime;
+pub use tactile_core::source::{
     Frame, FrameEntry, FrameList, FrameSource, MissingFrames, SourceKind, SourceOptions, SourceSpec,
 };
-pub use tactile_core::Runtime;

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
-use tactile_core::Runtime;
+use tactile_burn::Runtime;
 use tactile_core::image_io::RgbImage;
 use tactile_depth::DepthEstimator;
 use tactile_detect::TendonDetector;
@@ -51,6 +51,10 @@ pub struct FrameRecord {
     /// frame): no tendon, direction or depth is given.
     #[serde(default)]
     pub out_of_distribution: bool,
+    /// The detector's gate that answered without the network (`blank`,
+    /// `foreign`), if any: the same answer `tactile eval detector` scores.
+    #[serde(default)]
+    pub gate: Option<tactile_detect::Gate>,
     /// Time to bring a large frame down to the working resolution, ms
     /// (0 for frames already near it).
     #[serde(default)]
@@ -104,7 +108,7 @@ impl Pipeline {
             depth,
             threads,
             working_height: tactile_preprocess::visuo::WORKING_HEIGHT,
-            window: tactile_depth::data::window_mask(w, h),
+            window: tactile_core::spec::visuotactile::Window::mask(w, h),
         })
     }
 
@@ -135,7 +139,7 @@ impl Pipeline {
         let t_detect = Instant::now();
         let assessment = self.detector.assess(frame)?;
         let score = assessment.probability;
-        let tendon_raw = self.detector.is_tendon(score);
+        let tendon_raw = assessment.tendon;
         let tendon = match filter {
             Some(h) => h.update(score),
             None => tendon_raw,
@@ -155,6 +159,7 @@ impl Pipeline {
             depth_max_mm: None,
             input_score: assessment.input_score,
             out_of_distribution: assessment.out_of_distribution,
+            gate: assessment.gate,
             ms_prepare,
             latency_ms: None,
             ms_detect,

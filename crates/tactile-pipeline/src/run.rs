@@ -5,13 +5,13 @@
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
-use tactile_core::Runtime;
+use tactile_burn::Runtime;
 use tactile_core::metrics::Reservoir;
 
 use crate::Result;
 use crate::hysteresis::Hysteresis;
 use crate::palpation::{FrameRecord, Pipeline};
-use crate::source::{FrameSource, SourceKind};
+use tactile_core::source::{FrameSource, SourceKind};
 
 /// How a run goes.
 #[derive(Debug, Clone, Default)]
@@ -244,7 +244,7 @@ pub fn run(
         .transpose()?;
     // A stream's length is unknown: its bar counts without a total.
     let known = source.list().map_or(0, |l| l.frames.len() as u64);
-    let pb = tactile_core::train::progress_bar(known, "run");
+    let pb = tactile_core::progress::progress_bar(known, "run");
     let t0 = std::time::Instant::now();
     let mut times: [Reservoir; 7] = Default::default();
     let (mut frames, mut gated, mut ood) = (0usize, 0usize, 0usize);

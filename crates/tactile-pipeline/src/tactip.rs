@@ -5,10 +5,10 @@
 
 use std::path::{Path, PathBuf};
 
+use tactile_burn::Runtime;
 use tactile_cae::TactipEncoder;
 use tactile_cae::data::PinSet;
 use tactile_cae::inference::features_for_dataset;
-use tactile_core::Runtime;
 use tactile_core::dataset::Dataset;
 use tactile_core::metrics::{accuracy, confusion};
 use tactile_estimate::eval::{Scores, score};
@@ -45,7 +45,7 @@ pub fn dataset_features(
 /// The fingerprint of the encoder features come from (none for a CSV).
 fn encoder_fingerprint(source: &FeatureSource) -> Result<Option<String>> {
     Ok(match source {
-        FeatureSource::Encoder(dir) => Some(tactile_core::artifact::fingerprint::<
+        FeatureSource::Encoder(dir) => Some(tactile_burn::artifact::fingerprint::<
             tactile_cae::CaeArtifact,
         >(dir)?),
         FeatureSource::Csv(_) => None,
@@ -76,7 +76,7 @@ impl Predictor {
     /// encoder with the estimators in `heads` (every estimator folder
     /// inside it when empty).
     pub fn load(dir: &Path, heads: &[PathBuf], runtime: Runtime) -> Result<Self> {
-        use tactile_core::Artifact;
+        use tactile_burn::Artifact;
         if tactile_pose::PoseArtifact::is_in(dir) || tactile_pose::PoseEnsemble::is_in(dir) {
             Ok(Self::PoseNetwork(tactile_pose::PoseEstimator::load(
                 dir, runtime, 0,
@@ -140,10 +140,10 @@ impl TactipPerception {
         let encoder_net = TactipEncoder::load(encoder, runtime, 0)?;
         let device = runtime
             .device()
-            .unwrap_or(tactile_core::DeviceKind::Flex)
+            .unwrap_or(tactile_burn::DeviceKind::Flex)
             .device();
         let estimators = Estimators::load(encoder, heads, &device)?;
-        let fp = tactile_core::artifact::fingerprint::<tactile_cae::CaeArtifact>(encoder)?;
+        let fp = tactile_burn::artifact::fingerprint::<tactile_cae::CaeArtifact>(encoder)?;
         estimators.check_encoder(&fp, encoder_net.feature_count())?;
         Ok(Self {
             encoder: encoder_net,
@@ -247,7 +247,7 @@ pub fn rotated_features(
 ) -> Result<Vec<Vec<f32>>> {
     aug.check()?;
     let cfg = encoder.artifact.preprocess.clone();
-    let bar = tactile_core::train::progress_bar(rows.len() as u64, "rotated copies");
+    let bar = tactile_core::progress::progress_bar(rows.len() as u64, "rotated copies");
     let mut out = Vec::with_capacity(rows.len() * aug.copies);
     // A few hundred frames at a time keeps the pin images' memory small.
     for chunk in rows.chunks(256) {
@@ -280,7 +280,7 @@ pub fn train_head(
             tactile_core::Error::dataset(ds.labels_path(), None, "no frames to train on").into(),
         );
     }
-    tactile_core::io::check_output_dir(out, &[ds])?;
+    tactile_core::dataset::check_output_dir(out, &[ds])?;
     let feats = dataset_features(source, ds, runtime)?;
     let (classes, y) = classes_of(ds, "shape")?;
     let train = ds
@@ -321,7 +321,7 @@ pub fn train_head(
     );
     let device = runtime
         .device()
-        .unwrap_or(tactile_core::DeviceKind::Flex)
+        .unwrap_or(tactile_burn::DeviceKind::Flex)
         .device();
     let mut head = ClassifierHead::train(config, &tx, &ty, &device)?;
     head.artifact.encoder = encoder_fingerprint(source)?;
@@ -440,7 +440,7 @@ pub fn train_regressor(
     out: &Path,
     runtime: Runtime,
 ) -> Result<RegressorFit> {
-    tactile_core::io::check_output_dir(out, &[ds])?;
+    tactile_core::dataset::check_output_dir(out, &[ds])?;
     let feats = dataset_features(source, ds, runtime)?;
     // Every target must be labelled on every frame used: with
     // `only_labelled`, frames missing one are left out of every split.
@@ -521,7 +521,7 @@ pub fn train_regressor(
     cfg.schedule.seed = plan.seed;
     let device = runtime
         .device()
-        .unwrap_or(tactile_core::DeviceKind::Flex)
+        .unwrap_or(tactile_burn::DeviceKind::Flex)
         .device();
     let mut regressor = Regressor::train(cfg, (&tx, &ty), (&vx, &vy), &device)?;
     regressor.artifact.encoder = encoder_fingerprint(source)?;

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use tactile_core::Runtime;
+use tactile_burn::Runtime;
 use tactile_depth::DepthEstimator;
 use tactile_detect::TendonDetector;
 use tactile_onnx::runtime::OrtModel;
@@ -148,7 +148,7 @@ fn a_sixteen_bit_exposure_normalised_detector_stands_alone_too() {
         let (shape, p) = alone.run_u16(&[1, h, w, 3], img.to_levels(16)).unwrap();
         assert_eq!(shape, [1, 1]);
         let q = det
-            .probabilities(
+            .network_probabilities(
                 &det.artifact.network_input(img.quantised_to(16)).unwrap(),
                 1,
             )

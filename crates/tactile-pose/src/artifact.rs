@@ -6,8 +6,8 @@ use std::path::Path;
 
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
-use tactile_core::Artifact;
-use tactile_core::ensemble::Ensemble;
+use tactile_burn::Artifact;
+use tactile_burn::ensemble::Ensemble;
 use tactile_estimate::Target;
 use tactile_estimate::regressor::Scaler;
 use tactile_onnx::{Exportable, export_batch_dynamic};
@@ -50,7 +50,7 @@ impl Artifact for PoseArtifact {
     }
 
     fn check(&self, file: &Path) -> tactile_core::Result<()> {
-        use tactile_core::artifact::in_config;
+        use tactile_core::error::in_config;
         in_config(file, self.model.check())?;
         in_config(file, self.preprocess.check())?;
         let bad = |m: String| Err(tactile_core::Error::model(file, m));

@@ -34,7 +34,7 @@ impl Augment {
 
     /// Check the amounts (each in [0, 1]).
     pub fn check(&self) -> tactile_core::Result<()> {
-        tactile_core::train::check_augment_amounts(&[
+        tactile_burn::train::check_augment_amounts(&[
             ("gain", self.gain),
             ("offset", self.offset),
             ("noise", self.noise),

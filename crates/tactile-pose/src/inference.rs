@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use rayon::prelude::*;
+use tactile_burn::{Network, Runtime};
 use tactile_core::dataset::Dataset;
-use tactile_core::{Network, Runtime};
 use tactile_estimate::regressor::{Scaler, decode_columns};
 use tactile_preprocess::PinImage;
 
@@ -147,7 +147,7 @@ impl PoseEstimator {
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
-    use tactile_core::Artifact;
+    use tactile_burn::Artifact;
 
     #[test]
     fn an_ensemble_averages_its_members_and_reads_nothing_outside_its_folder() {

@@ -12,7 +12,7 @@ use burn::nn::{
 };
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
-use tactile_core::runtime::Forward;
+use tactile_burn::runtime::Forward;
 
 /// Largest input side accepted, pixels.
 pub const MAX_INPUT_PX: usize = 512;
@@ -91,7 +91,7 @@ impl PoseNetConfig {
             ));
         }
         let flat = self.widths[self.widths.len() - 1] * self.map_px() * self.map_px();
-        tactile_core::artifact::check_parameters(
+        tactile_burn::artifact::check_parameters(
             "pose network",
             (flat * self.hidden) as u64
                 + self.widths.iter().map(|&w| (w * w * 9) as u64).sum::<u64>(),
@@ -185,7 +185,7 @@ impl Forward for PoseNet {
     fn for_inference(mut self) -> Self {
         for s in &mut self.stages {
             if !s.folded {
-                tactile_core::nn::fold_batch_norm(&mut s.conv, &s.bn);
+                tactile_burn::nn::fold_batch_norm(&mut s.conv, &s.bn);
                 s.folded = true;
             }
         }
@@ -196,7 +196,7 @@ impl Forward for PoseNet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tactile_core::DeviceKind;
+    use tactile_burn::DeviceKind;
 
     #[test]
     fn shapes_limits_and_folding() {

@@ -6,9 +6,9 @@ use std::path::Path;
 
 use burn::config::Config;
 use burn::tensor::{Device, Tensor, TensorData};
+use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
+use tactile_burn::{Artifact, DeviceKind};
 use tactile_core::dataset::{Dataset, TestHoldout, hold_out};
-use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
-use tactile_core::{Artifact, DeviceKind};
 use tactile_estimate::Target;
 use tactile_estimate::regressor::{decode, encode, output_scaler};
 use tactile_preprocess::{Downsample, Lighting, PreprocessConfig};
@@ -41,7 +41,7 @@ pub fn grey_pin_images(side: usize) -> PreprocessConfig {
 
 /// The pose network's training loss (shared with the autoencoder's joint
 /// head).
-pub use tactile_core::nn::RegressionLoss as PoseLoss;
+pub use tactile_burn::nn::RegressionLoss as PoseLoss;
 
 /// Training settings.
 #[derive(Config, Debug)]
@@ -146,7 +146,7 @@ pub fn train(
     resume: bool,
 ) -> Result<FitSummary> {
     let config = &config.clone().checked()?;
-    tactile_core::io::check_output_dir(out, &[data])?;
+    tactile_core::dataset::check_output_dir(out, &[data])?;
     tactile_core::note!("preprocessing {} frames", data.len());
     let set = PoseSet::from_dataset(data, &config.preprocess, &config.targets)?;
     let rows = set.labelled(&data.training_rows(config.holdout)?);
@@ -186,8 +186,8 @@ pub fn train(
     let fit_cfg = FitConfig::new(&config.schedule, &title)
         .saving_to(out, resume)
         .with_checkpoint_every(5)
-        .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
-    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
+        .with_run_id(tactile_burn::artifact::run_fingerprint(config, &[data])?);
+    let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
     let seed = config.schedule.seed;
     let last_mae = std::cell::RefCell::new(Vec::new());
     let (_, summary) = fit::<_, Error>(
@@ -245,7 +245,7 @@ pub fn train(
         .get("validation_mae")
         .and_then(|v| serde_json::from_value(v.clone()).ok())
         .unwrap_or_default();
-    tactile_core::artifact::write_training_record(
+    tactile_burn::artifact::write_training_record(
         out,
         config,
         &summary,
@@ -289,7 +289,7 @@ pub fn test_scores(
     dir: &Path,
     data: &Dataset,
     holdout: TestHoldout,
-    runtime: tactile_core::Runtime,
+    runtime: tactile_burn::Runtime,
 ) -> Result<PoseScores> {
     let mut est = crate::PoseEstimator::load(dir, runtime, 0)?;
     let split = data.three_way_split(holdout.test_fraction, 0.2, holdout.split_seed)?;

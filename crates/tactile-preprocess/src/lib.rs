@@ -241,7 +241,7 @@ impl PreprocessConfig {
             "binary" => Ok(Self::binary_frames()),
             path if path.ends_with(".json") => {
                 let c: Self = tactile_core::io::read_json(path)?;
-                tactile_core::artifact::in_config(std::path::Path::new(path), c.check())?;
+                tactile_core::error::in_config(std::path::Path::new(path), c.check())?;
                 Ok(c)
             }
             other => Err(Error::UnknownPreset(other.to_string())),
@@ -652,25 +652,6 @@ pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage>
         }
     };
     Ok(PinImage { side, pixels })
-}
-
-/// Load a frame from disk and preprocess it; errors name the file.
-pub fn preprocess_file(
-    path: impl AsRef<std::path::Path>,
-    cfg: &PreprocessConfig,
-) -> Result<PinImage> {
-    let path = path.as_ref();
-    let frame = tactile_core::image_io::load_grey(path)?;
-    preprocess(&frame, cfg).map_err(|e| e.in_file(path))
-}
-
-/// Preprocess many files in parallel (rayon), in order; the first error wins.
-pub fn preprocess_files(
-    paths: &[std::path::PathBuf],
-    cfg: &PreprocessConfig,
-) -> Result<Vec<PinImage>> {
-    use rayon::prelude::*;
-    paths.par_iter().map(|p| preprocess_file(p, cfg)).collect()
 }
 
 #[cfg(test)]

@@ -5,8 +5,6 @@
 //! Images here are interleaved `H x W x C` `f32` in [0, 1] until
 //! [`ChannelStats::to_chw`] turns them into a normalised `C x H x W` input.
 
-use std::path::Path;
-
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::{GreyImage, RgbImage};
@@ -245,14 +243,6 @@ pub fn resize_grey(img: &GreyImage, width: usize, height: usize) -> Result<Float
         width,
         height,
     )
-}
-
-/// Load an RGB frame (greyscale is expanded) resized to `width x height`;
-/// errors name the file.
-pub fn load_frame(path: impl AsRef<Path>, width: usize, height: usize) -> Result<FloatImage> {
-    let path = path.as_ref();
-    let img = tactile_core::image_io::load_rgb(path)?;
-    resize_rgb(&img, width, height).map_err(|e| e.in_file(path))
 }
 
 /// How the segmenter looks at a frame: a square window of `side` pixels

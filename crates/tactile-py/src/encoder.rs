@@ -31,7 +31,7 @@ struct Models {
 pub struct PyTactipEncoder {
     models: Mutex<Models>,
     model_dir: PathBuf,
-    runtime: tactile_core::Runtime,
+    runtime: tactile_burn::Runtime,
     feature_count: usize,
     pin_side: usize,
     names: Vec<String>,

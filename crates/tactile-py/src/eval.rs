@@ -29,10 +29,7 @@ pub(crate) fn eval_detector<'py>(
         let mut det = TendonDetector::load(&model, rt, 0).py()?;
         let set = DetectionSet::from_dataset(&ds, &det.artifact.model).py()?;
         let sc = tactile_detect::evaluate(&mut det, &set).py()?;
-        Ok(
-            serde_json::json!({ "model": model, "data": data, "all": sc.all,
-            "onset_release": sc.onset_release, "ms_per_frame": sc.ms_per_frame }),
-        )
+        tactile_core::io::scored_record(&model, &data, &sc).py()
     })?;
     crate::json::to_py(py, &v)
 }
@@ -51,10 +48,7 @@ pub(crate) fn eval_segmenter<'py>(
         let mut seg = TendonSegmenter::load(&model, rt, 0).py()?;
         let ds = Dataset::open(&data).py()?;
         let sc = tactile_segment::evaluate(&mut seg, &ds).py()?;
-        Ok(
-            serde_json::json!({ "model": model, "data": data, "paths": sc.paths,
-            "ms_per_window": sc.ms_per_window }),
-        )
+        tactile_core::io::scored_record(&model, &data, &sc).py()
     })?;
     crate::json::to_py(py, &v)
 }

@@ -13,3 +13,21 @@ pub(crate) fn to_py<'py, T: serde::Serialize + ?Sized>(
     let text = serde_json::to_string(value).map_err(|e| PyValueError::new_err(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
+
+/// Keyword arguments onto an options type of the library
+/// ([`tactile_burn::options::Options`]): through JSON, so a tuple is a
+/// list and None keeps the default; an unknown keyword or a value of the
+/// wrong type is a `ValueError` naming it.
+pub(crate) fn options<'py, T: tactile_burn::options::Options>(
+    py: Python<'py>,
+    kwargs: Option<&Bound<'py, pyo3::types::PyDict>>,
+) -> PyResult<T> {
+    let map = match kwargs {
+        None => serde_json::Map::new(),
+        Some(d) => {
+            let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;
+            serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?
+        }
+    };
+    T::with_overrides(&map).map_err(|e| PyValueError::new_err(e.to_string()))
+}

@@ -7,7 +7,7 @@ use numpy::{IntoPyArray, PyArray2};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use tactile_core::Runtime;
+use tactile_burn::Runtime;
 use tactile_pipeline::{FrameRecord, FrameViews, Hysteresis, Pipeline};
 
 use crate::errors::PyResultExt;
@@ -251,6 +251,14 @@ impl FrameResult {
     #[getter]
     fn out_of_distribution(&self) -> bool {
         self.record.out_of_distribution
+    }
+
+    /// The detector's gate that answered without the network: "blank" (no
+    /// channel varies) or "foreign" (out of distribution); None when the
+    /// network answered. The same answer `tactile eval detector` scores.
+    #[getter]
+    fn gate(&self) -> Option<&'static str> {
+        self.record.gate.map(tactile_detect::Gate::name)
     }
 
     /// How far the frame's input statistics lie from the training frames',

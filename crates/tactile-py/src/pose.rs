@@ -19,7 +19,7 @@ use crate::frame::{FrameArg, Pixels};
 pub struct PyPoseEstimator {
     estimator: Mutex<PoseEstimator>,
     model_dir: PathBuf,
-    runtime: tactile_core::Runtime,
+    runtime: tactile_burn::Runtime,
     targets: Vec<String>,
     preprocess: tactile_preprocess::PreprocessConfig,
 }

@@ -7,12 +7,12 @@ use std::path::PathBuf;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use tactile_burn::DeviceKind;
+use tactile_burn::train::Schedule;
 use tactile_cae::{CaeConfig, CaeTrainingConfig, Optimizer};
-use tactile_core::DeviceKind;
 use tactile_core::dataset::{Dataset, TestHoldout};
-use tactile_core::train::Schedule;
 use tactile_depth::{DenseNetPreset, DepthTrainingConfig, HeadKind, LossKind};
-use tactile_detect::{Architecture, DetectorTrainingConfig, SoftLabels};
+use tactile_detect::DetectorOptions;
 use tactile_estimate::{HeadConfig, RegressorConfig, Target};
 use tactile_pipeline::tactip::{
     FeatureSource, RegressorPlan, RotationAugment, train_head, train_regressor,
@@ -119,7 +119,7 @@ fn size(what: &str, v: Option<(usize, usize)>, default: [usize; 2]) -> PyResult<
 /// The result dict: the fit summary plus what the trainer adds.
 fn summary<'py>(
     py: Python<'py>,
-    s: &tactile_core::train::FitSummary,
+    s: &tactile_burn::train::FitSummary,
     out: &std::path::Path,
     extra: serde_json::Value,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -195,43 +195,19 @@ pub(crate) fn train_cae<'py>(
     summary(py, &s, &out, serde_json::json!({}))
 }
 
-/// Train paper B's tendon detector on one or more visuo-tactile datasets.
+/// Train paper B's tendon detector on one or more visuo-tactile datasets;
+/// `options` are [`DetectorOptions`]' (the flags of `tactile train
+/// detector`, by their keyword names).
 #[pyfunction]
-#[pyo3(signature = (data, out, *, architecture=None, width=None, input=None, val_fraction=None, soft_labels=None, calibrate_only=false, device="flex", resume=false, schedule=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (data, out, **options))]
 pub(crate) fn train_detector<'py>(
     py: Python<'py>,
     data: Vec<PathBuf>,
     out: PathBuf,
-    architecture: Option<&str>,
-    width: Option<f64>,
-    input: Option<(usize, usize)>,
-    val_fraction: Option<f64>,
-    soft_labels: Option<f64>,
-    calibrate_only: bool,
-    device: &str,
-    resume: bool,
-    schedule: Option<&Bound<'py, PyDict>>,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let schedule = ScheduleArgs::from_dict(schedule)?;
-    let dev = self::device(device)?;
-    let d = DetectorTrainingConfig::new();
-    let architecture: Architecture = match architecture {
-        Some(a) => parse("architecture", a)?,
-        None => d.model.architecture,
-    };
-    let soft = match soft_labels {
-        None => None,
-        Some(w) if w > 0.0 && w.is_finite() => Some(SoftLabels::new(
-            datasets_synth::visuotactile::TENDON_MIN_AMPLITUDE_MM,
-            w,
-        )),
-        Some(w) => {
-            return Err(PyValueError::new_err(format!(
-                "soft_labels must be a positive width, got {w}"
-            )));
-        }
-    };
+    let options: DetectorOptions = crate::json::options(py, options)?;
+    options.config().py()?;
     if data.is_empty() {
         return Err(PyValueError::new_err("data: give at least one dataset"));
     }
@@ -240,27 +216,29 @@ pub(crate) fn train_detector<'py>(
         .into_iter()
         .map(|p| open(py, p))
         .collect::<PyResult<Vec<_>>>()?;
-    let input = size("input", input, d.model.input_size)?;
-    let config = DetectorTrainingConfig::new()
-        .with_model(
-            d.model
-                .clone()
-                .with_architecture(architecture)
-                .with_width(width.unwrap_or(d.model.width))
-                .with_input_size(input),
-        )
-        .with_schedule(schedule.apply(d.schedule.clone(), d.schedule.learning_rate))
-        .with_val_fraction(val_fraction.unwrap_or(d.val_fraction))
-        .with_soft_labels(soft);
-    let fit = interruptible(py, || {
-        tactile_detect::training::train(&config, &datasets, &out, dev, resume, calibrate_only).py()
-    })?;
-    summary(
-        py,
-        &fit.summary,
-        &out,
-        serde_json::json!({ "threshold": fit.threshold, "val_accuracy": fit.val_accuracy }),
-    )
+    let fit = interruptible(py, || options.train(&datasets, &out).py())?;
+    let mut v = serde_json::to_value(&fit).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    if let Some(m) = v.as_object_mut() {
+        m.insert("out".into(), out.display().to_string().into());
+    }
+    crate::json::to_py(py, &v)
+}
+
+/// The options of a trainer (`"detector"`): name, help and default of each,
+/// in flag order, the same the command line's `--help` shows.
+#[pyfunction]
+pub(crate) fn options<'py>(py: Python<'py>, trainer: &str) -> PyResult<Bound<'py, PyAny>> {
+    use tactile_burn::options::Options;
+    let docs = match trainer {
+        "detector" => DetectorOptions::docs(),
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "no options for '{other}' (known: detector)"
+            )));
+        }
+    }
+    .py()?;
+    crate::json::to_py(py, &docs)
 }
 
 /// Train paper B's U-Net tendon segmenter.

@@ -13,6 +13,7 @@ import time
 import pytest
 
 import tactile
+from conftest import run_cli
 
 
 @pytest.fixture(scope="module")
@@ -31,6 +32,42 @@ def test_train_then_eval_detector(small_vt, tmp_path):
     e = tactile.eval.detector(out, small_vt)
     assert e["all"]["frames"] == 24 and 0.0 <= e["all"]["accuracy"] <= 1.0
     assert set(e) >= {"all", "onset_release", "ms_per_frame"}
+
+
+def test_the_shipped_detector_recipe_trains_from_python_as_from_the_cli(root, small_vt, tmp_path,
+                                                                        tactile_bin):
+    # Every option of the shipped detector's members, read from their
+    # training record; only the size and schedule are made small.
+    shipped = json.loads((root / "models/detector/member-0/training.json").read_text())["config"]
+    m = shipped["model"]
+    recipe = dict(architecture=m["architecture"], input_bits=m["input_bits"],
+                  normalise_exposure=m["normalise_exposure"],
+                  soft_labels=shipped["soft_labels"]["width"], augment=True,
+                  val_fraction=shipped["val_fraction"], lr_decay=shipped["schedule"]["lr_decay"],
+                  width=0.25, input=(64, 48), max_epochs=1, batch_size=8, seed=3)
+    tactile.train.detector(small_vt, tmp_path / "py", **recipe)
+    flags = []
+    for k, v in recipe.items():
+        if v is True:
+            flags.append("--" + k.replace("_", "-"))
+        elif k == "input":
+            flags += ["--input", f"{v[0]}x{v[1]}"]
+        else:
+            flags += ["--" + k.replace("_", "-"), str(v)]
+    run_cli(tactile_bin, "train", "detector", "--data", str(small_vt), "--out",
+            str(tmp_path / "cli"), *flags)
+    py = json.loads((tmp_path / "py/training.json").read_text())["config"]
+    cli = json.loads((tmp_path / "cli/training.json").read_text())["config"]
+    assert py == cli
+    assert py["model"]["input_bits"] == 16 and py["model"]["normalise_exposure"] is True
+    assert py["augment"] is not None and py["soft_labels"]["width"] == shipped["soft_labels"]["width"]
+    # Every option the command line has is a keyword here, listed with its default.
+    names = {o["name"] for o in tactile.train.options("detector")}
+    assert {"input_bits", "normalise_exposure", "augment", "soft_labels", "max_epochs",
+            "device", "resume", "calibrate_only"} <= names
+    with pytest.raises(ValueError, match="unknown option 'input_bit'"):
+        tactile.train.detector(small_vt, tmp_path / "bad", input_bit=16)
+    assert not (tmp_path / "bad").exists()
 
 
 def test_two_detectors_average_as_one(root, small_vt, tmp_path):

@@ -5,9 +5,9 @@
 
 use std::path::Path;
 
+use tactile_burn::runtime::sigmoid;
+use tactile_burn::{Network, Runtime};
 use tactile_core::image_io::RgbImage;
-use tactile_core::runtime::sigmoid;
-use tactile_core::{Network, Runtime};
 use tactile_preprocess::visuo::{FloatImage, is_blank};
 
 use crate::Result;

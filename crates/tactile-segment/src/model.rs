@@ -11,7 +11,7 @@ use burn::nn::interpolate::{Interpolate2d, Interpolate2dConfig, InterpolateMode}
 use burn::nn::pool::{MaxPool2d, MaxPool2dConfig};
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
-use tactile_core::runtime::Forward;
+use tactile_burn::runtime::Forward;
 
 /// Largest window side accepted, pixels.
 pub const MAX_SIDE: usize = 1024;

@@ -8,10 +8,10 @@ use std::path::Path;
 
 use burn::config::Config;
 use burn::tensor::Device;
+use tactile_burn::nn::{bce_with_logits, dice_loss_with_logits};
+use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
+use tactile_burn::{Artifact, DeviceKind};
 use tactile_core::dataset::Dataset;
-use tactile_core::nn::{bce_with_logits, dice_loss_with_logits};
-use tactile_core::train::{FitConfig, FitSummary, Schedule, fit};
-use tactile_core::{Artifact, DeviceKind};
 use tactile_preprocess::visuo::ChannelStats;
 
 use crate::{Error, PostprocessConfig, Result, SegmentSet, SegmenterArtifact, UNet, UNetConfig};
@@ -58,7 +58,7 @@ fn predict(
             .into_data()
             .try_to_vec::<f32>()
             .map_err(|e| tactile_core::Error::Invalid(format!("segmenter output: {e:?}")))?;
-        let p: Vec<f32> = p.into_iter().map(tactile_core::runtime::sigmoid).collect();
+        let p: Vec<f32> = p.into_iter().map(tactile_burn::runtime::sigmoid).collect();
         probs.extend(p.chunks(h * w).take(b).map(<[f32]>::to_vec));
     }
     Ok((loss / n.max(1) as f64, probs))
@@ -94,7 +94,7 @@ pub fn train(
         ))
         .into());
     }
-    tactile_core::io::check_output_dir(out, &[data])?;
+    tactile_core::dataset::check_output_dir(out, &[data])?;
     let (train, val) = data.split_by_sequence(config.val_fraction, config.schedule.seed)?;
     let (train, val) = (data.tendon_rows(&train)?, data.tendon_rows(&val)?);
     if train.is_empty() || val.is_empty() {
@@ -136,8 +136,8 @@ pub fn train(
     let model = config.model.init(&ad)?;
     let fit_cfg = FitConfig::new(&config.schedule, "segmenter training (BCE + Dice)")
         .saving_to(out, resume)
-        .with_run_id(tactile_core::artifact::run_fingerprint(config, &[data])?);
-    let unfinished = tactile_core::artifact::Unfinished::begin(out)?;
+        .with_run_id(tactile_burn::artifact::run_fingerprint(config, &[data])?);
+    let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
     let train_idx: Vec<usize> = (0..train_set.len()).collect();
     let val_idx: Vec<usize> = (0..val_set.len()).collect();
     let (_, summary) = fit::<_, Error>(
@@ -156,7 +156,7 @@ pub fn train(
         },
         |m| Ok(artifact.save(m, out)?),
     )?;
-    tactile_core::artifact::write_training_record(
+    tactile_burn::artifact::write_training_record(
         out,
         config,
         &summary,

@@ -72,8 +72,8 @@ pub(crate) struct ResolutionArgs {
     #[arg(long, default_value = "models")]
     models: PathBuf,
     /// Where the networks run.
-    #[arg(long, value_enum, default_value_t = tactile_core::Runtime::Onnx)]
-    runtime: tactile_core::Runtime,
+    #[arg(long, value_enum, default_value_t = tactile_burn::Runtime::Onnx)]
+    runtime: tactile_burn::Runtime,
     /// Tendon frames rendered per size.
     #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u16).range(1..=1000))]
     frames: u16,
@@ -129,7 +129,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         }
     };
     if let Some(out) = out {
-        tactile_core::io::check_output_file(out, &[])?;
+        tactile_core::dataset::check_output_file(out, &[])?;
     }
     match cmd {
         BenchCmd::Cae(a) => {
@@ -152,7 +152,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             }
         }
         BenchCmd::Ood(a) => {
-            let r = tactile_bench::ood::bench_ood(&a.models, tactile_core::Runtime::Onnx)?;
+            let r = tactile_bench::ood::bench_ood(&a.models, tactile_burn::Runtime::Onnx)?;
             let md = tactile_bench::ood::ood_markdown(&r);
             say_raw!("{md}");
             if let Some(out) = &a.out {

@@ -47,7 +47,7 @@ pub(crate) struct CompareArgs {
 pub(crate) fn main(a: CompareArgs) -> Result<()> {
     if let Some(out) = &a.out {
         let ds = tactile_core::dataset::Dataset::open(&a.data)?;
-        tactile_core::io::check_output_file(out, &[&ds])?;
+        tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
     let md = compare(&Compare {
         encoder: a.encoder,

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::{Args, Subcommand};
 use tactile_core::dataset::DatasetKind;
-use tactile_pipeline::import::{ImportOptions, import_dataset};
+use tactile_core::import::{ImportOptions, import_dataset};
 
 #[derive(Subcommand)]
 pub(crate) enum DatasetCmd {

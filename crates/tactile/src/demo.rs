@@ -5,10 +5,10 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use tactile_burn::{DeviceKind, Runtime};
 use tactile_cae::TactipEncoder;
 use tactile_cae::data::PinSet;
 use tactile_core::dataset::Dataset;
-use tactile_core::{DeviceKind, Runtime};
 use tactile_estimate::ClassifierHead;
 
 #[derive(Args)]

@@ -4,9 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
+use tactile_burn::DeviceKind;
 use tactile_cae::TactipEncoder;
 use tactile_cae::inference::write_features_csv;
-use tactile_core::DeviceKind;
 use tactile_core::dataset::Dataset;
 
 #[derive(Args)]
@@ -27,7 +27,7 @@ pub(crate) struct EncodeArgs {
 
 pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
-    tactile_core::io::check_output_file(&a.out, &[&ds])?;
+    tactile_core::dataset::check_output_file(&a.out, &[&ds])?;
     let mut enc = TactipEncoder::load(&a.model, a.device.runtime(), 0)?;
     let (pins, feats) = enc.encode_dataset(&ds)?;
     write_features_csv(&a.out, &pins.files, &feats)?;

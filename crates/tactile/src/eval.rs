@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::{Args, Subcommand};
-use tactile_core::DeviceKind;
+use tactile_burn::DeviceKind;
 use tactile_core::dataset::Dataset;
 use tactile_depth::DepthEstimator;
 use tactile_detect::{DetectionSet, TendonDetector};
@@ -70,7 +70,7 @@ fn detector(a: DetectorArgs) -> Result<()> {
     let m = &a.m;
     let ds = Dataset::open(&m.data)?;
     for out in a.frames.iter().chain(&a.reliability) {
-        tactile_core::io::check_output_file(out, &[&ds])?;
+        tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
     let mut det = TendonDetector::load(&m.model, m.device.runtime(), 0)?;
     let data = DetectionSet::from_dataset(&ds, &det.artifact.model)?;
@@ -86,7 +86,7 @@ fn detector(a: DetectorArgs) -> Result<()> {
     }
     say!(
         "{}",
-        serde_json::json!({ "model": m.model, "data": m.data, "all": sc.all, "onset_release": sc.onset_release, "calibration": sc.calibration, "ms_per_frame": sc.ms_per_frame })
+        tactile_core::io::scored_record(&m.model, &m.data, &sc)?
     );
     Ok(())
 }
@@ -98,7 +98,7 @@ fn segmenter(m: ModelArgs) -> Result<()> {
     sc.describe(m.device).iter().for_each(|l| say!("{l}"));
     say!(
         "{}",
-        serde_json::json!({ "model": m.model, "data": m.data, "paths": sc.paths, "ms_per_window": sc.ms_per_window, "ms_postprocess": sc.ms_postprocess })
+        tactile_core::io::scored_record(&m.model, &m.data, &sc)?
     );
     Ok(())
 }
@@ -107,7 +107,7 @@ fn depth(a: DepthArgs) -> Result<()> {
     let m = &a.m;
     let ds = Dataset::open(&m.data)?;
     if let Some(dir) = &a.save_png {
-        tactile_core::io::check_output_dir(dir, &[&ds])?;
+        tactile_core::dataset::check_output_dir(dir, &[&ds])?;
     }
     let mut est = DepthEstimator::load(&m.model, m.device.runtime(), 0)?;
     let (s, ms) = tactile_depth::evaluate(&mut est, &ds)?;

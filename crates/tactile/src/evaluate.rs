@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use tactile_core::DeviceKind;
+use tactile_burn::DeviceKind;
 use tactile_core::dataset::Dataset;
 use tactile_estimate::eval::scores_markdown;
 use tactile_pipeline::tactip::TactipPerception;
@@ -33,7 +33,7 @@ pub(crate) struct EvaluateArgs {
 pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
     if let Some(out) = &a.out {
-        tactile_core::io::check_output_file(out, &[&ds])?;
+        tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
     let mut p = TactipPerception::load(&a.encoder, &a.heads, a.device.runtime())?;
     let s = p.evaluate(&ds)?;

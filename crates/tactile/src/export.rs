@@ -27,7 +27,7 @@ pub(crate) struct ExportArgs {
 }
 
 pub(crate) fn main(a: ExportArgs) -> Result<()> {
-    tactile_core::io::check_output_file(&a.out, &[])?;
+    tactile_core::dataset::check_output_file(&a.out, &[])?;
     let e = match a.standalone {
         true => export_standalone(&a.model)?,
         false => export_model(&a.model, a.part)?,

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use tactile_core::DeviceKind;
+use tactile_burn::DeviceKind;
 use tactile_core::dataset::Dataset;
 use tactile_pipeline::tactip::Predictor;
 
@@ -37,7 +37,7 @@ pub(crate) struct PerceiveArgs {
 pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
     if let Some(out) = &a.out {
-        tactile_core::io::check_output_file(out, &[&ds])?;
+        tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
     let mut p = Predictor::load(&a.encoder, &a.heads, a.device.runtime())?;
     let r = p.perceive(&ds)?;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
-use tactile_core::Runtime;
+use tactile_burn::Runtime;
 use tactile_pipeline::run::JsonLines;
 use tactile_pipeline::{Flow, FrameSource, Pipeline, RunOptions, SourceOptions, SourceSpec};
 
@@ -94,10 +94,10 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     };
     let inputs: Vec<_> = input.iter().collect();
     if let (Some(out), false) = (&a.out, to_stdout) {
-        tactile_core::io::check_output_file(out, &inputs)?;
+        tactile_core::dataset::check_output_file(out, &inputs)?;
     }
     if let Some(dir) = &a.render {
-        tactile_core::io::check_output_dir(dir, &inputs)?;
+        tactile_core::dataset::check_output_dir(dir, &inputs)?;
     }
     for w in source.list().map(|l| l.warnings()).unwrap_or_default() {
         tactile_core::note!("{w}");

@@ -31,7 +31,7 @@ pub(crate) struct SweepArgs {
 pub(crate) fn main(a: SweepArgs) -> Result<()> {
     if let Some(out) = &a.out {
         let ds = tactile_core::dataset::Dataset::open(&a.data)?;
-        tactile_core::io::check_output_file(out, &[&ds])?;
+        tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
     let r = sweep(&Sweep {
         encoders: a.encoders,

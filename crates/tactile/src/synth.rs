@@ -146,7 +146,7 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
         SynthCmd::Visuotactile(a) => &a.common,
     };
     if let Some(p) = &common.preview {
-        tactile_core::io::check_output_file(p, &[])?;
+        tactile_core::dataset::check_output_file(p, &[])?;
     }
     match cmd {
         SynthCmd::Tactip(a) => {

@@ -5,11 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
+use tactile_burn::DeviceKind;
+use tactile_burn::options::TestHoldoutArgs;
 use tactile_cae::{CaeConfig, CaeTrainingConfig, Optimizer};
-use tactile_core::DeviceKind;
-use tactile_core::dataset::{Dataset, TestHoldoutArgs};
+use tactile_core::dataset::Dataset;
 use tactile_depth::{DenseNetPreset, DepthTrainingConfig, HeadKind, LossKind};
-use tactile_detect::{Architecture, DetectorTrainingConfig, SoftLabels};
 use tactile_estimate::{HeadConfig, RegressorConfig, Target};
 use tactile_pipeline::tactip::{
     FeatureSource, RegressorPlan, RotationAugment, train_head, train_regressor,
@@ -66,8 +66,8 @@ pub(crate) struct EnsembleArgs {
     out: PathBuf,
 }
 
-tactile_core::schedule_args!(CaeSchedule, CaeTrainingConfig::new().schedule);
-tactile_core::schedule_args!(PoseSchedule, pose_defaults().schedule);
+tactile_burn::schedule_args!(CaeSchedule, CaeTrainingConfig::new().schedule);
+tactile_burn::schedule_args!(PoseSchedule, pose_defaults().schedule);
 
 fn pose_defaults() -> PoseTrainingConfig {
     PoseTrainingConfig::new(vec![])
@@ -101,9 +101,8 @@ pub(crate) struct PoseArgs {
     #[command(flatten)]
     schedule: PoseSchedule,
 }
-tactile_core::schedule_args!(DetectorSchedule, DetectorTrainingConfig::new().schedule);
-tactile_core::schedule_args!(SegmenterSchedule, SegmenterTrainingConfig::new().schedule);
-tactile_core::schedule_args!(DepthSchedule, DepthTrainingConfig::new().schedule);
+tactile_burn::schedule_args!(SegmenterSchedule, SegmenterTrainingConfig::new().schedule);
+tactile_burn::schedule_args!(DepthSchedule, DepthTrainingConfig::new().schedule);
 
 #[derive(Args)]
 pub(crate) struct CaeArgs {
@@ -258,35 +257,8 @@ pub(crate) struct DetectorArgs {
     /// Output model folder.
     #[arg(long)]
     out: PathBuf,
-    /// The network.
-    #[arg(long, value_enum, default_value_t = DetectorTrainingConfig::new().model.architecture)]
-    architecture: Architecture,
-    /// Channel width multiplier.
-    #[arg(long, default_value_t = DetectorTrainingConfig::new().model.width)]
-    width: f64,
-    /// Input size WIDTHxHEIGHT (paper B: 320x240).
-    #[arg(long, default_value_t = Size(DetectorTrainingConfig::new().model.input_size))]
-    input: Size,
-    /// Bits per channel the resized input keeps: 16 keeps the fraction of a grey level a light press shades the skin by, which averaging down to the input recovers and 8 rounds away.
-    #[arg(long, default_value_t = DetectorTrainingConfig::new().model.bits(), value_parser = clap::builder::TypedValueParser::map(clap::builder::PossibleValuesParser::new(["8", "16"]), |s: String| s.parse::<u8>().unwrap_or(8)))]
-    input_bits: u8,
-    /// Divide each input channel by its level at the window's centre, so a shading contrast means one ridge height whatever the exposure and LED balance.
-    #[arg(long)]
-    normalise_exposure: bool,
-    /// Fraction of each dataset's sequences that validate.
-    #[arg(long, default_value_t = DetectorTrainingConfig::new().val_fraction)]
-    val_fraction: f64,
-    /// Train toward soft targets from each frame's ridge amplitude (`ridge_mm`): sigmoid(ln(A / 0.03 mm) / WIDTH), 0.03 mm being the spec's label threshold. Suggested width: 0.2.
-    #[arg(long, value_name = "WIDTH")]
-    soft_labels: Option<f64>,
-    /// Photometric augmentation of the training frames (exposure, LED balance, blur, noise, glare, JPEG; see PhotometricAugment).
-    #[arg(long)]
-    augment: bool,
-    /// Only re-choose the threshold of the model already in --out on the validation sequences (training ends with this step anyway).
-    #[arg(long)]
-    calibrate_only: bool,
     #[command(flatten)]
-    schedule: DetectorSchedule,
+    options: tactile_detect::DetectorOptions,
 }
 
 #[derive(Args)]
@@ -457,36 +429,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         }
         TrainCmd::Detector(a) => {
             let datasets: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
-            let soft_labels = a
-                .soft_labels
-                .map(SoftLabels::about_spec_threshold)
-                .transpose()?;
-            let d = DetectorTrainingConfig::new();
-            let config = DetectorTrainingConfig::new()
-                .with_model(
-                    d.model
-                        .with_architecture(a.architecture)
-                        .with_width(a.width)
-                        .with_input_size(a.input.0)
-                        .with_input_bits(Some(a.input_bits))
-                        .with_normalise_exposure(Some(a.normalise_exposure)),
-                )
-                .with_schedule(a.schedule.schedule(d.schedule.learning_rate))
-                .with_val_fraction(a.val_fraction)
-                .with_soft_labels(soft_labels)
-                .with_augment(
-                    a.augment
-                        .then(tactile_detect::augment::PhotometricAugment::new),
-                );
-            let s = &a.schedule;
-            let fit = tactile_detect::training::train(
-                &config,
-                &datasets,
-                &a.out,
-                s.device,
-                s.resume,
-                a.calibrate_only,
-            )?;
+            let fit = a.options.train(&datasets, &a.out)?;
             say!("{}; model in {}", fit.describe(), a.out.display());
         }
         TrainCmd::Segmenter(a) => {

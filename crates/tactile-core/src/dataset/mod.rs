@@ -14,8 +14,6 @@ mod split;
 mod writer;
 
 pub use paths::{Escape, resolve_inside};
-#[cfg(feature = "clap")]
-pub use split::TestHoldoutArgs;
 pub use split::{Splits, TestHoldout, hold_out};
 pub use writer::DatasetWriter;
 
@@ -485,6 +483,30 @@ impl Dataset {
                 .collect(),
         )
     }
+}
+
+/// Before any work: the output file `out` can be written and is none of
+/// the files of the input `datasets`.
+pub fn check_output_file(out: &Path, datasets: &[&Dataset]) -> Result<()> {
+    for ds in datasets {
+        ds.refuse_as_output(out)?;
+    }
+    if out.is_dir() {
+        return Err(Error::Invalid(format!(
+            "{}: is a folder; give a file name for this output",
+            out.display()
+        )));
+    }
+    crate::io::ensure_writable_parent(out)
+}
+
+/// Before any work: the output folder `out` can be written and is not
+/// part of the input `datasets`.
+pub fn check_output_dir(out: &Path, datasets: &[&Dataset]) -> Result<()> {
+    for ds in datasets {
+        ds.refuse_as_output(out)?;
+    }
+    crate::io::ensure_writable_dir(out)
 }
 
 #[cfg(test)]

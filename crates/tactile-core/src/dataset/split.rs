@@ -43,27 +43,6 @@ impl TestHoldout {
     }
 }
 
-/// `--exclude-test` and `--split-seed` for every trainer that can leave
-/// out a later evaluation's test frames.
-#[cfg(feature = "clap")]
-#[derive(clap::Args, Debug, Clone, Copy)]
-pub struct TestHoldoutArgs {
-    /// Without a `split` column: leave out the test frames that `tactile compare`/`train regressor` with this test fraction and --split-seed hold out, so the model never sees them.
-    #[arg(long)]
-    pub exclude_test: Option<f64>,
-    /// The seed of that split (compare's --seed).
-    #[arg(long, default_value_t = 7)]
-    pub split_seed: u64,
-}
-
-#[cfg(feature = "clap")]
-impl TestHoldoutArgs {
-    /// The holdout these flags ask for.
-    pub fn holdout(&self) -> Option<TestHoldout> {
-        TestHoldout::excluding(self.exclude_test, self.split_seed)
-    }
-}
-
 fn check_fraction(name: &str, f: f64) -> Result<()> {
     if f > 0.0 && f < 1.0 {
         Ok(())

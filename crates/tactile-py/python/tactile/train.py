@@ -13,7 +13,7 @@ is raised.
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 from . import _tactile
 
@@ -102,45 +102,27 @@ def cae(
 def detector(
     data: Union[PathLike, Sequence[PathLike]],
     out: PathLike,
-    *,
-    architecture: Optional[str] = None,
-    width: Optional[float] = None,
-    input: Optional[Size] = None,
-    val_fraction: Optional[float] = None,
-    soft_labels: Optional[float] = None,
-    calibrate_only: bool = False,
-    device: str = "flex",
-    resume: bool = False,
-    max_epochs: Optional[int] = None,
-    patience: Optional[int] = None,
-    batch_size: Optional[int] = None,
-    lr: Optional[float] = None,
-    lr_decay: Optional[float] = None,
-    seed: Optional[int] = None,
+    **options: Any,
 ) -> Dict[str, Any]:
     """Paper B's tendon detector on one or more visuo-tactile datasets.
 
-    ``architecture``: "mobilenet-v3-small" (default) or "resnet18";
-    ``input``: (width, height), paper B's (320, 240). The summary includes
-    the threshold chosen on the validation sequences.
+    ``options`` are the flags of ``tactile train detector`` by their
+    keyword names (``input_bits=16``, ``normalise_exposure=True``,
+    ``soft_labels=0.6``, ``augment=True``, ``input=(320, 240)``,
+    ``max_epochs=...``); ``options("detector")`` lists every one with its
+    help and default, and an unknown keyword is a ``ValueError``. The
+    summary includes the threshold chosen on the validation sequences.
     """
     paths = [data] if isinstance(data, (str, os.PathLike)) else list(data)
     return _tactile.train_detector(
-        [os.fspath(p) for p in paths],
-        os.fspath(out),
-        architecture=architecture,
-        width=width,
-        input=input,
-        val_fraction=val_fraction,
-        soft_labels=soft_labels,
-        calibrate_only=calibrate_only,
-        device=device,
-        resume=resume,
-        schedule=_schedule(
-            max_epochs=max_epochs, patience=patience, batch_size=batch_size,
-            lr=lr, lr_decay=lr_decay, seed=seed,
-        ),
+        [os.fspath(p) for p in paths], os.fspath(out), **options
     )
+
+
+def options(trainer: str) -> List[Dict[str, Any]]:
+    """Every option of a trainer (``"detector"``): ``name``, ``help`` and
+    ``default`` of each, as ``tactile train <trainer> --help`` shows them."""
+    return _tactile.options(trainer)
 
 
 def segmenter(

@@ -8,14 +8,14 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use burn::config::Config;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 
-use crate::plot::{Series, line_plot};
 use crate::{Error, Result};
+use tactile_core::plot::{Series, line_plot};
 
 /// How long and how fast a model trains. Each model's training config
 /// embeds one, with that model's defaults.
@@ -139,7 +139,7 @@ impl TrainingLog {
     pub fn save(&self, dir: impl AsRef<Path>, title: &str) -> Result<()> {
         let dir = dir.as_ref();
         let csv_path = dir.join("curves.csv");
-        crate::io::write_atomic_with(&csv_path, |w| {
+        tactile_core::io::write_atomic_with(&csv_path, |w| {
             let metric = self.epochs.iter().any(|e| e.val_metric.is_some());
             writeln!(
                 w,
@@ -320,7 +320,7 @@ pub fn fit<M: burn::module::Module, E: From<Error>>(
         return Err(Error::Invalid("no training items".into()).into());
     }
     if let Some(out) = &cfg.out {
-        crate::io::create_dir_all(out)?;
+        tactile_core::io::create_dir_all(out)?;
     }
     let ckpt = cfg.out.as_ref().map(|o| o.join("checkpoint"));
     let mut state = FitState {
@@ -337,7 +337,7 @@ pub fn fit<M: burn::module::Module, E: From<Error>>(
                 Error::model(&st, "nothing to resume: no checkpoint in the output folder").into(),
             );
         }
-        state = crate::io::read_json(&st)?;
+        state = tactile_core::io::read_json(&st)?;
         if let (Some(was), Some(now)) = (&state.run_id, &cfg.run_id)
             && was != now
         {
@@ -369,7 +369,7 @@ pub fn fit<M: burn::module::Module, E: From<Error>>(
         let mut total = 0.0;
         let lr = s.learning_rate * s.lr_decay.powi(epoch as i32);
         for batch in shuffled_batches(train, s.batch_size, s.seed.wrapping_add(epoch as u64)) {
-            crate::interrupt::check()?;
+            tactile_core::interrupt::check()?;
             let loss = batch_loss(&model, &batch, epoch)?;
             let l: f32 = loss.clone().into_scalar();
             total += l as f64 * batch.len() as f64;
@@ -404,14 +404,14 @@ pub fn fit<M: burn::module::Module, E: From<Error>>(
             && (last || epoch.is_multiple_of(cfg.checkpoint_every.max(1)))
         {
             state.elapsed_s += start.elapsed().as_secs_f64();
-            crate::io::create_dir_all(ckpt)?;
+            tactile_core::io::create_dir_all(ckpt)?;
             crate::module_io::save_module(&model, &ckpt.join("model.bpk"))?;
             let opt_path = ckpt.join("optim.bpk");
             let bytes = optim.into_bytes().map_err(|e| {
                 Error::model(&opt_path, format!("cannot serialise optimiser state: {e}"))
             })?;
-            crate::io::write_atomic(&opt_path, &bytes)?;
-            crate::io::write_json_atomic(ckpt.join("state.json"), &state)?;
+            tactile_core::io::write_atomic(&opt_path, &bytes)?;
+            tactile_core::io::write_json_atomic(ckpt.join("state.json"), &state)?;
             state.elapsed_s -= start.elapsed().as_secs_f64();
             state.log.save(out, &cfg.title)?;
         }
@@ -447,7 +447,7 @@ struct Progress {
 impl Progress {
     fn new(max_epochs: usize, title: &str, shown: bool) -> Self {
         let bar = (shown && std::io::stderr().is_terminal())
-            .then(|| progress_bar(max_epochs as u64, title));
+            .then(|| tactile_core::progress::progress_bar(max_epochs as u64, title));
         Self {
             shown,
             bar,
@@ -482,7 +482,7 @@ impl Progress {
                 let done = r.epoch + 1 - self.first;
                 let per_epoch = self.started.elapsed().as_secs_f64() / done.max(1) as f64;
                 let eta = per_epoch * self.max_epochs.saturating_sub(r.epoch + 1) as f64;
-                crate::note!(
+                tactile_core::note!(
                     "{}: epoch {}/{}: train loss {:.4}, validation loss {:.4}{metric}; best {:.4} at epoch {}; elapsed {:.0} s, ETA {:.0} s at most",
                     self.title,
                     r.epoch + 1,
@@ -504,18 +504,6 @@ impl Progress {
             b.finish_and_clear();
         }
     }
-}
-
-/// A progress bar with position, rate and ETA (drawn only on a terminal).
-pub fn progress_bar(len: u64, what: &str) -> ProgressBar {
-    let pb = ProgressBar::new(len);
-    let style = ProgressStyle::with_template(
-        "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} ETA {eta} {msg}",
-    )
-    .unwrap_or_else(|_| ProgressStyle::default_bar());
-    pb.set_style(style);
-    pb.set_prefix(what.to_string());
-    pb
 }
 
 /// Seeded shuffled mini-batches of `indices` for one epoch.
@@ -546,60 +534,6 @@ pub fn check_augment_amounts(amounts: &[(&str, f64)]) -> Result<()> {
         ))),
         None => Ok(()),
     }
-}
-
-/// A front end's schedule flags for one model (`--max-epochs`,
-/// `--patience`, `--batch-size`, `--lr`, `--lr-decay`, `--seed`,
-/// `--device`, `--resume`), their defaults from that model's training
-/// config: `schedule_args!(Name, Config::new().schedule)` defines `Name`
-/// with `schedule(default_lr)` and the public fields `device` and `resume`.
-#[cfg(feature = "clap")]
-#[macro_export]
-macro_rules! schedule_args {
-    ($name:ident, $default:expr) => {
-        #[derive(clap::Args)]
-        pub struct $name {
-            /// Upper bound on epochs.
-            #[arg(long, default_value_t = $default.max_epochs)]
-            pub max_epochs: usize,
-            /// Epochs without a better validation loss before stopping.
-            #[arg(long, default_value_t = $default.patience)]
-            pub patience: usize,
-            /// Items per optimiser step.
-            #[arg(long, default_value_t = $default.batch_size)]
-            pub batch_size: usize,
-            /// Learning rate of the first epoch [default: the model's; for the
-            /// CAE, Adadelta 1.0 or Adam 0.003].
-            #[arg(long)]
-            pub lr: Option<f64>,
-            /// Learning-rate factor per epoch.
-            #[arg(long, default_value_t = $default.lr_decay)]
-            pub lr_decay: f64,
-            /// Seeds the weights, every shuffle and every split.
-            #[arg(long, default_value_t = $default.seed)]
-            pub seed: u64,
-            /// Training device.
-            #[arg(long, value_enum, default_value_t = $crate::DeviceKind::Flex)]
-            pub device: $crate::DeviceKind,
-            /// Continue from the checkpoint in the output folder.
-            #[arg(long)]
-            pub resume: bool,
-        }
-
-        impl $name {
-            /// The schedule, `default_lr` when no `--lr` was given.
-            pub fn schedule(&self, default_lr: f64) -> $crate::train::Schedule {
-                $crate::train::Schedule::new(
-                    self.batch_size,
-                    self.max_epochs,
-                    self.patience,
-                    self.lr.unwrap_or(default_lr),
-                )
-                .with_lr_decay(self.lr_decay)
-                .with_seed(self.seed)
-            }
-        }
-    };
 }
 
 #[cfg(test)]
@@ -658,7 +592,7 @@ mod tests {
         assert_eq!(csv.lines().count(), 4);
         assert!(csv.starts_with("epoch,train_loss,val_loss,seconds,val_metric\n"));
         assert!(csv.lines().nth(1).unwrap().ends_with(','));
-        let png = crate::image_io::load_rgb(d.path().join("curves.png")).unwrap();
+        let png = tactile_core::image_io::load_rgb(d.path().join("curves.png")).unwrap();
         assert_eq!(png.width(), 900);
     }
 }

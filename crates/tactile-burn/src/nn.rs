@@ -25,8 +25,17 @@ pub fn elementwise_bce_with_logits<const D: usize>(
 
 /// The loss on standardised regression columns (pose networks, the
 /// autoencoder's joint head).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    Default,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum RegressionLoss {
     /// Mean squared error: the usual choice, pulls hardest on outliers.
@@ -109,9 +118,9 @@ pub fn gradient_loss(pred: Tensor<4>, target: Tensor<4>) -> Tensor<1> {
 
 /// `(1 - SSIM) / 2` over 7x7 uniform windows, constants `(0.01 L)^2` and
 /// `(0.03 L)^2` for a dynamic range `L` in the maps' units (the same SSIM
-/// as [`crate::metrics::ssim`], differentiable).
+/// as [`tactile_core::metrics::ssim`], differentiable).
 pub fn ssim_loss(pred: Tensor<4>, target: Tensor<4>, range: f64) -> Tensor<1> {
-    let k = crate::metrics::SSIM_WINDOW;
+    let k = tactile_core::metrics::SSIM_WINDOW;
     let avg = burn::nn::pool::AvgPool2dConfig::new([k, k])
         .with_strides([1, 1])
         .init();
@@ -190,7 +199,7 @@ mod tests {
         assert_eq!(zero(gradient_loss(t(&a), t(&a))), 0.0);
         assert!(zero(ssim_loss(t(&a), t(&a), 6.0)).abs() < 1e-5);
         let l: f32 = ssim_loss(t(&a), t(&b), 6.0).into_scalar();
-        let m = crate::metrics::ssim(&a, &b, w, w, 6.0);
+        let m = tactile_core::metrics::ssim(&a, &b, w, w, 6.0);
         assert!((l as f64 - (1.0 - m) / 2.0).abs() < 1e-4, "{l} vs {m}");
         // Flat maps: finite, no division by zero.
         let flat = vec![15.0f32; w * w];

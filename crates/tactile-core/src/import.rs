@@ -13,10 +13,10 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use tactile_core::dataset::resolve_inside;
-use tactile_core::dataset::{Dataset, DatasetKind, DatasetWriter, FORMAT, MAX_ROWS, Manifest};
-use tactile_core::io::StagedDir;
-use tactile_core::{Error, Result};
+use crate::dataset::resolve_inside;
+use crate::dataset::{Dataset, DatasetKind, DatasetWriter, FORMAT, MAX_ROWS, Manifest};
+use crate::io::StagedDir;
+use crate::{Error, Result};
 
 use crate::source::{FrameSource, SourceOptions, SourceSpec};
 
@@ -77,7 +77,7 @@ enum FrameKey {
 }
 
 fn read_labels(path: &Path) -> Result<Labels> {
-    tactile_core::image_io::expect_regular_file(path)?;
+    crate::image_io::expect_regular_file(path)?;
     let bad = |line: usize, message: String| Error::Dataset {
         path: path.to_path_buf(),
         line: Some(line),
@@ -175,12 +175,12 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
     let root = staged.path().to_path_buf();
     let mut writer = DatasetWriter::create(&root, options.kind, &extra, true)?;
     for sub in ["frames", "masks", "depth"] {
-        tactile_core::io::create_dir_all(root.join(sub))?;
+        crate::io::create_dir_all(root.join(sub))?;
     }
     let mut size = None;
     let (mut written, mut read) = (0usize, 0u64);
     let mut done = std::collections::BTreeSet::new();
-    let pb = tactile_core::train::progress_bar(labels.rows.len() as u64, "import");
+    let pb = crate::progress::progress_bar(labels.rows.len() as u64, "import");
     while done.len() < labels.rows.len() {
         let Some(frame) = source.next_frame()? else {
             break;
@@ -214,15 +214,12 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
         }
         let file = format!("frames/{written:06}.png");
         match options.kind {
-            DatasetKind::Visuotactile => tactile_core::image_io::save_rgb_png(
-                root.join(&file),
-                w,
-                h,
-                frame.image.as_slice(),
-            )?,
+            DatasetKind::Visuotactile => {
+                crate::image_io::save_rgb_png(root.join(&file), w, h, frame.image.as_slice())?
+            }
             DatasetKind::Tactip => {
-                let grey = tactile_core::image_io::rgb_to_grey(frame.image.as_slice());
-                tactile_core::image_io::save_grey_png(root.join(&file), w, h, &grey)?
+                let grey = crate::image_io::rgb_to_grey(frame.image.as_slice());
+                crate::image_io::save_grey_png(root.join(&file), w, h, &grey)?
             }
         }
         let mut row = Vec::with_capacity(kind_cols.len() + extra.len());
@@ -240,7 +237,7 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
                     let ext = if *c == "mask" { "png" } else { "npy" };
                     let dir = if *c == "mask" { "masks" } else { "depth" };
                     let to = format!("{dir}/{:06}.{ext}", written);
-                    tactile_core::image_io::expect_regular_file(&from)?;
+                    crate::image_io::expect_regular_file(&from)?;
                     std::fs::copy(&from, root.join(&to)).map_err(|e| Error::io(&from, e))?;
                     to
                 }

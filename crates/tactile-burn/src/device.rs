@@ -6,8 +6,9 @@ use std::str::FromStr;
 use burn::tensor::Device;
 
 /// The CPU devices burn offers that tactile-rs runs every model on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum DeviceKind {
     /// burn's NdArray backend: the device the design names (deprecated upstream).
@@ -29,11 +30,6 @@ impl DeviceKind {
             DeviceKind::Ndarray => Device::ndarray(),
             DeviceKind::Flex => Device::flex(),
         }
-    }
-
-    /// The burn device with autodiff, for training.
-    pub fn autodiff_device(self) -> Device {
-        self.device().autodiff()
     }
 
     /// Lower-case name as used on the command line.

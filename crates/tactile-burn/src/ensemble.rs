@@ -39,7 +39,7 @@ impl Ensemble {
     /// outside the folder is read), each holding an `A`.
     pub fn read<A: Artifact>(dir: &Path) -> Result<Self> {
         let file = dir.join(Self::FILE);
-        let e: Self = crate::io::read_json(&file)?;
+        let e: Self = tactile_core::io::read_json(&file)?;
         let bad = |m: String| Err(Error::model(&file, m));
         if let Some(m) = Self::count_problem(e.members.len()) {
             return bad(m);
@@ -110,12 +110,12 @@ impl Ensemble {
             alike(&arts[0], a, m)?;
         }
         let notes = notes(&arts)?;
-        let staged = crate::io::StagedDir::new(out)?;
+        let staged = tactile_core::io::StagedDir::new(out)?;
         let mut names = Vec::new();
         for (k, m) in members.iter().enumerate() {
             let name = format!("member-{k}");
             let to = staged.path().join(&name);
-            crate::io::create_dir_all(&to)?;
+            tactile_core::io::create_dir_all(&to)?;
             for f in [A::CONFIG_FILE, A::WEIGHTS_FILE, TRAINING_FILE] {
                 if f == TRAINING_FILE && !m.join(f).is_file() {
                     continue;
@@ -134,7 +134,7 @@ impl Ensemble {
             members: names,
             notes: all_notes,
         };
-        crate::io::write_json_atomic(staged.path().join(Self::FILE), &e)?;
+        tactile_core::io::write_json_atomic(staged.path().join(Self::FILE), &e)?;
         staged.commit(false)?;
         Ok(e)
     }

@@ -14,8 +14,7 @@ use serde::{Deserialize, Serialize};
 use crate::{DeviceKind, Error, Result};
 
 /// The runtimes every network runs on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Runtime {
     /// burn's NdArray device.

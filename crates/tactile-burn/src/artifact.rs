@@ -42,9 +42,9 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
     /// Save the config and the weights into `dir` (created if needed),
     /// each atomically, the config last.
     fn save(&self, model: &Self::Model, dir: &Path) -> Result<()> {
-        crate::io::create_dir_all(dir)?;
+        tactile_core::io::create_dir_all(dir)?;
         crate::module_io::save_module(model, &dir.join(Self::WEIGHTS_FILE))?;
-        crate::io::write_json_atomic(dir.join(Self::CONFIG_FILE), self)
+        tactile_core::io::write_json_atomic(dir.join(Self::CONFIG_FILE), self)
     }
 
     /// Read and check the config alone; a folder whose training did not
@@ -76,7 +76,7 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
                 format!("no {}", Self::CONFIG_FILE),
             ));
         }
-        let artifact: Self = crate::io::read_json(&file)?;
+        let artifact: Self = tactile_core::io::read_json(&file)?;
         artifact.check(&file)?;
         Ok(artifact)
     }
@@ -132,7 +132,7 @@ impl Unfinished {
     /// Mark `dir` (created if needed) as being trained.
     pub fn begin(dir: &Path) -> Result<Self> {
         let marker = dir.join(INCOMPLETE_FILE);
-        crate::io::write_atomic(
+        tactile_core::io::write_atomic(
             &marker,
             b"training in progress, or interrupted: this model is not complete\n",
         )?;
@@ -150,7 +150,7 @@ impl Unfinished {
 /// A checkpoint records it; resuming with another one is refused.
 pub fn run_fingerprint(
     config: &impl Serialize,
-    datasets: &[&crate::dataset::Dataset],
+    datasets: &[&tactile_core::dataset::Dataset],
 ) -> Result<String> {
     use sha2::Digest;
     let mut json = serde_json::to_value(config)
@@ -213,14 +213,6 @@ pub fn check_field(
     }
 }
 
-/// Refuse a configuration error of a loaded config, naming its `file`.
-pub fn in_config<T>(file: &Path, r: Result<T>) -> Result<T> {
-    r.map_err(|e| match e {
-        Error::Config(m) => Error::model(file, m),
-        other => other,
-    })
-}
-
 /// The training record beside a model trained here.
 pub const TRAINING_FILE: &str = "training.json";
 
@@ -236,5 +228,5 @@ pub fn write_training_record(
     if let (Some(r), serde_json::Value::Object(e)) = (record.as_object_mut(), extra) {
         r.extend(e);
     }
-    crate::io::write_json_atomic(dir.join(TRAINING_FILE), &record)
+    tactile_core::io::write_json_atomic(dir.join(TRAINING_FILE), &record)
 }

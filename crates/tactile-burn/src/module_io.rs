@@ -19,7 +19,7 @@ pub fn module_bytes<M: Module>(module: &M, path: &Path) -> Result<Vec<u8>> {
 
 /// Save a module's weights atomically.
 pub fn save_module<M: Module>(module: &M, path: &Path) -> Result<()> {
-    crate::io::write_atomic(path, &module_bytes(module, path)?)
+    tactile_core::io::write_atomic(path, &module_bytes(module, path)?)
 }
 
 /// Refuse a module with a NaN or infinite weight, naming `path`.

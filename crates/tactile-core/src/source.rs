@@ -15,9 +15,9 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
-use tactile_core::dataset::Dataset;
-use tactile_core::image_io::{MAX_IMAGE_PIXELS, RgbImage};
-use tactile_core::{Error, Result};
+use crate::dataset::Dataset;
+use crate::image_io::{MAX_IMAGE_PIXELS, RgbImage};
+use crate::{Error, Result};
 
 /// One frame to process.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,8 +35,8 @@ pub struct FrameEntry {
 impl FrameEntry {
     /// Decode the frame as RGB; a frame of a dataset of another size than
     /// its manifest says is refused, naming the file.
-    pub fn load(&self) -> Result<tactile_core::image_io::RgbImage> {
-        let img = tactile_core::image_io::load_rgb(&self.path)?;
+    pub fn load(&self) -> Result<crate::image_io::RgbImage> {
+        let img = crate::image_io::load_rgb(&self.path)?;
         if let Some((w, h)) = self.size
             && (img.width(), img.height()) != (w, h)
         {
@@ -105,7 +105,7 @@ impl FrameList {
             .partition(|p| is_frame_file(p));
         // A pipe or a device named like a frame would block the reader.
         for p in &v {
-            tactile_core::image_io::expect_regular_file(p)?;
+            crate::image_io::expect_regular_file(p)?;
         }
         v.sort();
         ignored.sort();
@@ -353,11 +353,11 @@ fn raw_frames(
     move || {
         let len = width * height * 3;
         let mut buf = vec![0u8; len];
-        let got = tactile_core::video::read_full(&mut input, &mut buf)
-            .map_err(|e| Error::io("<stdin>", e))?;
+        let got =
+            crate::video::read_full(&mut input, &mut buf).map_err(|e| Error::io("<stdin>", e))?;
         match got {
             0 => Ok(None),
-            n if n == len => tactile_core::image_io::rgb_image(width, height, buf).map(Some),
+            n if n == len => crate::image_io::rgb_image(width, height, buf).map(Some),
             n => Err(Error::Invalid(format!(
                 "stdin ended inside a frame: {n} of {len} bytes ({width}x{height} rgb24)"
             ))),
@@ -410,7 +410,7 @@ impl LiveQueue {
                 return Ok(None);
             }
             // Wake now and then to honour Ctrl-C while a camera is silent.
-            tactile_core::interrupt::check()?;
+            crate::interrupt::check()?;
             s = self
                 .ready
                 .wait_timeout(s, Duration::from_millis(100))
@@ -434,7 +434,7 @@ pub struct FrameSource {
     limit: Option<u64>,
     given: u64,
     size: Option<(usize, usize)>,
-    stopper: Option<tactile_core::video::VideoStopper>,
+    stopper: Option<crate::video::VideoStopper>,
 }
 
 impl FrameSource {
@@ -448,7 +448,7 @@ impl FrameSource {
                 options.live_queue
             )));
         }
-        use tactile_core::video::{DecodeOptions, VideoInput, VideoReader};
+        use crate::video::{DecodeOptions, VideoInput, VideoReader};
         let (kind, list, reader, size, stopper): (_, _, Box<dyn Reader>, _, _) = match spec {
             SourceSpec::Stdin { width, height } => {
                 let (w, h) = (*width, *height);
@@ -635,7 +635,7 @@ impl FrameSource {
             self.stop();
             return Ok(None);
         }
-        tactile_core::interrupt::check()?;
+        crate::interrupt::check()?;
         let frame = match &mut self.feed {
             Feed::Direct(r) => r.next_frame()?,
             Feed::Prefetched(rx) => match rx.recv() {
