@@ -11,7 +11,6 @@
 //! so datasets are byte-identical on every machine, render in parallel, and
 //! can be extended without changing earlier samples.
 
-pub mod alternate;
 mod error;
 pub use error::{Error, Result};
 pub use tactile_core::npy;
@@ -20,6 +19,7 @@ pub mod raster;
 pub use tactile_core::rng;
 pub mod tactip;
 pub mod visuotactile;
+pub use visuotactile::render_alternate;
 pub mod write;
 
 pub use rng::Range;

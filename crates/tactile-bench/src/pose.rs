@@ -26,7 +26,7 @@ pub const PUBLISHED: (f64, f64) = (0.15, 1.45);
 /// The split every candidate is scored on when its folder names none.
 pub const DEFAULT_HOLDOUT: TestHoldout = TestHoldout {
     test_fraction: 0.2,
-    split_seed: 7,
+    split_seed: tactile_core::dataset::DEFAULT_SPLIT_SEED,
 };
 
 /// A candidate's errors, for the JSON and the report.

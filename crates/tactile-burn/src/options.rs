@@ -5,6 +5,7 @@
 //! default and its help are written once and reach both front ends.
 
 use std::fmt;
+use std::path::Path;
 use std::str::FromStr;
 
 use serde::de::DeserializeOwned;
@@ -41,39 +42,78 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
     /// name or a value of the wrong type is refused, naming the option and
     /// the options there are. A null value keeps the default.
     fn with_overrides(overrides: &Map<String, Value>) -> Result<Self> {
-        let mut v =
+        Self::resolve(None, overrides)
+    }
+
+    /// The defaults, then the options of a `config` file (a JSON object of
+    /// option names, as `--config FILE` and Python's `config=` give it),
+    /// then `overrides` (the flags given on the command line, or the
+    /// keyword arguments): each later one wins. An unknown name is refused,
+    /// naming the file where it came from one.
+    fn resolve(config: Option<&Path>, overrides: &Map<String, Value>) -> Result<Self> {
+        let defaults =
             serde_json::to_value(Self::defaults()?).map_err(|e| Error::Config(e.to_string()))?;
-        let known = v
-            .as_object_mut()
-            .ok_or_else(|| Error::Config("options must serialise as an object".into()))?;
-        for (k, value) in overrides {
-            if !known.contains_key(k) {
-                let mut names: Vec<&String> = known.keys().collect();
-                names.sort();
-                let names: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-                return Err(Error::Config(format!(
-                    "unknown option '{k}' (known: {})",
-                    names.join(", ")
-                )));
-            }
-            if !value.is_null() {
-                known.insert(k.clone(), value.clone());
+        let Value::Object(mut merged) = defaults else {
+            return Err(Error::Config("options must serialise as an object".into()));
+        };
+        let known: Vec<String> = {
+            let mut k: Vec<String> = merged.keys().cloned().collect();
+            k.sort();
+            k
+        };
+        let file = match config {
+            Some(p) => match tactile_core::io::read_json::<Value>(p)? {
+                Value::Object(m) => Some((p, m)),
+                _ => {
+                    return Err(Error::Config(format!(
+                        "{}: an options file is a JSON object of option names (known: {})",
+                        p.display(),
+                        known.join(", ")
+                    )));
+                }
+            },
+            None => None,
+        };
+        let layers = file
+            .iter()
+            .map(|(p, m)| (Some(*p), m))
+            .chain(std::iter::once((None, overrides)));
+        let mut origin: Map<String, Value> = Map::new();
+        for (from, layer) in layers {
+            for (k, value) in layer {
+                if !merged.contains_key(k) {
+                    let at = from
+                        .map(|p| format!("{}: ", p.display()))
+                        .unwrap_or_default();
+                    return Err(Error::Config(format!(
+                        "{at}unknown option '{k}' (known: {})",
+                        known.join(", ")
+                    )));
+                }
+                if !value.is_null() {
+                    merged.insert(k.clone(), value.clone());
+                    let at = from.map(|p| p.display().to_string()).unwrap_or_default();
+                    origin.insert(k.clone(), Value::String(at));
+                }
             }
         }
-        serde_json::from_value(v).map_err(|e| {
+        serde_json::from_value(Value::Object(merged.clone())).map_err(|e| {
             // Name the offending option: the first that fails on its own.
-            let bad = overrides.iter().find(|(k, value)| {
-                let mut one = serde_json::to_value(Self::defaults().ok()).unwrap_or_default();
-                match one.as_object_mut() {
-                    Some(o) if !value.is_null() => {
-                        o.insert((*k).clone(), (*value).clone());
-                        serde_json::from_value::<Self>(one).is_err()
-                    }
-                    _ => false,
-                }
+            let bad = origin.keys().find(|k| {
+                let Ok(Value::Object(mut one)) = serde_json::to_value(Self::defaults().ok()) else {
+                    return false;
+                };
+                one.insert((*k).clone(), merged[*k].clone());
+                serde_json::from_value::<Self>(Value::Object(one)).is_err()
             });
             match bad {
-                Some((k, value)) => Error::Config(format!("option '{k}' = {value}: {e}")),
+                Some(k) => {
+                    let at = match origin[k].as_str() {
+                        Some(f) if !f.is_empty() => format!("{f}: "),
+                        _ => String::new(),
+                    };
+                    Error::Config(format!("{at}option '{k}' = {}: {e}", merged[k]))
+                }
                 None => Error::Config(format!("options: {e}")),
             }
         })
@@ -96,9 +136,94 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
             })
             .collect())
     }
+
+    /// Every option as a typed Python keyword parameter
+    /// (`name: Type = default`), in flag order: what the generated stubs
+    /// (`_tactile.pyi`, `tactile/train.pyi`) declare, so an option added
+    /// here reaches editors and type checkers without being written again.
+    fn python_params() -> Result<Vec<String>> {
+        let defaults =
+            serde_json::to_value(Self::defaults()?).map_err(|e| Error::Config(e.to_string()))?;
+        let cmd = Self::augment_args(clap::Command::new("options"));
+        Ok(cmd
+            .get_arguments()
+            .map(|a| {
+                let name = a.get_id().as_str();
+                let default = defaults.get(name).cloned().unwrap_or(Value::Null);
+                let ty = python_type(a, &default);
+                let ty = if default.is_null() {
+                    format!("Optional[{ty}]")
+                } else {
+                    ty
+                };
+                format!("{name}: {ty} = {}", python_literal(&default))
+            })
+            .collect())
+    }
 }
 
 impl<T: clap::Args + clap::FromArgMatches + Serialize + DeserializeOwned> Options for T {}
+
+/// The Python type of one option's values: from its clap action and value
+/// parser (what the command line accepts), a list when it takes several.
+fn python_type(arg: &clap::Arg, default: &Value) -> String {
+    use std::any::TypeId;
+    if matches!(arg.get_action(), clap::ArgAction::SetTrue) {
+        return "bool".into();
+    }
+    let id = arg.get_value_parser().type_id();
+    let one = if id == TypeId::of::<Size>() {
+        "Tuple[int, int]"
+    } else if [TypeId::of::<f64>(), TypeId::of::<f32>()]
+        .iter()
+        .any(|t| id == *t)
+    {
+        "float"
+    } else if [
+        TypeId::of::<usize>(),
+        TypeId::of::<u64>(),
+        TypeId::of::<u32>(),
+        TypeId::of::<u8>(),
+        TypeId::of::<i64>(),
+        TypeId::of::<i32>(),
+    ]
+    .iter()
+    .any(|t| id == *t)
+    {
+        "int"
+    } else if id == TypeId::of::<bool>() {
+        "bool"
+    } else {
+        "str"
+    };
+    let many = arg.get_value_delimiter().is_some()
+        || matches!(arg.get_action(), clap::ArgAction::Append)
+        || default.is_array() && id != TypeId::of::<Size>();
+    if many {
+        format!("Sequence[{one}]")
+    } else {
+        one.into()
+    }
+}
+
+/// A JSON default as Python source.
+fn python_literal(v: &Value) -> String {
+    match v {
+        Value::Null => "None".into(),
+        Value::Bool(b) => if *b { "True" } else { "False" }.into(),
+        Value::Number(n) => match (n.as_f64(), n.is_f64()) {
+            (Some(f), true) if f.fract() == 0.0 && f.abs() < 1e15 => format!("{f:.1}"),
+            _ => n.to_string(),
+        },
+        Value::String(t) => serde_json::to_string(t).unwrap_or_default(),
+        Value::Array(a) => format!(
+            "({}{})",
+            a.iter().map(python_literal).collect::<Vec<_>>().join(", "),
+            if a.len() == 1 { "," } else { "" }
+        ),
+        Value::Object(_) => "None".into(),
+    }
+}
 
 /// An image size `WIDTHxHEIGHT` (e.g. `160x120`): `--input 320x240` on the
 /// command line, `input=(320, 240)` or `"320x240"` in Python and configs.
@@ -222,7 +347,7 @@ pub struct TestHoldoutArgs {
     #[arg(long)]
     pub exclude_test: Option<f64>,
     /// The seed of that split (compare's --seed).
-    #[arg(long, default_value_t = 7)]
+    #[arg(long, default_value_t = tactile_core::dataset::DEFAULT_SPLIT_SEED)]
     pub split_seed: u64,
 }
 

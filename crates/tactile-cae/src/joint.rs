@@ -220,8 +220,7 @@ impl JointLabels {
 }
 
 /// The command-line flags of joint training.
-#[cfg(feature = "clap")]
-#[derive(clap::Args, Debug)]
+#[derive(clap::Args, serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct JointArgs {
     /// Semi-supervised: also train the features to predict these label columns through a small head, e.g. x_mm,theta_deg:180,depth_mm (only the autoencoder is saved).
     #[arg(long, value_delimiter = ',')]
@@ -237,7 +236,6 @@ pub struct JointArgs {
     pub joint_loss: RegressionLoss,
 }
 
-#[cfg(feature = "clap")]
 impl JointArgs {
     /// `None` without `--joint-targets`.
     pub fn config(&self) -> crate::Result<Option<JointTargets>> {

@@ -15,6 +15,7 @@ pub mod export;
 pub mod inference;
 pub mod joint;
 pub mod model;
+pub mod options;
 pub mod training;
 
 pub use artifact::CaeArtifact;
@@ -22,4 +23,5 @@ pub use error::{Error, Result};
 pub use inference::TactipEncoder;
 pub use joint::JointTargets;
 pub use model::{Cae, CaeConfig, CaeDecoder, CaeEncoder};
+pub use options::{CaeOptions, RotateArgs};
 pub use training::{CaeTrainingConfig, Optimizer};

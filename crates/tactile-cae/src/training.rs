@@ -22,8 +22,7 @@ use crate::joint::{JointCae, JointLabels, JointTargets};
 use crate::model::CaeConfig;
 
 /// The optimiser.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Optimizer {
     /// Paper A's (Keras defaults).

@@ -11,6 +11,7 @@ mod error;
 pub mod eval;
 pub mod inference;
 pub mod model;
+pub mod options;
 pub mod torchvision;
 pub mod training;
 
@@ -20,4 +21,5 @@ pub use error::{Error, Result};
 pub use eval::{DEPTH_RANGE_MM, DepthScorer, DepthScores, evaluate};
 pub use inference::DepthEstimator;
 pub use model::{DenseNetConfig, DenseNetPreset, DepthNet, DepthNetConfig, HeadKind};
+pub use options::DepthOptions;
 pub use training::{DepthTrainingConfig, LossKind};

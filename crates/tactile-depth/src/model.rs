@@ -36,8 +36,7 @@ pub struct DenseNetConfig {
 
 /// The encoders: the published DenseNets and smaller ones that train on
 /// this machine.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum DenseNetPreset {
     /// Growth 8, blocks 2-2-2-2.
@@ -164,12 +163,11 @@ impl DenseNetConfig {
 }
 
 /// The head on the decoder's last features.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum HeadKind {
     /// One 1x1 convolution (paper B's choice).
-    #[cfg_attr(feature = "clap", value(alias = "1x1"))]
+    #[value(alias = "1x1")]
     Conv1x1,
     /// Two 3x3 convolutions with ReLU, then 1x1 (paper B's "custom").
     Custom,

@@ -21,8 +21,7 @@ use crate::model::{DenseNetConfig, DepthNet, DepthNetConfig};
 use crate::{DepthSet, Error, Result};
 
 /// Which loss trains the network.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum LossKind {
     /// Mean absolute error (paper B).

@@ -13,8 +13,7 @@ use tactile_segment::SegmenterArtifact;
 use crate::Result;
 
 /// Which part of a CAE folder to export (other models export their network).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Part {
     /// The network used at inference (for a CAE: pin image -> features).
     Encoder,

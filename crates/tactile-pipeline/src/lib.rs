@@ -11,6 +11,7 @@ pub mod ensemble;
 mod error;
 pub mod export;
 pub mod hysteresis;
+pub mod options;
 pub mod overlay;
 pub mod palpation;
 pub mod run;

@@ -12,10 +12,12 @@ pub mod data;
 mod error;
 pub mod inference;
 pub mod model;
+pub mod options;
 pub mod training;
 
 pub use artifact::{PoseArtifact, PoseEnsemble};
 pub use error::{Error, Result};
 pub use inference::{PoseEstimates, PoseEstimator};
 pub use model::{PoseNet, PoseNetConfig};
+pub use options::{PoseFit, PoseOptions};
 pub use training::PoseTrainingConfig;

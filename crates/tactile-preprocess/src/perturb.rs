@@ -139,6 +139,10 @@ impl Perturbation {
 /// Most turned copies of each training frame.
 pub const MAX_ROTATED_COPIES: usize = 32;
 
+/// The largest turn of rotation augmentation when none is asked for,
+/// degrees: a little past the 5 degrees a hand-mounted sensor is off by.
+pub const DEFAULT_ROTATION_DEG: f64 = 6.0;
+
 /// Largest augmentation angle accepted, degrees.
 pub const MAX_ROTATION_DEG: f64 = 45.0;
 

@@ -136,6 +136,19 @@ impl LibraryError for tactile_depth::Error {
     }
 }
 
+impl LibraryError for tactile_pose::Error {
+    fn kind(&self) -> Kind {
+        use tactile_pose::Error as E;
+        match self {
+            E::Core(c) => core_kind(c),
+            E::Preprocess(p) => preprocess_kind(p),
+            E::Onnx(o) => onnx_kind(o),
+            E::Cae(e) => e.kind(),
+            E::Estimate(e) => e.kind(),
+        }
+    }
+}
+
 impl LibraryError for tactile_pipeline::Error {
     fn kind(&self) -> Kind {
         use tactile_pipeline::Error as E;
@@ -148,7 +161,7 @@ impl LibraryError for tactile_pipeline::Error {
             E::Segment(e) => e.kind(),
             E::Depth(e) => e.kind(),
             E::Onnx(e) => onnx_kind(e),
-            E::Pose(e) => e.core().map_or(Kind::Value, core_kind),
+            E::Pose(e) => e.kind(),
         }
     }
 }

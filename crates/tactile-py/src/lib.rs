@@ -42,6 +42,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synth::synth_visuotactile, m)?)?;
     m.add_function(wrap_pyfunction!(train::train_cae, m)?)?;
     m.add_function(wrap_pyfunction!(train::train_detector, m)?)?;
+    m.add_function(wrap_pyfunction!(train::train_pose, m)?)?;
     m.add_function(wrap_pyfunction!(train::options, m)?)?;
     m.add_function(wrap_pyfunction!(train::train_segmenter, m)?)?;
     m.add_function(wrap_pyfunction!(train::train_depth, m)?)?;

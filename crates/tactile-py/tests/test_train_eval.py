@@ -167,3 +167,61 @@ def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):
     with pytest.raises(ValueError, match="joint_loss"):
         tactile.train.cae(data, tmp_path / "bad", joint_targets=["depth_mm"], joint_loss="l3")
     assert not (tmp_path / "bad" / "cae.json").exists()
+
+
+TRAINERS = ["cae", "head", "regressor", "pose", "detector", "segmenter", "depth"]
+
+
+def test_every_trainer_option_is_a_typed_keyword(small_vt, tmp_path):
+    import ast
+    from pathlib import Path
+
+    stub = ast.parse(Path(tactile.train.__file__).with_name("train.pyi").read_text())
+    defs = {n.name: n for n in stub.body if isinstance(n, ast.FunctionDef)}
+    for name in TRAINERS:
+        listed = [o["name"] for o in tactile.train.options(name)]
+        typed = [a.arg for a in defs[name].args.kwonlyargs]
+        assert typed[typed.index("config") + 1:] == listed, name
+        assert callable(getattr(tactile.train, name)), name
+    with pytest.raises(ValueError, match="no trainer 'vgg'"):
+        tactile.train.options("vgg")
+    # An unknown keyword is refused by every trainer before any data is read.
+    calls = {
+        "cae": lambda **k: tactile.train.cae(tmp_path / "none", tmp_path / "o", **k),
+        "head": lambda **k: tactile.train.head(tmp_path / "none", encoder=tmp_path, **k),
+        "regressor": lambda **k: tactile.train.regressor(tmp_path / "none", ["x_mm"],
+                                                         encoder=tmp_path, **k),
+        "pose": lambda **k: tactile.train.pose(tmp_path / "none", tmp_path / "o", **k),
+        "detector": lambda **k: tactile.train.detector(small_vt, tmp_path / "o", **k),
+        "segmenter": lambda **k: tactile.train.segmenter(small_vt, tmp_path / "o", **k),
+        "depth": lambda **k: tactile.train.depth(small_vt, tmp_path / "o", **k),
+    }
+    for name, call in calls.items():
+        with pytest.raises(ValueError, match="unknown option 'max_epoch'"):
+            call(max_epoch=1)
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_pose_network_trains_from_python_as_from_the_cli(root, tmp_path, tactile_bin):
+    data = root / "samples/virtual-tactip"
+    recipe = tmp_path / "recipe.json"
+    recipe.write_text(json.dumps({"widths": [8, 8, 8, 8], "hidden": 16, "max_epochs": 5,
+                                  "patience": 5}))
+    s = tactile.train.pose(data, tmp_path / "py", config=recipe,
+                           targets=["depth_mm", "force_n"], max_epochs=1, batch_size=8)
+    assert s["epochs_run"] == 1 and s["out"].endswith("py")
+    run_cli(tactile_bin, "train", "pose", "--data", str(data), "--out", str(tmp_path / "cli"),
+            "--config", str(recipe), "--targets", "depth_mm,force_n", "--max-epochs", "1",
+            "--batch-size", "8")
+    py = json.loads((tmp_path / "py/training.json").read_text())["config"]
+    cli = json.loads((tmp_path / "cli/training.json").read_text())["config"]
+    assert py == cli
+    assert py["model"]["widths"] == [8, 8, 8, 8] and py["schedule"]["max_epochs"] == 1
+    assert py["schedule"]["patience"] == 5, "the file's option, no keyword over it"
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"widht": [8]}))
+    with pytest.raises(ValueError, match="bad.json: unknown option 'widht'"):
+        tactile.train.pose(data, tmp_path / "bad", config=bad)
+    with pytest.raises(FileNotFoundError):
+        tactile.train.pose(data, tmp_path / "bad", config=tmp_path / "missing.json")
+    assert not (tmp_path / "bad").exists()

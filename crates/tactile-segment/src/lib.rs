@@ -10,6 +10,7 @@ mod error;
 pub mod eval;
 pub mod inference;
 pub mod model;
+pub mod options;
 pub mod postprocess;
 pub mod training;
 
@@ -19,6 +20,7 @@ pub use error::{Error, Result};
 pub use eval::{DirectionScores, PathScores, SegmenterScores, evaluate};
 pub use inference::{Segmentation, TendonSegmenter};
 pub use model::{UNet, UNetConfig};
+pub use options::SegmenterOptions;
 pub use postprocess::{
     Direction, DirectionMethod, Evidence, NoDirection, PostprocessConfig, Tendon, TendonMask,
     postprocess,

@@ -374,13 +374,10 @@ pub fn centre_line(
         width: w,
         height: h,
     };
-    let bytes: Vec<u8> = region.pixels.iter().map(|&p| u8::from(p)).collect();
-    let img = Image::<u8, 1>::new(size, bytes).map_err(kornia)?;
-    let mut near = Image::<u8, 1>::from_size_val(size, 0).map_err(kornia)?;
-    dilate(&img, &mut near, &box_kernel(5), PaddingMode::Constant, [0]).map_err(kornia)?;
+    let near = near_region(region, size)?;
     let soft: Vec<f32> = (0..w * h)
-        .map(|i| match (near.as_slice()[i], probabilities) {
-            (0, _) => 0.0,
+        .map(|i| match (near[i], probabilities) {
+            (false, _) => 0.0,
             (_, Some(p)) if p[i].is_finite() => p[i].clamp(0.0, 1.0),
             (_, Some(_)) => 0.0,
             (_, None) => f32::from(u8::from(region.pixels[i])),
@@ -390,45 +387,14 @@ pub fn centre_line(
     let q = q.as_slice();
     // Gradients that count: inside the inscribed ellipse, 4 px (the blur's
     // reach) from its rim, so the window's border is no edge.
-    let (cx, cy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
-    let (rx, ry) = (
-        (w as f64 / 2.0 - 4.0).max(1.0),
-        (h as f64 / 2.0 - 4.0).max(1.0),
-    );
-    // Only real edges: the blur's far tails (below a thousandth of the
-    // strongest edge's squared gradient) carry no direction, only cost.
-    let strongest = gx
-        .as_slice()
-        .iter()
-        .zip(gy.as_slice())
-        .map(|(a, b)| a * a + b * b)
-        .fold(0.0f32, f32::max) as f64;
-    let floor = (1e-3 * strongest).max(1e-12);
-    let edges: Vec<(f64, f64, f64, f64)> = (0..w * h)
-        .filter_map(|i| {
-            let (u, v) = ((i % w) as f64, (i / w) as f64);
-            let (dx, dy) = (gx.as_slice()[i] as f64, gy.as_slice()[i] as f64);
-            let inside = ((u - cx) / rx).powi(2) + ((v - cy) / ry).powi(2) <= 1.0;
-            (inside && dx * dx + dy * dy > floor).then_some((u, v, dx, dy))
-        })
-        .collect();
+    let view = Ellipse::inside_window(w, h, 4.0);
+    let edges = strong_edges(gx.as_slice(), gy.as_slice(), w, &view);
     if edges.is_empty() {
         // No edge in view (the region fills the window): the pixels' own
         // axis is all there is.
         return Ok(principal_axis(region, cfg));
     }
-    let sample = |u: f64, v: f64| -> f32 {
-        if u < 0.0 || v < 0.0 || u > (w - 1) as f64 || v > (h - 1) as f64 {
-            return 0.0;
-        }
-        let (u0, v0) = (u.floor() as usize, v.floor() as usize);
-        let (u1, v1) = ((u0 + 1).min(w - 1), (v0 + 1).min(h - 1));
-        let (fu, fv) = ((u - u0 as f64) as f32, (v - v0 as f64) as f32);
-        let at = |a: usize, b: usize| q[b * w + a];
-        (at(u0, v0) * (1.0 - fu) + at(u1, v0) * fu) * (1.0 - fv)
-            + (at(u0, v1) * (1.0 - fu) + at(u1, v1) * fu) * fv
-    };
-    let mut point = (cx, cy);
+    let mut point = (view.cx, view.cy);
     let mut sigma = w.min(h) as f64 / 2.0;
     let mut result = None;
     for _ in 0..4 {
@@ -438,61 +404,22 @@ pub fn centre_line(
         })) else {
             break;
         };
-        let (ns, nc) = normal.sin_cos();
         result = Some((normal + std::f64::consts::FRAC_PI_2, anisotropy));
-        // Walk the normal through the window centre: the tendon run nearest
-        // the centre is where the centre line crosses it.
-        let reach = ((w * w + h * h) as f64).sqrt() / 2.0;
-        let steps = (2.0 * reach) as i64;
-        let mut runs: Vec<(f64, f64, f64)> = Vec::new(); // (weight, weighted k, |k| min)
-        let mut open = false;
-        for step in -steps..=steps {
-            let k = step as f64 * 0.5;
-            let val = sample(cx + k * nc, cy + k * ns);
-            if val >= CENTRE_LINE_LEVEL {
-                if !open {
-                    runs.push((0.0, 0.0, f64::INFINITY));
-                    open = true;
-                }
-                let run = runs.last_mut().expect("a run was just opened");
-                run.0 += val as f64;
-                run.1 += val as f64 * k;
-                run.2 = run.2.min(k.abs());
-            } else {
-                open = false;
-            }
-        }
-        let Some(run) = runs.iter().min_by(|a, b| a.2.total_cmp(&b.2)) else {
+        let Some((k, half_width)) = nearest_crossing(q, w, h, (view.cx, view.cy), normal) else {
             break;
         };
-        let k = run.1 / run.0;
-        point = (cx + k * nc, cy + k * ns);
-        // The run's half-length (0.5 px steps) is the band's half-width.
-        let half_width = run.0 / 2.0 * 0.5;
+        let (ns, nc) = normal.sin_cos();
+        point = (view.cx + k * nc, view.cy + k * ns);
         sigma = (1.5 * half_width).clamp(3.0, w.min(h) as f64 / 2.0);
     }
     if let (Some(img), Some(_)) = (evidence.window, result) {
-        let shading = shading_gradients(img)?;
         let weight = |i: usize| match probabilities {
-            Some(p) if near.as_slice()[i] != 0 && p[i].is_finite() => p[i].clamp(0.0, 1.0) as f64,
+            Some(p) if near[i] && p[i].is_finite() => p[i].clamp(0.0, 1.0) as f64,
             Some(_) => 0.0,
             None => f64::from(u8::from(region.pixels[i])),
         };
-        let sigma = w.min(h) as f64 * SHADING_SIGMA_PER_SIDE;
-        // Pixels beyond 3 sigma of the point, outside the window's ellipse
-        // or off the region weigh (next to) nothing: skipped.
-        let reach2 = 9.0 * sigma * sigma;
-        let found = dominant_normal(shading.iter().filter_map(|&(i, dx, dy)| {
-            let (u, v) = ((i % w) as f64, (i / w) as f64);
-            let d2 = (u - point.0).powi(2) + (v - point.1).powi(2);
-            if d2 > reach2 || ((u - cx) / rx).powi(2) + ((v - cy) / ry).powi(2) > 1.0 {
-                return None;
-            }
-            let p = weight(i);
-            (p > 0.0).then(|| (p * (-d2 / (2.0 * sigma * sigma)).exp(), dx, dy))
-        }));
-        if let Some((normal, anisotropy)) = found {
-            result = Some((normal + std::f64::consts::FRAC_PI_2, anisotropy));
+        if let Some(found) = shading_direction(img, w, h, point, &view, weight)? {
+            result = Some(found);
         }
     }
     Ok(match result {
@@ -503,6 +430,138 @@ pub fn centre_line(
         }),
         None => principal_axis(region, cfg),
     })
+}
+
+/// The region grown by a 5 px box: where a segmenter's probabilities are
+/// trusted as evidence of the band.
+fn near_region(region: &TendonMask, size: ImageSize) -> Result<Vec<bool>> {
+    let bytes: Vec<u8> = region.pixels.iter().map(|&p| u8::from(p)).collect();
+    let img = Image::<u8, 1>::new(size, bytes).map_err(kornia)?;
+    let mut near = Image::<u8, 1>::from_size_val(size, 0).map_err(kornia)?;
+    dilate(&img, &mut near, &box_kernel(5), PaddingMode::Constant, [0]).map_err(kornia)?;
+    Ok(near.as_slice().iter().map(|&v| v != 0).collect())
+}
+
+/// An axis-aligned ellipse of pixel positions.
+struct Ellipse {
+    cx: f64,
+    cy: f64,
+    rx: f64,
+    ry: f64,
+}
+
+impl Ellipse {
+    /// The ellipse inscribed in a `w x h` window, `margin` px inside its rim.
+    fn inside_window(w: usize, h: usize, margin: f64) -> Self {
+        Self {
+            cx: (w as f64 - 1.0) / 2.0,
+            cy: (h as f64 - 1.0) / 2.0,
+            rx: (w as f64 / 2.0 - margin).max(1.0),
+            ry: (h as f64 / 2.0 - margin).max(1.0),
+        }
+    }
+
+    fn contains(&self, u: f64, v: f64) -> bool {
+        ((u - self.cx) / self.rx).powi(2) + ((v - self.cy) / self.ry).powi(2) <= 1.0
+    }
+}
+
+/// The gradients `(u, v, dx, dy)` inside `view` that are real edges: the
+/// blur's far tails (below a thousandth of the strongest edge's squared
+/// gradient) carry no direction, only cost.
+fn strong_edges(gx: &[f32], gy: &[f32], w: usize, view: &Ellipse) -> Vec<(f64, f64, f64, f64)> {
+    let strongest = gx
+        .iter()
+        .zip(gy)
+        .map(|(a, b)| a * a + b * b)
+        .fold(0.0f32, f32::max) as f64;
+    let floor = (1e-3 * strongest).max(1e-12);
+    (0..gx.len())
+        .filter_map(|i| {
+            let (u, v) = ((i % w) as f64, (i / w) as f64);
+            let (dx, dy) = (gx[i] as f64, gy[i] as f64);
+            (view.contains(u, v) && dx * dx + dy * dy > floor).then_some((u, v, dx, dy))
+        })
+        .collect()
+}
+
+/// `q` (a `w x h` plane) at a real position, bilinearly; 0 off the plane.
+fn bilinear(q: &[f32], w: usize, h: usize, u: f64, v: f64) -> f32 {
+    if u < 0.0 || v < 0.0 || u > (w - 1) as f64 || v > (h - 1) as f64 {
+        return 0.0;
+    }
+    let (u0, v0) = (u.floor() as usize, v.floor() as usize);
+    let (u1, v1) = ((u0 + 1).min(w - 1), (v0 + 1).min(h - 1));
+    let (fu, fv) = ((u - u0 as f64) as f32, (v - v0 as f64) as f32);
+    let at = |a: usize, b: usize| q[b * w + a];
+    (at(u0, v0) * (1.0 - fu) + at(u1, v0) * fu) * (1.0 - fv)
+        + (at(u0, v1) * (1.0 - fu) + at(u1, v1) * fu) * fv
+}
+
+/// Walk the line through `centre` along `normal` (radians) in half-pixel
+/// steps: the run of band (`q` at least [`CENTRE_LINE_LEVEL`]) nearest the
+/// centre is where the centre line crosses it. Its weighted offset along
+/// the normal and its half-width, pixels.
+fn nearest_crossing(
+    q: &[f32],
+    w: usize,
+    h: usize,
+    centre: (f64, f64),
+    normal: f64,
+) -> Option<(f64, f64)> {
+    let (ns, nc) = normal.sin_cos();
+    let reach = ((w * w + h * h) as f64).sqrt() / 2.0;
+    let steps = (2.0 * reach) as i64;
+    let mut runs: Vec<(f64, f64, f64)> = Vec::new(); // (weight, weighted k, |k| min)
+    let mut open = false;
+    for step in -steps..=steps {
+        let k = step as f64 * 0.5;
+        let val = bilinear(q, w, h, centre.0 + k * nc, centre.1 + k * ns);
+        if val >= CENTRE_LINE_LEVEL {
+            if !open {
+                runs.push((0.0, 0.0, f64::INFINITY));
+                open = true;
+            }
+            if let Some(run) = runs.last_mut() {
+                run.0 += val as f64;
+                run.1 += val as f64 * k;
+                run.2 = run.2.min(k.abs());
+            }
+        } else {
+            open = false;
+        }
+    }
+    let run = runs.iter().min_by(|a, b| a.2.total_cmp(&b.2))?;
+    // The run's half-length (0.5 px steps) is the band's half-width.
+    Some((run.1 / run.0, run.0 / 2.0 * 0.5))
+}
+
+/// The direction (radians, with its anisotropy) the window's shading gives
+/// near `point`: the tendon's ridge shades the skin along its whole
+/// length, so its gradients pin the angle finer than the mask's edges.
+/// Pixels beyond 3 sigma of the point, outside `view` or of no `weight`
+/// weigh (next to) nothing and are skipped.
+fn shading_direction(
+    img: &FloatImage,
+    w: usize,
+    h: usize,
+    point: (f64, f64),
+    view: &Ellipse,
+    weight: impl Fn(usize) -> f64,
+) -> Result<Option<(f64, f64)>> {
+    let shading = shading_gradients(img)?;
+    let sigma = w.min(h) as f64 * SHADING_SIGMA_PER_SIDE;
+    let reach2 = 9.0 * sigma * sigma;
+    let found = dominant_normal(shading.iter().filter_map(|&(i, dx, dy)| {
+        let (u, v) = ((i % w) as f64, (i / w) as f64);
+        let d2 = (u - point.0).powi(2) + (v - point.1).powi(2);
+        if d2 > reach2 || !view.contains(u, v) {
+            return None;
+        }
+        let p = weight(i);
+        (p > 0.0).then(|| (p * (-d2 / (2.0 * sigma * sigma)).exp(), dx, dy))
+    }));
+    Ok(found.map(|(normal, anisotropy)| (normal + std::f64::consts::FRAC_PI_2, anisotropy)))
 }
 
 /// The dominant orientation of weighted gradients `(weight, dx, dy)`: the

@@ -30,7 +30,7 @@ pub(crate) struct CompareArgs {
     #[arg(long, default_value_t = 0.2)]
     val_fraction: f64,
     /// Split and weight seed.
-    #[arg(long, default_value_t = 7)]
+    #[arg(long, default_value_t = tactile_core::dataset::DEFAULT_SPLIT_SEED)]
     seed: u64,
     /// Also write the table to this Markdown file.
     #[arg(long)]

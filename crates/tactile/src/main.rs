@@ -42,7 +42,7 @@ mod synth;
 mod train;
 
 use anyhow::Result;
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 #[derive(Parser)]
 #[command(
@@ -106,7 +106,9 @@ pub(crate) fn stdout_failed(e: std::io::Error) {
 }
 
 fn main() -> std::process::ExitCode {
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    args::keep_matches(matches);
     if let Err(e) = tactile_core::interrupt::install() {
         tactile_core::note!("warning: {e}");
     }

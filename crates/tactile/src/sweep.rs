@@ -18,7 +18,7 @@ pub(crate) struct SweepArgs {
     #[arg(long, default_value = "shape")]
     classify: String,
     /// Split and head seed.
-    #[arg(long, default_value_t = 7)]
+    #[arg(long, default_value_t = tactile_core::dataset::DEFAULT_SPLIT_SEED)]
     seed: u64,
     /// Timed runs per latency measurement.
     #[arg(long, default_value_t = 30)]

@@ -14,7 +14,7 @@ mod split;
 mod writer;
 
 pub use paths::{Escape, resolve_inside};
-pub use split::{Splits, TestHoldout, hold_out};
+pub use split::{DEFAULT_SPLIT_SEED, Splits, TestHoldout, hold_out};
 pub use writer::DatasetWriter;
 
 /// The format tag every manifest carries.

@@ -21,6 +21,10 @@ pub struct Splits {
     pub test: Vec<usize>,
 }
 
+/// The seed of the split every comparison, sweep and held-out test uses
+/// unless told otherwise: one seed means one split everywhere.
+pub const DEFAULT_SPLIT_SEED: u64 = 7;
+
 /// The test rows a later evaluation holds out (a `compare` or `train
 /// regressor` with this test fraction and seed), so an encoder trained
 /// before it never sees them.

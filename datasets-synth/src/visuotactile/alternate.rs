@@ -19,12 +19,13 @@
 //! The labels (mask, tendon, direction, depth) are the reference's exactly:
 //! they are geometry, not rendering.
 
+use super::render::{Raster, light_vectors, shade};
+use super::{
+    Camera, GLARE_AMPLITUDE, GLARE_SIGMA_FRACTION, NOMINAL_DEPTH_MM, SequenceScene,
+    VisuotactileConfig, VisuotactileFrame, surface,
+};
 use crate::raster::to_u8;
 use crate::rng::SampleRng;
-use crate::visuotactile::{
-    Camera, GLARE_AMPLITUDE, GLARE_SIGMA_FRACTION, NOMINAL_DEPTH_MM, Raster, SequenceScene,
-    VisuotactileConfig, VisuotactileFrame, light_vectors, shade, surface,
-};
 
 /// Finite-difference step for the normals, pixels.
 const STEP_PX: f64 = 0.25;

@@ -1,0 +1,108 @@
+//! The autoencoder trainer's options, written once: `tactile train cae`
+//! flattens them into its flags, `tactile.train.cae(...)` fills them from
+//! keyword arguments, and [`CaeOptions::config`] turns either into the one
+//! training config.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use tactile_burn::options::TestHoldoutArgs;
+use tactile_burn::train::FitSummary;
+use tactile_core::dataset::Dataset;
+use tactile_preprocess::PreprocessConfig;
+use tactile_preprocess::perturb::{DEFAULT_ROTATION_DEG, RotationAugment};
+
+use crate::joint::JointArgs;
+use crate::{CaeConfig, CaeTrainingConfig, Optimizer, Result};
+
+tactile_burn::schedule_args!(CaeSchedule, CaeTrainingConfig::new().schedule);
+
+/// Rotation augmentation of training frames (`train cae`, `train head`).
+#[derive(clap::Args, Serialize, Deserialize, Debug, Clone, Copy)]
+pub struct RotateArgs {
+    /// Also train on this many copies of each frame turned by up to --rotate-deg (a sensor mounted turned).
+    #[arg(long, default_value_t = 0)]
+    pub rotate_copies: usize,
+    /// Largest turn of those copies, degrees.
+    #[arg(long, default_value_t = DEFAULT_ROTATION_DEG)]
+    pub rotate_deg: f64,
+}
+
+impl RotateArgs {
+    /// The augmentation these options ask for (none without copies).
+    pub fn augment(&self, seed: u64) -> Option<RotationAugment> {
+        RotationAugment::optional(self.rotate_copies, self.rotate_deg, seed)
+    }
+}
+
+/// Every option of autoencoder training; each default is the training
+/// config's.
+#[derive(clap::Args, Serialize, Deserialize, Debug, Clone)]
+pub struct CaeOptions {
+    /// Preprocessing: binary (already binarised frames), paper, lighting-compensated, or a JSON file.
+    #[arg(long, default_value = "binary")]
+    pub preprocess: String,
+    /// Encoder widths, e.g. 16,8,8,4 (paper) or 16,16,8,4 (authors' release).
+    #[arg(long, value_delimiter = ',', default_values_t = CaeConfig::new().widths)]
+    pub widths: Vec<usize>,
+    /// Feature count (8/16/32/64): sets the last width.
+    #[arg(long)]
+    pub features: Option<usize>,
+    /// No ReLU before the last pooling: features cannot die (see CaeConfig).
+    #[arg(long)]
+    pub linear_latent: bool,
+    /// Adadelta (paper A) or Adam.
+    #[arg(long, value_enum, default_value_t = CaeTrainingConfig::new().optimizer)]
+    pub optimizer: Optimizer,
+    /// Fraction of the training rows held out for early stopping.
+    #[arg(long, default_value_t = CaeTrainingConfig::new().val_fraction)]
+    pub val_fraction: f64,
+    /// Leaving out a later evaluation's test frames.
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub holdout: TestHoldoutArgs,
+    /// The schedule, the device and resuming.
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub schedule: CaeSchedule,
+    /// Rotation augmentation.
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub rotate: RotateArgs,
+    /// Joint training of a pose head on the features.
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub joint: JointArgs,
+}
+
+impl CaeOptions {
+    /// The training config these options ask for (checked where it can
+    /// be before any data is read).
+    pub fn config(&self) -> Result<CaeTrainingConfig> {
+        let pre = PreprocessConfig::preset(&self.preprocess).map_err(|e| {
+            tactile_core::Error::Config(format!("preprocess '{}': {e}", self.preprocess))
+        })?;
+        let model = CaeConfig::from_options(
+            &self.widths,
+            self.features,
+            self.linear_latent,
+            pre.output_px,
+        )?;
+        let s = &self.schedule;
+        Ok(CaeTrainingConfig::new()
+            .with_model(model)
+            .with_preprocess(pre)
+            .with_schedule(s.schedule(self.optimizer.default_learning_rate()))
+            .with_optimizer(self.optimizer)
+            .with_val_fraction(self.val_fraction)
+            .with_holdout(self.holdout.holdout())
+            .with_rotation(self.rotate.augment(s.seed))
+            .with_joint(self.joint.config()?))
+    }
+
+    /// Train on `data` into `out` as these options say.
+    pub fn train(&self, data: &Dataset, out: &Path) -> Result<FitSummary> {
+        let s = &self.schedule;
+        crate::training::train(&self.config()?, data, out, s.device, s.resume)
+    }
+}

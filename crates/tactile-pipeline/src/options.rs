@@ -1,0 +1,249 @@
+//! Every trainer's options in one registry: the shape head's and the
+//! regressor's (defined here, beside the paper-A composition that trains
+//! them), and those the model crates define. The command line flattens
+//! each into its flags, the Python package fills it from keywords, and the
+//! generated Python stubs ([`python_stubs`]) type every keyword, so an
+//! option is written once.
+
+use serde::{Deserialize, Serialize};
+use tactile_burn::DeviceKind;
+use tactile_burn::options::{OptionDoc, Options};
+use tactile_cae::RotateArgs;
+use tactile_estimate::{HeadConfig, RegressorConfig, Target};
+
+use crate::tactip::{RegressorPlan, RotationAugment};
+use crate::{Error, Result};
+
+/// Every option of shape-head training; each default is the head config's.
+#[derive(clap::Args, Serialize, Deserialize, Debug, Clone)]
+pub struct HeadOptions {
+    /// Ensemble members; each early-stops on its own fold of the train split.
+    #[arg(long, default_value_t = HeadConfig::new(0, vec![]).folds)]
+    pub folds: usize,
+    /// Repeats of the k-fold split (members = folds x repeats).
+    #[arg(long, default_value_t = HeadConfig::new(0, vec![]).repeats)]
+    pub repeats: usize,
+    /// Fold and weight seed.
+    #[arg(long, default_value_t = HeadConfig::new(0, vec![]).schedule.seed)]
+    pub seed: u64,
+    /// Training device.
+    #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
+    pub device: DeviceKind,
+    /// Rotation augmentation (needs an encoder, not a feature file).
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub rotate: RotateArgs,
+}
+
+impl HeadOptions {
+    /// The head config and the rotation augmentation these options ask for.
+    pub fn config(&self) -> (HeadConfig, Option<RotationAugment>) {
+        let mut config = HeadConfig::new(0, vec![])
+            .with_folds(self.folds)
+            .with_repeats(self.repeats);
+        config.schedule.seed = self.seed;
+        (config, self.rotate.augment(self.seed))
+    }
+}
+
+/// Every option of regressor training (the targets are an input, like the
+/// data); each default is the regressor plan's.
+#[derive(clap::Args, Serialize, Deserialize, Debug, Clone)]
+pub struct RegressorOptions {
+    /// Without a `split` column: fraction of frames held out for testing (0: none, every frame trains).
+    #[arg(long, default_value_t = RegressorPlan::new(vec![]).test_fraction)]
+    pub test_fraction: f64,
+    /// Fraction of the training frames used for early stopping.
+    #[arg(long, default_value_t = RegressorPlan::new(vec![]).val_fraction)]
+    pub val_fraction: f64,
+    /// Hidden layer widths (ReLU), e.g. 32,16 (the authors' force head).
+    #[arg(long, value_delimiter = ',', default_values_t = RegressorPlan::new(vec![]).hidden)]
+    pub hidden: Vec<usize>,
+    /// Split and weight seed.
+    #[arg(long, default_value_t = RegressorConfig::new(0, vec![]).schedule.seed)]
+    pub seed: u64,
+    /// Training device.
+    #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
+    pub device: DeviceKind,
+    /// Use only frames where every target is labelled (e.g. theta_deg, empty for spheres and flats); otherwise an empty label is an error.
+    #[arg(long)]
+    pub only_labelled: bool,
+    /// Train only on frames of these shapes: a specialised regressor (a sphere's position, say) that answers where the head sees them.
+    #[arg(long, value_delimiter = ',')]
+    pub shapes: Vec<String>,
+}
+
+impl RegressorOptions {
+    /// The plan for `targets` (label columns, `NAME:PERIOD` for an angle).
+    pub fn plan(&self, targets: &[String]) -> Result<RegressorPlan> {
+        let targets = targets
+            .iter()
+            .map(|t| t.parse::<Target>())
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        if targets.is_empty() {
+            return Err(tactile_core::Error::Config(
+                "targets: give at least one label column".into(),
+            )
+            .into());
+        }
+        Ok(RegressorPlan {
+            hidden: self.hidden.clone(),
+            test_fraction: self.test_fraction,
+            val_fraction: self.val_fraction,
+            seed: self.seed,
+            only_labelled: self.only_labelled,
+            shapes: self.shapes.clone(),
+            ..RegressorPlan::new(targets)
+        })
+    }
+}
+
+/// One trainer as both front ends show it.
+pub struct Trainer {
+    /// Its name: `tactile train NAME`, `tactile.train.NAME(...)`.
+    pub name: &'static str,
+    /// The native function's name in `tactile._tactile`.
+    pub native: &'static str,
+    /// The Python parameters before the options (inputs, not options;
+    /// `*` where the keyword-only ones begin).
+    pub inputs: &'static [&'static str],
+    /// What it trains, for the stub's docstring.
+    pub about: &'static str,
+    docs: fn() -> tactile_core::Result<Vec<OptionDoc>>,
+    params: fn() -> tactile_core::Result<Vec<String>>,
+}
+
+impl Trainer {
+    const fn of<T: Options>(
+        name: &'static str,
+        native: &'static str,
+        inputs: &'static [&'static str],
+        about: &'static str,
+    ) -> Self {
+        Self {
+            name,
+            native,
+            inputs,
+            about,
+            docs: T::docs,
+            params: T::python_params,
+        }
+    }
+
+    /// Every option with its help and default, in flag order.
+    pub fn docs(&self) -> Result<Vec<OptionDoc>> {
+        Ok((self.docs)()?)
+    }
+
+    /// The typed Python signature of the trainer, `def NAME(...) -> R: ...`.
+    pub fn python_def(&self, name: &str, inputs: &[&str], returns: &str) -> Result<String> {
+        let mut s = format!("def {name}(\n");
+        for i in inputs {
+            s.push_str(&format!("    {i},\n"));
+        }
+        if !inputs.contains(&"*") {
+            s.push_str("    *,\n");
+        }
+        s.push_str("    config: Optional[_Path] = None,\n");
+        for p in (self.params)()? {
+            s.push_str(&format!("    {p},\n"));
+        }
+        s.push_str(&format!(") -> {returns}:"));
+        Ok(s)
+    }
+}
+
+/// Every trainer with options, in the command line's order.
+pub const TRAINERS: &[Trainer] = &[
+    Trainer::of::<tactile_cae::CaeOptions>(
+        "cae",
+        "train_cae",
+        &["data: _Path", "out: _Path"],
+        "Paper A's convolutional autoencoder on a TacTip dataset.",
+    ),
+    Trainer::of::<HeadOptions>(
+        "head",
+        "train_head_py",
+        &[
+            "data: _Path",
+            "*",
+            "encoder: Optional[_Path] = None",
+            "features: Optional[_Path] = None",
+            "out: Optional[_Path] = None",
+            "test: Optional[_Path] = None",
+        ],
+        "Paper A's shape head on an encoder's features (or a feature CSV).",
+    ),
+    Trainer::of::<RegressorOptions>(
+        "regressor",
+        "train_regressor_py",
+        &[
+            "data: _Path",
+            "targets: Sequence[str]",
+            "*",
+            "encoder: Optional[_Path] = None",
+            "features: Optional[_Path] = None",
+            "out: Optional[_Path] = None",
+        ],
+        "A regressor (pose, depth, force; angles on the circle) on an encoder's features.",
+    ),
+    Trainer::of::<tactile_pose::PoseOptions>(
+        "pose",
+        "train_pose",
+        &["data: _Path", "out: _Path"],
+        "A supervised pose network (CNN on grey pin images) on TacTip frames.",
+    ),
+    Trainer::of::<tactile_detect::DetectorOptions>(
+        "detector",
+        "train_detector",
+        &["data: Union[_Path, Sequence[_Path]]", "out: _Path"],
+        "Paper B's tendon detector on one or more visuo-tactile datasets.",
+    ),
+    Trainer::of::<tactile_segment::SegmenterOptions>(
+        "segmenter",
+        "train_segmenter",
+        &["data: _Path", "out: _Path"],
+        "Paper B's U-Net tendon segmenter.",
+    ),
+    Trainer::of::<tactile_depth::DepthOptions>(
+        "depth",
+        "train_depth",
+        &["data: _Path", "out: _Path"],
+        "Paper B's depth U-Net with a DenseNet encoder.",
+    ),
+];
+
+/// The trainer called `name`, or an error naming those there are.
+pub fn trainer(name: &str) -> Result<&'static Trainer> {
+    TRAINERS.iter().find(|t| t.name == name).ok_or_else(|| {
+        let known: Vec<&str> = TRAINERS.iter().map(|t| t.name).collect();
+        Error::from(tactile_core::Error::Config(format!(
+            "no trainer '{name}' (known: {})",
+            known.join(", ")
+        )))
+    })
+}
+
+/// The marker lines around the generated part of a stub file.
+pub const STUB_BEGIN: &str = "# --- generated by tactile_pipeline::options (TACTILE_BLESS=1 cargo test --release --workspace --test options): do not edit ---";
+/// See [`STUB_BEGIN`].
+pub const STUB_END: &str = "# --- end of generated part ---";
+
+/// The generated parts of the Python stubs: `(native, train)`, the typed
+/// native functions of `_tactile.pyi` and the typed trainers of
+/// `tactile/train.pyi`, each between [`STUB_BEGIN`] and [`STUB_END`].
+pub fn python_stubs() -> Result<(String, String)> {
+    let mut native = format!("{STUB_BEGIN}\n");
+    let mut train = format!("{STUB_BEGIN}\n");
+    for t in TRAINERS {
+        native.push_str(&t.python_def(t.native, t.inputs, "Dict[str, Any]")?);
+        native.push_str(" ...\n");
+        train.push_str(&t.python_def(t.name, t.inputs, "Dict[str, Any]")?);
+        train.push_str(&format!("\n    \"\"\"{}\"\"\"\n\n", t.about));
+    }
+    native.push_str(STUB_END);
+    native.push('\n');
+    train.push_str(STUB_END);
+    train.push('\n');
+    Ok((native, train))
+}

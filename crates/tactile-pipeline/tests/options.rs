@@ -1,0 +1,169 @@
+//! The options layer: every trainer's options reach the command line and
+//! Python by the same names, with the same defaults, and the Python stubs
+//! that type them are the ones the library generates.
+
+use std::path::PathBuf;
+
+use serde_json::{Value, json};
+use tactile_burn::options::Options;
+use tactile_pipeline::options::{STUB_BEGIN, STUB_END, TRAINERS, python_stubs, trainer};
+
+fn stub(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../tactile-py/python/tactile")
+        .join(name)
+}
+
+/// The generated part of a stub file as it is, and the file with `part`
+/// in its place (the placeholder `# generated` or the last generated part).
+fn generated_part(text: &str, part: &str) -> (Option<String>, String) {
+    match (text.find(STUB_BEGIN), text.find(STUB_END)) {
+        (Some(a), Some(b)) => {
+            let end = b + STUB_END.len() + 1;
+            let end = end.min(text.len());
+            (
+                Some(text[a..end].to_string()),
+                format!("{}{part}{}", &text[..a], &text[end..]),
+            )
+        }
+        _ => (None, text.replacen("# generated\n", part, 1)),
+    }
+}
+
+#[test]
+fn the_python_stubs_type_every_option_as_the_library_defines_it() {
+    let (native, train) = python_stubs().unwrap();
+    let bless = std::env::var_os("TACTILE_BLESS").is_some();
+    for (file, part) in [("_tactile.pyi", &native), ("train.pyi", &train)] {
+        let path = stub(file);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let (now, blessed) = generated_part(&text, part);
+        if bless {
+            std::fs::write(&path, blessed).unwrap();
+            continue;
+        }
+        assert_eq!(
+            now.as_deref(),
+            Some(part.as_str()),
+            "{} is not what the options generate: run TACTILE_BLESS=1 cargo test --release --workspace --test options",
+            path.display()
+        );
+    }
+    // The detector's keywords, typed as its flags parse them.
+    for want in [
+        "input_bits: int = 8",
+        "normalise_exposure: bool = False",
+        "soft_labels: Optional[float] = None",
+        "input: Tuple[int, int] = (",
+        "device: str = \"flex\"",
+    ] {
+        assert!(native.contains(want), "{want} not in\n{native}");
+    }
+    assert!(train.contains("def pose(\n    data: _Path,\n    out: _Path,\n    *,\n    config: Optional[_Path] = None,\n    targets: Sequence[str] = (\"x_mm\", \"theta_deg\", \"depth_mm\"),"), "{train}");
+}
+
+#[test]
+fn every_option_of_every_trainer_is_a_flag_and_a_keyword() {
+    assert_eq!(
+        TRAINERS.iter().map(|t| t.name).collect::<Vec<_>>(),
+        [
+            "cae",
+            "head",
+            "regressor",
+            "pose",
+            "detector",
+            "segmenter",
+            "depth"
+        ]
+    );
+    for t in TRAINERS {
+        let docs = t.docs().unwrap();
+        assert!(docs.len() >= 4, "{}: {} options", t.name, docs.len());
+        for d in &docs {
+            assert!(!d.help.is_empty(), "{}: {} has no help", t.name, d.name);
+            assert!(
+                !d.name.contains('-') && d.name != "config",
+                "{}: {} is no keyword",
+                t.name,
+                d.name
+            );
+        }
+    }
+    assert!(
+        trainer("vgg")
+            .err()
+            .unwrap()
+            .to_string()
+            .contains("known: cae, head")
+    );
+}
+
+/// Each option, set from a keyword to a value that is not its default,
+/// reaches the config the trainer would use; and the same value given
+/// through `--config FILE` does too, a keyword beside it winning.
+#[test]
+fn keywords_and_config_files_reach_the_training_config() {
+    use tactile_pose::PoseOptions;
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("p.json");
+    std::fs::write(
+        &file,
+        json!({"input_px": 128, "widths": [16, 32, 32, 64, 64], "hidden": 256, "max_epochs": 60})
+            .to_string(),
+    )
+    .unwrap();
+    let overrides = json!({"max_epochs": 45, "loss": "l1", "targets": ["x_mm", "theta_deg:180"]});
+    let p = PoseOptions::resolve(Some(&file), overrides.as_object().unwrap()).unwrap();
+    let c = p.config().unwrap();
+    assert_eq!(c.preprocess.output_px, 128);
+    assert_eq!(c.model.input_px, 128);
+    assert_eq!(c.model.widths, [16, 32, 32, 64, 64]);
+    assert_eq!(c.schedule.max_epochs, 45, "the keyword wins over the file");
+    assert_eq!(c.model.outputs, 3, "x and an angle's two columns");
+    // The shipped recipe files are options files.
+    for name in ["p128", "p64", "p64-wide"] {
+        let f = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../configs/pose")
+            .join(format!("{name}.json"));
+        PoseOptions::resolve(Some(&f), &Default::default())
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+            .config()
+            .unwrap();
+    }
+    // An unknown option in a file names the file and the option.
+    std::fs::write(&file, json!({"input_pix": 128}).to_string()).unwrap();
+    let e = PoseOptions::resolve(Some(&file), &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("p.json") && e.contains("unknown option 'input_pix'"),
+        "{e}"
+    );
+    std::fs::write(&file, "[1, 2]").unwrap();
+    let e = PoseOptions::resolve(Some(&file), &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("JSON object"), "{e}");
+    // A bad value from a file names the file and the option.
+    std::fs::write(&file, json!({"hidden": "wide"}).to_string()).unwrap();
+    let e = PoseOptions::resolve(Some(&file), &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("p.json") && e.contains("option 'hidden'"), "{e}");
+    // Every option of every trainer takes its own default as a keyword.
+    fn each_default<T: Options>() {
+        let defaults = serde_json::to_value(T::defaults().unwrap()).unwrap();
+        for (k, v) in defaults.as_object().unwrap() {
+            let one: serde_json::Map<String, Value> =
+                [(k.clone(), v.clone())].into_iter().collect();
+            T::with_overrides(&one).unwrap_or_else(|e| panic!("{k}: {e}"));
+        }
+    }
+    each_default::<tactile_cae::CaeOptions>();
+    each_default::<tactile_pipeline::options::HeadOptions>();
+    each_default::<tactile_pipeline::options::RegressorOptions>();
+    each_default::<PoseOptions>();
+    each_default::<tactile_detect::DetectorOptions>();
+    each_default::<tactile_segment::SegmenterOptions>();
+    each_default::<tactile_depth::DepthOptions>();
+}

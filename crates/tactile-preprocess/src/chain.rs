@@ -1,0 +1,291 @@
+//! The TacTip chain itself: a frame through lighting, equalisation,
+//! threshold, mask, opening, crop and resize to a [`PinImage`].
+
+use tactile_core::image_io::GreyImage;
+
+use crate::config::{Downsample, Lighting, PreprocessConfig};
+use crate::morphology::{blank, centre_crop, circular_mask, dilate, erode, top_hat_binary};
+use crate::resize::{resize_area, resize_linear};
+use crate::{Error, Result, align};
+
+/// Largest morphology window or box accepted, pixels.
+pub const MAX_WINDOW_PX: usize = 255;
+
+/// A pin image: `side x side` values in {0, 1} (or grey levels in [0, 1]
+/// when the chain does not binarise), row-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PinImage {
+    /// Side, pixels.
+    pub side: usize,
+    /// `side * side` values, row-major.
+    pub pixels: Vec<f32>,
+}
+
+/// `round(v/255 + offset)` with NumPy's round-half-to-even, per pixel.
+pub fn binarise(img: &GreyImage, offset: f64) -> Vec<f32> {
+    img.as_slice()
+        .iter()
+        .map(|&v| {
+            (v as f64 / 255.0 + offset)
+                .round_ties_even()
+                .clamp(0.0, 1.0) as f32
+        })
+        .collect()
+}
+
+/// The chain's first steps: lighting, equalisation, threshold, mask (the
+/// binary image the pin alignment measures).
+pub(crate) fn lit_and_masked(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<GreyImage> {
+    let mut img = frame.clone();
+    if let Lighting::TopHat {
+        background_window_px,
+        peak_window_px,
+        relative_threshold,
+        min_contrast,
+        denoise_px,
+    } = &cfg.lighting
+    {
+        img = top_hat_binary(
+            &img,
+            *background_window_px,
+            *peak_window_px,
+            *relative_threshold,
+            *min_contrast,
+            *denoise_px,
+        )?;
+    }
+    if cfg.equalize {
+        let mut dst = blank(&img)?;
+        kornia_imgproc::histogram::equalize_hist(&img, &mut dst)?;
+        img = dst;
+    }
+    if let Some(t) = cfg.threshold {
+        let mut dst = blank(&img)?;
+        // OpenCV THRESH_BINARY: value > t -> 255.
+        kornia_imgproc::threshold::threshold_binary(&img, &mut dst, t, 255)?;
+        img = dst;
+    }
+    if let Some(r) = cfg.mask_radius_px {
+        circular_mask(&mut img, r);
+    }
+    Ok(img)
+}
+
+/// Run the full configured chain on one frame.
+pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage> {
+    cfg.check()?;
+    if frame.width() < cfg.output_px || frame.height() < cfg.output_px {
+        return Err(Error::FrameTooSmall {
+            width: frame.width(),
+            height: frame.height(),
+            needed: cfg.output_px,
+        });
+    }
+    let mut img = lit_and_masked(frame, cfg)?;
+    if let Some(a) = &cfg.align
+        && let Some(turn) = align::turn_to_undo(&img, a)?
+    {
+        // Measured on the chain's own binary image (cheap, so a straight
+        // frame costs one connected-components pass); a turned frame is
+        // turned back raw and lit again, as a straight one would have been.
+        img = lit_and_masked(&align::turn_back(frame, turn)?, cfg)?;
+    }
+    if cfg.open_px > 0 {
+        img = dilate(&erode(&img, cfg.open_px)?, cfg.open_px)?;
+    }
+    if cfg.grow_px > 0 {
+        img = dilate(&img, cfg.grow_px)?;
+    }
+    img = centre_crop(&img, cfg.crop_px.min(img.width()).min(img.height()))?;
+    let side = cfg.output_px;
+    let pixels = match (cfg.downsample, cfg.binarise) {
+        // Bit-exact with the authors' u8 chain.
+        (Downsample::Linear, true) => {
+            binarise(&resize_linear(&img, side, side)?, cfg.binarise_offset)
+        }
+        (Downsample::Linear, false) => resize_linear(&img, side, side)?
+            .as_slice()
+            .iter()
+            .map(|&v| v as f32 / 255.0)
+            .collect(),
+        (Downsample::Area, b) => {
+            let soft = resize_area(&img, side, side)?;
+            if b {
+                soft.iter()
+                    .map(|&v| {
+                        (v as f64 + cfg.binarise_offset)
+                            .round_ties_even()
+                            .clamp(0.0, 1.0) as f32
+                    })
+                    .collect()
+            } else {
+                soft
+            }
+        }
+    };
+    Ok(PinImage { side, pixels })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::morphology::{box_extreme, box_kernel};
+    use kornia_imgproc::morphology;
+    use kornia_imgproc::padding::PaddingMode;
+
+    #[test]
+    fn area_resize_keeps_the_mean_and_sees_sub_pixel_motion() {
+        // A 4x4 white square on a 256x256 frame, moved by one input pixel:
+        // 1/9 of an output pixel at a 256 -> 28 shrink.
+        let frame = |x0: usize| {
+            let mut d = vec![0u8; 256 * 256];
+            for y in 100..104 {
+                for x in x0..x0 + 4 {
+                    d[y * 256 + x] = 255;
+                }
+            }
+            tactile_core::image_io::grey_image(256, 256, d).unwrap()
+        };
+        let (a, b) = (frame(100), frame(101));
+        let (sa, sb) = (
+            resize_area(&a, 28, 28).unwrap(),
+            resize_area(&b, 28, 28).unwrap(),
+        );
+        let sum = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>();
+        let expected = 16.0 / (256.0 * 256.0) * 784.0;
+        assert!(
+            (sum(&sa) - expected).abs() < 1e-5,
+            "{} vs {expected}",
+            sum(&sa)
+        );
+        assert!((sum(&sb) - expected).abs() < 1e-5);
+        // The centroid moves right by a fraction of an output pixel (28/256
+        // of one in the continuous limit; on the pixel grid a step).
+        let cx = |v: &[f32]| {
+            v.iter()
+                .enumerate()
+                .map(|(i, &p)| (i % 28) as f64 * p as f64)
+                .sum::<f64>()
+                / sum(v)
+        };
+        let shift = cx(&sb) - cx(&sa);
+        assert!(shift > 0.05 && shift < 0.25, "centroid shift {shift}");
+        // Bilinear sampling of the same two frames cannot tell them apart.
+        let (la, lb) = (
+            resize_linear(&a, 28, 28).unwrap(),
+            resize_linear(&b, 28, 28).unwrap(),
+        );
+        assert_eq!(binarise(&la, 0.3), binarise(&lb, 0.3));
+        assert!(resize_area(&a, 300, 28).is_err());
+    }
+
+    #[test]
+    fn separable_box_morphology_equals_kornia() {
+        let (w, h) = (37, 23);
+        let data: Vec<u8> = (0..w * h)
+            .map(|i| ((i * 7919 + i / 5 * 31) % 251) as u8)
+            .collect();
+        let img = tactile_core::image_io::grey_image(w, h, data).unwrap();
+        for side in [3, 5, 15] {
+            for max in [false, true] {
+                let mut k = blank(&img).unwrap();
+                if max {
+                    morphology::dilate(
+                        &img,
+                        &mut k,
+                        &box_kernel(side),
+                        PaddingMode::Replicate,
+                        [0],
+                    )
+                    .unwrap();
+                } else {
+                    morphology::erode(&img, &mut k, &box_kernel(side), PaddingMode::Replicate, [0])
+                        .unwrap();
+                }
+                let ours = box_extreme(&img, side, max).unwrap();
+                assert_eq!(ours.as_slice(), k.as_slice(), "side {side} max {max}");
+            }
+        }
+    }
+    use tactile_core::image_io::grey_image;
+
+    #[test]
+    fn binarise_rounds_half_to_even_like_numpy() {
+        let img = grey_image(3, 1, vec![51, 52, 255]).unwrap();
+        assert_eq!(binarise(&img, 0.3), vec![0.0, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn resize_matches_opencv_linear_on_a_ramp() {
+        // cv2.resize(np.arange(8, dtype=np.uint8).reshape(1, 8) * 30, (4, 1)) == [15, 75, 135, 195]
+        let img = grey_image(8, 1, (0..8).map(|v| v * 30).collect()).unwrap();
+        let out = resize_linear(&img, 4, 1).unwrap();
+        assert_eq!(out.as_slice(), &[15, 75, 135, 195]);
+    }
+
+    fn synthetic_pins(gain: impl Fn(f32, f32) -> f32) -> GreyImage {
+        let mut data = vec![0u8; 300 * 300];
+        for y in 0..300 {
+            for x in 0..300 {
+                let (fx, fy) = (x as f32, y as f32);
+                let near = ((fx - 150.0) / 20.0).round() * 20.0 + 150.0;
+                let neary = ((fy - 150.0) / 20.0).round() * 20.0 + 150.0;
+                let pin = (fx - near).powi(2) + (fy - neary).powi(2) < 16.0;
+                let v = if pin { 220.0 } else { 30.0 };
+                data[y * 300 + x] = (v * gain(fx, fy)).clamp(0.0, 255.0) as u8;
+            }
+        }
+        grey_image(300, 300, data).unwrap()
+    }
+
+    #[test]
+    fn lighting_compensation_removes_a_strong_gradient() {
+        let cfg = PreprocessConfig::lighting_compensated();
+        let flat = preprocess(&synthetic_pins(|_, _| 1.0), &cfg).unwrap();
+        let graded = preprocess(&synthetic_pins(|x, _| 0.35 + 1.0 * x / 300.0), &cfg).unwrap();
+        let differ = flat
+            .pixels
+            .iter()
+            .zip(&graded.pixels)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(
+            differ <= 8,
+            "{differ} of 784 pixels changed under a 3x illumination gradient"
+        );
+        let on = flat.pixels.iter().filter(|&&v| v == 1.0).count();
+        assert!(on > 50 && on < 500, "pin pixels: {on}");
+        // The fixed-threshold chain loses the dark half under the same gradient.
+        let paper = PreprocessConfig {
+            equalize: false,
+            ..PreprocessConfig::paper()
+        };
+        let p_flat = preprocess(&synthetic_pins(|_, _| 1.0), &paper).unwrap();
+        let p_graded = preprocess(&synthetic_pins(|x, _| 0.35 + 1.0 * x / 300.0), &paper).unwrap();
+        let p_differ = p_flat
+            .pixels
+            .iter()
+            .zip(&p_graded.pixels)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(
+            p_differ > differ,
+            "fixed threshold {p_differ} vs compensated {differ}"
+        );
+    }
+
+    #[test]
+    fn tiny_or_empty_frames_are_errors_not_panics() {
+        for side in [1usize, 10, 27] {
+            let img = grey_image(side, side, vec![255; side * side]).unwrap();
+            let e = preprocess(&img, &PreprocessConfig::paper())
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(&format!("{side}x{side}")), "{e}");
+        }
+        // A black frame is a valid (empty) pin image, a white one is all pins.
+        let black = grey_image(300, 300, vec![0; 90000]).unwrap();
+        let p = preprocess(&black, &PreprocessConfig::lighting_compensated()).unwrap();
+        assert!(p.pixels.iter().all(|&v| v == 0.0));
+    }
+}

@@ -1,0 +1,225 @@
+//! The TacTip chain's settings ([`PreprocessConfig`]) and its presets:
+//! the authors' chain, the lighting-compensated one for raw frames, and
+//! the named presets and JSON files a front end passes.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, MAX_WINDOW_PX, Result, align};
+
+/// How uneven illumination is removed before thresholding.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "snake_case")]
+pub enum Lighting {
+    /// No compensation: the fixed threshold of the authors' lab set-up.
+    None,
+    /// Background subtraction by a white top-hat (the frame minus its
+    /// morphological opening with a box larger than a pin), then a pixel is
+    /// a pin when it reaches `relative_threshold` of the local top-hat
+    /// maximum (a box of `peak_window_px`) and that maximum is at least
+    /// `min_contrast` grey levels. Gains, gradients and blobs cancel out.
+    TopHat {
+        /// Side of the opening box (larger than a pin), pixels.
+        background_window_px: usize,
+        /// Side of the local-maximum box, pixels.
+        peak_window_px: usize,
+        /// Fraction of the local top-hat maximum a pin pixel reaches.
+        relative_threshold: f32,
+        /// Smallest local maximum that counts as a pin, grey levels.
+        min_contrast: u8,
+        /// Box-blur size applied first to tame sensor noise (1 = off).
+        denoise_px: usize,
+    },
+}
+
+/// Every step of the chain; see the presets.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PreprocessConfig {
+    /// Illumination compensation.
+    pub lighting: Lighting,
+    /// Histogram equalisation (authors: on; pointless after top-hat).
+    pub equalize: bool,
+    /// Fixed binary threshold applied after equalisation (authors: 170);
+    /// `None` when the lighting step already produced a binary image.
+    pub threshold: Option<u8>,
+    /// Radius of the circular mask around the frame centre (authors: 145 px).
+    pub mask_radius_px: Option<f32>,
+    /// Side of the square morphological opening (authors: 2; 0 = off).
+    pub open_px: usize,
+    /// Side of a square dilation after the opening (0 = off). A 300 px
+    /// frame shrinks 10.7 times to 28 px, so a 7 px pin covers a third of
+    /// an output pixel and flickers in and out with sub-pixel motion;
+    /// growing pins first keeps each one visible in the pin image.
+    #[serde(default)]
+    pub grow_px: usize,
+    /// Side of the centred square crop (authors: 300).
+    pub crop_px: usize,
+    /// Side of the output pin image (28).
+    pub output_px: usize,
+    /// Offset of the final rounding `round(x/255 + offset)` (authors: 0.3).
+    pub binarise_offset: f64,
+    /// How the crop shrinks to `output_px` (authors: bilinear sampling).
+    #[serde(default)]
+    pub downsample: Downsample,
+    /// Round to {0, 1} (paper A). `false` keeps the grey levels in [0, 1],
+    /// which with [`Downsample::Area`] keep each pin's sub-pixel position:
+    /// the fraction of an output pixel it covers.
+    #[serde(default = "yes")]
+    pub binarise: bool,
+    /// Turn each frame whose pin lattice (measured on the binary image
+    /// after the lighting step and the mask) is turned from the training
+    /// frames' back before the chain ([`align`]: a sensor mounted turned);
+    /// `None` = off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub align: Option<align::PinAlign>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// Shrinking the crop to the pin image.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Downsample {
+    /// OpenCV's `INTER_LINEAR` (what the authors ran): samples a 2x2
+    /// neighbourhood, so at a 10x shrink most pixels are never read.
+    #[default]
+    Linear,
+    /// Mean over each output pixel's footprint, with fractional coverage at
+    /// its borders: every input pixel counts.
+    Area,
+}
+
+impl PreprocessConfig {
+    /// The authors' released chain for their lab frames.
+    pub fn paper() -> Self {
+        Self {
+            lighting: Lighting::None,
+            equalize: true,
+            threshold: Some(170),
+            mask_radius_px: Some(145.0),
+            open_px: 2,
+            grow_px: 0,
+            crop_px: 300,
+            output_px: 28,
+            binarise_offset: 0.3,
+            downsample: Downsample::Linear,
+            binarise: true,
+            align: None,
+        }
+    }
+
+    /// The chain for raw frames with uneven lighting (the virtual TacTip of
+    /// `sensors.md`, or a real sensor without a controlled light).
+    pub fn lighting_compensated() -> Self {
+        Self {
+            lighting: Lighting::TopHat {
+                background_window_px: 15,
+                peak_window_px: 21,
+                relative_threshold: 0.5,
+                min_contrast: 25,
+                denoise_px: 3,
+            },
+            equalize: false,
+            threshold: None,
+            mask_radius_px: Some(145.0),
+            // No 2x2 opening: with an even kernel OpenCV's (and kornia's)
+            // erode-then-dilate moves every pin by one pixel down and right;
+            // the 3x3 denoise already removes isolated noise pixels.
+            open_px: 0,
+            grow_px: 9,
+            crop_px: 300,
+            output_px: 28,
+            binarise_offset: 0.3,
+            downsample: Downsample::Linear,
+            binarise: true,
+            align: None,
+        }
+    }
+
+    /// Frames that are already binary pin images (the authors' released
+    /// shapes set): only crop, resize and binarise.
+    pub fn binary_frames() -> Self {
+        Self {
+            lighting: Lighting::None,
+            equalize: false,
+            threshold: None,
+            mask_radius_px: None,
+            open_px: 0,
+            grow_px: 0,
+            crop_px: 300,
+            output_px: 28,
+            binarise_offset: 0.3,
+            downsample: Downsample::Linear,
+            binarise: true,
+            align: None,
+        }
+    }
+
+    /// Check every size and value against its limit: windows and boxes up
+    /// to [`MAX_WINDOW_PX`], the crop up to 8K, the pin image no larger
+    /// than the crop, thresholds and offsets finite.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        let bad = |m: String| Err(tactile_core::Error::Config(format!("preprocessing: {m}")));
+        let windows = [("open_px", self.open_px), ("grow_px", self.grow_px)];
+        let lighting = match &self.lighting {
+            Lighting::None => vec![],
+            Lighting::TopHat {
+                background_window_px,
+                peak_window_px,
+                relative_threshold,
+                denoise_px,
+                ..
+            } => {
+                if !(0.0..=1.0).contains(relative_threshold) {
+                    return bad(format!(
+                        "relative_threshold {relative_threshold} must be in [0, 1]"
+                    ));
+                }
+                vec![
+                    ("background_window_px", *background_window_px),
+                    ("peak_window_px", *peak_window_px),
+                    ("denoise_px", *denoise_px),
+                ]
+            }
+        };
+        for (name, v) in windows.into_iter().chain(lighting) {
+            if v > MAX_WINDOW_PX {
+                return bad(format!("{name} {v} is larger than {MAX_WINDOW_PX} pixels"));
+            }
+        }
+        if self.crop_px == 0 || self.crop_px > 7680 {
+            return bad(format!("crop_px {} must be 1 to 7680", self.crop_px));
+        }
+        if self.output_px == 0 || self.output_px > self.crop_px {
+            return bad(format!(
+                "output_px {} must be 1 to the crop ({})",
+                self.output_px, self.crop_px
+            ));
+        }
+        if !self.binarise_offset.is_finite() || self.mask_radius_px.is_some_and(|r| !r.is_finite())
+        {
+            return bad("binarise_offset and mask_radius_px must be finite".into());
+        }
+        if let Some(a) = &self.align {
+            a.check()?;
+        }
+        Ok(())
+    }
+
+    /// Look a preset up by name (`paper`, `lighting-compensated`, `binary`),
+    /// or read a whole configuration from a `.json` file.
+    pub fn preset(name: &str) -> Result<Self> {
+        match name {
+            "paper" => Ok(Self::paper()),
+            "lighting-compensated" => Ok(Self::lighting_compensated()),
+            "binary" => Ok(Self::binary_frames()),
+            path if path.ends_with(".json") => {
+                let c: Self = tactile_core::io::read_json(path)?;
+                tactile_core::error::in_config(std::path::Path::new(path), c.check())?;
+                Ok(c)
+            }
+            other => Err(Error::UnknownPreset(other.to_string())),
+        }
+    }
+}
