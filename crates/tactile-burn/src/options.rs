@@ -119,22 +119,28 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
         })
     }
 
-    /// Every option with its help and default, in flag order.
-    fn docs() -> Result<Vec<OptionDoc>> {
+    /// Each option's clap argument with its default as JSON, in flag
+    /// order: what [`Options::docs`] and [`Options::python_params`] show.
+    fn each_with_default<R>(show: impl Fn(&clap::Arg, Value) -> R) -> Result<Vec<R>> {
         let defaults =
             serde_json::to_value(Self::defaults()?).map_err(|e| Error::Config(e.to_string()))?;
         let cmd = Self::augment_args(clap::Command::new("options"));
         Ok(cmd
             .get_arguments()
             .map(|a| {
-                let name = a.get_id().as_str().to_string();
-                OptionDoc {
-                    help: a.get_help().map(|h| h.to_string()).unwrap_or_default(),
-                    default: defaults.get(&name).cloned().unwrap_or(Value::Null),
-                    name,
-                }
+                let default = defaults.get(a.get_id().as_str()).cloned();
+                show(a, default.unwrap_or(Value::Null))
             })
             .collect())
+    }
+
+    /// Every option with its help and default, in flag order.
+    fn docs() -> Result<Vec<OptionDoc>> {
+        Self::each_with_default(|a, default| OptionDoc {
+            name: a.get_id().as_str().to_string(),
+            help: a.get_help().map(|h| h.to_string()).unwrap_or_default(),
+            default,
+        })
     }
 
     /// Every option as a typed Python keyword parameter
@@ -142,23 +148,15 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
     /// (`_tactile.pyi`, `tactile/train.pyi`) declare, so an option added
     /// here reaches editors and type checkers without being written again.
     fn python_params() -> Result<Vec<String>> {
-        let defaults =
-            serde_json::to_value(Self::defaults()?).map_err(|e| Error::Config(e.to_string()))?;
-        let cmd = Self::augment_args(clap::Command::new("options"));
-        Ok(cmd
-            .get_arguments()
-            .map(|a| {
-                let name = a.get_id().as_str();
-                let default = defaults.get(name).cloned().unwrap_or(Value::Null);
-                let ty = python_type(a, &default);
-                let ty = if default.is_null() {
-                    format!("Optional[{ty}]")
-                } else {
-                    ty
-                };
-                format!("{name}: {ty} = {}", python_literal(&default))
-            })
-            .collect())
+        Self::each_with_default(|a, default| {
+            let ty = python_type(a, &default);
+            let ty = if default.is_null() {
+                format!("Optional[{ty}]")
+            } else {
+                ty
+            };
+            format!("{}: {ty} = {}", a.get_id(), python_literal(&default))
+        })
     }
 }
 

@@ -37,6 +37,31 @@ fn result<'py, T: serde::Serialize>(
     crate::json::to_py(py, &v)
 }
 
+/// One-dataset training from Python: the options read and checked before
+/// any data (so a bad keyword leaves nothing behind), the output folder
+/// checked, the dataset opened, `train` run off the interpreter, its
+/// result returned as a dict with the output folder.
+fn train_on_one<'py, T, R, E>(
+    py: Python<'py>,
+    data: PathBuf,
+    out: PathBuf,
+    options: Option<&Bound<'py, PyDict>>,
+    check: impl Fn(&T) -> std::result::Result<(), E>,
+    train: impl Fn(&T, &Dataset, &std::path::Path) -> std::result::Result<R, E> + Send + Sync,
+) -> PyResult<Bound<'py, PyAny>>
+where
+    T: tactile_burn::options::Options + Sync,
+    R: serde::Serialize + Send,
+    E: crate::errors::LibraryError,
+{
+    let options: T = crate::json::options(py, options)?;
+    check(&options).py()?;
+    tactile_core::io::ensure_writable_dir(&out).py()?;
+    let ds = open(py, data)?;
+    let fit = interruptible(py, || train(&options, &ds, &out).py())?;
+    result(py, &fit, &out)
+}
+
 /// Train paper A's convolutional autoencoder; `options` are
 /// [`CaeOptions`]' by their keyword names.
 #[pyfunction]
@@ -47,12 +72,14 @@ pub(crate) fn train_cae<'py>(
     out: PathBuf,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let options: CaeOptions = crate::json::options(py, options)?;
-    options.config().py()?;
-    tactile_core::io::ensure_writable_dir(&out).py()?;
-    let ds = open(py, data)?;
-    let s = interruptible(py, || options.train(&ds, &out).py())?;
-    result(py, &s, &out)
+    train_on_one(
+        py,
+        data,
+        out,
+        options,
+        |o: &CaeOptions| o.config().map(drop),
+        |o: &CaeOptions, ds, out| o.train(ds, out),
+    )
 }
 
 /// Train a supervised pose network; `options` are [`PoseOptions`]'.
@@ -64,12 +91,14 @@ pub(crate) fn train_pose<'py>(
     out: PathBuf,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let options: PoseOptions = crate::json::options(py, options)?;
-    options.config().py()?;
-    tactile_core::io::ensure_writable_dir(&out).py()?;
-    let ds = open(py, data)?;
-    let fit = interruptible(py, || options.train(&ds, &out).py())?;
-    result(py, &fit, &out)
+    train_on_one(
+        py,
+        data,
+        out,
+        options,
+        |o: &PoseOptions| o.config().map(drop),
+        |o: &PoseOptions, ds, out| o.train(ds, out),
+    )
 }
 
 /// Train paper B's tendon detector on one or more visuo-tactile datasets;
@@ -106,11 +135,14 @@ pub(crate) fn train_segmenter<'py>(
     out: PathBuf,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let options: SegmenterOptions = crate::json::options(py, options)?;
-    tactile_core::io::ensure_writable_dir(&out).py()?;
-    let ds = open(py, data)?;
-    let s = interruptible(py, || options.train(&ds, &out).py())?;
-    result(py, &s, &out)
+    train_on_one(
+        py,
+        data,
+        out,
+        options,
+        |_: &SegmenterOptions| Ok::<(), tactile_segment::Error>(()),
+        |o: &SegmenterOptions, ds, out| o.train(ds, out),
+    )
 }
 
 /// Train paper B's depth U-Net with a DenseNet encoder; `options` are
@@ -123,11 +155,14 @@ pub(crate) fn train_depth<'py>(
     out: PathBuf,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let options: DepthOptions = crate::json::options(py, options)?;
-    tactile_core::io::ensure_writable_dir(&out).py()?;
-    let ds = open(py, data)?;
-    let s = interruptible(py, || options.train(&ds, &out).py())?;
-    result(py, &s, &out)
+    train_on_one(
+        py,
+        data,
+        out,
+        options,
+        |_: &DepthOptions| Ok::<(), tactile_depth::Error>(()),
+        |o: &DepthOptions, ds, out| o.train(ds, out),
+    )
 }
 
 fn source(encoder: &Option<PathBuf>, features: &Option<PathBuf>) -> PyResult<FeatureSource> {
