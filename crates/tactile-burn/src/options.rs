@@ -53,22 +53,18 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
     fn resolve(config: Option<&Path>, overrides: &Map<String, Value>) -> Result<Self> {
         let defaults =
             serde_json::to_value(Self::defaults()?).map_err(|e| Error::Config(e.to_string()))?;
-        let Value::Object(mut merged) = defaults else {
+        let Value::Object(defaults) = defaults else {
             return Err(Error::Config("options must serialise as an object".into()));
         };
-        let known: Vec<String> = {
-            let mut k: Vec<String> = merged.keys().cloned().collect();
-            k.sort();
-            k
-        };
+        // serde_json's map is sorted: the names come out in order.
+        let known = defaults.keys().cloned().collect::<Vec<_>>().join(", ");
         let file = match config {
-            Some(p) => match tactile_core::io::read_json::<Value>(p)? {
+            Some(p) => match read_options_file(p)? {
                 Value::Object(m) => Some((p, m)),
                 _ => {
                     return Err(Error::Config(format!(
-                        "{}: an options file is a JSON object of option names (known: {})",
-                        p.display(),
-                        known.join(", ")
+                        "{}: an options file is a JSON object of option names (known: {known})",
+                        p.display()
                     )));
                 }
             },
@@ -78,41 +74,38 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
             .iter()
             .map(|(p, m)| (Some(*p), m))
             .chain(std::iter::once((None, overrides)));
-        let mut origin: Map<String, Value> = Map::new();
+        let mut merged = defaults.clone();
+        // Where each value set came from (a file, or none: flags/keywords).
+        let mut origin: std::collections::BTreeMap<&String, Option<&Path>> = Default::default();
         for (from, layer) in layers {
             for (k, value) in layer {
-                if !merged.contains_key(k) {
+                if !defaults.contains_key(k) {
                     let at = from
                         .map(|p| format!("{}: ", p.display()))
                         .unwrap_or_default();
                     return Err(Error::Config(format!(
-                        "{at}unknown option '{k}' (known: {})",
-                        known.join(", ")
+                        "{at}unknown option '{k}' (known: {known})"
                     )));
                 }
                 if !value.is_null() {
                     merged.insert(k.clone(), value.clone());
-                    let at = from.map(|p| p.display().to_string()).unwrap_or_default();
-                    origin.insert(k.clone(), Value::String(at));
+                    origin.insert(k, from);
                 }
             }
         }
         serde_json::from_value(Value::Object(merged.clone())).map_err(|e| {
             // Name the offending option: the first that fails on its own.
-            let bad = origin.keys().find(|k| {
-                let Ok(Value::Object(mut one)) = serde_json::to_value(Self::defaults().ok()) else {
-                    return false;
-                };
-                one.insert((*k).clone(), merged[*k].clone());
+            let bad = origin.iter().find(|(k, _)| {
+                let mut one = defaults.clone();
+                one.insert((**k).clone(), merged[k.as_str()].clone());
                 serde_json::from_value::<Self>(Value::Object(one)).is_err()
             });
             match bad {
-                Some(k) => {
-                    let at = match origin[k].as_str() {
-                        Some(f) if !f.is_empty() => format!("{f}: "),
-                        _ => String::new(),
-                    };
-                    Error::Config(format!("{at}option '{k}' = {}: {e}", merged[k]))
+                Some((k, from)) => {
+                    let at = from
+                        .map(|p| format!("{}: ", p.display()))
+                        .unwrap_or_default();
+                    Error::Config(format!("{at}option '{k}' = {}: {e}", merged[k.as_str()]))
                 }
                 None => Error::Config(format!("options: {e}")),
             }
@@ -161,6 +154,24 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
 }
 
 impl<T: clap::Args + clap::FromArgMatches + Serialize + DeserializeOwned> Options for T {}
+
+/// Largest options file read, bytes: options are a few hundred bytes, so
+/// anything near this is not an options file.
+pub const MAX_OPTIONS_FILE_BYTES: u64 = 1 << 20;
+
+/// An options file's JSON, its size checked before it is read.
+fn read_options_file(path: &Path) -> Result<Value> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::io(path, e))?
+        .len();
+    if len > MAX_OPTIONS_FILE_BYTES {
+        return Err(Error::Config(format!(
+            "{}: {len} bytes is too large for an options file (at most {MAX_OPTIONS_FILE_BYTES})",
+            path.display()
+        )));
+    }
+    tactile_core::io::read_json(path)
+}
 
 /// The Python type of one option's values: from its clap action and value
 /// parser (what the command line accepts), a list when it takes several.

@@ -135,8 +135,11 @@ impl Trainer {
         Ok((self.docs)()?)
     }
 
-    /// The typed Python signature of the trainer, `def NAME(...) -> R: ...`.
-    pub fn python_def(&self, name: &str, inputs: &[&str], returns: &str) -> Result<String> {
+    /// The typed Python signature of the trainer under `name` (its own in
+    /// `tactile/train.pyi`, the native one in `_tactile.pyi`), up to the
+    /// colon.
+    pub fn python_def(&self, name: &str) -> Result<String> {
+        let inputs = self.inputs;
         let mut s = format!("def {name}(\n");
         for i in inputs {
             s.push_str(&format!("    {i},\n"));
@@ -148,7 +151,7 @@ impl Trainer {
         for p in (self.params)()? {
             s.push_str(&format!("    {p},\n"));
         }
-        s.push_str(&format!(") -> {returns}:"));
+        s.push_str(") -> Dict[str, Any]:");
         Ok(s)
     }
 }
@@ -236,9 +239,9 @@ pub fn python_stubs() -> Result<(String, String)> {
     let mut native = format!("{STUB_BEGIN}\n");
     let mut train = format!("{STUB_BEGIN}\n");
     for t in TRAINERS {
-        native.push_str(&t.python_def(t.native, t.inputs, "Dict[str, Any]")?);
+        native.push_str(&t.python_def(t.native)?);
         native.push_str(" ...\n");
-        train.push_str(&t.python_def(t.name, t.inputs, "Dict[str, Any]")?);
+        train.push_str(&t.python_def(t.name)?);
         train.push_str(&format!("\n    \"\"\"{}\"\"\"\n\n", t.about));
     }
     native.push_str(STUB_END);

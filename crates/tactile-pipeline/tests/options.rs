@@ -150,6 +150,13 @@ fn keywords_and_config_files_reach_the_training_config() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("p.json") && e.contains("option 'hidden'"), "{e}");
+    // A file far larger than any options file is refused before it is read.
+    let huge = " ".repeat(tactile_burn::options::MAX_OPTIONS_FILE_BYTES as usize + 1);
+    std::fs::write(&file, format!("{{{huge}}}")).unwrap();
+    let e = PoseOptions::resolve(Some(&file), &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("p.json") && e.contains("too large"), "{e}");
     // Every option of every trainer takes its own default as a keyword.
     fn each_default<T: Options>() {
         let defaults = serde_json::to_value(T::defaults().unwrap()).unwrap();

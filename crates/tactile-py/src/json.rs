@@ -27,10 +27,12 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
         None => serde_json::Map::new(),
         Some(d) => {
             let d = d.copy()?;
+            let os = py.import("os")?;
+            let path_like = os.getattr("PathLike")?;
             for (k, v) in d.iter() {
                 // Paths become strings, as JSON has them.
-                if v.is_instance(&py.import("os")?.getattr("PathLike")?)? {
-                    d.set_item(k, py.import("os")?.call_method1("fspath", (v,))?)?;
+                if v.is_instance(&path_like)? {
+                    d.set_item(k, os.call_method1("fspath", (v,))?)?;
                 }
             }
             let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;
