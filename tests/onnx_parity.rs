@@ -287,7 +287,7 @@ fn shipped_models_match_onnxruntime_on_real_inputs() {
     let seg = models.join("segmenter");
     let art = SegmenterArtifact::read(&seg).unwrap();
     let s = art.model.side;
-    let win = art.window();
+    let win = art.model.window();
     let (sw, sh) = win.scaled_size(640, 360);
     let data: Vec<f32> = palpation_frames(sw, sh)
         .iter()

@@ -262,24 +262,26 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
     let seg = SegmenterArtifact::read(&models().join("segmenter")).unwrap();
     let depth = DepthArtifact::read(&models().join("depth")).unwrap();
     let det_set = DetectionSet::from_dataset(&ds, &det.model).unwrap();
-    let seg_set = SegmentSet::from_dataset(&ds, &rows, seg.window(), 1, 0).unwrap();
+    let seg_set = SegmentSet::from_dataset(&ds, &rows, seg.model.window(), 1, 0).unwrap();
     let depth_set = DepthSet::from_dataset(&ds, &rows, depth.model.input_size).unwrap();
     for i in rows {
         let frame = load_rgb(ds.path_of(i, "file").unwrap()).unwrap();
         let trained = det.stats.to_chw(&det_set.view(i)).unwrap();
         assert_eq!(
-            det.frame_input(&frame).unwrap(),
+            det.model
+                .network_input(det.model.frame_image(&frame).unwrap(), &det.stats)
+                .unwrap(),
             trained,
             "detector, frame {i}"
         );
         assert_eq!(
-            seg.frame_window(&frame).unwrap(),
+            seg.model.frame_window(&frame).unwrap(),
             seg_set.image(i),
             "segmenter, frame {i}"
         );
         let trained = depth.stats.to_chw(&depth_set.image(i)).unwrap();
         assert_eq!(
-            depth.frame_input(&frame, None).unwrap(),
+            depth.model.frame_input(&frame, &depth.stats, None).unwrap(),
             trained,
             "depth, frame {i}"
         );

@@ -106,38 +106,53 @@ impl Shape {
 
 /// The per-sample ranges of the virtual TacTip (defaults: the spec's
 /// training distribution).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(default, deny_unknown_fields)]
 pub struct TactipConfig {
     /// Shapes drawn uniformly, by name (see [`SHAPES`]).
+    #[arg(long, value_delimiter = ',', default_values_t = TactipConfig::default().shapes)]
     pub shapes: Vec<String>,
     /// Indentation past first touch, mm.
+    #[arg(long, default_value_t = TactipConfig::default().depth_mm)]
     pub depth_mm: Range,
     /// Contact x, mm.
+    #[arg(long, default_value_t = TactipConfig::default().x_mm)]
     pub x_mm: Range,
     /// Contact y, mm.
+    #[arg(long, default_value_t = TactipConfig::default().y_mm)]
     pub y_mm: Range,
     /// In-plane orientation, degrees.
+    #[arg(long, default_value_t = TactipConfig::default().theta_deg)]
     pub theta_deg: Range,
     /// Sphere radius, mm.
+    #[arg(long, default_value_t = TactipConfig::default().sphere_radius_mm)]
     pub sphere_radius_mm: Range,
     /// Grey level of a pin at rest.
+    #[arg(long, default_value_t = TactipConfig::default().pin_grey)]
     pub pin_grey: Range,
     /// Grey level of the background.
+    #[arg(long, default_value_t = TactipConfig::default().background_grey)]
     pub background_grey: Range,
     /// `g0` of the illumination field.
+    #[arg(long, default_value_t = TactipConfig::default().gain)]
     pub gain: Range,
     /// `a` and `b` of the illumination field (each drawn from this range).
+    #[arg(long, default_value_t = TactipConfig::default().gradient)]
     pub gradient: Range,
     /// Probability of an external light blob.
+    #[arg(long, default_value_t = TactipConfig::default().blob_probability)]
     pub blob_probability: f64,
     /// Light blob width, pixels.
+    #[arg(long, default_value_t = TactipConfig::default().blob_sigma_px)]
     pub blob_sigma_px: Range,
     /// Light blob amplitude, grey levels.
+    #[arg(long, default_value_t = TactipConfig::default().blob_amplitude)]
     pub blob_amplitude: Range,
     /// Sensor noise, grey levels.
+    #[arg(long, default_value_t = TactipConfig::default().noise_sigma)]
     pub noise_sigma: Range,
     /// Relative standard deviation of the load-cell noise on `force_n`.
+    #[arg(long, default_value_t = TactipConfig::default().force_noise)]
     pub force_noise: f64,
 }
 

@@ -57,6 +57,13 @@ impl Range {
     }
 }
 
+/// `"min,max"`, as [`Range`]'s `FromStr` reads it.
+impl std::fmt::Display for Range {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{}", self.min, self.max)
+    }
+}
+
 /// Parse `"lo,hi"` or a single value (CLI flags).
 impl std::str::FromStr for Range {
     type Err = String;

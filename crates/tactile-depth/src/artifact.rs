@@ -5,12 +5,10 @@
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
 use tactile_burn::Artifact;
-use tactile_core::image_io::RgbImage;
 use tactile_onnx::{Exportable, export_batch_dynamic};
-use tactile_preprocess::visuo::{ChannelStats, resize_rgb};
+use tactile_preprocess::visuo::ChannelStats;
 
 use crate::model::{DepthNet, DepthNetConfig};
-use crate::{Error, Result};
 
 /// How depth is represented inside the network: `(depth_mm - offset_mm) /
 /// unit_mm`. With `unit_mm = 1` the network works in millimetres; 1000
@@ -100,24 +98,5 @@ impl Exportable for DepthArtifact {
         let [w, h] = self.model.input_size;
         let c = self.model.in_channels;
         export_batch_dynamic(model, [1, c, h, w], |m: &DepthNet, x| m.forward(x))
-    }
-}
-
-impl DepthArtifact {
-    /// The normalised `C x H x W` input of an RGB frame of any size
-    /// (resized, then 8 bits per channel as in training, see
-    /// [`FloatImage::quantised`](tactile_preprocess::visuo::FloatImage::quantised));
-    /// `mask` (at the input size) is required exactly when the network
-    /// takes the mask channel.
-    pub fn frame_input(&self, frame: &RgbImage, mask: Option<&[bool]>) -> Result<Vec<f32>> {
-        let [w, h] = self.model.input_size;
-        let img = resize_rgb(frame, w, h)?.quantised();
-        let mut x = self.stats.to_chw(&img)?;
-        match (self.with_mask, mask) {
-            (true, Some(m)) if m.len() == w * h => x.extend(m.iter().map(|&b| b as u8 as f32)),
-            (true, _) => return Err(Error::MaskRequired { size: [w, h] }),
-            (false, _) => {}
-        }
-        Ok(x)
     }
 }

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
 use tactile_core::spec::visuotactile as spec;
-use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_grey, resize_rgb};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_grey};
 
 use crate::Result;
 
@@ -97,8 +97,12 @@ impl DepthSet {
         let samples = rows
             .par_iter()
             .map(|&i| -> Result<DepthSample> {
-                let frame = resize_rgb(&ds.load_rgb(i)?, w, h)
-                    .map_err(|e| e.in_file(ds.path_of(i, "file").unwrap_or_default()))?;
+                let rgb = crate::prepare::frame_bytes(&ds.load_rgb(i)?, [w, h]).map_err(|e| {
+                    tactile_core::Error::image(
+                        ds.path_of(i, "file").unwrap_or_default(),
+                        e.to_string(),
+                    )
+                })?;
                 let (dw, dh, m) = ds.load_depth_m(i)?;
                 let depth_mm = depth_m_to_mm(&m, (dw, dh), w, h).map_err(|e| {
                     Error::dataset(
@@ -116,7 +120,7 @@ impl DepthSet {
                     .map(|&v| v >= 0.5)
                     .collect();
                 Ok(DepthSample {
-                    rgb: frame.to_bytes(),
+                    rgb,
                     depth_mm,
                     mask,
                     tendon: ds.number_opt(i, "tendon")? == Some(1.0),

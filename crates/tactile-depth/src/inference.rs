@@ -48,7 +48,8 @@ impl DepthEstimator {
     /// row-major) of an RGB frame of any size; `mask` (at the input size)
     /// is required exactly when the network takes the mask channel.
     pub fn depth_mm(&mut self, frame: &RgbImage, mask: Option<&[bool]>) -> Result<Vec<f32>> {
-        let x = self.artifact.frame_input(frame, mask)?;
+        let a = &self.artifact;
+        let x = a.model.frame_input(frame, &a.stats, mask)?;
         Ok(self.depth_mm_of_inputs(&x, 1)?.remove(0))
     }
 }

@@ -12,6 +12,7 @@ pub mod eval;
 pub mod inference;
 pub mod model;
 pub mod options;
+pub mod prepare;
 pub mod torchvision;
 pub mod training;
 

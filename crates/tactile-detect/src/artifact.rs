@@ -5,12 +5,10 @@
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
 use tactile_burn::Artifact;
-use tactile_core::image_io::RgbImage;
 use tactile_onnx::{Exportable, export_batch_dynamic};
-use tactile_preprocess::profile::{InputProfile, descriptor};
-use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_rgb};
+use tactile_preprocess::profile::InputProfile;
+use tactile_preprocess::visuo::ChannelStats;
 
-use crate::Result;
 use crate::model::{Detector, DetectorConfig};
 
 /// Everything needed to rebuild and run a saved detector.
@@ -73,38 +71,6 @@ impl Exportable for DetectorArtifact {
 }
 
 impl DetectorArtifact {
-    /// The normalised `3 x H x W` network input of an RGB frame of any size
-    /// (resized, then rounded to the input's bits as in training, see
-    /// [`FloatImage::quantised_to`](tactile_preprocess::visuo::FloatImage::quantised_to)).
-    /// No gate is applied: a frame's answer is
-    /// [`TendonDetector::assess`](crate::TendonDetector::assess)'s.
-    pub fn frame_input(&self, frame: &RgbImage) -> Result<Vec<f32>> {
-        self.network_input(self.frame_image(frame)?)
-    }
-
-    /// The frame as the detector sees it (resized to its input, rounded
-    /// to its bits per channel), from which both its input and its input
-    /// statistics are taken.
-    pub fn frame_image(&self, frame: &RgbImage) -> Result<FloatImage> {
-        let [w, h] = self.model.input_size;
-        Ok(resize_rgb(frame, w, h)?.quantised_to(self.model.bits()))
-    }
-
-    /// The normalised `3 x H x W` network input of a frame image made by
-    /// [`Self::frame_image`].
-    pub fn network_input(&self, img: FloatImage) -> Result<Vec<f32>> {
-        Ok(self.stats.to_chw(&self.model.network_view(img))?)
-    }
-
-    /// How far `frame` lies from the training frames' input statistics
-    /// ([`InputProfile::score`]), when the detector has a profile.
-    pub fn input_score(&self, image: &FloatImage) -> Result<Option<f32>> {
-        match &self.input_profile {
-            Some(p) => Ok(Some(p.score(&descriptor(image)?))),
-            None => Ok(None),
-        }
-    }
-
     /// Whether probability `p` reaches the saved threshold.
     pub fn is_tendon(&self, p: f32) -> bool {
         p as f64 >= self.threshold

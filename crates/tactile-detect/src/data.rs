@@ -4,7 +4,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_rgb};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage};
 
 use crate::{DetectorConfig, Result};
 
@@ -39,7 +39,6 @@ impl DetectionSet {
     /// `detector`, held at its bits; `tendon` must be 0 or 1.
     pub fn from_dataset(ds: &Dataset, detector: &DetectorConfig) -> Result<Self> {
         let [width, height] = detector.input_size;
-        let bits = detector.bits();
         ds.expect_kind(DatasetKind::Visuotactile)?;
         let tendon = (0..ds.len())
             .map(|i| match ds.number(i, "tendon")? {
@@ -58,9 +57,9 @@ impl DetectionSet {
         let frames = (0..ds.len())
             .into_par_iter()
             .map(|i| {
-                let img = resize_rgb(&ds.load_rgb(i)?, width, height)
-                    .map_err(|e| e.in_file(ds.root.join(&files[i])))?;
-                Ok(img.to_levels(bits))
+                detector.frame_levels(&ds.load_rgb(i)?).map_err(|e| {
+                    tactile_core::Error::image(ds.root.join(&files[i]), e.to_string()).into()
+                })
             })
             .collect::<Result<Vec<_>>>()?;
         let transition = transitions(ds, &tendon)?;
@@ -119,13 +118,7 @@ impl DetectionSet {
     /// The frame as a float image in [0, 1], as the camera gave it (the
     /// input profile's view).
     pub fn image(&self, i: usize) -> FloatImage {
-        FloatImage::from_levels(
-            self.width,
-            self.height,
-            3,
-            &self.frames[i],
-            self.detector.bits(),
-        )
+        self.detector.image_of_levels(&self.frames[i])
     }
 
     /// The frame as the network takes it, before the channel statistics.
@@ -137,7 +130,7 @@ impl DetectionSet {
     pub fn inputs(&self, idx: &[usize], stats: &ChannelStats) -> Result<Vec<f32>> {
         let mut data = Vec::with_capacity(idx.len() * 3 * self.width * self.height);
         for &i in idx {
-            data.extend(stats.to_chw(&self.view(i))?);
+            data.extend(self.detector.network_input(self.image(i), stats)?);
         }
         Ok(data)
     }
@@ -159,7 +152,7 @@ impl DetectionSet {
                 &mut img,
                 &mut tactile_core::rng::SampleRng::new(seed, round, i as u64),
             );
-            data.extend(stats.to_chw(&self.detector.network_view(img))?);
+            data.extend(self.detector.network_input(img, stats)?);
         }
         Ok(Tensor::from_data(
             TensorData::new(data, [idx.len(), 3, self.height, self.width]),

@@ -343,10 +343,20 @@ mod tests {
                 root().join(format!("samples/palpation/{i:06}.png")),
             )
             .unwrap();
-            let img = lead.frame_image(&frame).unwrap();
-            let za = logits(&a, lead.network_input(img.clone()).unwrap(), size, &device);
-            let zb = logits(&b, art.network_input(img.clone()).unwrap(), size, &device);
-            let x = lead.network_input(img).unwrap();
+            let img = lead.model.frame_image(&frame).unwrap();
+            let za = logits(
+                &a,
+                lead.model.network_input(img.clone(), &lead.stats).unwrap(),
+                size,
+                &device,
+            );
+            let zb = logits(
+                &b,
+                art.model.network_input(img.clone(), &art.stats).unwrap(),
+                size,
+                &device,
+            );
+            let x = lead.model.network_input(img, &lead.stats).unwrap();
             let ze = e.model.forward(Tensor::<4>::from_data(
                 TensorData::new(x, [1, 3, size[1], size[0]]),
                 &device,

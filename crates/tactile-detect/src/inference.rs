@@ -89,19 +89,23 @@ impl TendonDetector {
 
     /// The answer for an RGB frame of any size (resized to the input).
     pub fn assess(&mut self, frame: &RgbImage) -> Result<Assessment> {
-        let img = self.artifact.frame_image(frame)?;
+        let img = self.artifact.model.frame_image(frame)?;
         Ok(self.assess_images(vec![img])?.remove(0))
     }
 
     /// The gate a frame image (made by
-    /// [`DetectorArtifact::frame_image`]) meets, and its input score. The
+    /// [`DetectorConfig::frame_image`](crate::DetectorConfig::frame_image))
+    /// meets, and its input score (how far it lies from the training
+    /// frames' input statistics, when the detector has a profile). The
     /// input profile is asked first: a foreign frame is foreign even when
     /// it is also blank.
     pub fn gate(&self, img: &FloatImage) -> Result<(Option<Gate>, Option<f32>)> {
-        let input_score = self.artifact.input_score(img)?;
-        let foreign = match (&self.artifact.input_profile, input_score) {
-            (Some(p), Some(s)) => s > p.threshold,
-            _ => false,
+        let (input_score, foreign) = match &self.artifact.input_profile {
+            Some(p) => {
+                let s = p.score(&tactile_preprocess::profile::descriptor(img)?);
+                (Some(s), s > p.threshold)
+            }
+            None => (None, false),
         };
         let gate = if foreign {
             Some(Gate::Foreign)
@@ -135,7 +139,7 @@ impl TendonDetector {
     }
 
     /// The answers for frame images made by
-    /// [`DetectorArtifact::frame_image`], the network run once on the
+    /// [`DetectorConfig::frame_image`](crate::DetectorConfig::frame_image), the network run once on the
     /// frames no gate stopped.
     pub fn assess_images(&mut self, images: Vec<FloatImage>) -> Result<Vec<Assessment>> {
         let gates = images
@@ -146,7 +150,11 @@ impl TendonDetector {
         let mut passed = 0;
         for (img, (gate, _)) in images.into_iter().zip(&gates) {
             if gate.is_none() {
-                inputs.extend(self.artifact.network_input(img)?);
+                inputs.extend(
+                    self.artifact
+                        .model
+                        .network_input(img, &self.artifact.stats)?,
+                );
                 passed += 1;
             }
         }
@@ -165,7 +173,7 @@ impl TendonDetector {
     }
 
     /// The network's own tendon probabilities of `n` normalised inputs laid
-    /// end to end (as [`DetectorArtifact::network_input`] makes them), no
+    /// end to end (as [`DetectorConfig::network_input`](crate::DetectorConfig::network_input) makes them), no
     /// gate applied: for training, calibration and the ungated scores of
     /// an evaluation. A frame's answer is [`Self::assess`]'s.
     pub fn network_probabilities(&mut self, inputs: &[f32], n: usize) -> Result<Vec<f32>> {

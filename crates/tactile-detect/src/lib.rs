@@ -16,6 +16,7 @@ pub mod eval;
 pub mod inference;
 pub mod model;
 pub mod options;
+pub mod prepare;
 pub mod profile;
 pub mod training;
 

@@ -14,7 +14,6 @@ use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
 use tactile_burn::nn::{hard_sigmoid, hard_swish};
 use tactile_burn::runtime::Forward;
-use tactile_preprocess::visuo::{FloatImage, normalise_exposure};
 
 /// Which network.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, clap::ValueEnum)]
@@ -334,15 +333,6 @@ impl DetectorConfig {
         self.normalise_exposure.unwrap_or(false)
     }
 
-    /// The resized, quantised frame as the network takes it (before the
-    /// channel statistics): with `normalise_exposure`, its gain divided out.
-    pub fn network_view(&self, mut img: FloatImage) -> FloatImage {
-        if self.normalises_exposure() {
-            normalise_exposure(&mut img);
-        }
-        img
-    }
-
     /// Build with fresh weights.
     pub fn init(&self, device: &Device) -> Detector {
         let w = self.width;
@@ -485,6 +475,7 @@ pub fn parameter_count(m: &Detector) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use tactile_preprocess::visuo::FloatImage;
 
     #[test]
     fn folders_saved_before_the_input_form_existed_read_as_eight_bits_unnormalised() {

@@ -116,6 +116,53 @@ impl OrtModel {
     }
 }
 
+/// One output of a model run: its name, shape and values (integers and
+/// booleans as floats: 0/1 for booleans).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedOutput {
+    /// The output's name in the graph.
+    pub name: String,
+    /// Its shape.
+    pub shape: Vec<usize>,
+    /// Its values, row-major.
+    pub values: Vec<f32>,
+}
+
+impl OrtModel {
+    /// Run a standalone model's `frame` (uint8 or uint16 levels), returning
+    /// every output in the graph's order.
+    pub fn run_frame_outputs<T>(
+        &mut self,
+        shape: &[usize],
+        data: Vec<T>,
+    ) -> Result<Vec<NamedOutput>>
+    where
+        T: ort::value::PrimitiveTensorElementType + std::fmt::Debug + Clone + 'static,
+    {
+        let err = |e: ort::Error| Error::Run(format!("run failed: {e}"));
+        let input = Tensor::from_array((shape.to_vec(), data)).map_err(err)?;
+        let outputs = self.session.run(ort::inputs![input]).map_err(err)?;
+        let mut all = Vec::with_capacity(outputs.len());
+        for (name, value) in outputs.iter() {
+            let dims = |s: &ort::value::Shape| s.iter().map(|&d| d as usize).collect::<Vec<_>>();
+            let (shape, values) = if let Ok((s, v)) = value.try_extract_tensor::<f32>() {
+                (dims(s), v.to_vec())
+            } else if let Ok((s, v)) = value.try_extract_tensor::<i64>() {
+                (dims(s), v.iter().map(|&x| x as f32).collect())
+            } else {
+                let (s, v) = value.try_extract_tensor::<bool>().map_err(err)?;
+                (dims(s), v.iter().map(|&x| f32::from(u8::from(x))).collect())
+            };
+            all.push(NamedOutput {
+                name: name.to_string(),
+                shape,
+                values,
+            });
+        }
+        Ok(all)
+    }
+}
+
 impl Network for OrtModel {
     fn run(&mut self, shape: [usize; 4], input: Vec<f32>) -> tactile_core::Result<Vec<f32>> {
         Ok(self.run_f32(&shape, input)?.1)

@@ -7,9 +7,12 @@
 //! becomes `frame`, `uint8` `[N, H, W, C]`, cast, scaled to `[0, 1]`,
 //! normalised by the training statistics and transposed inside; the
 //! output passes a sigmoid (a probability) or an affine map (a depth in
-//! millimetres) and takes a name that says what it is. The model's own
-//! numbers (threshold, statistics, input size, toolkit version) go into
-//! its metadata.
+//! millimetres) and takes a name that says what it is. A detector's
+//! graph also holds its gates ([`GateSpec`]): blank and foreign frames get
+//! probability 0 and say which gate stopped them, and the decision is an
+//! output, so the graph answers a frame as the toolkit does. The model's
+//! own numbers (threshold, statistics, input size, toolkit version) go
+//! into its metadata.
 
 use onnx_ir::{AttributeProto, AttributeType, Message, ModelProto, NodeProto, TensorProto};
 
@@ -20,6 +23,7 @@ const FLOAT: i32 = 1;
 const UINT8: i32 = 2;
 const UINT16: i32 = 4;
 const INT64: i32 = 7;
+const BOOL: i32 = 9;
 
 /// What the standalone output is.
 #[derive(Debug, Clone, PartialEq)]
@@ -62,6 +66,55 @@ pub struct StandaloneSpec {
     /// the statistics, as `tactile_preprocess::visuo::normalise_exposure`
     /// does; a channel whose median is under one 8-bit level is left alone.
     pub exposure_level: Option<ExposureLevel>,
+    /// A detector's gates and decision, in the graph (with a
+    /// [`StandaloneOutput::Probability`] output only).
+    pub gates: Option<GateSpec>,
+}
+
+/// The gates a detector's frame meets before its network, and the rule
+/// that turns its probability into a decision, as
+/// `tactile_detect::TendonDetector::gate` and `answer` apply them. The
+/// graph gains three outputs: `gate` (int64 `[N]`: 0 passed, 1 blank,
+/// 2 foreign), `input_score` (float `[N]`, 0 without a profile) and
+/// `tendon` (bool `[N]`); a gated frame's probability is 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GateSpec {
+    /// A frame is blank when every channel's standard deviation over the
+    /// frame (in [0, 1] units) is below this.
+    pub blank_std: f32,
+    /// The input profile, when the detector has one.
+    pub profile: Option<ProfileGate>,
+    /// A tendon at probabilities >= this (see [`f32_at_or_above`]).
+    pub threshold: f32,
+}
+
+/// The smallest `f32` at or above `t`: `p >= f32_at_or_above(t)` exactly
+/// when `p as f64 >= t`, so a graph in `f32` decides as the toolkit does.
+pub fn f32_at_or_above(t: f64) -> f32 {
+    let f = t as f32;
+    if (f as f64) < t { f.next_up() } else { f }
+}
+
+/// An input profile in the graph: the descriptor of
+/// `tactile_preprocess::profile::descriptor`, its score against the
+/// training frames' centre and scale, and the threshold above which a
+/// frame is foreign.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProfileGate {
+    /// Luma weights of red, green and blue.
+    pub luma: [f32; 3],
+    /// Row-major `H x W` pixels of the sensing window.
+    pub window: Vec<bool>,
+    /// Window pixels where the fine texture (a Laplacian) is read.
+    pub texture: Vec<bool>,
+    /// Pixels of the housing.
+    pub housing: Vec<bool>,
+    /// Per statistic, the training centre.
+    pub centre: Vec<f32>,
+    /// Per statistic, the training scale.
+    pub scale: Vec<f32>,
+    /// Scores above this are foreign.
+    pub threshold: f32,
 }
 
 /// Where and to what each channel's level is set (see
@@ -213,6 +266,317 @@ fn exposure_nodes(
     Ok((ini, nodes))
 }
 
+/// Weights `1 / count` on the chosen pixels (0 elsewhere), as a column:
+/// a MatMul with it is the mean over those pixels (0 over none).
+fn mean_weights(name: &str, chosen: &[bool], column: bool) -> TensorProto {
+    let n = chosen.iter().filter(|&&c| c).count().max(1) as f32;
+    let w: Vec<f32> = chosen
+        .iter()
+        .map(|&c| if c { 1.0 / n } else { 0.0 })
+        .collect();
+    let len = w.len() as i64;
+    let dims: &[i64] = if column { &[len, 1] } else { &[1, len] };
+    constant(name, dims, w)
+}
+
+/// The nodes of the gates on `input` (`[N, H, W, C]` in [0, 1]); they
+/// leave `gate` (int64 `[N]`), `input_score` (float `[N]`) and
+/// `gate_passed` (bool `[N, 1]`).
+fn gate_nodes(
+    g: &GateSpec,
+    height: usize,
+    width: usize,
+    input: &str,
+) -> std::result::Result<(Vec<TensorProto>, Vec<NodeProto>), String> {
+    let (h, w) = (height as i64, width as i64);
+    let mut ini = vec![
+        int64_constant("gate_axes_hw", &[2], vec![1, 2]),
+        int64_constant("gate_axis_1", &[1], vec![1]),
+        constant("gate_blank_std", &[], vec![g.blank_std]),
+        constant("gate_half", &[], vec![0.5]),
+        int64_constant("gate_code_none", &[], vec![0]),
+        int64_constant("gate_code_blank", &[], vec![1]),
+        int64_constant("gate_code_foreign", &[], vec![2]),
+        int64_constant("gate_column", &[2], vec![-1, 1]),
+    ];
+    let reduce = |op: &str, name: &str, inputs: &[&str], out: &str, keep: i64| {
+        let mut n = node(op, name, inputs, out);
+        n.attribute.push(int_attribute("keepdims", keep));
+        n
+    };
+    let mut cast_float = node(
+        "Cast",
+        "gate_blank_float",
+        &["gate_chan_flat"],
+        "gate_chan_flat_f",
+    );
+    cast_float.attribute.push(int_attribute("to", FLOAT as i64));
+    // Blank: every channel's standard deviation under the limit.
+    let mut nodes = vec![
+        reduce(
+            "ReduceMean",
+            "gate_chan_mean",
+            &[input, "gate_axes_hw"],
+            "gate_chan_mean",
+            1,
+        ),
+        node(
+            "Sub",
+            "gate_chan_dev",
+            &[input, "gate_chan_mean"],
+            "gate_chan_dev",
+        ),
+        node(
+            "Mul",
+            "gate_chan_sq",
+            &["gate_chan_dev", "gate_chan_dev"],
+            "gate_chan_sq",
+        ),
+        reduce(
+            "ReduceMean",
+            "gate_chan_var",
+            &["gate_chan_sq", "gate_axes_hw"],
+            "gate_chan_var",
+            0,
+        ),
+        node("Sqrt", "gate_chan_sd", &["gate_chan_var"], "gate_chan_sd"),
+        node(
+            "Less",
+            "gate_chan_flat",
+            &["gate_chan_sd", "gate_blank_std"],
+            "gate_chan_flat",
+        ),
+        cast_float,
+        reduce(
+            "ReduceMin",
+            "gate_all_flat",
+            &["gate_chan_flat_f", "gate_axis_1"],
+            "gate_all_flat",
+            0,
+        ),
+        node(
+            "Greater",
+            "gate_blank",
+            &["gate_all_flat", "gate_half"],
+            "gate_blank",
+        ),
+        node(
+            "Where",
+            "gate_blank_code",
+            &["gate_blank", "gate_code_blank", "gate_code_none"],
+            "gate_blank_code",
+        ),
+    ];
+    let code = match &g.profile {
+        None => {
+            // A zero per frame: the blank test's shape times 0.
+            ini.push(constant("gate_zero", &[], vec![0.0]));
+            nodes.push(node(
+                "Mul",
+                "input_score",
+                &["gate_all_flat", "gate_zero"],
+                "input_score",
+            ));
+            "gate_blank_code"
+        }
+        Some(p) => {
+            let n = height * width;
+            if [p.window.len(), p.texture.len(), p.housing.len()] != [n; 3] {
+                return Err(format!("the profile's regions are not {width} x {height}"));
+            }
+            if p.centre.len() != 9 || p.scale.len() != 9 {
+                return Err("a profile of 9 statistics is expected".into());
+            }
+            // The texture region on the Laplacian's (H-2) x (W-2) output.
+            let inner: Vec<bool> = (1..height - 1)
+                .flat_map(|y| (1..width - 1).map(move |x| (y, x)))
+                .map(|(y, x)| p.texture[y * width + x])
+                .collect();
+            ini.extend([
+                constant("gate_luma", &[3, 1], p.luma.to_vec()),
+                int64_constant("gate_flat", &[2], vec![0, -1]),
+                int64_constant("gate_flat_rgb", &[3], vec![0, -1, 3]),
+                int64_constant("gate_rgb_shape", &[2], vec![0, 3]),
+                int64_constant("gate_image", &[4], vec![0, 1, h, w]),
+                mean_weights("gate_window_row", &p.window, false),
+                mean_weights("gate_window", &p.window, true),
+                mean_weights("gate_texture", &inner, true),
+                mean_weights("gate_housing", &p.housing, true),
+                constant(
+                    "gate_laplacian",
+                    &[1, 1, 3, 3],
+                    vec![0.0, -1.0, 0.0, -1.0, 4.0, -1.0, 0.0, -1.0, 0.0],
+                ),
+                constant(
+                    "gate_balance",
+                    &[3, 2],
+                    vec![1.0, 0.0, -1.0, -1.0, 0.0, 1.0],
+                ),
+                constant("gate_centre", &[9], p.centre.clone()),
+                constant("gate_scale", &[9], p.scale.clone()),
+                constant("gate_profile_threshold", &[], vec![p.threshold]),
+            ]);
+            let mut concat = node(
+                "Concat",
+                "gate_descriptor",
+                &[
+                    "gate_rgb",
+                    "gate_spread",
+                    "gate_fine",
+                    "gate_balanced",
+                    "gate_house",
+                    "gate_house_sd",
+                ],
+                "gate_descriptor",
+            );
+            concat.attribute.push(int_attribute("axis", 1));
+            let spread = |region: &str, mean: &str, sd: &str| {
+                vec![
+                    node("MatMul", mean, &["gate_luma_flat", region], mean),
+                    node(
+                        "Sub",
+                        &format!("{sd}_dev"),
+                        &["gate_luma_flat", mean],
+                        &format!("{sd}_dev"),
+                    ),
+                    node(
+                        "Mul",
+                        &format!("{sd}_sq"),
+                        &[&format!("{sd}_dev"), &format!("{sd}_dev")],
+                        &format!("{sd}_sq"),
+                    ),
+                    node(
+                        "MatMul",
+                        &format!("{sd}_var"),
+                        &[&format!("{sd}_sq"), region],
+                        &format!("{sd}_var"),
+                    ),
+                    node("Sqrt", sd, &[&format!("{sd}_var")], sd),
+                ]
+            };
+            let window = spread("gate_window", "gate_window_mean", "gate_spread");
+            let housing = spread("gate_housing", "gate_house", "gate_house_sd");
+            nodes.extend([
+                node(
+                    "MatMul",
+                    "gate_luma_pixels",
+                    &[input, "gate_luma"],
+                    "gate_luma_pixels",
+                ),
+                node(
+                    "Reshape",
+                    "gate_luma_flat",
+                    &["gate_luma_pixels", "gate_flat"],
+                    "gate_luma_flat",
+                ),
+                node(
+                    "Reshape",
+                    "gate_rgb_flat",
+                    &[input, "gate_flat_rgb"],
+                    "gate_rgb_flat",
+                ),
+                node(
+                    "MatMul",
+                    "gate_rgb_mean",
+                    &["gate_window_row", "gate_rgb_flat"],
+                    "gate_rgb_mean",
+                ),
+                node(
+                    "Reshape",
+                    "gate_rgb",
+                    &["gate_rgb_mean", "gate_rgb_shape"],
+                    "gate_rgb",
+                ),
+                node(
+                    "MatMul",
+                    "gate_balanced",
+                    &["gate_rgb", "gate_balance"],
+                    "gate_balanced",
+                ),
+                node(
+                    "Reshape",
+                    "gate_luma_image",
+                    &["gate_luma_flat", "gate_image"],
+                    "gate_luma_image",
+                ),
+                node(
+                    "Conv",
+                    "gate_lap",
+                    &["gate_luma_image", "gate_laplacian"],
+                    "gate_lap",
+                ),
+                node("Abs", "gate_lap_abs", &["gate_lap"], "gate_lap_abs"),
+                node(
+                    "Reshape",
+                    "gate_lap_flat",
+                    &["gate_lap_abs", "gate_flat"],
+                    "gate_lap_flat",
+                ),
+                node(
+                    "MatMul",
+                    "gate_fine",
+                    &["gate_lap_flat", "gate_texture"],
+                    "gate_fine",
+                ),
+            ]);
+            nodes.extend(window);
+            nodes.extend(housing);
+            nodes.extend([
+                concat,
+                node(
+                    "Sub",
+                    "gate_off_centre",
+                    &["gate_descriptor", "gate_centre"],
+                    "gate_off_centre",
+                ),
+                node(
+                    "Div",
+                    "gate_in_scales",
+                    &["gate_off_centre", "gate_scale"],
+                    "gate_in_scales",
+                ),
+                node("Abs", "gate_distance", &["gate_in_scales"], "gate_distance"),
+                reduce(
+                    "ReduceMax",
+                    "input_score",
+                    &["gate_distance", "gate_axis_1"],
+                    "input_score",
+                    0,
+                ),
+                node(
+                    "Greater",
+                    "gate_foreign",
+                    &["input_score", "gate_profile_threshold"],
+                    "gate_foreign",
+                ),
+                node(
+                    "Where",
+                    "gate_code",
+                    &["gate_foreign", "gate_code_foreign", "gate_blank_code"],
+                    "gate_code",
+                ),
+            ]);
+            "gate_code"
+        }
+    };
+    nodes.extend([
+        node("Identity", "gate", &[code], "gate"),
+        node(
+            "Equal",
+            "gate_is_none",
+            &["gate", "gate_code_none"],
+            "gate_is_none",
+        ),
+        node(
+            "Reshape",
+            "gate_passed",
+            &["gate_is_none", "gate_column"],
+            "gate_passed",
+        ),
+    ]);
+    Ok((ini, nodes))
+}
+
 /// Wrap the exported network `onnx` (one `[N, C, H, W]` float input, one
 /// output) as `spec` says; the new model's bytes.
 pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
@@ -308,6 +672,14 @@ pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
         ),
         transpose,
     ]);
+    if let Some(g) = &spec.gates {
+        if !matches!(spec.output, StandaloneOutput::Probability { .. }) {
+            return Err(bad("gates need a probability output".into()));
+        }
+        let (ini, nodes) = gate_nodes(g, spec.height, spec.width, "frame_unit").map_err(bad)?;
+        graph.initializer.extend(ini);
+        prefix.extend(nodes);
+    }
     let tail = std::mem::take(&mut graph.node);
     graph.node = prefix.into_iter().chain(tail).collect();
     let frame = &mut graph.input[input];
@@ -321,10 +693,55 @@ pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
         d.set_dim_value(v);
         shape.dim.push(d);
     }
-    shape.dim.insert(0, batch);
+    shape.dim.insert(0, batch.clone());
 
     // The network's output -> what the user wants, named.
     let name = match &spec.output {
+        StandaloneOutput::Probability { name } if spec.gates.is_some() => {
+            let threshold = spec.gates.as_ref().map_or(0.5, |g| g.threshold);
+            graph.initializer.extend([
+                constant("gate_zero_probability", &[], vec![0.0]),
+                constant("tendon_threshold", &[], vec![threshold]),
+                int64_constant("tendon_flat", &[1], vec![-1]),
+            ]);
+            graph.node.extend([
+                node(
+                    "Sigmoid",
+                    "to_probability",
+                    &[&old_out],
+                    "network_probability",
+                ),
+                node(
+                    "Where",
+                    "gated_probability",
+                    &[
+                        "gate_passed",
+                        "network_probability",
+                        "gate_zero_probability",
+                    ],
+                    name,
+                ),
+                node(
+                    "GreaterOrEqual",
+                    "tendon_at_threshold",
+                    &[name, "tendon_threshold"],
+                    "tendon_at_threshold",
+                ),
+                node(
+                    "And",
+                    "tendon_passed",
+                    &["tendon_at_threshold", "gate_passed"],
+                    "tendon_column",
+                ),
+                node(
+                    "Reshape",
+                    "tendon",
+                    &["tendon_column", "tendon_flat"],
+                    "tendon",
+                ),
+            ]);
+            name
+        }
         StandaloneOutput::Probability { name } => {
             graph
                 .node
@@ -363,6 +780,19 @@ pub fn make_standalone(onnx: &[u8], spec: &StandaloneSpec) -> Result<Vec<u8>> {
         .mut_or_insert_default()
         .mut_tensor_type()
         .elem_type = FLOAT;
+    if spec.gates.is_some() {
+        // Per frame: which gate stopped it, its input score, the decision.
+        for (out, elem) in [("gate", INT64), ("input_score", FLOAT), ("tendon", BOOL)] {
+            let mut v = graph.output[0].clone();
+            v.name = out.into();
+            let t = v.type_.mut_or_insert_default().mut_tensor_type();
+            t.elem_type = elem;
+            let shape = t.shape.mut_or_insert_default();
+            shape.dim.clear();
+            shape.dim.push(batch.clone());
+            graph.output.push(v);
+        }
+    }
     for (k, v) in &spec.metadata {
         model.metadata_props.push(Default::default());
         if let Some(entry) = model.metadata_props.last_mut() {

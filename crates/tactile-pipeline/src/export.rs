@@ -67,7 +67,8 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
 /// input size and toolkit version in its metadata.
 pub fn export_standalone(dir: &Path) -> Result<Exported> {
     use tactile_onnx::standalone::{
-        ExposureLevel, StandaloneOutput, StandaloneSpec, make_standalone,
+        ExposureLevel, GateSpec, ProfileGate, StandaloneOutput, StandaloneSpec, f32_at_or_above,
+        make_standalone,
     };
     let device = DeviceKind::Flex.device();
     let list = |v: &[f32]| serde_json::to_string(v).unwrap_or_default();
@@ -103,8 +104,23 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
         metadata.push(("threshold".into(), a.threshold.to_string()));
         metadata.push((
             "output".into(),
-            "tendon_probability: float32 [N, 1]; a tendon at >= threshold".into(),
+            "tendon_probability: float32 [N, 1], 0 for a gated frame; gate: int64 [N], 0 passed, 1 blank, 2 foreign (outside the input profile); input_score: float32 [N] (0 without a profile); tendon: bool [N], the decision".into(),
         ));
+        let profile = a.input_profile.as_ref().map(|p| {
+            let r = tactile_preprocess::profile::Regions::of(w, h);
+            ProfileGate {
+                luma: tactile_preprocess::profile::LUMA,
+                window: r.window,
+                texture: r.texture,
+                housing: r.housing,
+                centre: p.centre.clone(),
+                scale: p.scale.clone(),
+                threshold: p.threshold,
+            }
+        });
+        if let Some(p) = &a.input_profile {
+            metadata.push(("input_profile_threshold".into(), p.threshold.to_string()));
+        }
         let spec = StandaloneSpec {
             height: h,
             width: w,
@@ -118,6 +134,11 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
             exposure_level: a.model.normalises_exposure().then(|| ExposureLevel {
                 pixels: tactile_preprocess::visuo::exposure_pixels(w, h),
                 level: tactile_preprocess::visuo::FLAT_SKIN_LEVEL,
+            }),
+            gates: Some(GateSpec {
+                blank_std: tactile_preprocess::visuo::BLANK_FRAME_STD,
+                profile,
+                threshold: f32_at_or_above(a.threshold),
             }),
         };
         ("detector", make_standalone(&onnx, &spec)?)
@@ -146,6 +167,7 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
             metadata,
             input_bits: 8,
             exposure_level: None,
+            gates: None,
         };
         ("segmenter", make_standalone(&a.onnx(&l.model)?, &spec)?)
     } else if DepthArtifact::is_in(dir) {
@@ -177,6 +199,7 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
             metadata,
             input_bits: 8,
             exposure_level: None,
+            gates: None,
         };
         ("depth network", make_standalone(&a.onnx(&l.model)?, &spec)?)
     } else {

@@ -1,14 +1,17 @@
 #![allow(clippy::unwrap_used)]
 //! One answer per frame: `tactile eval detector` (the library's
-//! `evaluate`) and `tactile run` (the pipeline) give the same decision and
-//! the same gate to the same frames, blank and foreign ones included.
+//! `evaluate`), `tactile run` (the pipeline, which the Python package
+//! wraps) and the standalone ONNX export give the same decision and the
+//! same gate to the same 200 frames, blank and foreign ones included.
 
 use std::path::{Path, PathBuf};
 
 use tactile_burn::Runtime;
 use tactile_core::image_io::RgbImage;
 use tactile_detect::{DetectionSet, Gate, TendonDetector};
+use tactile_onnx::runtime::OrtModel;
 use tactile_pipeline::Pipeline;
+use tactile_pipeline::export::export_standalone;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -21,9 +24,31 @@ fn rgb(w: usize, h: usize, f: impl Fn(usize, usize, usize) -> u8) -> RgbImage {
     tactile_core::image_io::rgb_image(w, h, data).unwrap()
 }
 
-/// The sample palpation video, blank frames (black, saturated, one colour)
-/// and frames of other kinds (a virtual TacTip frame, stripes, noise).
+/// Rendered palpation frames (seeded sequences of the virtual sensor,
+/// every other one darker or brighter), the sample palpation video, blank
+/// frames (black, saturated, one colour) and frames of other kinds (a
+/// virtual TacTip frame, stripes, noise): 200 in all.
 fn frames() -> Vec<(String, RgbImage)> {
+    let cfg = datasets_synth::VisuotactileConfig {
+        width: 320,
+        height: 180,
+        ..Default::default()
+    };
+    let fps = cfg.frames_per_sequence;
+    let mut rendered: Vec<(String, RgbImage)> = (0..182)
+        .map(|i| {
+            let (seq, f) = (i / fps, i % fps);
+            let (_, frame) = datasets_synth::visuotactile::sample(&cfg, 31, seq as u64, f);
+            let gain = [1.0, 0.8, 1.15][seq % 3];
+            let data = frame
+                .rgb
+                .iter()
+                .map(|&v| (v as f32 * gain).round().min(255.0) as u8)
+                .collect();
+            let img = tactile_core::image_io::rgb_image(frame.width, frame.height, data).unwrap();
+            (format!("rendered {seq}/{f}"), img)
+        })
+        .collect();
     let mut v: Vec<(String, RgbImage)> = (0..12)
         .map(|i| {
             let p = root().join(format!("samples/palpation/{i:06}.png"));
@@ -58,7 +83,9 @@ fn frames() -> Vec<(String, RgbImage)> {
         "virtual TacTip".into(),
         tactile_core::image_io::load_rgb(tactip).unwrap(),
     ));
-    v
+    rendered.extend(v);
+    assert_eq!(rendered.len(), 200);
+    rendered
 }
 
 #[test]
@@ -68,7 +95,6 @@ fn eval_and_run_give_every_frame_the_same_answer() {
     let frames = frames();
     // The evaluation's set: each frame as the detector holds a dataset's
     // frame (resized to its input, in its bits), labelled "no tendon".
-    let bits = det.artifact.model.bits();
     let [width, height] = det.artifact.model.input_size;
     let n = frames.len();
     let set = DetectionSet {
@@ -78,7 +104,7 @@ fn eval_and_run_give_every_frame_the_same_answer() {
         files: frames.iter().map(|(name, _)| name.clone()).collect(),
         frames: frames
             .iter()
-            .map(|(_, f)| det.artifact.frame_image(f).unwrap().to_levels(bits))
+            .map(|(_, f)| det.artifact.model.frame_levels(f).unwrap())
             .collect(),
         tendon: vec![false; n],
         transition: vec![false; n],
@@ -86,6 +112,30 @@ fn eval_and_run_give_every_frame_the_same_answer() {
     };
     let scores = tactile_detect::evaluate(&mut det, &set).unwrap();
     let mut pipe = Pipeline::load(&models, Runtime::BurnFlex, 0).unwrap();
+    // The standalone model on every frame's levels at once.
+    let exported = export_standalone(&models.join("detector")).unwrap();
+    let mut alone = OrtModel::from_bytes(&exported.bytes, 0).unwrap();
+    let levels: Vec<u16> = set.frames.concat();
+    let shape = [n, height, width, 3];
+    let outputs = match det.artifact.model.bits() {
+        16 => alone.run_frame_outputs(&shape, levels),
+        _ => alone.run_frame_outputs(&shape, levels.iter().map(|&v| v as u8).collect()),
+    }
+    .unwrap();
+    let output = |name: &str| {
+        outputs
+            .iter()
+            .find(|o| o.name == name)
+            .unwrap_or_else(|| panic!("no output {name}"))
+            .values
+            .clone()
+    };
+    let (alone_p, alone_gate, alone_tendon, alone_score) = (
+        output("tendon_probability"),
+        output("gate"),
+        output("tendon"),
+        output("input_score"),
+    );
     let mut gates = [0usize; 2];
     for (i, (name, frame)) in frames.iter().enumerate() {
         let rec = pipe.process(name, frame).unwrap();
@@ -102,6 +152,31 @@ fn eval_and_run_give_every_frame_the_same_answer() {
             rec.score,
             scores.probabilities[i]
         );
+        // The standalone graph: the same gate, decision and probability.
+        let code = match rec.gate {
+            None => 0.0,
+            Some(Gate::Blank) => 1.0,
+            Some(Gate::Foreign) => 2.0,
+        };
+        assert_eq!(alone_gate[i], code, "{name}: standalone gate");
+        assert_eq!(
+            alone_tendon[i] == 1.0,
+            rec.tendon_raw,
+            "{name}: standalone decision"
+        );
+        assert!(
+            (alone_p[i] - rec.score).abs() < 1e-4,
+            "{name}: standalone probability {} vs {}",
+            alone_p[i],
+            rec.score
+        );
+        if let Some(s) = rec.input_score {
+            assert!(
+                (alone_score[i] - s).abs() <= 1e-3 * s.max(1.0),
+                "{name}: standalone input score {} vs {s}",
+                alone_score[i]
+            );
+        }
         match rec.gate {
             Some(Gate::Blank) => gates[0] += 1,
             Some(Gate::Foreign) => gates[1] += 1,
@@ -117,6 +192,7 @@ fn eval_and_run_give_every_frame_the_same_answer() {
     // The blank frames are stopped, and every frame of another kind is.
     assert_eq!(gates.iter().sum::<usize>(), 6, "gates {gates:?}");
     assert_eq!(scores.gated_blank + scores.gated_foreign, 6);
-    // The sample video passes through the network (its tendon frames say so).
-    assert!(scores.decisions[..12].iter().any(|&d| d));
+    // The rendered and sample videos pass through the network (their
+    // tendon frames say so).
+    assert!(scores.decisions[..194].iter().filter(|&&d| d).count() > 20);
 }

@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 use serde_json::{Value, json};
 use tactile_burn::options::Options;
-use tactile_pipeline::options::{STUB_BEGIN, STUB_END, TRAINERS, python_stubs, trainer};
+use tactile_pipeline::options::{
+    GENERATORS, STUB_BEGIN, STUB_END, TRAINERS, python_stubs, trainer,
+};
 
 fn stub(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -32,9 +34,13 @@ fn generated_part(text: &str, part: &str) -> (Option<String>, String) {
 
 #[test]
 fn the_python_stubs_type_every_option_as_the_library_defines_it() {
-    let (native, train) = python_stubs().unwrap();
+    let stubs = python_stubs().unwrap();
     let bless = std::env::var_os("TACTILE_BLESS").is_some();
-    for (file, part) in [("_tactile.pyi", &native), ("train.pyi", &train)] {
+    for (file, part) in [
+        ("_tactile.pyi", &stubs.native),
+        ("train.pyi", &stubs.train),
+        ("synth.pyi", &stubs.synth),
+    ] {
         let path = stub(file);
         let text = std::fs::read_to_string(&path).unwrap();
         let (now, blessed) = generated_part(&text, part);
@@ -57,9 +63,22 @@ fn the_python_stubs_type_every_option_as_the_library_defines_it() {
         "input: Tuple[int, int] = (",
         "device: str = \"flex\"",
     ] {
-        assert!(native.contains(want), "{want} not in\n{native}");
+        assert!(
+            stubs.native.contains(want),
+            "{want} not in\n{}",
+            stubs.native
+        );
     }
-    assert!(train.contains("def pose(\n    data: _Path,\n    out: _Path,\n    *,\n    config: Optional[_Path] = None,\n    targets: Sequence[str] = (\"x_mm\", \"theta_deg\", \"depth_mm\"),"), "{train}");
+    assert!(stubs.train.contains("def pose(\n    data: _Path,\n    out: _Path,\n    *,\n    config: Optional[_Path] = None,\n    targets: Sequence[str] = (\"x_mm\", \"theta_deg\", \"depth_mm\"),"), "{}", stubs.train);
+    // The generators' ranges are pairs, their defaults the spec's.
+    for want in [
+        "press_mm: Tuple[float, float] = (0.0, 4.0)",
+        "paths: Sequence[str] = (\"straight\", \"arc\", \"s-curve\")",
+        "sequences: Optional[int] = None",
+        "blob_probability: float = 0.3",
+    ] {
+        assert!(stubs.synth.contains(want), "{want} not in\n{}", stubs.synth);
+    }
 }
 
 #[test]
@@ -76,7 +95,7 @@ fn every_option_of_every_trainer_is_a_flag_and_a_keyword() {
             "depth"
         ]
     );
-    for t in TRAINERS {
+    for t in TRAINERS.iter().chain(GENERATORS) {
         let docs = t.docs().unwrap();
         assert!(docs.len() >= 4, "{}: {} options", t.name, docs.len());
         for d in &docs {

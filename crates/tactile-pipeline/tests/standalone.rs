@@ -149,7 +149,10 @@ fn a_sixteen_bit_exposure_normalised_detector_stands_alone_too() {
         assert_eq!(shape, [1, 1]);
         let q = det
             .network_probabilities(
-                &det.artifact.network_input(img.quantised_to(16)).unwrap(),
+                &det.artifact
+                    .model
+                    .network_input(img.quantised_to(16), &det.artifact.stats)
+                    .unwrap(),
                 1,
             )
             .unwrap()[0];
@@ -167,10 +170,14 @@ fn the_standalone_segmenter_gives_the_toolkits_mask_probabilities() {
     let mut alone = standalone("segmenter");
     let s = seg.artifact.model.side;
     for f in frames() {
-        let window = seg.artifact.frame_window(&f).unwrap();
+        let window = seg.artifact.model.frame_window(&f).unwrap();
         let (shape, p) = alone.run_u8(&[1, s, s, 3], window.to_bytes()).unwrap();
         assert_eq!(shape, [1, 1, s, s]);
-        let input = seg.artifact.window_input(&window).unwrap();
+        let input = seg
+            .artifact
+            .model
+            .window_input(&window, &seg.artifact.stats)
+            .unwrap();
         let q = seg.probabilities(&input, 1).unwrap().remove(0);
         assert!(
             max_diff(&p, &q) < 1e-5,

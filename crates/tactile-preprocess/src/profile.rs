@@ -32,6 +32,52 @@ pub const DESCRIPTOR: [&str; 9] = [
 /// units: a statistic that hardly varies in training still allows this.
 pub const MIN_SCALE: f32 = 0.02;
 
+/// Luma weights (ITU-R BT.601) of red, green and blue: the brightness the
+/// descriptor reads.
+pub const LUMA: [f32; 3] = [0.299, 0.587, 0.114];
+
+/// Where the descriptor reads a `width x height` frame: the one
+/// definition of its regions, used by [`descriptor`] and by the standalone
+/// ONNX export's graph of it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Regions {
+    /// Pixels (row-major) inside the sensing window, away from its edge.
+    pub window: Vec<bool>,
+    /// Window pixels with four neighbours (where the fine texture, a
+    /// Laplacian, is read).
+    pub texture: Vec<bool>,
+    /// Pixels of the dark housing, well outside the window.
+    pub housing: Vec<bool>,
+}
+
+impl Regions {
+    /// The regions of a `width x height` frame: in the inscribed ellipse's
+    /// normalised radius r, the window is r^2 <= 0.8, the housing r^2 >= 1.3.
+    pub fn of(width: usize, height: usize) -> Self {
+        let n = width * height;
+        let mut r = Self {
+            window: vec![false; n],
+            texture: vec![false; n],
+            housing: vec![false; n],
+        };
+        for y in 0..height {
+            let v = (y as f32 + 0.5) / height as f32 - 0.5;
+            for x in 0..width {
+                let i = y * width + x;
+                let u = (x as f32 + 0.5) / width as f32 - 0.5;
+                let r2 = 4.0 * (u * u + v * v);
+                if r2 <= 0.8 {
+                    r.window[i] = true;
+                    r.texture[i] = x > 0 && y > 0 && x + 1 < width && y + 1 < height;
+                } else if r2 >= 1.3 {
+                    r.housing[i] = true;
+                }
+            }
+        }
+        r
+    }
+}
+
 /// The descriptor of an RGB image in [0, 1] (at least 8 x 8).
 pub fn descriptor(img: &FloatImage) -> Result<Vec<f32>> {
     let (w, h) = (img.width, img.height);
@@ -44,29 +90,24 @@ pub fn descriptor(img: &FloatImage) -> Result<Vec<f32>> {
     let luma: Vec<f32> = img
         .data
         .chunks_exact(3)
-        .map(|p| 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2])
+        .map(|p| LUMA[0] * p[0] + LUMA[1] * p[1] + LUMA[2] * p[2])
         .collect();
+    let regions = Regions::of(w, h);
     let (mut inside, mut outside) = (Vec::with_capacity(w * h), Vec::new());
     let mut texture = Vec::with_capacity(w * h);
     let mut rgb = [0f64; 3];
-    for y in 0..h {
-        let v = (y as f32 + 0.5) / h as f32 - 0.5;
-        for x in 0..w {
-            let i = y * w + x;
-            let u = (x as f32 + 0.5) / w as f32 - 0.5;
-            let r = 4.0 * (u * u + v * v);
-            if r <= 0.8 {
-                inside.push(luma[i]);
-                for (c, acc) in rgb.iter_mut().enumerate() {
-                    *acc += img.data[i * 3 + c] as f64;
-                }
-                if x > 0 && y > 0 && x + 1 < w && y + 1 < h {
-                    let lap = 4.0 * luma[i] - luma[i - 1] - luma[i + 1] - luma[i - w] - luma[i + w];
-                    texture.push(lap.abs());
-                }
-            } else if r >= 1.3 {
-                outside.push(luma[i]);
+    for i in 0..w * h {
+        if regions.window[i] {
+            inside.push(luma[i]);
+            for (c, acc) in rgb.iter_mut().enumerate() {
+                *acc += img.data[i * 3 + c] as f64;
             }
+        } else if regions.housing[i] {
+            outside.push(luma[i]);
+        }
+        if regions.texture[i] {
+            let lap = 4.0 * luma[i] - luma[i - 1] - luma[i + 1] - luma[i - w] - luma[i + w];
+            texture.push(lap.abs());
         }
     }
     let n = inside.len().max(1) as f64;

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::sync::{Mutex, OnceLock};
 
-use numpy::{IntoPyArray, PyArray2};
+use numpy::{IntoPyArray, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -176,6 +176,33 @@ impl PyPipeline {
         }
         st.frames = 0;
         Ok(())
+    }
+
+    /// The frame as the detector takes it and as its standalone ONNX export
+    /// (`tactile export --standalone`) reads it: resized to the detector's
+    /// input, `(H, W, 3)` levels of its bits per channel (uint8, or uint16
+    /// for a 16-bit detector). The standalone model given this answers as
+    /// `process` does.
+    fn detector_frame<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let arg = FrameArg::new(frame, Layout::Rgb, "frame")?;
+        let px = arg.view();
+        let (levels, bits, [w, h]) = py.detach(|| -> PyResult<_> {
+            let st = self.lock()?;
+            let model = &st.pipeline.detector.artifact.model;
+            let levels = px.with_rgb(|img| model.frame_levels(img)).py()?.py()?;
+            Ok((levels, model.bits(), model.input_size))
+        })?;
+        let shape = [h, w, 3];
+        Ok(if bits == 16 {
+            levels.into_pyarray(py).reshape(shape)?.into_any()
+        } else {
+            let bytes: Vec<u8> = levels.into_iter().map(|v| v as u8).collect();
+            bytes.into_pyarray(py).reshape(shape)?.into_any()
+        })
     }
 
     /// The detector's probability threshold.

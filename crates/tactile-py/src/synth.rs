@@ -18,16 +18,6 @@ use crate::errors::PyResultExt;
 /// disk with `out=`).
 pub(crate) const MAX_ARRAY_BYTES: usize = 4 << 30;
 
-/// A generator config from its JSON overrides (keys of the config; every
-/// other key keeps the spec's default), validated.
-fn config<T: serde::de::DeserializeOwned + Default>(json: Option<&str>) -> PyResult<T> {
-    match json {
-        None => Ok(T::default()),
-        Some(text) => serde_json::from_str(text)
-            .map_err(|e| PyValueError::new_err(format!("synth config: {e}"))),
-    }
-}
-
 fn check_in_memory(count: usize, bytes_per_frame: usize) -> PyResult<()> {
     datasets_synth::check_count(count).py()?;
     let bytes = count.saturating_mul(bytes_per_frame);
@@ -41,7 +31,7 @@ fn check_in_memory(count: usize, bytes_per_frame: usize) -> PyResult<()> {
     Ok(())
 }
 
-fn options(force: bool, progress: bool) -> WriteOptions {
+fn write_options(force: bool, progress: bool) -> WriteOptions {
     WriteOptions { force, progress }
 }
 
@@ -52,21 +42,22 @@ fn column<'py>(py: Python<'py>, v: Vec<Option<f64>>) -> Bound<'py, PyArray1<f64>
 /// Virtual TacTip frames: written to `out` (returns the folder), or
 /// returned as `(frames (N, 300, 300) uint8, labels dict)`.
 #[pyfunction]
-#[pyo3(signature = (count, seed, out, config_json, force, progress))]
+#[pyo3(signature = (count, seed, out, force, progress, **options))]
 pub(crate) fn synth_tactip(
     py: Python<'_>,
     count: usize,
     seed: u64,
     out: Option<PathBuf>,
-    config_json: Option<String>,
     force: bool,
     progress: bool,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
-    let cfg: TactipConfig = config(config_json.as_deref())?;
+    let cfg: TactipConfig = crate::json::options(py, options)?;
     cfg.validate().py()?;
     if let Some(out) = out {
         let path = crate::work::interruptible(py, || {
-            datasets_synth::write_tactip(&cfg, count, seed, &out, options(force, progress)).py()
+            datasets_synth::write_tactip(&cfg, count, seed, &out, write_options(force, progress))
+                .py()
         })?;
         return Ok(path.into_pyobject(py)?.into_any().unbind());
     }
@@ -117,22 +108,31 @@ pub(crate) fn synth_tactip(
 /// folder), or returned as a dict of `frames (N, H, W, 3) uint8`,
 /// `masks (N, H, W) bool`, `depth_m (N, H, W) float32` and the labels.
 #[pyfunction]
-#[pyo3(signature = (count, seed, out, config_json, force, progress))]
+#[pyo3(signature = (count, sequences, seed, out, force, progress, **options))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn synth_visuotactile(
     py: Python<'_>,
-    count: usize,
+    count: Option<usize>,
+    sequences: Option<usize>,
     seed: u64,
     out: Option<PathBuf>,
-    config_json: Option<String>,
     force: bool,
     progress: bool,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
-    let cfg: VisuotactileConfig = config(config_json.as_deref())?;
+    let cfg: VisuotactileConfig = crate::json::options(py, options)?;
     cfg.validate().py()?;
+    let count = cfg.frame_count(count, sequences).py()?;
     if let Some(out) = out {
         let path = crate::work::interruptible(py, || {
-            datasets_synth::write_visuotactile(&cfg, count, seed, &out, options(force, progress))
-                .py()
+            datasets_synth::write_visuotactile(
+                &cfg,
+                count,
+                seed,
+                &out,
+                write_options(force, progress),
+            )
+            .py()
         })?;
         return Ok(path.into_pyobject(py)?.into_any().unbind());
     }

@@ -68,8 +68,10 @@ def test_synth_refuses_bad_counts_and_foreign_folders(tmp_path):
         tactile.synth.tactip(60_000)
     with pytest.raises(ValueError, match="x_mm"):
         tactile.synth.tactip(2, x_mm=(5.0, -5.0))
-    with pytest.raises(ValueError, match="unknown field"):
-        tactile.synth.tactip(2, config={"no_such_key": 1})
+    with pytest.raises(ValueError, match="unknown option 'no_such_key'"):
+        tactile.synth.tactip(2, no_such_key=1)
+    with pytest.raises(ValueError, match="config: an options file's path"):
+        tactile.synth.tactip(2, config={"x_mm": [0, 1]})
     user = tmp_path / "mine"
     user.mkdir()
     (user / "notes.txt").write_text("keep me")

@@ -5,13 +5,11 @@
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
 use tactile_burn::Artifact;
-use tactile_core::image_io::RgbImage;
 use tactile_onnx::{Exportable, export_batch_dynamic};
-use tactile_preprocess::visuo::{ChannelStats, FloatImage, SquareWindow, resize_rgb};
+use tactile_preprocess::visuo::ChannelStats;
 
 use crate::model::{UNet, UNetConfig};
-use crate::postprocess::{Evidence, PostprocessConfig, Tendon, TendonMask, postprocess};
-use crate::{Error, Result};
+use crate::postprocess::PostprocessConfig;
 
 /// Everything needed to rebuild and run a saved segmenter.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -85,51 +83,5 @@ impl Exportable for SegmenterArtifact {
     fn onnx(&self, model: &UNet) -> tactile_onnx::Result<Vec<u8>> {
         let s = self.model.side;
         export_batch_dynamic(model, [1, 3, s, s], |m: &UNet, x| m.forward(x))
-    }
-}
-
-impl SegmenterArtifact {
-    /// The square window the segmenter looks at.
-    pub fn window(&self) -> SquareWindow {
-        SquareWindow {
-            side: self.model.side,
-        }
-    }
-
-    /// The segmenter's (unrotated) window of an RGB frame of any size, at 8
-    /// bits per channel as in training ([`FloatImage::quantised`]).
-    pub fn frame_window(&self, frame: &RgbImage) -> Result<FloatImage> {
-        let win = self.window();
-        let (sw, sh) = win.scaled_size(frame.width(), frame.height());
-        Ok(win.cut(&resize_rgb(frame, sw, sh)?, 0.0).quantised())
-    }
-
-    /// The normalised `3 x S x S` input of a window.
-    pub fn window_input(&self, window: &FloatImage) -> Result<Vec<f32>> {
-        let s = self.model.side;
-        if (window.width, window.height) != (s, s) {
-            return Err(Error::WindowSize {
-                what: "window",
-                expected: [s, s],
-                found: [window.width, window.height],
-            });
-        }
-        Ok(self.stats.to_chw(window)?)
-    }
-
-    /// Post-processed tendon from the window's per-pixel probabilities;
-    /// `None` (a blank window: nothing to segment) gives an empty mask and
-    /// hence no direction.
-    pub fn tendon(&self, probabilities: Option<&[f32]>, window: &FloatImage) -> Result<Tendon> {
-        let s = self.model.side;
-        let mask = match probabilities {
-            Some(p) => TendonMask::from_probabilities(s, s, p, self.threshold)?,
-            None => TendonMask::empty(s, s),
-        };
-        let evidence = Evidence {
-            probabilities,
-            window: Some(window),
-        };
-        postprocess(&mask, evidence, &self.postprocess)
     }
 }

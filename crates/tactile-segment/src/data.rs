@@ -6,9 +6,9 @@ use crate::Result;
 use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_preprocess::visuo::{
-    ChannelStats, FloatImage, SquareWindow, binarise_mask, resize_grey, resize_rgb,
-};
+use tactile_preprocess::visuo::{ChannelStats, FloatImage, SquareWindow, resize_grey, resize_rgb};
+
+use crate::prepare::cut_frame;
 
 /// One window: 8-bit `S x S x 3` pixels, its 0/1 mask and where it came from.
 #[derive(Debug, Clone)]
@@ -33,23 +33,6 @@ pub struct SegmentSet {
     pub direction_deg: Vec<Option<f64>>,
     /// Per dataset row: the `path` label.
     pub path: Vec<Option<String>>,
-}
-
-/// The window of one frame (and mask), rotated by `deg`.
-pub fn cut_frame(
-    frame: &FloatImage,
-    mask: Option<&FloatImage>,
-    window: SquareWindow,
-    deg: f64,
-) -> (Vec<u8>, Option<Vec<bool>>) {
-    let bytes = window.cut(frame, deg).to_bytes();
-    let m = mask.map(|m| {
-        binarise_mask(&window.cut(m, deg))
-            .into_iter()
-            .map(|v| v > 0.5)
-            .collect()
-    });
-    (bytes, m)
 }
 
 /// `copies` seeded angles, one in each of `copies` equal parts of 360

@@ -128,14 +128,14 @@ pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<Segment
             why: "score",
         });
     }
-    let set = SegmentSet::from_dataset(ds, &rows, art.window(), 1, 0)?;
+    let set = SegmentSet::from_dataset(ds, &rows, art.model.window(), 1, 0)?;
     let idx: Vec<usize> = (0..set.len()).collect();
     let t0 = std::time::Instant::now();
     let mut probs = Vec::with_capacity(set.len());
     for chunk in idx.chunks(EVAL_BATCH) {
         let mut x = Vec::new();
         for &i in chunk {
-            x.extend(art.window_input(&set.image(i))?);
+            x.extend(art.model.window_input(&set.image(i), &art.stats)?);
         }
         probs.extend(segmenter.probabilities(&x, chunk.len())?);
     }

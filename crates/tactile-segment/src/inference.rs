@@ -57,16 +57,26 @@ impl TendonSegmenter {
     }
 
     /// Segment a window already cut (see
-    /// [`SegmenterArtifact::frame_window`]). A blank window (see
+    /// [`UNetConfig::frame_window`](crate::UNetConfig::frame_window)). A blank window (see
     /// [`is_blank`]) gives an empty mask without running the network.
     pub fn segment_window(&mut self, window: FloatImage) -> Result<Segmentation> {
         let probabilities = if is_blank(&window) {
             None
         } else {
-            let x = self.artifact.window_input(&window)?;
+            let x = self
+                .artifact
+                .model
+                .window_input(&window, &self.artifact.stats)?;
             self.probabilities(&x, 1)?.pop()
         };
-        let tendon = self.artifact.tendon(probabilities.as_deref(), &window)?;
+        let a = &self.artifact;
+        let tendon = crate::postprocess::window_tendon(
+            a.model.side,
+            probabilities.as_deref(),
+            &window,
+            a.threshold,
+            &a.postprocess,
+        )?;
         Ok(Segmentation {
             window,
             probabilities,
@@ -77,7 +87,7 @@ impl TendonSegmenter {
     /// Segment the window of an RGB frame of any size: the kept region and
     /// its direction (or why there is none).
     pub fn segment(&mut self, frame: &RgbImage) -> Result<Segmentation> {
-        let window = self.artifact.frame_window(frame)?;
+        let window = self.artifact.model.frame_window(frame)?;
         self.segment_window(window)
     }
 

@@ -12,6 +12,7 @@ pub mod inference;
 pub mod model;
 pub mod options;
 pub mod postprocess;
+pub mod prepare;
 pub mod training;
 
 pub use artifact::SegmenterArtifact;
@@ -23,6 +24,6 @@ pub use model::{UNet, UNetConfig};
 pub use options::SegmenterOptions;
 pub use postprocess::{
     Direction, DirectionMethod, Evidence, NoDirection, PostprocessConfig, Tendon, TendonMask,
-    postprocess,
+    postprocess, window_tendon,
 };
 pub use training::SegmenterTrainingConfig;

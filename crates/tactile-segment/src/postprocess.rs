@@ -191,6 +191,27 @@ impl Evidence<'_> {
     }
 }
 
+/// The tendon of an `side x side` window from the network's per-pixel
+/// `probabilities` (`None` for a blank window: an empty mask, hence no
+/// direction), the pixels at or above `threshold` post-processed by `cfg`.
+pub fn window_tendon(
+    side: usize,
+    probabilities: Option<&[f32]>,
+    window: &FloatImage,
+    threshold: f64,
+    cfg: &PostprocessConfig,
+) -> Result<Tendon> {
+    let mask = match probabilities {
+        Some(p) => TendonMask::from_probabilities(side, side, p, threshold)?,
+        None => TendonMask::empty(side, side),
+    };
+    let evidence = Evidence {
+        probabilities,
+        window: Some(window),
+    };
+    postprocess(&mask, evidence, cfg)
+}
+
 /// Keep the largest region not on the window's edge and give its direction.
 /// Ties between equal areas go to the region met first in raster order.
 pub fn postprocess(

@@ -5,8 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::{Args, Subcommand};
 use datasets_synth::{
-    Range, TactipConfig, TendonPath, VisuotactileConfig, WriteOptions, write_tactip,
-    write_visuotactile,
+    TactipConfig, VisuotactileConfig, WriteOptions, write_tactip, write_visuotactile,
 };
 
 #[derive(Subcommand)]
@@ -29,8 +28,9 @@ pub(crate) struct CommonArgs {
     /// Output dataset folder.
     #[arg(long)]
     out: PathBuf,
-    /// JSON file with any of the generator's ranges (see docs/synth.md);
-    /// flags given on the command line override it.
+    /// JSON file with any of the generator's options (the flags' names
+    /// with underscores; see docs/synth.md); flags given on the command
+    /// line override it.
     #[arg(long)]
     config: Option<PathBuf>,
     /// Replace a non-empty output folder.
@@ -48,71 +48,21 @@ pub(crate) struct CommonArgs {
 pub(crate) struct TactipArgs {
     #[command(flatten)]
     common: CommonArgs,
-    /// Shapes to draw from (default: all seven).
-    #[arg(long, value_delimiter = ',')]
-    shapes: Option<Vec<String>>,
-    /// Indentation depth range, mm: MIN,MAX.
-    #[arg(long)]
-    depth_mm: Option<Range>,
-    /// Contact x range, mm: MIN,MAX.
-    #[arg(long)]
-    x_mm: Option<Range>,
-    /// Contact y range, mm: MIN,MAX.
-    #[arg(long)]
-    y_mm: Option<Range>,
-    /// Orientation range, degrees: MIN,MAX.
-    #[arg(long)]
-    theta_deg: Option<Range>,
-    /// Sensor noise range, grey levels: MIN,MAX.
-    #[arg(long)]
-    noise_sigma: Option<Range>,
-    /// Probability of an external light blob.
-    #[arg(long)]
-    blob_probability: Option<f64>,
+    /// Every range of the generator (defaults: the spec's).
+    #[command(flatten)]
+    config: TactipConfig,
 }
 
 #[derive(Args)]
 pub(crate) struct VisuotactileArgs {
     #[command(flatten)]
     common: CommonArgs,
-    /// Frame width: an exact integer fraction of 1920 (with --height).
-    #[arg(long)]
-    width: Option<u32>,
-    /// Frame height: the same fraction of 1080.
-    #[arg(long)]
-    height: Option<u32>,
-    /// Tendon paths to draw from.
-    #[arg(long, value_delimiter = ',')]
-    paths: Option<Vec<TendonPath>>,
     /// Palpation videos to write (count = sequences x frames per sequence).
     #[arg(long)]
     sequences: Option<usize>,
-    /// Frames of each palpation video.
-    #[arg(long)]
-    frames_per_sequence: Option<usize>,
-    /// Peak press range, mm: MIN,MAX.
-    #[arg(long)]
-    press_mm: Option<Range>,
-    /// Tendon radius range, mm: MIN,MAX.
-    #[arg(long)]
-    tendon_radius_mm: Option<Range>,
-    /// Burial depth range, mm: MIN,MAX.
-    #[arg(long)]
-    burial_mm: Option<Range>,
-    /// Sensor noise range, 8-bit levels: MIN,MAX.
-    #[arg(long)]
-    noise_sigma: Option<Range>,
-    /// reference (what models train on) or alternate (another raster and
-    /// shading path of the same spec, a cross-check set).
-    #[arg(long)]
-    renderer: Option<datasets_synth::Renderer>,
-}
-
-fn config<T: serde::de::DeserializeOwned + Default>(c: &CommonArgs) -> Result<T> {
-    Ok(match &c.config {
-        None => T::default(),
-        Some(p) => tactile_core::io::read_json(p)?,
-    })
+    /// Every range of the generator (defaults: the spec's).
+    #[command(flatten)]
+    config: VisuotactileConfig,
 }
 
 fn finish(
@@ -135,10 +85,6 @@ fn finish(
     Ok(())
 }
 
-macro_rules! set {
-    ($cfg:ident, $a:ident: $($f:ident),*) => { $( if let Some(v) = $a.$f { $cfg.$f = v; } )* };
-}
-
 pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
     let t = std::time::Instant::now();
     let common = match &cmd {
@@ -150,8 +96,7 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
     }
     match cmd {
         SynthCmd::Tactip(a) => {
-            let mut cfg: TactipConfig = config(&a.common)?;
-            set!(cfg, a: shapes, depth_mm, x_mm, y_mm, theta_deg, noise_sigma, blob_probability);
+            let cfg = crate::args::resolve(a.config, a.common.config.as_deref())?;
             let Some(count) = a.common.count else {
                 bail!("--count is required")
             };
@@ -163,8 +108,7 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
             finish(&a.common, out, "virtual TacTip", count, t)
         }
         SynthCmd::Visuotactile(a) => {
-            let mut cfg: VisuotactileConfig = config(&a.common)?;
-            set!(cfg, a: paths, width, height, frames_per_sequence, press_mm, tendon_radius_mm, burial_mm, noise_sigma, renderer);
+            let cfg = crate::args::resolve(a.config, a.common.config.as_deref())?;
             let count = cfg.frame_count(a.common.count, a.sequences)?;
             let opts = WriteOptions {
                 force: a.common.force,

@@ -94,6 +94,12 @@ impl TendonPath {
     }
 }
 
+impl std::fmt::Display for TendonPath {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl std::str::FromStr for TendonPath {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
@@ -110,36 +116,49 @@ impl std::str::FromStr for TendonPath {
 
 /// The per-sample ranges of the virtual visuo-tactile sensor (defaults:
 /// the spec's training distribution at 640 x 360).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(default, deny_unknown_fields)]
 pub struct VisuotactileConfig {
     /// Rendered size: an exact integer fraction of 1920 x 1080.
+    #[arg(long, default_value_t = VisuotactileConfig::default().width)]
     pub width: u32,
     /// Rendered height.
+    #[arg(long, default_value_t = VisuotactileConfig::default().height)]
     pub height: u32,
     /// Tendon paths drawn uniformly.
+    #[arg(long, value_delimiter = ',', default_values_t = VisuotactileConfig::default().paths)]
     pub paths: Vec<TendonPath>,
     /// Tendon radius, mm.
+    #[arg(long, default_value_t = VisuotactileConfig::default().tendon_radius_mm)]
     pub tendon_radius_mm: Range,
     /// Depth of the tendon under the phantom's surface, mm.
+    #[arg(long, default_value_t = VisuotactileConfig::default().burial_mm)]
     pub burial_mm: Range,
     /// Radius of curvature of `arc` and `s-curve` paths.
+    #[arg(long, default_value_t = VisuotactileConfig::default().curvature_radius_mm)]
     pub curvature_radius_mm: Range,
     /// Peak press of a sequence, mm past first touch.
+    #[arg(long, default_value_t = VisuotactileConfig::default().press_mm)]
     pub press_mm: Range,
     /// The centre line passes within this fraction of the half-width of the frame centre.
+    #[arg(long, default_value_t = VisuotactileConfig::default().centre_fraction)]
     pub centre_fraction: f64,
     /// Fraction of sequences whose tendon lies outside the window.
+    #[arg(long, default_value_t = VisuotactileConfig::default().out_of_view_fraction)]
     pub out_of_view_fraction: f64,
     /// Exposure factor `1 + e`, `e` drawn per frame from this range.
+    #[arg(long, default_value_t = VisuotactileConfig::default().exposure_jitter)]
     pub exposure_jitter: Range,
     /// Sensor noise, 8-bit levels.
+    #[arg(long, default_value_t = VisuotactileConfig::default().noise_sigma)]
     pub noise_sigma: Range,
     /// Frames per palpation video.
+    #[arg(long, default_value_t = VisuotactileConfig::default().frames_per_sequence)]
     pub frames_per_sequence: usize,
     /// Which renderer draws the frames (the labels are the same). Left out
     /// of a reference dataset's manifest, which thus stays byte-identical.
     #[serde(skip_serializing_if = "Renderer::is_reference")]
+    #[arg(long, default_value_t = VisuotactileConfig::default().renderer)]
     pub renderer: Renderer,
 }
 
@@ -159,6 +178,15 @@ impl Renderer {
     /// True for [`Renderer::Reference`].
     pub fn is_reference(&self) -> bool {
         *self == Self::Reference
+    }
+}
+
+impl std::fmt::Display for Renderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Reference => "reference",
+            Self::Alternate => "alternate",
+        })
     }
 }
 

@@ -6,22 +6,22 @@ frames ``tactile synth`` writes with the same options.
 
 Without ``out`` the frames come back as numpy arrays; with ``out`` they are
 written as a dataset folder (the documented layout; see ``tactile.Dataset``)
-and the folder is returned. Ranges are ``(min, max)`` tuples; any other key
-of the generator's config (``docs/synth.md``) goes in ``config``.
+and the folder is returned. Every option of the generator is a keyword,
+as on the command line (``docs/synth.md``; the typed list is in
+``tactile/synth.pyi``): ranges are ``(min, max)`` tuples; ``config=`` names a
+JSON options file the keywords override, as ``--config`` does.
 """
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
-from typing import Any, Dict, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Optional, Tuple, Union
 
 import numpy as np
 
 from . import _tactile
 
-Range = Tuple[float, float]
 PathLike = Union[str, "os.PathLike[str]"]
 
 
@@ -36,36 +36,14 @@ def _whole(name: str, value: Any) -> int:
     return int(value)
 
 
-def _config(config: Optional[Dict[str, Any]], **ranges: Any) -> Optional[str]:
-    merged: Dict[str, Any] = dict(config or {})
-    for key, value in ranges.items():
-        if value is None:
-            continue
-        if isinstance(value, tuple):
-            if len(value) != 2:
-                raise ValueError(f"{key}: a range is (min, max), got {value!r}")
-            value = {"min": float(value[0]), "max": float(value[1])}
-        elif isinstance(value, (list, tuple)) and key in ("shapes", "paths"):
-            value = list(value)
-        merged[key] = value
-    return json.dumps(merged) if merged else None
-
-
 def tactip(
     count: int,
     seed: int = 1234,
     out: Optional[PathLike] = None,
     *,
-    shapes: Optional[Sequence[str]] = None,
-    depth_mm: Optional[Range] = None,
-    x_mm: Optional[Range] = None,
-    y_mm: Optional[Range] = None,
-    theta_deg: Optional[Range] = None,
-    noise_sigma: Optional[Range] = None,
-    blob_probability: Optional[float] = None,
-    config: Optional[Dict[str, Any]] = None,
     force: bool = False,
     progress: bool = True,
+    **options: Any,
 ) -> Union[Tuple[np.ndarray, Dict[str, Any]], Path]:
     """Virtual TacTip frames (paper A): 127 pins, seven contact shapes.
 
@@ -76,18 +54,9 @@ def tactip(
     writes a dataset there instead and returns its path; ``force=True``
     replaces an existing dataset (never a folder of other files).
     """
-    cfg = _config(
-        config,
-        shapes=list(shapes) if shapes is not None else None,
-        depth_mm=depth_mm,
-        x_mm=x_mm,
-        y_mm=y_mm,
-        theta_deg=theta_deg,
-        noise_sigma=noise_sigma,
-        blob_probability=blob_probability,
-    )
     r = _tactile.synth_tactip(
-        _whole("count", count), int(seed), None if out is None else os.fspath(out), cfg, force, progress
+        _whole("count", count), int(seed), None if out is None else os.fspath(out), force, progress,
+        **options,
     )
     return Path(r) if out is not None else r
 
@@ -98,17 +67,9 @@ def visuotactile(
     out: Optional[PathLike] = None,
     *,
     sequences: Optional[int] = None,
-    frames_per_sequence: Optional[int] = None,
-    width: Optional[int] = None,
-    height: Optional[int] = None,
-    paths: Optional[Sequence[str]] = None,
-    press_mm: Optional[Range] = None,
-    tendon_radius_mm: Optional[Range] = None,
-    burial_mm: Optional[Range] = None,
-    noise_sigma: Optional[Range] = None,
-    config: Optional[Dict[str, Any]] = None,
     force: bool = False,
     progress: bool = True,
+    **options: Any,
 ) -> Union[Dict[str, Any], Path]:
     """Virtual visuo-tactile palpation videos (paper B).
 
@@ -121,32 +82,14 @@ def visuotactile(
     a dataset there instead and returns its path. ``width`` x ``height``
     must be an integer fraction of 1920 x 1080 (default 640 x 360).
     """
-    fps = frames_per_sequence
-    if fps is None:
-        fps = int((config or {}).get("frames_per_sequence", 30))
-    if count is None and sequences is None:
-        raise ValueError("give count= (frames) or sequences= (videos)")
-    if sequences is not None:
-        frames = _whole("sequences", sequences) * _whole("frames_per_sequence", fps)
-        if count is not None and int(count) != frames:
-            raise ValueError(
-                f"count={count} disagrees with sequences={sequences} x {fps} frames per sequence"
-            )
-        count = frames
-    assert count is not None
-    cfg = _config(
-        config,
-        width=width,
-        height=height,
-        frames_per_sequence=frames_per_sequence,
-        paths=list(paths) if paths is not None else None,
-        press_mm=press_mm,
-        tendon_radius_mm=tendon_radius_mm,
-        burial_mm=burial_mm,
-        noise_sigma=noise_sigma,
-    )
     r = _tactile.synth_visuotactile(
-        _whole("count", count), int(seed), None if out is None else os.fspath(out), cfg, force, progress
+        None if count is None else _whole("count", count),
+        None if sequences is None else _whole("sequences", sequences),
+        int(seed),
+        None if out is None else os.fspath(out),
+        force,
+        progress,
+        **options,
     )
     return Path(r) if out is not None else r
 

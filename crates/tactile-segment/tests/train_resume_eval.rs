@@ -1,0 +1,56 @@
+#![allow(clippy::unwrap_used)]
+//! The segmenter's library path on tiny data, without the command line:
+//! options -> training -> resume -> evaluation.
+
+use serde_json::json;
+use tactile_burn::Runtime;
+use tactile_burn::options::Options;
+use tactile_core::dataset::Dataset;
+use tactile_segment::{SegmenterOptions, TendonSegmenter, evaluate};
+
+fn options(epochs: usize, resume: bool) -> SegmenterOptions {
+    let kw = json!({ "side": 32, "max_epochs": epochs, "resume": resume });
+    SegmenterOptions::with_overrides(kw.as_object().unwrap()).unwrap()
+}
+
+#[test]
+fn the_segmenter_trains_resumes_and_evaluates() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("vt");
+    let cfg = datasets_synth::VisuotactileConfig {
+        width: 320,
+        height: 180,
+        frames_per_sequence: 8,
+        ..Default::default()
+    };
+    datasets_synth::write_visuotactile(&cfg, 32, 5, &data, Default::default()).unwrap();
+    let ds = Dataset::open(&data).unwrap();
+    let out = tmp.path().join("seg");
+
+    let first = options(1, false).train(&ds, &out).unwrap();
+    assert_eq!(first.epochs_run, 1);
+    let resumed = options(2, true).train(&ds, &out).unwrap();
+    assert_eq!(resumed.epochs_run, 2);
+    for f in [
+        "segmenter.json",
+        "segmenter.bpk",
+        "curves.csv",
+        "training.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let mut seg = TendonSegmenter::load(&out, Runtime::BurnFlex, 0).unwrap();
+    assert_eq!(seg.artifact.model.side, 32);
+    let scores = evaluate(&mut seg, &ds).unwrap();
+    // Every tendon frame is scored, under its path.
+    let tendon_frames = (0..ds.len())
+        .filter(|&i| ds.number(i, "tendon").unwrap() == 1.0)
+        .count();
+    assert_eq!(scores.path("all").unwrap().frames, tendon_frames);
+    assert!(
+        scores
+            .paths
+            .iter()
+            .all(|p| (0.0..=1.0).contains(&p.mean_iou))
+    );
+}
