@@ -104,15 +104,17 @@ impl OrtModel {
         self.run_frame(shape, data)
     }
 
+    /// The first output of [`Self::run_frame_outputs`].
     fn run_frame<T>(&mut self, shape: &[usize], data: Vec<T>) -> Result<(Vec<usize>, Vec<f32>)>
     where
         T: ort::value::PrimitiveTensorElementType + std::fmt::Debug + Clone + 'static,
     {
-        let err = |e: ort::Error| Error::Run(format!("run failed: {e}"));
-        let input = Tensor::from_array((shape.to_vec(), data)).map_err(err)?;
-        let outputs = self.session.run(ort::inputs![input]).map_err(err)?;
-        let (s, v) = outputs[0].try_extract_tensor::<f32>().map_err(err)?;
-        Ok((s.iter().map(|&d| d as usize).collect(), v.to_vec()))
+        let first = self
+            .run_frame_outputs(shape, data)?
+            .into_iter()
+            .next()
+            .ok_or_else(|| Error::Run("the model gave no output".into()))?;
+        Ok((first.shape, first.values))
     }
 }
 

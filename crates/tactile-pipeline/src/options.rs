@@ -111,6 +111,11 @@ pub struct Trainer {
     pub about: &'static str,
     /// The Python return type.
     pub returns: &'static str,
+    /// The native function's parameters before the options (the
+    /// Python-facing `inputs` unless the wrapper passes others).
+    pub native_inputs: &'static [&'static str],
+    /// The native function's return type.
+    pub native_returns: &'static str,
     docs: fn() -> tactile_core::Result<Vec<OptionDoc>>,
     params: fn() -> tactile_core::Result<Vec<String>>,
 }
@@ -128,6 +133,8 @@ impl Trainer {
             inputs,
             about,
             returns: "Dict[str, Any]",
+            native_inputs: inputs,
+            native_returns: "Dict[str, Any]",
             docs: T::docs,
             params: T::python_params,
         }
@@ -138,11 +145,19 @@ impl Trainer {
         Ok((self.docs)()?)
     }
 
-    /// The typed Python signature of the trainer under `name` (its own in
-    /// `tactile/train.pyi`, the native one in `_tactile.pyi`), up to the
-    /// colon.
-    pub fn python_def(&self, name: &str) -> Result<String> {
-        let inputs = self.inputs;
+    /// The typed Python signature of the entry point (`tactile/train.pyi`,
+    /// `tactile/synth.pyi`), up to the colon.
+    pub fn python_def(&self) -> Result<String> {
+        self.signature(self.name, self.inputs, self.returns)
+    }
+
+    /// The typed signature of its native function (`_tactile.pyi`), up to
+    /// the colon.
+    pub fn native_def(&self) -> Result<String> {
+        self.signature(self.native, self.native_inputs, self.native_returns)
+    }
+
+    fn signature(&self, name: &str, inputs: &[&str], returns: &str) -> Result<String> {
         let mut s = format!("def {name}(\n");
         for i in inputs {
             s.push_str(&format!("    {i},\n"));
@@ -154,13 +169,25 @@ impl Trainer {
         for p in (self.params)()? {
             s.push_str(&format!("    {p},\n"));
         }
-        s.push_str(&format!(") -> {}:", self.returns));
+        s.push_str(&format!(") -> {returns}:"));
         Ok(s)
     }
 
     /// The same entry point returning `returns` in Python.
     const fn returning(mut self, returns: &'static str) -> Self {
         self.returns = returns;
+        self
+    }
+
+    /// The same entry point whose native function takes `inputs` and
+    /// returns `returns` (a wrapper in Python between the two).
+    const fn native_signature(
+        mut self,
+        inputs: &'static [&'static str],
+        returns: &'static str,
+    ) -> Self {
+        self.native_inputs = inputs;
+        self.native_returns = returns;
         self
     }
 }
@@ -182,7 +209,17 @@ pub const GENERATORS: &[Trainer] = &[
         ],
         "Virtual TacTip frames (paper A): arrays (frames, labels), or a dataset folder with out=.",
     )
-    .returning("Union[Tuple[npt.NDArray[np.uint8], Dict[str, Any]], Path]"),
+    .returning("Union[Tuple[npt.NDArray[np.uint8], Dict[str, Any]], Path]")
+    .native_signature(
+        &[
+            "count: int",
+            "seed: int",
+            "out: Optional[str]",
+            "force: bool",
+            "progress: bool",
+        ],
+        "Any",
+    ),
     Trainer::of::<datasets_synth::VisuotactileConfig>(
         "visuotactile",
         "synth_visuotactile",
@@ -197,26 +234,18 @@ pub const GENERATORS: &[Trainer] = &[
         ],
         "Virtual visuo-tactile palpation videos (paper B): a dict of arrays, or a dataset folder with out=.",
     )
-    .returning("Union[Dict[str, Any], Path]"),
-];
-
-/// The native generators' inputs (positional, as `tactile.synth` passes them).
-const NATIVE_GENERATOR_INPUTS: [&[&str]; 2] = [
-    &[
-        "count: int",
-        "seed: int",
-        "out: Optional[str]",
-        "force: bool",
-        "progress: bool",
-    ],
-    &[
-        "count: Optional[int]",
-        "sequences: Optional[int]",
-        "seed: int",
-        "out: Optional[str]",
-        "force: bool",
-        "progress: bool",
-    ],
+    .returning("Union[Dict[str, Any], Path]")
+    .native_signature(
+        &[
+            "count: Optional[int]",
+            "sequences: Optional[int]",
+            "seed: int",
+            "out: Optional[str]",
+            "force: bool",
+            "progress: bool",
+        ],
+        "Any",
+    ),
 ];
 
 /// Every trainer with options, in the command line's order.
@@ -312,22 +341,13 @@ pub fn python_stubs() -> Result<PythonStubs> {
     let mut native = format!("{STUB_BEGIN}\n");
     let mut train = format!("{STUB_BEGIN}\n");
     let mut synth = format!("{STUB_BEGIN}\n");
-    for t in TRAINERS {
-        native.push_str(&t.python_def(t.native)?);
-        native.push_str(" ...\n");
-        train.push_str(&t.python_def(t.name)?);
-        train.push_str(&format!("\n    \"\"\"{}\"\"\"\n\n", t.about));
-    }
-    for (g, inputs) in GENERATORS.iter().zip(NATIVE_GENERATOR_INPUTS) {
-        let native_entry = Trainer {
-            inputs,
-            returns: "Any",
-            ..*g
-        };
-        native.push_str(&native_entry.python_def(g.native)?);
-        native.push_str(" ...\n");
-        synth.push_str(&g.python_def(g.name)?);
-        synth.push_str(&format!("\n    \"\"\"{}\"\"\"\n\n", g.about));
+    for (entries, own) in [(TRAINERS, &mut train), (GENERATORS, &mut synth)] {
+        for t in entries {
+            native.push_str(&t.native_def()?);
+            native.push_str(" ...\n");
+            own.push_str(&t.python_def()?);
+            own.push_str(&format!("\n    \"\"\"{}\"\"\"\n\n", t.about));
+        }
     }
     for part in [&mut native, &mut train, &mut synth] {
         part.push_str(STUB_END);
