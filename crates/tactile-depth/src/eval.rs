@@ -2,9 +2,10 @@
 //! window and over the tendon mask, RMSE and SSIM, all in millimetres; and
 //! heat maps of truth beside prediction.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
+use tactile_burn::Runtime;
 use tactile_core::dataset::Dataset;
 
 use crate::Result;
@@ -135,6 +136,96 @@ pub fn score(data: &DepthSet, preds: &[Vec<f32>]) -> DepthScores {
         );
     }
     sc.finish()
+}
+
+/// Most heat maps one evaluation writes (each is a PNG of two maps).
+pub const MAX_HEAT_MAPS: usize = 10_000;
+
+/// What an evaluation writes beside its scores (`tactile eval depth`'s
+/// flags, `tactile.eval.depth`'s keywords): written once here.
+#[derive(Debug, Clone, clap::Args, Serialize, Deserialize)]
+pub struct EvalOptions {
+    /// Write heat maps of the skin's displacement from its rest dome in mm (true | predicted, one colour scale with its bar) for the first frames into this folder.
+    #[arg(long)]
+    pub save_png: Option<PathBuf>,
+    /// How many frames `save_png` writes.
+    #[arg(long, default_value_t = 8)]
+    pub png_frames: usize,
+}
+
+impl Default for EvalOptions {
+    fn default() -> Self {
+        Self {
+            save_png: None,
+            png_frames: 8,
+        }
+    }
+}
+
+/// A depth network's evaluation as both front ends report it.
+#[derive(Debug, Clone, Serialize)]
+pub struct DepthEvaluation {
+    /// The model folder.
+    pub model: PathBuf,
+    /// The dataset folder.
+    pub data: PathBuf,
+    /// The scores.
+    pub scores: DepthScores,
+    /// Inference time per frame, ms (batches of [`EVAL_BATCH`], loading
+    /// excluded).
+    pub ms_per_frame: f64,
+    /// Heat maps written into `options.save_png`.
+    pub heat_maps: usize,
+}
+
+/// The depth network in `model` scored on the labelled dataset in `data`,
+/// with the heat maps `options` ask for (the folder checked to lie outside
+/// the dataset before anything runs, written whole or not at all): what
+/// both front ends call.
+pub fn evaluate_folder(
+    model: &Path,
+    data: &Path,
+    runtime: Runtime,
+    options: &EvalOptions,
+) -> Result<DepthEvaluation> {
+    let ds = Dataset::open(data)?;
+    if let Some(dir) = &options.save_png {
+        ds.refuse_as_output(dir)?;
+        if std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_some()) {
+            return Err(tactile_core::Error::Invalid(format!(
+                "{}: already holds files (left alone); choose a new folder for the heat maps",
+                dir.display()
+            ))
+            .into());
+        }
+        if options.png_frames > MAX_HEAT_MAPS {
+            return Err(tactile_core::Error::Config(format!(
+                "png_frames: {} heat maps is more than {MAX_HEAT_MAPS}",
+                options.png_frames
+            ))
+            .into());
+        }
+    }
+    // Staged before the work: an unwritable place fails first.
+    let staged = options
+        .save_png
+        .as_ref()
+        .map(tactile_core::io::StagedDir::new)
+        .transpose()?;
+    let mut est = DepthEstimator::load(model, runtime, 0)?;
+    let (scores, ms_per_frame) = evaluate(&mut est, &ds)?;
+    let mut heat_maps = 0;
+    if let Some(staged) = staged {
+        heat_maps = save_heat_maps(&mut est, &ds, staged.path(), options.png_frames)?;
+        staged.commit(false)?;
+    }
+    Ok(DepthEvaluation {
+        model: model.to_path_buf(),
+        data: data.to_path_buf(),
+        scores,
+        ms_per_frame,
+        heat_maps,
+    })
 }
 
 /// Heat maps of the displacement from the rest dome in mm (truth |

@@ -2,9 +2,11 @@
 //! and F1 over every frame and over the onset and release frames, how well
 //! its probabilities are calibrated, with the probability of each frame.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+use tactile_burn::Runtime;
+use tactile_core::dataset::Dataset;
 use tactile_core::metrics::{BinaryScores, Calibration, binary_scores, calibration};
 use tactile_core::plot::{Series, line_plot};
 
@@ -204,6 +206,43 @@ pub fn evaluate(detector: &mut TendonDetector, data: &DetectionSet) -> Result<De
         decisions: pred,
         threshold: detector.artifact.threshold,
     })
+}
+
+/// What an evaluation writes beside its scores (`tactile eval detector`'s
+/// flags, `tactile.eval.detector`'s keywords): written once here.
+#[derive(Debug, Clone, Default, clap::Args, Serialize, Deserialize)]
+pub struct EvalOptions {
+    /// Also write every frame's probability and decision to this CSV (file, tendon, probability, predicted, onset_release), to look at the frames it gets wrong.
+    #[arg(long)]
+    pub frames: Option<PathBuf>,
+    /// Also save the reliability diagram (observed tendon fraction against predicted probability) as this PNG.
+    #[arg(long)]
+    pub reliability: Option<PathBuf>,
+}
+
+/// The detector in `model` scored on the labelled dataset in `data`, with
+/// the files `options` ask for written (each checked to lie outside the
+/// dataset before anything runs): what both front ends call.
+pub fn evaluate_folder(
+    model: &Path,
+    data: &Path,
+    runtime: Runtime,
+    options: &EvalOptions,
+) -> Result<DetectorScores> {
+    let ds = Dataset::open(data)?;
+    for out in options.frames.iter().chain(&options.reliability) {
+        tactile_core::dataset::check_output_file(out, &[&ds])?;
+    }
+    let mut det = TendonDetector::load(model, runtime, 0)?;
+    let set = DetectionSet::from_dataset(&ds, &det.artifact.model)?;
+    let sc = evaluate(&mut det, &set)?;
+    if let Some(path) = &options.frames {
+        write_decisions_csv(path, &set, &sc)?;
+    }
+    if let Some(path) = &options.reliability {
+        sc.save_reliability_plot(path, "Tendon detector: reliability")?;
+    }
+    Ok(sc)
 }
 
 /// Every frame's probability and decision as CSV (`file, tendon,

@@ -308,6 +308,31 @@ pub const TRAINERS: &[Trainer] = &[
     ),
 ];
 
+/// Every evaluation with options (`tactile eval NAME`,
+/// `tactile.eval.NAME(...)`): what each writes beside its scores.
+pub const EVALUATORS: &[Trainer] = &[
+    Trainer::of::<tactile_detect::eval::EvalOptions>(
+        "detector",
+        "eval_detector",
+        &["model: _Path", "data: _Path", "*", "runtime: str = \"burn-flex\""],
+        "Accuracy, precision, recall, F1 and the onset/release frames of a tendon detector on a labelled visuo-tactile dataset, gated and ungated.",
+    )
+    .native_signature(
+        &["model: str", "data: str", "*", "runtime: str = \"burn-flex\""],
+        "Dict[str, Any]",
+    ),
+    Trainer::of::<tactile_depth::eval::EvalOptions>(
+        "depth",
+        "eval_depth",
+        &["model: _Path", "data: _Path", "*", "runtime: str = \"burn-flex\""],
+        "MAE (sensing window and tendon), RMSE and SSIM of a depth network, mm.",
+    )
+    .native_signature(
+        &["model: str", "data: str", "*", "runtime: str = \"burn-flex\""],
+        "Dict[str, Any]",
+    ),
+];
+
 /// The trainer called `name`, or an error naming those there are.
 pub fn trainer(name: &str) -> Result<&'static Trainer> {
     TRAINERS.iter().find(|t| t.name == name).ok_or_else(|| {
@@ -334,6 +359,8 @@ pub struct PythonStubs {
     pub train: String,
     /// The typed generators of `tactile/synth.pyi`.
     pub synth: String,
+    /// The typed evaluations of `tactile/eval.pyi`.
+    pub eval: String,
 }
 
 /// The generated parts of the Python stubs ([`PythonStubs`]).
@@ -341,7 +368,12 @@ pub fn python_stubs() -> Result<PythonStubs> {
     let mut native = format!("{STUB_BEGIN}\n");
     let mut train = format!("{STUB_BEGIN}\n");
     let mut synth = format!("{STUB_BEGIN}\n");
-    for (entries, own) in [(TRAINERS, &mut train), (GENERATORS, &mut synth)] {
+    let mut eval = format!("{STUB_BEGIN}\n");
+    for (entries, own) in [
+        (TRAINERS, &mut train),
+        (GENERATORS, &mut synth),
+        (EVALUATORS, &mut eval),
+    ] {
         for t in entries {
             native.push_str(&t.native_def()?);
             native.push_str(" ...\n");
@@ -349,7 +381,7 @@ pub fn python_stubs() -> Result<PythonStubs> {
             own.push_str(&format!("\n    \"\"\"{}\"\"\"\n\n", t.about));
         }
     }
-    for part in [&mut native, &mut train, &mut synth] {
+    for part in [&mut native, &mut train, &mut synth, &mut eval] {
         part.push_str(STUB_END);
         part.push('\n');
     }
@@ -357,5 +389,6 @@ pub fn python_stubs() -> Result<PythonStubs> {
         native,
         train,
         synth,
+        eval,
     })
 }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use serde_json::{Value, json};
 use tactile_burn::options::Options;
 use tactile_pipeline::options::{
-    GENERATORS, STUB_BEGIN, STUB_END, TRAINERS, python_stubs, trainer,
+    EVALUATORS, GENERATORS, STUB_BEGIN, STUB_END, TRAINERS, python_stubs, trainer,
 };
 
 fn stub(name: &str) -> PathBuf {
@@ -40,6 +40,7 @@ fn the_python_stubs_type_every_option_as_the_library_defines_it() {
         ("_tactile.pyi", &stubs.native),
         ("train.pyi", &stubs.train),
         ("synth.pyi", &stubs.synth),
+        ("eval.pyi", &stubs.eval),
     ] {
         let path = stub(file);
         let text = std::fs::read_to_string(&path).unwrap();
@@ -79,6 +80,13 @@ fn the_python_stubs_type_every_option_as_the_library_defines_it() {
     ] {
         assert!(stubs.synth.contains(want), "{want} not in\n{}", stubs.synth);
     }
+    // What an evaluation writes is a keyword, as it is a flag.
+    for want in [
+        "def detector(\n    model: _Path,\n    data: _Path,\n    *,\n    runtime: str = \"burn-flex\",\n    config: Optional[_Path] = None,\n    frames: Optional[str] = None,\n    reliability: Optional[str] = None,",
+        "png_frames: int = 8",
+    ] {
+        assert!(stubs.eval.contains(want), "{want} not in\n{}", stubs.eval);
+    }
 }
 
 #[test]
@@ -95,9 +103,14 @@ fn every_option_of_every_trainer_is_a_flag_and_a_keyword() {
             "depth"
         ]
     );
-    for t in TRAINERS.iter().chain(GENERATORS) {
+    for t in TRAINERS.iter().chain(GENERATORS).chain(EVALUATORS) {
         let docs = t.docs().unwrap();
-        assert!(docs.len() >= 4, "{}: {} options", t.name, docs.len());
+        let least = if EVALUATORS.iter().any(|e| e.native == t.native) {
+            2
+        } else {
+            4
+        };
+        assert!(docs.len() >= least, "{}: {} options", t.name, docs.len());
         for d in &docs {
             assert!(!d.help.is_empty(), "{}: {} has no help", t.name, d.name);
             assert!(
@@ -192,4 +205,6 @@ fn keywords_and_config_files_reach_the_training_config() {
     each_default::<tactile_detect::DetectorOptions>();
     each_default::<tactile_segment::SegmenterOptions>();
     each_default::<tactile_depth::DepthOptions>();
+    each_default::<tactile_detect::eval::EvalOptions>();
+    each_default::<tactile_depth::eval::EvalOptions>();
 }

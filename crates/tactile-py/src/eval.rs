@@ -4,9 +4,8 @@
 use std::path::PathBuf;
 
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use tactile_core::dataset::Dataset;
-use tactile_depth::DepthEstimator;
-use tactile_detect::{DetectionSet, TendonDetector};
 use tactile_pipeline::tactip::TactipPerception;
 use tactile_segment::TendonSegmenter;
 
@@ -14,21 +13,21 @@ use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::work::interruptible;
 
-/// Score a tendon detector on a labelled visuo-tactile dataset.
+/// Score a tendon detector on a labelled visuo-tactile dataset; `options`
+/// are [`tactile_detect::eval::EvalOptions`]' (what it writes beside).
 #[pyfunction]
-#[pyo3(signature = (model, data, *, runtime="burn-flex"))]
+#[pyo3(signature = (model, data, *, runtime="burn-flex", **options))]
 pub(crate) fn eval_detector<'py>(
     py: Python<'py>,
     model: PathBuf,
     data: PathBuf,
     runtime: &str,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::runtime(runtime)?;
+    let o: tactile_detect::eval::EvalOptions = crate::json::options(py, options)?;
     let v = interruptible(py, || {
-        let ds = Dataset::open(&data).py()?;
-        let mut det = TendonDetector::load(&model, rt, 0).py()?;
-        let set = DetectionSet::from_dataset(&ds, &det.artifact.model).py()?;
-        let sc = tactile_detect::evaluate(&mut det, &set).py()?;
+        let sc = tactile_detect::eval::evaluate_folder(&model, &data, rt, &o).py()?;
         tactile_core::io::scored_record(&model, &data, &sc).py()
     })?;
     crate::json::to_py(py, &v)
@@ -53,21 +52,21 @@ pub(crate) fn eval_segmenter<'py>(
     crate::json::to_py(py, &v)
 }
 
-/// Score a depth network: MAE in the window and over the tendon, RMSE, SSIM.
+/// Score a depth network: MAE in the window and over the tendon, RMSE,
+/// SSIM; `options` are [`tactile_depth::eval::EvalOptions`]' (heat maps).
 #[pyfunction]
-#[pyo3(signature = (model, data, *, runtime="burn-flex"))]
+#[pyo3(signature = (model, data, *, runtime="burn-flex", **options))]
 pub(crate) fn eval_depth<'py>(
     py: Python<'py>,
     model: PathBuf,
     data: PathBuf,
     runtime: &str,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::runtime(runtime)?;
+    let o: tactile_depth::eval::EvalOptions = crate::json::options(py, options)?;
     let v = interruptible(py, || {
-        let ds = Dataset::open(&data).py()?;
-        let mut est = DepthEstimator::load(&model, rt, 0).py()?;
-        let (s, ms) = tactile_depth::evaluate(&mut est, &ds).py()?;
-        Ok(serde_json::json!({ "model": model, "data": data, "scores": s, "ms_per_frame": ms }))
+        tactile_depth::eval::evaluate_folder(&model, &data, rt, &o).py()
     })?;
     crate::json::to_py(py, &v)
 }

@@ -29,9 +29,16 @@ def test_train_then_eval_detector(small_vt, tmp_path):
                                batch_size=8, seed=1)
     assert s["epochs_run"] == 2 and 0.0 <= s["threshold"] <= 1.0
     assert (out / "detector.json").is_file()
-    e = tactile.eval.detector(out, small_vt)
+    csv, png = tmp_path / "frames.csv", tmp_path / "reliability.png"
+    e = tactile.eval.detector(out, small_vt, frames=csv, reliability=png)
     assert e["all"]["frames"] == 24 and 0.0 <= e["all"]["accuracy"] <= 1.0
-    assert set(e) >= {"all", "onset_release", "ms_per_frame"}
+    assert set(e) >= {"all", "ungated", "onset_release", "ms_per_frame", "calibration"}
+    # The same files `tactile eval detector --frames --reliability` writes.
+    rows = csv.read_text().splitlines()
+    assert rows[0] == "file,tendon,probability,predicted,onset_release" and len(rows) == 25
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(ValueError, match="frame"):
+        tactile.eval.detector(out, small_vt, frame=csv)
 
 
 def test_the_shipped_detector_recipe_trains_from_python_as_from_the_cli(root, small_vt, tmp_path,
@@ -225,3 +232,15 @@ def test_a_pose_network_trains_from_python_as_from_the_cli(root, tmp_path, tacti
     with pytest.raises(FileNotFoundError):
         tactile.train.pose(data, tmp_path / "bad", config=tmp_path / "missing.json")
     assert not (tmp_path / "bad").exists()
+
+
+def test_eval_depth_scores_the_shipped_network_and_draws_heat_maps(root, small_vt, tmp_path):
+    maps = tmp_path / "maps"
+    e = tactile.eval.depth(root / "models/depth", small_vt, save_png=maps, png_frames=2)
+    assert e["scores"]["frames"] == 24 and e["heat_maps"] == 2
+    assert 0.0 <= e["scores"]["mae_mm"] < 1.0 and -1.0 <= e["scores"]["ssim"] <= 1.0
+    assert sorted(p.name for p in maps.iterdir()) == ["depth-000.png", "depth-001.png"]
+    # A folder that already holds files is left alone.
+    with pytest.raises(Exception, match="already holds files"):
+        tactile.eval.depth(root / "models/depth", small_vt, save_png=maps, png_frames=2)
+    assert len(list(maps.iterdir())) == 2

@@ -7,8 +7,6 @@ use anyhow::Result;
 use clap::{Args, Subcommand};
 use tactile_burn::DeviceKind;
 use tactile_core::dataset::Dataset;
-use tactile_depth::DepthEstimator;
-use tactile_detect::{DetectionSet, TendonDetector};
 use tactile_segment::TendonSegmenter;
 
 #[derive(Subcommand)]
@@ -38,24 +36,16 @@ pub(crate) struct ModelArgs {
 pub(crate) struct DetectorArgs {
     #[command(flatten)]
     m: ModelArgs,
-    /// Also write every frame's probability and decision to this CSV (file, tendon, probability, predicted, onset_release), to look at the frames it gets wrong.
-    #[arg(long)]
-    frames: Option<PathBuf>,
-    /// Also save the reliability diagram (observed tendon fraction against predicted probability) as this PNG.
-    #[arg(long)]
-    reliability: Option<PathBuf>,
+    #[command(flatten)]
+    options: tactile_detect::eval::EvalOptions,
 }
 
 #[derive(Args)]
 pub(crate) struct DepthArgs {
     #[command(flatten)]
     m: ModelArgs,
-    /// Write heat maps of the skin's displacement from its rest dome in mm (true | predicted, one colour scale with its bar) for the first frames into this folder.
-    #[arg(long)]
-    save_png: Option<PathBuf>,
-    /// How many frames `--save-png` writes.
-    #[arg(long, default_value_t = 8)]
-    png_frames: usize,
+    #[command(flatten)]
+    options: tactile_depth::eval::EvalOptions,
 }
 
 pub(crate) fn main(cmd: EvalCmd) -> Result<()> {
@@ -67,21 +57,13 @@ pub(crate) fn main(cmd: EvalCmd) -> Result<()> {
 }
 
 fn detector(a: DetectorArgs) -> Result<()> {
-    let m = &a.m;
-    let ds = Dataset::open(&m.data)?;
-    for out in a.frames.iter().chain(&a.reliability) {
-        tactile_core::dataset::check_output_file(out, &[&ds])?;
-    }
-    let mut det = TendonDetector::load(&m.model, m.device.runtime(), 0)?;
-    let data = DetectionSet::from_dataset(&ds, &det.artifact.model)?;
-    let sc = tactile_detect::evaluate(&mut det, &data)?;
-    if let Some(path) = &a.frames {
-        tactile_detect::eval::write_decisions_csv(path, &data, &sc)?;
+    let (m, o) = (&a.m, &a.options);
+    let sc = tactile_detect::eval::evaluate_folder(&m.model, &m.data, m.device.runtime(), o)?;
+    if let Some(path) = &o.frames {
         tactile_core::note!("per-frame decisions in {}", path.display());
     }
     sc.describe(m.device).iter().for_each(|l| say!("{l}"));
-    if let Some(path) = &a.reliability {
-        sc.save_reliability_plot(path, "Tendon detector: reliability")?;
+    if let Some(path) = &o.reliability {
         tactile_core::note!("reliability diagram in {}", path.display());
     }
     say!(
@@ -104,24 +86,19 @@ fn segmenter(m: ModelArgs) -> Result<()> {
 }
 
 fn depth(a: DepthArgs) -> Result<()> {
-    let m = &a.m;
-    let ds = Dataset::open(&m.data)?;
-    if let Some(dir) = &a.save_png {
-        tactile_core::dataset::check_output_dir(dir, &[&ds])?;
-    }
-    let mut est = DepthEstimator::load(&m.model, m.device.runtime(), 0)?;
-    let (s, ms) = tactile_depth::evaluate(&mut est, &ds)?;
-    s.describe(ms, m.device).iter().for_each(|l| say!("{l}"));
-    if let Some(dir) = &a.save_png {
-        let n = tactile_depth::eval::save_heat_maps(&mut est, &ds, dir, a.png_frames)?;
+    let (m, o) = (&a.m, &a.options);
+    let e = tactile_depth::eval::evaluate_folder(&m.model, &m.data, m.device.runtime(), o)?;
+    e.scores
+        .describe(e.ms_per_frame, m.device)
+        .iter()
+        .for_each(|l| say!("{l}"));
+    if let Some(dir) = &o.save_png {
         say!(
-            "{n} heat maps of the push from the rest dome, mm (true | predicted, one scale) in {}",
+            "{} heat maps of the push from the rest dome, mm (true | predicted, one scale) in {}",
+            e.heat_maps,
             dir.display()
         );
     }
-    say!(
-        "{}",
-        serde_json::json!({ "model": m.model, "data": m.data, "scores": s, "ms_per_frame": ms })
-    );
+    say!("{}", serde_json::to_value(&e)?);
     Ok(())
 }

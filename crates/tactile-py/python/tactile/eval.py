@@ -11,10 +11,14 @@ from . import _tactile
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-def detector(model: PathLike, data: PathLike, *, runtime: str = "burn-flex") -> Dict[str, Any]:
+def detector(
+    model: PathLike, data: PathLike, *, runtime: str = "burn-flex", **options: Any
+) -> Dict[str, Any]:
     """Accuracy, precision, recall, F1 and the onset/release frames of a
-    tendon detector on a labelled visuo-tactile dataset."""
-    return _tactile.eval_detector(os.fspath(model), os.fspath(data), runtime=runtime)
+    tendon detector on a labelled visuo-tactile dataset, gated and ungated.
+    ``frames=`` (a CSV of every frame's answer) and ``reliability=`` (a
+    PNG) as ``tactile eval detector``; see ``eval.pyi``."""
+    return _tactile.eval_detector(os.fspath(model), os.fspath(data), runtime=runtime, **options)
 
 
 def segmenter(model: PathLike, data: PathLike, *, runtime: str = "burn-flex") -> Dict[str, Any]:
@@ -22,9 +26,13 @@ def segmenter(model: PathLike, data: PathLike, *, runtime: str = "burn-flex") ->
     return _tactile.eval_segmenter(os.fspath(model), os.fspath(data), runtime=runtime)
 
 
-def depth(model: PathLike, data: PathLike, *, runtime: str = "burn-flex") -> Dict[str, Any]:
-    """MAE (sensing window and tendon), RMSE and SSIM of a depth network, mm."""
-    return _tactile.eval_depth(os.fspath(model), os.fspath(data), runtime=runtime)
+def depth(
+    model: PathLike, data: PathLike, *, runtime: str = "burn-flex", **options: Any
+) -> Dict[str, Any]:
+    """MAE (sensing window and tendon), RMSE and SSIM of a depth network,
+    mm. ``save_png=`` (a new folder) and ``png_frames=`` write heat maps, as
+    ``tactile eval depth``; see ``eval.pyi``."""
+    return _tactile.eval_depth(os.fspath(model), os.fspath(data), runtime=runtime, **options)
 
 
 def tactip(

@@ -1,0 +1,90 @@
+#![allow(clippy::unwrap_used)]
+//! The depth network's library path on tiny data, without the command
+//! line: options -> training (refusing metres) -> resume -> evaluation
+//! with heat maps.
+
+use serde_json::json;
+use tactile_burn::Runtime;
+use tactile_burn::options::Options;
+use tactile_core::dataset::Dataset;
+use tactile_depth::DepthOptions;
+use tactile_depth::eval::{EvalOptions, evaluate_folder};
+
+fn options(extra: serde_json::Value) -> DepthOptions {
+    let mut kw = json!({
+        "encoder": "tiny", "input": [64, 32], "decoder_width": 16,
+        "max_epochs": 1, "val_fraction": 0.34,
+    });
+    kw.as_object_mut()
+        .unwrap()
+        .extend(extra.as_object().unwrap().clone());
+    DepthOptions::with_overrides(kw.as_object().unwrap()).unwrap()
+}
+
+#[test]
+fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("vt");
+    let cfg = datasets_synth::VisuotactileConfig {
+        width: 320,
+        height: 180,
+        frames_per_sequence: 6,
+        ..Default::default()
+    };
+    datasets_synth::write_visuotactile(&cfg, 18, 8, &data, Default::default()).unwrap();
+    let ds = Dataset::open(&data).unwrap();
+    let out = tmp.path().join("depth");
+
+    // Metres: the targets barely vary; refused before training, and why.
+    let e = options(json!({ "unit_mm": 1000.0 }))
+        .train(&ds, &out)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("stall") && e.contains("millimetres"), "{e}");
+    assert!(!out.join("depth.bpk").exists());
+
+    let recipe = json!({ "loss": "l1-grad-ssim", "head": "custom", "with_mask": true });
+    let first = options(recipe.clone()).train(&ds, &out).unwrap();
+    assert_eq!(first.epochs_run, 1);
+    let mut more = recipe.clone();
+    more.as_object_mut().unwrap().extend(
+        json!({ "max_epochs": 2, "resume": true })
+            .as_object()
+            .unwrap()
+            .clone(),
+    );
+    let resumed = options(more).train(&ds, &out).unwrap();
+    assert_eq!(resumed.epochs_run, 2, "resume continues the run");
+
+    let png = tmp.path().join("png");
+    let o = EvalOptions {
+        save_png: Some(png.clone()),
+        png_frames: 2,
+    };
+    let e = evaluate_folder(&out, &data, Runtime::BurnFlex, &o).unwrap();
+    assert_eq!(e.scores.frames, ds.len());
+    assert!(e.scores.mae_mm.is_finite() && e.scores.mae_mm >= 0.0);
+    assert!((-1.0..=1.0).contains(&e.scores.ssim));
+    assert_eq!(e.heat_maps, 2);
+    assert!(png.join("depth-000.png").is_file() && png.join("depth-001.png").is_file());
+    // A folder that already holds files is left alone, before any work.
+    let e = evaluate_folder(&out, &data, Runtime::BurnFlex, &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("already holds files"), "{e}");
+    assert_eq!(std::fs::read_dir(&png).unwrap().count(), 2);
+    // Heat maps over the dataset's own frames are refused, naming it.
+    let before = std::fs::read_dir(data.join("frames")).unwrap().count();
+    let inside = EvalOptions {
+        save_png: Some(data.join("frames")),
+        png_frames: 1,
+    };
+    let e = evaluate_folder(&out, &data, Runtime::BurnFlex, &inside)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("frames"), "{e}");
+    assert_eq!(
+        std::fs::read_dir(data.join("frames")).unwrap().count(),
+        before
+    );
+}
