@@ -26,6 +26,7 @@ macro_rules! say_raw {
 
 mod args;
 mod bench;
+mod calibrate;
 mod compare;
 mod dataset;
 mod demo;
@@ -91,6 +92,11 @@ enum Command {
     /// Benchmark models: latency per runtime against error.
     #[command(subcommand)]
     Bench(bench::BenchCmd),
+    /// Calibrate a real sensor (a GelSight-like one from ball presses).
+    #[command(subcommand)]
+    Calibrate(calibrate::CalibrateCmd),
+    /// Reconstruct a calibrated GelSight-like sensor's skin: the indentation (metres) under every frame, as .npy, with pictures.
+    Reconstruct(calibrate::ReconstructArgs),
     /// Classify frames with the shipped encoder and shape head, printing features.
     Demo(demo::DemoArgs),
 }
@@ -143,6 +149,8 @@ fn dispatch(command: Command) -> Result<()> {
         Command::Export(a) => export::main(a),
         Command::Bench(c) => bench::main(c),
         Command::Demo(a) => demo::main(a),
+        Command::Calibrate(c) => calibrate::main(c),
+        Command::Reconstruct(a) => calibrate::reconstruct(a),
     }
 }
 

@@ -66,7 +66,7 @@ pub(crate) struct ConfigArg {
 }
 
 impl ConfigArg {
-    fn resolve<T: tactile_burn::options::Options>(&self, parsed: T) -> Result<T> {
+    pub(crate) fn resolve<T: tactile_burn::options::Options>(&self, parsed: T) -> Result<T> {
         crate::args::resolve(parsed, self.config.as_deref())
     }
 }

@@ -1,0 +1,196 @@
+//! Finding a ball's contact circle in a press: the colour change from the
+//! background (exposure matched, at the working resolution), an Otsu
+//! threshold, the largest connected region (kornia), and the circle of
+//! the region's centroid and area, refined on the change's edge.
+
+use kornia_image::{Image, ImageSize};
+use kornia_imgproc::connected_components::{Connectivity, connected_components};
+
+use crate::layout::Circle;
+use crate::prepare::{PreparedBackground, WorkingImage};
+use crate::{Error, Result};
+
+/// Fewest working pixels a contact covers.
+pub const MIN_CONTACT_PIXELS: usize = 12;
+
+/// Otsu's threshold of `values` (256 bins over their range).
+fn otsu(values: &[f32]) -> f32 {
+    let (lo, hi) = values
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+        return hi;
+    }
+    let bins = 256;
+    let mut hist = vec![0f64; bins];
+    for &v in values {
+        let b = (((v - lo) / (hi - lo)) * (bins - 1) as f32) as usize;
+        hist[b.min(bins - 1)] += 1.0;
+    }
+    let total: f64 = hist.iter().sum();
+    let sum_all: f64 = hist.iter().enumerate().map(|(i, c)| i as f64 * c).sum();
+    let (mut w0, mut sum0, mut best, mut best_t) = (0.0, 0.0, -1.0, 0);
+    for (t, &c) in hist.iter().enumerate() {
+        w0 += c;
+        sum0 += t as f64 * c;
+        let w1 = total - w0;
+        if w0 == 0.0 || w1 == 0.0 {
+            continue;
+        }
+        let (m0, m1) = (sum0 / w0, (sum_all - sum0) / w1);
+        let between = w0 * w1 * (m0 - m1).powi(2);
+        if between > best {
+            best = between;
+            best_t = t;
+        }
+    }
+    lo + (best_t as f32 + 0.5) / (bins - 1) as f32 * (hi - lo)
+}
+
+/// The contact circle of `frame` (exposure matched) in frame pixels.
+/// `path` names the frame in errors (no contact found).
+pub fn find_contact(
+    background: &PreparedBackground,
+    frame: &WorkingImage,
+    path: &std::path::Path,
+) -> Result<Circle> {
+    let g = frame.grid;
+    let (w, h) = (g.width(), g.height());
+    let change = background.change(frame);
+    let t = otsu(&change);
+    let mask: Vec<u8> = change.iter().map(|&v| u8::from(v > t)).collect();
+    let src = Image::<u8, 1>::new(
+        ImageSize {
+            width: w,
+            height: h,
+        },
+        mask,
+    )?;
+    let mut labels = Image::<i32, 1>::from_size_val(
+        ImageSize {
+            width: w,
+            height: h,
+        },
+        0,
+    )?;
+    let n = connected_components(&src, &mut labels, Connectivity::Eight)?;
+    let mut count = vec![0usize; n.max(1) as usize];
+    for &l in labels.as_slice() {
+        if l > 0 {
+            count[l as usize] += 1;
+        }
+    }
+    let (best, &size) = count
+        .iter()
+        .enumerate()
+        .skip(1)
+        .max_by_key(|(_, c)| **c)
+        .unwrap_or((0, &0));
+    if size < MIN_CONTACT_PIXELS {
+        return Err(Error::Press {
+            path: path.to_path_buf(),
+            why: "no contact found (the frame hardly differs from the background)".into(),
+        });
+    }
+    // The region's centroid starts the search; the contact's edge is
+    // where the change peaks along each ray (the skin's slope, and with it
+    // the colour change, is steepest at the edge and reverses beyond it);
+    // a circle is fitted to those points.
+    let (mut sx, mut sy) = (0.0, 0.0);
+    for (i, &l) in labels.as_slice().iter().enumerate() {
+        if l as usize == best {
+            sx += (i % w) as f64;
+            sy += (i / w) as f64;
+        }
+    }
+    let mut c = (sx / size as f64, sy / size as f64);
+    let mut r = (size as f64 / std::f64::consts::PI).sqrt();
+    let sample = |x: f64, y: f64| -> f64 {
+        let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (h - 1) as f64));
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = (x - x0 as f64, y - y0 as f64);
+        let v = |xx: usize, yy: usize| change[yy * w + xx] as f64;
+        (v(x0, y0) * (1.0 - fx) + v(x1, y0) * fx) * (1.0 - fy)
+            + (v(x0, y1) * (1.0 - fx) + v(x1, y1) * fx) * fy
+    };
+    for _ in 0..3 {
+        let mut points = Vec::with_capacity(RAYS);
+        for k in 0..RAYS {
+            let t = k as f64 * std::f64::consts::TAU / RAYS as f64;
+            let (dx, dy) = (t.cos(), t.sin());
+            let (mut best_d, mut best_drop) = (r, f64::MIN);
+            let steps = 60;
+            for s in 0..=steps {
+                let d = r * (0.5 + 1.5 * s as f64 / steps as f64);
+                let drop = sample(c.0 + dx * d, c.1 + dy * d);
+                if drop > best_drop {
+                    best_drop = drop;
+                    best_d = d;
+                }
+            }
+            points.push((c.0 + dx * best_d, c.1 + dy * best_d));
+        }
+        // Rays that caught something else (a scratch, the housing's glare)
+        // are left out: those far from the median distance.
+        let mut dist: Vec<f64> = points
+            .iter()
+            .map(|p| (p.0 - c.0).hypot(p.1 - c.1))
+            .collect();
+        dist.sort_by(f64::total_cmp);
+        let med = dist[dist.len() / 2];
+        let kept: Vec<(f64, f64)> = points
+            .into_iter()
+            .filter(|p| ((p.0 - c.0).hypot(p.1 - c.1) - med).abs() < 0.15 * med)
+            .collect();
+        if kept.len() < RAYS / 3 {
+            break;
+        }
+        match fit_circle(&kept) {
+            Some((cx, cy, rr)) if rr.is_finite() && rr > 1.0 => {
+                c = (cx, cy);
+                r = rr;
+            }
+            _ => break,
+        }
+    }
+    let f = g.factor as f64;
+    Ok(Circle {
+        centre_x_px: g.frame_coord(c.0),
+        centre_y_px: g.frame_coord(c.1),
+        radius_px: r * f,
+    })
+}
+
+/// Rays along which the contact's edge is sought.
+const RAYS: usize = 48;
+
+/// The least-squares circle through `points` (Kasa's algebraic fit):
+/// centre and radius, or `None` when they are degenerate.
+fn fit_circle(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
+    let n = points.len() as f64;
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+    let (mut suu, mut svv, mut suv, mut suuu, mut svvv, mut suvv, mut svuu) =
+        (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for &(x, y) in points {
+        let (u, v) = (x - mx, y - my);
+        suu += u * u;
+        svv += v * v;
+        suv += u * v;
+        suuu += u * u * u;
+        svvv += v * v * v;
+        suvv += u * v * v;
+        svuu += v * u * u;
+    }
+    let det = suu * svv - suv * suv;
+    if det.abs() < 1e-9 {
+        return None;
+    }
+    let (b1, b2) = (0.5 * (suuu + suvv), 0.5 * (svvv + svuu));
+    let uc = (b1 * svv - b2 * suv) / det;
+    let vc = (suu * b2 - suv * b1) / det;
+    let r = (uc * uc + vc * vc + (suu + svv) / n).sqrt();
+    Some((uc + mx, vc + my, r))
+}

@@ -1,0 +1,67 @@
+//! What can go wrong calibrating a sensor or reconstructing its skin.
+
+use std::path::PathBuf;
+
+/// Errors of this crate; each names the file or field at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Foundation errors: I/O, images, configs.
+    #[error(transparent)]
+    Core(#[from] tactile_core::Error),
+    /// ONNX export or onnxruntime.
+    #[error(transparent)]
+    Onnx(#[from] tactile_onnx::Error),
+    /// A calibration folder that does not hold what the layout asks for.
+    #[error("{path}: {why}")]
+    Layout {
+        /// The file or folder at fault.
+        path: PathBuf,
+        /// What is wrong with it.
+        why: String,
+    },
+    /// A press whose contact circle cannot be used.
+    #[error("{path}: {why}")]
+    Press {
+        /// The press's frame.
+        path: PathBuf,
+        /// What is wrong with its circle.
+        why: String,
+    },
+    /// Too few presses to fit or score a model.
+    #[error("{count} presses in {path}: the sensor model needs at least {needed}")]
+    TooFewPresses {
+        /// The calibration folder.
+        path: PathBuf,
+        /// Presses found.
+        count: usize,
+        /// Presses needed.
+        needed: usize,
+    },
+    /// A frame whose size is not the calibration's.
+    #[error(
+        "{path}: frame is {found:?} (width, height), the sensor was calibrated at {expected:?}"
+    )]
+    FrameSize {
+        /// The frame.
+        path: PathBuf,
+        /// Calibrated size.
+        expected: (usize, usize),
+        /// The frame's size.
+        found: (usize, usize),
+    },
+}
+
+/// This crate's result.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl From<tactile_preprocess::Error> for Error {
+    fn from(e: tactile_preprocess::Error) -> Self {
+        Error::Core(tactile_core::Error::Invalid(e.to_string()))
+    }
+}
+
+impl From<kornia_image::ImageError> for Error {
+    fn from(e: kornia_image::ImageError) -> Self {
+        Error::Core(tactile_core::Error::Invalid(e.to_string()))
+    }
+}

@@ -1,0 +1,197 @@
+//! Reconstruction: a frame of a calibrated sensor to the skin's
+//! indentation. The frame is shrunk and exposure matched to the
+//! background, the network gives the slopes, a Poisson solve integrates
+//! them on the working grid (rest at the border), and the height is
+//! brought back to the frame's size bilinearly.
+
+use std::path::Path;
+
+use kornia_image::{Image, ImageSize};
+use kornia_imgproc::interpolation::InterpolationMode;
+use tactile_burn::{Artifact, Network, Runtime};
+use tactile_core::image_io::{RgbImage, load_rgb};
+
+use crate::artifact::{BACKGROUND_FILE, GelsightArtifact};
+use crate::poisson::PoissonSolver;
+use crate::prepare::{FEATURES, PreparedBackground, WorkingImage};
+use crate::{Error, Result};
+
+/// The skin's indentation over a frame: how far each pixel's skin is
+/// pushed toward the camera, metres (0 at rest).
+#[derive(Debug, Clone, PartialEq)]
+pub struct IndentationMap {
+    /// Width, pixels (the frame's).
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// Row-major metres.
+    pub indentation_m: Vec<f32>,
+}
+
+impl IndentationMap {
+    /// The deepest indentation, mm.
+    pub fn peak_mm(&self) -> f32 {
+        1e3 * self.indentation_m.iter().copied().fold(0f32, f32::max)
+    }
+}
+
+/// A calibrated sensor ready to reconstruct frames.
+pub struct Reconstructor {
+    /// The model's config.
+    pub artifact: GelsightArtifact,
+    net: Box<dyn Network>,
+    background: PreparedBackground,
+    /// The network's slopes on the background itself, subtracted from
+    /// every frame's: the skin at rest reconstructs to exactly 0.
+    rest: (Vec<f32>, Vec<f32>),
+    solver: PoissonSolver,
+}
+
+impl std::fmt::Debug for Reconstructor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Reconstructor({:?})", self.artifact.grid)
+    }
+}
+
+impl Reconstructor {
+    /// Load the model in `dir` onto `runtime`, with the background it was
+    /// calibrated against.
+    pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
+        let dir = dir.as_ref();
+        let (artifact, net) =
+            tactile_onnx::load_network::<GelsightArtifact>(dir, runtime, threads)?;
+        let bg_path = dir.join(BACKGROUND_FILE);
+        let background = load_rgb(&bg_path)?;
+        Self::new(artifact, net, &background, &bg_path)
+    }
+
+    /// A reconstructor of `artifact`'s network against `background`
+    /// (`path` names it in errors).
+    pub fn new(
+        artifact: GelsightArtifact,
+        net: Box<dyn Network>,
+        background: &RgbImage,
+        path: &Path,
+    ) -> Result<Self> {
+        let g = artifact.grid;
+        check_size(path, (g.frame_width, g.frame_height), background)?;
+        let mut r = Self {
+            background: PreparedBackground::new(background, g)?,
+            rest: (vec![], vec![]),
+            solver: PoissonSolver::new(g.width(), g.height()),
+            artifact,
+            net,
+        };
+        r.rest = r.raw_slopes(&r.background.image.clone())?;
+        Ok(r)
+    }
+
+    /// The same model against another background (`--background FILE`: the
+    /// sensor's rest frame today), of the calibrated size.
+    pub fn set_background(&mut self, background: &RgbImage, path: &Path) -> Result<()> {
+        let g = self.artifact.grid;
+        check_size(path, (g.frame_width, g.frame_height), background)?;
+        self.background = PreparedBackground::new(background, g)?;
+        self.rest = self.raw_slopes(&self.background.image.clone())?;
+        Ok(())
+    }
+
+    /// The runtime the network runs on.
+    pub fn runtime(&self) -> Runtime {
+        self.net.runtime()
+    }
+
+    /// The background as the model sees it.
+    pub fn background(&self) -> &PreparedBackground {
+        &self.background
+    }
+
+    /// The skin's slopes `(gx, gy)` on the working grid for an
+    /// exposure-matched working frame: the network's, less its answer at
+    /// rest.
+    pub fn slopes(&mut self, frame: &WorkingImage) -> Result<(Vec<f32>, Vec<f32>)> {
+        let (mut gx, mut gy) = self.raw_slopes(frame)?;
+        for (v, r) in gx.iter_mut().zip(&self.rest.0) {
+            *v -= r;
+        }
+        for (v, r) in gy.iter_mut().zip(&self.rest.1) {
+            *v -= r;
+        }
+        Ok((gx, gy))
+    }
+
+    fn raw_slopes(&mut self, frame: &WorkingImage) -> Result<(Vec<f32>, Vec<f32>)> {
+        let g = self.artifact.grid;
+        let (w, h) = (g.width(), g.height());
+        let x = self.background.features(frame);
+        let out = self.net.run([1, FEATURES, h, w], x)?;
+        let n = w * h;
+        if out.len() != 2 * n {
+            return Err(tactile_core::Error::Invalid(format!(
+                "the sensor model gave {} values for a {w}x{h} grid",
+                out.len()
+            ))
+            .into());
+        }
+        Ok((out[..n].to_vec(), out[n..].to_vec()))
+    }
+
+    /// The indentation on the working grid, mm, from slopes.
+    pub fn integrate_mm(&self, gx: &[f32], gy: &[f32]) -> Vec<f32> {
+        let step_mm = (self.artifact.grid.factor as f64 * self.artifact.sensor.mm_per_px) as f32;
+        let sx: Vec<f32> = gx.iter().map(|v| v * step_mm).collect();
+        let sy: Vec<f32> = gy.iter().map(|v| v * step_mm).collect();
+        self.solver.integrate(&sx, &sy)
+    }
+
+    /// The indentation on the working grid, mm.
+    pub fn working_mm(&mut self, frame: &RgbImage) -> Result<Vec<f32>> {
+        let f = self.background.matched(frame)?;
+        let (gx, gy) = self.slopes(&f)?;
+        Ok(self.integrate_mm(&gx, &gy))
+    }
+
+    /// The skin's indentation over `frame` (the calibrated size; `path`
+    /// names it in errors), at the frame's size, metres.
+    pub fn reconstruct(&mut self, frame: &RgbImage, path: &Path) -> Result<IndentationMap> {
+        let g = self.artifact.grid;
+        check_size(path, (g.frame_width, g.frame_height), frame)?;
+        let mm = self.working_mm(frame)?;
+        let (w, h) = (g.width(), g.height());
+        let src = Image::<f32, 1>::new(
+            ImageSize {
+                width: w,
+                height: h,
+            },
+            mm,
+        )?;
+        let size = ImageSize {
+            width: g.frame_width,
+            height: g.frame_height,
+        };
+        let mut dst = Image::<f32, 1>::from_size_val(size, 0.0)?;
+        kornia_imgproc::resize::resize(&src, &mut dst, InterpolationMode::Bilinear)?;
+        Ok(IndentationMap {
+            width: size.width,
+            height: size.height,
+            indentation_m: dst.as_slice().iter().map(|v| v * 1e-3).collect(),
+        })
+    }
+
+    /// Read the model folder's config only (no network).
+    pub fn read_config(dir: &Path) -> Result<GelsightArtifact> {
+        Ok(GelsightArtifact::read(dir)?)
+    }
+}
+
+fn check_size(path: &Path, expected: (usize, usize), img: &RgbImage) -> Result<()> {
+    let found = (img.width(), img.height());
+    if found != expected {
+        return Err(Error::FrameSize {
+            path: path.to_path_buf(),
+            expected,
+            found,
+        });
+    }
+    Ok(())
+}

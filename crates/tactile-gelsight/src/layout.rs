@@ -1,0 +1,360 @@
+//! The calibration layout: a folder of ball presses of one sensor.
+//!
+//! ```text
+//! DIR/
+//!   sensor.json     {"ball_diameter_mm": 4.0, "mm_per_px": 0.0295,
+//!                    "background": "background.png"}
+//!   background.png  the skin at rest (no contact), 8-bit RGB
+//!   frames/*.png    one press of the ball each, same size
+//!   presses.csv     optional: file,centre_x_px,centre_y_px,contact_radius_px
+//!                   (annotated circles, to score the circle finder)
+//! ```
+//! Every path stays inside `DIR`; sizes are checked before pixels are read.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use tactile_core::image_io::{RgbImage, load_rgb};
+
+use crate::{Error, Result};
+
+/// Most presses one calibration reads.
+pub const MAX_PRESSES: usize = 2_000;
+/// Largest `sensor.json` read, bytes.
+pub const MAX_SENSOR_FILE_BYTES: u64 = 64 << 10;
+/// Largest `presses.csv` read, bytes.
+pub const MAX_PRESSES_FILE_BYTES: u64 = 4 << 20;
+
+/// `sensor.json`: the ball and the camera's scale.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SensorInfo {
+    /// The pressed ball's diameter, mm.
+    pub ball_diameter_mm: f64,
+    /// Millimetres per pixel on the skin.
+    pub mm_per_px: f64,
+    /// The background frame, relative to the folder.
+    #[serde(default = "default_background")]
+    pub background: String,
+}
+
+fn default_background() -> String {
+    "background.png".into()
+}
+
+impl SensorInfo {
+    /// The ball's radius in pixels.
+    pub fn ball_radius_px(&self) -> f64 {
+        self.ball_diameter_mm / 2.0 / self.mm_per_px
+    }
+
+    fn check(&self, file: &Path) -> Result<()> {
+        let bad = |why: String| {
+            Err(Error::Layout {
+                path: file.to_path_buf(),
+                why,
+            })
+        };
+        if !(self.ball_diameter_mm.is_finite() && (0.1..=100.0).contains(&self.ball_diameter_mm)) {
+            return bad(format!(
+                "ball_diameter_mm = {} is no ball of 0.1-100 mm",
+                self.ball_diameter_mm
+            ));
+        }
+        if !(self.mm_per_px.is_finite() && (1e-4..=1.0).contains(&self.mm_per_px)) {
+            return bad(format!(
+                "mm_per_px = {} is not a scale of 0.0001-1 mm per pixel",
+                self.mm_per_px
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A contact circle in frame pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Circle {
+    /// Centre column.
+    pub centre_x_px: f64,
+    /// Centre row.
+    pub centre_y_px: f64,
+    /// Contact radius.
+    pub radius_px: f64,
+}
+
+/// One press: its frame file and, when `presses.csv` gives one, the
+/// annotated circle.
+#[derive(Debug, Clone)]
+pub struct Press {
+    /// Relative to the folder (`frames/press_01.png`).
+    pub file: String,
+    /// The annotated contact circle.
+    pub annotated: Option<Circle>,
+}
+
+/// A calibration folder, read and checked.
+#[derive(Clone)]
+pub struct BallPresses {
+    /// The folder.
+    pub root: PathBuf,
+    /// `sensor.json`.
+    pub sensor: SensorInfo,
+    /// The skin at rest.
+    pub background: RgbImage,
+    /// Every press, in file order.
+    pub presses: Vec<Press>,
+}
+
+impl std::fmt::Debug for BallPresses {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BallPresses")
+            .field("root", &self.root)
+            .field("sensor", &self.sensor)
+            .field("size", &self.size())
+            .field("presses", &self.presses.len())
+            .finish()
+    }
+}
+
+fn read_limited(path: &Path, limit: u64) -> Result<String> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| tactile_core::Error::io(path, e))?
+        .len();
+    if len > limit {
+        return Err(Error::Layout {
+            path: path.to_path_buf(),
+            why: format!("{len} bytes is more than such a file holds (at most {limit})"),
+        });
+    }
+    std::fs::read_to_string(path).map_err(|e| tactile_core::Error::io(path, e).into())
+}
+
+/// `rel` joined to `root`, refused when it leaves `root`.
+fn inside(root: &Path, rel: &str, file: &Path) -> Result<PathBuf> {
+    let p = Path::new(rel);
+    if p.is_absolute()
+        || p.components()
+            .any(|c| !matches!(c, std::path::Component::Normal(_)))
+    {
+        return Err(Error::Layout {
+            path: file.to_path_buf(),
+            why: format!("'{rel}' is not a path inside the calibration folder"),
+        });
+    }
+    Ok(root.join(p))
+}
+
+impl BallPresses {
+    /// Read the folder `root`: `sensor.json`, the background, the presses
+    /// (from `presses.csv` when there is one, else every `frames/*.png`).
+    pub fn open(root: impl AsRef<Path>) -> Result<Self> {
+        let root = root.as_ref().to_path_buf();
+        if !root.is_dir() {
+            return Err(Error::Layout {
+                path: root,
+                why: "no such calibration folder".into(),
+            });
+        }
+        let sensor_file = root.join("sensor.json");
+        if !sensor_file.is_file() {
+            return Err(Error::Layout {
+                path: sensor_file,
+                why: "missing: a calibration folder has sensor.json (ball_diameter_mm, mm_per_px)"
+                    .into(),
+            });
+        }
+        let sensor: SensorInfo =
+            serde_json::from_str(&read_limited(&sensor_file, MAX_SENSOR_FILE_BYTES)?).map_err(
+                |e| Error::Layout {
+                    path: sensor_file.clone(),
+                    why: format!("not a sensor description: {e}"),
+                },
+            )?;
+        sensor.check(&sensor_file)?;
+        let bg_path = inside(&root, &sensor.background, &sensor_file)?;
+        if !bg_path.is_file() {
+            return Err(Error::Layout {
+                path: bg_path,
+                why: "missing: the background frame (the skin at rest, no contact)".into(),
+            });
+        }
+        let background = load_rgb(&bg_path)?;
+        let csv_path = root.join("presses.csv");
+        let presses = if csv_path.is_file() {
+            read_presses_csv(&root, &csv_path)?
+        } else {
+            list_frames(&root)?
+        };
+        let ds = Self {
+            root,
+            sensor,
+            background,
+            presses,
+        };
+        for p in &ds.presses {
+            if let Some(c) = p.annotated {
+                ds.check_circle(&ds.root.join(&p.file), &c)?;
+            }
+        }
+        Ok(ds)
+    }
+
+    /// `(width, height)` of the sensor's frames.
+    pub fn size(&self) -> (usize, usize) {
+        (self.background.width(), self.background.height())
+    }
+
+    /// The frame of press `i`, its size checked against the background's.
+    pub fn frame(&self, i: usize) -> Result<RgbImage> {
+        let path = self.root.join(&self.presses[i].file);
+        let img = load_rgb(&path)?;
+        let found = (img.width(), img.height());
+        if found != self.size() {
+            return Err(Error::FrameSize {
+                path,
+                expected: self.size(),
+                found,
+            });
+        }
+        Ok(img)
+    }
+
+    /// Refuse a circle that leaves the frame or is wider than the ball.
+    pub fn check_circle(&self, path: &Path, c: &Circle) -> Result<()> {
+        let (w, h) = self.size();
+        let r = c.radius_px;
+        let bad = |why: String| {
+            Err(Error::Press {
+                path: path.to_path_buf(),
+                why,
+            })
+        };
+        if !(r.is_finite() && r >= 2.0) {
+            return bad(format!("contact radius {r} px is no contact"));
+        }
+        if r >= self.sensor.ball_radius_px() {
+            return bad(format!(
+                "contact radius {r:.1} px is not smaller than the ball's radius {:.1} px ({} mm at {} mm/px): a ball cannot touch wider than itself",
+                self.sensor.ball_radius_px(),
+                self.sensor.ball_diameter_mm / 2.0,
+                self.sensor.mm_per_px
+            ));
+        }
+        let (x, y) = (c.centre_x_px, c.centre_y_px);
+        if !(x.is_finite() && y.is_finite())
+            || x - r < 0.0
+            || y - r < 0.0
+            || x + r > w as f64
+            || y + r > h as f64
+        {
+            return bad(format!(
+                "contact circle at ({x:.1}, {y:.1}) radius {r:.1} px is not inside the {w}x{h} frame"
+            ));
+        }
+        Ok(())
+    }
+}
+
+fn read_presses_csv(root: &Path, path: &Path) -> Result<Vec<Press>> {
+    let text = read_limited(path, MAX_PRESSES_FILE_BYTES)?;
+    let mut rd = csv::ReaderBuilder::new().from_reader(text.as_bytes());
+    let headers = rd
+        .headers()
+        .map_err(|e| Error::Layout {
+            path: path.to_path_buf(),
+            why: format!("cannot read the header: {e}"),
+        })?
+        .clone();
+    let col = |name: &str| headers.iter().position(|h| h.trim() == name);
+    let file_col = col("file").ok_or_else(|| Error::Layout {
+        path: path.to_path_buf(),
+        why: "no 'file' column".into(),
+    })?;
+    let circle_cols = match (
+        col("centre_x_px"),
+        col("centre_y_px"),
+        col("contact_radius_px"),
+    ) {
+        (Some(x), Some(y), Some(r)) => Some([x, y, r]),
+        (None, None, None) => None,
+        _ => {
+            return Err(Error::Layout {
+                path: path.to_path_buf(),
+                why: "give all of centre_x_px, centre_y_px, contact_radius_px or none".into(),
+            });
+        }
+    };
+    let mut out = Vec::new();
+    for (i, rec) in rd.records().enumerate() {
+        let line = i + 2;
+        let rec = rec.map_err(|e| Error::Layout {
+            path: path.to_path_buf(),
+            why: format!("line {line}: {e}"),
+        })?;
+        if out.len() >= MAX_PRESSES {
+            return Err(Error::Layout {
+                path: path.to_path_buf(),
+                why: format!("more than {MAX_PRESSES} presses"),
+            });
+        }
+        let file = rec.get(file_col).unwrap_or("").trim().to_string();
+        let frame = inside(root, &file, path).map_err(|_| Error::Layout {
+            path: path.to_path_buf(),
+            why: format!("line {line}: '{file}' is not a frame inside the folder"),
+        })?;
+        if !frame.is_file() {
+            return Err(Error::Layout {
+                path: path.to_path_buf(),
+                why: format!("line {line}: frame '{file}' does not exist"),
+            });
+        }
+        let annotated = match circle_cols {
+            None => None,
+            Some(cols) => {
+                let mut v = [0.0; 3];
+                for (k, c) in cols.iter().enumerate() {
+                    let s = rec.get(*c).unwrap_or("").trim();
+                    v[k] = s.parse::<f64>().map_err(|_| Error::Layout {
+                        path: path.to_path_buf(),
+                        why: format!("line {line}: '{s}' in {} is not a number", &headers[*c]),
+                    })?;
+                }
+                Some(Circle {
+                    centre_x_px: v[0],
+                    centre_y_px: v[1],
+                    radius_px: v[2],
+                })
+            }
+        };
+        out.push(Press { file, annotated });
+    }
+    Ok(out)
+}
+
+fn list_frames(root: &Path) -> Result<Vec<Press>> {
+    let dir = root.join("frames");
+    let entries = std::fs::read_dir(&dir).map_err(|_| Error::Layout {
+        path: dir.clone(),
+        why: "missing: a calibration folder has frames/ with one PNG per press".into(),
+    })?;
+    let mut files = Vec::new();
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.to_ascii_lowercase().ends_with(".png") && e.path().is_file() {
+            if files.len() >= MAX_PRESSES {
+                return Err(Error::Layout {
+                    path: dir,
+                    why: format!("more than {MAX_PRESSES} presses"),
+                });
+            }
+            files.push(format!("frames/{name}"));
+        }
+    }
+    files.sort();
+    Ok(files
+        .into_iter()
+        .map(|file| Press {
+            file,
+            annotated: None,
+        })
+        .collect())
+}

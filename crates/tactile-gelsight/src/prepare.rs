@@ -1,0 +1,183 @@
+//! A frame and the background as the sensor model sees them: both shrunk
+//! by area averaging to the working resolution (`factor` frame pixels per
+//! working pixel), the frame's exposure matched to the background's (each
+//! channel's median), then channels first: the colour change, the
+//! background's colour, and the position. Used alike by calibration,
+//! reconstruction and the circle finder.
+
+use serde::{Deserialize, Serialize};
+use tactile_core::image_io::RgbImage;
+use tactile_preprocess::resize_area_interleaved;
+
+use crate::Result;
+
+/// Input channels of the sensor model.
+pub const FEATURES: usize = 8;
+/// The colour change is multiplied by this so it spans about [-1, 1].
+pub const DIFF_GAIN: f32 = 4.0;
+/// Largest shrink factor.
+pub const MAX_FACTOR: usize = 16;
+
+/// The working resolution of a sensor of `width x height` frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct WorkingGrid {
+    /// Frame width, pixels.
+    pub frame_width: usize,
+    /// Frame height, pixels.
+    pub frame_height: usize,
+    /// Frame pixels per working pixel, along each axis.
+    pub factor: usize,
+}
+
+impl WorkingGrid {
+    /// Working width.
+    pub fn width(&self) -> usize {
+        self.frame_width / self.factor
+    }
+
+    /// Working height.
+    pub fn height(&self) -> usize {
+        self.frame_height / self.factor
+    }
+
+    /// The frame-pixel coordinate of working pixel `i`'s centre (frame
+    /// pixel `k`'s centre is `k`).
+    pub fn frame_coord(&self, i: f64) -> f64 {
+        i * self.factor as f64 + (self.factor as f64 - 1.0) / 2.0
+    }
+
+    /// Check the factor against the frame.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        if self.factor == 0 || self.factor > MAX_FACTOR || self.width() < 8 || self.height() < 8 {
+            return Err(tactile_core::Error::Config(format!(
+                "factor {} must be 1-{MAX_FACTOR} and leave at least 8x8 working pixels of a {}x{} frame",
+                self.factor, self.frame_width, self.frame_height
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// An RGB frame at the working resolution: interleaved values in [0, 1].
+#[derive(Debug, Clone)]
+pub struct WorkingImage {
+    /// The grid.
+    pub grid: WorkingGrid,
+    /// `height * width * 3` values.
+    pub rgb: Vec<f32>,
+}
+
+impl WorkingImage {
+    /// `frame` shrunk to `grid` (cropping the remainder at the right and
+    /// bottom).
+    pub fn of(frame: &RgbImage, grid: WorkingGrid) -> Result<Self> {
+        let (w, h) = (grid.width() * grid.factor, grid.height() * grid.factor);
+        let src = frame.as_slice();
+        let fw = frame.width();
+        let rgb = if w == fw && h == frame.height() {
+            resize_area_interleaved(src, (fw, h, 3), grid.width(), grid.height())?
+        } else {
+            let mut crop = Vec::with_capacity(w * h * 3);
+            for y in 0..h {
+                crop.extend_from_slice(&src[y * fw * 3..(y * fw + w) * 3]);
+            }
+            resize_area_interleaved(&crop, (w, h, 3), grid.width(), grid.height())?
+        };
+        Ok(Self { grid, rgb })
+    }
+
+    /// Each channel's median.
+    pub fn medians(&self) -> [f32; 3] {
+        let mut out = [0.0; 3];
+        for (c, m) in out.iter_mut().enumerate() {
+            let mut v: Vec<f32> = self.rgb.iter().skip(c).step_by(3).copied().collect();
+            let mid = v.len() / 2;
+            if !v.is_empty() {
+                *m = *v.select_nth_unstable_by(mid, f32::total_cmp).1;
+            }
+        }
+        out
+    }
+
+    /// The same image with each channel scaled so its median is `to`'s (a
+    /// frame taken at another exposure than the background); a channel
+    /// darker than one grey level is left alone.
+    pub fn matched_to(&self, to: [f32; 3]) -> Self {
+        let m = self.medians();
+        let gain: Vec<f32> = (0..3)
+            .map(|c| {
+                if m[c] > 1.0 / 255.0 {
+                    to[c] / m[c]
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        Self {
+            grid: self.grid,
+            rgb: self
+                .rgb
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v * gain[i % 3])
+                .collect(),
+        }
+    }
+}
+
+/// The background at the working resolution, with its medians.
+#[derive(Debug, Clone)]
+pub struct PreparedBackground {
+    /// The shrunk background.
+    pub image: WorkingImage,
+    /// Its channel medians.
+    pub medians: [f32; 3],
+}
+
+impl PreparedBackground {
+    /// Shrink `background` to `grid`.
+    pub fn new(background: &RgbImage, grid: WorkingGrid) -> Result<Self> {
+        let image = WorkingImage::of(background, grid)?;
+        let medians = image.medians();
+        Ok(Self { image, medians })
+    }
+
+    /// A frame's exposure-matched working image.
+    pub fn matched(&self, frame: &RgbImage) -> Result<WorkingImage> {
+        Ok(WorkingImage::of(frame, self.image.grid)?.matched_to(self.medians))
+    }
+
+    /// The model's input for an exposure-matched frame: `[FEATURES, h, w]`
+    /// channels first (colour change x [`DIFF_GAIN`], background - 0.5,
+    /// x and y in [-1, 1]).
+    pub fn features(&self, frame: &WorkingImage) -> Vec<f32> {
+        let g = self.image.grid;
+        let (w, h) = (g.width(), g.height());
+        let n = w * h;
+        let mut out = vec![0f32; FEATURES * n];
+        for p in 0..n {
+            for c in 0..3 {
+                let (f, b) = (frame.rgb[p * 3 + c], self.image.rgb[p * 3 + c]);
+                out[c * n + p] = (f - b) * DIFF_GAIN;
+                out[(3 + c) * n + p] = b - 0.5;
+            }
+            let (x, y) = (p % w, p / w);
+            out[6 * n + p] = 2.0 * (x as f32 + 0.5) / w as f32 - 1.0;
+            out[7 * n + p] = 2.0 * (y as f32 + 0.5) / h as f32 - 1.0;
+        }
+        out
+    }
+
+    /// The colour change's size per working pixel (the circle finder's
+    /// evidence of contact).
+    pub fn change(&self, frame: &WorkingImage) -> Vec<f32> {
+        frame
+            .rgb
+            .chunks_exact(3)
+            .zip(self.image.rgb.chunks_exact(3))
+            .map(|(f, b)| {
+                ((f[0] - b[0]).powi(2) + (f[1] - b[1]).powi(2) + (f[2] - b[2]).powi(2)).sqrt()
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,202 @@
+//! Reconstructing a folder of frames (what `tactile reconstruct` and
+//! `tactile.calibrate.reconstruct` run): one `<stem>.npy` per frame
+//! (float32 `H x W`, metres) and, if asked, a picture per frame: the
+//! frame, a shaded 3-D view of the skin and its indentation in mm with a
+//! colour bar. Both folders are written whole or not at all.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+use tactile_burn::Runtime;
+use tactile_core::image_io::{RgbImage, load_rgb};
+use tactile_core::plot::{COLOUR_BAR_WIDTH, colour, colour_range, draw_colour_bar};
+
+use crate::inference::{IndentationMap, Reconstructor};
+use crate::{Error, Result};
+
+/// Most frames one call reconstructs.
+pub const MAX_FRAMES: usize = 100_000;
+
+/// What a reconstruction of a folder is asked for beside the model.
+#[derive(Debug, Clone)]
+pub struct ReconstructOptions {
+    /// Another rest frame than the calibration's.
+    pub background: Option<PathBuf>,
+    /// Pictures go into this (new) folder.
+    pub render: Option<PathBuf>,
+    /// Where the network runs.
+    pub runtime: Runtime,
+}
+
+/// What was reconstructed.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReconstructReport {
+    /// Frames written.
+    pub frames: usize,
+    /// Median time per frame (shrink, network, Poisson, enlarge), ms.
+    pub ms_per_frame: f64,
+    /// The deepest indentation over all frames, mm.
+    pub peak_mm: f64,
+}
+
+/// The PNG frames `data` names: itself, or those in it (sorted).
+pub fn frame_files(data: &Path) -> Result<Vec<PathBuf>> {
+    if data.is_file() {
+        return Ok(vec![data.to_path_buf()]);
+    }
+    let entries = std::fs::read_dir(data).map_err(|e| tactile_core::Error::io(data, e))?;
+    let mut files = Vec::new();
+    for e in entries.flatten() {
+        let p = e.path();
+        let png = p.extension().is_some_and(|x| x.eq_ignore_ascii_case("png"));
+        if png && p.is_file() {
+            if files.len() >= MAX_FRAMES {
+                return Err(Error::Layout {
+                    path: data.to_path_buf(),
+                    why: format!("more than {MAX_FRAMES} frames"),
+                });
+            }
+            files.push(p);
+        }
+    }
+    if files.is_empty() {
+        return Err(Error::Layout {
+            path: data.to_path_buf(),
+            why: "no PNG frames here".into(),
+        });
+    }
+    files.sort();
+    Ok(files)
+}
+
+fn refuse_non_empty(dir: &Path) -> Result<()> {
+    if std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_some()) {
+        return Err(Error::Layout {
+            path: dir.to_path_buf(),
+            why: "already holds files (left alone); choose a new folder".into(),
+        });
+    }
+    Ok(())
+}
+
+/// Reconstruct every frame `data` names with the model in `model` into
+/// the new folder `out`.
+pub fn reconstruct_folder(
+    model: &Path,
+    data: &Path,
+    out: &Path,
+    options: &ReconstructOptions,
+) -> Result<ReconstructReport> {
+    let files = frame_files(data)?;
+    refuse_non_empty(out)?;
+    if let Some(r) = &options.render {
+        refuse_non_empty(r)?;
+    }
+    let mut rec = Reconstructor::load(model, options.runtime, 0)?;
+    if let Some(bg) = &options.background {
+        rec.set_background(&load_rgb(bg)?, bg)?;
+    }
+    let staged = tactile_core::io::StagedDir::new(out)?;
+    let render = options
+        .render
+        .as_ref()
+        .map(tactile_core::io::StagedDir::new)
+        .transpose()?;
+    let mut times = Vec::with_capacity(files.len());
+    let mut peak = 0f64;
+    for f in &files {
+        if tactile_core::interrupt::requested() {
+            return Err(tactile_core::Error::Interrupted.into());
+        }
+        let frame = load_rgb(f)?;
+        let t0 = std::time::Instant::now();
+        let map = rec.reconstruct(&frame, f)?;
+        times.push(t0.elapsed().as_secs_f64() * 1e3);
+        peak = peak.max(map.peak_mm() as f64);
+        let stem = f
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "frame".into());
+        tactile_core::npy::write_depth_npy(
+            staged.path().join(format!("{stem}.npy")),
+            map.width,
+            map.height,
+            &map.indentation_m,
+        )?;
+        if let Some(r) = &render {
+            render_picture(&r.path().join(format!("{stem}.png")), &frame, &map)?;
+        }
+    }
+    staged.commit(false)?;
+    if let Some(r) = render {
+        r.commit(false)?;
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(ReconstructReport {
+        frames: files.len(),
+        ms_per_frame: times[times.len() / 2],
+        peak_mm: peak,
+    })
+}
+
+/// Every other pixel of a row-major map (for pictures half the frame's size).
+fn halve<T: Copy>(v: &[T], (w, h): (usize, usize), channels: usize) -> Vec<T> {
+    let mut out = Vec::with_capacity(w / 2 * (h / 2) * channels);
+    for y in (0..h - h % 2).step_by(2) {
+        for x in (0..w - w % 2).step_by(2) {
+            let o = (y * w + x) * channels;
+            out.extend_from_slice(&v[o..o + channels]);
+        }
+    }
+    out
+}
+
+/// The frame, a shaded 3-D view of the skin and its indentation in mm
+/// with a colour bar, side by side at half size.
+pub fn render_picture(path: &Path, frame: &RgbImage, map: &IndentationMap) -> Result<()> {
+    let (w, h) = (map.width, map.height);
+    let (hw, hh) = (w / 2, h / 2);
+    let rgb = halve(frame.as_slice(), (w, h), 3);
+    let mm: Vec<f32> = halve(&map.indentation_m, (w, h), 1)
+        .iter()
+        .map(|v| v * 1e3)
+        .collect();
+    let gap = 6;
+    let width = 3 * (hw + gap) + COLOUR_BAR_WIDTH;
+    let mut out = vec![255u8; width * hh * 3];
+    // Lambertian shading of the skin (light from the upper left), the
+    // relief exaggerated so a press of a millimetre shows.
+    let px_mm = 2.0 * 0.03;
+    let light = {
+        let l = [-1.0f32, -1.0, 1.5];
+        let n = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+        [l[0] / n, l[1] / n, l[2] / n]
+    };
+    let (lo, hi) = colour_range(mm.iter().copied());
+    for y in 0..hh {
+        for x in 0..hw {
+            let i = y * hw + x;
+            let o = |k: usize| (y * width + k * (hw + gap) + x) * 3;
+            out[o(0)..o(0) + 3].copy_from_slice(&rgb[i * 3..i * 3 + 3]);
+            // The skin's height is minus its indentation.
+            let at = |xx: usize, yy: usize| -mm[yy.min(hh - 1) * hw + xx.min(hw - 1)];
+            let dx = (at(x + 1, y) - at(x.saturating_sub(1), y)) / (2.0 * px_mm as f32) * 3.0;
+            let dy = (at(x, y + 1) - at(x, y.saturating_sub(1))) / (2.0 * px_mm as f32) * 3.0;
+            let n = (dx * dx + dy * dy + 1.0).sqrt();
+            let shade = ((-dx * light[0] - dy * light[1] + light[2]) / n).clamp(0.0, 1.0);
+            let g = (40.0 + 215.0 * shade) as u8;
+            out[o(1)..o(1) + 3].copy_from_slice(&[g, g, g]);
+            let c = colour((mm[i] as f64 - lo) / (hi - lo));
+            out[o(2)..o(2) + 3].copy_from_slice(&c);
+        }
+    }
+    draw_colour_bar(
+        &mut out,
+        width,
+        hh,
+        3 * (hw + gap),
+        (lo, hi),
+        "indentation, mm",
+    )?;
+    Ok(tactile_core::image_io::save_rgb_png(path, width, hh, &out)?)
+}

@@ -1,0 +1,425 @@
+//! Calibration: each press's contact circle (annotated, or found), the
+//! ball's geometry as slope targets, and the sensor model fitted to them
+//! (Adam, masked squared error on the slopes, a little colour jitter),
+//! early-stopped on presses held out for validation.
+
+use std::path::Path;
+
+use burn::config::Config;
+use burn::module::Module;
+use burn::tensor::{Device, Tensor, TensorData};
+use serde::{Deserialize, Serialize};
+use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
+use tactile_burn::{Artifact, DeviceKind};
+
+use crate::Error;
+use crate::artifact::{BACKGROUND_FILE, GelsightArtifact};
+use crate::circle::find_contact;
+use crate::eval::{PressScore, score_map};
+use crate::geometry::{Cap, GradientTargets};
+use crate::layout::{BallPresses, Circle};
+use crate::model::{GradientNet, GradientNetConfig};
+use crate::poisson::PoissonSolver;
+use crate::prepare::{FEATURES, PreparedBackground, WorkingGrid, WorkingImage};
+
+/// Frame pixels per pixel of the grid the circle finder works on.
+pub const FINDER_FACTOR: usize = 2;
+
+/// Fewest presses a calibration fits on (after the validation presses).
+pub const MIN_TRAIN_PRESSES: usize = 4;
+
+/// Which circle a press's targets are drawn from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum CircleSource {
+    /// The annotated circle where `presses.csv` gives one, else the found one.
+    #[default]
+    Auto,
+    /// Always the circle the toolkit finds.
+    Found,
+    /// Always the annotated circle (every press must have one).
+    Annotated,
+}
+
+/// How a sensor is calibrated.
+#[derive(Config, Debug, PartialEq)]
+pub struct CalibrationConfig {
+    /// The network.
+    #[config(default = "GradientNetConfig::new()")]
+    pub model: GradientNetConfig,
+    /// Frame pixels per working pixel.
+    #[config(default = 4)]
+    pub factor: usize,
+    /// Epochs, batches, learning rate, seed.
+    #[config(default = "Schedule::new(4, 150, 40, 5e-3).with_lr_decay(0.99)")]
+    pub schedule: Schedule,
+    /// Presses held out to stop training early (0: none, the last epoch kept).
+    #[config(default = 4)]
+    pub val_presses: usize,
+    /// Each channel's gain is jittered by up to this fraction in training.
+    #[config(default = 0.03)]
+    pub colour_jitter: f64,
+    /// Where the contact circles come from.
+    #[config(default = "CircleSource::Auto")]
+    pub circles: CircleSource,
+}
+
+/// One press made ready: its circles, its exposure-matched working frame
+/// and its slope targets.
+#[derive(Debug, Clone)]
+pub struct PreparedPress {
+    /// Its frame, relative to the folder.
+    pub file: String,
+    /// The circle the toolkit found.
+    pub found: Circle,
+    /// The annotated circle, if any.
+    pub annotated: Option<Circle>,
+    /// The circle its targets use.
+    pub circle: Circle,
+    /// The frame at the working resolution, exposure matched.
+    pub frame: WorkingImage,
+    /// Slope targets and weights.
+    pub targets: GradientTargets,
+}
+
+impl PreparedPress {
+    /// The ball's geometry on this press.
+    pub fn cap(&self, ds: &BallPresses) -> Cap {
+        Cap {
+            circle: self.circle,
+            ball_radius_px: ds.sensor.ball_radius_px(),
+            mm_per_px: ds.sensor.mm_per_px,
+        }
+    }
+}
+
+/// The background and every press of `ds` on the working grid of
+/// `factor`, with their circles and targets.
+pub fn prepare_presses(
+    ds: &BallPresses,
+    factor: usize,
+    circles: CircleSource,
+) -> crate::Result<(PreparedBackground, Vec<PreparedPress>)> {
+    let (w, h) = ds.size();
+    let grid = WorkingGrid {
+        frame_width: w,
+        frame_height: h,
+        factor,
+    };
+    grid.check()?;
+    let bg = PreparedBackground::new(&ds.background, grid)?;
+    // Circles are sought on a finer grid than the model's.
+    let fine = PreparedBackground::new(
+        &ds.background,
+        WorkingGrid {
+            factor: FINDER_FACTOR.min(factor),
+            ..grid
+        },
+    )?;
+    let mut out = Vec::with_capacity(ds.presses.len());
+    for (i, p) in ds.presses.iter().enumerate() {
+        let path = ds.root.join(&p.file);
+        let full = ds.frame(i)?;
+        let frame = bg.matched(&full)?;
+        let found = find_contact(&fine, &fine.matched(&full)?, &path)?;
+        let circle = match (circles, p.annotated) {
+            (CircleSource::Found, _) | (CircleSource::Auto, None) => found,
+            (_, Some(a)) => a,
+            (CircleSource::Annotated, None) => {
+                return Err(Error::Press {
+                    path,
+                    why: "no annotated circle in presses.csv (circles = annotated)".into(),
+                });
+            }
+        };
+        ds.check_circle(&path, &circle)?;
+        let cap = Cap {
+            circle,
+            ball_radius_px: ds.sensor.ball_radius_px(),
+            mm_per_px: ds.sensor.mm_per_px,
+        };
+        out.push(PreparedPress {
+            file: p.file.clone(),
+            found,
+            annotated: p.annotated,
+            circle,
+            targets: GradientTargets::of(&cap, grid),
+            frame,
+        });
+    }
+    Ok((bg, out))
+}
+
+/// Features, targets and weights of `presses` as tensors, each channel's
+/// gain jittered by up to `jitter` (seeded by `seed`).
+fn batch(
+    bg: &PreparedBackground,
+    presses: &[&PreparedPress],
+    jitter: f64,
+    seed: u64,
+    device: &Device,
+) -> (Tensor<4>, Tensor<4>, Tensor<4>) {
+    let g = bg.image.grid;
+    let (w, h) = (g.width(), g.height());
+    let n = presses.len();
+    let mut x = Vec::with_capacity(n * FEATURES * w * h);
+    let mut y: Vec<f32> = Vec::with_capacity(n * 2 * w * h);
+    let mut wt: Vec<f32> = Vec::with_capacity(n * w * h);
+    for (k, p) in presses.iter().enumerate() {
+        let f = if jitter > 0.0 {
+            let mut rng = tactile_core::rng::SampleRng::new(seed, 0x6e1, k as u64);
+            let gain: Vec<f32> = (0..3)
+                .map(|_| (1.0 + jitter * (2.0 * rng.uniform() - 1.0)) as f32)
+                .collect();
+            WorkingImage {
+                grid: g,
+                rgb: p
+                    .frame
+                    .rgb
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| v * gain[i % 3])
+                    .collect(),
+            }
+        } else {
+            p.frame.clone()
+        };
+        x.extend(bg.features(&f));
+        y.extend(&p.targets.gx);
+        y.extend(&p.targets.gy);
+        wt.extend(&p.targets.weight);
+    }
+    (
+        Tensor::<4>::from_data(TensorData::new(x, [n, FEATURES, h, w]), device),
+        Tensor::<4>::from_data(TensorData::new(y, [n, 2, h, w]), device),
+        Tensor::<4>::from_data(TensorData::new(wt, [n, 1, h, w]), device),
+    )
+}
+
+/// Weighted squared error of predicted slopes.
+fn loss(pred: Tensor<4>, target: Tensor<4>, weight: Tensor<4>) -> Tensor<1> {
+    let d = (pred - target).powi_scalar(2).sum_dim(1);
+    (d * weight.clone()).sum() / (weight.sum() * 2.0 + 1e-6)
+}
+
+/// The network's slopes on one press (no autodiff).
+pub fn predict_slopes(
+    net: &GradientNet,
+    bg: &PreparedBackground,
+    press: &PreparedPress,
+    device: &Device,
+) -> crate::Result<(Vec<f32>, Vec<f32>)> {
+    let (x, _, _) = batch(bg, &[press], 0.0, 0, device);
+    let v = net
+        .forward(x)
+        .into_data()
+        .try_to_vec::<f32>()
+        .map_err(|e| tactile_core::Error::Invalid(format!("{e:?}")))?;
+    let n = v.len() / 2;
+    Ok((v[..n].to_vec(), v[n..].to_vec()))
+}
+
+/// A fitted network and its run, in memory.
+pub struct Fitted {
+    /// The network (on the inference device).
+    pub net: GradientNet,
+    /// The run.
+    pub summary: FitSummary,
+}
+
+/// Fit the network on `train` presses, early-stopped on `val` (by the
+/// cap-shape error after integration), optionally saving into `out`.
+pub fn fit_presses(
+    config: &CalibrationConfig,
+    ds: &BallPresses,
+    bg: &PreparedBackground,
+    presses: &[PreparedPress],
+    (train, val): (&[usize], &[usize]),
+    device: DeviceKind,
+    out: Option<(&Path, &GelsightArtifact)>,
+) -> crate::Result<Fitted> {
+    config.model.check()?;
+    let dev = device.device();
+    let ad = dev.clone().autodiff();
+    ad.seed(config.schedule.seed);
+    let model = config.model.init(&ad)?;
+    let g = bg.image.grid;
+    let solver = PoissonSolver::new(g.width(), g.height());
+    let step_mm = (g.factor as f64 * ds.sensor.mm_per_px) as f32;
+    let mut fit_cfg = FitConfig::new(&config.schedule, "sensor model (slopes)");
+    fit_cfg.progress = out.is_some();
+    let (val_items, watch) = if val.is_empty() {
+        (train.len(), train)
+    } else {
+        (val.len(), val)
+    };
+    let mut best: Option<GradientNet> = None;
+    let (net, summary) = fit::<_, Error>(
+        &fit_cfg,
+        model,
+        burn::optim::AdamConfig::new().init(),
+        (train, val_items),
+        |m: &GradientNet, items, epoch| {
+            let ps: Vec<&PreparedPress> = items.iter().map(|&i| &presses[i]).collect();
+            let (x, y, w) = batch(
+                bg,
+                &ps,
+                config.colour_jitter,
+                (epoch as u64) << 20 | items[0] as u64,
+                &ad,
+            );
+            Ok(loss(m.forward(x), y, w))
+        },
+        |m| {
+            let m = m.valid();
+            let rest = PreparedPress {
+                frame: bg.image.clone(),
+                ..presses[watch[0]].clone()
+            };
+            let (rx, ry) = predict_slopes(&m, bg, &rest, &dev)?;
+            let (mut total, mut shape) = (0.0, 0.0);
+            for &i in watch {
+                let p = &presses[i];
+                let (x, y, w) = batch(bg, &[p], 0.0, 0, &dev);
+                total += loss(m.forward(x.clone()), y, w).into_scalar::<f32>() as f64;
+                let (gx, gy) = predict_slopes(&m, bg, p, &dev)?;
+                let sx: Vec<f32> = gx.iter().zip(&rx).map(|(v, r)| (v - r) * step_mm).collect();
+                let sy: Vec<f32> = gy.iter().zip(&ry).map(|(v, r)| (v - r) * step_mm).collect();
+                let h = solver.integrate(&sx, &sy);
+                let s = score_map(
+                    &h,
+                    (g.width(), g.height()),
+                    |i| g.frame_coord(i as f64),
+                    &p.cap(ds),
+                    &p.file,
+                );
+                shape += s.shape_mae_mm;
+            }
+            let n = watch.len().max(1) as f64;
+            Ok((total / n, Some(shape / n)))
+        },
+        |m| {
+            best = Some(m.valid());
+            if let Some((dir, art)) = out {
+                art.save(&m.valid(), dir)?;
+            }
+            Ok(())
+        },
+    )?;
+    Ok(Fitted {
+        net: best.unwrap_or_else(|| net.valid()),
+        summary,
+    })
+}
+
+/// What a calibration reports.
+#[derive(Debug, Clone, Serialize)]
+pub struct Calibration {
+    /// The training run.
+    pub fit: FitSummary,
+    /// The circle finder against the annotations, where there are any.
+    pub circles: Option<crate::eval::CircleAgreement>,
+    /// Presses fitted on.
+    pub train_presses: usize,
+    /// Presses that stopped training.
+    pub val_presses: usize,
+    /// Each validation press's scores (full resolution, the saved model).
+    pub validation: Vec<PressScore>,
+}
+
+/// Calibrate the sensor of `ds` into the model folder `out` (written whole
+/// or not at all): circles, targets, fit, the background copied beside the
+/// weights, the training record.
+pub fn calibrate(
+    config: &CalibrationConfig,
+    ds: &BallPresses,
+    out: &Path,
+    device: DeviceKind,
+) -> crate::Result<Calibration> {
+    config.model.check()?;
+    config.schedule.check()?;
+    let n = ds.presses.len();
+    if n < MIN_TRAIN_PRESSES + config.val_presses {
+        return Err(Error::TooFewPresses {
+            path: ds.root.clone(),
+            count: n,
+            needed: MIN_TRAIN_PRESSES + config.val_presses,
+        });
+    }
+    if std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some()) {
+        return Err(Error::Layout {
+            path: out.to_path_buf(),
+            why: "already holds files (left alone); choose a new model folder".into(),
+        });
+    }
+    let staged = tactile_core::io::StagedDir::new(out)?;
+    let (bg, presses) = prepare_presses(ds, config.factor, config.circles)?;
+    let circles = crate::eval::CircleAgreement::of(&presses);
+    if let Some(c) = &circles {
+        tactile_core::note!("{}", c.describe());
+    }
+    // Validation presses spread over the recording (every k-th).
+    let val: Vec<usize> = if config.val_presses == 0 {
+        vec![]
+    } else {
+        let step = n as f64 / config.val_presses as f64;
+        (0..config.val_presses)
+            .map(|k| ((k as f64 + 0.5) * step) as usize)
+            .collect()
+    };
+    let train: Vec<usize> = (0..n).filter(|i| !val.contains(i)).collect();
+    let artifact = GelsightArtifact {
+        model: config.model.clone(),
+        grid: bg.image.grid,
+        sensor: ds.sensor.clone(),
+        notes: serde_json::json!({
+            "calibrated_on": ds.root.display().to_string(),
+            "device": device.name(),
+            "presses": n,
+        }),
+    };
+    let dir = staged.path();
+    let fitted = fit_presses(
+        config,
+        ds,
+        &bg,
+        &presses,
+        (&train, &val),
+        device,
+        Some((dir, &artifact)),
+    )?;
+    artifact.save(&fitted.net, dir)?;
+    std::fs::copy(
+        ds.root.join(&ds.sensor.background),
+        dir.join(BACKGROUND_FILE),
+    )
+    .map_err(|e| tactile_core::Error::io(dir.join(BACKGROUND_FILE), e))?;
+    let _ = std::fs::remove_dir_all(dir.join("checkpoint"));
+    let mut rec = crate::inference::Reconstructor::new(
+        artifact.clone(),
+        Box::new(tactile_burn::runtime::BurnNetwork::new(fitted.net, device)),
+        &ds.background,
+        &ds.root.join(&ds.sensor.background),
+    )?;
+    let mut validation = Vec::new();
+    for &i in &val {
+        let p = &presses[i];
+        let path = ds.root.join(&p.file);
+        let map = rec.reconstruct(&ds.frame(i)?, &path)?;
+        validation.push(crate::eval::score_full(&map, &p.cap(ds), &p.file));
+    }
+    tactile_burn::artifact::write_training_record(
+        dir,
+        config,
+        &fitted.summary,
+        serde_json::json!({ "circles": circles, "validation": validation, "val_presses": val }),
+    )?;
+    staged.commit(false)?;
+    Ok(Calibration {
+        fit: fitted.summary,
+        circles,
+        train_presses: train.len(),
+        val_presses: val.len(),
+        validation,
+    })
+}

@@ -1,0 +1,153 @@
+#![allow(clippy::unwrap_used)]
+//! The calibration layout's refusals and a calibrate-then-reconstruct
+//! round trip on a few of the shared GelSight ball presses
+//! (`../shared/real/gelsight-ball`, read in place; subsets are written to
+//! temporary folders).
+
+use std::path::{Path, PathBuf};
+
+use tactile_burn::{DeviceKind, Runtime};
+use tactile_core::image_io::load_rgb;
+use tactile_gelsight::training::{CalibrationConfig, prepare_presses};
+use tactile_gelsight::{BallPresses, CircleSource, Error, Reconstructor, calibrate};
+
+fn shared() -> PathBuf {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/real/gelsight-ball");
+    assert!(p.is_dir(), "{} missing", p.display());
+    p
+}
+
+/// A calibration folder of the first `n` presses (copied), its CSV edited
+/// by `edit`.
+fn subset(dir: &Path, n: usize, edit: impl Fn(&str) -> String) {
+    let src = shared();
+    std::fs::create_dir_all(dir.join("frames")).unwrap();
+    for f in ["sensor.json", "background.png"] {
+        std::fs::copy(src.join(f), dir.join(f)).unwrap();
+    }
+    let text = std::fs::read_to_string(src.join("presses.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut csv = format!("{}\n", lines.next().unwrap());
+    for l in lines.take(n) {
+        let file = l.split(',').next().unwrap();
+        std::fs::copy(src.join(file), dir.join(file)).unwrap();
+        csv.push_str(&edit(l));
+        csv.push('\n');
+    }
+    std::fs::write(dir.join("presses.csv"), csv).unwrap();
+}
+
+#[test]
+fn the_circle_finder_agrees_with_the_annotations() {
+    let ds = BallPresses::open(shared()).unwrap();
+    assert_eq!(ds.presses.len(), 32);
+    let (_, presses) = prepare_presses(&ds, 4, CircleSource::Found).unwrap();
+    let c = tactile_gelsight::eval::CircleAgreement::of(&presses).unwrap();
+    assert_eq!(c.presses, 32);
+    assert!(
+        c.centre_error_px < 3.0 && c.radius_error_px < 4.0,
+        "{}",
+        c.describe()
+    );
+}
+
+#[test]
+fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A missing background.
+    let d = tmp.path().join("nobg");
+    subset(&d, 2, str::to_string);
+    std::fs::remove_file(d.join("background.png")).unwrap();
+    let e = BallPresses::open(&d).unwrap_err().to_string();
+    assert!(e.contains("background.png") && e.contains("missing"), "{e}");
+    // A circle off the frame.
+    let d = tmp.path().join("off");
+    subset(&d, 2, |l| l.replace(",299,220,", ",630,220,"));
+    let e = BallPresses::open(&d).unwrap_err().to_string();
+    assert!(
+        e.contains("press_01.png") && e.contains("not inside"),
+        "{e}"
+    );
+    // A contact wider than the ball (radius 2 mm = 67.8 px).
+    let d = tmp.path().join("wide");
+    subset(&d, 2, |l| l.replace(",63", ",70"));
+    let e = BallPresses::open(&d).unwrap_err().to_string();
+    assert!(
+        e.contains("press_01.png") && e.contains("ball's radius"),
+        "{e}"
+    );
+    // A frame of another size.
+    let d = tmp.path().join("size");
+    subset(&d, 2, str::to_string);
+    tactile_core::image_io::save_rgb_png(
+        d.join("frames/press_02.png"),
+        320,
+        240,
+        &vec![90u8; 320 * 240 * 3],
+    )
+    .unwrap();
+    let ds = BallPresses::open(&d).unwrap();
+    let e = ds.frame(1).err().unwrap().to_string();
+    assert!(e.contains("press_02.png") && e.contains("640, 480"), "{e}");
+    // Too few presses: refused before anything is written.
+    let d = tmp.path().join("few");
+    subset(&d, 3, str::to_string);
+    let ds = BallPresses::open(&d).unwrap();
+    let out = tmp.path().join("model");
+    let e = calibrate(&CalibrationConfig::new(), &ds, &out, DeviceKind::Flex).unwrap_err();
+    assert!(matches!(e, Error::TooFewPresses { count: 3, .. }), "{e}");
+    assert!(!out.exists());
+    // A path out of the folder in the CSV.
+    let d = tmp.path().join("escape");
+    subset(&d, 1, |l| {
+        l.replace("frames/press_01.png", "../escape/frames/press_01.png")
+    });
+    let e = BallPresses::open(&d).unwrap_err().to_string();
+    assert!(e.contains("presses.csv") && e.contains("line 2"), "{e}");
+}
+
+#[test]
+fn a_calibration_reconstructs_held_out_presses_and_rest() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("presses");
+    subset(&d, 10, str::to_string);
+    let ds = BallPresses::open(&d).unwrap();
+    let mut cfg = CalibrationConfig::new().with_factor(8).with_val_presses(2);
+    cfg.schedule.max_epochs = 40;
+    let out = tmp.path().join("model");
+    let cal = calibrate(&cfg, &ds, &out, DeviceKind::Flex).unwrap();
+    assert_eq!((cal.train_presses, cal.val_presses), (8, 2));
+    for f in [
+        "gelsight.json",
+        "gelsight.bpk",
+        "background.png",
+        "training.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    // Held-out presses: the cap's shape within 0.15 mm after a short fit.
+    for s in &cal.validation {
+        assert!(s.shape_mae_mm < 0.15, "{s:?}");
+        assert!(s.peak_mm > 0.5, "{s:?}");
+    }
+    // The background reconstructs to rest; burn and onnxruntime agree.
+    let bg = load_rgb(d.join("background.png")).unwrap();
+    let mut burn = Reconstructor::load(&out, Runtime::BurnFlex, 0).unwrap();
+    let rest = burn.reconstruct(&bg, &d.join("background.png")).unwrap();
+    assert_eq!((rest.width, rest.height), (640, 480));
+    assert!(
+        rest.indentation_m.iter().all(|v| v.abs() < 1e-5),
+        "rest is not flat"
+    );
+    let frame = load_rgb(d.join("frames/press_01.png")).unwrap();
+    let a = burn.reconstruct(&frame, Path::new("press_01.png")).unwrap();
+    let mut ort = Reconstructor::load(&out, Runtime::Onnx, 1).unwrap();
+    let b = ort.reconstruct(&frame, Path::new("press_01.png")).unwrap();
+    let worst = a
+        .indentation_m
+        .iter()
+        .zip(&b.indentation_m)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0f32, f32::max);
+    assert!(worst < 1e-6, "burn and onnxruntime differ by {worst} m");
+}
