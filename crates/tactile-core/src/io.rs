@@ -247,6 +247,20 @@ impl StagedDir {
         })
     }
 
+    /// [`StagedDir::new`] for a target that must be new (absent or empty):
+    /// one that already holds files is refused at once, before any work,
+    /// and left alone.
+    pub fn fresh(target: impl AsRef<Path>) -> Result<Self> {
+        let target = target.as_ref();
+        if std::fs::read_dir(target).is_ok_and(|mut d| d.next().is_some()) {
+            return Err(Error::Invalid(format!(
+                "{}: already holds files (left alone); choose a new folder",
+                target.display()
+            )));
+        }
+        Self::new(target)
+    }
+
     /// Where to write.
     pub fn path(&self) -> &Path {
         self.staging.path()

@@ -191,13 +191,6 @@ pub fn evaluate_folder(
     let ds = Dataset::open(data)?;
     if let Some(dir) = &options.save_png {
         ds.refuse_as_output(dir)?;
-        if std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_some()) {
-            return Err(tactile_core::Error::Invalid(format!(
-                "{}: already holds files (left alone); choose a new folder for the heat maps",
-                dir.display()
-            ))
-            .into());
-        }
         if options.png_frames > MAX_HEAT_MAPS {
             return Err(tactile_core::Error::Config(format!(
                 "png_frames: {} heat maps is more than {MAX_HEAT_MAPS}",
@@ -206,11 +199,12 @@ pub fn evaluate_folder(
             .into());
         }
     }
-    // Staged before the work: an unwritable place fails first.
+    // Staged before the work: a folder with files or an unwritable place
+    // fails first.
     let staged = options
         .save_png
         .as_ref()
-        .map(tactile_core::io::StagedDir::new)
+        .map(tactile_core::io::StagedDir::fresh)
         .transpose()?;
     let mut est = DepthEstimator::load(model, runtime, 0)?;
     let (scores, ms_per_frame) = evaluate(&mut est, &ds)?;

@@ -61,7 +61,8 @@ pub fn score_map(
             }
         }
     }
-    let offset = median(&mut diffs.clone());
+    // The median reorders the differences; the mean below does not care.
+    let offset = median(&mut diffs);
     let shape = diffs.iter().map(|d| (d - offset).abs()).sum::<f64>() / diffs.len().max(1) as f64;
     PressScore {
         file: file.to_string(),

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use kornia_image::{Image, ImageSize};
 use kornia_imgproc::interpolation::InterpolationMode;
-use tactile_burn::{Artifact, Network, Runtime};
+use tactile_burn::{Network, Runtime};
 use tactile_core::image_io::{RgbImage, load_rgb};
 
 use crate::artifact::{BACKGROUND_FILE, GelsightArtifact};
@@ -106,49 +106,32 @@ impl Reconstructor {
         &self.background
     }
 
-    /// The skin's slopes `(gx, gy)` on the working grid for an
-    /// exposure-matched working frame: the network's, less its answer at
-    /// rest.
-    pub fn slopes(&mut self, frame: &WorkingImage) -> Result<(Vec<f32>, Vec<f32>)> {
-        let (mut gx, mut gy) = self.raw_slopes(frame)?;
-        for (v, r) in gx.iter_mut().zip(&self.rest.0) {
-            *v -= r;
-        }
-        for (v, r) in gy.iter_mut().zip(&self.rest.1) {
-            *v -= r;
-        }
-        Ok((gx, gy))
-    }
-
     fn raw_slopes(&mut self, frame: &WorkingImage) -> Result<(Vec<f32>, Vec<f32>)> {
         let g = self.artifact.grid;
         let (w, h) = (g.width(), g.height());
         let x = self.background.features(frame);
         let out = self.net.run([1, FEATURES, h, w], x)?;
-        let n = w * h;
-        if out.len() != 2 * n {
+        if out.len() != 2 * w * h {
             return Err(tactile_core::Error::Invalid(format!(
                 "the sensor model gave {} values for a {w}x{h} grid",
                 out.len()
             ))
             .into());
         }
-        Ok((out[..n].to_vec(), out[n..].to_vec()))
-    }
-
-    /// The indentation on the working grid, mm, from slopes.
-    pub fn integrate_mm(&self, gx: &[f32], gy: &[f32]) -> Vec<f32> {
-        let step_mm = (self.artifact.grid.factor as f64 * self.artifact.sensor.mm_per_px) as f32;
-        let sx: Vec<f32> = gx.iter().map(|v| v * step_mm).collect();
-        let sy: Vec<f32> = gy.iter().map(|v| v * step_mm).collect();
-        self.solver.integrate(&sx, &sy)
+        Ok(split_slopes(out))
     }
 
     /// The indentation on the working grid, mm.
     pub fn working_mm(&mut self, frame: &RgbImage) -> Result<Vec<f32>> {
         let f = self.background.matched(frame)?;
-        let (gx, gy) = self.slopes(&f)?;
-        Ok(self.integrate_mm(&gx, &gy))
+        let (gx, gy) = self.raw_slopes(&f)?;
+        let step_mm = self.artifact.grid.step_mm(self.artifact.sensor.mm_per_px);
+        Ok(indentation_mm(
+            &self.solver,
+            (&gx, &gy),
+            (&self.rest.0, &self.rest.1),
+            step_mm,
+        ))
     }
 
     /// The skin's indentation over `frame` (the calibrated size; `path`
@@ -177,11 +160,27 @@ impl Reconstructor {
             indentation_m: dst.as_slice().iter().map(|v| v * 1e-3).collect(),
         })
     }
+}
 
-    /// Read the model folder's config only (no network).
-    pub fn read_config(dir: &Path) -> Result<GelsightArtifact> {
-        Ok(GelsightArtifact::read(dir)?)
-    }
+/// A network output's `gx` and `gy` maps (the first and second half).
+pub(crate) fn split_slopes(mut v: Vec<f32>) -> (Vec<f32>, Vec<f32>) {
+    let gy = v.split_off(v.len() / 2);
+    (v, gy)
+}
+
+/// The indentation on the working grid, mm: the network's `raw` slopes
+/// less its slopes at `rest`, in mm per working pixel (`step_mm`),
+/// integrated. Reconstruction and calibration's validation share it.
+pub fn indentation_mm(
+    solver: &PoissonSolver,
+    raw: (&[f32], &[f32]),
+    rest: (&[f32], &[f32]),
+    step_mm: f32,
+) -> Vec<f32> {
+    let skin = |g: &[f32], r: &[f32]| -> Vec<f32> {
+        g.iter().zip(r).map(|(v, r)| (v - r) * step_mm).collect()
+    };
+    solver.integrate(&skin(raw.0, rest.0), &skin(raw.1, rest.1))
 }
 
 fn check_size(path: &Path, expected: (usize, usize), img: &RgbImage) -> Result<()> {

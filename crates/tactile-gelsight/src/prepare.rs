@@ -46,6 +46,11 @@ impl WorkingGrid {
         i * self.factor as f64 + (self.factor as f64 - 1.0) / 2.0
     }
 
+    /// Millimetres per working pixel on a sensor of `mm_per_px`.
+    pub fn step_mm(&self, mm_per_px: f64) -> f32 {
+        (self.factor as f64 * mm_per_px) as f32
+    }
+
     /// Check the factor against the frame.
     pub fn check(&self) -> tactile_core::Result<()> {
         if self.factor == 0 || self.factor > MAX_FACTOR || self.width() < 8 || self.height() < 8 {

@@ -69,16 +69,6 @@ pub fn frame_files(data: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-fn refuse_non_empty(dir: &Path) -> Result<()> {
-    if std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_some()) {
-        return Err(Error::Layout {
-            path: dir.to_path_buf(),
-            why: "already holds files (left alone); choose a new folder".into(),
-        });
-    }
-    Ok(())
-}
-
 /// Reconstruct every frame `data` names with the model in `model` into
 /// the new folder `out`.
 pub fn reconstruct_folder(
@@ -88,20 +78,17 @@ pub fn reconstruct_folder(
     options: &ReconstructOptions,
 ) -> Result<ReconstructReport> {
     let files = frame_files(data)?;
-    refuse_non_empty(out)?;
-    if let Some(r) = &options.render {
-        refuse_non_empty(r)?;
-    }
+    // Both folders are new: one with files in it is refused before any work.
+    let staged = tactile_core::io::StagedDir::fresh(out)?;
+    let render = options
+        .render
+        .as_ref()
+        .map(tactile_core::io::StagedDir::fresh)
+        .transpose()?;
     let mut rec = Reconstructor::load(model, options.runtime, 0)?;
     if let Some(bg) = &options.background {
         rec.set_background(&load_rgb(bg)?, bg)?;
     }
-    let staged = tactile_core::io::StagedDir::new(out)?;
-    let render = options
-        .render
-        .as_ref()
-        .map(tactile_core::io::StagedDir::new)
-        .transpose()?;
     let mut times = Vec::with_capacity(files.len());
     let mut peak = 0f64;
     for f in &files {
@@ -124,7 +111,13 @@ pub fn reconstruct_folder(
             &map.indentation_m,
         )?;
         if let Some(r) = &render {
-            render_picture(&r.path().join(format!("{stem}.png")), &frame, &map)?;
+            let mm_per_px = rec.artifact.sensor.mm_per_px;
+            render_picture(
+                &r.path().join(format!("{stem}.png")),
+                &frame,
+                &map,
+                mm_per_px,
+            )?;
         }
     }
     staged.commit(false)?;
@@ -152,8 +145,14 @@ fn halve<T: Copy>(v: &[T], (w, h): (usize, usize), channels: usize) -> Vec<T> {
 }
 
 /// The frame, a shaded 3-D view of the skin and its indentation in mm
-/// with a colour bar, side by side at half size.
-pub fn render_picture(path: &Path, frame: &RgbImage, map: &IndentationMap) -> Result<()> {
+/// with a colour bar, side by side at half size (`mm_per_px`: the
+/// sensor's scale, for the shading's slopes).
+pub fn render_picture(
+    path: &Path,
+    frame: &RgbImage,
+    map: &IndentationMap,
+    mm_per_px: f64,
+) -> Result<()> {
     let (w, h) = (map.width, map.height);
     let (hw, hh) = (w / 2, h / 2);
     let rgb = halve(frame.as_slice(), (w, h), 3);
@@ -166,7 +165,8 @@ pub fn render_picture(path: &Path, frame: &RgbImage, map: &IndentationMap) -> Re
     let mut out = vec![255u8; width * hh * 3];
     // Lambertian shading of the skin (light from the upper left), the
     // relief exaggerated so a press of a millimetre shows.
-    let px_mm = 2.0 * 0.03;
+    // A picture pixel is two frame pixels.
+    let px_mm = 2.0 * mm_per_px;
     let light = {
         let l = [-1.0f32, -1.0, 1.5];
         let n = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();

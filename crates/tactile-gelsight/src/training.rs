@@ -202,21 +202,26 @@ fn loss(pred: Tensor<4>, target: Tensor<4>, weight: Tensor<4>) -> Tensor<1> {
     (d * weight.clone()).sum() / (weight.sum() * 2.0 + 1e-6)
 }
 
-/// The network's slopes on one press (no autodiff).
+/// The network's raw slopes on one exposure-matched working frame (no
+/// autodiff).
 pub fn predict_slopes(
     net: &GradientNet,
     bg: &PreparedBackground,
-    press: &PreparedPress,
+    frame: &WorkingImage,
     device: &Device,
 ) -> crate::Result<(Vec<f32>, Vec<f32>)> {
-    let (x, _, _) = batch(bg, &[press], 0.0, 0, device);
-    let v = net
-        .forward(x)
+    let g = bg.image.grid;
+    let x = TensorData::new(bg.features(frame), [1, FEATURES, g.height(), g.width()]);
+    slopes_of(net.forward(Tensor::<4>::from_data(x, device)))
+}
+
+/// A network output's two slope maps.
+fn slopes_of(out: Tensor<4>) -> crate::Result<(Vec<f32>, Vec<f32>)> {
+    let v = out
         .into_data()
         .try_to_vec::<f32>()
         .map_err(|e| tactile_core::Error::Invalid(format!("{e:?}")))?;
-    let n = v.len() / 2;
-    Ok((v[..n].to_vec(), v[n..].to_vec()))
+    Ok(crate::inference::split_slopes(v))
 }
 
 /// A fitted network and its run, in memory.
@@ -228,7 +233,8 @@ pub struct Fitted {
 }
 
 /// Fit the network on `train` presses, early-stopped on `val` (by the
-/// cap-shape error after integration), optionally saving into `out`.
+/// cap-shape error after integration), in memory; `progress` reports
+/// each epoch.
 pub fn fit_presses(
     config: &CalibrationConfig,
     ds: &BallPresses,
@@ -236,7 +242,7 @@ pub fn fit_presses(
     presses: &[PreparedPress],
     (train, val): (&[usize], &[usize]),
     device: DeviceKind,
-    out: Option<(&Path, &GelsightArtifact)>,
+    progress: bool,
 ) -> crate::Result<Fitted> {
     config.model.check()?;
     let dev = device.device();
@@ -245,9 +251,9 @@ pub fn fit_presses(
     let model = config.model.init(&ad)?;
     let g = bg.image.grid;
     let solver = PoissonSolver::new(g.width(), g.height());
-    let step_mm = (g.factor as f64 * ds.sensor.mm_per_px) as f32;
+    let step_mm = g.step_mm(ds.sensor.mm_per_px);
     let mut fit_cfg = FitConfig::new(&config.schedule, "sensor model (slopes)");
-    fit_cfg.progress = out.is_some();
+    fit_cfg.progress = progress;
     let (val_items, watch) = if val.is_empty() {
         (train.len(), train)
     } else {
@@ -272,20 +278,15 @@ pub fn fit_presses(
         },
         |m| {
             let m = m.valid();
-            let rest = PreparedPress {
-                frame: bg.image.clone(),
-                ..presses[watch[0]].clone()
-            };
-            let (rx, ry) = predict_slopes(&m, bg, &rest, &dev)?;
+            let (rx, ry) = predict_slopes(&m, bg, &bg.image, &dev)?;
             let (mut total, mut shape) = (0.0, 0.0);
             for &i in watch {
                 let p = &presses[i];
                 let (x, y, w) = batch(bg, &[p], 0.0, 0, &dev);
-                total += loss(m.forward(x.clone()), y, w).into_scalar::<f32>() as f64;
-                let (gx, gy) = predict_slopes(&m, bg, p, &dev)?;
-                let sx: Vec<f32> = gx.iter().zip(&rx).map(|(v, r)| (v - r) * step_mm).collect();
-                let sy: Vec<f32> = gy.iter().zip(&ry).map(|(v, r)| (v - r) * step_mm).collect();
-                let h = solver.integrate(&sx, &sy);
+                let out = m.forward(x);
+                total += loss(out.clone(), y, w).into_scalar::<f32>() as f64;
+                let (gx, gy) = slopes_of(out)?;
+                let h = crate::inference::indentation_mm(&solver, (&gx, &gy), (&rx, &ry), step_mm);
                 let s = score_map(
                     &h,
                     (g.width(), g.height()),
@@ -300,9 +301,6 @@ pub fn fit_presses(
         },
         |m| {
             best = Some(m.valid());
-            if let Some((dir, art)) = out {
-                art.save(&m.valid(), dir)?;
-            }
             Ok(())
         },
     )?;
@@ -346,13 +344,7 @@ pub fn calibrate(
             needed: MIN_TRAIN_PRESSES + config.val_presses,
         });
     }
-    if std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some()) {
-        return Err(Error::Layout {
-            path: out.to_path_buf(),
-            why: "already holds files (left alone); choose a new model folder".into(),
-        });
-    }
-    let staged = tactile_core::io::StagedDir::new(out)?;
+    let staged = tactile_core::io::StagedDir::fresh(out)?;
     let (bg, presses) = prepare_presses(ds, config.factor, config.circles)?;
     let circles = crate::eval::CircleAgreement::of(&presses);
     if let Some(c) = &circles {
@@ -379,22 +371,13 @@ pub fn calibrate(
         }),
     };
     let dir = staged.path();
-    let fitted = fit_presses(
-        config,
-        ds,
-        &bg,
-        &presses,
-        (&train, &val),
-        device,
-        Some((dir, &artifact)),
-    )?;
+    let fitted = fit_presses(config, ds, &bg, &presses, (&train, &val), device, true)?;
     artifact.save(&fitted.net, dir)?;
     std::fs::copy(
         ds.root.join(&ds.sensor.background),
         dir.join(BACKGROUND_FILE),
     )
     .map_err(|e| tactile_core::Error::io(dir.join(BACKGROUND_FILE), e))?;
-    let _ = std::fs::remove_dir_all(dir.join("checkpoint"));
     let mut rec = crate::inference::Reconstructor::new(
         artifact.clone(),
         Box::new(tactile_burn::runtime::BurnNetwork::new(fitted.net, device)),
