@@ -12,6 +12,9 @@ pub enum Error {
     /// A file, dataset or configuration problem.
     #[error(transparent)]
     Core(#[from] tactile_core::Error),
+    /// Ball-press calibration.
+    #[error(transparent)]
+    Gelsight(#[from] tactile_gelsight::Error),
     /// The virtual sensors.
     #[error(transparent)]
     Synth(#[from] datasets_synth::Error),
@@ -43,7 +46,8 @@ impl Error {
         match self {
             Error::Core(e) => Some(e),
             Error::Pipeline(e) => e.core(),
-            Error::Synth(_) => None,
+            Error::Gelsight(tactile_gelsight::Error::Core(e)) => Some(e),
+            Error::Gelsight(_) | Error::Synth(_) => None,
         }
     }
 }

@@ -8,6 +8,7 @@
 #![deny(missing_docs)]
 
 pub mod cae;
+pub mod calibration;
 pub mod compare;
 pub mod devices;
 mod error;

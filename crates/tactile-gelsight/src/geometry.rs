@@ -68,6 +68,13 @@ pub struct GradientTargets {
     pub gy: Vec<f32>,
     /// Per pixel, for `gx` and `gy` alike.
     pub weight: Vec<f32>,
+    /// The cap's height above its rim at each pixel's centre inside the
+    /// contact (0 elsewhere), mm.
+    pub cap_mm: Vec<f32>,
+    /// 1 inside the contact, else 0.
+    pub inside: Vec<f32>,
+    /// 1 beyond [`FAR_FIELD_RADII`] contact radii (the skin at rest), else 0.
+    pub far: Vec<f32>,
 }
 
 impl GradientTargets {
@@ -79,10 +86,19 @@ impl GradientTargets {
         let mut gy = vec![0f32; w * h];
         let mut inside = vec![false; w * h];
         let mut known = vec![false; w * h];
+        let mut cap_mm = vec![0f32; w * h];
+        let mut centre_inside = vec![0f32; w * h];
+        let mut far = vec![0f32; w * h];
         for j in 0..h {
             for i in 0..w {
                 let (x, y) = (grid.frame_coord(i as f64), grid.frame_coord(j as f64));
                 let k = j * w + i;
+                if let Some(t) = cap.height_mm(x, y) {
+                    cap_mm[k] = t as f32;
+                    centre_inside[k] = 1.0;
+                } else if cap.r_px(x, y) >= FAR_FIELD_RADII * cap.circle.radius_px {
+                    far[k] = 1.0;
+                }
                 // Both midpoints must be known.
                 if let (Some((sx, _)), Some((_, sy))) =
                     (cap.slope(x + half, y), cap.slope(x, y + half))
@@ -110,6 +126,13 @@ impl GradientTargets {
                 (true, false) => n_in / n_far,
             })
             .collect();
-        Self { gx, gy, weight }
+        Self {
+            gx,
+            gy,
+            weight,
+            cap_mm,
+            inside: centre_inside,
+            far,
+        }
     }
 }

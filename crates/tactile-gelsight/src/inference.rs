@@ -6,14 +6,13 @@
 
 use std::path::Path;
 
-use kornia_image::{Image, ImageSize};
-use kornia_imgproc::interpolation::InterpolationMode;
 use tactile_burn::{Network, Runtime};
 use tactile_core::image_io::{RgbImage, load_rgb};
 
 use crate::artifact::{BACKGROUND_FILE, GelsightArtifact};
+use crate::lookup::LookupTable;
 use crate::poisson::PoissonSolver;
-use crate::prepare::{FEATURES, PreparedBackground, WorkingImage};
+use crate::prepare::{FEATURES, PreparedBackground, WorkingGrid, WorkingImage};
 use crate::{Error, Result};
 
 /// The skin's indentation over a frame: how far each pixel's skin is
@@ -35,11 +34,29 @@ impl IndentationMap {
     }
 }
 
+/// What gives a working frame's slopes.
+pub enum SlopeModel {
+    /// A calibrated network on a runtime.
+    Network(Box<dyn Network>),
+    /// The classic colour-change lookup table.
+    Lookup(LookupTable),
+}
+
+impl SlopeModel {
+    /// `gx` then `gy` of `features` (`[FEATURES, h, w]`).
+    fn slopes(&mut self, features: Vec<f32>, (w, h): (usize, usize)) -> Result<Vec<f32>> {
+        match self {
+            Self::Network(net) => Ok(net.run([1, FEATURES, h, w], features)?),
+            Self::Lookup(t) => Ok(t.slopes(&features)),
+        }
+    }
+}
+
 /// A calibrated sensor ready to reconstruct frames.
 pub struct Reconstructor {
-    /// The model's config.
-    pub artifact: GelsightArtifact,
-    net: Box<dyn Network>,
+    grid: WorkingGrid,
+    mm_per_px: f64,
+    model: SlopeModel,
     background: PreparedBackground,
     /// The network's slopes on the background itself, subtracted from
     /// every frame's: the skin at rest reconstructs to exactly 0.
@@ -49,7 +66,7 @@ pub struct Reconstructor {
 
 impl std::fmt::Debug for Reconstructor {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Reconstructor({:?})", self.artifact.grid)
+        write!(f, "Reconstructor({:?})", self.grid)
     }
 }
 
@@ -62,25 +79,34 @@ impl Reconstructor {
             tactile_onnx::load_network::<GelsightArtifact>(dir, runtime, threads)?;
         let bg_path = dir.join(BACKGROUND_FILE);
         let background = load_rgb(&bg_path)?;
-        Self::new(artifact, net, &background, &bg_path)
+        Self::new(
+            artifact.grid,
+            artifact.sensor.mm_per_px,
+            SlopeModel::Network(net),
+            &background,
+            &bg_path,
+        )
     }
 
-    /// A reconstructor of `artifact`'s network against `background`
-    /// (`path` names it in errors).
+    /// A reconstructor on `grid` of a sensor of `mm_per_px` whose slopes
+    /// come from `model`, against `background` (`path` names it in
+    /// errors).
     pub fn new(
-        artifact: GelsightArtifact,
-        net: Box<dyn Network>,
+        grid: WorkingGrid,
+        mm_per_px: f64,
+        model: SlopeModel,
         background: &RgbImage,
         path: &Path,
     ) -> Result<Self> {
-        let g = artifact.grid;
+        let g = grid;
         check_size(path, (g.frame_width, g.frame_height), background)?;
         let mut r = Self {
             background: PreparedBackground::new(background, g)?,
             rest: (vec![], vec![]),
             solver: PoissonSolver::new(g.width(), g.height()),
-            artifact,
-            net,
+            grid,
+            mm_per_px,
+            model,
         };
         r.rest = r.raw_slopes(&r.background.image.clone())?;
         Ok(r)
@@ -89,16 +115,29 @@ impl Reconstructor {
     /// The same model against another background (`--background FILE`: the
     /// sensor's rest frame today), of the calibrated size.
     pub fn set_background(&mut self, background: &RgbImage, path: &Path) -> Result<()> {
-        let g = self.artifact.grid;
+        let g = self.grid;
         check_size(path, (g.frame_width, g.frame_height), background)?;
         self.background = PreparedBackground::new(background, g)?;
         self.rest = self.raw_slopes(&self.background.image.clone())?;
         Ok(())
     }
 
-    /// The runtime the network runs on.
-    pub fn runtime(&self) -> Runtime {
-        self.net.runtime()
+    /// The runtime the network runs on (`None`: the lookup table).
+    pub fn runtime(&self) -> Option<Runtime> {
+        match &self.model {
+            SlopeModel::Network(n) => Some(n.runtime()),
+            SlopeModel::Lookup(_) => None,
+        }
+    }
+
+    /// The working grid.
+    pub fn grid(&self) -> WorkingGrid {
+        self.grid
+    }
+
+    /// Millimetres per frame pixel.
+    pub fn mm_per_px(&self) -> f64 {
+        self.mm_per_px
     }
 
     /// The background as the model sees it.
@@ -106,11 +145,13 @@ impl Reconstructor {
         &self.background
     }
 
-    fn raw_slopes(&mut self, frame: &WorkingImage) -> Result<(Vec<f32>, Vec<f32>)> {
-        let g = self.artifact.grid;
+    /// The model's slopes on an exposure-matched working frame, the
+    /// rest's not subtracted.
+    pub fn raw_slopes(&mut self, frame: &WorkingImage) -> Result<(Vec<f32>, Vec<f32>)> {
+        let g = self.grid;
         let (w, h) = (g.width(), g.height());
         let x = self.background.features(frame);
-        let out = self.net.run([1, FEATURES, h, w], x)?;
+        let out = self.model.slopes(x, (w, h))?;
         if out.len() != 2 * w * h {
             return Err(tactile_core::Error::Invalid(format!(
                 "the sensor model gave {} values for a {w}x{h} grid",
@@ -121,11 +162,16 @@ impl Reconstructor {
         Ok(split_slopes(out))
     }
 
+    /// The rest's slopes (the model on the background).
+    pub fn rest_slopes(&self) -> (&[f32], &[f32]) {
+        (&self.rest.0, &self.rest.1)
+    }
+
     /// The indentation on the working grid, mm.
     pub fn working_mm(&mut self, frame: &RgbImage) -> Result<Vec<f32>> {
         let f = self.background.matched(frame)?;
         let (gx, gy) = self.raw_slopes(&f)?;
-        let step_mm = self.artifact.grid.step_mm(self.artifact.sensor.mm_per_px);
+        let step_mm = self.grid.step_mm(self.mm_per_px);
         Ok(indentation_mm(
             &self.solver,
             (&gx, &gy),
@@ -137,27 +183,15 @@ impl Reconstructor {
     /// The skin's indentation over `frame` (the calibrated size; `path`
     /// names it in errors), at the frame's size, metres.
     pub fn reconstruct(&mut self, frame: &RgbImage, path: &Path) -> Result<IndentationMap> {
-        let g = self.artifact.grid;
+        let g = self.grid;
         check_size(path, (g.frame_width, g.frame_height), frame)?;
         let mm = self.working_mm(frame)?;
-        let (w, h) = (g.width(), g.height());
-        let src = Image::<f32, 1>::new(
-            ImageSize {
-                width: w,
-                height: h,
-            },
-            mm,
-        )?;
-        let size = ImageSize {
-            width: g.frame_width,
-            height: g.frame_height,
-        };
-        let mut dst = Image::<f32, 1>::from_size_val(size, 0.0)?;
-        kornia_imgproc::resize::resize(&src, &mut dst, InterpolationMode::Bilinear)?;
+        let size = (g.frame_width, g.frame_height);
+        let big = tactile_preprocess::enlarge_f32(&mm, (g.width(), g.height()), size)?;
         Ok(IndentationMap {
-            width: size.width,
-            height: size.height,
-            indentation_m: dst.as_slice().iter().map(|v| v * 1e-3).collect(),
+            width: size.0,
+            height: size.1,
+            indentation_m: big.iter().map(|v| v * 1e-3).collect(),
         })
     }
 }

@@ -12,12 +12,14 @@
 #![deny(missing_docs)]
 
 pub mod artifact;
+pub mod bench;
 pub mod circle;
 mod error;
 pub mod eval;
 pub mod geometry;
 pub mod inference;
 pub mod layout;
+pub mod lookup;
 pub mod model;
 pub mod options;
 pub mod poisson;

@@ -26,8 +26,9 @@ pub struct GradientNetConfig {
     #[config(default = "vec![32, 32]")]
     pub widths: Vec<usize>,
     /// Each layer's (odd) kernel size, one more than `widths` (the output
-    /// layer last).
-    #[config(default = "vec![3, 1, 1]")]
+    /// layer last). Two 3x3 layers see 5x5 working pixels (20x20 frame
+    /// pixels at factor 4): measured in docs/calibration.md against one.
+    #[config(default = "vec![3, 3, 1]")]
     pub kernels: Vec<usize>,
 }
 

@@ -31,6 +31,9 @@ pub struct BallOptions {
     /// Each channel's gain is jittered by up to this fraction in training.
     #[arg(long, default_value_t = CalibrationConfig::new().colour_jitter)]
     pub colour_jitter: f64,
+    /// Weight of the integrated height's error beside the slopes' (0: slopes only).
+    #[arg(long, default_value_t = CalibrationConfig::new().height_weight)]
+    pub height_weight: f64,
     /// Where the contact circles come from: auto (annotated where presses.csv gives them), found, annotated.
     #[arg(long, value_enum, default_value_t = CircleSource::Auto)]
     pub circles: CircleSource,
@@ -62,6 +65,7 @@ impl BallOptions {
             .with_schedule(self.schedule.schedule(d.schedule.learning_rate))
             .with_val_presses(self.val_presses)
             .with_colour_jitter(self.colour_jitter)
+            .with_height_weight(self.height_weight)
             .with_circles(self.circles);
         c.model.check()?;
         c.schedule.check()?;
@@ -69,6 +73,13 @@ impl BallOptions {
             return Err(tactile_core::Error::Config(format!(
                 "colour_jitter must be in [0, 0.5), got {}",
                 c.colour_jitter
+            ))
+            .into());
+        }
+        if !(0.0..=1e4).contains(&c.height_weight) {
+            return Err(tactile_core::Error::Config(format!(
+                "height_weight must be in [0, 10000], got {}",
+                c.height_weight
             ))
             .into());
         }

@@ -6,6 +6,7 @@
 
 use std::sync::Arc;
 
+use burn::tensor::{Device, Tensor, TensorData};
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
 
@@ -93,6 +94,70 @@ impl PoissonSolver {
     }
 }
 
+/// The same solve as [`PoissonSolver`] written as tensor operations (the
+/// sine transform as a matrix product), so a loss on the height can train
+/// the network that predicts the gradients.
+#[derive(Debug, Clone)]
+pub struct PoissonLayer {
+    width: usize,
+    height: usize,
+    /// DST-I matrices, `[W, W]` and `[H, H]` (symmetric).
+    sine_x: Tensor<2>,
+    sine_y: Tensor<2>,
+    /// `1 / eigenvalue` per mode with the transforms' scale, `[1, W, H]`.
+    inverse_eigen: Tensor<3>,
+}
+
+impl PoissonLayer {
+    /// The layer for `width x height` grids on `device`.
+    pub fn new(width: usize, height: usize, device: &Device) -> Self {
+        let sine = |n: usize| {
+            let pi = std::f64::consts::PI;
+            let v: Vec<f32> = (0..n * n)
+                .map(|i| {
+                    let (j, k) = (i / n, i % n);
+                    (pi * ((j + 1) * (k + 1)) as f64 / (n + 1) as f64).sin() as f32
+                })
+                .collect();
+            Tensor::<2>::from_data(TensorData::new(v, [n, n]), device)
+        };
+        let e = PoissonSolver::new(width, height).inverse_eigen;
+        Self {
+            width,
+            height,
+            sine_x: sine(width),
+            sine_y: sine(height),
+            inverse_eigen: Tensor::<3>::from_data(TensorData::new(e, [1, width, height]), device),
+        }
+    }
+
+    /// Heights from forward-difference gradients.
+    ///
+    /// # Shapes
+    /// - `gx`, `gy`: `[N, H, W]`, height units per pixel
+    /// - returns `[N, H, W]`, zero beyond the border
+    pub fn integrate(&self, gx: Tensor<3>, gy: Tensor<3>) -> Tensor<3> {
+        let (w, h) = (self.width, self.height);
+        let n = gx.dims()[0];
+        let left = gx
+            .clone()
+            .slice([0..n, 0..h, 0..w - 1])
+            .pad((1, 0, 0, 0), 0.0f32);
+        let up = gy
+            .clone()
+            .slice([0..n, 0..h - 1, 0..w])
+            .pad((0, 0, 1, 0), 0.0f32);
+        let f = gx - left + gy - up;
+        // Rows (along x), then columns (along y), scale, and back.
+        let a = f.reshape([n * h, w]).matmul(self.sine_x.clone());
+        let t = a.reshape([n, h, w]).swap_dims(1, 2).reshape([n * w, h]);
+        let t = t.matmul(self.sine_y.clone()).reshape([n, w, h]) * self.inverse_eigen.clone();
+        let t = t.reshape([n * w, h]).matmul(self.sine_y.clone());
+        let out = t.reshape([n, w, h]).swap_dims(1, 2).reshape([n * h, w]);
+        out.matmul(self.sine_x.clone()).reshape([n, h, w])
+    }
+}
+
 fn transpose(src: &[f32], w: usize, h: usize) -> Vec<f32> {
     let mut dst = vec![0f32; w * h];
     for y in 0..h {
@@ -166,5 +231,31 @@ mod tests {
             .map(|(a, b)| (a - b).abs())
             .fold(0f32, f32::max);
         assert!(err < 1e-4, "{err}");
+    }
+
+    #[test]
+    fn the_tensor_layer_solves_as_the_fft_solver_does() {
+        let (w, h) = (19, 11);
+        let g = |s: u32| -> Vec<f32> {
+            (0..w * h)
+                .map(|i| ((i as u32 * 2654435761u32 ^ s) % 1000) as f32 / 500.0 - 1.0)
+                .collect()
+        };
+        let (gx, gy) = (g(1), g(7));
+        let want = PoissonSolver::new(w, h).integrate(&gx, &gy);
+        let dev = tactile_burn::DeviceKind::Ndarray.device();
+        let t = |v: &[f32]| Tensor::<3>::from_data(TensorData::new(v.to_vec(), [1, h, w]), &dev);
+        let got: Vec<f32> = PoissonLayer::new(w, h, &dev)
+            .integrate(t(&gx), t(&gy))
+            .into_data()
+            .try_to_vec::<f32>()
+            .unwrap();
+        let err = got
+            .iter()
+            .zip(&want)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0f32, f32::max);
+        let scale = want.iter().fold(0f32, |m, v| m.max(v.abs()));
+        assert!(err < 1e-4 * scale, "{err} of {scale}");
     }
 }

@@ -7,7 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::RgbImage;
-use tactile_preprocess::resize_area_interleaved;
+use tactile_preprocess::shrink_rgb_by;
 
 use crate::Result;
 
@@ -76,18 +76,11 @@ impl WorkingImage {
     /// `frame` shrunk to `grid` (cropping the remainder at the right and
     /// bottom).
     pub fn of(frame: &RgbImage, grid: WorkingGrid) -> Result<Self> {
-        let (w, h) = (grid.width() * grid.factor, grid.height() * grid.factor);
-        let src = frame.as_slice();
-        let fw = frame.width();
-        let rgb = if w == fw && h == frame.height() {
-            resize_area_interleaved(src, (fw, h, 3), grid.width(), grid.height())?
-        } else {
-            let mut crop = Vec::with_capacity(w * h * 3);
-            for y in 0..h {
-                crop.extend_from_slice(&src[y * fw * 3..(y * fw + w) * 3]);
-            }
-            resize_area_interleaved(&crop, (w, h, 3), grid.width(), grid.height())?
-        };
+        let rgb = shrink_rgb_by(
+            frame.as_slice(),
+            (frame.width(), frame.height()),
+            grid.factor,
+        )?;
         Ok(Self { grid, rgb })
     }
 

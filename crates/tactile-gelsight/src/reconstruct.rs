@@ -111,7 +111,7 @@ pub fn reconstruct_folder(
             &map.indentation_m,
         )?;
         if let Some(r) = &render {
-            let mm_per_px = rec.artifact.sensor.mm_per_px;
+            let mm_per_px = rec.mm_per_px();
             render_picture(
                 &r.path().join(format!("{stem}.png")),
                 &frame,

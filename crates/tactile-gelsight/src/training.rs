@@ -19,7 +19,7 @@ use crate::eval::{PressScore, score_map};
 use crate::geometry::{Cap, GradientTargets};
 use crate::layout::{BallPresses, Circle};
 use crate::model::{GradientNet, GradientNetConfig};
-use crate::poisson::PoissonSolver;
+use crate::poisson::{PoissonLayer, PoissonSolver};
 use crate::prepare::{FEATURES, PreparedBackground, WorkingGrid, WorkingImage};
 
 /// Frame pixels per pixel of the grid the circle finder works on.
@@ -51,7 +51,7 @@ pub struct CalibrationConfig {
     #[config(default = 4)]
     pub factor: usize,
     /// Epochs, batches, learning rate, seed.
-    #[config(default = "Schedule::new(4, 150, 40, 5e-3).with_lr_decay(0.99)")]
+    #[config(default = "Schedule::new(4, 60, 20, 5e-3).with_lr_decay(0.99)")]
     pub schedule: Schedule,
     /// Presses held out to stop training early (0: none, the last epoch kept).
     #[config(default = 4)]
@@ -59,6 +59,10 @@ pub struct CalibrationConfig {
     /// Each channel's gain is jittered by up to this fraction in training.
     #[config(default = 0.03)]
     pub colour_jitter: f64,
+    /// Weight of the integrated height's error (shape inside the contact,
+    /// rest in the far field, mm squared) beside the slopes' (0: slopes only).
+    #[config(default = 4.0)]
+    pub height_weight: f64,
     /// Where the contact circles come from.
     #[config(default = "CircleSource::Auto")]
     pub circles: CircleSource,
@@ -150,21 +154,38 @@ pub fn prepare_presses(
     Ok((bg, out))
 }
 
-/// Features, targets and weights of `presses` as tensors, each channel's
-/// gain jittered by up to `jitter` (seeded by `seed`).
+/// A batch of presses as tensors.
+struct Batch {
+    /// Features, `[N, FEATURES, H, W]`.
+    x: Tensor<4>,
+    /// Slope targets, `[N, 2, H, W]`.
+    slopes: Tensor<4>,
+    /// Their weights, `[N, 1, H, W]`.
+    weight: Tensor<4>,
+    /// The cap's height above its rim, mm, `[N, H, W]`.
+    cap_mm: Tensor<3>,
+    /// Inside the contact, `[N, H, W]`.
+    inside: Tensor<3>,
+    /// In the far field, `[N, H, W]`.
+    far: Tensor<3>,
+}
+
+/// `presses` as a batch, each channel's gain jittered by up to `jitter`
+/// (seeded by `seed`).
 fn batch(
     bg: &PreparedBackground,
     presses: &[&PreparedPress],
     jitter: f64,
     seed: u64,
     device: &Device,
-) -> (Tensor<4>, Tensor<4>, Tensor<4>) {
+) -> Batch {
     let g = bg.image.grid;
     let (w, h) = (g.width(), g.height());
     let n = presses.len();
     let mut x = Vec::with_capacity(n * FEATURES * w * h);
     let mut y: Vec<f32> = Vec::with_capacity(n * 2 * w * h);
-    let mut wt: Vec<f32> = Vec::with_capacity(n * w * h);
+    let (mut wt, mut cap, mut inside, mut far): (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>) =
+        (vec![], vec![], vec![], vec![]);
     for (k, p) in presses.iter().enumerate() {
         let f = if jitter > 0.0 {
             let mut rng = tactile_core::rng::SampleRng::new(seed, 0x6e1, k as u64);
@@ -185,21 +206,64 @@ fn batch(
             p.frame.clone()
         };
         x.extend(bg.features(&f));
-        y.extend(&p.targets.gx);
-        y.extend(&p.targets.gy);
-        wt.extend(&p.targets.weight);
+        let t = &p.targets;
+        y.extend(&t.gx);
+        y.extend(&t.gy);
+        wt.extend(&t.weight);
+        cap.extend(&t.cap_mm);
+        inside.extend(&t.inside);
+        far.extend(&t.far);
     }
-    (
-        Tensor::<4>::from_data(TensorData::new(x, [n, FEATURES, h, w]), device),
-        Tensor::<4>::from_data(TensorData::new(y, [n, 2, h, w]), device),
-        Tensor::<4>::from_data(TensorData::new(wt, [n, 1, h, w]), device),
-    )
+    let t3 = |v: Vec<f32>| Tensor::<3>::from_data(TensorData::new(v, [n, h, w]), device);
+    Batch {
+        x: Tensor::<4>::from_data(TensorData::new(x, [n, FEATURES, h, w]), device),
+        slopes: Tensor::<4>::from_data(TensorData::new(y, [n, 2, h, w]), device),
+        weight: Tensor::<4>::from_data(TensorData::new(wt, [n, 1, h, w]), device),
+        cap_mm: t3(cap),
+        inside: t3(inside),
+        far: t3(far),
+    }
 }
 
-/// Weighted squared error of predicted slopes.
-fn loss(pred: Tensor<4>, target: Tensor<4>, weight: Tensor<4>) -> Tensor<1> {
-    let d = (pred - target).powi_scalar(2).sum_dim(1);
-    (d * weight.clone()).sum() / (weight.sum() * 2.0 + 1e-6)
+/// What the loss sees besides the batch: the network's slopes at rest
+/// (subtracted before integrating, as reconstruction does), the solve and
+/// the working step.
+struct HeightTerm<'a> {
+    rest: Tensor<4>,
+    layer: &'a PoissonLayer,
+    step_mm: f32,
+    weight: f64,
+}
+
+/// Weighted squared error of predicted slopes, plus (with `height`) the
+/// integrated height's squared shape error inside the contact (its mean
+/// offset removed: the rim's sink is unknown) and its square in the far
+/// field, in mm, times the height weight.
+fn loss(pred: Tensor<4>, b: Batch, height: Option<&HeightTerm>) -> Tensor<1> {
+    let d = (pred.clone() - b.slopes).powi_scalar(2).sum_dim(1);
+    let slopes = (d * b.weight.clone()).sum() / (b.weight.sum() * 2.0 + 1e-6);
+    let Some(ht) = height else {
+        return slopes;
+    };
+    let [n, _, hh, ww] = pred.dims();
+    let skin = (pred - ht.rest.clone()) * ht.step_mm;
+    let gx = skin
+        .clone()
+        .slice([0..n, 0..1, 0..hh, 0..ww])
+        .reshape([n, hh, ww]);
+    let gy = skin.slice([0..n, 1..2, 0..hh, 0..ww]).reshape([n, hh, ww]);
+    let h = ht.layer.integrate(gx, gy);
+    let inside_n = b.inside.clone().sum_dim(2).sum_dim(1) + 1e-6;
+    let diff = (h.clone() - b.cap_mm) * b.inside.clone();
+    let offset = diff.clone().sum_dim(2).sum_dim(1) / inside_n.clone();
+    let shape = ((diff - offset) * b.inside)
+        .powi_scalar(2)
+        .sum_dim(2)
+        .sum_dim(1)
+        / inside_n;
+    let far_n = b.far.clone().sum_dim(2).sum_dim(1) + 1e-6;
+    let far = (h * b.far).powi_scalar(2).sum_dim(2).sum_dim(1) / far_n;
+    slopes + (shape + far).mean().reshape([1]) * ht.weight
 }
 
 /// The network's raw slopes on one exposure-matched working frame (no
@@ -233,7 +297,7 @@ pub struct Fitted {
 }
 
 /// Fit the network on `train` presses, early-stopped on `val` (by the
-/// cap-shape error after integration), in memory; `progress` reports
+/// cap-shape plus far-field error after integration, mm), in memory; `progress` reports
 /// each epoch.
 pub fn fit_presses(
     config: &CalibrationConfig,
@@ -252,6 +316,14 @@ pub fn fit_presses(
     let g = bg.image.grid;
     let solver = PoissonSolver::new(g.width(), g.height());
     let step_mm = g.step_mm(ds.sensor.mm_per_px);
+    let layer = PoissonLayer::new(g.width(), g.height(), &ad);
+    let features = |d: &Device| {
+        Tensor::<4>::from_data(
+            TensorData::new(bg.features(&bg.image), [1, FEATURES, g.height(), g.width()]),
+            d,
+        )
+    };
+    let bg_ad = features(&ad);
     let mut fit_cfg = FitConfig::new(&config.schedule, "sensor model (slopes)");
     fit_cfg.progress = progress;
     let (val_items, watch) = if val.is_empty() {
@@ -267,14 +339,21 @@ pub fn fit_presses(
         (train, val_items),
         |m: &GradientNet, items, epoch| {
             let ps: Vec<&PreparedPress> = items.iter().map(|&i| &presses[i]).collect();
-            let (x, y, w) = batch(
+            let b = batch(
                 bg,
                 &ps,
                 config.colour_jitter,
                 (epoch as u64) << 20 | items[0] as u64,
                 &ad,
             );
-            Ok(loss(m.forward(x), y, w))
+            let pred = m.forward(b.x.clone());
+            let height = (config.height_weight > 0.0).then(|| HeightTerm {
+                rest: m.forward(bg_ad.clone()),
+                layer: &layer,
+                step_mm,
+                weight: config.height_weight,
+            });
+            Ok(loss(pred, b, height.as_ref()))
         },
         |m| {
             let m = m.valid();
@@ -282,10 +361,8 @@ pub fn fit_presses(
             let (mut total, mut shape) = (0.0, 0.0);
             for &i in watch {
                 let p = &presses[i];
-                let (x, y, w) = batch(bg, &[p], 0.0, 0, &dev);
-                let out = m.forward(x);
-                total += loss(out.clone(), y, w).into_scalar::<f32>() as f64;
-                let (gx, gy) = slopes_of(out)?;
+                let b = batch(bg, &[p], 0.0, 0, &dev);
+                let (gx, gy) = slopes_of(m.forward(b.x))?;
                 let h = crate::inference::indentation_mm(&solver, (&gx, &gy), (&rx, &ry), step_mm);
                 let s = score_map(
                     &h,
@@ -295,6 +372,7 @@ pub fn fit_presses(
                     &p.file,
                 );
                 shape += s.shape_mae_mm;
+                total += s.shape_mae_mm + s.far_field_mm;
             }
             let n = watch.len().max(1) as f64;
             Ok((total / n, Some(shape / n)))
@@ -308,6 +386,18 @@ pub fn fit_presses(
         net: best.unwrap_or_else(|| net.valid()),
         summary,
     })
+}
+
+/// `k` of `n` items spread evenly over them (the middle of each of `k`
+/// equal runs): validation presses drawn from the whole recording.
+pub fn spread(n: usize, k: usize) -> Vec<usize> {
+    if k == 0 || n == 0 {
+        return vec![];
+    }
+    let step = n as f64 / k.min(n) as f64;
+    (0..k.min(n))
+        .map(|j| ((j as f64 + 0.5) * step) as usize)
+        .collect()
 }
 
 /// What a calibration reports.
@@ -350,15 +440,7 @@ pub fn calibrate(
     if let Some(c) = &circles {
         tactile_core::note!("{}", c.describe());
     }
-    // Validation presses spread over the recording (every k-th).
-    let val: Vec<usize> = if config.val_presses == 0 {
-        vec![]
-    } else {
-        let step = n as f64 / config.val_presses as f64;
-        (0..config.val_presses)
-            .map(|k| ((k as f64 + 0.5) * step) as usize)
-            .collect()
-    };
+    let val = spread(n, config.val_presses);
     let train: Vec<usize> = (0..n).filter(|i| !val.contains(i)).collect();
     let artifact = GelsightArtifact {
         model: config.model.clone(),
@@ -379,8 +461,11 @@ pub fn calibrate(
     )
     .map_err(|e| tactile_core::Error::io(dir.join(BACKGROUND_FILE), e))?;
     let mut rec = crate::inference::Reconstructor::new(
-        artifact.clone(),
-        Box::new(tactile_burn::runtime::BurnNetwork::new(fitted.net, device)),
+        artifact.grid,
+        artifact.sensor.mm_per_px,
+        crate::inference::SlopeModel::Network(Box::new(tactile_burn::runtime::BurnNetwork::new(
+            fitted.net, device,
+        ))),
         &ds.background,
         &ds.root.join(&ds.sensor.background),
     )?;

@@ -333,6 +333,15 @@ pub const EVALUATORS: &[Trainer] = &[
     ),
 ];
 
+/// Sensor calibrations (`tactile calibrate NAME`,
+/// `tactile.calibrate.NAME(...)`).
+pub const CALIBRATORS: &[Trainer] = &[Trainer::of::<tactile_gelsight::BallOptions>(
+    "ball",
+    "calibrate_ball",
+    &["data: _Path", "out: _Path"],
+    "Calibrate a GelSight-like sensor from presses of a ball of known radius (the calibration layout of docs/datasets.md) into a new model folder.",
+)];
+
 /// The trainer called `name`, or an error naming those there are.
 pub fn trainer(name: &str) -> Result<&'static Trainer> {
     TRAINERS.iter().find(|t| t.name == name).ok_or_else(|| {
@@ -361,6 +370,8 @@ pub struct PythonStubs {
     pub synth: String,
     /// The typed evaluations of `tactile/eval.pyi`.
     pub eval: String,
+    /// The typed calibrations of `tactile/calibrate.pyi`.
+    pub calibrate: String,
 }
 
 /// The generated parts of the Python stubs ([`PythonStubs`]).
@@ -369,10 +380,12 @@ pub fn python_stubs() -> Result<PythonStubs> {
     let mut train = format!("{STUB_BEGIN}\n");
     let mut synth = format!("{STUB_BEGIN}\n");
     let mut eval = format!("{STUB_BEGIN}\n");
+    let mut calibrate = format!("{STUB_BEGIN}\n");
     for (entries, own) in [
         (TRAINERS, &mut train),
         (GENERATORS, &mut synth),
         (EVALUATORS, &mut eval),
+        (CALIBRATORS, &mut calibrate),
     ] {
         for t in entries {
             native.push_str(&t.native_def()?);
@@ -381,7 +394,13 @@ pub fn python_stubs() -> Result<PythonStubs> {
             own.push_str(&format!("\n    \"\"\"{}\"\"\"\n\n", t.about));
         }
     }
-    for part in [&mut native, &mut train, &mut synth, &mut eval] {
+    for part in [
+        &mut native,
+        &mut train,
+        &mut synth,
+        &mut eval,
+        &mut calibrate,
+    ] {
         part.push_str(STUB_END);
         part.push('\n');
     }
@@ -390,5 +409,6 @@ pub fn python_stubs() -> Result<PythonStubs> {
         train,
         synth,
         eval,
+        calibrate,
     })
 }

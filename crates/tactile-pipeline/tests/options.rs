@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use serde_json::{Value, json};
 use tactile_burn::options::Options;
 use tactile_pipeline::options::{
-    EVALUATORS, GENERATORS, STUB_BEGIN, STUB_END, TRAINERS, python_stubs, trainer,
+    CALIBRATORS, EVALUATORS, GENERATORS, STUB_BEGIN, STUB_END, TRAINERS, python_stubs, trainer,
 };
 
 fn stub(name: &str) -> PathBuf {
@@ -41,6 +41,7 @@ fn the_python_stubs_type_every_option_as_the_library_defines_it() {
         ("train.pyi", &stubs.train),
         ("synth.pyi", &stubs.synth),
         ("eval.pyi", &stubs.eval),
+        ("calibrate.pyi", &stubs.calibrate),
     ] {
         let path = stub(file);
         let text = std::fs::read_to_string(&path).unwrap();
@@ -87,6 +88,19 @@ fn the_python_stubs_type_every_option_as_the_library_defines_it() {
     ] {
         assert!(stubs.eval.contains(want), "{want} not in\n{}", stubs.eval);
     }
+    // A calibration's recipe is keywords, as it is flags.
+    for want in [
+        "def ball(\n    data: _Path,\n    out: _Path,\n    *,\n    config: Optional[_Path] = None,",
+        "kernels: Sequence[int] = (",
+        "height_weight: float = ",
+        "circles: str = \"auto\"",
+    ] {
+        assert!(
+            stubs.calibrate.contains(want),
+            "{want} not in\n{}",
+            stubs.calibrate
+        );
+    }
 }
 
 #[test]
@@ -103,7 +117,12 @@ fn every_option_of_every_trainer_is_a_flag_and_a_keyword() {
             "depth"
         ]
     );
-    for t in TRAINERS.iter().chain(GENERATORS).chain(EVALUATORS) {
+    for t in TRAINERS
+        .iter()
+        .chain(GENERATORS)
+        .chain(EVALUATORS)
+        .chain(CALIBRATORS)
+    {
         let docs = t.docs().unwrap();
         let least = if EVALUATORS.iter().any(|e| e.native == t.native) {
             2

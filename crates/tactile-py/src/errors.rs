@@ -88,6 +88,17 @@ impl LibraryError for tactile_cae::Error {
     }
 }
 
+impl LibraryError for tactile_gelsight::Error {
+    fn kind(&self) -> Kind {
+        use tactile_gelsight::Error as E;
+        match self {
+            E::Core(c) => core_kind(c),
+            E::Onnx(o) => onnx_kind(o),
+            _ => Kind::Value,
+        }
+    }
+}
+
 impl LibraryError for tactile_estimate::Error {
     fn kind(&self) -> Kind {
         use tactile_estimate::Error as E;

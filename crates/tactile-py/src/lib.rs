@@ -5,6 +5,7 @@
 //! into numpy arrays, dicts or Python exceptions. The typed Python API,
 //! with its docstrings and stubs, is in `python/tactile/`.
 
+mod calibrate;
 mod dataset;
 mod encoder;
 mod errors;
@@ -32,6 +33,9 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<pipeline::FrameResult>()?;
     m.add_class::<encoder::PyTactipEncoder>()?;
     m.add_class::<pose::PyPoseEstimator>()?;
+    m.add_class::<calibrate::PyReconstructor>()?;
+    m.add_function(wrap_pyfunction!(calibrate::calibrate_ball, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::reconstruct_frames, m)?)?;
     m.add_class::<dataset::PyDataset>()?;
     m.add_class::<source::PyFrameSource>()?;
     m.add_class::<source::PyFrame>()?;

@@ -41,13 +41,20 @@ def test_stub_lists_every_export_and_member():
 
 
 def test_everything_public_has_a_docstring():
-    for mod in (tactile, tactile.synth, tactile.train, tactile.eval):
+    for mod in (tactile, tactile.synth, tactile.train, tactile.eval, tactile.calibrate):
         assert mod.__doc__
         for name in getattr(mod, "__all__", []):
             obj = getattr(mod, name)
             if callable(obj):
                 assert obj.__doc__, f"{mod.__name__}.{name} has no docstring"
-    for cls in (tactile.Pipeline, tactile.FrameResult, tactile.TactipEncoder, tactile.PoseEstimator, tactile.Dataset):
+    for cls in (
+        tactile.Pipeline,
+        tactile.FrameResult,
+        tactile.TactipEncoder,
+        tactile.PoseEstimator,
+        tactile.Reconstructor,
+        tactile.Dataset,
+    ):
         for m, v in vars(cls).items():
             if not m.startswith("_"):
                 assert getattr(v, "__doc__", None), f"{cls.__name__}.{m} has no docstring"

@@ -32,6 +32,32 @@ pub(crate) enum BenchCmd {
     /// Edge pose on the real TacTip edge set: pose networks and encoders
     /// with estimators, error on their held-out frames against latency.
     Pose(ModelsArgs),
+    /// Ball-press calibration: sensor models cross-validated by press
+    /// (lookup table, per-pixel MLP, the toolkit's networks), speed and
+    /// robustness; writes docs/calibration.md.
+    Calibration(CalibrationArgs),
+}
+
+#[derive(Args)]
+pub(crate) struct CalibrationArgs {
+    /// Calibration folder (docs/datasets.md: the calibration layout).
+    #[arg(long, default_value = "../shared/real/gelsight-ball")]
+    data: PathBuf,
+    /// Folds of the leave-presses-out split (press i in fold i mod folds).
+    #[arg(long, default_value_t = 8)]
+    folds: usize,
+    /// Exposure change of the robustness rows (0.15: +-15 %).
+    #[arg(long, default_value_t = 0.15)]
+    exposure: f64,
+    /// Frames timed per runtime (median reported).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    runs: u32,
+    /// The page; its plots and numbers (JSON) go beside it.
+    #[arg(long, default_value = "docs/calibration.md")]
+    out: PathBuf,
+    /// The shipped recipe the candidates are built from.
+    #[command(flatten)]
+    recipe: tactile_gelsight::BallOptions,
 }
 
 #[derive(Args)]
@@ -127,6 +153,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Detector(a) | BenchCmd::Segmenter(a) | BenchCmd::Depth(a) | BenchCmd::Pose(a) => {
             &a.out
         }
+        BenchCmd::Calibration(a) => &Some(a.out.clone()),
     };
     if let Some(out) = out {
         tactile_core::dataset::check_output_file(out, &[])?;
@@ -187,6 +214,26 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Segmenter(a) => show(a, bench_segmenters)?,
         BenchCmd::Depth(a) => show(a, bench_depth)?,
         BenchCmd::Pose(a) => show(a, tactile_bench::pose::bench_pose)?,
+        BenchCmd::Calibration(a) => {
+            if !(0.0..0.9).contains(&a.exposure) {
+                anyhow::bail!("--exposure must be in [0, 0.9), got {}", a.exposure);
+            }
+            let b = tactile_bench::calibration::CalibrationBench {
+                data: a.data,
+                base: a.recipe.config()?,
+                options: tactile_gelsight::bench::BenchOptions {
+                    folds: a.folds,
+                    exposure: a.exposure,
+                    runs: a.runs as usize,
+                    device: a.recipe.schedule.device,
+                    progress: true,
+                },
+            };
+            let r = tactile_bench::calibration::bench_calibration(&b)?;
+            let command: Vec<String> = std::env::args().skip(1).collect();
+            let md = r.write(&b, &format!("tactile {}", command.join(" ")), &a.out)?;
+            say_raw!("{md}");
+        }
     }
     Ok(())
 }

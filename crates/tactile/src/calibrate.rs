@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::{Args, Subcommand};
-use tactile_burn::DeviceKind;
+use tactile_burn::Runtime;
 
 use crate::train::ConfigArg;
 
@@ -77,9 +77,9 @@ pub(crate) struct ReconstructArgs {
     /// Also write pictures into this folder (new): each frame beside its indentation in mm with a colour bar, and a shaded 3-D view.
     #[arg(long)]
     render: Option<PathBuf>,
-    /// Device the network runs on.
-    #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
-    device: DeviceKind,
+    /// Where the sensor model runs.
+    #[arg(long, value_enum, default_value_t = Runtime::Onnx)]
+    runtime: Runtime,
 }
 
 pub(crate) fn reconstruct(a: ReconstructArgs) -> Result<()> {
@@ -90,7 +90,7 @@ pub(crate) fn reconstruct(a: ReconstructArgs) -> Result<()> {
         &tactile_gelsight::reconstruct::ReconstructOptions {
             background: a.background.clone(),
             render: a.render.clone(),
-            runtime: a.device.runtime(),
+            runtime: a.runtime,
         },
     )?;
     say!(
@@ -98,7 +98,7 @@ pub(crate) fn reconstruct(a: ReconstructArgs) -> Result<()> {
         r.frames,
         a.out.display(),
         r.ms_per_frame,
-        a.device,
+        a.runtime,
         r.peak_mm
     );
     if let Some(dir) = &a.render {

@@ -72,13 +72,14 @@ from ._tactile import (  # noqa: E402
     FrameSource,
     Pipeline,
     PoseEstimator,
+    Reconstructor,
     TactipEncoder,
     __version__,
     frames,
     read_grey,
     read_rgb,
 )
-from . import eval, synth, train  # noqa: E402
+from . import calibrate, eval, synth, train  # noqa: E402
 
 __all__ = [
     "Dataset",
@@ -90,8 +91,10 @@ __all__ = [
     "MAX_FRAME_SIDE",
     "Pipeline",
     "PoseEstimator",
+    "Reconstructor",
     "TactipEncoder",
     "__version__",
+    "calibrate",
     "eval",
     "frames",
     "read_grey",

@@ -119,6 +119,28 @@ class PoseEstimator:
     @property
     def runtime(self) -> str: ...
 
+class Reconstructor:
+    """A calibrated GelSight-like sensor: frames to the skin's indentation."""
+
+    def __init__(
+        self, model_dir: _Path, runtime: str = "onnx", background: Optional[_Path] = None
+    ) -> None: ...
+    def reconstruct(self, frame: npt.NDArray[np.uint8]) -> npt.NDArray[np.float32]: ...
+    @property
+    def frame_size(self) -> Tuple[int, int]: ...
+    @property
+    def runtime(self) -> str: ...
+
+def reconstruct_frames(
+    model: str,
+    data: str,
+    out: str,
+    *,
+    background: Optional[str] = None,
+    render: Optional[str] = None,
+    runtime: str = "onnx",
+) -> Dict[str, Any]: ...
+
 class Dataset:
     """A dataset folder of the documented layout."""
 
@@ -398,6 +420,27 @@ def eval_depth(
     config: Optional[_Path] = None,
     save_png: Optional[str] = None,
     png_frames: int = 8,
+) -> Dict[str, Any]: ...
+def calibrate_ball(
+    data: _Path,
+    out: _Path,
+    *,
+    config: Optional[_Path] = None,
+    widths: Sequence[int] = (32, 32),
+    kernels: Sequence[int] = (3, 3, 1),
+    factor: int = 4,
+    val_presses: int = 4,
+    colour_jitter: float = 0.03,
+    height_weight: float = 4.0,
+    circles: str = "auto",
+    max_epochs: int = 60,
+    patience: int = 20,
+    batch_size: int = 4,
+    lr: Optional[float] = None,
+    lr_decay: float = 0.99,
+    seed: int = 42,
+    device: str = "flex",
+    resume: bool = False,
 ) -> Dict[str, Any]: ...
 # --- end of generated part ---
 def options(trainer: str) -> List[Dict[str, Any]]: ...

@@ -1,0 +1,56 @@
+"""Calibrating a GelSight-like sensor from ball presses, with the options
+of ``tactile calibrate ball``, and reconstructing its frames.
+
+``ball(data, out, **options)`` reads a calibration folder (the layout in
+docs/datasets.md: ``sensor.json``, ``background.png``, ``frames/*.png``,
+optionally ``presses.csv``), finds each contact circle, fits the sensor
+model and writes a new model folder; it returns the summary
+``tactile calibrate ball`` prints (circle agreement, the held-out presses'
+scores). Options are keywords named as the flags (``max_epochs=...``),
+each defined once in the library; ``options("ball")`` is not needed:
+``calibrate.pyi`` types them. ``reconstruct(model, data, out)`` writes one
+``<stem>.npy`` (float32 H x W, metres toward the camera) per frame, as
+``tactile reconstruct`` does; ``tactile.Reconstructor`` does one numpy
+frame at a time.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, Optional, Union
+
+from . import _tactile
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def ball(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
+    """Calibrate a sensor from presses of a ball of known radius into the
+    new model folder ``out`` (``widths``, ``kernels``, ``factor``,
+    ``height_weight``, ``circles``, ``max_epochs``, ... as keywords)."""
+    return _tactile.calibrate_ball(os.fspath(data), os.fspath(out), **options)
+
+
+def reconstruct(
+    model: PathLike,
+    data: PathLike,
+    out: PathLike,
+    *,
+    background: Optional[PathLike] = None,
+    render: Optional[PathLike] = None,
+    runtime: str = "onnx",
+) -> Dict[str, Any]:
+    """Every frame of ``data`` (a PNG or a folder of them) to
+    ``out/<stem>.npy``; ``render`` also writes pictures (frame, shaded
+    skin, indentation with a colour bar); ``background`` replaces the
+    calibration's rest frame."""
+    return _tactile.reconstruct_frames(
+        os.fspath(model),
+        os.fspath(data),
+        os.fspath(out),
+        background=None if background is None else os.fspath(background),
+        render=None if render is None else os.fspath(render),
+        runtime=runtime,
+    )
+
+__all__ = ["ball", "reconstruct"]

@@ -1,0 +1,156 @@
+//! `tactile.calibrate`: a GelSight-like sensor calibrated from ball
+//! presses (the options of `tactile calibrate ball`, by keyword), folders
+//! reconstructed as `tactile reconstruct` does, and `tactile.Reconstructor`
+//! for numpy frames.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use numpy::{PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use tactile_gelsight::reconstruct::{ReconstructOptions, reconstruct_folder};
+use tactile_gelsight::{BallOptions, Reconstructor};
+
+use crate::errors::PyResultExt;
+use crate::frame::{FrameArg, Layout};
+use crate::work::interruptible;
+
+/// Calibrate the sensor of the calibration folder `data` into the new
+/// model folder `out`; `options` are [`BallOptions`]' by keyword.
+#[pyfunction]
+#[pyo3(signature = (data, out, **options))]
+pub(crate) fn calibrate_ball<'py>(
+    py: Python<'py>,
+    data: PathBuf,
+    out: PathBuf,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let o: BallOptions = crate::json::options(py, options)?;
+    o.config().py()?;
+    let c = interruptible(py, || o.calibrate(&data, &out).py())?;
+    let mut v = serde_json::to_value(&c)
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+    if let Some(m) = v.as_object_mut() {
+        m.insert("out".into(), out.display().to_string().into());
+    }
+    crate::json::to_py(py, &v)
+}
+
+/// Reconstruct every frame of `data` (a PNG or a folder of them) with the
+/// model in `model` into the new folder `out`: what `tactile reconstruct`
+/// prints as its last line.
+#[pyfunction]
+#[pyo3(signature = (model, data, out, *, background=None, render=None, runtime="onnx"))]
+pub(crate) fn reconstruct_frames<'py>(
+    py: Python<'py>,
+    model: PathBuf,
+    data: PathBuf,
+    out: PathBuf,
+    background: Option<PathBuf>,
+    render: Option<PathBuf>,
+    runtime: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let options = ReconstructOptions {
+        background,
+        render,
+        runtime: crate::pipeline::runtime(runtime)?,
+    };
+    let r = interruptible(py, || {
+        reconstruct_folder(&model, &data, &out, &options).py()
+    })?;
+    let v = serde_json::to_value(&r)
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+    crate::json::to_py(py, &v)
+}
+
+/// A calibrated sensor (`tactile calibrate ball`'s model folder) that
+/// turns its frames into the skin's indentation.
+///
+/// Thread-safe: calls from several threads take turns, and the
+/// interpreter lock is released while a frame is reconstructed.
+#[pyclass(module = "tactile", name = "Reconstructor")]
+pub struct PyReconstructor {
+    inner: Mutex<Reconstructor>,
+    model_dir: PathBuf,
+    runtime: tactile_burn::Runtime,
+    size: (usize, usize),
+}
+
+#[pymethods]
+impl PyReconstructor {
+    /// Load the calibrated sensor in `model_dir` onto `runtime`; with
+    /// `background`, compare against that rest frame (a PNG of the same
+    /// size) instead of the calibration's.
+    #[new]
+    #[pyo3(signature = (model_dir, runtime="onnx", background=None))]
+    fn new(
+        py: Python<'_>,
+        model_dir: PathBuf,
+        runtime: &str,
+        background: Option<PathBuf>,
+    ) -> PyResult<Self> {
+        let rt = crate::pipeline::runtime(runtime)?;
+        let dir = model_dir.clone();
+        let rec = py
+            .detach(move || -> tactile_gelsight::Result<Reconstructor> {
+                let mut r = Reconstructor::load(&dir, rt, 0)?;
+                if let Some(bg) = &background {
+                    r.set_background(&tactile_core::image_io::load_rgb(bg)?, bg)?;
+                }
+                Ok(r)
+            })
+            .py()?;
+        let g = rec.grid();
+        Ok(Self {
+            size: (g.frame_width, g.frame_height),
+            inner: Mutex::new(rec),
+            model_dir,
+            runtime: rt,
+        })
+    }
+
+    /// The skin's indentation under an `(H, W, 3)` uint8 RGB frame of the
+    /// calibrated size: `(H, W)` float32, metres toward the camera, 0 at
+    /// rest.
+    fn reconstruct<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let arg = FrameArg::new(frame, Layout::Rgb, "frame")?;
+        let px = arg.view();
+        let map = py.detach(|| -> PyResult<tactile_gelsight::IndentationMap> {
+            let mut r = self.inner.lock().map_err(|_| {
+                PyRuntimeError::new_err("the reconstructor failed in another thread")
+            })?;
+            px.with_rgb(|img| r.reconstruct(img, Path::new("frame")))
+                .py()?
+                .py()
+        })?;
+        let arr = numpy::PyArray1::from_vec(py, map.indentation_m);
+        arr.reshape([map.height, map.width])
+    }
+
+    /// The calibrated frame size, `(width, height)`.
+    #[getter]
+    fn frame_size(&self) -> (usize, usize) {
+        self.size
+    }
+
+    /// Where the sensor model runs.
+    #[getter]
+    fn runtime(&self) -> &'static str {
+        self.runtime.name()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Reconstructor('{}', runtime='{}', frame_size={:?})",
+            self.model_dir.display(),
+            self.runtime,
+            self.size
+        )
+    }
+}

@@ -1,0 +1,87 @@
+"""Ball-press calibration from Python: the same options and model folder as
+`tactile calibrate ball`, numpy frames reconstructed as the folder
+reconstruction writes them, and clear refusals."""
+
+from __future__ import annotations
+
+import csv
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tactile
+
+BALL = Path(__file__).resolve().parents[3].parent / "shared" / "real" / "gelsight-ball"
+
+
+@pytest.fixture(scope="module")
+def presses(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Six of the shared presses in a calibration folder of their own."""
+    if not BALL.is_dir():
+        pytest.fail(f"the shared ball presses are missing: {BALL}")
+    d = tmp_path_factory.mktemp("ball") / "presses"
+    (d / "frames").mkdir(parents=True)
+    for f in ("sensor.json", "background.png"):
+        shutil.copy(BALL / f, d / f)
+    with open(BALL / "presses.csv") as src:
+        rows = list(csv.reader(src))
+    with open(d / "presses.csv", "w", newline="") as dst:
+        w = csv.writer(dst)
+        w.writerow(rows[0])
+        for r in rows[1:7]:
+            shutil.copy(BALL / r[0], d / r[0])
+            w.writerow(r)
+    return d
+
+
+@pytest.fixture(scope="module")
+def model(presses: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("model") / "gelsight"
+    r = tactile.calibrate.ball(presses, out, factor=8, val_presses=2, max_epochs=6, kernels=[3, 1, 1])
+    assert r["out"] == str(out)
+    assert r["train_presses"] == 4 and r["val_presses"] == 2
+    assert r["circles"]["presses"] == 6 and r["circles"]["centre_error_px"] < 8
+    import json
+
+    cfg = json.loads((out / "gelsight.json").read_text())
+    assert cfg["grid"]["factor"] == 8 and cfg["model"]["kernels"] == [3, 1, 1]
+    return out
+
+
+def test_a_numpy_frame_reconstructs_as_the_folder_does(presses: Path, model: Path, tmp_path: Path):
+    frame_file = sorted((presses / "frames").glob("*.png"))[0]
+    out = tmp_path / "maps"
+    r = tactile.calibrate.reconstruct(model, frame_file, out, runtime="onnx")
+    assert r["frames"] == 1
+    saved = np.load(out / f"{frame_file.stem}.npy")
+    rec = tactile.Reconstructor(model, "onnx")
+    assert rec.frame_size == (640, 480)
+    got = rec.reconstruct(tactile.read_rgb(frame_file))
+    assert got.shape == (480, 640) and got.dtype == np.float32
+    np.testing.assert_allclose(got, saved, atol=1e-7)
+    # Pushed in where the ball was, at rest on the background.
+    assert got.max() > 2e-4
+    rest = rec.reconstruct(tactile.read_rgb(presses / "background.png"))
+    assert np.abs(rest).max() < 1e-5
+
+
+def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
+    rec = tactile.Reconstructor(model, "burn-flex")
+    with pytest.raises(ValueError, match=r"frame.*\(320, 240\).*\(640, 480\)"):
+        rec.reconstruct(np.zeros((240, 320, 3), np.uint8))
+    with pytest.raises(TypeError, match="uint8"):
+        rec.reconstruct(np.zeros((480, 640, 3), np.float32))
+    with pytest.raises(ValueError, match="colour_jitter"):
+        tactile.calibrate.ball(presses, tmp_path / "m", colour_jitter=0.9)
+    with pytest.raises(ValueError, match="no_such_option"):
+        tactile.calibrate.ball(presses, tmp_path / "m", no_such_option=1)
+    assert not (tmp_path / "m").exists()
+    # An output folder that already holds files is left alone.
+    taken = tmp_path / "taken"
+    taken.mkdir()
+    (taken / "keep.txt").write_text("mine")
+    with pytest.raises(Exception, match="already holds files"):
+        tactile.calibrate.reconstruct(model, presses / "frames", taken)
+    assert (taken / "keep.txt").read_text() == "mine"
