@@ -151,3 +151,106 @@ fn a_calibration_reconstructs_held_out_presses_and_rest() {
         .fold(0f32, f32::max);
     assert!(worst < 1e-6, "burn and onnxruntime differ by {worst} m");
 }
+
+#[test]
+fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_input() {
+    use tactile_gelsight::bench::{BenchOptions, Candidate, cross_validate};
+    use tactile_gelsight::reconstruct::{ReconstructOptions, reconstruct_folder};
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("presses");
+    subset(&d, 8, str::to_string);
+    let ds = BallPresses::open(&d).unwrap();
+    let (bg, presses) = prepare_presses(&ds, 4, CircleSource::Auto).unwrap();
+    let options = BenchOptions {
+        folds: 2,
+        exposure: 0.15,
+        runs: 2,
+        device: DeviceKind::Flex,
+        progress: false,
+    };
+    let r = cross_validate(
+        "lookup",
+        &Candidate::Lookup { bins: 24 },
+        &ds,
+        (&bg, &presses),
+        &options,
+    )
+    .unwrap();
+    // Every press scored once, by the table that did not see it: far better
+    // than a flat answer (about 0.3 mm) and at rest far from the ball.
+    assert_eq!(r.presses.len(), 8);
+    assert!(r.mean.shape_mm < 0.12, "{:?}", r.mean);
+    assert!(r.mean.far_field_mm < 0.03, "{:?}", r.mean);
+    assert!(
+        r.darker.shape_mm < 0.15 && r.brighter.shape_mm < 0.15,
+        "{r:?}"
+    );
+    assert!(r.burn_ms > 0.0 && r.ort_ms.is_none());
+    assert!(!r.profile.is_empty());
+    let bad = BenchOptions {
+        folds: 9,
+        ..options
+    };
+    assert!(
+        cross_validate(
+            "lookup",
+            &Candidate::Lookup { bins: 24 },
+            &ds,
+            (&bg, &presses),
+            &bad
+        )
+        .unwrap_err()
+        .to_string()
+        .contains("folds")
+    );
+
+    // A model folder to reconstruct with (a short fit is enough here).
+    let mut cfg = CalibrationConfig::new().with_factor(8).with_val_presses(2);
+    cfg.schedule.max_epochs = 2;
+    let model = tmp.path().join("model");
+    calibrate(&cfg, &ds, &model, DeviceKind::Flex).unwrap();
+    let o = ReconstructOptions {
+        background: None,
+        render: None,
+        runtime: Runtime::BurnFlex,
+    };
+    // An output folder that holds files is refused before any work and
+    // left alone.
+    let taken = tmp.path().join("taken");
+    std::fs::create_dir_all(&taken).unwrap();
+    std::fs::write(taken.join("keep.txt"), "mine").unwrap();
+    let e = reconstruct_folder(&model, &d.join("frames"), &taken, &o).unwrap_err();
+    assert!(e.to_string().contains("already holds files"), "{e}");
+    assert_eq!(
+        std::fs::read_to_string(taken.join("keep.txt")).unwrap(),
+        "mine"
+    );
+    // A frame of another size is named, and nothing is written.
+    let odd = tmp.path().join("odd");
+    std::fs::create_dir_all(&odd).unwrap();
+    tactile_core::image_io::save_rgb_png(
+        odd.join("small.png"),
+        320,
+        240,
+        &vec![128u8; 320 * 240 * 3],
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let e = reconstruct_folder(&model, &odd, &out, &o).unwrap_err();
+    assert!(matches!(e, Error::FrameSize { .. }), "{e}");
+    assert!(e.to_string().contains("small.png"), "{e}");
+    assert!(!out.exists());
+    // A folder without frames says so.
+    let empty = tmp.path().join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let e = reconstruct_folder(&model, &empty, &out, &o).unwrap_err();
+    assert!(e.to_string().contains("no PNG frames"), "{e}");
+    // A background of another size is refused, naming it.
+    let o = ReconstructOptions {
+        background: Some(odd.join("small.png")),
+        ..o
+    };
+    let e = reconstruct_folder(&model, &d.join("frames"), &out, &o).unwrap_err();
+    assert!(e.to_string().contains("small.png"), "{e}");
+    assert!(!out.exists());
+}
