@@ -25,6 +25,8 @@ pub struct CalibrationBench {
     pub base: CalibrationConfig,
     /// Folds, exposure change, timing runs, device.
     pub options: BenchOptions,
+    /// The candidates to run, by key ([`Candidate::KEYS`]); empty: all.
+    pub only: Vec<String>,
 }
 
 /// The page's numbers.
@@ -49,8 +51,22 @@ pub fn bench_calibration(b: &CalibrationBench) -> Result<CalibrationReport> {
     let (bg, presses) = prepare_presses(&ds, b.base.factor, b.base.circles)?;
     let prepare_s = t0.elapsed().as_secs_f64();
     let circles = CircleAgreement::of(&presses);
+    if let Some(bad) = b
+        .only
+        .iter()
+        .find(|k| !Candidate::KEYS.contains(&k.as_str()))
+    {
+        return Err(tactile_core::Error::Config(format!(
+            "candidates: no candidate {bad:?} (known: {})",
+            Candidate::KEYS.join(", ")
+        ))
+        .into());
+    }
     let mut candidates = Vec::new();
-    for (name, c) in Candidate::standard(&b.base) {
+    for (key, name, c) in Candidate::standard(&b.base) {
+        if !b.only.is_empty() && !b.only.iter().any(|k| k == key) {
+            continue;
+        }
         tactile_core::note!("cross-validating {name} ({} folds)", b.options.folds);
         candidates.push(cross_validate(&name, &c, &ds, (&bg, &presses), &b.options)?);
     }

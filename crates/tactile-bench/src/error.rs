@@ -46,8 +46,8 @@ impl Error {
         match self {
             Error::Core(e) => Some(e),
             Error::Pipeline(e) => e.core(),
-            Error::Gelsight(tactile_gelsight::Error::Core(e)) => Some(e),
-            Error::Gelsight(_) | Error::Synth(_) => None,
+            Error::Gelsight(e) => e.core(),
+            Error::Synth(_) => None,
         }
     }
 }

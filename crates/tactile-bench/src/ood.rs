@@ -205,7 +205,10 @@ pub fn bench_ood(models: &Path, runtime: Runtime) -> Result<OodBench> {
             score_range: range,
         });
     }
-    let threshold = (pipeline.detector.artifact.input_profile.as_ref()).map(|p| p.threshold);
+    let threshold = pipeline
+        .detector()
+        .and_then(|d| d.artifact.input_profile.as_ref())
+        .map(|p| p.threshold);
     Ok(OodBench { rows, threshold })
 }
 

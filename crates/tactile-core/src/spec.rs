@@ -87,8 +87,24 @@ pub mod visuotactile {
 
         /// True when pixel `(u, v)` (column, row) is inside the window.
         pub fn contains(&self, u: f64, v: f64) -> bool {
+            self.radius(u, v) <= 1.0
+        }
+
+        /// How far pixel `(u, v)` lies from the centre as a fraction of the
+        /// rim's distance in its direction (1 on the rim).
+        pub fn radius(&self, u: f64, v: f64) -> f64 {
             let (du, dv) = ((u - self.cx) / self.rx, (v - self.cy) / self.ry);
-            du * du + dv * dv <= 1.0
+            (du * du + dv * dv).sqrt()
+        }
+
+        /// The same window `margin` pixels inside its rim (semi-axes at
+        /// least one pixel).
+        pub fn inset(self, margin: f64) -> Self {
+            Self {
+                rx: (self.rx - margin).max(1.0),
+                ry: (self.ry - margin).max(1.0),
+                ..self
+            }
         }
 
         /// Row-major inside/outside of every pixel of a `w x h` map.
@@ -116,4 +132,13 @@ pub mod visuotactile {
             assert_eq!(rest_depth_mm(1.0), 18.0);
         }
     }
+}
+
+/// A real sensor calibrated from ball presses (`datasets.md`: the
+/// calibration layout) and the data rendered through its calibration.
+pub mod calibrated {
+    /// Skin pushed in by more than this is in contact (and, in rendered
+    /// palpation frames, in the tendon mask), mm: the visuo-tactile
+    /// sensor's label threshold.
+    pub const CONTACT_MIN_INDENTATION_MM: f64 = super::visuotactile::TENDON_MIN_AMPLITUDE_MM;
 }

@@ -36,10 +36,14 @@ pub enum Candidate {
 }
 
 impl Candidate {
+    /// The keys of [`Self::standard`]'s candidates, in its order.
+    pub const KEYS: [&'static str; 4] = ["lookup", "mlp", "conv-slopes", "shipped"];
+
     /// The classic anchors and the toolkit's own models beside `base` (the
-    /// shipped recipe): lookup table; per-pixel MLP on slopes (GelSight's
-    /// SDK); `base`'s network on slopes alone; `base` itself.
-    pub fn standard(base: &CalibrationConfig) -> Vec<(String, Candidate)> {
+    /// shipped recipe), each with its key and its name: lookup table;
+    /// per-pixel MLP on slopes (GelSight's SDK); `base`'s network on slopes
+    /// alone; `base` itself.
+    pub fn standard(base: &CalibrationConfig) -> Vec<(&'static str, String, Candidate)> {
         let mlp = CalibrationConfig {
             model: crate::GradientNetConfig::per_pixel_mlp(),
             height_weight: 0.0,
@@ -49,22 +53,27 @@ impl Candidate {
             height_weight: 0.0,
             ..base.clone()
         };
+        let [lookup, per_pixel, conv, shipped] = Self::KEYS;
         vec![
             (
+                lookup,
                 "lookup table (Taxim-style)".into(),
                 Candidate::Lookup {
                     bins: crate::lookup::DEFAULT_BINS,
                 },
             ),
             (
+                per_pixel,
                 "per-pixel MLP, slope loss (gs_sdk-style)".into(),
                 Candidate::Network(Box::new(mlp)),
             ),
             (
+                conv,
                 "convolutional, slope loss".into(),
                 Candidate::Network(Box::new(slopes)),
             ),
             (
+                shipped,
                 "convolutional, slope + height loss (shipped)".into(),
                 Candidate::Network(Box::new(base.clone())),
             ),

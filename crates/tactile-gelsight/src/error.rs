@@ -51,6 +51,17 @@ pub enum Error {
     },
 }
 
+impl Error {
+    /// The foundation error underneath, when there is one.
+    pub fn core(&self) -> Option<&tactile_core::Error> {
+        match self {
+            Error::Core(e) => Some(e),
+            Error::Onnx(e) => e.core(),
+            _ => None,
+        }
+    }
+}
+
 /// This crate's result.
 pub type Result<T> = std::result::Result<T, Error>;
 

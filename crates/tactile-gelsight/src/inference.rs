@@ -32,6 +32,15 @@ impl IndentationMap {
     pub fn peak_mm(&self) -> f32 {
         1e3 * self.indentation_m.iter().copied().fold(0f32, f32::max)
     }
+
+    /// The area in contact, mm²: pixels pushed in by more than
+    /// [`tactile_core::spec::calibrated::CONTACT_MIN_INDENTATION_MM`],
+    /// each `mm_per_px` square.
+    pub fn contact_area_mm2(&self, mm_per_px: f64) -> f32 {
+        let min_m = (tactile_core::spec::calibrated::CONTACT_MIN_INDENTATION_MM * 1e-3) as f32;
+        let n = self.indentation_m.iter().filter(|&&v| v > min_m).count();
+        (n as f64 * mm_per_px * mm_per_px) as f32
+    }
 }
 
 /// What gives a working frame's slopes.

@@ -33,6 +33,9 @@ pub enum Error {
     /// The pose network.
     #[error(transparent)]
     Pose(#[from] tactile_pose::Error),
+    /// A calibrated GelSight-like sensor.
+    #[error(transparent)]
+    Gelsight(#[from] tactile_gelsight::Error),
 }
 
 impl Error {
@@ -48,6 +51,7 @@ impl Error {
             Error::Depth(e) => e.core(),
             Error::Onnx(e) => e.core(),
             Error::Pose(e) => e.core(),
+            Error::Gelsight(e) => e.core(),
         }
     }
 }

@@ -1,13 +1,61 @@
-//! Paper B's figure 3 as a picture of one tendon frame: the segmenter's
-//! window with the kept region and its direction, beside the depth heat map.
+//! What a frame looked like to the pipeline, as pictures: paper B's
+//! figure 3 for a tendon frame (the segmenter's window with the kept
+//! region and its direction, beside the depth heat map) and, for a
+//! calibrated sensor, the frame beside its skin's indentation.
 
 use std::path::Path;
 
 use tactile_core::Result;
+use tactile_core::image_io::RgbImage;
+use tactile_gelsight::IndentationMap;
 use tactile_preprocess::visuo::SquareWindow;
 
-/// What a tendon frame looked like to the pipeline, for overlays.
+/// What the pipeline saw in one frame, for overlays and for the arrays a
+/// caller asks for.
+#[derive(Default)]
 pub struct FrameViews {
+    /// A tendon frame's window, region, direction and depth.
+    pub tendon: Option<TendonView>,
+    /// A calibrated sensor's indentation.
+    pub indentation: Option<SensorView>,
+}
+
+impl FrameViews {
+    /// Whether there is anything to show.
+    pub fn any(&self) -> bool {
+        self.tendon.is_some() || self.indentation.is_some()
+    }
+
+    /// Write this frame's pictures into `dir`: `STEM-overlay.png` for a
+    /// tendon frame, `STEM-indentation.png` for a calibrated sensor's
+    /// frame (`frame` as it came).
+    pub fn save_pngs(&self, dir: &Path, stem: &str, frame: &RgbImage) -> crate::Result<()> {
+        if let Some(t) = &self.tendon {
+            t.save_png(&dir.join(format!("{stem}-overlay.png")), 4)?;
+        }
+        if let Some(s) = &self.indentation {
+            tactile_gelsight::reconstruct::render_picture(
+                &dir.join(format!("{stem}-indentation.png")),
+                frame,
+                &s.map,
+                s.mm_per_px,
+            )
+            .map_err(crate::Error::from)?;
+        }
+        Ok(())
+    }
+}
+
+/// A calibrated sensor's skin under one frame.
+pub struct SensorView {
+    /// The indentation at the frame's size, metres.
+    pub map: IndentationMap,
+    /// The sensor's scale, mm per pixel.
+    pub mm_per_px: f64,
+}
+
+/// What a tendon frame looked like to the pipeline, for overlays.
+pub struct TendonView {
     /// The segmenter's window, `side x side x 3` in [0, 1].
     pub window: Vec<f32>,
     /// Its side, pixels.
@@ -24,7 +72,7 @@ pub struct FrameViews {
     pub frame_aspect: f64,
 }
 
-impl FrameViews {
+impl TendonView {
     /// The kept region at the frame's resolution (`width x height`,
     /// row-major): each frame pixel takes the window pixel it was cut into
     /// (nearest); pixels the window does not see are not tendon. The cut is

@@ -1,8 +1,10 @@
 //! Paper B's palpation pipeline, frame by frame: the detector runs on every
 //! frame; only when it sees a tendon do the segmenter, its post-processing
 //! (largest region, glare override, direction) and the depth network run.
-//! It composes the three model wrappers; each prepares its own input the
-//! same way on every runtime.
+//! A calibrated GelSight-like sensor's folder adds its skin's indentation
+//! on every frame (or gives only that, when it holds no palpation models).
+//! It composes the model wrappers; each prepares its own input the same
+//! way on every runtime.
 
 use std::path::Path;
 use std::time::Instant;
@@ -14,8 +16,11 @@ use tactile_depth::DepthEstimator;
 use tactile_detect::TendonDetector;
 use tactile_segment::TendonSegmenter;
 
+use tactile_burn::Artifact;
+use tactile_gelsight::{GelsightArtifact, Reconstructor};
+
 use crate::hysteresis::Hysteresis;
-use crate::overlay::FrameViews;
+use crate::overlay::{FrameViews, SensorView, TendonView};
 use crate::{Error, Result};
 
 /// What the pipeline made of one frame (one JSON Lines record).
@@ -71,29 +76,63 @@ pub struct FrameRecord {
     pub ms_depth: Option<f64>,
     /// Time of the whole frame, ms.
     pub ms_total: f64,
+    /// A calibrated sensor: the skin's deepest indentation, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indentation_peak_mm: Option<f32>,
+    /// A calibrated sensor: the area where the skin is pushed in by more
+    /// than [`tactile_core::spec::calibrated::CONTACT_MIN_INDENTATION_MM`], mm².
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact_area_mm2: Option<f32>,
+    /// A calibrated sensor: time of its reconstruction, ms.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ms_reconstruct: Option<f64>,
 }
 
-/// The three models on one runtime.
-pub struct Pipeline {
+impl FrameRecord {
+    /// The record of frame `name` before any model has run: no tendon.
+    pub fn empty(name: &str) -> Self {
+        Self {
+            frame: name.to_string(),
+            tendon: false,
+            score: 0.0,
+            direction_deg: None,
+            anisotropy: None,
+            no_direction: None,
+            mask_area_px: 0,
+            depth_min_mm: None,
+            depth_mean_mm: None,
+            depth_max_mm: None,
+            tendon_raw: false,
+            input_score: None,
+            out_of_distribution: false,
+            gate: None,
+            ms_prepare: 0.0,
+            latency_ms: None,
+            ms_detect: 0.0,
+            ms_segment: None,
+            ms_depth: None,
+            ms_total: 0.0,
+            indentation_peak_mm: None,
+            contact_area_mm2: None,
+            ms_reconstruct: None,
+        }
+    }
+}
+
+/// Paper B's three models on one runtime.
+pub struct PalpationModels {
     /// Tendon or not.
     pub detector: TendonDetector,
     /// Where and which way.
     pub segmenter: TendonSegmenter,
     /// How deep the skin is.
     pub depth: DepthEstimator,
-    /// onnxruntime intra-op threads it was loaded with.
-    pub threads: usize,
-    /// Frames at least twice this tall are box-averaged once to about it
-    /// before the models ([`tactile_preprocess::visuo::working_frame`]).
-    pub working_height: usize,
     window: Vec<bool>,
 }
 
-impl Pipeline {
-    /// Load `detector/`, `segmenter/` and `depth/` from `dir` onto
-    /// `runtime` (`threads` intra-op threads for onnxruntime).
-    pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
-        let dir = dir.as_ref();
+impl PalpationModels {
+    /// Load `detector/`, `segmenter/` and `depth/` from `dir`.
+    pub fn load(dir: &Path, runtime: Runtime, threads: usize) -> Result<Self> {
         let depth = DepthEstimator::load(dir.join("depth"), runtime, threads)?;
         if depth.artifact.with_mask {
             return Err(Error::Core(tactile_core::Error::model(
@@ -106,25 +145,73 @@ impl Pipeline {
             detector: TendonDetector::load(dir.join("detector"), runtime, threads)?,
             segmenter: TendonSegmenter::load(dir.join("segmenter"), runtime, threads)?,
             depth,
-            threads,
-            working_height: tactile_preprocess::visuo::WORKING_HEIGHT,
             window: tactile_core::spec::visuotactile::Window::mask(w, h),
         })
     }
+}
 
-    /// The detector's probability threshold.
-    pub fn threshold(&self) -> f64 {
-        self.detector.artifact.threshold
+/// A models folder run frame by frame: paper B's palpation models, a
+/// calibrated GelSight-like sensor's reconstruction, or both.
+pub struct Pipeline {
+    /// Paper B's models (`detector/`, `segmenter/`, `depth/`); `None` for
+    /// a folder that holds only a sensor calibration.
+    pub palpation: Option<PalpationModels>,
+    /// A calibrated GelSight-like sensor (`tactile calibrate ball` wrote
+    /// the folder itself): the skin's indentation on every frame.
+    pub sensor: Option<Reconstructor>,
+    /// Where the networks run.
+    pub runtime: Runtime,
+    /// onnxruntime intra-op threads it was loaded with.
+    pub threads: usize,
+    /// Frames at least twice this tall are box-averaged once to about it
+    /// before paper B's models ([`tactile_preprocess::visuo::working_frame`]).
+    pub working_height: usize,
+}
+
+impl Pipeline {
+    /// Load the models folder `dir` onto `runtime` (`threads` intra-op
+    /// threads for onnxruntime): `detector/`, `segmenter/` and `depth/`,
+    /// and the sensor calibration when `dir` is one (`gelsight.json`).
+    /// A folder with a calibration and no `detector/` reconstructs only.
+    pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
+        let dir = dir.as_ref();
+        let calibrated = dir.join(GelsightArtifact::CONFIG_FILE).is_file();
+        let palpation = match calibrated && !dir.join("detector").exists() {
+            true => None,
+            false => Some(PalpationModels::load(dir, runtime, threads)?),
+        };
+        let sensor = match calibrated {
+            true => Some(Reconstructor::load(dir, runtime, threads)?),
+            false => None,
+        };
+        Ok(Self {
+            palpation,
+            sensor,
+            runtime,
+            threads,
+            working_height: tactile_preprocess::visuo::WORKING_HEIGHT,
+        })
     }
 
-    /// Run on one frame. Frames without a tendon cost one detector pass.
+    /// The tendon detector, if the folder has one.
+    pub fn detector(&self) -> Option<&TendonDetector> {
+        self.palpation.as_ref().map(|p| &p.detector)
+    }
+
+    /// The detector's probability threshold (`None` without a detector).
+    pub fn threshold(&self) -> Option<f64> {
+        self.detector().map(|d| d.artifact.threshold)
+    }
+
+    /// Run on one frame. Frames without a tendon cost one detector pass
+    /// (and the sensor's reconstruction, when calibrated).
     pub fn process(&mut self, name: &str, frame: &RgbImage) -> Result<FrameRecord> {
         Ok(self.process_filtered(name, frame, None)?.0)
     }
 
     /// [`Self::process`], the tendon decision taken by a hysteresis filter
-    /// over the sequence when one is given, also returning what a tendon
-    /// frame looked like.
+    /// over the sequence when one is given, also returning what the frame
+    /// looked like (tendon frames, and every frame of a calibrated sensor).
     pub fn process_filtered(
         &mut self,
         name: &str,
@@ -132,47 +219,49 @@ impl Pipeline {
         filter: Option<&mut Hysteresis>,
     ) -> Result<(FrameRecord, Option<FrameViews>)> {
         let t0 = Instant::now();
+        let mut rec = FrameRecord::empty(name);
+        // A calibrated sensor's skin, from the frame as it came (its
+        // calibrated size; another size is refused, naming the frame).
+        let mut views = FrameViews::default();
+        if let Some(sensor) = self.sensor.as_mut() {
+            let t = Instant::now();
+            let map = sensor.reconstruct(frame, Path::new(name))?;
+            rec.ms_reconstruct = Some(1e3 * t.elapsed().as_secs_f64());
+            rec.indentation_peak_mm = Some(map.peak_mm());
+            rec.contact_area_mm2 = Some(map.contact_area_mm2(sensor.mm_per_px()));
+            views.indentation = Some(SensorView {
+                map,
+                mm_per_px: sensor.mm_per_px(),
+            });
+        }
+        let Some(models) = self.palpation.as_mut() else {
+            rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+            return Ok((rec, views.any().then_some(views)));
+        };
         // One downsample of a large frame; every model reads the result.
+        let t_prepare = Instant::now();
         let working = tactile_preprocess::visuo::working_frame(frame, self.working_height)?;
         let frame = working.as_ref().unwrap_or(frame);
-        let ms_prepare = 1e3 * t0.elapsed().as_secs_f64();
+        rec.ms_prepare = 1e3 * t_prepare.elapsed().as_secs_f64();
         let t_detect = Instant::now();
-        let assessment = self.detector.assess(frame)?;
-        let score = assessment.probability;
-        let tendon_raw = assessment.tendon;
-        let tendon = match filter {
-            Some(h) => h.update(score),
-            None => tendon_raw,
+        let assessment = models.detector.assess(frame)?;
+        rec.score = assessment.probability;
+        rec.tendon_raw = assessment.tendon;
+        rec.tendon = match filter {
+            Some(h) => h.update(rec.score),
+            None => rec.tendon_raw,
         };
-        let ms_detect = 1e3 * t_detect.elapsed().as_secs_f64();
-        let mut rec = FrameRecord {
-            frame: name.to_string(),
-            tendon,
-            score,
-            tendon_raw,
-            direction_deg: None,
-            anisotropy: None,
-            no_direction: None,
-            mask_area_px: 0,
-            depth_min_mm: None,
-            depth_mean_mm: None,
-            depth_max_mm: None,
-            input_score: assessment.input_score,
-            out_of_distribution: assessment.out_of_distribution,
-            gate: assessment.gate,
-            ms_prepare,
-            latency_ms: None,
-            ms_detect,
-            ms_segment: None,
-            ms_depth: None,
-            ms_total: 1e3 * t0.elapsed().as_secs_f64(),
-        };
-        if !tendon {
-            return Ok((rec, None));
+        rec.input_score = assessment.input_score;
+        rec.out_of_distribution = assessment.out_of_distribution;
+        rec.gate = assessment.gate;
+        rec.ms_detect = 1e3 * t_detect.elapsed().as_secs_f64();
+        if !rec.tendon {
+            rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+            return Ok((rec, views.any().then_some(views)));
         }
         // Segment and point.
         let t1 = Instant::now();
-        let seg = self.segmenter.segment(frame)?;
+        let seg = models.segmenter.segment(frame)?;
         let t = seg.tendon;
         rec.mask_area_px = t.region.area();
         let mut direction = None;
@@ -187,10 +276,10 @@ impl Pipeline {
         rec.ms_segment = Some(1e3 * t1.elapsed().as_secs_f64());
         // Depth.
         let t2 = Instant::now();
-        let depth_mm = self.depth.depth_mm(frame, None)?;
+        let depth_mm = models.depth.depth_mm(frame, None)?;
         let mm: Vec<f32> = depth_mm
             .iter()
-            .zip(&self.window)
+            .zip(&models.window)
             .filter(|(_, inside)| **inside)
             .map(|(&v, _)| v)
             .collect();
@@ -199,15 +288,15 @@ impl Pipeline {
         rec.depth_mean_mm = Some(mm.iter().sum::<f32>() / mm.len().max(1) as f32);
         rec.ms_depth = Some(1e3 * t2.elapsed().as_secs_f64());
         rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
-        let views = FrameViews {
+        views.tendon = Some(TendonView {
             window: seg.window.data,
-            side: self.segmenter.artifact.model.side,
+            side: models.segmenter.artifact.model.side,
             region: t.region.pixels,
             direction,
             depth_mm,
-            depth_size: self.depth.artifact.model.input_size,
+            depth_size: models.depth.artifact.model.input_size,
             frame_aspect: frame.width() as f64 / frame.height().max(1) as f64,
-        };
+        });
         Ok((rec, Some(views)))
     }
 }

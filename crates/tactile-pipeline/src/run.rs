@@ -18,7 +18,8 @@ use tactile_core::source::{FrameSource, SourceKind};
 pub struct RunOptions {
     /// Two-threshold filter on the detector per sequence: `(on, off)`.
     pub hysteresis: Option<(f32, f32)>,
-    /// Write an overlay PNG per tendon frame into this folder.
+    /// Write an overlay PNG per tendon frame (and a calibrated sensor's
+    /// indentation picture per frame) into this folder.
     pub render: Option<PathBuf>,
 }
 
@@ -40,6 +41,18 @@ pub struct StageTimes {
     pub frame: Option<Spread>,
     /// Tendon frames, whole.
     pub tendon_frame: Option<Spread>,
+    /// A calibrated sensor's reconstruction (every frame).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reconstruct: Option<Spread>,
+}
+
+/// A calibrated sensor's skin over a run.
+#[derive(Debug, Clone, Copy, Serialize, Default)]
+pub struct ContactSummary {
+    /// Frames with any skin pushed in past the contact threshold.
+    pub frames_in_contact: usize,
+    /// The deepest indentation over the run, mm.
+    pub peak_mm: f32,
 }
 
 /// What a run did, how fast and how well.
@@ -69,6 +82,13 @@ pub struct RunSummary {
     pub out_of_distribution: usize,
     /// Frames that went through every stage.
     pub tendon_frames: usize,
+    /// Whether the folder has paper B's models (a calibration alone
+    /// reconstructs only: no tendon decisions are made).
+    pub palpation: bool,
+    /// A calibrated sensor: frames with skin in contact, and the deepest
+    /// indentation over the run, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactSummary>,
     /// Accuracy of the decisions against the labels, when there are labels.
     pub detector_accuracy: Option<f64>,
     /// Changes of decision within sequences.
@@ -95,24 +115,41 @@ impl RunSummary {
         let stage =
             |v: Option<Spread>| v.map_or("-".into(), |[m, p]| format!("{m:.2} / {p:.2} ms"));
         let source = serde_json::to_value(self.source).ok();
-        let mut lines = vec![
-            format!(
-                "{} frames from a {} ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass",
-                self.frames,
-                source.as_ref().and_then(|v| v.as_str()).unwrap_or("source"),
-                self.fps,
-                self.runtime,
-                self.gated_out
-            ),
-            format!(
+        let mut lines = vec![];
+        let name = source.as_ref().and_then(|v| v.as_str()).unwrap_or("source");
+        if self.palpation {
+            lines.push(format!(
+                "{} frames from a {name} ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass",
+                self.frames, self.fps, self.runtime, self.gated_out
+            ));
+            lines.push(format!(
                 "median / p95 per stage: prepare {}, detect {}, segment + direction {}, depth {}, whole frame {}",
                 stage(self.stages_ms.prepare),
                 stage(self.stages_ms.detect),
                 stage(self.stages_ms.segment),
                 stage(self.stages_ms.depth),
                 stage(self.stages_ms.frame)
-            ),
-        ];
+            ));
+        } else {
+            lines.push(format!(
+                "{} frames from a {name} ({:.1} frames/s, {}, decoding included); a calibrated sensor without palpation models: indentation only",
+                self.frames, self.fps, self.runtime
+            ));
+            lines.push(format!(
+                "median / p95: whole frame {}",
+                stage(self.stages_ms.frame)
+            ));
+        }
+        if let Some(c) = self.contact {
+            lines.push(format!(
+                "calibrated sensor: reconstruction {} per frame; {} of {} frames in contact (past {} mm), deepest {:.3} mm",
+                stage(self.stages_ms.reconstruct),
+                c.frames_in_contact,
+                self.frames,
+                tactile_core::spec::calibrated::CONTACT_MIN_INDENTATION_MM,
+                c.peak_mm
+            ));
+        }
         if self.out_of_distribution > 0 {
             lines.push(format!(
                 "warning: {} of {} frames do not look like this sensor's (input statistics far from the training frames'): they got no tendon, direction or depth",
@@ -222,7 +259,8 @@ impl Decisions {
 /// Run `pipeline` over every frame of `source`, handing each record to
 /// `sink` as soon as it is made (memory stays bounded however long the
 /// source). Overlays of tendon frames go to `options.render` as
-/// `NAME-overlay.png`, staged and moved in when the run ends.
+/// `NAME-overlay.png` (a calibrated sensor's frames as
+/// `NAME-indentation.png`), staged and moved in when the run ends.
 pub fn run(
     pipeline: &mut Pipeline,
     source: &mut FrameSource,
@@ -246,7 +284,8 @@ pub fn run(
     let known = source.list().map_or(0, |l| l.frames.len() as u64);
     let pb = tactile_core::progress::progress_bar(known, "run");
     let t0 = std::time::Instant::now();
-    let mut times: [Reservoir; 7] = Default::default();
+    let mut times: [Reservoir; 8] = Default::default();
+    let mut contact = ContactSummary::default();
     let (mut frames, mut gated, mut ood) = (0usize, 0usize, 0usize);
     let (mut final_d, mut raw_d, mut labels) = (
         Decisions::default(),
@@ -271,7 +310,11 @@ pub fn run(
                 .unwrap_or_default()
                 .to_string_lossy()
                 .into_owned();
-            v.save_png(&staged.path().join(format!("{stem}-overlay.png")), 4)?;
+            v.save_pngs(staged.path(), &stem, &frame.image)?;
+        }
+        if let Some(peak) = rec.indentation_peak_mm {
+            contact.peak_mm = contact.peak_mm.max(peak);
+            contact.frames_in_contact += usize::from(rec.contact_area_mm2.unwrap_or(0.0) > 0.0);
         }
         let p = prev.as_ref().filter(|_| same_sequence);
         final_d.add(rec.tendon, frame.tendon, p.map(|p| p.1));
@@ -287,6 +330,7 @@ pub fn run(
             Some(rec.ms_total),
             rec.tendon.then_some(rec.ms_total),
             rec.latency_ms,
+            rec.ms_reconstruct,
         ]) {
             if let Some(v) = v {
                 r.push(v);
@@ -314,6 +358,7 @@ pub fn run(
         frame,
         tendon_frame,
         latency,
+        reconstruct,
     ] = times.map(|r| r.median_p95());
     Ok(RunSummary {
         source: source.kind(),
@@ -321,12 +366,14 @@ pub fn run(
         overlapped_decoding: source.overlapped(),
         missing_frames: source.list().map_or(0, |l| l.missing_frames().count),
         dropped_frames: source.dropped(),
-        runtime: pipeline.detector.runtime(),
+        runtime: pipeline.runtime,
         threads: pipeline.threads,
         fps: frames as f64 / wall.max(1e-9),
         gated_out: gated,
         out_of_distribution: ood,
         tendon_frames: frames - gated,
+        palpation: pipeline.palpation.is_some(),
+        contact: pipeline.sensor.is_some().then_some(contact),
         detector_accuracy: final_d.accuracy(),
         decision_changes: final_d.changes,
         detector_accuracy_threshold_only: raw_d.accuracy(),
@@ -340,6 +387,7 @@ pub fn run(
             depth,
             frame,
             tendon_frame,
+            reconstruct,
         },
         latency_ms: latency,
         peak_rss_mb: tactile_core::metrics::peak_rss_mb(),

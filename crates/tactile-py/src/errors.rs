@@ -173,6 +173,7 @@ impl LibraryError for tactile_pipeline::Error {
             E::Depth(e) => e.kind(),
             E::Onnx(e) => onnx_kind(e),
             E::Pose(e) => e.kind(),
+            E::Gelsight(e) => e.kind(),
         }
     }
 }

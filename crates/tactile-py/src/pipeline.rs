@@ -26,6 +26,9 @@ struct State {
 
 /// Paper B's palpation pipeline: the detector on every frame; the
 /// segmenter, the direction and the depth network only on tendon frames.
+/// A calibrated sensor's folder (`tactile calibrate ball`) adds the skin's
+/// indentation on every frame, or gives only that when it holds no
+/// palpation models.
 ///
 /// Thread-safe: calls from several threads take turns on the models, and
 /// the interpreter lock is released while a frame is processed.
@@ -36,7 +39,7 @@ pub struct PyPipeline {
     runtime: Runtime,
     threads: usize,
     hysteresis: Option<(f32, f32)>,
-    threshold: f64,
+    threshold: Option<f64>,
 }
 
 impl PyPipeline {
@@ -49,7 +52,8 @@ impl PyPipeline {
 
 #[pymethods]
 impl PyPipeline {
-    /// Load `detector/`, `segmenter/` and `depth/` from `models` onto
+    /// Load `detector/`, `segmenter/` and `depth/` from `models` (and the
+    /// calibration, when `models` is a calibrated sensor's folder) onto
     /// `runtime` ("onnx", "burn-flex" or "burn-ndarray"). `threads` is
     /// onnxruntime's intra-op threads (1 to 256); `hysteresis=(on, off)`
     /// filters the tendon decision over a sequence (see `reset`).
@@ -115,6 +119,7 @@ impl PyPipeline {
             size: (px.width, px.height),
             mask: OnceLock::new(),
             depth: OnceLock::new(),
+            indentation: OnceLock::new(),
         })
     }
 
@@ -192,7 +197,17 @@ impl PyPipeline {
         let px = arg.view();
         let (levels, bits, [w, h]) = py.detach(|| -> PyResult<_> {
             let st = self.lock()?;
-            let model = &st.pipeline.detector.artifact.model;
+            let model = &st
+                .pipeline
+                .detector()
+                .ok_or_else(|| {
+                    PyValueError::new_err(format!(
+                        "{}: no detector/ in this models folder (a calibration alone)",
+                        self.models.display()
+                    ))
+                })?
+                .artifact
+                .model;
             let levels = px.with_rgb(|img| model.frame_levels(img)).py()?.py()?;
             Ok((levels, model.bits(), model.input_size))
         })?;
@@ -205,10 +220,18 @@ impl PyPipeline {
         })
     }
 
-    /// The detector's probability threshold.
+    /// The detector's probability threshold (None: the folder holds only
+    /// a sensor calibration).
     #[getter]
-    fn threshold(&self) -> f64 {
+    fn threshold(&self) -> Option<f64> {
         self.threshold
+    }
+
+    /// Whether the folder is a calibrated sensor's: every result then
+    /// carries the skin's indentation (`indentation_m`).
+    #[getter]
+    fn calibrated(&self) -> PyResult<bool> {
+        Ok(self.lock()?.pipeline.sensor.is_some())
     }
 
     /// Where the networks run.
@@ -255,6 +278,7 @@ pub struct FrameResult {
     size: (usize, usize),
     mask: OnceLock<Py<PyArray2<bool>>>,
     depth: OnceLock<Option<Py<PyArray2<f32>>>>,
+    indentation: OnceLock<Option<Py<PyArray2<f32>>>>,
 }
 
 #[pymethods]
@@ -334,7 +358,7 @@ impl FrameResult {
         // Built outside the cell: a thread waiting on a OnceLock while
         // holding the interpreter would deadlock the one building it.
         if self.mask.get().is_none() {
-            let data = match &self.views {
+            let data = match self.views.as_ref().and_then(|v| v.tendon.as_ref()) {
                 Some(v) => py.detach(|| v.mask_at(w, h)),
                 None => vec![false; w * h],
             };
@@ -354,7 +378,7 @@ impl FrameResult {
     fn depth_m<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f32>>>> {
         let (w, h) = self.size;
         if self.depth.get().is_none() {
-            let made = match &self.views {
+            let made = match self.views.as_ref().and_then(|v| v.tendon.as_ref()) {
                 Some(v) => {
                     let data = py.detach(|| v.depth_m_at(w, h)).py()?;
                     let arr = ndarray::Array2::from_shape_vec((h, w), data)
@@ -371,6 +395,46 @@ impl FrameResult {
             .and_then(|d| d.as_ref().map(|a| a.bind(py).clone())))
     }
 
+    /// A calibrated sensor's skin: how far each pixel is pushed toward the
+    /// camera, `(H, W)` float32 metres at the frame's resolution (0 at
+    /// rest); None for a folder without a calibration.
+    #[getter]
+    fn indentation_m<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f32>>>> {
+        if self.indentation.get().is_none() {
+            let made = match self.views.as_ref().and_then(|v| v.indentation.as_ref()) {
+                Some(s) => {
+                    let m = &s.map;
+                    let arr = ndarray::Array2::from_shape_vec(
+                        (m.height, m.width),
+                        m.indentation_m.clone(),
+                    )
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+                    Some(arr.into_pyarray(py).unbind())
+                }
+                None => None,
+            };
+            let _ = self.indentation.set(made);
+        }
+        Ok(self
+            .indentation
+            .get()
+            .and_then(|d| d.as_ref().map(|a| a.bind(py).clone())))
+    }
+
+    /// A calibrated sensor: the deepest indentation, mm (None without a
+    /// calibration).
+    #[getter]
+    fn indentation_peak_mm(&self) -> Option<f32> {
+        self.record.indentation_peak_mm
+    }
+
+    /// A calibrated sensor: the area in contact (pushed in past 0.03 mm),
+    /// mm² (None without a calibration).
+    #[getter]
+    fn contact_area_mm2(&self) -> Option<f32> {
+        self.record.contact_area_mm2
+    }
+
     /// Smallest, mean and largest camera-to-skin distance inside the
     /// sensing window, mm; None when gated out.
     #[getter]
@@ -381,7 +445,8 @@ impl FrameResult {
 
     /// Milliseconds per stage: prepare (a large frame brought down to the
     /// working resolution), detect, segment (segmenter and direction),
-    /// depth, total. Stages a frame did not run are absent.
+    /// depth, reconstruct (a calibrated sensor), total. Stages a frame did
+    /// not run are absent.
     #[getter]
     fn ms<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.record;
@@ -393,6 +458,9 @@ impl FrameResult {
         }
         if let Some(v) = r.ms_depth {
             d.set_item("depth", v)?;
+        }
+        if let Some(v) = r.ms_reconstruct {
+            d.set_item("reconstruct", v)?;
         }
         d.set_item("total", r.ms_total)?;
         Ok(d)

@@ -85,3 +85,25 @@ def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
     with pytest.raises(Exception, match="already holds files"):
         tactile.calibrate.reconstruct(model, presses / "frames", taken)
     assert (taken / "keep.txt").read_text() == "mine"
+
+
+def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path, model: Path):
+    frame = tactile.read_rgb(sorted((presses / "frames").glob("*.png"))[0])
+    pipe = tactile.Pipeline(model, "onnx")
+    assert pipe.calibrated and pipe.threshold is None
+    r = pipe.process(frame)
+    # The same map as the reconstructor's, with its summary in the record.
+    want = tactile.Reconstructor(model, "onnx").reconstruct(frame)
+    np.testing.assert_allclose(r.indentation_m, want, atol=1e-7)
+    assert r.indentation_peak_mm == pytest.approx(want.max() * 1e3, rel=1e-5)
+    assert r.contact_area_mm2 > 1.0
+    assert not r.tendon and r.depth_m is None and "reconstruct" in r.ms
+    d = r.to_dict()
+    assert d["indentation_peak_mm"] == pytest.approx(r.indentation_peak_mm)
+    # Rest is flat, and a frame of another size is refused, named.
+    rest = pipe.process(tactile.read_rgb(presses / "background.png"))
+    assert rest.contact_area_mm2 == 0.0
+    with pytest.raises(ValueError, match=r"\(320, 240\).*\(640, 480\)"):
+        pipe.process(np.zeros((240, 320, 3), np.uint8))
+    with pytest.raises(ValueError, match="no detector"):
+        pipe.detector_frame(frame)

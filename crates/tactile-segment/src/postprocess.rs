@@ -13,6 +13,7 @@ use kornia_imgproc::filter::{gaussian_blur, spatial_gradient_float};
 use kornia_imgproc::morphology::{box_kernel, dilate};
 use kornia_imgproc::padding::PaddingMode;
 use serde::{Deserialize, Serialize};
+use tactile_core::spec::visuotactile::Window;
 use tactile_preprocess::visuo::FloatImage;
 
 /// A binary mask, row-major, `true` = tendon.
@@ -249,15 +250,14 @@ pub fn postprocess(
     connected_components(&img, &mut labels, Connectivity::Eight)
         .map_err(|e| kornia(format!("connected components: {e}")))?;
     // Per label: area, edge-band pixels, first raster index.
-    let (cx, cy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
-    let (rx, ry) = (w as f64 / 2.0, h as f64 / 2.0);
+    let window = Window::of_frame(w as f64, h as f64);
     let mut stats: std::collections::BTreeMap<i32, (usize, usize, usize)> = Default::default();
     for (i, &l) in labels.as_slice().iter().enumerate() {
         if l <= 0 {
             continue;
         }
         let (u, v) = ((i % w) as f64, (i / w) as f64);
-        let r = (((u - cx) / rx).powi(2) + ((v - cy) / ry).powi(2)).sqrt();
+        let r = window.radius(u, v);
         let e = stats.entry(l).or_insert((0, 0, i));
         e.0 += 1;
         if r >= 1.0 - cfg.edge_band {
@@ -300,17 +300,14 @@ pub fn principal_axis(
     mask: &TendonMask,
     cfg: &PostprocessConfig,
 ) -> std::result::Result<Direction, NoDirection> {
-    let (w, h) = (mask.width as f64, mask.height as f64);
-    let (cx, cy, rx, ry) = ((w - 1.0) / 2.0, (h - 1.0) / 2.0, w / 2.0, h / 2.0);
+    let window = Window::of_frame(mask.width as f64, mask.height as f64);
     let pts: Vec<(f64, f64)> = mask
         .pixels
         .iter()
         .enumerate()
         .filter(|(_, p)| **p)
         .map(|(i, _)| ((i % mask.width) as f64, (i / mask.width) as f64))
-        .filter(|(u, v)| {
-            !cfg.axis_within_window || ((u - cx) / rx).powi(2) + ((v - cy) / ry).powi(2) <= 1.0
-        })
+        .filter(|&(u, v)| !cfg.axis_within_window || window.contains(u, v))
         .collect();
     if pts.is_empty() {
         return Err(NoDirection::EmptyMask);
@@ -408,7 +405,7 @@ pub fn centre_line(
     let q = q.as_slice();
     // Gradients that count: inside the inscribed ellipse, 4 px (the blur's
     // reach) from its rim, so the window's border is no edge.
-    let view = Ellipse::inside_window(w, h, 4.0);
+    let view = Window::of_frame(w as f64, h as f64).inset(4.0);
     let edges = strong_edges(gx.as_slice(), gy.as_slice(), w, &view);
     if edges.is_empty() {
         // No edge in view (the region fills the window): the pixels' own
@@ -463,34 +460,10 @@ fn near_region(region: &TendonMask, size: ImageSize) -> Result<Vec<bool>> {
     Ok(near.as_slice().iter().map(|&v| v != 0).collect())
 }
 
-/// An axis-aligned ellipse of pixel positions.
-struct Ellipse {
-    cx: f64,
-    cy: f64,
-    rx: f64,
-    ry: f64,
-}
-
-impl Ellipse {
-    /// The ellipse inscribed in a `w x h` window, `margin` px inside its rim.
-    fn inside_window(w: usize, h: usize, margin: f64) -> Self {
-        Self {
-            cx: (w as f64 - 1.0) / 2.0,
-            cy: (h as f64 - 1.0) / 2.0,
-            rx: (w as f64 / 2.0 - margin).max(1.0),
-            ry: (h as f64 / 2.0 - margin).max(1.0),
-        }
-    }
-
-    fn contains(&self, u: f64, v: f64) -> bool {
-        ((u - self.cx) / self.rx).powi(2) + ((v - self.cy) / self.ry).powi(2) <= 1.0
-    }
-}
-
 /// The gradients `(u, v, dx, dy)` inside `view` that are real edges: the
 /// blur's far tails (below a thousandth of the strongest edge's squared
 /// gradient) carry no direction, only cost.
-fn strong_edges(gx: &[f32], gy: &[f32], w: usize, view: &Ellipse) -> Vec<(f64, f64, f64, f64)> {
+fn strong_edges(gx: &[f32], gy: &[f32], w: usize, view: &Window) -> Vec<(f64, f64, f64, f64)> {
     let strongest = gx
         .iter()
         .zip(gy)
@@ -567,7 +540,7 @@ fn shading_direction(
     w: usize,
     h: usize,
     point: (f64, f64),
-    view: &Ellipse,
+    view: &Window,
     weight: impl Fn(usize) -> f64,
 ) -> Result<Option<(f64, f64)>> {
     let shading = shading_gradients(img)?;

@@ -55,6 +55,9 @@ pub(crate) struct CalibrationArgs {
     /// The page; its plots and numbers (JSON) go beside it.
     #[arg(long, default_value = "docs/calibration.md")]
     out: PathBuf,
+    /// Only these candidates (lookup, mlp, conv-slopes, shipped); all by default.
+    #[arg(long, value_delimiter = ',')]
+    candidates: Vec<String>,
     /// The shipped recipe the candidates are built from.
     #[command(flatten)]
     recipe: tactile_gelsight::BallOptions,
@@ -228,6 +231,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
                     device: a.recipe.schedule.device,
                     progress: true,
                 },
+                only: a.candidates,
             };
             let r = tactile_bench::calibration::bench_calibration(&b)?;
             let command: Vec<String> = std::env::args().skip(1).collect();

@@ -25,7 +25,9 @@ pub(crate) struct RunArgs {
     /// The size of the frames on stdin, WIDTHxHEIGHT.
     #[arg(long)]
     size: Option<crate::args::Size>,
-    /// Folder with detector/, segmenter/ and depth/.
+    /// Folder with detector/, segmenter/ and depth/; a calibrated sensor's
+    /// folder (tactile calibrate ball) adds the skin's indentation to every
+    /// record, or gives only that when it holds no detector/.
     #[arg(long, default_value = "models")]
     models: PathBuf,
     /// Where the networks run (onnx is the fastest here).
@@ -47,7 +49,9 @@ pub(crate) struct RunArgs {
     limit: Option<u64>,
     /// Write an overlay PNG per tendon frame into this folder: the
     /// segmenter's window with the kept region in green and the direction
-    /// in red, beside the depth heat map (paper B's figure 3).
+    /// in red, beside the depth heat map (paper B's figure 3); with a
+    /// calibrated sensor, NAME-indentation.png per frame (the frame, a
+    /// shaded 3-D view and the indentation in mm).
     #[arg(long)]
     render: Option<PathBuf>,
     /// Hysteresis on the detector over each sequence: ON,OFF probabilities

@@ -1930,3 +1930,113 @@ fn joint_training_keeps_the_pose_in_the_features() {
     assert!(!ok && msg.contains("input_px 64"), "{msg}");
     assert!(!bad.join("cae.json").exists());
 }
+
+/// Six shared ball presses in a calibration folder of their own.
+fn ball_subset(dir: &Path) {
+    let ball = shared_real().join("gelsight-ball");
+    std::fs::create_dir_all(dir.join("frames")).unwrap();
+    for f in ["sensor.json", "background.png"] {
+        std::fs::copy(ball.join(f), dir.join(f)).unwrap();
+    }
+    let csv = std::fs::read_to_string(ball.join("presses.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().take(7).collect();
+    for l in &lines[1..] {
+        let file = l.split(',').next().unwrap();
+        std::fs::copy(ball.join(file), dir.join(file)).unwrap();
+    }
+    std::fs::write(dir.join("presses.csv"), lines.join("\n") + "\n").unwrap();
+}
+
+#[test]
+fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("presses");
+    ball_subset(&data);
+    let model = tmp.path().join("model");
+    let [d, m] = [&data, &model].map(|p| p.to_str().unwrap().to_string());
+    let (ok, msg) = tactile(&[
+        "calibrate",
+        "ball",
+        "--data",
+        &d,
+        "--out",
+        &m,
+        "--factor",
+        "8",
+        "--val-presses",
+        "2",
+        "--max-epochs",
+        "3",
+        "--kernels",
+        "3,1,1",
+    ]);
+    assert!(ok, "{msg}");
+    assert!(
+        msg.contains("circles found on 6 annotated presses"),
+        "{msg}"
+    );
+    let c = last_json(&msg);
+    assert_eq!(c["train_presses"], 4);
+    // The run loop on the calibration folder: indentation in every record,
+    // a picture per frame, the summary's contact line.
+    let records = tmp.path().join("records.jsonl");
+    let render = tmp.path().join("pictures");
+    let frames = data.join("frames");
+    let (ok, msg) = tactile(&[
+        "run",
+        "--models",
+        &m,
+        "--data",
+        frames.to_str().unwrap(),
+        "--out",
+        records.to_str().unwrap(),
+        "--render",
+        render.to_str().unwrap(),
+        "--runtime",
+        "burn-flex",
+    ]);
+    assert!(ok, "{msg}");
+    assert!(msg.contains("indentation only"), "{msg}");
+    let text = std::fs::read_to_string(&records).unwrap();
+    let recs: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(recs.len(), 6);
+    for r in &recs {
+        assert_eq!(r["tendon"], false);
+        assert!(r["indentation_peak_mm"].as_f64().unwrap() > 0.05, "{r}");
+        assert!(r["contact_area_mm2"].as_f64().unwrap() > 1.0, "{r}");
+    }
+    let pictures = std::fs::read_dir(&render).unwrap().count();
+    assert_eq!(pictures, 6);
+    // The same maps as tactile reconstruct writes.
+    let maps = tmp.path().join("maps");
+    let (ok, msg) = tactile(&[
+        "reconstruct",
+        "--model",
+        &m,
+        "--data",
+        frames.to_str().unwrap(),
+        "--out",
+        maps.to_str().unwrap(),
+        "--runtime",
+        "burn-flex",
+    ]);
+    assert!(ok, "{msg}");
+    let peak = last_json(&msg)["peak_mm"].as_f64().unwrap();
+    let most = recs
+        .iter()
+        .map(|r| r["indentation_peak_mm"].as_f64().unwrap())
+        .fold(0f64, f64::max);
+    assert!((peak - most).abs() < 1e-3, "{peak} against {most}");
+    // A frame of another size is refused, naming it.
+    let odd = tmp.path().join("odd");
+    std::fs::create_dir_all(&odd).unwrap();
+    write_png(&odd.join("small.png"), 320, 240);
+    let (ok, msg) = tactile(&["run", "--models", &m, "--data", odd.to_str().unwrap()]);
+    assert!(
+        !ok && msg.contains("small.png") && msg.contains("(640, 480)"),
+        "{msg}"
+    );
+}
