@@ -13,6 +13,7 @@ use tactile_core::image_io::{save_grey_png, save_rgb_png};
 
 use crate::Result;
 
+use crate::calibrated::{self, CalibratedConfig, CalibratedSensor};
 use crate::tactip::{self, FRAME_PX, TactipConfig};
 use crate::visuotactile::{self, NATIVE, VisuotactileConfig};
 
@@ -284,6 +285,87 @@ pub fn write_visuotactile(
                 num(scene.tendon_radius_mm, 4),
                 num(scene.burial_mm, 4),
                 num(frame.ridge_mm, 5),
+            ])
+        },
+    )
+}
+
+/// `count` frames of a calibrated sensor's palpation videos (videos of
+/// `config.frames_per_sequence`; the last may be cut short), rendered
+/// through the calibration in `sensor`: depth maps are the skin's
+/// indentation (the manifest says `"depth": "indentation"`).
+pub fn write_calibrated(
+    sensor: &CalibratedSensor,
+    config: &CalibratedConfig,
+    count: usize,
+    seed: u64,
+    out: &Path,
+    options: WriteOptions,
+) -> Result<PathBuf> {
+    config.validate()?;
+    check_count(count)?;
+    let fps = config.frames_per_sequence;
+    let mut extra = serde_json::Map::new();
+    extra.insert(
+        "config".into(),
+        serde_json::to_value(config).map_err(|e| Error::Invalid(e.to_string()))?,
+    );
+    extra.insert("depth".into(), "indentation".into());
+    extra.insert(
+        "calibration".into(),
+        serde_json::json!({
+            "folder": sensor.dir.display().to_string(),
+            "sensor": sensor.model.sensor,
+            "mm_per_px": sensor.model.mm_per_px,
+        }),
+    );
+    extra.insert("sequences".into(), count.div_ceil(fps).into());
+    let manifest = Manifest {
+        format: FORMAT.into(),
+        kind: DatasetKind::Visuotactile,
+        sensor_spec: format!("calibrated: {}", sensor.model.sensor),
+        width: sensor.width() as u32,
+        height: sensor.height() as u32,
+        generator: GENERATOR.into(),
+        seed: Some(seed),
+        count,
+        extra,
+    };
+    write_dataset(
+        out,
+        &["peak_mm"],
+        count,
+        manifest,
+        options,
+        &["frames", "masks", "depth"],
+        |root, i| {
+            let (seq, f) = (i / fps.max(1), i % fps.max(1));
+            let (scene, frame) = calibrated::sample(sensor, config, seed, seq as u64, f);
+            let stem = format!("{i:06}");
+            let (file, mask, depth) = (
+                format!("frames/{stem}.png"),
+                format!("masks/{stem}.png"),
+                format!("depth/{stem}.npy"),
+            );
+            save_rgb_png(root.join(&file), frame.width, frame.height, &frame.rgb)?;
+            save_grey_png(root.join(&mask), frame.width, frame.height, &frame.mask)?;
+            crate::npy::write_depth_npy(
+                root.join(&depth),
+                frame.width,
+                frame.height,
+                &frame.indentation_m,
+            )?;
+            Ok(vec![
+                file,
+                mask,
+                depth,
+                u8::from(frame.tendon).to_string(),
+                opt(frame.direction_deg, 3),
+                scene.contact.name().to_string(),
+                num(frame.press_mm, 4),
+                seq.to_string(),
+                f.to_string(),
+                num(frame.peak_mm, 5),
             ])
         },
     )

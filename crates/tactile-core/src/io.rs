@@ -117,6 +117,25 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: impl AsRef<Path>) -> Resu
     serde_json::from_str(&text).map_err(|e| Error::dataset(path, Some(e.line()), e.to_string()))
 }
 
+/// [`read_json`] of a file of at most `max_bytes` (checked before it is
+/// read), naming the file when it is larger.
+pub fn read_json_limited<T: serde::de::DeserializeOwned>(
+    path: impl AsRef<Path>,
+    max_bytes: u64,
+) -> Result<T> {
+    let path = path.as_ref();
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::io(path, e))?
+        .len();
+    if len > max_bytes {
+        return Err(Error::Config(format!(
+            "{}: {len} bytes is too large (at most {max_bytes})",
+            path.display()
+        )));
+    }
+    read_json(path)
+}
+
 /// Create a folder (and parents), naming it on error.
 pub fn create_dir_all(path: impl AsRef<Path>) -> Result<()> {
     let path = path.as_ref();

@@ -28,6 +28,9 @@ pub const MAX_PRESSES_FILE_BYTES: u64 = 4 << 20;
 /// `sensor.json`: the ball and the camera's scale.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SensorInfo {
+    /// What sensor this is (free text).
+    #[serde(default)]
+    pub sensor: String,
     /// The pressed ball's diameter, mm.
     pub ball_diameter_mm: f64,
     /// Millimetres per pixel on the skin.

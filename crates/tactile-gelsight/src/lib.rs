@@ -7,7 +7,9 @@
 //! a small convolutional network ([`model`]) learns colour to slope on
 //! the working grid ([`prepare`]), and a Poisson solve ([`poisson`])
 //! integrates slopes to height ([`inference`]). [`eval`] scores a
-//! reconstruction against the geometry.
+//! reconstruction against the geometry. [`render_model`] fits the sensor
+//! forward (optics and the gel's spread) so its own training data can be
+//! rendered.
 
 #![deny(missing_docs)]
 
@@ -25,6 +27,7 @@ pub mod options;
 pub mod poisson;
 pub mod prepare;
 pub mod reconstruct;
+pub mod render_model;
 pub mod training;
 
 pub use artifact::GelsightArtifact;

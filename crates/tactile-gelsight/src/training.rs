@@ -413,6 +413,8 @@ pub struct Calibration {
     pub val_presses: usize,
     /// Each validation press's scores (full resolution, the saved model).
     pub validation: Vec<PressScore>,
+    /// The render model (optics and gel) fitted beside the sensor model.
+    pub render: crate::render_model::RenderFit,
 }
 
 /// Calibrate the sensor of `ds` into the model folder `out` (written whole
@@ -469,6 +471,16 @@ pub fn calibrate(
         &ds.background,
         &ds.root.join(&ds.sensor.background),
     )?;
+    let sensor_name = match ds.sensor.sensor.is_empty() {
+        true => ds.root.display().to_string(),
+        false => ds.sensor.sensor.clone(),
+    };
+    let (render_model, render) =
+        crate::render_model::fit_render_model(ds, &bg, &presses, &mut rec, &sensor_name)?;
+    tactile_core::io::write_json_atomic(
+        dir.join(datasets_synth::calibrated::RENDER_MODEL_FILE),
+        &render_model,
+    )?;
     let mut validation = Vec::new();
     for &i in &val {
         let p = &presses[i];
@@ -480,7 +492,7 @@ pub fn calibrate(
         dir,
         config,
         &fitted.summary,
-        serde_json::json!({ "circles": circles, "validation": validation, "val_presses": val }),
+        serde_json::json!({ "circles": circles, "validation": validation, "val_presses": val, "render": render }),
     )?;
     staged.commit(false)?;
     Ok(Calibration {
@@ -489,5 +501,6 @@ pub fn calibrate(
         train_presses: train.len(),
         val_presses: val.len(),
         validation,
+        render,
     })
 }

@@ -164,16 +164,7 @@ pub const MAX_OPTIONS_FILE_BYTES: u64 = 1 << 20;
 
 /// An options file's JSON, its size checked before it is read.
 fn read_options_file(path: &Path) -> Result<Value> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| Error::io(path, e))?
-        .len();
-    if len > MAX_OPTIONS_FILE_BYTES {
-        return Err(Error::Config(format!(
-            "{}: {len} bytes is too large for an options file (at most {MAX_OPTIONS_FILE_BYTES})",
-            path.display()
-        )));
-    }
-    tactile_core::io::read_json(path)
+    tactile_core::io::read_json_limited(path, MAX_OPTIONS_FILE_BYTES)
 }
 
 /// The Python type of one option's values: from its clap action and value

@@ -246,6 +246,34 @@ pub const GENERATORS: &[Trainer] = &[
         ],
         "Any",
     ),
+    Trainer::of::<datasets_synth::CalibratedConfig>(
+        "gelsight",
+        "synth_gelsight",
+        &[
+            "sensor: _Path",
+            "count: Optional[int] = None",
+            "seed: int = 1234",
+            "out: Optional[_Path] = None",
+            "*",
+            "sequences: Optional[int] = None",
+            "force: bool = False",
+            "progress: bool = True",
+        ],
+        "A calibrated GelSight-like sensor's own palpation videos (tactile calibrate ball's folder), rendered through its optics and gel with indentation maps: a dict of arrays, or a dataset folder with out=.",
+    )
+    .returning("Union[Dict[str, Any], Path]")
+    .native_signature(
+        &[
+            "sensor: str",
+            "count: Optional[int]",
+            "sequences: Optional[int]",
+            "seed: int",
+            "out: Optional[str]",
+            "force: bool",
+            "progress: bool",
+        ],
+        "Any",
+    ),
 ];
 
 /// Every trainer with options, in the command line's order.

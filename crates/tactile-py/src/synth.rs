@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 
 use datasets_synth::{
-    TactipConfig, TactipLabels, VisuotactileConfig, WriteOptions, tactip, visuotactile,
+    CalibratedConfig, CalibratedSensor, TactipConfig, TactipLabels, VisuotactileConfig,
+    WriteOptions, calibrated, tactip, visuotactile,
 };
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::exceptions::PyValueError;
@@ -218,5 +219,112 @@ pub(crate) fn synth_visuotactile(
     )?;
     d.set_item("burial_mm", PyArray1::from_vec(py, f(&|s| s.burial_mm)))?;
     d.set_item("ridge_mm", PyArray1::from_vec(py, f(&|s| s.frame.ridge_mm)))?;
+    Ok(d.into_any().unbind())
+}
+
+/// A calibrated sensor's palpation videos: written to `out` (returns the
+/// folder), or returned as a dict of `frames (N, H, W, 3) uint8`,
+/// `masks (N, H, W) bool`, `indentation_m (N, H, W) float32` and the labels.
+#[pyfunction]
+#[pyo3(signature = (sensor, count, sequences, seed, out, force, progress, **options))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn synth_gelsight(
+    py: Python<'_>,
+    sensor: PathBuf,
+    count: Option<usize>,
+    sequences: Option<usize>,
+    seed: u64,
+    out: Option<PathBuf>,
+    force: bool,
+    progress: bool,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Py<PyAny>> {
+    let cfg: CalibratedConfig = crate::json::options(py, options)?;
+    cfg.validate().py()?;
+    let count = cfg.frame_count(count, sequences).py()?;
+    let unit = py.detach(|| CalibratedSensor::load(&sensor)).py()?;
+    if let Some(out) = out {
+        let path = crate::work::interruptible(py, || {
+            datasets_synth::write_calibrated(
+                &unit,
+                &cfg,
+                count,
+                seed,
+                &out,
+                write_options(force, progress),
+            )
+            .py()
+        })?;
+        return Ok(path.into_pyobject(py)?.into_any().unbind());
+    }
+    let (w, h) = (unit.width(), unit.height());
+    check_in_memory(count, w * h * (3 + 1 + 4))?;
+    let fps = cfg.frames_per_sequence.max(1);
+    let samples: Vec<(calibrated::CalibratedFrame, &'static str)> =
+        crate::work::interruptible(py, || {
+            (0..count)
+                .into_par_iter()
+                .map(|i| {
+                    tactile_core::interrupt::check()?;
+                    let (scene, frame) =
+                        calibrated::sample(&unit, &cfg, seed, (i / fps) as u64, i % fps);
+                    Ok((frame, scene.contact.name()))
+                })
+                .collect::<tactile_core::Result<_>>()
+                .py()
+        })?;
+    let mut rgb = Vec::with_capacity(count * w * h * 3);
+    let mut mask = Vec::with_capacity(count * w * h);
+    let mut depth = Vec::with_capacity(count * w * h);
+    for (f, _) in &samples {
+        rgb.extend_from_slice(&f.rgb);
+        mask.extend(f.mask.iter().map(|&v| v >= 128));
+        depth.extend_from_slice(&f.indentation_m);
+    }
+    let shape_err = |e: ndarray::ShapeError| PyValueError::new_err(e.to_string());
+    let d = PyDict::new(py);
+    d.set_item(
+        "frames",
+        ndarray::Array4::from_shape_vec((count, h, w, 3), rgb)
+            .map_err(shape_err)?
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "masks",
+        ndarray::Array3::from_shape_vec((count, h, w), mask)
+            .map_err(shape_err)?
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "indentation_m",
+        ndarray::Array3::from_shape_vec((count, h, w), depth)
+            .map_err(shape_err)?
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "tendon",
+        PyArray1::from_vec(py, samples.iter().map(|s| s.0.tendon).collect()),
+    )?;
+    d.set_item(
+        "direction_deg",
+        column(py, samples.iter().map(|s| s.0.direction_deg).collect()),
+    )?;
+    d.set_item("path", PyList::new(py, samples.iter().map(|s| s.1))?)?;
+    d.set_item(
+        "press_mm",
+        PyArray1::from_vec(py, samples.iter().map(|s| s.0.press_mm).collect()),
+    )?;
+    d.set_item(
+        "peak_mm",
+        PyArray1::from_vec(py, samples.iter().map(|s| s.0.peak_mm).collect()),
+    )?;
+    d.set_item(
+        "sequence",
+        PyArray1::from_vec(py, (0..count).map(|i| (i / fps) as i64).collect()),
+    )?;
+    d.set_item(
+        "frame_index",
+        PyArray1::from_vec(py, (0..count).map(|i| (i % fps) as i64).collect()),
+    )?;
     Ok(d.into_any().unbind())
 }

@@ -42,6 +42,41 @@ pub(crate) fn keep_matches(mut m: ArgMatches) {
     let _ = LEAF.set(m);
 }
 
+/// Options of another type `T` made from the flags of `parsed` given on the
+/// command line (by name; a given flag `T` does not have is refused),
+/// with `--config FILE` (of `T`'s options) under them: how `synth
+/// visuotactile --sensor` takes the calibrated generator's options.
+pub(crate) fn resolve_as<P: serde::Serialize, T: Options>(
+    parsed: &P,
+    config: Option<&Path>,
+) -> anyhow::Result<T> {
+    let Value::Object(values) = serde_json::to_value(parsed)? else {
+        anyhow::bail!("options must serialise as an object");
+    };
+    let Value::Object(known) = serde_json::to_value(T::defaults()?)? else {
+        anyhow::bail!("options must serialise as an object");
+    };
+    let mut given = Map::new();
+    if let Some(m) = LEAF.get() {
+        for (k, v) in values {
+            let on_line = m.try_get_raw(&k).is_ok_and(|v| v.is_some())
+                && m.value_source(&k) == Some(ValueSource::CommandLine);
+            if !on_line {
+                continue;
+            }
+            if !known.contains_key(&k) {
+                anyhow::bail!(
+                    "--{} does not apply here (the options are: {})",
+                    k.replace('_', "-"),
+                    known.keys().cloned().collect::<Vec<_>>().join(", ")
+                );
+            }
+            given.insert(k, v);
+        }
+    }
+    Ok(T::resolve(config, &given)?)
+}
+
 /// The options a verb parsed, with `--config FILE` under them: the file's
 /// options replace the defaults, and the flags given on the command line
 /// replace the file's (the library's [`Options::resolve`], as Python's

@@ -44,6 +44,15 @@ pub(crate) fn main(cmd: CalibrateCmd) -> Result<()> {
             if let Some(circles) = &c.circles {
                 say!("{}", circles.describe());
             }
+            say!(
+                "render model (optics.json): optics on {} pixels; gel spread {:.2} mm, gain {:.2} (profile error {:.3} mm); ball presses rendered back: colour error {:.1} levels (the bare background: {:.1})",
+                c.render.optics_samples,
+                c.render.gel.sigma_mm,
+                c.render.gel.gain,
+                c.render.gel_profile_error_mm,
+                c.render.colour_error_levels,
+                c.render.colour_error_unpressed_levels
+            );
             for s in &c.validation {
                 say!(
                     "held out {}: shape error {:.3} mm, far field {:.4} mm, rim sink {:.3} mm, peak {:.3} mm",

@@ -5,15 +5,18 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::{Args, Subcommand};
 use datasets_synth::{
-    TactipConfig, VisuotactileConfig, WriteOptions, write_tactip, write_visuotactile,
+    CalibratedConfig, CalibratedSensor, TactipConfig, VisuotactileConfig, WriteOptions,
+    write_calibrated, write_tactip, write_visuotactile,
 };
 
 #[derive(Subcommand)]
 pub(crate) enum SynthCmd {
     /// Virtual TacTip frames (paper A): shapes, position, orientation, depth, force.
     Tactip(TactipArgs),
-    /// Virtual visuo-tactile palpation videos (paper B): RGB, masks, directions, depth.
+    /// Virtual visuo-tactile palpation videos (paper B): RGB, masks, directions, depth; with --sensor, a calibrated sensor's own (the same as `synth gelsight`).
     Visuotactile(VisuotactileArgs),
+    /// A calibrated GelSight-like sensor's own palpation videos, rendered through its calibration (tactile calibrate ball): RGB, masks, directions, indentation maps.
+    Gelsight(GelsightArgs),
 }
 
 /// Options shared by both sensors.
@@ -60,9 +63,30 @@ pub(crate) struct VisuotactileArgs {
     /// Palpation videos to write (count = sequences x frames per sequence).
     #[arg(long)]
     sequences: Option<usize>,
+    /// Render a calibrated sensor's own videos instead (its calibration
+    /// folder): the flags it shares with `synth gelsight` apply (paths,
+    /// ranges of tendon radius, curvature, press, exposure, noise, frames
+    /// per sequence); its other options go in --config.
+    #[arg(long)]
+    sensor: Option<PathBuf>,
     /// Every range of the generator (defaults: the spec's).
     #[command(flatten)]
     config: VisuotactileConfig,
+}
+
+#[derive(Args)]
+pub(crate) struct GelsightArgs {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// The calibrated sensor's folder (tactile calibrate ball).
+    #[arg(long)]
+    sensor: PathBuf,
+    /// Palpation videos to write (count = sequences x frames per sequence).
+    #[arg(long)]
+    sequences: Option<usize>,
+    /// Every range of the generator.
+    #[command(flatten)]
+    config: CalibratedConfig,
 }
 
 fn finish(
@@ -90,6 +114,7 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
     let common = match &cmd {
         SynthCmd::Tactip(a) => &a.common,
         SynthCmd::Visuotactile(a) => &a.common,
+        SynthCmd::Gelsight(a) => &a.common,
     };
     if let Some(p) = &common.preview {
         tactile_core::dataset::check_output_file(p, &[])?;
@@ -107,6 +132,16 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
             let out = write_tactip(&cfg, count, a.common.seed, &a.common.out, opts)?;
             finish(&a.common, out, "virtual TacTip", count, t)
         }
+        SynthCmd::Visuotactile(a) if a.sensor.is_some() => {
+            let cfg: CalibratedConfig =
+                crate::args::resolve_as(&a.config, a.common.config.as_deref())?;
+            let sensor = a.sensor.unwrap_or_default();
+            gelsight(&a.common, &sensor, a.sequences, &cfg, t)
+        }
+        SynthCmd::Gelsight(a) => {
+            let cfg = crate::args::resolve(a.config, a.common.config.as_deref())?;
+            gelsight(&a.common, &a.sensor, a.sequences, &cfg, t)
+        }
         SynthCmd::Visuotactile(a) => {
             let cfg = crate::args::resolve(a.config, a.common.config.as_deref())?;
             let count = cfg.frame_count(a.common.count, a.sequences)?;
@@ -118,4 +153,22 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
             finish(&a.common, out, "virtual visuo-tactile", count, t)
         }
     }
+}
+
+fn gelsight(
+    c: &CommonArgs,
+    sensor: &std::path::Path,
+    sequences: Option<usize>,
+    cfg: &CalibratedConfig,
+    t: std::time::Instant,
+) -> Result<()> {
+    cfg.validate()?;
+    let count = cfg.frame_count(c.count, sequences)?;
+    let unit = CalibratedSensor::load(sensor)?;
+    let opts = WriteOptions {
+        force: c.force,
+        progress: true,
+    };
+    let out = write_calibrated(&unit, cfg, count, c.seed, &c.out, opts)?;
+    finish(c, out, "calibrated-sensor", count, t)
 }

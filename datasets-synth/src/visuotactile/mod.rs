@@ -9,7 +9,7 @@
 //! are listed in `docs/synth.md`.
 
 mod alternate;
-mod camera;
+pub(crate) mod camera;
 mod render;
 mod scene;
 
@@ -265,28 +265,32 @@ impl VisuotactileConfig {
     /// palpation videos of `frames_per_sequence`): either, or both when
     /// they agree.
     pub fn frame_count(&self, count: Option<usize>, sequences: Option<usize>) -> Result<usize> {
-        let f = self.frames_per_sequence;
-        let frames = |k: usize| {
-            k.checked_mul(f).ok_or_else(|| {
-                Error::Config(format!("{k} sequences x {f} frames is too many frames"))
-            })
-        };
-        match (count, sequences) {
-            (Some(c), None) => Ok(c),
-            (None, Some(k)) => frames(k),
-            (Some(c), Some(k)) if c == frames(k)? => Ok(c),
-            (Some(c), Some(k)) => Err(Error::Config(format!(
-                "count {c} disagrees with {k} sequences x {f} frames per sequence"
-            ))),
-            (None, None) => Err(Error::Config(
-                "give a frame count or a number of sequences".into(),
-            )),
-        }
+        frames_of(self.frames_per_sequence, count, sequences)
     }
 
     /// The scale divisor from the native frame (3 for 640 x 360).
     pub fn scale_divisor(&self) -> u32 {
         NATIVE.0 / self.width.max(1)
+    }
+}
+
+/// Frames to write from `count` and/or `sequences` videos of `f` frames:
+/// either, or both when they agree.
+pub(crate) fn frames_of(f: usize, count: Option<usize>, sequences: Option<usize>) -> Result<usize> {
+    let frames = |k: usize| {
+        k.checked_mul(f)
+            .ok_or_else(|| Error::Config(format!("{k} sequences x {f} frames is too many frames")))
+    };
+    match (count, sequences) {
+        (Some(c), None) => Ok(c),
+        (None, Some(k)) => frames(k),
+        (Some(c), Some(k)) if c == frames(k)? => Ok(c),
+        (Some(c), Some(k)) => Err(Error::Config(format!(
+            "count {c} disagrees with {k} sequences x {f} frames per sequence"
+        ))),
+        (None, None) => Err(Error::Config(
+            "give a frame count or a number of sequences".into(),
+        )),
     }
 }
 

@@ -94,4 +94,42 @@ def visuotactile(
     return Path(r) if out is not None else r
 
 
-__all__ = ["tactip", "visuotactile"]
+def gelsight(
+    sensor: PathLike,
+    count: Optional[int] = None,
+    seed: int = 1234,
+    out: Optional[PathLike] = None,
+    *,
+    sequences: Optional[int] = None,
+    force: bool = False,
+    progress: bool = True,
+    **options: Any,
+) -> Union[Dict[str, Any], Path]:
+    """A calibrated GelSight-like sensor's own palpation videos.
+
+    ``sensor`` is the folder ``tactile.calibrate.ball`` wrote: the frames
+    are rendered through its optics and gel over its background, at its
+    size. Give ``count`` frames or ``sequences`` videos of
+    ``frames_per_sequence`` frames (default 25). Returns a dict: ``frames``
+    ``(N, H, W, 3)`` uint8 RGB, ``masks`` ``(N, H, W)`` bool (a tendon
+    pushing the skin in past 0.03 mm), ``indentation_m`` ``(N, H, W)``
+    float32 metres, and the labels ``tendon``, ``direction_deg`` (NaN
+    without a tendon), ``path`` (the tendon's path, or ``sphere``,
+    ``punch``, ``flat``, ``none``), ``press_mm``, ``peak_mm``, ``sequence``,
+    ``frame_index``. With ``out``, writes a dataset there instead (its depth
+    maps are indentation) and returns its path.
+    """
+    r = _tactile.synth_gelsight(
+        os.fspath(sensor),
+        None if count is None else _whole("count", count),
+        None if sequences is None else _whole("sequences", sequences),
+        int(seed),
+        None if out is None else os.fspath(out),
+        force,
+        progress,
+        **options,
+    )
+    return Path(r) if out is not None else r
+
+
+__all__ = ["tactip", "visuotactile", "gelsight"]

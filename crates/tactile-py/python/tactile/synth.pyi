@@ -63,4 +63,37 @@ def visuotactile(
 ) -> Union[Dict[str, Any], Path]:
     """Virtual visuo-tactile palpation videos (paper B): a dict of arrays, or a dataset folder with out=."""
 
+def gelsight(
+    sensor: _Path,
+    count: Optional[int] = None,
+    seed: int = 1234,
+    out: Optional[_Path] = None,
+    *,
+    sequences: Optional[int] = None,
+    force: bool = False,
+    progress: bool = True,
+    config: Optional[_Path] = None,
+    paths: Sequence[str] = ("straight", "arc", "s-curve"),
+    tendon_radius_mm: Tuple[float, float] = (1.5, 3.5),
+    curvature_radius_mm: Tuple[float, float] = (10.0, 40.0),
+    press_mm: Tuple[float, float] = (0.05, 1.5),
+    centre_fraction: float = 0.6,
+    out_of_view_fraction: float = 0.08,
+    tendon_share: float = 0.6,
+    sphere_share: float = 0.15,
+    punch_share: float = 0.1,
+    flat_share: float = 0.05,
+    nothing_share: float = 0.1,
+    sphere_radius_mm: Tuple[float, float] = (2.0, 6.0),
+    punch_radius_mm: Tuple[float, float] = (1.0, 3.0),
+    optics_jitter: float = 0.15,
+    gel_jitter: float = 0.25,
+    blur_px: Tuple[float, float] = (0.0, 1.2),
+    shift_px: int = 2,
+    exposure_jitter: Tuple[float, float] = (-0.1, 0.1),
+    noise_sigma: Tuple[float, float] = (0.5, 3.0),
+    frames_per_sequence: int = 25,
+) -> Union[Dict[str, Any], Path]:
+    """A calibrated GelSight-like sensor's own palpation videos (tactile calibrate ball's folder), rendered through its optics and gel with indentation maps: a dict of arrays, or a dataset folder with out=."""
+
 # --- end of generated part ---

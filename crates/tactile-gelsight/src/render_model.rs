@@ -1,0 +1,266 @@
+//! The calibrated sensor forward: what the ball presses teach about how
+//! the sensor would show any press, so its own training data can be
+//! rendered (`datasets_synth::calibrated`). Two parts, both fitted here
+//! beside the sensor model and saved as the folder's render model:
+//!
+//! - the optics: colour change by slope and place, a table fitted to every
+//!   pixel whose slope the ball's geometry gives (inside the contact, and
+//!   the far field at rest), and to the sensor model's own slopes on the
+//!   sinking gel around each contact;
+//! - the gel: how far the skin sinks around a contact, fitted to the
+//!   sensor model's reconstructions of the presses.
+//!
+//! Each press is then rendered back through the model and compared with
+//! the real frame: the colour error says how close the rendered sensor is.
+
+use datasets_synth::calibrated::{
+    CalibratedConfig, CalibratedScene, CalibratedSensor, Contact, GelResponse, OpticsSample,
+    RenderModel, SensorOptics, render,
+};
+use serde::Serialize;
+use tactile_core::image_io::RgbImage;
+
+use crate::Result;
+use crate::geometry::{FAR_FIELD_RADII, INNER_FRACTION};
+use crate::inference::Reconstructor;
+use crate::layout::BallPresses;
+use crate::prepare::{PreparedBackground, WorkingImage};
+use crate::training::PreparedPress;
+
+/// Slope bins per axis of the optics table.
+pub const OPTICS_BINS: usize = 25;
+/// The table's slope range, mm per mm (the ball's cap reaches about 2).
+pub const OPTICS_MAX_SLOPE: f64 = 2.4;
+/// Radial step of the gel's profiles, mm.
+const PROFILE_STEP_MM: f64 = 0.1;
+
+/// How well the render model reproduces the presses.
+#[derive(Debug, Clone, Serialize)]
+pub struct RenderFit {
+    /// Pixels the optics were fitted on.
+    pub optics_samples: usize,
+    /// The gel's spread.
+    pub gel: GelResponse,
+    /// Mean |reconstructed - model| indentation over the presses' radial
+    /// profiles (out to three contact radii), mm.
+    pub gel_profile_error_mm: f64,
+    /// Mean |rendered - real| colour within two contact radii of each
+    /// press, 8-bit levels (exposure matched).
+    pub colour_error_levels: f64,
+    /// The same for the background itself (no press rendered): what a
+    /// render with no model of the press would score.
+    pub colour_error_unpressed_levels: f64,
+}
+
+/// Each channel's gain that brings `frame` to the background's exposure
+/// (the sensor model's exposure matching).
+fn exposure_gain(bg: &PreparedBackground, frame: &RgbImage) -> Result<[f32; 3]> {
+    let m = WorkingImage::of(frame, bg.image.grid)?.medians();
+    Ok(std::array::from_fn(|c| {
+        if m[c] > 1.0 / 255.0 {
+            bg.medians[c] / m[c]
+        } else {
+            1.0
+        }
+    }))
+}
+
+/// The radial mean of `map` (metres) about `(cx, cy)` at
+/// `(k + 0.5) * PROFILE_STEP_MM`, out to `reach_mm`, as `(r_mm, mm)`.
+fn radial_profile(
+    map: &[f32],
+    (w, h): (usize, usize),
+    (cx, cy): (f64, f64),
+    mm_per_px: f64,
+    reach_mm: f64,
+) -> Vec<(f64, f64)> {
+    let bins = (reach_mm / PROFILE_STEP_MM).ceil() as usize;
+    let mut sum = vec![0f64; bins];
+    let mut n = vec![0usize; bins];
+    let r_px = reach_mm / mm_per_px;
+    let (x0, x1) = (
+        (cx - r_px).floor().max(0.0) as usize,
+        ((cx + r_px).ceil() as usize).min(w),
+    );
+    let (y0, y1) = (
+        (cy - r_px).floor().max(0.0) as usize,
+        ((cy + r_px).ceil() as usize).min(h),
+    );
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let r = (x as f64 - cx).hypot(y as f64 - cy) * mm_per_px;
+            let b = (r / PROFILE_STEP_MM) as usize;
+            if b < bins {
+                sum[b] += map[y * w + x] as f64 * 1e3;
+                n[b] += 1;
+            }
+        }
+    }
+    (0..bins)
+        .filter(|&b| n[b] > 0)
+        .map(|b| ((b as f64 + 0.5) * PROFILE_STEP_MM, sum[b] / n[b] as f64))
+        .collect()
+}
+
+/// Fit the render model of the sensor of `ds` from its prepared presses
+/// and its calibrated reconstruction `rec`; `sensor` names the sensor.
+pub fn fit_render_model(
+    ds: &BallPresses,
+    bg: &PreparedBackground,
+    presses: &[PreparedPress],
+    rec: &mut Reconstructor,
+    sensor: &str,
+) -> Result<(RenderModel, RenderFit)> {
+    let (w, h) = ds.size();
+    let mm = ds.sensor.mm_per_px;
+    let background = ds.background.as_slice();
+    let mut samples = Vec::new();
+    let mut profiles = Vec::with_capacity(presses.len());
+    for (i, p) in presses.iter().enumerate() {
+        let frame = ds.frame(i)?;
+        let gain = exposure_gain(bg, &frame)?;
+        let map = rec.reconstruct(&frame, &ds.root.join(&p.file))?;
+        let cap = p.cap(ds);
+        let (cx, cy, a) = (
+            cap.circle.centre_x_px,
+            cap.circle.centre_y_px,
+            cap.circle.radius_px,
+        );
+        let change = |x: usize, y: usize| -> [f32; 3] {
+            let k = (y * w + x) * 3;
+            std::array::from_fn(|c| {
+                (frame.as_slice()[k + c] as f32 * gain[c] - background[k + c] as f32) / 255.0
+            })
+        };
+        let depth = |x: usize, y: usize| map.indentation_m[y * w + x] as f64 * 1e3;
+        for y in 1..h - 1 {
+            for x in 1..w - 1 {
+                let r = (x as f64 - cx).hypot(y as f64 - cy);
+                let (slope, weight) = if r <= INNER_FRACTION * a {
+                    (cap.slope(x as f64, y as f64), 1.0)
+                } else if r >= FAR_FIELD_RADII * a {
+                    // The skin at rest, sampled thinly: there is a lot of it.
+                    ((x % 3 == 0 && y % 3 == 0).then_some((0.0, 0.0)), 1.0)
+                } else if r >= a && x % 2 == 0 && y % 2 == 0 {
+                    // The sinking gel around the contact: the sensor
+                    // model's own slopes.
+                    let gx = (depth(x + 1, y) - depth(x - 1, y)) / (2.0 * mm);
+                    let gy = (depth(x, y + 1) - depth(x, y - 1)) / (2.0 * mm);
+                    (Some((gx, gy)), 0.5)
+                } else {
+                    (None, 0.0)
+                };
+                if let Some((gx, gy)) = slope {
+                    samples.push(OpticsSample {
+                        x: x as f64,
+                        y: y as f64,
+                        gx,
+                        gy,
+                        change: change(x, y),
+                        weight,
+                    });
+                }
+            }
+        }
+        profiles.push((
+            a * mm,
+            radial_profile(
+                &map.indentation_m,
+                (w, h),
+                (cx, cy),
+                mm,
+                FAR_FIELD_RADII * a * mm,
+            ),
+        ));
+    }
+    let optics = SensorOptics::fit((w, h), OPTICS_BINS, OPTICS_MAX_SLOPE, &samples)?;
+    let ball_mm = ds.sensor.ball_diameter_mm / 2.0;
+    let (gel, gel_profile_error_mm) = GelResponse::fit(ball_mm, &profiles)?;
+    let model = RenderModel {
+        sensor: sensor.to_string(),
+        mm_per_px: mm,
+        optics,
+        gel,
+        fit: serde_json::Value::Null,
+    };
+    let (colour_error_levels, colour_error_unpressed_levels) =
+        colour_error(ds, bg, presses, &model)?;
+    let fit = RenderFit {
+        optics_samples: samples.len(),
+        gel,
+        gel_profile_error_mm,
+        colour_error_levels,
+        colour_error_unpressed_levels,
+    };
+    let model = RenderModel {
+        fit: serde_json::to_value(&fit).unwrap_or_default(),
+        ..model
+    };
+    Ok((model, fit))
+}
+
+/// Render every press through `model` (the ball where its circle is, no
+/// noise or jitter) and compare with the real frame within two contact
+/// radii: mean |difference| in 8-bit levels, and the same for the bare
+/// background.
+fn colour_error(
+    ds: &BallPresses,
+    bg: &PreparedBackground,
+    presses: &[PreparedPress],
+    model: &RenderModel,
+) -> Result<(f64, f64)> {
+    let (w, h) = ds.size();
+    let sensor = CalibratedSensor {
+        dir: ds.root.clone(),
+        model: model.clone(),
+        background: ds.background.as_slice().to_vec(),
+    };
+    let config = CalibratedConfig {
+        exposure_jitter: datasets_synth::Range::fixed(0.0),
+        noise_sigma: datasets_synth::Range::fixed(0.0),
+        ..CalibratedConfig::default()
+    };
+    let ball_mm = ds.sensor.ball_diameter_mm / 2.0;
+    let mm = ds.sensor.mm_per_px;
+    let (cx0, cy0) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+    let (mut sum, mut bare, mut n) = (0f64, 0f64, 0usize);
+    for (i, p) in presses.iter().enumerate() {
+        let c = p.circle;
+        let Some((approach, _)) = model.gel.ball_profile(ball_mm, c.radius_px * mm, &[]) else {
+            continue;
+        };
+        let scene = CalibratedScene {
+            contact: Contact::Sphere {
+                radius_mm: ball_mm,
+                centre: ((c.centre_x_px - cx0) * mm, (c.centre_y_px - cy0) * mm),
+            },
+            peak_press_mm: approach,
+            optics_gain: [1.0; 3],
+            gel_sigma_factor: 1.0,
+            blur_px: 0.0,
+            shift_px: (0, 0),
+        };
+        let mut rng = tactile_core::rng::SampleRng::new(0, 0, i as u64);
+        let out = render(&sensor, &config, &scene, approach, &mut rng);
+        let frame = ds.frame(i)?;
+        let gain = exposure_gain(bg, &frame)?;
+        let real = frame.as_slice();
+        let back = ds.background.as_slice();
+        for y in 0..h {
+            for x in 0..w {
+                if (x as f64 - c.centre_x_px).hypot(y as f64 - c.centre_y_px) > 2.0 * c.radius_px {
+                    continue;
+                }
+                for (ch, g) in gain.iter().enumerate() {
+                    let k = (y * w + x) * 3 + ch;
+                    let r = real[k] as f64 * *g as f64;
+                    sum += (out.rgb[k] as f64 - r).abs();
+                    bare += (back[k] as f64 - r).abs();
+                    n += 1;
+                }
+            }
+        }
+    }
+    let n = n.max(1) as f64;
+    Ok((sum / n, bare / n))
+}

@@ -1,0 +1,296 @@
+//! How a calibrated sensor's gel takes a press: inside the contact the
+//! skin follows the object; around it the soft gel sinks too (a gap opens
+//! between object and skin before the geometric edge, so the contact is
+//! smaller than the overlap), and far from it the skin is at rest. The
+//! classic calibrated simulators (Taxim) model the spread with Gaussian
+//! smoothing of the object's overlap with the gel; here one Gaussian of
+//! width `sigma_mm` and a gain at most 1 do it, fitted to the ball presses
+//! (contact radius known, the gel around it reconstructed):
+//!
+//! `indentation = max(overlap, gain * blur(max(overlap, 0)), 0)`
+//!
+//! where `overlap = approach - s(x)` is how far the object's surface at
+//! `x` lies past the skin's rest surface (`s` its height above its lowest
+//! point; `-inf` off the object). The skin is never shallower than the
+//! object (the object pushes it); where the smoothed push (the gel dragged
+//! along) lies deeper than the object, skin and object have parted.
+
+use serde::{Deserialize, Serialize};
+use tactile_core::{Error, Result};
+
+use crate::raster::{Border, gaussian_blur};
+
+/// Widest spread, mm.
+pub const MAX_SIGMA_MM: f64 = 10.0;
+
+/// The gel's spread around a contact.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GelResponse {
+    /// Width of the Gaussian spread, mm.
+    pub sigma_mm: f64,
+    /// Gain on the smoothed overlap, in (0, 1] (above 1 a wide flat press
+    /// would push the skin deeper than the object).
+    pub gain: f64,
+}
+
+impl GelResponse {
+    /// Check a response read from a file.
+    pub fn check(&self) -> Result<()> {
+        if !(self.sigma_mm.is_finite() && self.sigma_mm > 0.0 && self.sigma_mm <= MAX_SIGMA_MM) {
+            return Err(Error::Config(format!(
+                "gel: sigma_mm must be in (0, {MAX_SIGMA_MM}], got {}",
+                self.sigma_mm
+            )));
+        }
+        if !(self.gain.is_finite() && self.gain > 0.0 && self.gain <= 1.0) {
+            return Err(Error::Config(format!(
+                "gel: gain must be in (0, 1], got {}",
+                self.gain
+            )));
+        }
+        Ok(())
+    }
+
+    /// The skin's indentation, mm, of an `overlap_mm` map (`w x h`,
+    /// row-major, `step_mm` per pixel; `-inf` off the object).
+    pub fn indentation_mm(
+        &self,
+        overlap_mm: &[f32],
+        (w, h): (usize, usize),
+        step_mm: f64,
+    ) -> Vec<f32> {
+        let mut spread: Vec<f32> = overlap_mm.iter().map(|v| v.max(0.0)).collect();
+        gaussian_blur(&mut spread, w, h, self.sigma_mm / step_mm, Border::Zero);
+        overlap_mm
+            .iter()
+            .zip(&spread)
+            .map(|(&o, &s)| o.max(self.gain as f32 * s).max(0.0))
+            .collect()
+    }
+
+    /// A ball of radius `ball_mm` pressed to contact radius `contact_mm`:
+    /// its approach and the radial profile of the indentation at `radii_mm`
+    /// (`None` when this response cannot reach that contact).
+    pub fn ball_profile(
+        &self,
+        ball_mm: f64,
+        contact_mm: f64,
+        radii_mm: &[f64],
+    ) -> Option<(f64, Vec<f64>)> {
+        let reach = radii_mm.iter().copied().fold(contact_mm, f64::max);
+        let sweep = BallSweep::new(ball_mm, reach, self.sigma_mm);
+        sweep.profile(self.gain, contact_mm, radii_mm)
+    }
+
+    /// The response whose ball presses best match reconstructed ones:
+    /// each of `presses` gives the contact radius and the reconstruction's
+    /// radial profile (`(r_mm, indentation_mm)` pairs out to a few contact
+    /// radii) of a ball of radius `ball_mm`. A grid search over width and
+    /// gain; returns the response and its mean |profile error|, mm.
+    pub fn fit(ball_mm: f64, presses: &[(f64, Vec<(f64, f64)>)]) -> Result<(Self, f64)> {
+        if presses.is_empty() {
+            return Err(Error::Config("gel: no presses to fit the spread on".into()));
+        }
+        let reach = presses
+            .iter()
+            .flat_map(|(a, p)| p.iter().map(|q| q.0).chain(std::iter::once(*a)))
+            .fold(0f64, f64::max);
+        let mut best: Option<(Self, f64)> = None;
+        for si in 0..14 {
+            let sigma_mm = 0.1 * 1.25f64.powi(si);
+            // One sweep of approaches per width serves every gain.
+            let sweep = BallSweep::new(ball_mm, reach, sigma_mm);
+            for gi in 1..=20 {
+                let gain = 0.05 * gi as f64;
+                let (mut sum, mut n, mut ok) = (0.0, 0usize, true);
+                for (a, profile) in presses {
+                    let radii: Vec<f64> = profile.iter().map(|p| p.0).collect();
+                    let Some((_, model)) = sweep.profile(gain, *a, &radii) else {
+                        ok = false;
+                        break;
+                    };
+                    for (m, (_, t)) in model.iter().zip(profile) {
+                        sum += (m - t).abs();
+                        n += 1;
+                    }
+                }
+                if !ok || n == 0 {
+                    continue;
+                }
+                let err = sum / n as f64;
+                if best.is_none_or(|(_, e)| err < e) {
+                    best = Some((Self { sigma_mm, gain }, err));
+                }
+            }
+        }
+        best.ok_or_else(|| {
+            Error::Config("gel: no spread reaches the presses' contact radii".into())
+        })
+    }
+}
+
+/// A ball pressed at a sweep of approaches, each approach's smoothed
+/// overlap along a radius: every gain's contact and profile follow from
+/// it without blurring again.
+struct BallSweep {
+    ball_mm: f64,
+    step_mm: f64,
+    /// Approaches, mm, increasing.
+    approaches: Vec<f64>,
+    /// Per approach, the blurred positive overlap at radius `k * step_mm`.
+    blurred: Vec<Vec<f32>>,
+}
+
+impl BallSweep {
+    fn new(ball_mm: f64, reach_mm: f64, sigma_mm: f64) -> Self {
+        let extent = reach_mm.max(ball_mm) + 3.0 * sigma_mm;
+        let step_mm = (extent / 120.0).max(0.02);
+        let half = (extent / step_mm).ceil() as usize;
+        let side = 2 * half + 1;
+        let height = |r: f64| (r < ball_mm).then(|| ball_mm - (ball_mm * ball_mm - r * r).sqrt());
+        let approaches: Vec<f64> = (1..=48).map(|k| ball_mm * k as f64 / 48.0).collect();
+        let blurred = approaches
+            .iter()
+            .map(|&d| {
+                let mut plane: Vec<f32> = (0..side * side)
+                    .map(|i| {
+                        let (x, y) = (
+                            (i % side) as f64 - half as f64,
+                            (i / side) as f64 - half as f64,
+                        );
+                        height(x.hypot(y) * step_mm).map_or(0.0, |s| (d - s).max(0.0) as f32)
+                    })
+                    .collect();
+                gaussian_blur(&mut plane, side, side, sigma_mm / step_mm, Border::Zero);
+                plane[half * side + half..(half + 1) * side].to_vec()
+            })
+            .collect();
+        Self {
+            ball_mm,
+            step_mm,
+            approaches,
+            blurred,
+        }
+    }
+
+    /// The indentation along a radius at approach index `k` and `gain`.
+    fn radial(&self, k: usize, gain: f64) -> Vec<f64> {
+        let d = self.approaches[k];
+        self.blurred[k]
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| {
+                let r = i as f64 * self.step_mm;
+                let overlap = match r < self.ball_mm {
+                    true => d - (self.ball_mm - (self.ball_mm * self.ball_mm - r * r).sqrt()),
+                    false => f64::NEG_INFINITY,
+                };
+                overlap.max(gain * b as f64).max(0.0)
+            })
+            .collect()
+    }
+
+    /// The contact radius of a radial indentation at approach index `k`:
+    /// the farthest radius where the skin meets the ball (linear between
+    /// samples).
+    fn contact_mm(&self, k: usize, gain: f64) -> f64 {
+        let d = self.approaches[k];
+        let mut far = 0f64;
+        for (i, &b) in self.blurred[k].iter().enumerate() {
+            let r = i as f64 * self.step_mm;
+            if r >= self.ball_mm {
+                break;
+            }
+            let overlap = d - (self.ball_mm - (self.ball_mm * self.ball_mm - r * r).sqrt());
+            if overlap > 0.0 && overlap >= gain * b as f64 {
+                far = r;
+            }
+        }
+        far
+    }
+
+    /// The approach and radial profile at `radii_mm` for contact radius
+    /// `contact_mm`, interpolated between the two approaches around it.
+    fn profile(&self, gain: f64, contact_mm: f64, radii_mm: &[f64]) -> Option<(f64, Vec<f64>)> {
+        let contacts: Vec<f64> = (0..self.approaches.len())
+            .map(|k| self.contact_mm(k, gain))
+            .collect();
+        let k = contacts
+            .windows(2)
+            .position(|w| w[0] <= contact_mm && contact_mm <= w[1])?;
+        let span = contacts[k + 1] - contacts[k];
+        let t = if span > 0.0 {
+            (contact_mm - contacts[k]) / span
+        } else {
+            0.0
+        };
+        let (p0, p1) = (self.radial(k, gain), self.radial(k + 1, gain));
+        let at = |p: &[f64], r: f64| {
+            let x = r / self.step_mm;
+            let i = (x.floor() as usize).min(p.len() - 1);
+            let j = (i + 1).min(p.len() - 1);
+            let f = x - i as f64;
+            p[i] * (1.0 - f) + p[j] * f
+        };
+        let d = self.approaches[k] * (1.0 - t) + self.approaches[k + 1] * t;
+        Some((
+            d,
+            radii_mm
+                .iter()
+                .map(|&r| at(&p0, r) * (1.0 - t) + at(&p1, r) * t)
+                .collect(),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_ball_press_follows_the_ball_inside_and_sinks_around_it() {
+        let gel = GelResponse {
+            sigma_mm: 0.6,
+            gain: 0.7,
+        };
+        gel.check().unwrap();
+        let radii: Vec<f64> = (0..=40).map(|k| k as f64 * 0.15).collect();
+        let (approach, p) = gel.ball_profile(2.0, 1.8, &radii).unwrap();
+        // Deepest at the centre (the approach), the rim sunk, at rest far off.
+        assert!((p[0] - approach).abs() < 1e-3, "{} {approach}", p[0]);
+        let rim = p[12];
+        assert!(rim > 0.1 && rim < approach, "{rim}");
+        assert!(p[40] < 0.05 * approach, "{}", p[40]);
+        assert!(p.windows(2).all(|w| w[1] <= w[0] + 1e-6));
+        // The fit recovers the response that made a set of profiles.
+        let presses: Vec<(f64, Vec<(f64, f64)>)> = [1.6, 1.8]
+            .iter()
+            .map(|&a| {
+                let (_, prof) = gel.ball_profile(2.0, a, &radii).unwrap();
+                (a, radii.iter().copied().zip(prof).collect())
+            })
+            .collect();
+        let (fit, err) = GelResponse::fit(2.0, &presses).unwrap();
+        assert!(err < 0.03, "{err}");
+        assert!(
+            (fit.sigma_mm - 0.6).abs() < 0.2 && (fit.gain - 0.7).abs() < 0.15,
+            "{fit:?}"
+        );
+        assert!(
+            GelResponse {
+                sigma_mm: -1.0,
+                gain: 0.5
+            }
+            .check()
+            .is_err()
+        );
+        assert!(
+            GelResponse {
+                sigma_mm: 1.0,
+                gain: 1.5
+            }
+            .check()
+            .is_err()
+        );
+    }
+}
