@@ -228,6 +228,7 @@ fn densenet121_depth_network_matches_onnxruntime() {
             unit_mm: 1.0,
         },
         with_mask: true,
+        depth_maps: Default::default(),
         notes: Default::default(),
     };
     let dir = folder(

@@ -39,7 +39,13 @@ fn downscale(rgb: &[u8], w: usize, h: usize, k: usize) -> (Vec<u8>, usize, usize
 /// Evenly spaced rows (at most `n`).
 fn pick(len: usize, n: usize) -> Vec<usize> {
     let n = n.min(len);
-    (0..n).map(|i| i * len / n.max(1)).collect()
+    let run = len / n.max(1);
+    // One frame of each of `n` equal runs, at an offset that walks through
+    // the run (golden-ratio steps), so videos whose length divides the run
+    // do not show the same frame of each.
+    (0..n)
+        .map(|i| i * run + ((i as f64 * 0.618_034).fract() * run as f64) as usize)
+        .collect()
 }
 
 fn arrow(centre: (f64, f64), deg: f64, len: f64, colour: [u8; 3]) -> Vec<Mark> {

@@ -310,7 +310,10 @@ pub fn write_calibrated(
         "config".into(),
         serde_json::to_value(config).map_err(|e| Error::Invalid(e.to_string()))?,
     );
-    extra.insert("depth".into(), "indentation".into());
+    extra.insert(
+        "depth".into(),
+        tactile_core::spec::DepthMaps::Indentation.name().into(),
+    );
     extra.insert(
         "calibration".into(),
         serde_json::json!({
@@ -333,7 +336,7 @@ pub fn write_calibrated(
     };
     write_dataset(
         out,
-        &["peak_mm"],
+        &["ridge_mm", "peak_mm"],
         count,
         manifest,
         options,
@@ -365,6 +368,7 @@ pub fn write_calibrated(
                 num(frame.press_mm, 4),
                 seq.to_string(),
                 f.to_string(),
+                num(frame.ridge_mm, 5),
                 num(frame.peak_mm, 5),
             ])
         },

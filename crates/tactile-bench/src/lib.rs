@@ -16,6 +16,7 @@ pub mod latency;
 pub mod models;
 pub mod ood;
 pub mod output;
+pub mod own_sensor;
 pub mod pose;
 pub mod report;
 pub mod resolution;

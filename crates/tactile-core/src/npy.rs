@@ -50,12 +50,26 @@ fn header_end(bytes: &[u8]) -> Option<usize> {
     start.checked_add(len).filter(|&end| end <= bytes.len())
 }
 
+/// Plausible indentation of a calibrated sensor's skin, metres: a little
+/// below rest (the gel's own noise) to 2 cm in.
+pub const PLAUSIBLE_INDENTATION_M: std::ops::RangeInclusive<f32> = -0.005..=0.02;
+
 /// Read a depth map: `(width, height, metres)`; names the file on any
 /// problem: not a 2-D float32 array, larger than 8K, a header that claims
 /// more than the file holds, a value that is not a finite distance between
 /// 0 and 1 m (the pixel is named). Every size is checked before anything
 /// is allocated for it.
 pub fn read_depth_npy(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>)> {
+    read_depth_npy_of(path, crate::spec::DepthMaps::Distance)
+}
+
+/// [`read_depth_npy`] of a map holding `maps`: distances as there, or a
+/// calibrated sensor's indentation, each value within
+/// [`PLAUSIBLE_INDENTATION_M`].
+pub fn read_depth_npy_of(
+    path: impl AsRef<Path>,
+    maps: crate::spec::DepthMaps,
+) -> Result<(usize, usize, Vec<f32>)> {
     use ndarray::ArrayView2;
     use ndarray_npy::ViewNpyExt;
     let path = path.as_ref();
@@ -92,6 +106,19 @@ pub fn read_depth_npy(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>)
         )));
     }
     let v: Vec<f32> = a.iter().copied().collect();
+    if maps == crate::spec::DepthMaps::Indentation {
+        if let Some(i) = v.iter().position(|x| !PLAUSIBLE_INDENTATION_M.contains(x)) {
+            return Err(bad(format!(
+                "indentation at pixel ({}, {}) is {} m: expected a finite value from {} to {} m",
+                i % w,
+                i / w,
+                v[i],
+                PLAUSIBLE_INDENTATION_M.start(),
+                PLAUSIBLE_INDENTATION_M.end()
+            )));
+        }
+        return Ok((w, h, v));
+    }
     if let Some(i) = v
         .iter()
         .position(|x| !PLAUSIBLE_DEPTH_M.contains(x) || *x == 0.0)

@@ -134,6 +134,39 @@ pub mod visuotactile {
     }
 }
 
+/// What a visuo-tactile dataset's depth maps hold (`manifest.json`'s
+/// `"depth"`): the virtual sensor's camera-to-skin distance, or a
+/// calibrated sensor's indentation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DepthMaps {
+    /// Camera-to-skin distance (the rest dome plus the press), scored
+    /// inside the sensing window ellipse.
+    #[default]
+    Distance,
+    /// How far the skin is pushed toward the camera, 0 at rest, over the
+    /// whole frame (a calibrated GelSight-like sensor).
+    Indentation,
+}
+
+impl DepthMaps {
+    /// The manifest's word for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            DepthMaps::Distance => "distance",
+            DepthMaps::Indentation => "indentation",
+        }
+    }
+
+    /// The pixels of a `w x h` map where the skin is seen and scored.
+    pub fn window(self, w: usize, h: usize) -> Vec<bool> {
+        match self {
+            DepthMaps::Distance => visuotactile::Window::mask(w, h),
+            DepthMaps::Indentation => vec![true; w * h],
+        }
+    }
+}
+
 /// A real sensor calibrated from ball presses (`datasets.md`: the
 /// calibration layout) and the data rendered through its calibration.
 pub mod calibrated {

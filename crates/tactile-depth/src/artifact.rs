@@ -45,6 +45,10 @@ pub struct DepthArtifact {
     pub scale: DepthScale,
     /// True when the fourth input channel is the tendon mask.
     pub with_mask: bool,
+    /// What its maps hold: camera-to-skin distance (the virtual sensor) or
+    /// a calibrated sensor's indentation.
+    #[serde(default)]
+    pub depth_maps: tactile_core::spec::DepthMaps,
     /// Provenance.
     #[serde(default)]
     pub notes: serde_json::Value,

@@ -5,6 +5,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::spec::DepthMaps;
 use tactile_core::spec::visuotactile as spec;
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_grey};
 
@@ -32,8 +33,12 @@ pub struct DepthSet {
     pub height: usize,
     /// The frames, in row order.
     pub samples: Vec<DepthSample>,
-    /// Pixels inside the ellipse inscribed in the frame (the sensing window).
+    /// Pixels where the skin is seen and scored: the ellipse inscribed in
+    /// the frame for the virtual sensor's distances, every pixel for a
+    /// calibrated sensor's indentation.
     pub window: Vec<bool>,
+    /// What the depth maps hold.
+    pub depth_maps: DepthMaps,
 }
 
 /// The skin at rest (`sensors.md`): camera-to-skin distance
@@ -57,6 +62,22 @@ pub fn rest_dome_mm(w: usize, h: usize, frame_aspect: f64) -> Vec<f32> {
         }
     }
     out
+}
+
+/// How far the skin is pushed towards the camera, mm, of a `w x h` map
+/// holding `maps` of a frame of aspect `frame_aspect`: a distance map less
+/// its rest dome (what shows the tendon in a picture, where the depth
+/// itself is mostly the dome's bowl), an indentation map as it is.
+pub fn push_mm(
+    depth_mm: &[f32],
+    maps: DepthMaps,
+    (w, h): (usize, usize),
+    frame_aspect: f64,
+) -> Vec<f32> {
+    match maps {
+        DepthMaps::Distance => displacement_mm(depth_mm, w, h, frame_aspect),
+        DepthMaps::Indentation => depth_mm.to_vec(),
+    }
 }
 
 /// How far the skin is pushed towards the camera from its rest dome, mm
@@ -132,7 +153,8 @@ impl DepthSet {
             width: w,
             height: h,
             samples,
-            window: spec::Window::mask(w, h),
+            window: ds.manifest.depth_maps().window(w, h),
+            depth_maps: ds.manifest.depth_maps(),
         })
     }
 

@@ -115,12 +115,32 @@ pub fn predict_mm(estimator: &mut DepthEstimator, data: &DepthSet) -> Result<Vec
 /// Score `estimator` on every frame of `ds`; also the inference time per
 /// frame (batches of [`EVAL_BATCH`], loading excluded).
 pub fn evaluate(estimator: &mut DepthEstimator, ds: &Dataset) -> Result<(DepthScores, f64)> {
+    same_maps(estimator, ds)?;
     let rows: Vec<usize> = (0..ds.len()).collect();
     let data = DepthSet::from_dataset(ds, &rows, estimator.artifact.model.input_size)?;
     let t0 = std::time::Instant::now();
     let preds = predict_mm(estimator, &data)?;
     let ms = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
     Ok((score(&data, &preds), ms))
+}
+
+/// Refuse to score a model on maps of another kind (distances against
+/// indentation), naming both.
+fn same_maps(estimator: &DepthEstimator, ds: &Dataset) -> Result<()> {
+    let (model, data) = (estimator.artifact.depth_maps, ds.manifest.depth_maps());
+    if model != data {
+        return Err(tactile_core::Error::dataset(
+            ds.root.join("manifest.json"),
+            None,
+            format!(
+                "its depth maps hold {}, the depth model predicts {}",
+                data.name(),
+                model.name()
+            ),
+        )
+        .into());
+    }
+    Ok(())
 }
 
 /// Scores of predicted maps against a set's truth.
@@ -222,7 +242,8 @@ pub fn evaluate_folder(
     })
 }
 
-/// Heat maps of the displacement from the rest dome in mm (truth |
+/// Heat maps of how far the skin is pushed in, mm (from the rest dome, or
+/// the indentation itself) (truth |
 /// prediction, one colour scale per frame with its colour bar) of the first
 /// `frames` frames of `ds`, as `depth-000.png`, ... in `dir`; returns how
 /// many were written.
@@ -232,6 +253,7 @@ pub fn save_heat_maps(
     dir: &Path,
     frames: usize,
 ) -> Result<usize> {
+    same_maps(estimator, ds)?;
     let rows: Vec<usize> = (0..ds.len().min(frames)).collect();
     let data = DepthSet::from_dataset(ds, &rows, estimator.artifact.model.input_size)?;
     let preds = predict_mm(estimator, &data)?;
@@ -239,8 +261,9 @@ pub fn save_heat_maps(
     let aspect = ds.manifest.width as f64 / ds.manifest.height.max(1) as f64;
     let (w, h) = (data.width, data.height);
     for (i, p) in preds.iter().enumerate() {
-        let truth = crate::data::displacement_mm(&data.samples[i].depth_mm, w, h, aspect);
-        let pred = crate::data::displacement_mm(p, w, h, aspect);
+        let maps = data.depth_maps;
+        let truth = crate::data::push_mm(&data.samples[i].depth_mm, maps, (w, h), aspect);
+        let pred = crate::data::push_mm(p, maps, (w, h), aspect);
         tactile_core::plot::heat_maps_with_bar(
             dir.join(format!("depth-{i:03}.png")),
             &[&truth, &pred],

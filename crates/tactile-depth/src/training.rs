@@ -185,6 +185,7 @@ pub fn train(
         stats: stats.clone(),
         scale,
         with_mask: config.with_mask,
+        depth_maps: train_set.depth_maps,
         notes: serde_json::json!({
             "trained_on": data.root.display().to_string(),
             "device": device.name(),

@@ -26,6 +26,10 @@ pub struct GelsightArtifact {
     pub grid: WorkingGrid,
     /// Ball and scale of the calibration.
     pub sensor: SensorInfo,
+    /// Slopes integrated only where the colour change shows contact
+    /// (`None`: everywhere).
+    #[serde(default)]
+    pub contact_gate: Option<crate::inference::ContactGate>,
     /// Provenance.
     #[serde(default)]
     pub notes: serde_json::Value,
@@ -45,6 +49,9 @@ impl Artifact for GelsightArtifact {
         use tactile_core::error::in_config;
         in_config(file, self.model.check())?;
         in_config(file, self.grid.check())?;
+        if let Some(g) = &self.contact_gate {
+            in_config(file, g.check())?;
+        }
         Ok(())
     }
 }

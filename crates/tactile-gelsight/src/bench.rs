@@ -37,7 +37,7 @@ pub enum Candidate {
 
 impl Candidate {
     /// The keys of [`Self::standard`]'s candidates, in its order.
-    pub const KEYS: [&'static str; 4] = ["lookup", "mlp", "conv-slopes", "shipped"];
+    pub const KEYS: [&'static str; 5] = ["lookup", "mlp", "conv-slopes", "shipped", "gated"];
 
     /// The classic anchors and the toolkit's own models beside `base` (the
     /// shipped recipe), each with its key and its name: lookup table;
@@ -53,7 +53,11 @@ impl Candidate {
             height_weight: 0.0,
             ..base.clone()
         };
-        let [lookup, per_pixel, conv, shipped] = Self::KEYS;
+        let gated = CalibrationConfig {
+            contact_gate: true,
+            ..base.clone()
+        };
+        let [lookup, per_pixel, conv, shipped, with_gate] = Self::KEYS;
         vec![
             (
                 lookup,
@@ -76,6 +80,11 @@ impl Candidate {
                 shipped,
                 "convolutional, slope + height loss (shipped)".into(),
                 Candidate::Network(Box::new(base.clone())),
+            ),
+            (
+                with_gate,
+                "the shipped recipe, slopes gated by the colour change".into(),
+                Candidate::Network(Box::new(gated)),
             ),
         ]
     }
@@ -251,6 +260,7 @@ pub fn cross_validate(
         let test: Vec<usize> = (0..n).filter(|i| i % options.folds == fold).collect();
         let rest: Vec<usize> = (0..n).filter(|i| i % options.folds != fold).collect();
         let t0 = Instant::now();
+        let mut gate = None;
         let model = match candidate {
             Candidate::Lookup { bins } => {
                 let mut t = LookupTable::new(*bins)?;
@@ -276,6 +286,7 @@ pub fn cross_validate(
                     options.device,
                     false,
                 )?;
+                gate = fitted.gate;
                 SlopeModel::Network(Box::new(tactile_burn::runtime::BurnNetwork::new(
                     fitted.net,
                     options.device,
@@ -284,7 +295,8 @@ pub fn cross_validate(
         };
         fits.push(t0.elapsed().as_secs_f64());
         let mut rec =
-            Reconstructor::new(grid, ds.sensor.mm_per_px, model, &ds.background, &bg_path)?;
+            Reconstructor::new(grid, ds.sensor.mm_per_px, model, &ds.background, &bg_path)?
+                .with_gate(gate);
         for &i in &test {
             let p = &presses[i];
             let frame = ds.frame(i)?;
@@ -353,8 +365,18 @@ fn time_candidate(
     options: &BenchOptions,
 ) -> Result<(f64, Option<f64>)> {
     let bg_path = ds.root.join(&ds.sensor.background);
-    let rec =
-        |m: SlopeModel| Reconstructor::new(grid, ds.sensor.mm_per_px, m, &ds.background, &bg_path);
+    // Timed with a gate, as calibrated models run (its thresholds do not
+    // change the time).
+    let gate = Some(crate::inference::ContactGate {
+        from: 0.04,
+        to: 0.08,
+    });
+    let rec = |m: SlopeModel| {
+        Ok::<_, Error>(
+            Reconstructor::new(grid, ds.sensor.mm_per_px, m, &ds.background, &bg_path)?
+                .with_gate(gate),
+        )
+    };
     match candidate {
         Candidate::Lookup { bins } => {
             let ms = time_frames(
@@ -370,6 +392,7 @@ fn time_candidate(
                 model: config.model.clone(),
                 grid,
                 sensor: ds.sensor.clone(),
+                contact_gate: None,
                 notes: serde_json::Value::Null,
             };
             let bytes = tactile_onnx::Exportable::onnx(&artifact, &net)?;

@@ -43,6 +43,76 @@ impl IndentationMap {
     }
 }
 
+/// Where the skin is in contact, from the colour change alone: slopes are
+/// kept in full where the change is at least `to`, dropped where it is at
+/// most `from`, and faded between, before they are integrated. The far
+/// field's change (lighting drift, noise) then adds no slope, so it
+/// integrates to rest, as the classic reconstructions' contact mask makes
+/// it. The thresholds come from the far field of the calibration presses.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ContactGate {
+    /// Colour change (RGB distance, `[0, 1]` units) at and below which a
+    /// working pixel's slopes are dropped.
+    pub from: f32,
+    /// At and above which they are kept.
+    pub to: f32,
+}
+
+impl ContactGate {
+    /// The gate of presses seen against `bg`: from the 90th to past the
+    /// 99th percentile of the colour change beyond three contact radii
+    /// (where the skin is at rest).
+    pub fn fit(
+        bg: &PreparedBackground,
+        presses: &[&crate::training::PreparedPress],
+    ) -> Option<Self> {
+        let mut far: Vec<f32> = presses
+            .iter()
+            .flat_map(|p| {
+                bg.change(&p.frame)
+                    .into_iter()
+                    .zip(p.targets.far.clone())
+                    .filter(|(_, f)| *f > 0.5)
+                    .map(|(c, _)| c)
+            })
+            .collect();
+        if far.len() < 100 {
+            return None;
+        }
+        far.sort_by(f32::total_cmp);
+        let at = |q: f64| far[((far.len() - 1) as f64 * q) as usize];
+        let (from, p99) = (at(0.9), at(0.99));
+        Some(Self {
+            from,
+            to: p99.max(from * 1.25) + 1e-4,
+        })
+    }
+
+    /// Each working pixel's weight for a frame's colour change.
+    pub fn weights(&self, change: &[f32]) -> Vec<f32> {
+        let span = (self.to - self.from).max(1e-6);
+        change
+            .iter()
+            .map(|&c| ((c - self.from) / span).clamp(0.0, 1.0))
+            .collect()
+    }
+
+    /// Check a gate read from a file.
+    pub fn check(&self) -> tactile_core::Result<()> {
+        if !(self.from.is_finite()
+            && self.to.is_finite()
+            && 0.0 <= self.from
+            && self.from < self.to
+            && self.to <= 2.0)
+        {
+            return Err(tactile_core::Error::Config(format!(
+                "contact_gate: need 0 <= from < to <= 2, got {self:?}"
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// What gives a working frame's slopes.
 pub enum SlopeModel {
     /// A calibrated network on a runtime.
@@ -71,6 +141,7 @@ pub struct Reconstructor {
     /// every frame's: the skin at rest reconstructs to exactly 0.
     rest: (Vec<f32>, Vec<f32>),
     solver: PoissonSolver,
+    gate: Option<ContactGate>,
 }
 
 impl std::fmt::Debug for Reconstructor {
@@ -88,13 +159,20 @@ impl Reconstructor {
             tactile_onnx::load_network::<GelsightArtifact>(dir, runtime, threads)?;
         let bg_path = dir.join(BACKGROUND_FILE);
         let background = load_rgb(&bg_path)?;
-        Self::new(
+        Ok(Self::new(
             artifact.grid,
             artifact.sensor.mm_per_px,
             SlopeModel::Network(net),
             &background,
             &bg_path,
-        )
+        )?
+        .with_gate(artifact.contact_gate))
+    }
+
+    /// The same reconstructor with slopes gated by the colour change
+    /// (`None`: every slope integrated).
+    pub fn with_gate(self, gate: Option<ContactGate>) -> Self {
+        Self { gate, ..self }
     }
 
     /// A reconstructor on `grid` of a sensor of `mm_per_px` whose slopes
@@ -116,6 +194,7 @@ impl Reconstructor {
             grid,
             mm_per_px,
             model,
+            gate: None,
         };
         r.rest = r.raw_slopes(&r.background.image.clone())?;
         Ok(r)
@@ -181,11 +260,13 @@ impl Reconstructor {
         let f = self.background.matched(frame)?;
         let (gx, gy) = self.raw_slopes(&f)?;
         let step_mm = self.grid.step_mm(self.mm_per_px);
+        let weights = self.gate.map(|g| g.weights(&self.background.change(&f)));
         Ok(indentation_mm(
             &self.solver,
             (&gx, &gy),
             (&self.rest.0, &self.rest.1),
             step_mm,
+            weights.as_deref(),
         ))
     }
 
@@ -212,16 +293,22 @@ pub(crate) fn split_slopes(mut v: Vec<f32>) -> (Vec<f32>, Vec<f32>) {
 }
 
 /// The indentation on the working grid, mm: the network's `raw` slopes
-/// less its slopes at `rest`, in mm per working pixel (`step_mm`),
-/// integrated. Reconstruction and calibration's validation share it.
+/// less its slopes at `rest`, in mm per working pixel (`step_mm`), each
+/// times its `weight` (the contact gate's) when given, integrated.
+/// Reconstruction and calibration's validation share it.
 pub fn indentation_mm(
     solver: &PoissonSolver,
     raw: (&[f32], &[f32]),
     rest: (&[f32], &[f32]),
     step_mm: f32,
+    weight: Option<&[f32]>,
 ) -> Vec<f32> {
     let skin = |g: &[f32], r: &[f32]| -> Vec<f32> {
-        g.iter().zip(r).map(|(v, r)| (v - r) * step_mm).collect()
+        g.iter()
+            .zip(r)
+            .enumerate()
+            .map(|(i, (v, r))| (v - r) * step_mm * weight.map_or(1.0, |w| w[i]))
+            .collect()
     };
     solver.integrate(&skin(raw.0, rest.0), &skin(raw.1, rest.1))
 }

@@ -25,7 +25,7 @@ pub struct BallOptions {
     /// Frame pixels per working pixel (the grid the model and the Poisson solve run on).
     #[arg(long, default_value_t = CalibrationConfig::new().factor)]
     pub factor: usize,
-    /// Presses held out to stop training early (spread over the recording).
+    /// Presses held out to choose the epoch, spread over the recording (0: all presses fit; the epoch is chosen on four of them).
     #[arg(long, default_value_t = CalibrationConfig::new().val_presses)]
     pub val_presses: usize,
     /// Each channel's gain is jittered by up to this fraction in training.
@@ -37,6 +37,9 @@ pub struct BallOptions {
     /// Where the contact circles come from: auto (annotated where presses.csv gives them), found, annotated.
     #[arg(long, value_enum, default_value_t = CircleSource::Auto)]
     pub circles: CircleSource,
+    /// Integrate slopes only where the colour change shows contact (its thresholds from the presses' far field).
+    #[arg(long)]
+    pub contact_gate: bool,
     /// The schedule and the device.
     #[command(flatten)]
     #[serde(flatten)]
@@ -66,7 +69,8 @@ impl BallOptions {
             .with_val_presses(self.val_presses)
             .with_colour_jitter(self.colour_jitter)
             .with_height_weight(self.height_weight)
-            .with_circles(self.circles);
+            .with_circles(self.circles)
+            .with_contact_gate(self.contact_gate);
         c.model.check()?;
         c.schedule.check()?;
         if !(0.0..0.5).contains(&c.colour_jitter) {

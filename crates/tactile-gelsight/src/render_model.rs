@@ -223,10 +223,12 @@ fn colour_error(
     let ball_mm = ds.sensor.ball_diameter_mm / 2.0;
     let mm = ds.sensor.mm_per_px;
     let (cx0, cy0) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+    let contacts: Vec<f64> = presses.iter().map(|p| p.circle.radius_px * mm).collect();
+    let approaches = model.gel.ball_approaches(ball_mm, &contacts);
     let (mut sum, mut bare, mut n) = (0f64, 0f64, 0usize);
     for (i, p) in presses.iter().enumerate() {
         let c = p.circle;
-        let Some((approach, _)) = model.gel.ball_profile(ball_mm, c.radius_px * mm, &[]) else {
+        let Some(approach) = approaches[i] else {
             continue;
         };
         let scene = CalibratedScene {

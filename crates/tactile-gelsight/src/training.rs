@@ -51,9 +51,10 @@ pub struct CalibrationConfig {
     #[config(default = 4)]
     pub factor: usize,
     /// Epochs, batches, learning rate, seed.
-    #[config(default = "Schedule::new(4, 60, 20, 5e-3).with_lr_decay(0.99)")]
+    #[config(default = "Schedule::new(4, 48, 20, 5e-3).with_lr_decay(0.97)")]
     pub schedule: Schedule,
-    /// Presses held out to stop training early (0: none, the last epoch kept).
+    /// Presses held out to choose the epoch (0: none; it is chosen on four
+    /// training presses).
     #[config(default = 4)]
     pub val_presses: usize,
     /// Each channel's gain is jittered by up to this fraction in training.
@@ -66,6 +67,11 @@ pub struct CalibrationConfig {
     /// Where the contact circles come from.
     #[config(default = "CircleSource::Auto")]
     pub circles: CircleSource,
+    /// Integrate slopes only where the colour change shows contact
+    /// (`ContactGate`; measured in docs/calibration.md: a little less far
+    /// field, a little more shape error).
+    #[config(default = false)]
+    pub contact_gate: bool,
 }
 
 /// One press made ready: its circles, its exposure-matched working frame
@@ -294,6 +300,8 @@ pub struct Fitted {
     pub net: GradientNet,
     /// The run.
     pub summary: FitSummary,
+    /// The contact gate of its training presses.
+    pub gate: Option<crate::inference::ContactGate>,
 }
 
 /// Fit the network on `train` presses, early-stopped on `val` (by the
@@ -326,10 +334,23 @@ pub fn fit_presses(
     let bg_ad = features(&ad);
     let mut fit_cfg = FitConfig::new(&config.schedule, "sensor model (slopes)");
     fit_cfg.progress = progress;
+    // Without validation presses, the epoch is chosen on four training
+    // presses spread over the recording (scoring every one each epoch
+    // would cost as much as the training).
+    let picked: Vec<usize>;
     let (val_items, watch) = if val.is_empty() {
-        (train.len(), train)
+        picked = spread(train.len(), 4)
+            .into_iter()
+            .map(|k| train[k])
+            .collect();
+        (picked.len(), picked.as_slice())
     } else {
         (val.len(), val)
+    };
+    let train_presses: Vec<&PreparedPress> = train.iter().map(|&i| &presses[i]).collect();
+    let gate = match config.contact_gate {
+        true => crate::inference::ContactGate::fit(bg, &train_presses),
+        false => None,
     };
     let mut best: Option<GradientNet> = None;
     let (net, summary) = fit::<_, Error>(
@@ -363,7 +384,14 @@ pub fn fit_presses(
                 let p = &presses[i];
                 let b = batch(bg, &[p], 0.0, 0, &dev);
                 let (gx, gy) = slopes_of(m.forward(b.x))?;
-                let h = crate::inference::indentation_mm(&solver, (&gx, &gy), (&rx, &ry), step_mm);
+                let weights = gate.map(|g| g.weights(&bg.change(&p.frame)));
+                let h = crate::inference::indentation_mm(
+                    &solver,
+                    (&gx, &gy),
+                    (&rx, &ry),
+                    step_mm,
+                    weights.as_deref(),
+                );
                 let s = score_map(
                     &h,
                     (g.width(), g.height()),
@@ -385,6 +413,7 @@ pub fn fit_presses(
     Ok(Fitted {
         net: best.unwrap_or_else(|| net.valid()),
         summary,
+        gate,
     })
 }
 
@@ -444,24 +473,25 @@ pub fn calibrate(
     }
     let val = spread(n, config.val_presses);
     let train: Vec<usize> = (0..n).filter(|i| !val.contains(i)).collect();
+    let dir = staged.path();
+    let fitted = fit_presses(config, ds, &bg, &presses, (&train, &val), device, true)?;
     let artifact = GelsightArtifact {
         model: config.model.clone(),
         grid: bg.image.grid,
         sensor: ds.sensor.clone(),
+        contact_gate: fitted.gate,
         notes: serde_json::json!({
             "calibrated_on": ds.root.display().to_string(),
             "device": device.name(),
             "presses": n,
         }),
     };
-    let dir = staged.path();
-    let fitted = fit_presses(config, ds, &bg, &presses, (&train, &val), device, true)?;
     artifact.save(&fitted.net, dir)?;
-    std::fs::copy(
-        ds.root.join(&ds.sensor.background),
-        dir.join(BACKGROUND_FILE),
-    )
-    .map_err(|e| tactile_core::Error::io(dir.join(BACKGROUND_FILE), e))?;
+    // Copied as bytes: the folder's own file, writable whatever the
+    // source's permissions.
+    let bg_file = ds.root.join(&ds.sensor.background);
+    let bytes = std::fs::read(&bg_file).map_err(|e| tactile_core::Error::io(&bg_file, e))?;
+    tactile_core::io::write_atomic(dir.join(BACKGROUND_FILE), &bytes)?;
     let mut rec = crate::inference::Reconstructor::new(
         artifact.grid,
         artifact.sensor.mm_per_px,
@@ -470,7 +500,8 @@ pub fn calibrate(
         ))),
         &ds.background,
         &ds.root.join(&ds.sensor.background),
-    )?;
+    )?
+    .with_gate(fitted.gate);
     let sensor_name = match ds.sensor.sensor.is_empty() {
         true => ds.root.display().to_string(),
         false => ds.sensor.sensor.clone(),

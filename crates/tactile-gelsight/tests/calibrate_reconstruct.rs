@@ -122,9 +122,23 @@ fn a_calibration_reconstructs_held_out_presses_and_rest() {
         "gelsight.bpk",
         "background.png",
         "training.json",
+        "optics.json",
     ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    // The render model reproduces the presses better than the bare
+    // background does, and loads as the renderer reads it.
+    let r = &cal.render;
+    assert!(
+        r.colour_error_levels < 0.8 * r.colour_error_unpressed_levels,
+        "{r:?}"
+    );
+    assert!(
+        r.gel.gain > 0.0 && r.gel.gain <= 1.0 && r.gel.sigma_mm > 0.0,
+        "{r:?}"
+    );
+    let unit = datasets_synth::calibrated::CalibratedSensor::load(&out).unwrap();
+    assert_eq!((unit.width(), unit.height()), (640, 480));
     // Held-out presses: the cap's shape within 0.15 mm after a short fit.
     for s in &cal.validation {
         assert!(s.shape_mae_mm < 0.15, "{s:?}");

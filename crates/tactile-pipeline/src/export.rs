@@ -46,6 +46,11 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
         ("segmenter", export::<SegmenterArtifact>(dir)?)
     } else if DepthArtifact::is_in(dir) {
         ("depth network", export::<DepthArtifact>(dir)?)
+    } else if tactile_gelsight::GelsightArtifact::is_in(dir) {
+        (
+            "calibrated sensor model",
+            export::<tactile_gelsight::GelsightArtifact>(dir)?,
+        )
     } else if part == Part::Autoencoder {
         let l = CaeArtifact::load(dir, &DeviceKind::Flex.device())?;
         let px = l.artifact.model.input_px;

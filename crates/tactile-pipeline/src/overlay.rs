@@ -68,6 +68,8 @@ pub struct TendonView {
     pub depth_mm: Vec<f32>,
     /// The depth network's input width and height.
     pub depth_size: [usize; 2],
+    /// What the depth map holds.
+    pub depth_maps: tactile_core::spec::DepthMaps,
     /// The frame's width / height (the depth map may be stretched).
     pub frame_aspect: f64,
 }
@@ -159,7 +161,12 @@ impl TendonView {
                 }
             }
         }
-        let disp = tactile_depth::data::displacement_mm(&self.depth_mm, dw, dh, self.frame_aspect);
+        let disp = tactile_depth::data::push_mm(
+            &self.depth_mm,
+            self.depth_maps,
+            (dw, dh),
+            self.frame_aspect,
+        );
         let (lo, hi) = tactile_core::plot::colour_range(disp.iter().copied());
         let t = |v: f64| (v - lo) / (hi - lo);
         for y in 0..s {

@@ -46,6 +46,11 @@ pub struct FrameRecord {
     pub depth_mean_mm: Option<f32>,
     /// Largest camera-to-skin distance inside the sensing window, mm.
     pub depth_max_mm: Option<f32>,
+    /// What the depth fields hold: `indentation` for a calibrated
+    /// sensor's depth network (then over the whole frame: how far the skin
+    /// is pushed in), else the camera-to-skin distance.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_maps: Option<tactile_core::spec::DepthMaps>,
     /// The detector's own threshold decision (before any hysteresis).
     pub tendon_raw: bool,
     /// How far the frame's input statistics lie from the training frames',
@@ -102,6 +107,7 @@ impl FrameRecord {
             depth_min_mm: None,
             depth_mean_mm: None,
             depth_max_mm: None,
+            depth_maps: None,
             tendon_raw: false,
             input_score: None,
             out_of_distribution: false,
@@ -141,11 +147,12 @@ impl PalpationModels {
             )));
         }
         let [w, h] = depth.artifact.model.input_size;
+        let window = depth.artifact.depth_maps.window(w, h);
         Ok(Self {
             detector: TendonDetector::load(dir.join("detector"), runtime, threads)?,
             segmenter: TendonSegmenter::load(dir.join("segmenter"), runtime, threads)?,
             depth,
-            window: tactile_core::spec::visuotactile::Window::mask(w, h),
+            window,
         })
     }
 }
@@ -224,6 +231,18 @@ impl Pipeline {
         // calibrated size; another size is refused, naming the frame).
         let mut views = FrameViews::default();
         if let Some(sensor) = self.sensor.as_mut() {
+            // A frame of another size is not this sensor's: with palpation
+            // models it is answered as foreign (no tendon, no depth), as
+            // the detector's profile answers frames of other sensors; a
+            // calibration alone refuses it, naming the frame.
+            let g = sensor.grid();
+            let calibrated_size = (g.frame_width, g.frame_height);
+            if self.palpation.is_some() && (frame.width(), frame.height()) != calibrated_size {
+                rec.out_of_distribution = true;
+                rec.gate = Some(tactile_detect::Gate::Foreign);
+                rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+                return Ok((rec, None));
+            }
             let t = Instant::now();
             let map = sensor.reconstruct(frame, Path::new(name))?;
             rec.ms_reconstruct = Some(1e3 * t.elapsed().as_secs_f64());
@@ -286,6 +305,7 @@ impl Pipeline {
         rec.depth_min_mm = mm.iter().copied().reduce(f32::min);
         rec.depth_max_mm = mm.iter().copied().reduce(f32::max);
         rec.depth_mean_mm = Some(mm.iter().sum::<f32>() / mm.len().max(1) as f32);
+        rec.depth_maps = Some(models.depth.artifact.depth_maps);
         rec.ms_depth = Some(1e3 * t2.elapsed().as_secs_f64());
         rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
         views.tendon = Some(TendonView {
@@ -295,6 +315,7 @@ impl Pipeline {
             direction,
             depth_mm,
             depth_size: models.depth.artifact.model.input_size,
+            depth_maps: models.depth.artifact.depth_maps,
             frame_aspect: frame.width() as f64 / frame.height().max(1) as f64,
         });
         Ok((rec, Some(views)))

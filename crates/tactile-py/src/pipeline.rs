@@ -372,8 +372,10 @@ impl FrameResult {
         }
     }
 
-    /// Camera-to-skin distance, `(H, W)` float32 metres at the frame's
-    /// resolution; None on frames gated out by the detector.
+    /// The depth network's map, `(H, W)` float32 metres at the frame's
+    /// resolution: camera-to-skin distance, or for a calibrated sensor's
+    /// depth network (`depth_maps == "indentation"`) the skin's
+    /// indentation; None on frames gated out by the detector.
     #[getter]
     fn depth_m<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f32>>>> {
         let (w, h) = self.size;
@@ -435,7 +437,14 @@ impl FrameResult {
         self.record.contact_area_mm2
     }
 
-    /// Smallest, mean and largest camera-to-skin distance inside the
+    /// What `depth_m` holds on this frame: "distance" or "indentation"
+    /// (None when the depth network did not run).
+    #[getter]
+    fn depth_maps(&self) -> Option<&'static str> {
+        self.record.depth_maps.map(|m| m.name())
+    }
+
+    /// Smallest, mean and largest camera-to-skin distance (or indentation) inside the
     /// sensing window, mm; None when gated out.
     #[getter]
     fn depth_mm_stats(&self) -> Option<(f32, f32, f32)> {

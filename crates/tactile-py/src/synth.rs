@@ -315,6 +315,10 @@ pub(crate) fn synth_gelsight(
         PyArray1::from_vec(py, samples.iter().map(|s| s.0.press_mm).collect()),
     )?;
     d.set_item(
+        "ridge_mm",
+        PyArray1::from_vec(py, samples.iter().map(|s| s.0.ridge_mm).collect()),
+    )?;
+    d.set_item(
         "peak_mm",
         PyArray1::from_vec(py, samples.iter().map(|s| s.0.peak_mm).collect()),
     )?;

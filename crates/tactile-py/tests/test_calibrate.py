@@ -107,3 +107,26 @@ def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path
         pipe.process(np.zeros((240, 320, 3), np.uint8))
     with pytest.raises(ValueError, match="no detector"):
         pipe.detector_frame(frame)
+
+
+def test_the_calibrated_sensor_renders_its_own_labelled_frames(model: Path, tmp_path: Path):
+    # The calibration wrote a render model beside the sensor model.
+    assert (model / "optics.json").is_file()
+    d = tactile.synth.gelsight(model, count=6, seed=9, frames_per_sequence=3, tendon_share=1.0)
+    assert d["frames"].shape == (6, 480, 640, 3) and d["frames"].dtype == np.uint8
+    assert d["indentation_m"].shape == (6, 480, 640) and d["indentation_m"].dtype == np.float32
+    pushed = d["indentation_m"] > 0.03e-3
+    for i in range(6):
+        # The mask is where the tendon pushes the skin in past 0.03 mm.
+        np.testing.assert_array_equal(d["masks"][i], pushed[i])
+        assert d["tendon"][i] == pushed[i].any()
+        assert np.isnan(d["direction_deg"][i]) != bool(d["tendon"][i])
+    # The same frames as the dataset the same call writes.
+    out = tactile.synth.gelsight(model, count=6, seed=9, out=tmp_path / "set", frames_per_sequence=3, tendon_share=1.0)
+    ds = tactile.Dataset(out)
+    assert len(ds) == 6 and ds.width == 640 and ds.height == 480
+    np.testing.assert_array_equal(tactile.read_rgb(out / "frames" / "000004.png"), d["frames"][4])
+    with pytest.raises(ValueError, match="press_mm"):
+        tactile.synth.gelsight(model, count=2, press_mm=(1.0, 0.5))
+    with pytest.raises(Exception, match="render model"):
+        tactile.synth.gelsight(tmp_path, count=2)

@@ -36,6 +36,32 @@ pub(crate) enum BenchCmd {
     /// (lookup table, per-pixel MLP, the toolkit's networks), speed and
     /// robustness; writes docs/calibration.md.
     Calibration(CalibrationArgs),
+    /// A calibrated sensor's own pipeline (scripts/own-sensor.sh trains it):
+    /// held-out renders, the real ball presses, frames of other sensors and
+    /// the loop's times; writes docs/own-sensor.md.
+    OwnSensor(OwnSensorArgs),
+}
+
+#[derive(Args)]
+pub(crate) struct OwnSensorArgs {
+    /// The calibrated sensor's folder with detector/, segmenter/ and depth/.
+    #[arg(long, default_value = "models/gelsight-r15")]
+    models: PathBuf,
+    /// Held-out renders of the sensor (tactile synth gelsight, a seed no training used).
+    #[arg(long)]
+    test: PathBuf,
+    /// The real ball presses (the calibration layout).
+    #[arg(long, default_value = "../shared/real/gelsight-ball")]
+    ball: PathBuf,
+    /// The loop's step times (JSON: step name to seconds; scripts/own-sensor.sh writes it).
+    #[arg(long)]
+    times: Option<PathBuf>,
+    /// Where the networks run.
+    #[arg(long, value_enum, default_value_t = tactile_burn::Runtime::Onnx)]
+    runtime: tactile_burn::Runtime,
+    /// The page; its numbers (JSON) go beside it.
+    #[arg(long, default_value = "docs/own-sensor.md")]
+    out: PathBuf,
 }
 
 #[derive(Args)]
@@ -157,6 +183,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             &a.out
         }
         BenchCmd::Calibration(a) => &Some(a.out.clone()),
+        BenchCmd::OwnSensor(a) => &Some(a.out.clone()),
     };
     if let Some(out) = out {
         tactile_core::dataset::check_output_file(out, &[])?;
@@ -217,6 +244,19 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Segmenter(a) => show(a, bench_segmenters)?,
         BenchCmd::Depth(a) => show(a, bench_depth)?,
         BenchCmd::Pose(a) => show(a, tactile_bench::pose::bench_pose)?,
+        BenchCmd::OwnSensor(a) => {
+            let b = tactile_bench::own_sensor::OwnSensorBench {
+                models: a.models,
+                test: a.test,
+                ball: a.ball,
+                times: a.times,
+                runtime: a.runtime,
+            };
+            let r = tactile_bench::own_sensor::bench_own_sensor(&b)?;
+            let command: Vec<String> = std::env::args().skip(1).collect();
+            let md = r.write(&b, &format!("tactile {}", command.join(" ")), &a.out)?;
+            say_raw!("{md}");
+        }
         BenchCmd::Calibration(a) => {
             if !(0.0..0.9).contains(&a.exposure) {
                 anyhow::bail!("--exposure must be in [0, 0.9), got {}", a.exposure);

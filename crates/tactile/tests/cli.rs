@@ -2040,3 +2040,159 @@ fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
         "{msg}"
     );
 }
+
+/// The own-sensor loop in miniature: calibrate, render the sensor's own
+/// frames, train the three palpation models on them, run the pipeline on
+/// the folder; frames of another size are foreign, not errors.
+#[test]
+fn a_calibrated_sensor_trains_and_runs_its_own_pipeline() {
+    let tmp = tempfile::tempdir().unwrap();
+    let presses = tmp.path().join("presses");
+    ball_subset(&presses);
+    let m = tmp.path().join("model");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let run = |args: &[&str]| {
+        let (ok, msg) = tactile(args);
+        assert!(ok, "tactile {}: {msg}", args.join(" "));
+        msg
+    };
+    run(&[
+        "calibrate",
+        "ball",
+        "--data",
+        &s(&presses),
+        "--out",
+        &s(&m),
+        "--factor",
+        "8",
+        "--val-presses",
+        "2",
+        "--max-epochs",
+        "2",
+        "--kernels",
+        "3,1,1",
+    ]);
+    assert!(m.join("optics.json").is_file());
+    // The alias refuses what the calibrated sensor does not take.
+    let data = tmp.path().join("renders");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--sensor",
+        &s(&m),
+        "--count",
+        "4",
+        "--width",
+        "320",
+        "--out",
+        &s(&data),
+    ]);
+    assert!(!ok && msg.contains("--width"), "{msg}");
+    assert!(!data.exists());
+    run(&[
+        "synth",
+        "visuotactile",
+        "--sensor",
+        &s(&m),
+        "--sequences",
+        "6",
+        "--frames-per-sequence",
+        "8",
+        "--press-mm",
+        "0.3,1.2",
+        "--seed",
+        "4",
+        "--out",
+        &s(&data),
+    ]);
+    let manifest = std::fs::read_to_string(data.join("manifest.json")).unwrap();
+    assert!(
+        manifest.contains("\"depth\": \"indentation\""),
+        "{manifest}"
+    );
+    run(&[
+        "train",
+        "detector",
+        "--data",
+        &s(&data),
+        "--out",
+        &s(&m.join("detector")),
+        "--input",
+        "40x30",
+        "--width",
+        "0.25",
+        "--max-epochs",
+        "1",
+        "--soft-labels",
+        "0.2",
+    ]);
+    run(&[
+        "train",
+        "segmenter",
+        "--data",
+        &s(&data),
+        "--out",
+        &s(&m.join("segmenter")),
+        "--side",
+        "32",
+        "--max-epochs",
+        "1",
+    ]);
+    run(&[
+        "train",
+        "depth",
+        "--data",
+        &s(&data),
+        "--out",
+        &s(&m.join("depth")),
+        "--encoder",
+        "small",
+        "--input",
+        "64x32",
+        "--max-epochs",
+        "1",
+    ]);
+    let depth = std::fs::read_to_string(m.join("depth/depth.json")).unwrap();
+    assert!(depth.contains("\"depth_maps\": \"indentation\""), "{depth}");
+    // The whole pipeline on the sensor's frames: every record has the
+    // calibration's indentation; tendon frames the depth network's, as
+    // indentation.
+    let msg = run(&[
+        "run",
+        "--models",
+        &s(&m),
+        "--data",
+        &s(&data),
+        "--out",
+        "-",
+        "--runtime",
+        "burn-flex",
+    ]);
+    let recs: Vec<serde_json::Value> = msg
+        .lines()
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .filter(|v: &serde_json::Value| v.get("frame").is_some())
+        .collect();
+    assert_eq!(recs.len(), 48, "{msg}");
+    for r in &recs {
+        assert!(r["indentation_peak_mm"].as_f64().is_some(), "{r}");
+        if r["tendon"] == true {
+            assert_eq!(r["depth_maps"], "indentation", "{r}");
+        }
+    }
+    // A frame of another size is foreign to this sensor, not an error.
+    let odd = tmp.path().join("odd");
+    std::fs::create_dir_all(&odd).unwrap();
+    write_png(&odd.join("small.png"), 320, 240);
+    let msg = run(&["run", "--models", &s(&m), "--data", &s(&odd), "--out", "-"]);
+    let rec: serde_json::Value = msg
+        .lines()
+        .find_map(|l| {
+            serde_json::from_str(l)
+                .ok()
+                .filter(|v: &serde_json::Value| v.get("frame").is_some())
+        })
+        .unwrap();
+    assert_eq!(rec["out_of_distribution"], true, "{rec}");
+    assert_eq!(rec["tendon"], false);
+}

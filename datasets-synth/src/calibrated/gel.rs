@@ -59,8 +59,8 @@ impl GelResponse {
         (w, h): (usize, usize),
         step_mm: f64,
     ) -> Vec<f32> {
-        let mut spread: Vec<f32> = overlap_mm.iter().map(|v| v.max(0.0)).collect();
-        gaussian_blur(&mut spread, w, h, self.sigma_mm / step_mm, Border::Zero);
+        let positive: Vec<f32> = overlap_mm.iter().map(|v| v.max(0.0)).collect();
+        let spread = smooth(positive, (w, h), self.sigma_mm / step_mm);
         overlap_mm
             .iter()
             .zip(&spread)
@@ -80,6 +80,18 @@ impl GelResponse {
         let reach = radii_mm.iter().copied().fold(contact_mm, f64::max);
         let sweep = BallSweep::new(ball_mm, reach, self.sigma_mm);
         sweep.profile(self.gain, contact_mm, radii_mm)
+    }
+
+    /// The approach of a ball of radius `ball_mm` pressed to each of
+    /// `contacts_mm` (`None` where this response cannot reach it): one sweep
+    /// of approaches serves them all.
+    pub fn ball_approaches(&self, ball_mm: f64, contacts_mm: &[f64]) -> Vec<Option<f64>> {
+        let reach = contacts_mm.iter().copied().fold(0f64, f64::max);
+        let sweep = BallSweep::new(ball_mm, reach, self.sigma_mm);
+        contacts_mm
+            .iter()
+            .map(|&a| sweep.profile(self.gain, a, &[]).map(|p| p.0))
+            .collect()
     }
 
     /// The response whose ball presses best match reconstructed ones:
@@ -129,6 +141,40 @@ impl GelResponse {
     }
 }
 
+/// A Gaussian blur of width `sigma_px` (zeros beyond the edges); a wide one
+/// runs on a grid shrunk to about a third of it and is enlarged back
+/// (both through `image`'s triangle filter), which a smooth field allows.
+fn smooth(plane: Vec<f32>, (w, h): (usize, usize), sigma_px: f64) -> Vec<f32> {
+    use image::imageops::{FilterType, resize};
+    use image::{ImageBuffer, Luma};
+    let k = ((sigma_px / 3.0).floor() as usize)
+        .clamp(1, 16)
+        .min(w.min(h) / 4)
+        .max(1);
+    if k == 1 {
+        let mut out = plane;
+        gaussian_blur(&mut out, w, h, sigma_px, Border::Zero);
+        return out;
+    }
+    let (sw, sh) = (w.div_ceil(k), h.div_ceil(k));
+    let Some(full) = ImageBuffer::<Luma<f32>, Vec<f32>>::from_raw(w as u32, h as u32, plane) else {
+        return vec![0.0; w * h];
+    };
+    let small = resize(&full, sw as u32, sh as u32, FilterType::Triangle);
+    let mut v = small.into_raw();
+    gaussian_blur(
+        &mut v,
+        sw,
+        sh,
+        sigma_px * sw as f64 / w as f64,
+        Border::Zero,
+    );
+    let Some(small) = ImageBuffer::<Luma<f32>, Vec<f32>>::from_raw(sw as u32, sh as u32, v) else {
+        return vec![0.0; w * h];
+    };
+    resize(&small, w as u32, h as u32, FilterType::Triangle).into_raw()
+}
+
 /// A ball pressed at a sweep of approaches, each approach's smoothed
 /// overlap along a radius: every gain's contact and profile follow from
 /// it without blurring again.
@@ -152,7 +198,7 @@ impl BallSweep {
         let blurred = approaches
             .iter()
             .map(|&d| {
-                let mut plane: Vec<f32> = (0..side * side)
+                let plane: Vec<f32> = (0..side * side)
                     .map(|i| {
                         let (x, y) = (
                             (i % side) as f64 - half as f64,
@@ -161,7 +207,7 @@ impl BallSweep {
                         height(x.hypot(y) * step_mm).map_or(0.0, |s| (d - s).max(0.0) as f32)
                     })
                     .collect();
-                gaussian_blur(&mut plane, side, side, sigma_mm / step_mm, Border::Zero);
+                let plane = smooth(plane, (side, side), sigma_mm / step_mm);
                 plane[half * side + half..(half + 1) * side].to_vec()
             })
             .collect();

@@ -33,6 +33,9 @@ pub struct CalibratedFrame {
     pub press_mm: f64,
     /// The deepest indentation, mm.
     pub peak_mm: f64,
+    /// A tendon's deepest push, mm (0 for other objects): what the
+    /// `tendon` label thresholds, for soft labels.
+    pub ridge_mm: f64,
 }
 
 /// The skin's indentation under `contact` at `press_mm` on `sensor`
@@ -134,6 +137,7 @@ pub fn render(
         .map(|&v| if is_tendon && v > min { 255 } else { 0 })
         .collect();
     let tendon = mask.iter().any(|&m| m > 0);
+    let peak_mm = ind.iter().copied().fold(0f32, f32::max) as f64;
     CalibratedFrame {
         width: w,
         height: h,
@@ -143,6 +147,7 @@ pub fn render(
         tendon,
         direction_deg: tendon.then(|| scene.contact.direction_deg()).flatten(),
         press_mm: press_mm.max(0.0),
-        peak_mm: ind.iter().copied().fold(0f32, f32::max) as f64,
+        peak_mm,
+        ridge_mm: if is_tendon { peak_mm } else { 0.0 },
     }
 }

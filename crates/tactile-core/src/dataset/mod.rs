@@ -104,6 +104,17 @@ pub struct Manifest {
     pub extra: serde_json::Map<String, serde_json::Value>,
 }
 
+impl Manifest {
+    /// What the depth maps hold: `"depth": "indentation"` for a calibrated
+    /// sensor's data, else the virtual sensor's camera-to-skin distance.
+    pub fn depth_maps(&self) -> crate::spec::DepthMaps {
+        match self.extra.get("depth").and_then(|v| v.as_str()) {
+            Some("indentation") => crate::spec::DepthMaps::Indentation,
+            _ => crate::spec::DepthMaps::Distance,
+        }
+    }
+}
+
 /// One row of `labels.csv`: the raw cells by column name, with its line.
 #[derive(Debug, Clone)]
 pub struct LabelRow {
@@ -359,7 +370,7 @@ impl Dataset {
     /// refused (naming the file) when its size is not the manifest's.
     pub fn load_depth_m(&self, i: usize) -> Result<(usize, usize, Vec<f32>)> {
         let path = self.path_of(i, "depth")?;
-        let (w, h, d) = crate::npy::read_depth_npy(&path)?;
+        let (w, h, d) = crate::npy::read_depth_npy_of(&path, self.manifest.depth_maps())?;
         self.expect_frame_size(&path, w, h)?;
         Ok((w, h, d))
     }

@@ -42,6 +42,8 @@ class FrameResult:
     @property
     def depth_m(self) -> Optional[npt.NDArray[np.float32]]: ...
     @property
+    def depth_maps(self) -> Optional[str]: ...
+    @property
     def depth_mm_stats(self) -> Optional[Tuple[float, float, float]]: ...
     @property
     def indentation_m(self) -> Optional[npt.NDArray[np.float32]]: ...
@@ -472,11 +474,12 @@ def calibrate_ball(
     colour_jitter: float = 0.03,
     height_weight: float = 4.0,
     circles: str = "auto",
-    max_epochs: int = 60,
+    contact_gate: bool = False,
+    max_epochs: int = 48,
     patience: int = 20,
     batch_size: int = 4,
     lr: Optional[float] = None,
-    lr_decay: float = 0.99,
+    lr_decay: float = 0.97,
     seed: int = 42,
     device: str = "flex",
     resume: bool = False,

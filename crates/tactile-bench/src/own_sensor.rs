@@ -1,0 +1,411 @@
+//! `docs/own-sensor.md`: a calibrated sensor's own palpation pipeline
+//! measured where it matters: its detector, segmenter and depth network on
+//! renders no training used; the real ball presses (no tendon on any; the
+//! depth network's indentation scored against the ball as the calibration
+//! is); frames of other sensors flagged as foreign; and the time of each
+//! step of the loop that made it (`scripts/own-sensor.sh`).
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+use tactile_burn::Runtime;
+use tactile_core::dataset::Dataset;
+use tactile_core::image_io::{RgbImage, rgb_image};
+use tactile_depth::DepthEstimator;
+use tactile_gelsight::eval::{PressScore, score_full};
+use tactile_gelsight::training::{CircleSource, prepare_presses};
+use tactile_gelsight::{BallPresses, IndentationMap, Reconstructor};
+use tactile_pipeline::palpation::Pipeline;
+
+use crate::Result;
+
+/// What the page is made from.
+#[derive(Debug, Clone)]
+pub struct OwnSensorBench {
+    /// The calibrated sensor's folder with `detector/`, `segmenter/`, `depth/`.
+    pub models: PathBuf,
+    /// Held-out renders of the sensor (`tactile synth gelsight`).
+    pub test: PathBuf,
+    /// The real ball presses (the calibration layout).
+    pub ball: PathBuf,
+    /// The loop's step times (JSON object: step name to seconds), if any.
+    pub times: Option<PathBuf>,
+    /// Where the networks run.
+    pub runtime: Runtime,
+}
+
+/// One real ball press.
+#[derive(Debug, Clone, Serialize)]
+pub struct BallRow {
+    /// Its frame.
+    pub file: String,
+    /// The pipeline's decision.
+    pub tendon: bool,
+    /// The detector's probability.
+    pub probability: f32,
+    /// Flagged as foreign.
+    pub foreign: bool,
+    /// The depth network's indentation against the ball.
+    pub network: PressScore,
+    /// The calibration's reconstruction against the ball.
+    pub calibration: PressScore,
+}
+
+/// One set of frames through the pipeline.
+#[derive(Debug, Clone, Serialize)]
+pub struct ForeignRow {
+    /// What the frames are.
+    pub set: String,
+    /// Whether they are the sensor's own.
+    pub own: bool,
+    /// Frames.
+    pub frames: usize,
+    /// Flagged as foreign.
+    pub flagged: usize,
+    /// Reported as showing a tendon.
+    pub tendon: usize,
+}
+
+/// The page's numbers.
+#[derive(Debug, Clone, Serialize)]
+pub struct OwnSensorReport {
+    /// Each step of the loop and its seconds.
+    pub times: Vec<(String, f64)>,
+    /// Frames rendered for training (from the times file).
+    pub frames: Option<u64>,
+    /// The detector on the held-out renders.
+    pub detector: tactile_detect::DetectorScores,
+    /// The segmenter on their tendon frames.
+    pub segmenter: tactile_segment::eval::SegmenterScores,
+    /// The depth network on them (indentation over the whole frame).
+    pub depth: tactile_depth::eval::DepthScores,
+    /// Its ms per frame.
+    pub depth_ms: f64,
+    /// The calibration's own reconstruction on the same renders: mean
+    /// |error| over the frame, mm.
+    pub reconstruction_mae_mm: f64,
+    /// Every real ball press.
+    pub ball: Vec<BallRow>,
+    /// The pipeline's rate over the held-out renders, frames/s.
+    pub pipeline_fps: f64,
+    /// Frames of this and other sensors.
+    pub foreign: Vec<ForeignRow>,
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (s, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    s / n.max(1) as f64
+}
+
+impl OwnSensorReport {
+    /// Mean shape and far-field errors over the ball presses: (network,
+    /// calibration), each `(shape, far)`.
+    pub fn ball_errors(&self) -> ((f64, f64), (f64, f64)) {
+        let b = &self.ball;
+        (
+            (
+                mean(b.iter().map(|r| r.network.shape_mae_mm)),
+                mean(b.iter().map(|r| r.network.far_field_mm)),
+            ),
+            (
+                mean(b.iter().map(|r| r.calibration.shape_mae_mm)),
+                mean(b.iter().map(|r| r.calibration.far_field_mm)),
+            ),
+        )
+    }
+}
+
+/// The depth network's indentation over a whole frame, metres.
+fn network_map(depth: &mut DepthEstimator, frame: &RgbImage) -> Result<IndentationMap> {
+    let mm = depth.depth_mm(frame, None)?;
+    let [w, h] = depth.artifact.model.input_size;
+    let big = tactile_preprocess::enlarge_f32(&mm, (w, h), (frame.width(), frame.height()))
+        .map_err(tactile_pipeline::Error::from)?;
+    Ok(IndentationMap {
+        width: frame.width(),
+        height: frame.height(),
+        indentation_m: big.iter().map(|v| v * 1e-3).collect(),
+    })
+}
+
+/// The frames of a dataset, in row order.
+fn frames_of(ds: &Dataset, max: usize) -> Result<Vec<RgbImage>> {
+    (0..ds.len().min(max))
+        .map(|i| Ok(ds.load_rgb(i)?))
+        .collect()
+}
+
+/// `frames` with each pixel's channels changed by `f`.
+fn recolour(
+    frames: &[RgbImage],
+    f: impl Fn(usize, usize, [u8; 3]) -> [u8; 3],
+) -> Result<Vec<RgbImage>> {
+    frames
+        .iter()
+        .map(|img| {
+            let (w, h) = (img.width(), img.height());
+            let mut out = Vec::with_capacity(w * h * 3);
+            for (i, p) in img.as_slice().chunks_exact(3).enumerate() {
+                out.extend(f(i % w, i / w, [p[0], p[1], p[2]]));
+            }
+            Ok(rgb_image(w, h, out)?)
+        })
+        .collect()
+}
+
+/// Measure everything on the page.
+pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
+    let times: Vec<(String, f64)> = match &b.times {
+        Some(p) => {
+            let v: serde_json::Map<String, serde_json::Value> =
+                tactile_core::io::read_json_limited(p, 1 << 20)?;
+            v.iter()
+                .filter(|(k, _)| *k != "frames")
+                .filter_map(|(k, v)| v.as_f64().map(|s| (k.clone(), s)))
+                .collect()
+        }
+        None => vec![],
+    };
+    let frames = match &b.times {
+        Some(p) => tactile_core::io::read_json_limited::<serde_json::Value>(p, 1 << 20)?
+            .get("frames")
+            .and_then(|v| v.as_u64()),
+        None => None,
+    };
+    let m = &b.models;
+    tactile_core::note!(
+        "detector, segmenter and depth network on {}",
+        b.test.display()
+    );
+    let detector = tactile_detect::eval::evaluate_folder(
+        &m.join("detector"),
+        &b.test,
+        b.runtime,
+        &Default::default(),
+    )?;
+    let test = Dataset::open(&b.test)?;
+    let mut seg = tactile_segment::TendonSegmenter::load(m.join("segmenter"), b.runtime, 0)?;
+    let segmenter = tactile_segment::eval::evaluate(&mut seg, &test)?;
+    let mut depth = DepthEstimator::load(m.join("depth"), b.runtime, 0)?;
+    let (depth_scores, depth_ms) = tactile_depth::eval::evaluate(&mut depth, &test)?;
+    // The calibration's reconstruction on the same renders.
+    let mut rec = Reconstructor::load(m, b.runtime, 0)?;
+    let mut errs = Vec::with_capacity(test.len());
+    for i in 0..test.len() {
+        tactile_core::interrupt::check()?;
+        let frame = test.load_rgb(i)?;
+        let map = rec.reconstruct(&frame, &test.path_of(i, "file")?)?;
+        let (_, _, truth) = test.load_depth_m(i)?;
+        errs.push(mean(
+            map.indentation_m
+                .iter()
+                .zip(&truth)
+                .map(|(p, t)| ((p - t) as f64 * 1e3).abs()),
+        ));
+    }
+    let reconstruction_mae_mm = mean(errs.into_iter());
+    // The real ball presses.
+    tactile_core::note!("the real ball presses in {}", b.ball.display());
+    let presses = BallPresses::open(&b.ball)?;
+    let (_, prepared) = prepare_presses(&presses, 4, CircleSource::Auto)?;
+    let mut pipeline = Pipeline::load(m, b.runtime, 1)?;
+    let mut ball = Vec::with_capacity(prepared.len());
+    for (i, p) in prepared.iter().enumerate() {
+        let frame = presses.frame(i)?;
+        let cap = p.cap(&presses);
+        let r = pipeline.process(&p.file, &frame)?;
+        let net = network_map(&mut depth, &frame)?;
+        let cal = rec.reconstruct(&frame, &presses.root.join(&p.file))?;
+        ball.push(BallRow {
+            file: p.file.clone(),
+            tendon: r.tendon,
+            probability: r.score,
+            foreign: r.out_of_distribution,
+            network: score_full(&net, &cap, &p.file),
+            calibration: score_full(&cal, &cap, &p.file),
+        });
+    }
+    // The pipeline's rate, and frames of this and other sensors.
+    let own = frames_of(&test, 400)?;
+    let t0 = std::time::Instant::now();
+    for f in &own {
+        pipeline.process("frame", f)?;
+    }
+    let pipeline_fps = own.len() as f64 / t0.elapsed().as_secs_f64().max(1e-9);
+    let real: Vec<RgbImage> = (0..presses.presses.len())
+        .map(|i| presses.frame(i))
+        .collect::<tactile_gelsight::Result<_>>()?;
+    let (w, h) = (own[0].width(), own[0].height());
+    let virtual_frames = {
+        use datasets_synth::{VisuotactileConfig, visuotactile};
+        let vc = VisuotactileConfig {
+            frames_per_sequence: 10,
+            ..Default::default()
+        };
+        let mut v = Vec::new();
+        for s in 0..6 {
+            for f in 0..10 {
+                let (_, fr) = visuotactile::sample(&vc, 990, s, f);
+                v.push(rgb_image(fr.width, fr.height, fr.rgb)?);
+            }
+        }
+        v
+    };
+    let stretched = virtual_frames
+        .iter()
+        .map(|f| {
+            let r = tactile_preprocess::visuo::resize_rgb(f, w, h)
+                .map_err(tactile_pipeline::Error::from)?;
+            Ok(rgb_image(w, h, r.to_bytes())?)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let sample: Vec<RgbImage> = own.iter().step_by(5).cloned().collect();
+    let sets: Vec<(String, bool, Vec<RgbImage>)> = vec![
+        ("held-out renders of this sensor".into(), true, own.clone()),
+        ("the real ball presses (this sensor)".into(), true, real),
+        (
+            "virtual visuo-tactile sensor, 640x360".into(),
+            false,
+            virtual_frames,
+        ),
+        (
+            format!("virtual visuo-tactile sensor stretched to {w}x{h}"),
+            false,
+            stretched,
+        ),
+        (
+            "another unit: LEDs in another order (channels rotated)".into(),
+            false,
+            recolour(&sample, |_, _, [r, g, b]| [g, b, r])?,
+        ),
+        (
+            "another unit: warmer light, falling off to one side".into(),
+            false,
+            recolour(&sample, |x, _, [r, g, b]| {
+                let k = 1.1 - 0.5 * x as f32 / w as f32;
+                [
+                    (r as f32 * k * 1.25).min(255.0) as u8,
+                    (g as f32 * k).min(255.0) as u8,
+                    (b as f32 * k * 0.7).min(255.0) as u8,
+                ]
+            })?,
+        ),
+        (
+            "another unit: a darker, flatter gel (half the contrast)".into(),
+            false,
+            recolour(&sample, |_, _, p| p.map(|v| (v as f32 * 0.5 + 40.0) as u8))?,
+        ),
+    ];
+    let mut foreign = Vec::new();
+    for (set, is_own, frames) in sets {
+        let (mut flagged, mut tendon) = (0, 0);
+        for f in &frames {
+            tactile_core::interrupt::check()?;
+            let r = pipeline.process("frame", f)?;
+            flagged += usize::from(r.out_of_distribution);
+            tendon += usize::from(r.tendon);
+        }
+        foreign.push(ForeignRow {
+            set,
+            own: is_own,
+            frames: frames.len(),
+            flagged,
+            tendon,
+        });
+    }
+    Ok(OwnSensorReport {
+        times,
+        frames,
+        detector,
+        segmenter,
+        depth: depth_scores,
+        depth_ms,
+        reconstruction_mae_mm,
+        ball,
+        pipeline_fps,
+        foreign,
+    })
+}
+
+impl OwnSensorReport {
+    /// The page (its numbers as JSON beside it).
+    pub fn write(&self, b: &OwnSensorBench, command: &str, out: &Path) -> Result<String> {
+        let mut md = String::new();
+        md.push_str("# Your own sensor: from ball presses to a trained palpation pipeline\n\n");
+        md.push_str(&format!(
+            "Generated by `{command}` after `bash scripts/own-sensor.sh` (which runs the loop below and then this). Machine: {}; {} runtime.\n\n",
+            tactile_core::bench::Machine::detect().describe(),
+            b.runtime
+        ));
+        md.push_str("A real GelSight R1.5 (`");
+        md.push_str(&b.ball.display().to_string());
+        md.push_str("`: 32 presses of a 4 mm ball) is calibrated (`tactile calibrate ball`: the sensor model that reconstructs its skin, and its render model: colour change by slope and place, and the gel's spread around a contact, both fitted on the presses). Its own palpation videos are then rendered through that calibration over its own background (`tactile synth gelsight`: tendons of 1.5-3.5 mm on straight and curved lines pressed 0.05-1.5 mm at any angle and offset; spheres, punches and plate edges as negatives; frames without contact; exposure, noise, blur, optics and gel varied per video), with exact masks, directions and indentation maps, and paper B's three models are trained on them with the toolkit's trainers and exported to ONNX. The folder `");
+        md.push_str(&b.models.display().to_string());
+        md.push_str("` then holds the calibration with `detector/`, `segmenter/` and `depth/` beside it, and `tactile run --models` on it runs the whole pipeline on that sensor's frames, its depth in indentation.\n\n## The loop, step by step\n\n| step | seconds |\n|---|---|\n");
+        for (k, s) in &self.times {
+            md.push_str(&format!("| {k} | {s:.0} |\n"));
+        }
+        let total: f64 = self.times.iter().map(|t| t.1).sum();
+        md.push_str(&format!(
+            "| **total** | **{total:.0}** ({:.1} min) |\n\n",
+            total / 60.0
+        ));
+        if let Some(n) = self.frames {
+            md.push_str(&format!("{n} frames were rendered for training.\n\n"));
+        }
+        let d = &self.detector.all;
+        md.push_str(&format!(
+            "## On renders no training used\n\n`{}`: {} frames ({} with a tendon).\n\n| model | measure | value |\n|---|---|---|\n| detector | accuracy | {:.4} |\n| detector | precision / recall | {:.4} / {:.4} |\n| detector | onset and release frames: accuracy | {:.4} |\n",
+            b.test.display(),
+            d.frames,
+            d.true_pos + d.false_neg,
+            d.accuracy,
+            d.precision,
+            d.recall,
+            self.detector.onset_release.accuracy
+        ));
+        for p in &self.segmenter.paths {
+            md.push_str(&format!(
+                "| segmenter, {} ({} frames) | IoU / direction median / p90 / coverage | {:.3} / {:.2} deg / {:.2} deg / {:.1} % |\n",
+                p.path,
+                p.frames,
+                p.mean_iou,
+                p.direction.median_deg,
+                p.direction.p90_deg,
+                100.0 * p.direction.coverage
+            ));
+        }
+        md.push_str(&format!(
+            "| depth network | indentation MAE over the frame / over the tendon | {:.4} mm / {} |\n| calibration's reconstruction (photometric, Poisson) | indentation MAE over the frame | {:.4} mm |\n| pipeline | frames/s over these frames (decoding excluded) | {:.1} |\n\n",
+            self.depth.mae_mm,
+            self.depth
+                .mae_tendon_mm
+                .map_or("-".into(), |v| format!("{v:.4} mm")),
+            self.reconstruction_mae_mm,
+            self.pipeline_fps
+        ));
+        let ((ns, nf), (cs, cf)) = self.ball_errors();
+        let tendons = self.ball.iter().filter(|r| r.tendon).count();
+        let flagged = self.ball.iter().filter(|r| r.foreign).count();
+        md.push_str(&format!(
+            "## On the real ball presses\n\nEvery press through the pipeline: {tendons} of {} reported as a tendon, {flagged} flagged as foreign (largest tendon probability {:.3}). The depth network (trained on renders only) and the calibration's reconstruction, each scored against the ball as in `docs/calibration.md` (shape inside the contact with its median offset removed, and the far field beyond three contact radii); the calibration was fitted on these presses, the network never saw a real frame.\n\n| model | shape (mm) | far field (mm) |\n|---|---|---|\n| depth network | {ns:.3} | {nf:.4} |\n| calibration's reconstruction | {cs:.3} | {cf:.4} |\n| ratio | {:.2}x | {:.2}x |\n\n",
+            self.ball.len(),
+            self.ball.iter().map(|r| r.probability).fold(0f32, f32::max),
+            ns / cs.max(1e-9),
+            nf / cf.max(1e-9)
+        ));
+        md.push_str("## Frames of other sensors\n\nThe detector's input profile (its training frames' statistics) flags frames that are not this sensor's; they get no tendon, direction or depth. Other units are stood in for by this sensor's held-out renders with another LED order, another light, or a flatter gel.\n\n| frames | own sensor | frames | flagged | tendon reported |\n|---|---|---|---|---|\n");
+        for r in &self.foreign {
+            md.push_str(&format!(
+                "| {} | {} | {} | {} | {} |\n",
+                r.set,
+                if r.own { "yes" } else { "no" },
+                r.frames,
+                r.flagged,
+                r.tendon
+            ));
+        }
+        crate::output::write_markdown_and_json(out, &md, self)?;
+        Ok(md)
+    }
+}

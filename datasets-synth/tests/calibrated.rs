@@ -1,0 +1,156 @@
+#![allow(clippy::unwrap_used)]
+//! A calibrated sensor's rendered data: the same frames for the same seed,
+//! and labels that agree with each other and with the indentation map.
+
+use datasets_synth::calibrated::{
+    CalibratedConfig, CalibratedSensor, Contact, GelResponse, OpticsSample, RenderModel,
+    SensorOptics, sample,
+};
+use datasets_synth::{WriteOptions, write_calibrated};
+use tactile_core::spec::DepthMaps;
+use tactile_core::spec::calibrated::CONTACT_MIN_INDENTATION_MM;
+
+/// A small sensor whose colour follows the slope: red with x, green with
+/// y, blue against x.
+fn sensor() -> CalibratedSensor {
+    let (w, h) = (160, 120);
+    let mut samples = vec![];
+    for k in 0..60_000usize {
+        let (x, y) = ((k % w) as f64, ((k / w) % h) as f64);
+        let gx = ((k * 7919) % 1000) as f64 / 250.0 - 2.0;
+        let gy = ((k * 104_729) % 1000) as f64 / 250.0 - 2.0;
+        samples.push(OpticsSample {
+            x,
+            y,
+            gx,
+            gy,
+            change: [(0.1 * gx) as f32, (0.1 * gy) as f32, (-0.05 * gx) as f32],
+            weight: 1.0,
+        });
+    }
+    let optics = SensorOptics::fit((w, h), 17, 2.0, &samples).unwrap();
+    CalibratedSensor {
+        dir: "test-sensor".into(),
+        model: RenderModel {
+            sensor: "test unit".into(),
+            mm_per_px: 0.06,
+            optics,
+            gel: GelResponse {
+                sigma_mm: 0.5,
+                gain: 0.7,
+            },
+            fit: serde_json::Value::Null,
+        },
+        background: vec![128; w * h * 3],
+    }
+}
+
+fn config() -> CalibratedConfig {
+    CalibratedConfig {
+        frames_per_sequence: 6,
+        ..CalibratedConfig::default()
+    }
+}
+
+#[test]
+fn the_same_seed_renders_the_same_frames() {
+    let s = sensor();
+    let c = config();
+    let (a_scene, a) = sample(&s, &c, 11, 3, 2);
+    let (b_scene, b) = sample(&s, &c, 11, 3, 2);
+    assert_eq!(a_scene, b_scene);
+    assert_eq!(a.rgb, b.rgb);
+    assert_eq!(a.indentation_m, b.indentation_m);
+    let (_, other) = sample(&s, &c, 12, 3, 2);
+    assert_ne!(a.rgb, other.rgb);
+}
+
+#[test]
+fn mask_direction_and_indentation_agree() {
+    let s = sensor();
+    let c = config();
+    let (mut tendons, mut others) = (0, 0);
+    for seq in 0..40u64 {
+        for f in [0, 2, 3] {
+            let (scene, fr) = sample(&s, &c, 5, seq, f);
+            assert_eq!(fr.rgb.len(), 160 * 120 * 3);
+            assert!(fr.indentation_m.iter().all(|v| v.is_finite() && *v >= 0.0));
+            let min = (CONTACT_MIN_INDENTATION_MM * 1e-3) as f32;
+            let pushed: Vec<bool> = fr.indentation_m.iter().map(|&v| v > min).collect();
+            match &scene.contact {
+                Contact::Tendon { .. } => {
+                    let mask: Vec<bool> = fr.mask.iter().map(|&m| m == 255).collect();
+                    assert_eq!(
+                        mask, pushed,
+                        "the mask is where a tendon pushes past 0.03 mm"
+                    );
+                    assert_eq!(fr.tendon, pushed.iter().any(|&p| p));
+                    assert_eq!(fr.direction_deg.is_some(), fr.tendon);
+                    if let Some(d) = fr.direction_deg {
+                        assert!((0.0..180.0).contains(&d));
+                        assert_eq!(Some(d), scene.contact.direction_deg());
+                    }
+                    assert!((fr.ridge_mm - fr.peak_mm).abs() < 1e-9);
+                    tendons += usize::from(fr.tendon);
+                }
+                _ => {
+                    assert!(!fr.tendon && fr.direction_deg.is_none());
+                    assert!(fr.mask.iter().all(|&m| m == 0));
+                    assert_eq!(fr.ridge_mm, 0.0);
+                    others += 1;
+                }
+            }
+            if fr.press_mm == 0.0 {
+                assert!(
+                    fr.indentation_m.iter().all(|&v| v == 0.0),
+                    "no press, no push"
+                );
+            }
+            let peak = fr.indentation_m.iter().copied().fold(0f32, f32::max) as f64 * 1e3;
+            assert!((peak - fr.peak_mm).abs() < 1e-4);
+            // The skin never sinks deeper than the object pushes it.
+            assert!(
+                fr.peak_mm <= fr.press_mm + 1e-6,
+                "{} > {}",
+                fr.peak_mm,
+                fr.press_mm
+            );
+        }
+    }
+    assert!(
+        tendons > 10 && others > 5,
+        "{tendons} tendon and {others} other frames"
+    );
+}
+
+#[test]
+fn a_dataset_says_its_depth_maps_are_indentation() {
+    let s = sensor();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("set");
+    write_calibrated(&s, &config(), 8, 3, &out, WriteOptions::default()).unwrap();
+    let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
+    assert_eq!(ds.manifest.depth_maps(), DepthMaps::Indentation);
+    assert_eq!((ds.manifest.width, ds.manifest.height), (160, 120));
+    assert!(ds.manifest.sensor_spec.contains("test unit"));
+    let (_, frame) = sample(&s, &config(), 3, 1, 1);
+    let (w, h, m) = ds.load_depth_m(7).unwrap();
+    assert_eq!((w, h), (160, 120));
+    assert_eq!(m, frame.indentation_m);
+    // A bad range is refused before anything is written.
+    let bad = CalibratedConfig {
+        press_mm: datasets_synth::Range::new(0.5, 0.1),
+        ..config()
+    };
+    let e = write_calibrated(
+        &s,
+        &bad,
+        4,
+        1,
+        &tmp.path().join("bad"),
+        WriteOptions::default(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("press_mm"), "{e}");
+    assert!(!tmp.path().join("bad").exists());
+}

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# The own-sensor loop (docs/own-sensor.md): a real GelSight calibrated from
+# its ball presses, its own palpation videos rendered through that
+# calibration, the detector, segmenter and depth network trained on them,
+# each exported to ONNX; then the page measures everything (held-out
+# renders, the real ball presses, frames of other sensors) with each
+# step's time.
+#
+#   bash scripts/own-sensor.sh [MODELS_DIR] [DATA_DIR]
+#
+# MODELS_DIR (default models/gelsight-r15) is built in a staging folder and
+# moved into place when every step has finished; DATA_DIR (default
+# data/own-sensor) holds the rendered sets. Step times go to
+# DATA_DIR/times.json, the page to docs/own-sensor.md.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+models="${1:-models/gelsight-r15}"
+data="${2:-data/own-sensor}"
+ball="${TACTILE_BALL:-../shared/real/gelsight-ball}"
+if [ -z "${ORT_DYLIB_PATH:-}" ]; then
+    eval "$(bash scripts/install-ort.sh)"
+    export ORT_DYLIB_PATH
+fi
+cargo build --release -p tactile
+target="${CARGO_TARGET_DIR:-target}"
+tactile="$target/release/tactile"
+stage="$(dirname "$models")/.$(basename "$models").new.$$"
+trap 'rm -rf "$stage"' EXIT
+rm -rf "$data"
+mkdir -p "$data"
+times="$data/times.json.tmp"
+echo "{" > "$times"
+step() {
+    local name="$1"
+    shift
+    echo "== $name: $*" >&2
+    local t0
+    t0=$(date +%s.%N)
+    "$@"
+    echo "  \"$name\": $(echo "$(date +%s.%N) - $t0" | bc)," >> "$times"
+}
+step calibrate "$tactile" calibrate ball --data "$ball" --out "$stage" --val-presses 0
+# Many short videos: the detector generalises with the number of scenes
+# far more than with frames of one scene (docs/own-sensor.md).
+step render "$tactile" synth gelsight --sensor "$stage" --sequences 1800 --frames-per-sequence 5 \
+    --flat-share 0.1 --seed 100 --out "$data/train" --preview "$data/train.png"
+step detector "$tactile" train detector --data "$data/train" --out "$stage/detector" \
+    --input 80x60 --input-bits 16 --soft-labels 0.2 --max-epochs 12 --patience 4
+step segmenter "$tactile" train segmenter --data "$data/train" --out "$stage/segmenter" \
+    --copies 1 --max-epochs 4 --patience 2
+step depth "$tactile" train depth --data "$data/train" --out "$stage/depth" \
+    --encoder small --input 128x96 --max-epochs 3 --patience 2
+step export bash -c "for m in detector segmenter depth; do '$tactile' export --model '$stage/'\$m --out '$stage/'\$m/\$m.onnx; done && '$tactile' export --model '$stage' --out '$stage/gelsight.onnx'"
+echo "  \"frames\": 9000" >> "$times"
+echo "}" >> "$times"
+mv "$times" "$data/times.json"
+# Held-out renders for the page (a seed no training set used).
+"$tactile" synth gelsight --sensor "$stage" --sequences 200 --frames-per-sequence 5 --seed 200 --out "$data/test"
+rm -rf "$models.old"
+if [ -e "$models" ]; then mv "$models" "$models.old"; fi
+mv "$stage" "$models"
+rm -rf "$models.old"
+"$tactile" bench own-sensor --models "$models" --test "$data/test" --ball "$ball" --times "$data/times.json" --out docs/own-sensor.md
