@@ -405,7 +405,67 @@ impl OwnSensorReport {
                 r.tendon
             ));
         }
+        // Pictures: real presses beside the same presses rendered through
+        // the calibration, and held-out renders with their labels.
+        let stem = out
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        let dir = out.parent().unwrap_or(Path::new("."));
+        let press_png = format!("{stem}-presses.png");
+        let renders_png = format!("{stem}-renders.png");
+        press_figure(b, &dir.join(&press_png))?;
+        datasets_synth::preview::contact_sheet(&b.test, &dir.join(&renders_png), 12)?;
+        md.push_str(&format!(
+            "\n## Pictures\n\nReal ball presses (top) and the same presses rendered through the calibration (bottom: the ball at the annotated circle, pressed as the gel's fit says; no noise):\n\n![presses]({press_png})\n\nHeld-out renders with their labels (mask in red, direction as an arrow):\n\n![renders]({renders_png})\n"
+        ));
         crate::output::write_markdown_and_json(out, &md, self)?;
         Ok(md)
     }
+}
+
+/// Three real presses above the same presses rendered through the
+/// calibration in `b.models`, at half size.
+fn press_figure(b: &OwnSensorBench, path: &Path) -> Result<()> {
+    let presses = BallPresses::open(&b.ball)?;
+    let unit = datasets_synth::calibrated::CalibratedSensor::load(&b.models)?;
+    let picked: Vec<usize> = (0..presses.presses.len().min(3)).collect();
+    let circles: Vec<_> = picked
+        .iter()
+        .filter_map(|&i| presses.presses[i].annotated)
+        .collect();
+    if circles.len() != picked.len() {
+        return Ok(());
+    }
+    let rendered = tactile_gelsight::render_model::render_presses(
+        &unit.model,
+        &presses.background,
+        presses.sensor.ball_diameter_mm / 2.0,
+        &circles,
+    );
+    let (w, h) = presses.size();
+    let (hw, hh) = (w / 2, h / 2);
+    let mut out = vec![255u8; 3 * hw * 2 * hh * 3];
+    let width = 3 * hw;
+    for (k, &i) in picked.iter().enumerate() {
+        let real = presses.frame(i)?;
+        let rows = [Some(real.as_slice().to_vec()), rendered[k].clone()];
+        for (r, img) in rows.iter().enumerate() {
+            let Some(img) = img else { continue };
+            for y in 0..hh {
+                for x in 0..hw {
+                    let s = ((2 * y) * w + 2 * x) * 3;
+                    let d = ((r * hh + y) * width + k * hw + x) * 3;
+                    out[d..d + 3].copy_from_slice(&img[s..s + 3]);
+                }
+            }
+        }
+    }
+    Ok(tactile_core::image_io::save_rgb_png(
+        path,
+        width,
+        2 * hh,
+        &out,
+    )?)
 }

@@ -199,6 +199,54 @@ pub fn fit_render_model(
     Ok((model, fit))
 }
 
+/// Each of `circles` (a ball of the calibration's radius pressed to that
+/// contact) rendered through `model` over `background`, without noise or
+/// jitter: what the sensor would show, as RGB bytes of the frame's size
+/// (`None` where the gel cannot reach that contact).
+pub fn render_presses(
+    model: &RenderModel,
+    background: &RgbImage,
+    ball_mm: f64,
+    circles: &[crate::layout::Circle],
+) -> Vec<Option<Vec<u8>>> {
+    let (w, h) = (background.width(), background.height());
+    let sensor = CalibratedSensor {
+        dir: Default::default(),
+        model: model.clone(),
+        background: background.as_slice().to_vec(),
+    };
+    let config = CalibratedConfig {
+        exposure_jitter: datasets_synth::Range::fixed(0.0),
+        noise_sigma: datasets_synth::Range::fixed(0.0),
+        ..CalibratedConfig::default()
+    };
+    let mm = model.mm_per_px;
+    let (cx0, cy0) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+    let contacts: Vec<f64> = circles.iter().map(|c| c.radius_px * mm).collect();
+    let approaches = model.gel.ball_approaches(ball_mm, &contacts);
+    circles
+        .iter()
+        .zip(approaches)
+        .enumerate()
+        .map(|(i, (c, approach))| {
+            let approach = approach?;
+            let scene = CalibratedScene {
+                contact: Contact::Sphere {
+                    radius_mm: ball_mm,
+                    centre: ((c.centre_x_px - cx0) * mm, (c.centre_y_px - cy0) * mm),
+                },
+                peak_press_mm: approach,
+                optics_gain: [1.0; 3],
+                gel_sigma_factor: 1.0,
+                blur_px: 0.0,
+                shift_px: (0, 0),
+            };
+            let mut rng = tactile_core::rng::SampleRng::new(0, 0, i as u64);
+            Some(render(&sensor, &config, &scene, approach, &mut rng).rgb)
+        })
+        .collect()
+}
+
 /// Render every press through `model` (the ball where its circle is, no
 /// noise or jitter) and compare with the real frame within two contact
 /// radii: mean |difference| in 8-bit levels, and the same for the bare
@@ -210,40 +258,16 @@ fn colour_error(
     model: &RenderModel,
 ) -> Result<(f64, f64)> {
     let (w, h) = ds.size();
-    let sensor = CalibratedSensor {
-        dir: ds.root.clone(),
-        model: model.clone(),
-        background: ds.background.as_slice().to_vec(),
-    };
-    let config = CalibratedConfig {
-        exposure_jitter: datasets_synth::Range::fixed(0.0),
-        noise_sigma: datasets_synth::Range::fixed(0.0),
-        ..CalibratedConfig::default()
-    };
-    let ball_mm = ds.sensor.ball_diameter_mm / 2.0;
-    let mm = ds.sensor.mm_per_px;
-    let (cx0, cy0) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
-    let contacts: Vec<f64> = presses.iter().map(|p| p.circle.radius_px * mm).collect();
-    let approaches = model.gel.ball_approaches(ball_mm, &contacts);
+    let circles: Vec<_> = presses.iter().map(|p| p.circle).collect();
+    let rendered = render_presses(
+        model,
+        &ds.background,
+        ds.sensor.ball_diameter_mm / 2.0,
+        &circles,
+    );
     let (mut sum, mut bare, mut n) = (0f64, 0f64, 0usize);
-    for (i, p) in presses.iter().enumerate() {
-        let c = p.circle;
-        let Some(approach) = approaches[i] else {
-            continue;
-        };
-        let scene = CalibratedScene {
-            contact: Contact::Sphere {
-                radius_mm: ball_mm,
-                centre: ((c.centre_x_px - cx0) * mm, (c.centre_y_px - cy0) * mm),
-            },
-            peak_press_mm: approach,
-            optics_gain: [1.0; 3],
-            gel_sigma_factor: 1.0,
-            blur_px: 0.0,
-            shift_px: (0, 0),
-        };
-        let mut rng = tactile_core::rng::SampleRng::new(0, 0, i as u64);
-        let out = render(&sensor, &config, &scene, approach, &mut rng);
+    for (i, (c, out)) in circles.iter().zip(rendered).enumerate() {
+        let Some(out) = out else { continue };
         let frame = ds.frame(i)?;
         let gain = exposure_gain(bg, &frame)?;
         let real = frame.as_slice();
@@ -256,7 +280,7 @@ fn colour_error(
                 for (ch, g) in gain.iter().enumerate() {
                     let k = (y * w + x) * 3 + ch;
                     let r = real[k] as f64 * *g as f64;
-                    sum += (out.rgb[k] as f64 - r).abs();
+                    sum += (out[k] as f64 - r).abs();
                     bare += (back[k] as f64 - r).abs();
                     n += 1;
                 }

@@ -130,3 +130,18 @@ def test_the_calibrated_sensor_renders_its_own_labelled_frames(model: Path, tmp_
         tactile.synth.gelsight(model, count=2, press_mm=(1.0, 0.5))
     with pytest.raises(Exception, match="render model"):
         tactile.synth.gelsight(tmp_path, count=2)
+
+
+def test_the_shipped_gelsight_pipeline_sees_no_tendon_on_real_presses(root: Path):
+    models = root / "models" / "gelsight-r15"
+    pipe = tactile.Pipeline(models, "onnx")
+    assert pipe.calibrated and pipe.threshold is not None
+    for f in sorted((BALL / "frames").glob("*.png"))[:6]:
+        r = pipe.process(tactile.read_rgb(f))
+        # A ball is no tendon; the frame is the sensor's own; the skin is
+        # pushed in by the ball.
+        assert not r.tendon and not r.out_of_distribution, f
+        assert r.indentation_peak_mm > 0.5
+    # A frame of another sensor's size is foreign, not an error.
+    r = pipe.process(np.full((360, 640, 3), 128, np.uint8))
+    assert r.out_of_distribution and not r.tendon
