@@ -13,7 +13,7 @@ use tactile_core::image_io::{save_grey_png, save_rgb_png};
 
 use crate::Result;
 
-use crate::calibrated::{self, CalibratedConfig, CalibratedSensor};
+use crate::calibrated::{self, CalibratedConfig, CalibratedSensor, RealFrames};
 use crate::tactip::{self, FRAME_PX, TactipConfig};
 use crate::visuotactile::{self, NATIVE, VisuotactileConfig};
 
@@ -301,10 +301,15 @@ pub fn write_calibrated(
     seed: u64,
     out: &Path,
     options: WriteOptions,
+    real: &RealFrames,
 ) -> Result<PathBuf> {
     config.validate()?;
     check_count(count)?;
+    real.validate(sensor)?;
+    let total = count + real.rows();
+    check_count(total)?;
     let fps = config.frames_per_sequence;
+    let rendered_sequences = count.div_ceil(fps.max(1));
     let mut extra = serde_json::Map::new();
     extra.insert(
         "config".into(),
@@ -322,7 +327,16 @@ pub fn write_calibrated(
             "mm_per_px": sensor.model.mm_per_px,
         }),
     );
-    extra.insert("sequences".into(), count.div_ceil(fps).into());
+    extra.insert(
+        "sequences".into(),
+        (rendered_sequences + real.frames.len()).into(),
+    );
+    if !real.frames.is_empty() {
+        extra.insert(
+            "real_frames".into(),
+            serde_json::to_value(real.record()).map_err(|e| Error::Invalid(e.to_string()))?,
+        );
+    }
     let manifest = Manifest {
         format: FORMAT.into(),
         kind: DatasetKind::Visuotactile,
@@ -331,17 +345,29 @@ pub fn write_calibrated(
         height: sensor.height() as u32,
         generator: GENERATOR.into(),
         seed: Some(seed),
-        count,
+        count: total,
         extra,
     };
     write_dataset(
         out,
         &["ridge_mm", "peak_mm"],
-        count,
+        total,
         manifest,
         options,
         &["frames", "masks", "depth"],
         |root, i| {
+            if i >= count {
+                let size = (sensor.width(), sensor.height());
+                return write_real_row(
+                    root,
+                    real,
+                    config,
+                    size,
+                    seed,
+                    (i, i - count),
+                    rendered_sequences,
+                );
+            }
             let (seq, f) = (i / fps.max(1), i % fps.max(1));
             let (scene, frame) = calibrated::sample(sensor, config, seed, seq as u64, f);
             let stem = format!("{i:06}");
@@ -373,4 +399,43 @@ pub fn write_calibrated(
             ])
         },
     )
+}
+
+/// Row `i` of a calibrated set of a `width` x `height` sensor, real row `r`: copy `r % copies` of a real
+/// frame, its own video after the `rendered` renders' videos.
+fn write_real_row(
+    root: &Path,
+    real: &RealFrames,
+    config: &CalibratedConfig,
+    (width, height): (usize, usize),
+    seed: u64,
+    (i, r): (usize, usize),
+    rendered: usize,
+) -> tactile_core::Result<Vec<String>> {
+    let copies = real.copies.max(1);
+    let (frame, rgb) = real.copy(config, seed, r);
+    let n = width * height;
+    let stem = format!("{i:06}");
+    let (file, mask, depth) = (
+        format!("frames/{stem}.png"),
+        format!("masks/{stem}.png"),
+        format!("depth/{stem}.npy"),
+    );
+    save_rgb_png(root.join(&file), width, height, &rgb)?;
+    save_grey_png(root.join(&mask), width, height, &vec![0u8; n])?;
+    crate::npy::write_depth_npy(root.join(&depth), width, height, &frame.indentation_m)?;
+    let peak_mm = frame.indentation_m.iter().copied().fold(0f32, f32::max) as f64 * 1e3;
+    Ok(vec![
+        file,
+        mask,
+        depth,
+        "0".into(),
+        String::new(),
+        calibrated::REAL_PRESS_PATH.to_string(),
+        num(peak_mm, 4),
+        (rendered + r / copies).to_string(),
+        (r % copies).to_string(),
+        num(0.0, 5),
+        num(peak_mm, 5),
+    ])
 }

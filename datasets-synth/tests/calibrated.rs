@@ -3,8 +3,8 @@
 //! and labels that agree with each other and with the indentation map.
 
 use datasets_synth::calibrated::{
-    CalibratedConfig, CalibratedSensor, Contact, GelResponse, OpticsSample, RenderModel,
-    SensorOptics, sample,
+    CalibratedConfig, CalibratedSensor, Contact, GelResponse, OpticsSample, REAL_PRESS_PATH,
+    RealFrame, RealFrames, RenderModel, SensorOptics, sample,
 };
 use datasets_synth::{WriteOptions, write_calibrated};
 use tactile_core::spec::DepthMaps;
@@ -128,7 +128,16 @@ fn a_dataset_says_its_depth_maps_are_indentation() {
     let s = sensor();
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("set");
-    write_calibrated(&s, &config(), 8, 3, &out, WriteOptions::default()).unwrap();
+    write_calibrated(
+        &s,
+        &config(),
+        8,
+        3,
+        &out,
+        WriteOptions::default(),
+        &RealFrames::default(),
+    )
+    .unwrap();
     let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
     assert_eq!(ds.manifest.depth_maps(), DepthMaps::Indentation);
     assert_eq!((ds.manifest.width, ds.manifest.height), (160, 120));
@@ -149,8 +158,71 @@ fn a_dataset_says_its_depth_maps_are_indentation() {
         1,
         &tmp.path().join("bad"),
         WriteOptions::default(),
+        &RealFrames::default(),
     )
     .unwrap_err();
     assert!(e.to_string().contains("press_mm"), "{e}");
     assert!(!tmp.path().join("bad").exists());
+}
+
+#[test]
+fn real_frames_join_a_set_as_negatives_with_their_own_labels() {
+    let s = sensor();
+    let (w, h) = (s.width(), s.height());
+    let frame = |k: u8| RealFrame {
+        file: format!("frames/press_{k:02}.png"),
+        rgb: vec![100 + k; 3 * w * h],
+        indentation_m: (0..w * h).map(|i| (i % 7) as f32 * 1e-4).collect(),
+    };
+    let real = RealFrames {
+        folder: "presses".into(),
+        frames: vec![frame(1), frame(2)],
+        held_out: vec!["frames/press_03.png".into()],
+        copies: 3,
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("set");
+    write_calibrated(&s, &config(), 8, 3, &out, WriteOptions::default(), &real).unwrap();
+    let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
+    assert_eq!(ds.manifest.count, 8 + 6);
+    let record = &ds.manifest.extra["real_frames"];
+    assert_eq!(record["used"].as_array().unwrap().len(), 2);
+    assert_eq!(record["held_out"][0], "frames/press_03.png");
+    let text = std::fs::read_to_string(out.join("labels.csv")).unwrap();
+    let rows: Vec<&str> = text.lines().skip(1).collect();
+    let real_rows: Vec<&str> = rows[8..].to_vec();
+    assert_eq!(real_rows.len(), 6);
+    let mut sequences = std::collections::BTreeSet::new();
+    for (k, r) in real_rows.iter().enumerate() {
+        let c: Vec<&str> = r.split(',').collect();
+        // No tendon, no direction, the real path, one video per frame.
+        assert_eq!((c[3], c[4], c[5]), ("0", "", REAL_PRESS_PATH), "{r}");
+        assert_eq!(c[8], (k % 3).to_string());
+        sequences.insert(c[7].to_string());
+        let (_, _, m) = ds.load_depth_m(8 + k).unwrap();
+        assert_eq!(m, real.frames[k / 3].indentation_m);
+    }
+    assert_eq!(sequences.len(), 2);
+    // Copies differ (exposure and noise), the same for the same seed.
+    let a = tactile_core::image_io::load_rgb(out.join("frames/000008.png")).unwrap();
+    let b = tactile_core::image_io::load_rgb(out.join("frames/000009.png")).unwrap();
+    assert_ne!(a.as_slice(), b.as_slice());
+    let again = tmp.path().join("again");
+    write_calibrated(&s, &config(), 8, 3, &again, WriteOptions::default(), &real).unwrap();
+    let c = tactile_core::image_io::load_rgb(again.join("frames/000008.png")).unwrap();
+    assert_eq!(a.as_slice(), c.as_slice());
+    // A frame of another size is refused, naming it.
+    let mut bad = real.clone();
+    bad.frames[1].rgb.truncate(10);
+    let e = write_calibrated(
+        &s,
+        &config(),
+        8,
+        3,
+        &tmp.path().join("bad"),
+        WriteOptions::default(),
+        &bad,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("press_02"), "{e}");
 }

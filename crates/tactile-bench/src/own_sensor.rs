@@ -32,6 +32,9 @@ pub struct OwnSensorBench {
     pub times: Option<PathBuf>,
     /// Where the networks run.
     pub runtime: Runtime,
+    /// The training set, when real presses joined it (its manifest's
+    /// `real_frames` says which): those presses are scored apart.
+    pub train: Option<PathBuf>,
 }
 
 /// One real ball press.
@@ -45,6 +48,8 @@ pub struct BallRow {
     pub probability: f32,
     /// Flagged as foreign.
     pub foreign: bool,
+    /// The press joined the training set (as a real negative).
+    pub in_training: bool,
     /// The depth network's indentation against the ball.
     pub network: PressScore,
     /// The calibration's reconstruction against the ball.
@@ -101,7 +106,46 @@ impl OwnSensorReport {
     /// Mean shape and far-field errors over the ball presses: (network,
     /// calibration), each `(shape, far)`.
     pub fn ball_errors(&self) -> ((f64, f64), (f64, f64)) {
-        let b = &self.ball;
+        Self::errors_of(&self.ball.iter().collect::<Vec<_>>())
+    }
+
+    /// The page's section on the real presses: every press, and apart
+    /// those that never joined training when some did.
+    fn ball_section(&self) -> String {
+        let all: Vec<&BallRow> = self.ball.iter().collect();
+        let held: Vec<&BallRow> = self.ball.iter().filter(|r| !r.in_training).collect();
+        let joined = all.len() - held.len();
+        let mut md = String::from("## On the real ball presses\n\n");
+        md.push_str(&if joined > 0 {
+            format!("{joined} of the {} presses joined the training set as real negatives (as copies under the renders' exposure and noise, labelled with the calibration's reconstruction; `tactile synth gelsight --real-presses`); the other {} never did and are the held-out check. ", all.len(), held.len())
+        } else {
+            "No real frame joined training: the networks saw renders only. ".into()
+        });
+        md.push_str("Each press goes through the pipeline; the depth network and the calibration's reconstruction are scored against the ball as in `docs/calibration.md` (shape inside the contact with its median offset removed, and the far field beyond three contact radii). The calibration was fitted on all of these presses.\n\n| presses | count | reported as a tendon | flagged foreign | largest tendon probability | depth network shape / far field (mm) | calibration shape / far field (mm) | ratio (shape) |\n|---|---|---|---|---|---|---|---|\n");
+        let mut rows = vec![("all", &all)];
+        if joined > 0 {
+            rows.push(("held out (never in training)", &held));
+        }
+        for (name, set) in rows {
+            if set.is_empty() {
+                continue;
+            }
+            let ((ns, nf), (cs, cf)) = Self::errors_of(set);
+            md.push_str(&format!(
+                "| {name} | {} | {} | {} | {:.3} | {ns:.3} / {nf:.4} | {cs:.3} / {cf:.4} | {:.2}x |\n",
+                set.len(),
+                set.iter().filter(|r| r.tendon).count(),
+                set.iter().filter(|r| r.foreign).count(),
+                set.iter().map(|r| r.probability).fold(0f32, f32::max),
+                ns / cs.max(1e-9),
+            ));
+        }
+        md.push('\n');
+        md
+    }
+
+    /// The same over `b`.
+    fn errors_of(b: &[&BallRow]) -> ((f64, f64), (f64, f64)) {
         (
             (
                 mean(b.iter().map(|r| r.network.shape_mae_mm)),
@@ -209,6 +253,21 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
     let presses = BallPresses::open(&b.ball)?;
     let (_, prepared) = prepare_presses(&presses, 4, CircleSource::Auto)?;
     let mut pipeline = Pipeline::load(m, b.runtime, 1)?;
+    let trained: Vec<String> = match &b.train {
+        Some(t) => Dataset::open(t)?
+            .manifest
+            .extra
+            .get("real_frames")
+            .and_then(|r| r.get("used"))
+            .and_then(|u| u.as_array())
+            .map(|u| {
+                u.iter()
+                    .filter_map(|v| v.as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default(),
+        None => vec![],
+    };
     let mut ball = Vec::with_capacity(prepared.len());
     for (i, p) in prepared.iter().enumerate() {
         let frame = presses.frame(i)?;
@@ -221,6 +280,7 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
             tendon: r.tendon,
             probability: r.score,
             foreign: r.out_of_distribution,
+            in_training: trained.contains(&p.file),
             network: score_full(&net, &cap, &p.file),
             calibration: score_full(&cal, &cap, &p.file),
         });
@@ -384,16 +444,7 @@ impl OwnSensorReport {
             self.reconstruction_mae_mm,
             self.pipeline_fps
         ));
-        let ((ns, nf), (cs, cf)) = self.ball_errors();
-        let tendons = self.ball.iter().filter(|r| r.tendon).count();
-        let flagged = self.ball.iter().filter(|r| r.foreign).count();
-        md.push_str(&format!(
-            "## On the real ball presses\n\nEvery press through the pipeline: {tendons} of {} reported as a tendon, {flagged} flagged as foreign (largest tendon probability {:.3}). The depth network (trained on renders only) and the calibration's reconstruction, each scored against the ball as in `docs/calibration.md` (shape inside the contact with its median offset removed, and the far field beyond three contact radii); the calibration was fitted on these presses, the network never saw a real frame.\n\n| model | shape (mm) | far field (mm) |\n|---|---|---|\n| depth network | {ns:.3} | {nf:.4} |\n| calibration's reconstruction | {cs:.3} | {cf:.4} |\n| ratio | {:.2}x | {:.2}x |\n\n",
-            self.ball.len(),
-            self.ball.iter().map(|r| r.probability).fold(0f32, f32::max),
-            ns / cs.max(1e-9),
-            nf / cf.max(1e-9)
-        ));
+        md.push_str(&self.ball_section());
         md.push_str("## Frames of other sensors\n\nThe detector's input profile (its training frames' statistics) flags frames that are not this sensor's; they get no tendon, direction or depth. Other units are stood in for by this sensor's held-out renders with another LED order, another light, or a flatter gel.\n\n| frames | own sensor | frames | flagged | tendon reported |\n|---|---|---|---|---|\n");
         for r in &self.foreign {
             md.push_str(&format!(

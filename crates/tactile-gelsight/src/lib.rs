@@ -23,6 +23,7 @@ pub mod inference;
 pub mod layout;
 pub mod lookup;
 pub mod model;
+pub mod negatives;
 pub mod options;
 pub mod poisson;
 pub mod prepare;

@@ -245,6 +245,7 @@ pub(crate) fn synth_gelsight(
     let unit = py.detach(|| CalibratedSensor::load(&sensor)).py()?;
     if let Some(out) = out {
         let path = crate::work::interruptible(py, || {
+            let real = tactile_gelsight::negatives::real_frames(&cfg, &sensor).py()?;
             datasets_synth::write_calibrated(
                 &unit,
                 &cfg,
@@ -252,10 +253,16 @@ pub(crate) fn synth_gelsight(
                 seed,
                 &out,
                 write_options(force, progress),
+                &real,
             )
             .py()
         })?;
         return Ok(path.into_pyobject(py)?.into_any().unbind());
+    }
+    if cfg.real_presses.is_some() {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "real_presses joins real frames to a set written to a folder: give out=",
+        ));
     }
     let (w, h) = (unit.width(), unit.height());
     check_in_memory(count, w * h * (3 + 1 + 4))?;

@@ -56,6 +56,9 @@ pub(crate) struct OwnSensorArgs {
     /// The loop's step times (JSON: step name to seconds; scripts/own-sensor.sh writes it).
     #[arg(long)]
     times: Option<PathBuf>,
+    /// The training set, when real presses joined it: those presses are scored apart from the held-out ones.
+    #[arg(long)]
+    train: Option<PathBuf>,
     /// Where the networks run.
     #[arg(long, value_enum, default_value_t = tactile_burn::Runtime::Onnx)]
     runtime: tactile_burn::Runtime,
@@ -251,6 +254,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
                 ball: a.ball,
                 times: a.times,
                 runtime: a.runtime,
+                train: a.train,
             };
             let r = tactile_bench::own_sensor::bench_own_sensor(&b)?;
             let command: Vec<String> = std::env::args().skip(1).collect();

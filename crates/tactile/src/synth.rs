@@ -169,6 +169,7 @@ fn gelsight(
         force: c.force,
         progress: true,
     };
-    let out = write_calibrated(&unit, cfg, count, c.seed, &c.out, opts)?;
+    let real = tactile_gelsight::negatives::real_frames(cfg, sensor)?;
+    let out = write_calibrated(&unit, cfg, count, c.seed, &c.out, opts, &real)?;
     finish(c, out, "calibrated-sensor", count, t)
 }

@@ -2091,7 +2091,7 @@ fn a_calibrated_sensor_trains_and_runs_its_own_pipeline() {
     assert!(!data.exists());
     run(&[
         "synth",
-        "visuotactile",
+        "gelsight",
         "--sensor",
         &s(&m),
         "--sequences",
@@ -2104,12 +2104,49 @@ fn a_calibrated_sensor_trains_and_runs_its_own_pipeline() {
         "4",
         "--out",
         &s(&data),
+        "--real-presses",
+        &s(&presses),
+        "--real-copies",
+        "2",
+        "--real-held-out",
+        "2",
     ]);
     let manifest = std::fs::read_to_string(data.join("manifest.json")).unwrap();
     assert!(
         manifest.contains("\"depth\": \"indentation\""),
         "{manifest}"
     );
+    // Four of the six presses joined as real negatives, two copies each,
+    // labelled by the calibration's reconstruction (the ball pushes in, even
+    // through this two-epoch calibration).
+    let ds = tactile_core::dataset::Dataset::open(&data).unwrap();
+    assert_eq!(ds.len(), 48 + 8);
+    let real = &ds.manifest.extra["real_frames"];
+    assert_eq!(real["used"].as_array().unwrap().len(), 4, "{real}");
+    assert_eq!(real["held_out"].as_array().unwrap().len(), 2, "{real}");
+    let (_, _, press) = ds.load_depth_m(48).unwrap();
+    let peak = press.iter().copied().fold(0f32, f32::max);
+    assert!(peak > 0.05e-3, "a ball press reconstructs to {peak} m");
+    // Holding every press out leaves none: refused, naming the folder.
+    let (ok, msg) = tactile(&[
+        "synth",
+        "gelsight",
+        "--sensor",
+        &s(&m),
+        "--count",
+        "4",
+        "--out",
+        &s(&tmp.path().join("none")),
+        "--real-presses",
+        &s(&presses),
+        "--real-held-out",
+        "6",
+    ]);
+    assert!(
+        !ok && msg.contains("real_held_out") && msg.contains("presses"),
+        "{msg}"
+    );
+    assert!(!tmp.path().join("none").exists());
     run(&[
         "train",
         "detector",
@@ -2173,7 +2210,7 @@ fn a_calibrated_sensor_trains_and_runs_its_own_pipeline() {
         .filter_map(|l| serde_json::from_str(l).ok())
         .filter(|v: &serde_json::Value| v.get("frame").is_some())
         .collect();
-    assert_eq!(recs.len(), 48, "{msg}");
+    assert_eq!(recs.len(), 56, "{msg}");
     for r in &recs {
         assert!(r["indentation_peak_mm"].as_f64().is_some(), "{r}");
         if r["tendon"] == true {

@@ -11,6 +11,7 @@
 
 mod gel;
 mod optics;
+mod real;
 mod render;
 mod scene;
 
@@ -25,11 +26,14 @@ use crate::visuotactile::{TendonPath, press_profile};
 
 pub use gel::GelResponse;
 pub use optics::{OPTICS_FORMAT, OpticsSample, SensorOptics};
+pub use real::{MAX_COPIES, MAX_REAL_FRAMES, RealFrame, RealFrames, RealFramesRecord};
 pub use render::{CalibratedFrame, indentation_mm, render};
 pub use scene::{CalibratedScene, Contact};
 
 /// The render model's file in a calibration folder.
 pub const RENDER_MODEL_FILE: &str = "optics.json";
+/// The `path` column of a real frame joined to a rendered set.
+pub const REAL_PRESS_PATH: &str = "real-press";
 /// The background's file in a calibration folder.
 pub const BACKGROUND_FILE: &str = "background.png";
 /// Largest render model file read, bytes.
@@ -197,6 +201,18 @@ pub struct CalibratedConfig {
     /// Frames per palpation video.
     #[arg(long, default_value_t = CalibratedConfig::default().frames_per_sequence)]
     pub frames_per_sequence: usize,
+    /// A folder of the sensor's real ball presses (the calibration layout)
+    /// joined to the renders as negatives: frames of this very sensor that
+    /// hold no tendon, labelled with the calibration's reconstruction.
+    #[arg(long)]
+    pub real_presses: Option<PathBuf>,
+    /// Copies of each real press, each with its own exposure and noise.
+    #[arg(long, default_value_t = CalibratedConfig::default().real_copies)]
+    pub real_copies: usize,
+    /// The last this many presses of `real_presses` are left out (kept for
+    /// a held-out check; the manifest names them).
+    #[arg(long, default_value_t = CalibratedConfig::default().real_held_out)]
+    pub real_held_out: usize,
 }
 
 impl Default for CalibratedConfig {
@@ -222,6 +238,9 @@ impl Default for CalibratedConfig {
             exposure_jitter: Range::new(-0.1, 0.1),
             noise_sigma: Range::new(0.5, 3.0),
             frames_per_sequence: 25,
+            real_presses: None,
+            real_copies: 5,
+            real_held_out: 0,
         }
     }
 }
@@ -229,6 +248,12 @@ impl Default for CalibratedConfig {
 impl CalibratedConfig {
     /// Check every value; the message names the offending key.
     pub fn validate(&self) -> Result<()> {
+        if !(1..=MAX_COPIES).contains(&self.real_copies) {
+            return Err(Error::Config(format!(
+                "real_copies: must be 1 to {MAX_COPIES}, got {}",
+                self.real_copies
+            )));
+        }
         if self.paths.is_empty() {
             return Err(Error::Config(
                 "paths: at least one tendon path is needed".into(),

@@ -443,6 +443,9 @@ def synth_gelsight(
     exposure_jitter: Tuple[float, float] = (-0.1, 0.1),
     noise_sigma: Tuple[float, float] = (0.5, 3.0),
     frames_per_sequence: int = 25,
+    real_presses: Optional[str] = None,
+    real_copies: int = 5,
+    real_held_out: int = 0,
 ) -> Any: ...
 def eval_detector(
     model: str,

@@ -93,6 +93,9 @@ def gelsight(
     exposure_jitter: Tuple[float, float] = (-0.1, 0.1),
     noise_sigma: Tuple[float, float] = (0.5, 3.0),
     frames_per_sequence: int = 25,
+    real_presses: Optional[str] = None,
+    real_copies: int = 5,
+    real_held_out: int = 0,
 ) -> Union[Dict[str, Any], Path]:
     """A calibrated GelSight-like sensor's own palpation videos (tactile calibrate ball's folder), rendered through its optics and gel with indentation maps: a dict of arrays, or a dataset folder with out=."""
 
