@@ -5,6 +5,7 @@ reconstruction writes them, and clear refusals."""
 from __future__ import annotations
 
 import csv
+import json
 import shutil
 from pathlib import Path
 
@@ -43,7 +44,6 @@ def model(presses: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     assert r["out"] == str(out)
     assert r["train_presses"] == 4 and r["val_presses"] == 2
     assert r["circles"]["presses"] == 6 and r["circles"]["centre_error_px"] < 8
-    import json
 
     cfg = json.loads((out / "gelsight.json").read_text())
     assert cfg["grid"]["factor"] == 8 and cfg["model"]["kernels"] == [3, 1, 1]
@@ -130,6 +130,22 @@ def test_the_calibrated_sensor_renders_its_own_labelled_frames(model: Path, tmp_
         tactile.synth.gelsight(model, count=2, press_mm=(1.0, 0.5))
     with pytest.raises(Exception, match="render model"):
         tactile.synth.gelsight(tmp_path, count=2)
+
+
+def test_real_presses_join_the_rendered_set_as_negatives(model: Path, presses: Path, tmp_path: Path):
+    out = tactile.synth.gelsight(model, count=4, seed=3, frames_per_sequence=2, out=tmp_path / "set",
+                                 real_presses=presses, real_copies=2, real_held_out=2)
+    ds = tactile.Dataset(out)
+    # Four of the six presses, two copies each, after the four renders.
+    assert len(ds) == 4 + 8
+    real = json.loads((out / "manifest.json").read_text())["real_frames"]
+    assert len(real["used"]) == 4 and len(real["held_out"]) == 2
+    for i in range(4, 12):
+        assert ds.depth_m(i).max() > 0  # the calibration's reconstruction of the press
+        assert not ds.mask(i).any()
+    # Real frames need a folder to go to.
+    with pytest.raises(ValueError, match="out="):
+        tactile.synth.gelsight(model, count=2, real_presses=presses)
 
 
 def test_the_shipped_gelsight_pipeline_sees_no_tendon_on_real_presses(root: Path):
