@@ -258,18 +258,12 @@ pub fn write_visuotactile(
         |root, i| {
             let (seq, f) = visuotactile_position(config, i);
             let (scene, frame) = visuotactile::sample(config, seed, seq as u64, f);
-            let stem = format!("{i:06}");
-            let (file, mask, depth) = (
-                format!("frames/{stem}.png"),
-                format!("masks/{stem}.png"),
-                format!("depth/{stem}.npy"),
-            );
-            save_rgb_png(root.join(&file), frame.width, frame.height, &frame.rgb)?;
-            save_grey_png(root.join(&mask), frame.width, frame.height, &frame.mask)?;
-            crate::npy::write_depth_npy(
-                root.join(&depth),
-                frame.width,
-                frame.height,
+            let [file, mask, depth] = write_frame_files(
+                root,
+                i,
+                (frame.width, frame.height),
+                &frame.rgb,
+                &frame.mask,
                 &frame.depth_m,
             )?;
             Ok(vec![
@@ -370,18 +364,12 @@ pub fn write_calibrated(
             }
             let (seq, f) = (i / fps.max(1), i % fps.max(1));
             let (scene, frame) = calibrated::sample(sensor, config, seed, seq as u64, f);
-            let stem = format!("{i:06}");
-            let (file, mask, depth) = (
-                format!("frames/{stem}.png"),
-                format!("masks/{stem}.png"),
-                format!("depth/{stem}.npy"),
-            );
-            save_rgb_png(root.join(&file), frame.width, frame.height, &frame.rgb)?;
-            save_grey_png(root.join(&mask), frame.width, frame.height, &frame.mask)?;
-            crate::npy::write_depth_npy(
-                root.join(&depth),
-                frame.width,
-                frame.height,
+            let [file, mask, depth] = write_frame_files(
+                root,
+                i,
+                (frame.width, frame.height),
+                &frame.rgb,
+                &frame.mask,
                 &frame.indentation_m,
             )?;
             Ok(vec![
@@ -414,16 +402,14 @@ fn write_real_row(
 ) -> tactile_core::Result<Vec<String>> {
     let copies = real.copies.max(1);
     let (frame, rgb) = real.copy(config, seed, r);
-    let n = width * height;
-    let stem = format!("{i:06}");
-    let (file, mask, depth) = (
-        format!("frames/{stem}.png"),
-        format!("masks/{stem}.png"),
-        format!("depth/{stem}.npy"),
-    );
-    save_rgb_png(root.join(&file), width, height, &rgb)?;
-    save_grey_png(root.join(&mask), width, height, &vec![0u8; n])?;
-    crate::npy::write_depth_npy(root.join(&depth), width, height, &frame.indentation_m)?;
+    let [file, mask, depth] = write_frame_files(
+        root,
+        i,
+        (width, height),
+        &rgb,
+        &vec![0u8; width * height],
+        &frame.indentation_m,
+    )?;
     let peak_mm = frame.indentation_m.iter().copied().fold(0f32, f32::max) as f64 * 1e3;
     Ok(vec![
         file,
@@ -438,4 +424,27 @@ fn write_real_row(
         num(0.0, 5),
         num(peak_mm, 5),
     ])
+}
+
+/// Write row `i`'s RGB frame, mask and depth map (metres) of a `width` x
+/// `height` visuo-tactile sample under `root`; returns their paths
+/// relative to it (the `file`, `mask` and `depth` columns).
+fn write_frame_files(
+    root: &Path,
+    i: usize,
+    (width, height): (usize, usize),
+    rgb: &[u8],
+    mask: &[u8],
+    depth_m: &[f32],
+) -> tactile_core::Result<[String; 3]> {
+    let stem = format!("{i:06}");
+    let paths = [
+        format!("frames/{stem}.png"),
+        format!("masks/{stem}.png"),
+        format!("depth/{stem}.npy"),
+    ];
+    save_rgb_png(root.join(&paths[0]), width, height, rgb)?;
+    save_grey_png(root.join(&paths[1]), width, height, mask)?;
+    crate::npy::write_depth_npy(root.join(&paths[2]), width, height, depth_m)?;
+    Ok(paths)
 }

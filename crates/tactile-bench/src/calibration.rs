@@ -87,14 +87,8 @@ impl CalibrationReport {
     /// The page, with its plots written beside `out` (`NAME-speed.png`,
     /// `NAME-profiles.png`) and its numbers as `NAME.json`.
     pub fn write(&self, b: &CalibrationBench, command: &str, out: &Path) -> Result<String> {
-        let stem = out
-            .file_stem()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned();
-        let dir = out.parent().unwrap_or(Path::new("."));
-        let speed_png = format!("{stem}-speed.png");
-        let profile_png = format!("{stem}-profiles.png");
+        let (speed_path, speed_png) = crate::output::picture_beside(out, "speed");
+        let (profile_path, profile_png) = crate::output::picture_beside(out, "profiles");
         let e = b.options.exposure * 100.0;
         let ds = BallPresses::open(&b.data)?;
         let mut md = String::new();
@@ -178,7 +172,7 @@ impl CalibrationReport {
             });
         }
         line_plot(
-            dir.join(&speed_png),
+            speed_path,
             "Cap-shape error against reconstruction time (640x480)",
             "ms per frame",
             "inside-contact shape error (mm)",
@@ -219,7 +213,7 @@ impl CalibrationReport {
                 p.file
             ));
             line_plot(
-                dir.join(&profile_png),
+                profile_path,
                 &format!("Cap profile of {}", p.file),
                 "distance from the contact's centre (mm)",
                 "height above the rim (mm)",

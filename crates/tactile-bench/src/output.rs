@@ -101,6 +101,14 @@ pub fn header(what: &str, data: &Path, runs: usize) -> String {
     )
 }
 
+/// A picture of the page `out` written beside it: its path and the name the
+/// page links it by (`NAME-suffix.png` for the page `NAME.md`).
+pub fn picture_beside(out: &Path, suffix: &str) -> (std::path::PathBuf, String) {
+    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
+    let name = format!("{stem}-{suffix}.png");
+    (out.parent().unwrap_or(Path::new(".")).join(&name), name)
+}
+
 /// Write a bench's Markdown to `out` and its rows as JSON beside it
 /// (`out` with the extension `json`), each atomically.
 pub fn write_markdown_and_json<T: Serialize>(out: &Path, markdown: &str, rows: &T) -> Result<()> {

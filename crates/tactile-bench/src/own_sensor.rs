@@ -458,16 +458,10 @@ impl OwnSensorReport {
         }
         // Pictures: real presses beside the same presses rendered through
         // the calibration, and held-out renders with their labels.
-        let stem = out
-            .file_stem()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned();
-        let dir = out.parent().unwrap_or(Path::new("."));
-        let press_png = format!("{stem}-presses.png");
-        let renders_png = format!("{stem}-renders.png");
-        press_figure(b, &dir.join(&press_png))?;
-        datasets_synth::preview::contact_sheet(&b.test, &dir.join(&renders_png), 12)?;
+        let (press_path, press_png) = crate::output::picture_beside(out, "presses");
+        let (renders_path, renders_png) = crate::output::picture_beside(out, "renders");
+        press_figure(b, &press_path)?;
+        datasets_synth::preview::contact_sheet(&b.test, &renders_path, 12)?;
         md.push_str(&format!(
             "\n## Pictures\n\nReal ball presses (top) and the same presses rendered through the calibration (bottom: the ball at the annotated circle, pressed as the gel's fit says; no noise):\n\n![presses]({press_png})\n\nHeld-out renders with their labels (mask in red, direction as an arrow):\n\n![renders]({renders_png})\n"
         ));
