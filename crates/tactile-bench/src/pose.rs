@@ -49,6 +49,61 @@ fn excluded_test(notes: &serde_json::Value) -> Option<TestHoldout> {
         .and_then(|v| serde_json::from_value(v.clone()).ok())
 }
 
+/// A model folder of a pose bench: what it is, its notes, its input side,
+/// parameters and latencies.
+pub(crate) struct Candidate {
+    /// `pose network`, `pose ensemble` or `encoder + estimators`.
+    pub kind: &'static str,
+    /// Its provenance notes.
+    pub notes: serde_json::Value,
+    /// Side of its pin image.
+    pub input: usize,
+    /// Its parameters (an ensemble's summed).
+    pub params: usize,
+    /// Its latency per runtime (an ensemble's summed).
+    pub ms: RuntimeMs,
+}
+
+impl Candidate {
+    /// Read the model in `m` and time it over `runs` runs.
+    pub fn read(m: &std::path::Path, runs: usize) -> Result<Self> {
+        let (kind, notes, input, params, ms) = if PoseEnsemble::is_in(m) {
+            // Members run one after another: latencies and sizes add up.
+            let e = PoseEnsemble::read(m)?;
+            let (mut p, mut ms, mut s) = (0, Vec::new(), 0);
+            for d in e.member_dirs(m) {
+                s = PoseArtifact::read(&d)?.model.input_px;
+                p += crate::models::parameters::<PoseArtifact>(&d)?;
+                ms.push(crate::latency::model_latencies::<PoseArtifact>(
+                    &d,
+                    [1, 1, s, s],
+                    runs,
+                )?);
+            }
+            ("pose ensemble", e.notes, s, p, RuntimeMs::sum(&ms))
+        } else if PoseArtifact::is_in(m) {
+            let a = PoseArtifact::read(m)?;
+            let s = a.model.input_px;
+            let p = crate::models::parameters::<PoseArtifact>(m)?;
+            let ms = crate::latency::model_latencies::<PoseArtifact>(m, [1, 1, s, s], runs)?;
+            ("pose network", a.notes, s, p, ms)
+        } else {
+            let a = CaeArtifact::read(m)?;
+            let s = a.model.input_px;
+            let p = crate::models::parameters::<CaeArtifact>(m)?;
+            let ms = crate::latency::model_latencies::<CaeArtifact>(m, [1, 1, s, s], runs)?;
+            ("encoder + estimators", a.notes, s, p, ms)
+        };
+        Ok(Self {
+            kind,
+            notes,
+            input,
+            params,
+            ms,
+        })
+    }
+}
+
 /// Score every model folder of `b.models` (pose networks and encoder
 /// folders with estimators) on `b.data` (the real edge set).
 pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
@@ -65,34 +120,13 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
         "| model | shear third | shear (mm) | frames | x MAE (mm) | theta MAE (deg) | depth MAE (mm) |\n|---|---|---|---|---|---|---|\n",
     );
     for m in &b.models {
-        let (kind, notes, input, params, ms): (&str, serde_json::Value, usize, usize, RuntimeMs) =
-            if PoseEnsemble::is_in(m) {
-                // Members run one after another: latencies and sizes add up.
-                let e = PoseEnsemble::read(m)?;
-                let (mut p, mut ms, mut s) = (0, Vec::new(), 0);
-                for d in e.member_dirs(m) {
-                    s = PoseArtifact::read(&d)?.model.input_px;
-                    p += crate::models::parameters::<PoseArtifact>(&d)?;
-                    ms.push(crate::latency::model_latencies::<PoseArtifact>(
-                        &d,
-                        [1, 1, s, s],
-                        b.runs,
-                    )?);
-                }
-                ("pose ensemble", e.notes, s, p, RuntimeMs::sum(&ms))
-            } else if PoseArtifact::is_in(m) {
-                let a = PoseArtifact::read(m)?;
-                let s = a.model.input_px;
-                let p = crate::models::parameters::<PoseArtifact>(m)?;
-                let ms = crate::latency::model_latencies::<PoseArtifact>(m, [1, 1, s, s], b.runs)?;
-                ("pose network", a.notes, s, p, ms)
-            } else {
-                let a = CaeArtifact::read(m)?;
-                let s = a.model.input_px;
-                let p = crate::models::parameters::<CaeArtifact>(m)?;
-                let ms = crate::latency::model_latencies::<CaeArtifact>(m, [1, 1, s, s], b.runs)?;
-                ("encoder + estimators", a.notes, s, p, ms)
-            };
+        let Candidate {
+            kind,
+            notes,
+            input,
+            params,
+            ms,
+        } = Candidate::read(m, b.runs)?;
         let holdout = excluded_test(&notes);
         let saw = holdout.is_none();
         let split = ds.three_way_split(

@@ -229,6 +229,84 @@ pub fn line_plot(
     crate::image_io::save_rgb_png(path, w as usize, h as usize, &buf)
 }
 
+/// One panel of [`scatter_grid`]: predictions against the truth of one
+/// target, each point coloured by its absolute error.
+pub struct ScatterPanel {
+    /// Panel title (the target and its error).
+    pub title: String,
+    /// `(truth, prediction)` points.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Panels of predicted against true values side by side (`columns` per
+/// row), each with the identity line and its points coloured from dark
+/// (exact) to yellow (the panel's 95th percentile error or worse), saved as
+/// a PNG atomically: the error plots of pose papers.
+pub fn scatter_grid(path: impl AsRef<Path>, panels: &[ScatterPanel], columns: usize) -> Result<()> {
+    let path = path.as_ref();
+    let columns = columns.clamp(1, 8);
+    let rows = panels.len().div_ceil(columns).max(1);
+    let (pw, ph) = (360u32, 340u32);
+    let (w, h) = (pw * columns as u32, ph * rows as u32);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    let text = font_available();
+    let mut draw = || -> std::result::Result<(), Box<dyn std::error::Error + '_>> {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let areas = root.split_evenly((rows, columns));
+        for (panel, area) in panels.iter().zip(areas) {
+            let pts: Vec<(f64, f64)> = panel
+                .points
+                .iter()
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                .copied()
+                .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            let (lo, hi) = pts
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.0).min(p.1), b.max(p.0).max(p.1))
+                });
+            let (lo, hi) = padded(lo, hi, false);
+            let mut err: Vec<f64> = pts.iter().map(|p| (p.1 - p.0).abs()).collect();
+            err.sort_by(f64::total_cmp);
+            let top = err[((err.len() as f64 * 0.95) as usize).min(err.len() - 1)].max(1e-12);
+            let mut builder = ChartBuilder::on(&area);
+            builder
+                .margin(10)
+                .x_label_area_size(if text { 30 } else { 5 })
+                .y_label_area_size(if text { 45 } else { 5 });
+            if text {
+                builder.caption(panel.title.as_str(), ("sans-serif", 16));
+            }
+            let mut chart = builder.build_cartesian_2d(lo..hi, lo..hi)?;
+            let mut mesh = chart.configure_mesh();
+            mesh.disable_mesh();
+            if text {
+                mesh.x_desc("true").y_desc("predicted");
+            } else {
+                mesh.disable_x_axis().disable_y_axis();
+            }
+            mesh.draw()?;
+            chart.draw_series(pts.iter().map(|&(t, p)| {
+                let [r, g, b] = colour(((p - t).abs() / top).min(1.0));
+                Circle::new((t, p), 1, RGBColor(r, g, b).filled())
+            }))?;
+            chart.draw_series(LineSeries::new(
+                vec![(lo, lo), (hi, hi)],
+                BLACK.stroke_width(1),
+            ))?;
+        }
+        root.present()?;
+        Ok(())
+    };
+    let drawn = draw().map_err(|e| e.to_string());
+    drawn.map_err(|e| Error::Invalid(format!("{}: cannot draw plot: {e}", path.display())))?;
+    crate::image_io::save_rgb_png(path, w as usize, h as usize, &buf)
+}
+
 /// Something to draw over an image (contact sheets, overlays).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Mark {

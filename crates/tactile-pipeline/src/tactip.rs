@@ -92,15 +92,17 @@ impl Predictor {
             Self::Encoder(p) => p.perceive(ds),
             Self::PoseNetwork(p) => {
                 let r = p.predict_dataset(ds)?;
-                let columns = r
-                    .names
-                    .iter()
-                    .enumerate()
-                    .map(|(j, n)| {
-                        let v = r.values.iter().map(|row| row[j]).collect();
-                        (n.clone(), tactile_estimate::Column::Number(v))
-                    })
+                let column = |rows: &[Vec<f64>], j: usize| {
+                    tactile_estimate::Column::Number(rows.iter().map(|row| row[j]).collect())
+                };
+                let mut columns: Vec<_> = (0..r.names.len())
+                    .map(|j| (r.names[j].clone(), column(&r.values, j)))
                     .collect();
+                if let Some(std) = &r.std {
+                    columns.extend(
+                        (0..r.names.len()).map(|j| (format!("{}_std", r.names[j]), column(std, j))),
+                    );
+                }
                 Ok(Perception {
                     files: r.files,
                     estimates: Estimates { columns },

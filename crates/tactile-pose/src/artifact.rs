@@ -26,6 +26,12 @@ pub struct PoseArtifact {
     pub targets: Vec<Target>,
     /// Standardisation of the encoded target columns.
     pub outputs: Scaler,
+    /// With uncertainty: per target, the factor that turns the network's
+    /// Laplace scale into a standard deviation whose ±1 interval holds
+    /// 68.3 % of the calibration frames' errors (see
+    /// [`crate::uncertainty`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std_scale: Option<Vec<f64>>,
     /// Free-form provenance: how it was trained, on what, with which result.
     #[serde(default)]
     pub notes: serde_json::Value,
@@ -67,6 +73,26 @@ impl Artifact for PoseArtifact {
                 self.columns(),
                 self.model.outputs
             ));
+        }
+        if self.model.has_uncertainty() {
+            if let Some(t) = self.targets.iter().find(|t| t.width() != 1) {
+                return bad(format!(
+                    "uncertainty is given for linear targets only; {} is an angle",
+                    t.name
+                ));
+            }
+            match &self.std_scale {
+                Some(s)
+                    if s.len() == self.targets.len()
+                        && s.iter().all(|v| v.is_finite() && *v > 0.0) => {}
+                Some(s) => {
+                    return bad(format!(
+                        "std_scale must hold one positive factor per target ({}), got {s:?}",
+                        self.targets.len()
+                    ));
+                }
+                None => return bad("a network with uncertainty needs its std_scale".into()),
+            }
         }
         in_config(
             file,
@@ -139,10 +165,11 @@ pub(crate) fn check_alike(
     if json(&first.preprocess) != json(&other.preprocess)
         || first.model.input_px != other.model.input_px
         || first.targets != other.targets
+        || first.model.has_uncertainty() != other.model.has_uncertainty()
     {
         return Err(tactile_core::Error::model(
             dir.join(PoseArtifact::CONFIG_FILE),
-            "its preprocessing, input size or targets differ from the first member's",
+            "its preprocessing, input size, targets or uncertainty differ from the first member's",
         ));
     }
     Ok(())

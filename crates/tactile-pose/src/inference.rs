@@ -32,6 +32,9 @@ pub struct PoseEstimates {
     pub names: Vec<String>,
     /// Per frame, one value per target in the labels' units.
     pub values: Vec<Vec<f64>>,
+    /// Per frame, each value's calibrated standard deviation, labels' units,
+    /// when the network gives an uncertainty.
+    pub std: Option<Vec<Vec<f64>>>,
     /// Preprocessing and network time per frame, ms.
     pub ms_per_frame: f64,
 }
@@ -75,9 +78,28 @@ impl PoseEstimator {
 
     /// Target values of grey pin images, one row per image.
     pub fn predict(&mut self, pins: &[PinImage]) -> Result<Vec<Vec<f64>>> {
+        Ok(self.predict_with_std(pins)?.0)
+    }
+
+    /// Whether the network gives a standard deviation per value.
+    pub fn has_uncertainty(&self) -> bool {
+        self.artifact.model.has_uncertainty()
+    }
+
+    /// Target values of grey pin images, one row per image, and with
+    /// uncertainty each value's standard deviation (labels' units). An
+    /// ensemble's deviation adds its members' spread to their mean
+    /// variance.
+    pub fn predict_with_std(
+        &mut self,
+        pins: &[PinImage],
+    ) -> Result<(Vec<Vec<f64>>, Option<Vec<Vec<f64>>>)> {
         let side = self.artifact.model.input_px;
         if let Some(bad) = pins.iter().find(|p| p.side != side) {
             return Err(tactile_core::Error::shape("pin image", side, bad.side).into());
+        }
+        if self.has_uncertainty() {
+            return self.predict_uncertain(pins);
         }
         let k = self.artifact.model.outputs;
         let mut out = Vec::with_capacity(pins.len());
@@ -108,7 +130,53 @@ impl PoseEstimator {
                 decode_columns(&self.artifact.targets, cols)
             }));
         }
-        Ok(out)
+        Ok((out, None))
+    }
+
+    /// [`Self::predict_with_std`] of networks with uncertainty (linear
+    /// targets only, so a column is a target).
+    fn predict_uncertain(
+        &mut self,
+        pins: &[PinImage],
+    ) -> Result<(Vec<Vec<f64>>, Option<Vec<Vec<f64>>>)> {
+        let side = self.artifact.model.input_px;
+        let k = self.artifact.model.outputs;
+        let ones = vec![1.0; k];
+        let factor = self.artifact.std_scale.clone().unwrap_or(ones);
+        let n = self.members.len().max(1) as f64;
+        let (mut values, mut std) = (Vec::new(), Vec::new());
+        for chunk in pins.chunks(PREDICT_BATCH) {
+            let x: Vec<f32> = chunk
+                .iter()
+                .flat_map(|p| p.pixels.iter().copied())
+                .collect();
+            // Per frame and target: sum of means, of squared means, of variances.
+            let mut acc = vec![vec![[0f64; 3]; k]; chunk.len()];
+            for (scaler, net) in self.members.iter_mut() {
+                let y = net.run([chunk.len(), 1, side, side], x.clone())?;
+                for (a, row) in acc.iter_mut().zip(y.chunks(2 * k)) {
+                    let mean = scaler.unscale(&row[..k]);
+                    for j in 0..k {
+                        let sd = crate::uncertainty::scale(row[k + j]) * scaler.std[j] * factor[j];
+                        a[j][0] += mean[j];
+                        a[j][1] += mean[j] * mean[j];
+                        a[j][2] += sd * sd;
+                    }
+                }
+            }
+            for a in acc {
+                values.push(a.iter().map(|s| s[0] / n).collect());
+                std.push(
+                    a.iter()
+                        .map(|s| {
+                            let m = s[0] / n;
+                            (s[2] / n + (s[1] / n - m * m).max(0.0)).sqrt()
+                        })
+                        .collect(),
+                );
+            }
+        }
+        Ok((values, Some(std)))
     }
 
     /// Every frame of a TacTip dataset.
@@ -116,7 +184,7 @@ impl PoseEstimator {
         let t0 = std::time::Instant::now();
         let cfg = self.artifact.preprocess.clone();
         let pins = tactile_cae::data::PinSet::from_dataset(ds, &cfg)?;
-        let values = self.predict(&pins.images)?;
+        let (values, std) = self.predict_with_std(&pins.images)?;
         Ok(PoseEstimates {
             files: pins.files,
             names: self
@@ -126,6 +194,7 @@ impl PoseEstimator {
                 .map(|t| t.name.clone())
                 .collect(),
             values,
+            std,
             ms_per_frame: 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64,
         })
     }

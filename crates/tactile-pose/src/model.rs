@@ -41,9 +41,25 @@ pub struct PoseNetConfig {
     /// Dropout before each dense layer while training (0 = none).
     #[config(default = 0.0)]
     pub dropout: f64,
+    /// A second column per output: the log of a Laplace scale, the
+    /// network's own estimate of how far off that output is on this frame
+    /// (absent in configs written before it: no uncertainty).
+    #[config(default = "None")]
+    pub uncertainty: Option<bool>,
 }
 
 impl PoseNetConfig {
+    /// Columns the network gives: the outputs, and as many log scales with
+    /// [`Self::uncertainty`].
+    pub fn columns(&self) -> usize {
+        self.outputs * if self.has_uncertainty() { 2 } else { 1 }
+    }
+
+    /// Whether the network gives a log scale per output.
+    pub fn has_uncertainty(&self) -> bool {
+        self.uncertainty == Some(true)
+    }
+
     /// Side of the last stage's map.
     pub fn map_px(&self) -> usize {
         self.input_px >> self.widths.len()
@@ -118,7 +134,7 @@ impl PoseNetConfig {
             stages,
             pool: MaxPool2dConfig::new([2, 2]).init(),
             fc1: LinearConfig::new(flat, self.hidden).init(device),
-            fc2: LinearConfig::new(self.hidden, self.outputs).init(device),
+            fc2: LinearConfig::new(self.hidden, self.columns()).init(device),
             dropout: DropoutConfig::new(self.dropout).init(),
         }
     }
@@ -144,7 +160,9 @@ impl Stage {
     }
 }
 
-/// Grey pin image `[N, 1, S, S]` -> standardised target columns `[N, K]`.
+/// Grey pin image `[N, 1, S, S]` -> standardised target columns `[N, K]`,
+/// followed by their `K` log Laplace scales when the network has
+/// uncertainty.
 #[derive(Module, Debug)]
 pub struct PoseNet {
     /// The convolution stages.
@@ -164,7 +182,8 @@ impl PoseNet {
     ///
     /// # Shapes
     /// - `x`: `[N, 1, S, S]` grey pin images in [0, 1]
-    /// - output: `[N, K]`
+    /// - output: `[N, K]`, or `[N, 2K]` with uncertainty (columns, then
+    ///   their log scales)
     pub fn forward(&self, x: Tensor<4>) -> Tensor<2> {
         let mut x = x;
         for s in &self.stages {

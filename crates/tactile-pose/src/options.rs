@@ -23,9 +23,29 @@ pub struct PoseOptions {
     /// Targets: label columns, NAME:PERIOD for an angle.
     #[arg(long, value_delimiter = ',', default_values_t = ["x_mm", "theta_deg", "depth_mm"].map(String::from))]
     pub targets: Vec<String>,
-    /// Side of the grey pin image (the central 256 px of the frame, masked to the tip, area-downsampled).
+    /// Side of the grey pin image (the central --crop-px of the frame, masked to the tip, area-downsampled).
     #[arg(long, default_value_t = PoseTrainingConfig::new(vec![]).preprocess.output_px)]
     pub input_px: usize,
+    /// Side of the central square of the frame that holds the tip, pixels (256 for the 127-pin TacTip, 440 for the 331-pin one).
+    #[arg(long, default_value_t = PoseTrainingConfig::new(vec![]).preprocess.crop_px)]
+    #[serde(default = "default_crop_px")]
+    pub crop_px: usize,
+    /// Radius of the circular mask over the tip inside that square, pixels.
+    #[arg(long, default_value_t = default_mask_radius_px())]
+    #[serde(default = "default_mask_radius_px")]
+    pub mask_radius_px: f32,
+    /// Also predict each target's uncertainty (a Laplace scale per target, calibrated on the early-stopping rows; linear targets only).
+    #[arg(long)]
+    #[serde(default)]
+    pub uncertainty: bool,
+    /// With --all-rows and --uncertainty: take the uncertainty calibration of this validated run of the same recipe (every row is fitted, so none is left to calibrate on).
+    #[arg(long)]
+    #[serde(default)]
+    pub calibration_from: Option<std::path::PathBuf>,
+    /// Train on the rows of every split (`val`, `test` too): the final model, its recipe chosen on a run that left them out.
+    #[arg(long)]
+    #[serde(default)]
+    pub every_split: bool,
     /// Channels of each stage; each stage halves the side.
     #[arg(long, value_delimiter = ',', default_values_t = PoseNetConfig::new().widths)]
     pub widths: Vec<usize>,
@@ -54,6 +74,17 @@ pub struct PoseOptions {
     pub schedule: PoseSchedule,
 }
 
+fn default_crop_px() -> usize {
+    PoseTrainingConfig::new(vec![]).preprocess.crop_px
+}
+
+fn default_mask_radius_px() -> f32 {
+    PoseTrainingConfig::new(vec![])
+        .preprocess
+        .mask_radius_px
+        .unwrap_or(100.0)
+}
+
 /// What training a pose network gave: the fit, and its scores on the test
 /// frames it left out when it left some out.
 #[derive(Debug, Clone, Serialize)]
@@ -79,11 +110,20 @@ impl PoseOptions {
             .clone()
             .with_widths(self.widths.clone())
             .with_hidden(self.hidden)
-            .with_dropout(self.dropout);
+            .with_dropout(self.dropout)
+            .with_uncertainty(Some(self.uncertainty));
+        let mut preprocess = grey_pin_images(self.input_px);
+        preprocess.crop_px = self.crop_px;
+        preprocess.mask_radius_px = Some(self.mask_radius_px);
         let config = PoseTrainingConfig {
             targets,
             model,
-            preprocess: grey_pin_images(self.input_px),
+            preprocess,
+            every_split: Some(self.every_split),
+            calibration_from: self
+                .calibration_from
+                .as_ref()
+                .map(|p| p.display().to_string()),
             schedule: self.schedule.schedule(d.schedule.learning_rate),
             val_fraction: self.val_fraction,
             holdout: self.holdout.holdout(),

@@ -77,6 +77,15 @@ pub struct PoseTrainingConfig {
     /// load unchanged); early stopping always compares the validation MSE.
     #[config(default = "None")]
     pub loss: Option<PoseLoss>,
+    /// Train on the rows of every split, `val` and `test` too (the final
+    /// model, its recipe chosen on a run that left them out).
+    #[config(default = "None")]
+    pub every_split: Option<bool>,
+    /// With uncertainty and `all_rows` (no frame left unfitted to calibrate
+    /// on): take the calibration of the pose network in this folder, the
+    /// same recipe validated on frames it did not fit.
+    #[config(default = "None")]
+    pub calibration_from: Option<String>,
 }
 
 impl PoseTrainingConfig {
@@ -91,6 +100,15 @@ impl PoseTrainingConfig {
         self.augment.check()?;
         if self.targets.is_empty() {
             return Err(tactile_core::Error::Config("no targets to predict".into()).into());
+        }
+        if self.model.has_uncertainty()
+            && let Some(t) = self.targets.iter().find(|t| t.width() != 1)
+        {
+            return Err(tactile_core::Error::Config(format!(
+                "uncertainty is given for linear targets only; {} is an angle",
+                t.name
+            ))
+            .into());
         }
         Ok(self)
     }
@@ -149,7 +167,12 @@ pub fn train(
     tactile_core::dataset::check_output_dir(out, &[data])?;
     tactile_core::note!("preprocessing {} frames", data.len());
     let set = PoseSet::from_dataset(data, &config.preprocess, &config.targets)?;
-    let rows = set.labelled(&data.training_rows(config.holdout)?);
+    let rows = if config.every_split == Some(true) {
+        (0..data.len()).collect()
+    } else {
+        data.training_rows(config.holdout)?
+    };
+    let rows = set.labelled(&rows);
     let (train, val) = if config.all_rows {
         (rows.clone(), rows)
     } else {
@@ -165,16 +188,35 @@ pub fn train(
         columns[i] = e.to_vec();
     }
     let val_truth = set.label_rows(&val);
+    let unc = config.model.has_uncertainty();
+    let borrowed_scale = match (&config.calibration_from, unc) {
+        (Some(dir), true) => Some(borrowed_calibration(Path::new(dir), &config.targets)?),
+        (Some(_), false) => {
+            return Err(tactile_core::Error::Config(
+                "calibration_from is for a network with uncertainty".into(),
+            )
+            .into());
+        }
+        (None, true) if config.all_rows => {
+            tactile_core::note!(
+                "uncertainty calibrated on the training rows (every row is fitted): its intervals will be too narrow; give calibration_from a validated run"
+            );
+            None
+        }
+        _ => None,
+    };
     let artifact = PoseArtifact {
         model: config.model.clone(),
         preprocess: config.preprocess.clone(),
         targets: config.targets.clone(),
         outputs: outputs.clone(),
+        std_scale: None,
         notes: serde_json::json!({
             "trained_on": data.root.display().to_string(),
             "device": device.name(),
             "excluded_test": config.holdout,
             "all_rows": config.all_rows,
+            "every_split": config.every_split == Some(true),
         }),
     };
     let dev = device.device();
@@ -190,6 +232,7 @@ pub fn train(
     let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
     let seed = config.schedule.seed;
     let last_mae = std::cell::RefCell::new(Vec::new());
+    let last_scale = std::cell::RefCell::new(None::<Vec<f64>>);
     let (_, summary) = fit::<_, Error>(
         &fit_cfg,
         model,
@@ -199,15 +242,37 @@ pub fn train(
             let x = set.batch(batch, &config.augment, (seed, epoch as u64 + 1), &ad);
             let y: Vec<f32> = batch.iter().flat_map(|&i| columns[i].clone()).collect();
             let y = Tensor::<2>::from_data(TensorData::new(y, [batch.len(), k]), &ad);
-            let diff = m.forward(x) - y;
-            Ok(loss.penalty(diff).mean())
+            let out = m.forward(x);
+            let diff = out.clone().narrow(1, 0, k) - y;
+            let fit = loss.penalty(diff.clone()).mean();
+            Ok(if unc {
+                fit + crate::uncertainty::laplace_nll(diff, out.narrow(1, k, k)).mean()
+            } else {
+                fit
+            })
         },
         |m| {
-            let cols = predict_columns(m, &set, &val, &dev)?;
+            let all = predict_columns(m, &set, &val, &dev)?;
+            let cols: Vec<&[f32]> = all.iter().map(|r| &r[..k]).collect();
             let pred: Vec<Vec<f64>> = cols
                 .iter()
                 .map(|r| decode(&config.targets, &outputs, r))
                 .collect();
+            if unc {
+                let truth = outputs.apply(&encode(&config.targets, &val_truth));
+                let ratios: Vec<Vec<f64>> = (0..k)
+                    .map(|j| {
+                        all.iter()
+                            .zip(truth.chunks(k))
+                            .map(|(r, t)| {
+                                (r[j] as f64 - t[j] as f64).abs()
+                                    / crate::uncertainty::scale(r[k + j])
+                            })
+                            .collect()
+                    })
+                    .collect();
+                *last_scale.borrow_mut() = Some(crate::uncertainty::calibrate(&ratios));
+            }
             let mse = cols
                 .iter()
                 .zip(
@@ -230,6 +295,11 @@ pub fn train(
         },
         |m| {
             let mut a = artifact.clone();
+            if unc {
+                a.std_scale = borrowed_scale
+                    .clone()
+                    .or_else(|| last_scale.borrow().clone());
+            }
             if let serde_json::Value::Object(n) = &mut a.notes {
                 n.insert(
                     "validation_mae".into(),
@@ -253,6 +323,20 @@ pub fn train(
     )?;
     unfinished.finish()?;
     Ok(summary)
+}
+
+/// The uncertainty calibration of the validated pose network in `dir`,
+/// which must predict `targets` with uncertainty.
+fn borrowed_calibration(dir: &Path, targets: &[Target]) -> Result<Vec<f64>> {
+    let a = PoseArtifact::read(dir)?;
+    match a.std_scale {
+        Some(s) if a.targets == targets => Ok(s),
+        _ => Err(tactile_core::Error::model(
+            dir.join("pose.json"),
+            "calibration_from needs a pose network with uncertainty for the same targets",
+        )
+        .into()),
+    }
 }
 
 /// A pose network's errors on the test rows of a split.

@@ -71,18 +71,24 @@ impl PyPoseEstimator {
     ) -> PyResult<Bound<'py, PyDict>> {
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
-        let rows = py.detach(|| -> PyResult<Vec<Vec<f64>>> {
+        let (rows, std) = py.detach(|| -> PyResult<(Vec<Vec<f64>>, Option<Vec<Vec<f64>>>)> {
             let pins = pin_images(&px, &self.preprocess)?;
             let mut e = self
                 .estimator
                 .lock()
                 .map_err(|_| PyRuntimeError::new_err("the estimator failed in another thread"))?;
-            e.predict(&pins).map_err(tactile_pipeline::Error::from).py()
+            e.predict_with_std(&pins)
+                .map_err(tactile_pipeline::Error::from)
+                .py()
         })?;
         let out = PyDict::new(py);
         for (j, name) in self.targets.iter().enumerate() {
             let v: Vec<f64> = rows.iter().map(|r| r[j]).collect();
             out.set_item(name, v.into_pyarray(py))?;
+            if let Some(std) = &std {
+                let v: Vec<f64> = std.iter().map(|r| r[j]).collect();
+                out.set_item(format!("{name}_std"), v.into_pyarray(py))?;
+            }
         }
         Ok(out)
     }

@@ -32,6 +32,10 @@ pub(crate) enum BenchCmd {
     /// Edge pose on the real TacTip edge set: pose networks and encoders
     /// with estimators, error on their held-out frames against latency.
     Pose(ModelsArgs),
+    /// Surface pose and shear on the real 331-pin TacTip set: every target
+    /// against the authors' CNN on their held-out split, interval coverage,
+    /// latency, and the first model's predictions plotted against the truth.
+    Surface(ModelsArgs),
     /// Ball-press calibration: sensor models cross-validated by press
     /// (lookup table, per-pixel MLP, the toolkit's networks), speed and
     /// robustness; writes docs/calibration.md.
@@ -182,9 +186,11 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Synth(a) => &a.out,
         BenchCmd::Resolution(a) => &a.out,
         BenchCmd::Devices(a) | BenchCmd::Ood(a) => &a.out,
-        BenchCmd::Detector(a) | BenchCmd::Segmenter(a) | BenchCmd::Depth(a) | BenchCmd::Pose(a) => {
-            &a.out
-        }
+        BenchCmd::Detector(a)
+        | BenchCmd::Segmenter(a)
+        | BenchCmd::Depth(a)
+        | BenchCmd::Pose(a)
+        | BenchCmd::Surface(a) => &a.out,
         BenchCmd::Calibration(a) => &Some(a.out.clone()),
         BenchCmd::OwnSensor(a) => &Some(a.out.clone()),
     };
@@ -247,6 +253,14 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Segmenter(a) => show(a, bench_segmenters)?,
         BenchCmd::Depth(a) => show(a, bench_depth)?,
         BenchCmd::Pose(a) => show(a, tactile_bench::pose::bench_pose)?,
+        BenchCmd::Surface(a) => {
+            let out = a.out.clone();
+            let t = tactile_bench::surface::bench_surface(&model_bench(a), out.as_deref())?;
+            say_raw!("{}", t.markdown);
+            if let Some(out) = &out {
+                t.write(out)?;
+            }
+        }
         BenchCmd::OwnSensor(a) => {
             let b = tactile_bench::own_sensor::OwnSensorBench {
                 models: a.models,
@@ -291,17 +305,21 @@ fn show<M: serde::Serialize>(
     a: ModelsArgs,
     bench: fn(&ModelBench) -> tactile_bench::Result<tactile_bench::output::Table<M>>,
 ) -> Result<()> {
-    let (models, data, select, extreme, runs) = (a.models, a.data, a.select, a.extreme, a.runs);
-    let t = bench(&ModelBench {
-        models,
-        data,
-        select,
-        extreme,
-        runs,
-    })?;
+    let out = a.out.clone();
+    let t = bench(&model_bench(a))?;
     say_raw!("{}", t.markdown);
-    if let Some(out) = &a.out {
+    if let Some(out) = &out {
         t.write(out)?;
     }
     Ok(())
+}
+
+fn model_bench(a: ModelsArgs) -> ModelBench {
+    ModelBench {
+        models: a.models,
+        data: a.data,
+        select: a.select,
+        extreme: a.extreme,
+        runs: a.runs,
+    }
 }

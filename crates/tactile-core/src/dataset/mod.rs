@@ -494,6 +494,16 @@ impl Dataset {
                 .collect(),
         )
     }
+
+    /// The rows the `split` column holds out for evaluation: its `test`
+    /// rows, or its `val` rows when it names no test rows (an authors'
+    /// train/val split, where the choices are made on `val`); `None`
+    /// without a `split` column.
+    pub fn evaluation_split(&self) -> Option<Vec<usize>> {
+        self.split_indices("test")
+            .filter(|t| !t.is_empty())
+            .or_else(|| self.split_indices("val"))
+    }
 }
 
 /// Before any work: the output file `out` can be written and is none of

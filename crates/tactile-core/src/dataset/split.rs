@@ -81,7 +81,7 @@ pub fn hold_out(
 
 impl Dataset {
     /// `(train, validation, test)` rows: the `split` column's train and
-    /// test rows when the dataset has both, else a seeded shuffle with
+    /// evaluation rows ([`Dataset::evaluation_split`]) when it has both, else a seeded shuffle with
     /// `test_fraction` held out; then `val_fraction` of the training rows
     /// validate.
     pub fn three_way_split(
@@ -93,7 +93,7 @@ impl Dataset {
         check_fraction("test fraction", test_fraction)?;
         check_fraction("validation fraction", val_fraction)?;
         let mut rng = StdRng::seed_from_u64(seed);
-        let (mut train, test) = match (self.split_indices("train"), self.split_indices("test")) {
+        let (mut train, test) = match (self.split_indices("train"), self.evaluation_split()) {
             (Some(tr), Some(te)) => (tr, te),
             _ => {
                 let mut all: Vec<usize> = (0..self.len()).collect();

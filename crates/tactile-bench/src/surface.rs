@@ -1,0 +1,223 @@
+//! Surface pose and shear on the real 331-pin TacTip set: every candidate
+//! (pose networks, encoders with their estimators) scored on the split the
+//! authors held out, per target against their own CNN, with the coverage
+//! of its uncertainty intervals where it gives one, against its latency.
+
+use serde::Serialize;
+use tactile_core::dataset::Dataset;
+use tactile_core::plot::{ScatterPanel, Series, scatter_grid};
+use tactile_estimate::Column;
+use tactile_pipeline::tactip::Predictor;
+
+use crate::Result;
+use crate::latency::ms_cell;
+use crate::models::ModelBench;
+use crate::output::{BenchRow, Table, add_points, folder_name, header, picture_beside};
+use crate::pose::Candidate;
+
+/// The targets, in the labels' units, with the authors' CNN's mean
+/// absolute error on their `val` split (four conv layers, 128x128 input).
+pub const AUTHORS_CNN: [(&str, f64); 6] = [
+    ("depth_mm", 0.175),
+    ("roll_deg", 1.34),
+    ("pitch_deg", 1.41),
+    ("shear_x_mm", 0.55),
+    ("shear_y_mm", 0.55),
+    ("shear_theta_deg", 1.21),
+];
+
+/// The goal: at least this much below the authors' error on every target.
+pub const GOAL_FRACTION: f64 = 0.75;
+
+/// A candidate's errors, for the JSON and the page.
+#[derive(Debug, Clone, Serialize)]
+pub struct SurfaceMetrics {
+    /// Mean absolute error per target of [`AUTHORS_CNN`], labels' units.
+    pub mae: Vec<f64>,
+    /// Each error over the authors' CNN's.
+    pub ratio: Vec<f64>,
+    /// Frames scored.
+    pub frames: usize,
+    /// True when the model trained on the scored frames too.
+    pub saw_scored_frames: bool,
+    /// `pose network`, `pose ensemble` or `encoder + estimators`.
+    pub kind: String,
+    /// Fraction of errors inside ±1 standard deviation, per target, when
+    /// the model gives one.
+    pub coverage_68: Option<Vec<f64>>,
+    /// Fraction inside ±1.96 standard deviations.
+    pub coverage_95: Option<Vec<f64>>,
+}
+
+/// The rows scored: the `split` column's held-out rows (`test`, else the
+/// authors' `val`), or every row without one.
+fn scored_rows(ds: &Dataset) -> Vec<usize> {
+    ds.evaluation_split()
+        .filter(|r| !r.is_empty())
+        .unwrap_or_else(|| (0..ds.len()).collect())
+}
+
+/// Whether the model in a folder with these notes trained on the scored
+/// rows: a pose network with `every_split`, an encoder whose notes say so.
+fn saw_scored(notes: &serde_json::Value) -> bool {
+    notes.get("every_split").and_then(|v| v.as_bool()) == Some(true)
+}
+
+/// Score every model folder of `b.models` on `b.data` (the surface set);
+/// with `out`, the first model's predictions are drawn against the truth
+/// beside it.
+pub fn bench_surface(
+    b: &ModelBench,
+    out: Option<&std::path::Path>,
+) -> Result<Table<SurfaceMetrics>> {
+    let ds = Dataset::open(&b.data)?;
+    let rows = scored_rows(&ds);
+    let mut md = header(
+        "Mean absolute error of surface pose and shear",
+        &b.data,
+        b.runs,
+    );
+    md.push_str(&format!(
+        "Scored on the {} frames of the authors' held-out split; a model trained on them too is marked. \
+         Each error cell gives the error and, in brackets, its ratio to the authors' CNN (goal: at most {GOAL_FRACTION}). \
+         Coverage: the fraction of frames whose error lies inside the model's ±1 and ±1.96 standard deviation intervals (68.3 % and 95 % when calibrated), mean over the targets (range).\n\n",
+        rows.len()
+    ));
+    md.push_str("| model | kind | input | parameters |");
+    for (t, _) in AUTHORS_CNN {
+        md.push_str(&format!(" {t} |"));
+    }
+    md.push_str(" worst ratio | 68 % interval | 95 % interval | burn flex ms | onnxruntime ms |\n|---|---|---|---|");
+    md.push_str(&"---|".repeat(AUTHORS_CNN.len() + 5));
+    md.push('\n');
+    md.push_str("| authors' CNN (reference) | 4 conv layers | 128x128 | - |");
+    for (_, e) in AUTHORS_CNN {
+        md.push_str(&format!(" {e} (1.00) |"));
+    }
+    md.push_str(" 1.00 | - | - | - | - |\n");
+    let (mut series, mut table_rows) = (Vec::new(), Vec::new());
+    let mut first_panels = None;
+    for m in &b.models {
+        let c = Candidate::read(m, b.runs)?;
+        let saw = saw_scored(&c.notes);
+        let mut predictor = Predictor::load(m, &[], tactile_burn::Runtime::BurnFlex)?;
+        let all = predictor.perceive(&ds)?;
+        let number = |name: &str| match all.estimates.get(name) {
+            Some(Column::Number(v)) => Some(v),
+            _ => None,
+        };
+        let (mut mae, mut ratio, mut panels) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut cov68, mut cov95) = (Vec::new(), Vec::new());
+        for (t, authors) in AUTHORS_CNN {
+            let Some(pred) = number(t) else {
+                return Err(tactile_core::Error::Invalid(format!(
+                    "{}: the model does not estimate {t}",
+                    m.display()
+                ))
+                .into());
+            };
+            let std = number(&format!("{t}_std"));
+            let mut points = Vec::with_capacity(rows.len());
+            let (mut inside68, mut inside95) = (0usize, 0usize);
+            for &i in &rows {
+                let Some(truth) = ds.number_opt(i, t)? else {
+                    continue;
+                };
+                let e = (pred[i] - truth).abs();
+                points.push((truth, pred[i]));
+                if let Some(s) = std {
+                    inside68 += usize::from(e <= s[i]);
+                    inside95 += usize::from(e <= tactile_pose::uncertainty::Z95 * s[i]);
+                }
+            }
+            let n = points.len().max(1) as f64;
+            let e = points.iter().map(|p| (p.1 - p.0).abs()).sum::<f64>() / n;
+            mae.push(e);
+            ratio.push(e / authors);
+            if std.is_some() {
+                cov68.push(inside68 as f64 / n);
+                cov95.push(inside95 as f64 / n);
+            }
+            panels.push(ScatterPanel {
+                title: format!("{t}: MAE {e:.3} (authors {authors})"),
+                points,
+            });
+        }
+        let worst = ratio.iter().copied().fold(0.0, f64::max);
+        let cov_cell = |v: &[f64]| {
+            if v.is_empty() {
+                return "-".to_string();
+            }
+            let (lo, hi) = v
+                .iter()
+                .fold((1f64, 0f64), |(a, b), x| (a.min(*x), b.max(*x)));
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            format!(
+                "{:.1} % ({:.1}-{:.1})",
+                100.0 * mean,
+                100.0 * lo,
+                100.0 * hi
+            )
+        };
+        md.push_str(&format!(
+            "| {}{} | {} | {i}x{i} | {} |",
+            folder_name(m),
+            if saw {
+                " (trained on these frames)"
+            } else {
+                ""
+            },
+            c.kind,
+            c.params,
+            i = c.input
+        ));
+        for (e, r) in mae.iter().zip(&ratio) {
+            md.push_str(&format!(" {e:.3} ({r:.2}) |"));
+        }
+        md.push_str(&format!(
+            " {worst:.2} | {} | {} | {} | {} |\n",
+            cov_cell(&cov68),
+            cov_cell(&cov95),
+            ms_cell(c.ms.flex),
+            ms_cell(c.ms.onnxruntime)
+        ));
+        if !saw {
+            add_points(&mut series, &c.ms, worst);
+        }
+        if first_panels.is_none() {
+            first_panels = Some((folder_name(m), panels));
+        }
+        table_rows.push(BenchRow::new(
+            m,
+            SurfaceMetrics {
+                mae,
+                ratio,
+                frames: rows.len(),
+                saw_scored_frames: saw,
+                kind: c.kind.to_string(),
+                coverage_68: (!cov68.is_empty()).then_some(cov68),
+                coverage_95: (!cov95.is_empty()).then_some(cov95),
+            },
+            c.ms,
+        ));
+    }
+    if let (Some((name, panels)), Some(out)) = (first_panels, out) {
+        let (path, link) = picture_beside(out, "scatter");
+        scatter_grid(&path, &panels, 3)?;
+        md.push_str(&format!(
+            "\nPredicted against true values of `{name}` on the scored frames, each point coloured by its error (dark: exact; yellow: the target's 95th percentile error or worse):\n\n![{name} predictions]({link})\n"
+        ));
+    }
+    series.push(Series {
+        name: "goal: every target at most 0.75x the authors' CNN".into(),
+        points: vec![(0.0, GOAL_FRACTION), (1.0, GOAL_FRACTION)],
+    });
+    Ok(Table {
+        markdown: md,
+        title: "Surface pose and shear: worst error ratio to the authors' CNN against latency"
+            .into(),
+        y_label: "worst target MAE / authors' CNN".into(),
+        series,
+        rows: table_rows,
+    })
+}

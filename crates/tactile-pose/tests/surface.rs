@@ -1,0 +1,136 @@
+#![allow(clippy::unwrap_used)]
+//! The surface pose-and-shear path on a few real 331-pin TacTip frames
+//! (`../shared/real/tactip331-surface`, copied to a temporary folder):
+//! the authors' `val` split is the held-out one, a network with
+//! uncertainty gives a calibrated standard deviation per target, and the
+//! final model trained on every split borrows its validated run's
+//! calibration.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::json;
+use tactile_burn::options::Options;
+use tactile_burn::{Artifact, Runtime};
+use tactile_core::dataset::Dataset;
+use tactile_pose::{PoseArtifact, PoseEstimator, PoseOptions};
+
+const TARGETS: [&str; 6] = [
+    "depth_mm",
+    "roll_deg",
+    "pitch_deg",
+    "shear_x_mm",
+    "shear_y_mm",
+    "shear_theta_deg",
+];
+
+fn surface_frames() -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/real/tactip331-surface");
+    assert!(root.is_dir(), "{} missing", root.display());
+    root
+}
+
+/// A dataset of the first `train` training and `val` validation frames.
+fn subset(dir: &Path, train: usize, val: usize) {
+    let real = surface_frames();
+    std::fs::create_dir_all(dir.join("frames")).unwrap();
+    let text = std::fs::read_to_string(real.join("labels.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut labels = format!("{}\n", lines.next().unwrap());
+    let (mut nt, mut nv) = (0, 0);
+    for l in lines {
+        let keep = if l.ends_with(",train") && nt < train {
+            nt += 1;
+            true
+        } else if l.ends_with(",val") && nv < val {
+            nv += 1;
+            true
+        } else {
+            false
+        };
+        if keep {
+            let file = l.split(',').next().unwrap();
+            std::fs::copy(real.join(file), dir.join(file)).unwrap();
+            labels.push_str(l);
+            labels.push('\n');
+        }
+    }
+    assert_eq!((nt, nv), (train, val));
+    std::fs::write(dir.join("labels.csv"), labels).unwrap();
+    let manifest = std::fs::read_to_string(real.join("manifest.json")).unwrap();
+    let mut m: serde_json::Value = serde_json::from_str(&manifest).unwrap();
+    m["count"] = json!(train + val);
+    std::fs::write(dir.join("manifest.json"), m.to_string()).unwrap();
+}
+
+fn options(extra: serde_json::Value) -> PoseOptions {
+    let mut kw = json!({
+        "targets": TARGETS, "input_px": 32, "crop_px": 440, "mask_radius_px": 215.0,
+        "widths": [4, 8], "hidden": 16, "max_epochs": 2, "uncertainty": true, "loss": "l1",
+    });
+    kw.as_object_mut()
+        .unwrap()
+        .extend(extra.as_object().unwrap().clone());
+    PoseOptions::with_overrides(kw.as_object().unwrap()).unwrap()
+}
+
+#[test]
+fn surface_pose_with_calibrated_uncertainty_on_the_authors_split() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("surface");
+    subset(&data, 30, 10);
+    let ds = Dataset::open(&data).unwrap();
+    // The authors' val rows are the held-out ones: no test rows to find.
+    assert_eq!(ds.evaluation_split().unwrap(), (30..40).collect::<Vec<_>>());
+    let split = ds.three_way_split(0.2, 0.2, 7).unwrap();
+    assert_eq!(split.test.len(), 10);
+    assert_eq!(split.train.len() + split.val.len(), 30);
+
+    let validated = tmp.path().join("validated");
+    options(json!({})).train(&ds, &validated).unwrap();
+    let art = PoseArtifact::read(&validated).unwrap();
+    let scale = art.std_scale.clone().unwrap();
+    assert_eq!(scale.len(), 6);
+    assert!(scale.iter().all(|s| s.is_finite() && *s > 0.0), "{scale:?}");
+    assert_eq!(art.notes["every_split"], json!(false));
+
+    let mut est = PoseEstimator::load(&validated, Runtime::BurnFlex, 0).unwrap();
+    let p = est.predict_dataset(&ds).unwrap();
+    assert_eq!(p.names, TARGETS);
+    let std = p.std.unwrap();
+    assert_eq!(std.len(), ds.len());
+    assert!(
+        std.iter()
+            .all(|r| r.len() == 6 && r.iter().all(|s| s.is_finite() && *s > 0.0))
+    );
+
+    // The final model: every split, every row, the validated calibration.
+    let last = tmp.path().join("final");
+    let kw = json!({
+        "every_split": true, "all_rows": true,
+        "calibration_from": validated.display().to_string(),
+    });
+    let fit = options(kw).train(&ds, &last).unwrap();
+    assert_eq!(fit.fit.train_items, 40, "val rows trained on too");
+    let art = PoseArtifact::read(&last).unwrap();
+    assert_eq!(art.std_scale.unwrap(), scale);
+    assert_eq!(art.notes["every_split"], json!(true));
+
+    // Borrowing from a network without uncertainty is refused, by file.
+    let plain = tmp.path().join("plain");
+    options(json!({"uncertainty": false, "max_epochs": 1}))
+        .train(&ds, &plain)
+        .unwrap();
+    let kw = json!({"all_rows": true, "calibration_from": plain.display().to_string()});
+    let e = options(kw)
+        .train(&ds, &tmp.path().join("bad"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("pose.json") && e.contains("calibration_from"),
+        "{e}"
+    );
+    // An angle target cannot carry a deviation.
+    let kw = json!({"targets": ["depth_mm", "roll_deg:360"]});
+    let e = options(kw).config().unwrap_err().to_string();
+    assert!(e.contains("linear targets only"), "{e}");
+}
