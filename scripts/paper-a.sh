@@ -17,18 +17,21 @@ BIN="${CARGO_TARGET_DIR:-target}/release/tactile"
 
 # Each step: the command line (kept for the document) and its run.
 # PAPER_A_ASSEMBLE_ONLY=1 runs none of them and rebuilds the page from the
-# tables already in docs/paper-a/.
+# tables already in docs/paper-a/; PAPER_A_ONLY='surface|shared' runs only
+# the steps whose names match (the others' tables are kept).
 declare -A CMD
 step() {
     local name=$1
     shift
     CMD[$name]="tactile $*"
     echo ">> tactile $*" >&2
-    [ -n "${PAPER_A_ASSEMBLE_ONLY:-}" ] || "$BIN" "$@" >/dev/null
+    [ -n "${PAPER_A_ASSEMBLE_ONLY:-}" ] && return
+    [ -n "${PAPER_A_ONLY:-}" ] && ! [[ $name =~ ^(${PAPER_A_ONLY})$ ]] && return
+    "$BIN" "$@" >/dev/null
 }
 
 SYNTH_TEST=data/paper-a-synth-test
-[ -d "$SYNTH_TEST" ] || [ -n "${PAPER_A_ASSEMBLE_ONLY:-}" ] || "$BIN" synth tactip --count 700 --seed 200 --out "$SYNTH_TEST"
+[ -d "$SYNTH_TEST" ] || [ -n "${PAPER_A_ASSEMBLE_ONLY:-}${PAPER_A_ONLY:-}" ] || "$BIN" synth tactip --count 700 --seed 200 --out "$SYNTH_TEST"
 
 step shapes compare --encoder models/cae-shapes --data "$REAL/polic-shapes" --classify shape --out "$OUT/shapes-compare.md"
 if [ -d data/sweep/cae-64 ]; then
@@ -88,6 +91,21 @@ fi
 step cross compare --encoder models/cae-shapes --data "$REAL/tactip127-edge" \
     --preprocess configs/preprocess/tactip127-edge.json \
     --targets x_mm,theta_deg:180,depth_mm --out "$OUT/cross-shapes-on-edge.md"
+
+# Surface pose and shear on the 331-pin set: the shipped models (trained
+# on every frame, so marked) and the candidates `bash scripts/surface.sh`
+# trains into data/surface without the authors' val frames.
+SURFACE_TARGETS=depth_mm,roll_deg,pitch_deg,shear_x_mm,shear_y_mm,shear_theta_deg
+SURFACE_MODELS=()
+for m in data/surface/p128 data/surface/p64 data/surface/cae56; do
+    [ -f "$m/pose.json" ] || [ -f "$m/pose/regressor.json" ] && [ ! -e "$m/INCOMPLETE" ] && SURFACE_MODELS+=("$m")
+done
+step surface bench surface --models "${SURFACE_MODELS[@]}" models/pose-surface models/cae-surface \
+    --data "$REAL/tactip331-surface" --runs 200 --out "$OUT/surface.md"
+step surface_compare compare --encoder models/cae-surface --data "$REAL/tactip331-surface" \
+    --targets "$SURFACE_TARGETS" --out "$OUT/surface-compare.md"
+step shared bench shared-encoder --encoders models/cae-edge models/cae-shapes models/cae-surface \
+    --tasks configs/bench/shared-encoder.json --real "$REAL" --out "$OUT/shared-encoder.md"
 
 # Drop each table's own first line (the machine) where the header has it.
 body() { grep -v '^Machine:' "$1"; }
@@ -170,6 +188,25 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     echo "The CAE routes beside the shipped pose network (the jointly trained encoders are scored on the frames they never saw; \`models/cae-edge\` and \`models/pose-edge\` trained on every frame, so their rows are on frames they saw). \`${CMD[pose_cae]}\`"
     echo
     body "$OUT/edge-pose-cae.md" | sed 's#](edge-pose-cae.png)#](paper-a/edge-pose-cae.png)#'
+    echo
+    echo "## 3b. Surface pose and shear on the real 331-pin set"
+    echo
+    [ -f docs/paper-a-surface.md ] && cat docs/paper-a-surface.md && echo
+    echo "Every candidate on the authors' held-out \`val\` split against its latency; the candidates were trained on \`train\` alone by \`bash scripts/surface.sh\`, the shipped models on all 8,000 frames (marked). \`${CMD[surface]}\`"
+    echo
+    body "$OUT/surface.md" | sed 's#](surface#](paper-a/surface#'
+    echo
+    echo "### Which representation carries shear"
+    echo
+    echo "The same split, one MLP (256-128) per feature set: the surface encoder's features, principal components and the raw pixels of its pin image, and pin tracking (blob centroids of the full-resolution frame matched to the pins of the first training frame, as displacements). \`${CMD[surface_compare]}\`"
+    echo
+    body "$OUT/surface-compare.md"
+    echo
+    echo "### One encoder for many tasks"
+    echo
+    echo "\`${CMD[shared]}\`"
+    echo
+    body "$OUT/shared-encoder.md"
     echo
     echo "## 4. All seven shapes on held-out synthetic frames"
     echo

@@ -162,6 +162,36 @@ type FeatureSet = (String, [Vec<Vec<f32>>; 3]);
 /// Labels of the (train, validation, test) frames.
 type SplitLabels<'a, T> = (&'a [T], &'a [T], &'a [T]);
 
+/// The MLP regressor (ReLU layers of `hidden`) fitted on the training
+/// features, stopped early on the validation ones: its predictions of the
+/// test features. Compare's and the shared-encoder bench's estimator.
+pub(crate) fn mlp_regression(
+    targets: &[Target],
+    [tx, vx, sx]: [&[Vec<f32>]; 3],
+    (ty, vy): (&[Vec<f64>], &[Vec<f64>]),
+    (hidden, seed): (&[usize], u64),
+    dev: &Device,
+) -> Result<Vec<Vec<f64>>> {
+    let mut cfg = RegressorConfig::new(tx[0].len(), targets.to_vec())
+        .with_hidden(hidden.iter().map(|&w| (w, Activation::Relu)).collect());
+    cfg.schedule.seed = seed;
+    Ok(Regressor::train(cfg, (tx, ty), (vx, vy), dev)?.predict(sx)?)
+}
+
+/// The MLP classifier head (paper A's 16-64-32, one fold) fitted on `x`:
+/// its classes of the test features.
+pub(crate) fn mlp_classification(
+    classes: &[String],
+    (x, y): (&[Vec<f32>], &[usize]),
+    sx: &[Vec<f32>],
+    seed: u64,
+    dev: &Device,
+) -> Result<Vec<usize>> {
+    let mut cfg = HeadConfig::new(x[0].len(), classes.to_vec()).with_repeats(1);
+    cfg.schedule.seed = seed;
+    Ok(ClassifierHead::train(cfg, x, y, dev)?.predict(sx)?)
+}
+
 fn regression_table(
     sets: &[FeatureSet],
     targets: &[Target],
@@ -198,12 +228,7 @@ fn regression_table(
                     let y: Vec<Vec<f64>> = ty.iter().chain(vy).cloned().collect();
                     classical::knn(targets, (&x, &y), sx, 5)?
                 }
-                _ => {
-                    let mut cfg = RegressorConfig::new(tx[0].len(), targets.to_vec())
-                        .with_hidden(hidden.iter().map(|&w| (w, Activation::Relu)).collect());
-                    cfg.schedule.seed = seed;
-                    Regressor::train(cfg, (tx, ty), (vx, vy), dev)?.predict(sx)?
-                }
+                _ => mlp_regression(targets, [tx, vx, sx], (ty, vy), (hidden, seed), dev)?,
             };
             let secs = t0.elapsed().as_secs_f64();
             let errs: Vec<String> = targets
@@ -251,11 +276,7 @@ fn classification_table(
             let pred = match est {
                 "Gaussian naive Bayes" => classical::gaussian_nb(&x, &y, sx)?,
                 "k-NN (k=5)" => classical::knn_classify(&x, &y, sx, 5)?,
-                _ => {
-                    let mut cfg = HeadConfig::new(x[0].len(), classes.to_vec()).with_repeats(1);
-                    cfg.schedule.seed = seed;
-                    ClassifierHead::train(cfg, &x, &y, dev)?.predict(sx)?
-                }
+                _ => mlp_classification(classes, (&x, &y), sx, seed, dev)?,
             };
             let secs = t0.elapsed().as_secs_f64();
             let acc = tactile_core::metrics::accuracy(&pred, sy);

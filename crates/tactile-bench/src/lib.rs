@@ -21,6 +21,7 @@ pub mod pose;
 pub mod report;
 pub mod resolution;
 pub mod robustness;
+pub mod shared;
 pub mod surface;
 pub mod sweep;
 pub mod synth;

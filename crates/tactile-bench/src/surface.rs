@@ -96,6 +96,24 @@ pub fn bench_surface(
     }
     md.push_str(" 1.00 | - | - | - | - |\n");
     let (mut series, mut table_rows) = (Vec::new(), Vec::new());
+    // The scored frames in thirds of their tap depth: shear shows in the
+    // pins only once the skin grips the surface.
+    let depth_of = |i: usize| ds.number_opt(i, "depth_mm").ok().flatten();
+    let mut by_depth: Vec<usize> = (0..rows.len())
+        .filter(|&k| depth_of(rows[k]).is_some())
+        .collect();
+    by_depth.sort_by(|&a, &b| {
+        let d = |k: usize| depth_of(rows[k]).unwrap_or(0.0);
+        d(a).total_cmp(&d(b))
+    });
+    let thirds: Vec<&[usize]> = by_depth.chunks(by_depth.len().div_ceil(3).max(1)).collect();
+    let mut depth_md = String::from("| model | tap depth third | depth (mm) | frames |");
+    for (t, _) in AUTHORS_CNN {
+        depth_md.push_str(&format!(" {t} |"));
+    }
+    depth_md.push_str("\n|---|---|---|---|");
+    depth_md.push_str(&"---|".repeat(AUTHORS_CNN.len()));
+    depth_md.push('\n');
     let mut first_panels = None;
     for m in &b.models {
         let c = Candidate::read(m, b.runs)?;
@@ -108,6 +126,7 @@ pub fn bench_surface(
         };
         let (mut mae, mut ratio, mut panels) = (Vec::new(), Vec::new(), Vec::new());
         let (mut cov68, mut cov95) = (Vec::new(), Vec::new());
+        let mut errors_by_target: Vec<Vec<f64>> = Vec::new();
         for (t, authors) in AUTHORS_CNN {
             let Some(pred) = number(t) else {
                 return Err(tactile_core::Error::Invalid(format!(
@@ -117,6 +136,14 @@ pub fn bench_surface(
                 .into());
             };
             let std = number(&format!("{t}_std"));
+            errors_by_target.push(
+                rows.iter()
+                    .map(|&i| match ds.number_opt(i, t) {
+                        Ok(Some(y)) => (pred[i] - y).abs(),
+                        _ => f64::NAN,
+                    })
+                    .collect::<Vec<f64>>(),
+            );
             let mut points = Vec::with_capacity(rows.len());
             let (mut inside68, mut inside95) = (0usize, 0usize);
             for &i in &rows {
@@ -144,6 +171,34 @@ pub fn bench_surface(
             });
         }
         let worst = ratio.iter().copied().fold(0.0, f64::max);
+        for (n, third) in thirds.iter().enumerate() {
+            let lo = third
+                .first()
+                .and_then(|&k| depth_of(rows[k]))
+                .unwrap_or(f64::NAN);
+            let hi = third
+                .last()
+                .and_then(|&k| depth_of(rows[k]))
+                .unwrap_or(f64::NAN);
+            depth_md.push_str(&format!(
+                "| {} | {} | {lo:.2}-{hi:.2} | {} |",
+                folder_name(m),
+                ["shallowest", "middle", "deepest"][n.min(2)],
+                third.len()
+            ));
+            for e in &errors_by_target {
+                let v: Vec<f64> = third
+                    .iter()
+                    .map(|&k| e[k])
+                    .filter(|x| x.is_finite())
+                    .collect();
+                depth_md.push_str(&format!(
+                    " {:.3} |",
+                    v.iter().sum::<f64>() / v.len().max(1) as f64
+                ));
+            }
+            depth_md.push('\n');
+        }
         let cov_cell = |v: &[f64]| {
             if v.is_empty() {
                 return "-".to_string();
@@ -201,6 +256,9 @@ pub fn bench_surface(
             c.ms,
         ));
     }
+    md.push_str(&format!(
+        "\nErrors by tap depth (mean absolute error of the scored frames in thirds of their depth): shear and twist show in the pins only where the skin grips the surface.\n\n{depth_md}"
+    ));
     if let (Some((name, panels)), Some(out)) = (first_panels, out) {
         let (path, link) = picture_beside(out, "scatter");
         scatter_grid(&path, &panels, 3)?;

@@ -51,6 +51,8 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
             "calibrated sensor model",
             export::<tactile_gelsight::GelsightArtifact>(dir)?,
         )
+    } else if tactile_pose::PoseArtifact::is_in(dir) {
+        ("pose network", export::<tactile_pose::PoseArtifact>(dir)?)
     } else if part == Part::Autoencoder {
         let l = CaeArtifact::load(dir, &DeviceKind::Flex.device())?;
         let px = l.artifact.model.input_px;

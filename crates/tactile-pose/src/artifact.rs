@@ -107,7 +107,10 @@ impl Artifact for PoseArtifact {
 }
 
 impl Exportable for PoseArtifact {
-    /// `[N, 1, S, S]` grey pin images -> `[N, K]` standardised columns.
+    /// `[N, 1, S, S]` grey pin images -> `[N, K]` standardised columns
+    /// (`[N, 2K]` with uncertainty: the columns, then their log Laplace
+    /// scales; `pose.json`'s `outputs` and `std_scale` turn both into the
+    /// labels' units).
     fn onnx(&self, model: &PoseNet) -> tactile_onnx::Result<Vec<u8>> {
         let s = self.model.input_px;
         export_batch_dynamic(model, [1, 1, s, s], |m: &PoseNet, x| m.forward(x))

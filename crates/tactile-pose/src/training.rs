@@ -172,7 +172,21 @@ pub fn train(
     } else {
         data.training_rows(config.holdout)?
     };
+    let candidates = rows.len();
     let rows = set.labelled(&rows);
+    if rows.len() < 2 && candidates >= 2 {
+        let names: Vec<&str> = config.targets.iter().map(|t| t.name.as_str()).collect();
+        return Err(tactile_core::Error::dataset(
+            data.labels_path(),
+            None,
+            format!(
+                "{} of {candidates} training frames have every target labelled ({}); choose targets this dataset labels",
+                rows.len(),
+                names.join(", ")
+            ),
+        )
+        .into());
+    }
     let (train, val) = if config.all_rows {
         (rows.clone(), rows)
     } else {

@@ -96,12 +96,29 @@ fn surface_pose_with_calibrated_uncertainty_on_the_authors_split() {
     let mut est = PoseEstimator::load(&validated, Runtime::BurnFlex, 0).unwrap();
     let p = est.predict_dataset(&ds).unwrap();
     assert_eq!(p.names, TARGETS);
-    let std = p.std.unwrap();
+    let std = p.std.clone().unwrap();
     assert_eq!(std.len(), ds.len());
     assert!(
         std.iter()
             .all(|r| r.len() == 6 && r.iter().all(|s| s.is_finite() && *s > 0.0))
     );
+    // onnxruntime gives the same values and deviations (the exported graph
+    // carries the log scales beside the columns).
+    let mut ort = PoseEstimator::load(&validated, Runtime::Onnx, 1).unwrap();
+    let q = ort.predict_dataset(&ds).unwrap();
+    let close = |a: &[Vec<f64>], b: &[Vec<f64>]| {
+        a.iter()
+            .flatten()
+            .zip(b.iter().flatten())
+            .all(|(x, y)| (x - y).abs() <= 1e-4 * x.abs().max(1.0))
+    };
+    assert!(
+        close(&p.values, &q.values),
+        "{:?} vs {:?}",
+        p.values[0],
+        q.values[0]
+    );
+    assert!(close(&std, &q.std.unwrap()));
 
     // The final model: every split, every row, the validated calibration.
     let last = tmp.path().join("final");

@@ -201,6 +201,11 @@ impl PreprocessConfig {
         {
             return bad("binarise_offset and mask_radius_px must be finite".into());
         }
+        if let Some(r) = self.mask_radius_px.filter(|r| *r <= 0.0) {
+            return bad(format!(
+                "mask_radius_px {r} must be positive (or absent: no mask)"
+            ));
+        }
         if let Some(a) = &self.align {
             a.check()?;
         }

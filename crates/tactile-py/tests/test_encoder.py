@@ -4,6 +4,7 @@ encode`, the estimates of `tactile perceive`, and clear errors."""
 from __future__ import annotations
 
 import csv
+import json
 import os
 import shutil
 from pathlib import Path
@@ -110,3 +111,35 @@ def test_pose_estimator_matches_tactile_predict(tactile_bin, root, tmp_path):
         pose.estimate(np.zeros((2, 3, 4, 5, 6), dtype=np.uint8))
     with pytest.raises(FileNotFoundError):
         tactile.PoseEstimator(tmp_path / "nowhere")
+
+
+def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bin, root, tmp_path):
+    """models/pose-surface from Python: each target and its calibrated
+    standard deviation, as `tactile predict` writes them."""
+    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
+    src = real / "tactip331-surface"
+    data = tmp_path / "surface"
+    (data / "frames").mkdir(parents=True)
+    with open(src / "labels.csv") as f:
+        lines = f.read().splitlines()
+    keep = [lines[0]] + lines[1:21]
+    for line in keep[1:]:
+        name = line.split(",")[0]
+        shutil.copy(src / name, data / name)
+    (data / "labels.csv").write_text("\n".join(keep) + "\n")
+    manifest = json.loads((src / "manifest.json").read_text())
+    manifest["count"] = 20
+    (data / "manifest.json").write_text(json.dumps(manifest))
+    out = tmp_path / "estimates.csv"
+    run_cli(tactile_bin, "predict", "--model", "models/pose-surface", "--data", str(data),
+            "--out", str(out), "--device", "flex")
+    with open(out) as f:
+        rows = list(csv.DictReader(f))
+    pose = tactile.PoseEstimator(root / "models/pose-surface", "burn-flex")
+    frames = np.stack([tactile.read_grey(data / r["file"]) for r in rows])
+    got = pose.estimate(frames)
+    assert sorted(got) == sorted(pose.targets + [t + "_std" for t in pose.targets])
+    for name, values in got.items():
+        cli = np.array([float(r[name]) for r in rows])
+        assert np.allclose(values, cli, atol=6e-5), name
+    assert all((got[t + "_std"] > 0).all() for t in pose.targets)

@@ -36,6 +36,10 @@ pub(crate) enum BenchCmd {
     /// against the authors' CNN on their held-out split, interval coverage,
     /// latency, and the first model's predictions plotted against the truth.
     Surface(ModelsArgs),
+    /// One encoder for many tasks: every encoder on every task of a list
+    /// (configs/bench/shared-encoder.json), an MLP per task, beside each
+    /// task's own encoder.
+    SharedEncoder(SharedEncoderArgs),
     /// Ball-press calibration: sensor models cross-validated by press
     /// (lookup table, per-pixel MLP, the toolkit's networks), speed and
     /// robustness; writes docs/calibration.md.
@@ -44,6 +48,22 @@ pub(crate) enum BenchCmd {
     /// held-out renders, the real ball presses, frames of other sensors and
     /// the loop's times; writes docs/own-sensor.md.
     OwnSensor(OwnSensorArgs),
+}
+
+#[derive(Args)]
+pub(crate) struct SharedEncoderArgs {
+    /// Encoder folders, each run on every task.
+    #[arg(long, num_args = 1.., required = true)]
+    encoders: Vec<PathBuf>,
+    /// The tasks: a JSON list of {task, data, preprocess, targets or classify, own}.
+    #[arg(long, default_value = "configs/bench/shared-encoder.json")]
+    tasks: PathBuf,
+    /// Folder the tasks' datasets are in.
+    #[arg(long, default_value = "../shared/real")]
+    real: PathBuf,
+    /// Also write the table (and its rows as JSON beside it).
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -191,6 +211,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         | BenchCmd::Depth(a)
         | BenchCmd::Pose(a)
         | BenchCmd::Surface(a) => &a.out,
+        BenchCmd::SharedEncoder(a) => &a.out,
         BenchCmd::Calibration(a) => &Some(a.out.clone()),
         BenchCmd::OwnSensor(a) => &Some(a.out.clone()),
     };
@@ -253,6 +274,15 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Segmenter(a) => show(a, bench_segmenters)?,
         BenchCmd::Depth(a) => show(a, bench_depth)?,
         BenchCmd::Pose(a) => show(a, tactile_bench::pose::bench_pose)?,
+        BenchCmd::SharedEncoder(a) => {
+            let tasks = tactile_bench::shared::read_tasks(&a.tasks)?;
+            let cells = tactile_bench::shared::shared_encoders(&a.encoders, &tasks, &a.real)?;
+            let md = tactile_bench::shared::shared_markdown(&cells, &a.encoders, &tasks);
+            say_raw!("{md}");
+            if let Some(out) = &a.out {
+                write_markdown_and_json(out, &md, &cells)?;
+            }
+        }
         BenchCmd::Surface(a) => {
             let out = a.out.clone();
             let t = tactile_bench::surface::bench_surface(&model_bench(a), out.as_deref())?;

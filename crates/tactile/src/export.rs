@@ -8,7 +8,7 @@ use tactile_pipeline::export::{Part, export_model, export_standalone};
 
 #[derive(Args)]
 pub(crate) struct ExportArgs {
-    /// Model folder (CAE, detector, segmenter or depth).
+    /// Model folder (CAE, pose network, detector, segmenter, depth or calibrated sensor model).
     #[arg(long)]
     model: PathBuf,
     /// Output .onnx file.

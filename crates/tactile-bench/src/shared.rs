@@ -1,0 +1,218 @@
+//! One encoder for many tasks (paper A's claim across data): every encoder
+//! of a list encodes every task's frames, a cheap MLP is fitted on those
+//! features per task, and each task's errors are set beside those of the
+//! encoder trained for it, in one table.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use tactile_burn::{Artifact, DeviceKind, Runtime};
+use tactile_cae::data::PinSet;
+use tactile_cae::{CaeArtifact, TactipEncoder};
+use tactile_core::dataset::{DEFAULT_SPLIT_SEED, Dataset};
+use tactile_estimate::Target;
+use tactile_pipeline::tactip::classes_of;
+use tactile_preprocess::PreprocessConfig;
+
+use crate::Result;
+use crate::compare::{mlp_classification, mlp_regression};
+use crate::output::folder_name;
+
+/// Most tasks in one table.
+pub const MAX_TASKS: usize = 16;
+
+/// One task of the table, as `configs/bench/shared-encoder.json` lists it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Task {
+    /// Its name in the table.
+    pub task: String,
+    /// Dataset folder, relative to the real-data folder.
+    pub data: String,
+    /// Preprocessing of this dataset's frames for an encoder trained on
+    /// other data (its side becomes the encoder's input side).
+    pub preprocess: String,
+    /// Regression targets (`NAME` or `NAME:PERIOD`).
+    #[serde(default)]
+    pub targets: Vec<String>,
+    /// A class column to classify instead.
+    #[serde(default)]
+    pub classify: Option<String>,
+    /// Folder name of the encoder trained for this task.
+    pub own: String,
+}
+
+/// A task's result with one encoder.
+#[derive(Debug, Clone, Serialize)]
+pub struct Cell {
+    /// Task name.
+    pub task: String,
+    /// Encoder folder name.
+    pub encoder: String,
+    /// Per metric (target MAE in its units, or `accuracy`), the value.
+    pub values: Vec<(String, f64)>,
+    /// True when the encoder trained on this task's test frames.
+    pub saw_test_frames: bool,
+}
+
+/// Read and check a task list.
+pub fn read_tasks(path: &Path) -> Result<Vec<Task>> {
+    let tasks: Vec<Task> = tactile_core::io::read_json(path)?;
+    let bad = |m: String| tactile_core::Error::Config(format!("{}: {m}", path.display()));
+    if tasks.is_empty() || tasks.len() > MAX_TASKS {
+        return Err(bad(format!("1 to {MAX_TASKS} tasks, got {}", tasks.len())).into());
+    }
+    for t in &tasks {
+        if t.targets.is_empty() == t.classify.is_none() {
+            return Err(bad(format!(
+                "task {}: give targets or classify, not both",
+                t.task
+            ))
+            .into());
+        }
+    }
+    Ok(tasks)
+}
+
+/// Whether an encoder trained on `ds` (its notes) saw the test frames: it
+/// trained on that folder, left no test frames out, and the folder has no
+/// `split` column keeping them apart.
+fn saw_test(art: &CaeArtifact, ds: &Dataset) -> bool {
+    let trained_on = art.notes.get("trained_on").and_then(|v| v.as_str());
+    let same = trained_on
+        .is_some_and(|t| std::fs::canonicalize(t).ok() == std::fs::canonicalize(&ds.root).ok());
+    let excluded = art.notes.get("excluded_test").is_some_and(|v| !v.is_null());
+    same && !excluded && ds.split_indices("train").is_none()
+}
+
+/// Every encoder on every task: features, an MLP per task on the training
+/// frames (early stopping on the validation ones), scored on the test
+/// frames of the task's split (its `split` column, else seed 7's 20 %).
+pub fn shared_encoders(encoders: &[PathBuf], tasks: &[Task], real: &Path) -> Result<Vec<Cell>> {
+    let dev = DeviceKind::Flex.device();
+    let mut cells = Vec::new();
+    for t in tasks {
+        let ds = Dataset::open(real.join(&t.data))?;
+        let split = ds.three_way_split(0.2, 0.2, DEFAULT_SPLIT_SEED)?;
+        let preset: PreprocessConfig = tactile_core::io::read_json(Path::new(&t.preprocess))?;
+        let targets = t
+            .targets
+            .iter()
+            .map(|s| s.parse::<Target>())
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        for enc in encoders {
+            let mut art = CaeArtifact::read(enc)?;
+            let name = folder_name(enc);
+            if name != t.own {
+                let side = art.model.input_px;
+                art.preprocess = PreprocessConfig {
+                    output_px: side,
+                    ..preset.clone()
+                };
+            }
+            art.preprocess.check()?;
+            tactile_core::note!("{}: encoding {} frames with {name}", t.task, ds.len());
+            let (_, net) = tactile_onnx::load_network::<CaeArtifact>(enc, Runtime::BurnFlex, 0)?;
+            let mut encoder = TactipEncoder::from_network(art.clone(), net);
+            let pins = PinSet::from_dataset(&ds, &art.preprocess)?;
+            let feats = encoder.encode(&pins.images)?;
+            let pick = |idx: &[usize]| -> Vec<Vec<f32>> {
+                idx.iter().map(|&i| feats[i].clone()).collect()
+            };
+            let (tx, vx, sx) = (pick(&split.train), pick(&split.val), pick(&split.test));
+            let values = if let Some(col) = &t.classify {
+                let (classes, y) = classes_of(&ds, col)?;
+                let rows: Vec<usize> = split.train.iter().chain(&split.val).copied().collect();
+                let x: Vec<Vec<f32>> = rows.iter().map(|&i| feats[i].clone()).collect();
+                let yy: Vec<usize> = rows.iter().map(|&i| y[i]).collect();
+                let pred = mlp_classification(&classes, (&x, &yy), &sx, DEFAULT_SPLIT_SEED, &dev)?;
+                let truth: Vec<usize> = split.test.iter().map(|&i| y[i]).collect();
+                vec![(
+                    "accuracy".to_string(),
+                    tactile_core::metrics::accuracy(&pred, &truth),
+                )]
+            } else {
+                let labels = |idx: &[usize]| -> Result<Vec<Vec<f64>>> {
+                    idx.iter()
+                        .map(|&i| {
+                            targets
+                                .iter()
+                                .map(|tg| Ok(ds.number(i, &tg.name)?))
+                                .collect::<Result<Vec<f64>>>()
+                        })
+                        .collect()
+                };
+                let (ty, vy, sy) = (
+                    labels(&split.train)?,
+                    labels(&split.val)?,
+                    labels(&split.test)?,
+                );
+                let pred = mlp_regression(
+                    &targets,
+                    [&tx, &vx, &sx],
+                    (&ty, &vy),
+                    (&[256, 128], DEFAULT_SPLIT_SEED),
+                    &dev,
+                )?;
+                targets
+                    .iter()
+                    .enumerate()
+                    .map(|(j, tg)| {
+                        let p: Vec<f64> = pred.iter().map(|r| r[j]).collect();
+                        let y: Vec<f64> = sy.iter().map(|r| r[j]).collect();
+                        (tg.name.clone(), tg.mae(&p, &y))
+                    })
+                    .collect()
+            };
+            cells.push(Cell {
+                task: t.task.clone(),
+                encoder: name,
+                values,
+                saw_test_frames: saw_test(&art, &ds),
+            });
+        }
+    }
+    Ok(cells)
+}
+
+/// The table: one row per task metric, one column per encoder, each cell
+/// with its ratio to the task's own encoder (an error ratio above 1, or an
+/// accuracy ratio below 1, is what sharing costs).
+pub fn shared_markdown(cells: &[Cell], encoders: &[PathBuf], tasks: &[Task]) -> String {
+    let names: Vec<String> = encoders.iter().map(|e| folder_name(e)).collect();
+    let mut md = format!(
+        "Machine: {}\n\nEach encoder encodes every task's frames (with the task's preprocessing at the encoder's input side; the task's own encoder with its own). An MLP (256-128 regressor, or paper A's 16-64-32 head) is fitted per task and encoder on the training frames, stopped early on the validation frames, and scored on the test frames (the `split` column's, else seed 7's 20 %). Errors are mean absolute errors in the labels' units; in brackets, the ratio to the task's own encoder. A dagger marks an encoder that trained on that task's test frames.\n\n| task | metric | own encoder |",
+        tactile_core::bench::Machine::detect().describe()
+    );
+    for n in &names {
+        md.push_str(&format!(" {n} |"));
+    }
+    md.push_str("\n|---|---|---|");
+    md.push_str(&"---|".repeat(names.len()));
+    md.push('\n');
+    for t in tasks {
+        let of = |enc: &str| cells.iter().find(|c| c.task == t.task && c.encoder == enc);
+        let Some(first) = of(&names[0]) else { continue };
+        for (k, (metric, _)) in first.values.iter().enumerate() {
+            md.push_str(&format!("| {} | {metric} | {} |", t.task, t.own));
+            let own = of(&t.own).map(|c| c.values[k].1);
+            for n in &names {
+                let Some(c) = of(n) else {
+                    md.push_str(" - |");
+                    continue;
+                };
+                let v = c.values[k].1;
+                let cell = if metric == "accuracy" {
+                    format!("{:.1} %", 100.0 * v)
+                } else {
+                    format!("{v:.3}")
+                };
+                let ratio = own.map_or(String::new(), |o| format!(" ({:.2})", v / o));
+                let dagger = if c.saw_test_frames { " †" } else { "" };
+                md.push_str(&format!(" {cell}{ratio}{dagger} |"));
+            }
+            md.push('\n');
+        }
+    }
+    md
+}
