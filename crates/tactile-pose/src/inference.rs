@@ -23,6 +23,10 @@ pub struct PoseEstimator {
     members: Vec<(Scaler, Box<dyn Network>)>,
 }
 
+/// Per frame the targets' values, and with uncertainty their standard
+/// deviations (labels' units).
+pub type ValuesWithStd = (Vec<Vec<f64>>, Option<Vec<Vec<f64>>>);
+
 /// Estimates for a dataset.
 #[derive(Debug, Clone)]
 pub struct PoseEstimates {
@@ -90,10 +94,7 @@ impl PoseEstimator {
     /// uncertainty each value's standard deviation (labels' units). An
     /// ensemble's deviation adds its members' spread to their mean
     /// variance.
-    pub fn predict_with_std(
-        &mut self,
-        pins: &[PinImage],
-    ) -> Result<(Vec<Vec<f64>>, Option<Vec<Vec<f64>>>)> {
+    pub fn predict_with_std(&mut self, pins: &[PinImage]) -> Result<ValuesWithStd> {
         let side = self.artifact.model.input_px;
         if let Some(bad) = pins.iter().find(|p| p.side != side) {
             return Err(tactile_core::Error::shape("pin image", side, bad.side).into());
@@ -135,10 +136,7 @@ impl PoseEstimator {
 
     /// [`Self::predict_with_std`] of networks with uncertainty (linear
     /// targets only, so a column is a target).
-    fn predict_uncertain(
-        &mut self,
-        pins: &[PinImage],
-    ) -> Result<(Vec<Vec<f64>>, Option<Vec<Vec<f64>>>)> {
+    fn predict_uncertain(&mut self, pins: &[PinImage]) -> Result<ValuesWithStd> {
         let side = self.artifact.model.input_px;
         let k = self.artifact.model.outputs;
         let ones = vec![1.0; k];

@@ -71,7 +71,7 @@ impl PyPoseEstimator {
     ) -> PyResult<Bound<'py, PyDict>> {
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
-        let (rows, std) = py.detach(|| -> PyResult<(Vec<Vec<f64>>, Option<Vec<Vec<f64>>>)> {
+        let (rows, std) = py.detach(|| -> PyResult<tactile_pose::inference::ValuesWithStd> {
             let pins = pin_images(&px, &self.preprocess)?;
             let mut e = self
                 .estimator
