@@ -96,6 +96,10 @@ ship-cae-edge:
     rm -rf models/.cae-edge-new && mkdir -p models/.cae-edge-new/pose && cp data/cae-edge-112-all/cae.* data/cae-edge-112-all/curves.* data/cae-edge-112-all/training.json models/.cae-edge-new/ && cp data/cae-edge-112-all/pose/regressor.* models/.cae-edge-new/pose/
     rm -rf models/cae-edge && mv models/.cae-edge-new models/cae-edge
 
+# Surface pose and shear on the real 331-pin set (issue 34): the candidates on the authors' train split, the shipped models/pose-surface (all 8,000 frames) and models/cae-surface; then `PAPER_A_ONLY='surface|surface_compare|shared' bash scripts/paper-a.sh` scores them into docs/paper-a.md.
+surface:
+    bash scripts/surface.sh
+
 # Paper A's feature-count search on the shapes set: trains 8/16/32/64-feature CAEs into data/sweep, then writes docs/paper-a/sweep.md and its plots.
 sweep:
     for f in 8 16 32 64; do cargo run --release -p tactile -- train cae --data {{real}}/polic-shapes --out data/sweep/cae-$f --widths 16,16,8,4 --features $f --optimizer adam --lr 1e-3 --batch-size 32 --max-epochs 600 --patience 100; done

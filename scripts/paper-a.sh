@@ -97,14 +97,14 @@ step cross compare --encoder models/cae-shapes --data "$REAL/tactip127-edge" \
 # trains into data/surface without the authors' val frames.
 SURFACE_TARGETS=depth_mm,roll_deg,pitch_deg,shear_x_mm,shear_y_mm,shear_theta_deg
 SURFACE_MODELS=()
-for m in data/surface/p128 data/surface/p64 data/surface/cae56; do
-    [ -f "$m/pose.json" ] || [ -f "$m/pose/regressor.json" ] && [ ! -e "$m/INCOMPLETE" ] && SURFACE_MODELS+=("$m")
+for m in data/surface/p128 data/surface/p64; do
+    [ -f "$m/pose.json" ] && [ ! -e "$m/INCOMPLETE" ] && SURFACE_MODELS+=("$m")
 done
 step surface bench surface --models "${SURFACE_MODELS[@]}" models/pose-surface models/cae-surface \
     --data "$REAL/tactip331-surface" --runs 200 --out "$OUT/surface.md"
 step surface_compare compare --encoder models/cae-surface --data "$REAL/tactip331-surface" \
     --targets "$SURFACE_TARGETS" --out "$OUT/surface-compare.md"
-step shared bench shared-encoder --encoders models/cae-edge models/cae-shapes models/cae-surface \
+step shared bench shared-encoder --encoders models/cae-edge models/cae-shapes models/cae-surface models/cae-edge-unsupervised \
     --tasks configs/bench/shared-encoder.json --real "$REAL" --out "$OUT/shared-encoder.md"
 
 # Drop each table's own first line (the machine) where the header has it.
