@@ -136,27 +136,24 @@ pub fn bench_surface(
                 .into());
             };
             let std = number(&format!("{t}_std"));
-            errors_by_target.push(
-                rows.iter()
-                    .map(|&i| match ds.number_opt(i, t) {
-                        Ok(Some(y)) => (pred[i] - y).abs(),
-                        _ => f64::NAN,
-                    })
-                    .collect::<Vec<f64>>(),
-            );
             let mut points = Vec::with_capacity(rows.len());
+            // Per scored row its |error| (NaN when unlabelled), for the depth thirds.
+            let mut errors = Vec::with_capacity(rows.len());
             let (mut inside68, mut inside95) = (0usize, 0usize);
             for &i in &rows {
                 let Some(truth) = ds.number_opt(i, t)? else {
+                    errors.push(f64::NAN);
                     continue;
                 };
                 let e = (pred[i] - truth).abs();
+                errors.push(e);
                 points.push((truth, pred[i]));
                 if let Some(s) = std {
                     inside68 += usize::from(e <= s[i]);
                     inside95 += usize::from(e <= tactile_pose::uncertainty::Z95 * s[i]);
                 }
             }
+            errors_by_target.push(errors);
             let n = points.len().max(1) as f64;
             let e = points.iter().map(|p| (p.1 - p.0).abs()).sum::<f64>() / n;
             mae.push(e);
