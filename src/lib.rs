@@ -17,4 +17,5 @@ pub use tactile_onnx as onnx;
 pub use tactile_pipeline as pipeline;
 pub use tactile_pose as pose;
 pub use tactile_preprocess as preprocess;
+pub use tactile_ros as ros;
 pub use tactile_segment as segment;

@@ -91,6 +91,21 @@ pub enum Error {
     /// Stopped on request (Ctrl-C, SIGTERM): nothing half-written is left.
     #[error("interrupted: stopped before finishing, nothing partial was kept")]
     Interrupted,
+    /// A ROS 2 bag (MCAP) could not be read: the container, a topic or
+    /// one message.
+    #[error("{}{}{}: {message}", path.display(),
+        topic.as_ref().map(|t| format!(": topic {t}")).unwrap_or_default(),
+        index.map(|i| format!(", message {i}")).unwrap_or_default())]
+    Bag {
+        /// The bag.
+        path: PathBuf,
+        /// The topic, when the problem is one topic's.
+        topic: Option<String>,
+        /// The message's index on its topic (0-based), when one message is bad.
+        index: Option<u64>,
+        /// What is wrong.
+        message: String,
+    },
     /// Any other invalid input, described in words.
     #[error("{0}")]
     Invalid(String),

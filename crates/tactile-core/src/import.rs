@@ -23,8 +23,10 @@ use crate::source::{FrameSource, SourceOptions, SourceSpec};
 /// What to import.
 #[derive(Debug, Clone)]
 pub struct ImportOptions {
-    /// The video file or folder of frames.
+    /// The video file, ROS 2 bag or folder of frames.
     pub frames: PathBuf,
+    /// A bag's image topic (`None`: its only one).
+    pub topic: Option<String>,
     /// The labels CSV (a `frame` column and the kind's labels).
     pub labels: PathBuf,
     /// Which sensor the frames are from.
@@ -165,10 +167,14 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
         .filter(|h| *h != "frame" && !kind_cols.contains(h))
         .collect();
     let col = |name: &str| labels.header.iter().position(|h| h == name);
-    let mut source = FrameSource::open(
-        &SourceSpec::Path(options.frames.clone()),
-        SourceOptions::default(),
-    )?;
+    let spec = match &options.topic {
+        Some(t) => SourceSpec::Bag {
+            path: options.frames.clone(),
+            topic: Some(t.clone()),
+        },
+        None => SourceSpec::Path(options.frames.clone()),
+    };
+    let mut source = FrameSource::open(&spec, SourceOptions::default())?;
     // Files (a folder, an image) can be labelled by name; stream frames by number.
     let is_folder = source.list().is_some();
     let staged = StagedDir::new(&options.out)?;

@@ -1,13 +1,15 @@
 //! The burn-free foundation of tactile-rs: the error type, the dataset
 //! layout (`datasets.md`) with its checks, splits and import, the sensor
 //! contract ([`spec`]), image loading, atomic file writes and staged
-//! folders, frame sources (folders, videos, cameras, standard input),
+//! folders, frame sources (folders, videos, cameras, standard input, ROS 2
+//! bags),
 //! metrics, plots, progress, interrupts and benchmark helpers. It compiles
 //! no tensor library, so the virtual sensors and the preprocessing build
 //! in seconds; everything that needs burn lives in `tactile-burn`.
 
 #![deny(missing_docs)]
 
+pub mod bag;
 pub mod bench;
 pub mod dataset;
 pub mod error;

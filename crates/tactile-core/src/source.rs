@@ -1,6 +1,7 @@
 //! Where frames come from: a dataset (frames in `labels.csv` order, with
 //! their sequences and labels), a folder of PNG or JPEG frames, a video
-//! file, a V4L2 camera, or raw RGB frames on stdin ([`FrameSource`]).
+//! file, an image topic of a ROS 2 bag (with each frame's header stamp), a
+//! V4L2 camera, or raw RGB frames on stdin ([`FrameSource`]).
 //!
 //! Recorded sources (datasets, folders, files) give every frame, decoded
 //! on a second thread ahead of the models when asked. Live sources (a
@@ -225,6 +226,8 @@ pub enum SourceKind {
     Folder,
     /// A video file decoded by FFmpeg.
     Video,
+    /// An image topic of a ROS 2 bag (MCAP).
+    Bag,
     /// A V4L2 camera, live.
     Camera,
     /// Raw rgb24 frames on stdin, live.
@@ -244,6 +247,15 @@ pub enum SourceSpec {
     /// A dataset, a folder of frames, one image, a video file or a camera
     /// device (`/dev/videoN`), told apart by what the path is.
     Path(PathBuf),
+    /// An image topic of a ROS 2 bag (an `.mcap` file); `None` reads its
+    /// only image topic (a bag with several is refused, naming them). A
+    /// plain [`SourceSpec::Path`] to an `.mcap` file is the same as `None`.
+    Bag {
+        /// The bag.
+        path: PathBuf,
+        /// The topic (`/gelsight/image_raw`).
+        topic: Option<String>,
+    },
     /// Raw frames on stdin: `width * height * 3` bytes each, rgb24.
     Stdin {
         /// Width, pixels.
@@ -289,6 +301,8 @@ pub struct Frame {
     pub tendon: Option<bool>,
     /// When a live frame arrived (read whole from the camera or stdin).
     pub arrived: Option<Instant>,
+    /// A bag's frame: its message's header stamp, nanoseconds since the epoch.
+    pub stamp_ns: Option<i64>,
 }
 
 /// Reads one frame after another.
@@ -316,6 +330,7 @@ impl Reader for ListReader {
             sequence: e.sequence,
             tendon: e.tendon,
             arrived: None,
+            stamp_ns: None,
         }))
     }
 }
@@ -340,8 +355,47 @@ impl<R: FnMut() -> Result<Option<RgbImage>> + Send> Reader for StreamReader<R> {
             sequence: None,
             tendon: None,
             arrived: self.live.then(Instant::now),
+            stamp_ns: None,
         }))
     }
+}
+
+/// The frames of a bag's image topic, named by their index on it.
+struct BagReader(crate::bag::BagImages);
+
+impl Reader for BagReader {
+    fn next_frame(&mut self) -> Result<Option<Frame>> {
+        let Some(f) = self.0.next_frame()? else {
+            return Ok(None);
+        };
+        Ok(Some(Frame {
+            image: f.image,
+            name: format!("{:06}", f.index),
+            sequence: None,
+            tendon: None,
+            arrived: None,
+            stamp_ns: Some(f.stamp_ns),
+        }))
+    }
+}
+
+/// What [`FrameSource::open`] builds before choosing how to feed it.
+type Opened = (
+    SourceKind,
+    Option<FrameList>,
+    Box<dyn Reader>,
+    Option<(usize, usize)>,
+    Option<crate::video::VideoStopper>,
+);
+
+/// A bag's image topic (its only one when `topic` is `None`).
+fn open_bag(path: &Path, topic: Option<String>) -> Result<Opened> {
+    let topic = match topic {
+        Some(t) => t,
+        None => crate::bag::only_image_topic(path)?,
+    };
+    let r = BagReader(crate::bag::BagImages::open(path, &topic)?);
+    Ok((SourceKind::Bag, None, Box::new(r), None, None))
 }
 
 /// Raw rgb24 frames of a fixed size from `input`.
@@ -439,8 +493,9 @@ pub struct FrameSource {
 
 impl FrameSource {
     /// Open `spec`: a folder (a dataset with labels.csv, else its PNG and
-    /// JPEG frames), one image file, a character device (a V4L2 camera,
-    /// live), any other file as a video through FFmpeg, or stdin (live).
+    /// JPEG frames), one image file, an `.mcap` file as a ROS 2 bag, a
+    /// character device (a V4L2 camera, live), any other file as a video
+    /// through FFmpeg, or stdin (live).
     pub fn open(spec: &SourceSpec, options: SourceOptions) -> Result<Self> {
         if options.live_queue == 0 || options.live_queue > MAX_LIVE_QUEUE {
             return Err(Error::Config(format!(
@@ -449,7 +504,8 @@ impl FrameSource {
             )));
         }
         use crate::video::{DecodeOptions, VideoInput, VideoReader};
-        let (kind, list, reader, size, stopper): (_, _, Box<dyn Reader>, _, _) = match spec {
+        let (kind, list, reader, size, stopper): Opened = match spec {
+            SourceSpec::Bag { path, topic } => open_bag(path, topic.clone())?,
             SourceSpec::Stdin { width, height } => {
                 let (w, h) = (*width, *height);
                 if w == 0 || h == 0 || (w as u64).saturating_mul(h as u64) > MAX_IMAGE_PIXELS {
@@ -477,7 +533,9 @@ impl FrameSource {
                     _ => Error::io(path, e),
                 })?;
                 use std::os::unix::fs::FileTypeExt;
-                if meta.is_dir() || (meta.is_file() && is_frame_file(path)) {
+                if meta.is_file() && crate::bag::is_bag_file(path) {
+                    open_bag(path, None)?
+                } else if meta.is_dir() || (meta.is_file() && is_frame_file(path)) {
                     let list = match meta.is_dir() {
                         true => FrameList::open(path)?,
                         false => FrameList {

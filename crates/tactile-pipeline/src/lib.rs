@@ -21,7 +21,9 @@ pub use error::{Error, Result};
 pub use hysteresis::Hysteresis;
 pub use overlay::{FrameViews, SensorView, TendonView};
 pub use palpation::{FrameRecord, PalpationModels, Pipeline};
-pub use run::{ContactSummary, Flow, RunOptions, RunOutcome, RunSummary, run, run_collect};
+pub use run::{
+    ContactSummary, Flow, RunItem, RunOptions, RunOutcome, RunSummary, run, run_collect,
+};
 pub use tactile_burn::Runtime;
 pub use tactile_core::source::{
     Frame, FrameEntry, FrameList, FrameSource, MissingFrames, SourceKind, SourceOptions, SourceSpec,

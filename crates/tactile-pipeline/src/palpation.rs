@@ -26,8 +26,12 @@ use crate::{Error, Result};
 /// What the pipeline made of one frame (one JSON Lines record).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FrameRecord {
-    /// The frame's file name.
+    /// The frame's file name (a stream's or a bag's frame: its number).
     pub frame: String,
+    /// A bag's frame: its message's header stamp, nanoseconds since the
+    /// epoch (copied into the results written to MCAP).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stamp_ns: Option<i64>,
     /// The tendon decision (the detector's threshold, or the hysteresis).
     pub tendon: bool,
     /// Detector probability.
@@ -98,6 +102,7 @@ impl FrameRecord {
     pub fn empty(name: &str) -> Self {
         Self {
             frame: name.to_string(),
+            stamp_ns: None,
             tendon: false,
             score: 0.0,
             direction_deg: None,

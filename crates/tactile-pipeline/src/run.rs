@@ -10,7 +10,9 @@ use tactile_core::metrics::Reservoir;
 
 use crate::Result;
 use crate::hysteresis::Hysteresis;
+use crate::overlay::FrameViews;
 use crate::palpation::{FrameRecord, Pipeline};
+use tactile_core::image_io::RgbImage;
 use tactile_core::source::{FrameSource, SourceKind};
 
 /// How a run goes.
@@ -265,7 +267,7 @@ pub fn run(
     pipeline: &mut Pipeline,
     source: &mut FrameSource,
     options: &RunOptions,
-    sink: &mut dyn FnMut(&FrameRecord) -> Result<Flow>,
+    sink: &mut dyn FnMut(&RunItem<'_>) -> Result<Flow>,
 ) -> Result<RunSummary> {
     // Overlays go to a staging folder first: an error or an interrupt
     // leaves no half set of them.
@@ -304,7 +306,8 @@ pub fn run(
         let (mut rec, views) =
             pipeline.process_filtered(&frame.name, &frame.image, filter.as_mut())?;
         rec.latency_ms = frame.arrived.map(|t| 1e3 * t.elapsed().as_secs_f64());
-        if let (Some(staged), Some(v)) = (&render, views) {
+        rec.stamp_ns = frame.stamp_ns;
+        if let (Some(staged), Some(v)) = (&render, &views) {
             let stem = Path::new(&frame.name)
                 .file_stem()
                 .unwrap_or_default()
@@ -339,9 +342,19 @@ pub fn run(
         frames += 1;
         gated += usize::from(!rec.tendon);
         ood += usize::from(rec.out_of_distribution);
-        prev = Some((frame.sequence, rec.tendon, rec.tendon_raw, frame.tendon));
+        prev = Some((
+            frame.sequence.clone(),
+            rec.tendon,
+            rec.tendon_raw,
+            frame.tendon,
+        ));
         pb.inc(1);
-        if sink(&rec)? == Flow::Stop {
+        let item = RunItem {
+            record: &rec,
+            views: views.as_ref(),
+            frame: &frame.image,
+        };
+        if sink(&item)? == Flow::Stop {
             break;
         }
     }
@@ -394,6 +407,18 @@ pub fn run(
     })
 }
 
+/// What [`run`] hands its sink per frame: the record, what the models saw
+/// (tendon frames, a calibrated sensor's frames) and the frame itself, so a
+/// sink can write images (MCAP results, a live view) as well as records.
+pub struct RunItem<'a> {
+    /// The frame's record.
+    pub record: &'a FrameRecord,
+    /// The window, mask, depth and indentation, when the frame had them.
+    pub views: Option<&'a FrameViews>,
+    /// The frame as it came.
+    pub frame: &'a RgbImage,
+}
+
 /// Run over `source` keeping every record: for tests, reports and short
 /// recorded sources.
 pub fn run_collect(
@@ -402,8 +427,8 @@ pub fn run_collect(
     options: &RunOptions,
 ) -> Result<RunOutcome> {
     let mut records = Vec::new();
-    let summary = run(pipeline, source, options, &mut |r| {
-        records.push(r.clone());
+    let summary = run(pipeline, source, options, &mut |item| {
+        records.push(item.record.clone());
         Ok(Flow::Continue)
     })?;
     Ok(RunOutcome { records, summary })

@@ -40,6 +40,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<source::PyFrameSource>()?;
     m.add_class::<source::PyFrame>()?;
     m.add_function(wrap_pyfunction!(source::frames, m)?)?;
+    m.add_function(wrap_pyfunction!(source::bag_topics, m)?)?;
     m.add_function(wrap_pyfunction!(image::read_rgb, m)?)?;
     m.add_function(wrap_pyfunction!(image::read_grey, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synth_tactip, m)?)?;

@@ -1,6 +1,7 @@
 //! `tactile.frames`: every source the command line reads (a dataset, a
-//! folder of PNG or JPEG frames, a video file, a V4L2 camera, raw frames
-//! on stdin) as a Python iterator of numpy frames.
+//! folder of PNG or JPEG frames, a video file, a ROS 2 bag's image topic,
+//! a V4L2 camera, raw frames on stdin) as a Python iterator of numpy
+//! frames; `tactile.bag_topics` lists a bag's image topics.
 
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -15,7 +16,8 @@ use crate::errors::PyResultExt;
 /// One frame of a source: `image` is `(H, W, 3)` uint8 RGB; `name` the
 /// file name or the frame's number in a stream; `sequence` and `tendon`
 /// what a dataset's labels say (else None); `age_ms` how long ago a live
-/// frame arrived, when it was handed over (None for recorded sources).
+/// frame arrived, when it was handed over (None for recorded sources);
+/// `stamp_ns` a bag frame's header stamp, nanoseconds since the epoch.
 #[pyclass(module = "tactile", name = "Frame", frozen, get_all)]
 pub struct PyFrame {
     image: Py<PyAny>,
@@ -23,6 +25,7 @@ pub struct PyFrame {
     sequence: Option<String>,
     tendon: Option<bool>,
     age_ms: Option<f64>,
+    stamp_ns: Option<i64>,
 }
 
 #[pymethods]
@@ -50,7 +53,7 @@ impl PyFrameSource {
 
 #[pymethods]
 impl PyFrameSource {
-    /// What the source is: "dataset", "folder", "video", "camera" or "stdin".
+    /// What the source is: "dataset", "folder", "video", "bag", "camera" or "stdin".
     #[getter]
     fn kind(&self) -> PyResult<String> {
         let k = self.lock()?.kind();
@@ -92,29 +95,34 @@ impl PyFrameSource {
             sequence: f.sequence,
             tendon: f.tendon,
             age_ms,
+            stamp_ns: f.stamp_ns,
         }))
     }
 }
 
 /// Open a source of frames: `source` is a dataset folder, a folder of PNG or
 /// JPEG frames, an image, a video file (decoded by the system's FFmpeg,
-/// every frame) or a camera device such as "/dev/video0" (live); or give
+/// every frame), a ROS 2 bag (".mcap"; `topic` names its image topic, else
+/// its only one is read) or a camera device such as "/dev/video0" (live); or give
 /// `stdin_size=(width, height)` (and no source) to read raw rgb24 frames
 /// from standard input (live). Live sources keep at most `live_queue`
 /// frames waiting and drop the oldest when more arrive.
 #[pyfunction]
-#[pyo3(signature = (source=None, *, stdin_size=None, live_queue=2, limit=None, prefetch=true))]
+#[pyo3(signature = (source=None, *, topic=None, stdin_size=None, live_queue=2, limit=None, prefetch=true))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn frames(
     py: Python<'_>,
     source: Option<PathBuf>,
+    topic: Option<String>,
     stdin_size: Option<(usize, usize)>,
     live_queue: usize,
     limit: Option<u64>,
     prefetch: bool,
 ) -> PyResult<PyFrameSource> {
     let spec = match (source, stdin_size) {
-        (Some(p), None) => SourceSpec::Path(p),
+        (Some(path), None) if topic.is_some() => SourceSpec::Bag { path, topic },
         (None, Some((width, height))) => SourceSpec::Stdin { width, height },
+        (Some(p), None) => SourceSpec::Path(p),
         (Some(_), Some(_)) => {
             return Err(PyValueError::new_err(
                 "give a source path or stdin_size, not both",
@@ -135,4 +143,24 @@ pub(crate) fn frames(
     Ok(PyFrameSource {
         source: Mutex::new(source),
     })
+}
+
+/// The image topics of a ROS 2 bag (an MCAP file): a list of dicts with
+/// `topic`, `message_type`, `count` and `rate_hz`.
+#[pyfunction]
+pub(crate) fn bag_topics(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny>>> {
+    let topics = py
+        .detach(move || tactile_core::bag::image_topics(&path))
+        .py()?;
+    topics
+        .into_iter()
+        .map(|t| {
+            let d = pyo3::types::PyDict::new(py);
+            d.set_item("topic", t.topic)?;
+            d.set_item("message_type", t.message_type)?;
+            d.set_item("count", t.count)?;
+            d.set_item("rate_hz", t.rate_hz)?;
+            Ok(d.into_any().unbind())
+        })
+        .collect()
 }

@@ -18,9 +18,13 @@ pub(crate) enum DatasetCmd {
 
 #[derive(Args)]
 pub(crate) struct FromVideoArgs {
-    /// The video file (anything FFmpeg decodes) or folder of frames.
+    /// The video file (anything FFmpeg decodes), a ROS 2 bag (.mcap; a
+    /// frame's number is its index on --topic) or a folder of frames.
     #[arg(long)]
     video: PathBuf,
+    /// A bag's image topic (without it, the bag's only image topic).
+    #[arg(long)]
+    topic: Option<String>,
     /// Labels CSV: a `frame` column and the kind's label columns
     /// (docs/datasets.md); `mask` and `depth` name files beside it.
     #[arg(long)]
@@ -44,6 +48,7 @@ pub(crate) fn main(cmd: DatasetCmd) -> Result<()> {
         DatasetCmd::FromVideo(a) => {
             let s = import_dataset(&ImportOptions {
                 frames: a.video,
+                topic: a.topic,
                 labels: a.labels,
                 kind: a.kind,
                 out: a.out,

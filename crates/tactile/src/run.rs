@@ -14,10 +14,18 @@ use tactile_pipeline::{Flow, FrameSource, Pipeline, RunOptions, SourceOptions, S
 pub(crate) struct RunArgs {
     /// The frames: a visuo-tactile dataset (frames in labels.csv order), a
     /// folder of PNG or JPEG frames (in name order), one image, a video
-    /// file (mp4, mkv, avi; decoded by FFmpeg, every frame) or a V4L2
-    /// camera such as /dev/video0 (live).
+    /// file (mp4, mkv, avi; decoded by FFmpeg, every frame), a ROS 2 bag
+    /// (.mcap; see --topic) or a V4L2 camera such as /dev/video0 (live).
     #[arg(long, required_unless_present = "stdin", conflicts_with = "stdin")]
     data: Option<PathBuf>,
+    /// A ROS 2 bag's image topic (sensor_msgs/msg/Image or
+    /// CompressedImage); without it, the bag's only image topic.
+    #[arg(long, requires = "data")]
+    topic: Option<String>,
+    /// List the bag's image topics with their message counts and rates,
+    /// and stop.
+    #[arg(long, requires = "data")]
+    list_topics: bool,
     /// Read raw rgb24 frames of --size from standard input (live), e.g.
     /// `ffmpeg -i cam -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size 640x360`.
     #[arg(long, requires = "size")]
@@ -41,9 +49,20 @@ pub(crate) struct RunArgs {
     threads: u16,
     /// JSON Lines, one record per frame as it is made: a file (it appears
     /// when the run ends) or `-` for standard output, flushed per frame
-    /// (the summary then goes to standard error).
+    /// (the summary then goes to standard error). A name ending in .mcap
+    /// writes ROS 2 messages instead (docs/robots.md): the record, the
+    /// tendon mask, the depth or indentation map and the direction, each
+    /// stamped like its input frame.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// With an .mcap --out or --view: also the input frames, on /tactile/image.
+    #[arg(long)]
+    with_frames: bool,
+    /// Serve the results live over the Foxglove WebSocket protocol at
+    /// HOST:PORT (open Foxglove on ws://HOST:PORT); the pipeline never
+    /// waits for a viewer (frames it cannot take are dropped and counted).
+    #[arg(long, value_name = "HOST:PORT")]
+    view: Option<String>,
     /// Process at most this many frames.
     #[arg(long)]
     limit: Option<u64>,
@@ -74,7 +93,30 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         Some(&[on, off]) => Some((on, off)),
         Some(v) => bail!("--hysteresis takes ON,OFF (two probabilities), got {v:?}"),
     };
+    if a.list_topics {
+        let Some(bag) = &a.data else {
+            bail!("--list-topics needs --data BAG.mcap")
+        };
+        let topics = tactile_core::bag::image_topics(bag)?;
+        if topics.is_empty() {
+            say!("{}: no image topics", bag.display());
+        }
+        for t in &topics {
+            say!(
+                "{}  {}  {} messages  {:.1} Hz",
+                t.topic,
+                t.message_type,
+                t.count,
+                t.rate_hz
+            );
+        }
+        return Ok(());
+    }
     let spec = match (&a.data, a.size) {
+        (Some(p), _) if a.topic.is_some() => SourceSpec::Bag {
+            path: p.clone(),
+            topic: a.topic.clone(),
+        },
         (Some(p), _) => SourceSpec::Path(p.clone()),
         (None, Some(crate::args::Size([width, height]))) => SourceSpec::Stdin { width, height },
         (None, None) => bail!("give --data PATH or --stdin --size WIDTHxHEIGHT"),
@@ -111,15 +153,41 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         hysteresis,
         render: a.render.clone(),
     };
-    let mut records = a.out.as_deref().map(JsonLines::create).transpose()?;
-    let s = tactile_pipeline::run(&mut pipeline, &mut source, &options, &mut |rec| {
+    let mcap_out = a
+        .out
+        .as_deref()
+        .filter(|p| tactile_core::bag::is_bag_file(p));
+    let mut robot = tactile_ros::RobotOutputs {
+        mcap: mcap_out.map(tactile_ros::McapResults::create).transpose()?,
+        live: a
+            .view
+            .as_deref()
+            .map(tactile_ros::live::LiveView::serve)
+            .transpose()?,
+        with_frames: a.with_frames,
+    };
+    if let Some(l) = &robot.live {
+        tactile_core::note!(
+            "live view: open Foxglove on ws://{}:{} (frames are sent while a viewer is subscribed)",
+            a.view
+                .as_deref()
+                .and_then(|v| v.rsplit_once(':'))
+                .map_or("127.0.0.1", |v| v.0),
+            l.port()
+        );
+    }
+    let json_out = a.out.as_deref().filter(|_| mcap_out.is_none());
+    let mut records = json_out.map(JsonLines::create).transpose()?;
+    let s = tactile_pipeline::run(&mut pipeline, &mut source, &options, &mut |item| {
+        robot.handle(item).map_err(tactile_core::Error::from)?;
         records
             .as_mut()
-            .map_or(Ok(Flow::Continue), |r| r.write(rec))
+            .map_or(Ok(Flow::Continue), |r| r.write(item.record))
     })?;
     if let Some(r) = records {
         r.finish()?;
     }
+    let robot = robot.finish()?;
     // With records on stdout, the summary goes to stderr.
     let report = |line: String| match to_stdout {
         true => tactile_core::note!("{line}"),
@@ -128,6 +196,12 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     s.describe().into_iter().for_each(report);
     if let (Some(out), false) = (&a.out, to_stdout) {
         report(format!("records in {}", out.display()));
+    }
+    if a.view.is_some() {
+        report(format!(
+            "live view: {} frames sent, {} dropped (viewer behind)",
+            robot.live_sent, robot.live_dropped
+        ));
     }
     report(serde_json::to_string(&s)?);
     Ok(())

@@ -188,6 +188,8 @@ class Frame:
     def tendon(self) -> Optional[bool]: ...
     @property
     def age_ms(self) -> Optional[float]: ...
+    @property
+    def stamp_ns(self) -> Optional[int]: ...
 
 class FrameSource:
     """Frames from a dataset, a folder, an image, a video file, a camera or stdin, in order."""
@@ -204,12 +206,16 @@ class FrameSource:
 def frames(
     source: Optional[_Path] = None,
     *,
+    topic: Optional[str] = None,
     stdin_size: Optional[Tuple[int, int]] = None,
     live_queue: int = 2,
     limit: Optional[int] = None,
     prefetch: bool = True,
 ) -> FrameSource:
-    """Open a source of frames (a dataset, a folder, an image, a video file, a camera, or stdin)."""
+    """Open a source of frames (a dataset, a folder, an image, a video file, a ROS 2 bag's image topic, a camera, or stdin)."""
+
+def bag_topics(path: _Path) -> List[Dict[str, Any]]:
+    """The image topics of a ROS 2 bag (MCAP): topic, message_type, count, rate_hz."""
 
 def read_rgb(path: _Path) -> npt.NDArray[np.uint8]:
     """An 8-bit PNG as (H, W, 3) uint8 RGB, decoded as the command line does."""

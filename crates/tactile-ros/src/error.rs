@@ -1,0 +1,45 @@
+use std::path::PathBuf;
+
+/// What can go wrong writing results to MCAP or serving them live.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The MCAP file could not be written.
+    #[error("{}: cannot write MCAP results: {message}", path.display())]
+    Write {
+        /// The output file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// A message could not be encoded (a value CDR cannot hold).
+    #[error("cannot encode {topic}: {message}")]
+    Encode {
+        /// The topic.
+        topic: String,
+        /// What went wrong.
+        message: String,
+    },
+    /// The live view could not start (the address is taken, not an address).
+    #[error("live view at {address}: {message}")]
+    Live {
+        /// The address asked for.
+        address: String,
+        /// What went wrong.
+        message: String,
+    },
+    /// The foundation's errors (an unwritable folder, an interrupt).
+    #[error(transparent)]
+    Core(#[from] tactile_core::Error),
+}
+
+/// This crate's results.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl From<Error> for tactile_core::Error {
+    fn from(e: Error) -> Self {
+        match e {
+            Error::Core(e) => e,
+            other => tactile_core::Error::Invalid(other.to_string()),
+        }
+    }
+}

@@ -1,0 +1,188 @@
+//! The live view: the same channels as an MCAP file of results, served over
+//! the Foxglove WebSocket protocol (the `foxglove` SDK's server), so a
+//! researcher opens Foxglove on `ws://HOST:PORT` and watches the decision,
+//! the mask, the depth and the direction as the pipeline runs.
+//!
+//! The pipeline never waits for a viewer: frames are encoded only while a
+//! viewer is subscribed, and handed to the server's thread through a queue
+//! of [`LIVE_QUEUE`] frames; when it is full the frame is dropped and
+//! counted ([`LiveView::dropped`]).
+
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{SyncSender, TrySendError};
+use std::sync::{Arc, Mutex};
+
+use foxglove::{ChannelBuilder, Context, RawChannel, WebSocketServer};
+
+use crate::results::{FrameMessages, Topic};
+use crate::{Error, Result};
+
+/// Frames that may wait for the server's thread; more are dropped.
+pub const LIVE_QUEUE: usize = 4;
+
+/// A Foxglove WebSocket server with the result channels.
+pub struct LiveView {
+    address: String,
+    port: u16,
+    channels: Arc<BTreeMap<Topic, Arc<RawChannel>>>,
+    queue: Option<SyncSender<FrameMessages>>,
+    worker: Option<std::thread::JoinHandle<()>>,
+    dropped: Arc<AtomicU64>,
+    sent: Arc<AtomicU64>,
+    server: Mutex<Option<foxglove::WebSocketServerHandle>>,
+}
+
+/// `HOST:PORT` split; port 0 picks a free one.
+fn parse_address(address: &str) -> Result<(String, u16)> {
+    let bad = |why: &str| Error::Live {
+        address: address.into(),
+        message: format!("{why}; give HOST:PORT such as 127.0.0.1:8765"),
+    };
+    let (host, port) = address.rsplit_once(':').ok_or_else(|| bad("no port"))?;
+    let port: u16 = port
+        .parse()
+        .map_err(|_| bad("the port is not a number from 0 to 65535"))?;
+    let host = host.trim_start_matches('[').trim_end_matches(']');
+    if host.is_empty() {
+        return Err(bad("no host"));
+    }
+    Ok((host.to_string(), port))
+}
+
+impl LiveView {
+    /// Serve the result channels at `address` (`HOST:PORT`; port 0 picks a
+    /// free one, see [`LiveView::port`]).
+    pub fn serve(address: &str) -> Result<Self> {
+        let (host, port) = parse_address(address)?;
+        let fail = |message: String| Error::Live {
+            address: address.into(),
+            message,
+        };
+        let ctx = Context::new();
+        let mut channels = BTreeMap::new();
+        for topic in Topic::ALL {
+            let s = topic.schema();
+            let schema = foxglove::Schema::new(s.name, "ros2msg", s.text.into_bytes());
+            let channel = ChannelBuilder::new(topic.name())
+                .message_encoding("cdr")
+                .schema(schema)
+                .context(&ctx)
+                .build_raw()
+                .map_err(|e| fail(e.to_string()))?;
+            channels.insert(topic, channel);
+        }
+        let server = WebSocketServer::new()
+            .name("tactile-rs")
+            .bind(host, port)
+            .context(&ctx)
+            .start_blocking()
+            .map_err(|e| fail(e.to_string()))?;
+        let port = server.port();
+        let channels = Arc::new(channels);
+        let (tx, rx) = std::sync::mpsc::sync_channel::<FrameMessages>(LIVE_QUEUE);
+        let sent = Arc::new(AtomicU64::new(0));
+        let worker = {
+            let channels = Arc::clone(&channels);
+            let sent = Arc::clone(&sent);
+            std::thread::spawn(move || {
+                for frame in rx {
+                    let meta = foxglove::PartialMetadata {
+                        log_time: u64::try_from(frame.stamp_ns).ok(),
+                    };
+                    for (topic, data) in &frame.messages {
+                        if let Some(c) = channels.get(topic) {
+                            c.log_with_meta(data, meta);
+                        }
+                    }
+                    sent.fetch_add(1, Ordering::Relaxed);
+                }
+            })
+        };
+        Ok(Self {
+            address: address.into(),
+            port,
+            channels,
+            queue: Some(tx),
+            worker: Some(worker),
+            dropped: Arc::new(AtomicU64::new(0)),
+            sent,
+            server: Mutex::new(Some(server)),
+        })
+    }
+
+    /// The address asked for.
+    pub fn address(&self) -> &str {
+        &self.address
+    }
+
+    /// The port served (the one picked when 0 was asked for).
+    pub fn port(&self) -> u16 {
+        self.port
+    }
+
+    /// Whether a viewer is subscribed to any channel: frames are encoded
+    /// only then.
+    pub fn watched(&self) -> bool {
+        self.channels.values().any(|c| c.has_sinks())
+    }
+
+    /// Hand one frame's messages to the server without waiting: a full
+    /// queue drops it (counted).
+    pub fn publish(&self, frame: FrameMessages) {
+        let Some(q) = &self.queue else { return };
+        match q.try_send(frame) {
+            Ok(()) => {}
+            Err(TrySendError::Full(_)) | Err(TrySendError::Disconnected(_)) => {
+                self.dropped.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+    }
+
+    /// Frames dropped because the server's thread was behind.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.load(Ordering::Relaxed)
+    }
+
+    /// Frames handed to the server.
+    pub fn sent(&self) -> u64 {
+        self.sent.load(Ordering::Relaxed)
+    }
+
+    /// Send what is queued, then stop the server.
+    pub fn close(&mut self) {
+        self.queue = None;
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+        if let Ok(mut s) = self.server.lock()
+            && let Some(server) = s.take()
+        {
+            server.stop().wait_blocking();
+        }
+    }
+}
+
+impl Drop for LiveView {
+    fn drop(&mut self) {
+        self.close();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn addresses_are_checked() {
+        assert_eq!(
+            parse_address("127.0.0.1:8765").unwrap(),
+            ("127.0.0.1".into(), 8765)
+        );
+        assert_eq!(parse_address("[::1]:0").unwrap(), ("::1".into(), 0));
+        for bad in ["8765", "host:", "host:99999", ":8765"] {
+            let e = parse_address(bad).unwrap_err().to_string();
+            assert!(e.contains(bad) && e.contains("HOST:PORT"), "{e}");
+        }
+    }
+}

@@ -1,0 +1,450 @@
+//! One frame's results as ROS 2 messages ([`FrameMessages`]) and an MCAP
+//! file of them ([`McapResults`]).
+
+use std::collections::BTreeMap;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use tactile_core::image_io::RgbImage;
+use tactile_pipeline::FrameRecord;
+use tactile_pipeline::overlay::FrameViews;
+
+use crate::messages::{
+    Color, Header, Image, ImageAnnotations, PalpationResult, Point2, PointsAnnotation,
+    TextAnnotation, Time, to_cdr,
+};
+use crate::schemas::{self, Schema};
+use crate::{Error, Result};
+
+/// The camera frame every message names.
+pub const FRAME_ID: &str = "tactile_sensor";
+
+/// The channels results go to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Topic {
+    /// The input frame, rgb8 (when asked).
+    Image,
+    /// The record.
+    Result,
+    /// The kept region in the segmenter's window, mono8.
+    TendonMask,
+    /// The depth network's map, 32FC1 mm.
+    Depth,
+    /// A calibrated sensor's indentation, 32FC1 mm.
+    Indentation,
+    /// The decision and direction drawn over the tendon mask.
+    Annotations,
+}
+
+impl Topic {
+    /// Every topic, in the order channels are registered.
+    pub const ALL: [Topic; 6] = [
+        Topic::Image,
+        Topic::Result,
+        Topic::TendonMask,
+        Topic::Depth,
+        Topic::Indentation,
+        Topic::Annotations,
+    ];
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Topic::Image => "/tactile/image",
+            Topic::Result => "/tactile/result",
+            Topic::TendonMask => "/tactile/tendon_mask",
+            Topic::Depth => "/tactile/depth",
+            Topic::Indentation => "/tactile/indentation",
+            Topic::Annotations => "/tactile/annotations",
+        }
+    }
+
+    /// Its message type and schema.
+    pub fn schema(self) -> Schema {
+        match self {
+            Topic::Result => schemas::palpation_result(),
+            Topic::Annotations => schemas::image_annotations(),
+            _ => schemas::image(),
+        }
+    }
+}
+
+/// One frame's results, encoded: `(topic, CDR bytes)` in [`Topic::ALL`]
+/// order, with the stamp they carry.
+#[derive(Debug, Clone)]
+pub struct FrameMessages {
+    /// The input frame's stamp, nanoseconds since the epoch.
+    pub stamp_ns: i64,
+    /// The messages.
+    pub messages: Vec<(Topic, Vec<u8>)>,
+}
+
+fn nan_or<T: Into<f64>>(v: Option<T>) -> f64 {
+    v.map_or(f64::NAN, Into::into)
+}
+
+fn nan_or32(v: Option<f32>) -> f32 {
+    v.unwrap_or(f32::NAN)
+}
+
+fn encode<T: serde::Serialize>(topic: Topic, msg: &T) -> Result<Vec<u8>> {
+    to_cdr(msg).map_err(|message| Error::Encode {
+        topic: topic.name().into(),
+        message,
+    })
+}
+
+fn image_msg<'a>(
+    header: &Header,
+    width: usize,
+    height: usize,
+    encoding: &str,
+    data: &'a [u8],
+) -> Image<'a> {
+    Image {
+        header: header.clone(),
+        height: height as u32,
+        width: width as u32,
+        encoding: encoding.into(),
+        is_bigendian: 0,
+        step: (data.len() / height.max(1)) as u32,
+        data,
+    }
+}
+
+fn f32_bytes(values: &[f32], scale: f32) -> Vec<u8> {
+    values
+        .iter()
+        .flat_map(|v| (v * scale).to_le_bytes())
+        .collect()
+}
+
+/// `foxglove_msgs/PointsAnnotation`'s `LINE_LIST`.
+const LINE_LIST: u8 = 4;
+const RED: Color = Color {
+    r: 0.95,
+    g: 0.1,
+    b: 0.1,
+    a: 1.0,
+};
+const CLEAR: Color = Color {
+    r: 0.0,
+    g: 0.0,
+    b: 0.0,
+    a: 0.0,
+};
+const SHADE: Color = Color {
+    r: 0.0,
+    g: 0.0,
+    b: 0.0,
+    a: 0.6,
+};
+const WHITE: Color = Color {
+    r: 1.0,
+    g: 1.0,
+    b: 1.0,
+    a: 1.0,
+};
+
+impl FrameMessages {
+    /// The messages of one frame: its record, what the models saw
+    /// (`views`), and the input `frame` itself when given. The stamp is the
+    /// record's (a bag's header stamp), else the time now.
+    pub fn encode(
+        record: &FrameRecord,
+        views: Option<&FrameViews>,
+        frame: Option<&RgbImage>,
+    ) -> Result<Self> {
+        let stamp_ns = record.stamp_ns.unwrap_or_else(now_ns);
+        let header = Header {
+            stamp: Time::from_nanos(stamp_ns),
+            frame_id: FRAME_ID.into(),
+        };
+        let mut messages = Vec::with_capacity(Topic::ALL.len());
+        if let Some(img) = frame {
+            let m = image_msg(&header, img.width(), img.height(), "rgb8", img.as_slice());
+            messages.push((Topic::Image, encode(Topic::Image, &m)?));
+        }
+        let r = record;
+        let result = PalpationResult {
+            header: header.clone(),
+            frame: r.frame.clone(),
+            tendon: r.tendon,
+            tendon_raw: r.tendon_raw,
+            score: r.score,
+            has_direction: r.direction_deg.is_some(),
+            direction_deg: nan_or(r.direction_deg),
+            anisotropy: nan_or(r.anisotropy),
+            no_direction: r.no_direction.clone().unwrap_or_default(),
+            mask_area_px: r.mask_area_px as u64,
+            depth_min_mm: nan_or32(r.depth_min_mm),
+            depth_mean_mm: nan_or32(r.depth_mean_mm),
+            depth_max_mm: nan_or32(r.depth_max_mm),
+            depth_maps: match (r.depth_maps, r.depth_mean_mm) {
+                (Some(d), _) => d.name().to_string(),
+                (None, Some(_)) => tactile_core::spec::DepthMaps::Distance.name().to_string(),
+                (None, None) => String::new(),
+            },
+            indentation_peak_mm: nan_or32(r.indentation_peak_mm),
+            contact_area_mm2: nan_or32(r.contact_area_mm2),
+            out_of_distribution: r.out_of_distribution,
+            gate: r.gate.map(|g| g.name().to_string()).unwrap_or_default(),
+            input_score: nan_or32(r.input_score),
+            ms_prepare: r.ms_prepare,
+            ms_detect: r.ms_detect,
+            ms_segment: nan_or(r.ms_segment),
+            ms_depth: nan_or(r.ms_depth),
+            ms_reconstruct: nan_or(r.ms_reconstruct),
+            ms_total: r.ms_total,
+        };
+        messages.push((Topic::Result, encode(Topic::Result, &result)?));
+        let tendon = views.and_then(|v| v.tendon.as_ref());
+        if let Some(t) = tendon {
+            let mask: Vec<u8> = t.region.iter().map(|&k| if k { 255 } else { 0 }).collect();
+            let m = image_msg(&header, t.side, t.side, "mono8", &mask);
+            messages.push((Topic::TendonMask, encode(Topic::TendonMask, &m)?));
+            let [w, h] = t.depth_size;
+            let depth = f32_bytes(&t.depth_mm, 1.0);
+            let m = image_msg(&header, w, h, "32FC1", &depth);
+            messages.push((Topic::Depth, encode(Topic::Depth, &m)?));
+        }
+        if let Some(s) = views.and_then(|v| v.indentation.as_ref()) {
+            let bytes = f32_bytes(&s.map.indentation_m, 1e3);
+            let m = image_msg(&header, s.map.width, s.map.height, "32FC1", &bytes);
+            messages.push((Topic::Indentation, encode(Topic::Indentation, &m)?));
+        }
+        let mut annotations = ImageAnnotations::default();
+        annotations.texts.push(TextAnnotation {
+            timestamp: header.stamp,
+            position: Point2 { x: 4.0, y: 4.0 },
+            text: match (r.tendon, r.gate) {
+                (_, Some(g)) => format!("{} frame: no tendon", g.name()),
+                (true, _) => format!(
+                    "tendon p={:.2}{}",
+                    r.score,
+                    r.direction_deg
+                        .map(|d| format!(" {d:.0} deg"))
+                        .unwrap_or_default()
+                ),
+                (false, _) => format!("no tendon p={:.2}", r.score),
+            },
+            font_size: 12.0,
+            text_color: WHITE,
+            background_color: SHADE,
+        });
+        if let Some(t) = tendon
+            && let Some((deg, (cx, cy))) = t.direction
+        {
+            // The same line as the overlay PNG: through the centroid, in
+            // the mask's pixels (their corners at integers, hence the 0.5).
+            let (sn, cs) = deg.to_radians().sin_cos();
+            let half = 0.45 * t.side as f64;
+            let (px, py) = (cx + 0.5, cy + 0.5);
+            annotations.points.push(PointsAnnotation {
+                timestamp: header.stamp,
+                r#type: LINE_LIST,
+                points: vec![
+                    Point2 {
+                        x: px - cs * half,
+                        y: py - sn * half,
+                    },
+                    Point2 {
+                        x: px + cs * half,
+                        y: py + sn * half,
+                    },
+                ],
+                outline_color: RED,
+                outline_colors: Vec::new(),
+                fill_color: CLEAR,
+                thickness: 2.0,
+            });
+        }
+        messages.push((
+            Topic::Annotations,
+            encode(Topic::Annotations, &annotations)?,
+        ));
+        Ok(Self { stamp_ns, messages })
+    }
+}
+
+fn now_ns() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as i64)
+}
+
+/// Results of a run as an MCAP file of ROS 2 messages, written to a
+/// temporary file beside `path` and moved there by [`McapResults::finish`]:
+/// an error or an interrupt leaves no partial file.
+pub struct McapResults {
+    path: PathBuf,
+    writer: mcap::Writer<BufWriter<tempfile::NamedTempFile>>,
+    channels: BTreeMap<Topic, u16>,
+    sequence: u32,
+    frames: u64,
+}
+
+impl McapResults {
+    /// Start the file that will be `path`; every channel is registered
+    /// now, so a reader lists them all even when a run has no tendon frame.
+    pub fn create(path: &Path) -> Result<Self> {
+        let fail = |message: String| Error::Write {
+            path: path.to_path_buf(),
+            message,
+        };
+        tactile_core::io::ensure_writable_parent(path)?;
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let tmp = tempfile::Builder::new()
+            .prefix(".tactile-")
+            .suffix(".mcap.tmp")
+            .tempfile_in(dir)
+            .map_err(|e| fail(e.to_string()))?;
+        let mut writer = mcap::WriteOptions::new()
+            .profile("ros2")
+            .library(concat!("tactile-rs ", env!("CARGO_PKG_VERSION")))
+            .create(BufWriter::new(tmp))
+            .map_err(|e| fail(e.to_string()))?;
+        let mut channels = BTreeMap::new();
+        let mut schema_ids: BTreeMap<&str, u16> = BTreeMap::new();
+        for topic in Topic::ALL {
+            let schema = topic.schema();
+            let id = match schema_ids.get(schema.name) {
+                Some(&id) => id,
+                None => {
+                    let id = writer
+                        .add_schema(schema.name, "ros2msg", schema.text.as_bytes())
+                        .map_err(|e| fail(e.to_string()))?;
+                    schema_ids.insert(schema.name, id);
+                    id
+                }
+            };
+            let channel = writer
+                .add_channel(id, topic.name(), "cdr", &BTreeMap::new())
+                .map_err(|e| fail(e.to_string()))?;
+            channels.insert(topic, channel);
+        }
+        Ok(Self {
+            path: path.to_path_buf(),
+            writer,
+            channels,
+            sequence: 0,
+            frames: 0,
+        })
+    }
+
+    /// Write one frame's messages, logged at their stamp.
+    pub fn write(&mut self, frame: &FrameMessages) -> Result<()> {
+        let time = u64::try_from(frame.stamp_ns).unwrap_or(0);
+        for (topic, data) in &frame.messages {
+            let header = mcap::records::MessageHeader {
+                channel_id: self.channels[topic],
+                sequence: self.sequence,
+                log_time: time,
+                publish_time: time,
+            };
+            self.sequence = self.sequence.wrapping_add(1);
+            self.writer
+                .write_to_known_channel(&header, data)
+                .map_err(|e| Error::Write {
+                    path: self.path.clone(),
+                    message: e.to_string(),
+                })?;
+        }
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// Frames written so far.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    /// Close the file (its summary and index) and move it into place.
+    pub fn finish(mut self) -> Result<PathBuf> {
+        let fail = |message: String| Error::Write {
+            path: self.path.clone(),
+            message,
+        };
+        self.writer.finish().map_err(|e| fail(e.to_string()))?;
+        let tmp = self
+            .writer
+            .into_inner()
+            .into_inner()
+            .map_err(|e| fail(e.error().to_string()))?;
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            tmp.as_file()
+                .set_permissions(std::fs::Permissions::from_mode(0o644))
+                .map_err(|e| fail(e.to_string()))?;
+        }
+        tmp.persist(&self.path)
+            .map_err(|e| fail(e.error.to_string()))?;
+        Ok(self.path)
+    }
+}
+
+/// Where a run's results go besides its JSON Lines: an MCAP file, a live
+/// view, or both, fed per frame from [`tactile_pipeline::run`]'s sink.
+#[derive(Default)]
+pub struct RobotOutputs {
+    /// The MCAP file of results.
+    pub mcap: Option<McapResults>,
+    /// The Foxglove live view.
+    pub live: Option<crate::live::LiveView>,
+    /// Also write (and serve) the input frames on `/tactile/image`.
+    pub with_frames: bool,
+}
+
+/// What the robot outputs did over a run.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct RobotSummary {
+    /// The MCAP file written, and its frames.
+    pub mcap: Option<(PathBuf, u64)>,
+    /// Frames handed to the live view.
+    pub live_sent: u64,
+    /// Frames the live view dropped because its thread was behind.
+    pub live_dropped: u64,
+}
+
+impl RobotOutputs {
+    /// Whether there is anything to do per frame.
+    pub fn is_empty(&self) -> bool {
+        self.mcap.is_none() && self.live.is_none()
+    }
+
+    /// One frame of a run.
+    pub fn handle(&mut self, item: &tactile_pipeline::RunItem<'_>) -> Result<()> {
+        let watched = self.live.as_ref().is_some_and(|l| l.watched());
+        if self.mcap.is_none() && !watched {
+            return Ok(());
+        }
+        let frame = self.with_frames.then_some(item.frame);
+        let messages = FrameMessages::encode(item.record, item.views, frame)?;
+        if let Some(m) = self.mcap.as_mut() {
+            m.write(&messages)?;
+        }
+        if let (Some(l), true) = (&self.live, watched) {
+            l.publish(messages);
+        }
+        Ok(())
+    }
+
+    /// Close the file (moving it into place) and the live view.
+    pub fn finish(mut self) -> Result<RobotSummary> {
+        let mut s = RobotSummary::default();
+        if let Some(m) = self.mcap.take() {
+            let frames = m.frames();
+            s.mcap = Some((m.finish()?, frames));
+        }
+        if let Some(mut l) = self.live.take() {
+            l.close();
+            s.live_sent = l.sent();
+            s.live_dropped = l.dropped();
+        }
+        Ok(s)
+    }
+}
