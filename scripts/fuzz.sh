@@ -5,6 +5,7 @@
 #   npy           .npy depth maps
 #   model_config  model config JSON of all six kinds of model folder
 #   weights       burnpack weight files
+#   bag           ROS 2 bags (MCAP files of Image and CompressedImage topics)
 # Needs a nightly toolchain (rustup) and `cargo install cargo-fuzz`. Seeds
 # come from the shipped models and a generated dataset; a single allocation
 # above 4000 MB counts as a crash, as the hostile-input tests' `ulimit -v`.
@@ -12,12 +13,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
 seconds="${1:-600}"
-# Further arguments pick targets (default: all four).
+# Further arguments pick targets (default: all five).
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(dataset npy model_config weights)
+[ ${#targets[@]} -gt 0 ] || targets=(dataset npy model_config weights bag)
 corpus=corpus
-mkdir -p "$corpus"/{dataset,npy,model_config,weights}
+mkdir -p "$corpus"/{dataset,npy,model_config,weights,bag}
 # Seeds: real inputs of each parser.
 seed_ds=$(mktemp -d)
 trap 'rm -rf "$seed_ds"' EXIT
@@ -34,6 +35,8 @@ for f in ../models/*/*.json ../models/*/*/*.json; do
     i=$((i + 1))
 done
 cp ../models/segmenter/segmenter.bpk "$corpus/weights/segmenter"
+# A bag: the toolkit's own results with the input frames (an Image topic).
+cargo run --release -q --manifest-path ../Cargo.toml -p tactile -- run --data ../samples/palpation --limit 2 --with-frames --out "$corpus/bag/results.mcap" >/dev/null
 # The fuzz builds (nightly, AddressSanitizer) get their own target folder,
 # fuzz/target: in the workspace's they would hold its lock for the whole
 # sanitizer build of burn.

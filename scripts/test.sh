@@ -6,7 +6,8 @@
 #     profile this project builds burn in);
 #  3. builds the Python package (crates/tactile-py, with maturin from PyPI)
 #     into a fresh virtual environment, sharing the cargo target folder so
-#     burn is not built again, and runs its pytest suite against the
+#     burn is not built again (with rosbags, mcap-ros2-support and
+#     websockets from PyPI), and runs its pytest suite against the
 #     `tactile` binary built in step 2.
 #  0. installs FFmpeg from the distribution's packages when missing (video
 #     sources are tested through it);
@@ -29,5 +30,8 @@ python3 -m venv "$venv"
 export PATH="$venv/bin:$PATH" VIRTUAL_ENV="$venv"
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
 "${pip[@]}" install "maturin>=1.16,<2" "numpy>=1.21" "pytest>=7"
+# Independent readers and writers of ROS 2 bags and a WebSocket client, for
+# the robot I/O checks (tests/test_robots.py).
+"${pip[@]}" install "mcap-ros2-support==0.6.0" "rosbags==0.11.9" "websockets==17.4"
 "${pip[@]}" install --no-build-isolation "$root/crates/tactile-py"
 TACTILE_BIN="$target/release/tactile" "$venv/bin/python" -m pytest -q "$root/crates/tactile-py/tests"

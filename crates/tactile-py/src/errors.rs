@@ -88,6 +88,17 @@ impl LibraryError for tactile_cae::Error {
     }
 }
 
+impl LibraryError for tactile_ros::Error {
+    fn kind(&self) -> Kind {
+        use tactile_ros::Error as E;
+        match self {
+            E::Core(c) => core_kind(c),
+            E::Write { .. } | E::Live { .. } => Kind::Os,
+            E::Encode { .. } => Kind::Value,
+        }
+    }
+}
+
 impl LibraryError for tactile_gelsight::Error {
     fn kind(&self) -> Kind {
         use tactile_gelsight::Error as E;

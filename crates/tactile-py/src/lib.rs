@@ -15,6 +15,7 @@ mod image;
 mod json;
 mod pipeline;
 mod pose;
+mod robot;
 mod source;
 mod synth;
 mod train;
@@ -41,6 +42,8 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<source::PyFrame>()?;
     m.add_function(wrap_pyfunction!(source::frames, m)?)?;
     m.add_function(wrap_pyfunction!(source::bag_topics, m)?)?;
+    m.add_class::<robot::PyMcapWriter>()?;
+    m.add_class::<robot::PyLiveView>()?;
     m.add_function(wrap_pyfunction!(image::read_rgb, m)?)?;
     m.add_function(wrap_pyfunction!(image::read_grey, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synth_tactip, m)?)?;

@@ -273,8 +273,8 @@ impl PyPipeline {
 /// the frame's resolution on first access.
 #[pyclass(module = "tactile", name = "FrameResult", frozen)]
 pub struct FrameResult {
-    record: FrameRecord,
-    views: Option<FrameViews>,
+    pub(crate) record: FrameRecord,
+    pub(crate) views: Option<FrameViews>,
     size: (usize, usize),
     mask: OnceLock<Py<PyArray2<bool>>>,
     depth: OnceLock<Option<Py<PyArray2<f32>>>>,

@@ -31,6 +31,8 @@ pub struct LiveView {
     dropped: Arc<AtomicU64>,
     sent: Arc<AtomicU64>,
     server: Mutex<Option<foxglove::WebSocketServerHandle>>,
+    /// The channels' context: the server holds it weakly, so it lives here.
+    _context: Arc<Context>,
 }
 
 /// `HOST:PORT` split; port 0 picks a free one.
@@ -108,6 +110,7 @@ impl LiveView {
             dropped: Arc::new(AtomicU64::new(0)),
             sent,
             server: Mutex::new(Some(server)),
+            _context: ctx,
         })
     }
 

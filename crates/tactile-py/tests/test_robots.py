@@ -1,0 +1,402 @@
+"""ROS 2 bags in, MCAP results out, the Foxglove live view: checked against
+independent implementations of the formats (`rosbags`, `mcap-ros2-support`,
+a Foxglove WebSocket client written here on `websockets`)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import shutil
+import struct
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap_ros2.reader import read_ros2_messages
+from mcap_ros2.writer import Writer as Ros2McapWriter
+from rosbags.highlevel import AnyReader
+from rosbags.rosbag2 import StoragePlugin, Writer as RosbagsWriter
+from rosbags.typesys import Stores, get_typestore
+
+import tactile
+
+T0 = 1_700_000_000_000_000_000
+PERIOD = 33_333_333
+
+IMAGE_MSG = """std_msgs/Header header
+uint32 height
+uint32 width
+string encoding
+uint8 is_bigendian
+uint32 step
+uint8[] data
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+"""
+
+COMPRESSED_MSG = """std_msgs/Header header
+string format
+uint8[] data
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+"""
+
+
+def stamp(i: int) -> int:
+    return T0 + i * PERIOD
+
+
+def header(i: int) -> dict:
+    t = stamp(i)
+    return {"stamp": {"sec": t // 10**9, "nanosec": t % 10**9}, "frame_id": "gelsight"}
+
+
+def run_records(tactile_bin: Path, root: Path, tmp: Path, *args: str) -> list[dict]:
+    out = tmp / f"records-{len(list(tmp.iterdir()))}.jsonl"
+    r = subprocess.run(
+        [str(tactile_bin), "run", *args, "--out", str(out)], capture_output=True, text=True, cwd=root
+    )
+    assert r.returncode == 0, r.stderr
+    return [json.loads(line) for line in out.read_text().splitlines()]
+
+
+def decisions(records: list[dict]) -> list[tuple]:
+    return [(r["tendon"], round(r["score"], 5), r["direction_deg"] and round(r["direction_deg"], 3)) for r in records]
+
+
+@pytest.fixture(scope="module")
+def rosbags_bag(tmp_path_factory, root, palpation_frames) -> Path:
+    """A bag written by `rosbags` (MCAP storage): the sample frames as
+    rgb8 Images, as bgr8 Images and as PNG CompressedImages."""
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    Image = ts.types["sensor_msgs/msg/Image"]
+    Compressed = ts.types["sensor_msgs/msg/CompressedImage"]
+    Header = ts.types["std_msgs/msg/Header"]
+    Time = ts.types["builtin_interfaces/msg/Time"]
+    folder = tmp_path_factory.mktemp("rosbags") / "bag"
+    pngs = sorted((root / "samples" / "palpation").glob("*.png"))
+    with RosbagsWriter(folder, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        raw = w.add_connection("/gelsight/image_raw", Image.__msgtype__, typestore=ts)
+        bgr = w.add_connection("/gelsight/image_bgr", Image.__msgtype__, typestore=ts)
+        png = w.add_connection("/gelsight/image_raw/compressed", Compressed.__msgtype__, typestore=ts)
+        for i, (f, rgb) in enumerate(zip(pngs, palpation_frames)):
+            t = stamp(i)
+            h = Header(stamp=Time(sec=t // 10**9, nanosec=t % 10**9), frame_id="gelsight")
+            height, width, _ = rgb.shape
+            for conn, data, enc in [(raw, rgb, "rgb8"), (bgr, rgb[:, :, ::-1], "bgr8")]:
+                msg = Image(
+                    header=h, height=height, width=width, encoding=enc, is_bigendian=0,
+                    step=width * 3, data=np.ascontiguousarray(data).reshape(-1),
+                )
+                w.write(conn, t, ts.serialize_cdr(msg, Image.__msgtype__))
+            msg = Compressed(header=h, format="png", data=np.frombuffer(f.read_bytes(), np.uint8))
+            w.write(png, t, ts.serialize_cdr(msg, Compressed.__msgtype__))
+    bags = list(folder.glob("*.mcap"))
+    assert len(bags) == 1
+    return bags[0]
+
+
+def test_rosbags_bag_gives_the_png_frames_with_their_stamps(rosbags_bag, palpation_frames):
+    topics = {t["topic"]: t for t in tactile.bag_topics(rosbags_bag)}
+    assert set(topics) == {"/gelsight/image_raw", "/gelsight/image_bgr", "/gelsight/image_raw/compressed"}
+    assert topics["/gelsight/image_raw"]["count"] == 12
+    assert topics["/gelsight/image_raw"]["rate_hz"] == pytest.approx(30.0, rel=1e-3)
+    for topic in topics:
+        frames = list(tactile.frames(rosbags_bag, topic=topic))
+        assert len(frames) == 12
+        for i, (f, want) in enumerate(zip(frames, palpation_frames)):
+            np.testing.assert_array_equal(f.image, want, err_msg=topic)
+            assert f.stamp_ns == stamp(i)
+            assert f.name == f"{i:06d}"
+
+
+def test_bag_runs_decide_as_the_png_folder(rosbags_bag, tactile_bin, root, tmp_path):
+    want = decisions(run_records(tactile_bin, root, tmp_path, "--data", "samples/palpation"))
+    for topic in ["/gelsight/image_raw", "/gelsight/image_bgr", "/gelsight/image_raw/compressed"]:
+        recs = run_records(tactile_bin, root, tmp_path, "--data", str(rosbags_bag), "--topic", topic)
+        assert decisions(recs) == want, topic
+        assert [r["stamp_ns"] for r in recs] == [stamp(i) for i in range(12)]
+
+
+def test_several_image_topics_must_be_named(rosbags_bag):
+    with pytest.raises(ValueError, match=r"3 image topics; name one.*/gelsight/image_bgr"):
+        list(tactile.frames(rosbags_bag))
+    with pytest.raises(ValueError, match=r"topic /nope: not in the bag; its image topics: /gelsight"):
+        list(tactile.frames(rosbags_bag, topic="/nope"))
+
+
+@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
+def test_mcap_ros2_bag_mono_and_jpeg(tmp_path, root, palpation_frames, tactile_bin):
+    """A bag written by `mcap-ros2-support`: mono8 and big-endian mono16
+    Images and JPEG CompressedImages, each as the toolkit reads the same
+    pixels from files."""
+    jpegs = tmp_path / "jpegs"
+    jpegs.mkdir()
+    for i, f in enumerate(sorted((root / "samples" / "palpation").glob("*.png"))):
+        subprocess.run(
+            ["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(f), "-q:v", "3", str(jpegs / f"{i:06d}.jpg")],
+            check=True,
+        )
+    bag = tmp_path / "mono.mcap"
+    with bag.open("wb") as fh:
+        w = Ros2McapWriter(fh)
+        image = w.register_msgdef("sensor_msgs/msg/Image", IMAGE_MSG)
+        compressed = w.register_msgdef("sensor_msgs/msg/CompressedImage", COMPRESSED_MSG)
+        for i, rgb in enumerate(palpation_frames):
+            h, wd, _ = rgb.shape
+            grey = rgb[:, :, 1].copy()
+            w.write_message("/tac/mono8", image, {
+                "header": header(i), "height": h, "width": wd, "encoding": "mono8",
+                "is_bigendian": 0, "step": wd + 4,
+                "data": np.pad(grey, ((0, 0), (0, 4))).tobytes(),
+            }, log_time=stamp(i), publish_time=stamp(i))
+            w.write_message("/tac/mono16", image, {
+                "header": header(i), "height": h, "width": wd, "encoding": "mono16",
+                "is_bigendian": 1, "step": wd * 2,
+                "data": (grey.astype(">u2") * 257).tobytes(),
+            }, log_time=stamp(i), publish_time=stamp(i))
+            w.write_message("/tac/jpeg", compressed, {
+                "header": header(i), "format": "rgb8; jpeg compressed bgr8",
+                "data": (jpegs / f"{i:06d}.jpg").read_bytes(),
+            }, log_time=stamp(i), publish_time=stamp(i))
+        w.finish()
+    for topic in ["/tac/mono8", "/tac/mono16"]:
+        frames = list(tactile.frames(bag, topic=topic))
+        assert [f.stamp_ns for f in frames] == [stamp(i) for i in range(12)]
+        for f, rgb in zip(frames, palpation_frames):
+            np.testing.assert_array_equal(f.image, np.repeat(rgb[:, :, 1:2], 3, axis=2), err_msg=topic)
+    from_bag = [f.image for f in tactile.frames(bag, topic="/tac/jpeg")]
+    from_files = [f.image for f in tactile.frames(jpegs)]
+    assert len(from_bag) == 12
+    for a, b in zip(from_bag, from_files):
+        np.testing.assert_array_equal(a, b)
+    want = decisions(run_records(tactile_bin, root, tmp_path, "--data", str(jpegs)))
+    got = decisions(run_records(tactile_bin, root, tmp_path, "--data", str(bag), "--topic", "/tac/jpeg"))
+    assert got == want
+
+
+def test_hostile_bags_name_the_topic_and_message(tmp_path, palpation_frames):
+    bag = tmp_path / "hostile.mcap"
+    with bag.open("wb") as fh:
+        w = Ros2McapWriter(fh)
+        image = w.register_msgdef("sensor_msgs/msg/Image", IMAGE_MSG)
+        compressed = w.register_msgdef("sensor_msgs/msg/CompressedImage", COMPRESSED_MSG)
+        header_only = w.register_msgdef("std_msgs/msg/Header", "builtin_interfaces/Time stamp\nstring frame_id\n"
+                                        "================================================================================\n"
+                                        "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n")
+        rgb = palpation_frames[0]
+        h, wd, _ = rgb.shape
+        good = {"header": header(0), "height": h, "width": wd, "encoding": "rgb8", "is_bigendian": 0,
+                "step": wd * 3, "data": rgb.tobytes()}
+        w.write_message("/wide", image, good, log_time=stamp(0))
+        w.write_message("/wide", image, {**good, "width": 100_000, "height": 100_000, "step": 300_000},
+                        log_time=stamp(1))
+        w.write_message("/fake_jpeg", compressed, {"header": header(0), "format": "jpeg", "data": b"not a picture"},
+                        log_time=stamp(0))
+        w.write_message("/yuv", image, {**good, "encoding": "yuv422"}, log_time=stamp(0))
+        w.write_message("/header", header_only, header(0), log_time=stamp(0))
+        w.finish()
+    wide = tactile.frames(bag, topic="/wide")
+    assert next(wide).image.shape == (h, wd, 3)
+    with pytest.raises(ValueError, match=r"hostile.mcap: topic /wide, message 1: image is 100000x100000"):
+        next(wide)
+    with pytest.raises(ValueError, match=r"topic /fake_jpeg, message 0: .*not a JPEG or PNG"):
+        list(tactile.frames(bag, topic="/fake_jpeg"))
+    with pytest.raises(ValueError, match=r"topic /yuv, message 0: encoding \"yuv422\""):
+        list(tactile.frames(bag, topic="/yuv"))
+    with pytest.raises(ValueError, match=r"topic /header: carries std_msgs/msg/Header"):
+        list(tactile.frames(bag, topic="/header"))
+    cut = tmp_path / "truncated.mcap"
+    data = bag.read_bytes()
+    cut.write_bytes(data[: len(data) // 2])
+    with pytest.raises(ValueError, match=r"truncated.mcap: not a readable MCAP bag"):
+        list(tactile.frames(cut, topic="/wide"))
+
+
+def read_back(path: Path) -> dict[str, list]:
+    out: dict[str, list] = {}
+    for m in read_ros2_messages(str(path)):
+        out.setdefault(m.channel.topic, []).append(m)
+    return out
+
+
+def nan_or(v):
+    return float("nan") if v is None else v
+
+
+def same(a, b) -> bool:
+    return (isinstance(a, float) and math.isnan(a) and b is None) or a == pytest.approx(nan_or(b), rel=1e-6)
+
+
+def test_results_mcap_is_read_back_by_both_readers(rosbags_bag, tactile_bin, root, tmp_path, palpation_frames):
+    topic = "/gelsight/image_raw"
+    records = run_records(tactile_bin, root, tmp_path, "--data", str(rosbags_bag), "--topic", topic)
+    out = tmp_path / "results.mcap"
+    r = subprocess.run(
+        [str(tactile_bin), "run", "--data", str(rosbags_bag), "--topic", topic, "--out", str(out), "--with-frames"],
+        capture_output=True, text=True, cwd=root,
+    )
+    assert r.returncode == 0, r.stderr
+    got = read_back(out)
+    tendon = sum(rec["tendon"] for rec in records)
+    assert {k: len(v) for k, v in got.items()} == {
+        "/tactile/image": 12, "/tactile/result": 12, "/tactile/annotations": 12,
+        "/tactile/tendon_mask": tendon, "/tactile/depth": tendon,
+    }
+    for m, rec, rgb in zip(got["/tactile/result"], records, palpation_frames):
+        msg = m.ros_msg
+        t = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+        assert t == rec["stamp_ns"] == m.log_time_ns
+        assert msg.frame == rec["frame"]
+        assert (msg.tendon, msg.tendon_raw, msg.mask_area_px) == (rec["tendon"], rec["tendon_raw"], rec["mask_area_px"])
+        for field in ["score", "direction_deg", "anisotropy", "depth_min_mm", "depth_mean_mm", "depth_max_mm"]:
+            assert same(getattr(msg, field), rec[field]), field
+        assert msg.has_direction == (rec["direction_deg"] is not None)
+    for m, rgb in zip(got["/tactile/image"], palpation_frames):
+        img = m.ros_msg
+        assert (img.encoding, img.height, img.width) == ("rgb8", *rgb.shape[:2])
+        np.testing.assert_array_equal(np.frombuffer(bytes(img.data), np.uint8).reshape(rgb.shape), rgb)
+    for m in got["/tactile/depth"]:
+        d = np.frombuffer(bytes(m.ros_msg.data), "<f4")
+        assert m.ros_msg.encoding == "32FC1" and d.size == m.ros_msg.width * m.ros_msg.height
+        assert np.isfinite(d).all() and 5 < d.mean() < 30
+    masks = [np.frombuffer(bytes(m.ros_msg.data), np.uint8) for m in got["/tactile/tendon_mask"]]
+    assert [int((k == 255).sum()) for k in masks] == [rec["mask_area_px"] for rec in records if rec["tendon"]]
+    lines = [m.ros_msg.points for m in got["/tactile/annotations"]]
+    assert sum(len(p) for p in lines) == sum(rec["direction_deg"] is not None for rec in records)
+    # rosbags reads the same file with its own CDR decoder and the schemas in it.
+    with AnyReader([out], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        results = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages()
+                   if c.topic == "/tactile/result"]
+    assert [(m.tendon, m.frame) for m in results] == [(rec["tendon"], rec["frame"]) for rec in records]
+
+
+def test_python_writes_the_same_results_mcap(tmp_path, pipeline, palpation_frames):
+    out = tmp_path / "py.mcap"
+    pipeline.reset()
+    with tactile.McapWriter(out) as w:
+        results = []
+        for i, f in enumerate(palpation_frames):
+            res = pipeline.process(f)
+            results.append(res)
+            w.write(res, f if i == 0 else None, stamp_ns=stamp(i))
+        assert not out.exists()
+    got = read_back(out)
+    assert len(got["/tactile/image"]) == 1
+    assert [m.ros_msg.tendon for m in got["/tactile/result"]] == [r.tendon for r in results]
+    assert [m.log_time_ns for m in got["/tactile/result"]] == [stamp(i) for i in range(12)]
+    # An error inside the block leaves no file.
+    bad = tmp_path / "bad.mcap"
+    with pytest.raises(RuntimeError):
+        with tactile.McapWriter(bad) as w:
+            w.write(results[0])
+            raise RuntimeError("stop")
+    assert not bad.exists() and not list(tmp_path.glob(".tactile-*"))
+
+
+async def _watch(port: int, started: threading.Event, want: set[str], timeout: float) -> dict[str, int]:
+    import websockets
+
+    seen: dict[str, int] = {}
+    async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"],
+                                  max_size=None) as ws:
+        channels: dict[int, dict] = {}
+        subs: dict[int, str] = {}
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            try:
+                msg = await asyncio.wait_for(ws.recv(), timeout=0.5)
+            except asyncio.TimeoutError:
+                continue
+            if isinstance(msg, str):
+                op = json.loads(msg)
+                if op.get("op") == "advertise":
+                    new = []
+                    for c in op["channels"]:
+                        channels[c["id"]] = c
+                        sid = len(subs) + 1
+                        subs[sid] = c["topic"]
+                        new.append({"id": sid, "channelId": c["id"]})
+                        assert c["encoding"] == "cdr" and c["schemaEncoding"] == "ros2msg" and c["schema"]
+                    await ws.send(json.dumps({"op": "subscribe", "subscriptions": new}))
+                    if want <= {c["topic"] for c in channels.values()}:
+                        started.set()
+            else:
+                assert msg[0] == 1  # message data
+                sid, _ts = struct.unpack_from("<IQ", msg, 1)
+                seen[subs[sid]] = seen.get(subs[sid], 0) + 1
+                if want <= set(seen):
+                    return seen
+    return seen
+
+
+def test_live_view_serves_every_channel(tactile_bin, root, palpation_frames):
+    pytest.importorskip("websockets")
+    h, w, _ = palpation_frames[0].shape
+    proc = subprocess.Popen(
+        [str(tactile_bin), "run", "--stdin", "--size", f"{w}x{h}", "--view", "127.0.0.1:0", "--with-frames",
+         "--live-queue", "64"],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=root,
+    )
+    try:
+        port = None
+        assert proc.stderr is not None
+        for _ in range(50):
+            line = proc.stderr.readline().decode()
+            if "ws://" in line:
+                port = int(line.split("ws://")[1].split()[0].rsplit(":", 1)[1])
+                break
+        assert port, "the live view's address was not printed"
+        started = threading.Event()
+        want = {"/tactile/image", "/tactile/result", "/tactile/annotations", "/tactile/tendon_mask",
+                "/tactile/depth"}
+        result: dict = {}
+
+        def watch():
+            result.update(asyncio.run(_watch(port, started, want, 60)))
+
+        t = threading.Thread(target=watch)
+        t.start()
+        assert started.wait(30), "no channels advertised"
+        time.sleep(0.3)  # the subscription reaches the server
+        assert proc.stdin is not None
+        for _ in range(3):
+            for f in palpation_frames:
+                proc.stdin.write(f.tobytes())
+                proc.stdin.flush()
+                time.sleep(0.03)
+        t.join(60)
+        out, err = proc.communicate(timeout=60)
+        assert proc.returncode == 0, err.decode()
+        assert want <= set(result), result
+        summary = [line for line in out.decode().splitlines() if line.startswith("live view:")]
+        assert summary and int(summary[0].split()[2]) >= result["/tactile/result"], out.decode()
+    finally:
+        proc.kill()
+
+
+def test_python_live_view_waits_for_no_one(pipeline, palpation_frames):
+    with pytest.raises(ValueError, match=r"live view at 127.0.0.1:99999: the port is not a number"):
+        tactile.LiveView("127.0.0.1:99999")
+    with tactile.LiveView("127.0.0.1:0") as view:
+        assert view.port > 0 and not view.watched
+        res = pipeline.process(palpation_frames[3])
+        # Nobody subscribed: nothing is encoded or queued.
+        assert view.publish(res, palpation_frames[3]) is False
+        assert (view.sent, view.dropped) == (0, 0)
