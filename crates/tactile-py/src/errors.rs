@@ -94,7 +94,7 @@ impl LibraryError for tactile_ros::Error {
         match self {
             E::Core(c) => core_kind(c),
             E::Write { .. } | E::Live { .. } => Kind::Os,
-            E::Encode { .. } => Kind::Value,
+            E::Encode { .. } | E::Address { .. } => Kind::Value,
         }
     }
 }

@@ -19,7 +19,15 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
-    /// The live view could not start (the address is taken, not an address).
+    /// The live view's address is not `HOST:PORT`.
+    #[error("live view at {address}: {message}")]
+    Address {
+        /// The address given.
+        address: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The live view could not start (the address is taken or cannot be bound).
     #[error("live view at {address}: {message}")]
     Live {
         /// The address asked for.

@@ -37,7 +37,7 @@ pub struct LiveView {
 
 /// `HOST:PORT` split; port 0 picks a free one.
 fn parse_address(address: &str) -> Result<(String, u16)> {
-    let bad = |why: &str| Error::Live {
+    let bad = |why: &str| Error::Address {
         address: address.into(),
         message: format!("{why}; give HOST:PORT such as 127.0.0.1:8765"),
     };

@@ -1,0 +1,68 @@
+"""The example ROS 2 node's logic, without ROS: it imports nothing of ROS,
+converts every image encoding it names as `tactile run` does on a bag, and
+gives the pipeline's answer with the header's stamp."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import tactile
+
+
+@pytest.fixture(scope="module")
+def node_module(root):
+    path = root / "examples" / "ros2" / "tactile_node.py"
+    spec = importlib.util.spec_from_file_location("tactile_node", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["tactile_node"] = module
+    spec.loader.exec_module(module)
+    assert "rclpy" not in sys.modules
+    return module
+
+
+def image_msg(data: np.ndarray, encoding: str, step: int, bigendian: int = 0, width: int | None = None):
+    h, w = data.shape[0], width or data.shape[1]
+    return SimpleNamespace(
+        header=SimpleNamespace(stamp=SimpleNamespace(sec=1_700_000_000, nanosec=42), frame_id="cam"),
+        height=h, width=w, encoding=encoding, is_bigendian=bigendian, step=step, data=data.tobytes(),
+    )
+
+
+def test_node_converts_each_encoding(node_module, palpation_frames):
+    rgb = palpation_frames[4]
+    h, w, _ = rgb.shape
+    grey = rgb[:, :, 1]
+    cases = [
+        (image_msg(rgb, "rgb8", w * 3), rgb),
+        (image_msg(np.ascontiguousarray(rgb[:, :, ::-1]), "bgr8", w * 3), rgb),
+        (image_msg(np.dstack([rgb, np.full((h, w), 255, np.uint8)]), "rgba8", w * 4), rgb),
+        (image_msg(np.pad(grey, ((0, 0), (0, 8))), "mono8", w + 8, width=w), np.repeat(grey[:, :, None], 3, 2)),
+        (image_msg(grey.astype(">u2") * 257, "mono16", w * 2, 1), np.repeat(grey[:, :, None], 3, 2)),
+    ]
+    for msg, want in cases:
+        np.testing.assert_array_equal(node_module.image_to_rgb(msg), want, err_msg=msg.encoding)
+    with pytest.raises(ValueError, match="yuv422"):
+        node_module.image_to_rgb(image_msg(rgb, "yuv422", w * 3))
+    with pytest.raises(ValueError, match="needs"):
+        node_module.image_to_rgb(SimpleNamespace(**{**vars(image_msg(rgb, "rgb8", w * 3)), "height": h + 1}))
+
+
+def test_node_answers_as_the_pipeline(node_module, root, palpation_frames):
+    node = node_module.PalpationNode(str(root / "models"), "onnx")
+    direct = tactile.Pipeline(root / "models", "onnx")
+    for rgb in palpation_frames:
+        h, w, _ = rgb.shape
+        out = node.handle(image_msg(np.ascontiguousarray(rgb[:, :, ::-1]), "bgr8", w * 3))
+        want = direct.process(rgb)
+        assert out.record["tendon"] == want.tendon
+        assert out.record["score"] == pytest.approx(want.score)
+        assert out.record["stamp_ns"] == 1_700_000_000_000_000_042
+        if want.tendon:
+            assert out.mask.shape == (h, w) and int((out.mask == 255).sum()) == int(want.mask.sum())
+        else:
+            assert out.mask is None

@@ -1,0 +1,127 @@
+"""A ROS 2 node that runs tactile-rs's palpation pipeline on an image topic.
+
+It subscribes to a `sensor_msgs/msg/Image` topic (rgb8, bgr8, mono8 or
+mono16, as the GelSight and TacTip cameras publish), runs `tactile.Pipeline`
+on each frame and publishes:
+
+- `~/result` (`std_msgs/msg/String`): the frame's record as JSON (the same
+  fields as a line of `tactile run --out`), stamped with the input's header;
+- `~/tendon_mask` (`sensor_msgs/msg/Image`, mono8): the kept region at the
+  frame's size, on tendon frames.
+
+Run it in a sourced ROS 2 workspace::
+
+    python3 examples/ros2/tactile_node.py --ros-args \
+        -r image:=/gelsight/image_raw -p models:=models -p runtime:=onnx
+
+The logic (`PalpationNode.handle`) imports nothing of ROS, so it is tested
+without ROS installed (crates/tactile-py/tests/test_ros_node.py); `main`
+imports rclpy only when the node is started.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from dataclasses import dataclass
+from typing import Any, Optional
+
+import numpy as np
+
+import tactile
+
+#: Pixel encodings of `sensor_msgs/msg/Image` this node reads.
+ENCODINGS = ("rgb8", "bgr8", "rgba8", "bgra8", "mono8", "mono16")
+
+
+def image_to_rgb(msg: Any) -> np.ndarray:
+    """An `sensor_msgs/msg/Image` (any object with its fields) as an
+    `(H, W, 3)` uint8 RGB array: the same conversion as `tactile run` on a
+    bag (bgr swapped, mono repeated, mono16 kept to its high byte)."""
+    h, w, step, enc = int(msg.height), int(msg.width), int(msg.step), str(msg.encoding)
+    channels = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1, "mono16": 2}.get(enc)
+    if channels is None:
+        raise ValueError(f"encoding {enc!r} is not one of {', '.join(ENCODINGS)}")
+    data = np.frombuffer(bytes(msg.data), np.uint8)
+    if h <= 0 or w <= 0 or step < w * channels or data.size < step * h:
+        raise ValueError(f"{w}x{h} {enc} with step {step} needs {step * h} bytes, got {data.size}")
+    rows = data[: step * h].reshape(h, step)[:, : w * channels]
+    if enc == "mono16":
+        px = rows.reshape(h, w, 2)[:, :, 0 if msg.is_bigendian else 1]
+        return np.repeat(px[:, :, None], 3, axis=2)
+    if enc == "mono8":
+        return np.repeat(rows.reshape(h, w, 1), 3, axis=2)
+    px = rows.reshape(h, w, channels)[:, :, :3]
+    return np.ascontiguousarray(px[:, :, ::-1] if enc.startswith("bgr") else px)
+
+
+@dataclass
+class Output:
+    """What the node publishes for one frame."""
+
+    record: dict
+    mask: Optional[np.ndarray]
+
+
+class PalpationNode:
+    """The node's logic without ROS: a pipeline over image messages."""
+
+    def __init__(self, models: str = "models", runtime: str = "onnx") -> None:
+        self.pipeline = tactile.Pipeline(models, runtime)
+
+    def handle(self, msg: Any) -> Output:
+        """One image message: its record (with the header's stamp) and, on
+        a tendon frame, the kept region as a uint8 mask of the frame's size."""
+        rgb = image_to_rgb(msg)
+        result = self.pipeline.process(rgb)
+        record = result.to_dict()
+        stamp = msg.header.stamp
+        record["stamp_ns"] = int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+        mask = (result.mask.astype(np.uint8) * 255) if result.tendon else None
+        return Output(record=record, mask=mask)
+
+
+def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs ROS 2
+    import rclpy
+    from rclpy.node import Node
+    from sensor_msgs.msg import Image
+    from std_msgs.msg import String
+
+    rclpy.init(args=argv if argv is not None else sys.argv)
+
+    class TactileNode(Node):
+        def __init__(self) -> None:
+            super().__init__("tactile")
+            models = self.declare_parameter("models", "models").value
+            runtime = self.declare_parameter("runtime", "onnx").value
+            self.logic = PalpationNode(models, runtime)
+            self.results = self.create_publisher(String, "~/result", 10)
+            self.masks = self.create_publisher(Image, "~/tendon_mask", 10)
+            # A queue of 1: a slow model skips to the newest frame.
+            self.create_subscription(Image, "image", self.on_image, 1)
+
+        def on_image(self, msg: Image) -> None:
+            try:
+                out = self.logic.handle(msg)
+            except ValueError as e:
+                self.get_logger().warning(f"frame skipped: {e}")
+                return
+            self.results.publish(String(data=json.dumps(out.record)))
+            if out.mask is not None:
+                m = Image(header=msg.header, height=out.mask.shape[0], width=out.mask.shape[1],
+                          encoding="mono8", is_bigendian=0, step=out.mask.shape[1],
+                          data=out.mask.tobytes())
+                self.masks.publish(m)
+
+    node = TactileNode()
+    try:
+        rclpy.spin(node)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.shutdown()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
