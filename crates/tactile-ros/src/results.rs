@@ -292,11 +292,11 @@ impl McapResults {
             path: path.to_path_buf(),
             message,
         };
-        tactile_core::io::ensure_writable_parent(path)?;
         let dir = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
+        tactile_core::io::create_dir_all(dir)?;
         let tmp = tempfile::Builder::new()
             .prefix(".tactile-")
             .suffix(".mcap.tmp")

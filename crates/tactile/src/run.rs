@@ -141,6 +141,11 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     let inputs: Vec<_> = input.iter().collect();
     if let (Some(out), false) = (&a.out, to_stdout) {
         tactile_core::dataset::check_output_file(out, &inputs)?;
+        if let (Some(data), Ok(o)) = (&a.data, std::fs::canonicalize(out))
+            && std::fs::canonicalize(data).is_ok_and(|d| d == o)
+        {
+            bail!("{}: --out is the input; give another file", out.display());
+        }
     }
     if let Some(dir) = &a.render {
         tactile_core::dataset::check_output_dir(dir, &inputs)?;

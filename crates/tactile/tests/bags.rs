@@ -1,0 +1,229 @@
+#![allow(clippy::unwrap_used)]
+//! ROS 2 bags at the command line: `--list-topics`, a bag's frames decided
+//! as the same PNG frames, results written as MCAP only when the run
+//! succeeds, and hostile bags refused naming the file, topic and message.
+//! (Bags written by independent implementations are read in the Python
+//! suite, tests/test_robots.py.)
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use tactile_core::bag::messages::{Header, Image, Time, to_cdr};
+
+const SAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../samples/palpation");
+const MODELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models");
+const T0: i64 = 1_700_000_000_000_000_000;
+
+fn tactile(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tactile"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn frames() -> Vec<(u32, u32, Vec<u8>)> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(SAMPLES)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "png"))
+        .collect();
+    files.sort();
+    files
+        .iter()
+        .map(|f| {
+            let img = image::open(f).unwrap().to_rgb8();
+            (img.width(), img.height(), img.into_raw())
+        })
+        .collect()
+}
+
+/// A bag with the sample frames as rgb8 Images on `/cam/image_raw` at
+/// 20 Hz, and `extra` messages `(topic, schema name, bytes)` after them.
+fn write_bag(path: &Path, extra: &[(&str, &str, Vec<u8>)]) {
+    let mut w = mcap::Writer::new(std::io::BufWriter::new(
+        std::fs::File::create(path).unwrap(),
+    ))
+    .unwrap();
+    let schema = w
+        .add_schema(
+            "sensor_msgs/msg/Image",
+            "ros2msg",
+            b"(not needed by this reader)",
+        )
+        .unwrap();
+    let cam = w
+        .add_channel(schema, "/cam/image_raw", "cdr", &BTreeMap::new())
+        .unwrap();
+    for (i, (width, height, px)) in frames().iter().enumerate() {
+        let t = T0 + i as i64 * 50_000_000;
+        let msg = Image {
+            header: Header {
+                stamp: Time::from_nanos(t),
+                frame_id: "cam".into(),
+            },
+            height: *height,
+            width: *width,
+            encoding: "rgb8".into(),
+            is_bigendian: 0,
+            step: width * 3,
+            data: px,
+        };
+        let header = mcap::records::MessageHeader {
+            channel_id: cam,
+            sequence: i as u32,
+            log_time: t as u64,
+            publish_time: t as u64,
+        };
+        w.write_to_known_channel(&header, &to_cdr(&msg).unwrap())
+            .unwrap();
+    }
+    for (topic, schema_name, bytes) in extra {
+        let s = w.add_schema(schema_name, "ros2msg", b"").unwrap();
+        let c = w.add_channel(s, topic, "cdr", &BTreeMap::new()).unwrap();
+        let header = mcap::records::MessageHeader {
+            channel_id: c,
+            sequence: 0,
+            log_time: T0 as u64,
+            publish_time: T0 as u64,
+        };
+        w.write_to_known_channel(&header, bytes).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+fn decisions(jsonl: &Path) -> Vec<(bool, String)> {
+    std::fs::read_to_string(jsonl)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            (v["tendon"].as_bool().unwrap(), format!("{:.5}", v["score"]))
+        })
+        .collect()
+}
+
+#[test]
+fn a_bag_is_listed_and_decided_as_its_png_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let bag = dir.path().join("rec.mcap");
+    write_bag(&bag, &[]);
+    let out = tactile(&["run", "--data", bag.to_str().unwrap(), "--list-topics"]);
+    assert!(out.status.success());
+    let listed = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        listed.contains("/cam/image_raw  sensor_msgs/msg/Image  12 messages  20.0 Hz"),
+        "{listed}"
+    );
+    let (a, b) = (dir.path().join("bag.jsonl"), dir.path().join("png.jsonl"));
+    let run = |data: &str, out: &Path| {
+        let o = tactile(&[
+            "run",
+            "--models",
+            MODELS,
+            "--data",
+            data,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    run(bag.to_str().unwrap(), &a);
+    run(SAMPLES, &b);
+    assert_eq!(decisions(&a), decisions(&b));
+    let first: serde_json::Value =
+        serde_json::from_str(std::fs::read_to_string(&a).unwrap().lines().nth(3).unwrap()).unwrap();
+    assert_eq!(first["stamp_ns"].as_i64(), Some(T0 + 3 * 50_000_000));
+}
+
+#[test]
+fn hostile_bags_are_refused_by_name_and_leave_no_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let results = dir.path().join("out").join("results.mcap");
+    let check = |bag: &Path, topic: &str, want: &[&str]| {
+        let o = tactile(&[
+            "run",
+            "--models",
+            MODELS,
+            "--data",
+            bag.to_str().unwrap(),
+            "--topic",
+            topic,
+            "--out",
+            results.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{topic}: {err}");
+        for w in want {
+            assert!(err.contains(w), "wanted {w:?} in: {err}");
+        }
+        // Nothing half-written: no results file, no temporary beside it.
+        let left: Vec<_> = std::fs::read_dir(results.parent().unwrap())
+            .map(|d| d.map(|e| e.unwrap().file_name()).collect())
+            .unwrap_or_default();
+        assert!(left.is_empty(), "{left:?}");
+    };
+    let wide = Image {
+        header: Header::default(),
+        height: 100_000,
+        width: 100_000,
+        encoding: "rgb8".into(),
+        is_bigendian: 0,
+        step: 300_000,
+        data: &[1, 2, 3],
+    };
+    let bag = dir.path().join("hostile.mcap");
+    write_bag(
+        &bag,
+        &[
+            ("/wide", "sensor_msgs/msg/Image", to_cdr(&wide).unwrap()),
+            ("/garbage", "sensor_msgs/msg/Image", vec![0, 1, 0, 0, 9]),
+            ("/imu", "sensor_msgs/msg/Imu", vec![0, 1, 0, 0]),
+        ],
+    );
+    check(
+        &bag,
+        "/wide",
+        &[
+            "hostile.mcap: topic /wide, message 0",
+            "100000x100000",
+            "8K",
+        ],
+    );
+    check(
+        &bag,
+        "/garbage",
+        &["topic /garbage, message 0: not a valid message"],
+    );
+    check(&bag, "/imu", &["topic /imu: carries sensor_msgs/msg/Imu"]);
+    check(
+        &bag,
+        "/none",
+        &[
+            "topic /none: not in the bag",
+            "/cam/image_raw, /garbage, /wide",
+        ],
+    );
+    // Cut inside its data: the frames before the cut are processed, then
+    // the run stops naming the container.
+    let bytes = std::fs::read(&bag).unwrap();
+    let cut = dir.path().join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    check(
+        &cut,
+        "/cam/image_raw",
+        &["cut.mcap: not a readable MCAP bag"],
+    );
+    // A record claiming a terabyte: refused before anything is allocated.
+    let mut huge = b"\x89MCAP0\r\n".to_vec();
+    huge.push(0x06); // a chunk
+    huge.extend((1u64 << 40).to_le_bytes());
+    huge.extend([0u8; 64]);
+    let huge_bag = dir.path().join("huge.mcap");
+    std::fs::write(&huge_bag, huge).unwrap();
+    check(
+        &huge_bag,
+        "/cam/image_raw",
+        &["huge.mcap: not a readable MCAP bag"],
+    );
+}
