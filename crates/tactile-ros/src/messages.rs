@@ -2,7 +2,9 @@
 //! image type is the one bags are read with, `tactile_core::bag::messages`).
 
 use serde::{Deserialize, Serialize};
-pub use tactile_core::bag::messages::{Header, Image, Time, from_cdr, to_cdr};
+pub use tactile_core::bag::messages::{
+    Header, Image, Time, from_cdr, to_cdr, to_cdr_with_capacity,
+};
 
 /// `tactile_msgs/msg/PalpationResult` (`msg/PalpationResult.msg`): one
 /// frame's record; missing values are NaN.

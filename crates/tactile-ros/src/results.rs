@@ -11,7 +11,7 @@ use tactile_pipeline::overlay::FrameViews;
 
 use crate::messages::{
     Color, Header, Image, ImageAnnotations, PalpationResult, Point2, PointsAnnotation,
-    TextAnnotation, Time, to_cdr,
+    TextAnnotation, Time, to_cdr_with_capacity,
 };
 use crate::schemas::{self, Schema};
 use crate::{Error, Result};
@@ -88,7 +88,15 @@ fn nan_or32(v: Option<f32>) -> f32 {
 }
 
 fn encode<T: serde::Serialize>(topic: Topic, msg: &T) -> Result<Vec<u8>> {
-    to_cdr(msg).map_err(|message| Error::Encode {
+    encode_sized(topic, msg, 256)
+}
+
+fn encode_image(topic: Topic, msg: &Image<'_>) -> Result<Vec<u8>> {
+    encode_sized(topic, msg, msg.data.len() + 256)
+}
+
+fn encode_sized<T: serde::Serialize>(topic: Topic, msg: &T, capacity: usize) -> Result<Vec<u8>> {
+    to_cdr_with_capacity(msg, capacity).map_err(|message| Error::Encode {
         topic: topic.name().into(),
         message,
     })
@@ -163,7 +171,7 @@ impl FrameMessages {
         let mut messages = Vec::with_capacity(Topic::ALL.len());
         if let Some(img) = frame {
             let m = image_msg(&header, img.width(), img.height(), "rgb8", img.as_slice());
-            messages.push((Topic::Image, encode(Topic::Image, &m)?));
+            messages.push((Topic::Image, encode_image(Topic::Image, &m)?));
         }
         let r = record;
         let result = PalpationResult {
@@ -202,16 +210,16 @@ impl FrameMessages {
         if let Some(t) = tendon {
             let mask: Vec<u8> = t.region.iter().map(|&k| if k { 255 } else { 0 }).collect();
             let m = image_msg(&header, t.side, t.side, "mono8", &mask);
-            messages.push((Topic::TendonMask, encode(Topic::TendonMask, &m)?));
+            messages.push((Topic::TendonMask, encode_image(Topic::TendonMask, &m)?));
             let [w, h] = t.depth_size;
             let depth = f32_bytes(&t.depth_mm, 1.0);
             let m = image_msg(&header, w, h, "32FC1", &depth);
-            messages.push((Topic::Depth, encode(Topic::Depth, &m)?));
+            messages.push((Topic::Depth, encode_image(Topic::Depth, &m)?));
         }
         if let Some(s) = views.and_then(|v| v.indentation.as_ref()) {
             let bytes = f32_bytes(&s.map.indentation_m, 1e3);
             let m = image_msg(&header, s.map.width, s.map.height, "32FC1", &bytes);
-            messages.push((Topic::Indentation, encode(Topic::Indentation, &m)?));
+            messages.push((Topic::Indentation, encode_image(Topic::Indentation, &m)?));
         }
         let mut annotations = ImageAnnotations::default();
         annotations.texts.push(TextAnnotation {

@@ -63,6 +63,10 @@ pub(crate) struct RunArgs {
     /// waits for a viewer (frames it cannot take are dropped and counted).
     #[arg(long, value_name = "HOST:PORT")]
     view: Option<String>,
+    /// With --view: wait up to this many seconds for a viewer to subscribe
+    /// before the first frame (replaying a bag or a video to watch it).
+    #[arg(long, default_value_t = 0.0, requires = "view")]
+    view_wait: f64,
     /// Process at most this many frames.
     #[arg(long)]
     limit: Option<u64>,
@@ -180,6 +184,16 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
                 .map_or("127.0.0.1", |v| v.0),
             l.port()
         );
+    }
+    if let Some(l) = &robot.live
+        && a.view_wait > 0.0
+    {
+        let until =
+            std::time::Instant::now() + std::time::Duration::from_secs_f64(a.view_wait.min(3600.0));
+        while !l.watched() && std::time::Instant::now() < until {
+            tactile_core::interrupt::check()?;
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
     }
     let json_out = a.out.as_deref().filter(|_| mcap_out.is_none());
     let mut records = json_out.map(JsonLines::create).transpose()?;
