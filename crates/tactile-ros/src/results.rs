@@ -456,3 +456,90 @@ impl RobotOutputs {
         Ok(s)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shipped Foxglove layout shows only channels the toolkit writes.
+    #[test]
+    fn the_foxglove_layout_names_only_our_topics() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../docs/foxglove-layout.json"
+        );
+        let text = std::fs::read_to_string(path).expect("docs/foxglove-layout.json");
+        let layout: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
+        let names: Vec<&str> = Topic::ALL.iter().map(|t| t.name()).collect();
+        let mut seen = 0;
+        let mut check = |s: &str| {
+            let topic = s.split('.').next().unwrap_or(s);
+            if topic.starts_with("/") {
+                assert!(names.contains(&topic), "{topic} is not one of {names:?}");
+                seen += 1;
+            }
+        };
+        fn walk(v: &serde_json::Value, f: &mut dyn FnMut(&str)) {
+            match v {
+                serde_json::Value::String(s) => f(s),
+                serde_json::Value::Array(a) => a.iter().for_each(|x| walk(x, f)),
+                serde_json::Value::Object(o) => o.iter().for_each(|(k, x)| {
+                    f(k);
+                    walk(x, f)
+                }),
+                _ => {}
+            }
+        }
+        walk(&layout["configById"], &mut check);
+        assert!(seen >= 8, "{seen}");
+        // Every panel in the mosaic is configured.
+        let ids: Vec<String> = layout["configById"]
+            .as_object()
+            .map(|o| o.keys().cloned().collect())
+            .unwrap_or_default();
+        let mut leaves = Vec::new();
+        fn leaves_of(v: &serde_json::Value, out: &mut Vec<String>) {
+            match v {
+                serde_json::Value::String(s) => out.push(s.clone()),
+                serde_json::Value::Object(o) => {
+                    for k in ["first", "second"] {
+                        if let Some(x) = o.get(k) {
+                            leaves_of(x, out);
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        leaves_of(&layout["layout"], &mut leaves);
+        leaves.sort();
+        let mut ids_sorted = ids.clone();
+        ids_sorted.sort();
+        assert_eq!(leaves, ids_sorted);
+    }
+
+    /// A frame's messages decode back to what was encoded.
+    #[test]
+    fn records_round_trip_through_cdr() {
+        let mut rec = FrameRecord::empty("000007");
+        rec.stamp_ns = Some(1_700_000_000_123_456_789);
+        rec.tendon = true;
+        rec.score = 0.75;
+        rec.direction_deg = Some(42.0);
+        let m = FrameMessages::encode(&rec, None, None).expect("encode");
+        assert_eq!(m.stamp_ns, 1_700_000_000_123_456_789);
+        let topics: Vec<Topic> = m.messages.iter().map(|(t, _)| *t).collect();
+        assert_eq!(topics, [Topic::Result, Topic::Annotations]);
+        let back: crate::messages::PalpationResult =
+            crate::messages::from_cdr(&m.messages[0].1).expect("decode");
+        assert_eq!(back.header.stamp.nanos(), 1_700_000_000_123_456_789);
+        assert_eq!(
+            (back.frame.as_str(), back.tendon, back.score),
+            ("000007", true, 0.75)
+        );
+        assert!(back.has_direction && back.direction_deg == 42.0 && back.depth_mean_mm.is_nan());
+        let ann: crate::messages::ImageAnnotations =
+            crate::messages::from_cdr(&m.messages[1].1).expect("decode");
+        assert_eq!(ann.texts[0].text, "tendon p=0.75 42 deg");
+    }
+}
