@@ -400,3 +400,24 @@ def test_python_live_view_waits_for_no_one(pipeline, palpation_frames):
         # Nobody subscribed: nothing is encoded or queued.
         assert view.publish(res, palpation_frames[3]) is False
         assert (view.sent, view.dropped) == (0, 0)
+
+
+def test_paper_a_estimates_as_mcap_match_the_csv(tactile_bin, root, tmp_path):
+    import csv
+
+    est_csv, est_mcap = tmp_path / "est.csv", tmp_path / "est.mcap"
+    for out in (est_csv, est_mcap):
+        r = subprocess.run([str(tactile_bin), "perceive", "--encoder", "models/cae-synth", "--data",
+                            "samples/virtual-tactip", "--out", str(out), "--show", "0"],
+                           capture_output=True, text=True, cwd=root)
+        assert r.returncode == 0, r.stderr
+    rows = list(csv.DictReader(est_csv.open()))
+    msgs = [m.ros_msg for m in read_ros2_messages(str(est_mcap))]
+    assert len(msgs) == len(rows) == 14
+    stamps = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in msgs]
+    assert stamps == sorted(set(stamps))
+    for m, row in zip(msgs, rows):
+        assert m.frame == row["file"]
+        assert dict(zip(m.class_names, m.classes)) == {"shape": row["shape"]}
+        for name, value in zip(m.names, m.values):
+            assert value == pytest.approx(float(row[name]), abs=1e-4), name

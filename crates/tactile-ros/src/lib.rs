@@ -20,11 +20,15 @@
 //!   decision as text and the direction as a line over the tendon mask.
 //!
 //! Every message carries the input frame's stamp (a bag's header stamp).
+//! Paper A's estimates go to `/tactile/estimates`
+//! (`tactile_msgs/msg/Estimates`, [`estimates`]).
 
 #![deny(missing_docs)]
 
 mod error;
+pub mod estimates;
 pub mod live;
+mod mcap_file;
 pub mod messages;
 mod results;
 pub mod schemas;

@@ -2,13 +2,13 @@
 //! file of them ([`McapResults`]).
 
 use std::collections::BTreeMap;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 use tactile_core::image_io::RgbImage;
 use tactile_pipeline::FrameRecord;
 use tactile_pipeline::overlay::FrameViews;
 
+use crate::mcap_file::McapFile;
 use crate::messages::{
     Color, Header, Image, ImageAnnotations, PalpationResult, Point2, PointsAnnotation,
     TextAnnotation, Time, to_cdr_with_capacity,
@@ -275,7 +275,7 @@ impl FrameMessages {
     }
 }
 
-fn now_ns() -> i64 {
+pub(crate) fn now_ns() -> i64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_nanos() as i64)
@@ -285,10 +285,8 @@ fn now_ns() -> i64 {
 /// temporary file beside `path` and moved there by [`McapResults::finish`]:
 /// an error or an interrupt leaves no partial file.
 pub struct McapResults {
-    path: PathBuf,
-    writer: mcap::Writer<BufWriter<tempfile::NamedTempFile>>,
+    file: McapFile,
     channels: BTreeMap<Topic, u16>,
-    sequence: u32,
     frames: u64,
 }
 
@@ -296,70 +294,23 @@ impl McapResults {
     /// Start the file that will be `path`; every channel is registered
     /// now, so a reader lists them all even when a run has no tendon frame.
     pub fn create(path: &Path) -> Result<Self> {
-        let fail = |message: String| Error::Write {
-            path: path.to_path_buf(),
-            message,
-        };
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        tactile_core::io::create_dir_all(dir)?;
-        let tmp = tempfile::Builder::new()
-            .prefix(".tactile-")
-            .suffix(".mcap.tmp")
-            .tempfile_in(dir)
-            .map_err(|e| fail(e.to_string()))?;
-        let mut writer = mcap::WriteOptions::new()
-            .profile("ros2")
-            .library(concat!("tactile-rs ", env!("CARGO_PKG_VERSION")))
-            .create(BufWriter::new(tmp))
-            .map_err(|e| fail(e.to_string()))?;
+        let mut file = McapFile::create(path)?;
         let mut channels = BTreeMap::new();
-        let mut schema_ids: BTreeMap<&str, u16> = BTreeMap::new();
         for topic in Topic::ALL {
-            let schema = topic.schema();
-            let id = match schema_ids.get(schema.name) {
-                Some(&id) => id,
-                None => {
-                    let id = writer
-                        .add_schema(schema.name, "ros2msg", schema.text.as_bytes())
-                        .map_err(|e| fail(e.to_string()))?;
-                    schema_ids.insert(schema.name, id);
-                    id
-                }
-            };
-            let channel = writer
-                .add_channel(id, topic.name(), "cdr", &BTreeMap::new())
-                .map_err(|e| fail(e.to_string()))?;
-            channels.insert(topic, channel);
+            channels.insert(topic, file.channel(topic.name(), &topic.schema())?);
         }
         Ok(Self {
-            path: path.to_path_buf(),
-            writer,
+            file,
             channels,
-            sequence: 0,
             frames: 0,
         })
     }
 
     /// Write one frame's messages, logged at their stamp.
     pub fn write(&mut self, frame: &FrameMessages) -> Result<()> {
-        let time = u64::try_from(frame.stamp_ns).unwrap_or(0);
         for (topic, data) in &frame.messages {
-            let header = mcap::records::MessageHeader {
-                channel_id: self.channels[topic],
-                sequence: self.sequence,
-                log_time: time,
-                publish_time: time,
-            };
-            self.sequence = self.sequence.wrapping_add(1);
-            self.writer
-                .write_to_known_channel(&header, data)
-                .map_err(|e| Error::Write {
-                    path: self.path.clone(),
-                    message: e.to_string(),
-                })?;
+            self.file
+                .write(self.channels[topic], frame.stamp_ns, data)?;
         }
         self.frames += 1;
         Ok(())
@@ -371,27 +322,8 @@ impl McapResults {
     }
 
     /// Close the file (its summary and index) and move it into place.
-    pub fn finish(mut self) -> Result<PathBuf> {
-        let fail = |message: String| Error::Write {
-            path: self.path.clone(),
-            message,
-        };
-        self.writer.finish().map_err(|e| fail(e.to_string()))?;
-        let tmp = self
-            .writer
-            .into_inner()
-            .into_inner()
-            .map_err(|e| fail(e.error().to_string()))?;
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::PermissionsExt;
-            tmp.as_file()
-                .set_permissions(std::fs::Permissions::from_mode(0o644))
-                .map_err(|e| fail(e.to_string()))?;
-        }
-        tmp.persist(&self.path)
-            .map_err(|e| fail(e.error.to_string()))?;
-        Ok(self.path)
+    pub fn finish(self) -> Result<PathBuf> {
+        self.file.finish()
     }
 }
 

@@ -23,6 +23,9 @@ const COLOR: &str = "float64 r\nfloat64 g\nfloat64 b\nfloat64 a\n";
 /// `tactile_msgs/msg/PalpationResult`: the repository's `msg/PalpationResult.msg`.
 pub const PALPATION_RESULT_MSG: &str = include_str!("../msg/PalpationResult.msg");
 
+/// `tactile_msgs/msg/Estimates`: the repository's `msg/Estimates.msg`.
+pub const ESTIMATES_MSG: &str = include_str!("../msg/Estimates.msg");
+
 /// A message type and its `ros2msg` schema text.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Schema {
@@ -85,6 +88,20 @@ pub fn image_annotations() -> Schema {
                 ("builtin_interfaces/Time", TIME),
                 ("foxglove_msgs/Point2", POINT2),
                 ("foxglove_msgs/Color", COLOR),
+            ],
+        ),
+    }
+}
+
+/// `tactile_msgs/msg/Estimates`.
+pub fn estimates() -> Schema {
+    Schema {
+        name: "tactile_msgs/msg/Estimates",
+        text: join(
+            ESTIMATES_MSG,
+            &[
+                ("std_msgs/Header", HEADER),
+                ("builtin_interfaces/Time", TIME),
             ],
         ),
     }

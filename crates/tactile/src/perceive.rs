@@ -23,7 +23,9 @@ pub(crate) struct PerceiveArgs {
     /// Dataset of frames to perceive.
     #[arg(long)]
     data: PathBuf,
-    /// Also write every estimate to this CSV.
+    /// Also write every estimate to this CSV, or, for a name ending in
+    /// .mcap, as ROS 2 messages (tactile_msgs/msg/Estimates on
+    /// /tactile/estimates, docs/robots.md).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Frames to print (all go to --out).
@@ -60,7 +62,14 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
         p.estimators(),
         r.ms_estimate
     );
-    if let Some(out) = &a.out {
+    if let Some(out) = a
+        .out
+        .as_deref()
+        .filter(|o| tactile_core::bag::is_bag_file(o))
+    {
+        tactile_ros::estimates::write_estimates(out, &r.files, &r.estimates)?;
+        say!("estimates written to {} (ROS 2 messages)", out.display());
+    } else if let Some(out) = &a.out {
         tactile_core::io::write_atomic_with(out, |w| {
             let mut csv = csv::Writer::from_writer(w);
             csv.write_record(&header)?;
