@@ -227,3 +227,38 @@ fn hostile_bags_are_refused_by_name_and_leave_no_results() {
         &["huge.mcap: not a readable MCAP bag"],
     );
 }
+
+#[test]
+fn a_labelled_bag_becomes_a_dataset() {
+    let dir = tempfile::tempdir().unwrap();
+    let bag = dir.path().join("rec.mcap");
+    write_bag(&bag, &[]);
+    // Messages 2-9 press on the tendon; 10 and 11 are left unlabelled.
+    let mut csv = String::from("frame,tendon,sequence\n");
+    for i in 0..10 {
+        csv.push_str(&format!("{i},{},0\n", u8::from((2..=9).contains(&i))));
+    }
+    let labels = dir.path().join("labels.csv");
+    std::fs::write(&labels, csv).unwrap();
+    let out = dir.path().join("ds");
+    let o = tactile(&[
+        "dataset",
+        "from-video",
+        "--kind",
+        "visuotactile",
+        "--video",
+        bag.to_str().unwrap(),
+        "--topic",
+        "/cam/image_raw",
+        "--labels",
+        labels.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
+    assert_eq!(ds.len(), 10);
+    let f5 = tactile_core::image_io::load_rgb(ds.path_of(5, "file").unwrap()).unwrap();
+    assert_eq!(f5.as_slice(), frames()[5].2.as_slice());
+    assert_eq!(ds.number_opt(5, "tendon").unwrap(), Some(1.0));
+}
