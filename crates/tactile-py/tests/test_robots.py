@@ -421,3 +421,28 @@ def test_paper_a_estimates_as_mcap_match_the_csv(tactile_bin, root, tmp_path):
         assert dict(zip(m.class_names, m.classes)) == {"shape": row["shape"]}
         for name, value in zip(m.names, m.values):
             assert value == pytest.approx(float(row[name]), abs=1e-4), name
+
+
+def test_a_calibrated_sensor_writes_its_indentation(tactile_bin, root, tmp_path):
+    """With a calibrated sensor (models/gelsight-r15) on real ball presses,
+    /tactile/indentation holds each frame's indentation in mm, its peak the
+    record's."""
+    frames = root.parent / "shared" / "real" / "gelsight-ball" / "frames"
+    if not frames.is_dir():
+        pytest.skip("the real GelSight ball presses are in ../shared/real")
+    out = tmp_path / "presses.mcap"
+    records = run_records(tactile_bin, root, tmp_path, "--models", "models/gelsight-r15", "--data", str(frames),
+                          "--limit", "3")
+    r = subprocess.run([str(tactile_bin), "run", "--models", "models/gelsight-r15", "--data", str(frames),
+                        "--limit", "3", "--out", str(out)], capture_output=True, text=True, cwd=root)
+    assert r.returncode == 0, r.stderr
+    got = read_back(out)
+    assert len(got["/tactile/indentation"]) == 3
+    for m, rec in zip(got["/tactile/indentation"], records):
+        img = m.ros_msg
+        d = np.frombuffer(bytes(img.data), "<f4").reshape(img.height, img.width)
+        assert img.encoding == "32FC1"
+        assert float(d.max()) == pytest.approx(rec["indentation_peak_mm"], rel=1e-4)
+    for m, rec in zip(got["/tactile/result"], records):
+        assert m.ros_msg.indentation_peak_mm == pytest.approx(rec["indentation_peak_mm"], rel=1e-6)
+        assert not m.ros_msg.tendon
