@@ -122,8 +122,10 @@ impl Records {
         container_error(&self.path, message)
     }
 
-    /// The next record, `None` at the end of the file.
-    fn next(&mut self) -> Result<Option<Item>> {
+    /// The next record, `None` at the end of the file. A message's bytes
+    /// are copied out only when it is on `topic` (others are skipped in
+    /// place: listing a bag copies nothing).
+    fn next(&mut self, topic: Option<&str>) -> Result<Option<Item>> {
         loop {
             let Some(event) = self.reader.next_event() else {
                 return Ok(None);
@@ -163,11 +165,22 @@ impl Records {
                             );
                             Item::Other
                         }
-                        Record::Message { header, data } => Item::Message {
-                            channel: header.channel_id,
-                            log_time: header.log_time,
-                            data: data.into_owned(),
-                        },
+                        Record::Message { header, data } => {
+                            let wanted = topic.is_some_and(|t| {
+                                self.channels
+                                    .get(&header.channel_id)
+                                    .is_some_and(|c| c.topic == t)
+                            });
+                            Item::Message {
+                                channel: header.channel_id,
+                                log_time: header.log_time,
+                                data: if wanted {
+                                    data.into_owned()
+                                } else {
+                                    Vec::new()
+                                },
+                            }
+                        }
                         _ => Item::Other,
                     }));
                 }
@@ -194,7 +207,7 @@ pub fn image_topics(path: &Path) -> Result<Vec<BagTopic>> {
     let mut records = Records::open(path)?;
     // Per channel: count, first and last log time.
     let mut seen: BTreeMap<u16, (u64, u64, u64)> = BTreeMap::new();
-    while let Some(item) = records.next()? {
+    while let Some(item) = records.next(None)? {
         crate::interrupt::check()?;
         if let Item::Message {
             channel, log_time, ..
@@ -296,7 +309,7 @@ impl BagImages {
     /// The next frame, `None` after the last.
     pub fn next_frame(&mut self) -> Result<Option<BagFrame>> {
         loop {
-            let Some(item) = self.records.next()? else {
+            let Some(item) = self.records.next(Some(&self.topic))? else {
                 if self.index == 0
                     && !self
                         .records
