@@ -36,7 +36,7 @@ for f in ../models/*/*.json ../models/*/*/*.json; do
 done
 cp ../models/segmenter/segmenter.bpk "$corpus/weights/segmenter"
 # A bag: the toolkit's own results with the input frames (an Image topic).
-cargo run --release -q --manifest-path ../Cargo.toml -p tactile -- run --data ../samples/palpation --limit 2 --with-frames --out "$corpus/bag/results.mcap" >/dev/null
+cargo run --release -q --manifest-path ../Cargo.toml -p tactile -- run --models ../models --data ../samples/palpation --limit 2 --with-frames --out "$corpus/bag/results.mcap" >/dev/null
 # The fuzz builds (nightly, AddressSanitizer) get their own target folder,
 # fuzz/target: in the workspace's they would hold its lock for the whole
 # sanitizer build of burn.
