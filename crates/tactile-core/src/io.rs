@@ -18,21 +18,34 @@ where
     F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
 {
     let path = path.as_ref();
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(path, e))?;
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".tactile-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(path, e))?;
+    let mut tmp = temp_beside(path)?;
     {
         let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
         write(&mut buf).map_err(|e| Error::io(path, e))?;
         buf.flush().map_err(|e| Error::io(path, e))?;
     }
+    persist_temp(tmp, path)
+}
+
+/// A temporary file in `path`'s folder (created if needed) that
+/// [`persist_temp`] moves to `path`; dropped before that, it leaves nothing.
+pub fn temp_beside(path: impl AsRef<Path>) -> Result<tempfile::NamedTempFile> {
+    let path = path.as_ref();
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(path, e))?;
+    tempfile::Builder::new()
+        .prefix(".tactile-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(|e| Error::io(path, e))
+}
+
+/// Move a finished [`temp_beside`] file to `path`.
+pub fn persist_temp(tmp: tempfile::NamedTempFile, path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
     // Temporary files are private (0600); a finished output is an ordinary file.
     #[cfg(unix)]
     {
@@ -57,19 +70,9 @@ impl AtomicFile {
     /// Start writing what will become `path` (its folder is created).
     pub fn create(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(path, e))?;
-        let tmp = tempfile::Builder::new()
-            .prefix(".tactile-")
-            .suffix(".tmp")
-            .tempfile_in(dir)
-            .map_err(|e| Error::io(path, e))?;
         Ok(Self {
             path: path.to_path_buf(),
-            out: std::io::BufWriter::new(tmp),
+            out: std::io::BufWriter::new(temp_beside(path)?),
         })
     }
 
@@ -90,15 +93,7 @@ impl AtomicFile {
             .out
             .into_inner()
             .map_err(|e| Error::io(&path, e.into_error()))?;
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::PermissionsExt;
-            tmp.as_file()
-                .set_permissions(std::fs::Permissions::from_mode(0o644))
-                .map_err(|e| Error::io(&path, e))?;
-        }
-        tmp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
-        Ok(())
+        persist_temp(tmp, &path)
     }
 }
 

@@ -26,16 +26,7 @@ impl McapFile {
 
     /// Start the file that will be `path` (its folder is created).
     pub(crate) fn create(path: &Path) -> Result<Self> {
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        tactile_core::io::create_dir_all(dir)?;
-        let tmp = tempfile::Builder::new()
-            .prefix(".tactile-")
-            .suffix(".mcap.tmp")
-            .tempfile_in(dir)
-            .map_err(|e| Self::fail(path, e))?;
+        let tmp = tactile_core::io::temp_beside(path)?;
         let writer = mcap::WriteOptions::new()
             .profile("ros2")
             .library(concat!("tactile-rs ", env!("CARGO_PKG_VERSION")))
@@ -91,14 +82,7 @@ impl McapFile {
             .into_inner()
             .into_inner()
             .map_err(|e| Self::fail(&path, e.error()))?;
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::PermissionsExt;
-            tmp.as_file()
-                .set_permissions(std::fs::Permissions::from_mode(0o644))
-                .map_err(|e| Self::fail(&path, e))?;
-        }
-        tmp.persist(&path).map_err(|e| Self::fail(&path, e.error))?;
+        tactile_core::io::persist_temp(tmp, &path)?;
         Ok(path)
     }
 }
