@@ -27,13 +27,8 @@ import tactile
 T0 = 1_700_000_000_000_000_000
 PERIOD = 33_333_333
 
-IMAGE_MSG = """std_msgs/Header header
-uint32 height
-uint32 width
-string encoding
-uint8 is_bigendian
-uint32 step
-uint8[] data
+# What both image messages use, as `ros2 bag record` writes it after them.
+HEADER_DEPS = """
 ================================================================================
 MSG: std_msgs/Header
 builtin_interfaces/Time stamp
@@ -44,18 +39,17 @@ int32 sec
 uint32 nanosec
 """
 
+IMAGE_MSG = """std_msgs/Header header
+uint32 height
+uint32 width
+string encoding
+uint8 is_bigendian
+uint32 step
+uint8[] data""" + HEADER_DEPS
+
 COMPRESSED_MSG = """std_msgs/Header header
 string format
-uint8[] data
-================================================================================
-MSG: std_msgs/Header
-builtin_interfaces/Time stamp
-string frame_id
-================================================================================
-MSG: builtin_interfaces/Time
-int32 sec
-uint32 nanosec
-"""
+uint8[] data""" + HEADER_DEPS
 
 
 def stamp(i: int) -> int:

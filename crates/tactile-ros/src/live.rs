@@ -24,6 +24,7 @@ pub const LIVE_QUEUE: usize = 4;
 /// A Foxglove WebSocket server with the result channels.
 pub struct LiveView {
     address: String,
+    host: String,
     port: u16,
     channels: Arc<BTreeMap<Topic, Arc<RawChannel>>>,
     queue: Option<SyncSender<FrameMessages>>,
@@ -76,7 +77,7 @@ impl LiveView {
         }
         let server = WebSocketServer::new()
             .name("tactile-rs")
-            .bind(host, port)
+            .bind(host.clone(), port)
             .context(&ctx)
             .start_blocking()
             .map_err(|e| fail(e.to_string()))?;
@@ -103,6 +104,7 @@ impl LiveView {
         };
         Ok(Self {
             address: address.into(),
+            host,
             port,
             channels,
             queue: Some(tx),
@@ -122,6 +124,30 @@ impl LiveView {
     /// The port served (the one picked when 0 was asked for).
     pub fn port(&self) -> u16 {
         self.port
+    }
+
+    /// Where Foxglove connects: `ws://HOST:PORT` with the port served.
+    pub fn url(&self) -> String {
+        match self.host.contains(':') {
+            true => format!("ws://[{}]:{}", self.host, self.port),
+            false => format!("ws://{}:{}", self.host, self.port),
+        }
+    }
+
+    /// Wait up to `seconds` (at most an hour) for a viewer to subscribe, so
+    /// a recorded source is watched from its first frame; true when one did.
+    /// Ctrl-C ends the wait as an interrupt.
+    pub fn wait_for_viewer(&self, seconds: f64) -> Result<bool> {
+        let until = std::time::Instant::now()
+            + std::time::Duration::from_secs_f64(seconds.clamp(0.0, 3600.0));
+        while !self.watched() {
+            if std::time::Instant::now() >= until {
+                return Ok(false);
+            }
+            tactile_core::interrupt::check()?;
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        Ok(true)
     }
 
     /// Whether a viewer is subscribed to any channel: frames are encoded

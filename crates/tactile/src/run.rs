@@ -177,22 +177,11 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     };
     if let Some(l) = &robot.live {
         tactile_core::note!(
-            "live view: open Foxglove on ws://{}:{} (frames are sent while a viewer is subscribed)",
-            a.view
-                .as_deref()
-                .and_then(|v| v.rsplit_once(':'))
-                .map_or("127.0.0.1", |v| v.0),
-            l.port()
+            "live view: open Foxglove on {} (frames are sent while a viewer is subscribed)",
+            l.url()
         );
-    }
-    if let Some(l) = &robot.live
-        && a.view_wait > 0.0
-    {
-        let until =
-            std::time::Instant::now() + std::time::Duration::from_secs_f64(a.view_wait.min(3600.0));
-        while !l.watched() && std::time::Instant::now() < until {
-            tactile_core::interrupt::check()?;
-            std::thread::sleep(std::time::Duration::from_millis(50));
+        if a.view_wait > 0.0 {
+            l.wait_for_viewer(a.view_wait)?;
         }
     }
     let json_out = a.out.as_deref().filter(|_| mcap_out.is_none());
