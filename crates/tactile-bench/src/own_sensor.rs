@@ -445,7 +445,7 @@ impl OwnSensorReport {
             self.pipeline_fps
         ));
         md.push_str(&self.ball_section());
-        md.push_str("## Frames of other sensors\n\nThe detector's input profile (its training frames' statistics) flags frames that are not this sensor's; they get no tendon, direction or depth. Other units are stood in for by this sensor's held-out renders with another LED order, another light, or a flatter gel.\n\n| frames | own sensor | frames | flagged | tendon reported |\n|---|---|---|---|---|\n");
+        md.push_str("## Frames of other sensors\n\nThe detector's input profile (its training frames' statistics) flags frames that are not this sensor's; they get no tendon, direction or depth. Besides the frame's global statistics it keeps the training frames' colour layout (each channel's level on a 16 x 12 grid, relative to the channel's mean): another unit of the same design differs there, in where each colour is bright (the residual) or in how strongly (the contrast), even when its global statistics match. Other units are stood in for by this sensor's held-out renders with another LED order, another light, or a flatter gel. The profile of the shipped detector was refitted with the layout on its training renders (`tactile train profile --model models/gelsight-r15/detector --data data/own-sensor/train`); `tactile train detector` fits it so itself.\n\n| frames | own sensor | frames | flagged | tendon reported |\n|---|---|---|---|---|\n");
         for r in &self.foreign {
             md.push_str(&format!(
                 "| {} | {} | {} | {} | {} |\n",

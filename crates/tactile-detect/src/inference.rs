@@ -102,7 +102,7 @@ impl TendonDetector {
     pub fn gate(&self, img: &FloatImage) -> Result<(Option<Gate>, Option<f32>)> {
         let (input_score, foreign) = match &self.artifact.input_profile {
             Some(p) => {
-                let s = p.score(&tactile_preprocess::profile::descriptor(img)?);
+                let s = p.score_frame(img)?;
                 (Some(s), s > p.threshold)
             }
             None => (None, false),

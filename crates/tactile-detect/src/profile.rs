@@ -6,7 +6,7 @@ use std::path::Path;
 
 use tactile_burn::Artifact;
 use tactile_core::dataset::Dataset;
-use tactile_preprocess::profile::{InputProfile, descriptor};
+use tactile_preprocess::profile::{InputProfile, LAYOUT_GRID, descriptor, layout_cells};
 
 use crate::{DetectionSet, DetectorArtifact, Result};
 
@@ -27,11 +27,25 @@ pub fn fit_input_profile_of(set: &DetectionSet, idx: &[usize]) -> Result<InputPr
     fit(idx.iter().map(|&i| (set, i)))
 }
 
+/// The nine statistics of each frame and, on frames at least as large as
+/// its grid, the colour layout.
 fn fit<'a>(frames: impl Iterator<Item = (&'a DetectionSet, usize)>) -> Result<InputProfile> {
-    let descriptors = frames
-        .map(|(s, i)| descriptor(&s.image(i)))
-        .collect::<std::result::Result<Vec<_>, _>>()?;
-    Ok(InputProfile::fit(&descriptors, PROFILE_MARGIN)?)
+    let (mut descriptors, mut cells) = (Vec::new(), Vec::new());
+    let mut layout = true;
+    for (s, i) in frames {
+        let img = s.image(i);
+        descriptors.push(descriptor(&img)?);
+        layout &= img.width >= LAYOUT_GRID.0 && img.height >= LAYOUT_GRID.1;
+        if layout {
+            cells.push(layout_cells(&img, LAYOUT_GRID)?);
+        }
+    }
+    let cells = layout.then_some((cells.as_slice(), LAYOUT_GRID));
+    Ok(InputProfile::fit_frames(
+        &descriptors,
+        cells,
+        PROFILE_MARGIN,
+    )?)
 }
 
 /// Fit the input profile of the detector in `dir` on `datasets` (its

@@ -115,6 +115,191 @@ pub struct ProfileGate {
     pub scale: Vec<f32>,
     /// Scores above this are foreign.
     pub threshold: f32,
+    /// The colour layout, when the profile has one: its residual is the
+    /// last statistic.
+    pub layout: Option<LayoutGate>,
+}
+
+/// The colour layout of `tactile_preprocess::profile::ColourLayout` in the
+/// graph.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LayoutGate {
+    /// Cells across.
+    pub columns: usize,
+    /// Cells down.
+    pub rows: usize,
+    /// `rows x columns x 3` reference values.
+    pub reference: Vec<f32>,
+    /// The contrast's weight per reference value.
+    pub contrast_weights: Vec<f32>,
+}
+
+/// The nodes of the layout's statistics of `input` (`[N, H, W, 3]`):
+/// each cell's channel means over the channels' means over the grid; the
+/// residual `gate_layout` (`[N, 1]`), the median of their distances from
+/// the reference (TopK's upper half, its minimum, as
+/// `select_nth_unstable` picks the element at `K / 2`); the contrast
+/// `gate_layout_contrast` (`[N, 1]`), `1 + sum((c - r) w)` as one MatMul
+/// and a constant.
+fn layout_nodes(
+    l: &LayoutGate,
+    (height, width): (usize, usize),
+    input: &str,
+) -> std::result::Result<(Vec<TensorProto>, Vec<NodeProto>), String> {
+    let (cols, rows) = (l.columns, l.rows);
+    if cols == 0
+        || rows == 0
+        || width < cols
+        || height < rows
+        || l.reference.len() != cols * rows * 3
+        || l.contrast_weights.len() != l.reference.len()
+    {
+        return Err(format!(
+            "a colour layout of {cols} x {rows} cells does not fit a {width} x {height} frame"
+        ));
+    }
+    let (cw, ch) = (width / cols, height / rows);
+    let k = cols * rows * 3;
+    let ini = vec![
+        int64_constant("gate_layout_starts", &[2], vec![0, 0]),
+        int64_constant(
+            "gate_layout_ends",
+            &[2],
+            vec![(rows * ch) as i64, (cols * cw) as i64],
+        ),
+        int64_constant("gate_layout_axes", &[2], vec![1, 2]),
+        int64_constant(
+            "gate_layout_grid",
+            &[6],
+            vec![0, rows as i64, ch as i64, cols as i64, cw as i64, 3],
+        ),
+        int64_constant("gate_layout_within", &[2], vec![2, 4]),
+        constant("gate_layout_dark", &[], vec![1.0 / 255.0]),
+        constant(
+            "gate_layout_reference",
+            &[rows as i64, cols as i64, 3],
+            l.reference.clone(),
+        ),
+        int64_constant("gate_layout_upper_half", &[1], vec![(k - k / 2) as i64]),
+        constant(
+            "gate_layout_weights",
+            &[k as i64, 1],
+            l.contrast_weights.clone(),
+        ),
+        constant(
+            "gate_layout_contrast_offset",
+            &[],
+            vec![
+                1.0 - l
+                    .reference
+                    .iter()
+                    .zip(&l.contrast_weights)
+                    .map(|(r, w)| (r * w) as f64)
+                    .sum::<f64>() as f32,
+            ],
+        ),
+    ];
+    let reduce = |op: &str, name: &str, inputs: &[&str], keep: i64| {
+        let mut n = node(op, name, inputs, name);
+        n.attribute.push(int_attribute("keepdims", keep));
+        n
+    };
+    let mut topk = node(
+        "TopK",
+        "gate_layout_top",
+        &["gate_layout_flat", "gate_layout_upper_half"],
+        "gate_layout_top",
+    );
+    topk.output.push("gate_layout_top_indices".into());
+    topk.attribute.push(int_attribute("axis", 1));
+    topk.attribute.push(int_attribute("largest", 1));
+    let nodes = vec![
+        node(
+            "Slice",
+            "gate_layout_crop",
+            &[
+                input,
+                "gate_layout_starts",
+                "gate_layout_ends",
+                "gate_layout_axes",
+            ],
+            "gate_layout_crop",
+        ),
+        node(
+            "Reshape",
+            "gate_layout_blocks",
+            &["gate_layout_crop", "gate_layout_grid"],
+            "gate_layout_blocks",
+        ),
+        reduce(
+            "ReduceMean",
+            "gate_layout_cells",
+            &["gate_layout_blocks", "gate_layout_within"],
+            0,
+        ),
+        reduce(
+            "ReduceMean",
+            "gate_layout_level_raw",
+            &["gate_layout_cells", "gate_layout_axes"],
+            1,
+        ),
+        node(
+            "Max",
+            "gate_layout_level",
+            &["gate_layout_level_raw", "gate_layout_dark"],
+            "gate_layout_level",
+        ),
+        node(
+            "Div",
+            "gate_layout_relative",
+            &["gate_layout_cells", "gate_layout_level"],
+            "gate_layout_relative",
+        ),
+        node(
+            "Sub",
+            "gate_layout_off",
+            &["gate_layout_relative", "gate_layout_reference"],
+            "gate_layout_off",
+        ),
+        node(
+            "Reshape",
+            "gate_layout_relative_flat",
+            &["gate_layout_relative", "gate_flat"],
+            "gate_layout_relative_flat",
+        ),
+        node(
+            "MatMul",
+            "gate_layout_weighted",
+            &["gate_layout_relative_flat", "gate_layout_weights"],
+            "gate_layout_weighted",
+        ),
+        node(
+            "Add",
+            "gate_layout_contrast",
+            &["gate_layout_weighted", "gate_layout_contrast_offset"],
+            "gate_layout_contrast",
+        ),
+        node(
+            "Abs",
+            "gate_layout_dist",
+            &["gate_layout_off"],
+            "gate_layout_dist",
+        ),
+        node(
+            "Reshape",
+            "gate_layout_flat",
+            &["gate_layout_dist", "gate_flat"],
+            "gate_layout_flat",
+        ),
+        topk,
+        reduce(
+            "ReduceMin",
+            "gate_layout",
+            &["gate_layout_top", "gate_axis_1"],
+            1,
+        ),
+    ];
+    Ok((ini, nodes))
 }
 
 /// Where and to what each channel's level is set (see
@@ -384,8 +569,9 @@ fn gate_nodes(
             if [p.window.len(), p.texture.len(), p.housing.len()] != [n; 3] {
                 return Err(format!("the profile's regions are not {width} x {height}"));
             }
-            if p.centre.len() != 9 || p.scale.len() != 9 {
-                return Err("a profile of 9 statistics is expected".into());
+            let stats = 9 + p.layout.as_ref().map_or(0, |_| 2);
+            if p.centre.len() != stats || p.scale.len() != stats {
+                return Err(format!("a profile of {stats} statistics is expected"));
             }
             // The texture region on the Laplacian's (H-2) x (W-2) output.
             let inner: Vec<bool> = (1..height - 1)
@@ -412,8 +598,8 @@ fn gate_nodes(
                     &[3, 2],
                     vec![1.0, 0.0, -1.0, -1.0, 0.0, 1.0],
                 ),
-                constant("gate_centre", &[9], p.centre.clone()),
-                constant("gate_scale", &[9], p.scale.clone()),
+                constant("gate_centre", &[stats as i64], p.centre.clone()),
+                constant("gate_scale", &[stats as i64], p.scale.clone()),
                 constant("gate_profile_threshold", &[], vec![p.threshold]),
             ]);
             let mut concat = node(
@@ -430,6 +616,13 @@ fn gate_nodes(
                 "gate_descriptor",
             );
             concat.attribute.push(int_attribute("axis", 1));
+            if let Some(l) = &p.layout {
+                let (li, ln) = layout_nodes(l, (height, width), input)?;
+                ini.extend(li);
+                nodes.extend(ln);
+                concat.input.push("gate_layout".into());
+                concat.input.push("gate_layout_contrast".into());
+            }
             let spread = |region: &str, mean: &str, sd: &str| {
                 vec![
                     node("MatMul", mean, &["gate_luma_flat", region], mean),

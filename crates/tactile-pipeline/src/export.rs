@@ -74,8 +74,8 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
 /// input size and toolkit version in its metadata.
 pub fn export_standalone(dir: &Path) -> Result<Exported> {
     use tactile_onnx::standalone::{
-        ExposureLevel, GateSpec, ProfileGate, StandaloneOutput, StandaloneSpec, f32_at_or_above,
-        make_standalone,
+        ExposureLevel, GateSpec, LayoutGate, ProfileGate, StandaloneOutput, StandaloneSpec,
+        f32_at_or_above, make_standalone,
     };
     let device = DeviceKind::Flex.device();
     let list = |v: &[f32]| serde_json::to_string(v).unwrap_or_default();
@@ -123,6 +123,12 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
                 centre: p.centre.clone(),
                 scale: p.scale.clone(),
                 threshold: p.threshold,
+                layout: p.layout.as_ref().map(|l| LayoutGate {
+                    columns: l.columns,
+                    rows: l.rows,
+                    reference: l.reference.clone(),
+                    contrast_weights: l.contrast_weights(),
+                }),
             }
         });
         if let Some(p) = &a.input_profile {

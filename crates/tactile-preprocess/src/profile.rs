@@ -8,7 +8,11 @@
 //! input, 8 bits per channel): inside the sensing window (the inscribed
 //! ellipse, away from its edge) the mean of each channel, the spread and
 //! the fine texture of the brightness, and the colour balance; outside it
-//! (the dark housing) the brightness and its spread.
+//! (the dark housing) the brightness and its spread. A profile may also
+//! keep the training frames' colour layout ([`ColourLayout`]): where on
+//! the frame each channel is bright. Another unit of the same design (its
+//! LEDs in another order, another light, another gel) has global
+//! statistics like this one's but not its layout.
 
 use serde::{Deserialize, Serialize};
 
@@ -35,6 +39,191 @@ pub const MIN_SCALE: f32 = 0.02;
 /// Luma weights (ITU-R BT.601) of red, green and blue: the brightness the
 /// descriptor reads.
 pub const LUMA: [f32; 3] = [0.299, 0.587, 0.114];
+
+/// Cells across and down of the colour layout.
+pub const LAYOUT_GRID: (usize, usize) = (16, 12);
+
+/// The names of the colour layout's statistics, after [`DESCRIPTOR`]'s.
+pub const LAYOUT_STATISTICS: [&str; 2] = ["colour layout residual", "colour layout contrast"];
+
+/// The smallest spread the colour layout's statistics are measured against
+/// (in units of a channel's mean level).
+pub const LAYOUT_MIN_SCALE: f32 = 0.001;
+
+/// A heavy-tailed statistic's 99.9th-percentile training distance is at
+/// most this many scales: the layout's statistics move with large
+/// contacts, so their scales come from their tails as well as their
+/// spreads.
+pub const TAIL_SCALES: f32 = 4.0;
+
+/// Each channel's mean over each cell of a `columns x rows` grid, divided
+/// by that channel's mean over the grid: `rows x columns x 3` values,
+/// row-major, independent of exposure and white balance. The grid covers
+/// the top-left `rows * (height / rows)` by `columns * (width / columns)`
+/// pixels.
+pub fn layout_cells(img: &FloatImage, (columns, rows): (usize, usize)) -> Result<Vec<f32>> {
+    let (w, h) = (img.width, img.height);
+    if img.channels != 3 {
+        return Err(Error::Channels {
+            expected: 3,
+            found: img.channels,
+        });
+    }
+    if columns == 0 || rows == 0 || w < columns || h < rows {
+        return Err(Error::Core(tactile_core::Error::Invalid(format!(
+            "a colour layout of {columns} x {rows} cells needs a frame at least that large, got {w} x {h}"
+        ))));
+    }
+    let (cw, ch) = (w / columns, h / rows);
+    let mut cells = vec![0f32; rows * columns * 3];
+    for (r, row) in cells.chunks_exact_mut(columns * 3).enumerate() {
+        for (c, cell) in row.chunks_exact_mut(3).enumerate() {
+            let mut acc = [0f64; 3];
+            for y in r * ch..(r + 1) * ch {
+                let start = (y * w + c * cw) * 3;
+                for p in img.data[start..start + cw * 3].chunks_exact(3) {
+                    for k in 0..3 {
+                        acc[k] += p[k] as f64;
+                    }
+                }
+            }
+            for k in 0..3 {
+                cell[k] = (acc[k] / (cw * ch) as f64) as f32;
+            }
+        }
+    }
+    let n = (rows * columns) as f32;
+    let mut level = [0f32; 3];
+    for cell in cells.chunks_exact(3) {
+        for k in 0..3 {
+            level[k] += cell[k];
+        }
+    }
+    let level = level.map(|v| (v / n).max(1.0 / 255.0));
+    for cell in cells.chunks_exact_mut(3) {
+        for k in 0..3 {
+            cell[k] /= level[k];
+        }
+    }
+    Ok(cells)
+}
+
+/// The element a sort of `v` puts at index `len / 2` (the upper median).
+fn upper_median(mut v: Vec<f32>) -> f32 {
+    let k = v.len() / 2;
+    *v.select_nth_unstable_by(k, f32::total_cmp).1
+}
+
+/// The training frames' colour layout: per cell and channel the median of
+/// their [`layout_cells`]. Two statistics compare a frame's layout with
+/// it: the residual, the median over cells and channels of their
+/// distance from it (so a contact over less than half the frame hardly
+/// moves it: another LED order or light moves it everywhere), and the
+/// contrast, the slope of the frame's layout against the reference's
+/// about the flat level 1 (another gel or black level: less or more
+/// contrast at the same places).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ColourLayout {
+    /// Cells across.
+    pub columns: usize,
+    /// Cells down.
+    pub rows: usize,
+    /// `rows x columns x 3` reference values.
+    pub reference: Vec<f32>,
+}
+
+impl ColourLayout {
+    /// Cells a layout may have.
+    pub const MAX_CELLS: usize = 4096;
+
+    /// The median layout of `cells` (each from [`layout_cells`] on a
+    /// `columns x rows` grid; at least one).
+    pub fn fit(cells: &[Vec<f32>], (columns, rows): (usize, usize)) -> Result<Self> {
+        let k = rows * columns * 3;
+        if cells.is_empty() || cells.iter().any(|c| c.len() != k) {
+            return Err(Error::Core(tactile_core::Error::Invalid(format!(
+                "a colour layout needs frames of {k} cell values each"
+            ))));
+        }
+        let reference = (0..k)
+            .map(|i| upper_median(cells.iter().map(|c| c[i]).collect()))
+            .collect();
+        Ok(Self {
+            columns,
+            rows,
+            reference,
+        })
+    }
+
+    /// The residual and the contrast of a frame (see the type).
+    pub fn statistics(&self, img: &FloatImage) -> Result<[f32; 2]> {
+        Ok(self.of_cells(&layout_cells(img, (self.columns, self.rows))?))
+    }
+
+    /// The residual and the contrast of a frame's [`layout_cells`]. The
+    /// contrast is `1 + sum((c - r) w)` with `w = (r - 1) / sum((r - 1)^2)`
+    /// ([`Self::contrast_weights`]): 1 at the reference's contrast.
+    pub fn of_cells(&self, cells: &[f32]) -> [f32; 2] {
+        let residual = upper_median(
+            cells
+                .iter()
+                .zip(&self.reference)
+                .map(|(c, r)| (c - r).abs())
+                .collect(),
+        );
+        let contrast = 1.0
+            + cells
+                .iter()
+                .zip(&self.reference)
+                .zip(self.contrast_weights())
+                .map(|((c, r), w)| ((c - r) * w) as f64)
+                .sum::<f64>() as f32;
+        [residual, contrast]
+    }
+
+    /// The contrast's weight per value: `(r - 1) / sum((r - 1)^2)`, all 0
+    /// for a flat reference (whose contrast is then always 1).
+    pub fn contrast_weights(&self) -> Vec<f32> {
+        let d: f64 = self
+            .reference
+            .iter()
+            .map(|&r| (r as f64 - 1.0).powi(2))
+            .sum();
+        self.reference
+            .iter()
+            .map(|&r| {
+                if d > 1e-8 {
+                    ((r as f64 - 1.0) / d) as f32
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
+    fn validate(&self) -> std::result::Result<(), String> {
+        let cells = self.rows.saturating_mul(self.columns);
+        if cells == 0 || cells > Self::MAX_CELLS || self.reference.len() != cells * 3 {
+            return Err(format!(
+                "input profile: a colour layout of {} x {} cells (at most {}) with {} values",
+                self.columns,
+                self.rows,
+                Self::MAX_CELLS,
+                self.reference.len()
+            ));
+        }
+        if self.reference.iter().any(|v| !v.is_finite()) {
+            return Err("input profile: the colour layout's values must be finite".into());
+        }
+        Ok(())
+    }
+}
+
+/// The value at the 99.9th percentile of `v` (nearest rank; `v` not empty).
+fn quantile_999(mut v: Vec<f32>) -> f32 {
+    v.sort_by(f32::total_cmp);
+    v[((v.len() - 1) as f64 * 0.999).round() as usize]
+}
 
 /// Where the descriptor reads a `width x height` frame: the one
 /// definition of its regions, used by [`descriptor`] and by the standalone
@@ -124,10 +313,16 @@ pub fn descriptor(img: &FloatImage) -> Result<Vec<f32>> {
     Ok(vec![r, g, b, spread, tex, r - g, b - g, house, house_sd])
 }
 
+/// Each training frame's [`layout_cells`] and the grid they were read on.
+pub type LayoutCells<'a> = (&'a [Vec<f32>], (usize, usize));
+
 /// The training frames' descriptors summarised: per statistic a centre
 /// (median) and a scale (1.4826 x the median absolute deviation, at least
 /// [`MIN_SCALE`]); a frame's score is its largest distance from the centre
 /// in scales, and a frame scoring above `threshold` is out of distribution.
+/// With a [`ColourLayout`], its two statistics follow
+/// ([`LAYOUT_STATISTICS`], scaled with [`LAYOUT_MIN_SCALE`] and
+/// [`TAIL_SCALES`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct InputProfile {
     /// What each value is ([`DESCRIPTOR`]).
@@ -140,6 +335,10 @@ pub struct InputProfile {
     pub threshold: f32,
     /// Training frames it was fitted on.
     pub frames: usize,
+    /// The training frames' colour layout (absent in profiles written
+    /// before it: the nine statistics alone).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layout: Option<ColourLayout>,
 }
 
 impl InputProfile {
@@ -158,44 +357,80 @@ impl InputProfile {
     /// Fit on the descriptors of the training frames: the threshold is
     /// `margin` times their 99.9th-percentile score (at least 6 scales).
     pub fn fit(descriptors: &[Vec<f32>], margin: f32) -> Result<Self> {
+        Self::fit_frames(descriptors, None, margin)
+    }
+
+    /// [`Self::fit`], with the colour layout of `cells` (each frame's
+    /// [`layout_cells`] on `grid`, in the order of `descriptors`) when
+    /// given: its two statistics follow the nine.
+    pub fn fit_frames(
+        descriptors: &[Vec<f32>],
+        cells: Option<LayoutCells<'_>>,
+        margin: f32,
+    ) -> Result<Self> {
         let k = DESCRIPTOR.len();
-        if descriptors.len() < Self::MIN_FRAMES || descriptors.iter().any(|d| d.len() != k) {
+        if descriptors.len() < Self::MIN_FRAMES
+            || descriptors.iter().any(|d| d.len() != k)
+            || cells.is_some_and(|(c, _)| c.len() != descriptors.len())
+        {
             return Err(Error::Core(tactile_core::Error::Invalid(format!(
                 "an input profile needs at least {} frames with {k} statistics each, got {}",
                 Self::MIN_FRAMES,
                 descriptors.len()
             ))));
         }
-        let median = |mut v: Vec<f32>| {
-            v.sort_by(f32::total_cmp);
-            v[v.len() / 2]
-        };
-        let centre: Vec<f32> = (0..k)
-            .map(|i| median(descriptors.iter().map(|d| d[i]).collect()))
+        let layout = cells
+            .map(|(c, grid)| ColourLayout::fit(c, grid))
+            .transpose()?;
+        let mut rows: Vec<Vec<f32>> = descriptors.to_vec();
+        let mut names: Vec<String> = DESCRIPTOR.iter().map(|s| s.to_string()).collect();
+        if let (Some(l), Some((cells, _))) = (&layout, cells) {
+            for (row, c) in rows.iter_mut().zip(cells) {
+                row.extend(l.of_cells(c));
+            }
+            names.extend(LAYOUT_STATISTICS.map(String::from));
+        }
+        let centre: Vec<f32> = (0..names.len())
+            .map(|i| upper_median(rows.iter().map(|d| d[i]).collect()))
             .collect();
-        let scale: Vec<f32> = (0..k)
+        let scale: Vec<f32> = (0..names.len())
             .map(|i| {
-                let mad = median(
-                    descriptors
-                        .iter()
-                        .map(|d| (d[i] - centre[i]).abs())
-                        .collect(),
-                );
-                (1.4826 * mad).max(MIN_SCALE)
+                let dev: Vec<f32> = rows.iter().map(|d| (d[i] - centre[i]).abs()).collect();
+                let mad = 1.4826 * upper_median(dev.clone());
+                if i < k {
+                    mad.max(MIN_SCALE)
+                } else {
+                    mad.max(LAYOUT_MIN_SCALE)
+                        .max(quantile_999(dev) / TAIL_SCALES)
+                }
             })
             .collect();
         let mut p = Self {
-            names: DESCRIPTOR.iter().map(|s| s.to_string()).collect(),
+            names,
             centre,
             scale,
             threshold: f32::INFINITY,
             frames: descriptors.len(),
+            layout,
         };
-        let mut scores: Vec<f32> = descriptors.iter().map(|d| p.score(d)).collect();
-        scores.sort_by(f32::total_cmp);
-        let q = scores[((scores.len() - 1) as f64 * 0.999).round() as usize];
+        let q = quantile_999(rows.iter().map(|d| p.score(d)).collect());
         p.threshold = (margin * q).max(6.0);
         Ok(p)
+    }
+
+    /// The statistics of a frame this profile scores: the
+    /// [`descriptor`], then the layout's two when it has a layout.
+    pub fn statistics(&self, img: &FloatImage) -> Result<Vec<f32>> {
+        let mut d = descriptor(img)?;
+        if let Some(l) = &self.layout {
+            d.extend(l.statistics(img)?);
+        }
+        Ok(d)
+    }
+
+    /// A frame's score (see [`Self::score`]).
+    pub fn score_frame(&self, img: &FloatImage) -> Result<f32> {
+        Ok(self.score(&self.statistics(img)?))
     }
 
     /// How far a descriptor lies from the training frames: its largest
@@ -211,7 +446,10 @@ impl InputProfile {
     /// Check a loaded profile: as many centres and scales as statistics,
     /// all finite, scales positive, a positive threshold.
     pub fn validate(&self) -> std::result::Result<(), String> {
-        let k = DESCRIPTOR.len();
+        if let Some(l) = &self.layout {
+            l.validate()?;
+        }
+        let k = DESCRIPTOR.len() + self.layout.as_ref().map_or(0, |_| LAYOUT_STATISTICS.len());
         if self.centre.len() != k || self.scale.len() != k {
             return Err(format!(
                 "input profile: {} centres and {} scales, {k} statistics expected",
@@ -228,5 +466,138 @@ impl InputProfile {
             );
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An 80 x 60 frame lit from three sides (red from the left, green from
+    /// the top, blue from the right) at `gain`, with pixel noise from
+    /// `seed` and, when `press`, a bright disc of radius 8 px.
+    fn lit(gain: f32, seed: u64, press: bool) -> FloatImage {
+        let (w, h) = (80, 60);
+        let mut rng = tactile_core::rng::SampleRng::new(seed, 0, 0);
+        let mut data = Vec::with_capacity(w * h * 3);
+        for y in 0..h {
+            for x in 0..w {
+                let (u, v) = (x as f32 / w as f32, y as f32 / h as f32);
+                let disc = press && (x as f32 - 40.0).hypot(y as f32 - 30.0) < 8.0;
+                for base in [0.7 - 0.3 * u, 0.7 - 0.3 * v, 0.4 + 0.3 * u] {
+                    let noise = 0.01 * rng.normal() as f32;
+                    let p = if disc { 0.9 } else { base * gain + noise };
+                    data.push(p.clamp(0.0, 1.0));
+                }
+            }
+        }
+        FloatImage {
+            width: w,
+            height: h,
+            channels: 3,
+            data,
+        }
+    }
+
+    fn profile() -> InputProfile {
+        let frames: Vec<FloatImage> = (0..60)
+            .map(|i| lit(0.8 + 0.4 * (i % 7) as f32 / 6.0, i, i % 3 == 0))
+            .collect();
+        let d: Vec<Vec<f32>> = frames.iter().map(|f| descriptor(f).unwrap()).collect();
+        let c: Vec<Vec<f32>> = frames
+            .iter()
+            .map(|f| layout_cells(f, LAYOUT_GRID).unwrap())
+            .collect();
+        InputProfile::fit_frames(&d, Some((&c, LAYOUT_GRID)), 1.5).unwrap()
+    }
+
+    #[test]
+    fn layout_cells_ignore_exposure_and_white_balance() {
+        let a = layout_cells(&lit(1.0, 1, false), LAYOUT_GRID).unwrap();
+        let mut f = lit(1.0, 1, false);
+        for p in f.data.chunks_exact_mut(3) {
+            p[0] *= 0.7;
+            p[2] *= 0.9;
+        }
+        let b = layout_cells(&f, LAYOUT_GRID).unwrap();
+        assert_eq!(a.len(), 16 * 12 * 3);
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() < 1e-4, "{x} {y}");
+        }
+        let tiny = FloatImage {
+            width: 8,
+            height: 8,
+            channels: 3,
+            data: vec![0.5; 192],
+        };
+        assert!(layout_cells(&tiny, LAYOUT_GRID).is_err());
+    }
+
+    #[test]
+    fn the_layout_flags_another_led_order_but_not_exposure_or_a_press() {
+        let p = profile();
+        assert_eq!(p.names[9..], LAYOUT_STATISTICS.map(String::from));
+        p.validate().unwrap();
+        // The sensor at another exposure, and pressed: its own.
+        for f in [lit(1.15, 99, false), lit(0.85, 98, true)] {
+            let s = p.score_frame(&f).unwrap();
+            assert!(s <= p.threshold, "own frame scored {s} > {}", p.threshold);
+        }
+        // The same frame with its LEDs in another order: the global
+        // statistics hardly move, the layout does.
+        let own = lit(1.0, 97, false);
+        let mut rotated = own.clone();
+        for px in rotated.data.chunks_exact_mut(3) {
+            px.rotate_left(1);
+        }
+        let s = p.score_frame(&rotated).unwrap();
+        assert!(
+            s > p.threshold,
+            "rotated LEDs scored {s} <= {}",
+            p.threshold
+        );
+        let stats = p.statistics(&rotated).unwrap();
+        let worst = (0..stats.len())
+            .max_by(|&a, &b| {
+                let z = |i: usize| ((stats[i] - p.centre[i]) / p.scale[i]).abs();
+                z(a).total_cmp(&z(b))
+            })
+            .unwrap();
+        assert!(LAYOUT_STATISTICS.contains(&p.names[worst].as_str()));
+        // A darker gel of half the contrast: the layout's contrast falls.
+        let mut flat = own.clone();
+        for v in &mut flat.data {
+            *v = *v * 0.5 + 0.16;
+        }
+        let stats = p.statistics(&flat).unwrap();
+        let z = |i: usize| ((stats[i] - p.centre[i]) / p.scale[i]).abs();
+        assert!(
+            z(10) > p.threshold,
+            "contrast {} scored {}",
+            stats[10],
+            z(10)
+        );
+        assert!((0.5..0.8).contains(&stats[10]), "contrast {}", stats[10]);
+    }
+
+    #[test]
+    fn profiles_written_before_the_layout_still_load() {
+        let mut p = profile();
+        p.layout = None;
+        for v in [&mut p.centre, &mut p.scale] {
+            v.truncate(9);
+        }
+        p.names.truncate(9);
+        let json = serde_json::to_string(&p).unwrap();
+        assert!(!json.contains("layout"));
+        let back: InputProfile = serde_json::from_str(&json).unwrap();
+        back.validate().unwrap();
+        assert_eq!(back.statistics(&lit(1.0, 5, false)).unwrap().len(), 9);
+        // A layout whose size does not match its values is refused.
+        let mut bad = profile();
+        if let Some(l) = &mut bad.layout {
+            l.rows = 1 << 40;
+        }
+        assert!(bad.validate().is_err());
     }
 }
