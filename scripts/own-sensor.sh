@@ -44,7 +44,8 @@ step calibrate "$tactile" calibrate ball --data "$ball" --out "$stage" --val-pre
 # far more than with frames of one scene (docs/own-sensor.md). The ball
 # presses that calibrated the sensor join as real negatives, all but the
 # last 8, which stay out for the page's held-out check.
-step render "$tactile" synth gelsight --sensor "$stage" --sequences 1800 --frames-per-sequence 5 \
+sequences=3000
+step render "$tactile" synth gelsight --sensor "$stage" --sequences $sequences --frames-per-sequence 5 \
     --flat-share 0.1 --seed 100 --out "$data/train" --preview "$data/train.png" \
     --real-presses "$ball" --real-copies 15 --real-held-out 8
 step detector "$tactile" train detector --data "$data/train" --out "$stage/detector" \
@@ -52,9 +53,9 @@ step detector "$tactile" train detector --data "$data/train" --out "$stage/detec
 step segmenter "$tactile" train segmenter --data "$data/train" --out "$stage/segmenter" \
     --copies 1 --max-epochs 4 --patience 2
 step depth "$tactile" train depth --data "$data/train" --out "$stage/depth" \
-    --encoder small --input 128x96 --max-epochs 3 --patience 2
+    --encoder small --input 128x96 --max-epochs 2 --patience 2
 step export bash -c "for m in detector segmenter depth; do '$tactile' export --model '$stage/'\$m --out '$stage/'\$m/\$m.onnx; done && '$tactile' export --model '$stage' --out '$stage/gelsight.onnx'"
-echo "  \"frames\": 9000" >> "$times"
+echo "  \"frames\": $((sequences * 5))" >> "$times"
 echo "}" >> "$times"
 mv "$times" "$data/times.json"
 # Held-out renders for the page (a seed no training set used).

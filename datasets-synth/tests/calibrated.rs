@@ -124,6 +124,42 @@ fn mask_direction_and_indentation_agree() {
 }
 
 #[test]
+fn objects_are_pressed_over_their_own_range_tendons_over_theirs() {
+    let s = sensor();
+    let c = CalibratedConfig {
+        press_mm: datasets_synth::Range::new(0.2, 0.4),
+        object_press_mm: datasets_synth::Range::new(2.0, 2.5),
+        ..config()
+    };
+    let (mut tendons, mut objects) = (0, 0);
+    for seq in 0..60u64 {
+        let (scene, _) = sample(&s, &c, 9, seq, 0);
+        let p = scene.peak_press_mm;
+        match scene.contact {
+            Contact::Tendon { .. } => {
+                assert!((0.2..=0.4).contains(&p), "tendon pressed {p} mm");
+                tendons += 1;
+            }
+            Contact::Nothing => {}
+            _ => {
+                assert!((2.0..=2.5).contains(&p), "object pressed {p} mm");
+                objects += 1;
+            }
+        }
+    }
+    assert!(
+        tendons > 10 && objects > 5,
+        "{tendons} tendons, {objects} objects"
+    );
+    let bad = CalibratedConfig {
+        object_press_mm: datasets_synth::Range::new(1.0, 9.0),
+        ..config()
+    };
+    let e = bad.validate().unwrap_err().to_string();
+    assert!(e.contains("object_press_mm"), "{e}");
+}
+
+#[test]
 fn a_dataset_says_its_depth_maps_are_indentation() {
     let s = sensor();
     let tmp = tempfile::tempdir().unwrap();

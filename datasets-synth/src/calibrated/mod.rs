@@ -153,6 +153,11 @@ pub struct CalibratedConfig {
     /// Peak press of a video (approach past first touch), mm.
     #[arg(long, default_value_t = CalibratedConfig::default().press_mm)]
     pub press_mm: Range,
+    /// Peak press of a video of a sphere, punch or plate edge, mm: deeper
+    /// than tendons, as a ball pressed into the gel to calibrate it is
+    /// (so the depth network learns the indentations it will be shown).
+    #[arg(long, default_value_t = CalibratedConfig::default().object_press_mm)]
+    pub object_press_mm: Range,
     /// A tendon's centre line passes within this fraction of the frame's half-height of its centre.
     #[arg(long, default_value_t = CalibratedConfig::default().centre_fraction)]
     pub centre_fraction: f64,
@@ -222,6 +227,7 @@ impl Default for CalibratedConfig {
             tendon_radius_mm: Range::new(1.5, 3.5),
             curvature_radius_mm: Range::new(10.0, 40.0),
             press_mm: Range::new(0.05, 1.5),
+            object_press_mm: Range::new(0.05, 2.5),
             centre_fraction: 0.6,
             out_of_view_fraction: 0.08,
             tendon_share: 0.6,
@@ -263,6 +269,7 @@ impl CalibratedConfig {
         self.curvature_radius_mm
             .check("curvature_radius_mm", 1.0, 1000.0)?;
         self.press_mm.check("press_mm", 0.0, 5.0)?;
+        self.object_press_mm.check("object_press_mm", 0.0, 5.0)?;
         self.sphere_radius_mm.check("sphere_radius_mm", 0.2, 50.0)?;
         self.punch_radius_mm.check("punch_radius_mm", 0.2, 50.0)?;
         for (name, v) in [

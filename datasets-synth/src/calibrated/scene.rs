@@ -144,7 +144,10 @@ impl CalibratedScene {
     /// The draw order is fixed.
     pub fn draw(config: &CalibratedConfig, half_mm: P2, rng: &mut SampleRng) -> Self {
         let kind = rng.uniform();
-        let peak_press_mm = rng.draw(config.press_mm);
+        // One draw sets the press; an object's is at the same place in
+        // its own range.
+        let press_at = rng.uniform();
+        let at = |r: crate::rng::Range| r.min + (r.max - r.min) * press_at;
         let mut optics_gain = [1.0; 3];
         for g in optics_gain.iter_mut() {
             *g = 1.0 + config.optics_jitter * (2.0 * rng.uniform() - 1.0);
@@ -219,6 +222,10 @@ impl CalibratedScene {
             }
         } else {
             Contact::Nothing
+        };
+        let peak_press_mm = match contact {
+            Contact::Tendon { .. } => at(config.press_mm),
+            _ => at(config.object_press_mm),
         };
         Self {
             contact,

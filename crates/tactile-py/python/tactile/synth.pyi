@@ -77,6 +77,7 @@ def gelsight(
     tendon_radius_mm: Tuple[float, float] = (1.5, 3.5),
     curvature_radius_mm: Tuple[float, float] = (10.0, 40.0),
     press_mm: Tuple[float, float] = (0.05, 1.5),
+    object_press_mm: Tuple[float, float] = (0.05, 2.5),
     centre_fraction: float = 0.6,
     out_of_view_fraction: float = 0.08,
     tendon_share: float = 0.6,
