@@ -121,7 +121,7 @@ impl OwnSensorReport {
         } else {
             "No real frame joined training: the networks saw renders only. ".into()
         });
-        md.push_str("Each press goes through the pipeline; the depth network and the calibration's reconstruction are scored against the ball as in `docs/calibration.md` (shape inside the contact with its median offset removed, and the far field beyond three contact radii). The calibration was fitted on all of these presses.\n\n| presses | count | reported as a tendon | flagged foreign | largest tendon probability | depth network shape / far field (mm) | calibration shape / far field (mm) | ratio (shape) |\n|---|---|---|---|---|---|---|---|\n");
+        md.push_str("Each press goes through the pipeline; the depth network and the calibration's reconstruction are scored against the ball as in `docs/calibration.md` (shape inside the contact with its median offset removed, and the far field beyond three contact radii). The calibration was fitted on all of these presses. The last column shows where the network's error comes from: its indentation stops short of the ball's depth.\n\n| presses | count | reported as a tendon | flagged foreign | largest tendon probability | depth network shape / far field (mm) | calibration shape / far field (mm) | ratio (shape) | deepest point, network / calibration (mm, mean) |\n|---|---|---|---|---|---|---|---|---|\n");
         let mut rows = vec![("all", &all)];
         if joined > 0 {
             rows.push(("held out (never in training)", &held));
@@ -132,12 +132,14 @@ impl OwnSensorReport {
             }
             let ((ns, nf), (cs, cf)) = Self::errors_of(set);
             md.push_str(&format!(
-                "| {name} | {} | {} | {} | {:.3} | {ns:.3} / {nf:.4} | {cs:.3} / {cf:.4} | {:.2}x |\n",
+                "| {name} | {} | {} | {} | {:.3} | {ns:.3} / {nf:.4} | {cs:.3} / {cf:.4} | {:.2}x | {:.2} / {:.2} |\n",
                 set.len(),
                 set.iter().filter(|r| r.tendon).count(),
                 set.iter().filter(|r| r.foreign).count(),
                 set.iter().map(|r| r.probability).fold(0f32, f32::max),
                 ns / cs.max(1e-9),
+                mean(set.iter().map(|r| r.network.peak_mm)),
+                mean(set.iter().map(|r| r.calibration.peak_mm)),
             ));
         }
         md.push('\n');
