@@ -194,6 +194,25 @@ impl PyLiveView {
         self.with(|v| Ok(v.port()))
     }
 
+    /// The address a viewer opens (`ws://HOST:PORT`, an IPv6 host in
+    /// brackets).
+    #[getter]
+    fn url(&self) -> PyResult<String> {
+        self.with(|v| Ok(v.url()))
+    }
+
+    /// Wait up to `seconds` (at most an hour) for a viewer to subscribe,
+    /// so a recording is watched from its first frame; true when one did.
+    /// Ctrl-C ends the wait with `KeyboardInterrupt`.
+    fn wait_for_viewer(&self, py: Python<'_>, seconds: f64) -> PyResult<bool> {
+        if !seconds.is_finite() || seconds < 0.0 {
+            return Err(PyValueError::new_err(format!(
+                "wait_for_viewer: seconds must be a finite number >= 0, got {seconds}"
+            )));
+        }
+        self.with(|v| crate::work::interruptible(py, || v.wait_for_viewer(seconds).py()))
+    }
+
     /// Whether a viewer is subscribed.
     #[getter]
     fn watched(&self) -> PyResult<bool> {

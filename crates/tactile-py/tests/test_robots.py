@@ -390,6 +390,13 @@ def test_python_live_view_waits_for_no_one(pipeline, palpation_frames):
         tactile.LiveView("127.0.0.1:99999")
     with tactile.LiveView("127.0.0.1:0") as view:
         assert view.port > 0 and not view.watched
+        assert view.url == f"ws://127.0.0.1:{view.port}"
+        # No viewer comes: the wait ends when asked, without one.
+        t0 = time.monotonic()
+        assert view.wait_for_viewer(0.3) is False
+        assert 0.25 <= time.monotonic() - t0 < 5
+        with pytest.raises(ValueError, match="seconds must be a finite number"):
+            view.wait_for_viewer(float("nan"))
         res = pipeline.process(palpation_frames[3])
         # Nobody subscribed: nothing is encoded or queued.
         assert view.publish(res, palpation_frames[3]) is False
