@@ -19,8 +19,19 @@ use crate::training::PREDICT_BATCH;
 pub struct PoseEstimator {
     /// Architecture, preprocessing, targets (an ensemble's first member's).
     pub artifact: PoseArtifact,
-    /// Each member's target scaling and network.
-    members: Vec<(Scaler, Box<dyn Network>)>,
+    /// Each member's target scaling, network and uncertainty calibration.
+    members: Vec<Member>,
+}
+
+/// One network of an estimator.
+struct Member {
+    /// Its target scaling.
+    outputs: Scaler,
+    /// Its network.
+    net: Box<dyn Network>,
+    /// Its calibration of the standard deviations, one factor per target
+    /// (each member's own: members are calibrated one by one).
+    std_scale: Option<Vec<f64>>,
 }
 
 /// Per frame the targets' values, and with uncertainty their standard
@@ -62,7 +73,11 @@ impl PoseEstimator {
                 Some(f) => check_alike(f, &artifact, d)?,
                 None => first = Some(artifact.clone()),
             }
-            members.push((artifact.outputs, net));
+            members.push(Member {
+                std_scale: artifact.std_scale.clone(),
+                outputs: artifact.outputs,
+                net,
+            });
         }
         let artifact = first.ok_or_else(|| tactile_core::Error::not_found(dir, "pose network"))?;
         Ok(Self { artifact, members })
@@ -72,7 +87,7 @@ impl PoseEstimator {
     pub fn runtime(&self) -> Runtime {
         self.members
             .first()
-            .map_or(Runtime::BurnFlex, |(_, n)| n.runtime())
+            .map_or(Runtime::BurnFlex, |m| m.net.runtime())
     }
 
     /// Networks whose estimates are averaged (1 unless an ensemble).
@@ -116,7 +131,15 @@ impl PoseEstimator {
             let mut sum = vec![vec![0f64; k]; chunk.len()];
             let mut x = Some(x);
             let last = self.members.len().saturating_sub(1);
-            for (m, (scaler, net)) in self.members.iter_mut().enumerate() {
+            for (
+                m,
+                Member {
+                    outputs: scaler,
+                    net,
+                    ..
+                },
+            ) in self.members.iter_mut().enumerate()
+            {
                 let input = if m == last { x.take() } else { x.clone() };
                 let y = net.run([chunk.len(), 1, side, side], input.unwrap_or_default())?;
                 for (acc, row) in sum.iter_mut().zip(y.chunks(k)) {
@@ -139,8 +162,6 @@ impl PoseEstimator {
     fn predict_uncertain(&mut self, pins: &[PinImage]) -> Result<ValuesWithStd> {
         let side = self.artifact.model.input_px;
         let k = self.artifact.model.outputs;
-        let ones = vec![1.0; k];
-        let factor = self.artifact.std_scale.clone().unwrap_or(ones);
         let n = self.members.len().max(1) as f64;
         let (mut values, mut std) = (Vec::new(), Vec::new());
         for chunk in pins.chunks(PREDICT_BATCH) {
@@ -150,12 +171,15 @@ impl PoseEstimator {
                 .collect();
             // Per frame and target: sum of means, of squared means, of variances.
             let mut acc = vec![vec![[0f64; 3]; k]; chunk.len()];
-            for (scaler, net) in self.members.iter_mut() {
-                let y = net.run([chunk.len(), 1, side, side], x.clone())?;
+            for member in self.members.iter_mut() {
+                let y = member.net.run([chunk.len(), 1, side, side], x.clone())?;
+                let (scaler, factor) = (&member.outputs, member.std_scale.as_deref());
                 for (a, row) in acc.iter_mut().zip(y.chunks(2 * k)) {
                     let mean = scaler.unscale(&row[..k]);
                     for j in 0..k {
-                        let sd = crate::uncertainty::scale(row[k + j]) * scaler.std[j] * factor[j];
+                        let sd = crate::uncertainty::scale(row[k + j])
+                            * scaler.std[j]
+                            * factor.map_or(1.0, |f| f[j]);
                         a[j][0] += mean[j];
                         a[j][1] += mean[j] * mean[j];
                         a[j][2] += sd * sd;

@@ -12,7 +12,7 @@ use serde_json::json;
 use tactile_burn::options::Options;
 use tactile_burn::{Artifact, Runtime};
 use tactile_core::dataset::Dataset;
-use tactile_pose::{PoseArtifact, PoseEstimator, PoseOptions};
+use tactile_pose::{PoseArtifact, PoseEnsemble, PoseEstimator, PoseOptions};
 
 const TARGETS: [&str; 6] = [
     "depth_mm",
@@ -30,6 +30,17 @@ fn surface_frames() -> PathBuf {
 }
 
 /// A dataset of the first `train` training and `val` validation frames.
+/// The files of `from` (not its sub-folders) copied into a new `to`.
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+}
+
 fn subset(dir: &Path, train: usize, val: usize) {
     let real = surface_frames();
     std::fs::create_dir_all(dir.join("frames")).unwrap();
@@ -119,6 +130,34 @@ fn surface_pose_with_calibrated_uncertainty_on_the_authors_split() {
         q.values[0]
     );
     assert!(close(&std, &q.std.unwrap()));
+
+    // An ensemble of two copies, the second calibrated twice as wide: each
+    // member's deviations keep their own calibration (equal estimates, so
+    // no spread: the ensemble's deviation is the root mean square).
+    let twin = tmp.path().join("twin");
+    copy_dir(&validated, &twin);
+    let mut wide = PoseArtifact::read(&twin).unwrap();
+    wide.std_scale = Some(scale.iter().map(|s| 2.0 * s).collect());
+    std::fs::write(
+        twin.join(PoseArtifact::CONFIG_FILE),
+        serde_json::to_string(&wide).unwrap(),
+    )
+    .unwrap();
+    let both = tmp.path().join("both");
+    PoseEnsemble::assemble(&[validated.clone(), twin], &both).unwrap();
+    let e = PoseEstimator::load(&both, Runtime::BurnFlex, 0)
+        .unwrap()
+        .predict_dataset(&ds)
+        .unwrap();
+    assert!(close(&e.values, &p.values));
+    let rms = 2.5f64.sqrt();
+    for (got, one) in e.std.unwrap().iter().flatten().zip(std.iter().flatten()) {
+        assert!(
+            (got - rms * one).abs() <= 1e-4 * one,
+            "{got} vs {}",
+            rms * one
+        );
+    }
 
     // The final model: every split, every row, the validated calibration.
     let last = tmp.path().join("final");
