@@ -115,8 +115,8 @@ pub struct ProfileGate {
     pub scale: Vec<f32>,
     /// Scores above this are foreign.
     pub threshold: f32,
-    /// The colour layout, when the profile has one: its residual is the
-    /// last statistic.
+    /// The colour layout, when the profile has one: its residual and
+    /// contrast are the last two statistics.
     pub layout: Option<LayoutGate>,
 }
 
@@ -134,11 +134,43 @@ pub struct LayoutGate {
     pub contrast_weights: Vec<f32>,
 }
 
+/// The nodes of the upper median along axis 1 of `input` (`[N, K, ...]`,
+/// `k` values) into `output` (the axis kept): the upper half by TopK, whose
+/// minimum is the element a sort puts at index `K / 2`, as
+/// `select_nth_unstable` picks it. Their names start with `prefix`.
+fn upper_median_nodes(
+    prefix: &str,
+    input: &str,
+    k: usize,
+    output: &str,
+) -> (Vec<TensorProto>, Vec<NodeProto>) {
+    let (half, axis, top) = (
+        format!("{prefix}_upper_half"),
+        format!("{prefix}_median_axis"),
+        format!("{prefix}_top"),
+    );
+    let ini = vec![
+        int64_constant(&half, &[1], vec![(k - k / 2) as i64]),
+        int64_constant(&axis, &[1], vec![1]),
+    ];
+    let mut topk = node("TopK", &top, &[input, &half], &top);
+    topk.output.push(format!("{top}_indices"));
+    topk.attribute.push(int_attribute("axis", 1));
+    topk.attribute.push(int_attribute("largest", 1));
+    let mut min = node(
+        "ReduceMin",
+        &format!("{prefix}_median"),
+        &[&top, &axis],
+        output,
+    );
+    min.attribute.push(int_attribute("keepdims", 1));
+    (ini, vec![topk, min])
+}
+
 /// The nodes of the layout's statistics of `input` (`[N, H, W, 3]`):
 /// each cell's channel means over the channels' means over the grid; the
 /// residual `gate_layout` (`[N, 1]`), the median of their distances from
-/// the reference (TopK's upper half, its minimum, as
-/// `select_nth_unstable` picks the element at `K / 2`); the contrast
+/// the reference ([`upper_median_nodes`]); the contrast
 /// `gate_layout_contrast` (`[N, 1]`), `1 + sum((c - r) w)` as one MatMul
 /// and a constant.
 fn layout_nodes(
@@ -160,7 +192,7 @@ fn layout_nodes(
     }
     let (cw, ch) = (width / cols, height / rows);
     let k = cols * rows * 3;
-    let ini = vec![
+    let mut ini = vec![
         int64_constant("gate_layout_starts", &[2], vec![0, 0]),
         int64_constant(
             "gate_layout_ends",
@@ -180,7 +212,6 @@ fn layout_nodes(
             &[rows as i64, cols as i64, 3],
             l.reference.clone(),
         ),
-        int64_constant("gate_layout_upper_half", &[1], vec![(k - k / 2) as i64]),
         constant(
             "gate_layout_weights",
             &[k as i64, 1],
@@ -204,16 +235,10 @@ fn layout_nodes(
         n.attribute.push(int_attribute("keepdims", keep));
         n
     };
-    let mut topk = node(
-        "TopK",
-        "gate_layout_top",
-        &["gate_layout_flat", "gate_layout_upper_half"],
-        "gate_layout_top",
-    );
-    topk.output.push("gate_layout_top_indices".into());
-    topk.attribute.push(int_attribute("axis", 1));
-    topk.attribute.push(int_attribute("largest", 1));
-    let nodes = vec![
+    let (median_ini, median) =
+        upper_median_nodes("gate_layout", "gate_layout_flat", k, "gate_layout");
+    ini.extend(median_ini);
+    let mut nodes = vec![
         node(
             "Slice",
             "gate_layout_crop",
@@ -291,14 +316,8 @@ fn layout_nodes(
             &["gate_layout_dist", "gate_flat"],
             "gate_layout_flat",
         ),
-        topk,
-        reduce(
-            "ReduceMin",
-            "gate_layout",
-            &["gate_layout_top", "gate_axis_1"],
-            1,
-        ),
     ];
+    nodes.extend(median);
     Ok((ini, nodes))
 }
 
@@ -361,9 +380,8 @@ fn ints_attribute(name: &str, values: &[i64]) -> AttributeProto {
 }
 
 /// The nodes that set each channel of `input` (`[N, H, W, C]` in [0, 1])
-/// to `e.level` at the median of `e.pixels`: gather those pixels, take the
-/// upper half with TopK, its minimum is the median (the element a sort
-/// puts at index `K / 2`, as `select_nth_unstable` picks it).
+/// to `e.level` at the median of `e.pixels`: gather those pixels, their
+/// median by [`upper_median_nodes`].
 fn exposure_nodes(
     e: &ExposureLevel,
     c: i64,
@@ -374,16 +392,13 @@ fn exposure_nodes(
     if k == 0 {
         return Err("no pixels set the exposure level");
     }
-    let upper = (k - k / 2) as i64;
-    let ini = vec![
+    let mut ini = vec![
         int64_constant("level_flat_shape", &[3], vec![0, -1, c]),
         int64_constant(
             "level_pixels",
             &[k as i64],
             e.pixels.iter().map(|&i| i as i64).collect(),
         ),
-        int64_constant("level_upper_half", &[1], vec![upper]),
-        int64_constant("level_axis", &[1], vec![1]),
         int64_constant("level_shape", &[4], vec![0, 1, 1, c]),
         constant("level_target", &[], vec![e.level]),
         constant("level_dark", &[], vec![1.0 / 255.0]),
@@ -396,23 +411,9 @@ fn exposure_nodes(
         "level_centre",
     );
     gather.attribute.push(int_attribute("axis", 1));
-    let mut topk = node(
-        "TopK",
-        "level_topk",
-        &["level_centre", "level_upper_half"],
-        "level_top",
-    );
-    topk.output.push("level_top_indices".into());
-    topk.attribute.push(int_attribute("axis", 1));
-    topk.attribute.push(int_attribute("largest", 1));
-    let mut min = node(
-        "ReduceMin",
-        "level_median",
-        &["level_top", "level_axis"],
-        "level_median3",
-    );
-    min.attribute.push(int_attribute("keepdims", 1));
-    let nodes = vec![
+    let (median_ini, median) = upper_median_nodes("level", "level_centre", k, "level_median3");
+    ini.extend(median_ini);
+    let mut nodes = vec![
         node(
             "Reshape",
             "level_flatten",
@@ -420,8 +421,9 @@ fn exposure_nodes(
             "level_flat",
         ),
         gather,
-        topk,
-        min,
+    ];
+    nodes.extend(median);
+    nodes.extend([
         node(
             "Reshape",
             "level_per_channel",
@@ -447,7 +449,7 @@ fn exposure_nodes(
             "level_gain_used",
         ),
         node("Mul", "level_apply", &[input, "level_gain_used"], output),
-    ];
+    ]);
     Ok((ini, nodes))
 }
 

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use tactile_burn::Runtime;
 use tactile_core::image_io::{RgbImage, load_rgb, rgb_image};
 use tactile_detect::{Gate, TendonDetector};
-use tactile_onnx::runtime::OrtModel;
-use tactile_pipeline::export::export_standalone;
+
+mod common;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -59,28 +59,12 @@ fn real_presses_pass_other_units_are_foreign_and_the_export_agrees() {
         ));
     }
     let model = &det.artifact.model;
-    let [w, h] = model.input_size;
     let levels: Vec<u16> = frames
         .iter()
         .flat_map(|(_, _, f)| model.frame_levels(f).unwrap())
         .collect();
-    let exported = export_standalone(&dir).unwrap();
-    let mut alone = OrtModel::from_bytes(&exported.bytes, 0).unwrap();
-    let shape = [frames.len(), h, w, 3];
-    let outputs = match model.bits() {
-        16 => alone.run_frame_outputs(&shape, levels),
-        _ => alone.run_frame_outputs(&shape, levels.iter().map(|&v| v as u8).collect()),
-    }
-    .unwrap();
-    let output = |name: &str| {
-        outputs
-            .iter()
-            .find(|o| o.name == name)
-            .unwrap_or_else(|| panic!("no output {name}"))
-            .values
-            .clone()
-    };
-    let (gates, scores) = (output("gate"), output("input_score"));
+    let alone = common::run_standalone(&dir, model, levels, frames.len());
+    let (gates, scores) = (alone.get("gate"), alone.get("input_score"));
     for (i, (name, foreign, frame)) in frames.iter().enumerate() {
         let a = det.assess(frame).unwrap();
         assert_eq!(
@@ -96,11 +80,10 @@ fn real_presses_pass_other_units_are_foreign_and_the_export_agrees() {
             "{name}: standalone input score {} vs {s}",
             scores[i]
         );
-        let code = match a.gate {
-            None => 0.0,
-            Some(Gate::Blank) => 1.0,
-            Some(Gate::Foreign) => 2.0,
-        };
-        assert_eq!(gates[i], code, "{name}: standalone gate");
+        assert_eq!(
+            gates[i],
+            common::gate_code(a.gate),
+            "{name}: standalone gate"
+        );
     }
 }

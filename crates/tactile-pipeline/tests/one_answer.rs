@@ -9,9 +9,9 @@ use std::path::{Path, PathBuf};
 use tactile_burn::Runtime;
 use tactile_core::image_io::RgbImage;
 use tactile_detect::{DetectionSet, Gate, TendonDetector};
-use tactile_onnx::runtime::OrtModel;
 use tactile_pipeline::Pipeline;
-use tactile_pipeline::export::export_standalone;
+
+mod common;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -113,23 +113,13 @@ fn eval_and_run_give_every_frame_the_same_answer() {
     let scores = tactile_detect::evaluate(&mut det, &set).unwrap();
     let mut pipe = Pipeline::load(&models, Runtime::BurnFlex, 0).unwrap();
     // The standalone model on every frame's levels at once.
-    let exported = export_standalone(&models.join("detector")).unwrap();
-    let mut alone = OrtModel::from_bytes(&exported.bytes, 0).unwrap();
-    let levels: Vec<u16> = set.frames.concat();
-    let shape = [n, height, width, 3];
-    let outputs = match det.artifact.model.bits() {
-        16 => alone.run_frame_outputs(&shape, levels),
-        _ => alone.run_frame_outputs(&shape, levels.iter().map(|&v| v as u8).collect()),
-    }
-    .unwrap();
-    let output = |name: &str| {
-        outputs
-            .iter()
-            .find(|o| o.name == name)
-            .unwrap_or_else(|| panic!("no output {name}"))
-            .values
-            .clone()
-    };
+    let alone = common::run_standalone(
+        &models.join("detector"),
+        &det.artifact.model,
+        set.frames.concat(),
+        n,
+    );
+    let output = |name: &str| alone.get(name);
     let (alone_p, alone_gate, alone_tendon, alone_score) = (
         output("tendon_probability"),
         output("gate"),
@@ -153,12 +143,11 @@ fn eval_and_run_give_every_frame_the_same_answer() {
             scores.probabilities[i]
         );
         // The standalone graph: the same gate, decision and probability.
-        let code = match rec.gate {
-            None => 0.0,
-            Some(Gate::Blank) => 1.0,
-            Some(Gate::Foreign) => 2.0,
-        };
-        assert_eq!(alone_gate[i], code, "{name}: standalone gate");
+        assert_eq!(
+            alone_gate[i],
+            common::gate_code(rec.gate),
+            "{name}: standalone gate"
+        );
         assert_eq!(
             alone_tendon[i] == 1.0,
             rec.tendon_raw,

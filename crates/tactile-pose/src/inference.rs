@@ -131,20 +131,14 @@ impl PoseEstimator {
             let mut sum = vec![vec![0f64; k]; chunk.len()];
             let mut x = Some(x);
             let last = self.members.len().saturating_sub(1);
-            for (
-                m,
-                Member {
-                    outputs: scaler,
-                    net,
-                    ..
-                },
-            ) in self.members.iter_mut().enumerate()
-            {
+            for (m, member) in self.members.iter_mut().enumerate() {
                 let input = if m == last { x.take() } else { x.clone() };
-                let y = net.run([chunk.len(), 1, side, side], input.unwrap_or_default())?;
+                let y = member
+                    .net
+                    .run([chunk.len(), 1, side, side], input.unwrap_or_default())?;
                 for (acc, row) in sum.iter_mut().zip(y.chunks(k)) {
                     acc.iter_mut()
-                        .zip(scaler.unscale(row))
+                        .zip(member.outputs.unscale(row))
                         .for_each(|(a, v)| *a += v);
                 }
             }
