@@ -52,8 +52,10 @@ step detector "$tactile" train detector --data "$data/train" --out "$stage/detec
     --input 80x60 --input-bits 16 --soft-labels 0.2 --max-epochs 12 --patience 4
 step segmenter "$tactile" train segmenter --data "$data/train" --out "$stage/segmenter" \
     --copies 1 --max-epochs 4 --patience 2
+# The depth network corrects the calibration's own reconstruction (its
+# fourth channel), which carries over to the real sensor's frames.
 step depth "$tactile" train depth --data "$data/train" --out "$stage/depth" \
-    --encoder small --input 128x96 --max-epochs 2 --patience 2
+    --encoder small --input 128x96 --max-epochs 2 --patience 2 --prior-calibration "$stage"
 step export bash -c "for m in detector segmenter depth; do '$tactile' export --model '$stage/'\$m --out '$stage/'\$m/\$m.onnx; done && '$tactile' export --model '$stage' --out '$stage/gelsight.onnx'"
 echo "  \"frames\": $((sequences * 5))" >> "$times"
 echo "}" >> "$times"

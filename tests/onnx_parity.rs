@@ -228,6 +228,7 @@ fn densenet121_depth_network_matches_onnxruntime() {
             unit_mm: 1.0,
         },
         with_mask: true,
+        prior: None,
         depth_maps: Default::default(),
         notes: Default::default(),
     };
@@ -243,6 +244,45 @@ fn densenet121_depth_network_matches_onnxruntime() {
         &dir,
         shape,
         &frames(shape.iter().product(), 21),
+    );
+}
+
+#[test]
+fn a_depth_network_correcting_its_calibration_matches_onnxruntime_at_any_batch() {
+    use tactile_rs::depth::prior::CalibrationPrior;
+    use tactile_rs::depth::{DenseNetConfig, DepthArtifact, DepthNetConfig, DepthScale};
+    // The prior (fourth channel) is added to the output: the export keeps
+    // that addition and the batch axis free.
+    let tmp = tempfile::tempdir().unwrap();
+    let art = DepthArtifact {
+        model: DepthNetConfig::new(DenseNetConfig::tiny(), [64, 32])
+            .with_in_channels(4)
+            .with_residual_channel(Some(3))
+            .with_decoder_width(16),
+        stats: unit_stats(3),
+        scale: DepthScale {
+            offset_mm: 0.1,
+            unit_mm: 1.0,
+        },
+        with_mask: false,
+        prior: Some(CalibrationPrior {
+            calibration: "..".into(),
+        }),
+        depth_maps: Default::default(),
+        notes: Default::default(),
+    };
+    let dir = folder(
+        tmp.path(),
+        "prior",
+        &art,
+        &art.init(&Device::flex()).unwrap(),
+    );
+    let shape = [3, 4, 32, 64];
+    check::<DepthArtifact>(
+        "depth-prior",
+        &dir,
+        shape,
+        &frames(shape.iter().product(), 23),
     );
 }
 

@@ -263,7 +263,7 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
     let depth = DepthArtifact::read(&models().join("depth")).unwrap();
     let det_set = DetectionSet::from_dataset(&ds, &det.model).unwrap();
     let seg_set = SegmentSet::from_dataset(&ds, &rows, seg.model.window(), 1, 0).unwrap();
-    let depth_set = DepthSet::from_dataset(&ds, &rows, depth.model.input_size).unwrap();
+    let depth_set = DepthSet::from_dataset(&ds, &rows, depth.model.input_size, None).unwrap();
     for i in rows {
         let frame = load_rgb(ds.path_of(i, "file").unwrap()).unwrap();
         let trained = det.stats.to_chw(&det_set.view(i)).unwrap();
@@ -281,7 +281,14 @@ fn models_see_a_frame_at_inference_exactly_as_in_training() {
         );
         let trained = depth.stats.to_chw(&depth_set.image(i)).unwrap();
         assert_eq!(
-            depth.model.frame_input(&frame, &depth.stats, None).unwrap(),
+            depth
+                .model
+                .frame_input(
+                    &frame,
+                    &depth.stats,
+                    tactile_rs::depth::prepare::FourthChannel::Nothing
+                )
+                .unwrap(),
             trained,
             "depth, frame {i}"
         );

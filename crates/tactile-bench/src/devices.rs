@@ -222,7 +222,7 @@ pub fn bench_devices(models: &Path, runs: usize) -> Result<Vec<DeviceRow>> {
     let z_dir = models.join("depth");
     let dep = DepthArtifact::read(&z_dir)?;
     let [zw, zh] = dep.model.input_size;
-    let zc = 3 + usize::from(dep.with_mask);
+    let zc = dep.model.in_channels;
     Ok(vec![
         if tactile_detect::DetectorEnsembleArtifact::is_in(&d) {
             row::<tactile_detect::DetectorEnsembleArtifact>("detector", &d, [1, 3, h, w], runs)?

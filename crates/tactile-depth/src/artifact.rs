@@ -1,6 +1,6 @@
 //! A trained depth network on disk: `depth.json` (architecture, the
 //! training frames' channel statistics, the depth scale, whether the mask
-//! is an input) beside `depth.bpk`.
+//! or a calibration's reconstruction is an input) beside `depth.bpk`.
 
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
@@ -45,6 +45,10 @@ pub struct DepthArtifact {
     pub scale: DepthScale,
     /// True when the fourth input channel is the tendon mask.
     pub with_mask: bool,
+    /// The sensor calibration whose reconstruction it corrects (its
+    /// fourth channel); `None` for a network of the frame alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior: Option<crate::prior::CalibrationPrior>,
     /// What its maps hold: camera-to-skin distance (the virtual sensor) or
     /// a calibrated sensor's indentation.
     #[serde(default)]
@@ -84,20 +88,34 @@ impl Artifact for DepthArtifact {
             s.offset_mm,
             "a finite number of millimetres",
         )?;
+        check_field(
+            file,
+            "prior",
+            !(self.with_mask && self.prior.is_some()),
+            "a prior and with_mask",
+            "a mask channel or a prior, not both",
+        )?;
+        check_field(
+            file,
+            "model.residual_channel",
+            self.model.residual_channel == self.prior.as_ref().map(|_| 3),
+            format!("{:?}", self.model.residual_channel),
+            "3 with a prior, none without",
+        )?;
         let c = self.model.in_channels;
         check_field(
             file,
             "model.in_channels",
-            c == 3 + self.with_mask as usize,
+            c == 3 + usize::from(self.with_mask || self.prior.is_some()),
             c,
-            "3, or 4 with the mask channel (with_mask)",
+            "3, or 4 with the mask channel (with_mask) or a prior",
         )
     }
 }
 
 impl Exportable for DepthArtifact {
-    /// `[N, C, H, W]` normalised frames (C = 3, or 4 with the mask) ->
-    /// `[N, 1, H, W]` depth in model units.
+    /// `[N, C, H, W]` normalised frames (C = 3, or 4 with the mask or the
+    /// prior in model units) -> `[N, 1, H, W]` depth in model units.
     fn onnx(&self, model: &DepthNet) -> tactile_onnx::Result<Vec<u8>> {
         let [w, h] = self.model.input_size;
         let c = self.model.in_channels;

@@ -9,7 +9,13 @@ use tactile_core::spec::DepthMaps;
 use tactile_core::spec::visuotactile as spec;
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_grey};
 
-use crate::Result;
+use std::path::Path;
+
+use tactile_burn::Runtime;
+
+use crate::prepare::FourthChannel;
+use crate::prior::PriorSource;
+use crate::{DepthNetConfig, DepthScale, Result};
 
 /// One sample at the input size.
 pub struct DepthSample {
@@ -23,6 +29,9 @@ pub struct DepthSample {
     pub tendon: bool,
     /// The peak press of the frame, mm (for reporting the extremes).
     pub press_mm: Option<f64>,
+    /// The calibration's reconstruction, mm, `H x W` (a network with a
+    /// prior).
+    pub prior_mm: Option<Vec<f32>>,
 }
 
 /// Samples of a dataset, with the sensing window at the input size.
@@ -112,43 +121,75 @@ pub fn depth_m_to_mm(
 }
 
 impl DepthSet {
-    /// Load `rows` of a visuo-tactile dataset at `w x h`.
-    pub fn from_dataset(ds: &Dataset, rows: &[usize], [w, h]: [usize; 2]) -> Result<Self> {
+    /// Load `rows` of a visuo-tactile dataset at `w x h`, each frame's
+    /// reconstruction through the calibration in `prior` too when given
+    /// (on burn's Flex device, one reconstructor per worker).
+    pub fn from_dataset(
+        ds: &Dataset,
+        rows: &[usize],
+        [w, h]: [usize; 2],
+        prior: Option<&Path>,
+    ) -> Result<Self> {
         ds.expect_kind(DatasetKind::Visuotactile)?;
+        if let Some(dir) = prior {
+            // Loaded once here so a bad calibration is named before any work.
+            PriorSource::load(dir, Runtime::BurnFlex, 1)?;
+            tactile_core::note!(
+                "reconstructing {} frames through the calibration in {}",
+                rows.len(),
+                dir.display()
+            );
+        }
+        let progress = tactile_core::progress::progress_bar(rows.len() as u64, "loading frames");
         let samples = rows
             .par_iter()
-            .map(|&i| -> Result<DepthSample> {
-                let rgb = crate::prepare::frame_bytes(&ds.load_rgb(i)?, [w, h]).map_err(|e| {
-                    tactile_core::Error::image(
-                        ds.path_of(i, "file").unwrap_or_default(),
-                        e.to_string(),
-                    )
-                })?;
-                let (dw, dh, m) = ds.load_depth_m(i)?;
-                let depth_mm = depth_m_to_mm(&m, (dw, dh), w, h).map_err(|e| {
-                    Error::dataset(
-                        ds.path_of(i, "depth").unwrap_or_default(),
-                        None,
-                        e.to_string(),
-                    )
-                })?;
-                let mpath = ds.path_of(i, "mask")?;
-                let m = ds.load_grey(i, "mask")?;
-                let mask = resize_grey(&m, w, h)
-                    .map_err(|e| e.in_file(&mpath))?
-                    .data
-                    .iter()
-                    .map(|&v| v >= 0.5)
-                    .collect();
-                Ok(DepthSample {
-                    rgb,
-                    depth_mm,
-                    mask,
-                    tendon: ds.number_opt(i, "tendon")? == Some(1.0),
-                    press_mm: ds.number_opt(i, "press_mm")?,
-                })
-            })
+            .with_min_len(32)
+            .map_init(
+                || prior.map(|d| PriorSource::load(d, Runtime::BurnFlex, 1)),
+                |source, &i| -> Result<DepthSample> {
+                    let frame = ds.load_rgb(i)?;
+                    let prior_mm = match source {
+                        Some(Ok(p)) => Some(p.prior_mm(&frame, &ds.path_of(i, "file")?, [w, h])?),
+                        Some(Err(e)) => {
+                            return Err(tactile_core::Error::Invalid(e.to_string()).into());
+                        }
+                        None => None,
+                    };
+                    progress.inc(1);
+                    let rgb = crate::prepare::frame_bytes(&frame, [w, h]).map_err(|e| {
+                        tactile_core::Error::image(
+                            ds.path_of(i, "file").unwrap_or_default(),
+                            e.to_string(),
+                        )
+                    })?;
+                    let (dw, dh, m) = ds.load_depth_m(i)?;
+                    let depth_mm = depth_m_to_mm(&m, (dw, dh), w, h).map_err(|e| {
+                        Error::dataset(
+                            ds.path_of(i, "depth").unwrap_or_default(),
+                            None,
+                            e.to_string(),
+                        )
+                    })?;
+                    let mpath = ds.path_of(i, "mask")?;
+                    let m = ds.load_grey(i, "mask")?;
+                    let mask = resize_grey(&m, w, h)
+                        .map_err(|e| e.in_file(&mpath))?
+                        .data
+                        .iter()
+                        .map(|&v| v >= 0.5)
+                        .collect();
+                    Ok(DepthSample {
+                        rgb,
+                        depth_mm,
+                        mask,
+                        tendon: ds.number_opt(i, "tendon")? == Some(1.0),
+                        press_mm: ds.number_opt(i, "press_mm")?,
+                        prior_mm,
+                    })
+                },
+            )
             .collect::<Result<Vec<_>>>()?;
+        progress.finish_and_clear();
         Ok(Self {
             width: w,
             height: h,
@@ -173,33 +214,49 @@ impl DepthSet {
         FloatImage::from_bytes(self.width, self.height, 3, &self.samples[i].rgb)
     }
 
-    /// Normalised `C x H x W` inputs of the frames at `idx` (RGB, plus
-    /// the mask as 0/1 when `with_mask`), end to end.
-    pub fn inputs(&self, idx: &[usize], stats: &ChannelStats, with_mask: bool) -> Result<Vec<f32>> {
-        let c = 3 + with_mask as usize;
+    /// Normalised `C x H x W` inputs of the frames at `idx` for a
+    /// network of `model` ([`DepthNetConfig::network_input`]: RGB, plus
+    /// the mask or the prior in `scale`'s model units when it takes one),
+    /// end to end.
+    pub fn inputs(
+        &self,
+        idx: &[usize],
+        stats: &ChannelStats,
+        model: &DepthNetConfig,
+        scale: &DepthScale,
+    ) -> Result<Vec<f32>> {
+        let c = model.in_channels;
         let mut x = Vec::with_capacity(idx.len() * c * self.width * self.height);
         for &i in idx {
-            x.extend(stats.to_chw(&self.image(i))?);
-            if with_mask {
-                x.extend(self.samples[i].mask.iter().map(|&m| m as u8 as f32));
-            }
+            let s = &self.samples[i];
+            let fourth = match (model.takes_prior(), model.takes_mask(), &s.prior_mm) {
+                (true, _, Some(p)) => FourthChannel::Prior(p, *scale),
+                (true, _, None) => {
+                    return Err(crate::Error::PriorRequired {
+                        size: [self.width, self.height],
+                    });
+                }
+                (false, true, _) => FourthChannel::Mask(&s.mask),
+                _ => FourthChannel::Nothing,
+            };
+            x.extend(model.network_input(&self.image(i), stats, fourth)?);
         }
         Ok(x)
     }
 
-    /// Inputs `[N, C, H, W]` (RGB normalised, plus the mask as 0/1 when
-    /// `with_mask`) and targets `[N, 1, H, W]` in model units.
+    /// Inputs `[N, C, H, W]` ([`Self::inputs`]) and targets `[N, 1, H,
+    /// W]` in model units.
     pub fn batch(
         &self,
         idx: &[usize],
         stats: &ChannelStats,
-        scale: &crate::artifact::DepthScale,
-        with_mask: bool,
+        scale: &DepthScale,
+        model: &DepthNetConfig,
         device: &Device,
     ) -> Result<(Tensor<4>, Tensor<4>)> {
         let (w, h) = (self.width, self.height);
-        let c = 3 + with_mask as usize;
-        let x = self.inputs(idx, stats, with_mask)?;
+        let c = model.in_channels;
+        let x = self.inputs(idx, stats, model, scale)?;
         let mut y = Vec::with_capacity(idx.len() * w * h);
         for &i in idx {
             y.extend(self.samples[i].depth_mm.iter().map(|&d| scale.to_model(d)));

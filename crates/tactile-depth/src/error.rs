@@ -15,9 +15,18 @@ pub enum Error {
     /// Export or onnxruntime.
     #[error(transparent)]
     Onnx(#[from] tactile_onnx::Error),
+    /// The sensor calibration a network with a prior starts from.
+    #[error(transparent)]
+    Calibration(#[from] tactile_gelsight::Error),
     /// A mask-channel network given no mask (or one of the wrong size).
     #[error("this depth network takes a {}x{} tendon mask as a fourth channel", size[0], size[1])]
     MaskRequired {
+        /// The network's input size.
+        size: [usize; 2],
+    },
+    /// A network with a prior given none (or one of the wrong size).
+    #[error("this depth network corrects its sensor calibration's reconstruction: it takes a {}x{} prior as a fourth channel", size[0], size[1])]
+    PriorRequired {
         /// The network's input size.
         size: [usize; 2],
     },
@@ -43,6 +52,7 @@ impl Error {
             Error::Core(e) => Some(e),
             Error::Preprocess(e) => e.core(),
             Error::Onnx(e) => e.core(),
+            Error::Calibration(e) => e.core(),
             _ => None,
         }
     }

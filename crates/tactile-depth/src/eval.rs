@@ -106,7 +106,7 @@ pub fn predict_mm(estimator: &mut DepthEstimator, data: &DepthSet) -> Result<Vec
     let idx: Vec<usize> = (0..data.len()).collect();
     let mut out = Vec::with_capacity(data.len());
     for chunk in idx.chunks(EVAL_BATCH) {
-        let x = data.inputs(chunk, &art.stats, art.with_mask)?;
+        let x = data.inputs(chunk, &art.stats, &art.model, &art.scale)?;
         out.extend(estimator.depth_mm_of_inputs(&x, chunk.len())?);
     }
     Ok(out)
@@ -117,7 +117,12 @@ pub fn predict_mm(estimator: &mut DepthEstimator, data: &DepthSet) -> Result<Vec
 pub fn evaluate(estimator: &mut DepthEstimator, ds: &Dataset) -> Result<(DepthScores, f64)> {
     same_maps(estimator, ds)?;
     let rows: Vec<usize> = (0..ds.len()).collect();
-    let data = DepthSet::from_dataset(ds, &rows, estimator.artifact.model.input_size)?;
+    let data = DepthSet::from_dataset(
+        ds,
+        &rows,
+        estimator.artifact.model.input_size,
+        estimator.prior_folder(),
+    )?;
     let t0 = std::time::Instant::now();
     let preds = predict_mm(estimator, &data)?;
     let ms = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
@@ -255,7 +260,12 @@ pub fn save_heat_maps(
 ) -> Result<usize> {
     same_maps(estimator, ds)?;
     let rows: Vec<usize> = (0..ds.len().min(frames)).collect();
-    let data = DepthSet::from_dataset(ds, &rows, estimator.artifact.model.input_size)?;
+    let data = DepthSet::from_dataset(
+        ds,
+        &rows,
+        estimator.artifact.model.input_size,
+        estimator.prior_folder(),
+    )?;
     let preds = predict_mm(estimator, &data)?;
     tactile_core::io::create_dir_all(dir)?;
     let aspect = ds.manifest.width as f64 / ds.manifest.height.max(1) as f64;

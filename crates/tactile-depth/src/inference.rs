@@ -3,28 +3,51 @@
 //! on any runtime. `tactile run`, `tactile eval depth`, the Python package
 //! and the benches all go through [`DepthEstimator`].
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use tactile_burn::{Network, Runtime};
 use tactile_core::image_io::RgbImage;
 
+use tactile_gelsight::IndentationMap;
+
 use crate::Result;
 use crate::artifact::DepthArtifact;
+use crate::prepare::FourthChannel;
+use crate::prior::PriorSource;
 
 /// A loaded depth network, ready for frames of any size.
 pub struct DepthEstimator {
     /// Architecture, statistics and depth scale.
     pub artifact: DepthArtifact,
     net: Box<dyn Network>,
+    /// The calibration a network with a prior corrects, and its folder.
+    prior: Option<(PriorSource, PathBuf)>,
 }
 
 impl DepthEstimator {
     /// Load the depth network in `dir` onto `runtime` (`threads` intra-op
     /// threads for onnxruntime; 0 = its default).
     pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
-        let (artifact, net) =
-            tactile_onnx::load_network::<DepthArtifact>(dir.as_ref(), runtime, threads)?;
-        Ok(Self { artifact, net })
+        let dir = dir.as_ref();
+        let (artifact, net) = tactile_onnx::load_network::<DepthArtifact>(dir, runtime, threads)?;
+        let prior = match &artifact.prior {
+            Some(p) => {
+                let folder = p.folder(dir);
+                Some((PriorSource::load(&folder, runtime, threads)?, folder))
+            }
+            None => None,
+        };
+        Ok(Self {
+            artifact,
+            net,
+            prior,
+        })
+    }
+
+    /// The folder of the calibration a network with a prior corrects
+    /// (`None` for a network of the frame alone).
+    pub fn prior_folder(&self) -> Option<&Path> {
+        self.prior.as_ref().map(|(_, f)| f.as_path())
     }
 
     /// Where the network runs.
@@ -46,10 +69,49 @@ impl DepthEstimator {
 
     /// Depth in mm at the network's input size (`width * height` values,
     /// row-major) of an RGB frame of any size; `mask` (at the input size)
-    /// is required exactly when the network takes the mask channel.
+    /// is required exactly when the network takes the mask channel. A
+    /// network with a prior reconstructs the frame through its calibration
+    /// first (the frame must be of the calibrated size).
     pub fn depth_mm(&mut self, frame: &RgbImage, mask: Option<&[bool]>) -> Result<Vec<f32>> {
+        let size = self.artifact.model.input_size;
+        let prior = match self.prior.as_mut() {
+            Some((p, _)) => Some(p.prior_mm(frame, Path::new("the frame"), size)?),
+            None => None,
+        };
+        self.depth_mm_of_frame(frame, mask, prior.as_deref())
+    }
+
+    /// [`Self::depth_mm`] of a frame whose calibration's reconstruction
+    /// was made already (the pipeline makes it on every frame of a
+    /// calibrated sensor); a network without a prior ignores it.
+    pub fn depth_mm_reconstructed(
+        &mut self,
+        frame: &RgbImage,
+        reconstruction: &IndentationMap,
+    ) -> Result<Vec<f32>> {
+        let prior = match self.artifact.model.takes_prior() {
+            true => Some(crate::prior::map_at(
+                reconstruction,
+                self.artifact.model.input_size,
+            )?),
+            false => None,
+        };
+        self.depth_mm_of_frame(frame, None, prior.as_deref())
+    }
+
+    fn depth_mm_of_frame(
+        &mut self,
+        frame: &RgbImage,
+        mask: Option<&[bool]>,
+        prior_mm: Option<&[f32]>,
+    ) -> Result<Vec<f32>> {
         let a = &self.artifact;
-        let x = a.model.frame_input(frame, &a.stats, mask)?;
+        let fourth = match (mask, prior_mm) {
+            (_, Some(p)) => FourthChannel::Prior(p, a.scale),
+            (Some(m), None) => FourthChannel::Mask(m),
+            (None, None) => FourthChannel::Nothing,
+        };
+        let x = a.model.frame_input(frame, &a.stats, fourth)?;
         Ok(self.depth_mm_of_inputs(&x, 1)?.remove(0))
     }
 }

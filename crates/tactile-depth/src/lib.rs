@@ -13,6 +13,7 @@ pub mod inference;
 pub mod model;
 pub mod options;
 pub mod prepare;
+pub mod prior;
 pub mod torchvision;
 pub mod training;
 

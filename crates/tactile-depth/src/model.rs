@@ -189,6 +189,10 @@ pub struct DepthNetConfig {
     #[config(default = "HeadKind::Conv1x1")]
     /// The head.
     pub head: HeadKind,
+    /// The input channel the output is added to: a network with a prior
+    /// ([`crate::prior`]) learns a correction to it. `None`: depth itself.
+    #[config(default = "None")]
+    pub residual_channel: Option<usize>,
 }
 
 fn bn(c: usize, device: &Device) -> BatchNorm {
@@ -349,6 +353,9 @@ pub struct DepthNet {
     pub head: Vec<Conv2d>,
     /// Bilinear x2, half-pixel centres.
     pub upsample: Interpolate2d,
+    /// The input channel the output is added to (a network with a prior).
+    #[module(skip)]
+    pub residual_channel: Option<usize>,
 }
 
 impl DenseNetConfig {
@@ -426,8 +433,15 @@ impl DepthNetConfig {
         }
         if !(3..=4).contains(&self.in_channels) {
             return Err(Error::Config(format!(
-                "{} input channels: expected 3 (RGB) or 4 (RGB + mask)",
+                "{} input channels: expected 3 (RGB) or 4 (RGB + mask or prior)",
                 self.in_channels
+            )));
+        }
+        if let Some(c) = self.residual_channel
+            && (c < 3 || c >= self.in_channels)
+        {
+            return Err(Error::Config(format!(
+                "residual channel {c}: expected the fourth input channel (3) of a 4-channel network"
             )));
         }
         let channels = [
@@ -537,6 +551,7 @@ impl DepthNetConfig {
                 .with_mode(InterpolateMode::Linear)
                 .with_align_corners(false)
                 .init(),
+            residual_channel: self.residual_channel,
         })
     }
 }
@@ -553,14 +568,25 @@ impl Forward for DepthNet {
     }
 }
 
+/// Channel `c` of `x` (`[N, C, H, W]` -> `[N, 1, H, W]`), as a weighted
+/// sum over channels: a slice would fix the batch size in the ONNX export.
+fn channel(x: &Tensor<4>, c: usize) -> Tensor<4> {
+    let n = x.dims()[1];
+    let pick: Vec<f32> = (0..n).map(|k| f32::from(u8::from(k == c))).collect();
+    let w = Tensor::<4>::from_data(TensorData::new(pick, [1, n, 1, 1]), &x.device());
+    (x.clone() * w).sum_dim(1)
+}
+
 impl DepthNet {
     /// Depth in the model's units (the folder's depth scale turns them into millimetres).
     ///
     /// # Shapes
     /// - `x`: `[N, C, H, W]`, RGB normalised with the training statistics
     ///   (and the tendon mask as a fourth channel when it takes one)
-    /// - output: `[N, 1, H, W]`
+    /// - output: `[N, 1, H, W]` (the residual channel of `x` plus the
+    ///   network's correction, for a network with a prior)
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        let prior = self.residual_channel.map(|c| channel(&x, c));
         let (mut skips, deepest) = self.encoder.forward(x);
         let mut y = self.bottleneck.forward(deepest);
         for b in &self.up {
@@ -575,7 +601,11 @@ impl DepthNet {
                 y = relu(y);
             }
         }
-        self.upsample.forward(y)
+        let y = self.upsample.forward(y);
+        match prior {
+            Some(p) => y + p,
+            None => y,
+        }
     }
 
     /// Stop gradients into the encoder (paper B's frozen ImageNet encoder).

@@ -41,6 +41,9 @@ pub struct DepthOptions {
     /// Train the decoder only.
     #[arg(long)]
     pub freeze_encoder: bool,
+    /// A sensor calibration folder (`tactile calibrate ball`): the network takes its reconstruction of each frame as a fourth channel and learns a correction to it, so it starts from what the calibration sees on the real sensor (save the network in that folder's `depth/`).
+    #[arg(long, value_name = "DIR")]
+    pub prior_calibration: Option<PathBuf>,
     /// torchvision DenseNet weights as safetensors (key mapping: the tactile-depth `torchvision` module docs); the preset must match.
     #[arg(long)]
     pub pretrained: Option<PathBuf>,
@@ -75,6 +78,11 @@ impl DepthOptions {
             .with_freeze_encoder(self.freeze_encoder)
             .with_pretrained(self.pretrained.as_ref().map(|p| p.display().to_string()))
             .with_val_fraction(self.val_fraction)
+            .with_prior_calibration(
+                self.prior_calibration
+                    .as_ref()
+                    .map(|p| p.display().to_string()),
+            )
     }
 
     /// Train on `data` into `out` as these options say.

@@ -3,13 +3,14 @@
 //! ([`DepthEstimator`](crate::DepthEstimator)) and evaluation go through
 //! here. The path: resize to the input size, round to 8 bits per channel
 //! as training sets hold frames ([`DepthNetConfig::frame_bytes`]), then
-//! the training statistics and, for a network that takes it, the tendon
-//! mask as a fourth channel ([`DepthNetConfig::network_input`]).
+//! the training statistics and, for a network that takes one, the tendon
+//! mask or the calibration's reconstruction as a fourth channel
+//! ([`DepthNetConfig::network_input`]).
 
 use tactile_core::image_io::RgbImage;
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_rgb};
 
-use crate::{DepthNetConfig, Error, Result};
+use crate::{DepthNetConfig, DepthScale, Error, Result};
 
 /// The frame resized to `w x h`, `H x W x 3` bytes: as training sets hold
 /// frames and inference takes them.
@@ -31,24 +32,42 @@ impl DepthNetConfig {
 
     /// Whether the network takes the tendon mask as a fourth channel.
     pub fn takes_mask(&self) -> bool {
-        self.in_channels == 4
+        self.in_channels == 4 && self.residual_channel.is_none()
+    }
+
+    /// Whether the network takes a prior (the calibration's
+    /// reconstruction) as its fourth channel and corrects it.
+    pub fn takes_prior(&self) -> bool {
+        self.in_channels == 4 && self.residual_channel.is_some()
     }
 
     /// The normalised `C x H x W` input of a frame image: its channels
-    /// by `stats`, then `mask` (`H x W`, at the input size) as 0/1 when the
-    /// network takes it; a mask is required exactly then.
+    /// by `stats`, then the fourth channel the network takes (the mask as
+    /// 0/1, or the prior in model units); exactly that one is required.
     pub fn network_input(
         &self,
         img: &FloatImage,
         stats: &ChannelStats,
-        mask: Option<&[bool]>,
+        fourth: FourthChannel<'_>,
     ) -> Result<Vec<f32>> {
         let [w, h] = self.input_size;
         let mut x = stats.to_chw(img)?;
-        match (self.takes_mask(), mask) {
-            (true, Some(m)) if m.len() == w * h => x.extend(m.iter().map(|&b| b as u8 as f32)),
-            (true, _) => return Err(Error::MaskRequired { size: [w, h] }),
-            (false, _) => {}
+        match fourth {
+            FourthChannel::Mask(m) if self.takes_mask() && m.len() == w * h => {
+                x.extend(m.iter().map(|&b| b as u8 as f32))
+            }
+            FourthChannel::Prior(p, scale) if self.takes_prior() && p.len() == w * h => {
+                x.extend(p.iter().map(|&v| scale.to_model(v)))
+            }
+            FourthChannel::Nothing if self.in_channels == 3 => {}
+            _ if self.takes_mask() => return Err(Error::MaskRequired { size: [w, h] }),
+            _ if self.takes_prior() => return Err(Error::PriorRequired { size: [w, h] }),
+            _ => {
+                return Err(tactile_core::Error::Invalid(
+                    "this depth network takes the frame only (RGB)".into(),
+                )
+                .into());
+            }
         }
         Ok(x)
     }
@@ -58,9 +77,22 @@ impl DepthNetConfig {
         &self,
         frame: &RgbImage,
         stats: &ChannelStats,
-        mask: Option<&[bool]>,
+        fourth: FourthChannel<'_>,
     ) -> Result<Vec<f32>> {
         let img = self.image_of_bytes(&self.frame_bytes(frame)?);
-        self.network_input(&img, stats, mask)
+        self.network_input(&img, stats, fourth)
     }
+}
+
+/// What goes into a depth network's fourth input channel, at its input
+/// size.
+#[derive(Debug, Clone, Copy)]
+pub enum FourthChannel<'a> {
+    /// Nothing: an RGB network.
+    Nothing,
+    /// The tendon mask (a mask-channel network).
+    Mask(&'a [bool]),
+    /// The calibration's reconstruction, mm, and the network's depth scale
+    /// that turns it into model units (a network with a prior).
+    Prior(&'a [f32], DepthScale),
 }

@@ -75,6 +75,11 @@ pub struct DepthTrainingConfig {
     /// Fraction of the sequences that validate.
     #[config(default = 0.2)]
     pub val_fraction: f64,
+    /// A sensor calibration folder: the network takes its reconstruction
+    /// of each frame as a fourth channel and learns a correction to it
+    /// ([`crate::prior`]).
+    #[config(default = "None")]
+    pub prior_calibration: Option<String>,
 }
 
 /// The loss of `kind` on model-unit depth maps.
@@ -101,7 +106,7 @@ fn predict_mm(
     let idx: Vec<usize> = (0..data.len()).collect();
     let mut out = Vec::with_capacity(idx.len());
     for chunk in idx.chunks(crate::eval::EVAL_BATCH) {
-        let (x, _) = data.batch(chunk, &art.stats, &art.scale, art.with_mask, device)?;
+        let (x, _) = data.batch(chunk, &art.stats, &art.scale, &art.model, device)?;
         let v = model
             .forward(x)
             .into_data()
@@ -124,8 +129,19 @@ pub fn train(
     resume: bool,
 ) -> Result<FitSummary> {
     config.schedule.check()?;
+    let prior_dir = config
+        .prior_calibration
+        .as_ref()
+        .map(std::path::PathBuf::from);
+    if config.with_mask && prior_dir.is_some() {
+        return Err(tactile_core::Error::Config(
+            "a depth network takes the tendon mask or a calibration prior as its fourth channel, not both".into(),
+        )
+        .into());
+    }
     let mut net = config.model.clone();
-    net.in_channels = 3 + config.with_mask as usize;
+    net.in_channels = 3 + usize::from(config.with_mask || prior_dir.is_some());
+    net.residual_channel = prior_dir.as_ref().map(|_| 3);
     net.check()?;
     if !(config.unit_mm.is_finite() && config.unit_mm > 0.0) {
         return Err(tactile_core::Error::Config(format!(
@@ -143,8 +159,8 @@ pub fn train(
         train.len(),
         val.len()
     );
-    let train_set = DepthSet::from_dataset(data, &train, [w, h])?;
-    let val_set = DepthSet::from_dataset(data, &val, [w, h])?;
+    let train_set = DepthSet::from_dataset(data, &train, [w, h], prior_dir.as_deref())?;
+    let val_set = DepthSet::from_dataset(data, &val, [w, h], prior_dir.as_deref())?;
     if train_set.is_empty() || val_set.is_empty() {
         return Err(tactile_core::Error::Invalid(format!(
             "need training and validation frames (got {} and {})",
@@ -185,6 +201,9 @@ pub fn train(
         stats: stats.clone(),
         scale,
         with_mask: config.with_mask,
+        prior: prior_dir
+            .as_deref()
+            .map(|d| crate::prior::CalibrationPrior::of(d, out)),
         depth_maps: train_set.depth_maps,
         notes: serde_json::json!({
             "trained_on": data.root.display().to_string(),
@@ -217,13 +236,13 @@ pub fn train(
         burn::optim::AdamConfig::new().init(),
         (&train_idx, val_set.len()),
         |m: &DepthNet, batch, _| {
-            let (x, y) = train_set.batch(batch, &stats, &scale, config.with_mask, &ad)?;
+            let (x, y) = train_set.batch(batch, &stats, &scale, &net, &ad)?;
             Ok(depth_loss(config.loss, m.forward(x), y, range))
         },
         |m| {
             let (mut loss, mut k) = (0.0, 0usize);
             for chunk in (0..val_set.len()).collect::<Vec<_>>().chunks(16) {
-                let (x, y) = val_set.batch(chunk, &stats, &scale, config.with_mask, &dev)?;
+                let (x, y) = val_set.batch(chunk, &stats, &scale, &net, &dev)?;
                 let l: f32 = depth_loss(config.loss, m.forward(x), y, range).into_scalar();
                 loss += l as f64 * chunk.len() as f64;
                 k += chunk.len();

@@ -186,10 +186,11 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
     } else if DepthArtifact::is_in(dir) {
         let l = DepthArtifact::load(dir, &device)?;
         let a = &l.artifact;
-        if a.with_mask {
+        if a.with_mask || a.prior.is_some() {
             return Err(tactile_core::Error::Invalid(format!(
-                "{}: this depth network also takes a mask channel; a standalone export takes the frame only",
-                dir.display()
+                "{}: this depth network also takes a {} channel; a standalone export takes the frame only (export it with `tactile export` and feed the fourth channel)",
+                dir.display(),
+                if a.with_mask { "mask" } else { "calibration prior" }
             ))
             .into());
         }

@@ -300,7 +300,14 @@ impl Pipeline {
         rec.ms_segment = Some(1e3 * t1.elapsed().as_secs_f64());
         // Depth.
         let t2 = Instant::now();
-        let depth_mm = models.depth.depth_mm(frame, None)?;
+        // A depth network with a prior corrects the calibration's
+        // reconstruction, made above on the frame as it came.
+        let depth_mm = match &views.indentation {
+            Some(v) if models.depth.artifact.model.takes_prior() => {
+                models.depth.depth_mm_reconstructed(frame, &v.map)?
+            }
+            _ => models.depth.depth_mm(frame, None)?,
+        };
         let mm: Vec<f32> = depth_mm
             .iter()
             .zip(&models.window)

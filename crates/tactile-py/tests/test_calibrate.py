@@ -161,3 +161,21 @@ def test_the_shipped_gelsight_pipeline_sees_no_tendon_on_real_presses(root: Path
     # A frame of another sensor's size is foreign, not an error.
     r = pipe.process(np.full((360, 640, 3), 128, np.uint8))
     assert r.out_of_distribution and not r.tendon
+
+
+def test_a_depth_network_learns_a_correction_to_its_calibration(model: Path, tmp_path: Path):
+    data = tactile.synth.gelsight(model, count=8, seed=5, frames_per_sequence=4, tendon_share=1.0,
+                                  out=tmp_path / "set")
+    sensor = tmp_path / "sensor"
+    shutil.copytree(model, sensor)
+    tactile.train.depth(data, sensor / "depth", encoder="tiny", input=(64, 32), decoder_width=16,
+                        max_epochs=1, val_fraction=0.5, prior_calibration=str(sensor))
+    art = json.loads((sensor / "depth" / "depth.json").read_text())
+    # The reconstruction is its fourth channel, found beside it.
+    assert art["prior"] == {"calibration": ".."} and art["model"]["in_channels"] == 4
+    assert art["model"]["residual_channel"] == 3
+    e = tactile.eval.depth(sensor / "depth", data)
+    assert e["scores"]["frames"] == 8 and np.isfinite(e["scores"]["mae_mm"])
+    with pytest.raises(ValueError, match="not both"):
+        tactile.train.depth(data, tmp_path / "x", prior_calibration=str(sensor), with_mask=True)
+    assert not (tmp_path / "x").exists()

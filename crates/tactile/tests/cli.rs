@@ -2188,9 +2188,19 @@ fn a_calibrated_sensor_trains_and_runs_its_own_pipeline() {
         "64x32",
         "--max-epochs",
         "1",
+        "--prior-calibration",
+        &s(&m),
     ]);
+    // The depth network corrects the calibration's reconstruction, found
+    // beside it (`..`), so the folder can move.
     let depth = std::fs::read_to_string(m.join("depth/depth.json")).unwrap();
     assert!(depth.contains("\"depth_maps\": \"indentation\""), "{depth}");
+    let art: serde_json::Value = serde_json::from_str(&depth).unwrap();
+    assert_eq!(art["prior"]["calibration"], "..", "{depth}");
+    assert_eq!(art["model"]["in_channels"], 4, "{depth}");
+    let moved = tmp.path().join("moved");
+    std::fs::rename(&m, &moved).unwrap();
+    let m = moved;
     // The whole pipeline on the sensor's frames: every record has the
     // calibration's indentation; tendon frames the depth network's, as
     // indentation.

@@ -166,6 +166,7 @@ def depth(
     loss: str = "l1",
     with_mask: bool = False,
     freeze_encoder: bool = False,
+    prior_calibration: Optional[str] = None,
     pretrained: Optional[str] = None,
     unit_mm: float = 1.0,
     decoder_width: int = 64,
