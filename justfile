@@ -165,6 +165,14 @@ train-detector-ensemble: train-detector-light
     rm -rf data/det/ensemble && cargo run --release -p tactile -- train ensemble --members data/det/light8 data/det/light data/det/light-aug --out data/det/ensemble
     for d in sel2-light-ref sel2-light-alt sel-default sel-light-ref sel-light-alt; do cargo run --release -p tactile -- eval detector --model data/det/ensemble --data data/$d; done
 
+# Round four, not shipped (docs/detector-light-presses.md): the light8 proportions as 3,300 five-frame videos.
+train-detector-scenes: synth-vt-detector-light
+    cargo run --release -p tactile -- synth visuotactile --sequences 600 --frames-per-sequence 5 --seed 9110 --out data/det2/train-9110
+    cargo run --release -p tactile -- synth visuotactile --sequences 600 --frames-per-sequence 5 --seed 9130 --press-mm 0.1,0.6 --out data/det2/train-9130
+    cargo run --release -p tactile -- synth visuotactile --sequences 2100 --frames-per-sequence 5 --seed 9150 --press-mm 0.05,0.4 --out data/det2/train-9150
+    cargo run --release -p tactile -- train detector --data data/det2/train-9110 data/det2/train-9130 data/det2/train-9150 --out data/det2/scenes --width 0.5 --input 80x60 --input-bits 16 --normalise-exposure --max-epochs 25 --patience 25 --soft-labels 0.6
+    for d in sel2-light-ref sel2-light-alt sel-default; do cargo run --release -p tactile -- eval detector --model data/det2/scenes --data data/$d; done
+
 ship-detector-ensemble: calibrate-detector-data
     rm -rf models/.detector-new && cp -r data/det/ensemble models/.detector-new
     cargo run --release -p tactile -- train calibrate --model models/.detector-new --data data/vt-cal data/vt-cal-light
