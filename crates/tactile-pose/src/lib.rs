@@ -8,6 +8,7 @@
 #![deny(missing_docs)]
 
 pub mod artifact;
+pub mod calibrate;
 pub mod data;
 mod error;
 pub mod inference;

@@ -189,4 +189,51 @@ fn surface_pose_with_calibrated_uncertainty_on_the_authors_split() {
     let kw = json!({"targets": ["depth_mm", "roll_deg:360"]});
     let e = options(kw).config().unwrap_err().to_string();
     assert!(e.contains("linear targets only"), "{e}");
+
+    // Calibrated again on frames it did not fit (`tactile train calibrate`):
+    // too few rows of a split are refused, naming the split; on every row
+    // the deviations are rescaled so ±1 holds 68.3 % of the errors, the
+    // estimates unchanged, and the final model takes those factors.
+    use tactile_pose::calibrate::{calibrate_on, calibration_from};
+    let recal = tmp.path().join("recal");
+    copy_dir(&validated, &recal);
+    let e = calibrate_on(&recal, &ds, Some("val"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("labels.csv") && e.contains("'val'") && e.contains("20"),
+        "{e}"
+    );
+    let fit = calibrate_on(&recal, &ds, None).unwrap();
+    assert_eq!(
+        (fit.frames, fit.std_scale_before.clone()),
+        (40, scale.clone())
+    );
+    let r = PoseEstimator::load(&recal, Runtime::BurnFlex, 0)
+        .unwrap()
+        .predict_dataset(&ds)
+        .unwrap();
+    assert!(close(&r.values, &p.values));
+    let truth: Vec<Vec<f64>> = (0..ds.len())
+        .map(|i| TARGETS.iter().map(|t| ds.number(i, t).unwrap()).collect())
+        .collect();
+    let rstd = r.std.unwrap();
+    for j in 0..6 {
+        let inside = (0..ds.len())
+            .filter(|&i| (r.values[i][j] - truth[i][j]).abs() <= rstd[i][j] * (1.0 + 1e-9))
+            .count();
+        assert_eq!(inside, 28, "target {j}: ceil(0.683 * 40) frames inside ±1");
+    }
+    calibration_from(&last, &recal).unwrap();
+    let taken = PoseArtifact::read(&last).unwrap().std_scale.unwrap();
+    assert!(
+        taken
+            .iter()
+            .zip(&fit.std_scale)
+            .all(|(a, b)| (a - b).abs() < 1e-12 * b)
+    );
+    let e = calibrate_on(&both, &ds, None).unwrap_err().to_string();
+    assert!(e.contains("calibrate each member"), "{e}");
+    let e = calibrate_on(&plain, &ds, None).unwrap_err().to_string();
+    assert!(e.contains("--uncertainty"), "{e}");
 }

@@ -273,3 +273,32 @@ pub(crate) fn options<'py>(py: Python<'py>, trainer: &str) -> PyResult<Bound<'py
 pub(crate) fn train_ensemble(members: Vec<PathBuf>, out: PathBuf) -> PyResult<String> {
     tactile_pipeline::ensemble::assemble_ensemble(&members, &out).py()
 }
+
+/// Calibrate a trained model on frames it was not trained on: a detector's
+/// probabilities on `data`, or a pose network's deviations on `data`'s rows
+/// of `split` (or the factors of the validated run `calibration_from`).
+/// Returns what changed, in words.
+#[pyfunction]
+#[pyo3(signature = (model, data, split=None, calibration_from=None))]
+pub(crate) fn train_calibrate(
+    py: Python<'_>,
+    model: PathBuf,
+    data: Vec<PathBuf>,
+    split: Option<String>,
+    calibration_from: Option<PathBuf>,
+) -> PyResult<String> {
+    interruptible(py, || {
+        let sets = data
+            .iter()
+            .map(Dataset::open)
+            .collect::<Result<Vec<_>, _>>()
+            .py()?;
+        tactile_pipeline::ensemble::calibrate_model(
+            &model,
+            &sets,
+            split.as_deref(),
+            calibration_from.as_deref(),
+        )
+        .py()
+    })
+}

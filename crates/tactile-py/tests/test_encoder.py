@@ -143,3 +143,22 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
         cli = np.array([float(r[name]) for r in rows])
         assert np.allclose(values, cli, atol=6e-5), name
     assert all((got[t + "_std"] > 0).all() for t in pose.targets)
+
+    # Calibrated again from Python (`tactile train calibrate`): on these 20
+    # frames ±1 deviation then holds ceil(0.683 * 20) = 14 of each target's
+    # errors, the estimates unchanged; too few rows of a split are refused.
+    model = tmp_path / "pose"
+    shutil.copytree(root / "models/pose-surface", model)
+    with pytest.raises(ValueError, match="'val'.*20"):
+        tactile.train.calibrate(model, data, split="val")
+    said = tactile.train.calibrate(model, data)
+    assert "20 frames" in said and "cross-fitted" in said
+    again = tactile.PoseEstimator(model, "burn-flex").estimate(frames)
+    labels = {r["file"]: r for r in csv.DictReader(keep)}
+    truth = {t: np.array([float(labels[r["file"]][t]) for r in rows]) for t in pose.targets}
+    for t in pose.targets:
+        assert np.allclose(again[t], got[t], atol=1e-6), t
+        inside = np.abs(again[t] - truth[t]) <= again[t + "_std"] * (1 + 1e-9)
+        assert inside.sum() == 14, t
+    with pytest.raises(ValueError, match="one of the two"):
+        tactile.train.calibrate(model, data, calibration_from=root / "models/pose-surface")

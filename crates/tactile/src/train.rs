@@ -27,8 +27,8 @@ pub(crate) enum TrainCmd {
     Depth(DepthArgs),
     /// The input profile of a trained detector: its training frames' input statistics, saved in detector.json, so frames of another sensor are flagged and get no answer (a detector trained now has one already).
     Profile(ProfileArgs),
-    /// Calibrate a trained detector's probabilities on frames it was not trained on: one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer (decisions unchanged).
-    Calibrate(ProfileArgs),
+    /// Calibrate a trained model on frames it was not trained on: a detector's probabilities (one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer; decisions unchanged), or a pose network's deviations (one factor per target so ±1 holds 68.3 % of the errors; `--split val` takes a split's rows, `--calibration-from` a validated run's factors).
+    Calibrate(CalibrateArgs),
     /// Average models trained apart (pose networks, or detectors reading frames alike): copies them into one folder that every command and Python load as one model.
     #[command(alias = "pose-ensemble")]
     Ensemble(EnsembleArgs),
@@ -41,9 +41,25 @@ pub(crate) struct ProfileArgs {
     /// The detector folder (the encoder folder for `align`).
     #[arg(long)]
     model: PathBuf,
-    /// Labelled dataset(s): the detector's training data for `profile` (the encoder's for `align`), frames it was not trained on for `calibrate`.
+    /// Labelled dataset(s): the detector's training data for `profile` (the encoder's for `align`).
     #[arg(long, num_args = 1.., required = true)]
     data: Vec<PathBuf>,
+}
+
+#[derive(Args)]
+pub(crate) struct CalibrateArgs {
+    /// The detector or pose-network folder.
+    #[arg(long)]
+    model: PathBuf,
+    /// Labelled dataset(s) of frames it was not trained on (one for a pose network).
+    #[arg(long, num_args = 1..)]
+    data: Vec<PathBuf>,
+    /// A pose network: only the rows whose `split` column says this (e.g. val).
+    #[arg(long)]
+    split: Option<String>,
+    /// A pose network trained on every frame: take the deviation factors of this validated run (same targets) instead.
+    #[arg(long, value_name = "DIR")]
+    calibration_from: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -213,7 +229,8 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Detector(a) => Some(&a.out),
         TrainCmd::Segmenter(a) => Some(&a.out),
         TrainCmd::Depth(a) => Some(&a.out),
-        TrainCmd::Profile(a) | TrainCmd::Calibrate(a) | TrainCmd::Align(a) => Some(&a.model),
+        TrainCmd::Profile(a) | TrainCmd::Align(a) => Some(&a.model),
+        TrainCmd::Calibrate(a) => Some(&a.model),
         TrainCmd::Pose(a) => Some(&a.out),
         TrainCmd::Ensemble(a) => Some(&a.out),
         TrainCmd::Head(a) => a.out.as_ref(),
@@ -296,8 +313,15 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         }
         TrainCmd::Calibrate(a) => {
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
-            let fit = tactile_detect::calibrate::calibrate_on(&a.model, &data)?;
-            say!("{}; detector in {}", fit.describe(), a.model.display());
+            say!(
+                "{}",
+                tactile_pipeline::ensemble::calibrate_model(
+                    &a.model,
+                    &data,
+                    a.split.as_deref(),
+                    a.calibration_from.as_deref()
+                )?
+            );
         }
         TrainCmd::Depth(a) => {
             let options = a.config.resolve(a.options)?;

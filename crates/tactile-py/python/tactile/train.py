@@ -140,5 +140,25 @@ def ensemble(members: Sequence[PathLike], out: PathLike) -> str:
     return _tactile.train_ensemble([os.fspath(m) for m in members], os.fspath(out))
 
 
+def calibrate(model: PathLike, data=None, *, split: Optional[str] = None,
+              calibration_from: Optional[PathLike] = None) -> str:
+    """Calibrate a trained model on frames it was not trained on (the CLI's
+    ``tactile train calibrate``): a detector's probabilities on ``data``
+    (one logit scale, decisions unchanged), or a pose network's deviations
+    (one factor per target so ±1 holds 68.3 % of the errors) on ``data``'s
+    rows of ``split``, or the factors of the validated run
+    ``calibration_from`` for a network trained on every frame. Rewrites the
+    model folder; returns what changed, in words.
+    """
+    if data is None:
+        sets = []
+    elif isinstance(data, (str, os.PathLike)):
+        sets = [os.fspath(data)]
+    else:
+        sets = [os.fspath(d) for d in data]
+    return _tactile.train_calibrate(os.fspath(model), sets, split,
+                                    None if calibration_from is None else os.fspath(calibration_from))
+
+
 __all__ = ["cae", "depth", "detector", "ensemble", "head", "options", "pose", "regressor",
            "segmenter"]
