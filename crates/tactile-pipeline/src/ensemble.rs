@@ -49,7 +49,9 @@ pub fn calibrate_model(
     split: Option<&str>,
     from: Option<&Path>,
 ) -> Result<String> {
-    let pose = PoseArtifact::is_in(model) || PoseEnsemble::is_in(model);
+    // Both kinds of ensemble hold an `ensemble.json`: its members say which.
+    let detector = DetectorArtifact::is_in(model) || DetectorEnsembleArtifact::read(model).is_ok();
+    let pose = !detector && (PoseArtifact::is_in(model) || PoseEnsemble::is_in(model));
     match (pose, from, data) {
         (true, Some(f), []) => Ok(tactile_pose::calibrate::calibration_from(model, f)?.describe()),
         (true, None, [ds]) => Ok(tactile_pose::calibrate::calibrate_on(model, ds, split)?.describe()),
