@@ -57,15 +57,6 @@ fn scored_rows(ds: &Dataset) -> Vec<usize> {
         .unwrap_or_else(|| (0..ds.len()).collect())
 }
 
-/// The name of the split [`scored_rows`] scores, if the set has one.
-fn scored_split(ds: &Dataset) -> Option<&'static str> {
-    match ds.split_indices("test") {
-        Some(t) if !t.is_empty() => Some("test"),
-        Some(_) => Some("val"),
-        None => None,
-    }
-}
-
 /// The coverage of a model whose deviations were calibrated on the scored
 /// split itself (`tactile train calibrate --split`): measured there it
 /// would be 68.3 % by construction, so its cross-fitted coverage (calibrated
@@ -189,7 +180,7 @@ pub fn bench_surface(
                 points,
             });
         }
-        let cross = cross_fitted(&c.notes, scored_split(&ds));
+        let cross = cross_fitted(&c.notes, ds.evaluation_split_name());
         if let Some([c68, c95]) = &cross {
             (cov68, cov95) = (c68.clone(), c95.clone());
         }

@@ -112,17 +112,23 @@ pub fn predict_mm(estimator: &mut DepthEstimator, data: &DepthSet) -> Result<Vec
     Ok(out)
 }
 
+/// The frames at `rows` of `ds` as `estimator` reads them (its input
+/// size, and its calibration's reconstruction for a network with a prior).
+fn frames_for(estimator: &DepthEstimator, ds: &Dataset, rows: &[usize]) -> Result<DepthSet> {
+    DepthSet::from_dataset(
+        ds,
+        rows,
+        estimator.artifact.model.input_size,
+        estimator.prior_folder(),
+    )
+}
+
 /// Score `estimator` on every frame of `ds`; also the inference time per
 /// frame (batches of [`EVAL_BATCH`], loading excluded).
 pub fn evaluate(estimator: &mut DepthEstimator, ds: &Dataset) -> Result<(DepthScores, f64)> {
     same_maps(estimator, ds)?;
     let rows: Vec<usize> = (0..ds.len()).collect();
-    let data = DepthSet::from_dataset(
-        ds,
-        &rows,
-        estimator.artifact.model.input_size,
-        estimator.prior_folder(),
-    )?;
+    let data = frames_for(estimator, ds, &rows)?;
     let t0 = std::time::Instant::now();
     let preds = predict_mm(estimator, &data)?;
     let ms = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
@@ -260,12 +266,7 @@ pub fn save_heat_maps(
 ) -> Result<usize> {
     same_maps(estimator, ds)?;
     let rows: Vec<usize> = (0..ds.len().min(frames)).collect();
-    let data = DepthSet::from_dataset(
-        ds,
-        &rows,
-        estimator.artifact.model.input_size,
-        estimator.prior_folder(),
-    )?;
+    let data = frames_for(estimator, ds, &rows)?;
     let preds = predict_mm(estimator, &data)?;
     tactile_core::io::create_dir_all(dir)?;
     let aspect = ds.manifest.width as f64 / ds.manifest.height.max(1) as f64;

@@ -7,6 +7,7 @@
 
 #![deny(missing_docs)]
 
+pub mod calibrate;
 pub mod ensemble;
 mod error;
 pub mod export;

@@ -126,15 +126,22 @@ fn uncertain(dir: &Path) -> Result<(PoseArtifact, Vec<f64>)> {
     Ok((a, s))
 }
 
-/// Rewrite `dir`'s factors as `scale`, its notes saying where they came from.
-fn save_scale(dir: &Path, scale: &[f64], note: serde_json::Value) -> Result<()> {
-    let loaded = PoseArtifact::load(dir, &burn::tensor::Device::flex())?;
-    let mut a = loaded.artifact;
-    a.std_scale = Some(scale.to_vec());
-    if let serde_json::Value::Object(n) = &mut a.notes {
+/// Rewrite `dir`'s `pose.json` (atomically; the weights are not touched)
+/// as `art` with the factors `scale`, its notes saying where they came from.
+fn save_scale(
+    dir: &Path,
+    mut art: PoseArtifact,
+    scale: &[f64],
+    note: serde_json::Value,
+) -> Result<()> {
+    art.std_scale = Some(scale.to_vec());
+    if let serde_json::Value::Object(n) = &mut art.notes {
         n.insert("uncertainty_calibration".into(), note);
     }
-    Ok(a.save(&loaded.model, dir)?)
+    Ok(tactile_core::io::write_json_atomic(
+        dir.join(PoseArtifact::CONFIG_FILE),
+        &art,
+    )?)
 }
 
 /// Calibrate the deviations of the pose network in `dir` on the frames of
@@ -193,8 +200,10 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
     let coverage_cross_fitted = cross_fitted_coverage(&errors, &std);
     let factor = rescale(&errors, &std);
     let scale: Vec<f64> = before.iter().zip(&factor).map(|(b, f)| b * f).collect();
+    let targets = art.targets.iter().map(|t| t.name.clone()).collect();
     save_scale(
         dir,
+        art,
         &scale,
         serde_json::json!({
             "data": ds.root.display().to_string(),
@@ -205,7 +214,7 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
     )?;
     Ok(UncertaintyFit {
         frames: errors.len(),
-        targets: art.targets.iter().map(|t| t.name.clone()).collect(),
+        targets,
         std_scale_before: before,
         std_scale: scale,
         coverage_before,
@@ -226,14 +235,16 @@ pub fn calibration_from(dir: &Path, from: &Path) -> Result<UncertaintyFit> {
         )
         .into());
     }
+    let targets = art.targets.iter().map(|t| t.name.clone()).collect();
     save_scale(
         dir,
+        art,
         &scale,
         serde_json::json!({ "from": from.display().to_string(), "notes": src.notes.get("uncertainty_calibration") }),
     )?;
     Ok(UncertaintyFit {
         frames: 0,
-        targets: art.targets.iter().map(|t| t.name.clone()).collect(),
+        targets,
         std_scale_before: before,
         std_scale: scale,
         coverage_before: [vec![], vec![]],

@@ -293,7 +293,7 @@ pub(crate) fn train_calibrate(
             .map(Dataset::open)
             .collect::<Result<Vec<_>, _>>()
             .py()?;
-        tactile_pipeline::ensemble::calibrate_model(
+        tactile_pipeline::calibrate::calibrate_model(
             &model,
             &sets,
             split.as_deref(),

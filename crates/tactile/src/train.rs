@@ -315,7 +315,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
             say!(
                 "{}",
-                tactile_pipeline::ensemble::calibrate_model(
+                tactile_pipeline::calibrate::calibrate_model(
                     &a.model,
                     &data,
                     a.split.as_deref(),

@@ -500,9 +500,14 @@ impl Dataset {
     /// train/val split, where the choices are made on `val`); `None`
     /// without a `split` column.
     pub fn evaluation_split(&self) -> Option<Vec<usize>> {
-        self.split_indices("test")
-            .filter(|t| !t.is_empty())
-            .or_else(|| self.split_indices("val"))
+        self.split_indices(self.evaluation_split_name()?)
+    }
+
+    /// The name of the split [`Self::evaluation_split`] takes: `test`
+    /// when the `split` column names test rows, else `val`.
+    pub fn evaluation_split_name(&self) -> Option<&'static str> {
+        let test = self.split_indices("test")?;
+        Some(if test.is_empty() { "val" } else { "test" })
     }
 }
 
