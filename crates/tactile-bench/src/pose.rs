@@ -56,8 +56,8 @@ pub(crate) struct Candidate {
     pub kind: &'static str,
     /// Its provenance notes.
     pub notes: serde_json::Value,
-    /// Side of its pin image.
-    pub input: usize,
+    /// Its pin image, `128x128` (a multi-scale ensemble's each: `128x128 + 64x64`).
+    pub input: String,
     /// Its parameters (an ensemble's summed).
     pub params: usize,
     /// Its latency per runtime (an ensemble's summed).
@@ -70,9 +70,12 @@ impl Candidate {
         let (kind, notes, input, params, ms) = if PoseEnsemble::is_in(m) {
             // Members run one after another: latencies and sizes add up.
             let e = PoseEnsemble::read(m)?;
-            let (mut p, mut ms, mut s) = (0, Vec::new(), 0);
+            let (mut p, mut ms, mut sides) = (0, Vec::new(), Vec::<usize>::new());
             for d in e.member_dirs(m) {
-                s = PoseArtifact::read(&d)?.model.input_px;
+                let s = PoseArtifact::read(&d)?.model.input_px;
+                if !sides.contains(&s) {
+                    sides.push(s);
+                }
                 p += crate::models::parameters::<PoseArtifact>(&d)?;
                 ms.push(crate::latency::model_latencies::<PoseArtifact>(
                     &d,
@@ -80,19 +83,24 @@ impl Candidate {
                     runs,
                 )?);
             }
-            ("pose ensemble", e.notes, s, p, RuntimeMs::sum(&ms))
+            let input = sides
+                .iter()
+                .map(|s| format!("{s}x{s}"))
+                .collect::<Vec<_>>()
+                .join(" + ");
+            ("pose ensemble", e.notes, input, p, RuntimeMs::sum(&ms))
         } else if PoseArtifact::is_in(m) {
             let a = PoseArtifact::read(m)?;
             let s = a.model.input_px;
             let p = crate::models::parameters::<PoseArtifact>(m)?;
             let ms = crate::latency::model_latencies::<PoseArtifact>(m, [1, 1, s, s], runs)?;
-            ("pose network", a.notes, s, p, ms)
+            ("pose network", a.notes, format!("{s}x{s}"), p, ms)
         } else {
             let a = CaeArtifact::read(m)?;
             let s = a.model.input_px;
             let p = crate::models::parameters::<CaeArtifact>(m)?;
             let ms = crate::latency::model_latencies::<CaeArtifact>(m, [1, 1, s, s], runs)?;
-            ("encoder + estimators", a.notes, s, p, ms)
+            ("encoder + estimators", a.notes, format!("{s}x{s}"), p, ms)
         };
         Ok(Self {
             kind,
@@ -186,7 +194,7 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
             ));
         }
         md.push_str(&format!(
-            "| {}{} | {kind} | {input}x{input} | {params} | {} | {:.3} | {:.2} | {:.3} | {} | {} | {} |\n",
+            "| {}{} | {kind} | {input} | {params} | {} | {:.3} | {:.2} | {:.3} | {} | {} | {} |\n",
             folder_name(m),
             if saw { " (trained on every frame)" } else { "" },
             split.test.len(),

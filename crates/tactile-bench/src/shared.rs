@@ -214,5 +214,132 @@ pub fn shared_markdown(cells: &[Cell], encoders: &[PathBuf], tasks: &[Task]) -> 
             md.push('\n');
         }
     }
+    md.push_str(&cost_markdown(cells, &names, tasks));
     md
+}
+
+/// What sharing costs, per encoder and task: the worst of the task's
+/// metrics as a factor on its own encoder's (an error ratio, or own over
+/// shared accuracy), and the encoder whose worst factor over every task is
+/// smallest, said plainly.
+fn cost_markdown(cells: &[Cell], names: &[String], tasks: &[Task]) -> String {
+    // Per encoder: per task its worst factor and that metric.
+    let mut worst: Vec<Vec<Option<(f64, String)>>> = Vec::new();
+    for n in names {
+        let mut row = Vec::new();
+        for t in tasks {
+            let of = |enc: &str| cells.iter().find(|c| c.task == t.task && c.encoder == enc);
+            let w = match (of(n), of(&t.own)) {
+                (Some(c), Some(own)) => c
+                    .values
+                    .iter()
+                    .zip(&own.values)
+                    .map(|((metric, v), (_, o))| {
+                        let f = if metric == "accuracy" { o / v } else { v / o };
+                        (f, metric.clone())
+                    })
+                    .filter(|(f, _)| f.is_finite())
+                    // The first of equal factors names the metric.
+                    .reduce(|a, b| if b.0 > a.0 { b } else { a }),
+                _ => None,
+            };
+            row.push(w);
+        }
+        worst.push(row);
+    }
+    let mut md = String::from(
+        "\nWhat one encoder for every task costs: per task, its worst metric as a factor on the task's own encoder (1.00: nothing lost).\n\n| encoder |",
+    );
+    for t in tasks {
+        md.push_str(&format!(" {} |", t.task));
+    }
+    md.push_str(" worst |\n|---|");
+    md.push_str(&"---|".repeat(tasks.len() + 1));
+    md.push('\n');
+    let mut best: Option<(f64, usize, usize)> = None;
+    for (e, row) in worst.iter().enumerate() {
+        md.push_str(&format!("| {} |", names[e]));
+        let mut top: Option<(f64, usize)> = None;
+        for (k, w) in row.iter().enumerate() {
+            match w {
+                Some((f, metric)) => {
+                    md.push_str(&format!(" {f:.2} ({metric}) |"));
+                    if top.is_none_or(|(t, _)| *f > t) {
+                        top = Some((*f, k));
+                    }
+                }
+                None => md.push_str(" - |"),
+            }
+        }
+        let complete = row.iter().all(Option::is_some);
+        match top {
+            Some((f, k)) if complete => {
+                md.push_str(&format!(" {f:.2} |\n"));
+                if best.is_none_or(|(b, _, _)| f < b) {
+                    best = Some((f, e, k));
+                }
+            }
+            _ => md.push_str(" - |\n"),
+        }
+    }
+    if let Some((f, e, k)) = best {
+        let (_, metric) = worst[e][k].clone().unwrap_or((f, String::new()));
+        md.push_str(&format!(
+            "\nThe one encoder that costs least over all {} tasks is {}: at worst {f:.2}x its own encoder's {metric} on the {} task.\n",
+            tasks.len(),
+            names[e],
+            tasks[k].task
+        ));
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn task(name: &str, own: &str) -> Task {
+        Task {
+            task: name.into(),
+            data: name.into(),
+            preprocess: String::new(),
+            targets: vec!["x_mm".into()],
+            classify: None,
+            own: own.into(),
+        }
+    }
+
+    fn cell(task: &str, encoder: &str, values: &[(&str, f64)]) -> Cell {
+        Cell {
+            task: task.into(),
+            encoder: encoder.into(),
+            values: values.iter().map(|(m, v)| (m.to_string(), *v)).collect(),
+            saw_test_frames: false,
+        }
+    }
+
+    #[test]
+    fn the_cheapest_shared_encoder_is_named_with_its_worst_cost() {
+        let tasks = [task("edge", "a"), task("shapes", "b")];
+        let cells = [
+            cell("edge", "a", &[("x_mm", 0.1), ("theta_deg", 1.0)]),
+            cell("edge", "b", &[("x_mm", 0.3), ("theta_deg", 1.5)]),
+            cell("shapes", "a", &[("accuracy", 0.5)]),
+            cell("shapes", "b", &[("accuracy", 0.9)]),
+        ];
+        let md = shared_markdown(&cells, &[PathBuf::from("a"), PathBuf::from("b")], &tasks);
+        // a loses accuracy on shapes (0.9 / 0.5 = 1.8); b triples edge x.
+        assert!(
+            md.contains("| a | 1.00 (x_mm) | 1.80 (accuracy) | 1.80 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| b | 3.00 (x_mm) | 1.00 (accuracy) | 3.00 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("costs least over all 2 tasks is a: at worst 1.80x its own encoder's accuracy on the shapes task"),
+            "{md}"
+        );
+    }
 }

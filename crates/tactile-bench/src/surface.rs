@@ -229,7 +229,7 @@ pub fn bench_surface(
             )
         };
         md.push_str(&format!(
-            "| {}{} | {} | {i}x{i} | {} |",
+            "| {}{} | {} | {} | {} |",
             folder_name(m),
             if saw {
                 " (trained on these frames)"
@@ -237,8 +237,8 @@ pub fn bench_surface(
                 ""
             },
             c.kind,
+            c.input,
             c.params,
-            i = c.input
         ));
         for (e, r) in mae.iter().zip(&ratio) {
             md.push_str(&format!(" {e:.3} ({r:.2}) |"));

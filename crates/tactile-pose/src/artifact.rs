@@ -134,8 +134,8 @@ impl PoseEnsemble {
     }
 
     /// Copy the pose-network folders `members` into a new ensemble folder
-    /// `out` (see [`Ensemble::assemble`]). Their preprocessing and targets
-    /// must agree; the ensemble's `excluded_test` is theirs, which they
+    /// `out` (see [`Ensemble::assemble`]). Their targets must agree (their
+    /// preprocessing need not: a multi-scale ensemble); the ensemble's `excluded_test` is theirs, which they
     /// must share.
     pub fn assemble(members: &[std::path::PathBuf], out: &Path) -> tactile_core::Result<Ensemble> {
         Ensemble::assemble(members, out, check_alike, |arts: &[PoseArtifact]| {
@@ -151,28 +151,57 @@ impl PoseEnsemble {
                 Some(Some(t)) => notes["excluded_test"] = (*t).clone(),
                 _ => {}
             }
+            // A member that trained on every split makes the ensemble one.
+            if arts
+                .iter()
+                .any(|a| a.notes.get("every_split").and_then(|v| v.as_bool()) == Some(true))
+            {
+                notes["every_split"] = true.into();
+            }
             Ok(notes)
         })
     }
 }
 
-/// Members must read frames alike and give the same columns.
+impl PoseEnsemble {
+    /// The factors an ensemble's calibration (`tactile train calibrate`)
+    /// put in its notes, one per target, applied to the members' combined
+    /// deviation; `None` when it was never calibrated as a whole.
+    pub fn std_scale(
+        e: &Ensemble,
+        dir: &Path,
+        targets: usize,
+    ) -> tactile_core::Result<Option<Vec<f64>>> {
+        let Some(v) = e.notes.get("std_scale") else {
+            return Ok(None);
+        };
+        let bad = || {
+            tactile_core::Error::model(
+                dir.join(Ensemble::FILE),
+                format!("notes.std_scale must be {targets} positive numbers, one per target"),
+            )
+        };
+        let f: Vec<f64> = serde_json::from_value(v.clone()).map_err(|_| bad())?;
+        if f.len() != targets || f.iter().any(|x| !x.is_finite() || *x <= 0.0) {
+            return Err(bad());
+        }
+        Ok(Some(f))
+    }
+}
+
+/// Members must give the same columns. They may read the frame each its
+/// own way (a multi-scale ensemble: 128 px and 64 px pin images, say).
 pub(crate) fn check_alike(
     first: &PoseArtifact,
     other: &PoseArtifact,
     dir: &Path,
 ) -> tactile_core::Result<()> {
-    fn json<T: Serialize>(t: &T) -> serde_json::Value {
-        serde_json::to_value(t).unwrap_or(serde_json::Value::Null)
-    }
-    if json(&first.preprocess) != json(&other.preprocess)
-        || first.model.input_px != other.model.input_px
-        || first.targets != other.targets
+    if first.targets != other.targets
         || first.model.has_uncertainty() != other.model.has_uncertainty()
     {
         return Err(tactile_core::Error::model(
             dir.join(PoseArtifact::CONFIG_FILE),
-            "its preprocessing, input size, targets or uncertainty differ from the first member's",
+            "its targets or uncertainty differ from the first member's",
         ));
     }
     Ok(())

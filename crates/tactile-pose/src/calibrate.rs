@@ -10,8 +10,10 @@
 use std::path::Path;
 
 use serde::Serialize;
+use tactile_burn::ensemble::Ensemble;
 use tactile_burn::{Artifact, Runtime};
 use tactile_core::dataset::Dataset;
+use tactile_estimate::Target;
 
 use crate::data::PoseSet;
 use crate::uncertainty::{Z95, calibrate, coverage};
@@ -108,48 +110,80 @@ pub fn cross_fitted_coverage(errors: &[Vec<f64>], std: &[Vec<f64>]) -> [Vec<f64>
     [avg(&x[0], &y[0]), avg(&x[1], &y[1])]
 }
 
-fn uncertain(dir: &Path) -> Result<(PoseArtifact, Vec<f64>)> {
-    if PoseEnsemble::is_in(dir) {
-        return Err(tactile_core::Error::model(
-            dir,
-            "an ensemble: calibrate each member, then assemble it again",
-        )
-        .into());
-    }
-    let a = PoseArtifact::read(dir)?;
-    let s = a.std_scale.clone().ok_or_else(|| {
+/// Where a model keeps its deviation factors.
+enum Factors {
+    /// A network's `pose.json` (`std_scale`).
+    Network(Box<PoseArtifact>),
+    /// An ensemble's `ensemble.json` (`notes.std_scale`), applied to the
+    /// deviation its members give together (their own factors stay).
+    Ensemble(Ensemble),
+}
+
+/// The model in `dir` with its factors, its targets, and the factors.
+fn uncertain(dir: &Path) -> Result<(Factors, Vec<Target>, Vec<f64>)> {
+    let no_uncertainty = || {
         tactile_core::Error::model(
             dir,
             "this pose network gives no uncertainty (train it with --uncertainty)",
         )
-    })?;
-    Ok((a, s))
-}
-
-/// Rewrite `dir`'s `pose.json` (atomically; the weights are not touched)
-/// as `art` with the factors `scale`, its notes saying where they came from.
-fn save_scale(
-    dir: &Path,
-    mut art: PoseArtifact,
-    scale: &[f64],
-    note: serde_json::Value,
-) -> Result<()> {
-    art.std_scale = Some(scale.to_vec());
-    if let serde_json::Value::Object(n) = &mut art.notes {
-        n.insert("uncertainty_calibration".into(), note);
+    };
+    if PoseEnsemble::is_in(dir) {
+        let e = PoseEnsemble::read(dir)?;
+        let first = e
+            .member_dirs(dir)
+            .into_iter()
+            .next()
+            .ok_or_else(|| tactile_core::Error::not_found(dir, "ensemble member"))?;
+        let a = PoseArtifact::read(&first)?;
+        if a.std_scale.is_none() {
+            return Err(no_uncertainty().into());
+        }
+        let k = a.targets.len();
+        let s = PoseEnsemble::std_scale(&e, dir, k)?.unwrap_or_else(|| vec![1.0; k]);
+        return Ok((Factors::Ensemble(e), a.targets, s));
     }
-    Ok(tactile_core::io::write_json_atomic(
-        dir.join(PoseArtifact::CONFIG_FILE),
-        &art,
-    )?)
+    let a = PoseArtifact::read(dir)?;
+    let s = a.std_scale.clone().ok_or_else(no_uncertainty)?;
+    let targets = a.targets.clone();
+    Ok((Factors::Network(Box::new(a)), targets, s))
 }
 
-/// Calibrate the deviations of the pose network in `dir` on the frames of
-/// `ds` (those of `split` when given): one factor per target so ±1
-/// deviation holds 68.3 % of their errors. The network's estimates are
-/// unchanged; `pose.json` is rewritten (atomically) with the new factors.
+/// Rewrite `dir`'s `pose.json` or `ensemble.json` (atomically; no weights
+/// are touched) with the factors `scale`, its notes saying where they came
+/// from.
+fn save_scale(dir: &Path, model: Factors, scale: &[f64], note: serde_json::Value) -> Result<()> {
+    match model {
+        Factors::Network(mut art) => {
+            art.std_scale = Some(scale.to_vec());
+            if let serde_json::Value::Object(n) = &mut art.notes {
+                n.insert("uncertainty_calibration".into(), note);
+            }
+            Ok(tactile_core::io::write_json_atomic(
+                dir.join(PoseArtifact::CONFIG_FILE),
+                &art,
+            )?)
+        }
+        Factors::Ensemble(mut e) => {
+            if !e.notes.is_object() {
+                e.notes = serde_json::json!({});
+            }
+            e.notes["std_scale"] = serde_json::json!(scale);
+            e.notes["uncertainty_calibration"] = note;
+            Ok(tactile_core::io::write_json_atomic(
+                dir.join(Ensemble::FILE),
+                &e,
+            )?)
+        }
+    }
+}
+
+/// Calibrate the deviations of the pose network (or ensemble) in `dir` on
+/// the frames of `ds` (those of `split` when given): one factor per target
+/// so ±1 deviation holds 68.3 % of their errors. The estimates are
+/// unchanged; `pose.json` (an ensemble's `ensemble.json`) is rewritten
+/// atomically with the new factors.
 pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<UncertaintyFit> {
-    let (art, before) = uncertain(dir)?;
+    let (model, targets, before) = uncertain(dir)?;
     let rows = match split {
         Some(s) => ds
             .split_indices(s)
@@ -163,7 +197,14 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
             .to_vec(),
         None => (0..ds.len()).collect(),
     };
-    let set = PoseSet::from_rows(ds, &rows, &art.preprocess, &art.targets)?;
+    let mut est = PoseEstimator::load(dir, Runtime::BurnFlex, 0)?;
+    // One set of pin images per scale (two for a multi-scale ensemble).
+    let sets = est
+        .scales()
+        .iter()
+        .map(|cfg| PoseSet::from_rows(ds, &rows, cfg, &targets))
+        .collect::<Result<Vec<_>>>()?;
+    let set = &sets[0];
     let labelled = set.labelled(&(0..rows.len()).collect::<Vec<_>>());
     if labelled.len() < 20 {
         return Err(tactile_core::Error::dataset(
@@ -177,19 +218,19 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
         )
         .into());
     }
-    let mut est = PoseEstimator::load(dir, Runtime::BurnFlex, 0)?;
-    let images: Vec<_> = labelled
+    let images: Vec<Vec<_>> = sets
         .iter()
-        .map(|&i| set.pins.images[i].clone())
+        .map(|s| labelled.iter().map(|&i| s.pins.images[i].clone()).collect())
         .collect();
-    let (values, std) = est.predict_with_std(&images)?;
+    let views: Vec<&[_]> = images.iter().map(Vec::as_slice).collect();
+    let (values, std) = est.predict_scales_with_std(&views)?;
     let std = std.ok_or_else(|| tactile_core::Error::model(dir, "no deviations came out"))?;
     let truth = set.label_rows(&labelled);
     let errors: Vec<Vec<f64>> = values
         .iter()
         .zip(&truth)
         .map(|(p, t)| {
-            art.targets
+            targets
                 .iter()
                 .enumerate()
                 .map(|(j, target)| target.error(p[j], t[j]))
@@ -200,10 +241,10 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
     let coverage_cross_fitted = cross_fitted_coverage(&errors, &std);
     let factor = rescale(&errors, &std);
     let scale: Vec<f64> = before.iter().zip(&factor).map(|(b, f)| b * f).collect();
-    let targets = art.targets.iter().map(|t| t.name.clone()).collect();
+    let names = targets.iter().map(|t| t.name.clone()).collect();
     save_scale(
         dir,
-        art,
+        model,
         &scale,
         serde_json::json!({
             "data": ds.root.display().to_string(),
@@ -214,7 +255,7 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
     )?;
     Ok(UncertaintyFit {
         frames: errors.len(),
-        targets,
+        targets: names,
         std_scale_before: before,
         std_scale: scale,
         coverage_before,
@@ -226,25 +267,35 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
 /// (the same targets): a network trained on every frame has none left to
 /// calibrate on.
 pub fn calibration_from(dir: &Path, from: &Path) -> Result<UncertaintyFit> {
-    let (art, before) = uncertain(dir)?;
-    let (src, scale) = uncertain(from)?;
-    if src.targets != art.targets {
+    let (model, targets, before) = uncertain(dir)?;
+    let (src, src_targets, scale) = uncertain(from)?;
+    if src_targets != targets {
         return Err(tactile_core::Error::model(
             from,
             "its targets are not the network's: its calibration does not apply",
         )
         .into());
     }
-    let targets = art.targets.iter().map(|t| t.name.clone()).collect();
+    if matches!(src, Factors::Ensemble(_)) != matches!(model, Factors::Ensemble(_)) {
+        return Err(tactile_core::Error::model(
+            from,
+            "an ensemble's factors apply to an ensemble of the same recipe, a network's to a network",
+        )
+        .into());
+    }
+    let src_note = match &src {
+        Factors::Network(a) => a.notes.get("uncertainty_calibration").cloned(),
+        Factors::Ensemble(e) => e.notes.get("uncertainty_calibration").cloned(),
+    };
     save_scale(
         dir,
-        art,
+        model,
         &scale,
-        serde_json::json!({ "from": from.display().to_string(), "notes": src.notes.get("uncertainty_calibration") }),
+        serde_json::json!({ "from": from.display().to_string(), "notes": src_note }),
     )?;
     Ok(UncertaintyFit {
         frames: 0,
-        targets,
+        targets: targets.iter().map(|t| t.name.clone()).collect(),
         std_scale_before: before,
         std_scale: scale,
         coverage_before: [vec![], vec![]],

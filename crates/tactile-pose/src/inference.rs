@@ -7,20 +7,28 @@ use std::path::Path;
 use rayon::prelude::*;
 use tactile_burn::{Network, Runtime};
 use tactile_core::dataset::Dataset;
+use tactile_core::image_io::GreyImage;
 use tactile_estimate::regressor::{Scaler, decode_columns};
-use tactile_preprocess::PinImage;
+use tactile_preprocess::{PinImage, PreprocessConfig};
 
 use crate::Result;
 use crate::artifact::{PoseArtifact, PoseEnsemble, check_alike};
 use crate::training::PREDICT_BATCH;
 
 /// A loaded pose network with its preprocessing, or an ensemble of them
-/// ([`PoseEnsemble`]) whose estimates are averaged.
+/// ([`PoseEnsemble`]) whose estimates are averaged. The members of a
+/// multi-scale ensemble read the frame each through its own preprocessing
+/// (a 128 px and a 64 px pin image, say): each distinct one is a *scale*.
 pub struct PoseEstimator {
     /// Architecture, preprocessing, targets (an ensemble's first member's).
     pub artifact: PoseArtifact,
     /// Each member's target scaling, network and uncertainty calibration.
     members: Vec<Member>,
+    /// The members' distinct preprocessings, the first member's first.
+    scales: Vec<PreprocessConfig>,
+    /// An ensemble's own calibration: one factor per target on its
+    /// combined deviation (see [`PoseEnsemble::std_scale`]).
+    std_factor: Option<Vec<f64>>,
 }
 
 /// One network of an estimator.
@@ -32,6 +40,10 @@ struct Member {
     /// Its calibration of the standard deviations, one factor per target
     /// (each member's own: members are calibrated one by one).
     std_scale: Option<Vec<f64>>,
+    /// Index of its preprocessing in [`PoseEstimator::scales`].
+    scale: usize,
+    /// Side of its pin image.
+    side: usize,
 }
 
 /// Per frame the targets' values, and with uncertainty their standard
@@ -60,27 +72,52 @@ impl PoseEstimator {
     /// An ensemble folder loads every member.
     pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
         let dir = dir.as_ref();
-        let dirs = if PoseEnsemble::is_in(dir) {
-            PoseEnsemble::read(dir)?.member_dirs(dir)
+        let ensemble = if PoseEnsemble::is_in(dir) {
+            Some(PoseEnsemble::read(dir)?)
         } else {
-            vec![dir.to_path_buf()]
+            None
         };
+        let dirs = ensemble
+            .as_ref()
+            .map_or_else(|| vec![dir.to_path_buf()], |e| e.member_dirs(dir));
         let mut first: Option<PoseArtifact> = None;
         let mut members = Vec::with_capacity(dirs.len());
+        let mut scales: Vec<PreprocessConfig> = Vec::new();
         for d in &dirs {
             let (artifact, net) = tactile_onnx::load_network::<PoseArtifact>(d, runtime, threads)?;
             match &first {
                 Some(f) => check_alike(f, &artifact, d)?,
                 None => first = Some(artifact.clone()),
             }
+            let scale = match scales
+                .iter()
+                .position(|s| same_preprocessing(s, &artifact.preprocess))
+            {
+                Some(k) => k,
+                None => {
+                    scales.push(artifact.preprocess.clone());
+                    scales.len() - 1
+                }
+            };
             members.push(Member {
                 std_scale: artifact.std_scale.clone(),
                 outputs: artifact.outputs,
+                side: artifact.model.input_px,
                 net,
+                scale,
             });
         }
         let artifact = first.ok_or_else(|| tactile_core::Error::not_found(dir, "pose network"))?;
-        Ok(Self { artifact, members })
+        let std_factor = match &ensemble {
+            Some(e) => PoseEnsemble::std_scale(e, dir, artifact.targets.len())?,
+            None => None,
+        };
+        Ok(Self {
+            artifact,
+            members,
+            scales,
+            std_factor,
+        })
     }
 
     /// Where it runs.
@@ -93,6 +130,13 @@ impl PoseEstimator {
     /// Networks whose estimates are averaged (1 unless an ensemble).
     pub fn members(&self) -> usize {
         self.members.len()
+    }
+
+    /// The distinct preprocessings its members read frames with (one
+    /// unless a multi-scale ensemble), the first member's first: what
+    /// [`Self::predict_scales_with_std`] takes pin images of.
+    pub fn scales(&self) -> &[PreprocessConfig] {
+        &self.scales
     }
 
     /// Target values of grey pin images, one row per image.
@@ -108,34 +152,63 @@ impl PoseEstimator {
     /// Target values of grey pin images, one row per image, and with
     /// uncertainty each value's standard deviation (labels' units). An
     /// ensemble's deviation adds its members' spread to their mean
-    /// variance.
+    /// variance. A multi-scale ensemble needs a pin image per scale:
+    /// [`Self::predict_scales_with_std`] or [`Self::predict_frames_with_std`].
     pub fn predict_with_std(&mut self, pins: &[PinImage]) -> Result<ValuesWithStd> {
-        let side = self.artifact.model.input_px;
-        if let Some(bad) = pins.iter().find(|p| p.side != side) {
-            return Err(tactile_core::Error::shape("pin image", side, bad.side).into());
+        self.predict_scales_with_std(&[pins])
+    }
+
+    /// [`Self::predict_with_std`] of raw frames, each preprocessed once
+    /// per scale (in parallel, the chain training used).
+    pub fn predict_frames_with_std(&mut self, frames: &[GreyImage]) -> Result<ValuesWithStd> {
+        let pins = self.preprocess(frames)?;
+        let views: Vec<&[PinImage]> = pins.iter().map(Vec::as_slice).collect();
+        self.predict_scales_with_std(&views)
+    }
+
+    /// [`Self::predict_with_std`] given, per scale of [`Self::scales`], the
+    /// same frames' pin images through that scale's preprocessing.
+    pub fn predict_scales_with_std(&mut self, pins: &[&[PinImage]]) -> Result<ValuesWithStd> {
+        if pins.len() != self.scales.len() {
+            let sides: Vec<String> = self
+                .scales
+                .iter()
+                .map(|s| format!("{0}x{0}", s.output_px))
+                .collect();
+            return Err(tactile_core::Error::Invalid(format!(
+                "the model reads each frame as {} pin image(s) ({}), given {}: give it frames",
+                self.scales.len(),
+                sides.join(", "),
+                pins.len()
+            ))
+            .into());
+        }
+        let frames = pins.first().map_or(0, |p| p.len());
+        if pins.iter().any(|p| p.len() != frames) {
+            return Err(tactile_core::Error::Invalid(
+                "each scale needs a pin image of every frame".into(),
+            )
+            .into());
+        }
+        for m in &self.members {
+            if let Some(bad) = pins[m.scale].iter().find(|p| p.side != m.side) {
+                return Err(tactile_core::Error::shape("pin image", m.side, bad.side).into());
+            }
         }
         if self.has_uncertainty() {
-            return self.predict_uncertain(pins);
+            return self.predict_uncertain(pins, frames);
         }
         let k = self.artifact.model.outputs;
-        let mut out = Vec::with_capacity(pins.len());
-        for chunk in pins.chunks(PREDICT_BATCH) {
-            let x: Vec<f32> = chunk
-                .iter()
-                .flat_map(|p| p.pixels.iter().copied())
-                .collect();
+        let mut out = Vec::with_capacity(frames);
+        for start in (0..frames).step_by(PREDICT_BATCH) {
+            let range = start..(start + PREDICT_BATCH).min(frames);
             // Each member's columns in the targets' encoded units, averaged,
             // then decoded once (an angle's cos/sin pair averages well where
             // the angles themselves would not across the wrap). One member
             // gives exactly its own decoded row.
-            let mut sum = vec![vec![0f64; k]; chunk.len()];
-            let mut x = Some(x);
-            let last = self.members.len().saturating_sub(1);
-            for (m, member) in self.members.iter_mut().enumerate() {
-                let input = if m == last { x.take() } else { x.clone() };
-                let y = member
-                    .net
-                    .run([chunk.len(), 1, side, side], input.unwrap_or_default())?;
+            let mut sum = vec![vec![0f64; k]; range.len()];
+            for member in self.members.iter_mut() {
+                let y = member.run(&pins[member.scale][range.clone()])?;
                 for (acc, row) in sum.iter_mut().zip(y.chunks(k)) {
                     acc.iter_mut()
                         .zip(member.outputs.unscale(row))
@@ -151,22 +224,18 @@ impl PoseEstimator {
         Ok((out, None))
     }
 
-    /// [`Self::predict_with_std`] of networks with uncertainty (linear
-    /// targets only, so a column is a target).
-    fn predict_uncertain(&mut self, pins: &[PinImage]) -> Result<ValuesWithStd> {
-        let side = self.artifact.model.input_px;
+    /// [`Self::predict_scales_with_std`] of networks with uncertainty
+    /// (linear targets only, so a column is a target).
+    fn predict_uncertain(&mut self, pins: &[&[PinImage]], frames: usize) -> Result<ValuesWithStd> {
         let k = self.artifact.model.outputs;
         let n = self.members.len().max(1) as f64;
         let (mut values, mut std) = (Vec::new(), Vec::new());
-        for chunk in pins.chunks(PREDICT_BATCH) {
-            let x: Vec<f32> = chunk
-                .iter()
-                .flat_map(|p| p.pixels.iter().copied())
-                .collect();
+        for start in (0..frames).step_by(PREDICT_BATCH) {
+            let range = start..(start + PREDICT_BATCH).min(frames);
             // Per frame and target: sum of means, of squared means, of variances.
-            let mut acc = vec![vec![[0f64; 3]; k]; chunk.len()];
+            let mut acc = vec![vec![[0f64; 3]; k]; range.len()];
             for member in self.members.iter_mut() {
-                let y = member.net.run([chunk.len(), 1, side, side], x.clone())?;
+                let y = member.run(&pins[member.scale][range.clone()])?;
                 let (scaler, factor) = (&member.outputs, member.std_scale.as_deref());
                 for (a, row) in acc.iter_mut().zip(y.chunks(2 * k)) {
                     let mean = scaler.unscale(&row[..k]);
@@ -180,13 +249,16 @@ impl PoseEstimator {
                     }
                 }
             }
+            let factor = self.std_factor.as_deref();
             for a in acc {
                 values.push(a.iter().map(|s| s[0] / n).collect());
                 std.push(
                     a.iter()
-                        .map(|s| {
+                        .enumerate()
+                        .map(|(j, s)| {
                             let m = s[0] / n;
                             (s[2] / n + (s[1] / n - m * m).max(0.0)).sqrt()
+                                * factor.map_or(1.0, |f| f[j])
                         })
                         .collect(),
                 );
@@ -198,11 +270,14 @@ impl PoseEstimator {
     /// Every frame of a TacTip dataset.
     pub fn predict_dataset(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
         let t0 = std::time::Instant::now();
-        let cfg = self.artifact.preprocess.clone();
-        let pins = tactile_cae::data::PinSet::from_dataset(ds, &cfg)?;
-        let (values, std) = self.predict_with_std(&pins.images)?;
+        let mut sets = Vec::with_capacity(self.scales.len());
+        for cfg in &self.scales {
+            sets.push(tactile_cae::data::PinSet::from_dataset(ds, cfg)?);
+        }
+        let views: Vec<&[PinImage]> = sets.iter().map(|s| s.images.as_slice()).collect();
+        let (values, std) = self.predict_scales_with_std(&views)?;
         Ok(PoseEstimates {
-            files: pins.files,
+            files: sets.swap_remove(0).files,
             names: self
                 .artifact
                 .targets
@@ -215,17 +290,33 @@ impl PoseEstimator {
         })
     }
 
-    /// Preprocess raw frames in parallel (the same chain as training).
-    pub fn preprocess(
-        &self,
-        frames: &[tactile_core::image_io::GreyImage],
-    ) -> Result<Vec<PinImage>> {
-        let cfg = &self.artifact.preprocess;
-        frames
-            .par_iter()
-            .map(|f| Ok(tactile_preprocess::preprocess(f, cfg)?))
+    /// Preprocess raw frames in parallel (the same chain as training), once
+    /// per scale of [`Self::scales`].
+    pub fn preprocess(&self, frames: &[GreyImage]) -> Result<Vec<Vec<PinImage>>> {
+        self.scales
+            .iter()
+            .map(|cfg| {
+                frames
+                    .par_iter()
+                    .map(|f| Ok(tactile_preprocess::preprocess(f, cfg)?))
+                    .collect()
+            })
             .collect()
     }
+}
+
+impl Member {
+    /// Its network's raw output rows for `pins` (one batch).
+    fn run(&mut self, pins: &[PinImage]) -> Result<Vec<f32>> {
+        let x: Vec<f32> = pins.iter().flat_map(|p| p.pixels.iter().copied()).collect();
+        Ok(self.net.run([pins.len(), 1, self.side, self.side], x)?)
+    }
+}
+
+/// Whether two members read frames alike (their preprocessing, compared
+/// as written to `pose.json`).
+fn same_preprocessing(a: &PreprocessConfig, b: &PreprocessConfig) -> bool {
+    serde_json::to_value(a).ok() == serde_json::to_value(b).ok()
 }
 
 #[cfg(test)]

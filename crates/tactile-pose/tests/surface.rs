@@ -232,8 +232,91 @@ fn surface_pose_with_calibrated_uncertainty_on_the_authors_split() {
             .zip(&fit.std_scale)
             .all(|(a, b)| (a - b).abs() < 1e-12 * b)
     );
-    let e = calibrate_on(&both, &ds, None).unwrap_err().to_string();
-    assert!(e.contains("calibrate each member"), "{e}");
     let e = calibrate_on(&plain, &ds, None).unwrap_err().to_string();
     assert!(e.contains("--uncertainty"), "{e}");
+
+    // A multi-scale ensemble: a 32 px and a 16 px network, each reading
+    // the frame through its own preprocessing; the estimates are the
+    // members' mean whichever way the frames come in.
+    let small = tmp.path().join("small");
+    options(json!({"input_px": 16, "widths": [4], "max_epochs": 1}))
+        .train(&ds, &small)
+        .unwrap();
+    let scales = tmp.path().join("scales");
+    PoseEnsemble::assemble(&[recal.clone(), small.clone()], &scales).unwrap();
+    let mut ms = PoseEstimator::load(&scales, Runtime::BurnFlex, 0).unwrap();
+    assert_eq!(
+        ms.scales().iter().map(|s| s.output_px).collect::<Vec<_>>(),
+        [32, 16]
+    );
+    let m = ms.predict_dataset(&ds).unwrap();
+    let s16 = PoseEstimator::load(&small, Runtime::BurnFlex, 0)
+        .unwrap()
+        .predict_dataset(&ds)
+        .unwrap();
+    for i in 0..ds.len() {
+        for j in 0..6 {
+            let mean = (r.values[i][j] + s16.values[i][j]) / 2.0;
+            assert!((m.values[i][j] - mean).abs() <= 1e-6 * mean.abs().max(1.0));
+        }
+    }
+    let frames: Vec<_> = (0..ds.len())
+        .map(|i| ds.load_grey(i, "file").unwrap())
+        .collect();
+    let (from_frames, _) = ms.predict_frames_with_std(&frames).unwrap();
+    assert!(close(&from_frames, &m.values));
+    // One set of pin images is not enough: the error says what it needs.
+    let pins = ms.preprocess(&frames).unwrap();
+    let e = ms.predict_with_std(&pins[0]).unwrap_err().to_string();
+    assert!(
+        e.contains("2 pin image(s)") && e.contains("32x32, 16x16"),
+        "{e}"
+    );
+    // Swapped scales are refused by size, not run.
+    let e = ms
+        .predict_scales_with_std(&[&pins[1], &pins[0]])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("32") && e.contains("16"), "{e}");
+
+    // Calibrated as a whole: the factors go into ensemble.json and apply
+    // to the members' combined deviation; no member's file changes.
+    let member_json =
+        std::fs::read(scales.join("member-0").join(PoseArtifact::CONFIG_FILE)).unwrap();
+    let fit = calibrate_on(&scales, &ds, None).unwrap();
+    assert_eq!(
+        (fit.frames, fit.std_scale_before.clone()),
+        (40, vec![1.0; 6])
+    );
+    assert_eq!(
+        std::fs::read(scales.join("member-0").join(PoseArtifact::CONFIG_FILE)).unwrap(),
+        member_json
+    );
+    let c = PoseEstimator::load(&scales, Runtime::BurnFlex, 0)
+        .unwrap()
+        .predict_dataset(&ds)
+        .unwrap();
+    assert!(close(&c.values, &m.values));
+    let cstd = c.std.unwrap();
+    for j in 0..6 {
+        let inside = (0..ds.len())
+            .filter(|&i| (c.values[i][j] - truth[i][j]).abs() <= cstd[i][j] * (1.0 + 1e-9))
+            .count();
+        assert_eq!(inside, 28, "target {j}");
+    }
+    // An ensemble's factors are not a network's, and broken ones are named.
+    let e = calibration_from(&last, &scales).unwrap_err().to_string();
+    assert!(e.contains("ensemble"), "{e}");
+    let text = std::fs::read_to_string(scales.join("ensemble.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["notes"]["std_scale"] = json!([1.0, -2.0]);
+    std::fs::write(scales.join("ensemble.json"), v.to_string()).unwrap();
+    let e = PoseEstimator::load(&scales, Runtime::BurnFlex, 0)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("ensemble.json") && e.contains("std_scale"),
+        "{e}"
+    );
 }

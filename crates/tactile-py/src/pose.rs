@@ -14,7 +14,8 @@ use crate::encoder::{frame_args, pin_image_array, pin_images};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Pixels};
 
-/// A pose network folder (`pose.json` + `pose.bpk`) with its preprocessing.
+/// A pose network folder (`pose.json` + `pose.bpk`) with its preprocessing,
+/// or an ensemble of them (members may read different pin image sizes).
 #[pyclass(module = "tactile", name = "PoseEstimator")]
 pub struct PyPoseEstimator {
     estimator: Mutex<PoseEstimator>,
@@ -51,7 +52,8 @@ impl PyPoseEstimator {
     }
 
     /// The grey pin image the network reads, `(S, S)` float32 in [0, 1],
-    /// from an `(H, W)` grey or `(H, W, 3)` RGB uint8 frame.
+    /// from an `(H, W)` grey or `(H, W, 3)` RGB uint8 frame (a multi-scale
+    /// ensemble's first member's).
     fn preprocess<'py>(
         &self,
         py: Python<'py>,
@@ -72,12 +74,18 @@ impl PyPoseEstimator {
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
         let (rows, std) = py.detach(|| -> PyResult<tactile_pose::inference::ValuesWithStd> {
-            let pins = pin_images(&px, &self.preprocess)?;
             let mut e = self
                 .estimator
                 .lock()
                 .map_err(|_| PyRuntimeError::new_err("the estimator failed in another thread"))?;
-            e.predict_with_std(&pins)
+            // One pin image per frame and scale (two for a multi-scale ensemble).
+            let pins = e
+                .scales()
+                .iter()
+                .map(|cfg| pin_images(&px, cfg))
+                .collect::<PyResult<Vec<_>>>()?;
+            let views: Vec<&[_]> = pins.iter().map(Vec::as_slice).collect();
+            e.predict_scales_with_std(&views)
                 .map_err(tactile_pipeline::Error::from)
                 .py()
         })?;
