@@ -4,7 +4,7 @@
 # the shipped models/pose-surface (the recipe chosen, on all 8,000 frames)
 # and models/cae-surface (the validated CAE route), each step timed (data/surface/times.json).
 # `PAPER_A_ONLY='surface|surface_compare|shared' bash scripts/paper-a.sh`
-# then scores them into docs/paper-a.md. About 2.5 hours on 2 cores.
+# then scores them into docs/paper-a.md. About 4.5 hours on 2 cores.
 # SURFACE_STEPS='p128 ship-pose' runs only the named steps.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -40,14 +40,20 @@ PY
 POSE=(--targets $T --crop-px 440 --mask-radius-px 215 --uncertainty --loss l1 --hidden 256 --val-fraction 0.1)
 run p64 "$BIN" train pose --data "$DATA" --out data/surface/p64 "${POSE[@]}" \
     --input-px 64 --widths 16,32,64,64 --max-epochs 25 --patience 40 --lr-decay 0.92
+run p96 "$BIN" train pose --data "$DATA" --out data/surface/p96 "${POSE[@]}" \
+    --input-px 96 --widths 16,32,64,64 --max-epochs 25 --patience 40 --lr-decay 0.92
 run p128 "$BIN" train pose --data "$DATA" --out data/surface/p128 "${POSE[@]}" \
     --input-px 128 --widths 16,32,32,64,64 --max-epochs 20 --patience 20 --lr-decay 0.88
 # Those rows come from `train`, where the errors are smaller than on frames
 # no training saw: the deviations are calibrated again on the authors' `val`
 # (the page shows their coverage cross-fitted on halves of it).
-for m in p64 p128; do
+for m in p64 p96 p128; do
     run "$m-calibrate" "$BIN" train calibrate --model "data/surface/$m" --data "$DATA" --split val
 done
+# The multi-scale ensemble: the three networks, each reading the frame at
+# its own size, averaged; its combined deviation calibrated on `val` too.
+run ms bash -c "rm -rf data/surface/ms && '$BIN' train ensemble --members data/surface/p128 data/surface/p96 data/surface/p64 --out data/surface/ms \
+    && '$BIN' train calibrate --model data/surface/ms --data '$DATA' --split val"
 
 # The CAE route: 56 px pin images through one stem block to Table I's 28 px
 # encoder, 32 features, trained jointly with a head on the six targets (L1,
@@ -59,18 +65,29 @@ run cae56 "$BIN" train cae --data "$DATA" --out data/surface/cae56 "${CAE[@]}" -
 run cae56-mlp "$BIN" train regressor --encoder data/surface/cae56 --data "$DATA" --targets $T \
     --hidden 256,128 --out data/surface/cae56/pose
 
-# The shipped pose network: the chosen recipe on every frame of both
-# splits for the epochs its validated run took; its uncertainty keeps the
-# validated run's calibration.
+# The shipped pose model: the multi-scale ensemble's recipe on every frame
+# of both splits, each member for the epochs its validated run took; each
+# member keeps its validated run's calibration, the ensemble the validated
+# ensemble's.
 ship() {
     local dir=$1 staged=$2
     rm -rf "models/.$dir-old" && [ -d "models/$dir" ] && mv "models/$dir" "models/.$dir-old"
     mv "$staged" "models/$dir" && rm -rf "models/.$dir-old"
 }
-run ship-pose bash -c "rm -rf data/surface/pose-all && '$BIN' train pose --data '$DATA' --out data/surface/pose-all ${POSE[*]} \
-    --input-px 128 --widths 16,32,32,64,64 --max-epochs 20 --patience 20 --lr-decay 0.88 \
-    --every-split --all-rows --calibration-from data/surface/p128 && rm -rf data/surface/pose-all/checkpoint"
-[ -f data/surface/pose-all/pose.json ] && ship pose-surface data/surface/pose-all
+all() {
+    local px=$1
+    shift
+    rm -rf "data/surface/pose-all-$px" && "$BIN" train pose --data "$DATA" --out "data/surface/pose-all-$px" "${POSE[@]}" \
+        --input-px "$px" "$@" --every-split --all-rows --calibration-from "data/surface/p$px" \
+        && rm -rf "data/surface/pose-all-$px/checkpoint"
+}
+run ship-pose-128 all 128 --widths 16,32,32,64,64 --max-epochs 20 --patience 20 --lr-decay 0.88
+run ship-pose-96 all 96 --widths 16,32,64,64 --max-epochs 25 --patience 40 --lr-decay 0.92
+run ship-pose-64 all 64 --widths 16,32,64,64 --max-epochs 25 --patience 40 --lr-decay 0.92
+run ship-pose bash -c "rm -rf data/surface/pose-all && '$BIN' train ensemble \
+    --members data/surface/pose-all-128 data/surface/pose-all-96 data/surface/pose-all-64 --out data/surface/pose-all \
+    && '$BIN' train calibrate --model data/surface/pose-all --calibration-from data/surface/ms"
+[ -f data/surface/pose-all/ensemble.json ] && ship pose-surface data/surface/pose-all
 # The CAE route is shipped as validated: trained on `train` alone, so its
 # scores on `val` are on frames it never saw.
 run ship-cae bash -c "rm -rf models/.cae-surface-new && mkdir -p models/.cae-surface-new/pose \

@@ -127,6 +127,21 @@ pub fn bench_surface(
     depth_md.push_str("\n|---|---|---|---|");
     depth_md.push_str(&"---|".repeat(AUTHORS_CNN.len()));
     depth_md.push('\n');
+    // The frames the candidates fitted: how far their errors there fall
+    // below the held-out ones says whether a target is learnt or left as
+    // noise (a target no network fits on its own training frames is not
+    // in the frame).
+    let fitted: Vec<usize> = ds
+        .split_indices("train")
+        .map(|r| r.to_vec())
+        .unwrap_or_default();
+    let mut fit_md = String::from("| model | frames |");
+    for (t, _) in AUTHORS_CNN {
+        fit_md.push_str(&format!(" {t} |"));
+    }
+    fit_md.push_str("\n|---|---|");
+    fit_md.push_str(&"---|".repeat(AUTHORS_CNN.len()));
+    fit_md.push('\n');
     let mut first_panels = None;
     for m in &b.models {
         let c = Candidate::read(m, b.runs)?;
@@ -179,6 +194,25 @@ pub fn bench_surface(
                 title: format!("{t}: MAE {e:.3} (authors {authors})"),
                 points,
             });
+        }
+        if !fitted.is_empty() {
+            fit_md.push_str(&format!("| {} | {} |", folder_name(m), fitted.len()));
+            for (t, _) in AUTHORS_CNN {
+                let pred = number(t).ok_or_else(|| {
+                    tactile_core::Error::Invalid(format!("{}: no {t}", m.display()))
+                })?;
+                let mut errors = Vec::with_capacity(fitted.len());
+                for &i in &fitted {
+                    if let Some(truth) = ds.number_opt(i, t)? {
+                        errors.push((pred[i] - truth).abs());
+                    }
+                }
+                fit_md.push_str(&format!(
+                    " {:.3} |",
+                    errors.iter().sum::<f64>() / errors.len().max(1) as f64
+                ));
+            }
+            fit_md.push('\n');
         }
         let cross = cross_fitted(&c.notes, ds.evaluation_split_name());
         if let Some([c68, c95]) = &cross {
@@ -283,6 +317,12 @@ pub fn bench_surface(
     md.push_str(&format!(
         "\nErrors by tap depth (mean absolute error of the scored frames in thirds of their depth): shear and twist show in the pins only where the skin grips the surface.\n\n{depth_md}"
     ));
+    if !fitted.is_empty() {
+        md.push_str(&format!(
+            "\nErrors on the {} `train` frames, which every candidate fitted (but for the 10 % that stopped it early): what a model leaves unexplained even on frames it learnt from.\n\n{fit_md}",
+            fitted.len()
+        ));
+    }
     if let (Some((name, panels)), Some(out)) = (first_panels, out) {
         let (path, link) = picture_beside(out, "scatter");
         scatter_grid(&path, &panels, 3)?;
