@@ -206,7 +206,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     if [ -f "$OUT/surface-compare.md" ]; then
         echo "### Which representation carries shear"
         echo
-        echo "The same split, three estimators (an MLP 256-128, ridge and k-NN) per feature set: the surface encoder's features, principal components and the raw pixels of its 56 px pin image, and pin tracking (blob centroids of the full-resolution frame matched to the pins of the first training frame, as displacements). Tracked displacements are the worst features for shear (a pin that slides more than half the pin spacing is matched to its neighbour, or to none), and the raw pixels keep more twist than the encoder's 32 features: the multi-scale ensemble of CNNs on grey pin images above beats every one of them on every target. \`${CMD[surface_compare]}\`"
+        echo "The same split, three estimators (an MLP 256-128, ridge and k-NN) per feature set: the surface encoder's features, principal components and the raw pixels of its 56 px pin image, and pin tracking (blob centroids of the full-resolution frame matched to the pins of the first training frame, as displacements). Tracked displacements are the worst features for shear, each feature set with its best estimator (a pin that slides more than half the pin spacing is matched to its neighbour, or to none), and the raw pixels keep more twist than the encoder's 32 features: the multi-scale ensemble of CNNs on grey pin images above beats every one of them on every target. \`${CMD[surface_compare]}\`"
         echo
         body "$OUT/surface-compare.md"
         echo
