@@ -23,20 +23,47 @@ impl PinSet {
 
     /// Preprocess the frames of `rows` of `ds` (in parallel, in order).
     pub fn from_rows(ds: &Dataset, rows: &[usize], cfg: &PreprocessConfig) -> Result<Self> {
+        let mut sets = Self::from_rows_each(ds, rows, std::slice::from_ref(cfg))?;
+        Ok(sets.remove(0))
+    }
+
+    /// [`Self::from_rows`] once per preprocessing of `cfgs` (a multi-scale
+    /// model's), each frame read and decoded once.
+    pub fn from_rows_each(
+        ds: &Dataset,
+        rows: &[usize],
+        cfgs: &[PreprocessConfig],
+    ) -> Result<Vec<Self>> {
         ds.expect_kind(DatasetKind::Tactip)?;
         let files: Vec<String> = rows
             .iter()
             .map(|&i| ds.text(i, "file").map(str::to_string))
             .collect::<tactile_core::Result<_>>()?;
-        let images = rows
+        let per_frame = rows
             .par_iter()
             .map(|&i| {
                 let frame = ds.load_grey(i, "file")?;
                 let path = ds.path_of(i, "file")?;
-                preprocess(&frame, cfg).map_err(|e| crate::Error::from(e.in_file(path)))
+                cfgs.iter()
+                    .map(|cfg| {
+                        preprocess(&frame, cfg).map_err(|e| crate::Error::from(e.in_file(&path)))
+                    })
+                    .collect::<Result<Vec<_>>>()
             })
             .collect::<Result<Vec<_>>>()?;
-        Ok(Self { files, images })
+        let mut sets: Vec<Self> = cfgs
+            .iter()
+            .map(|_| Self {
+                files: files.clone(),
+                images: Vec::with_capacity(rows.len()),
+            })
+            .collect();
+        for pins in per_frame {
+            for (set, pin) in sets.iter_mut().zip(pins) {
+                set.images.push(pin);
+            }
+        }
+        Ok(sets)
     }
 
     /// Pin images alone (perturbed or live frames), without file names.

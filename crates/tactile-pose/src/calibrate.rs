@@ -18,6 +18,7 @@ use tactile_estimate::Target;
 use crate::data::PoseSet;
 use crate::uncertainty::{Z95, calibrate, coverage};
 use crate::{PoseArtifact, PoseEnsemble, PoseEstimator, Result};
+use tactile_cae::data::PinSet;
 
 /// What a recalibration found and did.
 #[derive(Debug, Clone, Serialize)]
@@ -198,13 +199,10 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
         None => (0..ds.len()).collect(),
     };
     let mut est = PoseEstimator::load(dir, Runtime::BurnFlex, 0)?;
-    // One set of pin images per scale (two for a multi-scale ensemble).
-    let sets = est
-        .scales()
-        .iter()
-        .map(|cfg| PoseSet::from_rows(ds, &rows, cfg, &targets))
-        .collect::<Result<Vec<_>>>()?;
-    let set = &sets[0];
+    // One set of pin images per scale (three for the multi-scale
+    // ensemble), each frame read once; the labels with the first.
+    let mut pins = PinSet::from_rows_each(ds, &rows, est.scales())?;
+    let set = PoseSet::from_pins(ds, &rows, pins.remove(0), &targets)?;
     let labelled = set.labelled(&(0..rows.len()).collect::<Vec<_>>());
     if labelled.len() < 20 {
         return Err(tactile_core::Error::dataset(
@@ -218,9 +216,9 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
         )
         .into());
     }
-    let images: Vec<Vec<_>> = sets
-        .iter()
-        .map(|s| labelled.iter().map(|&i| s.pins.images[i].clone()).collect())
+    let images: Vec<Vec<_>> = std::iter::once(&set.pins)
+        .chain(&pins)
+        .map(|s| labelled.iter().map(|&i| s.images[i].clone()).collect())
         .collect();
     let views: Vec<&[_]> = images.iter().map(Vec::as_slice).collect();
     let (values, std) = est.predict_scales_with_std(&views)?;

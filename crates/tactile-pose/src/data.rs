@@ -78,7 +78,17 @@ impl PoseSet {
         cfg: &PreprocessConfig,
         targets: &[Target],
     ) -> Result<Self> {
-        let pins = PinSet::from_rows(ds, rows, cfg)?;
+        Self::from_pins(ds, rows, PinSet::from_rows(ds, rows, cfg)?, targets)
+    }
+
+    /// The set of `pins` already made of the frames at `rows`, with
+    /// `targets`' columns read.
+    pub fn from_pins(
+        ds: &Dataset,
+        rows: &[usize],
+        pins: PinSet,
+        targets: &[Target],
+    ) -> Result<Self> {
         let labels = rows
             .iter()
             .map(|&i| {

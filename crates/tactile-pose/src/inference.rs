@@ -270,10 +270,8 @@ impl PoseEstimator {
     /// Every frame of a TacTip dataset.
     pub fn predict_dataset(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
         let t0 = std::time::Instant::now();
-        let mut sets = Vec::with_capacity(self.scales.len());
-        for cfg in &self.scales {
-            sets.push(tactile_cae::data::PinSet::from_dataset(ds, cfg)?);
-        }
+        let rows: Vec<usize> = (0..ds.len()).collect();
+        let mut sets = tactile_cae::data::PinSet::from_rows_each(ds, &rows, &self.scales)?;
         let views: Vec<&[PinImage]> = sets.iter().map(|s| s.images.as_slice()).collect();
         let (values, std) = self.predict_scales_with_std(&views)?;
         Ok(PoseEstimates {
