@@ -1,6 +1,9 @@
 //! Grey pin images with their pose labels, and the augmentation that keeps
 //! the labels true: brightness gain and offset and sensor noise change how
-//! a frame looks, never where the contact is (no geometric change).
+//! a frame looks, never where the contact is; an optional small shift of
+//! the whole image (which the camera, fixed to the tip, never makes) leaves
+//! the pins' places relative to each other, so a network trained with it
+//! must read those rather than where in the image a pin sits.
 
 use burn::config::Config;
 use burn::tensor::{Device, Tensor, TensorData};
@@ -24,6 +27,10 @@ pub struct Augment {
     /// Standard deviation of per-pixel Gaussian noise.
     #[config(default = 0.02)]
     pub noise: f64,
+    /// Largest shift of the whole image along each axis, as a fraction of
+    /// its side (whole pixels, the uncovered border black; absent: none).
+    #[config(default = "None")]
+    pub shift: Option<f64>,
 }
 
 impl Augment {
@@ -32,18 +39,41 @@ impl Augment {
         Self::new().with_gain(0.0).with_offset(0.0).with_noise(0.0)
     }
 
+    /// The largest shift as a fraction of the side (0 when absent).
+    fn shift_fraction(&self) -> f64 {
+        self.shift.unwrap_or(0.0)
+    }
+
     /// Check the amounts (each in [0, 1]).
     pub fn check(&self) -> tactile_core::Result<()> {
         tactile_burn::train::check_augment_amounts(&[
             ("gain", self.gain),
             ("offset", self.offset),
             ("noise", self.noise),
-        ])
+        ])?;
+        if !(0.0..=MAX_SHIFT).contains(&self.shift_fraction()) {
+            return Err(tactile_core::Error::Config(format!(
+                "augmentation shift must be in [0, {MAX_SHIFT}] of the side, got {}",
+                self.shift_fraction()
+            )));
+        }
+        Ok(())
     }
 
-    /// `pixels` augmented with the draws of `rng`, clipped to [0, 1].
+    /// `pixels` (a square image) augmented with the draws of `rng`,
+    /// clipped to [0, 1].
     pub fn apply(&self, pixels: &mut [f32], rng: &mut SampleRng) {
-        if *self == Self::none() {
+        if self.shift_fraction() == 0.0 && self.is_photometric_none() {
+            return;
+        }
+        if self.shift_fraction() > 0.0 {
+            let side = pixels.len().isqrt();
+            let most = self.shift_fraction() * side as f64;
+            let dx = (most * (2.0 * rng.uniform() - 1.0)).round() as isize;
+            let dy = (most * (2.0 * rng.uniform() - 1.0)).round() as isize;
+            shift_image(pixels, side, dx, dy);
+        }
+        if self.is_photometric_none() {
             return;
         }
         let gain = 1.0 + self.gain * (2.0 * rng.uniform() - 1.0);
@@ -51,6 +81,35 @@ impl Augment {
         for p in pixels {
             let v = *p as f64 * gain + offset + self.noise * rng.normal();
             *p = v.clamp(0.0, 1.0) as f32;
+        }
+    }
+}
+
+/// Largest [`Augment::shift`], a fraction of the side.
+pub const MAX_SHIFT: f64 = 0.25;
+
+impl Augment {
+    fn is_photometric_none(&self) -> bool {
+        self.gain == 0.0 && self.offset == 0.0 && self.noise == 0.0
+    }
+}
+
+/// Move the `side`-square image `px` by `dx` columns and `dy` rows, the
+/// uncovered border black.
+fn shift_image(px: &mut [f32], side: usize, dx: isize, dy: isize) {
+    if dx == 0 && dy == 0 {
+        return;
+    }
+    let src = px.to_vec();
+    let s = side as isize;
+    for y in 0..s {
+        for x in 0..s {
+            let (sx, sy) = (x - dx, y - dy);
+            px[(y * s + x) as usize] = if (0..s).contains(&sx) && (0..s).contains(&sy) {
+                src[(sy * s + sx) as usize]
+            } else {
+                0.0
+            };
         }
     }
 }
@@ -159,5 +218,50 @@ mod tests {
         Augment::none().apply(&mut z, &mut SampleRng::new(1, 2, 3));
         assert!(z.iter().all(|&v| v == 0.5));
         assert!(Augment::new().with_noise(2.0).check().is_err());
+    }
+
+    #[test]
+    fn shift_moves_whole_pixels_and_blacks_the_border() {
+        // A 10x10 ramp; a shift of up to 0.2 of the side is at most 2 px.
+        let ramp: Vec<f32> = (0..100).map(|i| i as f32 / 100.0).collect();
+        let a = Augment::none().with_shift(Some(0.2));
+        a.check().unwrap();
+        let mut moved = 0;
+        for k in 0..40 {
+            let mut x = ramp.clone();
+            a.apply(&mut x, &mut SampleRng::new(7, 1, k));
+            let mut y = ramp.clone();
+            a.apply(&mut y, &mut SampleRng::new(7, 1, k));
+            assert_eq!(x, y, "seeded");
+            // Some whole-pixel shift (dx, dy) of at most 2 explains every pixel.
+            let (dx, dy) = (0..5)
+                .flat_map(|dy| (0..5).map(move |dx| (dx as isize - 2, dy as isize - 2)))
+                .find(|&(dx, dy)| {
+                    (0..10).all(|yy: isize| {
+                        (0..10).all(|xx: isize| {
+                            let (sx, sy) = (xx - dx, yy - dy);
+                            let want = if (0..10).contains(&sx) && (0..10).contains(&sy) {
+                                ramp[(sy * 10 + sx) as usize]
+                            } else {
+                                0.0
+                            };
+                            x[(yy * 10 + xx) as usize] == want
+                        })
+                    })
+                })
+                .expect("a whole-pixel shift of at most 2 with a black border");
+            moved += usize::from(dx != 0 || dy != 0);
+        }
+        assert!(moved > 20, "most draws move the image ({moved} of 40)");
+        // Without a shift, the draws (and so older models' runs) are as before.
+        let mut x = ramp.clone();
+        let mut y = ramp.clone();
+        Augment::new().apply(&mut x, &mut SampleRng::new(1, 2, 3));
+        Augment::new()
+            .with_shift(Some(0.0))
+            .apply(&mut y, &mut SampleRng::new(1, 2, 3));
+        assert_eq!(x, y);
+        assert!(Augment::none().with_shift(Some(0.5)).check().is_err());
+        assert!(Augment::none().with_shift(Some(-0.1)).check().is_err());
     }
 }

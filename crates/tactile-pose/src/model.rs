@@ -22,6 +22,8 @@ pub const MAX_WIDTH: usize = 512;
 pub const MAX_HIDDEN: usize = 4096;
 /// Most output columns.
 pub const MAX_OUTPUTS: usize = 64;
+/// Widest convolution kernel side.
+pub const MAX_KERNEL: usize = 15;
 
 /// Architecture of a [`PoseNet`].
 #[derive(Config, Debug, PartialEq)]
@@ -46,6 +48,11 @@ pub struct PoseNetConfig {
     /// (absent in configs written before it: no uncertainty).
     #[config(default = "None")]
     pub uncertainty: Option<bool>,
+    /// Side of each stage's convolution kernel, odd (absent: 3 for every
+    /// stage). A wide first kernel sees a pin and its neighbours at once,
+    /// so how far a pin slid against them is measured before any pooling.
+    #[config(default = "None")]
+    pub kernels: Option<Vec<usize>>,
 }
 
 impl PoseNetConfig {
@@ -58,6 +65,14 @@ impl PoseNetConfig {
     /// Whether the network gives a log scale per output.
     pub fn has_uncertainty(&self) -> bool {
         self.uncertainty == Some(true)
+    }
+
+    /// Kernel side of stage `i`.
+    pub fn kernel(&self, i: usize) -> usize {
+        self.kernels
+            .as_ref()
+            .and_then(|k| k.get(i).copied())
+            .unwrap_or(3)
     }
 
     /// Side of the last stage's map.
@@ -78,6 +93,15 @@ impl PoseNetConfig {
             return bad(format!(
                 "pose network: stage widths must be 1-{MAX_WIDTH}, got {:?}",
                 self.widths
+            ));
+        }
+        if let Some(k) = &self.kernels
+            && (k.len() != self.widths.len()
+                || k.iter().any(|&k| k == 0 || k > MAX_KERNEL || k % 2 == 0))
+        {
+            return bad(format!(
+                "pose network: one odd kernel side (1-{MAX_KERNEL}) per stage ({} stages), got {k:?}",
+                self.widths.len()
             ));
         }
         let step = 1usize << self.widths.len();
@@ -107,21 +131,24 @@ impl PoseNetConfig {
             ));
         }
         let flat = self.widths[self.widths.len() - 1] * self.map_px() * self.map_px();
-        tactile_burn::artifact::check_parameters(
-            "pose network",
-            (flat * self.hidden) as u64
-                + self.widths.iter().map(|&w| (w * w * 9) as u64).sum::<u64>(),
-        )
+        let mut c = 1;
+        let mut conv = 0u64;
+        for (i, &w) in self.widths.iter().enumerate() {
+            conv += (c * w * self.kernel(i) * self.kernel(i)) as u64;
+            c = w;
+        }
+        tactile_burn::artifact::check_parameters("pose network", (flat * self.hidden) as u64 + conv)
     }
 
     /// A network with fresh weights.
     pub fn init(&self, device: &Device) -> PoseNet {
         let mut stages = Vec::with_capacity(self.widths.len());
         let mut c = 1;
-        for &w in &self.widths {
+        for (i, &w) in self.widths.iter().enumerate() {
+            let (k, p) = (self.kernel(i), self.kernel(i) / 2);
             stages.push(Stage {
-                conv: Conv2dConfig::new([c, w], [3, 3])
-                    .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
+                conv: Conv2dConfig::new([c, w], [k, k])
+                    .with_padding(PaddingConfig2d::Explicit(p, p, p, p))
                     .with_bias(false)
                     .init(device),
                 bn: BatchNormConfig::new(w).init(device),
@@ -144,7 +171,7 @@ impl PoseNetConfig {
 /// ReLU.
 #[derive(Module, Debug)]
 pub struct Stage {
-    /// 3x3, no bias (the norm has one).
+    /// `k`x`k` (3 unless the config says), no bias (the norm has one).
     pub conv: Conv2d,
     /// Its batch norm.
     pub bn: BatchNorm,
@@ -245,8 +272,45 @@ mod tests {
             PoseNetConfig::new().with_hidden(0),
             PoseNetConfig::new().with_outputs(10_000),
             PoseNetConfig::new().with_input_px(1 << 40),
+            PoseNetConfig::new().with_kernels(Some(vec![5, 3])),
+            PoseNetConfig::new().with_kernels(Some(vec![4, 3, 3, 3])),
+            PoseNetConfig::new().with_kernels(Some(vec![17, 3, 3, 3])),
         ] {
             assert!(bad.check().is_err(), "{bad:?}");
         }
+    }
+
+    #[test]
+    fn wide_kernels_keep_the_map_and_fold() {
+        let dev = DeviceKind::Flex.device();
+        let cfg = PoseNetConfig::new()
+            .with_input_px(32)
+            .with_widths(vec![4, 8])
+            .with_kernels(Some(vec![7, 5]));
+        cfg.check().unwrap();
+        let net = cfg.init(&dev);
+        assert_eq!(net.stages[0].conv.weight.dims(), [4, 1, 7, 7]);
+        assert_eq!(net.stages[1].conv.weight.dims(), [8, 4, 5, 5]);
+        // A bright dot in one corner reaches the output only through the
+        // wide kernels' padding-preserving maps: same shapes as 3x3.
+        let mut px = vec![0.0f32; 2 * 32 * 32];
+        px[0] = 1.0;
+        let x = Tensor::<4>::from_data(TensorData::new(px, [2, 1, 32, 32]), &dev);
+        let a: Vec<f32> = net.forward(x.clone()).into_data().try_to_vec().unwrap();
+        let b: Vec<f32> = net
+            .for_inference()
+            .forward(x)
+            .into_data()
+            .try_to_vec()
+            .unwrap();
+        assert_eq!(a.len(), 6);
+        for (p, q) in a.iter().zip(&b) {
+            assert!((p - q).abs() < 1e-4, "{p} {q}");
+        }
+        assert_ne!(
+            a[..3],
+            a[3..],
+            "the frame with the dot differs from the empty one"
+        );
     }
 }

@@ -49,6 +49,14 @@ pub struct PoseOptions {
     /// Channels of each stage; each stage halves the side.
     #[arg(long, value_delimiter = ',', default_values_t = PoseNetConfig::new().widths)]
     pub widths: Vec<usize>,
+    /// Kernel side of each stage's convolution, odd (default: 3 for every stage); a wide first kernel sees a pin with its neighbours, so how far it slid against them.
+    #[arg(long, value_delimiter = ',')]
+    #[serde(default)]
+    pub kernels: Option<Vec<usize>>,
+    /// While training, shift the whole pin image by up to this fraction of its side along each axis (0 = none): the camera never moves against the tip, so the network must read where pins sit relative to each other.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub shift: f64,
     /// Hidden units of the dense head.
     #[arg(long, default_value_t = PoseNetConfig::new().hidden)]
     pub hidden: usize,
@@ -111,7 +119,8 @@ impl PoseOptions {
             .with_widths(self.widths.clone())
             .with_hidden(self.hidden)
             .with_dropout(self.dropout)
-            .with_uncertainty(Some(self.uncertainty));
+            .with_uncertainty(Some(self.uncertainty))
+            .with_kernels(self.kernels.clone());
         let mut preprocess = grey_pin_images(self.input_px);
         preprocess.crop_px = self.crop_px;
         preprocess.mask_radius_px = Some(self.mask_radius_px);
@@ -129,7 +138,10 @@ impl PoseOptions {
             holdout: self.holdout.holdout(),
             all_rows: self.all_rows,
             loss: Some(self.loss),
-            ..d
+            augment: d
+                .augment
+                .clone()
+                .with_shift((self.shift != 0.0).then_some(self.shift)),
         };
         config.checked()
     }

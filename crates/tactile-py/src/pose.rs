@@ -8,9 +8,10 @@ use numpy::{IntoPyArray, PyArray2};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use rayon::prelude::*;
 use tactile_pose::PoseEstimator;
 
-use crate::encoder::{frame_args, pin_image_array, pin_images};
+use crate::encoder::{frame_args, pin_image_array};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Pixels};
 
@@ -78,14 +79,14 @@ impl PyPoseEstimator {
                 .estimator
                 .lock()
                 .map_err(|_| PyRuntimeError::new_err("the estimator failed in another thread"))?;
-            // One pin image per frame and scale (two for a multi-scale ensemble).
-            let pins = e
-                .scales()
-                .iter()
-                .map(|cfg| pin_images(&px, cfg))
-                .collect::<PyResult<Vec<_>>>()?;
-            let views: Vec<&[_]> = pins.iter().map(Vec::as_slice).collect();
-            e.predict_scales_with_std(&views)
+            // Each frame made grey once; the library preprocesses it to
+            // every scale a multi-scale ensemble reads.
+            let grey = px
+                .par_iter()
+                .map(Pixels::grey)
+                .collect::<tactile_core::Result<Vec<_>>>()
+                .py()?;
+            e.predict_frames_with_std(&grey)
                 .map_err(tactile_pipeline::Error::from)
                 .py()
         })?;

@@ -339,6 +339,8 @@ def train_pose(
     calibration_from: Optional[str] = None,
     every_split: bool = False,
     widths: Sequence[int] = (16, 32, 64, 64),
+    kernels: Optional[Sequence[int]] = None,
+    shift: float = 0.0,
     hidden: int = 128,
     dropout: float = 0.0,
     val_fraction: float = 0.2,
