@@ -97,7 +97,7 @@ step cross compare --encoder models/cae-shapes --data "$REAL/tactip127-edge" \
 # trains into data/surface without the authors' val frames.
 SURFACE_TARGETS=depth_mm,roll_deg,pitch_deg,shear_x_mm,shear_y_mm,shear_theta_deg
 SURFACE_MODELS=()
-for m in data/surface/ms data/surface/p128 data/surface/p96 data/surface/p64; do
+for m in data/surface/ms-k data/surface/p64-k9 data/surface/p64-k7 data/surface/ms data/surface/p128 data/surface/p96 data/surface/p64; do
     { [ -f "$m/pose.json" ] || [ -f "$m/ensemble.json" ]; } && [ ! -e "$m/INCOMPLETE" ] && SURFACE_MODELS+=("$m")
 done
 step surface bench surface --models "${SURFACE_MODELS[@]}" models/pose-surface models/cae-surface \

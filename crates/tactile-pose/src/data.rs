@@ -263,5 +263,6 @@ mod tests {
         assert_eq!(x, y);
         assert!(Augment::none().with_shift(Some(0.5)).check().is_err());
         assert!(Augment::none().with_shift(Some(-0.1)).check().is_err());
+        assert!(Augment::none().with_shift(Some(f64::NAN)).check().is_err());
     }
 }
