@@ -15,6 +15,9 @@ use tactile_preprocess::PreprocessConfig;
 
 use crate::Result;
 
+/// Largest [`Augment::shift`], a fraction of the side.
+pub const MAX_SHIFT: f64 = 0.25;
+
 /// Label-preserving augmentation of a grey pin image.
 #[derive(Config, Debug, PartialEq)]
 pub struct Augment {
@@ -42,6 +45,11 @@ impl Augment {
     /// The largest shift as a fraction of the side (0 when absent).
     fn shift_fraction(&self) -> f64 {
         self.shift.unwrap_or(0.0)
+    }
+
+    /// Whether brightness and noise are left alone.
+    fn is_photometric_none(&self) -> bool {
+        self.gain == 0.0 && self.offset == 0.0 && self.noise == 0.0
     }
 
     /// Check the amounts (each in [0, 1]).
@@ -82,15 +90,6 @@ impl Augment {
             let v = *p as f64 * gain + offset + self.noise * rng.normal();
             *p = v.clamp(0.0, 1.0) as f32;
         }
-    }
-}
-
-/// Largest [`Augment::shift`], a fraction of the side.
-pub const MAX_SHIFT: f64 = 0.25;
-
-impl Augment {
-    fn is_photometric_none(&self) -> bool {
-        self.gain == 0.0 && self.offset == 0.0 && self.noise == 0.0
     }
 }
 

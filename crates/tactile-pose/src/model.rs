@@ -145,7 +145,8 @@ impl PoseNetConfig {
         let mut stages = Vec::with_capacity(self.widths.len());
         let mut c = 1;
         for (i, &w) in self.widths.iter().enumerate() {
-            let (k, p) = (self.kernel(i), self.kernel(i) / 2);
+            let k = self.kernel(i);
+            let p = k / 2;
             stages.push(Stage {
                 conv: Conv2dConfig::new([c, w], [k, k])
                     .with_padding(PaddingConfig2d::Explicit(p, p, p, p))
