@@ -80,6 +80,17 @@ CAE=(--preprocess configs/preprocess/tactip331-surface-area-56.json --widths 32,
 run cae56 "$BIN" train cae --data "$DATA" --out data/surface/cae56 "${CAE[@]}" --val-fraction 0.1
 run cae56-mlp "$BIN" train regressor --encoder data/surface/cae56 --data "$DATA" --targets $T \
     --hidden 512,256,128 --out data/surface/cae56/pose
+# The same encoder with the pose networks' two options: a wide first
+# kernel (the 56 px stem's, 7 or 9 px) and the whole-image shift in
+# training, applied to the reconstruction target alike.
+run cae56-k9 "$BIN" train cae --data "$DATA" --out data/surface/cae56-k9 "${CAE[@]}" --val-fraction 0.1 \
+    --first-kernel 9 --shift 0.05
+run cae56-k7 "$BIN" train cae --data "$DATA" --out data/surface/cae56-k7 "${CAE[@]}" --val-fraction 0.1 \
+    --first-kernel 7 --shift 0.025
+for m in cae56-k9 cae56-k7; do
+    run "$m-mlp" "$BIN" train regressor --encoder "data/surface/$m" --data "$DATA" --targets $T \
+        --hidden 512,256,128 --out "data/surface/$m/pose"
+done
 
 # The shipped pose model: the wide-kernel pair's recipe on every frame
 # of both splits, each member for the epochs its validated run took; each

@@ -46,10 +46,19 @@ pub struct CaeConfig {
     /// linear responses and none can die.
     #[config(default = "None")]
     pub latent_relu: Option<bool>,
+    /// Side of the encoder's first convolution kernel, odd (`None`: 3, as
+    /// Table I). At 56 px a 7 or 9 px kernel sees a pin with its
+    /// neighbours, so how far it slid against them (shear, twist) is
+    /// measured before the first pooling blurs it.
+    #[config(default = "None")]
+    pub first_kernel: Option<usize>,
 }
 
 /// Widest encoder block accepted.
 pub const MAX_WIDTH: usize = 256;
+
+/// Widest first kernel side accepted.
+pub const MAX_FIRST_KERNEL: usize = 15;
 
 /// Pin-image sides the autoencoder takes.
 pub const INPUT_SIDES: [usize; 3] = [28, 56, 112];
@@ -68,6 +77,13 @@ impl CaeConfig {
             return Err(tactile_core::Error::Config(format!(
                 "CAE widths must be 1 to {MAX_WIDTH}, got {w} in {:?} (stem {:?})",
                 self.widths, self.stem_width
+            )));
+        }
+        if let Some(k) = self.first_kernel
+            && (k == 0 || k > MAX_FIRST_KERNEL || k % 2 == 0)
+        {
+            return Err(tactile_core::Error::Config(format!(
+                "the CAE's first kernel side must be odd, 1 to {MAX_FIRST_KERNEL}, got {k}"
             )));
         }
         if !INPUT_SIDES.contains(&self.input_px) {
@@ -148,25 +164,37 @@ impl CaeConfig {
         // Keras' initialisation (Glorot-uniform kernels, zero biases): with
         // burn's default the 4-channel bottleneck's ReLUs tend to die early
         // and every feature stays 0.
-        let conv = |i, o, padding| {
-            let mut c = Conv2dConfig::new([i, o], [3, 3])
+        let conv = |i, o, k: usize, padding| {
+            let mut c = Conv2dConfig::new([i, o], [k, k])
                 .with_padding(padding)
                 .with_initializer(Initializer::XavierUniform { gain: 1.0 })
                 .init(device);
             c.bias = c.bias.map(|b| Param::from_tensor(b.val().zeros_like()));
             c
         };
-        let same = |i, o| conv(i, o, PaddingConfig2d::Explicit(1, 1, 1, 1));
-        let valid = |i, o| conv(i, o, PaddingConfig2d::Valid);
+        let same_k = |i, o, k: usize| {
+            let p = k / 2;
+            conv(i, o, k, PaddingConfig2d::Explicit(p, p, p, p))
+        };
+        let same = |i, o| same_k(i, o, 3);
+        let valid = |i, o| conv(i, o, 3, PaddingConfig2d::Valid);
+        let first = self.first_kernel.unwrap_or(3);
         let (blocks, s) = (self.stem_blocks(), self.stem_channels());
         // Stem: 1 -> s -> s channels; tail: c1 -> s -> s, then conv5 to 1.
-        let stem = (0..blocks).map(|b| same(if b == 0 { 1 } else { s }, s));
+        let stem = (0..blocks).map(|b| match b {
+            0 => same_k(1, s, first),
+            _ => same(s, s),
+        });
         let tail = (0..blocks).map(|b| same(if b == 0 { c1 } else { s }, s));
         let into_conv1 = if blocks > 0 { s } else { 1 };
         Cae {
             encoder: CaeEncoder {
                 stem: stem.collect(),
-                conv1: same(into_conv1, c1),
+                conv1: if blocks > 0 {
+                    same(into_conv1, c1)
+                } else {
+                    same_k(1, c1, first)
+                },
                 conv2: same(c1, c2),
                 conv3: same(c2, c3),
                 conv4: same(c3, c4),
@@ -419,6 +447,34 @@ mod tests {
                 .check()
                 .is_err()
         );
+    }
+
+    #[test]
+    fn a_wide_first_kernel_keeps_every_shape() {
+        let device = Device::flex();
+        for (px, k) in [(28, 7), (56, 9), (112, 5)] {
+            let cfg = CaeConfig::new()
+                .with_input_px(px)
+                .with_first_kernel(Some(k))
+                .with_feature_count(32)
+                .unwrap();
+            cfg.check().unwrap();
+            let m = cfg.init(&device);
+            let first = m.encoder.stem.first().unwrap_or(&m.encoder.conv1);
+            assert_eq!(first.weight.dims()[2..], [k, k]);
+            assert_eq!(m.encoder.conv2.weight.dims()[2..], [3, 3]);
+            let x = Tensor::<4>::ones([2, 1, px, px], &device);
+            assert_eq!(m.encoder.forward(x.clone()).dims(), [2, 32]);
+            assert_eq!(m.forward(x).dims(), [2, 1, px, px]);
+        }
+        for bad in [0, 4, 17] {
+            let cfg = CaeConfig::new().with_first_kernel(Some(bad));
+            let err = cfg.check().unwrap_err().to_string();
+            assert!(
+                err.contains("first kernel") && err.contains(&bad.to_string()),
+                "{err}"
+            );
+        }
     }
 
     #[test]

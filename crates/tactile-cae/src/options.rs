@@ -51,6 +51,14 @@ pub struct CaeOptions {
     /// No ReLU before the last pooling: features cannot die (see CaeConfig).
     #[arg(long)]
     pub linear_latent: bool,
+    /// Side of the encoder's first kernel, odd (Table I: 3); 7 or 9 at 56 px sees a pin with its neighbours.
+    #[arg(long, default_value_t = 3)]
+    #[serde(default = "default_first_kernel")]
+    pub first_kernel: usize,
+    /// While training, shift each pin image by up to this fraction of its side along each axis (0 = none), so the features must describe pins relative to each other.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub shift: f64,
     /// Adadelta (paper A) or Adam.
     #[arg(long, value_enum, default_value_t = CaeTrainingConfig::new().optimizer)]
     pub optimizer: Optimizer,
@@ -75,6 +83,10 @@ pub struct CaeOptions {
     pub joint: JointArgs,
 }
 
+fn default_first_kernel() -> usize {
+    3
+}
+
 impl CaeOptions {
     /// The training config these options ask for (checked where it can
     /// be before any data is read).
@@ -87,7 +99,10 @@ impl CaeOptions {
             self.features,
             self.linear_latent,
             pre.output_px,
-        )?;
+        )?
+        .with_first_kernel((self.first_kernel != 3).then_some(self.first_kernel));
+        model.check()?;
+        tactile_preprocess::perturb::check_shift(self.shift)?;
         let s = &self.schedule;
         Ok(CaeTrainingConfig::new()
             .with_model(model)
@@ -97,12 +112,49 @@ impl CaeOptions {
             .with_val_fraction(self.val_fraction)
             .with_holdout(self.holdout.holdout())
             .with_rotation(self.rotate.augment(s.seed))
-            .with_joint(self.joint.config()?))
+            .with_joint(self.joint.config()?)
+            .with_shift((self.shift != 0.0).then_some(self.shift)))
     }
 
     /// Train on `data` into `out` as these options say.
     pub fn train(&self, data: &Dataset, out: &Path) -> Result<FitSummary> {
         let s = &self.schedule;
         crate::training::train(&self.config()?, data, out, s.device, s.resume)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    #[derive(Parser)]
+    struct Flags {
+        #[command(flatten)]
+        options: CaeOptions,
+    }
+
+    fn config(flags: &[&str]) -> Result<CaeTrainingConfig> {
+        let args = std::iter::once("train-cae").chain(flags.iter().copied());
+        Flags::try_parse_from(args).unwrap().options.config()
+    }
+
+    #[test]
+    fn first_kernel_and_shift_reach_the_config_or_are_refused() {
+        let plain = config(&[]).unwrap();
+        assert_eq!((plain.model.first_kernel, plain.shift), (None, None));
+        let wide = config(&["--first-kernel", "9", "--shift", "0.05"]).unwrap();
+        assert_eq!((wide.model.first_kernel, wide.shift), (Some(9), Some(0.05)));
+        for (flag, says) in [
+            ("--first-kernel=4", "first kernel"),
+            ("--first-kernel=17", "first kernel"),
+            ("--shift=0.5", "augmentation shift"),
+            ("--shift=-0.1", "augmentation shift"),
+            ("--shift=NaN", "augmentation shift"),
+        ] {
+            let err = config(&[flag]).unwrap_err().to_string();
+            assert!(err.contains(says), "{flag}: {err}");
+        }
     }
 }

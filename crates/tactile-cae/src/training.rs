@@ -78,6 +78,12 @@ pub struct CaeTrainingConfig {
     /// saved.
     #[config(default = "None")]
     pub joint: Option<JointTargets>,
+    /// Each time a training image is drawn, shift it (input and the
+    /// reconstruction it is scored against alike) by whole pixels up to
+    /// this fraction of its side (see
+    /// [`tactile_preprocess::perturb::shift_pins`]); `None`: no shift.
+    #[config(default = "None")]
+    pub shift: Option<f64>,
 }
 
 /// Train on the training rows of `data` (see
@@ -98,6 +104,8 @@ pub fn train(
     if let Some(j) = &config.joint {
         j.check()?;
     }
+    let shift = config.shift.unwrap_or(0.0);
+    tactile_preprocess::perturb::check_shift(shift)?;
     tactile_core::dataset::check_output_dir(out, &[data])?;
     let rows = data.training_rows(config.holdout)?;
     let (train, val) = hold_out(rows, config.val_fraction, config.schedule.seed)
@@ -170,15 +178,20 @@ pub fn train(
         optim,
         (&train, val.len()),
         |m: &JointCae, batch, epoch| {
-            let x = batch_tensor(
-                batch.iter().map(|&i| {
+            let drawn: Vec<PinImage> = batch
+                .iter()
+                .map(|&i| {
                     let copies = turned.get(&i).map_or(&[][..], Vec::as_slice);
                     let mut rng = SampleRng::new(config.schedule.seed, epoch as u64, i as u64);
                     let pick = (rng.uniform() * (copies.len() + 1) as f64) as usize;
-                    copies.get(pick).unwrap_or(&pins.images[i])
-                }),
-                &ad,
-            );
+                    let mut pin = copies.get(pick).unwrap_or(&pins.images[i]).clone();
+                    if shift > 0.0 {
+                        tactile_preprocess::perturb::shift_pins(&mut pin.pixels, shift, &mut rng);
+                    }
+                    pin
+                })
+                .collect();
+            let x = batch_tensor(drawn.iter(), &ad);
             let (logits, columns) = m.forward(x.clone());
             let loss = bce_with_logits(logits, x);
             Ok(match (columns, &labels) {

@@ -15,8 +15,7 @@ use tactile_preprocess::PreprocessConfig;
 
 use crate::Result;
 
-/// Largest [`Augment::shift`], a fraction of the side.
-pub const MAX_SHIFT: f64 = 0.25;
+pub use tactile_preprocess::perturb::MAX_SHIFT;
 
 /// Label-preserving augmentation of a grey pin image.
 #[derive(Config, Debug, PartialEq)]
@@ -59,13 +58,7 @@ impl Augment {
             ("offset", self.offset),
             ("noise", self.noise),
         ])?;
-        if !(0.0..=MAX_SHIFT).contains(&self.shift_fraction()) {
-            return Err(tactile_core::Error::Config(format!(
-                "augmentation shift must be in [0, {MAX_SHIFT}] of the side, got {}",
-                self.shift_fraction()
-            )));
-        }
-        Ok(())
+        tactile_preprocess::perturb::check_shift(self.shift_fraction())
     }
 
     /// `pixels` (a square image) augmented with the draws of `rng`,
@@ -75,11 +68,7 @@ impl Augment {
             return;
         }
         if self.shift_fraction() > 0.0 {
-            let side = pixels.len().isqrt();
-            let most = self.shift_fraction() * side as f64;
-            let dx = (most * (2.0 * rng.uniform() - 1.0)).round() as isize;
-            let dy = (most * (2.0 * rng.uniform() - 1.0)).round() as isize;
-            shift_image(pixels, side, dx, dy);
+            tactile_preprocess::perturb::shift_pins(pixels, self.shift_fraction(), rng);
         }
         if self.is_photometric_none() {
             return;
@@ -89,26 +78,6 @@ impl Augment {
         for p in pixels {
             let v = *p as f64 * gain + offset + self.noise * rng.normal();
             *p = v.clamp(0.0, 1.0) as f32;
-        }
-    }
-}
-
-/// Move the `side`-square image `px` by `dx` columns and `dy` rows, the
-/// uncovered border black.
-fn shift_image(px: &mut [f32], side: usize, dx: isize, dy: isize) {
-    if dx == 0 && dy == 0 {
-        return;
-    }
-    let src = px.to_vec();
-    let s = side as isize;
-    for y in 0..s {
-        for x in 0..s {
-            let (sx, sy) = (x - dx, y - dy);
-            px[(y * s + x) as usize] = if (0..s).contains(&sx) && (0..s).contains(&sy) {
-                src[(sy * s + sx) as usize]
-            } else {
-                0.0
-            };
         }
     }
 }

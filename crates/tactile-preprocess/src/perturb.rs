@@ -236,6 +236,47 @@ impl RotationAugment {
     }
 }
 
+/// Largest whole-image shift of a pin image in training, a fraction of its
+/// side.
+pub const MAX_SHIFT: f64 = 0.25;
+
+/// Check a training shift: a fraction of the side in `[0, MAX_SHIFT]`.
+pub fn check_shift(fraction: f64) -> tactile_core::Result<()> {
+    if !(0.0..=MAX_SHIFT).contains(&fraction) {
+        return Err(tactile_core::Error::Config(format!(
+            "augmentation shift must be in [0, {MAX_SHIFT}] of the side, got {fraction}"
+        )));
+    }
+    Ok(())
+}
+
+/// Shift the square pin image `pixels` by whole pixels `(dx, dy)`, each
+/// drawn uniformly up to `fraction` of the side, the uncovered border
+/// black. The camera, fixed to the tip, never moves like this, so a
+/// network trained on shifted images must read where pins sit relative to
+/// each other, not where in the image. Draws two numbers from `rng`.
+pub fn shift_pins(pixels: &mut [f32], fraction: f64, rng: &mut SampleRng) {
+    let side = pixels.len().isqrt();
+    let most = fraction * side as f64;
+    let dx = (most * (2.0 * rng.uniform() - 1.0)).round() as isize;
+    let dy = (most * (2.0 * rng.uniform() - 1.0)).round() as isize;
+    if dx == 0 && dy == 0 {
+        return;
+    }
+    let src = pixels.to_vec();
+    let s = side as isize;
+    for y in 0..s {
+        for x in 0..s {
+            let (sx, sy) = (x - dx, y - dy);
+            pixels[(y * s + x) as usize] = if (0..s).contains(&sx) && (0..s).contains(&sy) {
+                src[(sy * s + sx) as usize]
+            } else {
+                0.0
+            };
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

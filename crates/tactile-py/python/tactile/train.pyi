@@ -32,6 +32,8 @@ def cae(
     widths: Sequence[int] = (16, 8, 8, 4),
     features: Optional[int] = None,
     linear_latent: bool = False,
+    first_kernel: int = 3,
+    shift: float = 0.0,
     optimizer: str = "adadelta",
     val_fraction: float = 0.2,
     exclude_test: Optional[float] = None,
