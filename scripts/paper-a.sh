@@ -100,6 +100,11 @@ SURFACE_MODELS=()
 for m in data/surface/ms-k data/surface/p64-k9 data/surface/p64-k7 data/surface/ms data/surface/p128 data/surface/p96 data/surface/p64; do
     { [ -f "$m/pose.json" ] || [ -f "$m/ensemble.json" ]; } && [ ! -e "$m/INCOMPLETE" ] && SURFACE_MODELS+=("$m")
 done
+# The CAE route's candidates (models/cae-surface is cae56-k9's): the
+# narrow-kernel encoder before it, and the 7 px one.
+for m in data/surface/cae56-k7 data/surface/cae56; do
+    [ -f "$m/cae.json" ] && [ -f "$m/pose/regressor.json" ] && [ ! -e "$m/INCOMPLETE" ] && SURFACE_MODELS+=("$m")
+done
 step surface bench surface --models "${SURFACE_MODELS[@]}" models/pose-surface models/cae-surface \
     --data "$REAL/tactip331-surface" --runs 200 --out "$OUT/surface.md"
 # Feature sets against each other on the surface split (pin tracking at full

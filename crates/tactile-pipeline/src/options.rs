@@ -7,6 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 use tactile_burn::DeviceKind;
+use tactile_burn::nn::RegressionLoss;
 use tactile_burn::options::{OptionDoc, Options};
 use tactile_cae::RotateArgs;
 use tactile_estimate::{HeadConfig, RegressorConfig, Target};
@@ -71,6 +72,10 @@ pub struct RegressorOptions {
     /// Train only on frames of these shapes: a specialised regressor (a sphere's position, say) that answers where the head sees them.
     #[arg(long, value_delimiter = ',')]
     pub shapes: Vec<String>,
+    /// The loss on the standardised targets, in training and for early stopping.
+    #[arg(long, value_enum, default_value_t = RegressionLoss::Mse)]
+    #[serde(default)]
+    pub loss: RegressionLoss,
 }
 
 impl RegressorOptions {
@@ -93,6 +98,7 @@ impl RegressorOptions {
             seed: self.seed,
             only_labelled: self.only_labelled,
             shapes: self.shapes.clone(),
+            loss: self.loss,
             ..RegressorPlan::new(targets)
         })
     }

@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use tactile_burn::Runtime;
+use tactile_burn::nn::RegressionLoss;
 use tactile_cae::TactipEncoder;
 use tactile_cae::data::PinSet;
 use tactile_cae::inference::features_for_dataset;
@@ -386,6 +387,9 @@ pub struct RegressorPlan {
     /// specialised regressor, such as a sphere's position. Empty: every
     /// frame.
     pub shapes: Vec<String>,
+    /// The loss on the standardised targets (MSE: the default; L1: the
+    /// reported metric's).
+    pub loss: RegressionLoss,
 }
 
 impl RegressorPlan {
@@ -401,6 +405,7 @@ impl RegressorPlan {
             seed: defaults.schedule.seed,
             only_labelled: false,
             shapes: Vec::new(),
+            loss: RegressionLoss::Mse,
         }
     }
 }
@@ -519,7 +524,8 @@ pub fn train_regressor(
         sx.len()
     );
     let mut cfg = RegressorConfig::new(feats[0].len(), plan.targets.clone())
-        .with_hidden(plan.hidden.iter().map(|&w| (w, Activation::Relu)).collect());
+        .with_hidden(plan.hidden.iter().map(|&w| (w, Activation::Relu)).collect())
+        .with_loss((plan.loss != RegressionLoss::Mse).then_some(plan.loss));
     cfg.schedule.seed = plan.seed;
     let device = runtime
         .device()

@@ -327,6 +327,7 @@ def train_regressor_py(
     device: str = "flex",
     only_labelled: bool = False,
     shapes: Sequence[str] = (),
+    loss: str = "mse",
 ) -> Dict[str, Any]: ...
 def train_pose(
     data: _Path,

@@ -87,6 +87,7 @@ def regressor(
     device: str = "flex",
     only_labelled: bool = False,
     shapes: Sequence[str] = (),
+    loss: str = "mse",
 ) -> Dict[str, Any]:
     """A regressor (pose, depth, force; angles on the circle) on an encoder's features."""
 
