@@ -191,6 +191,10 @@ test-detector-ensemble:
     cargo run --release -p tactile -- synth visuotactile --count 1200 --seed 753 --out data/test2-default-ref
     for d in test2-light-ref test2-light-alt test2-default-ref test2-default-alt-960; do cargo run --release -p tactile -- eval detector --model models/detector --data data/$d; done
 
+# The shipped detector at the extremes of each range of the sensor spec, both renderers (docs/detector-extremes.md, about 8 min).
+detector-extremes:
+    bash scripts/detector-extremes.sh
+
 # The light-press detector's test, on sets rendered after the choice (docs/detector-light-presses.md): light presses on both renderers and the default distribution on both (the alternate at 960x540).
 test-detector-light:
     cargo run --release -p tactile -- synth visuotactile --count 3000 --seed 740 --press-mm 0.05,0.4 --out data/test-light-ref
