@@ -148,9 +148,11 @@ def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
     enc = root / "models/cae-synth"
     out = tmp_path / "position-sphere"
     s = tactile.train.regressor(spheres, ["x_mm", "y_mm"], encoder=enc, out=out,
-                                shapes=["sphere"], test_fraction=0.25)
+                                shapes=["sphere"], test_fraction=0.25, loss="l1")
     assert set(s["test_mae"]) == {"x_mm", "y_mm"}
-    assert json.loads((out / "regressor.json").read_text())["shapes"] == ["sphere"]
+    saved = json.loads((out / "regressor.json").read_text())
+    assert saved["shapes"] == ["sphere"]
+    assert saved["model"]["loss"] == "l1"
     head = tmp_path / "head"
     tactile.train.head(data, encoder=enc, out=head, folds=2, repeats=1, rotate_copies=1,
                        rotate_deg=4.0)
@@ -165,9 +167,12 @@ def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):
     out = tmp_path / "joint"
     s = tactile.train.cae(data, out, preprocess="lighting-compensated", optimizer="adam",
                           linear_latent=True, joint_targets=["depth_mm", "force_n"],
-                          joint_weight=10.0, joint_loss="l1", max_epochs=2, patience=2)
+                          joint_weight=10.0, joint_loss="l1", max_epochs=2, patience=2,
+                          first_kernel=5, shift=0.05)
     assert (out / "cae.json").is_file()
     record = json.loads((out / "training.json").read_text())
+    assert record["config"]["model"]["first_kernel"] == 5
+    assert record["config"]["shift"] == 0.05
     assert [t["name"] for t in record["config"]["joint"]["targets"]] == ["depth_mm", "force_n"]
     assert record["config"]["joint"]["loss"] == "l1"
     assert record["summary"]["best_val_metric"] is not None
@@ -176,6 +181,9 @@ def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):
     assert not (tmp_path / "bad" / "cae.json").exists()
     with pytest.raises(ValueError, match="joint_loss"):
         tactile.train.cae(data, tmp_path / "bad", joint_targets=["depth_mm"], joint_loss="l3")
+    assert not (tmp_path / "bad" / "cae.json").exists()
+    with pytest.raises(ValueError, match="augmentation shift"):
+        tactile.train.cae(data, tmp_path / "bad", shift=0.5)
     assert not (tmp_path / "bad" / "cae.json").exists()
 
 
