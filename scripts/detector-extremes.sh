@@ -6,7 +6,9 @@
 # scored by `tactile eval detector`; each error's ridge height (the label's
 # `ridge_mm`, tendon when >= 0.03 mm) is listed. Writes
 # docs/detector-extremes.md; about 8 minutes on 2 cores (the alternate
-# renderer draws 9 frames/s). DETECTOR=DIR scores another detector.
+# renderer draws 9 frames/s). DETECTOR=DIR scores another detector. The
+# sets (about 0.7 GB each, depth maps included) are removed once scored;
+# KEEP_SETS=1 keeps them in data/detector-extremes (a rerun then reuses them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p tactile
@@ -56,6 +58,7 @@ acc = 1 - (len(fp) + len(fn)) / len(rows)
 heights = lambda v: ", ".join(f"{x:.4f}" for x in v) or "-"
 print(f"| {name} ({what}) | {seed} | `{flags}` | {acc:.4f} | {len(fp)} | {len(fn)} | false: {heights(fp)}; missed: {heights(fn)} |")
 PY
+    [ -n "${KEEP_SETS:-}" ] || rm -rf "$dir" "$dir.frames.csv"
 done
 mv "$tmp" "$OUT"
 trap - EXIT
