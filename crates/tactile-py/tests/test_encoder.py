@@ -162,3 +162,21 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
         assert inside.sum() == 14, t
     with pytest.raises(ValueError, match="one of the two"):
         tactile.train.calibrate(model, data, calibration_from=root / "models/pose-surface")
+
+
+def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root):
+    """models/cae-surface (a 9 px first kernel) through burn and through its
+    ONNX export: the same features and estimates on real surface frames."""
+    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
+    src = real / "tactip331-surface"
+    with open(src / "labels.csv") as f:
+        rows = list(csv.DictReader(f))[:16]
+    frames = [tactile.read_grey(src / r["file"]) for r in rows]
+    burn = tactile.TactipEncoder(root / "models/cae-surface", "burn-flex")
+    ort = tactile.TactipEncoder(root / "models/cae-surface", "onnx")
+    assert burn.feature_count == 32 and burn.pin_side == 56
+    a, b = burn.encode(frames), ort.encode(frames)
+    assert np.abs(a - b).max() <= 1e-4 * max(1.0, np.abs(a).max())
+    ea, eb = burn.estimate(frames), ort.estimate(frames)
+    for t in ["depth_mm", "roll_deg", "pitch_deg", "shear_x_mm", "shear_y_mm", "shear_theta_deg"]:
+        assert np.allclose(ea[t], eb[t], atol=1e-3), t
