@@ -6,7 +6,8 @@
 # scored by `tactile eval detector`; each error's ridge height (the label's
 # `ridge_mm`, tendon when >= 0.03 mm) is listed. Writes
 # docs/detector-extremes.md; about 8 minutes on 2 cores (the alternate
-# renderer draws 9 frames/s). DETECTOR=DIR scores another detector. The
+# renderer draws 9 frames/s). DETECTOR=DIR scores another detector (and
+# OUT=FILE writes its table elsewhere). The
 # sets (about 0.7 GB each, depth maps included) are removed once scored;
 # KEEP_SETS=1 keeps them in data/detector-extremes (a rerun then reuses them).
 set -euo pipefail
@@ -30,8 +31,8 @@ ROWS=(
     "light-weak-alt|967|the same, alternate renderer|${WEAK[*]} --press-mm 0.05,0.4 --renderer alternate"
     "light-strong-ref|968|light presses on the widest, shallowest tendon, reference renderer|${STRONG[*]} --press-mm 0.05,0.4"
 )
-OUT=docs/detector-extremes.md
-tmp=$(mktemp docs/.detector-extremes.md.XXXXXX)
+OUT=${OUT:-docs/detector-extremes.md}
+tmp=$(mktemp "$(dirname "$OUT")/.detector-extremes.md.XXXXXX")
 trap 'rm -f "$tmp"' EXIT
 {
     echo "# The virtual-sensor detector at the extremes of each range"
