@@ -64,6 +64,15 @@ impl RegressionLoss {
     }
 }
 
+/// Widest convolution kernel side the networks' configs accept.
+pub const MAX_KERNEL_SIDE: usize = 15;
+
+/// Whether `side` is a kernel side of 1 to `max` that is odd, so its
+/// 'same' padding of `side / 2` is symmetric.
+pub fn is_odd_kernel_side(side: usize, max: usize) -> bool {
+    side % 2 == 1 && side <= max
+}
+
 /// `relu6(x + 3) / 6`, MobileNetV3's hard sigmoid.
 ///
 /// Written as `(relu(x + 3) - relu(x - 3)) / 6`: burn-onnx 0.22 exports

@@ -58,7 +58,7 @@ pub struct CaeConfig {
 pub const MAX_WIDTH: usize = 256;
 
 /// Widest first kernel side accepted.
-pub const MAX_FIRST_KERNEL: usize = 15;
+pub use tactile_burn::nn::MAX_KERNEL_SIDE as MAX_FIRST_KERNEL;
 
 /// Pin-image sides the autoencoder takes.
 pub const INPUT_SIDES: [usize; 3] = [28, 56, 112];
@@ -80,7 +80,7 @@ impl CaeConfig {
             )));
         }
         if let Some(k) = self.first_kernel
-            && (k == 0 || k > MAX_FIRST_KERNEL || k % 2 == 0)
+            && !tactile_burn::nn::is_odd_kernel_side(k, MAX_FIRST_KERNEL)
         {
             return Err(tactile_core::Error::Config(format!(
                 "the CAE's first kernel side must be odd, 1 to {MAX_FIRST_KERNEL}, got {k}"

@@ -1,6 +1,7 @@
 //! Training the autoencoder: Adadelta (paper A) or Adam, stable BCE, early
 //! stopping on the validation loss, best model kept, resumable.
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use burn::config::Config;
@@ -178,20 +179,22 @@ pub fn train(
         optim,
         (&train, val.len()),
         |m: &JointCae, batch, epoch| {
-            let drawn: Vec<PinImage> = batch
+            // Each drawn image is borrowed, and copied only to be shifted.
+            let drawn: Vec<Cow<PinImage>> = batch
                 .iter()
                 .map(|&i| {
                     let copies = turned.get(&i).map_or(&[][..], Vec::as_slice);
                     let mut rng = SampleRng::new(config.schedule.seed, epoch as u64, i as u64);
                     let pick = (rng.uniform() * (copies.len() + 1) as f64) as usize;
-                    let mut pin = copies.get(pick).unwrap_or(&pins.images[i]).clone();
+                    let mut pin = Cow::Borrowed(copies.get(pick).unwrap_or(&pins.images[i]));
                     if shift > 0.0 {
-                        tactile_preprocess::perturb::shift_pins(&mut pin.pixels, shift, &mut rng);
+                        let pixels = &mut pin.to_mut().pixels;
+                        tactile_preprocess::perturb::shift_pins(pixels, shift, &mut rng);
                     }
                     pin
                 })
                 .collect();
-            let x = batch_tensor(drawn.iter(), &ad);
+            let x = batch_tensor(drawn.iter().map(|p| p.as_ref()), &ad);
             let (logits, columns) = m.forward(x.clone());
             let loss = bce_with_logits(logits, x);
             Ok(match (columns, &labels) {

@@ -57,7 +57,7 @@ impl GradientNetConfig {
             || self
                 .kernels
                 .iter()
-                .any(|&k| k == 0 || k % 2 == 0 || k > MAX_KERNEL)
+                .any(|&k| !tactile_burn::nn::is_odd_kernel_side(k, MAX_KERNEL))
         {
             return bad(format!(
                 "sensor model: {} odd kernels of 1-{MAX_KERNEL} (one per layer, the output last), got {:?}",

@@ -23,7 +23,7 @@ pub const MAX_HIDDEN: usize = 4096;
 /// Most output columns.
 pub const MAX_OUTPUTS: usize = 64;
 /// Widest convolution kernel side.
-pub const MAX_KERNEL: usize = 15;
+pub use tactile_burn::nn::MAX_KERNEL_SIDE as MAX_KERNEL;
 
 /// Architecture of a [`PoseNet`].
 #[derive(Config, Debug, PartialEq)]
@@ -97,7 +97,8 @@ impl PoseNetConfig {
         }
         if let Some(k) = &self.kernels
             && (k.len() != self.widths.len()
-                || k.iter().any(|&k| k == 0 || k > MAX_KERNEL || k % 2 == 0))
+                || k.iter()
+                    .any(|&k| !tactile_burn::nn::is_odd_kernel_side(k, MAX_KERNEL)))
         {
             return bad(format!(
                 "pose network: one odd kernel side (1-{MAX_KERNEL}) per stage ({} stages), got {k:?}",
