@@ -2244,35 +2244,55 @@ fn a_calibrated_sensor_trains_and_runs_its_own_pipeline() {
     assert_eq!(rec["tendon"], false);
 }
 
-/// Per-target mean absolute error over the frames of `split` of
-/// `tactile predict`'s CSV `out` against `data`'s labels.
-fn split_mae(out: &Path, data: &Path, split: &str, targets: &[&str]) -> (Vec<f64>, usize) {
-    let text = std::fs::read_to_string(out).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let at = |n: &str| header.iter().position(|c| *c == n).unwrap();
+/// The real surface set's six targets, in `tactile predict`'s column order.
+const SURFACE_TARGETS: [&str; 6] = [
+    "depth_mm",
+    "roll_deg",
+    "pitch_deg",
+    "shear_x_mm",
+    "shear_y_mm",
+    "shear_theta_deg",
+];
+
+/// `tactile predict --model models/MODEL` over the real surface set: the
+/// set's folder and the CSV's text.
+fn predict_surface(model: &str) -> (std::path::PathBuf, String) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let data = shared_real().join("tactip331-surface");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("estimates.csv");
+    let (ok, msg) = tactile(&[
+        "predict",
+        "--model",
+        root.join("models").join(model).to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--show",
+        "0",
+    ]);
+    assert!(ok, "{msg}");
+    (data, std::fs::read_to_string(&out).unwrap())
+}
+
+/// Each frame's [`SURFACE_TARGETS`] from `data`'s labels, of the frames
+/// of `split` alone when one is given.
+fn surface_truth(data: &Path, split: Option<&str>) -> std::collections::HashMap<String, Vec<f64>> {
     let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
     let mut lab = labels.lines();
     let names: Vec<&str> = lab.next().unwrap().split(',').collect();
     let col = |n: &str| names.iter().position(|c| *c == n).unwrap();
-    let truth: std::collections::HashMap<String, Vec<f64>> = lab
-        .map(|l| l.split(',').collect::<Vec<_>>())
-        .filter(|c| c[col("split")] == split)
+    lab.map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|c| split.is_none_or(|s| c[col("split")] == s))
         .map(|c| {
-            let v = targets.iter().map(|t| c[col(t)].parse().unwrap()).collect();
+            let v = SURFACE_TARGETS
+                .iter()
+                .map(|t| c[col(t)].parse().unwrap())
+                .collect();
             (c[0].to_string(), v)
         })
-        .collect();
-    let (mut err, mut n) = (vec![0f64; targets.len()], 0usize);
-    for l in lines {
-        let c: Vec<&str> = l.split(',').collect();
-        let Some(y) = truth.get(c[0]) else { continue };
-        for (k, t) in targets.iter().enumerate() {
-            err[k] += (c[at(t)].parse::<f64>().unwrap() - y[k]).abs();
-        }
-        n += 1;
-    }
-    (err.iter().map(|e| e / n.max(1) as f64).collect(), n)
+        .collect()
 }
 
 #[test]
@@ -2280,40 +2300,28 @@ fn the_cae_route_on_surface_frames_it_never_saw_is_within_1_5x_of_the_best() {
     // models/cae-surface trained on the authors' `train` split alone; on
     // their `val`, each target within 1.5x of the best model's error there
     // (ms-k in docs/paper-a/surface.md: issue 34's "one encoder" goal).
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let data = shared_real().join("tactip331-surface");
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("estimates.csv");
-    let model = root.join("models/cae-surface");
-    let (ok, msg) = tactile(&[
-        "predict",
-        "--model",
-        model.to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--show",
-        "0",
-    ]);
-    assert!(ok, "{msg}");
-    let targets = [
-        "depth_mm",
-        "roll_deg",
-        "pitch_deg",
-        "shear_x_mm",
-        "shear_y_mm",
-        "shear_theta_deg",
-    ];
-    let (mae, n) = split_mae(&out, &data, "val", &targets);
+    let (data, text) = predict_surface("cae-surface");
+    let truth = surface_truth(&data, Some("val"));
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let at = |n: &str| header.iter().position(|c| *c == n).unwrap();
+    let (mut err, mut n) = ([0f64; 6], 0usize);
+    for l in lines {
+        let c: Vec<&str> = l.split(',').collect();
+        let Some(y) = truth.get(c[0]) else { continue };
+        for (k, t) in SURFACE_TARGETS.iter().enumerate() {
+            err[k] += (c[at(t)].parse::<f64>().unwrap() - y[k]).abs();
+        }
+        n += 1;
+    }
     assert_eq!(n, 2000);
     let best = [0.096, 0.578, 0.692, 0.555, 0.551, 1.285];
     for k in 0..6 {
+        let mae = err[k] / n as f64;
         assert!(
-            mae[k] <= 1.5 * best[k],
-            "{}: {} against the best model's {}",
-            targets[k],
-            mae[k],
+            mae <= 1.5 * best[k],
+            "{}: {mae} against the best model's {}",
+            SURFACE_TARGETS[k],
             best[k]
         );
     }
@@ -2321,49 +2329,14 @@ fn the_cae_route_on_surface_frames_it_never_saw_is_within_1_5x_of_the_best() {
 
 #[test]
 fn predict_writes_surface_pose_shear_and_their_deviations() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let data = shared_real().join("tactip331-surface");
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("estimates.csv");
-    let model = root.join("models/pose-surface");
-    let (ok, msg) = tactile(&[
-        "predict",
-        "--model",
-        model.to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--show",
-        "0",
-    ]);
-    assert!(ok, "{msg}");
-    const TARGETS: [&str; 6] = [
-        "depth_mm",
-        "roll_deg",
-        "pitch_deg",
-        "shear_x_mm",
-        "shear_y_mm",
-        "shear_theta_deg",
-    ];
-    let text = std::fs::read_to_string(&out).unwrap();
+    let (data, text) = predict_surface("pose-surface");
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let mut want = vec!["file".to_string()];
-    want.extend(TARGETS.iter().map(|t| t.to_string()));
-    want.extend(TARGETS.iter().map(|t| format!("{t}_std")));
+    want.extend(SURFACE_TARGETS.iter().map(|t| t.to_string()));
+    want.extend(SURFACE_TARGETS.iter().map(|t| format!("{t}_std")));
     assert_eq!(header, want);
-    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
-    let mut lab = labels.lines();
-    let names: Vec<&str> = lab.next().unwrap().split(',').collect();
-    let col = |n: &str| names.iter().position(|c| *c == n).unwrap();
-    let truth: std::collections::HashMap<String, Vec<f64>> = lab
-        .map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
-            let v = TARGETS.iter().map(|t| c[col(t)].parse().unwrap()).collect();
-            (c[0].to_string(), v)
-        })
-        .collect();
+    let truth = surface_truth(&data, None);
     let (mut err, mut inside, mut n) = ([0f64; 6], [0usize; 6], 0usize);
     for l in lines {
         let c: Vec<&str> = l.split(',').collect();
@@ -2383,7 +2356,11 @@ fn predict_writes_surface_pose_shear_and_their_deviations() {
     for k in 0..6 {
         let mae = err[k] / n as f64;
         let cover = inside[k] as f64 / n as f64;
-        assert!(mae < authors[k], "{}: {mae}", TARGETS[k]);
-        assert!((0.85..=1.0).contains(&cover), "{}: {cover}", TARGETS[k]);
+        assert!(mae < authors[k], "{}: {mae}", SURFACE_TARGETS[k]);
+        assert!(
+            (0.85..=1.0).contains(&cover),
+            "{}: {cover}",
+            SURFACE_TARGETS[k]
+        );
     }
 }
