@@ -191,6 +191,15 @@ test-detector-ensemble:
     cargo run --release -p tactile -- synth visuotactile --count 1200 --seed 753 --out data/test2-default-ref
     for d in test2-light-ref test2-light-alt test2-default-ref test2-default-alt-960; do cargo run --release -p tactile -- eval detector --model models/detector --data data/$d; done
 
+# Issue 33's "Also", tried and not shipped (docs/detector-light-presses.md): the light-press recipe's data plus light-press sets at the two corners of the tendon ranges (radius 1.5 with burial 4, radius 4 with burial 1), trained with the photometric augmentation, then put in the augmented member's place in the ensemble (light8 stays first, so its input profile gates the frames; the members' folded calibration is unfolded by `train ensemble`).
+train-detector-corners: synth-vt-detector-light
+    cargo run --release -p tactile -- synth visuotactile --sequences 100 --frames-per-sequence 25 --seed 1510 --press-mm 0.05,0.4 --tendon-radius-mm 1.5,1.5 --burial-mm 4,4 --out data/vt-train-corner1510
+    cargo run --release -p tactile -- synth visuotactile --sequences 100 --frames-per-sequence 25 --seed 1520 --press-mm 0.05,0.4 --tendon-radius-mm 4,4 --burial-mm 1,1 --out data/vt-train-corner1520
+    cargo run --release -p tactile -- train detector --data data/vt-train2 data/vt-train-onset data/vt-train-onset2 data/vt-train-light150 data/vt-train-light160 data/vt-train-light170 data/vt-train-light180 data/vt-train-corner1510 data/vt-train-corner1520 --out data/det/corner-aug --width 0.5 --input 80x60 --input-bits 16 --normalise-exposure --max-epochs 25 --patience 25 --soft-labels 0.6 --augment
+    rm -rf data/det/ensemble-corners && cargo run --release -p tactile -- train ensemble --members models/detector/member-0 models/detector/member-1 data/det/corner-aug --out data/det/ensemble-corners
+    for d in sel2-light-ref sel2-light-alt sel-default; do cargo run --release -p tactile -- eval detector --model data/det/ensemble-corners --data data/$d; done
+    KEEP_SETS=1 DETECTOR=data/det/ensemble-corners OUT=data/det/ensemble-corners-extremes.md bash scripts/detector-extremes.sh
+
 # The shipped detector at the extremes of each range of the sensor spec, both renderers (docs/detector-extremes.md, about 8 min).
 detector-extremes:
     bash scripts/detector-extremes.sh

@@ -92,12 +92,15 @@ impl Ensemble {
     /// moved into place; an existing `out` is left alone). `alike` refuses
     /// a member that does not read its input or give its output as the
     /// first one does; `notes` makes what the kind of model adds to the
-    /// ensemble's provenance from the members' configs (or refuses them).
+    /// ensemble's provenance from the members' configs (or refuses them);
+    /// `prepare` may rewrite each copied member folder before the ensemble
+    /// is moved into place (a detector unfolds its calibration there).
     pub fn assemble<A: Artifact>(
         members: &[PathBuf],
         out: &Path,
         alike: impl Fn(&A, &A, &Path) -> Result<()>,
         notes: impl FnOnce(&[A]) -> Result<serde_json::Value>,
+        prepare: impl Fn(&Path) -> Result<()>,
     ) -> Result<Self> {
         if let Some(m) = Self::count_problem(members.len()) {
             return Err(Error::Invalid(m));
@@ -122,6 +125,7 @@ impl Ensemble {
                 }
                 std::fs::copy(m.join(f), to.join(f)).map_err(|e| Error::io(m.join(f), e))?;
             }
+            prepare(&to)?;
             names.push(name);
         }
         let mut all_notes = serde_json::json!({

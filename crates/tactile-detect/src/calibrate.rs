@@ -153,6 +153,37 @@ pub fn calibrate(dir: &Path, sets: &[&DetectionSet]) -> Result<CalibrationFit> {
     Ok(fit)
 }
 
+/// Undo the logit scale that calibrations folded into the one detector in
+/// `dir` (their composed scale is in its notes), and drop the note: the
+/// network then gives the logits it was trained to. Nothing to do for a
+/// detector never calibrated.
+pub fn unfold_calibration(dir: &Path) -> tactile_core::Result<()> {
+    let device = DeviceKind::Flex.device();
+    let mut loaded = DetectorArtifact::load(dir, &device)?;
+    let Some(scale) = loaded
+        .artifact
+        .notes
+        .get("calibration")
+        .and_then(|c| c.get("scale"))
+        .and_then(|s| s.as_f64())
+    else {
+        return Ok(());
+    };
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(tactile_core::Error::Invalid(format!(
+            "{}: the calibration scale in its notes is {scale}; expected a finite positive scale",
+            dir.display()
+        )));
+    }
+    let centre = logit(loaded.artifact.threshold);
+    scale_logit(&mut loaded.model, 1.0 / scale, centre);
+    if let serde_json::Value::Object(notes) = &mut loaded.artifact.notes {
+        notes.remove("calibration");
+    }
+    loaded.artifact.save(&loaded.model, dir)?;
+    Ok(())
+}
+
 /// `z -> scale (z - centre) + centre` folded into the last layer.
 fn scale_logit(model: &mut Detector, scale: f64, centre: f64) {
     use burn::module::Param;

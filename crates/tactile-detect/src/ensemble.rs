@@ -167,13 +167,17 @@ impl DetectorEnsembleArtifact {
     }
 
     /// Copy the detector folders `members` into a new ensemble folder `out`
-    /// (staged; an existing `out` is left alone).
+    /// (staged; an existing `out` is left alone). A calibration folded into
+    /// a member (alone, or as part of an ensemble it is taken from) is
+    /// unfolded in its copy, so the ensemble averages the logits as the
+    /// members were trained and is calibrated again as a whole.
     pub fn assemble(members: &[std::path::PathBuf], out: &Path) -> Result<Ensemble> {
         Ok(Ensemble::assemble::<DetectorArtifact>(
             members,
             out,
             check_alike,
             |_| Ok(serde_json::json!({})),
+            crate::calibrate::unfold_calibration,
         )?)
     }
 
@@ -328,13 +332,36 @@ mod tests {
         let mut art = lead.clone();
         art.stats.mean = vec![0.40, 0.55, 0.62];
         art.stats.std = vec![0.18, 0.31, 0.24];
+        // Fresh weights were never calibrated.
+        if let serde_json::Value::Object(notes) = &mut art.notes {
+            notes.remove("calibration");
+        }
         let other = tmp.path().join("other");
         art.save(&art.model.init(&device), &other).unwrap();
         let ens = tmp.path().join("ensemble");
         DetectorEnsembleArtifact::assemble(&[shipped.clone(), other.clone()], &ens).unwrap();
 
         let load = |d: &Path| DetectorArtifact::load(d, &device).unwrap().model;
-        let (a, b) = (load(&shipped), load(&other));
+        // The shipped member carries its ensemble's calibration; the
+        // ensemble averages the logits as trained, so compare with a copy
+        // whose calibration is unfolded, which is the calibrated logit
+        // mapped back through the noted scale.
+        let scale = lead.notes["calibration"]["scale"].as_f64();
+        let unfolded = tmp.path().join("unfolded");
+        std::fs::create_dir_all(&unfolded).unwrap();
+        for f in ["detector.json", "detector.bpk"] {
+            std::fs::copy(shipped.join(f), unfolded.join(f)).unwrap();
+        }
+        crate::calibrate::unfold_calibration(&unfolded).unwrap();
+        assert!(
+            read_config(&unfolded)
+                .unwrap()
+                .notes
+                .get("calibration")
+                .is_none()
+        );
+        let (a, b) = (load(&unfolded), load(&other));
+        let calibrated = load(&shipped);
         let e = DetectorEnsembleArtifact::load(&ens, &device).unwrap();
         assert_eq!(e.model.members.len(), 2);
         let size = lead.model.input_size;
@@ -344,12 +371,17 @@ mod tests {
             )
             .unwrap();
             let img = lead.model.frame_image(&frame).unwrap();
-            let za = logits(
-                &a,
-                lead.model.network_input(img.clone(), &lead.stats).unwrap(),
-                size,
-                &device,
-            );
+            let xa = lead.model.network_input(img.clone(), &lead.stats).unwrap();
+            let za = logits(&a, xa.clone(), size, &device);
+            if let Some(scale) = scale {
+                // Threshold 0.5: the calibration's fixed point is logit 0.
+                let zc = logits(&calibrated, xa, size, &device)[0] as f64;
+                assert!(
+                    (za[0] as f64 - zc / scale).abs() < 1e-3 * (1.0 + za[0].abs() as f64),
+                    "unfolded {} vs calibrated {zc} / {scale}",
+                    za[0]
+                );
+            }
             let zb = logits(
                 &b,
                 art.model.network_input(img.clone(), &art.stats).unwrap(),
