@@ -158,15 +158,9 @@ pub fn calibrate(dir: &Path, sets: &[&DetectionSet]) -> Result<CalibrationFit> {
 /// network then gives the logits it was trained to. Nothing to do for a
 /// detector never calibrated.
 pub fn unfold_calibration(dir: &Path) -> tactile_core::Result<()> {
-    let device = DeviceKind::Flex.device();
-    let mut loaded = DetectorArtifact::load(dir, &device)?;
-    let Some(scale) = loaded
-        .artifact
-        .notes
-        .get("calibration")
-        .and_then(|c| c.get("scale"))
-        .and_then(|s| s.as_f64())
-    else {
+    // The config alone says whether there is anything to undo; the
+    // weights are read only then.
+    let Some(scale) = noted_scale(&DetectorArtifact::read(dir)?.notes) else {
         return Ok(());
     };
     if !(scale.is_finite() && scale > 0.0) {
@@ -175,6 +169,7 @@ pub fn unfold_calibration(dir: &Path) -> tactile_core::Result<()> {
             dir.display()
         )));
     }
+    let mut loaded = DetectorArtifact::load(dir, &DeviceKind::Flex.device())?;
     let centre = logit(loaded.artifact.threshold);
     scale_logit(&mut loaded.model, 1.0 / scale, centre);
     if let serde_json::Value::Object(notes) = &mut loaded.artifact.notes {
@@ -196,15 +191,20 @@ fn scale_logit(model: &mut Detector, scale: f64, centre: f64) {
     }
 }
 
+/// The logit scale the calibrations recorded in `notes` folded in, composed
+/// (`None`: never calibrated).
+fn noted_scale(notes: &serde_json::Value) -> Option<f64> {
+    notes
+        .get("calibration")
+        .and_then(|c| c.get("scale"))
+        .and_then(|s| s.as_f64())
+}
+
 /// Record the fit in a model's notes, its scale composed with any earlier
 /// calibration's.
 fn note_calibration(notes: &mut serde_json::Value, fit: &CalibrationFit) {
+    let previous = noted_scale(notes).unwrap_or(1.0);
     if let serde_json::Value::Object(notes) = notes {
-        let previous = notes
-            .get("calibration")
-            .and_then(|c| c.get("scale"))
-            .and_then(|s| s.as_f64())
-            .unwrap_or(1.0);
         notes.insert(
             "calibration".into(),
             serde_json::json!({
@@ -231,6 +231,51 @@ pub fn calibrate_on(dir: &Path, datasets: &[Dataset]) -> Result<CalibrationFit> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A bad scale in a member's notes is refused, naming the folder, and
+    /// the folder is left as it was; a member never calibrated is left
+    /// byte for byte.
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn unfolding_refuses_a_bad_noted_scale_and_leaves_an_uncalibrated_member_alone() {
+        let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/detector/member-0");
+        let tmp = tempfile::tempdir().unwrap();
+        let files = [
+            DetectorArtifact::CONFIG_FILE,
+            DetectorArtifact::WEIGHTS_FILE,
+        ];
+        let copy = |name: &str, scale: Option<f64>| {
+            let dir = tmp.path().join(name);
+            std::fs::create_dir_all(&dir).unwrap();
+            for f in files {
+                std::fs::copy(shipped.join(f), dir.join(f)).unwrap();
+            }
+            let path = dir.join(DetectorArtifact::CONFIG_FILE);
+            let mut v: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            match scale {
+                Some(s) => v["notes"]["calibration"] = serde_json::json!({ "scale": s }),
+                None => {
+                    v["notes"].as_object_mut().unwrap().remove("calibration");
+                }
+            }
+            std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+            dir
+        };
+        let bytes = |dir: &Path| files.map(|f| std::fs::read(dir.join(f)).unwrap());
+        for bad in [-2.0, 0.0] {
+            let dir = copy("bad", Some(bad));
+            let before = bytes(&dir);
+            let err = unfold_calibration(&dir).unwrap_err().to_string();
+            assert!(err.contains(&dir.display().to_string()), "{err}");
+            assert!(err.contains("calibration scale"), "{err}");
+            assert_eq!(bytes(&dir), before);
+        }
+        let plain = copy("plain", None);
+        let before = bytes(&plain);
+        unfold_calibration(&plain).unwrap();
+        assert_eq!(bytes(&plain), before);
+    }
 
     #[test]
     fn an_under_confident_detector_is_sharpened_and_its_decisions_kept() {

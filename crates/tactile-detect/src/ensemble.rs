@@ -349,7 +349,10 @@ mod tests {
         let scale = lead.notes["calibration"]["scale"].as_f64();
         let unfolded = tmp.path().join("unfolded");
         std::fs::create_dir_all(&unfolded).unwrap();
-        for f in ["detector.json", "detector.bpk"] {
+        for f in [
+            DetectorArtifact::CONFIG_FILE,
+            DetectorArtifact::WEIGHTS_FILE,
+        ] {
             std::fs::copy(shipped.join(f), unfolded.join(f)).unwrap();
         }
         crate::calibrate::unfold_calibration(&unfolded).unwrap();
