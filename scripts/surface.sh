@@ -4,7 +4,7 @@
 # the shipped models/pose-surface (the recipe chosen, on all 8,000 frames)
 # and models/cae-surface (the validated CAE route), each step timed (data/surface/times.json).
 # `PAPER_A_ONLY='surface|surface_long|surface_compare|shared' bash scripts/paper-a.sh`
-# then scores them into docs/paper-a.md. About 7 hours on 2 cores (the two long-schedule networks about 45 and 35 minutes).
+# then scores them into docs/paper-a.md. About 7 hours on 2 cores (the two long-schedule networks about 45 and 25 minutes).
 # SURFACE_STEPS='p128 ship-pose' runs only the named steps.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -61,27 +61,28 @@ run ms bash -c "rm -rf data/surface/ms && '$BIN' train ensemble --members data/s
 # camera never does, so they must read pins against each other rather than
 # against the image. The pair, averaged (`ms-k`), is the recipe shipped.
 K7=(--input-px 64 --widths 16,32,64,64 --kernels 7,5,3,3 --shift 0.025)
-SHORT=(--max-epochs 25 --patience 40 --lr-decay 0.92)
 K9=(--input-px 64 --widths 16,32,64,64 --kernels 9,7,5,3 --shift 0.05)
-run p64-k7 "$BIN" train pose --data "$DATA" --out data/surface/p64-k7 "${POSE[@]}" "${K7[@]}" "${SHORT[@]}"
-run p64-k9 "$BIN" train pose --data "$DATA" --out data/surface/p64-k9 "${POSE[@]}" "${K9[@]}" "${SHORT[@]}"
-for m in p64-k7 p64-k9; do
-    run "$m-calibrate" "$BIN" train calibrate --model "data/surface/$m" --data "$DATA" --split val
-done
-run ms-k bash -c "rm -rf data/surface/ms-k && '$BIN' train ensemble --members data/surface/p64-k7 data/surface/p64-k9 --out data/surface/ms-k \
-    && '$BIN' train calibrate --model data/surface/ms-k --data '$DATA' --split val"
+SHORT=(--max-epochs 25 --patience 40 --lr-decay 0.92)
+# The pair on one schedule: both networks, each calibrated on `val`, then
+# averaged into ms-k<suffix> and calibrated again as a whole.
+wide_pair() {
+    local suffix=$1 m
+    shift
+    run "p64-k7$suffix" "$BIN" train pose --data "$DATA" --out "data/surface/p64-k7$suffix" "${POSE[@]}" "${K7[@]}" "$@"
+    run "p64-k9$suffix" "$BIN" train pose --data "$DATA" --out "data/surface/p64-k9$suffix" "${POSE[@]}" "${K9[@]}" "$@"
+    for m in "p64-k7$suffix" "p64-k9$suffix"; do
+        run "$m-calibrate" "$BIN" train calibrate --model "data/surface/$m" --data "$DATA" --split val
+    done
+    run "ms-k$suffix" bash -c "rm -rf data/surface/ms-k$suffix && '$BIN' train ensemble --members data/surface/p64-k7$suffix data/surface/p64-k9$suffix --out data/surface/ms-k$suffix \
+        && '$BIN' train calibrate --model data/surface/ms-k$suffix --data '$DATA' --split val"
+}
+wide_pair "" "${SHORT[@]}"
 # The same pair on a longer schedule: both networks were still improving
 # at epoch 25 (best epochs 22 and 24 of the shipped members), so 60 epochs
 # with the learning rate decaying 0.96 a epoch (ending near the 25-epoch
 # schedule's last rate).
 LONG=(--max-epochs 60 --patience 60 --lr-decay 0.96)
-run p64-k7-long "$BIN" train pose --data "$DATA" --out data/surface/p64-k7-long "${POSE[@]}" "${K7[@]}" "${LONG[@]}"
-run p64-k9-long "$BIN" train pose --data "$DATA" --out data/surface/p64-k9-long "${POSE[@]}" "${K9[@]}" "${LONG[@]}"
-for m in p64-k7-long p64-k9-long; do
-    run "$m-calibrate" "$BIN" train calibrate --model "data/surface/$m" --data "$DATA" --split val
-done
-run ms-k-long bash -c "rm -rf data/surface/ms-k-long && '$BIN' train ensemble --members data/surface/p64-k7-long data/surface/p64-k9-long --out data/surface/ms-k-long \
-    && '$BIN' train calibrate --model data/surface/ms-k-long --data '$DATA' --split val"
+wide_pair -long "${LONG[@]}"
 
 # The CAE route: 56 px pin images through one stem block to Table I's 28 px
 # encoder, 32 features, trained jointly with a head on the six targets (L1,
