@@ -231,7 +231,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
         echo
     fi
     if [ -f "$OUT/surface-long.md" ]; then
-        echo "### The wide-kernel pair on a longer schedule"
+        echo "### The longer schedule: the wide-kernel pair and the shipped models"
         echo
         [ -f docs/paper-a-surface-long.md ] && cat docs/paper-a-surface-long.md && echo
         echo "\`${CMD[surface_long]}\`"
