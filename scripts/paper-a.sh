@@ -115,7 +115,7 @@ surface_step() {
         KEPT[$name]=1
     fi
 }
-# The CAE route's candidates (models/cae-surface is cae56-k9's): the
+# The CAE route's candidates (models/cae-surface is cae56-k9-long's): the
 # narrow-kernel encoder before it, and the 7 px one.
 surface_step surface "$OUT/surface.md" data/surface/ms-k data/surface/p64-k9 data/surface/p64-k7 data/surface/ms \
     data/surface/p128 data/surface/p96 data/surface/p64 data/surface/cae56-k7 data/surface/cae56 \
@@ -227,7 +227,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     body "$OUT/surface.md" | sed 's#](surface#](paper-a/surface#'
     echo
     if [ -n "${KEPT[surface]:-}" ]; then
-        echo "This table is kept from its last run (its candidates are no longer in data/surface): its pose-surface and cae-surface rows are the models shipped then, the 25-epoch pair and the 40-epoch CAE. The models shipped now are scored in the next section's table. \`git log docs/paper-a/surface.md\` says when each table was made."
+        echo "This table is kept from its last run (its candidates are no longer in data/surface): its pose-surface and cae-surface rows are the models shipped when it was made (here the 25-epoch pair and the 40-epoch CAE, the prose above says). The models shipped now are scored in the next section's table. \`git log docs/paper-a/surface.md\` says when each table was made."
         echo
     fi
     if [ -f "$OUT/surface-long.md" ]; then
