@@ -125,7 +125,11 @@ run cae56-k9-long-mlp "$BIN" train regressor --encoder data/surface/cae56-k9-lon
 # The shipped pose model: the wide-kernel pair's long-schedule recipe on
 # every frame of both splits (each validated member was best at its 59th
 # of 60 epochs, so every epoch is kept); each member keeps its validated
-# run's calibration, the ensemble the validated ensemble's.
+# run's calibration, the ensemble the validated ensemble's. The pair's
+# suffix and schedule, and the CAE route's folder, say what is shipped.
+SHIP_PAIR=-long
+SHIP_SCHEDULE=("${LONG[@]}")
+SHIP_CAE=data/surface/cae56-k9-long
 ship() {
     local dir=$1 staged=$2
     rm -rf "models/.$dir-old" && [ -d "models/$dir" ] && mv "models/$dir" "models/.$dir-old"
@@ -135,19 +139,19 @@ all() {
     local name=$1
     shift
     rm -rf "data/surface/pose-all-$name" && "$BIN" train pose --data "$DATA" --out "data/surface/pose-all-$name" "${POSE[@]}" \
-        "$@" --every-split --all-rows --calibration-from "data/surface/p$name-long" \
+        "$@" --every-split --all-rows --calibration-from "data/surface/p$name$SHIP_PAIR" \
         && rm -rf "data/surface/pose-all-$name/checkpoint"
 }
-run ship-pose-64-k7 all 64-k7 "${K7[@]}" "${LONG[@]}"
-run ship-pose-64-k9 all 64-k9 "${K9[@]}" "${LONG[@]}"
+run ship-pose-64-k7 all 64-k7 "${K7[@]}" "${SHIP_SCHEDULE[@]}"
+run ship-pose-64-k9 all 64-k9 "${K9[@]}" "${SHIP_SCHEDULE[@]}"
 run ship-pose bash -c "rm -rf data/surface/pose-all && '$BIN' train ensemble \
     --members data/surface/pose-all-64-k7 data/surface/pose-all-64-k9 --out data/surface/pose-all \
-    && '$BIN' train calibrate --model data/surface/pose-all --calibration-from data/surface/ms-k-long"
+    && '$BIN' train calibrate --model data/surface/pose-all --calibration-from data/surface/ms-k$SHIP_PAIR"
 [ -f data/surface/pose-all/ensemble.json ] && ship pose-surface data/surface/pose-all
 # The CAE route is shipped as validated: trained on `train` alone, so its
 # scores on `val` are on frames it never saw.
 run ship-cae bash -c "rm -rf models/.cae-surface-new && mkdir -p models/.cae-surface-new/pose \
-    && cp data/surface/cae56-k9-long/cae.* data/surface/cae56-k9-long/curves.* data/surface/cae56-k9-long/training.json models/.cae-surface-new/ \
-    && cp data/surface/cae56-k9-long/pose/regressor.* models/.cae-surface-new/pose/"
+    && cp $SHIP_CAE/cae.* $SHIP_CAE/curves.* $SHIP_CAE/training.json models/.cae-surface-new/ \
+    && cp $SHIP_CAE/pose/regressor.* models/.cae-surface-new/pose/"
 [ -f models/.cae-surface-new/pose/regressor.json ] && ship cae-surface models/.cae-surface-new
 echo "times: $(cat "$TIMES")" >&2
