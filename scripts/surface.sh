@@ -121,6 +121,19 @@ run cae56-k9-long "$BIN" train cae --data "$DATA" --out data/surface/cae56-k9-lo
     --first-kernel 9 --shift 0.05 --lr-decay 0.965 --max-epochs 70 --patience 70
 run cae56-k9-long-mlp "$BIN" train regressor --encoder data/surface/cae56-k9-long --data "$DATA" --targets $T \
     --hidden 512,256,128 --loss l1 --out data/surface/cae56-k9-long/pose
+# One encoder for the edge and the surface tasks: the CAE recipe trained
+# on both sets at once. The edge set (every frame, as models/cae-edge
+# trained) is read at the same 56 px through its own preprocessing, with
+# its own head on x, theta and depth and no shift (x is where the edge
+# lies in the image). The long run's schedule (70 epochs, decay 0.965).
+# Scored against the per-task encoders in the shared-encoder table.
+EDGE_TASK=data/surface/also-edge-56.json
+cat >"$EDGE_TASK" <<JSON
+[{"data": "$REAL/tactip127-edge", "preprocess": "configs/preprocess/tactip127-edge-area-56.json",
+  "joint_targets": ["x_mm", "theta_deg:180", "depth_mm"], "shift": 0}]
+JSON
+run cae56-edge-surface "$BIN" train cae --data "$DATA" --out data/surface/cae56-edge-surface "${CAE[@]}" --val-fraction 0.1 \
+    --first-kernel 9 --shift 0.05 --lr-decay 0.965 --max-epochs 70 --patience 70 --also-tasks "$EDGE_TASK"
 
 # The shipped pose model: the wide-kernel pair's long-schedule recipe on
 # every frame of both splits (each validated member was best at its 59th

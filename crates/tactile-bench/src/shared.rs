@@ -75,12 +75,22 @@ pub fn read_tasks(path: &Path) -> Result<Vec<Task>> {
 }
 
 /// Whether an encoder trained on `ds` (its notes) saw the test frames: it
-/// trained on that folder, left no test frames out, and the folder has no
-/// `split` column keeping them apart.
+/// trained on that folder (its main dataset or a further one), left no
+/// test frames out, and the folder has no `split` column keeping them
+/// apart.
 fn saw_test(art: &CaeArtifact, ds: &Dataset) -> bool {
-    let trained_on = art.notes.get("trained_on").and_then(|v| v.as_str());
-    let same = trained_on
-        .is_some_and(|t| std::fs::canonicalize(t).ok() == std::fs::canonicalize(&ds.root).ok());
+    let here = std::fs::canonicalize(&ds.root).ok();
+    let main = art.notes.get("trained_on").into_iter();
+    let further = art
+        .notes
+        .get("also_trained_on")
+        .and_then(|v| v.as_array())
+        .into_iter()
+        .flatten();
+    let same = main
+        .chain(further)
+        .filter_map(|v| v.as_str())
+        .any(|t| here.is_some() && std::fs::canonicalize(t).ok() == here);
     let excluded = art.notes.get("excluded_test").is_some_and(|v| !v.is_null());
     same && !excluded && ds.split_indices("train").is_none()
 }
@@ -315,6 +325,36 @@ mod tests {
             encoder: encoder.into(),
             values: values.iter().map(|(m, v)| (m.to_string(), *v)).collect(),
             saw_test_frames: false,
+        }
+    }
+
+    #[test]
+    fn an_encoder_saw_the_test_frames_of_its_main_or_further_datasets() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/virtual-tactip");
+        let ds = Dataset::open(&root).unwrap();
+        let here = root.display().to_string();
+        let art = |notes: serde_json::Value| CaeArtifact {
+            model: tactile_cae::CaeConfig::new(),
+            preprocess: PreprocessConfig::binary_frames(),
+            notes,
+        };
+        for (notes, saw) in [
+            (serde_json::json!({"trained_on": here}), true),
+            (
+                serde_json::json!({"trained_on": "elsewhere", "also_trained_on": [here]}),
+                true,
+            ),
+            (
+                serde_json::json!({"trained_on": "elsewhere", "also_trained_on": ["nowhere"]}),
+                false,
+            ),
+            (
+                serde_json::json!({"trained_on": "elsewhere", "also_trained_on": [here], "excluded_test": {"fraction": 0.2}}),
+                false,
+            ),
+            (serde_json::json!({}), false),
+        ] {
+            assert_eq!(saw_test(&art(notes.clone()), &ds), saw, "{notes}");
         }
     }
 

@@ -108,38 +108,48 @@ impl JointTargets {
     }
 }
 
-/// The autoencoder with an optional head on its features.
+/// The autoencoder with a head on its features per task that has joint
+/// targets (none: reconstruction only).
 #[derive(Module, Debug)]
 pub struct JointCae {
     /// The autoencoder (what is saved).
     pub cae: Cae,
-    /// Features to hidden units, hidden units to standardised columns.
-    pub head: Option<(Linear, Linear)>,
+    /// Per head, features to hidden units, hidden units to standardised
+    /// columns.
+    pub heads: Vec<(Linear, Linear)>,
 }
 
 impl JointCae {
-    /// `cae` with a fresh head for `joint` on its `features`.
-    pub fn new(cae: Cae, joint: Option<&JointTargets>, features: usize, device: &Device) -> Self {
-        let head = joint.map(|j| {
-            (
-                LinearConfig::new(features, j.hidden).init(device),
-                LinearConfig::new(j.hidden, j.columns()).init(device),
-            )
-        });
-        Self { cae, head }
+    /// `cae` with a fresh head for each of `joints` on its `features`.
+    pub fn new(cae: Cae, joints: &[&JointTargets], features: usize, device: &Device) -> Self {
+        let heads = joints
+            .iter()
+            .map(|j| {
+                (
+                    LinearConfig::new(features, j.hidden).init(device),
+                    LinearConfig::new(j.hidden, j.columns()).init(device),
+                )
+            })
+            .collect();
+        Self { cae, heads }
     }
 
-    /// Reconstruction logits and, with a head, its standardised columns.
+    /// Reconstruction logits and each head's standardised columns.
     ///
     /// # Shapes
     /// - `x`: `[N, 1, 28, 28]`
-    /// - output: `[N, 1, 28, 28]` and `[N, K]`
-    pub fn forward(&self, x: Tensor<4>) -> (Tensor<4>, Option<Tensor<2>>) {
+    /// - output: `[N, 1, 28, 28]` and, per head, `[N, K]`
+    pub fn forward(&self, x: Tensor<4>) -> (Tensor<4>, Vec<Tensor<2>>) {
         let z = self.cae.encoder.latent(x);
-        let columns = self
-            .head
-            .as_ref()
-            .map(|(a, b)| b.forward(relu(a.forward(hwc_flatten(z.clone())))));
+        let columns = if self.heads.is_empty() {
+            Vec::new()
+        } else {
+            let flat = hwc_flatten(z.clone());
+            self.heads
+                .iter()
+                .map(|(a, b)| b.forward(relu(a.forward(flat.clone()))))
+                .collect()
+        };
         (self.cae.decoder.forward_latent(z), columns)
     }
 }
@@ -192,6 +202,23 @@ impl JointLabels {
             .map(|r| r.map(|r| scaler.apply(&encode(&joint.targets, &[r]))))
             .collect();
         Ok(Self { columns, scaler })
+    }
+
+    /// These labels as rows `offset..` of `total` rows, the others
+    /// unlabelled (a dataset's rows among several datasets').
+    pub fn placed(mut self, offset: usize, total: usize) -> Self {
+        let mut columns = vec![None; offset];
+        columns.append(&mut self.columns);
+        columns.resize(total.max(columns.len()), None);
+        Self {
+            columns,
+            scaler: self.scaler,
+        }
+    }
+
+    /// How many of `rows` are labelled.
+    pub fn labelled(&self, rows: &[usize]) -> usize {
+        rows.iter().filter(|&&i| self.columns[i].is_some()).count()
     }
 
     /// Mean `loss` of `predicted` columns against the labels of `rows`

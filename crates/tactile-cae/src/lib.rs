@@ -16,6 +16,7 @@ pub mod inference;
 pub mod joint;
 pub mod model;
 pub mod options;
+pub mod tasks;
 pub mod training;
 
 pub use artifact::CaeArtifact;

@@ -3,7 +3,7 @@
 //! keyword arguments, and [`CaeOptions::config`] turns either into the one
 //! training config.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use tactile_burn::options::TestHoldoutArgs;
@@ -13,6 +13,7 @@ use tactile_preprocess::PreprocessConfig;
 use tactile_preprocess::perturb::{DEFAULT_ROTATION_DEG, RotationAugment};
 
 use crate::joint::JointArgs;
+use crate::tasks::read_extra_tasks;
 use crate::{CaeConfig, CaeTrainingConfig, Optimizer, Result};
 
 tactile_burn::schedule_args!(CaeSchedule, CaeTrainingConfig::new().schedule);
@@ -81,6 +82,10 @@ pub struct CaeOptions {
     #[command(flatten)]
     #[serde(flatten)]
     pub joint: JointArgs,
+    /// One encoder for several datasets: a JSON list of further datasets trained on beside --data, each {"data", "preprocess", "joint_targets", "shift"} (its head takes the --joint-* settings).
+    #[arg(long)]
+    #[serde(default)]
+    pub also_tasks: Option<PathBuf>,
 }
 
 fn default_first_kernel() -> usize {
@@ -103,6 +108,16 @@ impl CaeOptions {
         .with_first_kernel((self.first_kernel != 3).then_some(self.first_kernel));
         model.check()?;
         tactile_preprocess::perturb::check_shift(self.shift)?;
+        let also = match &self.also_tasks {
+            Some(path) => read_extra_tasks(
+                path,
+                model.input_px,
+                self.joint.joint_weight,
+                self.joint.joint_hidden,
+                self.joint.joint_loss,
+            )?,
+            None => Vec::new(),
+        };
         let s = &self.schedule;
         Ok(CaeTrainingConfig::new()
             .with_model(model)
@@ -113,7 +128,8 @@ impl CaeOptions {
             .with_holdout(self.holdout.holdout())
             .with_rotation(self.rotate.augment(s.seed))
             .with_joint(self.joint.config()?)
-            .with_shift((self.shift != 0.0).then_some(self.shift)))
+            .with_shift((self.shift != 0.0).then_some(self.shift))
+            .with_also(also))
     }
 
     /// Train on `data` into `out` as these options say.

@@ -2,12 +2,13 @@
 //! stopping on the validation loss, best model kept, resumable.
 
 use std::borrow::Cow;
+use std::collections::HashMap;
 use std::path::Path;
 
 use burn::config::Config;
 use burn::optim::ModuleOptimizer;
 use serde::{Deserialize, Serialize};
-use tactile_burn::nn::bce_with_logits;
+use tactile_burn::nn::{RegressionLoss, bce_with_logits};
 use tactile_burn::optim::AdadeltaConfig;
 use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
@@ -21,6 +22,7 @@ use crate::artifact::CaeArtifact;
 use crate::data::{PinSet, batch_tensor};
 use crate::joint::{JointCae, JointLabels, JointTargets};
 use crate::model::CaeConfig;
+use crate::tasks::{ExtraTask, MAX_EXTRA_TASKS};
 
 /// The optimiser.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
@@ -85,6 +87,80 @@ pub struct CaeTrainingConfig {
     /// [`tactile_preprocess::perturb::shift_pins`]); `None`: no shift.
     #[config(default = "None")]
     pub shift: Option<f64>,
+    /// Further datasets trained on beside the main one, each with its own
+    /// preprocessing, head and shift (see [`crate::tasks`]).
+    #[config(default = "Vec::new()")]
+    pub also: Vec<ExtraTask>,
+}
+
+/// One dataset of a run and how its frames are read.
+struct Source<'a> {
+    ds: &'a Dataset,
+    preprocess: &'a PreprocessConfig,
+    joint: Option<&'a JointTargets>,
+    shift: f64,
+}
+
+/// Every dataset's frames as one set of rows: the pin images, the
+/// training and validation rows, each row's shift, each head's labels
+/// (placed at its dataset's rows) and turned copies.
+struct Rows {
+    pins: PinSet,
+    train: Vec<usize>,
+    val: Vec<usize>,
+    shift: Vec<f64>,
+    labels: Vec<JointLabels>,
+    turned: HashMap<usize, Vec<PinImage>>,
+}
+
+impl Rows {
+    fn read(config: &CaeTrainingConfig, sources: &[Source]) -> Result<Self> {
+        let total: usize = sources.iter().map(|s| s.ds.len()).sum();
+        let mut rows = Rows {
+            pins: PinSet::from_images(Vec::with_capacity(total)),
+            train: Vec::new(),
+            val: Vec::new(),
+            shift: Vec::with_capacity(total),
+            labels: Vec::new(),
+            turned: HashMap::new(),
+        };
+        for s in sources {
+            let offset = rows.pins.len();
+            let usable = s.ds.training_rows(config.holdout)?;
+            let (train, val) = hold_out(usable, config.val_fraction, config.schedule.seed)
+                .map_err(|e| {
+                    tactile_core::Error::dataset(s.ds.labels_path(), None, e.to_string())
+                })?;
+            tactile_core::note!(
+                "preprocessing {} frames of {} ({} train, {} validation)",
+                s.ds.len(),
+                s.ds.root.display(),
+                train.len(),
+                val.len()
+            );
+            let pins = PinSet::from_dataset(s.ds, s.preprocess)?;
+            if let Some(j) = s.joint {
+                rows.labels
+                    .push(JointLabels::read(s.ds, j, &train)?.placed(offset, total));
+            }
+            // Per training row, its turned copies (none without augmentation).
+            if let Some(aug) = &config.rotation {
+                tactile_core::note!(
+                    "turning {} training frames {} times",
+                    train.len(),
+                    aug.copies
+                );
+                let copies = aug.dataset_pins(s.ds, &train, s.preprocess)?;
+                rows.turned
+                    .extend(train.iter().map(|&i| i + offset).zip(copies));
+            }
+            rows.shift.extend(std::iter::repeat_n(s.shift, pins.len()));
+            rows.pins.images.extend(pins.images);
+            rows.train.extend(train.iter().map(|&i| i + offset));
+            rows.val.extend(val.iter().map(|&i| i + offset));
+        }
+        Ok(rows)
+    }
 }
 
 /// Train on the training rows of `data` (see
@@ -107,42 +183,60 @@ pub fn train(
     }
     let shift = config.shift.unwrap_or(0.0);
     tactile_preprocess::perturb::check_shift(shift)?;
-    tactile_core::dataset::check_output_dir(out, &[data])?;
-    let rows = data.training_rows(config.holdout)?;
-    let (train, val) = hold_out(rows, config.val_fraction, config.schedule.seed)
-        .map_err(|e| tactile_core::Error::dataset(data.labels_path(), None, e.to_string()))?;
-    tactile_core::note!(
-        "preprocessing {} frames ({} train, {} validation)",
-        data.len(),
-        train.len(),
-        val.len()
-    );
-    let pins = PinSet::from_dataset(data, &config.preprocess)?;
-    let labels = match &config.joint {
-        Some(j) => Some(JointLabels::read(data, j, &train)?),
-        None => None,
-    };
-    // Per training row, its turned copies (none without augmentation).
-    let turned: std::collections::HashMap<usize, Vec<PinImage>> = match &config.rotation {
-        Some(aug) => {
-            tactile_core::note!(
-                "turning {} training frames {} times",
-                train.len(),
-                aug.copies
-            );
-            let copies = aug.dataset_pins(data, &train, &config.preprocess)?;
-            train.iter().copied().zip(copies).collect()
-        }
-        None => Default::default(),
-    };
+    if config.also.len() > MAX_EXTRA_TASKS {
+        return Err(tactile_core::Error::Config(format!(
+            "1 to {MAX_EXTRA_TASKS} further datasets, got {}",
+            config.also.len()
+        ))
+        .into());
+    }
+    for t in &config.also {
+        t.check(config.model.input_px)?;
+    }
+    let extra = config
+        .also
+        .iter()
+        .map(|t| Dataset::open(&t.data))
+        .collect::<tactile_core::Result<Vec<_>>>()?;
+    let sources: Vec<Source> = std::iter::once(Source {
+        ds: data,
+        preprocess: &config.preprocess,
+        joint: config.joint.as_ref(),
+        shift,
+    })
+    .chain(config.also.iter().zip(&extra).map(|(t, ds)| Source {
+        ds,
+        preprocess: &t.preprocess,
+        joint: t.joint.as_ref(),
+        shift: t.shift.unwrap_or(0.0),
+    }))
+    .collect();
+    let datasets: Vec<&Dataset> = sources.iter().map(|s| s.ds).collect();
+    tactile_core::dataset::check_output_dir(out, &datasets)?;
+    let Rows {
+        pins,
+        train,
+        val,
+        shift: row_shift,
+        labels,
+        turned,
+    } = Rows::read(config, &sources)?;
+    let joints: Vec<&JointTargets> = sources.iter().filter_map(|s| s.joint).collect();
+    let mut notes = serde_json::json!({
+        "trained_on": data.root.display().to_string(),
+        "device": device.name(),
+        "excluded_test": config.holdout,
+    });
+    if !extra.is_empty() {
+        notes["also_trained_on"] = extra
+            .iter()
+            .map(|ds| ds.root.display().to_string())
+            .collect();
+    }
     let artifact = CaeArtifact {
         model: config.model.clone(),
         preprocess: config.preprocess.clone(),
-        notes: serde_json::json!({
-            "trained_on": data.root.display().to_string(),
-            "device": device.name(),
-            "excluded_test": config.holdout,
-        }),
+        notes,
     };
     let dev = device.device();
     let ad = dev.clone().autodiff();
@@ -150,28 +244,26 @@ pub fn train(
     ad.seed(config.schedule.seed);
     let model = JointCae::new(
         config.model.init(&ad),
-        config.joint.as_ref(),
+        &joints,
         config.model.feature_count(),
         &ad,
     );
-    let (weight, head_loss) = config
-        .joint
-        .as_ref()
-        .map_or((0.0, Default::default()), |j| {
-            (j.weight as f32, j.head_loss())
-        });
+    let heads: Vec<(f32, RegressionLoss)> = joints
+        .iter()
+        .map(|j| (j.weight as f32, j.head_loss()))
+        .collect();
     let optim: ModuleOptimizer = match config.optimizer {
         Optimizer::Adadelta => config.adadelta.init(),
         Optimizer::Adam => burn::optim::AdamConfig::new().init(),
     };
-    let title = match &config.joint {
+    let title = match joints.first() {
         Some(j) => format!("CAE training ({})", j.describe()),
         None => "CAE training (binary cross-entropy)".into(),
     };
     let fit_cfg = FitConfig::new(&config.schedule, &title)
         .saving_to(out, resume)
         .with_checkpoint_every(25)
-        .with_run_id(tactile_burn::artifact::run_fingerprint(config, &[data])?);
+        .with_run_id(tactile_burn::artifact::run_fingerprint(config, &datasets)?);
     let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
     let (_, summary) = fit::<_, crate::Error>(
         &fit_cfg,
@@ -187,36 +279,40 @@ pub fn train(
                     let mut rng = SampleRng::new(config.schedule.seed, epoch as u64, i as u64);
                     let pick = (rng.uniform() * (copies.len() + 1) as f64) as usize;
                     let mut pin = Cow::Borrowed(copies.get(pick).unwrap_or(&pins.images[i]));
-                    if shift > 0.0 {
+                    if row_shift[i] > 0.0 {
                         let pixels = &mut pin.to_mut().pixels;
-                        tactile_preprocess::perturb::shift_pins(pixels, shift, &mut rng);
+                        tactile_preprocess::perturb::shift_pins(pixels, row_shift[i], &mut rng);
                     }
                     pin
                 })
                 .collect();
             let x = batch_tensor(drawn.iter().map(|p| p.as_ref()), &ad);
             let (logits, columns) = m.forward(x.clone());
-            let loss = bce_with_logits(logits, x);
-            Ok(match (columns, &labels) {
-                (Some(c), Some(l)) => loss + l.loss(c, batch, head_loss) * weight,
-                _ => loss,
-            })
+            let mut loss = bce_with_logits(logits, x);
+            for ((c, l), &(weight, head_loss)) in columns.into_iter().zip(&labels).zip(&heads) {
+                loss = loss + l.loss(c, batch, head_loss) * weight;
+            }
+            Ok(loss)
         },
         |m| {
-            // Validation loss: the training loss's two terms on the held-out rows.
-            let (mut bce, mut head) = (0.0, 0.0);
+            // Validation loss: the training loss's terms on the held-out
+            // rows, each head's over its labelled rows.
+            let (mut bce, mut head, mut weighted) = (0.0, 0.0, 0.0);
             for chunk in val.chunks(config.schedule.batch_size.max(1)) {
                 let x = pins.batch(chunk, &dev);
                 let (logits, columns) = m.forward(x.clone());
                 let n = chunk.len() as f64;
                 bce += bce_with_logits(logits, x).into_scalar::<f32>() as f64 * n;
-                if let (Some(c), Some(l)) = (columns, &labels) {
-                    head += l.loss(c, chunk, head_loss).into_scalar::<f32>() as f64 * n;
+                for ((c, l), &(weight, head_loss)) in columns.into_iter().zip(&labels).zip(&heads) {
+                    let sum = l.loss(c, chunk, head_loss).into_scalar::<f32>() as f64
+                        * l.labelled(chunk) as f64;
+                    head += sum;
+                    weighted += weight as f64 * sum;
                 }
             }
             let n = val.len().max(1) as f64;
-            let metric = labels.as_ref().map(|_| head / n);
-            Ok(((bce + weight as f64 * head) / n, metric))
+            let metric = (!labels.is_empty()).then(|| head / n);
+            Ok(((bce + weighted) / n, metric))
         },
         |m| Ok(artifact.save(&m.cae, out)?),
     )?;

@@ -187,6 +187,29 @@ def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):
     assert not (tmp_path / "bad" / "cae.json").exists()
 
 
+
+def test_one_cae_trains_on_two_datasets_each_with_its_own_head(root, tmp_path):
+    data = root / "samples/virtual-tactip"
+    second = tactile.synth.tactip(count=6, seed=5, out=tmp_path / "second", progress=False)
+    tasks = tmp_path / "tasks.json"
+    tasks.write_text(json.dumps([{"data": os.fspath(second), "preprocess": "binary",
+                                  "joint_targets": ["x_mm"], "shift": 0.05}]))
+    out = tmp_path / "both"
+    s = tactile.train.cae(data, out, joint_targets=["depth_mm"], joint_loss="l1", max_epochs=1,
+                          patience=1, val_fraction=0.5, also_tasks=tasks)
+    record = json.loads((out / "training.json").read_text())
+    assert record["config"]["also"][0]["joint"]["targets"][0]["name"] == "x_mm"
+    notes = json.loads((out / "cae.json").read_text())["notes"]
+    assert notes["also_trained_on"] == [os.fspath(second)]
+    assert s["train_items"] + s["val_items"] == 6 + len(
+        (data / "labels.csv").read_text().splitlines()) - 1
+    # Its pin images must be the encoder's side (28 px here, not 56).
+    wide = root / "configs/preprocess/tactip127-edge-area-56.json"
+    tasks.write_text(json.dumps([{"data": os.fspath(second), "preprocess": os.fspath(wide)}]))
+    with pytest.raises(ValueError, match="tasks.json.*56 px"):
+        tactile.train.cae(data, tmp_path / "bad", also_tasks=tasks, max_epochs=1)
+    assert not (tmp_path / "bad" / "cae.json").exists()
+
 TRAINERS = ["cae", "head", "regressor", "pose", "detector", "segmenter", "depth"]
 
 

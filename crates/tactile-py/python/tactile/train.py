@@ -36,7 +36,9 @@ def cae(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
     0: each training frame is also seen turned by up to ``rotate_deg``
     degrees. ``joint_targets`` (e.g. ``["x_mm", "theta_deg:180"]``): the
     features also feed a head trained to predict those label columns.
-    Every option: ``options("cae")``.
+    ``also_tasks``: a JSON file listing further datasets the one encoder
+    trains on beside ``data``, each with its own ``preprocess``,
+    ``joint_targets`` and ``shift``. Every option: ``options("cae")``.
     """
     return _tactile.train_cae(os.fspath(data), os.fspath(out), **options)
 
