@@ -123,8 +123,9 @@ surface_step surface "$OUT/surface.md" data/surface/ms-k data/surface/p64-k9 dat
 # The wide-kernel pair on a longer schedule, beside the pair it extends.
 # The shipped models now follow it (the pair on all 8,000 frames, the CAE
 # route on its longer schedule), so they are scored here.
+# The edge+surface encoder with the CAE route's surface estimator too.
 surface_step surface_long "$OUT/surface-long.md" data/surface/ms-k-long data/surface/p64-k9-long data/surface/p64-k7-long \
-    models/pose-surface models/cae-surface
+    models/pose-surface models/cae-surface data/surface/cae56-edge-surface
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
@@ -134,7 +135,7 @@ if [ -n "${PAPER_A_SURFACE_COMPARE:-}" ]; then
 else
     CMD[surface_compare]="tactile compare --encoder models/cae-surface --data $REAL/tactip331-surface --targets $SURFACE_TARGETS --out $OUT/surface-compare.md (PAPER_A_SURFACE_COMPARE=1)"
 fi
-step shared bench shared-encoder --encoders models/cae-edge models/cae-shapes models/cae-surface models/cae-edge-unsupervised \
+step shared bench shared-encoder --encoders models/cae-edge models/cae-shapes models/cae-surface models/cae-edge-surface models/cae-edge-unsupervised \
     --tasks configs/bench/shared-encoder.json --real "$REAL" --out "$OUT/shared-encoder.md"
 
 # Drop each table's own first line (the machine) where the header has it.
@@ -253,6 +254,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     echo
     body "$OUT/shared-encoder.md"
     echo
+    [ -f docs/paper-a-shared.md ] && cat docs/paper-a-shared.md && echo
     echo "## 4. All seven shapes on held-out synthetic frames"
     echo
     echo "Virtual TacTip (sensors.md section 1), 700 frames of seed 200, never used in training or in any choice; every estimator shipped in \`models/cae-synth\` runs on one encoding. The position is scored twice: each target over every labelled frame, and in the last table only where a frame can show it (a sphere's or cuboid's x and y; the offset across a cylinder's, prism's or cuboid's axis, since its position along the axis changes nothing in the frame; an edge's distance along its normal; nothing for a flat; no frame under 0.5 mm deep, where no pin moves). \`position-sphere\` is a regressor trained on sphere frames alone (\`tactile train regressor --shapes sphere\`, 9,000 frames of seed 120): it answers where the shape head says sphere, so its errors in the last table include the spheres the head calls something else. \`${CMD[synthetic]}\`"

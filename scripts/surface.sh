@@ -134,6 +134,10 @@ cat >"$EDGE_TASK" <<JSON
 JSON
 run cae56-edge-surface "$BIN" train cae --data "$DATA" --out data/surface/cae56-edge-surface "${CAE[@]}" --val-fraction 0.1 \
     --first-kernel 9 --shift 0.05 --lr-decay 0.965 --max-epochs 70 --patience 70 --also-tasks "$EDGE_TASK"
+# Its surface estimator, the CAE route's (MLP 512-256-128, L1), so the
+# long-schedule table scores the shared encoder as the surface's own.
+run cae56-edge-surface-mlp "$BIN" train regressor --encoder data/surface/cae56-edge-surface --data "$DATA" --targets $T \
+    --hidden 512,256,128 --loss l1 --out data/surface/cae56-edge-surface/pose
 
 # The shipped pose model: the wide-kernel pair's long-schedule recipe on
 # every frame of both splits (each validated member was best at its 59th
@@ -167,4 +171,10 @@ run ship-cae bash -c "rm -rf models/.cae-surface-new && mkdir -p models/.cae-sur
     && cp $SHIP_CAE/cae.* $SHIP_CAE/curves.* $SHIP_CAE/training.json models/.cae-surface-new/ \
     && cp $SHIP_CAE/pose/regressor.* models/.cae-surface-new/pose/"
 [ -f models/.cae-surface-new/pose/regressor.json ] && ship cae-surface models/.cae-surface-new
+# The edge+surface encoder is shipped for the shared-encoder table (its
+# estimators are fitted there, per task).
+run ship-cae-edge-surface bash -c "rm -rf models/.cae-edge-surface-new && mkdir -p models/.cae-edge-surface-new \
+    && cp data/surface/cae56-edge-surface/cae.* data/surface/cae56-edge-surface/curves.* \
+        data/surface/cae56-edge-surface/training.json models/.cae-edge-surface-new/"
+[ -f models/.cae-edge-surface-new/cae.bpk ] && ship cae-edge-surface models/.cae-edge-surface-new
 echo "times: $(cat "$TIMES")" >&2
