@@ -296,6 +296,7 @@ def train_cae(
     joint_weight: float = 1.0,
     joint_hidden: int = 64,
     joint_loss: str = "mse",
+    also_tasks: Optional[str] = None,
 ) -> Dict[str, Any]: ...
 def train_head_py(
     data: _Path,

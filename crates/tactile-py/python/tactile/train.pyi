@@ -52,7 +52,7 @@ def cae(
     joint_weight: float = 1.0,
     joint_hidden: int = 64,
     joint_loss: str = "mse",
-    also_tasks: Optional[_Path] = None,
+    also_tasks: Optional[str] = None,
 ) -> Dict[str, Any]:
     """Paper A's convolutional autoencoder on a TacTip dataset."""
 
