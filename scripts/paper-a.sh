@@ -137,6 +137,14 @@ else
 fi
 step shared bench shared-encoder --encoders models/cae-edge models/cae-shapes models/cae-surface models/cae-edge-surface models/cae-edge-unsupervised \
     --tasks configs/bench/shared-encoder.json --real "$REAL" --out "$OUT/shared-encoder.md"
+# The edge+surface encoder trained without the edge set's test frames,
+# scored on them as the edge-only CAE routes of section 3 were.
+if trained data/surface/cae56-edge-surface-heldout; then
+    step edge_shared bench pose --models data/surface/cae56-edge-surface-heldout --data "$REAL/tactip127-edge" \
+        --runs 200 --out "$OUT/edge-pose-shared.md"
+else
+    CMD[edge_shared]="tactile bench pose --models data/surface/cae56-edge-surface-heldout --data $REAL/tactip127-edge --runs 200 --out $OUT/edge-pose-shared.md (after bash scripts/surface.sh)"
+fi
 
 # Drop each table's own first line (the machine) where the header has it.
 body() { grep -v '^Machine:' "$1"; }
@@ -255,6 +263,13 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     body "$OUT/shared-encoder.md"
     echo
     [ -f docs/paper-a-shared.md ] && cat docs/paper-a-shared.md && echo
+    if [ -f "$OUT/edge-pose-shared.md" ]; then
+        echo "**On edge frames it never saw.** The same encoder trained again without the edge set's 752 test frames (\`SURFACE_STEPS='cae56-edge-surface-heldout cae56-edge-surface-heldout-mlp' bash scripts/surface.sh\`), with the edge MLP 256-128 of the CAE routes in section 3. \`${CMD[edge_shared]}\`"
+        echo
+        body "$OUT/edge-pose-shared.md" | sed 's#](edge-pose-shared.png)#](paper-a/edge-pose-shared.png)#'
+        echo
+        [ -f docs/paper-a-shared-heldout.md ] && cat docs/paper-a-shared-heldout.md && echo
+    fi
     echo "## 4. All seven shapes on held-out synthetic frames"
     echo
     echo "Virtual TacTip (sensors.md section 1), 700 frames of seed 200, never used in training or in any choice; every estimator shipped in \`models/cae-synth\` runs on one encoding. The position is scored twice: each target over every labelled frame, and in the last table only where a frame can show it (a sphere's or cuboid's x and y; the offset across a cylinder's, prism's or cuboid's axis, since its position along the axis changes nothing in the frame; an edge's distance along its normal; nothing for a flat; no frame under 0.5 mm deep, where no pin moves). \`position-sphere\` is a regressor trained on sphere frames alone (\`tactile train regressor --shapes sphere\`, 9,000 frames of seed 120): it answers where the shape head says sphere, so its errors in the last table include the spheres the head calls something else. \`${CMD[synthetic]}\`"

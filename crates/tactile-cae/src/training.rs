@@ -185,7 +185,7 @@ pub fn train(
     tactile_preprocess::perturb::check_shift(shift)?;
     if config.also.len() > MAX_EXTRA_TASKS {
         return Err(tactile_core::Error::Config(format!(
-            "1 to {MAX_EXTRA_TASKS} further datasets, got {}",
+            "at most {MAX_EXTRA_TASKS} further datasets, got {}",
             config.also.len()
         ))
         .into());
