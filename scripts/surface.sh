@@ -117,23 +117,23 @@ done
 # 0.640 / 0.773 with 512-256, 0.641 / 0.715 with 512-256-128; 0.666 /
 # 0.732 and 0.758 / 0.768 for 256-128 and 512-256 stopped on 10 % of
 # `train` instead of 20 %). It is the CAE route shipped.
-run cae56-k9-long "$BIN" train cae --data "$DATA" --out data/surface/cae56-k9-long "${CAE[@]}" --val-fraction 0.1 \
-    --first-kernel 9 --shift 0.05 --lr-decay 0.965 --max-epochs 70 --patience 70
+CAE_LONG=(--val-fraction 0.1 --first-kernel 9 --shift 0.05 --lr-decay 0.965 --max-epochs 70 --patience 70)
+run cae56-k9-long "$BIN" train cae --data "$DATA" --out data/surface/cae56-k9-long "${CAE[@]}" "${CAE_LONG[@]}"
 run cae56-k9-long-mlp "$BIN" train regressor --encoder data/surface/cae56-k9-long --data "$DATA" --targets $T \
     --hidden 512,256,128 --loss l1 --out data/surface/cae56-k9-long/pose
 # One encoder for the edge and the surface tasks: the CAE recipe trained
 # on both sets at once. The edge set (every frame, as models/cae-edge
 # trained) is read at the same 56 px through its own preprocessing, with
 # its own head on x, theta and depth and no shift (x is where the edge
-# lies in the image). The long run's schedule (70 epochs, decay 0.965).
+# lies in the image). The long run's options (CAE_LONG: 70 epochs, decay 0.965).
 # Scored against the per-task encoders in the shared-encoder table.
 EDGE_TASK=data/surface/also-edge-56.json
 cat >"$EDGE_TASK" <<JSON
 [{"data": "$REAL/tactip127-edge", "preprocess": "configs/preprocess/tactip127-edge-area-56.json",
   "joint_targets": ["x_mm", "theta_deg:180", "depth_mm"], "shift": 0}]
 JSON
-run cae56-edge-surface "$BIN" train cae --data "$DATA" --out data/surface/cae56-edge-surface "${CAE[@]}" --val-fraction 0.1 \
-    --first-kernel 9 --shift 0.05 --lr-decay 0.965 --max-epochs 70 --patience 70 --also-tasks "$EDGE_TASK"
+run cae56-edge-surface "$BIN" train cae --data "$DATA" --out data/surface/cae56-edge-surface "${CAE[@]}" "${CAE_LONG[@]}" \
+    --also-tasks "$EDGE_TASK"
 # Its surface estimator, the CAE route's (MLP 512-256-128, L1), so the
 # long-schedule table scores the shared encoder as the surface's own.
 run cae56-edge-surface-mlp "$BIN" train regressor --encoder data/surface/cae56-edge-surface --data "$DATA" --targets $T \
@@ -143,8 +143,7 @@ run cae56-edge-surface-mlp "$BIN" train regressor --encoder data/surface/cae56-e
 # MLP those routes use, so its edge errors are on frames it never saw:
 # `tactile bench pose` sets them beside the edge-only 56 and 112 px routes.
 run cae56-edge-surface-heldout "$BIN" train cae --data "$DATA" --out data/surface/cae56-edge-surface-heldout "${CAE[@]}" \
-    --val-fraction 0.1 --first-kernel 9 --shift 0.05 --lr-decay 0.965 --max-epochs 70 --patience 70 \
-    --also-tasks "$EDGE_TASK" --exclude-test 0.2
+    "${CAE_LONG[@]}" --also-tasks "$EDGE_TASK" --exclude-test 0.2
 run cae56-edge-surface-heldout-mlp "$BIN" train regressor --encoder data/surface/cae56-edge-surface-heldout \
     --data "$REAL/tactip127-edge" --targets x_mm,theta_deg:180,depth_mm --hidden 256,128 \
     --out data/surface/cae56-edge-surface-heldout/pose

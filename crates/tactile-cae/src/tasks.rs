@@ -72,6 +72,18 @@ impl ExtraTask {
     }
 }
 
+/// Check further tasks against the encoder's input side `input_px`: how
+/// many there are, and each one.
+pub fn check_extra_tasks(tasks: &[ExtraTask], input_px: usize) -> tactile_core::Result<()> {
+    if tasks.len() > MAX_EXTRA_TASKS {
+        return Err(tactile_core::Error::Config(format!(
+            "at most {MAX_EXTRA_TASKS} further datasets, got {}",
+            tasks.len()
+        )));
+    }
+    tasks.iter().try_for_each(|t| t.check(input_px))
+}
+
 /// Read the task file `path` into checked further tasks; their heads take
 /// the main task's `weight`, `hidden` width and `loss`.
 pub fn read_extra_tasks(
@@ -83,34 +95,26 @@ pub fn read_extra_tasks(
 ) -> crate::Result<Vec<ExtraTask>> {
     let specs: Vec<ExtraTaskSpec> = tactile_core::io::read_json(path)?;
     let in_file =
-        |e: tactile_core::Error| tactile_core::Error::Config(format!("{}: {e}", path.display()));
-    if specs.is_empty() || specs.len() > MAX_EXTRA_TASKS {
-        return Err(in_file(tactile_core::Error::Config(format!(
-            "1 to {MAX_EXTRA_TASKS} further datasets, got {}",
-            specs.len()
-        )))
-        .into());
+        |e: &dyn std::fmt::Display| tactile_core::Error::Config(format!("{}: {e}", path.display()));
+    if specs.is_empty() {
+        return Err(in_file(&format!("1 to {MAX_EXTRA_TASKS} further datasets, got 0")).into());
     }
-    specs
+    let tasks = specs
         .into_iter()
         .map(|s| {
-            let preprocess = PreprocessConfig::preset(&s.preprocess).map_err(|e| {
-                in_file(tactile_core::Error::Config(format!(
-                    "preprocess '{}': {e}",
-                    s.preprocess
-                )))
-            })?;
-            let task = ExtraTask {
+            let preprocess = PreprocessConfig::preset(&s.preprocess)
+                .map_err(|e| in_file(&format!("preprocess '{}': {e}", s.preprocess)))?;
+            Ok(ExtraTask {
                 joint: JointTargets::from_names(&s.joint_targets, weight, hidden, loss)
-                    .map_err(|e| in_file(tactile_core::Error::Config(e.to_string())))?,
+                    .map_err(|e| in_file(&e))?,
                 shift: (s.shift != 0.0).then_some(s.shift),
                 data: s.data,
                 preprocess,
-            };
-            task.check(input_px).map_err(in_file)?;
-            Ok(task)
+            })
         })
-        .collect()
+        .collect::<tactile_core::Result<Vec<_>>>()?;
+    check_extra_tasks(&tasks, input_px).map_err(|e| in_file(&e))?;
+    Ok(tasks)
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ use crate::artifact::CaeArtifact;
 use crate::data::{PinSet, batch_tensor};
 use crate::joint::{JointCae, JointLabels, JointTargets};
 use crate::model::CaeConfig;
-use crate::tasks::{ExtraTask, MAX_EXTRA_TASKS};
+use crate::tasks::{ExtraTask, check_extra_tasks};
 
 /// The optimiser.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
@@ -183,16 +183,7 @@ pub fn train(
     }
     let shift = config.shift.unwrap_or(0.0);
     tactile_preprocess::perturb::check_shift(shift)?;
-    if config.also.len() > MAX_EXTRA_TASKS {
-        return Err(tactile_core::Error::Config(format!(
-            "at most {MAX_EXTRA_TASKS} further datasets, got {}",
-            config.also.len()
-        ))
-        .into());
-    }
-    for t in &config.also {
-        t.check(config.model.input_px)?;
-    }
+    check_extra_tasks(&config.also, config.model.input_px)?;
     let extra = config
         .also
         .iter()
