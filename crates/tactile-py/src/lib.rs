@@ -49,6 +49,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synth::synth_tactip, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synth_visuotactile, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synth_gelsight, m)?)?;
+    m.add_function(wrap_pyfunction!(synth::synth_ideal_detector, m)?)?;
     m.add_function(wrap_pyfunction!(train::train_cae, m)?)?;
     m.add_function(wrap_pyfunction!(train::train_detector, m)?)?;
     m.add_function(wrap_pyfunction!(train::train_pose, m)?)?;

@@ -339,3 +339,59 @@ pub(crate) fn synth_gelsight(
     )?;
     Ok(d.into_any().unbind())
 }
+
+/// The ideal detector of a virtual visuo-tactile dataset
+/// (`tactile synth ideal-detector`): per-frame arrays and the summary.
+#[pyfunction]
+#[pyo3(signature = (data, out, progress))]
+pub(crate) fn synth_ideal_detector(
+    py: Python<'_>,
+    data: PathBuf,
+    out: Option<PathBuf>,
+    progress: bool,
+) -> PyResult<Py<PyAny>> {
+    let bounds = py
+        .detach(|| -> tactile_core::Result<_> {
+            if let Some(out) = &out {
+                let ds = tactile_core::dataset::Dataset::open(&data)?;
+                tactile_core::dataset::check_output_file(out, &[&ds])?;
+            }
+            let bounds = visuotactile::dataset_bounds(&data, progress)?;
+            if let Some(out) = &out {
+                visuotactile::write_bounds_csv(&bounds, out)?;
+            }
+            Ok(bounds)
+        })
+        .py()?;
+    let s = visuotactile::summarise(&bounds);
+    let d = PyDict::new(py);
+    d.set_item("frames", s.frames)?;
+    d.set_item("accuracy", s.accuracy)?;
+    d.set_item("uncertain", s.uncertain)?;
+    d.set_item("median_sigma_mm", s.median_sigma_mm)?;
+    let f = |g: &dyn Fn(&visuotactile::DatasetFrameBound) -> f64| -> Vec<f64> {
+        bounds.iter().map(g).collect()
+    };
+    d.set_item(
+        "file",
+        PyList::new(py, bounds.iter().map(|b| b.file.as_str()))?,
+    )?;
+    d.set_item(
+        "tendon",
+        PyArray1::from_vec(py, bounds.iter().map(|b| b.tendon).collect()),
+    )?;
+    d.set_item("ridge_mm", PyArray1::from_vec(py, f(&|b| b.bound.ridge_mm)))?;
+    d.set_item(
+        "ridge_sigma_mm",
+        PyArray1::from_vec(py, f(&|b| b.bound.sigma_mm)),
+    )?;
+    d.set_item(
+        "in_view",
+        PyArray1::from_vec(py, bounds.iter().map(|b| b.bound.in_view).collect()),
+    )?;
+    d.set_item(
+        "ideal_p_correct",
+        PyArray1::from_vec(py, f(&|b| b.bound.p_correct)),
+    )?;
+    Ok(d.into_any().unbind())
+}

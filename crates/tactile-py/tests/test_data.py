@@ -42,6 +42,22 @@ def test_visuotactile_arrays_equal_the_written_dataset(tmp_path):
     assert list(ds.labels["sequence"]) == [0, 0, 0, 0]
 
 
+def test_ideal_detector_bounds_every_frame_and_refuses_foreign_sets(tmp_path):
+    out = tactile.synth.visuotactile(count=6, frames_per_sequence=6, width=320, height=180,
+                                     seed=4, press_mm=(0.3, 0.3), out_of_view_fraction=0.0,
+                                     out=tmp_path / "vt", progress=False)
+    b = tactile.synth.ideal_detector(out, out=tmp_path / "bound.csv", progress=False)
+    assert b["frames"] == 6 and len(b["file"]) == 6
+    assert b["accuracy"] == pytest.approx(float(np.mean(b["ideal_p_correct"])))
+    # Under contact a ridge is measurable to a fraction of the 0.03 mm threshold.
+    touching = b["ridge_mm"] > 0
+    assert touching.any() and np.all(b["ridge_sigma_mm"][touching] < 0.003)
+    assert (tmp_path / "bound.csv").read_text().startswith("file,tendon,ridge_mm,ridge_sigma_mm")
+    tt = tactile.synth.tactip(2, seed=1, out=tmp_path / "tt", progress=False)
+    with pytest.raises(ValueError, match="its kind is 'tactip'"):
+        tactile.synth.ideal_detector(tt, progress=False)
+
+
 def test_dataset_errors_name_the_file(tmp_path):
     with pytest.raises(FileNotFoundError):
         tactile.Dataset(tmp_path / "missing")

@@ -6,7 +6,7 @@ use anyhow::{Result, bail};
 use clap::{Args, Subcommand};
 use datasets_synth::{
     CalibratedConfig, CalibratedSensor, TactipConfig, VisuotactileConfig, WriteOptions,
-    write_calibrated, write_tactip, write_visuotactile,
+    visuotactile, write_calibrated, write_tactip, write_visuotactile,
 };
 
 #[derive(Subcommand)]
@@ -17,6 +17,18 @@ pub(crate) enum SynthCmd {
     Visuotactile(VisuotactileArgs),
     /// A calibrated GelSight-like sensor's own palpation videos, rendered through its calibration (tactile calibrate ball): RGB, masks, directions, indentation maps.
     Gelsight(GelsightArgs),
+    /// The ideal detector of a virtual visuo-tactile set: per frame, how precisely the frame tells its ridge's height (the Cramér–Rao bound, scenes drawn again from the manifest) and the best chance any detector has of labelling it right; its mean bounds every detector's accuracy on the set.
+    IdealDetector(IdealArgs),
+}
+
+#[derive(Args)]
+pub(crate) struct IdealArgs {
+    /// A virtual visuo-tactile dataset written by `tactile synth visuotactile`.
+    #[arg(long)]
+    data: PathBuf,
+    /// Write the per-frame bounds here (CSV: file, tendon, ridge_mm, ridge_sigma_mm, in_view, ideal_p_correct).
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 /// Options shared by both sensors.
@@ -112,11 +124,12 @@ fn finish(
 pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
     let t = std::time::Instant::now();
     let common = match &cmd {
-        SynthCmd::Tactip(a) => &a.common,
-        SynthCmd::Visuotactile(a) => &a.common,
-        SynthCmd::Gelsight(a) => &a.common,
+        SynthCmd::Tactip(a) => Some(&a.common),
+        SynthCmd::Visuotactile(a) => Some(&a.common),
+        SynthCmd::Gelsight(a) => Some(&a.common),
+        SynthCmd::IdealDetector(_) => None,
     };
-    if let Some(p) = &common.preview {
+    if let Some(p) = common.and_then(|c| c.preview.as_ref()) {
         tactile_core::dataset::check_output_file(p, &[])?;
     }
     match cmd {
@@ -152,6 +165,7 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
             let out = write_visuotactile(&cfg, count, a.common.seed, &a.common.out, opts)?;
             finish(&a.common, out, "virtual visuo-tactile", count, t)
         }
+        SynthCmd::IdealDetector(a) => ideal_detector(&a),
     }
 }
 
@@ -172,4 +186,26 @@ fn gelsight(
     let real = tactile_gelsight::negatives::real_frames(cfg, sensor)?;
     let out = write_calibrated(&unit, cfg, count, c.seed, &c.out, opts, &real)?;
     finish(c, out, "calibrated-sensor", count, t)
+}
+
+fn ideal_detector(a: &IdealArgs) -> Result<()> {
+    if let Some(out) = &a.out {
+        let ds = tactile_core::dataset::Dataset::open(&a.data)?;
+        tactile_core::dataset::check_output_file(out, &[&ds])?;
+    }
+    let bounds = visuotactile::dataset_bounds(&a.data, true)?;
+    let s = visuotactile::summarise(&bounds);
+    say!(
+        "{}: {} frames; the ideal detector's expected accuracy {:.4} ({} frames it labels right with a chance under 0.99); ridge height measurable to {:.2e} mm (median one-sigma bound over frames with a tendon in view)",
+        a.data.display(),
+        s.frames,
+        s.accuracy,
+        s.uncertain,
+        s.median_sigma_mm
+    );
+    if let Some(out) = &a.out {
+        visuotactile::write_bounds_csv(&bounds, out)?;
+        say!("per-frame bounds: {}", out.display());
+    }
+    Ok(())
 }

@@ -304,6 +304,58 @@ fn synth_rejects_bad_configuration_and_writes_nothing() {
 }
 
 #[test]
+fn the_ideal_detector_writes_its_bounds_outside_the_set_and_refuses_real_data() {
+    let tmp = tempfile::tempdir().unwrap();
+    let vt = tmp.path().join("vt");
+    let v = vt.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--count",
+        "4",
+        "--width",
+        "320",
+        "--height",
+        "180",
+        "--frames-per-sequence",
+        "4",
+        "--out",
+        v,
+    ]);
+    assert!(ok, "{msg}");
+    let csv = tmp.path().join("bound.csv");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "ideal-detector",
+        "--data",
+        v,
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok && msg.contains("expected accuracy"), "{msg}");
+    assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 5);
+    // Never over the dataset's own files.
+    let labels = vt.join("labels.csv");
+    let before = std::fs::read_to_string(&labels).unwrap();
+    let (ok, msg) = tactile(&[
+        "synth",
+        "ideal-detector",
+        "--data",
+        v,
+        "--out",
+        labels.to_str().unwrap(),
+    ]);
+    assert!(!ok && msg.contains("part of the input dataset"), "{msg}");
+    assert_eq!(std::fs::read_to_string(&labels).unwrap(), before);
+    // A set whose scenes cannot be drawn again: the real edge set.
+    let real = shared_real().join("tactip127-edge");
+    if real.is_dir() {
+        let (ok, msg) = tactile(&["synth", "ideal-detector", "--data", real.to_str().unwrap()]);
+        assert!(!ok && msg.contains("manifest.json"), "{msg}");
+    }
+}
+
+#[test]
 fn synth_keeps_a_non_empty_folder_unless_forced() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("ds");

@@ -42,8 +42,7 @@ pub fn render_alternate(
 ) -> VisuotactileFrame {
     let cam = Camera::new(config.width, config.height);
     let (w, h) = (cam.width, cam.height);
-    let exposure = 1.0 + rng.draw(config.exposure_jitter);
-    let noise_sigma = rng.draw(config.noise_sigma);
+    let (exposure, noise_sigma) = super::render::camera_draws(config, rng);
     let mm_per_px = NOMINAL_DEPTH_MM / cam.fx;
     let lights = light_vectors();
     let disp = |u: f64, v: f64| surface(&cam, scene, press_mm, u, v).disp;

@@ -9,6 +9,7 @@
 //! are listed in `docs/synth.md`.
 
 mod alternate;
+mod bound;
 pub(crate) mod camera;
 mod render;
 mod scene;
@@ -19,6 +20,10 @@ use tactile_core::{Error, Result};
 use crate::rng::{Range, SampleRng};
 
 pub use alternate::render_alternate;
+pub use bound::{
+    DatasetFrameBound, FrameBound, IdealSummary, dataset_bounds, frame_bound, summarise,
+    write_bounds_csv,
+};
 pub use camera::Camera;
 pub use render::{Surface, VisuotactileFrame, render, surface};
 pub use scene::{CentreLine, SequenceScene, fold_180, press_profile};
@@ -294,6 +299,25 @@ pub(crate) fn frames_of(f: usize, count: Option<usize>, sequences: Option<usize>
     }
 }
 
+/// The camera, the sequence's scene, the press and the random stream of
+/// frame `frame` of sequence `sequence`.
+pub(crate) fn frame_setup(
+    config: &VisuotactileConfig,
+    seed: u64,
+    sequence: u64,
+    frame: usize,
+) -> (Camera, SequenceScene, f64, SampleRng) {
+    let cam = Camera::new(config.width, config.height);
+    let scene = SequenceScene::draw(config, &cam, &mut SampleRng::new(seed, 1, sequence));
+    let press = press_profile(scene.peak_press_mm, frame, config.frames_per_sequence);
+    (
+        cam,
+        scene,
+        press,
+        SampleRng::new(seed, 2 + sequence, frame as u64),
+    )
+}
+
 /// Frame `frame` of sequence `sequence` of a dataset.
 pub fn sample(
     config: &VisuotactileConfig,
@@ -301,10 +325,7 @@ pub fn sample(
     sequence: u64,
     frame: usize,
 ) -> (SequenceScene, VisuotactileFrame) {
-    let cam = Camera::new(config.width, config.height);
-    let scene = SequenceScene::draw(config, &cam, &mut SampleRng::new(seed, 1, sequence));
-    let press = press_profile(scene.peak_press_mm, frame, config.frames_per_sequence);
-    let mut rng = SampleRng::new(seed, 2 + sequence, frame as u64);
+    let (_, scene, press, mut rng) = frame_setup(config, seed, sequence, frame);
     let out = match config.renderer {
         Renderer::Reference => render(config, &scene, press, &mut rng),
         Renderer::Alternate => {

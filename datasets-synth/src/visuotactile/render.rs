@@ -190,6 +190,28 @@ impl Raster {
     }
 }
 
+/// A frame's exposure factor and noise sigma, the first draws of its
+/// random stream (every renderer draws them so).
+pub(crate) fn camera_draws(config: &VisuotactileConfig, rng: &mut SampleRng) -> (f64, f64) {
+    let exposure = 1.0 + rng.draw(config.exposure_jitter);
+    let noise_sigma = rng.draw(config.noise_sigma);
+    (exposure, noise_sigma)
+}
+
+/// The reference renderer's LED glare, per pixel, in [0, 1] channel units.
+pub(crate) fn glare_plane(cam: &Camera) -> Vec<f32> {
+    let (w, h) = (cam.width, cam.height);
+    let (gu, gv) = cam.glare_centre();
+    let g_sigma = GLARE_SIGMA_FRACTION * w as f64;
+    (0..w * h)
+        .map(|i| {
+            let (u, v) = ((i % w) as f64, (i / w) as f64);
+            let d2 = (u - gu).powi(2) + (v - gv).powi(2);
+            (GLARE_AMPLITUDE * libm::exp(-d2 / (2.0 * g_sigma * g_sigma))) as f32
+        })
+        .collect()
+}
+
 /// Render one frame of `scene` at `press_mm`; `rng` supplies the frame's
 /// exposure and noise.
 pub fn render(
@@ -200,8 +222,7 @@ pub fn render(
 ) -> VisuotactileFrame {
     let cam = Camera::new(config.width, config.height);
     let (w, h) = (cam.width, cam.height);
-    let exposure = 1.0 + rng.draw(config.exposure_jitter);
-    let noise_sigma = rng.draw(config.noise_sigma);
+    let (exposure, noise_sigma) = camera_draws(config, rng);
     let lights = light_vectors();
     // One analytic sample per pixel.
     let mut raster = Raster::new(&cam, scene, press_mm, |_, _, at| {
@@ -209,15 +230,7 @@ pub fn render(
     });
 
     // Camera: exposure, LED glare, optical blur, noise, 8 bits.
-    let (gu, gv) = cam.glare_centre();
-    let g_sigma = GLARE_SIGMA_FRACTION * w as f64;
-    let glare: Vec<f32> = (0..w * h)
-        .map(|i| {
-            let (u, v) = ((i % w) as f64, (i / w) as f64);
-            let d2 = (u - gu).powi(2) + (v - gv).powi(2);
-            (GLARE_AMPLITUDE * libm::exp(-d2 / (2.0 * g_sigma * g_sigma))) as f32
-        })
-        .collect();
+    let glare = glare_plane(&cam);
     for plane in raster.planes.iter_mut() {
         for (p, g) in plane.iter_mut().zip(&glare) {
             *p = *p * exposure as f32 + g;

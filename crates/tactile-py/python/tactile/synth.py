@@ -132,4 +132,28 @@ def gelsight(
     return Path(r) if out is not None else r
 
 
-__all__ = ["tactip", "visuotactile", "gelsight"]
+def ideal_detector(
+    data: PathLike,
+    out: Optional[PathLike] = None,
+    *,
+    progress: bool = True,
+) -> Dict[str, Any]:
+    """The ideal detector of a virtual visuo-tactile dataset.
+
+    For every frame of ``data`` (written by ``visuotactile``; its scenes are
+    drawn again from the manifest), how precisely the frame itself tells
+    its ridge's height (``ridge_sigma_mm``: the Cramér–Rao bound of the
+    reference renderer's optics and noise) and the best chance any
+    detector has of labelling it right (``ideal_p_correct``). Returns a
+    dict of those per-frame arrays (with ``file``, ``tendon``,
+    ``ridge_mm``, ``in_view``) and the summary: ``frames``, ``accuracy``
+    (the mean chance: no detector can expect more on the set),
+    ``uncertain`` (frames under 0.99) and ``median_sigma_mm``. With
+    ``out``, also writes the per-frame CSV there.
+    """
+    return _tactile.synth_ideal_detector(
+        os.fspath(data), None if out is None else os.fspath(out), progress
+    )
+
+
+__all__ = ["tactip", "visuotactile", "gelsight", "ideal_detector"]

@@ -101,3 +101,10 @@ def gelsight(
     """A calibrated GelSight-like sensor's own palpation videos (tactile calibrate ball's folder), rendered through its optics and gel with indentation maps: a dict of arrays, or a dataset folder with out=."""
 
 # --- end of generated part ---
+def ideal_detector(
+    data: _Path,
+    out: Optional[_Path] = None,
+    *,
+    progress: bool = True,
+) -> Dict[str, Any]:
+    """The ideal detector of a virtual visuo-tactile dataset: per frame, the Cramér–Rao bound of its ridge height and the best chance any detector has of labelling it right; the mean bounds every detector's accuracy."""
