@@ -46,8 +46,10 @@ trap 'rm -f "$tmp"' EXIT
     echo
     echo "The ideal detector (\`tactile synth ideal-detector --data SET\`) knows everything about a frame but its ridge height and measures that as precisely as the frame allows (the Cramér–Rao bound of the reference renderer's optics and noise); its expected accuracy bounds every detector's on the set. Each error's ridge height is followed by its distance from the 0.03 mm threshold in units of that frame's bound (z): an ideal detector errs on a frame with chance Phi(-z), so errors at z above 3 are the detector's, not the frame's."
     echo
-    echo "| set | seed | flags | accuracy | ideal detector | false tendons | missed | ridge heights of the errors, mm (z) |"
-    echo "|---|---|---|---|---|---|---|---|"
+    echo "Read as a measurement, the detector calls a tendon with chance Phi((ln(A / 0.03 mm) - b) / s), fitted by maximum likelihood to its decisions on the frames under contact with the tendon in view: *cut / spread* gives where it cuts (exp(b) - 1, relative to the 0.03 mm threshold: negative calls lower ridges tendons) and how sharply (s, about the relative error of its ridge height). It is fitted only on a set with at least 30 such frames within 20 % of the threshold. *Ideal spread* is the median sigma_A / A of the frames with a ridge of 0.02-0.045 mm."
+    echo
+    echo "| set | seed | flags | accuracy | ideal detector | cut / spread | ideal spread | false tendons | missed | ridge heights of the errors, mm (z) |"
+    echo "|---|---|---|---|---|---|---|---|---|---|"
 } >"$tmp"
 for row in "${ROWS[@]}"; do
     IFS='|' read -r name seed what flags <<<"$row"
@@ -70,7 +72,33 @@ fn = sorted(err(r) for r in rows if r["predicted"] == "0" and r["tendon"] == "1"
 acc = 1 - (len(fp) + len(fn)) / len(rows)
 ideal = sum(float(bound[r["file"]]["ideal_p_correct"]) for r in rows) / len(rows)
 heights = lambda v: ", ".join(f"{a:.4f} ({z:.0f})" for a, z in v) or "-"
-print(f"| {name} ({what}) | {seed} | `{flags}` | {acc:.4f} | {ideal:.4f} | {len(fp)} | {len(fn)} | false: {heights(fp)}; missed: {heights(fn)} |")
+# The detector as a measurement: P(tendon called | A) = Phi((ln(A / 0.03) - b) / s)
+# fitted by maximum likelihood (grid) on frames under contact with the tendon
+# in view; exp(b) - 1 is where it cuts relative to 0.03 mm, s its spread in
+# ln A. The ideal's spread is the median sigma_A / A of frames near the cut.
+from math import erfc, exp, log, sqrt
+pts = []
+for r in rows:
+    b = bound[r["file"]]
+    a = float(b["ridge_mm"])
+    if a > 0 and b["in_view"] == "1":
+        pts.append((log(a / 0.03), r["predicted"] == "1"))
+def nll(bias, spread):
+    t = 0.0
+    for x, y in pts:
+        p = 0.5 * erfc(-(x - bias) / spread / sqrt(2))
+        p = min(max(p, 1e-9), 1 - 1e-9)
+        t -= log(p if y else 1 - p)
+    return t
+biases = [i / 200 for i in range(-60, 61)]
+spreads = [0.005 * 1.15 ** k for k in range(30)]
+best = min(((nll(bb, ss), bb, ss) for bb in biases for ss in spreads))
+near = sorted(float(bound[r["file"]]["ridge_sigma_mm"]) / float(bound[r["file"]]["ridge_mm"])
+              for r in rows if 0.02 < float(bound[r["file"]]["ridge_mm"]) < 0.045)
+ideal_spread = near[len(near) // 2] if near else float("nan")
+near_cut = sum(abs(x) < 0.2 for x, _ in pts)
+cut = f"{100 * (exp(best[1]) - 1):+.0f} % / {100 * best[2]:.1f} %" if near_cut >= 30 else f"- ({near_cut} frames within 20 %)"
+print(f"| {name} ({what}) | {seed} | `{flags}` | {acc:.4f} | {ideal:.4f} | {cut} | {100 * ideal_spread:.1f} % | {len(fp)} | {len(fn)} | false: {heights(fp)}; missed: {heights(fn)} |")
 PY
     [ -n "${KEEP_SETS:-}" ] || rm -rf "$dir" "$dir.frames.csv" "$dir.bound.csv"
 done
