@@ -13,6 +13,7 @@
 # OUT=FILE writes its table elsewhere). The
 # sets (about 0.7 GB each, depth maps included) are removed once scored;
 # KEEP_SETS=1 keeps them in data/detector-extremes (a rerun then reuses them).
+# SEED_OFFSET=N: the same sets with every seed moved by N.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p tactile
@@ -37,6 +38,9 @@ ROWS=(
     "light-alt|971|the same, alternate renderer|--press-mm 0.05,0.4 --renderer alternate"
 )
 OUT=${OUT:-docs/detector-extremes.md}
+# SEED_OFFSET=N renders every set again with its seed moved by N: fresh
+# frames of the same extremes, for a test after a choice made on these.
+SEED_OFFSET=${SEED_OFFSET:-0}
 tmp=$(mktemp "$(dirname "$OUT")/.detector-extremes.md.XXXXXX")
 trap 'rm -f "$tmp"' EXIT
 {
@@ -53,6 +57,7 @@ trap 'rm -f "$tmp"' EXIT
 } >"$tmp"
 for row in "${ROWS[@]}"; do
     IFS='|' read -r name seed what flags <<<"$row"
+    seed=$((seed + SEED_OFFSET))
     dir="$SETS/$name-$seed"
     # shellcheck disable=SC2086
     [ -f "$dir/labels.csv" ] || "$BIN" synth visuotactile --count 600 --seed "$seed" --out "$dir" $flags >&2
