@@ -351,17 +351,7 @@ pub(crate) fn synth_ideal_detector(
     progress: bool,
 ) -> PyResult<Py<PyAny>> {
     let bounds = py
-        .detach(|| -> tactile_core::Result<_> {
-            if let Some(out) = &out {
-                let ds = tactile_core::dataset::Dataset::open(&data)?;
-                tactile_core::dataset::check_output_file(out, &[&ds])?;
-            }
-            let bounds = visuotactile::dataset_bounds(&data, progress)?;
-            if let Some(out) = &out {
-                visuotactile::write_bounds_csv(&bounds, out)?;
-            }
-            Ok(bounds)
-        })
+        .detach(|| visuotactile::dataset_bounds(&data, out.as_deref(), progress))
         .py()?;
     let s = visuotactile::summarise(&bounds);
     let d = PyDict::new(py);

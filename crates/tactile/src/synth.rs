@@ -189,11 +189,7 @@ fn gelsight(
 }
 
 fn ideal_detector(a: &IdealArgs) -> Result<()> {
-    if let Some(out) = &a.out {
-        let ds = tactile_core::dataset::Dataset::open(&a.data)?;
-        tactile_core::dataset::check_output_file(out, &[&ds])?;
-    }
-    let bounds = visuotactile::dataset_bounds(&a.data, true)?;
+    let bounds = visuotactile::dataset_bounds(&a.data, a.out.as_deref(), true)?;
     let s = visuotactile::summarise(&bounds);
     say!(
         "{}: {} frames; the ideal detector's expected accuracy {:.4} ({} frames it labels right with a chance under 0.99); ridge height measurable to {:.2e} mm (median one-sigma bound over frames with a tendon in view)",
@@ -204,7 +200,6 @@ fn ideal_detector(a: &IdealArgs) -> Result<()> {
         s.median_sigma_mm
     );
     if let Some(out) = &a.out {
-        visuotactile::write_bounds_csv(&bounds, out)?;
         say!("per-frame bounds: {}", out.display());
     }
     Ok(())

@@ -169,9 +169,27 @@ pub struct DatasetFrameBound {
 /// written by this generator: the scenes are drawn again from the
 /// manifest's configuration and seed and each row's `sequence` and
 /// `frame_index`; a row whose `ridge_mm` disagrees with the scene drawn
-/// again is refused (another generator or version wrote it).
-pub fn dataset_bounds(root: &Path, progress: bool) -> Result<Vec<DatasetFrameBound>> {
+/// again is refused (another generator or version wrote it). With `out`,
+/// the per-frame CSV is written there ([`write_bounds_csv`]), checked
+/// before any work never to be one of the dataset's own files.
+pub fn dataset_bounds(
+    root: &Path,
+    out: Option<&Path>,
+    progress: bool,
+) -> Result<Vec<DatasetFrameBound>> {
     let ds = Dataset::open(root)?;
+    if let Some(out) = out {
+        tactile_core::dataset::check_output_file(out, &[&ds])?;
+    }
+    let bounds = bounds_of(&ds, progress)?;
+    if let Some(out) = out {
+        write_bounds_csv(&bounds, out)?;
+    }
+    Ok(bounds)
+}
+
+fn bounds_of(ds: &Dataset, progress: bool) -> Result<Vec<DatasetFrameBound>> {
+    let root = ds.root.as_path();
     ds.expect_kind(DatasetKind::Visuotactile)?;
     let manifest_path = root.join("manifest.json");
     let refuse = |why: String| Error::dataset(&manifest_path, None, why);
@@ -428,7 +446,7 @@ mod tests {
             ..light()
         };
         write_visuotactile(&config, 12, 5, &out, WriteOptions::default()).unwrap();
-        let bounds = dataset_bounds(&out, false).unwrap();
+        let bounds = dataset_bounds(&out, None, false).unwrap();
         assert_eq!(bounds.len(), 12);
         for (i, b) in bounds.iter().enumerate() {
             assert_eq!(b.bound, frame_bound(&config, 5, (i / 6) as u64, i % 6));
@@ -441,7 +459,7 @@ mod tests {
         let last = lines[3].rfind(',').unwrap();
         lines[3] = format!("{},0.5", &lines[3][..last]);
         std::fs::write(&labels, lines.join("\n") + "\n").unwrap();
-        let err = dataset_bounds(&out, false).unwrap_err().to_string();
+        let err = dataset_bounds(&out, None, false).unwrap_err().to_string();
         assert!(
             err.contains("labels.csv") && err.contains("ridge_mm") && err.contains('4'),
             "{err}"
