@@ -76,10 +76,7 @@ where
     for d in subdirs {
         tactile_core::io::create_dir_all(staging.join(d))?;
     }
-    let pb = tactile_core::progress::progress_bar(count as u64, "synth");
-    if !options.progress {
-        pb.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
+    let pb = tactile_core::progress::progress_bar_if(count as u64, "synth", options.progress);
     let rows: Vec<Vec<String>> = (0..count)
         .into_par_iter()
         .map(|i| {
@@ -240,7 +237,7 @@ pub fn write_visuotactile(
     let manifest = Manifest {
         format: FORMAT.into(),
         kind: DatasetKind::Visuotactile,
-        sensor_spec: "virtual-visuotactile/1".into(),
+        sensor_spec: visuotactile::SENSOR_SPEC.into(),
         width: config.width,
         height: config.height,
         generator: GENERATOR.into(),

@@ -2,6 +2,16 @@
 
 use indicatif::{ProgressBar, ProgressStyle};
 
+/// [`progress_bar`], or one that draws nothing when `shown` is false (a
+/// caller that asked for quiet work still counts through the same bar).
+pub fn progress_bar_if(len: u64, what: &str, shown: bool) -> ProgressBar {
+    let pb = progress_bar(len, what);
+    if !shown {
+        pb.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    pb
+}
+
 /// A progress bar with position, rate and ETA (drawn only on a terminal).
 pub fn progress_bar(len: u64, what: &str) -> ProgressBar {
     let pb = ProgressBar::new(len);

@@ -23,7 +23,7 @@ use tactile_core::{Error, Result};
 use super::camera::{Camera, sub};
 use super::render::{glare_plane, light_vectors, shade};
 use super::{
-    BLUR_PX, HOUSING_RGB, MASK_FLOOR_MM, MASK_FRACTION, MAX_FRAMES_PER_SEQUENCE, SequenceScene,
+    BLUR_PX, HOUSING_RGB, MASK_FLOOR_MM, MASK_FRACTION, SENSOR_SPEC, SequenceScene,
     TENDON_MIN_AMPLITUDE_MM, VisuotactileConfig, frame_setup, surface,
 };
 use crate::raster::{Border, gaussian_blur};
@@ -194,7 +194,8 @@ fn bounds_of(ds: &Dataset, progress: bool) -> Result<Vec<DatasetFrameBound>> {
     let manifest_path = root.join("manifest.json");
     let refuse = |why: String| Error::dataset(&manifest_path, None, why);
     let m = &ds.manifest;
-    if !m.generator.starts_with("datasets-synth") || m.sensor_spec != "virtual-visuotactile/1" {
+    let name = |g: &str| g.split(' ').next().unwrap_or_default().to_string();
+    if name(&m.generator) != name(crate::write::GENERATOR) || m.sensor_spec != SENSOR_SPEC {
         return Err(refuse(format!(
             "the ideal detector needs a virtual visuo-tactile dataset written by datasets-synth \
              (this one is '{}' by '{}')",
@@ -227,17 +228,12 @@ fn bounds_of(ds: &Dataset, progress: bool) -> Result<Vec<DatasetFrameBound>> {
             Ok(v)
         };
         let sequence = at("sequence", MAX_SEQUENCES)? as u64;
-        let frame = at(
-            "frame_index",
-            config.frames_per_sequence.min(MAX_FRAMES_PER_SEQUENCE) as f64,
-        )? as usize;
+        // `validate` bounds frames_per_sequence by MAX_FRAMES_PER_SEQUENCE.
+        let frame = at("frame_index", config.frames_per_sequence as f64)? as usize;
         let ridge = ds.number_opt(i, "ridge_mm")?;
         rows.push((i, line, sequence, frame, ridge));
     }
-    let pb = tactile_core::progress::progress_bar(rows.len() as u64, "ideal detector");
-    if !progress {
-        pb.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
+    let pb = tactile_core::progress::progress_bar_if(rows.len() as u64, "ideal detector", progress);
     let out = rows
         .par_iter()
         .map(|&(i, line, sequence, frame, ridge)| {
@@ -288,13 +284,16 @@ pub fn summarise(bounds: &[DatasetFrameBound]) -> IdealSummary {
     let frames = bounds.len();
     let accuracy = bounds.iter().map(|b| b.bound.p_correct).sum::<f64>() / frames.max(1) as f64;
     let uncertain = bounds.iter().filter(|b| b.bound.p_correct < 0.99).count();
-    let mut sigmas: Vec<f64> = bounds
+    let sigmas: Vec<f64> = bounds
         .iter()
         .filter(|b| b.bound.in_view && b.bound.ridge_mm > 0.0)
         .map(|b| b.bound.sigma_mm)
         .collect();
-    sigmas.sort_by(f64::total_cmp);
-    let median_sigma_mm = sigmas.get(sigmas.len() / 2).copied().unwrap_or(f64::NAN);
+    let median_sigma_mm = if sigmas.is_empty() {
+        f64::NAN
+    } else {
+        tactile_core::metrics::median(&sigmas)
+    };
     IdealSummary {
         frames,
         accuracy,

@@ -34,6 +34,8 @@ pub const NATIVE: (u32, u32) = (1920, 1080);
 pub const MAX_FRAMES_PER_SEQUENCE: usize = 100_000;
 /// Frames per second of a palpation video.
 pub const FPS: f64 = 30.0;
+/// The sensor contract a dataset's manifest names (`sensor_spec`).
+pub const SENSOR_SPEC: &str = "virtual-visuotactile/1";
 /// Nominal skin depth used for the tendon geometry, mm.
 pub const NOMINAL_DEPTH_MM: f64 = 15.0;
 pub use tactile_core::spec::visuotactile::{DOME_BASE_MM, DOME_RISE_MM, TENDON_MIN_AMPLITUDE_MM};
