@@ -350,9 +350,9 @@ pub(crate) fn synth_ideal_detector(
     out: Option<PathBuf>,
     progress: bool,
 ) -> PyResult<Py<PyAny>> {
-    let bounds = py
-        .detach(|| visuotactile::dataset_bounds(&data, out.as_deref(), progress))
-        .py()?;
+    let bounds = crate::work::interruptible(py, || {
+        visuotactile::dataset_bounds(&data, out.as_deref(), progress).py()
+    })?;
     let s = visuotactile::summarise(&bounds);
     let d = PyDict::new(py);
     d.set_item("frames", s.frames)?;

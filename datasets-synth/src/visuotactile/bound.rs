@@ -237,6 +237,7 @@ fn bounds_of(ds: &Dataset, progress: bool) -> Result<Vec<DatasetFrameBound>> {
     let out = rows
         .par_iter()
         .map(|&(i, line, sequence, frame, ridge)| {
+            tactile_core::interrupt::check()?;
             let bound = frame_bound(&config, seed, sequence, frame);
             pb.inc(1);
             if let Some(a) = ridge
