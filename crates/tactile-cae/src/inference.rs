@@ -114,7 +114,8 @@ pub fn write_features_csv(
 pub fn read_features_csv(path: impl AsRef<Path>) -> Result<(Vec<String>, Vec<Vec<f32>>)> {
     use tactile_core::Error as E;
     let path = path.as_ref();
-    let mut r = csv::Reader::from_path(path).map_err(|e| E::dataset(path, None, e.to_string()))?;
+    let file = std::fs::File::open(path).map_err(|e| E::io(path, e))?;
+    let mut r = tactile_core::csv_lines::reader(&csv::ReaderBuilder::new(), file);
     let header = r
         .headers()
         .map_err(|e| E::dataset(path, Some(1), e.to_string()))?
@@ -133,9 +134,8 @@ pub fn read_features_csv(path: impl AsRef<Path>) -> Result<(Vec<String>, Vec<Vec
         return Err(E::dataset(path, Some(1), "no feature columns f0, f1, ...").into());
     }
     let (mut files, mut feats) = (Vec::new(), Vec::new());
-    for (i, rec) in r.records().enumerate() {
-        let line = i + 2;
-        let rec = rec.map_err(|e| E::dataset(path, Some(line), e.to_string()))?;
+    for item in tactile_core::csv_lines::records(&mut r) {
+        let (line, rec) = item.map_err(|(line, why)| E::dataset(path, Some(line), why))?;
         files.push(rec.get(file_col).unwrap_or_default().to_string());
         let v = cols
             .iter()

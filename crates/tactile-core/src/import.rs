@@ -85,9 +85,10 @@ fn read_labels(path: &Path) -> Result<Labels> {
         line: Some(line),
         message,
     };
-    let mut csv = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_reader(std::fs::File::open(path).map_err(|e| Error::io(path, e))?);
+    let mut csv = crate::csv_lines::reader(
+        csv::ReaderBuilder::new().trim(csv::Trim::All),
+        std::fs::File::open(path).map_err(|e| Error::io(path, e))?,
+    );
     let header: Vec<String> = csv
         .headers()
         .map_err(|e| bad(1, e.to_string()))?
@@ -112,12 +113,11 @@ fn read_labels(path: &Path) -> Result<Labels> {
         ));
     }
     let mut rows = BTreeMap::new();
-    for (k, rec) in csv.records().enumerate() {
-        let line = k + 2;
+    for item in crate::csv_lines::records(&mut csv) {
+        let (line, rec) = item.map_err(|(line, why)| bad(line, why))?;
         if rows.len() >= MAX_ROWS {
             return Err(bad(line, format!("more than {MAX_ROWS} rows")));
         }
-        let rec = rec.map_err(|e| bad(line, e.to_string()))?;
         let cells: Vec<String> = rec.iter().map(str::to_string).collect();
         let key = &cells[frame_col];
         if key.is_empty() {

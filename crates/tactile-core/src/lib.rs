@@ -11,6 +11,7 @@
 
 pub mod bag;
 pub mod bench;
+pub mod csv_lines;
 pub mod dataset;
 pub mod error;
 pub mod image_io;

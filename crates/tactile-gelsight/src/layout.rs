@@ -259,7 +259,7 @@ impl BallPresses {
 
 fn read_presses_csv(root: &Path, path: &Path) -> Result<Vec<Press>> {
     let text = read_limited(path, MAX_PRESSES_FILE_BYTES)?;
-    let mut rd = csv::ReaderBuilder::new().from_reader(text.as_bytes());
+    let mut rd = tactile_core::csv_lines::reader(&csv::ReaderBuilder::new(), text.as_bytes());
     let headers = rd
         .headers()
         .map_err(|e| Error::Layout {
@@ -287,11 +287,10 @@ fn read_presses_csv(root: &Path, path: &Path) -> Result<Vec<Press>> {
         }
     };
     let mut out = Vec::new();
-    for (i, rec) in rd.records().enumerate() {
-        let line = i + 2;
-        let rec = rec.map_err(|e| Error::Layout {
+    for item in tactile_core::csv_lines::records(&mut rd) {
+        let (line, rec) = item.map_err(|(line, why)| Error::Layout {
             path: path.to_path_buf(),
-            why: format!("line {line}: {e}"),
+            why: format!("line {line}: {why}"),
         })?;
         if out.len() >= MAX_PRESSES {
             return Err(Error::Layout {

@@ -238,7 +238,7 @@ mod tests {
         let (w, h) = (19, 11);
         let g = |s: u32| -> Vec<f32> {
             (0..w * h)
-                .map(|i| (((i as u32 * 2654435761u32) ^ s) % 1000) as f32 / 500.0 - 1.0)
+                .map(|i| (((i as u32).wrapping_mul(2654435761u32) ^ s) % 1000) as f32 / 500.0 - 1.0)
                 .collect()
         };
         let (gx, gy) = (g(1), g(7));

@@ -104,6 +104,16 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     });
     let e = BallPresses::open(&d).unwrap_err().to_string();
     assert!(e.contains("presses.csv") && e.contains("line 2"), "{e}");
+    // The same on the third line of a file with CRLF endings (Python's csv
+    // module, spreadsheets) after a blank line: the physical line is named.
+    let d = tmp.path().join("escape-crlf");
+    subset(&d, 2, |l| {
+        l.replace("frames/press_02.png", "\n../escape/frames/press_02.png")
+    });
+    let csv = std::fs::read_to_string(d.join("presses.csv")).unwrap();
+    std::fs::write(d.join("presses.csv"), csv.replace('\n', "\r\n")).unwrap();
+    let e = BallPresses::open(&d).unwrap_err().to_string();
+    assert!(e.contains("presses.csv") && e.contains("line 4"), "{e}");
 }
 
 #[test]

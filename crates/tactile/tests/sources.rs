@@ -332,6 +332,11 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
     let r = import(&bad, &dir.path().join("ds2"));
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(err.contains("bad.csv:3: frame 40 is not in"), "{err}");
+    // Labels saved with CRLF endings and a blank line name the same lines.
+    std::fs::write(&bad, "frame,tendon\r\n3,1\r\n\r\n40,1\r\n").unwrap();
+    let r = import(&bad, &dir.path().join("ds2"));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("bad.csv:4: frame 40 is not in"), "{err}");
     std::fs::write(&bad, "frame,tendon,mask\n3,1,../../etc/passwd\n").unwrap();
     let r = import(&bad, &dir.path().join("ds2"));
     let err = String::from_utf8_lossy(&r.stderr);

@@ -206,11 +206,12 @@ impl Dataset {
             ));
         }
         let labels = root.join("labels.csv");
-        let mut reader = csv::ReaderBuilder::new()
-            .has_headers(true)
-            .flexible(false)
-            .from_path(&labels)
+        let file = std::fs::File::open(&labels)
             .map_err(|e| Error::dataset(&labels, None, format!("cannot read: {e}")))?;
+        let mut reader = crate::csv_lines::reader(
+            csv::ReaderBuilder::new().has_headers(true).flexible(false),
+            file,
+        );
         let header: Vec<String> = reader
             .headers()
             .map_err(|e| Error::dataset(&labels, Some(1), format!("bad header: {e}")))?
@@ -241,13 +242,8 @@ impl Dataset {
             ));
         }
         let mut rows = Vec::new();
-        for (i, rec) in reader.records().enumerate() {
-            let line = i + 2;
-            let rec = rec.map_err(|e| {
-                let at = e.position().map_or(line, |p| p.line() as usize);
-                Error::dataset(&labels, Some(at), e.to_string())
-            })?;
-            let line = rec.position().map_or(line, |p| p.line() as usize);
+        for item in crate::csv_lines::records(&mut reader) {
+            let (line, rec) = item.map_err(|(at, why)| Error::dataset(&labels, Some(at), why))?;
             if rows.len() >= MAX_ROWS {
                 return Err(Error::dataset(
                     &labels,
@@ -599,6 +595,25 @@ mod tests {
         );
         let e = Dataset::open(d.path()).unwrap_err().to_string();
         assert!(e.contains("finite"), "{e}");
+        // Files written with CRLF line endings (Python's csv module, Excel)
+        // name the same physical lines as LF files.
+        let crlf = |s: String| s.replace('\n', "\r\n");
+        tiny(
+            d.path(),
+            &crlf(format!(
+                "{HEADER}frames/a.png,sphere,1,0,0,2,3\nframes/a.png,sphere,abc,0,0,2,3\n"
+            )),
+        );
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(e.contains("labels.csv:3") && e.contains("'abc'"), "{e}");
+        tiny(
+            d.path(),
+            &crlf(format!(
+                "{HEADER}frames/a.png,sphere,1,0,0,2,3\nframes/a.png,sphere,1,0,0,2,3\nframes/gone.png,sphere,1,0,0,2,3\n"
+            )),
+        );
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(e.contains("labels.csv:4") && e.contains("gone.png"), "{e}");
     }
 
     #[test]

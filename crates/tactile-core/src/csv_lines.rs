@@ -1,0 +1,140 @@
+//! Physical line numbers for CSV records, whatever the line endings.
+//!
+//! Errors name the line of a bad cell, and users hand in CSV files written
+//! by Python's `csv` module or spreadsheets, with CRLF endings, blank lines
+//! or quoted cells spanning lines. The csv crate's own line count names a
+//! CRLF file's records one line too low, so readers wrap their input in
+//! [`LineCounting`], which notes where each line ends as bytes pass, and
+//! look a record's byte offset up in it.
+
+use std::io::Read;
+
+/// A reader that notes, as bytes pass, where each run of content after a
+/// line ending starts and on which line.
+///
+/// csv gives a record's position as the byte after the previous record's
+/// terminator, which for CRLF is the `\n` and before blank lines is the
+/// first of them; the record itself starts at the next content byte.
+#[derive(Debug)]
+pub struct LineCounting<R> {
+    inner: R,
+    offset: u64,
+    line: usize,
+    after_line_end: bool,
+    starts: Vec<(u64, usize)>,
+}
+
+impl<R: Read> LineCounting<R> {
+    /// Wrap `inner`, counting from its first byte (line 1).
+    pub fn new(inner: R) -> Self {
+        Self {
+            inner,
+            offset: 0,
+            line: 1,
+            after_line_end: true,
+            starts: Vec::new(),
+        }
+    }
+}
+
+impl<R> LineCounting<R> {
+    /// The 1-based line of the first content byte at or after `byte`
+    /// (`\r` and `\n` are not content); the last line when none follows.
+    pub fn line_at(&self, byte: u64) -> usize {
+        let i = self.starts.partition_point(|&(at, _)| at < byte);
+        self.starts.get(i).map_or(self.line, |&(_, line)| line)
+    }
+}
+
+impl<R: Read> Read for LineCounting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        for (i, &b) in buf[..n].iter().enumerate() {
+            match b {
+                b'\n' => {
+                    self.line += 1;
+                    self.after_line_end = true;
+                }
+                b'\r' => {}
+                _ if self.after_line_end => {
+                    self.starts.push((self.offset + i as u64, self.line));
+                    self.after_line_end = false;
+                }
+                _ => {}
+            }
+        }
+        self.offset += n as u64;
+        Ok(n)
+    }
+}
+
+/// A csv reader whose records know their physical lines.
+pub type CsvReader<R> = csv::Reader<LineCounting<R>>;
+
+/// Build a csv reader from `builder` over `inner` with line counting.
+pub fn reader<R: Read>(builder: &csv::ReaderBuilder, inner: R) -> CsvReader<R> {
+    builder.from_reader(LineCounting::new(inner))
+}
+
+/// The records after the header, each with its physical line; a bad
+/// record comes as its line and what is wrong with it ([`describe`]).
+pub fn records<R: Read>(
+    reader: &mut CsvReader<R>,
+) -> impl Iterator<Item = Result<(usize, csv::StringRecord), (usize, String)>> + '_ {
+    let mut it = reader.records();
+    let mut count = 1;
+    std::iter::from_fn(move || {
+        let next = it.next()?;
+        count += 1;
+        let lines = it.reader().get_ref();
+        let line = |p: Option<&csv::Position>| p.map_or(count, |p| lines.line_at(p.byte()));
+        Some(match next {
+            Ok(rec) => Ok((line(rec.position()), rec)),
+            Err(e) => Err((line(e.position()), describe(&e))),
+        })
+    })
+}
+
+/// What is wrong with a record, without csv's own position (whose line
+/// count is off for CRLF files): the caller names the line.
+pub fn describe(e: &csv::Error) -> String {
+    match e.kind() {
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => format!("{len} cells where the header has {expected_len}"),
+        csv::ErrorKind::Utf8 { err, .. } => {
+            format!("cell {} is not valid UTF-8", err.field() + 1)
+        }
+        csv::ErrorKind::Io(err) => format!("cannot read: {err}"),
+        _ => e.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lines(text: &str) -> Vec<usize> {
+        let mut r = reader(&csv::ReaderBuilder::new(), text.as_bytes());
+        records(&mut r).map(|item| item.unwrap().0).collect()
+    }
+
+    #[test]
+    fn records_name_their_physical_lines_with_any_line_endings() {
+        assert_eq!(lines("a,b\n1,2\n3,4\n"), [2, 3]);
+        assert_eq!(lines("a,b\r\n1,2\r\n3,4\r\n"), [2, 3]);
+        assert_eq!(lines("a,b\r\n1,2\r\n\r\n3,4"), [2, 4]);
+        assert_eq!(lines("a,b\n\"x\ny\",2\n3,4\n"), [2, 4]);
+        assert_eq!(lines("a,b\n\n\n1,2\r\n\r\n\r\n3,4"), [4, 7]);
+    }
+
+    #[test]
+    fn an_error_names_the_line_of_the_bad_record() {
+        let text = "a,b\r\n1,2\r\n3,4,5\r\n";
+        let mut r = reader(&csv::ReaderBuilder::new(), text.as_bytes());
+        let items: Vec<_> = records(&mut r).collect();
+        assert_eq!(items[0].as_ref().unwrap().0, 2);
+        let (line, why) = items[1].as_ref().unwrap_err();
+        assert_eq!((*line, why.as_str()), (3, "3 cells where the header has 2"));
+    }
+}
