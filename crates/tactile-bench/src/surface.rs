@@ -127,6 +127,9 @@ pub fn bench_surface(
     depth_md.push_str("\n|---|---|---|---|");
     depth_md.push_str(&"---|".repeat(AUTHORS_CNN.len()));
     depth_md.push('\n');
+    // The same thirds, the gain of each estimate on its truth: how much of a
+    // commanded slide or twist the estimates follow where the skin slips.
+    let mut gain_md = depth_md.clone();
     // The frames the candidates fitted: how far their errors there fall
     // below the held-out ones says whether a target is learnt or left as
     // noise (a target no network fits on its own training frames is not
@@ -155,6 +158,8 @@ pub fn bench_surface(
         let (mut mae, mut ratio, mut panels) = (Vec::new(), Vec::new(), Vec::new());
         let (mut cov68, mut cov95) = (Vec::new(), Vec::new());
         let mut errors_by_target: Vec<Vec<f64>> = Vec::new();
+        // Per target and scored row, (truth, estimate); NaN when unlabelled.
+        let mut pairs_by_target: Vec<Vec<(f64, f64)>> = Vec::new();
         // Per target, the MAE on the fitted frames.
         let mut fit_mae = Vec::new();
         for (t, authors) in AUTHORS_CNN {
@@ -169,14 +174,17 @@ pub fn bench_surface(
             let mut points = Vec::with_capacity(rows.len());
             // Per scored row its |error| (NaN when unlabelled), for the depth thirds.
             let mut errors = Vec::with_capacity(rows.len());
+            let mut pairs = Vec::with_capacity(rows.len());
             let (mut inside68, mut inside95) = (0usize, 0usize);
             for &i in &rows {
                 let Some(truth) = ds.number_opt(i, t)? else {
                     errors.push(f64::NAN);
+                    pairs.push((f64::NAN, f64::NAN));
                     continue;
                 };
                 let e = (pred[i] - truth).abs();
                 errors.push(e);
+                pairs.push((truth, pred[i]));
                 points.push((truth, pred[i]));
                 if let Some(s) = std {
                     inside68 += usize::from(e <= s[i]);
@@ -184,6 +192,7 @@ pub fn bench_surface(
                 }
             }
             errors_by_target.push(errors);
+            pairs_by_target.push(pairs);
             let mut fit_errors = Vec::with_capacity(fitted.len());
             for &i in &fitted {
                 if let Some(truth) = ds.number_opt(i, t)? {
@@ -225,12 +234,26 @@ pub fn bench_surface(
                 .last()
                 .and_then(|&k| depth_of(rows[k]))
                 .unwrap_or(f64::NAN);
-            depth_md.push_str(&format!(
+            let row_head = format!(
                 "| {} | {} | {lo:.2}-{hi:.2} | {} |",
                 folder_name(m),
                 ["shallowest", "middle", "deepest"][n.min(2)],
                 third.len()
-            ));
+            );
+            depth_md.push_str(&row_head);
+            gain_md.push_str(&row_head);
+            for pairs in &pairs_by_target {
+                let (truth, est): (Vec<f64>, Vec<f64>) = third
+                    .iter()
+                    .map(|&k| pairs[k])
+                    .filter(|(t, _)| t.is_finite())
+                    .unzip();
+                gain_md.push_str(&format!(
+                    " {:.2} |",
+                    tactile_core::metrics::gain(&est, &truth)
+                ));
+            }
+            gain_md.push('\n');
             for e in &errors_by_target {
                 let v: Vec<f64> = third
                     .iter()
@@ -313,6 +336,9 @@ pub fn bench_surface(
     }
     md.push_str(&format!(
         "\nErrors by tap depth (mean absolute error of the scored frames in thirds of their depth): shear and twist show in the pins only where the skin grips the surface.\n\n{depth_md}"
+    ));
+    md.push_str(&format!(
+        "\nGain by tap depth (the least-squares slope of each estimate on its truth in the same thirds; 1: the estimates follow the truth, 0: they ignore it): where the skin slips, a slide or twist shows only in part.\n\n{gain_md}"
     ));
     if !fitted.is_empty() {
         md.push_str(&format!(

@@ -47,6 +47,27 @@ pub fn mae(pred: &[f64], truth: &[f64]) -> f64 {
         / truth.len() as f64
 }
 
+/// Gain of estimates on the truth: the least-squares slope of `pred`
+/// against `truth`. 1 when the estimates follow every change of the truth,
+/// 0 when they ignore it; what an estimator recovers of a quantity the
+/// frame shows only in part. NaN with fewer than two distinct truths.
+pub fn gain(pred: &[f64], truth: &[f64]) -> f64 {
+    let n = truth.len().min(pred.len());
+    if n < 2 {
+        return f64::NAN;
+    }
+    let (mt, mp) = (
+        truth[..n].iter().sum::<f64>() / n as f64,
+        pred[..n].iter().sum::<f64>() / n as f64,
+    );
+    let (mut cov, mut var) = (0.0, 0.0);
+    for (t, p) in truth[..n].iter().zip(&pred[..n]) {
+        cov += (t - mt) * (p - mp);
+        var += (t - mt) * (t - mt);
+    }
+    if var > 0.0 { cov / var } else { f64::NAN }
+}
+
 /// Largest absolute difference between two equally long slices.
 pub fn max_abs_diff(a: &[f32], b: &[f32]) -> f32 {
     a.iter()
@@ -75,6 +96,16 @@ pub fn percentile(values: &[f64], p: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gain_is_the_slope_of_estimates_on_truth() {
+        let truth = [-2.0, -1.0, 0.0, 1.0, 2.0];
+        let half: Vec<f64> = truth.iter().map(|t| 0.5 * t + 3.0).collect();
+        assert!((gain(&half, &truth) - 0.5).abs() < 1e-12);
+        assert!(gain(&[1.0; 5], &truth).abs() < 1e-12);
+        assert!(gain(&truth, &[1.0; 5]).is_nan());
+        assert!(gain(&[1.0], &[1.0]).is_nan());
+    }
 
     #[test]
     fn basic_metrics() {

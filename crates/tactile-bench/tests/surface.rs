@@ -1,0 +1,82 @@
+#![allow(clippy::unwrap_used)]
+//! The surface bench on 150 real `val` frames of the 331-pin TacTip
+//! (`../shared/real/tactip331-surface`, copied to a temporary folder) with
+//! the shipped `models/pose-surface`: the gain table says what the estimates
+//! follow of each target by tap depth, and the shallow taps' twist, where
+//! the skin slips on the surface, is followed least.
+
+use std::path::{Path, PathBuf};
+
+use tactile_bench::models::ModelBench;
+use tactile_bench::surface::bench_surface;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Every `step`-th `val` row of the real set (its rows run by tap depth, so
+/// the subset spans every depth).
+fn val_subset(dir: &Path, step: usize) -> usize {
+    let real = root().join("../shared/real/tactip331-surface");
+    std::fs::create_dir_all(dir.join("frames")).unwrap();
+    let text = std::fs::read_to_string(real.join("labels.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut labels = format!("{}\n", lines.next().unwrap());
+    let mut n = 0;
+    for (k, l) in lines.filter(|l| l.ends_with(",val")).enumerate() {
+        if k % step == 0 {
+            let file = l.split(',').next().unwrap();
+            std::fs::copy(real.join(file), dir.join(file)).unwrap();
+            labels.push_str(l);
+            labels.push('\n');
+            n += 1;
+        }
+    }
+    std::fs::write(dir.join("labels.csv"), labels).unwrap();
+    let manifest = std::fs::read_to_string(real.join("manifest.json")).unwrap();
+    let mut m: serde_json::Value = serde_json::from_str(&manifest).unwrap();
+    m["count"] = n.into();
+    std::fs::write(dir.join("manifest.json"), m.to_string()).unwrap();
+    n
+}
+
+/// The cells of the gain table's row for `third` (six targets).
+fn gains(markdown: &str, third: &str) -> Vec<f64> {
+    let table = markdown.split("Gain by tap depth").nth(1).unwrap();
+    let row = table
+        .lines()
+        .find(|l| l.starts_with(&format!("| pose-surface | {third} |")))
+        .unwrap();
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    cells[5..11].iter().map(|c| c.parse().unwrap()).collect()
+}
+
+#[test]
+fn the_gain_table_shows_where_slide_and_twist_are_in_the_frame() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("val");
+    assert_eq!(val_subset(&data, 13), 154);
+    let bench = ModelBench {
+        models: vec![root().join("models/pose-surface")],
+        data,
+        select: None,
+        extreme: None,
+        runs: 1,
+    };
+    let table = bench_surface(&bench, None).unwrap();
+    let (shallow, deep) = (
+        gains(&table.markdown, "shallowest"),
+        gains(&table.markdown, "deepest"),
+    );
+    // Deep taps: every estimate follows its truth.
+    assert!(deep.iter().all(|g| (0.85..1.15).contains(g)), "{deep:?}");
+    // Shallow taps: depth, roll and pitch still do; twist least of all.
+    assert!(
+        shallow[..3].iter().all(|g| (0.85..1.15).contains(g)),
+        "{shallow:?}"
+    );
+    assert!(
+        shallow[5] < 0.7 && shallow[5] < shallow[3].min(shallow[4]),
+        "{shallow:?}"
+    );
+}
