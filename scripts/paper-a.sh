@@ -126,6 +126,8 @@ surface_step surface "$OUT/surface.md" data/surface/ms-k data/surface/p64-k9 dat
 # The edge+surface encoder with the CAE route's surface estimator too.
 surface_step surface_long "$OUT/surface-long.md" data/surface/ms-k-long data/surface/p64-k9-long data/surface/p64-k7-long \
     models/pose-surface models/cae-surface data/surface/cae56-edge-surface
+# The 9 px network on finer pins at the tip's centre (the central 240 px).
+surface_step surface_crop "$OUT/surface-crop.md" data/surface/p64-k9-c240
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
@@ -254,6 +256,15 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
         echo "The same split, three estimators (an MLP 256-128, ridge and k-NN) per feature set: the surface encoder's features, principal components and the raw pixels of its 56 px pin image, and pin tracking (blob centroids of the full-resolution frame matched to the pins of the first training frame, as displacements). Tracked displacements are the worst features for shear, each feature set with its best estimator (a pin that slides more than half the pin spacing is matched to its neighbour, or to none), and the raw pixels keep more twist than the encoder's 32 features: the multi-scale ensemble of CNNs on grey pin images above beats every one of them on every target. \`${CMD[surface_compare]}\`"
         echo
         body "$OUT/surface-compare.md"
+        echo
+    fi
+    if [ -f "$OUT/surface-crop.md" ]; then
+        echo "### Finer pins at the centre"
+        echo
+        [ -f docs/paper-a-surface-crop.md ] && cat docs/paper-a-surface-crop.md && echo
+        echo "\`${CMD[surface_crop]}\`"
+        echo
+        body "$OUT/surface-crop.md" | sed 's#](surface#](paper-a/surface#'
         echo
     fi
     echo "### One encoder for many tasks"

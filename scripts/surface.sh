@@ -77,6 +77,14 @@ wide_pair() {
         && '$BIN' train calibrate --model data/surface/ms-k$suffix --data '$DATA' --split val"
 }
 wide_pair "" "${SHORT[@]}"
+# Finer pins at the tip's centre: the 9 px network on the central 240 px
+# of the frame (a contact of a shallow tap lies there) at the same 64 px,
+# so each pin has 1.8x the pixels; scored apart (docs/paper-a.md, "Finer
+# pins at the centre").
+run p64-k9-c240 "$BIN" train pose --data "$DATA" --out data/surface/p64-k9-c240 \
+    --targets $T --crop-px 240 --mask-radius-px 215 --uncertainty --loss l1 --hidden 256 --val-fraction 0.1 \
+    "${K9[@]}" "${SHORT[@]}"
+run p64-k9-c240-calibrate "$BIN" train calibrate --model data/surface/p64-k9-c240 --data "$DATA" --split val
 # The same pair on a longer schedule: both networks were still improving
 # at epoch 25 (best epochs 22 and 24 of the shipped members), so 60 epochs
 # with the learning rate decaying 0.96 a epoch (ending near the 25-epoch
