@@ -10,7 +10,7 @@
 use std::io::Read;
 
 /// A reader that notes, as bytes pass, where each run of content after a
-/// line ending starts and on which line.
+/// line ending (`\n`, `\r\n` or a lone `\r`) starts and on which line.
 ///
 /// csv gives a record's position as the byte after the previous record's
 /// terminator, which for CRLF is the `\n` and before blank lines is the
@@ -21,6 +21,7 @@ pub struct LineCounting<R> {
     offset: u64,
     line: usize,
     after_line_end: bool,
+    after_cr: bool,
     starts: Vec<(u64, usize)>,
 }
 
@@ -32,6 +33,7 @@ impl<R: Read> LineCounting<R> {
             offset: 0,
             line: 1,
             after_line_end: true,
+            after_cr: false,
             starts: Vec::new(),
         }
     }
@@ -50,18 +52,20 @@ impl<R: Read> Read for LineCounting<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = self.inner.read(buf)?;
         for (i, &b) in buf[..n].iter().enumerate() {
+            // A line ends at `\n`, `\r\n` or a lone `\r` (as csv reads them).
             match b {
-                b'\n' => {
+                b'\n' if self.after_cr => {}
+                b'\n' | b'\r' => {
                     self.line += 1;
                     self.after_line_end = true;
                 }
-                b'\r' => {}
                 _ if self.after_line_end => {
                     self.starts.push((self.offset + i as u64, self.line));
                     self.after_line_end = false;
                 }
                 _ => {}
             }
+            self.after_cr = b == b'\r';
         }
         self.offset += n as u64;
         Ok(n)
@@ -126,6 +130,7 @@ mod tests {
         assert_eq!(lines("a,b\r\n1,2\r\n\r\n3,4"), [2, 4]);
         assert_eq!(lines("a,b\n\"x\ny\",2\n3,4\n"), [2, 4]);
         assert_eq!(lines("a,b\n\n\n1,2\r\n\r\n\r\n3,4"), [4, 7]);
+        assert_eq!(lines("a,b\r1,2\r\r3,4\r"), [2, 4]);
     }
 
     #[test]

@@ -179,7 +179,8 @@ impl Dataset {
             return Err(Error::dataset(
                 &manifest_path,
                 None,
-                "missing manifest.json",
+                "missing: this is not a dataset folder (docs/datasets.md); \
+                 `tactile dataset from-video --video FOLDER --labels CSV` makes one of a folder of frames",
             ));
         }
         let manifest: Manifest = crate::io::read_json(&manifest_path)?;
@@ -625,6 +626,13 @@ mod tests {
         std::fs::write(d.path().join("manifest.json"), "{ not json").unwrap();
         let e = Dataset::open(d.path()).unwrap_err().to_string();
         assert!(e.contains("manifest.json"), "{e}");
+        // A folder of frames alone is told how to become a dataset.
+        std::fs::remove_file(d.path().join("manifest.json")).unwrap();
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("manifest.json") && e.contains("from-video"),
+            "{e}"
+        );
     }
 
     #[test]
