@@ -70,6 +70,10 @@ pub struct CaeOptions {
     #[command(flatten)]
     #[serde(flatten)]
     pub holdout: TestHoldoutArgs,
+    /// Train on the rows of every split (`val`, `test` too; --val-fraction of them still stop it): the final model, its recipe chosen on a run that left them out.
+    #[arg(long)]
+    #[serde(default)]
+    pub every_split: bool,
     /// The schedule, the device and resuming.
     #[command(flatten)]
     #[serde(flatten)]
@@ -118,6 +122,13 @@ impl CaeOptions {
             )?,
             None => Vec::new(),
         };
+        if self.every_split && self.holdout.holdout().is_some() {
+            return Err(tactile_core::Error::Config(
+                "every_split trains on the test frames that exclude_test leaves out: give one"
+                    .into(),
+            )
+            .into());
+        }
         let s = &self.schedule;
         Ok(CaeTrainingConfig::new()
             .with_model(model)
@@ -126,6 +137,7 @@ impl CaeOptions {
             .with_optimizer(self.optimizer)
             .with_val_fraction(self.val_fraction)
             .with_holdout(self.holdout.holdout())
+            .with_every_split(self.every_split)
             .with_rotation(self.rotate.augment(s.seed))
             .with_joint(self.joint.config()?)
             .with_shift((self.shift != 0.0).then_some(self.shift))

@@ -71,6 +71,11 @@ pub struct CaeTrainingConfig {
     /// evaluation with this split holds out, so the encoder never sees them.
     #[config(default = "None")]
     pub holdout: Option<TestHoldout>,
+    /// Train on the rows of every split (`val`, `test` too), still holding
+    /// `val_fraction` of them out to stop on: the final model, its recipe
+    /// chosen on a run that left them out.
+    #[config(default = false)]
+    pub every_split: bool,
     /// Rotation augmentation: each epoch, each training frame is seen as
     /// it is or as one of its turned copies (equally likely), so the
     /// features also describe frames of a sensor mounted turned.
@@ -126,7 +131,11 @@ impl Rows {
         };
         for s in sources {
             let offset = rows.pins.len();
-            let usable = s.ds.training_rows(config.holdout)?;
+            let usable = if config.every_split {
+                (0..s.ds.len()).collect()
+            } else {
+                s.ds.training_rows(config.holdout)?
+            };
             let (train, val) = hold_out(usable, config.val_fraction, config.schedule.seed)
                 .map_err(|e| {
                     tactile_core::Error::dataset(s.ds.labels_path(), None, e.to_string())
@@ -217,6 +226,7 @@ pub fn train(
         "trained_on": data.root.display().to_string(),
         "device": device.name(),
         "excluded_test": config.holdout,
+        "every_split": config.every_split,
     });
     if !extra.is_empty() {
         notes["also_trained_on"] = extra

@@ -63,6 +63,10 @@ pub struct RegressorOptions {
     /// Split and weight seed.
     #[arg(long, default_value_t = RegressorConfig::new(0, vec![]).schedule.seed)]
     pub seed: u64,
+    /// Train on the frames of every split (`val`, `test` too; --val-fraction of them still stop it): the final model, its recipe chosen on a run that left them out.
+    #[arg(long)]
+    #[serde(default)]
+    pub every_split: bool,
     /// Training device.
     #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
     pub device: DeviceKind,
@@ -96,6 +100,7 @@ impl RegressorOptions {
             test_fraction: self.test_fraction,
             val_fraction: self.val_fraction,
             seed: self.seed,
+            every_split: self.every_split,
             only_labelled: self.only_labelled,
             shapes: self.shapes.clone(),
             loss: self.loss,

@@ -380,6 +380,9 @@ pub struct RegressorPlan {
     pub val_fraction: f64,
     /// Split and weight seed.
     pub seed: u64,
+    /// Train on the frames of every split (`val`, `test` too; a share of
+    /// them still stops it): the final model.
+    pub every_split: bool,
     /// Use only frames where every target is labelled; otherwise an empty
     /// label is an error.
     pub only_labelled: bool,
@@ -403,6 +406,7 @@ impl RegressorPlan {
             test_fraction: 0.2,
             val_fraction: 0.2,
             seed: defaults.schedule.seed,
+            every_split: false,
             only_labelled: false,
             shapes: Vec::new(),
             loss: RegressionLoss::Mse,
@@ -472,12 +476,17 @@ pub fn train_regressor(
             Ok(Some(row))
         })
         .collect::<tactile_core::Result<Vec<_>>>()?;
-    let mut s = if plan.test_fraction == 0.0 {
-        // The final model: every frame trains, a share of them for early
-        // stopping; nothing is left to test on.
-        let (train, val) =
-            tactile_core::dataset::hold_out(ds.training_rows(None)?, plan.val_fraction, plan.seed)
-                .map_err(|e| tactile_core::Error::dataset(ds.labels_path(), None, e.to_string()))?;
+    let mut s = if plan.test_fraction == 0.0 || plan.every_split {
+        // The final model: every frame trains (of every split with
+        // `every_split`), a share of them for early stopping; nothing is
+        // left to test on.
+        let rows = if plan.every_split {
+            (0..ds.len()).collect()
+        } else {
+            ds.training_rows(None)?
+        };
+        let (train, val) = tactile_core::dataset::hold_out(rows, plan.val_fraction, plan.seed)
+            .map_err(|e| tactile_core::Error::dataset(ds.labels_path(), None, e.to_string()))?;
         tactile_core::dataset::Splits {
             train,
             val,
@@ -489,7 +498,8 @@ pub fn train_regressor(
     for rows in [&mut s.train, &mut s.val, &mut s.test] {
         rows.retain(|&i| labels[i].is_some());
     }
-    if s.train.is_empty() || s.val.is_empty() || (s.test.is_empty() && plan.test_fraction > 0.0) {
+    let wants_test = plan.test_fraction > 0.0 && !plan.every_split;
+    if s.train.is_empty() || s.val.is_empty() || (s.test.is_empty() && wants_test) {
         return Err(tactile_core::Error::dataset(
             ds.labels_path(),
             None,

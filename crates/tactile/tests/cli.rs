@@ -428,6 +428,90 @@ fn demo_runs_on_the_shipped_model_and_samples() {
 }
 
 #[test]
+fn every_split_trains_the_final_cae_and_regressor_on_val_frames_too() {
+    // 12 synthetic frames with the authors' kind of `split` column: 8
+    // `train`, 4 `val`.
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("set");
+    let d = data.to_str().unwrap();
+    let (ok, msg) = tactile(&["synth", "tactip", "--count", "12", "--out", d]);
+    assert!(ok, "{msg}");
+    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
+    let mut text = String::new();
+    for (i, l) in labels.lines().enumerate() {
+        let split = match i {
+            0 => "split",
+            1..=8 => "train",
+            _ => "val",
+        };
+        text.push_str(&format!("{l},{split}\n"));
+    }
+    std::fs::write(data.join("labels.csv"), text).unwrap();
+    let frames = |dir: &Path| -> u64 {
+        let t: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("training.json")).unwrap())
+                .unwrap();
+        t["train_frames"].as_u64().unwrap() + t["val_frames"].as_u64().unwrap()
+    };
+    let cae = |out: &Path, extra: &[&str]| {
+        let base = ["train", "cae", "--data", d, "--out", out.to_str().unwrap()];
+        tactile(
+            &[
+                &base[..],
+                &["--max-epochs", "1", "--val-fraction", "0.25"],
+                extra,
+            ]
+            .concat(),
+        )
+    };
+    let (validated, all) = (tmp.path().join("validated"), tmp.path().join("all"));
+    let (ok, msg) = cae(&validated, &[]);
+    assert!(ok, "{msg}");
+    assert_eq!(
+        frames(&validated),
+        8,
+        "the validated run reads `train` alone"
+    );
+    let (ok, msg) = cae(&all, &["--every-split"]);
+    assert!(ok, "{msg}");
+    assert_eq!(frames(&all), 12, "the final run reads `val` too");
+    let art: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(all.join("cae.json")).unwrap()).unwrap();
+    assert_eq!(art["notes"]["every_split"], true);
+    // Leaving test frames out and training on every split contradict.
+    let bad = tmp.path().join("bad");
+    let (ok, msg) = cae(&bad, &["--every-split", "--exclude-test", "0.2"]);
+    assert!(!ok && msg.contains("every_split"), "{msg}");
+    assert!(!bad.join("cae.json").exists());
+    // Its estimator: scored on `val` when validated; with --every-split
+    // every frame trains and nothing is left to test.
+    let reg = |out: &Path, extra: &[&str]| {
+        let base = [
+            "train",
+            "regressor",
+            "--encoder",
+            all.to_str().unwrap(),
+            "--data",
+            d,
+            "--targets",
+            "depth_mm",
+            "--val-fraction",
+            "0.25",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        tactile(&[&base[..], extra].concat())
+    };
+    let (ok, msg) = reg(&tmp.path().join("reg"), &[]);
+    assert!(ok && msg.contains("4 test"), "{msg}");
+    let (ok, msg) = reg(&all.join("pose"), &["--every-split"]);
+    assert!(
+        ok && msg.contains("every frame trained (3 for early stopping)"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn regressor_names_a_missing_label_and_a_bad_target() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("spheres");
