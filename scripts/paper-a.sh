@@ -115,7 +115,7 @@ surface_step() {
         KEPT[$name]=1
     fi
 }
-# The CAE route's candidates (models/cae-surface is cae56-k9-long's): the
+# The CAE route's candidates (models/cae-surface-train is cae56-k9-long's): the
 # narrow-kernel encoder before it, and the 7 px one.
 surface_step surface "$OUT/surface.md" data/surface/ms-k data/surface/p64-k9 data/surface/p64-k7 data/surface/ms \
     data/surface/p128 data/surface/p96 data/surface/p64 data/surface/cae56-k7 data/surface/cae56 \
@@ -125,19 +125,19 @@ surface_step surface "$OUT/surface.md" data/surface/ms-k data/surface/p64-k9 dat
 # route on its longer schedule), so they are scored here.
 # The edge+surface encoder with the CAE route's surface estimator too.
 surface_step surface_long "$OUT/surface-long.md" data/surface/ms-k-long data/surface/p64-k9-long data/surface/p64-k7-long \
-    models/pose-surface models/cae-surface data/surface/cae56-edge-surface
+    models/pose-surface models/cae-surface-train models/cae-surface data/surface/cae56-edge-surface
 # The 9 px network on finer pins at the tip's centre (the central 240 px).
 surface_step surface_crop "$OUT/surface-crop.md" data/surface/p64-k9-c240
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
 if [ -n "${PAPER_A_SURFACE_COMPARE:-}" ]; then
-    step surface_compare compare --encoder models/cae-surface --data "$REAL/tactip331-surface" \
+    step surface_compare compare --encoder models/cae-surface-train --data "$REAL/tactip331-surface" \
         --targets "$SURFACE_TARGETS" --out "$OUT/surface-compare.md"
 else
-    CMD[surface_compare]="tactile compare --encoder models/cae-surface --data $REAL/tactip331-surface --targets $SURFACE_TARGETS --out $OUT/surface-compare.md (PAPER_A_SURFACE_COMPARE=1)"
+    CMD[surface_compare]="tactile compare --encoder models/cae-surface-train --data $REAL/tactip331-surface --targets $SURFACE_TARGETS --out $OUT/surface-compare.md (PAPER_A_SURFACE_COMPARE=1)"
 fi
-step shared bench shared-encoder --encoders models/cae-edge models/cae-shapes models/cae-surface models/cae-edge-surface models/cae-edge-unsupervised \
+step shared bench shared-encoder --encoders models/cae-edge models/cae-shapes models/cae-surface-train models/cae-edge-surface models/cae-edge-unsupervised \
     --tasks configs/bench/shared-encoder.json --real "$REAL" --out "$OUT/shared-encoder.md"
 # The edge+surface encoder trained without the edge set's test frames,
 # scored on them as the edge-only CAE routes of section 3 were.

@@ -193,6 +193,14 @@ run ship-cae bash -c "rm -rf models/.cae-surface-new && mkdir -p models/.cae-sur
     && cp $SHIP_CAE/cae.* $SHIP_CAE/curves.* $SHIP_CAE/training.json models/.cae-surface-new/ \
     && cp $SHIP_CAE/pose/regressor.* models/.cae-surface-new/pose/"
 [ -f models/.cae-surface-new/pose/regressor.json ] && ship cae-surface models/.cae-surface-new
+# The validated CAE route (trained on `train` alone) is shipped beside it,
+# so the tables that score it on `val` and the shared-encoder table's own
+# surface encoder are on frames it never saw.
+VALIDATED_CAE=data/surface/cae56-k9-long
+run ship-cae-train bash -c "rm -rf models/.cae-surface-train-new && mkdir -p models/.cae-surface-train-new/pose \
+    && cp $VALIDATED_CAE/cae.* $VALIDATED_CAE/curves.* $VALIDATED_CAE/training.json models/.cae-surface-train-new/ \
+    && cp $VALIDATED_CAE/pose/regressor.* models/.cae-surface-train-new/pose/"
+[ -f models/.cae-surface-train-new/pose/regressor.json ] && ship cae-surface-train models/.cae-surface-train-new
 # The edge+surface encoder is shipped for the shared-encoder table (its
 # estimators are fitted there, per task).
 run ship-cae-edge-surface bash -c "rm -rf models/.cae-edge-surface-new && mkdir -p models/.cae-edge-surface-new \
