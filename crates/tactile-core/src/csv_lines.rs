@@ -7,6 +7,8 @@
 //! [`LineCounting`], which notes where each line ends as bytes pass, and
 //! look a record's byte offset up in it.
 
+use std::cell::RefCell;
+use std::collections::VecDeque;
 use std::io::Read;
 
 /// A reader that notes, as bytes pass, where each run of content after a
@@ -15,6 +17,8 @@ use std::io::Read;
 /// csv gives a record's position as the byte after the previous record's
 /// terminator, which for CRLF is the `\n` and before blank lines is the
 /// first of them; the record itself starts at the next content byte.
+/// Records are looked up in order, so the starts before the last one
+/// looked up are forgotten: memory stays within what csv has read ahead.
 #[derive(Debug)]
 pub struct LineCounting<R> {
     inner: R,
@@ -22,7 +26,7 @@ pub struct LineCounting<R> {
     line: usize,
     after_line_end: bool,
     after_cr: bool,
-    starts: Vec<(u64, usize)>,
+    starts: RefCell<VecDeque<(u64, usize)>>,
 }
 
 impl<R: Read> LineCounting<R> {
@@ -34,7 +38,7 @@ impl<R: Read> LineCounting<R> {
             line: 1,
             after_line_end: true,
             after_cr: false,
-            starts: Vec::new(),
+            starts: RefCell::new(VecDeque::new()),
         }
     }
 }
@@ -42,9 +46,12 @@ impl<R: Read> LineCounting<R> {
 impl<R> LineCounting<R> {
     /// The 1-based line of the first content byte at or after `byte`
     /// (`\r` and `\n` are not content); the last line when none follows.
+    /// Lines before it are forgotten: ask in increasing order of `byte`.
     pub fn line_at(&self, byte: u64) -> usize {
-        let i = self.starts.partition_point(|&(at, _)| at < byte);
-        self.starts.get(i).map_or(self.line, |&(_, line)| line)
+        let mut starts = self.starts.borrow_mut();
+        let i = starts.partition_point(|&(at, _)| at < byte);
+        starts.drain(..i);
+        starts.front().map_or(self.line, |&(_, line)| line)
     }
 }
 
@@ -60,7 +67,9 @@ impl<R: Read> Read for LineCounting<R> {
                     self.after_line_end = true;
                 }
                 _ if self.after_line_end => {
-                    self.starts.push((self.offset + i as u64, self.line));
+                    self.starts
+                        .get_mut()
+                        .push_back((self.offset + i as u64, self.line));
                     self.after_line_end = false;
                 }
                 _ => {}
@@ -131,6 +140,23 @@ mod tests {
         assert_eq!(lines("a,b\n\"x\ny\",2\n3,4\n"), [2, 4]);
         assert_eq!(lines("a,b\n\n\n1,2\r\n\r\n\r\n3,4"), [4, 7]);
         assert_eq!(lines("a,b\r1,2\r\r3,4\r"), [2, 4]);
+    }
+
+    #[test]
+    fn a_long_file_keeps_only_the_lines_csv_has_read_ahead() {
+        let text: String = std::iter::once("a,b\r\n".to_string())
+            .chain((0..100_000).map(|i| format!("{i},x\r\n")))
+            .collect();
+        let mut r = reader(&csv::ReaderBuilder::new(), text.as_bytes());
+        let mut last = 1;
+        for item in records(&mut r) {
+            let (line, _) = item.unwrap();
+            assert_eq!(line, last + 1);
+            last = line;
+        }
+        assert_eq!(last, 100_001);
+        // Every line looked up was forgotten as the next was asked for.
+        assert!(r.get_ref().starts.borrow().len() <= 1);
     }
 
     #[test]
