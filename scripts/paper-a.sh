@@ -150,6 +150,19 @@ fi
 
 # Drop each table's own first line (the machine) where the header has it.
 body() { grep -v '^Machine:' "$1"; }
+# A surface subsection, when its table is there: heading, its prose
+# (docs/paper-a-NAME.md), the command and the table with its pictures.
+surface_section() {
+    local title=$1 name=$2 table=$3 prose=docs/paper-a-${3##*/}
+    [ -f "$table" ] || return 0
+    echo "### $title"
+    echo
+    [ -f "$prose" ] && cat "$prose" && echo
+    echo "\`${CMD[$name]}\`"
+    echo
+    body "$table" | sed 's#](surface#](paper-a/surface#'
+    echo
+}
 
 tmp=$(mktemp docs/.paper-a.md.XXXXXX)
 {
@@ -241,15 +254,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
         echo "This table is kept from its last run (its candidates are no longer in data/surface): its pose-surface and cae-surface rows are the models shipped when it was made (here the 25-epoch pair and the 40-epoch CAE, the prose above says). The models shipped now are scored in the next section's table. \`git log docs/paper-a/surface.md\` says when each table was made."
         echo
     fi
-    if [ -f "$OUT/surface-long.md" ]; then
-        echo "### The longer schedule: the wide-kernel pair and the shipped models"
-        echo
-        [ -f docs/paper-a-surface-long.md ] && cat docs/paper-a-surface-long.md && echo
-        echo "\`${CMD[surface_long]}\`"
-        echo
-        body "$OUT/surface-long.md" | sed 's#](surface#](paper-a/surface#'
-        echo
-    fi
+    surface_section "The longer schedule: the wide-kernel pair and the shipped models" surface_long "$OUT/surface-long.md"
     if [ -f "$OUT/surface-compare.md" ]; then
         echo "### Which representation carries shear"
         echo
@@ -258,15 +263,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
         body "$OUT/surface-compare.md"
         echo
     fi
-    if [ -f "$OUT/surface-crop.md" ]; then
-        echo "### Finer pins at the centre"
-        echo
-        [ -f docs/paper-a-surface-crop.md ] && cat docs/paper-a-surface-crop.md && echo
-        echo "\`${CMD[surface_crop]}\`"
-        echo
-        body "$OUT/surface-crop.md" | sed 's#](surface#](paper-a/surface#'
-        echo
-    fi
+    surface_section "Finer pins at the centre" surface_crop "$OUT/surface-crop.md"
     echo "### One encoder for many tasks"
     echo
     echo "\`${CMD[shared]}\`"

@@ -157,8 +157,8 @@ pub fn bench_surface(
         };
         let (mut mae, mut ratio, mut panels) = (Vec::new(), Vec::new(), Vec::new());
         let (mut cov68, mut cov95) = (Vec::new(), Vec::new());
-        let mut errors_by_target: Vec<Vec<f64>> = Vec::new();
-        // Per target and scored row, (truth, estimate); NaN when unlabelled.
+        // Per target and scored row, (truth, estimate); NaN when unlabelled:
+        // the depth thirds' errors and gains.
         let mut pairs_by_target: Vec<Vec<(f64, f64)>> = Vec::new();
         // Per target, the MAE on the fitted frames.
         let mut fit_mae = Vec::new();
@@ -172,18 +172,14 @@ pub fn bench_surface(
             };
             let std = number(&format!("{t}_std"));
             let mut points = Vec::with_capacity(rows.len());
-            // Per scored row its |error| (NaN when unlabelled), for the depth thirds.
-            let mut errors = Vec::with_capacity(rows.len());
             let mut pairs = Vec::with_capacity(rows.len());
             let (mut inside68, mut inside95) = (0usize, 0usize);
             for &i in &rows {
                 let Some(truth) = ds.number_opt(i, t)? else {
-                    errors.push(f64::NAN);
                     pairs.push((f64::NAN, f64::NAN));
                     continue;
                 };
                 let e = (pred[i] - truth).abs();
-                errors.push(e);
                 pairs.push((truth, pred[i]));
                 points.push((truth, pred[i]));
                 if let Some(s) = std {
@@ -191,7 +187,6 @@ pub fn bench_surface(
                     inside95 += usize::from(e <= tactile_pose::uncertainty::Z95 * s[i]);
                 }
             }
-            errors_by_target.push(errors);
             pairs_by_target.push(pairs);
             let mut fit_errors = Vec::with_capacity(fitted.len());
             for &i in &fitted {
@@ -248,24 +243,17 @@ pub fn bench_surface(
                     .map(|&k| pairs[k])
                     .filter(|(t, _)| t.is_finite())
                     .unzip();
+                depth_md.push_str(&format!(
+                    " {:.3} |",
+                    tactile_core::metrics::mae(&est, &truth)
+                ));
                 gain_md.push_str(&format!(
                     " {:.2} |",
                     tactile_core::metrics::gain(&est, &truth)
                 ));
             }
-            gain_md.push('\n');
-            for e in &errors_by_target {
-                let v: Vec<f64> = third
-                    .iter()
-                    .map(|&k| e[k])
-                    .filter(|x| x.is_finite())
-                    .collect();
-                depth_md.push_str(&format!(
-                    " {:.3} |",
-                    v.iter().sum::<f64>() / v.len().max(1) as f64
-                ));
-            }
             depth_md.push('\n');
+            gain_md.push('\n');
         }
         let cov_cell = |v: &[f64]| {
             if v.is_empty() {

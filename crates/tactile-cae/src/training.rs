@@ -131,11 +131,7 @@ impl Rows {
         };
         for s in sources {
             let offset = rows.pins.len();
-            let usable = if config.every_split {
-                (0..s.ds.len()).collect()
-            } else {
-                s.ds.training_rows(config.holdout)?
-            };
+            let usable = s.ds.rows_to_fit(config.every_split, config.holdout)?;
             let (train, val) = hold_out(usable, config.val_fraction, config.schedule.seed)
                 .map_err(|e| {
                     tactile_core::Error::dataset(s.ds.labels_path(), None, e.to_string())

@@ -480,11 +480,7 @@ pub fn train_regressor(
         // The final model: every frame trains (of every split with
         // `every_split`), a share of them for early stopping; nothing is
         // left to test on.
-        let rows = if plan.every_split {
-            (0..ds.len()).collect()
-        } else {
-            ds.training_rows(None)?
-        };
+        let rows = ds.rows_to_fit(plan.every_split, None)?;
         let (train, val) = tactile_core::dataset::hold_out(rows, plan.val_fraction, plan.seed)
             .map_err(|e| tactile_core::Error::dataset(ds.labels_path(), None, e.to_string()))?;
         tactile_core::dataset::Splits {

@@ -167,11 +167,7 @@ pub fn train(
     tactile_core::dataset::check_output_dir(out, &[data])?;
     tactile_core::note!("preprocessing {} frames", data.len());
     let set = PoseSet::from_dataset(data, &config.preprocess, &config.targets)?;
-    let rows = if config.every_split == Some(true) {
-        (0..data.len()).collect()
-    } else {
-        data.training_rows(config.holdout)?
-    };
+    let rows = data.rows_to_fit(config.every_split == Some(true), config.holdout)?;
     let candidates = rows.len();
     let rows = set.labelled(&rows);
     if rows.len() < 2 && candidates >= 2 {

@@ -135,6 +135,21 @@ impl Dataset {
         })
     }
 
+    /// The rows a trainer fits: every row with `every_split` (the final
+    /// model, the `split` column's `val` and `test` rows too), else
+    /// [`Dataset::training_rows`].
+    pub fn rows_to_fit(
+        &self,
+        every_split: bool,
+        holdout: Option<TestHoldout>,
+    ) -> Result<Vec<usize>> {
+        if every_split {
+            Ok((0..self.len()).collect())
+        } else {
+            self.training_rows(holdout)
+        }
+    }
+
     /// Rows of `rows` whose `tendon` label is 1.
     pub fn tendon_rows(&self, rows: &[usize]) -> Result<Vec<usize>> {
         let mut out = Vec::new();
