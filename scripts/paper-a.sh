@@ -102,7 +102,8 @@ trained() {
     local m
     for m in "$@"; do
         [ -e "$m/INCOMPLETE" ] && return 1
-        [ -f "$m/pose.json" ] || [ -f "$m/ensemble.json" ] || { [ -f "$m/cae.json" ] && [ -f "$m/pose/regressor.json" ]; } || return 1
+        [ -f "$m/pose.json" ] || [ -f "$m/ensemble.json" ] \
+            || { [ -f "$m/cae.json" ] && { [ -f "$m/pose/regressor.json" ] || [ -f "$m/pose/ensemble.json" ]; }; } || return 1
     done
 }
 surface_step() {
@@ -123,9 +124,10 @@ surface_step surface "$OUT/surface.md" data/surface/ms-k data/surface/p64-k9 dat
 # The wide-kernel pair on a longer schedule, beside the pair it extends.
 # The shipped models now follow it (the pair on all 8,000 frames, the CAE
 # route on its longer schedule), so they are scored here.
-# The edge+surface encoder with the CAE route's surface estimator too.
+# The edge+surface encoder with the CAE route's surface estimator too, and
+# the CAE route's encoder with the first of its five averaged MLPs alone.
 surface_step surface_long "$OUT/surface-long.md" data/surface/ms-k-long data/surface/p64-k9-long data/surface/p64-k7-long \
-    models/pose-surface models/cae-surface-train models/cae-surface data/surface/cae56-edge-surface
+    models/pose-surface models/cae-surface-train models/cae-surface data/surface/cae56-k9-long data/surface/cae56-edge-surface
 # The 9 px network on finer pins at the tip's centre (the central 240 px).
 surface_step surface_crop "$OUT/surface-crop.md" data/surface/p64-k9-c240
 # Feature sets against each other on the surface split (pin tracking at full

@@ -93,7 +93,8 @@ pub fn bench_surface(
         "Scored on the {} frames of the authors' held-out split; a model trained on them too is marked. \
          Each error cell gives the error and, in brackets, its ratio to the authors' CNN (goal: at most {GOAL_FRACTION}). \
          Coverage: the fraction of frames whose error lies inside the model's ±1 and ±1.96 standard deviation intervals (68.3 % and 95 % when calibrated), mean over the targets (range); \
-         for a model whose deviations were calibrated on these frames (`tactile train calibrate --split`), cross-fitted: calibrated on one half, measured on the other, both ways (marked \"cross-fitted\").\n\n",
+         for a model whose deviations were calibrated on these frames (`tactile train calibrate --split`), cross-fitted: calibrated on one half, measured on the other, both ways (marked \"cross-fitted\"). \
+         An encoder's parameters and latency include its estimators' (an ensemble's every member), which run on burn's Flex beside onnxruntime.\n\n",
         rows.len()
     ));
     md.push_str("| model | kind | input | parameters |");

@@ -234,7 +234,7 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
             Estimator::Regressor(r) => {
                 let pred = r.predict(feats)?;
                 // A specialised regressor is scored on frames of its shapes.
-                let only = &r.artifact.shapes;
+                let only = &r.artifact().shapes;
                 let mine = |i: usize| {
                     only.is_empty() || shapes[i].is_some_and(|s| only.iter().any(|k| k == s))
                 };

@@ -7,6 +7,7 @@
 #![deny(missing_docs)]
 
 pub mod classical;
+pub mod ensemble;
 mod error;
 pub mod eval;
 pub mod head;
@@ -15,6 +16,7 @@ pub mod registry;
 pub mod regressor;
 pub mod target;
 
+pub use ensemble::RegressorEnsemble;
 pub use error::{Error, Result};
 pub use head::{ClassifierHead, HeadArtifact, HeadConfig};
 pub use mlp::{Activation, Mlp};

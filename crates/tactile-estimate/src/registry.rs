@@ -7,16 +7,16 @@ use std::path::{Path, PathBuf};
 use burn::tensor::Device;
 use tactile_burn::Artifact;
 
+use crate::ensemble::RegressorEnsemble;
 use crate::head::{ClassifierHead, HeadArtifact};
-use crate::regressor::{Regressor, RegressorArtifact};
 use crate::{Error, Result};
 
 /// A trained estimator on an encoder's features.
 pub enum Estimator {
     /// A shape classifier.
-    Classifier(ClassifierHead),
-    /// A regressor of one or more targets.
-    Regressor(Regressor),
+    Classifier(Box<ClassifierHead>),
+    /// A regressor of one or more targets, or an ensemble of them.
+    Regressor(RegressorEnsemble),
 }
 
 /// The name of a classifier's output column.
@@ -25,20 +25,22 @@ pub const CLASS_COLUMN: &str = "shape";
 impl Estimator {
     /// True when `dir` holds an estimator.
     pub fn is_in(dir: &Path) -> bool {
-        HeadArtifact::is_in(dir) || RegressorArtifact::is_in(dir)
+        HeadArtifact::is_in(dir) || RegressorEnsemble::is_in(dir)
     }
 
     /// Load the estimator in `dir`.
     pub fn load(dir: &Path, device: &Device) -> Result<Self> {
         if HeadArtifact::is_in(dir) {
-            Ok(Self::Classifier(ClassifierHead::load(dir, device)?))
-        } else if RegressorArtifact::is_in(dir) {
-            Ok(Self::Regressor(Regressor::load(dir, device)?))
+            Ok(Self::Classifier(Box::new(ClassifierHead::load(
+                dir, device,
+            )?)))
+        } else if RegressorEnsemble::is_in(dir) {
+            Ok(Self::Regressor(RegressorEnsemble::load(dir, device)?))
         } else {
             Err(tactile_core::Error::wrong_kind(
                 dir,
                 "estimator folder",
-                "neither head.json nor regressor.json",
+                "neither head.json, regressor.json nor ensemble.json",
             )
             .into())
         }
@@ -48,7 +50,7 @@ impl Estimator {
     pub fn inputs(&self) -> usize {
         match self {
             Self::Classifier(h) => h.artifact.model.inputs,
-            Self::Regressor(r) => r.artifact.model.inputs,
+            Self::Regressor(r) => r.artifact().model.inputs,
         }
     }
 
@@ -56,7 +58,16 @@ impl Estimator {
     pub fn encoder(&self) -> Option<&str> {
         match self {
             Self::Classifier(h) => h.artifact.encoder.as_deref(),
-            Self::Regressor(r) => r.artifact.encoder.as_deref(),
+            Self::Regressor(r) => r.artifact().encoder.as_deref(),
+        }
+    }
+
+    /// Its weights and biases (an ensemble's summed).
+    pub fn parameters(&self) -> usize {
+        use burn::module::Module;
+        match self {
+            Self::Classifier(h) => h.net.num_params(),
+            Self::Regressor(r) => r.members.iter().map(|m| m.mlp.num_params()).sum(),
         }
     }
 
@@ -125,7 +136,7 @@ impl Estimators {
         }
         if dirs.is_empty() {
             return Err(Error::NoEstimators(format!(
-                "{} has no folder with head.json or regressor.json; name estimator folders explicitly",
+                "{} has no folder with head.json, regressor.json or ensemble.json; name estimator folders explicitly",
                 encoder.display()
             )));
         }
@@ -139,6 +150,11 @@ impl Estimators {
     /// How many there are.
     pub fn len(&self) -> usize {
         self.items.len()
+    }
+
+    /// Their weights and biases, summed.
+    pub fn parameters(&self) -> usize {
+        self.items.iter().map(|(_, e)| e.parameters()).sum()
     }
 
     /// True when there are none.
@@ -185,7 +201,7 @@ impl Estimators {
                     let names = p.iter().map(|&c| h.classes()[c].clone()).collect();
                     columns.push((CLASS_COLUMN.to_string(), Column::Class(names)));
                 }
-                Estimator::Regressor(r) if !r.artifact.shapes.is_empty() => specialised.push(r),
+                Estimator::Regressor(r) if !r.artifact().shapes.is_empty() => specialised.push(r),
                 Estimator::Regressor(r) => {
                     let p = r.predict(feats)?;
                     for (j, t) in r.targets().iter().enumerate() {
@@ -207,7 +223,7 @@ impl Estimators {
             let applies = |i: usize| {
                 shapes
                     .as_ref()
-                    .is_none_or(|s| r.artifact.shapes.contains(&s[i]))
+                    .is_none_or(|s| r.artifact().shapes.contains(&s[i]))
             };
             for (j, t) in r.targets().iter().enumerate() {
                 match columns.iter_mut().find(|c| c.0 == t.name) {

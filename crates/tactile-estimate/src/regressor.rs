@@ -314,6 +314,18 @@ impl Regressor {
 
     /// Predictions, one row of target values per feature vector.
     pub fn predict(&self, x: &[Vec<f32>]) -> Result<Vec<Vec<f64>>> {
+        let targets = &self.artifact.model.targets;
+        Ok(self
+            .predict_columns(x)?
+            .iter()
+            .map(|cols| decode_columns(targets, cols))
+            .collect())
+    }
+
+    /// The network's outputs per feature vector in their own units, before
+    /// decoding (an angle's cos/sin pair): what an ensemble averages, so
+    /// that angles are averaged on the circle.
+    pub fn predict_columns(&self, x: &[Vec<f32>]) -> Result<Vec<Vec<f64>>> {
         let a = &self.artifact;
         check_features(x, a.model.inputs)?;
         if x.is_empty() {
@@ -332,26 +344,27 @@ impl Regressor {
             .convert::<f32>()
             .try_to_vec::<f32>()
             .map_err(|e| tactile_core::Error::Invalid(format!("reading predictions: {e:?}")))?;
-        Ok(out
-            .chunks(m)
-            .map(|r| decode(&a.model.targets, &a.outputs, r))
-            .collect())
+        Ok(out.chunks(m).map(|r| a.outputs.unscale(r)).collect())
     }
 
     /// Mean absolute error per target on `(x, y)`.
     pub fn evaluate(&self, x: &[Vec<f32>], y: &[Vec<f64>]) -> Result<Vec<f64>> {
-        let pred = self.predict(x)?;
-        Ok(self
-            .targets()
-            .iter()
-            .enumerate()
-            .map(|(j, t)| {
-                let p: Vec<f64> = pred.iter().map(|r| r[j]).collect();
-                let tr: Vec<f64> = y.iter().map(|r| r[j]).collect();
-                t.mae(&p, &tr)
-            })
-            .collect())
+        Ok(mae_per_target(self.targets(), &self.predict(x)?, y))
     }
+}
+
+/// Mean absolute error per target of prediction rows against label rows
+/// (angles on their circle).
+pub fn mae_per_target(targets: &[Target], pred: &[Vec<f64>], y: &[Vec<f64>]) -> Vec<f64> {
+    targets
+        .iter()
+        .enumerate()
+        .map(|(j, t)| {
+            let p: Vec<f64> = pred.iter().map(|r| r[j]).collect();
+            let tr: Vec<f64> = y.iter().map(|r| r[j]).collect();
+            t.mae(&p, &tr)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -212,7 +212,7 @@ impl PyTactipEncoder {
     ) -> PyResult<Bound<'py, PyDict>> {
         if self.names.is_empty() {
             return Err(PyValueError::new_err(format!(
-                "{}: this encoder has no estimators (no folder with head.json or regressor.json); train one or pass estimators=[...]",
+                "{}: this encoder has no estimators (no folder with head.json, regressor.json or ensemble.json); train one or pass estimators=[...]",
                 self.model_dir.display()
             )));
         }

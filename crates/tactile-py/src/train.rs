@@ -267,8 +267,9 @@ pub(crate) fn options<'py>(py: Python<'py>, trainer: &str) -> PyResult<Bound<'py
     crate::json::to_py(py, &docs)
 }
 
-/// Average models trained apart (pose networks, or detectors that read a
-/// frame alike) in a new ensemble folder; returns what was made, in words.
+/// Average models trained apart (pose networks, detectors that read a
+/// frame alike, or regressors on one encoder's features trained with other
+/// seeds) in a new ensemble folder; returns what was made, in words.
 #[pyfunction]
 pub(crate) fn train_ensemble(members: Vec<PathBuf>, out: PathBuf) -> PyResult<String> {
     tactile_pipeline::ensemble::assemble_ensemble(&members, &out).py()

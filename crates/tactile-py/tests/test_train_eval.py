@@ -162,6 +162,26 @@ def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
         tactile.train.head(data, encoder=enc, out=tmp_path / "h2", rotate_copies=99)
 
 
+def test_regressors_of_other_seeds_average_as_one_estimator(root, tmp_path):
+    spheres = tactile.synth.tactip(count=20, seed=7, out=tmp_path / "spheres", shapes=["sphere"],
+                                   progress=False)
+    enc = root / "models/cae-synth"
+    members = []
+    for seed in (7, 8):
+        out = tmp_path / f"seed{seed}"
+        tactile.train.regressor(spheres, ["x_mm", "y_mm"], encoder=enc, out=out, seed=seed,
+                                test_fraction=0.25)
+        members.append(out)
+    assert "2 regressors averaged" in tactile.train.ensemble(members, tmp_path / "ens")
+    ds = tactile.Dataset(spheres)
+    frames = [ds.frame(i) for i in range(len(ds))]
+    one = [tactile.TactipEncoder(enc, estimators=[m]).estimate(frames) for m in members]
+    both = tactile.TactipEncoder(enc, estimators=[tmp_path / "ens"]).estimate(frames)
+    assert set(both) == {"x_mm", "y_mm"}
+    for t in both:
+        assert abs(both[t] - (one[0][t] + one[1][t]) / 2).max() <= 1e-4, t
+
+
 def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):
     data = root / "samples/virtual-tactip"
     out = tmp_path / "joint"

@@ -15,7 +15,7 @@ pub(crate) struct EvaluateArgs {
     /// Trained encoder folder.
     #[arg(long)]
     encoder: PathBuf,
-    /// Estimator folders (default: every folder in ENCODER with head.json or regressor.json).
+    /// Estimator folders (default: every folder in ENCODER with head.json, regressor.json or ensemble.json).
     #[arg(long, num_args = 1..)]
     heads: Vec<PathBuf>,
     /// Labelled dataset (e.g. held-out synthetic frames).

@@ -16,8 +16,8 @@ pub(crate) struct PerceiveArgs {
     #[arg(long, visible_alias = "model")]
     encoder: PathBuf,
     /// Estimator folders: classifier heads (head.json) and regressors
-    /// (regressor.json), all run on the same feature vector (default:
-    /// every such folder inside ENCODER).
+    /// (regressor.json, or an ensemble of them: ensemble.json), all run on
+    /// the same feature vector (default: every such folder inside ENCODER).
     #[arg(long, num_args = 1..)]
     heads: Vec<PathBuf>,
     /// Dataset of frames to perceive.

@@ -11,7 +11,7 @@ pub(crate) struct RobustnessArgs {
     /// Trained encoder folder.
     #[arg(long)]
     encoder: PathBuf,
-    /// Estimator folders (default: every folder in ENCODER with head.json or regressor.json).
+    /// Estimator folders (default: every folder in ENCODER with head.json, regressor.json or ensemble.json).
     #[arg(long, num_args = 1..)]
     heads: Vec<PathBuf>,
     /// Labelled dataset of raw frames (held-out synthetic TacTip frames).

@@ -29,7 +29,7 @@ pub(crate) enum TrainCmd {
     Profile(ProfileArgs),
     /// Calibrate a trained model on frames it was not trained on: a detector's probabilities (one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer; decisions unchanged), or a pose network's deviations (one factor per target so ±1 holds 68.3 % of the errors; `--split val` takes a split's rows, `--calibration-from` a validated run's factors).
     Calibrate(CalibrateArgs),
-    /// Average models trained apart (pose networks, or detectors reading frames alike): copies them into one folder that every command and Python load as one model. A detector member's folded calibration is unfolded in its copy; calibrate the ensemble as a whole.
+    /// Average models trained apart (pose networks, detectors reading frames alike, or regressors on one encoder's features trained with other seeds): copies them into one folder that every command and Python load as one model (a regressor ensemble inside the encoder folder runs as one of its estimators). A detector member's folded calibration is unfolded in its copy; calibrate the ensemble as a whole.
     #[command(alias = "pose-ensemble")]
     Ensemble(EnsembleArgs),
     /// Measure the pin lattice's orientation on an encoder's training frames and save it with the encoder, so frames of a sensor mounted turned are turned back before encoding.
@@ -64,7 +64,7 @@ pub(crate) struct CalibrateArgs {
 
 #[derive(Args)]
 pub(crate) struct EnsembleArgs {
-    /// The member folders (pose networks or detectors).
+    /// The member folders (pose networks, detectors or regressors).
     #[arg(long, num_args = 1.., required = true)]
     members: Vec<PathBuf>,
     /// The new ensemble folder (an existing one is left alone).

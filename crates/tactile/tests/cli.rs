@@ -571,6 +571,43 @@ fn regressor_names_a_missing_label_and_a_bad_target() {
         "{msg}"
     );
     assert!(out.join("regressor.json").is_file() && out.join("regressor.bpk").is_file());
+    // Another seed's regressor is averaged with it as one estimator; one
+    // answering other targets is refused, and nothing is made.
+    let more = |dir: &Path, extra: &[&str]| {
+        let at = base.iter().position(|a| *a == "--out").unwrap();
+        let mut args = base.to_vec();
+        args[at + 1] = dir.to_str().unwrap();
+        args.extend(["--test-fraction", "0.25"]);
+        args.extend(extra);
+        tactile(&args)
+    };
+    let (seed8, other) = (tmp.path().join("seed8"), tmp.path().join("depth-only"));
+    let (ok, msg) = more(&seed8, &["--targets", "depth_mm,force_n", "--seed", "8"]);
+    assert!(ok, "{msg}");
+    let (ok, msg) = more(&other, &["--targets", "depth_mm"]);
+    assert!(ok, "{msg}");
+    let assemble = |members: &[&Path], to: &Path| {
+        let mut args = vec![
+            "train",
+            "ensemble",
+            "--out",
+            to.to_str().unwrap(),
+            "--members",
+        ];
+        args.extend(members.iter().map(|m| m.to_str().unwrap()));
+        tactile(&args)
+    };
+    let ens = tmp.path().join("ensemble");
+    let (ok, msg) = assemble(&[&out, &seed8], &ens);
+    assert!(ok && msg.contains("2 regressors averaged"), "{msg}");
+    assert!(ens.join("ensemble.json").is_file() && ens.join("member-1/regressor.bpk").is_file());
+    let refused = tmp.path().join("refused");
+    let (ok, msg) = assemble(&[&out, &other], &refused);
+    assert!(
+        !ok && msg.contains("targets differs") && msg.contains("depth-only"),
+        "{msg}"
+    );
+    assert!(!refused.exists());
 }
 
 #[test]
@@ -607,7 +644,7 @@ fn perceive_runs_every_shipped_estimator_on_one_encoding() {
         root.join("samples/virtual-tactip").to_str().unwrap(),
     ]);
     assert!(
-        !ok && msg.contains("neither head.json nor regressor.json"),
+        !ok && msg.contains("neither head.json, regressor.json nor ensemble.json"),
         "{msg}"
     );
 }
@@ -2446,29 +2483,46 @@ fn the_cae_route_on_surface_frames_it_never_saw_is_within_1_5x_of_the_best() {
     };
     assert_eq!(notes("cae-surface")["every_split"], true);
     assert_ne!(notes("cae-surface-train")["every_split"], true);
-    let (data, text) = predict_surface("cae-surface-train");
-    let truth = surface_truth(&data, Some("val"));
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let at = |n: &str| header.iter().position(|c| *c == n).unwrap();
-    let (mut err, mut n) = ([0f64; 6], 0usize);
-    for l in lines {
-        let c: Vec<&str> = l.split(',').collect();
-        let Some(y) = truth.get(c[0]) else { continue };
-        for (k, t) in SURFACE_TARGETS.iter().enumerate() {
-            err[k] += (c[at(t)].parse::<f64>().unwrap() - y[k]).abs();
+    let mae = |model: &str| {
+        let (data, text) = predict_surface(model);
+        let truth = surface_truth(&data, Some("val"));
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let at = |n: &str| header.iter().position(|c| *c == n).unwrap();
+        let (mut err, mut n) = ([0f64; 6], 0usize);
+        for l in lines {
+            let c: Vec<&str> = l.split(',').collect();
+            let Some(y) = truth.get(c[0]) else { continue };
+            for (k, t) in SURFACE_TARGETS.iter().enumerate() {
+                err[k] += (c[at(t)].parse::<f64>().unwrap() - y[k]).abs();
+            }
+            n += 1;
         }
-        n += 1;
-    }
-    assert_eq!(n, 2000);
+        assert_eq!(n, 2000);
+        err.map(|e| e / n as f64)
+    };
     let best = [0.099, 0.438, 0.496, 0.531, 0.533, 1.206];
+    let validated = mae("cae-surface-train");
     for k in 0..6 {
-        let mae = err[k] / n as f64;
         assert!(
-            mae <= 1.5 * best[k],
-            "{}: {mae} against the best model's {}",
+            validated[k] <= 1.5 * best[k],
+            "{}: {} against the best model's {}",
             SURFACE_TARGETS[k],
+            validated[k],
             best[k]
+        );
+    }
+    // The shipped pair, both trained on these frames too, stand alike: the
+    // CAE route's averaged estimator keeps it well inside 1.5x (1.15x on
+    // roll, the widest, in docs/paper-a/surface-long.md).
+    let (cae, pose) = (mae("cae-surface"), mae("pose-surface"));
+    for k in 0..6 {
+        assert!(
+            cae[k] <= 1.3 * pose[k],
+            "{}: the shipped CAE route's {} against the pose model's {}",
+            SURFACE_TARGETS[k],
+            cae[k],
+            pose[k]
         );
     }
 }

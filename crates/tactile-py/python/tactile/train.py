@@ -132,11 +132,14 @@ def options(trainer: str) -> List[Dict[str, Any]]:
 
 
 def ensemble(members: Sequence[PathLike], out: PathLike) -> str:
-    """Average models trained apart: pose networks, or detectors that read a
-    frame alike (input size, bits, exposure normalisation, threshold).
+    """Average models trained apart: pose networks, detectors that read a
+    frame alike (input size, bits, exposure normalisation, threshold), or
+    regressors on one encoder's features trained with other seeds.
     Copies them into the new folder ``out`` (an existing one is left alone)
     that ``PoseEstimator``, ``Pipeline`` and ``tactile.eval`` load as one
-    model; a detector ensemble is one network (the members' mean logit).
+    model; a detector ensemble is one network (the members' mean logit); a
+    regressor ensemble inside an encoder folder is one of the estimators
+    ``TactipEncoder`` runs (the members' mean).
     Returns what was made, in words.
     """
     return _tactile.train_ensemble([os.fspath(m) for m in members], os.fspath(out))
