@@ -25,9 +25,28 @@ pub struct RegressorEnsemble {
 
 impl RegressorEnsemble {
     /// Whether `dir` holds a regressor (`regressor.json`) or an ensemble
-    /// (`ensemble.json`; its members are checked on loading).
+    /// of them: an `ensemble.json` whose first member is not a folder of
+    /// another kind of model (a pose ensemble kept beside the estimators is
+    /// not one of them). Its members are checked on loading, which names
+    /// what is wrong with an unreadable one.
     pub fn is_in(dir: &Path) -> bool {
-        RegressorArtifact::is_in(dir) || Ensemble::is_in(dir)
+        if RegressorArtifact::is_in(dir) {
+            return true;
+        }
+        if !Ensemble::is_in(dir) {
+            return false;
+        }
+        let Ok(e) = tactile_core::io::read_json::<Ensemble>(&dir.join(Ensemble::FILE)) else {
+            return true;
+        };
+        e.members.first().is_none_or(|m| {
+            let mut parts = Path::new(m).components();
+            let plain = matches!(
+                (parts.next(), parts.next()),
+                (Some(std::path::Component::Normal(_)), None)
+            );
+            !(plain && dir.join(m).is_dir()) || RegressorArtifact::is_in(&dir.join(m))
+        })
     }
 
     /// Load the regressor in `dir`, or every member of the ensemble there,
@@ -180,6 +199,14 @@ mod tests {
         let encoder = tmp.path().join("encoder");
         let e = RegressorEnsemble::assemble(&[a, b], &encoder.join("pose")).unwrap();
         assert_eq!(e.members, ["member-0", "member-1"]);
+        // An ensemble of another kind of model kept there is not run.
+        std::fs::create_dir_all(encoder.join("pose-networks/member-0")).unwrap();
+        std::fs::write(
+            encoder.join("pose-networks/ensemble.json"),
+            r#"{"members": ["member-0"]}"#,
+        )
+        .unwrap();
+        std::fs::write(encoder.join("pose-networks/member-0/pose.json"), "{}").unwrap();
         let est = Estimators::load(&encoder, &[], &dev).unwrap();
         assert_eq!(est.len(), 1);
         let (tx, ty) = data(120, 5000);
