@@ -3,7 +3,8 @@
 //! (`../shared/real/tactip331-surface`, copied to a temporary folder) with
 //! the shipped `models/pose-surface`: the gain table says what the estimates
 //! follow of each target by tap depth, and the shallow taps' twist, where
-//! the skin slips on the surface, is followed least.
+//! the skin slips on the surface, is followed least; an encoder's row
+//! counts every member of its estimator.
 
 use std::path::{Path, PathBuf};
 
@@ -79,4 +80,53 @@ fn the_gain_table_shows_where_slide_and_twist_are_in_the_frame() {
         shallow[5] < 0.7 && shallow[5] < shallow[3].min(shallow[4]),
         "{shallow:?}"
     );
+}
+
+#[test]
+fn an_encoder_row_counts_every_member_of_its_estimator() {
+    // models/cae-surface-train's estimator averages five MLPs: its row in
+    // the table counts all of them beside the encoder, four more than the
+    // same encoder with its first member alone, whose estimates differ.
+    let shipped = root().join("models/cae-surface-train");
+    let tmp = tempfile::tempdir().unwrap();
+    let single = tmp.path().join("one-mlp");
+    std::fs::create_dir_all(single.join("pose")).unwrap();
+    for f in ["cae.json", "cae.bpk"] {
+        std::fs::copy(shipped.join(f), single.join(f)).unwrap();
+    }
+    for f in ["regressor.json", "regressor.bpk"] {
+        std::fs::copy(
+            shipped.join("pose/member-0").join(f),
+            single.join("pose").join(f),
+        )
+        .unwrap();
+    }
+    let data = tmp.path().join("val");
+    assert_eq!(val_subset(&data, 100), 20);
+    let bench = ModelBench {
+        models: vec![shipped, single],
+        data,
+        select: None,
+        extreme: None,
+        runs: 1,
+    };
+    let table = bench_surface(&bench, None).unwrap();
+    let row = |name: &str| -> Vec<String> {
+        let l = table
+            .markdown
+            .lines()
+            .find(|l| l.starts_with(&format!("| {name} |")))
+            .unwrap();
+        l.split('|').map(|c| c.trim().to_string()).collect()
+    };
+    let (five, one) = (row("cae-surface-train"), row("one-mlp"));
+    let params = |r: &[String]| r[4].parse::<usize>().unwrap();
+    let hidden: Vec<_> = [512, 256, 128]
+        .into_iter()
+        .map(|w| (w, tactile_estimate::Activation::Relu))
+        .collect();
+    let member = tactile_estimate::mlp::parameters(32, &hidden, 6) as usize;
+    assert_eq!(params(&five), params(&one) + 4 * member, "{five:?} {one:?}");
+    assert_eq!(five[2], "encoder + estimators");
+    assert_ne!(five[5..11], one[5..11]);
 }
