@@ -126,13 +126,13 @@ fn check_alike(
     dir: &Path,
 ) -> tactile_core::Result<()> {
     let differs = if first.model.inputs != other.model.inputs {
-        Some("its feature count")
+        Some("takes another feature count")
     } else if first.model.targets != other.model.targets {
-        Some("its targets")
+        Some("answers other targets")
     } else if first.encoder != other.encoder {
-        Some("its encoder")
+        Some("was trained on another encoder's features")
     } else if first.shapes != other.shapes {
-        Some("its shapes")
+        Some("answers for other shapes")
     } else {
         None
     };
@@ -140,7 +140,7 @@ fn check_alike(
         Some(what) => Err(tactile_core::Error::model(
             dir.join(RegressorArtifact::CONFIG_FILE),
             format!(
-                "{what} differs from the first member's; an ensemble averages regressors trained alike"
+                "this member {what} than the first; an ensemble averages regressors trained alike"
             ),
         )),
         None => Ok(()),
@@ -256,7 +256,7 @@ mod tests {
             .unwrap()
             .to_string();
         assert!(
-            err.contains("targets differs") && err.contains("b/regressor.json"),
+            err.contains("answers other targets") && err.contains("b/regressor.json"),
             "{err}"
         );
         assert!(!tmp.path().join("e").exists());

@@ -604,7 +604,7 @@ fn regressor_names_a_missing_label_and_a_bad_target() {
     let refused = tmp.path().join("refused");
     let (ok, msg) = assemble(&[&out, &other], &refused);
     assert!(
-        !ok && msg.contains("targets differs") && msg.contains("depth-only"),
+        !ok && msg.contains("answers other targets") && msg.contains("depth-only"),
         "{msg}"
     );
     assert!(!refused.exists());
