@@ -18,9 +18,9 @@ use crate::target::Target;
 /// One regressor, or an ensemble of them whose estimates are averaged: a
 /// regressor folder as the estimators load it.
 pub struct RegressorEnsemble {
-    /// The members, the first one's config standing for all (they share
-    /// inputs, targets, encoder and shapes).
-    pub members: Vec<Regressor>,
+    /// The members (at least one), the first one's config standing for all
+    /// (they share inputs, targets, encoder and shapes).
+    members: Vec<Regressor>,
 }
 
 impl RegressorEnsemble {
@@ -80,6 +80,11 @@ impl RegressorEnsemble {
             |_| Ok(serde_json::json!({})),
             |_| Ok(()),
         )?)
+    }
+
+    /// The members, in folder order.
+    pub fn members(&self) -> &[Regressor] {
+        &self.members
     }
 
     /// The config, scalers and provenance of the first member.

@@ -67,7 +67,7 @@ impl Estimator {
         use burn::module::Module;
         match self {
             Self::Classifier(h) => h.net.num_params(),
-            Self::Regressor(r) => r.members.iter().map(|m| m.mlp.num_params()).sum(),
+            Self::Regressor(r) => r.members().iter().map(|m| m.mlp.num_params()).sum(),
         }
     }
 
