@@ -12,6 +12,7 @@ use tactile_cae::data::PinSet;
 use tactile_cae::{CaeArtifact, TactipEncoder};
 use tactile_core::dataset::Dataset;
 use tactile_estimate::classical;
+use tactile_estimate::regressor::target_mae;
 use tactile_estimate::{
     Activation, ClassifierHead, HeadConfig, Regressor, RegressorConfig, Target,
 };
@@ -231,14 +232,9 @@ fn regression_table(
                 _ => mlp_regression(targets, [tx, vx, sx], (ty, vy), (hidden, seed), dev)?,
             };
             let secs = t0.elapsed().as_secs_f64();
-            let errs: Vec<String> = targets
+            let errs: Vec<String> = target_mae(targets, &pred, sy)
                 .iter()
-                .enumerate()
-                .map(|(j, t)| {
-                    let p: Vec<f64> = pred.iter().map(|r| r[j]).collect();
-                    let tr: Vec<f64> = sy.iter().map(|r| r[j]).collect();
-                    format!("{:.3}", t.mae(&p, &tr))
-                })
+                .map(|e| format!("{e:.3}"))
                 .collect();
             md.push_str(&format!(
                 "| {name} | {est} | {} | {secs:.1} |\n",

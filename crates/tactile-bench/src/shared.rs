@@ -11,6 +11,7 @@ use tactile_cae::data::PinSet;
 use tactile_cae::{CaeArtifact, TactipEncoder};
 use tactile_core::dataset::{DEFAULT_SPLIT_SEED, Dataset};
 use tactile_estimate::Target;
+use tactile_estimate::regressor::target_mae;
 use tactile_pipeline::tactip::classes_of;
 use tactile_preprocess::PreprocessConfig;
 
@@ -166,12 +167,8 @@ pub fn shared_encoders(encoders: &[PathBuf], tasks: &[Task], real: &Path) -> Res
                 )?;
                 targets
                     .iter()
-                    .enumerate()
-                    .map(|(j, tg)| {
-                        let p: Vec<f64> = pred.iter().map(|r| r[j]).collect();
-                        let y: Vec<f64> = sy.iter().map(|r| r[j]).collect();
-                        (tg.name.clone(), tg.mae(&p, &y))
-                    })
+                    .zip(target_mae(&targets, &pred, &sy))
+                    .map(|(tg, mae)| (tg.name.clone(), mae))
                     .collect()
             };
             cells.push(Cell {

@@ -12,7 +12,7 @@ use tactile_burn::Artifact;
 use tactile_burn::ensemble::Ensemble;
 
 use crate::Result;
-use crate::regressor::{Regressor, RegressorArtifact, decode_columns, mae_per_target};
+use crate::regressor::{Regressor, RegressorArtifact, decode_columns, target_mae};
 use crate::target::Target;
 
 /// One regressor, or an ensemble of them whose estimates are averaged: a
@@ -119,7 +119,7 @@ impl RegressorEnsemble {
 
     /// Mean absolute error per target on `(x, y)`.
     pub fn evaluate(&self, x: &[Vec<f32>], y: &[Vec<f64>]) -> Result<Vec<f64>> {
-        Ok(mae_per_target(self.targets(), &self.predict(x)?, y))
+        Ok(target_mae(self.targets(), &self.predict(x)?, y))
     }
 }
 

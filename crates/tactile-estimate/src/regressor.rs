@@ -349,13 +349,13 @@ impl Regressor {
 
     /// Mean absolute error per target on `(x, y)`.
     pub fn evaluate(&self, x: &[Vec<f32>], y: &[Vec<f64>]) -> Result<Vec<f64>> {
-        Ok(mae_per_target(self.targets(), &self.predict(x)?, y))
+        Ok(target_mae(self.targets(), &self.predict(x)?, y))
     }
 }
 
-/// Mean absolute error per target of prediction rows against label rows
-/// (angles on their circle).
-pub fn mae_per_target(targets: &[Target], pred: &[Vec<f64>], y: &[Vec<f64>]) -> Vec<f64> {
+/// Mean absolute error per target of prediction rows against label rows,
+/// in the labels' units (angles on their circle).
+pub fn target_mae(targets: &[Target], pred: &[Vec<f64>], y: &[Vec<f64>]) -> Vec<f64> {
     targets
         .iter()
         .enumerate()

@@ -10,7 +10,7 @@ use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
 use tactile_core::dataset::{Dataset, TestHoldout, hold_out};
 use tactile_estimate::Target;
-use tactile_estimate::regressor::{decode, encode, output_scaler};
+use tactile_estimate::regressor::{decode, encode, output_scaler, target_mae};
 use tactile_preprocess::{Downsample, Lighting, PreprocessConfig};
 
 use crate::artifact::PoseArtifact;
@@ -137,19 +137,6 @@ pub fn predict_columns(
         out.extend(v.chunks(k).map(<[f32]>::to_vec));
     }
     Ok(out)
-}
-
-/// Mean absolute error per target of `predictions` (labels' units).
-pub fn target_mae(targets: &[Target], predictions: &[Vec<f64>], truth: &[Vec<f64>]) -> Vec<f64> {
-    targets
-        .iter()
-        .enumerate()
-        .map(|(j, t)| {
-            let p: Vec<f64> = predictions.iter().map(|r| r[j]).collect();
-            let y: Vec<f64> = truth.iter().map(|r| r[j]).collect();
-            t.mae(&p, &y)
-        })
-        .collect()
 }
 
 /// Train on the training rows of `data` and write everything into `out`:
