@@ -157,22 +157,9 @@ mod tests {
     use super::*;
     use crate::registry::Estimators;
     use crate::regressor::RegressorConfig;
+    use crate::regressor::tests::data;
     use tactile_burn::DeviceKind;
     use tactile_burn::train::Schedule;
-
-    /// `y = (2 x0 - x1, angle 40 x2 degrees)`.
-    fn data(n: usize, offset: usize) -> (Vec<Vec<f32>>, Vec<Vec<f64>>) {
-        (0..n)
-            .map(|i| {
-                let k = (i + offset) as f64;
-                let x = [(k * 0.37).sin(), (k * 0.11).cos(), ((k * 0.53).sin() * 2.0)];
-                (
-                    x.iter().map(|&v| v as f32).collect(),
-                    vec![2.0 * x[0] - x[1], 40.0 * x[2]],
-                )
-            })
-            .unzip()
-    }
 
     fn train(targets: Vec<Target>, seed: u64, epochs: usize, dir: &Path) -> Regressor {
         let (x, y) = data(300, 0);

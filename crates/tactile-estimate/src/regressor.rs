@@ -368,12 +368,12 @@ pub fn target_mae(targets: &[Target], pred: &[Vec<f64>], y: &[Vec<f64>]) -> Vec<
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use tactile_burn::DeviceKind;
 
     /// `y = (2 x0 - x1, angle 40 x2 degrees)` with small noise-free structure.
-    fn data(n: usize, offset: usize) -> (Vec<Vec<f32>>, Vec<Vec<f64>>) {
+    pub(crate) fn data(n: usize, offset: usize) -> (Vec<Vec<f32>>, Vec<Vec<f64>>) {
         (0..n)
             .map(|i| {
                 let k = (i + offset) as f64;
