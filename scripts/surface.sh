@@ -134,17 +134,25 @@ run cae56-k9-long-mlp "$BIN" train regressor --encoder data/surface/cae56-k9-lon
 # `val` the seeds alone give roll 0.64-0.69 and pitch 0.71-0.77 deg; their
 # average, 0.568 and 0.622. The members sit outside the encoder folder so
 # that only the ensemble runs beside it.
+# `more_mlps STEP ENCODER [FLAGS]`: steps STEP-mlp-sSEED train the other
+# seeds' MLPs (with FLAGS) into ENCODER-mlps/sSEED, and STEP-ensemble
+# averages them with ENCODER/pose into ENCODER-mlps/ensemble.
 MLP_SEEDS=(11 13 17 19)
 members() {
     local encoder=$1
     rm -rf "$encoder-mlps/ensemble" && "$BIN" train ensemble --out "$encoder-mlps/ensemble" --members "$encoder/pose" \
         $(for s in "${MLP_SEEDS[@]}"; do echo "$encoder-mlps/s$s"; done)
 }
-for s in "${MLP_SEEDS[@]}"; do
-    run "cae56-k9-long-mlp-s$s" "$BIN" train regressor --encoder data/surface/cae56-k9-long --data "$DATA" --targets $T \
-        --hidden 512,256,128 --loss l1 --seed "$s" --out "data/surface/cae56-k9-long-mlps/s$s"
-done
-run cae56-k9-long-ensemble members data/surface/cae56-k9-long
+more_mlps() {
+    local step=$1 encoder=$2 s
+    shift 2
+    for s in "${MLP_SEEDS[@]}"; do
+        run "$step-mlp-s$s" "$BIN" train regressor --encoder "$encoder" --data "$DATA" --targets $T \
+            --hidden 512,256,128 --loss l1 "$@" --seed "$s" --out "$encoder-mlps/s$s"
+    done
+    run "$step-ensemble" members "$encoder"
+}
+more_mlps cae56-k9-long data/surface/cae56-k9-long
 # One encoder for the edge and the surface tasks: the CAE recipe trained
 # on both sets at once. The edge set (every frame, as models/cae-edge
 # trained) is read at the same 56 px through its own preprocessing, with
@@ -205,11 +213,7 @@ run ship-pose bash -c "rm -rf data/surface/pose-all && '$BIN' train ensemble \
 run ship-cae-all "$BIN" train cae --data "$DATA" --out data/surface/cae-all "${CAE[@]}" "${CAE_LONG[@]}" --every-split
 run ship-cae-all-mlp "$BIN" train regressor --encoder data/surface/cae-all --data "$DATA" --targets $T \
     --hidden 512,256,128 --loss l1 --every-split --out data/surface/cae-all/pose
-for s in "${MLP_SEEDS[@]}"; do
-    run "ship-cae-all-mlp-s$s" "$BIN" train regressor --encoder data/surface/cae-all --data "$DATA" --targets $T \
-        --hidden 512,256,128 --loss l1 --every-split --seed "$s" --out "data/surface/cae-all-mlps/s$s"
-done
-run ship-cae-all-ensemble members data/surface/cae-all
+more_mlps ship-cae-all data/surface/cae-all --every-split
 # The encoder with its averaged estimator as `pose`, staged then moved in.
 ship_cae() {
     local encoder=$1 estimator=$2 dir=$3

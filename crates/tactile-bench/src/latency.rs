@@ -100,27 +100,30 @@ pub fn time_network(net: &mut dyn Network, shape: [usize; 4], input: &[f32], run
 /// Median milliseconds of the encoder folder `dir`'s estimators on one
 /// stand-in feature vector, on the burn device each runtime runs them on
 /// (onnxruntime runs the encoder only; its estimators run on burn's Flex,
-/// as `tactile predict` runs them), with their summed parameters.
+/// as `tactile predict` runs them, so that row takes Flex's time), with
+/// their summed parameters.
 pub fn estimator_latencies(dir: &Path, runs: usize) -> Result<(usize, RuntimeMs)> {
     use tactile_burn::DeviceKind;
-    let mut out = RuntimeMs::default();
-    let mut params = 0;
-    for (runtime, device) in [
-        (Runtime::BurnNdarray, DeviceKind::Ndarray),
-        (Runtime::BurnFlex, DeviceKind::Flex),
-        (Runtime::Onnx, DeviceKind::Flex),
-    ] {
+    let time = |device: DeviceKind| -> Result<(usize, f64)> {
         let est = tactile_estimate::Estimators::load(dir, &[], &device.device())?;
-        params = est.parameters();
         let k = est.items.first().map_or(0, |(_, e)| e.inputs());
         let feats = vec![stand_in_input(k)];
         let ms = 1e3
             * median_seconds(3, runs, || {
                 let _ = est.estimate(&feats);
             });
-        out.set(runtime, ms);
-    }
-    Ok((params, out))
+        Ok((est.parameters(), ms))
+    };
+    let (params, ndarray) = time(DeviceKind::Ndarray)?;
+    let (_, flex) = time(DeviceKind::Flex)?;
+    Ok((
+        params,
+        RuntimeMs {
+            ndarray: Some(ndarray),
+            flex: Some(flex),
+            onnxruntime: Some(flex),
+        },
+    ))
 }
 
 /// Median batch-1 milliseconds of the model in `dir` on every runtime
