@@ -171,7 +171,7 @@ pub fn bench_surface(
                 ))
                 .into());
             };
-            let std = number(&format!("{t}_std"));
+            let std = number(&tactile_estimate::registry::std_column(t));
             let mut points = Vec::with_capacity(rows.len());
             let mut pairs = Vec::with_capacity(rows.len());
             let (mut inside68, mut inside95) = (0usize, 0usize);
@@ -216,7 +216,16 @@ pub fn bench_surface(
             }
             fit_md.push('\n');
         }
-        let cross = cross_fitted(&c.notes, ds.evaluation_split_name());
+        // An encoder's deviations are its regressor's, calibrated there.
+        let notes = match &predictor {
+            Predictor::Encoder(p) => p
+                .estimators
+                .calibration()
+                .map(|u| serde_json::json!({ "uncertainty_calibration": u }))
+                .unwrap_or_default(),
+            Predictor::PoseNetwork(_) => c.notes.clone(),
+        };
+        let cross = cross_fitted(&notes, ds.evaluation_split_name());
         if let Some([c68, c95]) = &cross {
             (cov68, cov95) = (c68.clone(), c95.clone());
         }

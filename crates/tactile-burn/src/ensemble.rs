@@ -81,6 +81,44 @@ impl Ensemble {
         )
     }
 
+    /// The factors a calibration of the ensemble as a whole (`tactile
+    /// train calibrate`) put in its notes, one per target, applied to the
+    /// members' combined deviation; `None` when it was never calibrated as
+    /// a whole. `dir` is the ensemble's folder, named in the error.
+    pub fn std_scale(&self, dir: &Path, targets: usize) -> Result<Option<Vec<f64>>> {
+        let Some(v) = self.notes.get("std_scale") else {
+            return Ok(None);
+        };
+        let bad = || {
+            Error::model(
+                dir.join(Self::FILE),
+                format!("notes.std_scale must be {targets} positive numbers, one per target"),
+            )
+        };
+        let f: Vec<f64> = serde_json::from_value(v.clone()).map_err(|_| bad())?;
+        if f.len() != targets || f.iter().any(|x| !x.is_finite() || *x <= 0.0) {
+            return Err(bad());
+        }
+        Ok(Some(f))
+    }
+
+    /// Rewrite `dir`'s `ensemble.json` (atomically; no member is touched)
+    /// with the factors `scale` of a calibration as a whole (see
+    /// [`Self::std_scale`]), its notes saying where they came from.
+    pub fn write_std_scale(
+        mut self,
+        dir: &Path,
+        scale: &[f64],
+        note: serde_json::Value,
+    ) -> Result<()> {
+        if !self.notes.is_object() {
+            self.notes = serde_json::json!({});
+        }
+        self.notes["std_scale"] = serde_json::json!(scale);
+        self.notes["uncertainty_calibration"] = note;
+        tactile_core::io::write_json_atomic(dir.join(Self::FILE), &self)
+    }
+
     /// The member folders.
     pub fn member_dirs(&self, dir: &Path) -> Vec<PathBuf> {
         self.members.iter().map(|m| dir.join(m)).collect()

@@ -12,8 +12,9 @@ use tactile_burn::Artifact;
 use tactile_burn::ensemble::Ensemble;
 
 use crate::Result;
-use crate::regressor::{Regressor, RegressorArtifact, decode_columns, target_mae};
+use crate::regressor::{Regressor, RegressorArtifact, ValuesWithStd, decode_columns, target_mae};
 use crate::target::Target;
+use crate::uncertainty::UncertaintyFit;
 
 /// One regressor, or an ensemble of them whose estimates are averaged: a
 /// regressor folder as the estimators load it.
@@ -21,6 +22,13 @@ pub struct RegressorEnsemble {
     /// The members (at least one), the first one's config standing for all
     /// (they share inputs, targets, encoder and shapes).
     members: Vec<Regressor>,
+    /// With uncertainty, the factors a calibration of the ensemble as a
+    /// whole put in `ensemble.json`, applied to the members' combined
+    /// deviation (each member keeps its own factors).
+    std_factor: Option<Vec<f64>>,
+    /// Where its deviations were last calibrated (`tactile train
+    /// calibrate`), from its notes.
+    calibration: Option<serde_json::Value>,
 }
 
 impl RegressorEnsemble {
@@ -53,8 +61,12 @@ impl RegressorEnsemble {
     /// refusing members that do not take and give what the first does.
     pub fn load(dir: &Path, device: &Device) -> Result<Self> {
         if RegressorArtifact::is_in(dir) {
+            let r = Regressor::load(dir, device)?;
+            let calibration = r.artifact.notes.get(CALIBRATION_NOTE).cloned();
             return Ok(Self {
-                members: vec![Regressor::load(dir, device)?],
+                members: vec![r],
+                std_factor: None,
+                calibration,
             });
         }
         let e = Ensemble::read::<RegressorArtifact>(dir)?;
@@ -66,7 +78,12 @@ impl RegressorEnsemble {
         for (d, m) in e.member_dirs(dir).iter().zip(&members).skip(1) {
             check_alike(&members[0].artifact, &m.artifact, d)?;
         }
-        Ok(Self { members })
+        let std_factor = e.std_scale(dir, members[0].targets().len())?;
+        Ok(Self {
+            members,
+            std_factor,
+            calibration: e.notes.get(CALIBRATION_NOTE).cloned(),
+        })
     }
 
     /// Copy the regressor folders `members` into a new ensemble folder
@@ -101,26 +118,190 @@ impl RegressorEnsemble {
     /// of the members' outputs before decoding, so angles average on their
     /// circle.
     pub fn predict(&self, x: &[Vec<f32>]) -> Result<Vec<Vec<f64>>> {
-        let mut sum = self.members[0].predict_columns(x)?;
-        for m in &self.members[1..] {
-            for (s, row) in sum.iter_mut().zip(m.predict_columns(x)?) {
-                s.iter_mut().zip(row).for_each(|(a, b)| *a += b);
+        Ok(self.predict_with_std(x)?.0)
+    }
+
+    /// Whether it gives each target's standard deviation.
+    pub fn has_uncertainty(&self) -> bool {
+        self.artifact().model.has_uncertainty()
+    }
+
+    /// [`Self::predict`] and, with uncertainty, each target's standard
+    /// deviation in the labels' units: the members' mean variance plus
+    /// their spread, times the ensemble's own factors when it was
+    /// calibrated as a whole (one member: its own deviation).
+    pub fn predict_with_std(&self, x: &[Vec<f32>]) -> Result<ValuesWithStd> {
+        // Per vector and column: sum of values, of squared values, and per
+        // target of variances.
+        let (mut sum, mut sq): (Vec<Vec<f64>>, Vec<Vec<f64>>) = (Vec::new(), Vec::new());
+        let mut var: Option<Vec<Vec<f64>>> = None;
+        for (i, m) in self.members.iter().enumerate() {
+            let (cols, std) = m.predict_columns_with_std(x)?;
+            if i == 0 {
+                sq = cols
+                    .iter()
+                    .map(|c| c.iter().map(|v| v * v).collect())
+                    .collect();
+                var = std.map(|s| {
+                    s.iter()
+                        .map(|r| r.iter().map(|d| d * d).collect())
+                        .collect()
+                });
+                sum = cols;
+                continue;
+            }
+            for ((s, q), row) in sum.iter_mut().zip(sq.iter_mut()).zip(&cols) {
+                for ((a, b), v) in s.iter_mut().zip(q.iter_mut()).zip(row) {
+                    *a += v;
+                    *b += v * v;
+                }
+            }
+            if let (Some(var), Some(std)) = (var.as_mut(), std) {
+                for (a, row) in var.iter_mut().zip(std) {
+                    a.iter_mut().zip(row).for_each(|(a, d)| *a += d * d);
+                }
             }
         }
         let n = self.members.len() as f64;
-        Ok(sum
+        let means: Vec<Vec<f64>> = sum
             .iter()
-            .map(|cols| {
-                let mean: Vec<f64> = cols.iter().map(|v| v / n).collect();
-                decode_columns(self.targets(), &mean)
-            })
-            .collect())
+            .map(|c| c.iter().map(|v| v / n).collect())
+            .collect();
+        let values = means
+            .iter()
+            .map(|c| decode_columns(self.targets(), c))
+            .collect();
+        // With uncertainty every target is linear: a column is a target.
+        let std = var.map(|var| {
+            var.iter()
+                .zip(&means)
+                .zip(&sq)
+                .map(|((v, mean), q)| {
+                    (0..v.len())
+                        .map(|j| {
+                            let spread = (q[j] / n - mean[j] * mean[j]).max(0.0);
+                            (v[j] / n + spread).sqrt()
+                                * self.std_factor.as_ref().map_or(1.0, |f| f[j])
+                        })
+                        .collect()
+                })
+                .collect()
+        });
+        Ok((values, std))
+    }
+
+    /// Where its deviations were last calibrated on frames it never
+    /// fitted (data, split, frames and the cross-fitted coverage), when
+    /// they were.
+    pub fn calibration(&self) -> Option<&serde_json::Value> {
+        self.calibration.as_ref()
+    }
+
+    /// Calibrate the deviations of the regressor (or ensemble) in `dir` on
+    /// feature vectors `x` and their labels `y` (frames it never fitted:
+    /// `data`'s rows of `split`, recorded in its notes): one factor per
+    /// target so ±1 deviation holds 68.3 % of their errors. The estimates
+    /// are unchanged; `regressor.json` (an ensemble's `ensemble.json`) is
+    /// rewritten atomically.
+    pub fn calibrate_on(
+        dir: &Path,
+        (x, y): (&[Vec<f32>], &[Vec<f64>]),
+        (data, split): (&Path, Option<&str>),
+        device: &Device,
+    ) -> Result<UncertaintyFit> {
+        let model = Self::load(dir, device)?;
+        let before = model.factors(dir)?;
+        let (values, std) = model.predict_with_std(x)?;
+        let std = std.ok_or_else(|| no_uncertainty(dir))?;
+        let fit = crate::uncertainty::fit(model.targets(), (&values, y), &std, before);
+        model.write_factors(dir, &fit.std_scale, fit.note(data, split))?;
+        Ok(fit)
+    }
+
+    /// Give the regressor (or ensemble) in `dir` the factors of the
+    /// validated one of the same recipe in `from`: one trained on every
+    /// frame has none left to calibrate on.
+    pub fn calibration_from(dir: &Path, from: &Path, device: &Device) -> Result<UncertaintyFit> {
+        let (model, source) = (Self::load(dir, device)?, Self::load(from, device)?);
+        let (before, scale) = (model.factors(dir)?, source.factors(from)?);
+        if source.targets() != model.targets() {
+            return Err(tactile_core::Error::model(
+                from,
+                "its targets are not the regressor's: its calibration does not apply",
+            )
+            .into());
+        }
+        if (source.members.len() > 1) != (model.members.len() > 1) {
+            return Err(tactile_core::Error::model(
+                from,
+                "an ensemble's factors apply to an ensemble of the same recipe, a regressor's to a regressor",
+            )
+            .into());
+        }
+        let note =
+            serde_json::json!({ "from": from.display().to_string(), "notes": source.calibration });
+        model.write_factors(dir, &scale, note)?;
+        Ok(UncertaintyFit {
+            frames: 0,
+            targets: model.targets().iter().map(|t| t.name.clone()).collect(),
+            std_scale_before: before,
+            std_scale: scale,
+            coverage_before: [vec![], vec![]],
+            coverage_cross_fitted: [vec![], vec![]],
+        })
+    }
+
+    /// The factors calibration changes: a regressor's own, an ensemble's
+    /// as a whole (1 until it is calibrated so).
+    fn factors(&self, dir: &Path) -> Result<Vec<f64>> {
+        if !self.has_uncertainty() {
+            return Err(no_uncertainty(dir));
+        }
+        let k = self.targets().len();
+        Ok(
+            if self.members.len() == 1 && RegressorArtifact::is_in(dir) {
+                self.artifact()
+                    .std_scale
+                    .clone()
+                    .unwrap_or_else(|| vec![1.0; k])
+            } else {
+                self.std_factor.clone().unwrap_or_else(|| vec![1.0; k])
+            },
+        )
+    }
+
+    /// Write `scale` where [`Self::factors`] reads it, with `note`.
+    fn write_factors(&self, dir: &Path, scale: &[f64], note: serde_json::Value) -> Result<()> {
+        if RegressorArtifact::is_in(dir) {
+            let mut a = self.artifact().clone();
+            a.std_scale = Some(scale.to_vec());
+            if !a.notes.is_object() {
+                a.notes = serde_json::json!({});
+            }
+            a.notes[CALIBRATION_NOTE] = note;
+            return Ok(tactile_core::io::write_json_atomic(
+                dir.join(RegressorArtifact::CONFIG_FILE),
+                &a,
+            )?);
+        }
+        Ok(Ensemble::read::<RegressorArtifact>(dir)?.write_std_scale(dir, scale, note)?)
     }
 
     /// Mean absolute error per target on `(x, y)`.
     pub fn evaluate(&self, x: &[Vec<f32>], y: &[Vec<f64>]) -> Result<Vec<f64>> {
         Ok(target_mae(self.targets(), &self.predict(x)?, y))
     }
+}
+
+/// The notes' key of where deviations were calibrated.
+const CALIBRATION_NOTE: &str = "uncertainty_calibration";
+
+fn no_uncertainty(dir: &Path) -> crate::Error {
+    tactile_core::Error::model(
+        dir,
+        "this regressor gives no uncertainty (train it with --uncertainty)",
+    )
+    .into()
 }
 
 /// Members must read the same features (count and encoder) and answer the
@@ -138,6 +319,8 @@ fn check_alike(
         Some("was trained on another encoder's features")
     } else if first.shapes != other.shapes {
         Some("answers for other shapes")
+    } else if first.model.has_uncertainty() != other.model.has_uncertainty() {
+        Some("gives an uncertainty otherwise")
     } else {
         None
     };
@@ -155,7 +338,7 @@ fn check_alike(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::registry::Estimators;
+    use crate::registry::{Column, Estimators};
     use crate::regressor::RegressorConfig;
     use crate::regressor::tests::data;
     use tactile_burn::DeviceKind;
@@ -265,5 +448,71 @@ mod tests {
             .unwrap()
             .to_string();
         assert!(err.contains("member-1/regressor.json"), "{err}");
+    }
+
+    #[test]
+    fn an_ensembles_deviations_are_calibrated_as_a_whole_and_run_as_std_columns() {
+        let dev = DeviceKind::Flex.device();
+        let tmp = tempfile::tempdir().unwrap();
+        let (x, y, _) = crate::regressor::tests::noisy(1200, 1);
+        let (vx, vy, _) = crate::regressor::tests::noisy(300, 2);
+        let member = |seed: u64, uncertain: bool| {
+            let dir = tmp.path().join(format!("m{seed}-{uncertain}"));
+            let cfg = RegressorConfig::new(2, vec![Target::linear("y")])
+                .with_schedule(Schedule::new(64, 80, 20, 3e-3).with_seed(seed))
+                .with_uncertainty(uncertain.then_some(true));
+            Regressor::train(cfg, (&x, &y), (&vx, &vy), &dev)
+                .unwrap()
+                .save(&dir)
+                .unwrap();
+            dir
+        };
+        let (a, b) = (member(7, true), member(8, true));
+        // A member without uncertainty is not averaged with them.
+        let err =
+            RegressorEnsemble::assemble(&[a.clone(), member(9, false)], &tmp.path().join("no"))
+                .err()
+                .unwrap()
+                .to_string();
+        assert!(err.contains("gives an uncertainty otherwise"), "{err}");
+        let encoder = tmp.path().join("encoder");
+        let ens = encoder.join("pose");
+        RegressorEnsemble::assemble(&[a, b], &ens).unwrap();
+        // Before calibration as a whole the spread widens the deviation;
+        // calibrated on 600 other rows, ±1 holds 68.3 % of a third set's
+        // errors.
+        let (cx, cy, _) = crate::regressor::tests::noisy(600, 3);
+        let fit =
+            RegressorEnsemble::calibrate_on(&ens, (&cx, &cy), (tmp.path(), Some("val")), &dev)
+                .unwrap();
+        assert_eq!((fit.frames, fit.std_scale_before.clone()), (600, vec![1.0]));
+        let e = Ensemble::read::<RegressorArtifact>(&ens).unwrap();
+        assert_eq!(e.std_scale(&ens, 1).unwrap(), Some(fit.std_scale.clone()));
+        let est = Estimators::load(&encoder, &[], &dev).unwrap();
+        let (tx, ty, _) = crate::regressor::tests::noisy(2000, 4);
+        let out = est.estimate(&tx).unwrap();
+        let (Some(Column::Number(v)), Some(Column::Number(s))) = (out.get("y"), out.get("y_std"))
+        else {
+            panic!("{:?}", out.columns.iter().map(|c| &c.0).collect::<Vec<_>>());
+        };
+        let inside = v
+            .iter()
+            .zip(s)
+            .zip(&ty)
+            .filter(|((v, s), t)| (*v - t[0]).abs() <= **s)
+            .count();
+        let c68 = inside as f64 / ty.len() as f64;
+        assert!((0.64..0.73).contains(&c68), "{c68}");
+        assert_eq!(est.calibration().unwrap()["frames"], 600);
+        // A regressor of no uncertainty is refused, naming its folder.
+        let plain = member(10, false);
+        let err = RegressorEnsemble::calibrate_on(&plain, (&cx, &cy), (tmp.path(), None), &dev)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            err.contains("gives no uncertainty") && err.contains("m10-false"),
+            "{err}"
+        );
     }
 }

@@ -15,6 +15,7 @@ pub mod mlp;
 pub mod registry;
 pub mod regressor;
 pub mod target;
+pub mod uncertainty;
 
 pub use ensemble::RegressorEnsemble;
 pub use error::{Error, Result};

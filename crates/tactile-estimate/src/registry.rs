@@ -75,9 +75,44 @@ impl Estimator {
     pub fn columns(&self) -> Vec<String> {
         match self {
             Self::Classifier(_) => vec![CLASS_COLUMN.to_string()],
-            Self::Regressor(r) => r.targets().iter().map(|t| t.name.clone()).collect(),
+            Self::Regressor(r) => {
+                let names = r.targets().iter().map(|t| t.name.clone());
+                let std = r
+                    .targets()
+                    .iter()
+                    .filter(|_| r.has_uncertainty())
+                    .map(|t| std_column(&t.name));
+                names.chain(std).collect()
+            }
         }
     }
+}
+
+/// The name of the column of a target's standard deviation.
+pub fn std_column(target: &str) -> String {
+    format!("{target}_std")
+}
+
+/// A regressor's columns on `feats`: each target's values, then with
+/// uncertainty each one's standard deviation ([`std_column`]).
+fn regressor_columns(r: &RegressorEnsemble, feats: &[Vec<f32>]) -> Result<Vec<(String, Vec<f64>)>> {
+    let (values, std) = r.predict_with_std(feats)?;
+    let column = |rows: &[Vec<f64>], j: usize| rows.iter().map(|row| row[j]).collect();
+    let mut out: Vec<(String, Vec<f64>)> = r
+        .targets()
+        .iter()
+        .enumerate()
+        .map(|(j, t)| (t.name.clone(), column(&values, j)))
+        .collect();
+    if let Some(std) = &std {
+        out.extend(
+            r.targets()
+                .iter()
+                .enumerate()
+                .map(|(j, t)| (std_column(&t.name), column(std, j))),
+        );
+    }
+    Ok(out)
 }
 
 /// Values of one output column, one per frame.
@@ -157,6 +192,16 @@ impl Estimators {
         self.items.iter().map(|(_, e)| e.parameters()).sum()
     }
 
+    /// Where the first regressor with a calibrated uncertainty was
+    /// calibrated on frames it never fitted (see
+    /// [`RegressorEnsemble::calibration`]).
+    pub fn calibration(&self) -> Option<&serde_json::Value> {
+        self.items.iter().find_map(|(_, e)| match e {
+            Estimator::Regressor(r) => r.calibration(),
+            Estimator::Classifier(_) => None,
+        })
+    }
+
     /// True when there are none.
     pub fn is_empty(&self) -> bool {
         self.items.is_empty()
@@ -202,13 +247,11 @@ impl Estimators {
                     columns.push((CLASS_COLUMN.to_string(), Column::Class(names)));
                 }
                 Estimator::Regressor(r) if !r.artifact().shapes.is_empty() => specialised.push(r),
-                Estimator::Regressor(r) => {
-                    let p = r.predict(feats)?;
-                    for (j, t) in r.targets().iter().enumerate() {
-                        let v = p.iter().map(|row| row[j]).collect();
-                        columns.push((t.name.clone(), Column::Number(v)));
-                    }
-                }
+                Estimator::Regressor(r) => columns.extend(
+                    regressor_columns(r, feats)?
+                        .into_iter()
+                        .map(|(name, v)| (name, Column::Number(v))),
+                ),
             }
         }
         // A regressor trained on some shapes answers for the frames the
@@ -219,26 +262,25 @@ impl Estimators {
             _ => None,
         };
         for r in specialised {
-            let p = r.predict(feats)?;
             let applies = |i: usize| {
                 shapes
                     .as_ref()
                     .is_none_or(|s| r.artifact().shapes.contains(&s[i]))
             };
-            for (j, t) in r.targets().iter().enumerate() {
-                match columns.iter_mut().find(|c| c.0 == t.name) {
+            for (name, p) in regressor_columns(r, feats)? {
+                match columns.iter_mut().find(|c| c.0 == name) {
                     Some((_, Column::Number(v))) => {
                         for (i, x) in v.iter_mut().enumerate() {
                             if applies(i) {
-                                *x = p[i][j];
+                                *x = p[i];
                             }
                         }
                     }
                     _ => {
                         let v = (0..p.len())
-                            .map(|i| if applies(i) { p[i][j] } else { f64::NAN })
+                            .map(|i| if applies(i) { p[i] } else { f64::NAN })
                             .collect();
-                        columns.push((t.name.clone(), Column::Number(v)));
+                        columns.push((name, Column::Number(v)));
                     }
                 }
             }

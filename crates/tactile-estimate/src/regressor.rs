@@ -35,12 +35,35 @@ pub struct RegressorConfig {
     /// this option were trained).
     #[config(default = "None")]
     pub loss: Option<RegressionLoss>,
+    /// Also give each target's uncertainty: per target a second output,
+    /// the log of a Laplace scale trained on the likelihood of the
+    /// regressor's own error ([`crate::uncertainty`]), calibrated on the
+    /// early-stopping rows; linear targets only (`None` in regressors saved
+    /// before this option: no uncertainty).
+    #[config(default = "None")]
+    pub uncertainty: Option<bool>,
 }
 
 impl RegressorConfig {
-    /// Network outputs (an angle takes two).
+    /// Target columns (an angle takes two).
     fn outputs(&self) -> usize {
         self.targets.iter().map(Target::width).sum()
+    }
+
+    /// Whether it gives each target's uncertainty.
+    pub fn has_uncertainty(&self) -> bool {
+        self.uncertainty == Some(true)
+    }
+
+    /// Network outputs: the target columns, then with uncertainty one log
+    /// scale per target.
+    fn network_outputs(&self) -> usize {
+        self.outputs()
+            + if self.has_uncertainty() {
+                self.targets.len()
+            } else {
+                0
+            }
     }
 }
 
@@ -110,6 +133,14 @@ pub struct RegressorArtifact {
     /// frames the head puts in them (see `Estimators::estimate`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub shapes: Vec<String>,
+    /// With uncertainty: per target, the factor that turns the network's
+    /// Laplace scale into a standard deviation whose ±1 interval holds
+    /// 68.3 % of the calibration rows' errors.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std_scale: Option<Vec<f64>>,
+    /// Free-form provenance (where its uncertainty was calibrated).
+    #[serde(default, skip_serializing_if = "serde_json::Value::is_null")]
+    pub notes: serde_json::Value,
 }
 
 impl Artifact for RegressorArtifact {
@@ -120,8 +151,13 @@ impl Artifact for RegressorArtifact {
 
     fn init(&self, device: &Device) -> tactile_core::Result<Mlp> {
         let m = &self.model;
-        crate::mlp::check_sizes(m.inputs, &m.hidden, m.outputs())?;
-        Ok(Mlp::with_hidden(m.inputs, &m.hidden, m.outputs(), device))
+        crate::mlp::check_sizes(m.inputs, &m.hidden, m.network_outputs())?;
+        Ok(Mlp::with_hidden(
+            m.inputs,
+            &m.hidden,
+            m.network_outputs(),
+            device,
+        ))
     }
 
     fn check(&self, file: &Path) -> tactile_core::Result<()> {
@@ -129,8 +165,12 @@ impl Artifact for RegressorArtifact {
         let m = &self.model;
         in_config(
             file,
-            crate::mlp::check_sizes(m.inputs, &m.hidden, m.outputs()),
+            crate::mlp::check_sizes(m.inputs, &m.hidden, m.network_outputs()),
         )?;
+        if m.has_uncertainty() {
+            crate::uncertainty::check_std_scale(&m.targets, self.std_scale.as_deref())
+                .map_err(|e| tactile_core::Error::model(file, e))?;
+        }
         in_config(
             file,
             crate::mlp::check_scaler(
@@ -167,6 +207,10 @@ fn to64(v: &[Vec<f32>]) -> Vec<Vec<f64>> {
         .map(|r| r.iter().map(|&a| a as f64).collect())
         .collect()
 }
+
+/// Per feature vector its values, and with uncertainty each target's
+/// standard deviation (labels' units).
+pub type ValuesWithStd = (Vec<Vec<f64>>, Option<Vec<Vec<f64>>>);
 
 /// Encode label rows (one value per target) into network columns.
 pub fn encode(targets: &[Target], y: &[Vec<f64>]) -> Vec<Vec<f64>> {
@@ -260,7 +304,11 @@ impl Regressor {
         check_features(x, config.inputs)?;
         check_features(val_x, config.inputs)?;
         config.schedule.check()?;
-        crate::mlp::check_sizes(config.inputs, &config.hidden, config.outputs())?;
+        crate::mlp::check_sizes(config.inputs, &config.hidden, config.network_outputs())?;
+        if config.has_uncertainty() {
+            crate::uncertainty::check_linear(&config.targets)
+                .map_err(tactile_core::Error::Config)?;
+        }
         let nt = config.targets.len();
         if let Some(bad) = y.iter().chain(val_y).find(|r| r.len() != nt) {
             return Err(tactile_core::Error::shape("label row", nt, bad.len()).into());
@@ -278,6 +326,8 @@ impl Regressor {
             outputs,
             encoder: None,
             shapes: Vec::new(),
+            std_scale: None,
+            notes: serde_json::Value::Null,
         };
         let mlp = artifact.init(&ad)?;
         let xt = matrix(x.len(), k, artifact.inputs.apply(&x64), &ad);
@@ -285,17 +335,25 @@ impl Regressor {
         let vx = matrix(val_x.len(), k, artifact.inputs.apply(&vx64), device);
         let vy = matrix(val_x.len(), m, artifact.outputs.apply(&evy), device);
         let loss = artifact.model.loss.unwrap_or_default();
+        let uncertain = artifact.model.has_uncertainty();
         let mlp = fit_in_memory(
             &artifact.model.schedule,
             mlp,
             x.len(),
             |mlp, bi| {
-                let pred = mlp.forward(xt.clone().select(0, bi.clone()));
-                loss.penalty(pred - yt.clone().select(0, bi)).mean()
+                let out = mlp.forward(xt.clone().select(0, bi.clone()));
+                let error = out.clone().narrow(1, 0, m) - yt.clone().select(0, bi);
+                let fit = loss.penalty(error.clone()).mean();
+                if uncertain {
+                    let nll = crate::uncertainty::laplace_nll(error, out.narrow(1, m, nt));
+                    fit + nll.mean()
+                } else {
+                    fit
+                }
             },
             |v| {
                 let vl: f32 = loss
-                    .penalty(v.forward(vx.clone()) - vy.clone())
+                    .penalty(v.forward(vx.clone()).narrow(1, 0, m) - vy.clone())
                     .mean()
                     .into_scalar();
                 Ok(tactile_burn::train::ensure_finite(
@@ -305,11 +363,28 @@ impl Regressor {
             },
             &ad,
         )?;
-        Ok(Self {
+        let mut r = Self {
             artifact,
             mlp,
             device: device.clone(),
-        })
+        };
+        if uncertain {
+            // One factor per target makes ±1 deviation hold 68.3 % of the
+            // early-stopping rows' errors (standardised units).
+            let (raw, ey) = (r.run(val_x)?, r.artifact.outputs.apply(&evy));
+            let ratios: Vec<Vec<f64>> = (0..nt)
+                .map(|j| {
+                    raw.chunks(m + nt)
+                        .zip(ey.chunks(m))
+                        .map(|(o, y)| {
+                            (o[j] - y[j]).abs() as f64 / crate::uncertainty::scale(o[m + j])
+                        })
+                        .collect()
+                })
+                .collect();
+            r.artifact.std_scale = Some(crate::uncertainty::calibrate(&ratios));
+        }
+        Ok(r)
     }
 
     /// Predictions, one row of target values per feature vector.
@@ -326,13 +401,44 @@ impl Regressor {
     /// decoding (an angle's cos/sin pair): what an ensemble averages, so
     /// that angles are averaged on the circle.
     pub fn predict_columns(&self, x: &[Vec<f32>]) -> Result<Vec<Vec<f64>>> {
+        Ok(self.predict_columns_with_std(x)?.0)
+    }
+
+    /// [`Self::predict_columns`] and, with uncertainty, per feature vector
+    /// each target's standard deviation in the labels' units (the targets
+    /// are then linear: a column is a target).
+    pub fn predict_columns_with_std(&self, x: &[Vec<f32>]) -> Result<ValuesWithStd> {
+        let a = &self.artifact;
+        let (m, nt) = (a.model.outputs(), a.model.targets.len());
+        let raw = self.run(x)?;
+        let width = a.model.network_outputs();
+        let cols = raw
+            .chunks(width)
+            .map(|r| a.outputs.unscale(&r[..m]))
+            .collect();
+        let std = match (&a.std_scale, a.model.has_uncertainty()) {
+            (Some(f), true) => Some(
+                raw.chunks(width)
+                    .map(|r| {
+                        (0..nt)
+                            .map(|j| crate::uncertainty::scale(r[m + j]) * a.outputs.std[j] * f[j])
+                            .collect()
+                    })
+                    .collect(),
+            ),
+            _ => None,
+        };
+        Ok((cols, std))
+    }
+
+    /// The network's raw outputs, row-major, one row per feature vector.
+    fn run(&self, x: &[Vec<f32>]) -> Result<Vec<f32>> {
         let a = &self.artifact;
         check_features(x, a.model.inputs)?;
         if x.is_empty() {
             return Ok(Vec::new());
         }
-        let m = a.model.outputs();
-        let out = self
+        Ok(self
             .mlp
             .forward(matrix(
                 x.len(),
@@ -343,8 +449,7 @@ impl Regressor {
             .into_data()
             .convert::<f32>()
             .try_to_vec::<f32>()
-            .map_err(|e| tactile_core::Error::Invalid(format!("reading predictions: {e:?}")))?;
-        Ok(out.chunks(m).map(|r| a.outputs.unscale(r)).collect())
+            .map_err(|e| tactile_core::Error::Invalid(format!("reading predictions: {e:?}")))?)
     }
 
     /// Mean absolute error per target on `(x, y)`.
@@ -428,5 +533,86 @@ pub(crate) mod tests {
         };
         let (mse, l1) = (fit(None), fit(Some(RegressionLoss::L1)));
         assert!(l1 < 0.25 && l1 < 0.6 * mse, "L1 {l1}, MSE {mse}");
+    }
+
+    /// `y = x0 + noise` whose spread grows with `x1` (0.05 to 0.55):
+    /// Laplace noise drawn per row from a fixed seed.
+    pub(crate) fn noisy(n: usize, seed: u64) -> (Vec<Vec<f32>>, Vec<Vec<f64>>, Vec<f64>) {
+        let mut rng = tactile_core::rng::SampleRng::new(seed, 0, 0);
+        let mut out = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..n {
+            let (x0, x1) = (rng.uniform() * 2.0 - 1.0, rng.uniform());
+            let b = 0.05 + 0.5 * x1;
+            let u: f64 = rng.uniform() - 0.5;
+            let e = -b * u.signum() * (1.0 - 2.0 * u.abs()).max(1e-12).ln();
+            out.0.push(vec![x0 as f32, x1 as f32]);
+            out.1.push(vec![x0 + e]);
+            out.2.push(b);
+        }
+        out
+    }
+
+    #[test]
+    fn an_uncertain_regressor_says_where_it_errs_and_its_intervals_hold() {
+        let dev = DeviceKind::Flex.device();
+        let cfg = RegressorConfig::new(2, vec![Target::linear("y")])
+            .with_hidden(vec![(32, Activation::Relu), (16, Activation::Relu)])
+            .with_schedule(Schedule::new(64, 200, 30, 3e-3).with_seed(7))
+            .with_loss(Some(RegressionLoss::L1))
+            .with_uncertainty(Some(true));
+        let (x, y, _) = noisy(2000, 1);
+        let (vx, vy, _) = noisy(500, 2);
+        let r = Regressor::train(cfg, (&x, &y), (&vx, &vy), &dev).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        r.save(dir.path()).unwrap();
+        let r = Regressor::load(dir.path(), &dev).unwrap();
+        let (tx, ty, tb) = noisy(2000, 3);
+        let (cols, std) = r.predict_columns_with_std(&tx).unwrap();
+        let std = std.expect("deviations");
+        let errors: Vec<Vec<f64>> = cols
+            .iter()
+            .zip(&ty)
+            .map(|(p, t)| vec![p[0] - t[0]])
+            .collect();
+        // Calibrated on the early-stopping rows, the intervals hold on
+        // rows it never saw: a Laplace's ±1 and ±1.96 hold 68.3 % and 89.5 %.
+        let c68 = crate::uncertainty::coverage(&errors, &std, 1.0)[0];
+        let c95 = crate::uncertainty::coverage(&errors, &std, crate::uncertainty::Z95)[0];
+        assert!(
+            (0.63..0.74).contains(&c68) && (0.85..0.95).contains(&c95),
+            "{c68} {c95}"
+        );
+        // The deviation follows the noise: rows of the noisiest quarter
+        // are given at least 3x the deviation of the quietest quarter's.
+        let mean_std = |keep: &dyn Fn(f64) -> bool| {
+            let v: Vec<f64> = std
+                .iter()
+                .zip(&tb)
+                .filter(|(_, b)| keep(**b))
+                .map(|(s, _)| s[0])
+                .collect();
+            v.iter().sum::<f64>() / v.len() as f64
+        };
+        let (quiet, loud) = (mean_std(&|b| b < 0.175), mean_std(&|b| b > 0.425));
+        assert!(loud > 3.0 * quiet, "{quiet} {loud}");
+        // An angle has no deviation of its own column: refused up front.
+        let angle = RegressorConfig::new(2, vec![Target::angle("theta_deg", 180.0)])
+            .with_uncertainty(Some(true));
+        let err = Regressor::train(angle, (&x, &y), (&vx, &vy), &dev)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("theta_deg is an angle"), "{err}");
+        // A regressor.json whose factors were removed is refused, naming it.
+        let file = dir.path().join("regressor.json");
+        let mut v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+        v.as_object_mut().unwrap().remove("std_scale");
+        std::fs::write(&file, v.to_string()).unwrap();
+        let err = Regressor::load(dir.path(), &dev).err().unwrap().to_string();
+        assert!(
+            err.contains("regressor.json") && err.contains("std_scale"),
+            "{err}"
+        );
     }
 }

@@ -4,24 +4,32 @@
 
 use std::path::Path;
 
-use tactile_burn::Artifact;
+use tactile_burn::{Artifact, Runtime};
+use tactile_cae::data::PinSet;
+use tactile_cae::{CaeArtifact, TactipEncoder};
+use tactile_core::dataset::Dataset;
 use tactile_detect::{DetectorArtifact, DetectorEnsembleArtifact};
+use tactile_estimate::RegressorEnsemble;
 use tactile_pose::{PoseArtifact, PoseEnsemble};
 
 use crate::Result;
 
 /// Calibrate a trained model on frames it was not trained on, the kind of
 /// its folder saying how: a detector's probabilities (one logit scale,
-/// decisions unchanged) on `data`; a pose network's deviations (one factor
-/// per target) on `data`'s rows of `split` (every row without one), or,
+/// decisions unchanged) on `data`; a pose network's deviations, or those of
+/// a regressor (or regressor ensemble) inside an encoder folder (one factor
+/// per target), on `data`'s rows of `split` (every row without one), or,
 /// with `from`, the factors of that validated run. Returns one line saying
 /// what changed.
 pub fn calibrate_model(
     model: &Path,
-    data: &[tactile_core::dataset::Dataset],
+    data: &[Dataset],
     split: Option<&str>,
     from: Option<&Path>,
 ) -> Result<String> {
+    if RegressorEnsemble::is_in(model) {
+        return calibrate_regressor(model, data, split, from);
+    }
     // Both kinds of ensemble hold an `ensemble.json`: its members say which.
     let detector = DetectorArtifact::is_in(model) || DetectorEnsembleArtifact::read(model).is_ok();
     let pose = !detector && (PoseArtifact::is_in(model) || PoseEnsemble::is_in(model));
@@ -41,4 +49,50 @@ pub fn calibrate_model(
         )
         .into()),
     }
+}
+
+/// [`calibrate_model`] of a regressor on its encoder's features: the
+/// encoder is the folder it sits in.
+fn calibrate_regressor(
+    model: &Path,
+    data: &[Dataset],
+    split: Option<&str>,
+    from: Option<&Path>,
+) -> Result<String> {
+    let device = tactile_burn::DeviceKind::Flex.device();
+    let fit = match (from, data) {
+        (Some(f), []) => RegressorEnsemble::calibration_from(model, f, &device)?,
+        (None, [ds]) => {
+            let encoder = model
+                .parent()
+                .filter(|p| CaeArtifact::is_in(p))
+                .ok_or_else(|| {
+                    tactile_core::Error::model(
+                        model,
+                        "a regressor is calibrated on its encoder's features: keep it inside the encoder folder it was trained on",
+                    )
+                })?;
+            let targets = RegressorEnsemble::load(model, &device)?.targets().to_vec();
+            let rows = tactile_estimate::uncertainty::calibration_rows(ds, split, &targets)?;
+            let mut enc = TactipEncoder::load(encoder, Runtime::BurnFlex, 0)?;
+            let pins = PinSet::from_rows(ds, &rows, &enc.artifact.preprocess)?;
+            let feats = enc.encode(&pins.images)?;
+            let labels = rows
+                .iter()
+                .map(|&i| targets.iter().map(|t| ds.number(i, &t.name)).collect())
+                .collect::<tactile_core::Result<Vec<Vec<f64>>>>()?;
+            RegressorEnsemble::calibrate_on(model, (&feats, &labels), (&ds.root, split), &device)?
+        }
+        _ => {
+            return Err(tactile_core::Error::Config(
+                "a regressor is calibrated on one dataset (with --split to take its rows of one split) or taken from a validated one (--calibration-from), one of the two".into(),
+            )
+            .into());
+        }
+    };
+    Ok(format!(
+        "{}; regressor in {}",
+        fit.describe(),
+        model.display()
+    ))
 }

@@ -80,6 +80,10 @@ pub struct RegressorOptions {
     #[arg(long, value_enum, default_value_t = RegressionLoss::Mse)]
     #[serde(default)]
     pub loss: RegressionLoss,
+    /// Also give each target's uncertainty (a Laplace scale per target, calibrated on the early-stopping frames; linear targets only): `<target>_std` columns. Calibrate it again on frames it never fitted with `train calibrate --model ENCODER/FOLDER`.
+    #[arg(long)]
+    #[serde(default)]
+    pub uncertainty: bool,
 }
 
 impl RegressorOptions {
@@ -104,6 +108,7 @@ impl RegressorOptions {
             only_labelled: self.only_labelled,
             shapes: self.shapes.clone(),
             loss: self.loss,
+            uncertainty: self.uncertainty,
             ..RegressorPlan::new(targets)
         })
     }

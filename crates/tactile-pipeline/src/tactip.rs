@@ -100,9 +100,12 @@ impl Predictor {
                     .map(|j| (r.names[j].clone(), column(&r.values, j)))
                     .collect();
                 if let Some(std) = &r.std {
-                    columns.extend(
-                        (0..r.names.len()).map(|j| (format!("{}_std", r.names[j]), column(std, j))),
-                    );
+                    columns.extend((0..r.names.len()).map(|j| {
+                        (
+                            tactile_estimate::registry::std_column(&r.names[j]),
+                            column(std, j),
+                        )
+                    }));
                 }
                 Ok(Perception {
                     files: r.files,
@@ -393,6 +396,9 @@ pub struct RegressorPlan {
     /// The loss on the standardised targets (MSE: the default; L1: the
     /// reported metric's).
     pub loss: RegressionLoss,
+    /// Also give each target's standard deviation, calibrated on the
+    /// early-stopping frames (linear targets only).
+    pub uncertainty: bool,
 }
 
 impl RegressorPlan {
@@ -409,6 +415,7 @@ impl RegressorPlan {
             every_split: false,
             only_labelled: false,
             shapes: Vec::new(),
+            uncertainty: false,
             loss: RegressionLoss::Mse,
         }
     }
@@ -531,7 +538,8 @@ pub fn train_regressor(
     );
     let mut cfg = RegressorConfig::new(feats[0].len(), plan.targets.clone())
         .with_hidden(plan.hidden.iter().map(|&w| (w, Activation::Relu)).collect())
-        .with_loss((plan.loss != RegressionLoss::Mse).then_some(plan.loss));
+        .with_loss((plan.loss != RegressionLoss::Mse).then_some(plan.loss))
+        .with_uncertainty(plan.uncertainty.then_some(true));
     cfg.schedule.seed = plan.seed;
     let device = runtime
         .device()

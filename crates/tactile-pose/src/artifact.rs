@@ -75,24 +75,8 @@ impl Artifact for PoseArtifact {
             ));
         }
         if self.model.has_uncertainty() {
-            if let Some(t) = self.targets.iter().find(|t| t.width() != 1) {
-                return bad(format!(
-                    "uncertainty is given for linear targets only; {} is an angle",
-                    t.name
-                ));
-            }
-            match &self.std_scale {
-                Some(s)
-                    if s.len() == self.targets.len()
-                        && s.iter().all(|v| v.is_finite() && *v > 0.0) => {}
-                Some(s) => {
-                    return bad(format!(
-                        "std_scale must hold one positive factor per target ({}), got {s:?}",
-                        self.targets.len()
-                    ));
-                }
-                None => return bad("a network with uncertainty needs its std_scale".into()),
-            }
+            crate::uncertainty::check_std_scale(&self.targets, self.std_scale.as_deref())
+                .map_err(|e| tactile_core::Error::model(file, e))?;
         }
         in_config(
             file,
@@ -163,32 +147,6 @@ impl PoseEnsemble {
         // A pose network's calibration scales its deviations, which stay
         // the member's own in an ensemble: nothing to rewrite.
         Ensemble::assemble(members, out, check_alike, notes, |_| Ok(()))
-    }
-}
-
-impl PoseEnsemble {
-    /// The factors an ensemble's calibration (`tactile train calibrate`)
-    /// put in its notes, one per target, applied to the members' combined
-    /// deviation; `None` when it was never calibrated as a whole.
-    pub fn std_scale(
-        e: &Ensemble,
-        dir: &Path,
-        targets: usize,
-    ) -> tactile_core::Result<Option<Vec<f64>>> {
-        let Some(v) = e.notes.get("std_scale") else {
-            return Ok(None);
-        };
-        let bad = || {
-            tactile_core::Error::model(
-                dir.join(Ensemble::FILE),
-                format!("notes.std_scale must be {targets} positive numbers, one per target"),
-            )
-        };
-        let f: Vec<f64> = serde_json::from_value(v.clone()).map_err(|_| bad())?;
-        if f.len() != targets || f.iter().any(|x| !x.is_finite() || *x <= 0.0) {
-            return Err(bad());
-        }
-        Ok(Some(f))
     }
 }
 

@@ -27,7 +27,7 @@ pub struct PoseEstimator {
     /// The members' distinct preprocessings, the first member's first.
     scales: Vec<PreprocessConfig>,
     /// An ensemble's own calibration: one factor per target on its
-    /// combined deviation (see [`PoseEnsemble::std_scale`]).
+    /// combined deviation (see [`tactile_burn::ensemble::Ensemble::std_scale`]).
     std_factor: Option<Vec<f64>>,
 }
 
@@ -109,7 +109,7 @@ impl PoseEstimator {
         }
         let artifact = first.ok_or_else(|| tactile_core::Error::not_found(dir, "pose network"))?;
         let std_factor = match &ensemble {
-            Some(e) => PoseEnsemble::std_scale(e, dir, artifact.targets.len())?,
+            Some(e) => e.std_scale(dir, artifact.targets.len())?,
             None => None,
         };
         Ok(Self {

@@ -15,7 +15,7 @@ pub mod inference;
 pub mod model;
 pub mod options;
 pub mod training;
-pub mod uncertainty;
+pub use tactile_estimate::uncertainty;
 
 pub use artifact::{PoseArtifact, PoseEnsemble};
 pub use error::{Error, Result};

@@ -101,14 +101,8 @@ impl PoseTrainingConfig {
         if self.targets.is_empty() {
             return Err(tactile_core::Error::Config("no targets to predict".into()).into());
         }
-        if self.model.has_uncertainty()
-            && let Some(t) = self.targets.iter().find(|t| t.width() != 1)
-        {
-            return Err(tactile_core::Error::Config(format!(
-                "uncertainty is given for linear targets only; {} is an angle",
-                t.name
-            ))
-            .into());
+        if self.model.has_uncertainty() {
+            crate::uncertainty::check_linear(&self.targets).map_err(tactile_core::Error::Config)?;
         }
         Ok(self)
     }

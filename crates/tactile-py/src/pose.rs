@@ -96,7 +96,10 @@ impl PyPoseEstimator {
             out.set_item(name, v.into_pyarray(py))?;
             if let Some(std) = &std {
                 let v: Vec<f64> = std.iter().map(|r| r[j]).collect();
-                out.set_item(format!("{name}_std"), v.into_pyarray(py))?;
+                out.set_item(
+                    tactile_estimate::registry::std_column(name),
+                    v.into_pyarray(py),
+                )?;
             }
         }
         Ok(out)

@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
 import tactile
@@ -180,6 +182,39 @@ def test_regressors_of_other_seeds_average_as_one_estimator(root, tmp_path):
     assert set(both) == {"x_mm", "y_mm"}
     for t in both:
         assert abs(both[t] - (one[0][t] + one[1][t]) / 2).max() <= 1e-4, t
+
+
+def test_an_uncertain_regressor_ensemble_is_calibrated_in_its_encoder(root, tmp_path):
+    spheres = tactile.synth.tactip(count=24, seed=7, out=tmp_path / "spheres", shapes=["sphere"],
+                                   progress=False)
+    # The encoder's folder, copied, to keep the estimator inside it.
+    enc = tmp_path / "enc"
+    enc.mkdir()
+    for f in ("cae.json", "cae.bpk"):
+        shutil.copy(root / "models/cae-synth" / f, enc / f)
+    members = []
+    for seed in (7, 8):
+        out = tmp_path / f"seed{seed}"
+        tactile.train.regressor(spheres, ["x_mm", "y_mm"], encoder=enc, out=out, seed=seed,
+                                test_fraction=0.25, uncertainty=True)
+        members.append(out)
+    with pytest.raises(ValueError, match="theta_deg is an angle"):
+        tactile.train.regressor(spheres, ["theta_deg:180"], encoder=enc, out=tmp_path / "bad",
+                                uncertainty=True)
+    tactile.train.ensemble(members, enc / "position")
+    said = tactile.train.calibrate(enc / "position", spheres)
+    assert "24 frames" in said and "regressor in" in said, said
+    factors = json.loads((enc / "position/ensemble.json").read_text())["notes"]["std_scale"]
+    assert len(factors) == 2 and all(f > 0 for f in factors)
+    ds = tactile.Dataset(spheres)
+    got = tactile.TactipEncoder(enc).estimate([ds.frame(i) for i in range(len(ds))])
+    assert set(got) == {"x_mm", "y_mm", "x_mm_std", "y_mm_std"}
+    # Calibrated on these frames, ±1 deviation holds 68.3 % of their errors
+    # (the 17th smallest of 24 ratios sits on the bound).
+    for t in ("x_mm", "y_mm"):
+        truth = np.asarray(ds.labels[t], dtype=float)
+        inside = (abs(got[t] - truth) <= got[f"{t}_std"] * (1 + 1e-9)).mean()
+        assert 0.68 <= inside <= 0.75, (t, inside)
 
 
 def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):

@@ -319,7 +319,7 @@ mod tests {
             ]
         };
         let mut samples = vec![];
-        for k in 0..40_000 {
+        for k in 0..40_000u64 {
             let (x, y) = ((k % 64) as f64, ((k / 64) % 48) as f64);
             let gx = ((k * 7919) % 1000) as f64 / 500.0 - 1.0;
             let gy = ((k * 104_729) % 1000) as f64 / 500.0 - 1.0;

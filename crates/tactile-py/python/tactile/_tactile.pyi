@@ -331,6 +331,7 @@ def train_regressor_py(
     only_labelled: bool = False,
     shapes: Sequence[str] = (),
     loss: str = "mse",
+    uncertainty: bool = False,
 ) -> Dict[str, Any]: ...
 def train_pose(
     data: _Path,

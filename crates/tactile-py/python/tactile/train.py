@@ -149,10 +149,11 @@ def calibrate(model: PathLike, data=None, *, split: Optional[str] = None,
               calibration_from: Optional[PathLike] = None) -> str:
     """Calibrate a trained model on frames it was not trained on (the CLI's
     ``tactile train calibrate``): a detector's probabilities on ``data``
-    (one logit scale, decisions unchanged), or a pose network's deviations
-    (one factor per target so ±1 holds 68.3 % of the errors) on ``data``'s
-    rows of ``split``, or the factors of the validated run
-    ``calibration_from`` for a network trained on every frame. Rewrites the
+    (one logit scale, decisions unchanged), or the deviations of a pose
+    network or of a regressor (or regressor ensemble) kept in its encoder's
+    folder (one factor per target so ±1 holds 68.3 % of the errors) on
+    ``data``'s rows of ``split``, or the factors of the validated run
+    ``calibration_from`` for a model trained on every frame. Rewrites the
     model folder; returns what changed, in words.
     """
     if data is None:

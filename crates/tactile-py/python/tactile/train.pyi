@@ -91,6 +91,7 @@ def regressor(
     only_labelled: bool = False,
     shapes: Sequence[str] = (),
     loss: str = "mse",
+    uncertainty: bool = False,
 ) -> Dict[str, Any]:
     """A regressor (pose, depth, force; angles on the circle) on an encoder's features."""
 
