@@ -153,6 +153,24 @@ more_mlps() {
     run "$step-ensemble" members "$encoder"
 }
 more_mlps cae56-k9-long data/surface/cae56-k9-long
+# The same five seeds' MLPs with a per-frame uncertainty (--uncertainty: a
+# Laplace scale per target beside each estimate, calibrated on the
+# early-stopping rows), averaged into ENCODER-umlps/ensemble, whose
+# combined deviation (the members' mean variance plus their spread) is
+# calibrated again on `val` once it sits in the shipped encoder folder
+# (ship-cae-train-calibrate below). This is the estimator shipped.
+UMLP_SEEDS=(7 "${MLP_SEEDS[@]}")
+uncertain_mlps() {
+    local step=$1 encoder=$2 s
+    shift 2
+    for s in "${UMLP_SEEDS[@]}"; do
+        run "$step-umlp-s$s" "$BIN" train regressor --encoder "$encoder" --data "$DATA" --targets $T \
+            --hidden 512,256,128 --loss l1 --uncertainty "$@" --seed "$s" --out "$encoder-umlps/s$s"
+    done
+    run "$step-uensemble" bash -c "rm -rf '$encoder-umlps/ensemble' && '$BIN' train ensemble --out '$encoder-umlps/ensemble' \
+        --members $(for s in "${UMLP_SEEDS[@]}"; do echo -n "$encoder-umlps/s$s "; done)"
+}
+uncertain_mlps cae56-k9-long data/surface/cae56-k9-long
 # One encoder for the edge and the surface tasks: the CAE recipe trained
 # on both sets at once. The edge set (every frame, as models/cae-edge
 # trained) is read at the same 56 px through its own preprocessing, with
@@ -214,6 +232,7 @@ run ship-cae-all "$BIN" train cae --data "$DATA" --out data/surface/cae-all "${C
 run ship-cae-all-mlp "$BIN" train regressor --encoder data/surface/cae-all --data "$DATA" --targets $T \
     --hidden 512,256,128 --loss l1 --every-split --out data/surface/cae-all/pose
 more_mlps ship-cae-all data/surface/cae-all --every-split
+uncertain_mlps ship-cae-all data/surface/cae-all --every-split
 # The encoder with its averaged estimator as `pose`, staged then moved in.
 ship_cae() {
     local encoder=$1 estimator=$2 dir=$3
@@ -222,12 +241,16 @@ ship_cae() {
         && cp -r "$estimator" "models/.$dir-new/pose" \
         && ship "$dir" "models/.$dir-new"
 }
-run ship-cae ship_cae "$SHIP_CAE" "$SHIP_CAE-mlps/ensemble" cae-surface
+run ship-cae ship_cae "$SHIP_CAE" "$SHIP_CAE-umlps/ensemble" cae-surface
 # The validated CAE route (trained on `train` alone) is shipped beside it,
 # so the tables that score it on `val` and the shared-encoder table's own
 # surface encoder are on frames it never saw.
 VALIDATED_CAE=data/surface/cae56-k9-long
-run ship-cae-train ship_cae "$VALIDATED_CAE" "$VALIDATED_CAE-mlps/ensemble" cae-surface-train
+run ship-cae-train ship_cae "$VALIDATED_CAE" "$VALIDATED_CAE-umlps/ensemble" cae-surface-train
+# Its deviations calibrated on `val` (frames it never fitted); the shipped
+# route, which fitted them, takes those factors.
+run ship-cae-train-calibrate "$BIN" train calibrate --model models/cae-surface-train/pose --data "$DATA" --split val
+run ship-cae-calibrate "$BIN" train calibrate --model models/cae-surface/pose --calibration-from models/cae-surface-train/pose
 # The edge+surface encoder is shipped for the shared-encoder table (its
 # estimators are fitted there, per task).
 run ship-cae-edge-surface bash -c "rm -rf models/.cae-edge-surface-new && mkdir -p models/.cae-edge-surface-new \

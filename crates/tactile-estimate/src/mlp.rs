@@ -143,16 +143,40 @@ impl Mlp {
     /// # Shapes
     /// - `x`: `[N, inputs]`
     /// - output: `[N, outputs]`
-    pub fn forward(&self, mut x: Tensor<2>) -> Tensor<2> {
+    pub fn forward(&self, x: Tensor<2>) -> Tensor<2> {
+        match self.layers.last() {
+            Some(out) => out.forward(self.hidden(x)),
+            None => x,
+        }
+    }
+
+    /// The outputs, and the outputs again computed from the last hidden
+    /// layer with its gradient stopped: what trains only the output layer
+    /// (a regressor's uncertainty) reads the second.
+    ///
+    /// # Shapes
+    /// - `x`: `[N, inputs]`
+    /// - outputs: `[N, outputs]` each
+    pub fn forward_and_detached(&self, x: Tensor<2>) -> (Tensor<2>, Tensor<2>) {
+        let h = self.hidden(x);
+        match self.layers.last() {
+            Some(out) => (out.forward(h.clone()), out.forward(h.detach())),
+            None => (h.clone(), h.detach()),
+        }
+    }
+
+    /// The last hidden layer's activations (the input when there is none).
+    ///
+    /// # Shapes
+    /// - `x`: `[N, inputs]`
+    /// - output: `[N, last hidden width]`
+    pub fn hidden(&self, mut x: Tensor<2>) -> Tensor<2> {
         let last = self.layers.len().saturating_sub(1);
-        for (i, layer) in self.layers.iter().enumerate() {
-            x = layer.forward(x);
-            if i < last {
-                x = match self.activations[i] {
-                    Activation::Relu => relu(x),
-                    Activation::Sigmoid => sigmoid(x),
-                };
-            }
+        for (layer, act) in self.layers[..last].iter().zip(&self.activations) {
+            x = match act {
+                Activation::Relu => relu(layer.forward(x)),
+                Activation::Sigmoid => sigmoid(layer.forward(x)),
+            };
         }
         x
     }

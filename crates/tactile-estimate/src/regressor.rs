@@ -37,9 +37,10 @@ pub struct RegressorConfig {
     pub loss: Option<RegressionLoss>,
     /// Also give each target's uncertainty: per target a second output,
     /// the log of a Laplace scale trained on the likelihood of the
-    /// regressor's own error ([`crate::uncertainty`]), calibrated on the
-    /// early-stopping rows; linear targets only (`None` in regressors saved
-    /// before this option: no uncertainty).
+    /// regressor's own error ([`crate::uncertainty`]) from the last hidden
+    /// layer with its gradient stopped (the estimates train as without
+    /// it), calibrated on the early-stopping rows; linear targets only
+    /// (`None` in regressors saved before this option: no uncertainty).
     #[config(default = "None")]
     pub uncertainty: Option<bool>,
 }
@@ -341,15 +342,19 @@ impl Regressor {
             mlp,
             x.len(),
             |mlp, bi| {
-                let out = mlp.forward(xt.clone().select(0, bi.clone()));
-                let error = out.clone().narrow(1, 0, m) - yt.clone().select(0, bi);
-                let fit = loss.penalty(error.clone()).mean();
-                if uncertain {
-                    let nll = crate::uncertainty::laplace_nll(error, out.narrow(1, m, nt));
-                    fit + nll.mean()
-                } else {
-                    fit
+                let x = xt.clone().select(0, bi.clone());
+                if !uncertain {
+                    return loss
+                        .penalty(mlp.forward(x) - yt.clone().select(0, bi))
+                        .mean();
                 }
+                // The scales read the hidden layer with its gradient
+                // stopped, and the error's is stopped too: the estimates
+                // learn exactly as without them.
+                let (out, detached) = mlp.forward_and_detached(x);
+                let error = out.narrow(1, 0, m) - yt.clone().select(0, bi);
+                let nll = crate::uncertainty::laplace_nll(error.clone(), detached.narrow(1, m, nt));
+                loss.penalty(error).mean() + nll.mean()
             },
             |v| {
                 let vl: f32 = loss
@@ -535,18 +540,21 @@ pub(crate) mod tests {
         assert!(l1 < 0.25 && l1 < 0.6 * mse, "L1 {l1}, MSE {mse}");
     }
 
-    /// `y = x0 + noise` whose spread grows with `x1` (0.05 to 0.55):
-    /// Laplace noise drawn per row from a fixed seed.
+    /// Two targets, like a tap's depth and its shear: `depth = x0`
+    /// exactly, and `shear = x1 + noise` whose Laplace spread grows as
+    /// the tap gets shallower (0.05 at `x0 = 1` to 0.55 at `x0 = 0`),
+    /// drawn per row from a fixed seed. Returns the features, the labels
+    /// and each row's shear spread.
     pub(crate) fn noisy(n: usize, seed: u64) -> (Vec<Vec<f32>>, Vec<Vec<f64>>, Vec<f64>) {
         let mut rng = tactile_core::rng::SampleRng::new(seed, 0, 0);
         let mut out = (Vec::new(), Vec::new(), Vec::new());
         for _ in 0..n {
-            let (x0, x1) = (rng.uniform() * 2.0 - 1.0, rng.uniform());
-            let b = 0.05 + 0.5 * x1;
+            let (x0, x1) = (rng.uniform(), rng.uniform() * 2.0 - 1.0);
+            let b = 0.05 + 0.5 * (1.0 - x0);
             let u: f64 = rng.uniform() - 0.5;
             let e = -b * u.signum() * (1.0 - 2.0 * u.abs()).max(1e-12).ln();
             out.0.push(vec![x0 as f32, x1 as f32]);
-            out.1.push(vec![x0 + e]);
+            out.1.push(vec![x0, x1 + e]);
             out.2.push(b);
         }
         out
@@ -555,7 +563,7 @@ pub(crate) mod tests {
     #[test]
     fn an_uncertain_regressor_says_where_it_errs_and_its_intervals_hold() {
         let dev = DeviceKind::Flex.device();
-        let cfg = RegressorConfig::new(2, vec![Target::linear("y")])
+        let cfg = RegressorConfig::new(2, vec![Target::linear("depth"), Target::linear("shear")])
             .with_hidden(vec![(32, Activation::Relu), (16, Activation::Relu)])
             .with_schedule(Schedule::new(64, 200, 30, 3e-3).with_seed(7))
             .with_loss(Some(RegressionLoss::L1))
@@ -572,24 +580,25 @@ pub(crate) mod tests {
         let errors: Vec<Vec<f64>> = cols
             .iter()
             .zip(&ty)
-            .map(|(p, t)| vec![p[0] - t[0]])
+            .map(|(p, t)| vec![p[0] - t[0], p[1] - t[1]])
             .collect();
         // Calibrated on the early-stopping rows, the intervals hold on
         // rows it never saw: a Laplace's ±1 and ±1.96 hold 68.3 % and 89.5 %.
-        let c68 = crate::uncertainty::coverage(&errors, &std, 1.0)[0];
-        let c95 = crate::uncertainty::coverage(&errors, &std, crate::uncertainty::Z95)[0];
+        let c68 = crate::uncertainty::coverage(&errors, &std, 1.0)[1];
+        let c95 = crate::uncertainty::coverage(&errors, &std, crate::uncertainty::Z95)[1];
         assert!(
             (0.63..0.74).contains(&c68) && (0.85..0.95).contains(&c95),
             "{c68} {c95}"
         );
-        // The deviation follows the noise: rows of the noisiest quarter
-        // are given at least 3x the deviation of the quietest quarter's.
+        // The shear's deviation follows its noise, which the estimate of
+        // the depth carries: rows of the noisiest quarter are given at
+        // least 3x the deviation of the quietest quarter's.
         let mean_std = |keep: &dyn Fn(f64) -> bool| {
             let v: Vec<f64> = std
                 .iter()
                 .zip(&tb)
                 .filter(|(_, b)| keep(**b))
-                .map(|(s, _)| s[0])
+                .map(|(s, _)| s[1])
                 .collect();
             v.iter().sum::<f64>() / v.len() as f64
         };
