@@ -125,8 +125,14 @@ fn an_encoder_row_counts_every_member_of_its_estimator() {
         .into_iter()
         .map(|w| (w, tactile_estimate::Activation::Relu))
         .collect();
-    let member = tactile_estimate::mlp::parameters(32, &hidden, 6) as usize;
+    // Six estimates and their six log scales.
+    let member = tactile_estimate::mlp::parameters(32, &hidden, 12) as usize;
     assert_eq!(params(&five), params(&one) + 4 * member, "{five:?} {one:?}");
     assert_eq!(five[2], "encoder + estimators");
     assert_ne!(five[5..11], one[5..11]);
+    // Its deviations were calibrated on the authors' `val`, so its
+    // coverage is the cross-fitted one; the lone member's, calibrated on
+    // its early-stopping rows, is measured on these frames.
+    assert!(five[12].ends_with("cross-fitted"), "{five:?}");
+    assert!(one[12].contains('%') && !one[12].contains("cross"), "{one:?}");
 }

@@ -201,6 +201,9 @@ def test_an_uncertain_regressor_ensemble_is_calibrated_in_its_encoder(root, tmp_
     with pytest.raises(ValueError, match="theta_deg is an angle"):
         tactile.train.regressor(spheres, ["theta_deg:180"], encoder=enc, out=tmp_path / "bad",
                                 uncertainty=True)
+    # Outside an encoder folder a regressor has no features to calibrate on.
+    with pytest.raises(ValueError, match="inside the encoder folder"):
+        tactile.train.calibrate(members[0], spheres)
     tactile.train.ensemble(members, enc / "position")
     said = tactile.train.calibrate(enc / "position", spheres)
     assert "24 frames" in said and "regressor in" in said, said

@@ -27,7 +27,7 @@ pub(crate) enum TrainCmd {
     Depth(DepthArgs),
     /// The input profile of a trained detector: its training frames' input statistics, saved in detector.json, so frames of another sensor are flagged and get no answer (a detector trained now has one already).
     Profile(ProfileArgs),
-    /// Calibrate a trained model on frames it was not trained on: a detector's probabilities (one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer; decisions unchanged), or a pose network's deviations (one factor per target so ±1 holds 68.3 % of the errors; `--split val` takes a split's rows, `--calibration-from` a validated run's factors).
+    /// Calibrate a trained model on frames it was not trained on: a detector's probabilities (one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer; decisions unchanged), or the deviations of a pose network or of a regressor kept in its encoder folder (one factor per target so ±1 holds 68.3 % of the errors; `--split val` takes a split's rows, `--calibration-from` a validated run's factors).
     Calibrate(CalibrateArgs),
     /// Average models trained apart (pose networks, detectors reading frames alike, or regressors on one encoder's features trained with other seeds): copies them into one folder that every command and Python load as one model (a regressor ensemble inside the encoder folder runs as one of its estimators). A detector member's folded calibration is unfolded in its copy; calibrate the ensemble as a whole.
     #[command(alias = "pose-ensemble")]
@@ -48,16 +48,16 @@ pub(crate) struct ProfileArgs {
 
 #[derive(Args)]
 pub(crate) struct CalibrateArgs {
-    /// The detector or pose-network folder.
+    /// The detector, pose-network or regressor folder (a regressor inside the encoder folder it reads, e.g. ENCODER/pose).
     #[arg(long)]
     model: PathBuf,
-    /// Labelled dataset(s) of frames it was not trained on (one for a pose network).
+    /// Labelled dataset(s) of frames it was not trained on (one for a pose network or regressor).
     #[arg(long, num_args = 1..)]
     data: Vec<PathBuf>,
-    /// A pose network: only the rows whose `split` column says this (e.g. val).
+    /// A pose network or regressor: only the rows whose `split` column says this (e.g. val).
     #[arg(long)]
     split: Option<String>,
-    /// A pose network trained on every frame: take the deviation factors of this validated run (same targets) instead.
+    /// A pose network or regressor trained on every frame: take the deviation factors of this validated run (same targets) instead.
     #[arg(long, value_name = "DIR")]
     calibration_from: Option<PathBuf>,
 }

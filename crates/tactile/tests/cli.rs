@@ -2538,6 +2538,42 @@ fn the_cae_route_on_surface_frames_it_never_saw_is_within_1_5x_of_the_best() {
         1.3,
         mae("pose-surface"),
     );
+    // Both CAE routes give each estimate's deviation, the validated one's
+    // calibrated on `val` (the shipped one takes its factors): there ±1
+    // holds 68.3 % of the errors, and ±1.96 most of them.
+    for model in ["cae-surface-train", "cae-surface"] {
+        let (data, text) = predict_surface(model);
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let mut want = vec!["file".to_string()];
+        want.extend(SURFACE_TARGETS.iter().map(|t| t.to_string()));
+        want.extend(SURFACE_TARGETS.iter().map(|t| format!("{t}_std")));
+        assert_eq!(header, want, "{model}");
+        if model != "cae-surface-train" {
+            continue;
+        }
+        let truth = surface_truth(&data, Some("val"));
+        let (mut inside, mut n) = ([[0usize; 2]; 6], 0usize);
+        for l in lines {
+            let c: Vec<&str> = l.split(',').collect();
+            let Some(y) = truth.get(c[0]) else { continue };
+            for k in 0..6 {
+                let (p, s): (f64, f64) = (c[1 + k].parse().unwrap(), c[7 + k].parse().unwrap());
+                assert!(s > 0.0 && s.is_finite(), "{l}");
+                inside[k][0] += usize::from((p - y[k]).abs() <= s);
+                inside[k][1] += usize::from((p - y[k]).abs() <= 1.96 * s);
+            }
+            n += 1;
+        }
+        for (k, [one, two]) in inside.iter().enumerate() {
+            let (one, two) = (*one as f64 / n as f64, *two as f64 / n as f64);
+            assert!(
+                (0.67..=0.70).contains(&one) && (0.85..=1.0).contains(&two),
+                "{}: {one} {two}",
+                SURFACE_TARGETS[k]
+            );
+        }
+    }
 }
 
 #[test]
