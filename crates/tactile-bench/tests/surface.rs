@@ -134,5 +134,8 @@ fn an_encoder_row_counts_every_member_of_its_estimator() {
     // coverage is the cross-fitted one; the lone member's, calibrated on
     // its early-stopping rows, is measured on these frames.
     assert!(five[12].ends_with("cross-fitted"), "{five:?}");
-    assert!(one[12].contains('%') && !one[12].contains("cross"), "{one:?}");
+    assert!(
+        one[12].contains('%') && !one[12].contains("cross"),
+        "{one:?}"
+    );
 }
