@@ -99,6 +99,10 @@ impl RegressorOptions {
             )
             .into());
         }
+        if self.uncertainty {
+            tactile_estimate::uncertainty::check_linear(&targets)
+                .map_err(tactile_core::Error::Config)?;
+        }
         Ok(RegressorPlan {
             hidden: self.hidden.clone(),
             test_fraction: self.test_fraction,
