@@ -224,31 +224,18 @@ impl RegressorEnsemble {
     pub fn calibration_from(dir: &Path, from: &Path, device: &Device) -> Result<UncertaintyFit> {
         let (model, source) = (Self::load(dir, device)?, Self::load(from, device)?);
         let (before, scale) = (model.factors(dir)?, source.factors(from)?);
-        if source.targets() != model.targets() {
-            return Err(tactile_core::Error::model(
-                from,
-                "its targets are not the regressor's: its calibration does not apply",
-            )
-            .into());
-        }
-        if (source.members.len() > 1) != (model.members.len() > 1) {
-            return Err(tactile_core::Error::model(
-                from,
-                "an ensemble's factors apply to an ensemble of the same recipe, a regressor's to a regressor",
-            )
-            .into());
-        }
-        let note =
-            serde_json::json!({ "from": from.display().to_string(), "notes": source.calibration });
-        model.write_factors(dir, &scale, note)?;
-        Ok(UncertaintyFit {
-            frames: 0,
-            targets: model.targets().iter().map(|t| t.name.clone()).collect(),
-            std_scale_before: before,
-            std_scale: scale,
-            coverage_before: [vec![], vec![]],
-            coverage_cross_fitted: [vec![], vec![]],
-        })
+        // An ensemble's factors scale its combined deviation, a
+        // regressor's its own.
+        let same_kind = RegressorArtifact::is_in(from) == RegressorArtifact::is_in(dir);
+        UncertaintyFit::check_taken(
+            from,
+            (source.targets() == model.targets(), same_kind),
+            "regressor",
+        )?;
+        let (fit, note) =
+            UncertaintyFit::taken(model.targets(), before, scale, (from, source.calibration));
+        model.write_factors(dir, &fit.std_scale, note)?;
+        Ok(fit)
     }
 
     /// The factors calibration changes: a regressor's own, an ensemble's
@@ -258,16 +245,14 @@ impl RegressorEnsemble {
             return Err(no_uncertainty(dir));
         }
         let k = self.targets().len();
-        Ok(
-            if self.members.len() == 1 && RegressorArtifact::is_in(dir) {
-                self.artifact()
-                    .std_scale
-                    .clone()
-                    .unwrap_or_else(|| vec![1.0; k])
-            } else {
-                self.std_factor.clone().unwrap_or_else(|| vec![1.0; k])
-            },
-        )
+        Ok(if RegressorArtifact::is_in(dir) {
+            self.artifact()
+                .std_scale
+                .clone()
+                .unwrap_or_else(|| vec![1.0; k])
+        } else {
+            self.std_factor.clone().unwrap_or_else(|| vec![1.0; k])
+        })
     }
 
     /// Write `scale` where [`Self::factors`] reads it, with `note`.
@@ -516,6 +501,19 @@ mod tests {
         let c68 = inside as f64 / ty.len() as f64;
         assert!((0.63..0.76).contains(&c68), "{c68}");
         assert_eq!(est.calibration().unwrap()["frames"], 600);
+        // Another ensemble of the recipe takes those factors; a lone
+        // regressor does not (its factors scale its own deviation, an
+        // ensemble's the combined one).
+        let (c, d) = (member(11, true), member(12, true));
+        let other = tmp.path().join("other");
+        RegressorEnsemble::assemble(&[c.clone(), d], &other).unwrap();
+        let taken = RegressorEnsemble::calibration_from(&other, &ens, &dev).unwrap();
+        assert_eq!((taken.frames, &taken.std_scale), (0, &kept));
+        let err = RegressorEnsemble::calibration_from(&c, &ens, &dev)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("a regressor's to a regressor"), "{err}");
         // A regressor of no uncertainty is refused, naming its folder.
         let plain = member(10, false);
         let err = RegressorEnsemble::calibrate_on(&plain, (&cx, &cy), (tmp.path(), None), &dev)

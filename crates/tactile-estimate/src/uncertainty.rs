@@ -119,6 +119,52 @@ pub struct UncertaintyFit {
 }
 
 impl UncertaintyFit {
+    /// Refuse to take the factors of the validated run `from` when its
+    /// targets differ, or when one is an ensemble and the other a single
+    /// `what` (network, regressor): its calibration would not apply.
+    pub fn check_taken(
+        from: &std::path::Path,
+        (same_targets, same_kind): (bool, bool),
+        what: &str,
+    ) -> tactile_core::Result<()> {
+        if !same_targets {
+            return Err(tactile_core::Error::model(
+                from,
+                format!("its targets are not the {what}'s: its calibration does not apply"),
+            ));
+        }
+        if !same_kind {
+            return Err(tactile_core::Error::model(
+                from,
+                format!(
+                    "an ensemble's factors apply to an ensemble of the same recipe, a {what}'s to a {what}"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Factors `scale` taken from the validated run `from` (whose own
+    /// calibration notes are `from_notes`) for a model of `targets` that
+    /// had `before`; with the note the model keeps of it.
+    pub fn taken(
+        targets: &[crate::Target],
+        before: Vec<f64>,
+        scale: Vec<f64>,
+        (from, from_notes): (&std::path::Path, Option<serde_json::Value>),
+    ) -> (Self, serde_json::Value) {
+        let fit = Self {
+            frames: 0,
+            targets: targets.iter().map(|t| t.name.clone()).collect(),
+            std_scale_before: before,
+            std_scale: scale,
+            coverage_before: [vec![], vec![]],
+            coverage_cross_fitted: [vec![], vec![]],
+        };
+        let note = serde_json::json!({ "from": from.display().to_string(), "notes": from_notes });
+        (fit, note)
+    }
+
     /// One line for a terminal.
     pub fn describe(&self) -> String {
         let mean = |v: &[f64]| 100.0 * v.iter().sum::<f64>() / v.len().max(1) as f64;

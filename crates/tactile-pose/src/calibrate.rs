@@ -107,36 +107,13 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
 pub fn calibration_from(dir: &Path, from: &Path) -> Result<UncertaintyFit> {
     let (model, targets, before) = uncertain(dir)?;
     let (src, src_targets, scale) = uncertain(from)?;
-    if src_targets != targets {
-        return Err(tactile_core::Error::model(
-            from,
-            "its targets are not the network's: its calibration does not apply",
-        )
-        .into());
-    }
-    if matches!(src, Factors::Ensemble(_)) != matches!(model, Factors::Ensemble(_)) {
-        return Err(tactile_core::Error::model(
-            from,
-            "an ensemble's factors apply to an ensemble of the same recipe, a network's to a network",
-        )
-        .into());
-    }
+    let same_kind = matches!(src, Factors::Ensemble(_)) == matches!(model, Factors::Ensemble(_));
+    UncertaintyFit::check_taken(from, (src_targets == targets, same_kind), "network")?;
     let src_note = match &src {
         Factors::Network(a) => a.notes.get("uncertainty_calibration").cloned(),
         Factors::Ensemble(e) => e.notes.get("uncertainty_calibration").cloned(),
     };
-    save_scale(
-        dir,
-        model,
-        &scale,
-        serde_json::json!({ "from": from.display().to_string(), "notes": src_note }),
-    )?;
-    Ok(UncertaintyFit {
-        frames: 0,
-        targets: targets.iter().map(|t| t.name.clone()).collect(),
-        std_scale_before: before,
-        std_scale: scale,
-        coverage_before: [vec![], vec![]],
-        coverage_cross_fitted: [vec![], vec![]],
-    })
+    let (fit, note) = UncertaintyFit::taken(&targets, before, scale, (from, src_note));
+    save_scale(dir, model, &fit.std_scale, note)?;
+    Ok(fit)
 }
