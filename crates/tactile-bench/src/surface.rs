@@ -7,6 +7,7 @@ use serde::Serialize;
 use tactile_core::dataset::Dataset;
 use tactile_core::plot::{ScatterPanel, Series, scatter_grid};
 use tactile_estimate::Column;
+use tactile_estimate::uncertainty::{ONE_SIGMA, calibrate};
 use tactile_pipeline::tactip::Predictor;
 
 use crate::Result;
@@ -69,6 +70,58 @@ fn cross_fitted(notes: &serde_json::Value, split: Option<&str>) -> Option<[Vec<f
     serde_json::from_value(u.get("coverage_cross_fitted")?.clone()).ok()
 }
 
+/// Points of the coverage curve: z from 0.25 to 3 in these steps.
+const COVERAGE_STEPS: usize = 12;
+
+fn coverage_z(step: usize) -> f64 {
+    0.25 * step as f64
+}
+
+/// The fraction of a normal variable within ±z standard deviations.
+fn normal_coverage(z: f64) -> f64 {
+    // erf(z / sqrt 2) by Abramowitz and Stegun 7.1.26 (error below 1.5e-7).
+    let x = z / std::f64::consts::SQRT_2;
+    let t = 1.0 / (1.0 + 0.327_591_1 * x);
+    let poly = t
+        * (0.254_829_592
+            + t * (-0.284_496_736
+                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    1.0 - poly * (-x * x).exp()
+}
+
+/// Per z of [`coverage_z`], the fraction of `|error| <= z * std`, mean
+/// over the targets (`(|error|, std)` per row, per target). Cross-fitted:
+/// each half of the rows counted under the factors that make ±1 hold
+/// 68.3 % of the other half, the two halves averaged.
+fn coverage_curve(targets: &[Vec<(f64, f64)>], cross_fit: bool) -> Vec<(f64, f64)> {
+    let inside = |rows: &[(f64, f64)], z: f64, factor: f64| {
+        rows.iter().filter(|(e, s)| *e <= z * s * factor).count() as f64 / rows.len().max(1) as f64
+    };
+    (1..=COVERAGE_STEPS)
+        .map(coverage_z)
+        .map(|z| {
+            let per_target = targets.iter().map(|rows| {
+                if !cross_fit {
+                    return inside(rows, z, 1.0);
+                }
+                let half = |p: usize| -> Vec<(f64, f64)> {
+                    rows.iter()
+                        .enumerate()
+                        .filter(|(i, _)| i % 2 == p)
+                        .map(|(_, r)| *r)
+                        .collect()
+                };
+                let (even, odd) = (half(0), half(1));
+                let factor = |rows: &[(f64, f64)]| {
+                    calibrate(&[rows.iter().map(|(e, s)| e / s).collect()])[0]
+                };
+                (inside(&odd, z, factor(&even)) + inside(&even, z, factor(&odd))) / 2.0
+            });
+            (z, per_target.sum::<f64>() / targets.len().max(1) as f64)
+        })
+        .collect()
+}
+
 /// Whether the model in a folder with these notes trained on the scored
 /// rows: a pose network with `every_split`, an encoder whose notes say so.
 fn saw_scored(notes: &serde_json::Value) -> bool {
@@ -110,6 +163,7 @@ pub fn bench_surface(
     }
     md.push_str(" 1.00 | - | - | - | - |\n");
     let (mut series, mut table_rows) = (Vec::new(), Vec::new());
+    let mut coverage_series = Vec::new();
     // The scored frames in thirds of their tap depth: shear shows in the
     // pins only once the skin grips the surface.
     let depth_of = |i: usize| ds.number_opt(i, "depth_mm").ok().flatten();
@@ -158,6 +212,9 @@ pub fn bench_surface(
         };
         let (mut mae, mut ratio, mut panels) = (Vec::new(), Vec::new(), Vec::new());
         let (mut cov68, mut cov95) = (Vec::new(), Vec::new());
+        // Per target with a deviation, (|error|, deviation) per scored row:
+        // the coverage curve.
+        let mut errors_and_std: Vec<Vec<(f64, f64)>> = Vec::new();
         // Per target and scored row, (truth, estimate); NaN when unlabelled:
         // the depth thirds' errors and gains.
         let mut pairs_by_target: Vec<Vec<(f64, f64)>> = Vec::new();
@@ -174,6 +231,7 @@ pub fn bench_surface(
             let std = number(&tactile_estimate::registry::std_column(t));
             let mut points = Vec::with_capacity(rows.len());
             let mut pairs = Vec::with_capacity(rows.len());
+            let mut deviations = Vec::new();
             let (mut inside68, mut inside95) = (0usize, 0usize);
             for &i in &rows {
                 let Some(truth) = ds.number_opt(i, t)? else {
@@ -184,6 +242,7 @@ pub fn bench_surface(
                 pairs.push((truth, pred[i]));
                 points.push((truth, pred[i]));
                 if let Some(s) = std {
+                    deviations.push((e, s[i]));
                     inside68 += usize::from(e <= s[i]);
                     inside95 += usize::from(e <= tactile_pose::uncertainty::Z95 * s[i]);
                 }
@@ -203,6 +262,7 @@ pub fn bench_surface(
             if std.is_some() {
                 cov68.push(inside68 as f64 / n);
                 cov95.push(inside95 as f64 / n);
+                errors_and_std.push(deviations);
             }
             panels.push(ScatterPanel {
                 title: format!("{t}: MAE {e:.3} (authors {authors})"),
@@ -228,6 +288,20 @@ pub fn bench_surface(
         let cross = cross_fitted(&notes, ds.evaluation_split_name());
         if let Some([c68, c95]) = &cross {
             (cov68, cov95) = (c68.clone(), c95.clone());
+        }
+        if !errors_and_std.is_empty() && !saw {
+            coverage_series.push(Series {
+                name: format!(
+                    "{}{}",
+                    folder_name(m),
+                    if cross.is_some() {
+                        " (cross-fitted)"
+                    } else {
+                        ""
+                    }
+                ),
+                points: coverage_curve(&errors_and_std, cross.is_some()),
+            });
         }
         let worst = ratio.iter().copied().fold(0.0, f64::max);
         for (n, third) in thirds.iter().enumerate() {
@@ -344,6 +418,36 @@ pub fn bench_surface(
             fitted.len()
         ));
     }
+    if let (false, Some(out)) = (coverage_series.is_empty(), out) {
+        let z: Vec<f64> = (1..=COVERAGE_STEPS).map(coverage_z).collect();
+        coverage_series.push(Series {
+            name: "normal errors (95 % at 1.96)".into(),
+            points: z.iter().map(|&z| (z, normal_coverage(z))).collect(),
+        });
+        coverage_series.push(Series {
+            name: "Laplace errors, 68.3 % at 1".into(),
+            points: z
+                .iter()
+                .map(|&z| (z, 1.0 - (1.0 - ONE_SIGMA).powf(z)))
+                .collect(),
+        });
+        let (path, link) = picture_beside(out, "coverage");
+        tactile_core::plot::line_plot(
+            &path,
+            "Interval coverage on frames the models never fitted",
+            "interval half-width (standard deviations)",
+            "fraction of errors inside (mean over targets)",
+            &coverage_series,
+            false,
+        )?;
+        md.push_str(&format!(
+            "
+How often the error lies inside ±z standard deviations, for z from 0.25 to 3, mean over the targets, for the models that give a deviation and never fitted the scored frames (cross-fitted where they were calibrated on them: factors from one half, counted on the other), beside what normal and Laplace errors would give:
+
+![interval coverage]({link})
+"
+        ));
+    }
     if let (Some((name, panels)), Some(out)) = (first_panels, out) {
         let (path, link) = picture_beside(out, "scatter");
         scatter_grid(&path, &panels, 3)?;
@@ -363,4 +467,32 @@ pub fn bench_surface(
         series,
         rows: table_rows,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_coverage_curve_of_laplace_errors_follows_the_laplace_reference() {
+        assert!((normal_coverage(1.0) - 0.682_689).abs() < 1e-6);
+        assert!((normal_coverage(tactile_estimate::uncertainty::Z95) - 0.95).abs() < 1e-6);
+        // Laplace errors of scale 1 under a deviation of 2: cross-fitted,
+        // ±1 holds 68.3 % and ±z the Laplace's 1 - 0.317^z, not a normal's.
+        let mut rng = tactile_core::rng::SampleRng::new(5, 0, 0);
+        let rows: Vec<(f64, f64)> = (0..20_000)
+            .map(|_| {
+                let u: f64 = rng.uniform();
+                (-(1.0 - u).max(1e-12).ln(), 2.0)
+            })
+            .collect();
+        let curve = coverage_curve(&[rows.clone()], true);
+        for &(z, c) in &curve {
+            let laplace = 1.0 - (1.0 - ONE_SIGMA).powf(z);
+            assert!((c - laplace).abs() < 0.015, "z {z}: {c} against {laplace}");
+        }
+        // Uncalibrated, the too-wide deviation covers more than that.
+        let raw = coverage_curve(&[rows], false);
+        assert!(raw[3].1 > 0.8, "{raw:?}");
+    }
 }
