@@ -486,7 +486,7 @@ mod tests {
                 (-(1.0 - u).max(1e-12).ln(), 2.0)
             })
             .collect();
-        let curve = coverage_curve(&[rows.clone()], true);
+        let curve = coverage_curve(std::slice::from_ref(&rows), true);
         for &(z, c) in &curve {
             let laplace = 1.0 - (1.0 - ONE_SIGMA).powf(z);
             assert!((c - laplace).abs() < 0.015, "z {z}: {c} against {laplace}");
