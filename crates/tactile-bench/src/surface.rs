@@ -4,10 +4,11 @@
 //! of its uncertainty intervals where it gives one, against its latency.
 
 use serde::Serialize;
+use tactile_burn::ensemble::CALIBRATION_NOTE;
 use tactile_core::dataset::Dataset;
 use tactile_core::plot::{ScatterPanel, Series, scatter_grid};
 use tactile_estimate::Column;
-use tactile_estimate::uncertainty::{ONE_SIGMA, calibrate};
+use tactile_estimate::uncertainty::{ONE_SIGMA, Z95, coverage, cross_fitted_coverage_at};
 use tactile_pipeline::tactip::Predictor;
 
 use crate::Result;
@@ -61,9 +62,10 @@ fn scored_rows(ds: &Dataset) -> Vec<usize> {
 /// The coverage of a model whose deviations were calibrated on the scored
 /// split itself (`tactile train calibrate --split`): measured there it
 /// would be 68.3 % by construction, so its cross-fitted coverage (calibrated
-/// on one half of the split, measured on the other) stands instead.
-fn cross_fitted(notes: &serde_json::Value, split: Option<&str>) -> Option<[Vec<f64>; 2]> {
-    let u = notes.get("uncertainty_calibration")?;
+/// on one half of the split, measured on the other) stands instead. `u`
+/// is the model's calibration note ([`CALIBRATION_NOTE`]).
+fn cross_fitted(u: Option<&serde_json::Value>, split: Option<&str>) -> Option<[Vec<f64>; 2]> {
+    let u = u?;
     if split.is_none() || u.get("split").and_then(|s| s.as_str()) != split {
         return None;
     }
@@ -79,14 +81,7 @@ fn coverage_z(step: usize) -> f64 {
 
 /// The fraction of a normal variable within ±z standard deviations.
 fn normal_coverage(z: f64) -> f64 {
-    // erf(z / sqrt 2) by Abramowitz and Stegun 7.1.26 (error below 1.5e-7).
-    let x = z / std::f64::consts::SQRT_2;
-    let t = 1.0 / (1.0 + 0.327_591_1 * x);
-    let poly = t
-        * (0.254_829_592
-            + t * (-0.284_496_736
-                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
-    1.0 - poly * (-x * x).exp()
+    libm::erf(z / std::f64::consts::SQRT_2)
 }
 
 /// Per z of [`coverage_z`], the fraction of `|error| <= z * std`, mean
@@ -94,32 +89,23 @@ fn normal_coverage(z: f64) -> f64 {
 /// each half of the rows counted under the factors that make ±1 hold
 /// 68.3 % of the other half, the two halves averaged.
 fn coverage_curve(targets: &[Vec<(f64, f64)>], cross_fit: bool) -> Vec<(f64, f64)> {
-    let inside = |rows: &[(f64, f64)], z: f64, factor: f64| {
-        rows.iter().filter(|(e, s)| *e <= z * s * factor).count() as f64 / rows.len().max(1) as f64
-    };
-    (1..=COVERAGE_STEPS)
-        .map(coverage_z)
-        .map(|z| {
-            let per_target = targets.iter().map(|rows| {
-                if !cross_fit {
-                    return inside(rows, z, 1.0);
-                }
-                let half = |p: usize| -> Vec<(f64, f64)> {
-                    rows.iter()
-                        .enumerate()
-                        .filter(|(i, _)| i % 2 == p)
-                        .map(|(_, r)| *r)
-                        .collect()
-                };
-                let (even, odd) = (half(0), half(1));
-                let factor = |rows: &[(f64, f64)]| {
-                    calibrate(&[rows.iter().map(|(e, s)| e / s).collect()])[0]
-                };
-                (inside(&odd, z, factor(&even)) + inside(&even, z, factor(&odd))) / 2.0
-            });
-            (z, per_target.sum::<f64>() / targets.len().max(1) as f64)
-        })
-        .collect()
+    let zs: Vec<f64> = (1..=COVERAGE_STEPS).map(coverage_z).collect();
+    let mut sum = vec![0.0; zs.len()];
+    for rows in targets {
+        let (errors, std): (Vec<Vec<f64>>, Vec<Vec<f64>>) =
+            rows.iter().map(|&(e, s)| (vec![e], vec![s])).unzip();
+        let at: Vec<f64> = if cross_fit {
+            cross_fitted_coverage_at(&errors, &std, &zs)
+                .into_iter()
+                .map(|c| c[0])
+                .collect()
+        } else {
+            zs.iter().map(|&z| coverage(&errors, &std, z)[0]).collect()
+        };
+        sum.iter_mut().zip(at).for_each(|(total, c)| *total += c);
+    }
+    let n = targets.len().max(1) as f64;
+    zs.into_iter().zip(sum).map(|(z, s)| (z, s / n)).collect()
 }
 
 /// Whether the model in a folder with these notes trained on the scored
@@ -244,7 +230,7 @@ pub fn bench_surface(
                 if let Some(s) = std {
                     deviations.push((e, s[i]));
                     inside68 += usize::from(e <= s[i]);
-                    inside95 += usize::from(e <= tactile_pose::uncertainty::Z95 * s[i]);
+                    inside95 += usize::from(e <= Z95 * s[i]);
                 }
             }
             pairs_by_target.push(pairs);
@@ -277,15 +263,11 @@ pub fn bench_surface(
             fit_md.push('\n');
         }
         // An encoder's deviations are its regressor's, calibrated there.
-        let notes = match &predictor {
-            Predictor::Encoder(p) => p
-                .estimators
-                .calibration()
-                .map(|u| serde_json::json!({ "uncertainty_calibration": u }))
-                .unwrap_or_default(),
-            Predictor::PoseNetwork(_) => c.notes.clone(),
+        let calibration = match &predictor {
+            Predictor::Encoder(p) => p.estimators.calibration(),
+            Predictor::PoseNetwork(_) => c.notes.get(CALIBRATION_NOTE),
         };
-        let cross = cross_fitted(&notes, ds.evaluation_split_name());
+        let cross = cross_fitted(calibration, ds.evaluation_split_name());
         if let Some([c68, c95]) = &cross {
             (cov68, cov95) = (c68.clone(), c95.clone());
         }

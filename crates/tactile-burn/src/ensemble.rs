@@ -23,6 +23,11 @@ pub struct Ensemble {
     pub notes: serde_json::Value,
 }
 
+/// The key under which a model's notes say where its deviations were last
+/// calibrated on frames it never fitted (data, split, frames, cross-fitted
+/// coverage), or whose factors it took.
+pub const CALIBRATION_NOTE: &str = "uncertainty_calibration";
+
 impl Ensemble {
     /// The file that makes a folder an ensemble.
     pub const FILE: &'static str = "ensemble.json";
@@ -115,7 +120,7 @@ impl Ensemble {
             self.notes = serde_json::json!({});
         }
         self.notes["std_scale"] = serde_json::json!(scale);
-        self.notes["uncertainty_calibration"] = note;
+        self.notes[CALIBRATION_NOTE] = note;
         tactile_core::io::write_json_atomic(dir.join(Self::FILE), &self)
     }
 

@@ -9,12 +9,12 @@ use std::path::{Path, PathBuf};
 
 use burn::tensor::Device;
 use tactile_burn::Artifact;
-use tactile_burn::ensemble::Ensemble;
+use tactile_burn::ensemble::{CALIBRATION_NOTE, Ensemble};
 
 use crate::Result;
-use crate::regressor::{Regressor, RegressorArtifact, ValuesWithStd, decode_columns, target_mae};
+use crate::regressor::{Regressor, RegressorArtifact, decode_columns, target_mae};
 use crate::target::Target;
-use crate::uncertainty::UncertaintyFit;
+use crate::uncertainty::{Mixture, UncertaintyFit, ValuesWithStd};
 
 /// One regressor, or an ensemble of them whose estimates are averaged: a
 /// regressor folder as the estimators load it.
@@ -131,58 +131,33 @@ impl RegressorEnsemble {
     /// their spread, times the ensemble's own factors when it was
     /// calibrated as a whole (one member: its own deviation).
     pub fn predict_with_std(&self, x: &[Vec<f32>]) -> Result<ValuesWithStd> {
-        // Per vector and column: sum of values, of squared values, and per
-        // target of variances.
-        let (mut sum, mut sq): (Vec<Vec<f64>>, Vec<Vec<f64>>) = (Vec::new(), Vec::new());
-        let mut var: Option<Vec<Vec<f64>>> = None;
-        for (i, m) in self.members.iter().enumerate() {
+        // Per vector and column, the members' estimates (with uncertainty
+        // every target is linear: a column is a target, and has a deviation).
+        let mut mix: Vec<Vec<Mixture>> = Vec::new();
+        for m in &self.members {
             let (cols, std) = m.predict_columns_with_std(x)?;
-            if i == 0 {
-                sq = cols
-                    .iter()
-                    .map(|c| c.iter().map(|v| v * v).collect())
-                    .collect();
-                var = std.map(|s| {
-                    s.iter()
-                        .map(|r| r.iter().map(|d| d * d).collect())
-                        .collect()
-                });
-                sum = cols;
-                continue;
-            }
-            for ((s, q), row) in sum.iter_mut().zip(sq.iter_mut()).zip(&cols) {
-                for ((a, b), v) in s.iter_mut().zip(q.iter_mut()).zip(row) {
-                    *a += v;
-                    *b += v * v;
-                }
-            }
-            if let (Some(var), Some(std)) = (var.as_mut(), std) {
-                for (a, row) in var.iter_mut().zip(std) {
-                    a.iter_mut().zip(row).for_each(|(a, d)| *a += d * d);
+            mix.resize_with(cols.len(), Vec::new);
+            for (i, (acc, row)) in mix.iter_mut().zip(&cols).enumerate() {
+                acc.resize(row.len(), Mixture::default());
+                for (j, (a, v)) in acc.iter_mut().zip(row).enumerate() {
+                    a.add(*v, std.as_ref().map_or(0.0, |s| s[i][j]));
                 }
             }
         }
-        let n = self.members.len() as f64;
-        let means: Vec<Vec<f64>> = sum
+        let values = mix
             .iter()
-            .map(|c| c.iter().map(|v| v / n).collect())
+            .map(|row| {
+                let mean: Vec<f64> = row.iter().map(Mixture::mean).collect();
+                decode_columns(self.targets(), &mean)
+            })
             .collect();
-        let values = means
-            .iter()
-            .map(|c| decode_columns(self.targets(), c))
-            .collect();
-        // With uncertainty every target is linear: a column is a target.
-        let std = var.map(|var| {
-            var.iter()
-                .zip(&means)
-                .zip(&sq)
-                .map(|((v, mean), q)| {
-                    (0..v.len())
-                        .map(|j| {
-                            let spread = (q[j] / n - mean[j] * mean[j]).max(0.0);
-                            (v[j] / n + spread).sqrt()
-                                * self.std_factor.as_ref().map_or(1.0, |f| f[j])
-                        })
+        let factor = |j: usize| self.std_factor.as_ref().map_or(1.0, |f| f[j]);
+        let std = self.has_uncertainty().then(|| {
+            mix.iter()
+                .map(|row| {
+                    row.iter()
+                        .enumerate()
+                        .map(|(j, a)| a.std() * factor(j))
                         .collect()
                 })
                 .collect()
@@ -197,24 +172,23 @@ impl RegressorEnsemble {
         self.calibration.as_ref()
     }
 
-    /// Calibrate the deviations of the regressor (or ensemble) in `dir` on
-    /// feature vectors `x` and their labels `y` (frames it never fitted:
-    /// `data`'s rows of `split`, recorded in its notes): one factor per
-    /// target so ±1 deviation holds 68.3 % of their errors. The estimates
-    /// are unchanged; `regressor.json` (an ensemble's `ensemble.json`) is
-    /// rewritten atomically.
+    /// Calibrate the deviations of this regressor (or ensemble), loaded
+    /// from `dir`, on feature vectors `x` and their labels `y` (frames it
+    /// never fitted: `data`'s rows of `split`, recorded in its notes): one
+    /// factor per target so ±1 deviation holds 68.3 % of their errors. The
+    /// estimates are unchanged; `regressor.json` (an ensemble's
+    /// `ensemble.json`) is rewritten atomically.
     pub fn calibrate_on(
+        &self,
         dir: &Path,
         (x, y): (&[Vec<f32>], &[Vec<f64>]),
         (data, split): (&Path, Option<&str>),
-        device: &Device,
     ) -> Result<UncertaintyFit> {
-        let model = Self::load(dir, device)?;
-        let before = model.factors(dir)?;
-        let (values, std) = model.predict_with_std(x)?;
+        let before = self.factors(dir)?;
+        let (values, std) = self.predict_with_std(x)?;
         let std = std.ok_or_else(|| no_uncertainty(dir))?;
-        let fit = crate::uncertainty::fit(model.targets(), (&values, y), &std, before);
-        model.write_factors(dir, &fit.std_scale, fit.note(data, split))?;
+        let fit = crate::uncertainty::fit(self.targets(), (&values, y), &std, before);
+        self.write_factors(dir, &fit.std_scale, fit.note(data, split))?;
         Ok(fit)
     }
 
@@ -277,9 +251,6 @@ impl RegressorEnsemble {
         Ok(target_mae(self.targets(), &self.predict(x)?, y))
     }
 }
-
-/// The notes' key of where deviations were calibrated.
-const CALIBRATION_NOTE: &str = "uncertainty_calibration";
 
 fn no_uncertainty(dir: &Path) -> crate::Error {
     tactile_core::Error::model(
@@ -468,9 +439,10 @@ mod tests {
         // calibrated on 600 other rows, ±1 holds 68.3 % of a third set's
         // errors.
         let (cx, cy, _) = crate::regressor::tests::noisy(600, 3);
-        let fit =
-            RegressorEnsemble::calibrate_on(&ens, (&cx, &cy), (tmp.path(), Some("val")), &dev)
-                .unwrap();
+        let fit = RegressorEnsemble::load(&ens, &dev)
+            .unwrap()
+            .calibrate_on(&ens, (&cx, &cy), (tmp.path(), Some("val")))
+            .unwrap();
         assert_eq!(
             (fit.frames, fit.std_scale_before.clone()),
             (600, vec![1.0, 1.0])
@@ -516,7 +488,9 @@ mod tests {
         assert!(err.contains("a regressor's to a regressor"), "{err}");
         // A regressor of no uncertainty is refused, naming its folder.
         let plain = member(10, false);
-        let err = RegressorEnsemble::calibrate_on(&plain, (&cx, &cy), (tmp.path(), None), &dev)
+        let err = RegressorEnsemble::load(&plain, &dev)
+            .unwrap()
+            .calibrate_on(&plain, (&cx, &cy), (tmp.path(), None))
             .err()
             .unwrap()
             .to_string();

@@ -15,6 +15,7 @@ use tactile_burn::train::Schedule;
 use crate::head::check_features;
 use crate::mlp::{Activation, Mlp, fit_in_memory, matrix};
 use crate::target::{Target, TargetKind};
+use crate::uncertainty::ValuesWithStd;
 use crate::{Error, Result};
 
 /// Architecture and training of a regressor.
@@ -209,10 +210,6 @@ fn to64(v: &[Vec<f32>]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Per feature vector its values, and with uncertainty each target's
-/// standard deviation (labels' units).
-pub type ValuesWithStd = (Vec<Vec<f64>>, Option<Vec<Vec<f64>>>);
-
 /// Encode label rows (one value per target) into network columns.
 pub fn encode(targets: &[Target], y: &[Vec<f64>]) -> Vec<Vec<f64>> {
     y.iter()
@@ -376,18 +373,13 @@ impl Regressor {
         if uncertain {
             // One factor per target makes ±1 deviation hold 68.3 % of the
             // early-stopping rows' errors (standardised units).
+            // Linear targets only: a column is a target (m = nt).
             let (raw, ey) = (r.run(val_x)?, r.artifact.outputs.apply(&evy));
-            let ratios: Vec<Vec<f64>> = (0..nt)
-                .map(|j| {
-                    raw.chunks(m + nt)
-                        .zip(ey.chunks(m))
-                        .map(|(o, y)| {
-                            (o[j] - y[j]).abs() as f64 / crate::uncertainty::scale(o[m + j])
-                        })
-                        .collect()
-                })
-                .collect();
-            r.artifact.std_scale = Some(crate::uncertainty::calibrate(&ratios));
+            r.artifact.std_scale = Some(crate::uncertainty::calibrate_raw(
+                raw.chunks(m + nt),
+                &ey,
+                nt,
+            ));
         }
         Ok(r)
     }
@@ -426,7 +418,9 @@ impl Regressor {
                 raw.chunks(width)
                     .map(|r| {
                         (0..nt)
-                            .map(|j| crate::uncertainty::scale(r[m + j]) * a.outputs.std[j] * f[j])
+                            .map(|j| {
+                                crate::uncertainty::deviation(r[m + j], a.outputs.std[j], f[j])
+                            })
                             .collect()
                     })
                     .collect(),

@@ -54,6 +54,69 @@ pub fn calibrate(ratios: &[Vec<f64>]) -> Vec<f64> {
         .collect()
 }
 
+/// Per target, the factor that makes ±1 deviation hold 68.3 % of the
+/// errors of raw network rows (`k` standardised estimates, then their `k`
+/// log scales) against the standardised labels `truth` (`k` per row).
+pub fn calibrate_raw<'a>(
+    rows: impl IntoIterator<Item = &'a [f32]>,
+    truth: &[f32],
+    k: usize,
+) -> Vec<f64> {
+    let rows: Vec<&[f32]> = rows.into_iter().collect();
+    let ratios: Vec<Vec<f64>> = (0..k)
+        .map(|j| {
+            rows.iter()
+                .zip(truth.chunks(k))
+                .map(|(r, t)| (r[j] as f64 - t[j] as f64).abs() / scale(r[k + j]))
+                .collect()
+        })
+        .collect();
+    calibrate(&ratios)
+}
+
+/// Per value its estimates, and with uncertainty each estimate's standard
+/// deviation (labels' units).
+pub type ValuesWithStd = (Vec<Vec<f64>>, Option<Vec<Vec<f64>>>);
+
+/// One value's standard deviation in the labels' units from a network's
+/// log-scale output, the standardisation `output_std` of its column and
+/// the calibration `factor`.
+pub fn deviation(log_scale: f32, output_std: f64, factor: f64) -> f64 {
+    scale(log_scale) * output_std * factor
+}
+
+/// Members' estimates of one value with their deviations, as one: their
+/// mean, and the deviation of their mixture (the members' mean variance
+/// plus their spread), which an ensemble gives.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Mixture {
+    n: f64,
+    sum: f64,
+    squares: f64,
+    variances: f64,
+}
+
+impl Mixture {
+    /// Add a member's estimate and its deviation (0 for none).
+    pub fn add(&mut self, value: f64, std: f64) {
+        self.n += 1.0;
+        self.sum += value;
+        self.squares += value * value;
+        self.variances += std * std;
+    }
+
+    /// The members' mean estimate.
+    pub fn mean(&self) -> f64 {
+        self.sum / self.n.max(1.0)
+    }
+
+    /// The mixture's standard deviation.
+    pub fn std(&self) -> f64 {
+        let (n, m) = (self.n.max(1.0), self.mean());
+        (self.variances / n + (self.squares / n - m * m).max(0.0)).sqrt()
+    }
+}
+
 /// Refuse uncertainty for an angle target: a deviation is given per
 /// column, and an angle takes two (its cosine and sine).
 pub fn check_linear(targets: &[crate::Target]) -> Result<(), String> {
@@ -186,9 +249,7 @@ impl UncertaintyFit {
             rounded(&self.std_scale_before)
         )
     }
-}
 
-impl UncertaintyFit {
     /// What the model's notes keep of it (`uncertainty_calibration`): the
     /// frames it was measured on (`data`, `split`) and the cross-fitted
     /// coverage, which a bench scoring those frames reports instead.
@@ -226,6 +287,18 @@ pub fn rescale(errors: &[Vec<f64>], std: &[Vec<f64>]) -> Vec<f64> {
 /// frames and measured on the odd ones, and the other way round, averaged
 /// per target.
 pub fn cross_fitted_coverage(errors: &[Vec<f64>], std: &[Vec<f64>]) -> [Vec<f64>; 2] {
+    let mut at = cross_fitted_coverage_at(errors, std, &[1.0, Z95]).into_iter();
+    [at.next().unwrap_or_default(), at.next().unwrap_or_default()]
+}
+
+/// Per half-width of `zs` (in deviations), the coverage of `±z` intervals
+/// rescaled ([`rescale`]) on the even frames and measured on the odd
+/// ones, and the other way round, averaged per target.
+pub fn cross_fitted_coverage_at(
+    errors: &[Vec<f64>],
+    std: &[Vec<f64>],
+    zs: &[f64],
+) -> Vec<Vec<f64>> {
     let half = |parity: usize| -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
         errors
             .iter()
@@ -236,17 +309,19 @@ pub fn cross_fitted_coverage(errors: &[Vec<f64>], std: &[Vec<f64>]) -> [Vec<f64>
             .unzip()
     };
     let (a, b) = (half(0), half(1));
-    let measured = |fit: &(Vec<Vec<f64>>, Vec<Vec<f64>>), on: &(Vec<Vec<f64>>, Vec<Vec<f64>>)| {
+    let rescaled = |fit: &(Vec<Vec<f64>>, Vec<Vec<f64>>), on: &(Vec<Vec<f64>>, Vec<Vec<f64>>)| {
         let f = rescale(&fit.0, &fit.1);
-        let s: Vec<Vec<f64>> =
-            on.1.iter()
-                .map(|s| s.iter().zip(&f).map(|(v, f)| v * f).collect())
-                .collect();
-        [coverage(&on.0, &s, 1.0), coverage(&on.0, &s, Z95)]
+        on.1.iter()
+            .map(|s| s.iter().zip(&f).map(|(v, f)| v * f).collect())
+            .collect::<Vec<Vec<f64>>>()
     };
-    let (x, y) = (measured(&a, &b), measured(&b, &a));
-    let avg = |p: &[f64], q: &[f64]| p.iter().zip(q).map(|(p, q)| (p + q) / 2.0).collect();
-    [avg(&x[0], &y[0]), avg(&x[1], &y[1])]
+    let (on_b, on_a) = (rescaled(&a, &b), rescaled(&b, &a));
+    zs.iter()
+        .map(|&z| {
+            let (x, y) = (coverage(&b.0, &on_b, z), coverage(&a.0, &on_a, z));
+            x.iter().zip(&y).map(|(p, q)| (p + q) / 2.0).collect()
+        })
+        .collect()
 }
 
 /// What a calibration on frames the model never fitted found: the

@@ -72,8 +72,9 @@ fn calibrate_regressor(
                         "a regressor is calibrated on its encoder's features: keep it inside the encoder folder it was trained on",
                     )
                 })?;
-            let targets = RegressorEnsemble::load(model, &device)?.targets().to_vec();
-            let rows = tactile_estimate::uncertainty::calibration_rows(ds, split, &targets)?;
+            let regressor = RegressorEnsemble::load(model, &device)?;
+            let targets = regressor.targets();
+            let rows = tactile_estimate::uncertainty::calibration_rows(ds, split, targets)?;
             let mut enc = TactipEncoder::load(encoder, Runtime::BurnFlex, 0)?;
             let pins = PinSet::from_rows(ds, &rows, &enc.artifact.preprocess)?;
             let feats = enc.encode(&pins.images)?;
@@ -81,7 +82,7 @@ fn calibrate_regressor(
                 .iter()
                 .map(|&i| targets.iter().map(|t| ds.number(i, &t.name)).collect())
                 .collect::<tactile_core::Result<Vec<Vec<f64>>>>()?;
-            RegressorEnsemble::calibrate_on(model, (&feats, &labels), (&ds.root, split), &device)?
+            regressor.calibrate_on(model, (&feats, &labels), (&ds.root, split))?
         }
         _ => {
             return Err(tactile_core::Error::Config(

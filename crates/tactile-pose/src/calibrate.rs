@@ -9,13 +9,13 @@
 
 use std::path::Path;
 
-use tactile_burn::ensemble::Ensemble;
+use tactile_burn::ensemble::{CALIBRATION_NOTE, Ensemble};
 use tactile_burn::{Artifact, Runtime};
 use tactile_core::dataset::Dataset;
 use tactile_estimate::Target;
 
 use crate::data::PoseSet;
-pub use crate::uncertainty::{UncertaintyFit, cross_fitted_coverage, rescale};
+use crate::uncertainty::UncertaintyFit;
 use crate::{PoseArtifact, PoseEnsemble, PoseEstimator, Result};
 use tactile_cae::data::PinSet;
 
@@ -65,7 +65,7 @@ fn save_scale(dir: &Path, model: Factors, scale: &[f64], note: serde_json::Value
         Factors::Network(mut art) => {
             art.std_scale = Some(scale.to_vec());
             if let serde_json::Value::Object(n) = &mut art.notes {
-                n.insert("uncertainty_calibration".into(), note);
+                n.insert(CALIBRATION_NOTE.into(), note);
             }
             Ok(tactile_core::io::write_json_atomic(
                 dir.join(PoseArtifact::CONFIG_FILE),
@@ -110,8 +110,8 @@ pub fn calibration_from(dir: &Path, from: &Path) -> Result<UncertaintyFit> {
     let same_kind = matches!(src, Factors::Ensemble(_)) == matches!(model, Factors::Ensemble(_));
     UncertaintyFit::check_taken(from, (src_targets == targets, same_kind), "network")?;
     let src_note = match &src {
-        Factors::Network(a) => a.notes.get("uncertainty_calibration").cloned(),
-        Factors::Ensemble(e) => e.notes.get("uncertainty_calibration").cloned(),
+        Factors::Network(a) => a.notes.get(CALIBRATION_NOTE).cloned(),
+        Factors::Ensemble(e) => e.notes.get(CALIBRATION_NOTE).cloned(),
     };
     let (fit, note) = UncertaintyFit::taken(&targets, before, scale, (from, src_note));
     save_scale(dir, model, &fit.std_scale, note)?;

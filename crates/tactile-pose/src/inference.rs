@@ -14,6 +14,7 @@ use tactile_preprocess::{PinImage, PreprocessConfig};
 use crate::Result;
 use crate::artifact::{PoseArtifact, PoseEnsemble, check_alike};
 use crate::training::PREDICT_BATCH;
+use crate::uncertainty::{Mixture, deviation};
 
 /// A loaded pose network with its preprocessing, or an ensemble of them
 /// ([`PoseEnsemble`]) whose estimates are averaged. The members of a
@@ -46,9 +47,7 @@ struct Member {
     side: usize,
 }
 
-/// Per frame the targets' values, and with uncertainty their standard
-/// deviations (labels' units).
-pub type ValuesWithStd = (Vec<Vec<f64>>, Option<Vec<Vec<f64>>>);
+pub use tactile_estimate::uncertainty::ValuesWithStd;
 
 /// Estimates for a dataset.
 #[derive(Debug, Clone)]
@@ -228,38 +227,29 @@ impl PoseEstimator {
     /// (linear targets only, so a column is a target).
     fn predict_uncertain(&mut self, pins: &[&[PinImage]], frames: usize) -> Result<ValuesWithStd> {
         let k = self.artifact.model.outputs;
-        let n = self.members.len().max(1) as f64;
         let (mut values, mut std) = (Vec::new(), Vec::new());
         for start in (0..frames).step_by(PREDICT_BATCH) {
             let range = start..(start + PREDICT_BATCH).min(frames);
-            // Per frame and target: sum of means, of squared means, of variances.
-            let mut acc = vec![vec![[0f64; 3]; k]; range.len()];
+            // Per frame and target, the members' estimates.
+            let mut acc = vec![vec![Mixture::default(); k]; range.len()];
             for member in self.members.iter_mut() {
                 let y = member.run(&pins[member.scale][range.clone()])?;
                 let (scaler, factor) = (&member.outputs, member.std_scale.as_deref());
                 for (a, row) in acc.iter_mut().zip(y.chunks(2 * k)) {
                     let mean = scaler.unscale(&row[..k]);
                     for j in 0..k {
-                        let sd = crate::uncertainty::scale(row[k + j])
-                            * scaler.std[j]
-                            * factor.map_or(1.0, |f| f[j]);
-                        a[j][0] += mean[j];
-                        a[j][1] += mean[j] * mean[j];
-                        a[j][2] += sd * sd;
+                        let f = factor.map_or(1.0, |f| f[j]);
+                        a[j].add(mean[j], deviation(row[k + j], scaler.std[j], f));
                     }
                 }
             }
-            let factor = self.std_factor.as_deref();
+            let factor = |j: usize| self.std_factor.as_deref().map_or(1.0, |f| f[j]);
             for a in acc {
-                values.push(a.iter().map(|s| s[0] / n).collect());
+                values.push(a.iter().map(Mixture::mean).collect());
                 std.push(
                     a.iter()
                         .enumerate()
-                        .map(|(j, s)| {
-                            let m = s[0] / n;
-                            (s[2] / n + (s[1] / n - m * m).max(0.0)).sqrt()
-                                * factor.map_or(1.0, |f| f[j])
-                        })
+                        .map(|(j, m)| m.std() * factor(j))
                         .collect(),
                 );
             }

@@ -251,18 +251,11 @@ pub fn train(
                 .collect();
             if unc {
                 let truth = outputs.apply(&encode(&config.targets, &val_truth));
-                let ratios: Vec<Vec<f64>> = (0..k)
-                    .map(|j| {
-                        all.iter()
-                            .zip(truth.chunks(k))
-                            .map(|(r, t)| {
-                                (r[j] as f64 - t[j] as f64).abs()
-                                    / crate::uncertainty::scale(r[k + j])
-                            })
-                            .collect()
-                    })
-                    .collect();
-                *last_scale.borrow_mut() = Some(crate::uncertainty::calibrate(&ratios));
+                *last_scale.borrow_mut() = Some(crate::uncertainty::calibrate_raw(
+                    all.iter().map(Vec::as_slice),
+                    &truth,
+                    k,
+                ));
             }
             let mse = cols
                 .iter()
