@@ -130,6 +130,8 @@ surface_step surface_long "$OUT/surface-long.md" data/surface/ms-k-long data/sur
     models/pose-surface models/cae-surface-train models/cae-surface data/surface/cae56-k9-long data/surface/cae56-edge-surface
 # The 9 px network on finer pins at the tip's centre (the central 240 px).
 surface_step surface_crop "$OUT/surface-crop.md" data/surface/p64-k9-c240
+# The same network on twice the long schedule's epochs, beside it.
+surface_step surface_xlong "$OUT/surface-xlong.md" data/surface/p64-k9-long data/surface/p64-k9-xlong
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
@@ -266,6 +268,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
         echo
     fi
     surface_section "Finer pins at the centre" surface_crop "$OUT/surface-crop.md"
+    surface_section "Twice the epochs" surface_xlong "$OUT/surface-xlong.md"
     echo "### One encoder for many tasks"
     echo
     echo "\`${CMD[shared]}\`"

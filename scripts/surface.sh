@@ -91,6 +91,13 @@ run p64-k9-c240-calibrate "$BIN" train calibrate --model data/surface/p64-k9-c24
 # schedule's last rate).
 LONG=(--max-epochs 60 --patience 60 --lr-decay 0.96)
 wide_pair -long "${LONG[@]}"
+# Are they still stopped, not full? The 9 px network of that pair reached
+# its best epoch at 59 of 60; twice the epochs, the learning rate decaying
+# 0.98 a epoch (ending at the long schedule's last rate), scored apart
+# (docs/paper-a.md, "Twice the epochs").
+XLONG=(--max-epochs 120 --patience 120 --lr-decay 0.98)
+run p64-k9-xlong "$BIN" train pose --data "$DATA" --out data/surface/p64-k9-xlong "${POSE[@]}" "${K9[@]}" "${XLONG[@]}"
+run p64-k9-xlong-calibrate "$BIN" train calibrate --model data/surface/p64-k9-xlong --data "$DATA" --split val
 
 # The CAE route: 56 px pin images through one stem block to Table I's 28 px
 # encoder, 32 features, trained jointly with a head on the six targets (L1,

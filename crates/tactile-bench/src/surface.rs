@@ -49,6 +49,9 @@ pub struct SurfaceMetrics {
     pub coverage_68: Option<Vec<f64>>,
     /// Fraction inside ±1.96 standard deviations.
     pub coverage_95: Option<Vec<f64>>,
+    /// Per target, the correlation of this model's errors with the first
+    /// model's on the scored frames (none for the first model).
+    pub error_correlation: Option<Vec<f64>>,
 }
 
 /// The rows scored: the `split` column's held-out rows (`test`, else the
@@ -186,6 +189,17 @@ pub fn bench_surface(
     fit_md.push_str("\n|---|---|");
     fit_md.push_str(&"---|".repeat(AUTHORS_CNN.len()));
     fit_md.push('\n');
+    // Per target, how alike each model's errors are to the first model's:
+    // errors two unlike models share are in the frames, not the models.
+    let mut agreement_md = String::from("| model | tap depth third |");
+    for (t, _) in AUTHORS_CNN {
+        agreement_md.push_str(&format!(" {t} |"));
+    }
+    agreement_md.push_str("\n|---|---|");
+    agreement_md.push_str(&"---|".repeat(AUTHORS_CNN.len()));
+    agreement_md.push('\n');
+    // The first model's signed errors per target and scored row.
+    let mut reference_errors: Option<Vec<Vec<f64>>> = None;
     let mut first_panels = None;
     for m in &b.models {
         let c = Candidate::read(m, b.runs)?;
@@ -284,6 +298,54 @@ pub fn bench_surface(
                 ),
                 points: coverage_curve(&errors_and_std, cross.is_some()),
             });
+        }
+        let errors: Vec<Vec<f64>> = pairs_by_target
+            .iter()
+            .map(|pairs| pairs.iter().map(|(t, e)| e - t).collect())
+            .collect();
+        // Per target, the correlation with the reference's errors over the
+        // scored rows at these positions.
+        let agreement = |reference: &[Vec<f64>], at: &mut dyn Iterator<Item = usize>| {
+            let at: Vec<usize> = at.collect();
+            reference
+                .iter()
+                .zip(&errors)
+                .map(|(r, e)| {
+                    let (r, e): (Vec<f64>, Vec<f64>) = at
+                        .iter()
+                        .map(|&k| (r[k], e[k]))
+                        .filter(|(r, e)| r.is_finite() && e.is_finite())
+                        .unzip();
+                    tactile_core::metrics::correlation(&r, &e)
+                })
+                .collect::<Vec<f64>>()
+        };
+        let error_correlation = reference_errors
+            .as_deref()
+            .map(|reference| agreement(reference, &mut (0..rows.len())));
+        if let (Some(reference), Some(all)) = (reference_errors.as_deref(), &error_correlation) {
+            let name = format!(
+                "{}{}",
+                folder_name(m),
+                if saw {
+                    " (trained on these frames)"
+                } else {
+                    ""
+                }
+            );
+            let by_third = thirds
+                .iter()
+                .zip(["shallowest", "middle", "deepest"])
+                .map(|(third, label)| (label, agreement(reference, &mut third.iter().copied())));
+            for (label, rho) in std::iter::once(("all", all.clone())).chain(by_third) {
+                agreement_md.push_str(&format!("| {name} | {label} |"));
+                for r in rho {
+                    agreement_md.push_str(&format!(" {r:.2} |"));
+                }
+                agreement_md.push('\n');
+            }
+        } else {
+            reference_errors = Some(errors);
         }
         let worst = ratio.iter().copied().fold(0.0, f64::max);
         for (n, third) in thirds.iter().enumerate() {
@@ -384,6 +446,7 @@ pub fn bench_surface(
                 kind: c.kind.to_string(),
                 coverage_68: (!cov68.is_empty()).then_some(cov68),
                 coverage_95: (!cov95.is_empty()).then_some(cov95),
+                error_correlation,
             },
             c.ms,
         ));
@@ -394,6 +457,14 @@ pub fn bench_surface(
     md.push_str(&format!(
         "\nGain by tap depth (the least-squares slope of each estimate on its truth in the same thirds; 1: the estimates follow the truth, 0: they ignore it): where the skin slips, a slide or twist shows only in part.\n\n{gain_md}"
     ));
+    if let (Some(first), true) = (b.models.first(), b.models.len() > 1) {
+        md.push_str(&format!(
+            "\nError agreement with `{}` (the correlation of each model's signed errors with its errors on the scored frames, per target): \
+             errors that models of unlike inputs and training share are in the frames or their labels, not in either model; \
+             what one model gets wrong alone, another can get right (an ensemble's members share its errors in part by construction).\n\n{agreement_md}",
+            folder_name(first)
+        ));
+    }
     if !fitted.is_empty() {
         md.push_str(&format!(
             "\nErrors on the {} `train` frames, which every candidate fitted (but for the 10 % that stopped it early): what a model leaves unexplained even on frames it learnt from.\n\n{fit_md}",

@@ -138,4 +138,24 @@ fn an_encoder_row_counts_every_member_of_its_estimator() {
         one[12].contains('%') && !one[12].contains("cross"),
         "{one:?}"
     );
+    // The lone member errs much as the five do, frame by frame: its row of
+    // the error agreement table (correlation with the first model's errors).
+    let agreement = table
+        .markdown
+        .split("Error agreement with `cae-surface-train`")
+        .nth(1)
+        .unwrap();
+    let rho: Vec<f64> = agreement
+        .lines()
+        .find(|l| l.starts_with("| one-mlp | all |"))
+        .unwrap()
+        .split('|')
+        .skip(3)
+        .take(6)
+        .map(|c| c.trim().parse().unwrap())
+        .collect();
+    assert!(rho.iter().all(|r| (0.6..=1.0).contains(r)), "{rho:?}");
+    let json = table.rows[1].metrics.error_correlation.as_ref().unwrap();
+    assert!(json.iter().zip(&rho).all(|(j, r)| (j - r).abs() <= 0.005));
+    assert!(table.rows[0].metrics.error_correlation.is_none());
 }

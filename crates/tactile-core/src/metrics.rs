@@ -47,25 +47,49 @@ pub fn mae(pred: &[f64], truth: &[f64]) -> f64 {
         / truth.len() as f64
 }
 
+/// Means-removed second moments of two equally long series:
+/// `(covariance, variance of a, variance of b)`, each summed, not divided.
+fn centred_moments(a: &[f64], b: &[f64]) -> (f64, f64, f64) {
+    let n = a.len().min(b.len());
+    let (ma, mb) = (
+        a[..n].iter().sum::<f64>() / n as f64,
+        b[..n].iter().sum::<f64>() / n as f64,
+    );
+    a[..n]
+        .iter()
+        .zip(&b[..n])
+        .fold((0.0, 0.0, 0.0), |(c, va, vb), (x, y)| {
+            let (dx, dy) = (x - ma, y - mb);
+            (c + dx * dy, va + dx * dx, vb + dy * dy)
+        })
+}
+
 /// Gain of estimates on the truth: the least-squares slope of `pred`
 /// against `truth`. 1 when the estimates follow every change of the truth,
 /// 0 when they ignore it; what an estimator recovers of a quantity the
 /// frame shows only in part. NaN with fewer than two distinct truths.
 pub fn gain(pred: &[f64], truth: &[f64]) -> f64 {
-    let n = truth.len().min(pred.len());
-    if n < 2 {
+    if truth.len().min(pred.len()) < 2 {
         return f64::NAN;
     }
-    let (mt, mp) = (
-        truth[..n].iter().sum::<f64>() / n as f64,
-        pred[..n].iter().sum::<f64>() / n as f64,
-    );
-    let (mut cov, mut var) = (0.0, 0.0);
-    for (t, p) in truth[..n].iter().zip(&pred[..n]) {
-        cov += (t - mt) * (p - mp);
-        var += (t - mt) * (t - mt);
-    }
+    let (cov, var, _) = centred_moments(truth, pred);
     if var > 0.0 { cov / var } else { f64::NAN }
+}
+
+/// Pearson correlation of two equally long series. Of two models' errors
+/// on the same frames: near 1 when they err alike, so what is left is in
+/// the frames (or their labels) rather than in either model. NaN with
+/// fewer than two values or a constant series.
+pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
+    if a.len().min(b.len()) < 2 {
+        return f64::NAN;
+    }
+    let (cov, va, vb) = centred_moments(a, b);
+    if va > 0.0 && vb > 0.0 {
+        cov / (va * vb).sqrt()
+    } else {
+        f64::NAN
+    }
 }
 
 /// Largest absolute difference between two equally long slices.
@@ -105,6 +129,24 @@ mod tests {
         assert!(gain(&[1.0; 5], &truth).abs() < 1e-12);
         assert!(gain(&truth, &[1.0; 5]).is_nan());
         assert!(gain(&[1.0], &[1.0]).is_nan());
+    }
+
+    #[test]
+    fn correlation_measures_how_alike_two_errors_are() {
+        let common = [1.0, -1.0, 1.0, -1.0];
+        let own = [1.0, 1.0, -1.0, -1.0];
+        // Each error half common, half its own (orthogonal) part: the
+        // shared part is half of each one's variance.
+        let a: Vec<f64> = common.iter().zip(&own).map(|(c, o)| c + o).collect();
+        let b: Vec<f64> = common.iter().zip(&own).map(|(c, o)| c - o).collect();
+        assert!(correlation(&a, &b).abs() < 1e-12);
+        let a2: Vec<f64> = common.iter().zip(&own).map(|(c, o)| 2.0 * c + o).collect();
+        let b2: Vec<f64> = common.iter().zip(&own).map(|(c, o)| 2.0 * c - o).collect();
+        assert!((correlation(&a2, &b2) - 0.6).abs() < 1e-12);
+        let scaled: Vec<f64> = a.iter().map(|x| -3.0 * x + 1.0).collect();
+        assert!((correlation(&a, &scaled) + 1.0).abs() < 1e-12);
+        assert!(correlation(&a, &[2.0; 4]).is_nan());
+        assert!(correlation(&[1.0], &[1.0]).is_nan());
     }
 
     #[test]
