@@ -3,8 +3,8 @@
 # the candidates on the authors' `train` split (choices made on `val`), then
 # the shipped models/pose-surface (the recipe chosen, on all 8,000 frames)
 # and models/cae-surface (the validated CAE route), each step timed (data/surface/times.json).
-# `PAPER_A_ONLY='surface|surface_long|surface_compare|shared' bash scripts/paper-a.sh`
-# then scores them into docs/paper-a.md. About 9 hours on 2 cores (the two long-schedule networks about 45 and 25 minutes, the long CAE 50, the shipped pair 100).
+# `PAPER_A_ONLY='surface|surface_long|surface_crop|surface_xlong|surface_compare|shared' bash scripts/paper-a.sh`
+# then scores them into docs/paper-a.md. About 10 hours on 2 cores (the two long-schedule networks about 45 and 25 minutes, the 9 px network on twice their epochs 73, the long CAE 50, the shipped pair 100).
 # SURFACE_STEPS='p128 ship-pose' runs only the named steps.
 set -euo pipefail
 cd "$(dirname "$0")/.."
