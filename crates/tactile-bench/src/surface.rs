@@ -305,8 +305,7 @@ pub fn bench_surface(
             .collect();
         // Per target, the correlation with the reference's errors over the
         // scored rows at these positions.
-        let agreement = |reference: &[Vec<f64>], at: &mut dyn Iterator<Item = usize>| {
-            let at: Vec<usize> = at.collect();
+        let agreement = |reference: &[Vec<f64>], at: &[usize]| {
             reference
                 .iter()
                 .zip(&errors)
@@ -322,7 +321,7 @@ pub fn bench_surface(
         };
         let error_correlation = reference_errors
             .as_deref()
-            .map(|reference| agreement(reference, &mut (0..rows.len())));
+            .map(|reference| agreement(reference, &(0..rows.len()).collect::<Vec<_>>()));
         if let (Some(reference), Some(all)) = (reference_errors.as_deref(), &error_correlation) {
             let name = format!(
                 "{}{}",
@@ -336,7 +335,7 @@ pub fn bench_surface(
             let by_third = thirds
                 .iter()
                 .zip(["shallowest", "middle", "deepest"])
-                .map(|(third, label)| (label, agreement(reference, &mut third.iter().copied())));
+                .map(|(third, label)| (label, agreement(reference, third)));
             for (label, rho) in std::iter::once(("all", all.clone())).chain(by_third) {
                 agreement_md.push_str(&format!("| {name} | {label} |"));
                 for r in rho {
