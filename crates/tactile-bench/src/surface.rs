@@ -111,6 +111,22 @@ fn coverage_curve(targets: &[Vec<(f64, f64)>], cross_fit: bool) -> Vec<(f64, f64
     zs.into_iter().zip(sum).map(|(z, s)| (z, s / n)).collect()
 }
 
+/// The header and rule of a markdown table: the `leading` columns, one
+/// per target of [`AUTHORS_CNN`], then the `trailing` ones.
+fn per_target_header(leading: &[&str], trailing: &[&str]) -> String {
+    let names = leading
+        .iter()
+        .copied()
+        .chain(AUTHORS_CNN.iter().map(|(t, _)| *t))
+        .chain(trailing.iter().copied());
+    let columns = leading.len() + AUTHORS_CNN.len() + trailing.len();
+    format!(
+        "| {} |\n|{}\n",
+        names.collect::<Vec<_>>().join(" | "),
+        "---|".repeat(columns)
+    )
+}
+
 /// Whether the model in a folder with these notes trained on the scored
 /// rows: a pose network with `every_split`, an encoder whose notes say so.
 fn saw_scored(notes: &serde_json::Value) -> bool {
@@ -139,13 +155,16 @@ pub fn bench_surface(
          An encoder's parameters and latency include its estimators' (an ensemble's every member), which run on burn's Flex beside onnxruntime.\n\n",
         rows.len()
     ));
-    md.push_str("| model | kind | input | parameters |");
-    for (t, _) in AUTHORS_CNN {
-        md.push_str(&format!(" {t} |"));
-    }
-    md.push_str(" worst ratio | 68 % interval | 95 % interval | burn flex ms | onnxruntime ms |\n|---|---|---|---|");
-    md.push_str(&"---|".repeat(AUTHORS_CNN.len() + 5));
-    md.push('\n');
+    md.push_str(&per_target_header(
+        &["model", "kind", "input", "parameters"],
+        &[
+            "worst ratio",
+            "68 % interval",
+            "95 % interval",
+            "burn flex ms",
+            "onnxruntime ms",
+        ],
+    ));
     md.push_str("| authors' CNN (reference) | 4 conv layers | 128x128 | - |");
     for (_, e) in AUTHORS_CNN {
         md.push_str(&format!(" {e} (1.00) |"));
@@ -164,13 +183,8 @@ pub fn bench_surface(
         d(a).total_cmp(&d(b))
     });
     let thirds: Vec<&[usize]> = by_depth.chunks(by_depth.len().div_ceil(3).max(1)).collect();
-    let mut depth_md = String::from("| model | tap depth third | depth (mm) | frames |");
-    for (t, _) in AUTHORS_CNN {
-        depth_md.push_str(&format!(" {t} |"));
-    }
-    depth_md.push_str("\n|---|---|---|---|");
-    depth_md.push_str(&"---|".repeat(AUTHORS_CNN.len()));
-    depth_md.push('\n');
+    let mut depth_md =
+        per_target_header(&["model", "tap depth third", "depth (mm)", "frames"], &[]);
     // The same thirds, the gain of each estimate on its truth: how much of a
     // commanded slide or twist the estimates follow where the skin slips.
     let mut gain_md = depth_md.clone();
@@ -182,22 +196,10 @@ pub fn bench_surface(
         .split_indices("train")
         .map(|r| r.to_vec())
         .unwrap_or_default();
-    let mut fit_md = String::from("| model | frames |");
-    for (t, _) in AUTHORS_CNN {
-        fit_md.push_str(&format!(" {t} |"));
-    }
-    fit_md.push_str("\n|---|---|");
-    fit_md.push_str(&"---|".repeat(AUTHORS_CNN.len()));
-    fit_md.push('\n');
+    let mut fit_md = per_target_header(&["model", "frames"], &[]);
     // Per target, how alike each model's errors are to the first model's:
     // errors two unlike models share are in the frames, not the models.
-    let mut agreement_md = String::from("| model | tap depth third |");
-    for (t, _) in AUTHORS_CNN {
-        agreement_md.push_str(&format!(" {t} |"));
-    }
-    agreement_md.push_str("\n|---|---|");
-    agreement_md.push_str(&"---|".repeat(AUTHORS_CNN.len()));
-    agreement_md.push('\n');
+    let mut agreement_md = per_target_header(&["model", "tap depth third"], &[]);
     // The first model's signed errors per target and scored row.
     let mut reference_errors: Option<Vec<Vec<f64>>> = None;
     let mut first_panels = None;
