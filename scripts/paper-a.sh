@@ -106,15 +106,17 @@ trained() {
             || { [ -f "$m/cae.json" ] && { [ -f "$m/pose/regressor.json" ] || [ -f "$m/pose/ensemble.json" ]; }; } || return 1
     done
 }
+# The set scored is $SURFACE_DATA if set (shown as $SURFACE_DATA_SHOWN).
 surface_step() {
-    local name=$1 out=$2
+    local name=$1 out=$2 data=${SURFACE_DATA:-$REAL/tactip331-surface}
     shift 2
     if trained "$@"; then
-        step "$name" bench surface --models "$@" --data "$REAL/tactip331-surface" --runs 200 --out "$out"
+        step "$name" bench surface --models "$@" --data "$data" --runs 200 --out "$out"
     else
-        CMD[$name]="tactile bench surface --models $* --data $REAL/tactip331-surface --runs 200 --out $out (after bash scripts/surface.sh)"
+        CMD[$name]="tactile bench surface --models $* --data $data --runs 200 --out $out (after bash scripts/surface.sh)"
         KEPT[$name]=1
     fi
+    [ -z "${SURFACE_DATA_SHOWN:-}" ] || CMD[$name]=${CMD[$name]//"$data"/$SURFACE_DATA_SHOWN}
 }
 # The CAE route's candidates (models/cae-surface-train is cae56-k9-long's): the
 # narrow-kernel encoder before it, and the 7 px one.
@@ -132,6 +134,14 @@ surface_step surface_long "$OUT/surface-long.md" data/surface/ms-k-long data/sur
 surface_step surface_crop "$OUT/surface-crop.md" data/surface/p64-k9-c240
 # The same network on twice the long schedule's epochs, beside it.
 surface_step surface_xlong "$OUT/surface-xlong.md" data/surface/p64-k9-long data/surface/p64-k9-xlong
+# The 9 px network trained on the taps shallower than 2.34 mm alone, beside
+# networks trained on every depth, on those taps' `val` frames (the set
+# scripts/surface-shallow-set.sh writes, made here when the network is there).
+SHALLOW_MODELS=(data/surface/p64-k9-long data/surface/p64-k9-shallow data/surface/ms-k-long models/cae-surface-train)
+SHALLOW_SET=SHALLOW_SET
+trained "${SHALLOW_MODELS[@]}" && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] && SHALLOW_SET=$(bash scripts/surface-shallow-set.sh)
+SURFACE_DATA=$SHALLOW_SET SURFACE_DATA_SHOWN='"$(bash scripts/surface-shallow-set.sh)"' \
+    surface_step surface_shallow "$OUT/surface-shallow.md" "${SHALLOW_MODELS[@]}"
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
@@ -269,6 +279,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     fi
     surface_section "Finer pins at the centre" surface_crop "$OUT/surface-crop.md"
     surface_section "Twice the epochs" surface_xlong "$OUT/surface-xlong.md"
+    surface_section "A network for the shallow taps alone" surface_shallow "$OUT/surface-shallow.md"
     echo "### One encoder for many tasks"
     echo
     echo "\`${CMD[shared]}\`"

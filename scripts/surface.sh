@@ -4,7 +4,7 @@
 # the shipped models/pose-surface (the recipe chosen, on all 8,000 frames)
 # and models/cae-surface (the validated CAE route), each step timed (data/surface/times.json).
 # `PAPER_A_ONLY='surface|surface_long|surface_crop|surface_xlong|surface_compare|shared' bash scripts/paper-a.sh`
-# then scores them into docs/paper-a.md. About 10 hours on 2 cores (the two long-schedule networks about 45 and 25 minutes, the 9 px network on twice their epochs 73, the long CAE 50, the shipped pair 100).
+# then scores them into docs/paper-a.md. About 10 hours on 2 cores (the two long-schedule networks about 45 and 25 minutes, the 9 px network on twice their epochs 73, on the shallow taps alone 11, the long CAE 50, the shipped pair 100).
 # SURFACE_STEPS='p128 ship-pose' runs only the named steps.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -98,6 +98,13 @@ wide_pair -long "${LONG[@]}"
 XLONG=(--max-epochs 120 --patience 120 --lr-decay 0.98)
 run p64-k9-xlong "$BIN" train pose --data "$DATA" --out data/surface/p64-k9-xlong "${POSE[@]}" "${K9[@]}" "${XLONG[@]}"
 run p64-k9-xlong-calibrate "$BIN" train calibrate --model data/surface/p64-k9-xlong --data "$DATA" --split val
+# Are slide and twist in the shallow taps at all, or drowned by the deep
+# ones? The 9 px network on the long schedule trained on the taps
+# shallower than 2.34 mm alone (scripts/surface-shallow-set.sh: 1,965
+# `train` frames), scored on that set's `val` beside the networks trained
+# on every depth (docs/paper-a.md, "A network for the shallow taps alone").
+shallow_pose() { "$BIN" train pose --data "$(bash scripts/surface-shallow-set.sh)" "$@"; }
+run p64-k9-shallow shallow_pose --out data/surface/p64-k9-shallow "${POSE[@]}" "${K9[@]}" "${LONG[@]}"
 
 # The CAE route: 56 px pin images through one stem block to Table I's 28 px
 # encoder, 32 features, trained jointly with a head on the six targets (L1,

@@ -28,6 +28,10 @@ pub const AUTHORS_CNN: [(&str, f64); 6] = [
     ("shear_theta_deg", 1.21),
 ];
 
+/// The reference row of the estimate that reads no frame: each target's
+/// median over the `train` frames.
+const TRAIN_MEDIAN: &str = "`train` median (reads no frame)";
+
 /// The goal: at least this much below the authors' error on every target.
 pub const GOAL_FRACTION: f64 = 0.75;
 
@@ -197,6 +201,30 @@ pub fn bench_surface(
         .map(|r| r.to_vec())
         .unwrap_or_default();
     let mut fit_md = per_target_header(&["model", "frames"], &[]);
+    // Per target, the median truth of the fitted frames: an estimate that
+    // reads no frame, against which the tables show what a model learnt
+    // (empty without a `train` split).
+    let mut train_median = Vec::new();
+    if !fitted.is_empty() {
+        for (t, _) in AUTHORS_CNN {
+            let mut truth = Vec::with_capacity(fitted.len());
+            for &i in &fitted {
+                truth.extend(ds.number_opt(i, t)?);
+            }
+            train_median.push(tactile_core::metrics::median(&truth));
+        }
+    }
+    // A depth third's leading cells: who, which third, its depths, frames.
+    let third_head = |name: &str, n: usize, third: &[usize]| {
+        let depth_at = |k: Option<&usize>| k.and_then(|&k| depth_of(rows[k])).unwrap_or(f64::NAN);
+        format!(
+            "| {name} | {} | {:.2}-{:.2} | {} |",
+            ["shallowest", "middle", "deepest"][n.min(2)],
+            depth_at(third.first()),
+            depth_at(third.last()),
+            third.len()
+        )
+    };
     // Per target, how alike each model's errors are to the first model's:
     // errors two unlike models share are in the frames, not the models.
     let mut agreement_md = per_target_header(&["model", "tap depth third"], &[]);
@@ -350,20 +378,7 @@ pub fn bench_surface(
         }
         let worst = ratio.iter().copied().fold(0.0, f64::max);
         for (n, third) in thirds.iter().enumerate() {
-            let lo = third
-                .first()
-                .and_then(|&k| depth_of(rows[k]))
-                .unwrap_or(f64::NAN);
-            let hi = third
-                .last()
-                .and_then(|&k| depth_of(rows[k]))
-                .unwrap_or(f64::NAN);
-            let row_head = format!(
-                "| {} | {} | {lo:.2}-{hi:.2} | {} |",
-                folder_name(m),
-                ["shallowest", "middle", "deepest"][n.min(2)],
-                third.len()
-            );
+            let row_head = third_head(&folder_name(m), n, third);
             depth_md.push_str(&row_head);
             gain_md.push_str(&row_head);
             for pairs in &pairs_by_target {
@@ -452,8 +467,38 @@ pub fn bench_surface(
             c.ms,
         ));
     }
+    // The estimate that reads no frame, on the same thirds and fitted frames.
+    let constant_mae = |at: &[usize]| -> Result<Vec<f64>> {
+        let mut out = Vec::with_capacity(train_median.len());
+        for ((t, _), &median) in AUTHORS_CNN.iter().zip(&train_median) {
+            let mut truth = Vec::with_capacity(at.len());
+            for &i in at {
+                truth.extend(ds.number_opt(i, t)?);
+            }
+            out.push(tactile_core::metrics::mae(
+                &vec![median; truth.len()],
+                &truth,
+            ));
+        }
+        Ok(out)
+    };
+    if !train_median.is_empty() {
+        for (n, third) in thirds.iter().enumerate() {
+            depth_md.push_str(&third_head(TRAIN_MEDIAN, n, third));
+            for e in constant_mae(&third.iter().map(|&k| rows[k]).collect::<Vec<_>>())? {
+                depth_md.push_str(&format!(" {e:.3} |"));
+            }
+            depth_md.push('\n');
+        }
+        fit_md.push_str(&format!("| {TRAIN_MEDIAN} | {} |", fitted.len()));
+        for e in constant_mae(&fitted)? {
+            fit_md.push_str(&format!(" {e:.3} |"));
+        }
+        fit_md.push('\n');
+    }
     md.push_str(&format!(
-        "\nErrors by tap depth (mean absolute error of the scored frames in thirds of their depth): shear and twist show in the pins only where the skin grips the surface.\n\n{depth_md}"
+        "\nErrors by tap depth (mean absolute error of the scored frames in thirds of their depth): shear and twist show in the pins only where the skin grips the surface. \
+         The last rows are what reading no frame gives: each target's median on the `train` frames as every estimate.\n\n{depth_md}"
     ));
     md.push_str(&format!(
         "\nGain by tap depth (the least-squares slope of each estimate on its truth in the same thirds; 1: the estimates follow the truth, 0: they ignore it): where the skin slips, a slide or twist shows only in part.\n\n{gain_md}"
@@ -468,7 +513,7 @@ pub fn bench_surface(
     }
     if !fitted.is_empty() {
         md.push_str(&format!(
-            "\nErrors on the {} `train` frames, which every candidate fitted (but for the 10 % that stopped it early): what a model leaves unexplained even on frames it learnt from.\n\n{fit_md}",
+            "\nErrors on the {} `train` frames, which every candidate fitted (but for the 10 % that stopped it early): what a model leaves unexplained even on frames it learnt from (the last row reads no frame).\n\n{fit_md}",
             fitted.len()
         ));
     }

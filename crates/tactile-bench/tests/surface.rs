@@ -16,40 +16,57 @@ fn root() -> PathBuf {
 }
 
 /// Every `step`-th `val` row of the real set (its rows run by tap depth, so
-/// the subset spans every depth).
+/// the subset spans every depth); the number of `val` rows.
 fn val_subset(dir: &Path, step: usize) -> usize {
+    subset(dir, step, None)
+}
+
+/// Every `val_step`-th `val` row and every `train_step`-th `train` row;
+/// the number of `val` rows.
+fn subset(dir: &Path, val_step: usize, train_step: Option<usize>) -> usize {
     let real = root().join("../shared/real/tactip331-surface");
     std::fs::create_dir_all(dir.join("frames")).unwrap();
     let text = std::fs::read_to_string(real.join("labels.csv")).unwrap();
     let mut lines = text.lines();
     let mut labels = format!("{}\n", lines.next().unwrap());
-    let mut n = 0;
-    for (k, l) in lines.filter(|l| l.ends_with(",val")).enumerate() {
-        if k % step == 0 {
-            let file = l.split(',').next().unwrap();
-            std::fs::copy(real.join(file), dir.join(file)).unwrap();
-            labels.push_str(l);
-            labels.push('\n');
-            n += 1;
+    let (mut n, mut count) = (0, 0);
+    for (split, step) in [("val", Some(val_step)), ("train", train_step)] {
+        let Some(step) = step else { continue };
+        let rows = lines.clone().filter(|l| l.ends_with(&format!(",{split}")));
+        for (k, l) in rows.enumerate() {
+            if k % step == 0 {
+                let file = l.split(',').next().unwrap();
+                std::fs::copy(real.join(file), dir.join(file)).unwrap();
+                labels.push_str(l);
+                labels.push('\n');
+                n += usize::from(split == "val");
+                count += 1;
+            }
         }
     }
     std::fs::write(dir.join("labels.csv"), labels).unwrap();
     let manifest = std::fs::read_to_string(real.join("manifest.json")).unwrap();
     let mut m: serde_json::Value = serde_json::from_str(&manifest).unwrap();
-    m["count"] = n.into();
+    m["count"] = count.into();
     std::fs::write(dir.join("manifest.json"), m.to_string()).unwrap();
     n
 }
 
-/// The cells of the gain table's row for `third` (six targets).
-fn gains(markdown: &str, third: &str) -> Vec<f64> {
-    let table = markdown.split("Gain by tap depth").nth(1).unwrap();
+/// The six target cells of `model`'s row for `third` in the table after
+/// the heading that starts with `table`.
+fn third_cells(markdown: &str, table: &str, model: &str, third: &str) -> Vec<f64> {
+    let table = markdown.split(table).nth(1).unwrap();
     let row = table
         .lines()
-        .find(|l| l.starts_with(&format!("| pose-surface | {third} |")))
+        .find(|l| l.starts_with(&format!("| {model} | {third} |")))
         .unwrap();
     let cells: Vec<&str> = row.split('|').map(str::trim).collect();
     cells[5..11].iter().map(|c| c.parse().unwrap()).collect()
+}
+
+/// The cells of the gain table's row for `third` (six targets).
+fn gains(markdown: &str, third: &str) -> Vec<f64> {
+    third_cells(markdown, "Gain by tap depth", "pose-surface", third)
 }
 
 #[test]
@@ -79,6 +96,65 @@ fn the_gain_table_shows_where_slide_and_twist_are_in_the_frame() {
     assert!(
         shallow[5] < 0.7 && shallow[5] < shallow[3].min(shallow[4]),
         "{shallow:?}"
+    );
+}
+
+#[test]
+fn the_depth_table_sets_every_error_beside_an_estimate_that_reads_no_frame() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("set");
+    assert_eq!(subset(&data, 40, Some(100)), 50);
+    let bench = ModelBench {
+        models: vec![root().join("models/pose-surface")],
+        data: data.clone(),
+        select: None,
+        extreme: None,
+        runs: 1,
+    };
+    let table = bench_surface(&bench, None).unwrap();
+    let md = &table.markdown;
+    let errors = |model: &str, third: &str| third_cells(md, "Errors by tap depth", model, third);
+    let none = "`train` median (reads no frame)";
+    // The reference's twist cell on the deepest third, recomputed here:
+    // the median twist of the 60 `train` rows as every estimate.
+    let ds = tactile_core::dataset::Dataset::open(&data).unwrap();
+    let twist = |split: &str| -> Vec<(f64, f64)> {
+        ds.split_indices(split)
+            .unwrap()
+            .iter()
+            .map(|&i| {
+                let n = |c: &str| ds.number_opt(i, c).unwrap().unwrap();
+                (n("depth_mm"), n("shear_theta_deg"))
+            })
+            .collect()
+    };
+    let train: Vec<f64> = twist("train").iter().map(|r| r.1).collect();
+    assert_eq!(train.len(), 60);
+    let median = tactile_core::metrics::median(&train);
+    let mut val = twist("val");
+    val.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let deepest = &val[34..];
+    let expected = deepest.iter().map(|r| (r.1 - median).abs()).sum::<f64>() / 16.0;
+    assert!((errors(none, "deepest")[5] - expected).abs() < 0.0005);
+    // Where the skin grips, the model is far below reading no frame on
+    // every target; on the shallowest taps, roll and pitch still are.
+    let (model, floor) = (errors("pose-surface", "deepest"), errors(none, "deepest"));
+    assert!(
+        model.iter().zip(&floor).all(|(m, f)| m < &(0.5 * f)),
+        "{model:?} {floor:?}"
+    );
+    let (model, floor) = (
+        errors("pose-surface", "shallowest"),
+        errors(none, "shallowest"),
+    );
+    assert!(
+        model[1] < 0.3 * floor[1] && model[2] < 0.3 * floor[2],
+        "{model:?} {floor:?}"
+    );
+    // The fitted frames' table has the reference too.
+    assert!(
+        md.lines()
+            .any(|l| l.starts_with(&format!("| {none} | 60 |")))
     );
 }
 

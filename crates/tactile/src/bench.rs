@@ -34,9 +34,10 @@ pub(crate) enum BenchCmd {
     Pose(ModelsArgs),
     /// Surface pose and shear on the real 331-pin TacTip set: every target
     /// against the authors' CNN on their held-out split, interval coverage,
-    /// latency, errors and gains by tap depth, how alike each model's errors
-    /// are to the first model's, and the first model's predictions plotted
-    /// against the truth.
+    /// latency, errors and gains by tap depth (beside an estimate that reads
+    /// no frame, each target's `train` median), how alike each model's
+    /// errors are to the first model's, and the first model's predictions
+    /// plotted against the truth.
     Surface(ModelsArgs),
     /// One encoder for many tasks: every encoder on every task of a list
     /// (configs/bench/shared-encoder.json), an MLP per task, beside each
