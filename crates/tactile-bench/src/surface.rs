@@ -228,6 +228,10 @@ pub fn bench_surface(
     // Per target, how alike each model's errors are to the first model's:
     // errors two unlike models share are in the frames, not the models.
     let mut agreement_md = per_target_header(&["model", "tap depth third"], &[]);
+    // Per depth third, how the deviations follow the error: a robot should
+    // learn from them where a target cannot be read (shallow twist).
+    let mut depth_coverage_md =
+        per_target_header(&["model", "tap depth third", "depth (mm)", "frames"], &[]);
     // The first model's signed errors per target and scored row.
     let mut reference_errors: Option<Vec<Vec<f64>>> = None;
     let mut first_panels = None;
@@ -245,6 +249,9 @@ pub fn bench_surface(
         // Per target with a deviation, (|error|, deviation) per scored row:
         // the coverage curve.
         let mut errors_and_std: Vec<Vec<(f64, f64)>> = Vec::new();
+        // Per target, the deviation per scored row (NaN when unlabelled),
+        // for a model that gives one: the coverage by depth third.
+        let mut std_by_target: Vec<Vec<f64>> = Vec::new();
         // Per target and scored row, (truth, estimate); NaN when unlabelled:
         // the depth thirds' errors and gains.
         let mut pairs_by_target: Vec<Vec<(f64, f64)>> = Vec::new();
@@ -289,7 +296,8 @@ pub fn bench_surface(
             let e = points.iter().map(|p| (p.1 - p.0).abs()).sum::<f64>() / n;
             mae.push(e);
             ratio.push(e / authors);
-            if std.is_some() {
+            if let Some(s) = std {
+                std_by_target.push(rows.iter().map(|&i| s[i]).collect());
                 cov68.push(inside68 as f64 / n);
                 cov95.push(inside95 as f64 / n);
                 errors_and_std.push(deviations);
@@ -398,6 +406,34 @@ pub fn bench_surface(
             }
             depth_md.push('\n');
             gain_md.push('\n');
+            // A model that fitted these frames has no honest interval here.
+            if std_by_target.len() == pairs_by_target.len() && !saw {
+                depth_coverage_md.push_str(&row_head);
+                for (pairs, std) in pairs_by_target.iter().zip(&std_by_target) {
+                    let (errors, deviations): (Vec<f64>, Vec<f64>) = third
+                        .iter()
+                        .map(|&k| ((pairs[k].1 - pairs[k].0).abs(), std[k]))
+                        .filter(|(e, _)| e.is_finite())
+                        .unzip();
+                    let n = errors.len().max(1) as f64;
+                    let inside = |z: f64| {
+                        100.0
+                            * errors
+                                .iter()
+                                .zip(&deviations)
+                                .filter(|(e, s)| **e <= z * **s)
+                                .count() as f64
+                            / n
+                    };
+                    depth_coverage_md.push_str(&format!(
+                        " {:.0} / {:.0} % ({:.3}) |",
+                        inside(1.0),
+                        inside(Z95),
+                        deviations.iter().sum::<f64>() / n
+                    ));
+                }
+                depth_coverage_md.push('\n');
+            }
         }
         let cov_cell = |v: &[f64]| {
             if v.is_empty() {
@@ -503,6 +539,13 @@ pub fn bench_surface(
     md.push_str(&format!(
         "\nGain by tap depth (the least-squares slope of each estimate on its truth in the same thirds; 1: the estimates follow the truth, 0: they ignore it): where the skin slips, a slide or twist shows only in part.\n\n{gain_md}"
     ));
+    if depth_coverage_md.lines().count() > 2 {
+        md.push_str(&format!(
+            "\nIntervals by tap depth, for the models that give a deviation and never fitted the scored frames: per target, the share of errors inside ±1 and ±1.96 standard deviations \
+             (68.3 % and 95 % when calibrated; each target has one factor, calibrated over every depth at once, for the models marked cross-fitted above on all of these frames) and, in brackets, the mean deviation in the target's unit. \
+             A deviation that grows where a target cannot be read tells a robot not to trust it there.\n\n{depth_coverage_md}"
+        ));
+    }
     if let (Some(first), true) = (b.models.first(), b.models.len() > 1) {
         md.push_str(&format!(
             "\nError agreement with `{}` (the correlation of each model's signed errors with its errors on the scored frames, per target): \

@@ -105,7 +105,10 @@ fn the_depth_table_sets_every_error_beside_an_estimate_that_reads_no_frame() {
     let data = tmp.path().join("set");
     assert_eq!(subset(&data, 40, Some(100)), 50);
     let bench = ModelBench {
-        models: vec![root().join("models/pose-surface")],
+        models: vec![
+            root().join("models/pose-surface"),
+            root().join("models/cae-surface-train"),
+        ],
         data: data.clone(),
         select: None,
         extreme: None,
@@ -156,6 +159,21 @@ fn the_depth_table_sets_every_error_beside_an_estimate_that_reads_no_frame() {
         md.lines()
             .any(|l| l.starts_with(&format!("| {none} | 60 |")))
     );
+    // The intervals by depth: only the model that never fitted these
+    // frames, its twist deviation widest where the skin slips.
+    let intervals = md.split("Intervals by tap depth").nth(1).unwrap();
+    let intervals = intervals.split("Error agreement").next().unwrap();
+    assert!(!intervals.contains("| pose-surface |"));
+    let twist_std = |third: &str| -> f64 {
+        let row = intervals
+            .lines()
+            .find(|l| l.starts_with(&format!("| cae-surface-train | {third} |")))
+            .unwrap();
+        let cell = row.split('|').nth(10).unwrap();
+        cell.split(['(', ')']).nth(1).unwrap().parse().unwrap()
+    };
+    let (shallow, deep) = (twist_std("shallowest"), twist_std("deepest"));
+    assert!(shallow > 2.0 * deep && deep > 0.0, "{shallow} {deep}");
 }
 
 #[test]

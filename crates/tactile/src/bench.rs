@@ -34,8 +34,8 @@ pub(crate) enum BenchCmd {
     Pose(ModelsArgs),
     /// Surface pose and shear on the real 331-pin TacTip set: every target
     /// against the authors' CNN on their held-out split, interval coverage,
-    /// latency, errors and gains by tap depth (beside an estimate that reads
-    /// no frame, each target's `train` median), how alike each model's
+    /// latency, errors, gains and intervals by tap depth (beside an estimate
+    /// that reads no frame, each target's `train` median), how alike each model's
     /// errors are to the first model's, and the first model's predictions
     /// plotted against the truth.
     Surface(ModelsArgs),
