@@ -408,28 +408,33 @@ pub fn bench_surface(
             gain_md.push('\n');
             // A model that fitted these frames has no honest interval here.
             if std_by_target.len() == pairs_by_target.len() && !saw {
+                // Frame by frame (the frames labelled on every target), the
+                // signed errors and the deviations.
+                let labelled: Vec<usize> = third
+                    .iter()
+                    .copied()
+                    .filter(|&k| pairs_by_target.iter().all(|p| p[k].0.is_finite()))
+                    .collect();
+                let errors: Vec<Vec<f64>> = labelled
+                    .iter()
+                    .map(|&k| pairs_by_target.iter().map(|p| p[k].1 - p[k].0).collect())
+                    .collect();
+                let deviations: Vec<Vec<f64>> = labelled
+                    .iter()
+                    .map(|&k| std_by_target.iter().map(|s| s[k]).collect())
+                    .collect();
+                let (c68, c95) = (
+                    coverage(&errors, &deviations, 1.0),
+                    coverage(&errors, &deviations, Z95),
+                );
+                let n = labelled.len().max(1) as f64;
                 depth_coverage_md.push_str(&row_head);
-                for (pairs, std) in pairs_by_target.iter().zip(&std_by_target) {
-                    let (errors, deviations): (Vec<f64>, Vec<f64>) = third
-                        .iter()
-                        .map(|&k| ((pairs[k].1 - pairs[k].0).abs(), std[k]))
-                        .filter(|(e, _)| e.is_finite())
-                        .unzip();
-                    let n = errors.len().max(1) as f64;
-                    let inside = |z: f64| {
-                        100.0
-                            * errors
-                                .iter()
-                                .zip(&deviations)
-                                .filter(|(e, s)| **e <= z * **s)
-                                .count() as f64
-                            / n
-                    };
+                for (j, (c68, c95)) in c68.iter().zip(&c95).enumerate() {
+                    let mean_std = deviations.iter().map(|d| d[j]).sum::<f64>() / n;
                     depth_coverage_md.push_str(&format!(
-                        " {:.0} / {:.0} % ({:.3}) |",
-                        inside(1.0),
-                        inside(Z95),
-                        deviations.iter().sum::<f64>() / n
+                        " {:.0} / {:.0} % ({mean_std:.3}) |",
+                        100.0 * c68,
+                        100.0 * c95
                     ));
                 }
                 depth_coverage_md.push('\n');
