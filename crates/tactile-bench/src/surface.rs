@@ -235,6 +235,9 @@ pub fn bench_surface(
     // The first model's signed errors per target and scored row.
     let mut reference_errors: Option<Vec<Vec<f64>>> = None;
     let mut first_panels = None;
+    // The first model's (truth, estimate) per target and scored row: its
+    // error against tap depth, drawn beside the table.
+    let mut first_pairs: Option<Vec<Vec<(f64, f64)>>> = None;
     for m in &b.models {
         let c = Candidate::read(m, b.runs)?;
         let saw = saw_scored(&c.notes);
@@ -492,6 +495,7 @@ pub fn bench_surface(
         }
         if first_panels.is_none() {
             first_panels = Some((folder_name(m), panels));
+            first_pairs = Some(pairs_by_target.clone());
         }
         table_rows.push(BenchRow::new(
             m,
@@ -537,10 +541,66 @@ pub fn bench_surface(
         }
         fit_md.push('\n');
     }
+    // The first model's error against tap depth, per target as a fraction of
+    // reading no frame: one picture, whatever each target's unit.
+    let mut relative_plot = None;
+    if let (Some(pairs), Some(out), false) = (&first_pairs, out, train_median.is_empty()) {
+        let tenths: Vec<&[usize]> = by_depth
+            .chunks(by_depth.len().div_ceil(10).max(1))
+            .collect();
+        let mut series = Vec::with_capacity(AUTHORS_CNN.len() + 1);
+        let mut depth_range = (f64::INFINITY, f64::NEG_INFINITY);
+        // Depth itself is left out: within a tenth of the depths, reading no
+        // frame is as good as the tenth is narrow.
+        for (j, (t, _)) in AUTHORS_CNN
+            .iter()
+            .enumerate()
+            .filter(|(_, (t, _))| *t != "depth_mm")
+        {
+            let mut points = Vec::with_capacity(tenths.len());
+            for tenth in &tenths {
+                let depths: Vec<f64> = tenth.iter().filter_map(|&k| depth_of(rows[k])).collect();
+                let depth = depths.iter().sum::<f64>() / depths.len().max(1) as f64;
+                depth_range = (depth_range.0.min(depth), depth_range.1.max(depth));
+                let (truth, est): (Vec<f64>, Vec<f64>) = tenth
+                    .iter()
+                    .map(|&k| pairs[j][k])
+                    .filter(|(t, _)| t.is_finite())
+                    .unzip();
+                let reference =
+                    constant_mae(&tenth.iter().map(|&k| rows[k]).collect::<Vec<_>>())?[j];
+                points.push((depth, tactile_core::metrics::mae(&est, &truth) / reference));
+            }
+            series.push(Series {
+                name: (*t).to_string(),
+                points,
+            });
+        }
+        series.push(Series {
+            name: "reading no frame (the `train` median)".into(),
+            points: vec![(depth_range.0, 1.0), (depth_range.1, 1.0)],
+        });
+        let (path, link) = picture_beside(out, "by-depth");
+        tactile_core::plot::line_plot(
+            &path,
+            "Error against tap depth, as a fraction of reading no frame",
+            "tap depth (mm; mean of each tenth of the scored frames)",
+            "MAE / MAE of each target's train median",
+            &series,
+            false,
+        )?;
+        relative_plot = Some(link);
+    }
     md.push_str(&format!(
         "\nErrors by tap depth (mean absolute error of the scored frames in thirds of their depth): shear and twist show in the pins only where the skin grips the surface. \
          The last rows are what reading no frame gives: each target's median on the `train` frames as every estimate.\n\n{depth_md}"
     ));
+    if let (Some(link), Some(m)) = (&relative_plot, b.models.first()) {
+        md.push_str(&format!(
+            "\nThe error of `{}` against tap depth, in tenths of the scored frames, each target's as a fraction of reading no frame (0: exact; 1: the frame told it nothing; depth left out, since the tenths are by depth):\n\n![error against tap depth]({link})\n",
+            folder_name(m)
+        ));
+    }
     md.push_str(&format!(
         "\nGain by tap depth (the least-squares slope of each estimate on its truth in the same thirds; 1: the estimates follow the truth, 0: they ignore it): where the skin slips, a slide or twist shows only in part.\n\n{gain_md}"
     ));

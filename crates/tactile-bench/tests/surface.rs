@@ -114,7 +114,18 @@ fn the_depth_table_sets_every_error_beside_an_estimate_that_reads_no_frame() {
         extreme: None,
         runs: 1,
     };
-    let table = bench_surface(&bench, None).unwrap();
+    let out = tmp.path().join("table.md");
+    let table = bench_surface(&bench, Some(&out)).unwrap();
+    // The first model's error against depth, relative to reading no frame.
+    assert!(table.markdown.contains("](table-by-depth.png)"));
+    assert!(
+        tmp.path()
+            .join("table-by-depth.png")
+            .metadata()
+            .unwrap()
+            .len()
+            > 10_000
+    );
     let md = &table.markdown;
     let errors = |model: &str, third: &str| third_cells(md, "Errors by tap depth", model, third);
     let none = "`train` median (reads no frame)";
