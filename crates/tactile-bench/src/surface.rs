@@ -548,8 +548,22 @@ pub fn bench_surface(
         let tenths: Vec<&[usize]> = by_depth
             .chunks(by_depth.len().div_ceil(10).max(1))
             .collect();
-        let mut series = Vec::with_capacity(AUTHORS_CNN.len() + 1);
-        let mut depth_range = (f64::INFINITY, f64::NEG_INFINITY);
+        // Per tenth, once: its mean depth and the no-frame error per target.
+        let mut depths = Vec::with_capacity(tenths.len());
+        let mut references = Vec::with_capacity(tenths.len());
+        for tenth in &tenths {
+            let d: Vec<f64> = tenth.iter().filter_map(|&k| depth_of(rows[k])).collect();
+            depths.push(d.iter().sum::<f64>() / d.len().max(1) as f64);
+            references.push(constant_mae(
+                &tenth.iter().map(|&k| rows[k]).collect::<Vec<_>>(),
+            )?);
+        }
+        let depth_range = depths
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| {
+                (lo.min(d), hi.max(d))
+            });
+        let mut series = Vec::with_capacity(AUTHORS_CNN.len());
         // Depth itself is left out: within a tenth of the depths, reading no
         // frame is as good as the tenth is narrow.
         for (j, (t, _)) in AUTHORS_CNN
@@ -557,20 +571,21 @@ pub fn bench_surface(
             .enumerate()
             .filter(|(_, (t, _))| *t != "depth_mm")
         {
-            let mut points = Vec::with_capacity(tenths.len());
-            for tenth in &tenths {
-                let depths: Vec<f64> = tenth.iter().filter_map(|&k| depth_of(rows[k])).collect();
-                let depth = depths.iter().sum::<f64>() / depths.len().max(1) as f64;
-                depth_range = (depth_range.0.min(depth), depth_range.1.max(depth));
-                let (truth, est): (Vec<f64>, Vec<f64>) = tenth
-                    .iter()
-                    .map(|&k| pairs[j][k])
-                    .filter(|(t, _)| t.is_finite())
-                    .unzip();
-                let reference =
-                    constant_mae(&tenth.iter().map(|&k| rows[k]).collect::<Vec<_>>())?[j];
-                points.push((depth, tactile_core::metrics::mae(&est, &truth) / reference));
-            }
+            let points = tenths
+                .iter()
+                .zip(depths.iter().zip(&references))
+                .map(|(tenth, (&depth, reference))| {
+                    let (truth, est): (Vec<f64>, Vec<f64>) = tenth
+                        .iter()
+                        .map(|&k| pairs[j][k])
+                        .filter(|(t, _)| t.is_finite())
+                        .unzip();
+                    (
+                        depth,
+                        tactile_core::metrics::mae(&est, &truth) / reference[j],
+                    )
+                })
+                .collect();
             series.push(Series {
                 name: (*t).to_string(),
                 points,
