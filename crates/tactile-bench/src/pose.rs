@@ -62,17 +62,29 @@ pub(crate) struct Candidate {
     pub params: usize,
     /// Its latency per runtime (an ensemble's summed).
     pub ms: RuntimeMs,
+    /// The dataset folders it was trained on, as its notes (an ensemble's
+    /// members' notes) record them; empty when they record none.
+    pub trained_on: Vec<String>,
 }
 
 impl Candidate {
     /// Read the model in `m` and time it over `runs` runs.
     pub fn read(m: &std::path::Path, runs: usize) -> Result<Self> {
+        let trained_on = |notes: &serde_json::Value| {
+            notes
+                .get("trained_on")
+                .and_then(|v| v.as_str())
+                .map(str::to_string)
+        };
+        let mut sets = Vec::new();
         let (kind, notes, input, params, ms) = if PoseEnsemble::is_in(m) {
             // Members run one after another: latencies and sizes add up.
             let e = PoseEnsemble::read(m)?;
             let (mut p, mut ms, mut sides) = (0, Vec::new(), Vec::<usize>::new());
             for d in e.member_dirs(m) {
-                let s = PoseArtifact::read(&d)?.model.input_px;
+                let member = PoseArtifact::read(&d)?;
+                sets.extend(trained_on(&member.notes));
+                let s = member.model.input_px;
                 if !sides.contains(&s) {
                     sides.push(s);
                 }
@@ -91,6 +103,7 @@ impl Candidate {
             ("pose ensemble", e.notes, input, p, RuntimeMs::sum(&ms))
         } else if PoseArtifact::is_in(m) {
             let a = PoseArtifact::read(m)?;
+            sets.extend(trained_on(&a.notes));
             let s = a.model.input_px;
             let p = crate::models::parameters::<PoseArtifact>(m)?;
             let ms = crate::latency::model_latencies::<PoseArtifact>(m, [1, 1, s, s], runs)?;
@@ -98,6 +111,7 @@ impl Candidate {
         } else {
             // The encoder, then its estimators on its features.
             let a = CaeArtifact::read(m)?;
+            sets.extend(trained_on(&a.notes));
             let s = a.model.input_px;
             let p = crate::models::parameters::<CaeArtifact>(m)?;
             let ms = crate::latency::model_latencies::<CaeArtifact>(m, [1, 1, s, s], runs)?;
@@ -117,6 +131,7 @@ impl Candidate {
             input,
             params,
             ms,
+            trained_on: sets,
         })
     }
 }
@@ -143,6 +158,7 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
             input,
             params,
             ms,
+            ..
         } = Candidate::read(m, b.runs)?;
         let holdout = excluded_test(&notes);
         let saw = holdout.is_none();

@@ -58,22 +58,37 @@ pub struct SurfaceMetrics {
     pub error_correlation: Option<Vec<f64>>,
 }
 
-/// The rows scored: the `split` column's held-out rows (`test`, else the
-/// authors' `val`), or every row without one.
-fn scored_rows(ds: &Dataset) -> Vec<usize> {
-    ds.evaluation_split()
-        .filter(|r| !r.is_empty())
-        .unwrap_or_else(|| (0..ds.len()).collect())
+/// The rows scored and the split they are: the `split` column's held-out
+/// rows (`test`, else the authors' `val`), or every row (no split named)
+/// when the labels hold none.
+fn scored_rows(ds: &Dataset) -> (Vec<usize>, Option<&'static str>) {
+    match ds.evaluation_split().filter(|r| !r.is_empty()) {
+        Some(rows) => (rows, ds.evaluation_split_name()),
+        None => ((0..ds.len()).collect(), None),
+    }
 }
 
 /// The coverage of a model whose deviations were calibrated on the scored
-/// split itself (`tactile train calibrate --split`): measured there it
-/// would be 68.3 % by construction, so its cross-fitted coverage (calibrated
-/// on one half of the split, measured on the other) stands instead. `u`
-/// is the model's calibration note ([`CALIBRATION_NOTE`]).
-fn cross_fitted(u: Option<&serde_json::Value>, split: Option<&str>) -> Option<[Vec<f64>; 2]> {
-    let u = u?;
-    if split.is_none() || u.get("split").and_then(|s| s.as_str()) != split {
+/// frames themselves (`tactile train calibrate --split`: the same split of
+/// the dataset its note names, or frames copied out of it): measured there
+/// it would be 68.3 % by construction, so its cross-fitted coverage
+/// (calibrated on one half of the split, measured on the other) stands
+/// instead. On any other frames the coverage is measured. `u` is the
+/// model's calibration note ([`CALIBRATION_NOTE`]).
+fn cross_fitted(
+    u: Option<&serde_json::Value>,
+    model_dir: &std::path::Path,
+    ds: &Dataset,
+    rows: &[usize],
+    split: Option<&str>,
+) -> Option<[Vec<f64>; 2]> {
+    let (u, split) = (u?, split?);
+    if u.get("split").and_then(|s| s.as_str()) != Some(split) {
+        return None;
+    }
+    let calibrated_on = Dataset::open_recorded(u.get("data")?.as_str()?, model_dir)?;
+    let within = calibrated_on.split_indices(split)?;
+    if !calibrated_on.holds_frames(ds, rows, Some(&within)) {
         return None;
     }
     serde_json::from_value(u.get("coverage_cross_fitted")?.clone()).ok()
@@ -131,10 +146,19 @@ fn per_target_header(leading: &[&str], trailing: &[&str]) -> String {
     )
 }
 
-/// Whether the model in a folder with these notes trained on the scored
-/// rows: a pose network with `every_split`, an encoder whose notes say so.
-fn saw_scored(notes: &serde_json::Value) -> bool {
-    notes.get("every_split").and_then(|v| v.as_bool()) == Some(true)
+/// Whether a model trained on the scored rows: one trained on every split
+/// (a pose network with `every_split`, an encoder whose notes say so) of a
+/// dataset that holds these frames. Without a record of its dataset, or
+/// where that dataset cannot be opened, it is taken to have seen them.
+fn saw_scored(c: &Candidate, model_dir: &std::path::Path, ds: &Dataset, rows: &[usize]) -> bool {
+    if c.notes.get("every_split").and_then(|v| v.as_bool()) != Some(true) {
+        return false;
+    }
+    c.trained_on.is_empty()
+        || c.trained_on.iter().any(|d| {
+            Dataset::open_recorded(d, model_dir)
+                .is_none_or(|trained| trained.holds_frames(ds, rows, None))
+        })
 }
 
 /// Score every model folder of `b.models` on `b.data` (the surface set);
@@ -145,19 +169,23 @@ pub fn bench_surface(
     out: Option<&std::path::Path>,
 ) -> Result<Table<SurfaceMetrics>> {
     let ds = Dataset::open(&b.data)?;
-    let rows = scored_rows(&ds);
+    let (rows, split) = scored_rows(&ds);
     let mut md = header(
         "Mean absolute error of surface pose and shear",
         &b.data,
         b.runs,
     );
     md.push_str(&format!(
-        "Scored on the {} frames of the authors' held-out split; a model trained on them too is marked. \
+        "Scored on {}; a model trained on them too is marked. \
          Each error cell gives the error and, in brackets, its ratio to the authors' CNN (goal: at most {GOAL_FRACTION}). \
          Coverage: the fraction of frames whose error lies inside the model's ±1 and ±1.96 standard deviation intervals (68.3 % and 95 % when calibrated), mean over the targets (range); \
          for a model whose deviations were calibrated on these frames (`tactile train calibrate --split`), cross-fitted: calibrated on one half, measured on the other, both ways (marked \"cross-fitted\"). \
          An encoder's parameters and latency include its estimators' (an ensemble's every member), which run on burn's Flex beside onnxruntime.\n\n",
-        rows.len()
+        match split {
+            Some("val") => format!("the {} frames of the authors' held-out split", rows.len()),
+            Some(name) => format!("the {} frames of the `{name}` split", rows.len()),
+            None => format!("all {} frames (the labels name no held-out split)", rows.len()),
+        }
     ));
     md.push_str(&per_target_header(
         &["model", "kind", "input", "parameters"],
@@ -240,7 +268,7 @@ pub fn bench_surface(
     let mut first_pairs: Option<Vec<Vec<(f64, f64)>>> = None;
     for m in &b.models {
         let c = Candidate::read(m, b.runs)?;
-        let saw = saw_scored(&c.notes);
+        let saw = saw_scored(&c, m, &ds, &rows);
         let mut predictor = Predictor::load(m, &[], tactile_burn::Runtime::BurnFlex)?;
         let all = predictor.perceive(&ds)?;
         let number = |name: &str| match all.estimates.get(name) {
@@ -287,6 +315,16 @@ pub fn bench_surface(
                     inside95 += usize::from(e <= Z95 * s[i]);
                 }
             }
+            if points.is_empty() {
+                return Err(tactile_core::Error::dataset(
+                    ds.labels_path(),
+                    None,
+                    format!(
+                        "no scored frame has a {t} label: the bench needs the targets it scores"
+                    ),
+                )
+                .into());
+            }
             pairs_by_target.push(pairs);
             let mut fit_errors = Vec::with_capacity(fitted.len());
             for &i in &fitted {
@@ -322,7 +360,7 @@ pub fn bench_surface(
             Predictor::Encoder(p) => p.estimators.calibration(),
             Predictor::PoseNetwork(_) => c.notes.get(CALIBRATION_NOTE),
         };
-        let cross = cross_fitted(calibration, ds.evaluation_split_name());
+        let cross = cross_fitted(calibration, m, &ds, &rows, split);
         if let Some([c68, c95]) = &cross {
             (cov68, cov95) = (c68.clone(), c95.clone());
         }

@@ -264,3 +264,91 @@ fn an_encoder_row_counts_every_member_of_its_estimator() {
     assert!(json.iter().zip(&rho).all(|(j, r)| (j - r).abs() <= 0.005));
     assert!(table.rows[0].metrics.error_correlation.is_none());
 }
+
+#[test]
+fn frames_no_model_fitted_are_scored_as_unseen_and_unlabelled_ones_are_refused() {
+    // The same 20 `val` frames twice: as copied out of the real set (frames
+    // every shipped model of `every_split` fitted, and on which
+    // cae-surface-train's deviations were calibrated) and under other
+    // names, as other frames of the same rig would come.
+    let tmp = tempfile::tempdir().unwrap();
+    let (copied, other) = (tmp.path().join("copied"), tmp.path().join("other"));
+    assert_eq!(val_subset(&copied, 100), 20);
+    std::fs::create_dir_all(other.join("frames")).unwrap();
+    std::fs::copy(copied.join("manifest.json"), other.join("manifest.json")).unwrap();
+    let text = std::fs::read_to_string(copied.join("labels.csv")).unwrap();
+    let mut labels = String::new();
+    for (k, l) in text.lines().enumerate() {
+        if k == 0 {
+            labels.push_str(l);
+        } else {
+            let (file, rest) = l.split_once(',').unwrap();
+            let renamed = format!("frames/rig-b-{k:04}.png");
+            std::fs::copy(copied.join(file), other.join(&renamed)).unwrap();
+            labels.push_str(&format!("{renamed},{rest}"));
+        }
+        labels.push('\n');
+    }
+    std::fs::write(other.join("labels.csv"), &labels).unwrap();
+    let bench = |data: &Path| ModelBench {
+        models: vec![
+            root().join("models/pose-surface"),
+            root().join("models/cae-surface-train"),
+        ],
+        data: data.to_path_buf(),
+        select: None,
+        extreme: None,
+        runs: 1,
+    };
+    let row = |markdown: &str, name: &str| -> Vec<String> {
+        let l = markdown
+            .lines()
+            .find(|l| l.starts_with(&format!("| {name}")))
+            .unwrap();
+        l.split('|').map(|c| c.trim().to_string()).collect()
+    };
+    let seen = bench_surface(&bench(&copied), None).unwrap();
+    let unseen = bench_surface(&bench(&other), None).unwrap();
+    assert_eq!(
+        row(&seen.markdown, "pose-surface")[1],
+        "pose-surface (trained on these frames)"
+    );
+    assert_eq!(row(&unseen.markdown, "pose-surface")[1], "pose-surface");
+    assert!(seen.rows[0].metrics.saw_scored_frames && !unseen.rows[0].metrics.saw_scored_frames);
+    // Calibrated on these very frames, the coverage is the cross-fitted one
+    // of its note; on other frames it is measured, and so it differs.
+    let (a, b) = (
+        row(&seen.markdown, "cae-surface-train"),
+        row(&unseen.markdown, "cae-surface-train"),
+    );
+    assert!(a[12].ends_with("cross-fitted"), "{a:?}");
+    assert!(
+        b[12].contains('%') && !b[12].contains("cross") && b[12] != a[12],
+        "{b:?}"
+    );
+    // The errors are the same frames' either way.
+    assert_eq!(a[5..11], b[5..11]);
+    // Frames without the targets are refused by name, not scored as exact.
+    let unlabelled = tmp.path().join("unlabelled");
+    std::fs::create_dir_all(&unlabelled).unwrap();
+    for f in ["manifest.json", "frames"] {
+        std::fs::rename(other.join(f), unlabelled.join(f)).unwrap();
+    }
+    let mut lines = labels.lines();
+    let head = lines.next().unwrap();
+    let mut blank = format!("{head}\n");
+    for l in lines {
+        blank.push_str(l.split(',').take(5).collect::<Vec<_>>().join(",").as_str());
+        blank.push_str(&",".repeat(head.split(',').count() - 5));
+        blank.push('\n');
+    }
+    std::fs::write(unlabelled.join("labels.csv"), blank).unwrap();
+    let Err(e) = bench_surface(&bench(&unlabelled), None) else {
+        panic!("frames without labels were scored");
+    };
+    let e = e.to_string();
+    assert!(
+        e.contains("labels.csv") && e.contains("depth_mm label"),
+        "{e}"
+    );
+}

@@ -500,6 +500,65 @@ impl Dataset {
         self.split_indices(self.evaluation_split_name()?)
     }
 
+    /// The dataset a model's notes name as it was recorded (`trained_on`,
+    /// a calibration's `data`): a relative path is relative to the folder
+    /// the training ran in, unknown now, so it is looked up from the
+    /// current folder, then from each folder above `model_dir`. `None`
+    /// when no such dataset opens.
+    pub fn open_recorded(recorded: &str, model_dir: &Path) -> Option<Dataset> {
+        let recorded = Path::new(recorded);
+        if recorded.is_absolute() {
+            return Dataset::open(recorded).ok();
+        }
+        let model_dir = model_dir.canonicalize().ok();
+        std::iter::once(PathBuf::new())
+            .chain(
+                model_dir
+                    .iter()
+                    .flat_map(|d| d.ancestors().skip(1).map(Path::to_path_buf)),
+            )
+            .map(|base| base.join(recorded))
+            .find(|p| p.join("manifest.json").is_file())
+            .and_then(|p| Dataset::open(p).ok())
+    }
+
+    /// Whether every frame of `other`'s `rows` is one of this dataset's
+    /// `within` rows (every row when `None`): the same folder, or a frame
+    /// of the same name in its folder and the same size on disk. A subset
+    /// copied out of a dataset is held by it; other frames of the same rig
+    /// are not. It tells a bench whether a model fitted or calibrated on
+    /// this dataset has seen the frames it scores.
+    pub fn holds_frames(&self, other: &Dataset, rows: &[usize], within: Option<&[usize]>) -> bool {
+        let same_folder = match (self.root.canonicalize(), other.root.canonicalize()) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        };
+        let size = |ds: &Dataset, i: usize| {
+            let path = ds.path_of(i, "file").ok()?;
+            std::fs::metadata(path).ok().map(|m| m.len())
+        };
+        let mine: std::collections::HashMap<&str, usize> = match within {
+            Some(w) => w
+                .iter()
+                .filter(|&&i| i < self.len())
+                .copied()
+                .collect::<Vec<_>>(),
+            None => (0..self.len()).collect(),
+        }
+        .into_iter()
+        .filter_map(|i| Some((self.text_opt(i, "file")?, i)))
+        .collect();
+        let held = |j: usize| {
+            other
+                .text_opt(j, "file")
+                .and_then(|f| mine.get(f))
+                .is_some_and(|&i| {
+                    same_folder || (size(self, i).is_some() && size(self, i) == size(other, j))
+                })
+        };
+        rows.iter().all(|&j| j < other.len() && held(j))
+    }
+
     /// The name of the split [`Self::evaluation_split`] takes: `test`
     /// when the `split` column names test rows, else `val`.
     pub fn evaluation_split_name(&self) -> Option<&'static str> {
