@@ -187,7 +187,20 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
                 .map(|&j| errors[j][k])
                 .filter(|e| e.is_finite())
                 .collect();
-            v.iter().sum::<f64>() / v.len().max(1) as f64
+            // No labelled frame (or no such estimate): no error, not 0.
+            if v.is_empty() {
+                f64::NAN
+            } else {
+                v.iter().sum::<f64>() / v.len() as f64
+            }
+        };
+        // An error cell: `-` where there is none.
+        let cell = |e: f64, decimals: usize| {
+            if e.is_finite() {
+                format!("{e:.decimals$}")
+            } else {
+                "-".to_string()
+            }
         };
         let every: Vec<usize> = (0..errors.len()).collect();
         let mae = [0, 1, 2].map(|k| mean(&every, k));
@@ -209,23 +222,23 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
             let lo = third.first().and_then(|&j| shear[j]).unwrap_or(f64::NAN);
             let hi = third.last().and_then(|&j| shear[j]).unwrap_or(f64::NAN);
             shear_md.push_str(&format!(
-                "| {} | {} | {lo:.2}-{hi:.2} | {} | {:.3} | {:.2} | {:.3} |\n",
+                "| {} | {} | {lo:.2}-{hi:.2} | {} | {} | {} | {} |\n",
                 folder_name(m),
                 ["lowest", "middle", "highest"][t.min(2)],
                 third.len(),
-                mean(third, 0),
-                mean(third, 1),
-                mean(third, 2)
+                cell(mean(third, 0), 3),
+                cell(mean(third, 1), 2),
+                cell(mean(third, 2), 3)
             ));
         }
         md.push_str(&format!(
-            "| {}{} | {kind} | {input} | {params} | {} | {:.3} | {:.2} | {:.3} | {} | {} | {} |\n",
+            "| {}{} | {kind} | {input} | {params} | {} | {} | {} | {} | {} | {} | {} |\n",
             folder_name(m),
             if saw { " (trained on every frame)" } else { "" },
             split.test.len(),
-            mae[0],
-            mae[1],
-            mae[2],
+            cell(mae[0], 3),
+            cell(mae[1], 2),
+            cell(mae[2], 3),
             ms_cell(ms.ndarray),
             ms_cell(ms.flex),
             ms_cell(ms.onnxruntime),
@@ -235,7 +248,7 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
             .iter()
             .filter_map(|v| v.1)
             .fold(slowest, f64::max);
-        if !saw {
+        if !saw && mae[0].is_finite() {
             add_points(&mut series, &ms, mae[0]);
         }
         rows.push(BenchRow::new(

@@ -1,0 +1,66 @@
+#![allow(clippy::unwrap_used)]
+//! The edge pose bench on 63 real frames of the 127-pin TacTip edge set
+//! (`../shared/real/tactip127-edge`, copied to a temporary folder) with
+//! the shipped `models/pose-edge`: a target the frames do not label has no
+//! error, rather than an error of zero.
+
+use std::path::{Path, PathBuf};
+
+use tactile_bench::models::ModelBench;
+use tactile_bench::pose::bench_pose;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+#[test]
+fn a_target_no_frame_labels_gets_no_error_not_zero() {
+    let real = root().join("../shared/real/tactip127-edge");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("edge");
+    let text = std::fs::read_to_string(real.join("labels.csv")).unwrap();
+    let mut lines = text.lines();
+    let head = lines.next().unwrap();
+    let theta = head.split(',').position(|c| c == "theta_deg").unwrap();
+    let mut labels = format!("{head}\n");
+    let mut count = 0;
+    for l in lines.step_by(60) {
+        let mut cells: Vec<&str> = l.split(',').collect();
+        let file = cells[0];
+        let to = data.join(file);
+        std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+        std::fs::copy(real.join(file), to).unwrap();
+        cells[theta] = "";
+        labels.push_str(&cells.join(","));
+        labels.push('\n');
+        count += 1;
+    }
+    std::fs::write(data.join("labels.csv"), labels).unwrap();
+    let manifest = std::fs::read_to_string(real.join("manifest.json")).unwrap();
+    let mut m: serde_json::Value = serde_json::from_str(&manifest).unwrap();
+    m["count"] = count.into();
+    std::fs::write(data.join("manifest.json"), m.to_string()).unwrap();
+    let bench = ModelBench {
+        models: vec![root().join("models/pose-edge")],
+        data,
+        select: None,
+        extreme: None,
+        runs: 1,
+    };
+    let table = bench_pose(&bench).unwrap();
+    let row: Vec<&str> = table
+        .markdown
+        .lines()
+        .find(|l| l.starts_with("| pose-edge (trained on every frame) |"))
+        .unwrap()
+        .split('|')
+        .map(str::trim)
+        .collect();
+    // x and depth are scored; theta, unlabelled, is not.
+    let x: f64 = row[6].parse().unwrap();
+    let depth: f64 = row[8].parse().unwrap();
+    assert!(x > 0.0 && x < 1.0 && depth > 0.0 && depth < 0.5, "{row:?}");
+    assert_eq!(row[7], "-", "{row:?}");
+    let mae = table.rows[0].metrics.mae;
+    assert!(mae[0].is_finite() && mae[1].is_nan(), "{mae:?}");
+}
