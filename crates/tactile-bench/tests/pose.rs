@@ -4,14 +4,12 @@
 //! the shipped `models/pose-edge`: a target the frames do not label has no
 //! error, rather than an error of zero.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::root;
 
 use tactile_bench::models::ModelBench;
 use tactile_bench::pose::bench_pose;
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 #[test]
 fn a_target_no_frame_labels_gets_no_error_not_zero() {
@@ -35,11 +33,7 @@ fn a_target_no_frame_labels_gets_no_error_not_zero() {
         labels.push('\n');
         count += 1;
     }
-    std::fs::write(data.join("labels.csv"), labels).unwrap();
-    let manifest = std::fs::read_to_string(real.join("manifest.json")).unwrap();
-    let mut m: serde_json::Value = serde_json::from_str(&manifest).unwrap();
-    m["count"] = count.into();
-    std::fs::write(data.join("manifest.json"), m.to_string()).unwrap();
+    common::write_subset(&real, &data, &labels, count);
     let bench = ModelBench {
         models: vec![root().join("models/pose-edge")],
         data,

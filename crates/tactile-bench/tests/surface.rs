@@ -6,14 +6,14 @@
 //! the skin slips on the surface, is followed least; an encoder's row
 //! counts every member of its estimator.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
+
+use common::root;
 
 use tactile_bench::models::ModelBench;
 use tactile_bench::surface::bench_surface;
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 /// Every `step`-th `val` row of the real set (its rows run by tap depth, so
 /// the subset spans every depth); the number of `val` rows.
@@ -44,11 +44,7 @@ fn subset(dir: &Path, val_step: usize, train_step: Option<usize>) -> usize {
             }
         }
     }
-    std::fs::write(dir.join("labels.csv"), labels).unwrap();
-    let manifest = std::fs::read_to_string(real.join("manifest.json")).unwrap();
-    let mut m: serde_json::Value = serde_json::from_str(&manifest).unwrap();
-    m["count"] = count.into();
-    std::fs::write(dir.join("manifest.json"), m.to_string()).unwrap();
+    common::write_subset(&real, dir, &labels, count);
     n
 }
 
