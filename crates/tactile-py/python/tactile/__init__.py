@@ -13,10 +13,13 @@ Paper A's encoder and its estimators::
     enc.encode(frames)                       # (N, 16) float32
     enc.estimate(frames)                     # {"shape": ..., "x_mm": ...}
 
-A pose network (x, theta, depth straight from the frame)::
+A pose network (the pose straight from the frame; a deviation per target
+where the model gives one)::
 
     pose = tactile.PoseEstimator("models/pose-edge")
     pose.estimate(frames)                    # {"x_mm": ..., "theta_deg": ..., "depth_mm": ...}
+    surface = tactile.PoseEstimator("models/pose-surface")
+    surface.estimate(frames)                 # {"depth_mm": ..., ..., "shear_theta_deg_std": ...}
 
 Frames from a video file, a camera, a folder or a dataset::
 

@@ -115,7 +115,8 @@ class TactipEncoder:
     def runtime(self) -> str: ...
 
 class PoseEstimator:
-    """A supervised pose network: x, theta, depth straight from the frame."""
+    """A supervised pose network (or an ensemble): its targets straight from
+    the frame, with a ``<target>_std`` deviation where it gives one."""
 
     def __init__(self, model_dir: _Path, runtime: str = "burn-flex") -> None: ...
     def preprocess(self, frame: npt.NDArray[np.uint8]) -> npt.NDArray[np.float32]: ...
