@@ -22,7 +22,7 @@ use crate::output::{BenchRow, Table, add_points, folder_name, header};
 pub struct ModelBench {
     /// Model folders of the sweep.
     pub models: Vec<PathBuf>,
-    /// Held-out visuo-tactile dataset for the error columns.
+    /// Held-out dataset for the error columns (visuo-tactile, or TacTip for the pose benches).
     pub data: PathBuf,
     /// A second held-out dataset, the one sizes are chosen on.
     pub select: Option<PathBuf>,

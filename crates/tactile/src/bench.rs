@@ -185,7 +185,7 @@ pub(crate) struct ModelsArgs {
     /// Model folders of the sweep.
     #[arg(long, num_args = 1.., required = true)]
     models: Vec<PathBuf>,
-    /// Held-out visuo-tactile dataset for the error column.
+    /// Held-out dataset for the error column: visuo-tactile for detector, segmenter and depth; TacTip for pose and surface.
     #[arg(long)]
     data: PathBuf,
     /// Timed runs per latency (median reported).
