@@ -125,6 +125,9 @@ impl Candidate {
                 ms,
             )
         };
+        // An ensemble's members mostly share one dataset: look it up once.
+        sets.sort();
+        sets.dedup();
         Ok(Self {
             kind,
             notes,

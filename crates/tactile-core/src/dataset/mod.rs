@@ -537,23 +537,25 @@ impl Dataset {
             let path = ds.path_of(i, "file").ok()?;
             std::fs::metadata(path).ok().map(|m| m.len())
         };
-        let mine: std::collections::HashMap<&str, usize> = match within {
-            Some(w) => w
-                .iter()
-                .filter(|&&i| i < self.len())
-                .copied()
-                .collect::<Vec<_>>(),
-            None => (0..self.len()).collect(),
-        }
-        .into_iter()
-        .filter_map(|i| Some((self.text_opt(i, "file")?, i)))
-        .collect();
+        let all: Vec<usize>;
+        let within = match within {
+            Some(w) => w,
+            None => {
+                all = (0..self.len()).collect();
+                &all
+            }
+        };
+        let mine: std::collections::HashMap<&str, usize> = within
+            .iter()
+            .filter(|&&i| i < self.len())
+            .filter_map(|&i| Some((self.text_opt(i, "file")?, i)))
+            .collect();
         let held = |j: usize| {
             other
                 .text_opt(j, "file")
                 .and_then(|f| mine.get(f))
                 .is_some_and(|&i| {
-                    same_folder || (size(self, i).is_some() && size(self, i) == size(other, j))
+                    same_folder || size(self, i).is_some_and(|n| size(other, j) == Some(n))
                 })
         };
         rows.iter().all(|&j| j < other.len() && held(j))
