@@ -55,13 +55,21 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
     for row in rows.iter().take(a.show) {
         say!("{}", row.join("\t"));
     }
-    say!(
-        "{} frames: encoding {:.3} ms/frame (preprocessing included), {} estimators {:.4} ms/frame",
-        ds.len(),
-        r.ms_encode,
-        p.estimators(),
-        r.ms_estimate
-    );
+    match &p {
+        Predictor::PoseNetwork(_) => say!(
+            "{} frames: pose network {:.3} ms/frame (preprocessing included)",
+            ds.len(),
+            r.ms_encode
+        ),
+        Predictor::Encoder(_) => say!(
+            "{} frames: encoding {:.3} ms/frame (preprocessing included), {} estimator{} {:.4} ms/frame",
+            ds.len(),
+            r.ms_encode,
+            p.estimators(),
+            if p.estimators() == 1 { "" } else { "s" },
+            r.ms_estimate
+        ),
+    }
     if let Some(out) = a
         .out
         .as_deref()
