@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use tactile_burn::DeviceKind;
+use tactile_burn::{DeviceKind, Runtime};
 use tactile_core::dataset::Dataset;
 use tactile_pipeline::tactip::Predictor;
 
@@ -34,6 +34,11 @@ pub(crate) struct PerceiveArgs {
     /// Device the networks run on.
     #[arg(long, value_enum, default_value_t = DeviceKind::Flex)]
     device: DeviceKind,
+    /// Run the networks here instead of on --device: `onnx` runs each
+    /// network's ONNX export through onnxruntime (the deployment path the
+    /// benches time), `burn-flex`/`burn-ndarray` are --device's two.
+    #[arg(long, value_enum, conflicts_with = "device")]
+    runtime: Option<Runtime>,
 }
 
 pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
@@ -41,7 +46,11 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
     if let Some(out) = &a.out {
         tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
-    let mut p = Predictor::load(&a.encoder, &a.heads, a.device.runtime())?;
+    let mut p = Predictor::load(
+        &a.encoder,
+        &a.heads,
+        a.runtime.unwrap_or(a.device.runtime()),
+    )?;
     let r = p.perceive(&ds)?;
     let mut header = vec!["file".to_string()];
     header.extend(r.estimates.columns.iter().map(|c| c.0.clone()));

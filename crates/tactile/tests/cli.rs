@@ -1655,6 +1655,87 @@ fn predict_runs_the_shipped_pose_network_in_the_labels_units() {
 }
 
 #[test]
+fn predict_through_onnxruntime_gives_the_burn_estimates() {
+    // The deployment path the latency goals are timed on: `--runtime onnx`
+    // runs each network's ONNX export. On 12 real surface frames, the
+    // shipped pose ensemble and the CAE route give burn's estimates and
+    // deviations within 2e-3 of each target's unit.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let real = shared_real().join("tactip331-surface");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("surface");
+    std::fs::create_dir_all(data.join("frames")).unwrap();
+    let labels = std::fs::read_to_string(real.join("labels.csv")).unwrap();
+    let mut lines = labels.lines();
+    let mut text = format!("{}\n", lines.next().unwrap());
+    for l in lines.filter(|l| l.ends_with(",val")).step_by(150).take(12) {
+        let file = l.split(',').next().unwrap();
+        std::fs::copy(real.join(file), data.join(file)).unwrap();
+        text += &format!("{l}\n");
+    }
+    std::fs::write(data.join("labels.csv"), text).unwrap();
+    let mut manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(real.join("manifest.json")).unwrap())
+            .unwrap();
+    manifest["count"] = 12.into();
+    std::fs::write(data.join("manifest.json"), manifest.to_string()).unwrap();
+    let estimates = |model: &str, runtime: &str| -> Vec<Vec<String>> {
+        let out = tmp.path().join(format!("{model}-{runtime}.csv"));
+        let (ok, msg) = tactile(&[
+            "predict",
+            "--model",
+            root.join("models").join(model).to_str().unwrap(),
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--runtime",
+            runtime,
+        ]);
+        assert!(ok, "{msg}");
+        std::fs::read_to_string(out)
+            .unwrap()
+            .lines()
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect()
+    };
+    for model in ["pose-surface", "cae-surface"] {
+        let (onnx, flex) = (estimates(model, "onnx"), estimates(model, "burn-flex"));
+        assert_eq!(onnx.len(), 13, "{model}");
+        assert_eq!(onnx[0], flex[0], "{model}: the same columns");
+        assert!(
+            onnx[0].iter().any(|c| c == "shear_theta_deg_std"),
+            "{model}"
+        );
+        for (a, b) in onnx[1..].iter().zip(&flex[1..]) {
+            assert_eq!(a[0], b[0], "{model}: the same frames in the same order");
+            for (j, (x, y)) in a[1..].iter().zip(&b[1..]).enumerate() {
+                let (x, y): (f64, f64) = (x.parse().unwrap(), y.parse().unwrap());
+                assert!(
+                    (x - y).abs() <= 2e-3,
+                    "{model} {} on {}: onnx {x}, burn {y}",
+                    onnx[0][j + 1],
+                    a[0]
+                );
+            }
+        }
+    }
+    // --device and --runtime name the same choice: both at once is refused.
+    let (ok, msg) = tactile(&[
+        "predict",
+        "--model",
+        root.join("models/pose-surface").to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--device",
+        "flex",
+        "--runtime",
+        "onnx",
+    ]);
+    assert!(!ok && msg.contains("--runtime"), "{msg}");
+}
+
+#[test]
 fn a_pose_network_trains_scores_its_held_out_frames_and_predicts() {
     let data = shared_real().join("tactip127-edge");
     let tmp = tempfile::tempdir().unwrap();
