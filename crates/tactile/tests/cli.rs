@@ -1581,13 +1581,10 @@ fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
     );
 }
 
-/// `tactile predict` with `model` over the real edge set: the CSV's
-/// header and the mean absolute error of each target over every frame.
-fn predict_edge_errors(model: &Path) -> [f64; 3] {
-    let data = shared_real().join("tactip127-edge");
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("estimates.csv");
-    let (ok, msg) = tactile(&[
+/// `tactile predict --model MODEL --data DATA --out OUT` with `extra`
+/// flags, asserting that it succeeds.
+fn predict(model: &Path, data: &Path, out: &Path, extra: &[&str]) {
+    let mut args = vec![
         "predict",
         "--model",
         model.to_str().unwrap(),
@@ -1595,8 +1592,19 @@ fn predict_edge_errors(model: &Path) -> [f64; 3] {
         data.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let (ok, msg) = tactile(&args);
     assert!(ok, "{msg}");
+}
+
+/// `tactile predict` with `model` over the real edge set: the CSV's
+/// header and the mean absolute error of each target over every frame.
+fn predict_edge_errors(model: &Path) -> [f64; 3] {
+    let data = shared_real().join("tactip127-edge");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("estimates.csv");
+    predict(model, &data, &out, &[]);
     let text = std::fs::read_to_string(&out).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("file,x_mm,theta_deg,depth_mm"));
@@ -1681,18 +1689,12 @@ fn predict_through_onnxruntime_gives_the_burn_estimates() {
     std::fs::write(data.join("manifest.json"), manifest.to_string()).unwrap();
     let estimates = |model: &str, runtime: &str| -> Vec<Vec<String>> {
         let out = tmp.path().join(format!("{model}-{runtime}.csv"));
-        let (ok, msg) = tactile(&[
-            "predict",
-            "--model",
-            root.join("models").join(model).to_str().unwrap(),
-            "--data",
-            data.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--runtime",
-            runtime,
-        ]);
-        assert!(ok, "{msg}");
+        predict(
+            &root.join("models").join(model),
+            &data,
+            &out,
+            &["--runtime", runtime],
+        );
         std::fs::read_to_string(out)
             .unwrap()
             .lines()
@@ -2522,18 +2524,12 @@ fn predict_surface(model: &str) -> (std::path::PathBuf, String) {
     }
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("estimates.csv");
-    let (ok, msg) = tactile(&[
-        "predict",
-        "--model",
-        root.join("models").join(model).to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--show",
-        "0",
-    ]);
-    assert!(ok, "{msg}");
+    predict(
+        &root.join("models").join(model),
+        &data,
+        &out,
+        &["--show", "0"],
+    );
     let text = std::fs::read_to_string(&out).unwrap();
     runs.insert(model.to_string(), text.clone());
     (data, text)
