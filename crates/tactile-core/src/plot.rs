@@ -81,6 +81,23 @@ fn tick_label(v: f64, step: f64, integers: bool) -> String {
     format!("{v:.decimals$}")
 }
 
+/// Tick label of `v` on an axis spanning `span`, whatever step the ticks
+/// take (1, 2, 2.5 or 5 times a power of ten): one decimal more than a
+/// tenth of the span needs, trailing zeros dropped (`-25`, `2.5`, `0.3`).
+fn trimmed_tick_label(v: f64, span: f64) -> String {
+    let label = tick_label(v, span / 100.0, false);
+    let label = if label.contains('.') {
+        label.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        label.as_str()
+    };
+    if label == "-0" {
+        "0".into()
+    } else {
+        label.into()
+    }
+}
+
 /// The corner of the plot with the fewest points under where a legend
 /// would go, so the legend hides none it can avoid.
 fn legend_corner(
@@ -284,8 +301,15 @@ pub fn scatter_grid(path: impl AsRef<Path>, panels: &[ScatterPanel], columns: us
             let mut chart = builder.build_cartesian_2d(lo..hi, lo..hi)?;
             let mut mesh = chart.configure_mesh();
             mesh.disable_mesh();
+            // Six ticks a side: ten labels such as "-25.0" overlap in a panel.
+            let fmt = |v: &f64| trimmed_tick_label(*v, hi - lo);
             if text {
-                mesh.x_desc("true").y_desc("predicted");
+                mesh.x_desc("true")
+                    .y_desc("predicted")
+                    .x_labels(6)
+                    .y_labels(6)
+                    .x_label_formatter(&fmt)
+                    .y_label_formatter(&fmt);
             } else {
                 mesh.disable_x_axis().disable_y_axis();
             }
@@ -527,6 +551,10 @@ mod tests {
         assert_eq!(tick_label(4.0, 2.0, true), "4");
         assert_eq!(tick_label(0.126, 0.01, false), "0.13");
         assert_eq!(tick_label(12.5, 5.0, false), "12");
+        assert_eq!(trimmed_tick_label(-25.0, 55.0), "-25");
+        assert_eq!(trimmed_tick_label(2.5, 11.0), "2.5");
+        assert_eq!(trimmed_tick_label(0.30000000000000004, 1.2), "0.3");
+        assert_eq!(trimmed_tick_label(-0.0001, 1.2), "0");
         let d = tempfile::tempdir().unwrap();
         let one = [Series {
             name: "one point".into(),
