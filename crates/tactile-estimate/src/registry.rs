@@ -137,6 +137,38 @@ impl Estimates {
         self.columns.iter().find(|c| c.0 == name).map(|c| &c.1)
     }
 
+    /// Append the rows of `more`, a later batch of frames through the same
+    /// estimators (its columns the same, in the same order); the first
+    /// batch appended to an empty `Estimates` gives its columns.
+    pub fn append(&mut self, more: Estimates) -> crate::Result<()> {
+        if self.columns.is_empty() {
+            *self = more;
+            return Ok(());
+        }
+        let names = |e: &Estimates| e.columns.iter().map(|c| c.0.clone()).collect::<Vec<_>>();
+        if names(self) != names(&more) {
+            return Err(tactile_core::Error::Invalid(format!(
+                "estimates of columns {:?} cannot follow columns {:?}",
+                names(&more),
+                names(self)
+            ))
+            .into());
+        }
+        for ((name, to), (_, from)) in self.columns.iter_mut().zip(more.columns) {
+            match (to, from) {
+                (Column::Class(a), Column::Class(b)) => a.extend(b),
+                (Column::Number(a), Column::Number(b)) => a.extend(b),
+                _ => {
+                    return Err(tactile_core::Error::Invalid(format!(
+                        "estimate column '{name}' is a class in one batch and a number in another"
+                    ))
+                    .into());
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Cell `i` of every column as text (numbers with 4 decimals).
     pub fn row(&self, i: usize) -> Vec<String> {
         self.columns

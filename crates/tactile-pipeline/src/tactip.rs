@@ -11,7 +11,9 @@ use tactile_cae::TactipEncoder;
 use tactile_cae::data::PinSet;
 use tactile_cae::inference::features_for_dataset;
 use tactile_core::dataset::Dataset;
+use tactile_core::image_io::GreyImage;
 use tactile_core::metrics::{accuracy, confusion};
+use tactile_core::source::FrameSource;
 use tactile_estimate::eval::{Scores, score};
 use tactile_estimate::{
     Activation, ClassifierHead, Estimates, Estimators, HeadConfig, Regressor, RegressorConfig,
@@ -93,28 +95,89 @@ impl Predictor {
             Self::Encoder(p) => p.perceive(ds),
             Self::PoseNetwork(p) => {
                 let r = p.predict_dataset(ds)?;
-                let column = |rows: &[Vec<f64>], j: usize| {
-                    tactile_estimate::Column::Number(rows.iter().map(|row| row[j]).collect())
-                };
-                let mut columns: Vec<_> = (0..r.names.len())
-                    .map(|j| (r.names[j].clone(), column(&r.values, j)))
-                    .collect();
-                if let Some(std) = &r.std {
-                    columns.extend((0..r.names.len()).map(|j| {
-                        (
-                            tactile_estimate::registry::std_column(&r.names[j]),
-                            column(std, j),
-                        )
-                    }));
-                }
                 Ok(Perception {
                     files: r.files,
-                    estimates: Estimates { columns },
+                    stamps_ns: None,
+                    estimates: pose_estimates(&r.names, &r.values, r.std.as_deref()),
                     ms_encode: r.ms_per_frame,
                     ms_estimate: 0.0,
                 })
             }
         }
+    }
+
+    /// The same columns as [`Self::perceive`] for grey frames, each
+    /// preprocessed as the model's training frames were.
+    pub fn perceive_frames(&mut self, frames: &[GreyImage]) -> Result<Estimates> {
+        match self {
+            Self::Encoder(p) => {
+                let pins = frames
+                    .iter()
+                    .map(|f| p.encoder.preprocess(f))
+                    .collect::<std::result::Result<Vec<_>, _>>()?;
+                p.estimate(&pins)
+            }
+            Self::PoseNetwork(p) => {
+                let (values, std) = p.predict_frames_with_std(frames)?;
+                let names: Vec<String> =
+                    p.artifact.targets.iter().map(|t| t.name.clone()).collect();
+                Ok(pose_estimates(&names, &values, std.as_deref()))
+            }
+        }
+    }
+
+    /// Every frame of `input` (a dataset's, or a source's in batches):
+    /// one column per target (per estimator output). No frame at all is
+    /// an error naming the input.
+    pub fn perceive_input(&mut self, input: &mut PredictInput, data: &Path) -> Result<Perception> {
+        let r = match input {
+            PredictInput::Dataset(ds) => self.perceive(ds)?,
+            PredictInput::Source(source) => self.perceive_source(source)?,
+        };
+        if r.files.is_empty() {
+            return Err(tactile_core::Error::Invalid(format!(
+                "{}: no frames to estimate",
+                data.display()
+            ))
+            .into());
+        }
+        Ok(r)
+    }
+
+    /// Every frame of a recorded source (a folder of frames, an image, a
+    /// video, a ROS 2 bag's image topic) or a live one that ends (a
+    /// camera or stdin with a frame limit), in batches as they arrive; a
+    /// bag's frames keep their stamps. Colour frames are made grey with
+    /// OpenCV's weights, as a colour PNG in a dataset is.
+    pub fn perceive_source(&mut self, source: &mut FrameSource) -> Result<Perception> {
+        let t0 = std::time::Instant::now();
+        let (mut files, mut stamps, mut estimates) = (Vec::new(), Vec::new(), Estimates::default());
+        let mut batch: Vec<GreyImage> = Vec::with_capacity(SOURCE_BATCH);
+        loop {
+            let frame = source.next_frame()?;
+            if let Some(f) = &frame {
+                let grey = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
+                let (w, h) = (f.image.width(), f.image.height());
+                batch.push(tactile_core::image_io::grey_image(w, h, grey)?);
+                files.push(f.name.clone());
+                stamps.push(f.stamp_ns);
+            }
+            if batch.len() == SOURCE_BATCH || (frame.is_none() && !batch.is_empty()) {
+                estimates.append(self.perceive_frames(&batch)?)?;
+                batch.clear();
+            }
+            if frame.is_none() {
+                break;
+            }
+        }
+        let n = files.len().max(1) as f64;
+        Ok(Perception {
+            stamps_ns: stamps.iter().copied().collect(),
+            files,
+            estimates,
+            ms_encode: 1e3 * t0.elapsed().as_secs_f64() / n,
+            ms_estimate: 0.0,
+        })
     }
 
     /// Estimators run per frame (the pose network counts as one).
@@ -126,10 +189,160 @@ impl Predictor {
     }
 }
 
-/// What perception made of a dataset.
+/// The frames `tactile predict` and Python's `tactile.predict` estimate.
+pub enum PredictInput {
+    /// A dataset folder (it holds `manifest.json`): every row of
+    /// `labels.csv`, in order, named by its `file`.
+    Dataset(Dataset),
+    /// Any other frame source: a folder of PNG or JPEG frames, one image,
+    /// a video, a ROS 2 bag's image topic, or a camera read for a number
+    /// of frames.
+    Source(FrameSource),
+}
+
+impl PredictInput {
+    /// Open `data`, checked before any model loads: a folder with
+    /// `manifest.json` is a dataset (and must be a whole one), anything
+    /// else a frame source; `topic` picks a bag's image topic, `limit`
+    /// keeps the first frames. A live camera needs a limit, since the
+    /// estimates are written when the frames end.
+    pub fn open(data: &Path, topic: Option<&str>, limit: Option<u64>) -> Result<Self> {
+        use tactile_core::source::{SourceOptions, SourceSpec};
+        if data.is_dir() && data.join("manifest.json").exists() {
+            if topic.is_some() {
+                return Err(tactile_core::Error::Config(format!(
+                    "a topic picks a ROS 2 bag's images; {} is a dataset folder",
+                    data.display()
+                ))
+                .into());
+            }
+            let mut ds = Dataset::open(data)?;
+            if let Some(n) = limit {
+                ds.rows.truncate(usize::try_from(n).unwrap_or(usize::MAX));
+            }
+            return Ok(Self::Dataset(ds));
+        }
+        let spec = match topic {
+            Some(t) => SourceSpec::Bag {
+                path: data.to_path_buf(),
+                topic: Some(t.to_string()),
+            },
+            None => SourceSpec::Path(data.to_path_buf()),
+        };
+        let options = SourceOptions {
+            limit,
+            ..SourceOptions::default()
+        };
+        let source = FrameSource::open(&spec, options)?;
+        if source.kind().is_live() && limit.is_none() {
+            return Err(tactile_core::Error::Config(format!(
+                "{} is a live camera: give a frame limit (the estimates are written when the frames end), \
+                 or estimate each frame as it comes (Python: tactile.frames with tactile.PoseEstimator)",
+                data.display()
+            ))
+            .into());
+        }
+        Ok(Self::Source(source))
+    }
+
+    /// What the user should know of the input (gaps in a folder's frame
+    /// numbering).
+    pub fn warnings(&self) -> Vec<String> {
+        match self {
+            Self::Dataset(_) => Vec::new(),
+            Self::Source(s) => s.list().map(|l| l.warnings()).unwrap_or_default(),
+        }
+    }
+
+    /// Before any work: `out` can be written and is not part of the input
+    /// (`data`, what this was opened from).
+    pub fn check_output(&self, data: &Path, out: &Path) -> Result<()> {
+        let datasets: Vec<&Dataset> = match self {
+            Self::Dataset(ds) => vec![ds],
+            Self::Source(_) => Vec::new(),
+        };
+        tactile_core::dataset::check_output_file(out, &datasets)?;
+        let (o, d) = (std::fs::canonicalize(out), std::fs::canonicalize(data));
+        if let (Ok(o), Ok(d)) = (o, d)
+            && o == d
+        {
+            return Err(tactile_core::Error::Invalid(format!(
+                "{}: this output is the input; give another file, so nothing was done",
+                out.display()
+            ))
+            .into());
+        }
+        Ok(())
+    }
+}
+
+/// Frames a source's estimates are made of at once.
+const SOURCE_BATCH: usize = 64;
+
+/// A pose network's estimates as columns: each target, then with
+/// uncertainty each target's `<target>_std`.
+fn pose_estimates(names: &[String], values: &[Vec<f64>], std: Option<&[Vec<f64>]>) -> Estimates {
+    let column = |rows: &[Vec<f64>], j: usize| {
+        tactile_estimate::Column::Number(rows.iter().map(|row| row[j]).collect())
+    };
+    let mut columns: Vec<_> = (0..names.len())
+        .map(|j| (names[j].clone(), column(values, j)))
+        .collect();
+    if let Some(std) = std {
+        columns.extend((0..names.len()).map(|j| {
+            (
+                tactile_estimate::registry::std_column(&names[j]),
+                column(std, j),
+            )
+        }));
+    }
+    Estimates { columns }
+}
+
+impl Perception {
+    /// The CSV's columns: `file`, `stamp_ns` when the frames had stamps,
+    /// then every estimate's.
+    pub fn header(&self) -> Vec<String> {
+        let mut header = vec!["file".to_string()];
+        if self.stamps_ns.is_some() {
+            header.push("stamp_ns".into());
+        }
+        header.extend(self.estimates.columns.iter().map(|c| c.0.clone()));
+        header
+    }
+
+    /// Row `i` of the CSV, the cells of [`Self::header`] (numbers with 4
+    /// decimals).
+    pub fn row(&self, i: usize) -> Vec<String> {
+        let mut row = vec![self.files[i].clone()];
+        if let Some(s) = &self.stamps_ns {
+            row.push(s[i].to_string());
+        }
+        row.extend(self.estimates.row(i));
+        row
+    }
+
+    /// Write every row as CSV to `path`, atomically.
+    pub fn write_csv(&self, path: &Path) -> tactile_core::Result<()> {
+        tactile_core::io::write_atomic_with(path, |w| {
+            let mut csv = csv::Writer::from_writer(w);
+            csv.write_record(self.header())?;
+            for i in 0..self.files.len() {
+                csv.write_record(self.row(i))?;
+            }
+            csv.flush()
+        })
+    }
+}
+
+/// What perception made of a dataset or a frame source.
 pub struct Perception {
-    /// Each frame's `file` label.
+    /// Each frame's `file` label (a source's frame name: its file name,
+    /// or its number in a video or on a bag's topic, `000042`).
     pub files: Vec<String>,
+    /// Each frame's message stamp, ns since the epoch, when every frame
+    /// had one (a ROS 2 bag's).
+    pub stamps_ns: Option<Vec<i64>>,
     /// Every estimator's outputs.
     pub estimates: Estimates,
     /// Preprocessing and encoding time per frame, ms.
@@ -173,6 +386,7 @@ impl TactipPerception {
         let ms_estimate = 1e3 * t1.elapsed().as_secs_f64() / ds.len().max(1) as f64;
         Ok(Perception {
             files: pins.files,
+            stamps_ns: None,
             estimates,
             ms_encode,
             ms_estimate,

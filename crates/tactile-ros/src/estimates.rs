@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use tactile_estimate::{Column, Estimates};
+use tactile_pipeline::tactip::Perception;
 
 use crate::mcap_file::McapFile;
 use crate::messages::{Header, Time, to_cdr};
@@ -32,15 +33,36 @@ pub struct EstimatesMsg {
     pub classes: Vec<String>,
 }
 
+/// Write what `tactile predict` made of its frames to `path`: ROS 2
+/// messages for a name ending in `.mcap` ([`write_estimates`]), else CSV
+/// (`file`, `stamp_ns` when the frames had stamps, every estimate).
+pub fn write_perception(path: &Path, perception: &Perception) -> Result<PathBuf> {
+    if tactile_core::bag::is_bag_file(path) {
+        return write_estimates(
+            path,
+            &perception.files,
+            perception.stamps_ns.as_deref(),
+            &perception.estimates,
+        );
+    }
+    perception.write_csv(path)?;
+    Ok(path.to_path_buf())
+}
+
 /// Write `estimates` of `files` (one row per file) to `path` as MCAP,
-/// staged and moved into place.
-pub fn write_estimates(path: &Path, files: &[String], estimates: &Estimates) -> Result<PathBuf> {
+/// staged and moved into place. Each message is stamped like its frame
+/// when `stamps_ns` gives the frames' stamps (a bag's), else when written.
+pub fn write_estimates(
+    path: &Path,
+    files: &[String],
+    stamps_ns: Option<&[i64]>,
+    estimates: &Estimates,
+) -> Result<PathBuf> {
     let mut file = McapFile::create(path)?;
     let channel = file.channel(ESTIMATES_TOPIC, &crate::schemas::estimates())?;
     let mut last = 0i64;
     for (i, frame) in files.iter().enumerate() {
         let mut msg = EstimatesMsg {
-            // Strictly increasing, so readers keep the frames' order.
             header: Header {
                 stamp: Time::default(),
                 frame_id: FRAME_ID.into(),
@@ -63,7 +85,11 @@ pub fn write_estimates(path: &Path, files: &[String], estimates: &Estimates) -> 
                 }
             }
         }
-        let stamp = now_ns().max(last + 1);
+        let stamp = match stamps_ns.and_then(|s| s.get(i)) {
+            Some(&s) => s,
+            // Strictly increasing, so readers keep the frames' order.
+            None => now_ns().max(last + 1),
+        };
         last = stamp;
         msg.header.stamp = Time::from_nanos(stamp);
         let data = to_cdr(&msg).map_err(|message| Error::Encode {

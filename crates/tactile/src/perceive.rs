@@ -6,8 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 use tactile_burn::{DeviceKind, Runtime};
-use tactile_core::dataset::Dataset;
-use tactile_pipeline::tactip::Predictor;
+use tactile_pipeline::tactip::{PredictInput, Predictor};
 
 #[derive(Args)]
 pub(crate) struct PerceiveArgs {
@@ -20,9 +19,20 @@ pub(crate) struct PerceiveArgs {
     /// the same feature vector (default: every such folder inside ENCODER).
     #[arg(long, num_args = 1..)]
     heads: Vec<PathBuf>,
-    /// Dataset of frames to perceive.
+    /// The frames: a dataset folder (docs/datasets.md; every row of
+    /// labels.csv, in order), or a folder of PNG or JPEG frames (in name
+    /// order), one image, a video file (decoded by FFmpeg), a ROS 2 bag
+    /// (.mcap; see --topic) or, with --limit, a V4L2 camera.
     #[arg(long)]
     data: PathBuf,
+    /// A ROS 2 bag's image topic (without it, the bag's only image topic).
+    #[arg(long)]
+    topic: Option<String>,
+    /// Estimate at most this many frames of a video, bag, folder or
+    /// camera (a camera needs it: the estimates are written when the
+    /// frames end).
+    #[arg(long)]
+    limit: Option<u64>,
     /// Also write every estimate to this CSV, or, for a name ending in
     /// .mcap, as ROS 2 messages (tactile_msgs/msg/Estimates on
     /// /tactile/estimates, docs/robots.md).
@@ -42,60 +52,53 @@ pub(crate) struct PerceiveArgs {
 }
 
 pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
-    let ds = Dataset::open(&a.data)?;
+    let mut input = PredictInput::open(&a.data, a.topic.as_deref(), a.limit)?;
+    for w in input.warnings() {
+        tactile_core::note!("{w}");
+    }
     if let Some(out) = &a.out {
-        tactile_core::dataset::check_output_file(out, &[&ds])?;
+        input.check_output(&a.data, out)?;
     }
     let mut p = Predictor::load(
         &a.encoder,
         &a.heads,
         a.runtime.unwrap_or(a.device.runtime()),
     )?;
-    let r = p.perceive(&ds)?;
-    let mut header = vec!["file".to_string()];
-    header.extend(r.estimates.columns.iter().map(|c| c.0.clone()));
-    let rows: Vec<Vec<String>> = r
-        .files
-        .iter()
-        .enumerate()
-        .map(|(i, f)| [vec![f.clone()], r.estimates.row(i)].concat())
-        .collect();
-    say!("{}", header.join("\t"));
-    for row in rows.iter().take(a.show) {
-        say!("{}", row.join("\t"));
+    let r = p.perceive_input(&mut input, &a.data)?;
+    let frames = r.files.len();
+    say!("{}", r.header().join("\t"));
+    for i in 0..frames.min(a.show) {
+        say!("{}", r.row(i).join("\t"));
     }
     match &p {
+        // A source's frames are decoded on another thread as they run.
+        _ if matches!(input, PredictInput::Source(_)) => say!(
+            "{} frames: {:.3} ms/frame (preprocessing and every network included)",
+            frames,
+            r.ms_encode
+        ),
         Predictor::PoseNetwork(_) => say!(
             "{} frames: pose network {:.3} ms/frame (preprocessing included)",
-            ds.len(),
+            frames,
             r.ms_encode
         ),
         Predictor::Encoder(_) => say!(
             "{} frames: encoding {:.3} ms/frame (preprocessing included), {} estimator{} {:.4} ms/frame",
-            ds.len(),
+            frames,
             r.ms_encode,
             p.estimators(),
             if p.estimators() == 1 { "" } else { "s" },
             r.ms_estimate
         ),
     }
-    if let Some(out) = a
-        .out
-        .as_deref()
-        .filter(|o| tactile_core::bag::is_bag_file(o))
-    {
-        tactile_ros::estimates::write_estimates(out, &r.files, &r.estimates)?;
-        say!("estimates written to {} (ROS 2 messages)", out.display());
-    } else if let Some(out) = &a.out {
-        tactile_core::io::write_atomic_with(out, |w| {
-            let mut csv = csv::Writer::from_writer(w);
-            csv.write_record(&header)?;
-            for row in &rows {
-                csv.write_record(row)?;
-            }
-            csv.flush()
-        })?;
-        say!("estimates written to {}", out.display());
+    if let Some(out) = &a.out {
+        tactile_ros::estimates::write_perception(out, &r)?;
+        let what = if tactile_core::bag::is_bag_file(out) {
+            " (ROS 2 messages)"
+        } else {
+            ""
+        };
+        say!("estimates written to {}{what}", out.display());
     }
     Ok(())
 }

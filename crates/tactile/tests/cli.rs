@@ -1662,16 +1662,11 @@ fn predict_runs_the_shipped_pose_network_in_the_labels_units() {
     );
 }
 
-#[test]
-fn predict_through_onnxruntime_gives_the_burn_estimates() {
-    // The deployment path the latency goals are timed on: `--runtime onnx`
-    // runs each network's ONNX export. On 12 real surface frames, the
-    // shipped pose ensemble and the CAE route give burn's estimates and
-    // deviations within 2e-3 of each target's unit.
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+/// A dataset in `dir/surface` of 12 real surface `val` frames (every
+/// 150th), its frames in `frames/`.
+fn surface_val_subset(dir: &Path) -> std::path::PathBuf {
     let real = shared_real().join("tactip331-surface");
-    let tmp = tempfile::tempdir().unwrap();
-    let data = tmp.path().join("surface");
+    let data = dir.join("surface");
     std::fs::create_dir_all(data.join("frames")).unwrap();
     let labels = std::fs::read_to_string(real.join("labels.csv")).unwrap();
     let mut lines = labels.lines();
@@ -1687,6 +1682,175 @@ fn predict_through_onnxruntime_gives_the_burn_estimates() {
             .unwrap();
     manifest["count"] = 12.into();
     std::fs::write(data.join("manifest.json"), manifest.to_string()).unwrap();
+    data
+}
+
+/// A CSV's rows (header first), split at commas.
+fn csv_rows(path: &Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+#[test]
+fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
+    // A robot records its TacTip as a bag (mono8 Images) or saves frames
+    // to a folder: `predict --data` reads both, each frame's estimates the
+    // dataset's to the CSV's 4 decimals (1e-4: the batches differ), a
+    // bag's frames keep their stamps (a `stamp_ns` column; MCAP messages
+    // stamped like their frames).
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let model = root.join("models/pose-surface");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = surface_val_subset(tmp.path());
+    let by_file = |rows: Vec<Vec<String>>| {
+        let header = rows[0].clone();
+        let body: std::collections::BTreeMap<String, Vec<f64>> = rows[1..]
+            .iter()
+            .map(|r| {
+                let name = Path::new(&r[0]).file_name().unwrap().to_str().unwrap();
+                let v = r[1..].iter().map(|c| c.parse().unwrap()).collect();
+                (name.to_string(), v)
+            })
+            .collect();
+        (header, body)
+    };
+    let out = tmp.path().join("dataset.csv");
+    predict(&model, &data, &out, &[]);
+    let (want_header, want) = by_file(csv_rows(&out));
+    assert_eq!(want.len(), 12);
+    let same =
+        |what: &str, header: &[String], got: &std::collections::BTreeMap<String, Vec<f64>>| {
+            assert_eq!(header, want_header, "{what}: the dataset's columns");
+            assert_eq!(
+                got.keys().collect::<Vec<_>>(),
+                want.keys().collect::<Vec<_>>(),
+                "{what}"
+            );
+            for (file, v) in got {
+                for (j, (a, b)) in v.iter().zip(&want[file]).enumerate() {
+                    assert!(
+                        (a - b).abs() <= 1e-4,
+                        "{what} {file} {}: {a} against {b}",
+                        header[j + 1]
+                    );
+                }
+            }
+        };
+    // The frames folder alone: no manifest, no labels.
+    let out = tmp.path().join("folder.csv");
+    predict(&model, &data.join("frames"), &out, &[]);
+    let (header, got) = by_file(csv_rows(&out));
+    same("folder", &header, &got);
+    // The same frames as a ROS 2 bag of mono8 Images, 30 Hz.
+    let t0: i64 = 1_700_000_000_000_000_000;
+    let bag = tmp.path().join("tactip.mcap");
+    let mut names = Vec::new();
+    {
+        use tactile_core::bag::messages::{Header, Image, Time, to_cdr};
+        let mut w = mcap::Writer::new(std::io::BufWriter::new(
+            std::fs::File::create(&bag).unwrap(),
+        ))
+        .unwrap();
+        let schema = w
+            .add_schema("sensor_msgs/msg/Image", "ros2msg", b"")
+            .unwrap();
+        let ch = w
+            .add_channel(schema, "/tactip/image_raw", "cdr", &Default::default())
+            .unwrap();
+        for (i, file) in want.keys().enumerate() {
+            let img = image::open(data.join("frames").join(file))
+                .unwrap()
+                .to_luma8();
+            let t = t0 + i as i64 * 33_333_333;
+            let msg = Image {
+                header: Header {
+                    stamp: Time::from_nanos(t),
+                    frame_id: "tactip".into(),
+                },
+                height: img.height(),
+                width: img.width(),
+                encoding: "mono8".into(),
+                is_bigendian: 0,
+                step: img.width(),
+                data: img.as_raw(),
+            };
+            let header = mcap::records::MessageHeader {
+                channel_id: ch,
+                sequence: i as u32,
+                log_time: t as u64,
+                publish_time: t as u64,
+            };
+            w.write_to_known_channel(&header, &to_cdr(&msg).unwrap())
+                .unwrap();
+            names.push((format!("{i:06}"), file.clone(), t));
+        }
+        w.finish().unwrap();
+    }
+    let out = tmp.path().join("bag.csv");
+    predict(&model, &bag, &out, &["--topic", "/tactip/image_raw"]);
+    let rows = csv_rows(&out);
+    assert_eq!(rows[0][..2], ["file".to_string(), "stamp_ns".to_string()]);
+    // Without the stamps, each frame named by its file.
+    let header = [vec![rows[0][0].clone()], rows[0][2..].to_vec()].concat();
+    let renamed: Vec<Vec<String>> = std::iter::once(header)
+        .chain(rows[1..].iter().zip(&names).map(|(r, (number, file, t))| {
+            assert_eq!(
+                (&r[0], &r[1]),
+                (number, &t.to_string()),
+                "the frame's number and stamp"
+            );
+            [vec![file.clone()], r[2..].to_vec()].concat()
+        }))
+        .collect();
+    let (header, got) = by_file(renamed);
+    same("bag", &header, &got);
+    // As ROS 2 messages: one per frame, stamped like it.
+    let out = tmp.path().join("estimates.mcap");
+    predict(&model, &bag, &out, &[]);
+    let bytes = std::fs::read(&out).unwrap();
+    let stamps: Vec<u64> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic == "/tactile/estimates")
+        .map(|m| m.log_time)
+        .collect();
+    assert_eq!(stamps, names.iter().map(|n| n.2 as u64).collect::<Vec<_>>());
+    // The input as the output, or a topic of a dataset: refused, nothing written.
+    let before = std::fs::read(&bag).unwrap();
+    for (data, extra) in [
+        (&bag, vec![]),
+        (&data, vec!["--topic", "/tactip/image_raw"]),
+    ] {
+        let mut args = vec!["predict", "--model", model.to_str().unwrap()];
+        args.extend([
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            bag.to_str().unwrap(),
+        ]);
+        args.extend(extra);
+        let (ok, msg) = tactile(&args);
+        assert!(
+            !ok && (msg.contains("this output is the input")
+                || msg.contains("is a dataset folder")),
+            "{msg}"
+        );
+    }
+    assert_eq!(std::fs::read(&bag).unwrap(), before);
+}
+
+#[test]
+fn predict_through_onnxruntime_gives_the_burn_estimates() {
+    // The deployment path the latency goals are timed on: `--runtime onnx`
+    // runs each network's ONNX export. On 12 real surface frames, the
+    // shipped pose ensemble and the CAE route give burn's estimates and
+    // deviations within 2e-3 of each target's unit.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = surface_val_subset(tmp.path());
     let estimates = |model: &str, runtime: &str| -> Vec<Vec<String>> {
         let out = tmp.path().join(format!("{model}-{runtime}.csv"));
         predict(
@@ -1695,11 +1859,7 @@ fn predict_through_onnxruntime_gives_the_burn_estimates() {
             &out,
             &["--runtime", runtime],
         );
-        std::fs::read_to_string(out)
-            .unwrap()
-            .lines()
-            .map(|l| l.split(',').map(str::to_string).collect())
-            .collect()
+        csv_rows(&out)
     };
     for model in ["pose-surface", "cae-surface"] {
         let (onnx, flex) = (estimates(model, "onnx"), estimates(model, "burn-flex"));
