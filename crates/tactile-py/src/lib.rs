@@ -15,6 +15,7 @@ mod image;
 mod json;
 mod pipeline;
 mod pose;
+mod predict;
 mod robot;
 mod source;
 mod synth;
@@ -34,6 +35,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<pipeline::FrameResult>()?;
     m.add_class::<encoder::PyTactipEncoder>()?;
     m.add_class::<pose::PyPoseEstimator>()?;
+    m.add_function(wrap_pyfunction!(predict::predict, m)?)?;
     m.add_class::<calibrate::PyReconstructor>()?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate_ball, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::reconstruct_frames, m)?)?;

@@ -180,3 +180,43 @@ def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root):
     ea, eb = burn.estimate(frames), ort.estimate(frames)
     for t in ["depth_mm", "roll_deg", "pitch_deg", "shear_x_mm", "shear_y_mm", "shear_theta_deg"]:
         assert np.allclose(ea[t], eb[t], atol=1e-3), t
+
+
+def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, tmp_path):
+    """`tactile.predict` is `tactile predict`: on a folder of 8 real surface
+    frames (no dataset around them), the same CSV byte for byte, the same
+    values returned; an encoder route with a limit; bad input named. (A
+    bag written by `rosbags`: tests/test_robots.py.)"""
+    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
+    src = real / "tactip331-surface"
+    with open(src / "labels.csv") as f:
+        names = [r["file"] for r in csv.DictReader(f)][:8]
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for n in names:
+        shutil.copy(src / n, folder / Path(n).name)
+    out = tmp_path / "cli.csv"
+    run_cli(tactile_bin, "predict", "--model", "models/pose-surface", "--data", str(folder),
+            "--out", str(out))
+    with open(out) as f:
+        rows = list(csv.DictReader(f))
+    py_out = tmp_path / "py.csv"
+    got = tactile.predict(root / "models/pose-surface", folder, py_out)
+    assert got["file"] == [r["file"] for r in rows]
+    assert py_out.read_text() == out.read_text()
+    assert "stamp_ns" not in got and got["ms_per_frame"] > 0
+    for name in rows[0]:
+        if name != "file":
+            assert np.allclose(got[name], [float(r[name]) for r in rows], atol=6e-5), name
+    # One encoder with its estimators, a limit, and bad input named.
+    cae = tactile.predict(root / "models/cae-surface", folder, limit=3)
+    assert len(cae["file"]) == 3 and cae["shear_theta_deg_std"].shape == (3,)
+    with pytest.raises(FileNotFoundError, match="nowhere"):
+        tactile.predict(root / "models/pose-surface", tmp_path / "nowhere")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(ValueError, match="no PNG or JPEG frames"):
+        tactile.predict(root / "models/pose-surface", empty)
+    with pytest.raises(ValueError, match="this output is the input"):
+        tactile.predict(root / "models/pose-surface", folder / Path(names[0]).name,
+                        folder / Path(names[0]).name)

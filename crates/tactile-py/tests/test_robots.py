@@ -424,6 +424,51 @@ def test_paper_a_estimates_as_mcap_match_the_csv(tactile_bin, root, tmp_path):
             assert value == pytest.approx(float(row[name]), abs=1e-4), name
 
 
+def test_a_tactip_bag_gives_the_folders_estimates_stamped_like_its_frames(root, tmp_path):
+    """A TacTip recorded as `ros2 bag record` would (mono8 Images, written by
+    `rosbags`): `tactile.predict` on the bag gives each frame the estimates
+    of the same PNG frames in a folder, with the message's stamp, and its
+    MCAP output (read by `mcap-ros2-support`) stamps each estimate so."""
+    src = root.parent / "shared" / "real" / "tactip331-surface" / "frames"
+    if not src.is_dir():
+        pytest.skip("the real TacTip surface set is in ../shared/real")
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    pngs = [src / f"val_image_{i}.png" for i in (1, 2, 3, 4, 5, 6)]
+    for f in pngs:
+        shutil.copy(f, folder / f.name)
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    Image = ts.types["sensor_msgs/msg/Image"]
+    Header = ts.types["std_msgs/msg/Header"]
+    Time = ts.types["builtin_interfaces/msg/Time"]
+    bag_dir = tmp_path / "bag"
+    with RosbagsWriter(bag_dir, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        conn = w.add_connection("/tactip/image_raw", Image.__msgtype__, typestore=ts)
+        for i, f in enumerate(pngs):
+            grey = tactile.read_grey(f)
+            t = stamp(i)
+            h = Header(stamp=Time(sec=t // 10**9, nanosec=t % 10**9), frame_id="tactip")
+            msg = Image(header=h, height=grey.shape[0], width=grey.shape[1], encoding="mono8",
+                        is_bigendian=0, step=grey.shape[1], data=grey.reshape(-1))
+            w.write(conn, t, ts.serialize_cdr(msg, Image.__msgtype__))
+    bag = next(bag_dir.glob("*.mcap"))
+    model = root / "models" / "pose-surface"
+    want = tactile.predict(model, folder)
+    out = tmp_path / "estimates.mcap"
+    got = tactile.predict(model, bag, out)
+    assert got["file"] == [f"{i:06}" for i in range(6)]
+    assert list(got["stamp_ns"]) == [stamp(i) for i in range(6)]
+    targets = [k for k in want if k not in ("file", "ms_per_frame")]
+    for k in targets:
+        assert np.allclose(got[k], want[k], atol=1e-9), k
+    msgs = [m.ros_msg for m in read_ros2_messages(str(out))]
+    assert [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in msgs] == [stamp(i) for i in range(6)]
+    for i, m in enumerate(msgs):
+        assert m.frame == f"{i:06}"
+        for name, value in zip(m.names, m.values):
+            assert value == pytest.approx(want[name][i], abs=1e-9), name
+
+
 def test_a_calibrated_sensor_writes_its_indentation(tactile_bin, root, tmp_path):
     """With a calibrated sensor (models/gelsight-r15) on real ball presses,
     /tactile/indentation holds each frame's indentation in mm, its peak the

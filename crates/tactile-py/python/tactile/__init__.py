@@ -26,6 +26,12 @@ Frames from a video file, a camera, a folder or a dataset::
     for f in tactile.frames("palpation.mp4"):   # or "/dev/video0", a folder
         r = pipe.process(f.image)
 
+A TacTip model over a whole recording, as ``tactile predict`` (a dataset, a
+folder of frames, a video or a ROS 2 bag; CSV or MCAP out)::
+
+    est = tactile.predict("models/pose-surface", "tactip.mcap", "estimates.mcap")
+    est["stamp_ns"], est["shear_theta_deg"], est["shear_theta_deg_std"]
+
 Datasets, generators, training and evaluation: ``tactile.Dataset``,
 ``tactile.synth``, ``tactile.train``, ``tactile.eval``.
 
@@ -82,6 +88,7 @@ from ._tactile import (  # noqa: E402
     __version__,
     bag_topics,
     frames,
+    predict,
     read_grey,
     read_rgb,
 )
@@ -106,6 +113,7 @@ __all__ = [
     "calibrate",
     "eval",
     "frames",
+    "predict",
     "read_grey",
     "read_rgb",
     "synth",

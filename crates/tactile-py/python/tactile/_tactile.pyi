@@ -130,6 +130,21 @@ class PoseEstimator:
     @property
     def runtime(self) -> str: ...
 
+def predict(
+    model: _Path,
+    data: _Path,
+    out: Optional[_Path] = None,
+    *,
+    heads: Sequence[_Path] = (),
+    topic: Optional[str] = None,
+    limit: Optional[int] = None,
+    runtime: str = "burn-flex",
+) -> Dict[str, Any]:
+    """``tactile predict``: every estimate of a TacTip model on every frame of a
+    dataset, a folder of frames, an image, a video or a ROS 2 bag's image topic
+    (``file``, ``stamp_ns`` for a bag, one array per estimate, ``ms_per_frame``),
+    written to ``out`` too when given (CSV, or ROS 2 messages for ``.mcap``)."""
+
 class Reconstructor:
     """A calibrated GelSight-like sensor: frames to the skin's indentation."""
 
