@@ -153,9 +153,13 @@ impl Predictor {
         let t0 = std::time::Instant::now();
         let (mut files, mut stamps, mut estimates) = (Vec::new(), Vec::new(), Estimates::default());
         let mut batch: Vec<GreyImage> = Vec::with_capacity(SOURCE_BATCH);
+        // A stream's length is unknown: its bar counts without a total.
+        let known = source.list().map_or(0, |l| l.frames.len() as u64);
+        let pb = tactile_core::progress::progress_bar(known, "predict");
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
+                pb.inc(1);
                 let grey = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
                 let (w, h) = (f.image.width(), f.image.height());
                 batch.push(tactile_core::image_io::grey_image(w, h, grey)?);
@@ -170,6 +174,7 @@ impl Predictor {
                 break;
             }
         }
+        pb.finish_and_clear();
         let n = files.len().max(1) as f64;
         Ok(Perception {
             stamps_ns: stamps.iter().copied().collect(),
