@@ -28,9 +28,9 @@ pub(crate) struct PerceiveArgs {
     /// A ROS 2 bag's image topic (without it, the bag's only image topic).
     #[arg(long)]
     topic: Option<String>,
-    /// Estimate at most this many frames of a video, bag, folder or
-    /// camera (a camera needs it: the estimates are written when the
-    /// frames end).
+    /// Estimate only the first this many frames (of a dataset, a folder,
+    /// a video, a bag or a camera; a camera needs it, as the estimates are
+    /// written when the frames end).
     #[arg(long)]
     limit: Option<u64>,
     /// Also write every estimate to this CSV, or, for a name ending in
