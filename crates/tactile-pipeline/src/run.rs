@@ -198,7 +198,7 @@ impl JsonLines {
     }
 
     /// Write one record; [`Flow::Stop`] when standard output was closed.
-    pub fn write(&mut self, rec: &FrameRecord) -> Result<Flow> {
+    pub fn write<T: serde::Serialize>(&mut self, rec: &T) -> Result<Flow> {
         let line = serde_json::to_string(rec).map_err(|e| {
             tactile_core::Error::Invalid(format!("cannot write a record as JSON: {e}"))
         })?;

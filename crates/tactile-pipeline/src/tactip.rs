@@ -4,6 +4,7 @@
 //! encoding per frame, and their scores.
 
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use tactile_burn::Runtime;
 use tactile_burn::nn::RegressionLoss;
@@ -14,6 +15,8 @@ use tactile_core::dataset::Dataset;
 use tactile_core::image_io::GreyImage;
 use tactile_core::metrics::{accuracy, confusion};
 use tactile_core::source::FrameSource;
+
+use crate::run::Flow;
 use tactile_estimate::eval::{Scores, score};
 use tactile_estimate::{
     Activation, ClassifierHead, Estimates, Estimators, HeadConfig, Regressor, RegressorConfig,
@@ -146,43 +149,86 @@ impl Predictor {
 
     /// Every frame of a recorded source (a folder of frames, an image, a
     /// video, a ROS 2 bag's image topic) or a live one that ends (a
-    /// camera or stdin with a frame limit), in batches as they arrive; a
-    /// bag's frames keep their stamps. Colour frames are made grey with
-    /// OpenCV's weights, as a colour PNG in a dataset is.
+    /// camera with a frame limit), in batches as they arrive; a bag's
+    /// frames keep their stamps.
     pub fn perceive_source(&mut self, source: &mut FrameSource) -> Result<Perception> {
         let t0 = std::time::Instant::now();
-        let (mut files, mut stamps, mut estimates) = (Vec::new(), Vec::new(), Estimates::default());
-        let mut batch: Vec<GreyImage> = Vec::with_capacity(SOURCE_BATCH);
+        let mut all = Perception {
+            files: Vec::new(),
+            stamps_ns: Some(Vec::new()),
+            estimates: Estimates::default(),
+            ms_encode: 0.0,
+            ms_estimate: 0.0,
+        };
+        let mut stamps: Vec<Option<i64>> = Vec::new();
+        self.perceive_source_with(source, SOURCE_BATCH, &mut |batch, _| {
+            match &batch.stamps_ns {
+                Some(s) => stamps.extend(s.iter().map(|&t| Some(t))),
+                None => stamps.extend(batch.files.iter().map(|_| None)),
+            }
+            all.files.extend(batch.files);
+            all.estimates.append(batch.estimates)?;
+            Ok(Flow::Continue)
+        })?;
+        all.stamps_ns = stamps.into_iter().collect();
+        all.ms_encode = 1e3 * t0.elapsed().as_secs_f64() / all.files.len().max(1) as f64;
+        Ok(all)
+    }
+
+    /// The frames of `source` in batches of up to `batch` (1 for a live
+    /// stream, each frame estimated as it comes), each handed to `on_batch`
+    /// with its estimates and, for live frames, when each arrived; the
+    /// batch's `stamps_ns` holds each frame's stamp where it has one (a
+    /// bag's). Colour frames are made grey with OpenCV's weights, as a
+    /// colour PNG in a dataset is. Returns the frames estimated.
+    pub fn perceive_source_with(
+        &mut self,
+        source: &mut FrameSource,
+        batch: usize,
+        on_batch: &mut BatchSink<'_>,
+    ) -> Result<usize> {
+        let batch = batch.clamp(1, SOURCE_BATCH);
+        let mut grey: Vec<GreyImage> = Vec::with_capacity(batch);
+        let (mut files, mut stamps, mut arrived) = (Vec::new(), Vec::new(), Vec::new());
         // A stream's length is unknown: its bar counts without a total.
         let known = source.list().map_or(0, |l| l.frames.len() as u64);
-        let pb = tactile_core::progress::progress_bar(known, "predict");
+        let pb = tactile_core::progress::progress_bar_if(known, "predict", batch > 1);
+        let mut done = 0;
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
                 pb.inc(1);
-                let grey = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
+                let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
                 let (w, h) = (f.image.width(), f.image.height());
-                batch.push(tactile_core::image_io::grey_image(w, h, grey)?);
+                grey.push(tactile_core::image_io::grey_image(w, h, g)?);
                 files.push(f.name.clone());
                 stamps.push(f.stamp_ns);
+                arrived.push(f.arrived);
             }
-            if batch.len() == SOURCE_BATCH || (frame.is_none() && !batch.is_empty()) {
-                estimates.append(self.perceive_frames(&batch)?)?;
-                batch.clear();
+            if grey.len() == batch || (frame.is_none() && !grey.is_empty()) {
+                let estimates = self.perceive_frames(&grey)?;
+                done += grey.len();
+                grey.clear();
+                let p = Perception {
+                    files: std::mem::take(&mut files),
+                    stamps_ns: stamps.iter().copied().collect(),
+                    estimates,
+                    ms_encode: 0.0,
+                    ms_estimate: 0.0,
+                };
+                stamps.clear();
+                let flow = on_batch(p, &arrived)?;
+                arrived.clear();
+                if flow == Flow::Stop {
+                    break;
+                }
             }
             if frame.is_none() {
                 break;
             }
         }
         pb.finish_and_clear();
-        let n = files.len().max(1) as f64;
-        Ok(Perception {
-            stamps_ns: stamps.iter().copied().collect(),
-            files,
-            estimates,
-            ms_encode: 1e3 * t0.elapsed().as_secs_f64() / n,
-            ms_estimate: 0.0,
-        })
+        Ok(done)
     }
 
     /// Estimators run per frame (the pose network counts as one).
@@ -209,9 +255,15 @@ impl PredictInput {
     /// Open `data`, checked before any model loads: a folder with
     /// `manifest.json` is a dataset (and must be a whole one), anything
     /// else a frame source; `topic` picks a bag's image topic, `limit`
-    /// keeps the first frames. A live camera needs a limit, since the
-    /// estimates are written when the frames end.
-    pub fn open(data: &Path, topic: Option<&str>, limit: Option<u64>) -> Result<Self> {
+    /// keeps the first frames. A live camera needs a limit unless
+    /// `streamed` (each frame's estimates go out as it is done), since
+    /// otherwise the estimates are written when the frames end.
+    pub fn open(
+        data: &Path,
+        topic: Option<&str>,
+        limit: Option<u64>,
+        streamed: bool,
+    ) -> Result<Self> {
         use tactile_core::source::{SourceOptions, SourceSpec};
         if data.is_dir() && data.join("manifest.json").exists() {
             if topic.is_some() {
@@ -239,10 +291,11 @@ impl PredictInput {
             ..SourceOptions::default()
         };
         let source = FrameSource::open(&spec, options)?;
-        if source.kind().is_live() && limit.is_none() {
+        if source.kind().is_live() && limit.is_none() && !streamed {
             return Err(tactile_core::Error::Config(format!(
                 "{} is a live camera: give a frame limit (the estimates are written when the frames end), \
-                 or estimate each frame as it comes (Python: tactile.frames with tactile.PoseEstimator)",
+                 or stream each frame's estimates as it comes (`tactile predict --out -`; Python: \
+                 tactile.frames with tactile.PoseEstimator)",
                 data.display()
             ))
             .into());
@@ -280,6 +333,11 @@ impl PredictInput {
         Ok(())
     }
 }
+
+/// What [`Predictor::perceive_source_with`] hands each batch to: the
+/// batch's estimates and when each live frame arrived; it says whether to
+/// go on.
+pub type BatchSink<'a> = dyn FnMut(Perception, &[Option<Instant>]) -> Result<Flow> + 'a;
 
 /// Frames a source's estimates are made of at once.
 const SOURCE_BATCH: usize = 64;
@@ -325,6 +383,35 @@ impl Perception {
         }
         row.extend(self.estimates.row(i));
         row
+    }
+
+    /// Row `i` as one JSON object, for a stream of records: `file`,
+    /// `stamp_ns` (a bag's), `latency_ms` (a live frame's, from its
+    /// arrival to now), then every estimate (a number, `null` for NaN, or
+    /// a class name).
+    pub fn record(&self, i: usize, arrived: Option<Instant>) -> serde_json::Value {
+        use serde_json::Value;
+        let mut m = serde_json::Map::new();
+        m.insert("file".into(), Value::from(self.files[i].clone()));
+        if let Some(s) = &self.stamps_ns {
+            m.insert("stamp_ns".into(), Value::from(s[i]));
+        }
+        if let Some(t) = arrived {
+            m.insert(
+                "latency_ms".into(),
+                Value::from(1e3 * t.elapsed().as_secs_f64()),
+            );
+        }
+        for (name, column) in &self.estimates.columns {
+            let v = match column {
+                tactile_estimate::Column::Number(v) => {
+                    serde_json::Number::from_f64(v[i]).map_or(Value::Null, Value::Number)
+                }
+                tactile_estimate::Column::Class(v) => Value::from(v[i].clone()),
+            };
+            m.insert(name.clone(), v);
+        }
+        Value::Object(m)
     }
 
     /// Write every row as CSV to `path`, atomically.

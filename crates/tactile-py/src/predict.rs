@@ -37,7 +37,7 @@ pub(crate) fn predict<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let rt = self::runtime(runtime)?;
     let r = interruptible(py, || {
-        let mut input = PredictInput::open(&data, topic.as_deref(), limit).py()?;
+        let mut input = PredictInput::open(&data, topic.as_deref(), limit, false).py()?;
         if let Some(out) = &out {
             input.check_output(&data, out).py()?;
         }

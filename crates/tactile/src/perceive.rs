@@ -1,11 +1,12 @@
 //! `tactile perceive`: paper A's simultaneous deployment, one encoding per
 //! frame and every estimator on it.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
 use tactile_burn::{DeviceKind, Runtime};
+use tactile_pipeline::run::{Flow, JsonLines};
 use tactile_pipeline::tactip::{PredictInput, Predictor};
 
 #[derive(Args)]
@@ -22,20 +23,24 @@ pub(crate) struct PerceiveArgs {
     /// The frames: a dataset folder (docs/datasets.md; every row of
     /// labels.csv, in order), or a folder of PNG or JPEG frames (in name
     /// order), one image, a video file (decoded by FFmpeg), a ROS 2 bag
-    /// (.mcap; see --topic) or, with --limit, a V4L2 camera.
+    /// (.mcap; see --topic) or a V4L2 camera (with --limit, or streamed
+    /// with `--out -`).
     #[arg(long)]
     data: PathBuf,
     /// A ROS 2 bag's image topic (without it, the bag's only image topic).
     #[arg(long)]
     topic: Option<String>,
     /// Estimate only the first this many frames (of a dataset, a folder,
-    /// a video, a bag or a camera; a camera needs it, as the estimates are
-    /// written when the frames end).
+    /// a video, a bag or a camera; a camera needs it unless streamed with
+    /// `--out -`, as the estimates are written when the frames end).
     #[arg(long)]
     limit: Option<u64>,
     /// Also write every estimate to this CSV, or, for a name ending in
     /// .mcap, as ROS 2 messages (tactile_msgs/msg/Estimates on
-    /// /tactile/estimates, docs/robots.md).
+    /// /tactile/estimates, docs/robots.md), or with `-` stream one JSON
+    /// object per frame to standard output as soon as it is estimated
+    /// (a camera then runs until stopped; the summary goes to standard
+    /// error).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Frames to print (all go to --out).
@@ -52,11 +57,12 @@ pub(crate) struct PerceiveArgs {
 }
 
 pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
-    let mut input = PredictInput::open(&a.data, a.topic.as_deref(), a.limit)?;
+    let streamed = a.out.as_deref() == Some(Path::new("-"));
+    let mut input = PredictInput::open(&a.data, a.topic.as_deref(), a.limit, streamed)?;
     for w in input.warnings() {
         tactile_core::note!("{w}");
     }
-    if let Some(out) = &a.out {
+    if let Some(out) = a.out.as_ref().filter(|_| !streamed) {
         input.check_output(&a.data, out)?;
     }
     let mut p = Predictor::load(
@@ -64,6 +70,9 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
         &a.heads,
         a.runtime.unwrap_or(a.device.runtime()),
     )?;
+    if streamed {
+        return stream(&mut p, &mut input, &a);
+    }
     let r = p.perceive_input(&mut input, &a.data)?;
     let frames = r.files.len();
     say!("{}", r.header().join("\t"));
@@ -100,5 +109,48 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
         };
         say!("estimates written to {}{what}", out.display());
     }
+    Ok(())
+}
+
+/// `--out -`: one JSON object per frame on standard output as soon as it
+/// is estimated (a reader that goes away stops the run quietly), the
+/// summary on standard error.
+fn stream(p: &mut Predictor, input: &mut PredictInput, a: &PerceiveArgs) -> Result<()> {
+    let mut out = JsonLines::create(Path::new("-"))?;
+    let t0 = std::time::Instant::now();
+    let frames = match input {
+        PredictInput::Dataset(_) => {
+            let r = p.perceive_input(input, &a.data)?;
+            for i in 0..r.files.len() {
+                if out.write(&r.record(i, None))? == Flow::Stop {
+                    break;
+                }
+            }
+            r.files.len()
+        }
+        PredictInput::Source(source) => {
+            let n = p.perceive_source_with(source, 1, &mut |batch, arrived| {
+                for i in 0..batch.files.len() {
+                    let arrived = arrived.get(i).copied().flatten();
+                    if out.write(&batch.record(i, arrived))? == Flow::Stop {
+                        return Ok(Flow::Stop);
+                    }
+                }
+                Ok(Flow::Continue)
+            })?;
+            if source.kind().is_live() {
+                tactile_core::note!(
+                    "{} live frames dropped (the models fell behind)",
+                    source.dropped()
+                );
+            }
+            n
+        }
+    };
+    out.finish()?;
+    tactile_core::note!(
+        "{frames} frames: {:.3} ms/frame (decoding, preprocessing and every network included)",
+        1e3 * t0.elapsed().as_secs_f64() / frames.max(1) as f64
+    );
     Ok(())
 }

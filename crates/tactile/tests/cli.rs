@@ -1744,6 +1744,39 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
     predict(&model, &data.join("frames"), &out, &[]);
     let (header, got) = by_file(csv_rows(&out));
     same("folder", &header, &got);
+    // Streamed (`--out -`): one JSON object per frame on stdout, as it is
+    // estimated, the same values; `--limit` keeps the first frames.
+    let out = Command::new(env!("CARGO_BIN_EXE_tactile"))
+        .args(["predict", "--model", model.to_str().unwrap(), "--data"])
+        .args([
+            data.join("frames").to_str().unwrap(),
+            "--out",
+            "-",
+            "--limit",
+            "5",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 5);
+    for v in &lines {
+        let file = v["file"].as_str().unwrap();
+        for (name, x) in want_header[1..].iter().zip(&got[file]) {
+            let y = v[name.as_str()].as_f64().unwrap();
+            assert!(
+                (x - y).abs() <= 1e-4,
+                "streamed {file} {name}: {y} against {x}"
+            );
+        }
+    }
     // The same frames as a ROS 2 bag of mono8 Images, 30 Hz.
     let t0: i64 = 1_700_000_000_000_000_000;
     let bag = tmp.path().join("tactip.mcap");
