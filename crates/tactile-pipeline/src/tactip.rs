@@ -147,6 +147,48 @@ impl Predictor {
         Ok(r)
     }
 
+    /// Every frame of `input` as a stream of records ([`Perception::record`]),
+    /// each handed to `on_record` as soon as it is estimated: a source's
+    /// one frame at a time (a live frame with its latency), a dataset's
+    /// once all its frames are. `on_record` says whether to go on.
+    pub fn stream_input(
+        &mut self,
+        input: &mut PredictInput,
+        data: &Path,
+        on_record: &mut dyn FnMut(serde_json::Value) -> Result<Flow>,
+    ) -> Result<Streamed> {
+        match input {
+            PredictInput::Dataset(_) => {
+                let r = self.perceive_input(input, data)?;
+                for i in 0..r.files.len() {
+                    if on_record(r.record(i, None))? == Flow::Stop {
+                        break;
+                    }
+                }
+                Ok(Streamed {
+                    frames: r.files.len(),
+                    dropped: None,
+                })
+            }
+            PredictInput::Source(source) => {
+                let frames = self.perceive_source_with(source, 1, &mut |batch, arrived| {
+                    for i in 0..batch.files.len() {
+                        let arrived = arrived.get(i).copied().flatten();
+                        if on_record(batch.record(i, arrived))? == Flow::Stop {
+                            return Ok(Flow::Stop);
+                        }
+                    }
+                    Ok(Flow::Continue)
+                })?;
+                let live = source.kind().is_live();
+                Ok(Streamed {
+                    frames,
+                    dropped: live.then(|| source.dropped()),
+                })
+            }
+        }
+    }
+
     /// Every frame of a recorded source (a folder of frames, an image, a
     /// video, a ROS 2 bag's image topic) or a live one that ends (a
     /// camera with a frame limit), in batches as they arrive; a bag's
@@ -155,7 +197,7 @@ impl Predictor {
         let t0 = std::time::Instant::now();
         let mut all = Perception {
             files: Vec::new(),
-            stamps_ns: Some(Vec::new()),
+            stamps_ns: None,
             estimates: Estimates::default(),
             ms_encode: 0.0,
             ms_estimate: 0.0,
@@ -320,18 +362,17 @@ impl PredictInput {
             Self::Source(_) => Vec::new(),
         };
         tactile_core::dataset::check_output_file(out, &datasets)?;
-        let (o, d) = (std::fs::canonicalize(out), std::fs::canonicalize(data));
-        if let (Ok(o), Ok(d)) = (o, d)
-            && o == d
-        {
-            return Err(tactile_core::Error::Invalid(format!(
-                "{}: this output is the input; give another file, so nothing was done",
-                out.display()
-            ))
-            .into());
-        }
-        Ok(())
+        Ok(tactile_core::dataset::refuse_input_as_output(out, data)?)
     }
+}
+
+/// What [`Predictor::stream_input`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Streamed {
+    /// Frames estimated.
+    pub frames: usize,
+    /// A live source's frames dropped because the models fell behind.
+    pub dropped: Option<u64>,
 }
 
 /// What [`Predictor::perceive_source_with`] hands each batch to: the

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 use tactile_burn::{DeviceKind, Runtime};
-use tactile_pipeline::run::{Flow, JsonLines};
+use tactile_pipeline::run::JsonLines;
 use tactile_pipeline::tactip::{PredictInput, Predictor};
 
 #[derive(Args)]
@@ -118,39 +118,15 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
 fn stream(p: &mut Predictor, input: &mut PredictInput, a: &PerceiveArgs) -> Result<()> {
     let mut out = JsonLines::create(Path::new("-"))?;
     let t0 = std::time::Instant::now();
-    let frames = match input {
-        PredictInput::Dataset(_) => {
-            let r = p.perceive_input(input, &a.data)?;
-            for i in 0..r.files.len() {
-                if out.write(&r.record(i, None))? == Flow::Stop {
-                    break;
-                }
-            }
-            r.files.len()
-        }
-        PredictInput::Source(source) => {
-            let n = p.perceive_source_with(source, 1, &mut |batch, arrived| {
-                for i in 0..batch.files.len() {
-                    let arrived = arrived.get(i).copied().flatten();
-                    if out.write(&batch.record(i, arrived))? == Flow::Stop {
-                        return Ok(Flow::Stop);
-                    }
-                }
-                Ok(Flow::Continue)
-            })?;
-            if source.kind().is_live() {
-                tactile_core::note!(
-                    "{} live frames dropped (the models fell behind)",
-                    source.dropped()
-                );
-            }
-            n
-        }
-    };
+    let s = p.stream_input(input, &a.data, &mut |rec| out.write(&rec))?;
     out.finish()?;
+    if let Some(dropped) = s.dropped {
+        tactile_core::note!("{dropped} live frames dropped (the models fell behind)");
+    }
     tactile_core::note!(
-        "{frames} frames: {:.3} ms/frame (decoding, preprocessing and every network included)",
-        1e3 * t0.elapsed().as_secs_f64() / frames.max(1) as f64
+        "{} frames: {:.3} ms/frame (decoding, preprocessing and every network included)",
+        s.frames,
+        1e3 * t0.elapsed().as_secs_f64() / s.frames.max(1) as f64
     );
     Ok(())
 }

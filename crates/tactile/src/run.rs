@@ -145,10 +145,8 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     let inputs: Vec<_> = input.iter().collect();
     if let (Some(out), false) = (&a.out, to_stdout) {
         tactile_core::dataset::check_output_file(out, &inputs)?;
-        if let (Some(data), Ok(o)) = (&a.data, std::fs::canonicalize(out))
-            && std::fs::canonicalize(data).is_ok_and(|d| d == o)
-        {
-            bail!("{}: --out is the input; give another file", out.display());
+        if let Some(data) = &a.data {
+            tactile_core::dataset::refuse_input_as_output(out, data)?;
         }
     }
     if let Some(dir) = &a.render {

@@ -584,6 +584,20 @@ pub fn check_output_file(out: &Path, datasets: &[&Dataset]) -> Result<()> {
     crate::io::ensure_writable_parent(out)
 }
 
+/// Before any work: the output file `out` is not the input file itself
+/// (`--data rec.mcap --out rec.mcap`), which writing it would replace.
+pub fn refuse_input_as_output(out: &Path, input: &Path) -> Result<()> {
+    if let (Ok(o), Ok(i)) = (out.canonicalize(), input.canonicalize())
+        && o == i
+    {
+        return Err(Error::Invalid(format!(
+            "{}: this output is the input; give another file, so nothing was done",
+            out.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Before any work: the output folder `out` can be written and is not
 /// part of the input `datasets`.
 pub fn check_output_dir(out: &Path, datasets: &[&Dataset]) -> Result<()> {
