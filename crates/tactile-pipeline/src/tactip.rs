@@ -94,6 +94,10 @@ impl Predictor {
 
     /// Every frame of `ds`: one column per target (per estimator output).
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
+        let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
+        if let Some(why) = self.frame_mismatch(w, h) {
+            tactile_core::note!("warning: {}: {why}", ds.root.display());
+        }
         match self {
             Self::Encoder(p) => p.perceive(ds),
             Self::PoseNetwork(p) => {
@@ -138,11 +142,7 @@ impl Predictor {
             PredictInput::Source(source) => self.perceive_source(source)?,
         };
         if r.files.is_empty() {
-            return Err(tactile_core::Error::Invalid(format!(
-                "{}: no frames to estimate",
-                data.display()
-            ))
-            .into());
+            return Err(no_frames(data));
         }
         Ok(r)
     }
@@ -180,6 +180,9 @@ impl Predictor {
                     }
                     Ok(Flow::Continue)
                 })?;
+                if frames == 0 {
+                    return Err(no_frames(data));
+                }
                 let live = source.kind().is_live();
                 Ok(Streamed {
                     frames,
@@ -236,10 +239,19 @@ impl Predictor {
         let known = source.list().map_or(0, |l| l.frames.len() as u64);
         let pb = tactile_core::progress::progress_bar_if(known, "predict", batch > 1);
         let mut done = 0;
+        // Each frame size is checked once (a folder may mix sizes).
+        let mut sizes: Vec<(usize, usize)> = Vec::new();
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
                 pb.inc(1);
+                let size = (f.image.width(), f.image.height());
+                if !sizes.contains(&size) && sizes.len() < MAX_SIZE_WARNINGS {
+                    sizes.push(size);
+                    if let Some(why) = self.frame_mismatch(size.0, size.1) {
+                        pb.suspend(|| tactile_core::note!("warning: {}: {why}", f.name));
+                    }
+                }
                 let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
                 let (w, h) = (f.image.width(), f.image.height());
                 grey.push(tactile_core::image_io::grey_image(w, h, g)?);
@@ -273,6 +285,19 @@ impl Predictor {
         Ok(done)
     }
 
+    /// Why a `width` x `height` frame does not suit this model, if it does
+    /// not (see [`tactile_preprocess::PreprocessConfig::frame_mismatch`];
+    /// an ensemble's members are each asked).
+    pub fn frame_mismatch(&self, width: usize, height: usize) -> Option<String> {
+        match self {
+            Self::Encoder(p) => p.encoder.artifact.preprocess.frame_mismatch(width, height),
+            Self::PoseNetwork(p) => p
+                .scales()
+                .iter()
+                .find_map(|c| c.frame_mismatch(width, height)),
+        }
+    }
+
     /// Estimators run per frame (the pose network counts as one).
     pub fn estimators(&self) -> usize {
         match self {
@@ -280,6 +305,11 @@ impl Predictor {
             Self::PoseNetwork(_) => 1,
         }
     }
+}
+
+/// The error of an input that gave no frame at all.
+fn no_frames(data: &Path) -> crate::Error {
+    tactile_core::Error::Invalid(format!("{}: no frames to estimate", data.display())).into()
 }
 
 /// The frames `tactile predict` and Python's `tactile.predict` estimate.
@@ -382,6 +412,10 @@ pub type BatchSink<'a> = dyn FnMut(Perception, &[Option<Instant>]) -> Result<Flo
 
 /// Frames a source's estimates are made of at once.
 const SOURCE_BATCH: usize = 64;
+
+/// Distinct frame sizes a source is checked for: a stream of ever-new
+/// sizes is not worth a warning each.
+const MAX_SIZE_WARNINGS: usize = 8;
 
 /// A pose network's estimates as columns: each target, then with
 /// uncertainty each target's `<target>_std`.

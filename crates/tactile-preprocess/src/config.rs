@@ -212,6 +212,21 @@ impl PreprocessConfig {
         Ok(())
     }
 
+    /// Why a `width` x `height` frame does not suit this chain, if it does
+    /// not: one smaller than the crop is taken whole, so its pins reach the
+    /// pin image at another scale than the training frames' did (a frame
+    /// of another camera or resolution) and the estimates mean little.
+    pub fn frame_mismatch(&self, width: usize, height: usize) -> Option<String> {
+        (width.min(height) < self.crop_px).then(|| {
+            format!(
+                "the frame is {width}x{height}, smaller than the model's {c}x{c} crop: it was \
+                 trained on larger frames, so it reads these pins at another scale; give \
+                 frames of the sensor and resolution it was trained on",
+                c = self.crop_px
+            )
+        })
+    }
+
     /// Look a preset up by name (`paper`, `lighting-compensated`, `binary`),
     /// or read a whole configuration from a `.json` file.
     pub fn preset(name: &str) -> Result<Self> {
@@ -226,5 +241,24 @@ impl PreprocessConfig {
             }
             other => Err(Error::UnknownPreset(other.to_string())),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PreprocessConfig;
+
+    #[test]
+    fn a_frame_smaller_than_the_crop_is_named_as_another_scale() {
+        let c = PreprocessConfig {
+            crop_px: 440,
+            ..PreprocessConfig::paper()
+        };
+        assert_eq!(c.frame_mismatch(445, 440), None);
+        assert_eq!(c.frame_mismatch(1920, 1080), None);
+        let why = c
+            .frame_mismatch(640, 360)
+            .expect("360 px is below a 440 px crop");
+        assert!(why.contains("640x360") && why.contains("440x440"), "{why}");
     }
 }

@@ -1873,6 +1873,65 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
         );
     }
     assert_eq!(std::fs::read(&bag).unwrap(), before);
+    // A bag whose image topic holds no message: no frames, refused alike
+    // whether the estimates go to a file or stream out.
+    let empty = tmp.path().join("empty.mcap");
+    {
+        let mut w = mcap::Writer::new(std::io::BufWriter::new(
+            std::fs::File::create(&empty).unwrap(),
+        ))
+        .unwrap();
+        let schema = w
+            .add_schema("sensor_msgs/msg/Image", "ros2msg", b"")
+            .unwrap();
+        w.add_channel(schema, "/tactip/image_raw", "cdr", &Default::default())
+            .unwrap();
+        w.finish().unwrap();
+    }
+    for out in [tmp.path().join("none.csv").to_str().unwrap(), "-"] {
+        let (ok, msg) = tactile(&[
+            "predict",
+            "--model",
+            model.to_str().unwrap(),
+            "--data",
+            empty.to_str().unwrap(),
+            "--topic",
+            "/tactip/image_raw",
+            "--out",
+            out,
+        ]);
+        assert!(!ok && msg.contains("no frames to estimate"), "{out}: {msg}");
+    }
+    assert!(!tmp.path().join("none.csv").exists());
+    // A frame of another camera among them (a third of the size, smaller
+    // than the model's 440 px crop): still estimated, with a warning that
+    // names it.
+    let mixed = tmp.path().join("mixed");
+    std::fs::create_dir(&mixed).unwrap();
+    for (i, file) in want.keys().take(2).enumerate() {
+        let img = image::open(data.join("frames").join(file)).unwrap();
+        let img = if i == 1 { img.thumbnail(148, 147) } else { img };
+        img.save(mixed.join(format!("{i:04}.png"))).unwrap();
+    }
+    let out = tmp.path().join("mixed.csv");
+    let (ok, msg) = tactile(&[
+        "predict",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        mixed.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    assert_eq!(csv_rows(&out).len(), 3);
+    let warned: Vec<&str> = msg.lines().filter(|l| l.contains("warning")).collect();
+    assert_eq!(warned.len(), 1, "{msg}");
+    assert!(
+        warned[0].contains("0001.png")
+            && warned[0].contains("smaller than the model's 440x440 crop"),
+        "{msg}"
+    );
 }
 
 #[test]
