@@ -95,22 +95,24 @@ impl Predictor {
     /// Every frame of `ds`: one column per target (per estimator output).
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
         let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
-        if let Some(why) = self.frame_mismatch(w, h) {
-            tactile_core::note!("warning: {}: {why}", ds.root.display());
-        }
-        match self {
-            Self::Encoder(p) => p.perceive(ds),
+        let mismatch = self.frame_mismatch(w, h);
+        let mut r = match self {
+            Self::Encoder(p) => p.perceive(ds)?,
             Self::PoseNetwork(p) => {
                 let r = p.predict_dataset(ds)?;
-                Ok(Perception {
+                Perception {
                     files: r.files,
                     stamps_ns: None,
                     estimates: pose_estimates(&r.names, &r.values, r.std.as_deref()),
                     ms_encode: r.ms_per_frame,
                     ms_estimate: 0.0,
-                })
+                    warnings: Vec::new(),
+                }
             }
-        }
+        };
+        r.warnings
+            .extend(mismatch.map(|why| format!("{}: {why}", ds.root.display())));
+        Ok(r)
     }
 
     /// The same columns as [`Self::perceive`] for grey frames, each
@@ -150,16 +152,20 @@ impl Predictor {
     /// Every frame of `input` as a stream of records ([`Perception::record`]),
     /// each handed to `on_record` as soon as it is estimated: a source's
     /// one frame at a time (a live frame with its latency), a dataset's
-    /// once all its frames are. `on_record` says whether to go on.
+    /// once all its frames are. `on_record` says whether to go on;
+    /// `on_warning` gets each of [`Perception::warnings`] before the
+    /// records of the frames that raised it.
     pub fn stream_input(
         &mut self,
         input: &mut PredictInput,
         data: &Path,
         on_record: &mut dyn FnMut(serde_json::Value) -> Result<Flow>,
+        on_warning: &mut dyn FnMut(&str),
     ) -> Result<Streamed> {
         match input {
             PredictInput::Dataset(_) => {
                 let r = self.perceive_input(input, data)?;
+                r.warnings.iter().for_each(|w| on_warning(w));
                 for i in 0..r.files.len() {
                     if on_record(r.record(i, None))? == Flow::Stop {
                         break;
@@ -172,6 +178,7 @@ impl Predictor {
             }
             PredictInput::Source(source) => {
                 let frames = self.perceive_source_with(source, 1, &mut |batch, arrived| {
+                    batch.warnings.iter().for_each(|w| on_warning(w));
                     for i in 0..batch.files.len() {
                         let arrived = arrived.get(i).copied().flatten();
                         if on_record(batch.record(i, arrived))? == Flow::Stop {
@@ -204,6 +211,7 @@ impl Predictor {
             estimates: Estimates::default(),
             ms_encode: 0.0,
             ms_estimate: 0.0,
+            warnings: Vec::new(),
         };
         let mut stamps: Vec<Option<i64>> = Vec::new();
         self.perceive_source_with(source, SOURCE_BATCH, &mut |batch, _| {
@@ -213,6 +221,7 @@ impl Predictor {
             }
             all.files.extend(batch.files);
             all.estimates.append(batch.estimates)?;
+            all.warnings.extend(batch.warnings);
             Ok(Flow::Continue)
         })?;
         all.stamps_ns = stamps.into_iter().collect();
@@ -241,6 +250,7 @@ impl Predictor {
         let mut done = 0;
         // Each frame size is checked once (a folder may mix sizes).
         let mut sizes: Vec<(usize, usize)> = Vec::new();
+        let mut warnings = Vec::new();
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
@@ -249,7 +259,7 @@ impl Predictor {
                 if !sizes.contains(&size) && sizes.len() < MAX_SIZE_WARNINGS {
                     sizes.push(size);
                     if let Some(why) = self.frame_mismatch(size.0, size.1) {
-                        pb.suspend(|| tactile_core::note!("warning: {}: {why}", f.name));
+                        warnings.push(format!("{}: {why}", f.name));
                     }
                 }
                 let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
@@ -269,6 +279,7 @@ impl Predictor {
                     estimates,
                     ms_encode: 0.0,
                     ms_estimate: 0.0,
+                    warnings: std::mem::take(&mut warnings),
                 };
                 stamps.clear();
                 let flow = on_batch(p, &arrived)?;
@@ -516,6 +527,10 @@ pub struct Perception {
     pub ms_encode: f64,
     /// Time of all estimators per frame, ms.
     pub ms_estimate: f64,
+    /// What the user should know of the frames: each frame size the model
+    /// was not made for, named by its first frame
+    /// ([`Predictor::frame_mismatch`]).
+    pub warnings: Vec<String>,
 }
 
 impl TactipPerception {
@@ -557,6 +572,7 @@ impl TactipPerception {
             estimates,
             ms_encode,
             ms_estimate,
+            warnings: Vec::new(),
         })
     }
 

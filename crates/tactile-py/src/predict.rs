@@ -36,7 +36,7 @@ pub(crate) fn predict<'py>(
     runtime: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let rt = self::runtime(runtime)?;
-    let r = interruptible(py, || {
+    let (r, input_warnings) = interruptible(py, || {
         let mut input = PredictInput::open(&data, topic.as_deref(), limit, false).py()?;
         if let Some(out) = &out {
             input.check_output(&data, out).py()?;
@@ -46,8 +46,18 @@ pub(crate) fn predict<'py>(
         if let Some(out) = &out {
             tactile_ros::estimates::write_perception(out, &r).py()?;
         }
-        Ok(r)
+        Ok((r, input.warnings()))
     })?;
+    // What the command line notes on standard error, as Python warnings
+    // (a notebook shows those, not the process's stderr).
+    for w in input_warnings.iter().chain(&r.warnings) {
+        PyErr::warn(
+            py,
+            py.get_type::<pyo3::exceptions::PyUserWarning>().as_any(),
+            &std::ffi::CString::new(w.replace('\0', "")).unwrap_or_default(),
+            1,
+        )?;
+    }
     let d = PyDict::new(py);
     d.set_item("file", &r.files)?;
     if let Some(s) = r.stamps_ns {

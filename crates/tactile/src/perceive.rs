@@ -74,6 +74,9 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
         return stream(&mut p, &mut input, &a);
     }
     let r = p.perceive_input(&mut input, &a.data)?;
+    for w in &r.warnings {
+        tactile_core::note!("warning: {w}");
+    }
     let frames = r.files.len();
     say!("{}", r.header().join("\t"));
     for i in 0..frames.min(a.show) {
@@ -118,7 +121,9 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
 fn stream(p: &mut Predictor, input: &mut PredictInput, a: &PerceiveArgs) -> Result<()> {
     let mut out = JsonLines::create(Path::new("-"))?;
     let t0 = std::time::Instant::now();
-    let s = p.stream_input(input, &a.data, &mut |rec| out.write(&rec))?;
+    let s = p.stream_input(input, &a.data, &mut |rec| out.write(&rec), &mut |w| {
+        tactile_core::note!("warning: {w}")
+    })?;
     out.finish()?;
     if let Some(dropped) = s.dropped {
         tactile_core::note!("{dropped} live frames dropped (the models fell behind)");
