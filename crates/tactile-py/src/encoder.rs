@@ -95,6 +95,28 @@ pub(crate) fn pin_images(
         .py()
 }
 
+/// A `UserWarning` for each frame size among `px` that a preprocessing of
+/// `cfgs` was not made for (a frame smaller than its crop: another camera
+/// or resolution), naming its first frame; the estimates are still made.
+pub(crate) fn warn_frame_sizes(
+    py: Python<'_>,
+    px: &[Pixels<'_>],
+    cfgs: &[tactile_preprocess::PreprocessConfig],
+) -> PyResult<()> {
+    let mut seen: Vec<(usize, usize)> = Vec::new();
+    for (i, p) in px.iter().enumerate() {
+        let size = (p.width, p.height);
+        if seen.contains(&size) {
+            continue;
+        }
+        seen.push(size);
+        if let Some(why) = cfgs.iter().find_map(|c| c.frame_mismatch(size.0, size.1)) {
+            crate::errors::user_warning(py, &format!("frames[{i}]: {why}"))?;
+        }
+    }
+    Ok(())
+}
+
 /// One frame's pin image as numpy, `(S, S)` float32 in [0, 1]: what
 /// `preprocess()` returns on every model that reads pin images.
 pub(crate) fn pin_image_array<'py>(
@@ -104,6 +126,7 @@ pub(crate) fn pin_image_array<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
     let arg = FrameArg::new(frame, Layout::GreyOrRgb, "frame")?;
     let px = [arg.view()];
+    warn_frame_sizes(py, &px, std::slice::from_ref(cfg))?;
     let pin = py
         .detach(|| pin_images(&px, cfg))?
         .pop()
@@ -191,6 +214,7 @@ impl PyTactipEncoder {
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
+        warn_frame_sizes(py, &px, std::slice::from_ref(&self.preprocess))?;
         let k = self.feature_count;
         let feats = py.detach(|| -> PyResult<Vec<Vec<f32>>> {
             let pins = self.pins(&px)?;
@@ -218,6 +242,7 @@ impl PyTactipEncoder {
         }
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
+        warn_frame_sizes(py, &px, std::slice::from_ref(&self.preprocess))?;
         let est = py.detach(|| -> PyResult<tactile_estimate::Estimates> {
             let pins = self.pins(&px)?;
             let mut m = self.lock()?;

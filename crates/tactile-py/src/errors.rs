@@ -226,3 +226,15 @@ impl<T, E: LibraryError> PyResultExt<T> for Result<T, E> {
         self.map_err(to_py)
     }
 }
+
+/// `msg` as a Python `UserWarning`: what the command line notes on
+/// standard error (a notebook shows warnings, not the process's stderr).
+pub(crate) fn user_warning(py: pyo3::Python<'_>, msg: &str) -> pyo3::PyResult<()> {
+    let text = std::ffi::CString::new(msg.replace('\0', "")).unwrap_or_default();
+    PyErr::warn(
+        py,
+        py.get_type::<pyo3::exceptions::PyUserWarning>().as_any(),
+        &text,
+        1,
+    )
+}

@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 use rayon::prelude::*;
 use tactile_pose::PoseEstimator;
 
-use crate::encoder::{frame_args, pin_image_array};
+use crate::encoder::{frame_args, pin_image_array, warn_frame_sizes};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Pixels};
 
@@ -24,6 +24,8 @@ pub struct PyPoseEstimator {
     runtime: tactile_burn::Runtime,
     targets: Vec<String>,
     preprocess: tactile_preprocess::PreprocessConfig,
+    /// Every member's preprocessing (a multi-scale ensemble's differ).
+    scales: Vec<tactile_preprocess::PreprocessConfig>,
 }
 
 #[pymethods]
@@ -46,6 +48,7 @@ impl PyPoseEstimator {
                 .map(|t| t.name.clone())
                 .collect(),
             preprocess: estimator.artifact.preprocess.clone(),
+            scales: estimator.scales().to_vec(),
             estimator: Mutex::new(estimator),
             model_dir,
             runtime: rt,
@@ -74,6 +77,7 @@ impl PyPoseEstimator {
     ) -> PyResult<Bound<'py, PyDict>> {
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
+        warn_frame_sizes(py, &px, &self.scales)?;
         let (rows, std) = py.detach(|| -> PyResult<tactile_pose::inference::ValuesWithStd> {
             let mut e = self
                 .estimator

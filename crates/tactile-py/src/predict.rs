@@ -48,15 +48,8 @@ pub(crate) fn predict<'py>(
         }
         Ok((r, input.warnings()))
     })?;
-    // What the command line notes on standard error, as Python warnings
-    // (a notebook shows those, not the process's stderr).
     for w in input_warnings.iter().chain(&r.warnings) {
-        PyErr::warn(
-            py,
-            py.get_type::<pyo3::exceptions::PyUserWarning>().as_any(),
-            &std::ffi::CString::new(w.replace('\0', "")).unwrap_or_default(),
-            1,
-        )?;
+        crate::errors::user_warning(py, w)?;
     }
     let d = PyDict::new(py);
     d.set_item("file", &r.files)?;

@@ -7,6 +7,7 @@ import csv
 import json
 import os
 import shutil
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -143,6 +144,18 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
         cli = np.array([float(r[name]) for r in rows])
         assert np.allclose(values, cli, atol=6e-5), name
     assert all((got[t + "_std"] > 0).all() for t in pose.targets)
+    # Frames of another camera (smaller than the model's 440 px crop): still
+    # estimated, with one warning per size naming its first frame; frames of
+    # the rig's own size get none.
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        pose.estimate(frames[:2])
+    assert not [w for w in seen if "smaller than" in str(w.message)]
+    small = np.full((3, 120, 160), 128, dtype=np.uint8)
+    with pytest.warns(UserWarning, match=r"frames\[1\]: the frame is 160x120.*440x440 crop") as seen:
+        mixed = pose.estimate([frames[0], *small])
+    assert len(mixed["depth_mm"]) == 4
+    assert sum("smaller than" in str(w.message) for w in seen) == 1
 
     # Calibrated again from Python (`tactile train calibrate`): on these 20
     # frames ±1 deviation then holds ceil(0.683 * 20) = 14 of each target's
@@ -178,6 +191,8 @@ def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root):
     a, b = burn.encode(frames), ort.encode(frames)
     assert np.abs(a - b).max() <= 1e-4 * max(1.0, np.abs(a).max())
     ea, eb = burn.estimate(frames), ort.estimate(frames)
+    with pytest.warns(UserWarning, match=r"frames\[0\]: the frame is 160x120"):
+        burn.encode(np.zeros((1, 120, 160), dtype=np.uint8))
     for t in ["depth_mm", "roll_deg", "pitch_deg", "shear_x_mm", "shear_y_mm", "shear_theta_deg"]:
         assert np.allclose(ea[t], eb[t], atol=1e-3), t
 
