@@ -22,8 +22,8 @@ use tactile_estimate::{
     Activation, ClassifierHead, Estimates, Estimators, HeadConfig, Regressor, RegressorConfig,
     Target,
 };
-use tactile_preprocess::PinImage;
 pub use tactile_preprocess::perturb::RotationAugment;
+use tactile_preprocess::{FrameSizeCheck, PinImage, PreprocessConfig};
 
 use crate::Result;
 
@@ -95,7 +95,7 @@ impl Predictor {
     /// Every frame of `ds`: one column per target (per estimator output).
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
         let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
-        let mismatch = self.frame_mismatch(w, h);
+        let mismatch = FrameSizeCheck::default().check(w, h, self.preprocessings());
         let mut r = match self {
             Self::Encoder(p) => p.perceive(ds)?,
             Self::PoseNetwork(p) => {
@@ -248,22 +248,17 @@ impl Predictor {
         let known = source.list().map_or(0, |l| l.frames.len() as u64);
         let pb = tactile_core::progress::progress_bar_if(known, "predict", batch > 1);
         let mut done = 0;
-        // Each frame size is checked once (a folder may mix sizes).
-        let mut sizes: Vec<(usize, usize)> = Vec::new();
+        let mut sizes = FrameSizeCheck::default();
         let mut warnings = Vec::new();
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
                 pb.inc(1);
-                let size = (f.image.width(), f.image.height());
-                if !sizes.contains(&size) && sizes.len() < MAX_SIZE_WARNINGS {
-                    sizes.push(size);
-                    if let Some(why) = self.frame_mismatch(size.0, size.1) {
-                        warnings.push(format!("{}: {why}", f.name));
-                    }
+                let (w, h) = (f.image.width(), f.image.height());
+                if let Some(why) = sizes.check(w, h, self.preprocessings()) {
+                    warnings.push(format!("{}: {why}", f.name));
                 }
                 let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
-                let (w, h) = (f.image.width(), f.image.height());
                 grey.push(tactile_core::image_io::grey_image(w, h, g)?);
                 files.push(f.name.clone());
                 stamps.push(f.stamp_ns);
@@ -296,16 +291,12 @@ impl Predictor {
         Ok(done)
     }
 
-    /// Why a `width` x `height` frame does not suit this model, if it does
-    /// not (see [`tactile_preprocess::PreprocessConfig::frame_mismatch`];
-    /// an ensemble's members are each asked).
-    pub fn frame_mismatch(&self, width: usize, height: usize) -> Option<String> {
+    /// How the model reads a frame: an encoder's preprocessing, or each
+    /// of a pose ensemble's (its members may read different pin images).
+    pub fn preprocessings(&self) -> Vec<&PreprocessConfig> {
         match self {
-            Self::Encoder(p) => p.encoder.artifact.preprocess.frame_mismatch(width, height),
-            Self::PoseNetwork(p) => p
-                .scales()
-                .iter()
-                .find_map(|c| c.frame_mismatch(width, height)),
+            Self::Encoder(p) => vec![&p.encoder.artifact.preprocess],
+            Self::PoseNetwork(p) => p.scales().iter().collect(),
         }
     }
 
@@ -424,10 +415,6 @@ pub type BatchSink<'a> = dyn FnMut(Perception, &[Option<Instant>]) -> Result<Flo
 /// Frames a source's estimates are made of at once.
 const SOURCE_BATCH: usize = 64;
 
-/// Distinct frame sizes a source is checked for: a stream of ever-new
-/// sizes is not worth a warning each.
-const MAX_SIZE_WARNINGS: usize = 8;
-
 /// A pose network's estimates as columns: each target, then with
 /// uncertainty each target's `<target>_std`.
 fn pose_estimates(names: &[String], values: &[Vec<f64>], std: Option<&[Vec<f64>]>) -> Estimates {
@@ -529,7 +516,7 @@ pub struct Perception {
     pub ms_estimate: f64,
     /// What the user should know of the frames: each frame size the model
     /// was not made for, named by its first frame
-    /// ([`Predictor::frame_mismatch`]).
+    /// ([`FrameSizeCheck`]).
     pub warnings: Vec<String>,
 }
 

@@ -244,6 +244,38 @@ impl PreprocessConfig {
     }
 }
 
+/// Frame sizes already checked against a model's preprocessings
+/// ([`PreprocessConfig::frame_mismatch`]): each size is judged once (a
+/// folder may mix sizes), and at most [`Self::MAX_SIZES`] of them, so a
+/// stream of ever-new sizes does not warn of each.
+#[derive(Debug, Default)]
+pub struct FrameSizeCheck {
+    seen: Vec<(usize, usize)>,
+}
+
+impl FrameSizeCheck {
+    /// Distinct sizes judged.
+    pub const MAX_SIZES: usize = 8;
+
+    /// Why a frame of a size not seen before does not suit one of `cfgs`
+    /// (a model's preprocessings: an ensemble's members may differ), if
+    /// it does not; `None` for a size already judged.
+    pub fn check<'a>(
+        &mut self,
+        width: usize,
+        height: usize,
+        cfgs: impl IntoIterator<Item = &'a PreprocessConfig>,
+    ) -> Option<String> {
+        let size = (width, height);
+        if self.seen.contains(&size) || self.seen.len() >= Self::MAX_SIZES {
+            return None;
+        }
+        self.seen.push(size);
+        cfgs.into_iter()
+            .find_map(|c| c.frame_mismatch(width, height))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::PreprocessConfig;
@@ -260,5 +292,18 @@ mod tests {
             .frame_mismatch(640, 360)
             .expect("360 px is below a 440 px crop");
         assert!(why.contains("640x360") && why.contains("440x440"), "{why}");
+    }
+
+    #[test]
+    fn each_frame_size_is_judged_once() {
+        let c = PreprocessConfig {
+            crop_px: 440,
+            ..PreprocessConfig::paper()
+        };
+        let mut check = super::FrameSizeCheck::default();
+        assert!(check.check(640, 360, [&c]).is_some());
+        assert_eq!(check.check(640, 360, [&c]), None, "already judged");
+        assert_eq!(check.check(445, 440, [&c]), None, "fits the crop");
+        assert!(check.check(320, 240, [&c]).is_some(), "another size");
     }
 }

@@ -28,7 +28,7 @@ pub mod visuo;
 
 pub(crate) use chain::lit_and_masked;
 pub use chain::{MAX_WINDOW_PX, PinImage, binarise, preprocess};
-pub use config::{Downsample, Lighting, PreprocessConfig};
+pub use config::{Downsample, FrameSizeCheck, Lighting, PreprocessConfig};
 pub use error::{Error, Result};
 pub use resize::{
     enlarge_f32, resize_area, resize_area_f32, resize_area_interleaved, resize_linear,

@@ -103,14 +103,9 @@ pub(crate) fn warn_frame_sizes(
     px: &[Pixels<'_>],
     cfgs: &[tactile_preprocess::PreprocessConfig],
 ) -> PyResult<()> {
-    let mut seen: Vec<(usize, usize)> = Vec::new();
+    let mut sizes = tactile_preprocess::FrameSizeCheck::default();
     for (i, p) in px.iter().enumerate() {
-        let size = (p.width, p.height);
-        if seen.contains(&size) {
-            continue;
-        }
-        seen.push(size);
-        if let Some(why) = cfgs.iter().find_map(|c| c.frame_mismatch(size.0, size.1)) {
+        if let Some(why) = sizes.check(p.width, p.height, cfgs) {
             crate::errors::user_warning(py, &format!("frames[{i}]: {why}"))?;
         }
     }
