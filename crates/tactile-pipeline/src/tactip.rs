@@ -94,8 +94,7 @@ impl Predictor {
 
     /// Every frame of `ds`: one column per target (per estimator output).
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
-        let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
-        let mismatch = FrameSizeCheck::default().check(w, h, self.preprocessings());
+        let mismatch = dataset_frame_warning(ds, self.preprocessings());
         let mut r = match self {
             Self::Encoder(p) => p.perceive(ds)?,
             Self::PoseNetwork(p) => {
@@ -110,8 +109,7 @@ impl Predictor {
                 }
             }
         };
-        r.warnings
-            .extend(mismatch.map(|why| format!("{}: {why}", ds.root.display())));
+        r.warnings.extend(mismatch);
         Ok(r)
     }
 
@@ -307,6 +305,18 @@ impl Predictor {
             Self::PoseNetwork(_) => 1,
         }
     }
+}
+
+/// A warning naming `ds` when its frames (the manifest's size) do not suit
+/// one of a model's preprocessings `cfgs` ([`FrameSizeCheck`]).
+pub fn dataset_frame_warning<'a>(
+    ds: &Dataset,
+    cfgs: impl IntoIterator<Item = &'a PreprocessConfig>,
+) -> Option<String> {
+    let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
+    FrameSizeCheck::default()
+        .check(w, h, cfgs)
+        .map(|why| format!("{}: {why}", ds.root.display()))
 }
 
 /// The error of an input that gave no frame at all.

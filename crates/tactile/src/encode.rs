@@ -29,6 +29,11 @@ pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
     tactile_core::dataset::check_output_file(&a.out, &[&ds])?;
     let mut enc = TactipEncoder::load(&a.model, a.device.runtime(), 0)?;
+    if let Some(w) =
+        tactile_pipeline::tactip::dataset_frame_warning(&ds, [&enc.artifact.preprocess])
+    {
+        tactile_core::note!("warning: {w}");
+    }
     let (pins, feats) = enc.encode_dataset(&ds)?;
     write_features_csv(&a.out, &pins.files, &feats)?;
     say!(

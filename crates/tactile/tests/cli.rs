@@ -112,6 +112,26 @@ fn model(dir: &Path, data: &Path) {
 }
 
 #[test]
+fn encode_warns_of_frames_smaller_than_the_encoders_crop() {
+    // The surface encoder reads the central 440 px of 445x440 frames; the
+    // virtual TacTip's 300x300 frames reach it at another scale: encoded,
+    // with a warning naming the dataset.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("features.csv");
+    let data = root.join("samples/virtual-tactip");
+    let (ok, msg) = encode(&root.join("models/cae-surface"), &data, &out);
+    assert!(ok && out.exists(), "{msg}");
+    assert!(
+        msg.contains("warning") && msg.contains("300x300, smaller than the model's 440x440 crop"),
+        "{msg}"
+    );
+    // The encoder made for them says nothing.
+    let (ok, msg) = encode(&root.join("models/cae-synth"), &data, &out);
+    assert!(ok && !msg.contains("warning"), "{msg}");
+}
+
+#[test]
 fn encode_names_corrupt_wrong_size_and_deep_frames_and_writes_nothing() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("ds");
