@@ -254,7 +254,7 @@ impl Predictor {
                 pb.inc(1);
                 let (w, h) = (f.image.width(), f.image.height());
                 if let Some(why) = sizes.check(w, h, self.preprocessings()) {
-                    warnings.push(format!("{}: {why}", f.name));
+                    warnings.push(format!("warning: {}: {why}", f.name));
                 }
                 let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
                 grey.push(tactile_core::image_io::grey_image(w, h, g)?);
@@ -316,7 +316,7 @@ pub fn dataset_frame_warning<'a>(
     let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
     FrameSizeCheck::default()
         .check(w, h, cfgs)
-        .map(|why| format!("{}: {why}", ds.root.display()))
+        .map(|why| format!("warning: {}: {why}", ds.root.display()))
 }
 
 /// The error of an input that gave no frame at all.
@@ -525,8 +525,9 @@ pub struct Perception {
     /// Time of all estimators per frame, ms.
     pub ms_estimate: f64,
     /// What the user should know of the frames: each frame size the model
-    /// was not made for, named by its first frame
-    /// ([`FrameSizeCheck`]).
+    /// was not made for, named by its first frame ([`FrameSizeCheck`]);
+    /// each begins `warning: `, as a frame folder's own do
+    /// ([`tactile_core::source::FrameList::warnings`]).
     pub warnings: Vec<String>,
 }
 

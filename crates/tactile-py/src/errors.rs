@@ -228,8 +228,10 @@ impl<T, E: LibraryError> PyResultExt<T> for Result<T, E> {
 }
 
 /// `msg` as a Python `UserWarning`: what the command line notes on
-/// standard error (a notebook shows warnings, not the process's stderr).
+/// standard error (a notebook shows warnings, not the process's stderr),
+/// without the note's leading `warning: `, which the category says.
 pub(crate) fn user_warning(py: pyo3::Python<'_>, msg: &str) -> pyo3::PyResult<()> {
+    let msg = msg.strip_prefix("warning: ").unwrap_or(msg);
     let text = std::ffi::CString::new(msg.replace('\0', "")).unwrap_or_default();
     PyErr::warn(
         py,

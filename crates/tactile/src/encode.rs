@@ -32,7 +32,7 @@ pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     if let Some(w) =
         tactile_pipeline::tactip::dataset_frame_warning(&ds, [&enc.artifact.preprocess])
     {
-        tactile_core::note!("warning: {w}");
+        tactile_core::note!("{w}");
     }
     let (pins, feats) = enc.encode_dataset(&ds)?;
     write_features_csv(&a.out, &pins.files, &feats)?;

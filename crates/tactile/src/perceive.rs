@@ -75,7 +75,7 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
     }
     let r = p.perceive_input(&mut input, &a.data)?;
     for w in &r.warnings {
-        tactile_core::note!("warning: {w}");
+        tactile_core::note!("{w}");
     }
     let frames = r.files.len();
     say!("{}", r.header().join("\t"));
@@ -122,7 +122,7 @@ fn stream(p: &mut Predictor, input: &mut PredictInput, a: &PerceiveArgs) -> Resu
     let mut out = JsonLines::create(Path::new("-"))?;
     let t0 = std::time::Instant::now();
     let s = p.stream_input(input, &a.data, &mut |rec| out.write(&rec), &mut |w| {
-        tactile_core::note!("warning: {w}")
+        tactile_core::note!("{w}")
     })?;
     out.finish()?;
     if let Some(dropped) = s.dropped {
