@@ -9,7 +9,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use tactile_core::bag::messages::{Header, Image, Time, to_cdr};
+use tactile_core::bag::messages::{Header, Image, to_cdr};
+
+mod common;
 
 const SAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../samples/palpation");
 const MODELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models");
@@ -41,44 +43,12 @@ fn frames() -> Vec<(u32, u32, Vec<u8>)> {
 /// A bag with the sample frames as rgb8 Images on `/cam/image_raw` at
 /// 20 Hz, and `extra` messages `(topic, schema name, bytes)` after them.
 fn write_bag(path: &Path, extra: &[(&str, &str, Vec<u8>)]) {
-    let mut w = mcap::Writer::new(std::io::BufWriter::new(
-        std::fs::File::create(path).unwrap(),
-    ))
-    .unwrap();
-    let schema = w
-        .add_schema(
-            "sensor_msgs/msg/Image",
-            "ros2msg",
-            b"(not needed by this reader)",
-        )
-        .unwrap();
-    let cam = w
-        .add_channel(schema, "/cam/image_raw", "cdr", &BTreeMap::new())
-        .unwrap();
+    let mut bag = common::ImageBag::create(path, "/cam/image_raw", "cam");
     for (i, (width, height, px)) in frames().iter().enumerate() {
-        let t = T0 + i as i64 * 50_000_000;
-        let msg = Image {
-            header: Header {
-                stamp: Time::from_nanos(t),
-                frame_id: "cam".into(),
-            },
-            height: *height,
-            width: *width,
-            encoding: "rgb8".into(),
-            is_bigendian: 0,
-            step: width * 3,
-            data: px,
-        };
-        let header = mcap::records::MessageHeader {
-            channel_id: cam,
-            sequence: i as u32,
-            log_time: t as u64,
-            publish_time: t as u64,
-        };
-        w.write_to_known_channel(&header, &to_cdr(&msg).unwrap())
-            .unwrap();
+        bag.write(T0 + i as i64 * 50_000_000, (*width, *height, 3), "rgb8", px);
     }
     for (topic, schema_name, bytes) in extra {
+        let w = &mut bag.writer;
         let s = w.add_schema(schema_name, "ros2msg", b"").unwrap();
         let c = w.add_channel(s, topic, "cdr", &BTreeMap::new()).unwrap();
         let header = mcap::records::MessageHeader {
@@ -89,7 +59,7 @@ fn write_bag(path: &Path, extra: &[(&str, &str, Vec<u8>)]) {
         };
         w.write_to_known_channel(&header, bytes).unwrap();
     }
-    w.finish().unwrap();
+    bag.finish();
 }
 
 fn decisions(jsonl: &Path) -> Vec<(bool, String)> {

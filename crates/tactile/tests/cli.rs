@@ -5,6 +5,8 @@
 use std::path::Path;
 use std::process::Command;
 
+mod common;
+
 fn tactile(args: &[&str]) -> (bool, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_tactile"))
         .args(args)
@@ -1801,47 +1803,16 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
     let t0: i64 = 1_700_000_000_000_000_000;
     let bag = tmp.path().join("tactip.mcap");
     let mut names = Vec::new();
-    {
-        use tactile_core::bag::messages::{Header, Image, Time, to_cdr};
-        let mut w = mcap::Writer::new(std::io::BufWriter::new(
-            std::fs::File::create(&bag).unwrap(),
-        ))
-        .unwrap();
-        let schema = w
-            .add_schema("sensor_msgs/msg/Image", "ros2msg", b"")
-            .unwrap();
-        let ch = w
-            .add_channel(schema, "/tactip/image_raw", "cdr", &Default::default())
-            .unwrap();
-        for (i, file) in want.keys().enumerate() {
-            let img = image::open(data.join("frames").join(file))
-                .unwrap()
-                .to_luma8();
-            let t = t0 + i as i64 * 33_333_333;
-            let msg = Image {
-                header: Header {
-                    stamp: Time::from_nanos(t),
-                    frame_id: "tactip".into(),
-                },
-                height: img.height(),
-                width: img.width(),
-                encoding: "mono8".into(),
-                is_bigendian: 0,
-                step: img.width(),
-                data: img.as_raw(),
-            };
-            let header = mcap::records::MessageHeader {
-                channel_id: ch,
-                sequence: i as u32,
-                log_time: t as u64,
-                publish_time: t as u64,
-            };
-            w.write_to_known_channel(&header, &to_cdr(&msg).unwrap())
-                .unwrap();
-            names.push((format!("{i:06}"), file.clone(), t));
-        }
-        w.finish().unwrap();
+    let mut w = common::ImageBag::create(&bag, "/tactip/image_raw", "tactip");
+    for (i, file) in want.keys().enumerate() {
+        let img = image::open(data.join("frames").join(file))
+            .unwrap()
+            .to_luma8();
+        let t = t0 + i as i64 * 33_333_333;
+        w.write(t, (img.width(), img.height(), 1), "mono8", img.as_raw());
+        names.push((format!("{i:06}"), file.clone(), t));
     }
+    w.finish();
     let out = tmp.path().join("bag.csv");
     predict(&model, &bag, &out, &["--topic", "/tactip/image_raw"]);
     let rows = csv_rows(&out);
@@ -1896,18 +1867,7 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
     // A bag whose image topic holds no message: no frames, refused alike
     // whether the estimates go to a file or stream out.
     let empty = tmp.path().join("empty.mcap");
-    {
-        let mut w = mcap::Writer::new(std::io::BufWriter::new(
-            std::fs::File::create(&empty).unwrap(),
-        ))
-        .unwrap();
-        let schema = w
-            .add_schema("sensor_msgs/msg/Image", "ros2msg", b"")
-            .unwrap();
-        w.add_channel(schema, "/tactip/image_raw", "cdr", &Default::default())
-            .unwrap();
-        w.finish().unwrap();
-    }
+    common::ImageBag::create(&empty, "/tactip/image_raw", "tactip").finish();
     for out in [tmp.path().join("none.csv").to_str().unwrap(), "-"] {
         let (ok, msg) = tactile(&[
             "predict",

@@ -1,0 +1,77 @@
+//! Helpers shared by the command-line test files.
+#![allow(dead_code, clippy::unwrap_used)]
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+use tactile_core::bag::messages::{Header, Image, Time, to_cdr};
+
+/// A ROS 2 bag being written (MCAP, `cdr` messages) with one
+/// `sensor_msgs/msg/Image` topic, as a camera driver records it.
+pub struct ImageBag {
+    /// The writer, for messages of other topics.
+    pub writer: mcap::Writer<BufWriter<File>>,
+    channel: u16,
+    frame_id: String,
+    sequence: u32,
+}
+
+impl ImageBag {
+    /// A bag at `path` with Images on `topic`, their headers' `frame_id`
+    /// `frame_id`.
+    pub fn create(path: &Path, topic: &str, frame_id: &str) -> Self {
+        let mut writer = mcap::Writer::new(BufWriter::new(File::create(path).unwrap())).unwrap();
+        let schema = writer
+            .add_schema("sensor_msgs/msg/Image", "ros2msg", b"")
+            .unwrap();
+        let channel = writer
+            .add_channel(schema, topic, "cdr", &BTreeMap::new())
+            .unwrap();
+        Self {
+            writer,
+            channel,
+            frame_id: frame_id.into(),
+            sequence: 0,
+        }
+    }
+
+    /// One Image stamped (and logged) at `stamp_ns`: `data` holds
+    /// `height` rows of `width` pixels of `channels` bytes in `encoding`.
+    pub fn write(
+        &mut self,
+        stamp_ns: i64,
+        (width, height, channels): (u32, u32, u32),
+        encoding: &str,
+        data: &[u8],
+    ) {
+        let msg = Image {
+            header: Header {
+                stamp: Time::from_nanos(stamp_ns),
+                frame_id: self.frame_id.clone(),
+            },
+            height,
+            width,
+            encoding: encoding.into(),
+            is_bigendian: 0,
+            step: width * channels,
+            data,
+        };
+        let header = mcap::records::MessageHeader {
+            channel_id: self.channel,
+            sequence: self.sequence,
+            log_time: stamp_ns as u64,
+            publish_time: stamp_ns as u64,
+        };
+        self.sequence += 1;
+        self.writer
+            .write_to_known_channel(&header, &to_cdr(&msg).unwrap())
+            .unwrap();
+    }
+
+    /// Close the bag (its summary and footer written).
+    pub fn finish(mut self) {
+        self.writer.finish().unwrap();
+    }
+}
