@@ -132,6 +132,9 @@ surface_step surface_long "$OUT/surface-long.md" data/surface/ms-k-long data/sur
     models/pose-surface models/cae-surface-train models/cae-surface data/surface/cae56-k9-long data/surface/cae56-edge-surface
 # The 9 px network on finer pins at the tip's centre (the central 240 px).
 surface_step surface_crop "$OUT/surface-crop.md" data/surface/p64-k9-c240
+# The same network on polar pin images (angle down the rows), scored on
+# the polar set scripts/surface-polar.py writes from the same frames.
+SURFACE_DATA=data/surface/polar-set surface_step surface_polar "$OUT/surface-polar.md" data/surface/p64-k9-polar data/surface/p64-k9-polar-noshift
 # The same network on twice the long schedule's epochs, beside it.
 surface_step surface_xlong "$OUT/surface-xlong.md" data/surface/p64-k9-long data/surface/p64-k9-xlong
 # The 9 px network trained on the taps shallower than 2.34 mm alone, beside
@@ -278,6 +281,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
         echo
     fi
     surface_section "Finer pins at the centre" surface_crop "$OUT/surface-crop.md"
+    surface_section "Polar pin images" surface_polar "$OUT/surface-polar.md"
     surface_section "Twice the epochs" surface_xlong "$OUT/surface-xlong.md"
     surface_section "A network for the shallow taps alone" surface_shallow "$OUT/surface-shallow.md"
     echo "### One encoder for many tasks"

@@ -3,8 +3,8 @@
 # the candidates on the authors' `train` split (choices made on `val`), then
 # the shipped models/pose-surface (the recipe chosen, on all 8,000 frames)
 # and models/cae-surface (the validated CAE route), each step timed (data/surface/times.json).
-# `PAPER_A_ONLY='surface|surface_long|surface_crop|surface_xlong|surface_compare|shared' bash scripts/paper-a.sh`
-# then scores them into docs/paper-a.md. About 10 hours on 2 cores (the two long-schedule networks about 45 and 25 minutes, the 9 px network on twice their epochs 73, on the shallow taps alone 11, the long CAE 50, the shipped pair 100).
+# `PAPER_A_ONLY='surface|surface_long|surface_crop|surface_polar|surface_xlong|surface_compare|shared' bash scripts/paper-a.sh`
+# then scores them into docs/paper-a.md. About 10 hours on 2 cores (the two long-schedule networks about 45 and 25 minutes, the 9 px network on twice their epochs 73, on the shallow taps alone 11, the long CAE 50, the shipped pair 100, the two on polar pin images 46).
 # SURFACE_STEPS='p128 ship-pose' runs only the named steps.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -85,6 +85,21 @@ run p64-k9-c240 "$BIN" train pose --data "$DATA" --out data/surface/p64-k9-c240 
     --targets $T --crop-px 240 --mask-radius-px 215 --uncertainty --loss l1 --hidden 256 --val-fraction 0.1 \
     "${K9[@]}" "${SHORT[@]}"
 run p64-k9-c240-calibrate "$BIN" train calibrate --model data/surface/p64-k9-c240 --data "$DATA" --split val
+# Polar pin images: each frame resampled about the tip's centre (angle down
+# the rows, radius along the columns, scripts/surface-polar.py: needs
+# numpy, pillow and opencv-python-headless), so a twist of the gripped pins
+# is one shift down the rows; the same network, options and schedule on
+# the whole 880 px polar square, and without the shift (which here turns
+# the whole tip), scored apart (docs/paper-a.md, "Polar pin images").
+POLAR=data/surface/polar-set
+run polar-set bash -c "[ -d '$POLAR' ] || python3 scripts/surface-polar.py --data '$DATA' --out '$POLAR'"
+POLAR_POSE=(--targets $T --crop-px 880 --mask-radius-px 1000 --uncertainty --loss l1 --hidden 256 --val-fraction 0.1)
+run p64-k9-polar "$BIN" train pose --data "$POLAR" --out data/surface/p64-k9-polar "${POLAR_POSE[@]}" "${K9[@]}" "${SHORT[@]}"
+run p64-k9-polar-noshift "$BIN" train pose --data "$POLAR" --out data/surface/p64-k9-polar-noshift "${POLAR_POSE[@]}" \
+    --input-px 64 --widths 16,32,64,64 --kernels 9,7,5,3 "${SHORT[@]}"
+for m in p64-k9-polar p64-k9-polar-noshift; do
+    run "$m-calibrate" "$BIN" train calibrate --model "data/surface/$m" --data "$POLAR" --split val
+done
 # The same pair on a longer schedule: both networks were still improving
 # at epoch 25 (best epochs 22 and 24 of the shipped members), so 60 epochs
 # with the learning rate decaying 0.96 a epoch (ending near the 25-epoch
