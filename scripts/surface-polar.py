@@ -20,15 +20,12 @@ renamed at the end.
 """
 
 import argparse
-import csv
-import json
-import os
-import shutil
 import sys
 
 import cv2
 import numpy as np
-from PIL import Image
+
+from frame_set import check_new, write_set
 
 
 def main() -> int:
@@ -39,44 +36,25 @@ def main() -> int:
     ap.add_argument("--radius", type=float, default=215.0, help="the tip's radius, pixels")
     ap.add_argument("--side", type=int, default=880, help="side of the polar image, pixels (64-2048)")
     args = ap.parse_args()
+    check_new(args.out)
     if not 64 <= args.side <= 2048:
         print(f"error: --side {args.side} is not 64-2048", file=sys.stderr)
+        return 2
+    if not 1.0 <= args.radius <= 10000.0:
+        print(f"error: --radius {args.radius} is not 1-10000 pixels", file=sys.stderr)
         return 2
     try:
         cx, cy = (float(v) for v in args.centre.split(","))
     except ValueError:
         print(f"error: --centre {args.centre!r} is not x,y", file=sys.stderr)
         return 2
-    if os.path.exists(args.out):
-        print(f"error: {args.out} exists; give a new folder", file=sys.stderr)
-        return 2
-    with open(os.path.join(args.data, "labels.csv"), newline="") as f:
-        rows = list(csv.DictReader(f))
-    root = os.path.realpath(args.data)
-    stage = args.out.rstrip("/") + ".partial"
-    shutil.rmtree(stage, ignore_errors=True)
-    os.makedirs(os.path.join(stage, "frames"))
-    for i, r in enumerate(rows):
-        path = os.path.realpath(os.path.join(root, r["file"]))
-        if not path.startswith(root + os.sep):
-            raise SystemExit(f"error: labels.csv: {r['file']} lies outside {args.data}")
-        frame = np.asarray(Image.open(path).convert("L"))
-        polar = cv2.warpPolar(
-            frame, (args.side, args.side), (cx, cy), args.radius, cv2.INTER_LINEAR | cv2.WARP_FILL_OUTLIERS
-        )
-        out = os.path.join(stage, r["file"])
-        os.makedirs(os.path.dirname(out), exist_ok=True)
-        Image.fromarray(polar).save(out)
-        if i % 1000 == 0:
-            print(f"{i}/{len(rows)} frames", file=sys.stderr)
-    shutil.copy(os.path.join(args.data, "labels.csv"), os.path.join(stage, "labels.csv"))
-    with open(os.path.join(args.data, "manifest.json")) as f:
-        m = json.load(f)
-    m["width"] = m["height"] = args.side
-    with open(os.path.join(stage, "manifest.json"), "w") as f:
-        json.dump(m, f, indent=1)
-    os.rename(stage, args.out)
-    print(f"{len(rows)} polar frames ({args.side}x{args.side}) in {args.out}")
+
+    def polar(frame: np.ndarray) -> np.ndarray:
+        flags = cv2.INTER_LINEAR | cv2.WARP_FILL_OUTLIERS
+        return cv2.warpPolar(frame, (args.side, args.side), (cx, cy), args.radius, flags)
+
+    n = write_set(args.data, args.out, polar)
+    print(f"{n} polar frames ({args.side}x{args.side}) in {args.out}")
     return 0
 
 
