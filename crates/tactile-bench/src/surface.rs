@@ -73,8 +73,12 @@ fn scored_rows(ds: &Dataset) -> (Vec<usize>, Option<&'static str>) {
 /// the dataset its note names, or frames copied out of it): measured there
 /// it would be 68.3 % by construction, so its cross-fitted coverage
 /// (calibrated on one half of the split, measured on the other) stands
-/// instead. On any other frames the coverage is measured. `u` is the
-/// model's calibration note ([`CALIBRATION_NOTE`]).
+/// instead. On any other frames the coverage is measured. Where the
+/// dataset the note names cannot be opened (moved, or never recorded), the
+/// scored frames may be the calibration's: the cross-fitted coverage
+/// stands, as [`saw_scored`] takes such a model to have seen them, so a
+/// coverage of 68.3 % by construction is never shown as measured. `u` is
+/// the model's calibration note ([`CALIBRATION_NOTE`]).
 fn cross_fitted(
     u: Option<&serde_json::Value>,
     model_dir: &std::path::Path,
@@ -86,10 +90,15 @@ fn cross_fitted(
     if u.get("split").and_then(|s| s.as_str()) != Some(split) {
         return None;
     }
-    let calibrated_on = Dataset::open_recorded(u.get("data")?.as_str()?, model_dir)?;
-    let within = calibrated_on.split_indices(split)?;
-    if !calibrated_on.holds_frames(ds, rows, Some(&within)) {
-        return None;
+    let calibrated_on = u
+        .get("data")
+        .and_then(|d| d.as_str())
+        .and_then(|d| Dataset::open_recorded(d, model_dir));
+    if let Some(calibrated_on) = calibrated_on {
+        let within = calibrated_on.split_indices(split)?;
+        if !calibrated_on.holds_frames(ds, rows, Some(&within)) {
+            return None;
+        }
     }
     serde_json::from_value(u.get("coverage_cross_fitted")?.clone()).ok()
 }

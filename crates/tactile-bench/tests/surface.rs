@@ -15,6 +15,20 @@ use common::root;
 use tactile_bench::models::ModelBench;
 use tactile_bench::surface::bench_surface;
 
+/// `from` and everything under it copied into a new `to`.
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        let dest = to.join(p.file_name().unwrap());
+        if p.is_dir() {
+            copy_tree(&p, &dest);
+        } else {
+            std::fs::copy(&p, dest).unwrap();
+        }
+    }
+}
+
 /// Every `step`-th `val` row of the real set (its rows run by tap depth, so
 /// the subset spans every depth); the number of `val` rows.
 fn val_subset(dir: &Path, step: usize) -> usize {
@@ -324,6 +338,30 @@ fn frames_no_model_fitted_are_scored_as_unseen_and_unlabelled_ones_are_refused()
     );
     // The errors are the same frames' either way.
     assert_eq!(a[5..11], b[5..11]);
+    // Calibrated on a dataset that has since moved (its note names a
+    // folder that is not there): the scored frames may be the
+    // calibration's, so the cross-fitted coverage stands, not one that
+    // would be 68.3 % by construction.
+    let moved = tmp.path().join("cae-surface-moved");
+    copy_tree(&root().join("models/cae-surface-train"), &moved);
+    let note = moved.join("pose/ensemble.json");
+    let recorded = "\"../shared/real/tactip331-surface\"";
+    let text = std::fs::read_to_string(&note).unwrap();
+    assert!(text.contains(recorded), "{text}");
+    std::fs::write(
+        &note,
+        text.replace(recorded, "\"moved-away/tactip331-surface\""),
+    )
+    .unwrap();
+    let moved_bench = ModelBench {
+        models: vec![moved],
+        ..bench(&other)
+    };
+    let m = row(
+        &bench_surface(&moved_bench, None).unwrap().markdown,
+        "cae-surface-moved",
+    );
+    assert_eq!(m[12], a[12], "{m:?}");
     // Frames without the targets are refused by name, not scored as exact.
     let unlabelled = tmp.path().join("unlabelled");
     std::fs::create_dir_all(&unlabelled).unwrap();
