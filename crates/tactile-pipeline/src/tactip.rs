@@ -247,13 +247,15 @@ impl Predictor {
         let pb = tactile_core::progress::progress_bar_if(known, "predict", batch > 1);
         let mut done = 0;
         let mut sizes = FrameSizeCheck::default();
+        // Taken once: the model's preprocessings do not change in the loop.
+        let cfgs: Vec<PreprocessConfig> = self.preprocessings().into_iter().cloned().collect();
         let mut warnings = Vec::new();
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
                 pb.inc(1);
                 let (w, h) = (f.image.width(), f.image.height());
-                if let Some(why) = sizes.check(w, h, self.preprocessings()) {
+                if let Some(why) = sizes.check(w, h, &cfgs) {
                     warnings.push(format!("warning: {}: {why}", f.name));
                 }
                 let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
