@@ -235,24 +235,12 @@ def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, 
     with pytest.raises(ValueError, match="this output is the input"):
         tactile.predict(root / "models/pose-surface", folder / Path(names[0]).name,
                         folder / Path(names[0]).name)
-    # A frame of another camera (smaller than the model's 440 px crop) among
-    # them: still estimated, with one Python warning naming it.
-    (folder / "zz-small.png").write_bytes(_grey_png(160, 120))
+    # A frame of another camera (the virtual TacTip's 300x300, smaller than
+    # the model's 440 px crop) among them: still estimated, with one Python
+    # warning naming it.
+    shutil.copy(root / "samples" / "virtual-tactip" / "frames" / "000000.png", folder / "zz-small.png")
     with pytest.warns(UserWarning, match="zz-small.png.*smaller than the model's 440x440 crop") as seen:
         mixed = tactile.predict(root / "models/pose-surface", folder)
     assert len(mixed["file"]) == 9
     assert sum("smaller than" in str(w.message) for w in seen) == 1
 
-
-def _grey_png(width: int, height: int) -> bytes:
-    """A mid-grey 8-bit PNG (written by hand: the test needs no imaging package)."""
-    import struct
-    import zlib
-
-    def chunk(kind: bytes, data: bytes) -> bytes:
-        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
-
-    rows = b"".join(b"\x00" + bytes([128]) * width for _ in range(height))
-    header = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows))
-            + chunk(b"IEND", b""))
