@@ -114,18 +114,21 @@ impl Predictor {
     }
 
     /// The same columns as [`Self::perceive`] for grey frames, each
-    /// preprocessed as the model's training frames were.
-    pub fn perceive_frames(&mut self, frames: &[GreyImage]) -> Result<Estimates> {
+    /// preprocessed as the model's training frames were; a frame that
+    /// cannot be is named by its entry of `names`.
+    pub fn perceive_frames(&mut self, frames: &[GreyImage], names: &[String]) -> Result<Estimates> {
+        let pins = self
+            .preprocessings()
+            .into_iter()
+            .map(|cfg| {
+                tactile_preprocess::preprocess_each(frames, cfg).map_err(|e| e.name_frame(names))
+            })
+            .collect::<std::result::Result<Vec<Vec<PinImage>>, _>>()?;
         match self {
-            Self::Encoder(p) => {
-                let pins = frames
-                    .iter()
-                    .map(|f| p.encoder.preprocess(f))
-                    .collect::<std::result::Result<Vec<_>, _>>()?;
-                p.estimate(&pins)
-            }
+            Self::Encoder(p) => p.estimate(pins.first().map_or(&[], Vec::as_slice)),
             Self::PoseNetwork(p) => {
-                let (values, std) = p.predict_frames_with_std(frames)?;
+                let views: Vec<&[PinImage]> = pins.iter().map(Vec::as_slice).collect();
+                let (values, std) = p.predict_scales_with_std(&views)?;
                 let names: Vec<String> =
                     p.artifact.targets.iter().map(|t| t.name.clone()).collect();
                 Ok(pose_estimates(&names, &values, std.as_deref()))
@@ -265,7 +268,7 @@ impl Predictor {
                 arrived.push(f.arrived);
             }
             if grey.len() == batch || (frame.is_none() && !grey.is_empty()) {
-                let estimates = self.perceive_frames(&grey)?;
+                let estimates = self.perceive_frames(&grey, &files)?;
                 done += grey.len();
                 grey.clear();
                 let p = Perception {

@@ -4,7 +4,6 @@
 
 use std::path::Path;
 
-use rayon::prelude::*;
 use tactile_burn::{Network, Runtime};
 use tactile_core::dataset::Dataset;
 use tactile_core::image_io::GreyImage;
@@ -283,12 +282,7 @@ impl PoseEstimator {
     pub fn preprocess(&self, frames: &[GreyImage]) -> Result<Vec<Vec<PinImage>>> {
         self.scales
             .iter()
-            .map(|cfg| {
-                frames
-                    .par_iter()
-                    .map(|f| Ok(tactile_preprocess::preprocess(f, cfg)?))
-                    .collect()
-            })
+            .map(|cfg| Ok(tactile_preprocess::preprocess_each(frames, cfg)?))
             .collect()
     }
 }

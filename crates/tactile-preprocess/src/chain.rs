@@ -71,6 +71,23 @@ pub(crate) fn lit_and_masked(frame: &GreyImage, cfg: &PreprocessConfig) -> Resul
     Ok(img)
 }
 
+/// [`preprocess`] on every frame of a batch, in parallel; a frame that
+/// fails is named by its place in the batch (`frames[i]`), since frames
+/// given in memory have no file to name.
+pub fn preprocess_each(frames: &[GreyImage], cfg: &PreprocessConfig) -> Result<Vec<PinImage>> {
+    use rayon::prelude::*;
+    frames
+        .par_iter()
+        .enumerate()
+        .map(|(index, f)| {
+            preprocess(f, cfg).map_err(|e| Error::Frame {
+                index,
+                error: Box::new(e),
+            })
+        })
+        .collect()
+}
+
 /// Run the full configured chain on one frame.
 pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage> {
     cfg.check()?;

@@ -47,14 +47,23 @@ pub enum Error {
     /// An image operation of kornia failed.
     #[error("image operation failed: {0}")]
     Kornia(String),
+    /// Any of the above, in the frame at `index` of a batch given in memory.
+    #[error("frames[{index}]: {error}")]
+    Frame {
+        /// The frame's place in the batch.
+        index: usize,
+        /// What went wrong with it (in the message, not a `source`, so a
+        /// chain printed whole does not say it twice).
+        error: Box<Error>,
+    },
     /// Any of the above, in a named file.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {error}", path.display())]
     File {
         /// The frame.
         path: PathBuf,
-        /// What went wrong with it.
-        #[source]
-        source: Box<Error>,
+        /// What went wrong with it (in the message, not a `source`, so a
+        /// chain printed whole does not say it twice).
+        error: Box<Error>,
     },
 }
 
@@ -70,8 +79,20 @@ impl Error {
             ) => Error::Core(e),
             other => Error::File {
                 path: path.into(),
-                source: Box::new(other),
+                error: Box::new(other),
             },
+        }
+    }
+
+    /// A batch's frame error named by its frame's entry of `names` (its
+    /// file or message) instead of its place in the batch.
+    pub fn name_frame(self, names: &[impl AsRef<str>]) -> Self {
+        match self {
+            Error::Frame { index, error } => match names.get(index) {
+                Some(name) => error.in_file(name.as_ref()),
+                None => Error::Frame { index, error },
+            },
+            other => other,
         }
     }
 
@@ -79,7 +100,7 @@ impl Error {
     pub fn core(&self) -> Option<&tactile_core::Error> {
         match self {
             Error::Core(e) => Some(e),
-            Error::File { source, .. } => source.core(),
+            Error::File { error, .. } | Error::Frame { error, .. } => error.core(),
             _ => None,
         }
     }

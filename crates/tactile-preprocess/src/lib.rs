@@ -27,7 +27,7 @@ mod resize;
 pub mod visuo;
 
 pub(crate) use chain::lit_and_masked;
-pub use chain::{MAX_WINDOW_PX, PinImage, binarise, preprocess};
+pub use chain::{MAX_WINDOW_PX, PinImage, binarise, preprocess, preprocess_each};
 pub use config::{Downsample, FrameSizeCheck, Lighting, PreprocessConfig};
 pub use error::{Error, Result};
 pub use resize::{

@@ -87,12 +87,13 @@ pub(crate) fn pin_images(
     px: &[Pixels<'_>],
     cfg: &tactile_preprocess::PreprocessConfig,
 ) -> PyResult<Vec<PinImage>> {
-    px.par_iter()
-        .map(|p| -> tactile_preprocess::Result<PinImage> {
-            tactile_preprocess::preprocess(&p.grey()?, cfg)
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .py()
+    let grey = px
+        .par_iter()
+        .map(Pixels::grey)
+        .collect::<tactile_core::Result<Vec<_>>>()
+        .py()?;
+    // A frame that fails is named `frames[i]`.
+    tactile_preprocess::preprocess_each(&grey, cfg).py()
 }
 
 /// A `UserWarning` for each frame size among `px` that a preprocessing of

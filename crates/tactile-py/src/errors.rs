@@ -52,7 +52,7 @@ fn preprocess_kind(e: &tactile_preprocess::Error) -> Kind {
     use tactile_preprocess::Error as E;
     match e {
         E::Core(c) => core_kind(c),
-        E::File { source, .. } => preprocess_kind(source),
+        E::File { error, .. } | E::Frame { error, .. } => preprocess_kind(error),
         E::Kornia(_) => Kind::Runtime,
         _ => Kind::Value,
     }

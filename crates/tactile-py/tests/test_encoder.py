@@ -156,6 +156,9 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
         mixed = pose.estimate([frames[0], *small])
     assert len(mixed["depth_mm"]) == 4
     assert sum("smaller than" in str(w.message) for w in seen) == 1
+    # A frame too small for even the pin image is refused, named by its place.
+    with pytest.raises(ValueError, match=r"frames\[2\]: frame is 12x10, smaller than the 64x64"):
+        pose.estimate([frames[0], frames[1], np.zeros((10, 12), dtype=np.uint8)])
 
     # Calibrated again from Python (`tactile train calibrate`): on these 20
     # frames ±1 deviation then holds ceil(0.683 * 20) = 14 of each target's
@@ -193,6 +196,8 @@ def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root):
     ea, eb = burn.estimate(frames), ort.estimate(frames)
     with pytest.warns(UserWarning, match=r"frames\[0\]: the frame is 160x120"):
         burn.encode(np.zeros((1, 120, 160), dtype=np.uint8))
+    with pytest.raises(ValueError, match=r"frames\[1\]: frame is 12x10, smaller than the 56x56"):
+        burn.encode([frames[0], np.zeros((10, 12), dtype=np.uint8)])
     for t in ["depth_mm", "roll_deg", "pitch_deg", "shear_x_mm", "shear_y_mm", "shear_theta_deg"]:
         assert np.allclose(ea[t], eb[t], atol=1e-3), t
 

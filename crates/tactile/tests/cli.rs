@@ -1912,6 +1912,29 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
             && warned[0].contains("smaller than the model's 440x440 crop"),
         "{msg}"
     );
+    // A frame too small for even the pin image cannot be estimated: the
+    // error names its file, says it once, and no estimates are written.
+    image::open(data.join("frames").join(want.keys().next().unwrap()))
+        .unwrap()
+        .resize_exact(12, 12, image::imageops::FilterType::Triangle)
+        .save(mixed.join("0002.png"))
+        .unwrap();
+    let out = tmp.path().join("tiny.csv");
+    let (ok, msg) = tactile(&[
+        "predict",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        mixed.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok && !out.exists(), "{msg}");
+    assert!(
+        msg.contains("0002.png: frame is 12x12, smaller than the")
+            && msg.matches("smaller than the").count() == 1,
+        "{msg}"
+    );
 }
 
 #[test]
