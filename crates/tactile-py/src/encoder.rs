@@ -123,10 +123,10 @@ pub(crate) fn pin_image_array<'py>(
     let arg = FrameArg::new(frame, Layout::GreyOrRgb, "frame")?;
     let px = [arg.view()];
     warn_frame_sizes(py, &px, std::slice::from_ref(cfg))?;
+    let grey = px[0].grey().py()?;
     let pin = py
-        .detach(|| pin_images(&px, cfg))?
-        .pop()
-        .ok_or_else(|| PyRuntimeError::new_err("no pin image"))?;
+        .detach(|| tactile_preprocess::preprocess(&grey, cfg))
+        .py()?;
     let arr = ndarray::Array2::from_shape_vec((pin.side, pin.side), pin.pixels)
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(arr.into_pyarray(py))

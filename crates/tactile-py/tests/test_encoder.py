@@ -159,6 +159,8 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
     # A frame too small for even the pin image is refused, named by its place.
     with pytest.raises(ValueError, match=r"frames\[2\]: frame is 12x10, smaller than the 64x64"):
         pose.estimate([frames[0], frames[1], np.zeros((10, 12), dtype=np.uint8)])
+    with pytest.raises(ValueError, match=r"^frame is 12x10, smaller than the 64x64"):
+        pose.preprocess(np.zeros((10, 12), dtype=np.uint8))
 
     # Calibrated again from Python (`tactile train calibrate`): on these 20
     # frames ±1 deviation then holds ceil(0.683 * 20) = 14 of each target's
