@@ -14,7 +14,7 @@ use tactile_cae::inference::features_for_dataset;
 use tactile_core::dataset::Dataset;
 use tactile_core::image_io::GreyImage;
 use tactile_core::metrics::{accuracy, confusion};
-use tactile_core::source::FrameSource;
+use tactile_core::source::{FrameSource, SourceKind};
 
 use crate::run::Flow;
 use tactile_estimate::eval::{Scores, score};
@@ -115,13 +115,17 @@ impl Predictor {
 
     /// The same columns as [`Self::perceive`] for grey frames, each
     /// preprocessed as the model's training frames were; a frame that
-    /// cannot be is named by its entry of `names`.
-    pub fn perceive_frames(&mut self, frames: &[GreyImage], names: &[String]) -> Result<Estimates> {
+    /// cannot be is named by `name` of its place among `frames`.
+    pub fn perceive_frames(
+        &mut self,
+        frames: &[GreyImage],
+        name: impl Fn(usize) -> Option<String>,
+    ) -> Result<Estimates> {
         let pins = self
             .preprocessings()
             .into_iter()
             .map(|cfg| {
-                tactile_preprocess::preprocess_each(frames, cfg).map_err(|e| e.name_frame(names))
+                tactile_preprocess::preprocess_each(frames, cfg).map_err(|e| e.name_frame(&name))
             })
             .collect::<std::result::Result<Vec<Vec<PinImage>>, _>>()?;
         match self {
@@ -253,6 +257,7 @@ impl Predictor {
         // Taken once: the model's preprocessings do not change in the loop.
         let cfgs: Vec<PreprocessConfig> = self.preprocessings().into_iter().cloned().collect();
         let mut warnings = Vec::new();
+        let kind = source.kind();
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
@@ -268,7 +273,13 @@ impl Predictor {
                 arrived.push(f.arrived);
             }
             if grey.len() == batch || (frame.is_none() && !grey.is_empty()) {
-                let estimates = self.perceive_frames(&grey, &files)?;
+                // A file is named as it is; a stream's frame by its number.
+                let estimates = self.perceive_frames(&grey, |i| {
+                    files.get(i).map(|n| match kind {
+                        SourceKind::Dataset | SourceKind::Folder => n.clone(),
+                        _ => format!("frame {n}"),
+                    })
+                })?;
                 done += grey.len();
                 grey.clear();
                 let p = Perception {

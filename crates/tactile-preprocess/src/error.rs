@@ -84,12 +84,12 @@ impl Error {
         }
     }
 
-    /// A batch's frame error named by its frame's entry of `names` (its
-    /// file or message) instead of its place in the batch.
-    pub fn name_frame(self, names: &[impl AsRef<str>]) -> Self {
+    /// A batch's frame error named by `name` of its place in the batch
+    /// (its file, or its number in a stream) instead of by the place.
+    pub fn name_frame(self, name: impl FnOnce(usize) -> Option<String>) -> Self {
         match self {
-            Error::Frame { index, error } => match names.get(index) {
-                Some(name) => error.in_file(name.as_ref()),
+            Error::Frame { index, error } => match name(index) {
+                Some(name) => error.in_file(name),
                 None => Error::Frame { index, error },
             },
             other => other,

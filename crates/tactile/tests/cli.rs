@@ -1930,6 +1930,29 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
             && msg.matches("frame is 12x12").count() == 1,
         "{msg}"
     );
+    // In a stream (here a bag), by its number.
+    let tiny_bag = tmp.path().join("tiny.mcap");
+    let mut w = common::ImageBag::create(&tiny_bag, "/tactip/image_raw", "tactip");
+    let rest = image::open(data.join("frames").join(want.keys().next().unwrap()))
+        .unwrap()
+        .to_luma8();
+    w.write(t0, (rest.width(), rest.height(), 1), "mono8", rest.as_raw());
+    w.write(t0 + 33_333_333, (12, 12, 1), "mono8", &[0; 144]);
+    w.finish();
+    let (ok, msg) = tactile(&[
+        "predict",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        tiny_bag.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok && !out.exists(), "{msg}");
+    assert!(
+        msg.contains("frame 000001: frame is 12x12, smaller than the"),
+        "{msg}"
+    );
 }
 
 #[test]
