@@ -1,6 +1,8 @@
 //! The TacTip chain itself: a frame through lighting, equalisation,
 //! threshold, mask, opening, crop and resize to a [`PinImage`].
 
+use std::borrow::Cow;
+
 use tactile_core::image_io::GreyImage;
 
 use crate::config::{Downsample, Lighting, PreprocessConfig};
@@ -75,15 +77,28 @@ pub(crate) fn lit_and_masked(frame: &GreyImage, cfg: &PreprocessConfig) -> Resul
 /// fails is named by its place in the batch (`frames[i]`), since frames
 /// given in memory have no file to name.
 pub fn preprocess_each(frames: &[GreyImage], cfg: &PreprocessConfig) -> Result<Vec<PinImage>> {
+    preprocess_each_by(frames, cfg, |f| Ok(Cow::Borrowed(f)))
+}
+
+/// [`preprocess_each`] on frames of another form, each made grey by
+/// `grey` only as its turn comes, so a batch is never held twice (once as
+/// given, once grey); a frame whose conversion fails is named alike.
+pub fn preprocess_each_by<F: Sync>(
+    frames: &[F],
+    cfg: &PreprocessConfig,
+    grey: impl Fn(&F) -> Result<Cow<'_, GreyImage>> + Sync,
+) -> Result<Vec<PinImage>> {
     use rayon::prelude::*;
     frames
         .par_iter()
         .enumerate()
         .map(|(index, f)| {
-            preprocess(f, cfg).map_err(|e| Error::Frame {
-                index,
-                error: Box::new(e),
-            })
+            grey(f)
+                .and_then(|g| preprocess(&g, cfg))
+                .map_err(|e| Error::Frame {
+                    index,
+                    error: Box::new(e),
+                })
         })
         .collect()
 }

@@ -27,7 +27,9 @@ mod resize;
 pub mod visuo;
 
 pub(crate) use chain::lit_and_masked;
-pub use chain::{MAX_WINDOW_PX, PinImage, binarise, preprocess, preprocess_each};
+pub use chain::{
+    MAX_WINDOW_PX, PinImage, binarise, preprocess, preprocess_each, preprocess_each_by,
+};
 pub use config::{Downsample, FrameSizeCheck, Lighting, PreprocessConfig};
 pub use error::{Error, Result};
 pub use resize::{

@@ -8,7 +8,6 @@ use numpy::{IntoPyArray, PyArray2};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rayon::prelude::*;
 use tactile_cae::TactipEncoder;
 use tactile_estimate::{Column, Estimators};
 use tactile_pipeline::tactip::TactipPerception;
@@ -87,13 +86,8 @@ pub(crate) fn pin_images(
     px: &[Pixels<'_>],
     cfg: &tactile_preprocess::PreprocessConfig,
 ) -> PyResult<Vec<PinImage>> {
-    let grey = px
-        .par_iter()
-        .map(Pixels::grey)
-        .collect::<tactile_core::Result<Vec<_>>>()
-        .py()?;
-    // A frame that fails is named `frames[i]`.
-    tactile_preprocess::preprocess_each(&grey, cfg).py()
+    // Each frame made grey as its turn comes; one that fails is named `frames[i]`.
+    tactile_preprocess::preprocess_each_by(px, cfg, |p| Ok(std::borrow::Cow::Owned(p.grey()?))).py()
 }
 
 /// A `UserWarning` for each frame size among `px` that a preprocessing of
