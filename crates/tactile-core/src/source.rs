@@ -239,6 +239,15 @@ impl SourceKind {
     pub fn is_live(self) -> bool {
         matches!(self, SourceKind::Camera | SourceKind::Stdin)
     }
+
+    /// A frame of this source named in a message: a file by its name
+    /// (`a.png`), a stream's frame by its number (`frame 000042`).
+    pub fn frame_label(self, name: &str) -> String {
+        match self {
+            SourceKind::Dataset | SourceKind::Folder => name.to_string(),
+            _ => format!("frame {name}"),
+        }
+    }
 }
 
 /// Where to read frames from.

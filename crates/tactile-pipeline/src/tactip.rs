@@ -14,7 +14,7 @@ use tactile_cae::inference::features_for_dataset;
 use tactile_core::dataset::Dataset;
 use tactile_core::image_io::GreyImage;
 use tactile_core::metrics::{accuracy, confusion};
-use tactile_core::source::{FrameSource, SourceKind};
+use tactile_core::source::FrameSource;
 
 use crate::run::Flow;
 use tactile_estimate::eval::{Scores, score};
@@ -264,7 +264,7 @@ impl Predictor {
                 pb.inc(1);
                 let (w, h) = (f.image.width(), f.image.height());
                 if let Some(why) = sizes.check(w, h, &cfgs) {
-                    warnings.push(format!("warning: {}: {why}", f.name));
+                    warnings.push(format!("warning: {}: {why}", kind.frame_label(&f.name)));
                 }
                 let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
                 grey.push(tactile_core::image_io::grey_image(w, h, g)?);
@@ -273,13 +273,8 @@ impl Predictor {
                 arrived.push(f.arrived);
             }
             if grey.len() == batch || (frame.is_none() && !grey.is_empty()) {
-                // A file is named as it is; a stream's frame by its number.
-                let estimates = self.perceive_frames(&grey, |i| {
-                    files.get(i).map(|n| match kind {
-                        SourceKind::Dataset | SourceKind::Folder => n.clone(),
-                        _ => format!("frame {n}"),
-                    })
-                })?;
+                let estimates =
+                    self.perceive_frames(&grey, |i| files.get(i).map(|n| kind.frame_label(n)))?;
                 done += grey.len();
                 grey.clear();
                 let p = Perception {
