@@ -104,8 +104,10 @@ impl FrameList {
             .map_err(|e| Error::io(dir, e))?
             .filter_map(|e| e.ok().map(|e| e.path()))
             .partition(|p| is_frame_file(p));
-        // A pipe or a device named like a frame would block the reader.
+        // A pipe or a device named like a frame would block the reader; a
+        // link out of the folder would read what the user did not name.
         for p in &v {
+            crate::dataset::expect_entry_inside(dir, p)?;
             crate::image_io::expect_regular_file(p)?;
         }
         v.sort();

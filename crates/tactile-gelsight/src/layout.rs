@@ -131,19 +131,30 @@ fn read_limited(path: &Path, limit: u64) -> Result<String> {
     std::fs::read_to_string(path).map_err(|e| tactile_core::Error::io(path, e).into())
 }
 
-/// `rel` joined to `root`, refused when it leaves `root`.
-fn inside(root: &Path, rel: &str, file: &Path) -> Result<PathBuf> {
+/// `rel` joined to `root`, refused (with the reason) when it leaves `root`
+/// by its name or through a symbolic link.
+fn inside(root: &Path, rel: &str) -> std::result::Result<PathBuf, String> {
     let p = Path::new(rel);
     if p.is_absolute()
         || p.components()
             .any(|c| !matches!(c, std::path::Component::Normal(_)))
     {
-        return Err(Error::Layout {
-            path: file.to_path_buf(),
-            why: format!("'{rel}' is not a path inside the calibration folder"),
-        });
+        return Err(format!(
+            "'{rel}' is not a path inside the calibration folder"
+        ));
     }
-    Ok(root.join(p))
+    let canonical = root
+        .canonicalize()
+        .map_err(|e| format!("cannot resolve the folder {}: {e}", root.display()))?;
+    match tactile_core::dataset::resolve_inside(&canonical, p) {
+        Ok(_) => Ok(root.join(p)),
+        Err(tactile_core::dataset::Escape::Loop) => {
+            Err(format!("'{rel}' passes through too many symbolic links"))
+        }
+        Err(_) => Err(format!(
+            "'{rel}' passes through a symbolic link that leaves the calibration folder"
+        )),
+    }
 }
 
 impl BallPresses {
@@ -173,7 +184,10 @@ impl BallPresses {
                 },
             )?;
         sensor.check(&sensor_file)?;
-        let bg_path = inside(&root, &sensor.background, &sensor_file)?;
+        let bg_path = inside(&root, &sensor.background).map_err(|why| Error::Layout {
+            path: sensor_file.clone(),
+            why,
+        })?;
         if !bg_path.is_file() {
             return Err(Error::Layout {
                 path: bg_path,
@@ -299,9 +313,9 @@ fn read_presses_csv(root: &Path, path: &Path) -> Result<Vec<Press>> {
             });
         }
         let file = rec.get(file_col).unwrap_or("").trim().to_string();
-        let frame = inside(root, &file, path).map_err(|_| Error::Layout {
+        let frame = inside(root, &file).map_err(|why| Error::Layout {
             path: path.to_path_buf(),
-            why: format!("line {line}: '{file}' is not a frame inside the folder"),
+            why: format!("line {line}: {why}"),
         })?;
         if !frame.is_file() {
             return Err(Error::Layout {
@@ -342,6 +356,7 @@ fn list_frames(root: &Path) -> Result<Vec<Press>> {
     for e in entries.flatten() {
         let name = e.file_name().to_string_lossy().into_owned();
         if name.to_ascii_lowercase().ends_with(".png") && e.path().is_file() {
+            tactile_core::dataset::expect_entry_inside(&dir, &e.path())?;
             if files.len() >= MAX_PRESSES {
                 return Err(Error::Layout {
                     path: dir,

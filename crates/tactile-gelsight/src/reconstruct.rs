@@ -50,6 +50,7 @@ pub fn frame_files(data: &Path) -> Result<Vec<PathBuf>> {
         let p = e.path();
         let png = p.extension().is_some_and(|x| x.eq_ignore_ascii_case("png"));
         if png && p.is_file() {
+            tactile_core::dataset::expect_entry_inside(data, &p)?;
             if files.len() >= MAX_FRAMES {
                 return Err(Error::Layout {
                     path: data.to_path_buf(),

@@ -114,6 +114,21 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     std::fs::write(d.join("presses.csv"), csv.replace('\n', "\r\n")).unwrap();
     let e = BallPresses::open(&d).unwrap_err().to_string();
     assert!(e.contains("presses.csv") && e.contains("line 4"), "{e}");
+    // A frame that is a link out of the folder, named in the CSV or found
+    // in frames/: refused by its name, not read.
+    let d = tmp.path().join("link");
+    subset(&d, 1, str::to_string);
+    let press = d.join("frames/press_01.png");
+    std::fs::remove_file(&press).unwrap();
+    std::os::unix::fs::symlink(shared().join("frames/press_01.png"), &press).unwrap();
+    let e = BallPresses::open(&d).unwrap_err().to_string();
+    assert!(
+        e.contains("presses.csv") && e.contains("line 2") && e.contains("leaves"),
+        "{e}"
+    );
+    std::fs::remove_file(d.join("presses.csv")).unwrap();
+    let e = BallPresses::open(&d).unwrap_err().to_string();
+    assert!(e.contains("press_01.png") && e.contains("leaves"), "{e}");
 }
 
 #[test]
@@ -263,6 +278,16 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     let e = reconstruct_folder(&model, &odd, &out, &o).unwrap_err();
     assert!(matches!(e, Error::FrameSize { .. }), "{e}");
     assert!(e.to_string().contains("small.png"), "{e}");
+    assert!(!out.exists());
+    // A frame that links out of the folder is named, not read.
+    let linked = tmp.path().join("linked");
+    std::fs::create_dir_all(&linked).unwrap();
+    std::os::unix::fs::symlink(odd.join("small.png"), linked.join("out.png")).unwrap();
+    let e = reconstruct_folder(&model, &linked, &out, &o).unwrap_err();
+    assert!(
+        e.to_string().contains("out.png") && e.to_string().contains("leaves the folder"),
+        "{e}"
+    );
     assert!(!out.exists());
     // A folder without frames says so.
     let empty = tmp.path().join("empty");

@@ -54,3 +54,15 @@ def test_limit_and_bad_sources(root, tmp_path):
         tactile.frames(bad)
     with pytest.raises(ValueError, match="stdin_size"):
         tactile.frames()
+
+
+def test_a_folder_bounds_its_reads(root, tmp_path):
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    first = root / "samples" / "palpation" / "000000.png"
+    shutil.copy(first, folder / "000000.png")
+    (folder / "000001.png").symlink_to("000000.png")
+    assert [f.name for f in tactile.frames(folder)] == ["000000.png", "000001.png"]
+    (folder / "000002.png").symlink_to(first)
+    with pytest.raises(ValueError, match=r"000002\.png: is a symbolic link that leaves the folder"):
+        tactile.frames(folder)

@@ -157,6 +157,36 @@ fn reads_stay_inside_the_dataset_and_do_not_reveal_outside_files() {
         );
         assert!(!msg.contains("does not exist"), "{msg}");
     }
+    // A folder of frames without labels.csv bounds its reads alike: a link
+    // out is refused by its name, a link to a frame beside it is read.
+    let folder = tmp.path().join("folder");
+    std::fs::create_dir_all(&folder).unwrap();
+    png(&folder.join("0.png"), 300, 300);
+    std::os::unix::fs::symlink("0.png", folder.join("1.png")).unwrap();
+    let predict = |out: &Path| {
+        let model = root().join("models/cae-shapes");
+        tactile(&[
+            "predict",
+            "--model",
+            s(&model),
+            "--data",
+            s(&folder),
+            "--out",
+            s(out),
+        ])
+    };
+    let (ok, msg) = predict(&out);
+    assert!(ok, "{msg}");
+    let rows = std::fs::read_to_string(&out).unwrap().lines().count();
+    assert_eq!(rows, 3, "a header and two frames");
+    std::fs::remove_file(&out).unwrap();
+    std::os::unix::fs::symlink(&outside, folder.join("2.png")).unwrap();
+    let (ok, msg) = predict(&out);
+    assert!(
+        !ok && msg.contains("2.png") && msg.contains("leaves the folder"),
+        "{msg}"
+    );
+    assert!(!out.exists());
     // A column named twice is an error, not "the last one wins".
     let _ = std::fs::remove_dir_all(&ds);
     tactip(&ds, 1, &[row("frames/0.png")]);

@@ -13,7 +13,7 @@ mod paths;
 mod split;
 mod writer;
 
-pub use paths::{Escape, resolve_inside};
+pub use paths::{Escape, expect_entry_inside, resolve_inside};
 pub use split::{DEFAULT_SPLIT_SEED, Splits, TestHoldout, hold_out};
 pub use writer::DatasetWriter;
 

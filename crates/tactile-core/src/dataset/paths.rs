@@ -56,11 +56,11 @@ fn lexical(a: &Path) -> PathBuf {
 
 /// `rel` (as written in `labels.csv`) resolved inside `root`, which must be
 /// an absolute, canonical folder path.
-pub fn resolve_inside(root: &Path, rel: &str) -> Result<PathBuf, Escape> {
-    if rel.trim().is_empty() {
+pub fn resolve_inside(root: &Path, rel: impl AsRef<Path>) -> Result<PathBuf, Escape> {
+    let rel = rel.as_ref();
+    if rel.as_os_str().to_string_lossy().trim().is_empty() {
         return Err(Escape::Empty);
     }
-    let rel = Path::new(rel);
     let mut parts = Vec::new();
     for c in rel.components() {
         match c {
@@ -102,6 +102,28 @@ pub fn resolve_inside(root: &Path, rel: &str) -> Result<PathBuf, Escape> {
         at = root.to_path_buf();
     }
     Ok(at)
+}
+
+/// Refuse `entry`, a file listed in the folder `dir` (a folder of frames,
+/// of presses), when it is a symbolic link whose target leaves `dir`: the
+/// folder a user names bounds what is read, as a dataset's does.
+pub fn expect_entry_inside(dir: &Path, entry: &Path) -> crate::Result<()> {
+    let is_link = std::fs::symlink_metadata(entry).is_ok_and(|m| m.file_type().is_symlink());
+    if !is_link {
+        return Ok(());
+    }
+    let refuse = |why: &str| crate::Error::image(entry, why.to_string());
+    let root = dir.canonicalize().map_err(|e| crate::Error::io(dir, e))?;
+    let name = entry
+        .strip_prefix(dir)
+        .map_err(|_| refuse("is not in the folder being read"))?;
+    match resolve_inside(&root, name) {
+        Ok(_) => Ok(()),
+        Err(Escape::Loop) => Err(refuse("passes through too many symbolic links")),
+        Err(_) => Err(refuse(
+            "is a symbolic link that leaves the folder; refusing to read outside it (copy the file into the folder)",
+        )),
+    }
 }
 
 #[cfg(test)]
@@ -150,6 +172,18 @@ mod tests {
             symlink("loop2", root.join("frames/loop1")).unwrap();
             symlink("loop1", root.join("frames/loop2")).unwrap();
             assert_eq!(ok("frames/loop1"), Err(Escape::Loop));
+            // A folder's entries: links out refused by name, links in kept.
+            let dir = root.join("frames");
+            assert!(expect_entry_inside(&dir, &dir.join("a.png")).is_ok());
+            assert!(expect_entry_inside(&dir, &dir.join("alias.png")).is_ok());
+            for name in ["out.png", "gone.png", "up.png"] {
+                let e = expect_entry_inside(&dir, &dir.join(name)).unwrap_err();
+                let msg = e.to_string();
+                assert!(
+                    msg.contains(name) && msg.contains("leaves the folder"),
+                    "{msg}"
+                );
+            }
         }
     }
 }
