@@ -100,10 +100,20 @@ impl FrameList {
                 ignored: Vec::new(),
             });
         }
+        // As many files as a dataset may have rows, counted before they
+        // are all held.
+        let limit = crate::dataset::MAX_ROWS;
         let (mut v, mut ignored): (Vec<PathBuf>, Vec<PathBuf>) = std::fs::read_dir(dir)
             .map_err(|e| Error::io(dir, e))?
             .filter_map(|e| e.ok().map(|e| e.path()))
+            .take(limit + 1)
             .partition(|p| is_frame_file(p));
+        if v.len() + ignored.len() > limit {
+            return Err(Error::Invalid(format!(
+                "{}: more than {limit} files; a folder of frames holds at most that many",
+                dir.display()
+            )));
+        }
         // A pipe or a device named like a frame would block the reader; a
         // link out of the folder would read what the user did not name.
         for p in &v {

@@ -187,6 +187,19 @@ fn reads_stay_inside_the_dataset_and_do_not_reveal_outside_files() {
         "{msg}"
     );
     assert!(!out.exists());
+    std::fs::remove_file(folder.join("2.png")).unwrap();
+    // An output named like one of its frames (itself, through a link, or a
+    // new one) is refused before any work; the frames stay as they were.
+    let frame = std::fs::read(folder.join("0.png")).unwrap();
+    for name in ["0.png", "1.png", "3.png"] {
+        let (ok, msg) = predict(&folder.join(name));
+        assert!(
+            !ok && msg.contains(name) && msg.contains("named like a frame of the input folder"),
+            "{msg}"
+        );
+    }
+    assert_eq!(std::fs::read(folder.join("0.png")).unwrap(), frame);
+    assert!(!folder.join("3.png").exists());
     // A column named twice is an error, not "the last one wins".
     let _ = std::fs::remove_dir_all(&ds);
     tactip(&ds, 1, &[row("frames/0.png")]);

@@ -388,16 +388,8 @@ impl Dataset {
     /// the dataset folder itself, its manifest or labels, a file it
     /// references or a folder holding them (`encode --out DS/labels.csv`).
     pub fn refuse_as_output(&self, out: &Path) -> Result<()> {
-        let canonical = |p: &Path| -> Option<PathBuf> {
-            p.canonicalize().ok().or_else(|| {
-                let parent = p
-                    .parent()
-                    .filter(|q| !q.as_os_str().is_empty())
-                    .unwrap_or(Path::new("."));
-                Some(parent.canonicalize().ok()?.join(p.file_name()?))
-            })
-        };
-        let (Some(root), Some(out_c)) = (canonical(&self.root), canonical(out)) else {
+        let (Some(root), Some(out_c)) = (canonical_output(&self.root), canonical_output(out))
+        else {
             return Ok(());
         };
         let Ok(rel) = out_c.strip_prefix(&root) else {
@@ -584,15 +576,38 @@ pub fn check_output_file(out: &Path, datasets: &[&Dataset]) -> Result<()> {
     crate::io::ensure_writable_parent(out)
 }
 
+/// `p` made absolute with its links resolved: itself when it exists, else
+/// its folder's canonical path joined to its name (an output not yet
+/// written). `None` when neither resolves.
+fn canonical_output(p: &Path) -> Option<PathBuf> {
+    p.canonicalize().ok().or_else(|| {
+        let parent = p
+            .parent()
+            .filter(|q| !q.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        Some(parent.canonicalize().ok()?.join(p.file_name()?))
+    })
+}
+
 /// Before any work: the output file `out` is not the input file itself
-/// (`--data rec.mcap --out rec.mcap`), which writing it would replace.
+/// (`--data rec.mcap --out rec.mcap`), which writing it would replace, nor
+/// a frame of the input folder of frames (`--data frames --out
+/// frames/0001.png`), which it would replace or join.
 pub fn refuse_input_as_output(out: &Path, input: &Path) -> Result<()> {
-    if let (Ok(o), Ok(i)) = (out.canonicalize(), input.canonicalize())
-        && o == i
-    {
+    let (Some(o), Ok(i)) = (canonical_output(out), input.canonicalize()) else {
+        return Ok(());
+    };
+    if o == i {
         return Err(Error::Invalid(format!(
             "{}: this output is the input; give another file, so nothing was done",
             out.display()
+        )));
+    }
+    if i.is_dir() && o.parent() == Some(i.as_path()) && crate::source::is_frame_file(&o) {
+        return Err(Error::Invalid(format!(
+            "{}: this output is named like a frame of the input folder {}; writing it would change the frames, so nothing was done",
+            out.display(),
+            input.display()
         )));
     }
     Ok(())
