@@ -162,7 +162,9 @@ pub fn run_fingerprint(
     h.update(json.to_string().as_bytes());
     for ds in datasets {
         for f in [ds.root.join("manifest.json"), ds.labels_path()] {
-            h.update(std::fs::read(&f).map_err(|e| Error::io(&f, e))?);
+            // In pieces: labels may run to millions of rows.
+            let mut file = std::fs::File::open(&f).map_err(|e| Error::io(&f, e))?;
+            std::io::copy(&mut file, &mut h).map_err(|e| Error::io(&f, e))?;
         }
     }
     Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
@@ -186,8 +188,10 @@ pub struct Loaded<A: Artifact> {
 pub fn fingerprint<A: Artifact>(dir: &Path) -> Result<String> {
     use sha2::Digest;
     let path = dir.join(A::WEIGHTS_FILE);
-    let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, e))?;
-    let digest = sha2::Sha256::digest(&bytes);
+    let mut file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
+    let mut h = sha2::Sha256::new();
+    std::io::copy(&mut file, &mut h).map_err(|e| Error::io(&path, e))?;
+    let digest = h.finalize();
     Ok(format!(
         "sha256:{}",
         digest

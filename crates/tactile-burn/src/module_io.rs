@@ -64,6 +64,7 @@ pub fn load_module<M: Module>(module: M, path: &Path) -> Result<M> {
     if !path.is_file() {
         return Err(Error::model(path, "weights file does not exist"));
     }
+    tactile_core::io::check_file_size(path, tactile_core::io::MAX_WEIGHTS_BYTES)?;
     let record = ModuleRecord::load(path)
         .map_err(|e| Error::model(path, e.to_string()))?
         .cast_to_module_dtype();

@@ -67,7 +67,7 @@ fn load_conv(
 /// Channel widths of a released encoder, read from its kernels.
 pub fn authors_widths(path: impl AsRef<Path>) -> Result<[usize; 4]> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = tactile_core::io::read_limited(path, tactile_core::io::MAX_WEIGHTS_BYTES)?;
     let st = SafeTensors::deserialize(&bytes)
         .map_err(|e| Error::model(path, format!("not a safetensors file: {e}")))?;
     let mut w = [0; 4];
@@ -85,7 +85,7 @@ pub fn authors_widths(path: impl AsRef<Path>) -> Result<[usize; 4]> {
 pub fn load_authors_encoder(path: impl AsRef<Path>, device: &Device) -> Result<Cae> {
     let path = path.as_ref();
     let widths = authors_widths(path)?;
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = tactile_core::io::read_limited(path, tactile_core::io::MAX_WEIGHTS_BYTES)?;
     let st = SafeTensors::deserialize(&bytes)
         .map_err(|e| Error::model(path, format!("not a safetensors file: {e}")))?;
     let mut cae = CaeConfig::new().with_widths(widths).init(device);

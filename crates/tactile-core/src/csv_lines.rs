@@ -26,8 +26,15 @@ pub struct LineCounting<R> {
     line: usize,
     after_line_end: bool,
     after_cr: bool,
+    in_quotes: bool,
+    record_bytes: u64,
     starts: RefCell<VecDeque<(u64, usize)>>,
 }
+
+/// Longest record a CSV may hold (a row of `labels.csv` is about a hundred
+/// bytes): a file without line ends (a sparse file claims terabytes of
+/// zeros) is refused at this length instead of filling memory.
+pub const MAX_RECORD_BYTES: u64 = 1 << 20;
 
 impl<R: Read> LineCounting<R> {
     /// Wrap `inner`, counting from its first byte (line 1).
@@ -38,6 +45,8 @@ impl<R: Read> LineCounting<R> {
             line: 1,
             after_line_end: true,
             after_cr: false,
+            in_quotes: false,
+            record_bytes: 0,
             starts: RefCell::new(VecDeque::new()),
         }
     }
@@ -59,6 +68,19 @@ impl<R: Read> Read for LineCounting<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = self.inner.read(buf)?;
         for (i, &b) in buf[..n].iter().enumerate() {
+            // A record ends at a line end outside quotes.
+            match b {
+                b'"' => self.in_quotes = !self.in_quotes,
+                b'\n' | b'\r' if !self.in_quotes => self.record_bytes = 0,
+                _ => {}
+            }
+            self.record_bytes += 1;
+            if self.record_bytes > MAX_RECORD_BYTES {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("a record longer than {MAX_RECORD_BYTES} bytes (no line end)"),
+                ));
+            }
             // A line ends at `\n`, `\r\n` or a lone `\r` (as csv reads them).
             match b {
                 b'\n' if self.after_cr => {}
@@ -157,6 +179,25 @@ mod tests {
         assert_eq!(last, 100_001);
         // Every line looked up was forgotten as the next was asked for.
         assert!(r.get_ref().starts.borrow().len() <= 1);
+    }
+
+    #[test]
+    fn a_record_without_end_is_refused_at_its_bound() {
+        // Zeros without a line end, as a sparse file reads: an error once
+        // the bound is passed, not a record that fills memory.
+        let zeros = std::io::repeat(0).take(4 * MAX_RECORD_BYTES);
+        let mut r = reader(&csv::ReaderBuilder::new(), zeros);
+        let e = r.headers().unwrap_err();
+        assert!(describe(&e).contains("a record longer than"), "{e}");
+        // A long quoted cell spanning lines counts as one record; records
+        // just under the bound pass.
+        let cell = "x".repeat(MAX_RECORD_BYTES as usize / 2);
+        let text = format!("a,b\n\"{cell}\n{cell}\",2\n");
+        let mut r = reader(&csv::ReaderBuilder::new(), text.as_bytes());
+        assert!(records(&mut r).next().unwrap().is_err());
+        let text = format!("a,b\n{cell},2\n{cell},3\n");
+        let mut r = reader(&csv::ReaderBuilder::new(), text.as_bytes());
+        assert_eq!(records(&mut r).filter(Result::is_ok).count(), 2);
     }
 
     #[test]

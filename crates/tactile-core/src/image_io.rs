@@ -44,6 +44,10 @@ fn describe(color: ColorType) -> &'static str {
 /// read first, so a bigger file is refused before its pixels are allocated.
 pub const MAX_IMAGE_PIXELS: u64 = 7680 * 4320;
 
+/// Largest image file copied as bytes: an 8K frame of 16-bit RGBA stored
+/// without compression is 265 MB.
+pub const MAX_IMAGE_FILE_BYTES: u64 = 512 << 20;
+
 /// Refuse anything but a regular file before opening it: a pipe or a
 /// device named `*.png` would block a reader forever or never end.
 pub fn expect_regular_file(path: &Path) -> Result<()> {

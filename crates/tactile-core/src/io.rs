@@ -105,30 +105,71 @@ pub fn write_json_atomic<T: serde::Serialize>(path: impl AsRef<Path>, value: &T)
     write_atomic(path, text.as_bytes())
 }
 
-/// Read and parse a JSON file, naming the file on error.
+/// Largest JSON file [`read_json`] reads: far above any manifest, config
+/// or model description, far below what would exhaust memory (a sparse
+/// file can claim terabytes).
+pub const MAX_JSON_BYTES: u64 = 64 << 20;
+
+/// Read and parse a JSON file of at most [`MAX_JSON_BYTES`], naming the
+/// file on error.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: impl AsRef<Path>) -> Result<T> {
-    let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    serde_json::from_str(&text).map_err(|e| Error::dataset(path, Some(e.line()), e.to_string()))
+    read_json_limited(path, MAX_JSON_BYTES)
 }
 
-/// [`read_json`] of a file of at most `max_bytes` (checked before it is
-/// read), naming the file when it is larger.
+/// Largest weights file read (burn records, safetensors): a network of
+/// 100 million float32 parameters, the most any model folder may hold, is
+/// 400 MB.
+pub const MAX_WEIGHTS_BYTES: u64 = 1 << 30;
+
+/// Refuse `path` when it holds more than `max_bytes`, naming it; checked
+/// on its size, before anything is read.
+pub fn check_file_size(path: &Path, max_bytes: u64) -> Result<()> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::io(path, e))?
+        .len();
+    if len > max_bytes {
+        return Err(too_large(path, len, max_bytes));
+    }
+    Ok(())
+}
+
+fn too_large(path: &Path, len: u64, max_bytes: u64) -> Error {
+    Error::Invalid(format!(
+        "{}: {len} bytes is too large (at most {max_bytes})",
+        path.display()
+    ))
+}
+
+/// The bytes of `path`, a file of at most `max_bytes`, naming the file
+/// when it is larger. The size is checked before the file is read, and the
+/// read stops past the limit, so a file that grows or lies about its size
+/// (a device, a pipe) is bounded too.
+pub fn read_limited(path: impl AsRef<Path>, max_bytes: u64) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let path = path.as_ref();
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    if len > max_bytes {
+        return Err(too_large(path, len, max_bytes));
+    }
+    let mut bytes = Vec::with_capacity(len as usize);
+    file.take(max_bytes + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_large(path, bytes.len() as u64, max_bytes));
+    }
+    Ok(bytes)
+}
+
+/// [`read_json`] of a file of at most `max_bytes` ([`read_limited`]).
 pub fn read_json_limited<T: serde::de::DeserializeOwned>(
     path: impl AsRef<Path>,
     max_bytes: u64,
 ) -> Result<T> {
     let path = path.as_ref();
-    let len = std::fs::metadata(path)
-        .map_err(|e| Error::io(path, e))?
-        .len();
-    if len > max_bytes {
-        return Err(Error::Config(format!(
-            "{}: {len} bytes is too large (at most {max_bytes})",
-            path.display()
-        )));
-    }
-    read_json(path)
+    let bytes = read_limited(path, max_bytes)?;
+    serde_json::from_slice(&bytes).map_err(|e| Error::dataset(path, Some(e.line()), e.to_string()))
 }
 
 /// Create a folder (and parents), naming it on error.
@@ -338,6 +379,18 @@ impl StagedDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn json_files_are_bounded_before_they_are_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("big.json");
+        std::fs::File::create(&p).unwrap().set_len(1 << 40).unwrap();
+        let e = read_json::<serde_json::Value>(&p).unwrap_err().to_string();
+        assert!(e.contains("big.json") && e.contains("too large"), "{e}");
+        std::fs::write(&p, "[1, 2, 3]").unwrap();
+        assert_eq!(read_json::<Vec<u8>>(&p).unwrap(), vec![1, 2, 3]);
+        assert!(read_json_limited::<Vec<u8>>(&p, 4).is_err());
+    }
 
     #[test]
     fn atomic_write_replaces_and_leaves_no_temp() {

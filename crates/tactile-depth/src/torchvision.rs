@@ -85,7 +85,7 @@ pub fn load_torchvision_encoder(
     device: &Device,
 ) -> Result<DenseNetEncoder> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = tactile_core::io::read_limited(path, tactile_core::io::MAX_WEIGHTS_BYTES)?;
     let st = SafeTensors::deserialize(&bytes)
         .map_err(|e| Error::model(path, format!("not a safetensors file: {e}")))?;
     let src = Source {

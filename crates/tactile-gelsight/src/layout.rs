@@ -119,16 +119,11 @@ impl std::fmt::Debug for BallPresses {
 }
 
 fn read_limited(path: &Path, limit: u64) -> Result<String> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| tactile_core::Error::io(path, e))?
-        .len();
-    if len > limit {
-        return Err(Error::Layout {
-            path: path.to_path_buf(),
-            why: format!("{len} bytes is more than such a file holds (at most {limit})"),
-        });
-    }
-    std::fs::read_to_string(path).map_err(|e| tactile_core::Error::io(path, e).into())
+    let bytes = tactile_core::io::read_limited(path, limit)?;
+    String::from_utf8(bytes).map_err(|_| Error::Layout {
+        path: path.to_path_buf(),
+        why: "is not UTF-8 text".into(),
+    })
 }
 
 /// `rel` joined to `root`, refused (with the reason) when it leaves `root`

@@ -490,7 +490,8 @@ pub fn calibrate(
     // Copied as bytes: the folder's own file, writable whatever the
     // source's permissions.
     let bg_file = ds.root.join(&ds.sensor.background);
-    let bytes = std::fs::read(&bg_file).map_err(|e| tactile_core::Error::io(&bg_file, e))?;
+    let bytes =
+        tactile_core::io::read_limited(&bg_file, tactile_core::image_io::MAX_IMAGE_FILE_BYTES)?;
     tactile_core::io::write_atomic(dir.join(BACKGROUND_FILE), &bytes)?;
     let mut rec = crate::inference::Reconstructor::new(
         artifact.grid,
