@@ -162,12 +162,18 @@ pub fn run_fingerprint(
     h.update(json.to_string().as_bytes());
     for ds in datasets {
         for f in [ds.root.join("manifest.json"), ds.labels_path()] {
-            // In pieces: labels may run to millions of rows.
-            let mut file = std::fs::File::open(&f).map_err(|e| Error::io(&f, e))?;
-            std::io::copy(&mut file, &mut h).map_err(|e| Error::io(&f, e))?;
+            hash_file(&mut h, &f)?;
         }
     }
     Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
+
+/// Feed `path`'s bytes to `h` in pieces: labels may run to millions of
+/// rows and weights to a gigabyte, neither worth holding whole.
+fn hash_file(h: &mut sha2::Sha256, path: &Path) -> Result<()> {
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    std::io::copy(&mut file, h).map_err(|e| Error::io(path, e))?;
+    Ok(())
 }
 
 /// A model loaded from its folder: config, network and where it runs.
@@ -188,9 +194,8 @@ pub struct Loaded<A: Artifact> {
 pub fn fingerprint<A: Artifact>(dir: &Path) -> Result<String> {
     use sha2::Digest;
     let path = dir.join(A::WEIGHTS_FILE);
-    let mut file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
     let mut h = sha2::Sha256::new();
-    std::io::copy(&mut file, &mut h).map_err(|e| Error::io(&path, e))?;
+    hash_file(&mut h, &path)?;
     let digest = h.finalize();
     Ok(format!(
         "sha256:{}",

@@ -127,8 +127,9 @@ fn read_limited(path: &Path, limit: u64) -> Result<String> {
 }
 
 /// `rel` joined to `root`, refused (with the reason) when it leaves `root`
-/// by its name or through a symbolic link.
-fn inside(root: &Path, rel: &str) -> std::result::Result<PathBuf, String> {
+/// by its name or through a symbolic link (`canonical` is `root`'s
+/// canonical path, resolved once per folder).
+fn inside(root: &Path, canonical: &Path, rel: &str) -> std::result::Result<PathBuf, String> {
     let p = Path::new(rel);
     if p.is_absolute()
         || p.components()
@@ -138,10 +139,7 @@ fn inside(root: &Path, rel: &str) -> std::result::Result<PathBuf, String> {
             "'{rel}' is not a path inside the calibration folder"
         ));
     }
-    let canonical = root
-        .canonicalize()
-        .map_err(|e| format!("cannot resolve the folder {}: {e}", root.display()))?;
-    match tactile_core::dataset::resolve_inside(&canonical, p) {
+    match tactile_core::dataset::resolve_inside(canonical, p) {
         Ok(_) => Ok(root.join(p)),
         Err(tactile_core::dataset::Escape::Loop) => {
             Err(format!("'{rel}' passes through too many symbolic links"))
@@ -179,10 +177,14 @@ impl BallPresses {
                 },
             )?;
         sensor.check(&sensor_file)?;
-        let bg_path = inside(&root, &sensor.background).map_err(|why| Error::Layout {
-            path: sensor_file.clone(),
-            why,
-        })?;
+        let canonical = root
+            .canonicalize()
+            .map_err(|e| tactile_core::Error::io(&root, e))?;
+        let bg_path =
+            inside(&root, &canonical, &sensor.background).map_err(|why| Error::Layout {
+                path: sensor_file.clone(),
+                why,
+            })?;
         if !bg_path.is_file() {
             return Err(Error::Layout {
                 path: bg_path,
@@ -192,7 +194,7 @@ impl BallPresses {
         let background = load_rgb(&bg_path)?;
         let csv_path = root.join("presses.csv");
         let presses = if csv_path.is_file() {
-            read_presses_csv(&root, &csv_path)?
+            read_presses_csv(&root, &canonical, &csv_path)?
         } else {
             list_frames(&root)?
         };
@@ -266,7 +268,7 @@ impl BallPresses {
     }
 }
 
-fn read_presses_csv(root: &Path, path: &Path) -> Result<Vec<Press>> {
+fn read_presses_csv(root: &Path, canonical: &Path, path: &Path) -> Result<Vec<Press>> {
     let text = read_limited(path, MAX_PRESSES_FILE_BYTES)?;
     let mut rd = tactile_core::csv_lines::reader(&csv::ReaderBuilder::new(), text.as_bytes());
     let headers = rd
@@ -308,7 +310,7 @@ fn read_presses_csv(root: &Path, path: &Path) -> Result<Vec<Press>> {
             });
         }
         let file = rec.get(file_col).unwrap_or("").trim().to_string();
-        let frame = inside(root, &file).map_err(|why| Error::Layout {
+        let frame = inside(root, canonical, &file).map_err(|why| Error::Layout {
             path: path.to_path_buf(),
             why: format!("line {line}: {why}"),
         })?;

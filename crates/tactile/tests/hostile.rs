@@ -320,11 +320,8 @@ fn every_size_is_bounded_before_anything_is_allocated() {
     );
     // A JSON file claiming a terabyte (sparse, so it costs nothing on
     // disk): refused by its size, naming it, before it is read.
-    let sparse = |p: &Path| {
-        let f = std::fs::File::create(p).unwrap();
-        f.set_len(1 << 40).unwrap();
-    };
-    sparse(&det.join("detector.json"));
+    let sparse = |p: &Path, len: u64| std::fs::File::create(p).unwrap().set_len(len).unwrap();
+    sparse(&det.join("detector.json"), 1 << 40);
     let (ok, msg) = tactile(&["eval", "detector", "--model", s(&det), "--data", s(&vt)]);
     assert!(
         !ok && msg.contains("detector.json") && msg.contains("too large"),
@@ -333,35 +330,26 @@ fn every_size_is_bounded_before_anything_is_allocated() {
     // Weights claiming 32 GB, under burn's own 100 GB bound: refused by
     // the toolkit's (1 GiB) before burn reads them.
     std::fs::write(det.join("detector.json"), &text).unwrap();
-    std::fs::File::create(det.join("detector.bpk"))
-        .unwrap()
-        .set_len(1 << 35)
-        .unwrap();
+    sparse(&det.join("detector.bpk"), 1 << 35);
     let (ok, msg) = tactile(&["eval", "detector", "--model", s(&det), "--data", s(&vt)]);
     assert!(
         !ok && msg.contains("detector.bpk") && msg.contains("too large"),
         "{msg}"
     );
-    // A labels.csv of a terabyte of zeros (no line end): refused at the
-    // record bound, naming the file.
-    let zeros = tmp.path().join("zero-labels");
-    std::fs::create_dir(&zeros).unwrap();
-    std::fs::copy(vt.join("manifest.json"), zeros.join("manifest.json")).unwrap();
-    sparse(&zeros.join("labels.csv"));
-    let (ok, msg) = tactile(&["eval", "depth", "--model", s(&model), "--data", s(&zeros)]);
-    assert!(
-        !ok && msg.contains("labels.csv") && msg.contains("a record longer than"),
-        "{msg}"
-    );
-    let big = tmp.path().join("big-manifest");
-    std::fs::create_dir(&big).unwrap();
-    std::fs::copy(vt.join("labels.csv"), big.join("labels.csv")).unwrap();
-    sparse(&big.join("manifest.json"));
-    let (ok, msg) = tactile(&["eval", "depth", "--model", s(&model), "--data", s(&big)]);
-    assert!(
-        !ok && msg.contains("manifest.json") && msg.contains("too large"),
-        "{msg}"
-    );
+    // A labels.csv of a terabyte of zeros (no line end), refused at the
+    // record bound, and a manifest.json claiming a terabyte, refused by its
+    // size: each named.
+    for (name, kept, why) in [
+        ("labels.csv", "manifest.json", "a record longer than"),
+        ("manifest.json", "labels.csv", "too large"),
+    ] {
+        let ds = tmp.path().join(format!("sparse-{name}"));
+        std::fs::create_dir(&ds).unwrap();
+        std::fs::copy(vt.join(kept), ds.join(kept)).unwrap();
+        sparse(&ds.join(name), 1 << 40);
+        let (ok, msg) = tactile(&["eval", "depth", "--model", s(&model), "--data", s(&ds)]);
+        assert!(!ok && msg.contains(name) && msg.contains(why), "{msg}");
+    }
     // Counts near 2^63 are refused, not wrapped.
     let out = tmp.path().join("huge");
     for args in [
