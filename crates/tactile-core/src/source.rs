@@ -77,6 +77,20 @@ pub fn is_frame_file(p: &Path) -> bool {
         .is_some_and(|x| FRAME_EXTENSIONS.iter().any(|e| x.eq_ignore_ascii_case(e)))
 }
 
+/// True for a folder (not a link) that is a dataset or has a PNG or JPEG
+/// frame among its first thousand entries: a hint for a user who named the
+/// folder above the frames.
+fn folder_holds_frames(p: &Path) -> bool {
+    let is_dir = std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir());
+    is_dir
+        && (p.join("labels.csv").is_file()
+            || std::fs::read_dir(p).is_ok_and(|rd| {
+                rd.take(1000)
+                    .filter_map(|e| e.ok())
+                    .any(|e| is_frame_file(&e.path()))
+            }))
+}
+
 impl FrameList {
     /// The frames of `dir`: a dataset when it has `labels.csv`, else its
     /// PNG and JPEG files in name order (anything else is listed in
@@ -124,11 +138,18 @@ impl FrameList {
         ignored.sort();
         if v.is_empty() {
             return Err(Error::Invalid(format!(
-                "{}: no labels.csv and no PNG or JPEG frames{}",
+                "{}: no labels.csv and no PNG or JPEG frames{}{}",
                 dir.display(),
                 match ignored.len() {
                     0 => String::new(),
                     n => format!(" ({n} other files)"),
+                },
+                match ignored.iter().find(|p| folder_holds_frames(p)) {
+                    Some(sub) => format!(
+                        "; the folder {} holds frames: pass it instead",
+                        sub.display()
+                    ),
+                    None => String::new(),
                 }
             )));
         }

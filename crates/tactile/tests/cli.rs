@@ -1300,6 +1300,12 @@ fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
     std::fs::create_dir(&empty).unwrap();
     let (ok, msg) = tactile(&["run", "--data", empty.to_str().unwrap()]);
     assert!(!ok && msg.contains("no PNG or JPEG frames"), "{msg}");
+    // Naming the folder above the frames is told which folder holds them.
+    std::fs::create_dir(empty.join("frames")).unwrap();
+    std::fs::copy(video.join("000000.png"), empty.join("frames/0.png")).unwrap();
+    let (ok, msg) = tactile(&["run", "--data", empty.to_str().unwrap()]);
+    let hint = format!("the folder {} holds frames", empty.join("frames").display());
+    assert!(!ok && msg.contains(&hint), "{msg}");
 }
 
 #[test]
