@@ -82,6 +82,8 @@ impl DeviceKind {
 /// output (logits, depth in model units, features) out, flattened.
 pub trait Network: Send {
     /// Run on `input`, `shape[0] * shape[1] * shape[2] * shape[3]` values.
+    /// Once a stop is requested (Ctrl-C, SIGTERM) every run is refused with
+    /// `Interrupted`, so inference over many batches stops between two.
     fn run(&mut self, shape: [usize; 4], input: Vec<f32>) -> Result<Vec<f32>>;
     /// Where it runs.
     fn runtime(&self) -> Runtime;
@@ -139,6 +141,7 @@ impl<M: Forward> BurnNetwork<M> {
 
 impl<M: Forward + Send> Network for BurnNetwork<M> {
     fn run(&mut self, shape: [usize; 4], input: Vec<f32>) -> Result<Vec<f32>> {
+        tactile_core::interrupt::check()?;
         let n: usize = shape.iter().product();
         if input.len() != n {
             return Err(Error::shape(

@@ -147,7 +147,6 @@ impl DepthSet {
             .map_init(
                 || prior.map(|d| PriorSource::load(d, Runtime::BurnFlex, 1)),
                 |source, &i| -> Result<DepthSample> {
-                    tactile_core::interrupt::check()?;
                     let frame = ds.load_rgb(i)?;
                     let prior_mm = match source {
                         Some(Ok(p)) => Some(p.prior_mm(&frame, &ds.path_of(i, "file")?, [w, h])?),

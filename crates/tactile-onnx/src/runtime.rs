@@ -167,6 +167,7 @@ impl OrtModel {
 
 impl Network for OrtModel {
     fn run(&mut self, shape: [usize; 4], input: Vec<f32>) -> tactile_core::Result<Vec<f32>> {
+        tactile_core::interrupt::check()?;
         Ok(self.run_f32(&shape, input)?.1)
     }
 

@@ -789,3 +789,44 @@ fn a_pose_network_folder_is_checked_when_loaded() {
         );
     }
 }
+
+/// Ctrl-C (or SIGTERM) during a long estimate over a dataset stops it
+/// within a batch: exit 130, no estimates file, nothing staged left. Before,
+/// decoding and the networks ran to the end and wrote the file anyway.
+#[test]
+fn a_long_prediction_stops_at_ctrl_c_and_writes_nothing() {
+    let data = std::env::var_os("TACTILE_SHARED_REAL")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("../shared/real"))
+        .join("tactip331-surface");
+    let tmp = tempfile::tempdir().unwrap();
+    for (model, signal) in [("pose-surface", "-INT"), ("cae-surface", "-TERM")] {
+        let out = tmp.path().join(format!("{model}.csv"));
+        let mut child = Command::new(bin())
+            .args(["predict", "--model", s(&root().join("models").join(model))])
+            .args(["--data", s(&data), "--out", s(&out)])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // 8,000 frames take half a minute or more: stop it in the middle.
+        std::thread::sleep(Duration::from_millis(2500));
+        let t0 = Instant::now();
+        Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        let status = child.wait().unwrap();
+        let mut msg = String::new();
+        std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut msg).unwrap();
+        assert_eq!(status.code(), Some(130), "{model}: {msg}");
+        assert!(msg.contains("interrupted"), "{model}: {msg}");
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "{model}: {:?}",
+            t0.elapsed()
+        );
+        let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().collect();
+        assert!(left.is_empty(), "{model}: {left:?}");
+    }
+}

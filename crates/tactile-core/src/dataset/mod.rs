@@ -346,8 +346,11 @@ impl Dataset {
     }
 
     /// The frame of row `i` as RGB, refused (naming the file) when its
-    /// size is not the manifest's.
+    /// size is not the manifest's. Every `load_*` returns `Interrupted`
+    /// once a stop is requested, so a loader over thousands of rows stops
+    /// at Ctrl-C instead of decoding them all.
     pub fn load_rgb(&self, i: usize) -> Result<crate::image_io::RgbImage> {
+        crate::interrupt::check()?;
         let path = self.path_of(i, "file")?;
         let img = crate::image_io::load_rgb(&path)?;
         self.expect_frame_size(&path, img.width(), img.height())?;
@@ -357,6 +360,7 @@ impl Dataset {
     /// The greyscale image in `column` (`file`, `mask`) of row `i`, refused
     /// (naming the file) when its size is not the manifest's.
     pub fn load_grey(&self, i: usize, column: &str) -> Result<crate::image_io::GreyImage> {
+        crate::interrupt::check()?;
         let path = self.path_of(i, column)?;
         let img = crate::image_io::load_grey(&path)?;
         self.expect_frame_size(&path, img.width(), img.height())?;
@@ -366,6 +370,7 @@ impl Dataset {
     /// The depth map of row `i` in metres, `(width, height, values)`,
     /// refused (naming the file) when its size is not the manifest's.
     pub fn load_depth_m(&self, i: usize) -> Result<(usize, usize, Vec<f32>)> {
+        crate::interrupt::check()?;
         let path = self.path_of(i, "depth")?;
         let (w, h, d) = crate::npy::read_depth_npy_of(&path, self.manifest.depth_maps())?;
         self.expect_frame_size(&path, w, h)?;
