@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -141,6 +142,34 @@ def test_ctrl_c_stops_training_and_marks_it_incomplete(small_vt, tmp_path):
     assert (out / "INCOMPLETE").is_file()
     with pytest.raises(ValueError, match="did not finish training"):
         tactile.eval.detector(out, small_vt)
+
+
+def test_ctrl_c_stops_a_long_prediction_and_writes_nothing(root, tmp_path):
+    """`tactile.predict` over the 8,000 real surface frames (half a minute)
+    stops within a batch at Ctrl-C: KeyboardInterrupt, no estimates file."""
+    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
+    data = real / "tactip331-surface"
+    if not data.is_dir():
+        pytest.skip("the real TacTip surface set is in ../shared/real")
+    out = tmp_path / "estimates.csv"
+    code = (
+        "import signal, tactile\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        f"tactile.predict({str(root / 'models/pose-surface')!r}, {str(data)!r}, {str(out)!r})\n"
+    )
+    p = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+    time.sleep(4)
+    assert p.poll() is None, p.stderr.read()
+    t0 = time.time()
+    p.send_signal(signal.SIGINT)
+    try:
+        _, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        raise
+    assert p.returncode != 0 and "KeyboardInterrupt" in err, err
+    assert time.time() - t0 < 10
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
