@@ -219,6 +219,9 @@ fn regression_table(
     );
     for (name, [tx, vx, sx]) in sets {
         for est in [mlp.as_str(), "ridge", "k-NN (k=5)"] {
+            // A classical fit (ridge on raw pixels) can take an hour and
+            // cannot be stopped inside: Ctrl-C stops between two.
+            tactile_core::interrupt::check()?;
             tactile_core::note!("{name} + {est}");
             let t0 = std::time::Instant::now();
             let pred = match est {
@@ -267,6 +270,9 @@ fn classification_table(
             "Gaussian naive Bayes",
             "k-NN (k=5)",
         ] {
+            // A classical fit (ridge on raw pixels) can take an hour and
+            // cannot be stopped inside: Ctrl-C stops between two.
+            tactile_core::interrupt::check()?;
             tactile_core::note!("{name} + {est}");
             let t0 = std::time::Instant::now();
             let pred = match est {
