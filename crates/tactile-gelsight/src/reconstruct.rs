@@ -37,37 +37,45 @@ pub struct ReconstructReport {
     pub ms_per_frame: f64,
     /// The deepest indentation over all frames, mm.
     pub peak_mm: f64,
+    /// What a user should know of the input (files that are not frames,
+    /// gaps in the numbering).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
-/// The PNG frames `data` names: itself, or those in it (sorted).
-pub fn frame_files(data: &Path) -> Result<Vec<PathBuf>> {
+/// The frames `data` names: itself, or those of a folder as every command
+/// reads one (`tactile_core::source::FrameList`: a dataset's rows, else its
+/// PNG and JPEG frames in name order, each checked to be a file inside the
+/// folder), with the warnings to show first (files that are not frames,
+/// gaps in the numbering). Two frames whose names differ only by their
+/// extension are refused: both would be written to one `.npy`.
+pub fn frame_files(data: &Path) -> Result<(Vec<PathBuf>, Vec<String>)> {
     if data.is_file() {
-        return Ok(vec![data.to_path_buf()]);
+        return Ok((vec![data.to_path_buf()], Vec::new()));
     }
-    let entries = std::fs::read_dir(data).map_err(|e| tactile_core::Error::io(data, e))?;
-    let mut files = Vec::new();
-    for e in entries.flatten() {
-        let p = e.path();
-        let png = p.extension().is_some_and(|x| x.eq_ignore_ascii_case("png"));
-        if png && p.is_file() {
-            tactile_core::dataset::expect_entry_inside(data, &p)?;
-            if files.len() >= MAX_FRAMES {
-                return Err(Error::Layout {
-                    path: data.to_path_buf(),
-                    why: format!("more than {MAX_FRAMES} frames"),
-                });
-            }
-            files.push(p);
-        }
-    }
-    if files.is_empty() {
+    let list = tactile_core::source::FrameList::open(data)?;
+    if list.frames.len() > MAX_FRAMES {
         return Err(Error::Layout {
             path: data.to_path_buf(),
-            why: "no PNG frames here".into(),
+            why: format!("more than {MAX_FRAMES} frames"),
         });
     }
-    files.sort();
-    Ok(files)
+    let mut by_stem = std::collections::HashMap::new();
+    for f in &list.frames {
+        let stem = f.path.file_stem().unwrap_or_default();
+        if let Some(before) = by_stem.insert(stem, &f.path) {
+            return Err(Error::Layout {
+                path: f.path.clone(),
+                why: format!(
+                    "has the name of {} but for its extension; both would be written to {}.npy (rename one)",
+                    before.display(),
+                    stem.to_string_lossy()
+                ),
+            });
+        }
+    }
+    let warnings = list.warnings();
+    Ok((list.frames.into_iter().map(|f| f.path).collect(), warnings))
 }
 
 /// Reconstruct every frame `data` names with the model in `model` into
@@ -78,7 +86,7 @@ pub fn reconstruct_folder(
     out: &Path,
     options: &ReconstructOptions,
 ) -> Result<ReconstructReport> {
-    let files = frame_files(data)?;
+    let (files, warnings) = frame_files(data)?;
     // Both folders are new: one with files in it is refused before any work.
     let staged = tactile_core::io::StagedDir::fresh(out)?;
     let render = options
@@ -130,6 +138,7 @@ pub fn reconstruct_folder(
         frames: files.len(),
         ms_per_frame: times[times.len() / 2],
         peak_mm: peak,
+        warnings,
     })
 }
 

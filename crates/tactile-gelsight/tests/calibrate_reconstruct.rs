@@ -293,7 +293,44 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     let empty = tmp.path().join("empty");
     std::fs::create_dir_all(&empty).unwrap();
     let e = reconstruct_folder(&model, &empty, &out, &o).unwrap_err();
-    assert!(e.to_string().contains("no PNG frames"), "{e}");
+    assert!(e.to_string().contains("no PNG or JPEG frames"), "{e}");
+    // A JPEG frame is read like a PNG; one named like another frame but for
+    // its extension is refused (both would be one .npy), naming both.
+    let twins = tmp.path().join("twins");
+    std::fs::create_dir_all(&twins).unwrap();
+    let first = std::fs::read_dir(d.join("frames"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let rgb = tactile_core::image_io::load_rgb(&first).unwrap();
+    image::RgbImage::from_raw(
+        rgb.width() as u32,
+        rgb.height() as u32,
+        rgb.as_slice().to_vec(),
+    )
+    .unwrap()
+    .save(twins.join("a.jpg"))
+    .unwrap();
+    std::fs::write(twins.join("notes.txt"), "not a frame").unwrap();
+    let r = reconstruct_folder(&model, &twins, &out, &o).unwrap();
+    assert_eq!(r.frames, 1);
+    assert!(out.join("a.npy").is_file());
+    assert!(
+        r.warnings.iter().any(|w| w.contains("notes.txt")),
+        "{:?}",
+        r.warnings
+    );
+    std::fs::copy(&first, twins.join("a.png")).unwrap();
+    let again = tmp.path().join("again");
+    let e = reconstruct_folder(&model, &twins, &again, &o).unwrap_err();
+    assert!(
+        e.to_string().contains("a.jpg") && e.to_string().contains("a.png"),
+        "{e}"
+    );
+    assert!(!again.exists());
+    std::fs::remove_dir_all(&out).unwrap();
     // A background of another size is refused, naming it.
     let o = ReconstructOptions {
         background: Some(odd.join("small.png")),

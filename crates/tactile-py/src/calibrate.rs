@@ -38,7 +38,8 @@ pub(crate) fn calibrate_ball<'py>(
     crate::json::to_py(py, &v)
 }
 
-/// Reconstruct every frame of `data` (a PNG or a folder of them) with the
+/// Reconstruct every frame of `data` (a frame, a folder of PNG or JPEG
+/// frames, or a dataset folder) with the
 /// model in `model` into the new folder `out`: what `tactile reconstruct`
 /// prints as its last line.
 #[pyfunction]
@@ -60,6 +61,9 @@ pub(crate) fn reconstruct_frames<'py>(
     let r = interruptible(py, || {
         reconstruct_folder(&model, &data, &out, &options).py()
     })?;
+    for w in &r.warnings {
+        crate::errors::user_warning(py, w)?;
+    }
     let v = serde_json::to_value(&r)
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     crate::json::to_py(py, &v)

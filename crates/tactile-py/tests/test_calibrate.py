@@ -65,6 +65,16 @@ def test_a_numpy_frame_reconstructs_as_the_folder_does(presses: Path, model: Pat
     assert got.max() > 2e-4
     rest = rec.reconstruct(tactile.read_rgb(presses / "background.png"))
     assert np.abs(rest).max() < 1e-5
+    # A folder: its frames in name order, a file that is not one named in a
+    # warning and in the result.
+    folder = tmp_path / "folder"
+    folder.mkdir()
+    shutil.copy(frame_file, folder / "0001.png")
+    (folder / "notes.txt").write_text("not a frame")
+    with pytest.warns(UserWarning, match="notes.txt"):
+        r = tactile.calibrate.reconstruct(model, folder, tmp_path / "maps2", runtime="onnx")
+    assert r["frames"] == 1 and any("notes.txt" in w for w in r["warnings"])
+    np.testing.assert_allclose(np.load(tmp_path / "maps2" / "0001.npy"), saved, atol=1e-7)
 
 
 def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):

@@ -74,7 +74,8 @@ pub(crate) struct ReconstructArgs {
     /// A calibrated sensor's model folder (tactile calibrate ball).
     #[arg(long)]
     model: PathBuf,
-    /// A frame, or a folder of frames (PNG) of that sensor.
+    /// A frame, a folder of frames (PNG or JPEG) of that sensor, or a
+    /// dataset folder (its rows' frames).
     #[arg(long)]
     data: PathBuf,
     /// Output folder (new): <frame stem>.npy per frame, float32 H x W, the skin's indentation in metres (toward the camera; 0 at rest).
@@ -102,6 +103,9 @@ pub(crate) fn reconstruct(a: ReconstructArgs) -> Result<()> {
             runtime: a.runtime,
         },
     )?;
+    for w in &r.warnings {
+        tactile_core::note!("{w}");
+    }
     say!(
         "{} frames reconstructed into {} ({:.2} ms per frame, {}); deepest {:.3} mm",
         r.frames,
