@@ -46,6 +46,33 @@ impl FrameViews {
     }
 }
 
+/// The names a run's pictures take: each frame's stem, and `STEM-2`,
+/// `STEM-3`, ... for a later frame whose stem is taken (`a.png` and
+/// `a.jpg`, or one file name in two folders of a dataset), so no frame's
+/// pictures overwrite another's.
+#[derive(Default)]
+pub struct PictureStems {
+    used: std::collections::HashSet<String>,
+}
+
+impl PictureStems {
+    /// The name for the pictures of the frame named `frame_name`.
+    pub fn next(&mut self, frame_name: &str) -> String {
+        let stem = Path::new(frame_name)
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        let mut name = stem.clone();
+        let mut k = 2;
+        while !self.used.insert(name.clone()) {
+            name = format!("{stem}-{k}");
+            k += 1;
+        }
+        name
+    }
+}
+
 /// A calibrated sensor's skin under one frame.
 pub struct SensorView {
     /// The indentation at the frame's size, metres.
@@ -202,5 +229,20 @@ impl TendonView {
             tactile_core::plot::draw_marks(&mut rgb, width, s, &marks)?;
         }
         tactile_core::image_io::save_rgb_png(path, width, s, &rgb)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PictureStems;
+
+    #[test]
+    fn frames_that_share_a_stem_get_pictures_of_their_own() {
+        let mut stems = PictureStems::default();
+        let names: Vec<String> = ["a.png", "a.jpg", "b.png", "a-2.png", "a.jpeg"]
+            .iter()
+            .map(|n| stems.next(n))
+            .collect();
+        assert_eq!(names, ["a", "a-2", "b", "a-2-2", "a-3"]);
     }
 }

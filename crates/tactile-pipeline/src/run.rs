@@ -278,6 +278,7 @@ pub fn run(
         }
         None => None,
     };
+    let mut stems = crate::overlay::PictureStems::default();
     let mut filter = options
         .hysteresis
         .map(|(on, off)| Hysteresis::new(on, off))
@@ -308,11 +309,7 @@ pub fn run(
         rec.latency_ms = frame.arrived.map(|t| 1e3 * t.elapsed().as_secs_f64());
         rec.stamp_ns = frame.stamp_ns;
         if let (Some(staged), Some(v)) = (&render, &views) {
-            let stem = Path::new(&frame.name)
-                .file_stem()
-                .unwrap_or_default()
-                .to_string_lossy()
-                .into_owned();
+            let stem = stems.next(&frame.name);
             v.save_pngs(staged.path(), &stem, &frame.image)?;
         }
         if let Some(peak) = rec.indentation_peak_mm {

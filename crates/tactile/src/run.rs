@@ -70,11 +70,13 @@ pub(crate) struct RunArgs {
     /// Process at most this many frames.
     #[arg(long)]
     limit: Option<u64>,
-    /// Write an overlay PNG per tendon frame into this folder: the
-    /// segmenter's window with the kept region in green and the direction
-    /// in red, beside the depth heat map (paper B's figure 3); with a
-    /// calibrated sensor, NAME-indentation.png per frame (the frame, a
-    /// shaded 3-D view and the indentation in mm).
+    /// Write an overlay PNG per tendon frame into this folder
+    /// (NAME-overlay.png): the segmenter's window with the kept region in
+    /// green and the direction in red, beside the depth heat map (paper
+    /// B's figure 3); with a calibrated sensor, NAME-indentation.png per
+    /// frame (the frame, a shaded 3-D view and the indentation in mm).
+    /// NAME is the frame's name without its extension, NAME-2, NAME-3, ...
+    /// for later frames of the same name.
     #[arg(long)]
     render: Option<PathBuf>,
     /// Hysteresis on the detector over each sequence: ON,OFF probabilities
