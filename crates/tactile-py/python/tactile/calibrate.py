@@ -42,9 +42,9 @@ def reconstruct(
 ) -> Dict[str, Any]:
     """Every frame of ``data`` (a frame, a folder of PNG or JPEG frames, or
     a dataset folder) to ``out/<stem>.npy``; files that are not frames are
-    named in a ``UserWarning`` (and in the result's ``warnings``); ``render`` also writes pictures (frame, shaded
-    skin, indentation with a colour bar); ``background`` replaces the
-    calibration's rest frame."""
+    named in a ``UserWarning`` (and in the result's ``warnings``);
+    ``render`` also writes pictures (frame, shaded skin, indentation with a
+    colour bar); ``background`` replaces the calibration's rest frame."""
     return _tactile.reconstruct_frames(
         os.fspath(model),
         os.fspath(data),
