@@ -15,6 +15,11 @@ pub struct PinSet {
     pub images: Vec<PinImage>,
 }
 
+/// Rows of a dataset preprocessed at a time when only their estimates are
+/// kept (inference over a whole dataset): 1,024 pin images of 128 px are
+/// 64 MiB, where a million rows at once would be 64 GiB.
+pub const DATASET_CHUNK: usize = 1024;
+
 impl PinSet {
     /// Preprocess every frame of `ds` (in parallel).
     pub fn from_dataset(ds: &Dataset, cfg: &PreprocessConfig) -> Result<Self> {
@@ -64,6 +69,25 @@ impl PinSet {
             }
         }
         Ok(sets)
+    }
+
+    /// Every row of `ds` preprocessed once per preprocessing of `cfgs`, a
+    /// chunk of `chunk_rows` rows ([`DATASET_CHUNK`] for inference) at a
+    /// time, each chunk's sets handed to `each` in order: a dataset of any
+    /// length in bounded memory.
+    pub fn for_each_chunk<E: From<crate::Error>>(
+        ds: &Dataset,
+        cfgs: &[PreprocessConfig],
+        chunk_rows: usize,
+        mut each: impl FnMut(Vec<Self>) -> std::result::Result<(), E>,
+    ) -> std::result::Result<(), E> {
+        ds.expect_kind(DatasetKind::Tactip)
+            .map_err(crate::Error::from)?;
+        let rows: Vec<usize> = (0..ds.len()).collect();
+        for chunk in rows.chunks(chunk_rows.max(1)) {
+            each(Self::from_rows_each(ds, chunk, cfgs)?)?;
+        }
+        Ok(())
     }
 
     /// Pin images alone (perturbed or live frames), without file names.

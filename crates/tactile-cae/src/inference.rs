@@ -10,7 +10,7 @@ use tactile_core::image_io::GreyImage;
 use tactile_preprocess::PinImage;
 
 use crate::artifact::CaeArtifact;
-use crate::data::PinSet;
+use crate::data::{DATASET_CHUNK, PinSet};
 use crate::{Error, Result};
 
 /// Pin images per network call.
@@ -79,11 +79,19 @@ impl TactipEncoder {
         Ok(out)
     }
 
-    /// Preprocess and encode every frame of a TacTip dataset.
-    pub fn encode_dataset(&mut self, ds: &Dataset) -> Result<(PinSet, Vec<Vec<f32>>)> {
-        let pins = PinSet::from_dataset(ds, &self.artifact.preprocess)?;
-        let feats = self.encode(&pins.images)?;
-        Ok((pins, feats))
+    /// Preprocess and encode every frame of a TacTip dataset, a chunk at a
+    /// time ([`PinSet::for_each_chunk`]): each row's `file` label and
+    /// features.
+    pub fn encode_dataset(&mut self, ds: &Dataset) -> Result<(Vec<String>, Vec<Vec<f32>>)> {
+        let cfg = self.artifact.preprocess.clone();
+        let (mut files, mut feats) = (Vec::with_capacity(ds.len()), Vec::with_capacity(ds.len()));
+        PinSet::for_each_chunk(ds, std::slice::from_ref(&cfg), DATASET_CHUNK, |mut sets| {
+            let set = sets.swap_remove(0);
+            feats.extend(self.encode(&set.images)?);
+            files.extend(set.files);
+            Ok::<(), Error>(())
+        })?;
+        Ok((files, feats))
     }
 }
 

@@ -68,3 +68,35 @@ fn one_autoencoder_trains_on_two_datasets_each_with_its_own_head() {
     };
     assert!(err.contains("tasks.json") && err.contains("56 px"), "{err}");
 }
+
+#[test]
+fn a_dataset_read_in_chunks_gives_every_row_in_order() {
+    use tactile_cae::data::PinSet;
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("d");
+    let cfg = datasets_synth::TactipConfig::default();
+    datasets_synth::write_tactip(&cfg, 7, 5, &d, Default::default()).unwrap();
+    let ds = Dataset::open(&d).unwrap();
+    let pre = tactile_preprocess::PreprocessConfig::paper();
+    let whole = PinSet::from_dataset(&ds, &pre).unwrap();
+    let mut chunks = Vec::new();
+    PinSet::for_each_chunk(&ds, std::slice::from_ref(&pre), 3, |mut sets| {
+        chunks.push(sets.swap_remove(0));
+        Ok::<_, tactile_cae::Error>(())
+    })
+    .unwrap();
+    assert_eq!(
+        chunks.iter().map(|c| c.files.len()).collect::<Vec<_>>(),
+        [3, 3, 1]
+    );
+    let files: Vec<String> = chunks.iter().flat_map(|c| c.files.clone()).collect();
+    assert_eq!(files, whole.files);
+    let pixels = |s: &PinSet| {
+        s.images
+            .iter()
+            .map(|p| p.pixels.clone())
+            .collect::<Vec<_>>()
+    };
+    let chunked: Vec<Vec<f32>> = chunks.iter().flat_map(pixels).collect();
+    assert_eq!(chunked, pixels(&whole));
+}

@@ -46,9 +46,9 @@ pub struct ReconstructReport {
 /// The frames `data` names: itself, or those of a folder as every command
 /// reads one (`tactile_core::source::FrameList`: a dataset's rows, else its
 /// PNG and JPEG frames in name order, each checked to be a file inside the
-/// folder), with the warnings to show first (files that are not frames,
-/// gaps in the numbering). Two frames whose names differ only by their
-/// extension are refused: both would be written to one `.npy`.
+/// folder), with what the user should be told (files that are not frames,
+/// gaps in the numbering). Two frames of one name once their extensions
+/// are dropped are refused: both would be written to one `.npy`.
 pub fn frame_files(data: &Path) -> Result<(Vec<PathBuf>, Vec<String>)> {
     if data.is_file() {
         return Ok((vec![data.to_path_buf()], Vec::new()));
@@ -67,7 +67,7 @@ pub fn frame_files(data: &Path) -> Result<(Vec<PathBuf>, Vec<String>)> {
             return Err(Error::Layout {
                 path: f.path.clone(),
                 why: format!(
-                    "has the name of {} but for its extension; both would be written to {}.npy (rename one)",
+                    "has the name of {} once their extensions are dropped; both would be written to {}.npy (rename one)",
                     before.display(),
                     stem.to_string_lossy()
                 ),

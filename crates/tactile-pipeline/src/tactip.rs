@@ -570,13 +570,13 @@ impl TactipPerception {
     /// Perceive every frame of a dataset, timing encoding and estimation.
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
         let t0 = std::time::Instant::now();
-        let (pins, feats) = self.encoder.encode_dataset(ds)?;
+        let (files, feats) = self.encoder.encode_dataset(ds)?;
         let ms_encode = 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64;
         let t1 = std::time::Instant::now();
         let estimates = self.estimators.estimate(&feats)?;
         let ms_estimate = 1e3 * t1.elapsed().as_secs_f64() / ds.len().max(1) as f64;
         Ok(Perception {
-            files: pins.files,
+            files,
             stamps_ns: None,
             estimates,
             ms_encode,

@@ -14,6 +14,7 @@ use crate::Result;
 use crate::artifact::{PoseArtifact, PoseEnsemble, check_alike};
 use crate::training::PREDICT_BATCH;
 use crate::uncertainty::{Mixture, deviation};
+use tactile_cae::data::DATASET_CHUNK;
 
 /// A loaded pose network with its preprocessing, or an ensemble of them
 /// ([`PoseEnsemble`]) whose estimates are averaged. The members of a
@@ -256,15 +257,25 @@ impl PoseEstimator {
         Ok((values, Some(std)))
     }
 
-    /// Every frame of a TacTip dataset.
+    /// Every frame of a TacTip dataset, a chunk at a time
+    /// ([`tactile_cae::data::PinSet::for_each_chunk`]).
     pub fn predict_dataset(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
         let t0 = std::time::Instant::now();
-        let rows: Vec<usize> = (0..ds.len()).collect();
-        let mut sets = tactile_cae::data::PinSet::from_rows_each(ds, &rows, &self.scales)?;
-        let views: Vec<&[PinImage]> = sets.iter().map(|s| s.images.as_slice()).collect();
-        let (values, std) = self.predict_scales_with_std(&views)?;
+        let (mut files, mut values) = (Vec::with_capacity(ds.len()), Vec::with_capacity(ds.len()));
+        let mut std: Option<Vec<Vec<f64>>> = None;
+        let scales = self.scales.clone();
+        tactile_cae::data::PinSet::for_each_chunk(ds, &scales, DATASET_CHUNK, |mut sets| {
+            let views: Vec<&[PinImage]> = sets.iter().map(|s| s.images.as_slice()).collect();
+            let (v, s) = self.predict_scales_with_std(&views)?;
+            values.extend(v);
+            if let Some(s) = s {
+                std.get_or_insert_with(Vec::new).extend(s);
+            }
+            files.extend(sets.swap_remove(0).files);
+            Ok::<(), crate::Error>(())
+        })?;
         Ok(PoseEstimates {
-            files: sets.swap_remove(0).files,
+            files,
             names: self
                 .artifact
                 .targets

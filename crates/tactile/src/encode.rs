@@ -34,8 +34,8 @@ pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     {
         tactile_core::note!("{w}");
     }
-    let (pins, feats) = enc.encode_dataset(&ds)?;
-    write_features_csv(&a.out, &pins.files, &feats)?;
+    let (files, feats) = enc.encode_dataset(&ds)?;
+    write_features_csv(&a.out, &files, &feats)?;
     say!(
         "{} feature vectors of {} values written to {}",
         feats.len(),
