@@ -115,30 +115,42 @@ def test_eval_on_the_wrong_kind_of_model(root, small_vt):
         tactile.eval.segmenter(root / "models/detector", small_vt)
 
 
-def test_ctrl_c_stops_training_and_marks_it_incomplete(small_vt, tmp_path):
-    out = tmp_path / "det"
-    # A shell's background job inherits SIGINT ignored, and Python then
-    # installs no KeyboardInterrupt handler: restore it, as at a terminal.
+def _python(call: str) -> subprocess.Popen:
+    """`call` in a new interpreter that turns Ctrl-C into KeyboardInterrupt
+    (a shell's background job inherits SIGINT ignored, and Python then
+    installs no handler: restored, as at a terminal)."""
     code = (
         "import signal, tactile\n"
         "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
-        f"tactile.train.detector({str(small_vt)!r}, {str(out)!r}, width=0.25, input=(64, 48),"
-        " max_epochs=100000, patience=100000, batch_size=8)\n"
+        f"{call}\n"
     )
-    p = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 120
-    while not (out / "checkpoint").exists():
-        assert p.poll() is None, p.stderr.read()
-        assert time.time() < deadline, "training never wrote a checkpoint"
-        time.sleep(0.2)
+    return subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+
+
+def _interrupt(p: subprocess.Popen) -> str:
+    """Ctrl-C to `p`; its standard error once it ended with KeyboardInterrupt."""
     p.send_signal(signal.SIGINT)
     try:
         _, err = p.communicate(timeout=60)
     except subprocess.TimeoutExpired:
         p.kill()
         raise
-    assert p.returncode != 0
-    assert "KeyboardInterrupt" in err
+    assert p.returncode != 0 and "KeyboardInterrupt" in err, err
+    return err
+
+
+def test_ctrl_c_stops_training_and_marks_it_incomplete(small_vt, tmp_path):
+    out = tmp_path / "det"
+    p = _python(
+        f"tactile.train.detector({str(small_vt)!r}, {str(out)!r}, width=0.25, input=(64, 48),"
+        " max_epochs=100000, patience=100000, batch_size=8)"
+    )
+    deadline = time.time() + 120
+    while not (out / "checkpoint").exists():
+        assert p.poll() is None, p.stderr.read()
+        assert time.time() < deadline, "training never wrote a checkpoint"
+        time.sleep(0.2)
+    _interrupt(p)
     assert (out / "INCOMPLETE").is_file()
     with pytest.raises(ValueError, match="did not finish training"):
         tactile.eval.detector(out, small_vt)
@@ -152,22 +164,11 @@ def test_ctrl_c_stops_a_long_prediction_and_writes_nothing(root, tmp_path):
     if not data.is_dir():
         pytest.skip("the real TacTip surface set is in ../shared/real")
     out = tmp_path / "estimates.csv"
-    code = (
-        "import signal, tactile\n"
-        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
-        f"tactile.predict({str(root / 'models/pose-surface')!r}, {str(data)!r}, {str(out)!r})\n"
-    )
-    p = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+    p = _python(f"tactile.predict({str(root / 'models/pose-surface')!r}, {str(data)!r}, {str(out)!r})")
     time.sleep(4)
     assert p.poll() is None, p.stderr.read()
     t0 = time.time()
-    p.send_signal(signal.SIGINT)
-    try:
-        _, err = p.communicate(timeout=60)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        raise
-    assert p.returncode != 0 and "KeyboardInterrupt" in err, err
+    _interrupt(p)
     assert time.time() - t0 < 10
     assert list(tmp_path.iterdir()) == []
 
