@@ -14,11 +14,19 @@ import pytest
 import tactile
 
 ROOT = Path(__file__).resolve().parents[3]
+# The project's real sensor data (`../shared/real` beside the clone, or
+# TACTILE_SHARED_REAL).
+SHARED_REAL = Path(os.environ.get("TACTILE_SHARED_REAL", ROOT.parent / "shared" / "real"))
 
 
 @pytest.fixture(scope="session")
 def root() -> Path:
     return ROOT
+
+
+@pytest.fixture(scope="session")
+def shared_real() -> Path:
+    return SHARED_REAL
 
 
 @pytest.fixture(scope="session")

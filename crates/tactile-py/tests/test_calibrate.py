@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 
 import tactile
+from conftest import SHARED_REAL
 
-BALL = Path(__file__).resolve().parents[3].parent / "shared" / "real" / "gelsight-ball"
+BALL = SHARED_REAL / "gelsight-ball"
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 import shutil
 import warnings
 from pathlib import Path
@@ -90,10 +89,9 @@ def test_encoder_errors(root, tmp_path):
         enc.encode([np.zeros((300, 300), np.uint8), np.zeros((300, 300, 2), np.uint8)])
 
 
-def test_pose_estimator_matches_tactile_predict(tactile_bin, root, tmp_path):
+def test_pose_estimator_matches_tactile_predict(tactile_bin, root, tmp_path, shared_real):
     """The pose network from Python gives `tactile predict`'s estimates."""
-    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
-    data = real / "tactip127-edge"
+    data = shared_real / "tactip127-edge"
     out = tmp_path / "estimates.csv"
     run_cli(tactile_bin, "predict", "--model", "models/pose-edge", "--data", str(data),
             "--out", str(out), "--device", "flex")
@@ -114,11 +112,10 @@ def test_pose_estimator_matches_tactile_predict(tactile_bin, root, tmp_path):
         tactile.PoseEstimator(tmp_path / "nowhere")
 
 
-def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bin, root, tmp_path):
+def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bin, root, tmp_path, shared_real):
     """models/pose-surface from Python: each target and its calibrated
     standard deviation, as `tactile predict` writes them."""
-    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
-    src = real / "tactip331-surface"
+    src = shared_real / "tactip331-surface"
     data = tmp_path / "surface"
     (data / "frames").mkdir(parents=True)
     with open(src / "labels.csv") as f:
@@ -182,11 +179,10 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
         tactile.train.calibrate(model, data, calibration_from=root / "models/pose-surface")
 
 
-def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root):
+def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root, shared_real):
     """models/cae-surface (a 9 px first kernel) through burn and through its
     ONNX export: the same features and estimates on real surface frames."""
-    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
-    src = real / "tactip331-surface"
+    src = shared_real / "tactip331-surface"
     with open(src / "labels.csv") as f:
         rows = list(csv.DictReader(f))[:16]
     frames = [tactile.read_grey(src / r["file"]) for r in rows]
@@ -204,13 +200,12 @@ def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root):
         assert np.allclose(ea[t], eb[t], atol=1e-3), t
 
 
-def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, tmp_path):
+def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, tmp_path, shared_real):
     """`tactile.predict` is `tactile predict`: on a folder of 8 real surface
     frames (no dataset around them), the same CSV byte for byte, the same
     values returned; an encoder route with a limit; bad input named. (A
     bag written by `rosbags`: tests/test_robots.py.)"""
-    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
-    src = real / "tactip331-surface"
+    src = shared_real / "tactip331-surface"
     with open(src / "labels.csv") as f:
         names = [r["file"] for r in csv.DictReader(f)][:8]
     folder = tmp_path / "frames"

@@ -424,12 +424,12 @@ def test_paper_a_estimates_as_mcap_match_the_csv(tactile_bin, root, tmp_path):
             assert value == pytest.approx(float(row[name]), abs=1e-4), name
 
 
-def test_a_tactip_bag_gives_the_folders_estimates_stamped_like_its_frames(root, tmp_path):
+def test_a_tactip_bag_gives_the_folders_estimates_stamped_like_its_frames(root, tmp_path, shared_real):
     """A TacTip recorded as `ros2 bag record` would (mono8 Images, written by
     `rosbags`): `tactile.predict` on the bag gives each frame the estimates
     of the same PNG frames in a folder, with the message's stamp, and its
     MCAP output (read by `mcap-ros2-support`) stamps each estimate so."""
-    src = root.parent / "shared" / "real" / "tactip331-surface" / "frames"
+    src = shared_real / "tactip331-surface" / "frames"
     if not src.is_dir():
         pytest.skip("the real TacTip surface set is in ../shared/real")
     folder = tmp_path / "frames"
@@ -469,11 +469,11 @@ def test_a_tactip_bag_gives_the_folders_estimates_stamped_like_its_frames(root, 
             assert value == pytest.approx(want[name][i], abs=1e-9), name
 
 
-def test_a_calibrated_sensor_writes_its_indentation(tactile_bin, root, tmp_path):
+def test_a_calibrated_sensor_writes_its_indentation(tactile_bin, root, tmp_path, shared_real):
     """With a calibrated sensor (models/gelsight-r15) on real ball presses,
     /tactile/indentation holds each frame's indentation in mm, its peak the
     record's."""
-    frames = root.parent / "shared" / "real" / "gelsight-ball" / "frames"
+    frames = shared_real / "gelsight-ball" / "frames"
     if not frames.is_dir():
         pytest.skip("the real GelSight ball presses are in ../shared/real")
     out = tmp_path / "presses.mcap"

@@ -10,7 +10,6 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -156,11 +155,10 @@ def test_ctrl_c_stops_training_and_marks_it_incomplete(small_vt, tmp_path):
         tactile.eval.detector(out, small_vt)
 
 
-def test_ctrl_c_stops_a_long_prediction_and_writes_nothing(root, tmp_path):
+def test_ctrl_c_stops_a_long_prediction_and_writes_nothing(root, tmp_path, shared_real):
     """`tactile.predict` over the 8,000 real surface frames (half a minute)
     stops within a batch at Ctrl-C: KeyboardInterrupt, no estimates file."""
-    real = Path(os.environ.get("TACTILE_SHARED_REAL", root.parent / "shared" / "real"))
-    data = real / "tactip331-surface"
+    data = shared_real / "tactip331-surface"
     if not data.is_dir():
         pytest.skip("the real TacTip surface set is in ../shared/real")
     out = tmp_path / "estimates.csv"

@@ -18,6 +18,14 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
+/// The project's real sensor data (`../shared/real` beside the clone, or
+/// TACTILE_SHARED_REAL).
+fn shared_real() -> PathBuf {
+    std::env::var_os("TACTILE_SHARED_REAL")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("../shared/real"))
+}
+
 /// One network of the shipped detector (its first member when it is an
 /// ensemble), for tests that edit a detector's config.
 fn shipped_network() -> PathBuf {
@@ -758,10 +766,7 @@ fn a_pose_network_folder_is_checked_when_loaded() {
     let tmp = tempfile::tempdir().unwrap();
     let shipped = root().join("models/pose-edge");
     let text = std::fs::read_to_string(shipped.join("pose.json")).unwrap();
-    let data = root().join("../shared/real/tactip127-edge");
-    let data = std::env::var_os("TACTILE_SHARED_REAL")
-        .map(|p| PathBuf::from(p).join("tactip127-edge"))
-        .unwrap_or(data);
+    let data = shared_real().join("tactip127-edge");
     for (name, from, to, says) in [
         (
             "huge",
@@ -795,10 +800,7 @@ fn a_pose_network_folder_is_checked_when_loaded() {
 /// decoding and the networks ran to the end and wrote the file anyway.
 #[test]
 fn a_long_prediction_stops_at_ctrl_c_and_writes_nothing() {
-    let data = std::env::var_os("TACTILE_SHARED_REAL")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root().join("../shared/real"))
-        .join("tactip331-surface");
+    let data = shared_real().join("tactip331-surface");
     let tmp = tempfile::tempdir().unwrap();
     for (model, signal) in [("pose-surface", "-INT"), ("cae-surface", "-TERM")] {
         let out = tmp.path().join(format!("{model}.csv"));
