@@ -5,7 +5,7 @@
 //!   sensor.json     {"ball_diameter_mm": 4.0, "mm_per_px": 0.0295,
 //!                    "background": "background.png"}
 //!   background.png  the skin at rest (no contact), 8-bit RGB
-//!   frames/*.png    one press of the ball each, same size
+//!   frames/*.png    one press of the ball each, same size (PNG or JPEG)
 //!   presses.csv     optional: file,centre_x_px,centre_y_px,contact_radius_px
 //!                   (annotated circles, to score the circle finder)
 //! ```
@@ -105,6 +105,9 @@ pub struct BallPresses {
     pub background: RgbImage,
     /// Every press, in file order.
     pub presses: Vec<Press>,
+    /// What a user should know about the folder: files in `frames/` that
+    /// are not PNG or JPEG frames and so are no presses.
+    pub warnings: Vec<String>,
 }
 
 impl std::fmt::Debug for BallPresses {
@@ -152,7 +155,8 @@ fn inside(root: &Path, canonical: &Path, rel: &str) -> std::result::Result<PathB
 
 impl BallPresses {
     /// Read the folder `root`: `sensor.json`, the background, the presses
-    /// (from `presses.csv` when there is one, else every `frames/*.png`).
+    /// (from `presses.csv` when there is one, else every PNG or JPEG frame
+    /// in `frames/`).
     pub fn open(root: impl AsRef<Path>) -> Result<Self> {
         let root = root.as_ref().to_path_buf();
         if !root.is_dir() {
@@ -193,8 +197,8 @@ impl BallPresses {
         }
         let background = load_rgb(&bg_path)?;
         let csv_path = root.join("presses.csv");
-        let presses = if csv_path.is_file() {
-            read_presses_csv(&root, &canonical, &csv_path)?
+        let (presses, warnings) = if csv_path.is_file() {
+            (read_presses_csv(&root, &canonical, &csv_path)?, Vec::new())
         } else {
             list_frames(&root)?
         };
@@ -203,6 +207,7 @@ impl BallPresses {
             sensor,
             background,
             presses,
+            warnings,
         };
         for p in &ds.presses {
             if let Some(c) = p.annotated {
@@ -343,32 +348,60 @@ fn read_presses_csv(root: &Path, canonical: &Path, path: &Path) -> Result<Vec<Pr
     Ok(out)
 }
 
-fn list_frames(root: &Path) -> Result<Vec<Press>> {
+/// Every PNG or JPEG frame in `root/frames`, in name order, and a warning
+/// naming the files there that are not frames (a press saved in another
+/// format would otherwise be left out without a word).
+fn list_frames(root: &Path) -> Result<(Vec<Press>, Vec<String>)> {
     let dir = root.join("frames");
     let entries = std::fs::read_dir(&dir).map_err(|_| Error::Layout {
         path: dir.clone(),
-        why: "missing: a calibration folder has frames/ with one PNG per press".into(),
+        why: "missing: a calibration folder has frames/ with one PNG or JPEG per press".into(),
     })?;
-    let mut files = Vec::new();
+    let (mut files, mut ignored) = (Vec::new(), Vec::new());
     for e in entries.flatten() {
+        let path = e.path();
         let name = e.file_name().to_string_lossy().into_owned();
-        if name.to_ascii_lowercase().ends_with(".png") && e.path().is_file() {
-            tactile_core::dataset::expect_entry_inside(&dir, &e.path())?;
-            if files.len() >= MAX_PRESSES {
-                return Err(Error::Layout {
-                    path: dir,
-                    why: format!("more than {MAX_PRESSES} presses"),
-                });
+        if !tactile_core::source::is_frame_file(&path) || !path.is_file() {
+            if ignored.len() < MAX_PRESSES {
+                ignored.push(name);
             }
-            files.push(format!("frames/{name}"));
+            continue;
         }
+        tactile_core::dataset::expect_entry_inside(&dir, &path)?;
+        if files.len() >= MAX_PRESSES {
+            return Err(Error::Layout {
+                path: dir,
+                why: format!("more than {MAX_PRESSES} presses"),
+            });
+        }
+        files.push(format!("frames/{name}"));
     }
     files.sort();
-    Ok(files
+    ignored.sort();
+    let mut warnings = Vec::new();
+    if !ignored.is_empty() {
+        let one = ignored.len() == 1;
+        warnings.push(format!(
+            "warning: {} {} in {} {}, so not read as {}: {}{}",
+            ignored.len(),
+            if one { "entry" } else { "entries" },
+            dir.display(),
+            if one {
+                "is not a PNG or JPEG frame"
+            } else {
+                "are not PNG or JPEG frames"
+            },
+            if one { "a press" } else { "presses" },
+            ignored[..ignored.len().min(5)].join(", "),
+            if ignored.len() > 5 { ", ..." } else { "" }
+        ));
+    }
+    let presses = files
         .into_iter()
         .map(|file| Press {
             file,
             annotated: None,
         })
-        .collect())
+        .collect();
+    Ok((presses, warnings))
 }

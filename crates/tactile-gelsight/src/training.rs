@@ -444,6 +444,10 @@ pub struct Calibration {
     pub validation: Vec<PressScore>,
     /// The render model (optics and gel) fitted beside the sensor model.
     pub render: crate::render_model::RenderFit,
+    /// What a user should know about the calibration folder (files in
+    /// `frames/` that were not read as presses).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// Calibrate the sensor of `ds` into the model folder `out` (written whole
@@ -534,5 +538,6 @@ pub fn calibrate(
         val_presses: val.len(),
         validation,
         render,
+        warnings: ds.warnings.clone(),
     })
 }

@@ -132,6 +132,38 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
 }
 
 #[test]
+fn a_folder_without_presses_csv_reads_png_and_jpeg_presses_and_names_the_rest() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("listed");
+    subset(&d, 2, str::to_string);
+    std::fs::remove_file(d.join("presses.csv")).unwrap();
+    // The second press saved as JPEG, as some recorders do.
+    let png = d.join("frames/press_02.png");
+    image::open(&png)
+        .unwrap()
+        .to_rgb8()
+        .save(d.join("frames/press_02.jpg"))
+        .unwrap();
+    std::fs::remove_file(&png).unwrap();
+    std::fs::write(d.join("frames/notes.txt"), "pressed at 2 N").unwrap();
+    std::fs::create_dir(d.join("frames/old")).unwrap();
+    let ds = BallPresses::open(&d).unwrap();
+    let files: Vec<_> = ds.presses.iter().map(|p| p.file.as_str()).collect();
+    assert_eq!(files, ["frames/press_01.png", "frames/press_02.jpg"]);
+    assert_eq!(ds.frame(1).unwrap().width(), 640);
+    assert_eq!(ds.warnings.len(), 1, "{:?}", ds.warnings);
+    let w = &ds.warnings[0];
+    assert!(
+        w.contains("2 entries") && w.contains("notes.txt") && w.contains("old"),
+        "{w}"
+    );
+    // A folder of frames only warns of nothing.
+    std::fs::remove_file(d.join("frames/notes.txt")).unwrap();
+    std::fs::remove_dir(d.join("frames/old")).unwrap();
+    assert!(BallPresses::open(&d).unwrap().warnings.is_empty());
+}
+
+#[test]
 fn a_calibration_reconstructs_held_out_presses_and_rest() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path().join("presses");

@@ -30,6 +30,9 @@ pub(crate) fn calibrate_ball<'py>(
     let o: BallOptions = crate::json::options(py, options)?;
     o.config().py()?;
     let c = interruptible(py, || o.calibrate(&data, &out).py())?;
+    for w in &c.warnings {
+        crate::errors::user_warning(py, w)?;
+    }
     let mut v = serde_json::to_value(&c)
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     if let Some(m) = v.as_object_mut() {

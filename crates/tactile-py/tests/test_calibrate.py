@@ -78,6 +78,17 @@ def test_a_numpy_frame_reconstructs_as_the_folder_does(presses: Path, model: Pat
     np.testing.assert_allclose(np.load(tmp_path / "maps2" / "0001.npy"), saved, atol=1e-7)
 
 
+def test_a_folder_without_presses_csv_warns_of_files_that_are_no_presses(presses: Path, tmp_path: Path):
+    d = tmp_path / "listed"
+    shutil.copytree(presses, d)
+    (d / "presses.csv").unlink()
+    (d / "frames" / "notes.txt").write_text("pressed at 2 N")
+    with pytest.warns(UserWarning, match="notes.txt"):
+        r = tactile.calibrate.ball(d, tmp_path / "m", factor=8, val_presses=2, max_epochs=1, kernels=[3, 1, 1])
+    assert r["train_presses"] == 4 and r["val_presses"] == 2
+    assert any("notes.txt" in w for w in r["warnings"])
+
+
 def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
     rec = tactile.Reconstructor(model, "burn-flex")
     with pytest.raises(ValueError, match=r"frame.*\(320, 240\).*\(640, 480\)"):

@@ -17,7 +17,7 @@ pub(crate) enum CalibrateCmd {
 
 #[derive(Args)]
 pub(crate) struct BallArgs {
-    /// Calibration folder: sensor.json, background.png, frames/*.png, optional presses.csv.
+    /// Calibration folder: sensor.json, background.png, frames/ (a PNG or JPEG per press), optional presses.csv.
     #[arg(long)]
     data: PathBuf,
     /// Output model folder (new).
@@ -34,6 +34,9 @@ pub(crate) fn main(cmd: CalibrateCmd) -> Result<()> {
         CalibrateCmd::Ball(a) => {
             let options = a.config.resolve(a.options)?;
             let c = options.calibrate(&a.data, &a.out)?;
+            for w in &c.warnings {
+                tactile_core::note!("{w}");
+            }
             say!(
                 "sensor model {}; {} presses fitted, {} held out; model in {}",
                 c.fit.describe("cap-shape error, mm"),

@@ -2,16 +2,17 @@
 of ``tactile calibrate ball``, and reconstructing its frames.
 
 ``ball(data, out, **options)`` reads a calibration folder (the layout in
-docs/datasets.md: ``sensor.json``, ``background.png``, ``frames/*.png``,
-optionally ``presses.csv``), finds each contact circle, fits the sensor
-model and writes a new model folder; it returns the summary
-``tactile calibrate ball`` prints (circle agreement, the held-out presses'
-scores). Options are keywords named as the flags (``max_epochs=...``),
-each defined once in the library; ``options("ball")`` is not needed:
-``calibrate.pyi`` types them. ``reconstruct(model, data, out)`` writes one
-``<stem>.npy`` (float32 H x W, metres toward the camera) per frame, as
-``tactile reconstruct`` does; ``tactile.Reconstructor`` does one numpy
-frame at a time.
+docs/datasets.md: ``sensor.json``, ``background.png``, ``frames/`` (a PNG
+or JPEG per press), optionally ``presses.csv``), finds each contact
+circle, fits the sensor model and writes a new model folder; it returns
+the summary ``tactile calibrate ball`` prints (circle agreement, the
+held-out presses' scores; files in ``frames/`` that are no frames come as
+a ``UserWarning``). Options are keywords named as the flags
+(``max_epochs=...``), each defined once in the library;
+``options("ball")`` is not needed: ``calibrate.pyi`` types them.
+``reconstruct(model, data, out)`` writes one ``<stem>.npy`` (float32 H x
+W, metres toward the camera) per frame, as ``tactile reconstruct`` does;
+``tactile.Reconstructor`` does one numpy frame at a time.
 """
 
 from __future__ import annotations
