@@ -600,6 +600,8 @@ impl FrameSource {
                         entries: list.frames.clone().into_iter(),
                     };
                     (kind, Some(list), Box::new(r) as Box<dyn Reader>, size, None)
+                } else if let Some(e) = crate::dataset::file_of_a_dataset(path) {
+                    return Err(e);
                 } else if meta.file_type().is_char_device() || meta.is_file() {
                     // A character device is a camera, read live; a file a video.
                     let (input, kind) = match meta.is_file() {

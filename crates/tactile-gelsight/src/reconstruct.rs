@@ -50,6 +50,9 @@ pub struct ReconstructReport {
 /// gaps in the numbering). Two frames of one name once their extensions
 /// are dropped are refused: both would be written to one `.npy`.
 pub fn frame_files(data: &Path) -> Result<(Vec<PathBuf>, Vec<String>)> {
+    if let Some(e) = tactile_core::dataset::file_of_a_dataset(data) {
+        return Err(e.into());
+    }
     if data.is_file() {
         return Ok((vec![data.to_path_buf()], Vec::new()));
     }

@@ -259,6 +259,29 @@ fn a_file_that_is_not_a_video_is_an_error_naming_it() {
         err.contains("clip.mp4") && err.contains("cannot read as video"),
         "{err}"
     );
+    // A dataset's labels file named instead of its folder: the folder is
+    // named, not FFmpeg's "Invalid data".
+    let ds = dir.path().join("my-dataset");
+    std::fs::create_dir(&ds).unwrap();
+    let labels = ds.join("labels.csv");
+    std::fs::write(&labels, "file,split\n").unwrap();
+    let out = tactile()
+        .args([
+            "run",
+            "--models",
+            MODELS,
+            "--data",
+            labels.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("labels.csv: is a file of a dataset")
+            && err.contains(&format!("pass the dataset's folder {}", ds.display())),
+        "{err}"
+    );
 }
 
 #[test]

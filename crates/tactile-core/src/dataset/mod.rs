@@ -165,12 +165,35 @@ fn parse_number(labels: &Path, row: &LabelRow, column: &str) -> Result<Option<f6
     }
 }
 
+/// The error for `labels.csv` or `manifest.json` of a dataset (beside a
+/// `labels.csv`) named where the dataset's folder was meant, naming the
+/// folder; `None` for any other path.
+pub fn file_of_a_dataset(path: &Path) -> Option<Error> {
+    let named = |n: &str| path.file_name().is_some_and(|f| f == n);
+    let is_file = (named("labels.csv") || named("manifest.json"))
+        && path.is_file()
+        && path.with_file_name("labels.csv").is_file();
+    is_file.then(|| {
+        Error::Invalid(format!(
+            "{}: is a file of a dataset, not frames: pass the dataset's folder {}",
+            path.display(),
+            path.parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(Path::new("."))
+                .display()
+        ))
+    })
+}
+
 impl Dataset {
     /// Open and check a dataset folder: the manifest parses and has the
     /// right format, `labels.csv` has the kind's columns in order, every
     /// number parses and is finite, and every referenced file exists.
     pub fn open(root: impl AsRef<Path>) -> Result<Self> {
         let root = root.as_ref().to_path_buf();
+        if let Some(e) = file_of_a_dataset(&root) {
+            return Err(e);
+        }
         if !root.is_dir() {
             return Err(Error::not_found(&root, "dataset folder"));
         }
