@@ -1,6 +1,7 @@
 //! Progress on long work: a bar with position, rate and ETA on a terminal.
 
-use indicatif::{ProgressBar, ProgressStyle};
+pub use indicatif::ProgressBar;
+use indicatif::ProgressStyle;
 
 /// [`progress_bar`], or one that draws nothing when `shown` is false (a
 /// caller that asked for quiet work still counts through the same bar).

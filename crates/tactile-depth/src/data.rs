@@ -127,20 +127,64 @@ impl DepthSet {
     pub fn from_dataset(
         ds: &Dataset,
         rows: &[usize],
-        [w, h]: [usize; 2],
+        size: [usize; 2],
         prior: Option<&Path>,
     ) -> Result<Self> {
+        let progress = Self::start_loading(ds, rows.len(), prior)?;
+        let set = Self::load_rows(ds, rows, size, prior, &progress)?;
+        progress.finish_and_clear();
+        Ok(set)
+    }
+
+    /// Every row of `ds` loaded as [`DepthSet::from_dataset`] does, a
+    /// chunk of `chunk_rows` rows at a time, each chunk handed to `each` in
+    /// order: a dataset of any length in bounded memory.
+    pub fn for_each_chunk(
+        ds: &Dataset,
+        size: [usize; 2],
+        prior: Option<&Path>,
+        chunk_rows: usize,
+        mut each: impl FnMut(DepthSet) -> Result<()>,
+    ) -> Result<()> {
+        let progress = Self::start_loading(ds, ds.len(), prior)?;
+        let rows: Vec<usize> = (0..ds.len()).collect();
+        for chunk in rows.chunks(chunk_rows.max(1)) {
+            each(Self::load_rows(ds, chunk, size, prior, &progress)?)?;
+        }
+        progress.finish_and_clear();
+        Ok(())
+    }
+
+    /// Check what every row needs before any is read (the kind of dataset,
+    /// the calibration), and the progress bar of `rows` rows.
+    fn start_loading(
+        ds: &Dataset,
+        rows: usize,
+        prior: Option<&Path>,
+    ) -> Result<tactile_core::progress::ProgressBar> {
         ds.expect_kind(DatasetKind::Visuotactile)?;
         if let Some(dir) = prior {
             // Loaded once here so a bad calibration is named before any work.
             PriorSource::load(dir, Runtime::BurnFlex, 1)?;
             tactile_core::note!(
-                "reconstructing {} frames through the calibration in {}",
-                rows.len(),
+                "reconstructing {rows} frames through the calibration in {}",
                 dir.display()
             );
         }
-        let progress = tactile_core::progress::progress_bar(rows.len() as u64, "loading frames");
+        Ok(tactile_core::progress::progress_bar(
+            rows as u64,
+            "loading frames",
+        ))
+    }
+
+    /// `rows` of `ds` at `w x h`, counted on `progress`.
+    fn load_rows(
+        ds: &Dataset,
+        rows: &[usize],
+        [w, h]: [usize; 2],
+        prior: Option<&Path>,
+        progress: &tactile_core::progress::ProgressBar,
+    ) -> Result<Self> {
         let samples = rows
             .par_iter()
             .with_min_len(32)
@@ -189,7 +233,6 @@ impl DepthSet {
                 },
             )
             .collect::<Result<Vec<_>>>()?;
-        progress.finish_and_clear();
         Ok(Self {
             width: w,
             height: h,

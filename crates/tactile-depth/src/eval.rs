@@ -87,6 +87,19 @@ impl DepthScorer {
         }
     }
 
+    /// Add every sample of `data` with its predicted map.
+    pub fn add_set(&mut self, data: &DepthSet, preds: &[Vec<f32>]) {
+        for (s, p) in data.samples.iter().zip(preds) {
+            self.add(
+                p,
+                &s.depth_mm,
+                &data.window,
+                &s.mask,
+                (data.width, data.height),
+            );
+        }
+    }
+
     /// The scores of every frame added.
     pub fn finish(&self) -> DepthScores {
         let n = self.n.max(1) as f64;
@@ -123,16 +136,39 @@ fn frames_for(estimator: &DepthEstimator, ds: &Dataset, rows: &[usize]) -> Resul
     )
 }
 
-/// Score `estimator` on every frame of `ds`; also the inference time per
-/// frame (batches of [`EVAL_BATCH`], loading excluded).
+/// Rows of a dataset loaded at once when scoring it: memory stays bounded
+/// however many frames the dataset has.
+pub const EVAL_CHUNK: usize = 512;
+
+/// Score `estimator` on every frame of `ds`, read [`EVAL_CHUNK`] rows at a
+/// time; also the inference time per frame (batches of [`EVAL_BATCH`],
+/// loading excluded).
 pub fn evaluate(estimator: &mut DepthEstimator, ds: &Dataset) -> Result<(DepthScores, f64)> {
+    evaluate_in_chunks(estimator, ds, EVAL_CHUNK)
+}
+
+/// [`evaluate`] reading `chunk_rows` rows at a time (the scores do not
+/// depend on it).
+pub fn evaluate_in_chunks(
+    estimator: &mut DepthEstimator,
+    ds: &Dataset,
+    chunk_rows: usize,
+) -> Result<(DepthScores, f64)> {
     same_maps(estimator, ds)?;
-    let rows: Vec<usize> = (0..ds.len()).collect();
-    let data = frames_for(estimator, ds, &rows)?;
-    let t0 = std::time::Instant::now();
-    let preds = predict_mm(estimator, &data)?;
-    let ms = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
-    Ok((score(&data, &preds), ms))
+    let mut scorer = DepthScorer::default();
+    let mut seconds = 0.0;
+    let (size, prior) = (
+        estimator.artifact.model.input_size,
+        estimator.prior_folder().map(Path::to_path_buf),
+    );
+    DepthSet::for_each_chunk(ds, size, prior.as_deref(), chunk_rows, |data| {
+        let t0 = std::time::Instant::now();
+        let preds = predict_mm(estimator, &data)?;
+        seconds += t0.elapsed().as_secs_f64();
+        scorer.add_set(&data, &preds);
+        Ok(())
+    })?;
+    Ok((scorer.finish(), 1e3 * seconds / ds.len().max(1) as f64))
 }
 
 /// Refuse to score a model on maps of another kind (distances against
@@ -157,15 +193,7 @@ fn same_maps(estimator: &DepthEstimator, ds: &Dataset) -> Result<()> {
 /// Scores of predicted maps against a set's truth.
 pub fn score(data: &DepthSet, preds: &[Vec<f32>]) -> DepthScores {
     let mut sc = DepthScorer::default();
-    for (s, p) in data.samples.iter().zip(preds) {
-        sc.add(
-            p,
-            &s.depth_mm,
-            &data.window,
-            &s.mask,
-            (data.width, data.height),
-        );
-    }
+    sc.add_set(data, preds);
     sc.finish()
 }
 

@@ -7,8 +7,10 @@ use serde_json::json;
 use tactile_burn::Runtime;
 use tactile_burn::options::Options;
 use tactile_core::dataset::Dataset;
+use tactile_depth::DepthEstimator;
 use tactile_depth::DepthOptions;
-use tactile_depth::eval::{EvalOptions, evaluate_folder};
+use tactile_depth::data::DepthSet;
+use tactile_depth::eval::{EvalOptions, evaluate_folder, evaluate_in_chunks, predict_mm, score};
 
 fn options(extra: serde_json::Value) -> DepthOptions {
     let mut kw = json!({
@@ -67,6 +69,15 @@ fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
     assert!((-1.0..=1.0).contains(&e.scores.ssim));
     assert_eq!(e.heat_maps, 2);
     assert!(png.join("depth-000.png").is_file() && png.join("depth-001.png").is_file());
+    // Read a few rows at a time (as a large dataset is), the scores are
+    // those of the whole set at once.
+    let mut est = DepthEstimator::load(&out, Runtime::BurnFlex, 0).unwrap();
+    let whole =
+        DepthSet::from_dataset(&ds, &(0..ds.len()).collect::<Vec<_>>(), [64, 32], None).unwrap();
+    let preds = predict_mm(&mut est, &whole).unwrap();
+    let (chunked, _) = evaluate_in_chunks(&mut est, &ds, 5).unwrap();
+    assert_eq!(chunked, score(&whole, &preds));
+    assert_eq!(chunked, e.scores);
     // A folder that already holds files is left alone, before any work.
     let e = evaluate_folder(&out, &data, Runtime::BurnFlex, &o)
         .unwrap_err()

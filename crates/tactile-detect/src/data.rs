@@ -38,6 +38,43 @@ impl DetectionSet {
     /// Load and resize every frame (in parallel) to the input of
     /// `detector`, held at its bits; `tendon` must be 0 or 1.
     pub fn from_dataset(ds: &Dataset, detector: &DetectorConfig) -> Result<Self> {
+        let mut set = Self::labels_of(ds, detector)?;
+        set.frames = load_frames(ds, detector, &set.files, 0)?;
+        Ok(set)
+    }
+
+    /// Every row of `ds` as [`DetectionSet::from_dataset`] loads it, a
+    /// chunk of `chunk_rows` rows at a time, each chunk handed to `each` in
+    /// order (its labels checked first, on every row): a dataset of any
+    /// length in bounded memory. The onset and release frames are those of
+    /// the whole dataset's sequences.
+    pub fn for_each_chunk(
+        ds: &Dataset,
+        detector: &DetectorConfig,
+        chunk_rows: usize,
+        mut each: impl FnMut(DetectionSet) -> Result<()>,
+    ) -> Result<()> {
+        let labels = Self::labels_of(ds, detector)?;
+        let step = chunk_rows.max(1);
+        for start in (0..labels.files.len()).step_by(step) {
+            let end = (start + step).min(labels.files.len());
+            let files = labels.files[start..end].to_vec();
+            let frames = load_frames(ds, detector, &files, start)?;
+            each(Self {
+                frames,
+                files,
+                tendon: labels.tendon[start..end].to_vec(),
+                transition: labels.transition[start..end].to_vec(),
+                ridge_mm: labels.ridge_mm[start..end].to_vec(),
+                detector: detector.clone(),
+                ..labels
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Every row's labels, checked, without its frame.
+    fn labels_of(ds: &Dataset, detector: &DetectorConfig) -> Result<Self> {
         let [width, height] = detector.input_size;
         ds.expect_kind(DatasetKind::Visuotactile)?;
         let tendon = (0..ds.len())
@@ -54,14 +91,6 @@ impl DetectionSet {
         let files: Vec<String> = (0..ds.len())
             .map(|i| ds.text(i, "file").map(str::to_string))
             .collect::<tactile_core::Result<_>>()?;
-        let frames = (0..ds.len())
-            .into_par_iter()
-            .map(|i| {
-                detector.frame_levels(&ds.load_rgb(i)?).map_err(|e| {
-                    tactile_core::Error::image(ds.root.join(&files[i]), e.to_string()).into()
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
         let transition = transitions(ds, &tendon)?;
         let ridge_mm = (0..ds.len())
             .map(|i| ds.number_opt(i, "ridge_mm"))
@@ -71,7 +100,7 @@ impl DetectionSet {
             height,
             detector: detector.clone(),
             files,
-            frames,
+            frames: Vec::new(),
             tendon,
             transition,
             ridge_mm,
@@ -289,6 +318,27 @@ impl SoftLabels {
         let p = (1.0 / (1.0 + (-z).exp())) as f32;
         if tendon { p.max(0.5) } else { p.min(0.5) }
     }
+}
+
+/// The frames of rows `first..first + files.len()` of `ds` (their `file`
+/// labels `files`), resized in parallel to `detector`'s input and held at
+/// its bits.
+fn load_frames(
+    ds: &Dataset,
+    detector: &DetectorConfig,
+    files: &[String],
+    first: usize,
+) -> Result<Vec<Vec<u16>>> {
+    (0..files.len())
+        .into_par_iter()
+        .map(|k| {
+            detector
+                .frame_levels(&ds.load_rgb(first + k)?)
+                .map_err(|e| {
+                    tactile_core::Error::image(ds.root.join(&files[k]), e.to_string()).into()
+                })
+        })
+        .collect()
 }
 
 /// Frames within two frames (same sequence, by `frame_index`) of a frame

@@ -153,59 +153,127 @@ pub fn save_reliability_plot(c: &Calibration, path: &Path, title: &str) -> Resul
     )?)
 }
 
+/// Rows of a dataset loaded at once when scoring it: memory stays bounded
+/// however many frames the dataset has.
+pub const EVAL_CHUNK: usize = 1024;
+
+/// What the detector said of a run of frames: each frame's gate (and input
+/// score) and the network's probability, with the network's time.
+#[derive(Default)]
+struct FrameAnswers {
+    gates: Vec<(Option<crate::Gate>, Option<f32>)>,
+    network: Vec<f32>,
+    network_seconds: f64,
+}
+
+impl FrameAnswers {
+    /// Add every frame of `data`.
+    fn add(&mut self, detector: &mut TendonDetector, data: &DetectionSet) -> Result<()> {
+        let size = detector.artifact.model.input_size;
+        if [data.width, data.height] != size {
+            return Err(Error::InputSize {
+                expected: size,
+                found: [data.width, data.height],
+            });
+        }
+        let stats = detector.artifact.stats.clone();
+        for i in 0..data.len() {
+            self.gates.push(detector.gate(&data.image(i))?);
+        }
+        let t0 = std::time::Instant::now();
+        let all: Vec<usize> = (0..data.len()).collect();
+        for chunk in all.chunks(EVAL_BATCH) {
+            let x = data.inputs(chunk, &stats)?;
+            self.network
+                .extend(detector.network_probabilities(&x, chunk.len())?);
+        }
+        self.network_seconds += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The scores of these answers against each frame's `tendon` label,
+    /// `transition` marking the onset and release frames.
+    fn score(
+        &self,
+        detector: &TendonDetector,
+        tendon: &[bool],
+        transition: &[bool],
+    ) -> DetectorScores {
+        let n = self.network.len();
+        let answers: Vec<_> = self
+            .gates
+            .iter()
+            .zip(&self.network)
+            .map(|(&g, &q)| detector.answer(g, Some(q)))
+            .collect();
+        let count = |gate| answers.iter().filter(|a| a.gate == Some(gate)).count();
+        let p: Vec<f32> = answers.iter().map(|a| a.probability).collect();
+        let pred: Vec<bool> = answers.iter().map(|a| a.tendon).collect();
+        let ungated: Vec<bool> = self
+            .network
+            .iter()
+            .map(|&q| detector.is_tendon(q))
+            .collect();
+        let tr: Vec<usize> = (0..n).filter(|&i| transition[i]).collect();
+        DetectorScores {
+            all: binary_scores(&pred, tendon),
+            ungated: binary_scores(&ungated, tendon),
+            gated_blank: count(crate::Gate::Blank),
+            gated_foreign: count(crate::Gate::Foreign),
+            onset_release: binary_scores(
+                &tr.iter().map(|&i| pred[i]).collect::<Vec<_>>(),
+                &tr.iter().map(|&i| tendon[i]).collect::<Vec<_>>(),
+            ),
+            ms_per_frame: 1e3 * self.network_seconds / n.max(1) as f64,
+            calibration: calibration(&p, tendon, CALIBRATION_BINS),
+            probabilities: p,
+            decisions: pred,
+            threshold: detector.artifact.threshold,
+        }
+    }
+}
+
 /// Score `detector` on every frame of `data` (loaded at its input size):
 /// each frame gets [`TendonDetector::answer`], the answer `tactile run`
 /// gives it, and the network's own probabilities are scored beside it.
 pub fn evaluate(detector: &mut TendonDetector, data: &DetectionSet) -> Result<DetectorScores> {
-    let size = detector.artifact.model.input_size;
-    if [data.width, data.height] != size {
-        return Err(Error::InputSize {
-            expected: size,
-            found: [data.width, data.height],
-        });
-    }
-    let stats = detector.artifact.stats.clone();
-    let all: Vec<usize> = (0..data.len()).collect();
-    let gates = all
-        .iter()
-        .map(|&i| detector.gate(&data.image(i)))
-        .collect::<Result<Vec<_>>>()?;
-    let t0 = std::time::Instant::now();
-    let mut network = Vec::with_capacity(data.len());
-    for chunk in all.chunks(EVAL_BATCH) {
-        let x = data.inputs(chunk, &stats)?;
-        network.extend(detector.network_probabilities(&x, chunk.len())?);
-    }
-    let ms_per_frame = 1e3 * t0.elapsed().as_secs_f64() / data.len().max(1) as f64;
-    let answers: Vec<_> = gates
-        .iter()
-        .zip(&network)
-        .map(|(&g, &q)| detector.answer(g, Some(q)))
-        .collect();
-    let count = |gate| answers.iter().filter(|a| a.gate == Some(gate)).count();
-    let p: Vec<f32> = answers.iter().map(|a| a.probability).collect();
-    let pred: Vec<bool> = answers.iter().map(|a| a.tendon).collect();
-    let ungated: Vec<bool> = network.iter().map(|&q| detector.is_tendon(q)).collect();
-    let tr: Vec<usize> = all
-        .iter()
-        .copied()
-        .filter(|&i| data.transition[i])
-        .collect();
-    Ok(DetectorScores {
-        all: binary_scores(&pred, &data.tendon),
-        ungated: binary_scores(&ungated, &data.tendon),
-        gated_blank: count(crate::Gate::Blank),
-        gated_foreign: count(crate::Gate::Foreign),
-        onset_release: binary_scores(
-            &tr.iter().map(|&i| pred[i]).collect::<Vec<_>>(),
-            &tr.iter().map(|&i| data.tendon[i]).collect::<Vec<_>>(),
-        ),
-        ms_per_frame,
-        calibration: calibration(&p, &data.tendon, CALIBRATION_BINS),
-        probabilities: p,
-        decisions: pred,
-        threshold: detector.artifact.threshold,
-    })
+    let mut answers = FrameAnswers::default();
+    answers.add(detector, data)?;
+    Ok(answers.score(detector, &data.tendon, &data.transition))
+}
+
+/// The labels of a dataset's frames, in dataset order, that its scores
+/// were counted against.
+#[derive(Debug, Clone, Default)]
+pub struct FrameLabels {
+    /// Each frame's `file`.
+    pub files: Vec<String>,
+    /// Each frame's `tendon` label.
+    pub tendon: Vec<bool>,
+    /// Frames within two frames of a label change in their sequence.
+    pub transition: Vec<bool>,
+}
+
+/// [`evaluate`] on every row of `ds`, read `chunk_rows` rows at a time (the
+/// scores do not depend on it; [`EVAL_CHUNK`] for a dataset of any length
+/// in bounded memory), with the labels scored against.
+pub fn evaluate_dataset(
+    detector: &mut TendonDetector,
+    ds: &Dataset,
+    chunk_rows: usize,
+) -> Result<(DetectorScores, FrameLabels)> {
+    let mut answers = FrameAnswers::default();
+    let mut labels = FrameLabels::default();
+    let config = detector.artifact.model.clone();
+    DetectionSet::for_each_chunk(ds, &config, chunk_rows, |part| {
+        answers.add(detector, &part)?;
+        labels.files.extend(part.files);
+        labels.tendon.extend(part.tendon);
+        labels.transition.extend(part.transition);
+        Ok(())
+    })?;
+    let scores = answers.score(detector, &labels.tendon, &labels.transition);
+    Ok((scores, labels))
 }
 
 /// What an evaluation writes beside its scores (`tactile eval detector`'s
@@ -234,10 +302,9 @@ pub fn evaluate_folder(
         tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
     let mut det = TendonDetector::load(model, runtime, 0)?;
-    let set = DetectionSet::from_dataset(&ds, &det.artifact.model)?;
-    let sc = evaluate(&mut det, &set)?;
+    let (sc, labels) = evaluate_dataset(&mut det, &ds, EVAL_CHUNK)?;
     if let Some(path) = &options.frames {
-        write_decisions_csv(path, &set, &sc)?;
+        write_decisions_csv(path, &labels, &sc)?;
     }
     if let Some(path) = &options.reliability {
         sc.save_reliability_plot(path, "Tendon detector: reliability")?;
@@ -248,7 +315,7 @@ pub fn evaluate_folder(
 /// Every frame's probability and decision as CSV (`file, tendon,
 /// probability, predicted, onset_release`), to look at the frames it gets
 /// wrong.
-pub fn write_decisions_csv(path: &Path, data: &DetectionSet, s: &DetectorScores) -> Result<()> {
+pub fn write_decisions_csv(path: &Path, data: &FrameLabels, s: &DetectorScores) -> Result<()> {
     let mut csv = String::from("file,tendon,probability,predicted,onset_release\n");
     for (i, p) in s.probabilities.iter().enumerate() {
         csv.push_str(&format!(

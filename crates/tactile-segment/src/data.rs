@@ -21,6 +21,10 @@ pub struct Window {
     pub pixels: Vec<u8>,
     /// `S x S` tendon flags.
     pub mask: Vec<bool>,
+    /// Its row's `direction_deg` label, when present.
+    pub direction_deg: Option<f64>,
+    /// Its row's `path` label, when present.
+    pub path: Option<String>,
 }
 
 /// Windows of a dataset's frames with their labels.
@@ -29,10 +33,6 @@ pub struct SegmentSet {
     pub window: SquareWindow,
     /// The windows, `copies` per row, in row order.
     pub windows: Vec<Window>,
-    /// Per dataset row: `direction_deg` and `path` labels when present.
-    pub direction_deg: Vec<Option<f64>>,
-    /// Per dataset row: the `path` label.
-    pub path: Vec<Option<String>>,
 }
 
 /// `copies` seeded angles, one in each of `copies` equal parts of 360
@@ -73,6 +73,8 @@ impl SegmentSet {
                 let mask_path = ds.path_of(row, "mask")?;
                 let m = ds.load_grey(row, "mask")?;
                 let mask = resize_grey(&m, sw, sh).map_err(|e| e.in_file(&mask_path))?;
+                let direction_deg = ds.number_opt(row, "direction_deg")?;
+                let path = ds.text_opt(row, "path").map(str::to_string);
                 Ok(rotation_angles(copies, seed, row)
                     .into_iter()
                     .map(|deg| {
@@ -82,22 +84,16 @@ impl SegmentSet {
                             rotation_deg: deg,
                             pixels,
                             mask: m.unwrap_or_default(),
+                            direction_deg,
+                            path: path.clone(),
                         }
                     })
                     .collect())
             })
             .collect::<Result<_>>()?;
-        let direction_deg = (0..ds.len())
-            .map(|i| ds.number_opt(i, "direction_deg"))
-            .collect::<tactile_core::Result<_>>()?;
-        let path = (0..ds.len())
-            .map(|i| ds.text_opt(i, "path").map(str::to_string))
-            .collect();
         Ok(Self {
             window,
             windows: windows.into_iter().flatten().collect(),
-            direction_deg,
-            path,
         })
     }
 

@@ -118,8 +118,22 @@ impl SegmenterScores {
     }
 }
 
+/// Tendon rows of a dataset loaded at once when scoring it: memory stays
+/// bounded however many frames the dataset has.
+pub const EVAL_CHUNK: usize = 512;
+
 /// Score `segmenter` on every tendon frame of `ds`.
 pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<SegmenterScores> {
+    evaluate_in_chunks(segmenter, ds, EVAL_CHUNK)
+}
+
+/// [`evaluate`] reading `chunk_rows` tendon rows at a time (the scores do
+/// not depend on it).
+pub fn evaluate_in_chunks(
+    segmenter: &mut TendonSegmenter,
+    ds: &Dataset,
+    chunk_rows: usize,
+) -> Result<SegmenterScores> {
     let art = segmenter.artifact.clone();
     let rows = ds.tendon_rows(&(0..ds.len()).collect::<Vec<_>>())?;
     if rows.is_empty() {
@@ -128,18 +142,6 @@ pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<Segment
             why: "score",
         });
     }
-    let set = SegmentSet::from_dataset(ds, &rows, art.model.window(), 1, 0)?;
-    let idx: Vec<usize> = (0..set.len()).collect();
-    let t0 = std::time::Instant::now();
-    let mut probs = Vec::with_capacity(set.len());
-    for chunk in idx.chunks(EVAL_BATCH) {
-        let mut x = Vec::new();
-        for &i in chunk {
-            x.extend(art.model.window_input(&set.image(i), &art.stats)?);
-        }
-        probs.extend(segmenter.probabilities(&x, chunk.len())?);
-    }
-    let ms_per_window = 1e3 * t0.elapsed().as_secs_f64() / set.len() as f64;
     let s = art.model.side;
     let baseline = PostprocessConfig {
         direction: DirectionMethod::PrincipalAxis,
@@ -148,32 +150,48 @@ pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<Segment
     // (path, IoU, error by the artifact's method, error by the baseline)
     let mut per: Vec<(String, f64, Option<f64>, Option<f64>)> = Vec::new();
     let mut post = [0.0f64; 2];
-    for (i, p) in probs.iter().enumerate() {
-        let w = &set.windows[i];
-        let mask = TendonMask::from_probabilities(s, s, p, art.threshold)?;
-        let score = iou(&mask.pixels, &w.mask);
-        let truth = set.direction_deg[w.row];
-        let image = set.image(i);
-        let error = |cfg: &PostprocessConfig| -> Result<Option<f64>> {
-            let evidence = Evidence {
-                probabilities: Some(p),
-                window: Some(&image),
+    let mut network_seconds = 0.0;
+    for part in rows.chunks(chunk_rows.max(1)) {
+        let set = SegmentSet::from_dataset(ds, part, art.model.window(), 1, 0)?;
+        let idx: Vec<usize> = (0..set.len()).collect();
+        let t0 = std::time::Instant::now();
+        let mut probs = Vec::with_capacity(set.len());
+        for chunk in idx.chunks(EVAL_BATCH) {
+            let mut x = Vec::new();
+            for &i in chunk {
+                x.extend(art.model.window_input(&set.image(i), &art.stats)?);
+            }
+            probs.extend(segmenter.probabilities(&x, chunk.len())?);
+        }
+        network_seconds += t0.elapsed().as_secs_f64();
+        for (i, p) in probs.iter().enumerate() {
+            let w = &set.windows[i];
+            let mask = TendonMask::from_probabilities(s, s, p, art.threshold)?;
+            let score = iou(&mask.pixels, &w.mask);
+            let truth = w.direction_deg;
+            let image = set.image(i);
+            let error = |cfg: &PostprocessConfig| -> Result<Option<f64>> {
+                let evidence = Evidence {
+                    probabilities: Some(p),
+                    window: Some(&image),
+                };
+                let t = postprocess(&mask, evidence, cfg)?;
+                Ok(match (t.direction, truth) {
+                    (Ok(d), Some(truth)) => Some(direction_error_deg(d.angle_deg, truth)),
+                    _ => None,
+                })
             };
-            let t = postprocess(&mask, evidence, cfg)?;
-            Ok(match (t.direction, truth) {
-                (Ok(d), Some(truth)) => Some(direction_error_deg(d.angle_deg, truth)),
-                _ => None,
-            })
-        };
-        let path = set.path[w.row].clone().unwrap_or_else(|| "unknown".into());
-        let t1 = std::time::Instant::now();
-        let e1 = error(&art.postprocess)?;
-        let t2 = std::time::Instant::now();
-        let e2 = error(&baseline)?;
-        post[0] += (t2 - t1).as_secs_f64();
-        post[1] += t2.elapsed().as_secs_f64();
-        per.push((path, score, e1, e2));
+            let path = w.path.clone().unwrap_or_else(|| "unknown".into());
+            let t1 = std::time::Instant::now();
+            let e1 = error(&art.postprocess)?;
+            let t2 = std::time::Instant::now();
+            let e2 = error(&baseline)?;
+            post[0] += (t2 - t1).as_secs_f64();
+            post[1] += t2.elapsed().as_secs_f64();
+            per.push((path, score, e1, e2));
+        }
     }
+    let windows = per.len().max(1) as f64;
     let mut paths: Vec<String> = per.iter().map(|p| p.0.clone()).collect();
     paths.sort();
     paths.dedup();
@@ -196,7 +214,7 @@ pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<Segment
     }
     Ok(SegmenterScores {
         paths: table,
-        ms_per_window,
-        ms_postprocess: post.map(|t| 1e3 * t / set.len().max(1) as f64),
+        ms_per_window: 1e3 * network_seconds / windows,
+        ms_postprocess: post.map(|t| 1e3 * t / windows),
     })
 }

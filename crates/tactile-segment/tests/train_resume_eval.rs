@@ -6,6 +6,7 @@ use serde_json::json;
 use tactile_burn::Runtime;
 use tactile_burn::options::Options;
 use tactile_core::dataset::Dataset;
+use tactile_segment::eval::evaluate_in_chunks;
 use tactile_segment::{SegmenterOptions, TendonSegmenter, evaluate};
 
 fn options(epochs: usize, resume: bool) -> SegmenterOptions {
@@ -52,5 +53,13 @@ fn the_segmenter_trains_resumes_and_evaluates() {
             .paths
             .iter()
             .all(|p| (0.0..=1.0).contains(&p.mean_iou))
+    );
+    // Read 3 tendon rows at a time (as a large dataset is): the same table
+    // of every path.
+    let chunked = evaluate_in_chunks(&mut seg, &ds, 3).unwrap();
+    assert!(tendon_frames > 3);
+    assert_eq!(
+        serde_json::to_value(&chunked.paths).unwrap(),
+        serde_json::to_value(&scores.paths).unwrap()
     );
 }
