@@ -83,12 +83,40 @@ impl Predictor {
     /// inside it when empty).
     pub fn load(dir: &Path, heads: &[PathBuf], runtime: Runtime) -> Result<Self> {
         use tactile_burn::Artifact;
-        if tactile_pose::PoseArtifact::is_in(dir) || tactile_pose::PoseEnsemble::is_in(dir) {
+        // An ensemble of pose networks: `ensemble.json` and a member with
+        // `pose.json` (a detector's ensemble is no TacTip model).
+        let pose = |d: &Path| {
+            tactile_pose::PoseArtifact::is_in(d)
+                || (tactile_pose::PoseEnsemble::is_in(d)
+                    && std::fs::read_dir(d).is_ok_and(|rd| {
+                        rd.take(1000)
+                            .flatten()
+                            .any(|e| tactile_pose::PoseArtifact::is_in(&e.path()))
+                    }))
+        };
+        if dir.exists() && !dir.is_dir() {
+            return Err(tactile_core::Error::wrong_kind(dir, "model folder", "a file").into());
+        }
+        if !dir.is_dir() {
+            return Err(tactile_core::Error::not_found(dir, "model folder").into());
+        }
+        if pose(dir) {
             Ok(Self::PoseNetwork(tactile_pose::PoseEstimator::load(
                 dir, runtime, 0,
             )?))
-        } else {
+        } else if tactile_cae::CaeArtifact::is_in(dir) {
             Ok(Self::Encoder(TactipPerception::load(dir, heads, runtime)?))
+        } else {
+            let model = |d: &Path| pose(d) || tactile_cae::CaeArtifact::is_in(d);
+            Err(tactile_core::Error::wrong_kind(
+                dir,
+                "TacTip model folder",
+                format!(
+                    "no pose network (pose.json, or an ensemble of them) and no cae.json{}",
+                    folder_hint(dir, model)
+                ),
+            )
+            .into())
         }
     }
 
@@ -965,4 +993,91 @@ pub fn train_regressor(
         frames: [tx.len(), vx.len(), sx.len()],
         test_mae,
     })
+}
+
+/// What a folder that is no TacTip model holds, for its error: the
+/// subfolders that are (a user who named the folder above the models), or
+/// the configuration files it has (a model of another kind).
+fn folder_hint(dir: &Path, is_model: impl Fn(&Path) -> bool) -> String {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return String::new();
+    };
+    let (mut models, mut configs) = (Vec::new(), Vec::new());
+    for e in entries.take(1000).flatten() {
+        let (path, name) = (e.path(), e.file_name().to_string_lossy().into_owned());
+        if path.is_dir() && is_model(&path) {
+            models.push(name);
+        } else if name.ends_with(".json") && !name.starts_with("training") {
+            configs.push(name);
+        }
+    }
+    models.sort();
+    configs.sort();
+    let list = |v: &[String]| {
+        let mut s = v[..v.len().min(6)].join(", ");
+        if v.len() > 6 {
+            s.push_str(", ...");
+        }
+        s
+    };
+    if !models.is_empty() {
+        format!("; the folders {} in it are: pass one", list(&models))
+    } else if !configs.is_empty() {
+        format!(
+            "; it holds {}: a model `predict` does not run",
+            list(&configs)
+        )
+    } else {
+        String::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    fn refusal(dir: &Path) -> String {
+        match Predictor::load(dir, &[], Runtime::BurnFlex) {
+            Ok(_) => panic!("{} loaded", dir.display()),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn a_folder_that_is_no_tactip_model_is_named_with_what_it_holds() {
+        let tmp = tempfile::tempdir().unwrap();
+        let root = tmp.path();
+        // The folder above the models: they are named.
+        for (sub, file) in [("cae-a", "cae.json"), ("pose-b", "pose.json")] {
+            std::fs::create_dir(root.join(sub)).unwrap();
+            std::fs::write(root.join(sub).join(file), "{}").unwrap();
+        }
+        let e = refusal(root);
+        assert!(
+            e.contains("not a TacTip model folder")
+                && e.contains("cae-a, pose-b in it are: pass one"),
+            "{e}"
+        );
+        // A palpation model, or a detector's ensemble: its files are named.
+        let depth = root.join("depth");
+        std::fs::create_dir(&depth).unwrap();
+        std::fs::write(depth.join("depth.json"), "{}").unwrap();
+        let e = refusal(&depth);
+        assert!(
+            e.contains("it holds depth.json: a model `predict` does not run"),
+            "{e}"
+        );
+        let det = root.join("detector");
+        std::fs::create_dir_all(det.join("member-0")).unwrap();
+        std::fs::write(det.join("ensemble.json"), "{}").unwrap();
+        std::fs::write(det.join("member-0/detector.json"), "{}").unwrap();
+        let e = refusal(&det);
+        assert!(e.contains("it holds ensemble.json"), "{e}");
+        // A file, and a folder that does not exist.
+        let e = refusal(&depth.join("depth.json"));
+        assert!(e.contains("depth.json: not a model folder (a file)"), "{e}");
+        let e = refusal(&root.join("nowhere"));
+        assert!(e.contains("nowhere: model folder does not exist"), "{e}");
+    }
 }
