@@ -188,6 +188,30 @@ impl Pipeline {
     pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
         let dir = dir.as_ref();
         let calibrated = dir.join(GelsightArtifact::CONFIG_FILE).is_file();
+        let models_folder = |d: &Path| {
+            d.join(GelsightArtifact::CONFIG_FILE).is_file()
+                || ["detector", "segmenter", "depth"]
+                    .iter()
+                    .any(|m| d.join(m).is_dir())
+        };
+        if !dir.is_dir() {
+            return Err(tactile_core::Error::not_found(dir, "models folder").into());
+        }
+        if !models_folder(dir) {
+            return Err(tactile_core::Error::wrong_kind(
+                dir,
+                "models folder",
+                format!(
+                    "no detector/, segmenter/ and depth/, and no gelsight.json{}",
+                    crate::folder_hint(
+                        dir,
+                        models_folder,
+                        "one model, not a folder of them: pass the folder that holds detector/, segmenter/ and depth/ (or a calibrated sensor's)"
+                    )
+                ),
+            )
+            .into());
+        }
         let palpation = match calibrated && !dir.join("detector").exists() {
             true => None,
             false => Some(PalpationModels::load(dir, runtime, threads)?),
@@ -331,5 +355,35 @@ impl Pipeline {
             frame_aspect: frame.width() as f64 / frame.height().max(1) as f64,
         });
         Ok((rec, Some(views)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn a_folder_that_is_no_models_folder_is_named_with_what_it_holds() {
+        let tmp = tempfile::tempdir().unwrap();
+        let refusal = |dir: &Path| match Pipeline::load(dir, Runtime::BurnFlex, 1) {
+            Ok(_) => panic!("{} loaded", dir.display()),
+            Err(e) => e.to_string(),
+        };
+        // One model of the set given instead of the set.
+        let depth = tmp.path().join("models/depth");
+        std::fs::create_dir_all(&depth).unwrap();
+        std::fs::write(depth.join("depth.json"), "{}").unwrap();
+        let e = refusal(&depth);
+        assert!(
+            e.contains("not a models folder")
+                && e.contains("it holds depth.json: one model, not a folder of them"),
+            "{e}"
+        );
+        // The folder above a models folder: it is named.
+        let e = refusal(tmp.path());
+        assert!(e.contains("the folder models in it is: pass it"), "{e}");
+        let e = refusal(&tmp.path().join("nowhere"));
+        assert!(e.contains("models folder does not exist"), "{e}");
     }
 }

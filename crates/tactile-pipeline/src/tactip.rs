@@ -113,7 +113,7 @@ impl Predictor {
                 "TacTip model folder",
                 format!(
                     "no pose network (pose.json, or an ensemble of them) and no cae.json{}",
-                    folder_hint(dir, model)
+                    crate::folder_hint(dir, model, "a model `predict` does not run")
                 ),
             )
             .into())
@@ -993,43 +993,6 @@ pub fn train_regressor(
         frames: [tx.len(), vx.len(), sx.len()],
         test_mae,
     })
-}
-
-/// What a folder that is no TacTip model holds, for its error: the
-/// subfolders that are (a user who named the folder above the models), or
-/// the configuration files it has (a model of another kind).
-fn folder_hint(dir: &Path, is_model: impl Fn(&Path) -> bool) -> String {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return String::new();
-    };
-    let (mut models, mut configs) = (Vec::new(), Vec::new());
-    for e in entries.take(1000).flatten() {
-        let (path, name) = (e.path(), e.file_name().to_string_lossy().into_owned());
-        if path.is_dir() && is_model(&path) {
-            models.push(name);
-        } else if name.ends_with(".json") && !name.starts_with("training") {
-            configs.push(name);
-        }
-    }
-    models.sort();
-    configs.sort();
-    let list = |v: &[String]| {
-        let mut s = v[..v.len().min(6)].join(", ");
-        if v.len() > 6 {
-            s.push_str(", ...");
-        }
-        s
-    };
-    if !models.is_empty() {
-        format!("; the folders {} in it are: pass one", list(&models))
-    } else if !configs.is_empty() {
-        format!(
-            "; it holds {}: a model `predict` does not run",
-            list(&configs)
-        )
-    } else {
-        String::new()
-    }
 }
 
 #[cfg(test)]
