@@ -234,7 +234,7 @@ def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, 
     empty.mkdir()
     with pytest.raises(ValueError, match="no PNG or JPEG frames"):
         tactile.predict(root / "models/pose-surface", empty)
-    with pytest.raises(ValueError, match=r"not a TacTip model folder.*pose-surface.*pass one"):
+    with pytest.raises(ValueError, match=r"not a TacTip model folder.*the folders cae-edge, .*pass one"):
         tactile.predict(root / "models", folder)
     with pytest.raises(ValueError, match=r"is a file of a dataset.*pass the dataset's folder"):
         tactile.predict(root / "models/pose-surface", src / "labels.csv")
