@@ -70,10 +70,19 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
             return Err(Error::not_found(dir, format!("{} folder", Self::KIND)));
         }
         if !file.is_file() {
+            // A model of this kind, alone or as an ensemble of them.
+            let holds = |d: &Path| d.join(Self::CONFIG_FILE).is_file();
+            let is_model = |d: &Path| {
+                holds(d)
+                    || (crate::ensemble::Ensemble::is_in(d)
+                        && std::fs::read_dir(d)
+                            .is_ok_and(|rd| rd.take(1000).flatten().any(|e| holds(&e.path()))))
+            };
+            let hint = folder_hint(dir, is_model, "a model of another kind");
             return Err(Error::wrong_kind(
                 dir,
                 format!("{} folder", Self::KIND),
-                format!("no {}", Self::CONFIG_FILE),
+                format!("no {}{hint}", Self::CONFIG_FILE),
             ));
         }
         let artifact: Self = tactile_core::io::read_json(&file)?;
@@ -238,4 +247,45 @@ pub fn write_training_record(
         r.extend(e);
     }
     tactile_core::io::write_json_atomic(dir.join(TRAINING_FILE), &record)
+}
+
+/// What a folder that is not the model a command wants holds, for its
+/// error: the subfolders that are (`is_model`: a user who named the folder
+/// above the models), or the configuration files it has, said to be
+/// `other` (a model of another kind).
+pub fn folder_hint(
+    dir: &std::path::Path,
+    is_model: impl Fn(&std::path::Path) -> bool,
+    other: &str,
+) -> String {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return String::new();
+    };
+    let (mut models, mut configs) = (Vec::new(), Vec::new());
+    for e in entries.take(1000).flatten() {
+        let (path, name) = (e.path(), e.file_name().to_string_lossy().into_owned());
+        if path.is_dir() && is_model(&path) {
+            models.push(name);
+        } else if name.ends_with(".json") && !name.starts_with("training") {
+            configs.push(name);
+        }
+    }
+    models.sort();
+    configs.sort();
+    let list = |v: &[String]| {
+        let mut s = v[..v.len().min(6)].join(", ");
+        if v.len() > 6 {
+            s.push_str(", ...");
+        }
+        s
+    };
+    if models.len() == 1 {
+        format!("; the folder {} in it is: pass it", models[0])
+    } else if !models.is_empty() {
+        format!("; the folders {} in it are: pass one", list(&models))
+    } else if !configs.is_empty() {
+        format!("; it holds {}: {other}", list(&configs))
+    } else {
+        String::new()
+    }
 }

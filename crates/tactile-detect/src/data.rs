@@ -61,13 +61,14 @@ impl DetectionSet {
             let files = labels.files[start..end].to_vec();
             let frames = load_frames(ds, detector, &files, start)?;
             each(Self {
+                width: labels.width,
+                height: labels.height,
                 frames,
                 files,
                 tendon: labels.tendon[start..end].to_vec(),
                 transition: labels.transition[start..end].to_vec(),
                 ridge_mm: labels.ridge_mm[start..end].to_vec(),
                 detector: detector.clone(),
-                ..labels
             })?;
         }
         Ok(())

@@ -203,7 +203,7 @@ impl Pipeline {
                 "models folder",
                 format!(
                     "no detector/, segmenter/ and depth/, and no gelsight.json{}",
-                    crate::folder_hint(
+                    tactile_burn::artifact::folder_hint(
                         dir,
                         models_folder,
                         "one model, not a folder of them: pass the folder that holds detector/, segmenter/ and depth/ (or a calibrated sensor's)"

@@ -113,7 +113,11 @@ impl Predictor {
                 "TacTip model folder",
                 format!(
                     "no pose network (pose.json, or an ensemble of them) and no cae.json{}",
-                    crate::folder_hint(dir, model, "a model `predict` does not run")
+                    tactile_burn::artifact::folder_hint(
+                        dir,
+                        model,
+                        "a model `predict` does not run"
+                    )
                 ),
             )
             .into())

@@ -112,6 +112,8 @@ def test_training_errors(small_vt, tmp_path):
 def test_eval_on_the_wrong_kind_of_model(root, small_vt):
     with pytest.raises(ValueError, match="segmenter"):
         tactile.eval.segmenter(root / "models/detector", small_vt)
+    with pytest.raises(ValueError, match=r"not a detector folder.*the folder detector in it is: pass it"):
+        tactile.eval.detector(root / "models", small_vt)
 
 
 def _python(call: str) -> subprocess.Popen:

@@ -535,6 +535,27 @@ fn models_and_labels_are_checked_when_loaded() {
         !ok && msg.contains("segmenter.bpk") && msg.contains("NaN"),
         "{msg}"
     );
+    // The wrong folder for a model: what it holds is named (the model
+    // inside it, or its own configuration).
+    let (ok, msg) = tactile(&[
+        "eval",
+        "segmenter",
+        "--model",
+        s(&root().join("models")),
+        "--data",
+        s(&vt),
+    ]);
+    assert!(
+        !ok && msg.contains(
+            "not a segmenter folder (no segmenter.json; the folder segmenter in it is: pass it)"
+        ),
+        "{msg}"
+    );
+    let (ok, msg) = tactile(&["eval", "depth", "--model", s(&seg), "--data", s(&vt)]);
+    assert!(
+        !ok && msg.contains("no depth.json; it holds segmenter.json: a model of another kind"),
+        "{msg}"
+    );
     // A head trained on another encoder is refused by perceive.
     let synth = root().join("models/cae-synth");
     let shapes_head = root().join("models/cae-shapes/head");
