@@ -71,12 +71,8 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
         }
         if !file.is_file() {
             // A model of this kind, alone or as an ensemble of them.
-            let holds = |d: &Path| d.join(Self::CONFIG_FILE).is_file();
             let is_model = |d: &Path| {
-                holds(d)
-                    || (crate::ensemble::Ensemble::is_in(d)
-                        && std::fs::read_dir(d)
-                            .is_ok_and(|rd| rd.take(1000).flatten().any(|e| holds(&e.path()))))
+                d.join(Self::CONFIG_FILE).is_file() || crate::ensemble::Ensemble::is_of::<Self>(d)
             };
             let hint = folder_hint(dir, is_model, "a model of another kind");
             return Err(Error::wrong_kind(

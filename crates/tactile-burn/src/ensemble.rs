@@ -39,6 +39,19 @@ impl Ensemble {
         dir.join(Self::FILE).is_file()
     }
 
+    /// Whether `dir` holds an ensemble of `A`s: `ensemble.json` and a
+    /// folder in it holding an `A` (an ensemble of another kind of model
+    /// is not one; a broken ensemble of `A`s still is, to be refused by
+    /// [`Self::read`] with its reason).
+    pub fn is_of<A: Artifact>(dir: &Path) -> bool {
+        Self::is_in(dir)
+            && std::fs::read_dir(dir).is_ok_and(|rd| {
+                rd.take(1000)
+                    .flatten()
+                    .any(|e| e.path().join(A::CONFIG_FILE).is_file())
+            })
+    }
+
     /// Read and check `dir/ensemble.json`: 1 to [`Self::MAX_MEMBERS`]
     /// members, each a plain folder name inside `dir` (no path, so nothing
     /// outside the folder is read), each holding an `A`.

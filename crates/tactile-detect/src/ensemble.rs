@@ -140,7 +140,7 @@ pub fn read_config(dir: &Path) -> Result<DetectorArtifact> {
 
 /// Whether `dir` holds a detector: one network or an ensemble.
 pub fn is_detector(dir: &Path) -> bool {
-    DetectorArtifact::is_in(dir) || DetectorEnsembleArtifact::is_in(dir)
+    DetectorArtifact::is_in(dir) || Ensemble::is_of::<DetectorArtifact>(dir)
 }
 
 /// The ONNX graph of the detector in `dir` (one network or an ensemble)

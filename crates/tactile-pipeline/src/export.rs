@@ -40,6 +40,18 @@ where
 
 /// Export the model in `dir`.
 pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
+    if tactile_pose::PoseEnsemble::is_in(dir) {
+        let members = tactile_pose::PoseEnsemble::read(dir)?.members;
+        return Err(tactile_core::Error::Invalid(format!(
+            "{}: an ensemble of {} pose networks ({}), each reading the frame through its own pin image: export each member (`tactile export --model {} --out {}.onnx`) and average their estimates in the labels' units, as `tactile predict` does",
+            dir.display(),
+            members.len(),
+            members.join(", "),
+            dir.join(&members[0]).display(),
+            members[0]
+        ))
+        .into());
+    }
     let (kind, bytes) = if is_detector(dir) {
         ("detector", detector_onnx(dir)?.1)
     } else if SegmenterArtifact::is_in(dir) {
@@ -225,4 +237,23 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
         .into());
     };
     Ok(Exported { kind, bytes })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pose_ensemble_is_refused_with_how_to_export_its_members() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/pose-surface");
+        let e = match export_model(&dir, Part::Encoder) {
+            Ok(_) => panic!("a pose ensemble exported as one graph"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            e.contains("an ensemble of 2 pose networks (member-0, member-1)")
+                && e.contains("pose-surface/member-0 --out member-0.onnx"),
+            "{e}"
+        );
+    }
 }

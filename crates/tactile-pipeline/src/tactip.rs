@@ -83,17 +83,10 @@ impl Predictor {
     /// inside it when empty).
     pub fn load(dir: &Path, heads: &[PathBuf], runtime: Runtime) -> Result<Self> {
         use tactile_burn::Artifact;
-        // An ensemble of pose networks: `ensemble.json` and a member with
-        // `pose.json` (a detector's ensemble is no TacTip model).
-        let pose = |d: &Path| {
-            tactile_pose::PoseArtifact::is_in(d)
-                || (tactile_pose::PoseEnsemble::is_in(d)
-                    && std::fs::read_dir(d).is_ok_and(|rd| {
-                        rd.take(1000)
-                            .flatten()
-                            .any(|e| tactile_pose::PoseArtifact::is_in(&e.path()))
-                    }))
-        };
+        // A pose network, or an ensemble of them (a detector's ensemble is
+        // no TacTip model).
+        let pose =
+            |d: &Path| tactile_pose::PoseArtifact::is_in(d) || tactile_pose::PoseEnsemble::is_in(d);
         if dir.exists() && !dir.is_dir() {
             return Err(tactile_core::Error::wrong_kind(dir, "model folder", "a file").into());
         }

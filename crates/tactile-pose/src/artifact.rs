@@ -107,9 +107,9 @@ impl Exportable for PoseArtifact {
 pub struct PoseEnsemble;
 
 impl PoseEnsemble {
-    /// Whether `dir` holds an ensemble.
+    /// Whether `dir` holds an ensemble of pose networks.
     pub fn is_in(dir: &Path) -> bool {
-        Ensemble::is_in(dir)
+        Ensemble::is_of::<PoseArtifact>(dir)
     }
 
     /// Read and check `dir/ensemble.json` (see [`Ensemble::read`]).
