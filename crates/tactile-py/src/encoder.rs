@@ -37,17 +37,19 @@ pub struct PyTactipEncoder {
     preprocess: tactile_preprocess::PreprocessConfig,
 }
 
-/// Every frame of `frames` (one 2-D frame, an `(N, H, W)` or
-/// `(N, H, W, 3)` array, or an iterable of frames), checked.
+/// Every frame of `frames` (one `(H, W)` grey or `(H, W, 3)` RGB frame,
+/// an `(N, H, W)` or `(N, H, W, 3)` array, or an iterable of frames),
+/// checked. A 3-D array whose last axis is 3 is one RGB frame (as OpenCV
+/// and imageio give it), not three-pixel-wide grey frames.
 pub(crate) fn frame_args<'py>(frames: &Bound<'py, PyAny>) -> PyResult<Vec<FrameArg<'py>>> {
     if let Ok(a) = frames.cast::<numpy::PyUntypedArray>() {
         use numpy::PyUntypedArrayMethods;
-        if a.ndim() == 2 {
+        if a.ndim() == 2 || (a.ndim() == 3 && a.shape()[2] == 3) {
             return Ok(vec![FrameArg::new(frames, Layout::GreyOrRgb, "frame")?]);
         }
         if a.ndim() != 3 && a.ndim() != 4 {
             return Err(PyValueError::new_err(format!(
-                "frames: expected one (H, W) frame, an (N, H, W) or (N, H, W, 3) uint8 array, or a list of frames; got shape {}",
+                "frames: expected one (H, W) or (H, W, 3) frame, an (N, H, W) or (N, H, W, 3) uint8 array, or a list of frames; got shape {}",
                 crate::frame::py_shape(a.shape())
             )));
         }
@@ -194,9 +196,9 @@ impl PyTactipEncoder {
         pin_image_array(py, frame, &self.preprocess)
     }
 
-    /// Features of frames, `(N, F)` float32: `frames` is one `(H, W)`
-    /// frame, an `(N, H, W)` grey or `(N, H, W, 3)` RGB uint8 array, or a
-    /// list of frames.
+    /// Features of frames, `(N, F)` float32: `frames` is one `(H, W)` or
+    /// `(H, W, 3)` frame, an `(N, H, W)` grey or `(N, H, W, 3)` RGB uint8
+    /// array, or a list of frames.
     fn encode<'py>(
         &self,
         py: Python<'py>,

@@ -68,8 +68,8 @@ impl PyPoseEstimator {
 
     /// Each target (`x_mm`, `theta_deg`, `depth_mm`, ...) to an array with
     /// one value per frame, in the labels' units: `frames` is one `(H, W)`
-    /// frame, an `(N, H, W)` grey or `(N, H, W, 3)` RGB uint8 array, or a
-    /// list of frames.
+    /// or `(H, W, 3)` frame, an `(N, H, W)` grey or `(N, H, W, 3)` RGB
+    /// uint8 array, or a list of frames.
     fn estimate<'py>(
         &self,
         py: Python<'py>,

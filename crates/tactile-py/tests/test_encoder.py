@@ -106,6 +106,12 @@ def test_pose_estimator_matches_tactile_predict(tactile_bin, root, tmp_path, sha
         # predict writes four decimals.
         assert np.allclose(got[name], cli, atol=6e-5), name
     assert pose.preprocess(frames[0]).shape == (pose.pin_side, pose.pin_side)
+    # One RGB frame as OpenCV or imageio give it, (H, W, 3): one frame, not
+    # three-pixel-wide grey ones; the same estimate as its grey levels.
+    rgb = np.repeat(frames[0][:, :, None], 3, axis=2)
+    one = pose.estimate(rgb)
+    for name in pose.targets:
+        assert one[name].shape == (1,) and np.allclose(one[name], got[name][:1], atol=1e-5), name
     with pytest.raises(ValueError):
         pose.estimate(np.zeros((2, 3, 4, 5, 6), dtype=np.uint8))
     with pytest.raises(FileNotFoundError):
