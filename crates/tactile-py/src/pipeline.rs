@@ -124,12 +124,19 @@ impl PyPipeline {
     }
 
     /// Process frames in order: an `(N, H, W, 3)` array or any iterable of
-    /// `(H, W, 3)` frames. Returns one result per frame.
+    /// `(H, W, 3)` frames (one `(H, W, 3)` array is one frame). Returns one
+    /// result per frame.
     fn process_many(
         &self,
         py: Python<'_>,
         frames: &Bound<'_, PyAny>,
     ) -> PyResult<Vec<FrameResult>> {
+        if let Ok(a) = frames.cast::<numpy::PyUntypedArray>() {
+            use numpy::PyUntypedArrayMethods;
+            if a.ndim() == 3 && a.shape()[2] == 3 {
+                return Ok(vec![self.process(py, frames)?]);
+            }
+        }
         let mut out = Vec::new();
         for f in frames.try_iter()? {
             out.push(self.process(py, &f?)?);

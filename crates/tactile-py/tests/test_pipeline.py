@@ -94,6 +94,9 @@ def test_non_contiguous_and_batched_input(pipeline, palpation_frames):
     one = [pipeline.process(f) for f in palpation_frames[:4]]
     assert [m.score for m in many] == [o.score for o in one]
     assert len(pipeline.process_many(iter(palpation_frames[:3]))) == 3
+    # One (H, W, 3) frame is one frame, not H rows.
+    single = pipeline.process_many(frame)
+    assert len(single) == 1 and single[0].score == a.score
 
 
 def test_hysteresis_and_reset(root, palpation_frames):
