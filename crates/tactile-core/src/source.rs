@@ -179,18 +179,25 @@ impl FrameList {
                 missing.count, missing.first
             ));
         }
-        if !self.ignored.is_empty() {
-            let names: Vec<_> = (self.ignored.iter().take(5))
-                .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
-                .collect();
-            w.push(format!(
-                "warning: {} file(s) that are not PNG or JPEG frames were not read: {}{}",
-                self.ignored.len(),
-                names.join(", "),
-                if self.ignored.len() > 5 { ", ..." } else { "" }
-            ));
-        }
+        w.extend(self.ignored_warning());
         w
+    }
+
+    /// The warning naming the files of a folder of frames that are not PNG
+    /// or JPEG frames (the first five), when there are any.
+    pub fn ignored_warning(&self) -> Option<String> {
+        if self.ignored.is_empty() {
+            return None;
+        }
+        let names: Vec<_> = (self.ignored.iter().take(5))
+            .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
+            .collect();
+        Some(format!(
+            "warning: {} file(s) that are not PNG or JPEG frames were not read: {}{}",
+            self.ignored.len(),
+            names.join(", "),
+            if self.ignored.len() > 5 { ", ..." } else { "" }
+        ))
     }
 
     /// Keep the first `n` frames.

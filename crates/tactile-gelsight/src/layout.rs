@@ -348,60 +348,35 @@ fn read_presses_csv(root: &Path, canonical: &Path, path: &Path) -> Result<Vec<Pr
     Ok(out)
 }
 
-/// Every PNG or JPEG frame in `root/frames`, in name order, and a warning
-/// naming the files there that are not frames (a press saved in another
-/// format would otherwise be left out without a word).
+/// Every PNG or JPEG frame in `root/frames`, in name order, read as every
+/// folder of frames is (`core::source::FrameList`), and the warning naming
+/// the files there that are not frames (a press saved in another format
+/// would otherwise be left out without a word).
 fn list_frames(root: &Path) -> Result<(Vec<Press>, Vec<String>)> {
     let dir = root.join("frames");
-    let entries = std::fs::read_dir(&dir).map_err(|_| Error::Layout {
-        path: dir.clone(),
-        why: "missing: a calibration folder has frames/ with one PNG or JPEG per press".into(),
-    })?;
-    let (mut files, mut ignored) = (Vec::new(), Vec::new());
-    for e in entries.flatten() {
-        let path = e.path();
-        let name = e.file_name().to_string_lossy().into_owned();
-        if !tactile_core::source::is_frame_file(&path) || !path.is_file() {
-            if ignored.len() < MAX_PRESSES {
-                ignored.push(name);
-            }
-            continue;
-        }
-        tactile_core::dataset::expect_entry_inside(&dir, &path)?;
-        if files.len() >= MAX_PRESSES {
-            return Err(Error::Layout {
-                path: dir,
-                why: format!("more than {MAX_PRESSES} presses"),
-            });
-        }
-        files.push(format!("frames/{name}"));
+    if !dir.is_dir() {
+        return Err(Error::Layout {
+            path: dir,
+            why: "missing: a calibration folder has frames/ with one PNG or JPEG per press".into(),
+        });
     }
-    files.sort();
-    ignored.sort();
-    let mut warnings = Vec::new();
-    if !ignored.is_empty() {
-        let one = ignored.len() == 1;
-        warnings.push(format!(
-            "warning: {} {} in {} {}, so not read as {}: {}{}",
-            ignored.len(),
-            if one { "entry" } else { "entries" },
-            dir.display(),
-            if one {
-                "is not a PNG or JPEG frame"
-            } else {
-                "are not PNG or JPEG frames"
-            },
-            if one { "a press" } else { "presses" },
-            ignored[..ignored.len().min(5)].join(", "),
-            if ignored.len() > 5 { ", ..." } else { "" }
-        ));
+    let list = tactile_core::source::FrameList::open(&dir)?;
+    if list.frames.len() > MAX_PRESSES {
+        return Err(Error::Layout {
+            path: dir,
+            why: format!("more than {MAX_PRESSES} presses"),
+        });
     }
-    let presses = files
-        .into_iter()
-        .map(|file| Press {
-            file,
+    let presses = list
+        .frames
+        .iter()
+        .map(|f| Press {
+            file: format!(
+                "frames/{}",
+                f.path.file_name().unwrap_or_default().to_string_lossy()
+            ),
             annotated: None,
         })
         .collect();
-    Ok((presses, warnings))
+    Ok((presses, list.ignored_warning().into_iter().collect()))
 }

@@ -154,7 +154,7 @@ fn a_folder_without_presses_csv_reads_png_and_jpeg_presses_and_names_the_rest() 
     assert_eq!(ds.warnings.len(), 1, "{:?}", ds.warnings);
     let w = &ds.warnings[0];
     assert!(
-        w.contains("2 entries") && w.contains("notes.txt") && w.contains("old"),
+        w.contains("2 file(s)") && w.contains("notes.txt") && w.contains("old"),
         "{w}"
     );
     // A folder of frames only warns of nothing.
