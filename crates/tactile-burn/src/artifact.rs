@@ -66,9 +66,7 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
     /// own last steps, such as calibrating a threshold).
     fn read_unfinished(dir: &Path) -> Result<Self> {
         let file = dir.join(Self::CONFIG_FILE);
-        if !dir.is_dir() {
-            return Err(Error::not_found(dir, format!("{} folder", Self::KIND)));
-        }
+        tactile_core::io::expect_folder(dir, &format!("{} folder", Self::KIND))?;
         if !file.is_file() {
             // A model of this kind, alone or as an ensemble of them.
             let is_model = |d: &Path| {

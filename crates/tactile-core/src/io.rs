@@ -110,6 +110,17 @@ pub fn write_json_atomic<T: serde::Serialize>(path: impl AsRef<Path>, value: &T)
 /// file can claim terabytes).
 pub const MAX_JSON_BYTES: u64 = 64 << 20;
 
+/// `dir` is a folder (`what`: "dataset folder", "model folder"): a path
+/// that does not exist is [`Error::not_found`], a file is a folder of the
+/// wrong kind ("not a model folder (a file)").
+pub fn expect_folder(dir: &Path, what: &str) -> Result<()> {
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => Err(Error::wrong_kind(dir, what, "a file")),
+        Err(_) => Err(Error::not_found(dir, what)),
+    }
+}
+
 /// Read and parse a JSON file of at most [`MAX_JSON_BYTES`], naming the
 /// file on error.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: impl AsRef<Path>) -> Result<T> {
@@ -379,6 +390,27 @@ impl StagedDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_folder_is_told_from_a_file_and_from_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(expect_folder(dir.path(), "model folder").is_ok());
+        let f = dir.path().join("labels.txt");
+        std::fs::write(&f, "x").unwrap();
+        let e = expect_folder(&f, "dataset folder").unwrap_err();
+        assert!(!e.is_not_found());
+        assert!(
+            e.to_string()
+                .contains("labels.txt: not a dataset folder (a file)"),
+            "{e}"
+        );
+        let e = expect_folder(&dir.path().join("nowhere"), "model folder").unwrap_err();
+        assert!(
+            e.is_not_found()
+                && e.to_string()
+                    .contains("nowhere: model folder does not exist")
+        );
+    }
 
     #[test]
     fn json_files_are_bounded_before_they_are_read() {

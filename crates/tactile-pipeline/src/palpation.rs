@@ -194,9 +194,7 @@ impl Pipeline {
                     .iter()
                     .any(|m| d.join(m).is_dir())
         };
-        if !dir.is_dir() {
-            return Err(tactile_core::Error::not_found(dir, "models folder").into());
-        }
+        tactile_core::io::expect_folder(dir, "models folder")?;
         if !models_folder(dir) {
             return Err(tactile_core::Error::wrong_kind(
                 dir,
@@ -385,5 +383,10 @@ mod tests {
         assert!(e.contains("the folder models in it is: pass it"), "{e}");
         let e = refusal(&tmp.path().join("nowhere"));
         assert!(e.contains("models folder does not exist"), "{e}");
+        let e = refusal(&depth.join("depth.json"));
+        assert!(
+            e.contains("depth.json: not a models folder (a file)"),
+            "{e}"
+        );
     }
 }

@@ -87,12 +87,7 @@ impl Predictor {
         // no TacTip model).
         let pose =
             |d: &Path| tactile_pose::PoseArtifact::is_in(d) || tactile_pose::PoseEnsemble::is_in(d);
-        if dir.exists() && !dir.is_dir() {
-            return Err(tactile_core::Error::wrong_kind(dir, "model folder", "a file").into());
-        }
-        if !dir.is_dir() {
-            return Err(tactile_core::Error::not_found(dir, "model folder").into());
-        }
+        tactile_core::io::expect_folder(dir, "model folder")?;
         if pose(dir) {
             Ok(Self::PoseNetwork(tactile_pose::PoseEstimator::load(
                 dir, runtime, 0,

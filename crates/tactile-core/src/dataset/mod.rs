@@ -194,9 +194,7 @@ impl Dataset {
         if let Some(e) = file_of_a_dataset(&root) {
             return Err(e);
         }
-        if !root.is_dir() {
-            return Err(Error::not_found(&root, "dataset folder"));
-        }
+        crate::io::expect_folder(&root, "dataset folder")?;
         let manifest_path = root.join("manifest.json");
         if !manifest_path.is_file() {
             return Err(Error::dataset(
