@@ -198,23 +198,19 @@ impl BallPresses {
         let background = load_rgb(&bg_path)?;
         let csv_path = root.join("presses.csv");
         let (presses, warnings) = if csv_path.is_file() {
-            (read_presses_csv(&root, &canonical, &csv_path)?, Vec::new())
+            let size = (background.width(), background.height());
+            let presses = read_presses_csv(&root, &canonical, &csv_path, &sensor, size)?;
+            (presses, Vec::new())
         } else {
             list_frames(&root)?
         };
-        let ds = Self {
+        Ok(Self {
             root,
             sensor,
             background,
             presses,
             warnings,
-        };
-        for p in &ds.presses {
-            if let Some(c) = p.annotated {
-                ds.check_circle(&ds.root.join(&p.file), &c)?;
-            }
-        }
-        Ok(ds)
+        })
     }
 
     /// `(width, height)` of the sensor's frames.
@@ -239,41 +235,53 @@ impl BallPresses {
 
     /// Refuse a circle that leaves the frame or is wider than the ball.
     pub fn check_circle(&self, path: &Path, c: &Circle) -> Result<()> {
-        let (w, h) = self.size();
-        let r = c.radius_px;
-        let bad = |why: String| {
-            Err(Error::Press {
+        match circle_problem(&self.sensor, self.size(), c) {
+            None => Ok(()),
+            Some(why) => Err(Error::Press {
                 path: path.to_path_buf(),
                 why,
-            })
-        };
-        if !(r.is_finite() && r >= 2.0) {
-            return bad(format!("contact radius {r} px is no contact"));
+            }),
         }
-        if r >= self.sensor.ball_radius_px() {
-            return bad(format!(
-                "contact radius {r:.1} px is not smaller than the ball's radius {:.1} px ({} mm at {} mm/px): a ball cannot touch wider than itself",
-                self.sensor.ball_radius_px(),
-                self.sensor.ball_diameter_mm / 2.0,
-                self.sensor.mm_per_px
-            ));
-        }
-        let (x, y) = (c.centre_x_px, c.centre_y_px);
-        if !(x.is_finite() && y.is_finite())
-            || x - r < 0.0
-            || y - r < 0.0
-            || x + r > w as f64
-            || y + r > h as f64
-        {
-            return bad(format!(
-                "contact circle at ({x:.1}, {y:.1}) radius {r:.1} px is not inside the {w}x{h} frame"
-            ));
-        }
-        Ok(())
     }
 }
 
-fn read_presses_csv(root: &Path, canonical: &Path, path: &Path) -> Result<Vec<Press>> {
+/// What makes `c` no contact circle of a ball on a `(w, h)` frame: not a
+/// finite number, too small, wider than the ball, or leaving the frame.
+fn circle_problem(sensor: &SensorInfo, (w, h): (usize, usize), c: &Circle) -> Option<String> {
+    let (x, y, r) = (c.centre_x_px, c.centre_y_px, c.radius_px);
+    if !(x.is_finite() && y.is_finite() && r.is_finite()) {
+        return Some(format!(
+            "contact circle at ({x}, {y}) radius {r} px is not a finite number"
+        ));
+    }
+    if r < 2.0 {
+        return Some(format!("contact radius {r} px is no contact"));
+    }
+    if r >= sensor.ball_radius_px() {
+        return Some(format!(
+            "contact radius {r:.1} px is not smaller than the ball's radius {:.1} px ({} mm at {} mm/px): a ball cannot touch wider than itself",
+            sensor.ball_radius_px(),
+            sensor.ball_diameter_mm / 2.0,
+            sensor.mm_per_px
+        ));
+    }
+    if x - r < 0.0 || y - r < 0.0 || x + r > w as f64 || y + r > h as f64 {
+        return Some(format!(
+            "contact circle at ({x:.1}, {y:.1}) radius {r:.1} px is not inside the {w}x{h} frame"
+        ));
+    }
+    None
+}
+
+/// The presses `presses.csv` lists, each annotated circle checked against
+/// the sensor and the `frame_size`; a bad one is named by its line.
+fn read_presses_csv(
+    root: &Path,
+    canonical: &Path,
+    path: &Path,
+    sensor: &SensorInfo,
+    frame_size: (usize, usize),
+) -> Result<Vec<Press>> {
     let text = read_limited(path, MAX_PRESSES_FILE_BYTES)?;
     let mut rd = tactile_core::csv_lines::reader(&csv::ReaderBuilder::new(), text.as_bytes());
     let headers = rd
@@ -336,11 +344,18 @@ fn read_presses_csv(root: &Path, canonical: &Path, path: &Path) -> Result<Vec<Pr
                         why: format!("line {line}: '{s}' in {} is not a number", &headers[*c]),
                     })?;
                 }
-                Some(Circle {
+                let c = Circle {
                     centre_x_px: v[0],
                     centre_y_px: v[1],
                     radius_px: v[2],
-                })
+                };
+                if let Some(why) = circle_problem(sensor, frame_size, &c) {
+                    return Err(Error::Layout {
+                        path: path.to_path_buf(),
+                        why: format!("line {line}: {file}: {why}"),
+                    });
+                }
+                Some(c)
             }
         };
         out.push(Press { file, annotated });

@@ -60,22 +60,32 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     std::fs::remove_file(d.join("background.png")).unwrap();
     let e = BallPresses::open(&d).unwrap_err().to_string();
     assert!(e.contains("background.png") && e.contains("missing"), "{e}");
-    // A circle off the frame.
-    let d = tmp.path().join("off");
-    subset(&d, 2, |l| l.replace(",299,220,", ",630,220,"));
-    let e = BallPresses::open(&d).unwrap_err().to_string();
-    assert!(
-        e.contains("press_01.png") && e.contains("not inside"),
-        "{e}"
-    );
-    // A contact wider than the ball (radius 2 mm = 67.8 px).
-    let d = tmp.path().join("wide");
-    subset(&d, 2, |l| l.replace(",63", ",70"));
-    let e = BallPresses::open(&d).unwrap_err().to_string();
-    assert!(
-        e.contains("press_01.png") && e.contains("ball's radius"),
-        "{e}"
-    );
+    // Annotated circles that cannot be a ball's contact, each named by
+    // its line of presses.csv (where it is mended) and its frame: off the
+    // frame, wider than the ball (radius 2 mm = 67.8 px), too small, and
+    // not a finite number.
+    for (name, edit, why) in [
+        (
+            "off",
+            (",299,220,", ",630,220,"),
+            "not inside the 640x480 frame",
+        ),
+        ("wide", (",63", ",70"), "ball's radius"),
+        ("small", (",63", ",1"), "no contact"),
+        ("inf", (",63", ",inf"), "not a finite number"),
+        ("nan", (",299,", ",NaN,"), "not a finite number"),
+    ] {
+        let d = tmp.path().join(name);
+        subset(&d, 2, |l| l.replace(edit.0, edit.1));
+        let e = BallPresses::open(&d).unwrap_err().to_string();
+        assert!(
+            e.contains("presses.csv")
+                && e.contains("line 2")
+                && e.contains("press_01.png")
+                && e.contains(why),
+            "{name}: {e}"
+        );
+    }
     // A frame of another size.
     let d = tmp.path().join("size");
     subset(&d, 2, str::to_string);
