@@ -232,12 +232,7 @@ impl Artifact for DetectorEnsembleArtifact {
     /// `ensemble.json` (checked by [`Ensemble::read`]) and every member's
     /// config, which must agree with the first's.
     fn read_unfinished(dir: &Path) -> tactile_core::Result<Self> {
-        if !dir.is_dir() {
-            return Err(tactile_core::Error::not_found(
-                dir,
-                "detector ensemble folder",
-            ));
-        }
+        tactile_core::io::expect_folder(dir, "detector ensemble folder")?;
         let ensemble = Ensemble::read::<DetectorArtifact>(dir)?;
         let members = ensemble
             .member_dirs(dir)

@@ -159,12 +159,7 @@ impl BallPresses {
     /// in `frames/`).
     pub fn open(root: impl AsRef<Path>) -> Result<Self> {
         let root = root.as_ref().to_path_buf();
-        if !root.is_dir() {
-            return Err(Error::Layout {
-                path: root,
-                why: "no such calibration folder".into(),
-            });
-        }
+        tactile_core::io::expect_folder(&root, "calibration folder")?;
         let sensor_file = root.join("sensor.json");
         if !sensor_file.is_file() {
             return Err(Error::Layout {

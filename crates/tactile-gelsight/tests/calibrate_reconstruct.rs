@@ -54,6 +54,19 @@ fn the_circle_finder_agrees_with_the_annotations() {
 #[test]
 fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     let tmp = tempfile::tempdir().unwrap();
+    // No folder, and a file where the folder should be, told apart.
+    let e = BallPresses::open(tmp.path().join("nowhere")).unwrap_err();
+    assert!(
+        e.to_string().contains("calibration folder does not exist"),
+        "{e}"
+    );
+    let file = tmp.path().join("presses.csv");
+    std::fs::write(&file, "file\n").unwrap();
+    let e = BallPresses::open(&file).unwrap_err().to_string();
+    assert!(
+        e.contains("presses.csv: not a calibration folder (a file)"),
+        "{e}"
+    );
     // A missing background.
     let d = tmp.path().join("nobg");
     subset(&d, 2, str::to_string);

@@ -21,9 +21,7 @@ pub fn assemble_ensemble(members: &[PathBuf], out: &Path) -> Result<String> {
         .first()
         .map(PathBuf::as_path)
         .unwrap_or(Path::new(""));
-    if !first.is_dir() {
-        return Err(tactile_core::Error::not_found(first, "model folder").into());
-    }
+    tactile_core::io::expect_folder(first, "model folder")?;
     if DetectorArtifact::is_in(first) {
         let e = DetectorEnsembleArtifact::assemble(members, out)?;
         Ok(e.describe(out, "detectors"))
