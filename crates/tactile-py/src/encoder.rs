@@ -14,10 +14,7 @@ use tactile_pipeline::tactip::TactipPerception;
 use tactile_preprocess::PinImage;
 
 use crate::errors::PyResultExt;
-use crate::frame::{FrameArg, Layout, Pixels};
-
-/// Most frames one call takes (a batch of 8K frames would be 2 GB).
-pub(crate) const MAX_BATCH: usize = 100_000;
+use crate::frame::{FrameArg, Layout, Pixels, each_frame};
 
 struct Models {
     encoder: TactipEncoder,
@@ -39,35 +36,9 @@ pub struct PyTactipEncoder {
 
 /// Every frame of `frames` (one `(H, W)` grey or `(H, W, 3)` RGB frame,
 /// an `(N, H, W)` or `(N, H, W, 3)` array, or an iterable of frames),
-/// checked. A 3-D array whose last axis is 3 is one RGB frame (as OpenCV
-/// and imageio give it), not three-pixel-wide grey frames.
+/// checked (see [`each_frame`]).
 pub(crate) fn frame_args<'py>(frames: &Bound<'py, PyAny>) -> PyResult<Vec<FrameArg<'py>>> {
-    if let Ok(a) = frames.cast::<numpy::PyUntypedArray>() {
-        use numpy::PyUntypedArrayMethods;
-        if a.ndim() == 2 || (a.ndim() == 3 && a.shape()[2] == 3) {
-            return Ok(vec![FrameArg::new(frames, Layout::GreyOrRgb, "frame")?]);
-        }
-        if a.ndim() != 3 && a.ndim() != 4 {
-            return Err(PyValueError::new_err(format!(
-                "frames: expected one (H, W) or (H, W, 3) frame, an (N, H, W) or (N, H, W, 3) uint8 array, or a list of frames; got shape {}",
-                crate::frame::py_shape(a.shape())
-            )));
-        }
-    }
-    let mut out = Vec::new();
-    for (i, f) in frames.try_iter()?.enumerate() {
-        if i >= MAX_BATCH {
-            return Err(PyValueError::new_err(format!(
-                "frames: more than {MAX_BATCH} frames in one call; pass them in batches"
-            )));
-        }
-        out.push(FrameArg::new(
-            &f?,
-            Layout::GreyOrRgb,
-            &format!("frames[{i}]"),
-        )?);
-    }
-    Ok(out)
+    each_frame(frames, |f, what| FrameArg::new(f, Layout::GreyOrRgb, what))
 }
 
 impl PyTactipEncoder {

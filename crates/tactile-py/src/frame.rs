@@ -1,5 +1,5 @@
-//! numpy arrays in: an `(H, W, 3)` uint8 RGB frame or an `(H, W)` uint8
-//! grey frame, checked for type and shape with a message that says what
+//! numpy arrays in: an `(H, W, 3)` uint8 RGB frame or an `(H, W)` (or
+//! `(H, W, 1)`) uint8 grey frame, checked for type and shape with a message that says what
 //! was given. A C-contiguous array is read in place (no copy); any other
 //! layout (a slice, a channel-reversed view of an OpenCV BGR frame) is
 //! copied once into a contiguous buffer.
@@ -47,10 +47,34 @@ pub(crate) fn py_shape(shape: &[usize]) -> String {
     }
 }
 
+/// How to mend a frame whose channels are not what `layout` reads: RGBA
+/// (as imageio or PIL read a PNG with alpha; refused, as the CLI refuses
+/// such a file, rather than guessing what transparency means), or grey
+/// where only RGB is read.
+fn channel_hint(shape: &[usize], layout: Layout) -> &'static str {
+    match (shape, layout) {
+        (&[_, _, 4], _) => " (an RGBA frame: if it is opaque, drop its alpha with frame[..., :3])",
+        (&[_, _, 2], Layout::GreyOrRgb) => {
+            " (grey with alpha: if it is opaque, drop its alpha with frame[..., 0])"
+        }
+        (&[_, _, 1] | &[_, _], Layout::Rgb) => {
+            " (a grey frame: repeat it to RGB with numpy.dstack([frame] * 3))"
+        }
+        _ => "",
+    }
+}
+
+/// What `obj` is, for a message: its dtype and shape when it is an array.
 fn describe(obj: &Bound<'_, PyAny>) -> String {
     match obj.cast::<PyUntypedArray>() {
         Ok(a) => format!("a {} array of shape {}", a.dtype(), py_shape(a.shape())),
         Err(_) => match obj.get_type().name() {
+            Ok(n)
+                if n.to_str()
+                    .is_ok_and(|n| n.starts_with(['a', 'e', 'i', 'o', 'u'])) =>
+            {
+                format!("an {n}")
+            }
             Ok(n) => format!("a {n}"),
             Err(_) => "another type".into(),
         },
@@ -76,11 +100,12 @@ impl<'py> FrameArg<'py> {
         let shape = arr.shape().to_vec();
         let (height, width, channels) = match (layout, shape.as_slice()) {
             (_, &[h, w, 3]) => (h, w, 3),
-            (Layout::GreyOrRgb, &[h, w]) => (h, w, 1),
+            (Layout::GreyOrRgb, &[h, w] | &[h, w, 1]) => (h, w, 1),
             _ => {
                 return Err(PyValueError::new_err(format!(
-                    "{what}: expected {want}, got shape {}",
-                    py_shape(&shape)
+                    "{what}: expected {want}, got shape {}{}",
+                    py_shape(&shape),
+                    channel_hint(&shape, layout)
                 )));
             }
         };
@@ -189,4 +214,45 @@ impl Pixels<'_> {
         };
         tactile_core::image_io::grey_image(self.width, self.height, data)
     }
+}
+
+/// Most frames one call takes (a batch of 8K frames would be 2 GB).
+pub(crate) const MAX_BATCH: usize = 100_000;
+
+/// `f` on each frame of `frames` in order, with its name for messages:
+/// one frame (`frame`) or an `(N, ...)` array or iterable of them
+/// (`frames[i]`), read one at a time (a generator of video frames is never
+/// held whole). A 2-D array, or a 3-D one whose last axis is 4 or less, is
+/// one frame (an `(H, W, 3)` RGB frame as OpenCV and imageio give it, not H
+/// frames 3 pixels wide; no model reads frames 4 pixels wide or less), so a
+/// frame with a channel axis or alpha is checked, and named, as one frame.
+pub(crate) fn each_frame<'py, T>(
+    frames: &Bound<'py, PyAny>,
+    mut f: impl FnMut(&Bound<'py, PyAny>, &str) -> PyResult<T>,
+) -> PyResult<Vec<T>> {
+    const WANT: &str = "expected one (H, W) or (H, W, 3) uint8 frame, an (N, H, W) or (N, H, W, 3) uint8 array, or a list of frames";
+    if let Ok(a) = frames.cast::<PyUntypedArray>() {
+        if a.ndim() == 2 || (a.ndim() == 3 && a.shape()[2] <= 4) {
+            return Ok(vec![f(frames, "frame")?]);
+        }
+        if a.ndim() != 3 && a.ndim() != 4 {
+            return Err(PyValueError::new_err(format!(
+                "frames: {WANT}; got shape {}",
+                py_shape(a.shape())
+            )));
+        }
+    }
+    let items = frames
+        .try_iter()
+        .map_err(|_| PyTypeError::new_err(format!("frames: {WANT}; got {}", describe(frames))))?;
+    let mut out = Vec::new();
+    for (i, item) in items.enumerate() {
+        if i >= MAX_BATCH {
+            return Err(PyValueError::new_err(format!(
+                "frames: more than {MAX_BATCH} frames in one call; pass them in batches"
+            )));
+        }
+        out.push(f(&item?, &format!("frames[{i}]"))?);
+    }
+    Ok(out)
 }

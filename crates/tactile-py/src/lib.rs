@@ -29,7 +29,7 @@ use pyo3::prelude::*;
 fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("MAX_FRAME_SIDE", frame::MAX_SIDE)?;
-    m.add("MAX_BATCH", encoder::MAX_BATCH)?;
+    m.add("MAX_BATCH", frame::MAX_BATCH)?;
     m.add("MAX_ARRAY_BYTES", synth::MAX_ARRAY_BYTES)?;
     m.add_class::<pipeline::PyPipeline>()?;
     m.add_class::<pipeline::FrameResult>()?;

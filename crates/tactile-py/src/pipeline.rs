@@ -11,7 +11,7 @@ use tactile_burn::Runtime;
 use tactile_pipeline::{FrameRecord, FrameViews, Hysteresis, Pipeline};
 
 use crate::errors::PyResultExt;
-use crate::frame::{FrameArg, Layout};
+use crate::frame::{FrameArg, Layout, each_frame};
 
 /// Parse a runtime name as the command line does.
 pub(crate) fn runtime(name: &str) -> PyResult<Runtime> {
@@ -47,6 +47,40 @@ impl PyPipeline {
         self.state
             .lock()
             .map_err(|_| PyRuntimeError::new_err("the pipeline failed in another thread"))
+    }
+
+    /// Process one frame, named `what` in messages (`frame`, `frames[i]`).
+    fn process_named(
+        &self,
+        py: Python<'_>,
+        frame: &Bound<'_, PyAny>,
+        what: &str,
+    ) -> PyResult<FrameResult> {
+        let arg = FrameArg::new(frame, Layout::Rgb, what)?;
+        let px = arg.view();
+        let (rec, views) = py.detach(|| -> PyResult<_> {
+            let mut st = self.lock()?;
+            let State {
+                pipeline,
+                filter,
+                frames,
+            } = &mut *st;
+            let name = frames.to_string();
+            let out = px
+                .with_rgb(|img| pipeline.process_filtered(&name, img, filter.as_mut()))
+                .py()?
+                .py()?;
+            *frames += 1;
+            Ok(out)
+        })?;
+        Ok(FrameResult {
+            record: rec,
+            views,
+            size: (px.width, px.height),
+            mask: OnceLock::new(),
+            depth: OnceLock::new(),
+            indentation: OnceLock::new(),
+        })
     }
 }
 
@@ -96,31 +130,7 @@ impl PyPipeline {
 
     /// Process one `(H, W, 3)` uint8 RGB frame of any size.
     fn process(&self, py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<FrameResult> {
-        let arg = FrameArg::new(frame, Layout::Rgb, "frame")?;
-        let px = arg.view();
-        let (rec, views) = py.detach(|| -> PyResult<_> {
-            let mut st = self.lock()?;
-            let State {
-                pipeline,
-                filter,
-                frames,
-            } = &mut *st;
-            let name = frames.to_string();
-            let out = px
-                .with_rgb(|img| pipeline.process_filtered(&name, img, filter.as_mut()))
-                .py()?
-                .py()?;
-            *frames += 1;
-            Ok(out)
-        })?;
-        Ok(FrameResult {
-            record: rec,
-            views,
-            size: (px.width, px.height),
-            mask: OnceLock::new(),
-            depth: OnceLock::new(),
-            indentation: OnceLock::new(),
-        })
+        self.process_named(py, frame, "frame")
     }
 
     /// Process frames in order: an `(N, H, W, 3)` array or any iterable of
@@ -131,17 +141,7 @@ impl PyPipeline {
         py: Python<'_>,
         frames: &Bound<'_, PyAny>,
     ) -> PyResult<Vec<FrameResult>> {
-        if let Ok(a) = frames.cast::<numpy::PyUntypedArray>() {
-            use numpy::PyUntypedArrayMethods;
-            if a.ndim() == 3 && a.shape()[2] == 3 {
-                return Ok(vec![self.process(py, frames)?]);
-            }
-        }
-        let mut out = Vec::new();
-        for f in frames.try_iter()? {
-            out.push(self.process(py, &f?)?);
-        }
-        Ok(out)
+        each_frame(frames, |f, what| self.process_named(py, f, what))
     }
 
     /// Time the pipeline inside Rust on `frame`, `repeats` times, without

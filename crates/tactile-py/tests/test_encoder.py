@@ -87,6 +87,17 @@ def test_encoder_errors(root, tmp_path):
         enc.encode(np.zeros((2, 300, 300, 3, 1), np.uint8))
     with pytest.raises(ValueError, match=r"frames\[1\]"):
         enc.encode([np.zeros((300, 300), np.uint8), np.zeros((300, 300, 2), np.uint8)])
+    # Frames as image readers give them: grey with a channel axis is grey;
+    # alpha (an RGBA or grey-alpha PNG) is refused as the CLI refuses such a
+    # file, saying how to drop it, not read as a batch of 4-pixel-wide frames.
+    grey = np.random.default_rng(3).integers(0, 256, (300, 300), np.uint8)
+    np.testing.assert_array_equal(enc.encode(grey[..., None]), enc.encode(grey))
+    with pytest.raises(ValueError, match=r"\(300, 300, 4\) \(an RGBA frame: .*frame\[\.\.\., :3\]"):
+        enc.encode(np.zeros((300, 300, 4), np.uint8))
+    with pytest.raises(ValueError, match=r"\(300, 300, 2\) \(grey with alpha"):
+        enc.encode(np.zeros((300, 300, 2), np.uint8))
+    with pytest.raises(TypeError, match="list of frames; got a NoneType"):
+        enc.encode(None)
 
 
 def test_pose_estimator_matches_tactile_predict(tactile_bin, root, tmp_path, shared_real):

@@ -97,6 +97,14 @@ def test_non_contiguous_and_batched_input(pipeline, palpation_frames):
     # One (H, W, 3) frame is one frame, not H rows.
     single = pipeline.process_many(frame)
     assert len(single) == 1 and single[0].score == a.score
+    # A frame with alpha, or grey, is one frame refused as such; a bad frame
+    # in a batch is named by its index.
+    with pytest.raises(ValueError, match=r"^frame: .*\(an RGBA frame"):
+        pipeline.process_many(np.dstack([frame, np.full(frame.shape[:2], 255, np.uint8)]))
+    with pytest.raises(ValueError, match=r"^frame: .*\(a grey frame"):
+        pipeline.process_many(frame[:, :, 0])
+    with pytest.raises(ValueError, match=r"^frames\[1\]: .*got shape \(5, 5\)"):
+        pipeline.process_many([frame, np.zeros((5, 5), np.uint8)])
 
 
 def test_hysteresis_and_reset(root, palpation_frames):
@@ -113,8 +121,10 @@ def test_hysteresis_and_reset(root, palpation_frames):
     [
         (np.zeros((180, 320, 3), np.float32), TypeError, "float32"),
         (np.zeros((180, 320, 3), np.uint16), TypeError, "uint16"),
-        (np.zeros((180, 320, 4), np.uint8), ValueError, "(180, 320, 4)"),
-        (np.zeros((180, 320), np.uint8), ValueError, "(180, 320)"),
+        (np.zeros((180, 320, 4), np.uint8), ValueError, "(180, 320, 4) (an RGBA frame: if it is opaque, drop its alpha with frame[..., :3])"),
+        (np.zeros((180, 320), np.uint8), ValueError, "(180, 320) (a grey frame: repeat it to RGB"),
+        (np.zeros((180, 320, 1), np.uint8), ValueError, "(180, 320, 1) (a grey frame: repeat it to RGB"),
+        (None, TypeError, "got a NoneType"),
         (np.zeros((0, 320, 3), np.uint8), ValueError, "320x0"),
         (np.zeros((9000, 2, 3), np.uint8), ValueError, "7680"),
         ([[1, 2, 3]], TypeError, "list"),
