@@ -12,7 +12,7 @@ use tactile_burn::nn::{RegressionLoss, bce_with_logits};
 use tactile_burn::optim::AdadeltaConfig;
 use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
-use tactile_core::dataset::{Dataset, TestHoldout, hold_out};
+use tactile_core::dataset::{Dataset, TestHoldout};
 use tactile_core::rng::SampleRng;
 use tactile_preprocess::perturb::RotationAugment;
 use tactile_preprocess::{PinImage, PreprocessConfig};
@@ -132,10 +132,8 @@ impl Rows {
         for s in sources {
             let offset = rows.pins.len();
             let usable = s.ds.rows_to_fit(config.every_split, config.holdout)?;
-            let (train, val) = hold_out(usable, config.val_fraction, config.schedule.seed)
-                .map_err(|e| {
-                    tactile_core::Error::dataset(s.ds.labels_path(), None, e.to_string())
-                })?;
+            let (train, val) =
+                s.ds.hold_out(usable, config.val_fraction, config.schedule.seed)?;
             tactile_core::note!(
                 "preprocessing {} frames of {} ({} train, {} validation)",
                 s.ds.len(),
@@ -183,6 +181,7 @@ pub fn train(
     config.schedule.check()?;
     config.model.check()?;
     config.preprocess.check()?;
+    tactile_core::dataset::check_val_fraction(config.val_fraction)?;
     if let Some(j) = &config.joint {
         j.check()?;
     }
@@ -209,6 +208,11 @@ pub fn train(
     .collect();
     let datasets: Vec<&Dataset> = sources.iter().map(|s| s.ds).collect();
     tactile_core::dataset::check_output_dir(out, &datasets)?;
+    for s in &sources {
+        if let Some(j) = s.joint {
+            s.ds.expect_columns(j.targets.iter().map(|t| t.name.as_str()))?;
+        }
+    }
     let Rows {
         pins,
         train,

@@ -713,6 +713,7 @@ pub fn train_head(
         );
     }
     tactile_core::dataset::check_output_dir(out, &[ds])?;
+    ds.expect_columns(["shape"])?;
     let feats = dataset_features(source, ds, runtime)?;
     let (classes, y) = classes_of(ds, "shape")?;
     let train = ds
@@ -885,6 +886,7 @@ pub fn train_regressor(
     runtime: Runtime,
 ) -> Result<RegressorFit> {
     tactile_core::dataset::check_output_dir(out, &[ds])?;
+    ds.expect_columns(plan.targets.iter().map(|t| t.name.as_str()))?;
     let feats = dataset_features(source, ds, runtime)?;
     // Every target must be labelled on every frame used: with
     // `only_labelled`, frames missing one are left out of every split.
@@ -914,8 +916,7 @@ pub fn train_regressor(
         // `every_split`), a share of them for early stopping; nothing is
         // left to test on.
         let rows = ds.rows_to_fit(plan.every_split, None)?;
-        let (train, val) = tactile_core::dataset::hold_out(rows, plan.val_fraction, plan.seed)
-            .map_err(|e| tactile_core::Error::dataset(ds.labels_path(), None, e.to_string()))?;
+        let (train, val) = ds.hold_out(rows, plan.val_fraction, plan.seed)?;
         tactile_core::dataset::Splits {
             train,
             val,

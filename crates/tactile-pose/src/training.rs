@@ -8,7 +8,7 @@ use burn::config::Config;
 use burn::tensor::{Device, Tensor, TensorData};
 use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
-use tactile_core::dataset::{Dataset, TestHoldout, hold_out};
+use tactile_core::dataset::{Dataset, TestHoldout};
 use tactile_estimate::Target;
 use tactile_estimate::regressor::{decode, encode, output_scaler, target_mae};
 use tactile_preprocess::{Downsample, Lighting, PreprocessConfig};
@@ -98,6 +98,7 @@ impl PoseTrainingConfig {
         self.preprocess.check()?;
         self.schedule.check()?;
         self.augment.check()?;
+        tactile_core::dataset::check_val_fraction(self.val_fraction)?;
         if self.targets.is_empty() {
             return Err(tactile_core::Error::Config("no targets to predict".into()).into());
         }
@@ -146,6 +147,7 @@ pub fn train(
 ) -> Result<FitSummary> {
     let config = &config.clone().checked()?;
     tactile_core::dataset::check_output_dir(out, &[data])?;
+    data.expect_columns(config.targets.iter().map(|t| t.name.as_str()))?;
     tactile_core::note!("preprocessing {} frames", data.len());
     let set = PoseSet::from_dataset(data, &config.preprocess, &config.targets)?;
     let rows = data.rows_to_fit(config.every_split == Some(true), config.holdout)?;
@@ -167,8 +169,7 @@ pub fn train(
     let (train, val) = if config.all_rows {
         (rows.clone(), rows)
     } else {
-        hold_out(rows, config.val_fraction, config.schedule.seed)
-            .map_err(|e| tactile_core::Error::dataset(data.labels_path(), None, e.to_string()))?
+        data.hold_out(rows, config.val_fraction, config.schedule.seed)?
     };
     let encoded = encode(&config.targets, &set.label_rows(&train));
     let outputs = output_scaler(&config.targets, &encoded);

@@ -533,6 +533,67 @@ fn every_split_trains_the_final_cae_and_regressor_on_val_frames_too() {
     );
 }
 
+/// A target the labels do not have, or a validation fraction out of range,
+/// is the user's flag: every trainer names it (the column with the columns
+/// there are; the fraction as a configuration error, not as the labels
+/// file's) before a frame is preprocessed, and makes nothing.
+#[test]
+fn a_misspelt_target_or_fraction_is_refused_before_any_frame_is_read() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let data = root.join("samples/virtual-tactip");
+    let d = data.to_str().unwrap();
+    let out = tmp.path().join("out");
+    let o = out.to_str().unwrap();
+    let encoder = root.join("models/cae-synth");
+    let runs: [&[&str]; 3] = [
+        &[
+            "train",
+            "pose",
+            "--data",
+            d,
+            "--out",
+            o,
+            "--max-epochs",
+            "1",
+        ],
+        &["train", "cae", "--data", d, "--out", o, "--max-epochs", "1"],
+        &[
+            "train",
+            "regressor",
+            "--encoder",
+            encoder.to_str().unwrap(),
+            "--data",
+            d,
+            "--out",
+            o,
+        ],
+    ];
+    for (k, run) in runs.iter().enumerate() {
+        let targets = if k == 1 {
+            "--joint-targets"
+        } else {
+            "--targets"
+        };
+        let (ok, msg) = tactile(&[run, &[targets, "depth_mm,dpeth_mm"][..]].concat());
+        assert!(
+            !ok && msg.contains("labels.csv:1: no column 'dpeth_mm' (its columns: file, shape,")
+                && !msg.contains("preprocessing"),
+            "{run:?}: {msg}"
+        );
+        if k < 2 {
+            let (ok, msg) = tactile(&[run, &["--val-fraction", "1.5"][..]].concat());
+            assert!(
+                !ok && msg.contains("validation fraction must be in [0, 1), got 1.5")
+                    && !msg.contains("labels.csv")
+                    && !msg.contains("preprocessing"),
+                "{run:?}: {msg}"
+            );
+        }
+        assert!(!out.exists(), "{run:?} made {o}");
+    }
+}
+
 #[test]
 fn regressor_names_a_missing_label_and_a_bad_target() {
     let tmp = tempfile::tempdir().unwrap();

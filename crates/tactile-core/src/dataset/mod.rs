@@ -14,7 +14,7 @@ mod split;
 mod writer;
 
 pub use paths::{Escape, expect_entry_inside, resolve_inside};
-pub use split::{DEFAULT_SPLIT_SEED, Splits, TestHoldout, hold_out};
+pub use split::{DEFAULT_SPLIT_SEED, Splits, TestHoldout, check_val_fraction, hold_out};
 pub use writer::DatasetWriter;
 
 /// The format tag every manifest carries.
@@ -490,6 +490,24 @@ impl Dataset {
                 format!("column '{column}' is empty, but this command needs it"),
             )
         })
+    }
+
+    /// Check `labels.csv` has every one of `columns` (the targets a command
+    /// was asked to learn or score), naming the first it lacks and the
+    /// columns it has, before any frame is read: an absent column is a
+    /// misspelt flag, not a frame without a label.
+    pub fn expect_columns<'a>(&self, columns: impl IntoIterator<Item = &'a str>) -> Result<()> {
+        match columns
+            .into_iter()
+            .find(|c| !self.columns.iter().any(|have| have == c))
+        {
+            None => Ok(()),
+            Some(c) => Err(Error::dataset(
+                self.labels_path(),
+                Some(1),
+                format!("no column '{c}' (its columns: {})", self.columns.join(", ")),
+            )),
+        }
     }
 
     /// A numeric label, `None` when empty.

@@ -55,6 +55,18 @@ fn check_fraction(name: &str, f: f64) -> Result<()> {
     }
 }
 
+/// Check a validation fraction (`--val-fraction`) is in `[0, 1)`, so a
+/// trainer can refuse it before preprocessing a single frame.
+pub fn check_val_fraction(val_fraction: f64) -> Result<()> {
+    if (0.0..1.0).contains(&val_fraction) {
+        Ok(())
+    } else {
+        Err(Error::Config(format!(
+            "validation fraction must be in [0, 1), got {val_fraction}"
+        )))
+    }
+}
+
 /// Shuffle `rows` with `seed` and hold out the last `val_fraction` of them
 /// (at least one, and at least one left): `(train, validation)`.
 pub fn hold_out(
@@ -62,11 +74,7 @@ pub fn hold_out(
     val_fraction: f64,
     seed: u64,
 ) -> Result<(Vec<usize>, Vec<usize>)> {
-    if !(0.0..1.0).contains(&val_fraction) {
-        return Err(Error::Config(format!(
-            "validation fraction must be in [0, 1), got {val_fraction}"
-        )));
-    }
+    check_val_fraction(val_fraction)?;
     if rows.len() < 2 {
         return Err(Error::Invalid(format!(
             "need at least 2 training frames, found {}",
@@ -80,6 +88,19 @@ pub fn hold_out(
 }
 
 impl Dataset {
+    /// [`hold_out`] of this dataset's `rows`: too few of them is named by
+    /// its labels file; a bad fraction is the flag's error, not the file's.
+    pub fn hold_out(
+        &self,
+        rows: Vec<usize>,
+        val_fraction: f64,
+        seed: u64,
+    ) -> Result<(Vec<usize>, Vec<usize>)> {
+        check_val_fraction(val_fraction)?;
+        hold_out(rows, val_fraction, seed)
+            .map_err(|e| Error::dataset(self.labels_path(), None, e.to_string()))
+    }
+
     /// `(train, validation, test)` rows: the `split` column's train and
     /// evaluation rows ([`Dataset::evaluation_split`]) when it has both, else a seeded shuffle with
     /// `test_fraction` held out; then `val_fraction` of the training rows
