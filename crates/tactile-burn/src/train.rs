@@ -46,13 +46,19 @@ impl Schedule {
                 self.batch_size, self.max_epochs
             )));
         }
-        for (name, v) in [
-            ("learning rate", self.learning_rate),
-            ("learning-rate decay", self.lr_decay),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Error::Config(format!("{name} must be positive, got {v}")));
-            }
+        if !(self.learning_rate.is_finite() && self.learning_rate > 0.0) {
+            return Err(Error::Config(format!(
+                "learning rate must be a positive finite number, got {}",
+                self.learning_rate
+            )));
+        }
+        // A factor per epoch: above 1 the rate grows every epoch until the
+        // weights diverge.
+        if !(self.lr_decay > 0.0 && self.lr_decay <= 1.0) {
+            return Err(Error::Config(format!(
+                "learning-rate decay must be in (0, 1] (a factor per epoch; 1 keeps the rate), got {}",
+                self.lr_decay
+            )));
         }
         Ok(())
     }
@@ -570,6 +576,23 @@ mod tests {
                 .with_lr_decay(0.0)
                 .check()
                 .is_err()
+        );
+        let e = Schedule::new(16, 10, 3, f64::INFINITY).check().unwrap_err();
+        assert!(
+            e.to_string().contains("positive finite number, got inf"),
+            "{e}"
+        );
+        // A decay above 1 grows the rate every epoch: refused; 1 keeps it.
+        let e = Schedule::new(16, 10, 3, 1e-3)
+            .with_lr_decay(1.5)
+            .check()
+            .unwrap_err();
+        assert!(e.to_string().contains("must be in (0, 1]"), "{e}");
+        assert!(
+            Schedule::new(16, 10, 3, 1e-3)
+                .with_lr_decay(1.0)
+                .check()
+                .is_ok()
         );
     }
 
