@@ -32,7 +32,7 @@ pub enum Error {
     /// A folder holds something else than the command needs (a segmenter
     /// where a detector was asked for, a TacTip dataset for a palpation
     /// model).
-    #[error("{}: not a {expected} ({found})", path.display())]
+    #[error("{}: not {} {expected} ({found})", path.display(), article(expected))]
     WrongKind {
         /// The folder or file.
         path: PathBuf,
@@ -109,6 +109,15 @@ pub enum Error {
     /// Any other invalid input, described in words.
     #[error("{0}")]
     Invalid(String),
+}
+
+/// "an" before a vowel ("an estimator folder"), else "a".
+fn article(noun: &str) -> &'static str {
+    if noun.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    }
 }
 
 impl Error {

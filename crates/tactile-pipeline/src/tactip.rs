@@ -89,6 +89,18 @@ impl Predictor {
             |d: &Path| tactile_pose::PoseArtifact::is_in(d) || tactile_pose::PoseEnsemble::is_in(d);
         tactile_core::io::expect_folder(dir, "model folder")?;
         if pose(dir) {
+            // A pose network gives its targets itself: estimator folders
+            // would be left unread without a word.
+            if let Some(h) = heads.first() {
+                return Err(tactile_core::Error::model(
+                    dir,
+                    format!(
+                        "a pose network, which gives its targets itself: estimator folders (--heads {}) read an encoder's features; leave them out, or pass an encoder folder",
+                        h.display()
+                    ),
+                )
+                .into());
+            }
             Ok(Self::PoseNetwork(tactile_pose::PoseEstimator::load(
                 dir, runtime, 0,
             )?))
@@ -1035,5 +1047,37 @@ mod tests {
         assert!(e.contains("depth.json: not a model folder (a file)"), "{e}");
         let e = refusal(&root.join("nowhere"));
         assert!(e.contains("nowhere: model folder does not exist"), "{e}");
+    }
+
+    /// Estimator folders read an encoder's features: given with a pose
+    /// network they are refused, not left unread; one that is no estimator
+    /// is named as such.
+    #[test]
+    fn estimator_folders_go_with_an_encoder_only() {
+        let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
+        let head = models.join("cae-surface/pose");
+        let e = match Predictor::load(&models.join("pose-surface"), &[head], Runtime::BurnFlex) {
+            Ok(_) => panic!("a pose network took estimator folders"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            e.contains("pose-surface: a pose network")
+                && e.contains("--heads")
+                && e.contains("cae-surface/pose"),
+            "{e}"
+        );
+        let nothing = tempfile::tempdir().unwrap();
+        let e = match Predictor::load(
+            &models.join("cae-surface"),
+            &[nothing.path().to_path_buf()],
+            Runtime::BurnFlex,
+        ) {
+            Ok(_) => panic!("an empty folder was taken for an estimator"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            e.contains(": not an estimator folder (neither head.json"),
+            "{e}"
+        );
     }
 }
