@@ -372,19 +372,6 @@ impl StagedDir {
         }
         Ok(target)
     }
-
-    /// Move every file of the staging folder into the target folder
-    /// (created if needed), keeping what else it holds.
-    pub fn commit_into(self) -> Result<std::path::PathBuf> {
-        create_dir_all(&self.target)?;
-        let entries = std::fs::read_dir(self.staging.path())
-            .map_err(|e| Error::io(self.staging.path(), e))?;
-        for e in entries.flatten() {
-            let to = self.target.join(e.file_name());
-            std::fs::rename(e.path(), &to).map_err(|err| Error::io(&to, err))?;
-        }
-        Ok(self.target.clone())
-    }
 }
 
 #[cfg(test)]

@@ -262,7 +262,8 @@ impl Decisions {
 /// `sink` as soon as it is made (memory stays bounded however long the
 /// source). Overlays of tendon frames go to `options.render` as
 /// `NAME-overlay.png` (a calibrated sensor's frames as
-/// `NAME-indentation.png`), staged and moved in when the run ends.
+/// `NAME-indentation.png`), staged and moved in when the run ends; a
+/// render folder that already holds files is refused before any frame.
 pub fn run(
     pipeline: &mut Pipeline,
     source: &mut FrameSource,
@@ -270,11 +271,13 @@ pub fn run(
     sink: &mut dyn FnMut(&RunItem<'_>) -> Result<Flow>,
 ) -> Result<RunSummary> {
     // Overlays go to a staging folder first: an error or an interrupt
-    // leaves no half set of them.
+    // leaves no half set of them. The folder must be new (absent or
+    // empty), as `reconstruct --render` asks: another run's overlays of the
+    // same names are never written over, and two runs never mix theirs.
     let render = match &options.render {
         Some(dir) => {
             tactile_core::io::ensure_writable_dir(dir)?;
-            Some(tactile_core::io::StagedDir::new(dir)?)
+            Some(tactile_core::io::StagedDir::fresh(dir)?)
         }
         None => None,
     };
@@ -357,7 +360,7 @@ pub fn run(
     }
     pb.finish_and_clear();
     if let Some(staged) = render {
-        staged.commit_into()?;
+        staged.commit(false)?;
     }
     let wall = t0.elapsed().as_secs_f64();
     let [

@@ -70,7 +70,8 @@ pub(crate) struct RunArgs {
     /// Process at most this many frames.
     #[arg(long)]
     limit: Option<u64>,
-    /// Write an overlay PNG per tendon frame into this folder
+    /// Write an overlay PNG per tendon frame into this new folder (one
+    /// that already holds files is refused and left alone)
     /// (NAME-overlay.png): the segmenter's window with the kept region in
     /// green and the direction in red, beside the depth heat map (paper
     /// B's figure 3); with a calibrated sensor, NAME-indentation.png per

@@ -2606,6 +2606,49 @@ fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
     }
     let pictures = std::fs::read_dir(&render).unwrap().count();
     assert_eq!(pictures, 6);
+    // Another run into the same pictures folder is refused before a frame
+    // is processed: the first run's pictures are not written over.
+    let first = std::fs::read_dir(&render)
+        .unwrap()
+        .map(|e| {
+            std::fs::metadata(e.unwrap().path())
+                .unwrap()
+                .modified()
+                .unwrap()
+        })
+        .max();
+    let again = tmp.path().join("again.jsonl");
+    let (ok, msg) = tactile(&[
+        "run",
+        "--models",
+        &m,
+        "--data",
+        frames.to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+        "--render",
+        render.to_str().unwrap(),
+        "--runtime",
+        "burn-flex",
+    ]);
+    assert!(
+        !ok && msg.contains("pictures: already holds files (left alone); choose a new folder"),
+        "{msg}"
+    );
+    assert!(!again.exists(), "a refused run left {}", again.display());
+    let after = std::fs::read_dir(&render)
+        .unwrap()
+        .map(|e| {
+            std::fs::metadata(e.unwrap().path())
+                .unwrap()
+                .modified()
+                .unwrap()
+        })
+        .max();
+    assert_eq!(
+        (std::fs::read_dir(&render).unwrap().count(), after),
+        (6, first)
+    );
     // The same maps as tactile reconstruct writes.
     let maps = tmp.path().join("maps");
     let (ok, msg) = tactile(&[
