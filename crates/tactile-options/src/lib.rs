@@ -28,6 +28,47 @@ pub struct OptionDoc {
     pub default: Value,
 }
 
+/// The options `T` of `defaults` with `key` alone set to `value`: whether
+/// that value is one the option takes, and if not, why.
+fn alone<T: DeserializeOwned>(
+    defaults: &Map<String, Value>,
+    key: &str,
+    value: &Value,
+) -> std::result::Result<T, serde_json::Error> {
+    let mut one = defaults.clone();
+    one.insert(key.to_string(), value.clone());
+    serde_json::from_value(Value::Object(one))
+}
+
+/// `value`, or, when it is a string the option does not take as it is but
+/// takes as a list, the list its commas separate (numbers as numbers), as
+/// the flag reads it: `targets="x_mm,y_mm"` as `--targets x_mm,y_mm`.
+fn listed<T>(
+    value: &Value,
+    takes: impl Fn(&Value) -> std::result::Result<T, serde_json::Error>,
+) -> Value {
+    let Value::String(s) = value else {
+        return value.clone();
+    };
+    if takes(value).is_ok() {
+        return value.clone();
+    }
+    let list = Value::Array(
+        s.split(',')
+            .map(str::trim)
+            .map(|p| match serde_json::from_str::<Value>(p) {
+                Ok(n @ Value::Number(_)) => n,
+                _ => Value::String(p.to_string()),
+            })
+            .collect(),
+    );
+    if takes(&list).is_ok() {
+        list
+    } else {
+        value.clone()
+    }
+}
+
 /// A set of options both front ends fill: clap flags on the command line,
 /// keyword arguments in Python. Implemented for every `clap::Args` type
 /// whose fields all have defaults and that serialises with the same names.
@@ -91,20 +132,21 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
                     )));
                 }
                 if !value.is_null() {
-                    merged.insert(k.clone(), value.clone());
+                    merged.insert(k.clone(), listed(value, |v| alone::<Self>(&defaults, k, v)));
                     origin.insert(k, from);
                 }
             }
         }
         serde_json::from_value(Value::Object(merged.clone())).map_err(|e| {
-            // Name the offending option: the first that fails on its own.
-            let bad = origin.iter().find(|(k, _)| {
-                let mut one = defaults.clone();
-                one.insert((**k).clone(), merged[k.as_str()].clone());
-                serde_json::from_value::<Self>(Value::Object(one)).is_err()
+            // Name the offending option, the first that fails on its own,
+            // with its own error (not another option's).
+            let bad = origin.iter().find_map(|(k, from)| {
+                alone::<Self>(&defaults, k, &merged[k.as_str()])
+                    .err()
+                    .map(|e| (k, from, e))
             });
             match bad {
-                Some((k, from)) => {
+                Some((k, from, e)) => {
                     let at = from
                         .map(|p| format!("{}: ", p.display()))
                         .unwrap_or_default();

@@ -201,6 +201,32 @@ fn keywords_and_config_files_reach_the_training_config() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("p.json") && e.contains("option 'hidden'"), "{e}");
+    // Two bad values: the first is named with its own error, not the
+    // other's.
+    let two = json!({"max_epochs": "one", "widths": "wide"});
+    let e = PoseOptions::resolve(None, two.as_object().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("option 'max_epochs' = \"one\": invalid type: string \"one\""),
+        "{e}"
+    );
+    // A list given as one string reads as the flag reads it: commas
+    // separate, numbers stay numbers.
+    let csv =
+        json!({"targets": "x_mm, theta_deg:180", "widths": "16,32,32,64,64", "input_px": 128});
+    let c = PoseOptions::resolve(None, csv.as_object().unwrap())
+        .unwrap()
+        .config()
+        .unwrap();
+    assert_eq!(c.model.widths, [16, 32, 32, 64, 64]);
+    assert_eq!(
+        c.targets
+            .iter()
+            .map(|t| t.name.as_str())
+            .collect::<Vec<_>>(),
+        ["x_mm", "theta_deg"]
+    );
     // A file far larger than any options file is refused before it is read.
     let huge = " ".repeat(tactile_burn::options::MAX_OPTIONS_FILE_BYTES as usize + 1);
     std::fs::write(&file, format!("{{{huge}}}")).unwrap();

@@ -26,17 +26,45 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
     let mut map: serde_json::Map<String, serde_json::Value> = match kwargs {
         None => serde_json::Map::new(),
         Some(d) => {
-            let d = d.copy()?;
             let os = py.import("os")?;
             let path_like = os.getattr("PathLike")?;
+            let numpy_value = py.import("numpy")?.getattr("ndarray")?;
+            let numpy_scalar = py.import("numpy")?.getattr("generic")?;
+            let json = py.import("json")?;
+            let kwargs = pyo3::types::PyDict::new(py);
+            kwargs.set_item("allow_nan", false)?;
+            let mut map = serde_json::Map::new();
             for (k, v) in d.iter() {
-                // Paths become strings, as JSON has them.
-                if v.is_instance(&path_like)? {
-                    d.set_item(k, os.call_method1("fspath", (v,))?)?;
-                }
+                let key: String = k.extract()?;
+                // Paths become strings, numpy values Python ones, as JSON
+                // has them.
+                let v = if v.is_instance(&path_like)? {
+                    os.call_method1("fspath", (v,))?
+                } else if v.is_instance(&numpy_value)? || v.is_instance(&numpy_scalar)? {
+                    v.call_method0("tolist")?
+                } else {
+                    v
+                };
+                // Each value alone, so a bad one is named: NaN and
+                // infinities are refused (JSON has none).
+                let text: String = json
+                    .call_method("dumps", (&v,), Some(&kwargs))
+                    .and_then(|t| t.extract())
+                    .map_err(|e| {
+                        let why = match v.extract::<f64>() {
+                            Ok(x) if !x.is_finite() => "not a finite number".to_string(),
+                            _ => e.to_string(),
+                        };
+                        PyValueError::new_err(format!(
+                            "invalid configuration: option '{key}' = {}: {why}",
+                            v.repr().map(|r| r.to_string()).unwrap_or_default()
+                        ))
+                    })?;
+                let value = serde_json::from_str(&text)
+                    .map_err(|e| PyValueError::new_err(format!("option '{key}': {e}")))?;
+                map.insert(key, value);
             }
-            let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;
-            serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?
+            map
         }
     };
     let config = match map.remove("config") {

@@ -328,6 +328,17 @@ def test_every_trainer_option_is_a_typed_keyword(small_vt, tmp_path):
     for name, call in calls.items():
         with pytest.raises(ValueError, match="unknown option 'max_epoch'"):
             call(max_epoch=1)
+        if "lr" not in [o["name"] for o in tactile.train.options(name)]:
+            continue
+        # NaN is named as the option it was given for, not as JSON's parse
+        # error; a wrong type is named with its own error.
+        with pytest.raises(ValueError, match=r"option 'lr' = nan: not a finite number"):
+            call(lr=float("nan"))
+        with pytest.raises(ValueError, match=r"option 'max_epochs' = \"one\": invalid type: string \"one\""):
+            call(max_epochs="one", patience="many")
+    # A list as one string reads as its flag does: commas separate.
+    with pytest.raises(ValueError, match=r"option 'widths' = \"16,x\""):
+        calls["pose"](targets="x_mm,y_mm", widths="16,x")
     assert not (tmp_path / "o").exists()
 
 
