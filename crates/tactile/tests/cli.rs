@@ -2578,19 +2578,22 @@ fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
     let records = tmp.path().join("records.jsonl");
     let render = tmp.path().join("pictures");
     let frames = data.join("frames");
-    let (ok, msg) = tactile(&[
-        "run",
-        "--models",
-        &m,
-        "--data",
-        frames.to_str().unwrap(),
-        "--out",
-        records.to_str().unwrap(),
-        "--render",
-        render.to_str().unwrap(),
-        "--runtime",
-        "burn-flex",
-    ]);
+    let run_into = |records: &Path| {
+        tactile(&[
+            "run",
+            "--models",
+            &m,
+            "--data",
+            frames.to_str().unwrap(),
+            "--out",
+            records.to_str().unwrap(),
+            "--render",
+            render.to_str().unwrap(),
+            "--runtime",
+            "burn-flex",
+        ])
+    };
+    let (ok, msg) = run_into(&records);
     assert!(ok, "{msg}");
     assert!(msg.contains("indentation only"), "{msg}");
     let text = std::fs::read_to_string(&records).unwrap();
@@ -2608,45 +2611,27 @@ fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
     assert_eq!(pictures, 6);
     // Another run into the same pictures folder is refused before a frame
     // is processed: the first run's pictures are not written over.
-    let first = std::fs::read_dir(&render)
-        .unwrap()
-        .map(|e| {
-            std::fs::metadata(e.unwrap().path())
-                .unwrap()
-                .modified()
-                .unwrap()
-        })
-        .max();
+    let newest = || {
+        std::fs::read_dir(&render)
+            .unwrap()
+            .map(|e| {
+                std::fs::metadata(e.unwrap().path())
+                    .unwrap()
+                    .modified()
+                    .unwrap()
+            })
+            .max()
+    };
+    let first = newest();
     let again = tmp.path().join("again.jsonl");
-    let (ok, msg) = tactile(&[
-        "run",
-        "--models",
-        &m,
-        "--data",
-        frames.to_str().unwrap(),
-        "--out",
-        again.to_str().unwrap(),
-        "--render",
-        render.to_str().unwrap(),
-        "--runtime",
-        "burn-flex",
-    ]);
+    let (ok, msg) = run_into(&again);
     assert!(
         !ok && msg.contains("pictures: already holds files (left alone); choose a new folder"),
         "{msg}"
     );
     assert!(!again.exists(), "a refused run left {}", again.display());
-    let after = std::fs::read_dir(&render)
-        .unwrap()
-        .map(|e| {
-            std::fs::metadata(e.unwrap().path())
-                .unwrap()
-                .modified()
-                .unwrap()
-        })
-        .max();
     assert_eq!(
-        (std::fs::read_dir(&render).unwrap().count(), after),
+        (std::fs::read_dir(&render).unwrap().count(), newest()),
         (6, first)
     );
     // The same maps as tactile reconstruct writes.
