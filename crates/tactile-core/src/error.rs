@@ -111,8 +111,9 @@ pub enum Error {
     Invalid(String),
 }
 
-/// "an" before a vowel ("an estimator folder"), else "a".
-fn article(noun: &str) -> &'static str {
+/// "an" before a vowel ("an estimator folder"), else "a": the one rule
+/// every message that names a kind of thing uses.
+pub fn article(noun: &str) -> &'static str {
     if noun.starts_with(['a', 'e', 'i', 'o', 'u']) {
         "an"
     } else {

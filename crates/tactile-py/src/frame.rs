@@ -69,13 +69,10 @@ fn describe(obj: &Bound<'_, PyAny>) -> String {
     match obj.cast::<PyUntypedArray>() {
         Ok(a) => format!("a {} array of shape {}", a.dtype(), py_shape(a.shape())),
         Err(_) => match obj.get_type().name() {
-            Ok(n)
-                if n.to_str()
-                    .is_ok_and(|n| n.starts_with(['a', 'e', 'i', 'o', 'u'])) =>
-            {
-                format!("an {n}")
+            Ok(n) => {
+                let n = n.to_string();
+                format!("{} {n}", tactile_core::error::article(&n))
             }
-            Ok(n) => format!("a {n}"),
             Err(_) => "another type".into(),
         },
     }

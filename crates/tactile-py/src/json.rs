@@ -28,8 +28,9 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
         Some(d) => {
             let os = py.import("os")?;
             let path_like = os.getattr("PathLike")?;
-            let numpy_value = py.import("numpy")?.getattr("ndarray")?;
-            let numpy_scalar = py.import("numpy")?.getattr("generic")?;
+            let numpy = py.import("numpy")?;
+            let (numpy_value, numpy_scalar) =
+                (numpy.getattr("ndarray")?, numpy.getattr("generic")?);
             let json = py.import("json")?;
             let kwargs = pyo3::types::PyDict::new(py);
             kwargs.set_item("allow_nan", false)?;

@@ -96,9 +96,10 @@ impl Dataset {
         val_fraction: f64,
         seed: u64,
     ) -> Result<(Vec<usize>, Vec<usize>)> {
-        check_val_fraction(val_fraction)?;
-        hold_out(rows, val_fraction, seed)
-            .map_err(|e| Error::dataset(self.labels_path(), None, e.to_string()))
+        hold_out(rows, val_fraction, seed).map_err(|e| match e {
+            Error::Config(_) => e,
+            e => Error::dataset(self.labels_path(), None, e.to_string()),
+        })
     }
 
     /// `(train, validation, test)` rows: the `split` column's train and
@@ -191,11 +192,7 @@ impl Dataset {
         val_fraction: f64,
         seed: u64,
     ) -> Result<(Vec<usize>, Vec<usize>)> {
-        if !(0.0..1.0).contains(&val_fraction) || val_fraction == 0.0 {
-            return Err(Error::Config(format!(
-                "validation fraction must be in (0, 1), got {val_fraction}"
-            )));
-        }
+        check_fraction("validation fraction", val_fraction)?;
         let mut groups: std::collections::BTreeMap<String, Vec<usize>> = Default::default();
         for i in 0..self.len() {
             let key = match self.text_opt(i, "sequence") {
