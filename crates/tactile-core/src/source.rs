@@ -62,8 +62,8 @@ pub struct FrameList {
     /// True for a dataset, whose rows say what it holds; false for a
     /// folder of frames, which may have dropped some.
     pub is_dataset: bool,
-    /// Files of a folder of frames that are not PNG or JPEG frames (sorted;
-    /// they are reported, not read).
+    /// Files of a folder of frames that are not PNG or JPEG frames, or are
+    /// hidden (sorted; they are reported, not read).
     pub ignored: Vec<PathBuf>,
 }
 
@@ -75,6 +75,15 @@ pub fn is_frame_file(p: &Path) -> bool {
     p.extension()
         .and_then(|x| x.to_str())
         .is_some_and(|x| FRAME_EXTENSIONS.iter().any(|e| x.eq_ignore_ascii_case(e)))
+}
+
+/// True for a file whose name starts with a dot: macOS leaves `._frame.png`
+/// resource forks (not pictures) beside every frame copied to a shared or
+/// FAT drive, and `.DS_Store`; a folder of frames reads none of them.
+pub fn is_hidden_file(p: &Path) -> bool {
+    p.file_name()
+        .and_then(|n| n.to_str())
+        .is_some_and(|n| n.starts_with('.'))
 }
 
 /// True for a folder (not a link) that is a dataset or has a PNG or JPEG
@@ -93,8 +102,8 @@ fn folder_holds_frames(p: &Path) -> bool {
 
 impl FrameList {
     /// The frames of `dir`: a dataset when it has `labels.csv`, else its
-    /// PNG and JPEG files in name order (anything else is listed in
-    /// [`FrameList::ignored`]).
+    /// PNG and JPEG files in name order (anything else, and hidden files,
+    /// are listed in [`FrameList::ignored`]).
     pub fn open(dir: &Path) -> Result<Self> {
         if dir.join("labels.csv").is_file() {
             let ds = Dataset::open(dir)?;
@@ -121,7 +130,7 @@ impl FrameList {
             .map_err(|e| Error::io(dir, e))?
             .filter_map(|e| e.ok().map(|e| e.path()))
             .take(limit + 1)
-            .partition(|p| is_frame_file(p));
+            .partition(|p| is_frame_file(p) && !is_hidden_file(p));
         if v.len() + ignored.len() > limit {
             return Err(Error::Invalid(format!(
                 "{}: more than {limit} files; a folder of frames holds at most that many",
@@ -183,21 +192,41 @@ impl FrameList {
         w
     }
 
-    /// The warning naming the files of a folder of frames that are not PNG
-    /// or JPEG frames (the first five), when there are any.
+    /// The warning naming the files of a folder of frames that were not read
+    /// (the first five of each kind): those that are not PNG or JPEG frames,
+    /// and hidden ones, when there are any.
     pub fn ignored_warning(&self) -> Option<String> {
         if self.ignored.is_empty() {
             return None;
         }
-        let names: Vec<_> = (self.ignored.iter().take(5))
-            .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
-            .collect();
-        Some(format!(
-            "warning: {} file(s) that are not PNG or JPEG frames were not read: {}{}",
-            self.ignored.len(),
-            names.join(", "),
-            if self.ignored.len() > 5 { ", ..." } else { "" }
-        ))
+        let (hidden, other): (Vec<&PathBuf>, Vec<&PathBuf>) =
+            self.ignored.iter().partition(|p| is_hidden_file(p));
+        let names = |v: &[&PathBuf]| {
+            let first: Vec<_> = (v.iter().take(5))
+                .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
+                .collect();
+            format!(
+                "{}{}",
+                first.join(", "),
+                if v.len() > 5 { ", ..." } else { "" }
+            )
+        };
+        let mut parts = Vec::new();
+        if !other.is_empty() {
+            parts.push(format!(
+                "{} file(s) that are not PNG or JPEG frames were not read: {}",
+                other.len(),
+                names(&other)
+            ));
+        }
+        if !hidden.is_empty() {
+            parts.push(format!(
+                "{} hidden file(s) (a name starting with '.', as macOS's ._ copies) were not read: {}",
+                hidden.len(),
+                names(&hidden)
+            ));
+        }
+        Some(format!("warning: {}", parts.join("; ")))
     }
 
     /// Keep the first `n` frames.

@@ -72,9 +72,12 @@ def test_a_numpy_frame_reconstructs_as_the_folder_does(presses: Path, model: Pat
     folder.mkdir()
     shutil.copy(frame_file, folder / "0001.png")
     (folder / "notes.txt").write_text("not a frame")
+    # macOS's resource fork beside a copied frame: hidden, not a picture.
+    (folder / "._0001.png").write_bytes(b"\0\x05\x16\x07resource fork")
     with pytest.warns(UserWarning, match="notes.txt"):
         r = tactile.calibrate.reconstruct(model, folder, tmp_path / "maps2", runtime="onnx")
     assert r["frames"] == 1 and any("notes.txt" in w for w in r["warnings"])
+    assert any("hidden" in w and "._0001.png" in w for w in r["warnings"])
     np.testing.assert_allclose(np.load(tmp_path / "maps2" / "0001.npy"), saved, atol=1e-7)
 
 

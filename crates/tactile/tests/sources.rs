@@ -235,10 +235,22 @@ fn a_folder_of_jpeg_frames_runs_and_other_files_are_reported() {
             .unwrap();
     }
     std::fs::write(dir.path().join("notes.txt"), "recorded on day 3").unwrap();
+    // What macOS leaves beside frames copied to a shared drive: resource
+    // forks named like frames that are not pictures, and .DS_Store.
+    std::fs::write(
+        dir.path().join("._000001.jpg"),
+        b"\0\x05\x16\x07resource fork",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join(".DS_Store"), b"\0\0\0\x01Bud1").unwrap();
     let (records, summary, err) = run(&["--data", dir.path().to_str().unwrap()], None);
     assert_eq!(summary["source"], "folder");
     assert!(
-        err.contains("1 file(s) that are not PNG or JPEG frames were not read: notes.txt"),
+        err.contains(
+            "1 file(s) that are not PNG or JPEG frames were not read: notes.txt; \
+             2 hidden file(s) (a name starting with '.', as macOS's ._ copies) were not read: \
+             .DS_Store, ._000001.jpg"
+        ),
         "{err}"
     );
     assert_agree(&reference(), &records, 2.0);
