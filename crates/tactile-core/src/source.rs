@@ -102,7 +102,7 @@ fn folder_holds_frames(p: &Path) -> bool {
 
 impl FrameList {
     /// The frames of `dir`: a dataset when it has `labels.csv`, else its
-    /// PNG and JPEG files in name order (anything else, and hidden files,
+    /// PNG and JPEG files in the order of the numbers in their names (anything else, and hidden files,
     /// are listed in [`FrameList::ignored`]).
     pub fn open(dir: &Path) -> Result<Self> {
         if dir.join("labels.csv").is_file() {
@@ -143,8 +143,11 @@ impl FrameList {
             crate::dataset::expect_entry_inside(dir, p)?;
             crate::image_io::expect_regular_file(p)?;
         }
-        v.sort();
-        ignored.sort();
+        // By the numbers in the names, as a file browser shows them:
+        // `frame_2.png` before `frame_10.png` (zero-padded names keep
+        // their order), so a run's frames and its hysteresis go in time.
+        alphanumeric_sort::sort_path_slice(&mut v);
+        alphanumeric_sort::sort_path_slice(&mut ignored);
         if v.is_empty() {
             return Err(Error::Invalid(format!(
                 "{}: no labels.csv and no PNG or JPEG frames{}{}",

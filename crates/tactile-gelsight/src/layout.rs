@@ -358,8 +358,9 @@ fn read_presses_csv(
     Ok(out)
 }
 
-/// Every PNG or JPEG frame in `root/frames`, in name order, read as every
-/// folder of frames is (`core::source::FrameList`), and the warning naming
+/// Every PNG or JPEG frame in `root/frames`, in the order of the numbers in
+/// their names, read as every folder of frames is
+/// (`core::source::FrameList`), and the warning naming
 /// the files there that are not frames (a press saved in another format
 /// would otherwise be left out without a word).
 fn list_frames(root: &Path) -> Result<(Vec<Press>, Vec<String>)> {

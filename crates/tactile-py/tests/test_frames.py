@@ -24,6 +24,17 @@ def test_folder_frames_are_the_files(root, palpation_frames):
         assert f.age_ms is None and f.tendon is None
 
 
+def test_a_folder_numbered_without_zeros_comes_in_time(root, tmp_path, palpation_frames):
+    # frame_10.png after frame_9.png, not after frame_1.png; hidden files
+    # (macOS's ._ copies, not pictures) are not read.
+    for i in range(12):
+        shutil.copy(root / "samples" / "palpation" / f"{i:06d}.png", tmp_path / f"frame_{i}.png")
+    (tmp_path / "._frame_3.png").write_bytes(b"\0\x05\x16\x07resource fork")
+    got = list(tactile.frames(tmp_path))
+    assert [f.name for f in got] == [f"frame_{i}.png" for i in range(12)]
+    assert all(np.array_equal(f.image, e) for f, e in zip(got, palpation_frames))
+
+
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
 def test_lossless_video_gives_the_pipeline_the_same_frames(root, tmp_path, pipeline, palpation_frames):
     video = tmp_path / "palpation.mp4"

@@ -257,6 +257,27 @@ fn a_folder_of_jpeg_frames_runs_and_other_files_are_reported() {
 }
 
 #[test]
+fn a_folder_numbered_without_zeros_runs_in_time() {
+    // Frames saved as frame_0.png ... frame_11.png: by name, frame_10 and
+    // frame_11 would come before frame_2, and the run's hysteresis would
+    // see the palpation out of order.
+    let dir = tempfile::tempdir().unwrap();
+    for (i, p) in sample_frames().iter().enumerate() {
+        std::fs::copy(p, dir.path().join(format!("frame_{i}.png"))).unwrap();
+    }
+    let (records, summary, err) = run(&["--data", dir.path().to_str().unwrap()], None);
+    let names: Vec<_> = records
+        .iter()
+        .map(|r| r["frame"].as_str().unwrap())
+        .collect();
+    let expected: Vec<_> = (0..names.len()).map(|i| format!("frame_{i}.png")).collect();
+    assert_eq!(names, expected);
+    assert_eq!(summary["missing_frames"], 0, "{err}");
+    assert!(!err.contains("missing from the numbering"), "{err}");
+    assert_agree(&reference(), &records, 0.0);
+}
+
+#[test]
 fn a_file_that_is_not_a_video_is_an_error_naming_it() {
     let dir = tempfile::tempdir().unwrap();
     let f = dir.path().join("clip.mp4");
