@@ -257,7 +257,8 @@ impl Dataset {
                 &labels,
                 Some(1),
                 format!(
-                    "header must start with {} (found {})",
+                    "header must start with {} (found {}); frames without labels need no \
+                     labels.csv: pass the folder that holds them",
                     required.join(","),
                     header.join(",")
                 ),
@@ -757,6 +758,8 @@ mod tests {
         tiny(d.path(), "file,x_mm\nframes/a.png,1\n");
         let e = Dataset::open(d.path()).unwrap_err().to_string();
         assert!(e.contains("labels.csv:1"), "{e}");
+        // Unlabelled frames listed by file alone: told to pass their folder.
+        assert!(e.contains("pass the folder that holds them"), "{e}");
         std::fs::write(d.path().join("manifest.json"), "{ not json").unwrap();
         let e = Dataset::open(d.path()).unwrap_err().to_string();
         assert!(e.contains("manifest.json"), "{e}");
