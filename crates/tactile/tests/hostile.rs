@@ -160,11 +160,21 @@ fn reads_stay_inside_the_dataset_and_do_not_reveal_outside_files() {
         std::os::unix::fs::symlink(&target, ds.join("frames/link.png")).unwrap();
         let (ok, msg) = encode(&ds, &out);
         assert!(
-            !ok && msg.contains("labels.csv:3") && msg.contains("leaves the dataset folder"),
+            !ok && msg.contains("labels.csv:3")
+                && msg.contains("leaves the dataset folder")
+                && msg.contains("move the whole dataset folder there and link to it"),
             "{msg}"
         );
         assert!(!msg.contains("does not exist"), "{msg}");
     }
+    // What that error advises: a link to the whole dataset folder is read.
+    let _ = std::fs::remove_dir_all(&ds);
+    tactip(&ds, 1, &[row("frames/0.png")]);
+    let linked = tmp.path().join("linked-dataset");
+    std::os::unix::fs::symlink(&ds, &linked).unwrap();
+    let (ok, msg) = encode(&linked, &out);
+    assert!(ok && out.exists(), "{msg}");
+    std::fs::remove_file(&out).unwrap();
     // A folder of frames without labels.csv bounds its reads alike: a link
     // out is refused by its name, a link to a frame beside it is read.
     let folder = tmp.path().join("folder");

@@ -29,7 +29,10 @@ impl Escape {
         match self {
             Escape::Absolute => "is absolute: files must be named relative to the dataset folder",
             Escape::Parent => "goes up with '..': files must stay inside the dataset folder",
-            Escape::Link => "passes through a symbolic link that leaves the dataset folder",
+            Escape::Link => {
+                "passes through a symbolic link that leaves the dataset folder (to keep the \
+                 frames on another disk, move the whole dataset folder there and link to it)"
+            }
             Escape::Loop => "passes through too many symbolic links",
             Escape::Empty => "is empty",
         }
