@@ -201,6 +201,26 @@ pub fn save_rgb_png(
     crate::io::write_atomic(path, &bytes)
 }
 
+/// Load a tendon mask (0 = background, 255 = tendon; values of 128 and more
+/// count as tendon), refused when it has marked pixels but none reaches 128:
+/// a 0/1 mask, as `mask.astype(numpy.uint8)` saves one, would otherwise be
+/// read as empty and train a segmenter to find nothing.
+pub fn load_mask(path: impl AsRef<Path>) -> Result<GreyImage> {
+    let path = path.as_ref();
+    let img = load_grey(path)?;
+    let largest = img.as_slice().iter().copied().max().unwrap_or(0);
+    if (1..128).contains(&largest) {
+        return Err(Error::image(
+            path,
+            format!(
+                "a tendon mask whose largest value is {largest}: masks are 0 = background \
+                 and 255 = tendon (a 0/1 mask needs multiplying by 255)"
+            ),
+        ));
+    }
+    Ok(img)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -239,6 +259,27 @@ mod tests {
             .unwrap();
         let e = load_grey(&pa).err().unwrap().to_string();
         assert!(e.contains("alpha.png") && e.contains("RGBA"), "{e}");
+    }
+
+    #[test]
+    fn a_mask_of_zeros_and_ones_is_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("mask01.png");
+        let mut px = vec![0u8; 64];
+        px[10..20].fill(1);
+        save_grey_png(&p, 8, 8, &px).unwrap();
+        let e = load_mask(&p).err().unwrap().to_string();
+        assert!(
+            e.contains("mask01.png") && e.contains("largest value is 1"),
+            "{e}"
+        );
+        // Empty masks and 0/255 masks (with soft edges) are read.
+        save_grey_png(&p, 8, 8, &[0u8; 64]).unwrap();
+        assert!(load_mask(&p).is_ok());
+        px[10..20].fill(255);
+        px[20] = 40;
+        save_grey_png(&p, 8, 8, &px).unwrap();
+        assert_eq!(load_mask(&p).unwrap().as_slice(), &px[..]);
     }
 
     #[test]

@@ -244,6 +244,24 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
                     let dir = if *c == "mask" { "masks" } else { "depth" };
                     let to = format!("{dir}/{:06}.{ext}", written);
                     crate::image_io::expect_regular_file(&from)?;
+                    if *c == "mask" {
+                        // Read now, not when training: a 0/1 mask or one of
+                        // another size is named before the dataset exists.
+                        let at_line = |message: String| Error::Dataset {
+                            path: options.labels.clone(),
+                            line: Some(*line),
+                            message: format!("mask {cell:?}: {message}"),
+                        };
+                        let m = crate::image_io::load_mask(&from)
+                            .map_err(|e| at_line(e.to_string()))?;
+                        if (m.width(), m.height()) != (w, h) {
+                            return Err(at_line(format!(
+                                "is {}x{}, its frame {w}x{h}",
+                                m.width(),
+                                m.height()
+                            )));
+                        }
+                    }
                     std::fs::copy(&from, root.join(&to)).map_err(|e| Error::io(&from, e))?;
                     to
                 }

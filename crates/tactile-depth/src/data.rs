@@ -215,7 +215,7 @@ impl DepthSet {
                         )
                     })?;
                     let mpath = ds.path_of(i, "mask")?;
-                    let m = ds.load_grey(i, "mask")?;
+                    let m = ds.load_mask(i)?;
                     let mask = resize_grey(&m, w, h)
                         .map_err(|e| e.in_file(&mpath))?
                         .data

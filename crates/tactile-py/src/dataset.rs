@@ -152,7 +152,7 @@ impl PyDataset {
         if !self.has("mask") || self.ds.text_opt(i, "mask").is_none() {
             return Ok(None);
         }
-        let img = py.detach(|| self.ds.load_grey(i, "mask")).py()?;
+        let img = py.detach(|| self.ds.load_mask(i)).py()?;
         let (w, h) = (img.width(), img.height());
         let bits = img.as_slice().iter().map(|&v| v >= 128).collect();
         array2(py, h, w, bits).map(Some)

@@ -19,7 +19,8 @@ pub(crate) enum DatasetCmd {
 #[derive(Args)]
 pub(crate) struct FromVideoArgs {
     /// The video file (anything FFmpeg decodes), a ROS 2 bag (.mcap; a
-    /// frame's number is its index on --topic) or a folder of frames.
+    /// frame's number is its index on --topic) or a folder of frames (a
+    /// frame's number is its place when ordered by the numbers in the names).
     #[arg(long)]
     video: PathBuf,
     /// A bag's image topic (without it, the bag's only image topic).

@@ -400,6 +400,25 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
         err.contains("bad.csv:2") && err.contains("goes up with '..'"),
         "{err}"
     );
+    // A 0/1 mask (as numpy's astype(uint8) saves one) would be read as
+    // empty; a mask of another size would be resized into a wrong label.
+    let (w, h) = (imgs[3].width(), imgs[3].height());
+    let mut px = vec![0u8; w * h];
+    px[w * 90..w * 91].fill(1);
+    tactile_core::image_io::save_grey_png(dir.path().join("m01.png"), w, h, &px).unwrap();
+    tactile_core::image_io::save_grey_png(dir.path().join("small.png"), 8, 8, &[255; 64]).unwrap();
+    for (mask, why) in [
+        (
+            "m01.png",
+            "largest value is 1: masks are 0 = background and 255 = tendon",
+        ),
+        ("small.png", &format!("is 8x8, its frame {w}x{h}")),
+    ] {
+        std::fs::write(&bad, format!("frame,tendon,mask\n3,1,{mask}\n")).unwrap();
+        let r = import(&bad, &dir.path().join("ds2"));
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.contains("bad.csv:2") && err.contains(why), "{err}");
+    }
     assert!(
         !dir.path().join("ds2").exists(),
         "nothing left by a failed import"

@@ -389,6 +389,16 @@ impl Dataset {
         Ok(img)
     }
 
+    /// The tendon mask of row `i` (`image_io::load_mask`: a 0/1 mask is
+    /// refused), of the manifest's size.
+    pub fn load_mask(&self, i: usize) -> Result<crate::image_io::GreyImage> {
+        crate::interrupt::check()?;
+        let path = self.path_of(i, "mask")?;
+        let img = crate::image_io::load_mask(&path)?;
+        self.expect_frame_size(&path, img.width(), img.height())?;
+        Ok(img)
+    }
+
     /// The depth map of row `i` in metres, `(width, height, values)`,
     /// refused (naming the file) when its size is not the manifest's.
     pub fn load_depth_m(&self, i: usize) -> Result<(usize, usize, Vec<f32>)> {
