@@ -128,10 +128,10 @@ pub fn read_features_csv(path: impl AsRef<Path>) -> Result<(Vec<String>, Vec<Vec
         .headers()
         .map_err(|e| E::dataset(path, Some(1), e.to_string()))?
         .clone();
-    let file_col = header
-        .iter()
-        .position(|h| h == "file")
-        .ok_or_else(|| E::dataset(path, Some(1), "no 'file' column"))?;
+    let file_col = header.iter().position(|h| h == "file").ok_or_else(|| {
+        let hint = tactile_core::csv_lines::separator_hint(header.iter());
+        E::dataset(path, Some(1), format!("no 'file' column{hint}"))
+    })?;
     let cols: Vec<usize> = header
         .iter()
         .enumerate()

@@ -111,6 +111,25 @@ pub fn reader<R: Read>(builder: &csv::ReaderBuilder, inner: R) -> CsvReader<R> {
     builder.from_reader(LineCounting::new(inner))
 }
 
+/// What to add to "no such column" when the header is one cell holding a
+/// `;` or a tab: a spreadsheet saved the file with another separator
+/// (Excel does so in locales that write decimal commas). Empty otherwise.
+pub fn separator_hint<'a>(header: impl IntoIterator<Item = &'a str>) -> &'static str {
+    let mut cells = header.into_iter();
+    match (cells.next(), cells.next()) {
+        (Some(only), None) if only.contains(';') => {
+            " (the header is one cell holding ';': separate the columns with commas and \
+             write decimal points, e.g. with pandas: \
+             read_csv(f, sep=';', decimal=',').to_csv(f, index=False))"
+        }
+        (Some(only), None) if only.contains('\t') => {
+            " (the header is one cell holding tabs: separate the columns with commas, e.g. \
+             with pandas: read_csv(f, sep='\\t').to_csv(f, index=False))"
+        }
+        _ => "",
+    }
+}
+
 /// The records after the header, each with its physical line; a bad
 /// record comes as its line and what is wrong with it ([`describe`]).
 pub fn records<R: Read>(
@@ -208,5 +227,21 @@ mod tests {
         assert_eq!(items[0].as_ref().unwrap().0, 2);
         let (line, why) = items[1].as_ref().unwrap_err();
         assert_eq!((*line, why.as_str()), (3, "3 cells where the header has 2"));
+    }
+
+    #[test]
+    fn a_header_split_by_semicolons_or_tabs_is_named() {
+        for (text, hint) in [
+            ("file;shape;x_mm\nframes/a.png;flat;1,5\n", "holding ';'"),
+            ("file\tshape\n", "holding tabs"),
+        ] {
+            let mut r = reader(&csv::ReaderBuilder::new(), text.as_bytes());
+            let h = r.headers().unwrap().clone();
+            assert!(separator_hint(h.iter()).contains(hint), "{text:?}");
+        }
+        let mut r = reader(&csv::ReaderBuilder::new(), "file,shape\n".as_bytes());
+        let h = r.headers().unwrap().clone();
+        assert_eq!(separator_hint(h.iter()), "");
+        assert_eq!(separator_hint(["file"]), "");
     }
 }

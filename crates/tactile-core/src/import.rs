@@ -103,7 +103,11 @@ fn read_labels(path: &Path) -> Result<Labels> {
     let Some(frame_col) = header.iter().position(|h| h == "frame") else {
         return Err(bad(
             1,
-            "no `frame` column: name each labelled frame by its number in the video (from 0) or its file name".into(),
+            format!(
+                "no `frame` column{}: name each labelled frame by its number in the video \
+                 (from 0) or its file name",
+                crate::csv_lines::separator_hint(header.iter().map(String::as_str))
+            ),
         ));
     };
     if header.iter().any(|h| h == "file") {

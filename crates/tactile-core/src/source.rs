@@ -102,8 +102,9 @@ fn folder_holds_frames(p: &Path) -> bool {
 
 impl FrameList {
     /// The frames of `dir`: a dataset when it has `labels.csv`, else its
-    /// PNG and JPEG files in the order of the numbers in their names (anything else, and hidden files,
-    /// are listed in [`FrameList::ignored`]).
+    /// PNG and JPEG files in the order of the numbers in their names
+    /// (anything else, and hidden files, are listed in
+    /// [`FrameList::ignored`]).
     pub fn open(dir: &Path) -> Result<Self> {
         if dir.join("labels.csv").is_file() {
             let ds = Dataset::open(dir)?;

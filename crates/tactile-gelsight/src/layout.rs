@@ -289,7 +289,10 @@ fn read_presses_csv(
     let col = |name: &str| headers.iter().position(|h| h.trim() == name);
     let file_col = col("file").ok_or_else(|| Error::Layout {
         path: path.to_path_buf(),
-        why: "no 'file' column".into(),
+        why: format!(
+            "no 'file' column{}",
+            tactile_core::csv_lines::separator_hint(headers.iter())
+        ),
     })?;
     let circle_cols = match (
         col("centre_x_px"),

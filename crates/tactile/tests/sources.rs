@@ -393,6 +393,14 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
     let r = import(&bad, &dir.path().join("ds2"));
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(err.contains("bad.csv:4: frame 40 is not in"), "{err}");
+    // Saved by a spreadsheet that separates with semicolons.
+    std::fs::write(&bad, "frame;tendon\n3;1\n").unwrap();
+    let r = import(&bad, &dir.path().join("ds2"));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("bad.csv:1: no `frame` column (the header is one cell holding ';'"),
+        "{err}"
+    );
     std::fs::write(&bad, "frame,tendon,mask\n3,1,../../etc/passwd\n").unwrap();
     let r = import(&bad, &dir.path().join("ds2"));
     let err = String::from_utf8_lossy(&r.stderr);

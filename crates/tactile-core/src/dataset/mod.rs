@@ -257,10 +257,15 @@ impl Dataset {
                 &labels,
                 Some(1),
                 format!(
-                    "header must start with {} (found {}); frames without labels need no \
-                     labels.csv: pass the folder that holds them",
+                    "header must start with {} (found {}){}",
                     required.join(","),
-                    header.join(",")
+                    header.join(","),
+                    match crate::csv_lines::separator_hint(header.iter().map(String::as_str)) {
+                        "" =>
+                            "; frames without labels need no labels.csv: pass the folder \
+                               that holds them",
+                        hint => hint,
+                    }
                 ),
             ));
         }
@@ -770,6 +775,13 @@ mod tests {
         assert!(e.contains("labels.csv:1"), "{e}");
         // Unlabelled frames listed by file alone: told to pass their folder.
         assert!(e.contains("pass the folder that holds them"), "{e}");
+        // Labels saved by a spreadsheet with semicolons: told so.
+        tiny(d.path(), "file;shape;x_mm\nframes/a.png;flat;1,5\n");
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("labels.csv:1") && e.contains("holding ';'"),
+            "{e}"
+        );
         std::fs::write(d.path().join("manifest.json"), "{ not json").unwrap();
         let e = Dataset::open(d.path()).unwrap_err().to_string();
         assert!(e.contains("manifest.json"), "{e}");
