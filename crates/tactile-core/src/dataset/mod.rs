@@ -377,29 +377,33 @@ impl Dataset {
     /// once a stop is requested, so a loader over thousands of rows stops
     /// at Ctrl-C instead of decoding them all.
     pub fn load_rgb(&self, i: usize) -> Result<crate::image_io::RgbImage> {
-        crate::interrupt::check()?;
-        let path = self.path_of(i, "file")?;
-        let img = crate::image_io::load_rgb(&path)?;
-        self.expect_frame_size(&path, img.width(), img.height())?;
-        Ok(img)
+        self.load_sized(i, "file", |p| crate::image_io::load_rgb(p))
     }
 
     /// The greyscale image in `column` (`file`, `mask`) of row `i`, refused
     /// (naming the file) when its size is not the manifest's.
     pub fn load_grey(&self, i: usize, column: &str) -> Result<crate::image_io::GreyImage> {
-        crate::interrupt::check()?;
-        let path = self.path_of(i, column)?;
-        let img = crate::image_io::load_grey(&path)?;
-        self.expect_frame_size(&path, img.width(), img.height())?;
-        Ok(img)
+        self.load_sized(i, column, |p| crate::image_io::load_grey(p))
     }
 
     /// The tendon mask of row `i` (`image_io::load_mask`: a 0/1 mask is
     /// refused), of the manifest's size.
     pub fn load_mask(&self, i: usize) -> Result<crate::image_io::GreyImage> {
+        self.load_sized(i, "mask", |p| crate::image_io::load_mask(p))
+    }
+
+    /// The picture in `column` of row `i` read by `load`, once no stop is
+    /// requested, refused (naming the file) when its size is not the
+    /// manifest's: the one path of every `load_*` of a picture.
+    fn load_sized<const C: usize>(
+        &self,
+        i: usize,
+        column: &str,
+        load: impl Fn(&Path) -> Result<kornia_image::Image<u8, C>>,
+    ) -> Result<kornia_image::Image<u8, C>> {
         crate::interrupt::check()?;
-        let path = self.path_of(i, "mask")?;
-        let img = crate::image_io::load_mask(&path)?;
+        let path = self.path_of(i, column)?;
+        let img = load(&path)?;
         self.expect_frame_size(&path, img.width(), img.height())?;
         Ok(img)
     }
