@@ -380,8 +380,9 @@ impl Dataset {
         self.load_sized(i, "file", |p| crate::image_io::load_rgb(p))
     }
 
-    /// The greyscale image in `column` (`file`, `mask`) of row `i`, refused
-    /// (naming the file) when its size is not the manifest's.
+    /// The greyscale image in `column` of row `i` (a tendon mask goes
+    /// through [`Dataset::load_mask`]), refused (naming the file) when its
+    /// size is not the manifest's.
     pub fn load_grey(&self, i: usize, column: &str) -> Result<crate::image_io::GreyImage> {
         self.load_sized(i, column, |p| crate::image_io::load_grey(p))
     }
