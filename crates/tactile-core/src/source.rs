@@ -86,6 +86,12 @@ pub fn is_hidden_file(p: &Path) -> bool {
         .is_some_and(|n| n.starts_with('.'))
 }
 
+/// True for a file a folder of frames reads: a PNG or JPEG that is not
+/// hidden. The one rule of [`FrameList::open`] and its hint.
+fn is_listed_frame(p: &Path) -> bool {
+    is_frame_file(p) && !is_hidden_file(p)
+}
+
 /// True for a folder (not a link) that is a dataset or has a PNG or JPEG
 /// frame among its first thousand entries: a hint for a user who named the
 /// folder above the frames.
@@ -96,7 +102,7 @@ fn folder_holds_frames(p: &Path) -> bool {
             || std::fs::read_dir(p).is_ok_and(|rd| {
                 rd.take(1000)
                     .filter_map(|e| e.ok())
-                    .any(|e| is_frame_file(&e.path()))
+                    .any(|e| is_listed_frame(&e.path()))
             }))
 }
 
@@ -131,7 +137,7 @@ impl FrameList {
             .map_err(|e| Error::io(dir, e))?
             .filter_map(|e| e.ok().map(|e| e.path()))
             .take(limit + 1)
-            .partition(|p| is_frame_file(p) && !is_hidden_file(p));
+            .partition(|p| is_listed_frame(p));
         if v.len() + ignored.len() > limit {
             return Err(Error::Invalid(format!(
                 "{}: more than {limit} files; a folder of frames holds at most that many",
