@@ -201,15 +201,19 @@ pub fn save_rgb_png(
     crate::io::write_atomic(path, &bytes)
 }
 
-/// Load a tendon mask (0 = background, 255 = tendon; values of 128 and more
-/// count as tendon), refused when it has marked pixels but none reaches 128:
+/// The least value of a tendon pixel in a mask PNG (0 = background,
+/// 255 = tendon): every reader of a mask's bits compares with this.
+pub const MASK_TENDON_MIN: u8 = 128;
+
+/// Load a tendon mask (values of [`MASK_TENDON_MIN`] and more count as tendon),
+/// refused when it has marked pixels but none reaches [`MASK_TENDON_MIN`]:
 /// a 0/1 mask, as `mask.astype(numpy.uint8)` saves one, would otherwise be
 /// read as empty and train a segmenter to find nothing.
 pub fn load_mask(path: impl AsRef<Path>) -> Result<GreyImage> {
     let path = path.as_ref();
     let img = load_grey(path)?;
     let largest = img.as_slice().iter().copied().max().unwrap_or(0);
-    if (1..128).contains(&largest) {
+    if (1..MASK_TENDON_MIN).contains(&largest) {
         return Err(Error::image(
             path,
             format!(

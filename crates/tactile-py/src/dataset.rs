@@ -154,7 +154,11 @@ impl PyDataset {
         }
         let img = py.detach(|| self.ds.load_mask(i)).py()?;
         let (w, h) = (img.width(), img.height());
-        let bits = img.as_slice().iter().map(|&v| v >= 128).collect();
+        let bits = img
+            .as_slice()
+            .iter()
+            .map(|&v| v >= tactile_core::image_io::MASK_TENDON_MIN)
+            .collect();
         array2(py, h, w, bits).map(Some)
     }
 

@@ -171,7 +171,12 @@ pub(crate) fn synth_visuotactile(
     let mut depth = Vec::with_capacity(count * w * h);
     for s in &samples {
         rgb.extend_from_slice(&s.frame.rgb);
-        mask.extend(s.frame.mask.iter().map(|&v| v >= 128));
+        mask.extend(
+            s.frame
+                .mask
+                .iter()
+                .map(|&v| v >= tactile_core::image_io::MASK_TENDON_MIN),
+        );
         depth.extend_from_slice(&s.frame.depth_m);
     }
     let shape_err = |e: ndarray::ShapeError| PyValueError::new_err(e.to_string());
@@ -285,7 +290,11 @@ pub(crate) fn synth_gelsight(
     let mut depth = Vec::with_capacity(count * w * h);
     for (f, _) in &samples {
         rgb.extend_from_slice(&f.rgb);
-        mask.extend(f.mask.iter().map(|&v| v >= 128));
+        mask.extend(
+            f.mask
+                .iter()
+                .map(|&v| v >= tactile_core::image_io::MASK_TENDON_MIN),
+        );
         depth.extend_from_slice(&f.indentation_m);
     }
     let shape_err = |e: ndarray::ShapeError| PyValueError::new_err(e.to_string());
