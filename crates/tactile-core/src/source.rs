@@ -163,12 +163,21 @@ impl FrameList {
                     0 => String::new(),
                     n => format!(" ({n} other files)"),
                 },
-                match ignored.iter().find(|p| folder_holds_frames(p)) {
-                    Some(sub) => format!(
+                match (
+                    ignored.iter().find(|p| folder_holds_frames(p)),
+                    ignored.iter().find(|p| crate::bag::is_bag_file(p)),
+                ) {
+                    (Some(sub), _) => format!(
                         "; the folder {} holds frames: pass it instead",
                         sub.display()
                     ),
-                    None => String::new(),
+                    // A bag folder holds metadata.yaml; without it, each
+                    // MCAP file is a bag of its own.
+                    (None, Some(bag)) => format!(
+                        "; it holds MCAP files without the metadata.yaml of a ROS 2 bag folder: pass one, as {}",
+                        bag.display()
+                    ),
+                    (None, None) => String::new(),
                 }
             )));
         }
@@ -335,9 +344,10 @@ pub enum SourceSpec {
     /// A dataset, a folder of frames, one image, a video file or a camera
     /// device (`/dev/videoN`), told apart by what the path is.
     Path(PathBuf),
-    /// An image topic of a ROS 2 bag (an `.mcap` file); `None` reads its
-    /// only image topic (a bag with several is refused, naming them). A
-    /// plain [`SourceSpec::Path`] to an `.mcap` file is the same as `None`.
+    /// An image topic of a ROS 2 bag (a bag folder holding `metadata.yaml`,
+    /// or one `.mcap` file); `None` reads its only image topic (a bag with
+    /// several is refused, naming them). A plain [`SourceSpec::Path`] to a
+    /// bag is the same as `None`.
     Bag {
         /// The bag.
         path: PathBuf,
@@ -580,8 +590,9 @@ pub struct FrameSource {
 }
 
 impl FrameSource {
-    /// Open `spec`: a folder (a dataset with labels.csv, else its PNG and
-    /// JPEG frames), one image file, an `.mcap` file as a ROS 2 bag, a
+    /// Open `spec`: a folder (a dataset with labels.csv, a ROS 2 bag with
+    /// metadata.yaml, else its PNG and JPEG frames), one image file, an
+    /// `.mcap` file as a ROS 2 bag, a
     /// character device (a V4L2 camera, live), any other file as a video
     /// through FFmpeg, or stdin (live).
     pub fn open(spec: &SourceSpec, options: SourceOptions) -> Result<Self> {
@@ -621,7 +632,9 @@ impl FrameSource {
                     _ => Error::io(path, e),
                 })?;
                 use std::os::unix::fs::FileTypeExt;
-                if meta.is_file() && crate::bag::is_bag_file(path) {
+                if (meta.is_file() && crate::bag::is_bag_file(path))
+                    || (meta.is_dir() && crate::bag::is_bag_folder(path))
+                {
                     open_bag(path, None)?
                 } else if meta.is_dir() || (meta.is_file() && is_frame_file(path)) {
                     let list = match meta.is_dir() {
@@ -647,6 +660,12 @@ impl FrameSource {
                     };
                     (kind, Some(list), Box::new(r) as Box<dyn Reader>, size, None)
                 } else if let Some(e) = crate::dataset::file_of_a_dataset(path) {
+                    return Err(e);
+                } else if let Some(e) = meta
+                    .is_file()
+                    .then(|| crate::bag::other_bag_format(path))
+                    .flatten()
+                {
                     return Err(e);
                 } else if meta.file_type().is_char_device() || meta.is_file() {
                     // A character device is a camera, read live; a file a video.

@@ -102,8 +102,9 @@ impl PyFrameSource {
 
 /// Open a source of frames: `source` is a dataset folder, a folder of PNG or
 /// JPEG frames, an image, a video file (decoded by the system's FFmpeg,
-/// every frame), a ROS 2 bag (".mcap"; `topic` names its image topic, else
-/// its only one is read) or a camera device such as "/dev/video0" (live); or give
+/// every frame), a ROS 2 bag (its folder or one ".mcap"; `topic` names its
+/// image topic, else its only one is read) or a camera device such as
+/// "/dev/video0" (live); or give
 /// `stdin_size=(width, height)` (and no source) to read raw rgb24 frames
 /// from standard input (live). Live sources keep at most `live_queue`
 /// frames waiting and drop the oldest when more arrive.
@@ -145,8 +146,8 @@ pub(crate) fn frames(
     })
 }
 
-/// The image topics of a ROS 2 bag (an MCAP file): a list of dicts with
-/// `topic`, `message_type`, `count` and `rate_hz`.
+/// The image topics of a ROS 2 bag (its folder or one MCAP file): a list
+/// of dicts with `topic`, `message_type`, `count` and `rate_hz`.
 #[pyfunction]
 pub(crate) fn bag_topics(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny>>> {
     let topics = py

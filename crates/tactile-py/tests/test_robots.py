@@ -10,6 +10,7 @@ import math
 import shutil
 import struct
 import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -19,6 +20,7 @@ import pytest
 from mcap_ros2.reader import read_ros2_messages
 from mcap_ros2.writer import Writer as Ros2McapWriter
 from rosbags.highlevel import AnyReader
+from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.rosbag2 import StoragePlugin, Writer as RosbagsWriter
 from rosbags.typesys import Stores, get_typestore
 
@@ -133,6 +135,73 @@ def test_several_image_topics_must_be_named(rosbags_bag):
         list(tactile.frames(rosbags_bag))
     with pytest.raises(ValueError, match=r"topic /nope: not in the bag; its image topics: /gelsight"):
         list(tactile.frames(rosbags_bag, topic="/nope"))
+
+
+
+def rosbags_convert(src: Path, dst: Path, *extra: str) -> Path:
+    """`rosbags-convert` (from the `rosbags` package) to MCAP storage."""
+    exe = Path(sys.executable).with_name("rosbags-convert")
+    cmd = [str(exe), "--src", str(src), "--dst", str(dst), "--dst-storage", "mcap", *extra]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return dst
+
+
+def assert_the_sample_frames(bag: Path, topic: str, palpation_frames, what: str) -> None:
+    topics = {t["topic"]: t["count"] for t in tactile.bag_topics(bag)}
+    assert topics == {topic: 12}, what
+    frames = list(tactile.frames(bag))
+    assert [f.stamp_ns for f in frames] == [stamp(i) for i in range(12)], what
+    for f, want in zip(frames, palpation_frames):
+        np.testing.assert_array_equal(f.image, want, err_msg=what)
+
+
+def test_bags_as_ros2_bag_record_leaves_them(rosbags_bag, tmp_path, palpation_frames):
+    """A bag folder (metadata.yaml beside its .mcap) is read as its file,
+    and so are rosbag2's zstd compression of whole files (.mcap.zstd) and
+    of single messages."""
+    topic = "/gelsight/image_raw"
+    folder = rosbags_convert(rosbags_bag.parent, tmp_path / "plain", "--include-topic", topic)
+    assert (folder / "metadata.yaml").is_file()
+    whole = rosbags_convert(folder, tmp_path / "whole", "--compress", "zstd", "--compress-mode", "file")
+    (zstd_file,) = whole.glob("*.mcap.zstd")
+    single = rosbags_convert(folder, tmp_path / "single", "--compress", "zstd", "--compress-mode", "message")
+    for bag in [folder, whole, zstd_file, single]:
+        assert_the_sample_frames(bag, topic, palpation_frames, str(bag))
+
+
+def test_sqlite_and_ros1_bags_name_the_command_that_converts_them(tmp_path, palpation_frames):
+    """What `ros2 bag record` left before Iron (SQLite), and a ROS 1 bag:
+    refused with a `rosbags-convert` command, which gives a bag that reads
+    as the frames."""
+    ts2, ts1 = get_typestore(Stores.ROS2_HUMBLE), get_typestore(Stores.ROS1_NOETIC)
+    sqlite, ros1 = tmp_path / "humble", tmp_path / "noetic.bag"
+    for ts, make in [(ts2, lambda: RosbagsWriter(sqlite, version=8, storage_plugin=StoragePlugin.SQLITE3)),
+                     (ts1, lambda: Ros1Writer(ros1))]:
+        Image, Header, Time = (ts.types[t] for t in
+                               ["sensor_msgs/msg/Image", "std_msgs/msg/Header", "builtin_interfaces/msg/Time"])
+        with make() as w:
+            c = w.add_connection("/cam/image_raw", Image.__msgtype__, typestore=ts)
+            for i, rgb in enumerate(palpation_frames):
+                t = stamp(i)
+                when = Time(sec=t // 10**9, nanosec=t % 10**9)
+                h = Header(seq=i, stamp=when, frame_id="g") if ts is ts1 else Header(stamp=when, frame_id="g")
+                height, width, _ = rgb.shape
+                msg = Image(header=h, height=height, width=width, encoding="rgb8", is_bigendian=0,
+                            step=width * 3, data=np.ascontiguousarray(rgb).reshape(-1))
+                data = ts.serialize_ros1(msg, Image.__msgtype__) if ts is ts1 else ts.serialize_cdr(msg, Image.__msgtype__)
+                w.write(c, t, data)
+    (db3,) = sqlite.glob("*.db3")
+    for given, src, what in [(sqlite, sqlite, "SQLite storage"), (db3, sqlite, "SQLite storage"),
+                             (ros1, ros1, "a ROS 1 bag")]:
+        hint = f"rosbags-convert --src {src} --dst NEW_FOLDER --dst-storage mcap"
+        for read in [lambda: list(tactile.frames(given)), lambda: tactile.bag_topics(given)]:
+            with pytest.raises(ValueError) as e:
+                read()
+            assert what in str(e.value) and hint in str(e.value), str(e.value)
+        if given is not db3:
+            converted = rosbags_convert(src, tmp_path / f"{src.stem}-mcap")
+            assert_the_sample_frames(converted, "/cam/image_raw", palpation_frames, what)
 
 
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")

@@ -23,8 +23,8 @@ pub(crate) struct PerceiveArgs {
     /// The frames: a dataset folder (docs/datasets.md; every row of
     /// labels.csv, in order), or a folder of PNG or JPEG frames (by the
     /// numbers in their names), one image, a video file (decoded by
-    /// FFmpeg), a ROS 2 bag (.mcap; see --topic) or a V4L2 camera (with
-    /// --limit, or streamed with `--out -`).
+    /// FFmpeg), a ROS 2 bag (its folder or one .mcap; see --topic) or a
+    /// V4L2 camera (with --limit, or streamed with `--out -`).
     #[arg(long)]
     data: PathBuf,
     /// A ROS 2 bag's image topic (without it, the bag's only image topic).

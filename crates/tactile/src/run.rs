@@ -15,8 +15,8 @@ pub(crate) struct RunArgs {
     /// The frames: a visuo-tactile dataset (frames in labels.csv order), a
     /// folder of PNG or JPEG frames (by the numbers in their names), one
     /// image, a video file (mp4, mkv, avi; decoded by FFmpeg, every frame),
-    /// a ROS 2 bag (.mcap; see --topic) or a V4L2 camera such as /dev/video0
-    /// (live).
+    /// a ROS 2 bag (its folder or one .mcap; see --topic) or a V4L2 camera
+    /// such as /dev/video0 (live).
     #[arg(long, required_unless_present = "stdin", conflicts_with = "stdin")]
     data: Option<PathBuf>,
     /// A ROS 2 bag's image topic (sensor_msgs/msg/Image or

@@ -232,3 +232,151 @@ fn a_labelled_bag_becomes_a_dataset() {
     assert_eq!(f5.as_slice(), frames()[5].2.as_slice());
     assert_eq!(ds.number_opt(5, "tendon").unwrap(), Some(1.0));
 }
+
+/// A bag folder as `ros2 bag record` splits a recording: `metadata.yaml`
+/// and `rec_0.mcap` … `rec_11.mcap`, one sample frame each. In odd files a
+/// `/chatter` channel comes first, so the image channel's id differs from
+/// file to file, and a `/chatter` message precedes the frame.
+fn write_split_bag(folder: &Path) {
+    std::fs::create_dir(folder).unwrap();
+    std::fs::write(
+        folder.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n",
+    )
+    .unwrap();
+    for (i, (width, height, px)) in frames().iter().enumerate() {
+        let others: &[&str] = if i % 2 == 1 { &["/chatter"] } else { &[] };
+        let path = folder.join(format!("rec_{i}.mcap"));
+        let mut bag = common::ImageBag::create_after(&path, others, "/cam/image_raw", "cam");
+        let t = T0 + i as i64 * 50_000_000;
+        if i % 2 == 1 {
+            let header = mcap::records::MessageHeader {
+                channel_id: 1,
+                sequence: 0,
+                log_time: t as u64,
+                publish_time: t as u64,
+            };
+            let hello = [0, 1, 0, 0, 6, 0, 0, 0, b'h', b'e', b'l', b'l', b'o', 0];
+            bag.writer.write_to_known_channel(&header, &hello).unwrap();
+        }
+        bag.write(t, (*width, *height, 3), "rgb8", px);
+        bag.finish();
+    }
+}
+
+#[test]
+fn a_split_bag_folder_is_read_in_the_order_of_its_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("rec");
+    write_split_bag(&folder);
+    let data = folder.to_str().unwrap();
+    let out = tactile(&["run", "--data", data, "--list-topics"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let listed = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        listed.trim(),
+        "/cam/image_raw  sensor_msgs/msg/Image  12 messages  20.0 Hz"
+    );
+    let (a, b) = (dir.path().join("bag.jsonl"), dir.path().join("png.jsonl"));
+    for (data, out) in [(data, &a), (SAMPLES, &b)] {
+        let o = tactile(&[
+            "run",
+            "--models",
+            MODELS,
+            "--data",
+            data,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    assert_eq!(decisions(&a), decisions(&b));
+    // rec_2 … rec_9 before rec_10: the stamps go in time.
+    let stamps: Vec<i64> = std::fs::read_to_string(&a)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["stamp_ns"]
+                .as_i64()
+                .unwrap()
+        })
+        .collect();
+    let want: Vec<i64> = (0..12).map(|i| T0 + i * 50_000_000).collect();
+    assert_eq!(stamps, want);
+    // Results written into the bag folder would join the bag.
+    let inside = folder.join("results.mcap");
+    let o = tactile(&[
+        "run",
+        "--models",
+        MODELS,
+        "--data",
+        data,
+        "--out",
+        inside.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("inside the input bag folder"),
+        "{err}"
+    );
+    assert!(!inside.exists());
+}
+
+#[test]
+fn bags_this_toolkit_does_not_read_are_refused_with_the_command_that_converts_them() {
+    let dir = tempfile::tempdir().unwrap();
+    // What `ros2 bag record` leaves before ROS 2 Iron: SQLite storage.
+    let sqlite = dir.path().join("humble");
+    std::fs::create_dir(&sqlite).unwrap();
+    std::fs::write(
+        sqlite.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n",
+    )
+    .unwrap();
+    let db3 = sqlite.join("humble_0.db3");
+    std::fs::write(&db3, b"SQLite format 3\0 and the rest of a database").unwrap();
+    // A ROS 1 bag, whatever its name.
+    let ros1 = dir.path().join("noetic.bin");
+    std::fs::write(&ros1, b"#ROSBAG V2.0\n and its records").unwrap();
+    let sqlite_s = sqlite.to_str().unwrap().to_string();
+    let cases = [
+        (sqlite_s.clone(), "SQLite storage", sqlite_s.clone()),
+        (
+            db3.to_str().unwrap().to_string(),
+            "SQLite storage",
+            sqlite_s.clone(),
+        ),
+        (
+            ros1.to_str().unwrap().to_string(),
+            "a ROS 1 bag",
+            ros1.to_str().unwrap().to_string(),
+        ),
+    ];
+    for (data, what, src) in &cases {
+        for extra in [&[][..], &["--list-topics"][..]] {
+            let mut args = vec!["run", "--models", MODELS, "--data", data.as_str()];
+            args.extend(extra);
+            let o = tactile(&args);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success(), "{data}: {err}");
+            assert!(err.contains(what), "{data}: {err}");
+            let convert =
+                format!("rosbags-convert --src {src} --dst NEW_FOLDER --dst-storage mcap");
+            assert!(err.contains(&convert), "{data}: {err}");
+        }
+    }
+    // MCAP files in a folder that is not a bag folder: pass one of them.
+    let loose = dir.path().join("recordings");
+    std::fs::create_dir(&loose).unwrap();
+    write_bag(&loose.join("monday.mcap"), &[]);
+    let o = tactile(&["run", "--models", MODELS, "--data", loose.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("without the metadata.yaml of a ROS 2 bag folder: pass one, as"),
+        "{err}"
+    );
+}

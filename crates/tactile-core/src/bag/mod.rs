@@ -7,13 +7,20 @@
 //! (JPEG, PNG) are understood; anything else is refused naming the topic
 //! and the message.
 //!
+//! A bag is given as `ros2 bag record` leaves it (a folder holding
+//! `metadata.yaml` and one or more `.mcap` files, split ones read in the
+//! order of their numbers) or as one `.mcap` file. rosbag2's zstd
+//! compression of whole files (`.mcap.zstd`) and of single messages is
+//! undone by the `zstd` crate. Bags this toolkit does not read (SQLite
+//! `.db3`, ROS 1 `.bag`) are refused with the command that converts them.
+//!
 //! The file is read a record at a time through `mcap`'s sans-I/O reader
 //! (bounded memory whatever the bag's size); schemas and channels are kept
 //! as they appear, and each message of the chosen topic becomes a frame.
 
 pub mod messages;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -85,13 +92,19 @@ struct ChannelInfo {
     encoding: String,
 }
 
-/// Records of a bag, one after another.
+/// Records of a bag, one after another, file after file of a split bag.
 struct Records {
+    /// The file being read.
     path: PathBuf,
-    file: File,
+    /// The files still to read.
+    rest: VecDeque<PathBuf>,
+    file: Box<dyn Read + Send>,
     reader: LinearReader,
+    /// The current file's schemas and channels (their ids are per file).
     schemas: BTreeMap<u16, String>,
     channels: BTreeMap<u16, ChannelInfo>,
+    /// Every topic met so far, in any file, with its message type.
+    topics: BTreeMap<String, String>,
 }
 
 /// What [`Records::next`] found.
@@ -104,18 +117,54 @@ enum Item {
     Other,
 }
 
+/// The start of every zstd frame (RFC 8878), which plain CDR (`00 01`)
+/// never begins with.
+const ZSTD_MAGIC: [u8; 4] = [0x28, 0xb5, 0x2f, 0xfd];
+
+/// One storage file: its bytes, decompressed when rosbag2 compressed the
+/// whole file (`.mcap.zstd`).
+fn open_storage(path: &Path) -> Result<Box<dyn Read + Send>> {
+    crate::image_io::expect_regular_file(path)?;
+    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    if !has_suffix(path, ".zstd") {
+        return Ok(Box::new(file));
+    }
+    let z = zstd::stream::read::Decoder::new(file).map_err(|e| Error::io(path, e))?;
+    Ok(Box::new(z))
+}
+
+fn new_reader() -> LinearReader {
+    LinearReader::new_with_options(
+        LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
+    )
+}
+
 impl Records {
     fn open(path: &Path) -> Result<Self> {
-        crate::image_io::expect_regular_file(path)?;
-        let file = File::open(path).map_err(|e| Error::io(path, e))?;
-        let options = LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES);
+        let mut rest: VecDeque<PathBuf> = storage_files(path)?.into();
+        let first = rest.pop_front().unwrap_or_else(|| path.to_path_buf());
         Ok(Self {
-            path: path.to_path_buf(),
-            file,
-            reader: LinearReader::new_with_options(options),
+            file: open_storage(&first)?,
+            path: first,
+            rest,
+            reader: new_reader(),
             schemas: BTreeMap::new(),
             channels: BTreeMap::new(),
+            topics: BTreeMap::new(),
         })
+    }
+
+    /// On to the next file of a split bag; false after the last.
+    fn next_file(&mut self) -> Result<bool> {
+        let Some(next) = self.rest.pop_front() else {
+            return Ok(false);
+        };
+        self.file = open_storage(&next)?;
+        self.path = next;
+        self.reader = new_reader();
+        self.schemas.clear();
+        self.channels.clear();
+        Ok(true)
     }
 
     fn container(&self, message: impl ToString) -> Error {
@@ -128,12 +177,21 @@ impl Records {
     fn next(&mut self, topic: Option<&str>) -> Result<Option<Item>> {
         loop {
             let Some(event) = self.reader.next_event() else {
+                if self.next_file()? {
+                    continue;
+                }
                 return Ok(None);
             };
             match event.map_err(|e| container_error(&self.path, e))? {
                 LinearReadEvent::ReadRequest(need) => {
                     let buf = self.reader.insert(need);
-                    let n = self.file.read(buf).map_err(|e| Error::io(&self.path, e))?;
+                    let n = self.file.read(buf).map_err(|e| match e.kind() {
+                        // A damaged `.mcap.zstd`: its decompressor's reason.
+                        std::io::ErrorKind::InvalidData | std::io::ErrorKind::Other => {
+                            container_error(&self.path, e)
+                        }
+                        _ => Error::io(&self.path, e),
+                    })?;
                     self.reader.notify_read(n);
                 }
                 LinearReadEvent::Record { opcode, data } => {
@@ -155,6 +213,9 @@ impl Records {
                                     )));
                                 }
                             };
+                            self.topics
+                                .entry(c.topic.clone())
+                                .or_insert_with(|| message_type.clone());
                             self.channels.insert(
                                 c.id,
                                 ChannelInfo {
@@ -194,50 +255,163 @@ pub fn is_image_type(t: &str) -> bool {
     t == IMAGE_TYPE || t == COMPRESSED_IMAGE_TYPE
 }
 
-/// True for a path named like an MCAP file (`.mcap`).
+fn has_suffix(p: &Path, suffix: &str) -> bool {
+    p.file_name()
+        .and_then(|n| n.to_str())
+        .is_some_and(|n| n.to_ascii_lowercase().ends_with(suffix))
+}
+
+/// True for a path named like an MCAP file (`.mcap`, or `.mcap.zstd` as
+/// rosbag2's file compression leaves it).
 pub fn is_bag_file(p: &Path) -> bool {
-    p.extension()
-        .and_then(|x| x.to_str())
-        .is_some_and(|x| x.eq_ignore_ascii_case("mcap"))
+    has_suffix(p, ".mcap") || has_suffix(p, ".mcap.zstd")
+}
+
+/// True for a ROS 2 bag folder as `ros2 bag record` leaves it: a folder
+/// holding `metadata.yaml`.
+pub fn is_bag_folder(p: &Path) -> bool {
+    p.is_dir() && p.join("metadata.yaml").is_file()
+}
+
+/// Most storage files one bag folder may hold.
+const MAX_BAG_FILES: usize = 100_000;
+
+/// How to convert a bag this toolkit does not read, without ROS.
+fn convert_hint(src: &Path) -> String {
+    format!(
+        "convert it to MCAP without ROS: `pip install rosbags`, then `rosbags-convert --src {} --dst NEW_FOLDER --dst-storage mcap`",
+        src.display()
+    )
+}
+
+/// A bag in a format this toolkit does not read (SQLite `.db3`, ROS 1
+/// `.bag`), told by its first bytes: the error saying how to convert it.
+/// `None` for any other file.
+pub fn other_bag_format(path: &Path) -> Option<Error> {
+    let mut head = [0u8; 16];
+    let n = File::open(path)
+        .and_then(|mut f| crate::video::read_full(&mut f, &mut head))
+        .ok()?;
+    let head = &head[..n];
+    let (what, src) = if head.starts_with(b"SQLite format 3\0") {
+        // rosbag2's converters take the bag folder, not its .db3.
+        let src = match path.parent() {
+            Some(d) if d.join("metadata.yaml").is_file() => d,
+            _ => path,
+        };
+        (
+            "a ROS 2 bag in SQLite storage (.db3, the default before ROS 2 Iron)",
+            src,
+        )
+    } else if head.starts_with(b"#ROSBAG V") {
+        ("a ROS 1 bag", path)
+    } else {
+        return None;
+    };
+    Some(bag_error(
+        path,
+        None,
+        None,
+        format!(
+            "{what}; this toolkit reads ROS 2 bags in MCAP storage: {}",
+            convert_hint(src)
+        ),
+    ))
+}
+
+/// The files of the bag at `path`, in the order they are read: the file
+/// itself, or a bag folder's `.mcap` (and `.mcap.zstd`) files in the order
+/// of the numbers in their names (`rec_0`, `rec_1`, …, `rec_10`), as
+/// rosbag2 splits a recording.
+fn storage_files(path: &Path) -> Result<Vec<PathBuf>> {
+    if !path.is_dir() {
+        crate::image_io::expect_regular_file(path)?;
+        if let Some(e) = other_bag_format(path) {
+            return Err(e);
+        }
+        return Ok(vec![path.to_path_buf()]);
+    }
+    let entries: Vec<PathBuf> = std::fs::read_dir(path)
+        .map_err(|e| Error::io(path, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| !crate::source::is_hidden_file(p))
+        .take(MAX_BAG_FILES + 1)
+        .collect();
+    if entries.len() > MAX_BAG_FILES {
+        return Err(bag_error(
+            path,
+            None,
+            None,
+            format!("more than {MAX_BAG_FILES} files; a bag folder holds at most that many"),
+        ));
+    }
+    if entries.iter().any(|p| has_suffix(p, ".db3")) {
+        return Err(bag_error(
+            path,
+            None,
+            None,
+            format!(
+                "a ROS 2 bag in SQLite storage (.db3, the default before ROS 2 Iron); this toolkit reads ROS 2 bags in MCAP storage: {}",
+                convert_hint(path)
+            ),
+        ));
+    }
+    let mut files: Vec<PathBuf> = entries.into_iter().filter(|p| is_bag_file(p)).collect();
+    if files.is_empty() {
+        return Err(bag_error(
+            path,
+            None,
+            None,
+            "a ROS 2 bag folder (it holds metadata.yaml) without an .mcap file",
+        ));
+    }
+    for f in &files {
+        crate::dataset::expect_entry_inside(path, f)?;
+    }
+    alphanumeric_sort::sort_path_slice(&mut files);
+    Ok(files)
 }
 
 /// Every image topic of the bag at `path` with its message count and rate
-/// (one pass over the file), in name order.
+/// (one pass over the bag), in name order.
 pub fn image_topics(path: &Path) -> Result<Vec<BagTopic>> {
     let mut records = Records::open(path)?;
-    // Per channel: count, first and last log time.
-    let mut seen: BTreeMap<u16, (u64, u64, u64)> = BTreeMap::new();
+    // Per topic: count, first and last log time.
+    let mut seen: BTreeMap<String, (u64, u64, u64)> = BTreeMap::new();
     while let Some(item) = records.next(None)? {
         crate::interrupt::check()?;
         if let Item::Message {
             channel, log_time, ..
         } = item
+            && let Some(c) = records.channels.get(&channel)
         {
-            let e = seen.entry(channel).or_insert((0, log_time, log_time));
+            let e = seen
+                .entry(c.topic.clone())
+                .or_insert((0, log_time, log_time));
             e.0 += 1;
             e.1 = e.1.min(log_time);
             e.2 = e.2.max(log_time);
         }
     }
-    let mut topics: BTreeMap<String, BagTopic> = BTreeMap::new();
-    for (id, c) in &records.channels {
-        if !is_image_type(&c.message_type) {
-            continue;
-        }
-        let (count, first, last) = seen.get(id).copied().unwrap_or((0, 0, 0));
-        let t = topics.entry(c.topic.clone()).or_insert(BagTopic {
-            topic: c.topic.clone(),
-            message_type: c.message_type.clone(),
-            count: 0,
-            rate_hz: 0.0,
-        });
-        t.count += count;
-        let span = last.saturating_sub(first) as f64 * 1e-9;
-        if count > 1 && span > 0.0 {
-            t.rate_hz = (count - 1) as f64 / span;
-        }
-    }
-    Ok(topics.into_values().collect())
+    let topics = records
+        .topics
+        .iter()
+        .filter(|(_, message_type)| is_image_type(message_type))
+        .map(|(topic, message_type)| {
+            let (count, first, last) = seen.get(topic).copied().unwrap_or((0, 0, 0));
+            let span = last.saturating_sub(first) as f64 * 1e-9;
+            BagTopic {
+                topic: topic.clone(),
+                message_type: message_type.clone(),
+                count,
+                rate_hz: match count > 1 && span > 0.0 {
+                    true => (count - 1) as f64 / span,
+                    false => 0.0,
+                },
+            }
+        })
+        .collect();
+    Ok(topics)
 }
 
 /// The one image topic to read from a bag when none is named: the only
@@ -310,22 +484,14 @@ impl BagImages {
     pub fn next_frame(&mut self) -> Result<Option<BagFrame>> {
         loop {
             let Some(item) = self.records.next(Some(&self.topic))? else {
-                if self.index == 0
-                    && !self
+                if self.index == 0 && !self.records.topics.contains_key(&self.topic) {
+                    let names: Vec<&str> = self
                         .records
-                        .channels
-                        .values()
-                        .any(|c| c.topic == self.topic)
-                {
-                    let mut names: Vec<&str> = self
-                        .records
-                        .channels
-                        .values()
-                        .filter(|c| is_image_type(&c.message_type))
-                        .map(|c| c.topic.as_str())
+                        .topics
+                        .iter()
+                        .filter(|(_, t)| is_image_type(t))
+                        .map(|(n, _)| n.as_str())
                         .collect();
-                    names.sort_unstable();
-                    names.dedup();
                     return Err(self.topic_error(format!(
                         "not in the bag; its image topics: {}",
                         if names.is_empty() {
@@ -369,6 +535,11 @@ impl BagImages {
                     c.encoding
                 )));
             }
+            // rosbag2's message compression: each message's bytes zstd'd.
+            let data = match data.starts_with(&ZSTD_MAGIC) {
+                true => unzstd(&data).map_err(|e| self.message_error(e))?,
+                false => data,
+            };
             let (image, stamp) = if c.message_type == IMAGE_TYPE {
                 let m: Image<'_> = from_cdr(&data).map_err(|e| self.message_error(e))?;
                 (
@@ -391,5 +562,61 @@ impl BagImages {
             self.index += 1;
             return Ok(Some(frame));
         }
+    }
+}
+
+/// A message rosbag2 compressed on its own, decompressed; refused past
+/// [`MAX_RECORD_BYTES`] before more is held.
+fn unzstd(data: &[u8]) -> std::result::Result<Vec<u8>, String> {
+    let d = zstd::stream::read::Decoder::new(data)
+        .map_err(|e| format!("not a readable zstd-compressed message: {e}"))?;
+    let mut out = Vec::new();
+    d.take(MAX_RECORD_BYTES as u64 + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| format!("not a readable zstd-compressed message: {e}"))?;
+    if out.len() > MAX_RECORD_BYTES {
+        return Err(format!(
+            "a zstd-compressed message of more than {MAX_RECORD_BYTES} bytes"
+        ));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn a_compressed_message_is_bounded_and_a_damaged_one_named() {
+        let small = zstd::encode_all(&b"\x00\x01\x00\x00hello"[..], 1).unwrap();
+        assert!(small.starts_with(&ZSTD_MAGIC));
+        assert_eq!(unzstd(&small).unwrap(), b"\x00\x01\x00\x00hello");
+        // A bomb: a few kilobytes that would be 300 MB; refused once past
+        // the record limit, not held whole.
+        let bomb = zstd::encode_all(std::io::repeat(0).take(300 << 20), 1).unwrap();
+        assert!(bomb.len() < 1 << 20);
+        let e = unzstd(&bomb).unwrap_err();
+        assert!(e.contains("more than 268435456 bytes"), "{e}");
+        let mut damaged = small.clone();
+        damaged.truncate(small.len() - 3);
+        let e = unzstd(&damaged).unwrap_err();
+        assert!(e.contains("not a readable zstd-compressed message"), "{e}");
+    }
+
+    #[test]
+    fn other_bag_formats_are_told_by_their_first_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("x.mcap");
+        std::fs::write(&f, b"SQLite format 3\0...").unwrap();
+        let e = other_bag_format(&f).unwrap().to_string();
+        assert!(
+            e.contains("SQLite storage") && e.contains(&format!("--src {}", f.display())),
+            "{e}"
+        );
+        std::fs::write(&f, b"\x89MCAP0\r\n").unwrap();
+        assert!(other_bag_format(&f).is_none());
+        std::fs::write(&f, b"").unwrap();
+        assert!(other_bag_format(&f).is_none());
     }
 }

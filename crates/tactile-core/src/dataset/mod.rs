@@ -668,6 +668,13 @@ pub fn refuse_input_as_output(out: &Path, input: &Path) -> Result<()> {
             out.display()
         )));
     }
+    if crate::bag::is_bag_folder(&i) && o.starts_with(&i) {
+        return Err(Error::Invalid(format!(
+            "{}: this output is inside the input bag folder {}, whose MCAP files are all read as the bag; give a file outside it, so nothing was done",
+            out.display(),
+            input.display()
+        )));
+    }
     if i.is_dir() && o.parent() == Some(i.as_path()) && crate::source::is_frame_file(&o) {
         return Err(Error::Invalid(format!(
             "{}: this output is named like a frame of the input folder {}; writing it would change the frames, so nothing was done",

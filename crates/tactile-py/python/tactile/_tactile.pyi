@@ -231,7 +231,7 @@ def frames(
     """Open a source of frames (a dataset, a folder, an image, a video file, a ROS 2 bag's image topic, a camera, or stdin)."""
 
 def bag_topics(path: _Path) -> List[Dict[str, Any]]:
-    """The image topics of a ROS 2 bag (MCAP): topic, message_type, count, rate_hz."""
+    """The image topics of a ROS 2 bag (its folder or one MCAP file): topic, message_type, count, rate_hz."""
 
 class McapWriter:
     """Pipeline results as ROS 2 messages in an MCAP file (the channels of `tactile run --out X.mcap`)."""

@@ -22,7 +22,22 @@ impl ImageBag {
     /// A bag at `path` with Images on `topic`, their headers' `frame_id`
     /// `frame_id`.
     pub fn create(path: &Path, topic: &str, frame_id: &str) -> Self {
+        Self::create_after(path, &[], topic, frame_id)
+    }
+
+    /// As [`ImageBag::create`], with channels for `others` (schema
+    /// `std_msgs/msg/String`) defined first, so the image channel's id is
+    /// `others.len() + 1` (channel ids are the file's own).
+    pub fn create_after(path: &Path, others: &[&str], topic: &str, frame_id: &str) -> Self {
         let mut writer = mcap::Writer::new(BufWriter::new(File::create(path).unwrap())).unwrap();
+        if !others.is_empty() {
+            let s = writer
+                .add_schema("std_msgs/msg/String", "ros2msg", b"")
+                .unwrap();
+            for t in others {
+                writer.add_channel(s, t, "cdr", &BTreeMap::new()).unwrap();
+            }
+        }
         let schema = writer
             .add_schema("sensor_msgs/msg/Image", "ros2msg", b"")
             .unwrap();
