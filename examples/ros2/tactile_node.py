@@ -1,8 +1,9 @@
 """A ROS 2 node that runs tactile-rs's palpation pipeline on an image topic.
 
-It subscribes to a `sensor_msgs/msg/Image` topic (rgb8, bgr8, mono8 or
-mono16, as the GelSight and TacTip cameras publish), runs `tactile.Pipeline`
-on each frame and publishes:
+It subscribes to a `sensor_msgs/msg/Image` topic (any encoding `tactile
+run` reads in a bag: rgb8, bgr8, mono8, mono16 as the GelSight and TacTip
+cameras publish, cv_bridge's 8UC3, packed YUV 4:2:2, Bayer), runs
+`tactile.Pipeline` on each frame and publishes:
 
 - `~/result` (`std_msgs/msg/String`): the frame's record as JSON (the same
   fields as a line of `tactile run --out`), stamped with the input's header;
@@ -30,29 +31,9 @@ import numpy as np
 
 import tactile
 
-#: Pixel encodings of `sensor_msgs/msg/Image` this node reads.
-ENCODINGS = ("rgb8", "bgr8", "rgba8", "bgra8", "mono8", "mono16")
-
-
-def image_to_rgb(msg: Any) -> np.ndarray:
-    """An `sensor_msgs/msg/Image` (any object with its fields) as an
-    `(H, W, 3)` uint8 RGB array: the same conversion as `tactile run` on a
-    bag (bgr swapped, mono repeated, mono16 kept to its high byte)."""
-    h, w, step, enc = int(msg.height), int(msg.width), int(msg.step), str(msg.encoding)
-    channels = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1, "mono16": 2}.get(enc)
-    if channels is None:
-        raise ValueError(f"encoding {enc!r} is not one of {', '.join(ENCODINGS)}")
-    data = np.frombuffer(bytes(msg.data), np.uint8)
-    if h <= 0 or w <= 0 or step < w * channels or data.size < step * h:
-        raise ValueError(f"{w}x{h} {enc} with step {step} needs {step * h} bytes, got {data.size}")
-    rows = data[: step * h].reshape(h, step)[:, : w * channels]
-    if enc == "mono16":
-        px = rows.reshape(h, w, 2)[:, :, 0 if msg.is_bigendian else 1]
-        return np.repeat(px[:, :, None], 3, axis=2)
-    if enc == "mono8":
-        return np.repeat(rows.reshape(h, w, 1), 3, axis=2)
-    px = rows.reshape(h, w, channels)[:, :, :3]
-    return np.ascontiguousarray(px[:, :, ::-1] if enc.startswith("bgr") else px)
+#: An `sensor_msgs/msg/Image` (any object with its fields) as an `(H, W, 3)`
+#: uint8 RGB array: the conversion `tactile run` gives a bag's frames.
+image_to_rgb = tactile.ros_image_to_rgb
 
 
 @dataclass

@@ -44,6 +44,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<source::PyFrame>()?;
     m.add_function(wrap_pyfunction!(source::frames, m)?)?;
     m.add_function(wrap_pyfunction!(source::bag_topics, m)?)?;
+    m.add_function(wrap_pyfunction!(source::ros_image_to_rgb, m)?)?;
     m.add_class::<robot::PyMcapWriter>()?;
     m.add_class::<robot::PyLiveView>()?;
     m.add_function(wrap_pyfunction!(image::read_rgb, m)?)?;

@@ -272,7 +272,7 @@ def test_hostile_bags_name_the_topic_and_message(tmp_path, palpation_frames):
                         log_time=stamp(1))
         w.write_message("/fake_jpeg", compressed, {"header": header(0), "format": "jpeg", "data": b"not a picture"},
                         log_time=stamp(0))
-        w.write_message("/yuv", image, {**good, "encoding": "yuv422"}, log_time=stamp(0))
+        w.write_message("/nv21", image, {**good, "encoding": "nv21"}, log_time=stamp(0))
         w.write_message("/header", header_only, header(0), log_time=stamp(0))
         w.finish()
     wide = tactile.frames(bag, topic="/wide")
@@ -281,8 +281,8 @@ def test_hostile_bags_name_the_topic_and_message(tmp_path, palpation_frames):
         next(wide)
     with pytest.raises(ValueError, match=r"topic /fake_jpeg, message 0: .*not a JPEG or PNG"):
         list(tactile.frames(bag, topic="/fake_jpeg"))
-    with pytest.raises(ValueError, match=r"topic /yuv, message 0: encoding \"yuv422\""):
-        list(tactile.frames(bag, topic="/yuv"))
+    with pytest.raises(ValueError, match=r"topic /nv21, message 0: encoding \"nv21\""):
+        list(tactile.frames(bag, topic="/nv21"))
     with pytest.raises(ValueError, match=r"topic /header: carries std_msgs/msg/Header"):
         list(tactile.frames(bag, topic="/header"))
     cut = tmp_path / "truncated.mcap"

@@ -40,14 +40,20 @@ def test_node_converts_each_encoding(node_module, palpation_frames):
     cases = [
         (image_msg(rgb, "rgb8", w * 3), rgb),
         (image_msg(np.ascontiguousarray(rgb[:, :, ::-1]), "bgr8", w * 3), rgb),
+        # cv_bridge's cv2_to_imgmsg of an OpenCV (BGR) frame without an encoding.
+        (image_msg(np.ascontiguousarray(rgb[:, :, ::-1]), "8UC3", w * 3), rgb),
         (image_msg(np.dstack([rgb, np.full((h, w), 255, np.uint8)]), "rgba8", w * 4), rgb),
         (image_msg(np.pad(grey, ((0, 0), (0, 8))), "mono8", w + 8, width=w), np.repeat(grey[:, :, None], 3, 2)),
         (image_msg(grey.astype(">u2") * 257, "mono16", w * 2, 1), np.repeat(grey[:, :, None], 3, 2)),
     ]
     for msg, want in cases:
         np.testing.assert_array_equal(node_module.image_to_rgb(msg), want, err_msg=msg.encoding)
-    with pytest.raises(ValueError, match="yuv422"):
-        node_module.image_to_rgb(image_msg(rgb, "yuv422", w * 3))
+    with pytest.raises(ValueError, match=r"encoding \"nv21\" is not one of rgb8, bgr8"):
+        node_module.image_to_rgb(image_msg(rgb, "nv21", w * 3))
+    with pytest.raises(ValueError, match=r"no field \"step\""):
+        node_module.image_to_rgb(SimpleNamespace(height=h, width=w, encoding="rgb8", is_bigendian=0, data=b""))
+    with pytest.raises(ValueError, match=r"field \"height\": must be an integer"):
+        node_module.image_to_rgb(SimpleNamespace(**{**vars(image_msg(rgb, "rgb8", w * 3)), "height": -1}))
     with pytest.raises(ValueError, match="needs"):
         node_module.image_to_rgb(SimpleNamespace(**{**vars(image_msg(rgb, "rgb8", w * 3)), "height": h + 1}))
 

@@ -129,25 +129,79 @@ fn check_size(width: u64, height: u64) -> Result<(), String> {
     Ok(())
 }
 
+/// How an `Image`'s bytes hold its pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum PixelLayout {
+    Rgb,
+    Bgr,
+    Rgba,
+    Bgra,
+    Mono8,
+    Mono16,
+    /// Packed 4:2:2, `U Y0 V Y1` (ROS's `yuv422`).
+    Uyvy,
+    /// Packed 4:2:2, `Y0 U Y1 V` (ROS's `yuv422_yuy2`).
+    Yuyv,
+    Bayer(kornia_imgproc::color::BayerPattern),
+}
+
+/// The encodings read, as `sensor_msgs/image_encodings` and Foxglove name
+/// them: OpenCV's `8UC3`/`8UC4` (what `cv_bridge` writes for a frame
+/// without an encoding) are its BGR order.
+pub const IMAGE_ENCODINGS: &str = "rgb8, bgr8, rgba8, bgra8, mono8, mono16, 8UC1, 8UC3, 8UC4, 16UC1, yuv422 (uyvy), yuv422_yuy2 (yuyv), bayer_rggb8, bayer_bggr8, bayer_gbrg8, bayer_grbg8";
+
+impl PixelLayout {
+    fn of(encoding: &str) -> Option<Self> {
+        use kornia_imgproc::color::BayerPattern as B;
+        Some(match encoding {
+            "rgb8" => Self::Rgb,
+            "bgr8" | "8UC3" => Self::Bgr,
+            "rgba8" => Self::Rgba,
+            "bgra8" | "8UC4" => Self::Bgra,
+            "mono8" | "8UC1" => Self::Mono8,
+            "mono16" | "16UC1" => Self::Mono16,
+            "yuv422" | "uyvy" => Self::Uyvy,
+            "yuv422_yuy2" | "yuyv" => Self::Yuyv,
+            "bayer_rggb8" => Self::Bayer(B::Rggb),
+            "bayer_bggr8" => Self::Bayer(B::Bggr),
+            "bayer_gbrg8" => Self::Bayer(B::Gbrg),
+            "bayer_grbg8" => Self::Bayer(B::Grbg),
+            _ => return None,
+        })
+    }
+
+    fn bytes_per_pixel(self) -> usize {
+        match self {
+            Self::Rgb | Self::Bgr => 3,
+            Self::Rgba | Self::Bgra => 4,
+            Self::Mono8 | Self::Bayer(_) => 1,
+            Self::Mono16 | Self::Uyvy | Self::Yuyv => 2,
+        }
+    }
+}
+
 impl Image<'_> {
-    /// The pixels as 8-bit RGB: `bgr8`/`bgra8` swapped, `mono8` repeated,
-    /// `mono16` kept to its high byte. Sizes are checked against 8K and the
-    /// data before anything is allocated.
+    /// The pixels as 8-bit RGB: BGR orders swapped, alpha dropped, `mono8`
+    /// repeated, `mono16` kept to its high byte; packed YUV 4:2:2 and
+    /// Bayer mosaics converted by `kornia-imgproc` (BT.601; bilinear
+    /// demosaicing). Sizes are checked against 8K and the data before
+    /// anything is allocated.
     pub fn to_rgb(&self) -> Result<RgbImage, String> {
         let (w, h) = (self.width as usize, self.height as usize);
         check_size(w as u64, h as u64)?;
-        let channels = match self.encoding.as_str() {
-            "rgb8" | "bgr8" => 3,
-            "rgba8" | "bgra8" => 4,
-            "mono8" | "8UC1" => 1,
-            "mono16" | "16UC1" => 2,
-            other => {
-                return Err(format!(
-                    "encoding {other:?} is not one of rgb8, bgr8, rgba8, bgra8, mono8, mono16"
-                ));
-            }
+        let Some(layout) = PixelLayout::of(&self.encoding) else {
+            return Err(format!(
+                "encoding {:?} is not one of {IMAGE_ENCODINGS}",
+                self.encoding
+            ));
         };
-        let row = w * channels;
+        if matches!(layout, PixelLayout::Uyvy | PixelLayout::Yuyv) && w % 2 == 1 {
+            return Err(format!(
+                "{w}x{h} {}: a 4:2:2 frame's width must be even",
+                self.encoding
+            ));
+        }
+        let row = w * layout.bytes_per_pixel();
         let step = self.step as usize;
         if step < row || (step as u64) * (h as u64) > self.data.len() as u64 {
             return Err(format!(
@@ -157,25 +211,49 @@ impl Image<'_> {
                 self.data.len()
             ));
         }
+        let rows = || (0..h).map(|y| &self.data[y * step..y * step + row]);
         let mut rgb = Vec::with_capacity(w * h * 3);
-        for y in 0..h {
-            let line = &self.data[y * step..y * step + row];
-            match self.encoding.as_str() {
-                "rgb8" => rgb.extend_from_slice(line),
-                "bgr8" => line
-                    .chunks_exact(3)
-                    .for_each(|p| rgb.extend([p[2], p[1], p[0]])),
-                "rgba8" => line
-                    .chunks_exact(4)
-                    .for_each(|p| rgb.extend([p[0], p[1], p[2]])),
-                "bgra8" => line
-                    .chunks_exact(4)
-                    .for_each(|p| rgb.extend([p[2], p[1], p[0]])),
-                "mono8" | "8UC1" => line.iter().for_each(|&v| rgb.extend([v, v, v])),
-                _ => line.chunks_exact(2).for_each(|p| {
+        match layout {
+            PixelLayout::Rgb => rows().for_each(|line| rgb.extend_from_slice(line)),
+            PixelLayout::Bgr => rows().for_each(|line| {
+                line.chunks_exact(3)
+                    .for_each(|p| rgb.extend([p[2], p[1], p[0]]))
+            }),
+            PixelLayout::Rgba => rows().for_each(|line| {
+                line.chunks_exact(4)
+                    .for_each(|p| rgb.extend([p[0], p[1], p[2]]))
+            }),
+            PixelLayout::Bgra => rows().for_each(|line| {
+                line.chunks_exact(4)
+                    .for_each(|p| rgb.extend([p[2], p[1], p[0]]))
+            }),
+            PixelLayout::Mono8 => {
+                rows().for_each(|line| line.iter().for_each(|&v| rgb.extend([v, v, v])))
+            }
+            PixelLayout::Mono16 => rows().for_each(|line| {
+                line.chunks_exact(2).for_each(|p| {
                     let hi = if self.is_bigendian != 0 { p[0] } else { p[1] };
                     rgb.extend([hi, hi, hi]);
-                }),
+                })
+            }),
+            PixelLayout::Uyvy | PixelLayout::Yuyv | PixelLayout::Bayer(_) => {
+                use kornia_imgproc::color as c;
+                let packed: Vec<u8> = rows().flatten().copied().collect();
+                let mut out = crate::image_io::rgb_image(w, h, vec![0; w * h * 3])
+                    .map_err(|e| e.to_string())?;
+                let done = match layout {
+                    PixelLayout::Bayer(pattern) => crate::image_io::grey_image(w, h, packed)
+                        .map_err(|e| e.to_string())
+                        .and_then(|mosaic| {
+                            c::rgb_from_bayer(&mosaic, pattern, &mut out).map_err(|e| e.to_string())
+                        }),
+                    PixelLayout::Uyvy => {
+                        c::rgb_from_uyvy(&packed, &mut out).map_err(|e| e.to_string())
+                    }
+                    _ => c::rgb_from_yuyv(&packed, &mut out).map_err(|e| e.to_string()),
+                };
+                done.map_err(|e| format!("cannot convert the {} pixels: {e}", self.encoding))?;
+                return Ok(out);
             }
         }
         crate::image_io::rgb_image(w, h, rgb).map_err(|e| e.to_string())
@@ -263,9 +341,21 @@ mod tests {
         );
         let odd = Image {
             encoding: "yuv422".into(),
+            width: 3,
+            step: 6,
+            ..msg.clone()
+        };
+        let e = odd.to_rgb().err().unwrap_or_default();
+        assert!(
+            e.contains("yuv422") && e.contains("width must be even"),
+            "{e}"
+        );
+        let unknown = Image {
+            encoding: "nv21".into(),
             ..msg
         };
-        assert!(odd.to_rgb().err().unwrap_or_default().contains("yuv422"));
+        let e = unknown.to_rgb().err().unwrap_or_default();
+        assert!(e.contains("\"nv21\" is not one of rgb8"), "{e}");
         // Truncated and foreign bytes are errors, not panics.
         assert!(from_cdr::<Image<'_>>(&bytes[..bytes.len() - 3]).is_err());
         assert!(from_cdr::<Image<'_>>(&[1, 2]).is_err());
@@ -285,5 +375,102 @@ mod tests {
             Time::from_nanos(Time { sec: 3, nanosec: 9 }.nanos()),
             Time { sec: 3, nanosec: 9 }
         );
+    }
+
+    /// An `Image` of `data` in `encoding`, `step` bytes a row.
+    fn image<'a>(encoding: &str, w: u32, h: u32, step: u32, data: &'a [u8]) -> Image<'a> {
+        Image {
+            header: Header::default(),
+            height: h,
+            width: w,
+            encoding: encoding.into(),
+            is_bigendian: 0,
+            step,
+            data,
+        }
+    }
+
+    /// A smooth 16x12 RGB frame (the converters average neighbours).
+    fn smooth() -> Vec<u8> {
+        (0..12u32)
+            .flat_map(|y| {
+                (0..16u32).flat_map(move |x| [(60 + 8 * x) as u8, (40 + 10 * y) as u8, 120])
+            })
+            .collect()
+    }
+
+    fn max_diff(a: &[u8], b: &[u8]) -> u8 {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| x.abs_diff(*y))
+            .max()
+            .unwrap_or(0)
+    }
+
+    #[test]
+    fn opencv_yuv_and_bayer_encodings_give_the_frame() {
+        let rgb = smooth();
+        let (w, h) = (16u32, 12u32);
+        // cv_bridge's 8UC3 / 8UC4: OpenCV's BGR order, as Foxglove reads it.
+        let bgr: Vec<u8> = rgb.chunks(3).flat_map(|p| [p[2], p[1], p[0]]).collect();
+        let bgra: Vec<u8> = rgb
+            .chunks(3)
+            .flat_map(|p| [p[2], p[1], p[0], 255])
+            .collect();
+        let got = image("8UC3", w, h, w * 3, &bgr).to_rgb().unwrap();
+        assert_eq!(got.as_slice(), rgb.as_slice());
+        let got = image("8UC4", w, h, w * 4, &bgra).to_rgb().unwrap();
+        assert_eq!(got.as_slice(), rgb.as_slice());
+        // Packed 4:2:2 made by kornia's encoder, rows padded by 8 bytes;
+        // UYVY is the same samples in the other order.
+        let src = crate::image_io::rgb_image(16, 12, rgb.clone()).unwrap();
+        let mut yuyv = vec![0u8; 16 * 12 * 2];
+        kornia_imgproc::color::yuyv_from_rgb(&src, &mut yuyv).unwrap();
+        let pad = |rows: &[u8], row: usize| -> Vec<u8> {
+            rows.chunks(row)
+                .flat_map(|r| r.iter().copied().chain([7; 8]))
+                .collect()
+        };
+        let uyvy: Vec<u8> = yuyv.chunks(2).flat_map(|p| [p[1], p[0]]).collect();
+        for (enc, packed) in [
+            ("yuv422_yuy2", &yuyv),
+            ("yuyv", &yuyv),
+            ("yuv422", &uyvy),
+            ("uyvy", &uyvy),
+        ] {
+            let data = pad(packed, 32);
+            let got = image(enc, w, h, 40, &data).to_rgb().unwrap();
+            let d = max_diff(got.as_slice(), &rgb);
+            assert!(d <= 12, "{enc}: off by {d}");
+        }
+        // Bayer mosaics sampled from the frame, demosaiced back.
+        for (enc, at) in [
+            ("bayer_rggb8", [[0, 1], [1, 2]]),
+            ("bayer_bggr8", [[2, 1], [1, 0]]),
+            ("bayer_grbg8", [[1, 0], [2, 1]]),
+            ("bayer_gbrg8", [[1, 2], [0, 1]]),
+        ] {
+            let mosaic: Vec<u8> = (0..12usize)
+                .flat_map(|y| (0..16usize).map(move |x| (x, y)))
+                .map(|(x, y)| rgb[(y * 16 + x) * 3 + at[y % 2][x % 2]])
+                .collect();
+            let got = image(enc, w, h, w, &mosaic).to_rgb().unwrap();
+            // Inside the border, where bilinear demosaicing has every neighbour.
+            let inner = |v: &[u8]| -> Vec<u8> {
+                (1..11usize)
+                    .flat_map(|y| {
+                        (1..15usize).flat_map(move |x| (0..3).map(move |c| (y * 16 + x) * 3 + c))
+                    })
+                    .map(|i| v[i])
+                    .collect()
+            };
+            let d = max_diff(&inner(got.as_slice()), &inner(&rgb));
+            assert!(d <= 6, "{enc}: off by {d}");
+            // A channel out of place would be off by tens.
+            assert!(
+                got.as_slice()[(5 * 16 + 5) * 3 + 2].abs_diff(120) <= 6,
+                "{enc}"
+            );
+        }
     }
 }

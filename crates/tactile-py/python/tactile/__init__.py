@@ -91,6 +91,7 @@ from ._tactile import (  # noqa: E402
     predict,
     read_grey,
     read_rgb,
+    ros_image_to_rgb,
 )
 from . import calibrate, eval, synth, train  # noqa: E402
 
@@ -116,6 +117,7 @@ __all__ = [
     "predict",
     "read_grey",
     "read_rgb",
+    "ros_image_to_rgb",
     "synth",
     "train",
 ]
