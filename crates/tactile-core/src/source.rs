@@ -399,7 +399,8 @@ pub struct Frame {
     pub tendon: Option<bool>,
     /// When a live frame arrived (read whole from the camera or stdin).
     pub arrived: Option<Instant>,
-    /// A bag's frame: its message's header stamp, nanoseconds since the epoch.
+    /// A bag's frame: its message's header stamp (else its log time),
+    /// nanoseconds since the epoch.
     pub stamp_ns: Option<i64>,
 }
 

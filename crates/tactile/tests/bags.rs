@@ -62,6 +62,25 @@ fn write_bag(path: &Path, extra: &[(&str, &str, Vec<u8>)]) {
     bag.finish();
 }
 
+/// `tactile run` on `data` with the shipped models, its records to `out`.
+fn run_to(data: &str, out: &Path) -> Output {
+    tactile(&[
+        "run",
+        "--models",
+        MODELS,
+        "--data",
+        data,
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+/// [`run_to`], which must succeed.
+fn run_ok(data: &str, out: &Path) {
+    let o = run_to(data, out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 fn decisions(jsonl: &Path) -> Vec<(bool, String)> {
     std::fs::read_to_string(jsonl)
         .unwrap()
@@ -86,20 +105,8 @@ fn a_bag_is_listed_and_decided_as_its_png_frames() {
         "{listed}"
     );
     let (a, b) = (dir.path().join("bag.jsonl"), dir.path().join("png.jsonl"));
-    let run = |data: &str, out: &Path| {
-        let o = tactile(&[
-            "run",
-            "--models",
-            MODELS,
-            "--data",
-            data,
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    };
-    run(bag.to_str().unwrap(), &a);
-    run(SAMPLES, &b);
+    run_ok(bag.to_str().unwrap(), &a);
+    run_ok(SAMPLES, &b);
     assert_eq!(decisions(&a), decisions(&b));
     let first: serde_json::Value =
         serde_json::from_str(std::fs::read_to_string(&a).unwrap().lines().nth(3).unwrap()).unwrap();
@@ -282,18 +289,8 @@ fn a_split_bag_folder_is_read_in_the_order_of_its_files() {
         "/cam/image_raw  sensor_msgs/msg/Image  12 messages  20.0 Hz"
     );
     let (a, b) = (dir.path().join("bag.jsonl"), dir.path().join("png.jsonl"));
-    for (data, out) in [(data, &a), (SAMPLES, &b)] {
-        let o = tactile(&[
-            "run",
-            "--models",
-            MODELS,
-            "--data",
-            data,
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    }
+    run_ok(data, &a);
+    run_ok(SAMPLES, &b);
     assert_eq!(decisions(&a), decisions(&b));
     // rec_2 … rec_9 before rec_10: the stamps go in time.
     let stamps: Vec<i64> = std::fs::read_to_string(&a)
@@ -309,15 +306,7 @@ fn a_split_bag_folder_is_read_in_the_order_of_its_files() {
     assert_eq!(stamps, want);
     // Results written into the bag folder would join the bag.
     let inside = folder.join("results.mcap");
-    let o = tactile(&[
-        "run",
-        "--models",
-        MODELS,
-        "--data",
-        data,
-        "--out",
-        inside.to_str().unwrap(),
-    ]);
+    let o = run_to(data, &inside);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && err.contains("inside the input bag folder"),
@@ -379,4 +368,48 @@ fn bags_this_toolkit_does_not_read_are_refused_with_the_command_that_converts_th
         err.contains("without the metadata.yaml of a ROS 2 bag folder: pass one, as"),
         "{err}"
     );
+    // Frames beside another tool's metadata.yaml stay a folder of frames.
+    let shots = dir.path().join("shots");
+    std::fs::create_dir(&shots).unwrap();
+    std::fs::write(shots.join("metadata.yaml"), "camera: gelsight mini\n").unwrap();
+    for name in ["000000.png", "000001.png"] {
+        std::fs::copy(Path::new(SAMPLES).join(name), shots.join(name)).unwrap();
+    }
+    let spec = tactile_core::source::SourceSpec::Path(shots.clone());
+    let mut source = tactile_core::source::FrameSource::open(&spec, Default::default()).unwrap();
+    assert_eq!(source.kind(), tactile_core::source::SourceKind::Folder);
+    assert!(source.next_frame().unwrap().is_some());
+    // A topic asked of a folder that is not a bag.
+    let o = tactile(&[
+        "run",
+        "--models",
+        MODELS,
+        "--data",
+        SAMPLES,
+        "--topic",
+        "/cam/image_raw",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("a folder without the metadata.yaml of a ROS 2 bag folder (rosbag2_bagfile_information); a topic is read from a ROS 2 bag"), "{err}");
+}
+
+#[test]
+fn an_unstamped_frame_takes_its_log_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("unstamped.mcap");
+    let mut bag = common::ImageBag::create(&path, "/cam/image_raw", "cam");
+    let (width, height, px) = &frames()[0];
+    for i in 0..3i64 {
+        // Frame 1 as a publisher that does not stamp leaves it.
+        let stamp = if i == 1 { 0 } else { T0 + i * 50_000_000 };
+        let logged = (T0 + i * 50_000_000 + 2_000_000) as u64;
+        bag.write_logged(stamp, logged, (*width, *height, 3), "rgb8", px);
+    }
+    bag.finish();
+    let mut images = tactile_core::bag::BagImages::open(&path, "/cam/image_raw").unwrap();
+    let mut stamps = Vec::new();
+    while let Some(f) = images.next_frame().unwrap() {
+        stamps.push(f.stamp_ns);
+    }
+    assert_eq!(stamps, [T0, T0 + 52_000_000, T0 + 100_000_000]);
 }

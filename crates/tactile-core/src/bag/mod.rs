@@ -77,7 +77,9 @@ pub struct BagTopic {
 pub struct BagFrame {
     /// The pixels.
     pub image: RgbImage,
-    /// The message's header stamp, nanoseconds since the epoch.
+    /// The message's header stamp, nanoseconds since the epoch; its log
+    /// time when the header carries none (0, as a publisher that does not
+    /// stamp leaves it), so frames keep their times.
     pub stamp_ns: i64,
     /// When the recorder logged it, nanoseconds since the epoch.
     pub log_time_ns: u64,
@@ -268,9 +270,21 @@ pub fn is_bag_file(p: &Path) -> bool {
 }
 
 /// True for a ROS 2 bag folder as `ros2 bag record` leaves it: a folder
-/// holding `metadata.yaml`.
+/// whose `metadata.yaml` is rosbag2's (its `rosbag2_bagfile_information`
+/// key in the first 64 KiB), so a folder of frames with a `metadata.yaml`
+/// of another tool stays a folder of frames.
 pub fn is_bag_folder(p: &Path) -> bool {
-    p.is_dir() && p.join("metadata.yaml").is_file()
+    let meta = p.join("metadata.yaml");
+    if !p.is_dir() || !meta.is_file() {
+        return false;
+    }
+    let mut head = Vec::new();
+    File::open(&meta)
+        .and_then(|f| f.take(64 << 10).read_to_end(&mut head))
+        .is_ok_and(|_| {
+            head.windows(27)
+                .any(|w| w == b"rosbag2_bagfile_information")
+        })
 }
 
 /// Most storage files one bag folder may hold.
@@ -296,7 +310,7 @@ pub fn other_bag_format(path: &Path) -> Option<Error> {
     let (what, src) = if head.starts_with(b"SQLite format 3\0") {
         // rosbag2's converters take the bag folder, not its .db3.
         let src = match path.parent() {
-            Some(d) if d.join("metadata.yaml").is_file() => d,
+            Some(d) if is_bag_folder(d) => d,
             _ => path,
         };
         (
@@ -330,6 +344,14 @@ fn storage_files(path: &Path) -> Result<Vec<PathBuf>> {
             return Err(e);
         }
         return Ok(vec![path.to_path_buf()]);
+    }
+    if !is_bag_folder(path) {
+        return Err(bag_error(
+            path,
+            None,
+            None,
+            "a folder without the metadata.yaml of a ROS 2 bag folder (rosbag2_bagfile_information); a topic is read from a ROS 2 bag: give its folder or one .mcap file",
+        ));
     }
     let entries: Vec<PathBuf> = std::fs::read_dir(path)
         .map_err(|e| Error::io(path, e))?
@@ -555,7 +577,10 @@ impl BagImages {
             };
             let frame = BagFrame {
                 image,
-                stamp_ns: stamp.nanos(),
+                stamp_ns: match stamp.nanos() {
+                    0 => i64::try_from(log_time).unwrap_or(i64::MAX),
+                    t => t,
+                },
                 log_time_ns: log_time,
                 index: self.index,
             };

@@ -54,9 +54,16 @@ impl ImageBag {
 
     /// One Image stamped (and logged) at `stamp_ns`: `data` holds
     /// `height` rows of `width` pixels of `channels` bytes in `encoding`.
-    pub fn write(
+    pub fn write(&mut self, stamp_ns: i64, size: (u32, u32, u32), encoding: &str, data: &[u8]) {
+        self.write_logged(stamp_ns, stamp_ns as u64, size, encoding, data);
+    }
+
+    /// As [`ImageBag::write`], its header stamped `stamp_ns` and the
+    /// message logged at `log_time_ns`.
+    pub fn write_logged(
         &mut self,
         stamp_ns: i64,
+        log_time_ns: u64,
         (width, height, channels): (u32, u32, u32),
         encoding: &str,
         data: &[u8],
@@ -76,8 +83,8 @@ impl ImageBag {
         let header = mcap::records::MessageHeader {
             channel_id: self.channel,
             sequence: self.sequence,
-            log_time: stamp_ns as u64,
-            publish_time: stamp_ns as u64,
+            log_time: log_time_ns,
+            publish_time: log_time_ns,
         };
         self.sequence += 1;
         self.writer
