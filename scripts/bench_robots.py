@@ -1,12 +1,13 @@
-"""Robot I/O speed: reading 1080p ROS 2 bags (raw rgb8 and JPEG topics) and
-the pipeline's frame rate with and without a subscribed Foxglove viewer.
+"""Robot I/O speed: reading 1080p ROS 2 bags (raw rgb8, packed YUV 4:2:2 and
+JPEG topics; bag folders with rosbag2's zstd file and message compression)
+and the pipeline's frame rate with and without a subscribed Foxglove viewer.
 
     python scripts/bench_robots.py [--frames 60] [--out docs/robots-bench.md]
 
 Needs the `tactile` package and binary built from this tree (scripts/test.sh
-does both), FFmpeg, and `mcap-ros2-support` and `websockets` from PyPI. The
-bags are written with mcap-ros2-support (an independent writer) from the
-shipped sample frames scaled to 1920x1080. Each timing is the median of
+does both), FFmpeg, and `mcap-ros2-support`, `rosbags` and `websockets`
+from PyPI. The bags are written with mcap-ros2-support and rosbags
+(independent writers) from the shipped sample frames scaled to 1920x1080. Each timing is the median of
 --repeats runs.
 """
 
@@ -27,6 +28,9 @@ from pathlib import Path
 
 import numpy as np
 from mcap_ros2.writer import Writer
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin
+from rosbags.rosbag2 import Writer as Rosbag2Writer
+from rosbags.typesys import Stores, get_typestore
 
 import tactile
 
@@ -50,31 +54,58 @@ def ffmpeg(*args: str) -> bytes:
                           capture_output=True).stdout
 
 
-def write_bags(tmp: Path, n: int) -> tuple[Path, Path]:
+def stamp(i: int) -> int:
+    return 1_700_000_000_000_000_000 + i * 33_333_333
+
+
+def write_bags(tmp: Path, n: int) -> dict[str, Path]:
+    """`raw` (rgb8), `yuyv` (yuv422_yuy2) and `jpeg` bags written by
+    mcap-ros2-support; `zstd-file` and `zstd-message`, the raw frames in
+    bag folders written by rosbags with rosbag2's zstd compression."""
     src = sorted((ROOT / "samples" / "palpation").glob("*.png"))
-    raws, jpegs = [], []
+    frames = {"raw": [], "yuyv": [], "jpeg": []}
     for f in src:
-        raws.append(ffmpeg("-i", str(f), "-vf", "scale=1920:1080", "-f", "rawvideo", "-pix_fmt", "rgb24", "-"))
-        jpegs.append(ffmpeg("-i", str(f), "-vf", "scale=1920:1080", "-q:v", "3", "-f", "mjpeg", "-"))
-    paths = []
-    for name, kind in [("raw.mcap", "raw"), ("jpeg.mcap", "jpeg")]:
-        path = tmp / name
+        scale = ["-i", str(f), "-vf", "scale=1920:1080"]
+        frames["raw"].append(ffmpeg(*scale, "-f", "rawvideo", "-pix_fmt", "rgb24", "-"))
+        frames["yuyv"].append(ffmpeg(*scale, "-f", "rawvideo", "-pix_fmt", "yuyv422", "-"))
+        frames["jpeg"].append(ffmpeg(*scale, "-q:v", "3", "-f", "mjpeg", "-"))
+    paths = {}
+    for kind in ["raw", "yuyv", "jpeg"]:
+        path = tmp / f"{kind}.mcap"
         with path.open("wb") as fh:
             w = Writer(fh)
-            schema = w.register_msgdef("sensor_msgs/msg/Image" if kind == "raw" else
-                                       "sensor_msgs/msg/CompressedImage", IMAGE if kind == "raw" else COMPRESSED)
+            schema = w.register_msgdef("sensor_msgs/msg/Image" if kind != "jpeg" else
+                                       "sensor_msgs/msg/CompressedImage", IMAGE if kind != "jpeg" else COMPRESSED)
             for i in range(n):
-                t = 1_700_000_000_000_000_000 + i * 33_333_333
+                t = stamp(i)
                 header = {"stamp": {"sec": t // 10**9, "nanosec": t % 10**9}, "frame_id": "cam"}
-                if kind == "raw":
-                    msg = {"header": header, "height": 1080, "width": 1920, "encoding": "rgb8",
-                           "is_bigendian": 0, "step": 5760, "data": raws[i % len(raws)]}
+                data = frames[kind][i % len(src)]
+                if kind == "jpeg":
+                    msg = {"header": header, "format": "jpeg", "data": data}
                 else:
-                    msg = {"header": header, "format": "jpeg", "data": jpegs[i % len(jpegs)]}
+                    enc, step = ("rgb8", 5760) if kind == "raw" else ("yuv422_yuy2", 3840)
+                    msg = {"header": header, "height": 1080, "width": 1920, "encoding": enc,
+                           "is_bigendian": 0, "step": step, "data": data}
                 w.write_message("/cam/image", schema, msg, log_time=t, publish_time=t)
             w.finish()
-        paths.append(path)
-    return paths[0], paths[1]
+        paths[kind] = path
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    Image, Header, Time = (ts.types[t] for t in
+                           ["sensor_msgs/msg/Image", "std_msgs/msg/Header", "builtin_interfaces/msg/Time"])
+    for mode in [CompressionMode.FILE, CompressionMode.MESSAGE]:
+        folder = tmp / f"zstd-{mode.name.lower()}"
+        w = Rosbag2Writer(folder, version=8, storage_plugin=StoragePlugin.MCAP)
+        w.set_compression(mode, CompressionFormat.ZSTD)
+        with w:
+            c = w.add_connection("/cam/image", Image.__msgtype__, typestore=ts)
+            for i in range(n):
+                t = stamp(i)
+                msg = Image(header=Header(stamp=Time(sec=t // 10**9, nanosec=t % 10**9), frame_id="cam"),
+                            height=1080, width=1920, encoding="rgb8", is_bigendian=0, step=5760,
+                            data=np.frombuffer(frames["raw"][i % len(src)], np.uint8))
+                w.write(c, t, ts.serialize_cdr(msg, Image.__msgtype__))
+        paths[folder.name] = folder
+    return paths
 
 
 def read_rate(bag: Path) -> float:
@@ -138,10 +169,16 @@ def main() -> None:
                     default=Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release" / "tactile")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        raw, jpeg = write_bags(Path(tmp), a.frames)
+        bags = write_bags(Path(tmp), a.frames)
+        raw, jpeg = bags["raw"], bags["jpeg"]
         med = lambda f: statistics.median(f() for _ in range(a.repeats))  # noqa: E731
         rows = {
             "read raw rgb8 topic (tactile.frames)": med(lambda: read_rate(raw)),
+            "read yuv422_yuy2 topic, converted to RGB (tactile.frames)": med(lambda: read_rate(bags["yuyv"])),
+            "read raw rgb8 bag folder, rosbag2 zstd file compression (tactile.frames)":
+                med(lambda: read_rate(bags["zstd-file"])),
+            "read raw rgb8 bag folder, rosbag2 zstd message compression (tactile.frames)":
+                med(lambda: read_rate(bags["zstd-message"])),
             "read JPEG topic (tactile.frames)": med(lambda: read_rate(jpeg)),
             "tactile run on the raw topic": med(lambda: run_fps(a.tactile, raw, False)),
             "tactile run on the raw topic, --view with a subscribed viewer":
@@ -162,7 +199,8 @@ def main() -> None:
         "# Robot I/O speed",
         "",
         f"Generated by `python scripts/bench_robots.py --frames {a.frames} --repeats {a.repeats}`: "
-        f"{a.frames}-frame 1920x1080 bags written by mcap-ros2-support; median of {a.repeats} runs. "
+        f"{a.frames}-frame 1920x1080 bags written by mcap-ros2-support (the zstd bag folders by rosbags); "
+        f"median of {a.repeats} runs. "
         f"Machine: {cpu}, {os.cpu_count()} logical cores; onnxruntime 1 thread, frames decoded on a second thread.",
         "",
         "| what | frames/s |",
