@@ -165,7 +165,7 @@ impl FrameList {
                 },
                 match (
                     ignored.iter().find(|p| folder_holds_frames(p)),
-                    ignored.iter().find(|p| crate::bag::is_bag_file(p)),
+                    ignored.iter().find(|p| crate::bag::is_bag_input_file(p)),
                 ) {
                     (Some(sub), _) => format!(
                         "; the folder {} holds frames: pass it instead",
@@ -592,10 +592,10 @@ pub struct FrameSource {
 
 impl FrameSource {
     /// Open `spec`: a folder (a dataset with labels.csv, a ROS 2 bag with
-    /// metadata.yaml, else its PNG and JPEG frames), one image file, an
-    /// `.mcap` file as a ROS 2 bag, a
-    /// character device (a V4L2 camera, live), any other file as a video
-    /// through FFmpeg, or stdin (live).
+    /// rosbag2's metadata.yaml, else its PNG and JPEG frames), one image
+    /// file, an `.mcap` (or `.mcap.zstd`) file as a ROS 2 bag, a character
+    /// device (a V4L2 camera, live), any other file as a video through
+    /// FFmpeg, or stdin (live).
     pub fn open(spec: &SourceSpec, options: SourceOptions) -> Result<Self> {
         if options.live_queue == 0 || options.live_queue > MAX_LIVE_QUEUE {
             return Err(Error::Config(format!(
@@ -633,7 +633,7 @@ impl FrameSource {
                     _ => Error::io(path, e),
                 })?;
                 use std::os::unix::fs::FileTypeExt;
-                if (meta.is_file() && crate::bag::is_bag_file(path))
+                if (meta.is_file() && crate::bag::is_bag_input_file(path))
                     || (meta.is_dir() && crate::bag::is_bag_folder(path))
                 {
                     open_bag(path, None)?

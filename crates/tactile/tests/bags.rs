@@ -312,6 +312,13 @@ fn a_split_bag_folder_is_read_in_the_order_of_its_files() {
         !o.status.success() && err.contains("inside the input bag folder"),
         "{err}"
     );
+    // The same when the input is one of its files.
+    let o = run_to(folder.join("rec_3.mcap").to_str().unwrap(), &inside);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("inside the input bag folder"),
+        "{err}"
+    );
     assert!(!inside.exists());
 }
 

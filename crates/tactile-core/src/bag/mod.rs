@@ -263,10 +263,16 @@ fn has_suffix(p: &Path, suffix: &str) -> bool {
         .is_some_and(|n| n.to_ascii_lowercase().ends_with(suffix))
 }
 
-/// True for a path named like an MCAP file (`.mcap`, or `.mcap.zstd` as
-/// rosbag2's file compression leaves it).
+/// True for a path named like an MCAP file (`.mcap`): a bag read, or
+/// results written as one.
 pub fn is_bag_file(p: &Path) -> bool {
-    has_suffix(p, ".mcap") || has_suffix(p, ".mcap.zstd")
+    has_suffix(p, ".mcap")
+}
+
+/// True for a bag file read: an MCAP file, or one rosbag2 compressed
+/// whole (`.mcap.zstd`). Outputs are never written compressed.
+pub fn is_bag_input_file(p: &Path) -> bool {
+    is_bag_file(p) || has_suffix(p, ".mcap.zstd")
 }
 
 /// True for a ROS 2 bag folder as `ros2 bag record` leaves it: a folder
@@ -378,7 +384,10 @@ fn storage_files(path: &Path) -> Result<Vec<PathBuf>> {
             ),
         ));
     }
-    let mut files: Vec<PathBuf> = entries.into_iter().filter(|p| is_bag_file(p)).collect();
+    let mut files: Vec<PathBuf> = entries
+        .into_iter()
+        .filter(|p| is_bag_input_file(p))
+        .collect();
     if files.is_empty() {
         return Err(bag_error(
             path,

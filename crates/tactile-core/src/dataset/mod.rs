@@ -668,11 +668,16 @@ pub fn refuse_input_as_output(out: &Path, input: &Path) -> Result<()> {
             out.display()
         )));
     }
-    if crate::bag::is_bag_folder(&i) && o.starts_with(&i) {
+    // The bag folder of the input, given whole or as one of its files.
+    let bag_folder = match crate::bag::is_bag_folder(&i) {
+        true => Some(i.as_path()),
+        false => i.parent().filter(|p| crate::bag::is_bag_folder(p)),
+    };
+    if let Some(bag) = bag_folder.filter(|b| o.starts_with(b)) {
         return Err(Error::Invalid(format!(
             "{}: this output is inside the input bag folder {}, whose MCAP files are all read as the bag; give a file outside it, so nothing was done",
             out.display(),
-            input.display()
+            bag.display()
         )));
     }
     if i.is_dir() && o.parent() == Some(i.as_path()) && crate::source::is_frame_file(&o) {
