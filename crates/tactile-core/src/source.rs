@@ -583,6 +583,8 @@ enum Feed {
 pub struct FrameSource {
     kind: SourceKind,
     list: Option<FrameList>,
+    /// What the user should know of a bag (one split read alone).
+    notes: Vec<String>,
     feed: Feed,
     limit: Option<u64>,
     given: u64,
@@ -753,9 +755,16 @@ impl FrameSource {
         } else {
             Feed::Direct(reader)
         };
+        let notes = match spec {
+            SourceSpec::Bag { path, .. } | SourceSpec::Path(path) if kind == SourceKind::Bag => {
+                crate::bag::split_read_alone(path).into_iter().collect()
+            }
+            _ => Vec::new(),
+        };
         Ok(Self {
             kind,
             list,
+            notes,
             feed,
             limit: options.limit,
             given: 0,
@@ -767,6 +776,19 @@ impl FrameSource {
     /// What the source is.
     pub fn kind(&self) -> SourceKind {
         self.kind
+    }
+
+    /// What a user should know before the run: a folder's gaps in the
+    /// numbering and files that are not frames, one split of a bag read
+    /// alone.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = self
+            .list
+            .as_ref()
+            .map(FrameList::warnings)
+            .unwrap_or_default();
+        w.extend(self.notes.iter().cloned());
+        w
     }
 
     /// The frames of a dataset or folder source.

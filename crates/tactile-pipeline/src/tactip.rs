@@ -431,11 +431,11 @@ impl PredictInput {
     }
 
     /// What the user should know of the input (gaps in a folder's frame
-    /// numbering).
+    /// numbering, one split of a bag read alone).
     pub fn warnings(&self) -> Vec<String> {
         match self {
             Self::Dataset(_) => Vec::new(),
-            Self::Source(s) => s.list().map(|l| l.warnings()).unwrap_or_default(),
+            Self::Source(s) => s.warnings(),
         }
     }
 

@@ -141,6 +141,9 @@ pub(crate) fn frames(
         limit,
     };
     let source = py.detach(move || FrameSource::open(&spec, options)).py()?;
+    for w in source.warnings() {
+        crate::errors::user_warning(py, &w)?;
+    }
     Ok(PyFrameSource {
         source: Mutex::new(source),
     })

@@ -30,7 +30,9 @@ def test_a_folder_numbered_without_zeros_comes_in_time(root, tmp_path, palpation
     for i in range(12):
         shutil.copy(root / "samples" / "palpation" / f"{i:06d}.png", tmp_path / f"frame_{i}.png")
     (tmp_path / "._frame_3.png").write_bytes(b"\0\x05\x16\x07resource fork")
-    got = list(tactile.frames(tmp_path))
+    # What was not read is said, as the command line says it.
+    with pytest.warns(UserWarning, match=r"1 hidden file\(s\).*were not read: \._frame_3\.png"):
+        got = list(tactile.frames(tmp_path))
     assert [f.name for f in got] == [f"frame_{i}.png" for i in range(12)]
     assert all(np.array_equal(f.image, e) for f, e in zip(got, palpation_frames))
 

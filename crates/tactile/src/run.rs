@@ -156,7 +156,7 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     if let Some(dir) = &a.render {
         tactile_core::dataset::check_output_dir(dir, &inputs)?;
     }
-    for w in source.list().map(|l| l.warnings()).unwrap_or_default() {
+    for w in source.warnings() {
         tactile_core::note!("{w}");
     }
     let mut pipeline = Pipeline::load(&a.models, a.runtime, a.threads as usize)?;

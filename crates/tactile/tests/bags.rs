@@ -312,7 +312,17 @@ fn a_split_bag_folder_is_read_in_the_order_of_its_files() {
         !o.status.success() && err.contains("inside the input bag folder"),
         "{err}"
     );
-    // The same when the input is one of its files.
+    // One split alone is read, and said to be one of twelve.
+    let one = dir.path().join("one.jsonl");
+    let o = run_to(folder.join("rec_3.mcap").to_str().unwrap(), &one);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("rec_3.mcap is one of the 12 files of the bag folder"),
+        "{err}"
+    );
+    assert_eq!(decisions(&one).len(), 1);
+    // Results inside the bag folder are refused for one of its files too.
     let o = run_to(folder.join("rec_3.mcap").to_str().unwrap(), &inside);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

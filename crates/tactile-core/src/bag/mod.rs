@@ -339,6 +339,23 @@ pub fn other_bag_format(path: &Path) -> Option<Error> {
     ))
 }
 
+/// When `path` is one `.mcap` of a bag folder holding several: the warning
+/// that only it is read (a split of the recording, not all of it).
+pub fn split_read_alone(path: &Path) -> Option<String> {
+    if path.is_dir() {
+        return None;
+    }
+    let folder = path.parent().filter(|d| is_bag_folder(d))?;
+    let n = storage_files(folder).ok()?.len();
+    (n > 1).then(|| {
+        format!(
+            "warning: {} is one of the {n} files of the bag folder {}; only it is read (give the folder to read the whole recording)",
+            path.display(),
+            folder.display()
+        )
+    })
+}
+
 /// The files of the bag at `path`, in the order they are read: the file
 /// itself, or a bag folder's `.mcap` (and `.mcap.zstd`) files in the order
 /// of the numbers in their names (`rec_0`, `rec_1`, …, `rec_10`), as
