@@ -284,23 +284,30 @@ pub fn is_bag_folder(p: &Path) -> bool {
     if !p.is_dir() || !meta.is_file() {
         return false;
     }
+    const KEY: &[u8] = b"rosbag2_bagfile_information";
     let mut head = Vec::new();
     File::open(&meta)
         .and_then(|f| f.take(64 << 10).read_to_end(&mut head))
-        .is_ok_and(|_| {
-            head.windows(27)
-                .any(|w| w == b"rosbag2_bagfile_information")
-        })
+        .is_ok_and(|_| head.windows(KEY.len()).any(|w| w == KEY))
 }
 
 /// Most storage files one bag folder may hold.
 const MAX_BAG_FILES: usize = 100_000;
 
-/// How to convert a bag this toolkit does not read, without ROS.
-fn convert_hint(src: &Path) -> String {
-    format!(
-        "convert it to MCAP without ROS: `pip install rosbags`, then `rosbags-convert --src {} --dst NEW_FOLDER --dst-storage mcap`",
-        src.display()
+/// What a SQLite bag is, in the error refusing one.
+const SQLITE_BAG: &str = "a ROS 2 bag in SQLite storage (.db3, the default before ROS 2 Iron)";
+
+/// The error refusing `path`, `what` (a bag this toolkit does not read),
+/// with the command that converts `src` to MCAP without ROS.
+fn foreign_bag_error(path: &Path, what: &str, src: &Path) -> Error {
+    bag_error(
+        path,
+        None,
+        None,
+        format!(
+            "{what}; this toolkit reads ROS 2 bags in MCAP storage: convert it to MCAP without ROS: `pip install rosbags`, then `rosbags-convert --src {} --dst NEW_FOLDER --dst-storage mcap`",
+            src.display()
+        ),
     )
 }
 
@@ -313,30 +320,18 @@ pub fn other_bag_format(path: &Path) -> Option<Error> {
         .and_then(|mut f| crate::video::read_full(&mut f, &mut head))
         .ok()?;
     let head = &head[..n];
-    let (what, src) = if head.starts_with(b"SQLite format 3\0") {
+    if head.starts_with(b"SQLite format 3\0") {
         // rosbag2's converters take the bag folder, not its .db3.
         let src = match path.parent() {
             Some(d) if is_bag_folder(d) => d,
             _ => path,
         };
-        (
-            "a ROS 2 bag in SQLite storage (.db3, the default before ROS 2 Iron)",
-            src,
-        )
+        Some(foreign_bag_error(path, SQLITE_BAG, src))
     } else if head.starts_with(b"#ROSBAG V") {
-        ("a ROS 1 bag", path)
+        Some(foreign_bag_error(path, "a ROS 1 bag", path))
     } else {
-        return None;
-    };
-    Some(bag_error(
-        path,
-        None,
-        None,
-        format!(
-            "{what}; this toolkit reads ROS 2 bags in MCAP storage: {}",
-            convert_hint(src)
-        ),
-    ))
+        None
+    }
 }
 
 /// When `path` is one `.mcap` of a bag folder holding several: the warning
@@ -391,15 +386,7 @@ fn storage_files(path: &Path) -> Result<Vec<PathBuf>> {
         ));
     }
     if entries.iter().any(|p| has_suffix(p, ".db3")) {
-        return Err(bag_error(
-            path,
-            None,
-            None,
-            format!(
-                "a ROS 2 bag in SQLite storage (.db3, the default before ROS 2 Iron); this toolkit reads ROS 2 bags in MCAP storage: {}",
-                convert_hint(path)
-            ),
-        ));
+        return Err(foreign_bag_error(path, SQLITE_BAG, path));
     }
     let mut files: Vec<PathBuf> = entries
         .into_iter()
