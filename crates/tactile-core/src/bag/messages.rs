@@ -212,52 +212,76 @@ impl Image<'_> {
             ));
         }
         let rows = || (0..h).map(|y| &self.data[y * step..y * step + row]);
-        let mut rgb = Vec::with_capacity(w * h * 3);
+        // Byte layouts are rewritten pixel by pixel, a row at a time.
+        let per_pixel = |write: &dyn Fn(&[u8], &mut Vec<u8>)| {
+            let mut rgb = Vec::with_capacity(w * h * 3);
+            rows().for_each(|line| write(line, &mut rgb));
+            crate::image_io::rgb_image(w, h, rgb).map_err(|e| e.to_string())
+        };
         match layout {
-            PixelLayout::Rgb => rows().for_each(|line| rgb.extend_from_slice(line)),
-            PixelLayout::Bgr => rows().for_each(|line| {
+            PixelLayout::Rgb => per_pixel(&|line, rgb| rgb.extend_from_slice(line)),
+            PixelLayout::Bgr => per_pixel(&|line, rgb| {
                 line.chunks_exact(3)
                     .for_each(|p| rgb.extend([p[2], p[1], p[0]]))
             }),
-            PixelLayout::Rgba => rows().for_each(|line| {
+            PixelLayout::Rgba => per_pixel(&|line, rgb| {
                 line.chunks_exact(4)
                     .for_each(|p| rgb.extend([p[0], p[1], p[2]]))
             }),
-            PixelLayout::Bgra => rows().for_each(|line| {
+            PixelLayout::Bgra => per_pixel(&|line, rgb| {
                 line.chunks_exact(4)
                     .for_each(|p| rgb.extend([p[2], p[1], p[0]]))
             }),
             PixelLayout::Mono8 => {
-                rows().for_each(|line| line.iter().for_each(|&v| rgb.extend([v, v, v])))
+                per_pixel(&|line, rgb| line.iter().for_each(|&v| rgb.extend([v, v, v])))
             }
-            PixelLayout::Mono16 => rows().for_each(|line| {
+            PixelLayout::Mono16 => per_pixel(&|line, rgb| {
                 line.chunks_exact(2).for_each(|p| {
                     let hi = if self.is_bigendian != 0 { p[0] } else { p[1] };
                     rgb.extend([hi, hi, hi]);
                 })
             }),
             PixelLayout::Uyvy | PixelLayout::Yuyv | PixelLayout::Bayer(_) => {
-                use kornia_imgproc::color as c;
-                let packed: Vec<u8> = rows().flatten().copied().collect();
-                let mut out = crate::image_io::rgb_image(w, h, vec![0; w * h * 3])
-                    .map_err(|e| e.to_string())?;
-                let done = match layout {
-                    PixelLayout::Bayer(pattern) => crate::image_io::grey_image(w, h, packed)
-                        .map_err(|e| e.to_string())
-                        .and_then(|mosaic| {
-                            c::rgb_from_bayer(&mosaic, pattern, &mut out).map_err(|e| e.to_string())
-                        }),
-                    PixelLayout::Uyvy => {
-                        c::rgb_from_uyvy(&packed, &mut out).map_err(|e| e.to_string())
-                    }
-                    _ => c::rgb_from_yuyv(&packed, &mut out).map_err(|e| e.to_string()),
+                // kornia's converters take the rows packed: borrowed as
+                // they are unless the message pads them.
+                let packed: std::borrow::Cow<'_, [u8]> = match step == row {
+                    true => self.data[..row * h].into(),
+                    false => rows().flatten().copied().collect::<Vec<u8>>().into(),
                 };
-                done.map_err(|e| format!("cannot convert the {} pixels: {e}", self.encoding))?;
-                return Ok(out);
+                kornia_to_rgb(layout, w, h, packed)
+                    .map_err(|e| format!("cannot convert the {} pixels: {e}", self.encoding))
             }
         }
-        crate::image_io::rgb_image(w, h, rgb).map_err(|e| e.to_string())
     }
+}
+
+/// Packed 4:2:2 or a Bayer mosaic (`packed`, `w` x `h`, rows without
+/// padding) to RGB through `kornia-imgproc`.
+fn kornia_to_rgb(
+    layout: PixelLayout,
+    w: usize,
+    h: usize,
+    packed: std::borrow::Cow<'_, [u8]>,
+) -> Result<RgbImage, String> {
+    use kornia_imgproc::color as c;
+    let mut out =
+        crate::image_io::rgb_image(w, h, vec![0; w * h * 3]).map_err(|e| e.to_string())?;
+    match layout {
+        PixelLayout::Bayer(pattern) => {
+            let mosaic = crate::image_io::grey_image(w, h, packed.into_owned())
+                .map_err(|e| e.to_string())?;
+            c::rgb_from_bayer(&mosaic, pattern, &mut out)
+        }
+        PixelLayout::Uyvy => c::rgb_from_uyvy(&packed, &mut out),
+        PixelLayout::Yuyv => c::rgb_from_yuyv(&packed, &mut out),
+        other => {
+            return Err(format!(
+                "{other:?} is rewritten byte by byte, not converted"
+            ));
+        }
+    }
+    .map_err(|e| e.to_string())?;
+    Ok(out)
 }
 
 impl CompressedImage<'_> {
