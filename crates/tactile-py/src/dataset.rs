@@ -137,10 +137,7 @@ impl PyDataset {
             }
             DatasetKind::Visuotactile => {
                 let img = py.detach(|| self.ds.load_rgb(i)).py()?;
-                Ok(ndarray::Array3::from_shape_vec((h, w, 3), img.into_vec())
-                    .map_err(|e| PyValueError::new_err(e.to_string()))?
-                    .into_pyarray(py)
-                    .into_any())
+                crate::image::rgb_array(py, img)
             }
         }
     }

@@ -9,17 +9,26 @@ use pyo3::prelude::*;
 
 use crate::errors::PyResultExt;
 
+/// An RGB image as an `(H, W, 3)` uint8 numpy array, its pixels moved,
+/// not copied: how every RGB frame reaches Python.
+pub(crate) fn rgb_array(
+    py: Python<'_>,
+    img: tactile_core::image_io::RgbImage,
+) -> PyResult<Bound<'_, PyAny>> {
+    let (w, h) = (img.width(), img.height());
+    Ok(ndarray::Array3::from_shape_vec((h, w, 3), img.into_vec())
+        .map_err(|e| PyValueError::new_err(e.to_string()))?
+        .into_pyarray(py)
+        .into_any())
+}
+
 /// An 8-bit PNG as `(H, W, 3)` uint8 RGB (grey is expanded).
 #[pyfunction]
 pub(crate) fn read_rgb(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
     let img = py
         .detach(move || tactile_core::image_io::load_rgb(&path))
         .py()?;
-    let (w, h) = (img.width(), img.height());
-    Ok(ndarray::Array3::from_shape_vec((h, w, 3), img.into_vec())
-        .map_err(|e| PyValueError::new_err(e.to_string()))?
-        .into_pyarray(py)
-        .into_any())
+    rgb_array(py, img)
 }
 
 /// An 8-bit PNG as `(H, W)` uint8 grey (RGB converted with OpenCV's weights).

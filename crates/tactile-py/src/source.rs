@@ -6,7 +6,6 @@
 use std::path::PathBuf;
 use std::sync::Mutex;
 
-use numpy::IntoPyArray;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use tactile_pipeline::{FrameSource, SourceOptions, SourceSpec};
@@ -82,13 +81,8 @@ impl PyFrameSource {
     fn __next__(&self, py: Python<'_>) -> PyResult<Option<PyFrame>> {
         let next = py.detach(|| -> PyResult<_> { self.lock()?.next_frame().py() })?;
         let Some(f) = next else { return Ok(None) };
-        let (w, h) = (f.image.width(), f.image.height());
         let age_ms = f.arrived.map(|t| 1e3 * t.elapsed().as_secs_f64());
-        let image = ndarray::Array3::from_shape_vec((h, w, 3), f.image.into_vec())
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py)
-            .into_any()
-            .unbind();
+        let image = crate::image::rgb_array(py, f.image)?.unbind();
         Ok(Some(PyFrame {
             image,
             name: f.name,
@@ -217,10 +211,5 @@ pub(crate) fn ros_image_to_rgb(py: Python<'_>, msg: &Bound<'_, PyAny>) -> PyResu
         data,
     };
     let rgb = image.to_rgb().map_err(PyValueError::new_err)?;
-    let (w, h) = (rgb.width(), rgb.height());
-    Ok(ndarray::Array3::from_shape_vec((h, w, 3), rgb.into_vec())
-        .map_err(|e| PyValueError::new_err(e.to_string()))?
-        .into_pyarray(py)
-        .into_any()
-        .unbind())
+    Ok(crate::image::rgb_array(py, rgb)?.unbind())
 }
