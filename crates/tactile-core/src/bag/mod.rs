@@ -17,6 +17,8 @@
 //! The file is read a record at a time through `mcap`'s sans-I/O reader
 //! (bounded memory whatever the bag's size); schemas and channels are kept
 //! as they appear, and each message of the chosen topic becomes a frame.
+//! Listing a bag's topics reads each file's index (summary and message
+//! indexes) instead, when it has a whole one.
 
 pub mod messages;
 
@@ -143,8 +145,20 @@ fn new_reader() -> LinearReader {
 
 impl Records {
     fn open(path: &Path) -> Result<Self> {
-        let mut rest: VecDeque<PathBuf> = storage_files(path)?.into();
-        let first = rest.pop_front().unwrap_or_else(|| path.to_path_buf());
+        Self::from_files(storage_files(path)?)
+    }
+
+    /// The records of `files`, one after another (at least one file).
+    fn from_files(files: Vec<PathBuf>) -> Result<Self> {
+        let mut rest: VecDeque<PathBuf> = files.into();
+        let Some(first) = rest.pop_front() else {
+            return Err(Error::Bag {
+                path: PathBuf::new(),
+                topic: None,
+                index: None,
+                message: "a bag without storage files".into(),
+            });
+        };
         Ok(Self {
             file: open_storage(&first)?,
             path: first,
@@ -407,12 +421,150 @@ fn storage_files(path: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// Every image topic of the bag at `path` with its message count and rate
-/// (one pass over the bag), in name order.
-pub fn image_topics(path: &Path) -> Result<Vec<BagTopic>> {
-    let mut records = Records::open(path)?;
-    // Per topic: count, first and last log time.
-    let mut seen: BTreeMap<String, (u64, u64, u64)> = BTreeMap::new();
+/// A topic of one storage file or a whole bag: its message type, message
+/// count and first and last log times.
+#[derive(Debug, Clone, PartialEq)]
+struct TopicTally {
+    message_type: String,
+    count: u64,
+    first: u64,
+    last: u64,
+}
+
+impl TopicTally {
+    fn new(message_type: String) -> Self {
+        Self {
+            message_type,
+            count: 0,
+            first: u64::MAX,
+            last: 0,
+        }
+    }
+
+    fn add(&mut self, count: u64, first: u64, last: u64) {
+        if count > 0 {
+            self.count += count;
+            self.first = self.first.min(first);
+            self.last = self.last.max(last);
+        }
+    }
+}
+
+type Tallies = BTreeMap<String, TopicTally>;
+
+/// Most bytes of summary and message indexes read from one file to list
+/// its topics; a larger index is passed over for a scan of the file.
+const MAX_INDEX_BYTES: u64 = 64 << 20;
+
+/// Reads of an MCAP file's index, bounded in total by [`MAX_INDEX_BYTES`].
+struct IndexFile {
+    file: File,
+    size: u64,
+    read: u64,
+}
+
+impl IndexFile {
+    /// `n` bytes at `offset`; `None` past the file's end or the budget.
+    fn read_at(&mut self, offset: u64, n: u64) -> Option<Vec<u8>> {
+        use std::io::{Seek, SeekFrom};
+        if offset.checked_add(n)? > self.size || self.read + n > MAX_INDEX_BYTES {
+            return None;
+        }
+        self.read += n;
+        self.file.seek(SeekFrom::Start(offset)).ok()?;
+        let mut buf = vec![0; usize::try_from(n).ok()?];
+        self.file.read_exact(&mut buf).ok()?;
+        Some(buf)
+    }
+}
+
+/// The topics of one `.mcap` file from its summary and message indexes,
+/// without reading its messages: a few reads at its end and one per chunk
+/// and channel. `None` when the file has no complete index to trust (no
+/// summary, as a recording cut short leaves it; no statistics or message
+/// indexes; indexes that disagree with its statistics; a compressed
+/// file), and it is scanned instead.
+fn indexed_tallies(path: &Path) -> Option<Tallies> {
+    use mcap::sans_io::summary_reader::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
+    use std::io::Seek;
+    if !is_bag_file(path) {
+        return None;
+    }
+    let file = File::open(path).ok()?;
+    let size = file.metadata().ok()?.len();
+    let mut index = IndexFile {
+        file,
+        size,
+        read: 0,
+    };
+    let mut reader = SummaryReader::new_with_options(
+        SummaryReaderOptions::default()
+            .with_file_size(size)
+            .with_record_length_limit(MAX_RECORD_BYTES),
+    );
+    while let Some(event) = reader.next_event() {
+        match event.ok()? {
+            SummaryReadEvent::ReadRequest(n) => {
+                index.read += n as u64;
+                if index.read > MAX_INDEX_BYTES {
+                    return None;
+                }
+                let got = index.file.read(reader.insert(n)).ok()?;
+                reader.notify_read(got);
+            }
+            SummaryReadEvent::SeekRequest(to) => {
+                reader.notify_seeked(index.file.seek(to).ok()?);
+            }
+        }
+    }
+    let summary = reader.finish()?;
+    let stats = summary.stats.as_ref()?;
+    let mut tallies = Tallies::new();
+    let mut by_channel: BTreeMap<u16, &str> = BTreeMap::new();
+    for (id, c) in &summary.channels {
+        let message_type = c
+            .schema
+            .as_ref()
+            .map(|s| s.name.clone())
+            .unwrap_or_default();
+        tallies
+            .entry(c.topic.clone())
+            .or_insert_with(|| TopicTally::new(message_type));
+        by_channel.insert(*id, &c.topic);
+    }
+    let mut indexed = 0u64;
+    for chunk in &summary.chunk_indexes {
+        crate::interrupt::check().ok()?;
+        for (&channel, &offset) in &chunk.message_index_offsets {
+            // A Message Index record: opcode, length, then its body.
+            let head = index.read_at(offset, 9)?;
+            let len = u64::from_le_bytes(head[1..9].try_into().ok()?);
+            if head[0] != mcap::records::op::MESSAGE_INDEX || len > MAX_RECORD_BYTES as u64 {
+                return None;
+            }
+            let body = index.read_at(offset + 9, len)?;
+            let Ok(Record::MessageIndex(m)) = mcap::parse_record(head[0], &body) else {
+                return None;
+            };
+            let topic = by_channel
+                .get(&channel)
+                .filter(|_| m.channel_id == channel)?;
+            let times = m.records.iter().map(|e| e.log_time);
+            let (first, last) = (times.clone().min()?, times.max()?);
+            indexed += m.records.len() as u64;
+            tallies
+                .get_mut(*topic)?
+                .add(m.records.len() as u64, first, last);
+        }
+    }
+    // Every message indexed, or the file is read through instead.
+    (indexed == stats.message_count).then_some(tallies)
+}
+
+/// The topics of one storage file, read through record by record.
+fn scanned_tallies(path: &Path) -> Result<Tallies> {
+    let mut records = Records::from_files(vec![path.to_path_buf()])?;
+    let mut tallies = Tallies::new();
     while let Some(item) = records.next(None)? {
         crate::interrupt::check()?;
         if let Item::Message {
@@ -420,29 +572,50 @@ pub fn image_topics(path: &Path) -> Result<Vec<BagTopic>> {
         } = item
             && let Some(c) = records.channels.get(&channel)
         {
-            let e = seen
+            tallies
                 .entry(c.topic.clone())
-                .or_insert((0, log_time, log_time));
-            e.0 += 1;
-            e.1 = e.1.min(log_time);
-            e.2 = e.2.max(log_time);
+                .or_insert_with(|| TopicTally::new(c.message_type.clone()))
+                .add(1, log_time, log_time);
         }
     }
-    let topics = records
-        .topics
-        .iter()
-        .filter(|(_, message_type)| is_image_type(message_type))
-        .map(|(topic, message_type)| {
-            let (count, first, last) = seen.get(topic).copied().unwrap_or((0, 0, 0));
-            let span = last.saturating_sub(first) as f64 * 1e-9;
+    for (topic, message_type) in records.topics {
+        tallies
+            .entry(topic)
+            .or_insert_with(|| TopicTally::new(message_type));
+    }
+    Ok(tallies)
+}
+
+/// Every image topic of the bag at `path` with its message count and rate,
+/// in name order. Each file's topics come from its index when it has a
+/// whole one (so listing a bag of gigabytes reads kilobytes), else from a
+/// pass over it.
+pub fn image_topics(path: &Path) -> Result<Vec<BagTopic>> {
+    let mut bag = Tallies::new();
+    for file in storage_files(path)? {
+        let tallies = match indexed_tallies(&file) {
+            Some(t) => t,
+            None => scanned_tallies(&file)?,
+        };
+        for (topic, t) in tallies {
+            bag.entry(topic)
+                .or_insert_with(|| TopicTally::new(t.message_type.clone()))
+                .add(t.count, t.first, t.last);
+        }
+    }
+    let topics = bag
+        .into_iter()
+        .filter(|(_, t)| is_image_type(&t.message_type))
+        .map(|(topic, t)| {
+            let span = t.last.saturating_sub(t.first) as f64 * 1e-9;
             BagTopic {
-                topic: topic.clone(),
-                message_type: message_type.clone(),
-                count,
-                rate_hz: match count > 1 && span > 0.0 {
-                    true => (count - 1) as f64 / span,
+                topic,
+                rate_hz: match t.count > 1 && span > 0.0 {
+                    true => (t.count - 1) as f64 / span,
                     false => 0.0,
                 },
+                message_type: t.message_type,
+                count: t.count,
             }
         })
         .collect();
@@ -640,6 +813,98 @@ mod tests {
         damaged.truncate(small.len() - 3);
         let e = unzstd(&damaged).unwrap_err();
         assert!(e.contains("not a readable zstd-compressed message"), "{e}");
+    }
+
+    /// A bag written with `options`: 40 messages on `/a` (Image, every
+    /// 10 ms), 7 on `/b` (CompressedImage, every 50 ms, from 1 s) and 5 on
+    /// `/log` (another type), interleaved; messages carry filler bytes.
+    fn indexed_bag(options: mcap::WriteOptions) -> Vec<u8> {
+        let mut out = std::io::Cursor::new(Vec::new());
+        let mut w = options.create(&mut out).unwrap();
+        let channel = |w: &mut mcap::Writer<_>, schema: &str, topic: &str| {
+            let s = w.add_schema(schema, "ros2msg", b"").unwrap();
+            w.add_channel(s, topic, "cdr", &BTreeMap::new()).unwrap()
+        };
+        let a = channel(&mut w, IMAGE_TYPE, "/a");
+        let b = channel(&mut w, COMPRESSED_IMAGE_TYPE, "/b");
+        let log = channel(&mut w, "rcl_interfaces/msg/Log", "/log");
+        let mut events: Vec<(u64, u16)> = (0..40).map(|i| (i * 10_000_000, a)).collect();
+        events.extend((0..7).map(|i| (1_000_000_000 + i * 50_000_000, b)));
+        events.extend((0..5).map(|i| (i * 3_000_000 + 5, log)));
+        events.sort();
+        for (i, (t, c)) in events.into_iter().enumerate() {
+            let h = mcap::records::MessageHeader {
+                channel_id: c,
+                sequence: i as u32,
+                log_time: t,
+                publish_time: t,
+            };
+            w.write_to_known_channel(&h, &[i as u8; 700]).unwrap();
+        }
+        w.finish().unwrap();
+        drop(w);
+        out.into_inner()
+    }
+
+    #[test]
+    fn a_bag_is_listed_from_its_index_as_a_pass_over_it_lists_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("x.mcap");
+        let write = |o: mcap::WriteOptions| {
+            let b = indexed_bag(o);
+            std::fs::write(&f, &b).unwrap();
+            b
+        };
+        // Chunks of a few messages each (so each topic spans several),
+        // compressed or not: the index gives what a pass gives.
+        for compression in [None, Some(mcap::Compression::Zstd)] {
+            let options = mcap::WriteOptions::new()
+                .compression(compression)
+                .chunk_size(Some(3000));
+            let bag = write(options);
+            let indexed = indexed_tallies(&f).expect("an indexed bag");
+            assert_eq!(indexed, scanned_tallies(&f).unwrap());
+            assert_eq!(indexed["/a"].count, 40);
+            assert_eq!(
+                (indexed["/b"].first, indexed["/b"].last),
+                (1_000_000_000, 1_300_000_000)
+            );
+            let listed = image_topics(&f).unwrap();
+            assert_eq!(listed.len(), 2);
+            assert!((listed[0].rate_hz - 100.0).abs() < 1e-9, "{listed:?}");
+            assert!((listed[1].rate_hz - 20.0).abs() < 1e-9, "{listed:?}");
+            // The messages themselves are not read: with a chunk in the
+            // middle damaged, the listing is the same (reading its frames
+            // would name the damage).
+            let summary = mcap::Summary::read(&bag).unwrap().unwrap();
+            let chunk = &summary.chunk_indexes[summary.chunk_indexes.len() / 2];
+            let (start, len) = (
+                chunk.chunk_start_offset as usize,
+                chunk.chunk_length as usize,
+            );
+            let mut damaged = bag.clone();
+            damaged[start + 60..start + len].fill(0xAB);
+            std::fs::write(&f, &damaged).unwrap();
+            assert_eq!(image_topics(&f).unwrap(), listed);
+            assert!(scanned_tallies(&f).is_err());
+        }
+        // Bags without a whole index are read through, with the same
+        // result: no message indexes, no statistics, no chunks, no
+        // summary (a recording cut short).
+        for options in [
+            mcap::WriteOptions::new().emit_message_indexes(false),
+            mcap::WriteOptions::new().emit_statistics(false),
+            mcap::WriteOptions::new().use_chunks(false),
+            mcap::WriteOptions::new().emit_summary_records(false),
+        ] {
+            let bag = write(options);
+            assert!(indexed_tallies(&f).is_none());
+            let listed = image_topics(&f).unwrap();
+            assert_eq!(listed.iter().map(|t| t.count).collect::<Vec<_>>(), [40, 7]);
+            let cut = &bag[..bag.len() - 40];
+            std::fs::write(&f, cut).unwrap();
+            assert!(indexed_tallies(&f).is_none());
+        }
     }
 
     #[test]
