@@ -287,12 +287,17 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
             path: options.labels.clone(),
             line: Some(*line),
             message: format!(
-                "frame {} is not in {} ({read} frames read)",
+                "frame {} is not in {} ({read} frames read){}",
                 match key {
                     FrameKey::Number(n) => n.to_string(),
                     FrameKey::Name(s) => format!("{s:?}"),
                 },
-                options.frames.display()
+                options.frames.display(),
+                source
+                    .late_warnings()
+                    .iter()
+                    .map(|w| format!("; {}", w.trim_start_matches("warning: ")))
+                    .collect::<String>()
             ),
         });
     }

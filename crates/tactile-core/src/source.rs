@@ -459,12 +459,19 @@ impl<R: FnMut() -> Result<Option<RgbImage>> + Send> Reader for StreamReader<R> {
     }
 }
 
-/// The frames of a bag's image topic, named by their index on it.
-struct BagReader(crate::bag::BagImages);
+/// Warnings found while reading, shared with the thread that reads.
+type LateWarnings = Arc<Mutex<Vec<String>>>;
+
+/// The frames of a bag's image topic, named by their index on it; at the
+/// end, its warnings (a file cut short) join the source's.
+struct BagReader(crate::bag::BagImages, LateWarnings);
 
 impl Reader for BagReader {
     fn next_frame(&mut self) -> Result<Option<Frame>> {
         let Some(f) = self.0.next_frame()? else {
+            if let Ok(mut late) = self.1.lock() {
+                late.extend(self.0.warnings());
+            }
             return Ok(None);
         };
         Ok(Some(Frame {
@@ -488,12 +495,12 @@ type Opened = (
 );
 
 /// A bag's image topic (its only one when `topic` is `None`).
-fn open_bag(path: &Path, topic: Option<String>) -> Result<Opened> {
+fn open_bag(path: &Path, topic: Option<String>, late: &LateWarnings) -> Result<Opened> {
     let topic = match topic {
         Some(t) => t,
         None => crate::bag::only_image_topic(path)?,
     };
-    let r = BagReader(crate::bag::BagImages::open(path, &topic)?);
+    let r = BagReader(crate::bag::BagImages::open(path, &topic)?, Arc::clone(late));
     Ok((SourceKind::Bag, None, Box::new(r), None, None))
 }
 
@@ -585,6 +592,8 @@ pub struct FrameSource {
     list: Option<FrameList>,
     /// What the user should know of a bag (one split read alone).
     notes: Vec<String>,
+    /// What was found while reading (a bag file cut short).
+    late: LateWarnings,
     feed: Feed,
     limit: Option<u64>,
     given: u64,
@@ -606,8 +615,9 @@ impl FrameSource {
             )));
         }
         use crate::video::{DecodeOptions, VideoInput, VideoReader};
+        let late = LateWarnings::default();
         let (kind, list, reader, size, stopper): Opened = match spec {
-            SourceSpec::Bag { path, topic } => open_bag(path, topic.clone())?,
+            SourceSpec::Bag { path, topic } => open_bag(path, topic.clone(), &late)?,
             SourceSpec::Stdin { width, height } => {
                 let (w, h) = (*width, *height);
                 if w == 0 || h == 0 || (w as u64).saturating_mul(h as u64) > MAX_IMAGE_PIXELS {
@@ -638,7 +648,7 @@ impl FrameSource {
                 if (meta.is_file() && crate::bag::is_bag_input_file(path))
                     || (meta.is_dir() && crate::bag::is_bag_folder(path))
                 {
-                    open_bag(path, None)?
+                    open_bag(path, None, &late)?
                 } else if meta.is_dir() || (meta.is_file() && is_frame_file(path)) {
                     let list = match meta.is_dir() {
                         true => FrameList::open(path)?,
@@ -765,6 +775,7 @@ impl FrameSource {
             kind,
             list,
             notes,
+            late,
             feed,
             limit: options.limit,
             given: 0,
@@ -778,9 +789,10 @@ impl FrameSource {
         self.kind
     }
 
-    /// What a user should know before the run: a folder's gaps in the
-    /// numbering and files that are not frames, one split of a bag read
-    /// alone.
+    /// What a user should know of the source: before the run, a
+    /// folder's gaps in the numbering and files that are not frames, one
+    /// split of a bag read alone; once its frames have ended, also
+    /// [`FrameSource::late_warnings`].
     pub fn warnings(&self) -> Vec<String> {
         let mut w = self
             .list
@@ -788,7 +800,15 @@ impl FrameSource {
             .map(FrameList::warnings)
             .unwrap_or_default();
         w.extend(self.notes.iter().cloned());
+        w.extend(self.late_warnings());
         w
+    }
+
+    /// What was found while reading, known once the frames have ended: a
+    /// bag file cut short (its frames read up to its last complete
+    /// record).
+    pub fn late_warnings(&self) -> Vec<String> {
+        self.late.lock().map(|l| l.clone()).unwrap_or_default()
     }
 
     /// The frames of a dataset or folder source.

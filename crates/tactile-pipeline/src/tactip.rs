@@ -224,6 +224,7 @@ impl Predictor {
                     }
                     Ok(Flow::Continue)
                 })?;
+                source.late_warnings().iter().for_each(|w| on_warning(w));
                 if frames == 0 {
                     return Err(no_frames(data));
                 }
@@ -262,6 +263,7 @@ impl Predictor {
             Ok(Flow::Continue)
         })?;
         all.stamps_ns = stamps.into_iter().collect();
+        all.warnings.extend(source.late_warnings());
         all.ms_encode = 1e3 * t0.elapsed().as_secs_f64() / all.files.len().max(1) as f64;
         Ok(all)
     }

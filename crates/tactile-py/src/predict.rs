@@ -38,6 +38,8 @@ pub(crate) fn predict<'py>(
     let rt = self::runtime(runtime)?;
     let (r, input_warnings) = interruptible(py, || {
         let mut input = PredictInput::open(&data, topic.as_deref(), limit, false).py()?;
+        // Taken now: those found while reading come with the estimates.
+        let input_warnings = input.warnings();
         if let Some(out) = &out {
             input.check_output(&data, out).py()?;
         }
@@ -46,7 +48,7 @@ pub(crate) fn predict<'py>(
         if let Some(out) = &out {
             tactile_ros::estimates::write_perception(out, &r).py()?;
         }
-        Ok((r, input.warnings()))
+        Ok((r, input_warnings))
     })?;
     for w in input_warnings.iter().chain(&r.warnings) {
         crate::errors::user_warning(py, w)?;

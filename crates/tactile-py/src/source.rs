@@ -5,6 +5,7 @@
 
 use std::path::PathBuf;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -40,6 +41,8 @@ impl PyFrame {
 #[pyclass(module = "tactile", name = "FrameSource")]
 pub struct PyFrameSource {
     source: Mutex<FrameSource>,
+    /// The warnings found while reading have been given.
+    late_warned: AtomicBool,
 }
 
 impl PyFrameSource {
@@ -80,7 +83,15 @@ impl PyFrameSource {
 
     fn __next__(&self, py: Python<'_>) -> PyResult<Option<PyFrame>> {
         let next = py.detach(|| -> PyResult<_> { self.lock()?.next_frame().py() })?;
-        let Some(f) = next else { return Ok(None) };
+        let Some(f) = next else {
+            // What the read found (a bag file cut short), once, at the end.
+            if !self.late_warned.swap(true, Ordering::Relaxed) {
+                for w in self.lock()?.late_warnings() {
+                    crate::errors::user_warning(py, &w)?;
+                }
+            }
+            return Ok(None);
+        };
         let age_ms = f.arrived.map(|t| 1e3 * t.elapsed().as_secs_f64());
         let image = crate::image::rgb_array(py, f.image)?.unbind();
         Ok(Some(PyFrame {
@@ -140,6 +151,7 @@ pub(crate) fn frames(
     }
     Ok(PyFrameSource {
         source: Mutex::new(source),
+        late_warned: AtomicBool::new(false),
     })
 }
 

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mcap.reader import make_reader
 from mcap_ros2.reader import read_ros2_messages
 from mcap_ros2.writer import Writer as Ros2McapWriter
 from rosbags.highlevel import AnyReader
@@ -285,11 +286,41 @@ def test_hostile_bags_name_the_topic_and_message(tmp_path, palpation_frames):
         list(tactile.frames(bag, topic="/nv21"))
     with pytest.raises(ValueError, match=r"topic /header: carries std_msgs/msg/Header"):
         list(tactile.frames(bag, topic="/header"))
-    cut = tmp_path / "truncated.mcap"
+    damaged = tmp_path / "damaged.mcap"
+    data = bytearray(bag.read_bytes())
+    data[len(data) // 3: len(data) // 2] = b"\xab" * (len(data) // 2 - len(data) // 3)
+    damaged.write_bytes(bytes(data))
+    with pytest.raises(ValueError, match=r"damaged.mcap: not a readable MCAP bag"):
+        list(tactile.frames(damaged, topic="/wide"))
+
+
+def test_a_recording_cut_short_gives_its_complete_frames(tmp_path, palpation_frames):
+    """A bag as a recorder killed mid-write leaves it (no summary, no
+    footer, its last chunk half written): the frames of its complete
+    chunks, and a warning saying what was lost; `ros2 bag record` is
+    often stopped so on a robot."""
+    bag = tmp_path / "killed.mcap"
+    with bag.open("wb") as fh:
+        w = Ros2McapWriter(fh, chunk_size=1)  # a chunk per frame
+        image = w.register_msgdef("sensor_msgs/msg/Image", IMAGE_MSG)
+        for i, rgb in enumerate(palpation_frames):
+            h, wd, _ = rgb.shape
+            w.write_message("/cam", image, {"header": header(i), "height": h, "width": wd, "encoding": "rgb8",
+                                            "is_bigendian": 0, "step": wd * 3, "data": rgb.tobytes()},
+                            log_time=stamp(i))
+        w.finish()
+    with bag.open("rb") as fh:
+        chunks = make_reader(fh).get_summary().chunk_indexes
+    last = chunks[-1]
     data = bag.read_bytes()
-    cut.write_bytes(data[: len(data) // 2])
-    with pytest.raises(ValueError, match=r"truncated.mcap: not a readable MCAP bag"):
-        list(tactile.frames(cut, topic="/wide"))
+    bag.write_bytes(data[: last.chunk_start_offset + last.chunk_length // 2])
+    kept = len(palpation_frames) - 1
+    with pytest.warns(UserWarning, match=rf"killed.mcap ends without its MCAP footer.*\({kept} on /cam"):
+        got = list(tactile.frames(bag))
+    assert len(got) == kept and tactile.bag_topics(bag)[0]["count"] == kept
+    for f, rgb in zip(got, palpation_frames):
+        assert np.array_equal(f.image, rgb)
+    assert got[-1].stamp_ns == stamp(len(got) - 1)
 
 
 def read_back(path: Path) -> dict[str, list]:

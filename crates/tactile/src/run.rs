@@ -197,6 +197,9 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     if let Some(r) = records {
         r.finish()?;
     }
+    for w in source.late_warnings() {
+        tactile_core::note!("{w}");
+    }
     let robot = robot.finish()?;
     // With records on stdout, the summary goes to stderr.
     let report = |line: String| match to_stdout {

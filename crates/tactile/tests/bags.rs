@@ -181,16 +181,8 @@ fn hostile_bags_are_refused_by_name_and_leave_no_results() {
             "/cam/image_raw, /garbage, /wide",
         ],
     );
-    // Cut inside its data: the frames before the cut are processed, then
-    // the run stops naming the container.
-    let bytes = std::fs::read(&bag).unwrap();
-    let cut = dir.path().join("cut.mcap");
-    std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
-    check(
-        &cut,
-        "/cam/image_raw",
-        &["cut.mcap: not a readable MCAP bag"],
-    );
+    // (A bag cut inside its data is a recording cut short, read up to
+    // the cut: a_recording_cut_short_gives_its_complete_frames_and_says_so.)
     // A record claiming a terabyte: refused before anything is allocated.
     let mut huge = b"\x89MCAP0\r\n".to_vec();
     huge.push(0x06); // a chunk
@@ -429,4 +421,64 @@ fn an_unstamped_frame_takes_its_log_time() {
         stamps.push(f.stamp_ns);
     }
     assert_eq!(stamps, [T0, T0 + 52_000_000, T0 + 100_000_000]);
+}
+
+#[test]
+fn a_recording_cut_short_gives_its_complete_frames_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let bag = dir.path().join("rec.mcap");
+    write_bag(&bag, &[]);
+    // Cut in the middle of its last chunk, as a recorder killed while
+    // writing it leaves the file: no summary, no footer.
+    let bytes = std::fs::read(&bag).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let chunks = &summary.chunk_indexes;
+    assert!(chunks.len() > 1, "{} chunks", chunks.len());
+    let last = chunks.last().unwrap();
+    let cut = last.chunk_start_offset + last.chunk_length / 2;
+    std::fs::write(&bag, &bytes[..cut as usize]).unwrap();
+    let data = bag.to_str().unwrap();
+    let listed = tactile(&["run", "--data", data, "--list-topics"]);
+    assert!(
+        listed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&listed.stderr)
+    );
+    let (a, b) = (dir.path().join("bag.jsonl"), dir.path().join("png.jsonl"));
+    let o = run_to(data, &a);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("{data} ends without its MCAP footer")),
+        "{stderr}"
+    );
+    run_ok(SAMPLES, &b);
+    let (kept, all) = (decisions(&a), decisions(&b));
+    assert!(
+        !kept.is_empty() && kept.len() < all.len(),
+        "{} of {}",
+        kept.len(),
+        all.len()
+    );
+    assert_eq!(kept, all[..kept.len()]);
+    assert!(
+        String::from_utf8_lossy(&listed.stdout)
+            .contains(&format!("sensor_msgs/msg/Image  {} messages", kept.len())),
+        "{}",
+        String::from_utf8_lossy(&listed.stdout)
+    );
+    // A bag whose bytes are damaged, not cut, is still refused.
+    let mut damaged = bytes.clone();
+    let first = &chunks[0];
+    damaged[(first.chunk_start_offset + 60) as usize
+        ..(first.chunk_start_offset + first.chunk_length) as usize]
+        .fill(0xAB);
+    std::fs::write(&bag, &damaged).unwrap();
+    let o = run_to(data, &a);
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("not a readable MCAP bag"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }

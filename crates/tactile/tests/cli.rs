@@ -1931,6 +1931,35 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
         );
     }
     assert_eq!(std::fs::read(&bag).unwrap(), before);
+    // The recorder killed after the last frame's chunk (no indexes, no
+    // footer): every frame estimated, to a file or streamed, and a
+    // warning that the file was cut short.
+    let summary = mcap::Summary::read(&before).unwrap().unwrap();
+    let last = summary.chunk_indexes.last().unwrap();
+    let cut = tmp.path().join("killed.mcap");
+    std::fs::write(
+        &cut,
+        &before[..(last.chunk_start_offset + last.chunk_length) as usize],
+    )
+    .unwrap();
+    for out in [tmp.path().join("killed.csv").to_str().unwrap(), "-"] {
+        let args = [
+            "predict",
+            "--model",
+            model.to_str().unwrap(),
+            "--data",
+            cut.to_str().unwrap(),
+            "--out",
+            out,
+        ];
+        let (ok, msg) = tactile(&args);
+        assert!(
+            ok && msg.contains("killed.mcap ends without its MCAP footer")
+                && msg.contains(&format!("({} on /tactip/image_raw in all)", names.len())),
+            "{out}: {msg}"
+        );
+    }
+    assert_eq!(csv_rows(&tmp.path().join("killed.csv")), rows);
     // A bag whose image topic holds no message: no frames, refused alike
     // whether the estimates go to a file or stream out.
     let empty = tmp.path().join("empty.mcap");

@@ -109,6 +109,10 @@ struct Records {
     channels: BTreeMap<u16, ChannelInfo>,
     /// Every topic met so far, in any file, with its message type.
     topics: BTreeMap<String, String>,
+    /// Files that ended without their end (no footer or end magic, or
+    /// in the middle of a record): recordings cut short, read up to their
+    /// last complete record.
+    cut_short: Vec<PathBuf>,
 }
 
 /// What [`Records::next`] found.
@@ -167,6 +171,7 @@ impl Records {
             schemas: BTreeMap::new(),
             channels: BTreeMap::new(),
             topics: BTreeMap::new(),
+            cut_short: Vec::new(),
         })
     }
 
@@ -198,7 +203,22 @@ impl Records {
                 }
                 return Ok(None);
             };
-            match event.map_err(|e| container_error(&self.path, e))? {
+            let event = match event {
+                Ok(e) => e,
+                // The file ends without its footer, the end of a recording
+                // cut short (the recorder killed, the power lost): every
+                // complete record before it was read, as Foxglove and
+                // `mcap recover` read such a file.
+                Err(mcap::McapError::UnexpectedEof) => {
+                    self.cut_short.push(self.path.clone());
+                    if self.next_file()? {
+                        continue;
+                    }
+                    return Ok(None);
+                }
+                Err(e) => return Err(container_error(&self.path, e)),
+            };
+            match event {
                 LinearReadEvent::ReadRequest(need) => {
                     let buf = self.reader.insert(need);
                     let n = self.file.read(buf).map_err(|e| match e.kind() {
@@ -673,6 +693,24 @@ impl BagImages {
     /// The topic read.
     pub fn topic(&self) -> &str {
         &self.topic
+    }
+
+    /// What a user should know of the frames read so far: each file that
+    /// ended without its footer (a recording cut short), of which the
+    /// complete records were read and the rest is lost.
+    pub fn warnings(&self) -> Vec<String> {
+        self.records
+            .cut_short
+            .iter()
+            .map(|f| {
+                format!(
+                    "warning: {} ends without its MCAP footer, as a recording cut short leaves it (the recorder killed or the power lost): its frames up to the last complete record were read ({} on {} in all), what it held after them is lost",
+                    f.display(),
+                    self.index,
+                    self.topic
+                )
+            })
+            .collect()
     }
 
     fn topic_error(&self, message: impl ToString) -> Error {
