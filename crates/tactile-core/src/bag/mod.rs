@@ -113,6 +113,8 @@ struct Records {
     /// in the middle of a record): recordings cut short, read up to their
     /// last complete record.
     cut_short: Vec<PathBuf>,
+    /// Messages met so far, in any file.
+    messages: u64,
 }
 
 /// What [`Records::next`] found.
@@ -172,6 +174,7 @@ impl Records {
             channels: BTreeMap::new(),
             topics: BTreeMap::new(),
             cut_short: Vec::new(),
+            messages: 0,
         })
     }
 
@@ -210,6 +213,12 @@ impl Records {
                 // complete record before it was read, as Foxglove and
                 // `mcap recover` read such a file.
                 Err(mcap::McapError::UnexpectedEof) => {
+                    // Cut before its first message: nothing to read.
+                    if self.messages == 0 {
+                        return Err(self.container(
+                            "it ends before its first complete message (a recording cut short before anything was recorded, or not an MCAP file written whole)",
+                        ));
+                    }
                     self.cut_short.push(self.path.clone());
                     if self.next_file()? {
                         continue;
@@ -263,6 +272,7 @@ impl Records {
                             Item::Other
                         }
                         Record::Message { header, data } => {
+                            self.messages += 1;
                             let wanted = topic.is_some_and(|t| {
                                 self.channels
                                     .get(&header.channel_id)
@@ -581,9 +591,12 @@ fn indexed_tallies(path: &Path) -> Option<Tallies> {
     (indexed == stats.message_count).then_some(tallies)
 }
 
-/// The topics of one storage file, read through record by record.
-fn scanned_tallies(path: &Path) -> Result<Tallies> {
+/// The topics of one storage file, read through record by record, after
+/// `messages_before` messages of the bag's earlier files (a file cut short
+/// before its first message is an error only when it is all there is).
+fn scanned_tallies(path: &Path, messages_before: u64) -> Result<Tallies> {
     let mut records = Records::from_files(vec![path.to_path_buf()])?;
+    records.messages = messages_before;
     let mut tallies = Tallies::new();
     while let Some(item) = records.next(None)? {
         crate::interrupt::check()?;
@@ -615,7 +628,7 @@ pub fn image_topics(path: &Path) -> Result<Vec<BagTopic>> {
     for file in storage_files(path)? {
         let tallies = match indexed_tallies(&file) {
             Some(t) => t,
-            None => scanned_tallies(&file)?,
+            None => scanned_tallies(&file, bag.values().map(|t| t.count).sum())?,
         };
         for (topic, t) in tallies {
             bag.entry(topic)
@@ -901,7 +914,7 @@ mod tests {
                 .chunk_size(Some(3000));
             let bag = write(options);
             let indexed = indexed_tallies(&f).expect("an indexed bag");
-            assert_eq!(indexed, scanned_tallies(&f).unwrap());
+            assert_eq!(indexed, scanned_tallies(&f, 0).unwrap());
             assert_eq!(indexed["/a"].count, 40);
             assert_eq!(
                 (indexed["/b"].first, indexed["/b"].last),
@@ -924,7 +937,7 @@ mod tests {
             damaged[start + 60..start + len].fill(0xAB);
             std::fs::write(&f, &damaged).unwrap();
             assert_eq!(image_topics(&f).unwrap(), listed);
-            assert!(scanned_tallies(&f).is_err());
+            assert!(scanned_tallies(&f, 0).is_err());
         }
         // Bags without a whole index are read through, with the same
         // result: no message indexes, no statistics, no chunks, no
@@ -943,6 +956,36 @@ mod tests {
             std::fs::write(&f, cut).unwrap();
             assert!(indexed_tallies(&f).is_none());
         }
+        // Cut before its first message (the magic and header only): an
+        // error, alone; the last split of a bag folder, nothing to add.
+        let bag = write(mcap::WriteOptions::new());
+        std::fs::write(&f, &bag[..30]).unwrap();
+        for e in [
+            image_topics(&f).unwrap_err(),
+            BagImages::open(&f, "/a")
+                .unwrap()
+                .next_frame()
+                .err()
+                .unwrap(),
+        ] {
+            assert!(
+                e.to_string().contains(
+                    "x.mcap: not a readable MCAP bag: it ends before its first complete message"
+                ),
+                "{e}"
+            );
+        }
+        let folder = dir.path().join("rec");
+        std::fs::create_dir(&folder).unwrap();
+        std::fs::write(
+            folder.join("metadata.yaml"),
+            "rosbag2_bagfile_information:\n",
+        )
+        .unwrap();
+        std::fs::write(folder.join("rec_0.mcap"), &bag).unwrap();
+        std::fs::write(folder.join("rec_1.mcap"), &bag[..30]).unwrap();
+        let listed = image_topics(&folder).unwrap();
+        assert_eq!(listed.iter().map(|t| t.count).collect::<Vec<_>>(), [40, 7]);
     }
 
     #[test]
