@@ -30,8 +30,9 @@ python3 -m venv "$venv"
 export PATH="$venv/bin:$PATH" VIRTUAL_ENV="$venv"
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
 "${pip[@]}" install "maturin>=1.16,<2" "numpy>=1.21" "pytest>=7"
-# Independent readers and writers of ROS 2 bags and a WebSocket client, for
+# Independent readers and writers of ROS 2 bags, the Foxglove SDK (its MCAP
+# recordings) and a WebSocket client, for
 # the robot I/O checks (tests/test_robots.py).
-"${pip[@]}" install "mcap-ros2-support==0.6.0" "rosbags==0.11.9" "websockets==17.4"
+"${pip[@]}" install "mcap-ros2-support==0.6.0" "rosbags==0.11.9" "websockets==17.4" "foxglove-sdk==0.30.3"
 "${pip[@]}" install --no-build-isolation "$root/crates/tactile-py"
 TACTILE_BIN="$target/release/tactile" "$venv/bin/python" -m pytest -q "$root/crates/tactile-py/tests"

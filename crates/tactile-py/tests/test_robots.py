@@ -255,6 +255,39 @@ def test_mcap_ros2_bag_mono_and_jpeg(tmp_path, root, palpation_frames, tactile_b
     assert got == want
 
 
+def test_frames_the_foxglove_sdk_records(tmp_path, root, palpation_frames, tactile_bin):
+    """An MCAP recorded with the Foxglove SDK (foxglove.RawImage and
+    foxglove.CompressedImage in protobuf), not a ROS 2 bag: the same
+    frames, stamps and decisions as the PNG folder."""
+    import foxglove
+    from foxglove.channels import CompressedImageChannel, RawImageChannel
+    from foxglove.messages import CompressedImage, RawImage, Timestamp
+
+    bag = tmp_path / "sdk.mcap"
+    pngs = sorted((root / "samples" / "palpation").glob("*.png"))
+    ctx = foxglove.Context()
+    with foxglove.open_mcap(bag, context=ctx):
+        raw = RawImageChannel("/cam/raw", context=ctx)
+        png = CompressedImageChannel("/cam/png", context=ctx)
+        for i, (f, rgb) in enumerate(zip(pngs, palpation_frames)):
+            t = stamp(i)
+            ts = Timestamp(sec=t // 10**9, nsec=t % 10**9)
+            h, w, _ = rgb.shape
+            raw.log(RawImage(timestamp=ts, frame_id="cam", width=w, height=h, encoding="rgb8", step=w * 3,
+                             data=rgb.tobytes()), log_time=t)
+            png.log(CompressedImage(timestamp=ts, frame_id="cam", data=f.read_bytes(), format="png"), log_time=t)
+    listed = {t["topic"]: (t["message_type"], t["count"]) for t in tactile.bag_topics(bag)}
+    assert listed == {"/cam/raw": ("foxglove.RawImage", len(pngs)), "/cam/png": ("foxglove.CompressedImage", len(pngs))}
+    for topic in listed:
+        got = list(tactile.frames(bag, topic=topic))
+        assert [f.stamp_ns for f in got] == [stamp(i) for i in range(len(pngs))]
+        for f, rgb in zip(got, palpation_frames):
+            assert np.array_equal(f.image, rgb), topic
+    folder = run_records(tactile_bin, root, tmp_path, "--data", str(root / "samples" / "palpation"))
+    recorded = run_records(tactile_bin, root, tmp_path, "--data", str(bag), "--topic", "/cam/raw")
+    assert decisions(recorded) == decisions(folder)
+
+
 def test_hostile_bags_name_the_topic_and_message(tmp_path, palpation_frames):
     bag = tmp_path / "hostile.mcap"
     with bag.open("wb") as fh:

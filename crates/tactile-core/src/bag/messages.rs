@@ -10,6 +10,11 @@ use serde::{Deserialize, Serialize};
 pub const IMAGE_TYPE: &str = "sensor_msgs/msg/Image";
 /// `sensor_msgs/msg/CompressedImage`.
 pub const COMPRESSED_IMAGE_TYPE: &str = "sensor_msgs/msg/CompressedImage";
+/// `foxglove.RawImage` (protobuf), as the Foxglove SDK records raw frames.
+pub const FOXGLOVE_RAW_IMAGE_TYPE: &str = "foxglove.RawImage";
+/// `foxglove.CompressedImage` (protobuf), as the Foxglove SDK records
+/// JPEG and PNG frames.
+pub const FOXGLOVE_COMPRESSED_IMAGE_TYPE: &str = "foxglove.CompressedImage";
 
 /// `builtin_interfaces/msg/Time`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]

@@ -3,9 +3,12 @@
 //! without ROS installed. The container is read by the `mcap` crate and the
 //! messages by a CDR deserialiser (`cdr-encoding`); nothing of either
 //! format is written by hand here. `sensor_msgs/msg/Image` (rgb8, bgr8,
-//! rgba8, bgra8, mono8, mono16) and `sensor_msgs/msg/CompressedImage`
-//! (JPEG, PNG) are understood; anything else is refused naming the topic
-//! and the message.
+//! rgba8, bgra8, mono8, mono16 and the other encodings of
+//! [`messages::IMAGE_ENCODINGS`]) and `sensor_msgs/msg/CompressedImage`
+//! (JPEG, PNG) are understood, and so are the `foxglove.RawImage` and
+//! `foxglove.CompressedImage` (protobuf, decoded by the `foxglove` crate's
+//! types) of MCAP files the Foxglove SDK records; anything else is refused
+//! naming the topic and the message.
 //!
 //! A bag is given as `ros2 bag record` leaves it (a folder holding
 //! `metadata.yaml` and one or more `.mcap` files, split ones read in the
@@ -32,7 +35,10 @@ use mcap::records::Record;
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
 use crate::{Error, Result};
-use messages::{COMPRESSED_IMAGE_TYPE, CompressedImage, IMAGE_TYPE, Image, from_cdr};
+use messages::{
+    COMPRESSED_IMAGE_TYPE, CompressedImage, FOXGLOVE_COMPRESSED_IMAGE_TYPE,
+    FOXGLOVE_RAW_IMAGE_TYPE, Header, IMAGE_TYPE, Image, from_cdr,
+};
 
 fn bag_error(
     path: &Path,
@@ -296,9 +302,31 @@ impl Records {
     }
 }
 
-/// True for the two image message types a bag's frames may be.
+/// True for the image message types a bag's frames may be: ROS 2's
+/// Image and CompressedImage, and the Foxglove SDK's RawImage and
+/// CompressedImage.
 pub fn is_image_type(t: &str) -> bool {
-    t == IMAGE_TYPE || t == COMPRESSED_IMAGE_TYPE
+    [
+        IMAGE_TYPE,
+        COMPRESSED_IMAGE_TYPE,
+        FOXGLOVE_RAW_IMAGE_TYPE,
+        FOXGLOVE_COMPRESSED_IMAGE_TYPE,
+    ]
+    .contains(&t)
+}
+
+/// The message encoding an image type is read in: ROS 2's CDR, or the
+/// protobuf the Foxglove SDK writes its schemas in.
+fn expected_encoding(message_type: &str) -> &'static str {
+    match message_type {
+        FOXGLOVE_RAW_IMAGE_TYPE | FOXGLOVE_COMPRESSED_IMAGE_TYPE => "protobuf",
+        _ => "cdr",
+    }
+}
+
+/// A Foxglove timestamp in nanoseconds since the epoch (0 when absent).
+fn foxglove_stamp(t: Option<foxglove::messages::Timestamp>) -> i64 {
+    t.map_or(0, |t| i64::try_from(t.total_nanos()).unwrap_or(i64::MAX))
 }
 
 fn has_suffix(p: &Path, suffix: &str) -> bool {
@@ -665,7 +693,7 @@ pub fn only_image_topic(path: &Path) -> Result<String> {
             path,
             None,
             None,
-            "has no sensor_msgs/msg/Image or CompressedImage topic",
+            "has no image topic (sensor_msgs/msg/Image or CompressedImage, foxglove.RawImage or CompressedImage)",
         )),
         many => Err(bag_error(
             path,
@@ -739,6 +767,50 @@ impl BagImages {
         )
     }
 
+    /// One message of `message_type` (an image type, in its encoding):
+    /// its frame and stamp (0 when it carries none).
+    fn decode(&self, message_type: &str, data: &[u8]) -> Result<(RgbImage, i64)> {
+        use foxglove::Decode;
+        let bad = |e: String| self.message_error(e);
+        let not_valid = |e: &dyn std::fmt::Display| {
+            self.message_error(format!("not a valid {message_type} message: {e}"))
+        };
+        Ok(match message_type {
+            IMAGE_TYPE => {
+                let m: Image<'_> = from_cdr(data).map_err(bad)?;
+                (m.to_rgb().map_err(bad)?, m.header.stamp.nanos())
+            }
+            COMPRESSED_IMAGE_TYPE => {
+                let m: CompressedImage<'_> = from_cdr(data).map_err(bad)?;
+                (m.to_rgb().map_err(bad)?, m.header.stamp.nanos())
+            }
+            FOXGLOVE_RAW_IMAGE_TYPE => {
+                let m = foxglove::messages::RawImage::decode(data).map_err(|e| not_valid(&e))?;
+                // The same pixel encodings as a ROS 2 Image, little-endian.
+                let image = Image {
+                    header: Header::default(),
+                    height: m.height,
+                    width: m.width,
+                    encoding: m.encoding,
+                    is_bigendian: 0,
+                    step: m.step,
+                    data: &m.data,
+                };
+                (image.to_rgb().map_err(bad)?, foxglove_stamp(m.timestamp))
+            }
+            _ => {
+                let m =
+                    foxglove::messages::CompressedImage::decode(data).map_err(|e| not_valid(&e))?;
+                let image = CompressedImage {
+                    header: Header::default(),
+                    format: m.format,
+                    data: &m.data,
+                };
+                (image.to_rgb().map_err(bad)?, foxglove_stamp(m.timestamp))
+            }
+        })
+    }
+
     /// The next frame, `None` after the last.
     pub fn next_frame(&mut self) -> Result<Option<BagFrame>> {
         loop {
@@ -780,7 +852,7 @@ impl BagImages {
             }
             if !is_image_type(&c.message_type) {
                 return Err(self.topic_error(format!(
-                    "carries {}, not {IMAGE_TYPE} or {COMPRESSED_IMAGE_TYPE}",
+                    "carries {}, not {IMAGE_TYPE}, {COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_RAW_IMAGE_TYPE} or {FOXGLOVE_COMPRESSED_IMAGE_TYPE}",
                     if c.message_type.is_empty() {
                         "messages without a schema"
                     } else {
@@ -788,10 +860,16 @@ impl BagImages {
                     }
                 )));
             }
-            if c.encoding != "cdr" {
+            let encoding = expected_encoding(&c.message_type);
+            if c.encoding != encoding {
                 return Err(self.topic_error(format!(
-                    "message encoding {:?}, not ROS 2's cdr",
-                    c.encoding
+                    "{} in message encoding {:?}; it is read in {encoding}{}",
+                    c.message_type,
+                    c.encoding,
+                    match encoding {
+                        "cdr" => " (ROS 2's)",
+                        _ => ", as the Foxglove SDK writes it",
+                    }
                 )));
             }
             // rosbag2's message compression: each message's bytes zstd'd.
@@ -799,22 +877,10 @@ impl BagImages {
                 true => unzstd(&data).map_err(|e| self.message_error(e))?,
                 false => data,
             };
-            let (image, stamp) = if c.message_type == IMAGE_TYPE {
-                let m: Image<'_> = from_cdr(&data).map_err(|e| self.message_error(e))?;
-                (
-                    m.to_rgb().map_err(|e| self.message_error(e))?,
-                    m.header.stamp,
-                )
-            } else {
-                let m: CompressedImage<'_> = from_cdr(&data).map_err(|e| self.message_error(e))?;
-                (
-                    m.to_rgb().map_err(|e| self.message_error(e))?,
-                    m.header.stamp,
-                )
-            };
+            let (image, stamp_ns) = self.decode(&c.message_type, &data)?;
             let frame = BagFrame {
                 image,
-                stamp_ns: match stamp.nanos() {
+                stamp_ns: match stamp_ns {
                     0 => i64::try_from(log_time).unwrap_or(i64::MAX),
                     t => t,
                 },
@@ -986,6 +1052,122 @@ mod tests {
         std::fs::write(folder.join("rec_1.mcap"), &bag[..30]).unwrap();
         let listed = image_topics(&folder).unwrap();
         assert_eq!(listed.iter().map(|t| t.count).collect::<Vec<_>>(), [40, 7]);
+    }
+
+    #[test]
+    fn frames_the_foxglove_sdk_records_are_read() {
+        use foxglove::messages::{CompressedImage as FoxCompressed, RawImage, Timestamp};
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("sdk.mcap");
+        let (w, h) = (16u32, 8u32);
+        let px: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 251) as u8).collect();
+        let mut png = Vec::new();
+        image::RgbImage::from_raw(w, h, px.clone())
+            .unwrap()
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        // Recorded as a Foxglove SDK user records: a context, its MCAP
+        // writer, a typed channel per topic. The BGR frame's rows padded.
+        let t0 = 1_700_000_000u32;
+        let ctx = foxglove::Context::new();
+        let writer = ctx.mcap_writer().create_new_buffered_file(&path).unwrap();
+        let raw = ctx.channel_builder("/cam/raw").build::<RawImage>();
+        let jpeg = ctx.channel_builder("/cam/png").build::<FoxCompressed>();
+        let bgr: Vec<u8> = px
+            .chunks(w as usize * 3)
+            .flat_map(|row| {
+                let mut r: Vec<u8> = row.chunks(3).flat_map(|p| [p[2], p[1], p[0]]).collect();
+                r.extend([0; 4]);
+                r
+            })
+            .collect();
+        for i in 0..3u32 {
+            let stamp = Timestamp::new(t0 + i, 0);
+            raw.log_with_time(
+                &RawImage {
+                    timestamp: Some(stamp),
+                    frame_id: "cam".into(),
+                    width: w,
+                    height: h,
+                    encoding: "bgr8".into(),
+                    step: w * 3 + 4,
+                    data: bgr.clone().into(),
+                },
+                stamp,
+            );
+            jpeg.log_with_time(
+                &FoxCompressed {
+                    timestamp: None,
+                    frame_id: "cam".into(),
+                    data: png.clone().into(),
+                    format: "png".into(),
+                },
+                stamp,
+            );
+        }
+        writer.close().unwrap();
+        let topics = image_topics(&path).unwrap();
+        let listed: Vec<_> = topics
+            .iter()
+            .map(|t| (t.topic.as_str(), t.message_type.as_str(), t.count))
+            .collect();
+        assert_eq!(
+            listed,
+            [
+                ("/cam/png", FOXGLOVE_COMPRESSED_IMAGE_TYPE, 3),
+                ("/cam/raw", FOXGLOVE_RAW_IMAGE_TYPE, 3)
+            ]
+        );
+        for topic in ["/cam/raw", "/cam/png"] {
+            let mut r = BagImages::open(&path, topic).unwrap();
+            for i in 0..3 {
+                let f = r.next_frame().unwrap().unwrap();
+                assert_eq!(f.image.as_slice(), px.as_slice(), "{topic} {i}");
+                // The message's timestamp; its log time when it has none.
+                assert_eq!(f.stamp_ns, (t0 + i) as i64 * 1_000_000_000, "{topic} {i}");
+            }
+            assert!(r.next_frame().unwrap().is_none());
+        }
+        // Not protobuf, or not a valid message: refused by name.
+        let bad = dir.path().join("bad.mcap");
+        let mut out = std::io::Cursor::new(Vec::new());
+        let mut w = mcap::Writer::new(&mut out).unwrap();
+        let s = w
+            .add_schema(FOXGLOVE_RAW_IMAGE_TYPE, "protobuf", b"")
+            .unwrap();
+        let json = w.add_channel(s, "/json", "json", &BTreeMap::new()).unwrap();
+        let garbage = w
+            .add_channel(s, "/garbage", "protobuf", &BTreeMap::new())
+            .unwrap();
+        for (channel, data) in [(json, &b"{}"[..]), (garbage, &[0xff; 12][..])] {
+            let h = mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence: 0,
+                log_time: 1,
+                publish_time: 1,
+            };
+            w.write_to_known_channel(&h, data).unwrap();
+        }
+        w.finish().unwrap();
+        drop(w);
+        std::fs::write(&bad, out.into_inner()).unwrap();
+        for (topic, want) in [
+            (
+                "/json",
+                "topic /json: foxglove.RawImage in message encoding \"json\"; it is read in protobuf",
+            ),
+            (
+                "/garbage",
+                "topic /garbage, message 0: not a valid foxglove.RawImage message",
+            ),
+        ] {
+            let e = BagImages::open(&bad, topic)
+                .unwrap()
+                .next_frame()
+                .err()
+                .unwrap();
+            assert!(e.to_string().contains(want), "{e}");
+        }
     }
 
     #[test]
