@@ -1,6 +1,7 @@
 #![allow(clippy::unwrap_used)]
 //! Hostile bags, many of them: a valid bag (chunked and compressed, and
-//! plain) with its bytes flipped, cut, or its length fields set huge, is
+//! plain; ROS 2 Image and CompressedImage and Foxglove RawImage topics)
+//! with its bytes flipped, cut, or its length fields set huge, is
 //! read through every image topic. Each read ends in frames or an error
 //! naming the file; none panics or allocates what a header claims. (The
 //! libFuzzer target `fuzz/fuzz_targets/bag.rs` explores further.)
@@ -37,6 +38,11 @@ fn bag_bytes(chunked: bool) -> Vec<u8> {
         let cmp = w
             .add_channel(s_cmp, "/png", "cdr", &BTreeMap::new())
             .unwrap();
+        // As the Foxglove SDK records a raw frame: protobuf.
+        let s_fox = w.add_schema("foxglove.RawImage", "protobuf", b"").unwrap();
+        let fox = w
+            .add_channel(s_fox, "/fox", "protobuf", &BTreeMap::new())
+            .unwrap();
         for i in 0..3u32 {
             let header = Header {
                 stamp: Time {
@@ -59,7 +65,22 @@ fn bag_bytes(chunked: bool) -> Vec<u8> {
                 format: "png".into(),
                 data: &png,
             };
-            for (channel, data) in [(raw, to_cdr(&img).unwrap()), (cmp, to_cdr(&c).unwrap())] {
+            let f = foxglove::messages::RawImage {
+                timestamp: Some(foxglove::messages::Timestamp::new(10 + i, i)),
+                frame_id: "cam".into(),
+                width: 16,
+                height: 8,
+                encoding: "rgb8".into(),
+                step: 48,
+                data: px.clone().into(),
+            };
+            let mut fox_bytes = Vec::new();
+            foxglove::Encode::encode(&f, &mut fox_bytes).unwrap();
+            for (channel, data) in [
+                (raw, to_cdr(&img).unwrap()),
+                (cmp, to_cdr(&c).unwrap()),
+                (fox, fox_bytes),
+            ] {
                 let h = mcap::records::MessageHeader {
                     channel_id: channel,
                     sequence: i,
@@ -124,7 +145,7 @@ fn mutated_bags_give_frames_or_errors_naming_the_file() {
     for chunked in [true, false] {
         let good = bag_bytes(chunked);
         std::fs::write(&path, &good).unwrap();
-        assert_eq!(read_all(&path), 6, "the unmutated bag (chunked {chunked})");
+        assert_eq!(read_all(&path), 9, "the unmutated bag (chunked {chunked})");
         let mut rng = SampleRng::new(35, u64::from(chunked), 0);
         let mut pick = |n: usize| ((rng.uniform() * n as f64) as usize).min(n - 1);
         for round in 0..1500 {

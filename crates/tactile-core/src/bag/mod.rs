@@ -302,9 +302,14 @@ impl Records {
     }
 }
 
+/// ROS 1's image types, as `mcap convert` writes a ROS 1 bag's topics to
+/// MCAP (encoding `ros1`): listed, and refused with the command that
+/// converts the bag to ROS 2 messages.
+const ROS1_IMAGE_TYPES: [&str; 2] = ["sensor_msgs/Image", "sensor_msgs/CompressedImage"];
+
 /// True for the image message types a bag's frames may be: ROS 2's
-/// Image and CompressedImage, and the Foxglove SDK's RawImage and
-/// CompressedImage.
+/// Image and CompressedImage, the Foxglove SDK's RawImage and
+/// CompressedImage (and ROS 1's, listed to be refused with advice).
 pub fn is_image_type(t: &str) -> bool {
     [
         IMAGE_TYPE,
@@ -313,6 +318,7 @@ pub fn is_image_type(t: &str) -> bool {
         FOXGLOVE_COMPRESSED_IMAGE_TYPE,
     ]
     .contains(&t)
+        || ROS1_IMAGE_TYPES.contains(&t)
 }
 
 /// The message encoding an image type is read in: ROS 2's CDR, or the
@@ -860,6 +866,12 @@ impl BagImages {
                     }
                 )));
             }
+            if c.encoding == "ros1" || ROS1_IMAGE_TYPES.contains(&c.message_type.as_str()) {
+                return Err(self.topic_error(format!(
+                    "carries ROS 1 messages ({} in encoding {:?}), as `mcap convert` writes a ROS 1 bag; this toolkit reads ROS 2 messages: convert the original ROS 1 bag without ROS: `pip install rosbags`, then `rosbags-convert --src BAG --dst NEW_FOLDER --dst-storage mcap`",
+                    c.message_type, c.encoding
+                )));
+            }
             let encoding = expected_encoding(&c.message_type);
             if c.encoding != encoding {
                 return Err(self.topic_error(format!(
@@ -1168,6 +1180,41 @@ mod tests {
                 .unwrap();
             assert!(e.to_string().contains(want), "{e}");
         }
+    }
+
+    #[test]
+    fn ros1_messages_in_mcap_are_listed_and_refused_with_the_command_that_converts_them() {
+        // As `mcap convert recording.bag recording.mcap` writes a ROS 1
+        // bag: ros1msg schemas, ros1 messages.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("converted.mcap");
+        let mut out = std::io::Cursor::new(Vec::new());
+        let mut w = mcap::Writer::new(&mut out).unwrap();
+        let s = w.add_schema("sensor_msgs/Image", "ros1msg", b"").unwrap();
+        let c = w.add_channel(s, "/cam", "ros1", &BTreeMap::new()).unwrap();
+        let h = mcap::records::MessageHeader {
+            channel_id: c,
+            sequence: 0,
+            log_time: 1,
+            publish_time: 1,
+        };
+        w.write_to_known_channel(&h, &[0; 40]).unwrap();
+        w.finish().unwrap();
+        drop(w);
+        std::fs::write(&path, out.into_inner()).unwrap();
+        assert_eq!(only_image_topic(&path).unwrap(), "/cam");
+        let e = BagImages::open(&path, "/cam")
+            .unwrap()
+            .next_frame()
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains(
+                "topic /cam: carries ROS 1 messages (sensor_msgs/Image in encoding \"ros1\")"
+            ) && e.contains("rosbags-convert --src BAG --dst NEW_FOLDER --dst-storage mcap"),
+            "{e}"
+        );
     }
 
     #[test]
