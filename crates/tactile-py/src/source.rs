@@ -159,10 +159,14 @@ pub(crate) fn frames(
 /// of dicts with `topic`, `message_type`, `count` and `rate_hz`.
 #[pyfunction]
 pub(crate) fn bag_topics(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny>>> {
-    let topics = py
-        .detach(move || tactile_core::bag::image_topics(&path))
+    let listing = py
+        .detach(move || tactile_core::bag::list_image_topics(&path))
         .py()?;
-    topics
+    for w in &listing.warnings {
+        crate::errors::user_warning(py, w)?;
+    }
+    listing
+        .topics
         .into_iter()
         .map(|t| {
             let d = pyo3::types::PyDict::new(py);

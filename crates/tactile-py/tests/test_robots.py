@@ -350,7 +350,9 @@ def test_a_recording_cut_short_gives_its_complete_frames(tmp_path, palpation_fra
     kept = len(palpation_frames) - 1
     with pytest.warns(UserWarning, match=rf"killed.mcap ends without its MCAP footer.*\({kept} on /cam"):
         got = list(tactile.frames(bag))
-    assert len(got) == kept and tactile.bag_topics(bag)[0]["count"] == kept
+    with pytest.warns(UserWarning, match=r"killed.mcap ends without its MCAP footer.*messages up to the last"):
+        listed = tactile.bag_topics(bag)
+    assert len(got) == kept and listed[0]["count"] == kept
     for f, rgb in zip(got, palpation_frames):
         assert np.array_equal(f.image, rgb)
     assert got[-1].stamp_ns == stamp(len(got) - 1)

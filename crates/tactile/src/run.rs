@@ -105,7 +105,11 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         let Some(bag) = &a.data else {
             bail!("--list-topics needs --data BAG.mcap")
         };
-        let topics = tactile_core::bag::image_topics(bag)?;
+        let listing = tactile_core::bag::list_image_topics(bag)?;
+        for w in &listing.warnings {
+            tactile_core::note!("{w}");
+        }
+        let topics = listing.topics;
         if topics.is_empty() {
             say!("{}: no image topics", bag.display());
         }

@@ -439,10 +439,12 @@ fn a_recording_cut_short_gives_its_complete_frames_and_says_so() {
     std::fs::write(&bag, &bytes[..cut as usize]).unwrap();
     let data = bag.to_str().unwrap();
     let listed = tactile(&["run", "--data", data, "--list-topics"]);
+    let stderr = String::from_utf8_lossy(&listed.stderr);
     assert!(
-        listed.status.success(),
-        "{}",
-        String::from_utf8_lossy(&listed.stderr)
+        listed.status.success()
+            && stderr.contains(&format!("{data} ends without its MCAP footer"))
+            && stderr.contains("its messages up to the last complete record are counted"),
+        "{stderr}"
     );
     let (a, b) = (dir.path().join("bag.jsonl"), dir.path().join("png.jsonl"));
     let o = run_to(data, &a);

@@ -625,10 +625,20 @@ fn indexed_tallies(path: &Path) -> Option<Tallies> {
     (indexed == stats.message_count).then_some(tallies)
 }
 
+/// The warning that `file` ended without its footer, `what` of it was
+/// read, and the rest is lost.
+fn cut_short_warning(file: &Path, what: &str) -> String {
+    format!(
+        "warning: {} ends without its MCAP footer, as a recording cut short leaves it (the recorder killed or the power lost): {what}, what it held after them is lost",
+        file.display()
+    )
+}
+
 /// The topics of one storage file, read through record by record, after
 /// `messages_before` messages of the bag's earlier files (a file cut short
-/// before its first message is an error only when it is all there is).
-fn scanned_tallies(path: &Path, messages_before: u64) -> Result<Tallies> {
+/// before its first message is an error only when it is all there is),
+/// and whether it was cut short.
+fn scanned_tallies(path: &Path, messages_before: u64) -> Result<(Tallies, bool)> {
     let mut records = Records::from_files(vec![path.to_path_buf()])?;
     records.messages = messages_before;
     let mut tallies = Tallies::new();
@@ -650,19 +660,43 @@ fn scanned_tallies(path: &Path, messages_before: u64) -> Result<Tallies> {
             .entry(topic)
             .or_insert_with(|| TopicTally::new(message_type));
     }
-    Ok(tallies)
+    Ok((tallies, !records.cut_short.is_empty()))
+}
+
+/// A bag's image topics, and what a user should know of them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BagListing {
+    /// Its image topics, in name order.
+    pub topics: Vec<BagTopic>,
+    /// Its files cut short (recordings stopped without closing), whose
+    /// messages are counted up to their last complete record.
+    pub warnings: Vec<String>,
 }
 
 /// Every image topic of the bag at `path` with its message count and rate,
-/// in name order. Each file's topics come from its index when it has a
-/// whole one (so listing a bag of gigabytes reads kilobytes), else from a
-/// pass over it.
+/// in name order (see [`list_image_topics`]).
 pub fn image_topics(path: &Path) -> Result<Vec<BagTopic>> {
+    Ok(list_image_topics(path)?.topics)
+}
+
+/// Every image topic of the bag at `path` with its message count and rate,
+/// in name order, and warnings of files cut short. Each file's topics come
+/// from its index when it has a whole one (so listing a bag of gigabytes
+/// reads kilobytes), else from a pass over it.
+pub fn list_image_topics(path: &Path) -> Result<BagListing> {
     let mut bag = Tallies::new();
+    let mut warnings = Vec::new();
     for file in storage_files(path)? {
         let tallies = match indexed_tallies(&file) {
             Some(t) => t,
-            None => scanned_tallies(&file, bag.values().map(|t| t.count).sum())?,
+            None => {
+                let (t, cut) = scanned_tallies(&file, bag.values().map(|t| t.count).sum())?;
+                if cut {
+                    let what = "its messages up to the last complete record are counted";
+                    warnings.push(cut_short_warning(&file, what));
+                }
+                t
+            }
         };
         for (topic, t) in tallies {
             bag.entry(topic)
@@ -686,7 +720,7 @@ pub fn image_topics(path: &Path) -> Result<Vec<BagTopic>> {
             }
         })
         .collect();
-    Ok(topics)
+    Ok(BagListing { topics, warnings })
 }
 
 /// The one image topic to read from a bag when none is named: the only
@@ -746,17 +780,14 @@ impl BagImages {
     /// ended without its footer (a recording cut short), of which the
     /// complete records were read and the rest is lost.
     pub fn warnings(&self) -> Vec<String> {
+        let read = format!(
+            "its frames up to the last complete record were read ({} on {} in all)",
+            self.index, self.topic
+        );
         self.records
             .cut_short
             .iter()
-            .map(|f| {
-                format!(
-                    "warning: {} ends without its MCAP footer, as a recording cut short leaves it (the recorder killed or the power lost): its frames up to the last complete record were read ({} on {} in all), what it held after them is lost",
-                    f.display(),
-                    self.index,
-                    self.topic
-                )
-            })
+            .map(|f| cut_short_warning(f, &read))
             .collect()
     }
 
@@ -992,7 +1023,7 @@ mod tests {
                 .chunk_size(Some(3000));
             let bag = write(options);
             let indexed = indexed_tallies(&f).expect("an indexed bag");
-            assert_eq!(indexed, scanned_tallies(&f, 0).unwrap());
+            assert_eq!(indexed, scanned_tallies(&f, 0).unwrap().0);
             assert_eq!(indexed["/a"].count, 40);
             assert_eq!(
                 (indexed["/b"].first, indexed["/b"].last),
