@@ -2,7 +2,9 @@
 
 It subscribes to a `sensor_msgs/msg/Image` topic (any encoding `tactile
 run` reads in a bag: rgb8, bgr8, mono8, mono16 as the GelSight and TacTip
-cameras publish, cv_bridge's 8UC3, packed YUV 4:2:2, Bayer), runs
+cameras publish, cv_bridge's 8UC3, packed YUV 4:2:2, Bayer), or with
+`-p compressed:=true` to a `sensor_msgs/msg/CompressedImage` topic (JPEG or
+PNG, as image_transport's `compressed` transport publishes), runs
 `tactile.Pipeline` on each frame and publishes:
 
 - `~/result` (`std_msgs/msg/String`): the frame's record as JSON (the same
@@ -14,6 +16,8 @@ Run it in a sourced ROS 2 workspace::
 
     python3 examples/ros2/tactile_node.py --ros-args \
         -r image:=/gelsight/image_raw -p models:=models -p runtime:=onnx
+    python3 examples/ros2/tactile_node.py --ros-args \
+        -r image:=/gelsight/image_raw/compressed -p compressed:=true
 
 The logic (`PalpationNode.handle`) imports nothing of ROS, so it is tested
 without ROS installed (crates/tactile-py/tests/test_ros_node.py); `main`
@@ -31,8 +35,9 @@ import numpy as np
 
 import tactile
 
-#: An `sensor_msgs/msg/Image` (any object with its fields) as an `(H, W, 3)`
-#: uint8 RGB array: the conversion `tactile run` gives a bag's frames.
+#: A `sensor_msgs/msg/Image` or `CompressedImage` (any object with its
+#: fields) as an `(H, W, 3)` uint8 RGB array: the conversion `tactile run`
+#: gives a bag's frames.
 image_to_rgb = tactile.ros_image_to_rgb
 
 
@@ -65,7 +70,7 @@ class PalpationNode:
 def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs ROS 2
     import rclpy
     from rclpy.node import Node
-    from sensor_msgs.msg import Image
+    from sensor_msgs.msg import CompressedImage, Image
     from std_msgs.msg import String
 
     rclpy.init(args=argv if argv is not None else sys.argv)
@@ -75,13 +80,14 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             super().__init__("tactile")
             models = self.declare_parameter("models", "models").value
             runtime = self.declare_parameter("runtime", "onnx").value
+            compressed = self.declare_parameter("compressed", False).value
             self.logic = PalpationNode(models, runtime)
             self.results = self.create_publisher(String, "~/result", 10)
             self.masks = self.create_publisher(Image, "~/tendon_mask", 10)
             # A queue of 1: a slow model skips to the newest frame.
-            self.create_subscription(Image, "image", self.on_image, 1)
+            self.create_subscription(CompressedImage if compressed else Image, "image", self.on_image, 1)
 
-        def on_image(self, msg: Image) -> None:
+        def on_image(self, msg: Any) -> None:
             try:
                 out = self.logic.handle(msg)
             except ValueError as e:

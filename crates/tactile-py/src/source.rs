@@ -180,43 +180,56 @@ pub(crate) fn bag_topics(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny
 }
 
 /// A `sensor_msgs/msg/Image` (an rclpy message, or any object with its
-/// `height`, `width`, `encoding`, `is_bigendian`, `step` and `data`) as an
-/// `(H, W, 3)` uint8 RGB array: the conversion `tactile run` gives a bag's
-/// frames, for a node that subscribes to a topic itself.
+/// `height`, `width`, `encoding`, `is_bigendian`, `step` and `data`), or a
+/// `sensor_msgs/msg/CompressedImage` (`format` and `data`: JPEG or PNG), as
+/// an `(H, W, 3)` uint8 RGB array: the conversion `tactile run` gives a
+/// bag's frames, for a node that subscribes to a topic itself.
 #[pyfunction]
 pub(crate) fn ros_image_to_rgb(py: Python<'_>, msg: &Bound<'_, PyAny>) -> PyResult<Py<PyAny>> {
-    use tactile_core::bag::messages::{Header, Image};
+    use tactile_core::bag::messages::{CompressedImage, Header, Image};
+    let compressed = msg.hasattr("format")? && !msg.hasattr("encoding")?;
+    let kind = match compressed {
+        true => "sensor_msgs/msg/CompressedImage",
+        false => "sensor_msgs/msg/Image",
+    };
     let field = |name: &str| {
-        msg.getattr(name).map_err(|_| {
-            PyValueError::new_err(format!(
-                "not a sensor_msgs/msg/Image: it has no field {name:?}"
-            ))
-        })
+        msg.getattr(name)
+            .map_err(|_| PyValueError::new_err(format!("not a {kind}: it has no field {name:?}")))
     };
-    let number = |name: &str| -> PyResult<u32> {
-        field(name)?.extract().map_err(|_| {
-            PyValueError::new_err(format!(
-                "sensor_msgs/msg/Image field {name:?}: must be an integer from 0 to 4294967295"
-            ))
-        })
-    };
-    let (height, width, step) = (number("height")?, number("width")?, number("step")?);
-    let is_bigendian = u8::from(field("is_bigendian")?.is_truthy()?);
-    let encoding: String = field("encoding")?.extract().map_err(|_| {
-        PyValueError::new_err("sensor_msgs/msg/Image field \"encoding\": must be a string")
-    })?;
     // rclpy gives `data` as an array.array('B'); bytes() takes it, bytes,
     // a bytearray or a numpy array alike.
     let data = py
         .import("builtins")?
         .getattr("bytes")?
         .call1((field("data")?,))
-        .map_err(|e| {
-            PyValueError::new_err(format!(
-                "sensor_msgs/msg/Image field \"data\": not bytes ({e})"
-            ))
-        })?;
+        .map_err(|e| PyValueError::new_err(format!("{kind} field \"data\": not bytes ({e})")))?;
     let data = data.cast::<pyo3::types::PyBytes>()?.as_bytes();
+    if compressed {
+        let format: String = field("format")?.extract().map_err(|_| {
+            PyValueError::new_err(format!("{kind} field \"format\": must be a string"))
+        })?;
+        let image = CompressedImage {
+            header: Header::default(),
+            format,
+            data,
+        };
+        let rgb = py
+            .detach(|| image.to_rgb())
+            .map_err(PyValueError::new_err)?;
+        return Ok(crate::image::rgb_array(py, rgb)?.unbind());
+    }
+    let number = |name: &str| -> PyResult<u32> {
+        field(name)?.extract().map_err(|_| {
+            PyValueError::new_err(format!(
+                "{kind} field {name:?}: must be an integer from 0 to 4294967295"
+            ))
+        })
+    };
+    let (height, width, step) = (number("height")?, number("width")?, number("step")?);
+    let is_bigendian = u8::from(field("is_bigendian")?.is_truthy()?);
+    let encoding: String = field("encoding")?.extract().map_err(|_| {
+        PyValueError::new_err(format!("{kind} field \"encoding\": must be a string"))
+    })?;
     let image = Image {
         header: Header::default(),
         height,

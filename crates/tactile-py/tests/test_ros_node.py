@@ -33,7 +33,7 @@ def image_msg(data: np.ndarray, encoding: str, step: int, bigendian: int = 0, wi
     )
 
 
-def test_node_converts_each_encoding(node_module, palpation_frames):
+def test_node_converts_each_encoding(node_module, root, palpation_frames):
     rgb = palpation_frames[4]
     h, w, _ = rgb.shape
     grey = rgb[:, :, 1]
@@ -48,6 +48,16 @@ def test_node_converts_each_encoding(node_module, palpation_frames):
     ]
     for msg, want in cases:
         np.testing.assert_array_equal(node_module.image_to_rgb(msg), want, err_msg=msg.encoding)
+    # A CompressedImage (image_transport's compressed transport): PNG
+    # exactly, JPEG within its loss.
+    png = sorted((root / "samples" / "palpation").glob("*.png"))[5].read_bytes()
+    compressed = SimpleNamespace(header=image_msg(rgb, "rgb8", w * 3).header, format="rgb8; png compressed rgb8",
+                                 data=np.frombuffer(png, np.uint8))
+    np.testing.assert_array_equal(node_module.image_to_rgb(compressed), palpation_frames[5])
+    with pytest.raises(ValueError, match=r"not a JPEG or PNG"):
+        node_module.image_to_rgb(SimpleNamespace(format="jpeg", data=b"not a picture"))
+    with pytest.raises(ValueError, match=r"not a sensor_msgs/msg/CompressedImage: it has no field \"data\""):
+        node_module.image_to_rgb(SimpleNamespace(format="jpeg"))
     with pytest.raises(ValueError, match=r"encoding \"nv21\" is not one of rgb8, bgr8"):
         node_module.image_to_rgb(image_msg(rgb, "nv21", w * 3))
     with pytest.raises(ValueError, match=r"no field \"step\""):

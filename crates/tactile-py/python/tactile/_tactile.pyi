@@ -234,7 +234,7 @@ def bag_topics(path: _Path) -> List[Dict[str, Any]]:
     """The image topics of a ROS 2 bag (its folder or one MCAP file, also one the Foxglove SDK recorded): topic, message_type, count, rate_hz."""
 
 def ros_image_to_rgb(msg: Any) -> np.ndarray:
-    """A sensor_msgs/msg/Image (an rclpy message, or any object with its fields) as (H, W, 3) uint8 RGB, as `tactile run` reads a bag's frames."""
+    """A sensor_msgs/msg/Image or CompressedImage (an rclpy message, or any object with its fields) as (H, W, 3) uint8 RGB, as `tactile run` reads a bag's frames."""
 
 class McapWriter:
     """Pipeline results as ROS 2 messages in an MCAP file (the channels of `tactile run --out X.mcap`)."""
