@@ -469,6 +469,32 @@ fn a_recording_cut_short_gives_its_complete_frames_and_says_so() {
         "{}",
         String::from_utf8_lossy(&listed.stdout)
     );
+    // A pipe named as a split of a bag folder: refused by name, not
+    // opened (opening it would wait for a writer for ever).
+    let fifo_bag = dir.path().join("fifo");
+    std::fs::create_dir(&fifo_bag).unwrap();
+    std::fs::write(
+        fifo_bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n",
+    )
+    .unwrap();
+    let status = Command::new("mkfifo")
+        .arg(fifo_bag.join("rec_0.mcap"))
+        .status()
+        .unwrap();
+    assert!(status.success());
+    for extra in [&["--list-topics"][..], &[][..]] {
+        let mut args = vec!["run", "--data", fifo_bag.to_str().unwrap()];
+        args.extend(extra);
+        let o = tactile(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success()
+                && stderr.contains("rec_0.mcap")
+                && stderr.contains("not a regular file"),
+            "{stderr}"
+        );
+    }
     // A bag whose bytes are damaged, not cut, is still refused.
     let mut damaged = bytes.clone();
     let first = &chunks[0];

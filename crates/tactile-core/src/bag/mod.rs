@@ -551,7 +551,9 @@ impl IndexFile {
 fn indexed_tallies(path: &Path) -> Option<Tallies> {
     use mcap::sans_io::summary_reader::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
     use std::io::Seek;
-    if !is_bag_file(path) {
+    // A pipe or device named .mcap is never opened (it would block); the
+    // scan refuses it by name.
+    if !is_bag_file(path) || !std::fs::metadata(path).ok()?.is_file() {
         return None;
     }
     let file = File::open(path).ok()?;
