@@ -204,13 +204,15 @@ pub(crate) fn ros_image_to_rgb(py: Python<'_>, msg: &Bound<'_, PyAny>) -> PyResu
         .call1((field("data")?,))
         .map_err(|e| PyValueError::new_err(format!("{kind} field \"data\": not bytes ({e})")))?;
     let data = data.cast::<pyo3::types::PyBytes>()?.as_bytes();
+    let string = |name: &str| -> PyResult<String> {
+        field(name)?
+            .extract()
+            .map_err(|_| PyValueError::new_err(format!("{kind} field {name:?}: must be a string")))
+    };
     if compressed {
-        let format: String = field("format")?.extract().map_err(|_| {
-            PyValueError::new_err(format!("{kind} field \"format\": must be a string"))
-        })?;
         let image = CompressedImage {
             header: Header::default(),
-            format,
+            format: string("format")?,
             data,
         };
         let rgb = py
@@ -227,14 +229,11 @@ pub(crate) fn ros_image_to_rgb(py: Python<'_>, msg: &Bound<'_, PyAny>) -> PyResu
     };
     let (height, width, step) = (number("height")?, number("width")?, number("step")?);
     let is_bigendian = u8::from(field("is_bigendian")?.is_truthy()?);
-    let encoding: String = field("encoding")?.extract().map_err(|_| {
-        PyValueError::new_err(format!("{kind} field \"encoding\": must be a string"))
-    })?;
     let image = Image {
         header: Header::default(),
         height,
         width,
-        encoding,
+        encoding: string("encoding")?,
         is_bigendian,
         step,
         data,
