@@ -825,7 +825,8 @@ impl BagImages {
             }
             FOXGLOVE_RAW_IMAGE_TYPE => {
                 let m = foxglove::messages::RawImage::decode(data).map_err(|e| not_valid(&e))?;
-                // The same pixel encodings as a ROS 2 Image, little-endian.
+                // The same pixel encodings as a ROS 2 Image; Foxglove's
+                // 16-bit ones are little-endian.
                 let image = Image {
                     header: Header::default(),
                     height: m.height,
@@ -917,8 +918,9 @@ impl BagImages {
                     }
                 )));
             }
-            // rosbag2's message compression: each message's bytes zstd'd.
-            let data = match data.starts_with(&ZSTD_MAGIC) {
+            // rosbag2's message compression: each ROS 2 message's bytes
+            // zstd'd.
+            let data = match encoding == "cdr" && data.starts_with(&ZSTD_MAGIC) {
                 true => unzstd(&data).map_err(|e| self.message_error(e))?,
                 false => data,
             };
