@@ -232,17 +232,23 @@ fn a_labelled_bag_becomes_a_dataset() {
     assert_eq!(ds.number_opt(5, "tendon").unwrap(), Some(1.0));
 }
 
-/// A bag folder as `ros2 bag record` splits a recording: `metadata.yaml`
-/// and `rec_0.mcap` … `rec_11.mcap`, one sample frame each. In odd files a
-/// `/chatter` channel comes first, so the image channel's id differs from
-/// file to file, and a `/chatter` message precedes the frame.
-fn write_split_bag(folder: &Path) {
+/// An empty bag folder at `folder`: its `metadata.yaml` names it one by
+/// rosbag2's key; its storage files are the caller's.
+fn bag_folder(folder: &Path) {
     std::fs::create_dir(folder).unwrap();
     std::fs::write(
         folder.join("metadata.yaml"),
         "rosbag2_bagfile_information:\n",
     )
     .unwrap();
+}
+
+/// A bag folder as `ros2 bag record` splits a recording: `metadata.yaml`
+/// and `rec_0.mcap` … `rec_11.mcap`, one sample frame each. In odd files a
+/// `/chatter` channel comes first, so the image channel's id differs from
+/// file to file, and a `/chatter` message precedes the frame.
+fn write_split_bag(folder: &Path) {
+    bag_folder(folder);
     for (i, (width, height, px)) in frames().iter().enumerate() {
         let others: &[&str] = if i % 2 == 1 { &["/chatter"] } else { &[] };
         let path = folder.join(format!("rec_{i}.mcap"));
@@ -329,12 +335,7 @@ fn bags_this_toolkit_does_not_read_are_refused_with_the_command_that_converts_th
     let dir = tempfile::tempdir().unwrap();
     // What `ros2 bag record` leaves before ROS 2 Iron: SQLite storage.
     let sqlite = dir.path().join("humble");
-    std::fs::create_dir(&sqlite).unwrap();
-    std::fs::write(
-        sqlite.join("metadata.yaml"),
-        "rosbag2_bagfile_information:\n",
-    )
-    .unwrap();
+    bag_folder(&sqlite);
     let db3 = sqlite.join("humble_0.db3");
     std::fs::write(&db3, b"SQLite format 3\0 and the rest of a database").unwrap();
     // A ROS 1 bag, whatever its name.
@@ -472,12 +473,7 @@ fn a_recording_cut_short_gives_its_complete_frames_and_says_so() {
     // A pipe named as a split of a bag folder: refused by name, not
     // opened (opening it would wait for a writer for ever).
     let fifo_bag = dir.path().join("fifo");
-    std::fs::create_dir(&fifo_bag).unwrap();
-    std::fs::write(
-        fifo_bag.join("metadata.yaml"),
-        "rosbag2_bagfile_information:\n",
-    )
-    .unwrap();
+    bag_folder(&fifo_bag);
     let status = Command::new("mkfifo")
         .arg(fifo_bag.join("rec_0.mcap"))
         .status()

@@ -383,9 +383,17 @@ fn foreign_bag_error(path: &Path, what: &str, src: &Path) -> Error {
         None,
         None,
         format!(
-            "{what}; this toolkit reads ROS 2 bags in MCAP storage: convert it to MCAP without ROS: `pip install rosbags`, then `rosbags-convert --src {} --dst NEW_FOLDER --dst-storage mcap`",
-            src.display()
+            "{what}; this toolkit reads ROS 2 bags in MCAP storage: convert it to MCAP without ROS: {}",
+            convert_command(&src.display().to_string())
         ),
+    )
+}
+
+/// The commands that convert the bag `src` (a SQLite or ROS 1 bag) to a
+/// ROS 2 bag in MCAP storage without ROS.
+fn convert_command(src: &str) -> String {
+    format!(
+        "`pip install rosbags`, then `rosbags-convert --src {src} --dst NEW_FOLDER --dst-storage mcap`"
     )
 }
 
@@ -528,13 +536,19 @@ struct IndexFile {
 }
 
 impl IndexFile {
+    /// Count `n` more bytes against the budget; `None` past it.
+    fn charge(&mut self, n: u64) -> Option<()> {
+        self.read = self.read.checked_add(n)?;
+        (self.read <= MAX_INDEX_BYTES).then_some(())
+    }
+
     /// `n` bytes at `offset`; `None` past the file's end or the budget.
     fn read_at(&mut self, offset: u64, n: u64) -> Option<Vec<u8>> {
         use std::io::{Seek, SeekFrom};
-        if offset.checked_add(n)? > self.size || self.read + n > MAX_INDEX_BYTES {
+        if offset.checked_add(n)? > self.size {
             return None;
         }
-        self.read += n;
+        self.charge(n)?;
         self.file.seek(SeekFrom::Start(offset)).ok()?;
         let mut buf = vec![0; usize::try_from(n).ok()?];
         self.file.read_exact(&mut buf).ok()?;
@@ -553,9 +567,10 @@ fn indexed_tallies(path: &Path) -> Option<Tallies> {
     use std::io::Seek;
     // A pipe or device named .mcap is never opened (it would block); the
     // scan refuses it by name.
-    if !is_bag_file(path) || !std::fs::metadata(path).ok()?.is_file() {
+    if !is_bag_file(path) {
         return None;
     }
+    crate::image_io::expect_regular_file(path).ok()?;
     let file = File::open(path).ok()?;
     let size = file.metadata().ok()?.len();
     let mut index = IndexFile {
@@ -571,10 +586,7 @@ fn indexed_tallies(path: &Path) -> Option<Tallies> {
     while let Some(event) = reader.next_event() {
         match event.ok()? {
             SummaryReadEvent::ReadRequest(n) => {
-                index.read += n as u64;
-                if index.read > MAX_INDEX_BYTES {
-                    return None;
-                }
+                index.charge(n as u64)?;
                 let got = index.file.read(reader.insert(n)).ok()?;
                 reader.notify_read(got);
             }
@@ -902,8 +914,10 @@ impl BagImages {
             }
             if c.encoding == "ros1" || ROS1_IMAGE_TYPES.contains(&c.message_type.as_str()) {
                 return Err(self.topic_error(format!(
-                    "carries ROS 1 messages ({} in encoding {:?}), as `mcap convert` writes a ROS 1 bag; this toolkit reads ROS 2 messages: convert the original ROS 1 bag without ROS: `pip install rosbags`, then `rosbags-convert --src BAG --dst NEW_FOLDER --dst-storage mcap`",
-                    c.message_type, c.encoding
+                    "carries ROS 1 messages ({} in encoding {:?}), as `mcap convert` writes a ROS 1 bag; this toolkit reads ROS 2 messages: convert the original ROS 1 bag without ROS: {}",
+                    c.message_type,
+                    c.encoding,
+                    convert_command("BAG")
                 )));
             }
             let encoding = expected_encoding(&c.message_type);
