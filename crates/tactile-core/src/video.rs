@@ -24,7 +24,7 @@ const STDERR_TAIL: usize = 4096;
 
 /// An FFmpeg tool that could not be started for `path`: missing (say how
 /// to install it) or another I/O failure.
-fn spawn_error(path: &Path, e: std::io::Error) -> Error {
+pub(crate) fn spawn_error(path: &Path, e: std::io::Error) -> Error {
     match e.kind() {
         std::io::ErrorKind::NotFound => Error::Invalid(INSTALL_HINT.into()),
         _ => Error::io(path, e),
@@ -216,24 +216,7 @@ impl VideoReader {
             .stdout
             .take()
             .ok_or_else(|| Error::Invalid("ffmpeg started without an output pipe".into()))?;
-        // Drain stderr on its own thread (a full pipe would stall FFmpeg),
-        // keeping only its tail for an error message.
-        let stderr = child.stderr.take().map(|mut err| {
-            std::thread::spawn(move || {
-                let mut tail = Vec::new();
-                let mut buf = [0u8; 1024];
-                while let Ok(n) = err.read(&mut buf) {
-                    if n == 0 {
-                        break;
-                    }
-                    tail.extend_from_slice(&buf[..n]);
-                    if tail.len() > STDERR_TAIL {
-                        tail.drain(..tail.len() - STDERR_TAIL);
-                    }
-                }
-                tail
-            })
-        });
+        let stderr = stderr_tail(&mut child);
         Ok(Self {
             input: input.clone(),
             info,
@@ -277,13 +260,7 @@ impl VideoReader {
             .wait()
             .map_err(|e| Error::io(self.input.path(), e))?;
         crate::interrupt::check()?;
-        let tail = self
-            .stderr
-            .take()
-            .and_then(|t| t.join().ok())
-            .map(|t| String::from_utf8_lossy(&t).trim().to_string())
-            .unwrap_or_default();
-        let last = tail.lines().last().unwrap_or("").to_string();
+        let last = last_words(self.stderr.take());
         if !status.success() {
             return Err(Error::image(
                 self.input.path(),
@@ -320,6 +297,36 @@ impl VideoStopper {
             let _ = c.kill();
         }
     }
+}
+
+/// FFmpeg's stderr drained on its own thread (a full pipe would stall
+/// it), keeping only its tail for an error message.
+pub(crate) fn stderr_tail(child: &mut Child) -> Option<std::thread::JoinHandle<Vec<u8>>> {
+    child.stderr.take().map(|mut err| {
+        std::thread::spawn(move || {
+            let mut tail = Vec::new();
+            let mut buf = [0u8; 1024];
+            while let Ok(n) = err.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                tail.extend_from_slice(&buf[..n]);
+                if tail.len() > STDERR_TAIL {
+                    tail.drain(..tail.len() - STDERR_TAIL);
+                }
+            }
+            tail
+        })
+    })
+}
+
+/// The last line FFmpeg wrote to stderr (after it exited).
+pub(crate) fn last_words(tail: Option<std::thread::JoinHandle<Vec<u8>>>) -> String {
+    let tail = tail
+        .and_then(|t| t.join().ok())
+        .map(|t| String::from_utf8_lossy(&t).trim().to_string())
+        .unwrap_or_default();
+    tail.lines().last().unwrap_or("").to_string()
 }
 
 /// Read until `buf` is full or the stream ends; how many bytes were read.

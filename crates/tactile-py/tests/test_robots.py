@@ -288,6 +288,52 @@ def test_frames_the_foxglove_sdk_records(tmp_path, root, palpation_frames, tacti
     assert decisions(recorded) == decisions(folder)
 
 
+def test_h264_video_the_foxglove_sdk_records(tmp_path, root, palpation_frames, tactile_bin):
+    """A camera recorded as foxglove.CompressedVideo (one H.264 frame per
+    message, lossless here): the frames, stamps and decisions of the PNG
+    folder; a recording begun mid-stream starts at its first keyframe and
+    says so."""
+    import foxglove
+    from foxglove.channels import CompressedVideoChannel
+    from foxglove.messages import CompressedVideo, Timestamp
+
+    pngs = root / "samples" / "palpation"
+    packets = tmp_path / "packets"
+    packets.mkdir()
+    subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(pngs / "%06d.png"),
+                    "-c:v", "libx264rgb", "-qp", "0", "-bf", "0", "-g", "4", "-x264-params", "repeat-headers=1",
+                    "-f", "image2", str(packets / "%03d.h264")], check=True)
+    data = [p.read_bytes() for p in sorted(packets.glob("*.h264"))]
+    assert len(data) == len(palpation_frames)
+
+    def record(bag: Path, first: int) -> None:
+        ctx = foxglove.Context()
+        with foxglove.open_mcap(bag, context=ctx):
+            video = CompressedVideoChannel("/cam/h264", context=ctx)
+            for i in range(first, len(data)):
+                t = stamp(i)
+                video.log(CompressedVideo(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
+                                          data=data[i], format="h264"), log_time=t)
+
+    bag = tmp_path / "video.mcap"
+    record(bag, 0)
+    assert [(t["topic"], t["message_type"], t["count"]) for t in tactile.bag_topics(bag)] == [
+        ("/cam/h264", "foxglove.CompressedVideo", len(data))]
+    got = list(tactile.frames(bag))
+    assert [f.stamp_ns for f in got] == [stamp(i) for i in range(len(data))]
+    for f, rgb in zip(got, palpation_frames):
+        assert np.array_equal(f.image, rgb)
+    folder = run_records(tactile_bin, root, tmp_path, "--data", str(pngs))
+    assert decisions(run_records(tactile_bin, root, tmp_path, "--data", str(bag))) == decisions(folder)
+    # Begun at frame 2 of a group of 4: frames 4 on, with a warning.
+    late = tmp_path / "late.mcap"
+    record(late, 2)
+    with pytest.warns(UserWarning, match=r"its first 2 messages come before the first keyframe of its h264 stream"):
+        got = list(tactile.frames(late))
+    assert [f.stamp_ns for f in got] == [stamp(i) for i in range(4, len(data))]
+    assert all(np.array_equal(f.image, rgb) for f, rgb in zip(got, palpation_frames[4:]))
+
+
 def test_hostile_bags_name_the_topic_and_message(tmp_path, palpation_frames):
     bag = tmp_path / "hostile.mcap"
     with bag.open("wb") as fh:

@@ -16,6 +16,13 @@ pub const FOXGLOVE_RAW_IMAGE_TYPE: &str = "foxglove.RawImage";
 /// JPEG and PNG frames.
 pub const FOXGLOVE_COMPRESSED_IMAGE_TYPE: &str = "foxglove.CompressedImage";
 
+/// `foxglove.CompressedVideo` (protobuf), as the Foxglove SDK records a
+/// video stream: one H.264, H.265, VP9 or AV1 frame per message.
+pub const FOXGLOVE_COMPRESSED_VIDEO_TYPE: &str = "foxglove.CompressedVideo";
+/// `foxglove_msgs/msg/CompressedVideo` (CDR): the same message in ROS 2,
+/// as the Foxglove bridge and ROS 2 video encoders publish it.
+pub const ROS_COMPRESSED_VIDEO_TYPE: &str = "foxglove_msgs/msg/CompressedVideo";
+
 /// `builtin_interfaces/msg/Time`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub struct Time {
@@ -79,6 +86,20 @@ pub struct CompressedImage<'a> {
     /// The file's bytes.
     #[serde(borrow, serialize_with = "as_bytes")]
     pub data: &'a [u8],
+}
+
+/// `foxglove_msgs/msg/CompressedVideo`: one frame of a video stream.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CompressedVideo<'a> {
+    /// When the frame was taken.
+    pub timestamp: Time,
+    /// The camera's frame of reference.
+    pub frame_id: String,
+    /// The frame's packets (for H.264 and H.265, Annex B NAL units).
+    #[serde(borrow, serialize_with = "as_bytes")]
+    pub data: &'a [u8],
+    /// `h264`, `h265`, `vp9` or `av1`.
+    pub format: String,
 }
 
 /// A `uint8[]` written in one piece (length, then the bytes) rather than

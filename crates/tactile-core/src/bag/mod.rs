@@ -7,8 +7,10 @@
 //! [`messages::IMAGE_ENCODINGS`]) and `sensor_msgs/msg/CompressedImage`
 //! (JPEG, PNG) are understood, and so are the `foxglove.RawImage` and
 //! `foxglove.CompressedImage` (protobuf, decoded by the `foxglove` crate's
-//! types) of MCAP files the Foxglove SDK records; anything else is refused
-//! naming the topic and the message.
+//! types) of MCAP files the Foxglove SDK records, and video topics
+//! (`foxglove.CompressedVideo` and ROS 2's `foxglove_msgs` one: H.264 and
+//! H.265, decoded by FFmpeg in [`video`]); anything else is refused naming
+//! the topic and the message.
 //!
 //! A bag is given as `ros2 bag record` leaves it (a folder holding
 //! `metadata.yaml` and one or more `.mcap` files, split ones read in the
@@ -24,6 +26,7 @@
 //! indexes) instead, when it has a whole one.
 
 pub mod messages;
+mod video;
 
 use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
@@ -37,7 +40,8 @@ use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOp
 use crate::{Error, Result};
 use messages::{
     COMPRESSED_IMAGE_TYPE, CompressedImage, FOXGLOVE_COMPRESSED_IMAGE_TYPE,
-    FOXGLOVE_RAW_IMAGE_TYPE, Header, IMAGE_TYPE, Image, from_cdr,
+    FOXGLOVE_COMPRESSED_VIDEO_TYPE, FOXGLOVE_RAW_IMAGE_TYPE, Header, IMAGE_TYPE, Image,
+    ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
 };
 
 fn bag_error(
@@ -308,14 +312,17 @@ impl Records {
 const ROS1_IMAGE_TYPES: [&str; 2] = ["sensor_msgs/Image", "sensor_msgs/CompressedImage"];
 
 /// True for the image message types a bag's frames may be: ROS 2's
-/// Image and CompressedImage, the Foxglove SDK's RawImage and
-/// CompressedImage (and ROS 1's, listed to be refused with advice).
+/// Image and CompressedImage, the Foxglove SDK's RawImage,
+/// CompressedImage and CompressedVideo, the last also as ROS 2's
+/// `foxglove_msgs` (and ROS 1's images, listed to be refused with advice).
 pub fn is_image_type(t: &str) -> bool {
     [
         IMAGE_TYPE,
         COMPRESSED_IMAGE_TYPE,
         FOXGLOVE_RAW_IMAGE_TYPE,
         FOXGLOVE_COMPRESSED_IMAGE_TYPE,
+        FOXGLOVE_COMPRESSED_VIDEO_TYPE,
+        ROS_COMPRESSED_VIDEO_TYPE,
     ]
     .contains(&t)
         || ROS1_IMAGE_TYPES.contains(&t)
@@ -325,7 +332,9 @@ pub fn is_image_type(t: &str) -> bool {
 /// protobuf the Foxglove SDK writes its schemas in.
 fn expected_encoding(message_type: &str) -> &'static str {
     match message_type {
-        FOXGLOVE_RAW_IMAGE_TYPE | FOXGLOVE_COMPRESSED_IMAGE_TYPE => "protobuf",
+        FOXGLOVE_RAW_IMAGE_TYPE
+        | FOXGLOVE_COMPRESSED_IMAGE_TYPE
+        | FOXGLOVE_COMPRESSED_VIDEO_TYPE => "protobuf",
         _ => "cdr",
     }
 }
@@ -765,109 +774,44 @@ pub fn only_image_topic(path: &Path) -> Result<String> {
     }
 }
 
-/// The frames of one image topic of a bag, in the order they were logged.
-pub struct BagImages {
+/// The messages of one topic of a bag, each checked as its channel
+/// appears: a topic of another message type or encoding is refused by
+/// name; one that never appears is refused at the end of the file.
+pub(crate) struct TopicMessages {
     records: Records,
     topic: String,
-    index: u64,
+    /// Messages given so far.
+    given: u64,
 }
 
-impl BagImages {
-    /// Read the frames of `topic` in the bag at `path`. The topic is
-    /// checked as its channel appears: a topic of another message type or
-    /// encoding is refused by name; one that never appears is refused at
-    /// the end of the file.
-    pub fn open(path: &Path, topic: &str) -> Result<Self> {
-        Ok(Self {
-            records: Records::open(path)?,
-            topic: topic.to_string(),
-            index: 0,
-        })
-    }
+/// One message of the topic read, undone of rosbag2's compression.
+pub(crate) struct TopicMessage {
+    /// Its message type.
+    pub message_type: String,
+    /// When the recorder logged it, nanoseconds since the epoch.
+    pub log_time: u64,
+    /// Its bytes, in the type's encoding.
+    pub data: Vec<u8>,
+    /// Its index on its topic (0-based).
+    pub index: u64,
+}
 
-    /// The topic read.
-    pub fn topic(&self) -> &str {
-        &self.topic
-    }
-
-    /// What a user should know of the frames read so far: each file that
-    /// ended without its footer (a recording cut short), of which the
-    /// complete records were read and the rest is lost.
-    pub fn warnings(&self) -> Vec<String> {
-        let read = format!(
-            "its frames up to the last complete record were read ({} on {} in all)",
-            self.index, self.topic
-        );
-        self.records
-            .cut_short
-            .iter()
-            .map(|f| cut_short_warning(f, &read))
-            .collect()
-    }
-
-    fn topic_error(&self, message: impl ToString) -> Error {
+impl TopicMessages {
+    /// The error of the topic read.
+    pub(crate) fn topic_error(&self, message: impl ToString) -> Error {
         bag_error(&self.records.path, Some(&self.topic), None, message)
     }
 
-    fn message_error(&self, message: impl ToString) -> Error {
-        bag_error(
-            &self.records.path,
-            Some(&self.topic),
-            Some(self.index),
-            message,
-        )
+    /// The error of the topic's message `index`.
+    pub(crate) fn message_error(&self, index: u64, message: impl ToString) -> Error {
+        bag_error(&self.records.path, Some(&self.topic), Some(index), message)
     }
 
-    /// One message of `message_type` (an image type, in its encoding):
-    /// its frame and stamp (0 when it carries none).
-    fn decode(&self, message_type: &str, data: &[u8]) -> Result<(RgbImage, i64)> {
-        use foxglove::Decode;
-        let bad = |e: String| self.message_error(e);
-        let not_valid = |e: &dyn std::fmt::Display| {
-            self.message_error(format!("not a valid {message_type} message: {e}"))
-        };
-        Ok(match message_type {
-            IMAGE_TYPE => {
-                let m: Image<'_> = from_cdr(data).map_err(bad)?;
-                (m.to_rgb().map_err(bad)?, m.header.stamp.nanos())
-            }
-            COMPRESSED_IMAGE_TYPE => {
-                let m: CompressedImage<'_> = from_cdr(data).map_err(bad)?;
-                (m.to_rgb().map_err(bad)?, m.header.stamp.nanos())
-            }
-            FOXGLOVE_RAW_IMAGE_TYPE => {
-                let m = foxglove::messages::RawImage::decode(data).map_err(|e| not_valid(&e))?;
-                // The same pixel encodings as a ROS 2 Image; Foxglove's
-                // 16-bit ones are little-endian.
-                let image = Image {
-                    header: Header::default(),
-                    height: m.height,
-                    width: m.width,
-                    encoding: m.encoding,
-                    is_bigendian: 0,
-                    step: m.step,
-                    data: &m.data,
-                };
-                (image.to_rgb().map_err(bad)?, foxglove_stamp(m.timestamp))
-            }
-            _ => {
-                let m =
-                    foxglove::messages::CompressedImage::decode(data).map_err(|e| not_valid(&e))?;
-                let image = CompressedImage {
-                    header: Header::default(),
-                    format: m.format,
-                    data: &m.data,
-                };
-                (image.to_rgb().map_err(bad)?, foxglove_stamp(m.timestamp))
-            }
-        })
-    }
-
-    /// The next frame, `None` after the last.
-    pub fn next_frame(&mut self) -> Result<Option<BagFrame>> {
+    /// The next message on the topic, `None` after the last.
+    pub(crate) fn next(&mut self) -> Result<Option<TopicMessage>> {
         loop {
             let Some(item) = self.records.next(Some(&self.topic))? else {
-                if self.index == 0 && !self.records.topics.contains_key(&self.topic) {
+                if self.given == 0 && !self.records.topics.contains_key(&self.topic) {
                     let names: Vec<&str> = self
                         .records
                         .topics
@@ -904,7 +848,7 @@ impl BagImages {
             }
             if !is_image_type(&c.message_type) {
                 return Err(self.topic_error(format!(
-                    "carries {}, not {IMAGE_TYPE}, {COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_RAW_IMAGE_TYPE} or {FOXGLOVE_COMPRESSED_IMAGE_TYPE}",
+                    "carries {}, not {IMAGE_TYPE}, {COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_RAW_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_VIDEO_TYPE} or {ROS_COMPRESSED_VIDEO_TYPE}",
                     if c.message_type.is_empty() {
                         "messages without a schema"
                     } else {
@@ -932,26 +876,165 @@ impl BagImages {
                     }
                 )));
             }
+            let index = self.given;
             // rosbag2's message compression: each ROS 2 message's bytes
             // zstd'd.
             let data = match encoding == "cdr" && data.starts_with(&ZSTD_MAGIC) {
-                true => unzstd(&data).map_err(|e| self.message_error(e))?,
+                true => unzstd(&data).map_err(|e| self.message_error(index, e))?,
                 false => data,
             };
-            let (image, stamp_ns) = self.decode(&c.message_type, &data)?;
-            let frame = BagFrame {
-                image,
-                stamp_ns: match stamp_ns {
-                    0 => i64::try_from(log_time).unwrap_or(i64::MAX),
-                    t => t,
-                },
-                log_time_ns: log_time,
-                index: self.index,
-            };
-            self.index += 1;
-            return Ok(Some(frame));
+            self.given += 1;
+            return Ok(Some(TopicMessage {
+                message_type: c.message_type,
+                log_time,
+                data,
+                index,
+            }));
         }
     }
+}
+
+/// The frames of one image topic of a bag, in the order they were logged.
+pub struct BagImages {
+    /// The topic's messages; held by the video decoder while it runs.
+    messages: Option<TopicMessages>,
+    /// The decoder of a video topic, started at its first message.
+    video: Option<video::VideoFrames>,
+    topic: String,
+    /// Frames given so far.
+    frames: u64,
+}
+
+impl BagImages {
+    /// Read the frames of `topic` in the bag at `path`. The topic is
+    /// checked as its channel appears: a topic of another message type or
+    /// encoding is refused by name; one that never appears is refused at
+    /// the end of the file.
+    pub fn open(path: &Path, topic: &str) -> Result<Self> {
+        Ok(Self {
+            messages: Some(TopicMessages {
+                records: Records::open(path)?,
+                topic: topic.to_string(),
+                given: 0,
+            }),
+            video: None,
+            topic: topic.to_string(),
+            frames: 0,
+        })
+    }
+
+    /// The topic read.
+    pub fn topic(&self) -> &str {
+        &self.topic
+    }
+
+    /// What a user should know of the frames read so far: each file that
+    /// ended without its footer (a recording cut short), of which the
+    /// complete records were read and the rest is lost; of a video topic,
+    /// the messages before its first keyframe, which cannot be decoded.
+    pub fn warnings(&self) -> Vec<String> {
+        let read = format!(
+            "its frames up to the last complete record were read ({} on {} in all)",
+            self.frames, self.topic
+        );
+        let messages = self
+            .messages
+            .as_ref()
+            .or_else(|| self.video.as_ref().and_then(|v| v.messages()));
+        let mut warnings: Vec<String> = messages
+            .iter()
+            .flat_map(|m| m.records.cut_short.iter())
+            .map(|f| cut_short_warning(f, &read))
+            .collect();
+        if let Some(v) = &self.video {
+            warnings.extend(v.warnings());
+        }
+        warnings
+    }
+
+    /// The next frame, `None` after the last.
+    pub fn next_frame(&mut self) -> Result<Option<BagFrame>> {
+        let frame = match (&mut self.video, &mut self.messages) {
+            (Some(v), _) => v.next_frame()?,
+            (None, Some(messages)) => {
+                let Some(m) = messages.next()? else {
+                    return Ok(None);
+                };
+                if video::is_video_type(&m.message_type) {
+                    let Some(messages) = self.messages.take() else {
+                        return Ok(None);
+                    };
+                    let v = self.video.insert(video::VideoFrames::start(messages, m)?);
+                    v.next_frame()?
+                } else {
+                    let (image, stamp_ns) = decode_image(messages, &m)?;
+                    Some(BagFrame {
+                        image,
+                        stamp_ns: stamp_or_log_time(stamp_ns, m.log_time),
+                        log_time_ns: m.log_time,
+                        index: m.index,
+                    })
+                }
+            }
+            (None, None) => None,
+        };
+        self.frames += u64::from(frame.is_some());
+        Ok(frame)
+    }
+}
+
+/// A message's stamp, or its log time when the publisher left it 0, so
+/// frames keep their times.
+fn stamp_or_log_time(stamp_ns: i64, log_time: u64) -> i64 {
+    match stamp_ns {
+        0 => i64::try_from(log_time).unwrap_or(i64::MAX),
+        t => t,
+    }
+}
+
+/// One message of an image type (in its encoding): its frame and stamp
+/// (0 when it carries none).
+fn decode_image(topic: &TopicMessages, m: &TopicMessage) -> Result<(RgbImage, i64)> {
+    use foxglove::Decode;
+    let (message_type, data) = (m.message_type.as_str(), m.data.as_slice());
+    let bad = |e: String| topic.message_error(m.index, e);
+    let not_valid = |e: &dyn std::fmt::Display| {
+        topic.message_error(m.index, format!("not a valid {message_type} message: {e}"))
+    };
+    Ok(match message_type {
+        IMAGE_TYPE => {
+            let m: Image<'_> = from_cdr(data).map_err(bad)?;
+            (m.to_rgb().map_err(bad)?, m.header.stamp.nanos())
+        }
+        COMPRESSED_IMAGE_TYPE => {
+            let m: CompressedImage<'_> = from_cdr(data).map_err(bad)?;
+            (m.to_rgb().map_err(bad)?, m.header.stamp.nanos())
+        }
+        FOXGLOVE_RAW_IMAGE_TYPE => {
+            let m = foxglove::messages::RawImage::decode(data).map_err(|e| not_valid(&e))?;
+            // The same pixel encodings as a ROS 2 Image; Foxglove's
+            // 16-bit ones are little-endian.
+            let image = Image {
+                header: Header::default(),
+                height: m.height,
+                width: m.width,
+                encoding: m.encoding,
+                is_bigendian: 0,
+                step: m.step,
+                data: &m.data,
+            };
+            (image.to_rgb().map_err(bad)?, foxglove_stamp(m.timestamp))
+        }
+        _ => {
+            let m = foxglove::messages::CompressedImage::decode(data).map_err(|e| not_valid(&e))?;
+            let image = CompressedImage {
+                header: Header::default(),
+                format: m.format,
+                data: &m.data,
+            };
+            (image.to_rgb().map_err(bad)?, foxglove_stamp(m.timestamp))
+        }
+    })
 }
 
 /// A message rosbag2 compressed on its own, decompressed; refused past

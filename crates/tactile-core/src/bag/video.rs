@@ -1,0 +1,660 @@
+//! Video topics of a bag: `foxglove.CompressedVideo`, as the Foxglove SDK
+//! records a camera, and ROS 2's `foxglove_msgs/msg/CompressedVideo`, as
+//! ROS 2 video encoders publish one: an H.264 or H.265 frame per message,
+//! decoded by the system's FFmpeg. No codec is written here.
+//!
+//! The topic's packets are written in order to an FFmpeg process from a
+//! thread of their own while the decoded frames are read back here (PAM
+//! pictures, which carry their size). The format forbids B-frames, so the
+//! decoder gives one frame per packet in the packets' order and each frame
+//! takes the stamp of its packet. Packets before the stream's first
+//! keyframe (a recording begun mid-stream) cannot be decoded by anyone:
+//! they are skipped, with a warning.
+
+use std::borrow::Cow;
+use std::io::{BufRead, BufReader, Write};
+use std::path::PathBuf;
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+
+use image::codecs::pnm::PnmDecoder;
+use image::{ColorType, ImageDecoder};
+
+use super::messages::{
+    CompressedVideo, FOXGLOVE_COMPRESSED_VIDEO_TYPE, ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
+};
+use super::{BagFrame, TopicMessage, TopicMessages, bag_error, foxglove_stamp, stamp_or_log_time};
+use crate::image_io::{MAX_IMAGE_PIXELS, RgbImage, rgb_image};
+use crate::video::{last_words, spawn_error, stderr_tail};
+use crate::{Error, Result};
+
+/// True for the video message types.
+pub(super) fn is_video_type(t: &str) -> bool {
+    t == FOXGLOVE_COMPRESSED_VIDEO_TYPE || t == ROS_COMPRESSED_VIDEO_TYPE
+}
+
+/// The video formats read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Codec {
+    H264,
+    H265,
+}
+
+impl Codec {
+    /// The codec of a message's `format`.
+    fn of(format: &str) -> Option<Self> {
+        match format.to_ascii_lowercase().as_str() {
+            "h264" => Some(Self::H264),
+            "h265" | "hevc" => Some(Self::H265),
+            _ => None,
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Self::H264 => "h264",
+            Self::H265 => "h265",
+        }
+    }
+
+    /// FFmpeg's demuxer of the codec's Annex B stream.
+    fn demuxer(self) -> &'static str {
+        match self {
+            Self::H264 => "h264",
+            Self::H265 => "hevc",
+        }
+    }
+
+    /// True when the packet (Annex B NAL units, each after a `00 00 01`
+    /// start code) carries a sequence parameter set, without which no
+    /// frame decodes: the format requires one in every keyframe. The
+    /// unit's type is the low five bits of H.264's first header byte (7:
+    /// SPS; ITU-T H.264 7.3.1) and bits 1-6 of H.265's (33: SPS; ITU-T
+    /// H.265 7.3.1.2).
+    fn starts_stream(self, data: &[u8]) -> bool {
+        data.windows(4).any(|w| {
+            w[..3] == [0, 0, 1]
+                && match self {
+                    Self::H264 => w[3] & 0x1f == 7,
+                    Self::H265 => (w[3] >> 1) & 0x3f == 33,
+                }
+        })
+    }
+}
+
+/// One message of a video type: its packet bytes, format and stamp (0
+/// when it carries none).
+fn packet<'a>(topic: &TopicMessages, m: &'a TopicMessage) -> Result<(Cow<'a, [u8]>, String, i64)> {
+    if m.message_type == ROS_COMPRESSED_VIDEO_TYPE {
+        let v: CompressedVideo<'_> =
+            from_cdr(&m.data).map_err(|e| topic.message_error(m.index, e))?;
+        return Ok((Cow::Borrowed(v.data), v.format, v.timestamp.nanos()));
+    }
+    use foxglove::Decode;
+    let v = foxglove::messages::CompressedVideo::decode(m.data.as_slice()).map_err(|e| {
+        topic.message_error(
+            m.index,
+            format!("not a valid {FOXGLOVE_COMPRESSED_VIDEO_TYPE} message: {e}"),
+        )
+    })?;
+    Ok((
+        Cow::Owned(v.data.to_vec()),
+        v.format,
+        foxglove_stamp(v.timestamp),
+    ))
+}
+
+/// The stamp and place of a packet written to the decoder.
+struct Stamp {
+    stamp_ns: i64,
+    log_time_ns: u64,
+    index: u64,
+}
+
+/// What the feeder did, once it ended.
+struct Fed {
+    /// The topic's messages, handed back (their files' warnings).
+    messages: TopicMessages,
+    /// Why it stopped before the topic's end.
+    error: Option<Error>,
+    /// Messages before the first keyframe.
+    skipped: u64,
+    /// Packets written to the decoder.
+    fed: u64,
+    /// The index of the first packet written.
+    first_index: Option<u64>,
+}
+
+/// Write the topic's packets, from `first` on, to the decoder's input, the
+/// stamp of each sent before it; the input is closed at the end, so the
+/// decoder gives its last frames and exits.
+fn feed(
+    mut messages: TopicMessages,
+    first: TopicMessage,
+    codec: Codec,
+    mut stdin: ChildStdin,
+    stamps: mpsc::Sender<Stamp>,
+) -> Fed {
+    let (mut skipped, mut fed, mut first_index) = (0, 0, None);
+    let mut next = Some(first);
+    let error = loop {
+        let m = match next.take() {
+            Some(m) => m,
+            None => match messages.next() {
+                Ok(Some(m)) => m,
+                Ok(None) => break None,
+                Err(e) => break Some(e),
+            },
+        };
+        if !is_video_type(&m.message_type) {
+            break Some(messages.message_error(
+                m.index,
+                format!(
+                    "a {} message on a video topic: a topic's frames are one stream",
+                    m.message_type
+                ),
+            ));
+        }
+        let (data, format, stamp_ns) = match packet(&messages, &m) {
+            Ok(p) => p,
+            Err(e) => break Some(e),
+        };
+        if Codec::of(&format) != Some(codec) {
+            break Some(messages.message_error(
+                m.index,
+                format!(
+                    "format {format:?} after {:?} ones: a topic's frames are one stream",
+                    codec.name()
+                ),
+            ));
+        }
+        if fed == 0 && !codec.starts_stream(&data) {
+            skipped += 1;
+            continue;
+        }
+        first_index.get_or_insert(m.index);
+        let stamp = Stamp {
+            stamp_ns: stamp_or_log_time(stamp_ns, m.log_time),
+            log_time_ns: m.log_time,
+            index: m.index,
+        };
+        // A decoder that stopped reading has exited or was stopped: the
+        // reader reports why.
+        if stamps.send(stamp).is_err() || stdin.write_all(&data).is_err() {
+            break None;
+        }
+        fed += 1;
+    };
+    drop(stdin);
+    Fed {
+        messages,
+        error,
+        skipped,
+        fed,
+        first_index,
+    }
+}
+
+/// The frames of a video topic, decoded by an FFmpeg process fed from a
+/// thread; the process is killed when this is dropped.
+pub(super) struct VideoFrames {
+    codec: Codec,
+    /// The file the video began in, and the topic, for errors.
+    path: PathBuf,
+    topic: String,
+    child: Child,
+    stdout: BufReader<ChildStdout>,
+    stderr: Option<JoinHandle<Vec<u8>>>,
+    stamps: mpsc::Receiver<Stamp>,
+    feeder: Option<JoinHandle<Fed>>,
+    fed: Option<Fed>,
+    frames: u64,
+    done: bool,
+}
+
+impl VideoFrames {
+    /// Start decoding the topic at its first message, `first`.
+    pub(super) fn start(messages: TopicMessages, first: TopicMessage) -> Result<Self> {
+        let (_, format, _) = packet(&messages, &first)?;
+        let codec = Codec::of(&format).ok_or_else(|| {
+            messages.message_error(
+                first.index,
+                format!(
+                    "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B), as the Foxglove SDK and ROS 2's video encoders record them"
+                ),
+            )
+        })?;
+        let path = messages.records.path.clone();
+        let topic = messages.topic.clone();
+        let mut child = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
+            .args(["-threads", "1", "-f", codec.demuxer(), "-i", "pipe:0"])
+            .args(["-map", "0:v:0", "-fps_mode", "passthrough"])
+            .args(["-pix_fmt", "rgb24", "-c:v", "pam", "-f", "image2pipe"])
+            .arg("pipe:1")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| spawn_error(&path, e))?;
+        let stderr = stderr_tail(&mut child);
+        let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(Error::Invalid("ffmpeg started without its pipes".into()));
+        };
+        let (send, stamps) = mpsc::channel();
+        let feeder = std::thread::Builder::new()
+            .name("video-packets".into())
+            .spawn(move || feed(messages, first, codec, stdin, send));
+        let feeder = match feeder {
+            Ok(f) => f,
+            Err(e) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(Error::io(&path, e));
+            }
+        };
+        Ok(Self {
+            codec,
+            path,
+            topic,
+            child,
+            stdout: BufReader::with_capacity(1 << 20, stdout),
+            stderr,
+            stamps,
+            feeder: Some(feeder),
+            fed: None,
+            frames: 0,
+            done: false,
+        })
+    }
+
+    fn error(&self, message: impl ToString) -> Error {
+        bag_error(&self.path, Some(&self.topic), None, message)
+    }
+
+    /// The topic's messages, once the video ended.
+    pub(super) fn messages(&self) -> Option<&TopicMessages> {
+        self.fed.as_ref().map(|f| &f.messages)
+    }
+
+    /// What a user should know of the frames decoded, once the video ended.
+    pub(super) fn warnings(&self) -> Vec<String> {
+        let Some(fed) = &self.fed else {
+            return Vec::new();
+        };
+        let mut warnings = Vec::new();
+        if fed.skipped > 0 {
+            warnings.push(format!(
+                "{} topic {}: its first {} messages come before the first keyframe of its {} stream (the recording began mid-stream) and cannot be decoded; its frames begin at message {}",
+                self.path.display(),
+                self.topic,
+                fed.skipped,
+                self.codec.name(),
+                fed.first_index.unwrap_or(fed.skipped)
+            ));
+        }
+        if self.frames < fed.fed {
+            warnings.push(format!(
+                "{} topic {}: FFmpeg gave a frame for {} of its {} packets (a damaged packet gives none), so each frame after a lost one carries the stamp of an earlier packet (at most {} back)",
+                self.path.display(),
+                self.topic,
+                self.frames,
+                fed.fed,
+                fed.fed - self.frames
+            ));
+        }
+        warnings
+    }
+
+    /// The next frame, `None` after the last.
+    pub(super) fn next_frame(&mut self) -> Result<Option<BagFrame>> {
+        if self.done {
+            return Ok(None);
+        }
+        let at_end = self.stdout.fill_buf().map(<[u8]>::is_empty);
+        if let Ok(true) = at_end {
+            self.done = true;
+            self.finish(false)?;
+            return Ok(None);
+        }
+        let frame = match at_end {
+            Err(e) => Err(Error::io(&self.path, e)),
+            Ok(_) => self.read_picture(),
+        }
+        .and_then(|image| {
+            let stamp = self.stamps.recv().map_err(|_| {
+                self.error(format!(
+                    "FFmpeg gave more frames than the {} packets written to it",
+                    self.frames
+                ))
+            })?;
+            Ok(BagFrame {
+                image,
+                stamp_ns: stamp.stamp_ns,
+                log_time_ns: stamp.log_time_ns,
+                index: stamp.index,
+            })
+        });
+        match frame {
+            Ok(frame) => {
+                self.frames += 1;
+                Ok(Some(frame))
+            }
+            Err(e) => {
+                self.done = true;
+                // The decoder's or the feeder's reason comes first.
+                self.finish(true)?;
+                Err(e)
+            }
+        }
+    }
+
+    /// One decoded picture, its size checked before it is held.
+    fn read_picture(&mut self) -> Result<RgbImage> {
+        let (path, topic) = (&self.path, &self.topic);
+        let bad = |e: String| {
+            bag_error(
+                path,
+                Some(topic),
+                None,
+                format!("a frame FFmpeg decoded could not be read: {e}"),
+            )
+        };
+        let decoder = PnmDecoder::new(&mut self.stdout).map_err(|e| bad(e.to_string()))?;
+        let (width, height) = decoder.dimensions();
+        if u64::from(width) * u64::from(height) > MAX_IMAGE_PIXELS {
+            return Err(self.error(format!(
+                "its video is {width}x{height}, more than the {MAX_IMAGE_PIXELS} pixels a frame may have"
+            )));
+        }
+        if decoder.color_type() != ColorType::Rgb8 {
+            return Err(bad(format!("{:?}, not 8-bit RGB", decoder.color_type())));
+        }
+        let mut buf = vec![0u8; (u64::from(width) * u64::from(height) * 3) as usize];
+        decoder
+            .read_image(&mut buf)
+            .map_err(|e| bad(e.to_string()))?;
+        rgb_image(width as usize, height as usize, buf)
+    }
+
+    /// Wait for the decoder (killed first when `stop`) and the feeder,
+    /// and report what stopped them.
+    fn finish(&mut self, stop: bool) -> Result<()> {
+        // A decoder that failed by itself is named, not the broken frame.
+        let failed = stop
+            && self
+                .child
+                .try_wait()
+                .ok()
+                .flatten()
+                .is_some_and(|s| !s.success());
+        if stop {
+            let _ = self.child.kill();
+        }
+        let status = self.child.wait().map_err(|e| Error::io(&self.path, e))?;
+        let last = last_words(self.stderr.take());
+        let fed = self.feeder.take().map(JoinHandle::join);
+        crate::interrupt::check()?;
+        let mut fed = match fed {
+            Some(Ok(fed)) => fed,
+            Some(Err(_)) => return Err(self.error("the thread writing its packets failed")),
+            None => return Ok(()),
+        };
+        let error = fed.error.take();
+        let (skipped, written) = (fed.skipped, fed.fed);
+        self.fed = Some(fed);
+        if let Some(e) = error {
+            return Err(e);
+        }
+        if stop && !failed {
+            return Ok(());
+        }
+        if written == 0 {
+            return Err(self.error(format!(
+                "none of its {skipped} messages is a keyframe of its {} stream (one carrying the sequence parameter set), so no frame can be decoded",
+                self.codec.name()
+            )));
+        }
+        if !status.success() {
+            return Err(self.error(format!(
+                "FFmpeg could not decode its {} stream ({status}): {last}",
+                self.codec.name()
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Drop for VideoFrames {
+    fn drop(&mut self) {
+        // The feeder then finds the decoder's input closed and ends.
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use crate::bag::messages::{Time, to_cdr};
+    use crate::bag::{BagImages, image_topics};
+    use std::collections::BTreeMap;
+    use std::path::Path;
+
+    /// `frames` frames of FFmpeg's moving test pattern encoded by
+    /// `encoder` without B-frames, a keyframe every 5: one packet per
+    /// frame (Annex B, parameter sets in each keyframe), and every frame
+    /// as FFmpeg decodes the whole stream.
+    fn encode(dir: &Path, encoder: &[&str], frames: usize) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+        let (w, h) = (64, 64);
+        let packets = dir.join(format!("{}-%03d.bin", encoder[1]));
+        let status = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
+            .args([
+                "-f",
+                "lavfi",
+                "-i",
+                &format!("testsrc=size={w}x{h}:rate=10"),
+            ])
+            .args(["-frames:v", &frames.to_string(), "-pix_fmt", "yuv420p"])
+            .args(encoder)
+            .args(["-f", "image2"])
+            .arg(&packets)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let packets: Vec<Vec<u8>> = (1..=frames)
+            .map(|i| std::fs::read(dir.join(format!("{}-{i:03}.bin", encoder[1]))).unwrap())
+            .collect();
+        let stream = dir.join(format!("{}.bin", encoder[1]));
+        std::fs::write(&stream, packets.concat()).unwrap();
+        let out = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-i"])
+            .arg(&stream)
+            .args([
+                "-fps_mode",
+                "passthrough",
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                "rgb24",
+                "-",
+            ])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let decoded: Vec<Vec<u8>> = out.stdout.chunks(w * h * 3).map(<[u8]>::to_vec).collect();
+        assert_eq!(decoded.len(), frames);
+        (packets, decoded)
+    }
+
+    const T0: u32 = 1_700_000_000;
+
+    fn stamp_ns(i: usize) -> i64 {
+        (T0 as i64 + i as i64) * 1_000_000_000
+    }
+
+    /// `packets` as ROS 2 `foxglove_msgs/msg/CompressedVideo` messages on
+    /// `topic`, stamped `T0 + i` seconds, as one MCAP file.
+    fn ros_bag(path: &Path, topic: &str, format: &str, packets: &[(usize, &[u8])]) {
+        let mut out = std::io::Cursor::new(Vec::new());
+        let mut w = mcap::Writer::new(&mut out).unwrap();
+        let s = w
+            .add_schema(ROS_COMPRESSED_VIDEO_TYPE, "ros2msg", b"")
+            .unwrap();
+        let c = w.add_channel(s, topic, "cdr", &BTreeMap::new()).unwrap();
+        for &(i, data) in packets {
+            let m = CompressedVideo {
+                timestamp: Time::from_nanos(stamp_ns(i)),
+                frame_id: "cam".into(),
+                data,
+                format: format.into(),
+            };
+            let h = mcap::records::MessageHeader {
+                channel_id: c,
+                sequence: i as u32,
+                log_time: i as u64,
+                publish_time: i as u64,
+            };
+            w.write_to_known_channel(&h, &to_cdr(&m).unwrap()).unwrap();
+        }
+        w.finish().unwrap();
+        drop(w);
+        std::fs::write(path, out.into_inner()).unwrap();
+    }
+
+    /// Every frame of `topic`, with its stamp and index, and the warnings.
+    fn read_all(path: &Path, topic: &str) -> Result<(Vec<BagFrame>, Vec<String>)> {
+        let mut r = BagImages::open(path, topic)?;
+        let mut frames = Vec::new();
+        while let Some(f) = r.next_frame()? {
+            frames.push(f);
+        }
+        Ok((frames, r.warnings()))
+    }
+
+    #[test]
+    fn a_video_topic_gives_each_packet_its_frame_and_stamp_from_its_first_keyframe() {
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = [
+            "-c:v",
+            "libx264",
+            "-bf",
+            "0",
+            "-g",
+            "5",
+            "-x264-params",
+            "repeat-headers=1",
+        ];
+        let (packets, decoded) = encode(dir.path(), &x264, 12);
+        // Recorded as a Foxglove SDK user records a camera, begun in the
+        // middle of a group of pictures: packets 2 to 4 precede the next
+        // keyframe (5), which nothing can decode.
+        let sdk = dir.path().join("sdk.mcap");
+        let ctx = foxglove::Context::new();
+        let writer = ctx.mcap_writer().create_new_buffered_file(&sdk).unwrap();
+        let channel = ctx
+            .channel_builder("/cam/h264")
+            .build::<foxglove::messages::CompressedVideo>();
+        for (i, p) in packets.iter().enumerate().skip(2) {
+            let stamp = foxglove::messages::Timestamp::new(T0 + i as u32, 0);
+            channel.log_with_time(
+                &foxglove::messages::CompressedVideo {
+                    timestamp: Some(stamp),
+                    frame_id: "cam".into(),
+                    data: p.clone().into(),
+                    format: "h264".into(),
+                },
+                stamp,
+            );
+        }
+        writer.close().unwrap();
+        let topics = image_topics(&sdk).unwrap();
+        assert_eq!(topics[0].message_type, FOXGLOVE_COMPRESSED_VIDEO_TYPE);
+        assert_eq!(topics[0].count, 10);
+        let (frames, warnings) = read_all(&sdk, "/cam/h264").unwrap();
+        // Each decoded frame is the whole stream's frame of its packet,
+        // stamped with its packet's stamp.
+        let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+        let want: Vec<(u64, i64)> = (5..12).map(|i| (i as u64 - 2, stamp_ns(i))).collect();
+        assert_eq!(got, want);
+        for (f, i) in frames.iter().zip(5..) {
+            assert_eq!((f.image.width(), f.image.height()), (64, 64));
+            assert!(f.image.as_slice() == decoded[i].as_slice(), "frame {i}");
+        }
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(
+            warnings[0].contains("its first 3 messages come before the first keyframe of its h264 stream (the recording began mid-stream) and cannot be decoded; its frames begin at message 3"),
+            "{}",
+            warnings[0]
+        );
+
+        // H.265 as ROS 2 messages, from its first packet: every frame.
+        let x265 = [
+            "-c:v",
+            "libx265",
+            "-x265-params",
+            "bframes=0:keyint=5:repeat-headers=1:log-level=error",
+        ];
+        let (packets, decoded) = encode(dir.path(), &x265, 7);
+        let ros = dir.path().join("ros.mcap");
+        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        ros_bag(&ros, "/cam/h265", "h265", &all);
+        let (frames, warnings) = read_all(&ros, "/cam/h265").unwrap();
+        assert_eq!(frames.len(), 7);
+        for (i, f) in frames.iter().enumerate() {
+            assert_eq!((f.index, f.stamp_ns), (i as u64, stamp_ns(i)));
+            assert!(f.image.as_slice() == decoded[i].as_slice(), "frame {i}");
+        }
+        assert!(warnings.is_empty(), "{warnings:?}");
+    }
+
+    #[test]
+    fn video_that_cannot_be_decoded_is_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
+        let (packets, _) = encode(dir.path(), &x264, 4);
+        type Packets<'a> = Vec<(usize, &'a [u8])>;
+        let cases: [(&str, Packets, &str); 3] = [
+            (
+                "vp9",
+                vec![(0, &packets[0])],
+                "topic /cam, message 0: video in format \"vp9\"; read are \"h264\" and \"h265\"",
+            ),
+            // No keyframe: the packets after the first.
+            (
+                "h264",
+                packets[1..].iter().map(|p| (1, p.as_slice())).collect(),
+                "topic /cam: none of its 3 messages is a keyframe of its h264 stream",
+            ),
+            (
+                "h264",
+                vec![(0, &packets[0]), (1, &[0, 0, 1, 0x65, 0xff, 0xff][..])],
+                "",
+            ),
+        ];
+        for (n, (format, packets, want)) in cases.into_iter().enumerate() {
+            let path = dir.path().join(format!("{n}.mcap"));
+            ros_bag(&path, "/cam", format, &packets);
+            match read_all(&path, "/cam") {
+                Err(e) => assert!(!want.is_empty() && e.to_string().contains(want), "{e}"),
+                // A damaged packet after a keyframe: what decodes is read,
+                // and a frame lost is said.
+                Ok((frames, warnings)) => {
+                    assert!(want.is_empty(), "{format}: {} frames", frames.len());
+                    assert_eq!(frames.len(), 1);
+                    assert_eq!(warnings.len(), 1, "{warnings:?}");
+                    assert!(
+                        warnings[0].contains("topic /cam: FFmpeg gave a frame for 1 of its 2 packets (a damaged packet gives none), so each frame after a lost one carries the stamp of an earlier packet (at most 1 back)"),
+                        "{}",
+                        warnings[0]
+                    );
+                }
+            }
+        }
+    }
+}
