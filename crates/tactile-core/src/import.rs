@@ -195,7 +195,8 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
         let Some(frame) = source.next_frame()? else {
             break;
         };
-        let number = read;
+        // A bag's frames are counted by their messages on the topic.
+        let number = frame.message_index.unwrap_or(read);
         read += 1;
         let key_num = FrameKey::Number(number);
         let key_name = FrameKey::Name(frame.name.clone());

@@ -402,6 +402,10 @@ pub struct Frame {
     /// A bag's frame: its message's header stamp (else its log time),
     /// nanoseconds since the epoch.
     pub stamp_ns: Option<i64>,
+    /// A bag's frame: its message's index on its topic, by which labels
+    /// name it (a video topic's first frame may come past 0: its packets
+    /// before the first keyframe give none).
+    pub message_index: Option<u64>,
 }
 
 /// Reads one frame after another.
@@ -430,6 +434,7 @@ impl Reader for ListReader {
             tendon: e.tendon,
             arrived: None,
             stamp_ns: None,
+            message_index: None,
         }))
     }
 }
@@ -455,6 +460,7 @@ impl<R: FnMut() -> Result<Option<RgbImage>> + Send> Reader for StreamReader<R> {
             tendon: None,
             arrived: self.live.then(Instant::now),
             stamp_ns: None,
+            message_index: None,
         }))
     }
 }
@@ -481,6 +487,7 @@ impl Reader for BagReader {
             tendon: None,
             arrived: None,
             stamp_ns: Some(f.stamp_ns),
+            message_index: Some(f.index),
         }))
     }
 }

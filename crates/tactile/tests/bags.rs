@@ -506,3 +506,106 @@ fn a_recording_cut_short_gives_its_complete_frames_and_says_so() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+#[test]
+fn a_video_bag_begun_mid_stream_is_run_and_labelled_by_its_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    // The sample frames as lossless H.264, a keyframe every 4, one packet
+    // per frame; the recording begins at packet 2, so its messages 0 and
+    // 1 precede the first keyframe and message m holds frame m + 2.
+    let packets = dir.path().join("packets");
+    std::fs::create_dir(&packets).unwrap();
+    let status = Command::new("ffmpeg")
+        .args(["-nostdin", "-loglevel", "error", "-i"])
+        .arg(Path::new(SAMPLES).join("%06d.png"))
+        .args(["-c:v", "libx264rgb", "-qp", "0", "-bf", "0", "-g", "4"])
+        .args(["-x264-params", "repeat-headers=1", "-f", "image2"])
+        .arg(packets.join("%03d.h264"))
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let bag = dir.path().join("video.mcap");
+    let mut out = std::io::Cursor::new(Vec::new());
+    let mut w = mcap::Writer::new(&mut out).unwrap();
+    let s = w
+        .add_schema("foxglove_msgs/msg/CompressedVideo", "ros2msg", b"")
+        .unwrap();
+    let c = w
+        .add_channel(s, "/cam/video", "cdr", &BTreeMap::new())
+        .unwrap();
+    for i in 2..12 {
+        let data = std::fs::read(packets.join(format!("{:03}.h264", i + 1))).unwrap();
+        let t = T0 + i as i64 * 50_000_000;
+        let m = tactile_core::bag::messages::CompressedVideo {
+            timestamp: tactile_core::bag::messages::Time::from_nanos(t),
+            frame_id: "cam".into(),
+            data: &data,
+            format: "h264".into(),
+        };
+        let header = mcap::records::MessageHeader {
+            channel_id: c,
+            sequence: i,
+            log_time: t as u64,
+            publish_time: t as u64,
+        };
+        w.write_to_known_channel(&header, &to_cdr(&m).unwrap())
+            .unwrap();
+    }
+    w.finish().unwrap();
+    drop(w);
+    std::fs::write(&bag, out.into_inner()).unwrap();
+
+    // Run: frames 4 to 11, decided as the PNG folder decides them, the
+    // skipped packets said.
+    let (png, video) = (dir.path().join("png.jsonl"), dir.path().join("v.jsonl"));
+    run_ok(SAMPLES, &png);
+    let o = run_to(bag.to_str().unwrap(), &video);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(decisions(&video), decisions(&png)[4..]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("its first 2 messages come before the first keyframe of its h264 stream"),
+        "{stderr}"
+    );
+
+    // Labels count messages on the topic: message 5 is frame 7.
+    let labels = dir.path().join("labels.csv");
+    let import = |rows: std::ops::Range<u32>, out: &Path| {
+        let mut csv = String::from("frame,tendon,sequence\n");
+        for i in rows {
+            csv.push_str(&format!("{i},0,0\n"));
+        }
+        std::fs::write(&labels, csv).unwrap();
+        tactile(&[
+            "dataset",
+            "from-video",
+            "--kind",
+            "visuotactile",
+            "--video",
+            bag.to_str().unwrap(),
+            "--topic",
+            "/cam/video",
+            "--labels",
+            labels.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let ds_dir = dir.path().join("ds");
+    let o = import(2..10, &ds_dir);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ds = tactile_core::dataset::Dataset::open(&ds_dir).unwrap();
+    assert_eq!(ds.len(), 8);
+    // Rows 0 to 7 are messages 2 to 9: message 5 is row 3.
+    let f = tactile_core::image_io::load_rgb(ds.path_of(3, "file").unwrap()).unwrap();
+    assert_eq!(f.as_slice(), frames()[7].2.as_slice());
+    // A label on a message before the first keyframe: named, with why.
+    let o = import(0..4, &dir.path().join("ds0"));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains("frame 0 is not in") && stderr.contains("before the first keyframe"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("ds0").exists());
+}
