@@ -418,6 +418,12 @@ impl VideoFrames {
                 self.codec.name()
             )));
         }
+        if self.frames == 0 {
+            return Err(self.error(format!(
+                "FFmpeg decoded no frame of its {written} {} packets: {last}",
+                self.codec.name()
+            )));
+        }
         if !status.success() {
             return Err(self.error(format!(
                 "FFmpeg could not decode its {} stream ({status}): {last}",
@@ -619,7 +625,11 @@ mod tests {
         let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
         let (packets, _) = encode(dir.path(), &x264, 4);
         type Packets<'a> = Vec<(usize, &'a [u8])>;
-        let cases: [(&str, Packets, &str); 3] = [
+        // Parameter sets that are not: no frame decodes.
+        let garbage: &[u8] = &[
+            0, 0, 0, 1, 0x67, 0xff, 0xff, 0xff, 0xff, 0, 0, 1, 0x65, 0xff,
+        ];
+        let cases: [(&str, Packets, &str); 4] = [
             (
                 "vp9",
                 vec![(0, &packets[0])],
@@ -630,6 +640,11 @@ mod tests {
                 "h264",
                 packets[1..].iter().map(|p| (1, p.as_slice())).collect(),
                 "topic /cam: none of its 3 messages is a keyframe of its h264 stream",
+            ),
+            (
+                "h264",
+                (0..3).map(|i| (i, garbage)).collect(),
+                "topic /cam: FFmpeg decoded no frame of its 3 h264 packets",
             ),
             (
                 "h264",
@@ -656,5 +671,39 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn damaged_packets_give_frames_or_an_error_never_a_hang() {
+        // Bytes of the packets overwritten at random, as a bad link or
+        // disk leaves them: each read ends, with frames (at most one a
+        // packet) or an error naming the bag.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
+        let (packets, _) = encode(dir.path(), &x264, 6);
+        let mut rng = crate::rng::SampleRng::new(41, 0, 0);
+        let path = dir.path().join("damaged.mcap");
+        let mut outcomes = [0usize; 2];
+        for _ in 0..24 {
+            let mut damaged = packets.clone();
+            for _ in 0..1 + rng.index(8) {
+                let p = rng.index(damaged.len());
+                let at = rng.index(damaged[p].len());
+                damaged[p][at] = rng.index(256) as u8;
+            }
+            let all: Vec<(usize, &[u8])> = damaged.iter().map(Vec::as_slice).enumerate().collect();
+            ros_bag(&path, "/cam", "h264", &all);
+            match read_all(&path, "/cam") {
+                Ok((frames, _)) => {
+                    assert!(!frames.is_empty() && frames.len() <= packets.len());
+                    outcomes[0] += 1;
+                }
+                Err(e) => {
+                    assert!(e.to_string().contains("damaged.mcap: topic /cam"), "{e}");
+                    outcomes[1] += 1;
+                }
+            }
+        }
+        assert!(outcomes[0] > 0, "{outcomes:?}");
     }
 }
