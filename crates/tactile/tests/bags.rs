@@ -197,6 +197,25 @@ fn hostile_bags_are_refused_by_name_and_leave_no_results() {
     );
 }
 
+/// `tactile dataset from-video` of `topic` of `bag` with `labels`, a
+/// visuotactile dataset to `out`.
+fn import_bag(bag: &Path, topic: &str, labels: &Path, out: &Path) -> Output {
+    tactile(&[
+        "dataset",
+        "from-video",
+        "--kind",
+        "visuotactile",
+        "--video",
+        bag.to_str().unwrap(),
+        "--topic",
+        topic,
+        "--labels",
+        labels.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
 #[test]
 fn a_labelled_bag_becomes_a_dataset() {
     let dir = tempfile::tempdir().unwrap();
@@ -210,20 +229,7 @@ fn a_labelled_bag_becomes_a_dataset() {
     let labels = dir.path().join("labels.csv");
     std::fs::write(&labels, csv).unwrap();
     let out = dir.path().join("ds");
-    let o = tactile(&[
-        "dataset",
-        "from-video",
-        "--kind",
-        "visuotactile",
-        "--video",
-        bag.to_str().unwrap(),
-        "--topic",
-        "/cam/image_raw",
-        "--labels",
-        labels.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = import_bag(&bag, "/cam/image_raw", &labels, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
     assert_eq!(ds.len(), 10);
@@ -576,20 +582,7 @@ fn a_video_bag_begun_mid_stream_is_run_and_labelled_by_its_messages() {
             csv.push_str(&format!("{i},0,0\n"));
         }
         std::fs::write(&labels, csv).unwrap();
-        tactile(&[
-            "dataset",
-            "from-video",
-            "--kind",
-            "visuotactile",
-            "--video",
-            bag.to_str().unwrap(),
-            "--topic",
-            "/cam/video",
-            "--labels",
-            labels.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
+        import_bag(&bag, "/cam/video", &labels, out)
     };
     let ds_dir = dir.path().join("ds");
     let o = import(2..10, &ds_dir);
