@@ -67,19 +67,31 @@ impl Codec {
     }
 
     /// True when the packet (Annex B NAL units, each after a `00 00 01`
-    /// start code) carries a sequence parameter set, without which no
-    /// frame decodes: the format requires one in every keyframe. The
-    /// unit's type is the low five bits of H.264's first header byte (7:
-    /// SPS; ITU-T H.264 7.3.1) and bits 1-6 of H.265's (33: SPS; ITU-T
-    /// H.265 7.3.1.2).
+    /// start code) is a keyframe a decoder can start at: a random-access
+    /// picture with the sequence parameter set it needs, as the format
+    /// requires every keyframe to carry. The unit's type is the low five
+    /// bits of H.264's first header byte (7: SPS, 5: IDR slice; ITU-T
+    /// H.264 7.3.1) and bits 1-6 of H.265's (33: SPS, 16-23: IRAP; ITU-T
+    /// H.265 7.3.1.2). A delta frame that repeats the SPS is no start: the
+    /// decoder would drop it, and the frames after it would take the
+    /// wrong packets' stamps.
     fn starts_stream(self, data: &[u8]) -> bool {
-        data.windows(4).any(|w| {
-            w[..3] == [0, 0, 1]
-                && match self {
-                    Self::H264 => w[3] & 0x1f == 7,
-                    Self::H265 => (w[3] >> 1) & 0x3f == 33,
-                }
-        })
+        let types = data
+            .windows(4)
+            .filter(|w| w[..3] == [0, 0, 1])
+            .map(|w| match self {
+                Self::H264 => w[3] & 0x1f,
+                Self::H265 => (w[3] >> 1) & 0x3f,
+            });
+        let (mut sps, mut random_access) = (false, false);
+        for t in types {
+            match (self, t) {
+                (Self::H264, 7) | (Self::H265, 33) => sps = true,
+                (Self::H264, 5) | (Self::H265, 16..=23) => random_access = true,
+                _ => {}
+            }
+        }
+        sps && random_access
     }
 }
 
@@ -414,7 +426,7 @@ impl VideoFrames {
         }
         if written == 0 {
             return Err(self.error(format!(
-                "none of its {skipped} messages is a keyframe of its {} stream (one carrying the sequence parameter set), so no frame can be decoded",
+                "none of its {skipped} messages is a keyframe of its {} stream (a random-access picture with its sequence parameter set), so no frame can be decoded",
                 self.codec.name()
             )));
         }
@@ -559,7 +571,18 @@ mod tests {
         let (packets, decoded) = encode(dir.path(), &x264, 12);
         // Recorded as a Foxglove SDK user records a camera, begun in the
         // middle of a group of pictures: packets 2 to 4 precede the next
-        // keyframe (5), which nothing can decode.
+        // keyframe (5), which nothing can decode. Their encoder repeats
+        // the parameter sets before every frame (the SPS and PPS of the
+        // first packet, before its IDR slice), so they are no start.
+        let idr = packets[0]
+            .windows(4)
+            .position(|w| w == [0, 0, 1, 0x65])
+            .unwrap();
+        let parameter_sets = packets[0][..idr].to_vec();
+        let mut packets = packets;
+        for p in &mut packets[2..5] {
+            p.splice(0..0, parameter_sets.iter().copied());
+        }
         let sdk = dir.path().join("sdk.mcap");
         let ctx = foxglove::Context::new();
         let writer = ctx.mcap_writer().create_new_buffered_file(&sdk).unwrap();
