@@ -151,6 +151,10 @@ fn feed(
     let (mut skipped, mut fed, mut first_index) = (0, 0, None);
     let mut next = Some(first);
     let error = loop {
+        // Ctrl-C ends the feed, then the decoder, then the reader's wait.
+        if let Err(e) = crate::interrupt::check() {
+            break Some(e);
+        }
         let m = match next.take() {
             Some(m) => m,
             None => match messages.next() {
