@@ -733,4 +733,56 @@ mod tests {
         }
         assert!(outcomes[0] > 0, "{outcomes:?}");
     }
+
+    #[test]
+    fn mutated_video_bags_give_frames_or_errors_naming_the_file() {
+        // The bag's own bytes mutated (random bytes, a cut, a length set
+        // huge), as bag_mutations.rs does for image topics: each read of
+        // the video topic ends in frames or an error naming the file.
+        // VIDEO_MUTATION_ROUNDS=1200 runs longer (60 by default).
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "2"];
+        let (packets, _) = encode(dir.path(), &x264, 4);
+        let good_path = dir.path().join("good.mcap");
+        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        ros_bag(&good_path, "/cam", "h264", &all);
+        let good = std::fs::read(&good_path).unwrap();
+        let path = dir.path().join("mutated.mcap");
+        let mut rng = crate::rng::SampleRng::new(43, 0, 0);
+        let rounds: usize = std::env::var("VIDEO_MUTATION_ROUNDS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(60);
+        let mut outcomes = [0usize; 2];
+        for round in 0..rounds {
+            let mut b = good.clone();
+            match round % 4 {
+                0 | 1 => {
+                    for _ in 0..1 + rng.index(4) {
+                        let i = rng.index(b.len());
+                        b[i] = rng.index(256) as u8;
+                    }
+                }
+                2 => b.truncate(rng.index(b.len())),
+                _ => {
+                    let i = rng.index(b.len() - 8);
+                    let v = [u64::MAX, 1 << 40, 1 << 31, 0xFFFF_FFFF][rng.index(4)];
+                    b[i..i + 8].copy_from_slice(&v.to_le_bytes());
+                }
+            }
+            std::fs::write(&path, &b).unwrap();
+            match read_all(&path, "/cam") {
+                Ok((frames, _)) => {
+                    assert!(frames.len() <= packets.len());
+                    outcomes[0] += 1;
+                }
+                Err(e) => {
+                    assert!(e.to_string().contains("mutated.mcap"), "round {round}: {e}");
+                    outcomes[1] += 1;
+                }
+            }
+        }
+        // Both kinds of ending are met (fixed seed).
+        assert!(outcomes.iter().all(|&n| n > 0), "{outcomes:?}");
+    }
 }
