@@ -22,6 +22,9 @@ pub const FOXGLOVE_COMPRESSED_VIDEO_TYPE: &str = "foxglove.CompressedVideo";
 /// `foxglove_msgs/msg/CompressedVideo` (CDR): the same message in ROS 2,
 /// as the Foxglove bridge and ROS 2 video encoders publish it.
 pub const ROS_COMPRESSED_VIDEO_TYPE: &str = "foxglove_msgs/msg/CompressedVideo";
+/// `ffmpeg_image_transport_msgs/msg/FFMPEGPacket` (CDR): one encoded
+/// frame as ROS 2's `ffmpeg_image_transport` publishes it.
+pub const FFMPEG_PACKET_TYPE: &str = "ffmpeg_image_transport_msgs/msg/FFMPEGPacket";
 
 /// `builtin_interfaces/msg/Time`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -100,6 +103,31 @@ pub struct CompressedVideo<'a> {
     pub data: &'a [u8],
     /// `h264`, `h265`, `vp9` or `av1`.
     pub format: String,
+}
+
+/// `ffmpeg_image_transport_msgs/msg/FFMPEGPacket`: one packet of the
+/// encoder `ffmpeg_image_transport` runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FfmpegPacket<'a> {
+    /// Stamp and frame.
+    pub header: Header,
+    /// The frame's width before encoding.
+    pub width: i32,
+    /// The frame's height before encoding.
+    pub height: i32,
+    /// The codec, as its first `;`-separated token (`h264`, `hevc`), or,
+    /// from older publishers, the encoder's name (`libx264`,
+    /// `hevc_nvenc`).
+    pub encoding: String,
+    /// The encoder's presentation time.
+    pub pts: u64,
+    /// The encoder's packet flags.
+    pub flags: u8,
+    /// The publisher's byte order.
+    pub is_bigendian: bool,
+    /// The packet (Annex B NAL units).
+    #[serde(borrow, serialize_with = "as_bytes")]
+    pub data: &'a [u8],
 }
 
 /// A `uint8[]` written in one piece (length, then the bytes) rather than

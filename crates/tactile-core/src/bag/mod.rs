@@ -8,9 +8,10 @@
 //! (JPEG, PNG) are understood, and so are the `foxglove.RawImage` and
 //! `foxglove.CompressedImage` (protobuf, decoded by the `foxglove` crate's
 //! types) of MCAP files the Foxglove SDK records, and video topics
-//! (`foxglove.CompressedVideo` and ROS 2's `foxglove_msgs` one: H.264 and
-//! H.265, decoded by FFmpeg in [`video`]); anything else is refused naming
-//! the topic and the message.
+//! (`foxglove.CompressedVideo`, ROS 2's `foxglove_msgs` one and
+//! `ffmpeg_image_transport`'s packets: H.264 and H.265, decoded by FFmpeg
+//! in [`video`]); anything else is refused naming the topic and the
+//! message.
 //!
 //! A bag is given as `ros2 bag record` leaves it (a folder holding
 //! `metadata.yaml` and one or more `.mcap` files, split ones read in the
@@ -39,7 +40,7 @@ use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOp
 
 use crate::{Error, Result};
 use messages::{
-    COMPRESSED_IMAGE_TYPE, CompressedImage, FOXGLOVE_COMPRESSED_IMAGE_TYPE,
+    COMPRESSED_IMAGE_TYPE, CompressedImage, FFMPEG_PACKET_TYPE, FOXGLOVE_COMPRESSED_IMAGE_TYPE,
     FOXGLOVE_COMPRESSED_VIDEO_TYPE, FOXGLOVE_RAW_IMAGE_TYPE, Header, IMAGE_TYPE, Image,
     ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
 };
@@ -314,7 +315,8 @@ const ROS1_IMAGE_TYPES: [&str; 2] = ["sensor_msgs/Image", "sensor_msgs/Compresse
 /// True for the image message types a bag's frames may be: ROS 2's
 /// Image and CompressedImage, the Foxglove SDK's RawImage,
 /// CompressedImage and CompressedVideo, the last also as ROS 2's
-/// `foxglove_msgs` (and ROS 1's images, listed to be refused with advice).
+/// `foxglove_msgs`, and `ffmpeg_image_transport`'s packets (and ROS 1's
+/// images, listed to be refused with advice).
 pub fn is_image_type(t: &str) -> bool {
     [
         IMAGE_TYPE,
@@ -323,6 +325,7 @@ pub fn is_image_type(t: &str) -> bool {
         FOXGLOVE_COMPRESSED_IMAGE_TYPE,
         FOXGLOVE_COMPRESSED_VIDEO_TYPE,
         ROS_COMPRESSED_VIDEO_TYPE,
+        FFMPEG_PACKET_TYPE,
     ]
     .contains(&t)
         || ROS1_IMAGE_TYPES.contains(&t)
@@ -848,7 +851,7 @@ impl TopicMessages {
             }
             if !is_image_type(&c.message_type) {
                 return Err(self.topic_error(format!(
-                    "carries {}, not {IMAGE_TYPE}, {COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_RAW_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_VIDEO_TYPE} or {ROS_COMPRESSED_VIDEO_TYPE}",
+                    "carries {}, not {IMAGE_TYPE}, {COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_RAW_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_VIDEO_TYPE}, {ROS_COMPRESSED_VIDEO_TYPE} or {FFMPEG_PACKET_TYPE}",
                     if c.message_type.is_empty() {
                         "messages without a schema"
                     } else {

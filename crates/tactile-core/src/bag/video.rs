@@ -1,7 +1,9 @@
 //! Video topics of a bag: `foxglove.CompressedVideo`, as the Foxglove SDK
-//! records a camera, and ROS 2's `foxglove_msgs/msg/CompressedVideo`, as
-//! ROS 2 video encoders publish one: an H.264 or H.265 frame per message,
-//! decoded by the system's FFmpeg. No codec is written here.
+//! records a camera, ROS 2's `foxglove_msgs/msg/CompressedVideo`, as ROS 2
+//! video encoders publish one, and `ffmpeg_image_transport_msgs/msg/
+//! FFMPEGPacket`, as ROS 2's `ffmpeg_image_transport` does: an H.264 or
+//! H.265 frame per message, decoded by the system's FFmpeg. No codec is
+//! written here.
 //!
 //! The topic's packets are written in order to an FFmpeg process from a
 //! thread of their own while the decoded frames are read back here (PAM
@@ -22,7 +24,8 @@ use image::codecs::pnm::PnmDecoder;
 use image::{ColorType, ImageDecoder};
 
 use super::messages::{
-    CompressedVideo, FOXGLOVE_COMPRESSED_VIDEO_TYPE, ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
+    CompressedVideo, FFMPEG_PACKET_TYPE, FOXGLOVE_COMPRESSED_VIDEO_TYPE, FfmpegPacket,
+    ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
 };
 use super::{BagFrame, TopicMessage, TopicMessages, bag_error, foxglove_stamp, stamp_or_log_time};
 use crate::image_io::{MAX_IMAGE_PIXELS, RgbImage, rgb_image};
@@ -31,7 +34,12 @@ use crate::{Error, Result};
 
 /// True for the video message types.
 pub(super) fn is_video_type(t: &str) -> bool {
-    t == FOXGLOVE_COMPRESSED_VIDEO_TYPE || t == ROS_COMPRESSED_VIDEO_TYPE
+    [
+        FOXGLOVE_COMPRESSED_VIDEO_TYPE,
+        ROS_COMPRESSED_VIDEO_TYPE,
+        FFMPEG_PACKET_TYPE,
+    ]
+    .contains(&t)
 }
 
 /// The video formats read.
@@ -48,6 +56,25 @@ impl Codec {
             "h264" => Some(Self::H264),
             "h265" | "hevc" => Some(Self::H265),
             _ => None,
+        }
+    }
+
+    /// The format an `ffmpeg_image_transport` packet's `encoding` names:
+    /// its codec (`h264`, `hevc`: the first `;`-separated token) or, from
+    /// older publishers, its encoder (`libx264`, `h264_nvenc`,
+    /// `hevc_vaapi`). Anything else is kept, to be refused by name.
+    fn of_encoding(encoding: &str) -> String {
+        let codec = encoding
+            .split(';')
+            .next()
+            .unwrap_or("")
+            .to_ascii_lowercase();
+        if codec.contains("hevc") || codec.contains("265") {
+            Self::H265.name().into()
+        } else if codec.contains("264") {
+            Self::H264.name().into()
+        } else {
+            codec
         }
     }
 
@@ -98,10 +125,15 @@ impl Codec {
 /// One message of a video type: its packet bytes, format and stamp (0
 /// when it carries none).
 fn packet<'a>(topic: &TopicMessages, m: &'a TopicMessage) -> Result<(Cow<'a, [u8]>, String, i64)> {
+    let bad = |e: String| topic.message_error(m.index, e);
     if m.message_type == ROS_COMPRESSED_VIDEO_TYPE {
-        let v: CompressedVideo<'_> =
-            from_cdr(&m.data).map_err(|e| topic.message_error(m.index, e))?;
+        let v: CompressedVideo<'_> = from_cdr(&m.data).map_err(bad)?;
         return Ok((Cow::Borrowed(v.data), v.format, v.timestamp.nanos()));
+    }
+    if m.message_type == FFMPEG_PACKET_TYPE {
+        let v: FfmpegPacket<'_> = from_cdr(&m.data).map_err(bad)?;
+        let format = Codec::of_encoding(&v.encoding);
+        return Ok((Cow::Borrowed(v.data), format, v.header.stamp.nanos()));
     }
     use foxglove::Decode;
     let v = foxglove::messages::CompressedVideo::decode(m.data.as_slice()).map_err(|e| {
@@ -462,7 +494,7 @@ impl Drop for VideoFrames {
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
-    use crate::bag::messages::{Time, to_cdr};
+    use crate::bag::messages::{Header, Time, to_cdr};
     use crate::bag::{BagImages, image_topics};
     use std::collections::BTreeMap;
     use std::path::Path;
@@ -523,26 +555,44 @@ mod tests {
     /// `packets` as ROS 2 `foxglove_msgs/msg/CompressedVideo` messages on
     /// `topic`, stamped `T0 + i` seconds, as one MCAP file.
     fn ros_bag(path: &Path, topic: &str, format: &str, packets: &[(usize, &[u8])]) {
+        cdr_bag(
+            path,
+            topic,
+            ROS_COMPRESSED_VIDEO_TYPE,
+            packets,
+            |i, data| {
+                to_cdr(&CompressedVideo {
+                    timestamp: Time::from_nanos(stamp_ns(i)),
+                    frame_id: "cam".into(),
+                    data,
+                    format: format.into(),
+                })
+            },
+        );
+    }
+
+    /// `packets` as messages of `schema` on `topic`, each made by
+    /// `message(i, data)`, as one MCAP file.
+    fn cdr_bag(
+        path: &Path,
+        topic: &str,
+        schema: &str,
+        packets: &[(usize, &[u8])],
+        message: impl Fn(usize, &[u8]) -> std::result::Result<Vec<u8>, String>,
+    ) {
         let mut out = std::io::Cursor::new(Vec::new());
         let mut w = mcap::Writer::new(&mut out).unwrap();
-        let s = w
-            .add_schema(ROS_COMPRESSED_VIDEO_TYPE, "ros2msg", b"")
-            .unwrap();
+        let s = w.add_schema(schema, "ros2msg", b"").unwrap();
         let c = w.add_channel(s, topic, "cdr", &BTreeMap::new()).unwrap();
         for &(i, data) in packets {
-            let m = CompressedVideo {
-                timestamp: Time::from_nanos(stamp_ns(i)),
-                frame_id: "cam".into(),
-                data,
-                format: format.into(),
-            };
             let h = mcap::records::MessageHeader {
                 channel_id: c,
                 sequence: i as u32,
                 log_time: i as u64,
                 publish_time: i as u64,
             };
-            w.write_to_known_channel(&h, &to_cdr(&m).unwrap()).unwrap();
+            w.write_to_known_channel(&h, &message(i, data).unwrap())
+                .unwrap();
         }
         w.finish().unwrap();
         drop(w);
@@ -784,5 +834,83 @@ mod tests {
         }
         // Both kinds of ending are met (fixed seed).
         assert!(outcomes.iter().all(|&n| n > 0), "{outcomes:?}");
+    }
+
+    #[test]
+    fn ffmpeg_image_transport_packets_are_read() {
+        // As ROS 2's ffmpeg_image_transport publishes: its current
+        // `encoding` ("codec;pixel formats…") and its older one (the
+        // encoder's name), each begun mid-stream.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
+        let (packets, decoded) = encode(dir.path(), &x264, 8);
+        let late: Vec<(usize, &[u8])> = packets
+            .iter()
+            .map(Vec::as_slice)
+            .enumerate()
+            .skip(1)
+            .collect();
+        for encoding in ["h264;yuv420p;bgr8;bgr8", "libx264", "h264_nvenc"] {
+            let path = dir.path().join("ffmpeg.mcap");
+            cdr_bag(
+                &path,
+                "/cam/ffmpeg",
+                FFMPEG_PACKET_TYPE,
+                &late,
+                |i, data| {
+                    to_cdr(&FfmpegPacket {
+                        header: Header {
+                            stamp: Time::from_nanos(stamp_ns(i)),
+                            frame_id: "cam".into(),
+                        },
+                        width: 64,
+                        height: 64,
+                        encoding: encoding.into(),
+                        pts: i as u64,
+                        flags: u8::from(i % 3 == 0),
+                        is_bigendian: false,
+                        data,
+                    })
+                },
+            );
+            assert_eq!(
+                image_topics(&path).unwrap()[0].message_type,
+                FFMPEG_PACKET_TYPE
+            );
+            let (frames, warnings) = read_all(&path, "/cam/ffmpeg").unwrap();
+            // Messages 0 and 1 (packets 1 and 2) precede the keyframe.
+            let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+            let want: Vec<(u64, i64)> = (3..8).map(|i| (i as u64 - 1, stamp_ns(i))).collect();
+            assert_eq!(got, want, "{encoding}");
+            for (f, i) in frames.iter().zip(3..) {
+                assert!(
+                    f.image.as_slice() == decoded[i].as_slice(),
+                    "{encoding} {i}"
+                );
+            }
+            assert!(warnings[0].contains("its first 2 messages"), "{warnings:?}");
+        }
+        // An encoder of another codec: refused by name.
+        let path = dir.path().join("av1.mcap");
+        cdr_bag(
+            &path,
+            "/cam/ffmpeg",
+            FFMPEG_PACKET_TYPE,
+            &late,
+            |i, data| {
+                to_cdr(&FfmpegPacket {
+                    header: Header::default(),
+                    width: 64,
+                    height: 64,
+                    encoding: "libsvtav1".into(),
+                    pts: i as u64,
+                    flags: 0,
+                    is_bigendian: false,
+                    data,
+                })
+            },
+        );
+        let e = read_all(&path, "/cam/ffmpeg").err().unwrap().to_string();
+        assert!(e.contains("video in format \"libsvtav1\""), "{e}");
     }
 }
