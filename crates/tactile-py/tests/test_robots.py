@@ -334,6 +334,46 @@ def test_h264_video_the_foxglove_sdk_records(tmp_path, root, palpation_frames, t
     assert all(np.array_equal(f.image, rgb) for f, rgb in zip(got, palpation_frames[4:]))
 
 
+def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpation_frames):
+    """ROS 2's video messages (foxglove_msgs CompressedVideo and
+    ffmpeg_image_transport's FFMPEGPacket) serialised by mcap-ros2-support
+    from their message definitions: the frames and stamps of the PNGs."""
+    packets = tmp_path / "packets"
+    packets.mkdir()
+    subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(root / "samples" / "palpation" / "%06d.png"),
+                    "-c:v", "libx264rgb", "-qp", "0", "-bf", "0", "-g", "4", "-x264-params", "repeat-headers=1",
+                    "-f", "image2", str(packets / "%03d.h264")], check=True)
+    data = [p.read_bytes() for p in sorted(packets.glob("*.h264"))]
+    time_deps = "\n================================================================================\n" \
+        "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
+    bag = tmp_path / "ros-video.mcap"
+    with bag.open("wb") as fh:
+        w = Ros2McapWriter(fh)
+        video = w.register_msgdef("foxglove_msgs/msg/CompressedVideo",
+                                  "builtin_interfaces/Time timestamp\nstring frame_id\nuint8[] data\nstring format"
+                                  + time_deps)
+        packet = w.register_msgdef("ffmpeg_image_transport_msgs/msg/FFMPEGPacket",
+                                   "std_msgs/Header header\nint32 width\nint32 height\nstring encoding\n"
+                                   "uint64 pts\nuint8 flags\nbool is_bigendian\nuint8[] data" + HEADER_DEPS)
+        for i, d in enumerate(data):
+            h, wd, _ = palpation_frames[i].shape
+            w.write_message("/cam/video", video, {"timestamp": header(i)["stamp"], "frame_id": "cam", "data": d,
+                                                  "format": "h264"}, log_time=stamp(i), publish_time=stamp(i))
+            w.write_message("/cam/ffmpeg", packet, {"header": header(i), "width": wd, "height": h,
+                                                    "encoding": "h264;gbrp;rgb8;rgb8", "pts": i,
+                                                    "flags": int(i % 4 == 0), "is_bigendian": False, "data": d},
+                            log_time=stamp(i), publish_time=stamp(i))
+        w.finish()
+    listed = {t["topic"]: t["message_type"] for t in tactile.bag_topics(bag)}
+    assert listed == {"/cam/video": "foxglove_msgs/msg/CompressedVideo",
+                      "/cam/ffmpeg": "ffmpeg_image_transport_msgs/msg/FFMPEGPacket"}
+    for topic in listed:
+        got = list(tactile.frames(bag, topic=topic))
+        assert [f.stamp_ns for f in got] == [stamp(i) for i in range(len(data))], topic
+        for f, rgb in zip(got, palpation_frames):
+            assert np.array_equal(f.image, rgb), topic
+
+
 def test_hostile_bags_name_the_topic_and_message(tmp_path, palpation_frames):
     bag = tmp_path / "hostile.mcap"
     with bag.open("wb") as fh:
