@@ -850,8 +850,9 @@ mod tests {
             .enumerate()
             .skip(1)
             .collect();
-        for encoding in ["h264;yuv420p;bgr8;bgr8", "libx264", "h264_nvenc"] {
-            let path = dir.path().join("ffmpeg.mcap");
+        // The packets as FFMPEGPackets of `encoding` on /cam/ffmpeg.
+        let path = dir.path().join("ffmpeg.mcap");
+        let write = |encoding: &str| {
             cdr_bag(
                 &path,
                 "/cam/ffmpeg",
@@ -872,7 +873,10 @@ mod tests {
                         data,
                     })
                 },
-            );
+            )
+        };
+        for encoding in ["h264;yuv420p;bgr8;bgr8", "libx264", "h264_nvenc"] {
+            write(encoding);
             assert_eq!(
                 image_topics(&path).unwrap()[0].message_type,
                 FFMPEG_PACKET_TYPE
@@ -891,25 +895,7 @@ mod tests {
             assert!(warnings[0].contains("its first 2 messages"), "{warnings:?}");
         }
         // An encoder of another codec: refused by name.
-        let path = dir.path().join("av1.mcap");
-        cdr_bag(
-            &path,
-            "/cam/ffmpeg",
-            FFMPEG_PACKET_TYPE,
-            &late,
-            |i, data| {
-                to_cdr(&FfmpegPacket {
-                    header: Header::default(),
-                    width: 64,
-                    height: 64,
-                    encoding: "libsvtav1".into(),
-                    pts: i as u64,
-                    flags: 0,
-                    is_bigendian: false,
-                    data,
-                })
-            },
-        );
+        write("libsvtav1");
         let e = read_all(&path, "/cam/ffmpeg").err().unwrap().to_string();
         assert!(e.contains("video in format \"libsvtav1\""), "{e}");
     }
