@@ -288,6 +288,17 @@ def test_frames_the_foxglove_sdk_records(tmp_path, root, palpation_frames, tacti
     assert decisions(recorded) == decisions(folder)
 
 
+def lossless_h264_packets(pngs: Path, tmp: Path) -> list[bytes]:
+    """The PNG frames of `pngs` as lossless H.264 (RGB, no B-frames, a
+    keyframe every 4 with its parameter sets): one packet per frame."""
+    packets = tmp / "packets"
+    packets.mkdir()
+    subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(pngs / "%06d.png"),
+                    "-c:v", "libx264rgb", "-qp", "0", "-bf", "0", "-g", "4", "-x264-params", "repeat-headers=1",
+                    "-f", "image2", str(packets / "%03d.h264")], check=True)
+    return [p.read_bytes() for p in sorted(packets.glob("*.h264"))]
+
+
 def test_h264_video_the_foxglove_sdk_records(tmp_path, root, palpation_frames, tactile_bin):
     """A camera recorded as foxglove.CompressedVideo (one H.264 frame per
     message, lossless here): the frames, stamps and decisions of the PNG
@@ -298,12 +309,7 @@ def test_h264_video_the_foxglove_sdk_records(tmp_path, root, palpation_frames, t
     from foxglove.messages import CompressedVideo, Timestamp
 
     pngs = root / "samples" / "palpation"
-    packets = tmp_path / "packets"
-    packets.mkdir()
-    subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(pngs / "%06d.png"),
-                    "-c:v", "libx264rgb", "-qp", "0", "-bf", "0", "-g", "4", "-x264-params", "repeat-headers=1",
-                    "-f", "image2", str(packets / "%03d.h264")], check=True)
-    data = [p.read_bytes() for p in sorted(packets.glob("*.h264"))]
+    data = lossless_h264_packets(pngs, tmp_path)
     assert len(data) == len(palpation_frames)
 
     def record(bag: Path, first: int) -> None:
@@ -338,12 +344,7 @@ def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpati
     """ROS 2's video messages (foxglove_msgs CompressedVideo and
     ffmpeg_image_transport's FFMPEGPacket) serialised by mcap-ros2-support
     from their message definitions: the frames and stamps of the PNGs."""
-    packets = tmp_path / "packets"
-    packets.mkdir()
-    subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(root / "samples" / "palpation" / "%06d.png"),
-                    "-c:v", "libx264rgb", "-qp", "0", "-bf", "0", "-g", "4", "-x264-params", "repeat-headers=1",
-                    "-f", "image2", str(packets / "%03d.h264")], check=True)
-    data = [p.read_bytes() for p in sorted(packets.glob("*.h264"))]
+    data = lossless_h264_packets(root / "samples" / "palpation", tmp_path)
     time_deps = "\n================================================================================\n" \
         "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
     bag = tmp_path / "ros-video.mcap"

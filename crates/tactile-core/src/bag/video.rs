@@ -143,7 +143,7 @@ fn packet<'a>(topic: &TopicMessages, m: &'a TopicMessage) -> Result<(Cow<'a, [u8
         )
     })?;
     Ok((
-        Cow::Owned(v.data.to_vec()),
+        Cow::Owned(Vec::from(v.data)),
         v.format,
         foxglove_stamp(v.timestamp),
     ))
@@ -166,8 +166,6 @@ struct Fed {
     skipped: u64,
     /// Packets written to the decoder.
     fed: u64,
-    /// The index of the first packet written.
-    first_index: Option<u64>,
 }
 
 /// Write the topic's packets, from `first` on, to the decoder's input, the
@@ -180,7 +178,7 @@ fn feed(
     mut stdin: ChildStdin,
     stamps: mpsc::Sender<Stamp>,
 ) -> Fed {
-    let (mut skipped, mut fed, mut first_index) = (0, 0, None);
+    let (mut skipped, mut fed) = (0, 0);
     let mut next = Some(first);
     let error = loop {
         // Ctrl-C ends the feed, then the decoder, then the reader's wait.
@@ -221,7 +219,6 @@ fn feed(
             skipped += 1;
             continue;
         }
-        first_index.get_or_insert(m.index);
         let stamp = Stamp {
             stamp_ns: stamp_or_log_time(stamp_ns, m.log_time),
             log_time_ns: m.log_time,
@@ -240,7 +237,6 @@ fn feed(
         error,
         skipped,
         fed,
-        first_index,
     }
 }
 
@@ -251,6 +247,8 @@ pub(super) struct VideoFrames {
     /// The file the video began in, and the topic, for errors.
     path: PathBuf,
     topic: String,
+    /// The index of the topic's message the video began at.
+    first: u64,
     child: Child,
     stdout: BufReader<ChildStdout>,
     stderr: Option<JoinHandle<Vec<u8>>>,
@@ -275,6 +273,7 @@ impl VideoFrames {
         })?;
         let path = messages.records.path.clone();
         let topic = messages.topic.clone();
+        let first_index = first.index;
         let mut child = Command::new("ffmpeg")
             .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
             .args(["-threads", "1", "-f", codec.demuxer(), "-i", "pipe:0"])
@@ -308,6 +307,7 @@ impl VideoFrames {
             codec,
             path,
             topic,
+            first: first_index,
             child,
             stdout: BufReader::with_capacity(1 << 20, stdout),
             stderr,
@@ -341,7 +341,7 @@ impl VideoFrames {
                 self.topic,
                 fed.skipped,
                 self.codec.name(),
-                fed.first_index.unwrap_or(fed.skipped)
+                self.first + fed.skipped
             ));
         }
         if self.frames < fed.fed {
