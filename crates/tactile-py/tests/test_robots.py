@@ -340,6 +340,48 @@ def test_h264_video_the_foxglove_sdk_records(tmp_path, root, palpation_frames, t
     assert all(np.array_equal(f.image, rgb) for f, rgb in zip(got, palpation_frames[4:]))
 
 
+def test_foxglove_json_messages_the_python_sdk_logs(tmp_path, root, palpation_frames, tactile_bin):
+    """Foxglove's image and video schemas logged as JSON (plain dicts,
+    bytes in base64, as Foxglove's JSON schemas have them) through the
+    Foxglove SDK's generic channel: the frames, stamps and decisions of
+    the PNG folder."""
+    import base64
+
+    import foxglove
+
+    pngs = root / "samples" / "palpation"
+    files = sorted(pngs.glob("*.png"))
+    video = lossless_h264_packets(pngs, tmp_path)
+    b64 = lambda b: base64.b64encode(b).decode("ascii")  # noqa: E731
+
+    def channel(ctx, topic: str, name: str):
+        schema = foxglove.Schema(name=name, encoding="jsonschema", data=json.dumps({"type": "object"}).encode())
+        return foxglove.Channel(topic, schema=schema, message_encoding="json", context=ctx)
+
+    bag = tmp_path / "json.mcap"
+    ctx = foxglove.Context()
+    with foxglove.open_mcap(bag, context=ctx):
+        raw = channel(ctx, "/cam/raw", "foxglove.RawImage")
+        png = channel(ctx, "/cam/png", "foxglove.CompressedImage")
+        h264 = channel(ctx, "/cam/h264", "foxglove.CompressedVideo")
+        for i, (f, rgb) in enumerate(zip(files, palpation_frames)):
+            t = stamp(i)
+            ts = {"sec": t // 10**9, "nsec": t % 10**9}
+            h, w, _ = rgb.shape
+            raw.log({"timestamp": ts, "frame_id": "cam", "width": w, "height": h, "encoding": "rgb8",
+                     "step": w * 3, "data": b64(rgb.tobytes())}, log_time=t)
+            png.log({"timestamp": ts, "frame_id": "cam", "data": b64(f.read_bytes()), "format": "png"}, log_time=t)
+            h264.log({"timestamp": ts, "frame_id": "cam", "data": b64(video[i]), "format": "h264"}, log_time=t)
+    for topic in ["/cam/raw", "/cam/png", "/cam/h264"]:
+        got = list(tactile.frames(bag, topic=topic))
+        assert [f.stamp_ns for f in got] == [stamp(i) for i in range(len(files))], topic
+        for f, rgb in zip(got, palpation_frames):
+            assert np.array_equal(f.image, rgb), topic
+    folder = run_records(tactile_bin, root, tmp_path, "--data", str(pngs))
+    recorded = run_records(tactile_bin, root, tmp_path, "--data", str(bag), "--topic", "/cam/png")
+    assert decisions(recorded) == decisions(folder)
+
+
 def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpation_frames):
     """ROS 2's video messages (foxglove_msgs CompressedVideo and
     ffmpeg_image_transport's FFMPEGPacket) serialised by mcap-ros2-support

@@ -6,8 +6,9 @@
 //! rgba8, bgra8, mono8, mono16 and the other encodings of
 //! [`messages::IMAGE_ENCODINGS`]) and `sensor_msgs/msg/CompressedImage`
 //! (JPEG, PNG) are understood, and so are the `foxglove.RawImage` and
-//! `foxglove.CompressedImage` (protobuf, decoded by the `foxglove` crate's
-//! types) of MCAP files the Foxglove SDK records, and video topics
+//! `foxglove.CompressedImage` of MCAP files the Foxglove SDK records (in
+//! protobuf, or in JSON as Foxglove's JSON schemas have them; either
+//! decoded by the `foxglove` crate's types), and video topics
 //! (`foxglove.CompressedVideo`, ROS 2's `foxglove_msgs` one and
 //! `ffmpeg_image_transport`'s packets: H.264 and H.265, decoded by FFmpeg
 //! in [`video`]); anything else is refused naming the topic and the
@@ -331,15 +332,35 @@ pub fn is_image_type(t: &str) -> bool {
         || ROS1_IMAGE_TYPES.contains(&t)
 }
 
-/// The message encoding an image type is read in: ROS 2's CDR, or the
-/// protobuf the Foxglove SDK writes its schemas in.
-fn expected_encoding(message_type: &str) -> &'static str {
+/// The message encodings an image type is read in: ROS 2's CDR, or, for
+/// Foxglove's schemas, the protobuf the Foxglove SDK writes them in and
+/// the JSON of Foxglove's JSON schemas (bytes in base64), as a recorder
+/// logging plain dictionaries or a JSON WebSocket stream writes them.
+fn expected_encodings(message_type: &str) -> &'static [&'static str] {
     match message_type {
         FOXGLOVE_RAW_IMAGE_TYPE
         | FOXGLOVE_COMPRESSED_IMAGE_TYPE
-        | FOXGLOVE_COMPRESSED_VIDEO_TYPE => "protobuf",
-        _ => "cdr",
+        | FOXGLOVE_COMPRESSED_VIDEO_TYPE => &["protobuf", "json"],
+        _ => &["cdr"],
     }
+}
+
+/// A message of a Foxglove schema in its channel's encoding: protobuf, or
+/// JSON through the `foxglove` crate's serde (bytes in base64).
+fn foxglove_message<M>(topic: &TopicMessages, m: &TopicMessage) -> Result<M>
+where
+    M: foxglove::Decode + serde::de::DeserializeOwned,
+{
+    let decoded = match m.json {
+        true => serde_json::from_slice(&m.data).map_err(|e| format!("{e} (in its JSON)")),
+        false => M::decode(m.data.as_slice()).map_err(|e| e.to_string()),
+    };
+    decoded.map_err(|e| {
+        topic.message_error(
+            m.index,
+            format!("not a valid {} message: {e}", m.message_type),
+        )
+    })
 }
 
 /// A Foxglove timestamp in nanoseconds since the epoch (0 when absent).
@@ -791,6 +812,9 @@ pub(crate) struct TopicMessages {
 pub(crate) struct TopicMessage {
     /// Its message type.
     pub message_type: String,
+    /// True when it is in JSON (a Foxglove schema's), not the type's
+    /// binary encoding.
+    pub json: bool,
     /// When the recorder logged it, nanoseconds since the epoch.
     pub log_time: u64,
     /// Its bytes, in the type's encoding.
@@ -867,27 +891,28 @@ impl TopicMessages {
                     convert_command("BAG")
                 )));
             }
-            let encoding = expected_encoding(&c.message_type);
-            if c.encoding != encoding {
+            let encodings = expected_encodings(&c.message_type);
+            if !encodings.contains(&c.encoding.as_str()) {
                 return Err(self.topic_error(format!(
-                    "{} in message encoding {:?}; it is read in {encoding}{}",
+                    "{} in message encoding {:?}; it is read in {}",
                     c.message_type,
                     c.encoding,
-                    match encoding {
-                        "cdr" => " (ROS 2's)",
-                        _ => ", as the Foxglove SDK writes it",
+                    match encodings {
+                        ["cdr"] => "cdr (ROS 2's)",
+                        _ => "protobuf, as the Foxglove SDK writes it, or json",
                     }
                 )));
             }
             let index = self.given;
             // rosbag2's message compression: each ROS 2 message's bytes
             // zstd'd.
-            let data = match encoding == "cdr" && data.starts_with(&ZSTD_MAGIC) {
+            let data = match c.encoding == "cdr" && data.starts_with(&ZSTD_MAGIC) {
                 true => unzstd(&data).map_err(|e| self.message_error(index, e))?,
                 false => data,
             };
             self.given += 1;
             return Ok(Some(TopicMessage {
+                json: c.encoding == "json",
                 message_type: c.message_type,
                 log_time,
                 data,
@@ -998,12 +1023,8 @@ fn stamp_or_log_time(stamp_ns: i64, log_time: u64) -> i64 {
 /// One message of an image type (in its encoding): its frame and stamp
 /// (0 when it carries none).
 fn decode_image(topic: &TopicMessages, m: &TopicMessage) -> Result<(RgbImage, i64)> {
-    use foxglove::Decode;
     let (message_type, data) = (m.message_type.as_str(), m.data.as_slice());
     let bad = |e: String| topic.message_error(m.index, e);
-    let not_valid = |e: &dyn std::fmt::Display| {
-        topic.message_error(m.index, format!("not a valid {message_type} message: {e}"))
-    };
     Ok(match message_type {
         IMAGE_TYPE => {
             let m: Image<'_> = from_cdr(data).map_err(bad)?;
@@ -1014,7 +1035,7 @@ fn decode_image(topic: &TopicMessages, m: &TopicMessage) -> Result<(RgbImage, i6
             (m.to_rgb().map_err(bad)?, m.header.stamp.nanos())
         }
         FOXGLOVE_RAW_IMAGE_TYPE => {
-            let m = foxglove::messages::RawImage::decode(data).map_err(|e| not_valid(&e))?;
+            let m: foxglove::messages::RawImage = foxglove_message(topic, m)?;
             // The same pixel encodings as a ROS 2 Image; Foxglove's
             // 16-bit ones are little-endian.
             let image = Image {
@@ -1029,7 +1050,7 @@ fn decode_image(topic: &TopicMessages, m: &TopicMessage) -> Result<(RgbImage, i6
             (image.to_rgb().map_err(bad)?, foxglove_stamp(m.timestamp))
         }
         _ => {
-            let m = foxglove::messages::CompressedImage::decode(data).map_err(|e| not_valid(&e))?;
+            let m: foxglove::messages::CompressedImage = foxglove_message(topic, m)?;
             let image = CompressedImage {
                 header: Header::default(),
                 format: m.format,
@@ -1202,6 +1223,113 @@ mod tests {
     }
 
     #[test]
+    fn foxglove_images_in_json_are_read() {
+        // Foxglove's JSON schemas, as a recorder logging plain JSON
+        // writes them: bytes in base64, stamps as {sec, nsec}, fields the
+        // schema does not name ignored.
+        use base64::Engine;
+        let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("json.mcap");
+        let (w, h) = (6u32, 4u32);
+        let px: Vec<u8> = (0..w * h * 3).map(|i| (i * 11 % 253) as u8).collect();
+        let mut png = Vec::new();
+        image::RgbImage::from_raw(w, h, px.clone())
+            .unwrap()
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let t0 = 1_700_000_000u32;
+        let raw = |i: u32| {
+            serde_json::json!({
+                "timestamp": {"sec": t0 + i, "nsec": 250_000_000},
+                "frame_id": "cam",
+                "width": w,
+                "height": h,
+                "encoding": "rgb8",
+                "step": w * 3,
+                "data": b64(&px),
+                "note": "ignored",
+            })
+        };
+        let compressed =
+            |_: u32| serde_json::json!({"frame_id": "cam", "data": b64(&png), "format": "png"});
+        let mut out = std::io::Cursor::new(Vec::new());
+        let mut writer = mcap::Writer::new(&mut out).unwrap();
+        let topics = [
+            ("/raw", FOXGLOVE_RAW_IMAGE_TYPE, [raw(0), raw(1)]),
+            (
+                "/png",
+                FOXGLOVE_COMPRESSED_IMAGE_TYPE,
+                [compressed(0), compressed(1)],
+            ),
+        ];
+        for (topic, schema, messages) in &topics {
+            let s = writer.add_schema(schema, "jsonschema", b"{}").unwrap();
+            let c = writer
+                .add_channel(s, topic, "json", &BTreeMap::new())
+                .unwrap();
+            for (i, message) in (0..).zip(messages) {
+                let h = mcap::records::MessageHeader {
+                    channel_id: c,
+                    sequence: i,
+                    log_time: u64::from(t0 + i) * 1_000_000_000,
+                    publish_time: 0,
+                };
+                let data = serde_json::to_vec(message).unwrap();
+                writer.write_to_known_channel(&h, &data).unwrap();
+            }
+        }
+        writer.finish().unwrap();
+        drop(writer);
+        std::fs::write(&path, out.into_inner()).unwrap();
+        for (topic, _, _) in &topics {
+            let mut r = BagImages::open(&path, topic).unwrap();
+            for i in 0..2 {
+                let f = r.next_frame().unwrap().unwrap();
+                assert_eq!(f.image.as_slice(), px.as_slice(), "{topic} {i}");
+                // Its timestamp, else (the PNG's) its log time.
+                let nsec = if *topic == "/raw" { 250_000_000 } else { 0 };
+                assert_eq!(f.stamp_ns, (t0 + i) as i64 * 1_000_000_000 + nsec);
+            }
+            assert!(r.next_frame().unwrap().is_none());
+        }
+        // Data that is not base64: refused naming the message.
+        let mut bad = raw(0);
+        bad["data"] = "not base64!".into();
+        let mut out = std::io::Cursor::new(Vec::new());
+        let mut writer = mcap::Writer::new(&mut out).unwrap();
+        let s = writer
+            .add_schema(FOXGLOVE_RAW_IMAGE_TYPE, "jsonschema", b"{}")
+            .unwrap();
+        let c = writer
+            .add_channel(s, "/raw", "json", &BTreeMap::new())
+            .unwrap();
+        let h = mcap::records::MessageHeader {
+            channel_id: c,
+            sequence: 0,
+            log_time: 1,
+            publish_time: 1,
+        };
+        let data = serde_json::to_vec(&bad).unwrap();
+        writer.write_to_known_channel(&h, &data).unwrap();
+        writer.finish().unwrap();
+        drop(writer);
+        std::fs::write(&path, out.into_inner()).unwrap();
+        let e = BagImages::open(&path, "/raw")
+            .unwrap()
+            .next_frame()
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains(
+                "json.mcap: topic /raw, message 0: not a valid foxglove.RawImage message: Invalid"
+            ),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn frames_the_foxglove_sdk_records_are_read() {
         use foxglove::messages::{CompressedImage as FoxCompressed, RawImage, Timestamp};
         let dir = tempfile::tempdir().unwrap();
@@ -1275,18 +1403,26 @@ mod tests {
             }
             assert!(r.next_frame().unwrap().is_none());
         }
-        // Not protobuf, or not a valid message: refused by name.
+        // Neither protobuf nor JSON, or not a valid message: refused by
+        // name.
         let bad = dir.path().join("bad.mcap");
         let mut out = std::io::Cursor::new(Vec::new());
         let mut w = mcap::Writer::new(&mut out).unwrap();
         let s = w
             .add_schema(FOXGLOVE_RAW_IMAGE_TYPE, "protobuf", b"")
             .unwrap();
+        let flat = w
+            .add_channel(s, "/flatbuffer", "flatbuffer", &BTreeMap::new())
+            .unwrap();
         let json = w.add_channel(s, "/json", "json", &BTreeMap::new()).unwrap();
         let garbage = w
             .add_channel(s, "/garbage", "protobuf", &BTreeMap::new())
             .unwrap();
-        for (channel, data) in [(json, &b"{}"[..]), (garbage, &[0xff; 12][..])] {
+        for (channel, data) in [
+            (flat, &b"{}"[..]),
+            (json, &b"{\"width\": 2}"[..]),
+            (garbage, &[0xff; 12][..]),
+        ] {
             let h = mcap::records::MessageHeader {
                 channel_id: channel,
                 sequence: 0,
@@ -1300,8 +1436,12 @@ mod tests {
         std::fs::write(&bad, out.into_inner()).unwrap();
         for (topic, want) in [
             (
+                "/flatbuffer",
+                "topic /flatbuffer: foxglove.RawImage in message encoding \"flatbuffer\"; it is read in protobuf, as the Foxglove SDK writes it, or json",
+            ),
+            (
                 "/json",
-                "topic /json: foxglove.RawImage in message encoding \"json\"; it is read in protobuf",
+                "topic /json, message 0: not a valid foxglove.RawImage message: missing field `frame_id`",
             ),
             (
                 "/garbage",

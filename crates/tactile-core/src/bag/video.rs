@@ -7,13 +7,21 @@
 //!
 //! The topic's packets are written in order to an FFmpeg process from a
 //! thread of their own while the decoded frames are read back here (PAM
-//! pictures, which carry their size). The format forbids B-frames, so the
-//! decoder gives one frame per packet in the packets' order and each frame
-//! takes the stamp of its packet. Packets before the stream's first
+//! pictures, which carry their size). The decoder gives one frame per
+//! packet, in display order: the packets' own order when the stream has no
+//! B-frames, as the format asks. Each frame takes the earliest stamp of
+//! the packets written and not yet given a frame, which is its own
+//! packet's: a frame comes out only once every packet shown before it is
+//! in, and a packet shown later is stamped later. So a stream with
+//! B-frames (whose packets come in decoding order, each stamped with the
+//! time it shows, as `ffmpeg_image_transport` publishes them) is stamped
+//! right too. Packets before the stream's first
 //! keyframe (a recording begun mid-stream) cannot be decoded by anyone:
 //! they are skipped, with a warning.
 
 use std::borrow::Cow;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
@@ -27,7 +35,10 @@ use super::messages::{
     CompressedVideo, FFMPEG_PACKET_TYPE, FOXGLOVE_COMPRESSED_VIDEO_TYPE, FfmpegPacket,
     ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
 };
-use super::{BagFrame, TopicMessage, TopicMessages, bag_error, foxglove_stamp, stamp_or_log_time};
+use super::{
+    BagFrame, TopicMessage, TopicMessages, bag_error, foxglove_message, foxglove_stamp,
+    stamp_or_log_time,
+};
 use crate::image_io::{MAX_IMAGE_PIXELS, RgbImage, rgb_image};
 use crate::video::{last_words, spawn_error, stderr_tail};
 use crate::{Error, Result};
@@ -135,13 +146,7 @@ fn packet<'a>(topic: &TopicMessages, m: &'a TopicMessage) -> Result<(Cow<'a, [u8
         let format = Codec::of_encoding(&v.encoding);
         return Ok((Cow::Borrowed(v.data), format, v.header.stamp.nanos()));
     }
-    use foxglove::Decode;
-    let v = foxglove::messages::CompressedVideo::decode(m.data.as_slice()).map_err(|e| {
-        topic.message_error(
-            m.index,
-            format!("not a valid {FOXGLOVE_COMPRESSED_VIDEO_TYPE} message: {e}"),
-        )
-    })?;
+    let v: foxglove::messages::CompressedVideo = foxglove_message(topic, m)?;
     Ok((
         Cow::Owned(Vec::from(v.data)),
         v.format,
@@ -149,11 +154,13 @@ fn packet<'a>(topic: &TopicMessages, m: &'a TopicMessage) -> Result<(Cow<'a, [u8
     ))
 }
 
-/// The stamp and place of a packet written to the decoder.
+/// The stamp and place of a packet written to the decoder, ordered by
+/// stamp, then by place (the field order).
+#[derive(Debug, PartialEq, Eq, PartialOrd, Ord)]
 struct Stamp {
     stamp_ns: i64,
-    log_time_ns: u64,
     index: u64,
+    log_time_ns: u64,
 }
 
 /// What the feeder did, once it ended.
@@ -253,6 +260,9 @@ pub(super) struct VideoFrames {
     stdout: BufReader<ChildStdout>,
     stderr: Option<JoinHandle<Vec<u8>>>,
     stamps: mpsc::Receiver<Stamp>,
+    /// Stamps of the packets written that have no frame yet, earliest
+    /// first.
+    pending: BinaryHeap<Reverse<Stamp>>,
     feeder: Option<JoinHandle<Fed>>,
     fed: Option<Fed>,
     frames: u64,
@@ -312,6 +322,7 @@ impl VideoFrames {
             stdout: BufReader::with_capacity(1 << 20, stdout),
             stderr,
             stamps,
+            pending: BinaryHeap::new(),
             feeder: Some(feeder),
             fed: None,
             frames: 0,
@@ -373,7 +384,10 @@ impl VideoFrames {
             Ok(_) => self.read_picture(),
         }
         .and_then(|image| {
-            let stamp = self.stamps.recv().map_err(|_| {
+            // Every packet the frame needed was written, so its stamp was
+            // sent, before the frame came out.
+            self.pending.extend(self.stamps.try_iter().map(Reverse));
+            let Reverse(stamp) = self.pending.pop().ok_or_else(|| {
                 self.error(format!(
                     "FFmpeg gave more frames than the {} packets written to it",
                     self.frames
@@ -499,10 +513,9 @@ mod tests {
     use std::collections::BTreeMap;
     use std::path::Path;
 
-    /// `frames` frames of FFmpeg's moving test pattern encoded by
-    /// `encoder` without B-frames, a keyframe every 5: one packet per
-    /// frame (Annex B, parameter sets in each keyframe), and every frame
-    /// as FFmpeg decodes the whole stream.
+    /// `frames` 64x64 frames of FFmpeg's moving test pattern encoded by
+    /// `encoder`: one packet per frame in decoding order (Annex B), and
+    /// every frame as FFmpeg decodes the whole stream, in display order.
     fn encode(dir: &Path, encoder: &[&str], frames: usize) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
         let (w, h) = (64, 64);
         let packets = dir.join(format!("{}-%03d.bin", encoder[1]));
@@ -544,6 +557,39 @@ mod tests {
         let decoded: Vec<Vec<u8>> = out.stdout.chunks(w * h * 3).map(<[u8]>::to_vec).collect();
         assert_eq!(decoded.len(), frames);
         (packets, decoded)
+    }
+
+    /// Where each packet of `encode(dir, encoder, frames)` shows: the
+    /// same encoding (x264 on one thread gives the same packets) through
+    /// FFmpeg's `framecrc` muxer, which lists each packet's size and
+    /// presentation stamp in decoding order; the stamps ranked.
+    fn display_order(encoder: &[&str], frames: usize, packets: &[Vec<u8>]) -> Vec<usize> {
+        let out = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
+            .args(["-f", "lavfi", "-i", "testsrc=size=64x64:rate=10"])
+            .args(["-frames:v", &frames.to_string(), "-pix_fmt", "yuv420p"])
+            .args(encoder)
+            .args(["-f", "framecrc", "-"])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let listed: Vec<(usize, i64)> = String::from_utf8(out.stdout)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').map(str::trim).collect();
+                (f[4].parse().unwrap(), f[2].parse().unwrap())
+            })
+            .collect();
+        let sizes: Vec<usize> = listed.iter().map(|l| l.0).collect();
+        assert_eq!(sizes, packets.iter().map(Vec::len).collect::<Vec<_>>());
+        let mut pts: Vec<i64> = listed.iter().map(|l| l.1).collect();
+        pts.sort_unstable();
+        listed
+            .iter()
+            .map(|l| pts.binary_search(&l.1).unwrap())
+            .collect()
     }
 
     const T0: u32 = 1_700_000_000;
@@ -697,6 +743,54 @@ mod tests {
     }
 
     #[test]
+    fn frames_of_a_stream_with_b_frames_take_their_own_packets_stamps() {
+        // Two B-frames between references: packets come in decoding
+        // order, each stamped with the time its frame shows, as
+        // ffmpeg_image_transport publishes an encoder's packets.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = [
+            "-c:v",
+            "libx264",
+            "-threads",
+            "1",
+            "-g",
+            "6",
+            "-x264-params",
+            "bframes=2:b-adapt=0:b-pyramid=none:repeat-headers=1",
+        ];
+        let (packets, decoded) = encode(dir.path(), &x264, 12);
+        let shown = display_order(&x264, 12, &packets);
+        assert_ne!(shown, (0..12).collect::<Vec<_>>(), "no B-frames");
+        let path = dir.path().join("b.mcap");
+        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        cdr_bag(&path, "/cam", FFMPEG_PACKET_TYPE, &all, |i, data| {
+            to_cdr(&FfmpegPacket {
+                header: Header {
+                    stamp: Time::from_nanos(stamp_ns(shown[i])),
+                    frame_id: "cam".into(),
+                },
+                width: 64,
+                height: 64,
+                encoding: "h264;yuv420p;rgb8;rgb8".into(),
+                pts: shown[i] as u64,
+                flags: u8::from(i % 6 == 0),
+                is_bigendian: false,
+                data,
+            })
+        });
+        let (frames, warnings) = read_all(&path, "/cam").unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        // Frame k (display order) is the stream's frame k, with the stamp
+        // and message of the packet that coded it.
+        assert_eq!(frames.len(), 12);
+        for (k, f) in frames.iter().enumerate() {
+            let message = shown.iter().position(|&s| s == k).unwrap();
+            assert_eq!((f.index, f.stamp_ns), (message as u64, stamp_ns(k)), "{k}");
+            assert!(f.image.as_slice() == decoded[k].as_slice(), "frame {k}");
+        }
+    }
+
+    #[test]
     fn video_that_cannot_be_decoded_is_refused_by_name() {
         let dir = tempfile::tempdir().unwrap();
         let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
@@ -748,6 +842,33 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_video_frame_past_the_size_limit_is_refused_before_it_is_held() {
+        // One keyframe of 7696x4320, a little past 8K UHD: refused from
+        // the decoded picture's header, before its 100 MB are read.
+        let dir = tempfile::tempdir().unwrap();
+        let stream = dir.path().join("big.h264");
+        let status = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
+            .args(["-f", "lavfi", "-i", "color=c=gray:size=7696x4320"])
+            .args(["-frames:v", "1", "-pix_fmt", "yuv420p"])
+            .args(["-c:v", "libx264", "-preset", "ultrafast", "-f", "h264"])
+            .arg(&stream)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let data = std::fs::read(&stream).unwrap();
+        let path = dir.path().join("big.mcap");
+        ros_bag(&path, "/cam", "h264", &[(0, &data)]);
+        let e = read_all(&path, "/cam").err().unwrap().to_string();
+        assert!(
+            e.contains(&format!(
+                "big.mcap: topic /cam: its video is 7696x4320, more than the {MAX_IMAGE_PIXELS} pixels a frame may have"
+            )),
+            "{e}"
+        );
     }
 
     #[test]
