@@ -4,8 +4,12 @@ It subscribes to a `sensor_msgs/msg/Image` topic (any encoding `tactile
 run` reads in a bag: rgb8, bgr8, mono8, mono16 as the GelSight and TacTip
 cameras publish, cv_bridge's 8UC3, packed YUV 4:2:2, Bayer), or with
 `-p compressed:=true` to a `sensor_msgs/msg/CompressedImage` topic (JPEG or
-PNG, as image_transport's `compressed` transport publishes), runs
-`tactile.Pipeline` on each frame and publishes:
+PNG, as image_transport's `compressed` transport publishes), or with
+`-p video:=foxglove` to a `foxglove_msgs/msg/CompressedVideo` topic (H.264
+or H.265, as ROS 2 video encoders and the Foxglove bridge publish) or with
+`-p video:=ffmpeg` to `ffmpeg_image_transport`'s `FFMPEGPacket` topic
+(decoded as they arrive by `tactile.VideoDecoder`), runs `tactile.Pipeline`
+on each frame and publishes:
 
 - `~/result` (`std_msgs/msg/String`): the frame's record as JSON (the same
   fields as a line of `tactile run --out`), stamped with the input's header;
@@ -18,6 +22,8 @@ Run it in a sourced ROS 2 workspace::
         -r image:=/gelsight/image_raw -p models:=models -p runtime:=onnx
     python3 examples/ros2/tactile_node.py --ros-args \
         -r image:=/gelsight/image_raw/compressed -p compressed:=true
+    python3 examples/ros2/tactile_node.py --ros-args \
+        -r image:=/gelsight/video -p video:=foxglove
 
 The logic (`PalpationNode.handle`) imports nothing of ROS, so it is tested
 without ROS installed (crates/tactile-py/tests/test_ros_node.py); `main`
@@ -54,15 +60,28 @@ class PalpationNode:
 
     def __init__(self, models: str = "models", runtime: str = "onnx") -> None:
         self.pipeline = tactile.Pipeline(models, runtime)
+        self.video: Optional[tactile.VideoDecoder] = None
 
     def handle(self, msg: Any) -> Output:
         """One image message: its record (with the header's stamp) and, on
         a tendon frame, the kept region as a uint8 mask of the frame's size."""
-        rgb = image_to_rgb(msg)
+        stamp = msg.header.stamp
+        return self.process(image_to_rgb(msg), int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec))
+
+    def handle_video(self, msg: Any) -> list[Output]:
+        """One video message (a CompressedVideo, with `timestamp` and
+        `format`, or an FFMPEGPacket, with `header` and `encoding`): the
+        outputs of the frames it completes, normally its own."""
+        stamp = msg.timestamp if hasattr(msg, "timestamp") else msg.header.stamp
+        if self.video is None:
+            self.video = tactile.VideoDecoder(getattr(msg, "format", None) or msg.encoding)
+        frames = self.video.decode(msg.data, int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec))
+        return [self.process(f.image, f.stamp_ns) for f in frames]
+
+    def process(self, rgb: np.ndarray, stamp_ns: int) -> Output:
         result = self.pipeline.process(rgb)
         record = result.to_dict()
-        stamp = msg.header.stamp
-        record["stamp_ns"] = int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+        record["stamp_ns"] = stamp_ns
         mask = (result.mask.astype(np.uint8) * 255) if result.tendon else None
         return Output(record=record, mask=mask)
 
@@ -70,8 +89,9 @@ class PalpationNode:
 def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs ROS 2
     import rclpy
     from rclpy.node import Node
+    from builtin_interfaces.msg import Time
     from sensor_msgs.msg import CompressedImage, Image
-    from std_msgs.msg import String
+    from std_msgs.msg import Header, String
 
     rclpy.init(args=argv if argv is not None else sys.argv)
 
@@ -81,21 +101,44 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             models = self.declare_parameter("models", "models").value
             runtime = self.declare_parameter("runtime", "onnx").value
             compressed = self.declare_parameter("compressed", False).value
+            video = self.declare_parameter("video", "").value
+            self.frame_id = ""
             self.logic = PalpationNode(models, runtime)
             self.results = self.create_publisher(String, "~/result", 10)
             self.masks = self.create_publisher(Image, "~/tendon_mask", 10)
-            # A queue of 1: a slow model skips to the newest frame.
-            self.create_subscription(CompressedImage if compressed else Image, "image", self.on_image, 1)
+            if video:
+                if video == "ffmpeg":
+                    from ffmpeg_image_transport_msgs.msg import FFMPEGPacket as Video
+                else:
+                    from foxglove_msgs.msg import CompressedVideo as Video
+                # Every packet is needed to decode the next: a deep queue.
+                self.create_subscription(Video, "image", self.on_video, 30)
+            else:
+                # A queue of 1: a slow model skips to the newest frame.
+                self.create_subscription(CompressedImage if compressed else Image, "image", self.on_image, 1)
 
         def on_image(self, msg: Any) -> None:
             try:
-                out = self.logic.handle(msg)
+                self.publish(self.logic.handle(msg), msg.header.frame_id)
             except ValueError as e:
                 self.get_logger().warning(f"frame skipped: {e}")
+
+        def on_video(self, msg: Any) -> None:
+            try:
+                outputs = self.logic.handle_video(msg)
+            except ValueError as e:
+                self.get_logger().warning(f"packet skipped: {e}")
                 return
+            frame_id = msg.frame_id if hasattr(msg, "frame_id") else msg.header.frame_id
+            for out in outputs:
+                self.publish(out, frame_id)
+
+        def publish(self, out: Output, frame_id: str) -> None:
             self.results.publish(String(data=json.dumps(out.record)))
             if out.mask is not None:
-                m = Image(header=msg.header, height=out.mask.shape[0], width=out.mask.shape[1],
+                t = out.record["stamp_ns"]
+                header = Header(stamp=Time(sec=t // 1_000_000_000, nanosec=t % 1_000_000_000), frame_id=frame_id)
+                m = Image(header=header, height=out.mask.shape[0], width=out.mask.shape[1],
                           encoding="mono8", is_bigendian=0, step=out.mask.shape[1],
                           data=out.mask.tobytes())
                 self.masks.publish(m)

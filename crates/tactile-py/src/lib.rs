@@ -42,6 +42,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<dataset::PyDataset>()?;
     m.add_class::<source::PyFrameSource>()?;
     m.add_class::<source::PyFrame>()?;
+    m.add_class::<source::PyVideoDecoder>()?;
     m.add_function(wrap_pyfunction!(source::frames, m)?)?;
     m.add_function(wrap_pyfunction!(source::bag_topics, m)?)?;
     m.add_function(wrap_pyfunction!(source::ros_image_to_rgb, m)?)?;

@@ -105,6 +105,107 @@ impl PyFrameSource {
     }
 }
 
+/// A live video topic decoded as its packets arrive, for a node that
+/// subscribes to `foxglove_msgs/msg/CompressedVideo` or
+/// `ffmpeg_image_transport_msgs/msg/FFMPEGPacket` itself: `format` is the
+/// message's `format` or `encoding` (H.264 or H.265, Annex B). `decode`
+/// takes each message's `data` (bytes, or rclpy's array) and stamp and
+/// gives the frames decoded so far, normally that packet's own; packets
+/// before the first keyframe are skipped (`skipped` counts them). The
+/// system's FFmpeg decodes, as it does a bag's video.
+#[pyclass(module = "tactile", name = "VideoDecoder")]
+pub struct PyVideoDecoder {
+    decoder: Mutex<Option<tactile_core::bag::LiveVideo>>,
+}
+
+impl PyVideoDecoder {
+    fn with<T>(
+        &self,
+        f: impl FnOnce(&mut tactile_core::bag::LiveVideo) -> PyResult<T>,
+    ) -> PyResult<T> {
+        let mut guard = self
+            .decoder
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the decoder failed in another thread"))?;
+        match guard.as_mut() {
+            Some(d) => f(d),
+            None => Err(PyValueError::new_err("the video decoder was finished")),
+        }
+    }
+}
+
+/// Frames of a live video as Python frames, named by their packet's place.
+fn live_frames(
+    py: Python<'_>,
+    frames: Vec<tactile_core::bag::LiveFrame>,
+) -> PyResult<Vec<PyFrame>> {
+    frames
+        .into_iter()
+        .map(|f| {
+            Ok(PyFrame {
+                image: crate::image::rgb_array(py, f.image)?.unbind(),
+                name: f.packet.to_string(),
+                sequence: None,
+                tendon: None,
+                age_ms: None,
+                stamp_ns: Some(f.stamp_ns),
+            })
+        })
+        .collect()
+}
+
+#[pymethods]
+impl PyVideoDecoder {
+    #[new]
+    #[pyo3(signature = (format, *, name="video"))]
+    fn new(py: Python<'_>, format: &str, name: &str) -> PyResult<Self> {
+        let decoder = py
+            .detach(|| tactile_core::bag::LiveVideo::new(format, name))
+            .py()?;
+        Ok(Self {
+            decoder: Mutex::new(Some(decoder)),
+        })
+    }
+
+    /// Give the next packet and its stamp (nanoseconds); the frames ready.
+    #[pyo3(signature = (data, stamp_ns=0))]
+    fn decode(
+        &self,
+        py: Python<'_>,
+        data: &Bound<'_, PyAny>,
+        stamp_ns: i64,
+    ) -> PyResult<Vec<PyFrame>> {
+        let data = py
+            .import("builtins")?
+            .getattr("bytes")?
+            .call1((data,))
+            .map_err(|e| PyValueError::new_err(format!("a packet's data: not bytes ({e})")))?;
+        let data = data.cast::<pyo3::types::PyBytes>()?.as_bytes().to_vec();
+        let frames = self.with(|d| py.detach(|| d.push(&data, stamp_ns)).py())?;
+        live_frames(py, frames)
+    }
+
+    /// End the stream: the frames still held.
+    fn finish(&self, py: Python<'_>) -> PyResult<Vec<PyFrame>> {
+        let decoder = self
+            .decoder
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the decoder failed in another thread"))?
+            .take();
+        let frames = match decoder {
+            Some(d) => py.detach(|| d.finish()).py()?,
+            None => Vec::new(),
+        };
+        live_frames(py, frames)
+    }
+
+    /// Packets given before the first keyframe, which no decoder can read.
+    #[getter]
+    fn skipped(&self) -> PyResult<u64> {
+        self.with(|d| Ok(d.skipped()))
+    }
+}
+
 /// Open a source of frames: `source` is a dataset folder, a folder of PNG or
 /// JPEG frames, an image, a video file (decoded by the system's FFmpeg,
 /// every frame), a ROS 2 bag (its folder or one ".mcap"; `topic` names its

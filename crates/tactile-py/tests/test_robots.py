@@ -382,6 +382,29 @@ def test_foxglove_json_messages_the_python_sdk_logs(tmp_path, root, palpation_fr
     assert decisions(recorded) == decisions(folder)
 
 
+def test_a_live_video_topic_decodes_each_packet_as_it_arrives(tmp_path, root, palpation_frames):
+    """A node subscribed to a running camera's H.264 topic, joined in the
+    middle of a group of pictures: `VideoDecoder.decode` skips the packets
+    before the next keyframe and then gives each packet's own frame (the
+    PNG, lossless) with its stamp, before the next packet is given."""
+    data = lossless_h264_packets(root / "samples" / "palpation", tmp_path)
+    decoder = tactile.VideoDecoder("h264", name="/cam/h264")
+    got = []
+    for i in range(2, len(data)):
+        frames = decoder.decode(bytearray(data[i]), stamp(i))
+        if i >= 4:
+            assert [f.stamp_ns for f in frames] == [stamp(i)], i
+        got += frames
+    assert decoder.skipped == 2
+    got += decoder.finish()
+    assert [f.stamp_ns for f in got] == [stamp(i) for i in range(4, len(data))]
+    assert all(np.array_equal(f.image, rgb) for f, rgb in zip(got, palpation_frames[4:]))
+    with pytest.raises(ValueError, match="finished"):
+        decoder.decode(data[0])
+    with pytest.raises(ValueError, match=r'/cam: video in format "vp9"'):
+        tactile.VideoDecoder("vp9", name="/cam")
+
+
 def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpation_frames):
     """ROS 2's video messages (foxglove_msgs CompressedVideo and
     ffmpeg_image_transport's FFMPEGPacket) serialised by mcap-ros2-support

@@ -30,6 +30,8 @@
 pub mod messages;
 mod video;
 
+pub use video::{LiveFrame, LiveVideo};
+
 use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
 use std::io::Read;

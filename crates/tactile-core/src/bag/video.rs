@@ -96,6 +96,17 @@ impl Codec {
         }
     }
 
+    /// An access unit delimiter (ITU-T H.264 7.3.2.4, any picture type;
+    /// H.265 7.3.2.5, type 35): written after a live packet, it tells
+    /// FFmpeg's parser the packet's picture is whole, so it is decoded at
+    /// once instead of when the next packet comes.
+    fn access_unit_delimiter(self) -> &'static [u8] {
+        match self {
+            Self::H264 => &[0, 0, 0, 1, 0x09, 0xf0],
+            Self::H265 => &[0, 0, 0, 1, 0x46, 0x01, 0x50],
+        }
+    }
+
     /// FFmpeg's demuxer of the codec's Annex B stream.
     fn demuxer(self) -> &'static str {
         match self {
@@ -247,6 +258,50 @@ fn feed(
     }
 }
 
+/// One picture FFmpeg decoded (PAM), its size checked before it is held;
+/// errors made by `error`.
+fn read_picture(stdout: &mut impl BufRead, error: impl Fn(String) -> Error) -> Result<RgbImage> {
+    let bad = |e: String| error(format!("a frame FFmpeg decoded could not be read: {e}"));
+    let decoder = PnmDecoder::new(stdout).map_err(|e| bad(e.to_string()))?;
+    let (width, height) = decoder.dimensions();
+    if u64::from(width) * u64::from(height) > MAX_IMAGE_PIXELS {
+        return Err(error(format!(
+            "its video is {width}x{height}, more than the {MAX_IMAGE_PIXELS} pixels a frame may have"
+        )));
+    }
+    if decoder.color_type() != ColorType::Rgb8 {
+        return Err(bad(format!("{:?}, not 8-bit RGB", decoder.color_type())));
+    }
+    let mut buf = vec![0u8; (u64::from(width) * u64::from(height) * 3) as usize];
+    decoder
+        .read_image(&mut buf)
+        .map_err(|e| bad(e.to_string()))?;
+    rgb_image(width as usize, height as usize, buf)
+}
+
+/// An FFmpeg process decoding `codec`'s Annex B stream from its input to
+/// PAM pictures on its output, one thread; `live` starts it on the first
+/// packet instead of after probing megabytes of the stream.
+fn spawn_decoder(codec: Codec, live: bool, path: &std::path::Path) -> Result<Child> {
+    let probe: &[&str] = match live {
+        true => &["-probesize", "32", "-analyzeduration", "0"],
+        false => &[],
+    };
+    Command::new("ffmpeg")
+        .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
+        .args(["-threads", "1"])
+        .args(probe)
+        .args(["-f", codec.demuxer(), "-i", "pipe:0"])
+        .args(["-map", "0:v:0", "-fps_mode", "passthrough"])
+        .args(["-pix_fmt", "rgb24", "-c:v", "pam", "-f", "image2pipe"])
+        .arg("pipe:1")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| spawn_error(path, e))
+}
+
 /// The frames of a video topic, decoded by an FFmpeg process fed from a
 /// thread; the process is killed when this is dropped.
 pub(super) struct VideoFrames {
@@ -284,17 +339,7 @@ impl VideoFrames {
         let path = messages.records.path.clone();
         let topic = messages.topic.clone();
         let first_index = first.index;
-        let mut child = Command::new("ffmpeg")
-            .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
-            .args(["-threads", "1", "-f", codec.demuxer(), "-i", "pipe:0"])
-            .args(["-map", "0:v:0", "-fps_mode", "passthrough"])
-            .args(["-pix_fmt", "rgb24", "-c:v", "pam", "-f", "image2pipe"])
-            .arg("pipe:1")
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .map_err(|e| spawn_error(&path, e))?;
+        let mut child = spawn_decoder(codec, false, &path)?;
         let stderr = stderr_tail(&mut child);
         let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
             let _ = child.kill();
@@ -414,32 +459,10 @@ impl VideoFrames {
         }
     }
 
-    /// One decoded picture, its size checked before it is held.
+    /// One decoded picture.
     fn read_picture(&mut self) -> Result<RgbImage> {
         let (path, topic) = (&self.path, &self.topic);
-        let bad = |e: String| {
-            bag_error(
-                path,
-                Some(topic),
-                None,
-                format!("a frame FFmpeg decoded could not be read: {e}"),
-            )
-        };
-        let decoder = PnmDecoder::new(&mut self.stdout).map_err(|e| bad(e.to_string()))?;
-        let (width, height) = decoder.dimensions();
-        if u64::from(width) * u64::from(height) > MAX_IMAGE_PIXELS {
-            return Err(self.error(format!(
-                "its video is {width}x{height}, more than the {MAX_IMAGE_PIXELS} pixels a frame may have"
-            )));
-        }
-        if decoder.color_type() != ColorType::Rgb8 {
-            return Err(bad(format!("{:?}, not 8-bit RGB", decoder.color_type())));
-        }
-        let mut buf = vec![0u8; (u64::from(width) * u64::from(height) * 3) as usize];
-        decoder
-            .read_image(&mut buf)
-            .map_err(|e| bad(e.to_string()))?;
-        rgb_image(width as usize, height as usize, buf)
+        read_picture(&mut self.stdout, |e| bag_error(path, Some(topic), None, e))
     }
 
     /// Wait for the decoder (killed first when `stop`) and the feeder,
@@ -501,6 +524,215 @@ impl Drop for VideoFrames {
         // The feeder then finds the decoder's input closed and ends.
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+/// A frame of a live video stream.
+pub struct LiveFrame {
+    /// The pixels.
+    pub image: RgbImage,
+    /// The stamp given with its packet, nanoseconds.
+    pub stamp_ns: i64,
+    /// Its packet's place among those given (0-based, counting the ones
+    /// skipped before the first keyframe).
+    pub packet: u64,
+}
+
+/// A video stream decoded as its packets arrive: a subscription to a
+/// live `CompressedVideo` or `FFMPEGPacket` topic. The packets go to an
+/// FFmpeg process that starts on the first keyframe (no probing) and
+/// decodes each packet as soon as it is whole (an access unit delimiter
+/// follows it), and a thread reads its pictures back, so a packet's frame
+/// is usually ready before [`Self::push`] returns. Frames take stamps as a
+/// bag's video does (the earliest pending one). The process is killed when
+/// this is dropped.
+pub struct LiveVideo {
+    codec: Codec,
+    name: String,
+    child: Child,
+    stdin: Option<ChildStdin>,
+    pictures: mpsc::Receiver<Result<RgbImage>>,
+    reader: Option<JoinHandle<()>>,
+    stderr: Option<JoinHandle<Vec<u8>>>,
+    pending: BinaryHeap<Reverse<Stamp>>,
+    /// Packets given, and written to the decoder.
+    given: u64,
+    written: u64,
+    /// False once a packet's frame did not come within the wait: the
+    /// stream holds frames back (B-frames) or lost one, so later pushes
+    /// return at once.
+    wait: bool,
+}
+
+/// How long [`LiveVideo::push`] waits for the frame of the packet it was
+/// given.
+const LIVE_FRAME_WAIT: std::time::Duration = std::time::Duration::from_millis(500);
+
+impl LiveVideo {
+    /// A decoder of `format` (`h264`, `h265`/`hevc`; the codec, or the
+    /// encoder's name as `ffmpeg_image_transport` writes it), named `name`
+    /// (a topic) in errors.
+    pub fn new(format: &str, name: &str) -> Result<Self> {
+        let error = |m: String| Error::Invalid(format!("{name}: {m}"));
+        let codec = Codec::of(&Codec::of_encoding(format)).ok_or_else(|| {
+            error(format!(
+                "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B)"
+            ))
+        })?;
+        let mut child = spawn_decoder(codec, true, std::path::Path::new(name))?;
+        let stderr = stderr_tail(&mut child);
+        let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(error("ffmpeg started without its pipes".into()));
+        };
+        let (send, pictures) = mpsc::channel();
+        let owner = name.to_string();
+        let reader = std::thread::Builder::new()
+            .name("live-video".into())
+            .spawn(move || {
+                let mut stdout = BufReader::with_capacity(1 << 20, stdout);
+                while let Ok(false) = stdout.fill_buf().map(<[u8]>::is_empty) {
+                    let picture =
+                        read_picture(&mut stdout, |m| Error::Invalid(format!("{owner}: {m}")));
+                    let failed = picture.is_err();
+                    if send.send(picture).is_err() || failed {
+                        break;
+                    }
+                }
+            });
+        let reader = match reader {
+            Ok(r) => r,
+            Err(e) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(error(format!("no thread to read its frames: {e}")));
+            }
+        };
+        Ok(Self {
+            codec,
+            name: name.to_string(),
+            child,
+            stdin: Some(stdin),
+            pictures,
+            reader: Some(reader),
+            stderr,
+            pending: BinaryHeap::new(),
+            given: 0,
+            written: 0,
+            wait: true,
+        })
+    }
+
+    /// Packets given before the first keyframe, which no decoder can read
+    /// (a subscription joined mid-stream): skipped.
+    pub fn skipped(&self) -> u64 {
+        self.given - self.written
+    }
+
+    /// Give the next packet (one frame, Annex B) and its stamp; the frames
+    /// decoded so far, after waiting (up to half a second, and only while
+    /// every packet has given its frame in time) for this packet's.
+    pub fn push(&mut self, data: &[u8], stamp_ns: i64) -> Result<Vec<LiveFrame>> {
+        let packet = self.given;
+        self.given += 1;
+        if self.written == 0 && !self.codec.starts_stream(data) {
+            return Ok(Vec::new());
+        }
+        let Some(stdin) = self.stdin.as_mut() else {
+            return Err(self.error("its stream was closed".into()));
+        };
+        self.pending.push(Reverse(Stamp {
+            stamp_ns,
+            index: packet,
+            log_time_ns: 0,
+        }));
+        let delimiter = self.codec.access_unit_delimiter();
+        if let Err(e) = stdin
+            .write_all(data)
+            .and_then(|()| stdin.write_all(delimiter))
+            .and_then(|()| stdin.flush())
+        {
+            let last = self.stop();
+            return Err(self.error(format!("FFmpeg stopped reading its packets ({e}): {last}")));
+        }
+        self.written += 1;
+        let mut frames = Vec::new();
+        if self.wait {
+            match self.pictures.recv_timeout(LIVE_FRAME_WAIT) {
+                Ok(p) => frames.push(self.frame(p)?),
+                Err(mpsc::RecvTimeoutError::Timeout) => self.wait = false,
+                Err(mpsc::RecvTimeoutError::Disconnected) => {}
+            }
+        }
+        self.ready(&mut frames)?;
+        Ok(frames)
+    }
+
+    /// End the stream: the frames still held, once FFmpeg has decoded
+    /// every packet.
+    pub fn finish(mut self) -> Result<Vec<LiveFrame>> {
+        drop(self.stdin.take());
+        let mut frames = Vec::new();
+        while let Ok(p) = self.pictures.recv() {
+            frames.push(self.frame(p)?);
+        }
+        let status = self.child.wait().map_err(|e| self.error(e.to_string()))?;
+        let last = last_words(self.stderr.take());
+        if !status.success() {
+            return Err(self.error(format!(
+                "FFmpeg could not decode its {} stream ({status}): {last}",
+                self.codec.name()
+            )));
+        }
+        Ok(frames)
+    }
+
+    /// The frames ready now, after `frames`.
+    fn ready(&mut self, frames: &mut Vec<LiveFrame>) -> Result<()> {
+        while let Ok(p) = self.pictures.try_recv() {
+            frames.push(self.frame(p)?);
+        }
+        Ok(())
+    }
+
+    /// A picture with the earliest pending stamp.
+    fn frame(&mut self, picture: Result<RgbImage>) -> Result<LiveFrame> {
+        let image = picture?;
+        let Some(Reverse(stamp)) = self.pending.pop() else {
+            return Err(self.error(format!(
+                "FFmpeg gave more frames than the {} packets written to it",
+                self.written
+            )));
+        };
+        Ok(LiveFrame {
+            image,
+            stamp_ns: stamp.stamp_ns,
+            packet: stamp.index,
+        })
+    }
+
+    /// Kill the decoder; its last words.
+    fn stop(&mut self) -> String {
+        drop(self.stdin.take());
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        last_words(self.stderr.take())
+    }
+
+    fn error(&self, message: String) -> Error {
+        Error::Invalid(format!("{}: {message}", self.name))
+    }
+}
+
+impl Drop for LiveVideo {
+    fn drop(&mut self) {
+        drop(self.stdin.take());
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        if let Some(r) = self.reader.take() {
+            let _ = r.join();
+        }
     }
 }
 
@@ -788,6 +1020,44 @@ mod tests {
             assert_eq!((f.index, f.stamp_ns), (message as u64, stamp_ns(k)), "{k}");
             assert!(f.image.as_slice() == decoded[k].as_slice(), "frame {k}");
         }
+    }
+
+    #[test]
+    fn a_live_stream_gives_each_packets_frame_as_it_arrives() {
+        // Joined mid-stream, as a subscriber joins a running camera: the
+        // packets before the keyframe skipped, then each packet's frame
+        // back from its own push (the decoder does not wait for the next
+        // packet), with its stamp; H.265 too.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "4"];
+        let x265 = [
+            "-c:v",
+            "libx265",
+            "-x265-params",
+            "bframes=0:keyint=4:repeat-headers=1:log-level=error",
+        ];
+        for (encoder, format) in [(&x264[..], "h264;yuv420p;rgb8;rgb8"), (&x265[..], "hevc")] {
+            let (packets, decoded) = encode(dir.path(), encoder, 10);
+            let mut live = LiveVideo::new(format, "/cam").unwrap();
+            let mut frames = Vec::new();
+            let mut late = 0;
+            for (i, p) in packets.iter().enumerate().skip(2) {
+                let got = live.push(p, stamp_ns(i)).unwrap();
+                late += usize::from(i >= 4 && !got.iter().any(|f| f.packet == i as u64 - 2));
+                frames.extend(got);
+            }
+            assert_eq!(live.skipped(), 2);
+            frames.extend(live.finish().unwrap());
+            assert_eq!(late, 0, "{format}: frames came a packet late");
+            let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.packet, f.stamp_ns)).collect();
+            let want: Vec<(u64, i64)> = (4..10).map(|i| (i as u64 - 2, stamp_ns(i))).collect();
+            assert_eq!(got, want, "{format}");
+            for (f, i) in frames.iter().zip(4..) {
+                assert!(f.image.as_slice() == decoded[i].as_slice(), "{format} {i}");
+            }
+        }
+        let e = LiveVideo::new("vp9", "/cam").err().unwrap().to_string();
+        assert!(e.contains("/cam: video in format \"vp9\""), "{e}");
     }
 
     #[test]
