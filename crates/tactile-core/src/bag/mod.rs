@@ -1196,14 +1196,7 @@ mod tests {
         // error, alone; the last split of a bag folder, nothing to add.
         let bag = write(mcap::WriteOptions::new());
         std::fs::write(&f, &bag[..30]).unwrap();
-        for e in [
-            image_topics(&f).unwrap_err(),
-            BagImages::open(&f, "/a")
-                .unwrap()
-                .next_frame()
-                .err()
-                .unwrap(),
-        ] {
+        for e in [image_topics(&f).unwrap_err(), first_frame_error(&f, "/a")] {
             assert!(
                 e.to_string().contains(
                     "x.mcap: not a readable MCAP bag: it ends before its first complete message"
@@ -1224,48 +1217,12 @@ mod tests {
         assert_eq!(listed.iter().map(|t| t.count).collect::<Vec<_>>(), [40, 7]);
     }
 
-    #[test]
-    fn foxglove_images_in_json_are_read() {
-        // Foxglove's JSON schemas, as a recorder logging plain JSON
-        // writes them: bytes in base64, stamps as {sec, nsec}, fields the
-        // schema does not name ignored.
-        use base64::Engine;
-        let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("json.mcap");
-        let (w, h) = (6u32, 4u32);
-        let px: Vec<u8> = (0..w * h * 3).map(|i| (i * 11 % 253) as u8).collect();
-        let mut png = Vec::new();
-        image::RgbImage::from_raw(w, h, px.clone())
-            .unwrap()
-            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-            .unwrap();
-        let t0 = 1_700_000_000u32;
-        let raw = |i: u32| {
-            serde_json::json!({
-                "timestamp": {"sec": t0 + i, "nsec": 250_000_000},
-                "frame_id": "cam",
-                "width": w,
-                "height": h,
-                "encoding": "rgb8",
-                "step": w * 3,
-                "data": b64(&px),
-                "note": "ignored",
-            })
-        };
-        let compressed =
-            |_: u32| serde_json::json!({"frame_id": "cam", "data": b64(&png), "format": "png"});
+    /// An MCAP file of JSON messages: per topic, its schema's name and
+    /// messages, logged a second apart from `t0`.
+    fn json_bag(path: &Path, topics: &[(&str, &str, Vec<serde_json::Value>)], t0: u32) {
         let mut out = std::io::Cursor::new(Vec::new());
         let mut writer = mcap::Writer::new(&mut out).unwrap();
-        let topics = [
-            ("/raw", FOXGLOVE_RAW_IMAGE_TYPE, [raw(0), raw(1)]),
-            (
-                "/png",
-                FOXGLOVE_COMPRESSED_IMAGE_TYPE,
-                [compressed(0), compressed(1)],
-            ),
-        ];
-        for (topic, schema, messages) in &topics {
+        for (topic, schema, messages) in topics {
             let s = writer.add_schema(schema, "jsonschema", b"{}").unwrap();
             let c = writer
                 .add_channel(s, topic, "json", &BTreeMap::new())
@@ -1283,7 +1240,64 @@ mod tests {
         }
         writer.finish().unwrap();
         drop(writer);
-        std::fs::write(&path, out.into_inner()).unwrap();
+        std::fs::write(path, out.into_inner()).unwrap();
+    }
+
+    /// The error of the first frame of `topic`.
+    fn first_frame_error(path: &Path, topic: &str) -> Error {
+        BagImages::open(path, topic)
+            .unwrap()
+            .next_frame()
+            .err()
+            .unwrap()
+    }
+
+    /// A `w x h` RGB test frame and its PNG.
+    fn frame_and_png(w: u32, h: u32, seed: u32) -> (Vec<u8>, Vec<u8>) {
+        let px: Vec<u8> = (0..w * h * 3).map(|i| (i * seed % 251) as u8).collect();
+        let mut png = Vec::new();
+        image::RgbImage::from_raw(w, h, px.clone())
+            .unwrap()
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        (px, png)
+    }
+
+    #[test]
+    fn foxglove_images_in_json_are_read() {
+        // Foxglove's JSON schemas, as a recorder logging plain JSON
+        // writes them: bytes in base64, stamps as {sec, nsec}, fields the
+        // schema does not name ignored.
+        use base64::Engine;
+        let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("json.mcap");
+        let (w, h) = (6u32, 4u32);
+        let (px, png) = frame_and_png(w, h, 11);
+        let t0 = 1_700_000_000u32;
+        let raw = |i: u32| {
+            serde_json::json!({
+                "timestamp": {"sec": t0 + i, "nsec": 250_000_000},
+                "frame_id": "cam",
+                "width": w,
+                "height": h,
+                "encoding": "rgb8",
+                "step": w * 3,
+                "data": b64(&px),
+                "note": "ignored",
+            })
+        };
+        let compressed =
+            |_: u32| serde_json::json!({"frame_id": "cam", "data": b64(&png), "format": "png"});
+        let topics = [
+            ("/raw", FOXGLOVE_RAW_IMAGE_TYPE, vec![raw(0), raw(1)]),
+            (
+                "/png",
+                FOXGLOVE_COMPRESSED_IMAGE_TYPE,
+                vec![compressed(0), compressed(1)],
+            ),
+        ];
+        json_bag(&path, &topics, t0);
         for (topic, _, _) in &topics {
             let mut r = BagImages::open(&path, topic).unwrap();
             for i in 0..2 {
@@ -1298,31 +1312,8 @@ mod tests {
         // Data that is not base64: refused naming the message.
         let mut bad = raw(0);
         bad["data"] = "not base64!".into();
-        let mut out = std::io::Cursor::new(Vec::new());
-        let mut writer = mcap::Writer::new(&mut out).unwrap();
-        let s = writer
-            .add_schema(FOXGLOVE_RAW_IMAGE_TYPE, "jsonschema", b"{}")
-            .unwrap();
-        let c = writer
-            .add_channel(s, "/raw", "json", &BTreeMap::new())
-            .unwrap();
-        let h = mcap::records::MessageHeader {
-            channel_id: c,
-            sequence: 0,
-            log_time: 1,
-            publish_time: 1,
-        };
-        let data = serde_json::to_vec(&bad).unwrap();
-        writer.write_to_known_channel(&h, &data).unwrap();
-        writer.finish().unwrap();
-        drop(writer);
-        std::fs::write(&path, out.into_inner()).unwrap();
-        let e = BagImages::open(&path, "/raw")
-            .unwrap()
-            .next_frame()
-            .err()
-            .unwrap()
-            .to_string();
+        json_bag(&path, &[("/raw", FOXGLOVE_RAW_IMAGE_TYPE, vec![bad])], t0);
+        let e = first_frame_error(&path, "/raw").to_string();
         assert!(
             e.contains(
                 "json.mcap: topic /raw, message 0: not a valid foxglove.RawImage message: Invalid"
@@ -1337,12 +1328,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("sdk.mcap");
         let (w, h) = (16u32, 8u32);
-        let px: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 251) as u8).collect();
-        let mut png = Vec::new();
-        image::RgbImage::from_raw(w, h, px.clone())
-            .unwrap()
-            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-            .unwrap();
+        let (px, png) = frame_and_png(w, h, 7);
         // Recorded as a Foxglove SDK user records: a context, its MCAP
         // writer, a typed channel per topic. The BGR frame's rows padded.
         let t0 = 1_700_000_000u32;
@@ -1450,11 +1436,7 @@ mod tests {
                 "topic /garbage, message 0: not a valid foxglove.RawImage message",
             ),
         ] {
-            let e = BagImages::open(&bad, topic)
-                .unwrap()
-                .next_frame()
-                .err()
-                .unwrap();
+            let e = first_frame_error(&bad, topic);
             assert!(e.to_string().contains(want), "{e}");
         }
     }
@@ -1480,12 +1462,7 @@ mod tests {
         drop(w);
         std::fs::write(&path, out.into_inner()).unwrap();
         assert_eq!(only_image_topic(&path).unwrap(), "/cam");
-        let e = BagImages::open(&path, "/cam")
-            .unwrap()
-            .next_frame()
-            .err()
-            .unwrap()
-            .to_string();
+        let e = first_frame_error(&path, "/cam").to_string();
         assert!(
             e.contains(
                 "topic /cam: carries ROS 1 messages (sensor_msgs/Image in encoding \"ros1\")"

@@ -564,9 +564,10 @@ pub struct LiveVideo {
     wait: bool,
 }
 
-/// How long [`LiveVideo::push`] waits for the frame of the packet it was
-/// given.
-const LIVE_FRAME_WAIT: std::time::Duration = std::time::Duration::from_millis(500);
+/// How long [`LiveVideo::push`] waits for a frame: far above a frame's
+/// decoding (milliseconds at 1080p), so only a stream that holds frames
+/// back (B-frames) or lost one waits it out, once.
+const LIVE_FRAME_WAIT: std::time::Duration = std::time::Duration::from_secs(1);
 
 impl LiveVideo {
     /// A decoder of `format` (`h264`, `h265`/`hevc`; the codec, or the
@@ -631,8 +632,9 @@ impl LiveVideo {
     }
 
     /// Give the next packet (one frame, Annex B) and its stamp; the frames
-    /// decoded so far, after waiting (up to half a second, and only while
-    /// every packet has given its frame in time) for this packet's.
+    /// decoded so far, after waiting for a frame (up to a second, and only
+    /// while every packet has given its frame in time), normally this
+    /// packet's.
     pub fn push(&mut self, data: &[u8], stamp_ns: i64) -> Result<Vec<LiveFrame>> {
         let packet = self.given;
         self.given += 1;
