@@ -1063,6 +1063,47 @@ mod tests {
     }
 
     #[test]
+    fn a_live_stream_of_damaged_packets_gives_frames_or_an_error_never_a_hang() {
+        // Bytes of a live stream's packets overwritten at random, as a bad
+        // link leaves them: every push and the finish return, with frames
+        // (at most one a packet) or an error naming the topic.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
+        let (packets, _) = encode(dir.path(), &x264, 6);
+        let mut rng = crate::rng::SampleRng::new(47, 0, 0);
+        let mut outcomes = [0usize; 2];
+        for _ in 0..12 {
+            let mut damaged = packets.clone();
+            for _ in 0..1 + rng.index(8) {
+                let p = rng.index(damaged.len());
+                let at = rng.index(damaged[p].len());
+                damaged[p][at] = rng.index(256) as u8;
+            }
+            let mut live = LiveVideo::new("h264", "/cam").unwrap();
+            let mut frames = 0;
+            let ended = damaged
+                .iter()
+                .enumerate()
+                .try_for_each(|(i, p)| {
+                    frames += live.push(p, stamp_ns(i))?.len();
+                    Ok::<_, Error>(())
+                })
+                .and_then(|()| live.finish().map(|rest| frames += rest.len()));
+            match ended {
+                Ok(()) => {
+                    assert!(frames <= packets.len());
+                    outcomes[0] += 1;
+                }
+                Err(e) => {
+                    assert!(e.to_string().starts_with("/cam: "), "{e}");
+                    outcomes[1] += 1;
+                }
+            }
+        }
+        assert!(outcomes[0] > 0, "{outcomes:?}");
+    }
+
+    #[test]
     fn video_that_cannot_be_decoded_is_refused_by_name() {
         let dir = tempfile::tempdir().unwrap();
         let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
