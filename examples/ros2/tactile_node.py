@@ -7,8 +7,9 @@ cameras publish, cv_bridge's 8UC3, packed YUV 4:2:2, Bayer), or with
 PNG, as image_transport's `compressed` transport publishes), or with
 `-p video:=foxglove` to a `foxglove_msgs/msg/CompressedVideo` topic (H.264
 or H.265, as ROS 2 video encoders and the Foxglove bridge publish) or with
-`-p video:=ffmpeg` to `ffmpeg_image_transport`'s `FFMPEGPacket` topic
-(decoded as they arrive by `tactile.VideoDecoder`), runs `tactile.Pipeline`
+`-p video:=ffmpeg` to `ffmpeg_image_transport`'s `FFMPEGPacket` topic or
+with `-p video:=h264` to `h264_image_transport`'s `h264_msgs/msg/Packet`
+topic (decoded as they arrive by `tactile.VideoDecoder`), runs `tactile.Pipeline`
 on each frame and publishes:
 
 - `~/result` (`std_msgs/msg/String`): the frame's record as JSON (the same
@@ -70,11 +71,13 @@ class PalpationNode:
 
     def handle_video(self, msg: Any) -> list[Output]:
         """One video message (a CompressedVideo, with `timestamp` and
-        `format`, or an FFMPEGPacket, with `header` and `encoding`): the
-        outputs of the frames it completes, normally its own."""
+        `format`; an FFMPEGPacket, with `header` and `encoding`; an
+        h264_msgs Packet, with `header`, always H.264): the outputs of the
+        frames it completes, normally its own."""
         stamp = msg.timestamp if hasattr(msg, "timestamp") else msg.header.stamp
         if self.video is None:
-            self.video = tactile.VideoDecoder(getattr(msg, "format", None) or msg.encoding)
+            codec = getattr(msg, "format", None) or getattr(msg, "encoding", None) or "h264"
+            self.video = tactile.VideoDecoder(codec)
         frames = self.video.decode(msg.data, int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec))
         return [self.process(f.image, f.stamp_ns) for f in frames]
 
@@ -109,6 +112,8 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             if video:
                 if video == "ffmpeg":
                     from ffmpeg_image_transport_msgs.msg import FFMPEGPacket as Video
+                elif video == "h264":
+                    from h264_msgs.msg import Packet as Video
                 else:
                     from foxglove_msgs.msg import CompressedVideo as Video
                 # Every packet is needed to decode the next: a deep queue.

@@ -406,9 +406,10 @@ def test_a_live_video_topic_decodes_each_packet_as_it_arrives(tmp_path, root, pa
 
 
 def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpation_frames):
-    """ROS 2's video messages (foxglove_msgs CompressedVideo and
-    ffmpeg_image_transport's FFMPEGPacket) serialised by mcap-ros2-support
-    from their message definitions: the frames and stamps of the PNGs."""
+    """ROS 2's video messages (foxglove_msgs CompressedVideo,
+    ffmpeg_image_transport's FFMPEGPacket and h264_image_transport's
+    h264_msgs Packet) serialised by mcap-ros2-support from their message
+    definitions: the frames and stamps of the PNGs."""
     data = lossless_h264_packets(root / "samples" / "palpation", tmp_path)
     time_deps = "\n================================================================================\n" \
         "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
@@ -421,6 +422,7 @@ def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpati
         packet = w.register_msgdef("ffmpeg_image_transport_msgs/msg/FFMPEGPacket",
                                    "std_msgs/Header header\nint32 width\nint32 height\nstring encoding\n"
                                    "uint64 pts\nuint8 flags\nbool is_bigendian\nuint8[] data" + HEADER_DEPS)
+        h264 = w.register_msgdef("h264_msgs/msg/Packet", "std_msgs/Header header\nint64 seq\nuint8[] data" + HEADER_DEPS)
         for i, d in enumerate(data):
             h, wd, _ = palpation_frames[i].shape
             w.write_message("/cam/video", video, {"timestamp": header(i)["stamp"], "frame_id": "cam", "data": d,
@@ -429,10 +431,13 @@ def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpati
                                                     "encoding": "h264;gbrp;rgb8;rgb8", "pts": i,
                                                     "flags": int(i % 4 == 0), "is_bigendian": False, "data": d},
                             log_time=stamp(i), publish_time=stamp(i))
+            w.write_message("/cam/h264", h264, {"header": header(i), "seq": 1000 + i, "data": d},
+                            log_time=stamp(i), publish_time=stamp(i))
         w.finish()
     listed = {t["topic"]: t["message_type"] for t in tactile.bag_topics(bag)}
     assert listed == {"/cam/video": "foxglove_msgs/msg/CompressedVideo",
-                      "/cam/ffmpeg": "ffmpeg_image_transport_msgs/msg/FFMPEGPacket"}
+                      "/cam/ffmpeg": "ffmpeg_image_transport_msgs/msg/FFMPEGPacket",
+                      "/cam/h264": "h264_msgs/msg/Packet"}
     for topic in listed:
         got = list(tactile.frames(bag, topic=topic))
         assert [f.stamp_ns for f in got] == [stamp(i) for i in range(len(data))], topic

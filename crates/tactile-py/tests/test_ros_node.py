@@ -86,20 +86,25 @@ def test_node_answers_as_the_pipeline(node_module, root, palpation_frames):
 
 def test_node_answers_a_video_topic_frame_by_frame(node_module, root, palpation_frames, tmp_path):
     """CompressedVideo messages (lossless H.264, one frame each) as rclpy
-    gives them: each message's own frame answered as the pipeline answers
-    the PNG, stamped with the message's timestamp."""
+    gives them, and the same packets as h264_msgs Packets: each message's
+    own frame answered as the pipeline answers the PNG, stamped with the
+    message's timestamp."""
     import array
 
     from test_robots import lossless_h264_packets
 
     packets = lossless_h264_packets(root / "samples" / "palpation", tmp_path)
     node = node_module.PalpationNode(str(root / "models"), "onnx")
+    h264_node = node_module.PalpationNode(str(root / "models"), "onnx")
     direct = tactile.Pipeline(root / "models", "onnx")
     for i, (data, rgb) in enumerate(zip(packets, palpation_frames)):
         msg = SimpleNamespace(timestamp=SimpleNamespace(sec=1_700_000_000 + i, nanosec=7), frame_id="cam",
                               data=array.array("B", data), format="h264")
         outs = node.handle_video(msg)
         assert len(outs) == 1, i
+        # The same packet as h264_image_transport's Packet (header, seq).
+        packet = SimpleNamespace(header=SimpleNamespace(stamp=msg.timestamp, frame_id="cam"), seq=i, data=data)
+        assert [o.record["score"] for o in h264_node.handle_video(packet)] == [outs[0].record["score"]], i
         want = direct.process(rgb)
         assert outs[0].record["tendon"] == want.tendon
         assert outs[0].record["score"] == pytest.approx(want.score)

@@ -25,6 +25,9 @@ pub const ROS_COMPRESSED_VIDEO_TYPE: &str = "foxglove_msgs/msg/CompressedVideo";
 /// `ffmpeg_image_transport_msgs/msg/FFMPEGPacket` (CDR): one encoded
 /// frame as ROS 2's `ffmpeg_image_transport` publishes it.
 pub const FFMPEG_PACKET_TYPE: &str = "ffmpeg_image_transport_msgs/msg/FFMPEGPacket";
+/// `h264_msgs/msg/Packet` (CDR): one H.264 packet as ROS 2's
+/// `h264_image_transport` publishes a V4L2 camera's stream.
+pub const H264_PACKET_TYPE: &str = "h264_msgs/msg/Packet";
 
 /// `builtin_interfaces/msg/Time`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -125,6 +128,18 @@ pub struct FfmpegPacket<'a> {
     pub flags: u8,
     /// The publisher's byte order.
     pub is_bigendian: bool,
+    /// The packet (Annex B NAL units).
+    #[serde(borrow, serialize_with = "as_bytes")]
+    pub data: &'a [u8],
+}
+
+/// `h264_msgs/msg/Packet`: one H.264 packet of `h264_image_transport`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct H264Packet<'a> {
+    /// Stamp and frame.
+    pub header: Header,
+    /// The packet's number in the publisher's stream.
+    pub seq: i64,
     /// The packet (Annex B NAL units).
     #[serde(borrow, serialize_with = "as_bytes")]
     pub data: &'a [u8],

@@ -9,8 +9,9 @@
 //! `foxglove.CompressedImage` of MCAP files the Foxglove SDK records (in
 //! protobuf, or in JSON as Foxglove's JSON schemas have them; either
 //! decoded by the `foxglove` crate's types), and video topics
-//! (`foxglove.CompressedVideo`, ROS 2's `foxglove_msgs` one and
-//! `ffmpeg_image_transport`'s packets: H.264 and H.265, decoded by FFmpeg
+//! (`foxglove.CompressedVideo`, ROS 2's `foxglove_msgs` one,
+//! `ffmpeg_image_transport`'s and `h264_image_transport`'s packets: H.264
+//! and H.265, decoded by FFmpeg
 //! in [`video`]); anything else is refused naming the topic and the
 //! message.
 //!
@@ -44,8 +45,8 @@ use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOp
 use crate::{Error, Result};
 use messages::{
     COMPRESSED_IMAGE_TYPE, CompressedImage, FFMPEG_PACKET_TYPE, FOXGLOVE_COMPRESSED_IMAGE_TYPE,
-    FOXGLOVE_COMPRESSED_VIDEO_TYPE, FOXGLOVE_RAW_IMAGE_TYPE, Header, IMAGE_TYPE, Image,
-    ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
+    FOXGLOVE_COMPRESSED_VIDEO_TYPE, FOXGLOVE_RAW_IMAGE_TYPE, H264_PACKET_TYPE, Header, IMAGE_TYPE,
+    Image, ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
 };
 
 fn bag_error(
@@ -318,19 +319,17 @@ const ROS1_IMAGE_TYPES: [&str; 2] = ["sensor_msgs/Image", "sensor_msgs/Compresse
 /// True for the image message types a bag's frames may be: ROS 2's
 /// Image and CompressedImage, the Foxglove SDK's RawImage,
 /// CompressedImage and CompressedVideo, the last also as ROS 2's
-/// `foxglove_msgs`, and `ffmpeg_image_transport`'s packets (and ROS 1's
-/// images, listed to be refused with advice).
+/// `foxglove_msgs`, `ffmpeg_image_transport`'s and `h264_image_transport`'s
+/// packets (and ROS 1's images, listed to be refused with advice).
 pub fn is_image_type(t: &str) -> bool {
     [
         IMAGE_TYPE,
         COMPRESSED_IMAGE_TYPE,
         FOXGLOVE_RAW_IMAGE_TYPE,
         FOXGLOVE_COMPRESSED_IMAGE_TYPE,
-        FOXGLOVE_COMPRESSED_VIDEO_TYPE,
-        ROS_COMPRESSED_VIDEO_TYPE,
-        FFMPEG_PACKET_TYPE,
     ]
     .contains(&t)
+        || video::is_video_type(t)
         || ROS1_IMAGE_TYPES.contains(&t)
 }
 
@@ -877,7 +876,7 @@ impl TopicMessages {
             }
             if !is_image_type(&c.message_type) {
                 return Err(self.topic_error(format!(
-                    "carries {}, not {IMAGE_TYPE}, {COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_RAW_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_VIDEO_TYPE}, {ROS_COMPRESSED_VIDEO_TYPE} or {FFMPEG_PACKET_TYPE}",
+                    "carries {}, not {IMAGE_TYPE}, {COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_RAW_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_IMAGE_TYPE}, {FOXGLOVE_COMPRESSED_VIDEO_TYPE}, {ROS_COMPRESSED_VIDEO_TYPE}, {FFMPEG_PACKET_TYPE} or {H264_PACKET_TYPE}",
                     if c.message_type.is_empty() {
                         "messages without a schema"
                     } else {

@@ -1,7 +1,8 @@
 //! Video topics of a bag: `foxglove.CompressedVideo`, as the Foxglove SDK
 //! records a camera, ROS 2's `foxglove_msgs/msg/CompressedVideo`, as ROS 2
-//! video encoders publish one, and `ffmpeg_image_transport_msgs/msg/
-//! FFMPEGPacket`, as ROS 2's `ffmpeg_image_transport` does: an H.264 or
+//! video encoders publish one, `ffmpeg_image_transport_msgs/msg/
+//! FFMPEGPacket`, as ROS 2's `ffmpeg_image_transport` does, and
+//! `h264_msgs/msg/Packet`, as `h264_image_transport` does: an H.264 or
 //! H.265 frame per message, decoded by the system's FFmpeg. No codec is
 //! written here.
 //!
@@ -33,7 +34,7 @@ use image::{ColorType, ImageDecoder};
 
 use super::messages::{
     CompressedVideo, FFMPEG_PACKET_TYPE, FOXGLOVE_COMPRESSED_VIDEO_TYPE, FfmpegPacket,
-    ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
+    H264_PACKET_TYPE, H264Packet, ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
 };
 use super::{
     BagFrame, TopicMessage, TopicMessages, bag_error, foxglove_message, foxglove_stamp,
@@ -49,6 +50,7 @@ pub(super) fn is_video_type(t: &str) -> bool {
         FOXGLOVE_COMPRESSED_VIDEO_TYPE,
         ROS_COMPRESSED_VIDEO_TYPE,
         FFMPEG_PACKET_TYPE,
+        H264_PACKET_TYPE,
     ]
     .contains(&t)
 }
@@ -151,6 +153,11 @@ fn packet<'a>(topic: &TopicMessages, m: &'a TopicMessage) -> Result<(Cow<'a, [u8
     if m.message_type == ROS_COMPRESSED_VIDEO_TYPE {
         let v: CompressedVideo<'_> = from_cdr(&m.data).map_err(bad)?;
         return Ok((Cow::Borrowed(v.data), v.format, v.timestamp.nanos()));
+    }
+    if m.message_type == H264_PACKET_TYPE {
+        let v: H264Packet<'_> = from_cdr(&m.data).map_err(bad)?;
+        let format = Codec::H264.name().to_string();
+        return Ok((Cow::Borrowed(v.data), format, v.header.stamp.nanos()));
     }
     if m.message_type == FFMPEG_PACKET_TYPE {
         let v: FfmpegPacket<'_> = from_cdr(&m.data).map_err(bad)?;
@@ -1268,6 +1275,45 @@ mod tests {
         }
         // Both kinds of ending are met (fixed seed).
         assert!(outcomes.iter().all(|&n| n > 0), "{outcomes:?}");
+    }
+
+    #[test]
+    fn h264_image_transport_packets_are_read() {
+        // As h264_image_transport's camera node publishes a V4L2 camera's
+        // H.264: each packet with its header stamp and sequence number.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
+        let (packets, decoded) = encode(dir.path(), &x264, 5);
+        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let path = dir.path().join("h264.mcap");
+        cdr_bag(
+            &path,
+            "/image_raw/h264",
+            H264_PACKET_TYPE,
+            &all,
+            |i, data| {
+                to_cdr(&H264Packet {
+                    header: Header {
+                        stamp: Time::from_nanos(stamp_ns(i)),
+                        frame_id: "camera_frame".into(),
+                    },
+                    seq: 100 + i as i64,
+                    data,
+                })
+            },
+        );
+        assert_eq!(
+            image_topics(&path).unwrap()[0].message_type,
+            H264_PACKET_TYPE
+        );
+        let (frames, warnings) = read_all(&path, "/image_raw/h264").unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+        let want: Vec<(u64, i64)> = (0..5).map(|i| (i as u64, stamp_ns(i))).collect();
+        assert_eq!(got, want);
+        for (f, want) in frames.iter().zip(&decoded) {
+            assert!(f.image.as_slice() == want.as_slice());
+        }
     }
 
     #[test]
