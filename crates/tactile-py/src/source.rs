@@ -108,7 +108,7 @@ impl PyFrameSource {
 /// A live video topic decoded as its packets arrive, for a node that
 /// subscribes to `foxglove_msgs/msg/CompressedVideo` or
 /// `ffmpeg_image_transport_msgs/msg/FFMPEGPacket` itself: `format` is the
-/// message's `format` or `encoding` (H.264 or H.265, Annex B). `decode`
+/// message's `format` or `encoding` (H.264 or H.265 in Annex B, AV1 OBUs). `decode`
 /// takes each message's `data` (bytes, or rclpy's array) and stamp and
 /// gives the frames decoded so far, normally that packet's own; packets
 /// before the first keyframe are skipped (`skipped` counts them). The

@@ -405,6 +405,62 @@ def test_a_live_video_topic_decodes_each_packet_as_it_arrives(tmp_path, root, pa
         tactile.VideoDecoder("vp9", name="/cam")
 
 
+def av1_temporal_units(stream: bytes) -> list[bytes]:
+    """An AV1 low overhead stream split before each temporal delimiter
+    (OBU type 2): one temporal unit, a frame here, each."""
+    units, at = [], 0
+    while at < len(stream):
+        header = stream[at]
+        p = at + 1 + ((header >> 2) & 1)
+        size, shift = 0, 0
+        while True:
+            b = stream[p]
+            p, size, shift = p + 1, size | (b & 0x7F) << shift, shift + 7
+            if b < 0x80:
+                break
+        if (header >> 3) & 0x0F == 2:
+            units.append(b"")
+        units[-1] += stream[at:p + size]
+        at = p + size
+    return units
+
+
+def test_av1_video_decodes_live_and_from_a_foxglove_recording(tmp_path, root):
+    """AV1 (libaom, a temporal unit per message) as the Foxglove SDK
+    records it and as a live topic gives it: every frame FFmpeg's decode
+    of the whole stream, each live one back from its own `decode`."""
+    import foxglove
+    from foxglove.channels import CompressedVideoChannel
+    from foxglove.messages import CompressedVideo, Timestamp
+
+    stream = tmp_path / "av1.obu"
+    subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-f", "lavfi", "-i", "testsrc=size=96x64:rate=10",
+                    "-frames:v", "6", "-pix_fmt", "yuv420p", "-c:v", "libaom-av1", "-cpu-used", "8", "-g", "3",
+                    "-lag-in-frames", "0", "-f", "obu", str(stream)], check=True)
+    raw = subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(stream), "-f", "rawvideo",
+                          "-pix_fmt", "rgb24", "-"], check=True, capture_output=True).stdout
+    want = np.frombuffer(raw, np.uint8).reshape(6, 64, 96, 3)
+    units = av1_temporal_units(stream.read_bytes())
+    assert len(units) == 6
+    decoder = tactile.VideoDecoder("av1", name="/cam/av1")
+    for i, unit in enumerate(units):
+        frames = decoder.decode(unit, stamp(i))
+        assert [f.stamp_ns for f in frames] == [stamp(i)], i
+        assert np.array_equal(frames[0].image, want[i]), i
+    assert decoder.finish() == []
+    bag = tmp_path / "av1.mcap"
+    ctx = foxglove.Context()
+    with foxglove.open_mcap(bag, context=ctx):
+        video = CompressedVideoChannel("/cam/av1", context=ctx)
+        for i, unit in enumerate(units):
+            t = stamp(i)
+            video.log(CompressedVideo(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
+                                      data=unit, format="av1"), log_time=t)
+    got = list(tactile.frames(bag))
+    assert [f.stamp_ns for f in got] == [stamp(i) for i in range(6)]
+    assert all(np.array_equal(f.image, w) for f, w in zip(got, want))
+
+
 def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpation_frames):
     """ROS 2's video messages (foxglove_msgs CompressedVideo,
     ffmpeg_image_transport's FFMPEGPacket and h264_image_transport's

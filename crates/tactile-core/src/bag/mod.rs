@@ -10,8 +10,8 @@
 //! protobuf, or in JSON as Foxglove's JSON schemas have them; either
 //! decoded by the `foxglove` crate's types), and video topics
 //! (`foxglove.CompressedVideo`, ROS 2's `foxglove_msgs` one,
-//! `ffmpeg_image_transport`'s and `h264_image_transport`'s packets: H.264
-//! and H.265, decoded by FFmpeg
+//! `ffmpeg_image_transport`'s and `h264_image_transport`'s packets: H.264,
+//! H.265 and AV1, decoded by FFmpeg
 //! in [`video`]); anything else is refused naming the topic and the
 //! message.
 //!

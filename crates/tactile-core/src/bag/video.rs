@@ -2,9 +2,9 @@
 //! records a camera, ROS 2's `foxglove_msgs/msg/CompressedVideo`, as ROS 2
 //! video encoders publish one, `ffmpeg_image_transport_msgs/msg/
 //! FFMPEGPacket`, as ROS 2's `ffmpeg_image_transport` does, and
-//! `h264_msgs/msg/Packet`, as `h264_image_transport` does: an H.264 or
-//! H.265 frame per message, decoded by the system's FFmpeg. No codec is
-//! written here.
+//! `h264_msgs/msg/Packet`, as `h264_image_transport` does: an H.264,
+//! H.265 or AV1 frame per message, decoded by the system's FFmpeg. No
+//! codec is written here.
 //!
 //! The topic's packets are written in order to an FFmpeg process from a
 //! thread of their own while the decoded frames are read back here (PAM
@@ -60,6 +60,40 @@ pub(super) fn is_video_type(t: &str) -> bool {
 enum Codec {
     H264,
     H265,
+    Av1,
+}
+
+/// AV1's temporal delimiter (an OBU of type 2 with its size field, empty;
+/// AV1 5.6), which begins each temporal unit of the low overhead format.
+const AV1_TEMPORAL_DELIMITER: [u8; 2] = [0x12, 0x00];
+
+/// The OBUs of AV1 data in the low overhead format (AV1 5.3: a header
+/// byte, an extension byte when flagged, a LEB128 size when flagged), each
+/// as its type and payload; the walk stops at one that does not fit.
+fn av1_obus(mut data: &[u8]) -> impl Iterator<Item = (u8, &[u8])> {
+    std::iter::from_fn(move || {
+        let (&header, rest) = data.split_first()?;
+        let rest = rest.get(usize::from(header & 0x04 != 0)..)?;
+        let (size, rest) = match header & 0x02 != 0 {
+            true => leb128(rest)?,
+            false => (rest.len(), rest),
+        };
+        let payload = rest.get(..size)?;
+        data = &rest[size..];
+        Some(((header >> 3) & 0x0f, payload))
+    })
+}
+
+/// An unsigned LEB128 value (at most 8 bytes, AV1 4.10.5) and what follows.
+fn leb128(data: &[u8]) -> Option<(usize, &[u8])> {
+    let mut value = 0u64;
+    for (i, &b) in data.iter().enumerate().take(8) {
+        value |= u64::from(b & 0x7f) << (7 * i);
+        if b & 0x80 == 0 {
+            return Some((usize::try_from(value).ok()?, &data[i + 1..]));
+        }
+    }
+    None
 }
 
 impl Codec {
@@ -68,21 +102,25 @@ impl Codec {
         match format.to_ascii_lowercase().as_str() {
             "h264" => Some(Self::H264),
             "h265" | "hevc" => Some(Self::H265),
+            "av1" => Some(Self::Av1),
             _ => None,
         }
     }
 
     /// The format an `ffmpeg_image_transport` packet's `encoding` names:
-    /// its codec (`h264`, `hevc`: the first `;`-separated token) or, from
-    /// older publishers, its encoder (`libx264`, `h264_nvenc`,
-    /// `hevc_vaapi`). Anything else is kept, to be refused by name.
+    /// its codec (`h264`, `hevc`, `av1`: the first `;`-separated token)
+    /// or, from older publishers, its encoder (`libx264`, `h264_nvenc`,
+    /// `hevc_vaapi`, `libsvtav1`). Anything else is kept, to be refused by
+    /// name.
     fn of_encoding(encoding: &str) -> String {
         let codec = encoding
             .split(';')
             .next()
             .unwrap_or("")
             .to_ascii_lowercase();
-        if codec.contains("hevc") || codec.contains("265") {
+        if codec.contains("av1") {
+            Self::Av1.name().into()
+        } else if codec.contains("hevc") || codec.contains("265") {
             Self::H265.name().into()
         } else if codec.contains("264") {
             Self::H264.name().into()
@@ -95,25 +133,54 @@ impl Codec {
         match self {
             Self::H264 => "h264",
             Self::H265 => "h265",
+            Self::Av1 => "av1",
+        }
+    }
+
+    /// What is written before each packet of a bag (before the first of a
+    /// live stream): AV1's temporal delimiter, so the demuxer finds each
+    /// temporal unit whether or not the recorder kept the packet's own
+    /// (see [`Self::body`]); nothing for H.264 and H.265, whose parser
+    /// finds each picture's start itself.
+    fn prefix(self) -> &'static [u8] {
+        match self {
+            Self::Av1 => &AV1_TEMPORAL_DELIMITER,
+            Self::H264 | Self::H265 => &[],
+        }
+    }
+
+    /// A packet's bytes as written: an AV1 packet without its own leading
+    /// temporal delimiter ([`Self::prefix`] writes one).
+    fn body(self, data: &[u8]) -> &[u8] {
+        match self {
+            Self::Av1 => data.strip_prefix(&AV1_TEMPORAL_DELIMITER).unwrap_or(data),
+            Self::H264 | Self::H265 => data,
         }
     }
 
     /// An access unit delimiter (ITU-T H.264 7.3.2.4, any picture type;
-    /// H.265 7.3.2.5, type 35): written after a live packet, it tells
-    /// FFmpeg's parser the packet's picture is whole, so it is decoded at
-    /// once instead of when the next packet comes.
+    /// H.265 7.3.2.5, type 35; AV1's temporal delimiter): written after a
+    /// live packet, it tells FFmpeg the packet's picture is whole, so it is
+    /// decoded at once instead of when the next packet comes. AV1's is
+    /// followed by an 8-byte padding OBU (type 15, AV1 5.7; its payload
+    /// ends in the trailing one bit), which decoders skip: FFmpeg's `obu`
+    /// demuxer reads up to ten bytes of the next OBU's header before it
+    /// hands on a unit, so a bare delimiter would wait for the next packet.
     fn access_unit_delimiter(self) -> &'static [u8] {
         match self {
             Self::H264 => &[0, 0, 0, 1, 0x09, 0xf0],
             Self::H265 => &[0, 0, 0, 1, 0x46, 0x01, 0x50],
+            Self::Av1 => &[0x12, 0x00, 0x7a, 0x08, 0, 0, 0, 0, 0, 0, 0, 0x80],
         }
     }
 
-    /// FFmpeg's demuxer of the codec's Annex B stream.
+    /// FFmpeg's demuxer of the codec's stream (Annex B; AV1's low
+    /// overhead OBUs).
     fn demuxer(self) -> &'static str {
         match self {
             Self::H264 => "h264",
             Self::H265 => "hevc",
+            Self::Av1 => "obu",
         }
     }
 
@@ -125,14 +192,36 @@ impl Codec {
     /// H.264 7.3.1) and bits 1-6 of H.265's (33: SPS, 16-23: IRAP; ITU-T
     /// H.265 7.3.1.2). A delta frame that repeats the SPS is no start: the
     /// decoder would drop it, and the frames after it would take the
-    /// wrong packets' stamps.
+    /// wrong packets' stamps. An AV1 packet starts one when it holds a
+    /// sequence header OBU (type 1) and its first frame header (in an OBU
+    /// of type 3 or 6) is a shown key frame: `show_existing_frame` 0 and
+    /// `frame_type` 0 in its first three bits (AV1 5.9.2), or any frame
+    /// of a sequence of still pictures (`reduced_still_picture_header`,
+    /// the fifth bit of the sequence header; AV1 5.5.1).
     fn starts_stream(self, data: &[u8]) -> bool {
+        if self == Self::Av1 {
+            let (mut sequence, mut still) = (false, false);
+            for (kind, payload) in av1_obus(data) {
+                match kind {
+                    1 => {
+                        sequence = true;
+                        still = payload.first().is_some_and(|b| b & 0x08 != 0);
+                    }
+                    3 | 6 => {
+                        return sequence
+                            && (still || payload.first().is_some_and(|b| b & 0xe0 == 0));
+                    }
+                    _ => {}
+                }
+            }
+            return false;
+        }
         let types = data
             .windows(4)
             .filter(|w| w[..3] == [0, 0, 1])
             .map(|w| match self {
                 Self::H264 => w[3] & 0x1f,
-                Self::H265 => (w[3] >> 1) & 0x3f,
+                _ => (w[3] >> 1) & 0x3f,
             });
         let (mut sps, mut random_access) = (false, false);
         for t in types {
@@ -251,7 +340,13 @@ fn feed(
         };
         // A decoder that stopped reading has exited or was stopped: the
         // reader reports why.
-        if stamps.send(stamp).is_err() || stdin.write_all(&data).is_err() {
+        // The stamp goes first: the frame cannot come out before it.
+        if stamps.send(stamp).is_err()
+            || stdin
+                .write_all(codec.prefix())
+                .and_then(|()| stdin.write_all(codec.body(&data)))
+                .is_err()
+        {
             break None;
         }
         fed += 1;
@@ -339,7 +434,7 @@ impl VideoFrames {
             messages.message_error(
                 first.index,
                 format!(
-                    "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B), as the Foxglove SDK and ROS 2's video encoders record them"
+                    "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B) and \"av1\" (low overhead OBUs), as the Foxglove SDK and ROS 2's video encoders record them"
                 ),
             )
         })?;
@@ -584,7 +679,7 @@ impl LiveVideo {
         let error = |m: String| Error::Invalid(format!("{name}: {m}"));
         let codec = Codec::of(&Codec::of_encoding(format)).ok_or_else(|| {
             error(format!(
-                "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B)"
+                "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B) and \"av1\" (low overhead OBUs)"
             ))
         })?;
         let mut child = spawn_decoder(codec, true, std::path::Path::new(name))?;
@@ -656,10 +751,14 @@ impl LiveVideo {
             index: packet,
             log_time_ns: 0,
         }));
-        let delimiter = self.codec.access_unit_delimiter();
+        let prefix = match self.written {
+            0 => self.codec.prefix(),
+            _ => &[],
+        };
         if let Err(e) = stdin
-            .write_all(data)
-            .and_then(|()| stdin.write_all(delimiter))
+            .write_all(prefix)
+            .and_then(|()| stdin.write_all(self.codec.body(data)))
+            .and_then(|()| stdin.write_all(self.codec.access_unit_delimiter()))
             .and_then(|()| stdin.flush())
         {
             let last = self.stop();
@@ -831,6 +930,51 @@ mod tests {
             .iter()
             .map(|l| pts.binary_search(&l.1).unwrap())
             .collect()
+    }
+
+    /// `frames` 64x64 frames of the test pattern in AV1 (libaom, a key
+    /// frame every 3, no hidden frames): one temporal unit per frame, each
+    /// beginning with its temporal delimiter as FFmpeg's `obu` muxer
+    /// writes them, and every frame as FFmpeg decodes the whole stream.
+    fn encode_av1(dir: &Path, frames: usize) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+        let stream = dir.join("av1.obu");
+        let status = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
+            .args(["-f", "lavfi", "-i", "testsrc=size=64x64:rate=10"])
+            .args(["-frames:v", &frames.to_string(), "-pix_fmt", "yuv420p"])
+            .args(["-c:v", "libaom-av1", "-cpu-used", "8", "-g", "3"])
+            .args(["-lag-in-frames", "0", "-threads", "1", "-f", "obu"])
+            .arg(&stream)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let data = std::fs::read(&stream).unwrap();
+        // Split before each temporal delimiter.
+        let mut packets: Vec<Vec<u8>> = Vec::new();
+        let mut at = 0;
+        for (kind, payload) in av1_obus(&data) {
+            let end = payload.as_ptr() as usize - data.as_ptr() as usize + payload.len();
+            if kind == 2 {
+                packets.push(Vec::new());
+            }
+            packets
+                .last_mut()
+                .unwrap()
+                .extend_from_slice(&data[at..end]);
+            at = end;
+        }
+        assert_eq!(at, data.len());
+        assert_eq!(packets.len(), frames);
+        let out = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-i"])
+            .arg(&stream)
+            .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let decoded: Vec<Vec<u8>> = out.stdout.chunks(64 * 64 * 3).map(<[u8]>::to_vec).collect();
+        assert_eq!(decoded.len(), frames);
+        (packets, decoded)
     }
 
     const T0: u32 = 1_700_000_000;
@@ -1278,6 +1422,65 @@ mod tests {
     }
 
     #[test]
+    fn av1_video_is_read_from_a_bag_and_live() {
+        // AV1 as the Foxglove SDK's format has it (low overhead OBUs, a
+        // temporal unit per message, the sequence header with each key
+        // frame), begun after the first key frame; every other message
+        // without its temporal delimiter, as a recorder that drops them
+        // writes it.
+        let dir = tempfile::tempdir().unwrap();
+        let (packets, decoded) = encode_av1(dir.path(), 8);
+        assert!(Codec::Av1.starts_stream(&packets[3]));
+        assert!(!Codec::Av1.starts_stream(&packets[4]));
+        let stripped: Vec<&[u8]> = packets
+            .iter()
+            .enumerate()
+            .map(|(i, p)| match i % 2 {
+                0 => &p[..],
+                _ => Codec::Av1.body(p),
+            })
+            .collect();
+        let path = dir.path().join("av1.mcap");
+        let late: Vec<(usize, &[u8])> = stripped.iter().copied().enumerate().skip(1).collect();
+        ros_bag(&path, "/cam/av1", "av1", &late);
+        let (frames, warnings) = read_all(&path, "/cam/av1").unwrap();
+        let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+        let want: Vec<(u64, i64)> = (3..8).map(|i| (i as u64 - 1, stamp_ns(i))).collect();
+        assert_eq!(got, want);
+        for (f, i) in frames.iter().zip(3..) {
+            assert!(f.image.as_slice() == decoded[i].as_slice(), "frame {i}");
+        }
+        assert!(
+            warnings[0]
+                .contains("its first 2 messages come before the first keyframe of its av1 stream"),
+            "{warnings:?}"
+        );
+        // Live, by its encoder's name as ffmpeg_image_transport gives it:
+        // each frame back from its own push.
+        let mut live = LiveVideo::new("libaom-av1", "/cam/av1").unwrap();
+        for (i, p) in stripped.iter().enumerate().skip(1) {
+            let got = live.push(p, stamp_ns(i)).unwrap();
+            let want: Vec<i64> = match i {
+                1 | 2 => vec![],
+                _ => vec![stamp_ns(i)],
+            };
+            assert_eq!(
+                got.iter().map(|f| f.stamp_ns).collect::<Vec<_>>(),
+                want,
+                "{i}"
+            );
+            for f in &got {
+                assert!(
+                    f.image.as_slice() == decoded[i].as_slice(),
+                    "live frame {i}"
+                );
+            }
+        }
+        assert_eq!(live.skipped(), 2);
+        assert!(live.finish().unwrap().is_empty());
+    }
+
+    #[test]
     fn h264_image_transport_packets_are_read() {
         // As h264_image_transport's camera node publishes a V4L2 camera's
         // H.264: each packet with its header stamp and sequence number.
@@ -1375,8 +1578,8 @@ mod tests {
             assert!(warnings[0].contains("its first 2 messages"), "{warnings:?}");
         }
         // An encoder of another codec: refused by name.
-        write("libsvtav1");
+        write("libvpx-vp9");
         let e = read_all(&path, "/cam/ffmpeg").err().unwrap().to_string();
-        assert!(e.contains("video in format \"libsvtav1\""), "{e}");
+        assert!(e.contains("video in format \"libvpx-vp9\""), "{e}");
     }
 }
