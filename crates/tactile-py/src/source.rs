@@ -106,9 +106,10 @@ impl PyFrameSource {
 }
 
 /// A live video topic decoded as its packets arrive, for a node that
-/// subscribes to `foxglove_msgs/msg/CompressedVideo` or
-/// `ffmpeg_image_transport_msgs/msg/FFMPEGPacket` itself: `format` is the
-/// message's `format` or `encoding` (H.264 or H.265 in Annex B, AV1 OBUs). `decode`
+/// subscribes to `foxglove_msgs/msg/CompressedVideo`,
+/// `ffmpeg_image_transport_msgs/msg/FFMPEGPacket` or `h264_msgs/msg/Packet`
+/// itself: `format` is the message's `format` or `encoding` (H.264 or H.265
+/// in Annex B, AV1 OBUs; "h264" for an `h264_msgs` Packet). `decode`
 /// takes each message's `data` (bytes, or rclpy's array) and stamp and
 /// gives the frames decoded so far, normally that packet's own; packets
 /// before the first keyframe are skipped (`skipped` counts them). The
@@ -119,15 +120,17 @@ pub struct PyVideoDecoder {
 }
 
 impl PyVideoDecoder {
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Option<tactile_core::bag::LiveVideo>>> {
+        self.decoder
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the decoder failed in another thread"))
+    }
+
     fn with<T>(
         &self,
         f: impl FnOnce(&mut tactile_core::bag::LiveVideo) -> PyResult<T>,
     ) -> PyResult<T> {
-        let mut guard = self
-            .decoder
-            .lock()
-            .map_err(|_| PyRuntimeError::new_err("the decoder failed in another thread"))?;
-        match guard.as_mut() {
+        match self.lock()?.as_mut() {
             Some(d) => f(d),
             None => Err(PyValueError::new_err("the video decoder was finished")),
         }
@@ -187,11 +190,7 @@ impl PyVideoDecoder {
 
     /// End the stream: the frames still held.
     fn finish(&self, py: Python<'_>) -> PyResult<Vec<PyFrame>> {
-        let decoder = self
-            .decoder
-            .lock()
-            .map_err(|_| PyRuntimeError::new_err("the decoder failed in another thread"))?
-            .take();
+        let decoder = self.lock()?.take();
         let frames = match decoder {
             Some(d) => py.detach(|| d.finish()).py()?,
             None => Vec::new(),

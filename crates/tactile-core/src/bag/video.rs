@@ -97,6 +97,15 @@ fn leb128(data: &[u8]) -> Option<(usize, &[u8])> {
 }
 
 impl Codec {
+    /// The codec of `format`, or the error naming what is read.
+    fn read(format: &str) -> std::result::Result<Self, String> {
+        Self::of(format).ok_or_else(|| {
+            format!(
+                "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B) and \"av1\" (low overhead OBUs), as the Foxglove SDK and ROS 2's video encoders record them"
+            )
+        })
+    }
+
     /// The codec of a message's `format`.
     fn of(format: &str) -> Option<Self> {
         match format.to_ascii_lowercase().as_str() {
@@ -270,6 +279,21 @@ struct Stamp {
     log_time_ns: u64,
 }
 
+/// Stamps of the packets written that have no frame yet, earliest first.
+#[derive(Default)]
+struct PendingStamps(BinaryHeap<Reverse<Stamp>>);
+
+impl PendingStamps {
+    /// The stamp of the frame just decoded: the earliest pending one (see
+    /// the module's documentation), or the error when every packet
+    /// written (`written`) already has its frame.
+    fn take(&mut self, written: u64) -> std::result::Result<Stamp, String> {
+        self.0.pop().map(|Reverse(s)| s).ok_or_else(|| {
+            format!("FFmpeg gave more frames than the {written} packets written to it")
+        })
+    }
+}
+
 /// What the feeder did, once it ended.
 struct Fed {
     /// The topic's messages, handed back (their files' warnings).
@@ -381,15 +405,30 @@ fn read_picture(stdout: &mut impl BufRead, error: impl Fn(String) -> Error) -> R
     rgb_image(width as usize, height as usize, buf)
 }
 
-/// An FFmpeg process decoding `codec`'s Annex B stream from its input to
-/// PAM pictures on its output, one thread; `live` starts it on the first
+/// Stop a decoder and reap it.
+fn kill(child: &mut Child) {
+    let _ = child.kill();
+    let _ = child.wait();
+}
+
+/// A decoder process with its input, its output and the tail of its
+/// error output.
+struct Decoder {
+    child: Child,
+    stdin: ChildStdin,
+    stdout: ChildStdout,
+    stderr: Option<JoinHandle<Vec<u8>>>,
+}
+
+/// An FFmpeg process decoding `codec`'s stream from its input to PAM
+/// pictures on its output, one thread; `live` starts it on the first
 /// packet instead of after probing megabytes of the stream.
-fn spawn_decoder(codec: Codec, live: bool, path: &std::path::Path) -> Result<Child> {
+fn spawn_decoder(codec: Codec, live: bool, path: &std::path::Path) -> Result<Decoder> {
     let probe: &[&str] = match live {
         true => &["-probesize", "32", "-analyzeduration", "0"],
         false => &[],
     };
-    Command::new("ffmpeg")
+    let mut child = Command::new("ffmpeg")
         .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
         .args(["-threads", "1"])
         .args(probe)
@@ -401,7 +440,20 @@ fn spawn_decoder(codec: Codec, live: bool, path: &std::path::Path) -> Result<Chi
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| spawn_error(path, e))
+        .map_err(|e| spawn_error(path, e))?;
+    let stderr = stderr_tail(&mut child);
+    match (child.stdin.take(), child.stdout.take()) {
+        (Some(stdin), Some(stdout)) => Ok(Decoder {
+            child,
+            stdin,
+            stdout,
+            stderr,
+        }),
+        _ => {
+            kill(&mut child);
+            Err(Error::Invalid("ffmpeg started without its pipes".into()))
+        }
+    }
 }
 
 /// The frames of a video topic, decoded by an FFmpeg process fed from a
@@ -417,9 +469,7 @@ pub(super) struct VideoFrames {
     stdout: BufReader<ChildStdout>,
     stderr: Option<JoinHandle<Vec<u8>>>,
     stamps: mpsc::Receiver<Stamp>,
-    /// Stamps of the packets written that have no frame yet, earliest
-    /// first.
-    pending: BinaryHeap<Reverse<Stamp>>,
+    pending: PendingStamps,
     feeder: Option<JoinHandle<Fed>>,
     fed: Option<Fed>,
     frames: u64,
@@ -430,24 +480,16 @@ impl VideoFrames {
     /// Start decoding the topic at its first message, `first`.
     pub(super) fn start(messages: TopicMessages, first: TopicMessage) -> Result<Self> {
         let (_, format, _) = packet(&messages, &first)?;
-        let codec = Codec::of(&format).ok_or_else(|| {
-            messages.message_error(
-                first.index,
-                format!(
-                    "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B) and \"av1\" (low overhead OBUs), as the Foxglove SDK and ROS 2's video encoders record them"
-                ),
-            )
-        })?;
+        let codec = Codec::read(&format).map_err(|e| messages.message_error(first.index, e))?;
         let path = messages.records.path.clone();
         let topic = messages.topic.clone();
         let first_index = first.index;
-        let mut child = spawn_decoder(codec, false, &path)?;
-        let stderr = stderr_tail(&mut child);
-        let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
-            let _ = child.kill();
-            let _ = child.wait();
-            return Err(Error::Invalid("ffmpeg started without its pipes".into()));
-        };
+        let Decoder {
+            mut child,
+            stdin,
+            stdout,
+            stderr,
+        } = spawn_decoder(codec, false, &path)?;
         let (send, stamps) = mpsc::channel();
         let feeder = std::thread::Builder::new()
             .name("video-packets".into())
@@ -455,8 +497,7 @@ impl VideoFrames {
         let feeder = match feeder {
             Ok(f) => f,
             Err(e) => {
-                let _ = child.kill();
-                let _ = child.wait();
+                kill(&mut child);
                 return Err(Error::io(&path, e));
             }
         };
@@ -469,7 +510,7 @@ impl VideoFrames {
             stdout: BufReader::with_capacity(1 << 20, stdout),
             stderr,
             stamps,
-            pending: BinaryHeap::new(),
+            pending: PendingStamps::default(),
             feeder: Some(feeder),
             fed: None,
             frames: 0,
@@ -533,13 +574,8 @@ impl VideoFrames {
         .and_then(|image| {
             // Every packet the frame needed was written, so its stamp was
             // sent, before the frame came out.
-            self.pending.extend(self.stamps.try_iter().map(Reverse));
-            let Reverse(stamp) = self.pending.pop().ok_or_else(|| {
-                self.error(format!(
-                    "FFmpeg gave more frames than the {} packets written to it",
-                    self.frames
-                ))
-            })?;
+            self.pending.0.extend(self.stamps.try_iter().map(Reverse));
+            let stamp = self.pending.take(self.frames).map_err(|e| self.error(e))?;
             Ok(BagFrame {
                 image,
                 stamp_ns: stamp.stamp_ns,
@@ -624,8 +660,7 @@ impl VideoFrames {
 impl Drop for VideoFrames {
     fn drop(&mut self) {
         // The feeder then finds the decoder's input closed and ends.
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        kill(&mut self.child);
     }
 }
 
@@ -641,7 +676,7 @@ pub struct LiveFrame {
 }
 
 /// A video stream decoded as its packets arrive: a subscription to a
-/// live `CompressedVideo` or `FFMPEGPacket` topic. The packets go to an
+/// live `CompressedVideo`, `FFMPEGPacket` or `h264_msgs/msg/Packet` topic. The packets go to an
 /// FFmpeg process that starts on the first keyframe (no probing) and
 /// decodes each packet as soon as it is whole (an access unit delimiter
 /// follows it), and a thread reads its pictures back, so a packet's frame
@@ -656,7 +691,7 @@ pub struct LiveVideo {
     pictures: mpsc::Receiver<Result<RgbImage>>,
     reader: Option<JoinHandle<()>>,
     stderr: Option<JoinHandle<Vec<u8>>>,
-    pending: BinaryHeap<Reverse<Stamp>>,
+    pending: PendingStamps,
     /// Packets given, and written to the decoder.
     given: u64,
     written: u64,
@@ -672,23 +707,18 @@ pub struct LiveVideo {
 const LIVE_FRAME_WAIT: std::time::Duration = std::time::Duration::from_secs(1);
 
 impl LiveVideo {
-    /// A decoder of `format` (`h264`, `h265`/`hevc`; the codec, or the
-    /// encoder's name as `ffmpeg_image_transport` writes it), named `name`
-    /// (a topic) in errors.
+    /// A decoder of `format` (`h264`, `h265`/`hevc`, `av1`; the codec, or
+    /// the encoder's name as `ffmpeg_image_transport` writes it), named
+    /// `name` (a topic) in errors.
     pub fn new(format: &str, name: &str) -> Result<Self> {
         let error = |m: String| Error::Invalid(format!("{name}: {m}"));
-        let codec = Codec::of(&Codec::of_encoding(format)).ok_or_else(|| {
-            error(format!(
-                "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B) and \"av1\" (low overhead OBUs)"
-            ))
-        })?;
-        let mut child = spawn_decoder(codec, true, std::path::Path::new(name))?;
-        let stderr = stderr_tail(&mut child);
-        let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
-            let _ = child.kill();
-            let _ = child.wait();
-            return Err(error("ffmpeg started without its pipes".into()));
-        };
+        let codec = Codec::read(&Codec::of_encoding(format)).map_err(error)?;
+        let Decoder {
+            mut child,
+            stdin,
+            stdout,
+            stderr,
+        } = spawn_decoder(codec, true, std::path::Path::new(name))?;
         let (send, pictures) = mpsc::channel();
         let owner = name.to_string();
         let reader = std::thread::Builder::new()
@@ -707,8 +737,7 @@ impl LiveVideo {
         let reader = match reader {
             Ok(r) => r,
             Err(e) => {
-                let _ = child.kill();
-                let _ = child.wait();
+                kill(&mut child);
                 return Err(error(format!("no thread to read its frames: {e}")));
             }
         };
@@ -720,7 +749,7 @@ impl LiveVideo {
             pictures,
             reader: Some(reader),
             stderr,
-            pending: BinaryHeap::new(),
+            pending: PendingStamps::default(),
             given: 0,
             written: 0,
             wait: true,
@@ -733,7 +762,8 @@ impl LiveVideo {
         self.given - self.written
     }
 
-    /// Give the next packet (one frame, Annex B) and its stamp; the frames
+    /// Give the next packet (one frame: Annex B, or an AV1 temporal unit)
+    /// and its stamp; the frames
     /// decoded so far, after waiting for a frame (up to a second, and only
     /// while every packet has given its frame in time), normally this
     /// packet's.
@@ -746,7 +776,7 @@ impl LiveVideo {
         let Some(stdin) = self.stdin.as_mut() else {
             return Err(self.error("its stream was closed".into()));
         };
-        self.pending.push(Reverse(Stamp {
+        self.pending.0.push(Reverse(Stamp {
             stamp_ns,
             index: packet,
             log_time_ns: 0,
@@ -807,12 +837,7 @@ impl LiveVideo {
     /// A picture with the earliest pending stamp.
     fn frame(&mut self, picture: Result<RgbImage>) -> Result<LiveFrame> {
         let image = picture?;
-        let Some(Reverse(stamp)) = self.pending.pop() else {
-            return Err(self.error(format!(
-                "FFmpeg gave more frames than the {} packets written to it",
-                self.written
-            )));
-        };
+        let stamp = self.pending.take(self.written).map_err(|e| self.error(e))?;
         Ok(LiveFrame {
             image,
             stamp_ns: stamp.stamp_ns,
@@ -823,8 +848,7 @@ impl LiveVideo {
     /// Kill the decoder; its last words.
     fn stop(&mut self) -> String {
         drop(self.stdin.take());
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        kill(&mut self.child);
         last_words(self.stderr.take())
     }
 
@@ -835,9 +859,7 @@ impl LiveVideo {
 
 impl Drop for LiveVideo {
     fn drop(&mut self) {
-        drop(self.stdin.take());
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        self.stop();
         if let Some(r) = self.reader.take() {
             let _ = r.join();
         }
