@@ -6,7 +6,7 @@ cameras publish, cv_bridge's 8UC3, packed YUV 4:2:2, Bayer), or with
 `-p compressed:=true` to a `sensor_msgs/msg/CompressedImage` topic (JPEG or
 PNG, as image_transport's `compressed` transport publishes), or with
 `-p video:=foxglove` to a `foxglove_msgs/msg/CompressedVideo` topic (H.264
-or H.265 or AV1, as ROS 2 video encoders and the Foxglove bridge publish) or with
+or H.265, VP9 or AV1, as ROS 2 video encoders and the Foxglove bridge publish) or with
 `-p video:=ffmpeg` to `ffmpeg_image_transport`'s `FFMPEGPacket` topic or
 with `-p video:=h264` to `h264_image_transport`'s `h264_msgs/msg/Packet`
 topic (decoded as they arrive by `tactile.VideoDecoder`), runs `tactile.Pipeline`

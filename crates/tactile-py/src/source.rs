@@ -109,7 +109,7 @@ impl PyFrameSource {
 /// subscribes to `foxglove_msgs/msg/CompressedVideo`,
 /// `ffmpeg_image_transport_msgs/msg/FFMPEGPacket` or `h264_msgs/msg/Packet`
 /// itself: `format` is the message's `format` or `encoding` (H.264 or H.265
-/// in Annex B, AV1 OBUs; "h264" for an `h264_msgs` Packet). `decode`
+/// in Annex B, VP9, AV1 OBUs; "h264" for an `h264_msgs` Packet). `decode`
 /// takes each message's `data` (bytes, or rclpy's array) and stamp and
 /// gives the frames decoded so far, normally that packet's own; packets
 /// before the first keyframe are skipped (`skipped` counts them). The

@@ -425,37 +425,55 @@ def av1_temporal_units(stream: bytes) -> list[bytes]:
     return units
 
 
-def test_av1_video_decodes_live_and_from_a_foxglove_recording(tmp_path, root):
-    """AV1 (libaom, a temporal unit per message) as the Foxglove SDK
-    records it and as a live topic gives it: every frame FFmpeg's decode
-    of the whole stream, each live one back from its own `decode`."""
+def ivf_frames(data):
+    """The frames of an IVF file (a 32-byte file header, then each frame
+    after its 32-bit size and 64-bit place), as FFmpeg's ivf muxer writes VP9."""
+    assert data[:4] == b"DKIF" and data[8:12] == b"VP90"
+    frames, at = [], 32
+    while at < len(data):
+        size = int.from_bytes(data[at:at + 4], "little")
+        frames.append(data[at + 12:at + 12 + size])
+        at += 12 + size
+    return frames
+
+
+@pytest.mark.parametrize("codec", ["av1", "vp9"])
+def test_video_decodes_live_and_from_a_foxglove_recording(tmp_path, root, codec):
+    """AV1 (libaom, a temporal unit per message) and VP9 (libvpx, a frame
+    per message) as the Foxglove SDK records them and as a live topic gives
+    them: every frame FFmpeg's decode of the whole stream, each live one
+    back from its own `decode`."""
     import foxglove
     from foxglove.channels import CompressedVideoChannel
     from foxglove.messages import CompressedVideo, Timestamp
 
-    stream = tmp_path / "av1.obu"
+    encoder, muxer, split = {
+        "av1": (["libaom-av1", "-cpu-used", "8", "-lag-in-frames", "0"], "obu", av1_temporal_units),
+        "vp9": (["libvpx-vp9", "-threads", "1"], "ivf", ivf_frames),
+    }[codec]
+    stream = tmp_path / f"{codec}.{muxer}"
     subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-f", "lavfi", "-i", "testsrc=size=96x64:rate=10",
-                    "-frames:v", "6", "-pix_fmt", "yuv420p", "-c:v", "libaom-av1", "-cpu-used", "8", "-g", "3",
-                    "-lag-in-frames", "0", "-f", "obu", str(stream)], check=True)
+                    "-frames:v", "6", "-pix_fmt", "yuv420p", "-c:v", *encoder, "-g", "3",
+                    "-f", muxer, str(stream)], check=True)
     raw = subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(stream), "-f", "rawvideo",
                           "-pix_fmt", "rgb24", "-"], check=True, capture_output=True).stdout
     want = np.frombuffer(raw, np.uint8).reshape(6, 64, 96, 3)
-    units = av1_temporal_units(stream.read_bytes())
+    units = split(stream.read_bytes())
     assert len(units) == 6
-    decoder = tactile.VideoDecoder("av1", name="/cam/av1")
+    decoder = tactile.VideoDecoder(codec, name=f"/cam/{codec}")
     for i, unit in enumerate(units):
         frames = decoder.decode(unit, stamp(i))
         assert [f.stamp_ns for f in frames] == [stamp(i)], i
         assert np.array_equal(frames[0].image, want[i]), i
     assert decoder.finish() == []
-    bag = tmp_path / "av1.mcap"
+    bag = tmp_path / f"{codec}.mcap"
     ctx = foxglove.Context()
     with foxglove.open_mcap(bag, context=ctx):
-        video = CompressedVideoChannel("/cam/av1", context=ctx)
+        video = CompressedVideoChannel(f"/cam/{codec}", context=ctx)
         for i, unit in enumerate(units):
             t = stamp(i)
             video.log(CompressedVideo(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
-                                      data=unit, format="av1"), log_time=t)
+                                      data=unit, format=codec), log_time=t)
     got = list(tactile.frames(bag))
     assert [f.stamp_ns for f in got] == [stamp(i) for i in range(6)]
     assert all(np.array_equal(f.image, w) for f, w in zip(got, want))

@@ -11,7 +11,7 @@
 //! decoded by the `foxglove` crate's types), and video topics
 //! (`foxglove.CompressedVideo`, ROS 2's `foxglove_msgs` one,
 //! `ffmpeg_image_transport`'s and `h264_image_transport`'s packets: H.264,
-//! H.265 and AV1, decoded by FFmpeg
+//! H.265, VP9 and AV1, decoded by FFmpeg
 //! in [`video`]); anything else is refused naming the topic and the
 //! message.
 //!

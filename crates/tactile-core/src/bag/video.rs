@@ -3,7 +3,7 @@
 //! video encoders publish one, `ffmpeg_image_transport_msgs/msg/
 //! FFMPEGPacket`, as ROS 2's `ffmpeg_image_transport` does, and
 //! `h264_msgs/msg/Packet`, as `h264_image_transport` does: an H.264,
-//! H.265 or AV1 frame per message, decoded by the system's FFmpeg. No
+//! H.265, VP9 or AV1 frame per message, decoded by the system's FFmpeg. No
 //! codec is written here.
 //!
 //! The topic's packets are written in order to an FFmpeg process from a
@@ -60,8 +60,13 @@ pub(super) fn is_video_type(t: &str) -> bool {
 enum Codec {
     H264,
     H265,
+    Vp9,
     Av1,
 }
+
+/// The size of an IVF file's header; each frame's is 12 bytes (its size
+/// and place).
+const IVF_FILE_HEADER: usize = 32;
 
 /// AV1's temporal delimiter (an OBU of type 2 with its size field, empty;
 /// AV1 5.6), which begins each temporal unit of the low overhead format.
@@ -101,7 +106,7 @@ impl Codec {
     fn read(format: &str) -> std::result::Result<Self, String> {
         Self::of(format).ok_or_else(|| {
             format!(
-                "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B) and \"av1\" (low overhead OBUs), as the Foxglove SDK and ROS 2's video encoders record them"
+                "video in format {format:?}; read are \"h264\" and \"h265\" (Annex B), \"vp9\" (a frame or superframe per message) and \"av1\" (low overhead OBUs), as the Foxglove SDK and ROS 2's video encoders record them"
             )
         })
     }
@@ -111,16 +116,17 @@ impl Codec {
         match format.to_ascii_lowercase().as_str() {
             "h264" => Some(Self::H264),
             "h265" | "hevc" => Some(Self::H265),
+            "vp9" => Some(Self::Vp9),
             "av1" => Some(Self::Av1),
             _ => None,
         }
     }
 
     /// The format an `ffmpeg_image_transport` packet's `encoding` names:
-    /// its codec (`h264`, `hevc`, `av1`: the first `;`-separated token)
-    /// or, from older publishers, its encoder (`libx264`, `h264_nvenc`,
-    /// `hevc_vaapi`, `libsvtav1`). Anything else is kept, to be refused by
-    /// name.
+    /// its codec (`h264`, `hevc`, `vp9`, `av1`: the first `;`-separated
+    /// token) or, from older publishers, its encoder (`libx264`,
+    /// `h264_nvenc`, `hevc_vaapi`, `libvpx-vp9`, `libsvtav1`). Anything
+    /// else is kept, to be refused by name.
     fn of_encoding(encoding: &str) -> String {
         let codec = encoding
             .split(';')
@@ -129,6 +135,8 @@ impl Codec {
             .to_ascii_lowercase();
         if codec.contains("av1") {
             Self::Av1.name().into()
+        } else if codec.contains("vp9") {
+            Self::Vp9.name().into()
         } else if codec.contains("hevc") || codec.contains("265") {
             Self::H265.name().into()
         } else if codec.contains("264") {
@@ -142,28 +150,68 @@ impl Codec {
         match self {
             Self::H264 => "h264",
             Self::H265 => "h265",
+            Self::Vp9 => "vp9",
             Self::Av1 => "av1",
         }
     }
 
-    /// What is written before each packet of a bag (before the first of a
-    /// live stream): AV1's temporal delimiter, so the demuxer finds each
-    /// temporal unit whether or not the recorder kept the packet's own
-    /// (see [`Self::body`]); nothing for H.264 and H.265, whose parser
-    /// finds each picture's start itself.
-    fn prefix(self) -> &'static [u8] {
+    /// Write the `index`-th packet (0-based) as the codec's demuxer reads
+    /// it, a `live` one followed by its access unit delimiter:
+    /// - H.264 and H.265 as they are: the parser finds each picture's start;
+    /// - AV1 after a temporal delimiter, its own dropped ([`Self::body`]),
+    ///   so the demuxer finds each temporal unit whether or not the
+    ///   recorder kept the packet's own (live, the delimiter written after
+    ///   the packet before begins it);
+    /// - VP9 as an IVF frame (its size and place before it), after the
+    ///   IVF file header for the first: FFmpeg reads VP9 only inside a
+    ///   container, and IVF's frames end where their size says, so each is
+    ///   decoded as soon as it is in, live too.
+    fn write_packet(
+        self,
+        out: &mut impl Write,
+        data: &[u8],
+        index: u64,
+        live: bool,
+    ) -> std::io::Result<()> {
         match self {
-            Self::Av1 => &AV1_TEMPORAL_DELIMITER,
-            Self::H264 | Self::H265 => &[],
+            Self::H264 | Self::H265 => out.write_all(data)?,
+            Self::Av1 => {
+                if !live || index == 0 {
+                    out.write_all(&AV1_TEMPORAL_DELIMITER)?;
+                }
+                out.write_all(self.body(data))?;
+            }
+            Self::Vp9 => {
+                // An IVF frame's size is 32 bits.
+                if u32::try_from(data.len()).is_err() {
+                    return Err(std::io::Error::new(
+                        std::io::ErrorKind::InvalidInput,
+                        "a VP9 packet of 4 GiB or more",
+                    ));
+                }
+                let mut framed = Vec::with_capacity(IVF_FILE_HEADER + 12 + data.len());
+                if index == 0 {
+                    // The size and rate are the decoder's to read from the
+                    // stream; the muxer names AV1, so the fourcc is VP9's.
+                    ivf::write_ivf_header(&mut framed, 0, 0, 30, 1);
+                    framed[8..12].copy_from_slice(b"VP90");
+                }
+                ivf::write_ivf_frame(&mut framed, index, data);
+                out.write_all(&framed)?;
+            }
         }
+        if live {
+            out.write_all(self.access_unit_delimiter())?;
+        }
+        Ok(())
     }
 
     /// A packet's bytes as written: an AV1 packet without its own leading
-    /// temporal delimiter ([`Self::prefix`] writes one).
+    /// temporal delimiter ([`Self::write_packet`] writes one).
     fn body(self, data: &[u8]) -> &[u8] {
         match self {
             Self::Av1 => data.strip_prefix(&AV1_TEMPORAL_DELIMITER).unwrap_or(data),
-            Self::H264 | Self::H265 => data,
+            Self::H264 | Self::H265 | Self::Vp9 => data,
         }
     }
 
@@ -175,20 +223,23 @@ impl Codec {
     /// ends in the trailing one bit), which decoders skip: FFmpeg's `obu`
     /// demuxer reads up to ten bytes of the next OBU's header before it
     /// hands on a unit, so a bare delimiter would wait for the next packet.
+    /// VP9 needs none: its IVF frame ends where its size says.
     fn access_unit_delimiter(self) -> &'static [u8] {
         match self {
+            Self::Vp9 => &[],
             Self::H264 => &[0, 0, 0, 1, 0x09, 0xf0],
             Self::H265 => &[0, 0, 0, 1, 0x46, 0x01, 0x50],
             Self::Av1 => &[0x12, 0x00, 0x7a, 0x08, 0, 0, 0, 0, 0, 0, 0, 0x80],
         }
     }
 
-    /// FFmpeg's demuxer of the codec's stream (Annex B; AV1's low
+    /// FFmpeg's demuxer of the codec's stream (Annex B; IVF; AV1's low
     /// overhead OBUs).
     fn demuxer(self) -> &'static str {
         match self {
             Self::H264 => "h264",
             Self::H265 => "hevc",
+            Self::Vp9 => "ivf",
             Self::Av1 => "obu",
         }
     }
@@ -206,8 +257,26 @@ impl Codec {
     /// of type 3 or 6) is a shown key frame: `show_existing_frame` 0 and
     /// `frame_type` 0 in its first three bits (AV1 5.9.2), or any frame
     /// of a sequence of still pictures (`reduced_still_picture_header`,
-    /// the fifth bit of the sequence header; AV1 5.5.1).
+    /// the fifth bit of the sequence header; AV1 5.5.1). A VP9 packet starts
+    /// one when its (first) frame is a key frame: the uncompressed header's
+    /// frame marker (2), profile (two bits, and a reserved one for profile
+    /// 3), `show_existing_frame` 0, `frame_type` 0, then after two more
+    /// bits the key frame's sync code 49 83 42 (VP9 6.2).
     fn starts_stream(self, data: &[u8]) -> bool {
+        if self == Self::Vp9 {
+            let Some(head) = data.get(..5) else {
+                return false;
+            };
+            // The first 40 bits, the first byte's highest bit at 39.
+            let bits = head.iter().fold(0u64, |v, &b| (v << 8) | u64::from(b));
+            let profile = ((bits >> 37) & 1) | (((bits >> 36) & 1) << 1);
+            let skip = u32::from(profile == 3);
+            let marker = bits >> 38 == 0b10;
+            // show_existing_frame and frame_type, both 0.
+            let key = (bits >> (34 - skip)) & 0b11 == 0;
+            let sync = (bits >> (8 - skip)) & 0xff_ffff;
+            return marker && key && sync == 0x49_83_42;
+        }
         if self == Self::Av1 {
             let (mut sequence, mut still) = (false, false);
             for (kind, payload) in av1_obus(data) {
@@ -365,11 +434,7 @@ fn feed(
         // A decoder that stopped reading has exited or was stopped: the
         // reader reports why.
         // The stamp goes first: the frame cannot come out before it.
-        if stamps.send(stamp).is_err()
-            || stdin
-                .write_all(codec.prefix())
-                .and_then(|()| stdin.write_all(codec.body(&data)))
-                .is_err()
+        if stamps.send(stamp).is_err() || codec.write_packet(&mut stdin, &data, fed, false).is_err()
         {
             break None;
         }
@@ -781,14 +846,9 @@ impl LiveVideo {
             index: packet,
             log_time_ns: 0,
         }));
-        let prefix = match self.written {
-            0 => self.codec.prefix(),
-            _ => &[],
-        };
-        if let Err(e) = stdin
-            .write_all(prefix)
-            .and_then(|()| stdin.write_all(self.codec.body(data)))
-            .and_then(|()| stdin.write_all(self.codec.access_unit_delimiter()))
+        if let Err(e) = self
+            .codec
+            .write_packet(stdin, data, self.written, true)
             .and_then(|()| stdin.flush())
         {
             let last = self.stop();
@@ -987,6 +1047,38 @@ mod tests {
         }
         assert_eq!(at, data.len());
         assert_eq!(packets.len(), frames);
+        let out = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-i"])
+            .arg(&stream)
+            .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let decoded: Vec<Vec<u8>> = out.stdout.chunks(64 * 64 * 3).map(<[u8]>::to_vec).collect();
+        assert_eq!(decoded.len(), frames);
+        (packets, decoded)
+    }
+
+    /// `frames` 64x64 frames of the test pattern in VP9 (libvpx, `pix_fmt`,
+    /// a key frame every 3): one frame per packet, as FFmpeg's IVF muxer
+    /// frames them, and every frame as FFmpeg decodes the IVF file.
+    fn encode_vp9(dir: &Path, pix_fmt: &str, frames: usize) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+        let stream = dir.join(format!("{pix_fmt}.ivf"));
+        let status = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
+            .args(["-f", "lavfi", "-i", "testsrc=size=64x64:rate=10"])
+            .args(["-frames:v", &frames.to_string(), "-pix_fmt", pix_fmt])
+            .args(["-c:v", "libvpx-vp9", "-g", "3", "-threads", "1"])
+            .args(["-f", "ivf"])
+            .arg(&stream)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let mut file = std::io::BufReader::new(std::fs::File::open(&stream).unwrap());
+        assert_eq!(&ivf::read_header(&mut file).unwrap().tag, b"VP90");
+        let packets: Vec<Vec<u8>> = (0..frames)
+            .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
+            .collect();
         let out = Command::new("ffmpeg")
             .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-i"])
             .arg(&stream)
@@ -1231,8 +1323,8 @@ mod tests {
                 assert!(f.image.as_slice() == decoded[i].as_slice(), "{format} {i}");
             }
         }
-        let e = LiveVideo::new("vp9", "/cam").err().unwrap().to_string();
-        assert!(e.contains("/cam: video in format \"vp9\""), "{e}");
+        let e = LiveVideo::new("vp8", "/cam").err().unwrap().to_string();
+        assert!(e.contains("/cam: video in format \"vp8\""), "{e}");
     }
 
     #[test]
@@ -1240,19 +1332,26 @@ mod tests {
         // Bytes of a live stream's packets overwritten at random, as a bad
         // link leaves them: every push and the finish return, with frames
         // (at most one a packet) or an error naming the topic.
+        // VP9's packets are framed by the toolkit (IVF), so a damaged one
+        // cannot move the next one's start.
         let dir = tempfile::tempdir().unwrap();
         let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
-        let (packets, _) = encode(dir.path(), &x264, 6);
+        let (h264, _) = encode(dir.path(), &x264, 6);
+        let (vp9, _) = encode_vp9(dir.path(), "yuv420p", 6);
         let mut rng = crate::rng::SampleRng::new(47, 0, 0);
         let mut outcomes = [0usize; 2];
-        for _ in 0..12 {
+        for round in 0..20 {
+            let (format, packets) = match round < 12 {
+                true => ("h264", &h264),
+                false => ("vp9", &vp9),
+            };
             let mut damaged = packets.clone();
             for _ in 0..1 + rng.index(8) {
                 let p = rng.index(damaged.len());
                 let at = rng.index(damaged[p].len());
                 damaged[p][at] = rng.index(256) as u8;
             }
-            let mut live = LiveVideo::new("h264", "/cam").unwrap();
+            let mut live = LiveVideo::new(format, "/cam").unwrap();
             let mut frames = 0;
             let ended = damaged
                 .iter()
@@ -1288,9 +1387,9 @@ mod tests {
         ];
         let cases: [(&str, Packets, &str); 4] = [
             (
-                "vp9",
+                "vp8",
                 vec![(0, &packets[0])],
-                "topic /cam, message 0: video in format \"vp9\"; read are \"h264\" and \"h265\"",
+                "topic /cam, message 0: video in format \"vp8\"; read are \"h264\" and \"h265\"",
             ),
             // No keyframe: the packets after the first.
             (
@@ -1503,6 +1602,63 @@ mod tests {
     }
 
     #[test]
+    fn vp9_video_is_read_from_a_bag_and_live() {
+        // VP9 as the Foxglove SDK's format has it (a frame per message),
+        // begun after the first key frame.
+        let dir = tempfile::tempdir().unwrap();
+        let (packets, decoded) = encode_vp9(dir.path(), "yuv420p", 8);
+        // Key frames of every profile (0: 4:2:0 8-bit, 1: 4:4:4, 3:
+        // 4:4:4 10-bit, whose header has one bit more) start a stream;
+        // the frames after them do not.
+        for (pix_fmt, profile) in [("yuv444p", 1), ("yuv444p10le", 3)] {
+            let (p, _) = encode_vp9(dir.path(), pix_fmt, 2);
+            assert_eq!((p[0][0] >> 4) & 0b11, [0b00, 0b10, 0b01, 0b11][profile]);
+            assert!(Codec::Vp9.starts_stream(&p[0]), "{pix_fmt}");
+            assert!(!Codec::Vp9.starts_stream(&p[1]), "{pix_fmt}");
+        }
+        assert!(Codec::Vp9.starts_stream(&packets[3]));
+        assert!(!Codec::Vp9.starts_stream(&packets[4]));
+        assert!(!Codec::Vp9.starts_stream(&packets[3][..4]));
+        let path = dir.path().join("vp9.mcap");
+        let late: Vec<(usize, &[u8])> = packets
+            .iter()
+            .map(Vec::as_slice)
+            .enumerate()
+            .skip(1)
+            .collect();
+        ros_bag(&path, "/cam/vp9", "vp9", &late);
+        let (frames, warnings) = read_all(&path, "/cam/vp9").unwrap();
+        let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+        let want: Vec<(u64, i64)> = (3..8).map(|i| (i as u64 - 1, stamp_ns(i))).collect();
+        assert_eq!(got, want);
+        for (f, i) in frames.iter().zip(3..) {
+            assert!(f.image.as_slice() == decoded[i].as_slice(), "frame {i}");
+        }
+        assert!(
+            warnings[0]
+                .contains("its first 2 messages come before the first keyframe of its vp9 stream"),
+            "{warnings:?}"
+        );
+        // Live, by its encoder's name as ffmpeg_image_transport gives it:
+        // each frame back from its own push.
+        let mut live = LiveVideo::new("libvpx-vp9", "/cam/vp9").unwrap();
+        for (i, p) in late {
+            let got = live.push(p, stamp_ns(i)).unwrap();
+            let want: Vec<i64> = match i {
+                1 | 2 => vec![],
+                _ => vec![stamp_ns(i)],
+            };
+            let stamps: Vec<i64> = got.iter().map(|f| f.stamp_ns).collect();
+            assert_eq!(stamps, want, "{i}");
+            for f in &got {
+                assert!(f.image.as_slice() == decoded[i].as_slice(), "live {i}");
+            }
+        }
+        assert_eq!(live.skipped(), 2);
+        assert!(live.finish().unwrap().is_empty());
+    }
+
+    #[test]
     fn h264_image_transport_packets_are_read() {
         // As h264_image_transport's camera node publishes a V4L2 camera's
         // H.264: each packet with its header stamp and sequence number.
@@ -1600,8 +1756,8 @@ mod tests {
             assert!(warnings[0].contains("its first 2 messages"), "{warnings:?}");
         }
         // An encoder of another codec: refused by name.
-        write("libvpx-vp9");
+        write("libvpx");
         let e = read_all(&path, "/cam/ffmpeg").err().unwrap().to_string();
-        assert!(e.contains("video in format \"libvpx-vp9\""), "{e}");
+        assert!(e.contains("video in format \"libvpx\""), "{e}");
     }
 }
