@@ -470,6 +470,37 @@ fn read_picture(stdout: &mut impl BufRead, error: impl Fn(String) -> Error) -> R
     rgb_image(width as usize, height as usize, buf)
 }
 
+/// How a decoder's stream ended, for bags and live alike: no keyframe
+/// among the `skipped` messages, so nothing was `written`; no frame of the
+/// packets written; or FFmpeg's failure (`status`, its `last` words) after
+/// `frames` frames.
+fn stream_end(
+    codec: Codec,
+    skipped: u64,
+    written: u64,
+    frames: u64,
+    status: std::process::ExitStatus,
+    last: &str,
+) -> std::result::Result<(), String> {
+    let name = codec.name();
+    if written == 0 {
+        return Err(format!(
+            "none of its {skipped} messages is a keyframe of its {name} stream (a random-access picture with its sequence parameter set), so no frame can be decoded"
+        ));
+    }
+    if frames == 0 {
+        return Err(format!(
+            "FFmpeg decoded no frame of its {written} {name} packets: {last}"
+        ));
+    }
+    if !status.success() {
+        return Err(format!(
+            "FFmpeg could not decode its {name} stream ({status}): {last}"
+        ));
+    }
+    Ok(())
+}
+
 /// Stop a decoder and reap it.
 fn kill(child: &mut Child) {
     let _ = child.kill();
@@ -700,25 +731,8 @@ impl VideoFrames {
         if stop && !failed {
             return Ok(());
         }
-        if written == 0 {
-            return Err(self.error(format!(
-                "none of its {skipped} messages is a keyframe of its {} stream (a random-access picture with its sequence parameter set), so no frame can be decoded",
-                self.codec.name()
-            )));
-        }
-        if self.frames == 0 {
-            return Err(self.error(format!(
-                "FFmpeg decoded no frame of its {written} {} packets: {last}",
-                self.codec.name()
-            )));
-        }
-        if !status.success() {
-            return Err(self.error(format!(
-                "FFmpeg could not decode its {} stream ({status}): {last}",
-                self.codec.name()
-            )));
-        }
-        Ok(())
+        stream_end(self.codec, skipped, written, self.frames, status, &last)
+            .map_err(|e| self.error(e))
     }
 }
 
@@ -757,9 +771,10 @@ pub struct LiveVideo {
     reader: Option<JoinHandle<()>>,
     stderr: Option<JoinHandle<Vec<u8>>>,
     pending: PendingStamps,
-    /// Packets given, and written to the decoder.
+    /// Packets given, written to the decoder, and frames decoded.
     given: u64,
     written: u64,
+    decoded: u64,
     /// False once a packet's frame did not come within the wait: the
     /// stream holds frames back (B-frames) or lost one, so later pushes
     /// return at once.
@@ -817,6 +832,7 @@ impl LiveVideo {
             pending: PendingStamps::default(),
             given: 0,
             written: 0,
+            decoded: 0,
             wait: true,
         })
     }
@@ -868,8 +884,14 @@ impl LiveVideo {
     }
 
     /// End the stream: the frames still held, once FFmpeg has decoded
-    /// every packet.
+    /// every packet. A stream given no packet ends with none; one that
+    /// gave no frame is refused as a bag's video is: no keyframe among its
+    /// packets, or none of them decoded.
     pub fn finish(mut self) -> Result<Vec<LiveFrame>> {
+        if self.given == 0 {
+            self.stop();
+            return Ok(Vec::new());
+        }
         drop(self.stdin.take());
         let mut frames = Vec::new();
         while let Ok(p) = self.pictures.recv() {
@@ -877,12 +899,9 @@ impl LiveVideo {
         }
         let status = self.child.wait().map_err(|e| self.error(e.to_string()))?;
         let last = last_words(self.stderr.take());
-        if !status.success() {
-            return Err(self.error(format!(
-                "FFmpeg could not decode its {} stream ({status}): {last}",
-                self.codec.name()
-            )));
-        }
+        let (skipped, written) = (self.skipped(), self.written);
+        stream_end(self.codec, skipped, written, self.decoded, status, &last)
+            .map_err(|e| self.error(e))?;
         Ok(frames)
     }
 
@@ -898,6 +917,7 @@ impl LiveVideo {
     fn frame(&mut self, picture: Result<RgbImage>) -> Result<LiveFrame> {
         let image = picture?;
         let stamp = self.pending.take(self.written).map_err(|e| self.error(e))?;
+        self.decoded += 1;
         Ok(LiveFrame {
             image,
             stamp_ns: stamp.stamp_ns,
@@ -1426,6 +1446,38 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_live_stream_that_gives_no_frame_says_why_as_a_bag_does() {
+        // Before, each of these ended in FFmpeg's "Error marking filters as
+        // finished" (exit status 1), even a decoder given no packet.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
+        let (packets, _) = encode(dir.path(), &x264, 4);
+        let garbage: &[u8] = &[
+            0, 0, 0, 1, 0x67, 0xff, 0xff, 0xff, 0xff, 0, 0, 1, 0x65, 0xff,
+        ];
+        let nothing = LiveVideo::new("h264", "/cam").unwrap();
+        assert!(nothing.finish().unwrap().is_empty());
+        let cases: [(Vec<&[u8]>, &str); 2] = [
+            (
+                packets[1..].iter().map(Vec::as_slice).collect(),
+                "/cam: none of its 3 messages is a keyframe of its h264 stream",
+            ),
+            (
+                vec![garbage; 3],
+                "/cam: FFmpeg decoded no frame of its 3 h264 packets",
+            ),
+        ];
+        for (packets, want) in cases {
+            let mut live = LiveVideo::new("h264", "/cam").unwrap();
+            for (i, p) in packets.iter().enumerate() {
+                assert!(live.push(p, stamp_ns(i)).unwrap().is_empty());
+            }
+            let e = live.finish().err().unwrap().to_string();
+            assert!(e.starts_with(want), "{e}");
         }
     }
 
