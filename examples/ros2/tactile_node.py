@@ -4,12 +4,15 @@ It subscribes to a `sensor_msgs/msg/Image` topic (any encoding `tactile
 run` reads in a bag: rgb8, bgr8, mono8, mono16 as the GelSight and TacTip
 cameras publish, cv_bridge's 8UC3, packed YUV 4:2:2, Bayer), or with
 `-p compressed:=true` to a `sensor_msgs/msg/CompressedImage` topic (JPEG or
-PNG, as image_transport's `compressed` transport publishes), or with
-`-p video:=foxglove` to a `foxglove_msgs/msg/CompressedVideo` topic (H.264
-or H.265, VP9 or AV1, as ROS 2 video encoders and the Foxglove bridge publish) or with
-`-p video:=ffmpeg` to `ffmpeg_image_transport`'s `FFMPEGPacket` topic or
-with `-p video:=h264` to `h264_image_transport`'s `h264_msgs/msg/Packet`
-topic (decoded as they arrive by `tactile.VideoDecoder`), runs `tactile.Pipeline`
+PNG, as image_transport's `compressed` transport publishes), or to a video
+topic, decoded as its packets arrive by `tactile.VideoDecoder`: with
+`-p video:=foxglove` a `foxglove_msgs/msg/CompressedVideo` topic (H.264,
+H.265, VP9 or AV1, as ROS 2 video encoders and the Foxglove bridge
+publish), with `-p video:=ffmpeg` `ffmpeg_image_transport`'s
+`FFMPEGPacket` topic, with `-p video:=h264` `h264_image_transport`'s
+`h264_msgs/msg/Packet` topic, or with `-p video:=compressed` a
+`CompressedImage` topic carrying video (format `h264`, as GStreamer's
+ROS 2 sink publishes). It runs `tactile.Pipeline`
 on each frame and publishes:
 
 - `~/result` (`std_msgs/msg/String`): the frame's record as JSON (the same
@@ -72,7 +75,8 @@ class PalpationNode:
     def handle_video(self, msg: Any) -> list[Output]:
         """One video message (a CompressedVideo, with `timestamp` and
         `format`; an FFMPEGPacket, with `header` and `encoding`; an
-        h264_msgs Packet, with `header`, always H.264): the outputs of the
+        h264_msgs Packet, with `header`, always H.264; a CompressedImage of
+        format `h264`, with `header` and `format`): the outputs of the
         frames it completes, normally its own."""
         stamp = msg.timestamp if hasattr(msg, "timestamp") else msg.header.stamp
         if self.video is None:
@@ -114,6 +118,8 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
                     from ffmpeg_image_transport_msgs.msg import FFMPEGPacket as Video
                 elif video == "h264":
                     from h264_msgs.msg import Packet as Video
+                elif video == "compressed":
+                    Video = CompressedImage
                 else:
                     from foxglove_msgs.msg import CompressedVideo as Video
                 # Every packet is needed to decode the next: a deep queue.

@@ -86,9 +86,9 @@ def test_node_answers_as_the_pipeline(node_module, root, palpation_frames):
 
 def test_node_answers_a_video_topic_frame_by_frame(node_module, root, palpation_frames, tmp_path):
     """CompressedVideo messages (lossless H.264, one frame each) as rclpy
-    gives them, and the same packets as h264_msgs Packets: each message's
-    own frame answered as the pipeline answers the PNG, stamped with the
-    message's timestamp."""
+    gives them, and the same packets as h264_msgs Packets and as
+    CompressedImages of format h264: each message's own frame answered as
+    the pipeline answers the PNG, stamped with the message's timestamp."""
     import array
 
     from test_robots import lossless_h264_packets
@@ -96,6 +96,7 @@ def test_node_answers_a_video_topic_frame_by_frame(node_module, root, palpation_
     packets = lossless_h264_packets(root / "samples" / "palpation", tmp_path)
     node = node_module.PalpationNode(str(root / "models"), "onnx")
     h264_node = node_module.PalpationNode(str(root / "models"), "onnx")
+    image_node = node_module.PalpationNode(str(root / "models"), "onnx")
     direct = tactile.Pipeline(root / "models", "onnx")
     for i, (data, rgb) in enumerate(zip(packets, palpation_frames)):
         msg = SimpleNamespace(timestamp=SimpleNamespace(sec=1_700_000_000 + i, nanosec=7), frame_id="cam",
@@ -105,6 +106,9 @@ def test_node_answers_a_video_topic_frame_by_frame(node_module, root, palpation_
         # The same packet as h264_image_transport's Packet (header, seq).
         packet = SimpleNamespace(header=SimpleNamespace(stamp=msg.timestamp, frame_id="cam"), seq=i, data=data)
         assert [o.record["score"] for o in h264_node.handle_video(packet)] == [outs[0].record["score"]], i
+        # As GStreamer's ROS 2 sink publishes it: a CompressedImage (header, format).
+        image = SimpleNamespace(header=packet.header, format="h264", data=data)
+        assert [o.record["score"] for o in image_node.handle_video(image)] == [outs[0].record["score"]], i
         want = direct.process(rgb)
         assert outs[0].record["tendon"] == want.tendon
         assert outs[0].record["score"] == pytest.approx(want.score)

@@ -989,7 +989,11 @@ impl BagImages {
                 let Some(m) = messages.next()? else {
                     return Ok(None);
                 };
-                if video::is_video_type(&m.message_type) {
+                // A compressed image topic whose first message is video
+                // is read as a video topic.
+                let video = video::is_video_type(&m.message_type)
+                    || (self.frames == 0 && video::carries_video(messages, &m)?);
+                if video {
                     let Some(messages) = self.messages.take() else {
                         return Ok(None);
                     };

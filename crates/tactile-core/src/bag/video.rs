@@ -33,8 +33,9 @@ use image::codecs::pnm::PnmDecoder;
 use image::{ColorType, ImageDecoder};
 
 use super::messages::{
-    CompressedVideo, FFMPEG_PACKET_TYPE, FOXGLOVE_COMPRESSED_VIDEO_TYPE, FfmpegPacket,
-    H264_PACKET_TYPE, H264Packet, ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
+    COMPRESSED_IMAGE_TYPE, CompressedImage, CompressedVideo, FFMPEG_PACKET_TYPE,
+    FOXGLOVE_COMPRESSED_IMAGE_TYPE, FOXGLOVE_COMPRESSED_VIDEO_TYPE, FfmpegPacket, H264_PACKET_TYPE,
+    H264Packet, ROS_COMPRESSED_VIDEO_TYPE, from_cdr,
 };
 use super::{
     BagFrame, TopicMessage, TopicMessages, bag_error, foxglove_message, foxglove_stamp,
@@ -53,6 +54,26 @@ pub(super) fn is_video_type(t: &str) -> bool {
         H264_PACKET_TYPE,
     ]
     .contains(&t)
+}
+
+/// True when a message of a compressed image type (ROS 2's or Foxglove's)
+/// carries video: its `format` names a codec read (`h264`, `h265`,
+/// `hevc`, `vp9`, `av1`), as GStreamer's ROS 2 sink and
+/// `nimbro_cam_transport` publish H.264 packets. Such a topic is read as a
+/// video topic.
+pub(super) fn carries_video(topic: &TopicMessages, m: &TopicMessage) -> Result<bool> {
+    let format = match m.message_type.as_str() {
+        COMPRESSED_IMAGE_TYPE => {
+            let c: CompressedImage<'_> =
+                from_cdr(&m.data).map_err(|e| topic.message_error(m.index, e))?;
+            c.format
+        }
+        FOXGLOVE_COMPRESSED_IMAGE_TYPE => {
+            foxglove_message::<foxglove::messages::CompressedImage>(topic, m)?.format
+        }
+        _ => return Ok(false),
+    };
+    Ok(Codec::of(format.trim()).is_some())
 }
 
 /// The video formats read.
@@ -313,8 +334,8 @@ impl Codec {
     }
 }
 
-/// One message of a video type: its packet bytes, format and stamp (0
-/// when it carries none).
+/// One message of a video type, or a compressed image carrying video: its
+/// packet bytes, format and stamp (0 when it carries none).
 fn packet<'a>(topic: &TopicMessages, m: &'a TopicMessage) -> Result<(Cow<'a, [u8]>, String, i64)> {
     let bad = |e: String| topic.message_error(m.index, e);
     if m.message_type == ROS_COMPRESSED_VIDEO_TYPE {
@@ -330,6 +351,16 @@ fn packet<'a>(topic: &TopicMessages, m: &'a TopicMessage) -> Result<(Cow<'a, [u8
         let v: FfmpegPacket<'_> = from_cdr(&m.data).map_err(bad)?;
         let format = Codec::of_encoding(&v.encoding);
         return Ok((Cow::Borrowed(v.data), format, v.header.stamp.nanos()));
+    }
+    if m.message_type == COMPRESSED_IMAGE_TYPE {
+        let v: CompressedImage<'_> = from_cdr(&m.data).map_err(bad)?;
+        let format = v.format.trim().to_string();
+        return Ok((Cow::Borrowed(v.data), format, v.header.stamp.nanos()));
+    }
+    if m.message_type == FOXGLOVE_COMPRESSED_IMAGE_TYPE {
+        let v: foxglove::messages::CompressedImage = foxglove_message(topic, m)?;
+        let (data, format) = (Vec::from(v.data), v.format.trim().to_string());
+        return Ok((Cow::Owned(data), format, foxglove_stamp(v.timestamp)));
     }
     let v: foxglove::messages::CompressedVideo = foxglove_message(topic, m)?;
     Ok((
@@ -400,7 +431,8 @@ fn feed(
                 Err(e) => break Some(e),
             },
         };
-        if !is_video_type(&m.message_type) {
+        let image = [COMPRESSED_IMAGE_TYPE, FOXGLOVE_COMPRESSED_IMAGE_TYPE];
+        if !is_video_type(&m.message_type) && !image.contains(&m.message_type.as_str()) {
             break Some(messages.message_error(
                 m.index,
                 format!(
@@ -1708,6 +1740,64 @@ mod tests {
         }
         assert_eq!(live.skipped(), 2);
         assert!(live.finish().unwrap().is_empty());
+    }
+
+    #[test]
+    fn h264_in_compressed_image_messages_is_read_as_video() {
+        // As GStreamer's ROS 2 sink publishes H.264: a sensor_msgs
+        // CompressedImage per packet, format "h264", begun mid-stream.
+        // Before, each message was refused as an image it is not.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
+        let (packets, decoded) = encode(dir.path(), &x264, 6);
+        let path = dir.path().join("compressed.mcap");
+        let write = |format: fn(usize) -> &'static str| {
+            let late: Vec<(usize, &[u8])> = packets
+                .iter()
+                .map(Vec::as_slice)
+                .enumerate()
+                .skip(1)
+                .collect();
+            cdr_bag(
+                &path,
+                "/cam/compressed",
+                COMPRESSED_IMAGE_TYPE,
+                &late,
+                |i, data| {
+                    to_cdr(&CompressedImage {
+                        header: Header {
+                            stamp: Time::from_nanos(stamp_ns(i)),
+                            frame_id: "cam".into(),
+                        },
+                        format: format(i).into(),
+                        data,
+                    })
+                },
+            )
+        };
+        write(|_| "h264");
+        let (frames, warnings) = read_all(&path, "/cam/compressed").unwrap();
+        let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+        let want: Vec<(u64, i64)> = (3..6).map(|i| (i as u64 - 1, stamp_ns(i))).collect();
+        assert_eq!(got, want);
+        for (f, i) in frames.iter().zip(3..) {
+            assert!(f.image.as_slice() == decoded[i].as_slice(), "frame {i}");
+        }
+        assert!(warnings[0].contains("its first 2 messages"), "{warnings:?}");
+        // A JPEG among the packets: named, not decoded as video.
+        write(|i| match i {
+            5 => "jpeg",
+            i if i % 2 == 0 => " H264",
+            _ => "h264",
+        });
+        let e = read_all(&path, "/cam/compressed")
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("topic /cam/compressed, message 4: format \"jpeg\" after \"h264\" ones"),
+            "{e}"
+        );
     }
 
     #[test]
