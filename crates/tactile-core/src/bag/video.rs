@@ -807,16 +807,24 @@ pub struct LiveVideo {
     given: u64,
     written: u64,
     decoded: u64,
-    /// False once a packet's frame did not come within the wait: the
-    /// stream holds frames back (B-frames) or lost one, so later pushes
-    /// return at once.
-    wait: bool,
+    /// Frames FFmpeg holds back once every packet given is in, learnt
+    /// from waits that timed out: a stream with B-frames holds as many as
+    /// its reordering needs, and a lost frame never comes. A push waits
+    /// only while more frames than these are out, so each returns the
+    /// frames its packet made due, as soon as they are decoded.
+    held: u64,
+    /// Waits that timed out; after [`LIVE_TIMEOUTS`], pushes no longer wait.
+    timeouts: u32,
 }
 
 /// How long [`LiveVideo::push`] waits for a frame: far above a frame's
 /// decoding (milliseconds at 1080p), so only a stream that holds frames
-/// back (B-frames) or lost one waits it out, once.
+/// back (B-frames) or lost one waits it out.
 const LIVE_FRAME_WAIT: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// Waits of [`LIVE_FRAME_WAIT`] a live stream may time out, so a stream
+/// that keeps losing frames is not held up a second each time.
+const LIVE_TIMEOUTS: u32 = 3;
 
 impl LiveVideo {
     /// A decoder of `format` (`h264`, `h265`/`hevc`, `av1`; the codec, or
@@ -865,7 +873,8 @@ impl LiveVideo {
             given: 0,
             written: 0,
             decoded: 0,
-            wait: true,
+            held: 0,
+            timeouts: 0,
         })
     }
 
@@ -875,11 +884,10 @@ impl LiveVideo {
         self.given - self.written
     }
 
-    /// Give the next packet (one frame: Annex B, or an AV1 temporal unit)
-    /// and its stamp; the frames
-    /// decoded so far, after waiting for a frame (up to a second, and only
-    /// while every packet has given its frame in time), normally this
-    /// packet's.
+    /// Give the next packet (one frame: Annex B, a VP9 frame, or an AV1
+    /// temporal unit) and its stamp; the frames decoded so far, normally
+    /// this packet's, after waiting for the frames due (up to a second
+    /// each; see [`LiveVideo`]'s `held`).
     pub fn push(&mut self, data: &[u8], stamp_ns: i64) -> Result<Vec<LiveFrame>> {
         let packet = self.given;
         self.given += 1;
@@ -904,11 +912,16 @@ impl LiveVideo {
         }
         self.written += 1;
         let mut frames = Vec::new();
-        if self.wait {
+        while self.timeouts < LIVE_TIMEOUTS && self.written.saturating_sub(self.decoded) > self.held
+        {
             match self.pictures.recv_timeout(LIVE_FRAME_WAIT) {
                 Ok(p) => frames.push(self.frame(p)?),
-                Err(mpsc::RecvTimeoutError::Timeout) => self.wait = false,
-                Err(mpsc::RecvTimeoutError::Disconnected) => {}
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    self.held = self.written.saturating_sub(self.decoded);
+                    self.timeouts += 1;
+                }
+                // FFmpeg ended: the next push or `finish` says why.
+                Err(mpsc::RecvTimeoutError::Disconnected) => break,
             }
         }
         self.ready(&mut frames)?;
@@ -1337,6 +1350,46 @@ mod tests {
         for (k, f) in frames.iter().enumerate() {
             let message = shown.iter().position(|&s| s == k).unwrap();
             assert_eq!((f.index, f.stamp_ns), (message as u64, stamp_ns(k)), "{k}");
+            assert!(f.image.as_slice() == decoded[k].as_slice(), "frame {k}");
+        }
+    }
+
+    #[test]
+    fn a_live_stream_with_b_frames_gives_each_frame_as_soon_as_it_is_due() {
+        // The B-frame stream above, pushed a packet at a time: FFmpeg
+        // holds one frame back for reordering. After one timed-out wait
+        // (the first packet's), each push waits for the frame its packet
+        // made due, so every push returns exactly one frame, in display
+        // order with its own stamp. Before, pushes stopped waiting after
+        // that timeout and returned before FFmpeg had decoded the frame,
+        // so frames came later (pushed back to back as here, every one
+        // only at the finish).
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = [
+            "-c:v",
+            "libx264",
+            "-threads",
+            "1",
+            "-g",
+            "6",
+            "-x264-params",
+            "bframes=2:b-adapt=0:b-pyramid=none:repeat-headers=1",
+        ];
+        let (packets, decoded) = encode(dir.path(), &x264, 12);
+        let shown = display_order(&x264, 12, &packets);
+        let mut live = LiveVideo::new("h264", "/cam").unwrap();
+        let mut counts = Vec::new();
+        let mut frames = Vec::new();
+        for (p, &k) in packets.iter().zip(&shown) {
+            let got = live.push(p, stamp_ns(k)).unwrap();
+            counts.push(got.len());
+            frames.extend(got);
+        }
+        frames.extend(live.finish().unwrap());
+        assert_eq!(counts, [0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1]);
+        assert_eq!(frames.len(), 12);
+        for (k, f) in frames.iter().enumerate() {
+            assert_eq!(f.stamp_ns, stamp_ns(k), "{k}");
             assert!(f.image.as_slice() == decoded[k].as_slice(), "frame {k}");
         }
     }
