@@ -1,7 +1,9 @@
 """Robot I/O speed: reading 1080p ROS 2 bags (raw rgb8, packed YUV 4:2:2 and
 JPEG topics; bag folders with rosbag2's zstd file and message compression;
-an H.264 video topic the Foxglove SDK records; the same packets decoded
-live, as a node subscribed to the topic gets them) and the pipeline's frame rate with and without a subscribed Foxglove viewer.
+video topics the Foxglove SDK records in each format it names, H.264,
+H.265, VP9 and AV1; the same packets decoded live, as a node subscribed to
+the topic gets them) and the pipeline's frame rate with and without a
+subscribed Foxglove viewer.
 
     python scripts/bench_robots.py [--frames 60] [--out docs/robots-bench.md]
 
@@ -59,7 +61,44 @@ def stamp(i: int) -> int:
     return 1_700_000_000_000_000_000 + i * 33_333_333
 
 
-def write_bags(tmp: Path, n: int) -> dict[str, Path]:
+#: The video formats of Foxglove's CompressedVideo: FFmpeg's encoder (a
+#: keyframe a second with its parameter sets or sequence header, no
+#: B-frames or hidden frames, one packet per frame; the AV1 and VP9 ones in
+#: their real-time modes) and the muxer whose packets are split into
+#: messages (Annex B packets one per file; IVF frames).
+VIDEO = {
+    "h264": (["libx264", "-bf", "0", "-x264-params", "repeat-headers=1"], "image2"),
+    "h265": (["libx265", "-x265-params", "bframes=0:repeat-headers=1:log-level=error"], "image2"),
+    "vp9": (["libvpx-vp9", "-deadline", "realtime", "-cpu-used", "8"], "ivf"),
+    "av1": (["libaom-av1", "-usage", "realtime", "-cpu-used", "8", "-lag-in-frames", "0"], "ivf"),
+}
+
+
+def video_packets(tmp: Path, raw: list[bytes], n: int, codec: str) -> list[bytes]:
+    """`n` 1080p frames (the `raw` rgb24 frames in turn) encoded in `codec`,
+    one packet per frame."""
+    encoder, muxer = VIDEO[codec]
+    folder = tmp / f"{codec}-packets"
+    folder.mkdir()
+    for i in range(n):
+        (folder / f"{i:06d}.rgb").write_bytes(raw[i % len(raw)])
+    out = folder / ("%06d.bin" if muxer == "image2" else "stream.ivf")
+    ffmpeg("-f", "image2", "-c:v", "rawvideo", "-pixel_format", "rgb24", "-video_size", "1920x1080",
+           "-framerate", "30", "-i", str(folder / "%06d.rgb"), "-c:v", *encoder, "-g", "30",
+           "-pix_fmt", "yuv420p", "-f", muxer, str(out))
+    if muxer == "image2":
+        return [p.read_bytes() for p in sorted(folder.glob("*.bin"))]
+    # IVF: a 32-byte file header, then each frame after its 32-bit size and
+    # 64-bit place.
+    data, packets, at = out.read_bytes(), [], 32
+    while at < len(data):
+        size = int.from_bytes(data[at:at + 4], "little")
+        packets.append(data[at + 12:at + 12 + size])
+        at += 12 + size
+    return packets
+
+
+def write_bags(tmp: Path, n: int) -> tuple[dict[str, Path], dict[str, list[bytes]]]:
     """`raw` (rgb8), `yuyv` (yuv422_yuy2) and `jpeg` bags written by
     mcap-ros2-support; `zstd-file` and `zstd-message`, the raw frames in
     bag folders written by rosbags with rosbag2's zstd compression."""
@@ -90,29 +129,22 @@ def write_bags(tmp: Path, n: int) -> dict[str, Path]:
                 w.write_message("/cam/image", schema, msg, log_time=t, publish_time=t)
             w.finish()
         paths[kind] = path
-    # A camera recorded as video by the Foxglove SDK: H.264 (x264's
-    # defaults, no B-frames, a keyframe a second with its parameter sets),
-    # one packet per message.
+    # A camera recorded as video by the Foxglove SDK in each format, one
+    # packet per message.
     import foxglove
     from foxglove.channels import CompressedVideoChannel
     from foxglove.messages import CompressedVideo, Timestamp
-    packets = tmp / "h264-packets"
-    packets.mkdir()
-    for i in range(n):
-        (packets / f"{i:06d}.rgb").write_bytes(frames["raw"][i % len(src)])
-    ffmpeg("-f", "image2", "-c:v", "rawvideo", "-pixel_format", "rgb24", "-video_size", "1920x1080",
-           "-framerate", "30", "-i", str(packets / "%06d.rgb"), "-c:v", "libx264", "-bf", "0", "-g", "30",
-           "-pix_fmt", "yuv420p", "-x264-params", "repeat-headers=1", "-f", "image2",
-           str(packets / "%06d.h264"))
-    path = tmp / "h264.mcap"
-    ctx = foxglove.Context()
-    with foxglove.open_mcap(path, context=ctx):
-        video = CompressedVideoChannel("/cam/image", context=ctx)
-        for i, p in enumerate(sorted(packets.glob("*.h264"))):
-            t = stamp(i)
-            video.log(CompressedVideo(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
-                                      data=p.read_bytes(), format="h264"), log_time=t)
-    paths["h264"] = path
+    packets = {codec: video_packets(tmp, frames["raw"], n, codec) for codec in VIDEO}
+    for codec, data in packets.items():
+        path = tmp / f"{codec}.mcap"
+        ctx = foxglove.Context()
+        with foxglove.open_mcap(path, context=ctx):
+            video = CompressedVideoChannel("/cam/image", context=ctx)
+            for i, d in enumerate(data):
+                t = stamp(i)
+                video.log(CompressedVideo(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
+                                          data=d, format=codec), log_time=t)
+        paths[codec] = path
     ts = get_typestore(Stores.ROS2_HUMBLE)
     Image, Header, Time = (ts.types[t] for t in
                            ["sensor_msgs/msg/Image", "std_msgs/msg/Header", "builtin_interfaces/msg/Time"])
@@ -129,16 +161,15 @@ def write_bags(tmp: Path, n: int) -> dict[str, Path]:
                             data=np.frombuffer(frames["raw"][i % len(src)], np.uint8))
                 w.write(c, t, ts.serialize_cdr(msg, Image.__msgtype__))
         paths[folder.name] = folder
-    return paths
+    return paths, packets
 
 
-def live_decode(packets: Path) -> tuple[float, float, int, int]:
-    """The H.264 packets given one at a time to `tactile.VideoDecoder`, as a
+def live_decode(data: list[bytes], codec: str) -> tuple[float, float, int, int]:
+    """The packets given one at a time to `tactile.VideoDecoder`, as a
     node subscribed to the topic gets them: frames/s, the median ms from a
     packet given to its frame back, and how many of the packets' frames came
     back from their own `decode` (of how many)."""
-    data = [p.read_bytes() for p in sorted(packets.glob("*.h264"))]
-    decoder = tactile.VideoDecoder("h264")
+    decoder = tactile.VideoDecoder(codec)
     waits, own = [], 0
     t0 = time.perf_counter()
     for i, d in enumerate(data):
@@ -230,7 +261,7 @@ def main() -> None:
                     default=Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release" / "tactile")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        bags = write_bags(Path(tmp), a.frames)
+        bags, packets = write_bags(Path(tmp), a.frames)
         raw, jpeg = bags["raw"], bags["jpeg"]
         med = lambda f: statistics.median(f() for _ in range(a.repeats))  # noqa: E731
         rows = {
@@ -251,11 +282,21 @@ def main() -> None:
             "tactile run on the JPEG topic": med(lambda: run_fps(a.tactile, jpeg, False)),
             "tactile run on the H.264 video topic": med(lambda: run_fps(a.tactile, bags["h264"], False)),
         }
-        live = [live_decode(Path(tmp) / "h264-packets") for _ in range(a.repeats)]
-        rows["decode the H.264 packets live, one at a time (tactile.VideoDecoder)"] = \
-            statistics.median(r[0] for r in live)
-        live_ms = statistics.median(r[1] for r in live)
-        live_own, live_all = min(r[2] for r in live), live[0][3]
+        codecs = {}
+        for codec in VIDEO:
+            live = [live_decode(packets[codec], codec) for _ in range(a.repeats)]
+            codecs[codec] = {
+                "read": rows["read H.264 video topic, foxglove.CompressedVideo (tactile.frames)"]
+                if codec == "h264" else med(lambda: read_rate(bags[codec])),
+                "live": statistics.median(r[0] for r in live),
+                "ms": statistics.median(r[1] for r in live),
+                "own": min(r[2] for r in live),
+                "all": live[0][3],
+                "kb": sum(map(len, packets[codec])) / len(packets[codec]) / 1e3,
+            }
+        h264 = codecs["h264"]
+        rows["decode the H.264 packets live, one at a time (tactile.VideoDecoder)"] = h264["live"]
+        live_ms, live_own, live_all = h264["ms"], h264["own"], h264["all"]
         listed = med(lambda: list_ms(raw))
         scanned = med(lambda: list_ms(cut_short(raw, Path(tmp) / "cut.mcap")))
         raw_mb = raw.stat().st_size / 1e6
@@ -272,7 +313,7 @@ def main() -> None:
         "",
         f"Generated by `python scripts/bench_robots.py --frames {a.frames} --repeats {a.repeats}`: "
         f"{a.frames}-frame 1920x1080 bags written by mcap-ros2-support (the zstd bag folders by rosbags, "
-        f"the H.264 one by the Foxglove SDK); "
+        f"the video ones by the Foxglove SDK); "
         f"median of {a.repeats} runs. "
         f"Machine: {cpu}, {os.cpu_count()} logical cores; onnxruntime 1 thread, frames decoded on a second thread.",
         "",
@@ -289,6 +330,18 @@ def main() -> None:
         f"{live_all} packets (the fewest of the runs), a median {live_ms:.1f} ms after the packet was given: "
         f"FFmpeg decodes a packet as soon as it is whole, not when the next one comes (a frame later at 30 "
         f"fps, 33 ms).",
+        "",
+        "Each video format, one packet per message of a foxglove.CompressedVideo topic (FFmpeg's encoder: "
+        + ", ".join(f"{c} `{VIDEO[c][0][0]}`" for c in VIDEO)
+        + "; a keyframe a second, no B-frames); read from the bag by `tactile.frames`, and live, given a "
+        "packet at a time to `tactile.VideoDecoder` (FFmpeg's decoders on one thread; AV1 by the one FFmpeg "
+        "picks, here libdav1d):",
+        "",
+        "| format | packet kB | bag read frames/s | live decode frames/s | median ms to a packet's frame "
+        "| frames back from their own `decode` |",
+        "|---|---|---|---|---|---|",
+        *[f"| {c} | {v['kb']:.1f} | {v['read']:.1f} | {v['live']:.1f} | {v['ms']:.1f} | {v['own']} of {v['all']} |"
+          for c, v in codecs.items()],
         "",
         f"Listing the raw bag's topics ({raw_mb:.0f} MB; `tactile.bag_topics`, `--list-topics`, and a run "
         f"or read without `--topic` finding its only image topic) takes {listed:.1f} ms from the file's MCAP "
