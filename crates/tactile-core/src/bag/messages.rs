@@ -368,6 +368,12 @@ impl CompressedImage<'_> {
             format,
             Some(image::ImageFormat::Jpeg) | Some(image::ImageFormat::Png)
         ) {
+            if super::video::is_video_format(&self.format) {
+                return Err(format!(
+                    "format {:?} is a video packet, not a picture: a video topic's packets are decoded as one stream (a bag's topic that begins with one is read so; live, tactile.VideoDecoder, the ROS 2 node's video:=compressed)",
+                    self.format
+                ));
+            }
             return Err(format!(
                 "format {:?}: the data is not a JPEG or PNG picture",
                 self.format
@@ -392,6 +398,35 @@ impl CompressedImage<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_video_packet_in_a_compressed_image_is_named_as_video() {
+        // An H.264 keyframe's start (SPS, IDR) as GStreamer's ROS 2 sink
+        // publishes it, given as a picture: the error says what it is and
+        // where it is read, not only that it is no JPEG.
+        let data = [0, 0, 0, 1, 0x67, 0x42, 0, 0x1e, 0, 0, 0, 1, 0x65, 0x88];
+        for format in ["h264", "H265", " vp9"] {
+            let e = CompressedImage {
+                header: Header::default(),
+                format: format.into(),
+                data: &data,
+            }
+            .to_rgb()
+            .err()
+            .unwrap();
+            assert!(e.contains("is a video packet, not a picture"), "{e}");
+            assert!(e.contains("tactile.VideoDecoder"), "{e}");
+        }
+        let e = CompressedImage {
+            header: Header::default(),
+            format: "jpeg".into(),
+            data: &data,
+        }
+        .to_rgb()
+        .err()
+        .unwrap();
+        assert!(e.contains("the data is not a JPEG or PNG picture"), "{e}");
+    }
 
     #[test]
     fn images_round_trip_through_cdr_and_hostile_sizes_are_refused() {

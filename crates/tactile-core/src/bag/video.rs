@@ -73,7 +73,12 @@ pub(super) fn carries_video(topic: &TopicMessages, m: &TopicMessage) -> Result<b
         }
         _ => return Ok(false),
     };
-    Ok(Codec::of(format.trim()).is_some())
+    Ok(is_video_format(&format))
+}
+
+/// True when a compressed image's `format` names a video codec read.
+pub(crate) fn is_video_format(format: &str) -> bool {
+    Codec::of(format.trim()).is_some()
 }
 
 /// The video formats read.
