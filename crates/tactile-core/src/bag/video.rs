@@ -25,7 +25,7 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
-use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::process::{Child, ChildStdin, ChildStdout, Command, ExitStatus, Stdio};
 use std::sync::mpsc;
 use std::thread::JoinHandle;
 
@@ -113,6 +113,76 @@ fn av1_obus(mut data: &[u8]) -> impl Iterator<Item = (u8, &[u8])> {
         data = &rest[size..];
         Some(((header >> 3) & 0x0f, payload))
     })
+}
+
+/// The NAL units of Annex B data: the bytes after each `00 00 01` start
+/// code up to the next one (without the zero bytes before it: a 4-byte
+/// start code's first, or trailing ones).
+fn nal_units(data: &[u8]) -> impl Iterator<Item = &[u8]> {
+    let mut starts = data
+        .windows(3)
+        .enumerate()
+        .filter(|(_, w)| *w == [0, 0, 1])
+        .map(|(i, _)| i)
+        .peekable();
+    std::iter::from_fn(move || {
+        let at = starts.next()? + 3;
+        let end = starts.peek().copied().unwrap_or(data.len()).max(at);
+        let unit = &data[at..end];
+        let len = unit.iter().rposition(|&b| b != 0).map_or(0, |p| p + 1);
+        Some(&unit[..len])
+    })
+}
+
+/// A VP9 key frame's format and size, read from its uncompressed header
+/// (VP9 6.2) by a bit reader: the frame marker (2), profile (and a
+/// reserved bit in profile 3), `show_existing_frame` 0, `frame_type` 0,
+/// `show_frame` and `error_resilient_mode`, the sync code 49 83 42, then
+/// `color_config` (bit depth, color space, range, subsampling) and
+/// `frame_size`. `None` when the packet's (first) frame is no key frame.
+fn vp9_key_frame(data: &[u8]) -> Option<[u32; 7]> {
+    use bitstream_io::{BigEndian, BitRead, BitReader};
+    let mut r = BitReader::endian(data, BigEndian);
+    let mut bits = |n: u32| r.read_var::<u32>(n).ok();
+    if bits(2)? != 2 {
+        return None;
+    }
+    let profile = bits(1)? | (bits(1)? << 1);
+    if profile == 3 {
+        bits(1)?;
+    }
+    // show_existing_frame, then frame_type (0: a key frame).
+    if bits(1)? != 0 || bits(1)? != 0 {
+        return None;
+    }
+    bits(2)?;
+    if bits(24)? != 0x49_83_42 {
+        return None;
+    }
+    let depth = if profile >= 2 { bits(1)? } else { 0 };
+    let color_space = bits(3)?;
+    let (mut range, mut subsampling) = (0, 0);
+    let full_chroma = profile == 1 || profile == 3;
+    // 7: CS_RGB, which has no range and no subsampling.
+    if color_space != 7 {
+        range = bits(1)?;
+        if full_chroma {
+            subsampling = bits(2)?;
+            bits(1)?;
+        }
+    } else if full_chroma {
+        bits(1)?;
+    }
+    let (width, height) = (bits(16)? + 1, bits(16)? + 1);
+    Some([
+        profile,
+        depth,
+        color_space,
+        range,
+        subsampling,
+        width,
+        height,
+    ])
 }
 
 /// An unsigned LEB128 value (at most 8 bytes, AV1 4.10.5) and what follows.
@@ -284,24 +354,10 @@ impl Codec {
     /// `frame_type` 0 in its first three bits (AV1 5.9.2), or any frame
     /// of a sequence of still pictures (`reduced_still_picture_header`,
     /// the fifth bit of the sequence header; AV1 5.5.1). A VP9 packet starts
-    /// one when its (first) frame is a key frame: the uncompressed header's
-    /// frame marker (2), profile (two bits, and a reserved one for profile
-    /// 3), `show_existing_frame` 0, `frame_type` 0, then after two more
-    /// bits the key frame's sync code 49 83 42 (VP9 6.2).
+    /// one when its (first) frame is a key frame ([`vp9_key_frame`]).
     fn starts_stream(self, data: &[u8]) -> bool {
         if self == Self::Vp9 {
-            let Some(head) = data.get(..5) else {
-                return false;
-            };
-            // The first 40 bits, the first byte's highest bit at 39.
-            let bits = head.iter().fold(0u64, |v, &b| (v << 8) | u64::from(b));
-            let profile = ((bits >> 37) & 1) | (((bits >> 36) & 1) << 1);
-            let skip = u32::from(profile == 3);
-            let marker = bits >> 38 == 0b10;
-            // show_existing_frame and frame_type, both 0.
-            let key = (bits >> (34 - skip)) & 0b11 == 0;
-            let sync = (bits >> (8 - skip)) & 0xff_ffff;
-            return marker && key && sync == 0x49_83_42;
+            return vp9_key_frame(data).is_some();
         }
         if self == Self::Av1 {
             let (mut sequence, mut still) = (false, false);
@@ -320,13 +376,7 @@ impl Codec {
             }
             return false;
         }
-        let types = data
-            .windows(4)
-            .filter(|w| w[..3] == [0, 0, 1])
-            .map(|w| match self {
-                Self::H264 => w[3] & 0x1f,
-                _ => (w[3] >> 1) & 0x3f,
-            });
+        let types = nal_units(data).filter_map(|u| u.first().map(|&h| self.nal_type(h)));
         let (mut sps, mut random_access) = (false, false);
         for t in types {
             match (self, t) {
@@ -336,6 +386,49 @@ impl Codec {
             }
         }
         sps && random_access
+    }
+
+    /// A NAL unit's type from its first header byte: its low five bits in
+    /// H.264 (ITU-T H.264 7.3.1), bits 1-6 in H.265 (ITU-T H.265 7.3.1.2).
+    fn nal_type(self, header: u8) -> u8 {
+        match self {
+            Self::H264 => header & 0x1f,
+            _ => (header >> 1) & 0x3f,
+        }
+    }
+
+    /// The stream parameters a keyframe carries: H.264's sequence
+    /// parameter sets (NAL type 7), H.265's video and sequence ones (32,
+    /// 33), AV1's sequence header OBUs, VP9's key frame format and size.
+    /// A keyframe whose parameters differ from its stream's begins a new
+    /// stream (a camera restarted at another size), decoded by a new
+    /// FFmpeg process: one process would scale every later frame to the
+    /// first frame's size.
+    fn parameters(self, data: &[u8]) -> Vec<u8> {
+        match self {
+            Self::H264 | Self::H265 => nal_units(data)
+                .filter(|u| {
+                    u.first().is_some_and(|&h| {
+                        matches!(
+                            (self, self.nal_type(h)),
+                            (Self::H264, 7) | (Self::H265, 32 | 33)
+                        )
+                    })
+                })
+                .flatten()
+                .copied()
+                .collect(),
+            Self::Av1 => av1_obus(data)
+                .filter(|(kind, _)| *kind == 1)
+                .flat_map(|(_, payload)| payload)
+                .copied()
+                .collect(),
+            Self::Vp9 => vp9_key_frame(data)
+                .into_iter()
+                .flatten()
+                .flat_map(u32::to_le_bytes)
+                .collect(),
+        }
     }
 }
 
@@ -376,9 +469,11 @@ fn packet<'a>(topic: &TopicMessages, m: &'a TopicMessage) -> Result<(Cow<'a, [u8
 }
 
 /// The stamp and place of a packet written to the decoder, ordered by
-/// stamp, then by place (the field order).
+/// the decoder it went to, then by stamp, then by place (the field order).
 #[derive(Debug, PartialEq, Eq, PartialOrd, Ord)]
 struct Stamp {
+    /// The decoder (0, then 1 after the stream's parameters changed, ...).
+    segment: u32,
     stamp_ns: i64,
     index: u64,
     log_time_ns: u64,
@@ -397,6 +492,24 @@ impl PendingStamps {
             format!("FFmpeg gave more frames than the {written} packets written to it")
         })
     }
+
+    /// Forget the stamps of decoders before `segment`, whose frames never
+    /// came (FFmpeg lost them); how many.
+    fn drop_before(&mut self, segment: u32) -> u64 {
+        let mut lost = 0;
+        while self.0.peek().is_some_and(|Reverse(s)| s.segment < segment) {
+            self.0.pop();
+            lost += 1;
+        }
+        lost
+    }
+}
+
+/// A decoder started by the feeder for a new stream, handed to the reader.
+struct Segment {
+    child: Child,
+    stdout: ChildStdout,
+    stderr: Option<JoinHandle<Vec<u8>>>,
 }
 
 /// What the feeder did, once it ended.
@@ -407,21 +520,38 @@ struct Fed {
     error: Option<Error>,
     /// Messages before the first keyframe.
     skipped: u64,
-    /// Packets written to the decoder.
+    /// Packets written to the decoders.
     fed: u64,
+    /// The messages whose keyframe began a new stream (new parameters).
+    restarts: Vec<u64>,
+}
+
+/// Where the feeder writes: the decoder's input, and the channels to the
+/// reader for each packet's stamp and each new decoder.
+struct FeedTo {
+    codec: Codec,
+    path: PathBuf,
+    stdin: ChildStdin,
+    stamps: mpsc::Sender<Stamp>,
+    segments: mpsc::Sender<Segment>,
 }
 
 /// Write the topic's packets, from `first` on, to the decoder's input, the
 /// stamp of each sent before it; the input is closed at the end, so the
-/// decoder gives its last frames and exits.
-fn feed(
-    mut messages: TopicMessages,
-    first: TopicMessage,
-    codec: Codec,
-    mut stdin: ChildStdin,
-    stamps: mpsc::Sender<Stamp>,
-) -> Fed {
+/// decoder gives its last frames and exits. A keyframe with new stream
+/// parameters ([`Codec::parameters`]) goes to a new decoder, handed to the
+/// reader before the old one's input is closed.
+fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
+    let FeedTo {
+        codec,
+        path,
+        mut stdin,
+        stamps,
+        segments,
+    } = to;
     let (mut skipped, mut fed) = (0, 0);
+    let (mut segment, mut in_segment, mut parameters) = (0u32, 0u64, Vec::new());
+    let mut restarts = Vec::new();
     let mut next = Some(first);
     let error = loop {
         // Ctrl-C ends the feed, then the decoder, then the reader's wait.
@@ -459,11 +589,45 @@ fn feed(
                 ),
             ));
         }
-        if fed == 0 && !codec.starts_stream(&data) {
+        let key = codec.starts_stream(&data);
+        if fed == 0 && !key {
             skipped += 1;
             continue;
         }
+        if key {
+            let new = codec.parameters(&data);
+            if fed > 0 && new != parameters {
+                let Decoder {
+                    child,
+                    stdin: next_stdin,
+                    stdout,
+                    stderr,
+                } = match spawn_decoder(codec, false, &path) {
+                    Ok(d) => d,
+                    Err(e) => break Some(e),
+                };
+                // The reader takes the new decoder before the old one
+                // ends, so it finds it when the old one's frames end.
+                let next = Segment {
+                    child,
+                    stdout,
+                    stderr,
+                };
+                if let Err(mpsc::SendError(mut next)) = segments.send(next) {
+                    kill(&mut next.child);
+                    break None;
+                }
+                // The old decoder's input closes: it gives its last
+                // frames and exits.
+                stdin = next_stdin;
+                segment += 1;
+                in_segment = 0;
+                restarts.push(m.index);
+            }
+            parameters = new;
+        }
         let stamp = Stamp {
+            segment,
             stamp_ns: stamp_or_log_time(stamp_ns, m.log_time),
             log_time_ns: m.log_time,
             index: m.index,
@@ -471,11 +635,15 @@ fn feed(
         // A decoder that stopped reading has exited or was stopped: the
         // reader reports why.
         // The stamp goes first: the frame cannot come out before it.
-        if stamps.send(stamp).is_err() || codec.write_packet(&mut stdin, &data, fed, false).is_err()
+        if stamps.send(stamp).is_err()
+            || codec
+                .write_packet(&mut stdin, &data, in_segment, false)
+                .is_err()
         {
             break None;
         }
         fed += 1;
+        in_segment += 1;
     };
     drop(stdin);
     Fed {
@@ -483,6 +651,7 @@ fn feed(
         error,
         skipped,
         fed,
+        restarts,
     }
 }
 
@@ -516,7 +685,7 @@ fn stream_end(
     skipped: u64,
     written: u64,
     frames: u64,
-    status: std::process::ExitStatus,
+    status: ExitStatus,
     last: &str,
 ) -> std::result::Result<(), String> {
     let name = codec.name();
@@ -603,6 +772,11 @@ pub(super) struct VideoFrames {
     stderr: Option<JoinHandle<Vec<u8>>>,
     stamps: mpsc::Receiver<Stamp>,
     pending: PendingStamps,
+    /// Decoders of the streams after this one, and this one's number.
+    segments: mpsc::Receiver<Segment>,
+    segment: u32,
+    /// Frames of earlier decoders lost (their packets gave none).
+    lost: u64,
     feeder: Option<JoinHandle<Fed>>,
     fed: Option<Fed>,
     frames: u64,
@@ -624,9 +798,17 @@ impl VideoFrames {
             stderr,
         } = spawn_decoder(codec, false, &path)?;
         let (send, stamps) = mpsc::channel();
+        let (send_segment, segments) = mpsc::channel();
+        let to = FeedTo {
+            codec,
+            path: path.clone(),
+            stdin,
+            stamps: send,
+            segments: send_segment,
+        };
         let feeder = std::thread::Builder::new()
             .name("video-packets".into())
-            .spawn(move || feed(messages, first, codec, stdin, send));
+            .spawn(move || feed(messages, first, to));
         let feeder = match feeder {
             Ok(f) => f,
             Err(e) => {
@@ -644,6 +826,9 @@ impl VideoFrames {
             stderr,
             stamps,
             pending: PendingStamps::default(),
+            segments,
+            segment: 0,
+            lost: 0,
             feeder: Some(feeder),
             fed: None,
             frames: 0,
@@ -676,6 +861,17 @@ impl VideoFrames {
                 self.first + fed.skipped
             ));
         }
+        if !fed.restarts.is_empty() {
+            let at: Vec<String> = fed.restarts.iter().map(u64::to_string).collect();
+            warnings.push(format!(
+                "{} topic {}: its {} stream's parameters change at message{} {} (a keyframe with new ones: a camera restarted, or set to another size); each part was decoded on its own, its frames at their own size",
+                self.path.display(),
+                self.topic,
+                self.codec.name(),
+                if at.len() == 1 { "" } else { "s" },
+                at.join(", ")
+            ));
+        }
         if self.frames < fed.fed {
             warnings.push(format!(
                 "{} topic {}: FFmpeg gave a frame for {} of its {} packets (a damaged packet gives none), so each frame after a lost one carries the stamp of an earlier packet (at most {} back)",
@@ -694,11 +890,21 @@ impl VideoFrames {
         if self.done {
             return Ok(None);
         }
-        let at_end = self.stdout.fill_buf().map(<[u8]>::is_empty);
-        if let Ok(true) = at_end {
-            self.done = true;
-            self.finish(false)?;
-            return Ok(None);
+        let mut at_end = self.stdout.fill_buf().map(<[u8]>::is_empty);
+        // A decoder's frames ended: the next stream's decoder, if the
+        // feeder started one (it does before closing this one's input).
+        while let Ok(true) = at_end {
+            let Ok(next) = self.segments.recv() else {
+                self.done = true;
+                self.finish(false)?;
+                return Ok(None);
+            };
+            if let Err(e) = self.next_segment(next) {
+                self.done = true;
+                self.finish(true)?;
+                return Err(e);
+            }
+            at_end = self.stdout.fill_buf().map(<[u8]>::is_empty);
         }
         let frame = match at_end {
             Err(e) => Err(Error::io(&self.path, e)),
@@ -728,6 +934,35 @@ impl VideoFrames {
                 Err(e)
             }
         }
+    }
+
+    /// Go on with the next stream's decoder, once this one gave its last
+    /// frame: this one must have ended well, and its packets without a
+    /// frame are forgotten (lost), so the next stream's frames take their
+    /// own stamps.
+    fn next_segment(&mut self, next: Segment) -> Result<()> {
+        let status = self.child.wait().map_err(|e| Error::io(&self.path, e));
+        let last = last_words(self.stderr.take());
+        let Segment {
+            child,
+            stdout,
+            stderr,
+        } = next;
+        let old = std::mem::replace(&mut self.child, child);
+        drop(old);
+        self.stdout = BufReader::with_capacity(1 << 20, stdout);
+        self.stderr = stderr;
+        let status = status?;
+        if !status.success() {
+            return Err(self.error(format!(
+                "FFmpeg could not decode its {} stream ({status}): {last}",
+                self.codec.name()
+            )));
+        }
+        self.pending.0.extend(self.stamps.try_iter().map(Reverse));
+        self.segment += 1;
+        self.lost += self.pending.drop_before(self.segment);
+        Ok(())
     }
 
     /// One decoded picture.
@@ -775,8 +1010,12 @@ impl VideoFrames {
 
 impl Drop for VideoFrames {
     fn drop(&mut self) {
-        // The feeder then finds the decoder's input closed and ends.
+        // The feeder then finds the decoder's input closed and ends; a
+        // decoder it started that was not taken yet is stopped too.
         kill(&mut self.child);
+        for mut next in self.segments.try_iter() {
+            kill(&mut next.child);
+        }
     }
 }
 
@@ -802,16 +1041,17 @@ pub struct LiveFrame {
 pub struct LiveVideo {
     codec: Codec,
     name: String,
-    child: Child,
-    stdin: Option<ChildStdin>,
-    pictures: mpsc::Receiver<Result<RgbImage>>,
-    reader: Option<JoinHandle<()>>,
-    stderr: Option<JoinHandle<Vec<u8>>>,
+    decoder: LiveDecoder,
     pending: PendingStamps,
-    /// Packets given, written to the decoder, and frames decoded.
+    /// Packets given, written to the decoders, and frames decoded.
     given: u64,
     written: u64,
     decoded: u64,
+    /// The current decoder's number, the packets written to it, and the
+    /// stream parameters of its first keyframe ([`Codec::parameters`]).
+    segment: u32,
+    in_segment: u64,
+    parameters: Vec<u8>,
     /// Frames FFmpeg holds back once every packet given is in, learnt
     /// from waits that timed out: a stream with B-frames holds as many as
     /// its reordering needs, and a lost frame never comes. A push waits
@@ -831,13 +1071,20 @@ const LIVE_FRAME_WAIT: std::time::Duration = std::time::Duration::from_secs(1);
 /// that keeps losing frames is not held up a second each time.
 const LIVE_TIMEOUTS: u32 = 3;
 
-impl LiveVideo {
-    /// A decoder of `format` (`h264`, `h265`/`hevc`, `av1`; the codec, or
-    /// the encoder's name as `ffmpeg_image_transport` writes it), named
-    /// `name` (a topic) in errors.
-    pub fn new(format: &str, name: &str) -> Result<Self> {
-        let error = |m: String| Error::Invalid(format!("{name}: {m}"));
-        let codec = Codec::read(&Codec::of_encoding(format)).map_err(error)?;
+/// A live stream's FFmpeg process: its input, and a thread reading its
+/// pictures into a channel.
+struct LiveDecoder {
+    child: Child,
+    stdin: Option<ChildStdin>,
+    pictures: mpsc::Receiver<Result<RgbImage>>,
+    reader: Option<JoinHandle<()>>,
+    stderr: Option<JoinHandle<Vec<u8>>>,
+}
+
+impl LiveDecoder {
+    /// A decoder of `codec` started at once (no probing), named `name`
+    /// in errors.
+    fn start(codec: Codec, name: &str) -> Result<Self> {
         let Decoder {
             mut child,
             stdin,
@@ -859,25 +1106,76 @@ impl LiveVideo {
                     }
                 }
             });
-        let reader = match reader {
-            Ok(r) => r,
+        match reader {
+            Ok(r) => Ok(Self {
+                child,
+                stdin: Some(stdin),
+                pictures,
+                reader: Some(r),
+                stderr,
+            }),
             Err(e) => {
                 kill(&mut child);
-                return Err(error(format!("no thread to read its frames: {e}")));
+                Err(Error::Invalid(format!(
+                    "{name}: no thread to read its frames: {e}"
+                )))
             }
-        };
+        }
+    }
+
+    /// Close the input and wait for the last pictures and the exit: the
+    /// pictures, the exit status and FFmpeg's last words.
+    fn end(&mut self) -> (Vec<Result<RgbImage>>, std::io::Result<ExitStatus>, String) {
+        drop(self.stdin.take());
+        let pictures: Vec<_> = self.pictures.iter().collect();
+        // The reader stops at a picture it cannot read: FFmpeg, left
+        // writing to no one, is stopped.
+        if pictures.iter().any(Result::is_err) {
+            let _ = self.child.kill();
+        }
+        let status = self.child.wait();
+        let last = last_words(self.stderr.take());
+        if let Some(r) = self.reader.take() {
+            let _ = r.join();
+        }
+        (pictures, status, last)
+    }
+
+    /// Kill the process; its last words.
+    fn stop(&mut self) -> String {
+        drop(self.stdin.take());
+        kill(&mut self.child);
+        last_words(self.stderr.take())
+    }
+}
+
+impl Drop for LiveDecoder {
+    fn drop(&mut self) {
+        self.stop();
+        if let Some(r) = self.reader.take() {
+            let _ = r.join();
+        }
+    }
+}
+
+impl LiveVideo {
+    /// A decoder of `format` (`h264`, `h265`/`hevc`, `vp9`, `av1`; the
+    /// codec, or the encoder's name as `ffmpeg_image_transport` writes
+    /// it), named `name` (a topic) in errors.
+    pub fn new(format: &str, name: &str) -> Result<Self> {
+        let error = |m: String| Error::Invalid(format!("{name}: {m}"));
+        let codec = Codec::read(&Codec::of_encoding(format)).map_err(error)?;
         Ok(Self {
             codec,
             name: name.to_string(),
-            child,
-            stdin: Some(stdin),
-            pictures,
-            reader: Some(reader),
-            stderr,
+            decoder: LiveDecoder::start(codec, name)?,
             pending: PendingStamps::default(),
             given: 0,
             written: 0,
             decoded: 0,
+            segment: 0,
+            in_segment: 0,
+            parameters: Vec::new(),
             held: 0,
             timeouts: 0,
         })
@@ -892,37 +1190,49 @@ impl LiveVideo {
     /// Give the next packet (one frame: Annex B, a VP9 frame, or an AV1
     /// temporal unit) and its stamp; the frames decoded so far, normally
     /// this packet's, after waiting for the frames due (up to a second
-    /// each; see [`LiveVideo`]'s `held`).
+    /// each; see [`LiveVideo`]'s `held`). A keyframe with new stream
+    /// parameters (a camera restarted at another size) first ends the
+    /// current decoder, whose last frames come back here too, and starts
+    /// a new one, so every frame keeps its own size.
     pub fn push(&mut self, data: &[u8], stamp_ns: i64) -> Result<Vec<LiveFrame>> {
         let packet = self.given;
         self.given += 1;
-        if self.written == 0 && !self.codec.starts_stream(data) {
+        let key = self.codec.starts_stream(data);
+        if self.written == 0 && !key {
             return Ok(Vec::new());
         }
-        let Some(stdin) = self.stdin.as_mut() else {
+        let mut frames = Vec::new();
+        if key {
+            let new = self.codec.parameters(data);
+            if self.written > 0 && new != self.parameters {
+                self.restart(&mut frames)?;
+            }
+            self.parameters = new;
+        }
+        let Some(stdin) = self.decoder.stdin.as_mut() else {
             return Err(self.error("its stream was closed".into()));
         };
         self.pending.0.push(Reverse(Stamp {
+            segment: self.segment,
             stamp_ns,
             index: packet,
             log_time_ns: 0,
         }));
         if let Err(e) = self
             .codec
-            .write_packet(stdin, data, self.written, true)
+            .write_packet(stdin, data, self.in_segment, true)
             .and_then(|()| stdin.flush())
         {
-            let last = self.stop();
+            let last = self.decoder.stop();
             return Err(self.error(format!("FFmpeg stopped reading its packets ({e}): {last}")));
         }
         self.written += 1;
-        let mut frames = Vec::new();
-        while self.timeouts < LIVE_TIMEOUTS && self.written.saturating_sub(self.decoded) > self.held
-        {
-            match self.pictures.recv_timeout(LIVE_FRAME_WAIT) {
+        self.in_segment += 1;
+        while self.timeouts < LIVE_TIMEOUTS && self.pending.0.len() as u64 > self.held {
+            match self.decoder.pictures.recv_timeout(LIVE_FRAME_WAIT) {
                 Ok(p) => frames.push(self.frame(p)?),
                 Err(mpsc::RecvTimeoutError::Timeout) => {
-                    self.held = self.written.saturating_sub(self.decoded);
+                    self.held = self.pending.0.len() as u64;
                     self.timeouts += 1;
                 }
                 // FFmpeg ended: the next push or `finish` says why.
@@ -939,25 +1249,51 @@ impl LiveVideo {
     /// packets, or none of them decoded.
     pub fn finish(mut self) -> Result<Vec<LiveFrame>> {
         if self.given == 0 {
-            self.stop();
+            self.decoder.stop();
             return Ok(Vec::new());
         }
-        drop(self.stdin.take());
         let mut frames = Vec::new();
-        while let Ok(p) = self.pictures.recv() {
-            frames.push(self.frame(p)?);
-        }
-        let status = self.child.wait().map_err(|e| self.error(e.to_string()))?;
-        let last = last_words(self.stderr.take());
+        let (status, last) = self.end_decoder(&mut frames)?;
         let (skipped, written) = (self.skipped(), self.written);
         stream_end(self.codec, skipped, written, self.decoded, status, &last)
             .map_err(|e| self.error(e))?;
         Ok(frames)
     }
 
+    /// A new decoder for a stream with new parameters: the current one's
+    /// last frames go to `frames`, and its packets that gave none are
+    /// forgotten, so the new stream's frames take their own stamps.
+    fn restart(&mut self, frames: &mut Vec<LiveFrame>) -> Result<()> {
+        let (status, last) = self.end_decoder(frames)?;
+        if !status.success() {
+            return Err(self.error(format!(
+                "FFmpeg could not decode its {} stream ({status}): {last}",
+                self.codec.name()
+            )));
+        }
+        self.decoder = LiveDecoder::start(self.codec, &self.name)?;
+        self.segment += 1;
+        self.in_segment = 0;
+        self.pending.drop_before(self.segment);
+        self.held = 0;
+        Ok(())
+    }
+
+    /// End the current decoder, its last frames going to `frames`; its
+    /// exit status and last words.
+    fn end_decoder(&mut self, frames: &mut Vec<LiveFrame>) -> Result<(ExitStatus, String)> {
+        let (pictures, status, last) = self.decoder.end();
+        for p in pictures {
+            frames.push(self.frame(p)?);
+        }
+        let status =
+            status.map_err(|e| self.error(format!("FFmpeg could not be waited for: {e}")))?;
+        Ok((status, last))
+    }
+
     /// The frames ready now, after `frames`.
     fn ready(&mut self, frames: &mut Vec<LiveFrame>) -> Result<()> {
-        while let Ok(p) = self.pictures.try_recv() {
+        while let Ok(p) = self.decoder.pictures.try_recv() {
             frames.push(self.frame(p)?);
         }
         Ok(())
@@ -975,24 +1311,8 @@ impl LiveVideo {
         })
     }
 
-    /// Kill the decoder; its last words.
-    fn stop(&mut self) -> String {
-        drop(self.stdin.take());
-        kill(&mut self.child);
-        last_words(self.stderr.take())
-    }
-
     fn error(&self, message: String) -> Error {
         Error::Invalid(format!("{}: {message}", self.name))
-    }
-}
-
-impl Drop for LiveVideo {
-    fn drop(&mut self) {
-        self.stop();
-        if let Some(r) = self.reader.take() {
-            let _ = r.join();
-        }
     }
 }
 
@@ -1009,7 +1329,19 @@ mod tests {
     /// `encoder`: one packet per frame in decoding order (Annex B), and
     /// every frame as FFmpeg decodes the whole stream, in display order.
     fn encode(dir: &Path, encoder: &[&str], frames: usize) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
-        let (w, h) = (64, 64);
+        encode_sized(dir, encoder, frames, (64, 64))
+    }
+
+    /// [`encode`] at another size.
+    fn encode_sized(
+        dir: &Path,
+        encoder: &[&str],
+        frames: usize,
+        (w, h): (usize, usize),
+    ) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+        let dir = dir.join(format!("{w}x{h}"));
+        std::fs::create_dir_all(&dir).unwrap();
+        let dir = dir.as_path();
         let packets = dir.join(format!("{}-%03d.bin", encoder[1]));
         let status = Command::new("ffmpeg")
             .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
@@ -1089,10 +1421,24 @@ mod tests {
     /// beginning with its temporal delimiter as FFmpeg's `obu` muxer
     /// writes them, and every frame as FFmpeg decodes the whole stream.
     fn encode_av1(dir: &Path, frames: usize) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
-        let stream = dir.join("av1.obu");
+        encode_av1_sized(dir, frames, (64, 64))
+    }
+
+    /// [`encode_av1`] at another size.
+    fn encode_av1_sized(
+        dir: &Path,
+        frames: usize,
+        (w, h): (usize, usize),
+    ) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+        let stream = dir.join(format!("av1-{w}x{h}.obu"));
         let status = Command::new("ffmpeg")
             .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
-            .args(["-f", "lavfi", "-i", "testsrc=size=64x64:rate=10"])
+            .args([
+                "-f",
+                "lavfi",
+                "-i",
+                &format!("testsrc=size={w}x{h}:rate=10"),
+            ])
             .args(["-frames:v", &frames.to_string(), "-pix_fmt", "yuv420p"])
             .args(["-c:v", "libaom-av1", "-cpu-used", "8", "-g", "3"])
             .args(["-lag-in-frames", "0", "-threads", "1", "-f", "obu"])
@@ -1124,7 +1470,7 @@ mod tests {
             .output()
             .unwrap();
         assert!(out.status.success());
-        let decoded: Vec<Vec<u8>> = out.stdout.chunks(64 * 64 * 3).map(<[u8]>::to_vec).collect();
+        let decoded: Vec<Vec<u8>> = out.stdout.chunks(w * h * 3).map(<[u8]>::to_vec).collect();
         assert_eq!(decoded.len(), frames);
         (packets, decoded)
     }
@@ -1133,10 +1479,25 @@ mod tests {
     /// a key frame every 3): one frame per packet, as FFmpeg's IVF muxer
     /// frames them, and every frame as FFmpeg decodes the IVF file.
     fn encode_vp9(dir: &Path, pix_fmt: &str, frames: usize) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
-        let stream = dir.join(format!("{pix_fmt}.ivf"));
+        encode_vp9_sized(dir, pix_fmt, frames, (64, 64))
+    }
+
+    /// [`encode_vp9`] at another size.
+    fn encode_vp9_sized(
+        dir: &Path,
+        pix_fmt: &str,
+        frames: usize,
+        (w, h): (usize, usize),
+    ) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+        let stream = dir.join(format!("{pix_fmt}-{w}x{h}.ivf"));
         let status = Command::new("ffmpeg")
             .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
-            .args(["-f", "lavfi", "-i", "testsrc=size=64x64:rate=10"])
+            .args([
+                "-f",
+                "lavfi",
+                "-i",
+                &format!("testsrc=size={w}x{h}:rate=10"),
+            ])
             .args(["-frames:v", &frames.to_string(), "-pix_fmt", pix_fmt])
             .args(["-c:v", "libvpx-vp9", "-g", "3", "-threads", "1"])
             .args(["-f", "ivf"])
@@ -1156,7 +1517,7 @@ mod tests {
             .output()
             .unwrap();
         assert!(out.status.success());
-        let decoded: Vec<Vec<u8>> = out.stdout.chunks(64 * 64 * 3).map(<[u8]>::to_vec).collect();
+        let decoded: Vec<Vec<u8>> = out.stdout.chunks(w * h * 3).map(<[u8]>::to_vec).collect();
         assert_eq!(decoded.len(), frames);
         (packets, decoded)
     }
@@ -1856,6 +2217,61 @@ mod tests {
             e.contains("topic /cam/compressed, message 4: format \"jpeg\" after \"h264\" ones"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_stream_whose_parameters_change_gives_each_frame_at_its_own_size() {
+        // A camera restarted at another size within one recording: three
+        // frames at 64x64, then a keyframe with new parameters (H.264's
+        // SPS; VP9's key frame size; AV1's sequence header) and three at
+        // 96x48. Before, one FFmpeg process scaled the last three to 64x64.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
+        for codec in ["h264", "vp9", "av1"] {
+            let (mut packets, mut decoded, mut sizes) = (Vec::new(), Vec::new(), Vec::new());
+            for size in [(64, 64), (96, 48)] {
+                let (p, d) = match codec {
+                    "h264" => encode_sized(dir.path(), &x264, 3, size),
+                    "vp9" => encode_vp9_sized(dir.path(), "yuv420p", 3, size),
+                    _ => encode_av1_sized(dir.path(), 3, size),
+                };
+                packets.extend(p);
+                decoded.extend(d);
+                sizes.extend([size; 3]);
+            }
+            let path = dir.path().join(format!("{codec}.mcap"));
+            let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+            ros_bag(&path, "/cam", codec, &all);
+            let (frames, warnings) = read_all(&path, "/cam").unwrap();
+            assert_eq!(frames.len(), 6, "{codec}");
+            for (i, f) in frames.iter().enumerate() {
+                assert_eq!((f.image.width(), f.image.height()), sizes[i], "{codec} {i}");
+                assert!(f.image.as_slice() == decoded[i].as_slice(), "{codec} {i}");
+                assert_eq!(
+                    (f.index, f.stamp_ns),
+                    (i as u64, stamp_ns(i)),
+                    "{codec} {i}"
+                );
+            }
+            assert_eq!(warnings.len(), 1, "{warnings:?}");
+            assert!(
+                warnings[0].contains(&format!(
+                    "its {codec} stream's parameters change at message 3"
+                )),
+                "{warnings:?}"
+            );
+            // Live: each push gives its own frame, at its own size.
+            let mut live = LiveVideo::new(codec, "/cam").unwrap();
+            for (i, p) in packets.iter().enumerate() {
+                let got = live.push(p, stamp_ns(i)).unwrap();
+                assert_eq!(got.len(), 1, "{codec} live {i}");
+                assert_eq!(got[0].stamp_ns, stamp_ns(i));
+                let size = (got[0].image.width(), got[0].image.height());
+                assert_eq!(size, sizes[i], "{codec} live {i}");
+                assert!(got[0].image.as_slice() == decoded[i].as_slice());
+            }
+            assert!(live.finish().unwrap().is_empty());
+        }
     }
 
     #[test]
