@@ -1672,12 +1672,10 @@ mod tests {
         assert!(warnings.is_empty(), "{warnings:?}");
     }
 
-    #[test]
-    fn frames_of_a_stream_with_b_frames_take_their_own_packets_stamps() {
-        // Two B-frames between references: packets come in decoding
-        // order, each stamped with the time its frame shows, as
-        // ffmpeg_image_transport publishes an encoder's packets.
-        let dir = tempfile::tempdir().unwrap();
+    /// 12 frames of x264 with two B-frames between references (one thread,
+    /// so its packets are the same each time): the packets in decoding
+    /// order, the frames in display order, and where each packet shows.
+    fn b_frame_stream(dir: &Path) -> (Vec<Vec<u8>>, Vec<Vec<u8>>, Vec<usize>) {
         let x264 = [
             "-c:v",
             "libx264",
@@ -1688,8 +1686,18 @@ mod tests {
             "-x264-params",
             "bframes=2:b-adapt=0:b-pyramid=none:repeat-headers=1",
         ];
-        let (packets, decoded) = encode(dir.path(), &x264, 12);
+        let (packets, decoded) = encode(dir, &x264, 12);
         let shown = display_order(&x264, 12, &packets);
+        (packets, decoded, shown)
+    }
+
+    #[test]
+    fn frames_of_a_stream_with_b_frames_take_their_own_packets_stamps() {
+        // Two B-frames between references: packets come in decoding
+        // order, each stamped with the time its frame shows, as
+        // ffmpeg_image_transport publishes an encoder's packets.
+        let dir = tempfile::tempdir().unwrap();
+        let (packets, decoded, shown) = b_frame_stream(dir.path());
         assert_ne!(shown, (0..12).collect::<Vec<_>>(), "no B-frames");
         let path = dir.path().join("b.mcap");
         let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
@@ -1731,18 +1739,7 @@ mod tests {
         // so frames came later (pushed back to back as here, every one
         // only at the finish).
         let dir = tempfile::tempdir().unwrap();
-        let x264 = [
-            "-c:v",
-            "libx264",
-            "-threads",
-            "1",
-            "-g",
-            "6",
-            "-x264-params",
-            "bframes=2:b-adapt=0:b-pyramid=none:repeat-headers=1",
-        ];
-        let (packets, decoded) = encode(dir.path(), &x264, 12);
-        let shown = display_order(&x264, 12, &packets);
+        let (packets, decoded, shown) = b_frame_stream(dir.path());
         let mut live = LiveVideo::new("h264", "/cam").unwrap();
         let mut counts = Vec::new();
         let mut frames = Vec::new();
