@@ -2061,44 +2061,7 @@ mod tests {
                 _ => Codec::Av1.body(p),
             })
             .collect();
-        let path = dir.path().join("av1.mcap");
-        let late: Vec<(usize, &[u8])> = stripped.iter().copied().enumerate().skip(1).collect();
-        ros_bag(&path, "/cam/av1", "av1", &late);
-        let (frames, warnings) = read_all(&path, "/cam/av1").unwrap();
-        let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
-        let want: Vec<(u64, i64)> = (3..8).map(|i| (i as u64 - 1, stamp_ns(i))).collect();
-        assert_eq!(got, want);
-        for (f, i) in frames.iter().zip(3..) {
-            assert!(f.image.as_slice() == decoded[i].as_slice(), "frame {i}");
-        }
-        assert!(
-            warnings[0]
-                .contains("its first 2 messages come before the first keyframe of its av1 stream"),
-            "{warnings:?}"
-        );
-        // Live, by its encoder's name as ffmpeg_image_transport gives it:
-        // each frame back from its own push.
-        let mut live = LiveVideo::new("libaom-av1", "/cam/av1").unwrap();
-        for (i, p) in stripped.iter().enumerate().skip(1) {
-            let got = live.push(p, stamp_ns(i)).unwrap();
-            let want: Vec<i64> = match i {
-                1 | 2 => vec![],
-                _ => vec![stamp_ns(i)],
-            };
-            assert_eq!(
-                got.iter().map(|f| f.stamp_ns).collect::<Vec<_>>(),
-                want,
-                "{i}"
-            );
-            for f in &got {
-                assert!(
-                    f.image.as_slice() == decoded[i].as_slice(),
-                    "live frame {i}"
-                );
-            }
-        }
-        assert_eq!(live.skipped(), 2);
-        assert!(live.finish().unwrap().is_empty());
+        read_begun_mid_stream(dir.path(), "av1", "libaom-av1", &stripped, &decoded);
     }
 
     #[test]
@@ -2119,29 +2082,40 @@ mod tests {
         assert!(Codec::Vp9.starts_stream(&packets[3]));
         assert!(!Codec::Vp9.starts_stream(&packets[4]));
         assert!(!Codec::Vp9.starts_stream(&packets[3][..4]));
-        let path = dir.path().join("vp9.mcap");
-        let late: Vec<(usize, &[u8])> = packets
-            .iter()
-            .map(Vec::as_slice)
-            .enumerate()
-            .skip(1)
-            .collect();
-        ros_bag(&path, "/cam/vp9", "vp9", &late);
-        let (frames, warnings) = read_all(&path, "/cam/vp9").unwrap();
+        let packets: Vec<&[u8]> = packets.iter().map(Vec::as_slice).collect();
+        read_begun_mid_stream(dir.path(), "vp9", "libvpx-vp9", &packets, &decoded);
+    }
+
+    /// `packets` (a keyframe every 3) from the second on, as a bag's topic
+    /// of `format` and live (to the decoder of `encoder`, named as
+    /// `ffmpeg_image_transport` names it): the frames from the keyframe at
+    /// 3 on, each FFmpeg's decode (`decoded`) with its own stamp, the two
+    /// messages before it skipped with a warning, and each live frame back
+    /// from its own push.
+    fn read_begun_mid_stream(
+        dir: &Path,
+        format: &str,
+        encoder: &str,
+        packets: &[&[u8]],
+        decoded: &[Vec<u8>],
+    ) {
+        let topic = format!("/cam/{format}");
+        let path = dir.join(format!("{format}.mcap"));
+        let late: Vec<(usize, &[u8])> = packets.iter().copied().enumerate().skip(1).collect();
+        ros_bag(&path, &topic, format, &late);
+        let (frames, warnings) = read_all(&path, &topic).unwrap();
         let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
-        let want: Vec<(u64, i64)> = (3..8).map(|i| (i as u64 - 1, stamp_ns(i))).collect();
-        assert_eq!(got, want);
+        let want: Vec<(u64, i64)> = (3..packets.len())
+            .map(|i| (i as u64 - 1, stamp_ns(i)))
+            .collect();
+        assert_eq!(got, want, "{format}");
         for (f, i) in frames.iter().zip(3..) {
-            assert!(f.image.as_slice() == decoded[i].as_slice(), "frame {i}");
+            assert!(f.image.as_slice() == decoded[i].as_slice(), "{format} {i}");
         }
-        assert!(
-            warnings[0]
-                .contains("its first 2 messages come before the first keyframe of its vp9 stream"),
-            "{warnings:?}"
-        );
-        // Live, by its encoder's name as ffmpeg_image_transport gives it:
-        // each frame back from its own push.
-        let mut live = LiveVideo::new("libvpx-vp9", "/cam/vp9").unwrap();
+        let skipped =
+            format!("its first 2 messages come before the first keyframe of its {format} stream");
+        assert!(warnings[0].contains(&skipped), "{warnings:?}");
+        let mut live = LiveVideo::new(encoder, &topic).unwrap();
         for (i, p) in late {
             let got = live.push(p, stamp_ns(i)).unwrap();
             let want: Vec<i64> = match i {
@@ -2149,9 +2123,12 @@ mod tests {
                 _ => vec![stamp_ns(i)],
             };
             let stamps: Vec<i64> = got.iter().map(|f| f.stamp_ns).collect();
-            assert_eq!(stamps, want, "{i}");
+            assert_eq!(stamps, want, "{format} live {i}");
             for f in &got {
-                assert!(f.image.as_slice() == decoded[i].as_slice(), "live {i}");
+                assert!(
+                    f.image.as_slice() == decoded[i].as_slice(),
+                    "{format} live {i}"
+                );
             }
         }
         assert_eq!(live.skipped(), 2);
