@@ -1342,45 +1342,21 @@ mod tests {
         let dir = dir.join(format!("{w}x{h}"));
         std::fs::create_dir_all(&dir).unwrap();
         let dir = dir.as_path();
-        let packets = dir.join(format!("{}-%03d.bin", encoder[1]));
-        let status = Command::new("ffmpeg")
-            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
-            .args([
-                "-f",
-                "lavfi",
-                "-i",
-                &format!("testsrc=size={w}x{h}:rate=10"),
-            ])
-            .args(["-frames:v", &frames.to_string(), "-pix_fmt", "yuv420p"])
-            .args(encoder)
-            .args(["-f", "image2"])
-            .arg(&packets)
-            .status()
-            .unwrap();
-        assert!(status.success());
+        let name = format!("{}-%03d.bin", encoder[1]);
+        encode_file(
+            (dir, &name),
+            "yuv420p",
+            (w, h),
+            frames,
+            &[encoder],
+            "image2",
+        );
         let packets: Vec<Vec<u8>> = (1..=frames)
             .map(|i| std::fs::read(dir.join(format!("{}-{i:03}.bin", encoder[1]))).unwrap())
             .collect();
         let stream = dir.join(format!("{}.bin", encoder[1]));
         std::fs::write(&stream, packets.concat()).unwrap();
-        let out = Command::new("ffmpeg")
-            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-i"])
-            .arg(&stream)
-            .args([
-                "-fps_mode",
-                "passthrough",
-                "-f",
-                "rawvideo",
-                "-pix_fmt",
-                "rgb24",
-                "-",
-            ])
-            .output()
-            .unwrap();
-        assert!(out.status.success());
-        let decoded: Vec<Vec<u8>> = out.stdout.chunks(w * h * 3).map(<[u8]>::to_vec).collect();
-        assert_eq!(decoded.len(), frames);
-        (packets, decoded)
+        (packets, decode_file(&stream, (w, h), frames))
     }
 
     /// Where each packet of `encode(dir, encoder, frames)` shows: the
@@ -1430,22 +1406,17 @@ mod tests {
         frames: usize,
         (w, h): (usize, usize),
     ) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
-        let stream = dir.join(format!("av1-{w}x{h}.obu"));
-        let status = Command::new("ffmpeg")
-            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
-            .args([
-                "-f",
-                "lavfi",
-                "-i",
-                &format!("testsrc=size={w}x{h}:rate=10"),
-            ])
-            .args(["-frames:v", &frames.to_string(), "-pix_fmt", "yuv420p"])
-            .args(["-c:v", "libaom-av1", "-cpu-used", "8", "-g", "3"])
-            .args(["-lag-in-frames", "0", "-threads", "1", "-f", "obu"])
-            .arg(&stream)
-            .status()
-            .unwrap();
-        assert!(status.success());
+        let libaom = ["-c:v", "libaom-av1", "-cpu-used", "8", "-g", "3"];
+        let options = ["-lag-in-frames", "0", "-threads", "1"];
+        let name = format!("av1-{w}x{h}.obu");
+        let stream = encode_file(
+            (dir, &name),
+            "yuv420p",
+            (w, h),
+            frames,
+            &[&libaom, &options],
+            "obu",
+        );
         let data = std::fs::read(&stream).unwrap();
         // Split before each temporal delimiter.
         let mut packets: Vec<Vec<u8>> = Vec::new();
@@ -1463,16 +1434,49 @@ mod tests {
         }
         assert_eq!(at, data.len());
         assert_eq!(packets.len(), frames);
+        (packets, decode_file(&stream, (w, h), frames))
+    }
+
+    /// `frames` frames of FFmpeg's test pattern at `w`x`h` in `pix_fmt`,
+    /// encoded with `encoder`'s options into `dir/name`, a file of
+    /// `muxer`'s format.
+    fn encode_file(
+        (dir, name): (&Path, &str),
+        pix_fmt: &str,
+        (w, h): (usize, usize),
+        frames: usize,
+        encoder: &[&[&str]],
+        muxer: &str,
+    ) -> std::path::PathBuf {
+        let stream = dir.join(name);
+        let status = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
+            .args(["-f", "lavfi", "-i"])
+            .arg(format!("testsrc=size={w}x{h}:rate=10"))
+            .args(["-frames:v", &frames.to_string(), "-pix_fmt", pix_fmt])
+            .args(encoder.concat())
+            .args(["-f", muxer])
+            .arg(&stream)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        stream
+    }
+
+    /// Every frame of the video file at `path` as FFmpeg decodes it
+    /// (`w`x`h` RGB), checked to be `frames`.
+    fn decode_file(path: &Path, (w, h): (usize, usize), frames: usize) -> Vec<Vec<u8>> {
         let out = Command::new("ffmpeg")
             .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-i"])
-            .arg(&stream)
-            .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+            .arg(path)
+            .args(["-fps_mode", "passthrough", "-f", "rawvideo"])
+            .args(["-pix_fmt", "rgb24", "-"])
             .output()
             .unwrap();
         assert!(out.status.success());
         let decoded: Vec<Vec<u8>> = out.stdout.chunks(w * h * 3).map(<[u8]>::to_vec).collect();
         assert_eq!(decoded.len(), frames);
-        (packets, decoded)
+        decoded
     }
 
     /// `frames` 64x64 frames of the test pattern in VP9 (libvpx, `pix_fmt`,
@@ -1489,37 +1493,15 @@ mod tests {
         frames: usize,
         (w, h): (usize, usize),
     ) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
-        let stream = dir.join(format!("{pix_fmt}-{w}x{h}.ivf"));
-        let status = Command::new("ffmpeg")
-            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
-            .args([
-                "-f",
-                "lavfi",
-                "-i",
-                &format!("testsrc=size={w}x{h}:rate=10"),
-            ])
-            .args(["-frames:v", &frames.to_string(), "-pix_fmt", pix_fmt])
-            .args(["-c:v", "libvpx-vp9", "-g", "3", "-threads", "1"])
-            .args(["-f", "ivf"])
-            .arg(&stream)
-            .status()
-            .unwrap();
-        assert!(status.success());
+        let libvpx = ["-c:v", "libvpx-vp9", "-g", "3", "-threads", "1"];
+        let name = format!("{pix_fmt}-{w}x{h}.ivf");
+        let stream = encode_file((dir, &name), pix_fmt, (w, h), frames, &[&libvpx], "ivf");
         let mut file = std::io::BufReader::new(std::fs::File::open(&stream).unwrap());
         assert_eq!(&ivf::read_header(&mut file).unwrap().tag, b"VP90");
         let packets: Vec<Vec<u8>> = (0..frames)
             .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
             .collect();
-        let out = Command::new("ffmpeg")
-            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-i"])
-            .arg(&stream)
-            .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
-            .output()
-            .unwrap();
-        assert!(out.status.success());
-        let decoded: Vec<Vec<u8>> = out.stdout.chunks(w * h * 3).map(<[u8]>::to_vec).collect();
-        assert_eq!(decoded.len(), frames);
-        (packets, decoded)
+        (packets, decode_file(&stream, (w, h), frames))
     }
 
     const T0: u32 = 1_700_000_000;
