@@ -492,6 +492,46 @@ def test_video_decodes_live_and_from_a_foxglove_recording(tmp_path, root, codec)
     assert all(np.array_equal(f.image, w) for f, w in zip(got, want))
 
 
+def test_a_camera_restarted_at_another_size_keeps_each_frames_size(tmp_path):
+    """A foxglove.CompressedVideo topic whose camera restarts at another
+    size (lossless H.264 at 64x48, then a keyframe with a new SPS at
+    96x64): every frame at its own size with FFmpeg's pixels, read from the
+    recording (with a warning naming the message) and live."""
+    import foxglove
+    from foxglove.channels import CompressedVideoChannel
+    from foxglove.messages import CompressedVideo, Timestamp
+
+    packets, want = [], []
+    for w, h in [(64, 48), (96, 64)]:
+        folder = tmp_path / f"{w}x{h}"
+        folder.mkdir()
+        source = ["-f", "lavfi", "-i", f"testsrc=size={w}x{h}:rate=10", "-frames:v", "3"]
+        subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", *source, "-c:v", "libx264rgb", "-qp", "0",
+                        "-bf", "0", "-f", "image2", str(folder / "%03d.h264")], check=True)
+        packets += [p.read_bytes() for p in sorted(folder.glob("*.h264"))]
+        raw = subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", *source, "-f", "rawvideo",
+                              "-pix_fmt", "rgb24", "-"], check=True, capture_output=True).stdout
+        want += list(np.frombuffer(raw, np.uint8).reshape(3, h, w, 3))
+    bag = tmp_path / "restarted.mcap"
+    ctx = foxglove.Context()
+    with foxglove.open_mcap(bag, context=ctx):
+        video = CompressedVideoChannel("/cam/h264", context=ctx)
+        for i, d in enumerate(packets):
+            t = stamp(i)
+            video.log(CompressedVideo(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
+                                      data=d, format="h264"), log_time=t)
+    with pytest.warns(UserWarning, match=r"its h264 stream's parameters change at message 3"):
+        got = list(tactile.frames(bag))
+    assert [f.stamp_ns for f in got] == [stamp(i) for i in range(6)]
+    assert all(np.array_equal(f.image, w) for f, w in zip(got, want))
+    decoder = tactile.VideoDecoder("h264", name="/cam/h264")
+    for i, d in enumerate(packets):
+        frames = decoder.decode(d, stamp(i))
+        assert [f.image.shape for f in frames] == [want[i].shape], i
+        assert np.array_equal(frames[0].image, want[i]), i
+    assert decoder.finish() == []
+
+
 def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpation_frames):
     """ROS 2's video messages (foxglove_msgs CompressedVideo,
     ffmpeg_image_transport's FFMPEGPacket and h264_image_transport's
