@@ -299,27 +299,36 @@ def lossless_h264_packets(pngs: Path, tmp: Path) -> list[bytes]:
     return [p.read_bytes() for p in sorted(packets.glob("*.h264"))]
 
 
+def foxglove_video(bag: Path, topic: str, packets: list[tuple[int, bytes]], fmt: str, image: bool = False) -> None:
+    """`packets` (message i stamped `stamp(i)`) recorded on `topic` by the
+    Foxglove SDK as foxglove.CompressedVideo of format `fmt`, or as
+    foxglove.CompressedImage of that format when `image`."""
+    import foxglove
+    from foxglove.channels import CompressedImageChannel, CompressedVideoChannel
+    from foxglove.messages import CompressedImage, CompressedVideo, Timestamp
+
+    message, channel_type = (CompressedImage, CompressedImageChannel) if image else \
+        (CompressedVideo, CompressedVideoChannel)
+    ctx = foxglove.Context()
+    with foxglove.open_mcap(bag, context=ctx):
+        channel = channel_type(topic, context=ctx)
+        for i, d in packets:
+            t = stamp(i)
+            channel.log(message(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam", data=d,
+                                format=fmt), log_time=t)
+
+
 def test_h264_video_the_foxglove_sdk_records(tmp_path, root, palpation_frames, tactile_bin):
     """A camera recorded as foxglove.CompressedVideo (one H.264 frame per
     message, lossless here): the frames, stamps and decisions of the PNG
     folder, also as foxglove.CompressedImage of format h264; a recording
     begun mid-stream starts at its first keyframe and says so."""
-    import foxglove
-    from foxglove.channels import CompressedImageChannel, CompressedVideoChannel
-    from foxglove.messages import CompressedImage, CompressedVideo, Timestamp
-
     pngs = root / "samples" / "palpation"
     data = lossless_h264_packets(pngs, tmp_path)
     assert len(data) == len(palpation_frames)
 
     def record(bag: Path, first: int) -> None:
-        ctx = foxglove.Context()
-        with foxglove.open_mcap(bag, context=ctx):
-            video = CompressedVideoChannel("/cam/h264", context=ctx)
-            for i in range(first, len(data)):
-                t = stamp(i)
-                video.log(CompressedVideo(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
-                                          data=data[i], format="h264"), log_time=t)
+        foxglove_video(bag, "/cam/h264", list(enumerate(data))[first:], "h264")
 
     bag = tmp_path / "video.mcap"
     record(bag, 0)
@@ -334,13 +343,7 @@ def test_h264_video_the_foxglove_sdk_records(tmp_path, root, palpation_frames, t
     # The same packets as foxglove.CompressedImage of format h264 (as
     # GStreamer's ROS 2 sink publishes them): read as video.
     images = tmp_path / "images.mcap"
-    ctx = foxglove.Context()
-    with foxglove.open_mcap(images, context=ctx):
-        channel = CompressedImageChannel("/cam/image", context=ctx)
-        for i, d in enumerate(data):
-            t = stamp(i)
-            channel.log(CompressedImage(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
-                                        data=d, format="h264"), log_time=t)
+    foxglove_video(images, "/cam/image", list(enumerate(data)), "h264", image=True)
     got = list(tactile.frames(images))
     assert [f.stamp_ns for f in got] == [stamp(i) for i in range(len(data))]
     assert all(np.array_equal(f.image, rgb) for f, rgb in zip(got, palpation_frames))
@@ -456,10 +459,6 @@ def test_video_decodes_live_and_from_a_foxglove_recording(tmp_path, root, codec)
     per message) as the Foxglove SDK records them and as a live topic gives
     them: every frame FFmpeg's decode of the whole stream, each live one
     back from its own `decode`."""
-    import foxglove
-    from foxglove.channels import CompressedVideoChannel
-    from foxglove.messages import CompressedVideo, Timestamp
-
     encoder, muxer, split = {
         "av1": (["libaom-av1", "-cpu-used", "8", "-lag-in-frames", "0"], "obu", av1_temporal_units),
         "vp9": (["libvpx-vp9", "-threads", "1"], "ivf", ivf_frames),
@@ -480,13 +479,7 @@ def test_video_decodes_live_and_from_a_foxglove_recording(tmp_path, root, codec)
         assert np.array_equal(frames[0].image, want[i]), i
     assert decoder.finish() == []
     bag = tmp_path / f"{codec}.mcap"
-    ctx = foxglove.Context()
-    with foxglove.open_mcap(bag, context=ctx):
-        video = CompressedVideoChannel(f"/cam/{codec}", context=ctx)
-        for i, unit in enumerate(units):
-            t = stamp(i)
-            video.log(CompressedVideo(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
-                                      data=unit, format=codec), log_time=t)
+    foxglove_video(bag, f"/cam/{codec}", list(enumerate(units)), codec)
     got = list(tactile.frames(bag))
     assert [f.stamp_ns for f in got] == [stamp(i) for i in range(6)]
     assert all(np.array_equal(f.image, w) for f, w in zip(got, want))
@@ -497,10 +490,6 @@ def test_a_camera_restarted_at_another_size_keeps_each_frames_size(tmp_path):
     size (lossless H.264 at 64x48, then a keyframe with a new SPS at
     96x64): every frame at its own size with FFmpeg's pixels, read from the
     recording (with a warning naming the message) and live."""
-    import foxglove
-    from foxglove.channels import CompressedVideoChannel
-    from foxglove.messages import CompressedVideo, Timestamp
-
     packets, want = [], []
     for w, h in [(64, 48), (96, 64)]:
         folder = tmp_path / f"{w}x{h}"
@@ -513,13 +502,7 @@ def test_a_camera_restarted_at_another_size_keeps_each_frames_size(tmp_path):
                               "-pix_fmt", "rgb24", "-"], check=True, capture_output=True).stdout
         want += list(np.frombuffer(raw, np.uint8).reshape(3, h, w, 3))
     bag = tmp_path / "restarted.mcap"
-    ctx = foxglove.Context()
-    with foxglove.open_mcap(bag, context=ctx):
-        video = CompressedVideoChannel("/cam/h264", context=ctx)
-        for i, d in enumerate(packets):
-            t = stamp(i)
-            video.log(CompressedVideo(timestamp=Timestamp(sec=t // 10**9, nsec=t % 10**9), frame_id="cam",
-                                      data=d, format="h264"), log_time=t)
+    foxglove_video(bag, "/cam/h264", list(enumerate(packets)), "h264")
     with pytest.warns(UserWarning, match=r"its h264 stream's parameters change at message 3"):
         got = list(tactile.frames(bag))
     assert [f.stamp_ns for f in got] == [stamp(i) for i in range(6)]
