@@ -522,9 +522,19 @@ struct Fed {
     skipped: u64,
     /// Packets written to the decoders.
     fed: u64,
-    /// The messages whose keyframe began a new stream (new parameters).
-    restarts: Vec<u64>,
+    /// Keyframes with new stream parameters, the messages of the first
+    /// few, and how many began a new decoder.
+    changes: u64,
+    changed_at: Vec<u64>,
+    restarts: usize,
 }
+
+/// Decoders a video stream may start after its first, one per change of
+/// its parameters ([`Codec::parameters`]), so a hostile topic whose every
+/// keyframe changes them does not start a process each (two in unit tests,
+/// so the limit is exercised). Later changes are decoded by the last
+/// decoder, which scales their frames to its size.
+const MAX_STREAM_RESTARTS: usize = if cfg!(test) { 2 } else { 64 };
 
 /// Where the feeder writes: the decoder's input, and the channels to the
 /// reader for each packet's stamp and each new decoder.
@@ -551,7 +561,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
     } = to;
     let (mut skipped, mut fed) = (0, 0);
     let (mut segment, mut in_segment, mut parameters) = (0u32, 0u64, Vec::new());
-    let mut restarts = Vec::new();
+    let (mut changes, mut changed_at, mut restarts) = (0, Vec::new(), 0);
     let mut next = Some(first);
     let error = loop {
         // Ctrl-C ends the feed, then the decoder, then the reader's wait.
@@ -596,7 +606,14 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         }
         if key {
             let new = codec.parameters(&data);
-            if fed > 0 && new != parameters {
+            let change = fed > 0 && new != parameters;
+            if change {
+                changes += 1;
+                if changed_at.len() < 10 {
+                    changed_at.push(m.index);
+                }
+            }
+            if change && restarts < MAX_STREAM_RESTARTS {
                 let Decoder {
                     child,
                     stdin: next_stdin,
@@ -622,7 +639,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
                 stdin = next_stdin;
                 segment += 1;
                 in_segment = 0;
-                restarts.push(m.index);
+                restarts += 1;
             }
             parameters = new;
         }
@@ -651,6 +668,8 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         error,
         skipped,
         fed,
+        changes,
+        changed_at,
         restarts,
     }
 }
@@ -861,14 +880,26 @@ impl VideoFrames {
                 self.first + fed.skipped
             ));
         }
-        if !fed.restarts.is_empty() {
-            let at: Vec<String> = fed.restarts.iter().map(u64::to_string).collect();
+        if fed.changes > 0 {
+            let mut at: Vec<String> = fed.changed_at.iter().map(u64::to_string).collect();
+            if fed.changes > at.len() as u64 {
+                at.push(format!("… ({} times)", fed.changes));
+            }
+            let decoded = match fed.changes > fed.restarts as u64 {
+                false => {
+                    "each part was decoded on its own, its frames at their own size".to_string()
+                }
+                true => format!(
+                    "the first {} changes each began a new decoder; the frames after the rest were decoded by the last one, scaled to its size",
+                    fed.restarts
+                ),
+            };
             warnings.push(format!(
-                "{} topic {}: its {} stream's parameters change at message{} {} (a keyframe with new ones: a camera restarted, or set to another size); each part was decoded on its own, its frames at their own size",
+                "{} topic {}: its {} stream's parameters change at message{} {} (a keyframe with new ones: a camera restarted, or set to another size); {decoded}",
                 self.path.display(),
                 self.topic,
                 self.codec.name(),
-                if at.len() == 1 { "" } else { "s" },
+                if fed.changes == 1 { "" } else { "s" },
                 at.join(", ")
             ));
         }
@@ -1204,7 +1235,8 @@ impl LiveVideo {
         let mut frames = Vec::new();
         if key {
             let new = self.codec.parameters(data);
-            if self.written > 0 && new != self.parameters {
+            let restarts = self.segment as usize;
+            if self.written > 0 && new != self.parameters && restarts < MAX_STREAM_RESTARTS {
                 self.restart(&mut frames)?;
             }
             self.parameters = new;
@@ -2228,6 +2260,53 @@ mod tests {
             }
             assert!(live.finish().unwrap().is_empty());
         }
+    }
+
+    #[test]
+    fn a_stream_whose_parameters_keep_changing_starts_at_most_the_limit_of_decoders() {
+        // Four parts of two frames, alternating 64x64 and 96x48: three
+        // changes of parameters, at messages 2, 4 and 6, past the limit of
+        // two new decoders in unit tests (64 otherwise). The first two
+        // begin new decoders; the last part is decoded by the last one,
+        // scaled to its 64x64, and the warning says so.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
+        let sizes = [(64, 64), (96, 48), (64, 64), (96, 48)];
+        let packets: Vec<Vec<u8>> = sizes
+            .iter()
+            .flat_map(|&size| encode_sized(dir.path(), &x264, 2, size).0)
+            .collect();
+        let want: Vec<(usize, usize)> = [(64, 64), (96, 48), (64, 64), (64, 64)]
+            .iter()
+            .flat_map(|&s| [s, s])
+            .collect();
+        let path = dir.path().join("changing.mcap");
+        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        ros_bag(&path, "/cam", "h264", &all);
+        let (frames, warnings) = read_all(&path, "/cam").unwrap();
+        let got: Vec<(usize, usize)> = frames
+            .iter()
+            .map(|f| (f.image.width(), f.image.height()))
+            .collect();
+        assert_eq!(got, want);
+        assert!(
+            warnings[0].contains("parameters change at messages 2, 4, 6 (")
+                && warnings[0].contains("the first 2 changes each began a new decoder"),
+            "{warnings:?}"
+        );
+        let mut live = LiveVideo::new("h264", "/cam").unwrap();
+        let mut got = Vec::new();
+        for (i, p) in packets.iter().enumerate() {
+            let frames = live.push(p, stamp_ns(i)).unwrap();
+            got.extend(frames.iter().map(|f| (f.image.width(), f.image.height())));
+        }
+        got.extend(
+            live.finish()
+                .unwrap()
+                .iter()
+                .map(|f| (f.image.width(), f.image.height())),
+        );
+        assert_eq!(got, want);
     }
 
     #[test]
