@@ -98,6 +98,12 @@ const IVF_FILE_HEADER: usize = 32;
 /// AV1 5.6), which begins each temporal unit of the low overhead format.
 const AV1_TEMPORAL_DELIMITER: [u8; 2] = [0x12, 0x00];
 
+/// An AV1 temporal unit without its own leading temporal delimiter
+/// ([`Codec::write_packet`] writes one before each).
+fn without_temporal_delimiter(data: &[u8]) -> &[u8] {
+    data.strip_prefix(&AV1_TEMPORAL_DELIMITER).unwrap_or(data)
+}
+
 /// The OBUs of AV1 data in the low overhead format (AV1 5.3: a header
 /// byte, an extension byte when flagged, a LEB128 size when flagged), each
 /// as its type and payload; the walk stops at one that does not fit.
@@ -254,7 +260,8 @@ impl Codec {
     /// Write the `index`-th packet (0-based) as the codec's demuxer reads
     /// it, a `live` one followed by its access unit delimiter:
     /// - H.264 and H.265 as they are: the parser finds each picture's start;
-    /// - AV1 after a temporal delimiter, its own dropped ([`Self::body`]),
+    /// - AV1 after a temporal delimiter, its own dropped
+    ///   ([`without_temporal_delimiter`]),
     ///   so the demuxer finds each temporal unit whether or not the
     ///   recorder kept the packet's own (live, the delimiter written after
     ///   the packet before begins it);
@@ -275,7 +282,7 @@ impl Codec {
                 if !live || index == 0 {
                     out.write_all(&AV1_TEMPORAL_DELIMITER)?;
                 }
-                out.write_all(self.body(data))?;
+                out.write_all(without_temporal_delimiter(data))?;
             }
             Self::Vp9 => {
                 // An IVF frame's size is 32 bits.
@@ -300,15 +307,6 @@ impl Codec {
             out.write_all(self.access_unit_delimiter())?;
         }
         Ok(())
-    }
-
-    /// A packet's bytes as written: an AV1 packet without its own leading
-    /// temporal delimiter ([`Self::write_packet`] writes one).
-    fn body(self, data: &[u8]) -> &[u8] {
-        match self {
-            Self::Av1 => data.strip_prefix(&AV1_TEMPORAL_DELIMITER).unwrap_or(data),
-            Self::H264 | Self::H265 | Self::Vp9 => data,
-        }
     }
 
     /// An access unit delimiter (ITU-T H.264 7.3.2.4, any picture type;
@@ -505,6 +503,43 @@ impl PendingStamps {
     }
 }
 
+/// What a packet is to the stream it joins.
+#[derive(Debug, PartialEq, Eq)]
+enum PacketRole {
+    /// Before the stream's first keyframe: no decoder can read it.
+    BeforeKeyframe,
+    /// A packet of the stream as it is.
+    InStream,
+    /// A keyframe whose stream parameters differ from the stream's so far.
+    NewParameters,
+}
+
+/// The stream parameters of a stream's last keyframe
+/// ([`Codec::parameters`]); `None` before its first. One for the bag
+/// reader's feeder and the live decoder.
+#[derive(Default)]
+struct StreamParameters(Option<Vec<u8>>);
+
+impl StreamParameters {
+    /// The role of the stream's next packet, `data`; a keyframe's
+    /// parameters are kept.
+    fn role(&mut self, codec: Codec, data: &[u8]) -> PacketRole {
+        if !codec.starts_stream(data) {
+            return match self.0 {
+                None => PacketRole::BeforeKeyframe,
+                Some(_) => PacketRole::InStream,
+            };
+        }
+        let new = codec.parameters(data);
+        let changed = self.0.as_ref().is_some_and(|old| *old != new);
+        self.0 = Some(new);
+        match changed {
+            true => PacketRole::NewParameters,
+            false => PacketRole::InStream,
+        }
+    }
+}
+
 /// A decoder started by the feeder for a new stream, handed to the reader.
 struct Segment {
     child: Child,
@@ -560,7 +595,8 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         segments,
     } = to;
     let (mut skipped, mut fed) = (0, 0);
-    let (mut segment, mut in_segment, mut parameters) = (0u32, 0u64, Vec::new());
+    let (mut segment, mut in_segment) = (0u32, 0u64);
+    let mut parameters = StreamParameters::default();
     let (mut changes, mut changed_at, mut restarts) = (0, Vec::new(), 0);
     let mut next = Some(first);
     let error = loop {
@@ -599,21 +635,17 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
                 ),
             ));
         }
-        let key = codec.starts_stream(&data);
-        if fed == 0 && !key {
+        let role = parameters.role(codec, &data);
+        if role == PacketRole::BeforeKeyframe {
             skipped += 1;
             continue;
         }
-        if key {
-            let new = codec.parameters(&data);
-            let change = fed > 0 && new != parameters;
-            if change {
-                changes += 1;
-                if changed_at.len() < 10 {
-                    changed_at.push(m.index);
-                }
+        if role == PacketRole::NewParameters {
+            changes += 1;
+            if changed_at.len() < 10 {
+                changed_at.push(m.index);
             }
-            if change && restarts < MAX_STREAM_RESTARTS {
+            if restarts < MAX_STREAM_RESTARTS {
                 let Decoder {
                     child,
                     stdin: next_stdin,
@@ -641,7 +673,6 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
                 in_segment = 0;
                 restarts += 1;
             }
-            parameters = new;
         }
         let stamp = Stamp {
             segment,
@@ -718,12 +749,23 @@ fn stream_end(
             "FFmpeg decoded no frame of its {written} {name} packets: {last}"
         ));
     }
-    if !status.success() {
-        return Err(format!(
-            "FFmpeg could not decode its {name} stream ({status}): {last}"
-        ));
+    decoder_ended_well(codec, status, last)
+}
+
+/// An FFmpeg decoder's end: the error naming its exit `status` and its
+/// `last` words when it failed.
+fn decoder_ended_well(
+    codec: Codec,
+    status: ExitStatus,
+    last: &str,
+) -> std::result::Result<(), String> {
+    match status.success() {
+        true => Ok(()),
+        false => Err(format!(
+            "FFmpeg could not decode its {} stream ({status}): {last}",
+            codec.name()
+        )),
     }
-    Ok(())
 }
 
 /// Stop a decoder and reap it.
@@ -979,17 +1021,10 @@ impl VideoFrames {
             stdout,
             stderr,
         } = next;
-        let old = std::mem::replace(&mut self.child, child);
-        drop(old);
+        self.child = child;
         self.stdout = BufReader::with_capacity(1 << 20, stdout);
         self.stderr = stderr;
-        let status = status?;
-        if !status.success() {
-            return Err(self.error(format!(
-                "FFmpeg could not decode its {} stream ({status}): {last}",
-                self.codec.name()
-            )));
-        }
+        decoder_ended_well(self.codec, status?, &last).map_err(|e| self.error(e))?;
         self.pending.0.extend(self.stamps.try_iter().map(Reverse));
         self.segment += 1;
         self.lost += self.pending.drop_before(self.segment);
@@ -1079,10 +1114,10 @@ pub struct LiveVideo {
     written: u64,
     decoded: u64,
     /// The current decoder's number, the packets written to it, and the
-    /// stream parameters of its first keyframe ([`Codec::parameters`]).
+    /// stream parameters of its last keyframe.
     segment: u32,
     in_segment: u64,
-    parameters: Vec<u8>,
+    parameters: StreamParameters,
     /// Frames FFmpeg holds back once every packet given is in, learnt
     /// from waits that timed out: a stream with B-frames holds as many as
     /// its reordering needs, and a lost frame never comes. A push waits
@@ -1206,7 +1241,7 @@ impl LiveVideo {
             decoded: 0,
             segment: 0,
             in_segment: 0,
-            parameters: Vec::new(),
+            parameters: StreamParameters::default(),
             held: 0,
             timeouts: 0,
         })
@@ -1228,18 +1263,14 @@ impl LiveVideo {
     pub fn push(&mut self, data: &[u8], stamp_ns: i64) -> Result<Vec<LiveFrame>> {
         let packet = self.given;
         self.given += 1;
-        let key = self.codec.starts_stream(data);
-        if self.written == 0 && !key {
+        let role = self.parameters.role(self.codec, data);
+        if role == PacketRole::BeforeKeyframe {
             return Ok(Vec::new());
         }
         let mut frames = Vec::new();
-        if key {
-            let new = self.codec.parameters(data);
-            let restarts = self.segment as usize;
-            if self.written > 0 && new != self.parameters && restarts < MAX_STREAM_RESTARTS {
-                self.restart(&mut frames)?;
-            }
-            self.parameters = new;
+        // The decoders started after the first are the stream's segments.
+        if role == PacketRole::NewParameters && (self.segment as usize) < MAX_STREAM_RESTARTS {
+            self.restart(&mut frames)?;
         }
         let Some(stdin) = self.decoder.stdin.as_mut() else {
             return Err(self.error("its stream was closed".into()));
@@ -1297,12 +1328,7 @@ impl LiveVideo {
     /// forgotten, so the new stream's frames take their own stamps.
     fn restart(&mut self, frames: &mut Vec<LiveFrame>) -> Result<()> {
         let (status, last) = self.end_decoder(frames)?;
-        if !status.success() {
-            return Err(self.error(format!(
-                "FFmpeg could not decode its {} stream ({status}): {last}",
-                self.codec.name()
-            )));
-        }
+        decoder_ended_well(self.codec, status, &last).map_err(|e| self.error(e))?;
         self.decoder = LiveDecoder::start(self.codec, &self.name)?;
         self.segment += 1;
         self.in_segment = 0;
@@ -2072,7 +2098,7 @@ mod tests {
             .enumerate()
             .map(|(i, p)| match i % 2 {
                 0 => &p[..],
-                _ => Codec::Av1.body(p),
+                _ => without_temporal_delimiter(p),
             })
             .collect();
         read_begun_mid_stream(dir.path(), "av1", "libaom-av1", &stripped, &decoded);
