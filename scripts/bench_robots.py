@@ -74,17 +74,15 @@ VIDEO = {
 }
 
 
-def video_packets(tmp: Path, raw: list[bytes], n: int, codec: str) -> list[bytes]:
-    """`n` 1080p frames (the `raw` rgb24 frames in turn) encoded in `codec`,
-    one packet per frame."""
+def video_packets(tmp: Path, frames: Path, codec: str) -> list[bytes]:
+    """The 1080p rgb24 frames in `frames` (000000.rgb, ...) encoded in
+    `codec`, one packet per frame."""
     encoder, muxer = VIDEO[codec]
     folder = tmp / f"{codec}-packets"
     folder.mkdir()
-    for i in range(n):
-        (folder / f"{i:06d}.rgb").write_bytes(raw[i % len(raw)])
     out = folder / ("%06d.bin" if muxer == "image2" else "stream.ivf")
     ffmpeg("-f", "image2", "-c:v", "rawvideo", "-pixel_format", "rgb24", "-video_size", "1920x1080",
-           "-framerate", "30", "-i", str(folder / "%06d.rgb"), "-c:v", *encoder, "-g", "30",
+           "-framerate", "30", "-i", str(frames / "%06d.rgb"), "-c:v", *encoder, "-g", "30",
            "-pix_fmt", "yuv420p", "-f", muxer, str(out))
     if muxer == "image2":
         return [p.read_bytes() for p in sorted(folder.glob("*.bin"))]
@@ -134,7 +132,12 @@ def write_bags(tmp: Path, n: int) -> tuple[dict[str, Path], dict[str, list[bytes
     import foxglove
     from foxglove.channels import CompressedVideoChannel
     from foxglove.messages import CompressedVideo, Timestamp
-    packets = {codec: video_packets(tmp, frames["raw"], n, codec) for codec in VIDEO}
+    # The frames written once, as FFmpeg's image2 input for every encoder.
+    rgb = tmp / "rgb-frames"
+    rgb.mkdir()
+    for i in range(n):
+        (rgb / f"{i:06d}.rgb").write_bytes(frames["raw"][i % len(src)])
+    packets = {codec: video_packets(tmp, rgb, codec) for codec in VIDEO}
     for codec, data in packets.items():
         path = tmp / f"{codec}.mcap"
         ctx = foxglove.Context()
