@@ -137,6 +137,22 @@ impl PyVideoDecoder {
     }
 }
 
+/// A message's `data` as Python bytes: rclpy gives it as an
+/// array.array('B'); bytes() takes that, bytes, a bytearray or a numpy
+/// array alike. `what` names it in the error.
+fn message_bytes<'py>(
+    py: Python<'py>,
+    data: &Bound<'py, PyAny>,
+    what: &str,
+) -> PyResult<Bound<'py, pyo3::types::PyBytes>> {
+    let data = py
+        .import("builtins")?
+        .getattr("bytes")?
+        .call1((data,))
+        .map_err(|e| PyValueError::new_err(format!("{what}: not bytes ({e})")))?;
+    Ok(data.cast_into::<pyo3::types::PyBytes>()?)
+}
+
 /// Frames of a live video as Python frames, named by their packet's place.
 fn live_frames(
     py: Python<'_>,
@@ -178,12 +194,9 @@ impl PyVideoDecoder {
         data: &Bound<'_, PyAny>,
         stamp_ns: i64,
     ) -> PyResult<Vec<PyFrame>> {
-        let data = py
-            .import("builtins")?
-            .getattr("bytes")?
-            .call1((data,))
-            .map_err(|e| PyValueError::new_err(format!("a packet's data: not bytes ({e})")))?;
-        let data = data.cast::<pyo3::types::PyBytes>()?.as_bytes().to_vec();
+        let data = message_bytes(py, data, "a packet's data")?
+            .as_bytes()
+            .to_vec();
         let frames = self.with(|d| py.detach(|| d.push(&data, stamp_ns)).py())?;
         live_frames(py, frames)
     }
@@ -296,14 +309,8 @@ pub(crate) fn ros_image_to_rgb(py: Python<'_>, msg: &Bound<'_, PyAny>) -> PyResu
         msg.getattr(name)
             .map_err(|_| PyValueError::new_err(format!("not a {kind}: it has no field {name:?}")))
     };
-    // rclpy gives `data` as an array.array('B'); bytes() takes it, bytes,
-    // a bytearray or a numpy array alike.
-    let data = py
-        .import("builtins")?
-        .getattr("bytes")?
-        .call1((field("data")?,))
-        .map_err(|e| PyValueError::new_err(format!("{kind} field \"data\": not bytes ({e})")))?;
-    let data = data.cast::<pyo3::types::PyBytes>()?.as_bytes();
+    let data = message_bytes(py, &field("data")?, &format!("{kind} field \"data\""))?;
+    let data = data.as_bytes();
     let string = |name: &str| -> PyResult<String> {
         field(name)?
             .extract()
