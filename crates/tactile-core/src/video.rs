@@ -20,7 +20,7 @@ use crate::{Error, Result};
 const INSTALL_HINT: &str = "reading video needs FFmpeg (ffmpeg and ffprobe on PATH); on Debian or Ubuntu: apt-get install ffmpeg";
 
 /// How much of FFmpeg's stderr is kept for an error message.
-const STDERR_TAIL: usize = 4096;
+pub(crate) const STDERR_TAIL: usize = 4096;
 
 /// An FFmpeg tool that could not be started for `path`: missing (say how
 /// to install it) or another I/O failure.

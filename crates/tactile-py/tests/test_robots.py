@@ -421,6 +421,33 @@ def test_a_live_video_topic_decodes_each_packet_as_it_arrives(tmp_path, root, pa
         tactile.VideoDecoder("vp8", name="/cam")
 
 
+def test_a_damaged_packet_leaves_every_other_frame_its_own_stamp(tmp_path, root, palpation_frames):
+    """A packet damaged on the way (message 5, in a group of pictures)
+    gives no frame: every other frame keeps its own stamp, in a recording
+    (with a warning naming the message) and live (each later packet's frame
+    from its own `decode`). Before, each frame after it was stamped as the
+    packet before it."""
+    data = lossless_h264_packets(root / "samples" / "palpation", tmp_path)
+    lost = 5
+    damaged = list(data)
+    damaged[lost] = b"\x00\x00\x01\x65\xff\xff"
+    kept = [i for i in range(len(data)) if i != lost]
+    bag = tmp_path / "damaged.mcap"
+    foxglove_video(bag, "/cam", list(enumerate(damaged)), "h264")
+    with pytest.warns(UserWarning, match=r"messages that gave none: 5; every frame carries its own packet's stamp"):
+        got = list(tactile.frames(bag))
+    assert [f.stamp_ns for f in got] == [stamp(i) for i in kept]
+    # Frames that do not refer to the lost one are the PNGs (lossless).
+    for f, i in zip(got, kept):
+        if i < lost or i >= 8:
+            assert np.array_equal(f.image, palpation_frames[i]), i
+    decoder = tactile.VideoDecoder("h264", name="/cam")
+    for i, d in enumerate(damaged):
+        frames = decoder.decode(d, stamp(i))
+        assert [f.stamp_ns for f in frames] == ([] if i == lost else [stamp(i)]), i
+    assert decoder.finish() == []
+
+
 def av1_temporal_units(stream: bytes) -> list[bytes]:
     """An AV1 low overhead stream split before each temporal delimiter
     (OBU type 2): one temporal unit, a frame here, each."""
