@@ -481,6 +481,11 @@ struct PendingStamps {
     /// (frames come in display order). They are kept, a few, for a stream
     /// whose stamps are not its display order, which may still give them.
     shown: Option<(u32, i64)>,
+    /// The last frame's time, and its decoder. FFmpeg keeps its frames'
+    /// times from going back: a time that would is raised to the last,
+    /// so a time that does not rise names no packet surely (it may be
+    /// another packet's of the same stamp).
+    last_time: Option<(u32, i64)>,
 }
 
 /// Passed stamps kept per stream before the earliest is given up as lost.
@@ -506,9 +511,9 @@ impl PendingStamps {
 
     /// The stamp of the frame just decoded, whose time FFmpeg gave as
     /// `time`: that of its own packet in the current decoder; without a
-    /// time, or one no pending packet has (a stream whose stamps are not
-    /// its display order), the earliest pending one (see the module's
-    /// documentation). The error when every packet written (`written`)
+    /// time, one that does not rise, or one no pending packet has (a
+    /// stream whose stamps are not its display order), the earliest
+    /// pending one (see the module's documentation). The error when every packet written (`written`)
     /// already has its frame.
     fn take(&mut self, time: Option<i64>, written: u64) -> std::result::Result<Taken, String> {
         let Some(first) = self.stamps.first() else {
@@ -519,7 +524,12 @@ impl PendingStamps {
         let segment = first.segment;
         // Every packet of a decoder has its time from the same stamp.
         let base_ns = first.stamp_ns.wrapping_sub(first.pts);
-        let own = time.and_then(|t| {
+        let last = self.last_time.filter(|(seg, _)| *seg == segment);
+        if let Some(t) = time {
+            self.last_time = Some((segment, t));
+        }
+        let rising = time.filter(|t| last.is_none_or(|(_, at)| *t > at));
+        let own = rising.and_then(|t| {
             let stamp_ns = base_ns.wrapping_add(t);
             let from = Stamp {
                 segment,
@@ -2170,6 +2180,45 @@ mod tests {
         let mut stamps: Vec<i64> = frames.iter().map(|f| f.stamp_ns).collect();
         stamps.sort();
         assert_eq!(stamps, (0..12).map(stamp_ns).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn frames_stamped_alike_or_back_in_time_keep_their_own_stamps() {
+        // A publisher that stamps every packet alike, and a clock that
+        // steps back (a simulation restarted): FFmpeg raises a time that
+        // would go back to the last one, which the second run's packet of
+        // that stamp also has; each frame still takes its own packet's
+        // stamp, in a bag and live.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
+        let (packets, _) = encode(dir.path(), &x264, 8);
+        let alike = |_: usize| stamp_ns(1);
+        let back = |i: usize| stamp_ns(i % 4);
+        for (name, stamp) in [("alike", &alike as &dyn Fn(usize) -> i64), ("back", &back)] {
+            let path = dir.path().join(format!("{name}.mcap"));
+            let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+            cdr_bag(&path, "/cam", ROS_COMPRESSED_VIDEO_TYPE, &all, |i, data| {
+                to_cdr(&CompressedVideo {
+                    timestamp: Time::from_nanos(stamp(i)),
+                    frame_id: "cam".into(),
+                    data,
+                    format: "h264".into(),
+                })
+            });
+            let (frames, warnings) = read_all(&path, "/cam").unwrap();
+            assert!(warnings.is_empty(), "{name}: {warnings:?}");
+            let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+            let want: Vec<(u64, i64)> = (0..8).map(|i| (i as u64, stamp(i))).collect();
+            assert_eq!(got, want, "{name}");
+            let mut live = LiveVideo::new("h264", "/cam").unwrap();
+            let mut got = Vec::new();
+            for (i, p) in packets.iter().enumerate() {
+                got.extend(live.push(p, stamp(i)).unwrap());
+            }
+            got.extend(live.finish().unwrap());
+            let got: Vec<(u64, i64)> = got.iter().map(|f| (f.packet, f.stamp_ns)).collect();
+            assert_eq!(got, want, "{name} live");
+        }
     }
 
     #[test]
