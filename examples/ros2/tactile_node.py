@@ -110,6 +110,7 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             compressed = self.declare_parameter("compressed", False).value
             video = self.declare_parameter("video", "").value
             self.frame_id = ""
+            self.lost = 0
             self.logic = PalpationNode(models, runtime)
             self.results = self.create_publisher(String, "~/result", 10)
             self.masks = self.create_publisher(Image, "~/tendon_mask", 10)
@@ -140,6 +141,12 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             except ValueError as e:
                 self.get_logger().warning(f"packet skipped: {e}")
                 return
+            lost = self.logic.video.lost if self.logic.video else 0
+            if lost > self.lost:
+                self.get_logger().warning(
+                    f"{lost - self.lost} packet(s) gave no frame (damaged; {lost} in all); "
+                    "the frames after them keep their own stamps")
+                self.lost = lost
             frame_id = msg.frame_id if hasattr(msg, "frame_id") else msg.header.frame_id
             for out in outputs:
                 self.publish(out, frame_id)

@@ -112,11 +112,14 @@ impl PyFrameSource {
 /// in Annex B, VP9, AV1 OBUs; "h264" for an `h264_msgs` Packet). `decode`
 /// takes each message's `data` (bytes, or rclpy's array) and stamp and
 /// gives the frames decoded so far, normally that packet's own; packets
-/// before the first keyframe are skipped (`skipped` counts them). The
+/// before the first keyframe are skipped (`skipped` counts them), and
+/// packets that gave no frame (damaged) are counted in `lost`. The
 /// system's FFmpeg decodes, as it does a bag's video.
 #[pyclass(module = "tactile", name = "VideoDecoder")]
 pub struct PyVideoDecoder {
     decoder: Mutex<Option<tactile_core::bag::LiveVideo>>,
+    /// `skipped` and `lost` once finished.
+    ended: Mutex<Option<(u64, u64)>>,
 }
 
 impl PyVideoDecoder {
@@ -133,6 +136,19 @@ impl PyVideoDecoder {
         match self.lock()?.as_mut() {
             Some(d) => f(d),
             None => Err(PyValueError::new_err("the video decoder was finished")),
+        }
+    }
+
+    /// `skipped` and `lost`, live or as the stream ended.
+    fn counts(&self) -> PyResult<(u64, u64)> {
+        if let Some(d) = self.lock()?.as_ref() {
+            return Ok((d.skipped(), d.lost()));
+        }
+        match self.ended.lock() {
+            Ok(ended) => Ok(ended.unwrap_or_default()),
+            Err(_) => Err(PyRuntimeError::new_err(
+                "the decoder failed in another thread",
+            )),
         }
     }
 }
@@ -183,6 +199,7 @@ impl PyVideoDecoder {
             .py()?;
         Ok(Self {
             decoder: Mutex::new(Some(decoder)),
+            ended: Mutex::new(None),
         })
     }
 
@@ -205,7 +222,15 @@ impl PyVideoDecoder {
     fn finish(&self, py: Python<'_>) -> PyResult<Vec<PyFrame>> {
         let decoder = self.lock()?.take();
         let frames = match decoder {
-            Some(d) => py.detach(|| d.finish()).py()?,
+            Some(d) => {
+                let (skipped, waiting) = (d.skipped(), d.without_frame());
+                let frames = py.detach(|| d.finish()).py()?;
+                let lost = waiting.saturating_sub(frames.len() as u64);
+                if let Ok(mut ended) = self.ended.lock() {
+                    *ended = Some((skipped, lost));
+                }
+                frames
+            }
             None => Vec::new(),
         };
         live_frames(py, frames)
@@ -214,7 +239,14 @@ impl PyVideoDecoder {
     /// Packets given before the first keyframe, which no decoder can read.
     #[getter]
     fn skipped(&self) -> PyResult<u64> {
-        self.with(|d| Ok(d.skipped()))
+        Ok(self.counts()?.0)
+    }
+
+    /// Packets that gave no frame (damaged): shown before a frame that
+    /// came, or left without one at `finish`.
+    #[getter]
+    fn lost(&self) -> PyResult<u64> {
+        Ok(self.counts()?.1)
     }
 }
 

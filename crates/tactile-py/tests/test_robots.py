@@ -445,7 +445,10 @@ def test_a_damaged_packet_leaves_every_other_frame_its_own_stamp(tmp_path, root,
     for i, d in enumerate(damaged):
         frames = decoder.decode(d, stamp(i))
         assert [f.stamp_ns for f in frames] == ([] if i == lost else [stamp(i)]), i
+        # Counted once a later frame came.
+        assert decoder.lost == int(i > lost), i
     assert decoder.finish() == []
+    assert (decoder.skipped, decoder.lost) == (0, 1)
 
 
 def av1_temporal_units(stream: bytes) -> list[bytes]:

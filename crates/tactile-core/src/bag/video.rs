@@ -1553,6 +1553,18 @@ impl LiveVideo {
         self.given - self.written
     }
 
+    /// Packets that gave no frame (a damaged packet): those shown before a
+    /// frame that came, their own not come.
+    pub fn lost(&self) -> u64 {
+        self.written - self.decoded - self.pending.due()
+    }
+
+    /// Packets written whose frames have not come: at [`Self::finish`],
+    /// those it does not give are lost.
+    pub fn without_frame(&self) -> u64 {
+        self.written - self.decoded
+    }
+
     /// Give the next packet (one frame: Annex B, a VP9 frame, or an AV1
     /// temporal unit) and its stamp; the frames decoded so far, normally
     /// this packet's, after waiting for the frames due (up to a second
@@ -2121,6 +2133,7 @@ mod tests {
             let own: Vec<u64> = frames.iter().map(|f| f.packet).collect();
             let want: &[u64] = if i == 3 { &[] } else { &[i as u64] };
             assert_eq!(own, want, "push {i}");
+            assert_eq!(live.lost(), u64::from(i > 3), "push {i}");
             got.extend(frames.iter().map(|f| (f.packet, f.stamp_ns)));
         }
         assert!(live.finish().unwrap().is_empty());

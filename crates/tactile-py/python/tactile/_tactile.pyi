@@ -237,13 +237,15 @@ def ros_image_to_rgb(msg: Any) -> np.ndarray:
     """A sensor_msgs/msg/Image or CompressedImage (an rclpy message, or any object with its fields) as (H, W, 3) uint8 RGB, as `tactile run` reads a bag's frames."""
 
 class VideoDecoder:
-    """A live video topic (foxglove_msgs/msg/CompressedVideo, ffmpeg_image_transport's FFMPEGPacket, h264_msgs/msg/Packet; H.264, H.265, VP9 or AV1) decoded as its packets arrive by the system's FFmpeg: `decode` gives the frames ready, normally the packet's own; packets before the first keyframe are skipped."""
+    """A live video topic (foxglove_msgs/msg/CompressedVideo, ffmpeg_image_transport's FFMPEGPacket, h264_msgs/msg/Packet; H.264, H.265, VP9 or AV1) decoded as its packets arrive by the system's FFmpeg: `decode` gives the frames ready, normally the packet's own, each with its own packet's stamp; packets before the first keyframe are skipped (`skipped`), packets that gave no frame are counted (`lost`)."""
 
     def __init__(self, format: str, *, name: str = "video") -> None: ...
     def decode(self, data: Any, stamp_ns: int = 0) -> List[Frame]: ...
     def finish(self) -> List[Frame]: ...
     @property
     def skipped(self) -> int: ...
+    @property
+    def lost(self) -> int: ...
 
 class McapWriter:
     """Pipeline results as ROS 2 messages in an MCAP file (the channels of `tactile run --out X.mcap`)."""
