@@ -763,7 +763,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
                     stdout,
                     times,
                     stderr,
-                } = match spawn_decoder(codec, false, &path) {
+                } = match spawn_decoder(codec, None, &path) {
                     Ok(d) => d,
                     Err(e) => break Some(e),
                 };
@@ -912,10 +912,14 @@ struct Decoder {
 /// keeps the packets' own times, `-enc_time_base -1` their nanoseconds):
 /// written before the picture, it is there when the picture is read, and
 /// the thread reading it never waits for the pictures.
-fn spawn_decoder(codec: Codec, live: bool, path: &std::path::Path) -> Result<Decoder> {
+fn spawn_decoder(
+    codec: Codec,
+    live: Option<mpsc::Sender<LiveEvent>>,
+    path: &std::path::Path,
+) -> Result<Decoder> {
     let probe: &[&str] = match live {
-        true => &["-probesize", "32", "-analyzeduration", "0"],
-        false => &[],
+        Some(_) => &["-probesize", "32", "-analyzeduration", "0"],
+        None => &[],
     };
     let forced: &[&str] = match codec.forced_decoder() {
         Some(decoder) => &["-c:v", decoder],
@@ -945,7 +949,7 @@ fn spawn_decoder(codec: Codec, live: bool, path: &std::path::Path) -> Result<Dec
         .stderr(Stdio::piped())
         .spawn()
         .map_err(|e| spawn_error(path, e))?;
-    let (times, stderr) = frame_times(&mut child);
+    let (times, stderr) = frame_times(&mut child, live);
     match (child.stdin.take(), child.stdout.take()) {
         (Some(stdin), Some(stdout)) => Ok(Decoder {
             child,
@@ -965,8 +969,12 @@ fn spawn_decoder(codec: Codec, live: bool, path: &std::path::Path) -> Result<Dec
 /// decoded (the presentation time column of its `framecrc` lines, `0,
 /// dts, pts, duration, size, crc`, in nanoseconds), sent in order as they
 /// come, and the tail of its other lines (its messages), for
-/// [`last_words`]. A line longer than FFmpeg writes is cut, not held.
-fn frame_times(child: &mut Child) -> (mpsc::Receiver<i64>, Option<JoinHandle<Vec<u8>>>) {
+/// [`last_words`], each also told to a live stream's `errors` (FFmpeg
+/// writes only errors). A line longer than FFmpeg writes is cut, not held.
+fn frame_times(
+    child: &mut Child,
+    errors: Option<mpsc::Sender<LiveEvent>>,
+) -> (mpsc::Receiver<i64>, Option<JoinHandle<Vec<u8>>>) {
     let (send, times) = mpsc::channel();
     let tail = child.stderr.take().map(|err| {
         std::thread::spawn(move || {
@@ -988,6 +996,10 @@ fn frame_times(child: &mut Child) -> (mpsc::Receiver<i64>, Option<JoinHandle<Vec
                     // A reader that ended takes no more times.
                     let _ = send.send(time);
                     continue;
+                }
+                if let Some(errors) = &errors {
+                    // A live stream that ended takes no more.
+                    let _ = errors.send(LiveEvent::Error);
                 }
                 tail.extend_from_slice(&line);
                 if tail.len() > STDERR_TAIL {
@@ -1123,7 +1135,7 @@ impl VideoFrames {
             stdout,
             times,
             stderr,
-        } = spawn_decoder(codec, false, &path)?;
+        } = spawn_decoder(codec, None, &path)?;
         let (send, stamps) = mpsc::channel();
         let (send_segment, segments) = mpsc::channel();
         let to = FeedTo {
@@ -1425,13 +1437,23 @@ const LIVE_FRAME_WAIT: std::time::Duration = std::time::Duration::from_secs(1);
 /// that keeps losing frames is not held up a second each time.
 const LIVE_TIMEOUTS: u32 = 3;
 
+/// What a live stream's FFmpeg did: a picture decoded, with its time
+/// ([`frame_times`]), or an error it wrote (a damaged packet).
+enum LiveEvent {
+    Picture(Result<(RgbImage, Option<i64>)>),
+    Error,
+}
+
+/// How long a push waits for its frame after FFmpeg wrote an error: a
+/// damaged packet's frame will not come, but a concealed one may.
+const LIVE_ERROR_WAIT: std::time::Duration = std::time::Duration::from_millis(100);
+
 /// A live stream's FFmpeg process: its input, and a thread reading its
-/// pictures into a channel.
+/// pictures into a channel, which its error output's thread also tells.
 struct LiveDecoder {
     child: Child,
     stdin: Option<ChildStdin>,
-    /// Each picture with its time ([`frame_times`]).
-    pictures: mpsc::Receiver<Result<(RgbImage, Option<i64>)>>,
+    events: mpsc::Receiver<LiveEvent>,
     reader: Option<JoinHandle<()>>,
     stderr: Option<JoinHandle<Vec<u8>>>,
 }
@@ -1440,14 +1462,14 @@ impl LiveDecoder {
     /// A decoder of `codec` started at once (no probing), named `name`
     /// in errors.
     fn start(codec: Codec, name: &str) -> Result<Self> {
+        let (send, events) = mpsc::channel();
         let Decoder {
             mut child,
             stdin,
             stdout,
             times,
             stderr,
-        } = spawn_decoder(codec, true, std::path::Path::new(name))?;
-        let (send, pictures) = mpsc::channel();
+        } = spawn_decoder(codec, Some(send.clone()), std::path::Path::new(name))?;
         let owner = name.to_string();
         let reader = std::thread::Builder::new()
             .name("live-video".into())
@@ -1459,7 +1481,7 @@ impl LiveDecoder {
                         read_picture(&mut stdout, |m| Error::Invalid(format!("{owner}: {m}")))
                             .map(|p| (p, times.next()));
                     let failed = picture.is_err();
-                    if send.send(picture).is_err() || failed {
+                    if send.send(LiveEvent::Picture(picture)).is_err() || failed {
                         break;
                     }
                 }
@@ -1468,7 +1490,7 @@ impl LiveDecoder {
             Ok(r) => Ok(Self {
                 child,
                 stdin: Some(stdin),
-                pictures,
+                events,
                 reader: Some(r),
                 stderr,
             }),
@@ -1492,7 +1514,14 @@ impl LiveDecoder {
         String,
     ) {
         drop(self.stdin.take());
-        let pictures: Vec<_> = self.pictures.iter().collect();
+        let pictures: Vec<_> = self
+            .events
+            .iter()
+            .filter_map(|e| match e {
+                LiveEvent::Picture(p) => Some(p),
+                LiveEvent::Error => None,
+            })
+            .collect();
         // The reader stops at a picture it cannot read: FFmpeg, left
         // writing to no one, is stopped.
         if pictures.iter().any(Result::is_err) {
@@ -1608,9 +1637,14 @@ impl LiveVideo {
         }
         self.written += 1;
         self.in_segment += 1;
+        let mut wait = LIVE_FRAME_WAIT;
         while self.timeouts < LIVE_TIMEOUTS && self.pending.due() > self.held {
-            match self.decoder.pictures.recv_timeout(LIVE_FRAME_WAIT) {
-                Ok(p) => frames.push(self.frame(p)?),
+            match self.decoder.events.recv_timeout(wait) {
+                Ok(LiveEvent::Picture(p)) => frames.push(self.frame(p)?),
+                // A damaged packet: its frame is waited for only briefly.
+                Ok(LiveEvent::Error) => wait = LIVE_ERROR_WAIT,
+                // Not held back, but lost (said by FFmpeg): no timeout.
+                Err(mpsc::RecvTimeoutError::Timeout) if wait == LIVE_ERROR_WAIT => break,
                 Err(mpsc::RecvTimeoutError::Timeout) => {
                     self.held = self.pending.due();
                     self.timeouts += 1;
@@ -1668,8 +1702,10 @@ impl LiveVideo {
 
     /// The frames ready now, after `frames`.
     fn ready(&mut self, frames: &mut Vec<LiveFrame>) -> Result<()> {
-        while let Ok(p) = self.decoder.pictures.try_recv() {
-            frames.push(self.frame(p)?);
+        while let Ok(e) = self.decoder.events.try_recv() {
+            if let LiveEvent::Picture(p) = e {
+                frames.push(self.frame(p)?);
+            }
         }
         Ok(())
     }
@@ -2232,6 +2268,41 @@ mod tests {
             let got: Vec<(u64, i64)> = got.iter().map(|f| (f.packet, f.stamp_ns)).collect();
             assert_eq!(got, want, "{name} live");
         }
+    }
+
+    #[test]
+    fn a_live_stream_of_several_damaged_packets_keeps_giving_frames_at_once() {
+        // Four damaged packets, one more than the waits that may time
+        // out: FFmpeg's error tells each push its frame is lost, so it
+        // waits a tenth of a second, not a second, and no timeout is
+        // spent. Before, the third lost frame ended waiting, and every
+        // later frame came a push late.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
+        let (mut packets, _) = encode(dir.path(), &x264, 12);
+        let damaged = [2, 4, 6, 8];
+        for k in damaged {
+            packets[k] = DAMAGED.to_vec();
+        }
+        let mut live = LiveVideo::new("h264", "/cam").unwrap();
+        for (i, p) in packets.iter().enumerate() {
+            let started = std::time::Instant::now();
+            let own: Vec<u64> = live
+                .push(p, stamp_ns(i))
+                .unwrap()
+                .iter()
+                .map(|f| f.packet)
+                .collect();
+            let lost = damaged.contains(&i);
+            let want: &[u64] = if lost { &[] } else { &[i as u64] };
+            assert_eq!(own, want, "push {i}");
+            if lost {
+                let waited = started.elapsed();
+                assert!(waited < LIVE_FRAME_WAIT / 2, "push {i}: {waited:?}");
+            }
+        }
+        assert_eq!(live.timeouts, 0);
+        assert!(live.finish().unwrap().is_empty());
     }
 
     #[test]
