@@ -16,9 +16,10 @@
 //! `ffmpeg_image_transport` publishes them), and the frames after a
 //! damaged packet that gave none keep their own (the lost packets are
 //! named in a warning). Only a stream whose stamps are not its frames'
-//! display order gives times that name no packet; each of its frames then
-//! takes the earliest stamp of the packets written and not yet given a
-//! frame, which is its own packet's while no frame is lost. Packets
+//! display order gives times that name no packet (or that FFmpeg raised
+//! so they do not go back); each such frame takes the stamp of the
+//! earliest written packet without a frame, which is its own without
+//! B-frames while no frame is lost. Packets
 //! before the stream's first keyframe (a recording begun mid-stream)
 //! cannot be decoded by anyone: they are skipped, with a warning.
 
@@ -478,9 +479,12 @@ struct PendingStamps {
     stamps: BTreeSet<Stamp>,
     /// The latest stamp a frame took by its time, and its decoder: the
     /// pending stamps before it are passed, their frames presumably lost
-    /// (frames come in display order). They are kept, a few, for a stream
-    /// whose stamps are not its display order, which may still give them.
+    /// (frames come in display order). They are kept, for a stream whose
+    /// stamps are not its display order, which may still give them, until
+    /// [`MAX_REORDERED`] says.
     shown: Option<(u32, i64)>,
+    /// The latest written packet whose frame came, and its decoder.
+    latest: Option<(u32, u64)>,
     /// The last frame's time, and its decoder. FFmpeg keeps its frames'
     /// times from going back: a time that would is raised to the last,
     /// so a time that does not rise names no packet surely (it may be
@@ -488,14 +492,17 @@ struct PendingStamps {
     last_time: Option<(u32, i64)>,
 }
 
-/// Passed stamps kept per stream before the earliest is given up as lost.
-const MAX_PASSED_STAMPS: usize = 16;
+/// Packets a decoder may show after a packet written later (H.264's and
+/// H.265's largest picture buffer): a packet written more before one whose
+/// frame came gave none.
+const MAX_REORDERED: u64 = 16;
 
 /// A decoded frame's stamp, and what it told of the packets before it.
 struct Taken {
     stamp: Stamp,
     /// Places of packets given up as lost (a damaged packet gives no
-    /// frame): passed stamps past [`MAX_PASSED_STAMPS`].
+    /// frame): written [`MAX_REORDERED`] packets or more before one whose
+    /// frame came.
     lost: Vec<u64>,
     /// Pending stamps this frame passed (shown before it, no frame yet).
     passed: u64,
@@ -512,11 +519,11 @@ impl PendingStamps {
     /// The stamp of the frame just decoded, whose time FFmpeg gave as
     /// `time`: that of its own packet in the current decoder; without a
     /// time, one that does not rise, or one no pending packet has (a
-    /// stream whose stamps are not its display order), the earliest
-    /// pending one (see the module's documentation). The error when every packet written (`written`)
+    /// stream whose stamps are not its display order), that of the
+    /// earliest written packet (see the module's documentation). The error when every packet written (`written`)
     /// already has its frame.
     fn take(&mut self, time: Option<i64>, written: u64) -> std::result::Result<Taken, String> {
-        let Some(first) = self.stamps.first() else {
+        let Some(first) = self.stamps.first().cloned() else {
             return Err(format!(
                 "FFmpeg gave more frames than the {written} packets written to it"
             ));
@@ -544,33 +551,56 @@ impl PendingStamps {
                 .filter(|s| s.segment == segment && s.stamp_ns == stamp_ns)
                 .cloned()
         });
-        let Some(own) = own else {
-            let stamp = self.stamps.pop_first().expect("a first stamp");
-            return Ok(Taken {
-                stamp,
-                lost: Vec::new(),
-                passed: 0,
-                own: false,
-            });
-        };
-        self.stamps.remove(&own);
+        let own_found = own.is_some();
         let passed_before = self.passed(segment);
-        if self
-            .shown
-            .is_none_or(|(seg, at)| seg != segment || at < own.stamp_ns)
-        {
-            self.shown = Some((segment, own.stamp_ns));
-        }
+        let stamp = match own {
+            Some(own) => {
+                if self
+                    .shown
+                    .is_none_or(|(seg, at)| seg != segment || at < own.stamp_ns)
+                {
+                    self.shown = Some((segment, own.stamp_ns));
+                }
+                own
+            }
+            // The earliest written packet: without B-frames, the frames
+            // come in the packets' order, whatever their stamps.
+            None => self
+                .stamps
+                .iter()
+                .take_while(|s| s.segment == segment)
+                .min_by_key(|s| s.index)
+                .cloned()
+                .unwrap_or(first),
+        };
+        self.stamps.remove(&stamp);
         let passed = self.passed(segment);
-        let mut lost = Vec::new();
-        for _ in MAX_PASSED_STAMPS..passed {
-            lost.extend(self.stamps.pop_first().map(|s| s.index));
-        }
+        // A packet written more than a decoder may reorder before one whose
+        // frame came gave none.
+        let latest = match self.latest {
+            Some((seg, at)) if seg == segment => at.max(stamp.index),
+            _ => stamp.index,
+        };
+        self.latest = Some((segment, latest));
+        let overdue: Vec<Stamp> = self
+            .stamps
+            .iter()
+            .take_while(|s| s.segment == segment)
+            .filter(|s| s.index.saturating_add(MAX_REORDERED) < latest)
+            .cloned()
+            .collect();
+        let lost = overdue
+            .into_iter()
+            .map(|s| {
+                self.stamps.remove(&s);
+                s.index
+            })
+            .collect();
         Ok(Taken {
-            stamp: own,
+            stamp,
             lost,
             passed: passed.saturating_sub(passed_before) as u64,
-            own: true,
+            own: own_found,
         })
     }
 
@@ -2303,6 +2333,58 @@ mod tests {
         }
         assert_eq!(live.timeouts, 0);
         assert!(live.finish().unwrap().is_empty());
+    }
+
+    #[test]
+    fn frames_of_wildly_stamped_packets_keep_their_own_stamps() {
+        // Stamps far apart (FFmpeg's floating point loses the nanosecond)
+        // and out of order, and stamps counting down: the times name no
+        // packet or do not rise, and each frame takes the earliest written
+        // packet's. Before, each took the earliest stamp, so the
+        // countdown's frame 1 was stamped as packet 9.
+        let dir = tempfile::tempdir().unwrap();
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
+        let (packets, _) = encode(dir.path(), &x264, 10);
+        let s = |seconds: i64| seconds * 1_000_000_000 + 123;
+        let wild = [
+            0,
+            2_000_000_000,
+            1,
+            1_500_000_000,
+            5,
+            3,
+            2_147_483_647,
+            7,
+            0,
+            9,
+        ]
+        .map(s);
+        let countdown: Vec<i64> = (0..10).map(|i| s(2_000_000_000 - i)).collect();
+        for (name, stamps) in [("wild", &wild[..]), ("countdown", &countdown)] {
+            let path = dir.path().join(format!("{name}.mcap"));
+            let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+            cdr_bag(&path, "/cam", ROS_COMPRESSED_VIDEO_TYPE, &all, |i, data| {
+                to_cdr(&CompressedVideo {
+                    timestamp: Time::from_nanos(stamps[i]),
+                    frame_id: "cam".into(),
+                    data,
+                    format: "h264".into(),
+                })
+            });
+            let (frames, warnings) = read_all(&path, "/cam").unwrap();
+            assert!(warnings.is_empty(), "{name}: {warnings:?}");
+            let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+            let want: Vec<(u64, i64)> = (0..10).map(|i| (i as u64, stamps[i])).collect();
+            assert_eq!(got, want, "{name}");
+            let mut live = LiveVideo::new("h264", "/cam").unwrap();
+            let mut got = Vec::new();
+            for (i, p) in packets.iter().enumerate() {
+                got.extend(live.push(p, stamps[i]).unwrap());
+            }
+            got.extend(live.finish().unwrap());
+            let got: Vec<(u64, i64)> = got.iter().map(|f| (f.packet, f.stamp_ns)).collect();
+            assert_eq!(got, want, "{name} live");
+        }
     }
 
     #[test]
