@@ -1544,6 +1544,9 @@ impl LiveDecoder {
         String,
     ) {
         drop(self.stdin.take());
+        // The channel closes when FFmpeg has exited (its error output's
+        // thread ends) and its pictures are read (or the reader stopped at
+        // one it could not read, closing FFmpeg's output).
         let pictures: Vec<_> = self
             .events
             .iter()
@@ -2609,6 +2612,14 @@ mod tests {
             )),
             "{e}"
         );
+        // Live: the push or the finish says so, and the finish returns
+        // (FFmpeg, left writing the picture to no one, is stopped).
+        let mut live = LiveVideo::new("h264", "/cam").unwrap();
+        live.timeouts = LIVE_TIMEOUTS;
+        let pushed = live.push(&data, 0).map(|f| f.len());
+        let e = pushed.and_then(|_| live.finish().map(|f| f.len()));
+        let e = e.err().unwrap().to_string();
+        assert!(e.contains("/cam: its video is 7696x4320"), "{e}");
     }
 
     #[test]
