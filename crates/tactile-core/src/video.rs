@@ -31,6 +31,53 @@ pub(crate) fn spawn_error(path: &Path, e: std::io::Error) -> Error {
     }
 }
 
+/// FFmpeg's options that keep every decoded frame as it is, none dropped
+/// or repeated to make a rate: the global ones (before the outputs) and
+/// each output's. `-fps_mode passthrough` since FFmpeg 5.1; before it
+/// (Ubuntu 22.04's 4.4, which ROS 2 Humble runs on) the global `-vsync
+/// passthrough`, which 5.1 on still reads but calls deprecated.
+pub(crate) fn passthrough_options() -> (&'static [&'static str], &'static [&'static str]) {
+    static HAS_FPS_MODE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let has_fps_mode = *HAS_FPS_MODE.get_or_init(|| {
+        Command::new("ffmpeg")
+            .arg("-version")
+            .stdin(Stdio::null())
+            .stderr(Stdio::null())
+            .output()
+            .map_or(true, |out| {
+                has_fps_mode(&String::from_utf8_lossy(&out.stdout))
+            })
+    });
+    match has_fps_mode {
+        true => (&[], &["-fps_mode", "passthrough"]),
+        false => (&["-vsync", "passthrough"], &[]),
+    }
+}
+
+/// True unless `ffmpeg -version`'s first line names a release before 5.1
+/// ("ffmpeg version 4.4.2-0ubuntu0.22.04.1", "n4.4"); a build from git
+/// ("N-112233-g…") or a line not understood is taken as new.
+fn has_fps_mode(version: &str) -> bool {
+    let Some(release) = version
+        .lines()
+        .next()
+        .and_then(|l| l.strip_prefix("ffmpeg version "))
+    else {
+        return true;
+    };
+    let numbers: Vec<u32> = release
+        .trim_start_matches('n')
+        .split(|c: char| !c.is_ascii_digit())
+        .take(2)
+        .map_while(|n| n.parse().ok())
+        .collect();
+    match numbers.as_slice() {
+        [major, minor] => (*major, *minor) >= (5, 1),
+        [major] => *major >= 5,
+        _ => true,
+    }
+}
+
 /// True when `ffmpeg` and `ffprobe` run.
 pub fn ffmpeg_available() -> bool {
     ["ffmpeg", "ffprobe"].iter().all(|tool| {
@@ -448,4 +495,31 @@ fn encode_with(frames: &[&RgbImage], fps: u32, out: &Path, codec: &[String]) -> 
         ));
     }
     std::fs::rename(&tmp, out).map_err(|e| Error::io(out, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn releases_before_5_1_keep_their_frames_with_vsync() {
+        for (line, new) in [
+            (
+                "ffmpeg version 5.1.9-0+deb12u1 Copyright (c) 2000-2026",
+                true,
+            ),
+            ("ffmpeg version 4.4.2-0ubuntu0.22.04.1 Copyright", false),
+            ("ffmpeg version n4.4 Copyright", false),
+            (
+                "ffmpeg version 4.2.2-static https://johnvansickle.com/ffmpeg/",
+                false,
+            ),
+            ("ffmpeg version 5.0.1 Copyright", false),
+            ("ffmpeg version 7.1.1 Copyright", true),
+            ("ffmpeg version N-112233-gabcdef Copyright", true),
+            ("something else", true),
+        ] {
+            assert_eq!(has_fps_mode(line), new, "{line}");
+        }
+    }
 }

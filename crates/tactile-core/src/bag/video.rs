@@ -44,7 +44,7 @@ use super::{
     stamp_or_log_time,
 };
 use crate::image_io::{MAX_IMAGE_PIXELS, RgbImage, rgb_image};
-use crate::video::{STDERR_TAIL, last_words, spawn_error};
+use crate::video::{STDERR_TAIL, last_words, passthrough_options, spawn_error};
 use crate::{Error, Result};
 
 /// True for the video message types.
@@ -955,23 +955,20 @@ fn spawn_decoder(
         Some(decoder) => &["-c:v", decoder],
         None => &[],
     };
-    let each_frame = [
-        "-map",
-        "0:v:0",
-        "-fps_mode",
-        "passthrough",
-        "-enc_time_base",
-        "-1",
-    ];
+    let (every_frame, each_output) = passthrough_options();
+    let each_frame = ["-map", "0:v:0", "-enc_time_base", "-1"];
     let mut child = Command::new("ffmpeg")
         .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-copyts"])
+        .args(every_frame)
         .args(["-threads", "1"])
         .args(probe)
         .args(forced)
         .args(["-f", "ivf", "-i", "pipe:0"])
         .args(each_frame)
+        .args(each_output)
         .args(["-c:v", "wrapped_avframe", "-f", "framecrc", "pipe:2"])
         .args(each_frame)
+        .args(each_output)
         .args(["-pix_fmt", "rgb24", "-c:v", "pam", "-f", "image2pipe"])
         .arg("pipe:1")
         .stdin(Stdio::piped())
@@ -1918,10 +1915,14 @@ mod tests {
     /// Every frame of the video file at `path` as FFmpeg decodes it
     /// (`w`x`h` RGB), checked to be `frames`.
     fn decode_file(path: &Path, (w, h): (usize, usize), frames: usize) -> Vec<Vec<u8>> {
+        let (every_frame, each_output) = passthrough_options();
         let out = Command::new("ffmpeg")
-            .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-i"])
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
+            .args(every_frame)
+            .arg("-i")
             .arg(path)
-            .args(["-fps_mode", "passthrough", "-f", "rawvideo"])
+            .args(each_output)
+            .args(["-f", "rawvideo"])
             .args(["-pix_fmt", "rgb24", "-"])
             .output()
             .unwrap();
