@@ -244,12 +244,18 @@ impl VideoReader {
         }
         let info = probe(input)?;
         let threads = options.threads.clamp(1, 64).to_string();
+        // Each frame once: FFmpeg's rawvideo output would otherwise repeat
+        // and drop frames of a variable rate video (a phone's) to make its
+        // average rate.
+        let (every_frame, each_output) = passthrough_options();
         let mut child = Command::new("ffmpeg")
             .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
+            .args(every_frame)
             .args(["-threads", &threads])
             .arg("-noautorotate")
             .args(input.input_args()?)
             .args(["-map", "0:v:0", "-an", "-sn", "-dn"])
+            .args(each_output)
             .args(["-f", "rawvideo", "-pix_fmt", "rgb24"])
             // The probed size, whatever the stream does later.
             .args(["-s", &format!("{}x{}", info.width, info.height)])
@@ -500,6 +506,35 @@ fn encode_with(frames: &[&RgbImage], fps: u32, out: &Path, codec: &[String]) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_video_of_variable_frame_rate_gives_each_frame_once() {
+        // 30 frames at 30 fps with a half-second pause after frame 10 and
+        // slowing after frame 20, as a phone records: FFmpeg's rawvideo
+        // output made 50 of them (repeats to fill its average rate).
+        let dir = tempfile::tempdir().unwrap();
+        let video = dir.path().join("vfr.mp4");
+        let (every_frame, each_output) = passthrough_options();
+        let status = Command::new("ffmpeg")
+            .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
+            .args(every_frame)
+            .args(["-f", "lavfi", "-i", "testsrc=size=64x64:rate=30"])
+            .args(["-frames:v", "30", "-vf"])
+            .arg("setpts='PTS+if(gte(N,10),0.5/TB,0)+if(gte(N,20),0.02*(N-20)/TB,0)'")
+            .args(each_output)
+            .args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
+            .arg(&video)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let mut reader =
+            VideoReader::open(&VideoInput::File(video), DecodeOptions::default()).unwrap();
+        let mut frames = 0;
+        while reader.next_frame().unwrap().is_some() {
+            frames += 1;
+        }
+        assert_eq!(frames, 30);
+    }
 
     #[test]
     fn releases_before_5_1_keep_their_frames_with_vsync() {
