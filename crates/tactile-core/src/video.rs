@@ -37,45 +37,48 @@ pub(crate) fn spawn_error(path: &Path, e: std::io::Error) -> Error {
 /// (Ubuntu 22.04's 4.4, which ROS 2 Humble runs on) the global `-vsync
 /// passthrough`, which 5.1 on still reads but calls deprecated.
 pub(crate) fn passthrough_options() -> (&'static [&'static str], &'static [&'static str]) {
-    static HAS_FPS_MODE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    let has_fps_mode = *HAS_FPS_MODE.get_or_init(|| {
-        Command::new("ffmpeg")
-            .arg("-version")
-            .stdin(Stdio::null())
-            .stderr(Stdio::null())
-            .output()
-            .map_or(true, |out| {
-                has_fps_mode(&String::from_utf8_lossy(&out.stdout))
-            })
-    });
-    match has_fps_mode {
+    match ffmpeg_release().is_none_or(|r| r >= (5, 1)) {
         true => (&[], &["-fps_mode", "passthrough"]),
         false => (&["-vsync", "passthrough"], &[]),
     }
 }
 
-/// True unless `ffmpeg -version`'s first line names a release before 5.1
-/// ("ffmpeg version 4.4.2-0ubuntu0.22.04.1", "n4.4"); a build from git
-/// ("N-112233-g…") or a line not understood is taken as new.
-fn has_fps_mode(version: &str) -> bool {
-    let Some(release) = version
-        .lines()
-        .next()
-        .and_then(|l| l.strip_prefix("ffmpeg version "))
-    else {
-        return true;
-    };
-    let numbers: Vec<u32> = release
+/// `-enc_time_base`'s value for the demuxer's time base: `demux` since
+/// FFmpeg 6.1, which calls the older `-1` deprecated.
+pub(crate) fn demuxer_time_base() -> &'static str {
+    match ffmpeg_release().is_none_or(|r| r >= (6, 1)) {
+        true => "demux",
+        false => "-1",
+    }
+}
+
+/// The system FFmpeg's release (major, minor), read once from `ffmpeg
+/// -version`; `None` for a build from git or a line not understood, which
+/// is taken as new.
+fn ffmpeg_release() -> Option<(u32, u32)> {
+    static RELEASE: std::sync::OnceLock<Option<(u32, u32)>> = std::sync::OnceLock::new();
+    *RELEASE.get_or_init(|| {
+        let out = Command::new("ffmpeg")
+            .arg("-version")
+            .stdin(Stdio::null())
+            .stderr(Stdio::null())
+            .output()
+            .ok()?;
+        release_of(&String::from_utf8_lossy(&out.stdout))
+    })
+}
+
+/// The release `ffmpeg -version`'s first line names ("ffmpeg version
+/// 4.4.2-0ubuntu0.22.04.1", "n4.4", "7.1"), or `None` ("N-112233-g…").
+fn release_of(version: &str) -> Option<(u32, u32)> {
+    let release = version.lines().next()?.strip_prefix("ffmpeg version ")?;
+    let mut numbers = release
         .trim_start_matches('n')
         .split(|c: char| !c.is_ascii_digit())
-        .take(2)
-        .map_while(|n| n.parse().ok())
-        .collect();
-    match numbers.as_slice() {
-        [major, minor] => (*major, *minor) >= (5, 1),
-        [major] => *major >= 5,
-        _ => true,
-    }
+        .map(str::parse::<u32>);
+    let major = numbers.next()?.ok()?;
+    let minor = numbers.next().and_then(Result::ok).unwrap_or(0);
+    Some((major, minor))
 }
 
 /// True when `ffmpeg` and `ffprobe` run.
@@ -537,24 +540,26 @@ mod tests {
     }
 
     #[test]
-    fn releases_before_5_1_keep_their_frames_with_vsync() {
-        for (line, new) in [
+    fn the_release_of_ffmpeg_is_read_from_its_version_line() {
+        for (line, release) in [
             (
                 "ffmpeg version 5.1.9-0+deb12u1 Copyright (c) 2000-2026",
-                true,
+                Some((5, 1)),
             ),
-            ("ffmpeg version 4.4.2-0ubuntu0.22.04.1 Copyright", false),
-            ("ffmpeg version n4.4 Copyright", false),
+            (
+                "ffmpeg version 4.4.2-0ubuntu0.22.04.1 Copyright",
+                Some((4, 4)),
+            ),
+            ("ffmpeg version n4.4 Copyright", Some((4, 4))),
             (
                 "ffmpeg version 4.2.2-static https://johnvansickle.com/ffmpeg/",
-                false,
+                Some((4, 2)),
             ),
-            ("ffmpeg version 5.0.1 Copyright", false),
-            ("ffmpeg version 7.1.1 Copyright", true),
-            ("ffmpeg version N-112233-gabcdef Copyright", true),
-            ("something else", true),
+            ("ffmpeg version 7 Copyright", Some((7, 0))),
+            ("ffmpeg version N-112233-gabcdef Copyright", None),
+            ("something else", None),
         ] {
-            assert_eq!(has_fps_mode(line), new, "{line}");
+            assert_eq!(release_of(line), release, "{line}");
         }
     }
 }

@@ -44,7 +44,7 @@ use super::{
     stamp_or_log_time,
 };
 use crate::image_io::{MAX_IMAGE_PIXELS, RgbImage, rgb_image};
-use crate::video::{STDERR_TAIL, last_words, passthrough_options, spawn_error};
+use crate::video::{STDERR_TAIL, demuxer_time_base, last_words, passthrough_options, spawn_error};
 use crate::{Error, Result};
 
 /// True for the video message types.
@@ -939,7 +939,7 @@ struct Decoder {
 /// one thread; `live` starts it on the first packet instead of after
 /// probing megabytes of the stream. Each frame's time goes first to its
 /// error output, as a `framecrc` line of a second output (`-copyts`
-/// keeps the packets' own times, `-enc_time_base -1` their nanoseconds):
+/// keeps the packets' own times, `-enc_time_base` the demuxer's nanoseconds):
 /// written before the picture, it is there when the picture is read, and
 /// the thread reading it never waits for the pictures.
 fn spawn_decoder(
@@ -956,7 +956,7 @@ fn spawn_decoder(
         None => &[],
     };
     let (every_frame, each_output) = passthrough_options();
-    let each_frame = ["-map", "0:v:0", "-enc_time_base", "-1"];
+    let each_frame = ["-map", "0:v:0", "-enc_time_base", demuxer_time_base()];
     let mut child = Command::new("ffmpeg")
         .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-copyts"])
         .args(every_frame)
