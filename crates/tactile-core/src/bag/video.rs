@@ -2265,6 +2265,41 @@ mod tests {
         assert_eq!(stamps, (0..12).map(stamp_ns).collect::<Vec<_>>());
     }
 
+    /// An H.264 stream without B-frames whose packets are stamped
+    /// `stamps`, in a bag (as `name`) and live: each frame must keep its
+    /// own packet's stamp and place.
+    fn each_frame_keeps_its_own_stamp(dir: &Path, name: &str, stamps: &[i64]) {
+        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
+        let (packets, _) = encode(dir, &x264, stamps.len());
+        let path = dir.join(format!("{name}.mcap"));
+        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        cdr_bag(&path, "/cam", ROS_COMPRESSED_VIDEO_TYPE, &all, |i, data| {
+            to_cdr(&CompressedVideo {
+                timestamp: Time::from_nanos(stamps[i]),
+                frame_id: "cam".into(),
+                data,
+                format: "h264".into(),
+            })
+        });
+        let (frames, warnings) = read_all(&path, "/cam").unwrap();
+        assert!(warnings.is_empty(), "{name}: {warnings:?}");
+        let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+        let want: Vec<(u64, i64)> = stamps
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| (i as u64, s))
+            .collect();
+        assert_eq!(got, want, "{name}");
+        let mut live = LiveVideo::new("h264", "/cam").unwrap();
+        let mut got = Vec::new();
+        for (p, &stamp) in packets.iter().zip(stamps) {
+            got.extend(live.push(p, stamp).unwrap());
+        }
+        got.extend(live.finish().unwrap());
+        let got: Vec<(u64, i64)> = got.iter().map(|f| (f.packet, f.stamp_ns)).collect();
+        assert_eq!(got, want, "{name} live");
+    }
+
     #[test]
     fn frames_stamped_alike_or_back_in_time_keep_their_own_stamps() {
         // A publisher that stamps every packet alike, and a clock that
@@ -2273,35 +2308,10 @@ mod tests {
         // that stamp also has; each frame still takes its own packet's
         // stamp, in a bag and live.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
-        let (packets, _) = encode(dir.path(), &x264, 8);
-        let alike = |_: usize| stamp_ns(1);
-        let back = |i: usize| stamp_ns(i % 4);
-        for (name, stamp) in [("alike", &alike as &dyn Fn(usize) -> i64), ("back", &back)] {
-            let path = dir.path().join(format!("{name}.mcap"));
-            let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
-            cdr_bag(&path, "/cam", ROS_COMPRESSED_VIDEO_TYPE, &all, |i, data| {
-                to_cdr(&CompressedVideo {
-                    timestamp: Time::from_nanos(stamp(i)),
-                    frame_id: "cam".into(),
-                    data,
-                    format: "h264".into(),
-                })
-            });
-            let (frames, warnings) = read_all(&path, "/cam").unwrap();
-            assert!(warnings.is_empty(), "{name}: {warnings:?}");
-            let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
-            let want: Vec<(u64, i64)> = (0..8).map(|i| (i as u64, stamp(i))).collect();
-            assert_eq!(got, want, "{name}");
-            let mut live = LiveVideo::new("h264", "/cam").unwrap();
-            let mut got = Vec::new();
-            for (i, p) in packets.iter().enumerate() {
-                got.extend(live.push(p, stamp(i)).unwrap());
-            }
-            got.extend(live.finish().unwrap());
-            let got: Vec<(u64, i64)> = got.iter().map(|f| (f.packet, f.stamp_ns)).collect();
-            assert_eq!(got, want, "{name} live");
-        }
+        let alike: Vec<i64> = (0..8).map(|_| stamp_ns(1)).collect();
+        let back: Vec<i64> = (0..8).map(|i| stamp_ns(i % 4)).collect();
+        each_frame_keeps_its_own_stamp(dir.path(), "alike", &alike);
+        each_frame_keeps_its_own_stamp(dir.path(), "back", &back);
     }
 
     #[test]
@@ -2347,8 +2357,6 @@ mod tests {
         // packet's. Before, each took the earliest stamp, so the
         // countdown's frame 1 was stamped as packet 9.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
-        let (packets, _) = encode(dir.path(), &x264, 10);
         let s = |seconds: i64| seconds * 1_000_000_000 + 123;
         let wild = [
             0,
@@ -2364,31 +2372,8 @@ mod tests {
         ]
         .map(s);
         let countdown: Vec<i64> = (0..10).map(|i| s(2_000_000_000 - i)).collect();
-        for (name, stamps) in [("wild", &wild[..]), ("countdown", &countdown)] {
-            let path = dir.path().join(format!("{name}.mcap"));
-            let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
-            cdr_bag(&path, "/cam", ROS_COMPRESSED_VIDEO_TYPE, &all, |i, data| {
-                to_cdr(&CompressedVideo {
-                    timestamp: Time::from_nanos(stamps[i]),
-                    frame_id: "cam".into(),
-                    data,
-                    format: "h264".into(),
-                })
-            });
-            let (frames, warnings) = read_all(&path, "/cam").unwrap();
-            assert!(warnings.is_empty(), "{name}: {warnings:?}");
-            let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
-            let want: Vec<(u64, i64)> = (0..10).map(|i| (i as u64, stamps[i])).collect();
-            assert_eq!(got, want, "{name}");
-            let mut live = LiveVideo::new("h264", "/cam").unwrap();
-            let mut got = Vec::new();
-            for (i, p) in packets.iter().enumerate() {
-                got.extend(live.push(p, stamps[i]).unwrap());
-            }
-            got.extend(live.finish().unwrap());
-            let got: Vec<(u64, i64)> = got.iter().map(|f| (f.packet, f.stamp_ns)).collect();
-            assert_eq!(got, want, "{name} live");
-        }
+        each_frame_keeps_its_own_stamp(dir.path(), "wild", &wild);
+        each_frame_keeps_its_own_stamp(dir.path(), "countdown", &countdown);
     }
 
     #[test]
