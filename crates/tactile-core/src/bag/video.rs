@@ -1668,7 +1668,9 @@ impl LiveVideo {
         self.written += 1;
         self.in_segment += 1;
         let mut wait = LIVE_FRAME_WAIT;
-        while self.timeouts < LIVE_TIMEOUTS && self.pending.due() > self.held {
+        // An empty packet (a publisher's dropped frame) gives no frame: its
+        // push does not wait, and a later frame passes it.
+        while !data.is_empty() && self.timeouts < LIVE_TIMEOUTS && self.pending.due() > self.held {
             match self.decoder.events.recv_timeout(wait) {
                 Ok(LiveEvent::Picture(p)) => frames.push(self.frame(p)?),
                 // A damaged packet: its frame is waited for only briefly.
@@ -2320,14 +2322,16 @@ mod tests {
         // out: FFmpeg's error tells each push its frame is lost, so it
         // waits a tenth of a second, not a second, and no timeout is
         // spent. Before, the third lost frame ended waiting, and every
-        // later frame came a push late.
+        // later frame came a push late. An empty packet (10) is not
+        // waited for at all.
         let dir = tempfile::tempdir().unwrap();
         let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
         let (mut packets, _) = encode(dir.path(), &x264, 12);
-        let damaged = [2, 4, 6, 8];
-        for k in damaged {
-            packets[k] = DAMAGED.to_vec();
+        let damaged = [2, 4, 6, 8, 10];
+        for k in &damaged[..4] {
+            packets[*k] = DAMAGED.to_vec();
         }
+        packets[10] = Vec::new();
         let mut live = LiveVideo::new("h264", "/cam").unwrap();
         for (i, p) in packets.iter().enumerate() {
             let started = std::time::Instant::now();
@@ -2345,7 +2349,7 @@ mod tests {
                 assert!(waited < LIVE_FRAME_WAIT / 2, "push {i}: {waited:?}");
             }
         }
-        assert_eq!(live.timeouts, 0);
+        assert_eq!((live.timeouts, live.lost()), (0, 5));
         assert!(live.finish().unwrap().is_empty());
     }
 
