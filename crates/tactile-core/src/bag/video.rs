@@ -1888,6 +1888,18 @@ mod tests {
         (packets, decode_file(&stream, (w, h), frames))
     }
 
+    /// `frames` frames of H.264 without B-frames, a keyframe every `gop`:
+    /// its packets and FFmpeg's decode of them.
+    fn h264_without_b_frames(dir: &Path, gop: u32, frames: usize) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+        let gop = gop.to_string();
+        encode(dir, &["-c:v", "libx264", "-bf", "0", "-g", &gop], frames)
+    }
+
+    /// Each packet with its message's place, as the bag writers take them.
+    fn numbered(packets: &[Vec<u8>]) -> Vec<(usize, &[u8])> {
+        packets.iter().map(Vec::as_slice).enumerate().collect()
+    }
+
     /// `frames` frames of FFmpeg's test pattern at `w`x`h` in `pix_fmt`,
     /// encoded with `encoder`'s options into `dir/name`, a file of
     /// `muxer`'s format.
@@ -2098,7 +2110,7 @@ mod tests {
         ];
         let (packets, decoded) = encode(dir.path(), &x265, 7);
         let ros = dir.path().join("ros.mcap");
-        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let all = numbered(&packets);
         ros_bag(&ros, "/cam/h265", "h265", &all);
         let (frames, warnings) = read_all(&ros, "/cam/h265").unwrap();
         assert_eq!(frames.len(), 7);
@@ -2137,7 +2149,7 @@ mod tests {
         let (packets, decoded, shown) = b_frame_stream(dir.path());
         assert_ne!(shown, (0..12).collect::<Vec<_>>(), "no B-frames");
         let path = dir.path().join("b.mcap");
-        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let all = numbered(&packets);
         cdr_bag(&path, "/cam", FFMPEG_PACKET_TYPE, &all, |i, data| {
             to_cdr(&FfmpegPacket {
                 header: Header {
@@ -2174,11 +2186,10 @@ mod tests {
         // every frame after a damaged packet carried an earlier packet's
         // stamp: frame 4 was stamped as message 3.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
-        let (mut packets, decoded) = encode(dir.path(), &x264, 8);
+        let (mut packets, decoded) = h264_without_b_frames(dir.path(), 50, 8);
         packets[3] = DAMAGED.to_vec();
         let path = dir.path().join("lost.mcap");
-        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let all = numbered(&packets);
         ros_bag(&path, "/cam", "h264", &all);
         let (frames, warnings) = read_all(&path, "/cam").unwrap();
         let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
@@ -2215,7 +2226,7 @@ mod tests {
         let b = (1..shown.len()).find(|&i| shown[i] < shown[i - 1]).unwrap();
         packets[b] = DAMAGED.to_vec();
         let path = dir.path().join("lost-b.mcap");
-        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let all = numbered(&packets);
         cdr_bag(&path, "/cam", ROS_COMPRESSED_VIDEO_TYPE, &all, |i, data| {
             to_cdr(&CompressedVideo {
                 timestamp: Time::from_nanos(stamp_ns(shown[i])),
@@ -2249,7 +2260,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let (packets, _, _) = b_frame_stream(dir.path());
         let path = dir.path().join("decoding-order.mcap");
-        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let all = numbered(&packets);
         ros_bag(&path, "/cam", "h264", &all);
         let (frames, warnings) = read_all(&path, "/cam").unwrap();
         assert!(warnings.is_empty(), "{warnings:?}");
@@ -2271,10 +2282,9 @@ mod tests {
     /// `stamps`, in a bag (as `name`) and live: each frame must keep its
     /// own packet's stamp and place.
     fn each_frame_keeps_its_own_stamp(dir: &Path, name: &str, stamps: &[i64]) {
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
-        let (packets, _) = encode(dir, &x264, stamps.len());
+        let (packets, _) = h264_without_b_frames(dir, 50, stamps.len());
         let path = dir.join(format!("{name}.mcap"));
-        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let all = numbered(&packets);
         cdr_bag(&path, "/cam", ROS_COMPRESSED_VIDEO_TYPE, &all, |i, data| {
             to_cdr(&CompressedVideo {
                 timestamp: Time::from_nanos(stamps[i]),
@@ -2325,8 +2335,7 @@ mod tests {
         // later frame came a push late. An empty packet (10) is not
         // waited for at all.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
-        let (mut packets, _) = encode(dir.path(), &x264, 12);
+        let (mut packets, _) = h264_without_b_frames(dir.path(), 50, 12);
         let damaged = [2, 4, 6, 8, 10];
         for k in &damaged[..4] {
             packets[*k] = DAMAGED.to_vec();
@@ -2455,8 +2464,7 @@ mod tests {
         // VP9's packets are framed by the toolkit (IVF), so a damaged one
         // cannot move the next one's start.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
-        let (h264, _) = encode(dir.path(), &x264, 6);
+        let (h264, _) = h264_without_b_frames(dir.path(), 3, 6);
         let (vp9, _) = encode_vp9(dir.path(), "yuv420p", 6);
         let mut rng = crate::rng::SampleRng::new(47, 0, 0);
         let mut outcomes = [0usize; 2];
@@ -2498,8 +2506,7 @@ mod tests {
     #[test]
     fn video_that_cannot_be_decoded_is_refused_by_name() {
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
-        let (packets, _) = encode(dir.path(), &x264, 4);
+        let (packets, _) = h264_without_b_frames(dir.path(), 50, 4);
         type Packets<'a> = Vec<(usize, &'a [u8])>;
         // Parameter sets that are not: no frame decodes.
         let garbage: &[u8] = &[
@@ -2550,8 +2557,7 @@ mod tests {
         // Before, each of these ended in FFmpeg's "Error marking filters as
         // finished" (exit status 1), even a decoder given no packet.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
-        let (packets, _) = encode(dir.path(), &x264, 4);
+        let (packets, _) = h264_without_b_frames(dir.path(), 50, 4);
         let garbage: &[u8] = &[
             0, 0, 0, 1, 0x67, 0xff, 0xff, 0xff, 0xff, 0, 0, 1, 0x65, 0xff,
         ];
@@ -2618,8 +2624,7 @@ mod tests {
         // disk leaves them: each read ends, with frames (at most one a
         // packet) or an error naming the bag.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
-        let (packets, _) = encode(dir.path(), &x264, 6);
+        let (packets, _) = h264_without_b_frames(dir.path(), 3, 6);
         let mut rng = crate::rng::SampleRng::new(41, 0, 0);
         let path = dir.path().join("damaged.mcap");
         let mut outcomes = [0usize; 2];
@@ -2630,7 +2635,7 @@ mod tests {
                 let at = rng.index(damaged[p].len());
                 damaged[p][at] = rng.index(256) as u8;
             }
-            let all: Vec<(usize, &[u8])> = damaged.iter().map(Vec::as_slice).enumerate().collect();
+            let all = numbered(&damaged);
             ros_bag(&path, "/cam", "h264", &all);
             match read_all(&path, "/cam") {
                 Ok((frames, _)) => {
@@ -2653,10 +2658,9 @@ mod tests {
         // the video topic ends in frames or an error naming the file.
         // VIDEO_MUTATION_ROUNDS=1200 runs longer (60 by default).
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "2"];
-        let (packets, _) = encode(dir.path(), &x264, 4);
+        let (packets, _) = h264_without_b_frames(dir.path(), 2, 4);
         let good_path = dir.path().join("good.mcap");
-        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let all = numbered(&packets);
         ros_bag(&good_path, "/cam", "h264", &all);
         let good = std::fs::read(&good_path).unwrap();
         let path = dir.path().join("mutated.mcap");
@@ -2797,16 +2801,10 @@ mod tests {
         // CompressedImage per packet, format "h264", begun mid-stream.
         // Before, each message was refused as an image it is not.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
-        let (packets, decoded) = encode(dir.path(), &x264, 6);
+        let (packets, decoded) = h264_without_b_frames(dir.path(), 3, 6);
         let path = dir.path().join("compressed.mcap");
         let write = |format: fn(usize) -> &'static str| {
-            let late: Vec<(usize, &[u8])> = packets
-                .iter()
-                .map(Vec::as_slice)
-                .enumerate()
-                .skip(1)
-                .collect();
+            let late = numbered(&packets)[1..].to_vec();
             cdr_bag(
                 &path,
                 "/cam/compressed",
@@ -2870,7 +2868,7 @@ mod tests {
                 sizes.extend([size; 3]);
             }
             let path = dir.path().join(format!("{codec}.mcap"));
-            let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+            let all = numbered(&packets);
             ros_bag(&path, "/cam", codec, &all);
             let (frames, warnings) = read_all(&path, "/cam").unwrap();
             assert_eq!(frames.len(), 6, "{codec}");
@@ -2923,7 +2921,7 @@ mod tests {
             .flat_map(|&s| [s, s])
             .collect();
         let path = dir.path().join("changing.mcap");
-        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let all = numbered(&packets);
         ros_bag(&path, "/cam", "h264", &all);
         let (frames, warnings) = read_all(&path, "/cam").unwrap();
         let got: Vec<(usize, usize)> = frames
@@ -2956,9 +2954,8 @@ mod tests {
         // As h264_image_transport's camera node publishes a V4L2 camera's
         // H.264: each packet with its header stamp and sequence number.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
-        let (packets, decoded) = encode(dir.path(), &x264, 5);
-        let all: Vec<(usize, &[u8])> = packets.iter().map(Vec::as_slice).enumerate().collect();
+        let (packets, decoded) = h264_without_b_frames(dir.path(), 3, 5);
+        let all = numbered(&packets);
         let path = dir.path().join("h264.mcap");
         cdr_bag(
             &path,
@@ -2996,14 +2993,8 @@ mod tests {
         // `encoding` ("codec;pixel formats…") and its older one (the
         // encoder's name), each begun mid-stream.
         let dir = tempfile::tempdir().unwrap();
-        let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "3"];
-        let (packets, decoded) = encode(dir.path(), &x264, 8);
-        let late: Vec<(usize, &[u8])> = packets
-            .iter()
-            .map(Vec::as_slice)
-            .enumerate()
-            .skip(1)
-            .collect();
+        let (packets, decoded) = h264_without_b_frames(dir.path(), 3, 8);
+        let late = numbered(&packets)[1..].to_vec();
         // The packets as FFMPEGPackets of `encoding` on /cam/ffmpeg.
         let path = dir.path().join("ffmpeg.mcap");
         let write = |encoding: &str| {
