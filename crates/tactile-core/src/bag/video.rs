@@ -507,7 +507,8 @@ struct Taken {
     /// Pending stamps this frame passed (shown before it, no frame yet).
     passed: u64,
     /// False when the frame's time named no pending packet, so it took
-    /// the earliest stamp, which may be an earlier packet's.
+    /// the earliest written packet's stamp, which after a lost frame may
+    /// be that packet's.
     own: bool,
 }
 
@@ -520,8 +521,8 @@ impl PendingStamps {
     /// `time`: that of its own packet in the current decoder; without a
     /// time, one that does not rise, or one no pending packet has (a
     /// stream whose stamps are not its display order), that of the
-    /// earliest written packet (see the module's documentation). The error when every packet written (`written`)
-    /// already has its frame.
+    /// earliest written packet (see the module's documentation). The error
+    /// when every packet written (`written`) already has its frame.
     fn take(&mut self, time: Option<i64>, written: u64) -> std::result::Result<Taken, String> {
         let Some(first) = self.stamps.first().cloned() else {
             return Err(format!(
@@ -582,20 +583,14 @@ impl PendingStamps {
             _ => stamp.index,
         };
         self.latest = Some((segment, latest));
-        let overdue: Vec<Stamp> = self
-            .stamps
-            .iter()
-            .take_while(|s| s.segment == segment)
-            .filter(|s| s.index.saturating_add(MAX_REORDERED) < latest)
-            .cloned()
-            .collect();
-        let lost = overdue
-            .into_iter()
-            .map(|s| {
-                self.stamps.remove(&s);
-                s.index
-            })
-            .collect();
+        let mut lost = Vec::new();
+        self.stamps.retain(|s| {
+            let overdue = s.segment == segment && s.index.saturating_add(MAX_REORDERED) < latest;
+            if overdue {
+                lost.push(s.index);
+            }
+            !overdue
+        });
         Ok(Taken {
             stamp,
             lost,
@@ -696,11 +691,38 @@ struct Fed {
     skipped: u64,
     /// Packets written to the decoders.
     fed: u64,
-    /// Keyframes with new stream parameters, the messages of the first
-    /// few, and how many began a new decoder.
-    changes: u64,
-    changed_at: Vec<u64>,
+    /// The messages of the keyframes with new stream parameters, and how
+    /// many began a new decoder.
+    changed: MessagePlaces,
     restarts: usize,
+}
+
+/// Messages of a topic a warning names: how many, and the places of the
+/// first few.
+#[derive(Default)]
+struct MessagePlaces {
+    count: u64,
+    first: Vec<u64>,
+}
+
+impl MessagePlaces {
+    fn add(&mut self, places: impl IntoIterator<Item = u64>) {
+        for place in places {
+            self.count += 1;
+            if self.first.len() < 10 {
+                self.first.push(place);
+            }
+        }
+    }
+
+    /// The places, "3, 7", then "… (12 {all})" past the first few.
+    fn describe(&self, all: &str) -> String {
+        let mut at: Vec<String> = self.first.iter().map(u64::to_string).collect();
+        if self.count > at.len() as u64 {
+            at.push(format!("… ({} {all})", self.count));
+        }
+        at.join(", ")
+    }
 }
 
 /// Decoders a video stream may start after its first, one per change of
@@ -738,7 +760,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
     // The stamp of the decoder's first packet, its packets' times from it.
     let mut base_ns = 0i64;
     let mut parameters = StreamParameters::default();
-    let (mut changes, mut changed_at, mut restarts) = (0, Vec::new(), 0);
+    let (mut changed, mut restarts) = (MessagePlaces::default(), 0);
     let mut next = Some(first);
     let error = loop {
         // Ctrl-C ends the feed, then the decoder, then the reader's wait.
@@ -782,10 +804,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
             continue;
         }
         if role == PacketRole::NewParameters {
-            changes += 1;
-            if changed_at.len() < 10 {
-                changed_at.push(m.index);
-            }
+            changed.add([m.index]);
             if restarts < MAX_STREAM_RESTARTS {
                 let Decoder {
                     child,
@@ -848,8 +867,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         error,
         skipped,
         fed,
-        changes,
-        changed_at,
+        changed,
         restarts,
     }
 }
@@ -1089,36 +1107,19 @@ const FRAME_TIME_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
 /// The packets of a stream found to give no frame.
 #[derive(Default)]
 struct LostPackets {
-    /// How many, and the places of the first few.
-    count: u64,
-    first: Vec<u64>,
-    /// Frames that took the earliest pending stamp, their time naming
-    /// none: after a lost frame, such a frame may carry an earlier
+    places: MessagePlaces,
+    /// Frames that took the earliest written packet's stamp, their time
+    /// naming none: after a lost frame, such a frame may carry an earlier
     /// packet's stamp.
     borrowed: u64,
 }
 
 impl LostPackets {
-    fn add(&mut self, places: Vec<u64>) {
-        self.count += places.len() as u64;
-        let room = 10usize.saturating_sub(self.first.len());
-        self.first.extend(places.into_iter().take(room));
-    }
-
     /// The frame's stamp, its lost packets counted.
     fn count(&mut self, taken: Taken) -> Stamp {
         self.borrowed += u64::from(!taken.own);
-        self.add(taken.lost);
+        self.places.add(taken.lost);
         taken.stamp
-    }
-
-    /// The places of the lost packets: "3, 7", "… (12 in all)".
-    fn describe(&self) -> String {
-        let mut at: Vec<String> = self.first.iter().map(u64::to_string).collect();
-        if self.count > at.len() as u64 {
-            at.push(format!("… ({} in all)", self.count));
-        }
-        at.join(", ")
     }
 }
 
@@ -1228,12 +1229,8 @@ impl VideoFrames {
                 self.first + fed.skipped
             ));
         }
-        if fed.changes > 0 {
-            let mut at: Vec<String> = fed.changed_at.iter().map(u64::to_string).collect();
-            if fed.changes > at.len() as u64 {
-                at.push(format!("… ({} times)", fed.changes));
-            }
-            let decoded = match fed.changes > fed.restarts as u64 {
+        if fed.changed.count > 0 {
+            let decoded = match fed.changed.count > fed.restarts as u64 {
                 false => {
                     "each part was decoded on its own, its frames at their own size".to_string()
                 }
@@ -1247,15 +1244,15 @@ impl VideoFrames {
                 self.path.display(),
                 self.topic,
                 self.codec.name(),
-                if fed.changes == 1 { "" } else { "s" },
-                at.join(", ")
+                if fed.changed.count == 1 { "" } else { "s" },
+                fed.changed.describe("times")
             ));
         }
         if self.frames < fed.fed {
             let stamps = match self.lost.borrowed {
                 0 => format!(
                     "messages that gave none: {}; every frame carries its own packet's stamp",
-                    self.lost.describe()
+                    self.lost.places.describe("in all")
                 ),
                 _ => format!(
                     "so each frame after a lost one carries the stamp of an earlier packet (at most {} back)",
@@ -1349,7 +1346,7 @@ impl VideoFrames {
         decoder_ended_well(self.codec, status?, &last).map_err(|e| self.error(e))?;
         self.pending.stamps.extend(self.stamps.try_iter());
         self.segment += 1;
-        self.lost.add(self.pending.drop_before(self.segment));
+        self.lost.places.add(self.pending.drop_before(self.segment));
         Ok(())
     }
 
@@ -1387,7 +1384,7 @@ impl VideoFrames {
         self.fed = Some(fed);
         // Packets still without a frame gave none.
         self.pending.stamps.extend(self.stamps.try_iter());
-        self.lost.add(self.pending.drain());
+        self.lost.places.add(self.pending.drain());
         if let Some(e) = error {
             return Err(e);
         }
