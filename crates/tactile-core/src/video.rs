@@ -20,7 +20,7 @@ use crate::{Error, Result};
 const INSTALL_HINT: &str = "reading video needs FFmpeg (ffmpeg and ffprobe on PATH); on Debian or Ubuntu: apt-get install ffmpeg";
 
 /// How much of FFmpeg's stderr is kept for an error message.
-pub(crate) const STDERR_TAIL: usize = 4096;
+const STDERR_TAIL: usize = 4096;
 
 /// An FFmpeg tool that could not be started for `path`: missing (say how
 /// to install it) or another I/O failure.
@@ -366,14 +366,20 @@ pub(crate) fn stderr_tail(child: &mut Child) -> Option<std::thread::JoinHandle<V
                 if n == 0 {
                     break;
                 }
-                tail.extend_from_slice(&buf[..n]);
-                if tail.len() > STDERR_TAIL {
-                    tail.drain(..tail.len() - STDERR_TAIL);
-                }
+                keep_tail(&mut tail, &buf[..n]);
             }
             tail
         })
     })
+}
+
+/// Add `bytes` to FFmpeg's error output kept for a message, keeping its
+/// last [`STDERR_TAIL`] bytes.
+pub(crate) fn keep_tail(tail: &mut Vec<u8>, bytes: &[u8]) {
+    tail.extend_from_slice(bytes);
+    if tail.len() > STDERR_TAIL {
+        tail.drain(..tail.len() - STDERR_TAIL);
+    }
 }
 
 /// The last line FFmpeg wrote to stderr (after it exited).

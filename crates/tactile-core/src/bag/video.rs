@@ -44,7 +44,7 @@ use super::{
     stamp_or_log_time,
 };
 use crate::image_io::{MAX_IMAGE_PIXELS, RgbImage, rgb_image};
-use crate::video::{STDERR_TAIL, demuxer_time_base, last_words, passthrough_options, spawn_error};
+use crate::video::{demuxer_time_base, keep_tail, last_words, passthrough_options, spawn_error};
 use crate::{Error, Result};
 
 /// True for the video message types.
@@ -677,7 +677,7 @@ impl StreamParameters {
 struct Segment {
     child: Child,
     stdout: ChildStdout,
-    times: mpsc::Receiver<i64>,
+    times: FrameTimes,
     stderr: Option<JoinHandle<Vec<u8>>>,
 }
 
@@ -948,7 +948,7 @@ struct Decoder {
     child: Child,
     stdin: ChildStdin,
     stdout: ChildStdout,
-    times: mpsc::Receiver<i64>,
+    times: FrameTimes,
     stderr: Option<JoinHandle<Vec<u8>>>,
 }
 
@@ -1019,7 +1019,7 @@ fn spawn_decoder(
 fn frame_times(
     child: &mut Child,
     errors: Option<mpsc::Sender<LiveEvent>>,
-) -> (mpsc::Receiver<i64>, Option<JoinHandle<Vec<u8>>>) {
+) -> (FrameTimes, Option<JoinHandle<Vec<u8>>>) {
     let (send, times) = mpsc::channel();
     let tail = child.stderr.take().map(|err| {
         std::thread::spawn(move || {
@@ -1046,15 +1046,12 @@ fn frame_times(
                     // A live stream that ended takes no more.
                     let _ = errors.send(LiveEvent::Error);
                 }
-                tail.extend_from_slice(&line);
-                if tail.len() > STDERR_TAIL {
-                    tail.drain(..tail.len() - STDERR_TAIL);
-                }
+                keep_tail(&mut tail, &line);
             }
             tail
         })
     });
-    (times, tail)
+    (FrameTimes::new(times), tail)
 }
 
 /// The longest line of FFmpeg's error output read as one.
@@ -1190,7 +1187,7 @@ impl VideoFrames {
             first: first_index,
             child,
             stdout: BufReader::with_capacity(1 << 20, stdout),
-            times: FrameTimes::new(times),
+            times,
             stderr,
             stamps,
             pending: PendingStamps::default(),
@@ -1341,7 +1338,7 @@ impl VideoFrames {
         } = next;
         self.child = child;
         self.stdout = BufReader::with_capacity(1 << 20, stdout);
-        self.times = FrameTimes::new(times);
+        self.times = times;
         self.stderr = stderr;
         decoder_ended_well(self.codec, status?, &last).map_err(|e| self.error(e))?;
         self.pending.stamps.extend(self.stamps.try_iter());
@@ -1491,7 +1488,7 @@ impl LiveDecoder {
             mut child,
             stdin,
             stdout,
-            times,
+            mut times,
             stderr,
         } = spawn_decoder(codec, Some(send.clone()), std::path::Path::new(name))?;
         let owner = name.to_string();
@@ -1499,7 +1496,6 @@ impl LiveDecoder {
             .name("live-video".into())
             .spawn(move || {
                 let mut stdout = BufReader::with_capacity(1 << 20, stdout);
-                let mut times = FrameTimes::new(times);
                 while let Ok(false) = stdout.fill_buf().map(<[u8]>::is_empty) {
                     let picture =
                         read_picture(&mut stdout, |m| Error::Invalid(format!("{owner}: {m}")))
