@@ -636,6 +636,42 @@ impl PendingStamps {
     }
 }
 
+/// The packets written to a stream's decoders, for the bag reader's
+/// feeder and the live decoder: the current decoder's number, how many it
+/// took, and the stamp of its first, which its packets' times are from.
+#[derive(Default)]
+struct DecoderClock {
+    segment: u32,
+    in_segment: u64,
+    base_ns: i64,
+}
+
+impl DecoderClock {
+    /// The stamp of the next packet written to the current decoder, with
+    /// its time, and whether it is the decoder's first.
+    fn stamp(&mut self, stamp_ns: i64, index: u64, log_time_ns: u64) -> (Stamp, bool) {
+        let first = self.in_segment == 0;
+        if first {
+            self.base_ns = stamp_ns;
+        }
+        self.in_segment += 1;
+        let stamp = Stamp {
+            segment: self.segment,
+            stamp_ns,
+            index,
+            log_time_ns,
+            pts: stamp_ns.wrapping_sub(self.base_ns),
+        };
+        (stamp, first)
+    }
+
+    /// The packets from now on go to a new decoder.
+    fn next_decoder(&mut self) {
+        self.segment += 1;
+        self.in_segment = 0;
+    }
+}
+
 /// What a packet is to the stream it joins.
 #[derive(Debug, PartialEq, Eq)]
 enum PacketRole {
@@ -756,9 +792,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         segments,
     } = to;
     let (mut skipped, mut fed) = (0, 0);
-    let (mut segment, mut in_segment) = (0u32, 0u64);
-    // The stamp of the decoder's first packet, its packets' times from it.
-    let mut base_ns = 0i64;
+    let mut clock = DecoderClock::default();
     let mut parameters = StreamParameters::default();
     let (mut changed, mut restarts) = (MessagePlaces::default(), 0);
     let mut next = Some(first);
@@ -831,35 +865,21 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
                 // The old decoder's input closes: it gives its last
                 // frames and exits.
                 stdin = next_stdin;
-                segment += 1;
-                in_segment = 0;
+                clock.next_decoder();
                 restarts += 1;
             }
         }
         let stamp_ns = stamp_or_log_time(stamp_ns, m.log_time);
-        if in_segment == 0 {
-            base_ns = stamp_ns;
-        }
-        let pts = stamp_ns.wrapping_sub(base_ns);
-        let stamp = Stamp {
-            segment,
-            stamp_ns,
-            log_time_ns: m.log_time,
-            index: m.index,
-            pts,
-        };
+        let (stamp, first) = clock.stamp(stamp_ns, m.index, m.log_time);
+        let pts = stamp.pts;
         // A decoder that stopped reading has exited or was stopped: the
         // reader reports why.
         // The stamp goes first: the frame cannot come out before it.
-        if stamps.send(stamp).is_err()
-            || codec
-                .write_packet(&mut stdin, &data, in_segment == 0, pts)
-                .is_err()
+        if stamps.send(stamp).is_err() || codec.write_packet(&mut stdin, &data, first, pts).is_err()
         {
             break None;
         }
         fed += 1;
-        in_segment += 1;
     };
     drop(stdin);
     Fed {
@@ -1432,12 +1452,9 @@ pub struct LiveVideo {
     given: u64,
     written: u64,
     decoded: u64,
-    /// The current decoder's number, the packets written to it, the stamp
-    /// of its first (its packets' times are from it), and the stream
+    /// The packets written to the current decoder, and the stream
     /// parameters of its last keyframe.
-    segment: u32,
-    in_segment: u64,
-    base_ns: i64,
+    clock: DecoderClock,
     parameters: StreamParameters,
     /// Frames FFmpeg holds back once every packet given is in, learnt
     /// from waits that timed out: a stream with B-frames holds as many as
@@ -1590,9 +1607,7 @@ impl LiveVideo {
             given: 0,
             written: 0,
             decoded: 0,
-            segment: 0,
-            in_segment: 0,
-            base_ns: 0,
+            clock: DecoderClock::default(),
             parameters: StreamParameters::default(),
             held: 0,
             timeouts: 0,
@@ -1633,33 +1648,25 @@ impl LiveVideo {
         }
         let mut frames = Vec::new();
         // The decoders started after the first are the stream's segments.
-        if role == PacketRole::NewParameters && (self.segment as usize) < MAX_STREAM_RESTARTS {
+        if role == PacketRole::NewParameters && (self.clock.segment as usize) < MAX_STREAM_RESTARTS
+        {
             self.restart(&mut frames)?;
         }
         let Some(stdin) = self.decoder.stdin.as_mut() else {
             return Err(self.error("its stream was closed".into()));
         };
-        if self.in_segment == 0 {
-            self.base_ns = stamp_ns;
-        }
-        let pts = stamp_ns.wrapping_sub(self.base_ns);
-        self.pending.add(Stamp {
-            segment: self.segment,
-            stamp_ns,
-            index: packet,
-            log_time_ns: 0,
-            pts,
-        });
+        let (stamp, first) = self.clock.stamp(stamp_ns, packet, 0);
+        let pts = stamp.pts;
+        self.pending.add(stamp);
         if let Err(e) = self
             .codec
-            .write_packet(stdin, data, self.in_segment == 0, pts)
+            .write_packet(stdin, data, first, pts)
             .and_then(|()| stdin.flush())
         {
             let last = self.decoder.stop();
             return Err(self.error(format!("FFmpeg stopped reading its packets ({e}): {last}")));
         }
         self.written += 1;
-        self.in_segment += 1;
         let mut wait = LIVE_FRAME_WAIT;
         // An empty packet (a publisher's dropped frame) gives no frame: its
         // push does not wait, and a later frame passes it.
@@ -1706,9 +1713,8 @@ impl LiveVideo {
         let (status, last) = self.end_decoder(frames)?;
         decoder_ended_well(self.codec, status, &last).map_err(|e| self.error(e))?;
         self.decoder = LiveDecoder::start(self.codec, &self.name)?;
-        self.segment += 1;
-        self.in_segment = 0;
-        self.pending.drop_before(self.segment);
+        self.clock.next_decoder();
+        self.pending.drop_before(self.clock.segment);
         self.held = 0;
         Ok(())
     }
@@ -1736,7 +1742,7 @@ impl LiveVideo {
     }
 
     /// A picture with its own packet's stamp, by its time (else the
-    /// earliest pending one).
+    /// earliest written packet's).
     fn frame(&mut self, picture: Result<(RgbImage, Option<i64>)>) -> Result<LiveFrame> {
         let (image, time) = picture?;
         let taken = self
