@@ -117,13 +117,11 @@ impl PyFrameSource {
 /// system's FFmpeg decodes, as it does a bag's video.
 #[pyclass(module = "tactile", name = "VideoDecoder")]
 pub struct PyVideoDecoder {
-    decoder: Mutex<Option<tactile_core::bag::LiveVideo>>,
-    /// `skipped` and `lost` once finished.
-    ended: Mutex<Option<(u64, u64)>>,
+    decoder: Mutex<tactile_core::bag::LiveVideo>,
 }
 
 impl PyVideoDecoder {
-    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Option<tactile_core::bag::LiveVideo>>> {
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, tactile_core::bag::LiveVideo>> {
         self.decoder
             .lock()
             .map_err(|_| PyRuntimeError::new_err("the decoder failed in another thread"))
@@ -133,23 +131,7 @@ impl PyVideoDecoder {
         &self,
         f: impl FnOnce(&mut tactile_core::bag::LiveVideo) -> PyResult<T>,
     ) -> PyResult<T> {
-        match self.lock()?.as_mut() {
-            Some(d) => f(d),
-            None => Err(PyValueError::new_err("the video decoder was finished")),
-        }
-    }
-
-    /// `skipped` and `lost`, live or as the stream ended.
-    fn counts(&self) -> PyResult<(u64, u64)> {
-        if let Some(d) = self.lock()?.as_ref() {
-            return Ok((d.skipped(), d.lost()));
-        }
-        match self.ended.lock() {
-            Ok(ended) => Ok(ended.unwrap_or_default()),
-            Err(_) => Err(PyRuntimeError::new_err(
-                "the decoder failed in another thread",
-            )),
-        }
+        f(&mut *self.lock()?)
     }
 }
 
@@ -198,8 +180,7 @@ impl PyVideoDecoder {
             .detach(|| tactile_core::bag::LiveVideo::new(format, name))
             .py()?;
         Ok(Self {
-            decoder: Mutex::new(Some(decoder)),
-            ended: Mutex::new(None),
+            decoder: Mutex::new(decoder),
         })
     }
 
@@ -220,33 +201,21 @@ impl PyVideoDecoder {
 
     /// End the stream: the frames still held.
     fn finish(&self, py: Python<'_>) -> PyResult<Vec<PyFrame>> {
-        let decoder = self.lock()?.take();
-        let frames = match decoder {
-            Some(d) => {
-                let (skipped, waiting) = (d.skipped(), d.without_frame());
-                let frames = py.detach(|| d.finish()).py()?;
-                let lost = waiting.saturating_sub(frames.len() as u64);
-                if let Ok(mut ended) = self.ended.lock() {
-                    *ended = Some((skipped, lost));
-                }
-                frames
-            }
-            None => Vec::new(),
-        };
+        let frames = self.with(|d| py.detach(|| d.finish()).py())?;
         live_frames(py, frames)
     }
 
     /// Packets given before the first keyframe, which no decoder can read.
     #[getter]
     fn skipped(&self) -> PyResult<u64> {
-        Ok(self.counts()?.0)
+        self.with(|d| Ok(d.skipped()))
     }
 
     /// Packets that gave no frame (damaged): shown before a frame that
     /// came, or left without one at `finish`.
     #[getter]
     fn lost(&self) -> PyResult<u64> {
-        Ok(self.counts()?.1)
+        self.with(|d| Ok(d.lost()))
     }
 }
 

@@ -1464,6 +1464,8 @@ pub struct LiveVideo {
     held: u64,
     /// Waits that timed out; after [`LIVE_TIMEOUTS`], pushes no longer wait.
     timeouts: u32,
+    /// True once [`Self::finish`] ended the stream.
+    finished: bool,
 }
 
 /// How long [`LiveVideo::push`] waits for a frame: far above a frame's
@@ -1611,6 +1613,7 @@ impl LiveVideo {
             parameters: StreamParameters::default(),
             held: 0,
             timeouts: 0,
+            finished: false,
         })
     }
 
@@ -1621,15 +1624,10 @@ impl LiveVideo {
     }
 
     /// Packets that gave no frame (a damaged packet): those shown before a
-    /// frame that came, their own not come.
+    /// frame that came, their own not come, and after [`Self::finish`]
+    /// every one without a frame.
     pub fn lost(&self) -> u64 {
         self.written - self.decoded - self.pending.due()
-    }
-
-    /// Packets written whose frames have not come: at [`Self::finish`],
-    /// those it does not give are lost.
-    pub fn without_frame(&self) -> u64 {
-        self.written - self.decoded
     }
 
     /// Give the next packet (one frame: Annex B, a VP9 frame, or an AV1
@@ -1640,6 +1638,11 @@ impl LiveVideo {
     /// current decoder, whose last frames come back here too, and starts
     /// a new one, so every frame keeps its own size.
     pub fn push(&mut self, data: &[u8], stamp_ns: i64) -> Result<Vec<LiveFrame>> {
+        if self.finished {
+            return Err(
+                self.error("the video decoder was finished: no packet is decoded after it".into())
+            );
+        }
         let packet = self.given;
         self.given += 1;
         let role = self.parameters.role(self.codec, data);
@@ -1690,16 +1693,23 @@ impl LiveVideo {
     }
 
     /// End the stream: the frames still held, once FFmpeg has decoded
-    /// every packet. A stream given no packet ends with none; one that
-    /// gave no frame is refused as a bag's video is: no keyframe among its
-    /// packets, or none of them decoded.
-    pub fn finish(mut self) -> Result<Vec<LiveFrame>> {
+    /// every packet; the packets still without a frame are lost. A stream
+    /// given no packet, or finished already, ends with none; one that gave
+    /// no frame is refused as a bag's video is: no keyframe among its
+    /// packets, or none of them decoded. [`Self::skipped`] and
+    /// [`Self::lost`] keep their counts; a later push is refused.
+    pub fn finish(&mut self) -> Result<Vec<LiveFrame>> {
+        if std::mem::replace(&mut self.finished, true) {
+            return Ok(Vec::new());
+        }
         if self.given == 0 {
             self.decoder.stop();
             return Ok(Vec::new());
         }
         let mut frames = Vec::new();
-        let (status, last) = self.end_decoder(&mut frames)?;
+        let ended = self.end_decoder(&mut frames);
+        self.pending.drain();
+        let (status, last) = ended?;
         let (skipped, written) = (self.skipped(), self.written);
         stream_end(self.codec, skipped, written, self.decoded, status, &last)
             .map_err(|e| self.error(e))?;
@@ -2560,7 +2570,7 @@ mod tests {
         let garbage: &[u8] = &[
             0, 0, 0, 1, 0x67, 0xff, 0xff, 0xff, 0xff, 0, 0, 1, 0x65, 0xff,
         ];
-        let nothing = LiveVideo::new("h264", "/cam").unwrap();
+        let mut nothing = LiveVideo::new("h264", "/cam").unwrap();
         assert!(nothing.finish().unwrap().is_empty());
         let cases: [(Vec<&[u8]>, &str); 2] = [
             (
