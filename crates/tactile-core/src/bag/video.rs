@@ -297,6 +297,8 @@ impl Codec {
                 format!("a {} packet of 4 GiB or more", self.name()),
             ));
         }
+        // Framed in memory: the `ivf` crate's writers panic on a write
+        // error, and FFmpeg's input is a pipe that may close.
         let mut framed = Vec::with_capacity(IVF_FILE_HEADER + 12 + data.len());
         if first {
             // The size is the decoder's to read from the stream; times
