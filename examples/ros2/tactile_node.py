@@ -111,6 +111,7 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             video = self.declare_parameter("video", "").value
             self.frame_id = ""
             self.lost = 0
+            self.scaled = 0
             self.logic = PalpationNode(models, runtime)
             self.results = self.create_publisher(String, "~/result", 10)
             self.masks = self.create_publisher(Image, "~/tendon_mask", 10)
@@ -147,6 +148,12 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
                     f"{lost - self.lost} packet(s) gave no frame (damaged; {lost} in all); "
                     "the frames after them keep their own stamps")
                 self.lost = lost
+            scaled = self.logic.video.scaled if self.logic.video else 0
+            if scaled > self.scaled:
+                self.get_logger().warning(
+                    f"the stream's frame size changed too often ({scaled} changes in all, past 64 "
+                    "and sooner than one per 32 packets): these frames are scaled to the last size")
+                self.scaled = scaled
             frame_id = msg.frame_id if hasattr(msg, "frame_id") else msg.header.frame_id
             for out in outputs:
                 self.publish(out, frame_id)

@@ -113,8 +113,9 @@ impl PyFrameSource {
 /// takes each message's `data` (bytes, or rclpy's array) and stamp and
 /// gives the frames decoded so far, normally that packet's own; packets
 /// before the first keyframe are skipped (`skipped` counts them), and
-/// packets that gave no frame (damaged) are counted in `lost`. The
-/// system's FFmpeg decodes, as it does a bag's video.
+/// packets that gave no frame (damaged) are counted in `lost`, and
+/// changes of size whose frames were scaled (a hostile stream's) in
+/// `scaled`. The system's FFmpeg decodes, as it does a bag's video.
 #[pyclass(module = "tactile", name = "VideoDecoder")]
 pub struct PyVideoDecoder {
     decoder: Mutex<tactile_core::bag::LiveVideo>,
@@ -216,6 +217,15 @@ impl PyVideoDecoder {
     #[getter]
     fn lost(&self) -> PyResult<u64> {
         self.with(|d| Ok(d.lost()))
+    }
+
+    /// Changes of the stream's parameters (a camera restarted at another
+    /// size) whose frames were scaled to the earlier frames' size: those
+    /// past the first 64 that came sooner than one per 32 packets. Every
+    /// other change's frames keep their own size.
+    #[getter]
+    fn scaled(&self) -> PyResult<u64> {
+        self.with(|d| Ok(d.scaled()))
     }
 }
 

@@ -546,6 +546,8 @@ def test_a_camera_restarted_at_another_size_keeps_each_frames_size(tmp_path):
         assert [f.image.shape for f in frames] == [want[i].shape], i
         assert np.array_equal(frames[0].image, want[i]), i
     assert decoder.finish() == []
+    # Its change of size got its own decoder: no frame was scaled.
+    assert (decoder.lost, decoder.scaled) == (0, 0)
 
 
 def test_ros2_video_topics_written_by_another_cdr_writer(tmp_path, root, palpation_frames):

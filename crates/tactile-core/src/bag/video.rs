@@ -669,7 +669,7 @@ impl DecoderClock {
 
     /// The packets from now on go to a new decoder.
     fn next_decoder(&mut self) {
-        self.segment += 1;
+        self.segment = self.segment.saturating_add(1);
         self.in_segment = 0;
     }
 }
@@ -729,10 +729,9 @@ struct Fed {
     skipped: u64,
     /// Packets written to the decoders.
     fed: u64,
-    /// The messages of the keyframes with new stream parameters, and how
-    /// many began a new decoder.
-    changed: MessagePlaces,
-    restarts: usize,
+    /// The keyframes with new stream parameters, and those that began no
+    /// new decoder.
+    changes: StreamChanges,
 }
 
 /// Messages of a topic a warning names: how many, and the places of the
@@ -764,11 +763,47 @@ impl MessagePlaces {
 }
 
 /// Decoders a video stream may start after its first, one per change of
-/// its parameters ([`Codec::parameters`]), so a hostile topic whose every
-/// keyframe changes them does not start a process each (two in unit tests,
-/// so the limit is exercised). Later changes are decoded by the last
-/// decoder, which scales their frames to its size.
-const MAX_STREAM_RESTARTS: usize = if cfg!(test) { 2 } else { 64 };
+/// its parameters ([`Codec::parameters`]), before any is earned by the
+/// packets written ([`PACKETS_PER_RESTART`]): two in unit tests, so the
+/// limit is exercised.
+const MAX_STREAM_RESTARTS: u64 = if cfg!(test) { 2 } else { 64 };
+
+/// Packets written that earn a stream one more new decoder past
+/// [`MAX_STREAM_RESTARTS`]. A new FFmpeg process costs about 80 ms, the
+/// decoding of eight 1080p frames or hundreds of tiny ones: a hostile
+/// topic whose every keyframe changes its parameters starts a process per
+/// 32 packets, not one each, while a camera restarted at another size any
+/// number of times, no more often than that on average, keeps every
+/// frame's size.
+const PACKETS_PER_RESTART: u64 = if cfg!(test) { 8 } else { 32 };
+
+/// The changes of a stream's parameters, each given a new decoder while
+/// the budget allows ([`MAX_STREAM_RESTARTS`], [`PACKETS_PER_RESTART`]);
+/// the others are decoded by the decoder before, which scales their
+/// frames to its size. One for the bag reader's feeder and the live
+/// decoder.
+#[derive(Default)]
+struct StreamChanges {
+    /// The messages of every change, and of those scaled.
+    changed: MessagePlaces,
+    scaled: MessagePlaces,
+    restarts: u64,
+}
+
+impl StreamChanges {
+    /// A change at message `index`, after `written` packets: true when it
+    /// may start a new decoder.
+    fn restart(&mut self, index: u64, written: u64) -> bool {
+        self.changed.add([index]);
+        let allowed = MAX_STREAM_RESTARTS.saturating_add(written / PACKETS_PER_RESTART);
+        let restart = self.restarts < allowed;
+        match restart {
+            true => self.restarts += 1,
+            false => self.scaled.add([index]),
+        }
+        restart
+    }
+}
 
 /// Where the feeder writes: the decoder's input, and the channels to the
 /// reader for each packet's stamp and each new decoder.
@@ -796,7 +831,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
     let (mut skipped, mut fed) = (0, 0);
     let mut clock = DecoderClock::default();
     let mut parameters = StreamParameters::default();
-    let (mut changed, mut restarts) = (MessagePlaces::default(), 0);
+    let mut changes = StreamChanges::default();
     let mut next = Some(first);
     let error = loop {
         // Ctrl-C ends the feed, then the decoder, then the reader's wait.
@@ -839,37 +874,33 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
             skipped += 1;
             continue;
         }
-        if role == PacketRole::NewParameters {
-            changed.add([m.index]);
-            if restarts < MAX_STREAM_RESTARTS {
-                let Decoder {
-                    child,
-                    stdin: next_stdin,
-                    stdout,
-                    times,
-                    stderr,
-                } = match spawn_decoder(codec, None, &path) {
-                    Ok(d) => d,
-                    Err(e) => break Some(e),
-                };
-                // The reader takes the new decoder before the old one
-                // ends, so it finds it when the old one's frames end.
-                let next = Segment {
-                    child,
-                    stdout,
-                    times,
-                    stderr,
-                };
-                if let Err(mpsc::SendError(mut next)) = segments.send(next) {
-                    kill(&mut next.child);
-                    break None;
-                }
-                // The old decoder's input closes: it gives its last
-                // frames and exits.
-                stdin = next_stdin;
-                clock.next_decoder();
-                restarts += 1;
+        if role == PacketRole::NewParameters && changes.restart(m.index, fed) {
+            let Decoder {
+                child,
+                stdin: next_stdin,
+                stdout,
+                times,
+                stderr,
+            } = match spawn_decoder(codec, None, &path) {
+                Ok(d) => d,
+                Err(e) => break Some(e),
+            };
+            // The reader takes the new decoder before the old one
+            // ends, so it finds it when the old one's frames end.
+            let next = Segment {
+                child,
+                stdout,
+                times,
+                stderr,
+            };
+            if let Err(mpsc::SendError(mut next)) = segments.send(next) {
+                kill(&mut next.child);
+                break None;
             }
+            // The old decoder's input closes: it gives its last
+            // frames and exits.
+            stdin = next_stdin;
+            clock.next_decoder();
         }
         let stamp_ns = stamp_or_log_time(stamp_ns, m.log_time);
         let (stamp, first) = clock.stamp(stamp_ns, m.index, m.log_time);
@@ -889,8 +920,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         error,
         skipped,
         fed,
-        changed,
-        restarts,
+        changes,
     }
 }
 
@@ -1248,14 +1278,15 @@ impl VideoFrames {
                 self.first + fed.skipped
             ));
         }
-        if fed.changed.count > 0 {
-            let decoded = match fed.changed.count > fed.restarts as u64 {
-                false => {
-                    "each part was decoded on its own, its frames at their own size".to_string()
-                }
-                true => format!(
-                    "the first {} changes each began a new decoder; the frames after the rest were decoded by the last one, scaled to its size",
-                    fed.restarts
+        let changes = &fed.changes;
+        if changes.changed.count > 0 {
+            let decoded = match changes.scaled.count {
+                0 => "each part was decoded on its own, its frames at their own size".to_string(),
+                _ => format!(
+                    "{} began a new decoder; the frames after the changes at message{} {} (more than one per {PACKETS_PER_RESTART} messages, past the first {MAX_STREAM_RESTARTS} changes) were decoded by the decoder before, scaled to its size",
+                    changes.restarts,
+                    if changes.scaled.count == 1 { "" } else { "s" },
+                    changes.scaled.describe("in all")
                 ),
             };
             warnings.push(format!(
@@ -1263,8 +1294,8 @@ impl VideoFrames {
                 self.path.display(),
                 self.topic,
                 self.codec.name(),
-                if fed.changed.count == 1 { "" } else { "s" },
-                fed.changed.describe("times")
+                if changes.changed.count == 1 { "" } else { "s" },
+                changes.changed.describe("times")
             ));
         }
         if self.frames < fed.fed {
@@ -1454,10 +1485,11 @@ pub struct LiveVideo {
     given: u64,
     written: u64,
     decoded: u64,
-    /// The packets written to the current decoder, and the stream
-    /// parameters of its last keyframe.
+    /// The packets written to the current decoder, the stream
+    /// parameters of its last keyframe, and their changes.
     clock: DecoderClock,
     parameters: StreamParameters,
+    changes: StreamChanges,
     /// Frames FFmpeg holds back once every packet given is in, learnt
     /// from waits that timed out: a stream with B-frames holds as many as
     /// its reordering needs, and a lost frame never comes. A push waits
@@ -1613,6 +1645,7 @@ impl LiveVideo {
             decoded: 0,
             clock: DecoderClock::default(),
             parameters: StreamParameters::default(),
+            changes: StreamChanges::default(),
             held: 0,
             timeouts: 0,
             finished: false,
@@ -1630,6 +1663,15 @@ impl LiveVideo {
     /// every one without a frame.
     pub fn lost(&self) -> u64 {
         self.written - self.decoded - self.pending.due()
+    }
+
+    /// Changes of the stream's parameters (a camera restarted at another
+    /// size) decoded by the decoder before, their frames scaled to its
+    /// size: those past the first 64 that came sooner than one per 32
+    /// packets (a hostile stream's every keyframe), which start no FFmpeg
+    /// process each. Every other change's frames keep their own size.
+    pub fn scaled(&self) -> u64 {
+        self.changes.scaled.count
     }
 
     /// Give the next packet (one frame: Annex B, a VP9 frame, or an AV1
@@ -1652,9 +1694,7 @@ impl LiveVideo {
             return Ok(Vec::new());
         }
         let mut frames = Vec::new();
-        // The decoders started after the first are the stream's segments.
-        if role == PacketRole::NewParameters && (self.clock.segment as usize) < MAX_STREAM_RESTARTS
-        {
+        if role == PacketRole::NewParameters && self.changes.restart(packet, self.written) {
             self.restart(&mut frames)?;
         }
         let Some(stdin) = self.decoder.stdin.as_mut() else {
@@ -2913,51 +2953,77 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_stream_whose_parameters_keep_changing_starts_at_most_the_limit_of_decoders() {
-        // Four parts of two frames, alternating 64x64 and 96x48: three
-        // changes of parameters, at messages 2, 4 and 6, past the limit of
-        // two new decoders in unit tests (64 otherwise). The first two
-        // begin new decoders; the last part is decoded by the last one,
-        // scaled to its 64x64, and the warning says so.
+    /// The frame sizes of an H.264 stream of `parts`, `frames` each, read
+    /// from a bag and live: the bag's sizes and warnings, the live sizes
+    /// and [`LiveVideo::scaled`].
+    #[allow(clippy::type_complexity)]
+    fn sizes_of_parts(
+        parts: &[(usize, usize)],
+        frames: usize,
+    ) -> (Vec<(usize, usize)>, Vec<String>, Vec<(usize, usize)>, u64) {
         let dir = tempfile::tempdir().unwrap();
         let x264 = ["-c:v", "libx264", "-bf", "0", "-g", "50"];
-        let sizes = [(64, 64), (96, 48), (64, 64), (96, 48)];
-        let packets: Vec<Vec<u8>> = sizes
+        let packets: Vec<Vec<u8>> = parts
             .iter()
-            .flat_map(|&size| encode_sized(dir.path(), &x264, 2, size).0)
+            .flat_map(|&size| encode_sized(dir.path(), &x264, frames, size).0)
             .collect();
-        let want: Vec<(usize, usize)> = [(64, 64), (96, 48), (64, 64), (64, 64)]
-            .iter()
-            .flat_map(|&s| [s, s])
-            .collect();
+        let size = |f: &RgbImage| (f.width(), f.height());
         let path = dir.path().join("changing.mcap");
-        let all = numbered(&packets);
-        ros_bag(&path, "/cam", "h264", &all);
-        let (frames, warnings) = read_all(&path, "/cam").unwrap();
-        let got: Vec<(usize, usize)> = frames
-            .iter()
-            .map(|f| (f.image.width(), f.image.height()))
-            .collect();
-        assert_eq!(got, want);
-        assert!(
-            warnings[0].contains("parameters change at messages 2, 4, 6 (")
-                && warnings[0].contains("the first 2 changes each began a new decoder"),
-            "{warnings:?}"
-        );
+        ros_bag(&path, "/cam", "h264", &numbered(&packets));
+        let (bag, warnings) = read_all(&path, "/cam").unwrap();
+        let bag = bag.iter().map(|f| size(&f.image)).collect();
         let mut live = LiveVideo::new("h264", "/cam").unwrap();
         let mut got = Vec::new();
         for (i, p) in packets.iter().enumerate() {
             let frames = live.push(p, stamp_ns(i)).unwrap();
-            got.extend(frames.iter().map(|f| (f.image.width(), f.image.height())));
+            got.extend(frames.iter().map(|f| size(&f.image)));
         }
-        got.extend(
-            live.finish()
-                .unwrap()
-                .iter()
-                .map(|f| (f.image.width(), f.image.height())),
+        got.extend(live.finish().unwrap().iter().map(|f| size(&f.image)));
+        (bag, warnings, got, live.scaled())
+    }
+
+    #[test]
+    fn a_stream_whose_parameters_keep_changing_starts_at_most_the_limit_of_decoders() {
+        // Four parts of two frames, alternating 64x64 and 96x48: three
+        // changes of parameters, at messages 2, 4 and 6, past the limit of
+        // two new decoders in unit tests (64 otherwise) before eight
+        // packets (32 otherwise) earn a third. The first two begin new
+        // decoders; the last part is decoded by the last one, scaled to
+        // its 64x64, and the warning says so; live, `scaled` counts it.
+        let sizes = [(64, 64), (96, 48), (64, 64), (96, 48)];
+        let want: Vec<(usize, usize)> = [(64, 64), (96, 48), (64, 64), (64, 64)]
+            .iter()
+            .flat_map(|&s| [s, s])
+            .collect();
+        let (bag, warnings, live, scaled) = sizes_of_parts(&sizes, 2);
+        assert_eq!(bag, want);
+        assert!(
+            warnings[0].contains("parameters change at messages 2, 4, 6 (")
+                && warnings[0].contains(
+                    "2 began a new decoder; the frames after the changes at message 6 (more than one per 8 messages, past the first 2 changes) were decoded by the decoder before, scaled to its size"
+                ),
+            "{warnings:?}"
         );
-        assert_eq!(got, want);
+        assert_eq!((live, scaled), (want, 1));
+    }
+
+    #[test]
+    fn a_camera_restarted_at_another_size_again_and_again_keeps_every_frames_size() {
+        // Five parts of eight frames, alternating 64x64 and 96x48: four
+        // changes, twice the two decoders a stream may start at once in
+        // unit tests, but no more than one per eight packets, so each
+        // earns its own decoder. Before, a stream started at most the
+        // limit, and the frames of the last two parts were scaled.
+        let sizes = [(64, 64), (96, 48), (64, 64), (96, 48), (64, 64)];
+        let want: Vec<(usize, usize)> = sizes.iter().flat_map(|&s| [s; 8]).collect();
+        let (bag, warnings, live, scaled) = sizes_of_parts(&sizes, 8);
+        assert_eq!(bag, want);
+        assert!(
+            warnings[0].contains("parameters change at messages 8, 16, 24, 32 (")
+                && warnings[0].contains("each part was decoded on its own"),
+            "{warnings:?}"
+        );
+        assert_eq!((live, scaled), (want, 0));
     }
 
     #[test]

@@ -237,7 +237,7 @@ def ros_image_to_rgb(msg: Any) -> np.ndarray:
     """A sensor_msgs/msg/Image or CompressedImage (an rclpy message, or any object with its fields) as (H, W, 3) uint8 RGB, as `tactile run` reads a bag's frames."""
 
 class VideoDecoder:
-    """A live video topic (foxglove_msgs/msg/CompressedVideo, ffmpeg_image_transport's FFMPEGPacket, h264_msgs/msg/Packet; H.264, H.265, VP9 or AV1) decoded as its packets arrive by the system's FFmpeg: `decode` gives the frames ready, normally the packet's own, each with its own packet's stamp; packets before the first keyframe are skipped (`skipped`), packets that gave no frame are counted (`lost`)."""
+    """A live video topic (foxglove_msgs/msg/CompressedVideo, ffmpeg_image_transport's FFMPEGPacket, h264_msgs/msg/Packet; H.264, H.265, VP9 or AV1) decoded as its packets arrive by the system's FFmpeg: `decode` gives the frames ready, normally the packet's own, each with its own packet's stamp; packets before the first keyframe are skipped (`skipped`), packets that gave no frame are counted (`lost`), and changes of size whose frames were scaled to the earlier frames' size (`scaled`: past the first 64 changes, those sooner than one per 32 packets)."""
 
     def __init__(self, format: str, *, name: str = "video") -> None: ...
     def decode(self, data: Any, stamp_ns: int = 0) -> List[Frame]: ...
@@ -246,6 +246,8 @@ class VideoDecoder:
     def skipped(self) -> int: ...
     @property
     def lost(self) -> int: ...
+    @property
+    def scaled(self) -> int: ...
 
 class McapWriter:
     """Pipeline results as ROS 2 messages in an MCAP file (the channels of `tactile run --out X.mcap`)."""
