@@ -1110,10 +1110,20 @@ fn frame_times(
 const MAX_STDERR_LINE: u64 = 4096;
 
 /// The presentation time of a `framecrc` line (`0, dts, pts, duration,
-/// size, 0xcrc`), or `None` for another line.
+/// size, 0xcrc`), or `None` for another line. From FFmpeg 7 the muxer
+/// writes on a thread of its own, and a message's prefixes (`[h264 @
+/// 0x…] `, each written apart from its text) may come just before the
+/// line: they are passed over.
 fn framecrc_time(line: &[u8]) -> Option<i64> {
-    let line = std::str::from_utf8(line).ok()?;
-    let fields: Vec<&str> = line.trim().split(',').map(str::trim).collect();
+    let mut line = std::str::from_utf8(line).ok()?.trim();
+    while let Some(rest) = line.strip_prefix('[') {
+        let (context, rest) = rest.split_once("] ")?;
+        if !context.contains(" @ ") {
+            return None;
+        }
+        line = rest.trim_start();
+    }
+    let fields: Vec<&str> = line.split(',').map(str::trim).collect();
     match fields.as_slice() {
         ["0", _, pts, _, _, crc] if crc.starts_with("0x") => pts.parse().ok(),
         _ => None,
@@ -2230,6 +2240,41 @@ mod tests {
 
     /// A slice that no decoder takes: a damaged packet's stand-in.
     const DAMAGED: &[u8] = &[0, 0, 1, 0x65, 0xff, 0xff];
+
+    #[test]
+    fn frame_times_are_read_past_the_prefixes_of_ffmpeg_7s_messages() {
+        // FFmpeg 7.0.2's error output for the damaged packet of the
+        // Python test (each frame's line is written by the muxer's thread,
+        // between a message's prefixes and its text). Before, a frame's
+        // line after a prefix was taken for a message: its time was lost,
+        // so each later frame took the next one's time and stamp.
+        let lines: [(&str, Option<i64>); 9] = [
+            (
+                "0,   99999999,   99999999, 40000000,      440, 0x3ef51d55\n",
+                Some(99_999_999),
+            ),
+            (
+                "[h264 @ 0x1d1d1b40] 0,  133333332,  133333332, 40000000,      440, 0xd66d1ba3\n",
+                Some(133_333_332),
+            ),
+            (
+                "[vist#0:0/h264 @ 0x1d1e6400] [dec:h264 @ 0x1d1d0c40] 0,  199999998,  199999998, 40000000,      440, 0x016a1ddd\n",
+                Some(199_999_998),
+            ),
+            ("A non-intra slice in an IDR NAL unit.\n", None),
+            ("[h264 @ 0x1d1d1b40] decode_slice_header error\n", None),
+            (
+                "[vist#0:0/h264 @ 0x1d1e6400] [dec:h264 @ 0x1d1d0c40] Error submitting packet to decoder: Invalid data found when processing input\n",
+                None,
+            ),
+            ("[h264 @ 0x1d1d1b40] 0, 1, 2, 3\n", None),
+            ("[not a prefix] 0, 1, 2, 3, 4, 0x5\n", None),
+            ("#tb 0: 1/1000000000\n", None),
+        ];
+        for (line, time) in lines {
+            assert_eq!(framecrc_time(line.as_bytes()), time, "{line}");
+        }
+    }
 
     #[test]
     fn a_lost_frame_leaves_every_other_frame_its_own_stamp() {
