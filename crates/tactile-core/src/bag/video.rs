@@ -19,7 +19,9 @@
 //! display order gives times that name no packet (or that FFmpeg raised
 //! so they do not go back); each such frame takes the stamp of the
 //! earliest written packet without a frame, which is its own without
-//! B-frames while no frame is lost. Packets
+//! B-frames while no frame is lost. A packet whose headers show no frame
+//! (invisible VP9 frames, hidden AV1 ones, parameter sets alone) is owed
+//! none. Packets
 //! before the stream's first keyframe (a recording begun mid-stream)
 //! cannot be decoded by anyone: they are skipped, with a warning.
 
@@ -195,6 +197,70 @@ fn vp9_key_frame(data: &[u8]) -> Option<[u32; 7]> {
         width,
         height,
     ])
+}
+
+/// The frames of a VP9 packet: those of its superframe index (VP9 Annex
+/// B: a last byte `110` + size bytes - 1 (2 bits) + frames - 1 (3 bits),
+/// repeated before the sizes), else the packet itself.
+fn vp9_frames(data: &[u8]) -> Box<dyn Iterator<Item = &[u8]> + '_> {
+    let whole = || Box::new(std::iter::once(data));
+    let Some(&marker) = data.last() else {
+        return whole();
+    };
+    if marker & 0xe0 != 0xc0 {
+        return whole();
+    }
+    let (size_bytes, frames) = (
+        usize::from((marker >> 3) & 3) + 1,
+        usize::from(marker & 7) + 1,
+    );
+    let index = 2 + size_bytes * frames;
+    let Some(start) = data.len().checked_sub(index) else {
+        return whole();
+    };
+    if data[start] != marker {
+        return whole();
+    }
+    let sizes = data[start + 1..data.len() - 1].chunks(size_bytes).map(|b| {
+        b.iter()
+            .rev()
+            .fold(0usize, |size, &byte| (size << 8) | usize::from(byte))
+    });
+    let mut at = 0usize;
+    let mut parts = Vec::with_capacity(frames);
+    for size in sizes {
+        match data[..start].get(at..at.saturating_add(size)) {
+            Some(part) => parts.push(part),
+            None => return whole(),
+        }
+        at += size;
+    }
+    Box::new(parts.into_iter())
+}
+
+/// True unless a VP9 frame's uncompressed header (VP9 6.2) says it is
+/// invisible: `show_existing_frame` 0 and `show_frame` 0. A frame not read
+/// (no frame marker) is taken to show.
+fn vp9_shows_frame(frame: &[u8]) -> bool {
+    use bitstream_io::{BigEndian, BitRead, BitReader};
+    let mut r = BitReader::endian(frame, BigEndian);
+    let mut bits = |n: u32| r.read_var::<u32>(n).ok();
+    let mut hidden = || -> Option<bool> {
+        if bits(2)? != 2 {
+            return None;
+        }
+        let profile = bits(1)? | (bits(1)? << 1);
+        if profile == 3 {
+            bits(1)?;
+        }
+        // show_existing_frame, frame_type, show_frame.
+        if bits(1)? == 1 {
+            return Some(false);
+        }
+        bits(1)?;
+        Some(bits(1)? == 0)
+    };
+    hidden() != Some(true)
 }
 
 /// An unsigned LEB128 value (at most 8 bytes, AV1 4.10.5) and what follows.
@@ -380,6 +446,37 @@ impl Codec {
         sps && random_access
     }
 
+    /// False when the packet shows no frame, so none is owed for it: a
+    /// VP9 packet whose every frame (of a superframe, VP9 Annex B) is
+    /// invisible (`show_frame` 0 and no `show_existing_frame`, VP9 6.2), as
+    /// libvpx's encoder gives its alternate reference frames when no muxer
+    /// merges them; an AV1 one whose frame headers (OBU type 3 or 6) all
+    /// have `show_existing_frame` and `show_frame` 0 (AV1 5.9.2); an
+    /// H.264 or H.265 one with NAL units but no picture's (H.264 types
+    /// 1-5, H.265 0-31): parameter sets or SEI alone. A packet not read
+    /// (empty, or not of this form) is taken to show one.
+    fn shows_frame(self, data: &[u8]) -> bool {
+        match self {
+            Self::H264 | Self::H265 => {
+                let mut units = nal_units(data).filter_map(|u| u.first()).peekable();
+                units.peek().is_none()
+                    || units.any(|&h| match self {
+                        Self::H264 => (1..=5).contains(&self.nal_type(h)),
+                        _ => self.nal_type(h) < 32,
+                    })
+            }
+            Self::Vp9 => vp9_frames(data).any(vp9_shows_frame),
+            Self::Av1 => {
+                let mut headers = av1_obus(data)
+                    .filter(|(kind, _)| matches!(kind, 3 | 6))
+                    .map(|(_, payload)| payload.first().copied())
+                    .peekable();
+                // show_existing_frame (bit 7), show_frame (bit 4).
+                headers.peek().is_none() || headers.any(|b| b.is_none_or(|b| b & 0x90 != 0))
+            }
+        }
+    }
+
     /// A NAL unit's type from its first header byte: its low five bits in
     /// H.264 (ITU-T H.264 7.3.1), bits 1-6 in H.265 (ITU-T H.265 7.3.1.2).
     fn nal_type(self, header: u8) -> u8 {
@@ -473,12 +570,19 @@ struct Stamp {
     /// decoder's first packet (small, so FFmpeg's floating point keeps it
     /// to the nanosecond).
     pts: i64,
+    /// True when the packet shows no frame ([`Codec::shows_frame`]).
+    hidden: bool,
 }
 
 /// Stamps of the packets written that have no frame yet, earliest first.
 #[derive(Default)]
 struct PendingStamps {
     stamps: BTreeSet<Stamp>,
+    /// The latest packets that show no frame (an invisible VP9 frame, an
+    /// AV1 temporal unit of hidden frames, H.264 parameter sets alone):
+    /// no frame is waited for, nor counted lost. A frame whose time names
+    /// one takes its stamp all the same, should FFmpeg show it.
+    hidden: std::collections::VecDeque<Stamp>,
     /// The latest stamp a frame took by its time, and its decoder: the
     /// pending stamps before it are passed, their frames presumably lost
     /// (frames come in display order). They are kept, for a stream whose
@@ -516,7 +620,20 @@ struct Taken {
 
 impl PendingStamps {
     fn add(&mut self, stamp: Stamp) {
-        self.stamps.insert(stamp);
+        if !stamp.hidden {
+            self.stamps.insert(stamp);
+            return;
+        }
+        if self.hidden.len() as u64 >= MAX_REORDERED {
+            self.hidden.pop_front();
+        }
+        self.hidden.push_back(stamp);
+    }
+
+    fn extend(&mut self, stamps: impl IntoIterator<Item = Stamp>) {
+        for stamp in stamps {
+            self.add(stamp);
+        }
     }
 
     /// The stamp of the frame just decoded, whose time FFmpeg gave as
@@ -526,6 +643,9 @@ impl PendingStamps {
     /// earliest written packet (see the module's documentation). The error
     /// when every packet written (`written`) already has its frame.
     fn take(&mut self, time: Option<i64>, written: u64) -> std::result::Result<Taken, String> {
+        if let Some(taken) = self.take_hidden(time) {
+            return Ok(taken);
+        }
         let Some(first) = self.stamps.first().cloned() else {
             return Err(format!(
                 "FFmpeg gave more frames than the {written} packets written to it"
@@ -547,6 +667,7 @@ impl PendingStamps {
                 index: 0,
                 log_time_ns: 0,
                 pts: i64::MIN,
+                hidden: false,
             };
             self.stamps
                 .range(from..)
@@ -601,6 +722,33 @@ impl PendingStamps {
         })
     }
 
+    /// A frame of a packet taken to show none, named by its `time` (and
+    /// no pending packet of the same decoder has that time): its stamp.
+    fn take_hidden(&mut self, time: Option<i64>) -> Option<Taken> {
+        let time = time?;
+        let at = self.hidden.iter().rposition(|h| h.pts == time)?;
+        let segment = self.hidden[at].segment;
+        let pending = self
+            .stamps
+            .iter()
+            .any(|s| s.segment == segment && s.pts == time);
+        if pending
+            || self
+                .last_time
+                .is_some_and(|(seg, t)| seg == segment && t >= time)
+        {
+            return None;
+        }
+        self.last_time = Some((segment, time));
+        let stamp = self.hidden.remove(at)?;
+        Some(Taken {
+            stamp,
+            lost: Vec::new(),
+            passed: 0,
+            own: true,
+        })
+    }
+
     /// Pending stamps of decoder `segment` before the latest shown.
     fn passed(&self, segment: u32) -> usize {
         match self.shown {
@@ -622,6 +770,7 @@ impl PendingStamps {
     /// Forget the stamps of decoders before `segment`, whose frames never
     /// came (FFmpeg lost them); their places.
     fn drop_before(&mut self, segment: u32) -> Vec<u64> {
+        self.hidden.retain(|s| s.segment >= segment);
         let mut lost = Vec::new();
         while self.stamps.first().is_some_and(|s| s.segment < segment) {
             lost.extend(self.stamps.pop_first().map(|s| s.index));
@@ -631,6 +780,7 @@ impl PendingStamps {
 
     /// Forget every stamp, the stream having ended; their places.
     fn drain(&mut self) -> Vec<u64> {
+        self.hidden.clear();
         std::mem::take(&mut self.stamps)
             .into_iter()
             .map(|s| s.index)
@@ -663,6 +813,7 @@ impl DecoderClock {
             index,
             log_time_ns,
             pts: stamp_ns.wrapping_sub(self.base_ns),
+            hidden: false,
         };
         (stamp, first)
     }
@@ -903,8 +1054,9 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
             clock.next_decoder();
         }
         let stamp_ns = stamp_or_log_time(stamp_ns, m.log_time);
-        let (stamp, first) = clock.stamp(stamp_ns, m.index, m.log_time);
-        let pts = stamp.pts;
+        let (mut stamp, first) = clock.stamp(stamp_ns, m.index, m.log_time);
+        stamp.hidden = !codec.shows_frame(&data);
+        let (pts, hidden) = (stamp.pts, stamp.hidden);
         // A decoder that stopped reading has exited or was stopped: the
         // reader reports why.
         // The stamp goes first: the frame cannot come out before it.
@@ -912,7 +1064,8 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         {
             break None;
         }
-        fed += 1;
+        // A packet that shows no frame is owed none.
+        fed += u64::from(!hidden);
     };
     drop(stdin);
     Fed {
@@ -1358,7 +1511,7 @@ impl VideoFrames {
         .and_then(|image| {
             // Every packet the frame needed was written, so its stamp was
             // sent, before the frame came out.
-            self.pending.stamps.extend(self.stamps.try_iter());
+            self.pending.extend(self.stamps.try_iter());
             let time = self.times.next();
             let taken = self
                 .pending
@@ -1404,7 +1557,7 @@ impl VideoFrames {
         self.times = times;
         self.stderr = stderr;
         decoder_ended_well(self.codec, status?, &last).map_err(|e| self.error(e))?;
-        self.pending.stamps.extend(self.stamps.try_iter());
+        self.pending.extend(self.stamps.try_iter());
         self.segment += 1;
         self.lost.places.add(self.pending.drop_before(self.segment));
         Ok(())
@@ -1443,7 +1596,7 @@ impl VideoFrames {
         let (skipped, written) = (fed.skipped, fed.fed);
         self.fed = Some(fed);
         // Packets still without a frame gave none.
-        self.pending.stamps.extend(self.stamps.try_iter());
+        self.pending.extend(self.stamps.try_iter());
         self.lost.places.add(self.pending.drain());
         if let Some(e) = error {
             return Err(e);
@@ -1491,9 +1644,11 @@ pub struct LiveVideo {
     name: String,
     decoder: LiveDecoder,
     pending: PendingStamps,
-    /// Packets given, written to the decoders, and frames decoded.
+    /// Packets given, written to the decoders, written that show no
+    /// frame ([`Codec::shows_frame`]), and frames decoded.
     given: u64,
     written: u64,
+    hidden: u64,
     decoded: u64,
     /// The packets written to the current decoder, the stream
     /// parameters of its last keyframe, and their changes.
@@ -1652,6 +1807,7 @@ impl LiveVideo {
             pending: PendingStamps::default(),
             given: 0,
             written: 0,
+            hidden: 0,
             decoded: 0,
             clock: DecoderClock::default(),
             parameters: StreamParameters::default(),
@@ -1672,7 +1828,9 @@ impl LiveVideo {
     /// frame that came, their own not come, and after [`Self::finish`]
     /// every one without a frame.
     pub fn lost(&self) -> u64 {
-        self.written - self.decoded - self.pending.due()
+        (self.written - self.hidden)
+            .saturating_sub(self.decoded)
+            .saturating_sub(self.pending.due())
     }
 
     /// Changes of the stream's parameters (a camera restarted at another
@@ -1710,8 +1868,10 @@ impl LiveVideo {
         let Some(stdin) = self.decoder.stdin.as_mut() else {
             return Err(self.error("its stream was closed".into()));
         };
-        let (stamp, first) = self.clock.stamp(stamp_ns, packet, 0);
+        let (mut stamp, first) = self.clock.stamp(stamp_ns, packet, 0);
+        stamp.hidden = !self.codec.shows_frame(data);
         let pts = stamp.pts;
+        self.hidden += u64::from(stamp.hidden);
         self.pending.add(stamp);
         if let Err(e) = self
             .codec
@@ -1815,6 +1975,8 @@ impl LiveVideo {
         // theirs again.
         self.held = self.held.saturating_sub(taken.passed);
         let stamp = taken.stamp;
+        // A packet taken to show no frame showed one after all.
+        self.hidden = self.hidden.saturating_sub(u64::from(stamp.hidden));
         self.decoded += 1;
         Ok(LiveFrame {
             image,
@@ -2796,6 +2958,152 @@ mod tests {
         }
         // Both kinds of ending are met (fixed seed).
         assert!(outcomes.iter().all(|&n| n > 0), "{outcomes:?}");
+    }
+
+    /// `frames` 64x64 frames of FFmpeg's Mandelbrot pattern in two-pass
+    /// VP9 with alternate reference frames (superframes of an invisible
+    /// frame and a shown one, each shown later by a packet of its own),
+    /// and every frame as FFmpeg decodes them.
+    fn vp9_with_hidden_frames(dir: &Path, frames: usize) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+        let stream = dir.join("hidden.ivf");
+        let log = dir.join("vp9-passes");
+        for pass in ["1", "2"] {
+            let status = Command::new("ffmpeg")
+                .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
+                .args(["-f", "lavfi", "-i", "mandelbrot=size=64x64:rate=10"])
+                .args(["-frames:v", &frames.to_string(), "-pix_fmt", "yuv420p"])
+                .args(["-c:v", "libvpx-vp9", "-g", "24", "-threads", "1"])
+                .args(["-auto-alt-ref", "1", "-lag-in-frames", "25", "-b:v", "200k"])
+                .args(["-pass", pass, "-passlogfile"])
+                .arg(&log)
+                .args(["-f", "ivf"])
+                .arg(&stream)
+                .status()
+                .unwrap();
+            assert!(status.success());
+        }
+        let mut file = std::io::BufReader::new(std::fs::File::open(&stream).unwrap());
+        ivf::read_header(&mut file).unwrap();
+        let packets: Vec<Vec<u8>> = (0..frames)
+            .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
+            .collect();
+        (packets, decode_file(&stream, (64, 64), frames))
+    }
+
+    #[test]
+    fn packets_that_show_no_frame_are_owed_none() {
+        // An encoder's invisible VP9 frames as messages of their own (as
+        // libvpx gives them when no muxer merges them into superframes):
+        // each shows no frame, so it is not waited for nor counted lost,
+        // and every frame keeps its own packet's stamp. Before, the bag
+        // warned that the invisible ones were damaged, and live, each
+        // waited a second; after the third, every later frame came only
+        // at the finish.
+        let dir = tempfile::tempdir().unwrap();
+        let (superframes, decoded) = vp9_with_hidden_frames(dir.path(), 24);
+        let mut packets: Vec<Vec<u8>> = Vec::new();
+        for p in &superframes {
+            packets.extend(vp9_frames(p).map(<[u8]>::to_vec));
+        }
+        let shown: Vec<usize> = (0..packets.len())
+            .filter(|&i| Codec::Vp9.shows_frame(&packets[i]))
+            .collect();
+        assert_eq!(shown.len(), 24);
+        assert!(packets.len() >= 26, "{} packets", packets.len());
+        let path = dir.path().join("hidden.mcap");
+        ros_bag(&path, "/cam", "vp9", &numbered(&packets));
+        let (frames, warnings) = read_all(&path, "/cam").unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+        let want: Vec<(u64, i64)> = shown.iter().map(|&i| (i as u64, stamp_ns(i))).collect();
+        assert_eq!(got, want);
+        for (k, f) in frames.iter().enumerate() {
+            assert!(f.image.as_slice() == decoded[k].as_slice(), "frame {k}");
+        }
+        let mut live = LiveVideo::new("vp9", "/cam").unwrap();
+        for (i, p) in packets.iter().enumerate() {
+            let started = std::time::Instant::now();
+            let got: Vec<u64> = live
+                .push(p, stamp_ns(i))
+                .unwrap()
+                .iter()
+                .map(|f| f.packet)
+                .collect();
+            let want: &[u64] = if shown.contains(&i) { &[i as u64] } else { &[] };
+            assert_eq!(got, want, "push {i}");
+            assert!(started.elapsed().as_secs_f64() < 0.5, "push {i}");
+        }
+        assert!(live.finish().unwrap().is_empty());
+        assert_eq!(live.lost(), 0);
+        // AV1 with hidden frames, each temporal unit a message as the
+        // format asks: every frame its own packet's. Alone (a unit cut
+        // after its first frame OBU, hidden), they show none.
+        let libaom = [
+            "-c:v",
+            "libaom-av1",
+            "-cpu-used",
+            "8",
+            "-g",
+            "24",
+            "-threads",
+            "1",
+        ];
+        let stream = encode_file(
+            (dir.path(), "hidden.obu"),
+            "yuv420p",
+            (64, 64),
+            12,
+            &[&libaom, &["-lag-in-frames", "35"]],
+            "obu",
+        );
+        let data = std::fs::read(&stream).unwrap();
+        let decoded = decode_file(&stream, (64, 64), 12);
+        let mut units: Vec<Vec<u8>> = Vec::new();
+        let mut hidden_alone = None;
+        let mut at = 0;
+        for (kind, payload) in av1_obus(&data) {
+            let end = payload.as_ptr() as usize - data.as_ptr() as usize + payload.len();
+            if kind == 2 {
+                units.push(Vec::new());
+            }
+            let unit = units.last_mut().unwrap();
+            let first_frame = matches!(kind, 3 | 6) && !Codec::Av1.shows_frame(unit);
+            unit.extend_from_slice(&data[at..end]);
+            if first_frame && payload[0] & 0x90 == 0 && hidden_alone.is_none() {
+                hidden_alone = Some(unit.clone());
+            }
+            at = end;
+        }
+        assert_eq!(units.len(), 12);
+        let hidden_alone = hidden_alone.expect("a hidden frame");
+        assert!(!Codec::Av1.shows_frame(&hidden_alone));
+        assert!(units.iter().all(|u| Codec::Av1.shows_frame(u)));
+        let path = dir.path().join("hidden-av1.mcap");
+        ros_bag(&path, "/cam", "av1", &numbered(&units));
+        let (frames, warnings) = read_all(&path, "/cam").unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let got: Vec<i64> = frames.iter().map(|f| f.stamp_ns).collect();
+        assert_eq!(got, (0..12).map(stamp_ns).collect::<Vec<_>>());
+        assert!((0..12).all(|k| frames[k].image.as_slice() == decoded[k].as_slice()));
+        let mut live = LiveVideo::new("av1", "/cam").unwrap();
+        for (i, u) in units.iter().enumerate() {
+            let got = live.push(u, stamp_ns(i)).unwrap();
+            assert_eq!(got.len(), 1, "push {i}");
+            assert!(got[0].image.as_slice() == decoded[i].as_slice(), "push {i}");
+        }
+        // H.264's parameter sets alone show none; with a picture, they do.
+        let (h264, _) = h264_without_b_frames(dir.path(), 50, 2);
+        let idr = nal_units(&h264[0])
+            .position(|u| u.first().is_some_and(|&h| h & 0x1f == 5))
+            .unwrap();
+        let sets: Vec<u8> = nal_units(&h264[0])
+            .take(idr)
+            .flat_map(|u| [&[0, 0, 1][..], u].concat())
+            .collect();
+        assert!(!Codec::H264.shows_frame(&sets));
+        assert!(Codec::H264.shows_frame(&h264[0]));
+        assert!(Codec::H264.shows_frame(&h264[1]));
+        assert!(Codec::Vp9.shows_frame(&[]) && Codec::H264.shows_frame(&[]));
     }
 
     #[test]
