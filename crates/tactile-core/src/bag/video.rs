@@ -604,6 +604,7 @@ struct PendingStamps {
 const MAX_REORDERED: u64 = 16;
 
 /// A decoded frame's stamp, and what it told of the packets before it.
+#[derive(Debug)]
 struct Taken {
     stamp: Stamp,
     /// Places of packets given up as lost (a damaged packet gives no
@@ -647,9 +648,19 @@ impl PendingStamps {
             return Ok(taken);
         }
         let Some(first) = self.stamps.first().cloned() else {
-            return Err(format!(
-                "FFmpeg gave more frames than the {written} packets written to it"
-            ));
+            // A packet taken to show no frame showed one, its time not
+            // told: the earliest such packet's.
+            return match self.hidden.pop_front() {
+                Some(stamp) => Ok(Taken {
+                    stamp,
+                    lost: Vec::new(),
+                    passed: 0,
+                    own: false,
+                }),
+                None => Err(format!(
+                    "FFmpeg gave more frames than the {written} packets written to it"
+                )),
+            };
         };
         let segment = first.segment;
         // Every packet of a decoder has its time from the same stamp.
@@ -726,8 +737,12 @@ impl PendingStamps {
     /// no pending packet of the same decoder has that time): its stamp.
     fn take_hidden(&mut self, time: Option<i64>) -> Option<Taken> {
         let time = time?;
-        let at = self.hidden.iter().rposition(|h| h.pts == time)?;
-        let segment = self.hidden[at].segment;
+        // The decoder giving frames now: the earliest one with a packet.
+        let segment = (self.stamps.first().into_iter())
+            .chain(self.hidden.front())
+            .map(|s| s.segment)
+            .min()?;
+        let at = (self.hidden.iter()).rposition(|h| h.segment == segment && h.pts == time)?;
         let pending = self
             .stamps
             .iter()
@@ -2988,6 +3003,40 @@ mod tests {
             .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
             .collect();
         (packets, decode_file(&stream, (64, 64), frames))
+    }
+
+    #[test]
+    fn a_frame_of_a_packet_taken_to_show_none_takes_its_stamp() {
+        // Should FFmpeg show a frame of a packet whose headers said it
+        // shows none (a hidden frame read wrong), the frame takes that
+        // packet's stamp by its time, or, with no time and no other packet
+        // waiting, the earliest such packet's; never an error.
+        let packet = |index: u64, hidden: bool| Stamp {
+            segment: 0,
+            stamp_ns: 100 + 10 * index as i64,
+            index,
+            log_time_ns: 0,
+            pts: 10 * index as i64,
+            hidden,
+        };
+        let mut pending = PendingStamps::default();
+        pending.extend([packet(0, false), packet(1, true), packet(2, false)]);
+        assert_eq!(pending.due(), 2);
+        let taken: Vec<(u64, bool)> = [0, 10, 20]
+            .iter()
+            .map(|&t| pending.take(Some(t), 3).unwrap())
+            .map(|t| (t.stamp.index, t.own))
+            .collect();
+        assert_eq!(taken, [(0, true), (1, true), (2, true)]);
+        pending.add(packet(3, true));
+        let last = pending.take(None, 4).unwrap();
+        assert_eq!((last.stamp.index, last.own), (3, false));
+        assert!(
+            pending
+                .take(None, 4)
+                .unwrap_err()
+                .contains("more frames than")
+        );
     }
 
     #[test]
