@@ -20,8 +20,8 @@
 //! so they do not go back); each such frame takes the stamp of the
 //! earliest written packet without a frame, which is its own without
 //! B-frames while no frame is lost. A packet whose headers show no frame
-//! (invisible VP9 frames, hidden AV1 ones, parameter sets alone) is owed
-//! none. Packets
+//! (invisible VP9 frames, hidden AV1 ones) is owed none; H.264 or H.265
+//! parameter sets sent alone join the next packet. Packets
 //! before the stream's first keyframe (a recording begun mid-stream)
 //! cannot be decoded by anyone: they are skipped, with a warning.
 
@@ -477,6 +477,26 @@ impl Codec {
         }
     }
 
+    /// True for an H.264 or H.265 packet of parameter sets (H.264's SPS
+    /// and PPS, types 7 and 8; H.265's VPS, SPS and PPS, 32-34) and no
+    /// picture: an encoder that sends them in a message of their own,
+    /// before the keyframe they belong to.
+    fn parameter_sets_alone(self, data: &[u8]) -> bool {
+        if !matches!(self, Self::H264 | Self::H265) {
+            return false;
+        }
+        let mut sets = false;
+        for u in nal_units(data) {
+            let Some(&h) = u.first() else { continue };
+            match (self, self.nal_type(h)) {
+                (Self::H264, 7 | 8) | (Self::H265, 32..=34) => sets = true,
+                (Self::H264, 1..=5) | (Self::H265, 0..=31) => return false,
+                _ => {}
+            }
+        }
+        sets
+    }
+
     /// A NAL unit's type from its first header byte: its low five bits in
     /// H.264 (ITU-T H.264 7.3.1), bits 1-6 in H.265 (ITU-T H.265 7.3.1.2).
     fn nal_type(self, header: u8) -> u8 {
@@ -877,6 +897,38 @@ impl StreamParameters {
     }
 }
 
+/// H.264 or H.265 parameter sets that came in a message of their own
+/// ([`Codec::parameter_sets_alone`]), held to be written with the next
+/// message, so a keyframe whose parameter sets came just before it starts
+/// a stream as one that carries them does. One for the bag reader's feeder
+/// and the live decoder.
+#[derive(Default)]
+struct HeldParameterSets(Vec<u8>);
+
+/// Most bytes of parameter sets held for the next message: past it, a
+/// hostile topic of parameter sets alone keeps only its latest.
+const MAX_HELD_PARAMETER_SETS: usize = 1 << 20;
+
+impl HeldParameterSets {
+    /// `data` after the parameter sets held, or `None` when it is
+    /// parameter sets alone, now held.
+    fn join<'a>(&mut self, codec: Codec, data: Cow<'a, [u8]>) -> Option<Cow<'a, [u8]>> {
+        if codec.parameter_sets_alone(&data) {
+            if self.0.len().saturating_add(data.len()) > MAX_HELD_PARAMETER_SETS {
+                self.0.clear();
+            }
+            self.0.extend_from_slice(&data);
+            return None;
+        }
+        if self.0.is_empty() {
+            return Some(data);
+        }
+        let mut joined = std::mem::take(&mut self.0);
+        joined.extend_from_slice(&data);
+        Some(Cow::Owned(joined))
+    }
+}
+
 /// A decoder started by the feeder for a new stream, handed to the reader.
 struct Segment {
     child: Child,
@@ -997,6 +1049,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
     let (mut skipped, mut fed) = (0, 0);
     let mut clock = DecoderClock::default();
     let mut parameters = StreamParameters::default();
+    let (mut held, mut merged) = (HeldParameterSets::default(), 0);
     let mut changes = StreamChanges::default();
     let mut next = Some(first);
     let error = loop {
@@ -1035,9 +1088,16 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
                 ),
             ));
         }
+        // Parameter sets alone join the next message, and are skipped
+        // with it.
+        let Some(data) = held.join(codec, data) else {
+            merged += 1;
+            continue;
+        };
         let role = parameters.role(codec, &data);
+        let joined = std::mem::take(&mut merged);
         if role == PacketRole::BeforeKeyframe {
-            skipped += 1;
+            skipped += 1 + joined;
             continue;
         }
         if role == PacketRole::NewParameters && changes.restart(m.index, fed) {
@@ -1669,13 +1729,18 @@ pub struct LiveVideo {
     /// parameters of its last keyframe, and their changes.
     clock: DecoderClock,
     parameters: StreamParameters,
+    /// Parameter sets given alone, held for the next packet; the packets
+    /// of them held, and those that joined a packet written.
+    held: HeldParameterSets,
+    joining: u64,
+    merged: u64,
     changes: StreamChanges,
     /// Frames FFmpeg holds back once every packet given is in, learnt
     /// from waits that timed out: a stream with B-frames holds as many as
     /// its reordering needs, and a lost frame never comes. A push waits
     /// only while more frames than these are out, so each returns the
     /// frames its packet made due, as soon as they are decoded.
-    held: u64,
+    held_back: u64,
     /// Waits that timed out; after [`LIVE_TIMEOUTS`], pushes no longer wait.
     timeouts: u32,
     /// True once [`Self::finish`] ended the stream.
@@ -1826,8 +1891,11 @@ impl LiveVideo {
             decoded: 0,
             clock: DecoderClock::default(),
             parameters: StreamParameters::default(),
+            held: HeldParameterSets::default(),
+            joining: 0,
+            merged: 0,
             changes: StreamChanges::default(),
-            held: 0,
+            held_back: 0,
             timeouts: 0,
             finished: false,
         })
@@ -1836,7 +1904,7 @@ impl LiveVideo {
     /// Packets given before the first keyframe, which no decoder can read
     /// (a subscription joined mid-stream): skipped.
     pub fn skipped(&self) -> u64 {
-        self.given - self.written
+        self.given - self.written - self.merged - self.joining
     }
 
     /// Packets that gave no frame (a damaged packet): those shown before a
@@ -1860,7 +1928,7 @@ impl LiveVideo {
     /// Give the next packet (one frame: Annex B, a VP9 frame, or an AV1
     /// temporal unit) and its stamp; the frames decoded so far, normally
     /// this packet's, after waiting for the frames due (up to a second
-    /// each; see [`LiveVideo`]'s `held`). A keyframe with new stream
+    /// each; see [`LiveVideo`]'s `held_back`). A keyframe with new stream
     /// parameters (a camera restarted at another size) first ends the
     /// current decoder, whose last frames come back here too, and starts
     /// a new one, so every frame keeps its own size.
@@ -1872,10 +1940,19 @@ impl LiveVideo {
         }
         let packet = self.given;
         self.given += 1;
+        // Parameter sets alone join the next packet, and are skipped with
+        // it.
+        let Some(data) = self.held.join(self.codec, Cow::Borrowed(data)) else {
+            self.joining += 1;
+            return Ok(Vec::new());
+        };
+        let data: &[u8] = &data;
         let role = self.parameters.role(self.codec, data);
+        let joined = std::mem::take(&mut self.joining);
         if role == PacketRole::BeforeKeyframe {
             return Ok(Vec::new());
         }
+        self.merged += joined;
         let mut frames = Vec::new();
         if role == PacketRole::NewParameters && self.changes.restart(packet, self.written) {
             self.restart(&mut frames)?;
@@ -1900,7 +1977,10 @@ impl LiveVideo {
         let mut wait = LIVE_FRAME_WAIT;
         // An empty packet (a publisher's dropped frame) gives no frame: its
         // push does not wait, and a later frame passes it.
-        while !data.is_empty() && self.timeouts < LIVE_TIMEOUTS && self.pending.due() > self.held {
+        while !data.is_empty()
+            && self.timeouts < LIVE_TIMEOUTS
+            && self.pending.due() > self.held_back
+        {
             match self.decoder.events.recv_timeout(wait) {
                 Ok(LiveEvent::Picture(p)) => frames.push(self.frame(p)?),
                 // A damaged packet: its frame is waited for only briefly.
@@ -1908,7 +1988,7 @@ impl LiveVideo {
                 // Not held back, but lost (said by FFmpeg): no timeout.
                 Err(mpsc::RecvTimeoutError::Timeout) if wait == LIVE_ERROR_WAIT => break,
                 Err(mpsc::RecvTimeoutError::Timeout) => {
-                    self.held = self.pending.due();
+                    self.held_back = self.pending.due();
                     self.timeouts += 1;
                 }
                 // FFmpeg ended: the next push or `finish` says why.
@@ -1952,7 +2032,7 @@ impl LiveVideo {
         self.decoder = LiveDecoder::start(self.codec, &self.name)?;
         self.clock.next_decoder();
         self.pending.drop_before(self.clock.segment);
-        self.held = 0;
+        self.held_back = 0;
         Ok(())
     }
 
@@ -1988,7 +2068,7 @@ impl LiveVideo {
             .map_err(|e| self.error(e))?;
         // Frames found lost were not held back: later pushes wait for
         // theirs again.
-        self.held = self.held.saturating_sub(taken.passed);
+        self.held_back = self.held_back.saturating_sub(taken.passed);
         let stamp = taken.stamp;
         // A packet taken to show no frame showed one after all.
         self.hidden = self.hidden.saturating_sub(u64::from(stamp.hidden));
@@ -3003,6 +3083,74 @@ mod tests {
             .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
             .collect();
         (packets, decode_file(&stream, (64, 64), frames))
+    }
+
+    #[test]
+    fn parameter_sets_in_a_message_of_their_own_join_their_keyframe() {
+        // An encoder that sends H.264's SPS and PPS in a message before
+        // each keyframe's picture: they join it, so the stream starts at
+        // its first keyframe and every picture keeps its own message's
+        // stamp, in a bag and live. Before, no message was a keyframe
+        // with its parameter sets, and the topic was refused.
+        let dir = tempfile::tempdir().unwrap();
+        let (packets, decoded) = h264_without_b_frames(dir.path(), 4, 12);
+        let framed = |units: &mut dyn Iterator<Item = &[u8]>| -> Vec<u8> {
+            units.flat_map(|u| [&[0, 0, 1][..], u].concat()).collect()
+        };
+        let is_set = |u: &[u8]| matches!(u.first().map(|h| h & 0x1f), Some(7 | 8));
+        let (mut messages, mut own) = (Vec::new(), Vec::new());
+        for p in &packets {
+            let sets = framed(&mut nal_units(p).filter(|u| is_set(u)));
+            if !sets.is_empty() {
+                assert!(Codec::H264.parameter_sets_alone(&sets));
+                messages.push(sets);
+            }
+            own.push(messages.len());
+            messages.push(framed(&mut nal_units(p).filter(|u| !is_set(u))));
+        }
+        assert_eq!(messages.len(), 15);
+        assert!(!Codec::H264.starts_stream(&messages[1]));
+        let path = dir.path().join("sets.mcap");
+        ros_bag(&path, "/cam", "h264", &numbered(&messages));
+        let (frames, warnings) = read_all(&path, "/cam").unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
+        let want: Vec<(u64, i64)> = own.iter().map(|&m| (m as u64, stamp_ns(m))).collect();
+        assert_eq!(got, want);
+        assert!((0..12).all(|k| frames[k].image.as_slice() == decoded[k].as_slice()));
+        let mut live = LiveVideo::new("h264", "/cam").unwrap();
+        for (m, data) in messages.iter().enumerate() {
+            let got: Vec<u64> = (live.push(data, stamp_ns(m)).unwrap().iter())
+                .map(|f| f.packet)
+                .collect();
+            let want: &[u64] = if own.contains(&m) { &[m as u64] } else { &[] };
+            assert_eq!(got, want, "push {m}");
+        }
+        assert!(live.finish().unwrap().is_empty());
+        assert_eq!((live.skipped(), live.lost()), (0, 0));
+        // Begun mid-stream, after the first keyframe (the recording's
+        // messages 0-2 are delta frames): they are skipped, and the stream
+        // starts at the next keyframe's parameter sets (message 3), its
+        // picture (message 4) the first frame.
+        let late: Vec<(usize, &[u8])> = numbered(&messages).into_iter().skip(2).collect();
+        let path = dir.path().join("sets-late.mcap");
+        ros_bag(&path, "/cam", "h264", &late);
+        let (frames, warnings) = read_all(&path, "/cam").unwrap();
+        assert_eq!(frames.len(), 8);
+        assert_eq!((frames[0].index, frames[0].stamp_ns), (4, stamp_ns(6)));
+        assert!(
+            warnings.len() == 1
+                && warnings[0].contains("its first 3 messages come before the first keyframe")
+                && warnings[0].ends_with("its frames begin at message 3"),
+            "{warnings:?}"
+        );
+        let mut live = LiveVideo::new("h264", "/cam").unwrap();
+        let mut got = Vec::new();
+        for &(m, data) in &late {
+            got.extend(live.push(data, stamp_ns(m)).unwrap());
+        }
+        got.extend(live.finish().unwrap());
+        assert_eq!((got.len(), got[0].packet, live.skipped()), (8, 4, 3));
     }
 
     #[test]
