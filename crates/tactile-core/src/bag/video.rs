@@ -3087,44 +3087,70 @@ mod tests {
 
     #[test]
     fn parameter_sets_in_a_message_of_their_own_join_their_keyframe() {
-        // An encoder that sends H.264's SPS and PPS in a message before
-        // each keyframe's picture: they join it, so the stream starts at
-        // its first keyframe and every picture keeps its own message's
-        // stamp, in a bag and live. Before, no message was a keyframe
-        // with its parameter sets, and the topic was refused.
+        // An encoder that sends H.264's SPS and PPS (H.265's VPS, SPS and
+        // PPS) in a message before each keyframe's picture: they join it,
+        // so the stream starts at its first keyframe and every picture
+        // keeps its own message's stamp, in a bag and live. Before, no
+        // message was a keyframe with its parameter sets, and the topic
+        // was refused.
         let dir = tempfile::tempdir().unwrap();
-        let (packets, decoded) = h264_without_b_frames(dir.path(), 4, 12);
+        let x265 = [
+            "-c:v",
+            "libx265",
+            "-x265-params",
+            "bframes=0:keyint=4:repeat-headers=1:log-level=error",
+        ];
+        for codec in [Codec::H264, Codec::H265] {
+            let (packets, decoded) = match codec {
+                Codec::H264 => h264_without_b_frames(dir.path(), 4, 12),
+                _ => encode(dir.path(), &x265, 12),
+            };
+            parameter_sets_apart(dir.path(), codec, &packets, &decoded);
+        }
+    }
+
+    /// [`parameter_sets_in_a_message_of_their_own_join_their_keyframe`]
+    /// for `codec`'s 12 `packets` (a keyframe every 4) and their frames.
+    fn parameter_sets_apart(dir: &Path, codec: Codec, packets: &[Vec<u8>], decoded: &[Vec<u8>]) {
+        let format = codec.name();
         let framed = |units: &mut dyn Iterator<Item = &[u8]>| -> Vec<u8> {
             units.flat_map(|u| [&[0, 0, 1][..], u].concat()).collect()
         };
-        let is_set = |u: &[u8]| matches!(u.first().map(|h| h & 0x1f), Some(7 | 8));
+        let is_set = |u: &[u8]| {
+            u.first().is_some_and(|&h| {
+                matches!(
+                    (codec, codec.nal_type(h)),
+                    (Codec::H264, 7 | 8) | (Codec::H265, 32..=34)
+                )
+            })
+        };
         let (mut messages, mut own) = (Vec::new(), Vec::new());
-        for p in &packets {
+        for p in packets {
             let sets = framed(&mut nal_units(p).filter(|u| is_set(u)));
             if !sets.is_empty() {
-                assert!(Codec::H264.parameter_sets_alone(&sets));
+                assert!(codec.parameter_sets_alone(&sets));
                 messages.push(sets);
             }
             own.push(messages.len());
             messages.push(framed(&mut nal_units(p).filter(|u| !is_set(u))));
         }
-        assert_eq!(messages.len(), 15);
-        assert!(!Codec::H264.starts_stream(&messages[1]));
-        let path = dir.path().join("sets.mcap");
-        ros_bag(&path, "/cam", "h264", &numbered(&messages));
+        assert_eq!(messages.len(), 15, "{format}");
+        assert!(!codec.starts_stream(&messages[1]));
+        let path = dir.join(format!("sets-{format}.mcap"));
+        ros_bag(&path, "/cam", format, &numbered(&messages));
         let (frames, warnings) = read_all(&path, "/cam").unwrap();
-        assert!(warnings.is_empty(), "{warnings:?}");
+        assert!(warnings.is_empty(), "{format}: {warnings:?}");
         let got: Vec<(u64, i64)> = frames.iter().map(|f| (f.index, f.stamp_ns)).collect();
         let want: Vec<(u64, i64)> = own.iter().map(|&m| (m as u64, stamp_ns(m))).collect();
-        assert_eq!(got, want);
+        assert_eq!(got, want, "{format}");
         assert!((0..12).all(|k| frames[k].image.as_slice() == decoded[k].as_slice()));
-        let mut live = LiveVideo::new("h264", "/cam").unwrap();
+        let mut live = LiveVideo::new(format, "/cam").unwrap();
         for (m, data) in messages.iter().enumerate() {
             let got: Vec<u64> = (live.push(data, stamp_ns(m)).unwrap().iter())
                 .map(|f| f.packet)
                 .collect();
             let want: &[u64] = if own.contains(&m) { &[m as u64] } else { &[] };
-            assert_eq!(got, want, "push {m}");
+            assert_eq!(got, want, "{format} push {m}");
         }
         assert!(live.finish().unwrap().is_empty());
         assert_eq!((live.skipped(), live.lost()), (0, 0));
@@ -3133,8 +3159,8 @@ mod tests {
         // starts at the next keyframe's parameter sets (message 3), its
         // picture (message 4) the first frame.
         let late: Vec<(usize, &[u8])> = numbered(&messages).into_iter().skip(2).collect();
-        let path = dir.path().join("sets-late.mcap");
-        ros_bag(&path, "/cam", "h264", &late);
+        let path = dir.join(format!("sets-late-{format}.mcap"));
+        ros_bag(&path, "/cam", format, &late);
         let (frames, warnings) = read_all(&path, "/cam").unwrap();
         assert_eq!(frames.len(), 8);
         assert_eq!((frames[0].index, frames[0].stamp_ns), (4, stamp_ns(6)));
@@ -3144,7 +3170,7 @@ mod tests {
                 && warnings[0].ends_with("its frames begin at message 3"),
             "{warnings:?}"
         );
-        let mut live = LiveVideo::new("h264", "/cam").unwrap();
+        let mut live = LiveVideo::new(format, "/cam").unwrap();
         let mut got = Vec::new();
         for &(m, data) in &late {
             got.extend(live.push(data, stamp_ns(m)).unwrap());
