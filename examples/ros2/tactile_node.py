@@ -110,8 +110,7 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             compressed = self.declare_parameter("compressed", False).value
             video = self.declare_parameter("video", "").value
             self.frame_id = ""
-            self.lost = 0
-            self.scaled = 0
+            self.seen = {"lost": 0, "scaled": 0}
             self.logic = PalpationNode(models, runtime)
             self.results = self.create_publisher(String, "~/result", 10)
             self.masks = self.create_publisher(Image, "~/tendon_mask", 10)
@@ -142,21 +141,20 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             except ValueError as e:
                 self.get_logger().warning(f"packet skipped: {e}")
                 return
-            lost = self.logic.video.lost if self.logic.video else 0
-            if lost > self.lost:
-                self.get_logger().warning(
-                    f"{lost - self.lost} packet(s) gave no frame (damaged; {lost} in all); "
-                    "the frames after them keep their own stamps")
-                self.lost = lost
-            scaled = self.logic.video.scaled if self.logic.video else 0
-            if scaled > self.scaled:
-                self.get_logger().warning(
-                    f"the stream's frame size changed too often ({scaled} changes in all, past 64 "
-                    "and sooner than one per 32 packets): these frames are scaled to the last size")
-                self.scaled = scaled
+            self.log_new("lost", "packet(s) gave no frame (damaged); the frames after them "
+                         "keep their own stamps")
+            self.log_new("scaled", "change(s) of frame size came too often (past 64, sooner than "
+                         "one per 32 packets): their frames are scaled to the size before")
             frame_id = msg.frame_id if hasattr(msg, "frame_id") else msg.header.frame_id
             for out in outputs:
                 self.publish(out, frame_id)
+
+        def log_new(self, count: str, what: str) -> None:
+            """Log the decoder's `count` (lost, scaled) when it grew."""
+            now = getattr(self.logic.video, count) if self.logic.video else 0
+            if now > self.seen[count]:
+                self.get_logger().warning(f"{now - self.seen[count]} {what} ({now} in all)")
+                self.seen[count] = now
 
         def publish(self, out: Output, frame_id: str) -> None:
             self.results.publish(String(data=json.dumps(out.record)))
