@@ -945,8 +945,10 @@ struct Fed {
     error: Option<Error>,
     /// Messages before the first keyframe.
     skipped: u64,
-    /// Packets written to the decoders.
+    /// Packets written to the decoders, and those of them that show no
+    /// frame ([`Codec::shows_frame`]).
     fed: u64,
+    hidden: u64,
     /// The keyframes with new stream parameters, and those that began no
     /// new decoder.
     changes: StreamChanges,
@@ -1046,7 +1048,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         stamps,
         segments,
     } = to;
-    let (mut skipped, mut fed) = (0, 0);
+    let (mut skipped, mut fed, mut hidden_packets) = (0, 0, 0);
     let mut clock = DecoderClock::default();
     let mut parameters = StreamParameters::default();
     let (mut held, mut merged) = (HeldParameterSets::default(), 0);
@@ -1139,8 +1141,9 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         {
             break None;
         }
+        fed += 1;
         // A packet that shows no frame is owed none.
-        fed += u64::from(!hidden);
+        hidden_packets += u64::from(hidden);
     };
     drop(stdin);
     Fed {
@@ -1148,6 +1151,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         error,
         skipped,
         fed,
+        hidden: hidden_packets,
         changes,
     }
 }
@@ -1536,7 +1540,8 @@ impl VideoFrames {
                 changes.changed.describe("times")
             ));
         }
-        if self.frames < fed.fed {
+        let owed = fed.fed - fed.hidden;
+        if self.frames < owed {
             let stamps = match self.lost.borrowed {
                 0 => format!(
                     "messages that gave none: {}; every frame carries its own packet's stamp",
@@ -1544,15 +1549,16 @@ impl VideoFrames {
                 ),
                 _ => format!(
                     "so each frame after a lost one carries the stamp of an earlier packet (at most {} back)",
-                    fed.fed - self.frames
+                    owed - self.frames
                 ),
             };
             warnings.push(format!(
-                "{} topic {}: FFmpeg gave a frame for {} of its {} packets (a damaged packet gives none); {stamps}",
+                "{} topic {}: FFmpeg gave a frame for {} of its {} packets{} (a damaged packet gives none); {stamps}",
                 self.path.display(),
                 self.topic,
                 self.frames,
-                fed.fed,
+                owed,
+                if fed.hidden > 0 { " that show one" } else { "" },
             ));
         }
         warnings
