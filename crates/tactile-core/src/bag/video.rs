@@ -1917,7 +1917,7 @@ impl LiveVideo {
     /// frame that came, their own not come, and after [`Self::finish`]
     /// every one without a frame.
     pub fn lost(&self) -> u64 {
-        (self.written - self.hidden)
+        (self.written.saturating_sub(self.hidden))
             .saturating_sub(self.decoded)
             .saturating_sub(self.pending.due())
     }
@@ -1968,8 +1968,7 @@ impl LiveVideo {
         };
         let (mut stamp, first) = self.clock.stamp(stamp_ns, packet, 0);
         stamp.hidden = !self.codec.shows_frame(data);
-        let pts = stamp.pts;
-        self.hidden += u64::from(stamp.hidden);
+        let (pts, hidden) = (stamp.pts, stamp.hidden);
         self.pending.add(stamp);
         if let Err(e) = self
             .codec
@@ -1980,6 +1979,7 @@ impl LiveVideo {
             return Err(self.error(format!("FFmpeg stopped reading its packets ({e}): {last}")));
         }
         self.written += 1;
+        self.hidden += u64::from(hidden);
         let mut wait = LIVE_FRAME_WAIT;
         // An empty packet (a publisher's dropped frame) gives no frame: its
         // push does not wait, and a later frame passes it.
