@@ -515,6 +515,8 @@ impl Codec {
     /// first frame's size.
     fn parameters(self, data: &[u8]) -> Vec<u8> {
         match self {
+            // Each set once: a keyframe joined by the sets sent before it
+            // ([`HeldParameterSets`]) may carry them twice.
             Self::H264 | Self::H265 => nal_units(data)
                 .filter(|u| {
                     u.first().is_some_and(|&h| {
@@ -524,6 +526,8 @@ impl Codec {
                         )
                     })
                 })
+                .collect::<BTreeSet<&[u8]>>()
+                .into_iter()
                 .flatten()
                 .copied()
                 .collect(),
@@ -3160,6 +3164,18 @@ mod tests {
         }
         assert!(live.finish().unwrap().is_empty());
         assert_eq!((live.skipped(), live.lost()), (0, 0));
+        // Sets sent apart before the second keyframe, which carries them
+        // too: the same parameters, so no change of them is told.
+        let mut twice = packets.to_vec();
+        twice.insert(4, framed(&mut nal_units(&packets[4]).filter(|u| is_set(u))));
+        assert!(codec.parameter_sets_alone(&twice[4]) && codec.starts_stream(&twice[5]));
+        let path = dir.join(format!("sets-twice-{format}.mcap"));
+        ros_bag(&path, "/cam", format, &numbered(&twice));
+        let (frames, warnings) = read_all(&path, "/cam").unwrap();
+        assert!(
+            frames.len() == 12 && warnings.is_empty(),
+            "{format}: {warnings:?}"
+        );
         // Begun mid-stream, after the first keyframe (the recording's
         // messages 0-2 are delta frames): they are skipped, and the stream
         // starts at the next keyframe's parameter sets (message 3), its
