@@ -603,7 +603,7 @@ struct Stamp {
 struct PendingStamps {
     stamps: BTreeSet<Stamp>,
     /// The latest packets that show no frame (an invisible VP9 frame, an
-    /// AV1 temporal unit of hidden frames, H.264 parameter sets alone):
+    /// AV1 temporal unit of hidden frames, H.264 or H.265 SEI alone):
     /// no frame is waited for, nor counted lost. A frame whose time names
     /// one takes its stamp all the same, should FFmpeg show it.
     hidden: std::collections::VecDeque<Stamp>,
@@ -662,29 +662,23 @@ impl PendingStamps {
     }
 
     /// The stamp of the frame just decoded, whose time FFmpeg gave as
-    /// `time`: that of its own packet in the current decoder; without a
-    /// time, one that does not rise, or one no pending packet has (a
-    /// stream whose stamps are not its display order), that of the
-    /// earliest written packet (see the module's documentation). The error
-    /// when every packet written (`written`) already has its frame.
+    /// `time`: that of its own packet in the current decoder (one taken to
+    /// show no frame too); without a time, one that does not rise, or one
+    /// no packet has (a stream whose stamps are not its display order),
+    /// that of the earliest written packet (see the module's
+    /// documentation). The error when every packet written (`written`)
+    /// already has its frame.
     fn take(&mut self, time: Option<i64>, written: u64) -> std::result::Result<Taken, String> {
-        if let Some(taken) = self.take_hidden(time) {
-            return Ok(taken);
-        }
-        let Some(first) = self.stamps.first().cloned() else {
-            // A packet taken to show no frame showed one, its time not
-            // told: the earliest such packet's.
-            return match self.hidden.pop_front() {
-                Some(stamp) => Ok(Taken {
-                    stamp,
-                    lost: Vec::new(),
-                    passed: 0,
-                    own: false,
-                }),
-                None => Err(format!(
-                    "FFmpeg gave more frames than the {written} packets written to it"
-                )),
-            };
+        // The decoder giving frames now: the earliest one with a packet
+        // (one that shows no frame too, should FFmpeg show one of it).
+        let first = (self.stamps.first().into_iter())
+            .chain(self.hidden.front())
+            .min_by_key(|s| s.segment)
+            .cloned();
+        let Some(first) = first else {
+            return Err(format!(
+                "FFmpeg gave more frames than the {written} packets written to it"
+            ));
         };
         let segment = first.segment;
         // Every packet of a decoder has its time from the same stamp.
@@ -704,11 +698,15 @@ impl PendingStamps {
                 pts: i64::MIN,
                 hidden: false,
             };
-            self.stamps
-                .range(from..)
-                .next()
+            let pending = (self.stamps.range(from..).next())
                 .filter(|s| s.segment == segment && s.stamp_ns == stamp_ns)
-                .cloned()
+                .cloned();
+            // Else a packet taken to show no frame, which showed one.
+            pending.or_else(|| {
+                let at = (self.hidden.iter())
+                    .rposition(|h| h.segment == segment && h.stamp_ns == stamp_ns)?;
+                self.hidden.remove(at)
+            })
         });
         let own_found = own.is_some();
         let passed_before = self.passed(segment);
@@ -723,14 +721,16 @@ impl PendingStamps {
                 own
             }
             // The earliest written packet: without B-frames, the frames
-            // come in the packets' order, whatever their stamps.
-            None => self
-                .stamps
-                .iter()
+            // come in the packets' order, whatever their stamps. With none
+            // waiting, the earliest that shows no frame (which showed one).
+            None => match (self.stamps.iter())
                 .take_while(|s| s.segment == segment)
                 .min_by_key(|s| s.index)
                 .cloned()
-                .unwrap_or(first),
+            {
+                Some(earliest) => earliest,
+                None => self.hidden.pop_front().unwrap_or(first),
+            },
         };
         self.stamps.remove(&stamp);
         let passed = self.passed(segment);
@@ -754,37 +754,6 @@ impl PendingStamps {
             lost,
             passed: passed.saturating_sub(passed_before) as u64,
             own: own_found,
-        })
-    }
-
-    /// A frame of a packet taken to show none, named by its `time` (and
-    /// no pending packet of the same decoder has that time): its stamp.
-    fn take_hidden(&mut self, time: Option<i64>) -> Option<Taken> {
-        let time = time?;
-        // The decoder giving frames now: the earliest one with a packet.
-        let segment = (self.stamps.first().into_iter())
-            .chain(self.hidden.front())
-            .map(|s| s.segment)
-            .min()?;
-        let at = (self.hidden.iter()).rposition(|h| h.segment == segment && h.pts == time)?;
-        let pending = self
-            .stamps
-            .iter()
-            .any(|s| s.segment == segment && s.pts == time);
-        if pending
-            || self
-                .last_time
-                .is_some_and(|(seg, t)| seg == segment && t >= time)
-        {
-            return None;
-        }
-        self.last_time = Some((segment, time));
-        let stamp = self.hidden.remove(at)?;
-        Some(Taken {
-            stamp,
-            lost: Vec::new(),
-            passed: 0,
-            own: true,
         })
     }
 
@@ -839,8 +808,15 @@ struct DecoderClock {
 
 impl DecoderClock {
     /// The stamp of the next packet written to the current decoder, with
-    /// its time, and whether it is the decoder's first.
-    fn stamp(&mut self, stamp_ns: i64, index: u64, log_time_ns: u64) -> (Stamp, bool) {
+    /// its time, and whether it is the decoder's first; `hidden` when it
+    /// shows no frame ([`Codec::shows_frame`]).
+    fn stamp(
+        &mut self,
+        stamp_ns: i64,
+        index: u64,
+        log_time_ns: u64,
+        hidden: bool,
+    ) -> (Stamp, bool) {
         let first = self.in_segment == 0;
         if first {
             self.base_ns = stamp_ns;
@@ -852,7 +828,7 @@ impl DecoderClock {
             index,
             log_time_ns,
             pts: stamp_ns.wrapping_sub(self.base_ns),
-            hidden: false,
+            hidden,
         };
         (stamp, first)
     }
@@ -907,29 +883,35 @@ impl StreamParameters {
 /// a stream as one that carries them does. One for the bag reader's feeder
 /// and the live decoder.
 #[derive(Default)]
-struct HeldParameterSets(Vec<u8>);
+struct HeldParameterSets {
+    sets: Vec<u8>,
+    /// The messages they came in.
+    messages: u64,
+}
 
 /// Most bytes of parameter sets held for the next message: past it, a
 /// hostile topic of parameter sets alone keeps only its latest.
 const MAX_HELD_PARAMETER_SETS: usize = 1 << 20;
 
 impl HeldParameterSets {
-    /// `data` after the parameter sets held, or `None` when it is
-    /// parameter sets alone, now held.
-    fn join<'a>(&mut self, codec: Codec, data: Cow<'a, [u8]>) -> Option<Cow<'a, [u8]>> {
+    /// `data` after the parameter sets held, with the number of messages
+    /// they came in; `None` when it is parameter sets alone, now held.
+    fn join<'a>(&mut self, codec: Codec, data: Cow<'a, [u8]>) -> Option<(Cow<'a, [u8]>, u64)> {
         if codec.parameter_sets_alone(&data) {
-            if self.0.len().saturating_add(data.len()) > MAX_HELD_PARAMETER_SETS {
-                self.0.clear();
+            if self.sets.len().saturating_add(data.len()) > MAX_HELD_PARAMETER_SETS {
+                self.sets.clear();
             }
-            self.0.extend_from_slice(&data);
+            self.sets.extend_from_slice(&data);
+            self.messages += 1;
             return None;
         }
-        if self.0.is_empty() {
-            return Some(data);
+        let messages = std::mem::take(&mut self.messages);
+        if self.sets.is_empty() {
+            return Some((data, messages));
         }
-        let mut joined = std::mem::take(&mut self.0);
+        let mut joined = std::mem::take(&mut self.sets);
         joined.extend_from_slice(&data);
-        Some(Cow::Owned(joined))
+        Some((Cow::Owned(joined), messages))
     }
 }
 
@@ -1055,7 +1037,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
     let (mut skipped, mut fed, mut hidden_packets) = (0, 0, 0);
     let mut clock = DecoderClock::default();
     let mut parameters = StreamParameters::default();
-    let (mut held, mut merged) = (HeldParameterSets::default(), 0);
+    let mut held = HeldParameterSets::default();
     let mut changes = StreamChanges::default();
     let mut next = Some(first);
     let error = loop {
@@ -1096,12 +1078,10 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         }
         // Parameter sets alone join the next message, and are skipped
         // with it.
-        let Some(data) = held.join(codec, data) else {
-            merged += 1;
+        let Some((data, joined)) = held.join(codec, data) else {
             continue;
         };
         let role = parameters.role(codec, &data);
-        let joined = std::mem::take(&mut merged);
         if role == PacketRole::BeforeKeyframe {
             skipped += 1 + joined;
             continue;
@@ -1135,9 +1115,9 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
             clock.next_decoder();
         }
         let stamp_ns = stamp_or_log_time(stamp_ns, m.log_time);
-        let (mut stamp, first) = clock.stamp(stamp_ns, m.index, m.log_time);
-        stamp.hidden = !codec.shows_frame(&data);
-        let (pts, hidden) = (stamp.pts, stamp.hidden);
+        let hidden = !codec.shows_frame(&data);
+        let (stamp, first) = clock.stamp(stamp_ns, m.index, m.log_time, hidden);
+        let pts = stamp.pts;
         // A decoder that stopped reading has exited or was stopped: the
         // reader reports why.
         // The stamp goes first: the frame cannot come out before it.
@@ -1729,9 +1709,11 @@ pub struct LiveVideo {
     name: String,
     decoder: LiveDecoder,
     pending: PendingStamps,
-    /// Packets given, written to the decoders, written that show no
-    /// frame ([`Codec::shows_frame`]), and frames decoded.
+    /// Packets given, skipped before the first keyframe (with the
+    /// parameter sets that joined them), written to the decoders, written
+    /// that show no frame ([`Codec::shows_frame`]), and frames decoded.
     given: u64,
+    skipped: u64,
     written: u64,
     hidden: u64,
     decoded: u64,
@@ -1739,11 +1721,8 @@ pub struct LiveVideo {
     /// parameters of its last keyframe, and their changes.
     clock: DecoderClock,
     parameters: StreamParameters,
-    /// Parameter sets given alone, held for the next packet; the packets
-    /// of them held, and those that joined a packet written.
+    /// Parameter sets given alone, held for the next packet.
     held: HeldParameterSets,
-    joining: u64,
-    merged: u64,
     changes: StreamChanges,
     /// Frames FFmpeg holds back once every packet given is in, learnt
     /// from waits that timed out: a stream with B-frames holds as many as
@@ -1896,14 +1875,13 @@ impl LiveVideo {
             decoder: LiveDecoder::start(codec, name)?,
             pending: PendingStamps::default(),
             given: 0,
+            skipped: 0,
             written: 0,
             hidden: 0,
             decoded: 0,
             clock: DecoderClock::default(),
             parameters: StreamParameters::default(),
             held: HeldParameterSets::default(),
-            joining: 0,
-            merged: 0,
             changes: StreamChanges::default(),
             held_back: 0,
             timeouts: 0,
@@ -1914,7 +1892,7 @@ impl LiveVideo {
     /// Packets given before the first keyframe, which no decoder can read
     /// (a subscription joined mid-stream): skipped.
     pub fn skipped(&self) -> u64 {
-        self.given - self.written - self.merged - self.joining
+        self.skipped
     }
 
     /// Packets that gave no frame (a damaged packet): those shown before a
@@ -1952,17 +1930,15 @@ impl LiveVideo {
         self.given += 1;
         // Parameter sets alone join the next packet, and are skipped with
         // it.
-        let Some(data) = self.held.join(self.codec, Cow::Borrowed(data)) else {
-            self.joining += 1;
+        let Some((data, joined)) = self.held.join(self.codec, Cow::Borrowed(data)) else {
             return Ok(Vec::new());
         };
         let data: &[u8] = &data;
         let role = self.parameters.role(self.codec, data);
-        let joined = std::mem::take(&mut self.joining);
         if role == PacketRole::BeforeKeyframe {
+            self.skipped += 1 + joined;
             return Ok(Vec::new());
         }
-        self.merged += joined;
         let mut frames = Vec::new();
         if role == PacketRole::NewParameters && self.changes.restart(packet, self.written) {
             self.restart(&mut frames)?;
@@ -1970,9 +1946,9 @@ impl LiveVideo {
         let Some(stdin) = self.decoder.stdin.as_mut() else {
             return Err(self.error("its stream was closed".into()));
         };
-        let (mut stamp, first) = self.clock.stamp(stamp_ns, packet, 0);
-        stamp.hidden = !self.codec.shows_frame(data);
-        let (pts, hidden) = (stamp.pts, stamp.hidden);
+        let hidden = !self.codec.shows_frame(data);
+        let (stamp, first) = self.clock.stamp(stamp_ns, packet, 0, hidden);
+        let pts = stamp.pts;
         self.pending.add(stamp);
         if let Err(e) = self
             .codec
