@@ -398,7 +398,13 @@ impl Codec {
         }
     }
 
-    /// True when the packet (Annex B NAL units, each after a `00 00 01`
+    /// True when the packet is a keyframe a decoder can start at
+    /// ([`Self::keyframe`]).
+    fn starts_stream(self, data: &[u8]) -> bool {
+        self.keyframe(data) == Keyframe::Starts
+    }
+
+    /// Whether the packet (Annex B NAL units, each after a `00 00 01`
     /// start code) is a keyframe a decoder can start at: a random-access
     /// picture with the sequence parameter set it needs, as the format
     /// requires every keyframe to carry. The unit's type is the low five
@@ -412,10 +418,18 @@ impl Codec {
     /// `frame_type` 0 in its first three bits (AV1 5.9.2), or any frame
     /// of a sequence of still pictures (`reduced_still_picture_header`,
     /// the fifth bit of the sequence header; AV1 5.5.1). A VP9 packet starts
-    /// one when its (first) frame is a key frame ([`vp9_key_frame`]).
-    fn starts_stream(self, data: &[u8]) -> bool {
+    /// one when its (first) frame is a key frame ([`vp9_key_frame`]). A
+    /// random-access picture (an AV1 key frame) without its sequence
+    /// parameter set (sequence header) is told apart: an encoder that sent
+    /// them once, before the recording began.
+    fn keyframe(self, data: &[u8]) -> Keyframe {
+        let of = |random_access: bool, parameters: bool| match (random_access, parameters) {
+            (false, _) => Keyframe::No,
+            (true, false) => Keyframe::WithoutParameters,
+            (true, true) => Keyframe::Starts,
+        };
         if self == Self::Vp9 {
-            return vp9_key_frame(data).is_some();
+            return of(vp9_key_frame(data).is_some(), true);
         }
         if self == Self::Av1 {
             let (mut sequence, mut still) = (false, false);
@@ -426,13 +440,13 @@ impl Codec {
                         still = payload.first().is_some_and(|b| b & 0x08 != 0);
                     }
                     3 | 6 => {
-                        return sequence
-                            && (still || payload.first().is_some_and(|b| b & 0xe0 == 0));
+                        let key = still || payload.first().is_some_and(|b| b & 0xe0 == 0);
+                        return of(key, sequence);
                     }
                     _ => {}
                 }
             }
-            return false;
+            return Keyframe::No;
         }
         let types = nal_units(data).filter_map(|u| u.first().map(|&h| self.nal_type(h)));
         let (mut sps, mut random_access) = (false, false);
@@ -443,7 +457,16 @@ impl Codec {
                 _ => {}
             }
         }
-        sps && random_access
+        of(random_access, sps)
+    }
+
+    /// What a keyframe must carry to start a stream
+    /// ([`Keyframe::WithoutParameters`]).
+    fn parameters_name(self) -> &'static str {
+        match self {
+            Self::Av1 => "sequence header",
+            _ => "sequence parameter set",
+        }
     }
 
     /// False when the packet shows no frame, so none is owed for it: a
@@ -840,11 +863,26 @@ impl DecoderClock {
     }
 }
 
+/// Whether a packet is a keyframe ([`Codec::keyframe`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Keyframe {
+    /// Not a keyframe.
+    No,
+    /// A random-access picture without the parameters it needs (H.264's
+    /// and H.265's sequence parameter set, AV1's sequence header).
+    WithoutParameters,
+    /// A keyframe a decoder can start at.
+    Starts,
+}
+
 /// What a packet is to the stream it joins.
 #[derive(Debug, PartialEq, Eq)]
 enum PacketRole {
     /// Before the stream's first keyframe: no decoder can read it.
     BeforeKeyframe,
+    /// Before the stream's first keyframe, a random-access picture
+    /// without the parameters it needs ([`Keyframe::WithoutParameters`]).
+    KeyframeWithoutParameters,
     /// A packet of the stream as it is.
     InStream,
     /// A keyframe whose stream parameters differ from the stream's so far.
@@ -861,10 +899,12 @@ impl StreamParameters {
     /// The role of the stream's next packet, `data`; a keyframe's
     /// parameters are kept.
     fn role(&mut self, codec: Codec, data: &[u8]) -> PacketRole {
-        if !codec.starts_stream(data) {
-            return match self.0 {
-                None => PacketRole::BeforeKeyframe,
-                Some(_) => PacketRole::InStream,
+        let keyframe = codec.keyframe(data);
+        if keyframe != Keyframe::Starts {
+            return match (&self.0, keyframe) {
+                (Some(_), _) => PacketRole::InStream,
+                (None, Keyframe::WithoutParameters) => PacketRole::KeyframeWithoutParameters,
+                (None, _) => PacketRole::BeforeKeyframe,
             };
         }
         let new = codec.parameters(data);
@@ -930,7 +970,7 @@ struct Fed {
     /// Why it stopped before the topic's end.
     error: Option<Error>,
     /// Messages before the first keyframe.
-    skipped: u64,
+    before: BeforeFirstKeyframe,
     /// Packets written to the decoders, and those of them that show no
     /// frame ([`Codec::shows_frame`]).
     fed: u64,
@@ -965,6 +1005,55 @@ impl MessagePlaces {
             at.push(format!("… ({} {all})", self.count));
         }
         at.join(", ")
+    }
+}
+
+/// The messages of a stream before its first keyframe, which no decoder
+/// can read (a recording begun mid-stream): how many, with the parameter
+/// sets that joined them, and the keyframes among them without their
+/// parameters. One for the bag reader's feeder and the live decoder.
+#[derive(Default)]
+struct BeforeFirstKeyframe {
+    skipped: u64,
+    without_parameters: MessagePlaces,
+}
+
+impl BeforeFirstKeyframe {
+    /// Skip message `index` of `role`, with the `joined` messages of
+    /// parameter sets before it; false when it is of the stream.
+    fn skip(&mut self, role: &PacketRole, index: u64, joined: u64) -> bool {
+        match role {
+            PacketRole::KeyframeWithoutParameters => self.without_parameters.add([index]),
+            PacketRole::BeforeKeyframe => {}
+            PacketRole::InStream | PacketRole::NewParameters => return false,
+        }
+        self.skipped += 1 + joined;
+        true
+    }
+
+    /// Why keyframes among them started no stream, to follow a warning or
+    /// error; empty when none came.
+    fn keyframes_without_parameters(&self, codec: Codec) -> String {
+        let places = &self.without_parameters;
+        if places.count == 0 {
+            return String::new();
+        }
+        let one = places.count == 1;
+        let how = match codec {
+            Codec::H264 | Codec::H265 => {
+                " (x264's and x265's `repeat-headers=1`, GStreamer's `h264parse` or `h265parse` with `config-interval=-1`)"
+            }
+            _ => "",
+        };
+        format!(
+            "; message{} {} {} keyframe{} without {} {}: the encoder sent it only before the recording began, so have it repeat it at every keyframe{how}",
+            if one { "" } else { "s" },
+            places.describe("in all"),
+            if one { "is a" } else { "are" },
+            if one { "" } else { "s" },
+            if one { "its" } else { "their" },
+            codec.parameters_name(),
+        )
     }
 }
 
@@ -1034,7 +1123,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
         stamps,
         segments,
     } = to;
-    let (mut skipped, mut fed, mut hidden_packets) = (0, 0, 0);
+    let (mut before, mut fed, mut hidden_packets) = (BeforeFirstKeyframe::default(), 0, 0);
     let mut clock = DecoderClock::default();
     let mut parameters = StreamParameters::default();
     let mut held = HeldParameterSets::default();
@@ -1082,8 +1171,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
             continue;
         };
         let role = parameters.role(codec, &data);
-        if role == PacketRole::BeforeKeyframe {
-            skipped += 1 + joined;
+        if before.skip(&role, m.index, joined) {
             continue;
         }
         if role == PacketRole::NewParameters && changes.restart(m.index, fed) {
@@ -1133,7 +1221,7 @@ fn feed(mut messages: TopicMessages, first: TopicMessage, to: FeedTo) -> Fed {
     Fed {
         messages,
         error,
-        skipped,
+        before,
         fed,
         hidden: hidden_packets,
         changes,
@@ -1162,12 +1250,13 @@ fn read_picture(stdout: &mut impl BufRead, error: impl Fn(String) -> Error) -> R
 }
 
 /// How a decoder's stream ended, for bags and live alike: no keyframe
-/// among the `skipped` messages, so nothing was `written`; no frame of the
+/// among the messages skipped (`before`), so nothing was `written`; no
+/// frame of the
 /// packets written; or FFmpeg's failure (`status`, its `last` words) after
 /// `frames` frames.
 fn stream_end(
     codec: Codec,
-    skipped: u64,
+    before: &BeforeFirstKeyframe,
     written: u64,
     frames: u64,
     status: ExitStatus,
@@ -1175,8 +1264,18 @@ fn stream_end(
 ) -> std::result::Result<(), String> {
     let name = codec.name();
     if written == 0 {
+        let keyframe = match codec {
+            Codec::Vp9 => "a key frame".to_string(),
+            Codec::Av1 => format!("a key frame with its {}", codec.parameters_name()),
+            _ => format!(
+                "a random-access picture with its {}",
+                codec.parameters_name()
+            ),
+        };
         return Err(format!(
-            "none of its {skipped} messages is a keyframe of its {name} stream (a random-access picture with its sequence parameter set), so no frame can be decoded"
+            "none of its {} messages is a keyframe of its {name} stream ({keyframe}), so no frame can be decoded{}",
+            before.skipped,
+            before.keyframes_without_parameters(codec)
         ));
     }
     if frames == 0 {
@@ -1494,14 +1593,16 @@ impl VideoFrames {
             return Vec::new();
         };
         let mut warnings = Vec::new();
-        if fed.skipped > 0 {
+        let before = &fed.before;
+        if before.skipped > 0 {
             warnings.push(format!(
-                "{} topic {}: its first {} messages come before the first keyframe of its {} stream (the recording began mid-stream) and cannot be decoded; its frames begin at message {}",
+                "{} topic {}: its first {} messages come before the first keyframe of its {} stream (the recording began mid-stream) and cannot be decoded; its frames begin at message {}{}",
                 self.path.display(),
                 self.topic,
-                fed.skipped,
+                before.skipped,
                 self.codec.name(),
-                self.first + fed.skipped
+                self.first + before.skipped,
+                before.keyframes_without_parameters(self.codec)
             ));
         }
         let changes = &fed.changes;
@@ -1658,8 +1759,7 @@ impl VideoFrames {
             None => return Ok(()),
         };
         let error = fed.error.take();
-        let (skipped, written) = (fed.skipped, fed.fed);
-        self.fed = Some(fed);
+        let fed = self.fed.insert(fed);
         // Packets still without a frame gave none.
         self.pending.extend(self.stamps.try_iter());
         self.lost.places.add(self.pending.drain());
@@ -1669,8 +1769,8 @@ impl VideoFrames {
         if stop && !failed {
             return Ok(());
         }
-        stream_end(self.codec, skipped, written, self.frames, status, &last)
-            .map_err(|e| self.error(e))
+        let ended = stream_end(self.codec, &fed.before, fed.fed, self.frames, status, &last);
+        ended.map_err(|e| self.error(e))
     }
 }
 
@@ -1713,7 +1813,7 @@ pub struct LiveVideo {
     /// parameter sets that joined them), written to the decoders, written
     /// that show no frame ([`Codec::shows_frame`]), and frames decoded.
     given: u64,
-    skipped: u64,
+    before: BeforeFirstKeyframe,
     written: u64,
     hidden: u64,
     decoded: u64,
@@ -1875,7 +1975,7 @@ impl LiveVideo {
             decoder: LiveDecoder::start(codec, name)?,
             pending: PendingStamps::default(),
             given: 0,
-            skipped: 0,
+            before: BeforeFirstKeyframe::default(),
             written: 0,
             hidden: 0,
             decoded: 0,
@@ -1892,7 +1992,7 @@ impl LiveVideo {
     /// Packets given before the first keyframe, which no decoder can read
     /// (a subscription joined mid-stream): skipped.
     pub fn skipped(&self) -> u64 {
-        self.skipped
+        self.before.skipped
     }
 
     /// Packets that gave no frame (a damaged packet): those shown before a
@@ -1935,8 +2035,7 @@ impl LiveVideo {
         };
         let data: &[u8] = &data;
         let role = self.parameters.role(self.codec, data);
-        if role == PacketRole::BeforeKeyframe {
-            self.skipped += 1 + joined;
+        if self.before.skip(&role, packet, joined) {
             return Ok(Vec::new());
         }
         let mut frames = Vec::new();
@@ -2003,9 +2102,15 @@ impl LiveVideo {
         let ended = self.end_decoder(&mut frames);
         self.pending.drain();
         let (status, last) = ended?;
-        let (skipped, written) = (self.skipped(), self.written);
-        stream_end(self.codec, skipped, written, self.decoded, status, &last)
-            .map_err(|e| self.error(e))?;
+        stream_end(
+            self.codec,
+            &self.before,
+            self.written,
+            self.decoded,
+            status,
+            &last,
+        )
+        .map_err(|e| self.error(e))?;
         Ok(frames)
     }
 
@@ -3175,6 +3280,118 @@ mod tests {
         }
         got.extend(live.finish().unwrap());
         assert_eq!((got.len(), got[0].packet, live.skipped()), (8, 4, 3));
+    }
+
+    #[test]
+    fn keyframes_without_their_parameters_are_named_with_the_cure() {
+        // An encoder that sends its parameter sets (AV1: its sequence
+        // header) only at its start, recorded after it: the keyframes it
+        // gives later cannot start a stream. Before, the error said only
+        // that no message is a keyframe, though every few is one.
+        let dir = tempfile::tempdir().unwrap();
+        let (h264, decoded_h264) = h264_without_b_frames(dir.path(), 2, 6);
+        let (av1, decoded_av1) = encode_av1(dir.path(), 8);
+        let bare_h264 = |p: &[u8]| -> Vec<u8> {
+            (nal_units(p).filter(|u| u.first().is_some_and(|h| !matches!(h & 0x1f, 7 | 8))))
+                .flat_map(|u| [&[0, 0, 1][..], u].concat())
+                .collect()
+        };
+        // The OBUs but the sequence header (type 1), each with its size
+        // field as libaom writes them.
+        let bare_av1 = |mut p: &[u8]| -> Vec<u8> {
+            let mut out = Vec::new();
+            while let Some(&h) = p.first() {
+                let (size, rest) = leb128(&p[1 + usize::from(h & 0x04 != 0)..]).unwrap();
+                let len = p.len() - rest.len() + size;
+                if (h >> 3) & 0x0f != 1 {
+                    out.extend_from_slice(&p[..len]);
+                }
+                p = &p[len..];
+            }
+            out
+        };
+        let h264_bare: Vec<Vec<u8>> = h264.iter().map(|p| bare_h264(p)).collect();
+        let av1_bare: Vec<Vec<u8>> = av1.iter().map(|p| bare_av1(p)).collect();
+        assert_eq!(Codec::H264.keyframe(&h264[2]), Keyframe::Starts);
+        assert_eq!(
+            Codec::H264.keyframe(&h264_bare[2]),
+            Keyframe::WithoutParameters
+        );
+        assert_eq!(Codec::H264.keyframe(&h264_bare[3]), Keyframe::No);
+        assert_eq!(Codec::Av1.keyframe(&av1[3]), Keyframe::Starts);
+        assert_eq!(
+            Codec::Av1.keyframe(&av1_bare[3]),
+            Keyframe::WithoutParameters
+        );
+        assert_eq!(Codec::Av1.keyframe(&av1_bare[4]), Keyframe::No);
+        let cure = "the encoder sent it only before the recording began, so have it repeat it at every keyframe";
+        // No keyframe with its parameters at all: refused, naming them.
+        let refused = [
+            (
+                "h264",
+                &h264_bare,
+                format!(
+                    "none of its 6 messages is a keyframe of its h264 stream (a random-access picture with its sequence parameter set), so no frame can be decoded; messages 0, 2, 4 are keyframes without their sequence parameter set: {cure} (x264's"
+                ),
+            ),
+            (
+                "av1",
+                &av1_bare,
+                format!(
+                    "none of its 8 messages is a keyframe of its av1 stream (a key frame with its sequence header), so no frame can be decoded; messages 0, 3, 6 are keyframes without their sequence header: {cure}"
+                ),
+            ),
+        ];
+        for (format, packets, want) in refused {
+            let path = dir.path().join(format!("bare-{format}.mcap"));
+            ros_bag(&path, "/cam", format, &numbered(packets));
+            let e = read_all(&path, "/cam").err().unwrap().to_string();
+            assert!(e.contains(&want), "{e}");
+            let mut live = LiveVideo::new(format, "/cam").unwrap();
+            for (i, p) in packets.iter().enumerate() {
+                assert!(live.push(p, stamp_ns(i)).unwrap().is_empty());
+            }
+            let e = live.finish().err().unwrap().to_string();
+            assert!(e.contains(&want), "{e}");
+        }
+        // The encoder restarted with its parameters later on: the stream
+        // starts there, and the warning names the keyframes before.
+        let later = [
+            (
+                "h264",
+                h264_bare[..4].iter().chain(&h264[4..]),
+                4,
+                &decoded_h264,
+                "messages 0, 2 are keyframes without their sequence parameter set",
+            ),
+            (
+                "av1",
+                av1_bare[..3].iter().chain(&av1[3..]),
+                3,
+                &decoded_av1,
+                "message 0 is a keyframe without its sequence header",
+            ),
+        ];
+        for (format, packets, start, decoded, want) in later {
+            let packets: Vec<Vec<u8>> = packets.cloned().collect();
+            let path = dir.path().join(format!("bare-then-whole-{format}.mcap"));
+            ros_bag(&path, "/cam", format, &numbered(&packets));
+            let (frames, warnings) = read_all(&path, "/cam").unwrap();
+            assert_eq!(frames.len(), packets.len() - start, "{format}");
+            assert!(
+                frames
+                    .iter()
+                    .zip(&decoded[start..])
+                    .all(|(f, d)| f.image.as_slice() == d.as_slice())
+            );
+            assert!(
+                warnings.len() == 1
+                    && warnings[0].contains(&format!(
+                        "its frames begin at message {start}; {want}: {cure}"
+                    )),
+                "{warnings:?}"
+            );
+        }
     }
 
     #[test]
