@@ -400,6 +400,7 @@ impl Codec {
 
     /// True when the packet is a keyframe a decoder can start at
     /// ([`Self::keyframe`]).
+    #[cfg(test)]
     fn starts_stream(self, data: &[u8]) -> bool {
         self.keyframe(data) == Keyframe::Starts
     }
