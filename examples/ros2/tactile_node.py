@@ -110,7 +110,7 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             compressed = self.declare_parameter("compressed", False).value
             video = self.declare_parameter("video", "").value
             self.frame_id = ""
-            self.seen = {"lost": 0, "scaled": 0}
+            self.seen = {"lost": 0, "scaled": 0, "keyframes_without_parameters": 0}
             self.logic = PalpationNode(models, runtime)
             self.results = self.create_publisher(String, "~/result", 10)
             self.masks = self.create_publisher(Image, "~/tendon_mask", 10)
@@ -141,6 +141,10 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
             except ValueError as e:
                 self.get_logger().warning(f"packet skipped: {e}")
                 return
+            self.log_new("keyframes_without_parameters", "keyframe(s) came without their parameter "
+                         "sets (SPS, AV1's sequence header), sent before this subscription began: no "
+                         "frame until one carries them; have the encoder repeat them at every keyframe "
+                         "(x264's repeat-headers=1, GStreamer's h264parse config-interval=-1)")
             self.log_new("lost", "packet(s) gave no frame (damaged); the frames after them "
                          "keep their own stamps")
             self.log_new("scaled", "change(s) of frame size came too often (past 64, sooner than "
@@ -150,7 +154,7 @@ def main(argv: Optional[list[str]] = None) -> None:  # pragma: no cover - needs 
                 self.publish(out, frame_id)
 
         def log_new(self, count: str, what: str) -> None:
-            """Log the decoder's `count` (lost, scaled) when it grew."""
+            """Log the decoder's `count` (keyframes_without_parameters, lost, scaled) when it grew."""
             now = getattr(self.logic.video, count) if self.logic.video else 0
             if now > self.seen[count]:
                 self.get_logger().warning(f"{now - self.seen[count]} {what} ({now} in all)")

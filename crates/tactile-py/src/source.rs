@@ -112,8 +112,9 @@ impl PyFrameSource {
 /// in Annex B, VP9, AV1 OBUs; "h264" for an `h264_msgs` Packet). `decode`
 /// takes each message's `data` (bytes, or rclpy's array) and stamp and
 /// gives the frames decoded so far, normally that packet's own; packets
-/// before the first keyframe are skipped (`skipped` counts them), and
-/// packets that gave no frame (damaged) are counted in `lost`, and
+/// before the first keyframe are skipped (`skipped` counts them, and
+/// `keyframes_without_parameters` those of them that were keyframes sent
+/// without their parameter sets), packets that gave no frame (damaged) are counted in `lost`, and
 /// changes of size whose frames were scaled (a hostile stream's) in
 /// `scaled`. The system's FFmpeg decodes, as it does a bag's video.
 #[pyclass(module = "tactile", name = "VideoDecoder")]
@@ -210,6 +211,17 @@ impl PyVideoDecoder {
     #[getter]
     fn skipped(&self) -> PyResult<u64> {
         self.with(|d| Ok(d.skipped()))
+    }
+
+    /// Keyframes among the packets skipped that came without their
+    /// parameters (H.264's and H.265's SPS, AV1's sequence header): an
+    /// encoder that sent them only before the subscription began. No frame
+    /// comes until a keyframe carries them: have the encoder repeat them
+    /// at every keyframe (x264's `repeat-headers=1`, GStreamer's
+    /// `h264parse config-interval=-1`).
+    #[getter]
+    fn keyframes_without_parameters(&self) -> PyResult<u64> {
+        self.with(|d| Ok(d.keyframes_without_parameters()))
     }
 
     /// Packets that gave no frame (damaged): shown before a frame that

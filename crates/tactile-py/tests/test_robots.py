@@ -421,6 +421,36 @@ def test_a_live_video_topic_decodes_each_packet_as_it_arrives(tmp_path, root, pa
         tactile.VideoDecoder("vp8", name="/cam")
 
 
+def test_a_live_camera_that_sent_its_parameter_sets_only_at_its_start_is_told(tmp_path, root):
+    """An encoder that sends H.264's SPS and PPS once, with its first
+    keyframe (x264's `repeat-headers=0` where the stream has no other
+    place for them), joined after it: its later keyframes cannot start a
+    stream. `keyframes_without_parameters` counts them as they come, for a
+    node to log, and `finish` names them with the cure. Before, only "none
+    of its 11 messages is a keyframe"."""
+    def without_parameter_sets(packet: bytes) -> bytes:
+        units = [u.rstrip(b"\x00") for u in packet.split(b"\x00\x00\x01")[1:]]
+        return b"".join(b"\x00\x00\x01" + u for u in units if u and u[0] & 0x1F not in (7, 8))
+
+    whole = lossless_h264_packets(root / "samples" / "palpation", tmp_path)
+    data = [whole[0]] + [without_parameter_sets(p) for p in whole[1:]]
+    decoder = tactile.VideoDecoder("h264", name="/cam")
+    for i in range(1, len(data)):
+        assert decoder.decode(data[i], stamp(i)) == [], i
+        assert decoder.keyframes_without_parameters == (i >= 4) + (i >= 8), i
+    assert decoder.skipped == len(data) - 1
+    with pytest.raises(ValueError, match=r"messages 3, 7 are keyframes without their sequence parameter "
+                       r"set: the encoder sent it only at its start, before the first of these messages, "
+                       r"so have it repeat it at every keyframe \(x264's and x265's `repeat-headers=1`"):
+        decoder.finish()
+    # From its start, the first keyframe carries them: every frame comes,
+    # each with its own stamp.
+    decoder = tactile.VideoDecoder("h264", name="/cam")
+    got = [f for i, d in enumerate(data) for f in decoder.decode(d, stamp(i))] + decoder.finish()
+    assert [f.stamp_ns for f in got] == [stamp(i) for i in range(len(data))]
+    assert decoder.keyframes_without_parameters == 0
+
+
 def test_a_damaged_packet_leaves_every_other_frame_its_own_stamp(tmp_path, root, palpation_frames):
     """A packet damaged on the way (message 5, in a group of pictures)
     gives no frame: every other frame keeps its own stamp, in a recording

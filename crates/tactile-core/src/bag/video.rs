@@ -1044,7 +1044,7 @@ impl BeforeFirstKeyframe {
             _ => "",
         };
         format!(
-            "; message{} {} {} keyframe{} without {} {}: the encoder sent it only before the recording began, so have it repeat it at every keyframe{how}",
+            "; message{} {} {} keyframe{} without {} {}: the encoder sent it only at its start, before the first of these messages, so have it repeat it at every keyframe{how}",
             if one { "" } else { "s" },
             places.describe("in all"),
             if one { "is a" } else { "are" },
@@ -1991,6 +1991,16 @@ impl LiveVideo {
     /// (a subscription joined mid-stream): skipped.
     pub fn skipped(&self) -> u64 {
         self.before.skipped
+    }
+
+    /// Keyframes among the packets skipped that came without the
+    /// parameters they need (H.264's and H.265's sequence parameter set,
+    /// AV1's sequence header): an encoder that sent them only before the
+    /// subscription began, so no frame comes until a keyframe carries
+    /// them. A node logs it with the cure ([`Self::finish`]'s error says
+    /// it): have the encoder repeat them at every keyframe.
+    pub fn keyframes_without_parameters(&self) -> u64 {
+        self.before.without_parameters.count
     }
 
     /// Packets that gave no frame (a damaged packet): those shown before a
@@ -3322,7 +3332,7 @@ mod tests {
             Keyframe::WithoutParameters
         );
         assert_eq!(Codec::Av1.keyframe(&av1_bare[4]), Keyframe::No);
-        let cure = "the encoder sent it only before the recording began, so have it repeat it at every keyframe";
+        let cure = "the encoder sent it only at its start, before the first of these messages, so have it repeat it at every keyframe";
         // No keyframe with its parameters at all: refused, naming them.
         let refused = [
             (
@@ -3349,6 +3359,8 @@ mod tests {
             for (i, p) in packets.iter().enumerate() {
                 assert!(live.push(p, stamp_ns(i)).unwrap().is_empty());
             }
+            // Told as they come, before `finish`, for a node to log.
+            assert_eq!(live.keyframes_without_parameters(), 3, "{format}");
             let e = live.finish().err().unwrap().to_string();
             assert!(e.contains(&want), "{e}");
         }
