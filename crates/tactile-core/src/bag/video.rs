@@ -1248,9 +1248,9 @@ fn read_picture(stdout: &mut impl BufRead, error: impl Fn(String) -> Error) -> R
 }
 
 /// How a decoder's stream ended, for bags and live alike: no keyframe
-/// among the messages skipped (`before`), so nothing was `written`; no
-/// frame of the
-/// packets written; or FFmpeg's failure (`status`, its `last` words) after
+/// among the messages skipped (`before`, which names those without their
+/// parameters), so nothing was `written`; no frame of the packets
+/// written; or FFmpeg's failure (`status`, its `last` words) after
 /// `frames` frames.
 fn stream_end(
     codec: Codec,
