@@ -180,7 +180,15 @@ pub fn read_json_limited<T: serde::de::DeserializeOwned>(
 ) -> Result<T> {
     let path = path.as_ref();
     let bytes = read_limited(path, max_bytes)?;
-    serde_json::from_slice(&bytes).map_err(|e| Error::dataset(path, Some(e.line()), e.to_string()))
+    serde_json::from_slice(without_byte_order_mark(&bytes))
+        .map_err(|e| Error::dataset(path, Some(e.line()), e.to_string()))
+}
+
+/// Text without its leading UTF-8 byte order mark, as Windows' Notepad
+/// and Excel ("CSV UTF-8") save one: serde_json refuses it as a value (the
+/// CSV reader passes over it by itself).
+pub fn without_byte_order_mark(text: &[u8]) -> &[u8] {
+    text.strip_prefix(b"\xef\xbb\xbf").unwrap_or(text)
 }
 
 /// Create a folder (and parents), naming it on error.

@@ -123,7 +123,8 @@ impl std::fmt::Debug for BallPresses {
 
 fn read_limited(path: &Path, limit: u64) -> Result<String> {
     let bytes = tactile_core::io::read_limited(path, limit)?;
-    String::from_utf8(bytes).map_err(|_| Error::Layout {
+    let text = tactile_core::io::without_byte_order_mark(&bytes);
+    String::from_utf8(text.to_vec()).map_err(|_| Error::Layout {
         path: path.to_path_buf(),
         why: "is not UTF-8 text".into(),
     })

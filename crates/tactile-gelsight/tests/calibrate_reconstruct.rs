@@ -52,6 +52,32 @@ fn the_circle_finder_agrees_with_the_annotations() {
 }
 
 #[test]
+fn a_calibration_folder_saved_by_windows_tools_opens() {
+    // sensor.json and presses.csv written by hand in Notepad or Excel
+    // ("CSV UTF-8"): a UTF-8 byte order mark first, CRLF line ends.
+    // Before, "sensor.json: not a sensor description: expected value at
+    // line 1 column 1".
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("windows");
+    subset(&d, 3, str::to_string);
+    for f in ["sensor.json", "presses.csv"] {
+        let text = std::fs::read_to_string(d.join(f)).unwrap();
+        let text = format!("\u{feff}{}", text.replace('\n', "\r\n"));
+        std::fs::write(d.join(f), text).unwrap();
+    }
+    let windows = BallPresses::open(&d).unwrap();
+    let plain = tmp.path().join("plain");
+    subset(&plain, 3, str::to_string);
+    let plain = BallPresses::open(&plain).unwrap();
+    assert_eq!(windows.sensor, plain.sensor);
+    assert_eq!(
+        format!("{:?}", windows.presses),
+        format!("{:?}", plain.presses)
+    );
+    assert_eq!(windows.presses.len(), 3);
+}
+
+#[test]
 fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     let tmp = tempfile::tempdir().unwrap();
     // No folder, and a file where the folder should be, told apart.

@@ -743,6 +743,21 @@ mod tests {
     }
 
     #[test]
+    fn a_dataset_saved_by_windows_tools_opens() {
+        // Notepad and Excel ("CSV UTF-8") begin a file with a UTF-8 byte
+        // order mark, and end lines with CRLF. Before, the manifest was
+        // refused: "manifest.json:1: expected value at line 1 column 1".
+        let d = tempfile::tempdir().unwrap();
+        let labels = format!("{HEADER}frames/a.png,sphere,1.5,,0,2,3.4\n").replace('\n', "\r\n");
+        tiny(d.path(), &format!("\u{feff}{labels}"));
+        let manifest = std::fs::read_to_string(d.path().join("manifest.json")).unwrap();
+        let manifest = format!("\u{feff}{}", manifest.replace('\n', "\r\n"));
+        std::fs::write(d.path().join("manifest.json"), manifest).unwrap();
+        let ds = Dataset::open(d.path()).unwrap();
+        assert_eq!((ds.len(), ds.number(0, "force_n").unwrap()), (1, 3.4));
+    }
+
+    #[test]
     fn missing_file_and_bad_number_name_the_line() {
         let d = tempfile::tempdir().unwrap();
         tiny(
