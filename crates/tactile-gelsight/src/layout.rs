@@ -329,7 +329,10 @@ fn read_presses_csv(
         if !frame.is_file() {
             return Err(Error::Layout {
                 path: path.to_path_buf(),
-                why: format!("line {line}: frame '{file}' does not exist"),
+                why: format!(
+                    "line {line}: frame '{file}' does not exist{}",
+                    tactile_core::dataset::backslash_hint(&file)
+                ),
             });
         }
         let annotated = match circle_cols {

@@ -75,6 +75,15 @@ fn a_calibration_folder_saved_by_windows_tools_opens() {
         format!("{:?}", plain.presses)
     );
     assert_eq!(windows.presses.len(), 3);
+    // Its frames named with backslashes (`os.path.join` on Windows): the
+    // error says how to write them.
+    let csv = std::fs::read_to_string(d.join("presses.csv")).unwrap();
+    std::fs::write(d.join("presses.csv"), csv.replace("frames/", "frames\\")).unwrap();
+    let e = BallPresses::open(&d).unwrap_err().to_string();
+    assert!(
+        e.contains("does not exist (a backslash is no folder separator here: write 'frames/"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -13,7 +13,7 @@ mod paths;
 mod split;
 mod writer;
 
-pub use paths::{Escape, expect_entry_inside, resolve_inside};
+pub use paths::{Escape, backslash_hint, expect_entry_inside, resolve_inside};
 pub use split::{DEFAULT_SPLIT_SEED, Splits, TestHoldout, check_val_fraction, hold_out};
 pub use writer::DatasetWriter;
 
@@ -346,7 +346,9 @@ impl Dataset {
                 };
                 let path = resolve_inside(&canonical, rel).map_err(|e| bad(e.describe()))?;
                 match std::fs::metadata(&path) {
-                    Err(_) => return Err(bad("does not exist")),
+                    Err(_) => {
+                        return Err(bad(&format!("does not exist{}", backslash_hint(rel))));
+                    }
                     Ok(m) if !m.is_file() => {
                         return Err(bad("is not a regular file (a folder, a pipe or a device)"));
                     }
@@ -755,6 +757,21 @@ mod tests {
         std::fs::write(d.path().join("manifest.json"), manifest).unwrap();
         let ds = Dataset::open(d.path()).unwrap();
         assert_eq!((ds.len(), ds.number(0, "force_n").unwrap()), (1, 3.4));
+    }
+
+    #[test]
+    fn a_path_written_with_backslashes_is_named_with_its_slashes() {
+        // labels.csv written on Windows by os.path.join: `frames\a.png`.
+        let d = tempfile::tempdir().unwrap();
+        tiny(
+            d.path(),
+            &format!("{HEADER}frames\\a.png,sphere,1.5,,0,2,3.4\n"),
+        );
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("labels.csv:2: column 'file': 'frames\\a.png' does not exist (a backslash is no folder separator here: write 'frames/a.png')"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -107,6 +107,20 @@ pub fn resolve_inside(root: &Path, rel: impl AsRef<Path>) -> Result<PathBuf, Esc
     Ok(at)
 }
 
+/// What to add to "'`rel`' does not exist" when `rel` was written on
+/// Windows (`frames\a.png`, as `os.path.join` writes it there): here a
+/// backslash is part of a file name, not a folder separator. Empty for
+/// any other path.
+pub fn backslash_hint(rel: &str) -> String {
+    match rel.contains('\\') {
+        true => format!(
+            " (a backslash is no folder separator here: write '{}')",
+            rel.replace('\\', "/")
+        ),
+        false => String::new(),
+    }
+}
+
 /// Refuse `entry`, a file listed in the folder `dir` (a folder of frames,
 /// of presses), when it is a symbolic link whose target leaves `dir`: the
 /// folder a user names bounds what is read, as a dataset's does.
