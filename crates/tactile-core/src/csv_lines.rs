@@ -29,6 +29,9 @@ pub struct LineCounting<R> {
     in_quotes: bool,
     record_bytes: u64,
     starts: RefCell<VecDeque<(u64, usize)>>,
+    /// The file's first two bytes, to tell UTF-16 text
+    /// ([`crate::io::utf16_hint`]).
+    start: Vec<u8>,
 }
 
 /// Longest record a CSV may hold (a row of `labels.csv` is about a hundred
@@ -48,6 +51,7 @@ impl<R: Read> LineCounting<R> {
             in_quotes: false,
             record_bytes: 0,
             starts: RefCell::new(VecDeque::new()),
+            start: Vec::new(),
         }
     }
 }
@@ -62,11 +66,18 @@ impl<R> LineCounting<R> {
         starts.drain(..i);
         starts.front().map_or(self.line, |&(_, line)| line)
     }
+
+    /// The first bytes read (at most two).
+    pub fn start(&self) -> &[u8] {
+        &self.start
+    }
 }
 
 impl<R: Read> Read for LineCounting<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = self.inner.read(buf)?;
+        let more = (2 - self.start.len()).min(n);
+        self.start.extend_from_slice(&buf[..more]);
         for (i, &b) in buf[..n].iter().enumerate() {
             // A record ends at a line end outside quotes.
             match b {
@@ -109,6 +120,18 @@ pub type CsvReader<R> = csv::Reader<LineCounting<R>>;
 /// Build a csv reader from `builder` over `inner` with line counting.
 pub fn reader<R: Read>(builder: &csv::ReaderBuilder, inner: R) -> CsvReader<R> {
     builder.from_reader(LineCounting::new(inner))
+}
+
+/// The header of a CSV file; else what is wrong with it, with how to save
+/// the file when it is UTF-16 text.
+pub fn headers<R: Read>(reader: &mut CsvReader<R>) -> Result<csv::StringRecord, String> {
+    match reader.headers() {
+        Ok(header) => Ok(header.clone()),
+        Err(e) => Err(format!(
+            "bad header: {e}{}",
+            crate::io::utf16_hint(reader.get_ref().start())
+        )),
+    }
 }
 
 /// What to add to "no such column" when the header is one cell holding a

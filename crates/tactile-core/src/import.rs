@@ -89,9 +89,8 @@ fn read_labels(path: &Path) -> Result<Labels> {
         csv::ReaderBuilder::new().trim(csv::Trim::All),
         std::fs::File::open(path).map_err(|e| Error::io(path, e))?,
     );
-    let header: Vec<String> = csv
-        .headers()
-        .map_err(|e| bad(1, e.to_string()))?
+    let header: Vec<String> = crate::csv_lines::headers(&mut csv)
+        .map_err(|why| bad(1, why))?
         .iter()
         .map(str::to_string)
         .collect();

@@ -181,7 +181,7 @@ pub fn read_json_limited<T: serde::de::DeserializeOwned>(
     let path = path.as_ref();
     let bytes = read_limited(path, max_bytes)?;
     serde_json::from_slice(without_byte_order_mark(&bytes))
-        .map_err(|e| Error::dataset(path, Some(e.line()), e.to_string()))
+        .map_err(|e| Error::dataset(path, Some(e.line()), format!("{e}{}", utf16_hint(&bytes))))
 }
 
 /// Text without its leading UTF-8 byte order mark, as Windows' Notepad
@@ -189,6 +189,18 @@ pub fn read_json_limited<T: serde::de::DeserializeOwned>(
 /// CSV reader passes over it by itself).
 pub fn without_byte_order_mark(text: &[u8]) -> &[u8] {
     text.strip_prefix(b"\xef\xbb\xbf").unwrap_or(text)
+}
+
+/// What to add to the error about a file whose text begins with `start`,
+/// when that is a UTF-16 byte order mark (Excel's "Unicode Text",
+/// Notepad's "UTF-16"): how to save it as UTF-8. Empty otherwise.
+pub fn utf16_hint(start: &[u8]) -> &'static str {
+    match start.get(..2) {
+        Some([0xff, 0xfe] | [0xfe, 0xff]) => {
+            " (it is UTF-16 text, as Excel's \"Unicode Text\" saves it: save it as \"CSV UTF-8\", or JSON as UTF-8)"
+        }
+        _ => "",
+    }
 }
 
 /// Create a folder (and parents), naming it on error.

@@ -126,7 +126,7 @@ fn read_limited(path: &Path, limit: u64) -> Result<String> {
     let text = tactile_core::io::without_byte_order_mark(&bytes);
     String::from_utf8(text.to_vec()).map_err(|_| Error::Layout {
         path: path.to_path_buf(),
-        why: "is not UTF-8 text".into(),
+        why: format!("is not UTF-8 text{}", tactile_core::io::utf16_hint(&bytes)),
     })
 }
 

@@ -66,15 +66,29 @@ fn a_calibration_folder_saved_by_windows_tools_opens() {
         std::fs::write(d.join(f), text).unwrap();
     }
     let windows = BallPresses::open(&d).unwrap();
-    let plain = tmp.path().join("plain");
-    subset(&plain, 3, str::to_string);
-    let plain = BallPresses::open(&plain).unwrap();
+    let plain_dir = tmp.path().join("plain");
+    subset(&plain_dir, 3, str::to_string);
+    let plain = BallPresses::open(&plain_dir).unwrap();
     assert_eq!(windows.sensor, plain.sensor);
     assert_eq!(
         format!("{:?}", windows.presses),
         format!("{:?}", plain.presses)
     );
     assert_eq!(windows.presses.len(), 3);
+    // sensor.json saved as UTF-16 (Notepad's "UTF-16 LE"): refused,
+    // saying how to save it.
+    let sensor = std::fs::read_to_string(plain_dir.join("sensor.json")).unwrap();
+    let utf16: Vec<u8> = [0xfeff_u16]
+        .into_iter()
+        .chain(sensor.encode_utf16())
+        .flat_map(u16::to_le_bytes)
+        .collect();
+    std::fs::write(plain_dir.join("sensor.json"), utf16).unwrap();
+    let e = BallPresses::open(&plain_dir).unwrap_err().to_string();
+    assert!(
+        e.contains("sensor.json: is not UTF-8 text (it is UTF-16 text"),
+        "{e}"
+    );
     // Its frames named with backslashes (`os.path.join` on Windows): the
     // error says how to write them.
     let csv = std::fs::read_to_string(d.join("presses.csv")).unwrap();

@@ -234,9 +234,8 @@ impl Dataset {
             csv::ReaderBuilder::new().has_headers(true).flexible(false),
             file,
         );
-        let header: Vec<String> = reader
-            .headers()
-            .map_err(|e| Error::dataset(&labels, Some(1), format!("bad header: {e}")))?
+        let header: Vec<String> = crate::csv_lines::headers(&mut reader)
+            .map_err(|why| Error::dataset(&labels, Some(1), why))?
             .iter()
             .map(|s| s.trim().to_string())
             .collect();
@@ -757,6 +756,39 @@ mod tests {
         std::fs::write(d.path().join("manifest.json"), manifest).unwrap();
         let ds = Dataset::open(d.path()).unwrap();
         assert_eq!((ds.len(), ds.number(0, "force_n").unwrap()), (1, 3.4));
+    }
+
+    #[test]
+    fn a_labels_csv_saved_as_utf16_says_how_to_save_it() {
+        // Excel's "Unicode Text": UTF-16 LE after its byte order mark.
+        let d = tempfile::tempdir().unwrap();
+        let text = format!("{HEADER}frames/a.png,sphere,1.5,,0,2,3.4\n");
+        tiny(d.path(), &text);
+        let utf16: Vec<u8> = [0xfeff_u16]
+            .into_iter()
+            .chain(text.encode_utf16())
+            .flat_map(u16::to_le_bytes)
+            .collect();
+        std::fs::write(d.path().join("labels.csv"), utf16).unwrap();
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("labels.csv:1: bad header:") && e.contains("(it is UTF-16 text, as Excel's \"Unicode Text\" saves it: save it as \"CSV UTF-8\""),
+            "{e}"
+        );
+        // A manifest saved as UTF-16 says so too.
+        std::fs::write(d.path().join("labels.csv"), &text).unwrap();
+        let manifest = std::fs::read_to_string(d.path().join("manifest.json")).unwrap();
+        let utf16: Vec<u8> = [0xfeff_u16]
+            .into_iter()
+            .chain(manifest.encode_utf16())
+            .flat_map(u16::to_le_bytes)
+            .collect();
+        std::fs::write(d.path().join("manifest.json"), utf16).unwrap();
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("manifest.json") && e.contains("it is UTF-16 text"),
+            "{e}"
+        );
     }
 
     #[test]
