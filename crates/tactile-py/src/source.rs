@@ -114,9 +114,9 @@ impl PyFrameSource {
 /// gives the frames decoded so far, normally that packet's own; packets
 /// before the first keyframe are skipped (`skipped` counts them, and
 /// `keyframes_without_parameters` those of them that were keyframes sent
-/// without their parameter sets), packets that gave no frame (damaged) are counted in `lost`, and
-/// changes of size whose frames were scaled (a hostile stream's) in
-/// `scaled`. The system's FFmpeg decodes, as it does a bag's video.
+/// without their parameter sets), packets that gave no frame (damaged)
+/// are counted in `lost`, and changes of size whose frames were scaled (a
+/// hostile stream's) in `scaled`. The system's FFmpeg decodes, as it does a bag's video.
 #[pyclass(module = "tactile", name = "VideoDecoder")]
 pub struct PyVideoDecoder {
     decoder: Mutex<tactile_core::bag::LiveVideo>,

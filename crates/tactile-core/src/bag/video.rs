@@ -480,11 +480,7 @@ impl Codec {
         match self {
             Self::H264 | Self::H265 => {
                 let mut units = nal_units(data).filter_map(|u| u.first()).peekable();
-                units.peek().is_none()
-                    || units.any(|&h| match self {
-                        Self::H264 => (1..=5).contains(&self.nal_type(h)),
-                        _ => self.nal_type(h) < 32,
-                    })
+                units.peek().is_none() || units.any(|&h| self.is_picture(h))
             }
             Self::Vp9 => vp9_frames(data).any(vp9_shows_frame),
             Self::Av1 => {
@@ -509,13 +505,31 @@ impl Codec {
         let mut sets = false;
         for u in nal_units(data) {
             let Some(&h) = u.first() else { continue };
-            match (self, self.nal_type(h)) {
-                (Self::H264, 7 | 8) | (Self::H265, 32..=34) => sets = true,
-                (Self::H264, 1..=5) | (Self::H265, 0..=31) => return false,
-                _ => {}
+            if self.is_picture(h) {
+                return false;
             }
+            sets |= self.is_parameter_set(h);
         }
         sets
+    }
+
+    /// True for an H.264 or H.265 NAL unit (by its first header byte) of a
+    /// picture: H.264 types 1-5, H.265 0-31 (VCL units).
+    fn is_picture(self, header: u8) -> bool {
+        match (self, self.nal_type(header)) {
+            (Self::H264, t) => (1..=5).contains(&t),
+            (_, t) => t < 32,
+        }
+    }
+
+    /// True for an H.264 or H.265 NAL unit (by its first header byte) of a
+    /// parameter set: H.264's SPS and PPS (7, 8), H.265's VPS, SPS and PPS
+    /// (32-34).
+    fn is_parameter_set(self, header: u8) -> bool {
+        matches!(
+            (self, self.nal_type(header)),
+            (Self::H264, 7 | 8) | (Self::H265, 32..=34)
+        )
     }
 
     /// A NAL unit's type from its first header byte: its low five bits in
@@ -1031,7 +1045,7 @@ impl BeforeFirstKeyframe {
 
     /// Why keyframes among them started no stream, to follow a warning or
     /// error; empty when none came.
-    fn keyframes_without_parameters(&self, codec: Codec) -> String {
+    fn describe_keyframes_without_parameters(&self, codec: Codec) -> String {
         let places = &self.without_parameters;
         if places.count == 0 {
             return String::new();
@@ -1273,7 +1287,7 @@ fn stream_end(
         return Err(format!(
             "none of its {} messages is a keyframe of its {name} stream ({keyframe}), so no frame can be decoded{}",
             before.skipped,
-            before.keyframes_without_parameters(codec)
+            before.describe_keyframes_without_parameters(codec)
         ));
     }
     if frames == 0 {
@@ -1600,7 +1614,7 @@ impl VideoFrames {
                 before.skipped,
                 self.codec.name(),
                 self.first + before.skipped,
-                before.keyframes_without_parameters(self.codec)
+                before.describe_keyframes_without_parameters(self.codec)
             ));
         }
         let changes = &fed.changes;
@@ -3208,30 +3222,25 @@ mod tests {
         }
     }
 
+    /// NAL units as Annex B data, each after a `00 00 01` start code.
+    fn annex_b<'a>(units: impl Iterator<Item = &'a [u8]>) -> Vec<u8> {
+        units.flat_map(|u| [&[0, 0, 1][..], u].concat()).collect()
+    }
+
     /// [`parameter_sets_in_a_message_of_their_own_join_their_keyframe`]
     /// for `codec`'s 12 `packets` (a keyframe every 4) and their frames.
     fn parameter_sets_apart(dir: &Path, codec: Codec, packets: &[Vec<u8>], decoded: &[Vec<u8>]) {
         let format = codec.name();
-        let framed = |units: &mut dyn Iterator<Item = &[u8]>| -> Vec<u8> {
-            units.flat_map(|u| [&[0, 0, 1][..], u].concat()).collect()
-        };
-        let is_set = |u: &[u8]| {
-            u.first().is_some_and(|&h| {
-                matches!(
-                    (codec, codec.nal_type(h)),
-                    (Codec::H264, 7 | 8) | (Codec::H265, 32..=34)
-                )
-            })
-        };
+        let is_set = |u: &[u8]| u.first().is_some_and(|&h| codec.is_parameter_set(h));
         let (mut messages, mut own) = (Vec::new(), Vec::new());
         for p in packets {
-            let sets = framed(&mut nal_units(p).filter(|u| is_set(u)));
+            let sets = annex_b(nal_units(p).filter(|u| is_set(u)));
             if !sets.is_empty() {
                 assert!(codec.parameter_sets_alone(&sets));
                 messages.push(sets);
             }
             own.push(messages.len());
-            messages.push(framed(&mut nal_units(p).filter(|u| !is_set(u))));
+            messages.push(annex_b(nal_units(p).filter(|u| !is_set(u))));
         }
         assert_eq!(messages.len(), 15, "{format}");
         assert!(!codec.starts_stream(&messages[1]));
@@ -3256,7 +3265,7 @@ mod tests {
         // Sets sent apart before the second keyframe, which carries them
         // too: the same parameters, so no change of them is told.
         let mut twice = packets.to_vec();
-        twice.insert(4, framed(&mut nal_units(&packets[4]).filter(|u| is_set(u))));
+        twice.insert(4, annex_b(nal_units(&packets[4]).filter(|u| is_set(u))));
         assert!(codec.parameter_sets_alone(&twice[4]) && codec.starts_stream(&twice[5]));
         let path = dir.join(format!("sets-twice-{format}.mcap"));
         ros_bag(&path, "/cam", format, &numbered(&twice));
@@ -3300,9 +3309,10 @@ mod tests {
         let (h264, decoded_h264) = h264_without_b_frames(dir.path(), 2, 6);
         let (av1, decoded_av1) = encode_av1(dir.path(), 8);
         let bare_h264 = |p: &[u8]| -> Vec<u8> {
-            (nal_units(p).filter(|u| u.first().is_some_and(|h| !matches!(h & 0x1f, 7 | 8))))
-                .flat_map(|u| [&[0, 0, 1][..], u].concat())
-                .collect()
+            annex_b(
+                nal_units(p)
+                    .filter(|u| u.first().is_some_and(|&h| !Codec::H264.is_parameter_set(h))),
+            )
         };
         // The OBUs but the sequence header (type 1), each with its size
         // field as libaom writes them.
@@ -3544,10 +3554,7 @@ mod tests {
         let idr = nal_units(&h264[0])
             .position(|u| u.first().is_some_and(|&h| h & 0x1f == 5))
             .unwrap();
-        let sets: Vec<u8> = nal_units(&h264[0])
-            .take(idr)
-            .flat_map(|u| [&[0, 0, 1][..], u].concat())
-            .collect();
+        let sets = annex_b(nal_units(&h264[0]).take(idr));
         assert!(!Codec::H264.shows_frame(&sets));
         assert!(Codec::H264.shows_frame(&h264[0]));
         assert!(Codec::H264.shows_frame(&h264[1]));
