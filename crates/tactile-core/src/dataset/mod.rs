@@ -762,14 +762,16 @@ mod tests {
     fn a_labels_csv_saved_as_utf16_says_how_to_save_it() {
         // Excel's "Unicode Text": UTF-16 LE after its byte order mark.
         let d = tempfile::tempdir().unwrap();
+        let utf16 = |text: &str| -> Vec<u8> {
+            [0xfeff_u16]
+                .into_iter()
+                .chain(text.encode_utf16())
+                .flat_map(u16::to_le_bytes)
+                .collect()
+        };
         let text = format!("{HEADER}frames/a.png,sphere,1.5,,0,2,3.4\n");
         tiny(d.path(), &text);
-        let utf16: Vec<u8> = [0xfeff_u16]
-            .into_iter()
-            .chain(text.encode_utf16())
-            .flat_map(u16::to_le_bytes)
-            .collect();
-        std::fs::write(d.path().join("labels.csv"), utf16).unwrap();
+        std::fs::write(d.path().join("labels.csv"), utf16(&text)).unwrap();
         let e = Dataset::open(d.path()).unwrap_err().to_string();
         assert!(
             e.contains("labels.csv:1: bad header:") && e.contains("(it is UTF-16 text, as Excel's \"Unicode Text\" saves it: save it as \"CSV UTF-8\""),
@@ -778,12 +780,7 @@ mod tests {
         // A manifest saved as UTF-16 says so too.
         std::fs::write(d.path().join("labels.csv"), &text).unwrap();
         let manifest = std::fs::read_to_string(d.path().join("manifest.json")).unwrap();
-        let utf16: Vec<u8> = [0xfeff_u16]
-            .into_iter()
-            .chain(manifest.encode_utf16())
-            .flat_map(u16::to_le_bytes)
-            .collect();
-        std::fs::write(d.path().join("manifest.json"), utf16).unwrap();
+        std::fs::write(d.path().join("manifest.json"), utf16(&manifest)).unwrap();
         let e = Dataset::open(d.path()).unwrap_err().to_string();
         assert!(
             e.contains("manifest.json") && e.contains("it is UTF-16 text"),
