@@ -395,6 +395,69 @@ impl Codec {
         }
     }
 
+    /// Frames FFmpeg's decoder of this stream holds back for reordering
+    /// (B-frames), as the parameters of `keyframe`, a packet a decoder
+    /// starts at, declare them: H.264's `max_num_reorder_frames`, H.265's
+    /// `sps_max_num_reorder_pics`, read by `ffprobe` as the stream's
+    /// `has_b_frames` (FFmpeg's own parser). 0 for VP9 and AV1, whose
+    /// decoders hold none back, for an H.264 stream that declares nothing
+    /// (its decoder learns its delay as it goes), and when `ffprobe`
+    /// fails or takes longer than [`REORDER_PROBE_WAIT`].
+    fn frames_held_back(self, keyframe: &[u8]) -> u64 {
+        let format = match self {
+            Self::H264 => "h264",
+            Self::H265 => "hevc",
+            Self::Vp9 | Self::Av1 => return 0,
+        };
+        let Ok(mut child) = Command::new("ffprobe")
+            .args(["-v", "error", "-f", format, "-i", "pipe:0"])
+            .args(["-select_streams", "v:0"])
+            .args(["-show_entries", "stream=has_b_frames", "-of", "csv=p=0"])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+        else {
+            return 0;
+        };
+        let stdin = child.stdin.take();
+        let deadline = std::time::Instant::now() + REORDER_PROBE_WAIT;
+        let ended = std::thread::scope(|scope| {
+            // Written on a thread: ffprobe may stop reading once it knows
+            // the stream, and is killed if it takes too long, which ends
+            // the write.
+            scope.spawn(move || {
+                if let Some(mut stdin) = stdin {
+                    let _ = stdin.write_all(keyframe);
+                }
+            });
+            loop {
+                match child.try_wait() {
+                    Ok(Some(status)) => break status.success(),
+                    Ok(None) if std::time::Instant::now() < deadline => {
+                        std::thread::sleep(std::time::Duration::from_millis(2));
+                    }
+                    _ => {
+                        kill(&mut child);
+                        break false;
+                    }
+                }
+            }
+        });
+        let mut out = String::new();
+        if !ended
+            || child
+                .stdout
+                .take()
+                .is_none_or(|mut o| o.read_to_string(&mut out).is_err())
+        {
+            return 0;
+        }
+        out.trim()
+            .parse::<u64>()
+            .map_or(0, |n| n.min(MAX_FRAMES_HELD_BACK))
+    }
+
     /// True when the packet is a keyframe a decoder can start at
     /// ([`Self::keyframe`]).
     #[cfg(test)]
@@ -1810,7 +1873,9 @@ pub struct LiveFrame {
 
 /// A video stream decoded as its packets arrive: a subscription to a
 /// live `CompressedVideo`, `FFMPEGPacket` or `h264_msgs/msg/Packet` topic. The packets go to an
-/// FFmpeg process that starts on the first keyframe (no probing) and
+/// FFmpeg process that starts on the first keyframe (no probing; the
+/// frames it holds back for B-frames are read from that keyframe's
+/// parameters, [`Codec::frames_held_back`]) and
 /// decodes each packet as soon as it is whole (an IVF frame), and a thread
 /// reads its pictures back, so a packet's frame is usually ready before
 /// [`Self::push`] returns. Frames take stamps as a bag's video does (their
@@ -1836,9 +1901,10 @@ pub struct LiveVideo {
     /// Parameter sets given alone, held for the next packet.
     held: HeldParameterSets,
     changes: StreamChanges,
-    /// Frames FFmpeg holds back once every packet given is in, learnt
-    /// from waits that timed out: a stream with B-frames holds as many as
-    /// its reordering needs, and a lost frame never comes. A push waits
+    /// Frames FFmpeg holds back once every packet given is in, read from
+    /// the stream's parameters where they declare it, else learnt from
+    /// waits that timed out: a stream with B-frames holds as many as its
+    /// reordering needs, and a lost frame never comes. A push waits
     /// only while more frames than these are out, so each returns the
     /// frames its packet made due, as soon as they are decoded.
     held_back: u64,
@@ -1852,6 +1918,14 @@ pub struct LiveVideo {
 /// decoding (milliseconds at 1080p), so only a stream that holds frames
 /// back (B-frames) or lost one waits it out.
 const LIVE_FRAME_WAIT: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// How long [`Codec::frames_held_back`] waits for `ffprobe` (tens of
+/// milliseconds on one keyframe), once per decoder a live stream starts.
+const REORDER_PROBE_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// The most frames a decoder holds back for reordering: H.264's and
+/// H.265's decoded picture buffer has at most 16.
+const MAX_FRAMES_HELD_BACK: u64 = 16;
 
 /// Waits of [`LIVE_FRAME_WAIT`] a live stream may time out, so a stream
 /// that keeps losing frames is not held up a second each time.
@@ -2069,6 +2143,11 @@ impl LiveVideo {
         };
         let hidden = !self.codec.shows_frame(data);
         let (stamp, first) = self.clock.stamp(stamp_ns, packet, 0, hidden);
+        if first {
+            // A stream whose parameters declare its B-frames gets no push
+            // that waits out its decoder's delay to learn it.
+            self.held_back = self.held_back.max(self.codec.frames_held_back(data));
+        }
         let pts = stamp.pts;
         self.pending.add(stamp);
         if let Err(e) = self
@@ -2858,26 +2937,80 @@ mod tests {
     #[test]
     fn a_live_stream_with_b_frames_gives_each_frame_as_soon_as_it_is_due() {
         // The B-frame stream above, pushed a packet at a time: FFmpeg
-        // holds one frame back for reordering. After one timed-out wait
-        // (the first packet's), each push waits for the frame its packet
-        // made due, so every push returns exactly one frame, in display
-        // order with its own stamp. Before, pushes stopped waiting after
-        // that timeout and returned before FFmpeg had decoded the frame,
-        // so frames came later (pushed back to back as here, every one
-        // only at the finish).
+        // holds one frame back for reordering, as the stream's SPS
+        // declares. Each push waits for the frame its packet made due, so
+        // every push returns exactly one frame, in display order with its
+        // own stamp. Before, the first push waited out a second to learn
+        // the delay (a timed-out wait); before that, pushes stopped
+        // waiting after that timeout and returned before FFmpeg had
+        // decoded the frame, so frames came later (pushed back to back as
+        // here, every one only at the finish).
         let dir = tempfile::tempdir().unwrap();
         let (packets, decoded, shown) = b_frame_stream(dir.path());
         let mut live = LiveVideo::new("h264", "/cam").unwrap();
         let mut counts = Vec::new();
         let mut frames = Vec::new();
+        let start = std::time::Instant::now();
         for (p, &k) in packets.iter().zip(&shown) {
             let got = live.push(p, stamp_ns(k)).unwrap();
             counts.push(got.len());
             frames.extend(got);
         }
+        let pushed = start.elapsed();
         frames.extend(live.finish().unwrap());
         assert_eq!(counts, [0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1]);
+        assert_eq!(live.timeouts, 0, "a push waited out its decoder's delay");
+        assert!(pushed < LIVE_FRAME_WAIT, "12 pushes took {pushed:?}");
         assert_eq!(frames.len(), 12);
+        for (k, f) in frames.iter().enumerate() {
+            assert_eq!(f.stamp_ns, stamp_ns(k), "{k}");
+            assert!(f.image.as_slice() == decoded[k].as_slice(), "frame {k}");
+        }
+    }
+
+    #[test]
+    fn b_frames_declared_by_a_stream_are_read_from_its_first_keyframe() {
+        // The frames each decoder holds back, as FFmpeg's own parser reads
+        // them from a keyframe's parameters: x264 with two B-frames and no
+        // pyramid (1), x264's and x265's defaults with B-frame pyramids
+        // (2), none without B-frames; and a live H.265 stream with
+        // B-frames that returns each frame from its own push with no
+        // wait timed out.
+        let dir = tempfile::tempdir().unwrap();
+        let folder = |name: &str| {
+            let d = dir.path().join(name);
+            std::fs::create_dir(&d).unwrap();
+            d
+        };
+        let (packets, _, _) = b_frame_stream(&folder("no-pyramid"));
+        assert_eq!(Codec::H264.frames_held_back(&packets[0]), 1);
+        let x264 = ["-c:v", "libx264", "-threads", "1", "-g", "12"];
+        let (packets, _) = encode(&folder("pyramid"), &x264, 12);
+        assert_eq!(Codec::H264.frames_held_back(&packets[0]), 2);
+        let (packets, _) = h264_without_b_frames(&folder("none"), 4, 4);
+        assert_eq!(Codec::H264.frames_held_back(&packets[0]), 0);
+        // Not a stream at all: nothing declared.
+        assert_eq!(Codec::H264.frames_held_back(b"not a stream"), 0);
+        assert_eq!(Codec::H265.frames_held_back(&[]), 0);
+        let x265 = [
+            "-c:v",
+            "libx265",
+            "-x265-params",
+            "keyint=12:repeat-headers=1:frame-threads=1:pools=none:log-level=error",
+        ];
+        let (packets, decoded) = encode(&folder("x265"), &x265, 12);
+        let shown = display_order(&x265, 12, &packets);
+        assert_ne!(shown, (0..12).collect::<Vec<_>>(), "no B-frames");
+        let held = Codec::H265.frames_held_back(&packets[0]);
+        assert!(held >= 1, "x265's B-frames declared as {held}");
+        let mut live = LiveVideo::new("hevc", "/cam").unwrap();
+        let mut frames = Vec::new();
+        for (p, &k) in packets.iter().zip(&shown) {
+            frames.extend(live.push(p, stamp_ns(k)).unwrap());
+        }
+        assert_eq!(live.timeouts, 0, "a push waited out its decoder's delay");
+        assert_eq!(frames.len() as u64, 12 - held, "frames before the finish");
+        frames.extend(live.finish().unwrap());
         for (k, f) in frames.iter().enumerate() {
             assert_eq!(f.stamp_ns, stamp_ns(k), "{k}");
             assert!(f.image.as_slice() == decoded[k].as_slice(), "frame {k}");
