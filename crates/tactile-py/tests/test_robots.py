@@ -421,6 +421,49 @@ def test_a_live_video_topic_decodes_each_packet_as_it_arrives(tmp_path, root, pa
         tactile.VideoDecoder("vp8", name="/cam")
 
 
+def test_a_live_camera_with_b_frames_gives_each_frame_without_waiting(tmp_path, root, palpation_frames):
+    """A camera whose encoder uses B-frames (x264 of the sample frames, two
+    between references; lossless x264 makes none): packets come in
+    decoding order, each stamped with the time its frame shows. The frames
+    its decoder holds back are read from the first keyframe's parameters,
+    so no `decode` waits out a second to learn them: after the first, each
+    returns the next frame in display order with its own stamp and
+    FFmpeg's pixels, the 12 within a second."""
+    pngs = root / "samples" / "palpation"
+    encoder = ["-i", str(pngs / "%06d.png"), "-c:v", "libx264rgb", "-qp", "1", "-threads", "1", "-g", "12",
+               "-x264-params", "bframes=2:b-adapt=0:b-pyramid=none:repeat-headers=1"]
+    packets = tmp_path / "packets"
+    packets.mkdir()
+    subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", *encoder, "-f", "image2",
+                    str(packets / "%03d.h264")], check=True)
+    data = [p.read_bytes() for p in sorted(packets.glob("*.h264"))]
+    # Each packet's display time, as the encoder gave it (decoding order).
+    listed = subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", *encoder, "-f", "framecrc", "-"],
+                            check=True, capture_output=True, text=True).stdout
+    pts = [int(line.split(",")[2]) for line in listed.splitlines() if not line.startswith("#")]
+    shown = [sorted(pts).index(t) for t in pts]
+    assert len(data) == 12 and shown != list(range(12)), "no B-frames"
+    stream = tmp_path / "stream.h264"
+    stream.write_bytes(b"".join(data))
+    raw = subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(stream), "-f", "rawvideo",
+                          "-pix_fmt", "rgb24", "-"], check=True, capture_output=True).stdout
+    decoded = np.frombuffer(raw, np.uint8).reshape(12, *palpation_frames[0].shape)
+    decoder = tactile.VideoDecoder("h264", name="/cam")
+    counts, got = [], []
+    start = time.monotonic()
+    for d, k in zip(data, shown):
+        frames = decoder.decode(d, stamp(k))
+        counts.append(len(frames))
+        got += frames
+    elapsed = time.monotonic() - start
+    got += decoder.finish()
+    assert counts == [0] + [1] * 11
+    assert elapsed < 1.0, f"12 packets took {elapsed:.2f} s"
+    assert [f.stamp_ns for f in got] == [stamp(k) for k in range(12)]
+    assert all(np.array_equal(f.image, rgb) for f, rgb in zip(got, decoded))
+    assert decoder.lost == 0
+
+
 def test_a_live_camera_that_sent_its_parameter_sets_only_at_its_start_is_told(tmp_path, root):
     """An encoder that sends H.264's SPS and PPS once, with its first
     keyframe (x264's `repeat-headers=0` where the stream has no other
