@@ -2973,48 +2973,59 @@ mod tests {
         // The frames each decoder holds back, as FFmpeg's own parser reads
         // them from a keyframe's parameters: x264 with two B-frames and no
         // pyramid (1), x264's and x265's defaults with B-frame pyramids
-        // (2), none without B-frames; and a live H.265 stream with
-        // B-frames that returns each frame from its own push with no
-        // wait timed out.
+        // (2), none without B-frames or from bytes that are no stream. Live, each B-frame stream's pushes wait out no delay:
+        // after the frames held, each returns exactly one frame, in
+        // display order with its own stamp and FFmpeg's pixels.
         let dir = tempfile::tempdir().unwrap();
         let folder = |name: &str| {
             let d = dir.path().join(name);
             std::fs::create_dir(&d).unwrap();
             d
         };
-        let (packets, _, _) = b_frame_stream(&folder("no-pyramid"));
-        assert_eq!(Codec::H264.frames_held_back(&packets[0]), 1);
         let x264 = ["-c:v", "libx264", "-threads", "1", "-g", "12"];
-        let (packets, _) = encode(&folder("pyramid"), &x264, 12);
-        assert_eq!(Codec::H264.frames_held_back(&packets[0]), 2);
-        let (packets, _) = h264_without_b_frames(&folder("none"), 4, 4);
-        assert_eq!(Codec::H264.frames_held_back(&packets[0]), 0);
-        // Not a stream at all: nothing declared.
-        assert_eq!(Codec::H264.frames_held_back(b"not a stream"), 0);
-        assert_eq!(Codec::H265.frames_held_back(&[]), 0);
         let x265 = [
             "-c:v",
             "libx265",
             "-x265-params",
             "keyint=12:repeat-headers=1:frame-threads=1:pools=none:log-level=error",
         ];
-        let (packets, decoded) = encode(&folder("x265"), &x265, 12);
-        let shown = display_order(&x265, 12, &packets);
-        assert_ne!(shown, (0..12).collect::<Vec<_>>(), "no B-frames");
-        let held = Codec::H265.frames_held_back(&packets[0]);
-        assert!(held >= 1, "x265's B-frames declared as {held}");
-        let mut live = LiveVideo::new("hevc", "/cam").unwrap();
-        let mut frames = Vec::new();
-        for (p, &k) in packets.iter().zip(&shown) {
-            frames.extend(live.push(p, stamp_ns(k)).unwrap());
+        let no_pyramid = b_frame_stream(&folder("no-pyramid"));
+        let encoded = |name: &str, encoder: &[&str], codec: Codec, held: u64| {
+            let (packets, decoded) = encode(&folder(name), encoder, 12);
+            let shown = display_order(encoder, 12, &packets);
+            (codec, packets, decoded, shown, held)
+        };
+        for (codec, packets, decoded, shown, held) in [
+            (Codec::H264, no_pyramid.0, no_pyramid.1, no_pyramid.2, 1),
+            encoded("pyramid", &x264, Codec::H264, 2),
+            encoded("x265", &x265, Codec::H265, 2),
+        ] {
+            let name = codec.name();
+            assert_ne!(shown, (0..12).collect::<Vec<_>>(), "{name}: no B-frames");
+            assert_eq!(codec.frames_held_back(&packets[0]), held, "{name}");
+            let mut live = LiveVideo::new(name, "/cam").unwrap();
+            let mut counts = Vec::new();
+            let mut frames = Vec::new();
+            for (p, &k) in packets.iter().zip(&shown) {
+                let got = live.push(p, stamp_ns(k)).unwrap();
+                counts.push(got.len());
+                frames.extend(got);
+            }
+            assert_eq!(live.timeouts, 0, "{name}: a push waited out its delay");
+            let mut want = vec![0; held as usize];
+            want.resize(12, 1);
+            assert_eq!(counts, want, "{name}: frames from each push");
+            frames.extend(live.finish().unwrap());
+            for (k, f) in frames.iter().enumerate() {
+                assert_eq!(f.stamp_ns, stamp_ns(k), "{name} {k}");
+                assert!(f.image.as_slice() == decoded[k].as_slice(), "{name} {k}");
+            }
         }
-        assert_eq!(live.timeouts, 0, "a push waited out its decoder's delay");
-        assert_eq!(frames.len() as u64, 12 - held, "frames before the finish");
-        frames.extend(live.finish().unwrap());
-        for (k, f) in frames.iter().enumerate() {
-            assert_eq!(f.stamp_ns, stamp_ns(k), "{k}");
-            assert!(f.image.as_slice() == decoded[k].as_slice(), "frame {k}");
-        }
+        let (packets, _) = h264_without_b_frames(&folder("none"), 4, 4);
+        assert_eq!(Codec::H264.frames_held_back(&packets[0]), 0);
+        assert_eq!(Codec::H264.frames_held_back(b"not a stream"), 0);
+        assert_eq!(Codec::H265.frames_held_back(&[]), 0);
+        assert_eq!(Codec::Vp9.frames_held_back(&packets[0]), 0);
     }
 
     #[test]
