@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from mcap.reader import make_reader
+from mcap.writer import CompressionType
 from mcap_ros2.reader import read_ros2_messages
 from mcap_ros2.writer import Writer as Ros2McapWriter
 from rosbags.highlevel import AnyReader
@@ -203,6 +204,30 @@ def test_sqlite_and_ros1_bags_name_the_command_that_converts_them(tmp_path, palp
         if given is not db3:
             converted = rosbags_convert(src, tmp_path / f"{src.stem}-mcap")
             assert_the_sample_frames(converted, "/cam/image_raw", palpation_frames, what)
+
+
+@pytest.mark.parametrize("compression", ["LZ4", "NONE"])
+def test_a_bag_whose_chunks_are_lz4_or_not_compressed_is_read(tmp_path, palpation_frames, compression):
+    """rosbag2's MCAP storage compresses chunks with zstd unless its storage
+    configuration says `compression: Lz4` or none: each reads the same
+    frames and stamps (zstd chunks are every other bag's here)."""
+    bag = tmp_path / f"{compression}.mcap"
+    with bag.open("wb") as fh:
+        w = Ros2McapWriter(fh, compression=CompressionType[compression])
+        image = w.register_msgdef("sensor_msgs/msg/Image", IMAGE_MSG)
+        for i, rgb in enumerate(palpation_frames):
+            h, wd, _ = rgb.shape
+            w.write_message("/cam", image, {
+                "header": header(i), "height": h, "width": wd, "encoding": "rgb8",
+                "is_bigendian": 0, "step": wd * 3, "data": rgb.tobytes(),
+            }, log_time=stamp(i), publish_time=stamp(i))
+        w.finish()
+    with bag.open("rb") as fh:
+        chunks = {c.compression for c in make_reader(fh).get_summary().chunk_indexes}
+    assert chunks == {"" if compression == "NONE" else "lz4"}
+    got = list(tactile.frames(bag))
+    assert [f.stamp_ns for f in got] == [stamp(i) for i in range(12)]
+    assert all(np.array_equal(f.image, rgb) for f, rgb in zip(got, palpation_frames))
 
 
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
