@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from mcap.reader import make_reader
-from mcap.writer import CompressionType
+from mcap.writer import CompressionType, IndexType, Writer as McapWriter
 from mcap_ros2.reader import read_ros2_messages
 from mcap_ros2.writer import Writer as Ros2McapWriter
 from rosbags.highlevel import AnyReader
@@ -206,14 +206,16 @@ def test_sqlite_and_ros1_bags_name_the_command_that_converts_them(tmp_path, palp
             assert_the_sample_frames(converted, "/cam/image_raw", palpation_frames, what)
 
 
-@pytest.mark.parametrize("compression", ["LZ4", "NONE"])
-def test_a_bag_whose_chunks_are_lz4_or_not_compressed_is_read(tmp_path, palpation_frames, compression):
-    """rosbag2's MCAP storage compresses chunks with zstd unless its storage
-    configuration says `compression: Lz4` or none: each reads the same
-    frames and stamps (zstd chunks are every other bag's here)."""
-    bag = tmp_path / f"{compression}.mcap"
-    with bag.open("wb") as fh:
-        w = Ros2McapWriter(fh, compression=CompressionType[compression])
+@pytest.mark.parametrize("storage", ["lz4", "uncompressed", "fastwrite"])
+def test_a_bag_of_each_rosbag2_mcap_storage_setting_is_read(tmp_path, palpation_frames, storage):
+    """rosbag2's MCAP storage compresses chunks with zstd (every other bag
+    here) unless its configuration says `compression: Lz4` or none, and
+    its `fastwrite` preset writes no chunks, no message indexes and no
+    CRCs: each lists its topic and reads the same frames and stamps."""
+    zstd = tmp_path / "zstd.mcap"
+    compression = {"lz4": CompressionType.LZ4, "uncompressed": CompressionType.NONE}
+    with zstd.open("wb") as fh:
+        w = Ros2McapWriter(fh, compression=compression.get(storage, CompressionType.ZSTD))
         image = w.register_msgdef("sensor_msgs/msg/Image", IMAGE_MSG)
         for i, rgb in enumerate(palpation_frames):
             h, wd, _ = rgb.shape
@@ -222,9 +224,26 @@ def test_a_bag_whose_chunks_are_lz4_or_not_compressed_is_read(tmp_path, palpatio
                 "is_bigendian": 0, "step": wd * 3, "data": rgb.tobytes(),
             }, log_time=stamp(i), publish_time=stamp(i))
         w.finish()
+    bag = zstd
+    if storage == "fastwrite":
+        # The same messages, byte for byte, as the preset lays them out.
+        bag = tmp_path / "fastwrite.mcap"
+        with zstd.open("rb") as fi, bag.open("wb") as fo:
+            w = McapWriter(fo, use_chunking=False, enable_crcs=False, index_types=IndexType.NONE)
+            w.start(profile="ros2", library="rosbag2")
+            schemas, channels = {}, {}
+            for schema, channel, m in make_reader(fi).iter_messages():
+                if schema.id not in schemas:
+                    schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
+                if channel.id not in channels:
+                    channels[channel.id] = w.register_channel(
+                        channel.topic, channel.message_encoding, schemas[schema.id], channel.metadata)
+                w.add_message(channels[channel.id], m.log_time, m.data, m.publish_time, m.sequence)
+            w.finish()
     with bag.open("rb") as fh:
         chunks = {c.compression for c in make_reader(fh).get_summary().chunk_indexes}
-    assert chunks == {"" if compression == "NONE" else "lz4"}
+    assert chunks == {"lz4": {"lz4"}, "uncompressed": {""}, "fastwrite": set()}[storage]
+    assert [(t["topic"], t["count"]) for t in tactile.bag_topics(bag)] == [("/cam", 12)]
     got = list(tactile.frames(bag))
     assert [f.stamp_ns for f in got] == [stamp(i) for i in range(12)]
     assert all(np.array_equal(f.image, rgb) for f, rgb in zip(got, palpation_frames))
