@@ -111,7 +111,9 @@ impl PyFrameSource {
 /// itself: `format` is the message's `format` or `encoding` (H.264 or H.265
 /// in Annex B, VP9, AV1 OBUs; "h264" for an `h264_msgs` Packet). `decode`
 /// takes each message's `data` (bytes, or rclpy's array) and stamp and
-/// gives the frames decoded so far, normally that packet's own; packets
+/// gives the frames decoded so far, normally that packet's own (with
+/// B-frames, once the decoder lets them go: how many it holds is read from
+/// the first keyframe's parameters, so no call waits to learn it); packets
 /// before the first keyframe are skipped (`skipped` counts them, and
 /// `keyframes_without_parameters` those of them that were keyframes sent
 /// without their parameter sets), packets that gave no frame (damaged)
