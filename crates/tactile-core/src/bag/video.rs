@@ -2935,47 +2935,19 @@ mod tests {
     }
 
     #[test]
-    fn a_live_stream_with_b_frames_gives_each_frame_as_soon_as_it_is_due() {
-        // The B-frame stream above, pushed a packet at a time: FFmpeg
-        // holds one frame back for reordering, as the stream's SPS
-        // declares. Each push waits for the frame its packet made due, so
-        // every push returns exactly one frame, in display order with its
-        // own stamp. Before, the first push waited out a second to learn
-        // the delay (a timed-out wait); before that, pushes stopped
-        // waiting after that timeout and returned before FFmpeg had
-        // decoded the frame, so frames came later (pushed back to back as
-        // here, every one only at the finish).
-        let dir = tempfile::tempdir().unwrap();
-        let (packets, decoded, shown) = b_frame_stream(dir.path());
-        let mut live = LiveVideo::new("h264", "/cam").unwrap();
-        let mut counts = Vec::new();
-        let mut frames = Vec::new();
-        let start = std::time::Instant::now();
-        for (p, &k) in packets.iter().zip(&shown) {
-            let got = live.push(p, stamp_ns(k)).unwrap();
-            counts.push(got.len());
-            frames.extend(got);
-        }
-        let pushed = start.elapsed();
-        frames.extend(live.finish().unwrap());
-        assert_eq!(counts, [0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1]);
-        assert_eq!(live.timeouts, 0, "a push waited out its decoder's delay");
-        assert!(pushed < LIVE_FRAME_WAIT, "12 pushes took {pushed:?}");
-        assert_eq!(frames.len(), 12);
-        for (k, f) in frames.iter().enumerate() {
-            assert_eq!(f.stamp_ns, stamp_ns(k), "{k}");
-            assert!(f.image.as_slice() == decoded[k].as_slice(), "frame {k}");
-        }
-    }
-
-    #[test]
     fn b_frames_declared_by_a_stream_are_read_from_its_first_keyframe() {
         // The frames each decoder holds back, as FFmpeg's own parser reads
         // them from a keyframe's parameters: x264 with two B-frames and no
         // pyramid (1), x264's and x265's defaults with B-frame pyramids
-        // (2), none without B-frames or from bytes that are no stream. Live, each B-frame stream's pushes wait out no delay:
-        // after the frames held, each returns exactly one frame, in
-        // display order with its own stamp and FFmpeg's pixels.
+        // (2), none without B-frames or from bytes that are no stream.
+        // Pushed a packet at a time, back to back, each B-frame stream
+        // waits out no delay: after the frames held, each push returns
+        // exactly one frame, in display order with its own stamp and
+        // FFmpeg's pixels, the 12 pushes within a second. Before, the
+        // first push waited out a second to learn the delay (a timed-out
+        // wait); before that, pushes stopped waiting after that timeout
+        // and returned before FFmpeg had decoded the frame, so frames came
+        // later (back to back as here, every one only at the finish).
         let dir = tempfile::tempdir().unwrap();
         let folder = |name: &str| {
             let d = dir.path().join(name);
@@ -3006,16 +2978,23 @@ mod tests {
             let mut live = LiveVideo::new(name, "/cam").unwrap();
             let mut counts = Vec::new();
             let mut frames = Vec::new();
+            let start = std::time::Instant::now();
             for (p, &k) in packets.iter().zip(&shown) {
                 let got = live.push(p, stamp_ns(k)).unwrap();
                 counts.push(got.len());
                 frames.extend(got);
             }
+            let pushed = start.elapsed();
             assert_eq!(live.timeouts, 0, "{name}: a push waited out its delay");
+            assert!(
+                pushed < LIVE_FRAME_WAIT,
+                "{name}: 12 pushes took {pushed:?}"
+            );
             let mut want = vec![0; held as usize];
             want.resize(12, 1);
             assert_eq!(counts, want, "{name}: frames from each push");
             frames.extend(live.finish().unwrap());
+            assert_eq!(frames.len(), 12, "{name}");
             for (k, f) in frames.iter().enumerate() {
                 assert_eq!(f.stamp_ns, stamp_ns(k), "{name} {k}");
                 assert!(f.image.as_slice() == decoded[k].as_slice(), "{name} {k}");
