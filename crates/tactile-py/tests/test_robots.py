@@ -206,6 +206,21 @@ def test_sqlite_and_ros1_bags_name_the_command_that_converts_them(tmp_path, palp
             assert_the_sample_frames(converted, "/cam/image_raw", palpation_frames, what)
 
 
+def rgb8_bag(path: Path, frames: list[np.ndarray], **writer_options) -> None:
+    """`frames` as rgb8 sensor_msgs/msg/Image messages on /cam, message i
+    stamped `stamp(i)`, written by mcap-ros2-support with `writer_options`
+    (chunk size, compression)."""
+    with path.open("wb") as fh:
+        w = Ros2McapWriter(fh, **writer_options)
+        image = w.register_msgdef("sensor_msgs/msg/Image", IMAGE_MSG)
+        for i, rgb in enumerate(frames):
+            h, wd, _ = rgb.shape
+            w.write_message("/cam", image, {"header": header(i), "height": h, "width": wd, "encoding": "rgb8",
+                                            "is_bigendian": 0, "step": wd * 3, "data": rgb.tobytes()},
+                            log_time=stamp(i))
+        w.finish()
+
+
 @pytest.mark.parametrize("storage", ["lz4", "uncompressed", "fastwrite"])
 def test_a_bag_of_each_rosbag2_mcap_storage_setting_is_read(tmp_path, palpation_frames, storage):
     """rosbag2's MCAP storage compresses chunks with zstd (every other bag
@@ -214,16 +229,7 @@ def test_a_bag_of_each_rosbag2_mcap_storage_setting_is_read(tmp_path, palpation_
     CRCs: each lists its topic and reads the same frames and stamps."""
     zstd = tmp_path / "zstd.mcap"
     compression = {"lz4": CompressionType.LZ4, "uncompressed": CompressionType.NONE}
-    with zstd.open("wb") as fh:
-        w = Ros2McapWriter(fh, compression=compression.get(storage, CompressionType.ZSTD))
-        image = w.register_msgdef("sensor_msgs/msg/Image", IMAGE_MSG)
-        for i, rgb in enumerate(palpation_frames):
-            h, wd, _ = rgb.shape
-            w.write_message("/cam", image, {
-                "header": header(i), "height": h, "width": wd, "encoding": "rgb8",
-                "is_bigendian": 0, "step": wd * 3, "data": rgb.tobytes(),
-            }, log_time=stamp(i), publish_time=stamp(i))
-        w.finish()
+    rgb8_bag(zstd, palpation_frames, compression=compression.get(storage, CompressionType.ZSTD))
     bag = zstd
     if storage == "fastwrite":
         # The same messages, byte for byte, as the preset lays them out.
@@ -752,15 +758,7 @@ def test_a_recording_cut_short_gives_its_complete_frames(tmp_path, palpation_fra
     chunks, and a warning saying what was lost; `ros2 bag record` is
     often stopped so on a robot."""
     bag = tmp_path / "killed.mcap"
-    with bag.open("wb") as fh:
-        w = Ros2McapWriter(fh, chunk_size=1)  # a chunk per frame
-        image = w.register_msgdef("sensor_msgs/msg/Image", IMAGE_MSG)
-        for i, rgb in enumerate(palpation_frames):
-            h, wd, _ = rgb.shape
-            w.write_message("/cam", image, {"header": header(i), "height": h, "width": wd, "encoding": "rgb8",
-                                            "is_bigendian": 0, "step": wd * 3, "data": rgb.tobytes()},
-                            log_time=stamp(i))
-        w.finish()
+    rgb8_bag(bag, palpation_frames, chunk_size=1)  # a chunk per frame
     with bag.open("rb") as fh:
         chunks = make_reader(fh).get_summary().chunk_indexes
     last = chunks[-1]
