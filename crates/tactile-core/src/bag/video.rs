@@ -3729,31 +3729,17 @@ mod tests {
     }
 
     #[test]
-    fn vp9_resized_on_inter_frames_comes_at_its_display_size() {
-        // libvpx's real-time encoder at a low bitrate (WebRTC's adaptive
-        // streams) shrinks the picture on inter frames: 640x480 from the
-        // key frame, 480x360 from frame 60, 320x240 from frame 90 (96
-        // frames of FFmpeg's `testsrc`; `tests/data/README.md` says how it
-        // was made). Each resized frame declares the key frame's 640x480 as
-        // its display size (render_size), so each frame comes at 640x480,
-        // with its own stamp, in a bag and live, nothing lost or counted
-        // as scaled past the decoders' limit.
-        let fixture =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vp9-resized-inter-frames.ivf");
-        let (w, h, frames) = (640, 480, 96);
-        let mut file = std::io::BufReader::new(std::fs::File::open(&fixture).unwrap());
-        assert_eq!(&ivf::read_header(&mut file).unwrap().tag, b"VP90");
-        let packets: Vec<Vec<u8>> = (0..frames)
-            .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
-            .collect();
-        // One key frame: the size changes come on inter frames.
-        let keys: Vec<usize> = (0..frames)
-            .filter(|&i| Codec::Vp9.starts_stream(&packets[i]))
-            .collect();
-        assert_eq!(keys, [0]);
-        let decoded = decode_file(&fixture, (w, h), frames);
-        // FFmpeg's pictures are the source's at full size after each
-        // resize too, not a corner of them or an older frame.
+    fn video_resized_on_inter_frames_comes_at_its_display_size() {
+        // Real-time encoders at a low bitrate (WebRTC's adaptive streams)
+        // shrink the picture on inter frames: libvpx's VP9 and libaom's
+        // AV1 with dynamic resizing, 640x480 from the key frame, 480x360
+        // from frame 60 (and VP9 320x240 from frame 90), of FFmpeg's
+        // `testsrc` (`tests/data/README.md` says how they were made). Each
+        // resized frame declares the key frame's 640x480 as its display
+        // size (render_size), so each frame comes at 640x480 with its own
+        // stamp, in a bag and live, nothing lost or counted as scaled past
+        // the decoders' limit.
+        let (w, h) = (640, 480);
         let source = Command::new("ffmpeg")
             .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
             .args(["-f", "lavfi", "-i", "testsrc=size=640x480:rate=30"])
@@ -3769,49 +3755,66 @@ mod tests {
             .output()
             .unwrap()
             .stdout;
+        let source: Vec<&[u8]> = source.chunks(w * h * 3).collect();
         let mean_error = |a: &[u8], b: &[u8]| {
-            a.iter()
+            let sum: f64 = a
+                .iter()
                 .zip(b)
-                .map(|(x, y)| x.abs_diff(*y) as f64)
-                .sum::<f64>()
-                / a.len() as f64
+                .map(|(x, y)| f64::from(x.abs_diff(*y)))
+                .sum();
+            sum / a.len() as f64
         };
-        for (i, (d, s)) in decoded.iter().zip(source.chunks(w * h * 3)).enumerate() {
-            let error = mean_error(d, s);
-            assert!(
-                error < 10.0,
-                "frame {i}: mean error {error:.1} against the source"
-            );
-            if i >= 30 {
-                let earlier = mean_error(d, &source[(i - 30) * w * h * 3..(i - 29) * w * h * 3]);
-                assert!(
-                    error < earlier,
-                    "frame {i}: nearer the source a second before"
-                );
-            }
-        }
-        let topic = "/cam/vp9";
         let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("resized.mcap");
-        let all = numbered(&packets);
-        ros_bag(&path, topic, "vp9", &all);
-        let (bag, warnings) = read_all(&path, topic).unwrap();
-        assert!(warnings.is_empty(), "{warnings:?}");
-        assert_eq!(bag.len(), frames);
-        for (i, f) in bag.iter().enumerate() {
-            assert_eq!((f.index, f.stamp_ns), (i as u64, stamp_ns(i)));
-            assert_eq!((f.image.width(), f.image.height()), (w, h), "bag {i}");
-            assert!(f.image.as_slice() == decoded[i].as_slice(), "bag {i}");
+        for (name, codec, tag, encoder, frames) in [
+            ("vp9", Codec::Vp9, b"VP90", "libvpx-vp9", 96),
+            ("av1", Codec::Av1, b"AV01", "libaom-av1", 72),
+        ] {
+            let fixture = Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join(format!("tests/data/{name}-resized-inter-frames.ivf"));
+            let mut file = std::io::BufReader::new(std::fs::File::open(&fixture).unwrap());
+            assert_eq!(&ivf::read_header(&mut file).unwrap().tag, tag);
+            let packets: Vec<Vec<u8>> = (0..frames)
+                .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
+                .collect();
+            // One key frame: the size changes come on inter frames.
+            let keys: Vec<usize> = (0..frames)
+                .filter(|&i| codec.starts_stream(&packets[i]))
+                .collect();
+            assert_eq!(keys, [0], "{name}");
+            let decoded = decode_file(&fixture, (w, h), frames);
+            // FFmpeg's pictures are the source's at full size after each
+            // resize too, not a corner of them or an older frame.
+            for (i, d) in decoded.iter().enumerate() {
+                let error = mean_error(d, source[i]);
+                assert!(error < 10.0, "{name} {i}: mean error {error:.1}");
+                if i >= 30 {
+                    let earlier = mean_error(d, source[i - 30]);
+                    assert!(error < earlier, "{name} {i}: nearer a second before");
+                }
+            }
+            let topic = format!("/cam/{name}");
+            let path = dir.path().join(format!("{name}.mcap"));
+            let all = numbered(&packets);
+            ros_bag(&path, &topic, name, &all);
+            let (bag, warnings) = read_all(&path, &topic).unwrap();
+            assert!(warnings.is_empty(), "{name}: {warnings:?}");
+            assert_eq!(bag.len(), frames, "{name}");
+            for (i, f) in bag.iter().enumerate() {
+                assert_eq!((f.index, f.stamp_ns), (i as u64, stamp_ns(i)), "{name}");
+                assert_eq!((f.image.width(), f.image.height()), (w, h), "{name} {i}");
+                assert!(f.image.as_slice() == decoded[i].as_slice(), "{name} {i}");
+            }
+            let mut live = LiveVideo::new(encoder, &topic).unwrap();
+            for (i, p) in all {
+                let got = live.push(p, stamp_ns(i)).unwrap();
+                assert_eq!(got.len(), 1, "{name} live {i}");
+                assert_eq!(got[0].stamp_ns, stamp_ns(i), "{name} live {i}");
+                let pixels = got[0].image.as_slice();
+                assert!(pixels == decoded[i].as_slice(), "{name} live {i}");
+            }
+            assert!(live.finish().unwrap().is_empty(), "{name}");
+            assert_eq!((live.lost(), live.scaled()), (0, 0), "{name}");
         }
-        let mut live = LiveVideo::new("libvpx-vp9", topic).unwrap();
-        for (i, p) in all {
-            let got = live.push(p, stamp_ns(i)).unwrap();
-            assert_eq!(got.len(), 1, "live {i}");
-            assert_eq!(got[0].stamp_ns, stamp_ns(i));
-            assert!(got[0].image.as_slice() == decoded[i].as_slice(), "live {i}");
-        }
-        assert!(live.finish().unwrap().is_empty());
-        assert_eq!((live.lost(), live.scaled()), (0, 0));
     }
 
     /// `packets` (a keyframe every 3) from the second on, as a bag's topic
