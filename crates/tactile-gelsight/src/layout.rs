@@ -11,7 +11,7 @@
 //! ```
 //! Every path stays inside `DIR`; sizes are checked before pixels are read.
 
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::{RgbImage, load_rgb};
@@ -130,24 +130,31 @@ fn read_limited(path: &Path, limit: u64) -> Result<String> {
     })
 }
 
-/// `rel` joined to `root`, refused (with the reason) when it leaves `root`
-/// by its name or through a symbolic link (`canonical` is `root`'s
+/// `rel` joined to `root`, and the file it names (through `./` and links,
+/// to tell a file listed twice); refused (with the reason) when it leaves
+/// `root` by its name or through a symbolic link (`canonical` is `root`'s
 /// canonical path, resolved once per folder).
-fn inside(root: &Path, canonical: &Path, rel: &str) -> std::result::Result<PathBuf, String> {
+fn inside(
+    root: &Path,
+    canonical: &Path,
+    rel: &str,
+) -> std::result::Result<(PathBuf, PathBuf), String> {
     let p = Path::new(rel);
+    // `./frames/a.png` is `frames/a.png`, as a dataset's labels.csv reads it.
     if p.is_absolute()
         || p.components()
-            .any(|c| !matches!(c, std::path::Component::Normal(_)))
+            .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
     {
         return Err(format!(
             "'{rel}' is not a path inside the calibration folder"
         ));
     }
     match tactile_core::dataset::resolve_inside(canonical, p) {
-        Ok(_) => Ok(root.join(p)),
+        Ok(resolved) => Ok((root.join(p), resolved)),
         Err(tactile_core::dataset::Escape::Loop) => {
             Err(format!("'{rel}' passes through too many symbolic links"))
         }
+        Err(tactile_core::dataset::Escape::Empty) => Err("a file name is empty".into()),
         Err(_) => Err(format!(
             "'{rel}' passes through a symbolic link that leaves the calibration folder"
         )),
@@ -180,7 +187,7 @@ impl BallPresses {
         let canonical = root
             .canonicalize()
             .map_err(|e| tactile_core::Error::io(&root, e))?;
-        let bg_path =
+        let (bg_path, _) =
             inside(&root, &canonical, &sensor.background).map_err(|why| Error::Layout {
                 path: sensor_file.clone(),
                 why,
@@ -310,6 +317,9 @@ fn read_presses_csv(
         }
     };
     let mut out = Vec::new();
+    // The line each frame is listed on: a press listed twice would be
+    // fitted twice, and could be fitted and held out at once.
+    let mut listed: std::collections::HashMap<PathBuf, usize> = Default::default();
     for item in tactile_core::csv_lines::records(&mut rd) {
         let (line, rec) = item.map_err(|(line, why)| Error::Layout {
             path: path.to_path_buf(),
@@ -322,7 +332,7 @@ fn read_presses_csv(
             });
         }
         let file = rec.get(file_col).unwrap_or("").trim().to_string();
-        let frame = inside(root, canonical, &file).map_err(|why| Error::Layout {
+        let (frame, the_file) = inside(root, canonical, &file).map_err(|why| Error::Layout {
             path: path.to_path_buf(),
             why: format!("line {line}: {why}"),
         })?;
@@ -332,6 +342,15 @@ fn read_presses_csv(
                 why: format!(
                     "line {line}: frame '{file}' does not exist{}",
                     tactile_core::dataset::backslash_hint(&file)
+                ),
+            });
+        }
+        if let Some(first) = listed.insert(the_file, line) {
+            return Err(Error::Layout {
+                path: path.to_path_buf(),
+                why: format!(
+                    "line {line}: frame '{file}' is listed already on line {first}: \
+                     a press is one row (delete one of the two)"
                 ),
             });
         }

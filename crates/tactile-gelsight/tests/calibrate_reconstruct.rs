@@ -148,6 +148,32 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
             "{name}: {e}"
         );
     }
+    // A press listed twice (as `frames/…` and `./frames/…`): named by both
+    // its lines. Before, it was fitted twice, and could be held out too.
+    let d = tmp.path().join("twice");
+    subset(&d, 2, |l| {
+        l.replace(
+            "frames/press_02.png,300,169,61",
+            "frames/press_02.png,300,169,61\n./frames/press_01.png,299,220,63",
+        )
+    });
+    let e = BallPresses::open(&d).unwrap_err().to_string();
+    assert!(
+        e.contains("presses.csv")
+            && e.contains("line 4")
+            && e.contains("press_01.png")
+            && e.contains("listed already on line 2"),
+        "{e}"
+    );
+    // Written as `./frames/…` alone, it is read (before, it was "not a
+    // path inside the calibration folder").
+    let d = tmp.path().join("dot");
+    subset(&d, 2, |l| {
+        l.replace("frames/press_01.png", "./frames/press_01.png")
+    });
+    let ds = BallPresses::open(&d).unwrap();
+    assert_eq!(ds.presses.len(), 2);
+    assert_eq!(ds.frame(0).unwrap().width(), 640);
     // A frame of another size.
     let d = tmp.path().join("size");
     subset(&d, 2, str::to_string);

@@ -900,4 +900,115 @@ mod tests {
         assert_eq!(ds.split_indices("train"), Some(vec![0]));
         assert_eq!(ds.manifest.count, 1);
     }
+
+    /// A dataset of `frames` 4x4 frames `frames/f{k}.png`, listed by
+    /// `rows` (one row per entry, naming frame k as written).
+    fn listed(dir: &Path, frames: usize, rows: &[String]) -> Dataset {
+        std::fs::create_dir_all(dir.join("frames")).unwrap();
+        for k in 0..frames {
+            let path = dir.join(format!("frames/f{k}.png"));
+            crate::image_io::save_grey_png(path, 4, 4, &[k as u8; 16]).unwrap();
+        }
+        let body: String = rows
+            .iter()
+            .map(|f| format!("{f},flat,0,0,0,1,0.5\n"))
+            .collect();
+        tiny(dir, &format!("{HEADER}{body}"));
+        Dataset::open(dir).unwrap()
+    }
+
+    #[test]
+    fn a_frame_listed_on_several_rows_is_never_on_both_sides_of_a_split() {
+        // A user oversampling frames by repeating their rows: before, the
+        // shuffles split rows, so a repeated frame could be fitted and
+        // tested (or fitted and validated), flattering the test error.
+        let d = tempfile::tempdir().unwrap();
+        let once: Vec<String> = (0..20).map(|k| format!("frames/f{k}.png")).collect();
+        // Frames 0-9 listed three times (once as `./frames/…`), 10-19 once.
+        let mut rows = once.clone();
+        for k in 0..10 {
+            rows.push(format!("frames/f{k}.png"));
+            rows.push(format!("./frames/f{k}.png"));
+        }
+        let frame = |ds: &Dataset, i: usize| {
+            ds.text(i, "file")
+                .unwrap()
+                .trim_start_matches("./")
+                .to_string()
+        };
+        let frames = |ds: &Dataset, r: &[usize]| -> std::collections::BTreeSet<String> {
+            r.iter().map(|&i| frame(ds, i)).collect()
+        };
+        let all_once = |mut r: Vec<usize>, n: usize| {
+            r.sort_unstable();
+            assert_eq!(r, (0..n).collect::<Vec<_>>());
+        };
+        // Frames each listed once are split as the shuffles alone split
+        // them (the splits every model and table so far were made with).
+        let ds = listed(&d.path().join("once"), 20, &once);
+        let s = ds.three_way_split(0.2, 0.2, 7).unwrap();
+        assert_eq!(
+            (s.train, s.val, s.test),
+            (
+                vec![12, 13, 6, 0, 7, 11, 18, 15, 17, 4, 14, 19, 5],
+                vec![16, 8, 3],
+                vec![2, 10, 1, 9]
+            )
+        );
+        let every: Vec<usize> = (0..20).collect();
+        assert_eq!(
+            ds.hold_out(every.clone(), 0.2, 7).unwrap(),
+            hold_out(every, 0.2, 7).unwrap()
+        );
+        assert_eq!(
+            ds.split_by_sequence(0.2, 7).unwrap(),
+            (
+                vec![0, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14, 15, 16, 19],
+                vec![1, 10, 17, 18]
+            )
+        );
+        let ds = listed(&d.path().join("repeated"), 20, &rows);
+        for seed in 0..20 {
+            let s = ds.three_way_split(0.2, 0.2, seed).unwrap();
+            let (tr, va, te) = (
+                frames(&ds, &s.train),
+                frames(&ds, &s.val),
+                frames(&ds, &s.test),
+            );
+            assert!(
+                tr.is_disjoint(&te) && tr.is_disjoint(&va) && va.is_disjoint(&te),
+                "seed {seed}"
+            );
+            assert!(!s.val.is_empty() && !s.test.is_empty());
+            all_once([s.train, s.val, s.test].concat(), rows.len());
+            let (tr, va) = ds.hold_out((0..rows.len()).collect(), 0.2, seed).unwrap();
+            assert!(
+                frames(&ds, &tr).is_disjoint(&frames(&ds, &va)),
+                "seed {seed}"
+            );
+            all_once([tr, va].concat(), rows.len());
+            let (tr, va) = ds.split_by_sequence(0.2, seed).unwrap();
+            assert!(
+                frames(&ds, &tr).is_disjoint(&frames(&ds, &va)),
+                "seed {seed}"
+            );
+            all_once([tr, va].concat(), rows.len());
+        }
+        // One frame on every row cannot be split: named by labels.csv.
+        let one = vec!["frames/f0.png".to_string(); 6];
+        let ds = listed(&d.path().join("one"), 1, &one);
+        let e = ds.three_way_split(0.2, 0.2, 7).unwrap_err().to_string();
+        assert!(
+            e.contains("labels.csv") && e.contains("too few frames"),
+            "{e}"
+        );
+        let e = ds
+            .hold_out((0..6).collect(), 0.2, 7)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("labels.csv") && e.contains("list one frame"),
+            "{e}"
+        );
+    }
 }

@@ -88,18 +88,76 @@ pub fn hold_out(
 }
 
 impl Dataset {
+    /// For each row, the first row that lists the same frame file (itself
+    /// when no row before it does): a frame listed twice, as a user
+    /// oversampling a class by repeating rows does, is one frame to split.
+    fn first_listings(&self) -> Vec<usize> {
+        let root = self.root.canonicalize().ok();
+        let mut first: std::collections::HashMap<std::path::PathBuf, usize> = Default::default();
+        (0..self.len())
+            .map(|i| {
+                let Some(rel) = self.text_opt(i, "file") else {
+                    return i;
+                };
+                // The file itself, through `./` and links; the text as
+                // written where it cannot be resolved.
+                let key = root
+                    .as_deref()
+                    .and_then(|r| super::resolve_inside(r, rel).ok())
+                    .unwrap_or_else(|| std::path::PathBuf::from(rel));
+                *first.entry(key).or_insert(i)
+            })
+            .collect()
+    }
+
+    /// `(keep, other)` with no frame on both sides: the rows of `other`
+    /// whose frame `keep` lists too move into `keep`, or, when that would
+    /// leave `other` empty, the rows of `keep` whose frame `other` lists
+    /// move into `other`. Rows of frames listed once stay where they are,
+    /// so a dataset without repeated rows is split as before.
+    fn keep_frames_together(
+        &self,
+        keep: Vec<usize>,
+        other: Vec<usize>,
+        first: &[usize],
+    ) -> (Vec<usize>, Vec<usize>) {
+        let into = |mut to: Vec<usize>, from: Vec<usize>| {
+            let frames: std::collections::HashSet<usize> = to.iter().map(|&i| first[i]).collect();
+            let (moved, from): (Vec<usize>, Vec<usize>) =
+                from.into_iter().partition(|&i| frames.contains(&first[i]));
+            to.extend(moved);
+            (to, from)
+        };
+        let (kept, rest) = into(keep.clone(), other.clone());
+        if !rest.is_empty() || other.is_empty() {
+            return (kept, rest);
+        }
+        let (other, keep) = into(other, keep);
+        (keep, other)
+    }
+
     /// [`hold_out`] of this dataset's `rows`: too few of them is named by
     /// its labels file; a bad fraction is the flag's error, not the file's.
+    /// A frame listed on several rows validates or trains, never both.
     pub fn hold_out(
         &self,
         rows: Vec<usize>,
         val_fraction: f64,
         seed: u64,
     ) -> Result<(Vec<usize>, Vec<usize>)> {
-        hold_out(rows, val_fraction, seed).map_err(|e| match e {
+        let too_few = |e: Error| match e {
             Error::Config(_) => e,
             e => Error::dataset(self.labels_path(), None, e.to_string()),
-        })
+        };
+        let (train, val) = hold_out(rows, val_fraction, seed).map_err(too_few)?;
+        let (train, val) = self.keep_frames_together(train, val, &self.first_listings());
+        if train.is_empty() {
+            return Err(too_few(Error::Invalid(format!(
+                "the {} training rows list one frame: need at least 2 frames to hold one out",
+                val.len()
+            ))));
+        }
+        Ok((train, val))
     }
 
     /// `(train, validation, test)` rows: the `split` column's train and
@@ -115,6 +173,7 @@ impl Dataset {
         check_fraction("test fraction", test_fraction)?;
         check_fraction("validation fraction", val_fraction)?;
         let mut rng = StdRng::seed_from_u64(seed);
+        let first = self.first_listings();
         let (mut train, test) = match (self.split_indices("train"), self.evaluation_split()) {
             (Some(tr), Some(te)) => (tr, te),
             _ => {
@@ -122,22 +181,30 @@ impl Dataset {
                 all.shuffle(&mut rng);
                 let n_test = ((all.len() as f64 * test_fraction).round() as usize).max(1);
                 let test = all.split_off(all.len().saturating_sub(n_test));
-                (all, test)
+                // A frame listed twice is tested only if it is never fitted.
+                self.keep_frames_together(all, test, &first)
             }
         };
         train.shuffle(&mut rng);
         let n_val = ((train.len() as f64 * val_fraction).round() as usize).max(1);
-        if train.len() <= n_val || test.is_empty() {
-            return Err(Error::dataset(
+        let too_few = || {
+            Error::dataset(
                 self.labels_path(),
                 None,
                 format!(
                     "too few frames ({}) for train, validation and test sets",
                     self.len()
                 ),
-            ));
+            )
+        };
+        if train.len() <= n_val || test.is_empty() {
+            return Err(too_few());
         }
         let val = train.split_off(train.len() - n_val);
+        let (train, val) = self.keep_frames_together(train, val, &first);
+        if train.is_empty() {
+            return Err(too_few());
+        }
         Ok(Splits { train, val, test })
     }
 
@@ -194,10 +261,12 @@ impl Dataset {
     ) -> Result<(Vec<usize>, Vec<usize>)> {
         check_fraction("validation fraction", val_fraction)?;
         let mut groups: std::collections::BTreeMap<String, Vec<usize>> = Default::default();
-        for i in 0..self.len() {
+        for (i, first) in self.first_listings().into_iter().enumerate() {
+            // A frame listed on several rows without a sequence is one
+            // group (named by its first row, as a frame listed once is).
             let key = match self.text_opt(i, "sequence") {
                 Some(s) => format!("s{s}"),
-                None => format!("f{i}"),
+                None => format!("f{first}"),
             };
             groups.entry(key).or_default().push(i);
         }
