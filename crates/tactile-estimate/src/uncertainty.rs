@@ -256,7 +256,7 @@ impl UncertaintyFit {
     pub fn note(&self, data: &std::path::Path, split: Option<&str>) -> serde_json::Value {
         serde_json::json!({
             "data": data.display().to_string(),
-            "split": split,
+            "split": split.map(tactile_core::dataset::split_name),
             "frames": self.frames,
             "coverage_cross_fitted": self.coverage_cross_fitted,
         })

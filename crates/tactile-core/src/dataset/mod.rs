@@ -115,6 +115,19 @@ impl Manifest {
     }
 }
 
+/// A `split` cell as the toolkit names splits: `train`, `val` or `test`
+/// in any case, and as other tools name them (`training`, `valid`,
+/// `validation`, `dev`, `testing`); anything else as written, in no split
+/// the toolkit makes.
+pub fn split_name(cell: &str) -> String {
+    match cell.trim().to_ascii_lowercase().as_str() {
+        "train" | "training" => "train".into(),
+        "val" | "valid" | "validation" | "dev" => "val".into(),
+        "test" | "testing" => "test".into(),
+        _ => cell.to_string(),
+    }
+}
+
 /// One row of `labels.csv`: the raw cells by column name, with its line.
 #[derive(Debug, Clone)]
 pub struct LabelRow {
@@ -282,6 +295,10 @@ impl Dataset {
                 .iter()
                 .cloned()
                 .zip(rec.iter().map(str::to_string))
+                .map(|(column, cell)| match column.as_str() {
+                    "split" => (column, split_name(&cell)),
+                    _ => (column, cell),
+                })
                 .collect();
             rows.push(LabelRow { line, cells });
         }
@@ -543,10 +560,36 @@ impl Dataset {
         if self.rows.first().map(|r| r.cells.contains_key("split")) != Some(true) {
             return None;
         }
+        // A split asked for by another of its names (`--split validation`).
+        let split = split_name(split);
         Some(
             (0..self.len())
-                .filter(|&i| self.text_opt(i, "split") == Some(split))
+                .filter(|&i| self.text_opt(i, "split") == Some(split.as_str()))
                 .collect(),
+        )
+    }
+
+    /// What a `split` column holds besides `train`, `val` and `test` (its
+    /// values and how many rows each), for an error about too few rows to
+    /// say why: empty without such values.
+    pub fn split_hint(&self) -> String {
+        let mut other: std::collections::BTreeMap<&str, usize> = Default::default();
+        for i in 0..self.len() {
+            match self.text_opt(i, "split") {
+                None | Some("train" | "val" | "test") => {}
+                Some(v) => *other.entry(v).or_default() += 1,
+            }
+        }
+        if other.is_empty() {
+            return String::new();
+        }
+        let values: Vec<String> = other
+            .iter()
+            .map(|(v, n)| format!("'{v}' ({n} rows)"))
+            .collect();
+        format!(
+            " (its split column also holds {}, in no split: name them train, val or test)",
+            values.join(", ")
         )
     }
 
@@ -1010,5 +1053,59 @@ mod tests {
             e.contains("labels.csv") && e.contains("list one frame"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn split_names_of_other_tools_are_read_and_unknown_ones_are_named() {
+        // A split column written by hand or by another tool: `Train`,
+        // `Validation`, `TEST`, `training`, `dev`. Before, only the exact
+        // `train`, `val` and `test` counted, so training found "0 training
+        // frames" without saying why.
+        let d = tempfile::tempdir().unwrap();
+        let write = |dir: &Path, splits: &[&str]| {
+            std::fs::create_dir_all(dir.join("frames")).unwrap();
+            crate::image_io::save_grey_png(dir.join("frames/a.png"), 4, 4, &[0; 16]).unwrap();
+            let body: String = splits
+                .iter()
+                .map(|s| format!("frames/a.png,flat,0,0,0,1,0.5,{s}\n"))
+                .collect();
+            let header = HEADER.replace('\n', ",split\n");
+            tiny(dir, &format!("{header}{body}"));
+            Dataset::open(dir).unwrap()
+        };
+        let named = [
+            "Train",
+            "training",
+            " TRAIN ",
+            "Validation",
+            "valid",
+            "dev",
+            "TEST",
+            "testing",
+            "",
+        ];
+        let ds = write(&d.path().join("named"), &named);
+        assert_eq!(ds.split_indices("train"), Some(vec![0, 1, 2]));
+        assert_eq!(ds.split_indices("val"), Some(vec![3, 4, 5]));
+        assert_eq!(ds.split_indices("Validation"), Some(vec![3, 4, 5]));
+        assert_eq!(ds.split_indices("test"), Some(vec![6, 7]));
+        assert_eq!(ds.evaluation_split(), Some(vec![6, 7]));
+        assert_eq!(ds.split_hint(), "");
+        // Values the toolkit has no split for are kept as written, and an
+        // error about too few rows names them.
+        let ds = write(
+            &d.path().join("folds"),
+            &["fold1", "fold1", "fold2", "train"],
+        );
+        assert_eq!(ds.split_indices("train"), Some(vec![3]));
+        let e = ds.hold_out(vec![3], 0.2, 7).unwrap_err().to_string();
+        assert!(
+            e.contains("labels.csv")
+                && e.contains("'fold1' (2 rows), 'fold2' (1 rows)")
+                && e.contains("name them train, val or test"),
+            "{e}"
+        );
+        let e = ds.three_way_split(0.2, 0.2, 7).unwrap_err().to_string();
+        assert!(e.contains("too few frames") && e.contains("'fold1'"), "{e}");
     }
 }

@@ -147,7 +147,11 @@ impl Dataset {
     ) -> Result<(Vec<usize>, Vec<usize>)> {
         let too_few = |e: Error| match e {
             Error::Config(_) => e,
-            e => Error::dataset(self.labels_path(), None, e.to_string()),
+            e => Error::dataset(
+                self.labels_path(),
+                None,
+                format!("{e}{}", self.split_hint()),
+            ),
         };
         let (train, val) = hold_out(rows, val_fraction, seed).map_err(too_few)?;
         let (train, val) = self.keep_frames_together(train, val, &self.first_listings());
@@ -192,8 +196,9 @@ impl Dataset {
                 self.labels_path(),
                 None,
                 format!(
-                    "too few frames ({}) for train, validation and test sets",
-                    self.len()
+                    "too few frames ({}) for train, validation and test sets{}",
+                    self.len(),
+                    self.split_hint()
                 ),
             )
         };
