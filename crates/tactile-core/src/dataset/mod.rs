@@ -1050,7 +1050,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("labels.csv") && e.contains("list one frame"),
+            e.contains("labels.csv") && e.contains("need at least 2 training frames, found 1"),
             "{e}"
         );
     }

@@ -110,35 +110,36 @@ impl Dataset {
             .collect()
     }
 
-    /// `(keep, other)` with no frame on both sides: the rows of `other`
-    /// whose frame `keep` lists too move into `keep`, or, when that would
-    /// leave `other` empty, the rows of `keep` whose frame `other` lists
-    /// move into `other`. Rows of frames listed once stay where they are,
-    /// so a dataset without repeated rows is split as before.
-    fn keep_frames_together(
-        &self,
-        keep: Vec<usize>,
-        other: Vec<usize>,
-        first: &[usize],
-    ) -> (Vec<usize>, Vec<usize>) {
-        let into = |mut to: Vec<usize>, from: Vec<usize>| {
-            let frames: std::collections::HashSet<usize> = to.iter().map(|&i| first[i]).collect();
-            let (moved, from): (Vec<usize>, Vec<usize>) =
-                from.into_iter().partition(|&i| frames.contains(&first[i]));
-            to.extend(moved);
-            (to, from)
-        };
-        let (kept, rest) = into(keep.clone(), other.clone());
-        if !rest.is_empty() || other.is_empty() {
-            return (kept, rest);
+    /// `rows` as frames: one row per frame (the first of its rows in
+    /// `rows`, in their order), and a function giving a list of those
+    /// back as every row of their frames. For a dataset that lists each
+    /// frame once both are the identity, so it is split as before.
+    fn by_frame(&self, rows: &[usize]) -> (Vec<usize>, impl Fn(&[usize]) -> Vec<usize> + use<>) {
+        let first = self.first_listings();
+        let mut members: std::collections::HashMap<usize, Vec<usize>> = Default::default();
+        let mut frames = Vec::new();
+        for &i in rows {
+            let group = members.entry(first[i]).or_default();
+            if group.is_empty() {
+                frames.push(i);
+            }
+            group.push(i);
         }
-        let (other, keep) = into(other, keep);
-        (keep, other)
+        let by_row: std::collections::HashMap<usize, Vec<usize>> =
+            members.into_values().map(|g| (g[0], g)).collect();
+        let rows_of = move |frames: &[usize]| -> Vec<usize> {
+            frames
+                .iter()
+                .flat_map(|f| by_row.get(f).into_iter().flatten().copied())
+                .collect()
+        };
+        (frames, rows_of)
     }
 
     /// [`hold_out`] of this dataset's `rows`: too few of them is named by
     /// its labels file; a bad fraction is the flag's error, not the file's.
-    /// A frame listed on several rows validates or trains, never both.
+    /// A frame listed on several rows is one frame: its rows validate or
+    /// train together.
     pub fn hold_out(
         &self,
         rows: Vec<usize>,
@@ -153,14 +154,9 @@ impl Dataset {
                 format!("{e}{}", self.split_hint()),
             ),
         };
-        let (train, val) = hold_out(rows, val_fraction, seed).map_err(too_few)?;
-        let (train, val) = self.keep_frames_together(train, val, &self.first_listings());
-        if train.is_empty() {
-            return Err(too_few(Error::Invalid(format!(
-                "the {} training rows list one frame: need at least 2 frames to hold one out",
-                val.len()
-            ))));
-        }
+        let (frames, rows_of) = self.by_frame(&rows);
+        let (train, val) = hold_out(frames, val_fraction, seed).map_err(too_few)?;
+        let (train, val) = (rows_of(&train), rows_of(&val));
         Ok((train, val))
     }
 
@@ -177,22 +173,23 @@ impl Dataset {
         check_fraction("test fraction", test_fraction)?;
         check_fraction("validation fraction", val_fraction)?;
         let mut rng = StdRng::seed_from_u64(seed);
-        let first = self.first_listings();
-        let (mut train, test) = match (self.split_indices("train"), self.evaluation_split()) {
+        // A frame listed on several rows is one frame: its rows are fitted,
+        // validated or tested together.
+        let (train, test) = match (self.split_indices("train"), self.evaluation_split()) {
             (Some(tr), Some(te)) => (tr, te),
             _ => {
-                let mut all: Vec<usize> = (0..self.len()).collect();
+                let (mut all, rows_of) = self.by_frame(&(0..self.len()).collect::<Vec<_>>());
                 all.shuffle(&mut rng);
                 let n_test = ((all.len() as f64 * test_fraction).round() as usize).max(1);
                 let test = all.split_off(all.len().saturating_sub(n_test));
-                // A frame listed twice is tested only if it is never fitted.
-                self.keep_frames_together(all, test, &first)
+                (rows_of(&all), rows_of(&test))
             }
         };
+        let (mut train, rows_of) = self.by_frame(&train);
         train.shuffle(&mut rng);
         let n_val = ((train.len() as f64 * val_fraction).round() as usize).max(1);
-        let too_few = || {
-            Error::dataset(
+        if train.len() <= n_val || test.is_empty() {
+            return Err(Error::dataset(
                 self.labels_path(),
                 None,
                 format!(
@@ -200,16 +197,10 @@ impl Dataset {
                     self.len(),
                     self.split_hint()
                 ),
-            )
-        };
-        if train.len() <= n_val || test.is_empty() {
-            return Err(too_few());
+            ));
         }
         let val = train.split_off(train.len() - n_val);
-        let (train, val) = self.keep_frames_together(train, val, &first);
-        if train.is_empty() {
-            return Err(too_few());
-        }
+        let (train, val) = (rows_of(&train), rows_of(&val));
         Ok(Splits { train, val, test })
     }
 
