@@ -168,6 +168,30 @@ impl Ensemble {
         for (m, a) in members.iter().zip(&arts).skip(1) {
             alike(&arts[0], a, m)?;
         }
+        // One model twice (a folder given twice, or a plain copy) would
+        // count its error twice and hide the spread the deviations add.
+        // The same weights read or calibrated another way are another model.
+        let identity = |m: &Path| -> Result<(String, Vec<u8>)> {
+            let config = m.join(A::CONFIG_FILE);
+            let bytes = std::fs::read(&config).map_err(|e| Error::io(&config, e))?;
+            Ok((crate::artifact::fingerprint::<A>(m)?, bytes))
+        };
+        let identities = members
+            .iter()
+            .map(|m| identity(m))
+            .collect::<Result<Vec<_>>>()?;
+        for (k, id) in identities.iter().enumerate() {
+            if let Some(j) = identities[..k].iter().position(|other| other == id) {
+                return Err(Error::model(
+                    &members[k],
+                    format!(
+                        "the same model as {} (identical config and weights): an ensemble \
+                         averages networks trained apart (with another --seed); give each once",
+                        members[j].display()
+                    ),
+                ));
+            }
+        }
         let notes = notes(&arts)?;
         let staged = tactile_core::io::StagedDir::new(out)?;
         let mut names = Vec::new();

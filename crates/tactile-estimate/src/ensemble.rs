@@ -393,7 +393,9 @@ mod tests {
         assert!(!tmp.path().join("e").exists());
         // An ensemble edited afterwards to hold one is refused on loading.
         let ens = tmp.path().join("ok");
-        RegressorEnsemble::assemble(&[a.clone(), a], &ens).unwrap();
+        let c = tmp.path().join("c");
+        train(vec![Target::linear("a"), Target::linear("b")], 8, 2, &c);
+        RegressorEnsemble::assemble(&[a, c], &ens).unwrap();
         std::fs::remove_dir_all(ens.join("member-1")).unwrap();
         let copy = |f: &str| std::fs::copy(b.join(f), ens.join("member-1").join(f)).unwrap();
         std::fs::create_dir(ens.join("member-1")).unwrap();

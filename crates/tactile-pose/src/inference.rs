@@ -364,7 +364,29 @@ mod tests {
         std::fs::write(ens.join("ensemble.json"), r#"{"members": []}"#).unwrap();
         assert!(PoseEstimator::load(&ens, Runtime::BurnFlex, 0).is_err());
         // An existing folder is left alone.
-        assert!(PoseEnsemble::assemble(&[shipped], &ens).is_err());
+        assert!(PoseEnsemble::assemble(&[shipped.clone()], &ens).is_err());
         assert!(ens.join("member-1").is_dir());
+        // One model given twice, as its folder twice or as a plain copy, is
+        // refused naming both, and no folder appears: it would count its
+        // error twice and hide the spread. Before, it was averaged.
+        let copy = tmp.path().join("copy");
+        std::fs::create_dir(&copy).unwrap();
+        for f in [PoseArtifact::CONFIG_FILE, PoseArtifact::WEIGHTS_FILE] {
+            std::fs::copy(shipped.join(f), copy.join(f)).unwrap();
+        }
+        for (second, name) in [(&shipped, "twice"), (&copy, "copied")] {
+            let out = tmp.path().join(name);
+            let err =
+                PoseEnsemble::assemble(&[shipped.clone(), other.clone(), second.clone()], &out)
+                    .err()
+                    .unwrap()
+                    .to_string();
+            assert!(
+                err.contains(&second.display().to_string())
+                    && err.contains(&format!("the same model as {}", shipped.display())),
+                "{name}: {err}"
+            );
+            assert!(!out.exists(), "{name}");
+        }
     }
 }

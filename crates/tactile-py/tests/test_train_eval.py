@@ -80,12 +80,22 @@ def test_the_shipped_detector_recipe_trains_from_python_as_from_the_cli(root, sm
 
 
 def test_two_detectors_average_as_one(root, small_vt, tmp_path):
-    # The shipped detector's first network, twice: the ensemble's answer is
-    # that network's, and members that read frames differently are refused.
+    # The shipped detector's first network and a copy of it whose notes
+    # differ: the ensemble's answer is that network's, and members that
+    # read frames differently are refused. The same folder twice (or a
+    # plain copy) is one model given twice, refused naming it.
     member = root / "models/detector/member-0"
     if not member.is_dir():
         member = root / "models/detector"
-    said = tactile.train.ensemble([member, member], tmp_path / "ens")
+    with pytest.raises(ValueError, match="the same model as"):
+        tactile.train.ensemble([member, member], tmp_path / "twice")
+    assert not (tmp_path / "twice").exists()
+    noted = tmp_path / "noted"
+    shutil.copytree(member, noted)
+    config = json.loads((noted / "detector.json").read_text())
+    config["notes"]["copied_for"] = "a test"
+    (noted / "detector.json").write_text(json.dumps(config))
+    said = tactile.train.ensemble([member, noted], tmp_path / "ens")
     assert said.startswith("2 detectors"), said
     one = tactile.eval.detector(member, small_vt)
     two = tactile.eval.detector(tmp_path / "ens", small_vt)
