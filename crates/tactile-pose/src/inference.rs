@@ -364,7 +364,7 @@ mod tests {
         std::fs::write(ens.join("ensemble.json"), r#"{"members": []}"#).unwrap();
         assert!(PoseEstimator::load(&ens, Runtime::BurnFlex, 0).is_err());
         // An existing folder is left alone.
-        assert!(PoseEnsemble::assemble(&[shipped.clone()], &ens).is_err());
+        assert!(PoseEnsemble::assemble(std::slice::from_ref(&shipped), &ens).is_err());
         assert!(ens.join("member-1").is_dir());
         // One model given twice, as its folder twice or as a plain copy, is
         // refused naming both, and no folder appears: it would count its
