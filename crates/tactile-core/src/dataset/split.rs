@@ -114,8 +114,11 @@ impl Dataset {
     /// `rows`, in their order), and a function giving a list of those
     /// back as every row of their frames. For a dataset that lists each
     /// frame once both are the identity, so it is split as before.
-    fn by_frame(&self, rows: &[usize]) -> (Vec<usize>, impl Fn(&[usize]) -> Vec<usize> + use<>) {
-        let first = self.first_listings();
+    /// `first` is [`Self::first_listings`], found once per split.
+    fn by_frame(
+        rows: &[usize],
+        first: &[usize],
+    ) -> (Vec<usize>, impl Fn(&[usize]) -> Vec<usize> + use<>) {
         let mut members: std::collections::HashMap<usize, Vec<usize>> = Default::default();
         let mut frames = Vec::new();
         for &i in rows {
@@ -154,7 +157,7 @@ impl Dataset {
                 format!("{e}{}", self.split_hint()),
             ),
         };
-        let (frames, rows_of) = self.by_frame(&rows);
+        let (frames, rows_of) = Self::by_frame(&rows, &self.first_listings());
         let (train, val) = hold_out(frames, val_fraction, seed).map_err(too_few)?;
         let (train, val) = (rows_of(&train), rows_of(&val));
         Ok((train, val))
@@ -175,17 +178,19 @@ impl Dataset {
         let mut rng = StdRng::seed_from_u64(seed);
         // A frame listed on several rows is one frame: its rows are fitted,
         // validated or tested together.
+        let first = self.first_listings();
         let (train, test) = match (self.split_indices("train"), self.evaluation_split()) {
             (Some(tr), Some(te)) => (tr, te),
             _ => {
-                let (mut all, rows_of) = self.by_frame(&(0..self.len()).collect::<Vec<_>>());
+                let (mut all, rows_of) =
+                    Self::by_frame(&(0..self.len()).collect::<Vec<_>>(), &first);
                 all.shuffle(&mut rng);
                 let n_test = ((all.len() as f64 * test_fraction).round() as usize).max(1);
                 let test = all.split_off(all.len().saturating_sub(n_test));
                 (rows_of(&all), rows_of(&test))
             }
         };
-        let (mut train, rows_of) = self.by_frame(&train);
+        let (mut train, rows_of) = Self::by_frame(&train, &first);
         train.shuffle(&mut rng);
         let n_val = ((train.len() as f64 * val_fraction).round() as usize).max(1);
         if train.len() <= n_val || test.is_empty() {
