@@ -11,7 +11,7 @@
 //! ```
 //! Every path stays inside `DIR`; sizes are checked before pixels are read.
 
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::{RgbImage, load_rgb};
@@ -139,23 +139,17 @@ fn inside(
     canonical: &Path,
     rel: &str,
 ) -> std::result::Result<(PathBuf, PathBuf), String> {
-    let p = Path::new(rel);
+    use tactile_core::dataset::Escape;
     // `./frames/a.png` is `frames/a.png`, as a dataset's labels.csv reads it.
-    if p.is_absolute()
-        || p.components()
-            .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
-    {
-        return Err(format!(
-            "'{rel}' is not a path inside the calibration folder"
-        ));
-    }
+    let p = Path::new(rel);
     match tactile_core::dataset::resolve_inside(canonical, p) {
         Ok(resolved) => Ok((root.join(p), resolved)),
-        Err(tactile_core::dataset::Escape::Loop) => {
-            Err(format!("'{rel}' passes through too many symbolic links"))
-        }
-        Err(tactile_core::dataset::Escape::Empty) => Err("a file name is empty".into()),
-        Err(_) => Err(format!(
+        Err(Escape::Absolute | Escape::Parent) => Err(format!(
+            "'{rel}' is not a path inside the calibration folder"
+        )),
+        Err(Escape::Loop) => Err(format!("'{rel}' passes through too many symbolic links")),
+        Err(Escape::Empty) => Err("a file name is empty".into()),
+        Err(Escape::Link) => Err(format!(
             "'{rel}' passes through a symbolic link that leaves the calibration folder"
         )),
     }
