@@ -2473,12 +2473,20 @@ mod tests {
         let libvpx = ["-c:v", "libvpx-vp9", "-g", "3", "-threads", "1"];
         let name = format!("{pix_fmt}-{w}x{h}.ivf");
         let stream = encode_file((dir, &name), pix_fmt, (w, h), frames, &[&libvpx], "ivf");
-        let mut file = std::io::BufReader::new(std::fs::File::open(&stream).unwrap());
-        assert_eq!(&ivf::read_header(&mut file).unwrap().tag, b"VP90");
-        let packets: Vec<Vec<u8>> = (0..frames)
+        (
+            ivf_packets(&stream, b"VP90", frames),
+            decode_file(&stream, (w, h), frames),
+        )
+    }
+
+    /// The first `frames` packets of the IVF file at `path`, whose header
+    /// names the codec `tag`: one frame (or temporal unit) per packet.
+    fn ivf_packets(path: &Path, tag: &[u8; 4], frames: usize) -> Vec<Vec<u8>> {
+        let mut file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+        assert_eq!(&ivf::read_header(&mut file).unwrap().tag, tag);
+        (0..frames)
             .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
-            .collect();
-        (packets, decode_file(&stream, (w, h), frames))
+            .collect()
     }
 
     const T0: u32 = 1_700_000_000;
@@ -3313,11 +3321,7 @@ mod tests {
                 .unwrap();
             assert!(status.success());
         }
-        let mut file = std::io::BufReader::new(std::fs::File::open(&stream).unwrap());
-        ivf::read_header(&mut file).unwrap();
-        let packets: Vec<Vec<u8>> = (0..frames)
-            .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
-            .collect();
+        let packets = ivf_packets(&stream, b"VP90", frames);
         (packets, decode_file(&stream, (64, 64), frames))
     }
 
@@ -3771,11 +3775,7 @@ mod tests {
         ] {
             let fixture = Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join(format!("tests/data/{name}-resized-inter-frames.ivf"));
-            let mut file = std::io::BufReader::new(std::fs::File::open(&fixture).unwrap());
-            assert_eq!(&ivf::read_header(&mut file).unwrap().tag, tag);
-            let packets: Vec<Vec<u8>> = (0..frames)
-                .map(|_| ivf::read_packet(&mut file).unwrap().data.into_vec())
-                .collect();
+            let packets = ivf_packets(&fixture, tag, frames);
             // One key frame: the size changes come on inter frames.
             let keys: Vec<usize> = (0..frames)
                 .filter(|&i| codec.starts_stream(&packets[i]))

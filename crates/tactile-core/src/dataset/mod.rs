@@ -1063,8 +1063,6 @@ mod tests {
         // frames" without saying why.
         let d = tempfile::tempdir().unwrap();
         let write = |dir: &Path, splits: &[&str]| {
-            std::fs::create_dir_all(dir.join("frames")).unwrap();
-            crate::image_io::save_grey_png(dir.join("frames/a.png"), 4, 4, &[0; 16]).unwrap();
             let body: String = splits
                 .iter()
                 .map(|s| format!("frames/a.png,flat,0,0,0,1,0.5,{s}\n"))
