@@ -343,14 +343,20 @@ impl Dataset {
                 "frame_index",
             ],
         };
+        // Each frame's split and the line that first gives it one: a
+        // `split` column that puts one frame in two splits would fit it and
+        // score it (or validate on it) at once.
+        let mut split_of: HashMap<PathBuf, (&str, usize)> = HashMap::new();
         for row in &self.rows {
-            let Some(_) = row.get("file") else {
+            let Some(file) = row.get("file") else {
                 return Err(Error::dataset(
                     &labels,
                     Some(row.line),
                     "column 'file' is empty",
                 ));
             };
+            // The frame file itself (through `./` and links).
+            let mut frame = None;
             for col in file_columns {
                 let Some(rel) = row.get(col) else { continue };
                 let bad = |why: &str| {
@@ -369,6 +375,30 @@ impl Dataset {
                         return Err(bad("is not a regular file (a folder, a pipe or a device)"));
                     }
                     Ok(_) => {}
+                }
+                if *col == "file" {
+                    frame = Some(path);
+                }
+            }
+            if let (Some(split @ ("train" | "val" | "test")), Some(frame)) =
+                (row.get("split"), frame)
+            {
+                match split_of.get(&frame) {
+                    Some(&(first, line)) if first != split => {
+                        return Err(Error::dataset(
+                            &labels,
+                            Some(row.line),
+                            format!(
+                                "frame '{file}' is in split '{split}', but line {line} puts it in \
+                                 '{first}': a frame is in one split, or it is fitted and scored \
+                                 at once (mend the split column, or drop it to split by --seed)"
+                            ),
+                        ));
+                    }
+                    Some(_) => {}
+                    None => {
+                        split_of.insert(frame, (split, row.line));
+                    }
                 }
             }
             for col in number_columns {
@@ -1055,6 +1085,78 @@ mod tests {
         );
     }
 
+    /// A dataset whose rows list frame `frames/f{k}.png` in `split`, for
+    /// each `(k, split)`.
+    fn with_splits<'a>(dir: &Path, rows: impl Iterator<Item = (usize, &'a str)>) {
+        std::fs::create_dir_all(dir.join("frames")).unwrap();
+        let mut body = String::new();
+        for (k, split) in rows {
+            let path = dir.join(format!("frames/f{k}.png"));
+            crate::image_io::save_grey_png(path, 4, 4, &[k as u8; 16]).unwrap();
+            body.push_str(&format!("frames/f{k}.png,flat,0,0,0,1,0.5,{split}\n"));
+        }
+        let header = HEADER.replace('\n', ",split\n");
+        tiny(dir, &format!("{header}{body}"));
+    }
+
+    #[test]
+    fn a_split_column_that_puts_one_frame_in_two_splits_is_refused() {
+        // A split column mended by hand, or two label files pasted
+        // together: a frame on a `train` row and on a `test` row would be
+        // fitted and scored at once. Before, it was taken as written.
+        let d = tempfile::tempdir().unwrap();
+        let dir = d.path().join("leaky");
+        with_splits(
+            &dir,
+            [
+                (0, "train"),
+                (1, "train"),
+                (2, "Test"),
+                (1, "test"),
+                (0, "train"),
+            ]
+            .into_iter(),
+        );
+        let e = Dataset::open(&dir).unwrap_err().to_string();
+        assert!(
+            e.contains("labels.csv")
+                && e.contains(":5")
+                && e.contains("frame 'frames/f1.png' is in split 'test'")
+                && e.contains("line 3 puts it in 'train'"),
+            "{e}"
+        );
+        // The same frame through `./` is the same frame.
+        let labels = dir.join("labels.csv");
+        let text = std::fs::read_to_string(&labels).unwrap();
+        std::fs::write(
+            &labels,
+            text.replace(
+                "frames/f1.png,flat,0,0,0,1,0.5,test",
+                "./frames/f1.png,flat,0,0,0,1,0.5,val",
+            ),
+        )
+        .unwrap();
+        let e = Dataset::open(&dir).unwrap_err().to_string();
+        assert!(e.contains("in split 'val', but line 3"), "{e}");
+        // A frame listed twice in one split (oversampled), or in a split and
+        // in a value that is no split, is one frame in one split.
+        let dir = d.path().join("oversampled");
+        with_splits(
+            &dir,
+            [
+                (0, "train"),
+                (0, "Train"),
+                (1, "test"),
+                (1, "fold1"),
+                (2, "val"),
+            ]
+            .into_iter(),
+        );
+        let ds = Dataset::open(&dir).unwrap();
+        assert_eq!(ds.split_indices("train"), Some(vec![0, 1]));
+        assert_eq!(ds.split_indices("test"), Some(vec![2]));
+    }
+
     #[test]
     fn split_names_of_other_tools_are_read_and_unknown_ones_are_named() {
         // A split column written by hand or by another tool: `Train`,
@@ -1063,12 +1165,7 @@ mod tests {
         // frames" without saying why.
         let d = tempfile::tempdir().unwrap();
         let write = |dir: &Path, splits: &[&str]| {
-            let body: String = splits
-                .iter()
-                .map(|s| format!("frames/a.png,flat,0,0,0,1,0.5,{s}\n"))
-                .collect();
-            let header = HEADER.replace('\n', ",split\n");
-            tiny(dir, &format!("{header}{body}"));
+            with_splits(dir, splits.iter().enumerate().map(|(k, s)| (k, *s)));
             Dataset::open(dir).unwrap()
         };
         let named = [
