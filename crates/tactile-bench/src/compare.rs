@@ -147,10 +147,14 @@ pub fn compare(c: &Compare) -> Result<String> {
     if let Some(col) = &c.classify {
         let (classes, y) = classes_of(&ds, col)?;
         let pick = |idx: &[usize]| -> Vec<usize> { idx.iter().map(|&i| y[i]).collect() };
+        // The frame of each train and validation row, for the MLP's folds.
+        let first = ds.first_listings();
+        let frames: Vec<usize> = train.iter().chain(val).map(|&i| first[i]).collect();
         md.push_str(&classification_table(
             &sets,
             &classes,
             (&pick(train), &pick(val), &pick(test)),
+            &frames,
             c.seed,
             &dev,
         )?);
@@ -179,18 +183,19 @@ pub(crate) fn mlp_regression(
     Ok(Regressor::train(cfg, (tx, ty), (vx, vy), dev)?.predict(sx)?)
 }
 
-/// The MLP classifier head (paper A's 16-64-32, one fold) fitted on `x`:
+/// The MLP classifier head (paper A's 16-64-32, one fold) fitted on `x`
+/// (`frames[i]` names row `i`'s frame, so a frame's rows share a fold):
 /// its classes of the test features.
 pub(crate) fn mlp_classification(
     classes: &[String],
-    (x, y): (&[Vec<f32>], &[usize]),
+    (x, y, frames): (&[Vec<f32>], &[usize], &[usize]),
     sx: &[Vec<f32>],
     seed: u64,
     dev: &Device,
 ) -> Result<Vec<usize>> {
     let mut cfg = HeadConfig::new(x[0].len(), classes.to_vec()).with_repeats(1);
     cfg.schedule.seed = seed;
-    Ok(ClassifierHead::train(cfg, x, y, dev)?.predict(sx)?)
+    Ok(ClassifierHead::train_by_frame(cfg, x, y, frames, dev)?.predict(sx)?)
 }
 
 fn regression_table(
@@ -253,6 +258,7 @@ fn classification_table(
     sets: &[FeatureSet],
     classes: &[String],
     (ty, vy, sy): SplitLabels<'_, usize>,
+    frames: &[usize],
     seed: u64,
     dev: &Device,
 ) -> Result<String> {
@@ -278,7 +284,7 @@ fn classification_table(
             let pred = match est {
                 "Gaussian naive Bayes" => classical::gaussian_nb(&x, &y, sx)?,
                 "k-NN (k=5)" => classical::knn_classify(&x, &y, sx, 5)?,
-                _ => mlp_classification(classes, (&x, &y), sx, seed, dev)?,
+                _ => mlp_classification(classes, (&x, &y, frames), sx, seed, dev)?,
             };
             let secs = t0.elapsed().as_secs_f64();
             let acc = tactile_core::metrics::accuracy(&pred, sy);

@@ -136,7 +136,15 @@ pub fn shared_encoders(encoders: &[PathBuf], tasks: &[Task], real: &Path) -> Res
                 let rows: Vec<usize> = split.train.iter().chain(&split.val).copied().collect();
                 let x: Vec<Vec<f32>> = rows.iter().map(|&i| feats[i].clone()).collect();
                 let yy: Vec<usize> = rows.iter().map(|&i| y[i]).collect();
-                let pred = mlp_classification(&classes, (&x, &yy), &sx, DEFAULT_SPLIT_SEED, &dev)?;
+                let first = ds.first_listings();
+                let frames: Vec<usize> = rows.iter().map(|&i| first[i]).collect();
+                let pred = mlp_classification(
+                    &classes,
+                    (&x, &yy, &frames),
+                    &sx,
+                    DEFAULT_SPLIT_SEED,
+                    &dev,
+                )?;
                 let truth: Vec<usize> = split.test.iter().map(|&i| y[i]).collect();
                 vec![(
                     "accuracy".to_string(),

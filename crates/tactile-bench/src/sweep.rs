@@ -72,6 +72,9 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
         )
         .into());
     }
+    // The frame of each training row, so a frame's rows share a fold.
+    let first = ds.first_listings();
+    let frames: Vec<usize> = train.iter().map(|&i| first[i]).collect();
     let dev = DeviceKind::Flex.device();
     let mut rows = Vec::new();
     for enc in &s.encoders {
@@ -91,7 +94,7 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
         let (sx, sy) = pick(&test);
         let mut cfg = HeadConfig::new(art.model.feature_count(), classes.clone()).with_repeats(1);
         cfg.schedule.seed = s.seed;
-        let head = ClassifierHead::train(cfg, &tx, &ty, &dev)?;
+        let head = ClassifierHead::train_by_frame(cfg, &tx, &ty, &frames, &dev)?;
         let acc = accuracy(&head.predict(&sx)?, &sy);
         let speed = measure_encoder(enc, &pins, 256, s.runs)?
             .into_iter()

@@ -147,6 +147,60 @@ pub struct ClassifierHead {
     pub device: Device,
 }
 
+/// The `(fit, stop)` rows of each member of a repeated k-fold ensemble:
+/// per repeat, one seeded shuffle of the frames (`frames[i]` names row
+/// `i`'s frame), the frame at position `p` stopping fold `p mod folds`; a
+/// frame's rows go with it. With every row its own frame these are the
+/// folds of a shuffle of the rows, as heads were always trained.
+fn folds_by_frame(
+    frames: &[usize],
+    folds: usize,
+    repeats: usize,
+    seed: u64,
+) -> Result<Vec<(Vec<usize>, Vec<usize>)>> {
+    // Each frame by its first row, in row order, with all of its rows.
+    let mut rows_of: std::collections::HashMap<usize, Vec<usize>> = Default::default();
+    let mut firsts = Vec::new();
+    for (i, f) in frames.iter().enumerate() {
+        let rows = rows_of.entry(*f).or_default();
+        if rows.is_empty() {
+            firsts.push(i);
+        }
+        rows.push(i);
+    }
+    let first_of: std::collections::HashMap<usize, &Vec<usize>> =
+        rows_of.values().map(|rows| (rows[0], rows)).collect();
+    if firsts.len() < folds {
+        return Err(Error::TooFewSamples(format!(
+            "classifier needs at least {folds} frames (one per fold), got {}",
+            firsts.len()
+        )));
+    }
+    let mut out = Vec::with_capacity(folds * repeats);
+    for repeat in 0..repeats {
+        // Folds from one seeded shuffle per repeat.
+        let order = shuffled_batches(
+            &firsts,
+            firsts.len(),
+            seed.wrapping_add(7919 * repeat as u64),
+        )
+        .concat();
+        for fold in 0..folds {
+            let (mut fit, mut stop) = (Vec::new(), Vec::new());
+            for (pos, first) in order.iter().enumerate() {
+                let side = if pos % folds == fold {
+                    &mut stop
+                } else {
+                    &mut fit
+                };
+                side.extend_from_slice(first_of[first]);
+            }
+            out.push((fit, stop));
+        }
+    }
+    Ok(out)
+}
+
 impl ClassifierHead {
     /// Load a head folder.
     pub fn load(dir: impl AsRef<Path>, device: &Device) -> Result<Self> {
@@ -168,8 +222,24 @@ impl ClassifierHead {
         &self.artifact.model.classes
     }
 
-    /// Train the k-fold ensemble on `(x, y)` (class indices).
+    /// Train the k-fold ensemble on `(x, y)` (class indices), each row its
+    /// own frame.
     pub fn train(config: HeadConfig, x: &[Vec<f32>], y: &[usize], device: &Device) -> Result<Self> {
+        let frames: Vec<usize> = (0..x.len()).collect();
+        Self::train_by_frame(config, x, y, &frames, device)
+    }
+
+    /// Train the k-fold ensemble on `(x, y)` (class indices), where
+    /// `frames[i]` names the frame row `i` was read from: rows of one frame
+    /// (a frame listed twice, its rotated copies) fit or stop a member
+    /// together, so no member stops early on a frame it fitted.
+    pub fn train_by_frame(
+        config: HeadConfig,
+        x: &[Vec<f32>],
+        y: &[usize],
+        frames: &[usize],
+        device: &Device,
+    ) -> Result<Self> {
         config.schedule.check()?;
         if config.folds < 2 {
             return Err(tactile_core::Error::Config(format!(
@@ -185,6 +255,14 @@ impl ClassifierHead {
                 x.len(),
                 y.len()
             )));
+        }
+        if frames.len() != x.len() {
+            return Err(tactile_core::Error::Invalid(format!(
+                "{} frame names for {} feature vectors",
+                frames.len(),
+                x.len()
+            ))
+            .into());
         }
         check_features(x, config.inputs)?;
         config.check()?;
@@ -206,43 +284,29 @@ impl ClassifierHead {
         .into_iter()
         .map(|s| s as f32)
         .collect();
+        let repeats = config.repeats.max(1);
+        let folds = folds_by_frame(frames, config.folds, repeats, config.schedule.seed)?;
         let mut members = Vec::with_capacity(config.members());
-        for repeat in 0..config.repeats.max(1) {
-            // Folds from one seeded shuffle per repeat.
-            let order = shuffled_batches(
-                &(0..x.len()).collect::<Vec<_>>(),
-                x.len(),
-                config.schedule.seed.wrapping_add(7919 * repeat as u64),
-            )
-            .concat();
-            for fold in 0..config.folds {
-                let (mut tr, mut va) = (Vec::new(), Vec::new());
-                for (pos, &i) in order.iter().enumerate() {
-                    if pos % config.folds == fold {
-                        va.push(i);
-                    } else {
-                        tr.push(i);
-                    }
-                }
-                let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
-                    (
-                        idx.iter().map(|&i| x[i].clone()).collect(),
-                        idx.iter().map(|&i| y[i]).collect(),
-                    )
-                };
-                let seed = config
-                    .schedule
-                    .seed
-                    .wrapping_add(1000 * fold as u64 + 100_000 * repeat as u64);
-                members.push(train_member(
-                    &config,
-                    seed,
-                    pick(&tr),
-                    pick(&va),
-                    (&mean, &std),
-                    device,
-                )?);
-            }
+        for (member, (tr, va)) in folds.iter().enumerate() {
+            let (repeat, fold) = (member / config.folds, member % config.folds);
+            let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
+                (
+                    idx.iter().map(|&i| x[i].clone()).collect(),
+                    idx.iter().map(|&i| y[i]).collect(),
+                )
+            };
+            let seed = config
+                .schedule
+                .seed
+                .wrapping_add(1000 * fold as u64 + 100_000 * repeat as u64);
+            members.push(train_member(
+                &config,
+                seed,
+                pick(tr),
+                pick(va),
+                (&mean, &std),
+                device,
+            )?);
         }
         Ok(Self {
             artifact: HeadArtifact {
@@ -397,6 +461,65 @@ mod tests {
         head.save(dir.path()).unwrap();
         let back = ClassifierHead::load(dir.path(), &dev).unwrap();
         assert_eq!(back.predict(&tx).unwrap(), pred);
+    }
+
+    #[test]
+    fn a_frame_on_several_rows_fits_or_stops_a_member_never_both() {
+        // Rows of one frame (listed twice, or its rotated copies): before,
+        // folds split rows, so a member could stop early on a frame it
+        // fitted and stop later than on a frame it never saw.
+        // Each row its own frame: the folds of one shuffle of the rows per
+        // repeat, as heads were always trained (the shipped ones too).
+        let rows: Vec<usize> = (0..12).collect();
+        let mut old = Vec::new();
+        for repeat in 0..2u64 {
+            let order = shuffled_batches(&rows, 12, 7 + 7919 * repeat).concat();
+            for fold in 0..3 {
+                let (mut fit, mut stop) = (Vec::new(), Vec::new());
+                for (pos, &i) in order.iter().enumerate() {
+                    if pos % 3 == fold {
+                        stop.push(i);
+                    } else {
+                        fit.push(i);
+                    }
+                }
+                old.push((fit, stop));
+            }
+        }
+        assert_eq!(folds_by_frame(&rows, 3, 2, 7).unwrap(), old);
+        // 10 frames, each on 3 rows spread over the list, and 5 frames once.
+        let frames: Vec<usize> = (0..30).map(|i| i % 10).chain(10..15).collect();
+        let members = folds_by_frame(&frames, 4, 3, 11).unwrap();
+        assert_eq!(members.len(), 12);
+        for (m, (fit, stop)) in members.iter().enumerate() {
+            let of = |rows: &[usize]| -> std::collections::BTreeSet<usize> {
+                rows.iter().map(|&i| frames[i]).collect()
+            };
+            assert!(of(fit).is_disjoint(&of(stop)), "member {m}");
+            let mut all = [fit.clone(), stop.clone()].concat();
+            all.sort_unstable();
+            assert_eq!(all, (0..35).collect::<Vec<_>>(), "member {m}");
+        }
+        // Each repeat's stopping rows cover every row once.
+        for repeat in members.chunks(4) {
+            let mut stops: Vec<usize> = repeat.iter().flat_map(|(_, s)| s.clone()).collect();
+            stops.sort_unstable();
+            assert_eq!(stops, (0..35).collect::<Vec<_>>());
+        }
+        // Fewer frames than folds is named, however many rows they have.
+        let two = [0, 1, 0, 1, 0, 1];
+        let e = folds_by_frame(&two, 3, 1, 7).unwrap_err().to_string();
+        assert!(
+            e.contains("at least 3 frames") && e.contains("got 2"),
+            "{e}"
+        );
+        let dev = DeviceKind::Flex.device();
+        let (x, y) = clusters(6, 1);
+        let cfg = HeadConfig::new(4, abc()).with_folds(3);
+        let e = ClassifierHead::train_by_frame(cfg.clone(), &x, &y, &two, &dev);
+        assert!(e.err().unwrap().to_string().contains("at least 3 frames"));
+        let e = ClassifierHead::train_by_frame(cfg, &x, &y, &two[..5], &dev);
+        assert!(e.err().unwrap().to_string().contains("5 frame names for 6"));
     }
 
     #[test]

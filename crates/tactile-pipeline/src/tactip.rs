@@ -740,6 +740,10 @@ pub fn train_head(
         )
     };
     let (mut tx, mut ty) = pick(&train);
+    // The frame of each row fitted, so a frame listed twice and its
+    // rotated copies fit or stop a member of the ensemble together.
+    let first = ds.first_listings();
+    let mut frames: Vec<usize> = train.iter().map(|&i| first[i]).collect();
     if let Some(aug) = rotation {
         aug.check()?;
         let FeatureSource::Encoder(dir) = source else {
@@ -754,6 +758,7 @@ pub fn train_head(
         for (k, f) in turned.into_iter().enumerate() {
             tx.push(f);
             ty.push(y[train[k / aug.copies]]);
+            frames.push(first[train[k / aug.copies]]);
         }
     }
     let config = HeadConfig {
@@ -770,7 +775,7 @@ pub fn train_head(
         .device()
         .unwrap_or(tactile_burn::DeviceKind::Flex)
         .device();
-    let mut head = ClassifierHead::train(config, &tx, &ty, &device)?;
+    let mut head = ClassifierHead::train_by_frame(config, &tx, &ty, &frames, &device)?;
     head.artifact.encoder = encoder_fingerprint(source)?;
     if let Some(aug) = rotation {
         head.artifact.notes = serde_json::json!({ "rotation_augment": aug });

@@ -90,8 +90,9 @@ pub fn hold_out(
 impl Dataset {
     /// For each row, the first row that lists the same frame file (itself
     /// when no row before it does): a frame listed twice, as a user
-    /// oversampling a class by repeating rows does, is one frame to split.
-    fn first_listings(&self) -> Vec<usize> {
+    /// oversampling a class by repeating rows does, is one frame to split
+    /// (here, and in the folds of a shape head's ensemble).
+    pub fn first_listings(&self) -> Vec<usize> {
         let root = self.root.canonicalize().ok();
         let mut first: std::collections::HashMap<std::path::PathBuf, usize> = Default::default();
         (0..self.len())
