@@ -728,11 +728,31 @@ pub fn train_head(
     }
     tactile_core::dataset::check_output_dir(out, &[ds])?;
     ds.expect_columns(["shape"])?;
-    let feats = dataset_features(source, ds, runtime)?;
-    let (classes, y) = classes_of(ds, "shape")?;
     let train = ds
         .split_indices("train")
         .unwrap_or_else(|| (0..ds.len()).collect());
+    // A test set holding training frames (the training folder again, or a
+    // copy of its frames' links) would score frames the head fitted.
+    if let Some(t) = test {
+        let shared = ds.rows_sharing_frames(&train, t);
+        if let Some(&j) = shared.first() {
+            return Err(tactile_core::Error::dataset(
+                t.labels_path(),
+                Some(t.rows[j].line),
+                format!(
+                    "{} of its {} frames are frames the head trains on (this one: '{}'), so its \
+                     accuracy would be on frames it fitted: test on frames it does not train on, \
+                     or leave --test out (a split column's test rows are then the test)",
+                    shared.len(),
+                    t.len(),
+                    t.text(j, "file")?
+                ),
+            )
+            .into());
+        }
+    }
+    let feats = dataset_features(source, ds, runtime)?;
+    let (classes, y) = classes_of(ds, "shape")?;
     let pick = |idx: &[usize]| -> (Vec<Vec<f32>>, Vec<usize>) {
         (
             idx.iter().map(|&i| feats[i].clone()).collect(),

@@ -202,6 +202,10 @@ def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
     assert notes["rotation_augment"]["copies"] == 1
     with pytest.raises(ValueError, match="rotation augmentation"):
         tactile.train.head(data, encoder=enc, out=tmp_path / "h2", rotate_copies=99)
+    # Tested on its own training frames: refused, and nothing is written.
+    with pytest.raises(ValueError, match="30 of its 30 frames are frames the head trains on"):
+        tactile.train.head(data, encoder=enc, out=tmp_path / "h3", folds=2, repeats=1, test=data)
+    assert not (tmp_path / "h3").exists()
 
 
 def test_regressors_of_other_seeds_average_as_one_estimator(root, tmp_path):

@@ -2378,28 +2378,45 @@ fn a_head_trains_on_turned_copies_and_records_the_augmentation() {
     ]);
     assert!(ok, "{msg}");
     let out = tmp.path().join("head");
-    let head = |copies: &str, deg: &str| {
-        tactile(&[
-            "train",
-            "head",
-            "--encoder",
-            enc.to_str().unwrap(),
-            "--data",
-            d,
-            "--folds",
-            "2",
-            "--repeats",
-            "1",
-            "--rotate-copies",
-            copies,
-            "--rotate-deg",
-            deg,
-            "--out",
-            out.to_str().unwrap(),
-        ])
+    let head_tested = |copies: &str, deg: &str, test: &[&str]| {
+        tactile(
+            &[
+                &[
+                    "train",
+                    "head",
+                    "--encoder",
+                    enc.to_str().unwrap(),
+                    "--data",
+                    d,
+                    "--folds",
+                    "2",
+                    "--repeats",
+                    "1",
+                    "--rotate-copies",
+                    copies,
+                    "--rotate-deg",
+                    deg,
+                    "--out",
+                    out.to_str().unwrap(),
+                ][..],
+                test,
+            ]
+            .concat(),
+        )
     };
+    let head = |copies: &str, deg: &str| head_tested(copies, deg, &[]);
     let (ok, msg) = head("2", "90");
     assert!(!ok && msg.contains("at most 45 degrees"), "{msg}");
+    // Tested on its own training frames (the folder again): refused before
+    // a frame is encoded, naming the test set's labels and the first frame.
+    let (ok, msg) = head_tested("2", "5", &["--test", d]);
+    assert!(
+        !ok && msg.contains("labels.csv:2")
+            && msg.contains("30 of its 30 frames are frames the head trains on")
+            && msg.contains("this one: 'frames/000000.png'"),
+        "{msg}"
+    );
+    assert!(!out.exists());
     let (ok, msg) = head("2", "5");
     assert!(ok && msg.contains("on 90 frames"), "{msg}");
     let json = std::fs::read_to_string(out.join("head.json")).unwrap();

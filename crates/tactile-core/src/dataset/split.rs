@@ -88,26 +88,53 @@ pub fn hold_out(
 }
 
 impl Dataset {
+    /// Each row's frame file as the filesystem finds it (through `./` and
+    /// links inside the folder); `None` where it cannot be resolved.
+    fn frame_files(&self) -> Vec<Option<std::path::PathBuf>> {
+        let root = self.root.canonicalize().ok();
+        (0..self.len())
+            .map(|i| {
+                let rel = self.text_opt(i, "file")?;
+                super::resolve_inside(root.as_deref()?, rel).ok()
+            })
+            .collect()
+    }
+
     /// For each row, the first row that lists the same frame file (itself
     /// when no row before it does): a frame listed twice, as a user
     /// oversampling a class by repeating rows does, is one frame to split
     /// (here, and in the folds of a shape head's ensemble).
     pub fn first_listings(&self) -> Vec<usize> {
-        let root = self.root.canonicalize().ok();
         let mut first: std::collections::HashMap<std::path::PathBuf, usize> = Default::default();
-        (0..self.len())
-            .map(|i| {
-                let Some(rel) = self.text_opt(i, "file") else {
-                    return i;
-                };
-                // The file itself, through `./` and links; the text as
-                // written where it cannot be resolved.
-                let key = root
-                    .as_deref()
-                    .and_then(|r| super::resolve_inside(r, rel).ok())
-                    .unwrap_or_else(|| std::path::PathBuf::from(rel));
-                *first.entry(key).or_insert(i)
+        self.frame_files()
+            .into_iter()
+            .enumerate()
+            .map(|(i, file)| {
+                // The text as written where the file cannot be resolved.
+                let key = file.or_else(|| self.text_opt(i, "file").map(Into::into));
+                match key {
+                    Some(key) => *first.entry(key).or_insert(i),
+                    None => i,
+                }
             })
+            .collect()
+    }
+
+    /// The rows of `other` whose frame is the file of one of `rows` here,
+    /// however each dataset names it: a test set holding them would score
+    /// frames a model fitted.
+    pub fn rows_sharing_frames(&self, rows: &[usize], other: &Dataset) -> Vec<usize> {
+        let files = self.frame_files();
+        let mine: std::collections::HashSet<&std::path::PathBuf> = rows
+            .iter()
+            .filter_map(|&i| files.get(i)?.as_ref())
+            .collect();
+        other
+            .frame_files()
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.as_ref().is_some_and(|f| mine.contains(f)))
+            .map(|(j, _)| j)
             .collect()
     }
 
