@@ -63,9 +63,10 @@ train-cae-synth out="models/cae-synth": synth-tactip
 align-cae-synth: synth-tactip
     cargo run --release -p tactile -- train align --model models/cae-synth --data data/synth-tactip-train
 
-# A shape head for models/cae-synth trained with rotation augmentation (4 copies of each frame turned by up to 6 degrees): robust to a sensor mounted turned, 3 points less on straight frames; scripts/paper-a.sh compares it.
+# A shape head trained with rotation augmentation (4 copies of each frame turned by up to 6 degrees) on models/cae-synth without its alignment (which would turn the copies back): the remedy scripts/paper-a.sh compares with alignment.
 train-turned-head out="data/cae-synth-turned-head": synth-tactip
-    cargo run --release -p tactile -- train head --encoder models/cae-synth --data data/synth-tactip-train --test data/synth-tactip-test --rotate-copies 4 --rotate-deg 6 --out {{out}}
+    bash scripts/cae-synth-unaligned.sh
+    cargo run --release -p tactile -- train head --encoder data/cae-synth-unaligned --data data/synth-tactip-train --test data/synth-tactip-test --rotate-copies 4 --rotate-deg 6 --out {{out}}
 
 # Frames/s of both virtual sensors; writes docs/bench-synth.md.
 bench-synth:

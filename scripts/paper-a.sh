@@ -73,15 +73,10 @@ step robustness robustness --encoder models/cae-synth --data "$SYNTH_TEST" --out
 # The same encoder and estimators without the pin alignment saved with the
 # encoder (`just align-cae-synth`): what a turned sensor costs without it.
 UNALIGNED=data/cae-synth-unaligned
-rm -rf "$UNALIGNED" && cp -r models/cae-synth "$UNALIGNED"
-python3 - "$UNALIGNED/cae.json" <<'PY'
-import json, sys
-config = json.load(open(sys.argv[1]))
-config["preprocess"].pop("align", None)
-json.dump(config, open(sys.argv[1], "w"), indent=2)
-PY
+bash scripts/cae-synth-unaligned.sh
 step robustness_unaligned robustness --encoder "$UNALIGNED" --data "$SYNTH_TEST" --out "$OUT/robustness-unaligned.md"
-# The shape head trained with rotation augmentation (`just train-turned-head`), when trained, on the encoder without alignment.
+# The shape head trained with rotation augmentation on the encoder without
+# alignment (`just train-turned-head`), when trained.
 TURNED=data/cae-synth-turned-head
 if [ -f "$TURNED/head.json" ]; then
     step robustness_turned robustness --encoder "$UNALIGNED" --heads "$TURNED" --data "$SYNTH_TEST" --out "$OUT/robustness-turned-head.md"
