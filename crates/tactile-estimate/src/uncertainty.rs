@@ -179,6 +179,10 @@ pub struct UncertaintyFit {
     /// measured on the other (both ways, averaged): what frames the
     /// calibration never saw can expect.
     pub coverage_cross_fitted: [Vec<f64>; 2],
+    /// Why the frames it was measured on are frames the model trained on,
+    /// when its notes say so: its factors then fit training errors, and
+    /// its intervals are too narrow on new frames.
+    pub fitted_frames: Option<String>,
 }
 
 impl UncertaintyFit {
@@ -223,6 +227,7 @@ impl UncertaintyFit {
             std_scale: scale,
             coverage_before: [vec![], vec![]],
             coverage_cross_fitted: [vec![], vec![]],
+            fitted_frames: None,
         };
         let note = serde_json::json!({ "from": from.display().to_string(), "notes": from_notes });
         (fit, note)
@@ -238,8 +243,12 @@ impl UncertaintyFit {
                 rounded(&self.std_scale_before)
             );
         }
+        let warning = self
+            .fitted_frames
+            .as_ref()
+            .map_or(String::new(), |why| format!("\nwarning: {why}"));
         format!(
-            "{} frames: inside ±1 / ±1.96 deviations {:.1} % / {:.1} % before, {:.1} % / {:.1} % after (cross-fitted on halves); factors {:?} (were {:?})",
+            "{} frames: inside ±1 / ±1.96 deviations {:.1} % / {:.1} % before, {:.1} % / {:.1} % after (cross-fitted on halves); factors {:?} (were {:?}){warning}",
             self.frames,
             mean(&self.coverage_before[0]),
             mean(&self.coverage_before[1]),
@@ -259,6 +268,7 @@ impl UncertaintyFit {
             "split": split.map(tactile_core::dataset::split_name),
             "frames": self.frames,
             "coverage_cross_fitted": self.coverage_cross_fitted,
+            "fitted_frames": self.fitted_frames,
         })
     }
 }
@@ -357,6 +367,7 @@ pub fn fit(
         std_scale,
         coverage_before,
         coverage_cross_fitted,
+        fitted_frames: None,
     }
 }
 

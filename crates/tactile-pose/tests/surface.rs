@@ -209,6 +209,35 @@ fn surface_pose_with_calibrated_uncertainty_on_the_authors_split() {
         (fit.frames, fit.std_scale_before.clone()),
         (40, scale.clone())
     );
+    // Its 10 `val` frames it never fitted: no warning.
+    assert_eq!(fit.fitted_frames, None);
+    // Calibrated on frames it trained on (its `train` rows; every frame of
+    // the final model): calibrated, with a warning in its line and notes,
+    // since the factors fit training errors.
+    let on_train = tmp.path().join("on-train");
+    copy_dir(&validated, &on_train);
+    let warned = calibrate_on(&on_train, &ds, Some("train")).unwrap();
+    let why = warned.fitted_frames.clone().unwrap_or_default();
+    assert!(
+        why.contains("these 30 frames are frames it trained on") && !why.contains("every split"),
+        "{why}"
+    );
+    assert!(warned.describe().contains("\nwarning: these 30 frames"));
+    let every = tmp.path().join("every");
+    copy_dir(&last, &every);
+    let why = calibrate_on(&every, &ds, None)
+        .unwrap()
+        .fitted_frames
+        .unwrap_or_default();
+    assert!(
+        why.contains("these 40 frames") && why.contains("every split"),
+        "{why}"
+    );
+    let notes = PoseArtifact::read(&every).unwrap().notes;
+    assert_eq!(
+        notes["uncertainty_calibration"]["fitted_frames"].as_str(),
+        Some(why.as_str())
+    );
     let r = PoseEstimator::load(&recal, Runtime::BurnFlex, 0)
         .unwrap()
         .predict_dataset(&ds)
