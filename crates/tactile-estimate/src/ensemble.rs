@@ -109,6 +109,12 @@ impl RegressorEnsemble {
         &self.members[0].artifact
     }
 
+    /// Each member's provenance notes (`trained_on`, `every_split`,
+    /// `excluded_test` when its training recorded them).
+    pub fn member_notes(&self) -> Vec<&serde_json::Value> {
+        self.members.iter().map(|m| &m.artifact.notes).collect()
+    }
+
     /// The targets, in column order.
     pub fn targets(&self) -> &[Target] {
         &self.artifact().model.targets
@@ -183,11 +189,13 @@ impl RegressorEnsemble {
         dir: &Path,
         (x, y): (&[Vec<f32>], &[Vec<f64>]),
         (data, split): (&Path, Option<&str>),
+        fitted_frames: Option<String>,
     ) -> Result<UncertaintyFit> {
         let before = self.factors(dir)?;
         let (values, std) = self.predict_with_std(x)?;
         let std = std.ok_or_else(|| no_uncertainty(dir))?;
-        let fit = crate::uncertainty::fit(self.targets(), (&values, y), &std, before);
+        let mut fit = crate::uncertainty::fit(self.targets(), (&values, y), &std, before);
+        fit.fitted_frames = fitted_frames;
         self.write_factors(dir, &fit.std_scale, fit.note(data, split))?;
         Ok(fit)
     }
@@ -443,7 +451,7 @@ mod tests {
         let (cx, cy, _) = crate::regressor::tests::noisy(600, 3);
         let fit = RegressorEnsemble::load(&ens, &dev)
             .unwrap()
-            .calibrate_on(&ens, (&cx, &cy), (tmp.path(), Some("val")))
+            .calibrate_on(&ens, (&cx, &cy), (tmp.path(), Some("val")), None)
             .unwrap();
         assert_eq!(
             (fit.frames, fit.std_scale_before.clone()),
@@ -492,7 +500,7 @@ mod tests {
         let plain = member(10, false);
         let err = RegressorEnsemble::load(&plain, &dev)
             .unwrap()
-            .calibrate_on(&plain, (&cx, &cy), (tmp.path(), None))
+            .calibrate_on(&plain, (&cx, &cy), (tmp.path(), None), None)
             .err()
             .unwrap()
             .to_string();

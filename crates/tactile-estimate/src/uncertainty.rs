@@ -371,6 +371,41 @@ pub fn fit(
     }
 }
 
+/// Why `rows` of `ds` are frames a model trained on, when the notes of
+/// the model (of any member of an ensemble: `notes`) name a dataset
+/// (`trained_on`, looked up from `dir` as [`Dataset::open_recorded`] does)
+/// whose rows it trained on (`every_split`, `excluded_test`:
+/// [`Dataset::rows_to_fit`]) hold them all: the same folder, or frames of
+/// the same names and sizes copied out of it. Its factors would then fit
+/// training errors. `None` when they are not, or the notes name no
+/// dataset that opens here.
+///
+/// [`Dataset::open_recorded`]: tactile_core::dataset::Dataset::open_recorded
+/// [`Dataset::rows_to_fit`]: tactile_core::dataset::Dataset::rows_to_fit
+pub fn fitted_frames(
+    notes: &[&serde_json::Value],
+    dir: &std::path::Path,
+    ds: &tactile_core::dataset::Dataset,
+    rows: &[usize],
+) -> Option<String> {
+    notes.iter().find_map(|n| {
+        let recorded = n.get("trained_on")?.as_str()?;
+        let trained = tactile_core::dataset::Dataset::open_recorded(recorded, dir)?;
+        let every_split = n.get("every_split").and_then(|v| v.as_bool()) == Some(true);
+        let holdout = n
+            .get("excluded_test")
+            .and_then(|v| serde_json::from_value(v.clone()).ok());
+        let fitted = trained.rows_to_fit(every_split, holdout).ok()?;
+        trained.holds_frames(ds, rows, Some(&fitted)).then(|| {
+            format!(
+                "these {} frames are frames it trained on (its notes: {recorded}{}), so the factors fit its training errors and its intervals will be too narrow on new frames: calibrate on frames it did not train on (another split or recording), or take a validated run's factors (--calibration-from)",
+                rows.len(),
+                if every_split { ", every split" } else { "" }
+            )
+        })
+    })
+}
+
 /// The rows of `ds` to calibrate on: those of `split` (every row without
 /// one) with every target labelled; at least 20, or an error naming the
 /// labels file.

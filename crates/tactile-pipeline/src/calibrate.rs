@@ -82,7 +82,13 @@ fn calibrate_regressor(
                 .iter()
                 .map(|&i| targets.iter().map(|t| ds.number(i, &t.name)).collect())
                 .collect::<tactile_core::Result<Vec<Vec<f64>>>>()?;
-            regressor.calibrate_on(model, (&feats, &labels), (&ds.root, split))?
+            let fitted = tactile_estimate::uncertainty::fitted_frames(
+                &regressor.member_notes(),
+                model,
+                ds,
+                &rows,
+            );
+            regressor.calibrate_on(model, (&feats, &labels), (&ds.root, split), fitted)?
         }
         _ => {
             return Err(tactile_core::Error::Config(

@@ -1014,6 +1014,17 @@ pub fn train_regressor(
     let mut regressor = Regressor::train(cfg, (&tx, &ty), (&vx, &vy), &device)?;
     regressor.artifact.encoder = encoder_fingerprint(source)?;
     regressor.artifact.shapes = plan.shapes.clone();
+    // Which rows it trained on, as a pose network records them, so a
+    // calibration on them can say so.
+    let final_model = plan.every_split || plan.test_fraction == 0.0;
+    regressor.artifact.notes = serde_json::json!({
+        "trained_on": ds.root.display().to_string(),
+        "every_split": plan.every_split,
+        "excluded_test": (!final_model).then_some(tactile_core::dataset::TestHoldout {
+            test_fraction: plan.test_fraction,
+            split_seed: plan.seed,
+        }),
+    });
     regressor.save(out)?;
     let test_mae = if sx.is_empty() {
         Vec::new()

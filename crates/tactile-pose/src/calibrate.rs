@@ -102,12 +102,8 @@ pub fn calibrate_on(dir: &Path, ds: &Dataset, split: Option<&str>) -> Result<Unc
     Ok(fit)
 }
 
-/// Why `rows` of `ds` are frames the model in `dir` trained on, when the
-/// notes of the network (of any member of an ensemble) name a dataset
-/// (`trained_on`) whose rows it trained on (`every_split`, `excluded_test`:
-/// [`Dataset::rows_to_fit`]) hold them all, the same folder or frames of
-/// the same names and sizes copied out of it. `None` when they are not, or
-/// the notes name no dataset that opens here.
+/// [`crate::uncertainty::fitted_frames`] of the network, or of an
+/// ensemble's members.
 fn fitted_frames(
     model: &Factors,
     dir: &Path,
@@ -122,29 +118,8 @@ fn fitted_frames(
             .map(|d| Ok(PoseArtifact::read(d)?.notes))
             .collect::<Result<_>>()?,
     };
-    for n in &notes {
-        let Some(recorded) = n.get("trained_on").and_then(|v| v.as_str()) else {
-            continue;
-        };
-        let Some(trained) = Dataset::open_recorded(recorded, dir) else {
-            continue;
-        };
-        let every_split = n.get("every_split").and_then(|v| v.as_bool()) == Some(true);
-        let holdout = n
-            .get("excluded_test")
-            .and_then(|v| serde_json::from_value(v.clone()).ok());
-        let Ok(fitted) = trained.rows_to_fit(every_split, holdout) else {
-            continue;
-        };
-        if trained.holds_frames(ds, rows, Some(&fitted)) {
-            return Ok(Some(format!(
-                "these {} frames are frames it trained on (its notes: {recorded}{}), so the factors fit its training errors and its intervals will be too narrow on new frames: calibrate on frames it did not train on (another split or recording), or take a validated run's factors (--calibration-from)",
-                rows.len(),
-                if every_split { ", every split" } else { "" }
-            )));
-        }
-    }
-    Ok(None)
+    let notes: Vec<&serde_json::Value> = notes.iter().collect();
+    Ok(crate::uncertainty::fitted_frames(&notes, dir, ds, rows))
 }
 
 /// Give the network in `dir` the factors of the validated run in `from`

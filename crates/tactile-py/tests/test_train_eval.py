@@ -251,6 +251,16 @@ def test_an_uncertain_regressor_ensemble_is_calibrated_in_its_encoder(root, tmp_
     tactile.train.ensemble(members, enc / "position")
     said = tactile.train.calibrate(enc / "position", spheres)
     assert "24 frames" in said and "regressor in" in said, said
+    # A quarter of them its members never fitted: no warning. A regressor
+    # trained on every frame, calibrated on them, is warned that its
+    # factors fit training errors (its notes say what it trained on).
+    assert "warning" not in said, said
+    tactile.train.regressor(spheres, ["x_mm", "y_mm"], encoder=enc, out=enc / "final",
+                            test_fraction=0.0, uncertainty=True)
+    notes = json.loads((enc / "final/regressor.json").read_text())["notes"]
+    assert notes["excluded_test"] is None and notes["trained_on"].endswith("spheres"), notes
+    said = tactile.train.calibrate(enc / "final", spheres)
+    assert "warning: these 24 frames are frames it trained on" in said, said
     factors = json.loads((enc / "position/ensemble.json").read_text())["notes"]["std_scale"]
     assert len(factors) == 2 and all(f > 0 for f in factors)
     ds = tactile.Dataset(spheres)
