@@ -97,9 +97,10 @@ fn calibrate_regressor(
             .into());
         }
     };
+    // The folder first: a warning, when there is one, ends the text.
     Ok(format!(
-        "{}; regressor in {}",
-        fit.describe(),
-        model.display()
+        "regressor in {}: {}",
+        model.display(),
+        fit.describe()
     ))
 }
