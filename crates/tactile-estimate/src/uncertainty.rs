@@ -243,12 +243,8 @@ impl UncertaintyFit {
                 rounded(&self.std_scale_before)
             );
         }
-        let warning = self
-            .fitted_frames
-            .as_ref()
-            .map_or(String::new(), |why| format!("\nwarning: {why}"));
         format!(
-            "{} frames: inside ±1 / ±1.96 deviations {:.1} % / {:.1} % before, {:.1} % / {:.1} % after (cross-fitted on halves); factors {:?} (were {:?}){warning}",
+            "{} frames: inside ±1 / ±1.96 deviations {:.1} % / {:.1} % before, {:.1} % / {:.1} % after (cross-fitted on halves); factors {:?} (were {:?})",
             self.frames,
             mean(&self.coverage_before[0]),
             mean(&self.coverage_before[1]),

@@ -10,23 +10,51 @@ use tactile_cae::{CaeArtifact, TactipEncoder};
 use tactile_core::dataset::Dataset;
 use tactile_detect::{DetectorArtifact, DetectorEnsembleArtifact};
 use tactile_estimate::RegressorEnsemble;
+use tactile_estimate::uncertainty::UncertaintyFit;
 use tactile_pose::{PoseArtifact, PoseEnsemble};
 
 use crate::Result;
+
+/// What [`calibrate_model`] did: one line for a terminal, and what the
+/// user should know (each begins `warning: `), which the command line
+/// notes on standard error and Python raises as `UserWarning`s.
+#[derive(Debug, Clone)]
+pub struct Calibrated {
+    /// What changed.
+    pub summary: String,
+    /// Warnings, such as calibration frames the model trained on.
+    pub warnings: Vec<String>,
+}
+
+impl Calibrated {
+    /// A deviation calibration's line, `folder` saying whose when given,
+    /// and its warning when its frames are frames the model trained on.
+    fn of(fit: &UncertaintyFit, folder: Option<String>) -> Self {
+        let summary = match folder {
+            Some(f) => format!("{}; {f}", fit.describe()),
+            None => fit.describe(),
+        };
+        let warnings = fit
+            .fitted_frames
+            .iter()
+            .map(|w| format!("warning: {w}"))
+            .collect();
+        Self { summary, warnings }
+    }
+}
 
 /// Calibrate a trained model on frames it was not trained on, the kind of
 /// its folder saying how: a detector's probabilities (one logit scale,
 /// decisions unchanged) on `data`; a pose network's deviations, or those of
 /// a regressor (or regressor ensemble) inside an encoder folder (one factor
 /// per target), on `data`'s rows of `split` (every row without one), or,
-/// with `from`, the factors of that validated run. Returns one line saying
-/// what changed.
+/// with `from`, the factors of that validated run. Returns what changed.
 pub fn calibrate_model(
     model: &Path,
     data: &[Dataset],
     split: Option<&str>,
     from: Option<&Path>,
-) -> Result<String> {
+) -> Result<Calibrated> {
     if RegressorEnsemble::is_in(model) {
         return calibrate_regressor(model, data, split, from);
     }
@@ -34,15 +62,24 @@ pub fn calibrate_model(
     let detector = DetectorArtifact::is_in(model) || DetectorEnsembleArtifact::read(model).is_ok();
     let pose = !detector && (PoseArtifact::is_in(model) || PoseEnsemble::is_in(model));
     match (pose, from, data) {
-        (true, Some(f), []) => Ok(tactile_pose::calibrate::calibration_from(model, f)?.describe()),
-        (true, None, [ds]) => Ok(tactile_pose::calibrate::calibrate_on(model, ds, split)?.describe()),
+        (true, Some(f), []) => Ok(Calibrated::of(
+            &tactile_pose::calibrate::calibration_from(model, f)?,
+            None,
+        )),
+        (true, None, [ds]) => Ok(Calibrated::of(
+            &tactile_pose::calibrate::calibrate_on(model, ds, split)?,
+            None,
+        )),
         (true, _, _) => Err(tactile_core::Error::Config(
             "a pose network is calibrated on one dataset (with --split to take its rows of one split) or taken from a validated run (--calibration-from), one of the two".into(),
         )
         .into()),
         (false, None, [_, ..]) if split.is_none() => {
             let fit = tactile_detect::calibrate::calibrate_on(model, data)?;
-            Ok(format!("{}; detector in {}", fit.describe(), model.display()))
+            Ok(Calibrated {
+                summary: format!("{}; detector in {}", fit.describe(), model.display()),
+                warnings: Vec::new(),
+            })
         }
         (false, _, _) => Err(tactile_core::Error::Config(
             "a detector is calibrated on whole datasets (--data, no --split or --calibration-from)".into(),
@@ -58,7 +95,7 @@ fn calibrate_regressor(
     data: &[Dataset],
     split: Option<&str>,
     from: Option<&Path>,
-) -> Result<String> {
+) -> Result<Calibrated> {
     let device = tactile_burn::DeviceKind::Flex.device();
     let fit = match (from, data) {
         (Some(f), []) => RegressorEnsemble::calibration_from(model, f, &device)?,
@@ -97,10 +134,8 @@ fn calibrate_regressor(
             .into());
         }
     };
-    // The folder first: a warning, when there is one, ends the text.
-    Ok(format!(
-        "regressor in {}: {}",
-        model.display(),
-        fit.describe()
+    Ok(Calibrated::of(
+        &fit,
+        Some(format!("regressor in {}", model.display())),
     ))
 }

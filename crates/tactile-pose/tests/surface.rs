@@ -222,7 +222,6 @@ fn surface_pose_with_calibrated_uncertainty_on_the_authors_split() {
         why.contains("these 30 frames are frames it trained on") && !why.contains("every split"),
         "{why}"
     );
-    assert!(warned.describe().contains("\nwarning: these 30 frames"));
     let every = tmp.path().join("every");
     copy_dir(&last, &every);
     let why = calibrate_on(&every, &ds, None)

@@ -288,7 +288,7 @@ pub(crate) fn train_calibrate(
     split: Option<String>,
     calibration_from: Option<PathBuf>,
 ) -> PyResult<String> {
-    interruptible(py, || {
+    let c = interruptible(py, || {
         let sets = data
             .iter()
             .map(Dataset::open)
@@ -301,5 +301,9 @@ pub(crate) fn train_calibrate(
             calibration_from.as_deref(),
         )
         .py()
-    })
+    })?;
+    for w in &c.warnings {
+        crate::errors::user_warning(py, w)?;
+    }
+    Ok(c.summary)
 }

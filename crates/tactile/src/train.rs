@@ -313,15 +313,16 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         }
         TrainCmd::Calibrate(a) => {
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
-            say!(
-                "{}",
-                tactile_pipeline::calibrate::calibrate_model(
-                    &a.model,
-                    &data,
-                    a.split.as_deref(),
-                    a.calibration_from.as_deref()
-                )?
-            );
+            let c = tactile_pipeline::calibrate::calibrate_model(
+                &a.model,
+                &data,
+                a.split.as_deref(),
+                a.calibration_from.as_deref(),
+            )?;
+            for w in &c.warnings {
+                tactile_core::note!("{w}");
+            }
+            say!("{}", c.summary);
         }
         TrainCmd::Depth(a) => {
             let options = a.config.resolve(a.options)?;
