@@ -158,18 +158,8 @@ fn folds_by_frame(
     repeats: usize,
     seed: u64,
 ) -> Result<Vec<(Vec<usize>, Vec<usize>)>> {
-    // Each frame by its first row, in row order, with all of its rows.
-    let mut rows_of: std::collections::HashMap<usize, Vec<usize>> = Default::default();
-    let mut firsts = Vec::new();
-    for (i, f) in frames.iter().enumerate() {
-        let rows = rows_of.entry(*f).or_default();
-        if rows.is_empty() {
-            firsts.push(i);
-        }
-        rows.push(i);
-    }
-    let first_of: std::collections::HashMap<usize, &Vec<usize>> =
-        rows_of.values().map(|rows| (rows[0], rows)).collect();
+    let groups = tactile_core::dataset::FrameGroups::new(frames.iter().copied().enumerate());
+    let firsts = &groups.frames;
     if firsts.len() < folds {
         return Err(Error::TooFewSamples(format!(
             "classifier needs at least {folds} frames (one per fold), got {}",
@@ -180,7 +170,7 @@ fn folds_by_frame(
     for repeat in 0..repeats {
         // Folds from one seeded shuffle per repeat.
         let order = shuffled_batches(
-            &firsts,
+            firsts,
             firsts.len(),
             seed.wrapping_add(7919 * repeat as u64),
         )
@@ -193,7 +183,7 @@ fn folds_by_frame(
                 } else {
                     &mut fit
                 };
-                side.extend_from_slice(first_of[first]);
+                side.extend_from_slice(groups.rows(*first));
             }
             out.push((fit, stop));
         }

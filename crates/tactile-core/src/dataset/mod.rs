@@ -14,7 +14,9 @@ mod split;
 mod writer;
 
 pub use paths::{Escape, backslash_hint, expect_entry_inside, resolve_inside};
-pub use split::{DEFAULT_SPLIT_SEED, Splits, TestHoldout, check_val_fraction, hold_out};
+pub use split::{
+    DEFAULT_SPLIT_SEED, FrameGroups, Splits, TestHoldout, check_val_fraction, hold_out,
+};
 pub use writer::DatasetWriter;
 
 /// The format tag every manifest carries.

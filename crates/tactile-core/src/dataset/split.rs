@@ -87,6 +87,47 @@ pub fn hold_out(
     Ok((rows, val))
 }
 
+/// Rows grouped by the frame they were read from: a frame listed on several
+/// rows (or a frame and its turned copies) is split, or put in a fold, as
+/// one. For rows that are each their own frame it is the identity, so they
+/// are split as before.
+#[derive(Debug, Clone)]
+pub struct FrameGroups {
+    /// One row per frame: the first of its rows, in the order given.
+    pub frames: Vec<usize>,
+    /// Every row of each frame, in the order given, by its first row.
+    rows: std::collections::HashMap<usize, Vec<usize>>,
+}
+
+impl FrameGroups {
+    /// Group `(row, frame)` pairs by frame (any key naming it, such as
+    /// [`Dataset::first_listings`] of the row).
+    pub fn new(rows: impl IntoIterator<Item = (usize, usize)>) -> Self {
+        let mut by_frame: std::collections::HashMap<usize, Vec<usize>> = Default::default();
+        let mut frames = Vec::new();
+        for (row, frame) in rows {
+            let group = by_frame.entry(frame).or_default();
+            if group.is_empty() {
+                frames.push(row);
+            }
+            group.push(row);
+        }
+        let rows = by_frame.into_values().map(|g| (g[0], g)).collect();
+        Self { frames, rows }
+    }
+
+    /// Every row of the frame whose first row is `frame` (none for a row
+    /// that is no frame's first).
+    pub fn rows(&self, frame: usize) -> &[usize] {
+        self.rows.get(&frame).map_or(&[], Vec::as_slice)
+    }
+
+    /// Every row of `frames` (first rows), frame by frame.
+    pub fn rows_of(&self, frames: &[usize]) -> Vec<usize> {
+        frames.iter().flat_map(|&f| self.rows(f)).copied().collect()
+    }
+}
+
 impl Dataset {
     /// Each row's frame file as the filesystem finds it (through `./` and
     /// links inside the folder); `None` where it cannot be resolved.
@@ -138,35 +179,6 @@ impl Dataset {
             .collect()
     }
 
-    /// `rows` as frames: one row per frame (the first of its rows in
-    /// `rows`, in their order), and a function giving a list of those
-    /// back as every row of their frames. For a dataset that lists each
-    /// frame once both are the identity, so it is split as before.
-    /// `first` is [`Self::first_listings`], found once per split.
-    fn by_frame(
-        rows: &[usize],
-        first: &[usize],
-    ) -> (Vec<usize>, impl Fn(&[usize]) -> Vec<usize> + use<>) {
-        let mut members: std::collections::HashMap<usize, Vec<usize>> = Default::default();
-        let mut frames = Vec::new();
-        for &i in rows {
-            let group = members.entry(first[i]).or_default();
-            if group.is_empty() {
-                frames.push(i);
-            }
-            group.push(i);
-        }
-        let by_row: std::collections::HashMap<usize, Vec<usize>> =
-            members.into_values().map(|g| (g[0], g)).collect();
-        let rows_of = move |frames: &[usize]| -> Vec<usize> {
-            frames
-                .iter()
-                .flat_map(|f| by_row.get(f).into_iter().flatten().copied())
-                .collect()
-        };
-        (frames, rows_of)
-    }
-
     /// [`hold_out`] of this dataset's `rows`: too few of them is named by
     /// its labels file; a bad fraction is the flag's error, not the file's.
     /// A frame listed on several rows is one frame: its rows validate or
@@ -185,9 +197,10 @@ impl Dataset {
                 format!("{e}{}", self.split_hint()),
             ),
         };
-        let (frames, rows_of) = Self::by_frame(&rows, &self.first_listings());
-        let (train, val) = hold_out(frames, val_fraction, seed).map_err(too_few)?;
-        let (train, val) = (rows_of(&train), rows_of(&val));
+        let first = self.first_listings();
+        let groups = FrameGroups::new(rows.iter().map(|&i| (i, first[i])));
+        let (train, val) = hold_out(groups.frames.clone(), val_fraction, seed).map_err(too_few)?;
+        let (train, val) = (groups.rows_of(&train), groups.rows_of(&val));
         Ok((train, val))
     }
 
@@ -210,15 +223,16 @@ impl Dataset {
         let (train, test) = match (self.split_indices("train"), self.evaluation_split()) {
             (Some(tr), Some(te)) => (tr, te),
             _ => {
-                let (mut all, rows_of) =
-                    Self::by_frame(&(0..self.len()).collect::<Vec<_>>(), &first);
+                let groups = FrameGroups::new(first.iter().copied().enumerate());
+                let mut all = groups.frames.clone();
                 all.shuffle(&mut rng);
                 let n_test = ((all.len() as f64 * test_fraction).round() as usize).max(1);
                 let test = all.split_off(all.len().saturating_sub(n_test));
-                (rows_of(&all), rows_of(&test))
+                (groups.rows_of(&all), groups.rows_of(&test))
             }
         };
-        let (mut train, rows_of) = Self::by_frame(&train, &first);
+        let groups = FrameGroups::new(train.iter().map(|&i| (i, first[i])));
+        let mut train = groups.frames.clone();
         train.shuffle(&mut rng);
         let n_val = ((train.len() as f64 * val_fraction).round() as usize).max(1);
         if train.len() <= n_val || test.is_empty() {
@@ -233,7 +247,7 @@ impl Dataset {
             ));
         }
         let val = train.split_off(train.len() - n_val);
-        let (train, val) = (rows_of(&train), rows_of(&val));
+        let (train, val) = (groups.rows_of(&train), groups.rows_of(&val));
         Ok(Splits { train, val, test })
     }
 
