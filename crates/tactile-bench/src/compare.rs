@@ -148,8 +148,7 @@ pub fn compare(c: &Compare) -> Result<String> {
         let (classes, y) = classes_of(&ds, col)?;
         let pick = |idx: &[usize]| -> Vec<usize> { idx.iter().map(|&i| y[i]).collect() };
         // The frame of each train and validation row, for the MLP's folds.
-        let first = ds.first_listings();
-        let frames: Vec<usize> = train.iter().chain(val).map(|&i| first[i]).collect();
+        let frames = ds.frame_of_rows(&[train.as_slice(), val.as_slice()].concat());
         md.push_str(&classification_table(
             &sets,
             &classes,

@@ -105,6 +105,9 @@ pub fn shared_encoders(encoders: &[PathBuf], tasks: &[Task], real: &Path) -> Res
     for t in tasks {
         let ds = Dataset::open(real.join(&t.data))?;
         let split = ds.three_way_split(0.2, 0.2, DEFAULT_SPLIT_SEED)?;
+        // The rows a classifier fits, and their frames (for its folds).
+        let fitted: Vec<usize> = split.train.iter().chain(&split.val).copied().collect();
+        let fitted_frames = ds.frame_of_rows(&fitted);
         let preset: PreprocessConfig = tactile_core::io::read_json(Path::new(&t.preprocess))?;
         let targets = t
             .targets
@@ -133,14 +136,11 @@ pub fn shared_encoders(encoders: &[PathBuf], tasks: &[Task], real: &Path) -> Res
             let (tx, vx, sx) = (pick(&split.train), pick(&split.val), pick(&split.test));
             let values = if let Some(col) = &t.classify {
                 let (classes, y) = classes_of(&ds, col)?;
-                let rows: Vec<usize> = split.train.iter().chain(&split.val).copied().collect();
-                let x: Vec<Vec<f32>> = rows.iter().map(|&i| feats[i].clone()).collect();
-                let yy: Vec<usize> = rows.iter().map(|&i| y[i]).collect();
-                let first = ds.first_listings();
-                let frames: Vec<usize> = rows.iter().map(|&i| first[i]).collect();
+                let x: Vec<Vec<f32>> = fitted.iter().map(|&i| feats[i].clone()).collect();
+                let yy: Vec<usize> = fitted.iter().map(|&i| y[i]).collect();
                 let pred = mlp_classification(
                     &classes,
-                    (&x, &yy, &frames),
+                    (&x, &yy, &fitted_frames),
                     &sx,
                     DEFAULT_SPLIT_SEED,
                     &dev,

@@ -73,8 +73,7 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
         .into());
     }
     // The frame of each training row, so a frame's rows share a fold.
-    let first = ds.first_listings();
-    let frames: Vec<usize> = train.iter().map(|&i| first[i]).collect();
+    let frames = ds.frame_of_rows(&train);
     let dev = DeviceKind::Flex.device();
     let mut rows = Vec::new();
     for enc in &s.encoders {

@@ -762,8 +762,7 @@ pub fn train_head(
     let (mut tx, mut ty) = pick(&train);
     // The frame of each row fitted, so a frame listed twice and its
     // rotated copies fit or stop a member of the ensemble together.
-    let first = ds.first_listings();
-    let mut frames: Vec<usize> = train.iter().map(|&i| first[i]).collect();
+    let mut frames = ds.frame_of_rows(&train);
     if let Some(aug) = rotation {
         aug.check()?;
         let FeatureSource::Encoder(dir) = source else {
@@ -778,7 +777,7 @@ pub fn train_head(
         for (k, f) in turned.into_iter().enumerate() {
             tx.push(f);
             ty.push(y[train[k / aug.copies]]);
-            frames.push(first[train[k / aug.copies]]);
+            frames.push(frames[k / aug.copies]);
         }
     }
     let config = HeadConfig {

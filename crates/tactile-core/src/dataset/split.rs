@@ -161,6 +161,13 @@ impl Dataset {
             .collect()
     }
 
+    /// The frame of each of `rows` (its [`Self::first_listings`] row), to
+    /// keep a frame's rows together in a model's folds.
+    pub fn frame_of_rows(&self, rows: &[usize]) -> Vec<usize> {
+        let first = self.first_listings();
+        rows.iter().map(|&i| first[i]).collect()
+    }
+
     /// The rows of `other` whose frame is the file of one of `rows` here,
     /// however each dataset names it: a test set holding them would score
     /// frames a model fitted.
