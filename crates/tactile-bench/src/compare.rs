@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_cae::data::PinSet;
 use tactile_cae::{CaeArtifact, TactipEncoder};
-use tactile_core::dataset::Dataset;
+use tactile_core::dataset::{Dataset, Provenance};
 use tactile_estimate::classical;
 use tactile_estimate::regressor::target_mae;
 use tactile_estimate::{
@@ -127,10 +127,10 @@ pub fn compare(c: &Compare) -> Result<String> {
         test.len(),
         c.seed,
         c.encoder.display(),
-        art.notes
-            .get("trained_on")
-            .and_then(|v| v.as_str())
-            .unwrap_or("unknown data"),
+        match Provenance::read(&art.notes).datasets.join(" + ") {
+            d if d.is_empty() => "unknown data".to_string(),
+            d => d,
+        },
         c.preprocess
             .as_ref()
             .map_or("the encoder's own", |p| p.0.as_str()),

@@ -5,7 +5,7 @@
 use serde::Serialize;
 use tactile_burn::Artifact;
 use tactile_cae::CaeArtifact;
-use tactile_core::dataset::{Dataset, TestHoldout};
+use tactile_core::dataset::{Dataset, Provenance, TestHoldout};
 use tactile_core::plot::Series;
 use tactile_pipeline::tactip::Predictor;
 use tactile_pose::{PoseArtifact, PoseEnsemble};
@@ -70,12 +70,7 @@ pub(crate) struct Candidate {
 impl Candidate {
     /// Read the model in `m` and time it over `runs` runs.
     pub fn read(m: &std::path::Path, runs: usize) -> Result<Self> {
-        let trained_on = |notes: &serde_json::Value| {
-            notes
-                .get("trained_on")
-                .and_then(|v| v.as_str())
-                .map(str::to_string)
-        };
+        let trained_on = |notes: &serde_json::Value| Provenance::read(notes).datasets;
         let mut sets = Vec::new();
         let (kind, notes, input, params, ms) = if PoseEnsemble::is_in(m) {
             // Members run one after another: latencies and sizes add up.

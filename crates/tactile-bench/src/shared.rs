@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_cae::data::PinSet;
 use tactile_cae::{CaeArtifact, TactipEncoder};
-use tactile_core::dataset::{DEFAULT_SPLIT_SEED, Dataset};
+use tactile_core::dataset::{DEFAULT_SPLIT_SEED, Dataset, Provenance};
 use tactile_estimate::Target;
 use tactile_estimate::regressor::target_mae;
 use tactile_pipeline::tactip::classes_of;
@@ -76,24 +76,13 @@ pub fn read_tasks(path: &Path) -> Result<Vec<Task>> {
 }
 
 /// Whether an encoder trained on `ds` (its notes) saw the test frames: it
-/// trained on that folder (its main dataset or a further one), left no
-/// test frames out, and the folder has no `split` column keeping them
-/// apart.
+/// trained on that folder (its main dataset or a further one), and fitted
+/// every split of it, or left no test frames out of a folder with no
+/// `split` column keeping them apart.
 fn saw_test(art: &CaeArtifact, ds: &Dataset) -> bool {
-    let here = std::fs::canonicalize(&ds.root).ok();
-    let main = art.notes.get("trained_on").into_iter();
-    let further = art
-        .notes
-        .get("also_trained_on")
-        .and_then(|v| v.as_array())
-        .into_iter()
-        .flatten();
-    let same = main
-        .chain(further)
-        .filter_map(|v| v.as_str())
-        .any(|t| here.is_some() && std::fs::canonicalize(t).ok() == here);
-    let excluded = art.notes.get("excluded_test").is_some_and(|v| !v.is_null());
-    same && !excluded && ds.split_indices("train").is_none()
+    let p = Provenance::read(&art.notes);
+    p.names_folder(&ds.root)
+        && (p.every_split || (p.excluded_test.is_none() && ds.split_indices("train").is_none()))
 }
 
 /// Every encoder on every task: features, an MLP per task on the training
@@ -354,12 +343,48 @@ mod tests {
                 false,
             ),
             (
-                serde_json::json!({"trained_on": "elsewhere", "also_trained_on": [here], "excluded_test": {"fraction": 0.2}}),
+                serde_json::json!({"trained_on": "elsewhere", "also_trained_on": [here], "excluded_test": {"test_fraction": 0.2, "split_seed": 1}}),
                 false,
             ),
             (serde_json::json!({}), false),
         ] {
             assert_eq!(saw_test(&art(notes.clone()), &ds), saw, "{notes}");
+        }
+        // A folder whose split column keeps the test frames apart: an
+        // encoder saw them only when it fitted every split (a final one).
+        let split = tempfile::tempdir().unwrap();
+        std::fs::copy(
+            root.join("manifest.json"),
+            split.path().join("manifest.json"),
+        )
+        .unwrap();
+        std::fs::create_dir(split.path().join("frames")).unwrap();
+        let mut labels =
+            String::from("file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n,radius_mm,split\n");
+        for (i, line) in std::fs::read_to_string(root.join("labels.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .enumerate()
+        {
+            let file = line.split(',').next().unwrap();
+            std::fs::copy(root.join(file), split.path().join(file)).unwrap();
+            labels.push_str(&format!(
+                "{line},{}\n",
+                if i < 10 { "train" } else { "test" }
+            ));
+        }
+        std::fs::write(split.path().join("labels.csv"), labels).unwrap();
+        let split_ds = Dataset::open(split.path()).unwrap();
+        let there = split.path().display().to_string();
+        for (notes, saw) in [
+            (serde_json::json!({"trained_on": there}), false),
+            (
+                serde_json::json!({"trained_on": there, "every_split": true}),
+                true,
+            ),
+        ] {
+            assert_eq!(saw_test(&art(notes.clone()), &split_ds), saw, "{notes}");
         }
     }
 

@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 use tactile_burn::ensemble::CALIBRATION_NOTE;
-use tactile_core::dataset::Dataset;
+use tactile_core::dataset::{Dataset, Provenance};
 use tactile_core::plot::{ScatterPanel, Series, scatter_grid};
 use tactile_estimate::Column;
 use tactile_estimate::uncertainty::{ONE_SIGMA, Z95, coverage, cross_fitted_coverage_at};
@@ -160,7 +160,7 @@ fn per_target_header(leading: &[&str], trailing: &[&str]) -> String {
 /// dataset that holds these frames. Without a record of its dataset, or
 /// where that dataset cannot be opened, it is taken to have seen them.
 fn saw_scored(c: &Candidate, model_dir: &std::path::Path, ds: &Dataset, rows: &[usize]) -> bool {
-    if c.notes.get("every_split").and_then(|v| v.as_bool()) != Some(true) {
+    if !Provenance::read(&c.notes).every_split {
         return false;
     }
     c.trained_on.is_empty()

@@ -12,7 +12,7 @@ use tactile_burn::nn::{RegressionLoss, bce_with_logits};
 use tactile_burn::optim::AdadeltaConfig;
 use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
-use tactile_core::dataset::{Dataset, TestHoldout};
+use tactile_core::dataset::{Dataset, Provenance, TestHoldout};
 use tactile_core::rng::SampleRng;
 use tactile_preprocess::perturb::RotationAugment;
 use tactile_preprocess::{PinImage, PreprocessConfig};
@@ -222,18 +222,10 @@ pub fn train(
         turned,
     } = Rows::read(config, &sources)?;
     let joints: Vec<&JointTargets> = sources.iter().filter_map(|s| s.joint).collect();
-    let mut notes = serde_json::json!({
-        "trained_on": data.root.display().to_string(),
-        "device": device.name(),
-        "excluded_test": config.holdout,
-        "every_split": config.every_split,
-    });
-    if !extra.is_empty() {
-        notes["also_trained_on"] = extra
-            .iter()
-            .map(|ds| ds.root.display().to_string())
-            .collect();
-    }
+    let notes = Provenance::of(&datasets)
+        .every_split(config.every_split)
+        .excluding_test(config.holdout)
+        .notes(serde_json::json!({ "device": device.name() }));
     let artifact = CaeArtifact {
         model: config.model.clone(),
         preprocess: config.preprocess.clone(),

@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use tactile_burn::nn::{gradient_loss, l1_loss, mse_loss, ssim_loss};
 use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
-use tactile_core::dataset::Dataset;
+use tactile_core::dataset::{Dataset, Provenance};
 use tactile_preprocess::visuo::ChannelStats;
 
 use crate::artifact::{DepthArtifact, DepthScale};
@@ -205,11 +205,13 @@ pub fn train(
             .as_deref()
             .map(|d| crate::prior::CalibrationPrior::of(d, out)),
         depth_maps: train_set.depth_maps,
-        notes: serde_json::json!({
-            "trained_on": data.root.display().to_string(),
-            "device": device.name(),
-            "encoder": crate::DenseNetPreset::of(&net.encoder).map_or("custom", |p| p.name()),
-        }),
+        // Split by sequence, the split column aside: it fits every split.
+        notes: Provenance::of(&[data])
+            .every_split(true)
+            .notes(serde_json::json!({
+                "device": device.name(),
+                "encoder": crate::DenseNetPreset::of(&net.encoder).map_or("custom", |p| p.name()),
+            })),
     };
     let dev = device.device();
     let ad = dev.clone().autodiff();

@@ -11,7 +11,7 @@ use tactile_burn::nn::elementwise_bce_with_logits;
 use tactile_burn::runtime::sigmoid;
 use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
-use tactile_core::dataset::Dataset;
+use tactile_core::dataset::{Dataset, Provenance};
 use tactile_preprocess::visuo::ChannelStats;
 
 use tactile_preprocess::profile::InputProfile;
@@ -208,10 +208,10 @@ pub fn train(
         input_profile: (train.len() >= InputProfile::MIN_FRAMES)
             .then(|| crate::profile::fit_input_profile_of(&data, &train))
             .transpose()?,
-        notes: serde_json::json!({
-            "trained_on": datasets.iter().map(|d| d.root.display().to_string()).collect::<Vec<_>>().join(" + "),
-            "device": device.name(),
-        }),
+        // Split by sequence, the split column aside: it fits every split.
+        notes: Provenance::of(&datasets.iter().collect::<Vec<_>>())
+            .every_split(true)
+            .notes(serde_json::json!({ "device": device.name() })),
     };
     let ad = dev.clone().autodiff();
     ad.seed(config.schedule.seed);

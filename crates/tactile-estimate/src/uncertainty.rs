@@ -385,19 +385,15 @@ pub fn fitted_frames(
     rows: &[usize],
 ) -> Option<String> {
     notes.iter().find_map(|n| {
-        let recorded = n.get("trained_on")?.as_str()?;
-        let trained = tactile_core::dataset::Dataset::open_recorded(recorded, dir)?;
-        let every_split = n.get("every_split").and_then(|v| v.as_bool()) == Some(true);
-        let holdout = n
-            .get("excluded_test")
-            .and_then(|v| serde_json::from_value(v.clone()).ok());
-        let fitted = trained.rows_to_fit(every_split, holdout).ok()?;
-        trained.holds_frames(ds, rows, Some(&fitted)).then(|| {
-            format!(
-                "these {} frames are frames it trained on (its notes: {recorded}{}), so the factors fit its training errors and its intervals will be too narrow on new frames: calibrate on frames it did not train on (another split or recording), or take a validated run's factors (--calibration-from)",
-                rows.len(),
-                if every_split { ", every split" } else { "" }
-            )
+        let p = tactile_core::dataset::Provenance::read(n);
+        p.fitted(dir).into_iter().find_map(|(recorded, trained, fitted)| {
+            trained.holds_frames(ds, rows, Some(&fitted.ok()?)).then(|| {
+                format!(
+                    "these {} frames are frames it trained on (its notes: {recorded}{}), so the factors fit its training errors and its intervals will be too narrow on new frames: calibrate on frames it did not train on (another split or recording), or take a validated run's factors (--calibration-from)",
+                    rows.len(),
+                    if p.every_split { ", every split" } else { "" }
+                )
+            })
         })
     })
 }

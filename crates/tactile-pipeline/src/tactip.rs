@@ -1016,14 +1016,15 @@ pub fn train_regressor(
     // Which rows it trained on, as a pose network records them, so a
     // calibration on them can say so.
     let final_model = plan.every_split || plan.test_fraction == 0.0;
-    regressor.artifact.notes = serde_json::json!({
-        "trained_on": ds.root.display().to_string(),
-        "every_split": plan.every_split,
-        "excluded_test": (!final_model).then_some(tactile_core::dataset::TestHoldout {
-            test_fraction: plan.test_fraction,
-            split_seed: plan.seed,
-        }),
-    });
+    regressor.artifact.notes = tactile_core::dataset::Provenance::of(&[ds])
+        .every_split(plan.every_split)
+        .excluding_test(
+            (!final_model).then_some(tactile_core::dataset::TestHoldout {
+                test_fraction: plan.test_fraction,
+                split_seed: plan.seed,
+            }),
+        )
+        .notes(serde_json::json!({}));
     regressor.save(out)?;
     let test_mae = if sx.is_empty() {
         Vec::new()

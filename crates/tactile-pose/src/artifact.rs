@@ -138,7 +138,7 @@ impl PoseEnsemble {
             // A member that trained on every split makes the ensemble one.
             if arts
                 .iter()
-                .any(|a| a.notes.get("every_split").and_then(|v| v.as_bool()) == Some(true))
+                .any(|a| tactile_core::dataset::Provenance::read(&a.notes).every_split)
             {
                 notes["every_split"] = true.into();
             }

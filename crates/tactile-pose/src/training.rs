@@ -8,7 +8,7 @@ use burn::config::Config;
 use burn::tensor::{Device, Tensor, TensorData};
 use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
-use tactile_core::dataset::{Dataset, TestHoldout};
+use tactile_core::dataset::{Dataset, Provenance, TestHoldout};
 use tactile_estimate::Target;
 use tactile_estimate::regressor::{decode, encode, output_scaler, target_mae};
 use tactile_preprocess::{Downsample, Lighting, PreprocessConfig};
@@ -203,13 +203,13 @@ pub fn train(
         targets: config.targets.clone(),
         outputs: outputs.clone(),
         std_scale: None,
-        notes: serde_json::json!({
-            "trained_on": data.root.display().to_string(),
-            "device": device.name(),
-            "excluded_test": config.holdout,
-            "all_rows": config.all_rows,
-            "every_split": config.every_split == Some(true),
-        }),
+        notes: Provenance::of(&[data])
+            .every_split(config.every_split == Some(true))
+            .excluding_test(config.holdout)
+            .notes(serde_json::json!({
+                "device": device.name(),
+                "all_rows": config.all_rows,
+            })),
     };
     let dev = device.device();
     let ad = dev.clone().autodiff();

@@ -11,7 +11,7 @@ use burn::tensor::Device;
 use tactile_burn::nn::{bce_with_logits, dice_loss_with_logits};
 use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
-use tactile_core::dataset::Dataset;
+use tactile_core::dataset::{Dataset, Provenance};
 use tactile_preprocess::visuo::ChannelStats;
 
 use crate::{Error, PostprocessConfig, Result, SegmentSet, SegmenterArtifact, UNet, UNetConfig};
@@ -124,11 +124,13 @@ pub fn train(
         stats: stats.clone(),
         threshold: 0.5,
         postprocess: PostprocessConfig::default(),
-        notes: serde_json::json!({
-            "trained_on": data.root.display().to_string(),
-            "device": device.name(),
-            "copies": config.copies,
-        }),
+        // Split by sequence, the split column aside: it fits every split.
+        notes: Provenance::of(&[data])
+            .every_split(true)
+            .notes(serde_json::json!({
+                "device": device.name(),
+                "copies": config.copies,
+            })),
     };
     let dev = device.device();
     let ad = dev.clone().autodiff();

@@ -1628,6 +1628,19 @@ fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
     assert_eq!(t["train_frames"], 36, "{t}");
     assert_eq!(t["config"]["soft_labels"]["width"], 0.2, "{t}");
     assert_eq!(t["config"]["soft_labels"]["threshold_mm"], 0.03, "{t}");
+    // Its notes name both datasets, each a folder a reader can open (they
+    // were one text joined by " + "), and say it fitted every split: it
+    // splits by sequence whatever a split column says.
+    let art: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(det.join("detector.json")).unwrap()).unwrap();
+    let notes = &art["notes"];
+    assert_eq!(notes["trained_on"], a.display().to_string(), "{notes}");
+    assert_eq!(
+        notes["also_trained_on"],
+        serde_json::json!([b.display().to_string()]),
+        "{notes}"
+    );
+    assert_eq!(notes["every_split"], true, "{notes}");
     // Per-frame decisions, one line per frame.
     let csv = tmp.path().join("decisions.csv");
     let (ok, msg) = tactile(&[

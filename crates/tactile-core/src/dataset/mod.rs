@@ -10,10 +10,12 @@ use serde::{Deserialize, Serialize};
 use crate::{Error, Result};
 
 mod paths;
+mod provenance;
 mod split;
 mod writer;
 
 pub use paths::{Escape, backslash_hint, expect_entry_inside, resolve_inside};
+pub use provenance::Provenance;
 pub use split::{
     DEFAULT_SPLIT_SEED, FrameGroups, Splits, TestHoldout, check_val_fraction, hold_out,
 };

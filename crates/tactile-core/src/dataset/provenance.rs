@@ -1,0 +1,164 @@
+//! Which frames a model fitted, as its notes record them. Every trainer
+//! writes these keys through [`Provenance::notes`] and every reader (a
+//! bench asking whether a model saw the frames it scores, a calibration
+//! asking whether it fits training errors) reads them through
+//! [`Provenance::read`], so the two never drift apart.
+
+use std::path::Path;
+
+use super::{Dataset, TestHoldout};
+use crate::Result;
+
+/// The datasets a model trained on and which of their rows it fitted.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Provenance {
+    /// The dataset folders as given to the trainer: the first is noted as
+    /// `trained_on`, the rest as `also_trained_on`.
+    pub datasets: Vec<String>,
+    /// It fitted the rows of every split (`val` and `test` too): a final
+    /// model, or a trainer that splits by sequence and ignores the column.
+    pub every_split: bool,
+    /// Without a `split` column: the test rows it left out for a later
+    /// evaluation.
+    pub excluded_test: Option<TestHoldout>,
+}
+
+impl Provenance {
+    /// Trained on `datasets` (the first is the main one), their training
+    /// rows only until [`Self::every_split`] or [`Self::excluding_test`]
+    /// say otherwise.
+    pub fn of(datasets: &[&Dataset]) -> Self {
+        Self {
+            datasets: datasets
+                .iter()
+                .map(|d| d.root.display().to_string())
+                .collect(),
+            every_split: false,
+            excluded_test: None,
+        }
+    }
+
+    /// With `every_split`: it fitted every row of every split.
+    pub fn every_split(mut self, every_split: bool) -> Self {
+        self.every_split = every_split;
+        self
+    }
+
+    /// It left out the test rows of `holdout`.
+    pub fn excluding_test(mut self, holdout: Option<TestHoldout>) -> Self {
+        self.excluded_test = holdout;
+        self
+    }
+
+    /// The notes a trainer saves: these keys, then `extra`'s (an object:
+    /// the device, the trainer's own choices).
+    pub fn notes(&self, extra: serde_json::Value) -> serde_json::Value {
+        let mut notes = serde_json::json!({
+            "every_split": self.every_split,
+            "excluded_test": self.excluded_test,
+        });
+        if let Some((main, further)) = self.datasets.split_first() {
+            notes["trained_on"] = main.as_str().into();
+            if !further.is_empty() {
+                notes["also_trained_on"] = further.into();
+            }
+        }
+        if let (Some(n), serde_json::Value::Object(extra)) = (notes.as_object_mut(), extra) {
+            n.extend(extra);
+        }
+        notes
+    }
+
+    /// What `notes` record. Notes without these keys (written before a
+    /// trainer recorded them) read as no dataset, training rows only.
+    pub fn read(notes: &serde_json::Value) -> Self {
+        let text = |v: &serde_json::Value| v.as_str().map(str::to_string);
+        let further = notes
+            .get("also_trained_on")
+            .and_then(|v| v.as_array())
+            .into_iter()
+            .flatten();
+        Self {
+            datasets: notes
+                .get("trained_on")
+                .into_iter()
+                .chain(further)
+                .filter_map(text)
+                .collect(),
+            every_split: notes.get("every_split").and_then(|v| v.as_bool()) == Some(true),
+            excluded_test: notes
+                .get("excluded_test")
+                .and_then(|v| serde_json::from_value(v.clone()).ok()),
+        }
+    }
+
+    /// Each recorded dataset that opens from `model_dir` (see
+    /// [`Dataset::open_recorded`]), with the rows it fitted of it
+    /// ([`Dataset::rows_to_fit`]) and its name as recorded.
+    pub fn fitted(&self, model_dir: &Path) -> Vec<(&str, Dataset, Result<Vec<usize>>)> {
+        self.datasets
+            .iter()
+            .filter_map(|d| {
+                let ds = Dataset::open_recorded(d, model_dir)?;
+                let rows = ds.rows_to_fit(self.every_split, self.excluded_test);
+                Some((d.as_str(), ds, rows))
+            })
+            .collect()
+    }
+
+    /// Whether one of its datasets is the folder `dir` (compared as
+    /// canonical paths; a recorded path that no longer resolves is not).
+    pub fn names_folder(&self, dir: &Path) -> bool {
+        let Ok(here) = dir.canonicalize() else {
+            return false;
+        };
+        self.datasets
+            .iter()
+            .any(|d| Path::new(d).canonicalize().ok().as_deref() == Some(here.as_path()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn notes_written_are_read_back_with_every_dataset_and_the_trainers_own_keys() {
+        let p = Provenance {
+            datasets: vec!["data/a".into(), "data/b".into()],
+            every_split: true,
+            excluded_test: Some(TestHoldout {
+                test_fraction: 0.2,
+                split_seed: 7,
+            }),
+        };
+        let notes = p.notes(serde_json::json!({"device": "flex"}));
+        assert_eq!(notes["trained_on"], "data/a");
+        assert_eq!(notes["also_trained_on"], serde_json::json!(["data/b"]));
+        assert_eq!(notes["device"], "flex");
+        assert_eq!(Provenance::read(&notes), p);
+        // One dataset: no `also_trained_on`, as the notes always had it.
+        let one = Provenance {
+            datasets: vec!["data/a".into()],
+            ..Default::default()
+        };
+        let notes = one.notes(serde_json::json!({}));
+        assert!(notes.get("also_trained_on").is_none());
+        assert_eq!(notes["excluded_test"], serde_json::Value::Null);
+        assert_eq!(Provenance::read(&notes), one);
+    }
+
+    #[test]
+    fn notes_of_older_models_read_as_no_dataset_and_training_rows_only() {
+        // A model trained before its trainer recorded anything.
+        let old = serde_json::json!({"device": "flex"});
+        assert_eq!(Provenance::read(&old), Provenance::default());
+        assert!(Provenance::read(&old).fitted(Path::new(".")).is_empty());
+        let pose = serde_json::json!({
+            "trained_on": "../shared/real/x", "every_split": false, "excluded_test": null, "all_rows": true
+        });
+        let p = Provenance::read(&pose);
+        assert_eq!(p.datasets, ["../shared/real/x"]);
+        assert!(!p.every_split && p.excluded_test.is_none());
+    }
+}
