@@ -277,29 +277,45 @@ fn an_encoder_row_counts_every_member_of_its_estimator() {
 
 #[test]
 fn frames_no_model_fitted_are_scored_as_unseen_and_unlabelled_ones_are_refused() {
-    // The same 20 `val` frames twice: as copied out of the real set (frames
-    // every shipped model of `every_split` fitted, and on which
-    // cae-surface-train's deviations were calibrated) and under other
-    // names, as other frames of the same rig would come.
+    // The same 20 `val` frames three times: as copied out of the real set
+    // (frames every shipped model of `every_split` fitted, and on which
+    // cae-surface-train's deviations were calibrated), copied under other
+    // names (still those frames), and as other frames of the same rig would
+    // come: other names, other bytes (a corner pixel outside the skin
+    // flipped).
     let tmp = tempfile::tempdir().unwrap();
-    let (copied, other) = (tmp.path().join("copied"), tmp.path().join("other"));
+    let (copied, renamed, other) = (
+        tmp.path().join("copied"),
+        tmp.path().join("renamed"),
+        tmp.path().join("other"),
+    );
     assert_eq!(val_subset(&copied, 100), 20);
-    std::fs::create_dir_all(other.join("frames")).unwrap();
-    std::fs::copy(copied.join("manifest.json"), other.join("manifest.json")).unwrap();
     let text = std::fs::read_to_string(copied.join("labels.csv")).unwrap();
-    let mut labels = String::new();
-    for (k, l) in text.lines().enumerate() {
-        if k == 0 {
-            labels.push_str(l);
-        } else {
-            let (file, rest) = l.split_once(',').unwrap();
-            let renamed = format!("frames/rig-b-{k:04}.png");
-            std::fs::copy(copied.join(file), other.join(&renamed)).unwrap();
-            labels.push_str(&format!("{renamed},{rest}"));
+    for (dir, flip) in [(&renamed, false), (&other, true)] {
+        std::fs::create_dir_all(dir.join("frames")).unwrap();
+        std::fs::copy(copied.join("manifest.json"), dir.join("manifest.json")).unwrap();
+        let mut labels = String::new();
+        for (k, l) in text.lines().enumerate() {
+            if k == 0 {
+                labels.push_str(l);
+            } else {
+                let (file, rest) = l.split_once(',').unwrap();
+                let name = format!("frames/rig-b-{k:04}.png");
+                if flip {
+                    let frame = tactile_core::image_io::load_grey(copied.join(file)).unwrap();
+                    let (w, h) = (frame.width(), frame.height());
+                    let mut pixels = frame.as_slice().to_vec();
+                    pixels[0] = 255 - pixels[0];
+                    tactile_core::image_io::save_grey_png(dir.join(&name), w, h, &pixels).unwrap();
+                } else {
+                    std::fs::copy(copied.join(file), dir.join(&name)).unwrap();
+                }
+                labels.push_str(&format!("{name},{rest}"));
+            }
+            labels.push('\n');
         }
-        labels.push('\n');
+        std::fs::write(dir.join("labels.csv"), &labels).unwrap();
     }
-    std::fs::write(other.join("labels.csv"), &labels).unwrap();
     let bench = |data: &Path| ModelBench {
         models: vec![
             root().join("models/pose-surface"),
@@ -322,6 +338,17 @@ fn frames_no_model_fitted_are_scored_as_unseen_and_unlabelled_ones_are_refused()
     assert_eq!(
         row(&seen.markdown, "pose-surface")[1],
         "pose-surface (trained on these frames)"
+    );
+    // Renamed copies are the frames it fitted and calibrated on.
+    let seen_renamed = bench_surface(&bench(&renamed), None).unwrap();
+    assert_eq!(
+        row(&seen_renamed.markdown, "pose-surface")[1],
+        "pose-surface (trained on these frames)"
+    );
+    assert!(
+        row(&seen_renamed.markdown, "cae-surface-train")[12].ends_with("cross-fitted"),
+        "{}",
+        seen_renamed.markdown
     );
     assert_eq!(row(&unseen.markdown, "pose-surface")[1], "pose-surface");
     assert!(seen.rows[0].metrics.saw_scored_frames && !unseen.rows[0].metrics.saw_scored_frames);
@@ -368,6 +395,7 @@ fn frames_no_model_fitted_are_scored_as_unseen_and_unlabelled_ones_are_refused()
     for f in ["manifest.json", "frames"] {
         std::fs::rename(other.join(f), unlabelled.join(f)).unwrap();
     }
+    let labels = std::fs::read_to_string(other.join("labels.csv")).unwrap();
     let mut lines = labels.lines();
     let head = lines.next().unwrap();
     let mut blank = format!("{head}\n");

@@ -371,8 +371,8 @@ pub fn fit(
 /// the model (of any member of an ensemble: `notes`) name a dataset
 /// (`trained_on`, looked up from `dir` as [`Dataset::open_recorded`] does)
 /// whose rows it trained on (`every_split`, `excluded_test`:
-/// [`Dataset::rows_to_fit`]) hold them all: the same folder, or frames of
-/// the same names and sizes copied out of it. Its factors would then fit
+/// [`Dataset::rows_to_fit`]) hold them all: the same files, or copies of
+/// them (the same bytes, under any name). Its factors would then fit
 /// training errors. `None` when they are not, or the notes name no
 /// dataset that opens here.
 ///

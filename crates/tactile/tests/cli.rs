@@ -2430,6 +2430,33 @@ fn a_head_trains_on_turned_copies_and_records_the_augmentation() {
         "{msg}"
     );
     assert!(!out.exists());
+    // A test set of other frames holding one copy of a training frame,
+    // under another name in another folder: found by its bytes.
+    let other = tmp.path().join("other");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "tactip",
+        "--count",
+        "10",
+        "--seed",
+        "7",
+        "--out",
+        other.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    std::fs::copy(
+        data.join("frames/000003.png"),
+        other.join("frames/000004.png"),
+    )
+    .unwrap();
+    let (ok, msg) = head_tested("2", "5", &["--test", other.to_str().unwrap()]);
+    assert!(
+        !ok && msg.contains("labels.csv:6")
+            && msg.contains("1 of its 10 frames are frames the head trains on")
+            && msg.contains("this one: 'frames/000004.png'"),
+        "{msg}"
+    );
+    assert!(!out.exists());
     let (ok, msg) = head("2", "5");
     assert!(ok && msg.contains("on 90 frames"), "{msg}");
     let json = std::fs::read_to_string(out.join("head.json")).unwrap();

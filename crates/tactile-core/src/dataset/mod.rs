@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::{Error, Result};
 
+mod copies;
 mod paths;
 mod provenance;
 mod split;
@@ -658,42 +659,26 @@ impl Dataset {
     }
 
     /// Whether every frame of `other`'s `rows` is one of this dataset's
-    /// `within` rows (every row when `None`): the same folder, or a frame
-    /// of the same name in its folder and the same size on disk. A subset
-    /// copied out of a dataset is held by it; other frames of the same rig
-    /// are not. It tells a bench whether a model fitted or calibrated on
-    /// this dataset has seen the frames it scores.
+    /// `within` rows (every row when `None`): the same file, or a copy of
+    /// it (the same bytes, under any name in any folder). A subset copied
+    /// out of a dataset is held by it; other frames of the same rig are
+    /// not. It tells a bench whether a model fitted or calibrated on this
+    /// dataset has seen the frames it scores. It stops at the first frame
+    /// not held, reading only frames of a size it asks about.
     pub fn holds_frames(&self, other: &Dataset, rows: &[usize], within: Option<&[usize]>) -> bool {
-        let same_folder = match (self.root.canonicalize(), other.root.canonicalize()) {
-            (Ok(a), Ok(b)) => a == b,
-            _ => false,
+        let files = self.frame_files();
+        let mine = match within {
+            Some(w) => w.iter().filter_map(|&i| files.get(i)?.clone()).collect(),
+            None => files.into_iter().flatten().collect::<Vec<_>>(),
         };
-        let size = |ds: &Dataset, i: usize| {
-            let path = ds.path_of(i, "file").ok()?;
-            std::fs::metadata(path).ok().map(|m| m.len())
-        };
-        let all: Vec<usize>;
-        let within = match within {
-            Some(w) => w,
-            None => {
-                all = (0..self.len()).collect();
-                &all
-            }
-        };
-        let mine: std::collections::HashMap<&str, usize> = within
-            .iter()
-            .filter(|&&i| i < self.len())
-            .filter_map(|&i| Some((self.text_opt(i, "file")?, i)))
-            .collect();
-        let held = |j: usize| {
-            other
-                .text_opt(j, "file")
-                .and_then(|f| mine.get(f))
-                .is_some_and(|&i| {
-                    same_folder || size(self, i).is_some_and(|n| size(other, j) == Some(n))
-                })
-        };
-        rows.iter().all(|&j| j < other.len() && held(j))
+        let mut copies = copies::FrameCopies::new(mine);
+        let theirs = other.frame_files();
+        rows.iter().all(|&j| {
+            theirs
+                .get(j)
+                .and_then(Option::as_deref)
+                .is_some_and(|f| copies.holds(f))
+        })
     }
 
     /// The name of the split [`Self::evaluation_split`] takes: `test`

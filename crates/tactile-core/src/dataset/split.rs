@@ -131,7 +131,7 @@ impl FrameGroups {
 impl Dataset {
     /// Each row's frame file as the filesystem finds it (through `./` and
     /// links inside the folder); `None` where it cannot be resolved.
-    fn frame_files(&self) -> Vec<Option<std::path::PathBuf>> {
+    pub(crate) fn frame_files(&self) -> Vec<Option<std::path::PathBuf>> {
         let root = self.root.canonicalize().ok();
         (0..self.len())
             .map(|i| {
@@ -169,19 +169,18 @@ impl Dataset {
     }
 
     /// The rows of `other` whose frame is the file of one of `rows` here,
-    /// however each dataset names it: a test set holding them would score
-    /// frames a model fitted.
+    /// however each dataset names it, or a copy of it (the same bytes, in
+    /// another folder or under another name): a test set holding them
+    /// would score frames a model fitted.
     pub fn rows_sharing_frames(&self, rows: &[usize], other: &Dataset) -> Vec<usize> {
         let files = self.frame_files();
-        let mine: std::collections::HashSet<&std::path::PathBuf> = rows
-            .iter()
-            .filter_map(|&i| files.get(i)?.as_ref())
-            .collect();
+        let mut copies =
+            super::copies::FrameCopies::new(rows.iter().filter_map(|&i| files.get(i)?.clone()));
         other
             .frame_files()
             .iter()
             .enumerate()
-            .filter(|(_, f)| f.as_ref().is_some_and(|f| mine.contains(f)))
+            .filter(|(_, f)| f.as_ref().is_some_and(|f| copies.holds(f)))
             .map(|(j, _)| j)
             .collect()
     }
