@@ -75,14 +75,23 @@ pub fn read_tasks(path: &Path) -> Result<Vec<Task>> {
     Ok(tasks)
 }
 
-/// Whether an encoder trained on `ds` (its notes) saw the test frames: it
-/// trained on that folder (its main dataset or a further one), and fitted
-/// every split of it, or left no test frames out of a folder with no
-/// `split` column keeping them apart.
-fn saw_test(art: &CaeArtifact, ds: &Dataset) -> bool {
-    let p = Provenance::read(&art.notes);
-    p.names_folder(&ds.root)
-        && (p.every_split || (p.excluded_test.is_none() && ds.split_indices("train").is_none()))
+/// Whether an encoder (its notes, its folder `dir`) fitted any of the
+/// `test` rows of `ds`: a dataset its notes name (main or further, found
+/// as [`Dataset::open_recorded`] finds it) holds one of them among the rows
+/// it fitted ([`Provenance::fitted`]), the same file or a copy. An
+/// encoder that left out other test rows than these, or fitted every
+/// split, saw them; one trained on other frames did not.
+fn saw_test(art: &CaeArtifact, dir: &Path, ds: &Dataset, test: &[usize]) -> bool {
+    Provenance::read(&art.notes)
+        .fitted(dir)
+        .into_iter()
+        .any(|(_, trained, fitted)| {
+            // Rows it cannot name (a split gone wrong since): all of them.
+            let fitted = fitted.unwrap_or_else(|_| (0..trained.len()).collect());
+            !trained
+                .rows_sharing_frames_among(&fitted, ds, test)
+                .is_empty()
+        })
 }
 
 /// Every encoder on every task: features, an MLP per task on the training
@@ -172,7 +181,7 @@ pub fn shared_encoders(encoders: &[PathBuf], tasks: &[Task], real: &Path) -> Res
                 task: t.task.clone(),
                 encoder: name,
                 values,
-                saw_test_frames: saw_test(&art, &ds),
+                saw_test_frames: saw_test(&art, enc, &ds, &split.test),
             });
         }
     }
@@ -327,38 +336,71 @@ mod tests {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/virtual-tactip");
         let ds = Dataset::open(&root).unwrap();
         let here = root.display().to_string();
+        let test = ds
+            .three_way_split(0.2, 0.2, DEFAULT_SPLIT_SEED)
+            .unwrap()
+            .test;
         let art = |notes: serde_json::Value| CaeArtifact {
             model: tactile_cae::CaeConfig::new(),
             preprocess: PreprocessConfig::binary_frames(),
             notes,
         };
-        for (notes, saw) in [
+        let saw = |notes: &serde_json::Value, ds: &Dataset, test: &[usize]| {
+            saw_test(&art(notes.clone()), &root, ds, test)
+        };
+        // The frames again, each under another name in another folder.
+        let tmp = tempfile::tempdir().unwrap();
+        let copy = tmp.path().join("copy");
+        std::fs::create_dir_all(copy.join("frames")).unwrap();
+        std::fs::copy(root.join("manifest.json"), copy.join("manifest.json")).unwrap();
+        let mut labels = String::new();
+        for (k, line) in std::fs::read_to_string(root.join("labels.csv"))
+            .unwrap()
+            .lines()
+            .enumerate()
+        {
+            match line.split_once(',') {
+                Some((file, rest)) if k > 0 => {
+                    let name = format!("frames/copy-{k}.png");
+                    std::fs::copy(root.join(file), copy.join(&name)).unwrap();
+                    labels.push_str(&format!("{name},{rest}\n"));
+                }
+                _ => labels.push_str(&format!("{line}\n")),
+            }
+        }
+        std::fs::write(copy.join("labels.csv"), labels).unwrap();
+        let copy = copy.display().to_string();
+        // Another seed's test frames are not these: it fitted some of them.
+        let other_seed = ds.three_way_split(0.2, 0.2, 1).unwrap().test;
+        assert_ne!(other_seed, test);
+        for (notes, expected) in [
             (serde_json::json!({"trained_on": here}), true),
             (
                 serde_json::json!({"trained_on": "elsewhere", "also_trained_on": [here]}),
                 true,
             ),
+            (serde_json::json!({"trained_on": copy}), true),
             (
                 serde_json::json!({"trained_on": "elsewhere", "also_trained_on": ["nowhere"]}),
                 false,
             ),
             (
-                serde_json::json!({"trained_on": "elsewhere", "also_trained_on": [here], "excluded_test": {"test_fraction": 0.2, "split_seed": 1}}),
+                serde_json::json!({"trained_on": here, "excluded_test": {"test_fraction": 0.2, "split_seed": DEFAULT_SPLIT_SEED}}),
                 false,
+            ),
+            (
+                serde_json::json!({"trained_on": here, "excluded_test": {"test_fraction": 0.2, "split_seed": 1}}),
+                true,
             ),
             (serde_json::json!({}), false),
         ] {
-            assert_eq!(saw_test(&art(notes.clone()), &ds), saw, "{notes}");
+            assert_eq!(saw(&notes, &ds, &test), expected, "{notes}");
         }
         // A folder whose split column keeps the test frames apart: an
         // encoder saw them only when it fitted every split (a final one).
-        let split = tempfile::tempdir().unwrap();
-        std::fs::copy(
-            root.join("manifest.json"),
-            split.path().join("manifest.json"),
-        )
-        .unwrap();
-        std::fs::create_dir(split.path().join("frames")).unwrap();
+        let split = tmp.path().join("split");
+        std::fs::create_dir_all(split.join("frames")).unwrap();
+        std::fs::copy(root.join("manifest.json"), split.join("manifest.json")).unwrap();
         let mut labels =
             String::from("file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n,radius_mm,split\n");
         for (i, line) in std::fs::read_to_string(root.join("labels.csv"))
@@ -368,23 +410,28 @@ mod tests {
             .enumerate()
         {
             let file = line.split(',').next().unwrap();
-            std::fs::copy(root.join(file), split.path().join(file)).unwrap();
+            std::fs::copy(root.join(file), split.join(file)).unwrap();
             labels.push_str(&format!(
                 "{line},{}\n",
                 if i < 10 { "train" } else { "test" }
             ));
         }
-        std::fs::write(split.path().join("labels.csv"), labels).unwrap();
-        let split_ds = Dataset::open(split.path()).unwrap();
-        let there = split.path().display().to_string();
-        for (notes, saw) in [
+        std::fs::write(split.join("labels.csv"), labels).unwrap();
+        let split_ds = Dataset::open(&split).unwrap();
+        let split_test = split_ds
+            .three_way_split(0.2, 0.2, DEFAULT_SPLIT_SEED)
+            .unwrap()
+            .test;
+        assert_eq!(split_test, [10, 11, 12, 13]);
+        let there = split.display().to_string();
+        for (notes, expected) in [
             (serde_json::json!({"trained_on": there}), false),
             (
                 serde_json::json!({"trained_on": there, "every_split": true}),
                 true,
             ),
         ] {
-            assert_eq!(saw_test(&art(notes.clone()), &split_ds), saw, "{notes}");
+            assert_eq!(saw(&notes, &split_ds, &split_test), expected, "{notes}");
         }
     }
 

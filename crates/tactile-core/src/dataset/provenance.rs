@@ -105,17 +105,6 @@ impl Provenance {
             })
             .collect()
     }
-
-    /// Whether one of its datasets is the folder `dir` (compared as
-    /// canonical paths; a recorded path that no longer resolves is not).
-    pub fn names_folder(&self, dir: &Path) -> bool {
-        let Ok(here) = dir.canonicalize() else {
-            return false;
-        };
-        self.datasets
-            .iter()
-            .any(|d| Path::new(d).canonicalize().ok().as_deref() == Some(here.as_path()))
-    }
 }
 
 #[cfg(test)]

@@ -173,15 +173,31 @@ impl Dataset {
     /// another folder or under another name): a test set holding them
     /// would score frames a model fitted.
     pub fn rows_sharing_frames(&self, rows: &[usize], other: &Dataset) -> Vec<usize> {
+        let all: Vec<usize> = (0..other.len()).collect();
+        self.rows_sharing_frames_among(rows, other, &all)
+    }
+
+    /// [`Self::rows_sharing_frames`] of `other`'s `among` rows only (its
+    /// test rows, say), reading no other frame of it.
+    pub fn rows_sharing_frames_among(
+        &self,
+        rows: &[usize],
+        other: &Dataset,
+        among: &[usize],
+    ) -> Vec<usize> {
         let files = self.frame_files();
         let mut copies =
             super::copies::FrameCopies::new(rows.iter().filter_map(|&i| files.get(i)?.clone()));
-        other
-            .frame_files()
+        let theirs = other.frame_files();
+        among
             .iter()
-            .enumerate()
-            .filter(|(_, f)| f.as_ref().is_some_and(|f| copies.holds(f)))
-            .map(|(j, _)| j)
+            .copied()
+            .filter(|&j| {
+                theirs
+                    .get(j)
+                    .and_then(Option::as_deref)
+                    .is_some_and(|f| copies.holds(f))
+            })
             .collect()
     }
 
