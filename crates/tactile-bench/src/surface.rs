@@ -155,18 +155,26 @@ fn per_target_header(leading: &[&str], trailing: &[&str]) -> String {
     )
 }
 
-/// Whether a model trained on the scored rows: one trained on every split
-/// (a pose network with `every_split`, an encoder whose notes say so) of a
-/// dataset that holds these frames. Without a record of its dataset, or
-/// where that dataset cannot be opened, it is taken to have seen them.
+/// Whether a model trained on the scored rows: a dataset its notes name
+/// holds every one of them among the rows it fitted (its `train` rows, or
+/// every row when it fitted every split; the same file or a copy). One
+/// trained on every split without a record of its dataset, or whose
+/// dataset cannot be opened, is taken to have seen them.
 fn saw_scored(c: &Candidate, model_dir: &std::path::Path, ds: &Dataset, rows: &[usize]) -> bool {
-    if !Provenance::read(&c.notes).every_split {
-        return false;
+    let p = Provenance {
+        datasets: c.trained_on.clone(),
+        ..Provenance::read(&c.notes)
+    };
+    if p.datasets.is_empty() {
+        return p.every_split;
     }
-    c.trained_on.is_empty()
-        || c.trained_on.iter().any(|d| {
-            Dataset::open_recorded(d, model_dir)
-                .is_none_or(|trained| trained.holds_frames(ds, rows, None))
+    p.datasets
+        .iter()
+        .any(|d| match Dataset::open_recorded(d, model_dir) {
+            None => p.every_split,
+            Some(trained) => trained
+                .rows_to_fit(p.every_split, p.excluded_test)
+                .is_ok_and(|fitted| trained.holds_frames(ds, rows, Some(&fitted))),
         })
 }
 

@@ -414,3 +414,49 @@ fn frames_no_model_fitted_are_scored_as_unseen_and_unlabelled_ones_are_refused()
         "{e}"
     );
 }
+
+#[test]
+fn a_model_scored_on_copies_of_its_training_rows_is_marked() {
+    // 20 `train` frames of the surface set, the split column dropped:
+    // `cae-surface-train` fitted them (it left `val` out), `pose-surface`
+    // too (every split).
+    let real = root().join("../shared/real/tactip331-surface");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("train-copies");
+    std::fs::create_dir_all(dir.join("frames")).unwrap();
+    let text = std::fs::read_to_string(real.join("labels.csv")).unwrap();
+    let mut lines = text.lines();
+    let head = lines.next().unwrap();
+    let mut labels = format!("{}\n", head.strip_suffix(",split").unwrap());
+    for l in lines.filter(|l| l.ends_with(",train")).step_by(300) {
+        let file = l.split(',').next().unwrap();
+        std::fs::copy(real.join(file), dir.join(file)).unwrap();
+        labels.push_str(&format!("{}\n", l.strip_suffix(",train").unwrap()));
+    }
+    common::write_subset(&real, &dir, &labels, 20);
+    let table = bench_surface(
+        &ModelBench {
+            models: vec![
+                root().join("models/cae-surface-train"),
+                root().join("models/pose-surface"),
+            ],
+            data: dir,
+            select: None,
+            extreme: None,
+            runs: 1,
+        },
+        None,
+    )
+    .unwrap();
+    for name in ["cae-surface-train", "pose-surface"] {
+        assert!(
+            table
+                .markdown
+                .lines()
+                .any(|l| l.starts_with(&format!("| {name} (trained on these frames) |"))),
+            "{name}: {}",
+            table.markdown
+        );
+    }
+    assert!(table.rows.iter().all(|r| r.metrics.saw_scored_frames));
+}
