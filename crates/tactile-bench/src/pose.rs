@@ -5,7 +5,7 @@
 use serde::Serialize;
 use tactile_burn::Artifact;
 use tactile_cae::CaeArtifact;
-use tactile_core::dataset::{Dataset, Provenance, TestHoldout};
+use tactile_core::dataset::{Dataset, Provenance, Seen, TestHoldout};
 use tactile_core::plot::Series;
 use tactile_pipeline::tactip::Predictor;
 use tactile_pose::{PoseArtifact, PoseEnsemble};
@@ -65,17 +65,8 @@ fn never_saw(
         datasets: trained_on,
         ..Provenance::read(notes)
     };
-    let fitted = p.fitted(dir);
     let all: Vec<usize> = (0..ds.len()).collect();
-    !p.datasets.is_empty()
-        && fitted.len() == p.datasets.len()
-        && fitted.into_iter().all(|(_, trained, rows)| {
-            rows.is_ok_and(|rows| {
-                trained
-                    .rows_sharing_frames_among(&rows, ds, &all)
-                    .is_empty()
-            })
-        })
+    p.seen(dir, ds, &all) == Seen::None
 }
 
 /// A model folder of a pose bench: what it is, its notes, its input side,

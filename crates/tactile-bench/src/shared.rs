@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_cae::data::PinSet;
 use tactile_cae::{CaeArtifact, TactipEncoder};
-use tactile_core::dataset::{DEFAULT_SPLIT_SEED, Dataset, Provenance};
+use tactile_core::dataset::{DEFAULT_SPLIT_SEED, Dataset, Provenance, Seen};
 use tactile_estimate::Target;
 use tactile_estimate::regressor::target_mae;
 use tactile_pipeline::tactip::classes_of;
@@ -78,20 +78,14 @@ pub fn read_tasks(path: &Path) -> Result<Vec<Task>> {
 /// Whether an encoder (its notes, its folder `dir`) fitted any of the
 /// `test` rows of `ds`: a dataset its notes name (main or further, found
 /// as [`Dataset::open_recorded`] finds it) holds one of them among the rows
-/// it fitted ([`Provenance::fitted`]), the same file or a copy. An
+/// it fitted ([`Provenance::seen`]), the same file or a copy. An
 /// encoder that left out other test rows than these, or fitted every
 /// split, saw them; one trained on other frames did not.
 fn saw_test(art: &CaeArtifact, dir: &Path, ds: &Dataset, test: &[usize]) -> bool {
-    Provenance::read(&art.notes)
-        .fitted(dir)
-        .into_iter()
-        .any(|(_, trained, fitted)| {
-            // Rows it cannot name (a split gone wrong since): all of them.
-            let fitted = fitted.unwrap_or_else(|_| (0..trained.len()).collect());
-            !trained
-                .rows_sharing_frames_among(&fitted, ds, test)
-                .is_empty()
-        })
+    matches!(
+        Provenance::read(&art.notes).seen(dir, ds, test),
+        Seen::Some | Seen::All
+    )
 }
 
 /// Every encoder on every task: features, an MLP per task on the training

@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 use tactile_burn::ensemble::CALIBRATION_NOTE;
-use tactile_core::dataset::{Dataset, Provenance};
+use tactile_core::dataset::{Dataset, Provenance, Seen};
 use tactile_core::plot::{ScatterPanel, Series, scatter_grid};
 use tactile_estimate::Column;
 use tactile_estimate::uncertainty::{ONE_SIGMA, Z95, coverage, cross_fitted_coverage_at};
@@ -165,17 +165,11 @@ fn saw_scored(c: &Candidate, model_dir: &std::path::Path, ds: &Dataset, rows: &[
         datasets: c.trained_on.clone(),
         ..Provenance::read(&c.notes)
     };
-    if p.datasets.is_empty() {
-        return p.every_split;
+    match p.seen(model_dir, ds, rows) {
+        Seen::All => true,
+        Seen::Unknown => p.every_split,
+        Seen::None | Seen::Some => false,
     }
-    p.datasets
-        .iter()
-        .any(|d| match Dataset::open_recorded(d, model_dir) {
-            None => p.every_split,
-            Some(trained) => trained
-                .rows_to_fit(p.every_split, p.excluded_test)
-                .is_ok_and(|fitted| trained.holds_frames(ds, rows, Some(&fitted))),
-        })
 }
 
 /// Score every model folder of `b.models` on `b.data` (the surface set);

@@ -368,16 +368,13 @@ pub fn fit(
 }
 
 /// Why `rows` of `ds` are frames a model trained on, when the notes of
-/// the model (of any member of an ensemble: `notes`) name a dataset
-/// (`trained_on`, looked up from `dir` as [`Dataset::open_recorded`] does)
-/// whose rows it trained on (`every_split`, `excluded_test`:
-/// [`Dataset::rows_to_fit`]) hold them all: the same files, or copies of
-/// them (the same bytes, under any name). Its factors would then fit
-/// training errors. `None` when they are not, or the notes name no
-/// dataset that opens here.
+/// the model (of any member of an ensemble: `notes`) say it fitted every
+/// one of them ([`Provenance::seen`]: the same files or copies, among the
+/// rows it fitted of a dataset they name). Its factors would then fit
+/// training errors. `None` when it did not, or the notes name no dataset
+/// that opens here.
 ///
-/// [`Dataset::open_recorded`]: tactile_core::dataset::Dataset::open_recorded
-/// [`Dataset::rows_to_fit`]: tactile_core::dataset::Dataset::rows_to_fit
+/// [`Provenance::seen`]: tactile_core::dataset::Provenance::seen
 pub fn fitted_frames(
     notes: &[&serde_json::Value],
     dir: &std::path::Path,
@@ -386,14 +383,13 @@ pub fn fitted_frames(
 ) -> Option<String> {
     notes.iter().find_map(|n| {
         let p = tactile_core::dataset::Provenance::read(n);
-        p.fitted(dir).into_iter().find_map(|(recorded, trained, fitted)| {
-            trained.holds_frames(ds, rows, Some(&fitted.ok()?)).then(|| {
-                format!(
-                    "these {} frames are frames it trained on (its notes: {recorded}{}), so the factors fit its training errors and its intervals will be too narrow on new frames: calibrate on frames it did not train on (another split or recording), or take a validated run's factors (--calibration-from)",
-                    rows.len(),
-                    if p.every_split { ", every split" } else { "" }
-                )
-            })
+        (p.seen(dir, ds, rows) == tactile_core::dataset::Seen::All).then(|| {
+            format!(
+                "these {} frames are frames it trained on (its notes: {}{}), so the factors fit its training errors and its intervals will be too narrow on new frames: calibrate on frames it did not train on (another split or recording), or take a validated run's factors (--calibration-from)",
+                rows.len(),
+                p.datasets.join(" + "),
+                if p.every_split { ", every split" } else { "" }
+            )
         })
     })
 }

@@ -16,7 +16,7 @@ mod split;
 mod writer;
 
 pub use paths::{Escape, backslash_hint, expect_entry_inside, resolve_inside};
-pub use provenance::Provenance;
+pub use provenance::{Provenance, Seen};
 pub use split::{
     DEFAULT_SPLIT_SEED, FrameGroups, Splits, TestHoldout, check_val_fraction, hold_out,
 };

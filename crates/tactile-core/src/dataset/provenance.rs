@@ -7,7 +7,6 @@
 use std::path::Path;
 
 use super::{Dataset, TestHoldout};
-use crate::Result;
 
 /// The datasets a model trained on and which of their rows it fitted.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -92,19 +91,48 @@ impl Provenance {
         }
     }
 
-    /// Each recorded dataset that opens from `model_dir` (see
-    /// [`Dataset::open_recorded`]), with the rows it fitted of it
-    /// ([`Dataset::rows_to_fit`]) and its name as recorded.
-    pub fn fitted(&self, model_dir: &Path) -> Vec<(&str, Dataset, Result<Vec<usize>>)> {
-        self.datasets
-            .iter()
-            .filter_map(|d| {
-                let ds = Dataset::open_recorded(d, model_dir)?;
-                let rows = ds.rows_to_fit(self.every_split, self.excluded_test);
-                Some((d.as_str(), ds, rows))
-            })
-            .collect()
+    /// How many of `rows` of `ds` it fitted: each dataset its notes name,
+    /// found from its folder `model_dir` (see [`Dataset::open_recorded`]),
+    /// holds them among the rows it fitted ([`Dataset::rows_to_fit`]), the
+    /// same file or a copy (the same bytes under any name). The one rule
+    /// of the benches' marks and the calibration's warning.
+    pub fn seen(&self, model_dir: &Path, ds: &Dataset, rows: &[usize]) -> Seen {
+        let asked: std::collections::HashSet<usize> = rows.iter().copied().collect();
+        let mut held = std::collections::HashSet::new();
+        let mut unknown = self.datasets.is_empty();
+        for d in &self.datasets {
+            let fitted = Dataset::open_recorded(d, model_dir).and_then(|trained| {
+                let fitted = trained
+                    .rows_to_fit(self.every_split, self.excluded_test)
+                    .ok()?;
+                Some(trained.rows_sharing_frames_among(&fitted, ds, rows))
+            });
+            match fitted {
+                Some(shared) => held.extend(shared),
+                None => unknown = true,
+            }
+        }
+        match held.len() {
+            n if n > 0 && n == asked.len() => Seen::All,
+            n if n > 0 => Seen::Some,
+            _ if unknown => Seen::Unknown,
+            _ => Seen::None,
+        }
     }
+}
+
+/// How many of some frames a model fitted ([`Provenance::seen`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Seen {
+    /// Its notes name no dataset, or one that does not open here, and the
+    /// others hold none of the frames: it may have fitted them.
+    Unknown,
+    /// None of them.
+    None,
+    /// Some of them, not all.
+    Some,
+    /// Every one of them.
+    All,
 }
 
 #[cfg(test)]
@@ -142,12 +170,38 @@ mod tests {
         // A model trained before its trainer recorded anything.
         let old = serde_json::json!({"device": "flex"});
         assert_eq!(Provenance::read(&old), Provenance::default());
-        assert!(Provenance::read(&old).fitted(Path::new(".")).is_empty());
         let pose = serde_json::json!({
             "trained_on": "../shared/real/x", "every_split": false, "excluded_test": null, "all_rows": true
         });
         let p = Provenance::read(&pose);
         assert_eq!(p.datasets, ["../shared/real/x"]);
         assert!(!p.every_split && p.excluded_test.is_none());
+    }
+
+    #[test]
+    fn seen_counts_the_asked_frames_among_the_rows_it_fitted() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/virtual-tactip");
+        let ds = Dataset::open(&root).unwrap();
+        let all: Vec<usize> = (0..ds.len()).collect();
+        let holdout = TestHoldout {
+            test_fraction: 0.2,
+            split_seed: 7,
+        };
+        let test = ds.three_way_split(0.2, 0.2, 7).unwrap().test;
+        let here = Provenance::of(&[&ds]);
+        assert_eq!(here.seen(&root, &ds, &all), Seen::All);
+        let held_out = here.clone().excluding_test(Some(holdout));
+        assert_eq!(held_out.seen(&root, &ds, &test), Seen::None);
+        assert_eq!(held_out.seen(&root, &ds, &all), Seen::Some);
+        assert_eq!(
+            held_out.clone().every_split(true).seen(&root, &ds, &test),
+            Seen::All
+        );
+        let nowhere = Provenance {
+            datasets: vec!["nowhere".into()],
+            ..Default::default()
+        };
+        assert_eq!(nowhere.seen(&root, &ds, &all), Seen::Unknown);
+        assert_eq!(Provenance::default().seen(&root, &ds, &all), Seen::Unknown);
     }
 }
