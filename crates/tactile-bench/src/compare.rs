@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_cae::data::PinSet;
 use tactile_cae::{CaeArtifact, TactipEncoder};
-use tactile_core::dataset::{Dataset, Provenance};
+use tactile_core::dataset::{Dataset, Provenance, Seen};
 use tactile_estimate::classical;
 use tactile_estimate::regressor::target_mae;
 use tactile_estimate::{
@@ -43,6 +43,37 @@ pub struct Compare {
     pub preprocess: Option<(String, PreprocessConfig)>,
     /// Hidden widths of the regression MLP (the same for every feature set).
     pub hidden: Vec<usize>,
+}
+
+/// What to tell a reader when the encoder fitted some of the `test` rows
+/// ([`Provenance::seen`]): its CAE row then scores features of frames it
+/// was trained on, beside rows (PCA, raw pixels, pin tracking) fitted on
+/// the training frames only.
+fn encoder_saw_test(
+    art: &CaeArtifact,
+    c: &Compare,
+    ds: &Dataset,
+    test: &[usize],
+) -> Option<String> {
+    let p = Provenance::read(&art.notes);
+    let how = match p.seen(&c.encoder, ds, test) {
+        Seen::All => "every one of",
+        Seen::Some => "some of",
+        Seen::None | Seen::Unknown => return None,
+    };
+    let cure = if ds.split_indices("train").is_some() {
+        "on the `train` rows only (without --every-split)".to_string()
+    } else {
+        format!(
+            "with --exclude-test {} --split-seed {} (the test frames here)",
+            c.test_fraction, c.seed
+        )
+    };
+    Some(format!(
+        "The encoder trained on {how} these {} test frames (its notes: {}), so its row scores frames its features fitted, unlike the other rows: for a held-out comparison train it {cure}, or on another recording.",
+        test.len(),
+        p.datasets.join(" + "),
+    ))
 }
 
 /// The comparison's Markdown.
@@ -135,6 +166,10 @@ pub fn compare(c: &Compare) -> Result<String> {
             .as_ref()
             .map_or("the encoder's own", |p| p.0.as_str()),
     );
+    if let Some(w) = encoder_saw_test(&art, c, &ds, test) {
+        tactile_core::note!("warning: {w}");
+        md.push_str(&format!("**{w}**\n\n"));
+    }
     if !c.targets.is_empty() {
         md.push_str(&regression_table(
             &sets,

@@ -842,6 +842,14 @@ fn compare_writes_a_table_of_every_feature_set_and_estimator() {
     ]);
     assert!(ok, "{msg}");
     let table = std::fs::read_to_string(&out).unwrap();
+    // The encoder trained on every frame, the test frames too: said in the
+    // table and on standard error, with the flags that would hold them out.
+    let saw = "The encoder trained on every one of these 24 test frames";
+    assert!(
+        table.contains(saw) && table.contains("--exclude-test 0.2 --split-seed 7"),
+        "{table}"
+    );
+    assert!(msg.contains(&format!("warning: {saw}")), "{msg}");
     let rows: Vec<&str> = table
         .lines()
         .filter(|l| l.starts_with("| ") && !l.starts_with("| features"))
