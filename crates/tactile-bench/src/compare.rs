@@ -10,13 +10,13 @@ use rayon::prelude::*;
 use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_cae::data::PinSet;
 use tactile_cae::{CaeArtifact, TactipEncoder};
-use tactile_core::dataset::{Dataset, Provenance, Seen};
+use tactile_core::dataset::{Dataset, Provenance};
 use tactile_estimate::classical;
 use tactile_estimate::regressor::target_mae;
 use tactile_estimate::{
     Activation, ClassifierHead, HeadConfig, Regressor, RegressorConfig, Target,
 };
-use tactile_pipeline::tactip::classes_of;
+use tactile_pipeline::tactip::{classes_of, encoder_trained_on, holdout_cure};
 use tactile_preprocess::PreprocessConfig;
 
 use crate::Result;
@@ -46,33 +46,14 @@ pub struct Compare {
 }
 
 /// What to tell a reader when the encoder fitted some of the `test` rows
-/// ([`Provenance::seen`]): its CAE row then scores features of frames it
+/// ([`encoder_trained_on`]): its CAE row then scores features of frames it
 /// was trained on, beside rows (PCA, raw pixels, pin tracking) fitted on
 /// the training frames only.
-fn encoder_saw_test(
-    art: &CaeArtifact,
-    c: &Compare,
-    ds: &Dataset,
-    test: &[usize],
-) -> Option<String> {
-    let p = Provenance::read(&art.notes);
-    let how = match p.seen(&c.encoder, ds, test) {
-        Seen::All => "every one of",
-        Seen::Some => "some of",
-        Seen::None | Seen::Unknown => return None,
-    };
-    let cure = if ds.split_indices("train").is_some() {
-        "on the `train` rows only (without --every-split)".to_string()
-    } else {
-        format!(
-            "with --exclude-test {} --split-seed {} (the test frames here)",
-            c.test_fraction, c.seed
-        )
-    };
+fn encoder_saw_test(c: &Compare, ds: &Dataset, test: &[usize]) -> Option<String> {
+    let saw = encoder_trained_on(&c.encoder, ds, test)?;
     Some(format!(
-        "The encoder trained on {how} these {} test frames (its notes: {}), so its row scores frames its features fitted, unlike the other rows: for a held-out comparison train it {cure}, or on another recording.",
-        test.len(),
-        p.datasets.join(" + "),
+        "The encoder {saw}, so its row scores frames its features fitted, unlike the other rows: for a held-out comparison train it {}, or on another recording.",
+        holdout_cure(ds, c.test_fraction, c.seed)
     ))
 }
 
@@ -166,7 +147,7 @@ pub fn compare(c: &Compare) -> Result<String> {
             .as_ref()
             .map_or("the encoder's own", |p| p.0.as_str()),
     );
-    if let Some(w) = encoder_saw_test(&art, c, &ds, test) {
+    if let Some(w) = encoder_saw_test(c, &ds, test) {
         tactile_core::note!("warning: {w}");
         md.push_str(&format!("**{w}**\n\n"));
     }

@@ -36,6 +36,39 @@ pub enum FeatureSource {
     Csv(PathBuf),
 }
 
+/// When the encoder in `dir` trained on some or all of `rows` of `ds`
+/// (its notes, [`Provenance::seen`]: the same files or copies), the words
+/// saying so, "trained on every one of these 24 test frames (its notes:
+/// ...)": an error on those rows is then on frames its features fitted.
+/// `None` when it did not, or its notes do not say.
+///
+/// [`Provenance::seen`]: tactile_core::dataset::Provenance::seen
+pub fn encoder_trained_on(dir: &Path, ds: &Dataset, rows: &[usize]) -> Option<String> {
+    use tactile_core::dataset::{Provenance, Seen};
+    let art = <tactile_cae::CaeArtifact as tactile_burn::Artifact>::read(dir).ok()?;
+    let p = Provenance::read(&art.notes);
+    let how = match p.seen(dir, ds, rows) {
+        Seen::All => "every one of",
+        Seen::Some => "some of",
+        Seen::None | Seen::Unknown => return None,
+    };
+    Some(format!(
+        "trained on {how} these {} test frames (its notes: {})",
+        rows.len(),
+        p.datasets.join(" + ")
+    ))
+}
+
+/// How to train an encoder that leaves out the test rows of `ds` that a
+/// split with `test_fraction` and `seed` holds out.
+pub fn holdout_cure(ds: &Dataset, test_fraction: f64, seed: u64) -> String {
+    if ds.split_indices("train").is_some() {
+        "on the `train` rows only (without --every-split)".to_string()
+    } else {
+        format!("with --exclude-test {test_fraction} --split-seed {seed} (the test frames here)")
+    }
+}
+
 /// Feature vectors of every frame of `ds`, in row order.
 pub fn dataset_features(
     source: &FeatureSource,
@@ -658,6 +691,10 @@ pub struct HeadTest {
     pub frames: usize,
     /// `confusion[truth][predicted]`.
     pub confusion: Vec<Vec<usize>>,
+    /// What a reader of the accuracy must know: the encoder trained on
+    /// the test frames. The CLI notes it on standard error; Python raises
+    /// it as a `UserWarning`.
+    pub warning: Option<String>,
 }
 
 impl HeadTest {
@@ -819,6 +856,21 @@ pub fn train_head(
         }
         None => ds.split_indices("test").map(|t| pick(&t)),
     };
+    // The test frames, to ask whether the encoder trained on them.
+    let test_rows = match test {
+        Some(t) => Some((t, (0..t.len()).collect::<Vec<_>>())),
+        None => ds.split_indices("test").map(|rows| (ds, rows)),
+    };
+    let warning = match (source, &test_rows) {
+        (FeatureSource::Encoder(dir), Some((t, rows))) => {
+            encoder_trained_on(dir, t, rows).map(|saw| {
+                format!(
+                    "the encoder {saw}, so the accuracy is on frames its features fitted: for a held-out accuracy train the encoder without them (on the `train` rows only, or on another recording)"
+                )
+            })
+        }
+        _ => None,
+    };
     let tested = match test_set {
         Some((sx, sy)) => {
             let pred = head.predict(&sx)?;
@@ -827,6 +879,7 @@ pub fn train_head(
                 right: pred.iter().zip(&sy).filter(|(a, b)| a == b).count(),
                 frames: sy.len(),
                 confusion: confusion(&pred, &sy, classes.len()),
+                warning,
             })
         }
         None => None,
@@ -895,6 +948,10 @@ pub struct RegressorFit {
     /// Mean absolute error per target on the test frames (empty with no
     /// test frames).
     pub test_mae: Vec<f64>,
+    /// What a reader of the test error must know: the encoder trained on
+    /// test frames. The CLI notes them on standard error; Python raises
+    /// them as `UserWarning`s.
+    pub warnings: Vec<String>,
 }
 
 impl RegressorFit {
@@ -1031,10 +1088,22 @@ pub fn train_regressor(
     } else {
         regressor.evaluate(&sx, &sy)?
     };
+    let warnings = match source {
+        FeatureSource::Encoder(dir) if !s.test.is_empty() => {
+            encoder_trained_on(dir, ds, &s.test).map(|saw| {
+                format!(
+                    "the encoder {saw}, so the test error is on frames its features fitted: for a held-out error train the encoder {}, or test on another recording",
+                    holdout_cure(ds, plan.test_fraction, plan.seed)
+                )
+            })
+        }
+        _ => None,
+    };
     Ok(RegressorFit {
         regressor,
         frames: [tx.len(), vx.len(), sx.len()],
         test_mae,
+        warnings: warnings.into_iter().collect(),
     })
 }
 

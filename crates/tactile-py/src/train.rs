@@ -207,6 +207,9 @@ pub(crate) fn train_head_py<'py>(
     let (head, tested) = interruptible(py, || {
         train_head(config, &src, &ds, test.as_ref(), &out, rt, rotation).py()
     })?;
+    if let Some(w) = tested.as_ref().and_then(|t| t.warning.as_ref()) {
+        crate::errors::user_warning(py, w)?;
+    }
     let test = tested.map(|t| {
         serde_json::json!({
             "accuracy": t.accuracy, "right": t.right, "frames": t.frames,
@@ -240,6 +243,9 @@ pub(crate) fn train_regressor_py<'py>(
     tactile_core::io::ensure_writable_dir(&out).py()?;
     let ds = open(py, data)?;
     let fit = interruptible(py, || train_regressor(&plan, &src, &ds, &out, rt).py())?;
+    for w in &fit.warnings {
+        crate::errors::user_warning(py, w)?;
+    }
     let mae: serde_json::Map<String, serde_json::Value> = plan
         .targets
         .iter()

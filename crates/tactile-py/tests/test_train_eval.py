@@ -289,6 +289,12 @@ def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):
     assert [t["name"] for t in record["config"]["joint"]["targets"]] == ["depth_mm", "force_n"]
     assert record["config"]["joint"]["loss"] == "l1"
     assert record["summary"]["best_val_metric"] is not None
+    # Its features fitted every frame, the test frames of a regressor on
+    # it too: its test error is said to be on frames the encoder fitted.
+    with pytest.warns(UserWarning, match="the encoder trained on every one of these .* test frames"):
+        r = tactile.train.regressor(data, ["depth_mm"], encoder=out, out=tmp_path / "reg",
+                                    test_fraction=0.25)
+    assert r["frames"]["test"] > 0
     with pytest.raises(ValueError, match="weight"):
         tactile.train.cae(data, tmp_path / "bad", joint_targets=["depth_mm"], joint_weight=0.0)
     assert not (tmp_path / "bad" / "cae.json").exists()

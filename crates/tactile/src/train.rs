@@ -257,6 +257,9 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             let (head, tested) = train_head(config, &src, &ds, test.as_ref(), &out, rt, rotation)?;
             if let Some(t) = tested {
                 t.describe(head.classes()).iter().for_each(|l| say!("{l}"));
+                if let Some(w) = &t.warning {
+                    tactile_core::note!("warning: {w}");
+                }
             }
             say!("head saved in {}", out.display());
         }
@@ -268,6 +271,9 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             let rt = options.device.runtime();
             let fit = train_regressor(&plan, &a.features.source()?, &ds, &out, rt)?;
             say!("{}", fit.describe(&plan.targets));
+            for w in &fit.warnings {
+                tactile_core::note!("warning: {w}");
+            }
             say!("regressor saved in {}", out.display());
         }
         TrainCmd::Pose(a) => {

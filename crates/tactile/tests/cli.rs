@@ -507,12 +507,12 @@ fn every_split_trains_the_final_cae_and_regressor_on_val_frames_too() {
     assert!(!bad.join("cae.json").exists());
     // Its estimator: scored on `val` when validated; with --every-split
     // every frame trains and nothing is left to test.
-    let reg = |out: &Path, extra: &[&str]| {
+    let reg_on = |encoder: &Path, out: &Path, extra: &[&str]| {
         let base = [
             "train",
             "regressor",
             "--encoder",
-            all.to_str().unwrap(),
+            encoder.to_str().unwrap(),
             "--data",
             d,
             "--targets",
@@ -524,11 +524,90 @@ fn every_split_trains_the_final_cae_and_regressor_on_val_frames_too() {
         ];
         tactile(&[&base[..], extra].concat())
     };
+    let reg = |out: &Path, extra: &[&str]| reg_on(&all, out, extra);
     let (ok, msg) = reg(&tmp.path().join("reg"), &[]);
     assert!(ok && msg.contains("4 test"), "{msg}");
+    // The final encoder fitted those 4 `val` frames: said, with the cure.
+    assert!(
+        msg.contains("warning: the encoder trained on every one of these 4 test frames")
+            && msg.contains("train the encoder on the `train` rows only (without --every-split)"),
+        "{msg}"
+    );
+    // The validated encoder left them out: nothing to say.
+    let (ok, msg) = reg_on(&validated, &tmp.path().join("reg-validated"), &[]);
+    assert!(
+        ok && msg.contains("4 test") && !msg.contains("warning"),
+        "{msg}"
+    );
     let (ok, msg) = reg(&all.join("pose"), &["--every-split"]);
     assert!(
         ok && msg.contains("every frame trained (3 for early stopping)"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn a_head_tested_on_frames_its_encoder_fitted_says_so() {
+    // 30 synthetic frames, 20 `train` and 10 `test`; a final encoder fitted
+    // every split, the test rows too.
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("set");
+    let d = data.to_str().unwrap();
+    let (ok, msg) = tactile(&[
+        "synth", "tactip", "--count", "30", "--seed", "4", "--out", d,
+    ]);
+    assert!(ok, "{msg}");
+    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
+    let mut text = String::new();
+    for (i, l) in labels.lines().enumerate() {
+        let split = match i {
+            0 => "split",
+            1..=20 => "train",
+            _ => "test",
+        };
+        text.push_str(&format!("{l},{split}\n"));
+    }
+    std::fs::write(data.join("labels.csv"), text).unwrap();
+    let head = |encoder: &Path, out: &str| {
+        tactile(&[
+            "train",
+            "head",
+            "--encoder",
+            encoder.to_str().unwrap(),
+            "--data",
+            d,
+            "--folds",
+            "2",
+            "--repeats",
+            "1",
+            "--out",
+            tmp.path().join(out).to_str().unwrap(),
+        ])
+    };
+    let all = tmp.path().join("all");
+    let (ok, msg) = tactile(&[
+        "train",
+        "cae",
+        "--data",
+        d,
+        "--out",
+        all.to_str().unwrap(),
+        "--max-epochs",
+        "1",
+        "--every-split",
+    ]);
+    assert!(ok, "{msg}");
+    let (ok, msg) = head(&all, "head-all");
+    assert!(
+        ok && msg.contains("warning: the encoder trained on every one of these 10 test frames")
+            && msg.contains("so the accuracy is on frames its features fitted"),
+        "{msg}"
+    );
+    // An encoder of other frames: its accuracy is a held-out one.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let (ok, msg) = head(&root.join("models/cae-synth"), "head-other");
+    assert!(
+        ok && msg.contains("test shape accuracy") && !msg.contains("warning"),
         "{msg}"
     );
 }
