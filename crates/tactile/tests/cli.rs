@@ -449,6 +449,25 @@ fn demo_runs_on_the_shipped_model_and_samples() {
     assert!(right.count() * 7 > rows.len() * 2, "{msg}");
 }
 
+/// Synthetic TacTip frames in `data` (`synth tactip` with `flags`) with a
+/// `split` column: the first `train` rows `train`, the others `rest`.
+fn synth_with_split(data: &Path, flags: &[&str], train: usize, rest: &str) {
+    let out = ["--out", data.to_str().unwrap()];
+    let (ok, msg) = tactile(&[&["synth", "tactip"][..], flags, &out[..]].concat());
+    assert!(ok, "{msg}");
+    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
+    let mut text = String::new();
+    for (i, l) in labels.lines().enumerate() {
+        let split = match i {
+            0 => "split",
+            i if i <= train => "train",
+            _ => rest,
+        };
+        text.push_str(&format!("{l},{split}\n"));
+    }
+    std::fs::write(data.join("labels.csv"), text).unwrap();
+}
+
 #[test]
 fn every_split_trains_the_final_cae_and_regressor_on_val_frames_too() {
     // 12 synthetic frames with the authors' kind of `split` column: 8
@@ -456,19 +475,7 @@ fn every_split_trains_the_final_cae_and_regressor_on_val_frames_too() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("set");
     let d = data.to_str().unwrap();
-    let (ok, msg) = tactile(&["synth", "tactip", "--count", "12", "--out", d]);
-    assert!(ok, "{msg}");
-    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
-    let mut text = String::new();
-    for (i, l) in labels.lines().enumerate() {
-        let split = match i {
-            0 => "split",
-            1..=8 => "train",
-            _ => "val",
-        };
-        text.push_str(&format!("{l},{split}\n"));
-    }
-    std::fs::write(data.join("labels.csv"), text).unwrap();
+    synth_with_split(&data, &["--count", "12"], 8, "val");
     let frames = |dir: &Path| -> u64 {
         let t: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("training.json")).unwrap())
@@ -553,21 +560,7 @@ fn a_head_tested_on_frames_its_encoder_fitted_says_so() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("set");
     let d = data.to_str().unwrap();
-    let (ok, msg) = tactile(&[
-        "synth", "tactip", "--count", "30", "--seed", "4", "--out", d,
-    ]);
-    assert!(ok, "{msg}");
-    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
-    let mut text = String::new();
-    for (i, l) in labels.lines().enumerate() {
-        let split = match i {
-            0 => "split",
-            1..=20 => "train",
-            _ => "test",
-        };
-        text.push_str(&format!("{l},{split}\n"));
-    }
-    std::fs::write(data.join("labels.csv"), text).unwrap();
+    synth_with_split(&data, &["--count", "30", "--seed", "4"], 20, "test");
     let head = |encoder: &Path, out: &str| {
         tactile(&[
             "train",
