@@ -833,9 +833,12 @@ pub fn train_head(
         .device();
     let mut head = ClassifierHead::train_by_frame(config, &tx, &ty, &frames, &device)?;
     head.artifact.encoder = encoder_fingerprint(source)?;
-    if let Some(aug) = rotation {
-        head.artifact.notes = serde_json::json!({ "rotation_augment": aug });
-    }
+    // The rows it fitted (the `train` rows, else every row), as every
+    // trainer records them.
+    head.artifact.notes = tactile_core::dataset::Provenance::of(&[ds]).notes(match rotation {
+        Some(aug) => serde_json::json!({ "rotation_augment": aug }),
+        None => serde_json::json!({}),
+    });
     head.save(out)?;
     let test_set: Option<(Vec<Vec<f32>>, Vec<usize>)> = match test {
         Some(t) => {

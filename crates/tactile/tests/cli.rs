@@ -2544,6 +2544,10 @@ fn a_head_trains_on_turned_copies_and_records_the_augmentation() {
         json.contains("rotation_augment") && json.contains("\"max_deg\": 5.0"),
         "{json}"
     );
+    // Which frames it fitted, as every trainer records them.
+    let notes = &serde_json::from_str::<serde_json::Value>(&json).unwrap()["notes"];
+    assert_eq!(notes["trained_on"], d, "{notes}");
+    assert_eq!(notes["every_split"], false, "{notes}");
 }
 
 /// The first `n` frames of the real edge set as a dataset of their own.
