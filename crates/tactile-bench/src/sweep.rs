@@ -13,7 +13,7 @@ use tactile_core::dataset::Dataset;
 use tactile_core::metrics::accuracy;
 use tactile_core::plot::{Series, line_plot};
 use tactile_estimate::{ClassifierHead, HeadConfig};
-use tactile_pipeline::tactip::classes_of;
+use tactile_pipeline::tactip::{classes_of, encoder_trained_on};
 
 use crate::Result;
 use crate::cae::measure_encoder;
@@ -47,6 +47,9 @@ pub struct SweepRow {
     pub accuracy: f64,
     /// `(runtime, ms at batch 1, frames/s at batch 256)`.
     pub speed: Vec<(String, f64, f64)>,
+    /// True when the encoder trained on some of the test frames: its BCE
+    /// and accuracy are then partly on frames it fitted.
+    pub saw_test_frames: bool,
 }
 
 /// The table and its rows.
@@ -105,6 +108,7 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
             bce,
             accuracy: acc,
             speed,
+            saw_test_frames: encoder_trained_on(enc, &ds, &test).is_some(),
         });
     }
     rows.sort_by_key(|r| r.features);
@@ -128,8 +132,13 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
     );
     for r in &rows {
         md.push_str(&format!(
-            "| {} | {} | {:.4} | {:.1} % | {} |\n",
+            "| {}{} | {} | {:.4} | {:.1} % | {} |\n",
             r.name,
+            if r.saw_test_frames {
+                " (trained on test frames)"
+            } else {
+                ""
+            },
             r.features,
             r.bce,
             100.0 * r.accuracy,
@@ -139,6 +148,9 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
                 .collect::<Vec<_>>()
                 .join(" | ")
         ));
+    }
+    if rows.iter().any(|r| r.saw_test_frames) {
+        md.push_str("\nAn encoder marked \"(trained on test frames)\" fitted some of these test frames (its notes say so): its BCE and accuracy are partly on frames it was trained on.\n");
     }
     Ok(SweepResult {
         markdown: md,
