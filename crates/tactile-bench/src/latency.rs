@@ -1,5 +1,5 @@
 //! Timing a saved model on every runtime through the same
-//! [`Network`](tactile_burn::Network) path inference uses.
+//! [`Network`] path inference uses.
 
 use std::path::Path;
 

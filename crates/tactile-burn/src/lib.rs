@@ -1,6 +1,6 @@
 //! The burn half of tactile-rs's foundation: the device switch and the
 //! runtimes networks run on (burn `ndarray`/`flex`, onnxruntime), the
-//! [`Artifact`](artifact::Artifact) trait every saved model folder
+//! [`Artifact`] trait every saved model folder
 //! implements, ensembles of folders, weights I/O, the one training skeleton
 //! ([`train::Schedule`], [`train::fit`]), stable layers and losses,
 //! Adadelta, and the option types the front ends share

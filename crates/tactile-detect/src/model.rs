@@ -52,7 +52,7 @@ pub struct DetectorConfig {
     #[config(default = "None")]
     pub input_bits: Option<u8>,
     /// Divide each channel by its level at the window's centre before the
-    /// network (see [`normalise_exposure`]): the label is a threshold on the
+    /// network (see `normalise_exposure`): the label is a threshold on the
     /// ridge's height, and the shading contrast a height makes scales with
     /// the exposure and the LEDs. None (folders saved before it existed):
     /// off.

@@ -3,7 +3,7 @@
 //! each model crate says how its own network exports by implementing
 //! [`Exportable`], so this crate knows no model. The exported graph runs
 //! in onnxruntime (through `ort`, loaded dynamically from the PyPI wheel's
-//! `libonnxruntime.so`) as a [`Network`](tactile_burn::Network), beside
+//! `libonnxruntime.so`) as a [`Network`], beside
 //! burn's devices: [`load_network`] gives any saved model on any runtime.
 
 #![deny(missing_docs)]

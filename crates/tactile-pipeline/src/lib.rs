@@ -1,7 +1,7 @@
 //! The models composed into what a robot runs. Paper B's palpation
 //! pipeline ([`Pipeline`]): the detector on every frame, the segmenter,
 //! direction and depth only on tendon frames, on burn or onnxruntime, with
-//! a run loop over datasets and folders of frames ([`run`]). Paper A's
+//! a run loop over datasets and folders of frames ([`run`](mod@run)). Paper A's
 //! perception ([`tactip`]): one encoder, every estimator of its folder on
 //! one encoding, and the training of those estimators.
 

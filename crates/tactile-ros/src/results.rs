@@ -328,7 +328,7 @@ impl McapResults {
 }
 
 /// Where a run's results go besides its JSON Lines: an MCAP file, a live
-/// view, or both, fed per frame from [`tactile_pipeline::run`]'s sink.
+/// view, or both, fed per frame from [`tactile_pipeline::run()`]'s sink.
 #[derive(Default)]
 pub struct RobotOutputs {
     /// The MCAP file of results.

@@ -43,7 +43,7 @@ pub struct SensorOptics {
     pub max_slope: f64,
     /// Bins per slope axis (centres evenly from `-max_slope` to `max_slope`).
     pub bins: usize,
-    /// Per bin (row `gy`, column `gx`), per channel, [`TERMS`] coefficients.
+    /// Per bin (row `gy`, column `gx`), per channel, `TERMS` coefficients.
     pub coefficients: Vec<f32>,
     /// Samples (weighted) each bin was fitted on (0: borrowed).
     pub samples: Vec<f32>,

@@ -177,7 +177,7 @@ pub enum Renderer {
     #[default]
     Reference,
     /// Another raster and shading path of the same spec
-    /// ([`crate::alternate::render_alternate`]): a cross-check set.
+    /// ([`alternate::render_alternate`]): a cross-check set.
     Alternate,
 }
 

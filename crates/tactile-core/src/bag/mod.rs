@@ -12,7 +12,7 @@
 //! (`foxglove.CompressedVideo`, ROS 2's `foxglove_msgs` one,
 //! `ffmpeg_image_transport`'s and `h264_image_transport`'s packets: H.264,
 //! H.265, VP9 and AV1, decoded by FFmpeg
-//! in [`video`]); anything else is refused naming the topic and the
+//! in `video`); anything else is refused naming the topic and the
 //! message.
 //!
 //! A bag is given as `ros2 bag record` leaves it (a folder holding

@@ -1875,7 +1875,7 @@ pub struct LiveFrame {
 /// live `CompressedVideo`, `FFMPEGPacket` or `h264_msgs/msg/Packet` topic. The packets go to an
 /// FFmpeg process that starts on the first keyframe (no probing; the
 /// frames it holds back for B-frames are read from that keyframe's
-/// parameters, [`Codec::frames_held_back`]) and
+/// parameters, `Codec::frames_held_back`) and
 /// decodes each packet as soon as it is whole (an IVF frame), and a thread
 /// reads its pictures back, so a packet's frame is usually ready before
 /// [`Self::push`] returns. Frames take stamps as a bag's video does (their

@@ -17,7 +17,7 @@ pub enum Escape {
     Parent,
     /// A symbolic link whose target is outside the folder.
     Link,
-    /// Links that point at each other (more than [`MAX_LINKS`]).
+    /// Links that point at each other (more than `MAX_LINKS`).
     Loop,
     /// An empty path.
     Empty,
