@@ -283,3 +283,35 @@ pub fn folder_hint(
         String::new()
     }
 }
+
+/// When the model of kind `A` in `dir` (an ensemble's every member) was
+/// trained on every frame of `ds`, as its notes record
+/// ([`Provenance::fitted_every`]), the words saying so: an evaluation on
+/// them scores frames it fitted. `None` when it was not, or its notes do
+/// not say (models trained before their trainer recorded it).
+///
+/// [`Provenance::fitted_every`]: tactile_core::dataset::Provenance::fitted_every
+pub fn scored_on_fitted<A: Artifact>(
+    dir: &Path,
+    ds: &tactile_core::dataset::Dataset,
+) -> Option<String> {
+    use tactile_core::dataset::Provenance;
+    let dirs = if crate::ensemble::Ensemble::is_of::<A>(dir) {
+        crate::ensemble::Ensemble::read::<A>(dir)
+            .ok()?
+            .member_dirs(dir)
+    } else {
+        vec![dir.to_path_buf()]
+    };
+    dirs.iter().find_map(|d| {
+        let art = serde_json::to_value(A::read(d).ok()?).ok()?;
+        let p = Provenance::read(art.get("notes")?);
+        p.fitted_every(d, ds).then(|| {
+            format!(
+                "the model trained on every one of these {} frames (its notes: {}), so these scores are on frames it fitted: score it on frames it did not train on (another seed or recording)",
+                ds.len(),
+                p.datasets.join(" + ")
+            )
+        })
+    })
+}

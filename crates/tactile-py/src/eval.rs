@@ -30,6 +30,7 @@ pub(crate) fn eval_detector<'py>(
         let sc = tactile_detect::eval::evaluate_folder(&model, &data, rt, &o).py()?;
         tactile_core::io::scored_record(&model, &data, &sc).py()
     })?;
+    warn_if_fitted::<tactile_detect::DetectorArtifact>(py, &model, &data)?;
     crate::json::to_py(py, &v)
 }
 
@@ -49,6 +50,7 @@ pub(crate) fn eval_segmenter<'py>(
         let sc = tactile_segment::evaluate(&mut seg, &ds).py()?;
         tactile_core::io::scored_record(&model, &data, &sc).py()
     })?;
+    warn_if_fitted::<tactile_segment::SegmenterArtifact>(py, &model, &data)?;
     crate::json::to_py(py, &v)
 }
 
@@ -68,6 +70,7 @@ pub(crate) fn eval_depth<'py>(
     let v = interruptible(py, || {
         tactile_depth::eval::evaluate_folder(&model, &data, rt, &o).py()
     })?;
+    warn_if_fitted::<tactile_depth::DepthArtifact>(py, &model, &data)?;
     crate::json::to_py(py, &v)
 }
 
@@ -92,4 +95,18 @@ pub(crate) fn eval_tactip<'py>(
             .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
     })?;
     crate::json::to_py(py, &v)
+}
+
+/// Raise a `UserWarning` when the model's notes say it trained on every
+/// frame just scored.
+fn warn_if_fitted<A: tactile_burn::Artifact>(
+    py: Python<'_>,
+    model: &std::path::Path,
+    data: &std::path::Path,
+) -> PyResult<()> {
+    let ds = Dataset::open(data).py()?;
+    match tactile_burn::artifact::scored_on_fitted::<A>(model, &ds) {
+        Some(w) => crate::errors::user_warning(py, &w),
+        None => Ok(()),
+    }
 }

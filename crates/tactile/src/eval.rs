@@ -59,6 +59,7 @@ pub(crate) fn main(cmd: EvalCmd) -> Result<()> {
 fn detector(a: DetectorArgs) -> Result<()> {
     let (m, o) = (&a.m, &a.options);
     let sc = tactile_detect::eval::evaluate_folder(&m.model, &m.data, m.device.runtime(), o)?;
+    warn_if_fitted::<tactile_detect::DetectorArtifact>(&m.model, &Dataset::open(&m.data)?);
     if let Some(path) = &o.frames {
         tactile_core::note!("per-frame decisions in {}", path.display());
     }
@@ -77,6 +78,7 @@ fn segmenter(m: ModelArgs) -> Result<()> {
     let mut seg = TendonSegmenter::load(&m.model, m.device.runtime(), 0)?;
     let ds = Dataset::open(&m.data)?;
     let sc = tactile_segment::evaluate(&mut seg, &ds)?;
+    warn_if_fitted::<tactile_segment::SegmenterArtifact>(&m.model, &ds);
     sc.describe(m.device).iter().for_each(|l| say!("{l}"));
     say!(
         "{}",
@@ -88,6 +90,7 @@ fn segmenter(m: ModelArgs) -> Result<()> {
 fn depth(a: DepthArgs) -> Result<()> {
     let (m, o) = (&a.m, &a.options);
     let e = tactile_depth::eval::evaluate_folder(&m.model, &m.data, m.device.runtime(), o)?;
+    warn_if_fitted::<tactile_depth::DepthArtifact>(&m.model, &Dataset::open(&m.data)?);
     e.scores
         .describe(e.ms_per_frame, m.device)
         .iter()
@@ -101,4 +104,12 @@ fn depth(a: DepthArgs) -> Result<()> {
     }
     say!("{}", serde_json::to_value(&e)?);
     Ok(())
+}
+
+/// Note on standard error when the model's notes say it trained on every
+/// frame just scored.
+fn warn_if_fitted<A: tactile_burn::Artifact>(model: &std::path::Path, ds: &Dataset) {
+    if let Some(w) = tactile_burn::artifact::scored_on_fitted::<A>(model, ds) {
+        tactile_core::note!("warning: {w}");
+    }
 }

@@ -1226,7 +1226,7 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
         d,
     ]);
     assert!(ok, "{msg}");
-    let v: serde_json::Value = serde_json::from_str(msg.lines().last().unwrap()).unwrap();
+    let v = last_json(&msg);
     assert_eq!(v["all"]["frames"], 32);
     let seg = tmp.path().join("seg");
     let (ok, msg) = tactile(&[
@@ -1257,7 +1257,7 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
         d,
     ]);
     assert!(ok, "{msg}");
-    let v: serde_json::Value = serde_json::from_str(msg.lines().last().unwrap()).unwrap();
+    let v = last_json(&msg);
     let iou = v["paths"][0]["mean_iou"].as_f64().unwrap();
     assert!((0.0..=1.0).contains(&iou));
     // Wrong kind of dataset: a clear error naming the manifest.
@@ -1742,6 +1742,13 @@ fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
         csv.to_str().unwrap(),
     ]);
     assert!(ok, "{msg}");
+    // It trained on every frame of `a` (split by sequence, every split):
+    // its scores there are on frames it fitted, and it says so.
+    assert!(
+        msg.contains("warning: the model trained on every one of these 24 frames")
+            && msg.contains("so these scores are on frames it fitted"),
+        "{msg}"
+    );
     let text = std::fs::read_to_string(&csv).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], "file,tendon,probability,predicted,onset_release");

@@ -121,6 +121,24 @@ impl Provenance {
     }
 }
 
+impl Provenance {
+    /// Whether it fitted every frame of `ds` (one dataset its notes name
+    /// holds them all among the rows it fitted, the same files or copies;
+    /// see [`Self::seen`]). It stops at the first frame not held, so a
+    /// set it never saw costs a look at one frame.
+    pub fn fitted_every(&self, model_dir: &Path, ds: &Dataset) -> bool {
+        let all: Vec<usize> = (0..ds.len()).collect();
+        !all.is_empty()
+            && self.datasets.iter().any(|d| {
+                Dataset::open_recorded(d, model_dir).is_some_and(|trained| {
+                    trained
+                        .rows_to_fit(self.every_split, self.excluded_test)
+                        .is_ok_and(|fitted| trained.holds_frames(ds, &all, Some(&fitted)))
+                })
+            })
+    }
+}
+
 /// How many of some frames a model fitted ([`Provenance::seen`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Seen {
