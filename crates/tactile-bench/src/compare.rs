@@ -139,7 +139,7 @@ pub fn compare(c: &Compare) -> Result<String> {
         test.len(),
         c.seed,
         c.encoder.display(),
-        match Provenance::read(&art.notes).datasets.join(" + ") {
+        match Provenance::read(&art.notes).names() {
             d if d.is_empty() => "unknown data".to_string(),
             d => d,
         },

@@ -43,28 +43,13 @@ pub struct PoseMetrics {
     pub kind: String,
 }
 
-fn excluded_test(notes: &serde_json::Value) -> Option<TestHoldout> {
-    notes
-        .get("excluded_test")
-        .and_then(|v| serde_json::from_value(v.clone()).ok())
-}
-
 /// Whether a pose network never saw any frame of `ds`: its notes name the
 /// datasets it trained on (`trained_on`, an ensemble's members'), each
 /// opens from its folder `dir`, and none holds a frame of `ds` among the
 /// rows it fitted (the same file or a copy). Other frames of the rig are
 /// then all new to it, and all are scored. Without such a record it may
 /// have seen them: it is scored on the test frames its split leaves.
-fn never_saw(
-    notes: &serde_json::Value,
-    trained_on: Vec<String>,
-    dir: &std::path::Path,
-    ds: &Dataset,
-) -> bool {
-    let p = Provenance {
-        datasets: trained_on,
-        ..Provenance::read(notes)
-    };
+fn never_saw(p: &Provenance, dir: &std::path::Path, ds: &Dataset) -> bool {
     let all: Vec<usize> = (0..ds.len()).collect();
     p.seen(dir, ds, &all) == Seen::None
 }
@@ -82,9 +67,10 @@ pub(crate) struct Candidate {
     pub params: usize,
     /// Its latency per runtime (an ensemble's summed).
     pub ms: RuntimeMs,
-    /// The dataset folders it was trained on, as its notes (an ensemble's
-    /// members' notes) record them; empty when they record none.
-    pub trained_on: Vec<String>,
+    /// What it trained on: the dataset folders its notes (an ensemble's
+    /// members' notes) record, none when they record none; the rows of
+    /// them as its own notes say (an ensemble's: its members' together).
+    pub provenance: Provenance,
 }
 
 impl Candidate {
@@ -145,11 +131,14 @@ impl Candidate {
         sets.dedup();
         Ok(Self {
             kind,
+            provenance: Provenance {
+                datasets: sets,
+                ..Provenance::read(&notes)
+            },
             notes,
             input,
             params,
             ms,
-            trained_on: sets,
         })
     }
 }
@@ -172,17 +161,17 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
     for m in &b.models {
         let Candidate {
             kind,
-            notes,
             input,
             params,
             ms,
-            trained_on,
+            provenance,
+            ..
         } = Candidate::read(m, b.runs)?;
-        let holdout = excluded_test(&notes);
+        let holdout = provenance.excluded_test;
         // An encoder's estimators may record no dataset: only pose
         // networks are taken to have never seen a set.
         let network = kind != "encoder + estimators";
-        let (saw, test) = if network && never_saw(&notes, trained_on, m, &ds) {
+        let (saw, test) = if network && never_saw(&provenance, m, &ds) {
             (false, (0..ds.len()).collect())
         } else {
             let split = ds.three_way_split(

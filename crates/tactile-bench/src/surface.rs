@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 use tactile_burn::ensemble::CALIBRATION_NOTE;
-use tactile_core::dataset::{Dataset, Provenance, Seen};
+use tactile_core::dataset::{Dataset, Seen};
 use tactile_core::plot::{ScatterPanel, Series, scatter_grid};
 use tactile_estimate::Column;
 use tactile_estimate::uncertainty::{ONE_SIGMA, Z95, coverage, cross_fitted_coverage_at};
@@ -161,10 +161,7 @@ fn per_target_header(leading: &[&str], trailing: &[&str]) -> String {
 /// trained on every split without a record of its dataset, or whose
 /// dataset cannot be opened, is taken to have seen them.
 fn saw_scored(c: &Candidate, model_dir: &std::path::Path, ds: &Dataset, rows: &[usize]) -> bool {
-    let p = Provenance {
-        datasets: c.trained_on.clone(),
-        ..Provenance::read(&c.notes)
-    };
+    let p = &c.provenance;
     match p.seen(model_dir, ds, rows) {
         Seen::All => true,
         Seen::Unknown => p.every_split,

@@ -310,7 +310,7 @@ pub fn scored_on_fitted<A: Artifact>(
             format!(
                 "the model trained on every one of these {} frames (its notes: {}), so these scores are on frames it fitted: score it on frames it did not train on (another seed or recording)",
                 ds.len(),
-                p.datasets.join(" + ")
+                p.names()
             )
         })
     })

@@ -387,7 +387,7 @@ pub fn fitted_frames(
             format!(
                 "these {} frames are frames it trained on (its notes: {}{}), so the factors fit its training errors and its intervals will be too narrow on new frames: calibrate on frames it did not train on (another split or recording), or take a validated run's factors (--calibration-from)",
                 rows.len(),
-                p.datasets.join(" + "),
+                p.names(),
                 if p.every_split { ", every split" } else { "" }
             )
         })

@@ -16,8 +16,8 @@ use tactile_pose::{PoseArtifact, PoseEnsemble};
 use crate::Result;
 
 /// What [`calibrate_model`] did: one line for a terminal, and what the
-/// user should know (each begins `warning: `), which the command line
-/// notes on standard error and Python raises as `UserWarning`s.
+/// user should know, which the command line notes on standard error as
+/// `warning: ...` and Python raises as `UserWarning`s.
 #[derive(Debug, Clone)]
 pub struct Calibrated {
     /// What changed.
@@ -34,11 +34,7 @@ impl Calibrated {
             Some(f) => format!("{}; {f}", fit.describe()),
             None => fit.describe(),
         };
-        let warnings = fit
-            .fitted_frames
-            .iter()
-            .map(|w| format!("warning: {w}"))
-            .collect();
+        let warnings = fit.fitted_frames.iter().cloned().collect();
         Self { summary, warnings }
     }
 }

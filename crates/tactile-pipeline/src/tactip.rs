@@ -55,7 +55,7 @@ pub fn encoder_trained_on(dir: &Path, ds: &Dataset, rows: &[usize]) -> Option<St
     Some(format!(
         "trained on {how} these {} test frames (its notes: {})",
         rows.len(),
-        p.datasets.join(" + ")
+        p.names()
     ))
 }
 
@@ -840,6 +840,11 @@ pub fn train_head(
         None => serde_json::json!({}),
     });
     head.save(out)?;
+    // The test frames: the `--test` set's, else the `split` column's.
+    let test_rows = match test {
+        Some(t) => Some((t, (0..t.len()).collect::<Vec<_>>())),
+        None => ds.split_indices("test").map(|rows| (ds, rows)),
+    };
     let test_set: Option<(Vec<Vec<f32>>, Vec<usize>)> = match test {
         Some(t) => {
             let f = dataset_features(source, t, runtime)?;
@@ -857,12 +862,7 @@ pub fn train_head(
                 .collect::<tactile_core::Result<Vec<_>>>()?;
             Some((f, y))
         }
-        None => ds.split_indices("test").map(|t| pick(&t)),
-    };
-    // The test frames, to ask whether the encoder trained on them.
-    let test_rows = match test {
-        Some(t) => Some((t, (0..t.len()).collect::<Vec<_>>())),
-        None => ds.split_indices("test").map(|rows| (ds, rows)),
+        None => test_rows.as_ref().map(|(_, rows)| pick(rows)),
     };
     let warning = match (source, &test_rows) {
         (FeatureSource::Encoder(dir), Some((t, rows))) => {

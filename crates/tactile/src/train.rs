@@ -326,7 +326,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
                 a.calibration_from.as_deref(),
             )?;
             for w in &c.warnings {
-                tactile_core::note!("{w}");
+                tactile_core::note!("warning: {w}");
             }
             say!("{}", c.summary);
         }

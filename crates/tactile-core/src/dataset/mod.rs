@@ -666,12 +666,8 @@ impl Dataset {
     /// dataset has seen the frames it scores. It stops at the first frame
     /// not held, reading only frames of a size it asks about.
     pub fn holds_frames(&self, other: &Dataset, rows: &[usize], within: Option<&[usize]>) -> bool {
-        let files = self.frame_files();
-        let mine = match within {
-            Some(w) => w.iter().filter_map(|&i| files.get(i)?.clone()).collect(),
-            None => files.into_iter().flatten().collect::<Vec<_>>(),
-        };
-        let mut copies = copies::FrameCopies::new(mine);
+        let within = within.map_or_else(|| (0..self.len()).collect(), <[usize]>::to_vec);
+        let mut copies = self.frame_copies(&within);
         let theirs = other.frame_files();
         rows.iter().all(|&j| {
             theirs

@@ -91,24 +91,37 @@ impl Provenance {
         }
     }
 
-    /// How many of `rows` of `ds` it fitted: each dataset its notes name,
-    /// found from its folder `model_dir` (see [`Dataset::open_recorded`]),
-    /// holds them among the rows it fitted ([`Dataset::rows_to_fit`]), the
-    /// same file or a copy (the same bytes under any name). The one rule
-    /// of the benches' marks and the calibration's warning.
+    /// The datasets as one line, for a message ("a + b").
+    pub fn names(&self) -> String {
+        self.datasets.join(" + ")
+    }
+
+    /// Each dataset its notes name, found from its folder `model_dir` (see
+    /// [`Dataset::open_recorded`]), with the rows it fitted of it
+    /// ([`Dataset::rows_to_fit`]); `None` for one that does not open here.
+    fn fitted_sets(&self, model_dir: &Path) -> impl Iterator<Item = Option<(Dataset, Vec<usize>)>> {
+        self.datasets.iter().map(move |d| {
+            let trained = Dataset::open_recorded(d, model_dir)?;
+            let fitted = trained
+                .rows_to_fit(self.every_split, self.excluded_test)
+                .ok()?;
+            Some((trained, fitted))
+        })
+    }
+
+    /// How many of `rows` of `ds` it fitted: each dataset of
+    /// [`Self::fitted_sets`] holds them among the rows it fitted, the same
+    /// file or a copy (the same bytes under any name). The one rule of the
+    /// benches' marks and the calibration's warning.
     pub fn seen(&self, model_dir: &Path, ds: &Dataset, rows: &[usize]) -> Seen {
         let asked: std::collections::HashSet<usize> = rows.iter().copied().collect();
         let mut held = std::collections::HashSet::new();
         let mut unknown = self.datasets.is_empty();
-        for d in &self.datasets {
-            let fitted = Dataset::open_recorded(d, model_dir).and_then(|trained| {
-                let fitted = trained
-                    .rows_to_fit(self.every_split, self.excluded_test)
-                    .ok()?;
-                Some(trained.rows_sharing_frames_among(&fitted, ds, rows))
-            });
-            match fitted {
-                Some(shared) => held.extend(shared),
+        for set in self.fitted_sets(model_dir) {
+            match set {
+                Some((trained, fitted)) => {
+                    held.extend(trained.rows_sharing_frames_among(&fitted, ds, rows))
+                }
                 None => unknown = true,
             }
         }
@@ -119,9 +132,7 @@ impl Provenance {
             _ => Seen::None,
         }
     }
-}
 
-impl Provenance {
     /// Whether it fitted every frame of `ds` (one dataset its notes name
     /// holds them all among the rows it fitted, the same files or copies;
     /// see [`Self::seen`]). It stops at the first frame not held, so a
@@ -129,13 +140,10 @@ impl Provenance {
     pub fn fitted_every(&self, model_dir: &Path, ds: &Dataset) -> bool {
         let all: Vec<usize> = (0..ds.len()).collect();
         !all.is_empty()
-            && self.datasets.iter().any(|d| {
-                Dataset::open_recorded(d, model_dir).is_some_and(|trained| {
-                    trained
-                        .rows_to_fit(self.every_split, self.excluded_test)
-                        .is_ok_and(|fitted| trained.holds_frames(ds, &all, Some(&fitted)))
-                })
-            })
+            && self
+                .fitted_sets(model_dir)
+                .flatten()
+                .any(|(trained, fitted)| trained.holds_frames(ds, &all, Some(&fitted)))
     }
 }
 

@@ -141,6 +141,13 @@ impl Dataset {
             .collect()
     }
 
+    /// The frame files of `rows`, to find frames (or copies of them)
+    /// among.
+    pub(crate) fn frame_copies(&self, rows: &[usize]) -> super::copies::FrameCopies {
+        let files = self.frame_files();
+        super::copies::FrameCopies::new(rows.iter().filter_map(|&i| files.get(i)?.clone()))
+    }
+
     /// For each row, the first row that lists the same frame file (itself
     /// when no row before it does): a frame listed twice, as a user
     /// oversampling a class by repeating rows does, is one frame to split
@@ -185,9 +192,7 @@ impl Dataset {
         other: &Dataset,
         among: &[usize],
     ) -> Vec<usize> {
-        let files = self.frame_files();
-        let mut copies =
-            super::copies::FrameCopies::new(rows.iter().filter_map(|&i| files.get(i)?.clone()));
+        let mut copies = self.frame_copies(rows);
         let theirs = other.frame_files();
         among
             .iter()
