@@ -294,8 +294,7 @@ pub fn report(r: &Report) -> Result<String> {
     }
     // A README without its markers fails now, not after the benches.
     if let Some(readme) = &r.readme {
-        let text =
-            std::fs::read_to_string(readme).map_err(|e| tactile_core::Error::io(readme, e))?;
+        let text = tactile_core::io::read_text(readme)?;
         replace_headline(&text, "", readme)?;
     }
     let dir = r.out.with_extension("");
@@ -424,8 +423,7 @@ pub fn report(r: &Report) -> Result<String> {
     );
     tactile_core::io::write_atomic(&r.out, md.as_bytes())?;
     if let Some(readme) = &r.readme {
-        let text =
-            std::fs::read_to_string(readme).map_err(|e| tactile_core::Error::io(readme, e))?;
+        let text = tactile_core::io::read_text(readme)?;
         let block = format!(
             "{headline}\nMeasured on {machine} by `tactile report` (`just report`); the full tables and plots are in `{}`.\n",
             r.out.display()

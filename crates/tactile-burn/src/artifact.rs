@@ -34,9 +34,10 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
         Ok(())
     }
 
-    /// True when `dir` holds this kind of model.
+    /// True when `dir` holds this kind of model (its config, even one
+    /// that is no regular file, so that loading it says so).
     fn is_in(dir: &Path) -> bool {
-        dir.join(Self::CONFIG_FILE).is_file()
+        dir.join(Self::CONFIG_FILE).exists()
     }
 
     /// Save the config and the weights into `dir` (created if needed),
@@ -67,11 +68,9 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
     fn read_unfinished(dir: &Path) -> Result<Self> {
         let file = dir.join(Self::CONFIG_FILE);
         tactile_core::io::expect_folder(dir, &format!("{} folder", Self::KIND))?;
-        if !file.is_file() {
+        if !file.exists() {
             // A model of this kind, alone or as an ensemble of them.
-            let is_model = |d: &Path| {
-                d.join(Self::CONFIG_FILE).is_file() || crate::ensemble::Ensemble::is_of::<Self>(d)
-            };
+            let is_model = |d: &Path| Self::is_in(d) || crate::ensemble::Ensemble::is_of::<Self>(d);
             let hint = folder_hint(dir, is_model, "a model of another kind");
             return Err(Error::wrong_kind(
                 dir,
@@ -174,7 +173,7 @@ pub fn run_fingerprint(
 /// Feed `path`'s bytes to `h` in pieces: labels may run to millions of
 /// rows and weights to a gigabyte, neither worth holding whole.
 fn hash_file(h: &mut sha2::Sha256, path: &Path) -> Result<()> {
-    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut file = tactile_core::io::open_regular(path)?;
     std::io::copy(&mut file, h).map_err(|e| Error::io(path, e))?;
     Ok(())
 }

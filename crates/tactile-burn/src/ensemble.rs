@@ -36,7 +36,7 @@ impl Ensemble {
 
     /// Whether `dir` holds an ensemble.
     pub fn is_in(dir: &Path) -> bool {
-        dir.join(Self::FILE).is_file()
+        dir.join(Self::FILE).exists()
     }
 
     /// Whether `dir` holds an ensemble of `A`s: `ensemble.json` and a
@@ -45,11 +45,8 @@ impl Ensemble {
     /// [`Self::read`] with its reason).
     pub fn is_of<A: Artifact>(dir: &Path) -> bool {
         Self::is_in(dir)
-            && std::fs::read_dir(dir).is_ok_and(|rd| {
-                rd.take(1000)
-                    .flatten()
-                    .any(|e| e.path().join(A::CONFIG_FILE).is_file())
-            })
+            && std::fs::read_dir(dir)
+                .is_ok_and(|rd| rd.take(1000).flatten().any(|e| A::is_in(&e.path())))
     }
 
     /// Read and check `dir/ensemble.json`: 1 to [`Self::MAX_MEMBERS`]
@@ -173,7 +170,7 @@ impl Ensemble {
         // The same weights read or calibrated another way are another model.
         let identity = |m: &Path| -> Result<(String, Vec<u8>)> {
             let config = m.join(A::CONFIG_FILE);
-            let bytes = std::fs::read(&config).map_err(|e| Error::io(&config, e))?;
+            let bytes = tactile_core::io::read_limited(&config, tactile_core::io::MAX_JSON_BYTES)?;
             Ok((crate::artifact::fingerprint::<A>(m)?, bytes))
         };
         let identities = members

@@ -61,9 +61,10 @@ pub fn check_finite<M: Module>(module: &M, path: &Path) -> Result<()> {
 /// it cannot convert; such a file is reported as malformed instead of
 /// ending the process (found by the `weights` fuzz target).
 pub fn load_module<M: Module>(module: M, path: &Path) -> Result<M> {
-    if !path.is_file() {
+    if !path.exists() {
         return Err(Error::model(path, "weights file does not exist"));
     }
+    // A pipe or a folder named as the weights is refused here, not read.
     tactile_core::io::check_file_size(path, tactile_core::io::MAX_WEIGHTS_BYTES)?;
     let record = ModuleRecord::load(path)
         .map_err(|e| Error::model(path, e.to_string()))?

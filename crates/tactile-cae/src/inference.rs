@@ -122,7 +122,7 @@ pub fn write_features_csv(
 pub fn read_features_csv(path: impl AsRef<Path>) -> Result<(Vec<String>, Vec<Vec<f32>>)> {
     use tactile_core::Error as E;
     let path = path.as_ref();
-    let file = std::fs::File::open(path).map_err(|e| E::io(path, e))?;
+    let file = tactile_core::io::open_regular(path)?;
     let mut r = tactile_core::csv_lines::reader(&csv::ReaderBuilder::new(), file);
     let header = r
         .headers()

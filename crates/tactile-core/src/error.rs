@@ -106,6 +106,14 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A path named as a file to read is a folder, a pipe or a device:
+    /// refused before it is opened, as opening a pipe blocks until
+    /// something writes to it and a device never ends.
+    #[error("{}: is not a regular file (a folder, a pipe or a device); refusing to read it", path.display())]
+    NotRegularFile {
+        /// The path.
+        path: PathBuf,
+    },
     /// Any other invalid input, described in words.
     #[error("{0}")]
     Invalid(String),

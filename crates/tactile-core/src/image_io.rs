@@ -48,21 +48,8 @@ pub const MAX_IMAGE_PIXELS: u64 = 7680 * 4320;
 /// without compression is 265 MB.
 pub const MAX_IMAGE_FILE_BYTES: u64 = 512 << 20;
 
-/// Refuse anything but a regular file before opening it: a pipe or a
-/// device named `*.png` would block a reader forever or never end.
-pub fn expect_regular_file(path: &Path) -> Result<()> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if !meta.is_file() {
-        return Err(Error::image(
-            path,
-            "is not a regular file (a folder, a pipe or a device); refusing to read it",
-        ));
-    }
-    Ok(())
-}
-
 fn decode(path: &Path) -> Result<DynamicImage> {
-    expect_regular_file(path)?;
+    crate::io::expect_regular(path)?;
     let open = || -> Result<ImageReader<std::io::BufReader<std::fs::File>>> {
         ImageReader::open(path)
             .map_err(|e| Error::io(path, e))?

@@ -79,7 +79,6 @@ enum FrameKey {
 }
 
 fn read_labels(path: &Path) -> Result<Labels> {
-    crate::image_io::expect_regular_file(path)?;
     let bad = |line: usize, message: String| Error::Dataset {
         path: path.to_path_buf(),
         line: Some(line),
@@ -87,7 +86,7 @@ fn read_labels(path: &Path) -> Result<Labels> {
     };
     let mut csv = crate::csv_lines::reader(
         csv::ReaderBuilder::new().trim(csv::Trim::All),
-        std::fs::File::open(path).map_err(|e| Error::io(path, e))?,
+        crate::io::open_regular(path)?,
     );
     let header: Vec<String> = crate::csv_lines::headers(&mut csv)
         .map_err(|why| bad(1, why))?
@@ -247,7 +246,7 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
                     let ext = if *c == "mask" { "png" } else { "npy" };
                     let dir = if *c == "mask" { "masks" } else { "depth" };
                     let to = format!("{dir}/{:06}.{ext}", written);
-                    crate::image_io::expect_regular_file(&from)?;
+                    crate::io::expect_regular(&from)?;
                     if *c == "mask" {
                         // Read now, not when training: a 0/1 mask or one of
                         // another size is named before the dataset exists.

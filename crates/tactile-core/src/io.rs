@@ -135,9 +135,7 @@ pub const MAX_WEIGHTS_BYTES: u64 = 1 << 30;
 /// Refuse `path` when it holds more than `max_bytes`, naming it; checked
 /// on its size, before anything is read.
 pub fn check_file_size(path: &Path, max_bytes: u64) -> Result<()> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| Error::io(path, e))?
-        .len();
+    let len = expect_regular(path)?.len();
     if len > max_bytes {
         return Err(too_large(path, len, max_bytes));
     }
@@ -151,6 +149,27 @@ fn too_large(path: &Path, len: u64, max_bytes: u64) -> Error {
     ))
 }
 
+/// Refuse anything but a regular file (after links), naming it, before it
+/// is opened: opening a pipe blocks until something writes to it, and a
+/// device never ends, so a `labels.csv`, a config or a weights file that is
+/// one would hang the reader instead of failing. Its metadata, for its size.
+pub fn expect_regular(path: &Path) -> Result<std::fs::Metadata> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        return Err(Error::NotRegularFile {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(meta)
+}
+
+/// `path` opened for reading once [`expect_regular`] passes it: the one
+/// way the toolkit opens a file a user or a model folder names.
+pub fn open_regular(path: &Path) -> Result<std::fs::File> {
+    expect_regular(path)?;
+    std::fs::File::open(path).map_err(|e| Error::io(path, e))
+}
+
 /// The bytes of `path`, a file of at most `max_bytes`, naming the file
 /// when it is larger. The size is checked before the file is read, and the
 /// read stops past the limit, so a file that grows or lies about its size
@@ -158,7 +177,7 @@ fn too_large(path: &Path, len: u64, max_bytes: u64) -> Error {
 pub fn read_limited(path: impl AsRef<Path>, max_bytes: u64) -> Result<Vec<u8>> {
     use std::io::Read;
     let path = path.as_ref();
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = open_regular(path)?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if len > max_bytes {
         return Err(too_large(path, len, max_bytes));
@@ -171,6 +190,19 @@ pub fn read_limited(path: impl AsRef<Path>, max_bytes: u64) -> Result<Vec<u8>> {
         return Err(too_large(path, bytes.len() as u64, max_bytes));
     }
     Ok(bytes)
+}
+
+/// The UTF-8 text of `path`, a file of at most [`MAX_JSON_BYTES`]
+/// ([`read_limited`]), naming it when it is not text.
+pub fn read_text(path: impl AsRef<Path>) -> Result<String> {
+    let path = path.as_ref();
+    String::from_utf8(read_limited(path, MAX_JSON_BYTES)?).map_err(|e| {
+        Error::dataset(
+            path,
+            None,
+            format!("not UTF-8 text: {e}{}", utf16_hint(e.as_bytes())),
+        )
+    })
 }
 
 /// [`read_json`] of a file of at most `max_bytes` ([`read_limited`]).

@@ -73,7 +73,7 @@ pub fn read_depth_npy_of(
     use ndarray::ArrayView2;
     use ndarray_npy::ViewNpyExt;
     let path = path.as_ref();
-    crate::image_io::expect_regular_file(path)?;
+    crate::io::expect_regular(path)?;
     let bad = |m: String| Error::dataset(path, None, m);
     let size = std::fs::metadata(path)
         .map_err(|e| Error::io(path, e))?

@@ -148,7 +148,7 @@ impl FrameList {
         // link out of the folder would read what the user did not name.
         for p in &v {
             crate::dataset::expect_entry_inside(dir, p)?;
-            crate::image_io::expect_regular_file(p)?;
+            crate::io::expect_regular(p)?;
         }
         // By the numbers in the names, as a file browser shows them:
         // `frame_2.png` before `frame_10.png` (zero-padded names keep

@@ -243,7 +243,7 @@ impl VideoReader {
     pub fn open(input: &VideoInput, options: DecodeOptions) -> Result<Self> {
         let path = input.path();
         if let VideoInput::File(p) = input {
-            crate::image_io::expect_regular_file(p)?;
+            crate::io::expect_regular(p)?;
         }
         let info = probe(input)?;
         let threads = options.threads.clamp(1, 64).to_string();

@@ -163,7 +163,7 @@ impl BallPresses {
         let root = root.as_ref().to_path_buf();
         tactile_core::io::expect_folder(&root, "calibration folder")?;
         let sensor_file = root.join("sensor.json");
-        if !sensor_file.is_file() {
+        if !sensor_file.exists() {
             return Err(Error::Layout {
                 path: sensor_file,
                 why: "missing: a calibration folder has sensor.json (ball_diameter_mm, mm_per_px)"
@@ -186,7 +186,7 @@ impl BallPresses {
                 path: sensor_file.clone(),
                 why,
             })?;
-        if !bg_path.is_file() {
+        if !bg_path.exists() {
             return Err(Error::Layout {
                 path: bg_path,
                 why: "missing: the background frame (the skin at rest, no contact)".into(),
@@ -194,7 +194,7 @@ impl BallPresses {
         }
         let background = load_rgb(&bg_path)?;
         let csv_path = root.join("presses.csv");
-        let (presses, warnings) = if csv_path.is_file() {
+        let (presses, warnings) = if csv_path.exists() {
             let size = (background.width(), background.height());
             let presses = read_presses_csv(&root, &canonical, &csv_path, &sensor, size)?;
             (presses, Vec::new())
@@ -330,7 +330,7 @@ fn read_presses_csv(
             path: path.to_path_buf(),
             why: format!("line {line}: {why}"),
         })?;
-        if !frame.is_file() {
+        if !frame.exists() {
             return Err(Error::Layout {
                 path: path.to_path_buf(),
                 why: format!(

@@ -187,9 +187,9 @@ impl Pipeline {
     /// A folder with a calibration and no `detector/` reconstructs only.
     pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
         let dir = dir.as_ref();
-        let calibrated = dir.join(GelsightArtifact::CONFIG_FILE).is_file();
+        let calibrated = GelsightArtifact::is_in(dir);
         let models_folder = |d: &Path| {
-            d.join(GelsightArtifact::CONFIG_FILE).is_file()
+            GelsightArtifact::is_in(d)
                 || ["detector", "segmenter", "depth"]
                     .iter()
                     .any(|m| d.join(m).is_dir())

@@ -75,7 +75,8 @@ impl Error {
             Error::Core(
                 e @ (tactile_core::Error::Io { .. }
                 | tactile_core::Error::Image { .. }
-                | tactile_core::Error::NotFound { .. }),
+                | tactile_core::Error::NotFound { .. }
+                | tactile_core::Error::NotRegularFile { .. }),
             ) => Error::Core(e),
             other => Error::File {
                 path: path.into(),

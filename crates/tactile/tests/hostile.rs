@@ -863,3 +863,91 @@ fn a_long_prediction_stops_at_ctrl_c_and_writes_nothing() {
         assert!(left.is_empty(), "{model}: {left:?}");
     }
 }
+
+#[test]
+fn pipes_named_as_a_datasets_a_models_or_a_calibrations_files_are_refused_at_once() {
+    // Opening a pipe blocks until something writes to it: each of these
+    // would hang the command for ever. Each must be refused by name at once.
+    let tmp = tempfile::tempdir().unwrap();
+    let fifo = |p: &Path| {
+        let _ = std::fs::remove_file(p);
+        assert!(Command::new("mkfifo").arg(p).status().unwrap().success());
+    };
+    let refused = |args: &[&str], pipe: &Path| {
+        let t0 = Instant::now();
+        let out = Command::new("timeout")
+            .args(["-s", "KILL", "60", bin()])
+            .args(args)
+            .output()
+            .unwrap();
+        let msg = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{args:?} hung or crashed: {msg}"
+        );
+        assert!(
+            msg.contains(s(pipe)) && msg.contains("not a regular file"),
+            "{args:?}: {msg}"
+        );
+        assert!(t0.elapsed() < Duration::from_secs(30), "{args:?}");
+    };
+    let ds = tmp.path().join("ds");
+    tactip(&ds, 2, &[row("frames/0.png"), row("frames/1.png")]);
+    let model = tmp.path().join("pose-edge");
+    std::fs::create_dir(&model).unwrap();
+    for f in ["pose.json", "pose.bpk"] {
+        std::fs::copy(root().join("models/pose-edge").join(f), model.join(f)).unwrap();
+    }
+    let out = tmp.path().join("est.csv");
+    let predict = [
+        "predict",
+        "--model",
+        s(&model),
+        "--data",
+        s(&ds),
+        "--out",
+        s(&out),
+    ];
+    // The dataset's manifest, then its labels; the model's config, then its weights.
+    for (dir, file) in [
+        (&ds, "manifest.json"),
+        (&ds, "labels.csv"),
+        (&model, "pose.json"),
+        (&model, "pose.bpk"),
+    ] {
+        let keep = tmp.path().join("kept");
+        std::fs::rename(dir.join(file), &keep).unwrap();
+        fifo(&dir.join(file));
+        refused(&predict, &dir.join(file));
+        std::fs::remove_file(dir.join(file)).unwrap();
+        std::fs::rename(&keep, dir.join(file)).unwrap();
+    }
+    assert!(!out.exists());
+    // A calibration folder's sensor description and press list, and an
+    // options file.
+    let ball = tmp.path().join("ball");
+    std::fs::create_dir(&ball).unwrap();
+    let real = shared_real().join("gelsight-ball");
+    for f in ["sensor.json", "background.png"] {
+        std::fs::copy(real.join(f), ball.join(f)).unwrap();
+    }
+    let cal = tmp.path().join("cal");
+    let calibrate = ["calibrate", "ball", "--data", s(&ball), "--out", s(&cal)];
+    fifo(&ball.join("presses.csv"));
+    refused(&calibrate, &ball.join("presses.csv"));
+    std::fs::rename(ball.join("sensor.json"), tmp.path().join("sensor.json")).unwrap();
+    fifo(&ball.join("sensor.json"));
+    refused(&calibrate, &ball.join("sensor.json"));
+    let options = tmp.path().join("options.json");
+    fifo(&options);
+    refused(
+        &[&calibrate[..], &["--config", s(&options)]].concat(),
+        &options,
+    );
+    assert!(!cal.exists());
+}

@@ -149,7 +149,7 @@ const ZSTD_MAGIC: [u8; 4] = [0x28, 0xb5, 0x2f, 0xfd];
 /// One storage file: its bytes, decompressed when rosbag2 compressed the
 /// whole file (`.mcap.zstd`).
 fn open_storage(path: &Path) -> Result<Box<dyn Read + Send>> {
-    crate::image_io::expect_regular_file(path)?;
+    crate::io::expect_regular(path)?;
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
     if !has_suffix(path, ".zstd") {
         return Ok(Box::new(file));
@@ -436,9 +436,8 @@ fn convert_command(src: &str) -> String {
 /// `None` for any other file.
 pub fn other_bag_format(path: &Path) -> Option<Error> {
     let mut head = [0u8; 16];
-    let n = File::open(path)
-        .and_then(|mut f| crate::video::read_full(&mut f, &mut head))
-        .ok()?;
+    let mut file = crate::io::open_regular(path).ok()?;
+    let n = crate::video::read_full(&mut file, &mut head).ok()?;
     let head = &head[..n];
     if head.starts_with(b"SQLite format 3\0") {
         // rosbag2's converters take the bag folder, not its .db3.
@@ -477,7 +476,7 @@ pub fn split_read_alone(path: &Path) -> Option<String> {
 /// rosbag2 splits a recording.
 fn storage_files(path: &Path) -> Result<Vec<PathBuf>> {
     if !path.is_dir() {
-        crate::image_io::expect_regular_file(path)?;
+        crate::io::expect_regular(path)?;
         if let Some(e) = other_bag_format(path) {
             return Err(e);
         }
@@ -604,7 +603,7 @@ fn indexed_tallies(path: &Path) -> Option<Tallies> {
     if !is_bag_file(path) {
         return None;
     }
-    crate::image_io::expect_regular_file(path).ok()?;
+    crate::io::expect_regular(path).ok()?;
     let file = File::open(path).ok()?;
     let size = file.metadata().ok()?.len();
     let mut index = IndexFile {

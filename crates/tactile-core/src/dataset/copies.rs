@@ -61,7 +61,7 @@ impl FrameCopies {
 /// read): equal files have equal digests; [`same_bytes`] confirms a match.
 fn digest(path: &Path) -> Option<u64> {
     use std::hash::Hasher;
-    let mut file = std::fs::File::open(path).ok()?;
+    let mut file = crate::io::open_regular(path).ok()?;
     let mut hasher = std::collections::hash_map::DefaultHasher::new();
     let mut buf = vec![0u8; 64 * 1024];
     loop {

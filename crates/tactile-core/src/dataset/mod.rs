@@ -214,7 +214,8 @@ impl Dataset {
         }
         crate::io::expect_folder(&root, "dataset folder")?;
         let manifest_path = root.join("manifest.json");
-        if !manifest_path.is_file() {
+        // A pipe or folder named manifest.json is refused by `read_json`.
+        if !manifest_path.exists() {
             return Err(Error::dataset(
                 &manifest_path,
                 None,
@@ -246,8 +247,12 @@ impl Dataset {
             ));
         }
         let labels = root.join("labels.csv");
-        let file = std::fs::File::open(&labels)
-            .map_err(|e| Error::dataset(&labels, None, format!("cannot read: {e}")))?;
+        let file = crate::io::open_regular(&labels).map_err(|e| match e {
+            Error::Io { source, .. } => {
+                Error::dataset(&labels, None, format!("cannot read: {source}"))
+            }
+            other => other,
+        })?;
         let mut reader = crate::csv_lines::reader(
             csv::ReaderBuilder::new().has_headers(true).flexible(false),
             file,

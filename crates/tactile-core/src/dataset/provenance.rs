@@ -8,6 +8,11 @@ use std::path::Path;
 
 use super::{Dataset, TestHoldout};
 
+/// Most distinct datasets whose frames are looked up for one model; a
+/// model's notes naming more read as [`Seen::Unknown`] beyond them (a
+/// trainer takes a handful: the detector's soft labels, two or three).
+pub const MAX_RECORDED_DATASETS: usize = 16;
+
 /// The datasets a model trained on and which of their rows it fitted.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Provenance {
@@ -99,14 +104,32 @@ impl Provenance {
     /// Each dataset its notes name, found from its folder `model_dir` (see
     /// [`Dataset::open_recorded`]), with the rows it fitted of it
     /// ([`Dataset::rows_to_fit`]); `None` for one that does not open here.
+    /// A name given twice is opened once, and past the first
+    /// [`MAX_RECORDED_DATASETS`] names one `None` stands for the rest, so
+    /// notes naming a dataset a million times cost one opening, not a
+    /// million.
     fn fitted_sets(&self, model_dir: &Path) -> impl Iterator<Item = Option<(Dataset, Vec<usize>)>> {
-        self.datasets.iter().map(move |d| {
-            let trained = Dataset::open_recorded(d, model_dir)?;
-            let fitted = trained
-                .rows_to_fit(self.every_split, self.excluded_test)
-                .ok()?;
-            Some((trained, fitted))
-        })
+        let mut names: Vec<&String> = Vec::new();
+        for d in &self.datasets {
+            if !names.contains(&d) {
+                names.push(d);
+            }
+            if names.len() > MAX_RECORDED_DATASETS {
+                break;
+            }
+        }
+        let more = names.len() > MAX_RECORDED_DATASETS;
+        names.truncate(MAX_RECORDED_DATASETS);
+        names
+            .into_iter()
+            .map(move |d| {
+                let trained = Dataset::open_recorded(d, model_dir)?;
+                let fitted = trained
+                    .rows_to_fit(self.every_split, self.excluded_test)
+                    .ok()?;
+                Some((trained, fitted))
+            })
+            .chain(more.then_some(None))
     }
 
     /// How many of `rows` of `ds` it fitted: each dataset of
@@ -229,5 +252,85 @@ mod tests {
         };
         assert_eq!(nowhere.seen(&root, &ds, &all), Seen::Unknown);
         assert_eq!(Provenance::default().seen(&root, &ds, &all), Seen::Unknown);
+    }
+
+    /// `seen` on another thread, failing the test instead of hanging it.
+    fn seen_within(p: Provenance, model_dir: &Path, ds: &Dataset, secs: u64) -> Seen {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let (dir, ds) = (model_dir.to_path_buf(), ds.clone());
+        std::thread::spawn(move || {
+            let all: Vec<usize> = (0..ds.len()).collect();
+            let _ = tx.send(p.seen(&dir, &ds, &all));
+        });
+        rx.recv_timeout(std::time::Duration::from_secs(secs))
+            .expect("seen did not answer in time")
+    }
+
+    #[test]
+    fn hostile_notes_read_as_what_they_can_say_and_never_hang() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../samples/virtual-tactip")
+            .canonicalize()
+            .unwrap();
+        let ds = Dataset::open(&root).unwrap();
+        let here = root.display().to_string();
+        // Keys of the wrong type name no dataset.
+        let wrong = serde_json::json!({"trained_on": 5, "also_trained_on": "x", "every_split": "yes",
+            "excluded_test": {"test_fraction": 0.2, "split_seed": -1}});
+        assert_eq!(Provenance::read(&wrong), Provenance::default());
+        // One dataset named 200,000 times is opened once.
+        let many =
+            serde_json::json!({"trained_on": here, "also_trained_on": vec![here.clone(); 200_000]});
+        let t0 = std::time::Instant::now();
+        assert_eq!(
+            seen_within(Provenance::read(&many), &root, &ds, 30),
+            Seen::All
+        );
+        assert!(
+            t0.elapsed() < std::time::Duration::from_secs(5),
+            "{:?}",
+            t0.elapsed()
+        );
+        // Past the first MAX_RECORDED_DATASETS names nothing is looked up:
+        // the frames may have been fitted.
+        let mut names: Vec<String> = (0..40).map(|i| format!("nowhere-{i}")).collect();
+        names.push(here.clone());
+        let far = Provenance {
+            datasets: names,
+            ..Default::default()
+        };
+        assert_eq!(seen_within(far, &root, &ds, 30), Seen::Unknown);
+        // A test fraction no split takes: its fitted rows are unknown.
+        let odd = serde_json::json!({"trained_on": here,
+            "excluded_test": {"test_fraction": 1e300, "split_seed": 7}});
+        assert_eq!(
+            seen_within(Provenance::read(&odd), &root, &ds, 30),
+            Seen::Unknown
+        );
+        // A dataset whose manifest or labels are pipes is never read (a
+        // pipe blocks whoever opens it until something writes to it).
+        for pipe in ["manifest.json", "labels.csv"] {
+            let tmp = tempfile::tempdir().unwrap();
+            let fake = tmp.path().join("fake");
+            std::fs::create_dir_all(&fake).unwrap();
+            for f in ["manifest.json", "labels.csv"] {
+                if f != pipe {
+                    std::fs::copy(root.join(f), fake.join(f)).unwrap();
+                }
+            }
+            let made = std::process::Command::new("mkfifo")
+                .arg(fake.join(pipe))
+                .status()
+                .unwrap();
+            assert!(made.success());
+            let notes = serde_json::json!({"trained_on": fake.display().to_string()});
+            assert_eq!(
+                seen_within(Provenance::read(&notes), &root, &ds, 10),
+                Seen::Unknown,
+                "{pipe}"
+            );
+            let e = Dataset::open(&fake).unwrap_err().to_string();
+            assert!(e.contains(pipe) && e.contains("not a regular file"), "{e}");
+        }
     }
 }
