@@ -1,6 +1,7 @@
 //! The library's errors as Python exceptions of fitting types, with the
 //! message the command line prints: a missing file or folder is a
-//! `FileNotFoundError`, an unreadable one an `OSError`, an output folder
+//! `FileNotFoundError`, an unreadable one (or a pipe, a device or a
+//! folder where a file is read) an `OSError`, an output folder
 //! that holds other files a `FileExistsError`, a stop request a
 //! `KeyboardInterrupt`; onnxruntime missing or failing, a diverged or
 //! stalled training a `RuntimeError`; anything wrong with the input (a bad
@@ -36,6 +37,8 @@ fn core_kind(e: &tactile_core::Error) -> Kind {
             std::io::ErrorKind::PermissionDenied => Kind::Permission,
             _ => Kind::Os,
         },
+        // As Python's own `open` of a folder is an `IsADirectoryError`.
+        E::NotRegularFile { .. } => Kind::Os,
         E::Diverged { .. } => Kind::Runtime,
         _ => Kind::Value,
     }

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -97,6 +98,13 @@ def test_dataset_errors_name_the_file(tmp_path):
     with pytest.raises(ValueError) as e:
         tactile.Dataset(out)
     assert "labels.csv:3" in str(e.value)
+    # A pipe in place of the labels would block whoever opens it: refused
+    # by name at once, an OSError as Python's own open of a folder is.
+    labels.unlink()
+    os.mkfifo(labels)
+    with pytest.raises(OSError) as e:
+        tactile.Dataset(out)
+    assert "labels.csv" in str(e.value) and "not a regular file" in str(e.value)
 
 
 def test_synth_refuses_bad_counts_and_foreign_folders(tmp_path):
