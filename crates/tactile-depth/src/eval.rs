@@ -235,6 +235,11 @@ pub struct DepthEvaluation {
     pub ms_per_frame: f64,
     /// Heat maps written into `options.save_png`.
     pub heat_maps: usize,
+    /// Set when the model's notes say it trained on every frame scored
+    /// ([`tactile_burn::artifact::scored_on_fitted`]): the words saying
+    /// these are not held-out scores, for the front ends to show.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
 }
 
 /// The depth network in `model` scored on the labelled dataset in `data`,
@@ -278,6 +283,7 @@ pub fn evaluate_folder(
         scores,
         ms_per_frame,
         heat_maps,
+        warning: tactile_burn::artifact::scored_on_fitted::<crate::DepthArtifact>(model, &ds),
     })
 }
 

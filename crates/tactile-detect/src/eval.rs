@@ -47,6 +47,11 @@ pub struct DetectorScores {
     pub decisions: Vec<bool>,
     /// The threshold the decisions used.
     pub threshold: f64,
+    /// Set when the model's notes say it trained on every frame scored
+    /// ([`tactile_burn::artifact::scored_on_fitted`]): the words saying
+    /// these are not held-out scores, for the front ends to show.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
 }
 
 impl DetectorScores {
@@ -229,6 +234,7 @@ impl FrameAnswers {
             probabilities: p,
             decisions: pred,
             threshold: detector.artifact.threshold,
+            warning: None,
         }
     }
 }
@@ -302,7 +308,8 @@ pub fn evaluate_folder(
         tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
     let mut det = TendonDetector::load(model, runtime, 0)?;
-    let (sc, labels) = evaluate_dataset(&mut det, &ds, EVAL_CHUNK)?;
+    let (mut sc, labels) = evaluate_dataset(&mut det, &ds, EVAL_CHUNK)?;
+    sc.warning = tactile_burn::artifact::scored_on_fitted::<crate::DetectorArtifact>(model, &ds);
     if let Some(path) = &options.frames {
         write_decisions_csv(path, &labels, &sc)?;
     }

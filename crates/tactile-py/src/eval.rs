@@ -7,7 +7,6 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_core::dataset::Dataset;
 use tactile_pipeline::tactip::TactipPerception;
-use tactile_segment::TendonSegmenter;
 
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
@@ -26,12 +25,14 @@ pub(crate) fn eval_detector<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::runtime(runtime)?;
     let o: tactile_detect::eval::EvalOptions = crate::json::options(py, options)?;
-    let v = interruptible(py, || {
-        let sc = tactile_detect::eval::evaluate_folder(&model, &data, rt, &o).py()?;
-        tactile_core::io::scored_record(&model, &data, &sc).py()
+    let sc = interruptible(py, || {
+        tactile_detect::eval::evaluate_folder(&model, &data, rt, &o).py()
     })?;
-    warn_if_fitted::<tactile_detect::DetectorArtifact>(py, &model, &data)?;
-    crate::json::to_py(py, &v)
+    warn(py, &sc.warning)?;
+    crate::json::to_py(
+        py,
+        &tactile_core::io::scored_record(&model, &data, &sc).py()?,
+    )
 }
 
 /// Score a tendon segmenter: IoU and direction error per tendon path.
@@ -44,14 +45,14 @@ pub(crate) fn eval_segmenter<'py>(
     runtime: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::runtime(runtime)?;
-    let v = interruptible(py, || {
-        let mut seg = TendonSegmenter::load(&model, rt, 0).py()?;
-        let ds = Dataset::open(&data).py()?;
-        let sc = tactile_segment::evaluate(&mut seg, &ds).py()?;
-        tactile_core::io::scored_record(&model, &data, &sc).py()
+    let sc = interruptible(py, || {
+        tactile_segment::evaluate_folder(&model, &data, rt).py()
     })?;
-    warn_if_fitted::<tactile_segment::SegmenterArtifact>(py, &model, &data)?;
-    crate::json::to_py(py, &v)
+    warn(py, &sc.warning)?;
+    crate::json::to_py(
+        py,
+        &tactile_core::io::scored_record(&model, &data, &sc).py()?,
+    )
 }
 
 /// Score a depth network: MAE in the window and over the tendon, RMSE,
@@ -70,7 +71,7 @@ pub(crate) fn eval_depth<'py>(
     let v = interruptible(py, || {
         tactile_depth::eval::evaluate_folder(&model, &data, rt, &o).py()
     })?;
-    warn_if_fitted::<tactile_depth::DepthArtifact>(py, &model, &data)?;
+    warn(py, &v.warning)?;
     crate::json::to_py(py, &v)
 }
 
@@ -97,16 +98,11 @@ pub(crate) fn eval_tactip<'py>(
     crate::json::to_py(py, &v)
 }
 
-/// Raise a `UserWarning` when the model's notes say it trained on every
-/// frame just scored.
-fn warn_if_fitted<A: tactile_burn::Artifact>(
-    py: Python<'_>,
-    model: &std::path::Path,
-    data: &std::path::Path,
-) -> PyResult<()> {
-    let ds = Dataset::open(data).py()?;
-    match tactile_burn::artifact::scored_on_fitted::<A>(model, &ds) {
-        Some(w) => crate::errors::user_warning(py, &w),
+/// Raise an evaluation's warning (scores on frames the model fitted) as a
+/// `UserWarning`.
+fn warn(py: Python<'_>, warning: &Option<String>) -> PyResult<()> {
+    match warning {
+        Some(w) => crate::errors::user_warning(py, w),
         None => Ok(()),
     }
 }

@@ -199,8 +199,11 @@ def test_a_depth_network_learns_a_correction_to_its_calibration(model: Path, tmp
     # The reconstruction is its fourth channel, found beside it.
     assert art["prior"] == {"calibration": ".."} and art["model"]["in_channels"] == 4
     assert art["model"]["residual_channel"] == 3
-    e = tactile.eval.depth(sensor / "depth", data)
+    # Scored on the 8 frames it trained on: said, and kept in the result.
+    with pytest.warns(UserWarning, match="the model trained on every one of these 8 frames"):
+        e = tactile.eval.depth(sensor / "depth", data)
     assert e["scores"]["frames"] == 8 and np.isfinite(e["scores"]["mae_mm"])
+    assert "so these scores are on frames it fitted" in e["warning"]
     with pytest.raises(ValueError, match="not both"):
         tactile.train.depth(data, tmp_path / "x", prior_calibration=str(sensor), with_mask=True)
     assert not (tmp_path / "x").exists()

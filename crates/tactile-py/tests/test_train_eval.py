@@ -36,6 +36,7 @@ def test_train_then_eval_detector(small_vt, tmp_path):
     with pytest.warns(UserWarning, match="the model trained on every one of these 24 frames"):
         e = tactile.eval.detector(out, small_vt, frames=csv, reliability=png)
     assert e["all"]["frames"] == 24 and 0.0 <= e["all"]["accuracy"] <= 1.0
+    assert "so these scores are on frames it fitted" in e["warning"]
     assert set(e) >= {"all", "ungated", "onset_release", "ms_per_frame", "calibration"}
     # The same files `tactile eval detector --frames --reliability` writes.
     rows = csv.read_text().splitlines()
@@ -404,6 +405,7 @@ def test_eval_depth_scores_the_shipped_network_and_draws_heat_maps(root, small_v
     maps = tmp_path / "maps"
     e = tactile.eval.depth(root / "models/depth", small_vt, save_png=maps, png_frames=2)
     assert e["scores"]["frames"] == 24 and e["heat_maps"] == 2
+    assert "warning" not in e  # frames it never trained on
     assert 0.0 <= e["scores"]["mae_mm"] < 1.0 and -1.0 <= e["scores"]["ssim"] <= 1.0
     assert sorted(p.name for p in maps.iterdir()) == ["depth-000.png", "depth-001.png"]
     # A folder that already holds files is left alone.

@@ -79,6 +79,11 @@ pub struct SegmenterScores {
     /// Post-processing time per window (regions and direction): by the
     /// artifact's method, and by the principal-axis baseline.
     pub ms_postprocess: [f64; 2],
+    /// Set when the model's notes say it trained on every frame scored
+    /// ([`tactile_burn::artifact::scored_on_fitted`]): the words saying
+    /// these are not held-out scores, for the front ends to show.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
 }
 
 impl SegmenterScores {
@@ -125,6 +130,22 @@ pub const EVAL_CHUNK: usize = 512;
 /// Score `segmenter` on every tendon frame of `ds`.
 pub fn evaluate(segmenter: &mut TendonSegmenter, ds: &Dataset) -> Result<SegmenterScores> {
     evaluate_in_chunks(segmenter, ds, EVAL_CHUNK)
+}
+
+/// The segmenter in `model` scored on the labelled dataset in `data`
+/// ([`evaluate`]), with a warning when its notes say it trained on every
+/// one of those frames: what `tactile eval segmenter` and
+/// `tactile.eval.segmenter` print and return.
+pub fn evaluate_folder(
+    model: &std::path::Path,
+    data: &std::path::Path,
+    runtime: tactile_burn::Runtime,
+) -> Result<SegmenterScores> {
+    let mut seg = TendonSegmenter::load(model, runtime, 0)?;
+    let ds = Dataset::open(data)?;
+    let mut sc = evaluate(&mut seg, &ds)?;
+    sc.warning = tactile_burn::artifact::scored_on_fitted::<crate::SegmenterArtifact>(model, &ds);
+    Ok(sc)
 }
 
 /// [`evaluate`] reading `chunk_rows` tendon rows at a time (the scores do
@@ -216,5 +237,6 @@ pub fn evaluate_in_chunks(
         paths: table,
         ms_per_window: 1e3 * network_seconds / windows,
         ms_postprocess: post.map(|t| 1e3 * t / windows),
+        warning: None,
     })
 }

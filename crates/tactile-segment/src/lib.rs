@@ -18,7 +18,7 @@ pub mod training;
 pub use artifact::SegmenterArtifact;
 pub use data::SegmentSet;
 pub use error::{Error, Result};
-pub use eval::{DirectionScores, PathScores, SegmenterScores, evaluate};
+pub use eval::{DirectionScores, PathScores, SegmenterScores, evaluate, evaluate_folder};
 pub use inference::{Segmentation, TendonSegmenter};
 pub use model::{UNet, UNetConfig};
 pub use options::SegmenterOptions;

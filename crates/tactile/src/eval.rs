@@ -6,8 +6,6 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::{Args, Subcommand};
 use tactile_burn::DeviceKind;
-use tactile_core::dataset::Dataset;
-use tactile_segment::TendonSegmenter;
 
 #[derive(Subcommand)]
 pub(crate) enum EvalCmd {
@@ -59,7 +57,7 @@ pub(crate) fn main(cmd: EvalCmd) -> Result<()> {
 fn detector(a: DetectorArgs) -> Result<()> {
     let (m, o) = (&a.m, &a.options);
     let sc = tactile_detect::eval::evaluate_folder(&m.model, &m.data, m.device.runtime(), o)?;
-    warn_if_fitted::<tactile_detect::DetectorArtifact>(&m.model, &Dataset::open(&m.data)?);
+    warn(&sc.warning);
     if let Some(path) = &o.frames {
         tactile_core::note!("per-frame decisions in {}", path.display());
     }
@@ -75,10 +73,8 @@ fn detector(a: DetectorArgs) -> Result<()> {
 }
 
 fn segmenter(m: ModelArgs) -> Result<()> {
-    let mut seg = TendonSegmenter::load(&m.model, m.device.runtime(), 0)?;
-    let ds = Dataset::open(&m.data)?;
-    let sc = tactile_segment::evaluate(&mut seg, &ds)?;
-    warn_if_fitted::<tactile_segment::SegmenterArtifact>(&m.model, &ds);
+    let sc = tactile_segment::evaluate_folder(&m.model, &m.data, m.device.runtime())?;
+    warn(&sc.warning);
     sc.describe(m.device).iter().for_each(|l| say!("{l}"));
     say!(
         "{}",
@@ -90,7 +86,7 @@ fn segmenter(m: ModelArgs) -> Result<()> {
 fn depth(a: DepthArgs) -> Result<()> {
     let (m, o) = (&a.m, &a.options);
     let e = tactile_depth::eval::evaluate_folder(&m.model, &m.data, m.device.runtime(), o)?;
-    warn_if_fitted::<tactile_depth::DepthArtifact>(&m.model, &Dataset::open(&m.data)?);
+    warn(&e.warning);
     e.scores
         .describe(e.ms_per_frame, m.device)
         .iter()
@@ -106,10 +102,10 @@ fn depth(a: DepthArgs) -> Result<()> {
     Ok(())
 }
 
-/// Note on standard error when the model's notes say it trained on every
-/// frame just scored.
-fn warn_if_fitted<A: tactile_burn::Artifact>(model: &std::path::Path, ds: &Dataset) {
-    if let Some(w) = tactile_burn::artifact::scored_on_fitted::<A>(model, ds) {
+/// Note an evaluation's warning (scores on frames the model fitted) on
+/// standard error.
+fn warn(warning: &Option<String>) {
+    if let Some(w) = warning {
         tactile_core::note!("warning: {w}");
     }
 }

@@ -1749,6 +1749,14 @@ fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
             && msg.contains("so these scores are on frames it fitted"),
         "{msg}"
     );
+    // The record printed last keeps it, for a script reading the scores.
+    let record = last_json(&msg);
+    assert!(
+        record["warning"]
+            .as_str()
+            .is_some_and(|w| w.contains("every one of these 24 frames")),
+        "{record}"
+    );
     let text = std::fs::read_to_string(&csv).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], "file,tendon,probability,predicted,onset_release");
