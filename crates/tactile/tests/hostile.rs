@@ -36,31 +36,34 @@ fn shipped_network() -> PathBuf {
     }
 }
 
-/// Run `tactile args` under the address-space limit: (success, output).
-fn tactile(args: &[&str]) -> (bool, String) {
-    let out = Command::new("bash")
-        .arg("-c")
-        .arg("ulimit -v 4000000; exec \"$@\"")
-        .arg("tactile")
-        .arg(bin())
-        .args(args)
-        .output()
-        .unwrap();
+/// Run `command`: its exit and its standard output then error as text.
+fn run(command: &mut Command) -> (std::process::ExitStatus, String) {
+    let out = command.output().unwrap();
     let msg = format!(
         "{}{}",
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
+    (out.status, msg)
+}
+
+/// Run `tactile args` under the address-space limit: (success, output).
+fn tactile(args: &[&str]) -> (bool, String) {
+    let (status, msg) = run(Command::new("bash")
+        .arg("-c")
+        .arg("ulimit -v 4000000; exec \"$@\"")
+        .arg("tactile")
+        .arg(bin())
+        .args(args));
     assert!(
         !msg.contains("panicked") && !msg.contains("memory allocation"),
         "{args:?} panicked or aborted:\n{msg}"
     );
     assert!(
-        out.status.code().is_some(),
-        "{args:?} died of a signal ({:?}):\n{msg}",
-        out.status
+        status.code().is_some(),
+        "{args:?} died of a signal ({status:?}):\n{msg}"
     );
-    (out.status.success(), msg)
+    (status.success(), msg)
 }
 
 fn s(p: &Path) -> &str {
@@ -875,21 +878,10 @@ fn pipes_named_as_a_datasets_a_models_or_a_calibrations_files_are_refused_at_onc
     };
     let refused = |args: &[&str], pipe: &Path| {
         let t0 = Instant::now();
-        let out = Command::new("timeout")
+        let (status, msg) = run(Command::new("timeout")
             .args(["-s", "KILL", "60", bin()])
-            .args(args)
-            .output()
-            .unwrap();
-        let msg = format!(
-            "{}{}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        );
-        assert_eq!(
-            out.status.code(),
-            Some(1),
-            "{args:?} hung or crashed: {msg}"
-        );
+            .args(args));
+        assert_eq!(status.code(), Some(1), "{args:?} hung or crashed: {msg}");
         assert!(
             msg.contains(s(pipe)) && msg.contains("not a regular file"),
             "{args:?}: {msg}"
