@@ -126,10 +126,24 @@ fn main() -> std::process::ExitCode {
             std::process::ExitCode::from(130)
         }
         Err(e) => {
-            tactile_core::note!("Error: {e:#}");
+            tactile_core::note!("Error: {}", describe(&e));
             std::process::ExitCode::FAILURE
         }
     }
+}
+
+/// The error and each cause it does not already say (a file error names
+/// what the system said in its own words: "x: Not a directory (os error
+/// 20)", not that twice).
+fn describe(e: &anyhow::Error) -> String {
+    let mut message = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !message.contains(&cause) {
+            message = format!("{message}: {cause}");
+        }
+    }
+    message
 }
 
 fn dispatch(command: Command) -> Result<()> {

@@ -942,4 +942,16 @@ fn pipes_named_as_a_datasets_a_models_or_a_calibrations_files_are_refused_at_onc
         &options,
     );
     assert!(!cal.exists());
+    // What the system said is said once ("Not a directory (os error 20)"),
+    // not again as the error's cause.
+    let (_, msg) = run(Command::new(bin()).args([
+        "reconstruct",
+        "--model",
+        s(&root().join("models/gelsight-r15")),
+        "--data",
+        s(&options),
+        "--out",
+        s(&tmp.path().join("depth")),
+    ]));
+    assert_eq!(msg.matches("(os error").count(), 1, "{msg}");
 }
