@@ -124,24 +124,56 @@ pub const INCOMPLETE_FILE: &str = "INCOMPLETE";
 /// A training run in progress in a model folder: while it exists the folder
 /// holds [`INCOMPLETE_FILE`] and every loader refuses it, so an interrupted
 /// or failed run never leaves a complete-looking model (with an
-/// uncalibrated threshold, say).
+/// uncalibrated threshold, say). It also holds the folder's lock, so a
+/// second run into the same folder is refused instead of mixing its
+/// weights, curves and checkpoints with the first's.
 #[must_use = "call finish() when the model is complete"]
 pub struct Unfinished {
     marker: PathBuf,
+    _lock: FolderLock,
+}
+
+/// A model folder locked for one run writing into it (`flock` on the
+/// folder): a second run into the same folder is refused instead of
+/// mixing its files with the first's. The system releases it when the
+/// process ends, however it ends, so a killed run never blocks the next.
+pub struct FolderLock {
+    _held: std::fs::File,
+}
+
+impl FolderLock {
+    /// Lock `dir` (created if needed); refused while another run holds it.
+    pub fn acquire(dir: &Path) -> Result<Self> {
+        tactile_core::io::create_dir_all(dir)?;
+        let lock = std::fs::File::open(dir).map_err(|e| Error::io(dir, e))?;
+        match lock.try_lock() {
+            Ok(()) => Ok(Self { _held: lock }),
+            Err(std::fs::TryLockError::WouldBlock) => Err(Error::model(
+                dir,
+                "another training run is writing this model folder: wait for it to end, or give this run another output folder",
+            )),
+            Err(std::fs::TryLockError::Error(e)) => Err(Error::io(dir, e)),
+        }
+    }
 }
 
 impl Unfinished {
-    /// Mark `dir` (created if needed) as being trained.
+    /// Lock `dir` (created if needed, [`FolderLock`]) and mark it as being
+    /// trained; refused while another run holds it.
     pub fn begin(dir: &Path) -> Result<Self> {
+        let lock = FolderLock::acquire(dir)?;
         let marker = dir.join(INCOMPLETE_FILE);
         tactile_core::io::write_atomic(
             &marker,
             b"training in progress, or interrupted: this model is not complete\n",
         )?;
-        Ok(Self { marker })
+        Ok(Self {
+            marker,
+            _lock: lock,
+        })
     }
 
-    /// The model is complete: remove the mark.
+    /// The model is complete: remove the mark (and release the folder).
     pub fn finish(self) -> Result<()> {
         std::fs::remove_file(&self.marker).map_err(|e| Error::io(&self.marker, e))
     }
@@ -313,4 +345,26 @@ pub fn scored_on_fitted<A: Artifact>(
             )
         })
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folder_locked_by_one_run_is_refused_to_another_until_it_ends() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("model");
+        let first = Unfinished::begin(&dir).unwrap();
+        let e = FolderLock::acquire(&dir).err().unwrap().to_string();
+        assert!(
+            e.contains("another training run is writing this model folder"),
+            "{e}"
+        );
+        assert!(Unfinished::begin(&dir).is_err());
+        first.finish().unwrap();
+        drop(FolderLock::acquire(&dir).unwrap());
+        Unfinished::begin(&dir).unwrap().finish().unwrap();
+        assert!(!dir.join(INCOMPLETE_FILE).exists());
+    }
 }

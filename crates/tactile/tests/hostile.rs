@@ -775,6 +775,19 @@ fn interrupted_training_is_marked_and_resume_checks_its_checkpoint() {
         }
         seen.push_str(&String::from_utf8_lossy(&buf[..n]));
     }
+    // A second run into the folder while it trains is refused, not mixed
+    // in (its weights, curves and checkpoint with the first's).
+    for extra in [
+        &["--max-epochs", "3"][..],
+        &["--max-epochs", "400", "--resume"],
+    ] {
+        let args = train(extra);
+        let (ok, msg) = tactile(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(
+            !ok && msg.contains("another training run is writing this model folder"),
+            "{msg}"
+        );
+    }
     Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
