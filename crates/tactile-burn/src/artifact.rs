@@ -142,15 +142,14 @@ pub struct FolderLock {
 }
 
 impl FolderLock {
-    /// Lock `dir` (created if needed); refused while another run holds it.
+    /// Lock the folder `dir`; refused while another run holds it.
     pub fn acquire(dir: &Path) -> Result<Self> {
-        tactile_core::io::create_dir_all(dir)?;
         let lock = std::fs::File::open(dir).map_err(|e| Error::io(dir, e))?;
         match lock.try_lock() {
             Ok(()) => Ok(Self { _held: lock }),
             Err(std::fs::TryLockError::WouldBlock) => Err(Error::model(
                 dir,
-                "another training run is writing this model folder: wait for it to end, or give this run another output folder",
+                "another run is writing this model folder (training or calibrating it): wait for it to end, or give this run another output folder",
             )),
             Err(std::fs::TryLockError::Error(e)) => Err(Error::io(dir, e)),
         }
@@ -161,6 +160,7 @@ impl Unfinished {
     /// Lock `dir` (created if needed, [`FolderLock`]) and mark it as being
     /// trained; refused while another run holds it.
     pub fn begin(dir: &Path) -> Result<Self> {
+        tactile_core::io::create_dir_all(dir)?;
         let lock = FolderLock::acquire(dir)?;
         let marker = dir.join(INCOMPLETE_FILE);
         tactile_core::io::write_atomic(
@@ -358,7 +358,7 @@ mod tests {
         let first = Unfinished::begin(&dir).unwrap();
         let e = FolderLock::acquire(&dir).err().unwrap().to_string();
         assert!(
-            e.contains("another training run is writing this model folder"),
+            e.contains("another run is writing this model folder"),
             "{e}"
         );
         assert!(Unfinished::begin(&dir).is_err());

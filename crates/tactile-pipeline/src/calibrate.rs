@@ -51,6 +51,11 @@ pub fn calibrate_model(
     split: Option<&str>,
     from: Option<&Path>,
 ) -> Result<Calibrated> {
+    // Its configs are rewritten: never while another run writes them.
+    let _lock = model
+        .is_dir()
+        .then(|| tactile_burn::artifact::FolderLock::acquire(model))
+        .transpose()?;
     if RegressorEnsemble::is_in(model) {
         return calibrate_regressor(model, data, split, from);
     }

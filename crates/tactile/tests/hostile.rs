@@ -777,14 +777,16 @@ fn interrupted_training_is_marked_and_resume_checks_its_checkpoint() {
     }
     // A second run into the folder while it trains is refused, not mixed
     // in (its weights, curves and checkpoint with the first's).
-    for extra in [
-        &["--max-epochs", "3"][..],
-        &["--max-epochs", "400", "--resume"],
+    // So is a calibration, which rewrites its config.
+    let calibrate = ["train", "calibrate", "--model", s(&det), "--data", s(&vt)].map(String::from);
+    for args in [
+        train(&["--max-epochs", "3"]),
+        train(&["--max-epochs", "400", "--resume"]),
+        calibrate.to_vec(),
     ] {
-        let args = train(extra);
         let (ok, msg) = tactile(&args.iter().map(String::as_str).collect::<Vec<_>>());
         assert!(
-            !ok && msg.contains("another training run is writing this model folder"),
+            !ok && msg.contains("another run is writing this model folder"),
             "{msg}"
         );
     }
