@@ -172,8 +172,8 @@ pub fn open_regular(path: &Path) -> Result<std::fs::File> {
 
 /// The bytes of `path`, a file of at most `max_bytes`, naming the file
 /// when it is larger. The size is checked before the file is read, and the
-/// read stops past the limit, so a file that grows or lies about its size
-/// (a device, a pipe) is bounded too.
+/// read stops past the limit, so a file that grows while it is read is
+/// bounded too; a pipe or a device is refused unopened ([`open_regular`]).
 pub fn read_limited(path: impl AsRef<Path>, max_bytes: u64) -> Result<Vec<u8>> {
     use std::io::Read;
     let path = path.as_ref();

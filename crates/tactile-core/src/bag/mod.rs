@@ -149,8 +149,7 @@ const ZSTD_MAGIC: [u8; 4] = [0x28, 0xb5, 0x2f, 0xfd];
 /// One storage file: its bytes, decompressed when rosbag2 compressed the
 /// whole file (`.mcap.zstd`).
 fn open_storage(path: &Path) -> Result<Box<dyn Read + Send>> {
-    crate::io::expect_regular(path)?;
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::io::open_regular(path)?;
     if !has_suffix(path, ".zstd") {
         return Ok(Box::new(file));
     }
@@ -603,8 +602,7 @@ fn indexed_tallies(path: &Path) -> Option<Tallies> {
     if !is_bag_file(path) {
         return None;
     }
-    crate::io::expect_regular(path).ok()?;
-    let file = File::open(path).ok()?;
+    let file = crate::io::open_regular(path).ok()?;
     let size = file.metadata().ok()?.len();
     let mut index = IndexFile {
         file,
