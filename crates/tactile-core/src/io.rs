@@ -27,10 +27,48 @@ where
     persist_temp(tmp, path)
 }
 
-/// A temporary file in `path`'s folder (created if needed) that
-/// [`persist_temp`] moves to `path`; dropped before that, it leaves nothing.
+/// Where an output named `path` is written: `path` itself when nothing or
+/// a regular file is there; the file a symbolic link there names (so the
+/// link stays and the file it points at is replaced, as a shell's `>`
+/// does). Anything else is refused, naming it: a pipe, a device (such as
+/// `/dev/stdout`, a link to one) or a socket would be replaced by the
+/// renamed temporary file, not written into.
+pub fn output_path(path: &Path) -> Result<std::path::PathBuf> {
+    let Ok(link) = std::fs::symlink_metadata(path) else {
+        return Ok(path.to_path_buf());
+    };
+    let target = match link.file_type().is_symlink() {
+        false => path.to_path_buf(),
+        true => {
+            let named = std::fs::read_link(path).map_err(|e| Error::io(path, e))?;
+            match path.parent() {
+                Some(dir) if named.is_relative() => dir.join(named),
+                _ => named,
+            }
+        }
+    };
+    match std::fs::metadata(&target) {
+        // A link to nothing yet: the file it names.
+        Err(_) if link.file_type().is_symlink() => Ok(target),
+        Err(e) => Err(Error::io(path, e)),
+        Ok(m) if m.is_file() => Ok(target),
+        Ok(m) if m.is_dir() => Err(Error::Invalid(format!(
+            "{}: is a folder; give a file name for this output",
+            path.display()
+        ))),
+        Ok(_) => Err(Error::Invalid(format!(
+            "{}: is a pipe, a device or a socket, not a file: an output is written beside its place and renamed into it, which would replace it; give a file name (commands that stream to standard output take `--out -`)",
+            path.display()
+        ))),
+    }
+}
+
+/// A temporary file in the folder of `path`'s [`output_path`] (created if
+/// needed) that [`persist_temp`] moves there; dropped before that, it
+/// leaves nothing.
 pub fn temp_beside(path: impl AsRef<Path>) -> Result<tempfile::NamedTempFile> {
-    let path = path.as_ref();
+    let target = output_path(path.as_ref())?;
+    let path = target.as_path();
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -43,9 +81,11 @@ pub fn temp_beside(path: impl AsRef<Path>) -> Result<tempfile::NamedTempFile> {
         .map_err(|e| Error::io(path, e))
 }
 
-/// Move a finished [`temp_beside`] file to `path`.
+/// Move a finished [`temp_beside`] file to `path` (its [`output_path`],
+/// looked at again: nothing but a file is ever replaced).
 pub fn persist_temp(tmp: tempfile::NamedTempFile, path: impl AsRef<Path>) -> Result<()> {
-    let path = path.as_ref();
+    let target = output_path(path.as_ref())?;
+    let path = target.as_path();
     // Temporary files are private (0600); a finished output is an ordinary file.
     #[cfg(unix)]
     {
@@ -429,6 +469,69 @@ impl StagedDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn outputs_replace_files_write_through_links_and_refuse_pipes_and_devices() {
+        use std::os::unix::fs::FileTypeExt;
+        let tmp = tempfile::tempdir().unwrap();
+        let p = |n: &str| tmp.path().join(n);
+        let fifo = |q: &Path| {
+            let made = std::process::Command::new("mkfifo")
+                .arg(q)
+                .status()
+                .unwrap();
+            assert!(made.success());
+        };
+        std::fs::write(p("old.csv"), "old").unwrap();
+        std::os::unix::fs::symlink("old.csv", p("link.csv")).unwrap();
+        std::os::unix::fs::symlink("sub/new.csv", p("dangling.csv")).unwrap();
+        fifo(&p("pipe"));
+        std::os::unix::fs::symlink(p("pipe"), p("to-pipe")).unwrap();
+        std::os::unix::fs::symlink("/dev/null", p("to-null")).unwrap();
+        // A file is replaced; through a link, the file it names (the link stays).
+        write_atomic(p("link.csv"), b"new").unwrap();
+        assert!(
+            std::fs::symlink_metadata(p("link.csv"))
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read(p("old.csv")).unwrap(), b"new");
+        write_atomic(p("dangling.csv"), b"made").unwrap();
+        assert_eq!(std::fs::read(p("sub/new.csv")).unwrap(), b"made");
+        assert!(
+            std::fs::symlink_metadata(p("dangling.csv"))
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        // A pipe, a link to one or to a device is refused and stays as it was.
+        for q in ["pipe", "to-pipe", "to-null"] {
+            let e = write_atomic(p(q), b"x").unwrap_err().to_string();
+            assert!(
+                e.contains(q) && e.contains("is a pipe, a device or a socket"),
+                "{e}"
+            );
+            assert!(AtomicFile::create(p(q)).is_err(), "{q}");
+        }
+        assert!(std::fs::metadata(p("pipe")).unwrap().file_type().is_fifo());
+        assert!(
+            std::fs::symlink_metadata(p("to-null"))
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert!(!std::fs::metadata("/dev/null").unwrap().is_file());
+        let e = write_atomic(tmp.path(), b"x").unwrap_err().to_string();
+        assert!(e.contains("is a folder"), "{e}");
+        // Nothing temporary is left beside them.
+        let left: Vec<_> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".tactile-"))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+    }
 
     #[test]
     fn a_folder_is_told_from_a_file_and_from_nothing() {

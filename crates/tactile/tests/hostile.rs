@@ -883,7 +883,7 @@ fn a_long_prediction_stops_at_ctrl_c_and_writes_nothing() {
 }
 
 #[test]
-fn pipes_named_as_a_datasets_a_models_or_a_calibrations_files_are_refused_at_once() {
+fn pipes_in_place_of_a_file_read_or_written_are_refused_at_once() {
     // Opening a pipe blocks until something writes to it: each of these
     // would hang the command for ever. Each must be refused by name at once.
     let tmp = tempfile::tempdir().unwrap();
@@ -935,6 +935,37 @@ fn pipes_named_as_a_datasets_a_models_or_a_calibrations_files_are_refused_at_onc
         std::fs::rename(&keep, dir.join(file)).unwrap();
     }
     assert!(!out.exists());
+    // A pipe, or a link to one, named as the output is not replaced by the
+    // estimates (renamed into its place); a link to a file writes the file.
+    let pipe_out = tmp.path().join("est-pipe");
+    fifo(&pipe_out);
+    let link_out = tmp.path().join("est-link");
+    std::os::unix::fs::symlink(&pipe_out, &link_out).unwrap();
+    for o in [&pipe_out, &link_out] {
+        let (status, msg) = run(Command::new("timeout")
+            .args(["-s", "KILL", "60", bin(), "predict", "--model", s(&model)])
+            .args(["--data", s(&ds), "--out", s(o)]));
+        assert!(
+            status.code() == Some(1) && msg.contains("is a pipe, a device or a socket"),
+            "{msg}"
+        );
+    }
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata(&pipe_out).unwrap().file_type().is_fifo());
+    std::fs::remove_file(&link_out).unwrap();
+    std::os::unix::fs::symlink(&out, &link_out).unwrap();
+    let (status, msg) = run(Command::new(bin())
+        .args(["predict", "--model", s(&model), "--data", s(&ds)])
+        .args(["--out", s(&link_out)]));
+    assert!(status.success(), "{msg}");
+    assert!(
+        out.is_file()
+            && std::fs::symlink_metadata(&link_out)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+    );
+    std::fs::remove_file(&out).unwrap();
     // A calibration folder's sensor description and press list, and an
     // options file.
     let ball = tmp.path().join("ball");

@@ -696,12 +696,7 @@ pub fn check_output_file(out: &Path, datasets: &[&Dataset]) -> Result<()> {
     for ds in datasets {
         ds.refuse_as_output(out)?;
     }
-    if out.is_dir() {
-        return Err(Error::Invalid(format!(
-            "{}: is a folder; give a file name for this output",
-            out.display()
-        )));
-    }
+    let out = crate::io::output_path(out)?;
     crate::io::ensure_writable_parent(out)
 }
 
