@@ -34,22 +34,10 @@ where
 /// `/dev/stdout`, a link to one) or a socket would be replaced by the
 /// renamed temporary file, not written into.
 pub fn output_path(path: &Path) -> Result<std::path::PathBuf> {
-    let Ok(link) = std::fs::symlink_metadata(path) else {
-        return Ok(path.to_path_buf());
-    };
-    let target = match link.file_type().is_symlink() {
-        false => path.to_path_buf(),
-        true => {
-            let named = std::fs::read_link(path).map_err(|e| Error::io(path, e))?;
-            match path.parent() {
-                Some(dir) if named.is_relative() => dir.join(named),
-                _ => named,
-            }
-        }
-    };
+    let target = through_links(path)?;
     match std::fs::metadata(&target) {
-        // A link to nothing yet: the file it names.
-        Err(_) if link.file_type().is_symlink() => Ok(target),
+        // Nothing there yet (or a link to nothing yet: the file it names).
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(target),
         Err(e) => Err(Error::io(path, e)),
         Ok(m) if m.is_file() => Ok(target),
         Ok(m) if m.is_dir() => Err(Error::Invalid(format!(
@@ -61,6 +49,31 @@ pub fn output_path(path: &Path) -> Result<std::path::PathBuf> {
             path.display()
         ))),
     }
+}
+
+/// The path that `path` names once its symbolic links are followed (each
+/// relative one from its own folder), the last link's target even when
+/// nothing is there yet; `path` itself when it is no link. An output
+/// renamed into place lands there, replacing no link.
+pub fn through_links(path: &Path) -> Result<std::path::PathBuf> {
+    let mut here = path.to_path_buf();
+    // As the system's own limit on links followed (Linux: 40).
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&here) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let named = std::fs::read_link(&here).map_err(|e| Error::io(path, e))?;
+                here = match here.parent() {
+                    Some(dir) if named.is_relative() => dir.join(named),
+                    _ => named,
+                };
+            }
+            _ => return Ok(here),
+        }
+    }
+    Err(Error::Invalid(format!(
+        "{}: too many levels of symbolic links",
+        path.display()
+    )))
 }
 
 /// A temporary file in the folder of `path`'s [`output_path`] (created if
@@ -366,7 +379,15 @@ fn process_alive(pid: u32) -> bool {
 impl StagedDir {
     /// A staging folder for `target` (whose parent is created if needed).
     pub fn new(target: impl AsRef<Path>) -> Result<Self> {
-        let target = target.as_ref().to_path_buf();
+        // Through a link, the folder it names (the link stays).
+        let named = target.as_ref();
+        let target = through_links(named)?;
+        if std::fs::metadata(&target).is_ok_and(|m| !m.is_dir()) {
+            return Err(Error::Invalid(format!(
+                "{}: is a file, a pipe or a device, not a folder; give a folder for this output",
+                named.display()
+            )));
+        }
         let name = target
             .file_name()
             .ok_or_else(|| Error::Invalid(format!("{}: not a folder name", target.display())))?
@@ -524,6 +545,21 @@ mod tests {
         assert!(!std::fs::metadata("/dev/null").unwrap().is_file());
         let e = write_atomic(tmp.path(), b"x").unwrap_err().to_string();
         assert!(e.contains("is a folder"), "{e}");
+        // A folder output through a link fills the folder it names.
+        std::fs::create_dir(p("empty")).unwrap();
+        std::os::unix::fs::symlink("empty", p("to-empty")).unwrap();
+        let staged = StagedDir::fresh(p("to-empty")).unwrap();
+        std::fs::write(staged.path().join("f"), "a").unwrap();
+        staged.commit(false).unwrap();
+        assert_eq!(std::fs::read(p("empty/f")).unwrap(), b"a");
+        assert!(
+            std::fs::symlink_metadata(p("to-empty"))
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        let e = StagedDir::new(p("pipe")).err().unwrap().to_string();
+        assert!(e.contains("not a folder"), "{e}");
         // Nothing temporary is left beside them.
         let left: Vec<_> = std::fs::read_dir(tmp.path())
             .unwrap()
