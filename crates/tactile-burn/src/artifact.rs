@@ -154,14 +154,20 @@ impl FolderLock {
             Err(std::fs::TryLockError::Error(e)) => Err(Error::io(dir, e)),
         }
     }
+
+    /// [`Self::acquire`] of `dir`, created first if needed: the folder a
+    /// run is about to write a model into.
+    pub fn creating(dir: &Path) -> Result<Self> {
+        tactile_core::io::create_dir_all(dir)?;
+        Self::acquire(dir)
+    }
 }
 
 impl Unfinished {
     /// Lock `dir` (created if needed, [`FolderLock`]) and mark it as being
     /// trained; refused while another run holds it.
     pub fn begin(dir: &Path) -> Result<Self> {
-        tactile_core::io::create_dir_all(dir)?;
-        let lock = FolderLock::acquire(dir)?;
+        let lock = FolderLock::creating(dir)?;
         let marker = dir.join(INCOMPLETE_FILE);
         tactile_core::io::write_atomic(
             &marker,
