@@ -24,7 +24,7 @@ pub enum Error {
         path: PathBuf,
     },
     /// The output path is a file.
-    #[error("{}: output exists and is a file, not a folder", path.display())]
+    #[error("{}: output exists and is a file, a pipe or a device, not a folder", path.display())]
     OutputIsFile {
         /// The file.
         path: PathBuf,
