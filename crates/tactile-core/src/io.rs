@@ -324,7 +324,9 @@ pub fn ensure_writable_dir(dir: impl AsRef<Path>) -> Result<()> {
         ))
     };
     if dir.exists() && !dir.is_dir() {
-        return Err(refuse("it is a file".into()));
+        return Err(refuse(
+            "it is a file, a pipe or a device, not a folder".into(),
+        ));
     }
     tempfile::Builder::new()
         .prefix(".tactile-probe-")
