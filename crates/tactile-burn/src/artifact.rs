@@ -147,10 +147,9 @@ impl FolderLock {
         let lock = std::fs::File::open(dir).map_err(|e| Error::io(dir, e))?;
         match lock.try_lock() {
             Ok(()) => Ok(Self { _held: lock }),
-            Err(std::fs::TryLockError::WouldBlock) => Err(Error::model(
-                dir,
-                "another run is writing this model folder (training or calibrating it): wait for it to end, or give this run another output folder",
-            )),
+            Err(std::fs::TryLockError::WouldBlock) => Err(Error::Busy {
+                path: dir.to_path_buf(),
+            }),
             Err(std::fs::TryLockError::Error(e)) => Err(Error::io(dir, e)),
         }
     }

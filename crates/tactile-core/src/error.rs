@@ -114,6 +114,13 @@ pub enum Error {
         /// The path.
         path: PathBuf,
     },
+    /// A folder another run holds (its lock): trained or calibrated by
+    /// another process right now.
+    #[error("{}: another run is writing this model folder (training or calibrating it): wait for it to end, or give this run another output folder", path.display())]
+    Busy {
+        /// The folder.
+        path: PathBuf,
+    },
     /// Any other invalid input, described in words.
     #[error("{0}")]
     Invalid(String),

@@ -2,7 +2,8 @@
 //! message the command line prints: a missing file or folder is a
 //! `FileNotFoundError`, an unreadable one (or a pipe, a device or a
 //! folder where a file is read) an `OSError`, an output folder
-//! that holds other files a `FileExistsError`, a stop request a
+//! that holds other files a `FileExistsError`, a model folder another run
+//! is writing a `BlockingIOError`, a stop request a
 //! `KeyboardInterrupt`; onnxruntime missing or failing, a diverged or
 //! stalled training a `RuntimeError`; anything wrong with the input (a bad
 //! label, a model config out of range, a frame of the wrong shape) a
@@ -10,8 +11,8 @@
 
 use pyo3::PyErr;
 use pyo3::exceptions::{
-    PyFileExistsError, PyFileNotFoundError, PyKeyboardInterrupt, PyNotADirectoryError, PyOSError,
-    PyPermissionError, PyRuntimeError, PyValueError,
+    PyBlockingIOError, PyFileExistsError, PyFileNotFoundError, PyKeyboardInterrupt,
+    PyNotADirectoryError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
 };
 
 /// What kind of Python exception an error is.
@@ -23,6 +24,7 @@ pub(crate) enum Kind {
     Permission,
     Os,
     Interrupt,
+    Busy,
     Runtime,
     Value,
 }
@@ -39,6 +41,8 @@ fn core_kind(e: &tactile_core::Error) -> Kind {
         },
         // As Python's own `open` of a folder is an `IsADirectoryError`.
         E::NotRegularFile { .. } => Kind::Os,
+        // As Python's own `fcntl.flock(..., LOCK_NB)` of a held lock.
+        E::Busy { .. } => Kind::Busy,
         E::Diverged { .. } => Kind::Runtime,
         _ => Kind::Value,
     }
@@ -213,6 +217,7 @@ pub(crate) fn to_py<E: LibraryError>(e: E) -> PyErr {
         Kind::Permission => PyPermissionError::new_err(msg),
         Kind::Os => PyOSError::new_err(msg),
         Kind::Interrupt => PyKeyboardInterrupt::new_err(msg),
+        Kind::Busy => PyBlockingIOError::new_err(msg),
         Kind::Runtime => PyRuntimeError::new_err(msg),
         Kind::Value => PyValueError::new_err(msg),
     }
