@@ -51,21 +51,23 @@ pub fn output_path(path: &Path) -> Result<std::path::PathBuf> {
     }
 }
 
+/// Symbolic links followed in one path before it counts as a loop (as
+/// Linux's own limit): for outputs here and for a dataset's files
+/// ([`crate::dataset::resolve_inside`]).
+pub const MAX_LINKS: usize = 40;
+
 /// The path that `path` names once its symbolic links are followed (each
 /// relative one from its own folder), the last link's target even when
 /// nothing is there yet; `path` itself when it is no link. An output
 /// renamed into place lands there, replacing no link.
 pub fn through_links(path: &Path) -> Result<std::path::PathBuf> {
     let mut here = path.to_path_buf();
-    // As the system's own limit on links followed (Linux: 40).
-    for _ in 0..40 {
+    for _ in 0..MAX_LINKS {
         match std::fs::symlink_metadata(&here) {
             Ok(m) if m.file_type().is_symlink() => {
                 let named = std::fs::read_link(&here).map_err(|e| Error::io(path, e))?;
-                here = match here.parent() {
-                    Some(dir) if named.is_relative() => dir.join(named),
-                    _ => named,
-                };
+                // An absolute target replaces the folder it is joined to.
+                here = here.parent().unwrap_or(Path::new("")).join(named);
             }
             _ => return Ok(here),
         }
@@ -505,6 +507,12 @@ mod tests {
                 .unwrap();
             assert!(made.success());
         };
+        let is_link = |n: &str| {
+            std::fs::symlink_metadata(p(n))
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        };
         std::fs::write(p("old.csv"), "old").unwrap();
         std::os::unix::fs::symlink("old.csv", p("link.csv")).unwrap();
         std::os::unix::fs::symlink("sub/new.csv", p("dangling.csv")).unwrap();
@@ -513,21 +521,11 @@ mod tests {
         std::os::unix::fs::symlink("/dev/null", p("to-null")).unwrap();
         // A file is replaced; through a link, the file it names (the link stays).
         write_atomic(p("link.csv"), b"new").unwrap();
-        assert!(
-            std::fs::symlink_metadata(p("link.csv"))
-                .unwrap()
-                .file_type()
-                .is_symlink()
-        );
+        assert!(is_link("link.csv"));
         assert_eq!(std::fs::read(p("old.csv")).unwrap(), b"new");
         write_atomic(p("dangling.csv"), b"made").unwrap();
         assert_eq!(std::fs::read(p("sub/new.csv")).unwrap(), b"made");
-        assert!(
-            std::fs::symlink_metadata(p("dangling.csv"))
-                .unwrap()
-                .file_type()
-                .is_symlink()
-        );
+        assert!(is_link("dangling.csv"));
         // A pipe, a link to one or to a device is refused and stays as it was.
         for q in ["pipe", "to-pipe", "to-null"] {
             let e = write_atomic(p(q), b"x").unwrap_err().to_string();
@@ -538,12 +536,7 @@ mod tests {
             assert!(AtomicFile::create(p(q)).is_err(), "{q}");
         }
         assert!(std::fs::metadata(p("pipe")).unwrap().file_type().is_fifo());
-        assert!(
-            std::fs::symlink_metadata(p("to-null"))
-                .unwrap()
-                .file_type()
-                .is_symlink()
-        );
+        assert!(is_link("to-null"));
         assert!(!std::fs::metadata("/dev/null").unwrap().is_file());
         let e = write_atomic(tmp.path(), b"x").unwrap_err().to_string();
         assert!(e.contains("is a folder"), "{e}");
@@ -554,12 +547,7 @@ mod tests {
         std::fs::write(staged.path().join("f"), "a").unwrap();
         staged.commit(false).unwrap();
         assert_eq!(std::fs::read(p("empty/f")).unwrap(), b"a");
-        assert!(
-            std::fs::symlink_metadata(p("to-empty"))
-                .unwrap()
-                .file_type()
-                .is_symlink()
-        );
+        assert!(is_link("to-empty"));
         let e = StagedDir::new(p("pipe")).err().unwrap().to_string();
         assert!(e.contains("not a folder"), "{e}");
         // Nothing temporary is left beside them.

@@ -8,6 +8,8 @@
 
 use std::path::{Component, Path, PathBuf};
 
+use crate::io::MAX_LINKS;
+
 /// Why a path is refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Escape {
@@ -17,7 +19,7 @@ pub enum Escape {
     Parent,
     /// A symbolic link whose target is outside the folder.
     Link,
-    /// Links that point at each other (more than `MAX_LINKS`).
+    /// Links that point at each other (more than [`MAX_LINKS`]).
     Loop,
     /// An empty path.
     Empty,
@@ -38,9 +40,6 @@ impl Escape {
         }
     }
 }
-
-/// Symbolic links followed in one path before it counts as a loop.
-pub const MAX_LINKS: usize = 40;
 
 /// `a` with `.` removed and `..` applied, without touching the disk.
 fn lexical(a: &Path) -> PathBuf {
