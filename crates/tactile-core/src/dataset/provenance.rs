@@ -132,10 +132,11 @@ impl Provenance {
             .chain(more.then_some(None))
     }
 
-    /// How many of `rows` of `ds` it fitted: each dataset of
-    /// [`Self::fitted_sets`] holds them among the rows it fitted, the same
-    /// file or a copy (the same bytes under any name). The one rule of the
-    /// benches' marks and the calibration's warning.
+    /// How many of `rows` of `ds` it fitted: each dataset its notes name
+    /// (found from its folder `model_dir`, see [`Dataset::open_recorded`])
+    /// holds them among the rows it fitted, the same file or a copy (the
+    /// same bytes under any name). The one rule of the benches' marks and
+    /// the calibration's warning.
     pub fn seen(&self, model_dir: &Path, ds: &Dataset, rows: &[usize]) -> Seen {
         let asked: std::collections::HashSet<usize> = rows.iter().copied().collect();
         let mut held = std::collections::HashSet::new();
