@@ -207,8 +207,6 @@ pub fn bench_cae(b: &CaeBench) -> Result<CaeBenchResult> {
 impl CaeBenchResult {
     /// Write the table and, beside it, its row as JSON.
     pub fn write(&self, out: &Path) -> Result<()> {
-        tactile_core::io::write_atomic(out, self.markdown.as_bytes())?;
-        tactile_core::io::write_json_atomic(out.with_extension("json"), &[&self.row])?;
-        Ok(())
+        crate::output::write_markdown_and_json(out, &self.markdown, &[&self.row])
     }
 }

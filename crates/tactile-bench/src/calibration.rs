@@ -87,6 +87,7 @@ impl CalibrationReport {
     /// The page, with its plots written beside `out` (`NAME-speed.png`,
     /// `NAME-profiles.png`) and its numbers as `NAME.json`.
     pub fn write(&self, b: &CalibrationBench, command: &str, out: &Path) -> Result<String> {
+        let _page = crate::output::lock_page(out)?;
         let (speed_path, speed_png) = crate::output::picture_beside(out, "speed");
         let (profile_path, profile_png) = crate::output::picture_beside(out, "profiles");
         let e = b.options.exposure * 100.0;
@@ -224,7 +225,7 @@ impl CalibrationReport {
         md.push_str(&format!(
             "\n## Error against speed\n\n![speed]({speed_png})\n"
         ));
-        crate::output::write_markdown_and_json(out, &md, self)?;
+        crate::output::markdown_and_json(out, &md, self)?;
         Ok(md)
     }
 }

@@ -149,7 +149,7 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
             false => model_latencies::<DetectorArtifact>(m, shape, b.runs)?,
         };
         md.push_str(&format!(
-            "| {} | {:?} | {} | {}x{} | {params} | {} | {:.4} | {:.4} | {:.4} | {:.3} / {:.3} | {} | {} | {} |\n",
+            "| {} | {:?} | {} | {}x{} | {params} | {} | {:.4} | {:.4} | {:.4} | {:.3} / {} | {} | {} | {} |\n",
             folder_name(m),
             art.model.architecture,
             art.model.width,
@@ -160,7 +160,7 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
             sc.all.f1,
             sc.onset_release.accuracy,
             sc.calibration.ece,
-            sc.calibration.ece_uncertain,
+            sc.calibration.ece_uncertain_text(3),
             ms_cell(ms.ndarray),
             ms_cell(ms.flex),
             ms_cell(ms.onnxruntime),
@@ -188,6 +188,8 @@ pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
         y_label: "error (%)".into(),
         series,
         rows,
+        pictures: Vec::new(),
+        after_plot: String::new(),
     })
 }
 
@@ -292,6 +294,8 @@ pub fn bench_segmenters(b: &ModelBench) -> Result<Table<SegmenterMetrics>> {
         y_label: "1 - mean IoU".into(),
         series,
         rows,
+        pictures: Vec::new(),
+        after_plot: String::new(),
     })
 }
 
@@ -375,5 +379,7 @@ pub fn bench_depth(b: &ModelBench) -> Result<Table<DepthMetrics>> {
         y_label: "MAE in the window (mm)".into(),
         series,
         rows,
+        pictures: Vec::new(),
+        after_plot: String::new(),
     })
 }

@@ -1,7 +1,10 @@
 //! Writing a bench's results: the Markdown table, its plot and its rows as
-//! JSON, side by side.
+//! JSON, side by side. A page's files are written together under its
+//! folder's lock ([`lock_page`]), so two runs writing one page leave the
+//! files of one of them, never a mix.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use serde::Serialize;
 use tactile_core::plot::{Series, line_plot};
@@ -54,6 +57,47 @@ pub fn add_points(series: &mut Vec<Series>, ms: &RuntimeMs, error: f64) {
     }
 }
 
+/// How long a page's writer waits for another run writing in the same
+/// folder: a page is written in seconds, so past this the folder is held
+/// by something longer (a model trained into it).
+pub const PAGE_PATIENCE: Duration = Duration::from_secs(120);
+
+/// Lock the folder of the page `out` while its files are written: a second
+/// run writing a page there waits (up to [`PAGE_PATIENCE`]) until the first
+/// has written all of its files, then writes all of its own.
+pub fn lock_page(out: &Path) -> Result<tactile_core::io::FolderLock> {
+    let dir = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    tactile_core::io::create_dir_all(dir)?;
+    Ok(tactile_core::io::FolderLock::wait(dir, PAGE_PATIENCE)?)
+}
+
+/// Draws a picture to the path it is given.
+type Draw = Box<dyn Fn(&Path) -> Result<()> + Send + Sync>;
+
+/// A picture of a page, drawn when the page is written (under its lock),
+/// not while the bench runs.
+pub struct Picture {
+    path: PathBuf,
+    draw: Draw,
+}
+
+impl Picture {
+    /// The picture `path`, drawn by `draw(path)`.
+    pub fn new(path: PathBuf, draw: impl Fn(&Path) -> Result<()> + Send + Sync + 'static) -> Self {
+        Self {
+            path,
+            draw: Box::new(draw),
+        }
+    }
+
+    fn draw(&self) -> Result<()> {
+        (self.draw)(&self.path)
+    }
+}
+
 /// A bench's table with its plot: written as `out`, `out.png` and `out.json`.
 pub struct Table<M> {
     /// The Markdown, without the image link.
@@ -66,12 +110,21 @@ pub struct Table<M> {
     pub series: Vec<Series>,
     /// The rows.
     pub rows: Vec<BenchRow<M>>,
+    /// Further pictures the Markdown links, drawn with the page.
+    pub pictures: Vec<Picture>,
+    /// Markdown after the plot's link.
+    pub after_plot: String,
 }
 
 impl<M: Serialize> Table<M> {
-    /// Write the table, its plot (`NAME.png`) and its rows (`NAME.json`);
-    /// returns the Markdown with the image linked.
+    /// Write the table, its plot (`NAME.png`), its further pictures and
+    /// its rows (`NAME.json`), all under the page's lock; returns the
+    /// Markdown with the image linked.
     pub fn write(&self, out: &Path) -> Result<String> {
+        let _page = lock_page(out)?;
+        for p in &self.pictures {
+            p.draw()?;
+        }
         tactile_core::io::write_json_atomic(out.with_extension("json"), &self.rows)?;
         let png = out.with_extension("png");
         line_plot(
@@ -83,7 +136,10 @@ impl<M: Serialize> Table<M> {
             false,
         )?;
         let name = png.file_name().unwrap_or_default().to_string_lossy();
-        let md = format!("{}\n![{}]({name})\n", self.markdown, self.title);
+        let md = format!(
+            "{}\n![{}]({name})\n{}",
+            self.markdown, self.title, self.after_plot
+        );
         tactile_core::io::write_atomic(out, md.as_bytes())?;
         Ok(md)
     }
@@ -110,9 +166,75 @@ pub fn picture_beside(out: &Path, suffix: &str) -> (std::path::PathBuf, String) 
 }
 
 /// Write a bench's Markdown to `out` and its rows as JSON beside it
-/// (`out` with the extension `json`), each atomically.
+/// (`out` with the extension `json`), each atomically, under the page's lock.
 pub fn write_markdown_and_json<T: Serialize>(out: &Path, markdown: &str, rows: &T) -> Result<()> {
+    let _page = lock_page(out)?;
+    markdown_and_json(out, markdown, rows)
+}
+
+/// [`write_markdown_and_json`] for a writer that holds the page's lock.
+pub(crate) fn markdown_and_json<T: Serialize>(out: &Path, markdown: &str, rows: &T) -> Result<()> {
     tactile_core::io::write_atomic(out, markdown.as_bytes())?;
     tactile_core::io::write_json_atomic(out.with_extension("json"), rows)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Another run writing a page in the folder holds its lock: this run's
+    /// page files (Markdown, JSON and pictures) wait, then appear together.
+    #[test]
+    fn a_page_waits_for_another_run_writing_in_its_folder_then_writes_all_its_files() {
+        let tmp = tempfile::tempdir().unwrap();
+        let other = tactile_core::io::FolderLock::acquire(tmp.path()).unwrap();
+        let page = tmp.path().join("page.md");
+        let table = Table::<u32> {
+            markdown: "| model |\n|---|\n".into(),
+            title: "error against latency".into(),
+            y_label: "error".into(),
+            series: vec![Series {
+                name: "onnxruntime".into(),
+                points: vec![(1.0, 0.5), (2.0, 0.25)],
+            }],
+            rows: Vec::new(),
+            pictures: vec![Picture::new(tmp.path().join("page-extra.png"), |p| {
+                Ok(tactile_core::io::write_atomic(p, b"picture")?)
+            })],
+            after_plot: "after".into(),
+        };
+        let other_page = tmp.path().join("other.md");
+        let (md, plain) = std::thread::scope(|s| {
+            let table_run = s.spawn(|| table.write(&page));
+            let plain_run = s.spawn(|| write_markdown_and_json(&other_page, "plain", &[1, 2]));
+            std::thread::sleep(Duration::from_millis(400));
+            let written: Vec<_> = std::fs::read_dir(tmp.path())
+                .unwrap()
+                .map(|e| e.unwrap().file_name())
+                .collect();
+            assert!(
+                written.is_empty(),
+                "written while another run held the folder: {written:?}"
+            );
+            drop(other);
+            (table_run.join().unwrap(), plain_run.join().unwrap())
+        });
+        let md = md.unwrap();
+        plain.unwrap();
+        assert!(
+            md.ends_with("![error against latency](page.png)\nafter"),
+            "{md}"
+        );
+        assert_eq!(std::fs::read_to_string(&page).unwrap(), md);
+        for f in [
+            "page.png",
+            "page.json",
+            "page-extra.png",
+            "other.md",
+            "other.json",
+        ] {
+            assert!(tmp.path().join(f).is_file(), "{f} not written");
+        }
+    }
 }

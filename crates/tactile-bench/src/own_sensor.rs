@@ -396,6 +396,7 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
 impl OwnSensorReport {
     /// The page (its numbers as JSON beside it).
     pub fn write(&self, b: &OwnSensorBench, command: &str, out: &Path) -> Result<String> {
+        let _page = crate::output::lock_page(out)?;
         let mut md = String::new();
         md.push_str("# Your own sensor: from ball presses to a trained palpation pipeline\n\n");
         md.push_str(&format!(
@@ -475,7 +476,7 @@ impl OwnSensorReport {
         md.push_str(&format!(
             "\n## Pictures\n\nReal ball presses (top) and the same presses rendered through the calibration (bottom: the ball at the annotated circle, pressed as the gel's fit says; no noise):\n\n![presses]({press_png})\n\nHeld-out renders with their labels (mask in red, direction as an arrow):\n\n![renders]({renders_png})\n"
         ));
-        crate::output::write_markdown_and_json(out, &md, self)?;
+        crate::output::markdown_and_json(out, &md, self)?;
         Ok(md)
     }
 }

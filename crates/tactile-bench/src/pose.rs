@@ -295,5 +295,7 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
         y_label: "x MAE (mm)".into(),
         series,
         rows,
+        pictures: Vec::new(),
+        after_plot: String::new(),
     })
 }

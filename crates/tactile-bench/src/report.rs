@@ -17,7 +17,7 @@ use crate::models::{
     DepthMetrics, DetectorMetrics, ModelBench, SegmenterMetrics, bench_depth, bench_detectors,
     bench_segmenters,
 };
-use crate::output::BenchRow;
+use crate::output::{BenchRow, Picture};
 
 /// What the report runs on and where it goes.
 #[derive(Debug, Clone)]
@@ -333,21 +333,26 @@ pub fn report(r: &Report) -> Result<String> {
         runs: r.runs,
     };
     tactile_core::note!("bench detector");
-    let det = bench_detectors(&bench("detector", None))?;
-    let mut det_md = det.write(&t("detector.md"))?;
+    let mut det = bench_detectors(&bench("detector", None))?;
     if let Some(row) = det.rows.first() {
-        let c = &row.metrics.calibration;
-        tactile_detect::eval::save_reliability_plot(
-            c,
-            &t("detector-reliability.png"),
-            "Tendon detector: reliability on the held-out frames",
-        )?;
-        det_md.push_str(&format!(
-            "\nCalibration of the shipped detector on the same frames: expected calibration error {:.4} over 10 bins, {:.4} over the {} frames with a probability in [0.1, 0.9]; Brier score {:.4}.\n\n![Detector: reliability](detector-reliability.png)\n",
-            c.ece, c.ece_uncertain, c.uncertain_frames, c.brier
-        ));
-        tactile_core::io::write_atomic(t("detector.md"), det_md.as_bytes())?;
+        let c = row.metrics.calibration.clone();
+        det.after_plot = format!(
+            "\nCalibration of the shipped detector on the same frames: expected calibration error {:.4} over 10 bins, {} over the {} frames with a probability in [0.1, 0.9]; Brier score {:.4}.\n\n![Detector: reliability](detector-reliability.png)\n",
+            c.ece,
+            c.ece_uncertain_text(4),
+            c.uncertain_frames,
+            c.brier
+        );
+        det.pictures
+            .push(Picture::new(t("detector-reliability.png"), move |path| {
+                Ok(tactile_detect::eval::save_reliability_plot(
+                    &c,
+                    path,
+                    "Tendon detector: reliability on the held-out frames",
+                )?)
+            }));
     }
+    let det_md = det.write(&t("detector.md"))?;
     tactile_core::note!("bench segmenter");
     let seg = bench_segmenters(&bench("segmenter", None))?;
     let seg_md = seg.write(&t("segmenter.md"))?;

@@ -149,6 +149,7 @@ pub struct RobustnessResult {
 impl RobustnessResult {
     /// Write the table to `out` and its plot beside it (`NAME.png`).
     pub fn write(&self, out: &Path) -> Result<()> {
+        let _page = crate::output::lock_page(out)?;
         let png = out.with_extension("png");
         line_plot(
             &png,

@@ -14,7 +14,7 @@ use tactile_pipeline::tactip::Predictor;
 use crate::Result;
 use crate::latency::ms_cell;
 use crate::models::ModelBench;
-use crate::output::{BenchRow, Table, add_points, folder_name, header, picture_beside};
+use crate::output::{BenchRow, Picture, Table, add_points, folder_name, header, picture_beside};
 use crate::pose::Candidate;
 
 /// The targets, in the labels' units, with the authors' CNN's mean
@@ -170,8 +170,9 @@ fn saw_scored(c: &Candidate, model_dir: &std::path::Path, ds: &Dataset, rows: &[
 }
 
 /// Score every model folder of `b.models` on `b.data` (the surface set);
-/// with `out`, the first model's predictions are drawn against the truth
-/// beside it.
+/// with `out`, the first model's predictions against the truth, its error
+/// by tap depth and the intervals' coverage are pictures of the page,
+/// drawn beside it when the table is written.
 pub fn bench_surface(
     b: &ModelBench,
     out: Option<&std::path::Path>,
@@ -596,6 +597,7 @@ pub fn bench_surface(
     // The first model's error against tap depth, per target as a fraction of
     // reading no frame: one picture, whatever each target's unit.
     let mut relative_plot = None;
+    let mut pictures = Vec::new();
     if let (Some(pairs), Some(out), false) = (&first_pairs, out, train_median.is_empty()) {
         let tenths: Vec<&[usize]> = by_depth
             .chunks(by_depth.len().div_ceil(10).max(1))
@@ -648,14 +650,16 @@ pub fn bench_surface(
             points: vec![(depth_range.0, 1.0), (depth_range.1, 1.0)],
         });
         let (path, link) = picture_beside(out, "by-depth");
-        tactile_core::plot::line_plot(
-            &path,
-            "Error against tap depth, as a fraction of reading no frame",
-            "tap depth (mm; mean of each tenth of the scored frames)",
-            "MAE / MAE of each target's train median",
-            &series,
-            false,
-        )?;
+        pictures.push(Picture::new(path, move |path| {
+            Ok(tactile_core::plot::line_plot(
+                path,
+                "Error against tap depth, as a fraction of reading no frame",
+                "tap depth (mm; mean of each tenth of the scored frames)",
+                "MAE / MAE of each target's train median",
+                &series,
+                false,
+            )?)
+        }));
         relative_plot = Some(link);
     }
     md.push_str(&format!(
@@ -706,14 +710,16 @@ pub fn bench_surface(
                 .collect(),
         });
         let (path, link) = picture_beside(out, "coverage");
-        tactile_core::plot::line_plot(
-            &path,
-            "Interval coverage on frames the models never fitted",
-            "interval half-width (standard deviations)",
-            "fraction of errors inside (mean over targets)",
-            &coverage_series,
-            false,
-        )?;
+        pictures.push(Picture::new(path, move |path| {
+            Ok(tactile_core::plot::line_plot(
+                path,
+                "Interval coverage on frames the models never fitted",
+                "interval half-width (standard deviations)",
+                "fraction of errors inside (mean over targets)",
+                &coverage_series,
+                false,
+            )?)
+        }));
         md.push_str(&format!(
             "
 How often the error lies inside ±z standard deviations, for z from 0.25 to 3, mean over the targets, for the models that give a deviation and never fitted the scored frames (cross-fitted where they were calibrated on them: factors from one half, counted on the other), beside what normal and Laplace errors would give:
@@ -724,10 +730,12 @@ How often the error lies inside ±z standard deviations, for z from 0.25 to 3, m
     }
     if let (Some((name, panels)), Some(out)) = (first_panels, out) {
         let (path, link) = picture_beside(out, "scatter");
-        scatter_grid(&path, &panels, 3)?;
         md.push_str(&format!(
             "\nPredicted against true values of `{name}` on the scored frames, each point coloured by its error (dark: exact; yellow: the target's 95th percentile error or worse):\n\n![{name} predictions]({link})\n"
         ));
+        pictures.push(Picture::new(path, move |path| {
+            Ok(scatter_grid(path, &panels, 3)?)
+        }));
     }
     series.push(Series {
         name: "goal: every target at most 0.75x the authors' CNN".into(),
@@ -740,6 +748,8 @@ How often the error lies inside ±z standard deviations, for z from 0.25 to 3, m
         y_label: "worst target MAE / authors' CNN".into(),
         series,
         rows: table_rows,
+        pictures,
+        after_plot: String::new(),
     })
 }
 

@@ -163,6 +163,7 @@ impl SweepResult {
     /// Write the table to `out` and the plots beside it
     /// (`NAME-features.png`, `NAME-latency.png`).
     pub fn write(&self, out: &Path) -> Result<()> {
+        let _page = crate::output::lock_page(out)?;
         tactile_core::io::write_atomic(out, self.markdown.as_bytes())?;
         let stem = out.with_extension("");
         let name = stem.file_name().unwrap_or_default().to_string_lossy();

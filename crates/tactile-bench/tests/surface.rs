@@ -126,8 +126,11 @@ fn the_depth_table_sets_every_error_beside_an_estimate_that_reads_no_frame() {
     };
     let out = tmp.path().join("table.md");
     let table = bench_surface(&bench, Some(&out)).unwrap();
-    // The first model's error against depth, relative to reading no frame.
+    // The first model's error against depth, relative to reading no frame:
+    // a picture of the page, drawn with it (under its lock), not before.
     assert!(table.markdown.contains("](table-by-depth.png)"));
+    assert!(!tmp.path().join("table-by-depth.png").exists());
+    table.write(&out).unwrap();
     assert!(
         tmp.path()
             .join("table-by-depth.png")

@@ -130,43 +130,14 @@ pub const INCOMPLETE_FILE: &str = "INCOMPLETE";
 #[must_use = "call finish() when the model is complete"]
 pub struct Unfinished {
     marker: PathBuf,
-    _lock: FolderLock,
-}
-
-/// A model folder locked for one run writing into it (`flock` on the
-/// folder): a second run into the same folder is refused instead of
-/// mixing its files with the first's. The system releases it when the
-/// process ends, however it ends, so a killed run never blocks the next.
-pub struct FolderLock {
-    _held: std::fs::File,
-}
-
-impl FolderLock {
-    /// Lock the folder `dir`; refused while another run holds it.
-    pub fn acquire(dir: &Path) -> Result<Self> {
-        let lock = std::fs::File::open(dir).map_err(|e| Error::io(dir, e))?;
-        match lock.try_lock() {
-            Ok(()) => Ok(Self { _held: lock }),
-            Err(std::fs::TryLockError::WouldBlock) => Err(Error::Busy {
-                path: dir.to_path_buf(),
-            }),
-            Err(std::fs::TryLockError::Error(e)) => Err(Error::io(dir, e)),
-        }
-    }
-
-    /// [`Self::acquire`] of `dir`, created first if needed: the folder a
-    /// run is about to write a model into.
-    pub fn creating(dir: &Path) -> Result<Self> {
-        tactile_core::io::create_dir_all(dir)?;
-        Self::acquire(dir)
-    }
+    _lock: tactile_core::io::FolderLock,
 }
 
 impl Unfinished {
-    /// Lock `dir` (created if needed, [`FolderLock`]) and mark it as being
+    /// Lock `dir` (created if needed, [`tactile_core::io::FolderLock`]) and mark it as being
     /// trained; refused while another run holds it.
     pub fn begin(dir: &Path) -> Result<Self> {
-        let lock = FolderLock::creating(dir)?;
+        let lock = tactile_core::io::FolderLock::creating(dir)?;
         let marker = dir.join(INCOMPLETE_FILE);
         tactile_core::io::write_atomic(
             &marker,
@@ -361,14 +332,14 @@ mod tests {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("model");
         let first = Unfinished::begin(&dir).unwrap();
-        let e = FolderLock::acquire(&dir).err().unwrap().to_string();
-        assert!(
-            e.contains("another run is writing this model folder"),
-            "{e}"
-        );
+        let e = tactile_core::io::FolderLock::acquire(&dir)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("another run is writing this folder"), "{e}");
         assert!(Unfinished::begin(&dir).is_err());
         first.finish().unwrap();
-        drop(FolderLock::acquire(&dir).unwrap());
+        drop(tactile_core::io::FolderLock::acquire(&dir).unwrap());
         Unfinished::begin(&dir).unwrap().finish().unwrap();
         assert!(!dir.join(INCOMPLETE_FILE).exists());
     }

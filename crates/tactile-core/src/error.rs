@@ -114,9 +114,9 @@ pub enum Error {
         /// The path.
         path: PathBuf,
     },
-    /// A folder another run holds (its lock): trained or calibrated by
-    /// another process right now.
-    #[error("{}: another run is writing this model folder (training or calibrating it): wait for it to end, or give this run another output folder", path.display())]
+    /// A folder another run holds (its lock): a model trained or
+    /// calibrated, or a page written, by another process right now.
+    #[error("{}: another run is writing this folder (training or calibrating a model, or writing a page there): wait for it to end, or give this run another output folder", path.display())]
     Busy {
         /// The folder.
         path: PathBuf,

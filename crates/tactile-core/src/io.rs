@@ -166,12 +166,13 @@ pub fn write_json_atomic<T: serde::Serialize>(path: impl AsRef<Path>, value: &T)
 pub const MAX_JSON_BYTES: u64 = 64 << 20;
 
 /// `dir` is a folder (`what`: "dataset folder", "model folder"): a path
-/// that does not exist is [`Error::not_found`], a file is a folder of the
-/// wrong kind ("not a model folder (a file)").
+/// that does not exist is [`Error::not_found`], a file (or a pipe) is a
+/// folder of the wrong kind ("not a model folder (a file)").
 pub fn expect_folder(dir: &Path, what: &str) -> Result<()> {
     match std::fs::metadata(dir) {
         Ok(m) if m.is_dir() => Ok(()),
-        Ok(_) => Err(Error::wrong_kind(dir, what, "a file")),
+        Ok(m) if m.is_file() => Err(Error::wrong_kind(dir, what, "a file")),
+        Ok(_) => Err(Error::wrong_kind(dir, what, "a pipe, a device or a socket")),
         Err(_) => Err(Error::not_found(dir, what)),
     }
 }
@@ -363,6 +364,66 @@ pub fn ensure_writable_parent(file: impl AsRef<Path>) -> Result<()> {
     ensure_writable_dir(file.as_ref().parent().unwrap_or(Path::new(".")))
 }
 
+/// A folder locked for one run writing into it (`flock` on the folder): a
+/// second run into the same folder is refused, or waits, instead of mixing
+/// its files with the first's. The system releases it when the process
+/// ends, however it ends, so a killed run never blocks the next.
+pub struct FolderLock {
+    _held: std::fs::File,
+}
+
+impl FolderLock {
+    /// Lock the folder `dir`; refused ([`Error::Busy`]) while another run
+    /// holds it.
+    pub fn acquire(dir: &Path) -> Result<Self> {
+        let lock = open_folder(dir)?;
+        match lock.try_lock() {
+            Ok(()) => Ok(Self { _held: lock }),
+            Err(std::fs::TryLockError::WouldBlock) => Err(Error::Busy {
+                path: dir.to_path_buf(),
+            }),
+            Err(std::fs::TryLockError::Error(e)) => Err(Error::io(dir, e)),
+        }
+    }
+
+    /// [`Self::acquire`] of `dir`, created first if needed: the folder a
+    /// run is about to write a model into.
+    pub fn creating(dir: &Path) -> Result<Self> {
+        create_dir_all(dir)?;
+        Self::acquire(dir)
+    }
+
+    /// Lock `dir`, waiting up to `patience` while another run holds it
+    /// ([`Error::Busy`] after that): for writes that take a moment, such
+    /// as the files of one page, which a second run should follow rather
+    /// than be refused.
+    pub fn wait(dir: &Path, patience: std::time::Duration) -> Result<Self> {
+        let lock = open_folder(dir)?;
+        let start = std::time::Instant::now();
+        loop {
+            match lock.try_lock() {
+                Ok(()) => return Ok(Self { _held: lock }),
+                Err(std::fs::TryLockError::WouldBlock) if start.elapsed() < patience => {
+                    std::thread::sleep(std::time::Duration::from_millis(50));
+                }
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    return Err(Error::Busy {
+                        path: dir.to_path_buf(),
+                    });
+                }
+                Err(std::fs::TryLockError::Error(e)) => return Err(Error::io(dir, e)),
+            }
+        }
+    }
+}
+
+/// `dir` opened to be locked: refused unless it is a folder, so a pipe
+/// there is named, never waited on.
+fn open_folder(dir: &Path) -> Result<std::fs::File> {
+    expect_folder(dir, "folder to write into")?;
+    std::fs::File::open(dir).map_err(|e| Error::io(dir, e))
+}
+
 /// A folder written in full before it appears. Files go into a hidden
 /// staging folder beside the target (`.NAME.partial-PID-XXXX`), unique to
 /// the run, so concurrent runs never mix; [`StagedDir::commit`] renames it
@@ -494,6 +555,43 @@ impl StagedDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_held_folder_is_refused_at_once_or_after_the_wait_and_a_pipe_is_never_waited_on() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("model");
+        let held = FolderLock::creating(&dir).unwrap();
+        let busy = |r: Result<FolderLock>| matches!(r, Err(Error::Busy { .. }));
+        assert!(busy(FolderLock::acquire(&dir)));
+        let start = std::time::Instant::now();
+        assert!(busy(FolderLock::wait(
+            &dir,
+            std::time::Duration::from_millis(200)
+        )));
+        assert!(start.elapsed() >= std::time::Duration::from_millis(200));
+        let waiting = std::thread::spawn({
+            let dir = dir.clone();
+            move || FolderLock::wait(&dir, std::time::Duration::from_secs(60)).map(drop)
+        });
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        drop(held);
+        waiting.join().unwrap().unwrap();
+        let pipe = tmp.path().join("pipe");
+        let made = std::process::Command::new("mkfifo").arg(&pipe).status();
+        if made.is_ok_and(|s| s.success()) {
+            for r in [
+                FolderLock::acquire(&pipe),
+                FolderLock::wait(&pipe, std::time::Duration::from_secs(60)),
+            ] {
+                let e = r.err().unwrap();
+                assert!(matches!(e, Error::WrongKind { .. }), "{e}");
+                assert!(
+                    e.to_string().contains("a pipe, a device or a socket"),
+                    "{e}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn outputs_replace_files_write_through_links_and_refuse_pipes_and_devices() {

@@ -300,6 +300,18 @@ pub struct Calibration {
     pub brier: f64,
 }
 
+impl Calibration {
+    /// [`Self::ece_uncertain`] with `decimals` for a table or a sentence:
+    /// "-" when no frame had a probability in [0.1, 0.9], not "NaN".
+    pub fn ece_uncertain_text(&self, decimals: usize) -> String {
+        if self.uncertain_frames == 0 || !self.ece_uncertain.is_finite() {
+            "-".into()
+        } else {
+            format!("{:.decimals$}", self.ece_uncertain)
+        }
+    }
+}
+
 /// Reliability over `bins` equal-width bins (at least 1) of the predicted
 /// probabilities `p` against the labels `truth`. Non-finite probabilities
 /// count in no bin.
@@ -558,12 +570,14 @@ mod reservoir_tests {
         assert!(c.ece.abs() < 1e-6, "{c:?}");
         assert_eq!(c.bins[3].frames, 10);
         assert_eq!(c.uncertain_frames, 10);
+        assert_eq!(c.ece_uncertain_text(3), "0.000");
         // Probability 0.95 on frames that are positive half the time.
         let p = vec![0.95f32; 10];
         let t: Vec<bool> = (0..10).map(|i| i % 2 == 0).collect();
         let c = calibration(&p, &t, 10);
         assert!((c.ece - 0.45).abs() < 1e-6, "{c:?}");
         assert!(c.ece_uncertain.is_nan());
+        assert_eq!(c.ece_uncertain_text(3), "-", "tables say no frame, not NaN");
         assert!((c.brier - (0.5 * 0.05f64.powi(2) + 0.5 * 0.95f64.powi(2))).abs() < 1e-6);
         // NaN probabilities are skipped, not binned.
         let c = calibration(&[f32::NAN, 1.0], &[true, true], 5);

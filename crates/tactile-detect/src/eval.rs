@@ -82,9 +82,9 @@ impl DetectorScores {
                 st.frames, st.accuracy, st.false_pos, st.false_neg
             ),
             format!(
-                "calibration: expected calibration error {:.4} over {CALIBRATION_BINS} bins, {:.4} over the {} frames with a probability in [0.1, 0.9]; Brier score {:.4}",
+                "calibration: expected calibration error {:.4} over {CALIBRATION_BINS} bins, {} over the {} frames with a probability in [0.1, 0.9]; Brier score {:.4}",
                 self.calibration.ece,
-                self.calibration.ece_uncertain,
+                self.calibration.ece_uncertain_text(4),
                 self.calibration.uncertain_frames,
                 self.calibration.brier
             ),

@@ -54,7 +54,7 @@ pub fn calibrate_model(
     // Its configs are rewritten: never while another run writes them.
     let _lock = model
         .is_dir()
-        .then(|| tactile_burn::artifact::FolderLock::acquire(model))
+        .then(|| tactile_core::io::FolderLock::acquire(model))
         .transpose()?;
     if RegressorEnsemble::is_in(model) {
         return calibrate_regressor(model, data, split, from);

@@ -840,7 +840,7 @@ pub fn train_head(
         None => serde_json::json!({}),
     });
     // Weights and config of one run, never of two into the same folder.
-    let _lock = tactile_burn::artifact::FolderLock::creating(out)?;
+    let _lock = tactile_core::io::FolderLock::creating(out)?;
     head.save(out)?;
     // The test frames: the `--test` set's, else the `split` column's.
     let test_rows = match test {
@@ -1087,7 +1087,7 @@ pub fn train_regressor(
             }),
         )
         .notes(serde_json::json!({}));
-    let _lock = tactile_burn::artifact::FolderLock::creating(out)?;
+    let _lock = tactile_core::io::FolderLock::creating(out)?;
     regressor.save(out)?;
     let test_mae = if sx.is_empty() {
         Vec::new()

@@ -166,7 +166,7 @@ def test_ctrl_c_stops_training_and_marks_it_incomplete(small_vt, tmp_path):
         time.sleep(0.2)
     # A second run into the folder while the first trains: refused, as a
     # held lock is (fcntl.flock's BlockingIOError), not mixed in.
-    with pytest.raises(BlockingIOError, match="another run is writing this model folder"):
+    with pytest.raises(BlockingIOError, match="another run is writing this folder"):
         tactile.train.detector(small_vt, out, width=0.25, input=(64, 48), max_epochs=1)
     _interrupt(p)
     assert (out / "INCOMPLETE").is_file()

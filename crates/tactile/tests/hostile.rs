@@ -786,7 +786,7 @@ fn interrupted_training_is_marked_and_resume_checks_its_checkpoint() {
     ] {
         let (ok, msg) = tactile(&args.iter().map(String::as_str).collect::<Vec<_>>());
         assert!(
-            !ok && msg.contains("another run is writing this model folder"),
+            !ok && msg.contains("another run is writing this folder"),
             "{msg}"
         );
     }
