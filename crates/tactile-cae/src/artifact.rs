@@ -70,6 +70,8 @@ pub fn add_pin_alignment(
     datasets: &[tactile_core::dataset::Dataset],
 ) -> crate::Result<(tactile_preprocess::align::PinAlign, usize)> {
     use rayon::prelude::*;
+    // Its config is rewritten: never while another run writes it.
+    let _lock = tactile_core::io::FolderLock::of_existing(dir)?;
     let mut artifact = CaeArtifact::read(dir)?;
     let mut angles = Vec::new();
     for ds in datasets {

@@ -393,6 +393,13 @@ impl FolderLock {
         Self::acquire(dir)
     }
 
+    /// [`Self::acquire`] of `dir` when it is a folder, before its configs
+    /// are read and rewritten; `None` when it is not, so the reader that
+    /// follows names what is there instead.
+    pub fn of_existing(dir: &Path) -> Result<Option<Self>> {
+        dir.is_dir().then(|| Self::acquire(dir)).transpose()
+    }
+
     /// Lock `dir`, waiting up to `patience` while another run holds it
     /// ([`Error::Busy`] after that): for writes that take a moment, such
     /// as the files of one page, which a second run should follow rather

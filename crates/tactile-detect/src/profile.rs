@@ -64,6 +64,9 @@ pub fn add_input_profile(dir: &Path, datasets: &[Dataset]) -> Result<InputProfil
             tactile_core::Error::Invalid("an ensemble without members".into()).into()
         });
     }
+    // Its config is rewritten: never while another run writes it (a lost
+    // update of `train calibrate`'s threshold, say).
+    let _lock = tactile_core::io::FolderLock::of_existing(dir)?;
     let mut artifact = DetectorArtifact::read(dir)?;
     let sets = datasets
         .iter()

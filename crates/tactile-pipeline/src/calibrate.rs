@@ -52,10 +52,7 @@ pub fn calibrate_model(
     from: Option<&Path>,
 ) -> Result<Calibrated> {
     // Its configs are rewritten: never while another run writes them.
-    let _lock = model
-        .is_dir()
-        .then(|| tactile_core::io::FolderLock::acquire(model))
-        .transpose()?;
+    let _lock = tactile_core::io::FolderLock::of_existing(model)?;
     if RegressorEnsemble::is_in(model) {
         return calibrate_regressor(model, data, split, from);
     }

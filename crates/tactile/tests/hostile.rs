@@ -777,12 +777,15 @@ fn interrupted_training_is_marked_and_resume_checks_its_checkpoint() {
     }
     // A second run into the folder while it trains is refused, not mixed
     // in (its weights, curves and checkpoint with the first's).
-    // So is a calibration, which rewrites its config.
-    let calibrate = ["train", "calibrate", "--model", s(&det), "--data", s(&vt)].map(String::from);
+    // So are a calibration and a refit of the input profile, which rewrite
+    // its config.
+    let rewrite =
+        |what: &str| ["train", what, "--model", s(&det), "--data", s(&vt)].map(String::from);
     for args in [
         train(&["--max-epochs", "3"]),
         train(&["--max-epochs", "400", "--resume"]),
-        calibrate.to_vec(),
+        rewrite("calibrate").to_vec(),
+        rewrite("profile").to_vec(),
     ] {
         let (ok, msg) = tactile(&args.iter().map(String::as_str).collect::<Vec<_>>());
         assert!(
