@@ -93,6 +93,20 @@ impl Picture {
         }
     }
 
+    /// A line plot ([`line_plot`]) of `series`, linear axes.
+    pub fn lines(
+        path: PathBuf,
+        title: &str,
+        x_label: &str,
+        y_label: &str,
+        series: Vec<Series>,
+    ) -> Self {
+        let [title, x_label, y_label] = [title, x_label, y_label].map(String::from);
+        Self::new(path, move |path| {
+            Ok(line_plot(path, &title, &x_label, &y_label, &series, false)?)
+        })
+    }
+
     fn draw(&self) -> Result<()> {
         (self.draw)(&self.path)
     }

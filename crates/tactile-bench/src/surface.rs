@@ -650,16 +650,13 @@ pub fn bench_surface(
             points: vec![(depth_range.0, 1.0), (depth_range.1, 1.0)],
         });
         let (path, link) = picture_beside(out, "by-depth");
-        pictures.push(Picture::new(path, move |path| {
-            Ok(tactile_core::plot::line_plot(
-                path,
-                "Error against tap depth, as a fraction of reading no frame",
-                "tap depth (mm; mean of each tenth of the scored frames)",
-                "MAE / MAE of each target's train median",
-                &series,
-                false,
-            )?)
-        }));
+        pictures.push(Picture::lines(
+            path,
+            "Error against tap depth, as a fraction of reading no frame",
+            "tap depth (mm; mean of each tenth of the scored frames)",
+            "MAE / MAE of each target's train median",
+            series,
+        ));
         relative_plot = Some(link);
     }
     md.push_str(&format!(
@@ -710,16 +707,13 @@ pub fn bench_surface(
                 .collect(),
         });
         let (path, link) = picture_beside(out, "coverage");
-        pictures.push(Picture::new(path, move |path| {
-            Ok(tactile_core::plot::line_plot(
-                path,
-                "Interval coverage on frames the models never fitted",
-                "interval half-width (standard deviations)",
-                "fraction of errors inside (mean over targets)",
-                &coverage_series,
-                false,
-            )?)
-        }));
+        pictures.push(Picture::lines(
+            path,
+            "Interval coverage on frames the models never fitted",
+            "interval half-width (standard deviations)",
+            "fraction of errors inside (mean over targets)",
+            coverage_series,
+        ));
         md.push_str(&format!(
             "
 How often the error lies inside ±z standard deviations, for z from 0.25 to 3, mean over the targets, for the models that give a deviation and never fitted the scored frames (cross-fitted where they were calibrated on them: factors from one half, counted on the other), beside what normal and Laplace errors would give:
