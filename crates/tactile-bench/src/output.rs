@@ -62,6 +62,16 @@ pub fn add_points(series: &mut Vec<Series>, ms: &RuntimeMs, error: f64) {
 /// by something longer (a model trained into it).
 pub const PAGE_PATIENCE: Duration = Duration::from_secs(120);
 
+/// Before a bench runs: its page `out` and the rows beside it
+/// (`NAME.json`) can be written, and neither is a model's file (a page
+/// `m/pose.md` would put its rows over `m/pose.json`).
+pub fn check_page(out: &Path) -> Result<()> {
+    for f in [out.to_path_buf(), out.with_extension("json")] {
+        tactile_core::dataset::check_output_file(&f, &[])?;
+    }
+    Ok(())
+}
+
 /// Lock the folder of the page `out` while its files are written: a second
 /// run writing a page there waits (up to [`PAGE_PATIENCE`]) until the first
 /// has written all of its files, then writes all of its own.

@@ -51,6 +51,44 @@ pub fn output_path(path: &Path) -> Result<std::path::PathBuf> {
     }
 }
 
+/// Entries of a folder looked at to tell whether it holds a model
+/// ([`refuse_model_file`]); a model folder holds a handful.
+const MAX_MODEL_FOLDER_ENTRIES: usize = 10_000;
+
+/// Refuse an output `out` (written at `target`, [`output_path`]) that
+/// would replace a file a model is loaded from: a config, notes or weights
+/// (`*.json`, `*.bpk`) of a model folder, one that holds weights (`*.bpk`)
+/// or an `ensemble.json`. `predict --out m/pose.json` would otherwise
+/// write estimates over the model's config, and a bench page
+/// `m/pose.md` its rows over it (`m/pose.json`). Its other files (curves,
+/// plots, exports) and new files may be written.
+pub fn refuse_model_file(out: &Path, target: &Path) -> Result<()> {
+    let ext = target.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !matches!(ext, "json" | "bpk") || !target.is_file() {
+        return Ok(());
+    }
+    let dir = target
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    let model = ext == "bpk"
+        || entries.take(MAX_MODEL_FOLDER_ENTRIES).flatten().any(|e| {
+            let name = std::path::PathBuf::from(e.file_name());
+            name == Path::new("ensemble.json") || name.extension().is_some_and(|x| x == "bpk")
+        });
+    if model {
+        return Err(Error::Invalid(format!(
+            "{}: is a file of the model in {} (its config, notes or weights); writing this output over it would break the model, so nothing was done: give another file name",
+            out.display(),
+            dir.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Symbolic links followed in one path before it counts as a loop (as
 /// Linux's own limit): for outputs here and for a dataset's files
 /// ([`crate::dataset::resolve_inside`]).
@@ -562,6 +600,48 @@ impl StagedDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn outputs_never_replace_what_a_model_is_loaded_from() {
+        let tmp = tempfile::tempdir().unwrap();
+        let write = |p: &Path| std::fs::write(p, b"{}").unwrap();
+        let (net, ens, plain) = (
+            tmp.path().join("net"),
+            tmp.path().join("ens"),
+            tmp.path().join("results"),
+        );
+        for d in [&net, &ens, &ens.join("member-0"), &plain] {
+            std::fs::create_dir_all(d).unwrap();
+        }
+        for f in ["pose.json", "pose.bpk", "training.json", "curves.csv"] {
+            write(&net.join(f));
+        }
+        write(&ens.join("ensemble.json"));
+        write(&ens.join("member-0/pose.json"));
+        write(&ens.join("member-0/pose.bpk"));
+        write(&plain.join("scores.json"));
+        let check = |p: std::path::PathBuf| refuse_model_file(&p, &output_path(&p).unwrap());
+        for refused in [
+            net.join("pose.json"),
+            net.join("pose.bpk"),
+            net.join("training.json"),
+            ens.join("ensemble.json"),
+            ens.join("member-0/pose.json"),
+        ] {
+            let e = check(refused.clone()).err().unwrap().to_string();
+            assert!(e.contains("is a file of the model in"), "{e}");
+        }
+        // A link to a model's config is the config.
+        std::os::unix::fs::symlink(net.join("pose.json"), tmp.path().join("link.json")).unwrap();
+        assert!(check(tmp.path().join("link.json")).is_err());
+        for allowed in [
+            net.join("curves.csv"),
+            net.join("estimates.json"),
+            plain.join("scores.json"),
+        ] {
+            check(allowed.clone()).unwrap_or_else(|e| panic!("{}: {e}", allowed.display()));
+        }
+    }
 
     #[test]
     fn a_held_folder_is_refused_at_once_or_after_the_wait_and_a_pipe_is_never_waited_on() {

@@ -258,6 +258,13 @@ def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, 
     with pytest.raises(ValueError, match="this output is the input"):
         tactile.predict(root / "models/pose-surface", folder / Path(names[0]).name,
                         folder / Path(names[0]).name)
+    # Nor a model's config: its estimates over `pose.json` would break it.
+    model = tmp_path / "model"
+    shutil.copytree(root / "models/pose-edge", model)
+    config = (model / "pose.json").read_bytes()
+    with pytest.raises(ValueError, match="pose.json: is a file of the model in"):
+        tactile.predict(model, folder, model / "pose.json")
+    assert (model / "pose.json").read_bytes() == config
     # A frame of another camera (the virtual TacTip's 300x300, smaller than
     # the model's 440 px crop) among them: still estimated, with one Python
     # warning naming it.

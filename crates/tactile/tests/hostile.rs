@@ -598,6 +598,54 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
         std::fs::read_to_string(ds.join("labels.csv")).unwrap(),
         labels
     );
+    // Nor does an output replace a model's config, notes or weights, named
+    // or beside a bench page; its other files and new ones may be written.
+    let m = tmp.path().join("m");
+    std::fs::create_dir(&m).unwrap();
+    for f in ["pose.json", "pose.bpk", "training.json", "curves.csv"] {
+        std::fs::copy(root().join("models/pose-edge").join(f), m.join(f)).unwrap();
+    }
+    let config = std::fs::read(m.join("pose.json")).unwrap();
+    let predict = |out: &Path| {
+        tactile(&[
+            "predict",
+            "--model",
+            s(&m),
+            "--data",
+            s(&ds),
+            "--out",
+            s(out),
+        ])
+    };
+    for out in ["pose.json", "pose.bpk", "training.json"] {
+        let (ok, msg) = predict(&m.join(out));
+        assert!(
+            !ok && msg.contains("is a file of the model in"),
+            "{out}: {msg}"
+        );
+    }
+    let (ok, msg) = tactile(&["export", "--model", s(&m), "--out", s(&m.join("pose.json"))]);
+    assert!(!ok && msg.contains("is a file of the model in"), "{msg}");
+    let (ok, msg) = tactile(&[
+        "bench",
+        "pose",
+        "--models",
+        s(&m),
+        "--data",
+        s(&ds),
+        "--out",
+        s(&m.join("pose.md")),
+    ]);
+    assert!(
+        !ok && msg.contains("m/pose.json: is a file of the model"),
+        "{msg}"
+    );
+    assert!(!m.join("pose.md").exists());
+    assert_eq!(std::fs::read(m.join("pose.json")).unwrap(), config);
+    for out in ["curves.csv", "estimates.csv"] {
+        let (ok, msg) = predict(&m.join(out));
+        assert!(ok, "{out}: {msg}");
+    }
     // Two runs writing one folder at once never mix.
     let out = tmp.path().join("shared");
     let spawn = |seed: &str| {

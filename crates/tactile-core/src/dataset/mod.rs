@@ -690,14 +690,16 @@ impl Dataset {
     }
 }
 
-/// Before any work: the output file `out` can be written and is none of
-/// the files of the input `datasets`.
+/// Before any work: the output file `out` can be written, is none of the
+/// files of the input `datasets` and none a model is loaded from
+/// ([`crate::io::refuse_model_file`]).
 pub fn check_output_file(out: &Path, datasets: &[&Dataset]) -> Result<()> {
     for ds in datasets {
         ds.refuse_as_output(out)?;
     }
-    let out = crate::io::output_path(out)?;
-    crate::io::ensure_writable_parent(out)
+    let target = crate::io::output_path(out)?;
+    crate::io::refuse_model_file(out, &target)?;
+    crate::io::ensure_writable_parent(target)
 }
 
 /// `p` made absolute with its links resolved: itself when it exists, else
