@@ -71,15 +71,7 @@ pub fn refuse_model_file(out: &Path, target: &Path) -> Result<()> {
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return Ok(());
-    };
-    let model = ext == "bpk"
-        || entries.take(MAX_MODEL_FOLDER_ENTRIES).flatten().any(|e| {
-            let name = std::path::PathBuf::from(e.file_name());
-            name == Path::new("ensemble.json") || name.extension().is_some_and(|x| x == "bpk")
-        });
-    if model {
+    if ext == "bpk" || !model_configs(dir).is_empty() {
         return Err(Error::Invalid(format!(
             "{}: is a file of the model in {} (its config, notes or weights); writing this output over it would break the model, so nothing was done: give another file name",
             out.display(),
@@ -87,6 +79,48 @@ pub fn refuse_model_file(out: &Path, target: &Path) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+/// The configs of the models the folder `dir` holds: each `NAME.json` with
+/// its weights `NAME.bpk` beside it, and an `ensemble.json` (sorted; empty
+/// for a folder that holds no model, or none at all).
+pub fn model_configs(dir: &Path) -> Vec<String> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut configs: Vec<String> = entries
+        .take(MAX_MODEL_FOLDER_ENTRIES)
+        .flatten()
+        .filter_map(|e| e.file_name().into_string().ok())
+        .filter(|name| {
+            name == "ensemble.json"
+                || name
+                    .strip_suffix(".json")
+                    .is_some_and(|stem| dir.join(format!("{stem}.bpk")).is_file())
+        })
+        .collect();
+    configs.sort();
+    configs
+}
+
+/// Before a model whose config is `config` (`detector.json`) is trained
+/// into the folder `dir`: refuse a folder that holds a model of another
+/// kind ([`model_configs`]), whose notes and curves the run would replace,
+/// leaving two models in one folder. A model of the same kind is trained
+/// again, as asked.
+pub fn refuse_other_model(dir: &Path, config: &str) -> Result<()> {
+    let others: Vec<String> = model_configs(dir)
+        .into_iter()
+        .filter(|c| c != config)
+        .collect();
+    if others.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Invalid(format!(
+        "{}: holds another model ({}); training a model with {config} into it would replace that model's notes and curves and leave two models in one folder, so nothing was done: give another output folder",
+        dir.display(),
+        others.join(", ")
+    )))
 }
 
 /// Symbolic links followed in one path before it counts as a loop (as
@@ -634,6 +668,13 @@ mod tests {
         // A link to a model's config is the config.
         std::os::unix::fs::symlink(net.join("pose.json"), tmp.path().join("link.json")).unwrap();
         assert!(check(tmp.path().join("link.json")).is_err());
+        // A model of another kind is not trained into a model's folder; one
+        // of the same kind is trained again.
+        let other = |d: &Path, config: &str| refuse_other_model(d, config).is_err();
+        assert_eq!(model_configs(&net), ["pose.json"]);
+        assert!(other(&net, "detector.json") && !other(&net, "pose.json"));
+        assert!(other(&ens, "pose.json"), "an ensemble's folder");
+        assert!(!other(&plain, "pose.json") && !other(&tmp.path().join("new"), "pose.json"));
         for allowed in [
             net.join("curves.csv"),
             net.join("estimates.json"),

@@ -152,7 +152,11 @@ pub fn train(
     }
     config.model.check()?;
     let refs: Vec<&Dataset> = datasets.iter().collect();
-    tactile_core::dataset::check_output_dir(out, &refs)?;
+    tactile_core::dataset::check_model_dir(
+        out,
+        &refs,
+        <crate::DetectorArtifact as tactile_burn::Artifact>::CONFIG_FILE,
+    )?;
     let [w, h] = config.model.input_size;
     let (data, train, val) = load_split(
         datasets,

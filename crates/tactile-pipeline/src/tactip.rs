@@ -763,7 +763,11 @@ pub fn train_head(
             tactile_core::Error::dataset(ds.labels_path(), None, "no frames to train on").into(),
         );
     }
-    tactile_core::dataset::check_output_dir(out, &[ds])?;
+    tactile_core::dataset::check_model_dir(
+        out,
+        &[ds],
+        <tactile_estimate::head::HeadArtifact as tactile_burn::Artifact>::CONFIG_FILE,
+    )?;
     ds.expect_columns(["shape"])?;
     let train = ds
         .split_indices("train")
@@ -985,7 +989,11 @@ pub fn train_regressor(
     out: &Path,
     runtime: Runtime,
 ) -> Result<RegressorFit> {
-    tactile_core::dataset::check_output_dir(out, &[ds])?;
+    tactile_core::dataset::check_model_dir(
+        out,
+        &[ds],
+        <tactile_estimate::regressor::RegressorArtifact as tactile_burn::Artifact>::CONFIG_FILE,
+    )?;
     ds.expect_columns(plan.targets.iter().map(|t| t.name.as_str()))?;
     let feats = dataset_features(source, ds, runtime)?;
     // Every target must be labelled on every frame used: with

@@ -146,7 +146,11 @@ pub fn train(
     resume: bool,
 ) -> Result<FitSummary> {
     let config = &config.clone().checked()?;
-    tactile_core::dataset::check_output_dir(out, &[data])?;
+    tactile_core::dataset::check_model_dir(
+        out,
+        &[data],
+        <crate::PoseArtifact as tactile_burn::Artifact>::CONFIG_FILE,
+    )?;
     data.expect_columns(config.targets.iter().map(|t| t.name.as_str()))?;
     tactile_core::note!("preprocessing {} frames", data.len());
     let set = PoseSet::from_dataset(data, &config.preprocess, &config.targets)?;

@@ -94,7 +94,11 @@ pub fn train(
         ))
         .into());
     }
-    tactile_core::dataset::check_output_dir(out, &[data])?;
+    tactile_core::dataset::check_model_dir(
+        out,
+        &[data],
+        <crate::SegmenterArtifact as tactile_burn::Artifact>::CONFIG_FILE,
+    )?;
     let (train, val) = data.split_by_sequence(config.val_fraction, config.schedule.seed)?;
     let (train, val) = (data.tendon_rows(&train)?, data.tendon_rows(&val)?);
     if train.is_empty() || val.is_empty() {

@@ -646,6 +646,25 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
         let (ok, msg) = predict(&m.join(out));
         assert!(ok, "{out}: {msg}");
     }
+    // Nor is a model of another kind trained into its folder, over its
+    // notes and curves.
+    let notes = std::fs::read(m.join("training.json")).unwrap();
+    let (ok, msg) = tactile(&[
+        "train",
+        "cae",
+        "--data",
+        s(&ds),
+        "--out",
+        s(&m),
+        "--max-epochs",
+        "1",
+    ]);
+    assert!(
+        !ok && msg.contains("holds another model (pose.json)"),
+        "{msg}"
+    );
+    assert_eq!(std::fs::read(m.join("training.json")).unwrap(), notes);
+    assert!(!m.join("cae.json").exists());
     // Two runs writing one folder at once never mix.
     let out = tmp.path().join("shared");
     let spawn = |seed: &str| {

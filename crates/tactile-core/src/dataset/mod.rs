@@ -751,6 +751,14 @@ pub fn refuse_input_as_output(out: &Path, input: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Before a model with the config `config` is trained into `out`: as
+/// [`check_output_dir`], and `out` holds no model of another kind
+/// ([`crate::io::refuse_other_model`]).
+pub fn check_model_dir(out: &Path, datasets: &[&Dataset], config: &str) -> Result<()> {
+    check_output_dir(out, datasets)?;
+    crate::io::refuse_other_model(out, config)
+}
+
 /// Before any work: the output folder `out` can be written and is not
 /// part of the input `datasets`.
 pub fn check_output_dir(out: &Path, datasets: &[&Dataset]) -> Result<()> {
