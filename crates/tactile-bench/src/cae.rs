@@ -142,6 +142,7 @@ pub struct CaeBenchResult {
 
 /// Speed against error of one encoder.
 pub fn bench_cae(b: &CaeBench) -> Result<CaeBenchResult> {
+    tactile_core::bench::check_runs(b.runs)?;
     let ds = Dataset::open(&b.data)?;
     let rows = ds
         .split_indices("test")

@@ -77,6 +77,7 @@ const CHAIN: usize = 8;
 /// H x W), timed per convolution in a chain on ndarray, flex and
 /// onnxruntime: where burn's time goes.
 pub fn conv_probes(runs: usize) -> Result<Vec<OpRow>> {
+    tactile_core::bench::check_runs(runs)?;
     use burn::nn::PaddingConfig2d;
     use burn::nn::conv::Conv2dConfig;
     // (what, kernel, in, out, groups, [height, width])
@@ -212,6 +213,7 @@ where
 
 /// The shipped detector, segmenter and depth network in `models`.
 pub fn bench_devices(models: &Path, runs: usize) -> Result<Vec<DeviceRow>> {
+    tactile_core::bench::check_runs(runs)?;
     use tactile_depth::DepthArtifact;
     use tactile_detect::DetectorArtifact;
     use tactile_segment::SegmenterArtifact;

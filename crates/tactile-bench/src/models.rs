@@ -100,6 +100,7 @@ pub fn choose_detector(candidates: &[Candidate]) -> String {
 
 /// Accuracy and F1 of every detector against its latency.
 pub fn bench_detectors(b: &ModelBench) -> Result<Table<DetectorMetrics>> {
+    tactile_core::bench::check_runs(b.runs)?;
     let ds = Dataset::open(&b.data)?;
     let sel_ds = b.select.as_ref().map(Dataset::open).transpose()?;
     let mut md = header("Accuracy and F1", &b.data, b.runs);
@@ -216,6 +217,7 @@ pub struct SegmenterMetrics {
 
 /// IoU and direction error of every segmenter against its latency.
 pub fn bench_segmenters(b: &ModelBench) -> Result<Table<SegmenterMetrics>> {
+    tactile_core::bench::check_runs(b.runs)?;
     let ds = Dataset::open(&b.data)?;
     let sel_ds = b.select.as_ref().map(Dataset::open).transpose()?;
     let mut md = header("Mean IoU and direction error", &b.data, b.runs);
@@ -314,6 +316,7 @@ pub struct DepthMetrics {
 
 /// Depth errors of every depth network against its latency.
 pub fn bench_depth(b: &ModelBench) -> Result<Table<DepthMetrics>> {
+    tactile_core::bench::check_runs(b.runs)?;
     let ds = Dataset::open(&b.data)?;
     let sel_ds = b.select.as_ref().map(Dataset::open).transpose()?;
     let ext_ds = b.extreme.as_ref().map(Dataset::open).transpose()?;

@@ -146,6 +146,7 @@ impl Candidate {
 /// Score every model folder of `b.models` (pose networks and encoder
 /// folders with estimators) on `b.data` (the real edge set).
 pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
+    tactile_core::bench::check_runs(b.runs)?;
     let ds = Dataset::open(&b.data)?;
     let mut md = header("Mean absolute error of edge pose", &b.data, b.runs);
     md.push_str(&format!(

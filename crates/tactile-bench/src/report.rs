@@ -40,6 +40,9 @@ pub struct Report {
     pub runs: usize,
 }
 
+/// Held-out sequences the report renders per set: 100,000 frames of 640x360.
+pub const MAX_REPORT_SEQUENCES: usize = 4_000;
+
 /// Start of the README's headline block.
 pub const HEADLINE_BEGIN: &str = "<!-- headline:begin -->";
 /// Its end.
@@ -286,11 +289,17 @@ fn body(markdown: &str, prefix: &str) -> String {
 
 /// Regenerate the page (and the README's headline); returns the headline.
 pub fn report(r: &Report) -> Result<String> {
-    if r.sequences == 0 || r.extreme_sequences == 0 || r.runs == 0 {
-        return Err(tactile_core::Error::Config(
-            "sequences, extreme sequences and runs must be at least 1".into(),
-        )
-        .into());
+    tactile_core::bench::check_runs(r.runs)?;
+    for (what, n) in [
+        ("sequences", r.sequences),
+        ("extreme sequences", r.extreme_sequences),
+    ] {
+        if !(1..=MAX_REPORT_SEQUENCES).contains(&n) {
+            return Err(tactile_core::Error::Config(format!(
+                "{what}: must be 1 to {MAX_REPORT_SEQUENCES} (each a held-out video rendered to disk), got {n}"
+            ))
+            .into());
+        }
     }
     // A README without its markers fails now, not after the benches.
     if let Some(readme) = &r.readme {

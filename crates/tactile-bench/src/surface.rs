@@ -177,6 +177,7 @@ pub fn bench_surface(
     b: &ModelBench,
     out: Option<&std::path::Path>,
 ) -> Result<Table<SurfaceMetrics>> {
+    tactile_core::bench::check_runs(b.runs)?;
     let ds = Dataset::open(&b.data)?;
     let (rows, split) = scored_rows(&ds);
     // Before any model runs: every target labelled on some scored frame (an

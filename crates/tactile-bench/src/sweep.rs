@@ -63,6 +63,7 @@ pub struct SweepResult {
 
 /// Run the sweep.
 pub fn sweep(s: &Sweep) -> Result<SweepResult> {
+    tactile_core::bench::check_runs(s.runs)?;
     let ds = Dataset::open(&s.data)?;
     let split = ds.three_way_split(0.2, 0.2, s.seed)?;
     let (train, test) = ([split.train, split.val].concat(), split.test);

@@ -37,9 +37,18 @@ fn write_rate(
     Ok(rates[1])
 }
 
+/// Frames one measurement of [`bench_synth`] renders and writes.
+pub const MAX_SYNTH_BENCH_FRAMES: usize = 10_000;
+
 /// Frames/s of both virtual sensors: render (one thread) and write (all
 /// threads), `frames` per measurement (fewer at 1920x1080); the Markdown.
 pub fn bench_synth(frames: usize) -> Result<String> {
+    if !(1..=MAX_SYNTH_BENCH_FRAMES).contains(&frames) {
+        return Err(tactile_core::Error::Config(format!(
+            "frames: must be 1 to {MAX_SYNTH_BENCH_FRAMES} per measurement (each written to disk), got {frames}"
+        ))
+        .into());
+    }
     use datasets_synth::{TactipConfig, VisuotactileConfig, WriteOptions, tactip, visuotactile};
     let threads = rayon::current_num_threads();
     let opts = WriteOptions::default();

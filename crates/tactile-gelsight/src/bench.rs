@@ -228,6 +228,7 @@ pub fn cross_validate(
     options: &BenchOptions,
 ) -> Result<CandidateResult> {
     let n = presses.len();
+    tactile_core::bench::check_runs(options.runs)?;
     if options.folds < 2 || options.folds > MAX_FOLDS.min(n) {
         return Err(tactile_core::Error::Config(format!(
             "folds must be 2-{}, got {}",

@@ -396,6 +396,38 @@ fn every_size_is_bounded_before_anything_is_allocated() {
         assert!(!ok, "{args:?}: {msg}");
     }
     assert!(!out.exists());
+    // So are timed runs and bench frames that would be held in memory (each
+    // run's time until the median) or written to disk: before, `--runs
+    // 4000000000` aborted on a 32 GB allocation.
+    let detector = root().join("models/detector");
+    let page = tmp.path().join("page.md");
+    for (args, why) in [
+        (
+            vec![
+                "bench",
+                "detector",
+                "--models",
+                s(&detector),
+                "--data",
+                s(&vt),
+                "--runs",
+                "4000000000",
+            ],
+            "timed runs: must be 1 to 100000",
+        ),
+        (
+            vec!["bench", "synth", "--frames", "1000000000000"],
+            "frames: must be 1 to 10000",
+        ),
+        (
+            vec!["report", "--runs", "1000000000000", "--out", s(&page)],
+            "timed runs: must be 1 to 100000",
+        ),
+    ] {
+        let (ok, msg) = tactile(&args);
+        assert!(!ok && msg.contains(why), "{args:?}: {msg}");
+    }
+    assert!(!page.exists());
     // Frames named by nanosecond timestamps: the gap is counted, not listed.
     let video = tmp.path().join("video");
     std::fs::create_dir(&video).unwrap();
