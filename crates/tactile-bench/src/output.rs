@@ -62,12 +62,26 @@ pub fn add_points(series: &mut Vec<Series>, ms: &RuntimeMs, error: f64) {
 /// by something longer (a model trained into it).
 pub const PAGE_PATIENCE: Duration = Duration::from_secs(120);
 
-/// Before a bench runs: its page `out` and the rows beside it
-/// (`NAME.json`) can be written, and neither is a model's file (a page
-/// `m/pose.md` would put its rows over `m/pose.json`).
-pub fn check_page(out: &Path) -> Result<()> {
-    for f in [out.to_path_buf(), out.with_extension("json")] {
-        tactile_core::dataset::check_output_file(&f, &[])?;
+/// Before a bench runs: its page `out`, its rows (`NAME.json`) and its
+/// plot (`NAME.png`) can be written, none is a file of the input
+/// `datasets` or of a model (a page `m/pose.md` would put its rows over
+/// `m/pose.json`), and the page is none of the others (`--out x.json`
+/// would write the page over its own rows).
+pub fn check_page(out: &Path, datasets: &[&tactile_core::dataset::Dataset]) -> Result<()> {
+    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if matches!(ext, "json" | "png") {
+        return Err(tactile_core::Error::Invalid(format!(
+            "{}: a page is Markdown, with its rows (NAME.json) and plots (NAME.png) beside it under its own name, so it cannot be named .{ext}; give NAME.md",
+            out.display()
+        ))
+        .into());
+    }
+    for f in [
+        out.to_path_buf(),
+        out.with_extension("json"),
+        out.with_extension("png"),
+    ] {
+        tactile_core::dataset::check_output_file(&f, datasets)?;
     }
     Ok(())
 }

@@ -290,6 +290,13 @@ fn body(markdown: &str, prefix: &str) -> String {
 /// Regenerate the page (and the README's headline); returns the headline.
 pub fn report(r: &Report) -> Result<String> {
     tactile_core::bench::check_runs(r.runs)?;
+    if r.out.extension().is_none() {
+        return Err(tactile_core::Error::Invalid(format!(
+            "{}: the report's tables and plots go into a folder of the page's name without its extension, which would be the page itself; give NAME.md",
+            r.out.display()
+        ))
+        .into());
+    }
     for (what, n) in [
         ("sequences", r.sequences),
         ("extreme sequences", r.extreme_sequences),

@@ -219,7 +219,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::OwnSensor(a) => &Some(a.out.clone()),
     };
     if let Some(out) = out {
-        tactile_bench::output::check_page(out)?;
+        tactile_bench::output::check_page(out, &[])?;
     }
     match cmd {
         BenchCmd::Cae(a) => {

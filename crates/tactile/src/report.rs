@@ -36,7 +36,7 @@ pub(crate) struct ReportArgs {
 }
 
 pub(crate) fn main(a: ReportArgs) -> Result<()> {
-    tactile_core::dataset::check_output_file(&a.out, &[])?;
+    tactile_bench::output::check_page(&a.out, &[])?;
     report(&Report {
         real: a.real,
         models: a.models,

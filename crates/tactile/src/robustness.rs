@@ -31,7 +31,7 @@ pub(crate) struct RobustnessArgs {
 pub(crate) fn main(a: RobustnessArgs) -> Result<()> {
     if let Some(out) = &a.out {
         let ds = tactile_core::dataset::Dataset::open(&a.data)?;
-        tactile_core::dataset::check_output_file(out, &[&ds])?;
+        tactile_bench::output::check_page(out, &[&ds])?;
     }
     let r = robustness(&Robustness {
         encoder: a.encoder,

@@ -697,6 +697,19 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
     );
     assert_eq!(std::fs::read(m.join("training.json")).unwrap(), notes);
     assert!(!m.join("cae.json").exists());
+    // A page is none of the files beside it: `--out x.json` wrote the page
+    // over its own rows, `--out x.png` over its plot, and a report page
+    // without an extension is the folder its tables go into.
+    for name in ["x.json", "x.png"] {
+        let page = tmp.path().join(name);
+        let (ok, msg) = tactile(&["bench", "synth", "--frames", "1", "--out", s(&page)]);
+        assert!(!ok && msg.contains("a page is Markdown"), "{msg}");
+        assert!(!page.exists());
+    }
+    let page = tmp.path().join("results");
+    let (ok, msg) = tactile(&["report", "--out", s(&page)]);
+    assert!(!ok && msg.contains("would be the page itself"), "{msg}");
+    assert!(!page.exists());
     // Two runs writing one folder at once never mix.
     let out = tmp.path().join("shared");
     let spawn = |seed: &str| {
