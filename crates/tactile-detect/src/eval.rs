@@ -307,6 +307,9 @@ pub fn evaluate_folder(
     for out in options.frames.iter().chain(&options.reliability) {
         tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
+    if let (Some(frames), Some(plot)) = (&options.frames, &options.reliability) {
+        tactile_core::dataset::refuse_same_output(frames, plot)?;
+    }
     let mut det = TendonDetector::load(model, runtime, 0)?;
     let (mut sc, labels) = evaluate_dataset(&mut det, &ds, EVAL_CHUNK)?;
     sc.warning = tactile_burn::artifact::scored_on_fitted::<crate::DetectorArtifact>(model, &ds);

@@ -91,6 +91,9 @@ pub fn reconstruct_folder(
 ) -> Result<ReconstructReport> {
     let (files, warnings) = frame_files(data)?;
     // Both folders are new: one with files in it is refused before any work.
+    if let Some(render) = &options.render {
+        tactile_core::dataset::refuse_same_output(out, render)?;
+    }
     let staged = tactile_core::io::StagedDir::fresh(out)?;
     let render = options
         .render

@@ -151,6 +151,9 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         _ => None,
     };
     let inputs: Vec<_> = input.iter().collect();
+    if let (Some(out), Some(render), false) = (&a.out, &a.render, to_stdout) {
+        tactile_core::dataset::refuse_same_output(out, render)?;
+    }
     if let (Some(out), false) = (&a.out, to_stdout) {
         tactile_core::dataset::check_output_file(out, &inputs)?;
         if let Some(data) = &a.data {

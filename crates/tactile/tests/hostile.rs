@@ -710,6 +710,44 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
     let (ok, msg) = tactile(&["report", "--out", s(&page)]);
     assert!(!ok && msg.contains("would be the page itself"), "{msg}");
     assert!(!page.exists());
+    // Nor are two outputs of one run one place: the second would replace
+    // the first (before, `--frames` was lost under `--reliability`).
+    let vt = tmp.path().join("vt-same");
+    palpations(&vt, "1", "2", "4");
+    let same = tmp.path().join("same.out");
+    let detector = root().join("models/detector");
+    for args in [
+        vec![
+            "eval",
+            "detector",
+            "--model",
+            s(&detector),
+            "--data",
+            s(&vt),
+            "--frames",
+            s(&same),
+            "--reliability",
+            s(&same),
+        ],
+        vec![
+            "run",
+            "--models",
+            s(&root().join("models")),
+            "--data",
+            s(&vt),
+            "--out",
+            s(&same),
+            "--render",
+            s(&same),
+        ],
+    ] {
+        let (ok, msg) = tactile(&args);
+        assert!(
+            !ok && msg.contains("two outputs of this run name one place"),
+            "{args:?}: {msg}"
+        );
+        assert!(!same.exists(), "{args:?}");
+    }
     // Two runs writing one folder at once never mix.
     let out = tmp.path().join("shared");
     let spawn = |seed: &str| {

@@ -715,6 +715,24 @@ fn canonical_output(p: &Path) -> Option<PathBuf> {
     })
 }
 
+/// Before any work: two outputs of one run (`--frames` and
+/// `--reliability`, `--out` and `--render`) name two places; written to one,
+/// the second would silently replace the first.
+pub fn refuse_same_output(first: &Path, second: &Path) -> Result<()> {
+    let same = match (canonical_output(first), canonical_output(second)) {
+        (Some(a), Some(b)) => a == b,
+        _ => first == second,
+    };
+    if same {
+        return Err(Error::Invalid(format!(
+            "{} and {}: two outputs of this run name one place, and the second would replace the first; give each its own, so nothing was done",
+            first.display(),
+            second.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Before any work: the output file `out` is not the input file itself
 /// (`--data rec.mcap --out rec.mcap`), which writing it would replace, nor
 /// a frame of the input folder of frames (`--data frames --out
@@ -771,6 +789,23 @@ pub fn check_output_dir(out: &Path, datasets: &[&Dataset]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn two_outputs_naming_one_place_are_refused_however_they_are_spelt() {
+        let tmp = tempfile::tempdir().unwrap();
+        let a = tmp.path().join("a.csv");
+        let spelt = tmp.path().join("sub/../a.csv");
+        std::fs::create_dir(tmp.path().join("sub")).unwrap();
+        assert!(refuse_same_output(&a, &a).is_err());
+        assert!(refuse_same_output(&a, &spelt).is_err(), "another spelling");
+        std::os::unix::fs::symlink(&a, tmp.path().join("link.csv")).unwrap();
+        std::fs::write(&a, b"x").unwrap();
+        assert!(
+            refuse_same_output(&a, &tmp.path().join("link.csv")).is_err(),
+            "a link"
+        );
+        refuse_same_output(&a, &tmp.path().join("b.csv")).unwrap();
+    }
 
     fn manifest(kind: DatasetKind, count: usize) -> Manifest {
         Manifest {
