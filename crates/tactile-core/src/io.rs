@@ -448,14 +448,7 @@ impl FolderLock {
     /// Lock the folder `dir`; refused ([`Error::Busy`]) while another run
     /// holds it.
     pub fn acquire(dir: &Path) -> Result<Self> {
-        let lock = open_folder(dir)?;
-        match lock.try_lock() {
-            Ok(()) => Ok(Self { _held: lock }),
-            Err(std::fs::TryLockError::WouldBlock) => Err(Error::Busy {
-                path: dir.to_path_buf(),
-            }),
-            Err(std::fs::TryLockError::Error(e)) => Err(Error::io(dir, e)),
-        }
+        Self::wait(dir, std::time::Duration::ZERO)
     }
 
     /// [`Self::acquire`] of `dir`, created first if needed: the folder a
@@ -473,9 +466,9 @@ impl FolderLock {
     }
 
     /// Lock `dir`, waiting up to `patience` while another run holds it
-    /// ([`Error::Busy`] after that): for writes that take a moment, such
-    /// as the files of one page, which a second run should follow rather
-    /// than be refused.
+    /// ([`Error::Busy`] after that; [`Error::Interrupted`] on Ctrl-C): for
+    /// writes that take a moment, such as the files of one page, which a
+    /// second run should follow rather than be refused.
     pub fn wait(dir: &Path, patience: std::time::Duration) -> Result<Self> {
         let lock = open_folder(dir)?;
         let start = std::time::Instant::now();
@@ -483,6 +476,7 @@ impl FolderLock {
             match lock.try_lock() {
                 Ok(()) => return Ok(Self { _held: lock }),
                 Err(std::fs::TryLockError::WouldBlock) if start.elapsed() < patience => {
+                    crate::interrupt::check()?;
                     std::thread::sleep(std::time::Duration::from_millis(50));
                 }
                 Err(std::fs::TryLockError::WouldBlock) => {
