@@ -66,8 +66,20 @@ pub const PAGE_PATIENCE: Duration = Duration::from_secs(120);
 /// plot (`NAME.png`) can be written, none is a file of the input
 /// `datasets` or of a model (a page `m/pose.md` would put its rows over
 /// `m/pose.json`), and the page is none of the others (`--out x.json`
-/// would write the page over its own rows).
+/// would write the page over its own rows), nor in the folder of a model
+/// being trained (whose lock the page would wait for, then lose its
+/// measurements).
 pub fn check_page(out: &Path, datasets: &[&tactile_core::dataset::Dataset]) -> Result<()> {
+    let dir = page_folder(out);
+    if dir.join(tactile_burn::artifact::INCOMPLETE_FILE).is_file()
+        && tactile_core::io::FolderLock::of_existing(dir).is_err()
+    {
+        return Err(tactile_core::Error::Invalid(format!(
+            "{}: a model is being trained in this folder, which a page's files wait for until the training ends; give the page another folder",
+            dir.display()
+        ))
+        .into());
+    }
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
     if matches!(ext, "json" | "png") {
         return Err(tactile_core::Error::Invalid(format!(
@@ -90,12 +102,16 @@ pub fn check_page(out: &Path, datasets: &[&tactile_core::dataset::Dataset]) -> R
 /// run writing a page there waits (up to [`PAGE_PATIENCE`]) until the first
 /// has written all of its files, then writes all of its own.
 pub fn lock_page(out: &Path) -> Result<tactile_core::io::FolderLock> {
-    let dir = out
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let dir = page_folder(out);
     tactile_core::io::create_dir_all(dir)?;
     Ok(tactile_core::io::FolderLock::wait(dir, PAGE_PATIENCE)?)
+}
+
+/// The folder of the page `out` ("." for a bare name).
+fn page_folder(out: &Path) -> &Path {
+    out.parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
 }
 
 /// Draws a picture to the path it is given.
@@ -220,6 +236,25 @@ pub(crate) fn markdown_and_json<T: Serialize>(out: &Path, markdown: &str, rows: 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A page is refused, before the bench runs, in the folder of a model
+    /// being trained (marked and locked); an interrupted training's folder
+    /// (marked, not locked) takes it.
+    #[test]
+    fn a_page_is_refused_in_the_folder_of_a_model_being_trained() {
+        let tmp = tempfile::tempdir().unwrap();
+        let page = tmp.path().join("page.md");
+        let training = tactile_burn::artifact::Unfinished::begin(tmp.path()).unwrap();
+        let e = check_page(&page, &[]).err().unwrap().to_string();
+        assert!(e.contains("a model is being trained in this folder"), "{e}");
+        drop(training);
+        assert!(
+            tmp.path()
+                .join(tactile_burn::artifact::INCOMPLETE_FILE)
+                .is_file()
+        );
+        check_page(&page, &[]).unwrap();
+    }
 
     /// Another run writing a page in the folder holds its lock: this run's
     /// page files (Markdown, JSON and pictures) wait, then appear together.
