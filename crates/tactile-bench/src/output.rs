@@ -70,7 +70,7 @@ pub const PAGE_PATIENCE: Duration = Duration::from_secs(120);
 /// being trained (whose lock the page would wait for, then lose its
 /// measurements).
 pub fn check_page(out: &Path, datasets: &[&tactile_core::dataset::Dataset]) -> Result<()> {
-    let dir = page_folder(out);
+    let dir = tactile_core::io::folder_of(out);
     if dir.join(tactile_burn::artifact::INCOMPLETE_FILE).is_file()
         && tactile_core::io::FolderLock::of_existing(dir).is_err()
     {
@@ -102,16 +102,9 @@ pub fn check_page(out: &Path, datasets: &[&tactile_core::dataset::Dataset]) -> R
 /// run writing a page there waits (up to [`PAGE_PATIENCE`]) until the first
 /// has written all of its files, then writes all of its own.
 pub fn lock_page(out: &Path) -> Result<tactile_core::io::FolderLock> {
-    let dir = page_folder(out);
+    let dir = tactile_core::io::folder_of(out);
     tactile_core::io::create_dir_all(dir)?;
     Ok(tactile_core::io::FolderLock::wait(dir, PAGE_PATIENCE)?)
-}
-
-/// The folder of the page `out` ("." for a bare name).
-fn page_folder(out: &Path) -> &Path {
-    out.parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."))
 }
 
 /// Draws a picture to the path it is given.

@@ -67,10 +67,7 @@ pub fn refuse_model_file(out: &Path, target: &Path) -> Result<()> {
     if !matches!(ext, "json" | "bpk") || !target.is_file() {
         return Ok(());
     }
-    let dir = target
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let dir = folder_of(target);
     if ext == "bpk" || !model_configs(dir).is_empty() {
         return Err(Error::Invalid(format!(
             "{}: is a file of the model in {} (its config, notes or weights); writing this output over it would break the model, so nothing was done: give another file name",
@@ -431,9 +428,17 @@ pub fn scored_record(
     Ok(v)
 }
 
+/// The folder the file `path` is in: its parent, or "." for a bare name
+/// (whose parent is the empty path) and for a root.
+pub fn folder_of(path: &Path) -> &Path {
+    path.parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+}
+
 /// [`ensure_writable_dir`] for the folder an output file will go into.
 pub fn ensure_writable_parent(file: impl AsRef<Path>) -> Result<()> {
-    ensure_writable_dir(file.as_ref().parent().unwrap_or(Path::new(".")))
+    ensure_writable_dir(folder_of(file.as_ref()))
 }
 
 /// A folder locked for one run writing into it (`flock` on the folder): a

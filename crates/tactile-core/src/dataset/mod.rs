@@ -195,10 +195,7 @@ pub fn file_of_a_dataset(path: &Path) -> Option<Error> {
         Error::Invalid(format!(
             "{}: is a file of a dataset, not frames: pass the dataset's folder {}",
             path.display(),
-            path.parent()
-                .filter(|p| !p.as_os_str().is_empty())
-                .unwrap_or(Path::new("."))
-                .display()
+            crate::io::folder_of(path).display()
         ))
     })
 }
@@ -707,10 +704,7 @@ pub fn check_output_file(out: &Path, datasets: &[&Dataset]) -> Result<()> {
 /// written). `None` when neither resolves.
 fn canonical_output(p: &Path) -> Option<PathBuf> {
     p.canonicalize().ok().or_else(|| {
-        let parent = p
-            .parent()
-            .filter(|q| !q.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
+        let parent = crate::io::folder_of(p);
         Some(parent.canonicalize().ok()?.join(p.file_name()?))
     })
 }
