@@ -56,9 +56,10 @@ pub fn output_path(path: &Path) -> Result<std::path::PathBuf> {
 const MAX_MODEL_FOLDER_ENTRIES: usize = 10_000;
 
 /// Refuse an output `out` (written at `target`, [`output_path`]) that
-/// would replace a file a model is loaded from: a config, notes or weights
-/// (`*.json`, `*.bpk`) of a model folder, one that holds weights (`*.bpk`)
-/// or an `ensemble.json`. `predict --out m/pose.json` would otherwise
+/// would replace a file a model is loaded from: weights (`*.bpk`) anywhere,
+/// and a config or notes (`*.json`) in a folder that holds a model
+/// ([`model_configs`]: a `NAME.json` with its `NAME.bpk`, or an
+/// `ensemble.json`). `predict --out m/pose.json` would otherwise
 /// write estimates over the model's config, and a bench page
 /// `m/pose.md` its rows over it (`m/pose.json`). Its other files (curves,
 /// plots, exports) and new files may be written.
