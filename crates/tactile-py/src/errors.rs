@@ -102,6 +102,7 @@ impl LibraryError for tactile_ros::Error {
             E::Core(c) => core_kind(c),
             E::Write { .. } | E::Live { .. } => Kind::Os,
             E::Encode { .. } | E::Address { .. } => Kind::Value,
+            E::Pipeline(p) => p.kind(),
         }
     }
 }

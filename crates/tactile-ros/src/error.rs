@@ -38,6 +38,10 @@ pub enum Error {
     /// The foundation's errors (an unwritable folder, an interrupt).
     #[error(transparent)]
     Core(#[from] tactile_core::Error),
+    /// The pipeline's errors in a run (a model that does not load, a
+    /// frame it cannot take).
+    #[error(transparent)]
+    Pipeline(#[from] Box<tactile_pipeline::Error>),
 }
 
 /// This crate's results.
@@ -47,6 +51,10 @@ impl From<Error> for tactile_core::Error {
     fn from(e: Error) -> Self {
         match e {
             Error::Core(e) => e,
+            Error::Pipeline(p) => match *p {
+                tactile_pipeline::Error::Core(c) => c,
+                other => tactile_core::Error::Invalid(other.to_string()),
+            },
             other => tactile_core::Error::Invalid(other.to_string()),
         }
     }

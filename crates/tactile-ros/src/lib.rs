@@ -32,6 +32,8 @@ mod mcap_file;
 pub mod messages;
 mod results;
 pub mod schemas;
+pub mod session;
 
 pub use error::{Error, Result};
 pub use results::{FrameMessages, McapResults, RobotOutputs, RobotSummary, Topic};
+pub use session::{RunReport, RunRequest, RunSession};

@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args;
 use tactile_burn::Runtime;
-use tactile_pipeline::run::JsonLines;
-use tactile_pipeline::{Flow, FrameSource, Pipeline, RunOptions, SourceOptions, SourceSpec};
+use tactile_pipeline::{SourceOptions, SourceSpec};
+use tactile_ros::{RunRequest, RunSession};
 
 #[derive(Args)]
 pub(crate) struct RunArgs {
@@ -124,7 +124,7 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let spec = match (&a.data, a.size) {
+    let source = match (&a.data, a.size) {
         (Some(p), _) if a.topic.is_some() => SourceSpec::Bag {
             path: p.clone(),
             topic: a.topic.clone(),
@@ -133,96 +133,50 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         (None, Some(crate::args::Size([width, height]))) => SourceSpec::Stdin { width, height },
         (None, None) => bail!("give --data PATH or --stdin --size WIDTHxHEIGHT"),
     };
-    // The input first: a bad folder or video is reported before any model
-    // loads (a camera's first frames wait in its queue meanwhile).
-    let mut source = FrameSource::open(
-        &spec,
-        SourceOptions {
+    let request = RunRequest {
+        source_options: SourceOptions {
             overlap: !a.no_overlap,
             live_queue: a.live_queue as usize,
             limit: a.limit,
         },
-    )?;
-    let to_stdout = a.out.as_deref() == Some(std::path::Path::new("-"));
-    // Outputs next: an unwritable folder, or one of the inputs, fails now,
-    // not after the run.
-    let input = match &a.data {
-        Some(d) if d.join("labels.csv").is_file() => Some(tactile_core::dataset::Dataset::open(d)?),
-        _ => None,
-    };
-    let inputs: Vec<_> = input.iter().collect();
-    if let (Some(out), Some(render), false) = (&a.out, &a.render, to_stdout) {
-        tactile_core::dataset::refuse_same_output(out, render)?;
-    }
-    if let (Some(out), false) = (&a.out, to_stdout) {
-        tactile_core::dataset::check_output_file(out, &inputs)?;
-        if let Some(data) = &a.data {
-            tactile_core::dataset::refuse_input_as_output(out, data)?;
-        }
-    }
-    if let Some(dir) = &a.render {
-        tactile_core::dataset::check_output_dir(dir, &inputs)?;
-    }
-    for w in source.warnings() {
-        tactile_core::note!("{w}");
-    }
-    let mut pipeline = Pipeline::load(&a.models, a.runtime, a.threads as usize)?;
-    let options = RunOptions {
+        runtime: a.runtime,
+        threads: a.threads as usize,
         hysteresis,
-        render: a.render.clone(),
-    };
-    let mcap_out = a
-        .out
-        .as_deref()
-        .filter(|p| tactile_core::bag::is_bag_file(p));
-    let mut robot = tactile_ros::RobotOutputs {
-        mcap: mcap_out.map(tactile_ros::McapResults::create).transpose()?,
-        live: a
-            .view
-            .as_deref()
-            .map(tactile_ros::live::LiveView::serve)
-            .transpose()?,
+        out: a.out,
+        render: a.render,
         with_frames: a.with_frames,
+        view: a.view,
+        ..RunRequest::new(source, a.models)
     };
-    if let Some(l) = &robot.live {
-        tactile_core::note!(
-            "live view: open Foxglove on {} (frames are sent while a viewer is subscribed)",
-            l.url()
-        );
-        if a.view_wait > 0.0 {
-            l.wait_for_viewer(a.view_wait)?;
-        }
-    }
-    let json_out = a.out.as_deref().filter(|_| mcap_out.is_none());
-    let mut records = json_out.map(JsonLines::create).transpose()?;
-    let s = tactile_pipeline::run(&mut pipeline, &mut source, &options, &mut |item| {
-        robot.handle(item).map_err(tactile_core::Error::from)?;
-        records
-            .as_mut()
-            .map_or(Ok(Flow::Continue), |r| r.write(item.record))
-    })?;
-    if let Some(r) = records {
-        r.finish()?;
-    }
-    for w in source.late_warnings() {
+    let to_stdout = request.records_to_stdout();
+    let session = RunSession::open(&request)?;
+    for w in session.warnings() {
         tactile_core::note!("{w}");
     }
-    let robot = robot.finish()?;
+    if let Some(url) = session.live_url() {
+        tactile_core::note!(
+            "live view: open Foxglove on {url} (frames are sent while a viewer is subscribed)"
+        );
+        session.wait_for_viewer(a.view_wait)?;
+    }
+    let r = session.run()?;
+    for w in &r.late_warnings {
+        tactile_core::note!("{w}");
+    }
     // With records on stdout, the summary goes to stderr.
     let report = |line: String| match to_stdout {
         true => tactile_core::note!("{line}"),
         false => say!("{line}"),
     };
-    s.describe().into_iter().for_each(report);
-    if let (Some(out), false) = (&a.out, to_stdout) {
+    r.summary.describe().into_iter().for_each(report);
+    if let Some(out) = r.records.as_ref().or(r.mcap.as_ref()) {
         report(format!("records in {}", out.display()));
     }
-    if a.view.is_some() {
+    if let (Some(sent), Some(dropped)) = (r.live_sent, r.live_dropped) {
         report(format!(
-            "live view: {} frames sent, {} dropped (viewer behind)",
-            robot.live_sent, robot.live_dropped
+            "live view: {sent} frames sent, {dropped} dropped (viewer behind)"
         ));
     }
-    report(serde_json::to_string(&s)?);
+    report(serde_json::to_string(&r.summary)?);
     Ok(())
 }

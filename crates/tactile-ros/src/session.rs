@@ -1,0 +1,222 @@
+//! A whole palpation run, as `tactile run` and Python's `tactile.run` make
+//! it: a source of frames, the models, and every output asked for (JSON
+//! Lines records, an MCAP file of ROS 2 messages, a live Foxglove view,
+//! overlay pictures). The front ends parse their arguments and print; the
+//! order of the checks lives here once: the source first (a bad folder or
+//! video is reported before any model loads), then every output (an
+//! unwritable folder, one of the inputs, two outputs naming one place),
+//! then the models, so nothing fails after the frames were processed.
+
+use std::path::{Path, PathBuf};
+
+use tactile_core::dataset::{self, Dataset};
+use tactile_pipeline::run::JsonLines;
+use tactile_pipeline::{
+    Flow, FrameSource, Hysteresis, Pipeline, RunOptions, RunSummary, Runtime, SourceOptions,
+    SourceSpec,
+};
+
+use crate::live::LiveView;
+use crate::{McapResults, Result, RobotOutputs};
+
+/// What a run reads and where its results go.
+#[derive(Debug, Clone)]
+pub struct RunRequest {
+    /// The frames: a dataset, a folder, an image, a video, a bag, a camera
+    /// or raw frames on standard input.
+    pub source: SourceSpec,
+    /// Decoding ahead, the live queue and a frame limit.
+    pub source_options: SourceOptions,
+    /// The models folder (detector/, segmenter/, depth/) or a calibrated
+    /// sensor's folder.
+    pub models: PathBuf,
+    /// Where the networks run.
+    pub runtime: Runtime,
+    /// onnxruntime intra-op threads.
+    pub threads: usize,
+    /// Two-threshold filter on the detector per sequence: `(on, off)`.
+    pub hysteresis: Option<(f32, f32)>,
+    /// JSON Lines records (`-`: standard output), or ROS 2 messages for a
+    /// name ending in `.mcap`.
+    pub out: Option<PathBuf>,
+    /// A new folder for overlay pictures.
+    pub render: Option<PathBuf>,
+    /// Also write (and serve) the input frames on `/tactile/image`.
+    pub with_frames: bool,
+    /// Serve the results live to Foxglove at this `HOST:PORT`.
+    pub view: Option<String>,
+}
+
+impl RunRequest {
+    /// A run of `models` over `source` on onnxruntime with one thread and
+    /// no outputs besides its summary.
+    pub fn new(source: SourceSpec, models: impl Into<PathBuf>) -> Self {
+        Self {
+            source,
+            source_options: SourceOptions::default(),
+            models: models.into(),
+            runtime: Runtime::Onnx,
+            threads: 1,
+            hysteresis: None,
+            out: None,
+            render: None,
+            with_frames: false,
+            view: None,
+        }
+    }
+
+    /// Whether the records go to standard output.
+    pub fn records_to_stdout(&self) -> bool {
+        self.out.as_deref() == Some(Path::new("-"))
+    }
+}
+
+/// A run whose source, outputs and models are open and checked, ready to
+/// go over its frames.
+pub struct RunSession {
+    source: FrameSource,
+    pipeline: Pipeline,
+    options: RunOptions,
+    robot: RobotOutputs,
+    records: Option<JsonLines>,
+    records_file: Option<PathBuf>,
+}
+
+/// What a run did: the pipeline's summary and where its outputs went.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct RunReport {
+    /// Speed, latency and decisions over the frames.
+    #[serde(flatten)]
+    pub summary: RunSummary,
+    /// The JSON Lines file written (not standard output).
+    pub records: Option<PathBuf>,
+    /// The MCAP file written.
+    pub mcap: Option<PathBuf>,
+    /// Frames written to the MCAP file.
+    pub mcap_frames: Option<u64>,
+    /// Frames handed to the live view and dropped by it (viewer behind).
+    pub live_sent: Option<u64>,
+    /// Frames the live view dropped because its viewer was behind.
+    pub live_dropped: Option<u64>,
+    /// The overlay folder written.
+    pub render: Option<PathBuf>,
+    /// What the source found only while it was read (e.g. a video's
+    /// frames of another size); the front ends show them as warnings.
+    #[serde(skip)]
+    pub late_warnings: Vec<String>,
+}
+
+impl RunSession {
+    /// Open the source, check every output and load the models, in that
+    /// order, so a bad input or output is reported before any model
+    /// loads and nothing is written before the run.
+    pub fn open(request: &RunRequest) -> Result<Self> {
+        if let Some((on, off)) = request.hysteresis {
+            Hysteresis::new(on, off)?;
+        }
+        let source = FrameSource::open(&request.source, request.source_options)?;
+        let data = match &request.source {
+            SourceSpec::Path(p) | SourceSpec::Bag { path: p, .. } => Some(p.as_path()),
+            _ => None,
+        };
+        let input = match data {
+            Some(d) if d.join("labels.csv").is_file() => Some(Dataset::open(d)?),
+            _ => None,
+        };
+        let inputs: Vec<_> = input.iter().collect();
+        let out = request.out.as_deref().filter(|_| !request.records_to_stdout());
+        if let (Some(out), Some(render)) = (out, &request.render) {
+            dataset::refuse_same_output(out, render)?;
+        }
+        if let Some(out) = out {
+            dataset::check_output_file(out, &inputs)?;
+            if let Some(data) = data {
+                dataset::refuse_input_as_output(out, data)?;
+            }
+        }
+        if let Some(dir) = &request.render {
+            dataset::check_output_dir(dir, &inputs)?;
+        }
+        let pipeline =
+            Pipeline::load(&request.models, request.runtime, request.threads).map_err(Box::new)?;
+        let mcap_out = out.filter(|p| tactile_core::bag::is_bag_file(p));
+        let robot = RobotOutputs {
+            mcap: mcap_out.map(McapResults::create).transpose()?,
+            live: request.view.as_deref().map(LiveView::serve).transpose()?,
+            with_frames: request.with_frames,
+        };
+        let json_out = request.out.as_deref().filter(|_| mcap_out.is_none());
+        let records = json_out
+            .map(JsonLines::create)
+            .transpose()
+            .map_err(Box::new)?;
+        Ok(Self {
+            source,
+            pipeline,
+            options: RunOptions {
+                hysteresis: request.hysteresis,
+                render: request.render.clone(),
+            },
+            robot,
+            records,
+            records_file: json_out.filter(|_| !request.records_to_stdout()).map(Path::to_path_buf),
+        })
+    }
+
+    /// What the source noted when it opened (files of a folder that are
+    /// not frames, gaps in the numbering, one split of a bag read alone).
+    pub fn warnings(&self) -> Vec<String> {
+        self.source.warnings()
+    }
+
+    /// The live view's address to open in Foxglove, when serving.
+    pub fn live_url(&self) -> Option<String> {
+        self.robot.live.as_ref().map(LiveView::url)
+    }
+
+    /// Hold the run up to `seconds` for a viewer to subscribe (replaying a
+    /// recording to watch it); whether one did. Without a live view, at
+    /// once false.
+    pub fn wait_for_viewer(&self, seconds: f64) -> Result<bool> {
+        match &self.robot.live {
+            Some(l) if seconds > 0.0 => l.wait_for_viewer(seconds),
+            _ => Ok(false),
+        }
+    }
+
+    /// Go over every frame, writing each output as records are made;
+    /// every file appears when the run ends (an error or an interrupt
+    /// leaves none).
+    pub fn run(self) -> Result<RunReport> {
+        let Self {
+            mut source,
+            mut pipeline,
+            options,
+            mut robot,
+            mut records,
+            records_file,
+        } = self;
+        let summary = tactile_pipeline::run(&mut pipeline, &mut source, &options, &mut |item| {
+            robot.handle(item).map_err(tactile_core::Error::from)?;
+            records
+                .as_mut()
+                .map_or(Ok(Flow::Continue), |r| r.write(item.record))
+        })
+        .map_err(Box::new)?;
+        if let Some(r) = records {
+            r.finish().map_err(Box::new)?;
+        }
+        let live = robot.live.is_some();
+        let robot = robot.finish()?;
+        Ok(RunReport {
+            summary,
+            records: records_file,
+            mcap_frames: robot.mcap.as_ref().map(|m| m.1),
+            mcap: robot.mcap.map(|m| m.0),
+            live_sent: live.then_some(robot.live_sent),
+            live_dropped: live.then_some(robot.live_dropped),
+            render: options.render,
+            late_warnings: source.late_warnings(),
+        })
+    }
+}
