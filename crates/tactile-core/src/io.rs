@@ -503,6 +503,19 @@ fn open_folder(dir: &Path) -> Result<std::fs::File> {
     std::fs::File::open(dir).map_err(|e| Error::io(dir, e))
 }
 
+/// Refuse an output folder that already holds files (another run's
+/// results, or anything else): a run that writes a new folder checks it
+/// before any work, and [`StagedDir::fresh`] again when it stages.
+pub fn refuse_folder_with_files(target: &Path) -> Result<()> {
+    if std::fs::read_dir(target).is_ok_and(|mut d| d.next().is_some()) {
+        return Err(Error::Invalid(format!(
+            "{}: already holds files (left alone); choose a new folder",
+            target.display()
+        )));
+    }
+    Ok(())
+}
+
 /// A folder written in full before it appears. Files go into a hidden
 /// staging folder beside the target (`.NAME.partial-PID-XXXX`), unique to
 /// the run, so concurrent runs never mix; [`StagedDir::commit`] renames it
@@ -575,12 +588,7 @@ impl StagedDir {
     /// and left alone.
     pub fn fresh(target: impl AsRef<Path>) -> Result<Self> {
         let target = target.as_ref();
-        if std::fs::read_dir(target).is_ok_and(|mut d| d.next().is_some()) {
-            return Err(Error::Invalid(format!(
-                "{}: already holds files (left alone); choose a new folder",
-                target.display()
-            )));
-        }
+        refuse_folder_with_files(target)?;
         Self::new(target)
     }
 

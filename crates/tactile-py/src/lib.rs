@@ -17,6 +17,7 @@ mod pipeline;
 mod pose;
 mod predict;
 mod robot;
+mod run;
 mod source;
 mod synth;
 mod train;
@@ -36,6 +37,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<encoder::PyTactipEncoder>()?;
     m.add_class::<pose::PyPoseEstimator>()?;
     m.add_function(wrap_pyfunction!(predict::predict, m)?)?;
+    m.add_function(wrap_pyfunction!(run::run, m)?)?;
     m.add_class::<calibrate::PyReconstructor>()?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate_ball, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::reconstruct_frames, m)?)?;

@@ -13,6 +13,17 @@ use tactile_pipeline::{FrameRecord, FrameViews, Hysteresis, Pipeline};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout, each_frame};
 
+/// onnxruntime's intra-op threads as the command line bounds them.
+pub(crate) fn check_threads(threads: usize) -> PyResult<()> {
+    if threads == 0 || threads > tactile_onnx::runtime::MAX_THREADS {
+        return Err(PyValueError::new_err(format!(
+            "threads: must be 1 to {}, got {threads}",
+            tactile_onnx::runtime::MAX_THREADS
+        )));
+    }
+    Ok(())
+}
+
 /// Parse a runtime name as the command line does.
 pub(crate) fn runtime(name: &str) -> PyResult<Runtime> {
     name.parse::<Runtime>().py()
@@ -101,12 +112,7 @@ impl PyPipeline {
         hysteresis: Option<(f32, f32)>,
     ) -> PyResult<Self> {
         let rt = crate::pipeline::runtime(runtime)?;
-        if threads == 0 || threads > tactile_onnx::runtime::MAX_THREADS {
-            return Err(PyValueError::new_err(format!(
-                "threads: must be 1 to {}, got {threads}",
-                tactile_onnx::runtime::MAX_THREADS
-            )));
-        }
+        check_threads(threads)?;
         let filter = hysteresis
             .map(|(on, off)| Hysteresis::new(on, off))
             .transpose()

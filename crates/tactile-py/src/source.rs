@@ -263,7 +263,30 @@ pub(crate) fn frames(
     limit: Option<u64>,
     prefetch: bool,
 ) -> PyResult<PyFrameSource> {
-    let spec = match (source, stdin_size) {
+    let spec = source_spec(source, topic, stdin_size)?;
+    let options = SourceOptions {
+        overlap: prefetch,
+        live_queue,
+        limit,
+    };
+    let source = py.detach(move || FrameSource::open(&spec, options)).py()?;
+    for w in source.warnings() {
+        crate::errors::user_warning(py, &w)?;
+    }
+    Ok(PyFrameSource {
+        source: Mutex::new(source),
+        late_warned: AtomicBool::new(false),
+    })
+}
+
+/// The source a path, a bag's topic or a size of raw frames on stdin
+/// names: `tactile.frames`' and `tactile.run`'s first arguments.
+pub(crate) fn source_spec(
+    source: Option<PathBuf>,
+    topic: Option<String>,
+    stdin_size: Option<(usize, usize)>,
+) -> PyResult<SourceSpec> {
+    Ok(match (source, stdin_size) {
         (Some(path), None) if topic.is_some() => SourceSpec::Bag { path, topic },
         (None, Some((width, height))) => SourceSpec::Stdin { width, height },
         (Some(p), None) => SourceSpec::Path(p),
@@ -277,19 +300,6 @@ pub(crate) fn frames(
                 "give a source path, or stdin_size=(width, height) for raw frames on stdin",
             ));
         }
-    };
-    let options = SourceOptions {
-        overlap: prefetch,
-        live_queue,
-        limit,
-    };
-    let source = py.detach(move || FrameSource::open(&spec, options)).py()?;
-    for w in source.warnings() {
-        crate::errors::user_warning(py, &w)?;
-    }
-    Ok(PyFrameSource {
-        source: Mutex::new(source),
-        late_warned: AtomicBool::new(false),
     })
 }
 

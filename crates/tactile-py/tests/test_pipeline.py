@@ -49,6 +49,77 @@ def test_process_matches_tactile_run(tactile_bin, root, tmp_path, pipeline, palp
     assert tendon_frames == 8, "the sample video has 8 tendon frames"
 
 
+# Keys of a record that time the run rather than say what it found.
+TIMING_KEYS = {"latency_ms"}
+
+
+def _found(record: dict) -> dict:
+    return {k: v for k, v in record.items() if not k.startswith("ms_") and k not in TIMING_KEYS}
+
+
+def test_run_writes_what_tactile_run_writes(tactile_bin, root, tmp_path):
+    """`tactile.run` is `tactile run`: the same records, overlays and
+    summary counts, and the same refusals before anything is written."""
+    cli_out, cli_render = tmp_path / "cli.jsonl", tmp_path / "cli-render"
+    stdout = run_cli(tactile_bin, "run", "--data", "samples/palpation", "--models", "models",
+                     "--hysteresis", "0.6,0.3", "--out", str(cli_out), "--render", str(cli_render))
+    cli_summary = json.loads(stdout.splitlines()[-1])
+    py_out, py_render = tmp_path / "py.jsonl", tmp_path / "py-render"
+    s = tactile.run(root / "samples/palpation", models=root / "models", hysteresis=(0.6, 0.3),
+                    out=py_out, render=py_render)
+    cli_records = [json.loads(line) for line in cli_out.read_text().splitlines()]
+    py_records = [json.loads(line) for line in py_out.read_text().splitlines()]
+    assert len(py_records) == len(cli_records) == s["frames"] == cli_summary["frames"]
+    for c, p in zip(cli_records, py_records):
+        c, p = _found(c), _found(p)
+        assert c.keys() == p.keys()
+        for key in c:
+            if isinstance(c[key], float):
+                assert abs(c[key] - p[key]) <= max(SCORE_TOL, DEPTH_TOL_MM), key
+            else:
+                assert c[key] == p[key], key
+    for key in ("tendon_frames", "gated_out", "decision_changes", "hysteresis", "source"):
+        assert s[key] == cli_summary[key], key
+    assert s["tendon_frames"] == 8
+    assert sorted(x.name for x in py_render.iterdir()) == sorted(x.name for x in cli_render.iterdir())
+    assert len(list(py_render.iterdir())) == 8
+    assert s["records"] == str(py_out) and s["render"] == str(py_render)
+    assert s["mcap"] is None and s["live_sent"] is None
+
+    # ROS 2 messages for an .mcap name.
+    m = tactile.run(root / "samples/palpation", models=root / "models", out=tmp_path / "r.mcap",
+                    limit=5)
+    assert m["mcap"] == str(tmp_path / "r.mcap") and m["mcap_frames"] == 5 == m["frames"]
+    assert m["records"] is None and (tmp_path / "r.mcap").stat().st_size > 0
+
+    # Refused before any model loads, nothing written: two outputs in one
+    # place, an output over the input, a render folder holding files and
+    # bad hysteresis (both checked before the missing models folder).
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(ValueError, match="two outputs of this run name one place"):
+        tactile.run(root / "samples/palpation", models=root / "models",
+                    out=tmp_path / "same", render=tmp_path / "same")
+    with pytest.raises(ValueError, match="000003.png"):
+        tactile.run(root / "samples/palpation", models=root / "models",
+                    out=root / "samples/palpation/000003.png")
+    with pytest.raises(ValueError, match="cli-render: already holds files"):
+        tactile.run(root / "samples/palpation", models=tmp_path / "no-models", render=cli_render)
+    with pytest.raises(ValueError, match="hysteresis"):
+        tactile.run(root / "samples/palpation", models=tmp_path / "no-models",
+                    hysteresis=(0.2, 0.6))
+    with pytest.raises(FileNotFoundError, match="no-models"):
+        tactile.run(root / "samples/palpation", models=tmp_path / "no-models",
+                    out=tmp_path / "never.jsonl")
+    with pytest.raises(ValueError, match="threads"):
+        tactile.run(root / "samples/palpation", threads=0)
+    with pytest.raises(ValueError, match="view_wait"):
+        tactile.run(root / "samples/palpation", view="127.0.0.1:0", view_wait=float("nan"))
+    with pytest.raises(ValueError, match="stdin_size"):
+        tactile.run()
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+    assert len(list(cli_render.iterdir())) == 8
+
+
 def _segmenter_side(root) -> int:
     cfg = json.loads((root / "models/segmenter/segmenter.json").read_text())
     return int(cfg["model"]["side"])

@@ -124,7 +124,10 @@ impl RunSession {
             _ => None,
         };
         let inputs: Vec<_> = input.iter().collect();
-        let out = request.out.as_deref().filter(|_| !request.records_to_stdout());
+        let out = request
+            .out
+            .as_deref()
+            .filter(|_| !request.records_to_stdout());
         if let (Some(out), Some(render)) = (out, &request.render) {
             dataset::refuse_same_output(out, render)?;
         }
@@ -136,6 +139,7 @@ impl RunSession {
         }
         if let Some(dir) = &request.render {
             dataset::check_output_dir(dir, &inputs)?;
+            tactile_core::io::refuse_folder_with_files(dir)?;
         }
         let pipeline =
             Pipeline::load(&request.models, request.runtime, request.threads).map_err(Box::new)?;
@@ -159,7 +163,9 @@ impl RunSession {
             },
             robot,
             records,
-            records_file: json_out.filter(|_| !request.records_to_stdout()).map(Path::to_path_buf),
+            records_file: json_out
+                .filter(|_| !request.records_to_stdout())
+                .map(Path::to_path_buf),
         })
     }
 

@@ -32,6 +32,12 @@ folder of frames, a video or a ROS 2 bag; CSV or MCAP out)::
     est = tactile.predict("models/pose-surface", "tactip.mcap", "estimates.mcap")
     est["stamp_ns"], est["shear_theta_deg"], est["shear_theta_deg_std"]
 
+Paper B's pipeline over a whole recording, as ``tactile run`` (records as
+JSON Lines or ROS 2 messages in MCAP, overlays, a live Foxglove view)::
+
+    summary = tactile.run("palpation.mp4", models="models", out="records.jsonl")
+    summary["fps"], summary["tendon_frames"], summary["records"]
+
 Datasets, generators, training and evaluation: ``tactile.Dataset``,
 ``tactile.synth``, ``tactile.train``, ``tactile.eval``.
 
@@ -93,6 +99,7 @@ from ._tactile import (  # noqa: E402
     read_grey,
     read_rgb,
     ros_image_to_rgb,
+    run,
 )
 from . import calibrate, eval, synth, train  # noqa: E402
 
@@ -120,6 +127,7 @@ __all__ = [
     "read_grey",
     "read_rgb",
     "ros_image_to_rgb",
+    "run",
     "synth",
     "train",
 ]

@@ -145,6 +145,31 @@ def predict(
     (``file``, ``stamp_ns`` for a bag, one array per estimate, ``ms_per_frame``),
     written to ``out`` too when given (CSV, or ROS 2 messages for ``.mcap``)."""
 
+def run(
+    source: Optional[_Path] = None,
+    *,
+    models: _Path = "models",
+    runtime: str = "onnx",
+    threads: int = 1,
+    hysteresis: Optional[Tuple[float, float]] = None,
+    out: Optional[_Path] = None,
+    render: Optional[_Path] = None,
+    with_frames: bool = False,
+    view: Optional[str] = None,
+    view_wait: float = 0.0,
+    topic: Optional[str] = None,
+    stdin_size: Optional[Tuple[int, int]] = None,
+    live_queue: int = 2,
+    limit: Optional[int] = None,
+    prefetch: bool = True,
+) -> Dict[str, Any]:
+    """``tactile run``: paper B's pipeline over every frame of ``source`` (what
+    ``frames`` reads), records to ``out`` (JSON Lines, ``"-"`` for standard
+    output, or ROS 2 messages for ``.mcap``), overlays into the new folder
+    ``render``, results served live at ``view`` (``HOST:PORT``); returns the
+    summary the command line prints last, with ``records``, ``mcap``,
+    ``mcap_frames``, ``render``, ``live_sent`` and ``live_dropped``."""
+
 class Reconstructor:
     """A calibrated GelSight-like sensor: frames to the skin's indentation."""
 

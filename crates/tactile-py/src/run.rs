@@ -1,0 +1,82 @@
+//! `tactile.run`: `tactile run` from Python, the same library session
+//! ([`tactile_ros::RunSession`]): the palpation pipeline over a source of
+//! frames, its records written as JSON Lines or ROS 2 messages in MCAP,
+//! overlays rendered, results served live, and the summary returned.
+
+use std::path::PathBuf;
+
+use pyo3::prelude::*;
+use tactile_ros::{RunRequest, RunSession};
+
+use crate::errors::PyResultExt;
+use crate::pipeline::{check_threads, runtime};
+use crate::source::source_spec;
+use crate::work::interruptible;
+
+/// Run the pipeline of `models` over every frame of `source` (what
+/// `tactile.frames` reads; `stdin_size=(w, h)` for raw rgb24 frames on
+/// standard input) as `tactile run` does, and return its summary as the
+/// dict the command line prints last, with `records`, `mcap`,
+/// `mcap_frames`, `render`, `live_sent` and `live_dropped` saying where
+/// the outputs went. Every output is checked before any model loads and
+/// appears when the run ends; Ctrl-C stops it leaving none.
+#[pyfunction]
+#[pyo3(signature = (
+    source=None, *, models=PathBuf::from("models"), runtime="onnx", threads=1,
+    hysteresis=None, out=None, render=None, with_frames=false, view=None,
+    view_wait=0.0, topic=None, stdin_size=None, live_queue=2, limit=None, prefetch=true
+))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run<'py>(
+    py: Python<'py>,
+    source: Option<PathBuf>,
+    models: PathBuf,
+    runtime: &str,
+    threads: usize,
+    hysteresis: Option<(f32, f32)>,
+    out: Option<PathBuf>,
+    render: Option<PathBuf>,
+    with_frames: bool,
+    view: Option<String>,
+    view_wait: f64,
+    topic: Option<String>,
+    stdin_size: Option<(usize, usize)>,
+    live_queue: usize,
+    limit: Option<u64>,
+    prefetch: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let rt = self::runtime(runtime)?;
+    check_threads(threads)?;
+    if !view_wait.is_finite() || view_wait < 0.0 {
+        return Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "view_wait: must be 0 or more seconds, got {view_wait}"
+        )));
+    }
+    let request = RunRequest {
+        source_options: tactile_pipeline::SourceOptions {
+            overlap: prefetch,
+            live_queue,
+            limit,
+        },
+        runtime: rt,
+        threads,
+        hysteresis,
+        out,
+        render,
+        with_frames,
+        view,
+        ..RunRequest::new(source_spec(source, topic, stdin_size)?, models)
+    };
+    let session = interruptible(py, || RunSession::open(&request).py())?;
+    for w in session.warnings() {
+        crate::errors::user_warning(py, &w)?;
+    }
+    let report = interruptible(py, || {
+        session.wait_for_viewer(view_wait).py()?;
+        session.run().py()
+    })?;
+    for w in &report.late_warnings {
+        crate::errors::user_warning(py, w)?;
+    }
+    crate::json::to_py(py, &report)
+}
