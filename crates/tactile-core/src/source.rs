@@ -208,7 +208,25 @@ impl FrameList {
             ));
         }
         w.extend(self.ignored_warning());
+        w.extend(self.unreadable_names_warning());
         w
+    }
+
+    /// The warning naming frames whose file names are not UTF-8 (written
+    /// on a system with another encoding): records, CSV rows and overlay
+    /// names are text, so they show such a name with U+FFFD in place of
+    /// its bad bytes, and two names can read alike there.
+    pub fn unreadable_names_warning(&self) -> Option<String> {
+        let bad: Vec<_> = (self.frames.iter())
+            .filter_map(|f| f.path.file_name().filter(|n| n.to_str().is_none()))
+            .collect();
+        let first = bad.first()?;
+        Some(format!(
+            "warning: {} frame name(s) are not UTF-8 (e.g. {first:?}); the outputs name them with \
+             U+FFFD in place of the bytes that are not, so rename them if two could \
+             read alike",
+            bad.len()
+        ))
     }
 
     /// The warning naming the files of a folder of frames that were not read

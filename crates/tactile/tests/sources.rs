@@ -257,6 +257,29 @@ fn a_folder_of_jpeg_frames_runs_and_other_files_are_reported() {
 }
 
 #[test]
+fn frame_names_that_are_not_utf8_are_run_and_reported() {
+    // A frame saved on a system whose file names are Latin-1 ("é" as the
+    // byte 0xE9): its name cannot be written as it is in a JSON record.
+    use std::os::unix::ffi::OsStrExt;
+    let dir = tempfile::tempdir().unwrap();
+    for (i, p) in sample_frames().iter().enumerate() {
+        let name = match i {
+            1 => std::ffi::OsStr::from_bytes(b"000001-\xe9.png").to_os_string(),
+            _ => format!("{i:06}.png").into(),
+        };
+        std::fs::copy(p, dir.path().join(name)).unwrap();
+    }
+    let (records, summary, err) = run(&["--data", dir.path().to_str().unwrap()], None);
+    assert_eq!(summary["frames"].as_u64().unwrap() as usize, records.len());
+    assert_eq!(records[1]["frame"], "000001-\u{fffd}.png");
+    assert!(
+        err.contains("1 frame name(s) are not UTF-8 (e.g. \"000001-\\xE9.png\")"),
+        "{err}"
+    );
+    assert_agree(&reference(), &records, 2.0);
+}
+
+#[test]
 fn a_folder_numbered_without_zeros_runs_in_time() {
     // Frames saved as frame_0.png ... frame_11.png: by name, frame_10 and
     // frame_11 would come before frame_2, and the run's hysteresis would
