@@ -55,23 +55,30 @@ pub fn output_path(path: &Path) -> Result<std::path::PathBuf> {
 /// ([`refuse_model_file`]); a model folder holds a handful.
 const MAX_MODEL_FOLDER_ENTRIES: usize = 10_000;
 
+/// The rest frame a calibrated sensor's model folder holds and loads
+/// (`tactile_gelsight::artifact::BACKGROUND_FILE` is this), which outputs never replace.
+pub const MODEL_BACKGROUND_FILE: &str = "background.png";
+
 /// Refuse an output `out` (written at `target`, [`output_path`]) that
 /// would replace a file a model is loaded from: weights (`*.bpk`) anywhere,
-/// and a config or notes (`*.json`) in a folder that holds a model
+/// and a config or notes (`*.json`) or a calibrated sensor's rest frame
+/// ([`MODEL_BACKGROUND_FILE`]) in a folder that holds a model
 /// ([`model_configs`]: a `NAME.json` with its `NAME.bpk`, or an
 /// `ensemble.json`). `predict --out m/pose.json` would otherwise
-/// write estimates over the model's config, and a bench page
-/// `m/pose.md` its rows over it (`m/pose.json`). Its other files (curves,
-/// plots, exports) and new files may be written.
+/// write estimates over the model's config, a bench page
+/// `m/pose.md` its rows over it (`m/pose.json`), and a page
+/// `m/background.md` its plot over the sensor's rest frame. Its other
+/// files (curves, plots, exports) and new files may be written.
 pub fn refuse_model_file(out: &Path, target: &Path) -> Result<()> {
     let ext = target.extension().and_then(|e| e.to_str()).unwrap_or("");
-    if !matches!(ext, "json" | "bpk") || !target.is_file() {
+    let background = target.file_name() == Some(std::ffi::OsStr::new(MODEL_BACKGROUND_FILE));
+    if !(matches!(ext, "json" | "bpk") || background) || !target.is_file() {
         return Ok(());
     }
     let dir = folder_of(target);
     if ext == "bpk" || !model_configs(dir).is_empty() {
         return Err(Error::Invalid(format!(
-            "{}: is a file of the model in {} (its config, notes or weights); writing this output over it would break the model, so nothing was done: give another file name",
+            "{}: is a file of the model in {} (its config, notes, weights or rest frame); writing this output over it would break the model, so nothing was done: give another file name",
             out.display(),
             dir.display()
         )));
@@ -655,10 +662,17 @@ mod tests {
         for d in [&net, &ens, &ens.join("member-0"), &plain] {
             std::fs::create_dir_all(d).unwrap();
         }
-        for f in ["pose.json", "pose.bpk", "training.json", "curves.csv"] {
+        for f in [
+            "pose.json",
+            "pose.bpk",
+            "training.json",
+            "curves.csv",
+            "background.png",
+        ] {
             write(&net.join(f));
         }
         write(&ens.join("ensemble.json"));
+        write(&plain.join("background.png"));
         write(&ens.join("member-0/pose.json"));
         write(&ens.join("member-0/pose.bpk"));
         write(&plain.join("scores.json"));
@@ -667,6 +681,7 @@ mod tests {
             net.join("pose.json"),
             net.join("pose.bpk"),
             net.join("training.json"),
+            net.join("background.png"),
             ens.join("ensemble.json"),
             ens.join("member-0/pose.json"),
         ] {
@@ -687,6 +702,7 @@ mod tests {
             net.join("curves.csv"),
             net.join("estimates.json"),
             plain.join("scores.json"),
+            plain.join("background.png"),
         ] {
             check(allowed.clone()).unwrap_or_else(|e| panic!("{}: {e}", allowed.display()));
         }

@@ -15,7 +15,7 @@ use crate::model::{GradientNet, GradientNetConfig};
 use crate::prepare::{FEATURES, WorkingGrid};
 
 /// The background's file in a model folder.
-pub const BACKGROUND_FILE: &str = "background.png";
+pub const BACKGROUND_FILE: &str = tactile_core::io::MODEL_BACKGROUND_FILE;
 
 /// Everything needed to rebuild and run a calibrated sensor model.
 #[derive(Debug, Clone, Serialize, Deserialize)]

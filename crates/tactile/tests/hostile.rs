@@ -674,6 +674,61 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
     );
     assert!(!m.join("pose.md").exists());
     assert_eq!(std::fs::read(m.join("pose.json")).unwrap(), config);
+    // Nor a bench page the labels of the dataset it measures (a bench's
+    // inputs are not all datasets: the output's place says it is one's).
+    let (ok, msg) = tactile(&[
+        "bench",
+        "pose",
+        "--models",
+        s(&m),
+        "--data",
+        s(&ds),
+        "--out",
+        s(&ds.join("labels.csv")),
+    ]);
+    assert!(
+        !ok && msg.contains("labels.csv: this output is part of the dataset"),
+        "{msg}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(ds.join("labels.csv")).unwrap(),
+        labels
+    );
+    // Nor a page's plot (NAME.png) the rest frame of a calibration folder
+    // or of a calibrated sensor's model.
+    let cal = tmp.path().join("cal");
+    let gel = tmp.path().join("gel");
+    std::fs::create_dir_all(&cal).unwrap();
+    std::fs::create_dir_all(&gel).unwrap();
+    let gelsight = root().join("models/gelsight-r15");
+    std::fs::write(
+        cal.join("sensor.json"),
+        r#"{"ball_diameter_mm": 4, "mm_per_px": 0.03}"#,
+    )
+    .unwrap();
+    std::fs::copy(gelsight.join("background.png"), cal.join("background.png")).unwrap();
+    for f in ["gelsight.json", "gelsight.bpk", "background.png"] {
+        std::fs::copy(gelsight.join(f), gel.join(f)).unwrap();
+    }
+    let rest = std::fs::read(gelsight.join("background.png")).unwrap();
+    for (dir, says) in [
+        (&cal, "is part of the calibration folder"),
+        (&gel, "is a file of the model in"),
+    ] {
+        let (ok, msg) = tactile(&[
+            "bench",
+            "pose",
+            "--models",
+            s(&m),
+            "--data",
+            s(&ds),
+            "--out",
+            s(&dir.join("background.md")),
+        ]);
+        assert!(!ok && msg.contains(says), "{msg}");
+        assert_eq!(std::fs::read(dir.join("background.png")).unwrap(), rest);
+        assert!(!dir.join("background.md").exists());
+    }
     for out in ["curves.csv", "estimates.csv"] {
         let (ok, msg) = predict(&m.join(out));
         assert!(ok, "{out}: {msg}");

@@ -688,15 +688,79 @@ impl Dataset {
 }
 
 /// Before any work: the output file `out` can be written, is none of the
-/// files of the input `datasets` and none a model is loaded from
-/// ([`crate::io::refuse_model_file`]).
+/// files of the input `datasets`, none of a dataset or calibration folder
+/// it lies in ([`refuse_file_of_enclosing_input`]) and none a model is loaded
+/// from ([`crate::io::refuse_model_file`]).
 pub fn check_output_file(out: &Path, datasets: &[&Dataset]) -> Result<()> {
     for ds in datasets {
         ds.refuse_as_output(out)?;
     }
     let target = crate::io::output_path(out)?;
     crate::io::refuse_model_file(out, &target)?;
+    refuse_file_of_enclosing_input(out, &target)?;
     crate::io::ensure_writable_parent(target)
+}
+
+/// Folders looked at for an input folder an output lies in: its own and
+/// three above (`DS/frames/seq/x.png`).
+const ENCLOSING_INPUT_DEPTH: usize = 4;
+
+/// Refuse an output `out` (written at `target`) that would change an input
+/// folder it lies in, whether or not the run reads it: a dataset's
+/// manifest, labels or a file its rows name, and a calibration folder's
+/// `sensor.json`, `presses.csv`, background frame and `frames/`. A bench
+/// page `DS/labels.csv` would otherwise be written over the labels of the
+/// dataset it measured, and a page `CAL/background.md` its plot over the
+/// rest frame (a bench names no dataset to check against: its inputs are
+/// models, bags and calibration folders too). A folder with a
+/// `manifest.json` and a `labels.csv` is taken for a dataset (when it
+/// does not open as one, its manifest and labels are still kept), one
+/// with a `sensor.json` for a calibration folder (docs/datasets.md).
+/// New files beside theirs are results, and may be written.
+pub fn refuse_file_of_enclosing_input(out: &Path, target: &Path) -> Result<()> {
+    let Some(t) = canonical_output(target) else {
+        return Ok(());
+    };
+    for dir in t.ancestors().skip(1).take(ENCLOSING_INPUT_DEPTH) {
+        let (manifest, labels) = (dir.join("manifest.json"), dir.join("labels.csv"));
+        if manifest.is_file() && labels.is_file() {
+            return match Dataset::open(dir) {
+                Ok(ds) => ds
+                    .refuse_as_output(&t)
+                    .map_err(|_| input_file_error(out, "dataset", dir)),
+                Err(_) if t == manifest || t == labels => {
+                    Err(input_file_error(out, "dataset", dir))
+                }
+                Err(_) => Ok(()),
+            };
+        }
+        let sensor = dir.join("sensor.json");
+        if sensor.is_file() {
+            // The background is named in sensor.json (default background.png).
+            let background = crate::io::read_json::<serde_json::Value>(&sensor)
+                .ok()
+                .and_then(|v| v.get("background")?.as_str().map(PathBuf::from))
+                .unwrap_or_else(|| PathBuf::from("background.png"));
+            let rel = t.strip_prefix(dir).unwrap_or(&t);
+            let kept = rel == Path::new("sensor.json")
+                || rel == Path::new("presses.csv")
+                || rel == background
+                || rel.starts_with("frames");
+            return match kept {
+                true => Err(input_file_error(out, "calibration folder", dir)),
+                false => Ok(()),
+            };
+        }
+    }
+    Ok(())
+}
+
+fn input_file_error(out: &Path, kind: &str, dir: &Path) -> Error {
+    Error::Invalid(format!(
+        "{}: this output is part of the {kind} {}; writing it would change the {kind}, so nothing was done",
+        out.display(),
+        dir.display()
+    ))
 }
 
 /// `p` made absolute with its links resolved: itself when it exists, else
@@ -825,6 +889,55 @@ mod tests {
     }
 
     const HEADER: &str = "file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n\n";
+
+    #[test]
+    fn outputs_never_change_an_input_folder_they_lie_in_whether_or_not_it_is_read() {
+        let d = tempfile::tempdir().unwrap();
+        let ds = d.path().join("ds");
+        tiny(&ds, &format!("{HEADER}frames/a.png,sphere,1.5,,0,2,3.4\n"));
+        let labels = std::fs::read(ds.join("labels.csv")).unwrap();
+        // No dataset given: the output's own place says it is one's.
+        for f in ["labels.csv", "manifest.json", "frames/a.png"] {
+            let e = check_output_file(&ds.join(f), &[]).unwrap_err().to_string();
+            assert!(e.contains("is part of the dataset"), "{f}: {e}");
+        }
+        // Through a link, and from a folder of the dataset.
+        std::os::unix::fs::symlink(ds.join("labels.csv"), d.path().join("page.md")).unwrap();
+        assert!(check_output_file(&d.path().join("page.md"), &[]).is_err());
+        // New files beside the dataset's, or in its folders, are results.
+        check_output_file(&ds.join("estimates.csv"), &[]).unwrap();
+        check_output_file(&ds.join("frames/b.png.md"), &[]).unwrap();
+        check_output_file(&d.path().join("labels.csv"), &[]).unwrap();
+        // A folder that looks like a dataset but does not open as one
+        // keeps its manifest and labels.
+        std::fs::write(ds.join("manifest.json"), "{ not json").unwrap();
+        assert!(check_output_file(&ds.join("labels.csv"), &[]).is_err());
+        check_output_file(&ds.join("frames/a.png"), &[]).unwrap();
+        assert_eq!(std::fs::read(ds.join("labels.csv")).unwrap(), labels);
+        // A calibration folder keeps its description, annotations, rest
+        // frame (the one sensor.json names) and presses.
+        let cal = d.path().join("cal");
+        std::fs::create_dir_all(cal.join("frames")).unwrap();
+        std::fs::write(cal.join("sensor.json"), r#"{"background": "rest.png"}"#).unwrap();
+        for f in ["presses.csv", "rest.png", "frames/p1.png", "notes.md"] {
+            std::fs::write(cal.join(f), b"x").unwrap();
+        }
+        for f in [
+            "sensor.json",
+            "presses.csv",
+            "rest.png",
+            "frames/p1.png",
+            "frames/new.md",
+        ] {
+            let e = check_output_file(&cal.join(f), &[])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("is part of the calibration folder"), "{f}: {e}");
+        }
+        for f in ["notes.md", "page.md", "background.png"] {
+            check_output_file(&cal.join(f), &[]).unwrap_or_else(|e| panic!("{f}: {e}"));
+        }
+    }
 
     #[test]
     fn good_dataset_opens_and_reads_labels() {
