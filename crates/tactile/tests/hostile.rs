@@ -658,16 +658,20 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
     }
     let (ok, msg) = tactile(&["export", "--model", s(&m), "--out", s(&m.join("pose.json"))]);
     assert!(!ok && msg.contains("is a file of the model in"), "{msg}");
-    let (ok, msg) = tactile(&[
-        "bench",
-        "pose",
-        "--models",
-        s(&m),
-        "--data",
-        s(&ds),
-        "--out",
-        s(&m.join("pose.md")),
-    ]);
+    // A bench page of the pose network on `ds`, named `out`.
+    let bench_page = |out: &Path| {
+        tactile(&[
+            "bench",
+            "pose",
+            "--models",
+            s(&m),
+            "--data",
+            s(&ds),
+            "--out",
+            s(out),
+        ])
+    };
+    let (ok, msg) = bench_page(&m.join("pose.md"));
     assert!(
         !ok && msg.contains("m/pose.json: is a file of the model"),
         "{msg}"
@@ -676,16 +680,7 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
     assert_eq!(std::fs::read(m.join("pose.json")).unwrap(), config);
     // Nor a bench page the labels of the dataset it measures (a bench's
     // inputs are not all datasets: the output's place says it is one's).
-    let (ok, msg) = tactile(&[
-        "bench",
-        "pose",
-        "--models",
-        s(&m),
-        "--data",
-        s(&ds),
-        "--out",
-        s(&ds.join("labels.csv")),
-    ]);
+    let (ok, msg) = bench_page(&ds.join("labels.csv"));
     assert!(
         !ok && msg.contains("labels.csv: this output is part of the dataset"),
         "{msg}"
@@ -715,16 +710,7 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
         (&cal, "is part of the calibration folder"),
         (&gel, "is a file of the model in"),
     ] {
-        let (ok, msg) = tactile(&[
-            "bench",
-            "pose",
-            "--models",
-            s(&m),
-            "--data",
-            s(&ds),
-            "--out",
-            s(&dir.join("background.md")),
-        ]);
+        let (ok, msg) = bench_page(&dir.join("background.md"));
         assert!(!ok && msg.contains(says), "{msg}");
         assert_eq!(std::fs::read(dir.join("background.png")).unwrap(), rest);
         assert!(!dir.join("background.md").exists());

@@ -688,8 +688,8 @@ impl Dataset {
 }
 
 /// Before any work: the output file `out` can be written, is none of the
-/// files of the input `datasets`, none of a dataset or calibration folder
-/// it lies in ([`refuse_file_of_enclosing_input`]) and none a model is loaded
+/// files of the input `datasets`, none of a dataset, calibration folder
+/// or bag it lies in ([`refuse_file_of_enclosing_input`]) and none a model is loaded
 /// from ([`crate::io::refuse_model_file`]).
 pub fn check_output_file(out: &Path, datasets: &[&Dataset]) -> Result<()> {
     for ds in datasets {
@@ -707,15 +707,17 @@ const ENCLOSING_INPUT_DEPTH: usize = 4;
 
 /// Refuse an output `out` (written at `target`) that would change an input
 /// folder it lies in, whether or not the run reads it: a dataset's
-/// manifest, labels or a file its rows name, and a calibration folder's
-/// `sensor.json`, `presses.csv`, background frame and `frames/`. A bench
+/// manifest, labels or a file its rows name, a calibration folder's
+/// `sensor.json`, `presses.csv`, background frame and `frames/`, and a
+/// ROS 2 bag folder's `metadata.yaml` and MCAP files. A bench
 /// page `DS/labels.csv` would otherwise be written over the labels of the
 /// dataset it measured, and a page `CAL/background.md` its plot over the
 /// rest frame (a bench names no dataset to check against: its inputs are
 /// models, bags and calibration folders too). A folder with a
 /// `manifest.json` and a `labels.csv` is taken for a dataset (when it
 /// does not open as one, its manifest and labels are still kept), one
-/// with a `sensor.json` for a calibration folder (docs/datasets.md).
+/// with a `sensor.json` for a calibration folder (docs/datasets.md), one
+/// with rosbag2's `metadata.yaml` for a bag ([`crate::bag::is_bag_folder`]).
 /// New files beside theirs are results, and may be written.
 pub fn refuse_file_of_enclosing_input(out: &Path, target: &Path) -> Result<()> {
     let Some(t) = canonical_output(target) else {
@@ -732,6 +734,21 @@ pub fn refuse_file_of_enclosing_input(out: &Path, target: &Path) -> Result<()> {
                     Err(input_file_error(out, "dataset", dir))
                 }
                 Err(_) => Ok(()),
+            };
+        }
+        // A bag's files are all read as the bag: a new MCAP file in its
+        // folder would join the recording.
+        if crate::bag::is_bag_folder(dir) {
+            let in_bag = t.parent() == Some(dir)
+                && (t.file_name() == Some(std::ffi::OsStr::new("metadata.yaml"))
+                    || crate::bag::is_bag_input_file(&t));
+            return match in_bag {
+                true => Err(Error::Invalid(format!(
+                    "{}: this output is part of the ROS 2 bag {}, whose MCAP files are all read as the bag; writing it would change the bag, so nothing was done",
+                    out.display(),
+                    dir.display()
+                ))),
+                false => Ok(()),
             };
         }
         let sensor = dir.join("sensor.json");
@@ -937,6 +954,24 @@ mod tests {
         for f in ["notes.md", "page.md", "background.png"] {
             check_output_file(&cal.join(f), &[]).unwrap_or_else(|e| panic!("{f}: {e}"));
         }
+        // A ROS 2 bag folder keeps its metadata and recordings, and takes
+        // no new MCAP file, which would be read as part of the bag.
+        let bag = d.path().join("bag");
+        std::fs::create_dir_all(&bag).unwrap();
+        std::fs::write(bag.join("metadata.yaml"), "rosbag2_bagfile_information:\n").unwrap();
+        std::fs::write(bag.join("rec_0.mcap"), b"x").unwrap();
+        for f in [
+            "metadata.yaml",
+            "rec_0.mcap",
+            "results.mcap",
+            "rec_1.mcap.zstd",
+        ] {
+            let e = check_output_file(&bag.join(f), &[])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("is part of the ROS 2 bag"), "{f}: {e}");
+        }
+        check_output_file(&bag.join("page.md"), &[]).unwrap();
     }
 
     #[test]
