@@ -481,9 +481,11 @@ impl PredictInput {
             Self::Dataset(ds) => vec![ds],
             Self::Source(_) => Vec::new(),
         };
-        // The input's own refusal first: it says why.
-        tactile_core::dataset::refuse_input_as_output(out, data)?;
-        Ok(tactile_core::dataset::check_output_file(out, &datasets)?)
+        Ok(tactile_core::dataset::check_run_output(
+            out,
+            Some(data),
+            &datasets,
+        )?)
     }
 }
 

@@ -205,11 +205,7 @@ impl PyLiveView {
     /// so a recording is watched from its first frame; true when one did.
     /// Ctrl-C ends the wait with `KeyboardInterrupt`.
     fn wait_for_viewer(&self, py: Python<'_>, seconds: f64) -> PyResult<bool> {
-        if !seconds.is_finite() || seconds < 0.0 {
-            return Err(PyValueError::new_err(format!(
-                "wait_for_viewer: seconds must be a finite number >= 0, got {seconds}"
-            )));
-        }
+        tactile_ros::live::check_wait_seconds("wait_for_viewer", seconds).py()?;
         self.with(|v| crate::work::interruptible(py, || v.wait_for_viewer(seconds).py()))
     }
 

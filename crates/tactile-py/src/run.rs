@@ -47,11 +47,7 @@ pub(crate) fn run<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::runtime(runtime)?;
     check_threads(threads)?;
-    if !view_wait.is_finite() || view_wait < 0.0 {
-        return Err(pyo3::exceptions::PyValueError::new_err(format!(
-            "view_wait: must be 0 or more seconds, got {view_wait}"
-        )));
-    }
+    tactile_ros::live::check_wait_seconds("view_wait", view_wait).py()?;
     let request = RunRequest {
         source_options: tactile_pipeline::SourceOptions {
             overlap: prefetch,

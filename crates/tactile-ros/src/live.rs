@@ -53,6 +53,19 @@ fn parse_address(address: &str) -> Result<(String, u16)> {
     Ok((host.to_string(), port))
 }
 
+/// Refuse a wait for a viewer that is not a finite number of seconds >= 0,
+/// naming the argument `what` (Python's `wait_for_viewer` and
+/// `tactile.run(view_wait=...)`).
+pub fn check_wait_seconds(what: &str, seconds: f64) -> Result<()> {
+    if seconds.is_finite() && seconds >= 0.0 {
+        return Ok(());
+    }
+    Err(tactile_core::Error::Invalid(format!(
+        "{what}: seconds must be a finite number >= 0, got {seconds}"
+    ))
+    .into())
+}
+
 impl LiveView {
     /// Serve the result channels at `address` (`HOST:PORT`; port 0 picks a
     /// free one, see [`LiveView::port`]).

@@ -132,12 +132,7 @@ impl RunSession {
             dataset::refuse_same_output(out, render)?;
         }
         if let Some(out) = out {
-            // The input's own refusal first: it says why (a bag's files
-            // are all read as the bag, a frame of the folder read).
-            if let Some(data) = data {
-                dataset::refuse_input_as_output(out, data)?;
-            }
-            dataset::check_output_file(out, &inputs)?;
+            dataset::check_run_output(out, data, &inputs)?;
         }
         if let Some(dir) = &request.render {
             dataset::check_output_dir(dir, &inputs)?;

@@ -701,6 +701,20 @@ pub fn check_output_file(out: &Path, datasets: &[&Dataset]) -> Result<()> {
     crate::io::ensure_writable_parent(target)
 }
 
+/// Before any work: the output file `out` of a run over `input` (a
+/// dataset, a folder of frames, a video or a bag; none for standard input)
+/// is none of the input's files, the input's own refusal said first
+/// because it says why ([`refuse_input_as_output`]: a bag's files are all
+/// read as the bag, a frame of the folder read), then passes
+/// [`check_output_file`]. `tactile run` and `tactile predict` check
+/// their records file with it.
+pub fn check_run_output(out: &Path, input: Option<&Path>, datasets: &[&Dataset]) -> Result<()> {
+    if let Some(input) = input {
+        refuse_input_as_output(out, input)?;
+    }
+    check_output_file(out, datasets)
+}
+
 /// Folders looked at for an input folder an output lies in: its own and
 /// three above (`DS/frames/seq/x.png`).
 const ENCLOSING_INPUT_DEPTH: usize = 4;
