@@ -19,7 +19,7 @@ use tactile_estimate::{
 use tactile_pipeline::tactip::{classes_of, encoder_trained_on, holdout_cure};
 use tactile_preprocess::PreprocessConfig;
 
-use crate::Result;
+use crate::{Error, Result};
 
 /// What is compared.
 #[derive(Debug, Clone)]
@@ -68,6 +68,10 @@ pub fn compare(c: &Compare) -> Result<String> {
                 .collect::<tactile_core::Result<Vec<f64>>>()
         })
         .collect::<tactile_core::Result<Vec<_>>>()?;
+    // Split first: a split the dataset cannot give fails before any frame
+    // is read.
+    let split = ds.three_way_split(c.test_fraction, c.val_fraction, c.seed)?;
+    let (train, val, test) = (&split.train, &split.val, &split.test);
     let dev = DeviceKind::Flex.device();
     let mut art = CaeArtifact::read(&c.encoder)?;
     if let Some((_, p)) = &c.preprocess {
@@ -79,8 +83,6 @@ pub fn compare(c: &Compare) -> Result<String> {
     let pins = PinSet::from_dataset(&ds, &art.preprocess)?;
     let cae_feats = encoder.encode(&pins.images)?;
     let raw: Vec<Vec<f32>> = pins.images.iter().map(|p| p.pixels.clone()).collect();
-    let split = ds.three_way_split(c.test_fraction, c.val_fraction, c.seed)?;
-    let (train, val, test) = (&split.train, &split.val, &split.test);
     let pick_x = |f: &[Vec<f32>], idx: &[usize]| -> Vec<Vec<f32>> {
         idx.iter().map(|&i| f[i].clone()).collect()
     };
@@ -96,8 +98,15 @@ pub fn compare(c: &Compare) -> Result<String> {
         ],
     )];
     let (rtr, rva, rte) = (pick_x(&raw, train), pick_x(&raw, val), pick_x(&raw, test));
+    // A split too small for a PCA's components leaves its row out, said
+    // under the table, rather than failing the comparison.
+    let mut left_out = Vec::new();
     for k in [16, 64] {
-        let mut p = classical::pca(&rtr, &[&rtr, &rva, &rte], k)?.into_iter();
+        let pca = classical::pca(&rtr, &[&rtr, &rva, &rte], k).map_err(Error::from);
+        let Some(p) = fitted(&format!("PCA-{k}"), pca, &mut left_out)? else {
+            continue;
+        };
+        let mut p = p.into_iter();
         let (Some(p0), Some(p1), Some(p2)) = (p.next(), p.next(), p.next()) else {
             continue;
         };
@@ -151,6 +160,7 @@ pub fn compare(c: &Compare) -> Result<String> {
         tactile_core::note!("warning: {w}");
         md.push_str(&format!("**{w}**\n\n"));
     }
+    md.push_str(&left_out_notes(&left_out));
     if !c.targets.is_empty() {
         md.push_str(&regression_table(
             &sets,
@@ -175,6 +185,30 @@ pub fn compare(c: &Compare) -> Result<String> {
         )?);
     }
     Ok(md)
+}
+
+/// `fit`'s result, or `None` when its split has too few frames for it:
+/// why `what` is left out is noted in `left_out` (and on standard error),
+/// so a small dataset gets every row that can be fitted rather than an
+/// error after the rest were.
+fn fitted<T>(what: &str, fit: Result<T>, left_out: &mut Vec<String>) -> Result<Option<T>> {
+    match fit {
+        Ok(v) => Ok(Some(v)),
+        Err(Error::Pipeline(tactile_pipeline::Error::Estimate(
+            tactile_estimate::Error::TooFewSamples(why),
+        ))) => {
+            let note = format!("{what} is left out: {why}.");
+            tactile_core::note!("warning: {note}");
+            left_out.push(note);
+            Ok(None)
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// The notes of [`fitted`] as paragraphs.
+fn left_out_notes(left_out: &[String]) -> String {
+    left_out.iter().map(|n| format!("{n}\n\n")).collect()
 }
 
 /// One feature set: name and (train, validation, test) vectors.
@@ -237,6 +271,7 @@ fn regression_table(
             .join(" | "),
         "---|".repeat(targets.len())
     );
+    let mut left_out = Vec::new();
     for (name, [tx, vx, sx]) in sets {
         for est in [mlp.as_str(), "ridge", "k-NN (k=5)"] {
             // A classical fit (ridge on raw pixels) can take an hour and
@@ -245,14 +280,17 @@ fn regression_table(
             tactile_core::note!("{name} + {est}");
             let t0 = std::time::Instant::now();
             let pred = match est {
-                "ridge" => classical::ridge(targets, (tx, ty), sx, 1e-3)?,
+                "ridge" => classical::ridge(targets, (tx, ty), sx, 1e-3).map_err(Error::from),
                 "k-NN (k=5)" => {
                     // k-NN uses the training and validation frames (no early stopping).
                     let x: Vec<Vec<f32>> = tx.iter().chain(vx).cloned().collect();
                     let y: Vec<Vec<f64>> = ty.iter().chain(vy).cloned().collect();
-                    classical::knn(targets, (&x, &y), sx, 5)?
+                    classical::knn(targets, (&x, &y), sx, 5).map_err(Error::from)
                 }
-                _ => mlp_regression(targets, [tx, vx, sx], (ty, vy), (hidden, seed), dev)?,
+                _ => mlp_regression(targets, [tx, vx, sx], (ty, vy), (hidden, seed), dev),
+            };
+            let Some(pred) = fitted(&format!("{name} + {est}"), pred, &mut left_out)? else {
+                continue;
             };
             let secs = t0.elapsed().as_secs_f64();
             let errs: Vec<String> = target_mae(targets, &pred, sy)
@@ -266,6 +304,7 @@ fn regression_table(
         }
     }
     md.push('\n');
+    md.push_str(&left_out_notes(&left_out));
     Ok(md)
 }
 
@@ -282,6 +321,7 @@ fn classification_table(
         classes.len(),
         classes.join(", ")
     );
+    let mut left_out = Vec::new();
     for (name, [tx, vx, sx]) in sets {
         // Classifiers fit on train + validation (the MLP makes its own folds).
         let x: Vec<Vec<f32>> = tx.iter().chain(vx).cloned().collect();
@@ -297,9 +337,12 @@ fn classification_table(
             tactile_core::note!("{name} + {est}");
             let t0 = std::time::Instant::now();
             let pred = match est {
-                "Gaussian naive Bayes" => classical::gaussian_nb(&x, &y, sx)?,
-                "k-NN (k=5)" => classical::knn_classify(&x, &y, sx, 5)?,
-                _ => mlp_classification(classes, (&x, &y, frames), sx, seed, dev)?,
+                "Gaussian naive Bayes" => classical::gaussian_nb(&x, &y, sx).map_err(Error::from),
+                "k-NN (k=5)" => classical::knn_classify(&x, &y, sx, 5).map_err(Error::from),
+                _ => mlp_classification(classes, (&x, &y, frames), sx, seed, dev),
+            };
+            let Some(pred) = fitted(&format!("{name} + {est}"), pred, &mut left_out)? else {
+                continue;
             };
             let secs = t0.elapsed().as_secs_f64();
             let acc = tactile_core::metrics::accuracy(&pred, sy);
@@ -310,5 +353,6 @@ fn classification_table(
         }
     }
     md.push('\n');
+    md.push_str(&left_out_notes(&left_out));
     Ok(md)
 }

@@ -43,7 +43,15 @@ fn standardise(x: &Array2<f64>, others: &[&Array2<f64>]) -> (Array2<f64>, Vec<Ar
 }
 
 /// PCA with `k` components fitted on `train`, applied to every set.
+/// Fewer training vectors than components is [`Error::TooFewSamples`]
+/// (linfa would refuse it in terms of matrix rows and columns).
 pub fn pca(train: &[Vec<f32>], sets: &[&[Vec<f32>]], k: usize) -> Result<Vec<Vec<Vec<f32>>>> {
+    if train.len() < k {
+        return Err(Error::TooFewSamples(format!(
+            "PCA with {k} components needs at least {k} training frames, got {}",
+            train.len()
+        )));
+    }
     let tr = array(train)?;
     let model = Pca::params(k)
         .fit(&DatasetBase::from(tr))

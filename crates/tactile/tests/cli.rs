@@ -955,6 +955,77 @@ fn compare_writes_a_table_of_every_feature_set_and_estimator() {
 }
 
 #[test]
+fn compare_on_a_small_dataset_leaves_out_only_what_it_cannot_fit() {
+    // The shipped 14-frame sample: 9 training frames are fewer than PCA's
+    // 16 and 64 components, and a split of 1 training and 6 validation
+    // frames leaves 7 for the 10-fold shape head. Each such row is left
+    // out and said; every other row is there.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let (encoder, data) = (
+        root.join("models/cae-shapes"),
+        root.join("samples/virtual-tactip"),
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("table.md");
+    let args = |fractions: &[&'static str]| {
+        let mut a = vec![
+            "compare",
+            "--encoder",
+            encoder.to_str().unwrap(),
+            "--data",
+            data.to_str().unwrap(),
+            "--targets",
+            "depth_mm",
+            "--classify",
+            "shape",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        a.extend_from_slice(fractions);
+        a
+    };
+    let rows = |table: &str| {
+        table
+            .lines()
+            .filter(|l| l.starts_with("| ") && !l.starts_with("| features"))
+            .count()
+    };
+    let (ok, msg) = tactile(&args(&[]));
+    assert!(ok, "{msg}");
+    let table = std::fs::read_to_string(&out).unwrap();
+    for k in [16, 64] {
+        let note = format!(
+            "PCA-{k} is left out: PCA with {k} components needs at least {k} training frames, got 9."
+        );
+        assert!(
+            table.contains(&note) && msg.contains(&note),
+            "{table}\n{msg}"
+        );
+    }
+    // CAE, raw pixels and pin tracking, three estimators each, twice.
+    assert_eq!(rows(&table), 18, "{table}");
+    std::fs::remove_file(&out).unwrap();
+    let (ok, msg) = tactile(&args(&["--test-fraction", "0.5", "--val-fraction", "0.9"]));
+    assert!(ok, "{msg}");
+    let table = std::fs::read_to_string(&out).unwrap();
+    for set in ["CAE-16", "raw 28x28", "pin tracking (127 pins)"] {
+        let note = format!(
+            "{set} + MLP 16-64-32 (10-fold) is left out: classifier needs at least 10 labelled samples, got 7"
+        );
+        assert!(table.contains(&note), "{table}");
+    }
+    assert_eq!(rows(&table), 15, "{table}");
+    // A split the dataset cannot give fails before any frame is read.
+    std::fs::remove_file(&out).unwrap();
+    let (ok, msg) = tactile(&args(&["--test-fraction", "0.9"]));
+    assert!(
+        !ok && msg.contains("too few frames (14)") && !msg.contains("preprocessing"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+}
+
+#[test]
 fn sweep_tabulates_and_plots_every_encoder() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("tt");
