@@ -54,7 +54,8 @@ fn parse_address(address: &str) -> Result<(String, u16)> {
 }
 
 /// Refuse a wait for a viewer that is not a finite number of seconds >= 0,
-/// naming the argument `what` (Python's `wait_for_viewer` and
+/// naming the argument `what` (`tactile run --view-wait`,
+/// [`crate::RunSession::wait_for_viewer`], Python's `wait_for_viewer` and
 /// `tactile.run(view_wait=...)`).
 pub fn check_wait_seconds(what: &str, seconds: f64) -> Result<()> {
     if seconds.is_finite() && seconds >= 0.0 {

@@ -179,8 +179,9 @@ impl RunSession {
 
     /// Hold the run up to `seconds` for a viewer to subscribe (replaying a
     /// recording to watch it); whether one did. Without a live view, at
-    /// once false.
+    /// once false. A wait that is not a finite number >= 0 is refused.
     pub fn wait_for_viewer(&self, seconds: f64) -> Result<bool> {
+        crate::live::check_wait_seconds("view_wait", seconds)?;
         match &self.robot.live {
             Some(l) if seconds > 0.0 => l.wait_for_viewer(seconds),
             _ => Ok(false),

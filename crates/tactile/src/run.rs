@@ -66,7 +66,7 @@ pub(crate) struct RunArgs {
     view: Option<String>,
     /// With --view: wait up to this many seconds for a viewer to subscribe
     /// before the first frame (replaying a bag or a video to watch it).
-    #[arg(long, default_value_t = 0.0, requires = "view")]
+    #[arg(long, default_value_t = 0.0, requires = "view", value_parser = wait_seconds)]
     view_wait: f64,
     /// Process at most this many frames.
     #[arg(long)]
@@ -179,4 +179,12 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
     }
     report(serde_json::to_string(&r.summary)?);
     Ok(())
+}
+
+/// `--view-wait`: a finite number of seconds >= 0 (NaN or a negative wait
+/// would silently mean none).
+fn wait_seconds(text: &str) -> Result<f64, String> {
+    let seconds: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    tactile_ros::live::check_wait_seconds("--view-wait", seconds).map_err(|e| e.to_string())?;
+    Ok(seconds)
 }

@@ -522,6 +522,25 @@ fn nothing_panics_on_empty_datasets_bad_configs_or_a_closed_stdout() {
         !ok && msg.contains("segmenter.json") && msg.contains("2 means"),
         "{msg}"
     );
+    // A live-view wait that is no number of seconds is refused before
+    // anything is served or read (it silently meant no wait).
+    for wait in ["--view-wait=nan", "--view-wait=-1", "--view-wait=inf"] {
+        let (ok, msg) = tactile(&[
+            "run",
+            "--data",
+            s(&vt),
+            "--models",
+            s(&root().join("models")),
+            "--view",
+            "127.0.0.1:0",
+            wait,
+        ]);
+        assert!(
+            !ok && msg.contains("--view-wait: seconds must be a finite number >= 0")
+                && !msg.contains("live view:"),
+            "{wait}: {msg}"
+        );
+    }
     // A closed stdout ends the run quietly.
     let mut child = Command::new(bin())
         .args([
