@@ -690,6 +690,30 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
             s(out),
         ])
     };
+    // A page where it may go, of frames without shear columns: no table
+    // of shear thirds (it was printed empty).
+    let six = tmp.path().join("six");
+    let rows: Vec<String> = (0..6).map(|i| row(&format!("frames/{i}.png"))).collect();
+    tactip(&six, 6, &rows);
+    let page = tmp.path().join("page.md");
+    let (ok, msg) = tactile(&[
+        "bench",
+        "pose",
+        "--models",
+        s(&m),
+        "--data",
+        s(&six),
+        "--runs",
+        "2",
+        "--out",
+        s(&page),
+    ]);
+    assert!(ok, "{msg}");
+    let text = std::fs::read_to_string(&page).unwrap();
+    assert!(
+        text.contains("| pose network | 128x128 |") && !text.contains("shear third"),
+        "{text}"
+    );
     let (ok, msg) = bench_page(&m.join("pose.md"));
     assert!(
         !ok && msg.contains("m/pose.json: is a file of the model"),
