@@ -219,6 +219,26 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// Refuse `folds` out of 2-[`MAX_FOLDS`], or more folds than `ds` has
+/// presses (a fold holds at least one), before any press is prepared.
+pub fn check_folds(folds: usize, ds: &BallPresses) -> Result<()> {
+    if !(2..=MAX_FOLDS).contains(&folds) {
+        return Err(tactile_core::Error::Config(format!(
+            "folds must be 2-{MAX_FOLDS}, got {folds}"
+        ))
+        .into());
+    }
+    if ds.presses.len() < folds {
+        return Err(Error::TooFewPresses {
+            path: ds.root.clone(),
+            count: ds.presses.len(),
+            needed: folds,
+            purpose: format!("a cross-validation of {folds} folds (a press per fold)"),
+        });
+    }
+    Ok(())
+}
+
 /// Cross-validate `candidate` on the prepared presses of `ds`.
 pub fn cross_validate(
     name: &str,
@@ -229,14 +249,7 @@ pub fn cross_validate(
 ) -> Result<CandidateResult> {
     let n = presses.len();
     tactile_core::bench::check_runs(options.runs)?;
-    if options.folds < 2 || options.folds > MAX_FOLDS.min(n) {
-        return Err(tactile_core::Error::Config(format!(
-            "folds must be 2-{}, got {}",
-            MAX_FOLDS.min(n),
-            options.folds
-        ))
-        .into());
-    }
+    check_folds(options.folds, ds)?;
     let grid = bg.image.grid;
     let bg_path = ds.root.join(&ds.sensor.background);
     let mut result = CandidateResult {

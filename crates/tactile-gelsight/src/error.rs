@@ -28,7 +28,7 @@ pub enum Error {
         why: String,
     },
     /// Too few presses to fit or score a model.
-    #[error("{count} presses in {path}: the sensor model needs at least {needed}")]
+    #[error("{count} presses in {path}: {purpose} needs at least {needed}")]
     TooFewPresses {
         /// The calibration folder.
         path: PathBuf,
@@ -36,6 +36,9 @@ pub enum Error {
         count: usize,
         /// Presses needed.
         needed: usize,
+        /// What needs them ("the sensor model", "a cross-validation of 8
+        /// folds").
+        purpose: String,
     },
     /// A frame whose size is not the calibration's.
     #[error(

@@ -467,6 +467,7 @@ pub fn calibrate(
             path: ds.root.clone(),
             count: n,
             needed: MIN_TRAIN_PRESSES + config.val_presses,
+            purpose: "the sensor model".into(),
         });
     }
     let staged = tactile_core::io::StagedDir::fresh(out)?;
