@@ -288,6 +288,9 @@ pub(crate) fn frames_of(f: usize, count: Option<usize>, sequences: Option<usize>
         k.checked_mul(f)
             .ok_or_else(|| Error::Config(format!("{k} sequences x {f} frames is too many frames")))
     };
+    if sequences == Some(0) {
+        return Err(Error::Config("sequences: must be at least 1, got 0".into()));
+    }
     match (count, sequences) {
         (Some(c), None) => Ok(c),
         (None, Some(k)) => frames(k),
@@ -368,6 +371,17 @@ mod tests {
             }
             assert!((closest - 3.0).abs() < 1e-3, "{closest}");
         }
+    }
+
+    #[test]
+    fn a_frame_count_comes_from_count_or_sequences_and_zero_sequences_is_named() {
+        assert_eq!(frames_of(30, None, Some(2)).unwrap(), 60);
+        assert_eq!(frames_of(30, Some(60), Some(2)).unwrap(), 60);
+        assert!(frames_of(30, Some(61), Some(2)).is_err());
+        // Before, zero videos passed here and were refused as "count: ... got 0".
+        let e = frames_of(30, None, Some(0)).unwrap_err().to_string();
+        assert!(e.contains("sequences: must be at least 1"), "{e}");
+        assert!(frames_of(usize::MAX, None, Some(2)).is_err());
     }
 
     #[test]
