@@ -140,6 +140,25 @@ SHALLOW_SET=SHALLOW_SET
 trained "${SHALLOW_MODELS[@]}" && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] && SHALLOW_SET=$(bash scripts/surface-shallow-set.sh)
 SURFACE_DATA=$SHALLOW_SET SURFACE_DATA_SHOWN='"$(bash scripts/surface-shallow-set.sh)"' \
     surface_step surface_shallow "$OUT/surface-shallow.md" "${SHALLOW_MODELS[@]}"
+# Frames turned half a turn about the tip's centre, read by the 25-epoch 9 px
+# network trained on `train`: are they frames the rig could have recorded
+# (augmentation with exact labels)? Needs a Python with the tactile package
+# ($PYTHON, default python3); otherwise the last table is kept.
+PYTHON=${PYTHON:-python3}
+HALF_TURN=(scripts/surface-half-turn.py --data "$REAL/tactip331-surface" --model data/surface/p64-k9)
+CMD[surface_half_turn]="python3 ${HALF_TURN[*]} > $OUT/surface-half-turn.md (after bash scripts/surface.sh)"
+if trained data/surface/p64-k9 && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] \
+    && { [ -z "${PAPER_A_ONLY:-}" ] || [[ surface_half_turn =~ ^(${PAPER_A_ONLY})$ ]]; } \
+    && "$PYTHON" -c "import tactile" 2>/dev/null; then
+    echo ">> python3 ${HALF_TURN[*]}" >&2
+    half_turn_tmp=$(mktemp "$OUT/.surface-half-turn.XXXXXX")
+    if "$PYTHON" "${HALF_TURN[@]}" >"$half_turn_tmp"; then
+        mv "$half_turn_tmp" "$OUT/surface-half-turn.md"
+    else
+        rm -f "$half_turn_tmp"
+        exit 1
+    fi
+fi
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
@@ -279,6 +298,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     surface_section "Polar pin images" surface_polar "$OUT/surface-polar.md"
     surface_section "Twice the epochs" surface_xlong "$OUT/surface-xlong.md"
     surface_section "A network for the shallow taps alone" surface_shallow "$OUT/surface-shallow.md"
+    surface_section "Half a turn: free frames with exact labels?" surface_half_turn "$OUT/surface-half-turn.md"
     echo "### One encoder for many tasks"
     echo
     echo "\`${CMD[shared]}\`"
