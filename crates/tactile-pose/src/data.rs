@@ -3,7 +3,9 @@
 //! a frame looks, never where the contact is; an optional small shift of
 //! the whole image (which the camera, fixed to the tip, never makes) leaves
 //! the pins' places relative to each other, so a network trained with it
-//! must read those rather than where in the image a pin sits.
+//! must read those rather than where in the image a pin sits. Half-turn
+//! copies, for a tip whose picture survives half a turn, train the targets
+//! a half turn maps to themselves or their negatives.
 
 use burn::config::Config;
 use burn::tensor::{Device, Tensor, TensorData};
@@ -33,7 +35,18 @@ pub struct Augment {
     /// its side (whole pixels, the uncovered border black; absent: none).
     #[config(default = "None")]
     pub shift: Option<f64>,
+    /// Half-turn copies: in each epoch each frame is turned 180 degrees
+    /// about the pin image's centre with probability 1/2, and a turned
+    /// copy trains only the targets named here, each label times its
+    /// value, what a half turn of the rig multiplies it by (1 or -1); the
+    /// other targets are left out of its loss (absent: no turn).
+    #[config(default = "None")]
+    pub half_turn: Option<std::collections::BTreeMap<String, f64>>,
 }
+
+/// The random stream of the half-turn draws, apart from the other
+/// augmentations' (so adding it changes none of their draws).
+const HALF_TURN_STREAM: u64 = 0x4841_4c46_5455_524e;
 
 impl Augment {
     /// No change at all.
@@ -51,14 +64,34 @@ impl Augment {
         self.gain == 0.0 && self.offset == 0.0 && self.noise == 0.0
     }
 
-    /// Check the amounts (each in [0, 1]).
+    /// Check the amounts (each in [0, 1]) and the half turn's signs (each
+    /// 1 or -1, at least one target).
     pub fn check(&self) -> tactile_core::Result<()> {
         tactile_burn::train::check_augment_amounts(&[
             ("gain", self.gain),
             ("offset", self.offset),
             ("noise", self.noise),
         ])?;
-        tactile_preprocess::perturb::check_shift(self.shift_fraction())
+        tactile_preprocess::perturb::check_shift(self.shift_fraction())?;
+        match &self.half_turn {
+            Some(signs) if signs.is_empty() => Err(tactile_core::Error::Config(
+                "half_turn: name at least one target the turned copies train".into(),
+            )),
+            Some(signs) => match signs.iter().find(|(_, v)| **v != 1.0 && **v != -1.0) {
+                Some((name, v)) => Err(tactile_core::Error::Config(format!(
+                    "half_turn: {name}'s sign must be 1 or -1 (what a half turn multiplies it by), got {v}"
+                ))),
+                None => Ok(()),
+            },
+            None => Ok(()),
+        }
+    }
+
+    /// Whether frame `index` is turned half a turn in epoch `round` under
+    /// `seed` (never without [`Self::half_turn`]).
+    pub fn turns(&self, (seed, round): (u64, u64), index: usize) -> bool {
+        self.half_turn.is_some()
+            && SampleRng::new(seed ^ HALF_TURN_STREAM, round, index as u64).chance(0.5)
     }
 
     /// `pixels` (a square image) augmented with the draws of `rng`,
@@ -161,6 +194,11 @@ impl PoseSet {
         let mut data = Vec::with_capacity(idx.len() * side * side);
         for &i in idx {
             let mut px = self.pins.images[i].pixels.clone();
+            if augment.turns((seed, round), i) {
+                // Row-major and square: a half turn about the centre is the
+                // pixels in reverse order.
+                px.reverse();
+            }
             augment.apply(&mut px, &mut SampleRng::new(seed, round, i as u64));
             data.extend(px);
         }
@@ -186,6 +224,62 @@ mod tests {
         Augment::none().apply(&mut z, &mut SampleRng::new(1, 2, 3));
         assert!(z.iter().all(|&v| v == 0.5));
         assert!(Augment::new().with_noise(2.0).check().is_err());
+    }
+
+    #[test]
+    fn a_half_turn_turns_about_half_the_frames_about_the_centre() {
+        let signs = std::collections::BTreeMap::from([("shear_x_mm".to_string(), -1.0)]);
+        let a = Augment::none().with_half_turn(Some(signs));
+        a.check().unwrap();
+        // About half the frames of an epoch, drawn again alike, other
+        // frames in another epoch.
+        let turned: Vec<bool> = (0..1000).map(|i| a.turns((7, 1), i)).collect();
+        let n = turned.iter().filter(|&&t| t).count();
+        assert!((400..600).contains(&n), "{n} of 1000");
+        assert_eq!(
+            turned,
+            (0..1000).map(|i| a.turns((7, 1), i)).collect::<Vec<_>>()
+        );
+        assert_ne!(
+            turned,
+            (0..1000).map(|i| a.turns((7, 2), i)).collect::<Vec<_>>()
+        );
+        assert!(!(0..1000).any(|i| Augment::new().turns((7, 1), i)));
+        // A turned 3x3 image: pixel (r, c) comes from (2 - r, 2 - c).
+        let image: Vec<f32> = (0..9).map(|v| v as f32 / 10.0).collect();
+        let set = PoseSet {
+            pins: PinSet {
+                files: vec!["a".into(); 40],
+                images: vec![
+                    tactile_preprocess::PinImage {
+                        side: 3,
+                        pixels: image.clone(),
+                    };
+                    40
+                ],
+            },
+            labels: vec![vec![Some(0.0)]; 40],
+        };
+        let idx: Vec<usize> = (0..40).collect();
+        let dev = Default::default();
+        let batch: Vec<f32> = set
+            .batch(&idx, &a, (7, 1), &dev)
+            .into_data()
+            .convert::<f32>()
+            .try_to_vec::<f32>()
+            .unwrap();
+        for (i, px) in batch.chunks(9).enumerate() {
+            let want: Vec<f32> = match a.turns((7, 1), i) {
+                true => (0..9).map(|k| image[8 - k]).collect(),
+                false => image.clone(),
+            };
+            assert_eq!(px, want.as_slice(), "frame {i}");
+        }
+        // Signs other than 1 and -1, or no target, are refused.
+        for bad in [vec![("x".to_string(), 0.5)], vec![]] {
+            let a = Augment::none().with_half_turn(Some(bad.into_iter().collect()));
+            assert!(a.check().is_err());
+        }
     }
 
     #[test]

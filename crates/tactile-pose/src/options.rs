@@ -57,6 +57,10 @@ pub struct PoseOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub shift: f64,
+    /// While training, turn each frame half a turn about the pin image's centre with probability 1/2 per epoch; a turned copy trains only the targets listed, as TARGET:SIGN, SIGN what the turn multiplies that label by (1 or -1). For a tip whose picture survives a half turn (scripts/surface-half-turn.py measures which targets do): shear_x_mm:-1,shear_y_mm:-1,shear_theta_deg:1.
+    #[arg(long, value_delimiter = ',', value_name = "TARGET:SIGN")]
+    #[serde(default)]
+    pub half_turn: Option<Vec<String>>,
     /// Hidden units of the dense head.
     #[arg(long, default_value_t = PoseNetConfig::new().hidden)]
     pub hidden: usize,
@@ -80,6 +84,29 @@ pub struct PoseOptions {
     #[command(flatten)]
     #[serde(flatten)]
     pub schedule: PoseSchedule,
+}
+
+/// `--half-turn`'s TARGET:SIGN items as the augmentation's signs (each
+/// checked by [`crate::data::Augment::check`]).
+fn half_turn_signs(items: &[String]) -> Result<std::collections::BTreeMap<String, f64>> {
+    let mut signs = std::collections::BTreeMap::new();
+    for item in items {
+        let parsed = item
+            .rsplit_once(':')
+            .and_then(|(name, sign)| Some((name.trim(), sign.trim().parse::<f64>().ok()?)));
+        let Some((name, sign)) = parsed else {
+            return Err(tactile_core::Error::Config(format!(
+                "half_turn: {item:?} is not TARGET:SIGN (e.g. shear_x_mm:-1)"
+            ))
+            .into());
+        };
+        if signs.insert(name.to_string(), sign).is_some() {
+            return Err(
+                tactile_core::Error::Config(format!("half_turn: {name} is listed twice")).into(),
+            );
+        }
+    }
+    Ok(signs)
 }
 
 fn default_crop_px() -> usize {
@@ -141,7 +168,8 @@ impl PoseOptions {
             augment: d
                 .augment
                 .clone()
-                .with_shift((self.shift != 0.0).then_some(self.shift)),
+                .with_shift((self.shift != 0.0).then_some(self.shift))
+                .with_half_turn(self.half_turn.as_deref().map(half_turn_signs).transpose()?),
         };
         config.checked()
     }
@@ -162,5 +190,26 @@ impl PoseOptions {
             None => None,
         };
         Ok(PoseFit { fit, test })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_turn_items_are_target_and_sign() {
+        let items = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let signs = half_turn_signs(&items(&["shear_x_mm:-1", " shear_theta_deg : +1"])).unwrap();
+        assert_eq!(signs["shear_x_mm"], -1.0);
+        assert_eq!(signs["shear_theta_deg"], 1.0);
+        let e = half_turn_signs(&items(&["shear_x_mm"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("\"shear_x_mm\" is not TARGET:SIGN"), "{e}");
+        let e = half_turn_signs(&items(&["a:1", "a:-1"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("a is listed twice"), "{e}");
     }
 }

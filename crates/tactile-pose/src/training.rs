@@ -105,6 +105,21 @@ impl PoseTrainingConfig {
         if self.model.has_uncertainty() {
             crate::uncertainty::check_linear(&self.targets).map_err(tactile_core::Error::Config)?;
         }
+        let signs = self.augment.half_turn.iter().flat_map(|s| s.keys());
+        if let Some(name) = signs
+            .into_iter()
+            .find(|n| !self.targets.iter().any(|t| &t.name == *n))
+        {
+            return Err(tactile_core::Error::Config(format!(
+                "half_turn: {name} is not one of the targets ({})",
+                self.targets
+                    .iter()
+                    .map(|t| t.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+            .into());
+        }
         Ok(self)
     }
 }
@@ -183,6 +198,11 @@ pub fn train(
     for (&i, e) in train.iter().zip(outputs.apply(&encoded).chunks(k)) {
         columns[i] = e.to_vec();
     }
+    let turned = config
+        .augment
+        .half_turn
+        .as_ref()
+        .map(|signs| TurnedLabels::new(&config.targets, signs, &set, &train, &outputs));
     let val_truth = set.label_rows(&val);
     let unc = config.model.has_uncertainty();
     let borrowed_scale = match (&config.calibration_from, unc) {
@@ -235,17 +255,41 @@ pub fn train(
         burn::optim::AdamConfig::new().init(),
         (&train, val.len()),
         |m: &PoseNet, batch, epoch| {
-            let x = set.batch(batch, &config.augment, (seed, epoch as u64 + 1), &ad);
-            let y: Vec<f32> = batch.iter().flat_map(|&i| columns[i].clone()).collect();
-            let y = Tensor::<2>::from_data(TensorData::new(y, [batch.len(), k]), &ad);
+            let round = (seed, epoch as u64 + 1);
+            let x = set.batch(batch, &config.augment, round, &ad);
             let out = m.forward(x);
+            let Some(turned) = &turned else {
+                let y: Vec<f32> = batch.iter().flat_map(|&i| columns[i].clone()).collect();
+                let y = Tensor::<2>::from_data(TensorData::new(y, [batch.len(), k]), &ad);
+                let diff = out.clone().narrow(1, 0, k) - y;
+                let fit = loss.penalty(diff.clone()).mean();
+                return Ok(if unc {
+                    fit + crate::uncertainty::laplace_nll(diff, out.narrow(1, k, k)).mean()
+                } else {
+                    fit
+                });
+            };
+            // Turned copies: their turned labels, and only the targets the
+            // turn keeps count (the mean is over the columns that count).
+            let (mut y, mut weight) = (Vec::new(), Vec::new());
+            for &i in batch {
+                if config.augment.turns(round, i) {
+                    y.extend_from_slice(&turned.columns[i]);
+                    weight.extend_from_slice(&turned.weight);
+                } else {
+                    y.extend_from_slice(&columns[i]);
+                    weight.extend(std::iter::repeat_n(1.0f32, k));
+                }
+            }
+            let counted = weight.iter().sum::<f32>().max(1.0);
+            let y = Tensor::<2>::from_data(TensorData::new(y, [batch.len(), k]), &ad);
+            let w = Tensor::<2>::from_data(TensorData::new(weight, [batch.len(), k]), &ad);
             let diff = out.clone().narrow(1, 0, k) - y;
-            let fit = loss.penalty(diff.clone()).mean();
-            Ok(if unc {
-                fit + crate::uncertainty::laplace_nll(diff, out.narrow(1, k, k)).mean()
-            } else {
-                fit
-            })
+            let mut per = loss.penalty(diff.clone());
+            if unc {
+                per = per + crate::uncertainty::laplace_nll(diff, out.narrow(1, k, k));
+            }
+            Ok((per * w).sum() / counted)
         },
         |m| {
             let all = predict_columns(m, &set, &val, &dev)?;
@@ -312,6 +356,51 @@ pub fn train(
     )?;
     unfinished.finish()?;
     Ok(summary)
+}
+
+/// The standardised columns of the training rows' labels turned half a
+/// turn (each named target times its sign), and which output columns a
+/// turned copy trains (1) or leaves out of its loss (0).
+struct TurnedLabels {
+    /// Per set row (empty for rows that are not trained on).
+    columns: Vec<Vec<f32>>,
+    /// Per output column.
+    weight: Vec<f32>,
+}
+
+impl TurnedLabels {
+    fn new(
+        targets: &[Target],
+        signs: &std::collections::BTreeMap<String, f64>,
+        set: &PoseSet,
+        train: &[usize],
+        outputs: &tactile_estimate::regressor::Scaler,
+    ) -> Self {
+        let sign = |t: &Target| signs.get(&t.name).copied();
+        let rows: Vec<Vec<f64>> = set
+            .label_rows(train)
+            .into_iter()
+            .map(|r| {
+                r.iter()
+                    .zip(targets)
+                    .map(|(v, t)| v * sign(t).unwrap_or(1.0))
+                    .collect()
+            })
+            .collect();
+        let k: usize = targets.iter().map(Target::width).sum();
+        let mut columns = vec![Vec::new(); set.pins.len()];
+        for (&i, e) in train
+            .iter()
+            .zip(outputs.apply(&encode(targets, &rows)).chunks(k))
+        {
+            columns[i] = e.to_vec();
+        }
+        let weight = targets
+            .iter()
+            .flat_map(|t| std::iter::repeat_n(f32::from(u8::from(sign(t).is_some())), t.width()))
+            .collect();
+        Self { columns, weight }
+    }
 }
 
 /// The uncertainty calibration of the validated pose network in `dir`,
@@ -381,6 +470,61 @@ pub fn test_scores(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A turned copy's labels are each named target times its sign,
+    /// standardised as the others; only the named targets count.
+    #[test]
+    fn turned_labels_negate_what_the_turn_negates_and_weigh_only_those() {
+        let targets: Vec<Target> = ["depth_mm", "shear_x_mm", "shear_theta_deg"]
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        let labels = [[1.0, 2.0, 3.0], [2.0, -1.0, 1.0], [4.0, 0.5, -2.0]];
+        let set = PoseSet {
+            pins: tactile_cae::data::PinSet {
+                files: vec!["f".into(); 3],
+                images: vec![
+                    tactile_preprocess::PinImage {
+                        side: 1,
+                        pixels: vec![0.0],
+                    };
+                    3
+                ],
+            },
+            labels: labels.iter().map(|r| r.map(Some).to_vec()).collect(),
+        };
+        let train = [0, 2];
+        let encoded = encode(&targets, &set.label_rows(&train));
+        let outputs = output_scaler(&targets, &encoded);
+        let signs = std::collections::BTreeMap::from([
+            ("shear_x_mm".to_string(), -1.0),
+            ("shear_theta_deg".to_string(), 1.0),
+        ]);
+        let t = TurnedLabels::new(&targets, &signs, &set, &train, &outputs);
+        assert_eq!(t.weight, vec![0.0, 1.0, 1.0]);
+        assert!(t.columns[1].is_empty(), "row 1 is not trained on");
+        for &i in &train {
+            let back = decode(&targets, &outputs, &t.columns[i]);
+            let want = [labels[i][0], -labels[i][1], labels[i][2]];
+            for (b, w) in back.iter().zip(want) {
+                assert!((b - w).abs() < 1e-5, "{back:?} {want:?}");
+            }
+        }
+        // A sign for a target the network does not predict is refused
+        // before any frame is read.
+        let mut c = PoseTrainingConfig::new(targets);
+        c.augment = c
+            .augment
+            .with_half_turn(Some(std::collections::BTreeMap::from([(
+                "roll_deg".to_string(),
+                -1.0,
+            )])));
+        let e = c.checked().unwrap_err().to_string();
+        assert!(
+            e.contains("half_turn: roll_deg is not one of the targets"),
+            "{e}"
+        );
+    }
 
     /// Configs written before the loss option load as MSE; `"l1"` is read
     /// and written back by name; an unknown loss is refused, not ignored.
