@@ -159,6 +159,8 @@ if trained data/surface/p64-k9 && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] \
         exit 1
     fi
 fi
+# The same network trained with half-turn copies that train the twist alone.
+surface_step surface_half_turn_trained "$OUT/surface-half-turn-trained.md" data/surface/p64-k9-turn data/surface/p64-k9
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
@@ -299,6 +301,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     surface_section "Twice the epochs" surface_xlong "$OUT/surface-xlong.md"
     surface_section "A network for the shallow taps alone" surface_shallow "$OUT/surface-shallow.md"
     surface_section "Half a turn: free frames with exact labels?" surface_half_turn "$OUT/surface-half-turn.md"
+    surface_section "Half-turn copies for the twist" surface_half_turn_trained "$OUT/surface-half-turn-trained.md"
     echo "### One encoder for many tasks"
     echo
     echo "\`${CMD[shared]}\`"

@@ -120,6 +120,12 @@ run p64-k9-xlong-calibrate "$BIN" train calibrate --model data/surface/p64-k9-xl
 # on every depth (docs/paper-a.md, "A network for the shallow taps alone").
 shallow_pose() { "$BIN" train pose --data "$(bash scripts/surface-shallow-set.sh)" "$@"; }
 run p64-k9-shallow shallow_pose --out data/surface/p64-k9-shallow "${POSE[@]}" "${K9[@]}" "${LONG[@]}"
+# The twist survives a half turn of the frame (scripts/surface-half-turn.py,
+# docs/paper-a.md "Half a turn"): the 25-epoch 9 px network with half-turn
+# copies that train the twist alone, scored beside p64-k9.
+run p64-k9-turn "$BIN" train pose --data "$DATA" --out data/surface/p64-k9-turn "${POSE[@]}" "${K9[@]}" "${SHORT[@]}" \
+    --half-turn shear_theta_deg:1
+run p64-k9-turn-calibrate "$BIN" train calibrate --model data/surface/p64-k9-turn --data "$DATA" --split val
 
 # The CAE route: 56 px pin images through one stem block to Table I's 28 px
 # encoder, 32 features, trained jointly with a head on the six targets (L1,
