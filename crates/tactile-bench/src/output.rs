@@ -98,13 +98,28 @@ pub fn check_page(out: &Path, datasets: &[&tactile_core::dataset::Dataset]) -> R
     Ok(())
 }
 
+/// The folder of a page locked while its files are written, and a second
+/// Ctrl-C held off until they all are.
+pub struct PageLock {
+    // Dropped in this order: the lock, then the hold (which may end the
+    // process, releasing the lock anyway).
+    _folder: tactile_core::io::FolderLock,
+    _hold: tactile_core::interrupt::Hold,
+}
+
 /// Lock the folder of the page `out` while its files are written: a second
 /// run writing a page there waits (up to [`PAGE_PATIENCE`]) until the first
-/// has written all of its files, then writes all of its own.
-pub fn lock_page(out: &Path) -> Result<tactile_core::io::FolderLock> {
+/// has written all of its files, then writes all of its own. Once locked, a
+/// second Ctrl-C ends the run only after the page's files are all written
+/// (the first only asks the run to stop), so they always come from one run.
+pub fn lock_page(out: &Path) -> Result<PageLock> {
     let dir = tactile_core::io::folder_of(out);
     tactile_core::io::create_dir_all(dir)?;
-    Ok(tactile_core::io::FolderLock::wait(dir, PAGE_PATIENCE)?)
+    let folder = tactile_core::io::FolderLock::wait(dir, PAGE_PATIENCE)?;
+    Ok(PageLock {
+        _folder: folder,
+        _hold: tactile_core::interrupt::hold(),
+    })
 }
 
 /// Draws a picture to the path it is given.

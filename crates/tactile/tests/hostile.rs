@@ -1117,6 +1117,31 @@ fn a_long_prediction_stops_at_ctrl_c_and_writes_nothing() {
         let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().collect();
         assert!(left.is_empty(), "{model}: {left:?}");
     }
+    // Two signals, the second before the run has stopped: it ends at
+    // once (no page is being written), with 130 and no panic.
+    let out = tmp.path().join("twice.csv");
+    let mut child = Command::new(bin())
+        .args(["predict", "--model", s(&root().join("models/pose-surface"))])
+        .args(["--data", s(&data), "--out", s(&out)])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(2500));
+    let t0 = Instant::now();
+    for _ in 0..2 {
+        Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap();
+    }
+    let status = child.wait().unwrap();
+    let mut msg = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut msg).unwrap();
+    assert_eq!(status.code(), Some(130), "{msg}");
+    assert!(!msg.contains("panicked"), "{msg}");
+    assert!(t0.elapsed() < Duration::from_secs(10), "{:?}", t0.elapsed());
+    assert!(!out.exists());
 }
 
 #[test]

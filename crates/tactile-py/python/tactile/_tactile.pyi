@@ -407,6 +407,7 @@ def train_pose(
     widths: Sequence[int] = (16, 32, 64, 64),
     kernels: Optional[Sequence[int]] = None,
     shift: float = 0.0,
+    half_turn: Optional[Sequence[str]] = None,
     hidden: int = 128,
     dropout: float = 0.0,
     val_fraction: float = 0.2,
