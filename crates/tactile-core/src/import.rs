@@ -78,6 +78,16 @@ enum FrameKey {
     Name(String),
 }
 
+impl std::fmt::Display for FrameKey {
+    /// As the labels CSV wrote it: a number plain, a name quoted.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameKey::Number(n) => write!(f, "{n}"),
+            FrameKey::Name(s) => write!(f, "{s:?}"),
+        }
+    }
+}
+
 fn read_labels(path: &Path) -> Result<Labels> {
     let bad = |line: usize, message: String| Error::Dataset {
         path: path.to_path_buf(),
@@ -132,7 +142,7 @@ fn read_labels(path: &Path) -> Result<Labels> {
         if let Some((first, _)) = rows.get(&key) {
             return Err(bad(
                 line,
-                format!("frame {key:?} is labelled twice (also on line {first})"),
+                format!("frame {key} is labelled twice (also on line {first})"),
             ));
         }
         rows.insert(key, (line, cells));
@@ -188,6 +198,8 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
     let mut size = None;
     let (mut written, mut read) = (0usize, 0u64);
     let mut done = std::collections::BTreeSet::new();
+    // The labels CSV's line of each row written, to name a bad label there.
+    let mut written_lines = Vec::new();
     let pb = crate::progress::progress_bar(labels.rows.len() as u64, "import");
     while done.len() < labels.rows.len() {
         let Some(frame) = source.next_frame()? else {
@@ -204,7 +216,19 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
                 .then(|| labels.rows.get_key_value(&key_name))
                 .flatten(),
         ) {
-            (Some(hit), _) | (None, Some(hit)) => hit,
+            // One frame labelled by its number and by its name.
+            (Some((_, (first, _))), Some((_, (second, _)))) => {
+                let (first, second) = (*first.min(second), *first.max(second));
+                return Err(Error::Dataset {
+                    path: options.labels.clone(),
+                    line: Some(second),
+                    message: format!(
+                        "frame {number} ({:?}) is labelled twice, by its number and by its name (also on line {first})",
+                        frame.name
+                    ),
+                });
+            }
+            (Some(hit), None) | (None, Some(hit)) => hit,
             (None, None) => continue,
         };
         let (w, h) = (frame.image.width(), frame.image.height());
@@ -276,6 +300,7 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
             row.push(col(c).map(|i| cells[i].clone()).unwrap_or_default());
         }
         writer.push_row(row)?;
+        written_lines.push(*line);
         done.insert(key.clone());
         written += 1;
         pb.inc(1);
@@ -286,11 +311,7 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
             path: options.labels.clone(),
             line: Some(*line),
             message: format!(
-                "frame {} is not in {} ({read} frames read){}",
-                match key {
-                    FrameKey::Number(n) => n.to_string(),
-                    FrameKey::Name(s) => format!("{s:?}"),
-                },
+                "frame {key} is not in {} ({read} frames read){}",
                 options.frames.display(),
                 source
                     .late_warnings()
@@ -320,8 +341,24 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
         count: written,
         extra: Default::default(),
     })?;
-    // Read back as every command will: a bad label fails here, not later.
-    Dataset::open(&root)?;
+    // Read back as every command will: a bad label fails here, not later,
+    // named at its line of the user's labels CSV (not the staged copy's).
+    let staged_labels = root.join("labels.csv");
+    Dataset::open(&root).map_err(|e| match e {
+        Error::Dataset {
+            path,
+            line: Some(l),
+            message,
+        } if path == staged_labels => Error::Dataset {
+            path: options.labels.clone(),
+            line: l
+                .checked_sub(2)
+                .and_then(|row| written_lines.get(row))
+                .copied(),
+            message,
+        },
+        e => e,
+    })?;
     let out = staged.commit(options.force)?;
     Ok(ImportSummary {
         out,

@@ -424,6 +424,54 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
         err.contains("bad.csv:1: no `frame` column (the header is one cell holding ';'"),
         "{err}"
     );
+    // A frame labelled twice is named as written; a label the dataset
+    // cannot read is named at its line of these labels, not of the
+    // dataset's staged copy.
+    std::fs::write(&bad, "frame,tendon\n3,1\n3,0\n").unwrap();
+    let r = import(&bad, &dir.path().join("ds2"));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("bad.csv:3: frame 3 is labelled twice (also on line 2)"),
+        "{err}"
+    );
+    std::fs::write(&bad, "frame,tendon\n2,0\n5,yes\n").unwrap();
+    let r = import(&bad, &dir.path().join("ds2"));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("bad.csv:3: column 'tendon': 'yes' is not a number")
+            && !err.contains("partial"),
+        "{err}"
+    );
+    // From a folder, a frame labelled by its number and by its file name.
+    let folder = dir.path().join("frames");
+    std::fs::create_dir(&folder).unwrap();
+    for (i, img) in imgs.iter().take(3).enumerate() {
+        let (w, h) = (img.width(), img.height());
+        tactile_core::image_io::save_rgb_png(
+            folder.join(format!("{i:06}.png")),
+            w,
+            h,
+            img.as_slice(),
+        )
+        .unwrap();
+    }
+    std::fs::write(&bad, "frame,tendon\n1,1\n000001.png,0\n").unwrap();
+    let r = tactile()
+        .args(["dataset", "from-video", "--kind", "visuotactile"])
+        .args([
+            "--video",
+            folder.to_str().unwrap(),
+            "--labels",
+            bad.to_str().unwrap(),
+        ])
+        .args(["--out", dir.path().join("ds2").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("bad.csv:3: frame 1 (\"000001.png\") is labelled twice, by its number and by its name (also on line 2)"),
+        "{err}"
+    );
     std::fs::write(&bad, "frame,tendon,mask\n3,1,../../etc/passwd\n").unwrap();
     let r = import(&bad, &dir.path().join("ds2"));
     let err = String::from_utf8_lossy(&r.stderr);
