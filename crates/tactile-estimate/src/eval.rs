@@ -44,6 +44,10 @@ pub struct Scores {
     pub confusion: Vec<Vec<usize>>,
     /// The classifier's classes.
     pub classes: Vec<String>,
+    /// Labelled frames whose shape the classifier does not know, per such
+    /// shape: they count as wrong and the confusion matrix leaves them out
+    /// (a head trained on other shapes than the frames show).
+    pub unknown_shapes: Vec<Group>,
     /// Every regressor target's errors.
     pub targets: Vec<TargetScore>,
     /// Contact position scored only where a frame shows it, when the
@@ -181,6 +185,7 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
         per_class: Vec::new(),
         confusion: Vec::new(),
         classes: Vec::new(),
+        unknown_shapes: Vec::new(),
         targets: Vec::new(),
         position: None,
     };
@@ -230,6 +235,15 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
                 }
                 out.confusion = confusion;
                 out.classes = classes.to_vec();
+                out.unknown_shapes = out
+                    .per_class
+                    .iter()
+                    .filter(|g| !classes.iter().any(|c| c == &g.name))
+                    .map(|g| Group {
+                        value: 0.0,
+                        ..g.clone()
+                    })
+                    .collect();
             }
             Estimator::Regressor(r) => {
                 let pred = r.predict(feats)?;
@@ -301,6 +315,27 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
     Ok(out)
 }
 
+impl Scores {
+    /// What to tell a reader when some frames are of shapes the
+    /// classifier does not know.
+    pub fn unknown_shapes_note(&self) -> Option<String> {
+        if self.unknown_shapes.is_empty() {
+            return None;
+        }
+        let frames: usize = self.unknown_shapes.iter().map(|g| g.frames).sum();
+        let names: Vec<&str> = self
+            .unknown_shapes
+            .iter()
+            .map(|g| g.name.as_str())
+            .collect();
+        Some(format!(
+            "{frames} of these frames are of shapes the classifier does not know ({}): they count as wrong, and the confusion matrix leaves them out. It knows {}.",
+            names.join(", "),
+            self.classes.join(", ")
+        ))
+    }
+}
+
 /// Markdown: accuracy per class with the confusion matrix, then the
 /// targets' errors per shape.
 pub fn scores_markdown(s: &Scores) -> String {
@@ -319,6 +354,9 @@ pub fn scores_markdown(s: &Scores) -> String {
                 g.frames,
                 100.0 * g.value
             ));
+        }
+        if let Some(note) = s.unknown_shapes_note() {
+            md.push_str(&format!("\n{note}\n"));
         }
         md.push_str("\nConfusion (rows: true shape, columns: predicted):\n\n| | ");
         md.push_str(&s.classes.join(" | "));

@@ -836,6 +836,26 @@ fn evaluate_and_robustness_score_the_shipped_estimators() {
         .unwrap();
     // Depth is drawn from 0-5 mm: guessing the middle gives about 1.25 mm.
     assert!(depth["mae"].as_f64().unwrap() < 0.8, "{msg}");
+    // The real shapes set's head knows four of the seven shapes: the
+    // frames of the other three are said to count as wrong.
+    let (ok, msg) = tactile(&[
+        "evaluate",
+        "--encoder",
+        root.join("models/cae-shapes").to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    assert!(
+        msg.contains("4 of these frames are of shapes the classifier does not know (edge, flat, sphere): they count as wrong, and the confusion matrix leaves them out. It knows cuboid, cylinderR4, cylinderR8, prism."),
+        "{msg}"
+    );
+    let json: serde_json::Value = serde_json::from_str(msg.lines().last().unwrap()).unwrap();
+    assert_eq!(
+        json["unknown_shapes"].as_array().unwrap().len(),
+        3,
+        "{json}"
+    );
 
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("robust.md");
