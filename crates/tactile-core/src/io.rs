@@ -34,6 +34,13 @@ where
 /// `/dev/stdout`, a link to one) or a socket would be replaced by the
 /// renamed temporary file, not written into.
 pub fn output_path(path: &Path) -> Result<std::path::PathBuf> {
+    // `--out -` means standard output to the commands that stream there
+    // (they never ask here); to any other it would be a file named `-`.
+    if path == Path::new("-") {
+        return Err(Error::Invalid(
+            "-: this output cannot go to standard output; give a file name (`predict` and `run` stream their records there with `--out -`)".into(),
+        ));
+    }
     let target = through_links(path)?;
     match std::fs::metadata(&target) {
         // Nothing there yet (or a link to nothing yet: the file it names).

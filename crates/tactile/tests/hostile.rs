@@ -642,6 +642,17 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
     // An output that is one of the inputs is refused before any work.
     let ds = tmp.path().join("ds");
     tactip(&ds, 1, &[row("frames/0.png")]);
+    // `--out -` is standard output only where a command streams there;
+    // elsewhere it was a file named `-` in the working folder.
+    let (status, msg) = run(Command::new(bin())
+        .current_dir(tmp.path())
+        .args(["encode", "--model", s(&root().join("models/cae-shapes"))])
+        .args(["--data", s(&ds), "--out", "-"]));
+    assert!(
+        !status.success() && msg.contains("-: this output cannot go to standard output"),
+        "{msg}"
+    );
+    assert!(!tmp.path().join("-").exists());
     let labels = std::fs::read_to_string(ds.join("labels.csv")).unwrap();
     let (ok, msg) = encode(&ds, &ds.join("labels.csv"));
     assert!(!ok && msg.contains("part of the input dataset"), "{msg}");
