@@ -893,6 +893,20 @@ fn evaluate_and_robustness_score_the_shipped_estimators() {
         accuracy(rows[0]) - accuracy(turned) <= 100.0 * 2.0 / 14.0 + 0.1,
         "{table}"
     );
+    // No frame to perturb is said as such (it was "no `shape` labels").
+    let (ok, msg) = tactile(&[
+        "robustness",
+        "--encoder",
+        enc.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--limit",
+        "0",
+    ]);
+    assert!(
+        !ok && msg.contains("limit: must be at least 1 frame, got 0"),
+        "{msg}"
+    );
 }
 
 #[test]
