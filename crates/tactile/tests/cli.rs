@@ -809,13 +809,12 @@ fn evaluate_and_robustness_score_the_shipped_estimators() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let enc = root.join("models/cae-synth");
     let data = root.join("samples/virtual-tactip");
-    let (ok, msg) = tactile(&[
-        "evaluate",
-        "--encoder",
-        enc.to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-    ]);
+    // `evaluate` or `robustness` of an encoder's estimators on the sample.
+    let scored = |command: &str, encoder: &Path, more: &[&str]| {
+        let head = [command, "--encoder", encoder.to_str().unwrap()];
+        tactile(&[&head[..], &["--data", data.to_str().unwrap()], more].concat())
+    };
+    let (ok, msg) = scored("evaluate", &enc, &[]);
     assert!(ok, "{msg}");
     let json: serde_json::Value = serde_json::from_str(msg.lines().last().unwrap()).unwrap();
     let acc = json["accuracy"].as_f64().unwrap();
@@ -838,13 +837,7 @@ fn evaluate_and_robustness_score_the_shipped_estimators() {
     assert!(depth["mae"].as_f64().unwrap() < 0.8, "{msg}");
     // The real shapes set's head knows four of the seven shapes: the
     // frames of the other three are said to count as wrong.
-    let (ok, msg) = tactile(&[
-        "evaluate",
-        "--encoder",
-        root.join("models/cae-shapes").to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-    ]);
+    let (ok, msg) = scored("evaluate", &root.join("models/cae-shapes"), &[]);
     assert!(ok, "{msg}");
     assert!(
         msg.contains("4 of these frames are of shapes the classifier does not know (edge, flat, sphere): they count as wrong, and the confusion matrix leaves them out. It knows cuboid, cylinderR4, cylinderR8, prism."),
@@ -859,15 +852,7 @@ fn evaluate_and_robustness_score_the_shipped_estimators() {
 
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("robust.md");
-    let (ok, msg) = tactile(&[
-        "robustness",
-        "--encoder",
-        enc.to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (ok, msg) = scored("robustness", &enc, &["--out", out.to_str().unwrap()]);
     assert!(ok, "{msg}");
     let table = std::fs::read_to_string(&out).unwrap();
     let rows: Vec<&str> = table
@@ -894,15 +879,7 @@ fn evaluate_and_robustness_score_the_shipped_estimators() {
         "{table}"
     );
     // No frame to perturb is said as such (it was "no `shape` labels").
-    let (ok, msg) = tactile(&[
-        "robustness",
-        "--encoder",
-        enc.to_str().unwrap(),
-        "--data",
-        data.to_str().unwrap(),
-        "--limit",
-        "0",
-    ]);
+    let (ok, msg) = scored("robustness", &enc, &["--limit", "0"]);
     assert!(
         !ok && msg.contains("limit: must be at least 1 frame, got 0"),
         "{msg}"
