@@ -219,19 +219,21 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Refuse `folds` out of 2-[`MAX_FOLDS`], or more folds than `ds` has
-/// presses (a fold holds at least one), before any press is prepared.
-pub fn check_folds(folds: usize, ds: &BallPresses) -> Result<()> {
+/// Refuse `folds` out of 2-[`MAX_FOLDS`], or more folds than the
+/// `presses` to split (a fold holds at least one) of the calibration
+/// folder `folder`: before any press is prepared, and on the prepared
+/// presses a cross-validation is given.
+pub fn check_folds(folds: usize, presses: usize, folder: &std::path::Path) -> Result<()> {
     if !(2..=MAX_FOLDS).contains(&folds) {
         return Err(tactile_core::Error::Config(format!(
             "folds must be 2-{MAX_FOLDS}, got {folds}"
         ))
         .into());
     }
-    if ds.presses.len() < folds {
+    if presses < folds {
         return Err(Error::TooFewPresses {
-            path: ds.root.clone(),
-            count: ds.presses.len(),
+            path: folder.to_path_buf(),
+            count: presses,
             needed: folds,
             purpose: format!("a cross-validation of {folds} folds (a press per fold)"),
         });
@@ -249,7 +251,7 @@ pub fn cross_validate(
 ) -> Result<CandidateResult> {
     let n = presses.len();
     tactile_core::bench::check_runs(options.runs)?;
-    check_folds(options.folds, ds)?;
+    check_folds(options.folds, n, &ds.root)?;
     let grid = bg.image.grid;
     let bg_path = ds.root.join(&ds.sensor.background);
     let mut result = CandidateResult {

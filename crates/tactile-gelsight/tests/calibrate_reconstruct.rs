@@ -198,14 +198,14 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     // Nor can they be cross-validated in 8 folds (the bench's default):
     // said in presses and folds, before any press is prepared. Before,
     // "folds must be 2-3, got 8".
-    let e = tactile_gelsight::bench::check_folds(8, &ds).unwrap_err();
+    let e = tactile_gelsight::bench::check_folds(8, ds.presses.len(), &ds.root).unwrap_err();
     assert!(
         e.to_string()
             .ends_with("few: a cross-validation of 8 folds (a press per fold) needs at least 8"),
         "{e}"
     );
-    assert!(tactile_gelsight::bench::check_folds(3, &ds).is_ok());
-    assert!(tactile_gelsight::bench::check_folds(1, &ds).is_err());
+    assert!(tactile_gelsight::bench::check_folds(3, ds.presses.len(), &ds.root).is_ok());
+    assert!(tactile_gelsight::bench::check_folds(1, ds.presses.len(), &ds.root).is_err());
     // A path out of the folder in the CSV.
     let d = tmp.path().join("escape");
     subset(&d, 1, |l| {
