@@ -927,11 +927,21 @@ mod tests {
         let ds = d.path().join("ds");
         tiny(&ds, &format!("{HEADER}frames/a.png,sphere,1.5,,0,2,3.4\n"));
         let labels = std::fs::read(ds.join("labels.csv")).unwrap();
+        // Each of `files` in `dir` refused as an output, the error saying `says`.
+        let refused = |dir: &Path, files: &[&str], says: &str| {
+            for f in files {
+                let e = check_output_file(&dir.join(f), &[])
+                    .unwrap_err()
+                    .to_string();
+                assert!(e.contains(says), "{f}: {e}");
+            }
+        };
         // No dataset given: the output's own place says it is one's.
-        for f in ["labels.csv", "manifest.json", "frames/a.png"] {
-            let e = check_output_file(&ds.join(f), &[]).unwrap_err().to_string();
-            assert!(e.contains("is part of the dataset"), "{f}: {e}");
-        }
+        refused(
+            &ds,
+            &["labels.csv", "manifest.json", "frames/a.png"],
+            "is part of the dataset",
+        );
         // Through a link, and from a folder of the dataset.
         std::os::unix::fs::symlink(ds.join("labels.csv"), d.path().join("page.md")).unwrap();
         assert!(check_output_file(&d.path().join("page.md"), &[]).is_err());
@@ -953,18 +963,17 @@ mod tests {
         for f in ["presses.csv", "rest.png", "frames/p1.png", "notes.md"] {
             std::fs::write(cal.join(f), b"x").unwrap();
         }
-        for f in [
-            "sensor.json",
-            "presses.csv",
-            "rest.png",
-            "frames/p1.png",
-            "frames/new.md",
-        ] {
-            let e = check_output_file(&cal.join(f), &[])
-                .unwrap_err()
-                .to_string();
-            assert!(e.contains("is part of the calibration folder"), "{f}: {e}");
-        }
+        refused(
+            &cal,
+            &[
+                "sensor.json",
+                "presses.csv",
+                "rest.png",
+                "frames/p1.png",
+                "frames/new.md",
+            ],
+            "is part of the calibration folder",
+        );
         for f in ["notes.md", "page.md", "background.png"] {
             check_output_file(&cal.join(f), &[]).unwrap_or_else(|e| panic!("{f}: {e}"));
         }
@@ -974,17 +983,16 @@ mod tests {
         std::fs::create_dir_all(&bag).unwrap();
         std::fs::write(bag.join("metadata.yaml"), "rosbag2_bagfile_information:\n").unwrap();
         std::fs::write(bag.join("rec_0.mcap"), b"x").unwrap();
-        for f in [
-            "metadata.yaml",
-            "rec_0.mcap",
-            "results.mcap",
-            "rec_1.mcap.zstd",
-        ] {
-            let e = check_output_file(&bag.join(f), &[])
-                .unwrap_err()
-                .to_string();
-            assert!(e.contains("is part of the ROS 2 bag"), "{f}: {e}");
-        }
+        refused(
+            &bag,
+            &[
+                "metadata.yaml",
+                "rec_0.mcap",
+                "results.mcap",
+                "rec_1.mcap.zstd",
+            ],
+            "is part of the ROS 2 bag",
+        );
         check_output_file(&bag.join("page.md"), &[]).unwrap();
     }
 
