@@ -377,12 +377,12 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
     let labels = dir.path().join("labels.csv");
     std::fs::write(&labels, csv).unwrap();
     let out = dir.path().join("ds");
-    let import = |labels: &Path, out: &Path| {
+    let import = |frames: &Path, labels: &Path, out: &Path| {
         tactile()
             .args(["dataset", "from-video", "--kind", "visuotactile"])
             .args([
                 "--video",
-                video.to_str().unwrap(),
+                frames.to_str().unwrap(),
                 "--labels",
                 labels.to_str().unwrap(),
             ])
@@ -390,7 +390,7 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
             .output()
             .unwrap()
     };
-    let r = import(&labels, &out);
+    let r = import(&video, &labels, &out);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
     assert_eq!(ds.len(), 11);
@@ -404,22 +404,22 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
     assert_eq!(summary["detector_accuracy"], 1.0, "{summary}");
     // A second import over it is refused; a frame beyond the video and a
     // mask outside the labels' folder are errors naming the line.
-    let r = import(&labels, &out);
+    let r = import(&video, &labels, &out);
     assert!(String::from_utf8_lossy(&r.stderr).contains("exists and is not empty"));
     let bad = dir.path().join("bad.csv");
-    std::fs::write(&bad, "frame,tendon\n3,1\n40,1\n").unwrap();
-    let r = import(&bad, &dir.path().join("ds2"));
-    let err = String::from_utf8_lossy(&r.stderr);
+    // The error of importing `frames` with the labels `csv` as `bad.csv`.
+    let refused = |frames: &Path, csv: &str| {
+        std::fs::write(&bad, csv).unwrap();
+        let r = import(frames, &bad, &dir.path().join("ds2"));
+        String::from_utf8_lossy(&r.stderr).into_owned()
+    };
+    let err = refused(&video, "frame,tendon\n3,1\n40,1\n");
     assert!(err.contains("bad.csv:3: frame 40 is not in"), "{err}");
     // Labels saved with CRLF endings and a blank line name the same lines.
-    std::fs::write(&bad, "frame,tendon\r\n3,1\r\n\r\n40,1\r\n").unwrap();
-    let r = import(&bad, &dir.path().join("ds2"));
-    let err = String::from_utf8_lossy(&r.stderr);
+    let err = refused(&video, "frame,tendon\r\n3,1\r\n\r\n40,1\r\n");
     assert!(err.contains("bad.csv:4: frame 40 is not in"), "{err}");
     // Saved by a spreadsheet that separates with semicolons.
-    std::fs::write(&bad, "frame;tendon\n3;1\n").unwrap();
-    let r = import(&bad, &dir.path().join("ds2"));
-    let err = String::from_utf8_lossy(&r.stderr);
+    let err = refused(&video, "frame;tendon\n3;1\n");
     assert!(
         err.contains("bad.csv:1: no `frame` column (the header is one cell holding ';'"),
         "{err}"
@@ -427,16 +427,12 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
     // A frame labelled twice is named as written; a label the dataset
     // cannot read is named at its line of these labels, not of the
     // dataset's staged copy.
-    std::fs::write(&bad, "frame,tendon\n3,1\n3,0\n").unwrap();
-    let r = import(&bad, &dir.path().join("ds2"));
-    let err = String::from_utf8_lossy(&r.stderr);
+    let err = refused(&video, "frame,tendon\n3,1\n3,0\n");
     assert!(
         err.contains("bad.csv:3: frame 3 is labelled twice (also on line 2)"),
         "{err}"
     );
-    std::fs::write(&bad, "frame,tendon\n2,0\n5,yes\n").unwrap();
-    let r = import(&bad, &dir.path().join("ds2"));
-    let err = String::from_utf8_lossy(&r.stderr);
+    let err = refused(&video, "frame,tendon\n2,0\n5,yes\n");
     assert!(
         err.contains("bad.csv:3: column 'tendon': 'yes' is not a number")
             && !err.contains("partial"),
@@ -455,26 +451,12 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
         )
         .unwrap();
     }
-    std::fs::write(&bad, "frame,tendon\n1,1\n000001.png,0\n").unwrap();
-    let r = tactile()
-        .args(["dataset", "from-video", "--kind", "visuotactile"])
-        .args([
-            "--video",
-            folder.to_str().unwrap(),
-            "--labels",
-            bad.to_str().unwrap(),
-        ])
-        .args(["--out", dir.path().join("ds2").to_str().unwrap()])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&r.stderr);
+    let err = refused(&folder, "frame,tendon\n1,1\n000001.png,0\n");
     assert!(
         err.contains("bad.csv:3: frame 1 (\"000001.png\") is labelled twice, by its number and by its name (also on line 2)"),
         "{err}"
     );
-    std::fs::write(&bad, "frame,tendon,mask\n3,1,../../etc/passwd\n").unwrap();
-    let r = import(&bad, &dir.path().join("ds2"));
-    let err = String::from_utf8_lossy(&r.stderr);
+    let err = refused(&video, "frame,tendon,mask\n3,1,../../etc/passwd\n");
     assert!(
         err.contains("bad.csv:2") && err.contains("goes up with '..'"),
         "{err}"
@@ -493,9 +475,7 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
         ),
         ("small.png", &format!("is 8x8, its frame {w}x{h}")),
     ] {
-        std::fs::write(&bad, format!("frame,tendon,mask\n3,1,{mask}\n")).unwrap();
-        let r = import(&bad, &dir.path().join("ds2"));
-        let err = String::from_utf8_lossy(&r.stderr);
+        let err = refused(&video, &format!("frame,tendon,mask\n3,1,{mask}\n"));
         assert!(err.contains("bad.csv:2") && err.contains(why), "{err}");
     }
     assert!(
