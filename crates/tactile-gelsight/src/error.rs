@@ -52,6 +52,15 @@ pub enum Error {
         /// The frame's size.
         found: (usize, usize),
     },
+    /// A grey frame (or rest frame) given to a sensor calibrated on colour
+    /// frames, whose colours are what its slopes are read from.
+    #[error(
+        "{path}: a greyscale frame, but the sensor was calibrated on colour frames, whose colours are what it reads the skin's slopes from; give the camera's colour frame"
+    )]
+    GreyFrame {
+        /// The frame.
+        path: PathBuf,
+    },
 }
 
 impl Error {

@@ -12,7 +12,7 @@ use tactile_core::image_io::{RgbImage, load_rgb};
 use crate::artifact::{BACKGROUND_FILE, GelsightArtifact};
 use crate::lookup::LookupTable;
 use crate::poisson::PoissonSolver;
-use crate::prepare::{FEATURES, PreparedBackground, WorkingGrid, WorkingImage};
+use crate::prepare::{FEATURES, PreparedBackground, WorkingGrid, WorkingImage, check_colour};
 use crate::{Error, Result};
 
 /// The skin's indentation over a frame: how far each pixel's skin is
@@ -201,11 +201,16 @@ impl Reconstructor {
     }
 
     /// The same model against another background (`--background FILE`: the
-    /// sensor's rest frame today), of the calibrated size.
+    /// sensor's rest frame today), of the calibrated size (and in colour,
+    /// when the calibration's was).
     pub fn set_background(&mut self, background: &RgbImage, path: &Path) -> Result<()> {
         let g = self.grid;
         check_size(path, (g.frame_width, g.frame_height), background)?;
-        self.background = PreparedBackground::new(background, g)?;
+        check_colour(path, background, self.background.colour)?;
+        self.background = PreparedBackground {
+            colour: self.background.colour,
+            ..PreparedBackground::new(background, g)?
+        };
         self.rest = self.raw_slopes(&self.background.image.clone())?;
         Ok(())
     }
@@ -270,11 +275,13 @@ impl Reconstructor {
         ))
     }
 
-    /// The skin's indentation over `frame` (the calibrated size; `path`
-    /// names it in errors), at the frame's size, metres.
+    /// The skin's indentation over `frame` (the calibrated size, in colour
+    /// when the calibration was; `path` names it in errors), at the frame's
+    /// size, metres.
     pub fn reconstruct(&mut self, frame: &RgbImage, path: &Path) -> Result<IndentationMap> {
         let g = self.grid;
         check_size(path, (g.frame_width, g.frame_height), frame)?;
+        check_colour(path, frame, self.background.colour)?;
         let mm = self.working_mm(frame)?;
         let size = (g.frame_width, g.frame_height);
         let big = tactile_preprocess::enlarge_f32(&mm, (g.width(), g.height()), size)?;

@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::{RgbImage, load_rgb};
 
+use crate::prepare::{COLOUR_SPREAD, check_colour, colour_spread};
 use crate::{Error, Result};
 
 /// Most presses one calibration reads.
@@ -215,7 +216,8 @@ impl BallPresses {
         (self.background.width(), self.background.height())
     }
 
-    /// The frame of press `i`, its size checked against the background's.
+    /// The frame of press `i`, its size checked against the background's,
+    /// and in colour when the background is.
     pub fn frame(&self, i: usize) -> Result<RgbImage> {
         let path = self.root.join(&self.presses[i].file);
         let img = load_rgb(&path)?;
@@ -227,6 +229,8 @@ impl BallPresses {
                 found,
             });
         }
+        let colour = colour_spread(&self.background) > COLOUR_SPREAD;
+        check_colour(&path, &img, colour)?;
         Ok(img)
     }
 

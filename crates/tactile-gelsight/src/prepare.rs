@@ -17,6 +17,36 @@ pub const FEATURES: usize = 8;
 pub const DIFF_GAIN: f32 = 4.0;
 /// Largest shrink factor.
 pub const MAX_FACTOR: usize = 16;
+/// A frame whose channels differ by less than this many grey levels on
+/// average is grey (a JPEG of a grey picture stays below it).
+pub const GREY_SPREAD: f32 = 1.0;
+/// A background whose channels differ by more than this many grey levels
+/// on average is a colour sensor's (GelSight's lights colour every pixel:
+/// the R1.5's background spreads 20 levels).
+pub const COLOUR_SPREAD: f32 = 4.0;
+
+/// How far apart a picture's channels are: each pixel's largest less its
+/// smallest channel, in grey levels, averaged over the picture.
+pub fn colour_spread(img: &RgbImage) -> f32 {
+    let px = img.as_slice().chunks_exact(3);
+    let n = px.len().max(1);
+    let sum: u64 = px
+        .map(|p| u64::from(p.iter().max().unwrap_or(&0) - p.iter().min().unwrap_or(&0)))
+        .sum();
+    (sum as f64 / n as f64) as f32
+}
+
+/// Refuse a grey `frame` (named `path`) for a sensor calibrated on colour
+/// frames (`colour`): its colour change would be read as slopes that are
+/// not there, a depth of nothing.
+pub fn check_colour(path: &std::path::Path, frame: &RgbImage, colour: bool) -> Result<()> {
+    if colour && colour_spread(frame) < GREY_SPREAD {
+        return Err(crate::Error::GreyFrame {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(())
+}
 
 /// The working resolution of a sensor of `width x height` frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -130,6 +160,9 @@ pub struct PreparedBackground {
     pub image: WorkingImage,
     /// Its channel medians.
     pub medians: [f32; 3],
+    /// It is a colour sensor's ([`COLOUR_SPREAD`]): grey frames are
+    /// refused against it.
+    pub colour: bool,
 }
 
 impl PreparedBackground {
@@ -137,7 +170,12 @@ impl PreparedBackground {
     pub fn new(background: &RgbImage, grid: WorkingGrid) -> Result<Self> {
         let image = WorkingImage::of(background, grid)?;
         let medians = image.medians();
-        Ok(Self { image, medians })
+        let colour = colour_spread(background) > COLOUR_SPREAD;
+        Ok(Self {
+            image,
+            medians,
+            colour,
+        })
     }
 
     /// A frame's exposure-matched working image.

@@ -187,6 +187,16 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     let ds = BallPresses::open(&d).unwrap();
     let e = ds.frame(1).err().unwrap().to_string();
     assert!(e.contains("press_02.png") && e.contains("640, 480"), "{e}");
+    // A press saved grey against the colour background: its colours are
+    // what the sensor is calibrated from, so it is named, not fitted.
+    let d = tmp.path().join("grey");
+    subset(&d, 2, str::to_string);
+    save_grey_copy(&d.join("frames/press_02.png"));
+    let ds = BallPresses::open(&d).unwrap();
+    assert!(ds.frame(0).is_ok());
+    let e = ds.frame(1).err().unwrap();
+    assert!(matches!(e, Error::GreyFrame { .. }), "{e}");
+    assert!(e.to_string().contains("press_02.png"), "{e}");
     // Too few presses: refused before anything is written.
     let d = tmp.path().join("few");
     subset(&d, 3, str::to_string);
@@ -480,4 +490,43 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     let e = reconstruct_folder(&model, &d.join("frames"), &out, &o).unwrap_err();
     assert!(e.to_string().contains("small.png"), "{e}");
     assert!(!out.exists());
+    // A grey frame, or a grey rest frame, of a colour sensor is named, not
+    // read as a skin (before, the background saved grey reconstructed to a
+    // 0.25 mm dent of nothing).
+    let grey = tmp.path().join("grey");
+    std::fs::create_dir_all(&grey).unwrap();
+    std::fs::copy(d.join("background.png"), grey.join("rest.png")).unwrap();
+    save_grey_copy(&grey.join("rest.png"));
+    let no_background = ReconstructOptions {
+        background: None,
+        ..o.clone()
+    };
+    let e = reconstruct_folder(&model, &grey, &out, &no_background).unwrap_err();
+    assert!(matches!(e, Error::GreyFrame { .. }), "{e}");
+    assert!(e.to_string().contains("rest.png"), "{e}");
+    let o = ReconstructOptions {
+        background: Some(grey.join("rest.png")),
+        ..o
+    };
+    let e = reconstruct_folder(&model, &d.join("frames"), &out, &o).unwrap_err();
+    assert!(
+        matches!(e, Error::GreyFrame { .. }) && e.to_string().contains("rest.png"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
+
+/// Overwrite the colour PNG `path` with its grey version, as RGB (the
+/// three channels equal): a frame a tool saved grey.
+fn save_grey_copy(path: &Path) {
+    let rgb = load_rgb(path).unwrap();
+    let grey: Vec<u8> = rgb
+        .as_slice()
+        .chunks_exact(3)
+        .flat_map(|p| {
+            let v = ((p[0] as u32 + p[1] as u32 + p[2] as u32) / 3) as u8;
+            [v, v, v]
+        })
+        .collect();
+    tactile_core::image_io::save_rgb_png(path, rgb.width(), rgb.height(), &grey).unwrap();
 }
