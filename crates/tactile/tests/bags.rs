@@ -181,6 +181,20 @@ fn hostile_bags_are_refused_by_name_and_leave_no_results() {
             "/cam/image_raw, /garbage, /wide",
         ],
     );
+    // A topic declared with no message (a recorder subscribed to a camera
+    // that never published): refused by name, where before it ran on no
+    // frame, wrote an empty results file and succeeded.
+    let silent = dir.path().join("silent.mcap");
+    let bag = common::ImageBag::create(&silent, "/cam/silent", "cam");
+    bag.finish();
+    check(
+        &silent,
+        "/cam/silent",
+        &[
+            "silent.mcap: topic /cam/silent: has no messages",
+            "other image topics: none",
+        ],
+    );
     // (A bag cut inside its data is a recording cut short, read up to
     // the cut: a_recording_cut_short_gives_its_complete_frames_and_says_so.)
     // A record claiming a terabyte: refused before anything is allocated.

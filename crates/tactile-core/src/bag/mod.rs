@@ -836,22 +836,32 @@ impl TopicMessages {
     pub(crate) fn next(&mut self) -> Result<Option<TopicMessage>> {
         loop {
             let Some(item) = self.records.next(Some(&self.topic))? else {
-                if self.given == 0 && !self.records.topics.contains_key(&self.topic) {
+                if self.given == 0 {
+                    // Nothing to run on: a topic not in the bag, or one
+                    // declared (a recorder subscribed) with no message.
                     let names: Vec<&str> = self
                         .records
                         .topics
                         .iter()
-                        .filter(|(_, t)| is_image_type(t))
+                        .filter(|(n, t)| is_image_type(t) && **n != self.topic)
                         .map(|(n, _)| n.as_str())
                         .collect();
-                    return Err(self.topic_error(format!(
-                        "not in the bag; its image topics: {}",
-                        if names.is_empty() {
-                            "none".to_string()
-                        } else {
-                            names.join(", ")
-                        }
-                    )));
+                    let others = match names.is_empty() {
+                        true => "none".to_string(),
+                        false => names.join(", "),
+                    };
+                    return Err(self.topic_error(
+                        match self.records.topics.contains_key(&self.topic) {
+                            false => format!("not in the bag; its image topics: {others}"),
+                            true => format!(
+                                "has no messages{}: its channel is declared, but nothing was logged on it; the bag's other image topics: {others}",
+                                match self.records.cut_short.is_empty() {
+                                    true => "",
+                                    false => " before the recording was cut short",
+                                }
+                            ),
+                        },
+                    ));
                 }
                 return Ok(None);
             };
