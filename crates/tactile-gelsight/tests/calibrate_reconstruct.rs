@@ -315,6 +315,24 @@ fn a_calibration_reconstructs_held_out_presses_and_rest() {
     );
     let unit = datasets_synth::calibrated::CalibratedSensor::load(&out).unwrap();
     assert_eq!((unit.width(), unit.height()), (640, 480));
+    // A render model edited out of range is named at its file, said once.
+    let optics = out.join("optics.json");
+    let good = std::fs::read_to_string(&optics).unwrap();
+    let mut bad: serde_json::Value = serde_json::from_str(&good).unwrap();
+    bad["optics"]["bins"] = 0.into();
+    std::fs::write(&optics, bad.to_string()).unwrap();
+    let e = datasets_synth::calibrated::CalibratedSensor::load(&out)
+        .err()
+        .unwrap()
+        .to_string();
+    assert_eq!(
+        e,
+        format!(
+            "invalid configuration: {}: optics: bins must be 2-128, got 0",
+            optics.display()
+        )
+    );
+    std::fs::write(&optics, good).unwrap();
     // Held-out presses: the cap's shape within 0.15 mm after a short fit.
     for s in &cal.validation {
         assert!(s.shape_mae_mm < 0.15, "{s:?}");

@@ -94,9 +94,12 @@ impl CalibratedSensor {
         }
         let model: RenderModel =
             tactile_core::io::read_json_limited(&file, MAX_RENDER_MODEL_BYTES)?;
-        model
-            .check()
-            .map_err(|e| Error::Config(format!("{}: {e}", file.display())))?;
+        model.check().map_err(|e| match e {
+            // Named at the file, said once ("invalid configuration: FILE:
+            // optics: bins must be 2-128, got 0").
+            Error::Config(why) => Error::Config(format!("{}: {why}", file.display())),
+            other => other,
+        })?;
         let bg_path = dir.join(BACKGROUND_FILE);
         let bg = load_rgb(&bg_path)?;
         let (w, h) = (model.optics.width, model.optics.height);
