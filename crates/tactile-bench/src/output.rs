@@ -71,14 +71,19 @@ pub const PAGE_PATIENCE: Duration = Duration::from_secs(120);
 /// measurements).
 pub fn check_page(out: &Path, datasets: &[&tactile_core::dataset::Dataset]) -> Result<()> {
     let dir = tactile_core::io::folder_of(out);
-    if dir.join(tactile_burn::artifact::INCOMPLETE_FILE).is_file()
-        && tactile_core::io::FolderLock::of_existing(dir).is_err()
-    {
-        return Err(tactile_core::Error::Invalid(format!(
-            "{}: a model is being trained in this folder, which a page's files wait for until the training ends; give the page another folder",
-            dir.display()
-        ))
-        .into());
+    if dir.join(tactile_burn::artifact::INCOMPLETE_FILE).is_file() {
+        // Held by a training (busy), or not lockable at all (said as is).
+        match tactile_core::io::FolderLock::of_existing(dir) {
+            Err(tactile_core::Error::Busy { .. }) => {
+                return Err(tactile_core::Error::Invalid(format!(
+                    "{}: a model is being trained in this folder, which a page's files wait for until the training ends; give the page another folder",
+                    dir.display()
+                ))
+                .into());
+            }
+            Err(e) => return Err(e.into()),
+            Ok(_) => {}
+        }
     }
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
     if matches!(ext, "json" | "png") {

@@ -59,9 +59,9 @@ impl FrameEntry {
 pub struct FrameList {
     /// The frames.
     pub frames: Vec<FrameEntry>,
-    /// True for a dataset, whose rows say what it holds; false for a
-    /// folder of frames, which may have dropped some.
-    pub is_dataset: bool,
+    /// The dataset the frames are the rows of (whose rows say what it
+    /// holds); `None` for a folder of frames, which may have dropped some.
+    pub dataset: Option<Dataset>,
     /// Files of a folder of frames that are not PNG or JPEG frames, or are
     /// hidden (sorted; they are reported, not read).
     pub ignored: Vec<PathBuf>,
@@ -126,7 +126,7 @@ impl FrameList {
                 .collect::<Result<_>>()?;
             return Ok(Self {
                 frames,
-                is_dataset: true,
+                dataset: Some(ds),
                 ignored: Vec::new(),
             });
         }
@@ -191,7 +191,7 @@ impl FrameList {
                     size: None,
                 })
                 .collect(),
-            is_dataset: false,
+            dataset: None,
             ignored,
         })
     }
@@ -277,7 +277,7 @@ impl FrameList {
     /// not listed: frames named by nanosecond timestamps skip billions.
     pub fn missing_frames(&self) -> MissingFrames {
         let none = MissingFrames::default();
-        if self.is_dataset {
+        if self.dataset.is_some() {
             return none;
         }
         let number = |p: &Path| -> Option<u64> {
@@ -684,11 +684,11 @@ impl FrameSource {
                                 tendon: None,
                                 size: None,
                             }],
-                            is_dataset: false,
+                            dataset: None,
                             ignored: Vec::new(),
                         },
                     };
-                    let kind = match list.is_dataset {
+                    let kind = match list.dataset.is_some() {
                         true => SourceKind::Dataset,
                         false => SourceKind::Folder,
                     };
@@ -839,6 +839,12 @@ impl FrameSource {
     /// The frames of a dataset or folder source.
     pub fn list(&self) -> Option<&FrameList> {
         self.list.as_ref()
+    }
+
+    /// The dataset read, as it was opened (so outputs are checked against
+    /// the very rows the run reads).
+    pub fn dataset(&self) -> Option<&Dataset> {
+        self.list.as_ref()?.dataset.as_ref()
     }
 
     /// The frame size, when known before reading (streams, datasets).

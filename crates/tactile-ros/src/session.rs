@@ -9,7 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
-use tactile_core::dataset::{self, Dataset};
+use tactile_core::dataset;
 use tactile_pipeline::run::JsonLines;
 use tactile_pipeline::{
     Flow, FrameSource, Hysteresis, Pipeline, RunOptions, RunSummary, Runtime, SourceOptions,
@@ -119,11 +119,7 @@ impl RunSession {
             SourceSpec::Path(p) | SourceSpec::Bag { path: p, .. } => Some(p.as_path()),
             _ => None,
         };
-        let input = match data {
-            Some(d) if d.join("labels.csv").is_file() => Some(Dataset::open(d)?),
-            _ => None,
-        };
-        let inputs: Vec<_> = input.iter().collect();
+        let inputs: Vec<_> = source.dataset().into_iter().collect();
         let out = request
             .out
             .as_deref()
