@@ -40,6 +40,16 @@ pub trait Artifact: Serialize + DeserializeOwned + Clone + Sized {
         dir.join(Self::CONFIG_FILE).exists()
     }
 
+    /// Before a trainer reads a frame: `out` can take a model of this kind
+    /// trained on `datasets` ([`tactile_core::dataset::check_model_dir`]
+    /// with this kind's config file).
+    fn check_out_dir(
+        out: &Path,
+        datasets: &[&tactile_core::dataset::Dataset],
+    ) -> tactile_core::Result<()> {
+        tactile_core::dataset::check_model_dir(out, datasets, Self::CONFIG_FILE)
+    }
+
     /// Save the config and the weights into `dir` (created if needed),
     /// each atomically, the config last.
     fn save(&self, model: &Self::Model, dir: &Path) -> Result<()> {

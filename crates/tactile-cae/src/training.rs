@@ -207,11 +207,7 @@ pub fn train(
     }))
     .collect();
     let datasets: Vec<&Dataset> = sources.iter().map(|s| s.ds).collect();
-    tactile_core::dataset::check_model_dir(
-        out,
-        &datasets,
-        <crate::CaeArtifact as tactile_burn::Artifact>::CONFIG_FILE,
-    )?;
+    <crate::CaeArtifact as tactile_burn::Artifact>::check_out_dir(out, &datasets)?;
     for s in &sources {
         if let Some(j) = s.joint {
             s.ds.expect_columns(j.targets.iter().map(|t| t.name.as_str()))?;

@@ -150,11 +150,7 @@ pub fn train(
         ))
         .into());
     }
-    tactile_core::dataset::check_model_dir(
-        out,
-        &[data],
-        <crate::DepthArtifact as tactile_burn::Artifact>::CONFIG_FILE,
-    )?;
+    <crate::DepthArtifact as tactile_burn::Artifact>::check_out_dir(out, &[data])?;
     let (train, val) = data.split_by_sequence(config.val_fraction, config.schedule.seed)?;
     let [w, h] = net.input_size;
     tactile_core::note!(

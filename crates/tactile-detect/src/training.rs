@@ -152,11 +152,7 @@ pub fn train(
     }
     config.model.check()?;
     let refs: Vec<&Dataset> = datasets.iter().collect();
-    tactile_core::dataset::check_model_dir(
-        out,
-        &refs,
-        <crate::DetectorArtifact as tactile_burn::Artifact>::CONFIG_FILE,
-    )?;
+    <crate::DetectorArtifact as tactile_burn::Artifact>::check_out_dir(out, &refs)?;
     let [w, h] = config.model.input_size;
     let (data, train, val) = load_split(
         datasets,

@@ -766,11 +766,7 @@ pub fn train_head(
             tactile_core::Error::dataset(ds.labels_path(), None, "no frames to train on").into(),
         );
     }
-    tactile_core::dataset::check_model_dir(
-        out,
-        &[ds],
-        <tactile_estimate::head::HeadArtifact as tactile_burn::Artifact>::CONFIG_FILE,
-    )?;
+    <tactile_estimate::head::HeadArtifact as tactile_burn::Artifact>::check_out_dir(out, &[ds])?;
     ds.expect_columns(["shape"])?;
     let train = ds
         .split_indices("train")
@@ -992,10 +988,9 @@ pub fn train_regressor(
     out: &Path,
     runtime: Runtime,
 ) -> Result<RegressorFit> {
-    tactile_core::dataset::check_model_dir(
+    <tactile_estimate::regressor::RegressorArtifact as tactile_burn::Artifact>::check_out_dir(
         out,
         &[ds],
-        <tactile_estimate::regressor::RegressorArtifact as tactile_burn::Artifact>::CONFIG_FILE,
     )?;
     ds.expect_columns(plan.targets.iter().map(|t| t.name.as_str()))?;
     let feats = dataset_features(source, ds, runtime)?;

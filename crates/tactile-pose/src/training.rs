@@ -161,11 +161,7 @@ pub fn train(
     resume: bool,
 ) -> Result<FitSummary> {
     let config = &config.clone().checked()?;
-    tactile_core::dataset::check_model_dir(
-        out,
-        &[data],
-        <crate::PoseArtifact as tactile_burn::Artifact>::CONFIG_FILE,
-    )?;
+    <crate::PoseArtifact as tactile_burn::Artifact>::check_out_dir(out, &[data])?;
     data.expect_columns(config.targets.iter().map(|t| t.name.as_str()))?;
     tactile_core::note!("preprocessing {} frames", data.len());
     let set = PoseSet::from_dataset(data, &config.preprocess, &config.targets)?;

@@ -94,11 +94,7 @@ pub fn train(
         ))
         .into());
     }
-    tactile_core::dataset::check_model_dir(
-        out,
-        &[data],
-        <crate::SegmenterArtifact as tactile_burn::Artifact>::CONFIG_FILE,
-    )?;
+    <crate::SegmenterArtifact as tactile_burn::Artifact>::check_out_dir(out, &[data])?;
     let (train, val) = data.split_by_sequence(config.val_fraction, config.schedule.seed)?;
     let (train, val) = (data.tendon_rows(&train)?, data.tendon_rows(&val)?);
     if train.is_empty() || val.is_empty() {
