@@ -182,27 +182,33 @@ impl PoseSet {
     }
 
     /// A `[N, 1, S, S]` batch of the images at `idx`, augmented with
-    /// streams of `seed` keyed by `round` (the epoch) and each frame.
+    /// streams of `seed` keyed by `round` (the epoch) and each frame, and
+    /// which of them it turned half a turn (whose labels the loss turns:
+    /// drawn here once, for both).
     pub fn batch(
         &self,
         idx: &[usize],
         augment: &Augment,
         (seed, round): (u64, u64),
         device: &Device,
-    ) -> Tensor<4> {
+    ) -> (Tensor<4>, Vec<bool>) {
         let side = self.pins.images.first().map_or(0, |p| p.side);
         let mut data = Vec::with_capacity(idx.len() * side * side);
+        let mut turned = Vec::with_capacity(idx.len());
         for &i in idx {
             let mut px = self.pins.images[i].pixels.clone();
-            if augment.turns((seed, round), i) {
+            let turn = augment.turns((seed, round), i);
+            if turn {
                 // Row-major and square: a half turn about the centre is the
                 // pixels in reverse order.
                 px.reverse();
             }
             augment.apply(&mut px, &mut SampleRng::new(seed, round, i as u64));
             data.extend(px);
+            turned.push(turn);
         }
-        Tensor::from_data(TensorData::new(data, [idx.len(), 1, side, side]), device)
+        let x = Tensor::from_data(TensorData::new(data, [idx.len(), 1, side, side]), device);
+        (x, turned)
     }
 }
 
@@ -262,14 +268,15 @@ mod tests {
         };
         let idx: Vec<usize> = (0..40).collect();
         let dev = Default::default();
-        let batch: Vec<f32> = set
-            .batch(&idx, &a, (7, 1), &dev)
+        let (batch, turned) = set.batch(&idx, &a, (7, 1), &dev);
+        let batch: Vec<f32> = batch
             .into_data()
             .convert::<f32>()
             .try_to_vec::<f32>()
             .unwrap();
         for (i, px) in batch.chunks(9).enumerate() {
-            let want: Vec<f32> = match a.turns((7, 1), i) {
+            assert_eq!(turned[i], a.turns((7, 1), i), "frame {i}");
+            let want: Vec<f32> = match turned[i] {
                 true => (0..9).map(|k| image[8 - k]).collect(),
                 false => image.clone(),
             };

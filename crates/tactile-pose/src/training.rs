@@ -136,7 +136,7 @@ pub fn predict_columns(
 ) -> Result<Vec<Vec<f32>>> {
     let mut out = Vec::with_capacity(rows.len());
     for chunk in rows.chunks(PREDICT_BATCH) {
-        let x = set.batch(chunk, &Augment::none(), (0, 0), device);
+        let (x, _) = set.batch(chunk, &Augment::none(), (0, 0), device);
         let y = model.forward(x);
         let k = y.dims()[1];
         let v: Vec<f32> = y
@@ -252,7 +252,7 @@ pub fn train(
         (&train, val.len()),
         |m: &PoseNet, batch, epoch| {
             let round = (seed, epoch as u64 + 1);
-            let x = set.batch(batch, &config.augment, round, &ad);
+            let (x, turns) = set.batch(batch, &config.augment, round, &ad);
             let out = m.forward(x);
             let Some(turned) = &turned else {
                 let y: Vec<f32> = batch.iter().flat_map(|&i| columns[i].clone()).collect();
@@ -268,8 +268,8 @@ pub fn train(
             // Turned copies: their turned labels, and only the targets the
             // turn keeps count (the mean is over the columns that count).
             let (mut y, mut weight) = (Vec::new(), Vec::new());
-            for &i in batch {
-                if config.augment.turns(round, i) {
+            for (&i, turn) in batch.iter().zip(turns) {
+                if turn {
                     y.extend_from_slice(&turned.columns[i]);
                     weight.extend_from_slice(&turned.weight);
                 } else {
