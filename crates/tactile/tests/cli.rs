@@ -2158,8 +2158,9 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
         );
     }
     assert_eq!(csv_rows(&tmp.path().join("killed.csv")), rows);
-    // A bag whose image topic holds no message: no frames, refused alike
-    // whether the estimates go to a file or stream out.
+    // A bag whose image topic holds no message: refused alike whether the
+    // estimates go to a file or stream out, naming the topic (before,
+    // "no frames to estimate").
     let empty = tmp.path().join("empty.mcap");
     common::ImageBag::create(&empty, "/tactip/image_raw", "tactip").finish();
     for out in [tmp.path().join("none.csv").to_str().unwrap(), "-"] {
@@ -2174,7 +2175,10 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
             "--out",
             out,
         ]);
-        assert!(!ok && msg.contains("no frames to estimate"), "{out}: {msg}");
+        assert!(
+            !ok && msg.contains("empty.mcap: topic /tactip/image_raw: has no messages"),
+            "{out}: {msg}"
+        );
     }
     assert!(!tmp.path().join("none.csv").exists());
     // A frame of another camera among them (a third of the size, smaller
