@@ -98,6 +98,12 @@ def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
         rec.reconstruct(np.zeros((240, 320, 3), np.uint8))
     with pytest.raises(TypeError, match="uint8"):
         rec.reconstruct(np.zeros((480, 640, 3), np.float32))
+    # A frame saved grey, of a sensor calibrated in colour: its colours are
+    # what the slopes are read from, so it is refused, not read as a dent.
+    rest = tactile.read_rgb(presses / "background.png")
+    grey = rest.mean(axis=2).astype(np.uint8)
+    with pytest.raises(ValueError, match="greyscale frame.*calibrated on colour"):
+        rec.reconstruct(np.repeat(grey[:, :, None], 3, axis=2))
     with pytest.raises(ValueError, match="colour_jitter"):
         tactile.calibrate.ball(presses, tmp_path / "m", colour_jitter=0.9)
     with pytest.raises(ValueError, match="no_such_option"):
