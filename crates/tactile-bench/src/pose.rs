@@ -7,7 +7,7 @@ use tactile_burn::Artifact;
 use tactile_cae::CaeArtifact;
 use tactile_core::dataset::{Dataset, Provenance, Seen, TestHoldout};
 use tactile_core::plot::Series;
-use tactile_pipeline::tactip::Predictor;
+use tactile_pipeline::tactip::{Predictor, TactipModelKind};
 use tactile_pose::{PoseArtifact, PoseEnsemble};
 
 use crate::Result;
@@ -78,7 +78,9 @@ impl Candidate {
     pub fn read(m: &std::path::Path, runs: usize) -> Result<Self> {
         let trained_on = |notes: &serde_json::Value| Provenance::read(notes).datasets;
         let mut sets = Vec::new();
-        let (kind, notes, input, params, ms) = if PoseEnsemble::is_in(m) {
+        let pose = TactipModelKind::of(m, "a model this bench does not score")?
+            == TactipModelKind::PoseNetwork;
+        let (kind, notes, input, params, ms) = if pose && PoseEnsemble::is_in(m) {
             // Members run one after another: latencies and sizes add up.
             let e = PoseEnsemble::read(m)?;
             let (mut p, mut ms, mut sides) = (0, Vec::new(), Vec::<usize>::new());
@@ -102,7 +104,7 @@ impl Candidate {
                 .collect::<Vec<_>>()
                 .join(" + ");
             ("pose ensemble", e.notes, input, p, RuntimeMs::sum(&ms))
-        } else if PoseArtifact::is_in(m) {
+        } else if pose {
             let a = PoseArtifact::read(m)?;
             sets.extend(trained_on(&a.notes));
             let s = a.model.input_px;

@@ -40,6 +40,7 @@ where
 
 /// Export the model in `dir`.
 pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
+    tactile_core::io::expect_folder(dir, "model folder")?;
     if tactile_pose::PoseEnsemble::is_in(dir) {
         let members = tactile_pose::PoseEnsemble::read(dir)?.members;
         return Err(tactile_core::Error::Invalid(format!(
@@ -72,8 +73,25 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
             "CAE autoencoder",
             tactile_cae::export::autoencoder_onnx(&l.model, px)?,
         )
-    } else {
+    } else if CaeArtifact::is_in(dir) {
         ("CAE encoder", export::<CaeArtifact>(dir)?)
+    } else {
+        let exportable = |d: &Path| {
+            is_detector(d)
+                || SegmenterArtifact::is_in(d)
+                || DepthArtifact::is_in(d)
+                || tactile_gelsight::GelsightArtifact::is_in(d)
+                || tactile_pose::PoseArtifact::is_in(d)
+                || CaeArtifact::is_in(d)
+        };
+        let hint =
+            tactile_burn::artifact::folder_hint(dir, exportable, "a model `export` does not write");
+        return Err(tactile_core::Error::wrong_kind(
+            dir,
+            "model folder",
+            format!("no cae.json, pose.json, detector.json, segmenter.json, depth.json or gelsight.json{hint}"),
+        )
+        .into());
     };
     Ok(Exported { kind, bytes })
 }

@@ -99,6 +99,47 @@ pub struct TactipPerception {
     pub estimators: Estimators,
 }
 
+/// What a TacTip model folder holds: the two kinds `predict` and the pose
+/// benches read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TactipModelKind {
+    /// A pose network, or an ensemble of them: it gives its targets itself.
+    PoseNetwork,
+    /// A CAE encoder, its estimators inside its folder.
+    Encoder,
+}
+
+impl TactipModelKind {
+    /// The kind of TacTip model in `dir`. A path that is no folder, or a
+    /// folder of neither kind, is refused naming what it holds (`other`
+    /// says what a model of another kind is to the caller: "a model
+    /// `predict` does not run").
+    pub fn of(dir: &Path, other: &str) -> Result<Self> {
+        use tactile_burn::Artifact;
+        // A pose network, or an ensemble of them (a detector's ensemble is
+        // no TacTip model).
+        let pose =
+            |d: &Path| tactile_pose::PoseArtifact::is_in(d) || tactile_pose::PoseEnsemble::is_in(d);
+        tactile_core::io::expect_folder(dir, "model folder")?;
+        if pose(dir) {
+            return Ok(Self::PoseNetwork);
+        }
+        if tactile_cae::CaeArtifact::is_in(dir) {
+            return Ok(Self::Encoder);
+        }
+        let model = |d: &Path| pose(d) || tactile_cae::CaeArtifact::is_in(d);
+        Err(tactile_core::Error::wrong_kind(
+            dir,
+            "TacTip model folder",
+            format!(
+                "no pose network (pose.json, or an ensemble of them) and no cae.json{}",
+                tactile_burn::artifact::folder_hint(dir, model, other)
+            ),
+        )
+        .into())
+    }
+}
+
 /// Anything that estimates targets from TacTip frames: an encoder with its
 /// estimators (paper A), or a pose network (`pose.json`), which estimates
 /// its targets directly.
@@ -115,13 +156,9 @@ impl Predictor {
     /// encoder with the estimators in `heads` (every estimator folder
     /// inside it when empty).
     pub fn load(dir: &Path, heads: &[PathBuf], runtime: Runtime) -> Result<Self> {
-        use tactile_burn::Artifact;
-        // A pose network, or an ensemble of them (a detector's ensemble is
-        // no TacTip model).
-        let pose =
-            |d: &Path| tactile_pose::PoseArtifact::is_in(d) || tactile_pose::PoseEnsemble::is_in(d);
-        tactile_core::io::expect_folder(dir, "model folder")?;
-        if pose(dir) {
+        if TactipModelKind::of(dir, "a model `predict` does not run")?
+            == TactipModelKind::PoseNetwork
+        {
             // A pose network gives its targets itself: estimator folders
             // would be left unread without a word.
             if let Some(h) = heads.first() {
@@ -137,23 +174,8 @@ impl Predictor {
             Ok(Self::PoseNetwork(tactile_pose::PoseEstimator::load(
                 dir, runtime, 0,
             )?))
-        } else if tactile_cae::CaeArtifact::is_in(dir) {
-            Ok(Self::Encoder(TactipPerception::load(dir, heads, runtime)?))
         } else {
-            let model = |d: &Path| pose(d) || tactile_cae::CaeArtifact::is_in(d);
-            Err(tactile_core::Error::wrong_kind(
-                dir,
-                "TacTip model folder",
-                format!(
-                    "no pose network (pose.json, or an ensemble of them) and no cae.json{}",
-                    tactile_burn::artifact::folder_hint(
-                        dir,
-                        model,
-                        "a model `predict` does not run"
-                    )
-                ),
-            )
-            .into())
+            Ok(Self::Encoder(TactipPerception::load(dir, heads, runtime)?))
         }
     }
 

@@ -688,6 +688,40 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
     }
     let (ok, msg) = tactile(&["export", "--model", s(&m), "--out", s(&m.join("pose.json"))]);
     assert!(!ok && msg.contains("is a file of the model in"), "{msg}");
+    // A model folder that is not there, or holds no model, is named as a
+    // model folder of the kinds the command reads (before, `export` and
+    // the pose and surface benches fell back to a CAE: "CAE model folder
+    // does not exist", "not a CAE model folder (no cae.json)").
+    let missing = tmp.path().join("nowhere");
+    let out = tmp.path().join("x.onnx");
+    for (model, want) in [
+        (&missing, "nowhere: model folder does not exist"),
+        (
+            &ds,
+            "not a model folder (no cae.json, pose.json, detector.json",
+        ),
+    ] {
+        let (ok, msg) = tactile(&["export", "--model", s(model), "--out", s(&out)]);
+        assert!(!ok && msg.contains(want) && !msg.contains("CAE"), "{msg}");
+    }
+    // (`bench surface` reads its models as `bench pose` does.)
+    for (model, want) in [
+        (&missing, "nowhere: model folder does not exist"),
+        (&ds, "not a TacTip model folder (no pose network"),
+    ] {
+        let page = tmp.path().join("never.md");
+        let (ok, msg) = tactile(&[
+            "bench",
+            "pose",
+            "--models",
+            s(model),
+            "--data",
+            s(&ds),
+            "--out",
+            s(&page),
+        ]);
+        assert!(!ok && msg.contains(want) && !msg.contains("CAE"), "{msg}");
+    }
     // A bench page of the pose network on `ds`, named `out`.
     let bench_page = |out: &Path| {
         tactile(&[
