@@ -161,6 +161,9 @@ if trained data/surface/p64-k9 && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] \
 fi
 # The same network trained with half-turn copies that train the twist alone.
 surface_step surface_half_turn_trained "$OUT/surface-half-turn-trained.md" data/surface/p64-k9-turn data/surface/p64-k9
+# The same network on 1,500, 3,000 and all 6,000 `train` frames, on as many
+# optimiser steps.
+surface_step surface_more_frames "$OUT/surface-more-frames.md" data/surface/p64-k9 data/surface/p64-k9-n3000 data/surface/p64-k9-n1500
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
@@ -302,6 +305,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     surface_section "A network for the shallow taps alone" surface_shallow "$OUT/surface-shallow.md"
     surface_section "Half a turn: free frames with exact labels?" surface_half_turn "$OUT/surface-half-turn.md"
     surface_section "Half-turn copies for the twist" surface_half_turn_trained "$OUT/surface-half-turn-trained.md"
+    surface_section "More frames" surface_more_frames "$OUT/surface-more-frames.md"
     echo "### One encoder for many tasks"
     echo
     echo "\`${CMD[shared]}\`"

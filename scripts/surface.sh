@@ -126,6 +126,21 @@ run p64-k9-shallow shallow_pose --out data/surface/p64-k9-shallow "${POSE[@]}" "
 run p64-k9-turn "$BIN" train pose --data "$DATA" --out data/surface/p64-k9-turn "${POSE[@]}" "${K9[@]}" "${SHORT[@]}" \
     --half-turn shear_theta_deg:1
 run p64-k9-turn-calibrate "$BIN" train calibrate --model data/surface/p64-k9-turn --data "$DATA" --split val
+# Would more taps of this rig bring slide and twist to the goal? The same
+# 9 px network on 1,500 and 3,000 of the 6,000 `train` frames
+# (scripts/surface-train-subset.sh: drawn at random, every `val` frame
+# kept), on as many optimiser steps as p64-k9 (epochs times 6,000 / N, the
+# learning rate's decay per epoch to the power N / 6,000), scored on `val`
+# beside p64-k9 (docs/paper-a.md, "More frames").
+for n in 1500 3000; do
+    subset_pose() { "$BIN" train pose --data "$(bash scripts/surface-train-subset.sh "$n")" "$@"; }
+    epochs=$((25 * 6000 / n))
+    decay=$(python3 -c "print(round(0.92 ** ($n / 6000), 5))")
+    run "p64-k9-n$n" subset_pose --out "data/surface/p64-k9-n$n" "${POSE[@]}" "${K9[@]}" \
+        --max-epochs "$epochs" --patience "$epochs" --lr-decay "$decay"
+    run "p64-k9-n$n-calibrate" "$BIN" train calibrate --model "data/surface/p64-k9-n$n" \
+        --data "$(bash scripts/surface-train-subset.sh "$n")" --split val
+done
 
 # The CAE route: 56 px pin images through one stem block to Table I's 28 px
 # encoder, 32 features, trained jointly with a head on the six targets (L1,

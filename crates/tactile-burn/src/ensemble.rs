@@ -155,8 +155,14 @@ impl Ensemble {
         notes: impl FnOnce(&[A]) -> Result<serde_json::Value>,
         prepare: impl Fn(&Path) -> Result<()>,
     ) -> Result<Self> {
-        if let Some(m) = Self::count_problem(members.len()) {
-            return Err(Error::Invalid(m));
+        // One model alone is no average (reading a folder of one, made by
+        // hand, is still allowed).
+        let n = members.len();
+        if !(2..=Self::MAX_MEMBERS).contains(&n) {
+            return Err(Error::Invalid(format!(
+                "an ensemble averages 2 to {} models trained apart, got {n}",
+                Self::MAX_MEMBERS
+            )));
         }
         let arts = members
             .iter()

@@ -31,6 +31,19 @@ pub fn assemble_ensemble(members: &[PathBuf], out: &Path) -> Result<String> {
     } else if RegressorArtifact::is_in(first) {
         let e = RegressorEnsemble::assemble(members, out)?;
         Ok(e.describe(out, "regressors"))
+    } else if tactile_burn::ensemble::Ensemble::is_in(first) {
+        // An ensemble's members are single models: name its own.
+        use tactile_burn::ensemble::Ensemble;
+        let members = tactile_core::io::read_json::<Ensemble>(&first.join(Ensemble::FILE))
+            .map(|e| e.member_dirs(first))
+            .unwrap_or_default();
+        let names: Vec<String> = members.iter().map(|m| m.display().to_string()).collect();
+        Err(tactile_core::Error::Invalid(format!(
+            "{}: an ensemble already (ensemble.json), and an ensemble's members are single models: give its members' folders ({}) beside the others",
+            first.display(),
+            names.join(", ")
+        ))
+        .into())
     } else {
         Err(tactile_core::Error::wrong_kind(
             first,
@@ -38,5 +51,39 @@ pub fn assemble_ensemble(members: &[PathBuf], out: &Path) -> Result<String> {
             "no detector.json, pose.json or regressor.json",
         )
         .into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ensemble_members_are_single_models() {
+        let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("e");
+        // One model alone is no average.
+        let e = assemble_ensemble(&[models.join("detector/member-0")], &out)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("an ensemble averages 2 to 8 models trained apart, got 1"),
+            "{e}"
+        );
+        // An ensemble as a member: its own members are named.
+        let e = assemble_ensemble(
+            &[models.join("detector"), models.join("detector/member-0")],
+            &out,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("detector: an ensemble already (ensemble.json)")
+                && e.contains("detector/member-0, ")
+                && e.contains("detector/member-1)"),
+            "{e}"
+        );
+        assert!(!out.exists());
     }
 }

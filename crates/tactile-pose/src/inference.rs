@@ -364,7 +364,21 @@ mod tests {
         std::fs::write(ens.join("ensemble.json"), r#"{"members": []}"#).unwrap();
         assert!(PoseEstimator::load(&ens, Runtime::BurnFlex, 0).is_err());
         // An existing folder is left alone.
-        assert!(PoseEnsemble::assemble(std::slice::from_ref(&shipped), &ens).is_err());
+        let e = PoseEnsemble::assemble(&[shipped.clone(), other.clone()], &ens)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("already exists and is left alone"), "{e}");
+        // One model alone is no average: refused before anything is read.
+        let e = PoseEnsemble::assemble(std::slice::from_ref(&shipped), &tmp.path().join("one"))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("an ensemble averages 2 to 8 models trained apart, got 1"),
+            "{e}"
+        );
+        assert!(!tmp.path().join("one").exists());
         assert!(ens.join("member-1").is_dir());
         // One model given twice, as its folder twice or as a plain copy, is
         // refused naming both, and no folder appears: it would count its
