@@ -93,6 +93,12 @@ def test_two_detectors_average_as_one(root, small_vt, tmp_path):
     with pytest.raises(ValueError, match="the same model as"):
         tactile.train.ensemble([member, member], tmp_path / "twice")
     assert not (tmp_path / "twice").exists()
+    # One model alone is no average, and an ensemble is no member.
+    with pytest.raises(ValueError, match="2 to 8 models trained apart, got 1"):
+        tactile.train.ensemble([member], tmp_path / "one")
+    with pytest.raises(ValueError, match="an ensemble already"):
+        tactile.train.ensemble([root / "models/detector", member], tmp_path / "nested")
+    assert not (tmp_path / "one").exists() and not (tmp_path / "nested").exists()
     noted = tmp_path / "noted"
     shutil.copytree(member, noted)
     config = json.loads((noted / "detector.json").read_text())
