@@ -250,7 +250,7 @@ impl JointLabels {
 #[derive(clap::Args, serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct JointArgs {
     /// Semi-supervised: also train the features to predict these label columns through a small head, e.g. x_mm,theta_deg:180,depth_mm (only the autoencoder is saved).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
     pub joint_targets: Vec<String>,
     /// Weight of the head's loss beside the reconstruction's.
     #[arg(long, default_value_t = 1.0)]

@@ -44,7 +44,7 @@ pub struct CaeOptions {
     #[arg(long, default_value = "binary")]
     pub preprocess: String,
     /// Encoder widths, e.g. 16,8,8,4 (paper) or 16,16,8,4 (authors' release).
-    #[arg(long, value_delimiter = ',', default_values_t = CaeConfig::new().widths)]
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = CaeConfig::new().widths)]
     pub widths: Vec<usize>,
     /// Feature count (8/16/32/64): sets the last width.
     #[arg(long)]

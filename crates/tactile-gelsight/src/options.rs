@@ -17,10 +17,10 @@ tactile_burn::schedule_args!(CalibrationSchedule, CalibrationConfig::new().sched
 #[derive(clap::Args, Serialize, Deserialize, Debug, Clone)]
 pub struct BallOptions {
     /// Hidden layers' widths of the sensor model.
-    #[arg(long, value_delimiter = ',', default_values_t = CalibrationConfig::new().model.widths)]
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = CalibrationConfig::new().model.widths)]
     pub widths: Vec<usize>,
     /// Each layer's odd kernel size, the output layer last (all 1: GelSight's per-pixel MLP).
-    #[arg(long, value_delimiter = ',', default_values_t = CalibrationConfig::new().model.kernels)]
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = CalibrationConfig::new().model.kernels)]
     pub kernels: Vec<usize>,
     /// Frame pixels per working pixel (the grid the model and the Poisson solve run on).
     #[arg(long, default_value_t = CalibrationConfig::new().factor)]

@@ -58,7 +58,7 @@ pub struct RegressorOptions {
     #[arg(long, default_value_t = RegressorPlan::new(vec![]).val_fraction)]
     pub val_fraction: f64,
     /// Hidden layer widths (ReLU), e.g. 32,16 (the authors' force head).
-    #[arg(long, value_delimiter = ',', default_values_t = RegressorPlan::new(vec![]).hidden)]
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = RegressorPlan::new(vec![]).hidden)]
     pub hidden: Vec<usize>,
     /// Split and weight seed.
     #[arg(long, default_value_t = RegressorConfig::new(0, vec![]).schedule.seed)]
@@ -74,7 +74,7 @@ pub struct RegressorOptions {
     #[arg(long)]
     pub only_labelled: bool,
     /// Train only on frames of these shapes: a specialised regressor (a sphere's position, say) that answers where the head sees them.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
     pub shapes: Vec<String>,
     /// The loss on the standardised targets, in training and for early stopping.
     #[arg(long, value_enum, default_value_t = RegressionLoss::Mse)]

@@ -21,7 +21,7 @@ tactile_burn::schedule_args!(PoseSchedule, PoseTrainingConfig::new(vec![]).sched
 #[derive(clap::Args, Serialize, Deserialize, Debug, Clone)]
 pub struct PoseOptions {
     /// Targets: label columns, NAME:PERIOD for an angle.
-    #[arg(long, value_delimiter = ',', default_values_t = ["x_mm", "theta_deg", "depth_mm"].map(String::from))]
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = ["x_mm", "theta_deg", "depth_mm"].map(String::from))]
     pub targets: Vec<String>,
     /// Side of the grey pin image (the central --crop-px of the frame, masked to the tip, area-downsampled).
     #[arg(long, default_value_t = PoseTrainingConfig::new(vec![]).preprocess.output_px)]
@@ -47,10 +47,10 @@ pub struct PoseOptions {
     #[serde(default)]
     pub every_split: bool,
     /// Channels of each stage; each stage halves the side.
-    #[arg(long, value_delimiter = ',', default_values_t = PoseNetConfig::new().widths)]
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = PoseNetConfig::new().widths)]
     pub widths: Vec<usize>,
     /// Kernel side of each stage's convolution, odd (default: 3 for every stage); a wide first kernel sees a pin with its neighbours, so how far it slid against them.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
     #[serde(default)]
     pub kernels: Option<Vec<usize>>,
     /// While training, shift the whole pin image by up to this fraction of its side along each axis (0 = none): the camera never moves against the tip, so the network must read where pins sit relative to each other.
@@ -58,7 +58,7 @@ pub struct PoseOptions {
     #[serde(default)]
     pub shift: f64,
     /// While training, turn each frame half a turn about the pin image's centre with probability 1/2 per epoch; a turned copy trains only the targets listed, as TARGET:SIGN, SIGN what the turn multiplies that label by (1 or -1). For a tip whose picture survives a half turn (scripts/surface-half-turn.py measures which targets do): shear_x_mm:-1,shear_y_mm:-1,shear_theta_deg:1.
-    #[arg(long, value_delimiter = ',', value_name = "TARGET:SIGN")]
+    #[arg(long, value_delimiter = ',', num_args = 1.., value_name = "TARGET:SIGN")]
     #[serde(default)]
     pub half_turn: Option<Vec<String>>,
     /// Hidden units of the dense head.

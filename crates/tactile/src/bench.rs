@@ -112,7 +112,7 @@ pub(crate) struct CalibrationArgs {
     #[arg(long, default_value = "docs/calibration.md")]
     out: PathBuf,
     /// Only these candidates (lookup, mlp, conv-slopes, shipped); all by default.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
     candidates: Vec<String>,
     /// The shipped recipe the candidates are built from.
     #[command(flatten)]

@@ -18,7 +18,7 @@ pub(crate) struct CompareArgs {
     #[arg(long)]
     data: PathBuf,
     /// Regression targets, e.g. x_mm,theta_deg:180,depth_mm.
-    #[arg(long, value_delimiter = ',', required_unless_present = "classify")]
+    #[arg(long, value_delimiter = ',', num_args = 1.., required_unless_present = "classify")]
     targets: Vec<Target>,
     /// A class column to classify too (e.g. shape).
     #[arg(long)]
@@ -40,7 +40,7 @@ pub(crate) struct CompareArgs {
     #[arg(long)]
     preprocess: Option<Preprocess>,
     /// Hidden widths of the regression MLP (the same for every feature set).
-    #[arg(long, value_delimiter = ',', default_values_t = [256, 128])]
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = [256, 128])]
     hidden: Vec<usize>,
 }
 

@@ -83,7 +83,7 @@ pub(crate) struct RunArgs {
     render: Option<PathBuf>,
     /// Hysteresis on the detector over each sequence: ON,OFF probabilities
     /// (a tendon appears at ON and disappears below OFF).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
     hysteresis: Option<Vec<f32>>,
     /// Decode each frame just before it is processed instead of on a
     /// second thread ahead of the models (recorded sources).

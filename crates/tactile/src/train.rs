@@ -169,7 +169,7 @@ pub(crate) struct RegressorArgs {
     #[arg(long)]
     data: PathBuf,
     /// Targets: label columns, angles with their period, e.g. x_mm,theta_deg:180,depth_mm.
-    #[arg(long, value_delimiter = ',', required = true)]
+    #[arg(long, value_delimiter = ',', num_args = 1.., required = true)]
     targets: Vec<String>,
     /// Output folder (default: ENCODER/regressor).
     #[arg(long)]

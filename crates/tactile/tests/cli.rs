@@ -737,7 +737,10 @@ fn regressor_names_a_missing_label_and_a_bad_target() {
         tactile(&args)
     };
     let (seed8, other) = (tmp.path().join("seed8"), tmp.path().join("depth-only"));
-    let (ok, msg) = more(&seed8, &["--targets", "depth_mm,force_n", "--seed", "8"]);
+    // A list flag takes its values as the help shows its default, space
+    // separated, as well as comma separated: the same targets (before,
+    // "unexpected argument 'force_n' found").
+    let (ok, msg) = more(&seed8, &["--targets", "depth_mm", "force_n", "--seed", "8"]);
     assert!(ok, "{msg}");
     let (ok, msg) = more(&other, &["--targets", "depth_mm"]);
     assert!(ok, "{msg}");
