@@ -134,11 +134,11 @@ SURFACE_DATA=data/surface/polar-set surface_step surface_polar "$OUT/surface-pol
 surface_step surface_xlong "$OUT/surface-xlong.md" data/surface/p64-k9-long data/surface/p64-k9-xlong
 # The 9 px network trained on the taps shallower than 2.34 mm alone, beside
 # networks trained on every depth, on those taps' `val` frames (the set
-# scripts/surface-shallow-set.sh writes, made here when the network is there).
+# `scripts/surface-subset.sh shallow` writes, made here when the network is there).
 SHALLOW_MODELS=(data/surface/p64-k9-long data/surface/p64-k9-shallow data/surface/ms-k-long models/cae-surface-train)
 SHALLOW_SET=SHALLOW_SET
-trained "${SHALLOW_MODELS[@]}" && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] && SHALLOW_SET=$(bash scripts/surface-shallow-set.sh)
-SURFACE_DATA=$SHALLOW_SET SURFACE_DATA_SHOWN='"$(bash scripts/surface-shallow-set.sh)"' \
+trained "${SHALLOW_MODELS[@]}" && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] && SHALLOW_SET=$(bash scripts/surface-subset.sh shallow)
+SURFACE_DATA=$SHALLOW_SET SURFACE_DATA_SHOWN='"$(bash scripts/surface-subset.sh shallow)"' \
     surface_step surface_shallow "$OUT/surface-shallow.md" "${SHALLOW_MODELS[@]}"
 # Frames turned half a turn about the tip's centre, read by the 25-epoch 9 px
 # network trained on `train`: are they frames the rig could have recorded
@@ -164,6 +164,20 @@ surface_step surface_half_turn_trained "$OUT/surface-half-turn-trained.md" data/
 # The same network on 1,500, 3,000 and all 6,000 `train` frames, on as many
 # optimiser steps.
 surface_step surface_more_frames "$OUT/surface-more-frames.md" data/surface/p64-k9 data/surface/p64-k9-n3000 data/surface/p64-k9-n1500
+# A power law fitted to their errors by frames (standard library Python).
+MORE_FRAMES=(scripts/surface-more-frames.py "$OUT/surface-more-frames.json" --frames p64-k9-n1500=1500 p64-k9-n3000=3000 p64-k9=6000)
+CMD[surface_more_frames_fit]="python3 ${MORE_FRAMES[*]} > $OUT/surface-more-frames-fit.md"
+if [ -f "$OUT/surface-more-frames.json" ] && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] \
+    && { [ -z "${PAPER_A_ONLY:-}" ] || [[ surface_more_frames =~ ^(${PAPER_A_ONLY})$ ]]; }; then
+    echo ">> python3 ${MORE_FRAMES[*]}" >&2
+    fit_tmp=$(mktemp "$OUT/.surface-more-frames-fit.XXXXXX")
+    if python3 "${MORE_FRAMES[@]}" >"$fit_tmp"; then
+        mv "$fit_tmp" "$OUT/surface-more-frames-fit.md"
+    else
+        rm -f "$fit_tmp"
+        exit 1
+    fi
+fi
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
@@ -306,6 +320,12 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
     surface_section "Half a turn: free frames with exact labels?" surface_half_turn "$OUT/surface-half-turn.md"
     surface_section "Half-turn copies for the twist" surface_half_turn_trained "$OUT/surface-half-turn-trained.md"
     surface_section "More frames" surface_more_frames "$OUT/surface-more-frames.md"
+    if [ -f "$OUT/surface-more-frames-fit.md" ]; then
+        echo "The power law fitted to each target's errors against the frames, and what it says of the goal: \`${CMD[surface_more_frames_fit]}\`"
+        echo
+        cat "$OUT/surface-more-frames-fit.md"
+        echo
+    fi
     echo "### One encoder for many tasks"
     echo
     echo "\`${CMD[shared]}\`"

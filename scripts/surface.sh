@@ -4,7 +4,7 @@
 # the shipped models/pose-surface (the recipe chosen, on all 8,000 frames)
 # and models/cae-surface (the validated CAE route), each step timed (data/surface/times.json).
 # `PAPER_A_ONLY='surface|surface_long|surface_crop|surface_polar|surface_xlong|surface_compare|shared' bash scripts/paper-a.sh`
-# then scores them into docs/paper-a.md. About 10 hours on 2 cores (the two long-schedule networks about 45 and 25 minutes, the 9 px network on twice their epochs 73, on the shallow taps alone 11, the long CAE 50, the shipped pair 100, the two on polar pin images 46).
+# then scores them into docs/paper-a.md. About 10 hours on 2 cores (the two long-schedule networks about 45 and 25 minutes, the 9 px network on twice their epochs 73, on the shallow taps alone 11, the long CAE 50, the shipped pair 100, the two on polar pin images 46, the two on fewer frames 15 and 16).
 # SURFACE_STEPS='p128 ship-pose' runs only the named steps.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -115,10 +115,10 @@ run p64-k9-xlong "$BIN" train pose --data "$DATA" --out data/surface/p64-k9-xlon
 run p64-k9-xlong-calibrate "$BIN" train calibrate --model data/surface/p64-k9-xlong --data "$DATA" --split val
 # Are slide and twist in the shallow taps at all, or drowned by the deep
 # ones? The 9 px network on the long schedule trained on the taps
-# shallower than 2.34 mm alone (scripts/surface-shallow-set.sh: 1,965
+# shallower than 2.34 mm alone (scripts/surface-subset.sh shallow: 1,965
 # `train` frames), scored on that set's `val` beside the networks trained
 # on every depth (docs/paper-a.md, "A network for the shallow taps alone").
-shallow_pose() { "$BIN" train pose --data "$(bash scripts/surface-shallow-set.sh)" "$@"; }
+shallow_pose() { "$BIN" train pose --data "$(bash scripts/surface-subset.sh shallow)" "$@"; }
 run p64-k9-shallow shallow_pose --out data/surface/p64-k9-shallow "${POSE[@]}" "${K9[@]}" "${LONG[@]}"
 # The twist survives a half turn of the frame (scripts/surface-half-turn.py,
 # docs/paper-a.md "Half a turn"): the 25-epoch 9 px network with half-turn
@@ -128,18 +128,17 @@ run p64-k9-turn "$BIN" train pose --data "$DATA" --out data/surface/p64-k9-turn 
 run p64-k9-turn-calibrate "$BIN" train calibrate --model data/surface/p64-k9-turn --data "$DATA" --split val
 # Would more taps of this rig bring slide and twist to the goal? The same
 # 9 px network on 1,500 and 3,000 of the 6,000 `train` frames
-# (scripts/surface-train-subset.sh: drawn at random, every `val` frame
+# (scripts/surface-subset.sh train N: drawn at random, every `val` frame
 # kept), on as many optimiser steps as p64-k9 (epochs times 6,000 / N, the
 # learning rate's decay per epoch to the power N / 6,000), scored on `val`
 # beside p64-k9 (docs/paper-a.md, "More frames").
 for n in 1500 3000; do
-    subset_pose() { "$BIN" train pose --data "$(bash scripts/surface-train-subset.sh "$n")" "$@"; }
+    subset_pose() { "$BIN" train pose --data "$(bash scripts/surface-subset.sh train "$n")" "$@"; }
     epochs=$((25 * 6000 / n))
     decay=$(python3 -c "print(round(0.92 ** ($n / 6000), 5))")
     run "p64-k9-n$n" subset_pose --out "data/surface/p64-k9-n$n" "${POSE[@]}" "${K9[@]}" \
         --max-epochs "$epochs" --patience "$epochs" --lr-decay "$decay"
-    run "p64-k9-n$n-calibrate" "$BIN" train calibrate --model "data/surface/p64-k9-n$n" \
-        --data "$(bash scripts/surface-train-subset.sh "$n")" --split val
+    run "p64-k9-n$n-calibrate" "$BIN" train calibrate --model "data/surface/p64-k9-n$n" --data "$DATA" --split val
 done
 
 # The CAE route: 56 px pin images through one stem block to Table I's 28 px
