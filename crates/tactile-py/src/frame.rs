@@ -58,7 +58,7 @@ fn channel_hint(shape: &[usize], layout: Layout) -> &'static str {
             " (grey with alpha: if it is opaque, drop its alpha with frame[..., 0])"
         }
         (&[_, _, 1] | &[_, _], Layout::Rgb) => {
-            " (a grey frame: repeat it to RGB with numpy.dstack([frame] * 3))"
+            " (a grey frame: repeat it to RGB with numpy.dstack([frame] * 3) if the sensor's frames are grey; a colour sensor's frames must stay in colour)"
         }
         _ => "",
     }

@@ -877,6 +877,25 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
         );
         assert!(!same.exists(), "{args:?}");
     }
+    // Records inside the new overlay folder, which must be new: refused
+    // before the run, nothing made.
+    let inside = same.join("records.jsonl");
+    let (ok, msg) = tactile(&[
+        "run",
+        "--models",
+        s(&root().join("models")),
+        "--data",
+        s(&vt),
+        "--out",
+        s(&inside),
+        "--render",
+        s(&same),
+    ]);
+    assert!(
+        !ok && msg.contains("one output of this run lies inside the other"),
+        "{msg}"
+    );
+    assert!(!same.exists());
     // Two runs writing one folder at once never mix.
     let out = tmp.path().join("shared");
     let spawn = |seed: &str| {

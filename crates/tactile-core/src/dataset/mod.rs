@@ -804,22 +804,40 @@ fn canonical_output(p: &Path) -> Option<PathBuf> {
     })
 }
 
-/// Before any work: two outputs of one run (`--frames` and
-/// `--reliability`, `--out` and `--render`) name two places; written to one,
-/// the second would silently replace the first.
-pub fn refuse_same_output(first: &Path, second: &Path) -> Result<()> {
-    let same = match (canonical_output(first), canonical_output(second)) {
-        (Some(a), Some(b)) => a == b,
-        _ => first == second,
-    };
-    if same {
-        return Err(Error::Invalid(format!(
-            "{} and {}: two outputs of this run name one place, and the second would replace the first; give each its own, so nothing was done",
-            first.display(),
-            second.display()
-        )));
+/// Where an output will be, however it is spelt: its deepest existing
+/// ancestor resolved (links, `..`), the rest as given.
+fn output_place(p: &Path) -> PathBuf {
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    for anc in abs.ancestors() {
+        if let (Ok(c), Ok(rest)) = (anc.canonicalize(), abs.strip_prefix(anc)) {
+            return match rest.as_os_str().is_empty() {
+                true => c,
+                false => c.join(rest),
+            };
+        }
     }
-    Ok(())
+    abs
+}
+
+/// Before any work: two outputs of one run (`--frames` and
+/// `--reliability`, `--out` and `--render`) name two places, neither inside
+/// the other: written to one place, the second would silently replace the
+/// first, and a new folder would hold (or, made second, fail over) the
+/// output inside it.
+pub fn refuse_same_output(first: &Path, second: &Path) -> Result<()> {
+    let (a, b) = (output_place(first), output_place(second));
+    let why = if a == b {
+        "two outputs of this run name one place, and the second would replace the first"
+    } else if a.starts_with(&b) || b.starts_with(&a) {
+        "one output of this run lies inside the other, a new folder that would hold it"
+    } else {
+        return Ok(());
+    };
+    Err(Error::Invalid(format!(
+        "{} and {}: {why}; give each its own place, so nothing was done",
+        first.display(),
+        second.display()
+    )))
 }
 
 /// Before any work: the output file `out` is not the input file itself
@@ -894,6 +912,21 @@ mod tests {
             "a link"
         );
         refuse_same_output(&a, &tmp.path().join("b.csv")).unwrap();
+        // One inside the other, existing or not, however spelt: refused.
+        let render = tmp.path().join("new/render");
+        for inside in [
+            render.join("x.jsonl"),
+            tmp.path().join("new/./render/sub/x.jsonl"),
+        ] {
+            let e = refuse_same_output(&inside, &render)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("lies inside the other"), "{e}");
+            assert!(refuse_same_output(&render, &inside).is_err());
+        }
+        assert!(refuse_same_output(&tmp.path().join("sub/../new/render"), &render).is_err());
+        refuse_same_output(&tmp.path().join("new/records.jsonl"), &render).unwrap();
+        refuse_same_output(&tmp.path().join("new/render-2"), &render).unwrap();
     }
 
     fn manifest(kind: DatasetKind, count: usize) -> Manifest {
