@@ -845,57 +845,48 @@ fn outputs_never_corrupt_destroy_or_half_exist() {
     palpations(&vt, "1", "2", "4");
     let same = tmp.path().join("same.out");
     let detector = root().join("models/detector");
-    for args in [
-        vec![
-            "eval",
-            "detector",
-            "--model",
-            s(&detector),
-            "--data",
-            s(&vt),
-            "--frames",
-            s(&same),
-            "--reliability",
-            s(&same),
-        ],
-        vec![
-            "run",
-            "--models",
-            s(&root().join("models")),
-            "--data",
-            s(&vt),
-            "--out",
-            s(&same),
-            "--render",
-            s(&same),
-        ],
-    ] {
-        let (ok, msg) = tactile(&args);
-        assert!(
-            !ok && msg.contains("two outputs of this run name one place"),
-            "{args:?}: {msg}"
-        );
-        assert!(!same.exists(), "{args:?}");
+    let models = root().join("models");
+    fn palpate<'a>(
+        models: &'a Path,
+        data: &'a Path,
+        out: &'a Path,
+        render: &'a Path,
+    ) -> Vec<&'a str> {
+        let (m, d, o, r) = (s(models), s(data), s(out), s(render));
+        vec!["run", "--models", m, "--data", d, "--out", o, "--render", r]
     }
     // Records inside the new overlay folder, which must be new: refused
-    // before the run, nothing made.
+    // before the run, nothing made, as one place named twice is.
     let inside = same.join("records.jsonl");
-    let (ok, msg) = tactile(&[
-        "run",
-        "--models",
-        s(&root().join("models")),
-        "--data",
-        s(&vt),
-        "--out",
-        s(&inside),
-        "--render",
-        s(&same),
-    ]);
-    assert!(
-        !ok && msg.contains("one output of this run lies inside the other"),
-        "{msg}"
-    );
-    assert!(!same.exists());
+    for (args, want) in [
+        (
+            vec![
+                "eval",
+                "detector",
+                "--model",
+                s(&detector),
+                "--data",
+                s(&vt),
+                "--frames",
+                s(&same),
+                "--reliability",
+                s(&same),
+            ],
+            "two outputs of this run name one place",
+        ),
+        (
+            palpate(&models, &vt, &same, &same),
+            "two outputs of this run name one place",
+        ),
+        (
+            palpate(&models, &vt, &inside, &same),
+            "one output of this run lies inside the other",
+        ),
+    ] {
+        let (ok, msg) = tactile(&args);
+        assert!(!ok && msg.contains(want), "{args:?}: {msg}");
+        assert!(!same.exists(), "{args:?}");
+    }
     // Two runs writing one folder at once never mix.
     let out = tmp.path().join("shared");
     let spawn = |seed: &str| {
