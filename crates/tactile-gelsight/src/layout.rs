@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::{RgbImage, load_rgb};
 
-use crate::prepare::{COLOUR_SPREAD, check_colour, colour_spread};
+use crate::prepare::{check_colour, is_colour_background};
 use crate::{Error, Result};
 
 /// Most presses one calibration reads.
@@ -109,6 +109,9 @@ pub struct BallPresses {
     /// What a user should know about the folder: files in `frames/` that
     /// are not PNG or JPEG frames and so are no presses.
     pub warnings: Vec<String>,
+    /// The background is a colour sensor's ([`is_colour_background`]):
+    /// grey presses are refused. Told once, when the folder is opened.
+    pub colour: bool,
 }
 
 impl std::fmt::Debug for BallPresses {
@@ -205,6 +208,7 @@ impl BallPresses {
         Ok(Self {
             root,
             sensor,
+            colour: is_colour_background(&background),
             background,
             presses,
             warnings,
@@ -229,8 +233,7 @@ impl BallPresses {
                 found,
             });
         }
-        let colour = colour_spread(&self.background) > COLOUR_SPREAD;
-        check_colour(&path, &img, colour)?;
+        check_colour(&path, &img, self.colour)?;
         Ok(img)
     }
 

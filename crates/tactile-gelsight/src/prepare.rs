@@ -37,6 +37,12 @@ pub fn colour_spread(img: &RgbImage) -> f32 {
     (sum as f64 / n.max(1) as f64) as f32
 }
 
+/// True for a colour sensor's rest frame ([`COLOUR_SPREAD`]): grey frames
+/// are refused against it.
+pub fn is_colour_background(background: &RgbImage) -> bool {
+    colour_spread(background) > COLOUR_SPREAD
+}
+
 /// Refuse a grey `frame` (named `path`) for a sensor calibrated on colour
 /// frames (`colour`): its colour change would be read as slopes that are
 /// not there, a depth of nothing.
@@ -161,8 +167,7 @@ pub struct PreparedBackground {
     pub image: WorkingImage,
     /// Its channel medians.
     pub medians: [f32; 3],
-    /// It is a colour sensor's ([`COLOUR_SPREAD`]): grey frames are
-    /// refused against it.
+    /// It is a colour sensor's ([`is_colour_background`]).
     pub colour: bool,
 }
 
@@ -171,11 +176,10 @@ impl PreparedBackground {
     pub fn new(background: &RgbImage, grid: WorkingGrid) -> Result<Self> {
         let image = WorkingImage::of(background, grid)?;
         let medians = image.medians();
-        let colour = colour_spread(background) > COLOUR_SPREAD;
         Ok(Self {
             image,
             medians,
-            colour,
+            colour: is_colour_background(background),
         })
     }
 
