@@ -796,16 +796,15 @@ fn input_file_error(out: &Path, kind: &str, dir: &Path) -> Error {
 
 /// `p` made absolute with its links resolved: itself when it exists, else
 /// its folder's canonical path joined to its name (an output not yet
-/// written). `None` when neither resolves.
+/// written; [`output_place`]). `None` when neither exists.
 fn canonical_output(p: &Path) -> Option<PathBuf> {
-    p.canonicalize().ok().or_else(|| {
-        let parent = crate::io::folder_of(p);
-        Some(parent.canonicalize().ok()?.join(p.file_name()?))
-    })
+    (p.exists() || crate::io::folder_of(p).exists()).then(|| output_place(p))
 }
 
 /// Where an output will be, however it is spelt: its deepest existing
-/// ancestor resolved (links, `..`), the rest as given.
+/// ancestor resolved (links, `..`), the rest as given. The one resolution
+/// of an output's place ([`canonical_output`] is it where the output or
+/// its folder exists).
 fn output_place(p: &Path) -> PathBuf {
     let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
     for anc in abs.ancestors() {
