@@ -29,6 +29,23 @@ step() {
     [ -n "${PAPER_A_ONLY:-}" ] && ! [[ $name =~ ^(${PAPER_A_ONLY})$ ]] && return
     "$BIN" "$@" >/dev/null
 }
+# A Python script's step, under the same rules (its command line kept by
+# the caller): `python_step NAME OUT PYTHON SCRIPT ARGS...` writes the
+# script's standard output to OUT whole, or leaves the last OUT and stops.
+python_step() {
+    local name=$1 out=$2 python=$3 tmp
+    shift 3
+    [ -n "${PAPER_A_ASSEMBLE_ONLY:-}" ] && return
+    [ -n "${PAPER_A_ONLY:-}" ] && ! [[ $name =~ ^(${PAPER_A_ONLY})$ ]] && return
+    echo ">> python3 $*" >&2
+    tmp=$(mktemp "$(dirname "$out")/.$(basename "$out").XXXXXX")
+    if "$python" "$@" >"$tmp"; then
+        mv "$tmp" "$out"
+    else
+        rm -f "$tmp"
+        exit 1
+    fi
+}
 
 SYNTH_TEST=data/paper-a-synth-test
 [ -d "$SYNTH_TEST" ] || [ -n "${PAPER_A_ASSEMBLE_ONLY:-}${PAPER_A_ONLY:-}" ] || "$BIN" synth tactip --count 700 --seed 200 --out "$SYNTH_TEST"
@@ -147,17 +164,8 @@ SURFACE_DATA=$SHALLOW_SET SURFACE_DATA_SHOWN='"$(bash scripts/surface-subset.sh 
 PYTHON=${PYTHON:-python3}
 HALF_TURN=(scripts/surface-half-turn.py --data "$REAL/tactip331-surface" --model data/surface/p64-k9)
 CMD[surface_half_turn]="python3 ${HALF_TURN[*]} > $OUT/surface-half-turn.md (after bash scripts/surface.sh)"
-if trained data/surface/p64-k9 && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] \
-    && { [ -z "${PAPER_A_ONLY:-}" ] || [[ surface_half_turn =~ ^(${PAPER_A_ONLY})$ ]]; } \
-    && "$PYTHON" -c "import tactile" 2>/dev/null; then
-    echo ">> python3 ${HALF_TURN[*]}" >&2
-    half_turn_tmp=$(mktemp "$OUT/.surface-half-turn.XXXXXX")
-    if "$PYTHON" "${HALF_TURN[@]}" >"$half_turn_tmp"; then
-        mv "$half_turn_tmp" "$OUT/surface-half-turn.md"
-    else
-        rm -f "$half_turn_tmp"
-        exit 1
-    fi
+if trained data/surface/p64-k9 && "$PYTHON" -c "import tactile" 2>/dev/null; then
+    python_step surface_half_turn "$OUT/surface-half-turn.md" "$PYTHON" "${HALF_TURN[@]}"
 fi
 # The same network trained with half-turn copies that train the twist alone.
 surface_step surface_half_turn_trained "$OUT/surface-half-turn-trained.md" data/surface/p64-k9-turn data/surface/p64-k9
@@ -167,16 +175,8 @@ surface_step surface_more_frames "$OUT/surface-more-frames.md" data/surface/p64-
 # A power law fitted to their errors by frames (standard library Python).
 MORE_FRAMES=(scripts/surface-more-frames.py "$OUT/surface-more-frames.json" --frames p64-k9-n1500=1500 p64-k9-n3000=3000 p64-k9=6000)
 CMD[surface_more_frames_fit]="python3 ${MORE_FRAMES[*]} > $OUT/surface-more-frames-fit.md"
-if [ -f "$OUT/surface-more-frames.json" ] && [ -z "${PAPER_A_ASSEMBLE_ONLY:-}" ] \
-    && { [ -z "${PAPER_A_ONLY:-}" ] || [[ surface_more_frames =~ ^(${PAPER_A_ONLY})$ ]]; }; then
-    echo ">> python3 ${MORE_FRAMES[*]}" >&2
-    fit_tmp=$(mktemp "$OUT/.surface-more-frames-fit.XXXXXX")
-    if python3 "${MORE_FRAMES[@]}" >"$fit_tmp"; then
-        mv "$fit_tmp" "$OUT/surface-more-frames-fit.md"
-    else
-        rm -f "$fit_tmp"
-        exit 1
-    fi
+if [ -f "$OUT/surface-more-frames.json" ]; then
+    python_step surface_more_frames "$OUT/surface-more-frames-fit.md" python3 "${MORE_FRAMES[@]}"
 fi
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
