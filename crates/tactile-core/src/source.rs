@@ -529,12 +529,18 @@ fn open_bag(path: &Path, topic: Option<String>, late: &LateWarnings) -> Result<O
     Ok((SourceKind::Bag, None, Box::new(r), None, None))
 }
 
-/// Raw rgb24 frames of a fixed size from `input`.
+/// Raw rgb24 frames of a fixed size from `input`. A stream that ends
+/// inside a frame after whole ones (a piped camera killed mid-write) ends
+/// there: the frames before it are kept and the partial one is told in
+/// `late`, as a bag cut short is. One that ends before its first whole
+/// frame is an error.
 fn raw_frames(
     mut input: impl Read + Send,
     width: usize,
     height: usize,
+    late: LateWarnings,
 ) -> impl FnMut() -> Result<Option<RgbImage>> + Send {
+    let mut whole = 0u64;
     move || {
         let len = width * height * 3;
         let mut buf = vec![0u8; len];
@@ -542,10 +548,22 @@ fn raw_frames(
             crate::video::read_full(&mut input, &mut buf).map_err(|e| Error::io("<stdin>", e))?;
         match got {
             0 => Ok(None),
-            n if n == len => crate::image_io::rgb_image(width, height, buf).map(Some),
-            n => Err(Error::Invalid(format!(
-                "stdin ended inside a frame: {n} of {len} bytes ({width}x{height} rgb24)"
+            n if n == len => {
+                whole += 1;
+                crate::image_io::rgb_image(width, height, buf).map(Some)
+            }
+            // Not one whole frame: not a stream of this size at all.
+            n if whole == 0 => Err(Error::Invalid(format!(
+                "stdin ended inside a frame: {n} of {len} bytes ({width}x{height} rgb24), before any whole frame; is --size the camera's?"
             ))),
+            n => {
+                if let Ok(mut late) = late.lock() {
+                    late.push(format!(
+                        "warning: stdin ended inside a frame: {n} of {len} bytes ({width}x{height} rgb24) after {whole} whole frames; the frames before it were kept, that part of one dropped"
+                    ));
+                }
+                Ok(None)
+            }
         }
     }
 }
@@ -650,7 +668,7 @@ impl FrameSource {
                         "stdin frame size {w}x{h}: frames must be 1 to {MAX_IMAGE_PIXELS} pixels (8K)"
                     )));
                 }
-                let read = raw_frames(std::io::stdin(), w, h);
+                let read = raw_frames(std::io::stdin(), w, h, Arc::clone(&late));
                 let r = StreamReader {
                     read,
                     number: 0,
@@ -831,7 +849,7 @@ impl FrameSource {
 
     /// What was found while reading, known once the frames have ended: a
     /// bag file cut short (its frames read up to its last complete
-    /// record).
+    /// record), stdin ended inside a frame.
     pub fn late_warnings(&self) -> Vec<String> {
         self.late.lock().map(|l| l.clone()).unwrap_or_default()
     }

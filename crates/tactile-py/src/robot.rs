@@ -9,7 +9,7 @@ use std::sync::Mutex;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use tactile_ros::live::LiveView;
-use tactile_ros::{FrameMessages, McapResults};
+use tactile_ros::{FrameMessages, McapResults, Topic};
 
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout};
@@ -70,7 +70,16 @@ impl PyMcapWriter {
     #[new]
     fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let p = path.clone();
-        let w = py.detach(move || McapResults::create(&p)).py()?;
+        // Paper B's topics now, so a reader lists them even when no frame
+        // had a tendon; the input frame and a sensor's indentation when
+        // first written.
+        let topics = [
+            Topic::Result,
+            Topic::TendonMask,
+            Topic::Depth,
+            Topic::Annotations,
+        ];
+        let w = py.detach(move || McapResults::create(&p, &topics)).py()?;
         Ok(Self {
             inner: Mutex::new(Some(w)),
             path,

@@ -79,3 +79,28 @@ def test_a_folder_bounds_its_reads(root, tmp_path):
     (folder / "000002.png").symlink_to(first)
     with pytest.raises(ValueError, match=r"000002\.png: is a symbolic link that leaves the folder"):
         tactile.frames(folder)
+
+
+def test_stdin_cut_inside_a_frame_keeps_the_whole_frames(tmp_path, palpation_frames):
+    # A piped camera killed mid-write: the whole frames before the cut come,
+    # then a warning says what was dropped; less than a frame is an error.
+    import sys
+    script = (
+        "import warnings, tactile\n"
+        "with warnings.catch_warnings(record=True) as w:\n"
+        "    warnings.simplefilter('always')\n"
+        "    try:\n"
+        "        got = [f.image.sum() for f in tactile.frames(stdin_size=(320, 180), live_queue=64)]\n"
+        "        print(len(got), *got)\n"
+        "    except ValueError as e:\n"
+        "        print('error', e)\n"
+        "    print('warnings', *[str(x.message) for x in w], sep='|')\n"
+    )
+    three = b"".join(f.tobytes() for f in palpation_frames[:3])
+    cut = palpation_frames[3].tobytes()[:1000]
+    out = subprocess.run([sys.executable, "-c", script], input=three + cut, capture_output=True, check=True).stdout
+    lines = out.decode().splitlines()
+    assert lines[0].split() == ["3"] + [str(int(f.sum())) for f in palpation_frames[:3]], lines
+    assert "stdin ended inside a frame: 1000 of 172800 bytes" in lines[1] and "after 3 whole frames" in lines[1], lines
+    out = subprocess.run([sys.executable, "-c", script], input=cut, capture_output=True, check=True).stdout
+    assert "error" in out.decode() and "before any whole frame" in out.decode(), out

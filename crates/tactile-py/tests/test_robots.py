@@ -845,6 +845,13 @@ def test_python_writes_the_same_results_mcap(tmp_path, pipeline, palpation_frame
         assert not out.exists()
     got = read_back(out)
     assert len(got["/tactile/image"]) == 1
+    # Paper B's topics declared at once, the frames when first written; no
+    # indentation without a calibrated sensor.
+    from mcap.reader import make_reader
+    with open(out, "rb") as fh:
+        declared = {c.topic for c in make_reader(fh).get_summary().channels.values()}
+    assert declared == {"/tactile/result", "/tactile/tendon_mask", "/tactile/depth", "/tactile/annotations",
+                        "/tactile/image"}
     assert [m.ros_msg.tendon for m in got["/tactile/result"]] == [r.tendon for r in results]
     assert [m.log_time_ns for m in got["/tactile/result"]] == [stamp(i) for i in range(12)]
     # An error inside the block leaves no file.

@@ -47,6 +47,23 @@ impl Topic {
         Topic::Annotations,
     ];
 
+    /// The topics a run of `pipeline` can write: the record and its
+    /// annotations always, the tendon mask and depth map with paper B's
+    /// models, the indentation with a calibrated sensor, the input frame
+    /// when asked (`with_frames`). A file declares these and no other, so
+    /// a reader never lists a topic the run could not fill.
+    pub fn written_by(pipeline: &tactile_pipeline::Pipeline, with_frames: bool) -> Vec<Topic> {
+        Topic::ALL
+            .into_iter()
+            .filter(|t| match t {
+                Topic::Image => with_frames,
+                Topic::TendonMask | Topic::Depth => pipeline.palpation.is_some(),
+                Topic::Indentation => pipeline.sensor.is_some(),
+                Topic::Result | Topic::Annotations => true,
+            })
+            .collect()
+    }
+
     /// Its name.
     pub fn name(self) -> &'static str {
         match self {
@@ -291,26 +308,37 @@ pub struct McapResults {
 }
 
 impl McapResults {
-    /// Start the file that will be `path`; every channel is registered
-    /// now, so a reader lists them all even when a run has no tendon frame.
-    pub fn create(path: &Path) -> Result<Self> {
-        let mut file = McapFile::create(path)?;
-        let mut channels = BTreeMap::new();
-        for topic in Topic::ALL {
-            channels.insert(topic, file.channel(topic.name(), &topic.schema())?);
-        }
-        Ok(Self {
-            file,
-            channels,
+    /// Start the file that will be `path`, its `topics` registered now
+    /// (those a run can write, [`Topic::written_by`]), so a reader lists
+    /// them even when a run has no tendon frame. A topic not among them is
+    /// registered when its first message comes.
+    pub fn create(path: &Path, topics: &[Topic]) -> Result<Self> {
+        let mut results = Self {
+            file: McapFile::create(path)?,
+            channels: BTreeMap::new(),
             frames: 0,
-        })
+        };
+        for &topic in topics {
+            results.channel(topic)?;
+        }
+        Ok(results)
+    }
+
+    /// The channel of `topic`, registered on first use.
+    fn channel(&mut self, topic: Topic) -> Result<u16> {
+        if let Some(&id) = self.channels.get(&topic) {
+            return Ok(id);
+        }
+        let id = self.file.channel(topic.name(), &topic.schema())?;
+        self.channels.insert(topic, id);
+        Ok(id)
     }
 
     /// Write one frame's messages, logged at their stamp.
     pub fn write(&mut self, frame: &FrameMessages) -> Result<()> {
         for (topic, data) in &frame.messages {
-            self.file
-                .write(self.channels[topic], frame.stamp_ns, data)?;
+            let channel = self.channel(*topic)?;
+            self.file.write(channel, frame.stamp_ns, data)?;
         }
         self.frames += 1;
         Ok(())

@@ -17,7 +17,7 @@ use tactile_pipeline::{
 };
 
 use crate::live::LiveView;
-use crate::{McapResults, Result, RobotOutputs};
+use crate::{McapResults, Result, RobotOutputs, Topic};
 
 /// What a run reads and where its results go.
 #[derive(Debug, Clone)]
@@ -137,8 +137,11 @@ impl RunSession {
         let pipeline =
             Pipeline::load(&request.models, request.runtime, request.threads).map_err(Box::new)?;
         let mcap_out = out.filter(|p| tactile_core::bag::is_bag_file(p));
+        let topics = Topic::written_by(&pipeline, request.with_frames);
         let robot = RobotOutputs {
-            mcap: mcap_out.map(McapResults::create).transpose()?,
+            mcap: mcap_out
+                .map(|p| McapResults::create(p, &topics))
+                .transpose()?,
             live: request.view.as_deref().map(LiveView::serve).transpose()?,
             with_frames: request.with_frames,
         };

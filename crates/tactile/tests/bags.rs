@@ -616,3 +616,68 @@ fn a_video_bag_begun_mid_stream_is_run_and_labelled_by_its_messages() {
     );
     assert!(!dir.path().join("ds0").exists());
 }
+
+/// The channels an MCAP file declares, by topic.
+fn declared_topics(path: &Path) -> Vec<String> {
+    let bytes = std::fs::read(path).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let mut topics: Vec<String> = summary.channels.values().map(|c| c.topic.clone()).collect();
+    topics.sort();
+    topics
+}
+
+#[test]
+fn a_results_file_declares_only_the_topics_its_run_can_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |name: &str| dir.path().join(name);
+    let run = |models: &str, data: &str, out: &Path, extra: &[&str]| {
+        let mut args = vec!["run", "--models", models, "--data", data, "--out"];
+        args.push(out.to_str().unwrap());
+        args.extend(extra);
+        let o = tactile(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        declared_topics(out)
+    };
+    let palpation = [
+        "/tactile/annotations",
+        "/tactile/depth",
+        "/tactile/result",
+        "/tactile/tendon_mask",
+    ];
+    // Paper B's models: no indentation (no calibrated sensor), no input
+    // frames unless asked.
+    assert_eq!(run(MODELS, SAMPLES, &out("b.mcap"), &[]), palpation);
+    let mut with_frames = palpation.to_vec();
+    with_frames.insert(2, "/tactile/image");
+    assert_eq!(
+        run(MODELS, SAMPLES, &out("f.mcap"), &["--with-frames"]),
+        with_frames
+    );
+    // A calibrated sensor alone: its indentation, no tendon topics.
+    let shipped = Path::new(MODELS).join("gelsight-r15");
+    let sensor = out("sensor");
+    std::fs::create_dir(&sensor).unwrap();
+    for entry in std::fs::read_dir(&shipped).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_file() {
+            std::fs::copy(&path, sensor.join(path.file_name().unwrap())).unwrap();
+        }
+    }
+    let rest = shipped.join("background.png");
+    let rest = rest.to_str().unwrap();
+    assert_eq!(
+        run(sensor.to_str().unwrap(), rest, &out("s.mcap"), &[]),
+        [
+            "/tactile/annotations",
+            "/tactile/indentation",
+            "/tactile/result"
+        ]
+    );
+    // Both: every topic but the frames.
+    let mut both = palpation.to_vec();
+    both.insert(2, "/tactile/indentation");
+    assert_eq!(
+        run(shipped.to_str().unwrap(), rest, &out("g.mcap"), &[]),
+        both
+    );
+}

@@ -156,9 +156,29 @@ fn raw_frames_on_stdin_give_the_same_records_as_the_files() {
 }
 
 #[test]
-fn stdin_that_ends_inside_a_frame_is_an_error_that_says_so() {
-    let mut bytes = images()[0].as_slice().to_vec();
-    bytes.truncate(1000);
+fn stdin_that_ends_inside_a_frame_keeps_the_whole_frames_before_it() {
+    // A piped camera killed mid-write: the three whole frames before the
+    // cut are kept, as a bag cut short keeps its messages, with a warning.
+    let imgs = images();
+    let mut bytes: Vec<u8> = imgs[..3]
+        .iter()
+        .flat_map(|i| i.as_slice().to_vec())
+        .collect();
+    bytes.extend_from_slice(&imgs[3].as_slice()[..1000]);
+    let (records, summary, err) = run(
+        &["--stdin", "--size", "320x180", "--live-queue", "64"],
+        Some(bytes),
+    );
+    assert_eq!(records.len(), 3, "{err}");
+    assert_eq!(summary["frames"], 3);
+    assert_agree(&reference()[..3], &records, 0.0);
+    assert!(
+        err.contains("stdin ended inside a frame: 1000 of 172800 bytes")
+            && err.contains("after 3 whole frames"),
+        "{err}"
+    );
+
+    // Less than one frame is no stream of that size: an error, no records.
     let mut child = tactile()
         .args(["run", "--models", MODELS, "--stdin", "--size", "320x180"])
         .stdin(Stdio::piped())
@@ -166,11 +186,19 @@ fn stdin_that_ends_inside_a_frame_is_an_error_that_says_so() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    child.stdin.take().unwrap().write_all(&bytes).unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(&imgs[0].as_slice()[..1000])
+        .unwrap();
     let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
-    assert!(err.contains("stdin ended inside a frame"), "{err}");
+    assert!(
+        err.contains("stdin ended inside a frame") && err.contains("before any whole frame"),
+        "{err}"
+    );
 }
 
 #[test]
