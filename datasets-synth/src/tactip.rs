@@ -109,7 +109,7 @@ impl Shape {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(default, deny_unknown_fields)]
 pub struct TactipConfig {
-    /// Shapes drawn uniformly, by name (see [`SHAPES`]).
+    /// Shapes drawn uniformly, by name.
     #[arg(long, value_delimiter = ',', default_values_t = TactipConfig::default().shapes)]
     pub shapes: Vec<String>,
     /// Indentation past first touch, mm.

@@ -111,8 +111,40 @@ pub(crate) fn stdout_failed(e: std::io::Error) {
     std::process::exit(0);
 }
 
+/// The command line, every numeric flag taking a value that starts with
+/// `-`: clap reads `--x-mm -6,6` (the default its help shows) or
+/// `--rotate-deg -5` as an unknown flag `-6`/`-5` otherwise. A range
+/// (`MIN,MAX`, one value) takes any value starting with `-`; a number
+/// only one that reads as a negative number, so `--lr --epochs 5` is still
+/// an error, not a learning rate of `--epochs`.
+fn cli() -> clap::Command {
+    use std::any::TypeId;
+    fn signed(cmd: clap::Command) -> clap::Command {
+        cmd.mut_args(|arg| {
+            let ty = arg.get_value_parser().type_id();
+            if ty == TypeId::of::<tactile_core::rng::Range>() {
+                arg.allow_hyphen_values(true)
+            } else if [
+                TypeId::of::<f64>(),
+                TypeId::of::<f32>(),
+                TypeId::of::<i64>(),
+                TypeId::of::<i32>(),
+            ]
+            .into_iter()
+            .any(|t| ty == t)
+            {
+                arg.allow_negative_numbers(true)
+            } else {
+                arg
+            }
+        })
+        .mut_subcommands(signed)
+    }
+    signed(Cli::command())
+}
+
 fn main() -> std::process::ExitCode {
-    let matches = Cli::command().get_matches();
+    let matches = cli().get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     args::keep_matches(matches);
     if let Err(e) = tactile_core::interrupt::install() {
@@ -170,10 +202,6 @@ fn dispatch(command: Command) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use clap::{CommandFactory, Parser};
-
-    use super::Cli;
-
     #[test]
     fn every_flag_has_help() {
         fn walk(cmd: &clap::Command, path: &str) {
@@ -188,9 +216,38 @@ mod tests {
                 walk(sub, &format!("{path} {}", sub.get_name()));
             }
         }
-        let cmd = Cli::command();
+        let cmd = super::cli();
         cmd.clone().debug_assert();
         walk(&cmd, "tactile");
+    }
+
+    /// Ranges and numbers below zero are taken as the help shows them
+    /// (`[default: -6,6]`), not as unknown flags.
+    #[test]
+    fn negative_values_are_values() {
+        use tactile_core::rng::Range;
+        let parse = |line: &str| super::cli().try_get_matches_from(line.split_whitespace());
+        let m = parse(
+            "tactile synth tactip --out o --count 3 --x-mm -6,6 --gradient -0.25,0.25 --theta-deg -90",
+        )
+        .unwrap();
+        let t = m.subcommand_matches("synth").unwrap();
+        let t = t.subcommand_matches("tactip").unwrap();
+        assert_eq!(t.get_one::<Range>("x_mm"), Some(&Range::new(-6.0, 6.0)));
+        assert_eq!(
+            t.get_one::<Range>("gradient"),
+            Some(&Range::new(-0.25, 0.25))
+        );
+        assert_eq!(t.get_one::<Range>("theta_deg"), Some(&Range::fixed(-90.0)));
+        // A negative number reaches the flag's own check, which names it.
+        let e = parse("tactile run --view-wait -1").unwrap_err().to_string();
+        assert!(
+            e.contains("seconds must be a finite number >= 0, got -1"),
+            "{e}"
+        );
+        // A range given no value is still an error, not a silent default.
+        assert!(parse("tactile synth tactip --out o --x-mm --y-mm 1,2").is_err());
+        assert!(parse("tactile synth tactip --out o --count 3 --x-mm").is_err());
     }
 
     /// Every `tactile ...` line of the README's command list parses.
@@ -211,7 +268,7 @@ mod tests {
             .filter(|l| l.starts_with("tactile "))
         {
             let words: Vec<&str> = line.split_whitespace().collect();
-            if let Err(e) = Cli::try_parse_from(&words) {
+            if let Err(e) = super::cli().try_get_matches_from(&words) {
                 panic!("README: `{line}` does not parse:\n{e}");
             }
             n += 1;
