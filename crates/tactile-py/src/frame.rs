@@ -67,7 +67,15 @@ fn channel_hint(shape: &[usize], layout: Layout) -> &'static str {
 /// What `obj` is, for a message: its dtype and shape when it is an array.
 fn describe(obj: &Bound<'_, PyAny>) -> String {
     match obj.cast::<PyUntypedArray>() {
-        Ok(a) => format!("a {} array of shape {}", a.dtype(), py_shape(a.shape())),
+        Ok(a) => {
+            // "an int8", "an object", but "a uint16" (said "you-int").
+            let dtype = a.dtype().to_string();
+            let article = match dtype.starts_with(['i', 'o']) {
+                true => "an",
+                false => "a",
+            };
+            format!("{article} {dtype} array of shape {}", py_shape(a.shape()))
+        }
         Err(_) => match obj.get_type().name() {
             Ok(n) => {
                 let n = n.to_string();

@@ -81,8 +81,12 @@ def test_encoder_errors(root, tmp_path):
     assert enc.encode(frames).shape == (2, enc.feature_count)
     with pytest.raises(ValueError, match="no estimators"):
         enc.estimate(frames)
-    with pytest.raises(TypeError, match="float64"):
+    with pytest.raises(TypeError, match="got a float64 array"):
         enc.encode(np.zeros((2, 300, 300)))
+    with pytest.raises(TypeError, match="got an int16 array"):
+        enc.encode(np.zeros((2, 300, 300), np.int16))
+    with pytest.raises(TypeError, match="got an object array"):
+        enc.encode(np.empty((2, 300, 300), object))
     with pytest.raises(ValueError, match=r"\(2, 300, 300, 3, 1\)"):
         enc.encode(np.zeros((2, 300, 300, 3, 1), np.uint8))
     with pytest.raises(ValueError, match=r"frames\[1\]"):
