@@ -101,13 +101,13 @@ for m in p64-k9-polar p64-k9-polar-noshift; do
     run "$m-calibrate" "$BIN" train calibrate --model "data/surface/$m" --data "$POLAR" --split val
 done
 # The same pair on a longer schedule: both networks were still improving
-# at epoch 25 (best epochs 22 and 24 of the shipped members), so 60 epochs
+# at epoch 25 (best epochs 23 and 25 of the shipped members), so 60 epochs
 # with the learning rate decaying 0.96 a epoch (ending near the 25-epoch
 # schedule's last rate).
 LONG=(--max-epochs 60 --patience 60 --lr-decay 0.96)
 wide_pair -long "${LONG[@]}"
 # Are they still stopped, not full? The 9 px network of that pair reached
-# its best epoch at 59 of 60; twice the epochs, the learning rate decaying
+# its best epoch at the last, 60 of 60; twice the epochs, the learning rate decaying
 # 0.98 a epoch (ending at the long schedule's last rate), scored apart
 # (docs/paper-a.md, "Twice the epochs").
 XLONG=(--max-epochs 120 --patience 120 --lr-decay 0.98)

@@ -261,7 +261,8 @@ impl FitConfig {
 pub struct FitSummary {
     /// Epochs run in all (across resumes).
     pub epochs_run: usize,
-    /// The epoch whose model was kept.
+    /// The epoch whose model was kept, counted from 0 as the training log's
+    /// epochs are (`training.json`); what is printed counts from 1.
     pub best_epoch: usize,
     /// Its validation loss.
     pub best_val_loss: f64,
@@ -285,7 +286,10 @@ impl FitSummary {
             .map_or(String::new(), |v| format!(", {metric} {v:.4}"));
         format!(
             "best epoch {} of {}: validation loss {:.4}{m}; {:.0} s",
-            self.best_epoch, self.epochs_run, self.best_val_loss, self.seconds
+            self.best_epoch + 1,
+            self.epochs_run,
+            self.best_val_loss,
+            self.seconds
         )
     }
 }
@@ -481,7 +485,10 @@ impl Progress {
                 b.set_position(r.epoch as u64 + 1);
                 b.set_message(format!(
                     "loss {:.4} val {:.4}{metric} best {:.4}@{}",
-                    r.train_loss, r.val_loss, early.best, early.best_epoch
+                    r.train_loss,
+                    r.val_loss,
+                    early.best,
+                    early.best_epoch + 1
                 ));
             }
             None if self.shown => {
@@ -496,7 +503,7 @@ impl Progress {
                     r.train_loss,
                     r.val_loss,
                     early.best,
-                    early.best_epoch,
+                    early.best_epoch + 1,
                     elapsed_s,
                     eta
                 );
@@ -553,6 +560,27 @@ mod tests {
         assert_eq!(es.update(1, f64::NAN), Verdict::Continue);
         assert_eq!(es.update(2, 1.5), Verdict::Stop);
         assert_eq!(es.best_epoch, 0);
+    }
+
+    /// The log counts epochs from 0; a person reads them from 1, as the
+    /// progress line's "epoch 60/60" does: the model kept at the last of
+    /// 60 epochs is "best epoch 60 of 60", not 59.
+    #[test]
+    fn the_best_epoch_is_said_counting_from_one() {
+        let fit = FitSummary {
+            epochs_run: 60,
+            best_epoch: 59,
+            best_val_loss: 0.5,
+            best_val_metric: None,
+            seconds: 1.0,
+            train_items: 10,
+            val_items: 2,
+        };
+        assert!(
+            fit.describe("").starts_with("best epoch 60 of 60:"),
+            "{}",
+            fit.describe("")
+        );
     }
 
     #[test]
