@@ -68,14 +68,6 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
     let split = ds.three_way_split(0.2, 0.2, s.seed)?;
     let (train, test) = ([split.train, split.val].concat(), split.test);
     let (classes, y) = classes_of(&ds, &s.classify)?;
-    if classes.len() < 2 {
-        return Err(tactile_core::Error::dataset(
-            ds.labels_path(),
-            None,
-            format!("column '{}' has fewer than 2 classes", s.classify),
-        )
-        .into());
-    }
     // The frame of each training row, so a frame's rows share a fold.
     let frames = ds.frame_of_rows(&train);
     let dev = DeviceKind::Flex.device();

@@ -255,9 +255,12 @@ pub fn evaluate_folder(
     let ds = Dataset::open(data)?;
     if let Some(dir) = &options.save_png {
         ds.refuse_as_output(dir)?;
-        if options.png_frames > MAX_HEAT_MAPS {
+        // Asking for a folder of heat maps and for none of them is a
+        // contradiction, not an empty folder.
+        if options.png_frames == 0 || options.png_frames > MAX_HEAT_MAPS {
             return Err(tactile_core::Error::Config(format!(
-                "png_frames: {} heat maps is more than {MAX_HEAT_MAPS}",
+                "png_frames: must be 1 to {MAX_HEAT_MAPS} heat maps with a folder for them ({}), got {}",
+                dir.display(),
                 options.png_frames
             ))
             .into());

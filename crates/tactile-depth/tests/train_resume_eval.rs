@@ -98,4 +98,17 @@ fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
         std::fs::read_dir(data.join("frames")).unwrap().count(),
         before
     );
+    // A folder for heat maps and none of them: refused, no folder made.
+    let none = EvalOptions {
+        save_png: Some(tmp.path().join("none")),
+        png_frames: 0,
+    };
+    let e = evaluate_folder(&out, &data, Runtime::BurnFlex, &none)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("png_frames: must be 1 to 10000 heat maps"),
+        "{e}"
+    );
+    assert!(!tmp.path().join("none").exists());
 }

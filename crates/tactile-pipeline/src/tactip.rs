@@ -691,7 +691,9 @@ impl TactipPerception {
     }
 }
 
-/// Sorted class names of a column and each row's class index.
+/// Sorted class names of a column and each row's class index. A column of
+/// one class is refused: a classifier of it learns nothing and scores
+/// 100 %.
 pub fn classes_of(ds: &Dataset, column: &str) -> Result<(Vec<String>, Vec<usize>)> {
     let names: Vec<String> = (0..ds.len())
         .map(|i| ds.text(i, column).map(str::to_string))
@@ -699,6 +701,20 @@ pub fn classes_of(ds: &Dataset, column: &str) -> Result<(Vec<String>, Vec<usize>
     let mut classes = names.clone();
     classes.sort();
     classes.dedup();
+    if classes.len() < 2 {
+        let what = match classes.first() {
+            Some(only) => format!("every one of its {} frames is '{only}'", ds.len()),
+            None => "it has no frames".to_string(),
+        };
+        return Err(tactile_core::Error::dataset(
+            ds.labels_path(),
+            None,
+            format!(
+                "column '{column}': {what}, and a classifier needs at least 2 classes to tell apart"
+            ),
+        )
+        .into());
+    }
     let y = names
         .iter()
         .map(|n| classes.iter().position(|c| c == n).unwrap_or(0))

@@ -176,6 +176,16 @@ impl PreprocessConfig {
                         "relative_threshold {relative_threshold} must be in [0, 1]"
                     ));
                 }
+                // A box of no pixels is no window: the opening and the
+                // local maximum would measure nothing.
+                for (name, v) in [
+                    ("background_window_px", *background_window_px),
+                    ("peak_window_px", *peak_window_px),
+                ] {
+                    if v == 0 {
+                        return bad(format!("{name} must be 1 to {MAX_WINDOW_PX} pixels, got 0"));
+                    }
+                }
                 vec![
                     ("background_window_px", *background_window_px),
                     ("peak_window_px", *peak_window_px),
@@ -292,6 +302,33 @@ mod tests {
             .frame_mismatch(640, 360)
             .expect("360 px is below a 440 px crop");
         assert!(why.contains("640x360") && why.contains("440x440"), "{why}");
+    }
+
+    #[test]
+    fn top_hat_windows_of_no_pixels_are_refused() {
+        let top_hat = |bg: usize, peak: usize, denoise: usize| super::PreprocessConfig {
+            lighting: super::Lighting::TopHat {
+                background_window_px: bg,
+                peak_window_px: peak,
+                relative_threshold: 0.5,
+                min_contrast: 10,
+                denoise_px: denoise,
+            },
+            ..super::PreprocessConfig::lighting_compensated()
+        };
+        assert!(top_hat(15, 21, 1).check().is_ok());
+        // denoise 0 or 1 is "off", as documented.
+        assert!(top_hat(15, 21, 0).check().is_ok());
+        for (cfg, name) in [
+            (top_hat(0, 21, 1), "background_window_px"),
+            (top_hat(15, 0, 1), "peak_window_px"),
+        ] {
+            let e = cfg.check().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("{name} must be 1 to 255 pixels, got 0")),
+                "{e}"
+            );
+        }
     }
 
     #[test]

@@ -219,6 +219,10 @@ def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
     with pytest.raises(ValueError, match="30 of its 30 frames are frames the head trains on"):
         tactile.train.head(data, encoder=enc, out=tmp_path / "h3", folds=2, repeats=1, test=data)
     assert not (tmp_path / "h3").exists()
+    # Frames of one shape: nothing to tell apart, refused naming the labels.
+    with pytest.raises(ValueError, match=r"labels\.csv.*every one of its 20 frames is 'sphere'"):
+        tactile.train.head(spheres, encoder=enc, out=tmp_path / "h4", folds=2, repeats=1)
+    assert not (tmp_path / "h4").exists()
 
 
 def test_regressors_of_other_seeds_average_as_one_estimator(root, tmp_path):
@@ -422,3 +426,7 @@ def test_eval_depth_scores_the_shipped_network_and_draws_heat_maps(root, small_v
     with pytest.raises(Exception, match="already holds files"):
         tactile.eval.depth(root / "models/depth", small_vt, save_png=maps, png_frames=2)
     assert len(list(maps.iterdir())) == 2
+    # A folder for heat maps and none of them is refused, no folder made.
+    with pytest.raises(ValueError, match="png_frames: must be 1 to 10000 heat maps"):
+        tactile.eval.depth(root / "models/depth", small_vt, save_png=tmp_path / "none", png_frames=0)
+    assert not (tmp_path / "none").exists()

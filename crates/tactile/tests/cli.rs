@@ -713,6 +713,26 @@ fn regressor_names_a_missing_label_and_a_bad_target() {
     let (ok, msg) = tactile(&[&base[..], &["--targets", "theta_deg:zero"]].concat());
     assert!(!ok && msg.contains("period"), "{msg}");
     assert!(!out.exists());
+    // A shape head on frames of one shape has nothing to tell apart
+    // (before, it was trained and scored 100 %); so has `compare
+    // --classify`.
+    let head = tmp.path().join("head");
+    let (ok, msg) = tactile(&[
+        "train",
+        "head",
+        "--features",
+        csv.to_str().unwrap(),
+        "--data",
+        d,
+        "--out",
+        head.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && msg.contains("labels.csv")
+            && msg.contains("column 'shape': every one of its 12 frames is 'sphere'"),
+        "{msg}"
+    );
+    assert!(!head.exists());
     // Depth is labelled everywhere: a regressor is trained and scored.
     let (ok, msg) = tactile(
         &[
