@@ -34,13 +34,14 @@ pub struct Robustness {
 
 /// Errors of every estimator on clean frames and on perturbed copies.
 pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
+    tactile_core::source::check_limit(r.limit.map(|n| n as u64))?;
     let ds = Dataset::open(&r.data)?;
     let n = r.limit.unwrap_or(ds.len()).min(ds.len());
     if n == 0 {
-        return Err(tactile_core::Error::Invalid(match r.limit {
-            Some(0) => "limit: must be at least 1 frame, got 0".into(),
-            _ => format!("{}: no frames to perturb", r.data.display()),
-        })
+        return Err(tactile_core::Error::Invalid(format!(
+            "{}: no frames to perturb",
+            r.data.display()
+        ))
         .into());
     }
     let mut perception = TactipPerception::load(&r.encoder, &r.heads, Runtime::BurnFlex)?;

@@ -529,6 +529,18 @@ fn open_bag(path: &Path, topic: Option<String>, late: &LateWarnings) -> Result<O
     Ok((SourceKind::Bag, None, Box::new(r), None, None))
 }
 
+/// A limit on the frames read must leave one: a run of none would end as
+/// if the source were empty and say it succeeded (leave the limit out to
+/// read every frame).
+pub fn check_limit(limit: Option<u64>) -> Result<()> {
+    match limit {
+        Some(0) => Err(Error::Config(
+            "limit: must be at least 1 frame, got 0 (leave it out to read every frame)".into(),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Raw rgb24 frames of a fixed size from `input`. A stream that ends
 /// inside a frame after whole ones (a piped camera killed mid-write) ends
 /// there: the frames before it are kept and the partial one is told in
@@ -651,6 +663,7 @@ impl FrameSource {
     /// device (a V4L2 camera, live), any other file as a video through
     /// FFmpeg, or stdin (live).
     pub fn open(spec: &SourceSpec, options: SourceOptions) -> Result<Self> {
+        check_limit(options.limit)?;
         if options.live_queue == 0 || options.live_queue > MAX_LIVE_QUEUE {
             return Err(Error::Config(format!(
                 "live queue: must be 1 to {MAX_LIVE_QUEUE} frames, got {}",

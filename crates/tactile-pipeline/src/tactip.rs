@@ -449,6 +449,7 @@ impl PredictInput {
         streamed: bool,
     ) -> Result<Self> {
         use tactile_core::source::{SourceOptions, SourceSpec};
+        tactile_core::source::check_limit(limit)?;
         if data.is_dir() && data.join("manifest.json").exists() {
             if topic.is_some() {
                 return Err(tactile_core::Error::Config(format!(

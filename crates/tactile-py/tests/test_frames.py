@@ -59,6 +59,8 @@ def test_lossless_video_gives_the_pipeline_the_same_frames(root, tmp_path, pipel
 
 def test_limit_and_bad_sources(root, tmp_path):
     assert len(list(tactile.frames(root / "samples" / "palpation", limit=3))) == 3
+    with pytest.raises(ValueError, match="limit: must be at least 1 frame, got 0"):
+        tactile.frames(root / "samples" / "palpation", limit=0)
     with pytest.raises(FileNotFoundError, match="missing"):
         tactile.frames(tmp_path / "missing")
     bad = tmp_path / "clip.mp4"

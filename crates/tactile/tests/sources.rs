@@ -202,6 +202,34 @@ fn stdin_that_ends_inside_a_frame_keeps_the_whole_frames_before_it() {
 }
 
 #[test]
+fn a_limit_of_no_frames_is_refused_not_run() {
+    // Before, `run --limit 0` read nothing and succeeded with an empty
+    // summary; `predict` said only "no frames to estimate".
+    for args in [
+        &["run", "--models", MODELS, "--data", SAMPLES, "--limit", "0"][..],
+        &[
+            "predict",
+            "--model",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/pose-edge"),
+            "--data",
+            SAMPLES,
+            "--limit",
+            "0",
+        ][..],
+    ] {
+        let out = tactile().args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success()
+                && err.contains(
+                    "limit: must be at least 1 frame, got 0 (leave it out to read every frame)"
+                ),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
 fn a_live_source_that_outruns_the_models_drops_the_oldest_frames_in_bounded_memory() {
     // 200 native 1920x1080 frames (1.2 GB) pushed as fast as a pipe takes
     // them: the models cannot keep up, so most are dropped from a queue of 2.
