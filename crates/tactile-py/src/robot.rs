@@ -172,7 +172,8 @@ impl PyLiveView {
     #[pyo3(signature = (address="127.0.0.1:8765"))]
     fn new(py: Python<'_>, address: &str) -> PyResult<Self> {
         let a = address.to_string();
-        let v = py.detach(move || LiveView::serve(&a)).py()?;
+        // Any pipeline's results may come: every topic.
+        let v = py.detach(move || LiveView::serve(&a, &Topic::ALL)).py()?;
         Ok(Self {
             inner: Mutex::new(Some(v)),
         })

@@ -863,7 +863,9 @@ def test_python_writes_the_same_results_mcap(tmp_path, pipeline, palpation_frame
     assert not bad.exists() and not list(tmp_path.glob(".tactile-*"))
 
 
-async def _watch(port: int, started: threading.Event, want: set[str], timeout: float) -> dict[str, int]:
+async def _watch(port: int, started: threading.Event, want: set[str], timeout: float,
+                 advertised: set[str] | None = None) -> dict[str, int]:
+    """Messages seen per topic; `advertised` gets every topic offered."""
     import websockets
 
     seen: dict[str, int] = {}
@@ -883,6 +885,8 @@ async def _watch(port: int, started: threading.Event, want: set[str], timeout: f
                     new = []
                     for c in op["channels"]:
                         channels[c["id"]] = c
+                        if advertised is not None:
+                            advertised.add(c["topic"])
                         sid = len(subs) + 1
                         subs[sid] = c["topic"]
                         new.append({"id": sid, "channelId": c["id"]})
@@ -920,9 +924,10 @@ def test_live_view_serves_every_channel(tactile_bin, root, palpation_frames):
         want = {"/tactile/image", "/tactile/result", "/tactile/annotations", "/tactile/tendon_mask",
                 "/tactile/depth"}
         result: dict = {}
+        advertised: set[str] = set()
 
         def watch():
-            result.update(asyncio.run(_watch(port, started, want, 60)))
+            result.update(asyncio.run(_watch(port, started, want, 60, advertised)))
 
         t = threading.Thread(target=watch)
         t.start()
@@ -938,6 +943,9 @@ def test_live_view_serves_every_channel(tactile_bin, root, palpation_frames):
         out, err = proc.communicate(timeout=60)
         assert proc.returncode == 0, err.decode()
         assert want <= set(result), result
+        # The topics the run can write, no other: no indentation without a
+        # calibrated sensor (before, every topic was offered).
+        assert advertised == want, advertised
         summary = [line for line in out.decode().splitlines() if line.startswith("live view:")]
         assert summary and int(summary[0].split()[2]) >= result["/tactile/result"], out.decode()
     finally:

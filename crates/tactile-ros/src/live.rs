@@ -68,9 +68,11 @@ pub fn check_wait_seconds(what: &str, seconds: f64) -> Result<()> {
 }
 
 impl LiveView {
-    /// Serve the result channels at `address` (`HOST:PORT`; port 0 picks a
-    /// free one, see [`LiveView::port`]).
-    pub fn serve(address: &str) -> Result<Self> {
+    /// Serve the channels of `topics` at `address` (`HOST:PORT`; port 0
+    /// picks a free one, see [`LiveView::port`]): a run's are those it can
+    /// write ([`Topic::written_by`]), so a viewer lists no topic that
+    /// stays empty; messages of other topics are not sent.
+    pub fn serve(address: &str, topics: &[Topic]) -> Result<Self> {
         let (host, port) = parse_address(address)?;
         let fail = |message: String| Error::Live {
             address: address.into(),
@@ -78,7 +80,7 @@ impl LiveView {
         };
         let ctx = Context::new();
         let mut channels = BTreeMap::new();
-        for topic in Topic::ALL {
+        for &topic in topics {
             let s = topic.schema();
             let schema = foxglove::Schema::new(s.name, "ros2msg", s.text.into_bytes());
             let channel = ChannelBuilder::new(topic.name())

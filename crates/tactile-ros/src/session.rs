@@ -142,7 +142,11 @@ impl RunSession {
             mcap: mcap_out
                 .map(|p| McapResults::create(p, &topics))
                 .transpose()?,
-            live: request.view.as_deref().map(LiveView::serve).transpose()?,
+            live: request
+                .view
+                .as_deref()
+                .map(|a| LiveView::serve(a, &topics))
+                .transpose()?,
             with_frames: request.with_frames,
         };
         let json_out = request.out.as_deref().filter(|_| mcap_out.is_none());
