@@ -449,8 +449,9 @@ impl PredictInput {
         streamed: bool,
     ) -> Result<Self> {
         use tactile_core::source::{SourceOptions, SourceSpec};
-        tactile_core::source::check_limit(limit)?;
         if data.is_dir() && data.join("manifest.json").exists() {
+            // A frame source checks its limit itself, a dataset here.
+            tactile_core::source::check_limit(limit)?;
             if topic.is_some() {
                 return Err(tactile_core::Error::Config(format!(
                     "a topic picks a ROS 2 bag's images; {} is a dataset folder",

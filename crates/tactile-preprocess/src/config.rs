@@ -161,7 +161,10 @@ impl PreprocessConfig {
     /// than the crop, thresholds and offsets finite.
     pub fn check(&self) -> tactile_core::Result<()> {
         let bad = |m: String| Err(tactile_core::Error::Config(format!("preprocessing: {m}")));
-        let windows = [("open_px", self.open_px), ("grow_px", self.grow_px)];
+        // (name, side, smallest side): 0 turns an opening, a growth or the
+        // denoise off, but the top-hat's boxes of no pixels would measure
+        // nothing.
+        let windows = [("open_px", self.open_px, 0), ("grow_px", self.grow_px, 0)];
         let lighting = match &self.lighting {
             Lighting::None => vec![],
             Lighting::TopHat {
@@ -176,24 +179,19 @@ impl PreprocessConfig {
                         "relative_threshold {relative_threshold} must be in [0, 1]"
                     ));
                 }
-                // A box of no pixels is no window: the opening and the
-                // local maximum would measure nothing.
-                for (name, v) in [
-                    ("background_window_px", *background_window_px),
-                    ("peak_window_px", *peak_window_px),
-                ] {
-                    if v == 0 {
-                        return bad(format!("{name} must be 1 to {MAX_WINDOW_PX} pixels, got 0"));
-                    }
-                }
                 vec![
-                    ("background_window_px", *background_window_px),
-                    ("peak_window_px", *peak_window_px),
-                    ("denoise_px", *denoise_px),
+                    ("background_window_px", *background_window_px, 1),
+                    ("peak_window_px", *peak_window_px, 1),
+                    ("denoise_px", *denoise_px, 0),
                 ]
             }
         };
-        for (name, v) in windows.into_iter().chain(lighting) {
+        for (name, v, min) in windows.into_iter().chain(lighting) {
+            if v < min {
+                return bad(format!(
+                    "{name} must be {min} to {MAX_WINDOW_PX} pixels, got {v}"
+                ));
+            }
             if v > MAX_WINDOW_PX {
                 return bad(format!("{name} {v} is larger than {MAX_WINDOW_PX} pixels"));
             }

@@ -70,15 +70,10 @@ impl PyMcapWriter {
     #[new]
     fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let p = path.clone();
-        // Paper B's topics now, so a reader lists them even when no frame
-        // had a tendon; the input frame and a sensor's indentation when
-        // first written.
-        let topics = [
-            Topic::Result,
-            Topic::TendonMask,
-            Topic::Depth,
-            Topic::Annotations,
-        ];
+        // Paper B's pipeline's topics now, so a reader lists them even when
+        // no frame had a tendon; the input frame and a sensor's indentation
+        // when first written.
+        let topics = Topic::written(true, false, false);
         let w = py.detach(move || McapResults::create(&p, &topics)).py()?;
         Ok(Self {
             inner: Mutex::new(Some(w)),

@@ -47,18 +47,28 @@ impl Topic {
         Topic::Annotations,
     ];
 
-    /// The topics a run of `pipeline` can write: the record and its
-    /// annotations always, the tendon mask and depth map with paper B's
-    /// models, the indentation with a calibrated sensor, the input frame
-    /// when asked (`with_frames`). A file declares these and no other, so
-    /// a reader never lists a topic the run could not fill.
+    /// The topics a run of `pipeline` can write ([`Topic::written`]). A
+    /// file declares these and no other, so a reader never lists a topic
+    /// the run could not fill.
     pub fn written_by(pipeline: &tactile_pipeline::Pipeline, with_frames: bool) -> Vec<Topic> {
+        Topic::written(
+            pipeline.palpation.is_some(),
+            pipeline.sensor.is_some(),
+            with_frames,
+        )
+    }
+
+    /// The topics written by a pipeline with or without paper B's models
+    /// (`palpation`: the tendon mask and depth map) and a calibrated
+    /// `sensor` (the indentation), with the input frames or not: the record
+    /// and its annotations always.
+    pub fn written(palpation: bool, sensor: bool, with_frames: bool) -> Vec<Topic> {
         Topic::ALL
             .into_iter()
             .filter(|t| match t {
                 Topic::Image => with_frames,
-                Topic::TendonMask | Topic::Depth => pipeline.palpation.is_some(),
-                Topic::Indentation => pipeline.sensor.is_some(),
+                Topic::TendonMask | Topic::Depth => palpation,
+                Topic::Indentation => sensor,
                 Topic::Result | Topic::Annotations => true,
             })
             .collect()
