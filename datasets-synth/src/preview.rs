@@ -74,10 +74,33 @@ fn arrow(centre: (f64, f64), deg: f64, len: f64, colour: [u8; 3]) -> Vec<Mark> {
     ]
 }
 
-/// Write a contact sheet of up to `n` frames of the dataset at `data` to `out`.
+/// Most frames a contact sheet shows: 100 lines of 4 thumbnails (about
+/// 75 MB of sheet), more than anyone reads on one picture.
+pub const MAX_PREVIEW_FRAMES: usize = 400;
+
+/// Refuse a contact sheet of no frames or of more than
+/// [`MAX_PREVIEW_FRAMES`], before a dataset is written for it.
+pub fn check_preview_frames(n: usize) -> Result<()> {
+    if !(1..=MAX_PREVIEW_FRAMES).contains(&n) {
+        return Err(tactile_core::Error::Config(format!(
+            "preview_frames: a contact sheet shows 1 to {MAX_PREVIEW_FRAMES} frames, got {n} (leave out --preview for none)"
+        )));
+    }
+    Ok(())
+}
+
+/// Write a contact sheet of up to `n` frames (1 to [`MAX_PREVIEW_FRAMES`])
+/// of the dataset at `data` to `out`.
 pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
+    check_preview_frames(n)?;
     let ds = Dataset::open(data)?;
-    let rows = pick(ds.len(), n.max(1));
+    if ds.is_empty() {
+        return Err(tactile_core::Error::Config(format!(
+            "{}: a dataset of no frames has no contact sheet",
+            data.display()
+        )));
+    }
+    let rows = pick(ds.len(), n);
     let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
     let k = w.div_ceil(240).max(1);
     let (tw, th) = (w / k, h / k);

@@ -54,7 +54,7 @@ pub(crate) struct CommonArgs {
     /// Also write a contact sheet of frames sampled through the dataset.
     #[arg(long)]
     preview: Option<PathBuf>,
-    /// Frames on the contact sheet.
+    /// Frames on the contact sheet (1-400).
     #[arg(long, default_value_t = 12)]
     preview_frames: usize,
 }
@@ -129,8 +129,9 @@ pub(crate) fn main(cmd: SynthCmd) -> Result<()> {
         SynthCmd::Gelsight(a) => Some(&a.common),
         SynthCmd::IdealDetector(_) => None,
     };
-    if let Some(p) = common.and_then(|c| c.preview.as_ref()) {
+    if let Some((c, p)) = common.and_then(|c| c.preview.as_ref().map(|p| (c, p))) {
         tactile_core::dataset::check_output_file(p, &[])?;
+        datasets_synth::preview::check_preview_frames(c.preview_frames)?;
     }
     match cmd {
         SynthCmd::Tactip(a) => {

@@ -418,6 +418,30 @@ fn synth_keeps_a_non_empty_folder_unless_forced() {
     assert_eq!(std::fs::read_dir(ds.join("frames")).unwrap().count(), 3);
     assert!(image::open(&preview).unwrap().width() > 300);
     assert_eq!(listing(tmp.path()), vec!["ds", "ds2", "preview.png"]);
+    // A contact sheet of no frames, or of a million, is refused before a
+    // dataset is written for it.
+    for n in ["0", "1000000"] {
+        let ds3 = tmp.path().join("ds3");
+        let (ok, msg) = tactile(&[
+            "synth",
+            "tactip",
+            "--count",
+            "3",
+            "--out",
+            ds3.to_str().unwrap(),
+            "--preview",
+            tmp.path().join("p3.png").to_str().unwrap(),
+            "--preview-frames",
+            n,
+        ]);
+        assert!(
+            !ok && msg.contains(&format!(
+                "preview_frames: a contact sheet shows 1 to 400 frames, got {n}"
+            )),
+            "{msg}"
+        );
+        assert_eq!(listing(tmp.path()), vec!["ds", "ds2", "preview.png"]);
+    }
 }
 
 #[test]
