@@ -53,6 +53,13 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
         ))
         .into());
     }
+    if part == Part::Autoencoder && !CaeArtifact::is_in(dir) {
+        return Err(tactile_core::Error::Invalid(format!(
+            "{}: part autoencoder: only a CAE has an autoencoder (its decoder beside the encoder), and this folder holds no cae.json; leave out the part to export its network",
+            dir.display()
+        ))
+        .into());
+    }
     let (kind, bytes) = if is_detector(dir) {
         ("detector", detector_onnx(dir)?.1)
     } else if SegmenterArtifact::is_in(dir) {
@@ -271,6 +278,19 @@ mod tests {
         assert!(
             e.contains("an ensemble of 2 pose networks (member-0, member-1)")
                 && e.contains("pose-surface/member-0 --out member-0.onnx"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_autoencoder_is_asked_only_of_a_cae() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/segmenter");
+        let e = match export_model(&dir, Part::Autoencoder) {
+            Ok(_) => panic!("a segmenter exported as an autoencoder"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            e.contains("segmenter: part autoencoder: only a CAE has an autoencoder"),
             "{e}"
         );
     }

@@ -15,7 +15,7 @@ pub(crate) struct ExportArgs {
     #[arg(long)]
     out: PathBuf,
     /// For a CAE: the encoder (pin image -> features) or the whole autoencoder.
-    #[arg(long, value_enum, default_value_t = Part::Encoder)]
+    #[arg(long, value_enum, default_value_t = Part::Encoder, conflicts_with = "standalone")]
     part: Part,
     /// Paper B models: a model that stands alone (docs/onnx.md): input
     /// `frame`, uint8 [N, H, W, 3] at the model's input size, normalisation
