@@ -21,6 +21,19 @@ pub enum Part {
     Autoencoder,
 }
 
+impl std::str::FromStr for Part {
+    type Err = tactile_core::Error;
+    fn from_str(s: &str) -> std::result::Result<Self, Self::Err> {
+        match s {
+            "encoder" => Ok(Part::Encoder),
+            "autoencoder" => Ok(Part::Autoencoder),
+            _ => Err(tactile_core::Error::Config(format!(
+                "unknown part '{s}': expected encoder or autoencoder"
+            ))),
+        }
+    }
+}
+
 /// An exported model.
 pub struct Exported {
     /// What it is ("detector", "CAE encoder", ...).
@@ -36,6 +49,28 @@ where
 {
     let l = A::load(dir, &DeviceKind::Flex.device())?;
     Ok(l.artifact.onnx(&l.model)?)
+}
+
+/// Export the model in `dir` to the ONNX file `out`, as `tactile export`
+/// and Python's `tactile.export` do: the output is checked before any
+/// work (never a file of an input it lies in) and written whole or not
+/// at all. `part` is a CAE's (default: its encoder); `standalone` a paper
+/// B network's ([`export_standalone`]), so the two are not asked together.
+pub fn export_to(dir: &Path, out: &Path, part: Option<Part>, standalone: bool) -> Result<Exported> {
+    tactile_core::dataset::check_output_file(out, &[])?;
+    let e = match (standalone, part) {
+        (true, Some(_)) => {
+            return Err(tactile_core::Error::Config(format!(
+                "{}: part and standalone together: a part is a CAE's (encoder or autoencoder), a standalone model a detector's, segmenter's or depth network's; ask for one of them",
+                dir.display()
+            ))
+            .into());
+        }
+        (true, None) => export_standalone(dir)?,
+        (false, part) => export_model(dir, part.unwrap_or(Part::Encoder))?,
+    };
+    tactile_onnx::save_onnx(out, &e.bytes)?;
+    Ok(e)
 }
 
 /// Export the model in `dir`.

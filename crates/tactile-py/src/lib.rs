@@ -10,6 +10,7 @@ mod dataset;
 mod encoder;
 mod errors;
 mod eval;
+mod export;
 mod frame;
 mod image;
 mod json;
@@ -37,6 +38,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<encoder::PyTactipEncoder>()?;
     m.add_class::<pose::PyPoseEstimator>()?;
     m.add_function(wrap_pyfunction!(predict::predict, m)?)?;
+    m.add_function(wrap_pyfunction!(export::export, m)?)?;
     m.add_function(wrap_pyfunction!(run::run, m)?)?;
     m.add_class::<calibrate::PyReconstructor>()?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate_ball, m)?)?;

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use tactile_pipeline::export::{Part, export_model, export_standalone};
+use tactile_pipeline::export::{Part, export_to};
 
 #[derive(Args)]
 pub(crate) struct ExportArgs {
@@ -14,9 +14,10 @@ pub(crate) struct ExportArgs {
     /// Output .onnx file.
     #[arg(long)]
     out: PathBuf,
-    /// For a CAE: the encoder (pin image -> features) or the whole autoencoder.
-    #[arg(long, value_enum, default_value_t = Part::Encoder, conflicts_with = "standalone")]
-    part: Part,
+    /// For a CAE: the encoder (pin image -> features) or the whole
+    /// autoencoder [default: encoder].
+    #[arg(long, value_enum)]
+    part: Option<Part>,
     /// Paper B models: a model that stands alone (docs/onnx.md): input
     /// `frame`, uint8 [N, H, W, 3] at the model's input size, normalisation
     /// and the sigmoid (or the millimetre scale) inside, named outputs
@@ -27,12 +28,7 @@ pub(crate) struct ExportArgs {
 }
 
 pub(crate) fn main(a: ExportArgs) -> Result<()> {
-    tactile_core::dataset::check_output_file(&a.out, &[])?;
-    let e = match a.standalone {
-        true => export_standalone(&a.model)?,
-        false => export_model(&a.model, a.part)?,
-    };
-    tactile_onnx::save_onnx(&a.out, &e.bytes)?;
+    let e = export_to(&a.model, &a.out, a.part, a.standalone)?;
     say!(
         "{} exported to {} ({} bytes)",
         e.kind,

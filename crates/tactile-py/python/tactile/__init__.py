@@ -38,6 +38,10 @@ JSON Lines or ROS 2 messages in MCAP, overlays, a live Foxglove view)::
     summary = tactile.run("palpation.mp4", models="models", out="records.jsonl")
     summary["fps"], summary["tendon_frames"], summary["records"]
 
+Any trained model to ONNX, as ``tactile export``::
+
+    tactile.export("models/detector", "detector.onnx", standalone=True)
+
 Datasets, generators, training and evaluation: ``tactile.Dataset``,
 ``tactile.synth``, ``tactile.train``, ``tactile.eval``.
 
@@ -94,6 +98,7 @@ from ._tactile import (  # noqa: E402
     VideoDecoder,
     __version__,
     bag_topics,
+    export,
     frames,
     predict,
     read_grey,
@@ -122,6 +127,7 @@ __all__ = [
     "bag_topics",
     "calibrate",
     "eval",
+    "export",
     "frames",
     "predict",
     "read_grey",

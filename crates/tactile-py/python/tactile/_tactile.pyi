@@ -145,6 +145,18 @@ def predict(
     (``file``, ``stamp_ns`` for a bag, one array per estimate, ``ms_per_frame``),
     written to ``out`` too when given (CSV, or ROS 2 messages for ``.mcap``)."""
 
+def export(
+    model: _Path,
+    out: _Path,
+    *,
+    part: Optional[str] = None,
+    standalone: bool = False,
+) -> Dict[str, Any]:
+    """``tactile export``: the model folder ``model`` to the ONNX file ``out``
+    (``kind``, ``bytes``, ``out``). ``part`` is a CAE's, ``"encoder"`` (the
+    default) or ``"autoencoder"``; ``standalone`` a detector's, segmenter's or
+    depth network's model that stands alone (input ``frame``, uint8)."""
+
 def run(
     source: Optional[_Path] = None,
     *,
