@@ -8,8 +8,10 @@ use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::import::{ImportOptions, import_dataset};
 
 use crate::errors::PyResultExt;
+use crate::work::interruptible;
 
 /// A dataset folder (`manifest.json`, `labels.csv`, frames and, for
 /// visuo-tactile data, masks and depth maps), checked when opened. Labels
@@ -54,6 +56,38 @@ impl PyDataset {
     #[new]
     fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let ds = py.detach(move || Dataset::open(&path)).py()?;
+        Ok(Self { ds })
+    }
+
+    /// `tactile dataset from-video`: the frames of `video` (a video file,
+    /// a ROS 2 bag's image topic or a folder of frames) that `labels` (a
+    /// CSV with a `frame` column) labels, written as a `kind` dataset
+    /// ("tactip" or "visuotactile") into the new folder `out`, then opened.
+    #[staticmethod]
+    #[pyo3(signature = (video, labels, kind, out, *, topic=None, sensor="real sensor".to_string(), force=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_video(
+        py: Python<'_>,
+        video: PathBuf,
+        labels: PathBuf,
+        kind: &str,
+        out: PathBuf,
+        topic: Option<String>,
+        sensor: String,
+        force: bool,
+    ) -> PyResult<Self> {
+        let kind = kind.parse::<DatasetKind>().py()?;
+        let options = ImportOptions {
+            frames: video,
+            topic,
+            labels,
+            kind,
+            out,
+            sensor,
+            force,
+        };
+        let summary = interruptible(py, || import_dataset(&options).py())?;
+        let ds = py.detach(move || Dataset::open(&summary.out)).py()?;
         Ok(Self { ds })
     }
 

@@ -135,3 +135,29 @@ def test_manifest_and_columns(root):
     assert ds.columns[:2] == ["file", "shape"]
     assert ds.manifest["kind"] == "tactip"
     json.dumps(ds.manifest)
+
+
+def test_a_folder_of_frames_and_labels_become_a_dataset(root, tmp_path, palpation_frames):
+    # Frames 2-9 of the sample video press on the tendon; frame 11 is unlabelled.
+    rows = ["frame,tendon,direction_deg,sequence"]
+    rows += [f"{i},{int(2 <= i <= 9)},{'117.3' if 2 <= i <= 9 else ''},0" for i in range(11)]
+    labels = tmp_path / "labels.csv"
+    labels.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "ds"
+    ds = tactile.Dataset.from_video(root / "samples/palpation", labels, "visuotactile", out, sensor="my rig")
+    assert isinstance(ds, tactile.Dataset) and ds.path == out and len(ds) == 11
+    assert ds.kind == "visuotactile" and ds.manifest["sensor_spec"] == "my rig"
+    # The frames are the folder's, byte for byte, and the labels the CSV's.
+    assert np.array_equal(ds.frame(3), palpation_frames[3])
+    assert ds.labels["tendon"].tolist() == [0, 0] + [1] * 8 + [0]
+    # As the command line: a second import over it, a frame beyond the
+    # folder, an unknown kind, refused by name.
+    with pytest.raises(ValueError, match="exists and is not empty"):
+        tactile.Dataset.from_video(root / "samples/palpation", labels, "visuotactile", out)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("frame,tendon\n3,1\n40,1\n")
+    with pytest.raises(ValueError, match="bad.csv:3: frame 40 is not in"):
+        tactile.Dataset.from_video(root / "samples/palpation", bad, "visuotactile", tmp_path / "ds2")
+    with pytest.raises(ValueError, match="unknown dataset kind 'gelsight': expected tactip or visuotactile"):
+        tactile.Dataset.from_video(root / "samples/palpation", labels, "gelsight", tmp_path / "ds3")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "ds", "labels.csv"]

@@ -41,6 +41,21 @@ pub enum DatasetKind {
     Visuotactile,
 }
 
+impl std::str::FromStr for DatasetKind {
+    type Err = Error;
+    /// The kind by its manifest name (`tactip`, `visuotactile`).
+    fn from_str(s: &str) -> Result<Self> {
+        [DatasetKind::Tactip, DatasetKind::Visuotactile]
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                Error::Config(format!(
+                    "unknown dataset kind '{s}': expected tactip or visuotactile"
+                ))
+            })
+    }
+}
+
 impl DatasetKind {
     /// The manifest's name of the kind.
     pub fn name(self) -> &'static str {

@@ -208,6 +208,21 @@ class Dataset:
     """A dataset folder of the documented layout."""
 
     def __init__(self, path: _Path) -> None: ...
+    @staticmethod
+    def from_video(
+        video: _Path,
+        labels: _Path,
+        kind: str,
+        out: _Path,
+        *,
+        topic: Optional[str] = None,
+        sensor: str = "real sensor",
+        force: bool = False,
+    ) -> Dataset:
+        """``tactile dataset from-video``: the frames of a video, a ROS 2 bag's
+        image topic or a folder of frames that a labels CSV (a ``frame`` column)
+        labels, written as a ``"tactip"`` or ``"visuotactile"`` dataset into the
+        new folder ``out``, then opened."""
     def __len__(self) -> int: ...
     def __getitem__(self, i: int) -> Dict[str, Any]: ...
     @property
