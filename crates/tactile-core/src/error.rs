@@ -13,7 +13,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Reading or writing a file failed.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}", shown(path))]
     Io {
         /// The file or folder.
         path: PathBuf,
@@ -22,7 +22,7 @@ pub enum Error {
         source: std::io::Error,
     },
     /// A file or folder that must exist does not.
-    #[error("{}: {what} does not exist", path.display())]
+    #[error("{}: {what} does not exist", shown(path))]
     NotFound {
         /// The missing path.
         path: PathBuf,
@@ -32,7 +32,7 @@ pub enum Error {
     /// A folder holds something else than the command needs (a segmenter
     /// where a detector was asked for, a TacTip dataset for a palpation
     /// model).
-    #[error("{}: not {} {expected} ({found})", path.display(), article(expected))]
+    #[error("{}: not {} {expected} ({found})", shown(path), article(expected))]
     WrongKind {
         /// The folder or file.
         path: PathBuf,
@@ -42,7 +42,7 @@ pub enum Error {
         found: String,
     },
     /// An image could not be decoded or has the wrong format or size.
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {message}", shown(path))]
     Image {
         /// The image file.
         path: PathBuf,
@@ -50,7 +50,7 @@ pub enum Error {
         message: String,
     },
     /// A dataset file is malformed (a bad label, a bad manifest).
-    #[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    #[error("{}{}: {message}", shown(path), line.map(|l| format!(":{l}")).unwrap_or_default())]
     Dataset {
         /// The file (`labels.csv`, `manifest.json`, a depth map).
         path: PathBuf,
@@ -60,7 +60,7 @@ pub enum Error {
         message: String,
     },
     /// A model or its configuration could not be loaded, saved or run.
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {message}", shown(path))]
     Model {
         /// The model file or folder.
         path: PathBuf,
@@ -93,7 +93,7 @@ pub enum Error {
     Interrupted,
     /// A ROS 2 bag (MCAP) could not be read: the container, a topic or
     /// one message.
-    #[error("{}{}{}: {message}", path.display(),
+    #[error("{}{}{}: {message}", shown(path),
         topic.as_ref().map(|t| format!(": topic {t}")).unwrap_or_default(),
         index.map(|i| format!(", message {i}")).unwrap_or_default())]
     Bag {
@@ -109,14 +109,20 @@ pub enum Error {
     /// A path named as a file to read is a folder, a pipe or a device:
     /// refused before it is opened, as opening a pipe blocks until
     /// something writes to it and a device never ends.
-    #[error("{}: is not a regular file (a folder, a pipe or a device); refusing to read it", path.display())]
+    #[error(
+        "{}: is not a regular file (a folder, a pipe or a device); refusing to read it",
+        shown(path)
+    )]
     NotRegularFile {
         /// The path.
         path: PathBuf,
     },
     /// A folder another run holds (its lock): a model trained or
     /// calibrated, or a page written, by another process right now.
-    #[error("{}: another run is writing this folder (training or calibrating a model, or writing a page there): wait for it to end, or give this run another output folder", path.display())]
+    #[error(
+        "{}: another run is writing this folder (training or calibrating a model, or writing a page there): wait for it to end, or give this run another output folder",
+        shown(path)
+    )]
     Busy {
         /// The folder.
         path: PathBuf,
@@ -124,6 +130,16 @@ pub enum Error {
     /// Any other invalid input, described in words.
     #[error("{0}")]
     Invalid(String),
+}
+
+/// A path as messages name it: an empty one (`""` from a blank variable or
+/// form field) said so, instead of a message that starts with ": ".
+pub fn shown(path: &Path) -> String {
+    if path.as_os_str().is_empty() {
+        "'' (an empty path)".into()
+    } else {
+        path.display().to_string()
+    }
 }
 
 /// "an" before a vowel ("an estimator folder"), else "a": the one rule

@@ -41,6 +41,12 @@ pub fn output_path(path: &Path) -> Result<std::path::PathBuf> {
             "-: this output cannot go to standard output; give a file name (`predict` and `run` stream their records there with `--out -`)".into(),
         ));
     }
+    if path.as_os_str().is_empty() {
+        return Err(Error::Invalid(format!(
+            "{}: give a file name for this output",
+            crate::error::shown(path)
+        )));
+    }
     let target = through_links(path)?;
     match std::fs::metadata(&target) {
         // Nothing there yet (or a link to nothing yet: the file it names).
@@ -552,6 +558,12 @@ impl StagedDir {
     pub fn new(target: impl AsRef<Path>) -> Result<Self> {
         // Through a link, the folder it names (the link stays).
         let named = target.as_ref();
+        if named.as_os_str().is_empty() {
+            return Err(Error::Invalid(format!(
+                "{}: give a folder for this output",
+                crate::error::shown(named)
+            )));
+        }
         let target = through_links(named)?;
         if std::fs::metadata(&target).is_ok_and(|m| !m.is_dir()) {
             return Err(Error::Invalid(format!(
@@ -656,6 +668,27 @@ impl StagedDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_empty_path_is_said_to_be_one() {
+        // An input: named as an empty path, not a message starting ": ".
+        let e = crate::dataset::Dataset::open(Path::new("")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "'' (an empty path): dataset folder does not exist"
+        );
+        let e = read_limited(Path::new(""), 10).unwrap_err().to_string();
+        assert!(e.starts_with("'' (an empty path): "), "{e}");
+        // An output is refused before anything is written for it.
+        let e = output_path(Path::new("")).unwrap_err().to_string();
+        assert_eq!(e, "'' (an empty path): give a file name for this output");
+        assert!(temp_beside("").is_err());
+        let e = StagedDir::new("").err().map(|e| e.to_string());
+        assert_eq!(
+            e.as_deref(),
+            Some("'' (an empty path): give a folder for this output")
+        );
+    }
 
     #[test]
     fn outputs_never_replace_what_a_model_is_loaded_from() {

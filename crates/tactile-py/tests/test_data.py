@@ -86,6 +86,8 @@ def test_ideal_detector_bounds_every_frame_and_refuses_foreign_sets(tmp_path):
 def test_dataset_errors_name_the_file(tmp_path):
     with pytest.raises(FileNotFoundError):
         tactile.Dataset(tmp_path / "missing")
+    with pytest.raises(FileNotFoundError, match=r"^'' \(an empty path\): dataset folder does not exist$"):
+        tactile.Dataset("")
     out = tactile.synth.tactip(3, seed=1, out=tmp_path / "d", progress=False)
     ds = tactile.Dataset(out)
     with pytest.raises(IndexError):

@@ -861,6 +861,10 @@ def test_python_writes_the_same_results_mcap(tmp_path, pipeline, palpation_frame
             w.write(results[0])
             raise RuntimeError("stop")
     assert not bad.exists() and not list(tmp_path.glob(".tactile-*"))
+    # An empty name (a blank setting) is refused when the writer is made,
+    # not after every frame was written to it.
+    with pytest.raises(ValueError, match=r"^'' \(an empty path\): give a file name for this output$"):
+        tactile.McapWriter("")
 
 
 async def _watch(port: int, started: threading.Event, want: set[str], timeout: float,
