@@ -37,10 +37,14 @@ impl Estimator {
         } else if RegressorEnsemble::is_in(dir) {
             Ok(Self::Regressor(RegressorEnsemble::load(dir, device)?))
         } else {
+            // An ensemble.json of another kind (a detector's) is named as
+            // a model of another kind, not said to be absent.
+            let hint =
+                tactile_burn::artifact::folder_hint(dir, Self::is_in, "a model of another kind");
             Err(tactile_core::Error::wrong_kind(
                 dir,
                 "estimator folder",
-                "neither head.json, regressor.json nor ensemble.json",
+                format!("no head.json, regressor.json or ensemble of regressors{hint}"),
             )
             .into())
         }

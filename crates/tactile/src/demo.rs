@@ -21,14 +21,14 @@ pub(crate) struct DemoArgs {
     /// The default is shipped: virtual TacTip frames of a held-out seed.
     #[arg(long, default_value = "samples/virtual-tactip")]
     data: PathBuf,
-    /// Frames per class to show.
-    #[arg(long, default_value_t = 2)]
-    per_class: usize,
+    /// Frames per class to show (1-10000).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    per_class: u32,
 }
 
 pub(crate) fn main(a: DemoArgs) -> Result<()> {
     let mut enc = TactipEncoder::load(&a.model, Runtime::BurnFlex, 0)
-        .with_context(|| format!("loading the shipped model from {}", a.model.display()))?;
+        .with_context(|| format!("loading the demo's encoder from {}", a.model.display()))?;
     let head = ClassifierHead::load(a.model.join("head"), &DeviceKind::Flex.device())?;
     let ds = Dataset::open(&a.data)
         .with_context(|| format!("the demo reads TacTip frames from {}", a.data.display()))?;
@@ -41,7 +41,7 @@ pub(crate) fn main(a: DemoArgs) -> Result<()> {
             rows.iter()
                 .copied()
                 .filter(|&i| ds.text_opt(i, "shape") == Some(class.as_str()))
-                .take(a.per_class),
+                .take(a.per_class as usize),
         );
     }
     let set = PinSet::from_rows(&ds, &picked, &enc.artifact.preprocess)?;

@@ -471,6 +471,13 @@ fn demo_runs_on_the_shipped_model_and_samples() {
         w[2] == w[4]
     });
     assert!(right.count() * 7 > rows.len() * 2, "{msg}");
+    // No frame per class shows nothing: refused, not "0/0 frames classified".
+    let (ok, msg) = tactile(&["demo", "--per-class", "0"]);
+    assert!(
+        !ok && msg
+            .contains("invalid value '0' for '--per-class <PER_CLASS>': 0 is not in 1..=10000"),
+        "{msg}"
+    );
 }
 
 /// Synthetic TacTip frames in `data` (`synth tactip` with `flags`) with a
@@ -846,7 +853,24 @@ fn perceive_runs_every_shipped_estimator_on_one_encoding() {
         root.join("samples/virtual-tactip").to_str().unwrap(),
     ]);
     assert!(
-        !ok && msg.contains("neither head.json, regressor.json nor ensemble.json"),
+        !ok && msg.contains(
+            "not an estimator folder (no head.json, regressor.json or ensemble of regressors"
+        ),
+        "{msg}"
+    );
+    // A detector ensemble's folder given as an estimator is named as the
+    // model of another kind it is.
+    let (ok, msg) = tactile(&[
+        "robustness",
+        "--encoder",
+        root.join("models/cae-synth").to_str().unwrap(),
+        "--heads",
+        root.join("models/detector").to_str().unwrap(),
+        "--data",
+        root.join("samples/virtual-tactip").to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && msg.contains("detector: not an estimator folder (no head.json, regressor.json or ensemble of regressors; it holds ensemble.json: a model of another kind)"),
         "{msg}"
     );
 }

@@ -556,14 +556,23 @@ impl Dataset {
     /// A text label that the calling command needs; an empty cell is an error
     /// naming the line.
     pub fn text(&self, i: usize, column: &str) -> Result<&str> {
-        let row = &self.rows[i];
-        row.get(column).ok_or_else(|| {
-            Error::dataset(
-                self.labels_path(),
-                Some(row.line),
-                format!("column '{column}' is empty, but this command needs it"),
-            )
-        })
+        self.rows[i]
+            .get(column)
+            .ok_or_else(|| self.needed_but_empty(i, column))
+    }
+
+    /// The error of a label a command needs that row `i` lacks: the cell
+    /// empty, or the column absent from `labels.csv` (a misspelt target),
+    /// which is said so with the columns it has.
+    fn needed_but_empty(&self, i: usize, column: &str) -> Error {
+        if let Err(e) = self.expect_columns([column]) {
+            return e;
+        }
+        Error::dataset(
+            self.labels_path(),
+            Some(self.rows[i].line),
+            format!("column '{column}' is empty, but this command needs it"),
+        )
     }
 
     /// A text label, `None` when empty.
@@ -573,14 +582,8 @@ impl Dataset {
 
     /// A numeric label that the calling command needs.
     pub fn number(&self, i: usize, column: &str) -> Result<f64> {
-        let row = &self.rows[i];
-        parse_number(&self.labels_path(), row, column)?.ok_or_else(|| {
-            Error::dataset(
-                self.labels_path(),
-                Some(row.line),
-                format!("column '{column}' is empty, but this command needs it"),
-            )
-        })
+        parse_number(&self.labels_path(), &self.rows[i], column)?
+            .ok_or_else(|| self.needed_but_empty(i, column))
     }
 
     /// Check `labels.csv` has every one of `columns` (the targets a command
@@ -967,6 +970,26 @@ mod tests {
     }
 
     const HEADER: &str = "file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n\n";
+
+    #[test]
+    fn a_label_of_a_column_the_labels_lack_names_the_columns_they_have() {
+        let d = tempfile::tempdir().unwrap();
+        let ds = d.path().join("ds");
+        tiny(&ds, &format!("{HEADER}frames/a.png,sphere,1.5,,0,2,3.4\n"));
+        let ds = Dataset::open(&ds).unwrap();
+        // A misspelt class or target column (`compare --classify shpae`).
+        let want = "labels.csv:1: no column 'shpae' (its columns: file, shape, x_mm, y_mm, theta_deg, depth_mm, force_n)";
+        let e = ds.text(0, "shpae").unwrap_err().to_string();
+        assert!(e.ends_with(want), "{e}");
+        let e = ds.number(0, "shpae").unwrap_err().to_string();
+        assert!(e.ends_with(want), "{e}");
+        // A column it has, empty on this row: the row's line.
+        let e = ds.number(0, "y_mm").unwrap_err().to_string();
+        assert!(
+            e.ends_with("labels.csv:2: column 'y_mm' is empty, but this command needs it"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn outputs_never_change_an_input_folder_they_lie_in_whether_or_not_it_is_read() {
