@@ -77,7 +77,7 @@ pub struct RunSummary {
     pub threads: usize,
     /// Frames per second, decoding included.
     pub fps: f64,
-    /// Frames the detector gated out.
+    /// Frames the detector gated out (0 without paper B's models).
     pub gated_out: usize,
     /// Frames flagged as far from the training frames (another sensor,
     /// not a sensor frame): answered with no tendon.
@@ -382,9 +382,18 @@ pub fn run(
         runtime: pipeline.runtime,
         threads: pipeline.threads,
         fps: frames as f64 / wall.max(1e-9),
-        gated_out: gated,
+        // Without paper B's models no detector ran to gate a frame out.
+        gated_out: if pipeline.palpation.is_some() {
+            gated
+        } else {
+            0
+        },
         out_of_distribution: ood,
-        tendon_frames: frames - gated,
+        tendon_frames: if pipeline.palpation.is_some() {
+            frames - gated
+        } else {
+            0
+        },
         palpation: pipeline.palpation.is_some(),
         contact: pipeline.sensor.is_some().then_some(contact),
         detector_accuracy: final_d.accuracy(),

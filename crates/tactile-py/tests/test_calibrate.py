@@ -138,6 +138,12 @@ def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path
         pipe.process(np.zeros((240, 320, 3), np.uint8))
     with pytest.raises(ValueError, match="no detector"):
         pipe.detector_frame(frame)
+    # A whole run of the sensor alone: every press in contact, and no frame
+    # said to be gated out by a detector it does not have.
+    summary = tactile.run(presses / "frames", models=model)
+    assert not summary["palpation"] and summary["frames"] == 6
+    assert summary["contact"]["frames_in_contact"] == 6
+    assert summary["gated_out"] == 0 and summary["tendon_frames"] == 0
 
 
 def test_the_calibrated_sensor_renders_its_own_labelled_frames(model: Path, tmp_path: Path):
