@@ -51,6 +51,16 @@ fn numbered_from_zero(onnx: &[u8]) -> Result<Vec<u8>> {
     let mut model = ModelProto::parse_from_bytes(onnx)
         .map_err(|e| Error::Export(format!("cannot read the export: {e}")))?;
     let graph = model.graph.mut_or_insert_default();
+    // A node holding a subgraph (If, Loop) may name outer tensors inside
+    // it: such a graph is left as burn-onnx wrote it.
+    let subgraphs = graph
+        .node
+        .iter()
+        .flat_map(|n| &n.attribute)
+        .any(|a| a.g.is_some() || !a.graphs.is_empty());
+    if subgraphs {
+        return Ok(onnx.to_vec());
+    }
     let mut ids: HashMap<String, usize> = HashMap::new();
     // `tensor_<id><rest>` (rest: a suffix such as `_output`) -> the id's new number.
     let mut rename = |name: &mut String| {

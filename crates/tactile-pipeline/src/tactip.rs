@@ -1235,7 +1235,9 @@ mod tests {
             Err(e) => e.to_string(),
         };
         assert!(
-            e.contains(": not an estimator folder (neither head.json"),
+            e.contains(
+                ": not an estimator folder (no head.json, regressor.json or ensemble of regressors)"
+            ),
             "{e}"
         );
     }
