@@ -303,13 +303,20 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
 mod tests {
     use super::*;
 
+    /// The refusal of exporting the shipped model `name`'s `part`.
+    fn refused(name: &str, part: Part) -> String {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../models")
+            .join(name);
+        match export_model(&dir, part) {
+            Ok(e) => panic!("{name} exported as a {}", e.kind),
+            Err(e) => e.to_string(),
+        }
+    }
+
     #[test]
     fn a_pose_ensemble_is_refused_with_how_to_export_its_members() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/pose-surface");
-        let e = match export_model(&dir, Part::Encoder) {
-            Ok(_) => panic!("a pose ensemble exported as one graph"),
-            Err(e) => e.to_string(),
-        };
+        let e = refused("pose-surface", Part::Encoder);
         assert!(
             e.contains("an ensemble of 2 pose networks (member-0, member-1)")
                 && e.contains("pose-surface/member-0 --out member-0.onnx"),
@@ -319,11 +326,7 @@ mod tests {
 
     #[test]
     fn an_autoencoder_is_asked_only_of_a_cae() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/segmenter");
-        let e = match export_model(&dir, Part::Autoencoder) {
-            Ok(_) => panic!("a segmenter exported as an autoencoder"),
-            Err(e) => e.to_string(),
-        };
+        let e = refused("segmenter", Part::Autoencoder);
         assert!(
             e.contains("segmenter: part autoencoder: only a CAE has an autoencoder"),
             "{e}"
