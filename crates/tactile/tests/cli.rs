@@ -1424,18 +1424,36 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
         tt.to_str().unwrap(),
     ]);
     assert!(ok, "{msg}");
+    // Each paper B model scored on TacTip frames, or trained on them: the
+    // dataset's kind named.
+    let trained = tmp.path().join("seg-on-tactip");
     let (ok, msg) = tactile(&[
-        "eval",
-        "detector",
-        "--model",
-        det.to_str().unwrap(),
+        "train",
+        "segmenter",
         "--data",
         tt.to_str().unwrap(),
+        "--out",
+        trained.to_str().unwrap(),
     ]);
     assert!(
-        !ok && msg.contains("manifest.json") && msg.contains("visuotactile"),
+        !ok && msg.contains("manifest.json: not a visuotactile dataset (its kind is 'tactip')"),
         "{msg}"
     );
+    assert!(!trained.exists());
+    for (kind, model) in [("detector", &det), ("segmenter", &seg)] {
+        let (ok, msg) = tactile(&[
+            "eval",
+            kind,
+            "--model",
+            model.to_str().unwrap(),
+            "--data",
+            tt.to_str().unwrap(),
+        ]);
+        assert!(
+            !ok && msg.contains("manifest.json: not a visuotactile dataset (its kind is 'tactip')"),
+            "{kind}: {msg}"
+        );
+    }
 }
 
 #[test]

@@ -309,8 +309,10 @@ impl Dataset {
         }
     }
 
-    /// Rows of `rows` whose `tendon` label is 1.
+    /// Rows of `rows` whose `tendon` label is 1; a dataset of another kind
+    /// than visuo-tactile (TacTip frames have no tendon) is named as such.
     pub fn tendon_rows(&self, rows: &[usize]) -> Result<Vec<usize>> {
+        self.expect_kind(super::DatasetKind::Visuotactile)?;
         let mut out = Vec::new();
         for &i in rows {
             if self.number(i, "tendon")? == 1.0 {
