@@ -23,14 +23,14 @@ pub enum Part {
 
 impl std::str::FromStr for Part {
     type Err = tactile_core::Error;
+    /// By the names the command line takes (`--part`), from the one
+    /// `clap::ValueEnum` derive, so Python reads the same names.
     fn from_str(s: &str) -> std::result::Result<Self, Self::Err> {
-        match s {
-            "encoder" => Ok(Part::Encoder),
-            "autoencoder" => Ok(Part::Autoencoder),
-            _ => Err(tactile_core::Error::Config(format!(
+        <Part as clap::ValueEnum>::from_str(s, false).map_err(|_| {
+            tactile_core::Error::Config(format!(
                 "unknown part '{s}': expected encoder or autoencoder"
-            ))),
-        }
+            ))
+        })
     }
 }
 

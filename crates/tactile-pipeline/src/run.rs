@@ -373,6 +373,7 @@ pub fn run(
         latency,
         reconstruct,
     ] = times.map(|r| r.median_p95());
+    let palpation = pipeline.palpation.is_some();
     Ok(RunSummary {
         source: source.kind(),
         frames,
@@ -382,19 +383,12 @@ pub fn run(
         runtime: pipeline.runtime,
         threads: pipeline.threads,
         fps: frames as f64 / wall.max(1e-9),
-        // Without paper B's models no detector ran to gate a frame out.
-        gated_out: if pipeline.palpation.is_some() {
-            gated
-        } else {
-            0
-        },
+        // Without paper B's models no detector ran to gate a frame out
+        // (and no frame has a tendon: every record stays tendon-free).
+        gated_out: if palpation { gated } else { 0 },
         out_of_distribution: ood,
-        tendon_frames: if pipeline.palpation.is_some() {
-            frames - gated
-        } else {
-            0
-        },
-        palpation: pipeline.palpation.is_some(),
+        tendon_frames: frames - gated,
+        palpation,
         contact: pipeline.sensor.is_some().then_some(contact),
         detector_accuracy: final_d.accuracy(),
         decision_changes: final_d.changes,
