@@ -48,7 +48,7 @@ impl Schedule {
         }
         if !(self.learning_rate.is_finite() && self.learning_rate > 0.0) {
             return Err(Error::Config(format!(
-                "learning rate must be a positive finite number, got {}",
+                "learning rate must be a positive finite number, got {:?}",
                 self.learning_rate
             )));
         }
@@ -56,7 +56,7 @@ impl Schedule {
         // weights diverge.
         if !(self.lr_decay > 0.0 && self.lr_decay <= 1.0) {
             return Err(Error::Config(format!(
-                "learning-rate decay must be in (0, 1] (a factor per epoch; 1 keeps the rate), got {}",
+                "learning-rate decay must be in (0, 1] (a factor per epoch; 1 keeps the rate), got {:?}",
                 self.lr_decay
             )));
         }
@@ -543,7 +543,7 @@ pub fn ensure_finite(what: &str, v: f64) -> Result<f64> {
 pub fn check_augment_amounts(amounts: &[(&str, f64)]) -> Result<()> {
     match amounts.iter().find(|(_, v)| !(0.0..=1.0).contains(v)) {
         Some((name, v)) => Err(Error::Config(format!(
-            "augmentation {name} must be in [0, 1], got {v}"
+            "augmentation {name} must be in [0, 1], got {v:?}"
         ))),
         None => Ok(()),
     }

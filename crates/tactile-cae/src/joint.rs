@@ -52,7 +52,7 @@ impl JointTargets {
         }
         if !(self.weight.is_finite() && self.weight > 0.0 && self.weight <= 1e3) {
             return bad(format!(
-                "joint training: the head's weight must be in (0, 1000], got {}",
+                "joint training: the head's weight must be in (0, 1000], got {:?}",
                 self.weight
             ));
         }
@@ -253,10 +253,10 @@ pub struct JointArgs {
     #[arg(long, value_delimiter = ',', num_args = 1..)]
     pub joint_targets: Vec<String>,
     /// Weight of the head's loss beside the reconstruction's.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = JointTargets::new(vec![]).weight)]
     pub joint_weight: f64,
     /// Hidden units of the joint head.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = JointTargets::new(vec![]).hidden)]
     pub joint_hidden: usize,
     /// The joint head's loss on the standardised columns.
     #[arg(long, value_enum, default_value_t = RegressionLoss::Mse)]
@@ -264,6 +264,30 @@ pub struct JointArgs {
 }
 
 impl JointArgs {
+    /// Refuse a head setting that nothing would use: without targets
+    /// (here or in further datasets, `heads_elsewhere`) there is no head,
+    /// and a weight, width or loss given for it would be ignored.
+    pub fn check_used(&self, heads_elsewhere: bool) -> crate::Result<()> {
+        let default = JointTargets::new(Vec::new());
+        let unused = [
+            (self.joint_weight != default.weight, "joint_weight"),
+            (self.joint_hidden != default.hidden, "joint_hidden"),
+            (self.joint_loss != RegressionLoss::Mse, "joint_loss"),
+        ]
+        .into_iter()
+        .filter_map(|(given, name)| given.then_some(name))
+        .collect::<Vec<_>>();
+        if self.joint_targets.is_empty() && !heads_elsewhere && !unused.is_empty() {
+            return Err(tactile_core::Error::Config(format!(
+                "{} set the joint head, and no joint_targets (nor also_tasks) ask for one: \
+                 give joint_targets too, or leave them out",
+                unused.join(", ")
+            ))
+            .into());
+        }
+        Ok(())
+    }
+
     /// `None` without `--joint-targets`.
     pub fn config(&self) -> crate::Result<Option<JointTargets>> {
         JointTargets::from_names(

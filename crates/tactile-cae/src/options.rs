@@ -30,9 +30,23 @@ pub struct RotateArgs {
 }
 
 impl RotateArgs {
-    /// The augmentation these options ask for (none without copies).
-    pub fn augment(&self, seed: u64) -> Option<RotationAugment> {
-        RotationAugment::optional(self.rotate_copies, self.rotate_deg, seed)
+    /// The augmentation these options ask for (none without copies),
+    /// checked. A turn given without copies would do nothing, so it is
+    /// refused rather than ignored.
+    pub fn augment(&self, seed: u64) -> Result<Option<RotationAugment>> {
+        if self.rotate_copies == 0 && self.rotate_deg != DEFAULT_ROTATION_DEG {
+            return Err(tactile_core::Error::Config(format!(
+                "rotate_deg {:?} turns the rotated copies, and rotate_copies is 0: \
+                 give rotate_copies too, or leave rotate_deg out",
+                self.rotate_deg
+            ))
+            .into());
+        }
+        let augment = RotationAugment::optional(self.rotate_copies, self.rotate_deg, seed);
+        if let Some(a) = &augment {
+            a.check()?;
+        }
+        Ok(augment)
     }
 }
 
@@ -112,6 +126,7 @@ impl CaeOptions {
         .with_first_kernel((self.first_kernel != 3).then_some(self.first_kernel));
         model.check()?;
         tactile_preprocess::perturb::check_shift(self.shift)?;
+        self.joint.check_used(self.also_tasks.is_some())?;
         let also = match &self.also_tasks {
             Some(path) => read_extra_tasks(
                 path,
@@ -138,7 +153,7 @@ impl CaeOptions {
             .with_val_fraction(self.val_fraction)
             .with_holdout(self.holdout.holdout())
             .with_every_split(self.every_split)
-            .with_rotation(self.rotate.augment(s.seed))
+            .with_rotation(self.rotate.augment(s.seed)?)
             .with_joint(self.joint.config()?)
             .with_shift((self.shift != 0.0).then_some(self.shift))
             .with_also(also))

@@ -37,19 +37,19 @@ impl Range {
     pub fn check(&self, name: &str, lo: f64, hi: f64) -> Result<()> {
         if !self.min.is_finite() || !self.max.is_finite() {
             return Err(Error::Config(format!(
-                "{name}: range [{}, {}] is not finite",
+                "{name}: range [{:?}, {:?}] is not finite",
                 self.min, self.max
             )));
         }
         if self.min > self.max {
             return Err(Error::Config(format!(
-                "{name}: range is inverted (min {} > max {})",
+                "{name}: range is inverted (min {:?} > max {:?})",
                 self.min, self.max
             )));
         }
         if self.min < lo || self.max > hi {
             return Err(Error::Config(format!(
-                "{name}: range [{}, {}] leaves the allowed [{lo}, {hi}]",
+                "{name}: range [{:?}, {:?}] leaves the allowed [{lo}, {hi}]",
                 self.min, self.max
             )));
         }
@@ -179,5 +179,14 @@ mod tests {
             .to_string();
         assert!(e.contains("depth_mm") && e.contains("inverted"), "{e}");
         assert!(Range::new(0.0, 9.0).check("depth_mm", 0.0, 5.0).is_err());
+        // Far out of range: said as written. Before, 1e300 in 301 digits.
+        let e = Range::new(1e300, 1e301)
+            .check("press_mm", 0.0, 5.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.ends_with("press_mm: range [1e300, 1e301] leaves the allowed [0, 5]"),
+            "{e}"
+        );
     }
 }

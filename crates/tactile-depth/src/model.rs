@@ -468,7 +468,7 @@ impl DepthNetConfig {
         }
         if !(e.compression > 0.0 && e.compression <= 1.0) {
             return Err(Error::Config(format!(
-                "transition compression must be in (0, 1], got {}",
+                "transition compression must be in (0, 1], got {:?}",
                 e.compression
             )));
         }

@@ -145,7 +145,7 @@ pub fn train(
     net.check()?;
     if !(config.unit_mm.is_finite() && config.unit_mm > 0.0) {
         return Err(tactile_core::Error::Config(format!(
-            "unit_mm must be positive, got {}",
+            "unit_mm must be positive, got {:?}",
             config.unit_mm
         ))
         .into());

@@ -294,7 +294,7 @@ impl SoftLabels {
     pub fn about_spec_threshold(width: f64) -> Result<Self> {
         if !(width > 0.0 && width.is_finite()) {
             return Err(tactile_core::Error::Config(format!(
-                "soft-label width must be positive, got {width}"
+                "soft-label width must be positive, got {width:?}"
             ))
             .into());
         }

@@ -297,7 +297,7 @@ impl DetectorConfig {
         let [w, h] = self.input_size;
         if !(self.width > 0.0 && self.width <= MAX_WIDTH) {
             return Err(tactile_core::Error::Config(format!(
-                "detector width must be in (0, {MAX_WIDTH}], got {}",
+                "detector width must be in (0, {MAX_WIDTH}], got {:?}",
                 self.width
             )));
         }

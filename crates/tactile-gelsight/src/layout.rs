@@ -60,13 +60,13 @@ impl SensorInfo {
         };
         if !(self.ball_diameter_mm.is_finite() && (0.1..=100.0).contains(&self.ball_diameter_mm)) {
             return bad(format!(
-                "ball_diameter_mm = {} is no ball of 0.1-100 mm",
+                "ball_diameter_mm = {:?} is no ball of 0.1-100 mm",
                 self.ball_diameter_mm
             ));
         }
         if !(self.mm_per_px.is_finite() && (1e-4..=1.0).contains(&self.mm_per_px)) {
             return bad(format!(
-                "mm_per_px = {} is not a scale of 0.0001-1 mm per pixel",
+                "mm_per_px = {:?} is not a scale of 0.0001-1 mm per pixel",
                 self.mm_per_px
             ));
         }

@@ -75,14 +75,14 @@ impl BallOptions {
         c.schedule.check()?;
         if !(0.0..0.5).contains(&c.colour_jitter) {
             return Err(tactile_core::Error::Config(format!(
-                "colour_jitter must be in [0, 0.5), got {}",
+                "colour_jitter must be in [0, 0.5), got {:?}",
                 c.colour_jitter
             ))
             .into());
         }
         if !(0.0..=1e4).contains(&c.height_weight) {
             return Err(tactile_core::Error::Config(format!(
-                "height_weight must be in [0, 10000], got {}",
+                "height_weight must be in [0, 10000], got {:?}",
                 c.height_weight
             ))
             .into());

@@ -52,6 +52,36 @@ fn the_circle_finder_agrees_with_the_annotations() {
 }
 
 #[test]
+fn a_scale_far_out_of_range_is_named_in_a_few_characters() {
+    // A sensor.json value far out of range is refused in the form it was
+    // written. Before, "ball_diameter_mm = 1000…000 is no ball" printed
+    // all 309 digits of 1e308.
+    let tmp = tempfile::tempdir().unwrap();
+    for (field, value, want) in [
+        (
+            "ball_diameter_mm",
+            "1e308",
+            "ball_diameter_mm = 1e308 is no ball of 0.1-100 mm",
+        ),
+        (
+            "mm_per_px",
+            "1e-30",
+            "mm_per_px = 1e-30 is not a scale of 0.0001-1 mm per pixel",
+        ),
+        ("mm_per_px", "2.5", "mm_per_px = 2.5 is not a scale"),
+    ] {
+        let d = tmp.path().join(format!("{field}-{value}"));
+        subset(&d, 3, str::to_string);
+        let sensor = std::fs::read_to_string(d.join("sensor.json")).unwrap();
+        let mut json: serde_json::Value = serde_json::from_str(&sensor).unwrap();
+        json[field] = serde_json::from_str(value).unwrap();
+        std::fs::write(d.join("sensor.json"), json.to_string()).unwrap();
+        let e = BallPresses::open(&d).unwrap_err().to_string();
+        assert!(e.contains(want) && e.len() < 300, "{e}");
+    }
+}
+
+#[test]
 fn a_calibration_folder_saved_by_windows_tools_opens() {
     // sensor.json and presses.csv written by hand in Notepad or Excel
     // ("CSV UTF-8"): a UTF-8 byte order mark first, CRLF line ends.

@@ -38,12 +38,12 @@ pub struct HeadOptions {
 
 impl HeadOptions {
     /// The head config and the rotation augmentation these options ask for.
-    pub fn config(&self) -> (HeadConfig, Option<RotationAugment>) {
+    pub fn config(&self) -> Result<(HeadConfig, Option<RotationAugment>)> {
         let mut config = HeadConfig::new(0, vec![])
             .with_folds(self.folds)
             .with_repeats(self.repeats);
         config.schedule.seed = self.seed;
-        (config, self.rotate.augment(self.seed))
+        Ok((config, self.rotate.augment(self.seed)?))
     }
 }
 

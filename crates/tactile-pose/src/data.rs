@@ -79,7 +79,7 @@ impl Augment {
             )),
             Some(signs) => match signs.iter().find(|(_, v)| **v != 1.0 && **v != -1.0) {
                 Some((name, v)) => Err(tactile_core::Error::Config(format!(
-                    "half_turn: {name}'s sign must be 1 or -1 (what a half turn multiplies it by), got {v}"
+                    "half_turn: {name}'s sign must be 1 or -1 (what a half turn multiplies it by), got {v:?}"
                 ))),
                 None => Ok(()),
             },

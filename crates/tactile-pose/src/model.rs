@@ -127,7 +127,7 @@ impl PoseNetConfig {
         }
         if !(0.0..0.95).contains(&self.dropout) {
             return bad(format!(
-                "pose network: dropout must be in [0, 0.95), got {}",
+                "pose network: dropout must be in [0, 0.95), got {:?}",
                 self.dropout
             ));
         }

@@ -176,7 +176,7 @@ impl PreprocessConfig {
             } => {
                 if !(0.0..=1.0).contains(relative_threshold) {
                     return bad(format!(
-                        "relative_threshold {relative_threshold} must be in [0, 1]"
+                        "relative_threshold {relative_threshold:?} must be in [0, 1]"
                     ));
                 }
                 vec![

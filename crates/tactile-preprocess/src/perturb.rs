@@ -184,7 +184,7 @@ impl RotationAugment {
         }
         if !(self.max_deg > 0.0 && self.max_deg <= MAX_ROTATION_DEG) {
             return Err(tactile_core::Error::Config(format!(
-                "rotation augmentation: the largest angle must be above 0 and at most {MAX_ROTATION_DEG} degrees, got {}",
+                "rotation augmentation: the largest angle must be above 0 and at most {MAX_ROTATION_DEG} degrees, got {:?}",
                 self.max_deg
             ))
             .into());
@@ -244,7 +244,7 @@ pub const MAX_SHIFT: f64 = 0.25;
 pub fn check_shift(fraction: f64) -> tactile_core::Result<()> {
     if !(0.0..=MAX_SHIFT).contains(&fraction) {
         return Err(tactile_core::Error::Config(format!(
-            "augmentation shift must be in [0, {MAX_SHIFT}] of the side, got {fraction}"
+            "augmentation shift must be in [0, {MAX_SHIFT}] of the side, got {fraction:?}"
         )));
     }
     Ok(())

@@ -200,7 +200,7 @@ pub(crate) fn train_head_py<'py>(
     let rt = options.device.runtime();
     let src = source(&encoder, &features)?;
     let out = out_or(&encoder, out, "head")?;
-    let (config, rotation) = options.config();
+    let (config, rotation) = options.config().py()?;
     tactile_core::io::ensure_writable_dir(&out).py()?;
     let ds = open(py, data)?;
     let test = test.map(|t| open(py, t)).transpose()?;

@@ -215,6 +215,10 @@ def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
     assert notes["rotation_augment"]["copies"] == 1
     with pytest.raises(ValueError, match="rotation augmentation"):
         tactile.train.head(data, encoder=enc, out=tmp_path / "h2", rotate_copies=99)
+    # A turn without copies would do nothing: refused, not ignored.
+    with pytest.raises(ValueError, match="rotate_deg 4.0 turns the rotated copies, and rotate_copies is 0"):
+        tactile.train.head(data, encoder=enc, out=tmp_path / "h2", rotate_deg=4.0)
+    assert not (tmp_path / "h2").exists()
     # Tested on its own training frames: refused, and nothing is written.
     with pytest.raises(ValueError, match="30 of its 30 frames are frames the head trains on"):
         tactile.train.head(data, encoder=enc, out=tmp_path / "h3", folds=2, repeats=1, test=data)
@@ -317,6 +321,8 @@ def test_a_cae_trains_jointly_with_pose_heads(root, tmp_path):
     assert not (tmp_path / "bad" / "cae.json").exists()
     with pytest.raises(ValueError, match="joint_loss"):
         tactile.train.cae(data, tmp_path / "bad", joint_targets=["depth_mm"], joint_loss="l3")
+    with pytest.raises(ValueError, match="joint_hidden set the joint head, and no joint_targets"):
+        tactile.train.cae(data, tmp_path / "bad", joint_hidden=8)
     assert not (tmp_path / "bad" / "cae.json").exists()
     with pytest.raises(ValueError, match="augmentation shift"):
         tactile.train.cae(data, tmp_path / "bad", shift=0.5)

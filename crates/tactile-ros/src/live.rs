@@ -62,7 +62,7 @@ pub fn check_wait_seconds(what: &str, seconds: f64) -> Result<()> {
         return Ok(());
     }
     Err(tactile_core::Error::Invalid(format!(
-        "{what}: seconds must be a finite number >= 0, got {seconds}"
+        "{what}: seconds must be a finite number >= 0, got {seconds:?}"
     ))
     .into())
 }

@@ -310,7 +310,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         }
         BenchCmd::Calibration(a) => {
             if !(0.0..0.9).contains(&a.exposure) {
-                anyhow::bail!("--exposure must be in [0, 0.9), got {}", a.exposure);
+                anyhow::bail!("--exposure must be in [0, 0.9), got {:?}", a.exposure);
             }
             let b = tactile_bench::calibration::CalibrationBench {
                 data: a.data,

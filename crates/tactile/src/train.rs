@@ -251,7 +251,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             let ds = Dataset::open(&a.data)?;
             let test = a.test.as_ref().map(Dataset::open).transpose()?;
             let out = a.features.out(&a.out, "head")?;
-            let (config, rotation) = options.config();
+            let (config, rotation) = options.config()?;
             let rt = options.device.runtime();
             let src = a.features.source()?;
             let (head, tested) = train_head(config, &src, &ds, test.as_ref(), &out, rt, rotation)?;

@@ -692,6 +692,13 @@ fn a_misspelt_target_or_fraction_is_refused_before_any_frame_is_read() {
                     && !msg.contains("preprocessing"),
                 "{run:?}: {msg}"
             );
+            // Far out of range: said as written, not in 301 digits.
+            let (ok, msg) = tactile(&[run, &["--val-fraction", "1e300"][..]].concat());
+            assert!(
+                !ok && msg.contains("validation fraction must be in [0, 1), got 1e300")
+                    && msg.len() < 400,
+                "{run:?}: {msg}"
+            );
         }
         assert!(!out.exists(), "{run:?} made {o}");
     }
@@ -2685,6 +2692,16 @@ fn a_head_trains_on_turned_copies_and_records_the_augmentation() {
     let head = |copies: &str, deg: &str| head_tested(copies, deg, &[]);
     let (ok, msg) = head("2", "90");
     assert!(!ok && msg.contains("at most 45 degrees"), "{msg}");
+    // A turn without copies would do nothing: refused, not ignored (before,
+    // the head trained without a turned frame, and any angle passed).
+    for deg in ["10", "1e300"] {
+        let (ok, msg) = head("0", deg);
+        assert!(
+            !ok && msg.contains("turns the rotated copies, and rotate_copies is 0"),
+            "{msg}"
+        );
+    }
+    assert!(!out.exists());
     // Tested on its own training frames (the folder again): refused before
     // a frame is encoded, naming the test set's labels and the first frame.
     let (ok, msg) = head_tested("2", "5", &["--test", d]);
@@ -2842,6 +2859,14 @@ fn joint_training_keeps_the_pose_in_the_features() {
     assert!(!ok && msg.contains("teapot_mm"), "{msg}");
     let (ok, msg) = train28(&bad, &["--joint-targets", "x_mm", "--joint-weight", "1e9"]);
     assert!(!ok && msg.contains("weight"), "{msg}");
+    // A head setting without targets would be ignored: refused, naming it.
+    let (ok, msg) = train28(&bad, &["--joint-weight", "-5", "--joint-loss", "l1"]);
+    assert!(
+        !ok && msg.contains(
+            "joint_weight, joint_loss set the joint head, and no joint_targets (nor also_tasks)"
+        ),
+        "{msg}"
+    );
     assert!(!bad.join("cae.json").exists());
     // 56 px pin images (a stem block in front of Table I's encoder) with
     // the head on the L1 loss: 32 features, the pin side from the

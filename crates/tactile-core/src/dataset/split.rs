@@ -51,7 +51,9 @@ fn check_fraction(name: &str, f: f64) -> Result<()> {
     if f > 0.0 && f < 1.0 {
         Ok(())
     } else {
-        Err(Error::Config(format!("{name} must be in (0, 1), got {f}")))
+        Err(Error::Config(format!(
+            "{name} must be in (0, 1), got {f:?}"
+        )))
     }
 }
 
@@ -62,7 +64,7 @@ pub fn check_val_fraction(val_fraction: f64) -> Result<()> {
         Ok(())
     } else {
         Err(Error::Config(format!(
-            "validation fraction must be in [0, 1), got {val_fraction}"
+            "validation fraction must be in [0, 1), got {val_fraction:?}"
         )))
     }
 }
