@@ -137,13 +137,7 @@ impl CaeOptions {
             )?,
             None => Vec::new(),
         };
-        if self.every_split && self.holdout.holdout().is_some() {
-            return Err(tactile_core::Error::Config(
-                "every_split trains on the test frames that exclude_test leaves out: give one"
-                    .into(),
-            )
-            .into());
-        }
+        tactile_core::dataset::check_every_split(self.every_split, self.holdout.holdout())?;
         let s = &self.schedule;
         Ok(CaeTrainingConfig::new()
             .with_model(model)

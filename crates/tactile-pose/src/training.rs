@@ -99,6 +99,7 @@ impl PoseTrainingConfig {
         self.schedule.check()?;
         self.augment.check()?;
         tactile_core::dataset::check_val_fraction(self.val_fraction)?;
+        tactile_core::dataset::check_every_split(self.every_split == Some(true), self.holdout)?;
         if self.targets.is_empty() {
             return Err(tactile_core::Error::Config("no targets to predict".into()).into());
         }

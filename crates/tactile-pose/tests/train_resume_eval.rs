@@ -80,4 +80,18 @@ fn the_pose_network_trains_resumes_and_predicts_in_the_labels_units() {
         .to_string();
     assert!(e.contains("input side 30"), "{e}");
     assert!(!tmp.path().join("p2").join("pose.json").exists());
+    // Every split fitted and test frames left out contradict: refused, as
+    // the CAE refuses it. Before, the network fitted the test frames, then
+    // scored them as "held-out test frames (never trained on)".
+    let kw = json!({ "input_px": 32, "exclude_test": 0.25, "every_split": true });
+    let both = PoseOptions::with_overrides(kw.as_object().unwrap()).unwrap();
+    let e = both
+        .train(&ds, &tmp.path().join("p3"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("every_split trains on the test frames that exclude_test leaves out"),
+        "{e}"
+    );
+    assert!(!tmp.path().join("p3").exists());
 }

@@ -210,7 +210,6 @@ impl PyLiveView {
     /// so a recording is watched from its first frame; true when one did.
     /// Ctrl-C ends the wait with `KeyboardInterrupt`.
     fn wait_for_viewer(&self, py: Python<'_>, seconds: f64) -> PyResult<bool> {
-        tactile_ros::live::check_wait_seconds("wait_for_viewer", seconds).py()?;
         self.with(|v| crate::work::interruptible(py, || v.wait_for_viewer(seconds).py()))
     }
 

@@ -47,7 +47,6 @@ pub(crate) fn run<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::runtime(runtime)?;
     check_threads(threads)?;
-    tactile_ros::live::check_wait_seconds("view_wait", view_wait).py()?;
     let request = RunRequest {
         source_options: tactile_pipeline::SourceOptions {
             overlap: prefetch,
@@ -61,6 +60,7 @@ pub(crate) fn run<'py>(
         render,
         with_frames,
         view,
+        view_wait,
         ..RunRequest::new(source_spec(source, topic, stdin_size)?, models)
     };
     let session = interruptible(py, || RunSession::open(&request).py())?;
@@ -68,7 +68,7 @@ pub(crate) fn run<'py>(
         crate::errors::user_warning(py, &w)?;
     }
     let report = interruptible(py, || {
-        session.wait_for_viewer(view_wait).py()?;
+        session.wait_for_viewer().py()?;
         session.run().py()
     })?;
     for w in &report.late_warnings {

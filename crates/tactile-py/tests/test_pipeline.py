@@ -114,6 +114,11 @@ def test_run_writes_what_tactile_run_writes(tactile_bin, root, tmp_path):
         tactile.run(root / "samples/palpation", threads=0)
     with pytest.raises(ValueError, match="view_wait"):
         tactile.run(root / "samples/palpation", view="127.0.0.1:0", view_wait=float("nan"))
+    # Options that would do nothing in this run: refused, not ignored.
+    with pytest.raises(ValueError, match="view_wait: waits for a viewer of the live view, and this run serves none"):
+        tactile.run(root / "samples/palpation", view_wait=5.0)
+    with pytest.raises(ValueError, match="with_frames: the input frames go to an .mcap out or to the live view"):
+        tactile.run(root / "samples/palpation", out=tmp_path / "never.jsonl", with_frames=True)
     with pytest.raises(ValueError, match="stdin_size"):
         tactile.run()
     assert sorted(p.name for p in tmp_path.iterdir()) == before

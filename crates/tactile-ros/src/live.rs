@@ -55,8 +55,7 @@ fn parse_address(address: &str) -> Result<(String, u16)> {
 
 /// Refuse a wait for a viewer that is not a finite number of seconds >= 0,
 /// naming the argument `what` (`tactile run --view-wait`,
-/// [`crate::RunSession::wait_for_viewer`], Python's `wait_for_viewer` and
-/// `tactile.run(view_wait=...)`).
+/// [`crate::RunSession::open`], [`LiveView::wait_for_viewer`]).
 pub fn check_wait_seconds(what: &str, seconds: f64) -> Result<()> {
     if seconds.is_finite() && seconds >= 0.0 {
         return Ok(());
@@ -152,8 +151,10 @@ impl LiveView {
 
     /// Wait up to `seconds` (at most an hour) for a viewer to subscribe, so
     /// a recorded source is watched from its first frame; true when one did.
-    /// Ctrl-C ends the wait as an interrupt.
+    /// Ctrl-C ends the wait as an interrupt. A wait that is not a finite
+    /// number >= 0 is refused.
     pub fn wait_for_viewer(&self, seconds: f64) -> Result<bool> {
+        check_wait_seconds("wait_for_viewer", seconds)?;
         let until = std::time::Instant::now()
             + std::time::Duration::from_secs_f64(seconds.clamp(0.0, 3600.0));
         while !self.watched() {

@@ -45,6 +45,9 @@ pub struct RunRequest {
     pub with_frames: bool,
     /// Serve the results live to Foxglove at this `HOST:PORT`.
     pub view: Option<String>,
+    /// With `view`: seconds [`RunSession::wait_for_viewer`] holds the run
+    /// for a viewer to subscribe before the first frame (0: none).
+    pub view_wait: f64,
 }
 
 impl RunRequest {
@@ -62,6 +65,7 @@ impl RunRequest {
             render: None,
             with_frames: false,
             view: None,
+            view_wait: 0.0,
         }
     }
 
@@ -80,6 +84,7 @@ pub struct RunSession {
     robot: RobotOutputs,
     records: Option<JsonLines>,
     records_file: Option<PathBuf>,
+    view_wait: f64,
 }
 
 /// What a run did: the pipeline's summary and where its outputs went.
@@ -113,6 +118,27 @@ impl RunSession {
     pub fn open(request: &RunRequest) -> Result<Self> {
         if let Some((on, off)) = request.hysteresis {
             Hysteresis::new(on, off)?;
+        }
+        crate::live::check_wait_seconds("view_wait", request.view_wait)?;
+        if request.view_wait > 0.0 && request.view.is_none() {
+            return Err(tactile_core::Error::Config(
+                "view_wait: waits for a viewer of the live view, and this run serves none: \
+                 give view too, or leave view_wait out"
+                    .into(),
+            )
+            .into());
+        }
+        let to_mcap = request
+            .out
+            .as_deref()
+            .is_some_and(tactile_core::bag::is_bag_file);
+        if request.with_frames && !to_mcap && request.view.is_none() {
+            return Err(tactile_core::Error::Config(
+                "with_frames: the input frames go to an .mcap out or to the live view, \
+                 and this run has neither: give one, or leave with_frames out"
+                    .into(),
+            )
+            .into());
         }
         let source = FrameSource::open(&request.source, request.source_options)?;
         let data = match &request.source {
@@ -166,6 +192,7 @@ impl RunSession {
             records_file: json_out
                 .filter(|_| !request.records_to_stdout())
                 .map(Path::to_path_buf),
+            view_wait: request.view_wait,
         })
     }
 
@@ -180,13 +207,12 @@ impl RunSession {
         self.robot.live.as_ref().map(LiveView::url)
     }
 
-    /// Hold the run up to `seconds` for a viewer to subscribe (replaying a
-    /// recording to watch it); whether one did. Without a live view, at
-    /// once false. A wait that is not a finite number >= 0 is refused.
-    pub fn wait_for_viewer(&self, seconds: f64) -> Result<bool> {
-        crate::live::check_wait_seconds("view_wait", seconds)?;
+    /// Hold the run up to the request's `view_wait` seconds for a viewer
+    /// to subscribe (replaying a recording to watch it); whether one did.
+    /// Without a wait or a live view, at once false.
+    pub fn wait_for_viewer(&self) -> Result<bool> {
         match &self.robot.live {
-            Some(l) if seconds > 0.0 => l.wait_for_viewer(seconds),
+            Some(l) if self.view_wait > 0.0 => l.wait_for_viewer(self.view_wait),
             _ => Ok(false),
         }
     }
@@ -202,6 +228,7 @@ impl RunSession {
             mut robot,
             mut records,
             records_file,
+            ..
         } = self;
         let summary = tactile_pipeline::run(&mut pipeline, &mut source, &options, &mut |item| {
             robot.handle(item).map_err(tactile_core::Error::from)?;

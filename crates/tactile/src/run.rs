@@ -32,7 +32,7 @@ pub(crate) struct RunArgs {
     #[arg(long, requires = "size")]
     stdin: bool,
     /// The size of the frames on stdin, WIDTHxHEIGHT.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "data")]
     size: Option<crate::args::Size>,
     /// Folder with detector/, segmenter/ and depth/; a calibrated sensor's
     /// folder (tactile calibrate ball) adds the skin's indentation to every
@@ -146,6 +146,7 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         render: a.render,
         with_frames: a.with_frames,
         view: a.view,
+        view_wait: a.view_wait,
         ..RunRequest::new(source, a.models)
     };
     let to_stdout = request.records_to_stdout();
@@ -157,7 +158,7 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         tactile_core::note!(
             "live view: open Foxglove on {url} (frames are sent while a viewer is subscribed)"
         );
-        session.wait_for_viewer(a.view_wait)?;
+        session.wait_for_viewer()?;
     }
     let r = session.run()?;
     for w in &r.late_warnings {

@@ -55,7 +55,7 @@ pub(crate) struct CommonArgs {
     #[arg(long)]
     preview: Option<PathBuf>,
     /// Frames on the contact sheet (1-400).
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = 12, requires = "preview")]
     preview_frames: usize,
 }
 

@@ -653,6 +653,25 @@ fn a_results_file_declares_only_the_topics_its_run_can_write() {
         run(MODELS, SAMPLES, &out("f.mcap"), &["--with-frames"]),
         with_frames
     );
+    // Frames asked for where they have no place (JSON Lines records, no
+    // live view): refused, nothing written. Before, silently dropped.
+    let o = tactile(&[
+        "run",
+        "--models",
+        MODELS,
+        "--data",
+        SAMPLES,
+        "--out",
+        out("f.jsonl").to_str().unwrap(),
+        "--with-frames",
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && e.contains("with_frames: the input frames go to an .mcap out or to the live view"),
+        "{e}"
+    );
+    assert!(!out("f.jsonl").exists());
     // A calibrated sensor alone: its indentation, no tendon topics.
     let shipped = Path::new(MODELS).join("gelsight-r15");
     let sensor = out("sensor");

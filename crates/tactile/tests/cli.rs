@@ -442,6 +442,24 @@ fn synth_keeps_a_non_empty_folder_unless_forced() {
         );
         assert_eq!(listing(tmp.path()), vec!["ds", "ds2", "preview.png"]);
     }
+    // Frames for a sheet no --preview asks for: refused, not ignored.
+    let ds4 = tmp.path().join("ds4");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "tactip",
+        "--count",
+        "3",
+        "--out",
+        ds4.to_str().unwrap(),
+        "--preview-frames",
+        "5",
+    ]);
+    assert!(
+        !ok && msg.contains("the following required arguments were not provided")
+            && msg.contains("--preview <PREVIEW>"),
+        "{msg}"
+    );
+    assert_eq!(listing(tmp.path()), vec!["ds", "ds2", "preview.png"]);
 }
 
 #[test]
@@ -541,7 +559,10 @@ fn every_split_trains_the_final_cae_and_regressor_on_val_frames_too() {
     // Leaving test frames out and training on every split contradict.
     let bad = tmp.path().join("bad");
     let (ok, msg) = cae(&bad, &["--every-split", "--exclude-test", "0.2"]);
-    assert!(!ok && msg.contains("every_split"), "{msg}");
+    assert!(
+        !ok && msg.contains("every_split trains on the test frames that exclude_test leaves out"),
+        "{msg}"
+    );
     assert!(!bad.join("cae.json").exists());
     // Its estimator: scored on `val` when validated; with --every-split
     // every frame trains and nothing is left to test.

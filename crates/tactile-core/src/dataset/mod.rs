@@ -18,7 +18,8 @@ mod writer;
 pub use paths::{Escape, backslash_hint, expect_entry_inside, resolve_inside};
 pub use provenance::{Provenance, Seen};
 pub use split::{
-    DEFAULT_SPLIT_SEED, FrameGroups, Splits, TestHoldout, check_val_fraction, hold_out,
+    DEFAULT_SPLIT_SEED, FrameGroups, Splits, TestHoldout, check_every_split, check_val_fraction,
+    hold_out,
 };
 pub use writer::DatasetWriter;
 

@@ -69,6 +69,18 @@ pub fn check_val_fraction(val_fraction: f64) -> Result<()> {
     }
 }
 
+/// Check a trainer is not asked both to fit every row (`every_split`,
+/// the final model) and to leave test rows out (`exclude_test`): it would
+/// fit the rows it then scores as never trained on.
+pub fn check_every_split(every_split: bool, holdout: Option<TestHoldout>) -> Result<()> {
+    if every_split && holdout.is_some() {
+        return Err(Error::Config(
+            "every_split trains on the test frames that exclude_test leaves out: give one".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// Shuffle `rows` with `seed` and hold out the last `val_fraction` of them
 /// (at least one, and at least one left): `(train, validation)`.
 pub fn hold_out(
