@@ -137,7 +137,8 @@ impl CaeOptions {
             )?,
             None => Vec::new(),
         };
-        tactile_core::dataset::check_every_split(self.every_split, self.holdout.holdout())?;
+        let holdout = self.holdout.holdout()?;
+        tactile_core::dataset::check_every_split(self.every_split, holdout)?;
         let s = &self.schedule;
         Ok(CaeTrainingConfig::new()
             .with_model(model)
@@ -145,7 +146,7 @@ impl CaeOptions {
             .with_schedule(s.schedule(self.optimizer.default_learning_rate()))
             .with_optimizer(self.optimizer)
             .with_val_fraction(self.val_fraction)
-            .with_holdout(self.holdout.holdout())
+            .with_holdout(holdout)
             .with_every_split(self.every_split)
             .with_rotation(self.rotate.augment(s.seed)?)
             .with_joint(self.joint.config()?)

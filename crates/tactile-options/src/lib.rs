@@ -349,8 +349,18 @@ pub struct TestHoldoutArgs {
 }
 
 impl TestHoldoutArgs {
-    /// The holdout these flags ask for.
-    pub fn holdout(&self) -> Option<TestHoldout> {
-        TestHoldout::excluding(self.exclude_test, self.split_seed)
+    /// The holdout these flags ask for. A split seed without a test
+    /// fraction would pick nothing, so it is refused rather than ignored.
+    pub fn holdout(&self) -> tactile_core::Result<Option<TestHoldout>> {
+        if self.exclude_test.is_none()
+            && self.split_seed != tactile_core::dataset::DEFAULT_SPLIT_SEED
+        {
+            return Err(tactile_core::Error::Config(format!(
+                "split_seed {} picks the test frames that exclude_test leaves out, and no \
+                 exclude_test is given: give exclude_test too, or leave split_seed out",
+                self.split_seed
+            )));
+        }
+        Ok(TestHoldout::excluding(self.exclude_test, self.split_seed))
     }
 }

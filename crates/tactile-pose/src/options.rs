@@ -162,7 +162,7 @@ impl PoseOptions {
                 .map(|p| p.display().to_string()),
             schedule: self.schedule.schedule(d.schedule.learning_rate),
             val_fraction: self.val_fraction,
-            holdout: self.holdout.holdout(),
+            holdout: self.holdout.holdout()?,
             all_rows: self.all_rows,
             loss: Some(self.loss),
             augment: d

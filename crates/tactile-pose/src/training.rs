@@ -100,6 +100,12 @@ impl PoseTrainingConfig {
         self.augment.check()?;
         tactile_core::dataset::check_val_fraction(self.val_fraction)?;
         tactile_core::dataset::check_every_split(self.every_split == Some(true), self.holdout)?;
+        if self.calibration_from.is_some() && !self.model.has_uncertainty() {
+            return Err(tactile_core::Error::Config(
+                "calibration_from is for a network with uncertainty".into(),
+            )
+            .into());
+        }
         if self.targets.is_empty() {
             return Err(tactile_core::Error::Config("no targets to predict".into()).into());
         }

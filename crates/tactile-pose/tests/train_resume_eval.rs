@@ -94,4 +94,22 @@ fn the_pose_network_trains_resumes_and_predicts_in_the_labels_units() {
         "{e}"
     );
     assert!(!tmp.path().join("p3").exists());
+    // Options that would do nothing are refused before any frame is read.
+    // Before, a split seed without a test fraction was ignored, and a
+    // borrowed calibration for a network without uncertainty was refused
+    // only after every frame was preprocessed.
+    for (kw, want) in [
+        (
+            json!({ "split_seed": 3 }),
+            "split_seed 3 picks the test frames that exclude_test leaves out, and no exclude_test",
+        ),
+        (
+            json!({ "calibration_from": "elsewhere" }),
+            "calibration_from is for a network with uncertainty",
+        ),
+    ] {
+        let o = PoseOptions::with_overrides(kw.as_object().unwrap()).unwrap();
+        let e = o.config().unwrap_err().to_string();
+        assert!(e.contains(want), "{e}");
+    }
 }

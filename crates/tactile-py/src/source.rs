@@ -287,6 +287,12 @@ pub(crate) fn source_spec(
     stdin_size: Option<(usize, usize)>,
 ) -> PyResult<SourceSpec> {
     Ok(match (source, stdin_size) {
+        (None, Some(_)) if topic.is_some() => {
+            return Err(PyValueError::new_err(
+                "topic picks a ROS 2 bag's images, and raw frames on stdin (stdin_size) have none: \
+                 leave topic out, or give the bag as the source",
+            ));
+        }
         (Some(path), None) if topic.is_some() => SourceSpec::Bag { path, topic },
         (None, Some((width, height))) => SourceSpec::Stdin { width, height },
         (Some(p), None) => SourceSpec::Path(p),

@@ -69,6 +69,9 @@ def test_limit_and_bad_sources(root, tmp_path):
         tactile.frames(bad)
     with pytest.raises(ValueError, match="stdin_size"):
         tactile.frames()
+    # A topic for raw frames on stdin would be ignored: refused.
+    with pytest.raises(ValueError, match="topic picks a ROS 2 bag's images, and raw frames on stdin"):
+        tactile.frames(stdin_size=(320, 180), topic="/cam")
 
 
 def test_a_folder_bounds_its_reads(root, tmp_path):
