@@ -84,48 +84,82 @@ pub fn rgb_to_grey(rgb: &[u8]) -> Vec<u8> {
         .collect()
 }
 
-/// Load an 8-bit greyscale PNG. 8-bit RGB is converted to grey; anything
-/// else (16-bit, alpha, palette that decodes with alpha) is rejected with an
-/// error naming the file and the format found.
+/// The pixels of `channels` interleaved 8-bit channels, the last alpha,
+/// without it when every pixel is opaque (as tools that add an alpha
+/// channel save a camera's frames); otherwise the count of pixels that are
+/// not, since what lies under a transparent pixel is not the sensor's
+/// picture. Frame files and Python's arrays go through this one rule.
+pub fn drop_opaque_alpha(data: &[u8], channels: usize) -> std::result::Result<Vec<u8>, usize> {
+    let see_through = data
+        .chunks_exact(channels)
+        .filter(|p| p[channels - 1] != u8::MAX)
+        .count();
+    if see_through > 0 {
+        return Err(see_through);
+    }
+    Ok(data
+        .chunks_exact(channels)
+        .flat_map(|p| p[..channels - 1].iter().copied())
+        .collect())
+}
+
+/// [`drop_opaque_alpha`] of a decoded file, its refusal worded.
+fn opaque(color: ColorType, data: &[u8], channels: usize) -> std::result::Result<Vec<u8>, String> {
+    drop_opaque_alpha(data, channels).map_err(|n| {
+        format!(
+            "{} image with {n} of its {} pixels not opaque; expected 8-bit RGB or greyscale \
+             (an alpha channel is dropped only when every pixel is opaque)",
+            describe(color),
+            data.len() / channels
+        )
+    })
+}
+
+/// Load an 8-bit greyscale PNG. 8-bit RGB is converted to grey, and an
+/// alpha channel dropped when every pixel is opaque; anything else
+/// (16-bit, transparent pixels) is rejected with an error naming the file
+/// and the format found.
 pub fn load_grey(path: impl AsRef<Path>) -> Result<GreyImage> {
     let path = path.as_ref();
     let img = decode(path)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
+    let color = img.color();
     let data = match img {
-        DynamicImage::ImageLuma8(buf) => buf.into_raw(),
-        DynamicImage::ImageRgb8(buf) => rgb_to_grey(buf.as_raw()),
-        other => {
-            return Err(Error::image(
-                path,
-                format!(
-                    "{} image; expected 8-bit greyscale (or 8-bit RGB)",
-                    describe(other.color())
-                ),
-            ));
+        DynamicImage::ImageLuma8(buf) => Ok(buf.into_raw()),
+        DynamicImage::ImageRgb8(buf) => Ok(rgb_to_grey(buf.as_raw())),
+        DynamicImage::ImageLumaA8(buf) => opaque(color, buf.as_raw(), 2),
+        DynamicImage::ImageRgba8(buf) => {
+            opaque(color, buf.as_raw(), 4).map(|rgb| rgb_to_grey(&rgb))
         }
-    };
+        _ => Err(format!(
+            "{} image; expected 8-bit greyscale (or 8-bit RGB)",
+            describe(color)
+        )),
+    }
+    .map_err(|e| Error::image(path, e))?;
     grey_image(w, h, data).map_err(|e| Error::image(path, e.to_string()))
 }
 
-/// Load an 8-bit RGB PNG. 8-bit greyscale is expanded to RGB; alpha and
-/// 16-bit images are rejected with an error naming the file.
+/// Load an 8-bit RGB PNG. 8-bit greyscale is expanded to RGB, and an alpha
+/// channel dropped when every pixel is opaque; 16-bit images and
+/// transparent pixels are rejected with an error naming the file.
 pub fn load_rgb(path: impl AsRef<Path>) -> Result<RgbImage> {
     let path = path.as_ref();
     let img = decode(path)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
+    let color = img.color();
+    let grey_to_rgb = |grey: &[u8]| grey.iter().flat_map(|&v| [v, v, v]).collect::<Vec<u8>>();
     let data = match img {
-        DynamicImage::ImageRgb8(buf) => buf.into_raw(),
-        DynamicImage::ImageLuma8(buf) => buf.as_raw().iter().flat_map(|&v| [v, v, v]).collect(),
-        other => {
-            return Err(Error::image(
-                path,
-                format!(
-                    "{} image; expected 8-bit RGB (or 8-bit greyscale)",
-                    describe(other.color())
-                ),
-            ));
-        }
-    };
+        DynamicImage::ImageRgb8(buf) => Ok(buf.into_raw()),
+        DynamicImage::ImageLuma8(buf) => Ok(grey_to_rgb(buf.as_raw())),
+        DynamicImage::ImageRgba8(buf) => opaque(color, buf.as_raw(), 4),
+        DynamicImage::ImageLumaA8(buf) => opaque(color, buf.as_raw(), 2).map(|g| grey_to_rgb(&g)),
+        _ => Err(format!(
+            "{} image; expected 8-bit RGB (or 8-bit greyscale)",
+            describe(color)
+        )),
+    }
+    .map_err(|e| Error::image(path, e))?;
     rgb_image(w, h, data).map_err(|e| Error::image(path, e.to_string()))
 }
 
@@ -249,7 +283,72 @@ mod tests {
             .save(&pa)
             .unwrap();
         let e = load_grey(&pa).err().unwrap().to_string();
-        assert!(e.contains("alpha.png") && e.contains("RGBA"), "{e}");
+        assert!(
+            e.contains("alpha.png: 8-bit RGBA image with 16 of its 16 pixels not opaque"),
+            "{e}"
+        );
+        // One see-through pixel is enough to refuse, grey or colour.
+        let mut px = [[200u8, 120, 40, 255]; 16].concat();
+        px[4 * 5 + 3] = 254;
+        image::RgbaImage::from_raw(4, 4, px.clone())
+            .unwrap()
+            .save(&pa)
+            .unwrap();
+        let e = load_rgb(&pa).err().unwrap().to_string();
+        assert!(e.contains("1 of its 16 pixels not opaque"), "{e}");
+        let pla = dir.path().join("grey-alpha.png");
+        image::GrayAlphaImage::from_raw(2, 1, vec![10, 255, 20, 0])
+            .unwrap()
+            .save(&pla)
+            .unwrap();
+        let e = load_grey(&pla).err().unwrap().to_string();
+        assert!(
+            e.contains("grey-alpha.png: 8-bit greyscale with alpha image with 1 of its 2"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_opaque_alpha_channel_is_dropped() {
+        // Frames saved with an alpha channel every pixel of which is opaque
+        // (PIL's convert("RGBA"), screenshots, some camera tools) read as
+        // the same frame without it. Before, refused as "8-bit RGBA image".
+        let dir = tempfile::tempdir().unwrap();
+        let rgb: Vec<u8> = (0..48u8).map(|v| v * 5).collect();
+        let rgba: Vec<u8> = rgb
+            .chunks(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        let (plain, alpha) = (dir.path().join("rgb.png"), dir.path().join("rgba.png"));
+        save_rgb_png(&plain, 4, 4, &rgb).unwrap();
+        image::RgbaImage::from_raw(4, 4, rgba)
+            .unwrap()
+            .save(&alpha)
+            .unwrap();
+        assert_eq!(
+            load_rgb(&alpha).unwrap().as_slice(),
+            load_rgb(&plain).unwrap().as_slice()
+        );
+        assert_eq!(
+            load_grey(&alpha).unwrap().as_slice(),
+            load_grey(&plain).unwrap().as_slice()
+        );
+        let grey: Vec<u8> = (0..16u8).map(|v| v * 15).collect();
+        let la: Vec<u8> = grey.iter().flat_map(|&v| [v, 255]).collect();
+        let (plain, alpha) = (dir.path().join("grey.png"), dir.path().join("la.png"));
+        save_grey_png(&plain, 4, 4, &grey).unwrap();
+        image::GrayAlphaImage::from_raw(4, 4, la)
+            .unwrap()
+            .save(&alpha)
+            .unwrap();
+        assert_eq!(
+            load_grey(&alpha).unwrap().as_slice(),
+            load_grey(&plain).unwrap().as_slice()
+        );
+        assert_eq!(
+            load_rgb(&alpha).unwrap().as_slice(),
+            load_rgb(&plain).unwrap().as_slice()
+        );
     }
 
     #[test]

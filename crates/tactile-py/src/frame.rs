@@ -1,6 +1,6 @@
 //! numpy arrays in: an `(H, W, 3)` uint8 RGB frame or an `(H, W)` (or
-//! `(H, W, 1)`) uint8 grey frame, checked for type and shape with a message that says what
-//! was given. A C-contiguous array is read in place (no copy); any other
+//! `(H, W, 1)`) uint8 grey frame (an opaque alpha channel dropped),
+//! checked for type and shape with a message that says what was given. A C-contiguous array is read in place (no copy); any other
 //! layout (a slice, a channel-reversed view of an OpenCV BGR frame) is
 //! copied once into a contiguous buffer.
 
@@ -47,17 +47,11 @@ pub(crate) fn py_shape(shape: &[usize]) -> String {
     }
 }
 
-/// How to mend a frame whose channels are not what `layout` reads: RGBA
-/// (as imageio or PIL read a PNG with alpha; refused, as the CLI refuses
-/// such a file, rather than guessing what transparency means), or grey
-/// where only RGB is read.
+/// How to mend a frame whose channels are not what `layout` reads: grey
+/// (with or without alpha) where only RGB is read.
 fn channel_hint(shape: &[usize], layout: Layout) -> &'static str {
     match (shape, layout) {
-        (&[_, _, 4], _) => " (an RGBA frame: if it is opaque, drop its alpha with frame[..., :3])",
-        (&[_, _, 2], Layout::GreyOrRgb) => {
-            " (grey with alpha: if it is opaque, drop its alpha with frame[..., 0])"
-        }
-        (&[_, _, 1] | &[_, _], Layout::Rgb) => {
+        (&[_, _, 1 | 2] | &[_, _], Layout::Rgb) => {
             " (a grey frame: repeat it to RGB with numpy.dstack([frame] * 3) if the sensor's frames are grey; a colour sensor's frames must stay in colour)"
         }
         _ => "",
@@ -103,9 +97,12 @@ impl<'py> FrameArg<'py> {
             )));
         }
         let shape = arr.shape().to_vec();
-        let (height, width, channels) = match (layout, shape.as_slice()) {
-            (_, &[h, w, 3]) => (h, w, 3),
+        // Alpha (as imageio or PIL read a PNG that has it) is dropped when
+        // every pixel is opaque, by the rule frame files follow.
+        let (height, width, given) = match (layout, shape.as_slice()) {
+            (_, &[h, w, c @ (3 | 4)]) => (h, w, c),
             (Layout::GreyOrRgb, &[h, w] | &[h, w, 1]) => (h, w, 1),
+            (Layout::GreyOrRgb, &[h, w, 2]) => (h, w, 2),
             _ => {
                 return Err(PyValueError::new_err(format!(
                     "{what}: expected {want}, got shape {}{}",
@@ -125,7 +122,27 @@ impl<'py> FrameArg<'py> {
             .map_err(|e| PyValueError::new_err(format!("{what}: cannot read the array ({e})")))?;
         let copy = match array.as_slice() {
             Ok(_) => None,
-            Err(_) => Some(array.as_array().iter().copied().collect()),
+            Err(_) => Some(array.as_array().iter().copied().collect::<Vec<u8>>()),
+        };
+        let (copy, channels) = match given {
+            2 | 4 => {
+                let pixels = copy.as_deref().or(array.as_slice().ok()).unwrap_or(&[]);
+                let kind = if given == 4 {
+                    "an RGBA"
+                } else {
+                    "a grey-with-alpha"
+                };
+                let rgb = tactile_core::image_io::drop_opaque_alpha(pixels, given).map_err(|n| {
+                    PyValueError::new_err(format!(
+                        "{what}: {kind} frame of shape {} with {n} of its {} pixels not opaque; \
+                         expected {want} (an alpha channel is dropped only when every pixel is opaque)",
+                        py_shape(&shape),
+                        width * height
+                    ))
+                })?;
+                (Some(rgb), given - 1)
+            }
+            _ => (copy, given),
         };
         Ok(Self {
             array,

@@ -92,14 +92,22 @@ def test_encoder_errors(root, tmp_path):
     with pytest.raises(ValueError, match=r"frames\[1\]"):
         enc.encode([np.zeros((300, 300), np.uint8), np.zeros((300, 300, 2), np.uint8)])
     # Frames as image readers give them: grey with a channel axis is grey;
-    # alpha (an RGBA or grey-alpha PNG) is refused as the CLI refuses such a
-    # file, saying how to drop it, not read as a batch of 4-pixel-wide frames.
+    # an opaque alpha channel (an RGBA or grey-alpha PNG) is dropped, as the
+    # command line drops it from such a file, and a frame with transparent
+    # pixels is refused as one frame, not read as a batch of 4-pixel-wide
+    # frames. Before, every frame with alpha was refused.
     grey = np.random.default_rng(3).integers(0, 256, (300, 300), np.uint8)
     np.testing.assert_array_equal(enc.encode(grey[..., None]), enc.encode(grey))
-    with pytest.raises(ValueError, match=r"\(300, 300, 4\) \(an RGBA frame: .*frame\[\.\.\., :3\]"):
+    opaque = np.full((300, 300), 255, np.uint8)
+    np.testing.assert_array_equal(enc.encode(np.dstack([grey, opaque])), enc.encode(grey))
+    rgb = np.dstack([grey, grey[::-1], grey.T])
+    np.testing.assert_array_equal(enc.encode(np.dstack([rgb, opaque])), enc.encode(rgb))
+    with pytest.raises(ValueError, match=r"an RGBA frame of shape \(300, 300, 4\) with 90000 of its 90000 pixels not opaque"):
         enc.encode(np.zeros((300, 300, 4), np.uint8))
-    with pytest.raises(ValueError, match=r"\(300, 300, 2\) \(grey with alpha"):
-        enc.encode(np.zeros((300, 300, 2), np.uint8))
+    half = np.dstack([grey, opaque])
+    half[:150, :, 1] = 0
+    with pytest.raises(ValueError, match=r"a grey-with-alpha frame of shape \(300, 300, 2\) with 45000 of"):
+        enc.encode(half)
     with pytest.raises(TypeError, match="list of frames; got a NoneType"):
         enc.encode(None)
 

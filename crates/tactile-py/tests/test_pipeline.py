@@ -173,10 +173,15 @@ def test_non_contiguous_and_batched_input(pipeline, palpation_frames):
     # One (H, W, 3) frame is one frame, not H rows.
     single = pipeline.process_many(frame)
     assert len(single) == 1 and single[0].score == a.score
-    # A frame with alpha, or grey, is one frame refused as such; a bad frame
-    # in a batch is named by its index.
-    with pytest.raises(ValueError, match=r"^frame: .*\(an RGBA frame"):
-        pipeline.process_many(np.dstack([frame, np.full(frame.shape[:2], 255, np.uint8)]))
+    # A frame with an opaque alpha channel is the frame; one with
+    # transparent pixels, or grey, is one frame refused as such; a bad
+    # frame in a batch is named by its index.
+    opaque = pipeline.process_many(np.dstack([frame, np.full(frame.shape[:2], 255, np.uint8)]))
+    assert len(opaque) == 1 and opaque[0].score == a.score
+    with pytest.raises(ValueError, match=r"^frame: an RGBA frame of shape .* with 1 of its"):
+        see_through = np.dstack([frame, np.full(frame.shape[:2], 255, np.uint8)])
+        see_through[5, 7, 3] = 0
+        pipeline.process_many(see_through)
     with pytest.raises(ValueError, match=r"^frame: .*\(a grey frame"):
         pipeline.process_many(frame[:, :, 0])
     with pytest.raises(ValueError, match=r"^frames\[1\]: .*got shape \(5, 5\)"):
@@ -197,7 +202,8 @@ def test_hysteresis_and_reset(root, palpation_frames):
     [
         (np.zeros((180, 320, 3), np.float32), TypeError, "float32"),
         (np.zeros((180, 320, 3), np.uint16), TypeError, "uint16"),
-        (np.zeros((180, 320, 4), np.uint8), ValueError, "(180, 320, 4) (an RGBA frame: if it is opaque, drop its alpha with frame[..., :3])"),
+        (np.zeros((180, 320, 4), np.uint8), ValueError, "an RGBA frame of shape (180, 320, 4) with 57600 of its 57600 pixels not opaque"),
+        (np.zeros((180, 320, 2), np.uint8), ValueError, "(180, 320, 2) (a grey frame: repeat it to RGB"),
         (np.zeros((180, 320), np.uint8), ValueError, "(180, 320) (a grey frame: repeat it to RGB"),
         (np.zeros((180, 320, 1), np.uint8), ValueError, "(180, 320, 1) (a grey frame: repeat it to RGB"),
         (None, TypeError, "got a NoneType"),
