@@ -255,15 +255,15 @@ fn circle_problem(sensor: &SensorInfo, (w, h): (usize, usize), c: &Circle) -> Op
     let (x, y, r) = (c.centre_x_px, c.centre_y_px, c.radius_px);
     if !(x.is_finite() && y.is_finite() && r.is_finite()) {
         return Some(format!(
-            "contact circle at ({x}, {y}) radius {r} px is not a finite number"
+            "contact circle at ({x:?}, {y:?}) radius {r:?} px is not a finite number"
         ));
     }
     if r < 2.0 {
-        return Some(format!("contact radius {r} px is no contact"));
+        return Some(format!("contact radius {r:?} px is no contact"));
     }
     if r >= sensor.ball_radius_px() {
         return Some(format!(
-            "contact radius {r:.1} px is not smaller than the ball's radius {:.1} px ({} mm at {} mm/px): a ball cannot touch wider than itself",
+            "contact radius {r:?} px is not smaller than the ball's radius {:.1} px ({} mm at {} mm/px): a ball cannot touch wider than itself",
             sensor.ball_radius_px(),
             sensor.ball_diameter_mm / 2.0,
             sensor.mm_per_px
@@ -271,7 +271,7 @@ fn circle_problem(sensor: &SensorInfo, (w, h): (usize, usize), c: &Circle) -> Op
     }
     if x - r < 0.0 || y - r < 0.0 || x + r > w as f64 || y + r > h as f64 {
         return Some(format!(
-            "contact circle at ({x:.1}, {y:.1}) radius {r:.1} px is not inside the {w}x{h} frame"
+            "contact circle at ({x:?}, {y:?}) radius {r:?} px is not inside the {w}x{h} frame"
         ));
     }
     None

@@ -166,6 +166,17 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
         ("small", (",63", ",1"), "no contact"),
         ("inf", (",63", ",inf"), "not a finite number"),
         ("nan", (",299,", ",NaN,"), "not a finite number"),
+        // Far out of range: said as written, not in 301 digits.
+        (
+            "huge",
+            (",63", ",1e300"),
+            "contact radius 1e300 px is not smaller than the ball's radius 67.8 px",
+        ),
+        (
+            "tiny",
+            (",63", ",-1e300"),
+            "contact radius -1e300 px is no contact",
+        ),
     ] {
         let d = tmp.path().join(name);
         subset(&d, 2, |l| l.replace(edit.0, edit.1));
