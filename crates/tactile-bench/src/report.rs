@@ -313,6 +313,21 @@ pub fn report(r: &Report) -> Result<String> {
         let text = tactile_core::io::read_text(readme)?;
         replace_headline(&text, "", readme)?;
     }
+    // Every input read, checked before the held-out sets are rendered and
+    // before any folder is made: a mistyped --real or --models fails now,
+    // not after minutes of work, and leaves nothing behind.
+    tactile_core::dataset::Dataset::open(r.real.join("polic-shapes"))?;
+    for (model, what) in [
+        ("cae-shapes", "CAE model folder"),
+        ("detector", "detector folder"),
+        ("segmenter", "segmenter folder"),
+        ("depth", "depth model folder"),
+    ] {
+        let path = r.models.join(model);
+        if !path.is_dir() {
+            return Err(tactile_core::Error::not_found(path, what).into());
+        }
+    }
     let dir = r.out.with_extension("");
     tactile_core::io::create_dir_all(&dir)?;
     tactile_core::io::create_dir_all(&r.work)?;

@@ -1791,6 +1791,24 @@ fn report_regenerates_the_results_page_and_the_readme_headline() {
         !out.exists() && !tmp.path().join("work").exists(),
         "work done before the check"
     );
+    // So is a real-data or models folder that is not there, before the
+    // held-out sets are rendered and before any folder is made (before,
+    // after 25 s of rendering and the CAE bench's start).
+    let missing = tmp.path().join("nowhere");
+    for flag in ["--real", "--models"] {
+        let mut a = args(&readme);
+        let at = a.iter().position(|x| x == flag).unwrap();
+        a[at + 1] = missing.to_str().unwrap().into();
+        let (ok, msg) = tactile(&a.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(
+            !ok && msg.contains("nowhere/") && msg.contains("does not exist"),
+            "{flag}: {msg}"
+        );
+        assert!(
+            !tmp.path().join("docs").exists() && !tmp.path().join("work").exists(),
+            "{flag}: work done before the check"
+        );
+    }
 
     let a = args(&readme);
     let (ok, msg) = tactile(&a.iter().map(String::as_str).collect::<Vec<_>>());
