@@ -221,6 +221,12 @@ pub fn train(
         model.encoder = crate::torchvision::load_torchvision_encoder(p, model.encoder, &ad)?;
     }
     if config.freeze_encoder {
+        if config.pretrained.is_none() {
+            tactile_core::note!(
+                "warning: freeze_encoder without pretrained weights: only the decoder trains, on the features of an encoder left as initialised (seed {}); give pretrained to start it from torchvision's weights",
+                config.schedule.seed
+            );
+        }
         model = model.freeze_encoder();
     }
     let range = DEPTH_RANGE_MM / config.unit_mm as f64;

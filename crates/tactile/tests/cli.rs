@@ -1518,6 +1518,15 @@ fn train_depth_refuses_metres_and_an_unknown_loss_by_their_flags() {
     assert!(!out.join("depth.bpk").exists());
     let (ok, msg) = tactile(&["train", "depth", "--data", d, "--out", o, "--loss", "huber"]);
     assert!(!ok && msg.contains("huber"), "{msg}");
+    // A frozen encoder that was never trained: said, as the run goes on
+    // (a baseline of random features is a choice, an oversight likelier).
+    let (ok, msg) = tactile(&[&base[..], &["--freeze-encoder"]].concat());
+    assert!(
+        ok && msg.contains(
+            "warning: freeze_encoder without pretrained weights: only the decoder trains"
+        ),
+        "{msg}"
+    );
 }
 
 #[test]
