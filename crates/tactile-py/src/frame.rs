@@ -1,8 +1,9 @@
 //! numpy arrays in: an `(H, W, 3)` uint8 RGB frame or an `(H, W)` (or
 //! `(H, W, 1)`) uint8 grey frame (an opaque alpha channel dropped),
-//! checked for type and shape with a message that says what was given. A C-contiguous array is read in place (no copy); any other
-//! layout (a slice, a channel-reversed view of an OpenCV BGR frame) is
-//! copied once into a contiguous buffer.
+//! checked for type and shape with a message that says what was given. A
+//! C-contiguous array is read in place (no copy); any other layout (a
+//! slice, a channel-reversed view of an OpenCV BGR frame) is copied once
+//! into a contiguous buffer, as is a frame whose alpha is dropped.
 
 use std::sync::Arc;
 

@@ -401,18 +401,13 @@ fn synth_keeps_a_non_empty_folder_unless_forced() {
     let d = ds.to_str().unwrap();
     let (ok, msg) = tactile(&["synth", "tactip", "--count", "2", "--out", d]);
     assert!(ok, "{msg}");
+    // Three frames into `out`, with these flags.
+    let synth3 = |out: &Path, flags: &[&str]| {
+        let base = ["synth", "tactip", "--count", "3", "--out"];
+        tactile(&[&base[..], &[out.to_str().unwrap()], flags].concat())
+    };
     let preview = tmp.path().join("preview.png");
-    let (ok, msg) = tactile(&[
-        "synth",
-        "tactip",
-        "--count",
-        "3",
-        "--out",
-        d,
-        "--force",
-        "--preview",
-        preview.to_str().unwrap(),
-    ]);
+    let (ok, msg) = synth3(&ds, &["--force", "--preview", preview.to_str().unwrap()]);
     assert!(ok, "{msg}");
     assert_eq!(listing(&ds), vec!["frames", "labels.csv", "manifest.json"]);
     assert_eq!(std::fs::read_dir(ds.join("frames")).unwrap().count(), 3);
@@ -421,19 +416,9 @@ fn synth_keeps_a_non_empty_folder_unless_forced() {
     // A contact sheet of no frames, or of a million, is refused before a
     // dataset is written for it.
     for n in ["0", "1000000"] {
-        let ds3 = tmp.path().join("ds3");
-        let (ok, msg) = tactile(&[
-            "synth",
-            "tactip",
-            "--count",
-            "3",
-            "--out",
-            ds3.to_str().unwrap(),
-            "--preview",
-            tmp.path().join("p3.png").to_str().unwrap(),
-            "--preview-frames",
-            n,
-        ]);
+        let sheet = tmp.path().join("p3.png");
+        let flags = ["--preview", sheet.to_str().unwrap(), "--preview-frames", n];
+        let (ok, msg) = synth3(&tmp.path().join("ds3"), &flags);
         assert!(
             !ok && msg.contains(&format!(
                 "preview_frames: a contact sheet shows 1 to 400 frames, got {n}"
@@ -443,17 +428,7 @@ fn synth_keeps_a_non_empty_folder_unless_forced() {
         assert_eq!(listing(tmp.path()), vec!["ds", "ds2", "preview.png"]);
     }
     // Frames for a sheet no --preview asks for: refused, not ignored.
-    let ds4 = tmp.path().join("ds4");
-    let (ok, msg) = tactile(&[
-        "synth",
-        "tactip",
-        "--count",
-        "3",
-        "--out",
-        ds4.to_str().unwrap(),
-        "--preview-frames",
-        "5",
-    ]);
+    let (ok, msg) = synth3(&tmp.path().join("ds4"), &["--preview-frames", "5"]);
     assert!(
         !ok && msg.contains("the following required arguments were not provided")
             && msg.contains("--preview <PREVIEW>"),
