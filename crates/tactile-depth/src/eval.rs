@@ -252,6 +252,14 @@ pub fn evaluate_folder(
     runtime: Runtime,
     options: &EvalOptions,
 ) -> Result<DepthEvaluation> {
+    if options.save_png.is_none() && options.png_frames != EvalOptions::default().png_frames {
+        return Err(tactile_core::Error::Config(format!(
+            "png_frames {}: the heat maps save_png writes, and no save_png folder is given: \
+             give save_png too, or leave png_frames out",
+            options.png_frames
+        ))
+        .into());
+    }
     let ds = Dataset::open(data)?;
     if let Some(dir) = &options.save_png {
         ds.refuse_as_output(dir)?;

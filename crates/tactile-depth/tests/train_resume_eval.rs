@@ -111,4 +111,17 @@ fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
         "{e}"
     );
     assert!(!tmp.path().join("none").exists());
+    // A count of heat maps with no folder for them would be ignored:
+    // refused (before, the scores came back and no map was written).
+    let nowhere = EvalOptions {
+        save_png: None,
+        png_frames: 3,
+    };
+    let e = evaluate_folder(&out, &data, Runtime::BurnFlex, &nowhere)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("png_frames 3: the heat maps save_png writes, and no save_png folder is given"),
+        "{e}"
+    );
 }

@@ -436,3 +436,6 @@ def test_eval_depth_scores_the_shipped_network_and_draws_heat_maps(root, small_v
     with pytest.raises(ValueError, match="png_frames: must be 1 to 10000 heat maps"):
         tactile.eval.depth(root / "models/depth", small_vt, save_png=tmp_path / "none", png_frames=0)
     assert not (tmp_path / "none").exists()
+    # A count of heat maps with no folder for them is refused, not ignored.
+    with pytest.raises(ValueError, match="png_frames 3: the heat maps save_png writes, and no save_png"):
+        tactile.eval.depth(root / "models/depth", small_vt, png_frames=3)
