@@ -245,6 +245,13 @@ mod tests {
             e.contains("seconds must be a finite number >= 0, got -1"),
             "{e}"
         );
+        // A size is for raw frames on stdin: with --data it would be
+        // ignored, so the two are refused together.
+        let e = parse("tactile run --data frames --size 640x480")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cannot be used with"), "{e}");
+        assert!(parse("tactile run --stdin --size 640x480").is_ok());
         // A range given no value is still an error, not a silent default.
         assert!(parse("tactile synth tactip --out o --x-mm --y-mm 1,2").is_err());
         assert!(parse("tactile synth tactip --out o --count 3 --x-mm").is_err());
