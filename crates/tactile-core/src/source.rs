@@ -766,6 +766,25 @@ impl FrameSource {
                 }
             }
         };
+        // Options of the other kind of source would do nothing: refused
+        // (the reader just opened is dropped, its decoder stopped).
+        let defaults = SourceOptions::default();
+        let what = format!("{kind:?}").to_lowercase();
+        if !kind.is_live() && options.live_queue != defaults.live_queue {
+            return Err(Error::Config(format!(
+                "live_queue {}: the frames a live source (a camera, stdin) may hold while the \
+                 models run, and this {what} source is recorded (every frame is kept): leave \
+                 live_queue out",
+                options.live_queue
+            )));
+        }
+        if kind.is_live() && options.overlap != defaults.overlap {
+            return Err(Error::Config(format!(
+                "no overlap (--no-overlap, prefetch=False) decodes a recorded source's frames just \
+                 before the models, and this {what} source is live (read as frames arrive): \
+                 leave it out"
+            )));
+        }
         let feed = if kind.is_live() {
             let queue = Arc::new(LiveQueue {
                 state: Mutex::new(LiveState {

@@ -69,6 +69,9 @@ def test_limit_and_bad_sources(root, tmp_path):
         tactile.frames(bad)
     with pytest.raises(ValueError, match="stdin_size"):
         tactile.frames()
+    # A live queue for a recorded folder would be ignored: refused.
+    with pytest.raises(ValueError, match="live_queue 8: .* and this folder source is recorded"):
+        tactile.frames(root / "samples" / "palpation", live_queue=8)
     # A topic for raw frames on stdin would be ignored: refused.
     with pytest.raises(ValueError, match="topic picks a ROS 2 bag's images, and raw frames on stdin"):
         tactile.frames(stdin_size=(320, 180), topic="/cam")

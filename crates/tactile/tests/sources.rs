@@ -202,6 +202,45 @@ fn stdin_that_ends_inside_a_frame_keeps_the_whole_frames_before_it() {
 }
 
 #[test]
+fn an_option_of_the_other_kind_of_source_is_refused() {
+    // A live queue for a recorded folder, or decoding without overlap for
+    // live stdin, would do nothing. Before, both were taken and ignored.
+    for (args, want) in [
+        (
+            &[
+                "run",
+                "--models",
+                MODELS,
+                "--data",
+                SAMPLES,
+                "--live-queue",
+                "8",
+            ][..],
+            "live_queue 8: the frames a live source (a camera, stdin) may hold while the models run, and this folder source is recorded",
+        ),
+        (
+            &[
+                "run",
+                "--models",
+                MODELS,
+                "--stdin",
+                "--size",
+                "320x180",
+                "--no-overlap",
+            ][..],
+            "and this stdin source is live (read as frames arrive): leave it out",
+        ),
+    ] {
+        let out = tactile().args(args).stdin(Stdio::null()).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(want),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
 fn a_limit_of_no_frames_is_refused_not_run() {
     // Before, `run --limit 0` read nothing and succeeded with an empty
     // summary; `predict` said only "no frames to estimate".
