@@ -158,7 +158,7 @@ pub fn bench_ood(models: &Path, runtime: Runtime) -> Result<OodBench> {
     let tactip_frames = (0..100u64)
         .map(|i| {
             let (_, frame) = tactip::sample(&tc, 905, i);
-            let rgb: Vec<u8> = frame.pixels.iter().flat_map(|&v| [v, v, v]).collect();
+            let rgb = tactile_core::image_io::grey_to_rgb(&frame.pixels);
             rgb_image(300, 300, rgb)
         })
         .collect::<tactile_core::Result<Vec<_>>>()?;

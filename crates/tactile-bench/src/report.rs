@@ -323,10 +323,7 @@ pub fn report(r: &Report) -> Result<String> {
         ("segmenter", "segmenter folder"),
         ("depth", "depth model folder"),
     ] {
-        let path = r.models.join(model);
-        if !path.is_dir() {
-            return Err(tactile_core::Error::not_found(path, what).into());
-        }
+        tactile_core::io::expect_folder(&r.models.join(model), what)?;
     }
     let dir = r.out.with_extension("");
     tactile_core::io::create_dir_all(&dir)?;

@@ -84,6 +84,12 @@ pub fn rgb_to_grey(rgb: &[u8]) -> Vec<u8> {
         .collect()
 }
 
+/// RGB from grey, each level repeated in the three channels: how a grey
+/// frame is read where a colour one is.
+pub fn grey_to_rgb(grey: &[u8]) -> Vec<u8> {
+    grey.iter().flat_map(|&v| [v, v, v]).collect()
+}
+
 /// The pixels of `channels` interleaved 8-bit channels, the last alpha,
 /// without it when every pixel is opaque (as tools that add an alpha
 /// channel save a camera's frames); otherwise the count of pixels that are
@@ -152,7 +158,6 @@ pub fn load_rgb(path: impl AsRef<Path>) -> Result<RgbImage> {
     let img = decode(path)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let color = img.color();
-    let grey_to_rgb = |grey: &[u8]| grey.iter().flat_map(|&v| [v, v, v]).collect::<Vec<u8>>();
     let data = match img {
         DynamicImage::ImageRgb8(buf) => Ok(buf.into_raw()),
         DynamicImage::ImageLuma8(buf) => Ok(grey_to_rgb(buf.as_raw())),

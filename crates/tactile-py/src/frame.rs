@@ -123,17 +123,23 @@ impl<'py> FrameArg<'py> {
             .map_err(|e| PyValueError::new_err(format!("{what}: cannot read the array ({e})")))?;
         let copy = match array.as_slice() {
             Ok(_) => None,
-            Err(_) => Some(array.as_array().iter().copied().collect::<Vec<u8>>()),
+            Err(_) => Some(array.as_array().iter().copied().collect()),
         };
-        let (copy, channels) = match given {
-            2 | 4 => {
-                let pixels = copy.as_deref().or(array.as_slice().ok()).unwrap_or(&[]);
-                let kind = if given == 4 {
-                    "an RGBA"
-                } else {
-                    "a grey-with-alpha"
-                };
-                let rgb = tactile_core::image_io::drop_opaque_alpha(pixels, given).map_err(|n| {
+        let mut frame = Self {
+            array,
+            copy,
+            width,
+            height,
+            channels: given,
+        };
+        if given == 2 || given == 4 {
+            let kind = if given == 4 {
+                "an RGBA"
+            } else {
+                "a grey-with-alpha"
+            };
+            let dropped = tactile_core::image_io::drop_opaque_alpha(frame.pixels(), given)
+                .map_err(|n| {
                     PyValueError::new_err(format!(
                         "{what}: {kind} frame of shape {} with {n} of its {} pixels not opaque; \
                          expected {want} (an alpha channel is dropped only when every pixel is opaque)",
@@ -141,17 +147,10 @@ impl<'py> FrameArg<'py> {
                         width * height
                     ))
                 })?;
-                (Some(rgb), given - 1)
-            }
-            _ => (copy, given),
-        };
-        Ok(Self {
-            array,
-            copy,
-            width,
-            height,
-            channels,
-        })
+            frame.copy = Some(dropped);
+            frame.channels = given - 1;
+        }
+        Ok(frame)
     }
 
     /// The pixels, row-major interleaved.
@@ -201,7 +200,7 @@ impl Pixels<'_> {
             height: self.height,
         };
         if self.channels != 3 {
-            let rgb: Vec<u8> = self.data.iter().flat_map(|&v| [v, v, v]).collect();
+            let rgb = tactile_core::image_io::grey_to_rgb(self.data);
             return Ok(f(&tactile_core::image_io::rgb_image(
                 self.width,
                 self.height,

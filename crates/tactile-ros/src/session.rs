@@ -128,11 +128,14 @@ impl RunSession {
             )
             .into());
         }
-        let to_mcap = request
+        // Where the records go: a file (not `-`, standard output), as ROS 2
+        // messages when its name says MCAP.
+        let out = request
             .out
             .as_deref()
-            .is_some_and(tactile_core::bag::is_bag_file);
-        if request.with_frames && !to_mcap && request.view.is_none() {
+            .filter(|_| !request.records_to_stdout());
+        let mcap_out = out.filter(|p| tactile_core::bag::is_bag_file(p));
+        if request.with_frames && mcap_out.is_none() && request.view.is_none() {
             return Err(tactile_core::Error::Config(
                 "with_frames: the input frames go to an .mcap out or to the live view, \
                  and this run has neither: give one, or leave with_frames out"
@@ -146,10 +149,6 @@ impl RunSession {
             _ => None,
         };
         let inputs: Vec<_> = source.dataset().into_iter().collect();
-        let out = request
-            .out
-            .as_deref()
-            .filter(|_| !request.records_to_stdout());
         if let (Some(out), Some(render)) = (out, &request.render) {
             dataset::refuse_same_output(out, render)?;
         }
@@ -162,7 +161,6 @@ impl RunSession {
         }
         let pipeline =
             Pipeline::load(&request.models, request.runtime, request.threads).map_err(Box::new)?;
-        let mcap_out = out.filter(|p| tactile_core::bag::is_bag_file(p));
         let topics = Topic::written_by(&pipeline, request.with_frames);
         let robot = RobotOutputs {
             mcap: mcap_out

@@ -827,12 +827,16 @@ fn perceive_runs_every_shipped_estimator_on_one_encoding() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("estimates.csv");
+    let encoder = root.join("models/cae-synth");
+    let encoder = encoder.to_str().unwrap();
+    let samples = root.join("samples/virtual-tactip");
+    let samples = samples.to_str().unwrap();
     let (ok, msg) = tactile(&[
         "perceive",
         "--encoder",
-        root.join("models/cae-synth").to_str().unwrap(),
+        encoder,
         "--data",
-        root.join("samples/virtual-tactip").to_str().unwrap(),
+        samples,
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -849,11 +853,11 @@ fn perceive_runs_every_shipped_estimator_on_one_encoding() {
     let (ok, msg) = tactile(&[
         "perceive",
         "--encoder",
-        root.join("models/cae-synth").to_str().unwrap(),
+        encoder,
         "--heads",
         tmp.path().to_str().unwrap(),
         "--data",
-        root.join("samples/virtual-tactip").to_str().unwrap(),
+        samples,
     ]);
     assert!(
         !ok && msg.contains(
@@ -866,11 +870,11 @@ fn perceive_runs_every_shipped_estimator_on_one_encoding() {
     let (ok, msg) = tactile(&[
         "robustness",
         "--encoder",
-        root.join("models/cae-synth").to_str().unwrap(),
+        encoder,
         "--heads",
         root.join("models/detector").to_str().unwrap(),
         "--data",
-        root.join("samples/virtual-tactip").to_str().unwrap(),
+        samples,
     ]);
     assert!(
         !ok && msg.contains("detector: not an estimator folder (no head.json, regressor.json or ensemble of regressors; it holds ensemble.json: a model of another kind)"),

@@ -388,7 +388,7 @@ impl CompressedImage<'_> {
             .map_err(|e| format!("cannot decode the picture: {e}"))?;
         let data = match img {
             DynamicImage::ImageRgb8(b) => b.into_raw(),
-            DynamicImage::ImageLuma8(b) => b.as_raw().iter().flat_map(|&v| [v, v, v]).collect(),
+            DynamicImage::ImageLuma8(b) => crate::image_io::grey_to_rgb(b.as_raw()),
             other => other.to_rgb8().into_raw(),
         };
         crate::image_io::rgb_image(w as usize, h as usize, data).map_err(|e| e.to_string())
