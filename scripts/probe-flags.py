@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Give every numeric flag of every `tactile` command a value far out of
-range (1e300, or `1e300,1e301` for a range) and print what each says.
+range (1e300, or `1e300,1e301` for a range; `--value` and `--pair` give
+others, such as -0.5 or nan) and print what each says.
 
 A probe, not a test: it finds refusals that print a number in hundreds of
 digits, flags that are accepted and ignored (exit 0), and messages that do
@@ -29,6 +30,10 @@ def main() -> int:
     default_bin = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release/tactile"
     ap.add_argument("--bin", default=str(default_bin), help="the tactile binary")
     ap.add_argument("--timeout", type=float, default=120, help="seconds per command")
+    ap.add_argument("--value", default="1e300",
+                    help="the value given to each numeric flag (e.g. -0.5 or nan)")
+    ap.add_argument("--pair", default="1e300,1e301",
+                    help="the value given to each numeric list flag (e.g. -0.5,0.3)")
     args = ap.parse_args()
     tactile = str(Path(args.bin).resolve())
     if not Path(tactile).is_file():
@@ -84,7 +89,7 @@ def main() -> int:
                 if not default or not re.fullmatch(r"-?[0-9]*\.?[0-9]+(e-?[0-9]+)?(,.*)?",
                                                    default.group(1).split()[0]):
                     continue
-                given = "1e300,1e301" if "," in default.group(1) else "1e300"
+                given = args.pair if "," in default.group(1) else args.value
                 try:
                     r = call([*path, *base, f"--{flag}", given], work)
                 except subprocess.TimeoutExpired:

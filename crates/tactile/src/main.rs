@@ -42,6 +42,8 @@ mod sweep;
 mod synth;
 mod train;
 
+use std::ffi::OsString;
+
 use anyhow::Result;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
@@ -111,40 +113,50 @@ pub(crate) fn stdout_failed(e: std::io::Error) {
     std::process::exit(0);
 }
 
-/// The command line, every numeric flag taking a value that starts with
-/// `-`: clap reads `--x-mm -6,6` (the default its help shows) or
-/// `--rotate-deg -5` as an unknown flag `-6`/`-5` otherwise. A range
-/// (`MIN,MAX`, one value) takes any value starting with `-`; a number
-/// only one that reads as a negative number, so `--lr --epochs 5` is still
-/// an error, not a learning rate of `--epochs`.
-fn cli() -> clap::Command {
-    use std::any::TypeId;
-    fn signed(cmd: clap::Command) -> clap::Command {
-        cmd.mut_args(|arg| {
-            let ty = arg.get_value_parser().type_id();
-            if ty == TypeId::of::<tactile_core::rng::Range>() {
-                arg.allow_hyphen_values(true)
-            } else if [
-                TypeId::of::<f64>(),
-                TypeId::of::<f32>(),
-                TypeId::of::<i64>(),
-                TypeId::of::<i32>(),
-            ]
-            .into_iter()
-            .any(|t| ty == t)
-            {
-                arg.allow_negative_numbers(true)
-            } else {
-                arg
+/// The command line's words, each value that starts with `-` and a digit
+/// or a point (`--x-mm -6,6`, the default its help shows; `--rotate-deg
+/// -5`, `--hysteresis -0.5,0.3`, `--seed -1`) attached to the flag before
+/// it (`--x-mm=-6,6`). Clap reads such a word as a cluster of short flags
+/// (`-6`) otherwise, and says "unexpected argument"; attached, it reaches
+/// the flag's parser or check, which names the flag. Only a number-like
+/// word is attached, so `--lr --epochs 5` is still a missing value, not a
+/// learning rate of `--epochs`; nothing after `--` is touched.
+fn attach_negative_values(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
+    let number_like = |w: &str| {
+        let mut c = w.chars();
+        c.next() == Some('-') && matches!(c.next(), Some('0'..='9' | '.'))
+    };
+    let mut words: Vec<OsString> = Vec::new();
+    let mut positional = false;
+    for word in args {
+        if !positional {
+            if let (Some(value), Some(flag)) = (
+                word.to_str().filter(|w| number_like(w)),
+                words.last_mut().filter(|f| {
+                    f.to_str()
+                        .is_some_and(|f| f.len() > 2 && f.starts_with("--") && !f.contains('='))
+                }),
+            ) {
+                flag.push("=");
+                flag.push(value);
+                continue;
             }
-        })
-        .mut_subcommands(signed)
+            positional = word == "--";
+        }
+        words.push(word);
     }
-    signed(Cli::command())
+    words
+}
+
+/// Parse the command line (`tactile ...`, program name first).
+fn parse(
+    args: impl IntoIterator<Item = OsString>,
+) -> std::result::Result<clap::ArgMatches, clap::Error> {
+    Cli::command().try_get_matches_from(attach_negative_values(args))
 }
 
 fn main() -> std::process::ExitCode {
-    let matches = cli().get_matches();
+    let matches = parse(std::env::args_os()).unwrap_or_else(|e| e.exit());
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     args::keep_matches(matches);
     if let Err(e) = tactile_core::interrupt::install() {
@@ -202,6 +214,13 @@ fn dispatch(command: Command) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
+    use std::ffi::OsString;
+    use std::path::PathBuf;
+
+    use clap::CommandFactory;
+
+    use super::Cli;
+
     #[test]
     fn every_flag_has_help() {
         fn walk(cmd: &clap::Command, path: &str) {
@@ -216,7 +235,7 @@ mod tests {
                 walk(sub, &format!("{path} {}", sub.get_name()));
             }
         }
-        let cmd = super::cli();
+        let cmd = Cli::command();
         cmd.clone().debug_assert();
         walk(&cmd, "tactile");
     }
@@ -226,7 +245,7 @@ mod tests {
     #[test]
     fn negative_values_are_values() {
         use tactile_core::rng::Range;
-        let parse = |line: &str| super::cli().try_get_matches_from(line.split_whitespace());
+        let parse = |line: &str| super::parse(line.split_whitespace().map(OsString::from));
         let m = parse(
             "tactile synth tactip --out o --count 3 --x-mm -6,6 --gradient -0.25,0.25 --theta-deg -90",
         )
@@ -252,6 +271,40 @@ mod tests {
             .to_string();
         assert!(e.contains("cannot be used with"), "{e}");
         assert!(parse("tactile run --stdin --size 640x480").is_ok());
+        // A numeric list below zero reaches its own check (the run's
+        // hysteresis refuses it), and a count below zero its parser, which
+        // names the flag. Before, both were "unexpected argument '-0' found".
+        let m = parse("tactile run --data d --out o --hysteresis -0.5,0.3").unwrap();
+        let r = m.subcommand_matches("run").unwrap();
+        let on_off: Vec<f32> = r.get_many("hysteresis").unwrap().copied().collect();
+        assert_eq!(on_off, [-0.5, 0.3]);
+        let e = parse("tactile synth tactip --out o --seed -1")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("'-1' for '--seed"), "{e}");
+        let m =
+            parse("tactile compare --encoder e --data d --targets x_mm --hidden 64,32 --hidden 16")
+                .unwrap();
+        let c = m.subcommand_matches("compare").unwrap();
+        let hidden: Vec<usize> = c.get_many("hidden").unwrap().copied().collect();
+        assert_eq!(hidden, [64, 32, 16]);
+        // A list given no value is an error naming it, not the next flag;
+        // a file name starting with a minus is a value too, and so is
+        // anything after `--`.
+        let e = parse("tactile run --data d --hysteresis --out o")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("a value is required for '--hysteresis"), "{e}");
+        let m = parse("tactile run --data d --out -1.jsonl").unwrap();
+        let r = m.subcommand_matches("run").unwrap();
+        assert_eq!(
+            r.get_one::<PathBuf>("out"),
+            Some(&PathBuf::from("-1.jsonl"))
+        );
+        let words = super::attach_negative_values(
+            ["tactile", "--a", "-1", "--", "--b", "-2"].map(OsString::from),
+        );
+        assert_eq!(words, ["tactile", "--a=-1", "--", "--b", "-2"]);
         // A range given no value is still an error, not a silent default.
         assert!(parse("tactile synth tactip --out o --x-mm --y-mm 1,2").is_err());
         assert!(parse("tactile synth tactip --out o --count 3 --x-mm").is_err());
@@ -275,7 +328,7 @@ mod tests {
             .filter(|l| l.starts_with("tactile "))
         {
             let words: Vec<&str> = line.split_whitespace().collect();
-            if let Err(e) = super::cli().try_get_matches_from(&words) {
+            if let Err(e) = super::parse(words.iter().map(OsString::from)) {
                 panic!("README: `{line}` does not parse:\n{e}");
             }
             n += 1;

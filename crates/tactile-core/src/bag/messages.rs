@@ -272,9 +272,15 @@ impl Image<'_> {
         }
         let row = w * layout.bytes_per_pixel();
         let step = self.step as usize;
-        if step < row || (step as u64) * (h as u64) > self.data.len() as u64 {
+        if step < row {
             return Err(format!(
-                "{w}x{h} {} needs rows of at least {row} bytes and {} bytes of data; the message has step {step} and {} bytes",
+                "{w}x{h} {}: step {step} is shorter than a row, which is {row} bytes",
+                self.encoding
+            ));
+        }
+        if (step as u64) * (h as u64) > self.data.len() as u64 {
+            return Err(format!(
+                "{w}x{h} {} with step {step} needs {} bytes of data; the message has {}",
                 self.encoding,
                 step as u64 * h as u64,
                 self.data.len()
@@ -460,12 +466,26 @@ mod tests {
             width: 3,
             ..msg.clone()
         };
+        let e = short.to_rgb().err().unwrap_or_default();
         assert!(
-            short
-                .to_rgb()
-                .err()
-                .unwrap_or_default()
-                .contains("needs rows")
+            e.contains("3x1 bgr8: step 6 is shorter than a row, which is 9 bytes"),
+            "{e}"
+        );
+        // A step of 0 is named as such, not as a need for 0 bytes.
+        let no_step = Image {
+            step: 0,
+            ..msg.clone()
+        };
+        let e = no_step.to_rgb().err().unwrap_or_default();
+        assert!(e.contains("step 0 is shorter than a row"), "{e}");
+        let truncated = Image {
+            height: 2,
+            ..msg.clone()
+        };
+        let e = truncated.to_rgb().err().unwrap_or_default();
+        assert!(
+            e.contains("2x2 bgr8 with step 6 needs 12 bytes of data; the message has 6"),
+            "{e}"
         );
         let odd = Image {
             encoding: "yuv422".into(),
