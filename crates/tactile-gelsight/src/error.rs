@@ -61,6 +61,17 @@ pub enum Error {
         /// The frame.
         path: PathBuf,
     },
+    /// A colour frame given to a sensor whose background is grey: a grey
+    /// copy of the rest frame, or a frame of another sensor.
+    #[error(
+        "{path}: a colour frame (its channels {spread:.1} grey levels apart on average), but the sensor's background is grey: a grey sensor's frames are grey too. Give the background as the camera records it (in colour), or this sensor's own frames"
+    )]
+    ColourFrame {
+        /// The frame.
+        path: PathBuf,
+        /// How far apart its channels are, grey levels on average.
+        spread: f32,
+    },
 }
 
 impl Error {

@@ -43,13 +43,29 @@ pub fn is_colour_background(background: &RgbImage) -> bool {
     colour_spread(background) > COLOUR_SPREAD
 }
 
+/// A frame whose channels differ by more than this many grey levels on
+/// average is a colour sensor's, however its background looks: twice the
+/// spread a grey background may have, so a grey sensor's frames, tinted as
+/// its background is, stay below it.
+pub const COLOUR_FRAME_SPREAD: f32 = 2.0 * COLOUR_SPREAD;
+
 /// Refuse a grey `frame` (named `path`) for a sensor calibrated on colour
 /// frames (`colour`): its colour change would be read as slopes that are
-/// not there, a depth of nothing.
+/// not there, a depth of nothing. Refuse a colour frame for a sensor whose
+/// background is grey too: the background is then not this camera's rest
+/// frame as it records it (a grey copy), or the frame is another sensor's,
+/// and every colour change would be read against the wrong rest.
 pub fn check_colour(path: &std::path::Path, frame: &RgbImage, colour: bool) -> Result<()> {
-    if colour && colour_spread(frame) < GREY_SPREAD {
+    let spread = colour_spread(frame);
+    if colour && spread < GREY_SPREAD {
         return Err(crate::Error::GreyFrame {
             path: path.to_path_buf(),
+        });
+    }
+    if !colour && spread > COLOUR_FRAME_SPREAD {
+        return Err(crate::Error::ColourFrame {
+            path: path.to_path_buf(),
+            spread,
         });
     }
     Ok(())

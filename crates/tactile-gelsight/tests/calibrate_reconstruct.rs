@@ -238,6 +238,20 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     let e = ds.frame(1).err().unwrap();
     assert!(matches!(e, Error::GreyFrame { .. }), "{e}");
     assert!(e.to_string().contains("press_02.png"), "{e}");
+    // The background saved grey beside colour presses: the presses are
+    // named, not fitted against the wrong rest (before, it calibrated,
+    // its circles found 62 px off on average).
+    let d = tmp.path().join("grey-background");
+    subset(&d, 2, str::to_string);
+    save_grey_copy(&d.join("background.png"));
+    let ds = BallPresses::open(&d).unwrap();
+    let e = ds.frame(0).err().unwrap();
+    assert!(matches!(e, Error::ColourFrame { .. }), "{e}");
+    let e = e.to_string();
+    assert!(
+        e.contains("press_01.png") && e.contains("the sensor's background is grey"),
+        "{e}"
+    );
     // Too few presses: refused before anything is written.
     let d = tmp.path().join("few");
     subset(&d, 3, str::to_string);
