@@ -45,7 +45,42 @@ fn default_background() -> String {
     "background.png".into()
 }
 
+/// The keys of `sensor.json` a calibration reads; others are notes.
+const SENSOR_KEYS: [&str; 4] = ["sensor", "ball_diameter_mm", "mm_per_px", "background"];
+
 impl SensorInfo {
+    /// Read `sensor.json` (its `text`; `file` names it in errors) and check
+    /// it. Keys it does not read are notes (the shared R1.5 folder has
+    /// `count`, `circles`, `source`), but one spelt nearly as a key it reads
+    /// (`backgroud`, `Background`, `mm_per_pixel`) is refused: read as a
+    /// note, a misspelt `background` would calibrate against
+    /// `background.png` instead of the rest frame it names.
+    pub fn parse(text: &str, file: &Path) -> Result<Self> {
+        let bad = |why: String| Error::Layout {
+            path: file.to_path_buf(),
+            why,
+        };
+        // Misspelt keys first: a misspelt required key is named as such,
+        // not as a missing one.
+        let keys = serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(text)
+            .unwrap_or_default();
+        for key in keys.keys().filter(|k| !SENSOR_KEYS.contains(&k.as_str())) {
+            let near = SENSOR_KEYS.iter().find(|known| {
+                strsim::normalized_damerau_levenshtein(&key.to_lowercase(), known) >= 0.75
+            });
+            if let Some(known) = near {
+                return Err(bad(format!(
+                    "key {key:?} is not one a calibration reads: did you mean {known:?}? (it reads {}; other keys are kept as notes)",
+                    SENSOR_KEYS.join(", ")
+                )));
+            }
+        }
+        let sensor: Self = serde_json::from_str(text)
+            .map_err(|e| bad(format!("not a sensor description: {e}")))?;
+        sensor.check(file)?;
+        Ok(sensor)
+    }
+
     /// The ball's radius in pixels.
     pub fn ball_radius_px(&self) -> f64 {
         self.ball_diameter_mm / 2.0 / self.mm_per_px
@@ -174,14 +209,10 @@ impl BallPresses {
                     .into(),
             });
         }
-        let sensor: SensorInfo =
-            serde_json::from_str(&read_limited(&sensor_file, MAX_SENSOR_FILE_BYTES)?).map_err(
-                |e| Error::Layout {
-                    path: sensor_file.clone(),
-                    why: format!("not a sensor description: {e}"),
-                },
-            )?;
-        sensor.check(&sensor_file)?;
+        let sensor = SensorInfo::parse(
+            &read_limited(&sensor_file, MAX_SENSOR_FILE_BYTES)?,
+            &sensor_file,
+        )?;
         let canonical = root
             .canonicalize()
             .map_err(|e| tactile_core::Error::io(&root, e))?;
@@ -417,4 +448,48 @@ fn list_frames(root: &Path) -> Result<(Vec<Press>, Vec<String>)> {
         })
         .collect();
     Ok((presses, list.ignored_warning().into_iter().collect()))
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    /// Notes are kept, a misspelt key is named with the key it nearly is.
+    #[test]
+    fn sensor_json_keeps_notes_and_names_a_misspelt_key() {
+        let file = Path::new("cal/sensor.json");
+        let parse = |text: &str| SensorInfo::parse(text, file);
+        // The shared R1.5 folder's keys: three notes beside the four read.
+        let r15 = r#"{"sensor": "R1.5", "ball_diameter_mm": 4.0, "mm_per_px": 0.0295,
+            "count": 32, "background": "rest.png", "circles": "annotated", "source": "taxim"}"#;
+        let s = parse(r15).unwrap();
+        assert_eq!(
+            (s.background.as_str(), s.ball_diameter_mm),
+            ("rest.png", 4.0)
+        );
+        for (key, meant) in [
+            ("backgroud", "background"),
+            ("Background", "background"),
+            ("mm_per_pixel", "mm_per_px"),
+            ("bal_diameter_mm", "ball_diameter_mm"),
+            ("sensors", "sensor"),
+        ] {
+            let text = r15.replace("\"background\"", "\"background_note\"");
+            let text = match meant {
+                "background" => text.replace("\"background_note\"", &format!("{key:?}")),
+                _ => text.replace(&format!("{meant:?}"), &format!("{key:?}")),
+            };
+            let e = parse(&text).unwrap_err().to_string();
+            assert!(
+                e.contains("cal/sensor.json")
+                    && e.contains(&format!("key {key:?} is not one a calibration reads"))
+                    && e.contains(&format!("did you mean {meant:?}")),
+                "{key}: {e}"
+            );
+        }
+        // Not an object at all: the description's own error.
+        let e = parse("[1, 2]").unwrap_err().to_string();
+        assert!(e.contains("not a sensor description"), "{e}");
+    }
 }
