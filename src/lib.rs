@@ -13,6 +13,7 @@ pub use tactile_core as core;
 pub use tactile_depth as depth;
 pub use tactile_detect as detect;
 pub use tactile_estimate as estimate;
+pub use tactile_gelsight as gelsight;
 pub use tactile_onnx as onnx;
 pub use tactile_pipeline as pipeline;
 pub use tactile_pose as pose;

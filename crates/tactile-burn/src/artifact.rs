@@ -227,18 +227,19 @@ pub fn fingerprint<A: Artifact>(dir: &Path) -> Result<String> {
 }
 
 /// A config value checked on load: refuse `value` unless `ok`, naming the
-/// config `file` and the `field`.
+/// config `file` and the `field`. The value is said in Rust's shortest
+/// form (`1e300`, not its 301 digits).
 pub fn check_field(
     file: &Path,
     field: &str,
     ok: bool,
-    value: impl std::fmt::Display,
+    value: impl std::fmt::Debug,
     need: &str,
 ) -> Result<()> {
     if ok {
         Ok(())
     } else {
-        Err(Error::model(file, format!("{field} is {value}: {need}")))
+        Err(Error::model(file, format!("{field} is {value:?}: {need}")))
     }
 }
 

@@ -480,7 +480,7 @@ impl DepthNetConfig {
                 c = (c as f64 * e.compression).floor() as usize;
                 if c == 0 {
                     return Err(Error::Config(format!(
-                        "transition compression {} leaves transition {} with no channels",
+                        "transition compression {:?} leaves transition {} with no channels",
                         e.compression,
                         i + 1
                     )));

@@ -49,6 +49,7 @@ impl Artifact for GelsightArtifact {
         use tactile_core::error::in_config;
         in_config(file, self.model.check())?;
         in_config(file, self.grid.check())?;
+        in_config(file, self.sensor.check_config())?;
         if let Some(g) = &self.contact_gate {
             in_config(file, g.check())?;
         }

@@ -87,25 +87,38 @@ impl SensorInfo {
     }
 
     fn check(&self, file: &Path) -> Result<()> {
-        let bad = |why: String| {
-            Err(Error::Layout {
+        match self.problem() {
+            Some(why) => Err(Error::Layout {
                 path: file.to_path_buf(),
                 why,
-            })
-        };
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// The same check of a calibrated model's copy (its config names it).
+    pub fn check_config(&self) -> tactile_core::Result<()> {
+        match self.problem() {
+            Some(why) => Err(tactile_core::Error::Config(format!("sensor: {why}"))),
+            None => Ok(()),
+        }
+    }
+
+    /// What is wrong with the ball or the scale, if anything.
+    fn problem(&self) -> Option<String> {
         if !(self.ball_diameter_mm.is_finite() && (0.1..=100.0).contains(&self.ball_diameter_mm)) {
-            return bad(format!(
+            return Some(format!(
                 "ball_diameter_mm = {:?} is no ball of 0.1-100 mm",
                 self.ball_diameter_mm
             ));
         }
         if !(self.mm_per_px.is_finite() && (1e-4..=1.0).contains(&self.mm_per_px)) {
-            return bad(format!(
+            return Some(format!(
                 "mm_per_px = {:?} is not a scale of 0.0001-1 mm per pixel",
                 self.mm_per_px
             ));
         }
-        Ok(())
+        None
     }
 }
 

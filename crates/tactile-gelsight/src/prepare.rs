@@ -104,8 +104,15 @@ impl WorkingGrid {
         (self.factor as f64 * mm_per_px) as f32
     }
 
-    /// Check the factor against the frame.
+    /// Check the frame against 8K and the factor against the frame.
     pub fn check(&self) -> tactile_core::Result<()> {
+        let max = tactile_core::image_io::MAX_IMAGE_PIXELS;
+        if (self.frame_width as u64).saturating_mul(self.frame_height as u64) > max {
+            return Err(tactile_core::Error::Config(format!(
+                "grid: a {}x{} frame is larger than 8K ({max} pixels)",
+                self.frame_width, self.frame_height
+            )));
+        }
         if self.factor == 0 || self.factor > MAX_FACTOR || self.width() < 8 || self.height() < 8 {
             return Err(tactile_core::Error::Config(format!(
                 "factor {} must be 1-{MAX_FACTOR} and leave at least 8x8 working pixels of a {}x{} frame",

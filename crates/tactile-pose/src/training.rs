@@ -24,7 +24,7 @@ use crate::{Error, Result};
 /// fraction of an output pixel it covers).
 pub fn grey_pin_images(side: usize) -> PreprocessConfig {
     PreprocessConfig {
-        lighting: Lighting::None,
+        lighting: Lighting::None {},
         equalize: false,
         threshold: None,
         mask_radius_px: Some(100.0),

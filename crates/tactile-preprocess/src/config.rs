@@ -8,10 +8,10 @@ use crate::{Error, MAX_WINDOW_PX, Result, align};
 
 /// How uneven illumination is removed before thresholding.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "method", rename_all = "snake_case")]
+#[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Lighting {
     /// No compensation: the fixed threshold of the authors' lab set-up.
-    None,
+    None {},
     /// Background subtraction by a white top-hat (the frame minus its
     /// morphological opening with a box larger than a pin), then a pixel is
     /// a pin when it reaches `relative_threshold` of the local top-hat
@@ -31,8 +31,10 @@ pub enum Lighting {
     },
 }
 
-/// Every step of the chain; see the presets.
+/// Every step of the chain; see the presets. An unknown key is refused: a
+/// misspelt `mask_radius_px` would otherwise read as no mask at all.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PreprocessConfig {
     /// Illumination compensation.
     pub lighting: Lighting,
@@ -94,7 +96,7 @@ impl PreprocessConfig {
     /// The authors' released chain for their lab frames.
     pub fn paper() -> Self {
         Self {
-            lighting: Lighting::None,
+            lighting: Lighting::None {},
             equalize: true,
             threshold: Some(170),
             mask_radius_px: Some(145.0),
@@ -141,7 +143,7 @@ impl PreprocessConfig {
     /// shapes set): only crop, resize and binarise.
     pub fn binary_frames() -> Self {
         Self {
-            lighting: Lighting::None,
+            lighting: Lighting::None {},
             equalize: false,
             threshold: None,
             mask_radius_px: None,
@@ -166,7 +168,7 @@ impl PreprocessConfig {
         // nothing.
         let windows = [("open_px", self.open_px, 0), ("grow_px", self.grow_px, 0)];
         let lighting = match &self.lighting {
-            Lighting::None => vec![],
+            Lighting::None {} => vec![],
             Lighting::TopHat {
                 background_window_px,
                 peak_window_px,
@@ -205,13 +207,20 @@ impl PreprocessConfig {
                 self.output_px, self.crop_px
             ));
         }
-        if !self.binarise_offset.is_finite() || self.mask_radius_px.is_some_and(|r| !r.is_finite())
-        {
-            return bad("binarise_offset and mask_radius_px must be finite".into());
-        }
-        if let Some(r) = self.mask_radius_px.filter(|r| *r <= 0.0) {
+        // round(x + offset) of x in [0, 1]: outside [-0.5, 0.5] every
+        // pixel rounds to one colour.
+        if !(-0.5..=0.5).contains(&self.binarise_offset) {
             return bad(format!(
-                "mask_radius_px {r} must be positive (or absent: no mask)"
+                "binarise_offset {:?} must be in [-0.5, 0.5] (the pin image is round(x + offset) of x in [0, 1]; beyond, every pixel is one colour)",
+                self.binarise_offset
+            ));
+        }
+        if let Some(r) = self
+            .mask_radius_px
+            .filter(|r| !(r.is_finite() && *r >= 1.0))
+        {
+            return bad(format!(
+                "mask_radius_px {r:?} must be a finite radius of at least 1 pixel (or absent: no mask)"
             ));
         }
         if let Some(a) = &self.align {
@@ -326,6 +335,48 @@ mod tests {
                 e.contains(&format!("{name} must be 1 to 255 pixels, got 0")),
                 "{e}"
             );
+        }
+    }
+
+    /// A preprocessing file is read whole or refused naming its file and
+    /// the key: before, a misspelt `mask_radius_px` read as no mask, a key
+    /// of another lighting method was dropped, and an offset that makes
+    /// every pixel one colour or a mask of no pixels were taken.
+    #[test]
+    fn a_preprocessing_file_with_a_stray_key_or_a_useless_value_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("pre.json");
+        let read = |text: &str| {
+            std::fs::write(&file, text).unwrap();
+            PreprocessConfig::preset(file.to_str().unwrap())
+        };
+        let good = r#"{"lighting": {"method": "none"}, "equalize": false, "threshold": null,
+            "mask_radius_px": 100.0, "open_px": 0, "grow_px": 5, "crop_px": 256,
+            "output_px": 28, "binarise_offset": 0.3}"#;
+        assert_eq!(read(good).unwrap().mask_radius_px, Some(100.0));
+        for (edit, want) in [
+            (
+                good.replace("mask_radius_px", "mask_radius"),
+                "unknown field `mask_radius`",
+            ),
+            (
+                good.replace(
+                    r#""method": "none""#,
+                    r#""method": "none", "background_window_px": 15"#,
+                ),
+                "unknown field `background_window_px`",
+            ),
+            (
+                good.replace("0.3}", "1e300}"),
+                "binarise_offset 1e300 must be in [-0.5, 0.5]",
+            ),
+            (
+                good.replace("100.0", "1e-30"),
+                "mask_radius_px 1e-30 must be a finite radius of at least 1 pixel",
+            ),
+        ] {
+            let e = read(&edit).unwrap_err().to_string();
+            assert!(e.contains("pre.json") && e.contains(want), "{want}: {e}");
         }
     }
 

@@ -38,13 +38,13 @@ impl GelResponse {
     pub fn check(&self) -> Result<()> {
         if !(self.sigma_mm.is_finite() && self.sigma_mm > 0.0 && self.sigma_mm <= MAX_SIGMA_MM) {
             return Err(Error::Config(format!(
-                "gel: sigma_mm must be in (0, {MAX_SIGMA_MM}], got {}",
+                "gel: sigma_mm must be in (0, {MAX_SIGMA_MM}], got {:?}",
                 self.sigma_mm
             )));
         }
         if !(self.gain.is_finite() && self.gain > 0.0 && self.gain <= 1.0) {
             return Err(Error::Config(format!(
-                "gel: gain must be in (0, 1], got {}",
+                "gel: gain must be in (0, 1], got {:?}",
                 self.gain
             )));
         }

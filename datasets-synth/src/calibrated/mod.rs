@@ -61,9 +61,9 @@ impl RenderModel {
     pub fn check(&self) -> Result<()> {
         self.optics.check()?;
         self.gel.check()?;
-        if !(self.mm_per_px.is_finite() && self.mm_per_px > 0.0 && self.mm_per_px < 10.0) {
+        if !(self.mm_per_px.is_finite() && (1e-4..=1.0).contains(&self.mm_per_px)) {
             return Err(Error::Config(format!(
-                "mm_per_px must be in (0, 10), got {}",
+                "mm_per_px must be 0.0001-1 mm per pixel (as a calibration's sensor.json), got {:?}",
                 self.mm_per_px
             )));
         }

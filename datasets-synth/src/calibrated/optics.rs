@@ -85,7 +85,7 @@ impl SensorOptics {
         }
         if !(max_slope.is_finite() && max_slope > 0.0 && max_slope <= 20.0) {
             return Err(Error::Config(format!(
-                "optics: max_slope must be in (0, 20], got {max_slope}"
+                "optics: max_slope must be in (0, 20], got {max_slope:?}"
             )));
         }
         if width == 0 || height == 0 {
@@ -196,7 +196,7 @@ impl SensorOptics {
         }
         if !(self.max_slope.is_finite() && self.max_slope > 0.0 && self.max_slope <= 20.0) {
             return bad(format!(
-                "max_slope must be in (0, 20], got {}",
+                "max_slope must be in (0, 20], got {:?}",
                 self.max_slope
             ));
         }
