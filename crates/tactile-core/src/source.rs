@@ -745,8 +745,17 @@ impl FrameSource {
                     let mut v = VideoReader::open(&input, DecodeOptions::default())?;
                     let info = v.info();
                     let stopper = v.stopper();
+                    let late = Arc::clone(&late);
                     let r = StreamReader {
-                        read: move || v.next_frame(),
+                        read: move || {
+                            let frame = v.next_frame()?;
+                            if let (None, Some(w)) = (&frame, v.shortfall_warning())
+                                && let Ok(mut late) = late.lock()
+                            {
+                                late.push(w);
+                            }
+                            Ok(frame)
+                        },
                         number: 0,
                         live: kind.is_live(),
                     };

@@ -148,6 +148,9 @@ pub struct VideoInfo {
     pub height: usize,
     /// Frames per second, when the container says.
     pub fps: Option<f64>,
+    /// The stream's length in seconds, when the container says (the
+    /// stream's own, else the file's).
+    pub duration_s: Option<f64>,
 }
 
 /// The size and rate of `input`'s first video stream, checked: a stream
@@ -156,7 +159,10 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
     let path = input.path();
     let mut cmd = Command::new("ffprobe");
     cmd.args(["-v", "error", "-select_streams", "v:0"])
-        .args(["-show_entries", "stream=width,height,avg_frame_rate"])
+        .args([
+            "-show_entries",
+            "stream=width,height,avg_frame_rate,duration:format=duration",
+        ])
         .args(["-of", "json"]);
     if let VideoInput::Camera(_) = input {
         cmd.args(["-f", "v4l2"]);
@@ -178,12 +184,18 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
     struct Probe {
         #[serde(default)]
         streams: Vec<Stream>,
+        format: Option<Format>,
     }
     #[derive(serde::Deserialize)]
     struct Stream {
         width: Option<u64>,
         height: Option<u64>,
         avg_frame_rate: Option<String>,
+        duration: Option<String>,
+    }
+    #[derive(serde::Deserialize)]
+    struct Format {
+        duration: Option<String>,
     }
     let probe: Probe = serde_json::from_slice(&out.stdout)
         .map_err(|e| Error::image(path, format!("unreadable ffprobe output: {e}")))?;
@@ -204,10 +216,17 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
         let (n, d): (f64, f64) = (n.parse().ok()?, d.parse().ok()?);
         (d > 0.0 && n > 0.0).then(|| n / d)
     });
+    let seconds = |d: Option<&String>| {
+        d.and_then(|d| d.parse::<f64>().ok())
+            .filter(|d| d.is_finite() && *d > 0.0)
+    };
+    let duration_s = seconds(s.duration.as_ref())
+        .or_else(|| seconds(probe.format.as_ref().and_then(|f| f.duration.as_ref())));
     Ok(VideoInfo {
         width: w as usize,
         height: h as usize,
         fps,
+        duration_s,
     })
 }
 
@@ -235,6 +254,8 @@ pub struct VideoReader {
     stdout: ChildStdout,
     stderr: Option<std::thread::JoinHandle<Vec<u8>>>,
     done: bool,
+    decoded: u64,
+    shortfall_told: bool,
 }
 
 impl VideoReader {
@@ -280,6 +301,34 @@ impl VideoReader {
             stdout,
             stderr,
             done: false,
+            decoded: 0,
+            shortfall_told: false,
+        })
+    }
+
+    /// Once a file's frames have ended: a warning when far fewer were
+    /// decoded than its container's length and rate promise (a copy cut
+    /// short, a recording stopped early: FFmpeg decodes what is there
+    /// and says nothing), told once. The frames decoded are kept.
+    pub fn shortfall_warning(&mut self) -> Option<String> {
+        let VideoInput::File(path) = &self.input else {
+            return None;
+        };
+        if !self.done || self.shortfall_told {
+            return None;
+        }
+        self.shortfall_told = true;
+        let (duration_s, fps) = (self.info.duration_s?, self.info.fps?);
+        let promised = (duration_s * fps).round();
+        let decoded = self.decoded as f64;
+        (decoded + 2.0 < promised && decoded < 0.9 * promised).then(|| {
+            format!(
+                "warning: {}: its container says {duration_s:.2} s at {fps:.2} frames per second \
+                 (about {promised} frames), and {} were decoded: the file may be cut short (a copy \
+                 or a recording stopped early); the frames decoded were kept",
+                path.display(),
+                self.decoded
+            )
         })
     }
 
@@ -306,6 +355,7 @@ impl VideoReader {
         let got =
             read_full(&mut self.stdout, &mut buf).map_err(|e| Error::io(self.input.path(), e))?;
         if got == len {
+            self.decoded += 1;
             return rgb_image(self.info.width, self.info.height, buf).map(Some);
         }
         self.done = true;

@@ -57,6 +57,25 @@ def test_lossless_video_gives_the_pipeline_the_same_frames(root, tmp_path, pipel
     assert decisions == [pipeline.process(x).tendon for x in palpation_frames]
 
 
+@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
+def test_a_video_cut_short_gives_its_frames_with_a_warning(root, tmp_path):
+    # 36 frames of Motion JPEG in Matroska, which declares its length up
+    # front; a copy stopped half-way decodes to fewer, and says so.
+    whole = tmp_path / "whole.mkv"
+    subprocess.run(
+        ["ffmpeg", "-nostdin", "-loglevel", "error", "-stream_loop", "2", "-framerate", "30",
+         "-i", str(root / "samples" / "palpation" / "%06d.png"),
+         "-c:v", "mjpeg", "-q:v", "2", str(whole)],
+        check=True,
+    )
+    assert len(list(tactile.frames(whole))) == 36
+    cut = tmp_path / "cut.mkv"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size // 2])
+    with pytest.warns(UserWarning, match=r"cut\.mkv: its container says 1\.20 s .* the file may be cut short"):
+        got = list(tactile.frames(cut))
+    assert 5 < len(got) < 32
+
+
 def test_limit_and_bad_sources(root, tmp_path):
     assert len(list(tactile.frames(root / "samples" / "palpation", limit=3))) == 3
     with pytest.raises(ValueError, match="limit: must be at least 1 frame, got 0"):

@@ -111,7 +111,8 @@ fn a_video_file_gives_the_decisions_and_directions_of_its_frames() {
     ] {
         let video = dir.path().join(name);
         encode(&refs, 30, codec, &video).unwrap();
-        let (records, summary, _) = run(&["--data", video.to_str().unwrap()], None);
+        let (records, summary, err) = run(&["--data", video.to_str().unwrap()], None);
+        assert!(!err.contains("cut short"), "a whole file: {err}");
         assert_eq!(summary["source"], "video");
         assert_eq!(
             summary["frames"],
@@ -128,6 +129,35 @@ fn a_video_file_gives_the_decisions_and_directions_of_its_frames() {
             }
         }
     }
+}
+
+#[test]
+fn a_video_file_cut_short_gives_its_frames_and_says_so() {
+    // A copy stopped half-way: FFmpeg decodes the frames that are there
+    // and says nothing, so the run compares them with the length and rate
+    // the container declares (Matroska writes its duration up front).
+    use tactile_core::video::{VideoCodec, encode};
+    let dir = tempfile::tempdir().unwrap();
+    let imgs = images();
+    let refs: Vec<_> = imgs.iter().cycle().take(40).collect();
+    let whole = dir.path().join("whole.mkv");
+    encode(&refs, 30, VideoCodec::Mjpeg, &whole).unwrap();
+    let bytes = std::fs::read(&whole).unwrap();
+    let cut = dir.path().join("cut.mkv");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let (records, summary, err) = run(&["--data", cut.to_str().unwrap()], None);
+    let n = records.len();
+    assert!((5..35).contains(&n), "{n} frames of a half file");
+    assert_eq!(summary["frames"], n as u64);
+    assert!(
+        err.contains(
+            "cut.mkv: its container says 1.33 s at 30.00 frames per second (about 40 frames)"
+        ) && err.contains(&format!("and {n} were decoded: the file may be cut short")),
+        "{err}"
+    );
+    let (records, _, err) = run(&["--data", whole.to_str().unwrap()], None);
+    assert_eq!(records.len(), 40);
+    assert!(!err.contains("cut short"), "{err}");
 }
 
 #[test]
