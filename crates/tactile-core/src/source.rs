@@ -345,13 +345,16 @@ impl SourceKind {
     pub fn is_live(self) -> bool {
         matches!(self, SourceKind::Camera | SourceKind::Stdin)
     }
+}
 
-    /// A frame of this source named in a message: a file by its name
-    /// (`a.png`), a stream's frame by its number (`frame 000042`).
-    pub fn frame_label(self, name: &str) -> String {
-        match self {
-            SourceKind::Dataset | SourceKind::Folder => name.to_string(),
-            _ => format!("frame {name}"),
+impl Frame {
+    /// The frame named in a message: a file by its path (`frames/a.png`,
+    /// as the folder was given), a stream's frame by its number (`frame
+    /// 000042`).
+    pub fn label(&self) -> String {
+        match &self.path {
+            Some(p) => p.display().to_string(),
+            None => format!("frame {}", self.name),
         }
     }
 }
@@ -411,6 +414,8 @@ pub struct Frame {
     pub image: RgbImage,
     /// The file name, or the frame's number in a stream (`000042`).
     pub name: String,
+    /// The file it was read from (a folder's or a dataset's frame).
+    pub path: Option<PathBuf>,
     /// Its palpation sequence, when a dataset says.
     pub sequence: Option<String>,
     /// Its `tendon` label, when a dataset says.
@@ -448,6 +453,7 @@ impl Reader for ListReader {
                 .unwrap_or_default()
                 .to_string_lossy()
                 .into_owned(),
+            path: Some(e.path),
             sequence: e.sequence,
             tendon: e.tendon,
             arrived: None,
@@ -474,6 +480,7 @@ impl<R: FnMut() -> Result<Option<RgbImage>> + Send> Reader for StreamReader<R> {
         Ok(Some(Frame {
             image,
             name,
+            path: None,
             sequence: None,
             tendon: None,
             arrived: self.live.then(Instant::now),
@@ -501,6 +508,7 @@ impl Reader for BagReader {
         Ok(Some(Frame {
             image: f.image,
             name: format!("{:06}", f.index),
+            path: None,
             sequence: None,
             tendon: None,
             arrived: None,

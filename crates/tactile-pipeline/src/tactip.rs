@@ -337,7 +337,8 @@ impl Predictor {
     ) -> Result<usize> {
         let batch = batch.clamp(1, SOURCE_BATCH);
         let mut grey: Vec<GreyImage> = Vec::with_capacity(batch);
-        let (mut files, mut stamps, mut arrived) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut files, mut labels, mut stamps, mut arrived) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         // A stream's length is unknown: its bar counts without a total.
         let known = source.list().map_or(0, |l| l.frames.len() as u64);
         let pb = tactile_core::progress::progress_bar_if(known, "predict", batch > 1);
@@ -346,26 +347,26 @@ impl Predictor {
         // Taken once: the model's preprocessings do not change in the loop.
         let cfgs: Vec<PreprocessConfig> = self.preprocessings().into_iter().cloned().collect();
         let mut warnings = Vec::new();
-        let kind = source.kind();
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
                 pb.inc(1);
                 let (w, h) = (f.image.width(), f.image.height());
                 if let Some(why) = sizes.check(w, h, &cfgs) {
-                    warnings.push(format!("warning: {}: {why}", kind.frame_label(&f.name)));
+                    warnings.push(format!("warning: {}: {why}", f.label()));
                 }
                 let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
                 grey.push(tactile_core::image_io::grey_image(w, h, g)?);
                 files.push(f.name.clone());
+                labels.push(f.label());
                 stamps.push(f.stamp_ns);
                 arrived.push(f.arrived);
             }
             if grey.len() == batch || (frame.is_none() && !grey.is_empty()) {
-                let estimates =
-                    self.perceive_frames(&grey, |i| files.get(i).map(|n| kind.frame_label(n)))?;
+                let estimates = self.perceive_frames(&grey, |i| labels.get(i).cloned())?;
                 done += grey.len();
                 grey.clear();
+                labels.clear();
                 let p = Perception {
                     files: std::mem::take(&mut files),
                     stamps_ns: stamps.iter().copied().collect(),

@@ -2319,7 +2319,7 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
     let warned: Vec<&str> = msg.lines().filter(|l| l.contains("warning")).collect();
     assert_eq!(warned.len(), 1, "{msg}");
     assert!(
-        warned[0].contains("0001.png")
+        warned[0].contains(&mixed.join("0001.png").display().to_string())
             && warned[0].contains("smaller than the model's 440x440 crop"),
         "{msg}"
     );
@@ -2333,9 +2333,14 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
     let out = tmp.path().join("tiny.csv");
     let (ok, msg) = predict_mixed(&out);
     assert!(!ok && !out.exists(), "{msg}");
+    // Named by its path as the folder was given (before, "0002.png"
+    // alone, whichever folder it was in).
+    let tiny = mixed.join("0002.png");
     assert!(
-        msg.contains("0002.png: frame is 12x12, smaller than the")
-            && msg.matches("frame is 12x12").count() == 1,
+        msg.contains(&format!(
+            "{}: frame is 12x12, smaller than the",
+            tiny.display()
+        )) && msg.matches("frame is 12x12").count() == 1,
         "{msg}"
     );
     // In a stream (here a bag), by its number.
