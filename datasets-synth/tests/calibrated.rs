@@ -6,8 +6,6 @@ use datasets_synth::calibrated::{
     CalibratedConfig, CalibratedSensor, Contact, GelResponse, OpticsSample, REAL_PRESS_PATH,
     RealFrame, RealFrames, RenderModel, SensorOptics, sample,
 };
-use std::path::Path;
-
 use datasets_synth::{WriteOptions, write_calibrated};
 use tactile_core::spec::DepthMaps;
 use tactile_core::spec::calibrated::CONTACT_MIN_INDENTATION_MM;
@@ -263,59 +261,4 @@ fn real_frames_join_a_set_as_negatives_with_their_own_labels() {
     )
     .unwrap_err();
     assert!(e.to_string().contains("press_02"), "{e}");
-}
-
-/// Every number of the shipped render model (`optics.json` of
-/// `models/gelsight-r15`; of its long tables, the first two) set to each
-/// extreme in turn: the model is read or refused, never a panic, and a
-/// refusal says the value in a few characters (before, 1e300 was printed
-/// in 301 digits). A scale the calibration would refuse (1e-30 mm per
-/// pixel) is refused here too: it rendered frames before.
-#[test]
-fn a_render_model_of_extreme_numbers_is_read_or_refused_in_a_few_words() {
-    use serde_json::Value;
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/gelsight-r15/optics.json");
-    let shipped: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
-    fn leaves(v: &Value, at: String, out: &mut Vec<String>) {
-        match v {
-            Value::Number(_) => out.push(at),
-            Value::Array(a) => a
-                .iter()
-                .take(2)
-                .enumerate()
-                .for_each(|(i, x)| leaves(x, format!("{at}/{i}"), out)),
-            Value::Object(o) => o
-                .iter()
-                .for_each(|(k, x)| leaves(x, format!("{at}/{k}"), out)),
-            _ => {}
-        }
-    }
-    let mut numbers = Vec::new();
-    leaves(&shipped, String::new(), &mut numbers);
-    assert!(numbers.len() > 8, "{numbers:?}");
-    let model = |v: &Value| serde_json::from_value::<RenderModel>(v.clone()).map(|m| m.check());
-    assert!(matches!(model(&shipped), Ok(Ok(()))));
-    let mut refused = 0;
-    for at in &numbers {
-        for x in [0.0, -1.0, 1e-30, 0.5, 1e9, 1e300, 1.8e19] {
-            let mut v = shipped.clone();
-            *v.pointer_mut(at).unwrap() = serde_json::json!(x);
-            if let Ok(Err(e)) = model(&v) {
-                refused += 1;
-                let e = e.to_string();
-                assert!(
-                    e.len() < 200 && !e.contains("0000000000000000000000"),
-                    "{at} = {x}: {e}"
-                );
-            }
-        }
-    }
-    assert!(refused > 10, "{refused}");
-    let mut v = shipped.clone();
-    *v.pointer_mut("/mm_per_px").unwrap() = serde_json::json!(1e-30);
-    let e = model(&v).unwrap().unwrap_err().to_string();
-    assert!(
-        e.contains("mm_per_px must be 0.0001-1 mm per pixel") && e.contains("1e-30"),
-        "{e}"
-    );
 }
