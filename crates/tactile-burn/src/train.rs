@@ -37,6 +37,11 @@ pub struct Schedule {
     pub seed: u64,
 }
 
+/// The largest learning rate taken: ten times Adadelta's customary 1.
+/// Before it was bounded, `--lr 1e300` trained an epoch, diverged and
+/// left its new folder marked incomplete.
+pub const MAX_LEARNING_RATE: f64 = 10.0;
+
 impl Schedule {
     /// Check the values before any data is loaded.
     pub fn check(&self) -> Result<()> {
@@ -46,9 +51,14 @@ impl Schedule {
                 self.batch_size, self.max_epochs
             )));
         }
-        if !(self.learning_rate.is_finite() && self.learning_rate > 0.0) {
+        // Adadelta's customary rate is 1 and Adam's 1e-3; past
+        // MAX_LEARNING_RATE every optimiser here diverges in its first epoch.
+        if !(self.learning_rate.is_finite()
+            && self.learning_rate > 0.0
+            && self.learning_rate <= MAX_LEARNING_RATE)
+        {
             return Err(Error::Config(format!(
-                "learning rate must be a positive finite number, got {:?}",
+                "learning rate must be a positive finite number of at most {MAX_LEARNING_RATE:?}, got {:?}",
                 self.learning_rate
             )));
         }
@@ -607,9 +617,17 @@ mod tests {
         );
         let e = Schedule::new(16, 10, 3, f64::INFINITY).check().unwrap_err();
         assert!(
-            e.to_string().contains("positive finite number, got inf"),
+            e.to_string()
+                .contains("positive finite number of at most 10.0, got inf"),
             "{e}"
         );
+        // A rate no optimiser here survives is refused before any data is
+        // read (before, 1e300 diverged in the first epoch); Adadelta's 1
+        // and the bound itself are taken.
+        let e = Schedule::new(16, 10, 3, 1e300).check().unwrap_err();
+        assert!(e.to_string().contains("at most 10.0, got 1e300"), "{e}");
+        assert!(Schedule::new(16, 10, 3, 1.0).check().is_ok());
+        assert!(Schedule::new(16, 10, 3, 10.0).check().is_ok());
         // A decay above 1 grows the rate every epoch: refused; 1 keeps it.
         let e = Schedule::new(16, 10, 3, 1e-3)
             .with_lr_decay(1.5)
