@@ -3,7 +3,7 @@
 use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::dataset::{Dataset, DatasetKind};
-use tactile_preprocess::{PinImage, PreprocessConfig, preprocess};
+use tactile_preprocess::{PinImage, PreprocessConfig, is_flat_frame, preprocess};
 
 use crate::Result;
 
@@ -13,6 +13,10 @@ pub struct PinSet {
     pub files: Vec<String>,
     /// Each frame's pin image.
     pub images: Vec<PinImage>,
+    /// The `file` labels of frames one grey level throughout their crop
+    /// ([`tactile_preprocess::is_flat_frame`]: no pins to read), for a
+    /// warning.
+    pub flat: Vec<String>,
 }
 
 /// Rows of a dataset preprocessed at a time when only their estimates are
@@ -49,21 +53,31 @@ impl PinSet {
             .map(|&i| {
                 let frame = ds.load_grey(i, "file")?;
                 let path = ds.path_of(i, "file")?;
-                cfgs.iter()
+                let flat = cfgs.first().is_some_and(|c| is_flat_frame(&frame, c));
+                let pins = cfgs
+                    .iter()
                     .map(|cfg| {
                         preprocess(&frame, cfg).map_err(|e| crate::Error::from(e.in_file(&path)))
                     })
-                    .collect::<Result<Vec<_>>>()
+                    .collect::<Result<Vec<_>>>()?;
+                Ok((pins, flat))
             })
             .collect::<Result<Vec<_>>>()?;
+        let flat: Vec<String> = per_frame
+            .iter()
+            .zip(&files)
+            .filter(|((_, flat), _)| *flat)
+            .map(|(_, f)| f.clone())
+            .collect();
         let mut sets: Vec<Self> = cfgs
             .iter()
             .map(|_| Self {
                 files: files.clone(),
                 images: Vec::with_capacity(rows.len()),
+                flat: flat.clone(),
             })
             .collect();
-        for pins in per_frame {
+        for (pins, _) in per_frame {
             for (set, pin) in sets.iter_mut().zip(pins) {
                 set.images.push(pin);
             }
@@ -95,6 +109,7 @@ impl PinSet {
         Self {
             files: Vec::new(),
             images,
+            flat: Vec::new(),
         }
     }
 

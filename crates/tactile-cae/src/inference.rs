@@ -83,16 +83,38 @@ impl TactipEncoder {
     /// time ([`PinSet::for_each_chunk`]): each row's `file` label and
     /// features.
     pub fn encode_dataset(&mut self, ds: &Dataset) -> Result<(Vec<String>, Vec<Vec<f32>>)> {
+        let e = self.encode_dataset_flagging(ds)?;
+        Ok((e.files, e.features))
+    }
+
+    /// [`Self::encode_dataset`], also giving the `file` labels of frames
+    /// one grey level throughout their crop ([`PinSet::flat`]).
+    pub fn encode_dataset_flagging(&mut self, ds: &Dataset) -> Result<EncodedDataset> {
         let cfg = self.artifact.preprocess.clone();
-        let (mut files, mut feats) = (Vec::with_capacity(ds.len()), Vec::with_capacity(ds.len()));
+        let mut e = EncodedDataset {
+            files: Vec::with_capacity(ds.len()),
+            features: Vec::with_capacity(ds.len()),
+            flat: Vec::new(),
+        };
         PinSet::for_each_chunk(ds, std::slice::from_ref(&cfg), DATASET_CHUNK, |mut sets| {
             let set = sets.swap_remove(0);
-            feats.extend(self.encode(&set.images)?);
-            files.extend(set.files);
+            e.features.extend(self.encode(&set.images)?);
+            e.files.extend(set.files);
+            e.flat.extend(set.flat);
             Ok::<(), Error>(())
         })?;
-        Ok((files, feats))
+        Ok(e)
     }
+}
+
+/// A dataset's features ([`TactipEncoder::encode_dataset_flagging`]).
+pub struct EncodedDataset {
+    /// Each row's `file` label.
+    pub files: Vec<String>,
+    /// Each row's features.
+    pub features: Vec<Vec<f32>>,
+    /// The `file` labels of frames one grey level throughout their crop.
+    pub flat: Vec<String>,
 }
 
 /// Write `file,f0,f1,...` rows atomically (the layout of the authors'

@@ -23,7 +23,7 @@ use tactile_estimate::{
     Target,
 };
 pub use tactile_preprocess::perturb::RotationAugment;
-use tactile_preprocess::{FrameSizeCheck, PinImage, PreprocessConfig};
+use tactile_preprocess::{FrameSizeCheck, PinImage, PreprocessConfig, is_flat_frame};
 
 use crate::Result;
 
@@ -192,7 +192,7 @@ impl Predictor {
                     estimates: pose_estimates(&r.names, &r.values, r.std.as_deref()),
                     ms_encode: r.ms_per_frame,
                     ms_estimate: 0.0,
-                    warnings: Vec::new(),
+                    warnings: flat_frames_warning(&r.flat, false).into_iter().collect(),
                 }
             }
         };
@@ -347,6 +347,7 @@ impl Predictor {
         // Taken once: the model's preprocessings do not change in the loop.
         let cfgs: Vec<PreprocessConfig> = self.preprocessings().into_iter().cloned().collect();
         let mut warnings = Vec::new();
+        let mut flat_frames = 0;
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
@@ -356,7 +357,19 @@ impl Predictor {
                     warnings.push(format!("warning: {}: {why}", f.label()));
                 }
                 let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
-                grey.push(tactile_core::image_io::grey_image(w, h, g)?);
+                let g = tactile_core::image_io::grey_image(w, h, g)?;
+                // Named as they come, the first few (a covered camera
+                // would name every frame of a stream otherwise).
+                if cfgs.first().is_some_and(|c| is_flat_frame(&g, c)) {
+                    flat_frames += 1;
+                    if flat_frames <= MAX_FLAT_NAMED {
+                        warnings.extend(flat_frames_warning(
+                            &[f.label()],
+                            flat_frames == MAX_FLAT_NAMED,
+                        ));
+                    }
+                }
+                grey.push(g);
                 files.push(f.name.clone());
                 labels.push(f.label());
                 stamps.push(f.stamp_ns);
@@ -406,6 +419,39 @@ impl Predictor {
             Self::PoseNetwork(_) => 1,
         }
     }
+}
+
+/// Flat frames named one by one in a stream before they are only counted.
+const MAX_FLAT_NAMED: usize = 3;
+
+/// The warning for frames one grey level throughout their crop
+/// ([`is_flat_frame`]): the first [`MAX_FLAT_NAMED`] of `flat` named, the
+/// rest counted; `then_unnamed` says a stream names no more after these.
+fn flat_frames_warning(flat: &[String], then_unnamed: bool) -> Option<String> {
+    if flat.is_empty() {
+        return None;
+    }
+    let named: Vec<&str> = flat
+        .iter()
+        .take(MAX_FLAT_NAMED)
+        .map(String::as_str)
+        .collect();
+    let more = match flat.len() - named.len() {
+        0 => String::new(),
+        n => format!(", and {n} more"),
+    };
+    let then = match then_unnamed {
+        true => " (any further ones are not named)",
+        false => "",
+    };
+    let these = match flat.len() {
+        1 => "this frame",
+        _ => "these frames",
+    };
+    Some(format!(
+        "warning: {}{more}: one grey level throughout the crop (a blank, covered or saturated camera?): no pins to read, so the estimates of {these} mean nothing{then}",
+        named.join(", ")
+    ))
 }
 
 /// A warning naming `ds` when its frames (the manifest's size) do not suit
@@ -665,7 +711,11 @@ impl TactipPerception {
     /// Perceive every frame of a dataset, timing encoding and estimation.
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
         let t0 = std::time::Instant::now();
-        let (files, feats) = self.encoder.encode_dataset(ds)?;
+        let tactile_cae::inference::EncodedDataset {
+            files,
+            features: feats,
+            flat,
+        } = self.encoder.encode_dataset_flagging(ds)?;
         let ms_encode = 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64;
         let t1 = std::time::Instant::now();
         let estimates = self.estimators.estimate(&feats)?;
@@ -676,7 +726,7 @@ impl TactipPerception {
             estimates,
             ms_encode,
             ms_estimate,
-            warnings: Vec::new(),
+            warnings: flat_frames_warning(&flat, false).into_iter().collect(),
         })
     }
 

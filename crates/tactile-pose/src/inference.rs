@@ -63,6 +63,9 @@ pub struct PoseEstimates {
     pub std: Option<Vec<Vec<f64>>>,
     /// Preprocessing and network time per frame, ms.
     pub ms_per_frame: f64,
+    /// The `file` labels of frames one grey level throughout their crop
+    /// (no pins to read: their estimates mean nothing).
+    pub flat: Vec<String>,
 }
 
 impl PoseEstimator {
@@ -263,6 +266,7 @@ impl PoseEstimator {
         let t0 = std::time::Instant::now();
         let (mut files, mut values) = (Vec::with_capacity(ds.len()), Vec::with_capacity(ds.len()));
         let mut std: Option<Vec<Vec<f64>>> = None;
+        let mut flat = Vec::new();
         let scales = self.scales.clone();
         tactile_cae::data::PinSet::for_each_chunk(ds, &scales, DATASET_CHUNK, |mut sets| {
             let views: Vec<&[PinImage]> = sets.iter().map(|s| s.images.as_slice()).collect();
@@ -271,7 +275,9 @@ impl PoseEstimator {
             if let Some(s) = s {
                 std.get_or_insert_with(Vec::new).extend(s);
             }
-            files.extend(sets.swap_remove(0).files);
+            let first = sets.swap_remove(0);
+            files.extend(first.files);
+            flat.extend(first.flat);
             Ok::<(), crate::Error>(())
         })?;
         Ok(PoseEstimates {
@@ -285,6 +291,7 @@ impl PoseEstimator {
             values,
             std,
             ms_per_frame: 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64,
+            flat,
         })
     }
 

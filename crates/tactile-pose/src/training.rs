@@ -486,6 +486,7 @@ mod tests {
         let set = PoseSet {
             pins: tactile_cae::data::PinSet {
                 files: vec!["f".into(); 3],
+                flat: Vec::new(),
                 images: vec![
                     tactile_preprocess::PinImage {
                         side: 1,

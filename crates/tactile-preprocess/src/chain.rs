@@ -103,6 +103,36 @@ pub fn preprocess_each_by<F: Sync>(
         .collect()
 }
 
+/// A frame whose grey levels inside the chain's centred crop spread less
+/// than this (their standard deviation) shows no pins: a blank, covered or
+/// saturated camera. Real TacTip frames spread 57 to 106 levels (400
+/// frames of each real set) and virtual ones 29.
+pub const FLAT_FRAME_LEVELS: f64 = 4.0;
+
+/// True when `frame` is one grey level throughout `cfg`'s crop (within
+/// [`FLAT_FRAME_LEVELS`]): there are no pins to read, so estimates made
+/// from it mean nothing. Every third row and column is read.
+pub fn is_flat_frame(frame: &GreyImage, cfg: &PreprocessConfig) -> bool {
+    let (w, h) = (frame.width(), frame.height());
+    let side = cfg.crop_px.min(w).min(h);
+    let (x0, y0) = ((w - side) / 2, (h - side) / 2);
+    let px = frame.as_slice();
+    let (mut n, mut sum, mut sq) = (0f64, 0f64, 0f64);
+    for y in (y0..y0 + side).step_by(3) {
+        for &v in px[y * w + x0..y * w + x0 + side].iter().step_by(3) {
+            let v = f64::from(v);
+            n += 1.0;
+            sum += v;
+            sq += v * v;
+        }
+    }
+    if n == 0.0 {
+        return false;
+    }
+    let mean = sum / n;
+    (sq / n - mean * mean).max(0.0).sqrt() < FLAT_FRAME_LEVELS
+}
+
 /// Run the full configured chain on one frame.
 pub fn preprocess(frame: &GreyImage, cfg: &PreprocessConfig) -> Result<PinImage> {
     cfg.check()?;
@@ -164,6 +194,32 @@ mod tests {
     use crate::morphology::{box_extreme, box_kernel};
     use kornia_imgproc::morphology;
     use kornia_imgproc::padding::PaddingMode;
+
+    /// Black, white, grey and a camera's noise of a couple of levels are
+    /// flat; pins are not, wherever they sit in the crop, and what lies
+    /// outside the crop does not count.
+    #[test]
+    fn a_frame_of_one_level_is_flat_and_pins_are_not() {
+        let cfg = PreprocessConfig {
+            crop_px: 60,
+            output_px: 20,
+            ..PreprocessConfig::paper()
+        };
+        let frame = |f: &dyn Fn(usize, usize) -> u8| {
+            let data = (0..100 * 80).map(|i| f(i % 100, i / 100)).collect();
+            tactile_core::image_io::grey_image(100, 80, data).unwrap()
+        };
+        for level in [0u8, 128, 255] {
+            assert!(is_flat_frame(&frame(&|_, _| level), &cfg), "{level}");
+        }
+        let noise = frame(&|x, y| 100 + ((x * 7 + y * 13) % 5) as u8);
+        assert!(is_flat_frame(&noise, &cfg));
+        let pins = frame(&|x, y| if x % 9 < 3 && y % 9 < 3 { 230 } else { 20 });
+        assert!(!is_flat_frame(&pins, &cfg));
+        // Pins only outside the centred 60 px crop: flat inside it.
+        let rim = frame(&|x, _| if !(20..80).contains(&x) { 230 } else { 20 });
+        assert!(is_flat_frame(&rim, &cfg));
+    }
 
     #[test]
     fn area_resize_keeps_the_mean_and_sees_sub_pixel_motion() {

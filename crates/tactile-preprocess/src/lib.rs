@@ -28,7 +28,8 @@ pub mod visuo;
 
 pub(crate) use chain::lit_and_masked;
 pub use chain::{
-    MAX_WINDOW_PX, PinImage, binarise, preprocess, preprocess_each, preprocess_each_by,
+    FLAT_FRAME_LEVELS, MAX_WINDOW_PX, PinImage, binarise, is_flat_frame, preprocess,
+    preprocess_each, preprocess_each_by,
 };
 pub use config::{Downsample, FrameSizeCheck, Lighting, PreprocessConfig};
 pub use error::{Error, Result};

@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 import shutil
+import subprocess
 import warnings
 from pathlib import Path
 
@@ -285,4 +286,17 @@ def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, 
         mixed = tactile.predict(root / "models/pose-surface", folder)
     assert len(mixed["file"]) == 9
     assert sum("smaller than" in str(w.message) for w in seen) == 1
+    # The real frames show pins; a blank one (a covered camera) is still
+    # estimated, and named: there are no pins to read.
+    assert not any("grey level" in str(w.message) for w in seen)
+    if shutil.which("ffmpeg") is None:  # installed by scripts/test.sh
+        return
+    (folder / "zz-small.png").unlink()
+    subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-f", "lavfi", "-i",
+                    "color=c=black:s=445x440", "-frames:v", "1", "-pix_fmt", "gray",
+                    str(folder / "zz-blank.png")], check=True)
+    with pytest.warns(UserWarning, match=r"zz-blank\.png: one grey level throughout the crop.*no pins to read") as seen:
+        blanked = tactile.predict(root / "models/pose-surface", folder)
+    assert len(blanked["file"]) == 9
+    assert sum("grey level" in str(w.message) for w in seen) == 1
 

@@ -3470,3 +3470,55 @@ fn predict_writes_surface_pose_shear_and_their_deviations() {
         );
     }
 }
+
+/// A blank frame among a TacTip dataset's (a covered or failed camera) is
+/// still estimated, as the interface writes a row per frame, but named in
+/// a warning: there are no pins to read. Before, its estimates came out
+/// like any other's without a word. The dataset and its folder of frames
+/// (two paths through the predictor) say the same; the frames with pins
+/// are not named.
+#[test]
+fn a_blank_frame_is_estimated_and_named_as_one_with_no_pins() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("tt");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "tactip",
+        "--count",
+        "6",
+        "--out",
+        data.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    write_png(&data.join("frames/000002.png"), 300, 300);
+    let model = root.join("models/cae-synth");
+    for (input, named) in [
+        (data.clone(), "frames/000002.png".to_string()),
+        (
+            data.join("frames"),
+            data.join("frames/000002.png").display().to_string(),
+        ),
+    ] {
+        let out = tmp.path().join("est.csv");
+        let (ok, msg) = tactile(&[
+            "predict",
+            "--model",
+            model.to_str().unwrap(),
+            "--data",
+            input.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+        assert_eq!(csv_rows(&out).len(), 7, "a header and a row per frame");
+        let warned: Vec<&str> = msg.lines().filter(|l| l.contains("grey level")).collect();
+        assert_eq!(warned.len(), 1, "{msg}");
+        assert!(
+            warned[0].contains(&format!(
+                "warning: {named}: one grey level throughout the crop"
+            )) && warned[0].contains("no pins to read"),
+            "{msg}"
+        );
+    }
+}
