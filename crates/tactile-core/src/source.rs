@@ -757,7 +757,8 @@ impl FrameSource {
                     let r = StreamReader {
                         read: move || {
                             let frame = v.next_frame()?;
-                            if let (None, Some(w)) = (&frame, v.shortfall_warning())
+                            if frame.is_none()
+                                && let Some(w) = v.take_shortfall_warning()
                                 && let Ok(mut late) = late.lock()
                             {
                                 late.push(w);

@@ -255,7 +255,7 @@ pub struct VideoReader {
     stderr: Option<std::thread::JoinHandle<Vec<u8>>>,
     done: bool,
     decoded: u64,
-    shortfall_told: bool,
+    shortfall: Option<String>,
 }
 
 impl VideoReader {
@@ -302,22 +302,24 @@ impl VideoReader {
             stderr,
             done: false,
             decoded: 0,
-            shortfall_told: false,
+            shortfall: None,
         })
     }
 
     /// Once a file's frames have ended: a warning when far fewer were
     /// decoded than its container's length and rate promise (a copy cut
     /// short, a recording stopped early: FFmpeg decodes what is there
-    /// and says nothing), told once. The frames decoded are kept.
-    pub fn shortfall_warning(&mut self) -> Option<String> {
+    /// and says nothing), given once. The frames decoded are kept.
+    pub fn take_shortfall_warning(&mut self) -> Option<String> {
+        self.shortfall.take()
+    }
+
+    /// [`Self::take_shortfall_warning`]'s warning, judged at the end of
+    /// the stream.
+    fn judge_shortfall(&self) -> Option<String> {
         let VideoInput::File(path) = &self.input else {
             return None;
         };
-        if !self.done || self.shortfall_told {
-            return None;
-        }
-        self.shortfall_told = true;
         let (duration_s, fps) = (self.info.duration_s?, self.info.fps?);
         let promised = (duration_s * fps).round();
         let decoded = self.decoded as f64;
@@ -379,6 +381,7 @@ impl VideoReader {
                 format!("the stream ended inside a frame ({got} of {len} bytes)"),
             ));
         }
+        self.shortfall = self.judge_shortfall();
         Ok(None)
     }
 }

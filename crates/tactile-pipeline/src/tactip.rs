@@ -353,8 +353,9 @@ impl Predictor {
             if let Some(f) = &frame {
                 pb.inc(1);
                 let (w, h) = (f.image.width(), f.image.height());
+                let label = f.label();
                 if let Some(why) = sizes.check(w, h, &cfgs) {
-                    warnings.push(format!("warning: {}: {why}", f.label()));
+                    warnings.push(format!("warning: {label}: {why}"));
                 }
                 let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
                 let g = tactile_core::image_io::grey_image(w, h, g)?;
@@ -364,14 +365,14 @@ impl Predictor {
                     flat_frames += 1;
                     if flat_frames <= MAX_FLAT_NAMED {
                         warnings.extend(flat_frames_warning(
-                            &[f.label()],
+                            std::slice::from_ref(&label),
                             flat_frames == MAX_FLAT_NAMED,
                         ));
                     }
                 }
                 grey.push(g);
                 files.push(f.name.clone());
-                labels.push(f.label());
+                labels.push(label);
                 stamps.push(f.stamp_ns);
                 arrived.push(f.arrived);
             }
