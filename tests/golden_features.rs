@@ -29,6 +29,7 @@ fn authors_encoder_reproduces_golden_features_on_both_devices() {
         let artifact = CaeArtifact {
             model: CaeConfig::new().with_widths(authors_widths(&file).unwrap()),
             preprocess: PreprocessConfig::binary_frames(),
+            input_profile: None,
             notes: Default::default(),
         };
         let net = Box::new(BurnNetwork::new(cae, kind));

@@ -143,6 +143,7 @@ fn cae_encoder_and_autoencoder_match_onnxruntime() {
                 output_px: px,
                 ..PreprocessConfig::binary_frames()
             },
+            input_profile: None,
             notes: Default::default(),
         };
         let dir = folder(tmp.path(), name, &art, &cae);

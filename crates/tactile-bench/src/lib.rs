@@ -17,6 +17,7 @@ pub mod models;
 pub mod ood;
 pub mod output;
 pub mod own_sensor;
+pub mod pin_profile;
 pub mod pose;
 pub mod report;
 pub mod resolution;

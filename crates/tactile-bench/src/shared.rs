@@ -337,6 +337,7 @@ mod tests {
         let art = |notes: serde_json::Value| CaeArtifact {
             model: tactile_cae::CaeConfig::new(),
             preprocess: PreprocessConfig::binary_frames(),
+            input_profile: None,
             notes,
         };
         let saw = |notes: &serde_json::Value, ds: &Dataset, test: &[usize]| {

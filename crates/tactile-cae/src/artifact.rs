@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use tactile_burn::Artifact;
 use tactile_onnx::Exportable;
 use tactile_preprocess::PreprocessConfig;
+use tactile_preprocess::profile::InputProfile;
 
 use crate::model::{Cae, CaeConfig};
 
@@ -17,6 +18,12 @@ pub struct CaeArtifact {
     pub model: CaeConfig,
     /// How a frame becomes the pin image it encodes.
     pub preprocess: PreprocessConfig,
+    /// Its training frames' pin profile ([`InputProfile::fit_pins`]):
+    /// frames far from it (another sensor, another scale) are named in a
+    /// warning by `predict`. Absent in models trained before it (`tactile
+    /// train profile` adds it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_profile: Option<InputProfile>,
     /// Free-form provenance: how it was trained, on what, with which result.
     #[serde(default)]
     pub notes: serde_json::Value,
@@ -36,6 +43,10 @@ impl Artifact for CaeArtifact {
     fn check(&self, file: &std::path::Path) -> tactile_core::Result<()> {
         use tactile_core::error::in_config;
         in_config(file, self.model.check())?;
+        if let Some(p) = &self.input_profile {
+            p.validate_reading(true)
+                .map_err(|m| tactile_core::Error::Config(format!("{}: {m}", file.display())))?;
+        }
         in_config(file, self.preprocess.check())?;
         if self.preprocess.output_px != self.model.input_px {
             return Err(tactile_core::Error::model(

@@ -3,6 +3,7 @@
 use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_preprocess::profile::InputProfile;
 use tactile_preprocess::{PinImage, PreprocessConfig, is_flat_frame, preprocess};
 
 use crate::Result;
@@ -17,6 +18,16 @@ pub struct PinSet {
     /// ([`tactile_preprocess::is_flat_frame`]: no pins to read), for a
     /// warning.
     pub flat: Vec<String>,
+}
+
+/// A frame whose pin image lies outside its model's pin profile
+/// ([`PinSet::foreign`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForeignFrame {
+    /// Its `file` label (or a stream frame's label).
+    pub file: String,
+    /// Its score ([`InputProfile::score_pins`]).
+    pub score: f32,
 }
 
 /// Rows of a dataset preprocessed at a time when only their estimates are
@@ -93,15 +104,48 @@ impl PinSet {
         ds: &Dataset,
         cfgs: &[PreprocessConfig],
         chunk_rows: usize,
+        each: impl FnMut(Vec<Self>) -> std::result::Result<(), E>,
+    ) -> std::result::Result<(), E> {
+        let rows: Vec<usize> = (0..ds.len()).collect();
+        Self::for_each_chunk_of(ds, &rows, cfgs, chunk_rows, each)
+    }
+
+    /// [`Self::for_each_chunk`] over the rows `rows` of `ds` alone.
+    pub fn for_each_chunk_of<E: From<crate::Error>>(
+        ds: &Dataset,
+        rows: &[usize],
+        cfgs: &[PreprocessConfig],
+        chunk_rows: usize,
         mut each: impl FnMut(Vec<Self>) -> std::result::Result<(), E>,
     ) -> std::result::Result<(), E> {
         ds.expect_kind(DatasetKind::Tactip)
             .map_err(crate::Error::from)?;
-        let rows: Vec<usize> = (0..ds.len()).collect();
         for chunk in rows.chunks(chunk_rows.max(1)) {
             each(Self::from_rows_each(ds, chunk, cfgs)?)?;
         }
         Ok(())
+    }
+
+    /// The frames whose pin images lie outside `profile` (a model's
+    /// training pin profile, [`InputProfile::fit_pins`]), in order: a
+    /// frame of another sensor, at another scale, or of no pins. Flat
+    /// frames are left to their own warning ([`Self::flat`]).
+    pub fn foreign(&self, profile: &InputProfile) -> Vec<ForeignFrame> {
+        let flat: std::collections::HashSet<&str> = self.flat.iter().map(String::as_str).collect();
+        let scores: Vec<f32> = self
+            .images
+            .par_iter()
+            .map(|p| profile.score_pins(p))
+            .collect();
+        self.files
+            .iter()
+            .zip(scores)
+            .filter(|(f, s)| *s > profile.threshold && !flat.contains(f.as_str()))
+            .map(|(f, score)| ForeignFrame {
+                file: f.clone(),
+                score,
+            })
+            .collect()
     }
 
     /// Pin images alone (perturbed or live frames), without file names.

@@ -88,17 +88,23 @@ impl TactipEncoder {
     }
 
     /// [`Self::encode_dataset`], also giving the `file` labels of frames
-    /// one grey level throughout their crop ([`PinSet::flat`]).
+    /// one grey level throughout their crop ([`PinSet::flat`]) and of
+    /// frames unlike its training frames ([`PinSet::foreign`]).
     pub fn encode_dataset_flagging(&mut self, ds: &Dataset) -> Result<EncodedDataset> {
         let cfg = self.artifact.preprocess.clone();
         let mut e = EncodedDataset {
             files: Vec::with_capacity(ds.len()),
             features: Vec::with_capacity(ds.len()),
             flat: Vec::new(),
+            foreign: Vec::new(),
         };
+        let profile = self.artifact.input_profile.clone();
         PinSet::for_each_chunk(ds, std::slice::from_ref(&cfg), DATASET_CHUNK, |mut sets| {
             let set = sets.swap_remove(0);
             e.features.extend(self.encode(&set.images)?);
+            if let Some(p) = &profile {
+                e.foreign.extend(set.foreign(p));
+            }
             e.files.extend(set.files);
             e.flat.extend(set.flat);
             Ok::<(), Error>(())
@@ -115,6 +121,9 @@ pub struct EncodedDataset {
     pub features: Vec<Vec<f32>>,
     /// The `file` labels of frames one grey level throughout their crop.
     pub flat: Vec<String>,
+    /// The frames unlike the encoder's training frames
+    /// ([`PinSet::foreign`]; none when it has no pin profile).
+    pub foreign: Vec<crate::data::ForeignFrame>,
 }
 
 /// Write `file,f0,f1,...` rows atomically (the layout of the authors'

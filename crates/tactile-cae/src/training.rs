@@ -15,6 +15,7 @@ use tactile_burn::{Artifact, DeviceKind};
 use tactile_core::dataset::{Dataset, Provenance, TestHoldout};
 use tactile_core::rng::SampleRng;
 use tactile_preprocess::perturb::RotationAugment;
+use tactile_preprocess::profile::InputProfile;
 use tactile_preprocess::{PinImage, PreprocessConfig};
 
 use crate::Result;
@@ -226,9 +227,11 @@ pub fn train(
         .every_split(config.every_split)
         .excluding_test(config.holdout)
         .notes(serde_json::json!({ "device": device.name() }));
+    let trained: Vec<&PinImage> = train.iter().map(|&i| &pins.images[i]).collect();
     let artifact = CaeArtifact {
         model: config.model.clone(),
         preprocess: config.preprocess.clone(),
+        input_profile: InputProfile::of_training_pins(&trained)?,
         notes,
     };
     let dev = device.device();

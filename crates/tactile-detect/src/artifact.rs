@@ -48,7 +48,7 @@ impl Artifact for DetectorArtifact {
         in_config(file, self.model.check())?;
         in_config(file, self.stats.check(3))?;
         if let Some(p) = &self.input_profile {
-            p.validate()
+            p.validate_reading(false)
                 .map_err(|m| tactile_core::Error::Config(format!("{}: {m}", file.display())))?;
         }
         let t = self.threshold;

@@ -15,6 +15,7 @@ pub mod hysteresis;
 pub mod options;
 pub mod overlay;
 pub mod palpation;
+pub mod profile;
 pub mod run;
 pub mod tactip;
 

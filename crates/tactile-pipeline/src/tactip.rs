@@ -17,12 +17,14 @@ use tactile_core::metrics::{accuracy, confusion};
 use tactile_core::source::FrameSource;
 
 use crate::run::Flow;
+use tactile_cae::data::ForeignFrame;
 use tactile_estimate::eval::{Scores, score};
 use tactile_estimate::{
     Activation, ClassifierHead, Estimates, Estimators, HeadConfig, Regressor, RegressorConfig,
     Target,
 };
 pub use tactile_preprocess::perturb::RotationAugment;
+use tactile_preprocess::profile::InputProfile;
 use tactile_preprocess::{FrameSizeCheck, PinImage, PreprocessConfig, is_flat_frame};
 
 use crate::Result;
@@ -192,7 +194,15 @@ impl Predictor {
                     estimates: pose_estimates(&r.names, &r.values, r.std.as_deref()),
                     ms_encode: r.ms_per_frame,
                     ms_estimate: 0.0,
-                    warnings: flat_frames_warning(&r.flat, false).into_iter().collect(),
+                    warnings: flat_frames_warning(&r.flat, false)
+                        .into_iter()
+                        .chain(
+                            p.artifact
+                                .input_profile
+                                .as_ref()
+                                .and_then(|pr| foreign_frames_warning(&r.foreign, pr, false)),
+                        )
+                        .collect(),
                 }
             }
         };
@@ -208,6 +218,25 @@ impl Predictor {
         frames: &[GreyImage],
         name: impl Fn(usize) -> Option<String>,
     ) -> Result<Estimates> {
+        Ok(self.perceive_frames_scored(frames, name)?.0)
+    }
+
+    /// The model's pin profile ([`InputProfile::fit_pins`]; an ensemble's
+    /// first member's), when it has one.
+    pub fn input_profile(&self) -> Option<&InputProfile> {
+        match self {
+            Self::Encoder(p) => p.encoder.artifact.input_profile.as_ref(),
+            Self::PoseNetwork(p) => p.artifact.input_profile.as_ref(),
+        }
+    }
+
+    /// [`Self::perceive_frames`], with each frame's score against the
+    /// model's pin profile (none without one).
+    fn perceive_frames_scored(
+        &mut self,
+        frames: &[GreyImage],
+        name: impl Fn(usize) -> Option<String>,
+    ) -> Result<(Estimates, Option<Vec<f32>>)> {
         let pins = self
             .preprocessings()
             .into_iter()
@@ -215,16 +244,21 @@ impl Predictor {
                 tactile_preprocess::preprocess_each(frames, cfg).map_err(|e| e.name_frame(&name))
             })
             .collect::<std::result::Result<Vec<Vec<PinImage>>, _>>()?;
-        match self {
-            Self::Encoder(p) => p.estimate(pins.first().map_or(&[], Vec::as_slice)),
+        let scores = self.input_profile().map(|p| {
+            pins.first()
+                .map_or(Vec::new(), |f| f.iter().map(|x| p.score_pins(x)).collect())
+        });
+        let estimates = match self {
+            Self::Encoder(p) => p.estimate(pins.first().map_or(&[], Vec::as_slice))?,
             Self::PoseNetwork(p) => {
                 let views: Vec<&[PinImage]> = pins.iter().map(Vec::as_slice).collect();
                 let (values, std) = p.predict_scales_with_std(&views)?;
                 let names: Vec<String> =
                     p.artifact.targets.iter().map(|t| t.name.clone()).collect();
-                Ok(pose_estimates(&names, &values, std.as_deref()))
+                pose_estimates(&names, &values, std.as_deref())
             }
-        }
+        };
+        Ok((estimates, scores))
     }
 
     /// Every frame of `input` (a dataset's, or a source's in batches):
@@ -347,7 +381,9 @@ impl Predictor {
         // Taken once: the model's preprocessings do not change in the loop.
         let cfgs: Vec<PreprocessConfig> = self.preprocessings().into_iter().cloned().collect();
         let mut warnings = Vec::new();
-        let mut flat_frames = 0;
+        let (mut flat_frames, mut foreign_frames) = (0, 0);
+        // Whether each frame of the batch is flat (left to that warning).
+        let mut flat_in_batch: Vec<bool> = Vec::with_capacity(batch);
         loop {
             let frame = source.next_frame()?;
             if let Some(f) = &frame {
@@ -361,7 +397,9 @@ impl Predictor {
                 let g = tactile_core::image_io::grey_image(w, h, g)?;
                 // Named as they come, the first few (a covered camera
                 // would name every frame of a stream otherwise).
-                if cfgs.first().is_some_and(|c| is_flat_frame(&g, c)) {
+                let flat = cfgs.first().is_some_and(|c| is_flat_frame(&g, c));
+                flat_in_batch.push(flat);
+                if flat {
                     flat_frames += 1;
                     if flat_frames <= MAX_FLAT_NAMED {
                         warnings.extend(flat_frames_warning(
@@ -377,10 +415,32 @@ impl Predictor {
                 arrived.push(f.arrived);
             }
             if grey.len() == batch || (frame.is_none() && !grey.is_empty()) {
-                let estimates = self.perceive_frames(&grey, |i| labels.get(i).cloned())?;
+                let (estimates, scores) =
+                    self.perceive_frames_scored(&grey, |i| labels.get(i).cloned())?;
+                if let (Some(scores), Some(profile)) = (scores, self.input_profile()) {
+                    for ((score, label), flat) in
+                        scores.into_iter().zip(&labels).zip(&flat_in_batch)
+                    {
+                        if score > profile.threshold && !flat {
+                            foreign_frames += 1;
+                            if foreign_frames <= MAX_FLAT_NAMED {
+                                let f = ForeignFrame {
+                                    file: label.clone(),
+                                    score,
+                                };
+                                warnings.extend(foreign_frames_warning(
+                                    std::slice::from_ref(&f),
+                                    profile,
+                                    foreign_frames == MAX_FLAT_NAMED,
+                                ));
+                            }
+                        }
+                    }
+                }
                 done += grey.len();
                 grey.clear();
                 labels.clear();
+                flat_in_batch.clear();
                 let p = Perception {
                     files: std::mem::take(&mut files),
                     stamps_ns: stamps.iter().copied().collect(),
@@ -422,22 +482,21 @@ impl Predictor {
     }
 }
 
-/// Flat frames named one by one in a stream before they are only counted.
+/// Flat (or foreign) frames named one by one in a stream, or in a
+/// dataset's warning, before they are only counted.
 const MAX_FLAT_NAMED: usize = 3;
 
-/// The warning for frames one grey level throughout their crop
-/// ([`is_flat_frame`]): the first [`MAX_FLAT_NAMED`] of `flat` named, the
-/// rest counted; `then_unnamed` says a stream names no more after these.
-fn flat_frames_warning(flat: &[String], then_unnamed: bool) -> Option<String> {
-    if flat.is_empty() {
-        return None;
-    }
-    let named: Vec<&str> = flat
+/// The frames of a warning: the first [`MAX_FLAT_NAMED`] of `frames`
+/// named, the rest counted ("a.png, b.png, c.png, and 4 more"); "this
+/// frame" or "these frames"; and, when `then_unnamed`, the words saying a
+/// stream names no more after these.
+fn named_frames(frames: &[String], then_unnamed: bool) -> (String, &'static str, &'static str) {
+    let named: Vec<&str> = frames
         .iter()
         .take(MAX_FLAT_NAMED)
         .map(String::as_str)
         .collect();
-    let more = match flat.len() - named.len() {
+    let more = match frames.len() - named.len() {
         0 => String::new(),
         n => format!(", and {n} more"),
     };
@@ -445,13 +504,46 @@ fn flat_frames_warning(flat: &[String], then_unnamed: bool) -> Option<String> {
         true => " (any further ones are not named)",
         false => "",
     };
-    let these = match flat.len() {
+    let these = match frames.len() {
         1 => "this frame",
         _ => "these frames",
     };
+    (format!("{}{more}", named.join(", ")), these, then)
+}
+
+/// The warning for frames one grey level throughout their crop
+/// ([`is_flat_frame`]) ([`named_frames`]).
+fn flat_frames_warning(flat: &[String], then_unnamed: bool) -> Option<String> {
+    if flat.is_empty() {
+        return None;
+    }
+    let (named, these, then) = named_frames(flat, then_unnamed);
     Some(format!(
-        "warning: {}{more}: one grey level throughout the crop (a blank, covered or saturated camera?): no pins to read, so the estimates of {these} mean nothing{then}",
-        named.join(", ")
+        "warning: {named}: one grey level throughout the crop (a blank, covered or saturated camera?): no pins to read, so the estimates of {these} mean nothing{then}"
+    ))
+}
+
+/// The warning for frames whose pin images lie outside the model's pin
+/// profile ([`PinSet::foreign`](tactile_cae::data::PinSet::foreign))
+/// ([`named_frames`]).
+fn foreign_frames_warning(
+    foreign: &[ForeignFrame],
+    profile: &InputProfile,
+    then_unnamed: bool,
+) -> Option<String> {
+    if foreign.is_empty() {
+        return None;
+    }
+    let worst = foreign.iter().map(|f| f.score).fold(f32::NAN, f32::max);
+    let files: Vec<String> = foreign.iter().map(|f| f.file.clone()).collect();
+    let (named, these, then) = named_frames(&files, then_unnamed);
+    let scored = match foreign.len() {
+        1 => format!("scores {worst:.1}"),
+        _ => format!("scores up to {worst:.1}"),
+    };
+    Some(format!(
+        "warning: {named}: pins spaced unlike those of the {} frames this model was trained on (its pin spectrum {scored}; its own sensor's frames stay below {:.1}): a frame of another sensor, at another scale or crop, or without pins? The estimates of {these} may mean nothing: give frames of the sensor and resolution it was trained on, or train on yours{then}",
+        profile.frames, profile.threshold
     ))
 }
 
@@ -716,6 +808,7 @@ impl TactipPerception {
             files,
             features: feats,
             flat,
+            foreign,
         } = self.encoder.encode_dataset_flagging(ds)?;
         let ms_encode = 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64;
         let t1 = std::time::Instant::now();
@@ -727,7 +820,16 @@ impl TactipPerception {
             estimates,
             ms_encode,
             ms_estimate,
-            warnings: flat_frames_warning(&flat, false).into_iter().collect(),
+            warnings: flat_frames_warning(&flat, false)
+                .into_iter()
+                .chain(
+                    self.encoder
+                        .artifact
+                        .input_profile
+                        .as_ref()
+                        .and_then(|p| foreign_frames_warning(&foreign, p, false)),
+                )
+                .collect(),
         })
     }
 

@@ -12,6 +12,7 @@ use tactile_estimate::Target;
 use tactile_estimate::regressor::Scaler;
 use tactile_onnx::{Exportable, export_batch_dynamic};
 use tactile_preprocess::PreprocessConfig;
+use tactile_preprocess::profile::InputProfile;
 
 use crate::model::{PoseNet, PoseNetConfig};
 
@@ -32,6 +33,12 @@ pub struct PoseArtifact {
     /// [`crate::uncertainty`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub std_scale: Option<Vec<f64>>,
+    /// Its training frames' pin profile ([`InputProfile::fit_pins`]):
+    /// frames far from it (another sensor, another scale) are named in a
+    /// warning by `predict`. Absent in models trained before it (`tactile
+    /// train profile` adds it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_profile: Option<InputProfile>,
     /// Free-form provenance: how it was trained, on what, with which result.
     #[serde(default)]
     pub notes: serde_json::Value,
@@ -58,6 +65,10 @@ impl Artifact for PoseArtifact {
     fn check(&self, file: &Path) -> tactile_core::Result<()> {
         use tactile_core::error::in_config;
         in_config(file, self.model.check())?;
+        if let Some(p) = &self.input_profile {
+            p.validate_reading(true)
+                .map_err(|m| tactile_core::Error::Config(format!("{}: {m}", file.display())))?;
+        }
         in_config(file, self.preprocess.check())?;
         let bad = |m: String| Err(tactile_core::Error::model(file, m));
         if self.preprocess.output_px != self.model.input_px {

@@ -66,6 +66,9 @@ pub struct PoseEstimates {
     /// The `file` labels of frames one grey level throughout their crop
     /// (no pins to read: their estimates mean nothing).
     pub flat: Vec<String>,
+    /// The frames unlike its training frames
+    /// ([`tactile_cae::data::PinSet::foreign`]; none without a pin profile).
+    pub foreign: Vec<tactile_cae::data::ForeignFrame>,
 }
 
 impl PoseEstimator {
@@ -266,8 +269,10 @@ impl PoseEstimator {
         let t0 = std::time::Instant::now();
         let (mut files, mut values) = (Vec::with_capacity(ds.len()), Vec::with_capacity(ds.len()));
         let mut std: Option<Vec<Vec<f64>>> = None;
-        let mut flat = Vec::new();
+        let (mut flat, mut foreign) = (Vec::new(), Vec::new());
         let scales = self.scales.clone();
+        // The first member's profile, of the first scale's pin images.
+        let profile = self.artifact.input_profile.clone();
         tactile_cae::data::PinSet::for_each_chunk(ds, &scales, DATASET_CHUNK, |mut sets| {
             let views: Vec<&[PinImage]> = sets.iter().map(|s| s.images.as_slice()).collect();
             let (v, s) = self.predict_scales_with_std(&views)?;
@@ -276,6 +281,9 @@ impl PoseEstimator {
                 std.get_or_insert_with(Vec::new).extend(s);
             }
             let first = sets.swap_remove(0);
+            if let Some(p) = &profile {
+                foreign.extend(first.foreign(p));
+            }
             files.extend(first.files);
             flat.extend(first.flat);
             Ok::<(), crate::Error>(())
@@ -292,6 +300,7 @@ impl PoseEstimator {
             std,
             ms_per_frame: 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64,
             flat,
+            foreign,
         })
     }
 

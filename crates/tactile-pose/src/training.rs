@@ -11,6 +11,7 @@ use tactile_burn::{Artifact, DeviceKind};
 use tactile_core::dataset::{Dataset, Provenance, TestHoldout};
 use tactile_estimate::Target;
 use tactile_estimate::regressor::{decode, encode, output_scaler, target_mae};
+use tactile_preprocess::profile::InputProfile;
 use tactile_preprocess::{Downsample, Lighting, PreprocessConfig};
 
 use crate::artifact::PoseArtifact;
@@ -230,6 +231,12 @@ pub fn train(
         targets: config.targets.clone(),
         outputs: outputs.clone(),
         std_scale: None,
+        input_profile: InputProfile::of_training_pins(
+            &train
+                .iter()
+                .map(|&i| &set.pins.images[i])
+                .collect::<Vec<_>>(),
+        )?,
         notes: Provenance::of(&[data])
             .every_split(config.every_split == Some(true))
             .excluding_test(config.holdout)

@@ -13,9 +13,14 @@
 //! the frame each channel is bright. Another unit of the same design (its
 //! LEDs in another order, another light, another gel) has global
 //! statistics like this one's but not its layout.
+//!
+//! A TacTip model's profile reads its pin images instead: where their
+//! power lies across spatial frequencies ([`pin_spectrum`]), which the
+//! pins' spacing sets.
 
 use serde::{Deserialize, Serialize};
 
+use crate::PinImage;
 use crate::visuo::FloatImage;
 use crate::{Error, Result};
 
@@ -55,6 +60,100 @@ pub const LAYOUT_MIN_SCALE: f32 = 0.001;
 /// contacts, so their scales come from their tails as well as their
 /// spreads.
 pub const TAIL_SCALES: f32 = 4.0;
+
+/// The smallest threshold a profile flags frames above, in scales.
+pub const MIN_THRESHOLD: f32 = 6.0;
+
+/// Radial bands a pin image's power spectrum is read in, from the lowest
+/// frequency to the Nyquist frequency along an axis (the corners beyond
+/// it fall in the last); the first, around the mean, is left out.
+pub const PIN_BANDS: usize = 16;
+
+/// How a pin profile's statistic names start ("pin spectrum band 3/16").
+pub const PIN_BAND_PREFIX: &str = "pin spectrum band";
+
+/// The smallest spread a pin spectrum band is measured against (natural
+/// log of its share of the power: 5 %).
+pub const PIN_MIN_SCALE: f32 = 0.05;
+
+/// How far above its training frames' 99.9th-percentile score a pin
+/// profile's threshold sits: the real surface set's 2,000 `val` frames,
+/// against profiles of its `train` frames, score at most 0.66 of it
+/// (`docs/bench-pin-profile-heldout.md`; other sensors' frames in
+/// `docs/bench-pin-profile.md`).
+pub const PIN_PROFILE_MARGIN: f32 = 1.5;
+
+/// [`pin_spectrum`] of each of `pins`, in parallel, in order.
+pub fn pin_spectra(pins: &[&PinImage]) -> Vec<Vec<f32>> {
+    use rayon::prelude::*;
+    pins.par_iter().map(|p| pin_spectrum(p)).collect()
+}
+
+/// The names of [`pin_spectrum`]'s values.
+pub fn pin_spectrum_names() -> Vec<String> {
+    (1..PIN_BANDS)
+        .map(|b| format!("{PIN_BAND_PREFIX} {b}/{PIN_BANDS}"))
+        .collect()
+}
+
+/// Where a pin image's power lies across spatial frequencies: the natural
+/// log of each radial band's share of the power (bands 1 to
+/// [`PIN_BANDS`]` - 1`, the mean removed). The pins' spacing sets the
+/// bands that carry it, whatever the contact moves them to or turns
+/// them by, so a frame of another sensor (other pins, or none: a
+/// GelSight frame), of this sensor at another scale, or of noise puts its
+/// power elsewhere.
+pub fn pin_spectrum(pin: &PinImage) -> Vec<f32> {
+    use rustfft::num_complex::Complex;
+    let n = pin.side;
+    if n == 0 || pin.pixels.len() != n * n {
+        return vec![0.0; PIN_BANDS - 1];
+    }
+    let mean = pin.pixels.iter().map(|&v| v as f64).sum::<f64>() / (n * n) as f64;
+    let mut data: Vec<Complex<f32>> = pin
+        .pixels
+        .iter()
+        .map(|&v| Complex::new(v - mean as f32, 0.0))
+        .collect();
+    thread_local! {
+        static PLANNER: std::cell::RefCell<rustfft::FftPlanner<f32>> =
+            std::cell::RefCell::new(rustfft::FftPlanner::new());
+    }
+    let fft = PLANNER.with(|p| p.borrow_mut().plan_fft_forward(n));
+    // Rows, then (transposed) columns: the 2-D transform.
+    fft.process(&mut data);
+    let mut t = vec![Complex::new(0.0, 0.0); n * n];
+    for y in 0..n {
+        for x in 0..n {
+            t[x * n + y] = data[y * n + x];
+        }
+    }
+    fft.process(&mut t);
+    let freq = |k: usize| {
+        let k = if k < n.div_ceil(2) {
+            k as f64
+        } else {
+            k as f64 - n as f64
+        };
+        k / n as f64
+    };
+    let (mut power, mut count) = ([0f64; PIN_BANDS], [0usize; PIN_BANDS]);
+    for (i, c) in t.iter().enumerate() {
+        let (fx, fy) = (freq(i / n), freq(i % n));
+        let r = (fx * fx + fy * fy).sqrt() / 0.5;
+        let band = ((r * PIN_BANDS as f64) as usize).min(PIN_BANDS - 1);
+        power[band] += c.norm_sqr() as f64;
+        count[band] += 1;
+    }
+    let mean_power: Vec<f64> = (1..PIN_BANDS)
+        .map(|b| power[b] / count[b].max(1) as f64)
+        .collect();
+    let total = mean_power.iter().sum::<f64>() + 1e-12;
+    mean_power
+        .iter()
+        .map(|p| ((p / total) + 1e-9).ln() as f32)
+        .collect()
+}
 
 /// Each channel's mean over each cell of a `columns x rows` grid, divided
 /// by that channel's mean over the grid: `rows x columns x 3` values,
@@ -325,7 +424,8 @@ pub type LayoutCells<'a> = (&'a [Vec<f32>], (usize, usize));
 /// [`TAIL_SCALES`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct InputProfile {
-    /// What each value is ([`DESCRIPTOR`]).
+    /// What each value is ([`DESCRIPTOR`], or [`pin_spectrum_names`] for
+    /// a pin profile).
     pub names: Vec<String>,
     /// Per statistic, the training median.
     pub centre: Vec<f32>,
@@ -390,19 +490,35 @@ impl InputProfile {
             }
             names.extend(LAYOUT_STATISTICS.map(String::from));
         }
+        let scale_of = |i: usize, mad: f32, dev: Vec<f32>| {
+            if i < k {
+                mad.max(MIN_SCALE)
+            } else {
+                mad.max(LAYOUT_MIN_SCALE)
+                    .max(quantile_999(dev) / TAIL_SCALES)
+            }
+        };
+        let mut p = Self::fit_rows(names, &rows, scale_of, margin);
+        p.layout = layout;
+        Ok(p)
+    }
+
+    /// Centre, scale (`scale_of` a statistic's index, its 1.4826 x MAD and
+    /// its distances from the centre) and threshold of `rows` (one per
+    /// frame, a value per name; at least one row).
+    fn fit_rows(
+        names: Vec<String>,
+        rows: &[Vec<f32>],
+        scale_of: impl Fn(usize, f32, Vec<f32>) -> f32,
+        margin: f32,
+    ) -> Self {
         let centre: Vec<f32> = (0..names.len())
             .map(|i| upper_median(rows.iter().map(|d| d[i]).collect()))
             .collect();
         let scale: Vec<f32> = (0..names.len())
             .map(|i| {
                 let dev: Vec<f32> = rows.iter().map(|d| (d[i] - centre[i]).abs()).collect();
-                let mad = 1.4826 * upper_median(dev.clone());
-                if i < k {
-                    mad.max(MIN_SCALE)
-                } else {
-                    mad.max(LAYOUT_MIN_SCALE)
-                        .max(quantile_999(dev) / TAIL_SCALES)
-                }
+                scale_of(i, 1.4826 * upper_median(dev.clone()), dev)
             })
             .collect();
         let mut p = Self {
@@ -410,12 +526,59 @@ impl InputProfile {
             centre,
             scale,
             threshold: f32::INFINITY,
-            frames: descriptors.len(),
-            layout,
+            frames: rows.len(),
+            layout: None,
         };
         let q = quantile_999(rows.iter().map(|d| p.score(d)).collect());
-        p.threshold = (margin * q).max(6.0);
-        Ok(p)
+        p.threshold = (margin * q).max(MIN_THRESHOLD);
+        p
+    }
+
+    /// A TacTip model's profile: fitted on the [`pin_spectrum`] of each of
+    /// its training frames' pin images (at least [`Self::MIN_FRAMES`]),
+    /// the threshold `margin` times their 99.9th-percentile score (at least
+    /// 6 scales). A frame of another sensor, at another scale or of no
+    /// pins at all has its power in other bands.
+    pub fn fit_pins(spectra: &[Vec<f32>], margin: f32) -> Result<Self> {
+        let names = pin_spectrum_names();
+        if spectra.len() < Self::MIN_FRAMES || spectra.iter().any(|d| d.len() != names.len()) {
+            return Err(Error::Core(tactile_core::Error::Invalid(format!(
+                "a pin profile needs at least {} frames with {} statistics each, got {}",
+                Self::MIN_FRAMES,
+                names.len(),
+                spectra.len()
+            ))));
+        }
+        Ok(Self::fit_rows(
+            names,
+            spectra,
+            |_, mad, _| mad.max(PIN_MIN_SCALE),
+            margin,
+        ))
+    }
+
+    /// The pin profile of a TacTip model's training pin images
+    /// ([`Self::fit_pins`] with [`PIN_PROFILE_MARGIN`]), or `None` with
+    /// fewer than [`Self::MIN_FRAMES`]: too few to tell its spread.
+    pub fn of_training_pins(pins: &[&PinImage]) -> Result<Option<Self>> {
+        if pins.len() < Self::MIN_FRAMES {
+            return Ok(None);
+        }
+        let spectra = pin_spectra(pins);
+        Self::fit_pins(&spectra, PIN_PROFILE_MARGIN).map(Some)
+    }
+
+    /// Whether it reads pin images ([`Self::fit_pins`], a TacTip model's)
+    /// rather than colour frames (a detector's).
+    pub fn reads_pins(&self) -> bool {
+        self.names
+            .first()
+            .is_some_and(|n| n.starts_with(PIN_BAND_PREFIX))
+    }
+
+    /// A pin image's score against a pin profile ([`Self::fit_pins`]).
+    pub fn score_pins(&self, pin: &PinImage) -> f32 {
+        self.score(&pin_spectrum(pin))
     }
 
     /// The statistics of a frame this profile scores: the
@@ -443,13 +606,34 @@ impl InputProfile {
             .fold(0.0, f32::max)
     }
 
+    /// [`Self::validate`], and that it reads what its model reads: pin
+    /// images when `pins` (a TacTip model's), else colour frames.
+    pub fn validate_reading(&self, pins: bool) -> std::result::Result<(), String> {
+        self.validate()?;
+        match (pins, self.reads_pins()) {
+            (true, false) => Err("input profile: one of colour frames (a detector's), where a TacTip model's reads pin images".into()),
+            (false, true) => Err("input profile: one of pin images (a TacTip model's), where a detector's reads colour frames".into()),
+            _ => Ok(()),
+        }
+    }
+
     /// Check a loaded profile: as many centres and scales as statistics,
     /// all finite, scales positive, a positive threshold.
     pub fn validate(&self) -> std::result::Result<(), String> {
         if let Some(l) = &self.layout {
             l.validate()?;
         }
-        let k = DESCRIPTOR.len() + self.layout.as_ref().map_or(0, |_| LAYOUT_STATISTICS.len());
+        let k = if self.reads_pins() {
+            if self.layout.is_some() || self.names != pin_spectrum_names() {
+                return Err(format!(
+                    "input profile: a pin profile reads the {} bands of a pin image's spectrum, in order, and no colour layout",
+                    PIN_BANDS - 1
+                ));
+            }
+            PIN_BANDS - 1
+        } else {
+            DESCRIPTOR.len() + self.layout.as_ref().map_or(0, |_| LAYOUT_STATISTICS.len())
+        };
         if self.centre.len() != k || self.scale.len() != k {
             return Err(format!(
                 "input profile: {} centres and {} scales, {k} statistics expected",
@@ -509,6 +693,85 @@ mod tests {
             .map(|f| layout_cells(f, LAYOUT_GRID).unwrap())
             .collect();
         InputProfile::fit_frames(&d, Some((&c, LAYOUT_GRID)), 1.5).unwrap()
+    }
+
+    /// A `side` px pin image of round pins on a hexagonal lattice of
+    /// `pitch` px, moved by `shift` px and each pin by up to `jitter` px
+    /// (a contact), from `seed`.
+    fn lattice(side: usize, pitch: f32, shift: f32, jitter: f32, seed: u64) -> PinImage {
+        let mut rng = tactile_core::rng::SampleRng::new(seed, 1, 0);
+        let mut centres = Vec::new();
+        let rows = (side as f32 / (pitch * 0.866)) as i32 + 2;
+        for r in -1..rows {
+            for c in -1..(side as f32 / pitch) as i32 + 2 {
+                let x = c as f32 * pitch + if r % 2 == 0 { 0.0 } else { pitch / 2.0 };
+                let y = r as f32 * pitch * 0.866;
+                let j = jitter * rng.normal() as f32;
+                centres.push((x + shift + j, y + shift - j));
+            }
+        }
+        let radius = pitch / 4.0;
+        let pixels = (0..side * side)
+            .map(|i| {
+                let (x, y) = ((i % side) as f32, (i / side) as f32);
+                let on = centres
+                    .iter()
+                    .any(|(cx, cy)| (x - cx).hypot(y - cy) <= radius);
+                f32::from(u8::from(on))
+            })
+            .collect();
+        PinImage { side, pixels }
+    }
+
+    #[test]
+    fn a_pin_profile_knows_its_pins_spacing_wherever_they_move() {
+        let own: Vec<PinImage> = (0..40)
+            .map(|i| lattice(64, 8.0, (i % 8) as f32, 0.3 + 0.1 * (i % 5) as f32, i))
+            .collect();
+        let p = InputProfile::of_training_pins(&own.iter().collect::<Vec<_>>())
+            .unwrap()
+            .unwrap();
+        p.validate_reading(true).unwrap();
+        assert!(p.reads_pins() && p.validate_reading(false).is_err());
+        assert_eq!(p.frames, 40);
+        // Its own pins moved by a new contact: theirs.
+        for seed in 100..110 {
+            let f = lattice(64, 8.0, 2.5, 0.6, seed);
+            let s = p.score_pins(&f);
+            assert!(s <= p.threshold, "own pins scored {s} > {}", p.threshold);
+        }
+        // Pins twice as dense or far apart (another sensor, or this one
+        // at another scale), noise, and a frame without pins: not theirs.
+        let mut rng = tactile_core::rng::SampleRng::new(7, 2, 0);
+        let noise = PinImage {
+            side: 64,
+            pixels: (0..64 * 64)
+                .map(|_| f32::from(u8::from(rng.normal() > 0.0)))
+                .collect(),
+        };
+        let mut blob = lattice(64, 64.0, 32.0, 0.0, 1);
+        blob.pixels.iter_mut().step_by(7).for_each(|v| *v = 0.0);
+        for (what, f) in [
+            ("denser", lattice(64, 4.0, 0.0, 0.2, 1)),
+            ("sparser", lattice(64, 16.0, 0.0, 0.5, 1)),
+            ("noise", noise),
+            ("one blob", blob),
+        ] {
+            let s = p.score_pins(&f);
+            assert!(s > p.threshold, "{what} scored {s} <= {}", p.threshold);
+        }
+        // Too few frames to tell a spread: no profile.
+        assert!(
+            InputProfile::of_training_pins(&own.iter().take(19).collect::<Vec<_>>())
+                .unwrap()
+                .is_none()
+        );
+        // A detector's profile is not a TacTip model's, nor the reverse.
+        let det = profile();
+        assert!(!det.reads_pins() && det.validate_reading(true).is_err());
+        let mut renamed = p.clone();
+        renamed.names[3] = "window mean red".into();
+        assert!(renamed.validate().is_err());
     }
 
     #[test]

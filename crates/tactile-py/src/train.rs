@@ -313,3 +313,27 @@ pub(crate) fn train_calibrate(
     }
     Ok(c.summary)
 }
+
+/// Fit a trained model's input profile on `data` (its training frames;
+/// a TacTip model's on the rows of `split` alone when given) and save it
+/// in its config: frames of another sensor are then flagged. Returns what
+/// was saved, in words.
+#[pyfunction]
+#[pyo3(signature = (model, data, split=None))]
+pub(crate) fn train_profile(
+    py: Python<'_>,
+    model: PathBuf,
+    data: Vec<PathBuf>,
+    split: Option<String>,
+) -> PyResult<String> {
+    interruptible(py, || {
+        let sets = data
+            .iter()
+            .map(Dataset::open)
+            .collect::<Result<Vec<_>, _>>()
+            .py()?;
+        let p =
+            tactile_pipeline::profile::add_input_profile(&model, &sets, split.as_deref()).py()?;
+        Ok(format!("{} saved in {}", p.describe(), model.display()))
+    })
+}

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import shutil
 import subprocess
 import warnings
@@ -282,10 +283,17 @@ def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, 
     # the model's 440 px crop) among them: still estimated, with one Python
     # warning naming it.
     shutil.copy(root / "samples" / "virtual-tactip" / "frames" / "000000.png", folder / "zz-small.png")
-    with pytest.warns(UserWarning, match="zz-small.png.*smaller than the model's 440x440 crop") as seen:
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
         mixed = tactile.predict(root / "models/pose-surface", folder)
     assert len(mixed["file"]) == 9
-    assert sum("smaller than" in str(w.message) for w in seen) == 1
+    smaller = [str(w.message) for w in seen if "smaller than" in str(w.message)]
+    assert len(smaller) == 1 and re.search("zz-small.png.*smaller than the model's 440x440 crop", smaller[0])
+    assert all(w.category is UserWarning for w in seen)
+    # Its pins (another sensor's, the virtual TacTip's) are named too, and
+    # only its: the model's pin profile knows the real frames.
+    unlike = [str(w.message) for w in seen if "pins spaced unlike" in str(w.message)]
+    assert len(unlike) == 1 and "zz-small.png" in unlike[0], unlike
     # The real frames show pins; a blank one (a covered camera) is still
     # estimated, and named: there are no pins to read.
     assert not any("grey level" in str(w.message) for w in seen)
@@ -300,3 +308,38 @@ def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, 
     assert len(blanked["file"]) == 9
     assert sum("grey level" in str(w.message) for w in seen) == 1
 
+
+
+def test_train_profile_gives_an_older_tactip_model_its_pin_profile(root, tmp_path, shared_real):
+    """`tactile.train.profile` is `tactile train profile`: a TacTip model
+    without a pin profile (trained before it) names no frame of another
+    sensor; fitted on its training frames, it names them in a warning."""
+    model = tmp_path / "cae"
+    shutil.copytree(root / "models/cae-synth", model)
+    config = json.loads((model / "cae.json").read_text())
+    del config["input_profile"]
+    (model / "cae.json").write_text(json.dumps(config))
+    own = tmp_path / "own"
+    tactile.synth.tactip(24, seed=5, out=own, progress=False)
+    folder = tmp_path / "frames"
+    shutil.copytree(root / "samples/virtual-tactip/frames", folder)
+    edge = shared_real / "tactip127-edge/frames/frame_0_0.png"
+    grey = tactile.read_grey(edge)
+    shutil.copy(edge, folder / "zz-edge.png")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        tactile.predict(model, folder)
+    assert not any("pins spaced unlike" in str(w.message) for w in seen)
+    with pytest.raises(ValueError, match=r"labels\.csv.*no 'split' column"):
+        tactile.train.profile(model, own, split="train")
+    with pytest.raises(ValueError, match="at least 20 frames"):
+        tactile.train.profile(model, root / "samples/virtual-tactip")
+    said = tactile.train.profile(model, [own])
+    assert said.startswith("input profile of 24 frames") and str(model) in said
+    assert json.loads((model / "cae.json").read_text())["input_profile"]["names"][0] == "pin spectrum band 1/16"
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        got = tactile.predict(model, folder)
+    assert len(got["file"]) == len(list(folder.iterdir())) and grey.shape == (256, 256)
+    unlike = [str(w.message) for w in seen if "pins spaced unlike" in str(w.message)]
+    assert len(unlike) == 1 and re.search(r"zz-edge\.png: pins spaced unlike those of the 24 frames", unlike[0]), unlike

@@ -23,6 +23,10 @@ pub(crate) enum BenchCmd {
     /// Frames of another sensor: flagged and tendon rates on fresh own
     /// frames and on frames that are not the sensor's.
     Ood(DevicesArgs),
+    /// Frames of another sensor given to paper A's models: how many frames
+    /// of each set each TacTip model's pin profile flags (what `predict`
+    /// warns of).
+    PinProfile(PinProfileArgs),
     /// Tendon detectors of a sweep: accuracy against latency per runtime.
     Detector(ModelsArgs),
     /// Segmenters of a sweep: IoU and direction error against latency per runtime.
@@ -51,6 +55,25 @@ pub(crate) enum BenchCmd {
     /// held-out renders, the real ball presses, frames of other sensors and
     /// the loop's times; writes docs/own-sensor.md.
     OwnSensor(OwnSensorArgs),
+}
+
+#[derive(Args)]
+pub(crate) struct PinProfileArgs {
+    /// TacTip model folders (encoders, pose networks or ensembles) with a pin profile.
+    #[arg(long, num_args = 1.., required = true)]
+    models: Vec<PathBuf>,
+    /// Sets of frames: datasets, folders of frames, videos.
+    #[arg(long, num_args = 1.., required = true)]
+    data: Vec<PathBuf>,
+    /// Frames read of each set at most (a dataset's rows evenly spaced).
+    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: u32,
+    /// Only a dataset's rows whose `split` column says this (e.g. val: frames a profile fitted on `train` never saw).
+    #[arg(long)]
+    split: Option<String>,
+    /// Also write the table to this Markdown file (its rows as JSON beside it).
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -215,6 +238,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         | BenchCmd::Pose(a)
         | BenchCmd::Surface(a) => &a.out,
         BenchCmd::SharedEncoder(a) => &a.out,
+        BenchCmd::PinProfile(a) => &a.out,
         BenchCmd::Calibration(a) => &Some(a.out.clone()),
         BenchCmd::OwnSensor(a) => &Some(a.out.clone()),
     };
@@ -239,6 +263,23 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             say_raw!("{md}");
             if let Some(out) = &a.out {
                 tactile_core::io::write_atomic(out, md.as_bytes())?;
+            }
+        }
+        BenchCmd::PinProfile(a) => {
+            let rows = tactile_bench::pin_profile::bench_pin_profiles(
+                &a.models,
+                &a.data,
+                a.frames as usize,
+                a.split.as_deref(),
+            )?;
+            let md = tactile_bench::pin_profile::pin_profile_markdown(
+                &rows,
+                a.frames as usize,
+                a.split.as_deref(),
+            );
+            say_raw!("{md}");
+            if let Some(out) = &a.out {
+                write_markdown_and_json(out, &md, &rows)?;
             }
         }
         BenchCmd::Ood(a) => {

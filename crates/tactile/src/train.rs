@@ -25,7 +25,7 @@ pub(crate) enum TrainCmd {
     Segmenter(SegmenterArgs),
     /// Paper B's depth U-Net with a DenseNet encoder.
     Depth(DepthArgs),
-    /// The input profile of a trained detector: its training frames' input statistics, saved in detector.json, so frames of another sensor are flagged and get no answer (a detector trained now has one already).
+    /// The input profile of a trained detector or TacTip model (an encoder, a pose network or ensemble): its training frames' input statistics (a TacTip model's: where its pin images' power lies across spatial frequencies), saved in its config, so frames of another sensor are flagged (a detector gives them no answer; `predict` names them in a warning). A model trained now has one already.
     Profile(ProfileArgs),
     /// Calibrate a trained model on frames it was not trained on: a detector's probabilities (one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer; decisions unchanged), or the deviations of a pose network or of a regressor kept in its encoder folder (one factor per target so ±1 holds 68.3 % of the errors; `--split val` takes a split's rows, `--calibration-from` a validated run's factors).
     Calibrate(CalibrateArgs),
@@ -38,12 +38,15 @@ pub(crate) enum TrainCmd {
 
 #[derive(Args)]
 pub(crate) struct ProfileArgs {
-    /// The detector folder (the encoder folder for `align`).
+    /// The detector, encoder or pose-network folder (the encoder folder for `align`).
     #[arg(long)]
     model: PathBuf,
-    /// Labelled dataset(s): the detector's training data for `profile` (the encoder's for `align`).
+    /// Dataset(s): the model's training data for `profile` (the encoder's for `align`).
     #[arg(long, num_args = 1.., required = true)]
     data: Vec<PathBuf>,
+    /// `profile` of a TacTip model: only the rows whose `split` column says this (e.g. train).
+    #[arg(long)]
+    split: Option<String>,
 }
 
 #[derive(Args)]
@@ -303,7 +306,8 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         }
         TrainCmd::Profile(a) => {
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
-            let p = tactile_detect::profile::add_input_profile(&a.model, &data)?;
+            let p =
+                tactile_pipeline::profile::add_input_profile(&a.model, &data, a.split.as_deref())?;
             say!("{} saved in {}", p.describe(), a.model.display());
         }
         TrainCmd::Ensemble(a) => {
@@ -313,6 +317,9 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             );
         }
         TrainCmd::Align(a) => {
+            if let Some(s) = &a.split {
+                bail!("--split {s}: `train align` measures every frame of the datasets given");
+            }
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
             let (p, n) = tactile_cae::artifact::add_pin_alignment(&a.model, &data)?;
             say!("{}", p.describe(n));

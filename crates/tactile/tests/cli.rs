@@ -3522,3 +3522,149 @@ fn a_blank_frame_is_estimated_and_named_as_one_with_no_pins() {
         );
     }
 }
+
+/// A grey frame of another sensor, resized to `w x h`, saved at `to`.
+fn foreign_frame(from: &Path, to: &Path, (w, h): (u32, u32)) {
+    let grey = image::open(from).unwrap().to_luma8();
+    image::imageops::resize(&grey, w, h, image::imageops::FilterType::Triangle)
+        .save(to)
+        .unwrap();
+}
+
+#[test]
+fn a_frame_of_another_sensor_is_estimated_and_named_as_unlike_the_training_frames() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let real = shared_real();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("tt");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "tactip",
+        "--count",
+        "24",
+        "--out",
+        data.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    // Two frames of other sensors at the virtual TacTip's size: a TacTip
+    // of 127 pins (the real edge set) and a GelSight's ball press.
+    let frame = |n: usize| data.join(format!("frames/{n:06}.png"));
+    foreign_frame(
+        &real.join("tactip127-edge/frames/frame_0_0.png"),
+        &frame(3),
+        (300, 300),
+    );
+    foreign_frame(
+        &real.join("gelsight-ball/frames/press_01.png"),
+        &frame(5),
+        (300, 300),
+    );
+    let predict = |model: &Path, input: &Path| {
+        let out = tmp.path().join("est.csv");
+        let (ok, msg) = tactile(&[
+            "predict",
+            "--model",
+            model.to_str().unwrap(),
+            "--data",
+            input.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{msg}");
+        assert_eq!(csv_rows(&out).len(), 25, "a header and a row per frame");
+        msg.lines()
+            .filter(|l| l.contains("pins spaced unlike"))
+            .map(str::to_string)
+            .collect::<Vec<_>>()
+    };
+    // The shipped encoder's profile names both, from a dataset in one
+    // warning, from a folder as they come; none of the virtual frames.
+    let shipped = root.join("models/cae-synth");
+    let warned = predict(&shipped, &data);
+    assert_eq!(warned.len(), 1, "{warned:?}");
+    assert!(
+        warned[0].starts_with("warning: frames/000003.png, frames/000005.png: pins spaced unlike those of the 3000 frames this model was trained on")
+            && warned[0].contains("another sensor"),
+        "{warned:?}"
+    );
+    let warned = predict(&shipped, &data.join("frames"));
+    assert_eq!(warned.len(), 2, "{warned:?}");
+    for (w, n) in warned.iter().zip([3, 5]) {
+        assert!(
+            w.starts_with(&format!("warning: {}: ", frame(n).display())),
+            "{w}"
+        );
+    }
+    // A copy without its profile (a model trained before it) warns of
+    // nothing; `train profile` on its training frames makes one.
+    let copy = tmp.path().join("m");
+    copy_model(&shipped, &copy);
+    let cfg = copy.join("cae.json");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cfg).unwrap()).unwrap();
+    json.as_object_mut().unwrap().remove("input_profile");
+    std::fs::write(&cfg, json.to_string()).unwrap();
+    assert!(predict(&copy, &data).is_empty());
+    let own = tmp.path().join("own");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "tactip",
+        "--count",
+        "40",
+        "--seed",
+        "9",
+        "--out",
+        own.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let profile = |extra: &[&str]| {
+        let mut args = vec![
+            "train",
+            "profile",
+            "--model",
+            copy.to_str().unwrap(),
+            "--data",
+            own.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        tactile(&args)
+    };
+    let (ok, msg) = profile(&["--split", "train"]);
+    assert!(
+        !ok && msg.contains("labels.csv") && msg.contains("no 'split' column"),
+        "{msg}"
+    );
+    let (ok, msg) = profile(&[]);
+    assert!(ok && msg.contains("input profile of 40 frames"), "{msg}");
+    let warned = predict(&copy, &data);
+    assert_eq!(warned.len(), 1, "{warned:?}");
+    assert!(
+        warned[0].starts_with("warning: frames/000003.png, frames/000005.png: ")
+            && warned[0].contains("the 40 frames this model was trained on"),
+        "{warned:?}"
+    );
+    // A detector's profile in an encoder's config is refused by name.
+    let det: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root.join("models/detector/member-0/detector.json")).unwrap(),
+    )
+    .unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cfg).unwrap()).unwrap();
+    json["input_profile"] = det["input_profile"].clone();
+    std::fs::write(&cfg, json.to_string()).unwrap();
+    let out = tmp.path().join("never.csv");
+    let (ok, msg) = tactile(&[
+        "predict",
+        "--model",
+        copy.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && msg.contains("cae.json") && msg.contains("one of colour frames (a detector's)"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+}

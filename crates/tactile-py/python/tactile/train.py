@@ -167,5 +167,19 @@ def calibrate(model: PathLike, data=None, *, split: Optional[str] = None,
                                     None if calibration_from is None else os.fspath(calibration_from))
 
 
-__all__ = ["cae", "depth", "detector", "ensemble", "head", "options", "pose", "regressor",
-           "segmenter"]
+def profile(model: PathLike, data, *, split: Optional[str] = None) -> str:
+    """Fit a trained model's input profile on ``data`` (a dataset or a list
+    of them: its training frames) and save it in its config (the CLI's
+    ``tactile train profile``): a detector's reads colour frames and gives
+    frames of another sensor no answer; a TacTip model's (an encoder, a
+    pose network or ensemble; the rows of ``split`` alone when given)
+    reads its pin images, and ``predict`` names such frames in a
+    ``UserWarning``. Models trained now have one already. Returns what was
+    saved, in words.
+    """
+    sets = [os.fspath(data)] if isinstance(data, (str, os.PathLike)) else [os.fspath(d) for d in data]
+    return _tactile.train_profile(os.fspath(model), sets, split)
+
+
+__all__ = ["cae", "depth", "detector", "ensemble", "head", "options", "pose", "profile",
+           "regressor", "segmenter"]

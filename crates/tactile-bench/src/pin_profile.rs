@@ -1,0 +1,127 @@
+//! Frames of another sensor given to paper A's models: how many frames of
+//! each set each TacTip model's pin profile (its training frames' pin
+//! spectrum, [`InputProfile::fit_pins`]) flags, and their scores. What
+//! `predict` warns of, measured.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+use tactile_core::dataset::Dataset;
+use tactile_core::image_io::GreyImage;
+use tactile_preprocess::profile::InputProfile;
+use tactile_preprocess::{is_flat_frame, preprocess};
+
+use crate::Result;
+
+/// One model on one set of frames.
+#[derive(Debug, Clone, Serialize)]
+pub struct PinProfileRow {
+    /// The model folder.
+    pub model: String,
+    /// The frames: a dataset, or a folder of frames.
+    pub data: String,
+    /// Frames scored (flat ones are left to their own warning).
+    pub frames: usize,
+    /// Frames scoring above the threshold.
+    pub flagged: usize,
+    /// Median score.
+    pub median: f32,
+    /// Largest score.
+    pub max: f32,
+    /// The profile's threshold.
+    pub threshold: f32,
+}
+
+/// Up to `limit` grey frames of `data`: a dataset's rows (those of
+/// `split` when given: a dataset without them is refused) evenly spaced,
+/// or a frame source's first.
+fn frames_of(data: &Path, limit: usize, split: Option<&str>) -> Result<Vec<GreyImage>> {
+    use tactile_core::source::{FrameSource, SourceOptions, SourceSpec};
+    if data.join("manifest.json").is_file() {
+        let ds = Dataset::open(data)?;
+        let rows = tactile_pipeline::profile::rows_of(&ds, split)?;
+        let step = rows.len().div_ceil(limit.max(1)).max(1);
+        return Ok(rows
+            .iter()
+            .step_by(step)
+            .map(|&i| ds.load_grey(i, "file"))
+            .collect::<tactile_core::Result<_>>()?);
+    }
+    let options = SourceOptions {
+        limit: Some(limit as u64),
+        ..SourceOptions::default()
+    };
+    let mut source = FrameSource::open(&SourceSpec::Path(data.to_path_buf()), options)?;
+    let mut out = Vec::new();
+    while let Some(f) = source.next_frame()? {
+        let (w, h) = (f.image.width(), f.image.height());
+        let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
+        out.push(tactile_core::image_io::grey_image(w, h, g)?);
+    }
+    Ok(out)
+}
+
+/// Every model of `models` on up to `limit` frames of every set of `data`
+/// (a dataset's rows of `split` alone, when given).
+pub fn bench_pin_profiles(
+    models: &[PathBuf],
+    data: &[PathBuf],
+    limit: usize,
+    split: Option<&str>,
+) -> Result<Vec<PinProfileRow>> {
+    let sets = data
+        .iter()
+        .map(|d| Ok((d, frames_of(d, limit, split)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let mut rows = Vec::new();
+    for m in models {
+        let (cfg, profile): (_, InputProfile) = tactile_pipeline::profile::model_pin_profile(m)?;
+        for (d, frames) in &sets {
+            let mut scores: Vec<f32> = Vec::with_capacity(frames.len());
+            for f in frames.iter().filter(|f| !is_flat_frame(f, &cfg)) {
+                scores.push(profile.score_pins(&preprocess(f, &cfg)?));
+            }
+            scores.sort_by(f32::total_cmp);
+            rows.push(PinProfileRow {
+                model: m.display().to_string(),
+                data: d.display().to_string(),
+                frames: scores.len(),
+                flagged: scores.iter().filter(|&&s| s > profile.threshold).count(),
+                median: scores.get(scores.len() / 2).copied().unwrap_or(f32::NAN),
+                max: scores.last().copied().unwrap_or(f32::NAN),
+                threshold: profile.threshold,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// The table of [`bench_pin_profiles`] (`split` as given to it).
+pub fn pin_profile_markdown(rows: &[PinProfileRow], limit: usize, split: Option<&str>) -> String {
+    let rows_of = match split {
+        Some(s) => format!("a dataset's `{s}` rows evenly spaced"),
+        None => "a dataset's rows evenly spaced".to_string(),
+    };
+    let mut md = format!(
+        "Each TacTip model's pin profile (where its training frames' pin images hold their power across \
+         spatial frequencies, saved in its config) against up to {limit} frames of each set ({rows_of}, \
+         a folder's first frames); a frame scoring above the model's threshold is \
+         named in a warning by `predict`. Blank frames are left to their own warning.\n\n\
+         | model | frames of | scored | flagged | flagged (%) | median score | largest score | threshold |\n\
+         |---|---|---|---|---|---|---|---|\n"
+    );
+    for r in rows {
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} |\n",
+            r.model,
+            r.data,
+            r.frames,
+            r.flagged,
+            100.0 * r.flagged as f64 / r.frames.max(1) as f64,
+            r.median,
+            r.max,
+            r.threshold
+        ));
+    }
+    md
+}

@@ -1,0 +1,164 @@
+//! `tactile train profile`: the input profile of a trained model, fitted
+//! on its training frames and saved in its config (the weights are not
+//! touched), so `predict` and the pipeline name frames of another sensor.
+//! A detector's reads colour frames ([`tactile_detect::profile`]); a
+//! TacTip model's (an encoder, a pose network, each member of a pose
+//! ensemble) reads its pin images ([`InputProfile::fit_pins`]).
+
+use std::path::Path;
+
+use tactile_burn::Artifact;
+use tactile_cae::CaeArtifact;
+use tactile_cae::data::{DATASET_CHUNK, PinSet};
+use tactile_core::dataset::Dataset;
+use tactile_pose::{PoseArtifact, PoseEnsemble};
+use tactile_preprocess::PreprocessConfig;
+use tactile_preprocess::profile::{InputProfile, PIN_PROFILE_MARGIN, pin_spectra};
+
+use crate::Result;
+use crate::tactip::TactipModelKind;
+
+/// Fit and save the input profile of the model in `dir` on `datasets`
+/// (its training data): a detector's, or a TacTip model's (on the rows of
+/// `split` alone when given). Returns the profile (an ensemble's first
+/// member's, the one it reads frames with).
+pub fn add_input_profile(
+    dir: &Path,
+    datasets: &[Dataset],
+    split: Option<&str>,
+) -> Result<InputProfile> {
+    let detector = tactile_detect::DetectorArtifact::is_in(dir)
+        || tactile_detect::DetectorEnsembleArtifact::read(dir).is_ok();
+    if detector {
+        if let Some(s) = split {
+            return Err(tactile_core::Error::Config(format!(
+                "a detector's profile is fitted on whole datasets: leave out the split ({s})"
+            ))
+            .into());
+        }
+        return Ok(tactile_detect::profile::add_input_profile(dir, datasets)?);
+    }
+    TactipModelKind::of(
+        dir,
+        "a model without an input profile (a detector or a TacTip model has one)",
+    )?;
+    let rows = datasets
+        .iter()
+        .map(|ds| rows_of(ds, split))
+        .collect::<Result<Vec<_>>>()?;
+    add_pin_profile(dir, datasets, &rows)
+}
+
+/// The rows of `ds` in `split` (every row without one); a split the
+/// dataset does not have is refused naming its labels.
+pub fn rows_of(ds: &Dataset, split: Option<&str>) -> Result<Vec<usize>> {
+    let Some(s) = split else {
+        return Ok((0..ds.len()).collect());
+    };
+    match ds.split_indices(s) {
+        Some(rows) if !rows.is_empty() => Ok(rows),
+        Some(_) => Err(tactile_core::Error::dataset(
+            ds.labels_path(),
+            None,
+            format!("no row's split is '{s}'"),
+        )
+        .into()),
+        None => Err(tactile_core::Error::dataset(
+            ds.labels_path(),
+            None,
+            format!("no 'split' column to take the '{s}' rows from"),
+        )
+        .into()),
+    }
+}
+
+/// The pin profile of the TacTip model in `dir`, fitted on every frame of
+/// `rows` of `datasets` that is not flat, saved in its config atomically.
+fn add_pin_profile(dir: &Path, datasets: &[Dataset], rows: &[Vec<usize>]) -> Result<InputProfile> {
+    if PoseEnsemble::is_in(dir) {
+        let mut first = None;
+        for d in PoseEnsemble::read(dir)?.member_dirs(dir) {
+            let p = add_pin_profile(&d, datasets, rows)?;
+            first.get_or_insert(p);
+        }
+        return first.ok_or_else(|| {
+            tactile_core::Error::Invalid("an ensemble without members".into()).into()
+        });
+    }
+    // Its config is rewritten: never while another run writes it.
+    let _lock = tactile_core::io::FolderLock::of_existing(dir)?;
+    if PoseArtifact::is_in(dir) {
+        let mut a = PoseArtifact::read(dir)?;
+        let p = pin_profile_of(datasets, rows, &a.preprocess)?;
+        a.input_profile = Some(p.clone());
+        tactile_core::io::write_json_atomic(dir.join(PoseArtifact::CONFIG_FILE), &a)?;
+        Ok(p)
+    } else {
+        let mut a = CaeArtifact::read(dir)?;
+        let p = pin_profile_of(datasets, rows, &a.preprocess)?;
+        a.input_profile = Some(p.clone());
+        tactile_core::io::write_json_atomic(dir.join(CaeArtifact::CONFIG_FILE), &a)?;
+        Ok(p)
+    }
+}
+
+/// The pin profile of the frames of `datasets` through `cfg`, a chunk at
+/// a time (only the spectra are kept), the rows `rows` of each; flat
+/// frames are left out.
+fn pin_profile_of(
+    datasets: &[Dataset],
+    rows: &[Vec<usize>],
+    cfg: &PreprocessConfig,
+) -> Result<InputProfile> {
+    let mut spectra = Vec::new();
+    for (ds, rows) in datasets.iter().zip(rows) {
+        let cfgs = std::slice::from_ref(cfg);
+        PinSet::for_each_chunk_of(ds, rows, cfgs, DATASET_CHUNK, |sets| {
+            let set = &sets[0];
+            let flat: std::collections::HashSet<&str> =
+                set.flat.iter().map(String::as_str).collect();
+            let pins: Vec<_> = set
+                .images
+                .iter()
+                .zip(&set.files)
+                .filter(|(_, f)| !flat.contains(f.as_str()))
+                .map(|(p, _)| p)
+                .collect();
+            spectra.extend(pin_spectra(&pins));
+            Ok::<(), crate::Error>(())
+        })?;
+    }
+    Ok(InputProfile::fit_pins(&spectra, PIN_PROFILE_MARGIN)?)
+}
+
+/// The preprocessing and the pin profile of the TacTip model in `dir`
+/// (an ensemble's first member's); a model without one is refused
+/// saying how to give it one.
+pub fn model_pin_profile(dir: &Path) -> Result<(PreprocessConfig, InputProfile)> {
+    let kind = TactipModelKind::of(dir, "a model without a pin profile")?;
+    let (cfg, profile) = match kind {
+        TactipModelKind::PoseNetwork => {
+            let first = match PoseEnsemble::is_in(dir) {
+                true => PoseEnsemble::read(dir)?
+                    .member_dirs(dir)
+                    .into_iter()
+                    .next()
+                    .unwrap_or_else(|| dir.to_path_buf()),
+                false => dir.to_path_buf(),
+            };
+            let a = PoseArtifact::read(&first)?;
+            (a.preprocess, a.input_profile)
+        }
+        TactipModelKind::Encoder => {
+            let a = CaeArtifact::read(dir)?;
+            (a.preprocess, a.input_profile)
+        }
+    };
+    let profile = profile.ok_or_else(|| {
+        tactile_core::Error::model(
+            dir,
+            "has no pin profile (trained before it): add one with `tactile train profile --model DIR --data ITS_TRAINING_DATA`",
+        )
+    })?;
+    Ok((cfg, profile))
+}
