@@ -547,6 +547,43 @@ fn foreign_frames_warning(
     ))
 }
 
+/// The warning for those of `pins` (one per frame, through a model's
+/// first preprocessing) that lie outside the model's pin `profile`, each
+/// frame named by `label` of its place: for calls that get frames rather
+/// than a dataset or a source (Python's `PoseEstimator.estimate`,
+/// `TactipEncoder.encode`). `None` without a profile or such a frame.
+pub fn foreign_pins_warning(
+    pins: &[PinImage],
+    profile: Option<&InputProfile>,
+    label: impl Fn(usize) -> String,
+) -> Option<String> {
+    let profile = profile?;
+    let foreign: Vec<ForeignFrame> = pins
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| {
+            let score = profile.score_pins(p);
+            (score > profile.threshold).then(|| ForeignFrame {
+                file: label(i),
+                score,
+            })
+        })
+        .collect();
+    foreign_frames_warning(&foreign, profile, false)
+}
+
+/// The warnings of an encoded dataset: its blank frames and its frames
+/// outside the encoder's pin `profile`, in one warning each.
+pub fn encoded_dataset_warnings(
+    e: &tactile_cae::inference::EncodedDataset,
+    profile: Option<&InputProfile>,
+) -> Vec<String> {
+    flat_frames_warning(&e.flat, false)
+        .into_iter()
+        .chain(profile.and_then(|p| foreign_frames_warning(&e.foreign, p, false)))
+        .collect()
+}
+
 /// A warning naming `ds` when its frames (the manifest's size) do not suit
 /// one of a model's preprocessings `cfgs` ([`FrameSizeCheck`]).
 pub fn dataset_frame_warning<'a>(
@@ -804,12 +841,14 @@ impl TactipPerception {
     /// Perceive every frame of a dataset, timing encoding and estimation.
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
         let t0 = std::time::Instant::now();
+        let encoded = self.encoder.encode_dataset_flagging(ds)?;
+        let warnings =
+            encoded_dataset_warnings(&encoded, self.encoder.artifact.input_profile.as_ref());
         let tactile_cae::inference::EncodedDataset {
             files,
             features: feats,
-            flat,
-            foreign,
-        } = self.encoder.encode_dataset_flagging(ds)?;
+            ..
+        } = encoded;
         let ms_encode = 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64;
         let t1 = std::time::Instant::now();
         let estimates = self.estimators.estimate(&feats)?;
@@ -820,16 +859,7 @@ impl TactipPerception {
             estimates,
             ms_encode,
             ms_estimate,
-            warnings: flat_frames_warning(&flat, false)
-                .into_iter()
-                .chain(
-                    self.encoder
-                        .artifact
-                        .input_profile
-                        .as_ref()
-                        .and_then(|p| foreign_frames_warning(&foreign, p, false)),
-                )
-                .collect(),
+            warnings,
         })
     }
 

@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_cae::TactipEncoder;
 use tactile_estimate::{Column, Estimators};
-use tactile_pipeline::tactip::TactipPerception;
+use tactile_pipeline::tactip::{TactipPerception, foreign_pins_warning};
 use tactile_preprocess::PinImage;
 
 use crate::errors::PyResultExt;
@@ -179,10 +179,18 @@ impl PyTactipEncoder {
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
         warn_frame_sizes(py, &px, std::slice::from_ref(&self.preprocess))?;
         let k = self.feature_count;
-        let feats = py.detach(|| -> PyResult<Vec<Vec<f32>>> {
+        let (feats, unlike) = py.detach(|| -> PyResult<(Vec<Vec<f32>>, Option<String>)> {
             let pins = self.pins(&px)?;
-            self.lock()?.encoder.encode(&pins).py()
+            let mut m = self.lock()?;
+            let unlike =
+                foreign_pins_warning(&pins, m.encoder.artifact.input_profile.as_ref(), |i| {
+                    format!("frames[{i}]")
+                });
+            Ok((m.encoder.encode(&pins).py()?, unlike))
         })?;
+        if let Some(w) = unlike {
+            crate::errors::user_warning(py, &w)?;
+        }
         let flat: Vec<f32> = feats.concat();
         let arr = ndarray::Array2::from_shape_vec((feats.len(), k), flat)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
@@ -206,15 +214,22 @@ impl PyTactipEncoder {
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
         warn_frame_sizes(py, &px, std::slice::from_ref(&self.preprocess))?;
-        let est = py.detach(|| -> PyResult<tactile_estimate::Estimates> {
+        let (est, unlike) = py.detach(|| -> PyResult<(tactile_estimate::Estimates, _)> {
             let pins = self.pins(&px)?;
             let mut m = self.lock()?;
+            let unlike =
+                foreign_pins_warning(&pins, m.encoder.artifact.input_profile.as_ref(), |i| {
+                    format!("frames[{i}]")
+                });
             let feats = m.encoder.encode(&pins).py()?;
             match &m.estimators {
-                Some(e) => e.estimate(&feats).py(),
+                Some(e) => Ok((e.estimate(&feats).py()?, unlike)),
                 None => Err(PyValueError::new_err("no estimators")),
             }
         })?;
+        if let Some(w) = unlike {
+            crate::errors::user_warning(py, &w)?;
+        }
         let np = py.import("numpy")?;
         let out = PyDict::new(py);
         for (name, col) in est.columns {

@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 use tactile_pose::PoseEstimator;
+use tactile_preprocess::PinImage;
 
 use crate::encoder::{frame_args, pin_image_array, warn_frame_sizes};
 use crate::errors::PyResultExt;
@@ -78,7 +79,7 @@ impl PyPoseEstimator {
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
         warn_frame_sizes(py, &px, &self.scales)?;
-        let (rows, std) = py.detach(|| -> PyResult<tactile_pose::inference::ValuesWithStd> {
+        let ((rows, std), unlike) = py.detach(|| -> PyResult<_> {
             let mut e = self
                 .estimator
                 .lock()
@@ -90,10 +91,25 @@ impl PyPoseEstimator {
                 .map(Pixels::grey)
                 .collect::<tactile_core::Result<Vec<_>>>()
                 .py()?;
-            e.predict_frames_with_std(&grey)
+            let pins = e
+                .preprocess(&grey)
                 .map_err(tactile_pipeline::Error::from)
-                .py()
+                .py()?;
+            let unlike = tactile_pipeline::tactip::foreign_pins_warning(
+                pins.first().map_or(&[], Vec::as_slice),
+                e.artifact.input_profile.as_ref(),
+                |i| format!("frames[{i}]"),
+            );
+            let views: Vec<&[PinImage]> = pins.iter().map(Vec::as_slice).collect();
+            let estimates = e
+                .predict_scales_with_std(&views)
+                .map_err(tactile_pipeline::Error::from)
+                .py()?;
+            Ok((estimates, unlike))
         })?;
+        if let Some(w) = unlike {
+            crate::errors::user_warning(py, &w)?;
+        }
         let out = PyDict::new(py);
         for (j, name) in self.targets.iter().enumerate() {
             let v: Vec<f64> = rows.iter().map(|r| r[j]).collect();

@@ -67,6 +67,9 @@ def test_preprocess_gives_the_pin_image(root):
     assert 0.0 <= pin.min() and pin.max() <= 1.0 and pin.std() > 0.0
 
 
+# Its frames are blank or noise on purpose: that they are named as frames
+# without this sensor's pins is asserted in the tests below.
+@pytest.mark.filterwarnings("ignore:.*pins spaced unlike:UserWarning")
 def test_encoder_errors(root, tmp_path):
     with pytest.raises(FileNotFoundError):
         tactile.TactipEncoder(tmp_path / "missing")
@@ -184,6 +187,9 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
         mixed = pose.estimate([frames[0], *small])
     assert len(mixed["depth_mm"]) == 4
     assert sum("smaller than" in str(w.message) for w in seen) == 1
+    # Grey frames without pins: named in one warning too.
+    unlike = [str(w.message) for w in seen if "pins spaced unlike" in str(w.message)]
+    assert len(unlike) == 1 and unlike[0].startswith("frames[1], frames[2], frames[3]: "), unlike
     # A frame too small for even the pin image is refused, named by its place.
     with pytest.raises(ValueError, match=r"frames\[2\]: frame is 12x10, smaller than the 64x64"):
         pose.estimate([frames[0], frames[1], np.zeros((10, 12), dtype=np.uint8)])
@@ -223,9 +229,16 @@ def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root, shared_r
     a, b = burn.encode(frames), ort.encode(frames)
     assert np.abs(a - b).max() <= 1e-4 * max(1.0, np.abs(a).max())
     ea, eb = burn.estimate(frames), ort.estimate(frames)
-    with pytest.warns(UserWarning, match=r"frames\[0\]: the frame is 160x120"):
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
         burn.encode(np.zeros((1, 120, 160), dtype=np.uint8))
-    with pytest.raises(ValueError, match=r"frames\[1\]: frame is 12x10, smaller than the 56x56"):
+    said = [str(w.message) for w in seen]
+    # A small blank frame: its size, and a pin image without pins.
+    assert len(said) == 2 and said[0].startswith("frames[0]: the frame is 160x120"), said
+    assert said[1].startswith("frames[0]: pins spaced unlike"), said
+    with pytest.raises(ValueError, match=r"frames\[1\]: frame is 12x10, smaller than the 56x56"), \
+            warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # its size, said above
         burn.encode([frames[0], np.zeros((10, 12), dtype=np.uint8)])
     for t in ["depth_mm", "roll_deg", "pitch_deg", "shear_x_mm", "shear_y_mm", "shear_theta_deg"]:
         assert np.allclose(ea[t], eb[t], atol=1e-3), t
@@ -343,3 +356,34 @@ def test_train_profile_gives_an_older_tactip_model_its_pin_profile(root, tmp_pat
     assert len(got["file"]) == len(list(folder.iterdir())) and grey.shape == (256, 256)
     unlike = [str(w.message) for w in seen if "pins spaced unlike" in str(w.message)]
     assert len(unlike) == 1 and re.search(r"zz-edge\.png: pins spaced unlike those of the 24 frames", unlike[0]), unlike
+
+
+def test_frames_of_another_sensor_given_to_the_models_one_call_at_a_time_are_named(root, shared_real):
+    """`PoseEstimator.estimate` and `TactipEncoder.encode` / `estimate` on
+    frames (a robot's loop, no dataset or source) estimate every frame and
+    name the ones outside the model's pin profile in a `UserWarning`, as
+    `predict` does; a frame of the model's own sensor passes."""
+    surface = tactile.read_grey(shared_real / "tactip331-surface/frames/train_image_1.png")
+    press = tactile.read_rgb(shared_real / "gelsight-ball/frames/press_01.png")
+    edge = tactile.read_grey(shared_real / "tactip127-edge/frames/frame_0_0.png")
+    pose = tactile.PoseEstimator(root / "models/pose-surface")
+    cae = tactile.TactipEncoder(root / "models/cae-edge")
+
+    def unlike(call):
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            out = call()
+        return out, [str(w.message) for w in seen if "pins spaced unlike" in str(w.message)]
+
+    got, said = unlike(lambda: pose.estimate(surface))
+    assert said == [] and got["depth_mm"].shape == (1,)
+    got, said = unlike(lambda: pose.estimate([surface, press]))
+    assert got["depth_mm"].shape == (2,)
+    assert len(said) == 1 and said[0].startswith("frames[1]: pins spaced unlike those of the 8000 frames"), said
+    feats, said = unlike(lambda: cae.encode(edge))
+    assert said == [] and feats.shape == (1, cae.feature_count)
+    feats, said = unlike(lambda: cae.encode([edge, surface]))
+    assert feats.shape == (2, cae.feature_count)
+    assert len(said) == 1 and said[0].startswith("frames[1]: "), said
+    got, said = unlike(lambda: cae.estimate([surface]))
+    assert len(said) == 1 and said[0].startswith("frames[0]: "), said

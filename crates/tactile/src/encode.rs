@@ -34,7 +34,12 @@ pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     {
         tactile_core::note!("{w}");
     }
-    let (files, feats) = enc.encode_dataset(&ds)?;
+    let encoded = enc.encode_dataset_flagging(&ds)?;
+    let profile = enc.artifact.input_profile.as_ref();
+    for w in tactile_pipeline::tactip::encoded_dataset_warnings(&encoded, profile) {
+        tactile_core::note!("{w}");
+    }
+    let (files, feats) = (encoded.files, encoded.features);
     write_features_csv(&a.out, &files, &feats)?;
     say!(
         "{} feature vectors of {} values written to {}",

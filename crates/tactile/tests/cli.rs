@@ -3587,6 +3587,15 @@ fn a_frame_of_another_sensor_is_estimated_and_named_as_unlike_the_training_frame
             && warned[0].contains("another sensor"),
         "{warned:?}"
     );
+    // `encode` writes every frame's features and names the two alike.
+    let feats = tmp.path().join("features.csv");
+    let (ok, msg) = encode(&shipped, &data, &feats);
+    assert!(ok, "{msg}");
+    assert_eq!(csv_rows(&feats).len(), 25, "a header and a row per frame");
+    assert!(
+        msg.contains("warning: frames/000003.png, frames/000005.png: pins spaced unlike"),
+        "{msg}"
+    );
     let warned = predict(&shipped, &data.join("frames"));
     assert_eq!(warned.len(), 2, "{warned:?}");
     for (w, n) in warned.iter().zip([3, 5]) {
