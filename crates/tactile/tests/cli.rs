@@ -1979,8 +1979,8 @@ fn detector_trains_on_two_datasets_with_soft_labels_and_lists_its_decisions() {
 }
 
 /// `tactile predict --model MODEL --data DATA --out OUT` with `extra`
-/// flags, asserting that it succeeds.
-fn predict(model: &Path, data: &Path, out: &Path, extra: &[&str]) {
+/// flags, asserting that it succeeds; what it said.
+fn predict(model: &Path, data: &Path, out: &Path, extra: &[&str]) -> String {
     let mut args = vec![
         "predict",
         "--model",
@@ -1993,6 +1993,7 @@ fn predict(model: &Path, data: &Path, out: &Path, extra: &[&str]) {
     args.extend_from_slice(extra);
     let (ok, msg) = tactile(&args);
     assert!(ok, "{msg}");
+    msg
 }
 
 /// `tactile predict` with `model` over the real edge set: the CSV's
@@ -3501,16 +3502,7 @@ fn a_blank_frame_is_estimated_and_named_as_one_with_no_pins() {
         ),
     ] {
         let out = tmp.path().join("est.csv");
-        let (ok, msg) = tactile(&[
-            "predict",
-            "--model",
-            model.to_str().unwrap(),
-            "--data",
-            input.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(ok, "{msg}");
+        let msg = predict(&model, &input, &out, &[]);
         assert_eq!(csv_rows(&out).len(), 7, "a header and a row per frame");
         let warned: Vec<&str> = msg.lines().filter(|l| l.contains("grey level")).collect();
         assert_eq!(warned.len(), 1, "{msg}");
@@ -3559,18 +3551,9 @@ fn a_frame_of_another_sensor_is_estimated_and_named_as_unlike_the_training_frame
         &frame(5),
         (300, 300),
     );
-    let predict = |model: &Path, input: &Path| {
+    let unlike = |model: &Path, input: &Path| {
         let out = tmp.path().join("est.csv");
-        let (ok, msg) = tactile(&[
-            "predict",
-            "--model",
-            model.to_str().unwrap(),
-            "--data",
-            input.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(ok, "{msg}");
+        let msg = predict(model, input, &out, &[]);
         assert_eq!(csv_rows(&out).len(), 25, "a header and a row per frame");
         msg.lines()
             .filter(|l| l.contains("pins spaced unlike"))
@@ -3580,7 +3563,7 @@ fn a_frame_of_another_sensor_is_estimated_and_named_as_unlike_the_training_frame
     // The shipped encoder's profile names both, from a dataset in one
     // warning, from a folder as they come; none of the virtual frames.
     let shipped = root.join("models/cae-synth");
-    let warned = predict(&shipped, &data);
+    let warned = unlike(&shipped, &data);
     assert_eq!(warned.len(), 1, "{warned:?}");
     assert!(
         warned[0].starts_with("warning: frames/000003.png, frames/000005.png: pins spaced unlike those of the 3000 frames this model was trained on")
@@ -3596,7 +3579,7 @@ fn a_frame_of_another_sensor_is_estimated_and_named_as_unlike_the_training_frame
         msg.contains("warning: frames/000003.png, frames/000005.png: pins spaced unlike"),
         "{msg}"
     );
-    let warned = predict(&shipped, &data.join("frames"));
+    let warned = unlike(&shipped, &data.join("frames"));
     assert_eq!(warned.len(), 2, "{warned:?}");
     for (w, n) in warned.iter().zip([3, 5]) {
         assert!(
@@ -3613,7 +3596,7 @@ fn a_frame_of_another_sensor_is_estimated_and_named_as_unlike_the_training_frame
         serde_json::from_str(&std::fs::read_to_string(&cfg).unwrap()).unwrap();
     json.as_object_mut().unwrap().remove("input_profile");
     std::fs::write(&cfg, json.to_string()).unwrap();
-    assert!(predict(&copy, &data).is_empty());
+    assert!(unlike(&copy, &data).is_empty());
     let own = tmp.path().join("own");
     let (ok, msg) = tactile(&[
         "synth",
@@ -3645,7 +3628,7 @@ fn a_frame_of_another_sensor_is_estimated_and_named_as_unlike_the_training_frame
     );
     let (ok, msg) = profile(&[]);
     assert!(ok && msg.contains("input profile of 40 frames"), "{msg}");
-    let warned = predict(&copy, &data);
+    let warned = unlike(&copy, &data);
     assert_eq!(warned.len(), 1, "{warned:?}");
     assert!(
         warned[0].starts_with("warning: frames/000003.png, frames/000005.png: ")
