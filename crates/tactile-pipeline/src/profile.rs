@@ -128,7 +128,32 @@ fn pin_profile_of(
             Ok::<(), crate::Error>(())
         })?;
     }
+    if spectra.len() < InputProfile::MIN_FRAMES {
+        let names: Vec<String> = datasets
+            .iter()
+            .map(|d| d.root.display().to_string())
+            .collect();
+        return Err(tactile_core::Error::Invalid(format!(
+            "{}: {} frames with pins to read{}, and a pin profile needs at least {} to tell their spread; give the model's training data",
+            names.join(", "),
+            spectra.len(),
+            split_words(rows, datasets),
+            InputProfile::MIN_FRAMES
+        ))
+        .into());
+    }
     Ok(InputProfile::fit_pins(&spectra, PIN_PROFILE_MARGIN)?)
+}
+
+/// " (of 40 rows)" when `rows` leave out some of `datasets`' rows (a
+/// split), else nothing.
+fn split_words(rows: &[Vec<usize>], datasets: &[Dataset]) -> String {
+    let taken: usize = rows.iter().map(Vec::len).sum();
+    let all: usize = datasets.iter().map(Dataset::len).sum();
+    match taken < all {
+        true => format!(" (the split's {taken} of {all} rows)"),
+        false => String::new(),
+    }
 }
 
 /// The preprocessing and the pin profile of the TacTip model in `dir`
