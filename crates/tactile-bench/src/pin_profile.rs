@@ -9,7 +9,7 @@ use serde::Serialize;
 use tactile_core::dataset::Dataset;
 use tactile_core::image_io::GreyImage;
 use tactile_preprocess::profile::InputProfile;
-use tactile_preprocess::{is_flat_frame, preprocess};
+use tactile_preprocess::{PreprocessConfig, is_flat_frame, preprocess};
 
 use crate::Result;
 
@@ -32,63 +32,75 @@ pub struct PinProfileRow {
     pub threshold: f32,
 }
 
-/// Up to `limit` grey frames of `data`: a dataset's rows (those of
-/// `split` when given: a dataset without them is refused) evenly spaced,
-/// or a frame source's first.
-fn frames_of(data: &Path, limit: usize, split: Option<&str>) -> Result<Vec<GreyImage>> {
+/// Each of up to `limit` grey frames of `data` handed to `each`, one at a
+/// time: a dataset's rows (those of `split` when given: a dataset without
+/// them is refused) evenly spaced, or a frame source's first.
+fn each_frame_of(
+    data: &Path,
+    limit: usize,
+    split: Option<&str>,
+    mut each: impl FnMut(&GreyImage) -> Result<()>,
+) -> Result<()> {
     use tactile_core::source::{FrameSource, SourceOptions, SourceSpec};
     if data.join("manifest.json").is_file() {
         let ds = Dataset::open(data)?;
         let rows = tactile_pipeline::profile::rows_of(&ds, split)?;
         let step = rows.len().div_ceil(limit.max(1)).max(1);
-        return Ok(rows
-            .iter()
-            .step_by(step)
-            .map(|&i| ds.load_grey(i, "file"))
-            .collect::<tactile_core::Result<_>>()?);
+        for &i in rows.iter().step_by(step) {
+            each(&ds.load_grey(i, "file")?)?;
+        }
+        return Ok(());
     }
     let options = SourceOptions {
         limit: Some(limit as u64),
         ..SourceOptions::default()
     };
     let mut source = FrameSource::open(&SourceSpec::Path(data.to_path_buf()), options)?;
-    let mut out = Vec::new();
     while let Some(f) = source.next_frame()? {
-        let (w, h) = (f.image.width(), f.image.height());
-        let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
-        out.push(tactile_core::image_io::grey_image(w, h, g)?);
+        each(&f.grey()?)?;
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Every model of `models` on up to `limit` frames of every set of `data`
-/// (a dataset's rows of `split` alone, when given).
+/// (a dataset's rows of `split` alone, when given). Each frame is read
+/// once and scored by every model; only the scores are kept.
 pub fn bench_pin_profiles(
     models: &[PathBuf],
     data: &[PathBuf],
     limit: usize,
     split: Option<&str>,
 ) -> Result<Vec<PinProfileRow>> {
-    let sets = data
+    let profiles: Vec<(PreprocessConfig, InputProfile)> = models
         .iter()
-        .map(|d| Ok((d, frames_of(d, limit, split)?)))
-        .collect::<Result<Vec<_>>>()?;
-    let mut rows = Vec::new();
-    for m in models {
-        let (cfg, profile): (_, InputProfile) = tactile_pipeline::profile::model_pin_profile(m)?;
-        for (d, frames) in &sets {
-            let mut scores: Vec<f32> = Vec::with_capacity(frames.len());
-            for f in frames.iter().filter(|f| !is_flat_frame(f, &cfg)) {
-                scores.push(profile.score_pins(&preprocess(f, &cfg)?));
+        .map(|m| Ok(tactile_pipeline::profile::model_pin_profile(m)?))
+        .collect::<Result<_>>()?;
+    // Per set, per model, the scores of its frames that are not flat.
+    let mut scores: Vec<Vec<Vec<f32>>> = Vec::with_capacity(data.len());
+    for d in data {
+        let mut per_model = vec![Vec::new(); models.len()];
+        each_frame_of(d, limit, split, |f| {
+            for ((cfg, profile), s) in profiles.iter().zip(&mut per_model) {
+                if !is_flat_frame(f, cfg) {
+                    s.push(profile.score_pins(&preprocess(f, cfg)?));
+                }
             }
-            scores.sort_by(f32::total_cmp);
+            Ok(())
+        })?;
+        scores.push(per_model);
+    }
+    let mut rows = Vec::new();
+    for (k, (m, (_, profile))) in models.iter().zip(&profiles).enumerate() {
+        for (d, per_model) in data.iter().zip(&mut scores) {
+            let s = &mut per_model[k];
+            s.sort_by(f32::total_cmp);
             rows.push(PinProfileRow {
                 model: m.display().to_string(),
                 data: d.display().to_string(),
-                frames: scores.len(),
-                flagged: scores.iter().filter(|&&s| s > profile.threshold).count(),
-                median: scores.get(scores.len() / 2).copied().unwrap_or(f32::NAN),
-                max: scores.last().copied().unwrap_or(f32::NAN),
+                frames: s.len(),
+                flagged: s.iter().filter(|&&v| v > profile.threshold).count(),
+                median: s.get(s.len() / 2).copied().unwrap_or(f32::NAN),
+                max: s.last().copied().unwrap_or(f32::NAN),
                 threshold: profile.threshold,
             });
         }

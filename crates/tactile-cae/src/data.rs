@@ -30,6 +30,36 @@ pub struct ForeignFrame {
     pub score: f32,
 }
 
+impl ForeignFrame {
+    /// Those of `pins` (one per frame, through the model's first
+    /// preprocessing) that score above `profile`'s threshold, in order,
+    /// scored in parallel; a frame is named by `label` of its place, and
+    /// those `skip` says (flat frames, told apart by their own warning)
+    /// are not scored.
+    pub fn among(
+        profile: &InputProfile,
+        pins: &[PinImage],
+        skip: impl Fn(usize) -> bool + Sync,
+        label: impl Fn(usize) -> String,
+    ) -> Vec<Self> {
+        let scores: Vec<Option<f32>> = pins
+            .par_iter()
+            .enumerate()
+            .map(|(i, p)| (!skip(i)).then(|| profile.score_pins(p)))
+            .collect();
+        scores
+            .into_iter()
+            .enumerate()
+            .filter_map(|(i, s)| {
+                s.filter(|&s| s > profile.threshold).map(|score| Self {
+                    file: label(i),
+                    score,
+                })
+            })
+            .collect()
+    }
+}
+
 /// Rows of a dataset preprocessed at a time when only their estimates are
 /// kept (inference over a whole dataset): 1,024 pin images of 128 px are
 /// 64 MiB, where a million rows at once would be 64 GiB.
@@ -126,26 +156,27 @@ impl PinSet {
         Ok(())
     }
 
+    /// Whether each image's frame is flat ([`Self::flat`]), in order.
+    pub fn flat_mask(&self) -> Vec<bool> {
+        let flat: std::collections::HashSet<&str> = self.flat.iter().map(String::as_str).collect();
+        self.files
+            .iter()
+            .map(|f| flat.contains(f.as_str()))
+            .collect()
+    }
+
     /// The frames whose pin images lie outside `profile` (a model's
     /// training pin profile, [`InputProfile::fit_pins`]), in order: a
     /// frame of another sensor, at another scale, or of no pins. Flat
     /// frames are left to their own warning ([`Self::flat`]).
     pub fn foreign(&self, profile: &InputProfile) -> Vec<ForeignFrame> {
-        let flat: std::collections::HashSet<&str> = self.flat.iter().map(String::as_str).collect();
-        let scores: Vec<f32> = self
-            .images
-            .par_iter()
-            .map(|p| profile.score_pins(p))
-            .collect();
-        self.files
-            .iter()
-            .zip(scores)
-            .filter(|(f, s)| *s > profile.threshold && !flat.contains(f.as_str()))
-            .map(|(f, score)| ForeignFrame {
-                file: f.clone(),
-                score,
-            })
-            .collect()
+        let flat = self.flat_mask();
+        ForeignFrame::among(
+            profile,
+            &self.images,
+            |i| flat[i],
+            |i| self.files[i].clone(),
+        )
     }
 
     /// Pin images alone (perturbed or live frames), without file names.

@@ -8,6 +8,7 @@ use tactile_burn::{Network, Runtime};
 use tactile_core::dataset::Dataset;
 use tactile_core::image_io::GreyImage;
 use tactile_preprocess::PinImage;
+use tactile_preprocess::profile::InputProfile;
 
 use crate::artifact::CaeArtifact;
 use crate::data::{DATASET_CHUNK, PinSet};
@@ -83,7 +84,9 @@ impl TactipEncoder {
     /// time ([`PinSet::for_each_chunk`]): each row's `file` label and
     /// features.
     pub fn encode_dataset(&mut self, ds: &Dataset) -> Result<(Vec<String>, Vec<Vec<f32>>)> {
-        let e = self.encode_dataset_flagging(ds)?;
+        // Only the features are wanted: no frame is scored against the
+        // encoder's pin profile.
+        let e = self.encode_rows(ds, None)?;
         Ok((e.files, e.features))
     }
 
@@ -91,6 +94,16 @@ impl TactipEncoder {
     /// one grey level throughout their crop ([`PinSet::flat`]) and of
     /// frames unlike its training frames ([`PinSet::foreign`]).
     pub fn encode_dataset_flagging(&mut self, ds: &Dataset) -> Result<EncodedDataset> {
+        let profile = self.artifact.input_profile.clone();
+        self.encode_rows(ds, profile.as_ref())
+    }
+
+    /// Every row of `ds` encoded, its frames outside `profile` listed.
+    fn encode_rows(
+        &mut self,
+        ds: &Dataset,
+        profile: Option<&InputProfile>,
+    ) -> Result<EncodedDataset> {
         let cfg = self.artifact.preprocess.clone();
         let mut e = EncodedDataset {
             files: Vec::with_capacity(ds.len()),
@@ -98,11 +111,10 @@ impl TactipEncoder {
             flat: Vec::new(),
             foreign: Vec::new(),
         };
-        let profile = self.artifact.input_profile.clone();
         PinSet::for_each_chunk(ds, std::slice::from_ref(&cfg), DATASET_CHUNK, |mut sets| {
             let set = sets.swap_remove(0);
             e.features.extend(self.encode(&set.images)?);
-            if let Some(p) = &profile {
+            if let Some(p) = profile {
                 e.foreign.extend(set.foreign(p));
             }
             e.files.extend(set.files);

@@ -357,6 +357,14 @@ impl Frame {
             None => format!("frame {}", self.name),
         }
     }
+
+    /// The frame made grey with OpenCV's weights, as a colour PNG in a
+    /// dataset is.
+    pub fn grey(&self) -> Result<crate::image_io::GreyImage> {
+        let (w, h) = (self.image.width(), self.image.height());
+        let g = crate::image_io::rgb_to_grey(self.image.as_slice());
+        crate::image_io::grey_image(w, h, g)
+    }
 }
 
 /// Where to read frames from.

@@ -403,13 +403,7 @@ pub fn calibration_rows(
     targets: &[crate::Target],
 ) -> tactile_core::Result<Vec<usize>> {
     let rows = match split {
-        Some(s) => ds.split_indices(s).ok_or_else(|| {
-            tactile_core::Error::dataset(
-                ds.labels_path(),
-                None,
-                format!("no 'split' column to take the '{s}' rows from"),
-            )
-        })?,
+        Some(s) => ds.split_rows(s)?,
         None => (0..ds.len()).collect(),
     };
     let mut labelled = Vec::with_capacity(rows.len());

@@ -55,21 +55,16 @@ pub fn rows_of(ds: &Dataset, split: Option<&str>) -> Result<Vec<usize>> {
     let Some(s) = split else {
         return Ok((0..ds.len()).collect());
     };
-    match ds.split_indices(s) {
-        Some(rows) if !rows.is_empty() => Ok(rows),
-        Some(_) => Err(tactile_core::Error::dataset(
+    let rows = ds.split_rows(s)?;
+    if rows.is_empty() {
+        return Err(tactile_core::Error::dataset(
             ds.labels_path(),
             None,
             format!("no row's split is '{s}'"),
         )
-        .into()),
-        None => Err(tactile_core::Error::dataset(
-            ds.labels_path(),
-            None,
-            format!("no 'split' column to take the '{s}' rows from"),
-        )
-        .into()),
+        .into());
     }
+    Ok(rows)
 }
 
 /// The pin profile of the TacTip model in `dir`, fitted on every frame of
@@ -85,21 +80,34 @@ fn add_pin_profile(dir: &Path, datasets: &[Dataset], rows: &[Vec<usize>]) -> Res
             tactile_core::Error::Invalid("an ensemble without members".into()).into()
         });
     }
+    if PoseArtifact::is_in(dir) {
+        refit::<PoseArtifact>(dir, datasets, rows, |a| {
+            (&a.preprocess, &mut a.input_profile)
+        })
+    } else {
+        refit::<CaeArtifact>(dir, datasets, rows, |a| {
+            (&a.preprocess, &mut a.input_profile)
+        })
+    }
+}
+
+/// Fit the pin profile of the model `A` in `dir` through its
+/// preprocessing and save it in its config atomically (`fields` gives
+/// both), under the folder's lock.
+fn refit<A: Artifact>(
+    dir: &Path,
+    datasets: &[Dataset],
+    rows: &[Vec<usize>],
+    fields: impl Fn(&mut A) -> (&PreprocessConfig, &mut Option<InputProfile>),
+) -> Result<InputProfile> {
     // Its config is rewritten: never while another run writes it.
     let _lock = tactile_core::io::FolderLock::of_existing(dir)?;
-    if PoseArtifact::is_in(dir) {
-        let mut a = PoseArtifact::read(dir)?;
-        let p = pin_profile_of(datasets, rows, &a.preprocess)?;
-        a.input_profile = Some(p.clone());
-        tactile_core::io::write_json_atomic(dir.join(PoseArtifact::CONFIG_FILE), &a)?;
-        Ok(p)
-    } else {
-        let mut a = CaeArtifact::read(dir)?;
-        let p = pin_profile_of(datasets, rows, &a.preprocess)?;
-        a.input_profile = Some(p.clone());
-        tactile_core::io::write_json_atomic(dir.join(CaeArtifact::CONFIG_FILE), &a)?;
-        Ok(p)
-    }
+    let mut a = A::read(dir)?;
+    let (cfg, slot) = fields(&mut a);
+    let p = pin_profile_of(datasets, rows, cfg)?;
+    *slot = Some(p.clone());
+    tactile_core::io::write_json_atomic(dir.join(A::CONFIG_FILE), &a)?;
+    Ok(p)
 }
 
 /// The pin profile of the frames of `datasets` through `cfg`, a chunk at
@@ -115,13 +123,11 @@ fn pin_profile_of(
         let cfgs = std::slice::from_ref(cfg);
         PinSet::for_each_chunk_of(ds, rows, cfgs, DATASET_CHUNK, |sets| {
             let set = &sets[0];
-            let flat: std::collections::HashSet<&str> =
-                set.flat.iter().map(String::as_str).collect();
             let pins: Vec<_> = set
                 .images
                 .iter()
-                .zip(&set.files)
-                .filter(|(_, f)| !flat.contains(f.as_str()))
+                .zip(set.flat_mask())
+                .filter(|(_, flat)| !flat)
                 .map(|(p, _)| p)
                 .collect();
             spectra.extend(pin_spectra(&pins));

@@ -194,15 +194,11 @@ impl Predictor {
                     estimates: pose_estimates(&r.names, &r.values, r.std.as_deref()),
                     ms_encode: r.ms_per_frame,
                     ms_estimate: 0.0,
-                    warnings: flat_frames_warning(&r.flat, false)
-                        .into_iter()
-                        .chain(
-                            p.artifact
-                                .input_profile
-                                .as_ref()
-                                .and_then(|pr| foreign_frames_warning(&r.foreign, pr, false)),
-                        )
-                        .collect(),
+                    warnings: dataset_frame_warnings(
+                        &r.flat,
+                        &r.foreign,
+                        p.artifact.input_profile.as_ref(),
+                    ),
                 }
             }
         };
@@ -218,7 +214,8 @@ impl Predictor {
         frames: &[GreyImage],
         name: impl Fn(usize) -> Option<String>,
     ) -> Result<Estimates> {
-        Ok(self.perceive_frames_scored(frames, name)?.0)
+        // No frame is scored: only the estimates are wanted.
+        Ok(self.perceive_frames_flagging(frames, &name, |_| true)?.0)
     }
 
     /// The model's pin profile ([`InputProfile::fit_pins`]; an ensemble's
@@ -230,24 +227,28 @@ impl Predictor {
         }
     }
 
-    /// [`Self::perceive_frames`], with each frame's score against the
-    /// model's pin profile (none without one).
-    fn perceive_frames_scored(
+    /// [`Self::perceive_frames`], with the frames outside the model's pin
+    /// profile ([`ForeignFrame::among`]; none without one), named by
+    /// `name`; those `skip` says (flat frames) are not scored.
+    fn perceive_frames_flagging(
         &mut self,
         frames: &[GreyImage],
-        name: impl Fn(usize) -> Option<String>,
-    ) -> Result<(Estimates, Option<Vec<f32>>)> {
+        name: &impl Fn(usize) -> Option<String>,
+        skip: impl Fn(usize) -> bool + Sync,
+    ) -> Result<(Estimates, Vec<ForeignFrame>)> {
         let pins = self
             .preprocessings()
             .into_iter()
             .map(|cfg| {
-                tactile_preprocess::preprocess_each(frames, cfg).map_err(|e| e.name_frame(&name))
+                tactile_preprocess::preprocess_each(frames, cfg).map_err(|e| e.name_frame(name))
             })
             .collect::<std::result::Result<Vec<Vec<PinImage>>, _>>()?;
-        let scores = self.input_profile().map(|p| {
-            pins.first()
-                .map_or(Vec::new(), |f| f.iter().map(|x| p.score_pins(x)).collect())
-        });
+        let foreign = match (self.input_profile(), pins.first()) {
+            (Some(p), Some(first)) => ForeignFrame::among(p, first, skip, |i| {
+                name(i).unwrap_or_else(|| format!("frames[{i}]"))
+            }),
+            _ => Vec::new(),
+        };
         let estimates = match self {
             Self::Encoder(p) => p.estimate(pins.first().map_or(&[], Vec::as_slice))?,
             Self::PoseNetwork(p) => {
@@ -258,7 +259,7 @@ impl Predictor {
                 pose_estimates(&names, &values, std.as_deref())
             }
         };
-        Ok((estimates, scores))
+        Ok((estimates, foreign))
     }
 
     /// Every frame of `input` (a dataset's, or a source's in batches):
@@ -393,8 +394,7 @@ impl Predictor {
                 if let Some(why) = sizes.check(w, h, &cfgs) {
                     warnings.push(format!("warning: {label}: {why}"));
                 }
-                let g = tactile_core::image_io::rgb_to_grey(f.image.as_slice());
-                let g = tactile_core::image_io::grey_image(w, h, g)?;
+                let g = f.grey()?;
                 // Named as they come, the first few (a covered camera
                 // would name every frame of a stream otherwise).
                 let flat = cfgs.first().is_some_and(|c| is_flat_frame(&g, c));
@@ -415,25 +415,19 @@ impl Predictor {
                 arrived.push(f.arrived);
             }
             if grey.len() == batch || (frame.is_none() && !grey.is_empty()) {
-                let (estimates, scores) =
-                    self.perceive_frames_scored(&grey, |i| labels.get(i).cloned())?;
-                if let (Some(scores), Some(profile)) = (scores, self.input_profile()) {
-                    for ((score, label), flat) in
-                        scores.into_iter().zip(&labels).zip(&flat_in_batch)
-                    {
-                        if score > profile.threshold && !flat {
-                            foreign_frames += 1;
-                            if foreign_frames <= MAX_FLAT_NAMED {
-                                let f = ForeignFrame {
-                                    file: label.clone(),
-                                    score,
-                                };
-                                warnings.extend(foreign_frames_warning(
-                                    std::slice::from_ref(&f),
-                                    profile,
-                                    foreign_frames == MAX_FLAT_NAMED,
-                                ));
-                            }
+                let (estimates, foreign) =
+                    self.perceive_frames_flagging(&grey, &|i| labels.get(i).cloned(), |i| {
+                        flat_in_batch[i]
+                    })?;
+                if let Some(profile) = self.input_profile() {
+                    for f in foreign {
+                        foreign_frames += 1;
+                        if foreign_frames <= MAX_FLAT_NAMED {
+                            warnings.extend(foreign_frames_warning(
+                                std::slice::from_ref(&f),
+                                profile,
+                                foreign_frames == MAX_FLAT_NAMED,
+                            ));
                         }
                     }
                 }
@@ -558,29 +552,39 @@ pub fn foreign_pins_warning(
     label: impl Fn(usize) -> String,
 ) -> Option<String> {
     let profile = profile?;
-    let foreign: Vec<ForeignFrame> = pins
-        .iter()
-        .enumerate()
-        .filter_map(|(i, p)| {
-            let score = profile.score_pins(p);
-            (score > profile.threshold).then(|| ForeignFrame {
-                file: label(i),
-                score,
-            })
-        })
-        .collect();
+    let foreign = ForeignFrame::among(profile, pins, |_| false, label);
     foreign_frames_warning(&foreign, profile, false)
 }
 
-/// The warnings of an encoded dataset: its blank frames and its frames
-/// outside the encoder's pin `profile`, in one warning each.
-pub fn encoded_dataset_warnings(
-    e: &tactile_cae::inference::EncodedDataset,
+/// A pose network's estimates of frames given one by one (Python's
+/// `PoseEstimator.estimate`), each preprocessed once per scale, with the
+/// warning for those outside its pin profile, named `frames[i]`
+/// ([`foreign_pins_warning`]).
+pub fn pose_frames_flagging(
+    e: &mut tactile_pose::PoseEstimator,
+    frames: &[GreyImage],
+) -> Result<(tactile_pose::inference::ValuesWithStd, Option<String>)> {
+    let pins = e.preprocess(frames)?;
+    let unlike = foreign_pins_warning(
+        pins.first().map_or(&[], Vec::as_slice),
+        e.artifact.input_profile.as_ref(),
+        |i| format!("frames[{i}]"),
+    );
+    let views: Vec<&[PinImage]> = pins.iter().map(Vec::as_slice).collect();
+    Ok((e.predict_scales_with_std(&views)?, unlike))
+}
+
+/// The warnings of a dataset's frames: its blank frames (`flat`) and its
+/// frames outside the model's pin `profile` (`foreign`), in one warning
+/// each.
+pub fn dataset_frame_warnings(
+    flat: &[String],
+    foreign: &[ForeignFrame],
     profile: Option<&InputProfile>,
 ) -> Vec<String> {
-    flat_frames_warning(&e.flat, false)
+    flat_frames_warning(flat, false)
         .into_iter()
-        .chain(profile.and_then(|p| foreign_frames_warning(&e.foreign, p, false)))
+        .chain(profile.and_then(|p| foreign_frames_warning(foreign, p, false)))
         .collect()
 }
 
@@ -842,8 +846,11 @@ impl TactipPerception {
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
         let t0 = std::time::Instant::now();
         let encoded = self.encoder.encode_dataset_flagging(ds)?;
-        let warnings =
-            encoded_dataset_warnings(&encoded, self.encoder.artifact.input_profile.as_ref());
+        let warnings = dataset_frame_warnings(
+            &encoded.flat,
+            &encoded.foreign,
+            self.encoder.artifact.input_profile.as_ref(),
+        );
         let tactile_cae::inference::EncodedDataset {
             files,
             features: feats,

@@ -10,7 +10,6 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 use tactile_pose::PoseEstimator;
-use tactile_preprocess::PinImage;
 
 use crate::encoder::{frame_args, pin_image_array, warn_frame_sizes};
 use crate::errors::PyResultExt;
@@ -91,21 +90,7 @@ impl PyPoseEstimator {
                 .map(Pixels::grey)
                 .collect::<tactile_core::Result<Vec<_>>>()
                 .py()?;
-            let pins = e
-                .preprocess(&grey)
-                .map_err(tactile_pipeline::Error::from)
-                .py()?;
-            let unlike = tactile_pipeline::tactip::foreign_pins_warning(
-                pins.first().map_or(&[], Vec::as_slice),
-                e.artifact.input_profile.as_ref(),
-                |i| format!("frames[{i}]"),
-            );
-            let views: Vec<&[PinImage]> = pins.iter().map(Vec::as_slice).collect();
-            let estimates = e
-                .predict_scales_with_std(&views)
-                .map_err(tactile_pipeline::Error::from)
-                .py()?;
-            Ok((estimates, unlike))
+            tactile_pipeline::tactip::pose_frames_flagging(&mut e, &grey).py()
         })?;
         if let Some(w) = unlike {
             crate::errors::user_warning(py, &w)?;

@@ -36,7 +36,9 @@ pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     }
     let encoded = enc.encode_dataset_flagging(&ds)?;
     let profile = enc.artifact.input_profile.as_ref();
-    for w in tactile_pipeline::tactip::encoded_dataset_warnings(&encoded, profile) {
+    for w in
+        tactile_pipeline::tactip::dataset_frame_warnings(&encoded.flat, &encoded.foreign, profile)
+    {
         tactile_core::note!("{w}");
     }
     let (files, feats) = (encoded.files, encoded.features);

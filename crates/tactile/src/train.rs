@@ -33,20 +33,30 @@ pub(crate) enum TrainCmd {
     #[command(alias = "pose-ensemble")]
     Ensemble(EnsembleArgs),
     /// Measure the pin lattice's orientation on an encoder's training frames and save it with the encoder, so frames of a sensor mounted turned are turned back before encoding.
-    Align(ProfileArgs),
+    Align(AlignArgs),
 }
 
 #[derive(Args)]
 pub(crate) struct ProfileArgs {
-    /// The detector, encoder or pose-network folder (the encoder folder for `align`).
+    /// The detector, encoder or pose-network folder.
     #[arg(long)]
     model: PathBuf,
-    /// Dataset(s): the model's training data for `profile` (the encoder's for `align`).
+    /// Dataset(s): the model's training data.
     #[arg(long, num_args = 1.., required = true)]
     data: Vec<PathBuf>,
-    /// `profile` of a TacTip model: only the rows whose `split` column says this (e.g. train).
+    /// A TacTip model: only the rows whose `split` column says this (e.g. train).
     #[arg(long)]
     split: Option<String>,
+}
+
+#[derive(Args)]
+pub(crate) struct AlignArgs {
+    /// The encoder folder.
+    #[arg(long)]
+    model: PathBuf,
+    /// Dataset(s): the encoder's training data (every frame is measured).
+    #[arg(long, num_args = 1.., required = true)]
+    data: Vec<PathBuf>,
 }
 
 #[derive(Args)]
@@ -232,7 +242,8 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         TrainCmd::Detector(a) => Some(&a.out),
         TrainCmd::Segmenter(a) => Some(&a.out),
         TrainCmd::Depth(a) => Some(&a.out),
-        TrainCmd::Profile(a) | TrainCmd::Align(a) => Some(&a.model),
+        TrainCmd::Profile(a) => Some(&a.model),
+        TrainCmd::Align(a) => Some(&a.model),
         TrainCmd::Calibrate(a) => Some(&a.model),
         TrainCmd::Pose(a) => Some(&a.out),
         TrainCmd::Ensemble(a) => Some(&a.out),
@@ -317,9 +328,6 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             );
         }
         TrainCmd::Align(a) => {
-            if let Some(s) = &a.split {
-                bail!("--split {s}: `train align` measures every frame of the datasets given");
-            }
             let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
             let (p, n) = tactile_cae::artifact::add_pin_alignment(&a.model, &data)?;
             say!("{}", p.describe(n));

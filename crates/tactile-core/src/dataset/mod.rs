@@ -625,6 +625,18 @@ impl Dataset {
         )
     }
 
+    /// The rows of `split` ([`Self::split_indices`]), or, for a dataset
+    /// without a `split` column, an error naming its labels.
+    pub fn split_rows(&self, split: &str) -> Result<Vec<usize>> {
+        self.split_indices(split).ok_or_else(|| {
+            Error::dataset(
+                self.labels_path(),
+                None,
+                format!("no 'split' column to take the '{split}' rows from"),
+            )
+        })
+    }
+
     /// What a `split` column holds besides `train`, `val` and `test` (its
     /// values and how many rows each), for an error about too few rows to
     /// say why: empty without such values.
