@@ -423,10 +423,14 @@ impl Predictor {
                     for f in foreign {
                         foreign_frames += 1;
                         if foreign_frames <= MAX_FLAT_NAMED {
+                            let wording = match foreign_frames == MAX_FLAT_NAMED {
+                                true => Wording::NamedThenUnnamed,
+                                false => Wording::Named,
+                            };
                             warnings.extend(foreign_frames_warning(
                                 std::slice::from_ref(&f),
                                 profile,
-                                foreign_frames == MAX_FLAT_NAMED,
+                                wording,
                             ));
                         }
                     }
@@ -523,55 +527,97 @@ fn flat_frames_warning(flat: &[String], then_unnamed: bool) -> Option<String> {
 fn foreign_frames_warning(
     foreign: &[ForeignFrame],
     profile: &InputProfile,
-    then_unnamed: bool,
+    wording: Wording,
 ) -> Option<String> {
     if foreign.is_empty() {
         return None;
     }
     let worst = foreign.iter().map(|f| f.score).fold(f32::NAN, f32::max);
     let files: Vec<String> = foreign.iter().map(|f| f.file.clone()).collect();
-    let (named, these, then) = named_frames(&files, then_unnamed);
-    let scored = match foreign.len() {
-        1 => format!("scores {worst:.1}"),
-        _ => format!("scores up to {worst:.1}"),
+    let (named, these, then) = named_frames(&files, wording == Wording::NamedThenUnnamed);
+    let threshold = profile.threshold;
+    let scored = match (wording, foreign.len()) {
+        (Wording::Left, _) => {
+            format!(
+                "its pin spectrum scores above the {threshold:.1} its own sensor's frames stay below"
+            )
+        }
+        (_, 1) => format!(
+            "its pin spectrum scores {worst:.1}; its own sensor's frames stay below {threshold:.1}"
+        ),
+        _ => format!(
+            "its pin spectrum scores up to {worst:.1}; its own sensor's frames stay below {threshold:.1}"
+        ),
     };
     Some(format!(
-        "warning: {named}: pins spaced unlike those of the {} frames this model was trained on (its pin spectrum {scored}; its own sensor's frames stay below {:.1}): a frame of another sensor, at another scale or crop, or without pins? The estimates of {these} may mean nothing: give frames of the sensor and resolution it was trained on, or train on yours{then}",
-        profile.frames, profile.threshold
+        "warning: {named}: pins spaced unlike those of the {} frames this model was trained on ({scored}): a frame of another sensor, at another scale or crop, or without pins? The estimates of {these} may mean nothing: give frames of the sensor and resolution it was trained on, or train on yours{then}",
+        profile.frames
     ))
 }
 
-/// The warning for those of `pins` (one per frame, through a model's
-/// first preprocessing) that lie outside the model's pin `profile`, each
-/// frame named by `label` of its place: for calls that get frames rather
-/// than a dataset or a source (Python's `PoseEstimator.estimate`,
-/// `TactipEncoder.encode`). `None` without a profile or such a frame.
-pub fn foreign_pins_warning(
+/// How a warning of foreign frames words itself.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Wording {
+    /// Their score named (a dataset's frames, in one warning).
+    Named,
+    /// Their score named, and the words saying a stream names no more
+    /// after these.
+    NamedThenUnnamed,
+    /// No score, so the text repeats alike ([`frames_warnings`]).
+    Left,
+}
+
+/// The warnings of frames given in a call rather than as a dataset or a
+/// source (Python's `PoseEstimator.estimate`, `TactipEncoder.encode`),
+/// each named `frames[i]`: the blank ones (`flat`), and those of the
+/// others whose `pins` (through the model's first preprocessing) lie
+/// outside its pin `profile`. Their words hold no score, so a loop fed
+/// the wrong camera repeats one text, which Python's warning filters show
+/// once per call site.
+pub fn frames_warnings(
+    flat: &[bool],
     pins: &[PinImage],
     profile: Option<&InputProfile>,
-    label: impl Fn(usize) -> String,
-) -> Option<String> {
-    let profile = profile?;
-    let foreign = ForeignFrame::among(profile, pins, |_| false, label);
-    foreign_frames_warning(&foreign, profile, false)
+) -> Vec<String> {
+    let named: Vec<String> = (0..flat.len())
+        .filter(|&i| flat[i])
+        .map(|i| format!("frames[{i}]"))
+        .collect();
+    let unlike = profile.and_then(|p| {
+        let foreign = ForeignFrame::among(
+            p,
+            pins,
+            |i| flat.get(i).copied().unwrap_or(false),
+            |i| format!("frames[{i}]"),
+        );
+        foreign_frames_warning(&foreign, p, Wording::Left)
+    });
+    flat_frames_warning(&named, false)
+        .into_iter()
+        .chain(unlike)
+        .collect()
 }
 
 /// A pose network's estimates of frames given one by one (Python's
 /// `PoseEstimator.estimate`), each preprocessed once per scale, with the
-/// warning for those outside its pin profile, named `frames[i]`
-/// ([`foreign_pins_warning`]).
+/// warnings of its blank frames and of those outside its pin profile
+/// ([`frames_warnings`]).
 pub fn pose_frames_flagging(
     e: &mut tactile_pose::PoseEstimator,
     frames: &[GreyImage],
-) -> Result<(tactile_pose::inference::ValuesWithStd, Option<String>)> {
+) -> Result<(tactile_pose::inference::ValuesWithStd, Vec<String>)> {
     let pins = e.preprocess(frames)?;
-    let unlike = foreign_pins_warning(
+    let flat: Vec<bool> = match e.scales().first() {
+        Some(cfg) => frames.iter().map(|f| is_flat_frame(f, cfg)).collect(),
+        None => vec![false; frames.len()],
+    };
+    let warnings = frames_warnings(
+        &flat,
         pins.first().map_or(&[], Vec::as_slice),
         e.artifact.input_profile.as_ref(),
-        |i| format!("frames[{i}]"),
     );
     let views: Vec<&[PinImage]> = pins.iter().map(Vec::as_slice).collect();
-    Ok((e.predict_scales_with_std(&views)?, unlike))
+    Ok((e.predict_scales_with_std(&views)?, warnings))
 }
 
 /// The warnings of a dataset's frames: its blank frames (`flat`) and its
@@ -584,7 +630,7 @@ pub fn dataset_frame_warnings(
 ) -> Vec<String> {
     flat_frames_warning(flat, false)
         .into_iter()
-        .chain(profile.and_then(|p| foreign_frames_warning(foreign, p, false)))
+        .chain(profile.and_then(|p| foreign_frames_warning(foreign, p, Wording::Named)))
         .collect()
 }
 

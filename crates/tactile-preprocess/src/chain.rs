@@ -88,13 +88,36 @@ pub fn preprocess_each_by<F: Sync>(
     cfg: &PreprocessConfig,
     grey: impl Fn(&F) -> Result<Cow<'_, GreyImage>> + Sync,
 ) -> Result<Vec<PinImage>> {
+    each_by(frames, cfg, grey, |_| ()).map(|pins| pins.into_iter().map(|(p, ())| p).collect())
+}
+
+/// [`preprocess_each_by`], each pin image with whether its frame is flat
+/// ([`is_flat_frame`]), read off the grey frame while it is held: for
+/// frames given in memory, which are warned of as a dataset's are.
+pub fn preprocess_each_noting_flat<F: Sync>(
+    frames: &[F],
+    cfg: &PreprocessConfig,
+    grey: impl Fn(&F) -> Result<Cow<'_, GreyImage>> + Sync,
+) -> Result<(Vec<PinImage>, Vec<bool>)> {
+    Ok(each_by(frames, cfg, grey, |g| is_flat_frame(g, cfg))?
+        .into_iter()
+        .unzip())
+}
+
+/// Each frame made grey, preprocessed, and read by `also` while grey.
+fn each_by<F: Sync, T: Send>(
+    frames: &[F],
+    cfg: &PreprocessConfig,
+    grey: impl Fn(&F) -> Result<Cow<'_, GreyImage>> + Sync,
+    also: impl Fn(&GreyImage) -> T + Sync,
+) -> Result<Vec<(PinImage, T)>> {
     use rayon::prelude::*;
     frames
         .par_iter()
         .enumerate()
         .map(|(index, f)| {
             grey(f)
-                .and_then(|g| preprocess(&g, cfg))
+                .and_then(|g| Ok((preprocess(&g, cfg)?, also(&g))))
                 .map_err(|e| Error::Frame {
                     index,
                     error: Box::new(e),

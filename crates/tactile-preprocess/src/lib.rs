@@ -29,7 +29,7 @@ pub mod visuo;
 pub(crate) use chain::lit_and_masked;
 pub use chain::{
     FLAT_FRAME_LEVELS, MAX_WINDOW_PX, PinImage, binarise, is_flat_frame, preprocess,
-    preprocess_each, preprocess_each_by,
+    preprocess_each, preprocess_each_by, preprocess_each_noting_flat,
 };
 pub use config::{Downsample, FrameSizeCheck, Lighting, PreprocessConfig};
 pub use error::{Error, Result};

@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_cae::TactipEncoder;
 use tactile_estimate::{Column, Estimators};
-use tactile_pipeline::tactip::{TactipPerception, foreign_pins_warning};
+use tactile_pipeline::tactip::{TactipPerception, frames_warnings};
 use tactile_preprocess::PinImage;
 
 use crate::errors::PyResultExt;
@@ -48,19 +48,15 @@ impl PyTactipEncoder {
             .map_err(|_| PyRuntimeError::new_err("the encoder failed in another thread"))
     }
 
-    /// Pin images of frames, preprocessed in parallel as a dataset's are.
-    fn pins(&self, px: &[Pixels<'_>]) -> PyResult<Vec<PinImage>> {
-        pin_images(px, &self.preprocess)
+    /// Pin images of frames, preprocessed in parallel as a dataset's are,
+    /// with whether each frame is blank (one grey level in its crop).
+    fn pins(&self, px: &[Pixels<'_>]) -> PyResult<(Vec<PinImage>, Vec<bool>)> {
+        // Each frame made grey as its turn comes; one that fails is named `frames[i]`.
+        tactile_preprocess::preprocess_each_noting_flat(px, &self.preprocess, |p| {
+            Ok(std::borrow::Cow::Owned(p.grey()?))
+        })
+        .py()
     }
-}
-
-/// Pin images of frames by `cfg`, preprocessed in parallel as a dataset's are.
-pub(crate) fn pin_images(
-    px: &[Pixels<'_>],
-    cfg: &tactile_preprocess::PreprocessConfig,
-) -> PyResult<Vec<PinImage>> {
-    // Each frame made grey as its turn comes; one that fails is named `frames[i]`.
-    tactile_preprocess::preprocess_each_by(px, cfg, |p| Ok(std::borrow::Cow::Owned(p.grey()?))).py()
 }
 
 /// A `UserWarning` for each frame size among `px` that a preprocessing of
@@ -179,16 +175,13 @@ impl PyTactipEncoder {
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
         warn_frame_sizes(py, &px, std::slice::from_ref(&self.preprocess))?;
         let k = self.feature_count;
-        let (feats, unlike) = py.detach(|| -> PyResult<(Vec<Vec<f32>>, Option<String>)> {
-            let pins = self.pins(&px)?;
+        let (feats, warnings) = py.detach(|| -> PyResult<(Vec<Vec<f32>>, Vec<String>)> {
+            let (pins, flat) = self.pins(&px)?;
             let mut m = self.lock()?;
-            let unlike =
-                foreign_pins_warning(&pins, m.encoder.artifact.input_profile.as_ref(), |i| {
-                    format!("frames[{i}]")
-                });
-            Ok((m.encoder.encode(&pins).py()?, unlike))
+            let warnings = frames_warnings(&flat, &pins, m.encoder.artifact.input_profile.as_ref());
+            Ok((m.encoder.encode(&pins).py()?, warnings))
         })?;
-        if let Some(w) = unlike {
+        for w in warnings {
             crate::errors::user_warning(py, &w)?;
         }
         let flat: Vec<f32> = feats.concat();
@@ -214,20 +207,17 @@ impl PyTactipEncoder {
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
         warn_frame_sizes(py, &px, std::slice::from_ref(&self.preprocess))?;
-        let (est, unlike) = py.detach(|| -> PyResult<(tactile_estimate::Estimates, _)> {
-            let pins = self.pins(&px)?;
+        let (est, warnings) = py.detach(|| -> PyResult<(tactile_estimate::Estimates, _)> {
+            let (pins, flat) = self.pins(&px)?;
             let mut m = self.lock()?;
-            let unlike =
-                foreign_pins_warning(&pins, m.encoder.artifact.input_profile.as_ref(), |i| {
-                    format!("frames[{i}]")
-                });
+            let warnings = frames_warnings(&flat, &pins, m.encoder.artifact.input_profile.as_ref());
             let feats = m.encoder.encode(&pins).py()?;
             match &m.estimators {
-                Some(e) => Ok((e.estimate(&feats).py()?, unlike)),
+                Some(e) => Ok((e.estimate(&feats).py()?, warnings)),
                 None => Err(PyValueError::new_err("no estimators")),
             }
         })?;
-        if let Some(w) = unlike {
+        for w in warnings {
             crate::errors::user_warning(py, &w)?;
         }
         let np = py.import("numpy")?;

@@ -78,7 +78,7 @@ impl PyPoseEstimator {
         let args = frame_args(frames)?;
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
         warn_frame_sizes(py, &px, &self.scales)?;
-        let ((rows, std), unlike) = py.detach(|| -> PyResult<_> {
+        let ((rows, std), warnings) = py.detach(|| -> PyResult<_> {
             let mut e = self
                 .estimator
                 .lock()
@@ -92,7 +92,7 @@ impl PyPoseEstimator {
                 .py()?;
             tactile_pipeline::tactip::pose_frames_flagging(&mut e, &grey).py()
         })?;
-        if let Some(w) = unlike {
+        for w in warnings {
             crate::errors::user_warning(py, &w)?;
         }
         let out = PyDict::new(py);

@@ -187,9 +187,10 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
         mixed = pose.estimate([frames[0], *small])
     assert len(mixed["depth_mm"]) == 4
     assert sum("smaller than" in str(w.message) for w in seen) == 1
-    # Grey frames without pins: named in one warning too.
-    unlike = [str(w.message) for w in seen if "pins spaced unlike" in str(w.message)]
-    assert len(unlike) == 1 and unlike[0].startswith("frames[1], frames[2], frames[3]: "), unlike
+    # Grey frames without pins: named in one warning too, as blank.
+    blank = [str(w.message) for w in seen if "one grey level" in str(w.message)]
+    assert len(blank) == 1 and blank[0].startswith("frames[1], frames[2], frames[3]: "), blank
+    assert not [w for w in seen if "pins spaced unlike" in str(w.message)]
     # A frame too small for even the pin image is refused, named by its place.
     with pytest.raises(ValueError, match=r"frames\[2\]: frame is 12x10, smaller than the 64x64"):
         pose.estimate([frames[0], frames[1], np.zeros((10, 12), dtype=np.uint8)])
@@ -233,9 +234,9 @@ def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root, shared_r
         warnings.simplefilter("always")
         burn.encode(np.zeros((1, 120, 160), dtype=np.uint8))
     said = [str(w.message) for w in seen]
-    # A small blank frame: its size, and a pin image without pins.
+    # A small blank frame: its size, and no pins to read.
     assert len(said) == 2 and said[0].startswith("frames[0]: the frame is 160x120"), said
-    assert said[1].startswith("frames[0]: pins spaced unlike"), said
+    assert said[1].startswith("frames[0]: one grey level throughout the crop"), said
     with pytest.raises(ValueError, match=r"frames\[1\]: frame is 12x10, smaller than the 56x56"), \
             warnings.catch_warnings():
         warnings.simplefilter("ignore")  # its size, said above
@@ -387,3 +388,37 @@ def test_frames_of_another_sensor_given_to_the_models_one_call_at_a_time_are_nam
     assert len(said) == 1 and said[0].startswith("frames[1]: "), said
     got, said = unlike(lambda: cae.estimate([surface]))
     assert len(said) == 1 and said[0].startswith("frames[0]: "), said
+
+
+def test_a_loop_fed_another_camera_is_warned_once_and_a_blank_frame_as_blank(root, shared_real):
+    """A robot's loop calling `PoseEstimator.estimate` / `TactipEncoder.encode`
+    frame by frame on the wrong camera is warned once per call site under
+    Python's default filter (the text names no score, so it repeats alike),
+    not once per frame; a blank frame given so is named as blank (no pins to
+    read), as `predict` names it, not as another sensor's."""
+    presses = sorted((shared_real / "gelsight-ball/frames").glob("press_*.png"))[:4]
+    frames = [tactile.read_rgb(p) for p in presses]
+    pose = tactile.PoseEstimator(root / "models/pose-surface")
+    cae = tactile.TactipEncoder(root / "models/cae-surface")
+    for call in (pose.estimate, cae.encode, cae.estimate):
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("default")
+            for f in frames:
+                call(f)
+        said = [str(w.message) for w in seen]
+        assert len(said) == 1 and said[0].startswith("frames[0]: pins spaced unlike those of the 8000 frames"), said
+        assert "scores above the" in said[0], said
+        # Every frame is still unlike: with every warning shown, each is named.
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            for f in frames:
+                call(f)
+        assert len(seen) == len(frames), [str(w.message) for w in seen]
+    surface = tactile.read_grey(shared_real / "tactip331-surface/frames/train_image_1.png")
+    blank = np.full_like(surface, 255)
+    for call in (pose.estimate, cae.encode):
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            call([surface, blank])
+        said = [str(w.message) for w in seen]
+        assert len(said) == 1 and said[0].startswith("frames[1]: one grey level throughout the crop"), said
