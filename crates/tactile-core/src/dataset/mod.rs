@@ -746,10 +746,6 @@ pub fn check_run_output(out: &Path, input: Option<&Path>, datasets: &[&Dataset])
     check_output_file(out, datasets)
 }
 
-/// Folders looked at for an input folder an output lies in: its own and
-/// three above (`DS/frames/seq/x.png`).
-const ENCLOSING_INPUT_DEPTH: usize = 4;
-
 /// Refuse an output `out` (written at `target`) that would change an input
 /// folder it lies in, whether or not the run reads it: a dataset's
 /// manifest, labels or a file its rows name, a calibration folder's
@@ -768,7 +764,10 @@ pub fn refuse_file_of_enclosing_input(out: &Path, target: &Path) -> Result<()> {
     let Some(t) = canonical_output(target) else {
         return Ok(());
     };
-    for dir in t.ancestors().skip(1).take(ENCLOSING_INPUT_DEPTH) {
+    // Every folder above, to the root: a dataset's rows may name files
+    // however deep (`DS/frames/session/run/take/x.png`), and the nearest
+    // input folder decides.
+    for dir in t.ancestors().skip(1) {
         let (manifest, labels) = (dir.join("manifest.json"), dir.join("labels.csv"));
         if manifest.is_file() && labels.is_file() {
             return match Dataset::open(dir) {
@@ -1038,10 +1037,23 @@ mod tests {
         assert!(check_output_file(&ds.join("labels.csv"), &[]).is_err());
         check_output_file(&ds.join("frames/a.png"), &[]).unwrap();
         assert_eq!(std::fs::read(ds.join("labels.csv")).unwrap(), labels);
+        // However deep a file its rows name lies (a recording's sessions,
+        // runs and takes): the folders above an output are looked at up
+        // to the root, not a fixed few.
+        let deep = d.path().join("deep");
+        let nested = "frames/s1/run2/take3/cam4/b.png";
+        tiny(
+            &deep,
+            &format!("{HEADER}frames/a.png,sphere,1.5,,0,2,3.4\n{nested},sphere,1.5,,0,2,3.4\n"),
+        );
+        std::fs::create_dir_all(deep.join("frames/s1/run2/take3/cam4")).unwrap();
+        crate::image_io::save_grey_png(deep.join(nested), 4, 4, &[0; 16]).unwrap();
+        refused(&deep, &[nested], "is part of the dataset");
+        check_output_file(&deep.join("frames/s1/run2/take3/cam4/b.md"), &[]).unwrap();
         // A calibration folder keeps its description, annotations, rest
         // frame (the one sensor.json names) and presses.
         let cal = d.path().join("cal");
-        std::fs::create_dir_all(cal.join("frames")).unwrap();
+        std::fs::create_dir_all(cal.join("frames/day1/ball4mm/take2")).unwrap();
         std::fs::write(cal.join("sensor.json"), r#"{"background": "rest.png"}"#).unwrap();
         for f in ["presses.csv", "rest.png", "frames/p1.png", "notes.md"] {
             std::fs::write(cal.join(f), b"x").unwrap();
@@ -1054,6 +1066,7 @@ mod tests {
                 "rest.png",
                 "frames/p1.png",
                 "frames/new.md",
+                "frames/day1/ball4mm/take2/p1.png",
             ],
             "is part of the calibration folder",
         );
