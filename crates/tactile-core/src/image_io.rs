@@ -40,6 +40,17 @@ fn describe(color: ColorType) -> &'static str {
     }
 }
 
+/// Why a frame file of another depth (16-bit, float) is not read, and
+/// what to do: the sensor contract is 8 bits per channel, and only the
+/// user knows which of 16 bits their camera fills (a 12-bit camera's
+/// levels cut to the high byte would read as a blank frame).
+fn not_eight_bit(color: ColorType, expected: &str) -> String {
+    format!(
+        "{} image; expected {expected}: save the frames with 8 bits per channel, your camera's levels scaled to 0-255",
+        describe(color)
+    )
+}
+
 /// Largest image decoded, in pixels (8K UHD, 7680 x 4320): the header is
 /// read first, so a bigger file is refused before its pixels are allocated.
 pub const MAX_IMAGE_PIXELS: u64 = 7680 * 4320;
@@ -141,10 +152,7 @@ pub fn load_grey(path: impl AsRef<Path>) -> Result<GreyImage> {
         DynamicImage::ImageRgba8(buf) => {
             opaque(color, buf.as_raw(), 4).map(|rgb| rgb_to_grey(&rgb))
         }
-        _ => Err(format!(
-            "{} image; expected 8-bit greyscale (or 8-bit RGB)",
-            describe(color)
-        )),
+        _ => Err(not_eight_bit(color, "8-bit greyscale (or 8-bit RGB)")),
     }
     .map_err(|e| Error::image(path, e))?;
     grey_image(w, h, data).map_err(|e| Error::image(path, e.to_string()))
@@ -163,10 +171,7 @@ pub fn load_rgb(path: impl AsRef<Path>) -> Result<RgbImage> {
         DynamicImage::ImageLuma8(buf) => Ok(grey_to_rgb(buf.as_raw())),
         DynamicImage::ImageRgba8(buf) => opaque(color, buf.as_raw(), 4),
         DynamicImage::ImageLumaA8(buf) => opaque(color, buf.as_raw(), 2).map(|g| grey_to_rgb(&g)),
-        _ => Err(format!(
-            "{} image; expected 8-bit RGB (or 8-bit greyscale)",
-            describe(color)
-        )),
+        _ => Err(not_eight_bit(color, "8-bit RGB (or 8-bit greyscale)")),
     }
     .map_err(|e| Error::image(path, e))?;
     rgb_image(w, h, data).map_err(|e| Error::image(path, e.to_string()))
@@ -286,6 +291,7 @@ mod tests {
             .unwrap();
         let e = load_grey(&p16).err().unwrap().to_string();
         assert!(e.contains("deep.png") && e.contains("16-bit"), "{e}");
+        assert!(e.contains("8 bits per channel"), "{e}");
         let pa = dir.path().join("alpha.png");
         image::RgbaImage::from_raw(4, 4, vec![9u8; 64])
             .unwrap()
