@@ -67,9 +67,10 @@ def test_preprocess_gives_the_pin_image(root):
     assert 0.0 <= pin.min() and pin.max() <= 1.0 and pin.std() > 0.0
 
 
-# Its frames are blank or noise on purpose: that they are named as frames
-# without this sensor's pins is asserted in the tests below.
+# Its frames are blank or noise on purpose: that they are named as blank
+# frames or frames without this sensor's pins is asserted in the tests below.
 @pytest.mark.filterwarnings("ignore:.*pins spaced unlike:UserWarning")
+@pytest.mark.filterwarnings("ignore:.*one grey level throughout the crop:UserWarning")
 def test_encoder_errors(root, tmp_path):
     with pytest.raises(FileNotFoundError):
         tactile.TactipEncoder(tmp_path / "missing")
