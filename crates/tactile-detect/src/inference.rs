@@ -138,6 +138,28 @@ impl TendonDetector {
         }
     }
 
+    /// The answer for a frame image whose `gate` was asked already
+    /// ([`Self::gate`]; a caller that acts on the gate first, as a
+    /// calibrated sensor's pipeline does before reconstructing): the
+    /// network runs only when no gate stopped it.
+    pub fn assess_gated(
+        &mut self,
+        img: FloatImage,
+        gate: (Option<Gate>, Option<f32>),
+    ) -> Result<Assessment> {
+        let network = match gate.0 {
+            Some(_) => None,
+            None => {
+                let input = self
+                    .artifact
+                    .model
+                    .network_input(img, &self.artifact.stats)?;
+                self.network_probabilities(&input, 1)?.into_iter().next()
+            }
+        };
+        Ok(self.answer(gate, network))
+    }
+
     /// The answers for frame images made by
     /// [`DetectorConfig::frame_image`](crate::DetectorConfig::frame_image), the network run once on the
     /// frames no gate stopped.

@@ -81,15 +81,81 @@ pub fn frame_files(data: &Path) -> Result<(Vec<PathBuf>, Vec<String>)> {
     Ok((list.frames.into_iter().map(|f| f.path).collect(), warnings))
 }
 
+/// A frame's score against a sensor's profile ([`SensorCheck`]).
+pub type FrameScore<'a> = Box<dyn FnMut(&RgbImage) -> Result<f32> + Send + 'a>;
+
+/// How far a frame lies from the sensor's own frames, to name frames of
+/// another sensor: the palpation detector's input profile of this sensor
+/// (its colours and colour layout), when the model folder has one
+/// (`tactile_pipeline` builds it; a calibration alone has none).
+pub struct SensorCheck<'a> {
+    /// A frame's score, in the profile's spreads.
+    pub score: FrameScore<'a>,
+    /// Scores above this are not the sensor's frames.
+    pub threshold: f32,
+    /// The frames the profile was fitted on.
+    pub frames: usize,
+}
+
+impl SensorCheck<'_> {
+    /// The score of `frame` when it is unlike the sensor's frames (above
+    /// the threshold); `None` when it is like them.
+    pub fn unlike(&mut self, frame: &RgbImage) -> Result<Option<f32>> {
+        let score = (self.score)(frame)?;
+        Ok((score > self.threshold).then_some(score))
+    }
+}
+
+/// Frames of another sensor named in a warning before they are counted.
+const UNLIKE_NAMED: usize = 3;
+
+/// The warning naming `unlike` (frame, score), frames `check` finds unlike
+/// the sensor's, with their largest score when `scored` (a frame given
+/// alone, in a loop, is warned of in words that repeat alike); `None`
+/// when there are none.
+pub fn unlike_warning(
+    unlike: &[(String, f32)],
+    check: &SensorCheck<'_>,
+    scored: bool,
+) -> Option<String> {
+    let worst = unlike.iter().map(|u| u.1).reduce(f32::max)?;
+    let named: Vec<&str> = unlike
+        .iter()
+        .take(UNLIKE_NAMED)
+        .map(|u| u.0.as_str())
+        .collect();
+    let more = match unlike.len() - named.len() {
+        0 => String::new(),
+        n => format!(", and {n} more"),
+    };
+    let these = match unlike.len() {
+        1 => "this frame",
+        _ => "these frames",
+    };
+    let scores = match (scored, unlike.len()) {
+        (false, _) => "above".to_string(),
+        (true, 1) => format!("{worst:.1},"),
+        (true, _) => format!("up to {worst:.1},"),
+    };
+    Some(format!(
+        "warning: {}{more}: colours unlike this sensor's (scored against the {} frames of it its detector was trained on: {scores} where the sensor's own frames stay below {:.1}): a frame of another sensor, or of this one under other light or with another gel? The indentation of {these} may mean nothing",
+        named.join(", "),
+        check.frames,
+        check.threshold
+    ))
+}
+
 /// Reconstruct every frame `data` names with the model in `model` into
-/// the new folder `out`.
+/// the new folder `out`; with a `check`, the frames unlike the sensor's
+/// are still reconstructed, and named in a warning.
 pub fn reconstruct_folder(
     model: &Path,
     data: &Path,
     out: &Path,
     options: &ReconstructOptions,
+    mut check: Option<SensorCheck<'_>>,
 ) -> Result<ReconstructReport> {
-    let (files, warnings) = frame_files(data)?;
+    let (files, mut warnings) = frame_files(data)?;
     // Both folders are new: one with files in it is refused before any work.
     if let Some(render) = &options.render {
         tactile_core::dataset::refuse_same_output(out, render)?;
@@ -106,6 +172,7 @@ pub fn reconstruct_folder(
     }
     let mut times = Vec::with_capacity(files.len());
     let mut peak = 0f64;
+    let mut unlike = Vec::new();
     for f in &files {
         if tactile_core::interrupt::requested() {
             return Err(tactile_core::Error::Interrupted.into());
@@ -114,6 +181,14 @@ pub fn reconstruct_folder(
         let t0 = std::time::Instant::now();
         let map = rec.reconstruct(&frame, f)?;
         times.push(t0.elapsed().as_secs_f64() * 1e3);
+        if let Some(score) = check
+            .as_mut()
+            .map(|c| c.unlike(&frame))
+            .transpose()?
+            .flatten()
+        {
+            unlike.push((f.display().to_string(), score));
+        }
         peak = peak.max(map.peak_mm() as f64);
         let stem = f
             .file_stem()
@@ -140,6 +215,9 @@ pub fn reconstruct_folder(
         r.commit(false)?;
     }
     times.sort_by(f64::total_cmp);
+    if let Some(c) = &check {
+        warnings.extend(unlike_warning(&unlike, c, true));
+    }
     Ok(ReconstructReport {
         frames: files.len(),
         ms_per_frame: times[times.len() / 2],

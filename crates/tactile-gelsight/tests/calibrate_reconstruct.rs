@@ -482,7 +482,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     let taken = tmp.path().join("taken");
     std::fs::create_dir_all(&taken).unwrap();
     std::fs::write(taken.join("keep.txt"), "mine").unwrap();
-    let e = reconstruct_folder(&model, &d.join("frames"), &taken, &o).unwrap_err();
+    let e = reconstruct_folder(&model, &d.join("frames"), &taken, &o, None).unwrap_err();
     assert!(e.to_string().contains("already holds files"), "{e}");
     assert_eq!(
         std::fs::read_to_string(taken.join("keep.txt")).unwrap(),
@@ -499,7 +499,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     )
     .unwrap();
     let out = tmp.path().join("out");
-    let e = reconstruct_folder(&model, &odd, &out, &o).unwrap_err();
+    let e = reconstruct_folder(&model, &odd, &out, &o, None).unwrap_err();
     assert!(matches!(e, Error::FrameSize { .. }), "{e}");
     assert!(e.to_string().contains("small.png"), "{e}");
     assert!(!out.exists());
@@ -507,7 +507,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     let linked = tmp.path().join("linked");
     std::fs::create_dir_all(&linked).unwrap();
     std::os::unix::fs::symlink(odd.join("small.png"), linked.join("out.png")).unwrap();
-    let e = reconstruct_folder(&model, &linked, &out, &o).unwrap_err();
+    let e = reconstruct_folder(&model, &linked, &out, &o, None).unwrap_err();
     assert!(
         e.to_string().contains("out.png") && e.to_string().contains("leaves the folder"),
         "{e}"
@@ -516,7 +516,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     // A folder without frames says so.
     let empty = tmp.path().join("empty");
     std::fs::create_dir_all(&empty).unwrap();
-    let e = reconstruct_folder(&model, &empty, &out, &o).unwrap_err();
+    let e = reconstruct_folder(&model, &empty, &out, &o, None).unwrap_err();
     assert!(e.to_string().contains("no PNG or JPEG frames"), "{e}");
     // A JPEG frame is read like a PNG; one named like another frame but for
     // its extension is refused (both would be one .npy), naming both.
@@ -538,7 +538,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     .save(twins.join("a.jpg"))
     .unwrap();
     std::fs::write(twins.join("notes.txt"), "not a frame").unwrap();
-    let r = reconstruct_folder(&model, &twins, &out, &o).unwrap();
+    let r = reconstruct_folder(&model, &twins, &out, &o, None).unwrap();
     assert_eq!(r.frames, 1);
     assert!(out.join("a.npy").is_file());
     assert!(
@@ -548,7 +548,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     );
     std::fs::copy(&first, twins.join("a.png")).unwrap();
     let again = tmp.path().join("again");
-    let e = reconstruct_folder(&model, &twins, &again, &o).unwrap_err();
+    let e = reconstruct_folder(&model, &twins, &again, &o, None).unwrap_err();
     assert!(
         e.to_string().contains("a.jpg") && e.to_string().contains("a.png"),
         "{e}"
@@ -560,7 +560,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
         background: Some(odd.join("small.png")),
         ..o
     };
-    let e = reconstruct_folder(&model, &d.join("frames"), &out, &o).unwrap_err();
+    let e = reconstruct_folder(&model, &d.join("frames"), &out, &o, None).unwrap_err();
     assert!(e.to_string().contains("small.png"), "{e}");
     assert!(!out.exists());
     // A grey frame, or a grey rest frame, of a colour sensor is named, not
@@ -574,14 +574,14 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
         background: None,
         ..o.clone()
     };
-    let e = reconstruct_folder(&model, &grey, &out, &no_background).unwrap_err();
+    let e = reconstruct_folder(&model, &grey, &out, &no_background, None).unwrap_err();
     assert!(matches!(e, Error::GreyFrame { .. }), "{e}");
     assert!(e.to_string().contains("rest.png"), "{e}");
     let o = ReconstructOptions {
         background: Some(grey.join("rest.png")),
         ..o
     };
-    let e = reconstruct_folder(&model, &d.join("frames"), &out, &o).unwrap_err();
+    let e = reconstruct_folder(&model, &d.join("frames"), &out, &o, None).unwrap_err();
     assert!(
         matches!(e, Error::GreyFrame { .. }) && e.to_string().contains("rest.png"),
         "{e}"

@@ -16,6 +16,7 @@ pub mod options;
 pub mod overlay;
 pub mod palpation;
 pub mod profile;
+pub mod reconstruct;
 pub mod run;
 pub mod tactip;
 

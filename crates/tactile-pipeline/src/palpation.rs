@@ -254,22 +254,55 @@ impl Pipeline {
     ) -> Result<(FrameRecord, Option<FrameViews>)> {
         let t0 = Instant::now();
         let mut rec = FrameRecord::empty(name);
-        // A calibrated sensor's skin, from the frame as it came (its
-        // calibrated size; another size is refused, naming the frame).
         let mut views = FrameViews::default();
-        if let Some(sensor) = self.sensor.as_mut() {
-            // A frame of another size is not this sensor's: with palpation
-            // models it is answered as foreign (no tendon, no depth), as
-            // the detector's profile answers frames of other sensors; a
-            // calibration alone refuses it, naming the frame.
-            let g = sensor.grid();
-            let calibrated_size = (g.frame_width, g.frame_height);
-            if self.palpation.is_some() && (frame.width(), frame.height()) != calibrated_size {
-                rec.out_of_distribution = true;
-                rec.gate = Some(tactile_detect::Gate::Foreign);
+        // With palpation models, the detector's gate is asked first: a
+        // frame of another sensor (another size than the calibration's,
+        // or input statistics far from the detector's training frames')
+        // gets no tendon, no direction, no depth and no reconstruction.
+        let mut gated = None;
+        if let Some(models) = self.palpation.as_mut() {
+            if let Some(sensor) = self.sensor.as_ref() {
+                let g = sensor.grid();
+                if (frame.width(), frame.height()) != (g.frame_width, g.frame_height) {
+                    rec.out_of_distribution = true;
+                    rec.gate = Some(tactile_detect::Gate::Foreign);
+                    rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+                    return Ok((rec, None));
+                }
+            }
+            // One downsample of a large frame; every model reads the result.
+            let t_prepare = Instant::now();
+            let working = tactile_preprocess::visuo::working_frame(frame, self.working_height)?;
+            rec.ms_prepare = 1e3 * t_prepare.elapsed().as_secs_f64();
+            let t_detect = Instant::now();
+            let img = models
+                .detector
+                .artifact
+                .model
+                .frame_image(working.as_ref().unwrap_or(frame))?;
+            let gate = models.detector.gate(&img)?;
+            let ms_gate = 1e3 * t_detect.elapsed().as_secs_f64();
+            if self.sensor.is_some() && gate.0 == Some(tactile_detect::Gate::Foreign) {
+                let a = models.detector.assess_gated(img, gate)?;
+                // The sequence's filter still hears the frame (a score of
+                // 0), as it does an uncalibrated pipeline's foreign frame.
+                if let Some(h) = filter {
+                    h.update(a.probability);
+                }
+                rec.score = a.probability;
+                rec.input_score = a.input_score;
+                rec.out_of_distribution = a.out_of_distribution;
+                rec.gate = a.gate;
+                rec.ms_detect = ms_gate;
                 rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
                 return Ok((rec, None));
             }
+            gated = Some((working, img, gate, ms_gate));
+        }
+        // A calibrated sensor's skin, from the frame as it came (its
+        // calibrated size; another size is refused by a calibration
+        // alone, naming the frame).
+        if let Some(sensor) = self.sensor.as_mut() {
             let t = Instant::now();
             let map = sensor.reconstruct(frame, Path::new(name))?;
             rec.ms_reconstruct = Some(1e3 * t.elapsed().as_secs_f64());
@@ -280,17 +313,14 @@ impl Pipeline {
                 mm_per_px: sensor.mm_per_px(),
             });
         }
-        let Some(models) = self.palpation.as_mut() else {
+        let (Some(models), Some((working, img, gate, ms_gate))) = (self.palpation.as_mut(), gated)
+        else {
             rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
             return Ok((rec, views.any().then_some(views)));
         };
-        // One downsample of a large frame; every model reads the result.
-        let t_prepare = Instant::now();
-        let working = tactile_preprocess::visuo::working_frame(frame, self.working_height)?;
         let frame = working.as_ref().unwrap_or(frame);
-        rec.ms_prepare = 1e3 * t_prepare.elapsed().as_secs_f64();
         let t_detect = Instant::now();
-        let assessment = models.detector.assess(frame)?;
+        let assessment = models.detector.assess_gated(img, gate)?;
         rec.score = assessment.probability;
         rec.tendon_raw = assessment.tendon;
         rec.tendon = match filter {
@@ -300,7 +330,7 @@ impl Pipeline {
         rec.input_score = assessment.input_score;
         rec.out_of_distribution = assessment.out_of_distribution;
         rec.gate = assessment.gate;
-        rec.ms_detect = 1e3 * t_detect.elapsed().as_secs_f64();
+        rec.ms_detect = ms_gate + 1e3 * t_detect.elapsed().as_secs_f64();
         if !rec.tendon {
             rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
             return Ok((rec, views.any().then_some(views)));

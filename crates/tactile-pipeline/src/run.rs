@@ -153,8 +153,12 @@ impl RunSummary {
             ));
         }
         if self.out_of_distribution > 0 {
+            let indentation = match self.contact.is_some() {
+                true => ", depth or indentation",
+                false => " or depth",
+            };
             lines.push(format!(
-                "warning: {} of {} frames do not look like this sensor's (input statistics far from the training frames'): they got no tendon, direction or depth",
+                "warning: {} of {} frames do not look like this sensor's (input statistics far from the training frames'): they got no tendon, direction{indentation}",
                 self.out_of_distribution, self.frames
             ));
         }

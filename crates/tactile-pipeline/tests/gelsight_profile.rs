@@ -87,3 +87,93 @@ fn real_presses_pass_other_units_are_foreign_and_the_export_agrees() {
         );
     }
 }
+
+/// A 331-pin TacTip frame (grey, 440x445) laid on the GelSight's 640x480
+/// canvas, tinted: a frame of another sensor at this sensor's size and in
+/// colour, which the calibration alone would reconstruct like any other.
+fn tactip_on_the_canvas() -> RgbImage {
+    let t = tactile_core::image_io::load_grey(
+        root().join("../shared/real/tactip331-surface/frames/train_image_1.png"),
+    )
+    .unwrap();
+    let (w, h) = (640, 480);
+    let mut data = vec![30u8; w * h * 3];
+    for y in 0..t.height().min(h) {
+        for x in 0..t.width().min(w) {
+            let v = t.as_slice()[y * t.width() + x] as f32;
+            let o = (y * w + x) * 3;
+            data[o..o + 3].copy_from_slice(&[v as u8, (v * 0.9) as u8, (v * 0.8) as u8]);
+        }
+    }
+    rgb_image(w, h, data).unwrap()
+}
+
+#[test]
+fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
+    let model = root().join("models/gelsight-r15");
+    let press = load_rgb(root().join("../shared/real/gelsight-ball/frames/press_01.png")).unwrap();
+    let other = tactip_on_the_canvas();
+    // `run`: the detector's gate is asked before the reconstruction, so a
+    // frame of another sensor gets no indentation either (it had one).
+    let mut p = tactile_pipeline::Pipeline::load(&model, Runtime::Onnx, 1).unwrap();
+    let own = p.process("press_01.png", &press).unwrap();
+    assert!(
+        own.gate.is_none() && own.indentation_peak_mm.is_some(),
+        "{own:?}"
+    );
+    let r = p.process("tactip.png", &other).unwrap();
+    assert_eq!(r.gate, Some(Gate::Foreign), "{r:?}");
+    assert!(
+        r.indentation_peak_mm.is_none() && r.ms_reconstruct.is_none(),
+        "{r:?}"
+    );
+    // `reconstruct`: every frame is reconstructed, and the other sensor's
+    // frame named by the profile of the detector in the model folder.
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = tmp.path().join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    let save = |name: &str, f: &RgbImage| {
+        tactile_core::image_io::save_rgb_png(frames.join(name), f.width(), f.height(), f.as_slice())
+            .unwrap()
+    };
+    save("a.png", &press);
+    save("b.png", &other);
+    let options = tactile_gelsight::reconstruct::ReconstructOptions {
+        background: None,
+        render: None,
+        runtime: Runtime::Onnx,
+    };
+    let out = tmp.path().join("out");
+    let report =
+        tactile_pipeline::reconstruct::reconstruct(&model, &frames, &out, &options).unwrap();
+    assert_eq!(report.frames, 2);
+    assert!(out.join("a.npy").is_file() && out.join("b.npy").is_file());
+    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+    let w = &report.warnings[0];
+    assert!(
+        w.contains("b.png: colours unlike this sensor's") && !w.contains("a.png"),
+        "{w}"
+    );
+    // A calibration without a detector has no profile to ask: no warning.
+    let alone = tmp.path().join("calibration");
+    std::fs::create_dir_all(&alone).unwrap();
+    for f in [
+        "gelsight.json",
+        "gelsight.bpk",
+        "gelsight.onnx",
+        "background.png",
+        "optics.json",
+    ] {
+        if model.join(f).exists() {
+            std::fs::copy(model.join(f), alone.join(f)).unwrap();
+        }
+    }
+    let report = tactile_pipeline::reconstruct::reconstruct(
+        &alone,
+        &frames,
+        &tmp.path().join("out2"),
+        &options,
+    )
+    .unwrap();
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+}

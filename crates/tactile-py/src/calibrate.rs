@@ -10,7 +10,7 @@ use numpy::{PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use tactile_gelsight::reconstruct::{ReconstructOptions, reconstruct_folder};
+use tactile_gelsight::reconstruct::{ReconstructOptions, SensorCheck, unlike_warning};
 use tactile_gelsight::{BallOptions, Reconstructor};
 
 use crate::errors::PyResultExt;
@@ -62,7 +62,7 @@ pub(crate) fn reconstruct_frames<'py>(
         runtime: crate::pipeline::runtime(runtime)?,
     };
     let r = interruptible(py, || {
-        reconstruct_folder(&model, &data, &out, &options).py()
+        tactile_pipeline::reconstruct::reconstruct(&model, &data, &out, &options).py()
     })?;
     for w in &r.warnings {
         crate::errors::user_warning(py, w)?;
@@ -79,7 +79,7 @@ pub(crate) fn reconstruct_frames<'py>(
 /// interpreter lock is released while a frame is reconstructed.
 #[pyclass(module = "tactile", name = "Reconstructor")]
 pub struct PyReconstructor {
-    inner: Mutex<Reconstructor>,
+    inner: Mutex<(Reconstructor, Option<SensorCheck<'static>>)>,
     model_dir: PathBuf,
     runtime: tactile_burn::Runtime,
     size: (usize, usize),
@@ -109,10 +109,13 @@ impl PyReconstructor {
                 Ok(r)
             })
             .py()?;
+        // The profile of the detector beside the calibration, if any,
+        // names frames of another sensor.
+        let check = tactile_pipeline::reconstruct::sensor_check(&model_dir).py()?;
         let g = rec.grid();
         Ok(Self {
             size: (g.frame_width, g.frame_height),
-            inner: Mutex::new(rec),
+            inner: Mutex::new((rec, check)),
             model_dir,
             runtime: rt,
         })
@@ -120,7 +123,9 @@ impl PyReconstructor {
 
     /// The skin's indentation under an `(H, W, 3)` uint8 RGB frame of the
     /// calibrated size: `(H, W)` float32, metres toward the camera, 0 at
-    /// rest.
+    /// rest. A frame unlike the sensor's (by the profile of the detector
+    /// beside the calibration, when there is one) is reconstructed too,
+    /// with a `UserWarning`.
     fn reconstruct<'py>(
         &self,
         py: Python<'py>,
@@ -128,14 +133,27 @@ impl PyReconstructor {
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let arg = FrameArg::new(frame, Layout::Rgb, "frame")?;
         let px = arg.view();
-        let map = py.detach(|| -> PyResult<tactile_gelsight::IndentationMap> {
-            let mut r = self.inner.lock().map_err(|_| {
+        let (map, warning) = py.detach(|| -> PyResult<(tactile_gelsight::IndentationMap, _)> {
+            let mut guard = self.inner.lock().map_err(|_| {
                 PyRuntimeError::new_err("the reconstructor failed in another thread")
             })?;
-            px.with_rgb(|img| r.reconstruct(img, Path::new("frame")))
-                .py()?
-                .py()
+            let (r, check) = &mut *guard;
+            px.with_rgb(|img| -> tactile_gelsight::Result<_> {
+                let map = r.reconstruct(img, Path::new("frame"))?;
+                let warning = match check.as_mut() {
+                    Some(c) => c.unlike(img)?.and_then(|score| {
+                        unlike_warning(&[("frame".to_string(), score)], c, false)
+                    }),
+                    None => None,
+                };
+                Ok((map, warning))
+            })
+            .py()?
+            .py()
         })?;
+        if let Some(w) = warning {
+            crate::errors::user_warning(py, &w)?;
+        }
         let arr = numpy::PyArray1::from_vec(py, map.indentation_m);
         arr.reshape([map.height, map.width])
     }

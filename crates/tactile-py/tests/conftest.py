@@ -74,3 +74,21 @@ def tendon_frame_640(root: Path) -> np.ndarray:
     tendon = np.flatnonzero(v["tendon"])
     assert tendon.size > 0
     return v["frames"][tendon[len(tendon) // 2]]
+
+
+def write_png(path: Path, pixels: np.ndarray) -> None:
+    """An 8-bit grey `(H, W)` or RGB `(H, W, 3)` PNG, written with the
+    standard library alone (the tests install no image library)."""
+    import struct
+    import zlib
+
+    h, w = pixels.shape[:2]
+    colour = 2 if pixels.ndim == 3 else 0
+    raw = b"".join(b"\0" + np.ascontiguousarray(pixels[r], np.uint8).tobytes() for r in range(h))
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
+
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, colour, 0, 0, 0))
+                     + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))

@@ -7,13 +7,14 @@ from __future__ import annotations
 import csv
 import json
 import shutil
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import tactile
-from conftest import SHARED_REAL
+from conftest import SHARED_REAL, write_png
 
 BALL = SHARED_REAL / "gelsight-ball"
 
@@ -200,6 +201,49 @@ def test_the_shipped_gelsight_pipeline_sees_no_tendon_on_real_presses(root: Path
     # A frame of another sensor's size is foreign, not an error.
     r = pipe.process(np.full((360, 640, 3), 128, np.uint8))
     assert r.out_of_distribution and not r.tendon
+
+
+def tactip_on_the_canvas(shift: int = 0) -> np.ndarray:
+    """A 331-pin TacTip frame laid on the GelSight's 640x480 canvas, tinted:
+    another sensor's frame at this sensor's size and in colour."""
+    t = tactile.read_grey(SHARED_REAL / "tactip331-surface/frames/train_image_1.png").astype(np.float32)
+    canvas = np.full((480, 640, 3), 30, np.uint8)
+    h, w = min(t.shape[0], 480), min(t.shape[1], 640 - shift)
+    for c, gain in enumerate((1.0, 0.9, 0.8)):
+        canvas[:h, shift:shift + w, c] = (t[:h, :w] * gain).astype(np.uint8)
+    return canvas
+
+
+def test_a_calibrated_sensor_names_frames_of_another_sensor(root: Path, tmp_path: Path):
+    """The detector beside the shipped calibration knows this sensor's frames:
+    `Reconstructor.reconstruct` and `tactile.calibrate.reconstruct` still
+    reconstruct a frame of another sensor but name it in a `UserWarning`,
+    once per call site in a loop; the pipeline gives it no indentation."""
+    models = root / "models" / "gelsight-r15"
+    press = tactile.read_rgb(sorted((BALL / "frames").glob("*.png"))[0])
+    rec = tactile.Reconstructor(models, "onnx")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        assert rec.reconstruct(press).shape == (480, 640)
+    assert not seen, [str(w.message) for w in seen]
+    others = [tactip_on_the_canvas(shift) for shift in (0, 60, 120)]
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("default")
+        for f in others:
+            assert rec.reconstruct(f).shape == (480, 640)
+    said = [str(w.message) for w in seen]
+    assert len(said) == 1 and said[0].startswith("frame: colours unlike this sensor's"), said
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    shutil.copy(sorted((BALL / "frames").glob("*.png"))[0], frames / "a.png")
+    write_png(frames / "b.png", others[0])
+    with pytest.warns(UserWarning, match=r"b\.png: colours unlike this sensor's") as seen:
+        r = tactile.calibrate.reconstruct(models, frames, tmp_path / "out")
+    assert r["frames"] == 2 and (tmp_path / "out" / "b.npy").is_file()
+    assert not any("a.png" in str(w.message) for w in seen)
+    pipe = tactile.Pipeline(models, "onnx")
+    r = pipe.process(others[0])
+    assert r.out_of_distribution and r.indentation_peak_mm is None
 
 
 def test_a_depth_network_learns_a_correction_to_its_calibration(model: Path, tmp_path: Path):

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import tactile
+from conftest import write_png
 
 
 def test_tactip_arrays_equal_the_written_dataset(tmp_path):
@@ -46,25 +47,9 @@ def test_visuotactile_arrays_equal_the_written_dataset(tmp_path):
     mask_file = out / ds.labels["mask"][0]
     ones = np.zeros((180, 320), np.uint8)
     ones[80:100] = 1
-    _write_grey_png(mask_file, ones)
+    write_png(mask_file, ones)
     with pytest.raises(ValueError, match=r"000000\.png.*largest value is 1"):
         ds.mask(0)
-
-
-def _write_grey_png(path, pixels):
-    """An 8-bit grey PNG, written with the standard library alone."""
-    import struct
-    import zlib
-
-    h, w = pixels.shape
-    raw = b"".join(b"\0" + pixels[r].tobytes() for r in range(h))
-
-    def chunk(kind, data):
-        body = kind + data
-        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
-
-    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
-                     + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
 def test_ideal_detector_bounds_every_frame_and_refuses_foreign_sets(tmp_path):

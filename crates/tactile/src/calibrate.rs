@@ -96,7 +96,7 @@ pub(crate) struct ReconstructArgs {
 }
 
 pub(crate) fn reconstruct(a: ReconstructArgs) -> Result<()> {
-    let r = tactile_gelsight::reconstruct::reconstruct_folder(
+    let r = tactile_pipeline::reconstruct::reconstruct(
         &a.model,
         &a.data,
         &a.out,
