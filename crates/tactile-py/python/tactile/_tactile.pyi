@@ -188,7 +188,10 @@ class Reconstructor:
     def __init__(
         self, model_dir: _Path, runtime: str = "onnx", background: Optional[_Path] = None
     ) -> None: ...
-    def reconstruct(self, frame: npt.NDArray[np.uint8]) -> npt.NDArray[np.float32]: ...
+    def reconstruct(self, frame: npt.NDArray[np.uint8]) -> npt.NDArray[np.float32]:
+        """The indentation (metres) under an RGB frame of the calibrated size; a
+        frame unlike the sensor's (by the detector beside the calibration, if
+        any) is reconstructed too, with a ``UserWarning``."""
     @property
     def frame_size(self) -> Tuple[int, int]: ...
     @property

@@ -42,8 +42,10 @@ def reconstruct(
     runtime: str = "onnx",
 ) -> Dict[str, Any]:
     """Every frame of ``data`` (a frame, a folder of PNG or JPEG frames, or
-    a dataset folder) to ``out/<stem>.npy``; files that are not frames are
-    named in a ``UserWarning`` (and in the result's ``warnings``);
+    a dataset folder) to ``out/<stem>.npy``; files that are not frames, and
+    frames unlike the sensor's (by the profile of the detector beside the
+    calibration, when the folder has ``detector/``), are named in a
+    ``UserWarning`` (and in the result's ``warnings``);
     ``render`` also writes pictures (frame, shaded skin, indentation with a
     colour bar); ``background`` replaces the calibration's rest frame."""
     return _tactile.reconstruct_frames(
