@@ -17,18 +17,34 @@ use crate::Result;
 
 /// The input profile of the detector in `model`'s `detector/` (its lead
 /// member's, for an ensemble) as a [`SensorCheck`]; `None` when the folder
-/// has no detector or the detector no profile.
-pub fn sensor_check(model: &Path) -> Result<Option<SensorCheck<'static>>> {
+/// has no detector or the detector no profile. A detector that cannot be
+/// read (one still being trained, a broken config) gives no check and a
+/// warning saying why: the reconstruction does not need it.
+pub fn sensor_check(model: &Path) -> (Option<SensorCheck<'static>>, Option<String>) {
     let dir = model.join("detector");
-    let artifact = if DetectorEnsembleArtifact::is_in(&dir) {
-        DetectorEnsembleArtifact::read(&dir)?.lead()?.clone()
-    } else if DetectorArtifact::is_in(&dir) {
-        DetectorArtifact::read(&dir)?
-    } else {
-        return Ok(None);
+    let read: std::result::Result<DetectorArtifact, String> =
+        if DetectorEnsembleArtifact::is_in(&dir) {
+            DetectorEnsembleArtifact::read(&dir)
+                .map_err(|e| e.to_string())
+                .and_then(|e| e.lead().cloned().map_err(|e| e.to_string()))
+        } else if DetectorArtifact::is_in(&dir) {
+            DetectorArtifact::read(&dir).map_err(|e| e.to_string())
+        } else {
+            return (None, None);
+        };
+    let artifact = match read {
+        Ok(a) => a,
+        Err(e) => {
+            return (
+                None,
+                Some(format!(
+                    "warning: {e}; frames of another sensor are not told without the detector's input profile"
+                )),
+            );
+        }
     };
     let Some(profile) = artifact.input_profile.clone() else {
-        return Ok(None);
+        return (None, None);
     };
     let (threshold, frames) = (profile.threshold, profile.frames);
     let config = artifact.model;
@@ -45,11 +61,12 @@ pub fn sensor_check(model: &Path) -> Result<Option<SensorCheck<'static>>> {
             .map_err(invalid)?;
         profile.score_frame(&img).map_err(invalid)
     };
-    Ok(Some(SensorCheck {
+    let check = SensorCheck {
         score: Box::new(score),
         threshold,
         frames,
-    }))
+    };
+    (Some(check), None)
 }
 
 /// A library error met while scoring a frame, as the reconstruction's.
@@ -68,6 +85,8 @@ pub fn reconstruct(
     out: &Path,
     options: &ReconstructOptions,
 ) -> Result<ReconstructReport> {
-    let check = sensor_check(model)?;
-    Ok(reconstruct_folder(model, data, out, options, check)?)
+    let (check, unread) = sensor_check(model);
+    let mut report = reconstruct_folder(model, data, out, options, check)?;
+    report.warnings.extend(unread);
+    Ok(report)
 }

@@ -108,6 +108,23 @@ fn tactip_on_the_canvas() -> RgbImage {
     rgb_image(w, h, data).unwrap()
 }
 
+/// The calibration of `model` alone (no palpation models) copied to `dst`.
+fn calibration_copy(model: &Path, dst: &Path) -> PathBuf {
+    std::fs::create_dir_all(dst).unwrap();
+    for f in [
+        "gelsight.json",
+        "gelsight.bpk",
+        "gelsight.onnx",
+        "background.png",
+        "optics.json",
+    ] {
+        if model.join(f).exists() {
+            std::fs::copy(model.join(f), dst.join(f)).unwrap();
+        }
+    }
+    dst.to_path_buf()
+}
+
 #[test]
 fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
     let model = root().join("models/gelsight-r15");
@@ -154,20 +171,34 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
         w.contains("b.png: colours unlike this sensor's") && !w.contains("a.png"),
         "{w}"
     );
+    // A detector still being trained beside the calibration (its folder
+    // marked unfinished): the reconstruction goes on, and says the frames
+    // are not told.
+    let training = calibration_copy(&model, &tmp.path().join("training"));
+    std::fs::create_dir_all(training.join("detector")).unwrap();
+    std::fs::copy(
+        model.join("detector/detector.json"),
+        training.join("detector/detector.json"),
+    )
+    .unwrap();
+    std::fs::write(training.join("detector/INCOMPLETE"), "").unwrap();
+    let report = tactile_pipeline::reconstruct::reconstruct(
+        &training,
+        &frames,
+        &tmp.path().join("out3"),
+        &options,
+    )
+    .unwrap();
+    assert_eq!(report.frames, 2);
+    assert!(
+        report.warnings.len() == 1
+            && report.warnings[0].contains("did not finish training")
+            && report.warnings[0].contains("frames of another sensor are not told"),
+        "{:?}",
+        report.warnings
+    );
     // A calibration without a detector has no profile to ask: no warning.
-    let alone = tmp.path().join("calibration");
-    std::fs::create_dir_all(&alone).unwrap();
-    for f in [
-        "gelsight.json",
-        "gelsight.bpk",
-        "gelsight.onnx",
-        "background.png",
-        "optics.json",
-    ] {
-        if model.join(f).exists() {
-            std::fs::copy(model.join(f), alone.join(f)).unwrap();
-        }
-    }
+    let alone = calibration_copy(&model, &tmp.path().join("calibration"));
     let report = tactile_pipeline::reconstruct::reconstruct(
         &alone,
         &frames,

@@ -111,7 +111,10 @@ impl PyReconstructor {
             .py()?;
         // The profile of the detector beside the calibration, if any,
         // names frames of another sensor.
-        let check = tactile_pipeline::reconstruct::sensor_check(&model_dir).py()?;
+        let (check, unread) = tactile_pipeline::reconstruct::sensor_check(&model_dir);
+        if let Some(w) = unread {
+            crate::errors::user_warning(py, &w)?;
+        }
         let g = rec.grid();
         Ok(Self {
             size: (g.frame_width, g.frame_height),
