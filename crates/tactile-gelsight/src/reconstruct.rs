@@ -104,6 +104,15 @@ impl SensorCheck<'_> {
         let score = (self.score)(frame)?;
         Ok((score > self.threshold).then_some(score))
     }
+
+    /// The warning for `frame`, named `name`, when it is unlike the
+    /// sensor's, in words without its score ([`unlike_warning`]): a frame
+    /// given alone, as a loop gives them, is warned of alike each time.
+    pub fn frame_warning(&mut self, frame: &RgbImage, name: &str) -> Result<Option<String>> {
+        Ok(self
+            .unlike(frame)?
+            .and_then(|score| unlike_warning(&[(name.to_string(), score)], self, false)))
+    }
 }
 
 /// Frames of another sensor named in a warning before they are counted.

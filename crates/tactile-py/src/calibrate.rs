@@ -10,7 +10,7 @@ use numpy::{PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use tactile_gelsight::reconstruct::{ReconstructOptions, SensorCheck, unlike_warning};
+use tactile_gelsight::reconstruct::{ReconstructOptions, SensorCheck};
 use tactile_gelsight::{BallOptions, Reconstructor};
 
 use crate::errors::PyResultExt;
@@ -144,9 +144,7 @@ impl PyReconstructor {
             px.with_rgb(|img| -> tactile_gelsight::Result<_> {
                 let map = r.reconstruct(img, Path::new("frame"))?;
                 let warning = match check.as_mut() {
-                    Some(c) => c.unlike(img)?.and_then(|score| {
-                        unlike_warning(&[("frame".to_string(), score)], c, false)
-                    }),
+                    Some(c) => c.frame_warning(img, "frame")?,
                     None => None,
                 };
                 Ok((map, warning))
