@@ -106,6 +106,29 @@ fn folder_holds_frames(p: &Path) -> bool {
             }))
 }
 
+/// Frames a warning names one by one before it only counts the rest.
+pub const FRAMES_NAMED: usize = 3;
+
+/// The frames of a warning: the first [`FRAMES_NAMED`] of `frames` named,
+/// the rest counted ("a.png, b.png, c.png, and 4 more"), and "this
+/// frame" or "these frames" for the words after them.
+pub fn named_frames(frames: &[String]) -> (String, &'static str) {
+    let named: Vec<&str> = frames
+        .iter()
+        .take(FRAMES_NAMED)
+        .map(String::as_str)
+        .collect();
+    let more = match frames.len() - named.len() {
+        0 => String::new(),
+        n => format!(", and {n} more"),
+    };
+    let these = match frames.len() {
+        1 => "this frame",
+        _ => "these frames",
+    };
+    (format!("{}{more}", named.join(", ")), these)
+}
+
 impl FrameList {
     /// The frames of `dir`: a dataset when it has `labels.csv`, else its
     /// PNG and JPEG files in the order of the numbers in their names

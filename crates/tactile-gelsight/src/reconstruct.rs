@@ -115,9 +115,6 @@ impl SensorCheck<'_> {
     }
 }
 
-/// Frames of another sensor named in a warning before they are counted.
-const UNLIKE_NAMED: usize = 3;
-
 /// The warning naming `unlike` (frame, score), frames `check` finds unlike
 /// the sensor's, with their largest score when `scored` (a frame given
 /// alone, in a loop, is warned of in words that repeat alike); `None`
@@ -128,29 +125,16 @@ pub fn unlike_warning(
     scored: bool,
 ) -> Option<String> {
     let worst = unlike.iter().map(|u| u.1).reduce(f32::max)?;
-    let named: Vec<&str> = unlike
-        .iter()
-        .take(UNLIKE_NAMED)
-        .map(|u| u.0.as_str())
-        .collect();
-    let more = match unlike.len() - named.len() {
-        0 => String::new(),
-        n => format!(", and {n} more"),
-    };
-    let these = match unlike.len() {
-        1 => "this frame",
-        _ => "these frames",
-    };
+    let files: Vec<String> = unlike.iter().map(|u| u.0.clone()).collect();
+    let (named, these) = tactile_core::source::named_frames(&files);
     let scores = match (scored, unlike.len()) {
         (false, _) => "above".to_string(),
         (true, 1) => format!("{worst:.1},"),
         (true, _) => format!("up to {worst:.1},"),
     };
     Some(format!(
-        "warning: {}{more}: colours unlike this sensor's (scored against the {} frames of it its detector was trained on: {scores} where the sensor's own frames stay below {:.1}): a frame of another sensor, or of this one under other light or with another gel? The indentation of {these} may mean nothing",
-        named.join(", "),
-        check.frames,
-        check.threshold
+        "warning: {named}: colours unlike this sensor's (scored against the {} frames of it its detector was trained on: {scores} where the sensor's own frames stay below {:.1}): a frame of another sensor, or of this one under other light or with another gel? The indentation of {these} may mean nothing",
+        check.frames, check.threshold
     ))
 }
 

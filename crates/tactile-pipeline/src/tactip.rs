@@ -482,31 +482,18 @@ impl Predictor {
 
 /// Flat (or foreign) frames named one by one in a stream, or in a
 /// dataset's warning, before they are only counted.
-const MAX_FLAT_NAMED: usize = 3;
+const MAX_FLAT_NAMED: usize = tactile_core::source::FRAMES_NAMED;
 
-/// The frames of a warning: the first [`MAX_FLAT_NAMED`] of `frames`
-/// named, the rest counted ("a.png, b.png, c.png, and 4 more"); "this
-/// frame" or "these frames"; and, when `then_unnamed`, the words saying a
-/// stream names no more after these.
+/// The frames of a warning ([`tactile_core::source::named_frames`]) and,
+/// when `then_unnamed`, the words saying a stream names no more after
+/// these.
 fn named_frames(frames: &[String], then_unnamed: bool) -> (String, &'static str, &'static str) {
-    let named: Vec<&str> = frames
-        .iter()
-        .take(MAX_FLAT_NAMED)
-        .map(String::as_str)
-        .collect();
-    let more = match frames.len() - named.len() {
-        0 => String::new(),
-        n => format!(", and {n} more"),
-    };
+    let (named, these) = tactile_core::source::named_frames(frames);
     let then = match then_unnamed {
         true => " (any further ones are not named)",
         false => "",
     };
-    let these = match frames.len() {
-        1 => "this frame",
-        _ => "these frames",
-    };
-    (format!("{}{more}", named.join(", ")), these, then)
+    (named, these, then)
 }
 
 /// The warning for frames one grey level throughout their crop
