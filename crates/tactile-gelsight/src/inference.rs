@@ -260,12 +260,12 @@ impl Reconstructor {
         (&self.rest.0, &self.rest.1)
     }
 
-    /// The indentation on the working grid, mm.
-    pub fn working_mm(&mut self, frame: &RgbImage) -> Result<Vec<f32>> {
-        let f = self.background.matched(frame)?;
-        let (gx, gy) = self.raw_slopes(&f)?;
+    /// The indentation on the working grid, mm, of a frame's working
+    /// image ([`Self::working_frame`]).
+    pub fn working_mm(&mut self, f: &WorkingImage) -> Result<Vec<f32>> {
+        let (gx, gy) = self.raw_slopes(f)?;
         let step_mm = self.grid.step_mm(self.mm_per_px);
-        let weights = self.gate.map(|g| g.weights(&self.background.change(&f)));
+        let weights = self.gate.map(|g| g.weights(&self.background.change(f)));
         Ok(indentation_mm(
             &self.solver,
             (&gx, &gy),
@@ -275,14 +275,36 @@ impl Reconstructor {
         ))
     }
 
+    /// Refuse a frame this sensor cannot read (`path` names it): another
+    /// size than the calibrated one, or grey when the calibration was in
+    /// colour.
+    pub fn check_frame(&self, frame: &RgbImage, path: &Path) -> Result<()> {
+        let g = self.grid;
+        check_size(path, (g.frame_width, g.frame_height), frame)?;
+        check_colour(path, frame, self.background.colour)
+    }
+
     /// The skin's indentation over `frame` (the calibrated size, in colour
     /// when the calibration was; `path` names it in errors), at the frame's
     /// size, metres.
     pub fn reconstruct(&mut self, frame: &RgbImage, path: &Path) -> Result<IndentationMap> {
+        let working = self.working_frame(frame, path)?;
+        self.reconstruct_working(&working)
+    }
+
+    /// `frame` checked ([`Self::check_frame`]), shrunk to the working grid
+    /// and its exposure matched to the rest frame: what the reconstruction
+    /// reads, and the rest-frame check
+    /// ([`PreparedBackground::median_change`]) with it.
+    pub fn working_frame(&self, frame: &RgbImage, path: &Path) -> Result<WorkingImage> {
+        self.check_frame(frame, path)?;
+        self.background.matched(frame)
+    }
+
+    /// [`Self::reconstruct`] of a frame's working image.
+    pub fn reconstruct_working(&mut self, working: &WorkingImage) -> Result<IndentationMap> {
         let g = self.grid;
-        check_size(path, (g.frame_width, g.frame_height), frame)?;
-        check_colour(path, frame, self.background.colour)?;
-        let mm = self.working_mm(frame)?;
+        let mm = self.working_mm(working)?;
         let size = (g.frame_width, g.frame_height);
         let big = tactile_preprocess::enlarge_f32(&mm, (g.width(), g.height()), size)?;
         Ok(IndentationMap {

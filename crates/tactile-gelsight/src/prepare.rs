@@ -232,6 +232,36 @@ impl PreparedBackground {
         out
     }
 
+    /// The median over working pixels of `frame`'s colour change from the
+    /// background ([`Self::change`]), its exposure matched first: a frame
+    /// of this sensor changes colour only where the skin is pressed, so
+    /// half of it or more stays near 0 (noise), while a frame of another
+    /// sensor differs throughout.
+    pub fn rest_change(&self, frame: &RgbImage) -> Result<f32> {
+        let g = self.image.grid;
+        if (frame.width(), frame.height()) != (g.frame_width, g.frame_height) {
+            return Err(tactile_core::Error::Invalid(format!(
+                "a {}x{} frame against a {}x{} rest frame",
+                frame.width(),
+                frame.height(),
+                g.frame_width,
+                g.frame_height
+            ))
+            .into());
+        }
+        Ok(self.median_change(&self.matched(frame)?))
+    }
+
+    /// [`Self::rest_change`] of a frame's exposure-matched working image.
+    pub fn median_change(&self, frame: &WorkingImage) -> f32 {
+        let mut change = self.change(frame);
+        if change.is_empty() {
+            return 0.0;
+        }
+        let mid = change.len() / 2;
+        *change.select_nth_unstable_by(mid, f32::total_cmp).1
+    }
+
     /// The colour change's size per working pixel (the circle finder's
     /// evidence of contact).
     pub fn change(&self, frame: &WorkingImage) -> Vec<f32> {
@@ -243,5 +273,58 @@ impl PreparedBackground {
                 ((f[0] - b[0]).powi(2) + (f[1] - b[1]).powi(2) + (f[2] - b[2]).powi(2)).sqrt()
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reconstruct::REST_CHANGE_LIMIT;
+    use tactile_core::image_io::rgb_image;
+
+    /// A 64x48 frame whose pixel (x, y) is `f(x, y)`.
+    fn frame(f: impl Fn(usize, usize) -> [u8; 3]) -> RgbImage {
+        let (w, h) = (64, 48);
+        let data = (0..w * h).flat_map(|i| f(i % w, i / w)).collect();
+        rgb_image(w, h, data).unwrap()
+    }
+
+    #[test]
+    fn only_a_frame_changed_over_half_its_picture_is_far_from_the_rest_frame() {
+        let grid = WorkingGrid {
+            frame_width: 64,
+            frame_height: 48,
+            factor: 4,
+        };
+        let lit = |x: usize, y: usize| [90 + x as u8, 120 + y as u8, 200 - x as u8];
+        let bg = PreparedBackground::new(&frame(lit), grid).unwrap();
+        let change = |f: &RgbImage| bg.rest_change(f).unwrap();
+        // At rest, at another exposure, and pressed over a third of the
+        // picture (a big contact: lit on the side facing one light, shaded
+        // on the other, 40 levels each way, which moves the exposure
+        // matching's medians too): well below the limit.
+        assert!(change(&frame(lit)) < 1e-6);
+        assert!(change(&frame(|x, y| lit(x, y).map(|v| (v as f32 * 0.8) as u8))) < 0.01);
+        let pressed = frame(|x, y| {
+            lit(x, y).map(|v| match (x < 22, y < 24) {
+                (false, _) => v,
+                (true, true) => v.saturating_add(40),
+                (true, false) => v - 40,
+            })
+        });
+        assert!(
+            change(&pressed) < REST_CHANGE_LIMIT / 2.0,
+            "{}",
+            change(&pressed)
+        );
+        // Another picture throughout: far above the limit.
+        let other = frame(|x, y| {
+            let v = if (x / 4 + y / 4) % 2 == 0 { 30 } else { 220 };
+            [v, v, v]
+        });
+        assert!(change(&other) > REST_CHANGE_LIMIT, "{}", change(&other));
+        // A frame of another size is an error, not a score.
+        let small = rgb_image(32, 48, vec![0; 32 * 48 * 3]).unwrap();
+        assert!(bg.rest_change(&small).is_err());
     }
 }

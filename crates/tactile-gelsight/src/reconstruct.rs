@@ -12,6 +12,7 @@ use tactile_core::image_io::{RgbImage, load_rgb};
 use tactile_core::plot::{COLOUR_BAR_WIDTH, colour, colour_range, draw_colour_bar};
 
 use crate::inference::{IndentationMap, Reconstructor};
+use crate::prepare::PreparedBackground;
 use crate::{Error, Result};
 
 /// Most frames one call reconstructs.
@@ -84,17 +85,63 @@ pub fn frame_files(data: &Path) -> Result<(Vec<PathBuf>, Vec<String>)> {
 /// A frame's score against a sensor's profile ([`SensorCheck`]).
 pub type FrameScore<'a> = Box<dyn FnMut(&RgbImage) -> Result<f32> + Send + 'a>;
 
+/// What a [`SensorCheck`] compares frames with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CheckBasis {
+    /// The palpation detector's input profile of this sensor (its colours
+    /// and colour layout), fitted on this many of its frames: it tells
+    /// other units of the same design too.
+    DetectorProfile {
+        /// The frames the profile was fitted on.
+        frames: usize,
+    },
+    /// The sensor's rest frame (the calibration's background, or the one
+    /// given instead): a calibration alone has nothing else. It tells
+    /// frames of another kind of sensor, not another unit of this one.
+    RestFrame,
+}
+
+/// Median colour change from the rest frame ([`PreparedBackground::rest_change`],
+/// an RGB distance on a 0-1 scale) above which a frame is not the sensor's:
+/// the 32 real presses of the calibrated R1.5 stay below 0.03, its renders
+/// below 0.04, and under spheres of 15-40 mm pressed 1.5-3 mm (half the
+/// gel or more in contact) below 0.07; TacTip frames on its canvas score
+/// 0.84 and more.
+pub const REST_CHANGE_LIMIT: f32 = 0.2;
+
 /// How far a frame lies from the sensor's own frames, to name frames of
 /// another sensor: the palpation detector's input profile of this sensor
-/// (its colours and colour layout), when the model folder has one
-/// (`tactile_pipeline` builds it; a calibration alone has none).
+/// when the model folder has one (`tactile_pipeline` builds it), else the
+/// rest frame ([`SensorCheck::rest_frame`]).
 pub struct SensorCheck<'a> {
-    /// A frame's score, in the profile's spreads.
+    /// A frame's score (in the profile's spreads, or a colour change).
     pub score: FrameScore<'a>,
     /// Scores above this are not the sensor's frames.
     pub threshold: f32,
-    /// The frames the profile was fitted on.
-    pub frames: usize,
+    /// What the score compares the frame with.
+    pub basis: CheckBasis,
+}
+
+impl SensorCheck<'static> {
+    /// The check of a calibration alone: a frame's median colour change
+    /// from `background`, the rest frame the reconstruction subtracts.
+    pub fn rest_frame(background: &PreparedBackground) -> Self {
+        let background = background.clone();
+        Self {
+            score: Box::new(move |frame| background.rest_change(frame)),
+            threshold: REST_CHANGE_LIMIT,
+            basis: CheckBasis::RestFrame,
+        }
+    }
+}
+
+impl<'a> SensorCheck<'a> {
+    /// `check` when there is one, else the rest frame's
+    /// ([`SensorCheck::rest_frame`]): every reconstruction names frames of
+    /// another sensor by the best check it has.
+    pub fn or_rest_frame(check: Option<Self>, background: &PreparedBackground) -> Self {
+        check.unwrap_or_else(|| SensorCheck::rest_frame(background))
+    }
 }
 
 impl SensorCheck<'_> {
@@ -127,26 +174,42 @@ pub fn unlike_warning(
     let worst = unlike.iter().map(|u| u.1).reduce(f32::max)?;
     let files: Vec<String> = unlike.iter().map(|u| u.0.clone()).collect();
     let (named, these) = tactile_core::source::named_frames(&files);
-    let scores = match (scored, unlike.len()) {
-        (false, _) => "above".to_string(),
-        (true, 1) => format!("{worst:.1},"),
-        (true, _) => format!("up to {worst:.1},"),
-    };
-    Some(format!(
-        "warning: {named}: colours unlike this sensor's (scored against the {} frames of it its detector was trained on: {scores} where the sensor's own frames stay below {:.1}): a frame of another sensor, or of this one under other light or with another gel? The indentation of {these} may mean nothing",
-        check.frames, check.threshold
-    ))
+    Some(match check.basis {
+        CheckBasis::DetectorProfile { frames } => {
+            let scores = match (scored, unlike.len()) {
+                (false, _) => "above".to_string(),
+                (true, 1) => format!("{worst:.1},"),
+                (true, _) => format!("up to {worst:.1},"),
+            };
+            format!(
+                "warning: {named}: colours unlike this sensor's (scored against the {frames} frames of it its detector was trained on: {scores} where the sensor's own frames stay below {:.1}): a frame of another sensor, or of this one under other light or with another gel? The indentation of {these} may mean nothing",
+                check.threshold
+            )
+        }
+        CheckBasis::RestFrame => {
+            let by = match (scored, unlike.len()) {
+                (false, _) => String::new(),
+                (true, 1) => format!(" by {worst:.2}"),
+                (true, _) => format!(" by up to {worst:.2}"),
+            };
+            format!(
+                "warning: {named}: half of the picture or more changed colour from this sensor's rest frame{by}, where its own frames, which change only where pressed, stay below {:.2} (the median change, an RGB distance on a 0-1 scale once exposure is matched): a frame of another sensor, or of this one under other light, or against another day's rest frame? The indentation of {these} may mean nothing",
+                check.threshold
+            )
+        }
+    })
 }
 
 /// Reconstruct every frame `data` names with the model in `model` into
-/// the new folder `out`; with a `check`, the frames unlike the sensor's
-/// are still reconstructed, and named in a warning.
+/// the new folder `out`. Frames unlike the sensor's (by `check`, else by
+/// the rest frame: [`SensorCheck::rest_frame`]) are still reconstructed,
+/// and named in a warning.
 pub fn reconstruct_folder(
     model: &Path,
     data: &Path,
     out: &Path,
     options: &ReconstructOptions,
-    mut check: Option<SensorCheck<'_>>,
+    check: Option<SensorCheck<'_>>,
 ) -> Result<ReconstructReport> {
     let (files, mut warnings) = frame_files(data)?;
     // Both folders are new: one with files in it is refused before any work.
@@ -163,6 +226,7 @@ pub fn reconstruct_folder(
     if let Some(bg) = &options.background {
         rec.set_background(&load_rgb(bg)?, bg)?;
     }
+    let mut check = SensorCheck::or_rest_frame(check, rec.background());
     let mut times = Vec::with_capacity(files.len());
     let mut peak = 0f64;
     let mut unlike = Vec::new();
@@ -174,12 +238,7 @@ pub fn reconstruct_folder(
         let t0 = std::time::Instant::now();
         let map = rec.reconstruct(&frame, f)?;
         times.push(t0.elapsed().as_secs_f64() * 1e3);
-        if let Some(score) = check
-            .as_mut()
-            .map(|c| c.unlike(&frame))
-            .transpose()?
-            .flatten()
-        {
+        if let Some(score) = check.unlike(&frame)? {
             unlike.push((f.display().to_string(), score));
         }
         peak = peak.max(map.peak_mm() as f64);
@@ -208,9 +267,7 @@ pub fn reconstruct_folder(
         r.commit(false)?;
     }
     times.sort_by(f64::total_cmp);
-    if let Some(c) = &check {
-        warnings.extend(unlike_warning(&unlike, c, true));
-    }
+    warnings.extend(unlike_warning(&unlike, &check, true));
     Ok(ReconstructReport {
         frames: files.len(),
         ms_per_frame: times[times.len() / 2],

@@ -17,6 +17,7 @@ use tactile_detect::TendonDetector;
 use tactile_segment::TendonSegmenter;
 
 use tactile_burn::Artifact;
+use tactile_gelsight::reconstruct::REST_CHANGE_LIMIT;
 use tactile_gelsight::{GelsightArtifact, Reconstructor};
 
 use crate::hysteresis::Hysteresis;
@@ -171,6 +172,12 @@ pub struct Pipeline {
     /// A calibrated GelSight-like sensor (`tactile calibrate ball` wrote
     /// the folder itself): the skin's indentation on every frame.
     pub sensor: Option<Reconstructor>,
+    /// A calibration alone (no detector to gate frames): frames unlike its
+    /// rest frame (median colour change above
+    /// [`tactile_gelsight::reconstruct::REST_CHANGE_LIMIT`], as
+    /// `tactile reconstruct` names them) are another sensor's and get no
+    /// indentation.
+    pub rest_check: bool,
     /// Where the networks run.
     pub runtime: Runtime,
     /// onnxruntime intra-op threads it was loaded with.
@@ -218,9 +225,11 @@ impl Pipeline {
             true => Some(Reconstructor::load(dir, runtime, threads)?),
             false => None,
         };
+        let rest_check = palpation.is_none() && sensor.is_some();
         Ok(Self {
             palpation,
             sensor,
+            rest_check,
             runtime,
             threads,
             working_height: tactile_preprocess::visuo::WORKING_HEIGHT,
@@ -301,10 +310,19 @@ impl Pipeline {
         }
         // A calibrated sensor's skin, from the frame as it came (its
         // calibrated size; another size is refused by a calibration
-        // alone, naming the frame).
+        // alone, naming the frame). A calibration alone asks its rest frame
+        // instead of the gate, after the size check the reconstruction
+        // makes.
         if let Some(sensor) = self.sensor.as_mut() {
             let t = Instant::now();
-            let map = sensor.reconstruct(frame, Path::new(name))?;
+            let working = sensor.working_frame(frame, Path::new(name))?;
+            if self.rest_check && sensor.background().median_change(&working) > REST_CHANGE_LIMIT {
+                rec.out_of_distribution = true;
+                rec.gate = Some(tactile_detect::Gate::Foreign);
+                rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+                return Ok((rec, None));
+            }
+            let map = sensor.reconstruct_working(&working)?;
             rec.ms_reconstruct = Some(1e3 * t.elapsed().as_secs_f64());
             rec.indentation_peak_mm = Some(map.peak_mm());
             rec.contact_area_mm2 = Some(map.contact_area_mm2(sensor.mm_per_px()));

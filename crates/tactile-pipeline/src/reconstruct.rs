@@ -3,22 +3,23 @@
 //! frames of another sensor named: when the model folder holds the
 //! palpation detector trained on this sensor's rendered frames
 //! (`detector/`), its input profile scores each frame, as `tactile run`'s
-//! gate does.
+//! gate does; a calibration alone compares them with its rest frame.
 
 use std::path::Path;
 
 use tactile_burn::Artifact;
 use tactile_detect::{DetectorArtifact, DetectorEnsembleArtifact};
 use tactile_gelsight::reconstruct::{
-    ReconstructOptions, ReconstructReport, SensorCheck, reconstruct_folder,
+    CheckBasis, ReconstructOptions, ReconstructReport, SensorCheck, reconstruct_folder,
 };
 
 use crate::Result;
 
 /// The input profile of the detector in `model`'s `detector/` (its lead
 /// member's, for an ensemble) as a [`SensorCheck`]; `None` when the folder
-/// has no detector or the detector no profile. A detector that cannot be
-/// read (one still being trained, a broken config) gives no check and a
+/// has no detector or the detector no profile (the reconstruction then
+/// checks frames against the rest frame). A detector that cannot be read
+/// (one still being trained, a broken config) gives no check and a
 /// warning saying why: the reconstruction does not need it.
 pub fn sensor_check(model: &Path) -> (Option<SensorCheck<'static>>, Option<String>) {
     let dir = model.join("detector");
@@ -38,7 +39,7 @@ pub fn sensor_check(model: &Path) -> (Option<SensorCheck<'static>>, Option<Strin
             return (
                 None,
                 Some(format!(
-                    "warning: {e}; frames of another sensor are not told without the detector's input profile"
+                    "warning: {e}; without the detector's input profile, only frames unlike the sensor's rest frame are told as another sensor's"
                 )),
             );
         }
@@ -64,7 +65,7 @@ pub fn sensor_check(model: &Path) -> (Option<SensorCheck<'static>>, Option<Strin
     let check = SensorCheck {
         score: Box::new(score),
         threshold,
-        frames,
+        basis: CheckBasis::DetectorProfile { frames },
     };
     (Some(check), None)
 }

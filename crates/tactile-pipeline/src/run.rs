@@ -153,12 +153,22 @@ impl RunSummary {
             ));
         }
         if self.out_of_distribution > 0 {
-            let indentation = match self.contact.is_some() {
-                true => ", depth or indentation",
-                false => " or depth",
+            let (unlike, left_out) = match (self.palpation, self.contact.is_some()) {
+                (true, true) => (
+                    "input statistics far from the training frames'",
+                    "tendon, direction, depth or indentation",
+                ),
+                (true, false) => (
+                    "input statistics far from the training frames'",
+                    "tendon, direction or depth",
+                ),
+                (false, _) => (
+                    "colours changed over half the picture from its rest frame",
+                    "indentation",
+                ),
             };
             lines.push(format!(
-                "warning: {} of {} frames do not look like this sensor's (input statistics far from the training frames'): they got no tendon, direction{indentation}",
+                "warning: {} of {} frames do not look like this sensor's ({unlike}): they got no {left_out}",
                 self.out_of_distribution, self.frames
             ));
         }

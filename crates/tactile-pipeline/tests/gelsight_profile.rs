@@ -172,8 +172,8 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
         "{w}"
     );
     // A detector still being trained beside the calibration (its folder
-    // marked unfinished): the reconstruction goes on, and says the frames
-    // are not told.
+    // marked unfinished): the reconstruction goes on, says so, and tells
+    // frames of another sensor by the rest frame alone.
     let training = calibration_copy(&model, &tmp.path().join("training"));
     std::fs::create_dir_all(training.join("detector")).unwrap();
     std::fs::copy(
@@ -190,14 +190,26 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
     )
     .unwrap();
     assert_eq!(report.frames, 2);
+    let by_rest = |w: &String| {
+        w.contains(
+            "b.png: half of the picture or more changed colour from this sensor's rest frame by ",
+        ) && !w.contains("a.png")
+    };
     assert!(
-        report.warnings.len() == 1
-            && report.warnings[0].contains("did not finish training")
-            && report.warnings[0].contains("frames of another sensor are not told"),
+        report.warnings.len() == 2
+            && report
+                .warnings
+                .iter()
+                .any(|w| w.contains("did not finish training")
+                    && w.contains("only frames unlike the sensor's rest frame are told"))
+            && report.warnings.iter().any(by_rest),
         "{:?}",
         report.warnings
     );
-    // A calibration without a detector has no profile to ask: no warning.
+    // A calibration without a detector (`calibrate ball`'s folder before
+    // `train detector`) tells the other sensor's frame by its rest frame:
+    // named, with its median colour change; the press is not. It was
+    // silent before.
     let alone = calibration_copy(&model, &tmp.path().join("calibration"));
     let report = tactile_pipeline::reconstruct::reconstruct(
         &alone,
@@ -206,5 +218,39 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
         &options,
     )
     .unwrap();
-    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    assert!(
+        report.warnings.len() == 1 && by_rest(&report.warnings[0]),
+        "{:?}",
+        report.warnings
+    );
+    // `run` on that calibration alone: the other sensor's frame is foreign
+    // and gets no indentation (it had one: the calibration read its pins as
+    // dents); the press keeps its own.
+    let mut p = tactile_pipeline::Pipeline::load(&alone, Runtime::Onnx, 1).unwrap();
+    let own = p.process("press_01.png", &press).unwrap();
+    assert!(
+        !own.out_of_distribution && own.indentation_peak_mm.unwrap() > 0.5,
+        "{own:?}"
+    );
+    let r = p.process("tactip.png", &other).unwrap();
+    assert!(
+        r.out_of_distribution && r.gate == Some(Gate::Foreign) && r.indentation_peak_mm.is_none(),
+        "{r:?}"
+    );
+    // Every real press of the sensor, through a calibration alone: none
+    // named (the other rest-frame scores are in docs/hard-cases.md).
+    let presses = root().join("../shared/real/gelsight-ball/frames");
+    let report = tactile_pipeline::reconstruct::reconstruct(
+        &alone,
+        &presses,
+        &tmp.path().join("out4"),
+        &options,
+    )
+    .unwrap();
+    assert_eq!(report.frames, 32);
+    assert!(
+        report.warnings.len() == 1 && report.warnings[0].contains("missing from the numbering"),
+        "{:?}",
+        report.warnings
+    );
 }

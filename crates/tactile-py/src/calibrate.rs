@@ -79,7 +79,7 @@ pub(crate) fn reconstruct_frames<'py>(
 /// interpreter lock is released while a frame is reconstructed.
 #[pyclass(module = "tactile", name = "Reconstructor")]
 pub struct PyReconstructor {
-    inner: Mutex<(Reconstructor, Option<SensorCheck<'static>>)>,
+    inner: Mutex<(Reconstructor, SensorCheck<'static>)>,
     model_dir: PathBuf,
     runtime: tactile_burn::Runtime,
     size: (usize, usize),
@@ -109,12 +109,13 @@ impl PyReconstructor {
                 Ok(r)
             })
             .py()?;
-        // The profile of the detector beside the calibration, if any,
-        // names frames of another sensor.
+        // The profile of the detector beside the calibration, if any, else
+        // the rest frame, names frames of another sensor.
         let (check, unread) = tactile_pipeline::reconstruct::sensor_check(&model_dir);
         if let Some(w) = unread {
             crate::errors::user_warning(py, &w)?;
         }
+        let check = SensorCheck::or_rest_frame(check, rec.background());
         let g = rec.grid();
         Ok(Self {
             size: (g.frame_width, g.frame_height),
@@ -127,8 +128,8 @@ impl PyReconstructor {
     /// The skin's indentation under an `(H, W, 3)` uint8 RGB frame of the
     /// calibrated size: `(H, W)` float32, metres toward the camera, 0 at
     /// rest. A frame unlike the sensor's (by the profile of the detector
-    /// beside the calibration, when there is one) is reconstructed too,
-    /// with a `UserWarning`.
+    /// beside the calibration, when there is one, else by its rest frame)
+    /// is reconstructed too, with a `UserWarning`.
     fn reconstruct<'py>(
         &self,
         py: Python<'py>,
@@ -143,10 +144,7 @@ impl PyReconstructor {
             let (r, check) = &mut *guard;
             px.with_rgb(|img| -> tactile_gelsight::Result<_> {
                 let map = r.reconstruct(img, Path::new("frame"))?;
-                let warning = match check.as_mut() {
-                    Some(c) => c.frame_warning(img, "frame")?,
-                    None => None,
-                };
+                let warning = check.frame_warning(img, "frame")?;
                 Ok((map, warning))
             })
             .py()?

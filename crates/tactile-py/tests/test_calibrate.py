@@ -246,6 +246,39 @@ def test_a_calibrated_sensor_names_frames_of_another_sensor(root: Path, tmp_path
     assert r.out_of_distribution and r.indentation_peak_mm is None
 
 
+def test_a_calibration_alone_names_frames_of_another_sensor_by_its_rest_frame(
+    presses: Path, model: Path, tmp_path: Path
+):
+    """Without a detector beside it (`calibrate ball`'s folder before `train
+    detector`), the calibration compares each frame with its rest frame: a
+    press changes colour only where it touches, another sensor's frame
+    everywhere. The presses, and the rest frame itself darker (another
+    exposure), pass; the other sensor's frame is named."""
+    rec = tactile.Reconstructor(model, "onnx")
+    rest = tactile.read_rgb(presses / "background.png")
+    darker = (rest.astype(np.float32) * 0.85).astype(np.uint8)
+    own = [tactile.read_rgb(f) for f in sorted((presses / "frames").glob("*.png"))] + [darker]
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        for f in own:
+            rec.reconstruct(f)
+    assert not seen, [str(w.message) for w in seen]
+    with pytest.warns(UserWarning, match=r"^frame: half of the picture or more changed colour from this sensor's rest frame, where"):
+        rec.reconstruct(tactip_on_the_canvas())
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    write_png(frames / "a.png", own[0])
+    write_png(frames / "b.png", tactip_on_the_canvas())
+    with pytest.warns(UserWarning, match=r"b\.png: half of the picture or more changed colour from this sensor's rest frame by 0\.\d\d,") as seen:
+        r = tactile.calibrate.reconstruct(model, frames, tmp_path / "out")
+    assert r["frames"] == 2 and not any("a.png" in str(w.message) for w in seen)
+    # The pipeline on the calibration alone gives that frame no indentation.
+    pipe = tactile.Pipeline(model, "onnx")
+    assert pipe.process(own[0]).indentation_peak_mm > 0
+    r = pipe.process(tactip_on_the_canvas())
+    assert r.out_of_distribution and r.indentation_peak_mm is None
+
+
 def test_a_depth_network_learns_a_correction_to_its_calibration(model: Path, tmp_path: Path):
     data = tactile.synth.gelsight(model, count=8, seed=5, frames_per_sequence=4, tendon_share=1.0,
                                   out=tmp_path / "set")
