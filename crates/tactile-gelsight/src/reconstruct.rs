@@ -12,7 +12,7 @@ use tactile_core::image_io::{RgbImage, load_rgb};
 use tactile_core::plot::{COLOUR_BAR_WIDTH, colour, colour_range, draw_colour_bar};
 
 use crate::inference::{IndentationMap, Reconstructor};
-use crate::prepare::PreparedBackground;
+use crate::prepare::{PreparedBackground, WorkingImage};
 use crate::{Error, Result};
 
 /// Most frames one call reconstructs.
@@ -86,22 +86,24 @@ pub fn frame_files(data: &Path) -> Result<(Vec<PathBuf>, Vec<String>)> {
 pub type FrameScore<'a> = Box<dyn FnMut(&RgbImage) -> Result<f32> + Send + 'a>;
 
 /// What a [`SensorCheck`] compares frames with.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CheckBasis {
+pub enum CheckBasis<'a> {
     /// The palpation detector's input profile of this sensor (its colours
-    /// and colour layout), fitted on this many of its frames: it tells
-    /// other units of the same design too.
+    /// and colour layout): it tells other units of the same design too.
     DetectorProfile {
         /// The frames the profile was fitted on.
         frames: usize,
+        /// A frame's score, in the profile's spreads.
+        score: FrameScore<'a>,
     },
     /// The sensor's rest frame (the calibration's background, or the one
-    /// given instead): a calibration alone has nothing else. It tells
-    /// frames of another kind of sensor, not another unit of this one.
+    /// given instead), read off the reconstruction's own working image
+    /// ([`PreparedBackground::median_change`]): a calibration alone has
+    /// nothing else. It tells frames of another kind of sensor, not
+    /// another unit of this one.
     RestFrame,
 }
 
-/// Median colour change from the rest frame ([`PreparedBackground::rest_change`],
+/// Median colour change from the rest frame ([`PreparedBackground::median_change`],
 /// an RGB distance on a 0-1 scale) above which a frame is not the sensor's:
 /// the 32 real presses of the calibrated R1.5 stay below 0.03, its renders
 /// below 0.04, and under spheres of 15-40 mm pressed 1.5-3 mm (half the
@@ -114,51 +116,63 @@ pub const REST_CHANGE_LIMIT: f32 = 0.2;
 /// when the model folder has one (`tactile_pipeline` builds it), else the
 /// rest frame ([`SensorCheck::rest_frame`]).
 pub struct SensorCheck<'a> {
-    /// A frame's score (in the profile's spreads, or a colour change).
-    pub score: FrameScore<'a>,
+    /// What a frame is compared with, and how it is scored.
+    pub basis: CheckBasis<'a>,
     /// Scores above this are not the sensor's frames.
     pub threshold: f32,
-    /// What the score compares the frame with.
-    pub basis: CheckBasis,
-}
-
-impl SensorCheck<'static> {
-    /// The check of a calibration alone: a frame's median colour change
-    /// from `background`, the rest frame the reconstruction subtracts.
-    pub fn rest_frame(background: &PreparedBackground) -> Self {
-        let background = background.clone();
-        Self {
-            score: Box::new(move |frame| background.rest_change(frame)),
-            threshold: REST_CHANGE_LIMIT,
-            basis: CheckBasis::RestFrame,
-        }
-    }
-}
-
-impl<'a> SensorCheck<'a> {
-    /// `check` when there is one, else the rest frame's
-    /// ([`SensorCheck::rest_frame`]): every reconstruction names frames of
-    /// another sensor by the best check it has.
-    pub fn or_rest_frame(check: Option<Self>, background: &PreparedBackground) -> Self {
-        check.unwrap_or_else(|| SensorCheck::rest_frame(background))
-    }
 }
 
 impl SensorCheck<'_> {
-    /// The score of `frame` when it is unlike the sensor's frames (above
-    /// the threshold); `None` when it is like them.
-    pub fn unlike(&mut self, frame: &RgbImage) -> Result<Option<f32>> {
-        let score = (self.score)(frame)?;
-        Ok((score > self.threshold).then_some(score))
+    /// The check of a calibration alone: a frame's median colour change
+    /// from the rest frame the reconstruction subtracts.
+    pub fn rest_frame() -> Self {
+        Self {
+            basis: CheckBasis::RestFrame,
+            threshold: REST_CHANGE_LIMIT,
+        }
     }
 
-    /// The warning for `frame`, named `name`, when it is unlike the
-    /// sensor's, in words without its score ([`unlike_warning`]): a frame
-    /// given alone, as a loop gives them, is warned of alike each time.
-    pub fn frame_warning(&mut self, frame: &RgbImage, name: &str) -> Result<Option<String>> {
-        Ok(self
-            .unlike(frame)?
-            .and_then(|score| unlike_warning(&[(name.to_string(), score)], self, false)))
+    /// `check` when there is one, else the rest frame's
+    /// ([`SensorCheck::rest_frame`]): every reconstruction names frames of
+    /// another sensor by the best check it has.
+    pub fn or_rest_frame(check: Option<Self>) -> Self {
+        check.unwrap_or_else(Self::rest_frame)
+    }
+
+    /// The score of `frame` when it is unlike the sensor's frames (above
+    /// the threshold); `None` when it is like them. `working` is the
+    /// reconstruction's working image of it
+    /// ([`Reconstructor::working_frame`]), against `rest`.
+    pub fn unlike(
+        &mut self,
+        frame: &RgbImage,
+        working: &WorkingImage,
+        rest: &PreparedBackground,
+    ) -> Result<Option<f32>> {
+        let score = match &mut self.basis {
+            CheckBasis::DetectorProfile { score, .. } => score(frame)?,
+            CheckBasis::RestFrame => rest.median_change(working),
+        };
+        Ok((score > self.threshold).then_some(score))
+    }
+}
+
+impl Reconstructor {
+    /// [`Reconstructor::reconstruct`], with the warning for `frame`
+    /// (named `name`) when `check` finds it unlike the sensor's, in words
+    /// without its score ([`unlike_warning`]): a frame given alone, as a
+    /// loop gives them, is warned of alike each time.
+    pub fn reconstruct_checked(
+        &mut self,
+        frame: &RgbImage,
+        name: &str,
+        check: &mut SensorCheck<'_>,
+    ) -> Result<(IndentationMap, Option<String>)> {
+        let working = self.working_frame(frame, Path::new(name))?;
+        let unlike = check.unlike(frame, &working, self.background())?;
+        let warning =
+            unlike.and_then(|score| unlike_warning(&[(name.to_string(), score)], check, false));
+        Ok((self.reconstruct_working(&working)?, warning))
     }
 }
 
@@ -175,7 +189,7 @@ pub fn unlike_warning(
     let files: Vec<String> = unlike.iter().map(|u| u.0.clone()).collect();
     let (named, these) = tactile_core::source::named_frames(&files);
     Some(match check.basis {
-        CheckBasis::DetectorProfile { frames } => {
+        CheckBasis::DetectorProfile { frames, .. } => {
             let scores = match (scored, unlike.len()) {
                 (false, _) => "above".to_string(),
                 (true, 1) => format!("{worst:.1},"),
@@ -226,7 +240,7 @@ pub fn reconstruct_folder(
     if let Some(bg) = &options.background {
         rec.set_background(&load_rgb(bg)?, bg)?;
     }
-    let mut check = SensorCheck::or_rest_frame(check, rec.background());
+    let mut check = SensorCheck::or_rest_frame(check);
     let mut times = Vec::with_capacity(files.len());
     let mut peak = 0f64;
     let mut unlike = Vec::new();
@@ -236,9 +250,10 @@ pub fn reconstruct_folder(
         }
         let frame = load_rgb(f)?;
         let t0 = std::time::Instant::now();
-        let map = rec.reconstruct(&frame, f)?;
+        let working = rec.working_frame(&frame, f)?;
+        let map = rec.reconstruct_working(&working)?;
         times.push(t0.elapsed().as_secs_f64() * 1e3);
-        if let Some(score) = check.unlike(&frame)? {
+        if let Some(score) = check.unlike(&frame, &working, rec.background())? {
             unlike.push((f.display().to_string(), score));
         }
         peak = peak.max(map.peak_mm() as f64);

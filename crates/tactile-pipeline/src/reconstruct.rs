@@ -63,9 +63,11 @@ pub fn sensor_check(model: &Path) -> (Option<SensorCheck<'static>>, Option<Strin
         profile.score_frame(&img).map_err(invalid)
     };
     let check = SensorCheck {
-        score: Box::new(score),
+        basis: CheckBasis::DetectorProfile {
+            frames,
+            score: Box::new(score),
+        },
         threshold,
-        basis: CheckBasis::DetectorProfile { frames },
     };
     (Some(check), None)
 }

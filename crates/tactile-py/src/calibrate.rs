@@ -3,7 +3,7 @@
 //! reconstructed as `tactile reconstruct` does, and `tactile.Reconstructor`
 //! for numpy frames.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Mutex;
 
 use numpy::{PyArray2, PyArrayMethods};
@@ -115,7 +115,7 @@ impl PyReconstructor {
         if let Some(w) = unread {
             crate::errors::user_warning(py, &w)?;
         }
-        let check = SensorCheck::or_rest_frame(check, rec.background());
+        let check = SensorCheck::or_rest_frame(check);
         let g = rec.grid();
         Ok(Self {
             size: (g.frame_width, g.frame_height),
@@ -142,13 +142,9 @@ impl PyReconstructor {
                 PyRuntimeError::new_err("the reconstructor failed in another thread")
             })?;
             let (r, check) = &mut *guard;
-            px.with_rgb(|img| -> tactile_gelsight::Result<_> {
-                let map = r.reconstruct(img, Path::new("frame"))?;
-                let warning = check.frame_warning(img, "frame")?;
-                Ok((map, warning))
-            })
-            .py()?
-            .py()
+            px.with_rgb(|img| r.reconstruct_checked(img, "frame", check))
+                .py()?
+                .py()
         })?;
         if let Some(w) = warning {
             crate::errors::user_warning(py, &w)?;
