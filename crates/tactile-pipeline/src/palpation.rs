@@ -17,7 +17,7 @@ use tactile_detect::TendonDetector;
 use tactile_segment::TendonSegmenter;
 
 use tactile_burn::Artifact;
-use tactile_gelsight::reconstruct::REST_CHANGE_LIMIT;
+use tactile_gelsight::reconstruct::SensorCheck;
 use tactile_gelsight::{GelsightArtifact, Reconstructor};
 
 use crate::hysteresis::Hysteresis;
@@ -173,11 +173,9 @@ pub struct Pipeline {
     /// the folder itself): the skin's indentation on every frame.
     pub sensor: Option<Reconstructor>,
     /// A calibration alone (no detector to gate frames): frames unlike its
-    /// rest frame (median colour change above
-    /// [`tactile_gelsight::reconstruct::REST_CHANGE_LIMIT`], as
-    /// `tactile reconstruct` names them) are another sensor's and get no
-    /// indentation.
-    pub rest_check: bool,
+    /// rest frame ([`SensorCheck::rest_frame`], as `tactile reconstruct`
+    /// names them) are another sensor's and get no indentation.
+    pub rest_check: Option<SensorCheck<'static>>,
     /// Where the networks run.
     pub runtime: Runtime,
     /// onnxruntime intra-op threads it was loaded with.
@@ -225,7 +223,7 @@ impl Pipeline {
             true => Some(Reconstructor::load(dir, runtime, threads)?),
             false => None,
         };
-        let rest_check = palpation.is_none() && sensor.is_some();
+        let rest_check = (palpation.is_none() && sensor.is_some()).then(SensorCheck::rest_frame);
         Ok(Self {
             palpation,
             sensor,
@@ -316,7 +314,11 @@ impl Pipeline {
         if let Some(sensor) = self.sensor.as_mut() {
             let t = Instant::now();
             let working = sensor.working_frame(frame, Path::new(name))?;
-            if self.rest_check && sensor.background().median_change(&working) > REST_CHANGE_LIMIT {
+            let unlike = match self.rest_check.as_mut() {
+                Some(check) => check.unlike(frame, &working, sensor.background())?,
+                None => None,
+            };
+            if unlike.is_some() {
                 rec.out_of_distribution = true;
                 rec.gate = Some(tactile_detect::Gate::Foreign);
                 rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
