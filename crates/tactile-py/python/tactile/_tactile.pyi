@@ -191,7 +191,8 @@ class Reconstructor:
     def reconstruct(self, frame: npt.NDArray[np.uint8]) -> npt.NDArray[np.float32]:
         """The indentation (metres) under an RGB frame of the calibrated size; a
         frame unlike the sensor's (by the detector beside the calibration, if
-        any) is reconstructed too, with a ``UserWarning``."""
+        any, else by the rest frame) is reconstructed too, with a
+        ``UserWarning``."""
     @property
     def frame_size(self) -> Tuple[int, int]: ...
     @property

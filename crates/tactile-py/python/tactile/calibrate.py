@@ -44,7 +44,8 @@ def reconstruct(
     """Every frame of ``data`` (a frame, a folder of PNG or JPEG frames, or
     a dataset folder) to ``out/<stem>.npy``; files that are not frames, and
     frames unlike the sensor's (by the profile of the detector beside the
-    calibration, when the folder has ``detector/``), are named in a
+    calibration, when the folder has ``detector/``, else by the rest frame:
+    changed in colour over half the picture), are named in a
     ``UserWarning`` (and in the result's ``warnings``);
     ``render`` also writes pictures (frame, shaded skin, indentation with a
     colour bar); ``background`` replaces the calibration's rest frame."""
