@@ -63,11 +63,14 @@ pub struct FrameRecord {
     #[serde(default)]
     pub input_score: Option<f32>,
     /// Far outside the training frames (another sensor, not a sensor
-    /// frame): no tendon, direction or depth is given.
+    /// frame): no tendon, direction or depth is given. A calibration alone
+    /// says so of a frame unlike its rest frame, and gives no indentation.
     #[serde(default)]
     pub out_of_distribution: bool,
     /// The detector's gate that answered without the network (`blank`,
-    /// `foreign`), if any: the same answer `tactile eval detector` scores.
+    /// `foreign`), if any: the same answer `tactile eval detector` scores
+    /// (`foreign` too for a calibration alone's frame unlike its rest
+    /// frame).
     #[serde(default)]
     pub gate: Option<tactile_detect::Gate>,
     /// Time to bring a large frame down to the working resolution, ms
