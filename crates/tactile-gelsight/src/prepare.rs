@@ -148,11 +148,7 @@ impl WorkingImage {
     pub fn medians(&self) -> [f32; 3] {
         let mut out = [0.0; 3];
         for (c, m) in out.iter_mut().enumerate() {
-            let mut v: Vec<f32> = self.rgb.iter().skip(c).step_by(3).copied().collect();
-            let mid = v.len() / 2;
-            if !v.is_empty() {
-                *m = *v.select_nth_unstable_by(mid, f32::total_cmp).1;
-            }
+            *m = upper_median(self.rgb.iter().skip(c).step_by(3).copied().collect());
         }
         out
     }
@@ -181,6 +177,16 @@ impl WorkingImage {
                 .collect(),
         }
     }
+}
+
+/// The middle value of `v` (the upper one of an even count), found
+/// without sorting; 0 for none.
+fn upper_median(mut v: Vec<f32>) -> f32 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let mid = v.len() / 2;
+    *v.select_nth_unstable_by(mid, f32::total_cmp).1
 }
 
 /// The background at the working resolution, with its medians.
@@ -238,12 +244,7 @@ impl PreparedBackground {
     /// the skin is pressed, so half of it or more stays near 0 (noise),
     /// while a frame of another sensor differs throughout.
     pub fn median_change(&self, frame: &WorkingImage) -> f32 {
-        let mut change = self.change(frame);
-        if change.is_empty() {
-            return 0.0;
-        }
-        let mid = change.len() / 2;
-        *change.select_nth_unstable_by(mid, f32::total_cmp).1
+        upper_median(self.change(frame))
     }
 
     /// The colour change's size per working pixel (the circle finder's

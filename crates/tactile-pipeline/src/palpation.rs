@@ -175,10 +175,6 @@ pub struct Pipeline {
     /// A calibrated GelSight-like sensor (`tactile calibrate ball` wrote
     /// the folder itself): the skin's indentation on every frame.
     pub sensor: Option<Reconstructor>,
-    /// A calibration alone (no detector to gate frames): frames unlike its
-    /// rest frame ([`SensorCheck::rest_frame`], as `tactile reconstruct`
-    /// names them) are another sensor's and get no indentation.
-    pub rest_check: Option<SensorCheck<'static>>,
     /// Where the networks run.
     pub runtime: Runtime,
     /// onnxruntime intra-op threads it was loaded with.
@@ -226,11 +222,9 @@ impl Pipeline {
             true => Some(Reconstructor::load(dir, runtime, threads)?),
             false => None,
         };
-        let rest_check = (palpation.is_none() && sensor.is_some()).then(SensorCheck::rest_frame);
         Ok(Self {
             palpation,
             sensor,
-            rest_check,
             runtime,
             threads,
             working_height: tactile_preprocess::visuo::WORKING_HEIGHT,
@@ -312,16 +306,16 @@ impl Pipeline {
         // A calibrated sensor's skin, from the frame as it came (its
         // calibrated size; another size is refused by a calibration
         // alone, naming the frame). A calibration alone asks its rest frame
-        // instead of the gate, after the size check the reconstruction
-        // makes.
+        // ([`SensorCheck::rest_frame`], as `tactile reconstruct` does)
+        // instead of the gate: a frame unlike it gets no indentation.
         if let Some(sensor) = self.sensor.as_mut() {
             let t = Instant::now();
             let working = sensor.working_frame(frame, Path::new(name))?;
-            let unlike = match self.rest_check.as_mut() {
-                Some(check) => check.unlike(frame, &working, sensor.background())?,
-                None => None,
-            };
-            if unlike.is_some() {
+            if self.palpation.is_none()
+                && SensorCheck::rest_frame()
+                    .unlike(frame, &working, sensor.background())?
+                    .is_some()
+            {
                 rec.out_of_distribution = true;
                 rec.gate = Some(tactile_detect::Gate::Foreign);
                 rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();

@@ -154,17 +154,16 @@ impl RunSummary {
         }
         if self.out_of_distribution > 0 {
             let (unlike, left_out) = match (self.palpation, self.contact.is_some()) {
-                (true, true) => (
-                    "input statistics far from the training frames'",
-                    "tendon, direction, depth or indentation",
-                ),
-                (true, false) => (
-                    "input statistics far from the training frames'",
-                    "tendon, direction or depth",
-                ),
                 (false, _) => (
                     "colours changed over half the picture from its rest frame",
                     "indentation",
+                ),
+                (true, calibrated) => (
+                    "input statistics far from the training frames'",
+                    match calibrated {
+                        true => "tendon, direction, depth or indentation",
+                        false => "tendon, direction or depth",
+                    },
                 ),
             };
             lines.push(format!(
