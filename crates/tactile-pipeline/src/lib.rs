@@ -25,7 +25,8 @@ pub use hysteresis::Hysteresis;
 pub use overlay::{FrameViews, SensorView, TendonView};
 pub use palpation::{FrameRecord, PalpationModels, Pipeline};
 pub use run::{
-    ContactSummary, Flow, RunItem, RunOptions, RunOutcome, RunSummary, run, run_collect,
+    ContactSummary, Flow, OtherSizeFrames, RunItem, RunOptions, RunOutcome, RunSummary, run,
+    run_collect,
 };
 pub use tactile_burn::Runtime;
 pub use tactile_core::source::{

@@ -231,6 +231,23 @@ impl Pipeline {
         })
     }
 
+    /// The frame size a calibrated sensor was calibrated at,
+    /// `[width, height]` (`None` without a calibration: the networks take
+    /// frames of any size).
+    pub fn calibrated_size(&self) -> Option<[usize; 2]> {
+        self.sensor.as_ref().map(|s| {
+            let g = s.grid();
+            [g.frame_width, g.frame_height]
+        })
+    }
+
+    /// The calibrated size `frame` is not, when it is not: such a frame is
+    /// foreign to the sensor ([`Self::process`] gives it nothing).
+    pub fn other_size(&self, frame: &RgbImage) -> Option<[usize; 2]> {
+        self.calibrated_size()
+            .filter(|&size| [frame.width(), frame.height()] != size)
+    }
+
     /// The tendon detector, if the folder has one.
     pub fn detector(&self) -> Option<&TendonDetector> {
         self.palpation.as_ref().map(|p| &p.detector)
@@ -259,21 +276,21 @@ impl Pipeline {
         let t0 = Instant::now();
         let mut rec = FrameRecord::empty(name);
         let mut views = FrameViews::default();
+        // A frame of another size than a calibrated sensor's is another
+        // sensor's (or another camera mode's): foreign, with or without
+        // palpation models, so one such frame does not stop a run.
+        if self.other_size(frame).is_some() {
+            rec.out_of_distribution = true;
+            rec.gate = Some(tactile_detect::Gate::Foreign);
+            rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+            return Ok((rec, None));
+        }
         // With palpation models, the detector's gate is asked first: a
-        // frame of another sensor (another size than the calibration's,
-        // or input statistics far from the detector's training frames')
-        // gets no tendon, no direction, no depth and no reconstruction.
+        // frame of another sensor (input statistics far from the
+        // detector's training frames') gets no tendon, no direction, no
+        // depth and no reconstruction.
         let mut gated = None;
         if let Some(models) = self.palpation.as_mut() {
-            if let Some(sensor) = self.sensor.as_ref() {
-                let g = sensor.grid();
-                if (frame.width(), frame.height()) != (g.frame_width, g.frame_height) {
-                    rec.out_of_distribution = true;
-                    rec.gate = Some(tactile_detect::Gate::Foreign);
-                    rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
-                    return Ok((rec, None));
-                }
-            }
             // One downsample of a large frame; every model reads the result.
             let t_prepare = Instant::now();
             let working = tactile_preprocess::visuo::working_frame(frame, self.working_height)?;
@@ -304,8 +321,7 @@ impl Pipeline {
             gated = Some((working, img, gate, ms_gate));
         }
         // A calibrated sensor's skin, from the frame as it came (its
-        // calibrated size; another size is refused by a calibration
-        // alone, naming the frame). A calibration alone asks its rest frame
+        // calibrated size, checked above). A calibration alone asks its rest frame
         // ([`SensorCheck::rest_frame`], as `tactile reconstruct` does)
         // instead of the gate: a frame unlike it gets no indentation.
         if let Some(sensor) = self.sensor.as_mut() {

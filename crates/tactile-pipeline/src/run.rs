@@ -57,6 +57,21 @@ pub struct ContactSummary {
     pub peak_mm: f32,
 }
 
+/// Frames of another size than a calibrated sensor's, over a run: each is
+/// foreign to the sensor (no tendon, no indentation), and the first is
+/// named so the camera's mode can be checked.
+#[derive(Debug, Clone, Serialize)]
+pub struct OtherSizeFrames {
+    /// How many frames.
+    pub frames: usize,
+    /// The size the sensor was calibrated at, `[width, height]`.
+    pub calibrated_size: [usize; 2],
+    /// The first such frame's name.
+    pub first: String,
+    /// The first such frame's size, `[width, height]`.
+    pub first_size: [usize; 2],
+}
+
 /// What a run did, how fast and how well.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunSummary {
@@ -79,9 +94,14 @@ pub struct RunSummary {
     pub fps: f64,
     /// Frames the detector gated out (0 without paper B's models).
     pub gated_out: usize,
-    /// Frames flagged as far from the training frames (another sensor,
-    /// not a sensor frame): answered with no tendon.
+    /// Frames flagged as another sensor's (another size than a calibrated
+    /// sensor's, input statistics far from the detector's training frames,
+    /// or a calibration alone's rest frame unlike them): answered with no
+    /// tendon and no indentation. Counts `other_size`'s frames too.
     pub out_of_distribution: usize,
+    /// A calibrated sensor's frames of another size, when there were any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub other_size: Option<OtherSizeFrames>,
     /// Frames that went through every stage.
     pub tendon_frames: usize,
     /// Whether the folder has paper B's models (a calibration alone
@@ -152,25 +172,7 @@ impl RunSummary {
                 c.peak_mm
             ));
         }
-        if self.out_of_distribution > 0 {
-            let (unlike, left_out) = match (self.palpation, self.contact.is_some()) {
-                (false, _) => (
-                    "colours changed over half the picture from its rest frame",
-                    "indentation",
-                ),
-                (true, calibrated) => (
-                    "input statistics far from the training frames'",
-                    match calibrated {
-                        true => "tendon, direction, depth or indentation",
-                        false => "tendon, direction or depth",
-                    },
-                ),
-            };
-            lines.push(format!(
-                "warning: {} of {} frames do not look like this sensor's ({unlike}): they got no {left_out}",
-                self.out_of_distribution, self.frames
-            ));
-        }
+        lines.extend(self.warnings());
         if self.source.is_live() {
             lines.push(format!(
                 "live: {} frame(s) dropped while the models were busy; arrival to record {}",
@@ -188,6 +190,44 @@ impl RunSummary {
             ));
         }
         lines
+    }
+
+    /// The run's warnings, each a line starting `warning: `: frames of
+    /// another size than the calibrated sensor's, and frames that do not
+    /// look like the sensor's. [`Self::describe`] holds them; the Python
+    /// package raises them as `UserWarning`s.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = vec![];
+        let (unlike, left_out) = match (self.palpation, self.contact.is_some()) {
+            (false, _) => (
+                "colours changed over half the picture from its rest frame",
+                "indentation",
+            ),
+            (true, calibrated) => (
+                "input statistics far from the training frames'",
+                match calibrated {
+                    true => "tendon, direction, depth or indentation",
+                    false => "tendon, direction or depth",
+                },
+            ),
+        };
+        let mut unlike_frames = self.out_of_distribution;
+        if let Some(o) = &self.other_size {
+            let [cw, ch] = o.calibrated_size;
+            let [w, h] = o.first_size;
+            warnings.push(format!(
+                "warning: {} of {} frames are not {cw}x{ch}, the size this sensor was calibrated at (the first: {}, {w}x{h}), frames of another sensor or camera mode: they got no {left_out}",
+                o.frames, self.frames, o.first
+            ));
+            unlike_frames = unlike_frames.saturating_sub(o.frames);
+        }
+        if unlike_frames > 0 {
+            warnings.push(format!(
+                "warning: {} of {} frames do not look like this sensor's ({unlike}): they got no {left_out}",
+                unlike_frames, self.frames
+            ));
+        }
+        warnings
     }
 }
 
@@ -306,6 +346,7 @@ pub fn run(
     let mut times: [Reservoir; 8] = Default::default();
     let mut contact = ContactSummary::default();
     let (mut frames, mut gated, mut ood) = (0usize, 0usize, 0usize);
+    let mut other_size = None;
     let (mut final_d, mut raw_d, mut labels) = (
         Decisions::default(),
         Decisions::default(),
@@ -319,6 +360,15 @@ pub fn run(
             && !same_sequence
         {
             h.reset();
+        }
+        if let Some(calibrated_size) = pipeline.other_size(&frame.image) {
+            let o = other_size.get_or_insert_with(|| OtherSizeFrames {
+                frames: 0,
+                calibrated_size,
+                first: frame.name.clone(),
+                first_size: [frame.image.width(), frame.image.height()],
+            });
+            o.frames += 1;
         }
         let (mut rec, views) =
             pipeline.process_filtered(&frame.name, &frame.image, filter.as_mut())?;
@@ -400,6 +450,7 @@ pub fn run(
         // (and no frame has a tendon: every record stays tendon-free).
         gated_out: if palpation { gated } else { 0 },
         out_of_distribution: ood,
+        other_size,
         tendon_frames: frames - gated,
         palpation,
         contact: pipeline.sensor.is_some().then_some(contact),

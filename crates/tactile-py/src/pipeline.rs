@@ -134,7 +134,9 @@ impl PyPipeline {
         })
     }
 
-    /// Process one `(H, W, 3)` uint8 RGB frame of any size.
+    /// Process one `(H, W, 3)` uint8 RGB frame of any size (a calibrated
+    /// sensor's frame of another size than its calibration's is another
+    /// sensor's: `out_of_distribution`, with no tendon and no indentation).
     fn process(&self, py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<FrameResult> {
         self.process_named(py, frame, "frame")
     }

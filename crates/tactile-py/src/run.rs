@@ -18,7 +18,8 @@ use crate::work::interruptible;
 /// standard input) as `tactile run` does, and return its summary as the
 /// dict the command line prints last, with `records`, `mcap`,
 /// `mcap_frames`, `render`, `live_sent` and `live_dropped` saying where
-/// the outputs went. Every output is checked before any model loads and
+/// the outputs went; the summary's warnings (frames of another size or
+/// unlike the sensor's) are also raised as `UserWarning`s. Every output is checked before any model loads and
 /// appears when the run ends; Ctrl-C stops it leaving none.
 #[pyfunction]
 #[pyo3(signature = (
@@ -71,7 +72,11 @@ pub(crate) fn run<'py>(
         session.wait_for_viewer().py()?;
         session.run().py()
     })?;
-    for w in &report.late_warnings {
+    for w in report
+        .late_warnings
+        .iter()
+        .chain(&report.summary.warnings())
+    {
         crate::errors::user_warning(py, w)?;
     }
     crate::json::to_py(py, &report)

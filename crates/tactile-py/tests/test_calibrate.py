@@ -119,7 +119,7 @@ def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
     assert (taken / "keep.txt").read_text() == "mine"
 
 
-def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path, model: Path):
+def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path, model: Path, tmp_path: Path):
     frame = tactile.read_rgb(sorted((presses / "frames").glob("*.png"))[0])
     pipe = tactile.Pipeline(model, "onnx")
     assert pipe.calibrated and pipe.threshold is None
@@ -132,11 +132,13 @@ def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path
     assert not r.tendon and r.depth_m is None and "reconstruct" in r.ms
     d = r.to_dict()
     assert d["indentation_peak_mm"] == pytest.approx(r.indentation_peak_mm)
-    # Rest is flat, and a frame of another size is refused, named.
+    # Rest is flat, and a frame of another size is another sensor's (or
+    # camera mode's): it gets nothing, and does not stop a sequence.
     rest = pipe.process(tactile.read_rgb(presses / "background.png"))
     assert rest.contact_area_mm2 == 0.0
-    with pytest.raises(ValueError, match=r"\(320, 240\).*\(640, 480\)"):
-        pipe.process(np.zeros((240, 320, 3), np.uint8))
+    small = pipe.process(np.zeros((240, 320, 3), np.uint8))
+    assert small.out_of_distribution and small.indentation_peak_mm is None
+    assert small.indentation_m is None and not small.tendon
     with pytest.raises(ValueError, match="no detector"):
         pipe.detector_frame(frame)
     # A whole run of the sensor alone: every press in contact, and no frame
@@ -147,6 +149,21 @@ def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path
     assert not summary["palpation"] and summary["frames"] == 6
     assert summary["contact"]["frames_in_contact"] == 6
     assert summary["gated_out"] == 0 and summary["tendon_frames"] == 0
+    assert "other_size" not in summary and summary["out_of_distribution"] == 0
+    # A run over a folder with a frame of another size goes on past it and
+    # names it in a warning.
+    mixed = tmp_path / "mixed"
+    mixed.mkdir()
+    for f in sorted((presses / "frames").glob("*.png"))[:2]:
+        shutil.copy(f, mixed / f.name)
+    write_png(mixed / "zz-small.png", np.zeros((240, 320, 3), np.uint8))
+    with pytest.warns(UserWarning, match=r"^1 of 3 frames are not 640x480, the size this sensor was calibrated at \(the first: zz-small\.png, 320x240\)"):
+        summary = tactile.run(mixed, models=model)
+    assert summary["frames"] == 3 and summary["out_of_distribution"] == 1
+    assert summary["contact"]["frames_in_contact"] == 2
+    assert summary["other_size"] == {
+        "frames": 1, "calibrated_size": [640, 480], "first": "zz-small.png", "first_size": [320, 240]
+    }
 
 
 def test_the_calibrated_sensor_renders_its_own_labelled_frames(model: Path, tmp_path: Path):

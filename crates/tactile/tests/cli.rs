@@ -3067,15 +3067,45 @@ fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
         .map(|r| r["indentation_peak_mm"].as_f64().unwrap())
         .fold(0f64, f64::max);
     assert!((peak - most).abs() < 1e-3, "{peak} against {most}");
-    // A frame of another size is refused, naming it.
+    // A frame of another size is another sensor's (or camera mode's): the
+    // run goes on past it, gives it nothing and names it.
     let odd = tmp.path().join("odd");
     std::fs::create_dir_all(&odd).unwrap();
+    let mut presses: Vec<_> = std::fs::read_dir(&frames)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    presses.sort();
+    std::fs::copy(&presses[0], odd.join("a.png")).unwrap();
     write_png(&odd.join("small.png"), 320, 240);
-    let (ok, msg) = tactile(&["run", "--models", &m, "--data", odd.to_str().unwrap()]);
+    let (ok, msg) = tactile(&[
+        "run",
+        "--models",
+        &m,
+        "--data",
+        odd.to_str().unwrap(),
+        "--out",
+        "-",
+    ]);
+    assert!(ok, "{msg}");
+    let recs: Vec<serde_json::Value> = msg
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|v| v.get("frame").is_some())
+        .collect();
+    assert_eq!(recs.len(), 2, "{msg}");
+    assert_eq!(recs[1]["frame"], "small.png");
+    assert_eq!(recs[1]["out_of_distribution"], true, "{msg}");
+    assert!(recs[1]["indentation_peak_mm"].is_null(), "{msg}");
     assert!(
-        !ok && msg.contains("small.png") && msg.contains("(640, 480)"),
+        recs[0]["indentation_peak_mm"].as_f64().unwrap() > 0.0,
         "{msg}"
     );
+    assert!(
+        msg.contains("warning: 1 of 2 frames are not 640x480, the size this sensor was calibrated at (the first: small.png, 320x240)"),
+        "{msg}"
+    );
+    assert_eq!(last_json(&msg)["other_size"]["frames"], 1, "{msg}");
 }
 
 /// The own-sensor loop in miniature: calibrate, render the sensor's own

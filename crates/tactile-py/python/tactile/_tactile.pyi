@@ -180,7 +180,9 @@ def run(
     output, or ROS 2 messages for ``.mcap``), overlays into the new folder
     ``render``, results served live at ``view`` (``HOST:PORT``); returns the
     summary the command line prints last, with ``records``, ``mcap``,
-    ``mcap_frames``, ``render``, ``live_sent`` and ``live_dropped``."""
+    ``mcap_frames``, ``render``, ``live_sent`` and ``live_dropped``. The
+    summary's warnings (frames of another size than a calibrated sensor's,
+    frames unlike the sensor's) are raised as ``UserWarning``s."""
 
 class Reconstructor:
     """A calibrated GelSight-like sensor: frames to the skin's indentation."""
