@@ -25,7 +25,7 @@ pub use hysteresis::Hysteresis;
 pub use overlay::{FrameViews, SensorView, TendonView};
 pub use palpation::{FrameRecord, PalpationModels, Pipeline};
 pub use run::{
-    ContactSummary, Flow, OtherSizeFrames, RunItem, RunOptions, RunOutcome, RunSummary, run,
+    ContactSummary, Flow, RunItem, RunOptions, RunOutcome, RunSummary, UnreadableFrames, run,
     run_collect,
 };
 pub use tactile_burn::Runtime;

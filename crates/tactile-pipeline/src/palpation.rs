@@ -99,6 +99,12 @@ pub struct FrameRecord {
     /// A calibrated sensor: time of its reconstruction, ms.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ms_reconstruct: Option<f64>,
+    /// A calibrated sensor: why it cannot read this frame (another size
+    /// than its calibration's, grey for a sensor calibrated in colour),
+    /// naming it. The frame is then another sensor's or another camera
+    /// mode's: `out_of_distribution`, `foreign`, and given nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unreadable: Option<String>,
 }
 
 impl FrameRecord {
@@ -130,6 +136,7 @@ impl FrameRecord {
             indentation_peak_mm: None,
             contact_area_mm2: None,
             ms_reconstruct: None,
+            unreadable: None,
         }
     }
 }
@@ -231,21 +238,24 @@ impl Pipeline {
         })
     }
 
-    /// The frame size a calibrated sensor was calibrated at,
-    /// `[width, height]` (`None` without a calibration: the networks take
-    /// frames of any size).
-    pub fn calibrated_size(&self) -> Option<[usize; 2]> {
-        self.sensor.as_ref().map(|s| {
-            let g = s.grid();
-            [g.frame_width, g.frame_height]
-        })
-    }
-
-    /// The calibrated size `frame` is not, when it is not: such a frame is
-    /// foreign to the sensor ([`Self::process`] gives it nothing).
-    pub fn other_size(&self, frame: &RgbImage) -> Option<[usize; 2]> {
-        self.calibrated_size()
-            .filter(|&size| [frame.width(), frame.height()] != size)
+    /// Why a calibrated sensor cannot read `frame` (named `name`), when it
+    /// cannot: another size than its calibration's, or grey for a sensor
+    /// calibrated in colour ([`Reconstructor::check_frame`]'s refusal).
+    /// [`Self::process`] gives such a frame nothing; without a calibration
+    /// the networks take frames of any size, and this is `None`.
+    fn unreadable(&self, name: &str, frame: &RgbImage) -> Result<Option<String>> {
+        let Some(sensor) = self.sensor.as_ref() else {
+            return Ok(None);
+        };
+        match sensor.check_frame(frame, Path::new(name)) {
+            Ok(()) => Ok(None),
+            Err(
+                e @ (tactile_gelsight::Error::FrameSize { .. }
+                | tactile_gelsight::Error::GreyFrame { .. }
+                | tactile_gelsight::Error::ColourFrame { .. }),
+            ) => Ok(Some(e.to_string())),
+            Err(e) => Err(e.into()),
+        }
     }
 
     /// The tendon detector, if the folder has one.
@@ -276,10 +286,12 @@ impl Pipeline {
         let t0 = Instant::now();
         let mut rec = FrameRecord::empty(name);
         let mut views = FrameViews::default();
-        // A frame of another size than a calibrated sensor's is another
-        // sensor's (or another camera mode's): foreign, with or without
-        // palpation models, so one such frame does not stop a run.
-        if self.other_size(frame).is_some() {
+        // A frame a calibrated sensor cannot read (another size, grey for
+        // a colour calibration) is another sensor's or another camera
+        // mode's: foreign, with or without palpation models, so one such
+        // frame does not stop a run.
+        if let Some(why) = self.unreadable(name, frame)? {
+            rec.unreadable = Some(why);
             rec.out_of_distribution = true;
             rec.gate = Some(tactile_detect::Gate::Foreign);
             rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
@@ -321,7 +333,7 @@ impl Pipeline {
             gated = Some((working, img, gate, ms_gate));
         }
         // A calibrated sensor's skin, from the frame as it came (its
-        // calibrated size, checked above). A calibration alone asks its rest frame
+        // calibrated size and colour, checked above). A calibration alone asks its rest frame
         // ([`SensorCheck::rest_frame`], as `tactile reconstruct` does)
         // instead of the gate: a frame unlike it gets no indentation.
         if let Some(sensor) = self.sensor.as_mut() {

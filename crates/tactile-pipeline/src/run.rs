@@ -57,19 +57,16 @@ pub struct ContactSummary {
     pub peak_mm: f32,
 }
 
-/// Frames of another size than a calibrated sensor's, over a run: each is
+/// Frames a calibrated sensor cannot read, over a run (another size than
+/// its calibration's, grey for a sensor calibrated in colour): each is
 /// foreign to the sensor (no tendon, no indentation), and the first is
-/// named so the camera's mode can be checked.
+/// named with why, so the camera's mode can be checked.
 #[derive(Debug, Clone, Serialize)]
-pub struct OtherSizeFrames {
+pub struct UnreadableFrames {
     /// How many frames.
     pub frames: usize,
-    /// The size the sensor was calibrated at, `[width, height]`.
-    pub calibrated_size: [usize; 2],
-    /// The first such frame's name.
+    /// Why the first could not be read, naming it.
     pub first: String,
-    /// The first such frame's size, `[width, height]`.
-    pub first_size: [usize; 2],
 }
 
 /// What a run did, how fast and how well.
@@ -94,14 +91,14 @@ pub struct RunSummary {
     pub fps: f64,
     /// Frames the detector gated out (0 without paper B's models).
     pub gated_out: usize,
-    /// Frames flagged as another sensor's (another size than a calibrated
-    /// sensor's, input statistics far from the detector's training frames,
+    /// Frames flagged as another sensor's (unreadable by a calibrated
+    /// sensor, input statistics far from the detector's training frames,
     /// or a calibration alone's rest frame unlike them): answered with no
-    /// tendon and no indentation. Counts `other_size`'s frames too.
+    /// tendon and no indentation. Counts `unreadable`'s frames too.
     pub out_of_distribution: usize,
-    /// A calibrated sensor's frames of another size, when there were any.
+    /// Frames the calibrated sensor could not read, when there were any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub other_size: Option<OtherSizeFrames>,
+    pub unreadable: Option<UnreadableFrames>,
     /// Frames that went through every stage.
     pub tendon_frames: usize,
     /// Whether the folder has paper B's models (a calibration alone
@@ -192,9 +189,9 @@ impl RunSummary {
         lines
     }
 
-    /// The run's warnings, each a line starting `warning: `: frames of
-    /// another size than the calibrated sensor's, and frames that do not
-    /// look like the sensor's. [`Self::describe`] holds them; the Python
+    /// The run's warnings, each a line starting `warning: `: frames the
+    /// calibrated sensor cannot read, and frames that do not look like the
+    /// sensor's. [`Self::describe`] holds them; the Python
     /// package raises them as `UserWarning`s.
     pub fn warnings(&self) -> Vec<String> {
         let mut warnings = vec![];
@@ -212,14 +209,12 @@ impl RunSummary {
             ),
         };
         let mut unlike_frames = self.out_of_distribution;
-        if let Some(o) = &self.other_size {
-            let [cw, ch] = o.calibrated_size;
-            let [w, h] = o.first_size;
+        if let Some(u) = &self.unreadable {
             warnings.push(format!(
-                "warning: {} of {} frames are not {cw}x{ch}, the size this sensor was calibrated at (the first: {}, {w}x{h}), frames of another sensor or camera mode: they got no {left_out}",
-                o.frames, self.frames, o.first
+                "warning: {} of {} frames cannot be read by this calibrated sensor (frames of another sensor or camera mode): they got no {left_out}. The first: {}",
+                u.frames, self.frames, u.first
             ));
-            unlike_frames = unlike_frames.saturating_sub(o.frames);
+            unlike_frames = unlike_frames.saturating_sub(u.frames);
         }
         if unlike_frames > 0 {
             warnings.push(format!(
@@ -346,7 +341,7 @@ pub fn run(
     let mut times: [Reservoir; 8] = Default::default();
     let mut contact = ContactSummary::default();
     let (mut frames, mut gated, mut ood) = (0usize, 0usize, 0usize);
-    let mut other_size = None;
+    let mut unreadable = None;
     let (mut final_d, mut raw_d, mut labels) = (
         Decisions::default(),
         Decisions::default(),
@@ -361,17 +356,16 @@ pub fn run(
         {
             h.reset();
         }
-        if let Some(calibrated_size) = pipeline.other_size(&frame.image) {
-            let o = other_size.get_or_insert_with(|| OtherSizeFrames {
-                frames: 0,
-                calibrated_size,
-                first: frame.name.clone(),
-                first_size: [frame.image.width(), frame.image.height()],
-            });
-            o.frames += 1;
-        }
         let (mut rec, views) =
             pipeline.process_filtered(&frame.name, &frame.image, filter.as_mut())?;
+        if let Some(why) = &rec.unreadable {
+            unreadable
+                .get_or_insert_with(|| UnreadableFrames {
+                    frames: 0,
+                    first: why.clone(),
+                })
+                .frames += 1;
+        }
         rec.latency_ms = frame.arrived.map(|t| 1e3 * t.elapsed().as_secs_f64());
         rec.stamp_ns = frame.stamp_ns;
         if let (Some(staged), Some(v)) = (&render, &views) {
@@ -450,7 +444,7 @@ pub fn run(
         // (and no frame has a tendon: every record stays tendon-free).
         gated_out: if palpation { gated } else { 0 },
         out_of_distribution: ood,
-        other_size,
+        unreadable,
         tendon_frames: frames - gated,
         palpation,
         contact: pipeline.sensor.is_some().then_some(contact),

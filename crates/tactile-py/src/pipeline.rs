@@ -134,9 +134,10 @@ impl PyPipeline {
         })
     }
 
-    /// Process one `(H, W, 3)` uint8 RGB frame of any size (a calibrated
-    /// sensor's frame of another size than its calibration's is another
-    /// sensor's: `out_of_distribution`, with no tendon and no indentation).
+    /// Process one `(H, W, 3)` uint8 RGB frame of any size (a frame a
+    /// calibrated sensor cannot read, of another size than its
+    /// calibration's or grey for a colour one, is another sensor's:
+    /// `out_of_distribution`, `unreadable` says why, and it gets nothing).
     fn process(&self, py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<FrameResult> {
         self.process_named(py, frame, "frame")
     }
@@ -312,11 +313,20 @@ impl FrameResult {
     }
 
     /// True when the frame does not look like the sensor's (its input
-    /// statistics are far from the training frames'): no tendon, direction
-    /// or depth is given.
+    /// statistics are far from the training frames', a calibration's rest
+    /// frame unlike it, or a calibrated sensor cannot read it): no tendon,
+    /// direction, depth or indentation is given.
     #[getter]
     fn out_of_distribution(&self) -> bool {
         self.record.out_of_distribution
+    }
+
+    /// Why a calibrated sensor cannot read the frame (another size than
+    /// its calibration's, grey for a sensor calibrated in colour); None
+    /// when it can.
+    #[getter]
+    fn unreadable(&self) -> Option<String> {
+        self.record.unreadable.clone()
     }
 
     /// The detector's gate that answered without the network: "blank" (no

@@ -18,8 +18,9 @@ use crate::work::interruptible;
 /// standard input) as `tactile run` does, and return its summary as the
 /// dict the command line prints last, with `records`, `mcap`,
 /// `mcap_frames`, `render`, `live_sent` and `live_dropped` saying where
-/// the outputs went; the summary's warnings (frames of another size or
-/// unlike the sensor's) are also raised as `UserWarning`s. Every output is checked before any model loads and
+/// the outputs went; the summary's warnings (frames a calibrated sensor
+/// cannot read, frames unlike the sensor's) are also raised as
+/// `UserWarning`s. Every output is checked before any model loads and
 /// appears when the run ends; Ctrl-C stops it leaving none.
 #[pyfunction]
 #[pyo3(signature = (

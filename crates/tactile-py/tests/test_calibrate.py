@@ -132,13 +132,19 @@ def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path
     assert not r.tendon and r.depth_m is None and "reconstruct" in r.ms
     d = r.to_dict()
     assert d["indentation_peak_mm"] == pytest.approx(r.indentation_peak_mm)
-    # Rest is flat, and a frame of another size is another sensor's (or
-    # camera mode's): it gets nothing, and does not stop a sequence.
+    # Rest is flat, and a frame the sensor cannot read (another size, grey
+    # for this colour sensor) is another sensor's or camera mode's: it gets
+    # nothing, says why, and does not stop a sequence.
     rest = pipe.process(tactile.read_rgb(presses / "background.png"))
-    assert rest.contact_area_mm2 == 0.0
+    assert rest.contact_area_mm2 == 0.0 and rest.unreadable is None
     small = pipe.process(np.zeros((240, 320, 3), np.uint8))
     assert small.out_of_distribution and small.indentation_peak_mm is None
     assert small.indentation_m is None and not small.tendon
+    assert "(320, 240)" in small.unreadable and "(640, 480)" in small.unreadable
+    grey = pipe.process(np.repeat(frame.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2))
+    assert grey.out_of_distribution and grey.indentation_peak_mm is None
+    assert "greyscale frame" in grey.unreadable and grey.to_dict()["unreadable"] == grey.unreadable
+    assert "unreadable" not in rest.to_dict()
     with pytest.raises(ValueError, match="no detector"):
         pipe.detector_frame(frame)
     # A whole run of the sensor alone: every press in contact, and no frame
@@ -149,21 +155,21 @@ def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path
     assert not summary["palpation"] and summary["frames"] == 6
     assert summary["contact"]["frames_in_contact"] == 6
     assert summary["gated_out"] == 0 and summary["tendon_frames"] == 0
-    assert "other_size" not in summary and summary["out_of_distribution"] == 0
-    # A run over a folder with a frame of another size goes on past it and
-    # names it in a warning.
+    assert "unreadable" not in summary and summary["out_of_distribution"] == 0
+    # A run over a folder with frames the sensor cannot read goes on past
+    # them and names the first in a warning.
     mixed = tmp_path / "mixed"
     mixed.mkdir()
     for f in sorted((presses / "frames").glob("*.png"))[:2]:
         shutil.copy(f, mixed / f.name)
     write_png(mixed / "zz-small.png", np.zeros((240, 320, 3), np.uint8))
-    with pytest.warns(UserWarning, match=r"^1 of 3 frames are not 640x480, the size this sensor was calibrated at \(the first: zz-small\.png, 320x240\)"):
+    write_png(mixed / "zzz-grey.png", np.full((480, 640, 3), 90, np.uint8))
+    with pytest.warns(UserWarning, match=r"^2 of 4 frames cannot be read by this calibrated sensor .*they got no indentation\. The first: zz-small\.png: .*\(320, 240\)"):
         summary = tactile.run(mixed, models=model)
-    assert summary["frames"] == 3 and summary["out_of_distribution"] == 1
+    assert summary["frames"] == 4 and summary["out_of_distribution"] == 2
     assert summary["contact"]["frames_in_contact"] == 2
-    assert summary["other_size"] == {
-        "frames": 1, "calibrated_size": [640, 480], "first": "zz-small.png", "first_size": [320, 240]
-    }
+    assert summary["unreadable"]["frames"] == 2
+    assert summary["unreadable"]["first"].startswith("zz-small.png: frame is (320, 240)")
 
 
 def test_the_calibrated_sensor_renders_its_own_labelled_frames(model: Path, tmp_path: Path):

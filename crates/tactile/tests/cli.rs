@@ -3068,7 +3068,7 @@ fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
         .fold(0f64, f64::max);
     assert!((peak - most).abs() < 1e-3, "{peak} against {most}");
     // A frame of another size is another sensor's (or camera mode's): the
-    // run goes on past it, gives it nothing and names it.
+    // run goes on past it, gives it nothing and says why.
     let odd = tmp.path().join("odd");
     std::fs::create_dir_all(&odd).unwrap();
     let mut presses: Vec<_> = std::fs::read_dir(&frames)
@@ -3102,10 +3102,16 @@ fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
         "{msg}"
     );
     assert!(
-        msg.contains("warning: 1 of 2 frames are not 640x480, the size this sensor was calibrated at (the first: small.png, 320x240)"),
+        recs[1]["unreadable"]
+            .as_str()
+            .is_some_and(|w| w.contains("small.png") && w.contains("(640, 480)")),
         "{msg}"
     );
-    assert_eq!(last_json(&msg)["other_size"]["frames"], 1, "{msg}");
+    assert!(
+        msg.contains("warning: 1 of 2 frames cannot be read by this calibrated sensor (frames of another sensor or camera mode): they got no indentation. The first: small.png: frame is (320, 240)"),
+        "{msg}"
+    );
+    assert_eq!(last_json(&msg)["unreadable"]["frames"], 1, "{msg}");
 }
 
 /// The own-sensor loop in miniature: calibrate, render the sensor's own

@@ -24,6 +24,8 @@ class FrameResult:
     @property
     def out_of_distribution(self) -> bool: ...
     @property
+    def unreadable(self) -> Optional[str]: ...
+    @property
     def input_score(self) -> Optional[float]: ...
     @property
     def gate(self) -> Optional[str]: ...
@@ -181,8 +183,8 @@ def run(
     ``render``, results served live at ``view`` (``HOST:PORT``); returns the
     summary the command line prints last, with ``records``, ``mcap``,
     ``mcap_frames``, ``render``, ``live_sent`` and ``live_dropped``. The
-    summary's warnings (frames of another size than a calibrated sensor's,
-    frames unlike the sensor's) are raised as ``UserWarning``s."""
+    summary's warnings (frames a calibrated sensor cannot read, frames
+    unlike the sensor's) are raised as ``UserWarning``s."""
 
 class Reconstructor:
     """A calibrated GelSight-like sensor: frames to the skin's indentation."""
