@@ -289,8 +289,12 @@ impl Pipeline {
         // A frame a calibrated sensor cannot read (another size, grey for
         // a colour calibration) is another sensor's or another camera
         // mode's: foreign, with or without palpation models, so one such
-        // frame does not stop a run.
+        // frame does not stop a run. A sequence's filter hears it as a
+        // score of 0, as it does the gate's foreign frames.
         if let Some(why) = self.unreadable(name, frame)? {
+            if let Some(h) = filter {
+                h.update(0.0);
+            }
             rec.unreadable = Some(why);
             rec.out_of_distribution = true;
             rec.gate = Some(tactile_detect::Gate::Foreign);
@@ -333,9 +337,10 @@ impl Pipeline {
             gated = Some((working, img, gate, ms_gate));
         }
         // A calibrated sensor's skin, from the frame as it came (its
-        // calibrated size and colour, checked above). A calibration alone asks its rest frame
-        // ([`SensorCheck::rest_frame`], as `tactile reconstruct` does)
-        // instead of the gate: a frame unlike it gets no indentation.
+        // calibrated size and colour, checked above). A calibration alone
+        // asks its rest frame ([`SensorCheck::rest_frame`], as `tactile
+        // reconstruct` does) instead of the gate: a frame unlike it gets
+        // no indentation.
         if let Some(sensor) = self.sensor.as_mut() {
             let t = Instant::now();
             let working = sensor.working_frame(frame, Path::new(name))?;
