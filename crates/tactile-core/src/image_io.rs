@@ -59,17 +59,50 @@ pub const MAX_IMAGE_PIXELS: u64 = 7680 * 4320;
 /// without compression is 265 MB.
 pub const MAX_IMAGE_FILE_BYTES: u64 = 512 << 20;
 
-fn decode(path: &Path) -> Result<DynamicImage> {
+/// What an image file's header says, read without decoding its pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImageHeader {
+    /// Width, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// Stored as greyscale (with or without alpha, of any depth).
+    pub grey: bool,
+}
+
+fn open_image(path: &Path) -> Result<ImageReader<std::io::BufReader<std::fs::File>>> {
+    ImageReader::open(path)
+        .map_err(|e| Error::io(path, e))?
+        .with_guessed_format()
+        .map_err(|e| Error::io(path, e))
+}
+
+/// Read `path`'s header only: its size and whether it is stored grey, so a
+/// folder's frames can be checked before any is decoded.
+pub fn image_header(path: &Path) -> Result<ImageHeader> {
+    use image::ImageDecoder as _;
     crate::io::expect_regular(path)?;
-    let open = || -> Result<ImageReader<std::io::BufReader<std::fs::File>>> {
-        ImageReader::open(path)
-            .map_err(|e| Error::io(path, e))?
-            .with_guessed_format()
-            .map_err(|e| Error::io(path, e))
-    };
-    let (w, h) = open()?
-        .into_dimensions()
+    let decoder = open_image(path)?
+        .into_decoder()
         .map_err(|e| Error::image(path, format!("cannot read the image header: {e}")))?;
+    let (width, height) = decoder.dimensions();
+    let grey = matches!(
+        decoder.color_type(),
+        ColorType::L8 | ColorType::La8 | ColorType::L16 | ColorType::La16
+    );
+    Ok(ImageHeader {
+        width,
+        height,
+        grey,
+    })
+}
+
+fn decode(path: &Path) -> Result<DynamicImage> {
+    let ImageHeader {
+        width: w,
+        height: h,
+        ..
+    } = image_header(path)?;
     if w as u64 * h as u64 > MAX_IMAGE_PIXELS {
         return Err(Error::image(
             path,
@@ -78,7 +111,7 @@ fn decode(path: &Path) -> Result<DynamicImage> {
             ),
         ));
     }
-    open()?
+    open_image(path)?
         .decode()
         .map_err(|e| Error::image(path, format!("cannot decode image: {e}")))
 }

@@ -72,6 +72,20 @@ pub enum Error {
         /// How far apart its channels are, grey levels on average.
         spread: f32,
     },
+    /// Frames of a folder this sensor cannot read, found from their
+    /// headers before any frame is reconstructed: the first one's refusal
+    /// ([`Error::FrameSize`] or [`Error::GreyFrame`]) and how many.
+    #[error(
+        "{first}; {count} of the {total} frames cannot be read by this sensor (another size than its calibration's, or stored grey for a sensor calibrated in colour): nothing was reconstructed"
+    )]
+    UnreadableFrames {
+        /// The first such frame's refusal.
+        first: Box<Error>,
+        /// Frames that cannot be read.
+        count: usize,
+        /// Frames in the folder.
+        total: usize,
+    },
 }
 
 impl Error {

@@ -284,6 +284,45 @@ impl Reconstructor {
         check_colour(path, frame, self.background.colour)
     }
 
+    /// Refuse `files` this sensor cannot read, from their headers alone
+    /// (another size than the calibrated one, or stored grey when the
+    /// calibration was in colour), before any is decoded: a folder's bad
+    /// frame is named at once, not after the frames before it. One such
+    /// file gives its own refusal; several, the first's and their count
+    /// ([`Error::UnreadableFrames`]). A grey picture stored as colour is
+    /// still refused by [`Self::check_frame`] once decoded.
+    pub fn check_files(&self, files: &[std::path::PathBuf]) -> Result<()> {
+        let g = self.grid;
+        let expected = (g.frame_width, g.frame_height);
+        let (mut first, mut count) = (None, 0usize);
+        for f in files {
+            let h = tactile_core::image_io::image_header(f)?;
+            let found = (h.width as usize, h.height as usize);
+            let refusal = if found != expected {
+                Error::FrameSize {
+                    path: f.clone(),
+                    expected,
+                    found,
+                }
+            } else if h.grey && self.background.colour {
+                Error::GreyFrame { path: f.clone() }
+            } else {
+                continue;
+            };
+            count += 1;
+            first.get_or_insert(refusal);
+        }
+        match first {
+            None => Ok(()),
+            Some(e) if count == 1 => Err(e),
+            Some(e) => Err(Error::UnreadableFrames {
+                first: Box::new(e),
+                count,
+                total: files.len(),
+            }),
+        }
+    }
+
     /// The skin's indentation over `frame` (the calibrated size, in colour
     /// when the calibration was; `path` names it in errors), at the frame's
     /// size, metres.

@@ -240,6 +240,7 @@ pub fn reconstruct_folder(
     if let Some(bg) = &options.background {
         rec.set_background(&load_rgb(bg)?, bg)?;
     }
+    rec.check_files(&files)?;
     let mut check = SensorCheck::or_rest_frame(check);
     let mut times = Vec::with_capacity(files.len());
     let mut peak = 0f64;

@@ -503,6 +503,44 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     assert!(matches!(e, Error::FrameSize { .. }), "{e}");
     assert!(e.to_string().contains("small.png"), "{e}");
     assert!(!out.exists());
+    // Frames it cannot read after good ones (another size, one stored
+    // grey) are found from their headers before any frame is
+    // reconstructed, counted, the first named; nothing is written.
+    let mixed = tmp.path().join("mixed");
+    std::fs::create_dir_all(&mixed).unwrap();
+    let mut presses: Vec<PathBuf> = std::fs::read_dir(d.join("frames"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    presses.sort();
+    for p in &presses[..2] {
+        std::fs::copy(p, mixed.join(p.file_name().unwrap())).unwrap();
+    }
+    std::fs::copy(odd.join("small.png"), mixed.join("zz-a.png")).unwrap();
+    std::fs::copy(odd.join("small.png"), mixed.join("zz-b.png")).unwrap();
+    tactile_core::image_io::save_grey_png(mixed.join("zz-c.png"), 640, 480, &vec![90u8; 640 * 480])
+        .unwrap();
+    let e = reconstruct_folder(&model, &mixed, &out, &o, None).unwrap_err();
+    let Error::UnreadableFrames {
+        first,
+        count,
+        total,
+    } = &e
+    else {
+        panic!("{e}")
+    };
+    assert_eq!((*count, *total), (3, 5), "{e}");
+    assert!(matches!(**first, Error::FrameSize { .. }), "{e}");
+    assert!(e.to_string().contains("zz-a.png"), "{e}");
+    assert!(!out.exists());
+    std::fs::remove_file(mixed.join("zz-a.png")).unwrap();
+    std::fs::remove_file(mixed.join("zz-b.png")).unwrap();
+    let e = reconstruct_folder(&model, &mixed, &out, &o, None).unwrap_err();
+    assert!(
+        matches!(e, Error::GreyFrame { .. }) && e.to_string().contains("zz-c.png"),
+        "{e}"
+    );
+    assert!(!out.exists());
     // A frame that links out of the folder is named, not read.
     let linked = tmp.path().join("linked");
     std::fs::create_dir_all(&linked).unwrap();

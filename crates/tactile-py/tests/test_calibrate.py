@@ -117,6 +117,16 @@ def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
     with pytest.raises(Exception, match="already holds files"):
         tactile.calibrate.reconstruct(model, presses / "frames", taken)
     assert (taken / "keep.txt").read_text() == "mine"
+    # Frames it cannot read after good ones are found before any frame is
+    # reconstructed: counted, the first named, nothing written.
+    mixed = tmp_path / "mixed"
+    mixed.mkdir()
+    shutil.copy(sorted((presses / "frames").glob("*.png"))[0], mixed / "a.png")
+    write_png(mixed / "y.png", np.zeros((240, 320, 3), np.uint8))
+    write_png(mixed / "z.png", np.zeros((240, 320, 3), np.uint8))
+    with pytest.raises(ValueError, match=r"y\.png: frame is \(320, 240\).*; 2 of the 3 frames cannot be read by this sensor"):
+        tactile.calibrate.reconstruct(model, mixed, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
 
 
 def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path, model: Path, tmp_path: Path):
