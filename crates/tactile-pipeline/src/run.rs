@@ -399,6 +399,14 @@ pub fn run(
         frames += 1;
         gated += usize::from(!rec.tendon);
         ood += usize::from(rec.out_of_distribution);
+        if rec.out_of_distribution {
+            // A live run (a camera in another mode) shows it at once on
+            // the bar, not only in the summary when it ends.
+            pb.set_message(match &unreadable {
+                Some(u) => format!("{ood} foreign, {} unreadable: {}", u.frames, u.first),
+                None => format!("{ood} foreign"),
+            });
+        }
         prev = Some((
             frame.sequence.clone(),
             rec.tendon,
