@@ -17,7 +17,7 @@ use tactile_detect::TendonDetector;
 use tactile_segment::TendonSegmenter;
 
 use tactile_burn::Artifact;
-use tactile_gelsight::reconstruct::SensorCheck;
+use tactile_gelsight::reconstruct::{CheckBasis, SensorCheck};
 use tactile_gelsight::{GelsightArtifact, Reconstructor};
 
 use crate::hysteresis::Hysteresis;
@@ -189,6 +189,15 @@ pub struct Pipeline {
     /// Frames at least twice this tall are box-averaged once to about it
     /// before paper B's models ([`tactile_preprocess::visuo::working_frame`]).
     pub working_height: usize,
+    /// A calibration run without palpation models: how it tells frames of
+    /// another sensor (the detector's input profile when `detector/` can
+    /// be read, else the rest frame); `None` with palpation models, whose
+    /// gate does it.
+    pub sensor_check: Option<SensorCheck<'static>>,
+    /// What loading found that a user should know: palpation models
+    /// beside a calibration that cannot all be read (one still being
+    /// trained), so the calibration runs alone.
+    pub warnings: Vec<String>,
 }
 
 impl Pipeline {
@@ -221,13 +230,36 @@ impl Pipeline {
             )
             .into());
         }
-        let palpation = match calibrated && !dir.join("detector").exists() {
-            true => None,
-            false => Some(PalpationModels::load(dir, runtime, threads)?),
+        // Palpation models beside a calibration that cannot all be read
+        // (`detector/` being trained, `segmenter/` and `depth/` not yet)
+        // leave the calibration to run alone, saying so.
+        let (palpation, unread) = match calibrated && !dir.join("detector").exists() {
+            true => (None, None),
+            false => match PalpationModels::load(dir, runtime, threads) {
+                Ok(models) => (Some(models), None),
+                Err(e) if calibrated => (None, Some(e.to_string())),
+                Err(e) => return Err(e),
+            },
         };
         let sensor = match calibrated {
             true => Some(Reconstructor::load(dir, runtime, threads)?),
             false => None,
+        };
+        let sensor_check =
+            (calibrated && palpation.is_none()).then(|| crate::reconstruct::detector_profile(dir));
+        let warnings = match (&unread, &sensor_check) {
+            (Some(e), Some(check)) => vec![format!(
+                "warning: {e}: the palpation models beside this calibration cannot all be read (still being trained?), so the calibration runs alone: the skin's indentation, no tendon; {}",
+                match check {
+                    Ok(Some(_)) =>
+                        "frames of another sensor are told by the detector's input profile"
+                            .to_string(),
+                    Err(d) if d != e =>
+                        format!("frames of another sensor are told by the rest frame ({d})"),
+                    _ => "frames of another sensor are told by the rest frame".to_string(),
+                }
+            )],
+            _ => vec![],
         };
         Ok(Self {
             palpation,
@@ -235,6 +267,8 @@ impl Pipeline {
             runtime,
             threads,
             working_height: tactile_preprocess::visuo::WORKING_HEIGHT,
+            sensor_check: sensor_check.map(|c| SensorCheck::or_rest_frame(c.ok().flatten())),
+            warnings,
         })
     }
 
@@ -255,6 +289,20 @@ impl Pipeline {
                 | tactile_gelsight::Error::ColourFrame { .. }),
             ) => Ok(Some(e.to_string())),
             Err(e) => Err(e.into()),
+        }
+    }
+
+    /// How this pipeline tells a frame of another sensor, in words for a
+    /// run's summary.
+    pub fn foreign_by(&self) -> &'static str {
+        match self.sensor_check.as_ref().map(|c| &c.basis) {
+            None => "input statistics far from the training frames'",
+            Some(CheckBasis::DetectorProfile { .. }) => {
+                "colours unlike the frames its detector was trained on"
+            }
+            Some(CheckBasis::RestFrame) => {
+                "colours changed over half the picture from its rest frame"
+            }
         }
     }
 
@@ -338,14 +386,14 @@ impl Pipeline {
         }
         // A calibrated sensor's skin, from the frame as it came (its
         // calibrated size and colour, checked above). A calibration alone
-        // asks its rest frame ([`SensorCheck::rest_frame`], as `tactile
-        // reconstruct` does) instead of the gate: a frame unlike it gets
-        // no indentation.
+        // asks its check instead of the gate (the detector's profile or
+        // the rest frame, as `tactile reconstruct` does): a frame unlike
+        // the sensor's gets no indentation.
         if let Some(sensor) = self.sensor.as_mut() {
             let t = Instant::now();
             let working = sensor.working_frame(frame, Path::new(name))?;
-            if self.palpation.is_none()
-                && SensorCheck::rest_frame()
+            if let Some(check) = self.sensor_check.as_mut()
+                && check
                     .unlike(frame, &working, sensor.background())?
                     .is_some()
             {

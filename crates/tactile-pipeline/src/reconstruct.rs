@@ -22,30 +22,31 @@ use crate::Result;
 /// (one still being trained, a broken config) gives no check and a
 /// warning saying why: the reconstruction does not need it.
 pub fn sensor_check(model: &Path) -> (Option<SensorCheck<'static>>, Option<String>) {
+    match detector_profile(model) {
+        Ok(check) => (check, None),
+        Err(e) => (
+            None,
+            Some(format!(
+                "warning: {e}; without the detector's input profile, only frames unlike the sensor's rest frame are told as another sensor's"
+            )),
+        ),
+    }
+}
+
+/// [`sensor_check`]'s check, or why the detector in `model` cannot be read.
+pub fn detector_profile(model: &Path) -> std::result::Result<Option<SensorCheck<'static>>, String> {
     let dir = model.join("detector");
-    let read: std::result::Result<DetectorArtifact, String> =
-        if DetectorEnsembleArtifact::is_in(&dir) {
-            DetectorEnsembleArtifact::read(&dir)
-                .map_err(|e| e.to_string())
-                .and_then(|e| e.lead().cloned().map_err(|e| e.to_string()))
-        } else if DetectorArtifact::is_in(&dir) {
-            DetectorArtifact::read(&dir).map_err(|e| e.to_string())
-        } else {
-            return (None, None);
-        };
-    let artifact = match read {
-        Ok(a) => a,
-        Err(e) => {
-            return (
-                None,
-                Some(format!(
-                    "warning: {e}; without the detector's input profile, only frames unlike the sensor's rest frame are told as another sensor's"
-                )),
-            );
-        }
+    let artifact = if DetectorEnsembleArtifact::is_in(&dir) {
+        DetectorEnsembleArtifact::read(&dir)
+            .map_err(|e| e.to_string())
+            .and_then(|e| e.lead().cloned().map_err(|e| e.to_string()))?
+    } else if DetectorArtifact::is_in(&dir) {
+        DetectorArtifact::read(&dir).map_err(|e| e.to_string())?
+    } else {
+        return Ok(None);
     };
     let Some(profile) = artifact.input_profile.clone() else {
-        return (None, None);
+        return Ok(None);
     };
     let (threshold, frames) = (profile.threshold, profile.frames);
     let config = artifact.model;
@@ -69,7 +70,7 @@ pub fn sensor_check(model: &Path) -> (Option<SensorCheck<'static>>, Option<Strin
         },
         threshold,
     };
-    (Some(check), None)
+    Ok(Some(check))
 }
 
 /// A library error met while scoring a frame, as the reconstruction's.

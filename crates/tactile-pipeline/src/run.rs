@@ -99,6 +99,10 @@ pub struct RunSummary {
     /// Frames the calibrated sensor could not read, when there were any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unreadable: Option<UnreadableFrames>,
+    /// How the pipeline told frames of another sensor
+    /// ([`Pipeline::foreign_by`]), for the warnings.
+    #[serde(skip)]
+    pub foreign_by: &'static str,
     /// Frames that went through every stage.
     pub tendon_frames: usize,
     /// Whether the folder has paper B's models (a calibration alone
@@ -195,18 +199,10 @@ impl RunSummary {
     /// package raises them as `UserWarning`s.
     pub fn warnings(&self) -> Vec<String> {
         let mut warnings = vec![];
-        let (unlike, left_out) = match (self.palpation, self.contact.is_some()) {
-            (false, _) => (
-                "colours changed over half the picture from its rest frame",
-                "indentation",
-            ),
-            (true, calibrated) => (
-                "input statistics far from the training frames'",
-                match calibrated {
-                    true => "tendon, direction, depth or indentation",
-                    false => "tendon, direction or depth",
-                },
-            ),
+        let left_out = match (self.palpation, self.contact.is_some()) {
+            (false, _) => "indentation",
+            (true, true) => "tendon, direction, depth or indentation",
+            (true, false) => "tendon, direction or depth",
         };
         let mut unlike_frames = self.out_of_distribution;
         if let Some(u) = &self.unreadable {
@@ -218,8 +214,8 @@ impl RunSummary {
         }
         if unlike_frames > 0 {
             warnings.push(format!(
-                "warning: {} of {} frames do not look like this sensor's ({unlike}): they got no {left_out}",
-                unlike_frames, self.frames
+                "warning: {} of {} frames do not look like this sensor's ({}): they got no {left_out}",
+                unlike_frames, self.frames, self.foreign_by
             ));
         }
         warnings
@@ -453,6 +449,7 @@ pub fn run(
         gated_out: if palpation { gated } else { 0 },
         out_of_distribution: ood,
         unreadable,
+        foreign_by: pipeline.foreign_by(),
         tendon_frames: frames - gated,
         palpation,
         contact: pipeline.sensor.is_some().then_some(contact),

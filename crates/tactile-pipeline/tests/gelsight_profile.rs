@@ -206,6 +206,67 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
         "{:?}",
         report.warnings
     );
+    // `run` on it: the calibration runs alone, saying why, and tells the
+    // other sensor's frame by the rest frame (before, the run refused to
+    // start: "depth model folder does not exist").
+    let mut p = tactile_pipeline::Pipeline::load(&training, Runtime::Onnx, 1).unwrap();
+    assert!(
+        p.palpation.is_none()
+            && p.warnings.len() == 1
+            && p.warnings[0].contains("cannot all be read (still being trained?)")
+            && p.warnings[0].contains("did not finish training")
+            && p.warnings[0].contains("told by the rest frame"),
+        "{:?}",
+        p.warnings
+    );
+    assert!(
+        p.process("press_01.png", &press)
+            .unwrap()
+            .indentation_peak_mm
+            .unwrap()
+            > 0.5
+    );
+    assert!(
+        p.process("tactip.png", &other)
+            .unwrap()
+            .indentation_peak_mm
+            .is_none()
+    );
+    assert_eq!(
+        p.foreign_by(),
+        "colours changed over half the picture from its rest frame"
+    );
+    // With the detector trained but not yet the segmenter and depth
+    // network, the detector's profile tells it.
+    std::fs::remove_file(training.join("detector/INCOMPLETE")).unwrap();
+    for f in std::fs::read_dir(model.join("detector")).unwrap() {
+        let f = f.unwrap().path();
+        if f.is_file() {
+            std::fs::copy(&f, training.join("detector").join(f.file_name().unwrap())).unwrap();
+        }
+    }
+    let mut p = tactile_pipeline::Pipeline::load(&training, Runtime::Onnx, 1).unwrap();
+    assert!(
+        p.palpation.is_none()
+            && p.warnings.len() == 1
+            && p.warnings[0].contains("told by the detector's input profile"),
+        "{:?}",
+        p.warnings
+    );
+    let own = p.process("press_01.png", &press).unwrap();
+    assert!(
+        !own.out_of_distribution && own.indentation_peak_mm.unwrap() > 0.5,
+        "{own:?}"
+    );
+    let r = p.process("tactip.png", &other).unwrap();
+    assert!(
+        r.out_of_distribution && r.indentation_peak_mm.is_none(),
+        "{r:?}"
+    );
+    assert_eq!(
+        p.foreign_by(),
+        "colours unlike the frames its detector was trained on"
+    );
     // A calibration without a detector (`calibrate ball`'s folder before
     // `train detector`) tells the other sensor's frame by its rest frame:
     // named, with its median colour change; the press is not. It was
@@ -227,6 +288,7 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
     // and gets no indentation (it had one: the calibration read its pins as
     // dents); the press keeps its own.
     let mut p = tactile_pipeline::Pipeline::load(&alone, Runtime::Onnx, 1).unwrap();
+    assert!(p.warnings.is_empty(), "{:?}", p.warnings);
     let own = p.process("press_01.png", &press).unwrap();
     assert!(
         !own.out_of_distribution && own.indentation_peak_mm.unwrap() > 0.5,

@@ -119,6 +119,9 @@ impl PyPipeline {
             .py()?;
         let dir = models.clone();
         let pipeline = py.detach(move || Pipeline::load(&dir, rt, threads)).py()?;
+        for w in &pipeline.warnings {
+            crate::errors::user_warning(py, w)?;
+        }
         let threshold = pipeline.threshold();
         Ok(Self {
             state: Mutex::new(State {

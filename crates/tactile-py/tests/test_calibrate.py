@@ -310,6 +310,23 @@ def test_a_calibration_alone_names_frames_of_another_sensor_by_its_rest_frame(
     assert pipe.process(own[0]).indentation_peak_mm > 0
     r = pipe.process(tactip_on_the_canvas())
     assert r.out_of_distribution and r.indentation_peak_mm is None
+    # While its detector is being trained (its folder there, the segmenter
+    # and depth network not yet), the pipeline runs the calibration alone
+    # and says why; before, it refused to load.
+    training = tmp_path / "training"
+    shutil.copytree(model, training)
+    (training / "detector").mkdir()
+    with pytest.warns(UserWarning, match=r"depth model folder does not exist: the palpation models beside this calibration cannot all be read \(still being trained\?\), so the calibration runs alone"):
+        pipe = tactile.Pipeline(training, "onnx")
+    assert pipe.calibrated and pipe.threshold is None
+    assert pipe.process(own[0]).indentation_peak_mm > 0
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        summary = tactile.run(frames, models=training)
+    said = [str(w.message) for w in seen]
+    assert summary["frames"] == 2 and summary["out_of_distribution"] == 1
+    assert len(said) == 2 and "runs alone" in said[0], said
+    assert said[1].startswith("1 of 2 frames do not look like this sensor's (colours changed over half the picture from its rest frame)"), said
 
 
 def test_a_depth_network_learns_a_correction_to_its_calibration(model: Path, tmp_path: Path):

@@ -194,10 +194,14 @@ impl RunSession {
         })
     }
 
-    /// What the source noted when it opened (files of a folder that are
-    /// not frames, gaps in the numbering, one split of a bag read alone).
+    /// What the models and the source noted when they opened (palpation
+    /// models beside a calibration that cannot all be read; files of a
+    /// folder that are not frames, gaps in the numbering, one split of a
+    /// bag read alone).
     pub fn warnings(&self) -> Vec<String> {
-        self.source.warnings()
+        let mut w = self.pipeline.warnings.clone();
+        w.extend(self.source.warnings());
+        w
     }
 
     /// The live view's address to open in Foxglove, when serving.
