@@ -206,6 +206,22 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
         "{:?}",
         report.warnings
     );
+    // The press keeps its indentation; the other sensor's frame is
+    // foreign, with none.
+    let tells_apart = |p: &mut tactile_pipeline::Pipeline| {
+        let own = p.process("press_01.png", &press).unwrap();
+        assert!(
+            !own.out_of_distribution && own.indentation_peak_mm.unwrap() > 0.5,
+            "{own:?}"
+        );
+        let r = p.process("tactip.png", &other).unwrap();
+        assert!(
+            r.out_of_distribution
+                && r.gate == Some(Gate::Foreign)
+                && r.indentation_peak_mm.is_none(),
+            "{r:?}"
+        );
+    };
     // `run` on it: the calibration runs alone, saying why, and tells the
     // other sensor's frame by the rest frame (before, the run refused to
     // start: "depth model folder does not exist").
@@ -219,19 +235,7 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
         "{:?}",
         p.warnings
     );
-    assert!(
-        p.process("press_01.png", &press)
-            .unwrap()
-            .indentation_peak_mm
-            .unwrap()
-            > 0.5
-    );
-    assert!(
-        p.process("tactip.png", &other)
-            .unwrap()
-            .indentation_peak_mm
-            .is_none()
-    );
+    tells_apart(&mut p);
     assert_eq!(
         p.foreign_by(),
         "colours changed over half the picture from its rest frame"
@@ -253,16 +257,7 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
         "{:?}",
         p.warnings
     );
-    let own = p.process("press_01.png", &press).unwrap();
-    assert!(
-        !own.out_of_distribution && own.indentation_peak_mm.unwrap() > 0.5,
-        "{own:?}"
-    );
-    let r = p.process("tactip.png", &other).unwrap();
-    assert!(
-        r.out_of_distribution && r.indentation_peak_mm.is_none(),
-        "{r:?}"
-    );
+    tells_apart(&mut p);
     assert_eq!(
         p.foreign_by(),
         "colours unlike the frames its detector was trained on"
@@ -289,16 +284,7 @@ fn a_calibrated_sensor_names_and_skips_frames_of_another_sensor() {
     // dents); the press keeps its own.
     let mut p = tactile_pipeline::Pipeline::load(&alone, Runtime::Onnx, 1).unwrap();
     assert!(p.warnings.is_empty(), "{:?}", p.warnings);
-    let own = p.process("press_01.png", &press).unwrap();
-    assert!(
-        !own.out_of_distribution && own.indentation_peak_mm.unwrap() > 0.5,
-        "{own:?}"
-    );
-    let r = p.process("tactip.png", &other).unwrap();
-    assert!(
-        r.out_of_distribution && r.gate == Some(Gate::Foreign) && r.indentation_peak_mm.is_none(),
-        "{r:?}"
-    );
+    tells_apart(&mut p);
     // Every real press of the sensor, through a calibration alone: none
     // named (the other rest-frame scores are in docs/hard-cases.md).
     let presses = root().join("../shared/real/gelsight-ball/frames");
