@@ -141,9 +141,18 @@ impl RunSummary {
         let mut lines = vec![];
         let name = source.as_ref().and_then(|v| v.as_str()).unwrap_or("source");
         if self.palpation {
+            // Frames the calibration cannot read cost no detector pass.
+            let unread = self.unreadable.as_ref().map_or(0, |u| u.frames);
             lines.push(format!(
-                "{} frames from a {name} ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass",
-                self.frames, self.fps, self.runtime, self.gated_out
+                "{} frames from a {name} ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass{}",
+                self.frames,
+                self.fps,
+                self.runtime,
+                self.gated_out.saturating_sub(unread),
+                match unread {
+                    0 => String::new(),
+                    n => format!(", {n} unreadable none"),
+                }
             ));
             lines.push(format!(
                 "median / p95 per stage: prepare {}, detect {}, segment + direction {}, depth {}, whole frame {}",

@@ -3326,6 +3326,12 @@ fn a_calibrated_sensor_trains_and_runs_its_own_pipeline() {
         .unwrap();
     assert_eq!(rec["out_of_distribution"], true, "{rec}");
     assert_eq!(rec["tendon"], false);
+    assert!(rec["unreadable"].as_str().is_some(), "{rec}");
+    // No detector pass was spent on it.
+    assert!(
+        msg.contains("0 without a tendon cost one detector pass, 1 unreadable none"),
+        "{msg}"
+    );
 }
 
 /// The real surface set's six targets, in `tactile predict`'s column order.
