@@ -39,7 +39,8 @@ struct State {
 /// segmenter, the direction and the depth network only on tendon frames.
 /// A calibrated sensor's folder (`tactile calibrate ball`) adds the skin's
 /// indentation on every frame, or gives only that when it holds no
-/// palpation models.
+/// palpation models, or models that cannot all be read yet (one still
+/// being trained: a `UserWarning` says so).
 ///
 /// Thread-safe: calls from several threads take turns on the models, and
 /// the interpreter lock is released while a frame is processed.
