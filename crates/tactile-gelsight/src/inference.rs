@@ -186,7 +186,11 @@ impl Reconstructor {
         path: &Path,
     ) -> Result<Self> {
         let g = grid;
-        check_size(path, (g.frame_width, g.frame_height), background)?;
+        check_size(
+            path,
+            (g.frame_width, g.frame_height),
+            frame_size(background),
+        )?;
         let mut r = Self {
             background: PreparedBackground::new(background, g)?,
             rest: (vec![], vec![]),
@@ -205,7 +209,11 @@ impl Reconstructor {
     /// when the calibration's was).
     pub fn set_background(&mut self, background: &RgbImage, path: &Path) -> Result<()> {
         let g = self.grid;
-        check_size(path, (g.frame_width, g.frame_height), background)?;
+        check_size(
+            path,
+            (g.frame_width, g.frame_height),
+            frame_size(background),
+        )?;
         check_colour(path, background, self.background.colour)?;
         self.background = PreparedBackground {
             colour: self.background.colour,
@@ -280,7 +288,7 @@ impl Reconstructor {
     /// colour.
     pub fn check_frame(&self, frame: &RgbImage, path: &Path) -> Result<()> {
         let g = self.grid;
-        check_size(path, (g.frame_width, g.frame_height), frame)?;
+        check_size(path, (g.frame_width, g.frame_height), frame_size(frame))?;
         check_colour(path, frame, self.background.colour)
     }
 
@@ -297,18 +305,14 @@ impl Reconstructor {
         let (mut first, mut count) = (None, 0usize);
         for f in files {
             let h = tactile_core::image_io::image_header(f)?;
-            let found = (h.width as usize, h.height as usize);
-            let refusal = if found != expected {
-                Error::FrameSize {
-                    path: f.clone(),
-                    expected,
-                    found,
-                }
-            } else if h.grey && self.background.colour {
-                Error::GreyFrame { path: f.clone() }
-            } else {
-                continue;
-            };
+            let refusal =
+                if let Err(e) = check_size(f, expected, (h.width as usize, h.height as usize)) {
+                    e
+                } else if h.grey && self.background.colour {
+                    Error::GreyFrame { path: f.clone() }
+                } else {
+                    continue;
+                };
             count += 1;
             first.get_or_insert(refusal);
         }
@@ -381,8 +385,14 @@ pub fn indentation_mm(
     solver.integrate(&skin(raw.0, rest.0), &skin(raw.1, rest.1))
 }
 
-fn check_size(path: &Path, expected: (usize, usize), img: &RgbImage) -> Result<()> {
-    let found = (img.width(), img.height());
+/// An image's `(width, height)`.
+fn frame_size(img: &RgbImage) -> (usize, usize) {
+    (img.width(), img.height())
+}
+
+/// Refuse a frame (or rest frame) named `path` of size `found`, decoded or
+/// read off its header, when it is not the calibrated size.
+fn check_size(path: &Path, expected: (usize, usize), found: (usize, usize)) -> Result<()> {
     if found != expected {
         return Err(Error::FrameSize {
             path: path.to_path_buf(),

@@ -391,7 +391,9 @@ impl Pipeline {
         // the sensor's gets no indentation.
         if let Some(sensor) = self.sensor.as_mut() {
             let t = Instant::now();
-            let working = sensor.working_frame(frame, Path::new(name))?;
+            // The frame passed the calibration's check above
+            // (`Self::unreadable`): shrink and match it without asking again.
+            let working = sensor.background().matched(frame)?;
             if let Some(check) = self.sensor_check.as_mut()
                 && check
                     .unlike(frame, &working, sensor.background())?
