@@ -127,6 +127,20 @@ pub enum Error {
         /// The folder.
         path: PathBuf,
     },
+    /// Frames of a folder or dataset that cannot be read, found from their
+    /// headers before any frame is decoded: the first one's refusal and
+    /// how many.
+    #[error(
+        "{first}; {count} of the {total} frames cannot be read (not a picture or cut short, larger than 8K, not 8 bits per channel, or another size than the manifest's): no frame was processed, so mend or move them"
+    )]
+    UnreadableFrames {
+        /// The first such frame's refusal.
+        first: Box<Error>,
+        /// Frames that cannot be read.
+        count: usize,
+        /// Frames checked.
+        total: usize,
+    },
     /// Any other invalid input, described in words.
     #[error("{0}")]
     Invalid(String),

@@ -68,6 +68,8 @@ pub struct ImageHeader {
     pub height: u32,
     /// Stored as greyscale (with or without alpha, of any depth).
     pub grey: bool,
+    /// The stored pixel format.
+    pub color: ColorType,
 }
 
 fn open_image(path: &Path) -> Result<ImageReader<std::io::BufReader<std::fs::File>>> {
@@ -94,15 +96,14 @@ pub fn image_header(path: &Path) -> Result<ImageHeader> {
         width,
         height,
         grey,
+        color: decoder.color_type(),
     })
 }
 
-fn decode(path: &Path) -> Result<DynamicImage> {
-    let ImageHeader {
-        width: w,
-        height: h,
-        ..
-    } = image_header(path)?;
+/// `path`'s header when its pixels fit the decoding limit (8K).
+fn header_within_limit(path: &Path) -> Result<ImageHeader> {
+    let header = image_header(path)?;
+    let (w, h) = (header.width, header.height);
     if w as u64 * h as u64 > MAX_IMAGE_PIXELS {
         return Err(Error::image(
             path,
@@ -111,6 +112,36 @@ fn decode(path: &Path) -> Result<DynamicImage> {
             ),
         ));
     }
+    Ok(header)
+}
+
+/// What [`load_rgb`] expects of a frame file.
+const RGB_FRAME: &str = "8-bit RGB (or 8-bit greyscale)";
+
+/// True for the pixel formats [`load_rgb`] reads (8 bits per channel; an
+/// alpha channel is dropped when every pixel is opaque, which only the
+/// pixels tell).
+fn rgb_readable(color: ColorType) -> bool {
+    matches!(
+        color,
+        ColorType::Rgb8 | ColorType::L8 | ColorType::Rgba8 | ColorType::La8
+    )
+}
+
+/// `path`'s header, checked as [`load_rgb`] will read the frame: a header
+/// that can be read, at most 8K pixels, 8 bits per channel. A folder's
+/// frames are checked this way before any is decoded, so a bad one is
+/// named at once, not after every frame before it.
+pub fn rgb_frame_header(path: &Path) -> Result<ImageHeader> {
+    let header = header_within_limit(path)?;
+    if !rgb_readable(header.color) {
+        return Err(Error::image(path, not_eight_bit(header.color, RGB_FRAME)));
+    }
+    Ok(header)
+}
+
+fn decode(path: &Path) -> Result<DynamicImage> {
+    header_within_limit(path)?;
     open_image(path)?
         .decode()
         .map_err(|e| Error::image(path, format!("cannot decode image: {e}")))
@@ -204,7 +235,7 @@ pub fn load_rgb(path: impl AsRef<Path>) -> Result<RgbImage> {
         DynamicImage::ImageLuma8(buf) => Ok(grey_to_rgb(buf.as_raw())),
         DynamicImage::ImageRgba8(buf) => opaque(color, buf.as_raw(), 4),
         DynamicImage::ImageLumaA8(buf) => opaque(color, buf.as_raw(), 2).map(|g| grey_to_rgb(&g)),
-        _ => Err(not_eight_bit(color, "8-bit RGB (or 8-bit greyscale)")),
+        _ => Err(not_eight_bit(color, RGB_FRAME)),
     }
     .map_err(|e| Error::image(path, e))?;
     rgb_image(w, h, data).map_err(|e| Error::image(path, e.to_string()))

@@ -38,19 +38,28 @@ impl FrameEntry {
     /// its manifest says is refused, naming the file.
     pub fn load(&self) -> Result<crate::image_io::RgbImage> {
         let img = crate::image_io::load_rgb(&self.path)?;
-        if let Some((w, h)) = self.size
-            && (img.width(), img.height()) != (w, h)
-        {
-            return Err(Error::image(
-                &self.path,
-                format!(
-                    "is {}x{}, but manifest.json says the frames are {w}x{h}",
-                    img.width(),
-                    img.height()
-                ),
-            ));
-        }
+        self.check_size((img.width(), img.height()))?;
         Ok(img)
+    }
+
+    /// Read the frame's header only, refusing what [`Self::load`] would:
+    /// a file that is no picture (or cut before its header ends), larger
+    /// than 8K, of another depth than 8 bits, or of another size than its
+    /// dataset's manifest says.
+    pub fn check_header(&self) -> Result<()> {
+        let h = crate::image_io::rgb_frame_header(&self.path)?;
+        self.check_size((h.width as usize, h.height as usize))
+    }
+
+    /// A frame of a dataset must have the size its manifest declares.
+    fn check_size(&self, (width, height): (usize, usize)) -> Result<()> {
+        match self.size {
+            Some((w, h)) if (width, height) != (w, h) => Err(Error::image(
+                &self.path,
+                format!("is {width}x{height}, but manifest.json says the frames are {w}x{h}"),
+            )),
+            _ => Ok(()),
+        }
     }
 }
 
@@ -217,6 +226,34 @@ impl FrameList {
             dataset: None,
             ignored,
         })
+    }
+
+    /// Check the header of each of the first `limit` frames (all of them
+    /// without a limit) before any frame is decoded
+    /// ([`FrameEntry::check_header`]), so a folder's bad frame stops a run
+    /// before its first frame, not after every frame before it. One bad
+    /// frame gives its own refusal; several, the first's and how many
+    /// ([`Error::UnreadableFrames`]). A frame whose pixels are cut short
+    /// behind a whole header is still found only when it is decoded.
+    pub fn check_headers(&self, limit: Option<u64>) -> Result<()> {
+        let n = limit.map_or(self.frames.len(), |l| {
+            self.frames
+                .len()
+                .min(usize::try_from(l).unwrap_or(usize::MAX))
+        });
+        let checked = &self.frames[..n];
+        let mut bad = checked.iter().filter_map(|f| f.check_header().err());
+        let Some(first) = bad.next() else {
+            return Ok(());
+        };
+        match bad.count() {
+            0 => Err(first),
+            more => Err(Error::UnreadableFrames {
+                first: Box::new(first),
+                count: more + 1,
+                total: checked.len(),
+            }),
+        }
     }
 
     /// What a user should know before the run: frames missing from the
@@ -762,6 +799,7 @@ impl FrameSource {
                         true => SourceKind::Dataset,
                         false => SourceKind::Folder,
                     };
+                    list.check_headers(options.limit)?;
                     let size = list.frames.first().and_then(|f| f.size);
                     let r = ListReader {
                         entries: list.frames.clone().into_iter(),
@@ -1009,5 +1047,85 @@ impl Iterator for FrameSource {
 impl Drop for FrameSource {
     fn drop(&mut self) {
         self.stop();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every frame a reader would refuse is found from its header, before
+    /// any frame is decoded: named alone, or the first named and all
+    /// counted; frames past the limit are not looked at.
+    #[test]
+    fn frames_that_cannot_be_read_are_found_from_their_headers() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let good = |name: &str, w: usize, h: usize| {
+            crate::image_io::save_rgb_png(d.join(name), w, h, &vec![90; w * h * 3]).unwrap()
+        };
+        good("1.png", 8, 6);
+        good("2.png", 8, 6);
+        let list = FrameList::open(d).unwrap();
+        list.check_headers(None).unwrap();
+
+        std::fs::write(d.join("3.png"), b"").unwrap();
+        std::fs::write(d.join("4.jpg"), b"not a picture").unwrap();
+        image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(2, 2, vec![0u16; 12])
+            .unwrap()
+            .save(d.join("5.png"))
+            .unwrap();
+        let list = FrameList::open(d).unwrap();
+        let e = list.check_headers(None).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::UnreadableFrames {
+                    count: 3,
+                    total: 5,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let text = e.to_string();
+        assert!(
+            text.starts_with(&format!(
+                "{}: cannot read the image header",
+                d.join("3.png").display()
+            )) && text.contains("3 of the 5 frames cannot be read"),
+            "{text}"
+        );
+        let e = list.check_headers(Some(3)).unwrap_err();
+        assert!(matches!(e, Error::Image { .. }), "{e}");
+        list.check_headers(Some(2)).unwrap();
+        // The 16-bit frame alone is refused as decoding it would be, with
+        // what to do.
+        let deep = FrameEntry {
+            path: d.join("5.png"),
+            sequence: None,
+            tendon: None,
+            size: None,
+        };
+        let (early, late) = (deep.check_header().unwrap_err(), deep.load().err().unwrap());
+        assert_eq!(early.to_string(), late.to_string());
+        assert!(
+            early
+                .to_string()
+                .contains("16-bit RGB image; expected 8-bit RGB")
+        );
+        // A dataset's frame of another size than its manifest's.
+        let row = FrameEntry {
+            path: d.join("1.png"),
+            size: Some((6, 8)),
+            ..deep
+        };
+        let (early, late) = (row.check_header().unwrap_err(), row.load().err().unwrap());
+        assert_eq!(early.to_string(), late.to_string());
+        assert!(
+            early
+                .to_string()
+                .contains("is 8x6, but manifest.json says the frames are 6x8")
+        );
     }
 }

@@ -74,9 +74,10 @@ pub enum Error {
     },
     /// Frames of a folder this sensor cannot read, found from their
     /// headers before any frame is reconstructed: the first one's refusal
-    /// ([`Error::FrameSize`] or [`Error::GreyFrame`]) and how many.
+    /// ([`Error::FrameSize`], [`Error::GreyFrame`], or the file's own) and
+    /// how many.
     #[error(
-        "{first}; {count} of the {total} frames cannot be read by this sensor (another size than its calibration's, or stored grey for a sensor calibrated in colour): nothing was reconstructed"
+        "{first}; {count} of the {total} frames cannot be read by this sensor (not a picture or cut short, larger than 8K, not 8 bits per channel, another size than its calibration's, or stored grey for a sensor calibrated in colour): nothing was reconstructed"
     )]
     UnreadableFrames {
         /// The first such frame's refusal.

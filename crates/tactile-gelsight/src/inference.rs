@@ -293,8 +293,10 @@ impl Reconstructor {
     }
 
     /// Refuse `files` this sensor cannot read, from their headers alone
-    /// (another size than the calibrated one, or stored grey when the
-    /// calibration was in colour), before any is decoded: a folder's bad
+    /// (no picture, or one no frame reader takes: see
+    /// [`tactile_core::image_io::rgb_frame_header`]; another size than the
+    /// calibrated one; stored grey when the calibration was in colour),
+    /// before any is decoded: a folder's bad
     /// frame is named at once, not after the frames before it. One such
     /// file gives its own refusal; several, the first's and their count
     /// ([`Error::UnreadableFrames`]). A grey picture stored as colour is
@@ -304,15 +306,18 @@ impl Reconstructor {
         let expected = (g.frame_width, g.frame_height);
         let (mut first, mut count) = (None, 0usize);
         for f in files {
-            let h = tactile_core::image_io::image_header(f)?;
-            let refusal =
-                if let Err(e) = check_size(f, expected, (h.width as usize, h.height as usize)) {
-                    e
-                } else if h.grey && self.background.colour {
-                    Error::GreyFrame { path: f.clone() }
-                } else {
-                    continue;
-                };
+            let refusal = match tactile_core::image_io::rgb_frame_header(f) {
+                Err(e) => Error::from(e),
+                Ok(h) => {
+                    if let Err(e) = check_size(f, expected, (h.width as usize, h.height as usize)) {
+                        e
+                    } else if h.grey && self.background.colour {
+                        Error::GreyFrame { path: f.clone() }
+                    } else {
+                        continue;
+                    }
+                }
+            };
             count += 1;
             first.get_or_insert(refusal);
         }

@@ -520,6 +520,9 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     std::fs::copy(odd.join("small.png"), mixed.join("zz-b.png")).unwrap();
     tactile_core::image_io::save_grey_png(mixed.join("zz-c.png"), 640, 480, &vec![90u8; 640 * 480])
         .unwrap();
+    // A file cut before its header ends is counted with them, not a stop
+    // at the first such file.
+    std::fs::write(mixed.join("zz-d.png"), b"\x89PNG").unwrap();
     let e = reconstruct_folder(&model, &mixed, &out, &o, None).unwrap_err();
     let Error::UnreadableFrames {
         first,
@@ -529,12 +532,13 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     else {
         panic!("{e}")
     };
-    assert_eq!((*count, *total), (3, 5), "{e}");
+    assert_eq!((*count, *total), (4, 6), "{e}");
     assert!(matches!(**first, Error::FrameSize { .. }), "{e}");
     assert!(e.to_string().contains("zz-a.png"), "{e}");
     assert!(!out.exists());
     std::fs::remove_file(mixed.join("zz-a.png")).unwrap();
     std::fs::remove_file(mixed.join("zz-b.png")).unwrap();
+    std::fs::remove_file(mixed.join("zz-d.png")).unwrap();
     let e = reconstruct_folder(&model, &mixed, &out, &o, None).unwrap_err();
     assert!(
         matches!(e, Error::GreyFrame { .. }) && e.to_string().contains("zz-c.png"),

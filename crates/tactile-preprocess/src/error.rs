@@ -76,7 +76,8 @@ impl Error {
                 e @ (tactile_core::Error::Io { .. }
                 | tactile_core::Error::Image { .. }
                 | tactile_core::Error::NotFound { .. }
-                | tactile_core::Error::NotRegularFile { .. }),
+                | tactile_core::Error::NotRegularFile { .. }
+                | tactile_core::Error::UnreadableFrames { .. }),
             ) => Error::Core(e),
             other => Error::File {
                 path: path.into(),

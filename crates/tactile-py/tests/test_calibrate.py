@@ -124,7 +124,8 @@ def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
     shutil.copy(sorted((presses / "frames").glob("*.png"))[0], mixed / "a.png")
     write_png(mixed / "y.png", np.zeros((240, 320, 3), np.uint8))
     write_png(mixed / "z.png", np.zeros((240, 320, 3), np.uint8))
-    with pytest.raises(ValueError, match=r"y\.png: frame is \(320, 240\).*; 2 of the 3 frames cannot be read by this sensor"):
+    (mixed / "zz.png").write_bytes(b"")  # an empty file is counted with them
+    with pytest.raises(ValueError, match=r"y\.png: frame is \(320, 240\).*; 3 of the 4 frames cannot be read by this sensor"):
         tactile.calibrate.reconstruct(model, mixed, tmp_path / "out")
     assert not (tmp_path / "out").exists()
 

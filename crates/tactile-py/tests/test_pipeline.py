@@ -4,6 +4,7 @@ frame-resolution outputs, bad input, threads and memory."""
 from __future__ import annotations
 
 import json
+import shutil
 import threading
 from pathlib import Path
 
@@ -94,8 +95,17 @@ def test_run_writes_what_tactile_run_writes(tactile_bin, root, tmp_path):
 
     # Refused before any model loads, nothing written: two outputs in one
     # place, an output over the input, a render folder holding files and
-    # bad hysteresis (both checked before the missing models folder).
+    # bad hysteresis (both checked before the missing models folder), and
+    # frames that cannot be read, from their headers.
+    cut = tmp_path / "cut"
+    cut.mkdir()
+    for f in sorted((root / "samples/palpation").glob("*.png"))[:3]:
+        shutil.copy(f, cut / f.name)
+    (cut / "000003.png").write_bytes(b"")
+    (cut / "000004.png").write_text("not a picture")
     before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(ValueError, match=r"000003\.png: cannot read the image header.*; 2 of the 5 frames cannot be read"):
+        tactile.run(cut, models=tmp_path / "no-models", out=tmp_path / "never.jsonl")
     with pytest.raises(ValueError, match="two outputs of this run name one place"):
         tactile.run(root / "samples/palpation", models=root / "models",
                     out=tmp_path / "same", render=tmp_path / "same")

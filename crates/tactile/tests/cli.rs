@@ -1618,6 +1618,47 @@ fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
     let v: serde_json::Value = serde_json::from_str(json).unwrap();
     assert_eq!(v["frames"], 5);
     assert_eq!(v["missing_frames"], 1);
+    // Frames that cannot be read (a 16-bit frame, an empty file, text
+    // named .png) are found from their headers when the folder is opened:
+    // named and counted before any model loads (the models folder here
+    // does not exist), not after every frame before them.
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(4, 4, vec![0u16; 16])
+        .unwrap()
+        .save(video.join("000006.png"))
+        .unwrap();
+    std::fs::write(video.join("000007.png"), b"").unwrap();
+    std::fs::write(video.join("000008.png"), b"not a picture").unwrap();
+    let out = tmp.path().join("r.jsonl");
+    let run_models = |models: &Path, limit: &str| {
+        tactile(&[
+            "run",
+            "--data",
+            video.to_str().unwrap(),
+            "--models",
+            models.to_str().unwrap(),
+            "--limit",
+            limit,
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let none = tmp.path().join("no-models");
+    let (ok, msg) = run_models(&none, "100");
+    assert!(
+        !ok && msg.contains("000006.png: 16-bit greyscale image")
+            && msg.contains("3 of the 8 frames cannot be read")
+            && !msg.contains("no-models"),
+        "{msg}"
+    );
+    let (ok, msg) = run_models(&none, "6");
+    assert!(
+        !ok && msg.contains("000006.png: 16-bit") && !msg.contains("of the"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+    // Frames past --limit are not read, so not checked either.
+    let (ok, msg) = run_models(&root.join("models"), "5");
+    assert!(ok && out.exists(), "{msg}");
     // A folder with no frames at all is an error naming it.
     let empty = tmp.path().join("empty");
     std::fs::create_dir(&empty).unwrap();
