@@ -150,6 +150,7 @@ impl PinSet {
     ) -> std::result::Result<(), E> {
         ds.expect_kind(DatasetKind::Tactip)
             .map_err(crate::Error::from)?;
+        ds.check_frame_headers(rows).map_err(crate::Error::from)?;
         for chunk in rows.chunks(chunk_rows.max(1)) {
             each(Self::from_rows_each(ds, chunk, cfgs)?)?;
         }

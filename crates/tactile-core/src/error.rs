@@ -167,6 +167,23 @@ pub fn article(noun: &str) -> &'static str {
 }
 
 impl Error {
+    /// The refusals of frames checked together before any is decoded:
+    /// none, the one alone, or the first with how many
+    /// ([`Error::UnreadableFrames`]) among the `total` checked.
+    pub fn of_frames(mut refusals: impl Iterator<Item = Error>, total: usize) -> Result<(), Self> {
+        let Some(first) = refusals.next() else {
+            return Ok(());
+        };
+        match refusals.count() {
+            0 => Err(first),
+            more => Err(Error::UnreadableFrames {
+                first: Box::new(first),
+                count: more + 1,
+                total,
+            }),
+        }
+    }
+
     /// An I/O error on `path`.
     pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
         Error::Io {

@@ -52,13 +52,10 @@ impl FrameEntry {
     }
 
     /// A frame of a dataset must have the size its manifest declares.
-    fn check_size(&self, (width, height): (usize, usize)) -> Result<()> {
+    fn check_size(&self, size: (usize, usize)) -> Result<()> {
         match self.size {
-            Some((w, h)) if (width, height) != (w, h) => Err(Error::image(
-                &self.path,
-                format!("is {width}x{height}, but manifest.json says the frames are {w}x{h}"),
-            )),
-            _ => Ok(()),
+            Some(manifest) => crate::dataset::expect_manifest_size(&self.path, size, manifest),
+            None => Ok(()),
         }
     }
 }
@@ -242,18 +239,10 @@ impl FrameList {
                 .min(usize::try_from(l).unwrap_or(usize::MAX))
         });
         let checked = &self.frames[..n];
-        let mut bad = checked.iter().filter_map(|f| f.check_header().err());
-        let Some(first) = bad.next() else {
-            return Ok(());
-        };
-        match bad.count() {
-            0 => Err(first),
-            more => Err(Error::UnreadableFrames {
-                first: Box::new(first),
-                count: more + 1,
-                total: checked.len(),
-            }),
-        }
+        Error::of_frames(
+            checked.iter().filter_map(|f| f.check_header().err()),
+            checked.len(),
+        )
     }
 
     /// What a user should know before the run: frames missing from the

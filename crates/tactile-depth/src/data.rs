@@ -148,6 +148,7 @@ impl DepthSet {
     ) -> Result<()> {
         let progress = Self::start_loading(ds, ds.len(), prior)?;
         let rows: Vec<usize> = (0..ds.len()).collect();
+        ds.check_frame_headers(&rows)?;
         for chunk in rows.chunks(chunk_rows.max(1)) {
             each(Self::load_rows(ds, chunk, size, prior, &progress)?)?;
         }

@@ -55,6 +55,7 @@ impl DetectionSet {
         mut each: impl FnMut(DetectionSet) -> Result<()>,
     ) -> Result<()> {
         let labels = Self::labels_of(ds, detector)?;
+        ds.check_frame_headers(&(0..ds.len()).collect::<Vec<_>>())?;
         let step = chunk_rows.max(1);
         for start in (0..labels.files.len()).step_by(step) {
             let end = (start + step).min(labels.files.len());

@@ -163,6 +163,7 @@ pub fn evaluate_in_chunks(
             why: "score",
         });
     }
+    ds.check_frame_headers(&rows)?;
     let s = art.model.side;
     let baseline = PostprocessConfig {
         direction: DirectionMethod::PrincipalAxis,

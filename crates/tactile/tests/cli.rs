@@ -169,6 +169,19 @@ fn encode_names_corrupt_wrong_size_and_deep_frames_and_writes_nothing() {
     );
     assert!(!out.exists());
 
+    // Several frames no reader takes: found from their headers before the
+    // first chunk is encoded, the first named and all counted.
+    let first = std::fs::read(data.join("frames/0.png")).unwrap();
+    std::fs::write(data.join("frames/0.png"), b"").unwrap();
+    let (ok, msg) = encode(&m, &data, &out);
+    assert!(
+        !ok && msg.contains("frames/0.png: cannot read the image header")
+            && msg.contains("2 of the 2 frames cannot be read"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+    std::fs::write(data.join("frames/0.png"), first).unwrap();
+
     // Valid again: the output appears, complete.
     write_png(&data.join("frames/1.png"), 300, 300);
     let (ok, msg) = encode(&m, &data, &out);

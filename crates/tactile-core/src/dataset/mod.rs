@@ -216,6 +216,22 @@ pub fn file_of_a_dataset(path: &Path) -> Option<Error> {
     })
 }
 
+/// A dataset's frame must have the size its manifest declares: the one
+/// refusal of every reader (the dataset's loaders, a run's frame list).
+pub fn expect_manifest_size(
+    path: &Path,
+    (width, height): (usize, usize),
+    (mw, mh): (usize, usize),
+) -> Result<()> {
+    if (width, height) != (mw, mh) {
+        return Err(Error::image(
+            path,
+            format!("is {width}x{height}, but manifest.json says the frames are {mw}x{mh}"),
+        ));
+    }
+    Ok(())
+}
+
 impl Dataset {
     /// Open and check a dataset folder: the manifest parses and has the
     /// right format, `labels.csv` has the kind's columns in order, every
@@ -492,14 +508,25 @@ impl Dataset {
 
     /// Refuse a file of `path` whose size is not the manifest's frame size.
     pub fn expect_frame_size(&self, path: &Path, width: usize, height: usize) -> Result<()> {
-        let (mw, mh) = (self.manifest.width as usize, self.manifest.height as usize);
-        if (width, height) != (mw, mh) {
-            return Err(Error::image(
-                path,
-                format!("is {width}x{height}, but manifest.json says the frames are {mw}x{mh}"),
-            ));
+        let manifest = (self.manifest.width as usize, self.manifest.height as usize);
+        expect_manifest_size(path, (width, height), manifest)
+    }
+
+    /// Read the frame header (`file`) of each of `rows` before any frame is
+    /// decoded, refusing what loading them would
+    /// ([`crate::image_io::rgb_frame_header`], the manifest's size): a bad
+    /// frame late in a long dataset stops a chunked read before its first
+    /// chunk, not after every chunk before it ([`Error::of_frames`]).
+    pub fn check_frame_headers(&self, rows: &[usize]) -> Result<()> {
+        let mut bad = Vec::new();
+        for &i in rows {
+            crate::interrupt::check()?;
+            let path = self.path_of(i, "file")?;
+            let checked = crate::image_io::rgb_frame_header(&path)
+                .and_then(|h| self.expect_frame_size(&path, h.width as usize, h.height as usize));
+            bad.extend(checked.err());
         }
-        Ok(())
+        Error::of_frames(bad.into_iter(), rows.len())
     }
 
     /// Refuse `out` as an output when writing it would change this dataset:
