@@ -167,19 +167,29 @@ pub fn article(noun: &str) -> &'static str {
 }
 
 impl Error {
-    /// The refusals of frames checked together before any is decoded:
-    /// none, the one alone, or the first with how many
-    /// ([`Error::UnreadableFrames`]) among the `total` checked.
-    pub fn of_frames(mut refusals: impl Iterator<Item = Error>, total: usize) -> Result<(), Self> {
-        let Some(first) = refusals.next() else {
-            return Ok(());
-        };
-        match refusals.count() {
-            0 => Err(first),
-            more => Err(Error::UnreadableFrames {
-                first: Box::new(first),
-                count: more + 1,
-                total,
+    /// `check` every one of `frames` before any is decoded (stopping on
+    /// a stop request), keeping the first refusal and a count, not every
+    /// refusal: `Ok` when none, the one alone, or the first with how many
+    /// ([`Error::UnreadableFrames`]).
+    pub fn check_frames<T>(
+        frames: &[T],
+        mut check: impl FnMut(&T) -> Result<(), Self>,
+    ) -> Result<(), Self> {
+        let (mut first, mut count) = (None, 0usize);
+        for frame in frames {
+            crate::interrupt::check()?;
+            if let Err(e) = check(frame) {
+                count += 1;
+                first.get_or_insert(e);
+            }
+        }
+        match first {
+            None => Ok(()),
+            Some(e) if count == 1 => Err(e),
+            Some(e) => Err(Error::UnreadableFrames {
+                first: Box::new(e),
+                count,
+                total: frames.len(),
             }),
         }
     }

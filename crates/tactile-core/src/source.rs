@@ -238,11 +238,7 @@ impl FrameList {
                 .len()
                 .min(usize::try_from(l).unwrap_or(usize::MAX))
         });
-        let checked = &self.frames[..n];
-        Error::of_frames(
-            checked.iter().filter_map(|f| f.check_header().err()),
-            checked.len(),
-        )
+        Error::check_frames(&self.frames[..n], FrameEntry::check_header)
     }
 
     /// What a user should know before the run: frames missing from the

@@ -516,17 +516,13 @@ impl Dataset {
     /// decoded, refusing what loading them would
     /// ([`crate::image_io::rgb_frame_header`], the manifest's size): a bad
     /// frame late in a long dataset stops a chunked read before its first
-    /// chunk, not after every chunk before it ([`Error::of_frames`]).
+    /// chunk, not after every chunk before it ([`Error::check_frames`]).
     pub fn check_frame_headers(&self, rows: &[usize]) -> Result<()> {
-        let mut bad = Vec::new();
-        for &i in rows {
-            crate::interrupt::check()?;
+        Error::check_frames(rows, |&i| {
             let path = self.path_of(i, "file")?;
-            let checked = crate::image_io::rgb_frame_header(&path)
-                .and_then(|h| self.expect_frame_size(&path, h.width as usize, h.height as usize));
-            bad.extend(checked.err());
-        }
-        Error::of_frames(bad.into_iter(), rows.len())
+            let h = crate::image_io::rgb_frame_header(&path)?;
+            self.expect_frame_size(&path, h.width as usize, h.height as usize)
+        })
     }
 
     /// Refuse `out` as an output when writing it would change this dataset:
