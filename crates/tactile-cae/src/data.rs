@@ -71,8 +71,10 @@ impl PinSet {
         Self::from_rows(ds, &(0..ds.len()).collect::<Vec<_>>(), cfg)
     }
 
-    /// Preprocess the frames of `rows` of `ds` (in parallel, in order).
+    /// Preprocess the frames of `rows` of `ds` (in parallel, in order),
+    /// their headers checked first ([`Dataset::check_frame_headers`]).
     pub fn from_rows(ds: &Dataset, rows: &[usize], cfg: &PreprocessConfig) -> Result<Self> {
+        ds.check_frame_headers(rows)?;
         let mut sets = Self::from_rows_each(ds, rows, std::slice::from_ref(cfg))?;
         Ok(sets.remove(0))
     }

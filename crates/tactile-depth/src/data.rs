@@ -131,6 +131,7 @@ impl DepthSet {
         prior: Option<&Path>,
     ) -> Result<Self> {
         let progress = Self::start_loading(ds, rows.len(), prior)?;
+        ds.check_frame_headers(rows)?;
         let set = Self::load_rows(ds, rows, size, prior, &progress)?;
         progress.finish_and_clear();
         Ok(set)

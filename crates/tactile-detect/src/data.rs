@@ -39,6 +39,7 @@ impl DetectionSet {
     /// `detector`, held at its bits; `tendon` must be 0 or 1.
     pub fn from_dataset(ds: &Dataset, detector: &DetectorConfig) -> Result<Self> {
         let mut set = Self::labels_of(ds, detector)?;
+        ds.check_frame_headers(&(0..ds.len()).collect::<Vec<_>>())?;
         set.frames = load_frames(ds, detector, &set.files, 0)?;
         Ok(set)
     }

@@ -114,6 +114,8 @@ pub fn train(
         val.len()
     );
     let seed = config.schedule.seed;
+    // Every frame's header before the first is decoded.
+    data.check_frame_headers(&[train.as_slice(), val.as_slice()].concat())?;
     let train_set = SegmentSet::from_dataset(data, &train, window, config.copies, seed)?;
     let val_set = SegmentSet::from_dataset(data, &val, window, 1, seed)?;
     let images: Vec<_> = (0..train_set.len()).map(|i| train_set.image(i)).collect();

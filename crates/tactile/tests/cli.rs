@@ -3767,3 +3767,61 @@ fn a_frame_of_another_sensor_is_estimated_and_named_as_unlike_the_training_frame
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn trainers_find_frames_that_cannot_be_read_before_loading_any() {
+    // A dataset with two frames no reader takes: every palpation trainer
+    // names the first and counts them before it decodes a frame, and
+    // makes no model folder.
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("vt");
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--sequences",
+        "6",
+        "--frames-per-sequence",
+        "6",
+        "--seed",
+        "62",
+        "--out",
+        data.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    // Two frames with a tendon (every trainer reads those), in two
+    // sequences.
+    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
+    let mut lines = labels.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let (file, tendon, sequence) = (col("file"), col("tendon"), col("sequence"));
+    let mut files: Vec<&str> = Vec::new();
+    let mut seen = Vec::new();
+    for cells in lines.map(|l| l.split(',').collect::<Vec<_>>()) {
+        if cells[tendon] == "1" && !seen.contains(&cells[sequence]) {
+            seen.push(cells[sequence]);
+            files.push(cells[file]);
+        }
+    }
+    std::fs::write(data.join(files[0]), b"").unwrap();
+    std::fs::write(data.join(files[1]), b"not a picture").unwrap();
+    for kind in ["detector", "segmenter", "depth"] {
+        let out = tmp.path().join(kind);
+        let (ok, msg) = tactile(&[
+            "train",
+            kind,
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--max-epochs",
+            "1",
+        ]);
+        assert!(
+            !ok && msg.contains(&format!("{}: cannot read the image header", files[0]))
+                && msg.contains("frames cannot be read"),
+            "{kind}: {msg}"
+        );
+        assert!(!out.exists(), "{kind}: a model folder was left");
+    }
+}
