@@ -166,6 +166,30 @@ pub fn article(noun: &str) -> &'static str {
     }
 }
 
+/// `check` every one of `frames` (stopping on a stop request), keeping
+/// the first refusal and a count: `Ok` when none, the one alone, or
+/// `many(first, count, total)`. The one loop behind every crate's check of
+/// a set of frames before any is decoded, whatever its error type.
+pub fn check_each<T, E: From<Error>>(
+    frames: &[T],
+    mut check: impl FnMut(&T) -> Result<(), E>,
+    many: impl FnOnce(E, usize, usize) -> E,
+) -> Result<(), E> {
+    let (mut first, mut count) = (None, 0usize);
+    for frame in frames {
+        crate::interrupt::check()?;
+        if let Err(e) = check(frame) {
+            count += 1;
+            first.get_or_insert(e);
+        }
+    }
+    match first {
+        None => Ok(()),
+        Some(e) if count == 1 => Err(e),
+        Some(e) => Err(many(e, count, frames.len())),
+    }
+}
+
 impl Error {
     /// `check` every one of `frames` before any is decoded (stopping on
     /// a stop request), keeping the first refusal and a count, not every
@@ -173,25 +197,15 @@ impl Error {
     /// ([`Error::UnreadableFrames`]).
     pub fn check_frames<T>(
         frames: &[T],
-        mut check: impl FnMut(&T) -> Result<(), Self>,
+        check: impl FnMut(&T) -> Result<(), Self>,
     ) -> Result<(), Self> {
-        let (mut first, mut count) = (None, 0usize);
-        for frame in frames {
-            crate::interrupt::check()?;
-            if let Err(e) = check(frame) {
-                count += 1;
-                first.get_or_insert(e);
-            }
-        }
-        match first {
-            None => Ok(()),
-            Some(e) if count == 1 => Err(e),
-            Some(e) => Err(Error::UnreadableFrames {
-                first: Box::new(e),
+        check_each(frames, check, |first, count, total| {
+            Error::UnreadableFrames {
+                first: Box::new(first),
                 count,
-                total: frames.len(),
-            }),
-        }
+                total,
+            }
+        })
     }
 
     /// An I/O error on `path`.

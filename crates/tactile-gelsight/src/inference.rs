@@ -304,32 +304,21 @@ impl Reconstructor {
     pub fn check_files(&self, files: &[std::path::PathBuf]) -> Result<()> {
         let g = self.grid;
         let expected = (g.frame_width, g.frame_height);
-        let (mut first, mut count) = (None, 0usize);
-        for f in files {
-            let refusal = match tactile_core::image_io::rgb_frame_header(f) {
-                Err(e) => Error::from(e),
-                Ok(h) => {
-                    if let Err(e) = check_size(f, expected, (h.width as usize, h.height as usize)) {
-                        e
-                    } else if h.grey && self.background.colour {
-                        Error::GreyFrame { path: f.clone() }
-                    } else {
-                        continue;
-                    }
-                }
-            };
-            count += 1;
-            first.get_or_insert(refusal);
-        }
-        match first {
-            None => Ok(()),
-            Some(e) if count == 1 => Err(e),
-            Some(e) => Err(Error::UnreadableFrames {
-                first: Box::new(e),
+        let check = |f: &std::path::PathBuf| {
+            let h = tactile_core::image_io::rgb_frame_header(f)?;
+            check_size(f, expected, (h.width as usize, h.height as usize))?;
+            match h.grey && self.background.colour {
+                true => Err(Error::GreyFrame { path: f.clone() }),
+                false => Ok(()),
+            }
+        };
+        tactile_core::error::check_each(files, check, |first, count, total| {
+            Error::UnreadableFrames {
+                first: Box::new(first),
                 count,
-                total: files.len(),
-            }),
-        }
+                total,
+            }
+        })
     }
 
     /// The skin's indentation over `frame` (the calibrated size, in colour
