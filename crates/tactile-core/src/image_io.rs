@@ -66,10 +66,18 @@ pub struct ImageHeader {
     pub width: u32,
     /// Height, pixels.
     pub height: u32,
-    /// Stored as greyscale (with or without alpha, of any depth).
-    pub grey: bool,
     /// The stored pixel format.
     pub color: ColorType,
+}
+
+impl ImageHeader {
+    /// Stored as greyscale (with or without alpha, of any depth).
+    pub fn grey(&self) -> bool {
+        matches!(
+            self.color,
+            ColorType::L8 | ColorType::La8 | ColorType::L16 | ColorType::La16
+        )
+    }
 }
 
 fn open_image(path: &Path) -> Result<ImageReader<std::io::BufReader<std::fs::File>>> {
@@ -79,8 +87,8 @@ fn open_image(path: &Path) -> Result<ImageReader<std::io::BufReader<std::fs::Fil
         .map_err(|e| Error::io(path, e))
 }
 
-/// Read `path`'s header only: its size and whether it is stored grey, so a
-/// folder's frames can be checked before any is decoded.
+/// Read `path`'s header only: its size and pixel format, so a folder's
+/// frames can be checked before any is decoded.
 pub fn image_header(path: &Path) -> Result<ImageHeader> {
     use image::ImageDecoder as _;
     crate::io::expect_regular(path)?;
@@ -88,14 +96,9 @@ pub fn image_header(path: &Path) -> Result<ImageHeader> {
         .into_decoder()
         .map_err(|e| Error::image(path, format!("cannot read the image header: {e}")))?;
     let (width, height) = decoder.dimensions();
-    let grey = matches!(
-        decoder.color_type(),
-        ColorType::L8 | ColorType::La8 | ColorType::L16 | ColorType::La16
-    );
     Ok(ImageHeader {
         width,
         height,
-        grey,
         color: decoder.color_type(),
     })
 }

@@ -307,7 +307,7 @@ impl Reconstructor {
         let check = |f: &std::path::PathBuf| {
             let h = tactile_core::image_io::rgb_frame_header(f)?;
             check_size(f, expected, (h.width as usize, h.height as usize))?;
-            match h.grey && self.background.colour {
+            match h.grey() && self.background.colour {
                 true => Err(Error::GreyFrame { path: f.clone() }),
                 false => Ok(()),
             }
