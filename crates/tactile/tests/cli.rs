@@ -96,6 +96,24 @@ fn dataset(dir: &Path, n: usize) {
     .unwrap();
 }
 
+/// `tactile synth visuotactile` into `out`: `sequences` palpation videos
+/// of `frames` frames each, from `seed`.
+fn synth_visuotactile(out: &Path, sequences: usize, frames: usize, seed: u64) {
+    let (ok, msg) = tactile(&[
+        "synth",
+        "visuotactile",
+        "--sequences",
+        &sequences.to_string(),
+        "--frames-per-sequence",
+        &frames.to_string(),
+        "--seed",
+        &seed.to_string(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+}
+
 /// A model folder with fresh weights, made by training for one epoch.
 fn model(dir: &Path, data: &Path) {
     let (ok, out) = tactile(&[
@@ -1244,19 +1262,7 @@ fn shipped_detector_and_segmenter_meet_their_targets_on_fresh_palpations() {
     let data = tmp.path().join("vt");
     let d = data.to_str().unwrap();
     // Six palpation videos of a seed no model has seen, every tendon path.
-    let (ok, msg) = tactile(&[
-        "synth",
-        "visuotactile",
-        "--sequences",
-        "6",
-        "--frames-per-sequence",
-        "20",
-        "--seed",
-        "4242",
-        "--out",
-        d,
-    ]);
-    assert!(ok, "{msg}");
+    synth_visuotactile(&data, 6, 20, 4242);
     let frames_csv = tmp.path().join("decisions.csv");
     let (ok, msg) = tactile(&[
         "eval",
@@ -1336,19 +1342,7 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("vt");
     let d = data.to_str().unwrap();
-    let (ok, msg) = tactile(&[
-        "synth",
-        "visuotactile",
-        "--sequences",
-        "4",
-        "--frames-per-sequence",
-        "8",
-        "--seed",
-        "5",
-        "--out",
-        d,
-    ]);
-    assert!(ok, "{msg}");
+    synth_visuotactile(&data, 4, 8, 5);
     let det = tmp.path().join("det");
     let args = |epochs: &str| {
         vec![
@@ -1468,19 +1462,7 @@ fn train_depth_refuses_metres_and_an_unknown_loss_by_their_flags() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("vt");
     let d = data.to_str().unwrap();
-    let (ok, msg) = tactile(&[
-        "synth",
-        "visuotactile",
-        "--sequences",
-        "3",
-        "--frames-per-sequence",
-        "6",
-        "--seed",
-        "8",
-        "--out",
-        d,
-    ]);
-    assert!(ok, "{msg}");
+    synth_visuotactile(&data, 3, 6, 8);
     let out = tmp.path().join("depth");
     let o = out.to_str().unwrap();
     let base = [
@@ -1527,19 +1509,7 @@ fn run_gates_frames_and_agrees_across_runtimes() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("vt");
     let d = data.to_str().unwrap();
-    let (ok, msg) = tactile(&[
-        "synth",
-        "visuotactile",
-        "--sequences",
-        "2",
-        "--frames-per-sequence",
-        "12",
-        "--seed",
-        "61",
-        "--out",
-        d,
-    ]);
-    assert!(ok, "{msg}");
+    synth_visuotactile(&data, 2, 12, 61);
     let mut flags = Vec::new();
     for rt in ["onnx", "burn-flex", "burn-ndarray"] {
         let out = tmp.path().join(format!("{rt}.jsonl"));
@@ -1602,19 +1572,7 @@ fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("vt");
-    let (ok, msg) = tactile(&[
-        "synth",
-        "visuotactile",
-        "--sequences",
-        "1",
-        "--frames-per-sequence",
-        "6",
-        "--seed",
-        "62",
-        "--out",
-        data.to_str().unwrap(),
-    ]);
-    assert!(ok, "{msg}");
+    synth_visuotactile(&data, 1, 6, 62);
     // A 30 fps video as numbered PNGs, frame 3 lost.
     let video = data.join("frames");
     std::fs::remove_file(video.join("000003.png")).unwrap();
@@ -3775,19 +3733,7 @@ fn trainers_find_frames_that_cannot_be_read_before_loading_any() {
     // makes no model folder.
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("vt");
-    let (ok, msg) = tactile(&[
-        "synth",
-        "visuotactile",
-        "--sequences",
-        "6",
-        "--frames-per-sequence",
-        "6",
-        "--seed",
-        "62",
-        "--out",
-        data.to_str().unwrap(),
-    ]);
-    assert!(ok, "{msg}");
+    synth_visuotactile(&data, 6, 6, 62);
     // Two frames with a tendon (every trainer reads those), in two
     // sequences.
     let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
