@@ -137,6 +137,25 @@ impl DepthSet {
         Ok(set)
     }
 
+    /// A training and a validation set of `ds` (`train` and `val` rows),
+    /// loaded as [`DepthSet::from_dataset`] loads one, with every frame's
+    /// header of both read once before the first frame is decoded: a bad
+    /// validation frame is named before the (slow) training frames load.
+    pub fn from_splits(
+        ds: &Dataset,
+        train: &[usize],
+        val: &[usize],
+        size: [usize; 2],
+        prior: Option<&Path>,
+    ) -> Result<(Self, Self)> {
+        let progress = Self::start_loading(ds, train.len() + val.len(), prior)?;
+        ds.check_frame_headers(&[train, val].concat())?;
+        let train_set = Self::load_rows(ds, train, size, prior, &progress)?;
+        let val_set = Self::load_rows(ds, val, size, prior, &progress)?;
+        progress.finish_and_clear();
+        Ok((train_set, val_set))
+    }
+
     /// Every row of `ds` loaded as [`DepthSet::from_dataset`] does, a
     /// chunk of `chunk_rows` rows at a time, each chunk handed to `each` in
     /// order: a dataset of any length in bounded memory.

@@ -159,11 +159,8 @@ pub fn train(
         train.len(),
         val.len()
     );
-    // Every frame's header before the first is decoded (and the training
-    // frames reconstructed through a prior): a bad validation frame too.
-    data.check_frame_headers(&[train.as_slice(), val.as_slice()].concat())?;
-    let train_set = DepthSet::from_dataset(data, &train, [w, h], prior_dir.as_deref())?;
-    let val_set = DepthSet::from_dataset(data, &val, [w, h], prior_dir.as_deref())?;
+    let (train_set, val_set) =
+        DepthSet::from_splits(data, &train, &val, [w, h], prior_dir.as_deref())?;
     if train_set.is_empty() || val_set.is_empty() {
         return Err(tactile_core::Error::Invalid(format!(
             "need training and validation frames (got {} and {})",

@@ -90,6 +90,20 @@ pub enum Error {
 }
 
 impl Error {
+    /// Whether this is [`Reconstructor::check_frame`]'s refusal of a frame
+    /// the sensor cannot read (another size than its calibration's, grey
+    /// for a sensor calibrated in colour, colour for a grey one): the
+    /// frame's fault, not the calibration's or the machine's. A pipeline
+    /// gives such a frame nothing and goes on; any other error stops it.
+    ///
+    /// [`Reconstructor::check_frame`]: crate::Reconstructor::check_frame
+    pub fn is_frame_refusal(&self) -> bool {
+        matches!(
+            self,
+            Error::FrameSize { .. } | Error::GreyFrame { .. } | Error::ColourFrame { .. }
+        )
+    }
+
     /// The foundation error underneath, when there is one.
     pub fn core(&self) -> Option<&tactile_core::Error> {
         match self {

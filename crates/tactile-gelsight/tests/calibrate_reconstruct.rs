@@ -237,6 +237,7 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     assert!(ds.frame(0).is_ok());
     let e = ds.frame(1).err().unwrap();
     assert!(matches!(e, Error::GreyFrame { .. }), "{e}");
+    assert!(e.is_frame_refusal(), "{e}");
     assert!(e.to_string().contains("press_02.png"), "{e}");
     // The background saved grey beside colour presses: the presses are
     // named, not fitted against the wrong rest (before, it calibrated,
@@ -247,6 +248,7 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     let ds = BallPresses::open(&d).unwrap();
     let e = ds.frame(0).err().unwrap();
     assert!(matches!(e, Error::ColourFrame { .. }), "{e}");
+    assert!(e.is_frame_refusal(), "{e}");
     let e = e.to_string();
     assert!(
         e.contains("press_01.png") && e.contains("the sensor's background is grey"),
@@ -534,6 +536,9 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     };
     assert_eq!((*count, *total), (4, 6), "{e}");
     assert!(matches!(**first, Error::FrameSize { .. }), "{e}");
+    // The count of a folder's bad frames stops a reconstruction; one
+    // frame's refusal is what a pipeline skips.
+    assert!(first.is_frame_refusal() && !e.is_frame_refusal(), "{e}");
     assert!(e.to_string().contains("zz-a.png"), "{e}");
     assert!(!out.exists());
     std::fs::remove_file(mixed.join("zz-a.png")).unwrap();

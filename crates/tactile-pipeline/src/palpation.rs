@@ -283,11 +283,7 @@ impl Pipeline {
         };
         match sensor.check_frame(frame, Path::new(name)) {
             Ok(()) => Ok(None),
-            Err(
-                e @ (tactile_gelsight::Error::FrameSize { .. }
-                | tactile_gelsight::Error::GreyFrame { .. }
-                | tactile_gelsight::Error::ColourFrame { .. }),
-            ) => Ok(Some(e.to_string())),
+            Err(e) if e.is_frame_refusal() => Ok(Some(e.to_string())),
             Err(e) => Err(e.into()),
         }
     }
