@@ -2032,7 +2032,7 @@ fn predict_edge_errors(model: &Path) -> [f64; 3] {
     let data = edge_thirds();
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("estimates.csv");
-    predict(model, &data, &out, &[]);
+    predict(model, data, &out, &[]);
     let text = std::fs::read_to_string(&out).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("file,x_mm,theta_deg,depth_mm"));
