@@ -2015,11 +2015,25 @@ fn predict(model: &Path, data: &Path, out: &Path, extra: &[&str]) -> String {
 /// mm against 0.0737, 0.717, 0.0154 over all 3,762; `models/cae-edge`
 /// 0.1153, 1.001, 0.0221 against 0.1119, 1.015, 0.0222).
 fn edge_thirds() -> &'static Path {
-    static DIR: std::sync::OnceLock<(tempfile::TempDir, std::path::PathBuf)> =
-        std::sync::OnceLock::new();
-    let (_, data) = DIR.get_or_init(|| {
+    static SUBSET: Subset = std::sync::OnceLock::new();
+    kept_subset(&SUBSET, |dir| {
+        real_subset("tactip127-edge", dir, |_| true, 3, usize::MAX)
+    })
+}
+
+/// A real subset made once per test binary, kept in its temporary folder
+/// as long as the binary runs.
+type Subset = std::sync::OnceLock<(tempfile::TempDir, std::path::PathBuf)>;
+
+/// `cell`'s subset, made by `make` in a new temporary folder the first
+/// time it is asked for.
+fn kept_subset(
+    cell: &'static Subset,
+    make: impl FnOnce(&Path) -> std::path::PathBuf,
+) -> &'static Path {
+    let (_, data) = cell.get_or_init(|| {
         let tmp = tempfile::tempdir().unwrap();
-        let data = real_subset("tactip127-edge", tmp.path(), |_| true, 3, usize::MAX);
+        let data = make(tmp.path());
         (tmp, data)
     });
     data
@@ -3401,14 +3415,8 @@ const SURFACE_TARGETS: [&str; 6] = [
 /// check is on `val`, and predicting the other 6,000 frames too tripled
 /// their time.
 fn surface_val() -> &'static Path {
-    static DIR: std::sync::OnceLock<(tempfile::TempDir, std::path::PathBuf)> =
-        std::sync::OnceLock::new();
-    let (_, data) = DIR.get_or_init(|| {
-        let tmp = tempfile::tempdir().unwrap();
-        let data = surface_val_subset(tmp.path(), 1, 2000);
-        (tmp, data)
-    });
-    data
+    static SUBSET: Subset = std::sync::OnceLock::new();
+    kept_subset(&SUBSET, |dir| surface_val_subset(dir, 1, 2000))
 }
 
 /// `tactile predict --model models/MODEL` over the real surface set's
@@ -3437,15 +3445,14 @@ fn predict_surface(model: &str) -> (std::path::PathBuf, String) {
     (data, text)
 }
 
-/// Each frame's [`SURFACE_TARGETS`] from `data`'s labels, of the frames
-/// of `split` alone when one is given.
-fn surface_truth(data: &Path, split: Option<&str>) -> std::collections::HashMap<String, Vec<f64>> {
+/// Each `val` frame's [`SURFACE_TARGETS`] from `data`'s labels.
+fn surface_val_truth(data: &Path) -> std::collections::HashMap<String, Vec<f64>> {
     let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
     let mut lab = labels.lines();
     let names: Vec<&str> = lab.next().unwrap().split(',').collect();
     let col = |n: &str| names.iter().position(|c| *c == n).unwrap();
     lab.map(|l| l.split(',').collect::<Vec<_>>())
-        .filter(|c| split.is_none_or(|s| c[col("split")] == s))
+        .filter(|c| c[col("split")] == "val")
         .map(|c| {
             let v = SURFACE_TARGETS
                 .iter()
@@ -3473,7 +3480,7 @@ fn the_cae_route_on_surface_frames_it_never_saw_is_within_1_5x_of_the_best() {
     assert_ne!(notes("cae-surface-train")["every_split"], true);
     let mae = |model: &str| {
         let (data, text) = predict_surface(model);
-        let truth = surface_truth(&data, Some("val"));
+        let truth = surface_val_truth(&data);
         let mut lines = text.lines();
         let header: Vec<&str> = lines.next().unwrap().split(',').collect();
         let at = |n: &str| header.iter().position(|c| *c == n).unwrap();
@@ -3531,7 +3538,7 @@ fn the_cae_route_on_surface_frames_it_never_saw_is_within_1_5x_of_the_best() {
         if model != "cae-surface-train" {
             continue;
         }
-        let truth = surface_truth(&data, Some("val"));
+        let truth = surface_val_truth(&data);
         let (mut inside, mut n) = ([[0usize; 2]; 6], 0usize);
         for l in lines {
             let c: Vec<&str> = l.split(',').collect();
@@ -3564,7 +3571,7 @@ fn predict_writes_surface_pose_shear_and_their_deviations() {
     want.extend(SURFACE_TARGETS.iter().map(|t| t.to_string()));
     want.extend(SURFACE_TARGETS.iter().map(|t| format!("{t}_std")));
     assert_eq!(header, want);
-    let truth = surface_truth(&data, Some("val"));
+    let truth = surface_val_truth(&data);
     let (mut err, mut inside, mut n) = ([0f64; 6], [0usize; 6], 0usize);
     for l in lines {
         let c: Vec<&str> = l.split(',').collect();
