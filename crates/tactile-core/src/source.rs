@@ -13,6 +13,7 @@
 use std::collections::VecDeque;
 use std::io::Read;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
@@ -231,14 +232,19 @@ impl FrameList {
     /// before its first frame, not after every frame before it. One bad
     /// frame gives its own refusal; several, the first's and how many
     /// ([`Error::UnreadableFrames`]). A frame whose pixels are cut short
-    /// behind a whole header is still found only when it is decoded.
+    /// behind a whole header is found only when it is decoded: the source
+    /// skips it then, with a warning ([`FrameSource::late_warnings`]).
     pub fn check_headers(&self, limit: Option<u64>) -> Result<()> {
+        Error::check_frames(self.first(limit), FrameEntry::check_header)
+    }
+
+    /// The first `limit` frames (all of them without a limit): those a run
+    /// with that limit reads.
+    pub fn first(&self, limit: Option<u64>) -> &[FrameEntry] {
         let n = limit.map_or(self.frames.len(), |l| {
-            self.frames
-                .len()
-                .min(usize::try_from(l).unwrap_or(usize::MAX))
+            (self.frames.len()).min(usize::try_from(l).unwrap_or(usize::MAX))
         });
-        Error::check_frames(&self.frames[..n], FrameEntry::check_header)
+        &self.frames[..n]
     }
 
     /// What a user should know before the run: frames missing from the
@@ -489,17 +495,78 @@ trait Reader: Send {
     fn next_frame(&mut self) -> Result<Option<Frame>>;
 }
 
+/// The frames of a folder or dataset. Their headers were read when the
+/// source opened ([`FrameList::check_headers`]); a frame that still cannot
+/// be decoded (its pixel data cut short or corrupt behind a whole header,
+/// as a copy stopped half-way leaves it) is skipped and named in a late
+/// warning, so the frames around it keep their results, as a video or bag
+/// cut short keeps its frames. Any other error (the file gone, the disk
+/// failing) stops the run.
 struct ListReader {
     entries: std::vec::IntoIter<FrameEntry>,
+    /// Frames the run reads (the limit's first ones), for the warning.
+    total: usize,
+    skipped: usize,
+    /// Why the first skipped frame could not be decoded, naming it.
+    first: Option<String>,
+    late: LateWarnings,
+    /// Where this reader's warning stands in `late`, once written.
+    slot: Option<usize>,
+    /// The count, shared with the source ([`FrameSource::undecodable`]).
+    undecodable: Arc<AtomicU64>,
+}
+
+impl ListReader {
+    fn new(entries: Vec<FrameEntry>, late: LateWarnings, undecodable: Arc<AtomicU64>) -> Self {
+        Self {
+            total: entries.len(),
+            entries: entries.into_iter(),
+            skipped: 0,
+            first: None,
+            late,
+            slot: None,
+            undecodable,
+        }
+    }
+
+    /// Count a frame that could not be decoded and bring the warning up
+    /// to date at once (a run stopped after it still says so).
+    fn skip(&mut self, why: &Error) {
+        self.skipped += 1;
+        self.undecodable.fetch_add(1, Ordering::Relaxed);
+        let first = self.first.get_or_insert_with(|| why.to_string());
+        let text = format!(
+            "warning: {} of the {} frames could not be decoded (pixel data cut short or corrupt \
+             behind a whole header, as a copy stopped half-way leaves it) and got no result; \
+             the other frames' results were kept. The first: {first}",
+            self.skipped, self.total
+        );
+        if let Ok(mut late) = self.late.lock() {
+            match self.slot {
+                Some(i) if i < late.len() => late[i] = text,
+                _ => {
+                    late.push(text);
+                    self.slot = Some(late.len() - 1);
+                }
+            }
+        }
+    }
 }
 
 impl Reader for ListReader {
     fn next_frame(&mut self) -> Result<Option<Frame>> {
-        let Some(e) = self.entries.next() else {
-            return Ok(None);
+        let (e, image) = loop {
+            let Some(e) = self.entries.next() else {
+                return Ok(None);
+            };
+            match e.load() {
+                Ok(image) => break (e, image),
+                Err(why @ Error::Image { .. }) => self.skip(&why),
+                Err(other) => return Err(other),
+            }
         };
         Ok(Some(Frame {
-            image: e.load()?,
+            image,
             name: e
                 .path
                 .file_name()
@@ -710,6 +777,8 @@ pub struct FrameSource {
     notes: Vec<String>,
     /// What was found while reading (a bag file cut short).
     late: LateWarnings,
+    /// A folder's frames skipped as they could not be decoded.
+    undecodable: Arc<AtomicU64>,
     feed: Feed,
     limit: Option<u64>,
     given: u64,
@@ -733,6 +802,7 @@ impl FrameSource {
         }
         use crate::video::{DecodeOptions, VideoInput, VideoReader};
         let late = LateWarnings::default();
+        let undecodable = Arc::<AtomicU64>::default();
         let (kind, list, reader, size, stopper): Opened = match spec {
             SourceSpec::Bag { path, topic } => open_bag(path, topic.clone(), &late)?,
             SourceSpec::Stdin { width, height } => {
@@ -786,9 +856,10 @@ impl FrameSource {
                     };
                     list.check_headers(options.limit)?;
                     let size = list.frames.first().and_then(|f| f.size);
-                    let r = ListReader {
-                        entries: list.frames.clone().into_iter(),
-                    };
+                    // A limit reads the folder's first frames, those whose
+                    // headers were read.
+                    let first = list.first(options.limit).to_vec();
+                    let r = ListReader::new(first, Arc::clone(&late), Arc::clone(&undecodable));
                     (kind, Some(list), Box::new(r) as Box<dyn Reader>, size, None)
                 } else if let Some(e) = crate::dataset::file_of_a_dataset(path) {
                     return Err(e);
@@ -923,6 +994,7 @@ impl FrameSource {
             list,
             notes,
             late,
+            undecodable,
             feed,
             limit: options.limit,
             given: 0,
@@ -984,6 +1056,13 @@ impl FrameSource {
         !matches!(self.feed, Feed::Direct(_))
     }
 
+    /// A folder's or dataset's frames skipped so far because they could
+    /// not be decoded behind a whole header (each named by the late
+    /// warning).
+    pub fn undecodable(&self) -> u64 {
+        self.undecodable.load(Ordering::Relaxed)
+    }
+
     /// Live frames dropped so far because processing fell behind.
     pub fn dropped(&self) -> u64 {
         match &self.feed {
@@ -1038,6 +1117,61 @@ impl Drop for FrameSource {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A folder's frame whose pixel data is cut short behind a whole
+    /// header (a copy stopped half-way) is skipped when it is decoded and
+    /// named in a warning; the frames around it are given, prefetched or
+    /// not, and a limit counts the folder's first frames, the cut one
+    /// among them.
+    #[test]
+    fn a_frame_cut_short_behind_its_header_is_skipped_and_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let (w, h) = (64, 48);
+        let pixels: Vec<u8> = (0..w * h * 3).map(|i| (i * 37 % 251) as u8).collect();
+        for name in ["1.png", "2.png", "3.png", "4.png"] {
+            crate::image_io::save_rgb_png(d.join(name), w, h, &pixels).unwrap();
+        }
+        let whole = std::fs::read(d.join("2.png")).unwrap();
+        std::fs::write(d.join("2.png"), &whole[..whole.len() / 2]).unwrap();
+        let list = FrameList::open(d).unwrap();
+        list.check_headers(None).unwrap();
+        for overlap in [true, false] {
+            for (limit, given) in [
+                (None, vec!["1.png", "3.png", "4.png"]),
+                (Some(3), vec!["1.png", "3.png"]),
+            ] {
+                let options = SourceOptions {
+                    overlap,
+                    limit,
+                    ..SourceOptions::default()
+                };
+                let mut source =
+                    FrameSource::open(&SourceSpec::Path(d.to_path_buf()), options).unwrap();
+                let names: Vec<String> = (&mut source).map(|f| f.unwrap().name).collect();
+                assert_eq!(names, given, "overlap {overlap}, limit {limit:?}");
+                let late = source.late_warnings();
+                assert_eq!(late.len(), 1, "{late:?}");
+                assert!(
+                    late[0].starts_with("warning: 1 of the ")
+                        && late[0].contains("could not be decoded")
+                        && late[0].contains(&d.join("2.png").display().to_string()),
+                    "{}",
+                    late[0]
+                );
+                assert_eq!(source.warnings(), late);
+                assert_eq!(source.undecodable(), 1);
+            }
+        }
+        // Past the cut frame, the frames read have no warning.
+        let options = SourceOptions {
+            limit: Some(1),
+            ..SourceOptions::default()
+        };
+        let mut source = FrameSource::open(&SourceSpec::Path(d.to_path_buf()), options).unwrap();
+        assert_eq!((&mut source).count(), 1);
+        assert!(source.late_warnings().is_empty());
+    }
 
     /// Every frame a reader would refuse is found from its header, before
     /// any frame is decoded: named alone, or the first named and all

@@ -80,6 +80,9 @@ pub struct RunSummary {
     pub overlapped_decoding: bool,
     /// Frames missing from a numbered folder.
     pub missing_frames: u64,
+    /// A folder's or dataset's frames skipped because they could not be
+    /// decoded behind a whole header (cut short), named by a warning.
+    pub undecodable_frames: u64,
     /// Live frames dropped because processing fell behind (the oldest
     /// waiting ones); 0 for recorded sources, which drop nothing.
     pub dropped_frames: u64,
@@ -449,6 +452,7 @@ pub fn run(
         frames,
         overlapped_decoding: source.overlapped(),
         missing_frames: source.list().map_or(0, |l| l.missing_frames().count),
+        undecodable_frames: source.undecodable(),
         dropped_frames: source.dropped(),
         runtime: pipeline.runtime,
         threads: pipeline.threads,

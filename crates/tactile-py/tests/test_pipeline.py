@@ -134,6 +134,17 @@ def test_run_writes_what_tactile_run_writes(tactile_bin, root, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == before
     assert len(list(cli_render.iterdir())) == 8
 
+    # A frame cut short behind a whole header is found when decoded: it is
+    # skipped with a warning naming it, and the other frames' records kept.
+    whole = (cut / "000002.png").read_bytes()
+    (cut / "000003.png").write_bytes(whole[: len(whole) // 2])
+    (cut / "000004.png").unlink()
+    with pytest.warns(UserWarning, match=r"1 of the 4 frames could not be decoded.*000003\.png: cannot decode"):
+        s = tactile.run(cut, models=root / "models", out=tmp_path / "kept.jsonl")
+    kept = [json.loads(line)["frame"] for line in (tmp_path / "kept.jsonl").read_text().splitlines()]
+    assert kept == ["000000.png", "000001.png", "000002.png"] and s["frames"] == 3
+    assert s["undecodable_frames"] == 1 and s["missing_frames"] == 0
+
 
 def _segmenter_side(root) -> int:
     cfg = json.loads((root / "models/segmenter/segmenter.json").read_text())

@@ -1630,6 +1630,51 @@ fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
     // Frames past --limit are not read, so not checked either.
     let (ok, msg) = run_models(&root.join("models"), "5");
     assert!(ok && out.exists(), "{msg}");
+    // A frame cut short behind a whole header (a copy stopped half-way)
+    // is found only when decoded: it is skipped and named, and the other
+    // frames' records are written.
+    let whole = std::fs::read(video.join("000005.png")).unwrap();
+    std::fs::write(video.join("000006.png"), &whole[..whole.len() / 2]).unwrap();
+    std::fs::copy(video.join("000005.png"), video.join("000007.png")).unwrap();
+    std::fs::remove_file(video.join("000008.png")).unwrap();
+    std::fs::remove_file(&out).unwrap();
+    let (ok, msg) = run_models(&root.join("models"), "100");
+    assert!(ok, "{msg}");
+    assert!(
+        msg.contains("warning: 1 of the 7 frames could not be decoded")
+            && msg.contains(&format!(
+                "{}: cannot decode image",
+                video.join("000006.png").display()
+            )),
+        "{msg}"
+    );
+    let names: Vec<String> = std::fs::read_to_string(&out)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["frame"]
+                .as_str()
+                .unwrap()
+                .to_string()
+        })
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "000000.png",
+            "000001.png",
+            "000002.png",
+            "000004.png",
+            "000005.png",
+            "000007.png"
+        ]
+    );
+    let json = msg.lines().find(|l| l.starts_with('{')).unwrap();
+    let v: serde_json::Value = serde_json::from_str(json).unwrap();
+    assert_eq!(
+        (v["frames"].as_u64(), v["undecodable_frames"].as_u64()),
+        (Some(6), Some(1))
+    );
     // A folder with no frames at all is an error naming it.
     let empty = tmp.path().join("empty");
     std::fs::create_dir(&empty).unwrap();

@@ -581,6 +581,21 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
         err.contains("bad.csv:3: frame 1 (\"000001.png\") is labelled twice, by its number and by its name (also on line 2)"),
         "{err}"
     );
+    // A labelled frame cut short behind its header is skipped by the
+    // reader, so its row is refused as not read, with why.
+    let whole = std::fs::read(folder.join("000002.png")).unwrap();
+    let cut = dir.path().join("cut");
+    std::fs::create_dir(&cut).unwrap();
+    std::fs::copy(folder.join("000000.png"), cut.join("000000.png")).unwrap();
+    std::fs::write(cut.join("000001.png"), &whole[..whole.len() / 2]).unwrap();
+    let err = refused(&cut, "frame,tendon\n0,0\n1,1\n");
+    assert!(
+        err.contains("bad.csv:3: frame 1 is not in")
+            && err.contains("(1 frames read); 1 of the 2 frames could not be decoded")
+            && err.contains("000001.png: cannot decode image"),
+        "{err}"
+    );
+    assert!(!dir.path().join("ds2").exists());
     let err = refused(&video, "frame,tendon,mask\n3,1,../../etc/passwd\n");
     assert!(
         err.contains("bad.csv:2") && err.contains("goes up with '..'"),
