@@ -498,17 +498,20 @@ trait Reader: Send {
 /// The frames of a folder or dataset. Their headers were read when the
 /// source opened ([`FrameList::check_headers`]); a frame that still cannot
 /// be decoded (its pixel data cut short or corrupt behind a whole header,
-/// as a copy stopped half-way leaves it) is skipped and named in a late
-/// warning, so the frames around it keep their results, as a video or bag
-/// cut short keeps its frames. Any other error (the file gone, the disk
-/// failing) stops the run.
+/// as a copy stopped half-way leaves it, or pixels that are not opaque) is
+/// skipped and named in a late warning, so the frames around it keep their
+/// results, as a video or bag cut short keeps its frames. When no frame
+/// at all can be decoded, the source ends with the error instead. Any
+/// other error (the file gone, the disk failing) stops the run.
 struct ListReader {
     entries: std::vec::IntoIter<FrameEntry>,
     /// Frames the run reads (the limit's first ones), for the warning.
     total: usize,
     skipped: usize,
+    /// Frames given.
+    given: usize,
     /// Why the first skipped frame could not be decoded, naming it.
-    first: Option<String>,
+    first: Option<Error>,
     late: LateWarnings,
     /// Where this reader's warning stands in `late`, once written.
     slot: Option<usize>,
@@ -522,6 +525,7 @@ impl ListReader {
             total: entries.len(),
             entries: entries.into_iter(),
             skipped: 0,
+            given: 0,
             first: None,
             late,
             slot: None,
@@ -531,14 +535,13 @@ impl ListReader {
 
     /// Count a frame that could not be decoded and bring the warning up
     /// to date at once (a run stopped after it still says so).
-    fn skip(&mut self, why: &Error) {
+    fn skip(&mut self, why: Error) {
         self.skipped += 1;
         self.undecodable.fetch_add(1, Ordering::Relaxed);
-        let first = self.first.get_or_insert_with(|| why.to_string());
+        let first = self.first.get_or_insert(why);
         let text = format!(
-            "warning: {} of the {} frames could not be decoded (pixel data cut short or corrupt \
-             behind a whole header, as a copy stopped half-way leaves it) and got no result; \
-             the other frames' results were kept. The first: {first}",
+            "warning: {} of the {} frames could not be decoded past their header and got no \
+             result; the other frames' results were kept. The first: {first}",
             self.skipped, self.total
         );
         if let Ok(mut late) = self.late.lock() {
@@ -557,14 +560,24 @@ impl Reader for ListReader {
     fn next_frame(&mut self) -> Result<Option<Frame>> {
         let (e, image) = loop {
             let Some(e) = self.entries.next() else {
-                return Ok(None);
+                return match (self.given, self.first.take()) {
+                    // Not one frame: nothing to keep, so the run fails.
+                    (0, Some(first)) if self.skipped == 1 => Err(first),
+                    (0, Some(first)) => Err(Error::UnreadableFrames {
+                        first: Box::new(first),
+                        count: self.skipped,
+                        total: self.total,
+                    }),
+                    _ => Ok(None),
+                };
             };
             match e.load() {
                 Ok(image) => break (e, image),
-                Err(why @ Error::Image { .. }) => self.skip(&why),
+                Err(why @ Error::Image { .. }) => self.skip(why),
                 Err(other) => return Err(other),
             }
         };
+        self.given += 1;
         Ok(Some(Frame {
             image,
             name: e
@@ -1008,10 +1021,12 @@ impl FrameSource {
         self.kind
     }
 
-    /// What a user should know of the source: before the run, a
-    /// folder's gaps in the numbering and files that are not frames, one
-    /// split of a bag read alone; once its frames have ended, also
-    /// [`FrameSource::late_warnings`].
+    /// What a user should know of the source before the run: a folder's
+    /// gaps in the numbering and files that are not frames, one split of a
+    /// bag read alone. What reading finds is in
+    /// [`FrameSource::late_warnings`], asked once the frames have ended
+    /// (frames decoded ahead of the run may have found it already, so it
+    /// is not here, where it would be told twice).
     pub fn warnings(&self) -> Vec<String> {
         let mut w = self
             .list
@@ -1019,7 +1034,6 @@ impl FrameSource {
             .map(FrameList::warnings)
             .unwrap_or_default();
         w.extend(self.notes.iter().cloned());
-        w.extend(self.late_warnings());
         w
     }
 
@@ -1154,12 +1168,13 @@ mod tests {
                 assert_eq!(late.len(), 1, "{late:?}");
                 assert!(
                     late[0].starts_with("warning: 1 of the ")
-                        && late[0].contains("could not be decoded")
+                        && late[0].contains("could not be decoded past their header")
                         && late[0].contains(&d.join("2.png").display().to_string()),
                     "{}",
                     late[0]
                 );
-                assert_eq!(source.warnings(), late);
+                // Told once: not among the warnings before the run.
+                assert!(source.warnings().is_empty());
                 assert_eq!(source.undecodable(), 1);
             }
         }
@@ -1171,6 +1186,32 @@ mod tests {
         let mut source = FrameSource::open(&SourceSpec::Path(d.to_path_buf()), options).unwrap();
         assert_eq!((&mut source).count(), 1);
         assert!(source.late_warnings().is_empty());
+        // When no frame can be decoded, nothing is kept: the source ends
+        // with the refusal, alone or counted.
+        let cut = tempfile::tempdir().unwrap();
+        let half = std::fs::read(d.join("2.png")).unwrap();
+        std::fs::write(cut.path().join("a.png"), &half).unwrap();
+        let read = |dir: &Path| -> Result<usize> {
+            let spec = SourceSpec::Path(dir.to_path_buf());
+            let mut source = FrameSource::open(&spec, SourceOptions::default())?;
+            (&mut source).try_fold(0, |n, f| f.map(|_| n + 1))
+        };
+        let e = read(cut.path()).unwrap_err();
+        assert!(matches!(e, Error::Image { .. }), "{e}");
+        std::fs::write(cut.path().join("b.png"), &half).unwrap();
+        let e = read(cut.path()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::UnreadableFrames {
+                    count: 2,
+                    total: 2,
+                    ..
+                }
+            ) && e.to_string().contains("a.png: cannot decode image"),
+            "{e}"
+        );
+        assert_eq!(read(d).unwrap(), 3);
     }
 
     /// Every frame a reader would refuse is found from its header, before

@@ -139,8 +139,9 @@ def test_run_writes_what_tactile_run_writes(tactile_bin, root, tmp_path):
     whole = (cut / "000002.png").read_bytes()
     (cut / "000003.png").write_bytes(whole[: len(whole) // 2])
     (cut / "000004.png").unlink()
-    with pytest.warns(UserWarning, match=r"1 of the 4 frames could not be decoded.*000003\.png: cannot decode"):
+    with pytest.warns(UserWarning, match=r"1 of the 4 frames could not be decoded.*000003\.png: cannot decode") as told:
         s = tactile.run(cut, models=root / "models", out=tmp_path / "kept.jsonl")
+    assert sum("could not be decoded" in str(w.message) for w in told) == 1
     kept = [json.loads(line)["frame"] for line in (tmp_path / "kept.jsonl").read_text().splitlines()]
     assert kept == ["000000.png", "000001.png", "000002.png"] and s["frames"] == 3
     assert s["undecodable_frames"] == 1 and s["missing_frames"] == 0
