@@ -1194,7 +1194,7 @@ mod tests {
         let read = |dir: &Path| -> Result<usize> {
             let spec = SourceSpec::Path(dir.to_path_buf());
             let mut source = FrameSource::open(&spec, SourceOptions::default())?;
-            (&mut source).try_fold(0, |n, f| f.map(|_| n + 1))
+            source.try_fold(0, |n, f| f.map(|_| n + 1))
         };
         let e = read(cut.path()).unwrap_err();
         assert!(matches!(e, Error::Image { .. }), "{e}");
