@@ -144,9 +144,7 @@ pub struct CaeBenchResult {
 pub fn bench_cae(b: &CaeBench) -> Result<CaeBenchResult> {
     tactile_core::bench::check_runs(b.runs)?;
     let ds = Dataset::open(&b.data)?;
-    let rows = ds
-        .split_indices("test")
-        .unwrap_or_else(|| (0..ds.len()).collect());
+    let rows = ds.split_indices("test").unwrap_or_else(|| ds.every_row());
     let flex = DeviceKind::Flex.device();
     let loaded = CaeArtifact::load(&b.model, &flex)?;
     let art = &loaded.artifact;

@@ -50,7 +50,7 @@ pub struct PoseMetrics {
 /// then all new to it, and all are scored. Without such a record it may
 /// have seen them: it is scored on the test frames its split leaves.
 fn never_saw(p: &Provenance, dir: &std::path::Path, ds: &Dataset) -> bool {
-    let all: Vec<usize> = (0..ds.len()).collect();
+    let all: Vec<usize> = ds.every_row();
     p.seen(dir, ds, &all) == Seen::None
 }
 
@@ -175,7 +175,7 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
         // networks are taken to have never seen a set.
         let network = kind != "encoder + estimators";
         let (saw, test) = if network && never_saw(&provenance, m, &ds) {
-            (false, (0..ds.len()).collect())
+            (false, ds.every_row())
         } else {
             let split = ds.three_way_split(
                 holdout.unwrap_or(DEFAULT_HOLDOUT).test_fraction,

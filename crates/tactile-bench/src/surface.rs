@@ -64,7 +64,7 @@ pub struct SurfaceMetrics {
 fn scored_rows(ds: &Dataset) -> (Vec<usize>, Option<&'static str>) {
     match ds.evaluation_split().filter(|r| !r.is_empty()) {
         Some(rows) => (rows, ds.evaluation_split_name()),
-        None => ((0..ds.len()).collect(), None),
+        None => (ds.every_row(), None),
     }
 }
 

@@ -68,7 +68,7 @@ pub const DATASET_CHUNK: usize = 1024;
 impl PinSet {
     /// Preprocess every frame of `ds` (in parallel).
     pub fn from_dataset(ds: &Dataset, cfg: &PreprocessConfig) -> Result<Self> {
-        Self::from_rows(ds, &(0..ds.len()).collect::<Vec<_>>(), cfg)
+        Self::from_rows(ds, &ds.every_row(), cfg)
     }
 
     /// Preprocess the frames of `rows` of `ds` (in parallel, in order),
@@ -138,7 +138,7 @@ impl PinSet {
         chunk_rows: usize,
         each: impl FnMut(Vec<Self>) -> std::result::Result<(), E>,
     ) -> std::result::Result<(), E> {
-        let rows: Vec<usize> = (0..ds.len()).collect();
+        let rows: Vec<usize> = ds.every_row();
         Self::for_each_chunk_of(ds, &rows, cfgs, chunk_rows, each)
     }
 

@@ -167,7 +167,7 @@ impl DepthSet {
         mut each: impl FnMut(DepthSet) -> Result<()>,
     ) -> Result<()> {
         let progress = Self::start_loading(ds, ds.len(), prior)?;
-        let rows: Vec<usize> = (0..ds.len()).collect();
+        let rows: Vec<usize> = ds.every_row();
         ds.check_frame_headers(&rows)?;
         for chunk in rows.chunks(chunk_rows.max(1)) {
             each(Self::load_rows(ds, chunk, size, prior, &progress)?)?;

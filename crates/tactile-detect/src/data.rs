@@ -39,7 +39,7 @@ impl DetectionSet {
     /// `detector`, held at its bits; `tendon` must be 0 or 1.
     pub fn from_dataset(ds: &Dataset, detector: &DetectorConfig) -> Result<Self> {
         let mut set = Self::labels_of(ds, detector)?;
-        ds.check_frame_headers(&(0..ds.len()).collect::<Vec<_>>())?;
+        ds.check_frame_headers(&ds.every_row())?;
         set.frames = load_frames(ds, detector, &set.files, 0)?;
         Ok(set)
     }
@@ -56,7 +56,7 @@ impl DetectionSet {
         mut each: impl FnMut(DetectionSet) -> Result<()>,
     ) -> Result<()> {
         let labels = Self::labels_of(ds, detector)?;
-        ds.check_frame_headers(&(0..ds.len()).collect::<Vec<_>>())?;
+        ds.check_frame_headers(&ds.every_row())?;
         let step = chunk_rows.max(1);
         for start in (0..labels.files.len()).step_by(step) {
             let end = (start + step).min(labels.files.len());

@@ -404,7 +404,7 @@ pub fn calibration_rows(
 ) -> tactile_core::Result<Vec<usize>> {
     let rows = match split {
         Some(s) => ds.split_rows(s)?,
-        None => (0..ds.len()).collect(),
+        None => ds.every_row(),
     };
     let mut labelled = Vec::with_capacity(rows.len());
     for i in rows {

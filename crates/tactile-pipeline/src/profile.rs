@@ -53,7 +53,7 @@ pub fn add_input_profile(
 /// dataset does not have is refused naming its labels.
 pub fn rows_of(ds: &Dataset, split: Option<&str>) -> Result<Vec<usize>> {
     let Some(s) = split else {
-        return Ok((0..ds.len()).collect());
+        return Ok(ds.every_row());
     };
     let rows = ds.split_rows(s)?;
     if rows.is_empty() {

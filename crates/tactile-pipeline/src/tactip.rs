@@ -1032,9 +1032,7 @@ pub fn train_head(
     }
     <tactile_estimate::head::HeadArtifact as tactile_burn::Artifact>::check_out_dir(out, &[ds])?;
     ds.expect_columns(["shape"])?;
-    let train = ds
-        .split_indices("train")
-        .unwrap_or_else(|| (0..ds.len()).collect());
+    let train = ds.split_indices("train").unwrap_or_else(|| ds.every_row());
     // A test set holding training frames (the training folder again, or a
     // copy of its frames' links) would score frames the head fitted.
     if let Some(t) = test {

@@ -127,7 +127,7 @@ pub struct PoseSet {
 impl PoseSet {
     /// Preprocess every frame of `ds` and read `targets`' columns.
     pub fn from_dataset(ds: &Dataset, cfg: &PreprocessConfig, targets: &[Target]) -> Result<Self> {
-        Self::from_rows(ds, &(0..ds.len()).collect::<Vec<_>>(), cfg, targets)
+        Self::from_rows(ds, &ds.every_row(), cfg, targets)
     }
 
     /// [`Self::from_dataset`] of the frames at `rows` alone (set row `k` is

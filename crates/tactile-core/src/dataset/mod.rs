@@ -567,6 +567,12 @@ impl Dataset {
         self.rows.len()
     }
 
+    /// Every row's index, in order: the rows of a call that reads the
+    /// whole dataset.
+    pub fn every_row(&self) -> Vec<usize> {
+        (0..self.rows.len()).collect()
+    }
+
     /// True when the dataset has no frames.
     pub fn is_empty(&self) -> bool {
         self.rows.is_empty()

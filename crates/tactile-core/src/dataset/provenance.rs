@@ -162,7 +162,7 @@ impl Provenance {
     /// see [`Self::seen`]). It stops at the first frame not held, so a
     /// set it never saw costs a look at one frame.
     pub fn fitted_every(&self, model_dir: &Path, ds: &Dataset) -> bool {
-        let all: Vec<usize> = (0..ds.len()).collect();
+        let all: Vec<usize> = ds.every_row();
         !all.is_empty()
             && self
                 .fitted_sets(model_dir)
@@ -232,7 +232,7 @@ mod tests {
     fn seen_counts_the_asked_frames_among_the_rows_it_fitted() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../samples/virtual-tactip");
         let ds = Dataset::open(&root).unwrap();
-        let all: Vec<usize> = (0..ds.len()).collect();
+        let all: Vec<usize> = ds.every_row();
         let holdout = TestHoldout {
             test_fraction: 0.2,
             split_seed: 7,
@@ -260,7 +260,7 @@ mod tests {
         let (tx, rx) = std::sync::mpsc::channel();
         let (dir, ds) = (model_dir.to_path_buf(), ds.clone());
         std::thread::spawn(move || {
-            let all: Vec<usize> = (0..ds.len()).collect();
+            let all: Vec<usize> = ds.every_row();
             let _ = tx.send(p.seen(&dir, &ds, &all));
         });
         rx.recv_timeout(std::time::Duration::from_secs(secs))
