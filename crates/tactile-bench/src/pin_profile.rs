@@ -59,6 +59,11 @@ fn each_frame_of(
     while let Some(f) = source.next_frame()? {
         each(&f.grey()?)?;
     }
+    // Frames skipped as undecodable are told, not silently left out.
+    source
+        .late_warnings()
+        .iter()
+        .for_each(|w| tactile_core::note!("{w}"));
     Ok(())
 }
 

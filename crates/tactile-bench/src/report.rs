@@ -143,7 +143,13 @@ fn run_pipeline(
         hysteresis,
         render: None,
     };
-    Ok(tactile_pipeline::run_collect(&mut pipeline, &mut frames, &options)?.summary)
+    let summary = tactile_pipeline::run_collect(&mut pipeline, &mut frames, &options)?.summary;
+    // Frames skipped as undecodable are told, not silently left out.
+    frames
+        .late_warnings()
+        .iter()
+        .for_each(|w| tactile_core::note!("{w}"));
+    Ok(summary)
 }
 
 fn median_of(s: Option<[f64; 2]>) -> Option<f64> {
