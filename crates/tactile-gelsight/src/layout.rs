@@ -155,7 +155,8 @@ pub struct BallPresses {
     /// Every press, in file order.
     pub presses: Vec<Press>,
     /// What a user should know about the folder: files in `frames/` that
-    /// are not PNG or JPEG frames and so are no presses.
+    /// are not PNG or JPEG frames, or frames there that `presses.csv`
+    /// does not list, and so are no presses.
     pub warnings: Vec<String>,
     /// The background is a colour sensor's ([`is_colour_background`]):
     /// grey presses are refused. Told once, when the folder is opened.
@@ -244,8 +245,8 @@ impl BallPresses {
         let csv_path = root.join("presses.csv");
         let (presses, warnings) = if csv_path.exists() {
             let size = (background.width(), background.height());
-            let presses = read_presses_csv(&root, &canonical, &csv_path, &sensor, size)?;
-            (presses, Vec::new())
+            let (presses, listed) = read_presses_csv(&root, &canonical, &csv_path, &sensor, size)?;
+            (presses, unlisted_frames_warning(&root, &listed))
         } else {
             list_frames(&root)?
         };
@@ -329,7 +330,7 @@ fn read_presses_csv(
     path: &Path,
     sensor: &SensorInfo,
     frame_size: (usize, usize),
-) -> Result<Vec<Press>> {
+) -> Result<(Vec<Press>, std::collections::HashSet<PathBuf>)> {
     let text = read_limited(path, MAX_PRESSES_FILE_BYTES)?;
     let mut rd = tactile_core::csv_lines::reader(&csv::ReaderBuilder::new(), text.as_bytes());
     let headers = rd
@@ -426,7 +427,43 @@ fn read_presses_csv(
         };
         out.push(Press { file, annotated });
     }
-    Ok(out)
+    Ok((out, listed.into_keys().collect()))
+}
+
+/// The warning naming the frames in `root/frames` that `presses.csv` does
+/// not list (`listed`: the files its rows name, resolved): they are no
+/// presses, and a press added to the folder without its row would
+/// otherwise be left out of the fit without a word.
+fn unlisted_frames_warning(
+    root: &Path,
+    listed: &std::collections::HashSet<PathBuf>,
+) -> Vec<String> {
+    let dir = root.join("frames");
+    let Ok(list) = tactile_core::source::FrameList::open(&dir) else {
+        return Vec::new();
+    };
+    let unlisted: Vec<String> = (list.frames.iter())
+        .filter(|f| (f.path.canonicalize()).is_ok_and(|p| !listed.contains(&p)))
+        .map(|f| {
+            f.path
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    if unlisted.is_empty() {
+        return Vec::new();
+    }
+    let (named, these) = tactile_core::source::named_frames(&unlisted);
+    vec![format!(
+        "warning: {}: {} of its {} frames are not listed in presses.csv, so they are no presses \
+         and are not fitted ({named}): add a row for each of {these}, or move {them} out of frames/",
+        dir.display(),
+        unlisted.len(),
+        list.frames.len(),
+        them = if unlisted.len() == 1 { "it" } else { "them" },
+    )]
 }
 
 /// Every PNG or JPEG frame in `root/frames`, in the order of the numbers in

@@ -215,6 +215,19 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     let ds = BallPresses::open(&d).unwrap();
     assert_eq!(ds.presses.len(), 2);
     assert_eq!(ds.frame(0).unwrap().width(), 640);
+    // Every frame listed (`./frames/…` too): no warning. A press added to
+    // frames/ without its row is no press: named, not silently left out.
+    assert!(ds.warnings.is_empty(), "{:?}", ds.warnings);
+    std::fs::copy(d.join("frames/press_02.png"), d.join("frames/press_09.png")).unwrap();
+    let ds = BallPresses::open(&d).unwrap();
+    assert_eq!(ds.presses.len(), 2);
+    assert!(
+        ds.warnings.len() == 1
+            && ds.warnings[0].contains("1 of its 3 frames are not listed in presses.csv")
+            && ds.warnings[0].contains("(press_09.png)"),
+        "{:?}",
+        ds.warnings
+    );
     // A frame of another size.
     let d = tmp.path().join("size");
     subset(&d, 2, str::to_string);
