@@ -495,6 +495,69 @@ trait Reader: Send {
     fn next_frame(&mut self) -> Result<Option<Frame>>;
 }
 
+/// Frames of a folder that could not be decoded past a whole header, over
+/// a run that skips them: the one wording of their warning and of the
+/// refusal when no frame could be decoded, for every reader of a folder
+/// ([`FrameSource`], `tactile reconstruct`).
+#[derive(Debug)]
+pub struct UndecodableFrames {
+    /// Frames the run reads.
+    total: usize,
+    /// Frames skipped so far.
+    skipped: usize,
+    /// Why the first skipped frame could not be decoded, naming it.
+    first: Option<Error>,
+}
+
+impl UndecodableFrames {
+    /// None skipped yet, of `total` frames read.
+    pub fn new(total: usize) -> Self {
+        Self {
+            total,
+            skipped: 0,
+            first: None,
+        }
+    }
+
+    /// True for the refusals a run skips: the decoder's of a file's
+    /// content (an image error). Any other error (the file gone, the disk
+    /// failing) stops the run.
+    pub fn skips(e: &Error) -> bool {
+        matches!(e, Error::Image { .. })
+    }
+
+    /// Count a skipped frame; the warning as it now reads.
+    pub fn skip(&mut self, why: Error) -> String {
+        self.skipped += 1;
+        let first = self.first.get_or_insert(why);
+        format!(
+            "warning: {} of the {} frames could not be decoded past their header and got no \
+             result; the other frames' results were kept. The first: {first}",
+            self.skipped, self.total
+        )
+    }
+
+    /// Frames skipped so far.
+    pub fn count(&self) -> usize {
+        self.skipped
+    }
+
+    /// At the end of a run that gave `given` frames: when it gave none and
+    /// skipped some, nothing is kept, so the run fails with the first
+    /// frame's refusal (alone, or with how many: [`Error::UnreadableFrames`]).
+    pub fn finish(&mut self, given: usize) -> Result<()> {
+        match (given, self.first.take()) {
+            (0, Some(first)) if self.skipped == 1 => Err(first),
+            (0, Some(first)) => Err(Error::UnreadableFrames {
+                first: Box::new(first),
+                count: self.skipped,
+                total: self.total,
+            }),
+            _ => Ok(()),
+        }
+    }
+}
+
 /// The frames of a folder or dataset. Their headers were read when the
 /// source opened ([`FrameList::check_headers`]); a frame that still cannot
 /// be decoded (its pixel data cut short or corrupt behind a whole header,
@@ -505,13 +568,10 @@ trait Reader: Send {
 /// other error (the file gone, the disk failing) stops the run.
 struct ListReader {
     entries: std::vec::IntoIter<FrameEntry>,
-    /// Frames the run reads (the limit's first ones), for the warning.
-    total: usize,
-    skipped: usize,
     /// Frames given.
     given: usize,
-    /// Why the first skipped frame could not be decoded, naming it.
-    first: Option<Error>,
+    /// Frames skipped, of those the run reads (the limit's first ones).
+    skipped: UndecodableFrames,
     late: LateWarnings,
     /// Where this reader's warning stands in `late`, once written.
     slot: Option<usize>,
@@ -522,11 +582,9 @@ struct ListReader {
 impl ListReader {
     fn new(entries: Vec<FrameEntry>, late: LateWarnings, undecodable: Arc<AtomicU64>) -> Self {
         Self {
-            total: entries.len(),
+            skipped: UndecodableFrames::new(entries.len()),
             entries: entries.into_iter(),
-            skipped: 0,
             given: 0,
-            first: None,
             late,
             slot: None,
             undecodable,
@@ -536,14 +594,8 @@ impl ListReader {
     /// Count a frame that could not be decoded and bring the warning up
     /// to date at once (a run stopped after it still says so).
     fn skip(&mut self, why: Error) {
-        self.skipped += 1;
         self.undecodable.fetch_add(1, Ordering::Relaxed);
-        let first = self.first.get_or_insert(why);
-        let text = format!(
-            "warning: {} of the {} frames could not be decoded past their header and got no \
-             result; the other frames' results were kept. The first: {first}",
-            self.skipped, self.total
-        );
+        let text = self.skipped.skip(why);
         if let Ok(mut late) = self.late.lock() {
             match self.slot {
                 Some(i) if i < late.len() => late[i] = text,
@@ -560,20 +612,13 @@ impl Reader for ListReader {
     fn next_frame(&mut self) -> Result<Option<Frame>> {
         let (e, image) = loop {
             let Some(e) = self.entries.next() else {
-                return match (self.given, self.first.take()) {
-                    // Not one frame: nothing to keep, so the run fails.
-                    (0, Some(first)) if self.skipped == 1 => Err(first),
-                    (0, Some(first)) => Err(Error::UnreadableFrames {
-                        first: Box::new(first),
-                        count: self.skipped,
-                        total: self.total,
-                    }),
-                    _ => Ok(None),
-                };
+                // Not one frame given: nothing to keep, so the run fails.
+                self.skipped.finish(self.given)?;
+                return Ok(None);
             };
             match e.load() {
                 Ok(image) => break (e, image),
-                Err(why @ Error::Image { .. }) => self.skip(why),
+                Err(why) if UndecodableFrames::skips(&why) => self.skip(why),
                 Err(other) => return Err(other),
             }
         };

@@ -38,6 +38,9 @@ pub struct ReconstructReport {
     pub ms_per_frame: f64,
     /// The deepest indentation over all frames, mm.
     pub peak_mm: f64,
+    /// Frames skipped because they could not be decoded past a whole
+    /// header (cut short), named by a warning.
+    pub undecodable_frames: usize,
     /// What a user should know of the input (files that are not frames,
     /// gaps in the numbering).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -245,11 +248,23 @@ pub fn reconstruct_folder(
     let mut times = Vec::with_capacity(files.len());
     let mut peak = 0f64;
     let mut unlike = Vec::new();
+    // A frame cut short behind a whole header is found only here: skipped
+    // and named, so the other frames' maps are kept, as `tactile run`
+    // keeps their records.
+    let mut undecodable = tactile_core::source::UndecodableFrames::new(files.len());
+    let mut undecodable_warning = None;
     for f in &files {
         if tactile_core::interrupt::requested() {
             return Err(tactile_core::Error::Interrupted.into());
         }
-        let frame = load_rgb(f)?;
+        let frame = match load_rgb(f) {
+            Ok(frame) => frame,
+            Err(why) if tactile_core::source::UndecodableFrames::skips(&why) => {
+                undecodable_warning = Some(undecodable.skip(why));
+                continue;
+            }
+            Err(other) => return Err(other.into()),
+        };
         let t0 = std::time::Instant::now();
         let working = rec.working_frame(&frame, f)?;
         let map = rec.reconstruct_working(&working)?;
@@ -278,16 +293,19 @@ pub fn reconstruct_folder(
             )?;
         }
     }
+    undecodable.finish(times.len())?;
     staged.commit(false)?;
     if let Some(r) = render {
         r.commit(false)?;
     }
     times.sort_by(f64::total_cmp);
+    warnings.extend(undecodable_warning);
     warnings.extend(unlike_warning(&unlike, &check, true));
     Ok(ReconstructReport {
-        frames: files.len(),
+        frames: times.len(),
         ms_per_frame: times[times.len() / 2],
         peak_mm: peak,
+        undecodable_frames: undecodable.count(),
         warnings,
     })
 }

@@ -563,6 +563,32 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
         "{e}"
     );
     assert!(!out.exists());
+    // A press cut short behind a whole header is found only when decoded:
+    // skipped and named, the other presses' maps written.
+    std::fs::remove_file(mixed.join("zz-c.png")).unwrap();
+    let whole = std::fs::read(&presses[0]).unwrap();
+    std::fs::write(mixed.join("zz-e.png"), &whole[..whole.len() / 2]).unwrap();
+    let r = reconstruct_folder(&model, &mixed, &out, &o, None).unwrap();
+    assert_eq!((r.frames, r.undecodable_frames), (2, 1));
+    assert!(
+        r.warnings.len() == 1
+            && r.warnings[0].contains("1 of the 3 frames could not be decoded past their header")
+            && r.warnings[0].contains("zz-e.png: cannot decode image"),
+        "{:?}",
+        r.warnings
+    );
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 2);
+    std::fs::remove_dir_all(&out).unwrap();
+    // Alone, it is refused, and nothing is written.
+    let cut = tmp.path().join("cut");
+    std::fs::create_dir_all(&cut).unwrap();
+    std::fs::rename(mixed.join("zz-e.png"), cut.join("zz-e.png")).unwrap();
+    let e = reconstruct_folder(&model, &cut, &out, &o, None).unwrap_err();
+    assert!(
+        e.to_string().contains("zz-e.png: cannot decode image"),
+        "{e}"
+    );
+    assert!(!out.exists());
     // A frame that links out of the folder is named, not read.
     let linked = tmp.path().join("linked");
     std::fs::create_dir_all(&linked).unwrap();

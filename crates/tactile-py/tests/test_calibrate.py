@@ -128,6 +128,16 @@ def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
     with pytest.raises(ValueError, match=r"y\.png: frame is \(320, 240\).*; 3 of the 4 frames cannot be read by this sensor"):
         tactile.calibrate.reconstruct(model, mixed, tmp_path / "out")
     assert not (tmp_path / "out").exists()
+    # A press cut short behind a whole header is found when decoded:
+    # skipped with a warning naming it, the other maps written.
+    for f in ("y.png", "z.png", "zz.png"):
+        (mixed / f).unlink()
+    whole = (mixed / "a.png").read_bytes()
+    (mixed / "b.png").write_bytes(whole[: len(whole) // 2])
+    with pytest.warns(UserWarning, match=r"1 of the 2 frames could not be decoded.*b\.png: cannot decode"):
+        r = tactile.calibrate.reconstruct(model, mixed, tmp_path / "out")
+    assert r["frames"] == 1 and r["undecodable_frames"] == 1
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["a.npy"]
 
 
 def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path, model: Path, tmp_path: Path):
