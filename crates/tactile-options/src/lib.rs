@@ -132,7 +132,17 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
                     )));
                 }
                 if !value.is_null() {
-                    merged.insert(k.clone(), listed(value, |v| alone::<Self>(&defaults, k, v)));
+                    let value = listed(value, |v| alone::<Self>(&defaults, k, v));
+                    // A file's value the option does not take is refused
+                    // even when a flag or keyword sets it again: the file
+                    // is wrong, and would be the next time it is used.
+                    if let (Some(p), Err(e)) = (from, alone::<Self>(&defaults, k, &value)) {
+                        return Err(Error::Config(format!(
+                            "{}: option '{k}' = {value}: {e}",
+                            p.display()
+                        )));
+                    }
+                    merged.insert(k.clone(), value);
                     origin.insert(k, from);
                 }
             }

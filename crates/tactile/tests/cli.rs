@@ -353,6 +353,25 @@ fn synth_rejects_bad_configuration_and_writes_nothing() {
         !ok && msg.contains("gen.json") && msg.contains("colour"),
         "{msg}"
     );
+    // A value the option does not take is refused in the file, naming
+    // both, even when a flag sets the option again.
+    std::fs::write(&cfg, r#"{"noise_sigma": "loud"}"#).unwrap();
+    let (ok, msg) = tactile(&[
+        "synth",
+        "tactip",
+        "--count",
+        "2",
+        "--out",
+        o,
+        "--noise-sigma",
+        "3,8",
+        "--config",
+        cfg.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && msg.contains("gen.json: option 'noise_sigma' = \"loud\""),
+        "{msg}"
+    );
     assert_eq!(listing(tmp.path()), vec!["gen.json"]);
 }
 
