@@ -338,17 +338,15 @@ fn synth_rejects_bad_configuration_and_writes_nothing() {
     }
     // A config file with an unknown key names the file.
     let cfg = tmp.path().join("gen.json");
+    let c = cfg.to_str().unwrap();
+    let with_config = |flags: &[&str]| {
+        let mut args = vec!["synth", "tactip", "--count", "2", "--out", o];
+        args.extend(flags);
+        args.extend(["--config", c]);
+        tactile(&args)
+    };
     std::fs::write(&cfg, r#"{"depth_mm": {"min": 0, "max": 2}, "colour": 3}"#).unwrap();
-    let (ok, msg) = tactile(&[
-        "synth",
-        "tactip",
-        "--count",
-        "2",
-        "--out",
-        o,
-        "--config",
-        cfg.to_str().unwrap(),
-    ]);
+    let (ok, msg) = with_config(&[]);
     assert!(
         !ok && msg.contains("gen.json") && msg.contains("colour"),
         "{msg}"
@@ -356,18 +354,7 @@ fn synth_rejects_bad_configuration_and_writes_nothing() {
     // A value the option does not take is refused in the file, naming
     // both, even when a flag sets the option again.
     std::fs::write(&cfg, r#"{"noise_sigma": "loud"}"#).unwrap();
-    let (ok, msg) = tactile(&[
-        "synth",
-        "tactip",
-        "--count",
-        "2",
-        "--out",
-        o,
-        "--noise-sigma",
-        "3,8",
-        "--config",
-        cfg.to_str().unwrap(),
-    ]);
+    let (ok, msg) = with_config(&["--noise-sigma", "3,8"]);
     assert!(
         !ok && msg.contains("gen.json: option 'noise_sigma' = \"loud\""),
         "{msg}"
