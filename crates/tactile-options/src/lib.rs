@@ -114,57 +114,40 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
             },
             None => None,
         };
-        let layers = file
+        // Each layer with where a refused name or value came from: a
+        // file, or nothing (flags, keywords).
+        let layers: Vec<(String, &Map<String, Value>)> = file
             .iter()
-            .map(|(p, m)| (Some(*p), m))
-            .chain(std::iter::once((None, overrides)));
+            .map(|(p, m)| (format!("{}: ", p.display()), m))
+            .chain(std::iter::once((String::new(), overrides)))
+            .collect();
+        // Unknown names first, in every layer, then the values.
+        for (at, layer) in &layers {
+            if let Some(k) = layer.keys().find(|k| !defaults.contains_key(*k)) {
+                return Err(Error::Config(format!(
+                    "{at}unknown option '{k}' (known: {known})"
+                )));
+            }
+        }
         let mut merged = defaults.clone();
-        // Where each value set came from (a file, or none: flags/keywords).
-        let mut origin: std::collections::BTreeMap<&String, Option<&Path>> = Default::default();
-        for (from, layer) in layers {
-            for (k, value) in layer {
-                if !defaults.contains_key(k) {
-                    let at = from
-                        .map(|p| format!("{}: ", p.display()))
-                        .unwrap_or_default();
-                    return Err(Error::Config(format!(
-                        "{at}unknown option '{k}' (known: {known})"
-                    )));
-                }
+        for (at, layer) in &layers {
+            for (k, value) in *layer {
                 if !value.is_null() {
                     let value = listed(value, |v| alone::<Self>(&defaults, k, v));
-                    // A file's value the option does not take is refused
-                    // even when a flag or keyword sets it again: the file
-                    // is wrong, and would be the next time it is used.
-                    if let (Some(p), Err(e)) = (from, alone::<Self>(&defaults, k, &value)) {
-                        return Err(Error::Config(format!(
-                            "{}: option '{k}' = {value}: {e}",
-                            p.display()
-                        )));
+                    // Each value is checked on its own where it is given,
+                    // with its own error (not another option's): a file's
+                    // value is refused even when a flag or keyword sets the
+                    // option again, as the file would be wrong the next
+                    // time it is used.
+                    if let Err(e) = alone::<Self>(&defaults, k, &value) {
+                        return Err(Error::Config(format!("{at}option '{k}' = {value}: {e}")));
                     }
                     merged.insert(k.clone(), value);
-                    origin.insert(k, from);
                 }
             }
         }
-        serde_json::from_value(Value::Object(merged.clone())).map_err(|e| {
-            // Name the offending option, the first that fails on its own,
-            // with its own error (not another option's).
-            let bad = origin.iter().find_map(|(k, from)| {
-                alone::<Self>(&defaults, k, &merged[k.as_str()])
-                    .err()
-                    .map(|e| (k, from, e))
-            });
-            match bad {
-                Some((k, from, e)) => {
-                    let at = from
-                        .map(|p| format!("{}: ", p.display()))
-                        .unwrap_or_default();
-                    Error::Config(format!("{at}option '{k}' = {}: {e}", merged[k.as_str()]))
-                }
-                None => Error::Config(format!("options: {e}")),
-            }
-        })
+        serde_json::from_value(Value::Object(merged))
+            .map_err(|e| Error::Config(format!("options: {e}")))
     }
 
     /// Each option's clap argument with its default as JSON, in flag
