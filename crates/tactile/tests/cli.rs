@@ -1591,8 +1591,12 @@ fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
     ]);
     assert!(ok, "{msg}");
     assert!(msg.contains("1 frame(s) missing"), "{msg}");
-    let json = msg.lines().find(|l| l.starts_with('{')).unwrap();
-    let v: serde_json::Value = serde_json::from_str(json).unwrap();
+    // The run's summary: its one JSON line.
+    let summary = |msg: &str| -> serde_json::Value {
+        let json = msg.lines().find(|l| l.starts_with('{')).unwrap();
+        serde_json::from_str(json).unwrap()
+    };
+    let v = summary(&msg);
     assert_eq!(v["frames"], 5);
     assert_eq!(v["missing_frames"], 1);
     // Frames that cannot be read (a 16-bit frame, an empty file, text
@@ -1676,8 +1680,7 @@ fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
             "000007.png"
         ]
     );
-    let json = msg.lines().find(|l| l.starts_with('{')).unwrap();
-    let v: serde_json::Value = serde_json::from_str(json).unwrap();
+    let v = summary(&msg);
     assert_eq!(
         (v["frames"].as_u64(), v["undecodable_frames"].as_u64()),
         (Some(6), Some(1))
