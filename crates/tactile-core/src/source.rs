@@ -496,9 +496,9 @@ trait Reader: Send {
 }
 
 /// Frames of a folder that could not be decoded past a whole header, over
-/// a run that skips them: the one wording of their warning and of the
-/// refusal when no frame could be decoded, for every reader of a folder
-/// ([`FrameSource`], `tactile reconstruct`).
+/// a run that skips them: which refusals are skipped, the one wording of
+/// their warning and of the refusal when no frame could be decoded, for
+/// every reader of a folder ([`FrameSource`], `tactile reconstruct`).
 #[derive(Debug)]
 pub struct UndecodableFrames {
     /// Frames the run reads.
@@ -519,22 +519,31 @@ impl UndecodableFrames {
         }
     }
 
-    /// True for the refusals a run skips: the decoder's of a file's
-    /// content (an image error). Any other error (the file gone, the disk
-    /// failing) stops the run.
-    pub fn skips(e: &Error) -> bool {
-        matches!(e, Error::Image { .. })
+    /// A frame as its decoder gave it: `Some` when decoded; `None` when
+    /// its content was refused (an image error), the frame counted as
+    /// skipped. Any other error (the file gone, the disk failing) is
+    /// returned: it stops the run.
+    pub fn decoded<T>(&mut self, frame: Result<T>) -> Result<Option<T>> {
+        match frame {
+            Ok(frame) => Ok(Some(frame)),
+            Err(why @ Error::Image { .. }) => {
+                self.skipped += 1;
+                self.first.get_or_insert(why);
+                Ok(None)
+            }
+            Err(other) => Err(other),
+        }
     }
 
-    /// Count a skipped frame; the warning as it now reads.
-    pub fn skip(&mut self, why: Error) -> String {
-        self.skipped += 1;
-        let first = self.first.get_or_insert(why);
-        format!(
+    /// The warning naming the first skipped frame and counting them;
+    /// `None` while none is.
+    pub fn warning(&self) -> Option<String> {
+        let first = self.first.as_ref()?;
+        Some(format!(
             "warning: {} of the {} frames could not be decoded past their header and got no \
              result; the other frames' results were kept. The first: {first}",
             self.skipped, self.total
-        )
+        ))
     }
 
     /// Frames skipped so far.
@@ -591,11 +600,13 @@ impl ListReader {
         }
     }
 
-    /// Count a frame that could not be decoded and bring the warning up
-    /// to date at once (a run stopped after it still says so).
-    fn skip(&mut self, why: Error) {
+    /// After a frame was skipped: its count and warning brought up to
+    /// date at once (a run stopped after it still says so).
+    fn tell_skipped(&mut self) {
         self.undecodable.fetch_add(1, Ordering::Relaxed);
-        let text = self.skipped.skip(why);
+        let Some(text) = self.skipped.warning() else {
+            return;
+        };
         if let Ok(mut late) = self.late.lock() {
             match self.slot {
                 Some(i) if i < late.len() => late[i] = text,
@@ -616,10 +627,9 @@ impl Reader for ListReader {
                 self.skipped.finish(self.given)?;
                 return Ok(None);
             };
-            match e.load() {
-                Ok(image) => break (e, image),
-                Err(why) if UndecodableFrames::skips(&why) => self.skip(why),
-                Err(other) => return Err(other),
+            match self.skipped.decoded(e.load())? {
+                Some(image) => break (e, image),
+                None => self.tell_skipped(),
             }
         };
         self.given += 1;

@@ -252,18 +252,12 @@ pub fn reconstruct_folder(
     // and named, so the other frames' maps are kept, as `tactile run`
     // keeps their records.
     let mut undecodable = tactile_core::source::UndecodableFrames::new(files.len());
-    let mut undecodable_warning = None;
     for f in &files {
         if tactile_core::interrupt::requested() {
             return Err(tactile_core::Error::Interrupted.into());
         }
-        let frame = match load_rgb(f) {
-            Ok(frame) => frame,
-            Err(why) if tactile_core::source::UndecodableFrames::skips(&why) => {
-                undecodable_warning = Some(undecodable.skip(why));
-                continue;
-            }
-            Err(other) => return Err(other.into()),
+        let Some(frame) = undecodable.decoded(load_rgb(f))? else {
+            continue;
         };
         let t0 = std::time::Instant::now();
         let working = rec.working_frame(&frame, f)?;
@@ -293,13 +287,13 @@ pub fn reconstruct_folder(
             )?;
         }
     }
+    warnings.extend(undecodable.warning());
     undecodable.finish(times.len())?;
     staged.commit(false)?;
     if let Some(r) = render {
         r.commit(false)?;
     }
     times.sort_by(f64::total_cmp);
-    warnings.extend(undecodable_warning);
     warnings.extend(unlike_warning(&unlike, &check, true));
     Ok(ReconstructReport {
         frames: times.len(),
