@@ -2,7 +2,8 @@
 
 use std::path::Path;
 
-use image::{ColorType, DynamicImage, ImageReader};
+use image::metadata::Orientation;
+use image::{ColorType, DynamicImage, ImageDecoder, ImageReader};
 use kornia_image::{Image, ImageSize};
 
 use crate::{Error, Result};
@@ -87,15 +88,51 @@ fn open_image(path: &Path) -> Result<ImageReader<std::io::BufReader<std::fs::Fil
         .map_err(|e| Error::io(path, e))
 }
 
-/// Read `path`'s header only: its size and pixel format, so a folder's
+/// How a picture's EXIF orientation (a camera held on its side, a
+/// phone's photo) says it is shown: [`image::metadata::Orientation`] from
+/// its metadata, no turn when it has none or one that cannot be read.
+fn exif_orientation(decoder: &mut impl ImageDecoder) -> Orientation {
+    // A damaged EXIF block is ignored, as OpenCV and browsers ignore it:
+    // the pixels are still the picture, as stored.
+    decoder.orientation().unwrap_or(Orientation::NoTransforms)
+}
+
+/// The size a picture of `stored` width and height is shown at once
+/// `orientation` is applied: a quarter turn swaps the sides.
+fn upright_size(stored: (u32, u32), orientation: Orientation) -> (u32, u32) {
+    match orientation {
+        Orientation::Rotate90
+        | Orientation::Rotate270
+        | Orientation::Rotate90FlipH
+        | Orientation::Rotate270FlipH => (stored.1, stored.0),
+        _ => stored,
+    }
+}
+
+/// Decode a picture the way it is shown: its EXIF orientation applied,
+/// as OpenCV's `imread` and `imdecode` apply it (the field's tools read
+/// frames with them). Frame files and a bag's compressed images are
+/// decoded here.
+pub(crate) fn decode_upright<R: std::io::BufRead + std::io::Seek>(
+    reader: ImageReader<R>,
+) -> image::ImageResult<DynamicImage> {
+    let mut decoder = reader.into_decoder()?;
+    let orientation = exif_orientation(&mut decoder);
+    let mut img = DynamicImage::from_decoder(decoder)?;
+    img.apply_orientation(orientation);
+    Ok(img)
+}
+
+/// Read `path`'s header only: its size as shown (its EXIF orientation
+/// applied, as decoding applies it) and pixel format, so a folder's
 /// frames can be checked before any is decoded.
 pub fn image_header(path: &Path) -> Result<ImageHeader> {
-    use image::ImageDecoder as _;
     crate::io::expect_regular(path)?;
-    let decoder = open_image(path)?
+    let mut decoder = open_image(path)?
         .into_decoder()
         .map_err(|e| Error::image(path, format!("cannot read the image header: {e}")))?;
-    let (width, height) = decoder.dimensions();
+    let orientation = exif_orientation(&mut decoder);
+    let (width, height) = upright_size(decoder.dimensions(), orientation);
     Ok(ImageHeader {
         width,
         height,
@@ -145,8 +182,7 @@ pub fn rgb_frame_header(path: &Path) -> Result<ImageHeader> {
 
 fn decode(path: &Path) -> Result<DynamicImage> {
     header_within_limit(path)?;
-    open_image(path)?
-        .decode()
+    decode_upright(open_image(path)?)
         .map_err(|e| Error::image(path, format!("cannot decode image: {e}")))
 }
 
@@ -346,6 +382,83 @@ mod tests {
         let e = load_grey(&junk).err().unwrap().to_string();
         assert!(e.contains("junk.png"), "{e}");
         assert_eq!(load_grey(&p).unwrap().as_slice(), &[7u8; 64][..]);
+    }
+
+    /// A TIFF block of EXIF metadata holding one tag, the orientation
+    /// (little-endian, as cameras write it): what a camera held on its side
+    /// writes beside pixels stored as its sensor reads them.
+    fn exif_orientation_block(orientation: u16) -> Vec<u8> {
+        let mut b = b"II*\0".to_vec();
+        b.extend(8u32.to_le_bytes()); // the first directory's offset
+        b.extend(1u16.to_le_bytes()); // one entry
+        b.extend(0x0112u16.to_le_bytes()); // Orientation
+        b.extend(3u16.to_le_bytes()); // SHORT
+        b.extend(1u32.to_le_bytes()); // one value
+        b.extend(orientation.to_le_bytes());
+        b.extend([0, 0]); // the value's field is four bytes
+        b.extend(0u32.to_le_bytes()); // no next directory
+        b
+    }
+
+    #[test]
+    fn a_pictures_exif_orientation_is_applied_as_opencv_applies_it() {
+        // A 32x16 picture, its left half dark and right half bright, stored
+        // with EXIF orientation 6 ("turn 90 degrees clockwise to show"), as
+        // a phone or a camera mounted on its side saves it. OpenCV's imread
+        // and imdecode show it 16x32, the dark half on top; so must every
+        // reader here, the header pass included (before, 32x16 as stored).
+        use image::ImageEncoder as _;
+        let (w, h) = (32u32, 16u32);
+        let stored: Vec<u8> = (0..h)
+            .flat_map(|_| (0..w).flat_map(|x| if x < w / 2 { [20u8; 3] } else { [230u8; 3] }))
+            .collect();
+        let dir = tempfile::tempdir().unwrap();
+        let jpeg = dir.path().join("side.jpg");
+        let mut bytes = Vec::new();
+        let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 95);
+        enc.set_exif_metadata(exif_orientation_block(6)).unwrap();
+        enc.write_image(&stored, w, h, image::ExtendedColorType::Rgb8)
+            .unwrap();
+        std::fs::write(&jpeg, &bytes).unwrap();
+        let png = dir.path().join("side.png");
+        let mut bytes = Vec::new();
+        let mut enc = image::codecs::png::PngEncoder::new(&mut bytes);
+        enc.set_exif_metadata(exif_orientation_block(6)).unwrap();
+        enc.write_image(&stored, w, h, image::ExtendedColorType::Rgb8)
+            .unwrap();
+        std::fs::write(&png, &bytes).unwrap();
+        for path in [&jpeg, &png] {
+            let header = rgb_frame_header(path).unwrap();
+            assert_eq!((header.width, header.height), (h, w), "{path:?}");
+            let rgb = load_rgb(path).unwrap();
+            assert_eq!((rgb.width(), rgb.height()), (h as usize, w as usize));
+            let at = |x: usize, y: usize| rgb.as_slice()[(y * h as usize + x) * 3];
+            assert!(at(8, 4) < 60 && at(8, 27) > 190, "{path:?}");
+            let grey = load_grey(path).unwrap();
+            assert_eq!((grey.width(), grey.height()), (h as usize, w as usize));
+        }
+        // A bag's compressed image is decoded the same way.
+        let png_bytes = std::fs::read(&png).unwrap();
+        let msg = crate::bag::messages::CompressedImage {
+            header: Default::default(),
+            format: "png".into(),
+            data: &png_bytes,
+        };
+        let rgb = msg.to_rgb().unwrap();
+        assert_eq!((rgb.width(), rgb.height()), (h as usize, w as usize));
+        assert_eq!(rgb.as_slice(), load_rgb(&png).unwrap().as_slice());
+        // Orientation 1, and a damaged block, leave the picture as stored.
+        for block in [exif_orientation_block(1), b"II*\0\xff\xff".to_vec()] {
+            let mut bytes = Vec::new();
+            let mut enc = image::codecs::png::PngEncoder::new(&mut bytes);
+            enc.set_exif_metadata(block).unwrap();
+            enc.write_image(&stored, w, h, image::ExtendedColorType::Rgb8)
+                .unwrap();
+            std::fs::write(&png, &bytes).unwrap();
+            assert_eq!(load_rgb(&png).unwrap().as_slice(), &stored[..]);
+            let header = rgb_frame_header(&png).unwrap();
+            assert_eq!((header.width, header.height), (w, h));
+        }
     }
 
     #[test]

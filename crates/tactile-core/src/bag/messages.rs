@@ -360,8 +360,10 @@ fn kornia_to_rgb(
 }
 
 impl CompressedImage<'_> {
-    /// The picture decoded to 8-bit RGB (JPEG or PNG, told by its bytes);
-    /// its header's size is checked against 8K before decoding.
+    /// The picture decoded to 8-bit RGB (JPEG or PNG, told by its bytes)
+    /// as it is shown (its EXIF orientation applied, as `cv_bridge`'s
+    /// `imdecode` applies it); its header's size is checked against 8K
+    /// before decoding.
     pub fn to_rgb(&self) -> Result<RgbImage, String> {
         use image::{DynamicImage, ImageReader};
         let reader = || {
@@ -389,9 +391,9 @@ impl CompressedImage<'_> {
             .into_dimensions()
             .map_err(|e| format!("cannot read the picture's header: {e}"))?;
         check_size(w as u64, h as u64)?;
-        let img = reader()?
-            .decode()
+        let img = crate::image_io::decode_upright(reader()?)
             .map_err(|e| format!("cannot decode the picture: {e}"))?;
+        let (w, h) = (img.width(), img.height());
         let data = match img {
             DynamicImage::ImageRgb8(b) => b.into_raw(),
             DynamicImage::ImageLuma8(b) => crate::image_io::grey_to_rgb(b.as_raw()),
