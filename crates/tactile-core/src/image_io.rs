@@ -299,18 +299,20 @@ pub fn expect_size(
     Ok(())
 }
 
-fn encode_png(
+/// Encode `data` as a PNG of `color` and write it atomically.
+fn save_png(
+    path: &Path,
     width: usize,
     height: usize,
     data: &[u8],
     color: image::ExtendedColorType,
-) -> std::io::Result<Vec<u8>> {
+) -> Result<()> {
     use image::ImageEncoder;
-    let mut out = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut out)
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes)
         .write_image(data, width as u32, height as u32, color)
-        .map_err(std::io::Error::other)?;
-    Ok(out)
+        .map_err(|e| Error::io(path, std::io::Error::other(e)))?;
+    crate::io::write_atomic(path, &bytes)
 }
 
 /// Save an 8-bit grey PNG atomically.
@@ -320,10 +322,13 @@ pub fn save_grey_png(
     height: usize,
     data: &[u8],
 ) -> Result<()> {
-    let path = path.as_ref();
-    let bytes = encode_png(width, height, data, image::ExtendedColorType::L8)
-        .map_err(|e| Error::io(path, e))?;
-    crate::io::write_atomic(path, &bytes)
+    save_png(
+        path.as_ref(),
+        width,
+        height,
+        data,
+        image::ExtendedColorType::L8,
+    )
 }
 
 /// Save an 8-bit RGB PNG atomically.
@@ -333,10 +338,13 @@ pub fn save_rgb_png(
     height: usize,
     data: &[u8],
 ) -> Result<()> {
-    let path = path.as_ref();
-    let bytes = encode_png(width, height, data, image::ExtendedColorType::Rgb8)
-        .map_err(|e| Error::io(path, e))?;
-    crate::io::write_atomic(path, &bytes)
+    save_png(
+        path.as_ref(),
+        width,
+        height,
+        data,
+        image::ExtendedColorType::Rgb8,
+    )
 }
 
 /// The least value of a tendon pixel in a mask PNG (0 = background,
