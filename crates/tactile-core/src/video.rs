@@ -4,7 +4,11 @@
 //! one frame at a time. No codec is written here.
 //!
 //! The size of the stream is read with `ffprobe` first and checked against
-//! [`MAX_IMAGE_PIXELS`] before any frame buffer is allocated. Inputs are
+//! [`MAX_IMAGE_PIXELS`] before any frame buffer is allocated. Frames are
+//! read as they are shown: a stream's display rotation (a phone's video
+//! recorded upright) is applied, as FFmpeg's own command line and OpenCV's
+//! `VideoCapture` apply it, and as a frame file's EXIF orientation is
+//! ([`crate::image_io`]). Inputs are
 //! passed as `file:` URLs, so a file name is never taken for an option or
 //! another protocol.
 
@@ -139,13 +143,16 @@ impl VideoInput {
     }
 }
 
-/// The first video stream's size and rate, from `ffprobe`.
+/// The first video stream's size (as shown) and rate, from `ffprobe`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VideoInfo {
-    /// Width, pixels.
+    /// Width as shown (its display rotation applied), pixels.
     pub width: usize,
-    /// Height, pixels.
+    /// Height as shown, pixels.
     pub height: usize,
+    /// How far the stream's display matrix turns its frames clockwise to
+    /// show them, degrees in [0, 360) (0: shown as stored).
+    pub turn_deg: f64,
     /// Frames per second, when the container says.
     pub fps: Option<f64>,
     /// The stream's length in seconds, when the container says (the
@@ -153,15 +160,57 @@ pub struct VideoInfo {
     pub duration_s: Option<f64>,
 }
 
-/// The size and rate of `input`'s first video stream, checked: a stream
-/// larger than 8K or without a video stream is an error naming the file.
+/// The clockwise turn, degrees in [0, 360), that shows a stream whose
+/// display matrix says `rotation_deg` (ffprobe's `rotation`, degrees
+/// counterclockwise), rounded to a degree as FFmpeg's command line rounds
+/// it; 0 for a value that is not finite.
+fn clockwise_turn(rotation_deg: f64) -> f64 {
+    if !rotation_deg.is_finite() {
+        return 0.0;
+    }
+    let turn = -rotation_deg.round();
+    // FFmpeg's own normalisation: a turn just under 360 reads as none.
+    let turn = turn - 360.0 * (turn / 360.0 + 0.9 / 360.0).floor();
+    if turn.abs() < 1.0 { 0.0 } else { turn }
+}
+
+impl VideoInfo {
+    /// The FFmpeg filter that turns a decoded frame to be shown, as
+    /// FFmpeg's command line and OpenCV's `VideoCapture` turn it (flips of
+    /// a mirrored matrix aside): a quarter or half turn exactly, another
+    /// angle by `rotate`, which keeps the size. `None` when none is needed.
+    fn turn_filter(&self) -> Option<String> {
+        let turn = self.turn_deg;
+        if turn == 0.0 {
+            None
+        } else if (turn - 90.0).abs() < 1.0 {
+            Some("transpose=clock".into())
+        } else if (turn - 180.0).abs() < 1.0 {
+            Some("hflip,vflip".into())
+        } else if (turn - 270.0).abs() < 1.0 {
+            Some("transpose=cclock".into())
+        } else {
+            Some(format!("rotate={turn:.6}*PI/180"))
+        }
+    }
+}
+
+/// Whether a clockwise turn of `turn_deg` swaps a frame's sides.
+fn turned_sideways(turn_deg: f64) -> bool {
+    (turn_deg - 90.0).abs() < 1.0 || (turn_deg - 270.0).abs() < 1.0
+}
+
+/// The size (as shown) and rate of `input`'s first video stream, checked:
+/// a stream larger than 8K or without a video stream is an error naming
+/// the file.
 pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
     let path = input.path();
     let mut cmd = Command::new("ffprobe");
     cmd.args(["-v", "error", "-select_streams", "v:0"])
         .args([
             "-show_entries",
-            "stream=width,height,avg_frame_rate,duration:format=duration",
+            // Side data as a whole: its fields vary with FFmpeg's release.
+            "stream=width,height,avg_frame_rate,duration:stream_side_data:format=duration",
         ])
         .args(["-of", "json"]);
     if let VideoInput::Camera(_) = input {
@@ -192,6 +241,13 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
         height: Option<u64>,
         avg_frame_rate: Option<String>,
         duration: Option<String>,
+        #[serde(default)]
+        side_data_list: Vec<SideData>,
+    }
+    #[derive(serde::Deserialize)]
+    struct SideData {
+        /// A display matrix's turn, degrees counterclockwise.
+        rotation: Option<serde_json::Value>,
     }
     #[derive(serde::Deserialize)]
     struct Format {
@@ -222,9 +278,20 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
     };
     let duration_s = seconds(s.duration.as_ref())
         .or_else(|| seconds(probe.format.as_ref().and_then(|f| f.duration.as_ref())));
+    let turn_deg = s
+        .side_data_list
+        .iter()
+        .find_map(|d| d.rotation.as_ref().and_then(serde_json::Value::as_f64))
+        .map_or(0.0, clockwise_turn);
+    let (w, h) = if turned_sideways(turn_deg) {
+        (h, w)
+    } else {
+        (w, h)
+    };
     Ok(VideoInfo {
         width: w as usize,
         height: h as usize,
+        turn_deg,
         fps,
         duration_s,
     })
@@ -276,10 +343,18 @@ impl VideoReader {
             .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
             .args(every_frame)
             .args(["-threads", &threads])
+            // Turned here as the probe read the display matrix, so the
+            // turn and the size come from one reading.
             .arg("-noautorotate")
             .args(input.input_args()?)
             .args(["-map", "0:v:0", "-an", "-sn", "-dn"])
             .args(each_output)
+            .args(
+                info.turn_filter()
+                    .map(|f| ["-vf".to_string(), f])
+                    .into_iter()
+                    .flatten(),
+            )
             .args(["-f", "rawvideo", "-pix_fmt", "rgb24"])
             // The probed size, whatever the stream does later.
             .args(["-s", &format!("{}x{}", info.width, info.height)])
@@ -596,6 +671,100 @@ mod tests {
             frames += 1;
         }
         assert_eq!(frames, 30);
+    }
+
+    #[test]
+    fn a_video_recorded_turned_is_read_as_it_is_shown() {
+        // Frames stored 64x32, a grey level a quarter, in a file whose
+        // display matrix turns them (a quarter turn as a phone held upright
+        // records, a half turn, three quarters): read as FFmpeg's command
+        // line and OpenCV's VideoCapture show them, as a frame file's EXIF
+        // orientation is applied. Before, read 64x32 as stored.
+        let dir = tempfile::tempdir().unwrap();
+        let (plain, turned) = (dir.path().join("plain.mp4"), dir.path().join("turned.mp4"));
+        let ffmpeg = |args: &[&str]| {
+            let out = Command::new("ffmpeg")
+                .args(["-nostdin", "-hide_banner", "-loglevel", "error", "-y"])
+                .args(args)
+                .output()
+                .unwrap();
+            assert!(out.status.success(), "ffmpeg {args:?}");
+            out.stdout
+        };
+        ffmpeg(&[
+            "-f",
+            "lavfi",
+            "-i",
+            "color=c=0x141414:s=32x16:r=10[a];color=c=0xe6e6e6:s=32x16:r=10[b];\
+             color=c=0x787878:s=32x16:r=10[c];color=c=0xb4b4b4:s=32x16:r=10[d];\
+             [a][b]hstack[top];[c][d]hstack[bottom];[top][bottom]vstack",
+            "-frames:v",
+            "5",
+            "-c:v",
+            "libx264",
+            "-pix_fmt",
+            "yuv444p",
+            plain.to_str().unwrap(),
+        ]);
+        let first_frame = |video: &Path| {
+            let input = VideoInput::File(video.to_path_buf());
+            let info = probe(&input).unwrap();
+            let mut reader = VideoReader::open(&input, DecodeOptions::default()).unwrap();
+            let mut frames = Vec::new();
+            while let Some(f) = reader.next_frame().unwrap() {
+                assert_eq!((f.width(), f.height()), (info.width, info.height));
+                frames.push(f);
+            }
+            assert_eq!(frames.len(), 5);
+            frames.swap_remove(0)
+        };
+        let stored = first_frame(&plain);
+        assert_eq!((stored.width(), stored.height()), (64, 32));
+        for (tag, shown_size) in [("90", (32, 64)), ("180", (64, 32)), ("270", (32, 64))] {
+            // The stream copied, tagged turned (FFmpeg writes the tag as
+            // the file's display matrix).
+            ffmpeg(&[
+                "-i",
+                plain.to_str().unwrap(),
+                "-c",
+                "copy",
+                "-metadata:s:v:0",
+                &format!("rotate={tag}"),
+                turned.to_str().unwrap(),
+            ]);
+            let shown = first_frame(&turned);
+            assert_eq!((shown.width(), shown.height()), shown_size, "{tag}");
+            // Pixel for pixel as FFmpeg's command line shows the file.
+            let cli = ffmpeg(&[
+                "-i",
+                turned.to_str().unwrap(),
+                "-frames:v",
+                "1",
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                "rgb24",
+                "-",
+            ]);
+            assert_eq!(shown.as_slice(), &cli[..], "{tag}");
+            assert_ne!(shown.as_slice(), stored.as_slice(), "{tag}");
+        }
+        // ffprobe's rotation (counterclockwise) read as FFmpeg reads it.
+        for (rotation, turn, sideways) in [
+            (90.0, 270.0, true),
+            (-90.0, 90.0, true),
+            (270.0, 90.0, true),
+            (89.6, 270.0, true),
+            (180.0, 180.0, false),
+            (-180.0, 180.0, false),
+            (0.0, 0.0, false),
+            (359.6, 0.0, false),
+            (-45.0, 45.0, false),
+            (f64::NAN, 0.0, false),
+        ] {
+            assert_eq!(clockwise_turn(rotation), turn, "{rotation}");
+            assert_eq!(turned_sideways(turn), sideways, "{rotation}");
+        }
     }
 
     #[test]
