@@ -123,6 +123,19 @@ pub(crate) fn decode_upright<R: std::io::BufRead + std::io::Seek>(
     Ok(img)
 }
 
+/// Whether `path` is a picture whose EXIF orientation turns it a quarter,
+/// so that it is read with its stored sides swapped; false for anything
+/// else, a file that cannot be read included (this only words a refusal).
+pub fn turned_sideways_by_exif(path: &Path) -> bool {
+    let Ok(mut decoder) = open_image(path).and_then(|r| {
+        r.into_decoder()
+            .map_err(|e| Error::image(path, e.to_string()))
+    }) else {
+        return false;
+    };
+    upright_size((1, 2), exif_orientation(&mut decoder)) == (2, 1)
+}
+
 /// Read `path`'s header only: its size as shown (its EXIF orientation
 /// applied, as decoding applies it) and pixel format, so a folder's
 /// frames can be checked before any is decoded.
@@ -445,6 +458,17 @@ mod tests {
             let grey = load_grey(path).unwrap();
             assert_eq!((grey.width(), grey.height()), (h as usize, w as usize));
         }
+        // A dataset whose manifest gives the stored size (written by a
+        // tool that reads pixels as stored, PIL's Image.open) is refused
+        // saying why the frame reads turned.
+        let e = crate::dataset::expect_manifest_size(&png, (h as usize, w as usize), (32, 16))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("side.png: is 16x32 as shown: its EXIF orientation turns the 32x16 pixels")
+                && e.contains("make the manifest say 16x32"),
+            "{e}"
+        );
         // A bag's compressed image is decoded the same way.
         let png_bytes = std::fs::read(&png).unwrap();
         let msg = crate::bag::messages::CompressedImage {
@@ -466,6 +490,14 @@ mod tests {
             assert_eq!(load_rgb(&png).unwrap().as_slice(), &stored[..]);
             let header = rgb_frame_header(&png).unwrap();
             assert_eq!((header.width, header.height), (w, h));
+            // A frame merely of the manifest's sides swapped is told so.
+            let e = crate::dataset::expect_manifest_size(&png, (32, 16), (16, 32))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.ends_with("is 32x16, but manifest.json says the frames are 16x32"),
+                "{e}"
+            );
         }
     }
 

@@ -224,10 +224,19 @@ pub fn expect_manifest_size(
     (mw, mh): (usize, usize),
 ) -> Result<()> {
     if (width, height) != (mw, mh) {
-        return Err(Error::image(
-            path,
-            format!("is {width}x{height}, but manifest.json says the frames are {mw}x{mh}"),
-        ));
+        let why = if (height, width) == (mw, mh) && crate::image_io::turned_sideways_by_exif(path) {
+            // A dataset written by a tool that reads pixels as stored
+            // (PIL's `Image.open`) gave the stored size.
+            format!(
+                "is {width}x{height} as shown: its EXIF orientation turns the {height}x{width} \
+                 pixels it stores, and frames are read as shown, as OpenCV reads them; but \
+                 manifest.json says the frames are {mw}x{mh}. Save the frame upright (without \
+                 the orientation), or make the manifest say {width}x{height}"
+            )
+        } else {
+            format!("is {width}x{height}, but manifest.json says the frames are {mw}x{mh}")
+        };
+        return Err(Error::image(path, why));
     }
     Ok(())
 }
