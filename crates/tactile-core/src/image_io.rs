@@ -63,10 +63,13 @@ pub const MAX_IMAGE_FILE_BYTES: u64 = 512 << 20;
 /// What an image file's header says, read without decoding its pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ImageHeader {
-    /// Width, pixels.
+    /// Width as shown (its EXIF orientation applied), pixels.
     pub width: u32,
-    /// Height, pixels.
+    /// Height as shown, pixels.
     pub height: u32,
+    /// Its EXIF orientation turns it a quarter: the sides as shown are the
+    /// stored ones swapped.
+    pub turned_sideways: bool,
     /// The stored pixel format.
     pub color: ColorType,
 }
@@ -97,16 +100,16 @@ fn exif_orientation(decoder: &mut impl ImageDecoder) -> Orientation {
     decoder.orientation().unwrap_or(Orientation::NoTransforms)
 }
 
-/// The size a picture of `stored` width and height is shown at once
-/// `orientation` is applied: a quarter turn swaps the sides.
-fn upright_size(stored: (u32, u32), orientation: Orientation) -> (u32, u32) {
-    match orientation {
+/// Whether `orientation` turns a picture a quarter, so that it is shown
+/// with its stored sides swapped.
+fn turns_sideways(orientation: Orientation) -> bool {
+    matches!(
+        orientation,
         Orientation::Rotate90
-        | Orientation::Rotate270
-        | Orientation::Rotate90FlipH
-        | Orientation::Rotate270FlipH => (stored.1, stored.0),
-        _ => stored,
-    }
+            | Orientation::Rotate270
+            | Orientation::Rotate90FlipH
+            | Orientation::Rotate270FlipH
+    )
 }
 
 /// Decode a picture the way it is shown: its EXIF orientation applied,
@@ -123,19 +126,6 @@ pub(crate) fn decode_upright<R: std::io::BufRead + std::io::Seek>(
     Ok(img)
 }
 
-/// Whether `path` is a picture whose EXIF orientation turns it a quarter,
-/// so that it is read with its stored sides swapped; false for anything
-/// else, a file that cannot be read included (this only words a refusal).
-pub fn turned_sideways_by_exif(path: &Path) -> bool {
-    let Ok(mut decoder) = open_image(path).and_then(|r| {
-        r.into_decoder()
-            .map_err(|e| Error::image(path, e.to_string()))
-    }) else {
-        return false;
-    };
-    upright_size((1, 2), exif_orientation(&mut decoder)) == (2, 1)
-}
-
 /// Read `path`'s header only: its size as shown (its EXIF orientation
 /// applied, as decoding applies it) and pixel format, so a folder's
 /// frames can be checked before any is decoded.
@@ -144,11 +134,16 @@ pub fn image_header(path: &Path) -> Result<ImageHeader> {
     let mut decoder = open_image(path)?
         .into_decoder()
         .map_err(|e| Error::image(path, format!("cannot read the image header: {e}")))?;
-    let orientation = exif_orientation(&mut decoder);
-    let (width, height) = upright_size(decoder.dimensions(), orientation);
+    let turned_sideways = turns_sideways(exif_orientation(&mut decoder));
+    let (stored_width, stored_height) = decoder.dimensions();
+    let (width, height) = match turned_sideways {
+        true => (stored_height, stored_width),
+        false => (stored_width, stored_height),
+    };
     Ok(ImageHeader {
         width,
         height,
+        turned_sideways,
         color: decoder.color_type(),
     })
 }

@@ -224,7 +224,10 @@ pub fn expect_manifest_size(
     (mw, mh): (usize, usize),
 ) -> Result<()> {
     if (width, height) != (mw, mh) {
-        let why = if (height, width) == (mw, mh) && crate::image_io::turned_sideways_by_exif(path) {
+        // Read again only to word the refusal; a file that is no picture
+        // (a depth map) is not turned.
+        let turned = || crate::image_io::image_header(path).is_ok_and(|h| h.turned_sideways);
+        let why = if (height, width) == (mw, mh) && turned() {
             // A dataset written by a tool that reads pixels as stored
             // (PIL's `Image.open`) gave the stored size.
             format!(
