@@ -151,8 +151,8 @@ pub struct VideoInfo {
     /// Height as shown, pixels.
     pub height: usize,
     /// How far the stream's display matrix turns its frames clockwise to
-    /// show them, degrees in [0, 360) (0: shown as stored).
-    pub turn_deg: f64,
+    /// show them, whole degrees in [0, 360) (0: shown as stored).
+    pub turn_deg: u16,
     /// Frames per second, when the container says.
     pub fps: Option<f64>,
     /// The stream's length in seconds, when the container says (the
@@ -160,18 +160,20 @@ pub struct VideoInfo {
     pub duration_s: Option<f64>,
 }
 
-/// The clockwise turn, degrees in [0, 360), that shows a stream whose
-/// display matrix says `rotation_deg` (ffprobe's `rotation`, degrees
-/// counterclockwise), rounded to a degree as FFmpeg's command line rounds
-/// it; 0 for a value that is not finite.
-fn clockwise_turn(rotation_deg: f64) -> f64 {
+/// The clockwise turn, whole degrees in [0, 360), that shows a stream
+/// whose display matrix says `rotation_deg` (ffprobe's `rotation`,
+/// degrees counterclockwise), as FFmpeg's command line reads it: rounded
+/// to a degree, and a turn of at most one degree either way is none; 0 for
+/// a value that is not finite.
+fn clockwise_turn(rotation_deg: f64) -> u16 {
     if !rotation_deg.is_finite() {
-        return 0.0;
+        return 0;
     }
-    let turn = -rotation_deg.round();
-    // FFmpeg's own normalisation: a turn just under 360 reads as none.
-    let turn = turn - 360.0 * (turn / 360.0 + 0.9 / 360.0).floor();
-    if turn.abs() < 1.0 { 0.0 } else { turn }
+    // The matrix's angle lies in [-180, 180]; the cast saturates anyway.
+    match (-rotation_deg.round() as i64).rem_euclid(360) {
+        0 | 1 | 359 => 0,
+        turn => turn as u16,
+    }
 }
 
 impl VideoInfo {
@@ -180,24 +182,19 @@ impl VideoInfo {
     /// a mirrored matrix aside): a quarter or half turn exactly, another
     /// angle by `rotate`, which keeps the size. `None` when none is needed.
     fn turn_filter(&self) -> Option<String> {
-        let turn = self.turn_deg;
-        if turn == 0.0 {
-            None
-        } else if (turn - 90.0).abs() < 1.0 {
-            Some("transpose=clock".into())
-        } else if (turn - 180.0).abs() < 1.0 {
-            Some("hflip,vflip".into())
-        } else if (turn - 270.0).abs() < 1.0 {
-            Some("transpose=cclock".into())
-        } else {
-            Some(format!("rotate={turn:.6}*PI/180"))
+        match self.turn_deg {
+            0 => None,
+            90 => Some("transpose=clock".into()),
+            180 => Some("hflip,vflip".into()),
+            270 => Some("transpose=cclock".into()),
+            turn => Some(format!("rotate={turn}*PI/180")),
         }
     }
 }
 
 /// Whether a clockwise turn of `turn_deg` swaps a frame's sides.
-fn turned_sideways(turn_deg: f64) -> bool {
-    (turn_deg - 90.0).abs() < 1.0 || (turn_deg - 270.0).abs() < 1.0
+fn turned_sideways(turn_deg: u16) -> bool {
+    matches!(turn_deg, 90 | 270)
 }
 
 /// The size (as shown) and rate of `input`'s first video stream, checked:
@@ -282,7 +279,7 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
         .side_data_list
         .iter()
         .find_map(|d| d.rotation.as_ref().and_then(serde_json::Value::as_f64))
-        .map_or(0.0, clockwise_turn);
+        .map_or(0, clockwise_turn);
     let (w, h) = if turned_sideways(turn_deg) {
         (h, w)
     } else {
@@ -751,16 +748,19 @@ mod tests {
         }
         // ffprobe's rotation (counterclockwise) read as FFmpeg reads it.
         for (rotation, turn, sideways) in [
-            (90.0, 270.0, true),
-            (-90.0, 90.0, true),
-            (270.0, 90.0, true),
-            (89.6, 270.0, true),
-            (180.0, 180.0, false),
-            (-180.0, 180.0, false),
-            (0.0, 0.0, false),
-            (359.6, 0.0, false),
-            (-45.0, 45.0, false),
-            (f64::NAN, 0.0, false),
+            (90.0, 270, true),
+            (-90.0, 90, true),
+            (270.0, 90, true),
+            (89.6, 270, true),
+            (180.0, 180, false),
+            (-180.0, 180, false),
+            (0.0, 0, false),
+            (359.6, 0, false),
+            (-45.0, 45, false),
+            (1.0, 0, false),
+            (-1.0, 0, false),
+            (2.0, 358, false),
+            (f64::NAN, 0, false),
         ] {
             assert_eq!(clockwise_turn(rotation), turn, "{rotation}");
             assert_eq!(turned_sideways(turn), sideways, "{rotation}");
