@@ -121,36 +121,62 @@ pub(crate) fn decode_upright<R: std::io::BufRead + std::io::Seek>(
 ) -> image::ImageResult<DynamicImage> {
     let mut decoder = reader.into_decoder()?;
     let orientation = exif_orientation(&mut decoder);
+    upright(decoder, orientation)
+}
+
+/// `decoder`'s picture decoded, then turned as `orientation` says.
+fn upright(
+    decoder: impl ImageDecoder,
+    orientation: Orientation,
+) -> image::ImageResult<DynamicImage> {
     let mut img = DynamicImage::from_decoder(decoder)?;
     img.apply_orientation(orientation);
     Ok(img)
+}
+
+/// `path` opened for decoding, its header read (a regular file whose
+/// header can be read).
+fn open_decoder(path: &Path) -> Result<impl ImageDecoder> {
+    crate::io::expect_regular(path)?;
+    open_image(path)?
+        .into_decoder()
+        .map_err(|e| Error::image(path, format!("cannot read the image header: {e}")))
+}
+
+/// What an opened picture's header says, and its EXIF orientation.
+fn header_of(decoder: &mut impl ImageDecoder) -> (ImageHeader, Orientation) {
+    let orientation = exif_orientation(decoder);
+    let turned_sideways = turns_sideways(orientation);
+    let (stored_width, stored_height) = decoder.dimensions();
+    let (width, height) = match turned_sideways {
+        true => (stored_height, stored_width),
+        false => (stored_width, stored_height),
+    };
+    let header = ImageHeader {
+        width,
+        height,
+        turned_sideways,
+        color: decoder.color_type(),
+    };
+    (header, orientation)
 }
 
 /// Read `path`'s header only: its size as shown (its EXIF orientation
 /// applied, as decoding applies it) and pixel format, so a folder's
 /// frames can be checked before any is decoded.
 pub fn image_header(path: &Path) -> Result<ImageHeader> {
-    crate::io::expect_regular(path)?;
-    let mut decoder = open_image(path)?
-        .into_decoder()
-        .map_err(|e| Error::image(path, format!("cannot read the image header: {e}")))?;
-    let turned_sideways = turns_sideways(exif_orientation(&mut decoder));
-    let (stored_width, stored_height) = decoder.dimensions();
-    let (width, height) = match turned_sideways {
-        true => (stored_height, stored_width),
-        false => (stored_width, stored_height),
-    };
-    Ok(ImageHeader {
-        width,
-        height,
-        turned_sideways,
-        color: decoder.color_type(),
-    })
+    Ok(header_of(&mut open_decoder(path)?).0)
 }
 
 /// `path`'s header when its pixels fit the decoding limit (8K).
 fn header_within_limit(path: &Path) -> Result<ImageHeader> {
     let header = image_header(path)?;
+    within_limit(path, &header)?;
+    Ok(header)
+}
+
+/// Refuse a picture whose header claims more pixels than 8K.
+fn within_limit(path: &Path, header: &ImageHeader) -> Result<()> {
     let (w, h) = (header.width, header.height);
     if w as u64 * h as u64 > MAX_IMAGE_PIXELS {
         return Err(Error::image(
@@ -160,7 +186,7 @@ fn header_within_limit(path: &Path) -> Result<ImageHeader> {
             ),
         ));
     }
-    Ok(header)
+    Ok(())
 }
 
 /// What [`load_rgb`] expects of a frame file.
@@ -188,9 +214,13 @@ pub fn rgb_frame_header(path: &Path) -> Result<ImageHeader> {
     Ok(header)
 }
 
+/// `path` decoded as it is shown, opened once: its header checked against
+/// 8K before its pixels are allocated.
 fn decode(path: &Path) -> Result<DynamicImage> {
-    header_within_limit(path)?;
-    decode_upright(open_image(path)?)
+    let mut decoder = open_decoder(path)?;
+    let (header, orientation) = header_of(&mut decoder);
+    within_limit(path, &header)?;
+    upright(decoder, orientation)
         .map_err(|e| Error::image(path, format!("cannot decode image: {e}")))
 }
 
