@@ -1,4 +1,5 @@
-//! Loading and saving 8-bit PNG frames with errors that name the file.
+//! Loading frame files (PNG, JPEG, BMP, TIFF, WebP, PGM/PPM, told by
+//! their bytes) and saving 8-bit PNGs, with errors that name the file.
 
 use std::path::Path;
 
@@ -140,7 +141,130 @@ fn open_decoder(path: &Path) -> Result<impl ImageDecoder> {
     crate::io::expect_regular(path)?;
     open_image(path)?
         .into_decoder()
-        .map_err(|e| Error::image(path, format!("cannot read the image header: {e}")))
+        .map_err(|e| file_refusal(path, "cannot read the image header", e))
+}
+
+/// Bytes of a JPEG read for its start-of-frame marker: the segments before
+/// it (EXIF, ICC profiles) are at most 64 KiB each.
+const JPEG_HEAD_BYTES: u64 = 1 << 20;
+
+/// Why `path` was not decoded: [`unread_jpeg_coding`]'s words for a JPEG
+/// of a coding the decoder does not read, else `what` and the decoder's.
+fn file_refusal(path: &Path, what: &str, e: image::ImageError) -> Error {
+    use std::io::Read;
+    let mut head = Vec::new();
+    let read =
+        std::fs::File::open(path).and_then(|f| f.take(JPEG_HEAD_BYTES).read_to_end(&mut head));
+    Error::image(
+        path,
+        refusal(what, &e, &head[..read.map_or(0, |_| head.len())]),
+    )
+}
+
+/// `what` and the decoder's error `e`, or, when `bytes` (the picture, or
+/// its first [`JPEG_HEAD_BYTES`]) are a JPEG of a coding the decoder does
+/// not read, that, since the decoder's words do not say it (a lossless
+/// JPEG is refused as "Number of components cannot be zero").
+pub(crate) fn refusal(what: &str, e: &image::ImageError, bytes: &[u8]) -> String {
+    use image::error::{ImageFormatHint, UnsupportedErrorKind};
+    if let Some(why) = unread_jpeg_coding(bytes) {
+        return why;
+    }
+    match e {
+        image::ImageError::Unsupported(u) => match (u.kind(), u.format_hint()) {
+            (UnsupportedErrorKind::Format(_), ImageFormatHint::Exact(format)) => format!(
+                "{what}: a {} picture, a format frames are not read in; they are read from {}",
+                (format.extensions_str().first())
+                    .map_or_else(|| format!("{format:?}"), |x| x.to_uppercase()),
+                crate::source::FRAME_FORMATS
+            ),
+            _ => format!("{what}: {e}"),
+        },
+        // The decoders' words for these ("failed to fill whole buffer",
+        // "Memory limit exceeded") do not say what is wrong with the file.
+        image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            format!("{what}: the file ends before its picture does (cut short)")
+        }
+        image::ImageError::Limits(_) => format!(
+            "{what}: its header asks for more than a frame may take ({e}): a damaged file, \
+             or not a camera's frame"
+        ),
+        _ => format!("{what}: {e}"),
+    }
+}
+
+/// True for the picture formats frames are read in, told by their bytes
+/// ([`crate::source::FRAME_FORMATS`]).
+pub(crate) fn is_frame_format(format: image::ImageFormat) -> bool {
+    use image::ImageFormat::{Bmp, Jpeg, Png, Pnm, Tiff, WebP};
+    matches!(format, Png | Jpeg | Bmp | Tiff | WebP | Pnm)
+}
+
+/// The JPEG coding of `bytes` when the decoder (zune-jpeg: 8-bit baseline,
+/// extended and progressive Huffman coding) does not read it, from the
+/// first start-of-frame marker (ITU T.81, B.1.1.3, table B.1); `None` for
+/// one it reads, or bytes that are not a JPEG whose markers can be walked.
+fn unread_jpeg_coding(bytes: &[u8]) -> Option<String> {
+    if !bytes.starts_with(&[0xFF, 0xD8]) {
+        return None;
+    }
+    let mut at = 2usize;
+    loop {
+        // A marker may follow fill bytes of 0xFF.
+        while bytes.get(at..at + 2) == Some(&[0xFF, 0xFF]) {
+            at += 1;
+        }
+        let (&ff, &marker) = (bytes.get(at)?, bytes.get(at + 1)?);
+        if ff != 0xFF {
+            return None;
+        }
+        match marker {
+            // Markers without a segment: TEM, RSTn, SOI.
+            0x01 | 0xD0..=0xD8 => {
+                at += 2;
+                continue;
+            }
+            // A scan or the end before any frame header.
+            0xD9 | 0xDA => return None,
+            // SOFn: every 0xCn but DHT (C4), JPG (C8) and DAC (CC).
+            0xC0..=0xCF if !matches!(marker, 0xC4 | 0xC8 | 0xCC) => {
+                return jpeg_coding_words(marker - 0xC0, *bytes.get(at + 4)?);
+            }
+            _ => {}
+        }
+        let length = u16::from_be_bytes([*bytes.get(at + 2)?, *bytes.get(at + 3)?]) as usize;
+        if length < 2 {
+            return None;
+        }
+        at += 2 + length;
+    }
+}
+
+/// The refusal of a JPEG whose frame header is SOF`n` with samples of
+/// `precision` bits, `None` for one the decoder reads.
+fn jpeg_coding_words(n: u8, precision: u8) -> Option<String> {
+    let coding = match n {
+        0..=2 => None,
+        3 => Some("a lossless"),
+        5 => Some("a hierarchical"),
+        6 => Some("a hierarchical progressive"),
+        7 => Some("a hierarchical lossless"),
+        9 => Some("an arithmetic-coded"),
+        10 => Some("an arithmetic-coded progressive"),
+        11 => Some("an arithmetic-coded lossless"),
+        _ => Some("an arithmetic-coded hierarchical"),
+    };
+    let save = "save the frames as PNG (lossless too) or as baseline JPEG";
+    match (coding, precision) {
+        (Some(coding), _) => Some(format!(
+            "{coding} JPEG (SOF{n}), a JPEG coding that is not read: {save}"
+        )),
+        (None, 8) => None,
+        (None, bits) => Some(format!(
+            "a {bits}-bit JPEG; frames are read with 8 bits per channel: {save}, \
+             your camera's levels scaled to 0-255"
+        )),
+    }
 }
 
 /// What an opened picture's header says, and its EXIF orientation.
@@ -220,8 +344,7 @@ fn decode(path: &Path) -> Result<DynamicImage> {
     let mut decoder = open_decoder(path)?;
     let (header, orientation) = header_of(&mut decoder);
     within_limit(path, &header)?;
-    upright(decoder, orientation)
-        .map_err(|e| Error::image(path, format!("cannot decode image: {e}")))
+    upright(decoder, orientation).map_err(|e| file_refusal(path, "cannot decode image", e))
 }
 
 /// Luma from RGB exactly as OpenCV's `cvtColor(RGB2GRAY)` does for 8-bit
@@ -428,6 +551,116 @@ mod tests {
         let e = load_grey(&junk).err().unwrap().to_string();
         assert!(e.contains("junk.png"), "{e}");
         assert_eq!(load_grey(&p).unwrap().as_slice(), &[7u8; 64][..]);
+    }
+
+    #[test]
+    fn frame_files_are_read_by_their_bytes_in_the_formats_opencv_reads_and_others_are_named() {
+        // A 24x16 frame of distinct levels saved as a lab camera's tool
+        // saves it (BMP, TIFF, lossless WebP, PPM) beside PNG: each reads
+        // as the PNG does, whatever its name says (before, a folder of them
+        // held "no PNG or JPEG frames" and a BMP named .png was refused).
+        use image::ImageFormat::{Bmp, Png, Pnm, Tiff, WebP};
+        let (w, h) = (24u32, 16u32);
+        let rgb: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 251) as u8).collect();
+        let frame = DynamicImage::ImageRgb8(image::RgbImage::from_raw(w, h, rgb.clone()).unwrap());
+        let dir = tempfile::tempdir().unwrap();
+        let files = [
+            ("f0.png", Png),
+            ("f1.bmp", Bmp),
+            ("f2.tif", Tiff),
+            ("f3.tiff", Tiff),
+            ("f4.webp", WebP),
+            ("f5.ppm", Pnm),
+            ("f6-a-bmp-named.png", Bmp),
+            ("f7-a-tiff-named.jpg", Tiff),
+        ];
+        for (name, format) in files {
+            let path = dir.path().join(name);
+            frame.save_with_format(&path, format).unwrap();
+            let header = rgb_frame_header(&path).unwrap();
+            assert_eq!((header.width, header.height), (w, h), "{name}");
+            assert_eq!(load_rgb(&path).unwrap().as_slice(), &rgb[..], "{name}");
+        }
+        let grey: Vec<u8> = (0..w * h).map(|i| (i * 3 % 256) as u8).collect();
+        let pgm = dir.path().join("f8.pgm");
+        DynamicImage::ImageLuma8(image::GrayImage::from_raw(w, h, grey.clone()).unwrap())
+            .save_with_format(&pgm, Pnm)
+            .unwrap();
+        assert_eq!(load_grey(&pgm).unwrap().as_slice(), &grey[..]);
+        // A folder holding them reads each, in the order of its numbers.
+        let list = crate::source::FrameList::open(dir.path()).unwrap();
+        let names: Vec<_> = (list.frames.iter())
+            .map(|f| f.path.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names.len(), files.len() + 1, "{names:?}");
+        assert!(list.ignored.is_empty(), "{:?}", list.ignored);
+        assert!(names[1] == "f1.bmp" && names[8] == "f8.pgm", "{names:?}");
+
+        // A JPEG of a coding the decoder does not read is named, by the
+        // header pass, by decoding and in a bag's compressed image (before:
+        // lossless read "Number of components cannot be zero").
+        let jpeg = |sof: u8, precision: u8| {
+            let mut b = vec![0xFF, 0xD8, 0xFF, 0xE0, 0, 16];
+            b.extend(b"JFIF\0\x01\x01\0\0\x01\0\x01\0\0");
+            // A fill byte, then the frame header: 24x16, three components.
+            b.extend([0xFF, 0xFF, 0xC0 + sof, 0, 17, precision, 0, 16, 0, 24, 3]);
+            b.extend([1, 0x11, 0, 2, 0x11, 0, 3, 0x11, 0, 0xFF, 0xD9]);
+            b
+        };
+        for (sof, precision, words) in [
+            (
+                3,
+                8,
+                "a lossless JPEG (SOF3), a JPEG coding that is not read: save the frames as PNG",
+            ),
+            (9, 8, "an arithmetic-coded JPEG (SOF9)"),
+            (7, 8, "a hierarchical lossless JPEG (SOF7)"),
+            (
+                1,
+                12,
+                "a 12-bit JPEG; frames are read with 8 bits per channel",
+            ),
+        ] {
+            let path = dir.path().join(format!("sof{sof}-{precision}.jpg"));
+            let bytes = jpeg(sof, precision);
+            std::fs::write(&path, &bytes).unwrap();
+            for e in [
+                rgb_frame_header(&path).unwrap_err().to_string(),
+                load_grey(&path).err().unwrap().to_string(),
+            ] {
+                assert!(e.contains(&format!("sof{sof}-{precision}.jpg")), "{e}");
+                assert!(e.contains(words), "{e}");
+            }
+            let message = crate::bag::messages::CompressedImage {
+                header: Default::default(),
+                format: "jpeg".into(),
+                data: &bytes,
+            };
+            let e = message.to_rgb().err().unwrap();
+            assert!(e.contains(words), "{e}");
+        }
+        // A frame cut short says so (before: "failed to fill whole buffer").
+        let bmp = std::fs::read(dir.path().join("f1.bmp")).unwrap();
+        let path = dir.path().join("cut.bmp");
+        std::fs::write(&path, &bmp[..bmp.len() - 100]).unwrap();
+        let e = load_rgb(&path).err().unwrap().to_string();
+        assert!(
+            e.contains("cut.bmp: cannot decode image: the file ends before its picture does"),
+            "{e}"
+        );
+        // A baseline JPEG cut short keeps the decoder's own words.
+        let path = dir.path().join("cut.jpg");
+        std::fs::write(&path, jpeg(0, 8)).unwrap();
+        let e = load_rgb(&path).err().unwrap().to_string();
+        assert!(e.contains("cut.jpg") && !e.contains("JPEG coding"), "{e}");
+        // A picture of another format is named as such.
+        let gif = dir.path().join("anim.png");
+        std::fs::write(&gif, b"GIF89a\x01\0\x01\0\0\0\0;").unwrap();
+        let e = load_rgb(&gif).err().unwrap().to_string();
+        assert!(
+            e.contains("anim.png") && e.contains("a GIF picture, a format frames are not read in"),
+            "{e}"
+        );
     }
 
     /// A TIFF block of EXIF metadata holding one tag, the orientation

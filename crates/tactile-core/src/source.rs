@@ -1,5 +1,5 @@
 //! Where frames come from: a dataset (frames in `labels.csv` order, with
-//! their sequences and labels), a folder of PNG or JPEG frames, a video
+//! their sequences and labels), a folder of frame files, a video
 //! file, an image topic of a ROS 2 bag (with each frame's header stamp), a
 //! V4L2 camera, or raw RGB frames on stdin ([`FrameSource`]).
 //!
@@ -69,15 +69,23 @@ pub struct FrameList {
     /// The dataset the frames are the rows of (whose rows say what it
     /// holds); `None` for a folder of frames, which may have dropped some.
     pub dataset: Option<Dataset>,
-    /// Files of a folder of frames that are not PNG or JPEG frames, or are
+    /// Files of a folder of frames that are not frame files, or are
     /// hidden (sorted; they are reported, not read).
     pub ignored: Vec<PathBuf>,
 }
 
-/// Extensions of the frame files a folder may hold.
-pub const FRAME_EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
+/// Extensions of the frame files a folder may hold: the picture formats
+/// OpenCV's `imread` reads that the `image` crate decodes (lab cameras'
+/// tools save BMP and TIFF as often as PNG). A file is decoded by what its
+/// bytes are, not by its name.
+pub const FRAME_EXTENSIONS: [&str; 9] = [
+    "png", "jpg", "jpeg", "bmp", "tif", "tiff", "webp", "pgm", "ppm",
+];
 
-/// True for a file named like a PNG or JPEG frame.
+/// The frame formats, as messages and help name them.
+pub const FRAME_FORMATS: &str = "PNG, JPEG, BMP, TIFF, WebP or PGM/PPM";
+
+/// True for a file named like a frame ([`FRAME_EXTENSIONS`]).
 pub fn is_frame_file(p: &Path) -> bool {
     p.extension()
         .and_then(|x| x.to_str())
@@ -93,14 +101,14 @@ pub fn is_hidden_file(p: &Path) -> bool {
         .is_some_and(|n| n.starts_with('.'))
 }
 
-/// True for a file a folder of frames reads: a PNG or JPEG that is not
+/// True for a file a folder of frames reads: a frame file that is not
 /// hidden. The one rule of [`FrameList::open`] and its hint.
 fn is_listed_frame(p: &Path) -> bool {
     is_frame_file(p) && !is_hidden_file(p)
 }
 
-/// True for a folder (not a link) that is a dataset or has a PNG or JPEG
-/// frame among its first thousand entries: a hint for a user who named the
+/// True for a folder (not a link) that is a dataset or has a frame file
+/// among its first thousand entries: a hint for a user who named the
 /// folder above the frames.
 fn folder_holds_frames(p: &Path) -> bool {
     let is_dir = std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir());
@@ -138,7 +146,7 @@ pub fn named_frames(frames: &[String]) -> (String, &'static str) {
 
 impl FrameList {
     /// The frames of `dir`: a dataset when it has `labels.csv`, else its
-    /// PNG and JPEG files in the order of the numbers in their names
+    /// frame files in the order of the numbers in their names
     /// (anything else, and hidden files, are listed in
     /// [`FrameList::ignored`]).
     pub fn open(dir: &Path) -> Result<Self> {
@@ -187,7 +195,7 @@ impl FrameList {
         alphanumeric_sort::sort_path_slice(&mut ignored);
         if v.is_empty() {
             return Err(Error::Invalid(format!(
-                "{}: no labels.csv and no PNG or JPEG frames{}{}",
+                "{}: no labels.csv and no frames ({FRAME_FORMATS}){}{}",
                 dir.display(),
                 match ignored.len() {
                     0 => String::new(),
@@ -281,7 +289,7 @@ impl FrameList {
     }
 
     /// The warning naming the files of a folder of frames that were not read
-    /// (the first five of each kind): those that are not PNG or JPEG frames,
+    /// (the first five of each kind): those that are not frame files,
     /// and hidden ones, when there are any.
     pub fn ignored_warning(&self) -> Option<String> {
         if self.ignored.is_empty() {
@@ -302,7 +310,7 @@ impl FrameList {
         let mut parts = Vec::new();
         if !other.is_empty() {
             parts.push(format!(
-                "{} file(s) that are not PNG or JPEG frames were not read: {}",
+                "{} file(s) that are not frames ({FRAME_FORMATS}) were not read: {}",
                 other.len(),
                 names(&other)
             ));
@@ -379,7 +387,7 @@ impl MissingFrames {
 pub enum SourceKind {
     /// A dataset (labels.csv).
     Dataset,
-    /// A folder of PNG or JPEG frames, or one image file.
+    /// A folder of frame files, or one frame file.
     Folder,
     /// A video file decoded by FFmpeg.
     Video,
@@ -856,7 +864,7 @@ pub struct FrameSource {
 
 impl FrameSource {
     /// Open `spec`: a folder (a dataset with labels.csv, a ROS 2 bag with
-    /// rosbag2's metadata.yaml, else its PNG and JPEG frames), one image
+    /// rosbag2's metadata.yaml, else its frame files), one frame
     /// file, an `.mcap` (or `.mcap.zstd`) file as a ROS 2 bag, a character
     /// device (a V4L2 camera, live), any other file as a video through
     /// FFmpeg, or stdin (live).

@@ -5,7 +5,7 @@
 //!   sensor.json     {"ball_diameter_mm": 4.0, "mm_per_px": 0.0295,
 //!                    "background": "background.png"}
 //!   background.png  the skin at rest (no contact), 8-bit RGB
-//!   frames/*.png    one press of the ball each, same size (PNG or JPEG)
+//!   frames/*.png    one press of the ball each, same size (PNG, JPEG, BMP, TIFF, WebP, PGM/PPM)
 //!   presses.csv     optional: file,centre_x_px,centre_y_px,contact_radius_px
 //!                   (annotated circles, to score the circle finder)
 //! ```
@@ -155,7 +155,7 @@ pub struct BallPresses {
     /// Every press, in file order.
     pub presses: Vec<Press>,
     /// What a user should know about the folder: files in `frames/` that
-    /// are not PNG or JPEG frames, or frames there that `presses.csv`
+    /// are not frame files, or frames there that `presses.csv`
     /// does not list, and so are no presses.
     pub warnings: Vec<String>,
     /// The background is a colour sensor's ([`is_colour_background`]):
@@ -210,8 +210,8 @@ fn inside(
 
 impl BallPresses {
     /// Read the folder `root`: `sensor.json`, the background, the presses
-    /// (from `presses.csv` when there is one, else every PNG or JPEG frame
-    /// in `frames/`).
+    /// (from `presses.csv` when there is one, else every frame file in
+    /// `frames/`).
     pub fn open(root: impl AsRef<Path>) -> Result<Self> {
         let root = root.as_ref().to_path_buf();
         tactile_core::io::expect_folder(&root, "calibration folder")?;
@@ -466,7 +466,7 @@ fn unlisted_frames_warning(
     )]
 }
 
-/// Every PNG or JPEG frame in `root/frames`, in the order of the numbers in
+/// Every frame file in `root/frames`, in the order of the numbers in
 /// their names, read as every folder of frames is
 /// (`core::source::FrameList`), and the warning naming
 /// the files there that are not frames (a press saved in another format
@@ -476,7 +476,7 @@ fn list_frames(root: &Path) -> Result<(Vec<Press>, Vec<String>)> {
     if !dir.is_dir() {
         return Err(Error::Layout {
             path: dir,
-            why: "missing: a calibration folder has frames/ with one PNG or JPEG per press".into(),
+            why: "missing: a calibration folder has frames/ with one frame file per press".into(),
         });
     }
     let list = tactile_core::source::FrameList::open(&dir)?;

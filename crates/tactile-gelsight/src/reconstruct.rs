@@ -49,7 +49,7 @@ pub struct ReconstructReport {
 
 /// The frames `data` names: itself, or those of a folder as every command
 /// reads one (`tactile_core::source::FrameList`: a dataset's rows, else its
-/// PNG and JPEG frames in the order of the numbers in their names, each
+/// frame files in the order of the numbers in their names, each
 /// checked to be a file inside the folder), with what the user should be
 /// told (files that are not frames, gaps in the numbering). Two frames of one name once their extensions
 /// are dropped are refused: both would be written to one `.npy`.

@@ -603,7 +603,11 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     let empty = tmp.path().join("empty");
     std::fs::create_dir_all(&empty).unwrap();
     let e = reconstruct_folder(&model, &empty, &out, &o, None).unwrap_err();
-    assert!(e.to_string().contains("no PNG or JPEG frames"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("no frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM)"),
+        "{e}"
+    );
     // A JPEG frame is read like a PNG; one named like another frame but for
     // its extension is refused (both would be one .npy), naming both.
     let twins = tmp.path().join("twins");

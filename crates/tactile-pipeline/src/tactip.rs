@@ -643,7 +643,7 @@ pub enum PredictInput {
     /// A dataset folder (it holds `manifest.json`): every row of
     /// `labels.csv`, in order, named by its `file`.
     Dataset(Dataset),
-    /// Any other frame source: a folder of PNG or JPEG frames, one image,
+    /// Any other frame source: a folder of frame files, one image,
     /// a video, a ROS 2 bag's image topic, or a camera read for a number
     /// of frames.
     Source(FrameSource),

@@ -1,5 +1,5 @@
 //! `tactile.frames`: every source the command line reads (a dataset, a
-//! folder of PNG or JPEG frames, a video file, a ROS 2 bag's image topic,
+//! folder of frames, a video file, a ROS 2 bag's image topic,
 //! a V4L2 camera, raw frames on stdin) as a Python iterator of numpy
 //! frames; `tactile.bag_topics` lists a bag's image topics.
 
@@ -335,7 +335,8 @@ pub(crate) fn bag_topics(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny
 
 /// A `sensor_msgs/msg/Image` (an rclpy message, or any object with its
 /// `height`, `width`, `encoding`, `is_bigendian`, `step` and `data`), or a
-/// `sensor_msgs/msg/CompressedImage` (`format` and `data`: JPEG or PNG), as
+/// `sensor_msgs/msg/CompressedImage` (`format` and `data`: JPEG, PNG or
+/// another frame format), as
 /// an `(H, W, 3)` uint8 RGB array: the conversion `tactile run` gives a
 /// bag's frames, for a node that subscribes to a topic itself.
 #[pyfunction]

@@ -280,7 +280,7 @@ def test_predict_reads_a_folder_of_frames_as_tactile_predict(tactile_bin, root, 
         tactile.predict(root / "models/pose-surface", tmp_path / "nowhere")
     empty = tmp_path / "empty"
     empty.mkdir()
-    with pytest.raises(ValueError, match="no PNG or JPEG frames"):
+    with pytest.raises(ValueError, match=r"no frames \(PNG, JPEG, BMP, TIFF, WebP or PGM/PPM\)"):
         tactile.predict(root / "models/pose-surface", empty)
     with pytest.raises(ValueError, match=r"not a TacTip model folder.*the folders cae-edge, .*pass one"):
         tactile.predict(root / "models", folder)

@@ -38,6 +38,39 @@ def test_a_folder_numbered_without_zeros_comes_in_time(root, tmp_path, palpation
 
 
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
+def test_a_folder_of_bmp_tiff_and_ppm_frames_reads_as_the_png_folder(root, tmp_path, palpation_frames):
+    # Lab cameras' tools save BMP and TIFF as often as PNG; OpenCV's imread
+    # reads them, and so does every folder here (before: "no PNG or JPEG
+    # frames"). One is named .png, and is read by its bytes.
+    names = []
+    for i in range(12):
+        ext, codec = [("bmp", "bmp"), ("tiff", "tiff"), ("ppm", "ppm")][i % 3]
+        name = f"{i:06d}.{ext}" if i != 4 else f"{i:06d}.png"
+        subprocess.run(
+            ["ffmpeg", "-nostdin", "-loglevel", "error", "-i",
+             str(root / "samples" / "palpation" / f"{i:06d}.png"),
+             "-c:v", codec, "-pix_fmt", "rgb24", "-f", "image2", str(tmp_path / name)],
+            check=True,
+        )
+        names.append(name)
+    got = list(tactile.frames(tmp_path))
+    assert [f.name for f in got] == names
+    assert all(np.array_equal(f.image, e) for f, e in zip(got, palpation_frames))
+    # A JPEG of a coding that is not read says which (before: "Number of
+    # components cannot be zero").
+    lossless = tmp_path / "lossless" / "000000.jpg"
+    lossless.parent.mkdir()
+    subprocess.run(
+        ["ffmpeg", "-nostdin", "-loglevel", "error", "-i",
+         str(root / "samples" / "palpation" / "000000.png"),
+         "-c:v", "ljpeg", "-pix_fmt", "bgr24", "-strict", "-1", str(lossless)],
+        check=True,
+    )
+    with pytest.raises(ValueError, match=r"000000\.jpg: a lossless JPEG \(SOF3\), a JPEG coding that is not read"):
+        list(tactile.frames(lossless.parent))
+
+
+@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
 def test_lossless_video_gives_the_pipeline_the_same_frames(root, tmp_path, pipeline, palpation_frames):
     video = tmp_path / "palpation.mp4"
     subprocess.run(

@@ -17,7 +17,7 @@ pub(crate) enum CalibrateCmd {
 
 #[derive(Args)]
 pub(crate) struct BallArgs {
-    /// Calibration folder: sensor.json, background.png, frames/ (a PNG or JPEG per press), optional presses.csv.
+    /// Calibration folder: sensor.json, background.png, frames/ (a frame per press: PNG, JPEG, BMP, TIFF, WebP or PGM/PPM), optional presses.csv.
     #[arg(long)]
     data: PathBuf,
     /// Output model folder (new).
@@ -77,7 +77,7 @@ pub(crate) struct ReconstructArgs {
     /// A calibrated sensor's model folder (tactile calibrate ball).
     #[arg(long)]
     model: PathBuf,
-    /// A frame, a folder of frames (PNG or JPEG) of that sensor, or a
+    /// A frame, a folder of frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM) of that sensor, or a
     /// dataset folder (its rows' frames).
     #[arg(long)]
     data: PathBuf,

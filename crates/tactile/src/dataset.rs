@@ -10,7 +10,7 @@ use tactile_core::import::{ImportOptions, import_dataset};
 
 #[derive(Subcommand)]
 pub(crate) enum DatasetCmd {
-    /// A video file (or a folder of PNG/JPEG frames) and a labels CSV with a
+    /// A video file (or a folder of frames) and a labels CSV with a
     /// `frame` column (the frame's number from 0, or its file name) become
     /// a dataset of the documented layout; unlabelled frames are skipped.
     FromVideo(FromVideoArgs),

@@ -13,8 +13,8 @@ use tactile_ros::{RunRequest, RunSession};
 #[derive(Args)]
 pub(crate) struct RunArgs {
     /// The frames: a visuo-tactile dataset (frames in labels.csv order), a
-    /// folder of PNG or JPEG frames (by the numbers in their names), one
-    /// image, a video file (mp4, mkv, avi; decoded by FFmpeg, every frame),
+    /// folder of frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM; by the
+    /// numbers in their names), one image, a video file (mp4, mkv, avi; decoded by FFmpeg, every frame),
     /// a ROS 2 bag (its folder or one .mcap; see --topic) or a V4L2 camera
     /// such as /dev/video0 (live).
     #[arg(long, required_unless_present = "stdin", conflicts_with = "stdin")]

@@ -1689,7 +1689,10 @@ fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
     let empty = tmp.path().join("empty");
     std::fs::create_dir(&empty).unwrap();
     let (ok, msg) = tactile(&["run", "--data", empty.to_str().unwrap()]);
-    assert!(!ok && msg.contains("no PNG or JPEG frames"), "{msg}");
+    assert!(
+        !ok && msg.contains("no frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM)"),
+        "{msg}"
+    );
     // Naming the folder above the frames is told which folder holds them.
     std::fs::create_dir(empty.join("frames")).unwrap();
     std::fs::copy(video.join("000000.png"), empty.join("frames/0.png")).unwrap();

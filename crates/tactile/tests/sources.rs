@@ -372,7 +372,7 @@ fn a_folder_of_jpeg_frames_runs_and_other_files_are_reported() {
     assert_eq!(summary["source"], "folder");
     assert!(
         err.contains(
-            "1 file(s) that are not PNG or JPEG frames were not read: notes.txt; \
+            "1 file(s) that are not frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM) were not read: notes.txt; \
              2 hidden file(s) (a name starting with '.', as macOS's ._ copies) were not read: \
              .DS_Store, ._000001.jpg"
         ),

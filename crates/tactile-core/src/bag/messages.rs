@@ -360,7 +360,8 @@ fn kornia_to_rgb(
 }
 
 impl CompressedImage<'_> {
-    /// The picture decoded to 8-bit RGB (JPEG or PNG, told by its bytes)
+    /// The picture decoded to 8-bit RGB (JPEG, PNG or another frame format,
+    /// told by its bytes, as `cv_bridge`'s `imdecode` tells it)
     /// as it is shown (its EXIF orientation applied, as `cv_bridge`'s
     /// `imdecode` applies it); its header's size is checked against 8K
     /// before decoding.
@@ -372,10 +373,7 @@ impl CompressedImage<'_> {
                 .map_err(|e| e.to_string())
         };
         let format = reader()?.format();
-        if !matches!(
-            format,
-            Some(image::ImageFormat::Jpeg) | Some(image::ImageFormat::Png)
-        ) {
+        if !format.is_some_and(crate::image_io::is_frame_format) {
             if super::video::is_video_format(&self.format) {
                 return Err(format!(
                     "format {:?} is a video packet, not a picture: a video topic's packets are decoded as one stream (a bag's topic that begins with one is read so; live, tactile.VideoDecoder, the ROS 2 node's video:=compressed)",
@@ -383,16 +381,19 @@ impl CompressedImage<'_> {
                 ));
             }
             return Err(format!(
-                "format {:?}: the data is not a JPEG or PNG picture",
-                self.format
+                "format {:?}: the data is not a picture in a format frames are read in ({})",
+                self.format,
+                crate::source::FRAME_FORMATS
             ));
         }
+        let refusal =
+            |what: &str, e: image::ImageError| crate::image_io::refusal(what, &e, self.data);
         let (w, h) = reader()?
             .into_dimensions()
-            .map_err(|e| format!("cannot read the picture's header: {e}"))?;
+            .map_err(|e| refusal("cannot read the picture's header", e))?;
         check_size(w as u64, h as u64)?;
         let img = crate::image_io::decode_upright(reader()?)
-            .map_err(|e| format!("cannot decode the picture: {e}"))?;
+            .map_err(|e| refusal("cannot decode the picture", e))?;
         let (w, h) = (img.width(), img.height());
         let data = match img {
             DynamicImage::ImageRgb8(b) => b.into_raw(),
@@ -433,7 +434,10 @@ mod tests {
         .to_rgb()
         .err()
         .unwrap();
-        assert!(e.contains("the data is not a JPEG or PNG picture"), "{e}");
+        assert!(
+            e.contains("the data is not a picture in a format frames are read in (PNG, JPEG,"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -519,7 +523,7 @@ mod tests {
                 .to_rgb()
                 .err()
                 .unwrap_or_default()
-                .contains("not a JPEG or PNG")
+                .contains("not a picture in a format frames are read in")
         );
         assert_eq!(
             Time::from_nanos(Time { sec: 3, nanosec: 9 }.nanos()),

@@ -41,8 +41,8 @@ def reconstruct(
     render: Optional[PathLike] = None,
     runtime: str = "onnx",
 ) -> Dict[str, Any]:
-    """Every frame of ``data`` (a frame, a folder of PNG or JPEG frames, or
-    a dataset folder) to ``out/<stem>.npy``; files that are not frames, and
+    """Every frame of ``data`` (a frame, a folder of frames: PNG, JPEG, BMP,
+    TIFF, WebP or PGM/PPM, or a dataset folder) to ``out/<stem>.npy``; files that are not frames, and
     frames unlike the sensor's (by the profile of the detector beside the
     calibration, when the folder has ``detector/``, else by the rest frame:
     changed in colour over half the picture), are named in a
