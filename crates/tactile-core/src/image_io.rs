@@ -136,12 +136,79 @@ fn upright(
 }
 
 /// `path` opened for decoding, its header read (a regular file whose
-/// header can be read).
+/// header can be read, holding one picture).
 fn open_decoder(path: &Path) -> Result<impl ImageDecoder> {
     crate::io::expect_regular(path)?;
-    open_image(path)?
+    let reader = open_image(path)?;
+    if let Some(format) = reader.format().filter(|f| may_hold_more_pictures(*f)) {
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        if let Some(why) = more_than_one_picture(std::io::BufReader::new(file), format) {
+            return Err(Error::image(path, why));
+        }
+    }
+    reader
         .into_decoder()
         .map_err(|e| file_refusal(path, "cannot read the image header", e))
+}
+
+/// IFDs of a TIFF walked to count its pages: a camera's thumbnails are a
+/// few; a stack is told by its second page.
+const MAX_TIFF_IFDS_WALKED: usize = 64;
+
+/// True for the frame formats that can hold more than one picture (a
+/// TIFF's pages, an animated WebP's frames).
+pub(crate) fn may_hold_more_pictures(format: image::ImageFormat) -> bool {
+    matches!(format, image::ImageFormat::Tiff | image::ImageFormat::WebP)
+}
+
+/// Why a picture of `format` read from `r` is refused when it holds more
+/// than one picture: a stack of frames saved in one file (ImageJ, a
+/// camera's burst, an animated WebP), of which the decoder, as OpenCV's
+/// `imread` and PIL, would give the first alone, losing the rest without
+/// a word. A TIFF's reduced-resolution pages (thumbnails: NewSubfileType
+/// bit 0) are not counted. `None` for one picture, or when the file
+/// cannot be read so far (decoding then says why).
+pub(crate) fn more_than_one_picture<R: std::io::BufRead + std::io::Seek>(
+    r: R,
+    format: image::ImageFormat,
+) -> Option<String> {
+    let split = "a frame file is one picture: save each as a file of its own, \
+                 in a folder, and pass the folder";
+    match format {
+        image::ImageFormat::Tiff => {
+            let mut tiff = tiff::decoder::Decoder::new(r).ok()?;
+            let (mut pages, mut walked) = (0usize, 0usize);
+            loop {
+                let reduced = tiff
+                    .find_tag_unsigned::<u32>(tiff::tags::Tag::NewSubfileType)
+                    .ok()
+                    .flatten()
+                    .is_some_and(|t| t & 1 == 1);
+                pages += usize::from(!reduced);
+                walked += 1;
+                if walked == MAX_TIFF_IFDS_WALKED
+                    || !tiff.more_images()
+                    || tiff.next_image().is_err()
+                {
+                    break;
+                }
+            }
+            let more = match tiff.more_images() && walked == MAX_TIFF_IFDS_WALKED {
+                true => "at least ",
+                false => "",
+            };
+            (pages > 1).then(|| {
+                format!("a TIFF of {more}{pages} pages (a stack of frames in one file); {split}")
+            })
+        }
+        image::ImageFormat::WebP => {
+            let webp = image_webp::WebPDecoder::new(r).ok()?;
+            let frames = webp.num_frames();
+            (webp.is_animated() && frames > 1)
+                .then(|| format!("an animated WebP of {frames} frames; {split}"))
+        }
+        _ => None,
+    }
 }
 
 /// Bytes of a JPEG read for its start-of-frame marker: the segments before
@@ -182,15 +249,30 @@ pub(crate) fn refusal(what: &str, e: &image::ImageError, bytes: &[u8]) -> String
         },
         // The decoders' words for these ("failed to fill whole buffer",
         // "Memory limit exceeded") do not say what is wrong with the file.
-        image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
-            format!("{what}: the file ends before its picture does (cut short)")
-        }
+        _ if cut_short(e) => format!("{what}: the file ends before its picture does (cut short)"),
         image::ImageError::Limits(_) => format!(
             "{what}: its header asks for more than a frame may take ({e}): a damaged file, \
              or not a camera's frame"
         ),
         _ => format!("{what}: {e}"),
     }
+}
+
+/// True when a decoder's error `e` is, or was caused by, reading past the
+/// end of the file (some decoders wrap it in their own format error).
+fn cut_short(e: &image::ImageError) -> bool {
+    let eof = |io: &std::io::Error| io.kind() == std::io::ErrorKind::UnexpectedEof;
+    if let image::ImageError::IoError(io) = e {
+        return eof(io);
+    }
+    let mut source = std::error::Error::source(e);
+    while let Some(cause) = source {
+        if cause.downcast_ref::<std::io::Error>().is_some_and(eof) {
+            return true;
+        }
+        source = cause.source();
+    }
+    false
 }
 
 /// True for the picture formats frames are read in, told by their bytes
@@ -661,6 +743,113 @@ mod tests {
             e.contains("anim.png") && e.contains("a GIF picture, a format frames are not read in"),
             "{e}"
         );
+    }
+
+    /// An animated WebP of `frames` copies of `frame`'s picture (a lossless
+    /// WebP, its `VP8L` chunk reused as each animation frame's).
+    fn animated_webp(frame: &[u8], (w, h): (u32, u32), frames: usize) -> Vec<u8> {
+        let le24 = |v: u32| v.to_le_bytes()[..3].to_vec();
+        let vp8l = &frame[12..]; // after "RIFF", its size and "WEBP"
+        let mut body = b"WEBPVP8X".to_vec();
+        body.extend(10u32.to_le_bytes());
+        body.extend([0x02, 0, 0, 0]); // the animation flag
+        body.extend(le24(w - 1));
+        body.extend(le24(h - 1));
+        body.extend(b"ANIM");
+        body.extend(6u32.to_le_bytes());
+        body.extend([0; 6]); // background colour, loop forever
+        for _ in 0..frames {
+            let mut anmf = [le24(0), le24(0), le24(w - 1), le24(h - 1), le24(100)].concat();
+            anmf.push(0b10); // drawn over the canvas, not blended
+            anmf.extend(vp8l);
+            body.extend(b"ANMF");
+            body.extend((anmf.len() as u32).to_le_bytes());
+            body.extend(&anmf);
+            if anmf.len() % 2 == 1 {
+                body.push(0);
+            }
+        }
+        let mut riff = b"RIFF".to_vec();
+        riff.extend((body.len() as u32).to_le_bytes());
+        riff.extend(body);
+        riff
+    }
+
+    #[test]
+    fn a_stack_of_frames_in_one_file_is_refused_not_read_as_its_first() {
+        // A TIFF of several pages (ImageJ's stacks, a camera's burst) or an
+        // animated WebP holds many frames; decoders, OpenCV's imread and
+        // PIL give the first alone. Read as one frame, the rest would be
+        // lost without a word: it is refused, saying what to do. A TIFF's
+        // thumbnail page (reduced resolution) is no frame of its own.
+        use tiff::encoder::{TiffEncoder, colortype::RGB8};
+        let (w, h) = (24u32, 16u32);
+        let rgb: Vec<u8> = (0..w * h * 3).map(|i| (i * 5 % 253) as u8).collect();
+        let dir = tempfile::tempdir().unwrap();
+        let tiff_of = |pages: usize, thumbnail: bool| {
+            let mut bytes = std::io::Cursor::new(Vec::new());
+            let mut tiff = TiffEncoder::new(&mut bytes).unwrap();
+            for _ in 0..pages {
+                tiff.write_image::<RGB8>(w, h, &rgb).unwrap();
+            }
+            if thumbnail {
+                let mut page = tiff.new_image::<RGB8>(w / 2, h / 2).unwrap();
+                (page.encoder())
+                    .write_tag(tiff::tags::Tag::NewSubfileType, 1u32)
+                    .unwrap();
+                page.write_data(&rgb[..(w * h * 3 / 4) as usize]).unwrap();
+            }
+            bytes.into_inner()
+        };
+        let mut webp = Vec::new();
+        DynamicImage::ImageRgb8(image::RgbImage::from_raw(w, h, rgb.clone()).unwrap())
+            .write_to(
+                &mut std::io::Cursor::new(&mut webp),
+                image::ImageFormat::WebP,
+            )
+            .unwrap();
+        let cases = [
+            (
+                "stack.tif",
+                tiff_of(3, false),
+                Some(
+                    "a TIFF of 3 pages (a stack of frames in one file); a frame file is one picture: save each as a file of its own",
+                ),
+            ),
+            ("thumbnailed.tif", tiff_of(1, true), None),
+            ("one.tif", tiff_of(1, false), None),
+            (
+                "burst.webp",
+                animated_webp(&webp, (w, h), 2),
+                Some("an animated WebP of 2 frames; a frame file is one picture"),
+            ),
+            ("one-frame.webp", animated_webp(&webp, (w, h), 1), None),
+            ("still.webp", webp.clone(), None),
+        ];
+        for (name, bytes, refusal) in cases {
+            let path = dir.path().join(name);
+            std::fs::write(&path, &bytes).unwrap();
+            let message = crate::bag::messages::CompressedImage {
+                header: Default::default(),
+                format: "tiff".into(),
+                data: &bytes,
+            };
+            match refusal {
+                Some(words) => {
+                    for e in [
+                        rgb_frame_header(&path).unwrap_err().to_string(),
+                        load_rgb(&path).err().unwrap().to_string(),
+                        message.to_rgb().err().unwrap(),
+                    ] {
+                        assert!(e.contains(words), "{name}: {e}");
+                    }
+                }
+                None => {
+                    assert_eq!(load_rgb(&path).unwrap().as_slice(), &rgb[..], "{name}");
+                    assert_eq!(message.to_rgb().unwrap().as_slice(), &rgb[..], "{name}");
+                }
+            }
+        }
     }
 
     /// A TIFF block of EXIF metadata holding one tag, the orientation
