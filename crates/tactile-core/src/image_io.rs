@@ -482,7 +482,7 @@ fn opaque(color: ColorType, data: &[u8], channels: usize) -> std::result::Result
     })
 }
 
-/// Load an 8-bit greyscale PNG. 8-bit RGB is converted to grey, and an
+/// Load a frame file as 8-bit greyscale. 8-bit RGB is converted to grey, and an
 /// alpha channel dropped when every pixel is opaque; anything else
 /// (16-bit, transparent pixels) is rejected with an error naming the file
 /// and the format found.
@@ -504,7 +504,7 @@ pub fn load_grey(path: impl AsRef<Path>) -> Result<GreyImage> {
     grey_image(w, h, data).map_err(|e| Error::image(path, e.to_string()))
 }
 
-/// Load an 8-bit RGB PNG. 8-bit greyscale is expanded to RGB, and an alpha
+/// Load a frame file as 8-bit RGB. 8-bit greyscale is expanded to RGB, and an alpha
 /// channel dropped when every pixel is opaque; 16-bit images and
 /// transparent pixels are rejected with an error naming the file.
 pub fn load_rgb(path: impl AsRef<Path>) -> Result<RgbImage> {
