@@ -895,7 +895,17 @@ mod tests {
         enc.write_image(&stored, w, h, image::ExtendedColorType::Rgb8)
             .unwrap();
         std::fs::write(&png, &bytes).unwrap();
-        for path in [&jpeg, &png] {
+        // A TIFF says it in its own Orientation tag, which OpenCV applies too.
+        let tif = dir.path().join("side.tif");
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        let mut tiff = tiff::encoder::TiffEncoder::new(&mut bytes).unwrap();
+        let mut page = (tiff.new_image::<tiff::encoder::colortype::RGB8>(w, h)).unwrap();
+        (page.encoder())
+            .write_tag(tiff::tags::Tag::Orientation, 6u16)
+            .unwrap();
+        page.write_data(&stored).unwrap();
+        std::fs::write(&tif, bytes.into_inner()).unwrap();
+        for path in [&jpeg, &png, &tif] {
             let header = rgb_frame_header(path).unwrap();
             assert_eq!((header.width, header.height), (h, w), "{path:?}");
             let rgb = load_rgb(path).unwrap();

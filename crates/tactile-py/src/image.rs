@@ -22,7 +22,8 @@ pub(crate) fn rgb_array(
         .into_any())
 }
 
-/// An 8-bit PNG as `(H, W, 3)` uint8 RGB (grey is expanded).
+/// A frame file (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM, 8 bits per
+/// channel) as `(H, W, 3)` uint8 RGB (grey is expanded).
 #[pyfunction]
 pub(crate) fn read_rgb(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
     let img = py
@@ -31,7 +32,8 @@ pub(crate) fn read_rgb(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAn
     rgb_array(py, img)
 }
 
-/// An 8-bit PNG as `(H, W)` uint8 grey (RGB converted with OpenCV's weights).
+/// A frame file (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM, 8 bits per
+/// channel) as `(H, W)` uint8 grey (RGB converted with OpenCV's weights).
 #[pyfunction]
 pub(crate) fn read_grey(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
     let img = py

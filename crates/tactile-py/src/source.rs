@@ -243,8 +243,8 @@ impl PyVideoDecoder {
     }
 }
 
-/// Open a source of frames: `source` is a dataset folder, a folder of PNG or
-/// JPEG frames, an image, a video file (decoded by the system's FFmpeg,
+/// Open a source of frames: `source` is a dataset folder, a folder of frames
+/// (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM), an image, a video file (decoded by the system's FFmpeg,
 /// every frame), a ROS 2 bag (its folder or one ".mcap"; `topic` names its
 /// image topic, else its only one is read) or a camera device such as
 /// "/dev/video0" (live); or give
