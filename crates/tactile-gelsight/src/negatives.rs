@@ -31,7 +31,10 @@ pub fn real_frames(config: &CalibratedConfig, sensor: &Path) -> Result<RealFrame
         });
     }
     let mut rec = Reconstructor::load(sensor, Runtime::BurnNdarray, 0)?;
-    rec.set_background(&presses.background, &presses.root.join("background.png"))?;
+    rec.set_background(
+        &presses.background,
+        &presses.root.join(&presses.sensor.background),
+    )?;
     let used = n - config.real_held_out;
     let mut frames = Vec::with_capacity(used);
     for (i, p) in presses.presses.iter().enumerate().take(used) {
