@@ -76,8 +76,8 @@ pub struct FrameList {
 
 /// Extensions of the frame files a folder may hold: the picture formats
 /// OpenCV's `imread` reads that the `image` crate decodes (lab cameras'
-/// tools save BMP and TIFF as often as PNG). A file is decoded by what its
-/// bytes are, not by its name.
+/// tools often save BMP or TIFF). A file is decoded by what its bytes are,
+/// not by its name.
 pub const FRAME_EXTENSIONS: [&str; 9] = [
     "png", "jpg", "jpeg", "bmp", "tif", "tiff", "webp", "pgm", "ppm",
 ];

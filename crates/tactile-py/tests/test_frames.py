@@ -39,7 +39,7 @@ def test_a_folder_numbered_without_zeros_comes_in_time(root, tmp_path, palpation
 
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
 def test_a_folder_of_bmp_tiff_and_ppm_frames_reads_as_the_png_folder(root, tmp_path, palpation_frames):
-    # Lab cameras' tools save BMP and TIFF as often as PNG; OpenCV's imread
+    # Lab cameras' tools often save BMP or TIFF; OpenCV's imread
     # reads them, and so does every folder here (before: "no PNG or JPEG
     # frames"). One is named .png, and is read by its bytes.
     names = []
