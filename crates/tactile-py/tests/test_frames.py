@@ -70,6 +70,52 @@ def test_a_folder_of_bmp_tiff_and_ppm_frames_reads_as_the_png_folder(root, tmp_p
         list(tactile.frames(lossless.parent))
 
 
+def _tiff(pages: list[np.ndarray]) -> bytes:
+    """Uncompressed RGB pages as one little-endian TIFF (TIFF 6.0, a
+    baseline RGB image per page), as ImageJ saves a stack."""
+    import struct
+
+    out = bytearray(b"II*\0" + struct.pack("<I", 0))
+    link = 4  # where the offset of the next page's directory goes
+    for page in pages:
+        h, w, _ = page.shape
+        pixels = len(out)
+        out += page.tobytes()
+        bits = len(out)
+        out += struct.pack("<3H", 8, 8, 8)
+        entries = [(256, 4, 1, w), (257, 4, 1, h), (258, 3, 3, bits), (259, 3, 1, 1),
+                   (262, 3, 1, 2), (273, 4, 1, pixels), (277, 3, 1, 3), (278, 4, 1, h),
+                   (279, 4, 1, w * h * 3), (284, 3, 1, 1)]
+        if len(out) % 2:
+            out += b"\0"
+        struct.pack_into("<I", out, link, len(out))
+        out += struct.pack("<H", len(entries))
+        for tag, kind, count, value in entries:
+            packed = struct.pack("<H", value) + b"\0\0" if kind == 3 and count == 1 else struct.pack("<I", value)
+            out += struct.pack("<HHI", tag, kind, count) + packed
+        link = len(out)
+        out += struct.pack("<I", 0)
+    return bytes(out)
+
+
+def test_a_stack_of_frames_in_one_tiff_is_refused_not_read_as_its_first(tmp_path, palpation_frames):
+    # A TIFF of several pages holds several frames; read as one frame (its
+    # first page, as OpenCV's imread and PIL read it), the rest would be
+    # lost without a word.
+    one = tmp_path / "one" / "000000.tif"
+    one.parent.mkdir()
+    one.write_bytes(_tiff(palpation_frames[:1]))
+    got = list(tactile.frames(one.parent))
+    assert len(got) == 1 and np.array_equal(got[0].image, palpation_frames[0])
+    stack = tmp_path / "stack" / "000000.tif"
+    stack.parent.mkdir()
+    stack.write_bytes(_tiff(palpation_frames[:3]))
+    with pytest.raises(ValueError, match=r"000000\.tif: a TIFF of 3 pages \(a stack of frames in one file\)"):
+        list(tactile.frames(stack.parent))
+    with pytest.raises(ValueError, match=r"a TIFF of 3 pages"):
+        tactile.read_rgb(stack)
+
+
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
 def test_lossless_video_gives_the_pipeline_the_same_frames(root, tmp_path, pipeline, palpation_frames):
     video = tmp_path / "palpation.mp4"
