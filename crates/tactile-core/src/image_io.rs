@@ -156,8 +156,9 @@ fn open_decoder(path: &Path) -> Result<impl ImageDecoder> {
 const MAX_TIFF_IFDS_WALKED: usize = 64;
 
 /// True for the frame formats that can hold more than one picture (a
-/// TIFF's pages, an animated WebP's frames).
-pub(crate) fn may_hold_more_pictures(format: image::ImageFormat) -> bool {
+/// TIFF's pages, an animated WebP's frames): those a file is opened a
+/// second time for, to count them.
+fn may_hold_more_pictures(format: image::ImageFormat) -> bool {
     matches!(format, image::ImageFormat::Tiff | image::ImageFormat::WebP)
 }
 

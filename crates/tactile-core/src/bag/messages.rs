@@ -386,11 +386,9 @@ impl CompressedImage<'_> {
                 crate::source::FRAME_FORMATS
             ));
         }
-        if let Some(format) = format.filter(|f| crate::image_io::may_hold_more_pictures(*f)) {
-            let bytes = std::io::Cursor::new(self.data);
-            if let Some(why) = crate::image_io::more_than_one_picture(bytes, format) {
-                return Err(why);
-            }
+        let bytes = std::io::Cursor::new(self.data);
+        if let Some(why) = format.and_then(|f| crate::image_io::more_than_one_picture(bytes, f)) {
+            return Err(why);
         }
         let refusal =
             |what: &str, e: image::ImageError| crate::image_io::refusal(what, &e, self.data);
