@@ -126,7 +126,7 @@ pub(crate) fn decode_upright<R: std::io::BufRead + std::io::Seek>(
 }
 
 /// `decoder`'s picture decoded, then turned as `orientation` says.
-fn upright(
+pub(crate) fn upright(
     decoder: impl ImageDecoder,
     orientation: Orientation,
 ) -> image::ImageResult<DynamicImage> {
@@ -143,6 +143,10 @@ fn open_decoder(path: &Path) -> Result<impl ImageDecoder> {
     if let Some(format) = reader.format().filter(|f| may_hold_more_pictures(*f)) {
         let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
         if let Some(why) = more_than_one_picture(std::io::BufReader::new(file), format) {
+            let why = match format {
+                image::ImageFormat::Tiff => format!("{why}; {ONE_PICTURE_HERE}"),
+                _ => why,
+            };
             return Err(Error::image(path, why));
         }
     }
@@ -162,19 +166,26 @@ fn may_hold_more_pictures(format: image::ImageFormat) -> bool {
     matches!(format, image::ImageFormat::Tiff | image::ImageFormat::WebP)
 }
 
-/// Why a picture of `format` read from `r` is refused when it holds more
-/// than one picture: a stack of frames saved in one file (ImageJ, a
+/// What a frame file read as one picture (in a folder, or decoded alone)
+/// that holds a stack is told to do: the stack given alone as the source
+/// is read page by page ([`crate::stack`]).
+const ONE_PICTURE_HERE: &str = "a frame file is one picture here: give the stack \
+     alone as the source (--data, tactile.frames) to read its pages as frames, or save \
+     each as a file of its own";
+
+/// A picture of `format` read from `r` that holds more than one, named
+/// with its count: a stack of frames saved in one file (ImageJ, a
 /// camera's burst, an animated WebP), of which the decoder, as OpenCV's
 /// `imread` and PIL, would give the first alone, losing the rest without
-/// a word. A TIFF's reduced-resolution pages (thumbnails: NewSubfileType
-/// bit 0) are not counted. `None` for one picture, or when the file
-/// cannot be read so far (decoding then says why).
+/// a word. Where one picture is read it is refused; given alone as the
+/// source it is read page by page ([`crate::stack`]). A TIFF's
+/// reduced-resolution pages (thumbnails: NewSubfileType bit 0) are not
+/// counted. `None` for one picture, or when the file cannot be read so
+/// far (decoding then says why).
 pub(crate) fn more_than_one_picture<R: std::io::BufRead + std::io::Seek>(
     r: R,
     format: image::ImageFormat,
 ) -> Option<String> {
-    let split = "a frame file is one picture: save each as a file of its own, \
-                 in a folder, and pass the folder";
     match format {
         image::ImageFormat::Tiff => {
             let mut tiff = tiff::decoder::Decoder::new(r).ok()?;
@@ -198,15 +209,19 @@ pub(crate) fn more_than_one_picture<R: std::io::BufRead + std::io::Seek>(
                 true => "at least ",
                 false => "",
             };
-            (pages > 1).then(|| {
-                format!("a TIFF of {more}{pages} pages (a stack of frames in one file); {split}")
-            })
+            (pages > 1)
+                .then(|| format!("a TIFF of {more}{pages} pages (a stack of frames in one file)"))
         }
         image::ImageFormat::WebP => {
             let webp = image_webp::WebPDecoder::new(r).ok()?;
             let frames = webp.num_frames();
-            (webp.is_animated() && frames > 1)
-                .then(|| format!("an animated WebP of {frames} frames; {split}"))
+            (webp.is_animated() && frames > 1).then(|| {
+                format!(
+                    "an animated WebP of {frames} frames (a stack of frames in one file), \
+                     whose frames are not read: its decoder composes them a level off; save \
+                     them as a TIFF of pages or as files of their own"
+                )
+            })
         }
         _ => None,
     }
@@ -351,7 +366,7 @@ fn jpeg_coding_words(n: u8, precision: u8) -> Option<String> {
 }
 
 /// What an opened picture's header says, and its EXIF orientation.
-fn header_of(decoder: &mut impl ImageDecoder) -> (ImageHeader, Orientation) {
+pub(crate) fn header_of(decoder: &mut impl ImageDecoder) -> (ImageHeader, Orientation) {
     let orientation = exif_orientation(decoder);
     let turned_sideways = turns_sideways(orientation);
     let (stored_width, stored_height) = decoder.dimensions();
@@ -375,25 +390,18 @@ pub fn image_header(path: &Path) -> Result<ImageHeader> {
     Ok(header_of(&mut open_decoder(path)?).0)
 }
 
-/// `path`'s header when its pixels fit the decoding limit (8K).
-fn header_within_limit(path: &Path) -> Result<ImageHeader> {
-    let header = image_header(path)?;
-    within_limit(path, &header)?;
-    Ok(header)
-}
-
 /// Refuse a picture whose header claims more pixels than 8K.
 fn within_limit(path: &Path, header: &ImageHeader) -> Result<()> {
-    let (w, h) = (header.width, header.height);
-    if w as u64 * h as u64 > MAX_IMAGE_PIXELS {
-        return Err(Error::image(
-            path,
-            format!(
-                "image is {w}x{h}, larger than 8K ({MAX_IMAGE_PIXELS} pixels); refusing to decode it"
-            ),
-        ));
-    }
-    Ok(())
+    beyond_limit(header.width, header.height).map_or(Ok(()), |why| Err(Error::image(path, why)))
+}
+
+/// Why a picture of `w` x `h` pixels is not decoded: more than 8K.
+pub(crate) fn beyond_limit(w: u32, h: u32) -> Option<String> {
+    (w as u64 * h as u64 > MAX_IMAGE_PIXELS).then(|| {
+        format!(
+            "image is {w}x{h}, larger than 8K ({MAX_IMAGE_PIXELS} pixels); refusing to decode it"
+        )
+    })
 }
 
 /// What [`load_rgb`] expects of a frame file.
@@ -414,11 +422,18 @@ fn rgb_readable(color: ColorType) -> bool {
 /// frames are checked this way before any is decoded, so a bad one is
 /// named at once, not after every frame before it.
 pub fn rgb_frame_header(path: &Path) -> Result<ImageHeader> {
-    let header = header_within_limit(path)?;
-    if !rgb_readable(header.color) {
-        return Err(Error::image(path, not_eight_bit(header.color, RGB_FRAME)));
+    let header = image_header(path)?;
+    match rgb_header_refusal(&header) {
+        Some(why) => Err(Error::image(path, why)),
+        None => Ok(header),
     }
-    Ok(header)
+}
+
+/// Why a picture of `header` would not be read as an RGB frame (past 8K,
+/// not 8 bits per channel); `None` when [`rgb_frame`] will take it.
+pub(crate) fn rgb_header_refusal(header: &ImageHeader) -> Option<String> {
+    beyond_limit(header.width, header.height)
+        .or_else(|| (!rgb_readable(header.color)).then(|| not_eight_bit(header.color, RGB_FRAME)))
 }
 
 /// `path` decoded as it is shown, opened once: its header checked against
@@ -510,7 +525,14 @@ pub fn load_grey(path: impl AsRef<Path>) -> Result<GreyImage> {
 /// transparent pixels are rejected with an error naming the file.
 pub fn load_rgb(path: impl AsRef<Path>) -> Result<RgbImage> {
     let path = path.as_ref();
-    let img = decode(path)?;
+    rgb_frame(decode(path)?).map_err(|e| Error::image(path, e))
+}
+
+/// A decoded picture as an 8-bit RGB frame, the one rule of a frame file
+/// and a stack's page: 8-bit greyscale expanded, an alpha channel dropped
+/// when every pixel is opaque; other depths and transparent pixels
+/// refused, saying why.
+pub(crate) fn rgb_frame(img: DynamicImage) -> std::result::Result<RgbImage, String> {
     let (w, h) = (img.width() as usize, img.height() as usize);
     let color = img.color();
     let data = match img {
@@ -519,9 +541,8 @@ pub fn load_rgb(path: impl AsRef<Path>) -> Result<RgbImage> {
         DynamicImage::ImageRgba8(buf) => opaque(color, buf.as_raw(), 4),
         DynamicImage::ImageLumaA8(buf) => opaque(color, buf.as_raw(), 2).map(|g| grey_to_rgb(&g)),
         _ => Err(not_eight_bit(color, RGB_FRAME)),
-    }
-    .map_err(|e| Error::image(path, e))?;
-    rgb_image(w, h, data).map_err(|e| Error::image(path, e.to_string()))
+    }?;
+    rgb_image(w, h, data).map_err(|e| e.to_string())
 }
 
 /// Check an image's size, naming the file when it is wrong.
@@ -749,8 +770,13 @@ mod tests {
     /// An animated WebP of `frames` copies of `frame`'s picture (a lossless
     /// WebP, its `VP8L` chunk reused as each animation frame's).
     fn animated_webp(frame: &[u8], (w, h): (u32, u32), frames: usize) -> Vec<u8> {
+        animation_of(&vec![frame; frames], (w, h))
+    }
+
+    /// An animated WebP whose frames are `pictures` (lossless WebPs of
+    /// `w` x `h`, each `VP8L` chunk an animation frame's).
+    fn animation_of(pictures: &[&[u8]], (w, h): (u32, u32)) -> Vec<u8> {
         let le24 = |v: u32| v.to_le_bytes()[..3].to_vec();
-        let vp8l = &frame[12..]; // after "RIFF", its size and "WEBP"
         let mut body = b"WEBPVP8X".to_vec();
         body.extend(10u32.to_le_bytes());
         body.extend([0x02, 0, 0, 0]); // the animation flag
@@ -759,7 +785,8 @@ mod tests {
         body.extend(b"ANIM");
         body.extend(6u32.to_le_bytes());
         body.extend([0; 6]); // background colour, loop forever
-        for _ in 0..frames {
+        for picture in pictures {
+            let vp8l = &picture[12..]; // after "RIFF", its size and "WEBP"
             let mut anmf = [le24(0), le24(0), le24(w - 1), le24(h - 1), le24(100)].concat();
             anmf.push(0b10); // drawn over the canvas, not blended
             anmf.extend(vp8l);
@@ -813,16 +840,14 @@ mod tests {
             (
                 "stack.tif",
                 tiff_of(3, false),
-                Some(
-                    "a TIFF of 3 pages (a stack of frames in one file); a frame file is one picture: save each as a file of its own",
-                ),
+                Some("a TIFF of 3 pages (a stack of frames in one file)"),
             ),
             ("thumbnailed.tif", tiff_of(1, true), None),
             ("one.tif", tiff_of(1, false), None),
             (
                 "burst.webp",
                 animated_webp(&webp, (w, h), 2),
-                Some("an animated WebP of 2 frames; a frame file is one picture"),
+                Some("an animated WebP of 2 frames (a stack of frames in one file)"),
             ),
             ("one-frame.webp", animated_webp(&webp, (w, h), 1), None),
             ("still.webp", webp.clone(), None),
@@ -837,13 +862,26 @@ mod tests {
             };
             match refusal {
                 Some(words) => {
+                    // A frame file read as one picture says how to read it
+                    // whole (a TIFF), or why it is not read (an animated
+                    // WebP); a message's picture is one frame.
+                    let here = match name.ends_with(".tif") {
+                        true => {
+                            "a frame file is one picture here: give the stack alone as the source"
+                        }
+                        false => "whose frames are not read: its decoder composes them a level off",
+                    };
                     for e in [
                         rgb_frame_header(&path).unwrap_err().to_string(),
                         load_rgb(&path).err().unwrap().to_string(),
-                        message.to_rgb().err().unwrap(),
                     ] {
-                        assert!(e.contains(words), "{name}: {e}");
+                        assert!(e.contains(words) && e.contains(here), "{name}: {e}");
                     }
+                    let e = message.to_rgb().err().unwrap();
+                    assert!(
+                        e.contains(words) && e.contains("a message's picture is one frame"),
+                        "{name}: {e}"
+                    );
                 }
                 None => {
                     assert_eq!(load_rgb(&path).unwrap().as_slice(), &rgb[..], "{name}");
@@ -851,6 +889,173 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_stack_given_alone_is_read_page_by_page_as_a_video_is() {
+        // ImageJ's and Micro-Manager's stacks and a camera's burst are one
+        // TIFF of many pages; an animated WebP holds many frames. Given
+        // alone as the source, each page is a frame, in order, named by its
+        // number as a video's frames are; thumbnails are skipped, each
+        // page's orientation tag applied, and a page that cannot be read
+        // is named by its number.
+        use crate::source::{FrameSource, SourceKind, SourceOptions, SourceSpec};
+        use tiff::encoder::{TiffEncoder, colortype::Gray16, colortype::RGB8};
+        let (w, h) = (24u32, 16u32);
+        let page = |k: u32| -> Vec<u8> {
+            (0..w * h * 3)
+                .map(|i| ((i * 5 + k * 41) % 253) as u8)
+                .collect()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let frames_of = |path: &Path| {
+            let spec = SourceSpec::Path(path.to_path_buf());
+            FrameSource::open(&spec, SourceOptions::default()).and_then(|mut source| {
+                assert_eq!(source.kind(), SourceKind::Stack);
+                let size = source.size();
+                let mut got = Vec::new();
+                while let Some(f) = source.next_frame()? {
+                    got.push((
+                        f.name,
+                        f.image.width(),
+                        f.image.height(),
+                        f.image.as_slice().to_vec(),
+                    ));
+                }
+                Ok((size, got))
+            })
+        };
+        // Three pages with a thumbnail after the first and a page turned a
+        // quarter (stored 16x24 with Orientation 6: shown 24x16).
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        let mut tiff = TiffEncoder::new(&mut bytes).unwrap();
+        tiff.write_image::<RGB8>(w, h, &page(0)).unwrap();
+        let mut thumb = tiff.new_image::<RGB8>(w / 2, h / 2).unwrap();
+        (thumb.encoder())
+            .write_tag(tiff::tags::Tag::NewSubfileType, 1u32)
+            .unwrap();
+        thumb
+            .write_data(&page(9)[..(w * h * 3 / 4) as usize])
+            .unwrap();
+        tiff.write_image::<RGB8>(w, h, &page(1)).unwrap();
+        // Page 2 shown upright is page(2); stored turned back a quarter.
+        let shown = image::RgbImage::from_raw(w, h, page(2)).unwrap();
+        let stored = image::imageops::rotate270(&shown);
+        let mut turned = tiff.new_image::<RGB8>(h, w).unwrap();
+        (turned.encoder())
+            .write_tag(tiff::tags::Tag::Orientation, 6u16)
+            .unwrap();
+        turned.write_data(stored.as_raw()).unwrap();
+        let stack = dir.path().join("stack.tif");
+        std::fs::write(&stack, bytes.into_inner()).unwrap();
+        let (size, got) = frames_of(&stack).unwrap();
+        assert_eq!(size, Some((w as usize, h as usize)));
+        assert_eq!(got.len(), 3, "thumbnail skipped");
+        for (k, (name, fw, fh, pixels)) in got.iter().enumerate() {
+            assert_eq!(name, &format!("{k:06}"));
+            assert_eq!((*fw, *fh), (w as usize, h as usize), "frame {k}");
+            assert!(
+                pixels == &page(k as u32),
+                "frame {k}: not its page's pixels"
+            );
+        }
+        // A BigTIFF stack reads alike (its header's offset is 8 bytes).
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        let mut big = TiffEncoder::new_big(&mut bytes).unwrap();
+        for k in 0..2 {
+            big.write_image::<RGB8>(w, h, &page(k)).unwrap();
+        }
+        let big_stack = dir.path().join("big.tiff");
+        std::fs::write(&big_stack, bytes.into_inner()).unwrap();
+        let (_, got) = frames_of(&big_stack).unwrap();
+        assert!(got.len() == 2 && got[1].3 == page(1), "BigTIFF pages");
+        // A stack cut short (a recording stopped while it was written)
+        // gives the pages before the cut, with a warning, as a video cut
+        // short does.
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        let mut tiff = TiffEncoder::new(&mut bytes).unwrap();
+        for k in 0..4 {
+            tiff.write_image::<RGB8>(w, h, &page(k)).unwrap();
+        }
+        let whole = bytes.into_inner();
+        let cut = dir.path().join("cut.tif");
+        std::fs::write(&cut, &whole[..whole.len() * 7 / 10]).unwrap();
+        let spec = SourceSpec::Path(cut.clone());
+        let mut source = FrameSource::open(&spec, SourceOptions::default()).unwrap();
+        let mut given = Vec::new();
+        while let Some(f) = source.next_frame().unwrap() {
+            assert!(f.image.as_slice() == page(given.len() as u32), "{}", f.name);
+            given.push(f.name);
+        }
+        assert_eq!(given, ["000000", "000001"]);
+        let late = source.late_warnings().join("\n");
+        assert!(
+            late.contains(
+                "cut.tif ends inside the directory of frame 000002 of the stack (cut short): \
+                 the 2 frames before it are read"
+            ),
+            "{late}"
+        );
+        std::fs::remove_file(&cut).unwrap();
+        // An animated WebP is refused as a source: image-webp composes its
+        // frames a level off (libwebp gives them exactly).
+        let webp = |k: u32| {
+            let mut out = Vec::new();
+            DynamicImage::ImageRgb8(image::RgbImage::from_raw(w, h, page(k)).unwrap())
+                .write_to(
+                    &mut std::io::Cursor::new(&mut out),
+                    image::ImageFormat::WebP,
+                )
+                .unwrap();
+            out
+        };
+        let (a, b) = (webp(3), webp(4));
+        let anim = dir.path().join("burst.webp");
+        std::fs::write(&anim, animation_of(&[&a, &b, &a], (w, h))).unwrap();
+        let spec = SourceSpec::Path(anim.clone());
+        let e = FrameSource::open(&spec, SourceOptions::default())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("burst.webp: an animated WebP of 3 frames")
+                && e.contains("whose frames are not read"),
+            "{e}"
+        );
+        // A page of 16 bits is named by its number, with the usual advice.
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        let mut tiff = TiffEncoder::new(&mut bytes).unwrap();
+        tiff.write_image::<RGB8>(w, h, &page(0)).unwrap();
+        tiff.write_image::<Gray16>(w, h, &vec![4000u16; (w * h) as usize])
+            .unwrap();
+        let deep = dir.path().join("deep.tif");
+        std::fs::write(&deep, bytes.into_inner()).unwrap();
+        let e = frames_of(&deep).unwrap_err().to_string();
+        assert!(
+            e.contains("deep.tif")
+                && e.contains("frame 000001 of the stack")
+                && e.contains("16-bit greyscale"),
+            "{e}"
+        );
+        // One picture, or a stack in a folder, is not a stack source.
+        let one = dir.path().join("one.tif");
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        TiffEncoder::new(&mut bytes)
+            .unwrap()
+            .write_image::<RGB8>(w, h, &page(0))
+            .unwrap();
+        std::fs::write(&one, bytes.into_inner()).unwrap();
+        assert!(
+            crate::stack::StackFrames::open(&one, None)
+                .unwrap()
+                .is_none()
+        );
+        let spec = SourceSpec::Path(dir.path().to_path_buf());
+        let e = FrameSource::open(&spec, SourceOptions::default())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("a frame file is one picture here"), "{e}");
     }
 
     /// A TIFF block of EXIF metadata holding one tag, the orientation

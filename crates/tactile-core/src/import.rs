@@ -205,8 +205,9 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
         let Some(frame) = source.next_frame()? else {
             break;
         };
-        // A bag's frames are counted by their messages on the topic.
-        let number = frame.message_index.unwrap_or(read);
+        // A frame's number is its place in its source (a bag's: its message
+        // on the topic), kept when a frame before it could not be decoded.
+        let number = frame.index_in_source.unwrap_or(read);
         read += 1;
         let key_num = FrameKey::Number(number);
         let key_name = FrameKey::Name(frame.name.clone());
@@ -366,4 +367,95 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
         frames_read: read,
         size: (w, h),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Import `frames` with labels on frames 0 and 2, and give the
+    /// pixels of the dataset's two frames.
+    fn import_frames_0_and_2(frames: &Path, dir: &Path) -> (ImportSummary, Vec<Vec<u8>>) {
+        let labels = dir.join("labels-in.csv");
+        std::fs::write(&labels, "frame,tendon\n0,0\n2,1\n").unwrap();
+        let out = dir.join(format!(
+            "ds-{}",
+            frames.file_name().unwrap().to_string_lossy()
+        ));
+        let summary = import_dataset(&ImportOptions {
+            frames: frames.to_path_buf(),
+            topic: None,
+            labels,
+            kind: DatasetKind::Visuotactile,
+            out: out.clone(),
+            sensor: String::new(),
+            force: false,
+        })
+        .unwrap();
+        let pixels = ["000000.png", "000001.png"]
+            .iter()
+            .map(|f| {
+                (crate::image_io::load_rgb(out.join("frames").join(f)).unwrap())
+                    .as_slice()
+                    .to_vec()
+            })
+            .collect();
+        (summary, pixels)
+    }
+
+    #[test]
+    fn a_frame_skipped_as_undecodable_keeps_the_numbers_of_the_frames_after_it() {
+        // A frame whose pixels cannot be decoded behind a whole header is
+        // skipped; the frames after it keep their numbers, so a label by
+        // number stays on its frame. Before, frame 2's label went to the
+        // frame after it, without a word.
+        let (w, h) = (24usize, 16usize);
+        let page = |k: usize| -> Vec<u8> {
+            (0..w * h * 3)
+                .map(|i| ((i * 7 + k * 53) % 251) as u8)
+                .collect()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        // A folder whose frame 1 is cut short behind its header.
+        let folder = dir.path().join("folder");
+        std::fs::create_dir(&folder).unwrap();
+        for k in 0..4 {
+            let f = folder.join(format!("{k:06}.png"));
+            crate::image_io::save_rgb_png(&f, w, h, &page(k)).unwrap();
+            if k == 1 {
+                let bytes = std::fs::read(&f).unwrap();
+                std::fs::write(&f, &bytes[..bytes.len() / 2]).unwrap();
+            }
+        }
+        // A stack whose page 1's compressed pixels are corrupt.
+        use tiff::encoder::{Compression, DeflateLevel, TiffEncoder, colortype::RGB8};
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        let mut tiff = TiffEncoder::new(&mut bytes)
+            .unwrap()
+            .with_compression(Compression::Deflate(DeflateLevel::Balanced));
+        for k in 0..4 {
+            tiff.write_image::<RGB8>(w as u32, h as u32, &page(k))
+                .unwrap();
+        }
+        let mut bytes = bytes.into_inner();
+        // Each page's zlib stream starts 0x78; the second is page 1's.
+        let starts: Vec<usize> = (0..bytes.len() - 1)
+            .filter(|&i| bytes[i] == 0x78 && [0x01, 0x5E, 0x9C, 0xDA].contains(&bytes[i + 1]))
+            .collect();
+        assert!(starts.len() >= 4, "{starts:?}");
+        for b in &mut bytes[starts[1] + 2..starts[1] + 40] {
+            *b = 0xFF;
+        }
+        let stack = dir.path().join("stack.tif");
+        std::fs::write(&stack, &bytes).unwrap();
+        for frames in [folder, stack] {
+            let (summary, pixels) = import_frames_0_and_2(&frames, dir.path());
+            assert_eq!(summary.frames, 2, "{frames:?}");
+            assert!(pixels[0] == page(0), "{frames:?}: frame 0");
+            assert!(
+                pixels[1] == page(2),
+                "{frames:?}: frame 2's label on another frame"
+            );
+        }
+    }
 }

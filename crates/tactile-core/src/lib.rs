@@ -25,6 +25,7 @@ pub mod progress;
 pub mod rng;
 pub mod source;
 pub mod spec;
+pub mod stack;
 pub mod video;
 
 /// A progress note on stderr. Unlike `eprintln!` it never panics: a note

@@ -391,6 +391,9 @@ pub enum SourceKind {
     Folder,
     /// A video file decoded by FFmpeg.
     Video,
+    /// A file of many frames given alone: a TIFF's pages or an animated
+    /// WebP's frames ([`crate::stack`]).
+    Stack,
     /// An image topic of a ROS 2 bag (MCAP).
     Bag,
     /// A V4L2 camera, live.
@@ -492,10 +495,13 @@ pub struct Frame {
     /// A bag's frame: its message's header stamp (else its log time),
     /// nanoseconds since the epoch.
     pub stamp_ns: Option<i64>,
-    /// A bag's frame: its message's index on its topic, by which labels
-    /// name it (a video topic's first frame may come past 0: its packets
-    /// before the first keyframe give none).
-    pub message_index: Option<u64>,
+    /// The frame's number in its source, by which labels name it, where it
+    /// can differ from the count of frames given before it: a folder's or
+    /// dataset's frame keeps its place when one before it was skipped as
+    /// undecodable, a stack's its page, a bag's frame is its message's
+    /// index on its topic (a video topic's first frame may come past 0:
+    /// its packets before the first keyframe give none).
+    pub index_in_source: Option<u64>,
 }
 
 /// Reads one frame after another.
@@ -575,16 +581,20 @@ impl UndecodableFrames {
     }
 }
 
-/// The frames of a folder or dataset. Their headers were read when the
-/// source opened ([`FrameList::check_headers`]); a frame that still cannot
-/// be decoded (its pixel data cut short or corrupt behind a whole header,
-/// as a copy stopped half-way leaves it, or pixels that are not opaque) is
+/// The frames of a folder or dataset, or a stack's pages. Their headers
+/// were read when the source opened ([`FrameList::check_headers`],
+/// [`crate::stack::StackFrames::open`]); a frame that still cannot be
+/// decoded (its pixel data cut short or corrupt behind a whole header, as
+/// a copy stopped half-way leaves it, or pixels that are not opaque) is
 /// skipped and named in a late warning, so the frames around it keep their
-/// results, as a video or bag cut short keeps its frames. When no frame
-/// at all can be decoded, the source ends with the error instead. Any
-/// other error (the file gone, the disk failing) stops the run.
+/// results, as a video or bag cut short keeps its frames. It keeps its
+/// number ([`Frame::index_in_source`]), so labels by number stay on their
+/// frames. When no frame at all can be decoded, the source ends with the
+/// error instead. Any other error (the file gone, the disk failing) stops
+/// the run.
 struct ListReader {
-    entries: std::vec::IntoIter<FrameEntry>,
+    /// Each frame, decoded as it is asked for.
+    entries: Box<dyn Iterator<Item = Result<Frame>> + Send>,
     /// Frames given.
     given: usize,
     /// Frames skipped, of those the run reads (the limit's first ones).
@@ -597,15 +607,64 @@ struct ListReader {
 }
 
 impl ListReader {
-    fn new(entries: Vec<FrameEntry>, late: LateWarnings, undecodable: Arc<AtomicU64>) -> Self {
+    /// The `total` frames `entries` decodes.
+    fn new(
+        entries: impl Iterator<Item = Result<Frame>> + Send + 'static,
+        total: usize,
+        late: LateWarnings,
+        undecodable: Arc<AtomicU64>,
+    ) -> Self {
         Self {
-            skipped: UndecodableFrames::new(entries.len()),
-            entries: entries.into_iter(),
+            skipped: UndecodableFrames::new(total),
+            entries: Box::new(entries),
             given: 0,
             late,
             slot: None,
             undecodable,
         }
+    }
+
+    /// A folder's or dataset's frames, each named by its file.
+    fn of_files(entries: Vec<FrameEntry>, late: LateWarnings, undecodable: Arc<AtomicU64>) -> Self {
+        let total = entries.len();
+        let frames = entries.into_iter().enumerate().map(|(i, e)| {
+            let image = e.load()?;
+            Ok(Frame {
+                image,
+                name: (e.path.file_name().unwrap_or_default())
+                    .to_string_lossy()
+                    .into_owned(),
+                path: Some(e.path),
+                sequence: e.sequence,
+                tendon: e.tendon,
+                arrived: None,
+                stamp_ns: None,
+                index_in_source: Some(i as u64),
+            })
+        });
+        Self::new(frames, total, late, undecodable)
+    }
+
+    /// A stack's pages, each named by its number, as a video's frames.
+    fn of_stack(
+        stack: crate::stack::StackFrames,
+        late: LateWarnings,
+        undecodable: Arc<AtomicU64>,
+    ) -> Self {
+        let total = stack.len();
+        let frames = (0..total).map(move |i| {
+            Ok(Frame {
+                image: stack.load(i)?,
+                name: format!("{i:06}"),
+                path: None,
+                sequence: None,
+                tendon: None,
+                arrived: None,
+                stamp_ns: None,
+                index_in_source: Some(i as u64),
+            })
+        });
+        Self::new(frames, total, late, undecodable)
     }
 
     /// After a frame was skipped: its count and warning brought up to
@@ -629,33 +688,19 @@ impl ListReader {
 
 impl Reader for ListReader {
     fn next_frame(&mut self) -> Result<Option<Frame>> {
-        let (e, image) = loop {
-            let Some(e) = self.entries.next() else {
+        let frame = loop {
+            let Some(frame) = self.entries.next() else {
                 // Not one frame given: nothing to keep, so the run fails.
                 self.skipped.finish(self.given)?;
                 return Ok(None);
             };
-            match self.skipped.decoded(e.load())? {
-                Some(image) => break (e, image),
+            match self.skipped.decoded(frame)? {
+                Some(frame) => break frame,
                 None => self.tell_skipped(),
             }
         };
         self.given += 1;
-        Ok(Some(Frame {
-            image,
-            name: e
-                .path
-                .file_name()
-                .unwrap_or_default()
-                .to_string_lossy()
-                .into_owned(),
-            path: Some(e.path),
-            sequence: e.sequence,
-            tendon: e.tendon,
-            arrived: None,
-            stamp_ns: None,
-            message_index: None,
-        }))
+        Ok(Some(frame))
     }
 }
 
@@ -681,7 +726,7 @@ impl<R: FnMut() -> Result<Option<RgbImage>> + Send> Reader for StreamReader<R> {
             tendon: None,
             arrived: self.live.then(Instant::now),
             stamp_ns: None,
-            message_index: None,
+            index_in_source: None,
         }))
     }
 }
@@ -709,7 +754,7 @@ impl Reader for BagReader {
             tendon: None,
             arrived: None,
             stamp_ns: Some(f.stamp_ns),
-            message_index: Some(f.index),
+            index_in_source: Some(f.index),
         }))
     }
 }
@@ -912,6 +957,27 @@ impl FrameSource {
                     || (meta.is_dir() && crate::bag::is_bag_folder(path))
                 {
                     open_bag(path, None, &late)?
+                } else if meta.is_file()
+                    && is_frame_file(path)
+                    && let Some(stack) = crate::stack::StackFrames::open(path, options.limit)?
+                {
+                    // A stack given alone: its pages one after another,
+                    // named by their number, as a video's frames.
+                    let size = Some(stack.size());
+                    if let Some(w) = stack.cut_short_warning()
+                        && let Ok(mut late) = late.lock()
+                    {
+                        late.push(w.to_string());
+                    }
+                    let r =
+                        ListReader::of_stack(stack, Arc::clone(&late), Arc::clone(&undecodable));
+                    (
+                        SourceKind::Stack,
+                        None,
+                        Box::new(r) as Box<dyn Reader>,
+                        size,
+                        None,
+                    )
                 } else if meta.is_dir() || (meta.is_file() && is_frame_file(path)) {
                     let list = match meta.is_dir() {
                         true => FrameList::open(path)?,
@@ -935,7 +1001,8 @@ impl FrameSource {
                     // A limit reads the folder's first frames, those whose
                     // headers were read.
                     let first = list.first(options.limit).to_vec();
-                    let r = ListReader::new(first, Arc::clone(&late), Arc::clone(&undecodable));
+                    let r =
+                        ListReader::of_files(first, Arc::clone(&late), Arc::clone(&undecodable));
                     (kind, Some(list), Box::new(r) as Box<dyn Reader>, size, None)
                 } else if let Some(e) = crate::dataset::file_of_a_dataset(path) {
                     return Err(e);

@@ -35,8 +35,8 @@ impl PyFrame {
     }
 }
 
-/// Frames from a dataset, a folder, an image, a video file, a camera or
-/// stdin, in order. Iterate it; `kind`, `dropped` and `size` say what it is,
+/// Frames from a dataset, a folder, an image, a TIFF stack, a video file, a
+/// camera or stdin, in order. Iterate it; `kind`, `dropped` and `size` say what it is,
 /// how many live frames were dropped and the frame size when known.
 #[pyclass(module = "tactile", name = "FrameSource")]
 pub struct PyFrameSource {
@@ -55,7 +55,8 @@ impl PyFrameSource {
 
 #[pymethods]
 impl PyFrameSource {
-    /// What the source is: "dataset", "folder", "video", "bag", "camera" or "stdin".
+    /// What the source is: "dataset", "folder", "video", "stack" (a TIFF of
+    /// many pages given alone), "bag", "camera" or "stdin".
     #[getter]
     fn kind(&self) -> PyResult<String> {
         let k = self.lock()?.kind();
@@ -244,7 +245,8 @@ impl PyVideoDecoder {
 }
 
 /// Open a source of frames: `source` is a dataset folder, a folder of frames
-/// (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM), an image, a video file (decoded by the system's FFmpeg,
+/// (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM), an image, a TIFF of many pages
+/// (a stack, read page by page), a video file (decoded by the system's FFmpeg,
 /// every frame), a ROS 2 bag (its folder or one ".mcap"; `topic` names its
 /// image topic, else its only one is read) or a camera device such as
 /// "/dev/video0" (live); or give

@@ -98,10 +98,11 @@ def _tiff(pages: list[np.ndarray]) -> bytes:
     return bytes(out)
 
 
-def test_a_stack_of_frames_in_one_tiff_is_refused_not_read_as_its_first(tmp_path, palpation_frames):
-    # A TIFF of several pages holds several frames; read as one frame (its
-    # first page, as OpenCV's imread and PIL read it), the rest would be
-    # lost without a word.
+def test_a_tiff_stack_is_read_page_by_page_alone_and_refused_as_one_frame(tmp_path, palpation_frames):
+    # A TIFF of several pages holds several frames. Given alone it is read
+    # page by page, as a video is; read as one frame (in a folder, or by
+    # read_rgb: its first page, as OpenCV's imread and PIL read it), the
+    # rest would be lost without a word, so it is refused.
     one = tmp_path / "one" / "000000.tif"
     one.parent.mkdir()
     one.write_bytes(_tiff(palpation_frames[:1]))
@@ -114,6 +115,12 @@ def test_a_stack_of_frames_in_one_tiff_is_refused_not_read_as_its_first(tmp_path
         list(tactile.frames(stack.parent))
     with pytest.raises(ValueError, match=r"a TIFF of 3 pages"):
         tactile.read_rgb(stack)
+    src = tactile.frames(stack)
+    assert src.kind == "stack" and src.size == (320, 180)
+    got = list(src)
+    assert [f.name for f in got] == ["000000", "000001", "000002"]
+    for f, expected in zip(got, palpation_frames[:3]):
+        assert np.array_equal(f.image, expected)
 
 
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")

@@ -21,7 +21,8 @@ pub(crate) struct FromVideoArgs {
     /// The video file (anything FFmpeg decodes), a ROS 2 bag (its folder or
     /// one .mcap; a frame's number is its index on --topic) or a folder of
     /// frames (a frame's number is its place when ordered by the numbers in
-    /// the names).
+    /// the names), or a TIFF of many pages (a stack: a frame's number is its
+    /// page's).
     #[arg(long)]
     video: PathBuf,
     /// A bag's image topic (without it, the bag's only image topic).

@@ -23,7 +23,8 @@ pub(crate) struct PerceiveArgs {
     /// The frames: a dataset folder (docs/datasets.md; every row of
     /// labels.csv, in order), or a folder of frames (PNG, JPEG, BMP, TIFF,
     /// WebP or PGM/PPM; by the
-    /// numbers in their names), one image, a video file (decoded by
+    /// numbers in their names), one image, a TIFF of many pages (a stack,
+    /// page by page), a video file (decoded by
     /// FFmpeg), a ROS 2 bag (its folder or one .mcap; see --topic) or a
     /// V4L2 camera (with --limit, or streamed with `--out -`).
     #[arg(long)]

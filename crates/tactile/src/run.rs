@@ -14,7 +14,8 @@ use tactile_ros::{RunRequest, RunSession};
 pub(crate) struct RunArgs {
     /// The frames: a visuo-tactile dataset (frames in labels.csv order), a
     /// folder of frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM; by the
-    /// numbers in their names), one image, a video file (mp4, mkv, avi; decoded by FFmpeg, every frame),
+    /// numbers in their names), one image, a TIFF of many pages (a stack,
+    /// page by page), a video file (mp4, mkv, avi; decoded by FFmpeg, every frame),
     /// a ROS 2 bag (its folder or one .mcap; see --topic) or a V4L2 camera
     /// such as /dev/video0 (live).
     #[arg(long, required_unless_present = "stdin", conflicts_with = "stdin")]

@@ -388,7 +388,7 @@ impl CompressedImage<'_> {
         }
         let bytes = std::io::Cursor::new(self.data);
         if let Some(why) = format.and_then(|f| crate::image_io::more_than_one_picture(bytes, f)) {
-            return Err(why);
+            return Err(format!("{why}; a message's picture is one frame"));
         }
         let refusal =
             |what: &str, e: image::ImageError| crate::image_io::refusal(what, &e, self.data);

@@ -268,7 +268,7 @@ class Frame:
     def stamp_ns(self) -> Optional[int]: ...
 
 class FrameSource:
-    """Frames from a dataset, a folder, an image, a video file, a camera or stdin, in order."""
+    """Frames from a dataset, a folder, an image, a TIFF stack, a video file, a camera or stdin, in order."""
 
     def __iter__(self) -> FrameSource: ...
     def __next__(self) -> Frame: ...
@@ -288,7 +288,7 @@ def frames(
     limit: Optional[int] = None,
     prefetch: bool = True,
 ) -> FrameSource:
-    """Open a source of frames (a dataset, a folder, an image, a video file, a ROS 2 bag's image topic, a camera, or stdin)."""
+    """Open a source of frames (a dataset, a folder, an image, a TIFF of many pages read page by page, a video file, a ROS 2 bag's image topic, a camera, or stdin)."""
 
 def bag_topics(path: _Path) -> List[Dict[str, Any]]:
     """The image topics of a ROS 2 bag (its folder or one MCAP file, also one the Foxglove SDK recorded; video topics too): topic, message_type, count, rate_hz."""
