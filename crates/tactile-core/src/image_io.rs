@@ -169,9 +169,9 @@ fn may_hold_more_pictures(format: image::ImageFormat) -> bool {
 /// What a frame file read as one picture (in a folder, or decoded alone)
 /// that holds a stack is told to do: the stack given alone as the source
 /// is read page by page ([`crate::stack`]).
-const ONE_PICTURE_HERE: &str = "a frame file is one picture here: give the stack \
-     alone as the source (--data, tactile.frames) to read its pages as frames, or save \
-     each as a file of its own";
+const ONE_PICTURE_HERE: &str = "a frame file is one picture here (a TIFF stack given \
+     alone as the source of tactile run, predict, dataset from-video or tactile.frames is \
+     read page by page): save each page as a file of its own";
 
 /// A picture of `format` read from `r` that holds more than one, named
 /// with its count: a stack of frames saved in one file (ImageJ, a
@@ -867,7 +867,7 @@ mod tests {
                     // WebP); a message's picture is one frame.
                     let here = match name.ends_with(".tif") {
                         true => {
-                            "a frame file is one picture here: give the stack alone as the source"
+                            "a frame file is one picture here (a TIFF stack given alone as the source"
                         }
                         false => "whose frames are not read: its decoder composes them a level off",
                     };
@@ -922,6 +922,9 @@ mod tests {
                         f.image.as_slice().to_vec(),
                     ));
                 }
+                // A stack's length is known before its pages are read (a
+                // progress bar's total).
+                assert_eq!(source.known_frames(), Some(got.len() as u64));
                 Ok((size, got))
             })
         };
@@ -988,6 +991,7 @@ mod tests {
             given.push(f.name);
         }
         assert_eq!(given, ["000000", "000001"]);
+        assert_eq!(source.known_frames(), Some(2));
         let late = source.late_warnings().join("\n");
         assert!(
             late.contains(

@@ -905,6 +905,8 @@ pub struct FrameSource {
     given: u64,
     size: Option<(usize, usize)>,
     stopper: Option<crate::video::VideoStopper>,
+    /// How many frames a recorded source of known length gives.
+    known: Option<u64>,
 }
 
 impl FrameSource {
@@ -924,6 +926,8 @@ impl FrameSource {
         use crate::video::{DecodeOptions, VideoInput, VideoReader};
         let late = LateWarnings::default();
         let undecodable = Arc::<AtomicU64>::default();
+        // A stack's pages, known from its header pass.
+        let mut stack_pages = None;
         let (kind, list, reader, size, stopper): Opened = match spec {
             SourceSpec::Bag { path, topic } => open_bag(path, topic.clone(), &late)?,
             SourceSpec::Stdin { width, height } => {
@@ -964,6 +968,7 @@ impl FrameSource {
                     // A stack given alone: its pages one after another,
                     // named by their number, as a video's frames.
                     let size = Some(stack.size());
+                    stack_pages = Some(stack.len() as u64);
                     if let Some(w) = stack.cut_short_warning()
                         && let Ok(mut late) = late.lock()
                     {
@@ -1132,7 +1137,12 @@ impl FrameSource {
             }
             _ => Vec::new(),
         };
+        let known = list
+            .as_ref()
+            .map(|l| l.first(options.limit).len() as u64)
+            .or(stack_pages);
         Ok(Self {
+            known,
             kind,
             list,
             notes,
@@ -1177,6 +1187,13 @@ impl FrameSource {
     /// The frames of a dataset or folder source.
     pub fn list(&self) -> Option<&FrameList> {
         self.list.as_ref()
+    }
+
+    /// How many frames the source gives when that is known before they
+    /// are read (a dataset's, a folder's or a stack's, within the limit),
+    /// for a progress bar's total; `None` for a stream.
+    pub fn known_frames(&self) -> Option<u64> {
+        self.known
     }
 
     /// The dataset read, as it was opened (so outputs are checked against

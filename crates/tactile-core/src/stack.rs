@@ -234,12 +234,6 @@ impl StackFrames {
         self.cut_short.as_deref()
     }
 
-    /// How the file was named when opened, with its count of pages (up to
-    /// the count's bound).
-    pub fn describe(&self) -> &str {
-        &self.what
-    }
-
     /// The pages read (the first `limit` when opened with one).
     pub fn len(&self) -> usize {
         self.pages.len()

@@ -343,7 +343,7 @@ pub fn run(
         .map(|(on, off)| Hysteresis::new(on, off))
         .transpose()?;
     // A stream's length is unknown: its bar counts without a total.
-    let known = source.list().map_or(0, |l| l.frames.len() as u64);
+    let known = source.known_frames().unwrap_or(0);
     let pb = tactile_core::progress::progress_bar(known, "run");
     let t0 = std::time::Instant::now();
     let mut times: [Reservoir; 8] = Default::default();

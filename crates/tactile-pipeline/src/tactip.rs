@@ -375,7 +375,7 @@ impl Predictor {
         let (mut files, mut labels, mut stamps, mut arrived) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         // A stream's length is unknown: its bar counts without a total.
-        let known = source.list().map_or(0, |l| l.frames.len() as u64);
+        let known = source.known_frames().unwrap_or(0);
         let pb = tactile_core::progress::progress_bar_if(known, "predict", batch > 1);
         let mut done = 0;
         let mut sizes = FrameSizeCheck::default();
