@@ -894,11 +894,12 @@ mod tests {
     #[test]
     fn a_stack_given_alone_is_read_page_by_page_as_a_video_is() {
         // ImageJ's and Micro-Manager's stacks and a camera's burst are one
-        // TIFF of many pages; an animated WebP holds many frames. Given
-        // alone as the source, each page is a frame, in order, named by its
-        // number as a video's frames are; thumbnails are skipped, each
-        // page's orientation tag applied, and a page that cannot be read
-        // is named by its number.
+        // TIFF of many pages. Given alone as the source, each page is a
+        // frame, in order, named by its number as a video's frames are;
+        // thumbnails are skipped, each page's orientation tag applied, a
+        // page no reader takes is named by its number, and a stack cut
+        // short gives the pages before the cut. An animated WebP is
+        // refused (its decoder composes frames a level off).
         use crate::source::{FrameSource, SourceKind, SourceOptions, SourceSpec};
         use tiff::encoder::{TiffEncoder, colortype::Gray16, colortype::RGB8};
         let (w, h) = (24u32, 16u32);

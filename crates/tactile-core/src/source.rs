@@ -391,8 +391,8 @@ pub enum SourceKind {
     Folder,
     /// A video file decoded by FFmpeg.
     Video,
-    /// A file of many frames given alone: a TIFF's pages or an animated
-    /// WebP's frames ([`crate::stack`]).
+    /// A TIFF of many pages given alone, read page by page
+    /// ([`crate::stack`]).
     Stack,
     /// An image topic of a ROS 2 bag (MCAP).
     Bag,
