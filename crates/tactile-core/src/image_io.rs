@@ -170,7 +170,7 @@ fn may_hold_more_pictures(format: image::ImageFormat) -> bool {
 /// that holds a stack is told to do: the stack given alone as the source
 /// is read page by page ([`crate::stack`]).
 const ONE_PICTURE_HERE: &str = "a frame file is one picture here (a TIFF stack given \
-     alone as the source of tactile run, predict, dataset from-video or tactile.frames is \
+     alone to tactile run, predict, reconstruct, dataset from-video or tactile.frames is \
      read page by page): save each page as a file of its own";
 
 /// A picture of `format` read from `r` that holds more than one, named
@@ -867,7 +867,7 @@ mod tests {
                     // WebP); a message's picture is one frame.
                     let here = match name.ends_with(".tif") {
                         true => {
-                            "a frame file is one picture here (a TIFF stack given alone as the source"
+                            "a frame file is one picture here (a TIFF stack given alone to tactile run"
                         }
                         false => "whose frames are not read: its decoder composes them a level off",
                     };

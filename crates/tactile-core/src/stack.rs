@@ -37,6 +37,8 @@ pub struct StackFrames {
     head: Vec<u8>,
     /// Each page's directory offset (thumbnails left out).
     pages: Vec<u64>,
+    /// Each page's header, as shown.
+    headers: Vec<ImageHeader>,
     /// The first page's size as shown.
     size: (usize, usize),
     /// The warning of a file cut short inside a page's directory (a
@@ -166,6 +168,7 @@ impl StackFrames {
             what,
             head,
             pages: Vec::new(),
+            headers: Vec::new(),
             size: (0, 0),
             cut_short: None,
         };
@@ -207,6 +210,7 @@ impl StackFrames {
                     self.size = (header.width as usize, header.height as usize);
                 }
                 self.pages.push(ifd);
+                self.headers.push(header);
             }
             if self.pages.len() >= wanted || !walker.more_images() {
                 return Ok(());
@@ -242,6 +246,12 @@ impl StackFrames {
     /// True for no pages (never, once opened: a stack has two at least).
     pub fn is_empty(&self) -> bool {
         self.pages.is_empty()
+    }
+
+    /// Page `number`'s header (its size as shown, its pixel format), read
+    /// when the stack was opened.
+    pub fn header(&self, number: usize) -> Option<ImageHeader> {
+        self.headers.get(number).copied()
     }
 
     /// The first page's width and height as shown.

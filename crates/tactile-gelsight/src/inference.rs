@@ -302,17 +302,30 @@ impl Reconstructor {
     /// ([`Error::UnreadableFrames`]). A grey picture stored as colour is
     /// still refused by [`Self::check_frame`] once decoded.
     pub fn check_files(&self, files: &[std::path::PathBuf]) -> Result<()> {
+        self.check_headers(files, |f| {
+            Ok((f.clone(), tactile_core::image_io::rgb_frame_header(f)?))
+        })
+    }
+
+    /// [`Self::check_files`] of any `frames`, each giving its name (for
+    /// errors) and its header through `header` (a file's, or a stack's
+    /// page's read when it was opened).
+    pub fn check_headers<T>(
+        &self,
+        frames: &[T],
+        header: impl Fn(&T) -> Result<(std::path::PathBuf, tactile_core::image_io::ImageHeader)>,
+    ) -> Result<()> {
         let g = self.grid;
         let expected = (g.frame_width, g.frame_height);
-        let check = |f: &std::path::PathBuf| {
-            let h = tactile_core::image_io::rgb_frame_header(f)?;
-            check_size(f, expected, (h.width as usize, h.height as usize))?;
+        let check = |f: &T| {
+            let (path, h) = header(f)?;
+            check_size(&path, expected, (h.width as usize, h.height as usize))?;
             match h.grey() && self.background.colour {
-                true => Err(Error::GreyFrame { path: f.clone() }),
+                true => Err(Error::GreyFrame { path }),
                 false => Ok(()),
             }
         };
-        tactile_core::error::check_each(files, check, |first, count, total| {
+        tactile_core::error::check_each(frames, check, |first, count, total| {
             Error::UnreadableFrames {
                 first: Box::new(first),
                 count,

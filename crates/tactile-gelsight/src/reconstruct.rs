@@ -1,5 +1,6 @@
-//! Reconstructing a folder of frames (what `tactile reconstruct` and
-//! `tactile.calibrate.reconstruct` run): one `<stem>.npy` per frame
+//! Reconstructing a folder of frames, or a TIFF stack's pages (what
+//! `tactile reconstruct` and `tactile.calibrate.reconstruct` run): one
+//! `<stem>.npy` per frame (`<stack stem>-000000.npy`, ... per page)
 //! (float32 `H x W`, metres) and, if asked, a picture per frame: the
 //! frame, a shaded 3-D view of the skin and its indentation in mm with a
 //! colour bar. Both folders are written whole or not at all.
@@ -217,6 +218,91 @@ pub fn unlike_warning(
     })
 }
 
+/// The frames a reconstruction reads: a folder's files (or one file), or
+/// the pages of a TIFF stack given alone.
+enum FramesToRead {
+    Files(Vec<PathBuf>),
+    Stack {
+        stack: tactile_core::stack::StackFrames,
+        /// The stack file.
+        path: PathBuf,
+    },
+}
+
+impl FramesToRead {
+    /// What `data` holds (a stack given alone, else [`frame_files`]), with
+    /// what the user should be told.
+    fn of(data: &Path) -> Result<(Self, Vec<String>)> {
+        if data.is_file()
+            && tactile_core::dataset::file_of_a_dataset(data).is_none()
+            && let Some(stack) = tactile_core::stack::StackFrames::open(data, None)?
+        {
+            let warnings = stack.cut_short_warning().map(str::to_string);
+            let frames = Self::Stack {
+                stack,
+                path: data.to_path_buf(),
+            };
+            return Ok((frames, warnings.into_iter().collect()));
+        }
+        let (files, warnings) = frame_files(data)?;
+        Ok((Self::Files(files), warnings))
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Self::Files(files) => files.len(),
+            Self::Stack { stack, .. } => stack.len(),
+        }
+    }
+
+    /// Frame `i` named in messages: its file, or the stack's page.
+    fn label(&self, i: usize) -> PathBuf {
+        match self {
+            Self::Files(files) => files[i].clone(),
+            Self::Stack { path, .. } => {
+                PathBuf::from(format!("{}, frame {i:06} of the stack", path.display()))
+            }
+        }
+    }
+
+    /// The name of frame `i`'s outputs: its file's stem, or the stack's
+    /// stem and the page's number (`stack-000003`).
+    fn stem(&self, i: usize) -> String {
+        let stem = |p: &Path| {
+            p.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "frame".into())
+        };
+        match self {
+            Self::Files(files) => stem(&files[i]),
+            Self::Stack { path, .. } => format!("{}-{i:06}", stem(path)),
+        }
+    }
+
+    fn load(&self, i: usize) -> tactile_core::Result<RgbImage> {
+        match self {
+            Self::Files(files) => load_rgb(&files[i]),
+            Self::Stack { stack, .. } => stack.load(i),
+        }
+    }
+
+    /// Refuse frames `rec` cannot read, from their headers alone.
+    fn check(&self, rec: &Reconstructor) -> Result<()> {
+        match self {
+            Self::Files(files) => rec.check_files(files),
+            Self::Stack { stack, .. } => {
+                let pages: Vec<usize> = (0..stack.len()).collect();
+                rec.check_headers(&pages, |&i| {
+                    let header = stack
+                        .header(i)
+                        .ok_or_else(|| tactile_core::Error::image(self.label(i), "no such page"))?;
+                    Ok((self.label(i), header))
+                })
+            }
+        }
+    }
+}
+
 /// Reconstruct every frame `data` names with the model in `model` into
 /// the new folder `out`. Frames unlike the sensor's (by `check`, else by
 /// the rest frame: [`SensorCheck::rest_frame`]) are still reconstructed,
@@ -228,7 +314,7 @@ pub fn reconstruct_folder(
     options: &ReconstructOptions,
     check: Option<SensorCheck<'_>>,
 ) -> Result<ReconstructReport> {
-    let (files, mut warnings) = frame_files(data)?;
+    let (frames, mut warnings) = FramesToRead::of(data)?;
     // Both folders are new: one with files in it is refused before any work.
     if let Some(render) = &options.render {
         tactile_core::dataset::refuse_same_output(out, render)?;
@@ -243,22 +329,23 @@ pub fn reconstruct_folder(
     if let Some(bg) = &options.background {
         rec.set_background(&load_rgb(bg)?, bg)?;
     }
-    rec.check_files(&files)?;
+    frames.check(&rec)?;
     let mut check = SensorCheck::or_rest_frame(check);
-    let mut times = Vec::with_capacity(files.len());
+    let mut times = Vec::with_capacity(frames.len());
     let mut peak = 0f64;
     let mut unlike = Vec::new();
     // A frame cut short behind a whole header is found only here: skipped
     // and named, so the other frames' maps are kept, as `tactile run`
     // keeps their records.
-    let mut undecodable = tactile_core::source::UndecodableFrames::new(files.len());
-    for f in &files {
+    let mut undecodable = tactile_core::source::UndecodableFrames::new(frames.len());
+    for i in 0..frames.len() {
         if tactile_core::interrupt::requested() {
             return Err(tactile_core::Error::Interrupted.into());
         }
-        let Some(frame) = undecodable.decoded(load_rgb(f))? else {
+        let Some(frame) = undecodable.decoded(frames.load(i))? else {
             continue;
         };
+        let f = &frames.label(i);
         let t0 = std::time::Instant::now();
         let working = rec.working_frame(&frame, f)?;
         let map = rec.reconstruct_working(&working)?;
@@ -267,10 +354,7 @@ pub fn reconstruct_folder(
             unlike.push((f.display().to_string(), score));
         }
         peak = peak.max(map.peak_mm() as f64);
-        let stem = f
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "frame".into());
+        let stem = frames.stem(i);
         tactile_core::npy::write_depth_npy(
             staged.path().join(format!("{stem}.npy")),
             map.width,

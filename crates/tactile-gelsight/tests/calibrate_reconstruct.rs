@@ -645,6 +645,37 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     );
     assert!(!again.exists());
     std::fs::remove_dir_all(&out).unwrap();
+    // A TIFF stack given alone is reconstructed page by page: each page's
+    // map is named by the stack and its number, and equals its frame
+    // file's.
+    use tiff::encoder::{TiffEncoder, colortype::RGB8};
+    let mut pngs: Vec<std::path::PathBuf> = std::fs::read_dir(d.join("frames"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "png"))
+        .collect();
+    pngs.sort();
+    let pair = tmp.path().join("pair");
+    std::fs::create_dir_all(&pair).unwrap();
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    let mut tiff = TiffEncoder::new(&mut bytes).unwrap();
+    for (k, f) in pngs[..2].iter().enumerate() {
+        let rgb = load_rgb(f).unwrap();
+        let (w, h) = (rgb.width() as u32, rgb.height() as u32);
+        tiff.write_image::<RGB8>(w, h, rgb.as_slice()).unwrap();
+        std::fs::copy(f, pair.join(format!("p{k}.png"))).unwrap();
+    }
+    let stack = tmp.path().join("presses.tif");
+    std::fs::write(&stack, bytes.into_inner()).unwrap();
+    let r = reconstruct_folder(&model, &stack, &out, &o, None).unwrap();
+    assert_eq!((r.frames, r.undecodable_frames), (2, 0));
+    let by_file = tmp.path().join("by-file");
+    reconstruct_folder(&model, &pair, &by_file, &o, None).unwrap();
+    for k in 0..2 {
+        let page = std::fs::read(out.join(format!("presses-{k:06}.npy"))).unwrap();
+        assert!(page == std::fs::read(by_file.join(format!("p{k}.npy"))).unwrap());
+    }
+    std::fs::remove_dir_all(&out).unwrap();
     // A background of another size is refused, naming it.
     let o = ReconstructOptions {
         background: Some(odd.join("small.png")),

@@ -41,8 +41,8 @@ pub(crate) fn calibrate_ball<'py>(
     crate::json::to_py(py, &v)
 }
 
-/// Reconstruct every frame of `data` (a frame, a folder of frames, or a
-/// dataset folder) with the
+/// Reconstruct every frame of `data` (a frame, a folder of frames, a TIFF
+/// stack's pages, or a dataset folder) with the
 /// model in `model` into the new folder `out`: what `tactile reconstruct`
 /// prints as its last line.
 #[pyfunction]

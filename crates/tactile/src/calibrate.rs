@@ -77,8 +77,9 @@ pub(crate) struct ReconstructArgs {
     /// A calibrated sensor's model folder (tactile calibrate ball).
     #[arg(long)]
     model: PathBuf,
-    /// A frame, a folder of frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM) of that sensor, or a
-    /// dataset folder (its rows' frames).
+    /// A frame, a folder of frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM) of that sensor, a
+    /// TIFF of many pages (a stack: <stack stem>-000000.npy, ... per page), or a dataset folder
+    /// (its rows' frames).
     #[arg(long)]
     data: PathBuf,
     /// Output folder (new): <frame stem>.npy per frame, float32 H x W, the skin's indentation in metres (toward the camera; 0 at rest).
