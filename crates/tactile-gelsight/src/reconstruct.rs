@@ -233,10 +233,18 @@ impl FramesToRead {
     /// What `data` holds (a stack given alone, else [`frame_files`]), with
     /// what the user should be told.
     fn of(data: &Path) -> Result<(Self, Vec<String>)> {
+        // One page past the bound is read to tell a stack too long.
+        let past_bound = Some(MAX_FRAMES as u64 + 1);
         if data.is_file()
             && tactile_core::dataset::file_of_a_dataset(data).is_none()
-            && let Some(stack) = tactile_core::stack::StackFrames::open(data, None)?
+            && let Some(stack) = tactile_core::stack::StackFrames::open(data, past_bound)?
         {
+            if stack.len() > MAX_FRAMES {
+                return Err(Error::Layout {
+                    path: data.to_path_buf(),
+                    why: format!("more than {MAX_FRAMES} frames"),
+                });
+            }
             let warnings = stack.cut_short_warning().map(str::to_string);
             let frames = Self::Stack {
                 stack,
