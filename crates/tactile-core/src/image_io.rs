@@ -191,12 +191,7 @@ pub(crate) fn more_than_one_picture<R: std::io::BufRead + std::io::Seek>(
             let mut tiff = tiff::decoder::Decoder::new(r).ok()?;
             let (mut pages, mut walked) = (0usize, 0usize);
             loop {
-                let reduced = tiff
-                    .find_tag_unsigned::<u32>(tiff::tags::Tag::NewSubfileType)
-                    .ok()
-                    .flatten()
-                    .is_some_and(|t| t & 1 == 1);
-                pages += usize::from(!reduced);
+                pages += usize::from(!is_thumbnail(&mut tiff));
                 walked += 1;
                 if walked == MAX_TIFF_IFDS_WALKED
                     || !tiff.more_images()
@@ -225,6 +220,17 @@ pub(crate) fn more_than_one_picture<R: std::io::BufRead + std::io::Seek>(
         }
         _ => None,
     }
+}
+
+/// True when `tiff`'s current directory is a reduced-resolution page (a
+/// thumbnail: NewSubfileType bit 0), not a frame of its own.
+pub(crate) fn is_thumbnail<R: std::io::Read + std::io::Seek>(
+    tiff: &mut tiff::decoder::Decoder<R>,
+) -> bool {
+    tiff.find_tag_unsigned::<u32>(tiff::tags::Tag::NewSubfileType)
+        .ok()
+        .flatten()
+        .is_some_and(|t| t & 1 == 1)
 }
 
 /// Bytes of a JPEG read for its start-of-frame marker: the segments before

@@ -17,10 +17,10 @@ use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
-use image::{ImageFormat, ImageReader};
+use image::{ImageDecoder, ImageFormat, ImageReader};
 
 use crate::image_io::{
-    ImageHeader, RgbImage, beyond_limit, header_of, refusal, rgb_frame, upright,
+    ImageHeader, RgbImage, beyond_limit, header_of, is_thumbnail, refusal, rgb_frame, upright,
 };
 use crate::{Error, Result};
 
@@ -39,8 +39,6 @@ pub struct StackFrames {
     pages: Vec<u64>,
     /// Each page's header, as shown.
     headers: Vec<ImageHeader>,
-    /// The first page's size as shown.
-    size: (usize, usize),
     /// The warning of a file cut short inside a page's directory (a
     /// recording stopped while it was written): the pages before it are
     /// read, as a video cut short keeps its frames.
@@ -110,24 +108,22 @@ impl Seek for WithHead {
     }
 }
 
-/// True when the walker's current directory is a reduced-resolution page
-/// (a thumbnail: NewSubfileType bit 0), not a frame of its own.
-fn is_thumbnail(walker: &mut tiff::decoder::Decoder<BufReader<File>>) -> bool {
-    walker
-        .find_tag_unsigned::<u32>(tiff::tags::Tag::NewSubfileType)
-        .ok()
-        .flatten()
-        .is_some_and(|t| t & 1 == 1)
-}
-
-/// `path` opened anew, read through `head` (its header pointing at one
-/// page), as a TIFF.
-fn page_reader(path: &Path, head: Vec<u8>) -> Result<ImageReader<BufReader<WithHead>>> {
+/// The decoder of the page whose directory is at `ifd`, its header read:
+/// the file opened anew and read through a header pointing at that
+/// directory, as a TIFF. A page that cannot be read is named by `at`; a
+/// file that cannot be opened is the disk's error, not the page's.
+fn page_decoder(
+    path: &Path,
+    head: &[u8],
+    ifd: u64,
+    at: impl Fn(String) -> Error,
+) -> Result<impl ImageDecoder> {
+    let head =
+        header_pointing_at(head, ifd).ok_or_else(|| at("its directory cannot be found".into()))?;
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    Ok(ImageReader::with_format(
-        BufReader::new(WithHead { file, head }),
-        ImageFormat::Tiff,
-    ))
+    ImageReader::with_format(BufReader::new(WithHead { file, head }), ImageFormat::Tiff)
+        .into_decoder()
+        .map_err(|e| at(refusal("cannot read its header", &e, &[])))
 }
 
 impl StackFrames {
@@ -169,7 +165,6 @@ impl StackFrames {
             head,
             pages: Vec::new(),
             headers: Vec::new(),
-            size: (0, 0),
             cut_short: None,
         };
         stack.read_headers(limit)?;
@@ -202,12 +197,9 @@ impl StackFrames {
                     .ifd_pointer()
                     .ok_or_else(|| at("its directory cannot be found".into()))?
                     .0;
-                let header = page_header(path, &self.head, ifd).map_err(at)?;
+                let header = header_of(&mut page_decoder(path, &self.head, ifd, at)?).0;
                 if let Some(why) = crate::image_io::rgb_header_refusal(&header) {
                     return Err(at(why));
-                }
-                if number == 0 {
-                    self.size = (header.width as usize, header.height as usize);
                 }
                 self.pages.push(ifd);
                 self.headers.push(header);
@@ -256,7 +248,9 @@ impl StackFrames {
 
     /// The first page's width and height as shown.
     pub fn size(&self) -> (usize, usize) {
-        self.size
+        self.headers
+            .first()
+            .map_or((0, 0), |h| (h.width as usize, h.height as usize))
     }
 
     /// Page `number` (from 0, thumbnails not counted) decoded as an 8-bit
@@ -270,11 +264,7 @@ impl StackFrames {
             .pages
             .get(number)
             .ok_or_else(|| at("no such page".into()))?;
-        let head = header_pointing_at(&self.head, ifd)
-            .ok_or_else(|| at("its directory cannot be found".into()))?;
-        let mut decoder = page_reader(path, head)?
-            .into_decoder()
-            .map_err(|e| at(refusal("cannot read its header", &e, &[])))?;
+        let mut decoder = page_decoder(path, &self.head, ifd, at)?;
         let (header, orientation) = header_of(&mut decoder);
         if let Some(why) = beyond_limit(header.width, header.height) {
             return Err(at(why));
@@ -283,16 +273,6 @@ impl StackFrames {
             upright(decoder, orientation).map_err(|e| at(refusal("cannot decode it", &e, &[])))?;
         rgb_frame(img).map_err(at)
     }
-}
-
-/// The header of the page whose directory is at `ifd`, as shown.
-fn page_header(path: &Path, head: &[u8], ifd: u64) -> std::result::Result<ImageHeader, String> {
-    let head = header_pointing_at(head, ifd).ok_or("its directory cannot be found")?;
-    let mut decoder = page_reader(path, head)
-        .map_err(|e| e.to_string())?
-        .into_decoder()
-        .map_err(|e| refusal("cannot read its header", &e, &[]))?;
-    Ok(header_of(&mut decoder).0)
 }
 
 /// True for a `tiff` error that reads past the end of the file.
