@@ -181,6 +181,9 @@ impl StackFrames {
         let mut walker = tiff::decoder::Decoder::new(BufReader::new(file))
             .map_err(|e| Error::image(path, format!("{what}: {e}")))?;
         loop {
+            // A long stack's header pass stops on a stop request, as a
+            // folder's does (`Error::check_frames`).
+            crate::interrupt::check()?;
             let number = self.pages.len();
             let at =
                 |why: String| Error::image(path, format!("frame {number:06} of the stack: {why}"));
