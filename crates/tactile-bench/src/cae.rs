@@ -110,16 +110,20 @@ impl EncoderSpeed {
     }
 }
 
-/// What the CAE bench measures.
-#[derive(Debug, Clone)]
+/// What the CAE bench measures (`tactile bench cae`'s flags).
+#[derive(Debug, Clone, clap::Args)]
 pub struct CaeBench {
-    /// Model folder (with `head/` for an accuracy column).
+    /// Model folder (with head/ for an accuracy column).
+    #[arg(long, default_value = "models/cae-shapes")]
     pub model: PathBuf,
     /// Dataset to measure error on (its `test` split when it has one).
+    #[arg(long, default_value = "../shared/real/polic-shapes")]
     pub data: PathBuf,
     /// Large-batch size for throughput.
+    #[arg(long, default_value_t = 256)]
     pub batch: usize,
     /// Timed runs per measurement (median reported).
+    #[arg(long, default_value_t = 30)]
     pub runs: usize,
 }
 

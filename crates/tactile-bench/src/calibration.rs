@@ -47,7 +47,7 @@ pub struct CalibrationReport {
 /// Cross-validate every candidate on the presses of `b.data`.
 pub fn bench_calibration(b: &CalibrationBench) -> Result<CalibrationReport> {
     let ds = BallPresses::open(&b.data)?;
-    tactile_gelsight::bench::check_folds(b.options.folds, ds.presses.len(), &ds.root)?;
+    b.options.check(ds.presses.len(), &ds.root)?;
     let t0 = std::time::Instant::now();
     let (bg, presses) = prepare_presses(&ds, b.base.factor, b.base.circles)?;
     let prepare_s = t0.elapsed().as_secs_f64();

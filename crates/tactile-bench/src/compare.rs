@@ -17,31 +17,40 @@ use tactile_estimate::{
     Activation, ClassifierHead, HeadConfig, Regressor, RegressorConfig, Target,
 };
 use tactile_pipeline::tactip::{classes_of, encoder_trained_on, holdout_cure};
-use tactile_preprocess::PreprocessConfig;
+use tactile_preprocess::NamedPreprocess;
 
 use crate::{Error, Result};
 
-/// What is compared.
-#[derive(Debug, Clone)]
+/// What is compared (`tactile compare`'s flags).
+#[derive(Debug, Clone, clap::Args)]
 pub struct Compare {
     /// Trained encoder (its preprocessing also makes the pixel baselines).
+    #[arg(long)]
     pub encoder: PathBuf,
     /// Dataset with the target labels.
+    #[arg(long)]
     pub data: PathBuf,
-    /// Regression targets.
+    /// Regression targets, e.g. x_mm,theta_deg:180,depth_mm.
+    #[arg(long, value_delimiter = ',', num_args = 1.., required_unless_present = "classify")]
     pub targets: Vec<Target>,
-    /// A class column to classify too.
+    /// A class column to classify too (e.g. shape).
+    #[arg(long)]
     pub classify: Option<String>,
     /// Without a `split` column: fraction of frames held out for testing.
+    #[arg(long, default_value_t = 0.2)]
     pub test_fraction: f64,
     /// Fraction of the training frames for early stopping.
+    #[arg(long, default_value_t = 0.2)]
     pub val_fraction: f64,
     /// Split and weight seed.
+    #[arg(long, default_value_t = tactile_core::dataset::DEFAULT_SPLIT_SEED)]
     pub seed: u64,
-    /// Preprocess with this instead of the encoder's own (an encoder
-    /// trained on one dataset applied to another).
-    pub preprocess: Option<(String, PreprocessConfig)>,
+    /// Preprocess with this preset or JSON file instead of the encoder's
+    /// own (an encoder trained on one dataset applied to another).
+    #[arg(long)]
+    pub preprocess: Option<NamedPreprocess>,
     /// Hidden widths of the regression MLP (the same for every feature set).
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = [256, 128])]
     pub hidden: Vec<usize>,
 }
 
@@ -74,8 +83,8 @@ pub fn compare(c: &Compare) -> Result<String> {
     let (train, val, test) = (&split.train, &split.val, &split.test);
     let dev = DeviceKind::Flex.device();
     let mut art = CaeArtifact::read(&c.encoder)?;
-    if let Some((_, p)) = &c.preprocess {
-        art.preprocess = p.clone();
+    if let Some(p) = &c.preprocess {
+        art.preprocess = p.config.clone();
     }
     let (_, net) = tactile_onnx::load_network::<CaeArtifact>(&c.encoder, Runtime::BurnFlex, 0)?;
     let mut encoder = TactipEncoder::from_network(art.clone(), net);
@@ -154,7 +163,7 @@ pub fn compare(c: &Compare) -> Result<String> {
         },
         c.preprocess
             .as_ref()
-            .map_or("the encoder's own", |p| p.0.as_str()),
+            .map_or("the encoder's own", |p| p.name.as_str()),
     );
     if let Some(w) = encoder_saw_test(c, &ds, test) {
         tactile_core::note!("warning: {w}");

@@ -17,18 +17,25 @@ use crate::Result;
 use crate::latency::{model_latencies, ms_cell};
 use crate::output::{BenchRow, Table, add_points, folder_name, header};
 
-/// Model folders and the data they are scored on.
-#[derive(Debug, Clone)]
+/// Model folders and the data they are scored on (the flags of `tactile
+/// bench detector|segmenter|depth|pose|surface`).
+#[derive(Debug, Clone, clap::Args)]
 pub struct ModelBench {
     /// Model folders of the sweep.
+    #[arg(long, num_args = 1.., required = true)]
     pub models: Vec<PathBuf>,
-    /// Held-out dataset for the error columns (visuo-tactile, or TacTip for the pose benches).
+    /// Held-out dataset for the error column: visuo-tactile for detector, segmenter and depth; TacTip for pose and surface.
+    #[arg(long)]
     pub data: PathBuf,
-    /// A second held-out dataset, the one sizes are chosen on.
+    /// A second held-out dataset, the one sizes are chosen on: its score
+    /// gets a column of its own.
+    #[arg(long)]
     pub select: Option<PathBuf>,
-    /// Depth only: a held-out set at the press extremes.
+    /// Depth only: a held-out set at the press extremes, scored in columns of its own.
+    #[arg(long)]
     pub extreme: Option<PathBuf>,
     /// Timed runs per latency (median reported).
+    #[arg(long, default_value_t = 20)]
     pub runs: usize,
 }
 

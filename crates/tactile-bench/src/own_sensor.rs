@@ -19,21 +19,27 @@ use tactile_pipeline::palpation::Pipeline;
 
 use crate::Result;
 
-/// What the page is made from.
-#[derive(Debug, Clone)]
+/// What the page is made from (`tactile bench own-sensor`'s flags).
+#[derive(Debug, Clone, clap::Args)]
 pub struct OwnSensorBench {
-    /// The calibrated sensor's folder with `detector/`, `segmenter/`, `depth/`.
+    /// The calibrated sensor's folder with detector/, segmenter/ and depth/.
+    #[arg(long, default_value = "models/gelsight-r15")]
     pub models: PathBuf,
-    /// Held-out renders of the sensor (`tactile synth gelsight`).
+    /// Held-out renders of the sensor (tactile synth gelsight, a seed no training used).
+    #[arg(long)]
     pub test: PathBuf,
     /// The real ball presses (the calibration layout).
+    #[arg(long, default_value = "../shared/real/gelsight-ball")]
     pub ball: PathBuf,
-    /// The loop's step times (JSON object: step name to seconds), if any.
+    /// The loop's step times (JSON: step name to seconds; scripts/own-sensor.sh writes it).
+    #[arg(long)]
     pub times: Option<PathBuf>,
     /// Where the networks run.
+    #[arg(long, value_enum, default_value_t = Runtime::Onnx)]
     pub runtime: Runtime,
     /// The training set, when real presses joined it (its manifest's
-    /// `real_frames` says which): those presses are scored apart.
+    /// `real_frames` says which): those presses are scored apart from the held-out ones.
+    #[arg(long)]
     pub train: Option<PathBuf>,
 }
 

@@ -67,15 +67,28 @@ fn each_frame_of(
     Ok(())
 }
 
-/// Every model of `models` on up to `limit` frames of every set of `data`
-/// (a dataset's rows of `split` alone, when given). Each frame is read
-/// once and scored by every model; only the scores are kept.
-pub fn bench_pin_profiles(
-    models: &[PathBuf],
-    data: &[PathBuf],
-    limit: usize,
-    split: Option<&str>,
-) -> Result<Vec<PinProfileRow>> {
+/// What the pin-profile bench reads (`tactile bench pin-profile`'s flags).
+#[derive(Debug, Clone, clap::Args)]
+pub struct PinProfileBench {
+    /// TacTip model folders (encoders, pose networks or ensembles) with a pin profile.
+    #[arg(long, num_args = 1.., required = true)]
+    pub models: Vec<PathBuf>,
+    /// Sets of frames: datasets, folders of frames, videos.
+    #[arg(long, num_args = 1.., required = true)]
+    pub data: Vec<PathBuf>,
+    /// Frames read of each set at most (a dataset's rows evenly spaced).
+    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub frames: u32,
+    /// Only a dataset's rows whose `split` column says this (e.g. val: frames a profile fitted on `train` never saw).
+    #[arg(long)]
+    pub split: Option<String>,
+}
+
+/// Every model of `b.models` on up to `b.frames` frames of every set of
+/// `b.data` (a dataset's rows of `b.split` alone, when given). Each frame
+/// is read once and scored by every model; only the scores are kept.
+pub fn bench_pin_profiles(b: &PinProfileBench) -> Result<Vec<PinProfileRow>> {
+    let (models, data, limit, split) = (&b.models, &b.data, b.frames as usize, b.split.as_deref());
     let profiles: Vec<(PreprocessConfig, InputProfile)> = models
         .iter()
         .map(|m| Ok(tactile_pipeline::profile::model_pin_profile(m)?))
@@ -114,7 +127,8 @@ pub fn bench_pin_profiles(
 }
 
 /// The table of [`bench_pin_profiles`] (`split` as given to it).
-pub fn pin_profile_markdown(rows: &[PinProfileRow], limit: usize, split: Option<&str>) -> String {
+pub fn pin_profile_markdown(rows: &[PinProfileRow], b: &PinProfileBench) -> String {
+    let (limit, split) = (b.frames as usize, b.split.as_deref());
     let rows_of = match split {
         Some(s) => format!("a dataset's `{s}` rows evenly spaced"),
         None => "a dataset's rows evenly spaced".to_string(),

@@ -19,24 +19,33 @@ use crate::models::{
 };
 use crate::output::{BenchRow, Picture};
 
-/// What the report runs on and where it goes.
-#[derive(Debug, Clone)]
+/// What the report runs on and where it goes (`tactile report`'s flags).
+#[derive(Debug, Clone, clap::Args)]
 pub struct Report {
     /// The real TacTip data (`polic-shapes` inside).
+    #[arg(long, default_value = "../shared/real")]
     pub real: PathBuf,
     /// Shipped models.
+    #[arg(long, default_value = "models")]
     pub models: PathBuf,
     /// Where held-out synthetic sets are generated (kept for reuse).
+    #[arg(long, default_value = "data/report")]
     pub work: PathBuf,
     /// The page; its tables and plots go into a folder beside it.
+    #[arg(long, default_value = "docs/results.md")]
     pub out: PathBuf,
-    /// Also put the headline table into this file, between the markers.
+    /// Also put the headline table into this file, between the lines
+    /// `<!-- headline:begin -->` and `<!-- headline:end -->` (the README).
+    #[arg(long)]
     pub readme: Option<PathBuf>,
     /// Sequences of 25 frames in the held-out test set (seed 200).
+    #[arg(long, default_value_t = 40)]
     pub sequences: usize,
     /// Sequences of 15 frames at the deepest presses (seed 300).
+    #[arg(long, default_value_t = 16)]
     pub extreme_sequences: usize,
     /// Timed runs per latency in the model benches (median reported).
+    #[arg(long, default_value_t = 20)]
     pub runs: usize,
 }
 

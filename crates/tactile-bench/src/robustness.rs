@@ -17,18 +17,23 @@ use tactile_preprocess::perturb::Perturbation;
 
 use crate::Result;
 
-/// What the study runs on.
-#[derive(Debug, Clone)]
+/// What the study runs on (`tactile robustness`'s flags).
+#[derive(Debug, Clone, clap::Args)]
 pub struct Robustness {
     /// Trained encoder folder.
+    #[arg(long)]
     pub encoder: PathBuf,
-    /// Estimator folders (default: every one inside the encoder's).
+    /// Estimator folders (default: every folder in ENCODER with head.json, regressor.json or ensemble.json).
+    #[arg(long, num_args = 1..)]
     pub heads: Vec<PathBuf>,
-    /// Labelled dataset of raw frames.
+    /// Labelled dataset of raw frames (held-out synthetic TacTip frames).
+    #[arg(long)]
     pub data: PathBuf,
     /// Use at most this many frames (the first ones).
+    #[arg(long)]
     pub limit: Option<usize>,
     /// Seed of the perturbations.
+    #[arg(long, default_value_t = 11)]
     pub seed: u64,
 }
 

@@ -19,18 +19,23 @@ use crate::Result;
 use crate::cae::measure_encoder;
 use crate::output::folder_name;
 
-/// What the sweep compares.
-#[derive(Debug, Clone)]
+/// What the sweep compares (`tactile sweep`'s flags).
+#[derive(Debug, Clone, clap::Args)]
 pub struct Sweep {
-    /// Trained encoders (e.g. 8, 16, 32 and 64 features).
+    /// Trained encoders to compare (e.g. 8, 16, 32 and 64 features).
+    #[arg(long, num_args = 1.., required = true)]
     pub encoders: Vec<PathBuf>,
     /// Dataset with a class column (its split column when present).
+    #[arg(long)]
     pub data: PathBuf,
-    /// The class column.
+    /// Class column for the accuracy.
+    #[arg(long, default_value = "shape")]
     pub classify: String,
     /// Split and head seed.
+    #[arg(long, default_value_t = tactile_core::dataset::DEFAULT_SPLIT_SEED)]
     pub seed: u64,
-    /// Timed runs per latency.
+    /// Timed runs per latency measurement.
+    #[arg(long, default_value_t = 30)]
     pub runs: usize,
 }
 

@@ -20,22 +20,35 @@ use crate::{Error, Result};
 
 use crate::source::{FrameSource, SourceOptions, SourceSpec};
 
-/// What to import.
+/// What to import (`tactile dataset from-video`'s flags).
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ImportOptions {
-    /// The video file, ROS 2 bag or folder of frames.
+    /// The video file (anything FFmpeg decodes), a ROS 2 bag (its folder or
+    /// one .mcap; a frame's number is its index on --topic) or a folder of
+    /// frames (a frame's number is its place when ordered by the numbers in
+    /// the names), or a TIFF of many pages (a stack: a frame's number is its
+    /// page's).
+    #[cfg_attr(feature = "clap", arg(long = "video", value_name = "VIDEO"))]
     pub frames: PathBuf,
-    /// A bag's image topic (`None`: its only one).
+    /// A bag's image topic (without it, the bag's only image topic).
+    #[cfg_attr(feature = "clap", arg(long))]
     pub topic: Option<String>,
-    /// The labels CSV (a `frame` column and the kind's labels).
+    /// Labels CSV: a `frame` column and the kind's label columns
+    /// (docs/datasets.md); `mask` and `depth` name files beside it.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub labels: PathBuf,
-    /// Which sensor the frames are from.
+    /// Which sensor the frames are from (TacTip frames are saved grey).
+    #[cfg_attr(feature = "clap", arg(long, value_enum))]
     pub kind: DatasetKind,
     /// The dataset folder to write.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub out: PathBuf,
-    /// Free text for the manifest's `sensor_spec` (the rig, the camera).
+    /// The manifest's `sensor_spec`: your rig and camera, in words.
+    #[cfg_attr(feature = "clap", arg(long, default_value = "real sensor"))]
     pub sensor: String,
-    /// Replace an existing dataset at `out`.
+    /// Replace an existing dataset at --out.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub force: bool,
 }
 

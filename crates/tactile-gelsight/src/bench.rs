@@ -219,6 +219,25 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+impl BenchOptions {
+    /// Refuse options no cross-validation of `presses` presses of the
+    /// calibration folder `folder` can run: timing runs out of range,
+    /// folds as [`check_folds`] says, or an exposure change outside
+    /// [0, 0.9) (a gain of 1 - exposure must stay well above 0).
+    pub fn check(&self, presses: usize, folder: &std::path::Path) -> Result<()> {
+        tactile_core::bench::check_runs(self.runs)?;
+        check_folds(self.folds, presses, folder)?;
+        if !(0.0..0.9).contains(&self.exposure) {
+            return Err(tactile_core::Error::Config(format!(
+                "exposure must be in [0, 0.9), got {:?}",
+                self.exposure
+            ))
+            .into());
+        }
+        Ok(())
+    }
+}
+
 /// Refuse `folds` out of 2-[`MAX_FOLDS`], or more folds than the
 /// `presses` to split (a fold holds at least one) of the calibration
 /// folder `folder`: before any press is prepared, and on the prepared
@@ -250,8 +269,7 @@ pub fn cross_validate(
     options: &BenchOptions,
 ) -> Result<CandidateResult> {
     let n = presses.len();
-    tactile_core::bench::check_runs(options.runs)?;
-    check_folds(options.folds, n, &ds.root)?;
+    options.check(n, &ds.root)?;
     let grid = bg.image.grid;
     let bg_path = ds.root.join(&ds.sensor.background);
     let mut result = CandidateResult {

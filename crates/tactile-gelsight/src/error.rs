@@ -11,6 +11,9 @@ pub enum Error {
     /// ONNX export or onnxruntime.
     #[error(transparent)]
     Onnx(#[from] tactile_onnx::Error),
+    /// Writing the sensor's rendered dataset (an output folder in use).
+    #[error(transparent)]
+    Synth(#[from] datasets_synth::Error),
     /// A calibration folder that does not hold what the layout asks for.
     #[error("{path}: {why}")]
     Layout {

@@ -3,13 +3,34 @@
 //! a frame of this very sensor without a tendon, and its indentation label
 //! is the calibration's own reconstruction of it.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use datasets_synth::CalibratedConfig;
-use datasets_synth::calibrated::{RealFrame, RealFrames};
+use datasets_synth::calibrated::{CalibratedSensor, RealFrame, RealFrames};
+use datasets_synth::{CalibratedConfig, WriteOptions};
 use tactile_burn::Runtime;
 
 use crate::{BallPresses, Error, Reconstructor, Result};
+
+/// The palpation videos of the calibrated sensor in `sensor`, written to
+/// `out`: `count` frames, or `sequences` videos, rendered through its
+/// calibration, with the real presses `config` joins to them
+/// ([`real_frames`]); what `tactile synth gelsight` and Python's
+/// `tactile.synth.gelsight` write. Gives the folder and the frame count.
+pub fn write_sensor_videos(
+    sensor: &Path,
+    config: &CalibratedConfig,
+    (count, sequences): (Option<usize>, Option<usize>),
+    seed: u64,
+    out: &Path,
+    options: WriteOptions,
+) -> Result<(PathBuf, usize)> {
+    config.validate()?;
+    let count = config.frame_count(count, sequences)?;
+    let unit = CalibratedSensor::load(sensor)?;
+    let real = real_frames(config, sensor)?;
+    let out = datasets_synth::write_calibrated(&unit, config, count, seed, out, options, &real)?;
+    Ok((out, count))
+}
 
 /// The real frames `config` asks for (`real_presses`, less the last
 /// `real_held_out`, `real_copies` each), reconstructed by the calibrated

@@ -19,14 +19,18 @@ use crate::{Error, Result};
 /// Most frames one call reconstructs.
 pub const MAX_FRAMES: usize = 100_000;
 
-/// What a reconstruction of a folder is asked for beside the model.
-#[derive(Debug, Clone)]
+/// What a reconstruction of a folder is asked for beside the model
+/// (flags of `tactile reconstruct`).
+#[derive(Debug, Clone, clap::Args)]
 pub struct ReconstructOptions {
-    /// Another rest frame than the calibration's.
+    /// The sensor's rest frame to compare against instead of the calibration's (same size).
+    #[arg(long)]
     pub background: Option<PathBuf>,
-    /// Pictures go into this (new) folder.
+    /// Also write pictures into this folder (new): each frame beside its indentation in mm with a colour bar, and a shaded 3-D view.
+    #[arg(long)]
     pub render: Option<PathBuf>,
-    /// Where the network runs.
+    /// Where the sensor model runs.
+    #[arg(long, value_enum, default_value_t = Runtime::Onnx)]
     pub runtime: Runtime,
 }
 

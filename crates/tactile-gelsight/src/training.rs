@@ -450,6 +450,39 @@ pub struct Calibration {
     pub warnings: Vec<String>,
 }
 
+impl Calibration {
+    /// What the calibration found, a line each, as `tactile calibrate ball`
+    /// prints it: the fit (the model folder `out` named), the circle
+    /// finder's agreement, the render model and each held-out press.
+    pub fn describe(&self, out: &Path) -> Vec<String> {
+        let mut lines = vec![format!(
+            "sensor model {}; {} presses fitted, {} held out; model in {}",
+            self.fit.describe("cap-shape error, mm"),
+            self.train_presses,
+            self.val_presses,
+            out.display()
+        )];
+        lines.extend(self.circles.as_ref().map(|c| c.describe()));
+        let r = &self.render;
+        lines.push(format!(
+            "render model (optics.json): optics on {} pixels; gel spread {:.2} mm, gain {:.2} (profile error {:.3} mm); ball presses rendered back: colour error {:.1} levels (the bare background: {:.1})",
+            r.optics_samples,
+            r.gel.sigma_mm,
+            r.gel.gain,
+            r.gel_profile_error_mm,
+            r.colour_error_levels,
+            r.colour_error_unpressed_levels
+        ));
+        lines.extend(self.validation.iter().map(|s| {
+            format!(
+                "held out {}: shape error {:.3} mm, far field {:.4} mm, rim sink {:.3} mm, peak {:.3} mm",
+                s.file, s.shape_mae_mm, s.far_field_mm, s.rim_sink_mm, s.peak_mm
+            )
+        }));
+        lines
+    }
+}
+
 /// Calibrate the sensor of `ds` into the model folder `out` (written whole
 /// or not at all): circles, targets, fit, the background copied beside the
 /// weights, the training record.

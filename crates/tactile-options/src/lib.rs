@@ -7,6 +7,8 @@
 
 #![deny(missing_docs)]
 
+pub mod command_line;
+
 use std::fmt;
 use std::path::Path;
 use std::str::FromStr;

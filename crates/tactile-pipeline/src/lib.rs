@@ -8,6 +8,7 @@
 #![deny(missing_docs)]
 
 pub mod calibrate;
+pub mod demo;
 pub mod ensemble;
 mod error;
 pub mod export;

@@ -261,6 +261,27 @@ impl PreprocessConfig {
     }
 }
 
+/// A preprocessing given by name: a preset's or a JSON file's
+/// ([`PreprocessConfig::preset`]), kept with its name for messages and
+/// tables (`--preprocess NAME`).
+#[derive(Debug, Clone)]
+pub struct NamedPreprocess {
+    /// The preset's name or the file's path, as given.
+    pub name: String,
+    /// What it says.
+    pub config: PreprocessConfig,
+}
+
+impl std::str::FromStr for NamedPreprocess {
+    type Err = Error;
+    fn from_str(name: &str) -> Result<Self> {
+        Ok(Self {
+            name: name.to_string(),
+            config: PreprocessConfig::preset(name)?,
+        })
+    }
+}
+
 /// Frame sizes already checked against a model's preprocessings
 /// ([`PreprocessConfig::frame_mismatch`]): each size is judged once (a
 /// folder may mix sizes), and at most [`Self::MAX_SIZES`] of them, so a

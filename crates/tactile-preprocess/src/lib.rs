@@ -31,7 +31,7 @@ pub use chain::{
     FLAT_FRAME_LEVELS, MAX_WINDOW_PX, PinImage, binarise, is_flat_frame, preprocess,
     preprocess_each, preprocess_each_by, preprocess_each_noting_flat,
 };
-pub use config::{Downsample, FrameSizeCheck, Lighting, PreprocessConfig};
+pub use config::{Downsample, FrameSizeCheck, Lighting, NamedPreprocess, PreprocessConfig};
 pub use error::{Error, Result};
 pub use resize::{
     enlarge_f32, resize_area, resize_area_f32, resize_area_interleaved, resize_linear,

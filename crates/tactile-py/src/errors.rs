@@ -113,6 +113,7 @@ impl LibraryError for tactile_gelsight::Error {
         match self {
             E::Core(c) => core_kind(c),
             E::Onnx(o) => onnx_kind(o),
+            E::Synth(s) => s.kind(),
             _ => Kind::Value,
         }
     }

@@ -245,25 +245,24 @@ pub(crate) fn synth_gelsight(
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
     let cfg: CalibratedConfig = crate::json::options(py, options)?;
-    cfg.validate().py()?;
-    let count = cfg.frame_count(count, sequences).py()?;
-    let unit = py.detach(|| CalibratedSensor::load(&sensor)).py()?;
     if let Some(out) = out {
-        let path = crate::work::interruptible(py, || {
-            let real = tactile_gelsight::negatives::real_frames(&cfg, &sensor).py()?;
-            datasets_synth::write_calibrated(
-                &unit,
+        let (path, _) = crate::work::interruptible(py, || {
+            let options = write_options(force, progress);
+            tactile_gelsight::negatives::write_sensor_videos(
+                &sensor,
                 &cfg,
-                count,
+                (count, sequences),
                 seed,
                 &out,
-                write_options(force, progress),
-                &real,
+                options,
             )
             .py()
         })?;
         return Ok(path.into_pyobject(py)?.into_any().unbind());
     }
+    cfg.validate().py()?;
+    let count = cfg.frame_count(count, sequences).py()?;
+    let unit = py.detach(|| CalibratedSensor::load(&sensor)).py()?;
     if cfg.real_presses.is_some() {
         return Err(pyo3::exceptions::PyValueError::new_err(
             "real_presses joins real frames to a set written to a folder: give out=",

@@ -3,15 +3,19 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
+
+use crate::args::Paged;
 use clap::{Args, Subcommand};
 use tactile_bench::cae::{CaeBench, bench_cae};
 use tactile_bench::models::{ModelBench, bench_depth, bench_detectors, bench_segmenters};
 use tactile_bench::output::write_markdown_and_json;
+use tactile_bench::own_sensor::OwnSensorBench;
+use tactile_bench::pin_profile::PinProfileBench;
 
 #[derive(Subcommand)]
 pub(crate) enum BenchCmd {
     /// The CAE encoder: latency and throughput per runtime, reconstruction and head accuracy.
-    Cae(CaeArgs),
+    Cae(Paged<CaeBench>),
     /// The virtual sensors: frames/s rendered and written.
     Synth(SynthArgs),
     /// The palpation pipeline per stage at 640x360 against the sensor's
@@ -26,23 +30,23 @@ pub(crate) enum BenchCmd {
     /// Frames of another sensor given to paper A's models: how many frames
     /// of each set each TacTip model's pin profile flags (what `predict`
     /// warns of).
-    PinProfile(PinProfileArgs),
+    PinProfile(Paged<PinProfileBench>),
     /// Tendon detectors of a sweep: accuracy against latency per runtime.
-    Detector(ModelsArgs),
+    Detector(Paged<ModelBench>),
     /// Segmenters of a sweep: IoU and direction error against latency per runtime.
-    Segmenter(ModelsArgs),
+    Segmenter(Paged<ModelBench>),
     /// Depth networks of a sweep or ablation: MAE, SSIM against latency per runtime.
-    Depth(ModelsArgs),
+    Depth(Paged<ModelBench>),
     /// Edge pose on the real TacTip edge set: pose networks and encoders
     /// with estimators, error on their held-out frames against latency.
-    Pose(ModelsArgs),
+    Pose(Paged<ModelBench>),
     /// Surface pose and shear on the real 331-pin TacTip set: every target
     /// against the authors' CNN on their held-out split, interval coverage,
     /// latency, errors, gains and intervals by tap depth (beside an estimate
     /// that reads no frame, each target's `train` median), how alike each model's
     /// errors are to the first model's, and the first model's predictions
     /// plotted against the truth.
-    Surface(ModelsArgs),
+    Surface(Paged<ModelBench>),
     /// One encoder for many tasks: every encoder on every task of a list
     /// (configs/bench/shared-encoder.json), an MLP per task, beside each
     /// task's own encoder.
@@ -55,25 +59,6 @@ pub(crate) enum BenchCmd {
     /// held-out renders, the real ball presses, frames of other sensors and
     /// the loop's times; writes docs/own-sensor.md.
     OwnSensor(OwnSensorArgs),
-}
-
-#[derive(Args)]
-pub(crate) struct PinProfileArgs {
-    /// TacTip model folders (encoders, pose networks or ensembles) with a pin profile.
-    #[arg(long, num_args = 1.., required = true)]
-    models: Vec<PathBuf>,
-    /// Sets of frames: datasets, folders of frames, videos.
-    #[arg(long, num_args = 1.., required = true)]
-    data: Vec<PathBuf>,
-    /// Frames read of each set at most (a dataset's rows evenly spaced).
-    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(1..=100_000))]
-    frames: u32,
-    /// Only a dataset's rows whose `split` column says this (e.g. val: frames a profile fitted on `train` never saw).
-    #[arg(long)]
-    split: Option<String>,
-    /// Also write the table to this Markdown file (its rows as JSON beside it).
-    #[arg(long)]
-    out: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -94,24 +79,8 @@ pub(crate) struct SharedEncoderArgs {
 
 #[derive(Args)]
 pub(crate) struct OwnSensorArgs {
-    /// The calibrated sensor's folder with detector/, segmenter/ and depth/.
-    #[arg(long, default_value = "models/gelsight-r15")]
-    models: PathBuf,
-    /// Held-out renders of the sensor (tactile synth gelsight, a seed no training used).
-    #[arg(long)]
-    test: PathBuf,
-    /// The real ball presses (the calibration layout).
-    #[arg(long, default_value = "../shared/real/gelsight-ball")]
-    ball: PathBuf,
-    /// The loop's step times (JSON: step name to seconds; scripts/own-sensor.sh writes it).
-    #[arg(long)]
-    times: Option<PathBuf>,
-    /// The training set, when real presses joined it: those presses are scored apart from the held-out ones.
-    #[arg(long)]
-    train: Option<PathBuf>,
-    /// Where the networks run.
-    #[arg(long, value_enum, default_value_t = tactile_burn::Runtime::Onnx)]
-    runtime: tactile_burn::Runtime,
+    #[command(flatten)]
+    bench: OwnSensorBench,
     /// The page; its numbers (JSON) go beside it.
     #[arg(long, default_value = "docs/own-sensor.md")]
     out: PathBuf,
@@ -140,25 +109,6 @@ pub(crate) struct CalibrationArgs {
     /// The shipped recipe the candidates are built from.
     #[command(flatten)]
     recipe: tactile_gelsight::BallOptions,
-}
-
-#[derive(Args)]
-pub(crate) struct CaeArgs {
-    /// Model folder (with head/ for an accuracy column).
-    #[arg(long, default_value = "models/cae-shapes")]
-    model: PathBuf,
-    /// Dataset to measure error on (its `test` split when it has one).
-    #[arg(long, default_value = "../shared/real/polic-shapes")]
-    data: PathBuf,
-    /// Large-batch size for throughput.
-    #[arg(long, default_value_t = 256)]
-    batch: usize,
-    /// Timed runs per measurement (median reported).
-    #[arg(long, default_value_t = 30)]
-    runs: usize,
-    /// Also write the table (and its row as JSON beside it).
-    #[arg(long)]
-    out: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -203,29 +153,6 @@ pub(crate) struct SynthArgs {
     out: Option<PathBuf>,
 }
 
-#[derive(Args)]
-pub(crate) struct ModelsArgs {
-    /// Model folders of the sweep.
-    #[arg(long, num_args = 1.., required = true)]
-    models: Vec<PathBuf>,
-    /// Held-out dataset for the error column: visuo-tactile for detector, segmenter and depth; TacTip for pose and surface.
-    #[arg(long)]
-    data: PathBuf,
-    /// Timed runs per latency (median reported).
-    #[arg(long, default_value_t = 20)]
-    runs: usize,
-    /// Markdown table; the plot goes beside it as NAME.png, the rows as NAME.json.
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// A second held-out dataset, the one sizes are chosen on: its score
-    /// gets a column of its own.
-    #[arg(long)]
-    select: Option<PathBuf>,
-    /// Depth only: a held-out set at the press extremes, scored in columns of its own.
-    #[arg(long)]
-    extreme: Option<PathBuf>,
-}
-
 pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
     let out = match &cmd {
         BenchCmd::Cae(a) => &a.out,
@@ -247,12 +174,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
     }
     match cmd {
         BenchCmd::Cae(a) => {
-            let r = bench_cae(&CaeBench {
-                model: a.model,
-                data: a.data,
-                batch: a.batch,
-                runs: a.runs,
-            })?;
+            let r = bench_cae(&a.bench)?;
             say_raw!("{}", r.markdown);
             if let Some(out) = &a.out {
                 r.write(out)?;
@@ -266,17 +188,8 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             }
         }
         BenchCmd::PinProfile(a) => {
-            let rows = tactile_bench::pin_profile::bench_pin_profiles(
-                &a.models,
-                &a.data,
-                a.frames as usize,
-                a.split.as_deref(),
-            )?;
-            let md = tactile_bench::pin_profile::pin_profile_markdown(
-                &rows,
-                a.frames as usize,
-                a.split.as_deref(),
-            );
+            let rows = tactile_bench::pin_profile::bench_pin_profiles(&a.bench)?;
+            let md = tactile_bench::pin_profile::pin_profile_markdown(&rows, &a.bench);
             say_raw!("{md}");
             if let Some(out) = &a.out {
                 write_markdown_and_json(out, &md, &rows)?;
@@ -328,31 +241,19 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             }
         }
         BenchCmd::Surface(a) => {
-            let out = a.out.clone();
-            let t = tactile_bench::surface::bench_surface(&model_bench(a), out.as_deref())?;
+            let t = tactile_bench::surface::bench_surface(&a.bench, a.out.as_deref())?;
             say_raw!("{}", t.markdown);
-            if let Some(out) = &out {
+            if let Some(out) = &a.out {
                 t.write(out)?;
             }
         }
         BenchCmd::OwnSensor(a) => {
-            let b = tactile_bench::own_sensor::OwnSensorBench {
-                models: a.models,
-                test: a.test,
-                ball: a.ball,
-                times: a.times,
-                runtime: a.runtime,
-                train: a.train,
-            };
-            let r = tactile_bench::own_sensor::bench_own_sensor(&b)?;
+            let r = tactile_bench::own_sensor::bench_own_sensor(&a.bench)?;
             let command: Vec<String> = std::env::args().skip(1).collect();
-            let md = r.write(&b, &format!("tactile {}", command.join(" ")), &a.out)?;
+            let md = r.write(&a.bench, &format!("tactile {}", command.join(" ")), &a.out)?;
             say_raw!("{md}");
         }
         BenchCmd::Calibration(a) => {
-            if !(0.0..0.9).contains(&a.exposure) {
-                anyhow::bail!("--exposure must be in [0, 0.9), got {:?}", a.exposure);
-            }
             let b = tactile_bench::calibration::CalibrationBench {
                 data: a.data,
                 base: a.recipe.config()?,
@@ -376,24 +277,13 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
 
 /// Run a model bench, print its table and write it (with plot and rows) to `out`.
 fn show<M: serde::Serialize>(
-    a: ModelsArgs,
+    a: Paged<ModelBench>,
     bench: fn(&ModelBench) -> tactile_bench::Result<tactile_bench::output::Table<M>>,
 ) -> Result<()> {
-    let out = a.out.clone();
-    let t = bench(&model_bench(a))?;
+    let t = bench(&a.bench)?;
     say_raw!("{}", t.markdown);
-    if let Some(out) = &out {
+    if let Some(out) = &a.out {
         t.write(out)?;
     }
     Ok(())
-}
-
-fn model_bench(a: ModelsArgs) -> ModelBench {
-    ModelBench {
-        models: a.models,
-        data: a.data,
-        select: a.select,
-        extreme: a.extreme,
-        runs: a.runs,
-    }
 }

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::{Args, Subcommand};
-use tactile_burn::Runtime;
 
 use crate::train::ConfigArg;
 
@@ -37,35 +36,7 @@ pub(crate) fn main(cmd: CalibrateCmd) -> Result<()> {
             for w in &c.warnings {
                 tactile_core::note!("{w}");
             }
-            say!(
-                "sensor model {}; {} presses fitted, {} held out; model in {}",
-                c.fit.describe("cap-shape error, mm"),
-                c.train_presses,
-                c.val_presses,
-                a.out.display()
-            );
-            if let Some(circles) = &c.circles {
-                say!("{}", circles.describe());
-            }
-            say!(
-                "render model (optics.json): optics on {} pixels; gel spread {:.2} mm, gain {:.2} (profile error {:.3} mm); ball presses rendered back: colour error {:.1} levels (the bare background: {:.1})",
-                c.render.optics_samples,
-                c.render.gel.sigma_mm,
-                c.render.gel.gain,
-                c.render.gel_profile_error_mm,
-                c.render.colour_error_levels,
-                c.render.colour_error_unpressed_levels
-            );
-            for s in &c.validation {
-                say!(
-                    "held out {}: shape error {:.3} mm, far field {:.4} mm, rim sink {:.3} mm, peak {:.3} mm",
-                    s.file,
-                    s.shape_mae_mm,
-                    s.far_field_mm,
-                    s.rim_sink_mm,
-                    s.peak_mm
-                );
-            }
+            c.describe(&a.out).iter().for_each(|l| say!("{l}"));
             say!("{}", serde_json::to_string(&c)?);
             Ok(())
         }
@@ -85,28 +56,12 @@ pub(crate) struct ReconstructArgs {
     /// Output folder (new): <frame stem>.npy per frame, float32 H x W, the skin's indentation in metres (toward the camera; 0 at rest).
     #[arg(long)]
     out: PathBuf,
-    /// The sensor's rest frame to compare against instead of the calibration's (same size).
-    #[arg(long)]
-    background: Option<PathBuf>,
-    /// Also write pictures into this folder (new): each frame beside its indentation in mm with a colour bar, and a shaded 3-D view.
-    #[arg(long)]
-    render: Option<PathBuf>,
-    /// Where the sensor model runs.
-    #[arg(long, value_enum, default_value_t = Runtime::Onnx)]
-    runtime: Runtime,
+    #[command(flatten)]
+    options: tactile_gelsight::reconstruct::ReconstructOptions,
 }
 
 pub(crate) fn reconstruct(a: ReconstructArgs) -> Result<()> {
-    let r = tactile_pipeline::reconstruct::reconstruct(
-        &a.model,
-        &a.data,
-        &a.out,
-        &tactile_gelsight::reconstruct::ReconstructOptions {
-            background: a.background.clone(),
-            render: a.render.clone(),
-            runtime: a.runtime,
-        },
-    )?;
+    let r = tactile_pipeline::reconstruct::reconstruct(&a.model, &a.data, &a.out, &a.options)?;
     for w in &r.warnings {
         tactile_core::note!("{w}");
     }
@@ -115,10 +70,10 @@ pub(crate) fn reconstruct(a: ReconstructArgs) -> Result<()> {
         r.frames,
         a.out.display(),
         r.ms_per_frame,
-        a.runtime,
+        a.options.runtime,
         r.peak_mm
     );
-    if let Some(dir) = &a.render {
+    if let Some(dir) = &a.options.render {
         say!("pictures in {}", dir.display());
     }
     say!("{}", serde_json::to_string(&r)?);

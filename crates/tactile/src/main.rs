@@ -88,7 +88,7 @@ enum Command {
     /// Paper B's palpation pipeline over frames: detect, then segment, point and reconstruct depth on tendon frames.
     Run(run::RunArgs),
     /// Regenerate docs/results.md: every shipped model's speed against its error, and the pipeline's.
-    Report(report::ReportArgs),
+    Report(tactile_bench::report::Report),
     /// Export a model to ONNX.
     Export(export::ExportArgs),
     /// Benchmark models: latency per runtime against error.
@@ -113,46 +113,13 @@ pub(crate) fn stdout_failed(e: std::io::Error) {
     std::process::exit(0);
 }
 
-/// The command line's words, each value that starts with `-` and a digit
-/// or a point (`--x-mm -6,6`, the default its help shows; `--rotate-deg
-/// -5`, `--hysteresis -0.5,0.3`, `--seed -1`) attached to the flag before
-/// it (`--x-mm=-6,6`). Clap reads such a word as a cluster of short flags
-/// (`-6`) otherwise, and says "unexpected argument"; attached, it reaches
-/// the flag's parser or check, which names the flag. Only a number-like
-/// word is attached, so `--lr --epochs 5` is still a missing value, not a
-/// learning rate of `--epochs`; nothing after `--` is touched.
-fn attach_negative_values(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
-    let number_like = |w: &str| {
-        let mut c = w.chars();
-        c.next() == Some('-') && matches!(c.next(), Some('0'..='9' | '.'))
-    };
-    let mut words: Vec<OsString> = Vec::new();
-    let mut positional = false;
-    for word in args {
-        if !positional {
-            if let (Some(value), Some(flag)) = (
-                word.to_str().filter(|w| number_like(w)),
-                words.last_mut().filter(|f| {
-                    f.to_str()
-                        .is_some_and(|f| f.len() > 2 && f.starts_with("--") && !f.contains('='))
-                }),
-            ) {
-                flag.push("=");
-                flag.push(value);
-                continue;
-            }
-            positional = word == "--";
-        }
-        words.push(word);
-    }
-    words
-}
-
 /// Parse the command line (`tactile ...`, program name first).
 fn parse(
     args: impl IntoIterator<Item = OsString>,
 ) -> std::result::Result<clap::ArgMatches, clap::Error> {
-    Cli::command().try_get_matches_from(attach_negative_values(args))
+    Cli::command().try_get_matches_from(
+        tactile_burn::options::command_line::attach_negative_values(args),
+    )
 }
 
 fn main() -> std::process::ExitCode {
@@ -301,10 +268,6 @@ mod tests {
             r.get_one::<PathBuf>("out"),
             Some(&PathBuf::from("-1.jsonl"))
         );
-        let words = super::attach_negative_values(
-            ["tactile", "--a", "-1", "--", "--b", "-2"].map(OsString::from),
-        );
-        assert_eq!(words, ["tactile", "--a=-1", "--", "--b", "-2"]);
         // A range given no value is still an error, not a silent default.
         assert!(parse("tactile synth tactip --out o --x-mm --y-mm 1,2").is_err());
         assert!(parse("tactile synth tactip --out o --count 3 --x-mm").is_err());

@@ -5,9 +5,10 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::{Args, Subcommand};
 use datasets_synth::{
-    CalibratedConfig, CalibratedSensor, TactipConfig, VisuotactileConfig, WriteOptions,
-    visuotactile, write_calibrated, write_tactip, write_visuotactile,
+    CalibratedConfig, TactipConfig, VisuotactileConfig, WriteOptions, visuotactile, write_tactip,
+    write_visuotactile,
 };
+use tactile_gelsight::negatives::write_sensor_videos;
 
 #[derive(Subcommand)]
 pub(crate) enum SynthCmd {
@@ -177,15 +178,12 @@ fn gelsight(
     cfg: &CalibratedConfig,
     t: std::time::Instant,
 ) -> Result<()> {
-    cfg.validate()?;
-    let count = cfg.frame_count(c.count, sequences)?;
-    let unit = CalibratedSensor::load(sensor)?;
     let opts = WriteOptions {
         force: c.force,
         progress: true,
     };
-    let real = tactile_gelsight::negatives::real_frames(cfg, sensor)?;
-    let out = write_calibrated(&unit, cfg, count, c.seed, &c.out, opts, &real)?;
+    let (out, count) =
+        write_sensor_videos(sensor, cfg, (c.count, sequences), c.seed, &c.out, opts)?;
     finish(c, out, "calibrated-sensor", count, t)
 }
 

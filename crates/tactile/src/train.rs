@@ -12,19 +12,19 @@ use tactile_pipeline::tactip::{FeatureSource, train_head, train_regressor};
 #[derive(Subcommand)]
 pub(crate) enum TrainCmd {
     /// Paper A's convolutional autoencoder.
-    Cae(CaeArgs),
+    Cae(TrainerArgs<tactile_cae::CaeOptions>),
     /// A shallow shape classifier on the features of a trained encoder.
     Head(HeadArgs),
     /// A regressor (pose, depth, force; angles on the circle) on features.
     Regressor(RegressorArgs),
     /// A supervised pose network (CNN on grey pin images) on TacTip frames.
-    Pose(PoseArgs),
+    Pose(TrainerArgs<tactile_pose::PoseOptions>),
     /// Paper B's tendon detector on visuo-tactile frames.
     Detector(DetectorArgs),
     /// Paper B's U-Net tendon segmenter on visuo-tactile tendon frames.
-    Segmenter(SegmenterArgs),
+    Segmenter(TrainerArgs<tactile_segment::SegmenterOptions>),
     /// Paper B's depth U-Net with a DenseNet encoder.
-    Depth(DepthArgs),
+    Depth(TrainerArgs<tactile_depth::DepthOptions>),
     /// The input profile of a trained detector or TacTip model (an encoder, a pose network or ensemble): its training frames' input statistics (a TacTip model's: where its pin images' power lies across spatial frequencies), saved in its config, so frames of another sensor are flagged (a detector gives them no answer; `predict` names them in a warning). A model trained now has one already.
     Profile(ProfileArgs),
     /// Calibrate a trained model on frames it was not trained on: a detector's probabilities (one logit scale about the threshold, fitted by maximum likelihood and folded into its last layer; decisions unchanged), or the deviations of a pose network or of a regressor kept in its encoder folder (one factor per target so ±1 holds 68.3 % of the errors; `--split val` takes a split's rows, `--calibration-from` a validated run's factors).
@@ -100,9 +100,11 @@ impl ConfigArg {
     }
 }
 
+/// A network trainer's flags: its dataset, its new model folder, an
+/// options file and its options.
 #[derive(Args)]
-pub(crate) struct PoseArgs {
-    /// TacTip dataset folder; with a `split` column, only `train` rows are used.
+pub(crate) struct TrainerArgs<O: Args> {
+    /// Dataset folder: TacTip for cae and pose (with a `split` column, only `train` rows are used), visuo-tactile for segmenter and depth (split by `sequence`).
     #[arg(long)]
     data: PathBuf,
     /// Output model folder.
@@ -111,21 +113,7 @@ pub(crate) struct PoseArgs {
     #[command(flatten)]
     config: ConfigArg,
     #[command(flatten)]
-    options: tactile_pose::PoseOptions,
-}
-
-#[derive(Args)]
-pub(crate) struct CaeArgs {
-    /// TacTip dataset folder; with a `split` column, only `train` rows are used.
-    #[arg(long)]
-    data: PathBuf,
-    /// Output model folder.
-    #[arg(long)]
-    out: PathBuf,
-    #[command(flatten)]
-    config: ConfigArg,
-    #[command(flatten)]
-    options: tactile_cae::CaeOptions,
+    options: O,
 }
 
 #[derive(Args)]
@@ -205,34 +193,6 @@ pub(crate) struct DetectorArgs {
     config: ConfigArg,
     #[command(flatten)]
     options: tactile_detect::DetectorOptions,
-}
-
-#[derive(Args)]
-pub(crate) struct SegmenterArgs {
-    /// Visuo-tactile dataset; its tendon frames are split by `sequence`.
-    #[arg(long)]
-    data: PathBuf,
-    /// Output model folder.
-    #[arg(long)]
-    out: PathBuf,
-    #[command(flatten)]
-    config: ConfigArg,
-    #[command(flatten)]
-    options: tactile_segment::SegmenterOptions,
-}
-
-#[derive(Args)]
-pub(crate) struct DepthArgs {
-    /// Visuo-tactile dataset (split by `sequence`).
-    #[arg(long)]
-    data: PathBuf,
-    /// Output model folder.
-    #[arg(long)]
-    out: PathBuf,
-    #[command(flatten)]
-    config: ConfigArg,
-    #[command(flatten)]
-    options: tactile_depth::DepthOptions,
 }
 
 pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
