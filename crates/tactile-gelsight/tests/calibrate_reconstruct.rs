@@ -467,7 +467,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     assert!(!r.profile.is_empty());
     let bad = BenchOptions {
         folds: 9,
-        ..options
+        ..options.clone()
     };
     assert!(
         cross_validate(
@@ -481,6 +481,24 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
         .to_string()
         .contains("folds")
     );
+    // An exposure change of 90 % or more (a gain of 0.1 or less) is refused
+    // with the runs and folds, before any candidate is fitted.
+    for exposure in [0.9, -0.1, f64::NAN] {
+        let bad = BenchOptions {
+            exposure,
+            ..options.clone()
+        };
+        let e = cross_validate(
+            "lookup",
+            &Candidate::Lookup { bins: 24 },
+            &ds,
+            (&bg, &presses),
+            &bad,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("exposure must be in [0, 0.9)"), "{e}");
+    }
 
     // A model folder to reconstruct with (a short fit is enough here).
     let mut cfg = CalibrationConfig::new().with_factor(8).with_val_presses(2);
