@@ -31,6 +31,6 @@ pub use rng::Range;
 pub use tactip::{SHAPES, TactipConfig};
 pub use visuotactile::{Renderer, TendonPath, VisuotactileConfig};
 pub use write::{
-    GENERATOR, TactipLabels, WriteOptions, check_count, visuotactile_position, write_calibrated,
-    write_tactip, write_visuotactile,
+    GENERATOR, TactipLabels, WriteOptions, calibrated_position, check_count, render_frames,
+    visuotactile_position, write_calibrated, write_tactip, write_visuotactile,
 };

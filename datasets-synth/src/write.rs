@@ -76,17 +76,7 @@ where
     for d in subdirs {
         tactile_core::io::create_dir_all(staging.join(d))?;
     }
-    let pb = tactile_core::progress::progress_bar_if(count as u64, "synth", options.progress);
-    let rows: Vec<Vec<String>> = (0..count)
-        .into_par_iter()
-        .map(|i| {
-            tactile_core::interrupt::check()?;
-            let r = row(&staging, i);
-            pb.inc(1);
-            r
-        })
-        .collect::<tactile_core::Result<_>>()?;
-    pb.finish_and_clear();
+    let rows = render_frames(count, options.progress, |i| row(&staging, i))?;
     for r in rows {
         writer.push_row(r)?;
     }
@@ -94,6 +84,29 @@ where
     // Checked again: another run may have filled the folder meanwhile.
     check_output(out, options.force)?;
     Ok(staged.commit(options.force)?)
+}
+
+/// `render(i)` for every frame `i` of `0..count`, in parallel on rayon's
+/// threads, in order, with a progress bar when `progress`, ended by a stop
+/// request (Ctrl-C): what a dataset's writer and the sets Python's
+/// `tactile.synth` returns in memory share.
+pub fn render_frames<T: Send>(
+    count: usize,
+    progress: bool,
+    render: impl Fn(usize) -> tactile_core::Result<T> + Sync,
+) -> tactile_core::Result<Vec<T>> {
+    let pb = tactile_core::progress::progress_bar_if(count as u64, "synth", progress);
+    let frames = (0..count)
+        .into_par_iter()
+        .map(|i| {
+            tactile_core::interrupt::check()?;
+            let r = render(i);
+            pb.inc(1);
+            r
+        })
+        .collect::<tactile_core::Result<_>>()?;
+    pb.finish_and_clear();
+    Ok(frames)
 }
 
 fn num(v: f64, decimals: usize) -> String {
@@ -206,7 +219,19 @@ pub fn write_tactip(
 
 /// Sequence and frame within it of row `i` of a visuo-tactile dataset.
 pub fn visuotactile_position(config: &VisuotactileConfig, i: usize) -> (usize, usize) {
-    let fps = config.frames_per_sequence.max(1);
+    video_position(config.frames_per_sequence, i)
+}
+
+/// Sequence and frame within it of rendered row `i` of a calibrated
+/// sensor's dataset.
+pub fn calibrated_position(config: &CalibratedConfig, i: usize) -> (usize, usize) {
+    video_position(config.frames_per_sequence, i)
+}
+
+/// Sequence and frame within it of frame `i` of videos of
+/// `frames_per_sequence` frames.
+fn video_position(frames_per_sequence: usize, i: usize) -> (usize, usize) {
+    let fps = frames_per_sequence.max(1);
     (i / fps, i % fps)
 }
 
@@ -359,7 +384,7 @@ pub fn write_calibrated(
                     rendered_sequences,
                 );
             }
-            let (seq, f) = (i / fps.max(1), i % fps.max(1));
+            let (seq, f) = calibrated_position(config, i);
             let (scene, frame) = calibrated::sample(sensor, config, seed, seq as u64, f);
             let [file, mask, depth] = write_frame_files(
                 root,

@@ -11,7 +11,6 @@ use numpy::{IntoPyArray, PyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use rayon::prelude::*;
 
 use crate::errors::PyResultExt;
 
@@ -65,16 +64,12 @@ pub(crate) fn synth_tactip(
     let n = tactip::FRAME_PX;
     check_in_memory(count, n * n)?;
     let samples: Vec<(Vec<u8>, TactipLabels)> = crate::work::interruptible(py, || {
-        (0..count)
-            .into_par_iter()
-            .map(|i| {
-                tactile_core::interrupt::check()?;
-                let (scene, frame) = tactip::sample(&cfg, seed, i as u64);
-                let labels = TactipLabels::of(&scene, &frame);
-                Ok((frame.pixels, labels))
-            })
-            .collect::<tactile_core::Result<_>>()
-            .py()
+        datasets_synth::render_frames(count, progress, |i| {
+            let (scene, frame) = tactip::sample(&cfg, seed, i as u64);
+            let labels = TactipLabels::of(&scene, &frame);
+            Ok((frame.pixels, labels))
+        })
+        .py()
     })?;
     let (pixels, labels): (Vec<Vec<u8>>, Vec<TactipLabels>) = samples.into_iter().unzip();
     let frames = ndarray::Array3::from_shape_vec((count, n, n), pixels.concat())
@@ -148,23 +143,19 @@ pub(crate) fn synth_visuotactile(
         burial_mm: f64,
     }
     let samples: Vec<Sample> = crate::work::interruptible(py, || {
-        (0..count)
-            .into_par_iter()
-            .map(|i| {
-                tactile_core::interrupt::check()?;
-                let (sequence, index) = datasets_synth::visuotactile_position(&cfg, i);
-                let (scene, frame) = visuotactile::sample(&cfg, seed, sequence as u64, index);
-                Ok(Sample {
-                    frame,
-                    path: scene.path.name(),
-                    sequence,
-                    index,
-                    tendon_radius_mm: scene.tendon_radius_mm,
-                    burial_mm: scene.burial_mm,
-                })
+        datasets_synth::render_frames(count, progress, |i| {
+            let (sequence, index) = datasets_synth::visuotactile_position(&cfg, i);
+            let (scene, frame) = visuotactile::sample(&cfg, seed, sequence as u64, index);
+            Ok(Sample {
+                frame,
+                path: scene.path.name(),
+                sequence,
+                index,
+                tendon_radius_mm: scene.tendon_radius_mm,
+                burial_mm: scene.burial_mm,
             })
-            .collect::<tactile_core::Result<_>>()
-            .py()
+        })
+        .py()
     })?;
     let mut rgb = Vec::with_capacity(count * w * h * 3);
     let mut mask = Vec::with_capacity(count * w * h);
@@ -270,19 +261,14 @@ pub(crate) fn synth_gelsight(
     }
     let (w, h) = (unit.width(), unit.height());
     check_in_memory(count, w * h * (3 + 1 + 4))?;
-    let fps = cfg.frames_per_sequence.max(1);
     let samples: Vec<(calibrated::CalibratedFrame, &'static str)> =
         crate::work::interruptible(py, || {
-            (0..count)
-                .into_par_iter()
-                .map(|i| {
-                    tactile_core::interrupt::check()?;
-                    let (scene, frame) =
-                        calibrated::sample(&unit, &cfg, seed, (i / fps) as u64, i % fps);
-                    Ok((frame, scene.contact.name()))
-                })
-                .collect::<tactile_core::Result<_>>()
-                .py()
+            datasets_synth::render_frames(count, progress, |i| {
+                let (sequence, index) = datasets_synth::calibrated_position(&cfg, i);
+                let (scene, frame) = calibrated::sample(&unit, &cfg, seed, sequence as u64, index);
+                Ok((frame, scene.contact.name()))
+            })
+            .py()
         })?;
     let mut rgb = Vec::with_capacity(count * w * h * 3);
     let mut mask = Vec::with_capacity(count * w * h);
@@ -337,13 +323,14 @@ pub(crate) fn synth_gelsight(
         "peak_mm",
         PyArray1::from_vec(py, samples.iter().map(|s| s.0.peak_mm).collect()),
     )?;
+    let position = |i| datasets_synth::calibrated_position(&cfg, i);
     d.set_item(
         "sequence",
-        PyArray1::from_vec(py, (0..count).map(|i| (i / fps) as i64).collect()),
+        PyArray1::from_vec(py, (0..count).map(|i| position(i).0 as i64).collect()),
     )?;
     d.set_item(
         "frame_index",
-        PyArray1::from_vec(py, (0..count).map(|i| (i % fps) as i64).collect()),
+        PyArray1::from_vec(py, (0..count).map(|i| position(i).1 as i64).collect()),
     )?;
     Ok(d.into_any().unbind())
 }
