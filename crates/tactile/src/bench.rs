@@ -3,14 +3,14 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-
-use crate::args::Paged;
 use clap::{Args, Subcommand};
 use tactile_bench::cae::{CaeBench, bench_cae};
 use tactile_bench::models::{ModelBench, bench_depth, bench_detectors, bench_segmenters};
 use tactile_bench::output::write_markdown_and_json;
 use tactile_bench::own_sensor::OwnSensorBench;
 use tactile_bench::pin_profile::PinProfileBench;
+
+use crate::args::Paged;
 
 #[derive(Subcommand)]
 pub(crate) enum BenchCmd {
