@@ -39,6 +39,52 @@ fn column<'py>(py: Python<'py>, v: Vec<Option<f64>>) -> Bound<'py, PyArray1<f64>
     PyArray1::from_vec(py, v.into_iter().map(|x| x.unwrap_or(f64::NAN)).collect())
 }
 
+/// A dict of a palpation video's frames as arrays: `frames (N, H, W, 3)
+/// uint8` RGB, `masks (N, H, W) bool` (the tendon's pixels, as a dataset's
+/// reader reads its mask PNG) and the per-pixel map as `depth_key (N, H,
+/// W) float32`, of frames of `(w, h)` pixels.
+fn video_arrays<'py, 'a>(
+    py: Python<'py>,
+    (w, h): (usize, usize),
+    frames: impl ExactSizeIterator<Item = (&'a [u8], &'a [u8], &'a [f32])>,
+    depth_key: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let count = frames.len();
+    let mut rgb = Vec::with_capacity(count * w * h * 3);
+    let mut mask = Vec::with_capacity(count * w * h);
+    let mut depth = Vec::with_capacity(count * w * h);
+    for (frame_rgb, frame_mask, frame_depth) in frames {
+        rgb.extend_from_slice(frame_rgb);
+        mask.extend(
+            frame_mask
+                .iter()
+                .map(|&v| v >= tactile_core::image_io::MASK_TENDON_MIN),
+        );
+        depth.extend_from_slice(frame_depth);
+    }
+    let shape_err = |e: ndarray::ShapeError| PyValueError::new_err(e.to_string());
+    let d = PyDict::new(py);
+    d.set_item(
+        "frames",
+        ndarray::Array4::from_shape_vec((count, h, w, 3), rgb)
+            .map_err(shape_err)?
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "masks",
+        ndarray::Array3::from_shape_vec((count, h, w), mask)
+            .map_err(shape_err)?
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        depth_key,
+        ndarray::Array3::from_shape_vec((count, h, w), depth)
+            .map_err(shape_err)?
+            .into_pyarray(py),
+    )?;
+    Ok(d)
+}
+
 /// Virtual TacTip frames: written to `out` (returns the folder), or
 /// returned as `(frames (N, 300, 300) uint8, labels dict)`.
 #[pyfunction]
@@ -157,38 +203,13 @@ pub(crate) fn synth_visuotactile(
         })
         .py()
     })?;
-    let mut rgb = Vec::with_capacity(count * w * h * 3);
-    let mut mask = Vec::with_capacity(count * w * h);
-    let mut depth = Vec::with_capacity(count * w * h);
-    for s in &samples {
-        rgb.extend_from_slice(&s.frame.rgb);
-        mask.extend(
-            s.frame
-                .mask
-                .iter()
-                .map(|&v| v >= tactile_core::image_io::MASK_TENDON_MIN),
-        );
-        depth.extend_from_slice(&s.frame.depth_m);
-    }
-    let shape_err = |e: ndarray::ShapeError| PyValueError::new_err(e.to_string());
-    let d = PyDict::new(py);
-    d.set_item(
-        "frames",
-        ndarray::Array4::from_shape_vec((count, h, w, 3), rgb)
-            .map_err(shape_err)?
-            .into_pyarray(py),
-    )?;
-    d.set_item(
-        "masks",
-        ndarray::Array3::from_shape_vec((count, h, w), mask)
-            .map_err(shape_err)?
-            .into_pyarray(py),
-    )?;
-    d.set_item(
+    let d = video_arrays(
+        py,
+        (w, h),
+        samples
+            .iter()
+            .map(|s| (&s.frame.rgb[..], &s.frame.mask[..], &s.frame.depth_m[..])),
         "depth_m",
-        ndarray::Array3::from_shape_vec((count, h, w), depth)
-            .map_err(shape_err)?
-            .into_pyarray(py),
     )?;
     let f = |g: &dyn Fn(&Sample) -> f64| -> Vec<f64> { samples.iter().map(g).collect() };
     d.set_item(
@@ -270,37 +291,13 @@ pub(crate) fn synth_gelsight(
             })
             .py()
         })?;
-    let mut rgb = Vec::with_capacity(count * w * h * 3);
-    let mut mask = Vec::with_capacity(count * w * h);
-    let mut depth = Vec::with_capacity(count * w * h);
-    for (f, _) in &samples {
-        rgb.extend_from_slice(&f.rgb);
-        mask.extend(
-            f.mask
-                .iter()
-                .map(|&v| v >= tactile_core::image_io::MASK_TENDON_MIN),
-        );
-        depth.extend_from_slice(&f.indentation_m);
-    }
-    let shape_err = |e: ndarray::ShapeError| PyValueError::new_err(e.to_string());
-    let d = PyDict::new(py);
-    d.set_item(
-        "frames",
-        ndarray::Array4::from_shape_vec((count, h, w, 3), rgb)
-            .map_err(shape_err)?
-            .into_pyarray(py),
-    )?;
-    d.set_item(
-        "masks",
-        ndarray::Array3::from_shape_vec((count, h, w), mask)
-            .map_err(shape_err)?
-            .into_pyarray(py),
-    )?;
-    d.set_item(
+    let d = video_arrays(
+        py,
+        (w, h),
+        samples
+            .iter()
+            .map(|(f, _)| (&f.rgb[..], &f.mask[..], &f.indentation_m[..])),
         "indentation_m",
-        ndarray::Array3::from_shape_vec((count, h, w), depth)
-            .map_err(shape_err)?
-            .into_pyarray(py),
     )?;
     d.set_item(
         "tendon",
