@@ -196,6 +196,18 @@ def test_ctrl_c_stops_a_long_prediction_and_writes_nothing(root, tmp_path, share
     assert list(tmp_path.iterdir()) == []
 
 
+def test_ctrl_c_stops_a_virtual_set_rendered_in_memory():
+    """`tactile.synth.visuotactile` without out= renders through the
+    writer's own loop (datasets_synth::render_frames): 600 frames take
+    about 13 s on two cores, and Ctrl-C ends them within a frame or two."""
+    p = _python("tactile.synth.visuotactile(count=600, progress=False)")
+    time.sleep(2)
+    assert p.poll() is None, p.stderr.read()
+    t0 = time.time()
+    _interrupt(p)
+    assert time.time() - t0 < 5
+
+
 def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
     data = tactile.synth.tactip(count=30, seed=6, out=tmp_path / "ds", progress=False)
     spheres = tactile.synth.tactip(count=20, seed=7, out=tmp_path / "spheres", shapes=["sphere"],

@@ -53,6 +53,8 @@ def tactip(
     float64 arrays (NaN where a shape has no such label). With ``out``,
     writes a dataset there instead and returns its path; ``force=True``
     replaces an existing dataset (never a folder of other files).
+    ``progress`` shows a bar on a terminal while the frames render, in
+    memory or to disk; Ctrl-C stops the render and keeps nothing.
     """
     r = _tactile.synth_tactip(
         _whole("count", count), int(seed), None if out is None else os.fspath(out), force, progress,
@@ -81,6 +83,7 @@ def visuotactile(
     ``tendon_radius_mm``, ``burial_mm``, ``ridge_mm``. With ``out``, writes
     a dataset there instead and returns its path. ``width`` x ``height``
     must be an integer fraction of 1920 x 1080 (default 640 x 360).
+    ``progress`` and Ctrl-C as for :func:`tactip`.
     """
     r = _tactile.synth_visuotactile(
         None if count is None else _whole("count", count),
@@ -117,7 +120,8 @@ def gelsight(
     without a tendon), ``path`` (the tendon's path, or ``sphere``,
     ``punch``, ``flat``, ``none``), ``press_mm``, ``peak_mm``, ``sequence``,
     ``frame_index``. With ``out``, writes a dataset there instead (its depth
-    maps are indentation) and returns its path.
+    maps are indentation) and returns its path. ``progress`` and Ctrl-C as
+    for :func:`tactip`.
     """
     r = _tactile.synth_gelsight(
         os.fspath(sensor),
