@@ -186,18 +186,25 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
         pose.estimate(frames[:2])
     assert not [w for w in seen if "smaller than" in str(w.message)]
     small = np.full((3, 120, 160), 128, dtype=np.uint8)
-    with pytest.warns(UserWarning, match=r"frames\[1\]: the frame is 160x120.*440x440 crop") as seen:
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
         mixed = pose.estimate([frames[0], *small])
+    said = [str(w.message) for w in seen]
+    assert any(re.match(r"frames\[1\]: the frame is 160x120.*440x440 crop", m) for m in said), said
     assert len(mixed["depth_mm"]) == 4
     assert sum("smaller than" in str(w.message) for w in seen) == 1
     # Grey frames without pins: named in one warning too, as blank.
     blank = [str(w.message) for w in seen if "one grey level" in str(w.message)]
     assert len(blank) == 1 and blank[0].startswith("frames[1], frames[2], frames[3]: "), blank
     assert not [w for w in seen if "pins spaced unlike" in str(w.message)]
-    # A frame too small for even the pin image is refused, named by its place.
-    with pytest.raises(ValueError, match=r"frames\[2\]: frame is 12x10, smaller than the 64x64"):
+    # A frame too small for even the pin image is refused, named by its place
+    # (after the warning that it is smaller than the model's crop).
+    crop = r"the frame is 12x10, smaller than the model's 440x440 crop"
+    with pytest.raises(ValueError, match=r"frames\[2\]: frame is 12x10, smaller than the 64x64"), \
+            pytest.warns(UserWarning, match=r"frames\[2\]: " + crop):
         pose.estimate([frames[0], frames[1], np.zeros((10, 12), dtype=np.uint8)])
-    with pytest.raises(ValueError, match=r"^frame is 12x10, smaller than the 64x64"):
+    with pytest.raises(ValueError, match=r"^frame is 12x10, smaller than the 64x64"), \
+            pytest.warns(UserWarning, match=r"frames\[0\]: " + crop):
         pose.preprocess(np.zeros((10, 12), dtype=np.uint8))
 
     # Calibrated again from Python (`tactile train calibrate`): on these 20
@@ -207,7 +214,8 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
     shutil.copytree(root / "models/pose-surface", model)
     with pytest.raises(ValueError, match="'val'.*20"):
         tactile.train.calibrate(model, data, split="val")
-    said = tactile.train.calibrate(model, data)
+    with pytest.warns(UserWarning, match="these 20 frames are frames it trained on"):
+        said = tactile.train.calibrate(model, data)
     assert "20 frames" in said and "cross-fitted" in said
     again = tactile.PoseEstimator(model, "burn-flex").estimate(frames)
     labels = {r["file"]: r for r in csv.DictReader(keep)}
