@@ -106,6 +106,72 @@ pub fn attach_negative_values(args: impl IntoIterator<Item = OsString>) -> Vec<O
 mod tests {
     use std::ffi::OsString;
 
+    use clap::{Args, Command, FromArgMatches};
+    use serde::{Deserialize, Serialize};
+
+    /// Two options, as a trainer's are.
+    #[derive(Args, Serialize, Deserialize, Debug, PartialEq)]
+    struct Two {
+        /// First.
+        #[arg(long, default_value_t = 1)]
+        a: u32,
+        /// Second.
+        #[arg(long, default_value_t = 2)]
+        b: u32,
+    }
+
+    /// Only the first, as another generator's options.
+    #[derive(Args, Serialize, Deserialize, Debug, PartialEq)]
+    struct One {
+        /// First.
+        #[arg(long, default_value_t = 10)]
+        a: u32,
+    }
+
+    fn parse(words: &[&str]) -> (Two, clap::ArgMatches) {
+        let m = Two::augment_args(Command::new("t").no_binary_name(true))
+            .try_get_matches_from(words)
+            .unwrap();
+        (Two::from_arg_matches(&m).unwrap(), m)
+    }
+
+    #[test]
+    fn flags_given_win_over_the_options_file_and_the_file_over_defaults() {
+        let dir = std::env::temp_dir().join(format!("tactile-options-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("o.json");
+        std::fs::write(&file, r#"{"a": 5, "b": 6}"#).unwrap();
+        let (parsed, m) = parse(&["--b", "9"]);
+        let got = super::resolve(parsed, Some(&file), &m).unwrap();
+        assert_eq!(got, Two { a: 5, b: 9 });
+        // A flag at its default value, given on the line, still wins.
+        let (parsed, m) = parse(&["--a", "1"]);
+        assert_eq!(
+            super::resolve(parsed, Some(&file), &m).unwrap(),
+            Two { a: 1, b: 6 }
+        );
+        // No file: the flags as parsed.
+        let (parsed, m) = parse(&["--b", "9"]);
+        assert_eq!(
+            super::resolve(parsed, None, &m).unwrap(),
+            Two { a: 1, b: 9 }
+        );
+        // Another type takes the flags it has, and refuses one it has not,
+        // naming it.
+        let (parsed, m) = parse(&["--a", "4"]);
+        let one: One = super::resolve_as(&parsed, None, &m).unwrap();
+        assert_eq!(one, One { a: 4 });
+        let (parsed, m) = parse(&["--b", "4"]);
+        let e = super::resolve_as::<Two, One>(&parsed, None, &m)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--b does not apply here (the options are: a)"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn a_number_below_zero_is_attached_to_its_flag_but_not_after_a_double_dash() {
         let words = super::attach_negative_values(

@@ -31,7 +31,8 @@ pub(crate) fn keep_matches(mut m: ArgMatches) {
     let _ = LEAF.set(m);
 }
 
-/// The flags given on the command line, with `--config FILE` under them
+/// Options of another type `T` made from the flags given on the command
+/// line, with `--config FILE` under them
 /// ([`tactile_burn::options::command_line::resolve_as`]).
 pub(crate) fn resolve_as<P: serde::Serialize, T: Options>(
     parsed: &P,
