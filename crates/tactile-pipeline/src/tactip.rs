@@ -3,6 +3,7 @@
 //! head and the regressors on them, every estimator of a folder on one
 //! encoding per frame, and their scores.
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -550,61 +551,76 @@ enum Wording {
     /// Their score named, and the words saying a stream names no more
     /// after these.
     NamedThenUnnamed,
-    /// No score, so the text repeats alike ([`frames_warnings`]).
+    /// No score, so the text repeats alike ([`GivenFrames::warnings`]).
     Left,
 }
 
-/// The warnings of frames given in a call rather than as a dataset or a
-/// source (Python's `PoseEstimator.estimate`, `TactipEncoder.encode`),
-/// each named `frames[i]`: the blank ones (`flat`), and those of the
-/// others whose `pins` (through the model's first preprocessing) lie
-/// outside its pin `profile`. Their words hold no score, so a loop fed
-/// the wrong camera repeats one text, which Python's warning filters show
-/// once per call site.
-pub fn frames_warnings(
-    flat: &[bool],
-    pins: &[PinImage],
-    profile: Option<&InputProfile>,
-) -> Vec<String> {
-    let named: Vec<String> = (0..flat.len())
-        .filter(|&i| flat[i])
-        .map(|i| format!("frames[{i}]"))
-        .collect();
-    let unlike = profile.and_then(|p| {
-        let foreign = ForeignFrame::among(
-            p,
-            pins,
-            |i| flat.get(i).copied().unwrap_or(false),
-            |i| format!("frames[{i}]"),
-        );
-        foreign_frames_warning(&foreign, p, Wording::Left)
-    });
-    flat_frames_warning(&named, false)
-        .into_iter()
-        .chain(unlike)
-        .collect()
+/// Frames given in a call rather than as a dataset or a source (Python's
+/// `TactipEncoder` and `PoseEstimator` calls), preprocessed a chunk at a
+/// time so that a long batch holds one chunk's grey frames, not all of
+/// them, while it notes what is owed a warning: the blank frames and
+/// those whose pin images lie outside the model's pin profile, each named
+/// `frames[i]` by its place in the call.
+#[derive(Debug, Default)]
+pub struct GivenFrames {
+    /// Frames preprocessed so far.
+    count: usize,
+    /// The blank ones, named.
+    flat: Vec<String>,
+    /// The others outside the pin profile.
+    foreign: Vec<ForeignFrame>,
 }
 
-/// A pose network's estimates of frames given one by one (Python's
-/// `PoseEstimator.estimate`), each preprocessed once per scale, with the
-/// warnings of its blank frames and of those outside its pin profile
-/// ([`frames_warnings`]).
-pub fn pose_frames_flagging(
-    e: &mut tactile_pose::PoseEstimator,
-    frames: &[GreyImage],
-) -> Result<(tactile_pose::inference::ValuesWithStd, Vec<String>)> {
-    let pins = e.preprocess(frames)?;
-    let flat: Vec<bool> = match e.scales().first() {
-        Some(cfg) => frames.iter().map(|f| is_flat_frame(f, cfg)).collect(),
-        None => vec![false; frames.len()],
-    };
-    let warnings = frames_warnings(
-        &flat,
-        pins.first().map_or(&[], Vec::as_slice),
-        e.artifact.input_profile.as_ref(),
-    );
-    let views: Vec<&[PinImage]> = pins.iter().map(Vec::as_slice).collect();
-    Ok((e.predict_scales_with_std(&views)?, warnings))
+impl GivenFrames {
+    /// The pin images of the next `frames` of the call, each made grey by
+    /// `grey`, per preprocessing of `scales` (an encoder has one, a
+    /// multi-scale pose ensemble several); the first one's pins are scored
+    /// against `profile`. An error names the frame by its place in the
+    /// call; a stop request (Ctrl-C) ends the work between frames.
+    pub fn preprocess<F: Sync>(
+        &mut self,
+        frames: &[F],
+        scales: &[PreprocessConfig],
+        profile: Option<&InputProfile>,
+        grey: impl Fn(&F) -> tactile_core::Result<GreyImage> + Sync,
+    ) -> Result<Vec<Vec<PinImage>>> {
+        let first = self.count;
+        let in_call = |e: tactile_preprocess::Error| e.frame_from(first);
+        let Some((cfg, others)) = scales.split_first() else {
+            return Ok(Vec::new());
+        };
+        let (first_pins, flat) =
+            tactile_preprocess::preprocess_each_noting_flat(frames, cfg, |f| {
+                Ok(Cow::Owned(grey(f)?))
+            })
+            .map_err(in_call)?;
+        let mut pins = vec![first_pins];
+        for cfg in others {
+            let each =
+                tactile_preprocess::preprocess_each_by(frames, cfg, |f| Ok(Cow::Owned(grey(f)?)));
+            pins.push(each.map_err(in_call)?);
+        }
+        let name = |i: usize| format!("frames[{}]", first + i);
+        self.flat
+            .extend((0..flat.len()).filter(|&i| flat[i]).map(name));
+        if let Some(p) = profile {
+            self.foreign
+                .extend(ForeignFrame::among(p, &pins[0], |i| flat[i], name));
+        }
+        self.count += frames.len();
+        Ok(pins)
+    }
+
+    /// The warnings of the frames preprocessed so far: the blank ones, and
+    /// the others outside `profile`. Their words hold no score, so a loop
+    /// fed the wrong camera repeats one text, which Python's warning
+    /// filters show once per call site.
+    pub fn warnings(&self, profile: Option<&InputProfile>) -> Vec<String> {
+        flat_frames_warning(&self.flat, false)
+            .into_iter()
+            .chain(profile.and_then(|p| foreign_frames_warning(&self.foreign, p, Wording::Left)))
+            .collect()
+    }
 }
 
 /// The warnings of a dataset's frames: its blank frames (`flat`) and its

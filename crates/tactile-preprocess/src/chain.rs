@@ -116,6 +116,8 @@ fn each_by<F: Sync, T: Send>(
         .par_iter()
         .enumerate()
         .map(|(index, f)| {
+            // A long batch stops between frames at a stop request (Ctrl-C).
+            tactile_core::interrupt::check()?;
             grey(f)
                 .and_then(|g| Ok((preprocess(&g, cfg)?, also(&g))))
                 .map_err(|e| Error::Frame {

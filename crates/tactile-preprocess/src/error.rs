@@ -86,6 +86,19 @@ impl Error {
         }
     }
 
+    /// A batch's frame error renumbered for a batch that is the part,
+    /// starting at `first`, of a longer one (a call's frames taken a chunk
+    /// at a time).
+    pub fn frame_from(self, first: usize) -> Self {
+        match self {
+            Error::Frame { index, error } => Error::Frame {
+                index: first + index,
+                error,
+            },
+            other => other,
+        }
+    }
+
     /// A batch's frame error named by `name` of its place in the batch
     /// (its file, or its number in a stream) instead of by the place.
     pub fn name_frame(self, name: impl FnOnce(usize) -> Option<String>) -> Self {

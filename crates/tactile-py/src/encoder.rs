@@ -10,11 +10,13 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_cae::TactipEncoder;
 use tactile_estimate::{Column, Estimators};
-use tactile_pipeline::tactip::{TactipPerception, frames_warnings};
-use tactile_preprocess::PinImage;
+use tactile_pipeline::tactip::{GivenFrames, TactipPerception};
+use tactile_preprocess::profile::InputProfile;
+use tactile_preprocess::{FrameSizeCheck, PinImage, PreprocessConfig};
 
 use crate::errors::PyResultExt;
-use crate::frame::{FrameArg, Layout, Pixels, each_frame};
+use crate::frame::{FrameArg, Layout, Pixels, frame_chunks};
+use crate::work::interruptible;
 
 struct Models {
     encoder: TactipEncoder,
@@ -31,46 +33,74 @@ pub struct PyTactipEncoder {
     feature_count: usize,
     pin_side: usize,
     names: Vec<String>,
-    preprocess: tactile_preprocess::PreprocessConfig,
+    preprocess: PreprocessConfig,
 }
 
-/// Every frame of `frames` (one `(H, W)` grey or `(H, W, 3)` RGB frame,
-/// an `(N, H, W)` or `(N, H, W, 3)` array, or an iterable of frames),
-/// checked (see [`each_frame`]).
-pub(crate) fn frame_args<'py>(frames: &Bound<'py, PyAny>) -> PyResult<Vec<FrameArg<'py>>> {
-    each_frame(frames, |f, what| FrameArg::new(f, Layout::GreyOrRgb, what))
+/// What a model makes of the frames of a call: `frames` is one `(H, W)`
+/// grey or `(H, W, 3)` RGB frame, an `(N, H, W)` or `(N, H, W, 3)` array,
+/// or an iterable of frames ([`crate::frame::each_frame`]), taken a chunk at a time
+/// ([`frame_chunks`]). Each chunk is preprocessed through every one of the
+/// model's `scales` and its pin images handed to `run` (which gives one
+/// row per frame), off the interpreter and stoppable with Ctrl-C; a
+/// `UserWarning` comes for each frame size the preprocessing was not made
+/// for as it first comes, and, at the end, for the blank frames and for
+/// those outside the model's pin `profile`.
+pub(crate) fn run_on_frames<T: Send>(
+    py: Python<'_>,
+    frames: &Bound<'_, PyAny>,
+    scales: &[PreprocessConfig],
+    profile: Option<&InputProfile>,
+    mut run: impl FnMut(Vec<Vec<PinImage>>) -> PyResult<Vec<T>> + Send,
+) -> PyResult<Vec<T>> {
+    let mut given = GivenFrames::default();
+    let mut sizes = FrameSizeCheck::default();
+    let mut rows = Vec::new();
+    frame_chunks(frames, Layout::GreyOrRgb, |args, first| {
+        let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
+        warn_frame_sizes(py, &px, first, &mut sizes, scales)?;
+        rows.extend(interruptible(py, || {
+            run(given.preprocess(&px, scales, profile, Pixels::grey).py()?)
+        })?);
+        Ok(())
+    })?;
+    for w in given.warnings(profile) {
+        crate::errors::user_warning(py, &w)?;
+    }
+    Ok(rows)
 }
 
 impl PyTactipEncoder {
+    /// The encoder's features of the frames of a call ([`run_on_frames`]).
+    fn features(&self, py: Python<'_>, frames: &Bound<'_, PyAny>) -> PyResult<Vec<Vec<f32>>> {
+        let profile = self.lock()?.encoder.artifact.input_profile.clone();
+        let scales = std::slice::from_ref(&self.preprocess);
+        run_on_frames(py, frames, scales, profile.as_ref(), |pins| {
+            let pins = pins.first().map_or(&[][..], Vec::as_slice);
+            self.lock()?.encoder.encode(pins).py()
+        })
+    }
+
     fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Models>> {
         self.models
             .lock()
             .map_err(|_| PyRuntimeError::new_err("the encoder failed in another thread"))
     }
-
-    /// Pin images of frames, preprocessed in parallel as a dataset's are,
-    /// with whether each frame is blank (one grey level in its crop).
-    fn pins(&self, px: &[Pixels<'_>]) -> PyResult<(Vec<PinImage>, Vec<bool>)> {
-        // Each frame made grey as its turn comes; one that fails is named `frames[i]`.
-        tactile_preprocess::preprocess_each_noting_flat(px, &self.preprocess, |p| {
-            Ok(std::borrow::Cow::Owned(p.grey()?))
-        })
-        .py()
-    }
 }
 
-/// A `UserWarning` for each frame size among `px` that a preprocessing of
-/// `cfgs` was not made for (a frame smaller than its crop: another camera
-/// or resolution), naming its first frame; the estimates are still made.
+/// A `UserWarning` for each frame size among `px` (frames of a call from
+/// its `first`) that a preprocessing of `cfgs` was not made for (a frame
+/// smaller than its crop: another camera or resolution) and that `sizes`
+/// has not seen, naming its first frame; the estimates are still made.
 pub(crate) fn warn_frame_sizes(
     py: Python<'_>,
     px: &[Pixels<'_>],
-    cfgs: &[tactile_preprocess::PreprocessConfig],
+    first: usize,
+    sizes: &mut FrameSizeCheck,
+    cfgs: &[PreprocessConfig],
 ) -> PyResult<()> {
-    let mut sizes = tactile_preprocess::FrameSizeCheck::default();
     for (i, p) in px.iter().enumerate() {
         if let Some(why) = sizes.check(p.width, p.height, cfgs) {
-            crate::errors::user_warning(py, &format!("frames[{i}]: {why}"))?;
+            crate::errors::user_warning(py, &format!("frames[{}]: {why}", first + i))?;
         }
     }
     Ok(())
@@ -81,11 +111,12 @@ pub(crate) fn warn_frame_sizes(
 pub(crate) fn pin_image_array<'py>(
     py: Python<'py>,
     frame: &Bound<'py, PyAny>,
-    cfg: &tactile_preprocess::PreprocessConfig,
+    cfg: &PreprocessConfig,
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
     let arg = FrameArg::new(frame, Layout::GreyOrRgb, "frame")?;
     let px = [arg.view()];
-    warn_frame_sizes(py, &px, std::slice::from_ref(cfg))?;
+    let cfgs = std::slice::from_ref(cfg);
+    warn_frame_sizes(py, &px, 0, &mut FrameSizeCheck::default(), cfgs)?;
     let grey = px[0].grey().py()?;
     let pin = py
         .detach(|| tactile_preprocess::preprocess(&grey, cfg))
@@ -171,19 +202,8 @@ impl PyTactipEncoder {
         py: Python<'py>,
         frames: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        let args = frame_args(frames)?;
-        let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
-        warn_frame_sizes(py, &px, std::slice::from_ref(&self.preprocess))?;
         let k = self.feature_count;
-        let (feats, warnings) = py.detach(|| -> PyResult<(Vec<Vec<f32>>, Vec<String>)> {
-            let (pins, flat) = self.pins(&px)?;
-            let mut m = self.lock()?;
-            let warnings = frames_warnings(&flat, &pins, m.encoder.artifact.input_profile.as_ref());
-            Ok((m.encoder.encode(&pins).py()?, warnings))
-        })?;
-        for w in warnings {
-            crate::errors::user_warning(py, &w)?;
-        }
+        let feats = self.features(py, frames)?;
         let flat: Vec<f32> = feats.concat();
         let arr = ndarray::Array2::from_shape_vec((feats.len(), k), flat)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
@@ -204,22 +224,13 @@ impl PyTactipEncoder {
                 self.model_dir.display()
             )));
         }
-        let args = frame_args(frames)?;
-        let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
-        warn_frame_sizes(py, &px, std::slice::from_ref(&self.preprocess))?;
-        let (est, warnings) = py.detach(|| -> PyResult<(tactile_estimate::Estimates, _)> {
-            let (pins, flat) = self.pins(&px)?;
-            let mut m = self.lock()?;
-            let warnings = frames_warnings(&flat, &pins, m.encoder.artifact.input_profile.as_ref());
-            let feats = m.encoder.encode(&pins).py()?;
-            match &m.estimators {
-                Some(e) => Ok((e.estimate(&feats).py()?, warnings)),
+        let feats = self.features(py, frames)?;
+        let est = py.detach(|| -> PyResult<tactile_estimate::Estimates> {
+            match &self.lock()?.estimators {
+                Some(e) => e.estimate(&feats).py(),
                 None => Err(PyValueError::new_err("no estimators")),
             }
         })?;
-        for w in warnings {
-            crate::errors::user_warning(py, &w)?;
-        }
         let np = py.import("numpy")?;
         let out = PyDict::new(py);
         for (name, col) in est.columns {

@@ -174,7 +174,7 @@ impl PyPipeline {
         }
         let arg = FrameArg::new(frame, Layout::Rgb, "frame")?;
         let px = arg.view();
-        py.detach(|| -> PyResult<Vec<f64>> {
+        crate::work::interruptible(py, || -> PyResult<Vec<f64>> {
             let mut st = self.lock()?;
             let State {
                 pipeline, filter, ..
@@ -182,6 +182,7 @@ impl PyPipeline {
             px.with_rgb(|img| -> PyResult<Vec<f64>> {
                 (0..repeats)
                     .map(|_| {
+                        tactile_core::interrupt::check().py()?;
                         let t = std::time::Instant::now();
                         pipeline.process_filtered("", img, filter.as_mut()).py()?;
                         Ok(1e3 * t.elapsed().as_secs_f64())

@@ -8,12 +8,11 @@ use numpy::{IntoPyArray, PyArray2};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rayon::prelude::*;
 use tactile_pose::PoseEstimator;
+use tactile_preprocess::PinImage;
 
-use crate::encoder::{frame_args, pin_image_array, warn_frame_sizes};
+use crate::encoder::{pin_image_array, run_on_frames};
 use crate::errors::PyResultExt;
-use crate::frame::{FrameArg, Pixels};
 
 /// A pose network folder (`pose.json` + `pose.bpk`) with its preprocessing,
 /// or an ensemble of them (members may read different pin image sizes).
@@ -26,6 +25,14 @@ pub struct PyPoseEstimator {
     preprocess: tactile_preprocess::PreprocessConfig,
     /// Every member's preprocessing (a multi-scale ensemble's differ).
     scales: Vec<tactile_preprocess::PreprocessConfig>,
+}
+
+impl PyPoseEstimator {
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, PoseEstimator>> {
+        self.estimator
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the estimator failed in another thread"))
+    }
 }
 
 #[pymethods]
@@ -75,26 +82,22 @@ impl PyPoseEstimator {
         py: Python<'py>,
         frames: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let args = frame_args(frames)?;
-        let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
-        warn_frame_sizes(py, &px, &self.scales)?;
-        let ((rows, std), warnings) = py.detach(|| -> PyResult<_> {
-            let mut e = self
-                .estimator
-                .lock()
-                .map_err(|_| PyRuntimeError::new_err("the estimator failed in another thread"))?;
-            // Each frame made grey once; the library preprocesses it to
-            // every scale a multi-scale ensemble reads.
-            let grey = px
-                .par_iter()
-                .map(Pixels::grey)
-                .collect::<tactile_core::Result<Vec<_>>>()
+        let (profile, uncertain) = {
+            let e = self.lock()?;
+            (e.artifact.input_profile.clone(), e.has_uncertainty())
+        };
+        let rows = run_on_frames(py, frames, &self.scales, profile.as_ref(), |pins| {
+            let views: Vec<&[PinImage]> = pins.iter().map(Vec::as_slice).collect();
+            let (rows, std) = self
+                .lock()?
+                .predict_scales_with_std(&views)
+                .map_err(tactile_pipeline::Error::from)
                 .py()?;
-            tactile_pipeline::tactip::pose_frames_flagging(&mut e, &grey).py()
+            let std = std.unwrap_or_else(|| vec![Vec::new(); rows.len()]);
+            Ok(rows.into_iter().zip(std).collect())
         })?;
-        for w in warnings {
-            crate::errors::user_warning(py, &w)?;
-        }
+        let (rows, std): (Vec<Vec<f64>>, Vec<Vec<f64>>) = rows.into_iter().unzip();
+        let std = uncertain.then_some(std);
         let out = PyDict::new(py);
         for (j, name) in self.targets.iter().enumerate() {
             let v: Vec<f64> = rows.iter().map(|r| r[j]).collect();

@@ -1,13 +1,18 @@
-//! Long work (training, evaluation, generating a dataset) off the
+//! Long work (training, evaluation, generating a dataset, a batch of
+//! frames) off the
 //! interpreter: it runs on a worker thread with the interpreter lock
 //! released, while the calling thread checks for Ctrl-C every 100 ms. A
 //! Ctrl-C asks the work to stop the way SIGINT stops the command line
 //! (staging folders removed, a training folder left marked incomplete),
 //! waits for it, then raises `KeyboardInterrupt`.
 
+use std::sync::mpsc::RecvTimeoutError;
 use std::time::Duration;
 
 use pyo3::prelude::*;
+
+/// How often Ctrl-C is looked for while the work runs.
+const POLL: Duration = Duration::from_millis(100);
 
 /// Run `work` on a worker thread, stoppable with Ctrl-C.
 pub(crate) fn interruptible<T, F>(py: Python<'_>, work: F) -> PyResult<T>
@@ -18,10 +23,16 @@ where
     tactile_core::interrupt::reset();
     let (result, signal) = py.detach(|| {
         std::thread::scope(|s| {
-            let handle = s.spawn(work);
+            let (done, ended) = std::sync::mpsc::channel::<()>();
+            let handle = s.spawn(move || {
+                let result = work();
+                // Wakes the wait below at once (a panic wakes it too, by
+                // dropping `done`): a short call is not held to the poll.
+                let _ = done.send(());
+                result
+            });
             let mut signal: Option<PyErr> = None;
-            while !handle.is_finished() {
-                std::thread::sleep(Duration::from_millis(100));
+            while let Err(RecvTimeoutError::Timeout) = ended.recv_timeout(POLL) {
                 if signal.is_none()
                     && let Err(e) = Python::attach(|py| py.check_signals())
                 {

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -52,6 +54,30 @@ def run_cli(binary: Path, *args: str) -> str:
     r = subprocess.run([str(binary), *args], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 0, f"tactile {' '.join(args)} failed:\n{r.stderr}"
     return r.stdout
+
+
+def run_python(call: str) -> subprocess.Popen:
+    """`call` in a new interpreter that turns Ctrl-C into KeyboardInterrupt
+    (a shell's background job inherits SIGINT ignored, and Python then
+    installs no handler: restored, as at a terminal)."""
+    code = (
+        "import signal, tactile\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        f"{call}\n"
+    )
+    return subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+
+
+def interrupt(p: subprocess.Popen) -> str:
+    """Ctrl-C to `p`; its standard error once it ended with KeyboardInterrupt."""
+    p.send_signal(signal.SIGINT)
+    try:
+        _, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        raise
+    assert p.returncode != 0 and "KeyboardInterrupt" in err, err
+    return err
 
 
 @pytest.fixture(scope="session")

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import tactile
-from conftest import run_cli
+from conftest import interrupt, run_cli, run_python
 
 
 @pytest.fixture(scope="module")
@@ -135,33 +135,9 @@ def test_eval_on_the_wrong_kind_of_model(root, small_vt):
         tactile.eval.detector(root / "models", small_vt)
 
 
-def _python(call: str) -> subprocess.Popen:
-    """`call` in a new interpreter that turns Ctrl-C into KeyboardInterrupt
-    (a shell's background job inherits SIGINT ignored, and Python then
-    installs no handler: restored, as at a terminal)."""
-    code = (
-        "import signal, tactile\n"
-        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
-        f"{call}\n"
-    )
-    return subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
-
-
-def _interrupt(p: subprocess.Popen) -> str:
-    """Ctrl-C to `p`; its standard error once it ended with KeyboardInterrupt."""
-    p.send_signal(signal.SIGINT)
-    try:
-        _, err = p.communicate(timeout=60)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        raise
-    assert p.returncode != 0 and "KeyboardInterrupt" in err, err
-    return err
-
-
 def test_ctrl_c_stops_training_and_marks_it_incomplete(small_vt, tmp_path):
     out = tmp_path / "det"
-    p = _python(
+    p = run_python(
         f"tactile.train.detector({str(small_vt)!r}, {str(out)!r}, width=0.25, input=(64, 48),"
         " max_epochs=100000, patience=100000, batch_size=8)"
     )
@@ -174,7 +150,7 @@ def test_ctrl_c_stops_training_and_marks_it_incomplete(small_vt, tmp_path):
     # held lock is (fcntl.flock's BlockingIOError), not mixed in.
     with pytest.raises(BlockingIOError, match="another run is writing this folder"):
         tactile.train.detector(small_vt, out, width=0.25, input=(64, 48), max_epochs=1)
-    _interrupt(p)
+    interrupt(p)
     assert (out / "INCOMPLETE").is_file()
     with pytest.raises(ValueError, match="did not finish training"):
         tactile.eval.detector(out, small_vt)
@@ -187,11 +163,11 @@ def test_ctrl_c_stops_a_long_prediction_and_writes_nothing(root, tmp_path, share
     if not data.is_dir():
         pytest.skip("the real TacTip surface set is in ../shared/real")
     out = tmp_path / "estimates.csv"
-    p = _python(f"tactile.predict({str(root / 'models/pose-surface')!r}, {str(data)!r}, {str(out)!r})")
+    p = run_python(f"tactile.predict({str(root / 'models/pose-surface')!r}, {str(data)!r}, {str(out)!r})")
     time.sleep(4)
     assert p.poll() is None, p.stderr.read()
     t0 = time.time()
-    _interrupt(p)
+    interrupt(p)
     assert time.time() - t0 < 10
     assert list(tmp_path.iterdir()) == []
 
@@ -200,15 +176,15 @@ def test_ctrl_c_stops_a_virtual_set_rendered_in_memory():
     """`tactile.synth.visuotactile` without out= renders through the
     writer's own loop (datasets_synth::render_frames): 600 frames take
     about 13 s on two cores, and Ctrl-C ends them within a frame or two."""
-    p = _python("tactile.synth.visuotactile(count=600, progress=False)")
+    p = run_python("tactile.synth.visuotactile(count=600, progress=False)")
     time.sleep(2)
     assert p.poll() is None, p.stderr.read()
     t0 = time.time()
-    _interrupt(p)
+    interrupt(p)
     assert time.time() - t0 < 5
 
 
-def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
+def test_a_sphere_regressor_and_a_turned_head_fromrun_python(root, tmp_path):
     data = tactile.synth.tactip(count=30, seed=6, out=tmp_path / "ds", progress=False)
     spheres = tactile.synth.tactip(count=20, seed=7, out=tmp_path / "spheres", shapes=["sphere"],
                                    progress=False)
