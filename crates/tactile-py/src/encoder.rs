@@ -58,9 +58,14 @@ pub(crate) fn run_on_frames<T: Send>(
     frame_chunks(frames, Layout::GreyOrRgb, |args, first| {
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
         warn_frame_sizes(py, &px, first, &mut sizes, scales)?;
-        rows.extend(interruptible(py, || {
-            run(given.preprocess(&px, scales, profile, Pixels::grey).py()?)
-        })?);
+        let work = || run(given.preprocess(&px, scales, profile, Pixels::grey).py()?);
+        // One frame is a millisecond or two: it runs here, as `process`
+        // does, where a worker thread would add 50 us to a robot's loop; a
+        // batch runs on one, where Ctrl-C can stop it.
+        rows.extend(match px.len() {
+            1 => py.detach(work)?,
+            _ => interruptible(py, work)?,
+        });
         Ok(())
     })?;
     for w in given.warnings(profile) {
