@@ -557,8 +557,8 @@ enum Wording {
 
 /// Frames given in a call rather than as a dataset or a source (Python's
 /// `TactipEncoder` and `PoseEstimator` calls), preprocessed a chunk at a
-/// time so that a long batch holds one chunk's grey frames, not all of
-/// them, while it notes what is owed a warning: the blank frames and
+/// time so that a long batch never holds more than a chunk's frames and
+/// pin images, while it notes what is owed a warning: the blank frames and
 /// those whose pin images lie outside the model's pin profile, each named
 /// `frames[i]` by its place in the call.
 #[derive(Debug, Default)]
