@@ -8,6 +8,7 @@
 use std::sync::Arc;
 
 use kornia_image::{Image, ImageSize};
+use numpy::ndarray::{ArrayView3, ArrayViewD, Axis, Ix2, Ix3};
 use numpy::{
     PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray,
     PyUntypedArrayMethods,
@@ -121,9 +122,12 @@ impl<'py> FrameArg<'py> {
         let array = typed
             .try_readonly()
             .map_err(|e| PyValueError::new_err(format!("{what}: cannot read the array ({e})")))?;
-        let copy = match array.as_slice() {
-            Ok(_) => None,
-            Err(_) => Some(standard_layout(&array.as_array())),
+        // Read in place only in C order: numpy's `as_slice` also hands out a
+        // Fortran-ordered buffer (a grey frame's `.T`, MATLAB's arrays
+        // through scipy), whose bytes in that order are columns, not rows.
+        let copy = match array.is_c_contiguous() {
+            true => None,
+            false => Some(standard_layout(&array.as_array())),
         };
         let mut frame = Self {
             array,
@@ -157,25 +161,58 @@ impl<'py> FrameArg<'py> {
     pub fn pixels(&self) -> &[u8] {
         match &self.copy {
             Some(v) => v,
-            // Checked contiguous in `new`.
+            // Checked C-contiguous in `new`.
             None => self.array.as_slice().unwrap_or(&[]),
         }
     }
 }
 
 /// The pixels of a frame not laid out in place (a slice, a channel-reversed
-/// view), copied in row-major order: through a view of fixed dimension, as
-/// numpy's own copy walks it, since stepping a dynamic-dimension index per
-/// pixel is over ten times slower (19 ms for a VGA frame, against 1.4).
-fn standard_layout(view: &numpy::ndarray::ArrayViewD<'_, u8>) -> Vec<u8> {
-    use numpy::ndarray::{Ix2, Ix3};
-    if let Ok(v) = view.view().into_dimensionality::<Ix3>() {
-        return v.iter().copied().collect();
+/// view), copied in row-major order. A frame whose rows each lie in one
+/// run of its buffer (a crop, OpenCV's BGR frame reversed to RGB,
+/// `frame[::-1]`, `frame[:, ::-1]`) is copied row by row; any other view
+/// (Fortran order, a transpose, a stride) through a view of fixed
+/// dimension, as numpy's own copy walks it. Stepping a dynamic-dimension
+/// index per byte, as before, took 19 ms for a VGA frame.
+fn standard_layout(view: &ArrayViewD<'_, u8>) -> Vec<u8> {
+    let frame = match view.ndim() {
+        2 => view
+            .view()
+            .into_dimensionality::<Ix2>()
+            .map(|v| v.insert_axis(Axis(2))),
+        _ => view.view().into_dimensionality::<Ix3>(),
+    };
+    match frame {
+        Ok(v) => copy_by_rows(&v).unwrap_or_else(|| v.iter().copied().collect()),
+        Err(_) => view.iter().copied().collect(),
     }
-    if let Ok(v) = view.view().into_dimensionality::<Ix2>() {
-        return v.iter().copied().collect();
+}
+
+/// `frame` (rows, columns, channels) copied in row-major order when each
+/// of its rows, once its reversed axes are turned back, is one run of the
+/// buffer; `None` for any other view.
+fn copy_by_rows(frame: &ArrayView3<'_, u8>) -> Option<Vec<u8>> {
+    let reversed: [bool; 3] = std::array::from_fn(|a| frame.strides()[a] < 0);
+    let mut stored = frame.view();
+    for (axis, _) in reversed.iter().enumerate().filter(|(_, r)| **r) {
+        stored.invert_axis(Axis(axis));
     }
-    view.iter().copied().collect()
+    let (h, w, c) = frame.dim();
+    let mut out = Vec::with_capacity(h * w * c);
+    for y in 0..h {
+        let row = stored.index_axis(Axis(0), if reversed[0] { h - 1 - y } else { y });
+        let row = row.to_slice()?;
+        match (reversed[1], reversed[2]) {
+            (false, false) => out.extend_from_slice(row),
+            (false, true) => row.chunks_exact(c).for_each(|p| out.extend(p.iter().rev())),
+            (true, false) => row
+                .chunks_exact(c)
+                .rev()
+                .for_each(|p| out.extend_from_slice(p)),
+            (true, true) => out.extend(row.iter().rev()),
+        }
+    }
+    Some(out)
 }
 
 /// Borrowed pixels that can cross into a GIL-free closure.

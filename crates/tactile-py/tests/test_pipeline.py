@@ -210,6 +210,27 @@ def test_non_contiguous_and_batched_input(pipeline, palpation_frames):
         pipeline.process_many([frame, np.zeros((5, 5), np.uint8)])
 
 
+def test_every_layout_of_a_frame_reads_as_its_c_ordered_copy(root, pipeline, palpation_frames):
+    """A frame is its pixels whatever numpy layout holds them: flipped views
+    (each axis, OpenCV's BGR reversed to RGB), Fortran order (MATLAB's
+    arrays through scipy, a grey frame's `.T`), slices and a broadcast all
+    give the detector and the encoder the input of their C-ordered copy.
+    Before, a Fortran-ordered frame was read in place as if in C order: its
+    columns as rows, without an error."""
+    frame = palpation_frames[4]
+    views = [frame[::fy, ::fx, ::fc] for fy in (1, -1) for fx in (1, -1) for fc in (1, -1)]
+    views += [np.asfortranarray(frame), frame[1:-1, 2:-2], frame[::2, ::3],
+              np.broadcast_to(frame[:1], frame.shape)]
+    for v in views:
+        assert np.array_equal(pipeline.detector_frame(v), pipeline.detector_frame(np.ascontiguousarray(v)))
+    fortran = pipeline.process(np.asfortranarray(frame))
+    assert fortran.score == pipeline.process(frame).score
+    enc = tactile.TactipEncoder(root / "models/cae-synth")
+    grey = tactile.Dataset(root / "samples/virtual-tactip").frame(0)
+    for v in [grey.T, grey[::-1], grey[:, ::-1], np.asfortranarray(grey)]:
+        assert np.array_equal(enc.encode(v), enc.encode(np.ascontiguousarray(v)))
+
+
 def test_hysteresis_and_reset(root, palpation_frames):
     p = tactile.Pipeline(root / "models", hysteresis=(0.6, 0.3))
     first = [p.process(f).tendon for f in palpation_frames]
