@@ -83,7 +83,16 @@ impl PyFrameSource {
     }
 
     fn __next__(&self, py: Python<'_>) -> PyResult<Option<PyFrame>> {
-        let next = py.detach(|| -> PyResult<_> { self.lock()?.next_frame().py() })?;
+        let read = || -> PyResult<_> { self.lock()?.next_frame().py() };
+        // A camera or stdin may keep the next frame waiting for ever: the
+        // wait runs where Ctrl-C stops it (the live queue looks for a stop
+        // every 100 ms). A file's frame runs here, sparing it the worker's
+        // 50 us.
+        let live = self.lock()?.kind().is_live();
+        let next = match live {
+            true => crate::work::interruptible(py, read)?,
+            false => py.detach(read)?,
+        };
         let Some(f) = next else {
             // What the read found (a bag file cut short), once, at the end.
             if !self.late_warned.swap(true, Ordering::Relaxed) {

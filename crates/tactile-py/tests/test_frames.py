@@ -217,3 +217,36 @@ def test_stdin_cut_inside_a_frame_keeps_the_whole_frames(tmp_path, palpation_fra
     assert "stdin ended inside a frame: 1000 of 172800 bytes" in lines[1] and "after 3 whole frames" in lines[1], lines
     out = subprocess.run([sys.executable, "-c", script], input=cut, capture_output=True, check=True).stdout
     assert "error" in out.decode() and "before any whole frame" in out.decode(), out
+
+
+def test_ctrl_c_stops_a_wait_for_the_next_live_frame(palpation_frames):
+    """A loop over a live source (a camera, stdin) whose next frame does not
+    come (a stalled camera, a writer that paused) stops at Ctrl-C with
+    KeyboardInterrupt, with the stream still open. Before, the wait ignored
+    Ctrl-C for as long as no frame came."""
+    import signal
+    import sys
+    import time
+    script = (
+        "import signal, tactile\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "for f in tactile.frames(stdin_size=(320, 180)):\n"
+        "    print('frame', flush=True)\n"
+    )
+    p = subprocess.Popen([sys.executable, "-c", script], stdin=subprocess.PIPE,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        p.stdin.write(palpation_frames[0].tobytes())
+        p.stdin.flush()
+        assert p.stdout.readline() == b"frame\n"
+        time.sleep(0.5)
+        t0 = time.time()
+        p.send_signal(signal.SIGINT)
+        p.wait(timeout=10)
+        assert time.time() - t0 < 3
+        err = p.stderr.read().decode()
+        assert p.returncode != 0 and "KeyboardInterrupt" in err, err
+    finally:
+        if p.poll() is None:
+            p.kill()
+        p.stdin.close()
