@@ -20,7 +20,6 @@ where
     F: FnOnce() -> PyResult<T> + Send,
     T: Send,
 {
-    tactile_core::interrupt::reset();
     let (result, signal) = py.detach(|| {
         std::thread::scope(|s| {
             let (done, ended) = std::sync::mpsc::channel::<()>();
@@ -48,10 +47,16 @@ where
             (result, signal)
         })
     });
-    tactile_core::interrupt::reset();
     match signal {
-        // The signal's own exception (KeyboardInterrupt), after the work stopped.
-        Some(e) => Err(e),
+        // The signal's own exception (KeyboardInterrupt), after the work
+        // stopped. Only the call that saw the signal (Python raises it in
+        // the main thread alone) asked for the stop, so only it withdraws
+        // it: a call on another thread, a batch a ROS callback runs, never
+        // clears a stop meant for this one.
+        Some(e) => {
+            tactile_core::interrupt::reset();
+            Err(e)
+        }
         None => result,
     }
 }

@@ -184,7 +184,34 @@ def test_ctrl_c_stops_a_virtual_set_rendered_in_memory():
     assert time.time() - t0 < 5
 
 
-def test_a_sphere_regressor_and_a_turned_head_fromrun_python(root, tmp_path):
+def test_ctrl_c_stops_the_main_threads_work_while_another_thread_runs_batches(root):
+    """Ctrl-C stops the main thread's long call even while another thread
+    (a ROS callback, a worker) keeps making calls that run off the
+    interpreter where Ctrl-C can stop them. Before, every such call cleared
+    the stop request as it began and ended, so the main thread's render
+    ran on to its end (about 13 s) before `KeyboardInterrupt`."""
+    p = run_python(
+        "import threading, warnings, numpy as np\n"
+        "warnings.simplefilter('ignore')\n"
+        f"pipe = tactile.Pipeline({str(root / 'models')!r})\n"
+        "frame = np.zeros((180, 320, 3), np.uint8)\n"
+        "def batches():\n"
+        "    while True:\n"
+        "        try:\n"
+        "            pipe.time_in_rust(frame, repeats=2)\n"
+        "        except Exception:\n"
+        "            pass\n"
+        "threading.Thread(target=batches, daemon=True).start()\n"
+        "tactile.synth.visuotactile(count=600, progress=False)"
+    )
+    time.sleep(3)
+    assert p.poll() is None, p.stderr.read()
+    t0 = time.time()
+    interrupt(p)
+    assert time.time() - t0 < 5
+
+
+def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
     data = tactile.synth.tactip(count=30, seed=6, out=tmp_path / "ds", progress=False)
     spheres = tactile.synth.tactip(count=20, seed=7, out=tmp_path / "spheres", shapes=["sphere"],
                                    progress=False)
