@@ -8,6 +8,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -77,6 +78,18 @@ def interrupt(p: subprocess.Popen) -> str:
         p.kill()
         raise
     assert p.returncode != 0 and "KeyboardInterrupt" in err, err
+    return err
+
+
+def interrupt_after(p: subprocess.Popen, running_s: float, within_s: float) -> str:
+    """Ctrl-C to `p` once it has run `running_s` seconds (and still runs),
+    which must end it with KeyboardInterrupt within `within_s` seconds;
+    its standard error."""
+    time.sleep(running_s)
+    assert p.poll() is None, p.stderr.read()
+    t0 = time.time()
+    err = interrupt(p)
+    assert time.time() - t0 < within_s, f"stopped {time.time() - t0:.1f} s after Ctrl-C"
     return err
 
 

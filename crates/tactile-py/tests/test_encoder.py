@@ -9,7 +9,6 @@ import re
 import shutil
 import subprocess
 import sys
-import time
 import warnings
 from pathlib import Path
 
@@ -17,7 +16,7 @@ import numpy as np
 import pytest
 
 import tactile
-from conftest import interrupt, run_cli, run_python
+from conftest import interrupt_after, run_cli, run_python
 
 
 def _frames(ds: tactile.Dataset) -> np.ndarray:
@@ -482,11 +481,7 @@ def test_ctrl_c_stops_a_long_batch_of_frames(root, call):
         "frames = np.broadcast_to(one, (99_999, 445, 440))\n"
         f"{call}"
     )
-    time.sleep(4)
-    assert p.poll() is None, p.stderr.read()
-    t0 = time.time()
-    interrupt(p)
-    assert time.time() - t0 < 3
+    interrupt_after(p, running_s=4, within_s=3)
 
 
 def test_a_long_batch_of_copied_frames_is_held_a_chunk_at_a_time(root):

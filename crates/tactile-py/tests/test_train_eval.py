@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import tactile
-from conftest import interrupt, run_cli, run_python
+from conftest import interrupt, interrupt_after, run_cli, run_python
 
 
 @pytest.fixture(scope="module")
@@ -164,11 +164,7 @@ def test_ctrl_c_stops_a_long_prediction_and_writes_nothing(root, tmp_path, share
         pytest.skip("the real TacTip surface set is in ../shared/real")
     out = tmp_path / "estimates.csv"
     p = run_python(f"tactile.predict({str(root / 'models/pose-surface')!r}, {str(data)!r}, {str(out)!r})")
-    time.sleep(4)
-    assert p.poll() is None, p.stderr.read()
-    t0 = time.time()
-    interrupt(p)
-    assert time.time() - t0 < 10
+    interrupt_after(p, running_s=4, within_s=10)
     assert list(tmp_path.iterdir()) == []
 
 
@@ -177,11 +173,7 @@ def test_ctrl_c_stops_a_virtual_set_rendered_in_memory():
     writer's own loop (datasets_synth::render_frames): 600 frames take
     about 13 s on two cores, and Ctrl-C ends them within a frame or two."""
     p = run_python("tactile.synth.visuotactile(count=600, progress=False)")
-    time.sleep(2)
-    assert p.poll() is None, p.stderr.read()
-    t0 = time.time()
-    interrupt(p)
-    assert time.time() - t0 < 5
+    interrupt_after(p, running_s=2, within_s=5)
 
 
 def test_ctrl_c_stops_the_main_threads_work_while_another_thread_runs_batches(root):
@@ -204,11 +196,7 @@ def test_ctrl_c_stops_the_main_threads_work_while_another_thread_runs_batches(ro
         "threading.Thread(target=batches, daemon=True).start()\n"
         "tactile.synth.visuotactile(count=600, progress=False)"
     )
-    time.sleep(3)
-    assert p.poll() is None, p.stderr.read()
-    t0 = time.time()
-    interrupt(p)
-    assert time.time() - t0 < 5
+    interrupt_after(p, running_s=3, within_s=5)
 
 
 def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
