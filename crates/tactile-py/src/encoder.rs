@@ -16,7 +16,7 @@ use tactile_preprocess::{FrameSizeCheck, PinImage, PreprocessConfig};
 
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout, Pixels, frame_chunks};
-use crate::work::interruptible;
+use crate::work::released;
 
 struct Models {
     encoder: TactipEncoder,
@@ -59,13 +59,7 @@ pub(crate) fn run_on_frames<T: Send>(
         let px: Vec<Pixels<'_>> = args.iter().map(FrameArg::view).collect();
         warn_frame_sizes(py, &px, first, &mut sizes, scales)?;
         let work = || run(given.preprocess(&px, scales, profile, Pixels::grey).py()?);
-        // One frame is a millisecond or two: it runs here, as `process`
-        // does, where a worker thread would add 50 us to a robot's loop; a
-        // batch runs on one, where Ctrl-C can stop it.
-        rows.extend(match px.len() {
-            1 => py.detach(work)?,
-            _ => interruptible(py, work)?,
-        });
+        rows.extend(released(py, px.len() > 1, work)?);
         Ok(())
     })?;
     for w in given.warnings(profile) {

@@ -84,15 +84,10 @@ impl PyFrameSource {
 
     fn __next__(&self, py: Python<'_>) -> PyResult<Option<PyFrame>> {
         let read = || -> PyResult<_> { self.lock()?.next_frame().py() };
-        // A camera or stdin may keep the next frame waiting for ever: the
-        // wait runs where Ctrl-C stops it (the live queue looks for a stop
-        // every 100 ms). A file's frame runs here, sparing it the worker's
-        // 50 us.
+        // A camera or stdin may keep the next frame waiting for ever (the
+        // live queue looks for a stop every 100 ms); a file's comes now.
         let live = self.lock()?.kind().is_live();
-        let next = match live {
-            true => crate::work::interruptible(py, read)?,
-            false => py.detach(read)?,
-        };
+        let next = crate::work::released(py, live, read)?;
         let Some(f) = next else {
             // What the read found (a bag file cut short), once, at the end.
             if !self.late_warned.swap(true, Ordering::Relaxed) {

@@ -1,7 +1,7 @@
 //! Long work (training, evaluation, generating a dataset, a batch of
-//! frames) off the
-//! interpreter: it runs on a worker thread with the interpreter lock
-//! released, while the calling thread checks for Ctrl-C every 100 ms. A
+//! frames, a live source's wait) off the interpreter: it runs on a worker
+//! thread with the interpreter lock released, while the calling thread
+//! checks for Ctrl-C every 100 ms. A
 //! Ctrl-C asks the work to stop the way SIGINT stops the command line
 //! (staging folders removed, a training folder left marked incomplete),
 //! waits for it, then raises `KeyboardInterrupt`.
@@ -58,5 +58,21 @@ where
             Err(e)
         }
         None => result,
+    }
+}
+
+/// `work` with the interpreter lock released: on a worker thread that
+/// Ctrl-C stops ([`interruptible`]) when it `may_be_long` (a batch of
+/// frames, a live source's wait), else on the calling thread, as
+/// `Pipeline.process` runs, sparing a call of a millisecond or two the
+/// worker's 50 us.
+pub(crate) fn released<T, F>(py: Python<'_>, may_be_long: bool, work: F) -> PyResult<T>
+where
+    F: FnOnce() -> PyResult<T> + Send,
+    T: Send,
+{
+    match may_be_long {
+        true => interruptible(py, work),
+        false => py.detach(work),
     }
 }
