@@ -183,6 +183,11 @@ impl PyLiveView {
         frame: Option<&Bound<'_, PyAny>>,
         stamp_ns: Option<i64>,
     ) -> PyResult<bool> {
+        // A stamp no message can hold is refused whether or not a viewer
+        // watches, so a script tried without one fails as it would live.
+        if let Some(s) = stamp_ns {
+            tactile_ros::checked_stamp(&result.record.frame, s).py()?;
+        }
         if !self.with(|v| Ok(v.watched()))? {
             return Ok(false);
         }

@@ -146,12 +146,18 @@ impl PyVideoDecoder {
 
 /// A message's `data` as Python bytes: rclpy gives it as an
 /// array.array('B'); bytes() takes that, bytes, a bytearray or a numpy
-/// array alike. `what` names it in the error.
+/// array alike. An int is refused: bytes(n) is n zero bytes, a packet
+/// no one sent. `what` names it in the error.
 fn message_bytes<'py>(
     py: Python<'py>,
     data: &Bound<'py, PyAny>,
     what: &str,
 ) -> PyResult<Bound<'py, pyo3::types::PyBytes>> {
+    if data.is_instance_of::<pyo3::types::PyInt>() {
+        return Err(PyValueError::new_err(format!(
+            "{what}: not bytes (an int, {data}: bytes() would make it that many zero bytes); give the message's data: bytes, a bytearray, an array.array('B') or a uint8 numpy array"
+        )));
+    }
     let data = py
         .import("builtins")?
         .getattr("bytes")?

@@ -854,6 +854,17 @@ def test_python_writes_the_same_results_mcap(tmp_path, pipeline, palpation_frame
                         "/tactile/image"}
     assert [m.ros_msg.tendon for m in got["/tactile/result"]] == [r.tendon for r in results]
     assert [m.log_time_ns for m in got["/tactile/result"]] == [stamp(i) for i in range(12)]
+    # A stamp a message cannot hold (before 1970: MCAP's times are
+    # unsigned; past 2038: a header's seconds are an int32) is refused, not
+    # written as another time; live too, a viewer watching or not.
+    with tactile.McapWriter(tmp_path / "stamps.mcap") as w:
+        for s in (-1, 2**31 * 10**9, 2**62):
+            with pytest.raises(ValueError, match=rf"^frame \S+: stamp_ns {s}: a stamp must be 0 \(1970\) to 2147483647999999999"):
+                w.write(results[0], stamp_ns=s)
+        w.write(results[0], stamp_ns=2**31 * 10**9 - 1)
+    assert [m.log_time_ns for m in read_back(tmp_path / "stamps.mcap")["/tactile/result"]] == [2**31 * 10**9 - 1]
+    with tactile.LiveView("127.0.0.1:0") as view, pytest.raises(ValueError, match=r"stamp_ns -1: a stamp must be"):
+        view.publish(results[0], stamp_ns=-1)
     # An error inside the block leaves no file.
     bad = tmp_path / "bad.mcap"
     with pytest.raises(RuntimeError):

@@ -68,6 +68,20 @@ def test_node_converts_each_encoding(node_module, root, palpation_frames):
         node_module.image_to_rgb(SimpleNamespace(**{**vars(image_msg(rgb, "rgb8", w * 3)), "height": h + 1}))
 
 
+def test_an_int_given_as_a_message_s_data_is_refused():
+    """bytes(n) is n zero bytes: an int slipped in as `data` (a length, a
+    handle) was read as a black picture or an empty packet."""
+    one_pixel = SimpleNamespace(height=1, width=1, encoding="mono8", is_bigendian=0, step=1, data=1)
+    with pytest.raises(ValueError, match=r'^sensor_msgs/msg/Image field "data": not bytes \(an int, 1: bytes\(\) would make'):
+        tactile.ros_image_to_rgb(one_pixel)
+    with pytest.raises(ValueError, match=r"^a packet's data: not bytes \(an int, 5: "):
+        tactile.VideoDecoder("h264").decode(5)
+    # What rclpy and numpy give stays read.
+    import array
+    for data in (b"\x07", bytearray(b"\x07"), array.array("B", [7]), np.array([7], np.uint8)):
+        assert tactile.ros_image_to_rgb(SimpleNamespace(**{**vars(one_pixel), "data": data})).tolist() == [[[7, 7, 7]]]
+
+
 def test_node_answers_as_the_pipeline(node_module, root, palpation_frames):
     node = node_module.PalpationNode(str(root / "models"), "onnx")
     direct = tactile.Pipeline(root / "models", "onnx")

@@ -35,5 +35,7 @@ pub mod schemas;
 pub mod session;
 
 pub use error::{Error, Result};
-pub use results::{FrameMessages, McapResults, RobotOutputs, RobotSummary, Topic};
+pub use results::{
+    FrameMessages, MAX_STAMP_NS, McapResults, RobotOutputs, RobotSummary, Topic, checked_stamp,
+};
 pub use session::{RunReport, RunRequest, RunSession};

@@ -190,7 +190,7 @@ impl FrameMessages {
         views: Option<&FrameViews>,
         frame: Option<&RgbImage>,
     ) -> Result<Self> {
-        let stamp_ns = record.stamp_ns.unwrap_or_else(now_ns);
+        let stamp_ns = checked_stamp(&record.frame, record.stamp_ns.unwrap_or_else(now_ns))?;
         let header = Header {
             stamp: Time::from_nanos(stamp_ns),
             frame_id: FRAME_ID.into(),
@@ -299,6 +299,24 @@ impl FrameMessages {
             encode(Topic::Annotations, &annotations)?,
         ));
         Ok(Self { stamp_ns, messages })
+    }
+}
+
+/// The latest stamp a ROS 2 header holds: `builtin_interfaces/Time`'s
+/// `sec` is an int32, so 2038-01-19 03:14:07.999999999.
+pub const MAX_STAMP_NS: i64 = i32::MAX as i64 * 1_000_000_000 + 999_999_999;
+
+/// `stamp_ns` of `frame` if a header and MCAP's log time can both hold it: MCAP's
+/// time is unsigned, a header's seconds an int32. Outside that, a stamp
+/// would be written as another time (before 1970 as 1970 in the log, past
+/// 2038 wrapped in the header), so it is refused, naming it.
+pub fn checked_stamp(frame: &str, stamp_ns: i64) -> Result<i64> {
+    match (0..=MAX_STAMP_NS).contains(&stamp_ns) {
+        true => Ok(stamp_ns),
+        false => Err(tactile_core::Error::Invalid(format!(
+            "frame {frame}: stamp_ns {stamp_ns}: a stamp must be 0 (1970) to {MAX_STAMP_NS} (2038, the last second a ROS 2 header's int32 holds) nanoseconds since the epoch; was it given in other units, or as a time before 1970?"
+        ))
+        .into()),
     }
 }
 
@@ -486,6 +504,40 @@ mod tests {
         let mut ids_sorted = ids.clone();
         ids_sorted.sort();
         assert_eq!(leaves, ids_sorted);
+    }
+
+    /// A stamp that a header or MCAP's log time cannot hold is refused,
+    /// naming the frame, not written as another time.
+    #[test]
+    fn a_stamp_outside_what_ros_holds_is_refused() {
+        let mut rec = FrameRecord::empty("000003");
+        for (stamp, ok) in [
+            (0, true),
+            (MAX_STAMP_NS, true),
+            (-1, false),
+            (MAX_STAMP_NS + 1, false),
+            (i64::MAX, false),
+        ] {
+            rec.stamp_ns = Some(stamp);
+            let got = FrameMessages::encode(&rec, None, None);
+            match ok {
+                true => {
+                    let m = got.expect("a stamp ROS holds");
+                    let back: crate::messages::PalpationResult =
+                        crate::messages::from_cdr(&m.messages[0].1).expect("decode");
+                    assert_eq!((m.stamp_ns, back.header.stamp.nanos()), (stamp, stamp));
+                }
+                false => {
+                    let e = got.map(|m| m.stamp_ns).expect_err("refused").to_string();
+                    assert!(
+                        e.starts_with(&format!(
+                            "frame 000003: stamp_ns {stamp}: a stamp must be 0"
+                        )),
+                        "{e}"
+                    );
+                }
+            }
+        }
     }
 
     /// A frame's messages decode back to what was encoded.
