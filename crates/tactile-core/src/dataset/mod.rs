@@ -101,6 +101,47 @@ impl DatasetKind {
     }
 }
 
+/// A whole number written either way JSON writers write one: `300`, or
+/// `300.0` (Python's `json.dump` of a float, a size read from YAML or
+/// computed). A fraction, a negative or a number past `T` is refused, the
+/// number named.
+fn whole_number<'de, D, T>(d: D) -> std::result::Result<T, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: TryFrom<u64>,
+{
+    use serde::de::Error as _;
+    let n = serde_json::Number::deserialize(d)?;
+    let whole = match (n.as_u64(), n.as_f64()) {
+        (Some(u), _) => Some(u),
+        // Within 2^53 a float holds every whole number exactly.
+        (None, Some(f)) if f >= 0.0 && f.fract() == 0.0 && f <= (1u64 << 53) as f64 => {
+            Some(f as u64)
+        }
+        _ => None,
+    };
+    whole.and_then(|u| T::try_from(u).ok()).ok_or_else(|| {
+        D::Error::custom(format!(
+            "{n} is not a whole number from 0 that fits (a size, a count or a seed)"
+        ))
+    })
+}
+
+/// The seed, a note no command needs: a whole number that fits in 64 bits
+/// (written either way, as [`whole_number`] reads it); any other value (a
+/// 128-bit entropy from numpy's `SeedSequence`, a negative, a string such
+/// as `"none"` for a capture rig, `null`) is read as none rather than
+/// refusing the frames over a note.
+fn lenient_seed<'de, D>(d: D) -> std::result::Result<Option<u64>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    #[derive(Deserialize)]
+    struct Whole(#[serde(deserialize_with = "whole_number")] u64);
+    let value = serde_json::Value::deserialize(d)?;
+    Ok(serde_json::from_value::<Whole>(value).ok().map(|w| w.0))
+}
+
 /// `manifest.json`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct Manifest {
@@ -111,14 +152,20 @@ pub struct Manifest {
     /// The sensor contract or free text for a real sensor.
     pub sensor_spec: String,
     /// Frame width, pixels.
+    #[serde(deserialize_with = "whole_number")]
     pub width: u32,
     /// Frame height, pixels.
+    #[serde(deserialize_with = "whole_number")]
     pub height: u32,
-    /// Name and version of what wrote it, or how it was captured.
+    /// Name and version of what wrote it, or how it was captured (a note:
+    /// empty when a writer left it out).
+    #[serde(default)]
     pub generator: String,
     /// The generator's seed, when there is one.
+    #[serde(default, deserialize_with = "lenient_seed")]
     pub seed: Option<u64>,
     /// Number of rows of `labels.csv`.
+    #[serde(deserialize_with = "whole_number")]
     pub count: usize,
     /// Anything else a writer recorded (a generator's config, for instance).
     #[serde(flatten)]
@@ -1247,6 +1294,65 @@ mod tests {
         );
         let e = Dataset::open(d.path()).unwrap_err().to_string();
         assert!(e.contains("labels.csv:4") && e.contains("gone.png"), "{e}");
+    }
+
+    /// Another writer's manifest: sizes written as floats (`300.0`, as
+    /// Python's `json.dump` writes a float), a seed that 64 bits do not
+    /// hold (numpy's 128-bit entropy) or that is not a number, no
+    /// generator. The frames are read; a size that is no whole number is
+    /// refused naming the file and the number.
+    #[test]
+    fn another_writers_manifest_is_read_by_what_it_means() {
+        let d = tempfile::tempdir().unwrap();
+        tiny(d.path(), &format!("{HEADER}frames/a.png,flat,0,0,0,1,1\n"));
+        let path = d.path().join("manifest.json");
+        let base = std::fs::read_to_string(&path).unwrap();
+        let with = |from: &str, to: &str| {
+            assert!(base.contains(from), "{from}");
+            std::fs::write(&path, base.replacen(from, to, 1)).unwrap();
+            Dataset::open(d.path())
+        };
+        let seed_128 = "\"seed\": 340282366920938463463374607431768211455";
+        for (from, to, seed) in [
+            ("\"width\": 4", "\"width\": 4.0", Some(1)),
+            ("\"count\": 1", "\"count\": 1.0", Some(1)),
+            ("\"seed\": 1", "\"seed\": 7.0", Some(7)),
+            ("\"seed\": 1", seed_128, None),
+            ("\"seed\": 1", "\"seed\": -5", None),
+            ("\"seed\": 1", "\"seed\": \"none\"", None),
+            ("\"generator\": \"test\",", "", Some(1)),
+        ] {
+            let ds = with(from, to).unwrap_or_else(|e| panic!("{to}: {e}"));
+            assert_eq!(
+                (ds.len(), ds.manifest.width, ds.manifest.seed),
+                (1, 4, seed),
+                "{to}"
+            );
+        }
+        for (from, to, named) in [
+            (
+                "\"width\": 4",
+                "\"width\": 4.5",
+                "4.5 is not a whole number",
+            ),
+            (
+                "\"height\": 4",
+                "\"height\": -4",
+                "-4 is not a whole number",
+            ),
+            (
+                "\"width\": 4",
+                "\"width\": 5e9",
+                "5000000000.0 is not a whole number",
+            ),
+            ("\"width\": 4", "\"width\": \"4\"", "invalid type: string"),
+        ] {
+            let e = with(from, to).unwrap_err().to_string();
+            assert!(
+                e.contains("manifest.json") && e.contains(named),
+                "{to}: {e}"
+            );
+        }
     }
 
     #[test]
