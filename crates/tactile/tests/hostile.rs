@@ -1307,3 +1307,73 @@ fn pipes_in_place_of_a_file_read_or_written_are_refused_at_once() {
     ]));
     assert_eq!(msg.matches("(os error").count(), 1, "{msg}");
 }
+
+/// `docs/hard-cases.md` stays true to the tests: every test its last
+/// column names (a backticked `snake_case` name of three or more words)
+/// is a function (`fn` or `def`) or a test file of the repository. A test
+/// renamed or merged without its row fails here, not in a reader's search.
+#[test]
+fn every_test_the_hard_cases_page_names_exists() {
+    fn sources(dir: &Path, out: &mut String) {
+        for e in std::fs::read_dir(dir).unwrap().flatten() {
+            let p = e.path();
+            let name = e.file_name().to_string_lossy().into_owned();
+            if p.is_dir() && !name.starts_with('.') && name != "target" {
+                sources(&p, out);
+            } else if [".rs", ".py", ".sh"].iter().any(|x| name.ends_with(x)) {
+                out.push_str(&format!("\nfile {}\n", name.rsplit_once('.').unwrap().0));
+                out.push_str(&std::fs::read_to_string(&p).unwrap_or_default());
+            }
+        }
+    }
+    let mut code = String::new();
+    for dir in [
+        "crates",
+        "datasets-synth",
+        "scripts",
+        "examples",
+        "src",
+        "tests",
+        "fuzz",
+    ] {
+        sources(&root().join(dir), &mut code);
+    }
+    let page = std::fs::read_to_string(root().join("docs/hard-cases.md")).unwrap();
+    let mut named = 0;
+    let mut missing = Vec::new();
+    for row in page.lines().filter(|l| l.starts_with('|')) {
+        let cells: Vec<&str> = row.split('|').collect();
+        let Some(tests) = cells.len().checked_sub(2).map(|i| cells[i]) else {
+            continue;
+        };
+        for name in tests.split('`').skip(1).step_by(2) {
+            let name = name.rsplit("::").next().unwrap_or(name);
+            let is_name = name.matches('_').count() >= 2
+                && name
+                    .chars()
+                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+            if !is_name {
+                continue;
+            }
+            named += 1;
+            let found = [
+                format!("fn {name}("),
+                format!("def {name}("),
+                format!("\nfile {name}\n"),
+            ]
+            .iter()
+            .any(|p| code.contains(p.as_str()));
+            if !found {
+                missing.push(name.to_string());
+            }
+        }
+    }
+    assert!(
+        named > 200,
+        "only {named} tests named in docs/hard-cases.md"
+    );
+    assert!(
+        missing.is_empty(),
+        "docs/hard-cases.md names tests that do not exist: {missing:?}"
+    );
+}
