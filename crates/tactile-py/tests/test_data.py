@@ -52,6 +52,31 @@ def test_visuotactile_arrays_equal_the_written_dataset(tmp_path):
         ds.mask(0)
 
 
+def test_a_nan_direction_without_a_tendon_reads_as_no_direction(tmp_path):
+    """The layout leaves `direction_deg` empty on a row without a tendon; a
+    writer that keeps a float on every row (Python's csv module, numpy)
+    writes `nan` there, which is read as that empty cell. On a tendon row a
+    NaN direction stays a bad label, named by its line."""
+    out = tactile.synth.visuotactile(count=8, frames_per_sequence=8, width=320, height=180,
+                                     seed=3, out=tmp_path / "vt", progress=False)
+    labels = out / "labels.csv"
+    rows = [line.split(",") for line in labels.read_text().splitlines()]
+    tendon, direction = rows[0].index("tendon"), rows[0].index("direction_deg")
+    without = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "0"]
+    with_one = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "1"]
+    assert without and with_one, "the seed gives rows of both kinds"
+    for i in without:
+        rows[i][direction] = "nan"
+    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    ds = tactile.Dataset(out)
+    assert all(np.isnan(ds.labels["direction_deg"][i - 1]) for i in without)
+    assert all(np.isfinite(ds.labels["direction_deg"][i - 1]) for i in with_one)
+    rows[with_one[0]][direction] = "NaN"
+    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'direction_deg': 'NaN' is not a finite number"):
+        tactile.Dataset(out)
+
+
 def test_ideal_detector_bounds_every_frame_and_refuses_foreign_sets(tmp_path):
     out = tactile.synth.visuotactile(count=6, frames_per_sequence=6, width=320, height=180,
                                      seed=4, press_mm=(0.3, 0.3), out_of_view_fraction=0.0,

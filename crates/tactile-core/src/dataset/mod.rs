@@ -205,6 +205,20 @@ pub struct LabelRow {
 }
 
 impl LabelRow {
+    /// A row without a tendon has no direction: the layout leaves its
+    /// `direction_deg` empty, and a writer that keeps a float for every
+    /// row (Python's `csv` module, numpy) writes `nan` there. Read as the
+    /// empty cell it stands for. A tendon row's NaN stays a bad label.
+    fn no_direction_without_a_tendon(&mut self) {
+        let no_tendon = self.get("tendon").is_some_and(|t| t.parse() == Ok(0.0));
+        if let Some(d) = self.cells.get_mut("direction_deg")
+            && no_tendon
+            && d.trim().parse::<f64>().is_ok_and(f64::is_nan)
+        {
+            d.clear();
+        }
+    }
+
     /// The raw cell, `None` when the column is absent or the cell empty.
     pub fn get(&self, column: &str) -> Option<&str> {
         self.cells
@@ -398,7 +412,11 @@ impl Dataset {
                     _ => (column, cell),
                 })
                 .collect();
-            rows.push(LabelRow { line, cells });
+            let mut row = LabelRow { line, cells };
+            if manifest.kind == DatasetKind::Visuotactile {
+                row.no_direction_without_a_tendon();
+            }
+            rows.push(row);
         }
         if rows.len() != manifest.count {
             return Err(Error::dataset(
