@@ -52,11 +52,12 @@ def test_visuotactile_arrays_equal_the_written_dataset(tmp_path):
         ds.mask(0)
 
 
-def test_a_nan_direction_without_a_tendon_reads_as_no_direction(tmp_path):
+def test_a_float_or_bool_writers_tendon_labels_read_as_the_layout_means(tmp_path):
     """The layout leaves `direction_deg` empty on a row without a tendon; a
     writer that keeps a float on every row (Python's csv module, numpy)
-    writes `nan` there, which is read as that empty cell. On a tendon row a
-    NaN direction stays a bad label, named by its line."""
+    writes `nan` there, which is read as that empty cell, and writes a
+    bool `tendon` as True / False. On a tendon row a NaN direction stays a
+    bad label, and a tendon neither 0 nor 1 is one, each named by its line."""
     out = tactile.synth.visuotactile(count=8, frames_per_sequence=8, width=320, height=180,
                                      seed=3, out=tmp_path / "vt", progress=False)
     labels = out / "labels.csv"
@@ -71,6 +72,18 @@ def test_a_nan_direction_without_a_tendon_reads_as_no_direction(tmp_path):
     ds = tactile.Dataset(out)
     assert all(np.isnan(ds.labels["direction_deg"][i - 1]) for i in without)
     assert all(np.isfinite(ds.labels["direction_deg"][i - 1]) for i in with_one)
+    # `tendon` as Python's csv module writes a bool reads as 1 / 0; any
+    # other value than those (every reader asks `tendon == 1`) is refused.
+    for i in without + with_one:
+        rows[i][tendon] = {"0": "False", "1": "true"}[rows[i][tendon]]
+    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    assert list(tactile.Dataset(out).labels["tendon"]) == list(ds.labels["tendon"])
+    for bad in ("2", "0.5", "-1", "yes"):
+        rows[with_one[0]][tendon] = bad
+        labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+        with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'tendon': "):
+            tactile.Dataset(out)
+    rows[with_one[0]][tendon] = "1"
     rows[with_one[0]][direction] = "NaN"
     labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
     with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'direction_deg': 'NaN' is not a finite number"):

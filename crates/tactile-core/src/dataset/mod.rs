@@ -205,6 +205,18 @@ pub struct LabelRow {
 }
 
 impl LabelRow {
+    /// `tendon` as `True` / `False` (any case), as Python's `csv` module
+    /// writes a bool, is the layout's `1` / `0`.
+    fn tendon_as_a_number(&mut self) {
+        if let Some(t) = self.cells.get_mut("tendon") {
+            match t.trim().to_ascii_lowercase().as_str() {
+                "true" => *t = "1".into(),
+                "false" => *t = "0".into(),
+                _ => {}
+            }
+        }
+    }
+
     /// A row without a tendon has no direction: the layout leaves its
     /// `direction_deg` empty, and a writer that keeps a float for every
     /// row (Python's `csv` module, numpy) writes `nan` there. Read as the
@@ -414,6 +426,7 @@ impl Dataset {
                 .collect();
             let mut row = LabelRow { line, cells };
             if manifest.kind == DatasetKind::Visuotactile {
+                row.tendon_as_a_number();
                 row.no_direction_without_a_tendon();
             }
             rows.push(row);
@@ -518,7 +531,18 @@ impl Dataset {
                 }
             }
             for col in number_columns {
-                parse_number(&labels, row, col)?;
+                let value = parse_number(&labels, row, col)?;
+                // Every reader asks `tendon == 1`: a 2 or a 0.5 would read
+                // as no tendon, silently.
+                if *col == "tendon"
+                    && let Some(v) = value.filter(|v| *v != 0.0 && *v != 1.0)
+                {
+                    return Err(Error::dataset(
+                        &labels,
+                        Some(row.line),
+                        format!("column 'tendon': {v} is neither 0 nor 1 (nor true or false)"),
+                    ));
+                }
             }
         }
         Ok(())
