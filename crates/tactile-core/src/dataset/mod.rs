@@ -371,11 +371,21 @@ impl Dataset {
             csv::ReaderBuilder::new().has_headers(true).flexible(false),
             file,
         );
-        let header: Vec<String> = crate::csv_lines::headers(&mut reader)
+        let mut header: Vec<String> = crate::csv_lines::headers(&mut reader)
             .map_err(|why| Error::dataset(&labels, Some(1), why))?
             .iter()
             .map(|s| s.trim().to_string())
             .collect();
+        // pandas' `to_csv` writes the frame's index first unless told
+        // `index=False`: an unnamed column (named `Unnamed: 0` once read and
+        // saved again). It is dropped, as the extra columns after the
+        // layout's are kept and ignored.
+        let index_column = header.len() > 1
+            && (header[0].is_empty() || header[0] == "Unnamed: 0")
+            && header[1] == "file";
+        if index_column {
+            header.remove(0);
+        }
         if let Some((i, dup)) = header
             .iter()
             .enumerate()
@@ -418,7 +428,11 @@ impl Dataset {
             let cells = header
                 .iter()
                 .cloned()
-                .zip(rec.iter().map(str::to_string))
+                .zip(
+                    rec.iter()
+                        .skip(usize::from(index_column))
+                        .map(str::to_string),
+                )
                 .map(|(column, cell)| match column.as_str() {
                     "split" => (column, split_name(&cell)),
                     _ => (column, cell),
@@ -1395,6 +1409,31 @@ mod tests {
                 "{to}: {e}"
             );
         }
+    }
+
+    /// `labels.csv` as pandas' `to_csv` writes it by default: its index
+    /// first, an unnamed column (`Unnamed: 0` once read and saved again).
+    /// Read without it; an unnamed first column before anything else than
+    /// `file` is still a wrong header.
+    #[test]
+    fn labels_with_pandas_index_column_first_are_read_without_it() {
+        let d = tempfile::tempdir().unwrap();
+        for index in ["", "Unnamed: 0"] {
+            tiny(
+                d.path(),
+                &format!("{index},{HEADER}0,frames/a.png,flat,1.5,0,0,1,1\n"),
+            );
+            let ds = Dataset::open(d.path()).unwrap_or_else(|e| panic!("{index:?}: {e}"));
+            assert_eq!(ds.columns[..2], ["file", "shape"], "{index:?}");
+            assert_eq!(ds.number(0, "x_mm").unwrap(), 1.5, "{index:?}");
+            assert_eq!(ds.text(0, "file").unwrap(), "frames/a.png", "{index:?}");
+        }
+        tiny(d.path(), ",shape,file\n0,flat,frames/a.png\n");
+        let e = Dataset::open(d.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("labels.csv:1") && e.contains("header must start"),
+            "{e}"
+        );
     }
 
     #[test]
