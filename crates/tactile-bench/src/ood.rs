@@ -3,7 +3,7 @@
 //! tendon, on fresh frames of its own sensor (new seeds, other sizes,
 //! light and deep presses) and on frames that are not its sensor's
 //! (virtual TacTip frames, uniform images, natural-looking images, the
-//! camera outside its housing).
+//! camera outside its housing, the sensor's frames made grey).
 
 use std::path::Path;
 
@@ -183,6 +183,23 @@ pub fn bench_ood(models: &Path, runtime: Runtime) -> Result<OodBench> {
         .map(outside_housing)
         .collect::<tactile_core::Result<Vec<_>>>()?;
     sets.push(("camera outside the housing".into(), false, outside));
+    // A camera in a mono mode (a bag of mono8 Images): the sensor's own
+    // frames without their colour, whose statistics the profile scores
+    // near the training frames'.
+    let grey = vt_frames(909, 10, (640, 360), None)?
+        .iter()
+        .map(|f| {
+            let rgb = tactile_core::image_io::grey_to_rgb(&tactile_core::image_io::rgb_to_grey(
+                f.as_slice(),
+            ));
+            rgb_image(f.width(), f.height(), rgb)
+        })
+        .collect::<tactile_core::Result<Vec<_>>>()?;
+    sets.push((
+        "visuo-tactile frames made grey (a camera in a mono mode)".into(),
+        false,
+        grey,
+    ));
     let mut rows = Vec::new();
     for (set, in_distribution, frames) in sets {
         tactile_core::note!("{set}: {} frames", frames.len());

@@ -31,7 +31,8 @@ pub struct DetectorScores {
     pub ungated: BinaryScores,
     /// Frames a gate stopped: blank ones.
     pub gated_blank: usize,
-    /// Frames a gate stopped: foreign ones (outside the input profile).
+    /// Frames a gate stopped: foreign ones (outside the input profile, or
+    /// of another camera mode).
     pub gated_foreign: usize,
     /// Over frames within two frames of a label change.
     pub onset_release: BinaryScores,

@@ -29,7 +29,8 @@ pub enum Gate {
     /// show, and a network's answer on such an input would be arbitrary.
     Blank,
     /// Far outside the training frames' input statistics (another
-    /// sensor, an image that is not a sensor frame).
+    /// sensor, an image that is not a sensor frame), or of another camera
+    /// mode (grey where they were in colour).
     Foreign,
 }
 
@@ -97,19 +98,25 @@ impl TendonDetector {
     /// [`DetectorConfig::frame_image`](crate::DetectorConfig::frame_image))
     /// meets, and its input score (how far it lies from the training
     /// frames' input statistics, when the detector has a profile). The
-    /// input profile is asked first: a foreign frame is foreign even when
-    /// it is also blank.
+    /// input profile is asked first: a frame outside it is foreign even
+    /// when it is also blank. A frame of another camera mode than the
+    /// training frames (grey to a detector of colour frames) is foreign
+    /// unless blank: a black or saturated frame is grey too.
     pub fn gate(&self, img: &FloatImage) -> Result<(Option<Gate>, Option<f32>)> {
+        let blank = tactile_preprocess::visuo::is_blank(img);
         let (input_score, foreign) = match &self.artifact.input_profile {
             Some(p) => {
                 let s = p.score_frame(img)?;
-                (Some(s), s > p.threshold)
+                (
+                    Some(s),
+                    s > p.threshold || (!blank && p.other_camera_mode(img)),
+                )
             }
             None => (None, false),
         };
         let gate = if foreign {
             Some(Gate::Foreign)
-        } else if tactile_preprocess::visuo::is_blank(img) {
+        } else if blank {
             Some(Gate::Blank)
         } else {
             None

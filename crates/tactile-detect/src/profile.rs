@@ -6,7 +6,7 @@ use std::path::Path;
 
 use tactile_burn::Artifact;
 use tactile_core::dataset::Dataset;
-use tactile_preprocess::profile::{InputProfile, LAYOUT_GRID, descriptor, layout_cells};
+use tactile_preprocess::profile::{InputProfile, LAYOUT_GRID, descriptor, is_grey, layout_cells};
 
 use crate::{DetectionSet, DetectorArtifact, Result};
 
@@ -28,24 +28,23 @@ pub fn fit_input_profile_of(set: &DetectionSet, idx: &[usize]) -> Result<InputPr
 }
 
 /// The nine statistics of each frame and, on frames at least as large as
-/// its grid, the colour layout.
+/// its grid, the colour layout; grey frames when most of them are grey.
 fn fit<'a>(frames: impl Iterator<Item = (&'a DetectionSet, usize)>) -> Result<InputProfile> {
     let (mut descriptors, mut cells) = (Vec::new(), Vec::new());
-    let mut layout = true;
+    let (mut layout, mut grey) = (true, 0usize);
     for (s, i) in frames {
         let img = s.image(i);
         descriptors.push(descriptor(&img)?);
+        grey += usize::from(is_grey(&img));
         layout &= img.width >= LAYOUT_GRID.0 && img.height >= LAYOUT_GRID.1;
         if layout {
             cells.push(layout_cells(&img, LAYOUT_GRID)?);
         }
     }
     let cells = layout.then_some((cells.as_slice(), LAYOUT_GRID));
-    Ok(InputProfile::fit_frames(
-        &descriptors,
-        cells,
-        PROFILE_MARGIN,
-    )?)
+    let mut profile = InputProfile::fit_frames(&descriptors, cells, PROFILE_MARGIN)?;
+    profile.grey_frames = 2 * grey > descriptors.len();
+    Ok(profile)
 }
 
 /// Fit the input profile of the detector in `dir` on `datasets` (its
@@ -76,4 +75,58 @@ pub fn add_input_profile(dir: &Path, datasets: &[Dataset]) -> Result<InputProfil
     artifact.input_profile = Some(profile.clone());
     tactile_core::io::write_json_atomic(dir.join(DetectorArtifact::CONFIG_FILE), &artifact)?;
     Ok(profile)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::DetectorConfig;
+
+    /// `n` 80 x 60 frames (8-bit levels) of the virtual sensor, in colour
+    /// or each made grey.
+    fn set(n: usize, grey: bool) -> DetectionSet {
+        let detector = DetectorConfig::new().with_input_size([80, 60]);
+        let cfg = datasets_synth::VisuotactileConfig {
+            width: 80,
+            height: 60,
+            ..Default::default()
+        };
+        let frames = (0..n)
+            .map(|i| {
+                let (_, f) = datasets_synth::visuotactile::sample(&cfg, 5, i as u64, 3);
+                f.rgb
+                    .chunks_exact(3)
+                    .flat_map(|p| match grey {
+                        true => [(p[0] as u16 + p[1] as u16 + p[2] as u16) / 3; 3],
+                        false => [p[0], p[1], p[2]].map(u16::from),
+                    })
+                    .collect()
+            })
+            .collect();
+        DetectionSet {
+            width: 80,
+            height: 60,
+            detector,
+            files: (0..n).map(|i| format!("{i}")).collect(),
+            frames,
+            tendon: vec![false; n],
+            transition: vec![false; n],
+            ridge_mm: vec![None; n],
+        }
+    }
+
+    /// A detector trained on a mono camera's frames keeps them: its
+    /// profile says so, and a colour frame is the other mode to it; one
+    /// trained in colour tells a grey frame.
+    #[test]
+    fn the_profile_keeps_the_training_frames_camera_mode() {
+        let (colour, grey) = (set(24, false), set(24, true));
+        let of_colour = fit_input_profile(&[&colour]).unwrap();
+        let of_grey = fit_input_profile(&[&grey]).unwrap();
+        assert!(!of_colour.grey_frames && of_grey.grey_frames);
+        assert!(of_colour.other_camera_mode(&grey.image(0)));
+        assert!(!of_colour.other_camera_mode(&colour.image(0)));
+        assert!(of_grey.other_camera_mode(&colour.image(0)));
+        assert!(!of_grey.other_camera_mode(&grey.image(0)));
+    }
 }

@@ -115,6 +115,11 @@ pub struct ProfileGate {
     pub scale: Vec<f32>,
     /// Scores above this are foreign.
     pub threshold: f32,
+    /// The training frames were grey: a frame that is not blank and is of
+    /// the other camera mode (grey, every pixel's channels equal, where
+    /// this is false) is foreign, as
+    /// `tactile_preprocess::profile::InputProfile::other_camera_mode` says.
+    pub grey_frames: bool,
     /// The colour layout, when the profile has one: its residual and
     /// contrast are the last two statistics.
     pub layout: Option<LayoutGate>,
@@ -603,6 +608,9 @@ fn gate_nodes(
                 constant("gate_centre", &[stats as i64], p.centre.clone()),
                 constant("gate_scale", &[stats as i64], p.scale.clone()),
                 constant("gate_profile_threshold", &[], vec![p.threshold]),
+                constant("gate_chroma", &[3, 2], vec![1.0, 0.0, -1.0, -1.0, 0.0, 1.0]),
+                int64_constant("gate_axes_hwc", &[3], vec![1, 2, 3]),
+                constant("gate_no_chroma", &[], vec![0.0]),
             ]);
             let mut concat = node(
                 "Concat",
@@ -740,8 +748,62 @@ fn gate_nodes(
                 ),
                 node(
                     "Greater",
-                    "gate_foreign",
+                    "gate_outside",
                     &["input_score", "gate_profile_threshold"],
+                    "gate_outside",
+                ),
+                // The camera mode: a frame is in colour when any pixel's
+                // red or blue differs from its green.
+                node(
+                    "MatMul",
+                    "gate_chroma_pixels",
+                    &[input, "gate_chroma"],
+                    "gate_chroma_pixels",
+                ),
+                node(
+                    "Abs",
+                    "gate_chroma_abs",
+                    &["gate_chroma_pixels"],
+                    "gate_chroma_abs",
+                ),
+                reduce(
+                    "ReduceMax",
+                    "gate_chroma_max",
+                    &["gate_chroma_abs", "gate_axes_hwc"],
+                    "gate_chroma_max",
+                    0,
+                ),
+                node(
+                    "Greater",
+                    "gate_in_colour",
+                    &["gate_chroma_max", "gate_no_chroma"],
+                    "gate_in_colour",
+                ),
+                match p.grey_frames {
+                    true => node(
+                        "Identity",
+                        "gate_mode_differs",
+                        &["gate_in_colour"],
+                        "gate_mode_differs",
+                    ),
+                    false => node(
+                        "Not",
+                        "gate_mode_differs",
+                        &["gate_in_colour"],
+                        "gate_mode_differs",
+                    ),
+                },
+                node("Not", "gate_not_blank", &["gate_blank"], "gate_not_blank"),
+                node(
+                    "And",
+                    "gate_other_mode",
+                    &["gate_mode_differs", "gate_not_blank"],
+                    "gate_other_mode",
+                ),
+                node(
+                    "Or",
+                    "gate_foreign",
+                    &["gate_outside", "gate_other_mode"],
                     "gate_foreign",
                 ),
                 node(

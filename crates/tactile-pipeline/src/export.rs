@@ -183,7 +183,7 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
         metadata.push(("threshold".into(), a.threshold.to_string()));
         metadata.push((
             "output".into(),
-            "tendon_probability: float32 [N, 1], 0 for a gated frame; gate: int64 [N], 0 passed, 1 blank, 2 foreign (outside the input profile); input_score: float32 [N] (0 without a profile); tendon: bool [N], the decision".into(),
+            "tendon_probability: float32 [N, 1], 0 for a gated frame; gate: int64 [N], 0 passed, 1 blank, 2 foreign (outside the input profile, or grey where its training frames were in colour); input_score: float32 [N] (0 without a profile); tendon: bool [N], the decision".into(),
         ));
         let profile = a.input_profile.as_ref().map(|p| {
             let r = tactile_preprocess::profile::Regions::of(w, h);
@@ -195,6 +195,7 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
                 centre: p.centre.clone(),
                 scale: p.scale.clone(),
                 threshold: p.threshold,
+                grey_frames: p.grey_frames,
                 layout: p.layout.as_ref().map(|l| LayoutGate {
                     columns: l.columns,
                     rows: l.rows,

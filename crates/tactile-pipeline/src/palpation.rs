@@ -292,7 +292,9 @@ impl Pipeline {
     /// run's summary.
     pub fn foreign_by(&self) -> &'static str {
         match self.sensor_check.as_ref().map(|c| &c.basis) {
-            None => "input statistics far from the training frames'",
+            None => {
+                "input statistics far from the training frames', or grey where they were in colour"
+            }
             Some(CheckBasis::DetectorProfile { .. }) => {
                 "colours unlike the frames its detector was trained on"
             }

@@ -2,7 +2,7 @@
 //! One answer per frame: `tactile eval detector` (the library's
 //! `evaluate`), `tactile run` (the pipeline, which the Python package
 //! wraps) and the standalone ONNX export give the same decision and the
-//! same gate to the same 200 frames, blank and foreign ones included.
+//! same gate to the same 202 frames, blank, foreign and grey ones included.
 
 use std::path::{Path, PathBuf};
 
@@ -27,7 +27,8 @@ fn rgb(w: usize, h: usize, f: impl Fn(usize, usize, usize) -> u8) -> RgbImage {
 /// Rendered palpation frames (seeded sequences of the virtual sensor,
 /// every other one darker or brighter), the sample palpation video, blank
 /// frames (black, saturated, one colour) and frames of other kinds (a
-/// virtual TacTip frame, stripes, noise): 200 in all.
+/// virtual TacTip frame, stripes, noise) and grey copies of two colour
+/// frames: 202 in all.
 fn frames() -> Vec<(String, RgbImage)> {
     let cfg = datasets_synth::VisuotactileConfig {
         width: 320,
@@ -83,8 +84,24 @@ fn frames() -> Vec<(String, RgbImage)> {
         "virtual TacTip".into(),
         tactile_core::image_io::load_rgb(tactip).unwrap(),
     ));
+    // Grey copies of colour frames (a camera in a mono mode, a bag of
+    // mono8 Images): their statistics stay near the colour frames', but
+    // the colour the models read is gone.
+    let colour = [v[6].clone(), rendered[3 * fps + 4].clone()];
+    assert_eq!(
+        [&*colour[0].0, &*colour[1].0],
+        ["palpation 6", "rendered 3/4"]
+    );
+    for (name, frame) in colour {
+        let (w, px) = (frame.width(), frame.as_slice());
+        let grey = rgb(w, frame.height(), |x, y, _| {
+            let p = &px[(y * w + x) * 3..][..3];
+            ((p[0] as u32 + p[1] as u32 + p[2] as u32) / 3) as u8
+        });
+        v.push((format!("grey {name}"), grey));
+    }
     rendered.extend(v);
-    assert_eq!(rendered.len(), 200);
+    assert_eq!(rendered.len(), 202);
     rendered
 }
 
@@ -178,9 +195,13 @@ fn eval_and_run_give_every_frame_the_same_answer() {
             );
         }
     }
-    // The blank frames are stopped, and every frame of another kind is.
-    assert_eq!(gates.iter().sum::<usize>(), 6, "gates {gates:?}");
-    assert_eq!(scores.gated_blank + scores.gated_foreign, 6);
+    // The blank frames are stopped, and every frame of another kind is,
+    // grey copies of the sensor's own frames among them.
+    assert_eq!(gates.iter().sum::<usize>(), 8, "gates {gates:?}");
+    assert_eq!(scores.gated_blank + scores.gated_foreign, 8);
+    for (i, (name, _)) in frames.iter().enumerate().skip(200) {
+        assert_eq!(alone_gate[i], 2.0, "{name}: foreign");
+    }
     // The rendered and sample videos pass through the network (their
     // tendon frames say so).
     assert!(scores.decisions[..194].iter().filter(|&&d| d).count() > 20);

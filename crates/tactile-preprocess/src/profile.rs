@@ -412,6 +412,20 @@ pub fn descriptor(img: &FloatImage) -> Result<Vec<f32>> {
     Ok(vec![r, g, b, spread, tex, r - g, b - g, house, house_sd])
 }
 
+/// Whether a frame image is grey: one channel, or three equal in every
+/// pixel (a camera in a mono mode, a grey picture given as RGB). A colour
+/// camera's frame is never exactly grey: its channels' noise differs.
+pub fn is_grey(img: &FloatImage) -> bool {
+    match img.channels {
+        1 => true,
+        3 => img
+            .data
+            .chunks_exact(3)
+            .all(|p| p[0] == p[1] && p[1] == p[2]),
+        _ => false,
+    }
+}
+
 /// Each training frame's [`layout_cells`] and the grid they were read on.
 pub type LayoutCells<'a> = (&'a [Vec<f32>], (usize, usize));
 
@@ -439,6 +453,13 @@ pub struct InputProfile {
     /// before it: the nine statistics alone).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub layout: Option<ColourLayout>,
+    /// The training frames were grey ([`is_grey`]: a camera in a mono
+    /// mode); absent, they were in colour. A frame of the other mode
+    /// than this is another camera's: its statistics may still lie near
+    /// the training frames' (a grey copy of a colour frame keeps every
+    /// mean), but the colour its models read is not there.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub grey_frames: bool,
 }
 
 impl InputProfile {
@@ -528,6 +549,7 @@ impl InputProfile {
             threshold: f32::INFINITY,
             frames: rows.len(),
             layout: None,
+            grey_frames: false,
         };
         let q = quantile_999(rows.iter().map(|d| p.score(d)).collect());
         p.threshold = (margin * q).max(MIN_THRESHOLD);
@@ -589,6 +611,14 @@ impl InputProfile {
             d.extend(l.statistics(img)?);
         }
         Ok(d)
+    }
+
+    /// Whether `img` is of another camera mode than the training frames:
+    /// grey ([`is_grey`]) to a profile of colour frames, or in colour to
+    /// one of grey frames. Only a profile of colour frames (a
+    /// detector's) tells; a pin profile reads grey pin images.
+    pub fn other_camera_mode(&self, img: &FloatImage) -> bool {
+        !self.reads_pins() && is_grey(img) != self.grey_frames
     }
 
     /// A frame's score (see [`Self::score`]).
@@ -681,6 +711,39 @@ mod tests {
             channels: 3,
             data,
         }
+    }
+
+    /// `img` made grey: each pixel's three channels their mean.
+    fn grey_copy(img: &FloatImage) -> FloatImage {
+        let data = img
+            .data
+            .chunks_exact(3)
+            .flat_map(|p| [(p[0] + p[1] + p[2]) / 3.0; 3])
+            .collect();
+        FloatImage { data, ..*img }
+    }
+
+    /// A grey frame to a profile of colour frames is another camera mode,
+    /// and a colour frame to one of grey frames; a pin profile never
+    /// tells (its pin images are grey).
+    #[test]
+    fn a_frame_of_the_other_camera_mode_is_told() {
+        let mut p = profile();
+        let (colour, grey) = (lit(1.0, 7, true), grey_copy(&lit(1.0, 7, true)));
+        assert!(is_grey(&grey) && !is_grey(&colour));
+        assert!(!p.grey_frames, "fitted on colour frames");
+        assert!(p.other_camera_mode(&grey) && !p.other_camera_mode(&colour));
+        p.grey_frames = true;
+        assert!(!p.other_camera_mode(&grey) && p.other_camera_mode(&colour));
+        // Saved only when set: profiles saved before read as colour ones.
+        let json = serde_json::to_string(&p).unwrap();
+        assert!(json.contains("\"grey_frames\":true"), "{json}");
+        p.grey_frames = false;
+        let json = serde_json::to_string(&p).unwrap();
+        assert!(!json.contains("grey_frames"), "{json}");
+        let pins =
+            InputProfile::fit_pins(&vec![vec![1.0; pin_spectrum_names().len()]; 30], 1.5).unwrap();
+        assert!(!pins.other_camera_mode(&grey) && !pins.other_camera_mode(&colour));
     }
 
     fn profile() -> InputProfile {

@@ -1,5 +1,6 @@
-"""One answer per frame, whoever asks: the same 200 frames (rendered
-palpation videos, the sample video, blank frames and frames of other kinds)
+"""One answer per frame, whoever asks: the same 202 frames (rendered
+palpation videos, the sample video, blank frames, frames of other kinds and
+grey copies of the sensor's own)
 get the same tendon decision and the same gate from `tactile eval detector`,
 `tactile run`, the Python package and the standalone ONNX export."""
 
@@ -16,8 +17,9 @@ from conftest import run_cli
 
 
 def _others(palpation_frames: list[np.ndarray], root) -> list[np.ndarray]:
-    """The sample video, then 8 frames no detector should answer: blank
-    ones (black, saturated, one colour) and ones of other kinds."""
+    """The sample video, then 10 frames no detector should answer: blank
+    ones (black, saturated, one colour), ones of other kinds, and two of
+    the video's frames made grey (a camera in a mono mode)."""
     h, w = 180, 320
     y, x = np.mgrid[0:h, 0:w]
     tactip = tactile.read_rgb(sorted((root / "samples" / "virtual-tactip" / "frames").glob("*.png"))[0])
@@ -32,6 +34,9 @@ def _others(palpation_frames: list[np.ndarray], root) -> list[np.ndarray]:
         np.ascontiguousarray(tactip),
         np.ascontiguousarray(tactip[::-1]),
     ]
+    for f in (palpation_frames[3], palpation_frames[6]):
+        grey = f.astype(np.uint16).sum(axis=2) // 3
+        odd.append(np.repeat(grey.astype(np.uint8)[..., None], 3, axis=2))
     return list(palpation_frames) + odd
 
 
@@ -46,7 +51,7 @@ def test_eval_run_python_and_standalone_onnx_give_one_answer(
     ds = tactile.Dataset(data)
     rendered = [ds.frame(i) for i in range(len(ds))]
     frames = rendered + _others(palpation_frames, root)
-    assert len(frames) == 200
+    assert len(frames) == 202
 
     # Python.
     pipe = tactile.Pipeline(root / "models", "onnx")
@@ -85,4 +90,5 @@ def test_eval_run_python_and_standalone_onnx_give_one_answer(
     # frame and every frame of another kind is stopped by a gate.
     assert sum(py_tendon) > 20
     assert all(g is None for g in py_gate[: len(rendered) + len(palpation_frames)])
-    assert all(g is not None for g in py_gate[-8:]), py_gate[-8:]
+    assert all(g is not None for g in py_gate[-10:]), py_gate[-10:]
+    assert py_gate[-2:] == ["foreign", "foreign"], py_gate[-2:]
