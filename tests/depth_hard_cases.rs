@@ -64,11 +64,33 @@ fn nan_and_infinity_name_the_file_and_the_pixel() {
 #[test]
 fn wrong_dtype_or_shape_names_the_file() {
     let dir = tempfile::tempdir().unwrap();
-    let f64s: Vec<u8> = [0.015f64; 8].iter().flat_map(|x| x.to_le_bytes()).collect();
+    // float64, as `numpy.save` writes a map computed in double precision:
+    // read as the float32 it would have been saved as.
+    let f64_bytes = |v: &[f64]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
     let p = dir.path().join("double.npy");
-    write_npy(&p, "<f8", &[2, 4], &f64s);
+    write_npy(&p, "<f8", &[2, 4], &f64_bytes(&[0.015; 8]));
+    let want = dir.path().join("single.npy");
+    write_npy(&want, "<f4", &[2, 4], &f32_bytes(&[0.015; 8]));
+    assert_eq!(
+        load_depth_mm(&p, 2, 1).unwrap(),
+        load_depth_mm(&want, 2, 1).unwrap()
+    );
+    // A double beyond float32's range is no distance; named by its pixel.
+    let mut v = [0.015f64; 8];
+    v[5] = 1e300;
+    write_npy(&p, "<f8", &[2, 4], &f64_bytes(&v));
     let e = load_depth_mm(&p, 2, 1).unwrap_err().to_string();
-    assert!(e.contains("double.npy") && e.contains("float32"), "{e}");
+    assert!(e.contains("double.npy") && e.contains("(1, 1)"), "{e}");
+    // Other dtypes are refused naming the file and what is read.
+    for (descr, bytes) in [("<f2", vec![0u8; 16]), ("<i4", vec![0u8; 32])] {
+        let p = dir.path().join("other.npy");
+        write_npy(&p, descr, &[2, 4], &bytes);
+        let e = load_depth_mm(&p, 2, 1).unwrap_err().to_string();
+        assert!(
+            e.contains("other.npy") && e.contains("float32 (or float64)"),
+            "{descr}: {e}"
+        );
+    }
     let p = dir.path().join("cube.npy");
     write_npy(&p, "<f4", &[2, 2, 2], &f32_bytes(&[0.015; 8]));
     let e = load_depth_mm(&p, 1, 1).unwrap_err().to_string();

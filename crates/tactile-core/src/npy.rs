@@ -50,12 +50,24 @@ fn header_end(bytes: &[u8]) -> Option<usize> {
     start.checked_add(len).filter(|&end| end <= bytes.len())
 }
 
+/// A depth map's size: non-empty and at most 8K.
+fn check_depth_size(w: usize, h: usize) -> std::result::Result<(), String> {
+    match w == 0 || h == 0 || w.saturating_mul(h) > MAX_DEPTH_PIXELS {
+        true => Err(format!(
+            "{w}x{h} depth map: must be non-empty and at most 8K ({MAX_DEPTH_PIXELS} pixels)"
+        )),
+        false => Ok(()),
+    }
+}
+
 /// Plausible indentation of a calibrated sensor's skin, metres: a little
 /// below rest (the gel's own noise) to 2 cm in.
 pub const PLAUSIBLE_INDENTATION_M: std::ops::RangeInclusive<f32> = -0.005..=0.02;
 
 /// Read a depth map: `(width, height, metres)`; names the file on any
-/// problem: not a 2-D float32 array, larger than 8K, a header that claims
+/// problem: not a 2-D float32 array (a float64 one, as `numpy.save` writes
+/// a map computed in double precision, is read to float32), larger than
+/// 8K, a header that claims
 /// more than the file holds, a value that is not a finite distance between
 /// 0 and 1 m (the pixel is named). Every size is checked before anything
 /// is allocated for it.
@@ -78,7 +90,8 @@ pub fn read_depth_npy_of(
     let size = std::fs::metadata(path)
         .map_err(|e| Error::io(path, e))?
         .len();
-    let limit = (MAX_DEPTH_PIXELS * 4 + (1 << 20)) as u64;
+    // A float64 map of 8K, the largest read.
+    let limit = (MAX_DEPTH_PIXELS * 8 + (1 << 20)) as u64;
     if size > limit {
         return Err(bad(format!(
             "{size} bytes: larger than any 8K depth map ({limit} bytes at most)"
@@ -97,15 +110,29 @@ pub fn read_depth_npy_of(
     if header_end(bytes).is_none() {
         return Err(bad("not an .npy file, or its header is cut short".into()));
     }
-    let a = ArrayView2::<f32>::view_npy(bytes)
-        .map_err(|e| bad(format!("not a 2-D float32 .npy depth map: {e}")))?;
-    let (h, w) = a.dim();
-    if w == 0 || h == 0 || w.saturating_mul(h) > MAX_DEPTH_PIXELS {
-        return Err(bad(format!(
-            "{w}x{h} depth map: must be non-empty and at most 8K ({MAX_DEPTH_PIXELS} pixels)"
-        )));
-    }
-    let v: Vec<f32> = a.iter().copied().collect();
+    // Views, not reads: nothing is allocated for the header's shape, which
+    // the view checks against the bytes there are.
+    let (w, h, v) = match ArrayView2::<f32>::view_npy(bytes) {
+        Ok(a) => {
+            let (h, w) = a.dim();
+            check_depth_size(w, h).map_err(bad)?;
+            (w, h, a.iter().copied().collect::<Vec<f32>>())
+        }
+        Err(e32) => match ArrayView2::<f64>::view_npy(bytes) {
+            Ok(a) => {
+                let (h, w) = a.dim();
+                check_depth_size(w, h).map_err(bad)?;
+                // A distance beyond f32's range becomes infinite, which the
+                // value checks below refuse.
+                (w, h, a.iter().map(|&x| x as f32).collect())
+            }
+            Err(_) => {
+                return Err(bad(format!(
+                    "not a 2-D float32 (or float64) .npy depth map: {e32}"
+                )));
+            }
+        },
+    };
     if maps == crate::spec::DepthMaps::Indentation {
         if let Some(i) = v.iter().position(|x| !PLAUSIBLE_INDENTATION_M.contains(x)) {
             return Err(bad(format!(
