@@ -153,6 +153,15 @@ pub fn separator_hint<'a>(header: impl IntoIterator<Item = &'a str>) -> &'static
     }
 }
 
+/// Whether a header's first cell is the index pandas' `to_csv` writes
+/// unless told `index=False`: a column without a name (`Unnamed: 0` once
+/// read and saved again). Its readers drop it before the columns they
+/// know.
+pub fn is_pandas_index(first_cell: &str) -> bool {
+    let name = first_cell.trim();
+    name.is_empty() || name == "Unnamed: 0"
+}
+
 /// The records after the header, each with its physical line; a bad
 /// record comes as its line and what is wrong with it ([`describe`]).
 pub fn records<R: Read>(

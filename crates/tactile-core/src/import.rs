@@ -101,6 +101,16 @@ impl std::fmt::Display for FrameKey {
     }
 }
 
+/// A `frame` cell: a number (`17`, or `17.0` as pandas writes a column
+/// of numbers that once held an empty cell), else a file name.
+fn frame_key(cell: &str) -> FrameKey {
+    let whole = cell.strip_suffix(".0").unwrap_or(cell);
+    match whole.parse::<u64>() {
+        Ok(n) if whole.bytes().all(|b| b.is_ascii_digit()) => FrameKey::Number(n),
+        _ => FrameKey::Name(cell.to_string()),
+    }
+}
+
 fn read_labels(path: &Path) -> Result<Labels> {
     let bad = |line: usize, message: String| Error::Dataset {
         path: path.to_path_buf(),
@@ -111,11 +121,16 @@ fn read_labels(path: &Path) -> Result<Labels> {
         csv::ReaderBuilder::new().trim(csv::Trim::All),
         crate::io::open_regular(path)?,
     );
-    let header: Vec<String> = crate::csv_lines::headers(&mut csv)
+    let mut header: Vec<String> = crate::csv_lines::headers(&mut csv)
         .map_err(|why| bad(1, why))?
         .iter()
         .map(str::to_string)
         .collect();
+    // pandas' index is no label: dropped, not copied into the dataset.
+    let index_column = header.len() > 1 && crate::csv_lines::is_pandas_index(&header[0]);
+    if index_column {
+        header.remove(0);
+    }
     for (i, h) in header.iter().enumerate() {
         if header[..i].contains(h) {
             return Err(bad(1, format!("column {h:?} appears twice")));
@@ -143,15 +158,16 @@ fn read_labels(path: &Path) -> Result<Labels> {
         if rows.len() >= MAX_ROWS {
             return Err(bad(line, format!("more than {MAX_ROWS} rows")));
         }
-        let cells: Vec<String> = rec.iter().map(str::to_string).collect();
+        let cells: Vec<String> = rec
+            .iter()
+            .skip(usize::from(index_column))
+            .map(str::to_string)
+            .collect();
         let key = &cells[frame_col];
         if key.is_empty() {
             return Err(bad(line, "empty `frame`".into()));
         }
-        let key = match key.parse::<u64>() {
-            Ok(n) => FrameKey::Number(n),
-            Err(_) => FrameKey::Name(key.clone()),
-        };
+        let key = frame_key(key);
         if let Some((first, _)) = rows.get(&key) {
             return Err(bad(
                 line,
@@ -414,6 +430,43 @@ mod tests {
             })
             .collect();
         (summary, pixels)
+    }
+
+    /// A labels CSV pandas wrote with its defaults: the index first (an
+    /// unnamed column, `Unnamed: 0` once read and saved again) and frame
+    /// numbers as floats (a column that once held an empty cell). The
+    /// index is no label and `2.0` is frame 2; a name stays a name.
+    #[test]
+    fn labels_pandas_wrote_are_read_by_what_they_mean() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("labels.csv");
+        for index in ["", "Unnamed: 0"] {
+            std::fs::write(
+                &path,
+                format!("{index},frame,tendon\n0,0.0,0\n1,2.0,1\n2,000003.png,1\n"),
+            )
+            .unwrap();
+            let labels = read_labels(&path).unwrap();
+            assert_eq!(labels.header, ["frame", "tendon"], "{index:?}");
+            let keys: Vec<&FrameKey> = labels.rows.keys().collect();
+            assert_eq!(
+                keys,
+                [
+                    &FrameKey::Number(0),
+                    &FrameKey::Number(2),
+                    &FrameKey::Name("000003.png".into())
+                ]
+            );
+            assert_eq!(labels.rows[&FrameKey::Number(2)].1, ["2.0", "1"]);
+        }
+        for (cell, key) in [
+            ("7", FrameKey::Number(7)),
+            ("7.5", FrameKey::Name("7.5".into())),
+            ("-1.0", FrameKey::Name("-1.0".into())),
+            (".0", FrameKey::Name(".0".into())),
+        ] {
+            assert_eq!(frame_key(cell), key, "{cell}");
+        }
     }
 
     #[test]

@@ -67,9 +67,8 @@ pub const PLAUSIBLE_INDENTATION_M: std::ops::RangeInclusive<f32> = -0.005..=0.02
 /// Read a depth map: `(width, height, metres)`; names the file on any
 /// problem: not a 2-D float32 array (a float64 one, as `numpy.save` writes
 /// a map computed in double precision, is read to float32), larger than
-/// 8K, a header that claims
-/// more than the file holds, a value that is not a finite distance between
-/// 0 and 1 m (the pixel is named). Every size is checked before anything
+/// 8K, a header that claims more than the file holds, a value that is not
+/// a finite distance between 0 and 1 m (the pixel is named). Every size is checked before anything
 /// is allocated for it.
 pub fn read_depth_npy(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>)> {
     read_depth_npy_of(path, crate::spec::DepthMaps::Distance)

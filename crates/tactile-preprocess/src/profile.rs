@@ -615,8 +615,8 @@ impl InputProfile {
 
     /// Whether `img` is of another camera mode than the training frames:
     /// grey ([`is_grey`]) to a profile of colour frames, or in colour to
-    /// one of grey frames. Only a profile of colour frames (a
-    /// detector's) tells; a pin profile reads grey pin images.
+    /// one of grey frames. A pin profile (a TacTip model's, whose pin
+    /// images are grey) never tells.
     pub fn other_camera_mode(&self, img: &FloatImage) -> bool {
         !self.reads_pins() && is_grey(img) != self.grey_frames
     }

@@ -376,12 +376,10 @@ impl Dataset {
             .iter()
             .map(|s| s.trim().to_string())
             .collect();
-        // pandas' `to_csv` writes the frame's index first unless told
-        // `index=False`: an unnamed column (named `Unnamed: 0` once read and
-        // saved again). It is dropped, as the extra columns after the
-        // layout's are kept and ignored.
+        // pandas' index, before `file`, is dropped, as the extra columns
+        // after the layout's are kept and ignored.
         let index_column = header.len() > 1
-            && (header[0].is_empty() || header[0] == "Unnamed: 0")
+            && crate::csv_lines::is_pandas_index(&header[0])
             && header[1] == "file";
         if index_column {
             header.remove(0);
