@@ -235,10 +235,9 @@ impl DepthSet {
                             e.to_string(),
                         )
                     })?;
-                    let mpath = ds.path_of(i, "mask")?;
                     let m = ds.load_mask(i)?;
                     let mask = resize_grey(&m, w, h)
-                        .map_err(|e| e.in_file(&mpath))?
+                        .map_err(|e| e.in_file(ds.path_of(i, "mask").unwrap_or_default()))?
                         .data
                         .iter()
                         .map(|&v| v >= 0.5)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import tactile
-from conftest import write_png
+from conftest import run_cli, write_png
 
 
 def test_tactip_arrays_equal_the_written_dataset(tmp_path):
@@ -88,6 +88,35 @@ def test_a_float_or_bool_writers_tendon_labels_read_as_the_layout_means(tmp_path
     labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
     with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'direction_deg': 'NaN' is not a finite number"):
         tactile.Dataset(out)
+
+
+def test_an_empty_mask_cell_on_a_row_without_a_tendon_is_an_empty_mask(tmp_path, root, tactile_bin):
+    """A writer that saves no mask where there is nothing to mark leaves the
+    `mask` cell of a row without a tendon empty: that row's mask is all
+    background, and the depth network is scored as on the written masks.
+    A tendon row without its mask is still refused by line."""
+    out = tactile.synth.visuotactile(count=8, frames_per_sequence=8, width=320, height=180,
+                                     seed=3, out=tmp_path / "vt", progress=False)
+    models = root / "models"
+    want = tactile.eval.depth(models / "depth", out)["scores"]
+    labels = out / "labels.csv"
+    rows = [line.split(",") for line in labels.read_text().splitlines()]
+    tendon, mask = rows[0].index("tendon"), rows[0].index("mask")
+    without = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "0"]
+    with_one = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "1"]
+    assert without and with_one, "the seed gives rows of both kinds"
+    for i in without:
+        assert not np.any(tactile.Dataset(out).mask(i - 1)), "the written mask is empty"
+        rows[i][mask] = ""
+    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    assert tactile.eval.depth(models / "depth", out)["scores"] == want
+    cli = json.loads(run_cli(tactile_bin, "eval", "depth", "--model", str(models / "depth"),
+                             "--data", str(out)).splitlines()[-1])
+    assert cli["scores"] == want
+    rows[with_one[0]][mask] = ""
+    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'mask' is empty"):
+        tactile.eval.depth(models / "depth", out)
 
 
 def test_ideal_detector_bounds_every_frame_and_refuses_foreign_sets(tmp_path):

@@ -70,9 +70,9 @@ impl SegmentSet {
             .map(|&row| -> Result<Vec<Window>> {
                 let frame = resize_rgb(&ds.load_rgb(row)?, sw, sh)
                     .map_err(|e| e.in_file(ds.path_of(row, "file").unwrap_or_default()))?;
-                let mask_path = ds.path_of(row, "mask")?;
                 let m = ds.load_mask(row)?;
-                let mask = resize_grey(&m, sw, sh).map_err(|e| e.in_file(&mask_path))?;
+                let mask = resize_grey(&m, sw, sh)
+                    .map_err(|e| e.in_file(ds.path_of(row, "mask").unwrap_or_default()))?;
                 let direction_deg = ds.number_opt(row, "direction_deg")?;
                 let path = ds.text_opt(row, "path").map(str::to_string);
                 Ok(rotation_angles(copies, seed, row)

@@ -588,8 +588,15 @@ impl Dataset {
     }
 
     /// The tendon mask of row `i` (`image_io::load_mask`: a 0/1 mask is
-    /// refused), of the manifest's size.
+    /// refused), of the manifest's size. A row without a tendon whose
+    /// `mask` cell is empty (a writer that saves no mask where there is
+    /// nothing to mark) has the mask that says so: all background.
     pub fn load_mask(&self, i: usize) -> Result<crate::image_io::GreyImage> {
+        if self.text_opt(i, "mask").is_none() && self.number_opt(i, "tendon")? == Some(0.0) {
+            crate::interrupt::check()?;
+            let (w, h) = (self.manifest.width as usize, self.manifest.height as usize);
+            return crate::image_io::grey_image(w, h, vec![0; w * h]);
+        }
         self.load_sized(i, "mask", |p| crate::image_io::load_mask(p))
     }
 
