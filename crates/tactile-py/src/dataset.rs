@@ -177,10 +177,11 @@ impl PyDataset {
     }
 
     /// Tendon mask of frame `i`, `(H, W)` bool; None without a mask column
-    /// or an empty cell.
+    /// or an empty cell (but for a row without a tendon, whose empty cell
+    /// is an empty mask).
     fn mask<'py>(&self, py: Python<'py>, i: isize) -> PyResult<Option<Bound<'py, PyAny>>> {
         let i = self.index(i)?;
-        if !self.has("mask") || self.ds.text_opt(i, "mask").is_none() {
+        if !self.has("mask") || !self.ds.has_mask(i).py()? {
             return Ok(None);
         }
         let img = py.detach(|| self.ds.load_mask(i)).py()?;

@@ -109,6 +109,8 @@ def test_an_empty_mask_cell_on_a_row_without_a_tendon_is_an_empty_mask(tmp_path,
         assert not np.any(tactile.Dataset(out).mask(i - 1)), "the written mask is empty"
         rows[i][mask] = ""
     labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    ds = tactile.Dataset(out)
+    assert all(ds.mask(i - 1).shape == (180, 320) and not np.any(ds.mask(i - 1)) for i in without)
     assert tactile.eval.depth(models / "depth", out)["scores"] == want
     cli = json.loads(run_cli(tactile_bin, "eval", "depth", "--model", str(models / "depth"),
                              "--data", str(out)).splitlines()[-1])
@@ -117,6 +119,7 @@ def test_an_empty_mask_cell_on_a_row_without_a_tendon_is_an_empty_mask(tmp_path,
     labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
     with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'mask' is empty"):
         tactile.eval.depth(models / "depth", out)
+    assert tactile.Dataset(out).mask(with_one[0] - 1) is None
 
 
 def test_ideal_detector_bounds_every_frame_and_refuses_foreign_sets(tmp_path):

@@ -587,12 +587,18 @@ impl Dataset {
         self.load_sized(i, column, |p| crate::image_io::load_grey(p))
     }
 
+    /// Whether row `i`'s mask is known: a file in its `mask` cell, or, in
+    /// a row without a tendon whose cell is empty (a writer that saves no
+    /// mask where there is nothing to mark), the mask that says so.
+    pub fn has_mask(&self, i: usize) -> Result<bool> {
+        Ok(self.text_opt(i, "mask").is_some() || self.number_opt(i, "tendon")? == Some(0.0))
+    }
+
     /// The tendon mask of row `i` (`image_io::load_mask`: a 0/1 mask is
-    /// refused), of the manifest's size. A row without a tendon whose
-    /// `mask` cell is empty (a writer that saves no mask where there is
-    /// nothing to mark) has the mask that says so: all background.
+    /// refused), of the manifest's size; all background in a row without
+    /// a tendon whose cell is empty ([`Self::has_mask`]).
     pub fn load_mask(&self, i: usize) -> Result<crate::image_io::GreyImage> {
-        if self.text_opt(i, "mask").is_none() && self.number_opt(i, "tendon")? == Some(0.0) {
+        if self.text_opt(i, "mask").is_none() && self.has_mask(i)? {
             crate::interrupt::check()?;
             let (w, h) = (self.manifest.width as usize, self.manifest.height as usize);
             return crate::image_io::grey_image(w, h, vec![0; w * h]);
