@@ -52,6 +52,22 @@ def test_visuotactile_arrays_equal_the_written_dataset(tmp_path):
         ds.mask(0)
 
 
+def _rows_by_tendon(out):
+    """A written visuo-tactile set's `labels.csv`, its rows as cells (the
+    header first), and the row numbers without a tendon and with one."""
+    labels = out / "labels.csv"
+    rows = [line.split(",") for line in labels.read_text().splitlines()]
+    tendon = rows[0].index("tendon")
+    without = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "0"]
+    with_one = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "1"]
+    assert without and with_one, "the seed gives rows of both kinds"
+    return labels, rows, without, with_one
+
+
+def _write_rows(labels, rows):
+    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+
+
 def test_a_float_or_bool_writers_tendon_labels_read_as_the_layout_means(tmp_path):
     """The layout leaves `direction_deg` empty on a row without a tendon; a
     writer that keeps a float on every row (Python's csv module, numpy)
@@ -60,15 +76,11 @@ def test_a_float_or_bool_writers_tendon_labels_read_as_the_layout_means(tmp_path
     bad label, and a tendon neither 0 nor 1 is one, each named by its line."""
     out = tactile.synth.visuotactile(count=8, frames_per_sequence=8, width=320, height=180,
                                      seed=3, out=tmp_path / "vt", progress=False)
-    labels = out / "labels.csv"
-    rows = [line.split(",") for line in labels.read_text().splitlines()]
+    labels, rows, without, with_one = _rows_by_tendon(out)
     tendon, direction = rows[0].index("tendon"), rows[0].index("direction_deg")
-    without = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "0"]
-    with_one = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "1"]
-    assert without and with_one, "the seed gives rows of both kinds"
     for i in without:
         rows[i][direction] = "nan"
-    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    _write_rows(labels, rows)
     ds = tactile.Dataset(out)
     assert all(np.isnan(ds.labels["direction_deg"][i - 1]) for i in without)
     assert all(np.isfinite(ds.labels["direction_deg"][i - 1]) for i in with_one)
@@ -76,16 +88,16 @@ def test_a_float_or_bool_writers_tendon_labels_read_as_the_layout_means(tmp_path
     # other value than those (every reader asks `tendon == 1`) is refused.
     for i in without + with_one:
         rows[i][tendon] = {"0": "False", "1": "true"}[rows[i][tendon]]
-    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    _write_rows(labels, rows)
     assert list(tactile.Dataset(out).labels["tendon"]) == list(ds.labels["tendon"])
     for bad in ("2", "0.5", "-1", "yes"):
         rows[with_one[0]][tendon] = bad
-        labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+        _write_rows(labels, rows)
         with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'tendon': "):
             tactile.Dataset(out)
     rows[with_one[0]][tendon] = "1"
     rows[with_one[0]][direction] = "NaN"
-    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    _write_rows(labels, rows)
     with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'direction_deg': 'NaN' is not a finite number"):
         tactile.Dataset(out)
 
@@ -99,16 +111,12 @@ def test_an_empty_mask_cell_on_a_row_without_a_tendon_is_an_empty_mask(tmp_path,
                                      seed=3, out=tmp_path / "vt", progress=False)
     models = root / "models"
     want = tactile.eval.depth(models / "depth", out)["scores"]
-    labels = out / "labels.csv"
-    rows = [line.split(",") for line in labels.read_text().splitlines()]
-    tendon, mask = rows[0].index("tendon"), rows[0].index("mask")
-    without = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "0"]
-    with_one = [i for i, r in enumerate(rows[1:], 1) if r[tendon] == "1"]
-    assert without and with_one, "the seed gives rows of both kinds"
+    labels, rows, without, with_one = _rows_by_tendon(out)
+    mask = rows[0].index("mask")
     for i in without:
         assert not np.any(tactile.Dataset(out).mask(i - 1)), "the written mask is empty"
         rows[i][mask] = ""
-    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    _write_rows(labels, rows)
     ds = tactile.Dataset(out)
     assert all(ds.mask(i - 1).shape == (180, 320) and not np.any(ds.mask(i - 1)) for i in without)
     assert tactile.eval.depth(models / "depth", out)["scores"] == want
@@ -116,7 +124,7 @@ def test_an_empty_mask_cell_on_a_row_without_a_tendon_is_an_empty_mask(tmp_path,
                              "--data", str(out)).splitlines()[-1])
     assert cli["scores"] == want
     rows[with_one[0]][mask] = ""
-    labels.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    _write_rows(labels, rows)
     with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'mask' is empty"):
         tactile.eval.depth(models / "depth", out)
     assert tactile.Dataset(out).mask(with_one[0] - 1) is None
