@@ -36,7 +36,8 @@ pub struct DetectionSet {
 
 impl DetectionSet {
     /// Load and resize every frame (in parallel) to the input of
-    /// `detector`, held at its bits; `tendon` must be 0 or 1.
+    /// `detector`, held at its bits (`tendon` is 0 or 1: `Dataset::open`
+    /// refuses any other).
     pub fn from_dataset(ds: &Dataset, detector: &DetectorConfig) -> Result<Self> {
         let mut set = Self::labels_of(ds, detector)?;
         ds.check_frame_headers(&ds.every_row())?;
@@ -80,16 +81,9 @@ impl DetectionSet {
     fn labels_of(ds: &Dataset, detector: &DetectorConfig) -> Result<Self> {
         let [width, height] = detector.input_size;
         ds.expect_kind(DatasetKind::Visuotactile)?;
+        // `Dataset::open` refused a tendon that is neither 0 nor 1.
         let tendon = (0..ds.len())
-            .map(|i| match ds.number(i, "tendon")? {
-                0.0 => Ok(false),
-                1.0 => Ok(true),
-                v => Err(Error::dataset(
-                    ds.labels_path(),
-                    Some(ds.rows[i].line),
-                    format!("column 'tendon': {v} is neither 0 nor 1"),
-                )),
-            })
+            .map(|i| Ok(ds.number(i, "tendon")? == 1.0))
             .collect::<tactile_core::Result<Vec<_>>>()?;
         let files: Vec<String> = (0..ds.len())
             .map(|i| ds.text(i, "file").map(str::to_string))
