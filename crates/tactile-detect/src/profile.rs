@@ -81,6 +81,7 @@ pub fn add_input_profile(dir: &Path, datasets: &[Dataset]) -> Result<InputProfil
 mod tests {
     use super::*;
     use crate::DetectorConfig;
+    use tactile_core::image_io::{grey_to_rgb, rgb_to_grey};
 
     /// `n` 80 x 60 frames (8-bit levels) of the virtual sensor, in colour
     /// or each made grey.
@@ -94,13 +95,11 @@ mod tests {
         let frames = (0..n)
             .map(|i| {
                 let (_, f) = datasets_synth::visuotactile::sample(&cfg, 5, i as u64, 3);
-                f.rgb
-                    .chunks_exact(3)
-                    .flat_map(|p| match grey {
-                        true => [(p[0] as u16 + p[1] as u16 + p[2] as u16) / 3; 3],
-                        false => [p[0], p[1], p[2]].map(u16::from),
-                    })
-                    .collect()
+                let rgb = match grey {
+                    true => grey_to_rgb(&rgb_to_grey(&f.rgb)),
+                    false => f.rgb,
+                };
+                rgb.into_iter().map(u16::from).collect()
             })
             .collect();
         DetectionSet {

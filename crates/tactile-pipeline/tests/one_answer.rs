@@ -93,11 +93,9 @@ fn frames() -> Vec<(String, RgbImage)> {
         ["palpation 6", "rendered 3/4"]
     );
     for (name, frame) in colour {
-        let (w, px) = (frame.width(), frame.as_slice());
-        let grey = rgb(w, frame.height(), |x, y, _| {
-            let p = &px[(y * w + x) * 3..][..3];
-            ((p[0] as u32 + p[1] as u32 + p[2] as u32) / 3) as u8
-        });
+        use tactile_core::image_io::{grey_to_rgb, rgb_to_grey};
+        let grey = grey_to_rgb(&rgb_to_grey(frame.as_slice()));
+        let grey = tactile_core::image_io::rgb_image(frame.width(), frame.height(), grey).unwrap();
         v.push((format!("grey {name}"), grey));
     }
     rendered.extend(v);

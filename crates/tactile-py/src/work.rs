@@ -1,10 +1,10 @@
 //! Long work (training, evaluation, generating a dataset, a batch of
 //! frames, a live source's wait) off the interpreter: it runs on a worker
 //! thread with the interpreter lock released, while the calling thread
-//! checks for Ctrl-C every 100 ms. A
-//! Ctrl-C asks the work to stop the way SIGINT stops the command line
-//! (staging folders removed, a training folder left marked incomplete),
-//! waits for it, then raises `KeyboardInterrupt`.
+//! checks for Ctrl-C every 100 ms. A Ctrl-C asks the work to stop the way
+//! SIGINT stops the command line (staging folders removed, a training
+//! folder left marked incomplete), waits for it, then raises
+//! `KeyboardInterrupt`.
 
 use std::sync::mpsc::RecvTimeoutError;
 use std::time::Duration;
