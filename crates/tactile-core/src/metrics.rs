@@ -175,6 +175,26 @@ mod tests {
         assert!((s.precision - 2.0 / 3.0).abs() < 1e-12 && (s.recall - 2.0 / 3.0).abs() < 1e-12);
         let none = binary_scores(&[false, false], &[false, false]);
         assert_eq!((none.accuracy, none.precision, none.f1), (1.0, 0.0, 0.0));
+        assert_eq!(
+            none.rates_text(4),
+            "accuracy 1.0000, precision -, recall -, F1 - (no frame has a tendon, and none was called one)"
+        );
+        assert_eq!(
+            binary_scores(&[true, false], &[false, false]).rates_text(2),
+            "accuracy 0.50, precision 0.00, recall -, F1 0.00 (no frame has a tendon: recall has nothing to count)"
+        );
+        assert_eq!(
+            binary_scores(&[false, false], &[true, false]).rates_text(2),
+            "accuracy 0.50, precision -, recall 0.00, F1 0.00 (no frame was called a tendon: precision has nothing to count)"
+        );
+        assert_eq!(
+            binary_scores(&[], &[]).rates_text(2),
+            "accuracy -, precision -, recall -, F1 -"
+        );
+        assert_eq!(
+            s.rates_text(3),
+            "accuracy 0.600, precision 0.667, recall 0.667, F1 0.667"
+        );
     }
 
     #[test]
@@ -238,6 +258,37 @@ pub struct BinaryScores {
     pub true_neg: usize,
     /// Positives predicted negative.
     pub false_neg: usize,
+}
+
+impl BinaryScores {
+    /// The four rates in words for a person, `-` where a rate has nothing
+    /// to count (precision with no frame called positive, recall with no
+    /// positive frame, F1 with neither, accuracy of no frame), followed by
+    /// why: a set of negatives scored perfectly reads as that, not as a
+    /// precision, recall and F1 of 0. The JSON keeps 0 there, as documented.
+    pub fn rates_text(&self, digits: usize) -> String {
+        let (tp, fp, fneg) = (self.true_pos, self.false_pos, self.false_neg);
+        let rate = |v: f64, defined: bool| match defined {
+            true => format!("{v:.digits$}"),
+            false => "-".to_string(),
+        };
+        let mut text = format!(
+            "accuracy {}, precision {}, recall {}, F1 {}",
+            rate(self.accuracy, self.frames > 0),
+            rate(self.precision, tp + fp > 0),
+            rate(self.recall, tp + fneg > 0),
+            rate(self.f1, tp + fp + fneg > 0),
+        );
+        if self.frames > 0 && tp + fneg == 0 {
+            text.push_str(match fp {
+                0 => " (no frame has a tendon, and none was called one)",
+                _ => " (no frame has a tendon: recall has nothing to count)",
+            });
+        } else if self.frames > 0 && tp + fp == 0 {
+            text.push_str(" (no frame was called a tendon: precision has nothing to count)");
+        }
+        text
+    }
 }
 
 /// Accuracy, precision, recall and F1 (0 when undefined, e.g. no positive

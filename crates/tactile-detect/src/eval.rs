@@ -62,13 +62,10 @@ impl DetectorScores {
         let (s, st) = (&self.all, &self.onset_release);
         let mut lines = vec![
             format!(
-                "{} frames ({} with a tendon): accuracy {:.4}, precision {:.4}, recall {:.4}, F1 {:.4}",
+                "{} frames ({} with a tendon): {}",
                 s.frames,
                 s.true_pos + s.false_neg,
-                s.accuracy,
-                s.precision,
-                s.recall,
-                s.f1
+                s.rates_text(4)
             ),
             format!(
                 "confusion: {} true positive, {} false positive, {} true negative, {} false negative",
@@ -78,10 +75,13 @@ impl DetectorScores {
                 "gates: {} blank and {} foreign frames answered without the network; without gates accuracy {:.4}",
                 self.gated_blank, self.gated_foreign, self.ungated.accuracy
             ),
-            format!(
-                "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
-                st.frames, st.accuracy, st.false_pos, st.false_neg
-            ),
+            match st.frames {
+                0 => "onset/release frames (within 2 frames of a label change in a sequence): none in this set".to_string(),
+                _ => format!(
+                    "onset/release frames (within 2 frames of a label change): {} frames, accuracy {:.4} ({} false positive, {} false negative)",
+                    st.frames, st.accuracy, st.false_pos, st.false_neg
+                ),
+            },
             format!(
                 "calibration: expected calibration error {:.4} over {CALIBRATION_BINS} bins, {} over the {} frames with a probability in [0.1, 0.9]; Brier score {:.4}",
                 self.calibration.ece,
@@ -335,4 +335,39 @@ pub fn write_decisions_csv(path: &Path, data: &FrameLabels, s: &DetectorScores) 
         ));
     }
     Ok(tactile_core::io::write_atomic(path, csv.as_bytes())?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A researcher's recording of presses without a tendon, scored
+    /// perfectly and without sequences: its summary says so, rather than
+    /// precision, recall, F1 and an onset/release accuracy of 0.
+    #[test]
+    fn a_set_without_tendons_or_onsets_reads_as_scored() {
+        let (p, truth) = (vec![0.01f32, 0.02, 0.0], vec![false; 3]);
+        let decisions = vec![false; 3];
+        let all = binary_scores(&decisions, &truth);
+        let scores = DetectorScores {
+            all,
+            ungated: all,
+            gated_blank: 0,
+            gated_foreign: 0,
+            onset_release: binary_scores(&[], &[]),
+            ms_per_frame: 1.0,
+            calibration: calibration(&p, &truth, CALIBRATION_BINS),
+            probabilities: p,
+            decisions,
+            threshold: 0.5,
+            warning: None,
+        };
+        let lines = scores.describe("flex");
+        assert_eq!(
+            lines[0],
+            "3 frames (0 with a tendon): accuracy 1.0000, precision -, recall -, F1 - (no frame has a tendon, and none was called one)"
+        );
+        assert!(lines[3].ends_with("none in this set"), "{}", lines[3]);
+        assert!(!lines.iter().any(|l| l.contains("accuracy 0.0000")));
+    }
 }
