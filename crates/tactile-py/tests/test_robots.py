@@ -985,6 +985,80 @@ def test_python_live_view_waits_for_no_one(pipeline, palpation_frames):
         assert (view.sent, view.dropped) == (0, 0)
 
 
+def test_hostile_viewers_leave_the_live_view_serving(pipeline, palpation_frames):
+    """The live view is a WebSocket server any program on the network may
+    reach: clients that speak no Foxglove, send garbage, subscribe to
+    channels that do not exist, flood it with connections or stall in the
+    handshake must not stop the frames, nor keep a well-behaved viewer
+    from every topic."""
+    pytest.importorskip("websockets")
+    import os
+    import socket
+
+    import websockets
+    from websockets.exceptions import ConnectionClosed, InvalidStatus
+
+    frame = palpation_frames[6]
+    res = pipeline.process(frame)
+    with tactile.LiveView("127.0.0.1:0") as view:
+        url = f"ws://127.0.0.1:{view.port}"
+        stop, published = threading.Event(), [0]
+
+        def publish():
+            while not stop.is_set():
+                view.publish(res, frame, stamp_ns=1_700_000_000_000_000_000 + published[0] * 33_000_000)
+                published[0] += 1
+                time.sleep(0.01)
+
+        pub = threading.Thread(target=publish)
+        pub.start()
+
+        async def hostile() -> list[str]:
+            said: list[str] = []
+            with pytest.raises(InvalidStatus):
+                await websockets.connect(url)  # no Foxglove subprotocol
+            async with websockets.connect(url, subprotocols=["foxglove.sdk.v1"], max_size=None) as ws:
+                for m in ["{{{", "null", '{"op": 5}', '{"op": "callService"}',
+                          json.dumps({"op": "subscribe", "subscriptions": [{"id": 1, "channelId": 99999}]}),
+                          json.dumps({"op": "unsubscribe", "subscriptionIds": [99999999999]}),
+                          json.dumps({"op": "advertise", "channels": [{"id": 1, "topic": "/x", "encoding": "json",
+                                                                       "schemaName": "a"}]}),
+                          os.urandom(1000), b"\x01", b"\x02\xff\xff\xff\xff", b"\x01" + bytes(8 << 20)]:
+                    await ws.send(m)
+                try:
+                    while True:
+                        m = await asyncio.wait_for(ws.recv(), 1.0)
+                        if isinstance(m, str) and json.loads(m).get("op") == "status":
+                            said.append(json.loads(m)["message"])
+                except (asyncio.TimeoutError, ConnectionClosed):
+                    pass
+            idle = [await websockets.connect(url, subprotocols=["foxglove.sdk.v1"]) for _ in range(50)]
+            for c in idle:
+                await c.close()
+            return said
+
+        try:
+            said = asyncio.run(hostile())
+            raw = socket.create_connection(("127.0.0.1", view.port))
+            raw.sendall(os.urandom(5000))
+            raw.close()
+            stalled = socket.create_connection(("127.0.0.1", view.port))
+            stalled.sendall(b"GET / HTTP/1.1\r\nHost: x\r\n")  # a handshake never finished
+            before = published[0]
+            started = threading.Event()
+            want = {"/tactile/image", "/tactile/result", "/tactile/tendon_mask", "/tactile/depth"}
+            seen = asyncio.run(_watch(view.port, started, want, timeout=20))
+            stalled.close()
+        finally:
+            stop.set()
+            pub.join()
+        # The server told the bad client what was wrong, and kept serving.
+        assert any("Invalid message" in m for m in said), said
+        assert want <= set(seen), seen
+        assert published[0] > before
+        assert view.sent > 0
+
+
 def test_paper_a_estimates_as_mcap_match_the_csv(tactile_bin, root, tmp_path):
     import csv
 
