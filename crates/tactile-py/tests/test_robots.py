@@ -1017,6 +1017,15 @@ def test_hostile_viewers_leave_the_live_view_serving(pipeline, palpation_frames)
             said: list[str] = []
             with pytest.raises(InvalidStatus):
                 await websockets.connect(url)  # no Foxglove subprotocol
+            # A viewer offering only the subprotocol's old name is refused at
+            # the handshake (docs/robots.md says which viewers connect); one
+            # offering both names, as Lichtblick does since it added the new
+            # one, is served.
+            with pytest.raises(InvalidStatus):
+                await websockets.connect(url, subprotocols=["foxglove.websocket.v1"])
+            async with websockets.connect(url, subprotocols=["foxglove.websocket.v1", "foxglove.sdk.v1"]) as both:
+                assert both.subprotocol == "foxglove.sdk.v1"
+                assert json.loads(await asyncio.wait_for(both.recv(), 5))["op"] == "serverInfo"
             async with websockets.connect(url, subprotocols=["foxglove.sdk.v1"], max_size=None) as ws:
                 for m in ["{{{", "null", '{"op": 5}', '{"op": "callService"}',
                           json.dumps({"op": "subscribe", "subscriptions": [{"id": 1, "channelId": 99999}]}),
