@@ -7,6 +7,7 @@
 //! Choices the spec leaves open are listed in `docs/synth.md`.
 
 use serde::{Deserialize, Serialize};
+use tactile_core::spec::{columns, tactip::label_applies};
 use tactile_core::{Error, Result};
 
 use crate::raster::{Border, gaussian_blur, to_u8};
@@ -93,14 +94,15 @@ impl Shape {
         }
     }
 
-    /// Whether `theta` means something for this shape.
+    /// Whether `theta` means something for this shape
+    /// ([`label_applies`], which every reader of the labels asks too).
     pub fn has_orientation(&self) -> bool {
-        !matches!(self, Shape::Sphere { .. } | Shape::Flat)
+        label_applies(self.name(), columns::THETA_DEG)
     }
 
     /// Whether the contact position means something for this shape.
     pub fn has_position(&self) -> bool {
-        !matches!(self, Shape::Flat)
+        label_applies(self.name(), columns::X_MM)
     }
 }
 

@@ -73,7 +73,7 @@ pub fn compare(c: &Compare) -> Result<String> {
         .map(|i| {
             c.targets
                 .iter()
-                .map(|t| ds.number(i, &t.name))
+                .map(|t| ds.target(i, &t.name))
                 .collect::<tactile_core::Result<Vec<f64>>>()
         })
         .collect::<tactile_core::Result<Vec<_>>>()?;

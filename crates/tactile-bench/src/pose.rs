@@ -193,7 +193,7 @@ pub fn bench_pose(b: &ModelBench) -> Result<Table<PoseMetrics>> {
                 continue;
             };
             for (e, &i) in errors.iter_mut().zip(&test) {
-                if let Ok(Some(truth)) = ds.number_opt(i, name) {
+                if let Ok(Some(truth)) = ds.target_opt(i, name) {
                     e[k] = (v[i] - truth).abs();
                 }
             }

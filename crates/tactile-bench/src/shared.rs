@@ -148,7 +148,7 @@ pub fn shared_encoders(encoders: &[PathBuf], tasks: &[Task], real: &Path) -> Res
                         .map(|&i| {
                             targets
                                 .iter()
-                                .map(|tg| Ok(ds.number(i, &tg.name)?))
+                                .map(|tg| Ok(ds.target(i, &tg.name)?))
                                 .collect::<Result<Vec<f64>>>()
                         })
                         .collect()

@@ -171,7 +171,7 @@ impl JointLabels {
             let row: Vec<Option<f64>> = joint
                 .targets
                 .iter()
-                .map(|t| ds.number_opt(i, &t.name))
+                .map(|t| ds.target_opt(i, &t.name))
                 .collect::<tactile_core::Result<_>>()?;
             raw.push(
                 row.into_iter()

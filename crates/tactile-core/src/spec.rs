@@ -43,6 +43,25 @@ pub mod columns {
     pub const SPLIT: &str = "split";
 }
 
+/// The virtual TacTip (`sensors.md` section 1).
+pub mod tactip {
+    use super::columns;
+
+    /// Whether a label means something on a frame of `shape`: theta is
+    /// "the in-plane orientation of edges, axes and ridges", which a sphere
+    /// and a flat have not, and a flat touches everywhere, so it has no
+    /// contact position. Every other pair (other columns, other shapes,
+    /// a real set's own shapes) does. Another implementation of the spec
+    /// may draw and write such labels; no estimator can learn them.
+    pub fn label_applies(shape: &str, column: &str) -> bool {
+        match column {
+            columns::THETA_DEG => !matches!(shape, "sphere" | "flat"),
+            columns::X_MM | columns::Y_MM => shape != "flat",
+            _ => true,
+        }
+    }
+}
+
 /// The virtual visuo-tactile sensor (`sensors.md` section 2).
 pub mod visuotactile {
     /// Smallest ridge amplitude that counts as a visible tendon, mm: the

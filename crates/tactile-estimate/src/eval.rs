@@ -120,8 +120,8 @@ pub fn position_score(x: &[f64], y: &[f64], ds: &Dataset) -> Result<PositionScor
             continue;
         };
         let (Some(tx), Some(ty), Some(depth)) = (
-            ds.number_opt(i, "x_mm")?,
-            ds.number_opt(i, "y_mm")?,
+            ds.target_opt(i, "x_mm")?,
+            ds.target_opt(i, "y_mm")?,
             ds.number_opt(i, "depth_mm")?,
         ) else {
             continue;
@@ -132,7 +132,7 @@ pub fn position_score(x: &[f64], y: &[f64], ds: &Dataset) -> Result<PositionScor
         }
         let (dx, dy) = (x[i] - tx, y[i] - ty);
         // Across the axis along theta: the component along n = (-sin, cos).
-        let theta = ds.number_opt(i, "theta_deg")?;
+        let theta = ds.target_opt(i, "theta_deg")?;
         let across = theta.map_or(f64::NAN, |t| {
             let (s, c) = t.to_radians().sin_cos();
             (-s * dx + c * dy).abs()
@@ -254,7 +254,7 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
                 };
                 for (j, t) in r.targets().iter().enumerate() {
                     let truth = (0..ds.len())
-                        .map(|i| ds.number_opt(i, &t.name))
+                        .map(|i| ds.target_opt(i, &t.name))
                         .collect::<Result<Vec<_>, _>>()?;
                     let mae_of = |rows: &mut dyn Iterator<Item = usize>| {
                         let (mut sum, mut n) = (0.0, 0usize);

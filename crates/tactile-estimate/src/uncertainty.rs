@@ -410,7 +410,7 @@ pub fn calibration_rows(
     for i in rows {
         let mut all = true;
         for t in targets {
-            all &= ds.number_opt(i, &t.name)?.is_some();
+            all &= ds.target_opt(i, &t.name)?.is_some();
         }
         if all {
             labelled.push(i);

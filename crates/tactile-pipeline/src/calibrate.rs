@@ -115,7 +115,7 @@ fn calibrate_regressor(
             let feats = enc.encode(&pins.images)?;
             let labels = rows
                 .iter()
-                .map(|&i| targets.iter().map(|t| ds.number(i, &t.name)).collect())
+                .map(|&i| targets.iter().map(|t| ds.target(i, &t.name)).collect())
                 .collect::<tactile_core::Result<Vec<Vec<f64>>>>()?;
             let fitted = tactile_estimate::uncertainty::fitted_frames(
                 &regressor.member_notes(),

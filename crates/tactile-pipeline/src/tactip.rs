@@ -1286,10 +1286,10 @@ pub fn train_regressor(
             }
             let mut row = Vec::with_capacity(plan.targets.len());
             for t in &plan.targets {
-                match (ds.number_opt(i, &t.name)?, plan.only_labelled) {
+                match (ds.target_opt(i, &t.name)?, plan.only_labelled) {
                     (Some(v), _) => row.push(v),
                     (None, true) => return Ok(None),
-                    (None, false) => row.push(ds.number(i, &t.name)?),
+                    (None, false) => row.push(ds.target(i, &t.name)?),
                 }
             }
             Ok(Some(row))

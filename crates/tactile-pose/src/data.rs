@@ -154,7 +154,7 @@ impl PoseSet {
             .map(|&i| {
                 targets
                     .iter()
-                    .map(|t| ds.number_opt(i, &t.name))
+                    .map(|t| ds.target_opt(i, &t.name))
                     .collect::<tactile_core::Result<Vec<_>>>()
             })
             .collect::<tactile_core::Result<Vec<_>>>()?;

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import tactile
-from conftest import run_cli, write_png
+from conftest import run_cli, tactip_independent, write_png
 
 
 def test_tactip_arrays_equal_the_written_dataset(tmp_path):
@@ -128,6 +128,57 @@ def test_an_empty_mask_cell_on_a_row_without_a_tendon_is_an_empty_mask(tmp_path,
     with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'mask' is empty"):
         tactile.eval.depth(models / "depth", out)
     assert tactile.Dataset(out).mask(with_one[0] - 1) is None
+
+
+def test_labels_a_shape_has_not_are_not_scored_whatever_was_written(tmp_path, root, tactile_bin):
+    """Another implementation of the virtual TacTip may draw and write a
+    sphere's theta and a flat's position and theta, where the project's
+    generator leaves them empty: no estimator can read them off a frame, so
+    they are scored (and learnt) as the empty cells they stand for."""
+    import csv
+    import shutil
+
+    orig = root / "samples" / "virtual-tactip"
+    out = tmp_path / "other-generator"
+    shutil.copytree(orig, out)
+    with open(out / "labels.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    col = {c: k for k, c in enumerate(rows[0])}
+    filled = 0
+    for r in rows[1:]:
+        if r[col["shape"]] in ("sphere", "flat"):
+            assert r[col["theta_deg"]] == "", "the project's generator leaves it empty"
+            r[col["theta_deg"]] = "77.7"
+            filled += 1
+        if r[col["shape"]] == "flat":
+            r[col["x_mm"]], r[col["y_mm"]] = "5.5", "-4.25"
+    assert filled >= 3
+    with open(out / "labels.csv", "w", newline="") as f:
+        csv.writer(f).writerows(rows)
+    encoder = root / "models" / "cae-synth"
+    want, got = tactile.eval.tactip(encoder, orig), tactile.eval.tactip(encoder, out)
+    assert got["targets"] == want["targets"] and got["position"] == want["position"]
+    assert {t["target"]: t["frames"] for t in got["targets"]}["theta_deg"] == 14 - filled
+    cli = run_cli(tactile_bin, "evaluate", "--encoder", str(encoder), "--data", str(out))
+    assert cli == run_cli(tactile_bin, "evaluate", "--encoder", str(encoder), "--data", str(orig)).replace(
+        str(orig), str(out))
+
+
+def test_the_shapes_models_read_another_implementation_of_the_virtual_tactip(tmp_path, root):
+    """Held-out TacTip data comes from other implementations of sensors.md:
+    the shipped encoder and estimators, trained on the project's generator,
+    read frames of one written from the spec alone (scripts/
+    tactip_independent.py) about as well as their own generator's."""
+    other = tmp_path / "independent"
+    tactip_independent().main(str(other), 70, 3)
+    own = tactile.synth.tactip(70, seed=3, out=tmp_path / "own", progress=False)
+    encoder = root / "models" / "cae-synth"
+    scores = {name: tactile.eval.tactip(encoder, d) for name, d in (("other", other), ("own", own))}
+    mae = {name: {t["target"]: t["mae"] for t in s["targets"]} for name, s in scores.items()}
+    assert scores["other"]["accuracy"] >= scores["own"]["accuracy"] - 0.1, scores
+    assert scores["other"]["accuracy"] >= 0.6
+    for target in ("depth_mm", "force_n", "theta_deg"):
+        assert mae["other"][target] <= 1.5 * mae["own"][target], (target, mae)
 
 
 def test_ideal_detector_bounds_every_frame_and_refuses_foreign_sets(tmp_path):

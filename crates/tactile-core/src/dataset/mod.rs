@@ -742,6 +742,37 @@ impl Dataset {
             .ok_or_else(|| self.needed_but_empty(i, column))
     }
 
+    /// A target label of row `i` to learn or score: [`Self::number_opt`],
+    /// but `None` where the row's shape has no such quantity
+    /// ([`crate::spec::tactip::label_applies`]: a sphere's or a flat's
+    /// theta, a flat's position), whatever was written there, so a set
+    /// whose generator writes them is read as one that leaves them empty.
+    pub fn target_opt(&self, i: usize, column: &str) -> Result<Option<f64>> {
+        match self.text_opt(i, "shape") {
+            Some(shape) if !crate::spec::tactip::label_applies(shape, column) => Ok(None),
+            _ => self.number_opt(i, column),
+        }
+    }
+
+    /// [`Self::target_opt`] that the calling command needs: a label a
+    /// row's shape does not have is refused as an empty one is.
+    pub fn target(&self, i: usize, column: &str) -> Result<f64> {
+        if let Some(v) = self.target_opt(i, column)? {
+            return Ok(v);
+        }
+        match (self.text_opt(i, "shape"), self.number_opt(i, column)?) {
+            (Some(shape), Some(_)) => Err(Error::dataset(
+                self.labels_path(),
+                Some(self.rows[i].line),
+                format!(
+                    "column '{column}': a {shape} has no such quantity (sensors.md), so its \
+                     value is no label, but this command needs it"
+                ),
+            )),
+            _ => Err(self.needed_but_empty(i, column)),
+        }
+    }
+
     /// Check `labels.csv` has every one of `columns` (the targets a command
     /// was asked to learn or score), naming the first it lacks and the
     /// columns it has, before any frame is read: an absent column is a
@@ -1154,6 +1185,43 @@ mod tests {
         let e = ds.number(0, "y_mm").unwrap_err().to_string();
         assert!(
             e.ends_with("labels.csv:2: column 'y_mm' is empty, but this command needs it"),
+            "{e}"
+        );
+    }
+
+    /// Another implementation of the virtual TacTip may draw and write a
+    /// sphere's theta and a flat's position: they are read as the empty
+    /// cells the project's generator leaves, by every trainer and scorer.
+    #[test]
+    fn labels_a_shape_has_not_are_no_targets_whatever_was_written() {
+        let d = tempfile::tempdir().unwrap();
+        let ds = d.path().join("ds");
+        tiny(
+            &ds,
+            &format!(
+                "{HEADER}frames/a.png,sphere,1.5,-2,37,2,3.4\nframes/a.png,flat,4,5,120,1,9\n\
+                 frames/a.png,edge,3,0,45,1,2\nframes/a.png,flat,,,,1,9\n"
+            ),
+        );
+        let ds = Dataset::open(&ds).unwrap();
+        // The sphere keeps its position, not its theta; the flat neither.
+        assert_eq!(ds.target_opt(0, "x_mm").unwrap(), Some(1.5));
+        assert_eq!(ds.target_opt(0, "theta_deg").unwrap(), None);
+        assert_eq!(ds.number_opt(0, "theta_deg").unwrap(), Some(37.0));
+        for c in ["x_mm", "y_mm", "theta_deg"] {
+            assert_eq!(ds.target_opt(1, c).unwrap(), None, "{c}");
+        }
+        assert_eq!(ds.target_opt(1, "depth_mm").unwrap(), Some(1.0));
+        assert_eq!(ds.target_opt(2, "theta_deg").unwrap(), Some(45.0));
+        // A command that needs it says why, or that it is empty.
+        let e = ds.target(0, "theta_deg").unwrap_err().to_string();
+        assert!(
+            e.ends_with("labels.csv:2: column 'theta_deg': a sphere has no such quantity (sensors.md), so its value is no label, but this command needs it"),
+            "{e}"
+        );
+        let e = ds.target(3, "x_mm").unwrap_err().to_string();
+        assert!(
+            e.ends_with("labels.csv:5: column 'x_mm' is empty, but this command needs it"),
             "{e}"
         );
     }
