@@ -82,6 +82,51 @@ fn describe(obj: &Bound<'_, PyAny>) -> String {
     }
 }
 
+/// How to make a frame of another dtype 8-bit, told by its values: a
+/// float frame of 0 to 1 (skimage's `img_as_float`, torchvision's
+/// `ToTensor`) cast as it is would become black, and a camera's 12- or
+/// 16-bit levels would wrap.
+fn conversion_hint(obj: &Bound<'_, PyAny>, arr: &Bound<'_, PyUntypedArray>) -> String {
+    let value = |m: &str| {
+        obj.call_method0(m)
+            .and_then(|v| v.extract::<f64>())
+            .ok()
+            .filter(|v| v.is_finite())
+    };
+    // Values are looked at only where they are levels (not complex, not
+    // objects), and only here, on the way to the error.
+    let kind = arr.dtype().kind();
+    // A view larger than any frame (a broadcast claiming terabytes) is not
+    // scanned.
+    let largest = MAX_SIDE * MAX_SIDE * 4;
+    if arr.len() == 0 || arr.len() > largest || !matches!(kind, b'b' | b'i' | b'u' | b'f') {
+        return "convert it to uint8 levels 0-255".into();
+    }
+    let (Some(lo), Some(hi)) = (value("min"), value("max")) else {
+        return "convert it to uint8 levels 0-255".into();
+    };
+    let short = |v: f64| match v.fract() == 0.0 {
+        true => format!("{v:.0}"),
+        false => format!("{v:.3}"),
+    };
+    let (lo_s, hi_s) = (short(lo), short(hi));
+    match kind {
+        b'b' => "a mask? frames are levels 0-255: frame.astype(numpy.uint8) * 255".into(),
+        b'f' if lo >= 0.0 && hi <= 1.0 => format!(
+            "its values lie in {lo_s}..{hi_s}, as a float image of 0 to 1 has: (frame * 255).round().astype(numpy.uint8); .astype(numpy.uint8) alone would make it black"
+        ),
+        b'f' if lo >= 0.0 && hi <= 255.0 => {
+            format!("its values lie in {lo_s}..{hi_s}: frame.round().astype(numpy.uint8)")
+        }
+        _ if lo >= 0.0 && hi <= 255.0 => {
+            format!("its values lie in {lo_s}..{hi_s}: frame.astype(numpy.uint8)")
+        }
+        _ => format!(
+            "its values lie in {lo_s}..{hi_s}, past 8 bits: scale the levels the camera fills to 0-255 (a 12-bit camera's / 16, a 16-bit one's / 257), then .round().astype(numpy.uint8)"
+        ),
+    }
+}
+
 impl<'py> FrameArg<'py> {
     /// Check `obj` (named `what` in messages) and borrow its pixels.
     pub fn new(obj: &Bound<'py, PyAny>, layout: Layout, what: &str) -> PyResult<Self> {
@@ -94,8 +139,9 @@ impl<'py> FrameArg<'py> {
         })?;
         if !arr.dtype().is_equiv_to(&numpy::dtype::<u8>(obj.py())) {
             return Err(PyTypeError::new_err(format!(
-                "{what}: expected {want}, got {} (convert with .astype(numpy.uint8) if the values are 0-255)",
-                describe(obj)
+                "{what}: expected {want}, got {} ({})",
+                describe(obj),
+                conversion_hint(obj, arr)
             )));
         }
         let shape = arr.shape().to_vec();

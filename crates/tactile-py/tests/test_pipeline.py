@@ -245,6 +245,16 @@ def test_hysteresis_and_reset(root, palpation_frames):
     [
         (np.zeros((180, 320, 3), np.float32), TypeError, "float32"),
         (np.zeros((180, 320, 3), np.uint16), TypeError, "uint16"),
+        # The conversion each dtype needs, told by its values: a float image
+        # of 0 to 1 (skimage, torchvision) cast as it is would be black.
+        (np.full((180, 320, 3), 0.5, np.float32), TypeError,
+         "its values lie in 0.500..0.500, as a float image of 0 to 1 has: (frame * 255).round().astype(numpy.uint8)"),
+        (np.full((180, 320, 3), 200.0), TypeError, "float64 array of shape (180, 320, 3) (its values lie in 200..200: frame.round()"),
+        (np.full((180, 320, 3), 4095, np.uint16), TypeError, "its values lie in 4095..4095, past 8 bits: scale the levels"),
+        (np.full((180, 320, 3), 9, np.int64), TypeError, "its values lie in 9..9: frame.astype(numpy.uint8))"),
+        (np.ones((180, 320, 3), bool), TypeError, "a mask? frames are levels 0-255"),
+        (np.zeros((180, 320, 3), np.complex64), TypeError, "(convert it to uint8 levels 0-255)"),
+        (np.broadcast_to(np.float32(0.5), (100_000, 100_000, 3)), TypeError, "(convert it to uint8 levels 0-255)"),
         (np.zeros((180, 320, 4), np.uint8), ValueError, "an RGBA frame of shape (180, 320, 4) with 57600 of its 57600 pixels not opaque"),
         (np.zeros((180, 320, 2), np.uint8), ValueError, "(180, 320, 2) (a grey frame: repeat it to RGB"),
         (np.zeros((180, 320), np.uint8), ValueError, "(180, 320) (a grey frame: repeat it to RGB"),
