@@ -121,6 +121,9 @@ fn conversion_hint(obj: &Bound<'_, PyAny>, arr: &Bound<'_, PyUntypedArray>) -> S
         _ if lo >= 0.0 && hi <= 255.0 => {
             format!("its values lie in {lo_s}..{hi_s}: frame.astype(numpy.uint8)")
         }
+        _ if lo < 0.0 => format!(
+            "its values lie in {lo_s}..{hi_s}, below 0: a normalised image? undo the normalisation to levels 0-255, then .round().astype(numpy.uint8)"
+        ),
         _ => format!(
             "its values lie in {lo_s}..{hi_s}, past 8 bits: scale the levels the camera fills to 0-255 (a 12-bit camera's / 16, a 16-bit one's / 257), then .round().astype(numpy.uint8)"
         ),

@@ -253,6 +253,8 @@ def test_hysteresis_and_reset(root, palpation_frames):
         (np.full((180, 320, 3), 4095, np.uint16), TypeError, "its values lie in 4095..4095, past 8 bits: scale the levels"),
         (np.full((180, 320, 3), 9, np.int64), TypeError, "its values lie in 9..9: frame.astype(numpy.uint8))"),
         (np.ones((180, 320, 3), bool), TypeError, "a mask? frames are levels 0-255"),
+        (np.linspace(-2.1, 2.6, 180 * 320 * 3, dtype=np.float32).reshape(180, 320, 3), TypeError,
+         "its values lie in -2.100..2.600, below 0: a normalised image? undo the normalisation"),
         (np.zeros((180, 320, 3), np.complex64), TypeError, "(convert it to uint8 levels 0-255)"),
         (np.broadcast_to(np.float32(0.5), (100_000, 100_000, 3)), TypeError, "(convert it to uint8 levels 0-255)"),
         (np.zeros((180, 320, 4), np.uint8), ValueError, "an RGBA frame of shape (180, 320, 4) with 57600 of its 57600 pixels not opaque"),
