@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import signal
@@ -122,9 +123,10 @@ def write_png(path: Path, pixels: np.ndarray) -> None:
     tactip_independent().write_png(path, pixels)
 
 
+@functools.cache
 def tactip_independent():
     """`scripts/tactip_independent.py`, the virtual TacTip written from the
-    spec alone."""
+    spec alone, loaded once (every `write_png` call uses it)."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("tactip_independent", ROOT / "scripts" / "tactip_independent.py")
