@@ -176,23 +176,23 @@ mod tests {
         let none = binary_scores(&[false, false], &[false, false]);
         assert_eq!((none.accuracy, none.precision, none.f1), (1.0, 0.0, 0.0));
         assert_eq!(
-            none.rates_text(4),
+            none.rates_text(4, "a tendon"),
             "accuracy 1.0000, precision -, recall -, F1 - (no frame has a tendon, and none was called one)"
         );
         assert_eq!(
-            binary_scores(&[true, false], &[false, false]).rates_text(2),
+            binary_scores(&[true, false], &[false, false]).rates_text(2, "a tendon"),
             "accuracy 0.50, precision 0.00, recall -, F1 0.00 (no frame has a tendon: recall has nothing to count)"
         );
         assert_eq!(
-            binary_scores(&[false, false], &[true, false]).rates_text(2),
+            binary_scores(&[false, false], &[true, false]).rates_text(2, "a tendon"),
             "accuracy 0.50, precision -, recall 0.00, F1 0.00 (no frame was called a tendon: precision has nothing to count)"
         );
         assert_eq!(
-            binary_scores(&[], &[]).rates_text(2),
+            binary_scores(&[], &[]).rates_text(2, "a tendon"),
             "accuracy -, precision -, recall -, F1 -"
         );
         assert_eq!(
-            s.rates_text(3),
+            s.rates_text(3, "a tendon"),
             "accuracy 0.600, precision 0.667, recall 0.667, F1 0.667"
         );
     }
@@ -266,7 +266,8 @@ impl BinaryScores {
     /// positive frame, F1 with neither, accuracy of no frame), followed by
     /// why: a set of negatives scored perfectly reads as that, not as a
     /// precision, recall and F1 of 0. The JSON keeps 0 there, as documented.
-    pub fn rates_text(&self, digits: usize) -> String {
+    /// `positive` names what a positive frame shows ("a tendon").
+    pub fn rates_text(&self, digits: usize, positive: &str) -> String {
         let (tp, fp, fneg) = (self.true_pos, self.false_pos, self.false_neg);
         let rate = |v: f64, defined: bool| match defined {
             true => format!("{v:.digits$}"),
@@ -280,12 +281,14 @@ impl BinaryScores {
             rate(self.f1, tp + fp + fneg > 0),
         );
         if self.frames > 0 && tp + fneg == 0 {
-            text.push_str(match fp {
-                0 => " (no frame has a tendon, and none was called one)",
-                _ => " (no frame has a tendon: recall has nothing to count)",
+            text.push_str(&match fp {
+                0 => format!(" (no frame has {positive}, and none was called one)"),
+                _ => format!(" (no frame has {positive}: recall has nothing to count)"),
             });
         } else if self.frames > 0 && tp + fp == 0 {
-            text.push_str(" (no frame was called a tendon: precision has nothing to count)");
+            text.push_str(&format!(
+                " (no frame was called {positive}: precision has nothing to count)"
+            ));
         }
         text
     }

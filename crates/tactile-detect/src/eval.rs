@@ -65,7 +65,7 @@ impl DetectorScores {
                 "{} frames ({} with a tendon): {}",
                 s.frames,
                 s.true_pos + s.false_neg,
-                s.rates_text(4)
+                s.rates_text(4, "a tendon")
             ),
             format!(
                 "confusion: {} true positive, {} false positive, {} true negative, {} false negative",
