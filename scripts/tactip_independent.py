@@ -15,8 +15,11 @@ too (drawn as ranges, as the spec lists them).
 import csv
 import json
 import os
+import shutil
+import signal
 import struct
 import sys
+import tempfile
 import zlib
 
 import numpy as np
@@ -149,6 +152,28 @@ def write_png(path, pixels):
 
 
 def main(out, count, seed):
+    """Write `count` frames and their labels as a dataset at `out`: made in
+    a staging folder beside it and renamed at the end, so an error or an
+    interrupt leaves nothing; an existing `out` is refused."""
+    if os.path.lexists(out):
+        raise FileExistsError(f"{out}: already exists (left alone); choose a new folder")
+    if not 1 <= count <= 10_000_000:
+        raise ValueError(f"count: must be 1 to 10000000 frames, got {count}")
+    if seed < 0:
+        raise ValueError(f"seed: must be 0 or more, got {seed}")
+    parent = os.path.dirname(os.path.abspath(out))
+    if not os.path.isdir(parent):
+        raise FileNotFoundError(f"{out}: its folder {parent} does not exist")
+    staging = tempfile.mkdtemp(prefix=".tactip-independent-", dir=parent)
+    try:
+        write_dataset(staging, count, seed)
+        os.rename(staging, out)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+
+
+def write_dataset(out, count, seed):
     rng = np.random.default_rng(seed)
     os.makedirs(os.path.join(out, "frames"))
     rows = []
@@ -166,11 +191,26 @@ def main(out, count, seed):
         w = csv.writer(f)
         w.writerow(["file", "shape", "x_mm", "y_mm", "theta_deg", "depth_mm", "force_n"])
         w.writerows(rows)
-    json.dump({"format": "tactile-dataset/1", "kind": "tactip", "sensor_spec": "virtual-tactip/1",
-               "width": SIZE, "height": SIZE, "generator": "tactip_indep.py (numpy, from sensors.md)",
-               "seed": seed, "count": count}, open(os.path.join(out, "manifest.json"), "w"), indent=1)
+    with open(os.path.join(out, "manifest.json"), "w") as f:
+        json.dump({"format": "tactile-dataset/1", "kind": "tactip", "sensor_spec": "virtual-tactip/1",
+                   "width": SIZE, "height": SIZE,
+                   "generator": "scripts/tactip_independent.py (numpy, from sensors.md)",
+                   "seed": seed, "count": count}, f, indent=1)
+
 
 if __name__ == "__main__":
+    usage = "usage: python scripts/tactip_independent.py OUT COUNT SEED"
     if len(sys.argv) != 4:
-        sys.exit("usage: python scripts/tactip_independent.py OUT COUNT SEED")
-    main(sys.argv[1], int(sys.argv[2]), int(sys.argv[3]))
+        sys.exit(usage)
+    try:
+        count, seed = int(sys.argv[2]), int(sys.argv[3])
+    except ValueError:
+        sys.exit(f"COUNT and SEED are whole numbers, got {sys.argv[2]!r} and {sys.argv[3]!r}\n{usage}")
+    # SIGTERM ends the run as Ctrl-C does: the staging folder removed.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    try:
+        main(sys.argv[1], count, seed)
+    except (OSError, ValueError) as e:
+        sys.exit(f"error: {e}")
+    except KeyboardInterrupt:
+        sys.exit(130)
