@@ -152,21 +152,27 @@ def write_png(path, pixels):
 
 
 def main(out, count, seed):
-    """Write `count` frames and their labels as a dataset at `out`: made in
-    a staging folder beside it and renamed at the end, so an error or an
-    interrupt leaves nothing; an existing `out` is refused."""
-    if os.path.lexists(out):
-        raise FileExistsError(f"{out}: already exists (left alone); choose a new folder")
+    """Write `count` frames and their labels as a dataset at `out` (see
+    `staged`)."""
     if not 1 <= count <= 10_000_000:
         raise ValueError(f"count: must be 1 to 10000000 frames, got {count}")
+    staged(out, seed, "tactip", lambda folder: write_dataset(folder, count, seed))
+
+
+def staged(out, seed, name, write):
+    """Run `write(folder)` in a staging folder beside `out` and rename it to
+    `out` at the end, so an error or an interrupt leaves nothing; an
+    existing `out` is refused."""
+    if os.path.lexists(out):
+        raise FileExistsError(f"{out}: already exists (left alone); choose a new folder")
     if seed < 0:
         raise ValueError(f"seed: must be 0 or more, got {seed}")
     parent = os.path.dirname(os.path.abspath(out))
     if not os.path.isdir(parent):
         raise FileNotFoundError(f"{out}: its folder {parent} does not exist")
-    staging = tempfile.mkdtemp(prefix=".tactip-independent-", dir=parent)
+    staging = tempfile.mkdtemp(prefix=f".{name}-independent-", dir=parent)
     try:
-        write_dataset(staging, count, seed)
+        write(staging)
         os.rename(staging, out)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
@@ -198,8 +204,9 @@ def write_dataset(out, count, seed):
                    "seed": seed, "count": count}, f, indent=1)
 
 
-if __name__ == "__main__":
-    usage = "usage: python scripts/tactip_independent.py OUT COUNT SEED"
+def cli(usage, main):
+    """`main(OUT, COUNT, SEED)` from the command line: bad arguments and
+    errors in one line, SIGTERM and Ctrl-C leaving nothing."""
     if len(sys.argv) != 4:
         sys.exit(usage)
     try:
@@ -214,3 +221,7 @@ if __name__ == "__main__":
         sys.exit(f"error: {e}")
     except KeyboardInterrupt:
         sys.exit(130)
+
+
+if __name__ == "__main__":
+    cli("usage: python scripts/tactip_independent.py OUT COUNT SEED", main)

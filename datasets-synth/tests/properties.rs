@@ -401,3 +401,44 @@ fn the_alternate_renderer_draws_the_same_scene_with_the_same_labels() {
             .contains("reference, alternate")
     );
 }
+
+#[test]
+fn tendons_just_outside_the_window_are_tendons_by_the_spec_labels() {
+    // Out of view at the default margin (1.6-3.6 w): no ridge over the
+    // mask's threshold inside the window, so a negative. Nearer (0-1 w),
+    // its flank reaches over the rim and the spec's rule makes it a tendon
+    // whose mask is a band along the rim, away from the centre.
+    let outside = |margin| VisuotactileConfig {
+        press_mm: Range::fixed(3.0),
+        out_of_view_fraction: 1.0,
+        out_of_view_margin_w: margin,
+        frames_per_sequence: 1,
+        ..small_visuo()
+    };
+    let (far, near) = (outside(Range::new(1.6, 3.6)), outside(Range::new(0.0, 1.0)));
+    assert!(near.validate().is_ok());
+    for seq in 0..12 {
+        let (_, f) = visuotactile::sample(&far, 7, seq, 0);
+        assert!(
+            !f.tendon && f.mask.iter().all(|&m| m == 0),
+            "sequence {seq}"
+        );
+        assert!(f.ridge_mm >= 0.03);
+        let (_, f) = visuotactile::sample(&near, 7, seq, 0);
+        assert!(f.tendon, "sequence {seq}: the ridge reaches over the rim");
+        let (w, h) = (f.width as f64, f.height as f64);
+        for (i, _) in f.mask.iter().enumerate().filter(|(_, m)| **m > 0) {
+            let (u, v) = (
+                (i % f.width) as f64 - (w - 1.0) / 2.0,
+                (i / f.width) as f64 - (h - 1.0) / 2.0,
+            );
+            let r = (u / (w / 2.0)).powi(2) + (v / (h / 2.0)).powi(2);
+            assert!(r > 0.09, "sequence {seq}: mask pixel {i} near the centre");
+        }
+    }
+    let bad = outside(Range::new(-1.0, 1.0))
+        .validate()
+        .unwrap_err()
+        .to_string();
+    assert!(bad.contains("out_of_view_margin_w"), "{bad}");
+}

@@ -102,8 +102,19 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
         let Value::Object(defaults) = defaults else {
             return Err(Error::Config("options must serialise as an object".into()));
         };
-        // serde_json's map is sorted: the names come out in order.
-        let known = defaults.keys().cloned().collect::<Vec<_>>().join(", ");
+        // Every flag is an option, also one its type leaves out of the
+        // serialised defaults (`skip_serializing_if`: a manifest that stays
+        // as it was while the option is at its default).
+        let names: std::collections::BTreeSet<String> = defaults
+            .keys()
+            .cloned()
+            .chain(
+                Self::augment_args(clap::Command::new("options"))
+                    .get_arguments()
+                    .map(|a| a.get_id().to_string()),
+            )
+            .collect();
+        let known = names.iter().cloned().collect::<Vec<_>>().join(", ");
         let file = match config {
             Some(p) => match read_options_file(p)? {
                 Value::Object(m) => Some((p, m)),
@@ -125,7 +136,7 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
             .collect();
         // Unknown names first, in every layer, then the values.
         for (at, layer) in &layers {
-            if let Some(k) = layer.keys().find(|k| !defaults.contains_key(*k)) {
+            if let Some(k) = layer.keys().find(|k| !names.contains(*k)) {
                 return Err(Error::Config(format!(
                     "{at}unknown option '{k}' (known: {known})"
                 )));

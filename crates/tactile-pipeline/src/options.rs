@@ -138,6 +138,14 @@ pub struct Trainer {
     pub native_returns: &'static str,
     docs: fn() -> tactile_core::Result<Vec<OptionDoc>>,
     params: fn() -> tactile_core::Result<Vec<String>>,
+    resolve: fn(&serde_json::Map<String, serde_json::Value>) -> tactile_core::Result<()>,
+}
+
+/// Whether `T` takes these keywords (name -> JSON value), and if not why.
+fn takes<T: Options>(
+    keywords: &serde_json::Map<String, serde_json::Value>,
+) -> tactile_core::Result<()> {
+    T::with_overrides(keywords).map(|_| ())
 }
 
 impl Trainer {
@@ -157,7 +165,14 @@ impl Trainer {
             native_returns: "Dict[str, Any]",
             docs: T::docs,
             params: T::python_params,
+            resolve: takes::<T>,
         }
+    }
+
+    /// Whether these keywords (name -> JSON value, as Python passes them)
+    /// are options it takes with values they take.
+    pub fn takes(&self, keywords: &serde_json::Map<String, serde_json::Value>) -> Result<()> {
+        Ok((self.resolve)(keywords)?)
     }
 
     /// Every option with its help and default, in flag order.

@@ -120,16 +120,17 @@ def write_png(path: Path, pixels: np.ndarray) -> None:
     """An 8-bit grey `(H, W)` or RGB `(H, W, 3)` PNG, written with the
     standard library alone (the tests install no image library): the
     independent TacTip's writer."""
-    tactip_independent().write_png(path, pixels)
+    script("tactip_independent").write_png(path, pixels)
 
 
 @functools.cache
-def tactip_independent():
-    """`scripts/tactip_independent.py`, the virtual TacTip written from the
-    spec alone, loaded once (every `write_png` call uses it)."""
+def script(name: str):
+    """`scripts/<name>.py` (such as `tactip_independent`, the virtual TacTip
+    written from the spec alone), loaded once (every `write_png` call uses
+    that one)."""
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("tactip_independent", ROOT / "scripts" / "tactip_independent.py")
+    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

@@ -153,6 +153,14 @@ pub struct VisuotactileConfig {
     /// Fraction of sequences whose tendon lies outside the window.
     #[arg(long, default_value_t = VisuotactileConfig::default().out_of_view_fraction)]
     pub out_of_view_fraction: f64,
+    /// How far an out-of-view tendon's centre line lies outside the window,
+    /// in ridge widths `w`. Below 1.56 its ridge reaches over the rim above
+    /// the mask's threshold, and the spec's labels make the frame a tendon
+    /// (the default keeps out-of-view frames negatives). Left out of the
+    /// manifest at its default, which thus stays byte-identical.
+    #[serde(skip_serializing_if = "is_default_margin")]
+    #[arg(long, default_value_t = VisuotactileConfig::default().out_of_view_margin_w)]
+    pub out_of_view_margin_w: Range,
     /// Exposure factor `1 + e`, `e` drawn per frame from this range.
     #[arg(long, default_value_t = VisuotactileConfig::default().exposure_jitter)]
     pub exposure_jitter: Range,
@@ -210,6 +218,14 @@ impl std::str::FromStr for Renderer {
     }
 }
 
+/// Out-of-view centre lines 1.6 to 3.6 ridge widths outside the window:
+/// no pixel of it reaches the mask's threshold.
+const DEFAULT_MARGIN_W: Range = Range { min: 1.6, max: 3.6 };
+
+fn is_default_margin(r: &Range) -> bool {
+    *r == DEFAULT_MARGIN_W
+}
+
 impl Default for VisuotactileConfig {
     fn default() -> Self {
         Self {
@@ -222,6 +238,7 @@ impl Default for VisuotactileConfig {
             press_mm: Range::new(0.0, 4.0),
             centre_fraction: 0.3,
             out_of_view_fraction: 0.15,
+            out_of_view_margin_w: DEFAULT_MARGIN_W,
             exposure_jitter: Range::new(-0.1, 0.1),
             noise_sigma: Range::new(1.0, 3.0),
             frames_per_sequence: 30,
@@ -258,6 +275,8 @@ impl VisuotactileConfig {
         self.press_mm.check("press_mm", 0.0, 10.0)?;
         Range::fixed(self.centre_fraction).check("centre_fraction", 0.0, 1.0)?;
         Range::fixed(self.out_of_view_fraction).check("out_of_view_fraction", 0.0, 1.0)?;
+        self.out_of_view_margin_w
+            .check("out_of_view_margin_w", 0.0, 100.0)?;
         self.exposure_jitter.check("exposure_jitter", -0.9, 0.9)?;
         self.noise_sigma.check("noise_sigma", 0.0, 100.0)?;
         if self.frames_per_sequence == 0 || self.frames_per_sequence > MAX_FRAMES_PER_SEQUENCE {

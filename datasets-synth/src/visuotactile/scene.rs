@@ -228,12 +228,16 @@ impl SequenceScene {
             };
             (line, path)
         } else {
-            // A straight tendon beyond the window: its mask-level ridge
-            // (|s| < 1.56 w) never reaches the ellipse.
+            // A straight tendon beyond the window: at the default margin
+            // its mask-level ridge (|s| < 1.56 w) never reaches the ellipse.
             let (a, b) = camera.window_radii();
             let k = NOMINAL_DEPTH_MM / camera.fx;
             let support = libm::hypot(a * k * radial.0, b * k * radial.1);
-            let anchor = scale(radial, support + (1.6 + 2.0 * margin_u) * w);
+            let margin = config.out_of_view_margin_w;
+            let anchor = scale(
+                radial,
+                support + (margin.min + (margin.max - margin.min) * margin_u) * w,
+            );
             (CentreLine::straight(anchor, tangent), TendonPath::Straight)
         };
         Self {

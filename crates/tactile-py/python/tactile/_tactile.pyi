@@ -567,6 +567,7 @@ def synth_visuotactile(
     press_mm: Tuple[float, float] = (0.0, 4.0),
     centre_fraction: float = 0.3,
     out_of_view_fraction: float = 0.15,
+    out_of_view_margin_w: Optional[Tuple[float, float]] = None,
     exposure_jitter: Tuple[float, float] = (-0.1, 0.1),
     noise_sigma: Tuple[float, float] = (1.0, 3.0),
     frames_per_sequence: int = 30,

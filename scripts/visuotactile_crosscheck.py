@@ -1,0 +1,121 @@
+"""Paper B's shipped models on two implementations of the virtual
+visuo-tactile sensor: the project's generator (`tactile synth
+visuotactile`) and `scripts/visuotactile_independent.py`, written from
+`sensors.md` alone. Writes a Markdown page (the table in `docs/synth.md`).
+
+    python scripts/visuotactile_crosscheck.py OUT.md [SEQUENCES SEED]
+
+Each set has SEQUENCES palpation videos of 12 frames (default 50, seed 21);
+the independent implementation gives two, the second with every tendon's
+centre line crossing the window.
+The detector's frames are also scored by kind (from the labels), so a kind
+of frame one implementation makes and the other does not is seen apart.
+Needs the `tactile` package (`pip install crates/tactile-py`).
+"""
+import csv
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import tactile
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "scripts"))
+import visuotactile_independent  # noqa: E402
+
+FRAMES = visuotactile_independent.FRAMES
+
+
+def kind(row):
+    """What a frame shows, from its labels (the independent set's
+    `outside_window_w` column says where its centre line is)."""
+    if float(row["press_mm"] or 0) <= 0:
+        return "no contact"
+    if row["tendon"] == "1":
+        if row.get("outside_window_w"):
+            return "tendon whose centre line is outside the window (its ridge reaches in)"
+        return "tendon in view"
+    if float(row["ridge_mm"]) >= 0.03:
+        return "centre line outside the window, no ridge over the mask's threshold in it"
+    return "touching, ridge under 0.03 mm"
+
+
+def by_kind(data, frames_csv):
+    """Frames and accuracy of the detector per kind of frame."""
+    labels = {r["file"]: r for r in csv.DictReader(open(data / "labels.csv"))}
+    counts = {}
+    for r in csv.DictReader(open(frames_csv)):
+        k = kind(labels[r["file"]])
+        n, right = counts.get(k, (0, 0))
+        counts[k] = (n + 1, right + (r["predicted"] == r["tendon"]))
+    return counts
+
+
+def score(data, tmp):
+    frames_csv = tmp / f"{data.name}-frames.csv"
+    det = tactile.eval.detector(ROOT / "models" / "detector", data, frames=str(frames_csv))
+    seg = tactile.eval.segmenter(ROOT / "models" / "segmenter", data)
+    dep = tactile.eval.depth(ROOT / "models" / "depth", data)
+    return det, seg, dep, by_kind(data, frames_csv)
+
+
+def page(sequences, seed, scores):
+    names = list(scores)
+    lines = [
+        f"Paper B's shipped models on {sequences} palpation videos of {FRAMES} frames (640 x 360, seed {seed}) "
+        "from each implementation of the virtual visuo-tactile sensor. "
+        f"Made by `python scripts/visuotactile_crosscheck.py OUT.md {sequences} {seed}`.",
+        "",
+        "| | " + " | ".join(names) + " |",
+        "|---|" + "---|" * len(names),
+    ]
+
+    def row(label, f):
+        lines.append(f"| {label} | " + " | ".join(f(*scores[n]) for n in names) + " |")
+
+    row("detector accuracy (frames with a tendon)",
+        lambda d, s, p, k: f"{d['all']['accuracy']:.4f} ({d['all']['true_pos'] + d['all']['false_neg']})")
+    row("detector recall / precision",
+        lambda d, s, p, k: f"{d['all']['recall']:.4f} / {d['all']['precision']:.4f}")
+    row("segmenter mean IoU, all paths",
+        lambda d, s, p, k: f"{s['paths'][0]['mean_iou']:.4f}")
+    row("direction error median / p90 (deg)",
+        lambda d, s, p, k: f"{s['paths'][0]['direction']['median_deg']:.2f} / {s['paths'][0]['direction']['p90_deg']:.2f}")
+    row("depth MAE in the window / over the tendon (mm)",
+        lambda d, s, p, k: f"{p['scores']['mae_mm']:.4f} / {p['scores']['mae_tendon_mm']:.4f}")
+    kinds = sorted({k for n in names for k in scores[n][3]})
+    lines += ["", "The detector by kind of frame (frames, accuracy):", "",
+              "| kind of frame | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
+    for k in kinds:
+        cells = []
+        for n in names:
+            total, right = scores[n][3].get(k, (0, 0))
+            cells.append(f"{total}, {right / total:.4f}" if total else "-")
+        lines.append(f"| {k} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main(out, sequences, seed):
+    out = Path(out)
+    if not out.parent.is_dir():
+        raise FileNotFoundError(f"{out}: its folder {out.parent} does not exist")
+    with tempfile.TemporaryDirectory(prefix=".crosscheck-", dir=out.parent) as t:
+        tmp = Path(t)
+        own = tactile.synth.visuotactile(sequences=sequences, frames_per_sequence=FRAMES, seed=seed,
+                                         out=tmp / "own", progress=False)
+        ind, in_view = tmp / "independent", tmp / "independent-in-view"
+        visuotactile_independent.main(str(ind), sequences, seed)
+        visuotactile_independent.main(str(in_view), sequences, seed, out_of_view=0.0)
+        scores = {"`tactile synth visuotactile`": score(Path(own), tmp),
+                  "`scripts/visuotactile_independent.py`": score(ind, tmp),
+                  "the same, every tendon in view": score(in_view, tmp)}
+        staged = tmp / "page.md"
+        staged.write_text(page(sequences, seed, scores))
+        os.replace(staged, out)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) not in (2, 4):
+        sys.exit("usage: python scripts/visuotactile_crosscheck.py OUT.md [SEQUENCES SEED]")
+    main(sys.argv[1], *(int(a) for a in sys.argv[2:]) if len(sys.argv) == 4 else (50, 21))
