@@ -4,15 +4,20 @@ visuotactile`) and `scripts/visuotactile_independent.py`, written from
 `sensors.md` alone. Writes a Markdown page (the table in `docs/synth.md`).
 
     python scripts/visuotactile_crosscheck.py OUT.md [SEQUENCES SEED]
+    python scripts/visuotactile_crosscheck.py OUT.md --detectors D... --sets S...
 
 Each set has SEQUENCES palpation videos of 12 frames (default 50, seed 21);
 the independent implementation gives two, the second with every tendon's
 centre line crossing the window.
 The detector's frames are also scored by kind (from the labels), so a kind
 of frame one implementation makes and the other does not is seen apart.
+With `--detectors`, the page is instead those detectors' accuracy by kind
+on each of the `--sets`.
 Needs the `tactile` package (`pip install crates/tactile-py`).
 """
+import argparse
 import csv
+import json
 import os
 import sys
 import tempfile
@@ -27,15 +32,17 @@ import visuotactile_independent  # noqa: E402
 FRAMES = visuotactile_independent.FRAMES
 
 
-def kind(row):
+RIM = "tendon whose centre line is outside the window (its ridge reaches in)"
+
+
+def kind(row, all_out_of_view=False):
     """What a frame shows, from its labels (the independent set's
-    `outside_window_w` column says where its centre line is)."""
+    `outside_window_w` column says where its centre line is; in a set of
+    this generator's made with `out_of_view_fraction` 1, every one is)."""
     if float(row["press_mm"] or 0) <= 0:
         return "no contact"
     if row["tendon"] == "1":
-        if row.get("outside_window_w"):
-            return "tendon whose centre line is outside the window (its ridge reaches in)"
-        return "tendon in view"
+        return RIM if all_out_of_view or row.get("outside_window_w") else "tendon in view"
     if float(row["ridge_mm"]) >= 0.03:
         return "centre line outside the window, no ridge over the mask's threshold in it"
     return "touching, ridge under 0.03 mm"
@@ -44,17 +51,42 @@ def kind(row):
 def by_kind(data, frames_csv):
     """Frames and accuracy of the detector per kind of frame."""
     labels = {r["file"]: r for r in csv.DictReader(open(data / "labels.csv"))}
+    config = json.loads((data / "manifest.json").read_text()).get("config", {})
+    all_out = config.get("out_of_view_fraction") == 1.0
     counts = {}
     for r in csv.DictReader(open(frames_csv)):
-        k = kind(labels[r["file"]])
+        k = kind(labels[r["file"]], all_out)
         n, right = counts.get(k, (0, 0))
         counts[k] = (n + 1, right + (r["predicted"] == r["tendon"]))
     return counts
 
 
-def score(data, tmp):
+def kinds_page(detectors, sets, tmp):
+    """The detectors' accuracy by kind of frame on each set, as Markdown."""
+    lines = ["Each detector's accuracy by kind of frame (frames) on each set. Made by "
+             f"`python scripts/visuotactile_crosscheck.py OUT.md --detectors {' '.join(d.name for d in detectors)} "
+             f"--sets {' '.join(s.name for s in sets)}` (folder names; `just detector-near-rim`).", "",
+             "| detector | set | accuracy | " + " | ".join(KINDS) + " |", "|---|---|---|" + "---|" * len(KINDS)]
+    for d in detectors:
+        for s in sets:
+            frames_csv = tmp / f"{d.name}-{s.name}.csv"
+            acc = tactile.eval.detector(d, s, frames=str(frames_csv))["all"]["accuracy"]
+            k = by_kind(s, frames_csv)
+            cells = [f"{k[c][1] / k[c][0]:.3f} ({k[c][0]})" if c in k else "-" for c in KINDS]
+            lines.append(f"| {d.name} | {s.name} | {acc:.4f} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+KINDS = ["no contact", "tendon in view", RIM,
+         "centre line outside the window, no ridge over the mask's threshold in it",
+         "touching, ridge under 0.03 mm"]
+
+
+def score(data, tmp, detector=ROOT / "models" / "detector"):
+    """The detector's (by kind of frame), segmenter's and depth network's
+    scores on `data`."""
     frames_csv = tmp / f"{data.name}-frames.csv"
-    det = tactile.eval.detector(ROOT / "models" / "detector", data, frames=str(frames_csv))
+    det = tactile.eval.detector(detector, data, frames=str(frames_csv))
     seg = tactile.eval.segmenter(ROOT / "models" / "segmenter", data)
     dep = tactile.eval.depth(ROOT / "models" / "depth", data)
     return det, seg, dep, by_kind(data, frames_csv)
@@ -96,12 +128,21 @@ def page(sequences, seed, scores):
     return "\n".join(lines) + "\n"
 
 
-def main(out, sequences, seed):
+def write_page(out, make):
+    """`make(tmp)`'s Markdown written to `out` through a staged file, with
+    a scratch folder beside it that is removed at the end."""
     out = Path(out)
     if not out.parent.is_dir():
         raise FileNotFoundError(f"{out}: its folder {out.parent} does not exist")
     with tempfile.TemporaryDirectory(prefix=".crosscheck-", dir=out.parent) as t:
         tmp = Path(t)
+        staged = tmp / "page.md"
+        staged.write_text(make(tmp))
+        os.replace(staged, out)
+
+
+def main(out, sequences, seed):
+    def make(tmp):
         own = tactile.synth.visuotactile(sequences=sequences, frames_per_sequence=FRAMES, seed=seed,
                                          out=tmp / "own", progress=False)
         ind, in_view = tmp / "independent", tmp / "independent-in-view"
@@ -110,12 +151,28 @@ def main(out, sequences, seed):
         scores = {"`tactile synth visuotactile`": score(Path(own), tmp),
                   "`scripts/visuotactile_independent.py`": score(ind, tmp),
                   "the same, every tendon in view": score(in_view, tmp)}
-        staged = tmp / "page.md"
-        staged.write_text(page(sequences, seed, scores))
-        os.replace(staged, out)
+        return page(sequences, seed, scores)
+
+    write_page(out, make)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) not in (2, 4):
-        sys.exit("usage: python scripts/visuotactile_crosscheck.py OUT.md [SEQUENCES SEED]")
-    main(sys.argv[1], *(int(a) for a in sys.argv[2:]) if len(sys.argv) == 4 else (50, 21))
+    cli = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    cli.add_argument("out", help="the Markdown page to write")
+    cli.add_argument("sequences", nargs="?", type=int, default=50)
+    cli.add_argument("seed", nargs="?", type=int, default=21)
+    cli.add_argument("--detectors", nargs="+", type=Path,
+                     help="instead: these detectors' accuracy by kind of frame on --sets")
+    cli.add_argument("--sets", nargs="+", type=Path)
+    a = cli.parse_args()
+    if a.detectors and not a.sets:
+        cli.error("--detectors needs --sets")
+    try:
+        if a.detectors:
+            write_page(a.out, lambda tmp: kinds_page(a.detectors, a.sets, tmp))
+        else:
+            main(a.out, a.sequences, a.seed)
+    except (OSError, ValueError) as e:
+        sys.exit(f"error: {e}")
+    except KeyboardInterrupt:
+        sys.exit(130)
