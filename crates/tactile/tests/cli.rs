@@ -1756,6 +1756,40 @@ fn unwritable_folder(tmp: &Path) -> Option<std::path::PathBuf> {
     (sys.join("kernel").is_dir() && !writable(sys)).then(|| sys.to_path_buf())
 }
 
+/// `run --out` writes JSON Lines (or MCAP for `.mcap`); a name that says
+/// another format (a CSV a spreadsheet would open, a compressed bag) is
+/// refused before any work, nothing written. Before, JSON Lines were
+/// written under it.
+#[test]
+fn run_refuses_records_named_as_another_format() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let samples = root.join("samples/palpation");
+    let models = root.join("models");
+    for (name, says) in [
+        ("records.csv", "named as a table"),
+        ("Records.TSV", "named as a table"),
+        ("run.mcap.zstd", "named as a compressed bag"),
+    ] {
+        let out = tmp.path().join(name);
+        let (ok, msg) = tactile(&[
+            "run",
+            "--data",
+            samples.to_str().unwrap(),
+            "--models",
+            models.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            !ok && msg.contains(says) && msg.contains(name),
+            "{name}: {msg}"
+        );
+        assert!(!out.exists(), "{name} was written");
+    }
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+}
+
 #[test]
 fn run_refuses_an_unwritable_output_folder_before_any_work() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
