@@ -308,6 +308,12 @@ pub fn evaluate_folder(
     for out in options.frames.iter().chain(&options.reliability) {
         tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
+    if let Some(frames) = &options.frames {
+        tactile_core::dataset::refuse_misnamed_results(
+            frames,
+            tactile_core::dataset::ResultsFormat::Csv,
+        )?;
+    }
     if let (Some(frames), Some(plot)) = (&options.frames, &options.reliability) {
         tactile_core::dataset::refuse_same_output(frames, plot)?;
     }

@@ -112,7 +112,7 @@ def test_run_writes_what_tactile_run_writes(tactile_bin, root, tmp_path):
     with pytest.raises(ValueError, match="000003.png"):
         tactile.run(root / "samples/palpation", models=root / "models",
                     out=root / "samples/palpation/000003.png")
-    with pytest.raises(ValueError, match=r"records\.csv: named as a table, but a run writes JSON Lines"):
+    with pytest.raises(ValueError, match=r"records\.csv: named as a table, but this writes JSON Lines"):
         tactile.run(root / "samples/palpation", models=root / "models", out=tmp_path / "records.csv")
     with pytest.raises(ValueError, match="cli-render: already holds files"):
         tactile.run(root / "samples/palpation", models=tmp_path / "no-models", render=cli_render)

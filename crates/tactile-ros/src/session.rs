@@ -75,27 +75,6 @@ impl RunRequest {
     }
 }
 
-/// A records file named as something a run does not write (a table, a
-/// compressed bag), which it would fill with JSON Lines under that name:
-/// refused by its name before any work.
-fn check_records_name(p: &Path) -> Result<()> {
-    let name = p
-        .file_name()
-        .map(|n| n.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    let wrong = if name.ends_with(".csv") || name.ends_with(".tsv") {
-        "named as a table, but a run writes JSON Lines (one JSON record per frame): \
-         name it .jsonl (pandas reads it with read_json(path, lines=True)), or .mcap \
-         for ROS 2 messages"
-    } else if tactile_core::bag::is_bag_input_file(p) && !tactile_core::bag::is_bag_file(p) {
-        "named as a compressed bag, but a run writes its MCAP uncompressed: name it \
-         .mcap (or .jsonl for JSON Lines)"
-    } else {
-        return Ok(());
-    };
-    Err(tactile_core::Error::Config(format!("{}: {wrong}", p.display())).into())
-}
-
 /// A run whose source, outputs and models are open and checked, ready to
 /// go over its frames.
 pub struct RunSession {
@@ -155,10 +134,10 @@ impl RunSession {
             .out
             .as_deref()
             .filter(|_| !request.records_to_stdout());
-        if let Some(p) = out {
-            check_records_name(p)?;
-        }
         let mcap_out = out.filter(|p| tactile_core::bag::is_bag_file(p));
+        if let Some(p) = out.filter(|_| mcap_out.is_none()) {
+            dataset::refuse_misnamed_results(p, dataset::ResultsFormat::JsonLines)?;
+        }
         if request.with_frames && mcap_out.is_none() && request.view.is_none() {
             return Err(tactile_core::Error::Config(
                 "with_frames: the input frames go to an .mcap out or to the live view, \

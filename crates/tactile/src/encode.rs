@@ -28,6 +28,10 @@ pub(crate) struct EncodeArgs {
 pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
     tactile_core::dataset::check_output_file(&a.out, &[&ds])?;
+    tactile_core::dataset::refuse_misnamed_results(
+        &a.out,
+        tactile_core::dataset::ResultsFormat::Csv,
+    )?;
     let mut enc = TactipEncoder::load(&a.model, a.device.runtime(), 0)?;
     if let Some(w) =
         tactile_pipeline::tactip::dataset_frame_warning(&ds, [&enc.artifact.preprocess])

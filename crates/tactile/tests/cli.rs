@@ -1756,38 +1756,78 @@ fn unwritable_folder(tmp: &Path) -> Option<std::path::PathBuf> {
     (sys.join("kernel").is_dir() && !writable(sys)).then(|| sys.to_path_buf())
 }
 
-/// `run --out` writes JSON Lines (or MCAP for `.mcap`); a name that says
-/// another format (a CSV a spreadsheet would open, a compressed bag) is
-/// refused before any work, nothing written. Before, JSON Lines were
-/// written under it.
+/// A results file named as another format than the command writes (a
+/// spreadsheet would open a `.csv`, `pandas.read_json` a `.jsonl`) is
+/// refused before any work, nothing written: `run` writes JSON Lines (or
+/// MCAP for `.mcap`), `predict`, `encode`, `eval detector --frames` and
+/// `synth ideal-detector` write CSV. Before, each wrote its format under
+/// the name.
 #[test]
-fn run_refuses_records_named_as_another_format() {
+fn results_named_as_another_format_are_refused_before_any_work() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let tmp = tempfile::tempdir().unwrap();
-    let samples = root.join("samples/palpation");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let (palpation, tactip) = (
+        s(&root.join("samples/palpation")),
+        s(&root.join("samples/virtual-tactip")),
+    );
     let models = root.join("models");
-    for (name, says) in [
-        ("records.csv", "named as a table"),
-        ("Records.TSV", "named as a table"),
-        ("run.mcap.zstd", "named as a compressed bag"),
+    let (all, encoder) = (s(&models), s(&models.join("cae-synth")));
+    let out = |name: &str| s(&tmp.path().join(name));
+    for (args, name, says) in [
+        (
+            vec!["run", "--data", &palpation, "--models", &all, "--out"],
+            "records.csv",
+            "named as a table",
+        ),
+        (
+            vec!["run", "--data", &palpation, "--models", &all, "--out"],
+            "Records.TSV",
+            "named as a table",
+        ),
+        (
+            vec!["run", "--data", &palpation, "--models", &all, "--out"],
+            "run.mcap.zstd",
+            "named as a compressed bag",
+        ),
+        (
+            vec!["predict", "--model", &encoder, "--data", &tactip, "--out"],
+            "est.jsonl",
+            "named as JSON",
+        ),
+        (
+            vec!["encode", "--model", &encoder, "--data", &tactip, "--out"],
+            "features.xlsx",
+            "named as a spreadsheet workbook",
+        ),
+        (
+            vec![
+                "eval",
+                "detector",
+                "--model",
+                &s(&models.join("detector")),
+                "--data",
+                &tactip,
+                "--frames",
+            ],
+            "frames.json",
+            "named as JSON",
+        ),
     ] {
-        let out = tmp.path().join(name);
-        let (ok, msg) = tactile(&[
-            "run",
-            "--data",
-            samples.to_str().unwrap(),
-            "--models",
-            models.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let mut cmd = args.clone();
+        let path = out(name);
+        cmd.push(&path);
+        let (ok, msg) = tactile(&cmd);
         assert!(
             !ok && msg.contains(says) && msg.contains(name),
             "{name}: {msg}"
         );
-        assert!(!out.exists(), "{name} was written");
     }
-    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+    assert_eq!(
+        std::fs::read_dir(tmp.path()).unwrap().count(),
+        0,
+        "something was written"
+    );
 }
 
 #[test]

@@ -180,6 +180,10 @@ pub fn dataset_bounds(
     let ds = Dataset::open(root)?;
     if let Some(out) = out {
         tactile_core::dataset::check_output_file(out, &[&ds])?;
+        tactile_core::dataset::refuse_misnamed_results(
+            out,
+            tactile_core::dataset::ResultsFormat::Csv,
+        )?;
     }
     let bounds = bounds_of(&ds, progress)?;
     if let Some(out) = out {

@@ -904,6 +904,60 @@ impl Dataset {
     }
 }
 
+/// What a results file holds, to check its name against
+/// ([`refuse_misnamed_results`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ResultsFormat {
+    /// Comma-separated values: a header row, then a row per frame.
+    Csv,
+    /// JSON Lines: one JSON object per line.
+    JsonLines,
+}
+
+impl ResultsFormat {
+    fn describe(self) -> &'static str {
+        match self {
+            Self::Csv => {
+                "comma-separated values (a header row, then one row per frame): name it .csv"
+            }
+            Self::JsonLines => {
+                "JSON Lines (one JSON record per frame): name it .jsonl (pandas reads it with \
+                 read_json(path, lines=True))"
+            }
+        }
+    }
+}
+
+/// Refuse a results file `out` named as another format than the `format`
+/// written: a reader chosen by the name (a spreadsheet, `pandas.read_csv`,
+/// `json.load`) would misread it. JSON Lines may be named `.json`, as
+/// loggers often do; a compressed bag (`.mcap.zstd`) is never written.
+pub fn refuse_misnamed_results(out: &Path, format: ResultsFormat) -> Result<()> {
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let ends = |suffixes: &[&str]| suffixes.iter().any(|s| name.ends_with(s));
+    let named = if ends(&[".mcap.zstd"]) {
+        "a compressed bag (outputs are written uncompressed, as .mcap where a command writes ROS 2 messages)"
+    } else if ends(&[".xlsx", ".xls", ".ods"]) {
+        "a spreadsheet workbook"
+    } else if format == ResultsFormat::JsonLines && ends(&[".csv", ".tsv"]) {
+        "a table"
+    } else if format == ResultsFormat::Csv && ends(&[".tsv"]) {
+        "tab-separated values"
+    } else if format == ResultsFormat::Csv && ends(&[".json", ".jsonl", ".ndjson"]) {
+        "JSON"
+    } else {
+        return Ok(());
+    };
+    Err(Error::Config(format!(
+        "{}: named as {named}, but this writes {}",
+        out.display(),
+        format.describe()
+    )))
+}
+
 /// Before any work: the output file `out` can be written, is none of the
 /// files of the input `datasets`, none of a dataset, calibration folder
 /// or bag it lies in ([`refuse_file_of_enclosing_input`]) and none a model is loaded
@@ -1111,6 +1165,41 @@ pub fn check_output_dir(out: &Path, datasets: &[&Dataset]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn results_named_as_another_format_are_refused() {
+        use ResultsFormat::{Csv, JsonLines};
+        for (name, format, named) in [
+            ("est.jsonl", Csv, Some("JSON")),
+            ("est.JSON", Csv, Some("JSON")),
+            ("est.ndjson", Csv, Some("JSON")),
+            ("est.tsv", Csv, Some("tab-separated")),
+            ("est.xlsx", Csv, Some("a spreadsheet workbook")),
+            ("r.mcap.zstd", Csv, Some("a compressed bag")),
+            ("records.csv", JsonLines, Some("a table")),
+            ("records.TSV", JsonLines, Some("a table")),
+            ("records.ods", JsonLines, Some("a spreadsheet workbook")),
+            ("r.mcap.zstd", JsonLines, Some("a compressed bag")),
+            ("est.csv", Csv, None),
+            ("est.txt", Csv, None),
+            ("est", Csv, None),
+            ("records.jsonl", JsonLines, None),
+            ("records.json", JsonLines, None),
+            ("csv", JsonLines, None),
+        ] {
+            let got = refuse_misnamed_results(Path::new("out").join(name).as_path(), format);
+            match named {
+                None => assert!(got.is_ok(), "{name}: {got:?}"),
+                Some(n) => {
+                    let e = got.unwrap_err().to_string();
+                    assert!(
+                        e.contains(name) && e.contains(&format!("named as {n}")),
+                        "{name}: {e}"
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn two_outputs_naming_one_place_are_refused_however_they_are_spelt() {
