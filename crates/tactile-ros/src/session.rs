@@ -135,9 +135,6 @@ impl RunSession {
             .as_deref()
             .filter(|_| !request.records_to_stdout());
         let mcap_out = out.filter(|p| tactile_core::bag::is_bag_file(p));
-        if let Some(p) = out.filter(|_| mcap_out.is_none()) {
-            dataset::refuse_misnamed_results(p, dataset::ResultsFormat::JsonLines)?;
-        }
         if request.with_frames && mcap_out.is_none() && request.view.is_none() {
             return Err(tactile_core::Error::Config(
                 "with_frames: the input frames go to an .mcap out or to the live view, \
@@ -157,6 +154,10 @@ impl RunSession {
         }
         if let Some(out) = out {
             dataset::check_run_output(out, data, &inputs)?;
+            // After the refusals that say an output would destroy something.
+            if mcap_out.is_none() {
+                dataset::refuse_misnamed_results(out, dataset::ResultsFormat::JsonLines)?;
+            }
         }
         if let Some(dir) = &request.render {
             dataset::check_output_dir(dir, &inputs)?;

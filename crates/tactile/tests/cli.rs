@@ -1774,22 +1774,11 @@ fn results_named_as_another_format_are_refused_before_any_work() {
     let models = root.join("models");
     let (all, encoder) = (s(&models), s(&models.join("cae-synth")));
     let out = |name: &str| s(&tmp.path().join(name));
+    let run = vec!["run", "--data", &palpation, "--models", &all, "--out"];
     for (args, name, says) in [
-        (
-            vec!["run", "--data", &palpation, "--models", &all, "--out"],
-            "records.csv",
-            "named as a table",
-        ),
-        (
-            vec!["run", "--data", &palpation, "--models", &all, "--out"],
-            "Records.TSV",
-            "named as a table",
-        ),
-        (
-            vec!["run", "--data", &palpation, "--models", &all, "--out"],
-            "run.mcap.zstd",
-            "named as a compressed bag",
-        ),
+        (run.clone(), "records.csv", "named as a table"),
+        (run.clone(), "Records.TSV", "named as a table"),
+        (run.clone(), "run.mcap.zstd", "named as a compressed bag"),
         (
             vec!["predict", "--model", &encoder, "--data", &tactip, "--out"],
             "est.jsonl",
