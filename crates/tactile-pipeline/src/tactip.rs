@@ -736,14 +736,12 @@ impl PredictInput {
             Self::Source(_) => Vec::new(),
         };
         tactile_core::dataset::check_run_output(out, Some(data), &datasets)?;
-        // After the refusals that say an output would destroy something.
-        if !tactile_core::bag::is_bag_file(out) {
-            tactile_core::dataset::refuse_misnamed_results(
-                out,
-                tactile_core::dataset::ResultsFormat::Csv,
-            )?;
-        }
-        Ok(())
+        // After the refusals that say an output would destroy something;
+        // an `.mcap` name (ROS 2 messages) is no misnamed CSV.
+        Ok(tactile_core::dataset::refuse_misnamed_results(
+            out,
+            tactile_core::dataset::ResultsFormat::Csv,
+        )?)
     }
 }
 

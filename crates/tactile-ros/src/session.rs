@@ -154,10 +154,9 @@ impl RunSession {
         }
         if let Some(out) = out {
             dataset::check_run_output(out, data, &inputs)?;
-            // After the refusals that say an output would destroy something.
-            if mcap_out.is_none() {
-                dataset::refuse_misnamed_results(out, dataset::ResultsFormat::JsonLines)?;
-            }
+            // After the refusals that say an output would destroy something;
+            // an `.mcap` name (ROS 2 messages) is no misnamed JSON Lines.
+            dataset::refuse_misnamed_results(out, dataset::ResultsFormat::JsonLines)?;
         }
         if let Some(dir) = &request.render {
             dataset::check_output_dir(dir, &inputs)?;
