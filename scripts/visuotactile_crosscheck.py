@@ -32,7 +32,11 @@ import visuotactile_independent  # noqa: E402
 FRAMES = visuotactile_independent.FRAMES
 
 
+NO_CONTACT, IN_VIEW = "no contact", "tendon in view"
 RIM = "tendon whose centre line is outside the window (its ridge reaches in)"
+OUTSIDE = "centre line outside the window, no ridge over the mask's threshold in it"
+LIGHT = "touching, ridge under 0.03 mm"
+KINDS = [NO_CONTACT, IN_VIEW, RIM, OUTSIDE, LIGHT]
 
 
 def kind(row, all_out_of_view=False):
@@ -40,25 +44,33 @@ def kind(row, all_out_of_view=False):
     `outside_window_w` column says where its centre line is; in a set of
     this generator's made with `out_of_view_fraction` 1, every one is)."""
     if float(row["press_mm"] or 0) <= 0:
-        return "no contact"
+        return NO_CONTACT
     if row["tendon"] == "1":
-        return RIM if all_out_of_view or row.get("outside_window_w") else "tendon in view"
-    if float(row["ridge_mm"]) >= 0.03:
-        return "centre line outside the window, no ridge over the mask's threshold in it"
-    return "touching, ridge under 0.03 mm"
+        return RIM if all_out_of_view or row.get("outside_window_w") else IN_VIEW
+    return OUTSIDE if float(row["ridge_mm"]) >= 0.03 else LIGHT
 
 
 def by_kind(data, frames_csv):
     """Frames and accuracy of the detector per kind of frame."""
-    labels = {r["file"]: r for r in csv.DictReader(open(data / "labels.csv"))}
+    with open(data / "labels.csv") as f:
+        labels = {r["file"]: r for r in csv.DictReader(f)}
     config = json.loads((data / "manifest.json").read_text()).get("config", {})
     all_out = config.get("out_of_view_fraction") == 1.0
     counts = {}
-    for r in csv.DictReader(open(frames_csv)):
-        k = kind(labels[r["file"]], all_out)
-        n, right = counts.get(k, (0, 0))
-        counts[k] = (n + 1, right + (r["predicted"] == r["tendon"]))
+    with open(frames_csv) as f:
+        for r in csv.DictReader(f):
+            k = kind(labels[r["file"]], all_out)
+            n, right = counts.get(k, (0, 0))
+            counts[k] = (n + 1, right + (r["predicted"] == r["tendon"]))
     return counts
+
+
+def detector_by_kind(detector, data, tmp):
+    """A detector's scores on `data` and its accuracy per kind of frame
+    (from its per-frame CSV, written in `tmp`)."""
+    frames_csv = tmp / f"{Path(detector).name}-{data.name}-frames.csv"
+    det = tactile.eval.detector(detector, data, frames=str(frames_csv))
+    return det, by_kind(data, frames_csv)
 
 
 def kinds_page(detectors, sets, tmp):
@@ -69,27 +81,19 @@ def kinds_page(detectors, sets, tmp):
              "| detector | set | accuracy | " + " | ".join(KINDS) + " |", "|---|---|---|" + "---|" * len(KINDS)]
     for d in detectors:
         for s in sets:
-            frames_csv = tmp / f"{d.name}-{s.name}.csv"
-            acc = tactile.eval.detector(d, s, frames=str(frames_csv))["all"]["accuracy"]
-            k = by_kind(s, frames_csv)
+            det, k = detector_by_kind(d, s, tmp)
             cells = [f"{k[c][1] / k[c][0]:.3f} ({k[c][0]})" if c in k else "-" for c in KINDS]
-            lines.append(f"| {d.name} | {s.name} | {acc:.4f} | " + " | ".join(cells) + " |")
+            lines.append(f"| {d.name} | {s.name} | {det['all']['accuracy']:.4f} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
-
-
-KINDS = ["no contact", "tendon in view", RIM,
-         "centre line outside the window, no ridge over the mask's threshold in it",
-         "touching, ridge under 0.03 mm"]
 
 
 def score(data, tmp, detector=ROOT / "models" / "detector"):
     """The detector's (by kind of frame), segmenter's and depth network's
     scores on `data`."""
-    frames_csv = tmp / f"{data.name}-frames.csv"
-    det = tactile.eval.detector(detector, data, frames=str(frames_csv))
+    det, kinds = detector_by_kind(detector, data, tmp)
     seg = tactile.eval.segmenter(ROOT / "models" / "segmenter", data)
     dep = tactile.eval.depth(ROOT / "models" / "depth", data)
-    return det, seg, dep, by_kind(data, frames_csv)
+    return det, seg, dep, kinds
 
 
 def page(sequences, seed, scores):
