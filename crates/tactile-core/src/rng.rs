@@ -32,6 +32,13 @@ impl Range {
         Self { min: v, max: v }
     }
 
+    /// The value a fraction `u` (in `[0, 1)`) of the way from `min` to
+    /// `max`: a uniform draw's place in the range, the one formula every
+    /// draw uses (so one uniform can set several ranges alike).
+    pub fn at(&self, u: f64) -> f64 {
+        self.min + (self.max - self.min) * u
+    }
+
     /// Check the range is finite, ordered and inside `[lo, hi]`; `name` is
     /// the configuration key used in the message.
     pub fn check(&self, name: &str, lo: f64, hi: f64) -> Result<()> {
@@ -114,7 +121,7 @@ impl SampleRng {
 
     /// Uniform in `range`.
     pub fn draw(&mut self, range: Range) -> f64 {
-        range.min + (range.max - range.min) * self.uniform()
+        range.at(self.uniform())
     }
 
     /// `true` with probability `p`.

@@ -17,7 +17,7 @@ use crate::{Error, Result};
 
 /// The skin's indentation over a frame: how far each pixel's skin is
 /// pushed toward the camera, metres (0 at rest).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct IndentationMap {
     /// Width, pixels (the frame's).
     pub width: usize,

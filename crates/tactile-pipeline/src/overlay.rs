@@ -11,8 +11,10 @@ use tactile_gelsight::IndentationMap;
 use tactile_preprocess::visuo::SquareWindow;
 
 /// What the pipeline saw in one frame, for overlays and for the arrays a
-/// caller asks for.
-#[derive(Default)]
+/// caller asks for. Serde, so a frame's result can be sent to another
+/// process whole (Python's pickle); [`FrameViews::check`] says whether
+/// views read back fit together.
+#[derive(Default, serde::Serialize, serde::Deserialize)]
 pub struct FrameViews {
     /// A tendon frame's window, region, direction and depth.
     pub tendon: Option<TendonView>,
@@ -24,6 +26,61 @@ impl FrameViews {
     /// Whether there is anything to show.
     pub fn any(&self) -> bool {
         self.tendon.is_some() || self.indentation.is_some()
+    }
+
+    /// Whether views read back from elsewhere (a pickle) fit together and
+    /// a `width x height` frame: every buffer as long as its sizes say,
+    /// each side at most [`tactile_core::dataset::MAX_SIDE`], finite
+    /// scales. Views the pipeline made always do.
+    pub fn check(&self, width: usize, height: usize) -> crate::Result<()> {
+        use tactile_core::dataset::MAX_SIDE;
+        let bad = |what: String| crate::Error::from(tactile_core::Error::Invalid(what));
+        let side_ok = |n: usize| (1..=MAX_SIDE as usize).contains(&n);
+        if !side_ok(width) || !side_ok(height) {
+            return Err(bad(format!(
+                "frame views for a {width}x{height} frame: each side must be 1 to {MAX_SIDE}"
+            )));
+        }
+        if let Some(t) = &self.tendon {
+            let [dw, dh] = t.depth_size;
+            let fits = side_ok(t.side)
+                && t.window.len() == t.side * t.side * 3
+                && t.region.len() == t.side * t.side
+                && side_ok(dw)
+                && side_ok(dh)
+                && t.depth_mm.len() == dw * dh
+                && t.frame_aspect.is_finite()
+                && t.frame_aspect > 0.0;
+            if !fits {
+                return Err(bad(format!(
+                    "tendon view: a {0}x{0} window with {1} values and {2} region pixels, \
+                     a {dw}x{dh} depth map with {3} values, aspect {4}: they do not fit together",
+                    t.side,
+                    t.window.len(),
+                    t.region.len(),
+                    t.depth_mm.len(),
+                    t.frame_aspect
+                )));
+            }
+        }
+        if let Some(s) = &self.indentation {
+            let m = &s.map;
+            if m.width != width
+                || m.height != height
+                || m.indentation_m.len() != width * height
+                || !(s.mm_per_px.is_finite() && s.mm_per_px > 0.0)
+            {
+                return Err(bad(format!(
+                    "indentation view: a {}x{} map with {} values at {} mm per pixel \
+                     for a {width}x{height} frame: they do not fit together",
+                    m.width,
+                    m.height,
+                    m.indentation_m.len(),
+                    s.mm_per_px
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// Write this frame's pictures into `dir`: `STEM-overlay.png` for a
@@ -74,6 +131,7 @@ impl PictureStems {
 }
 
 /// A calibrated sensor's skin under one frame.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct SensorView {
     /// The indentation at the frame's size, metres.
     pub map: IndentationMap,
@@ -82,6 +140,7 @@ pub struct SensorView {
 }
 
 /// What a tendon frame looked like to the pipeline, for overlays.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct TendonView {
     /// The segmenter's window, `side x side x 3` in [0, 1].
     pub window: Vec<f32>,
@@ -234,7 +293,81 @@ impl TendonView {
 
 #[cfg(test)]
 mod tests {
-    use super::PictureStems;
+    use super::{FrameViews, PictureStems, SensorView, TendonView};
+    use tactile_gelsight::IndentationMap;
+
+    fn tendon(side: usize, depth: [usize; 2]) -> TendonView {
+        TendonView {
+            window: vec![0.5; side * side * 3],
+            side,
+            region: vec![false; side * side],
+            direction: None,
+            depth_mm: vec![15.0; depth[0] * depth[1]],
+            depth_size: depth,
+            depth_maps: Default::default(),
+            frame_aspect: 16.0 / 9.0,
+        }
+    }
+
+    #[test]
+    fn views_read_back_must_fit_together_and_their_frame() {
+        let good = FrameViews {
+            tendon: Some(tendon(8, [6, 4])),
+            indentation: Some(SensorView {
+                map: IndentationMap {
+                    width: 16,
+                    height: 9,
+                    indentation_m: vec![0.0; 144],
+                },
+                mm_per_px: 0.03,
+            }),
+        };
+        good.check(16, 9).unwrap();
+        assert_eq!(good.tendon.as_ref().unwrap().mask_at(16, 9).len(), 144);
+        // A frame too large for any source, even without views.
+        let e = FrameViews::default()
+            .check(100_000, 9)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("100000x9 frame: each side must be 1 to 7680"),
+            "{e}"
+        );
+        assert!(FrameViews::default().check(0, 9).is_err());
+        // The indentation of another frame size.
+        let e = good.check(17, 9).unwrap_err().to_string();
+        assert!(e.contains("a 16x9 map with 144 values"), "{e}");
+        // A window whose region is short (a later mask would index past it).
+        let mut short = tendon(8, [6, 4]);
+        short.region.pop();
+        let bad = FrameViews {
+            tendon: Some(short),
+            indentation: None,
+        };
+        let e = bad.check(16, 9).unwrap_err().to_string();
+        assert!(e.contains("63 region pixels"), "{e}");
+        // A depth map bigger than its values, or an aspect that is no number.
+        let mut big = tendon(8, [6, 4]);
+        big.depth_size = [6000, 4000];
+        assert!(
+            FrameViews {
+                tendon: Some(big),
+                indentation: None
+            }
+            .check(16, 9)
+            .is_err()
+        );
+        let mut nan = tendon(8, [6, 4]);
+        nan.frame_aspect = f64::NAN;
+        assert!(
+            FrameViews {
+                tendon: Some(nan),
+                indentation: None
+            }
+            .check(16, 9)
+            .is_err()
+        );
+    }
 
     #[test]
     fn frames_that_share_a_stem_get_pictures_of_their_own() {

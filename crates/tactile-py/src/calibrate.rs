@@ -87,6 +87,15 @@ pub struct PyReconstructor {
 
 #[pymethods]
 impl PyReconstructor {
+    /// Refused, saying what to make in a worker process instead.
+    fn __reduce__(&self) -> PyResult<Py<PyAny>> {
+        Err(crate::pickling::holds_models(
+            "Reconstructor",
+            None,
+            "tactile.Reconstructor(model_dir)",
+        ))
+    }
+
     /// Load the calibrated sensor in `model_dir` onto `runtime`; with
     /// `background`, compare against that rest frame (a PNG of the same
     /// size) instead of the calibration's.

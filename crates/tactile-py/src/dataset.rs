@@ -95,6 +95,15 @@ impl PyDataset {
         self.ds.len()
     }
 
+    /// Pickled as its folder (made absolute), opened and checked again
+    /// where it is unpickled: a worker process reads the frames itself.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, pyo3::types::PyType>, (PathBuf,))> {
+        let root = std::path::absolute(&slf.get().ds.root)?;
+        Ok((slf.get_type(), (root,)))
+    }
+
     /// The folder.
     #[getter]
     fn path(&self) -> PathBuf {

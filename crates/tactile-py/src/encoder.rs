@@ -127,6 +127,15 @@ pub(crate) fn pin_image_array<'py>(
 
 #[pymethods]
 impl PyTactipEncoder {
+    /// Refused, saying what to make in a worker process instead.
+    fn __reduce__(&self) -> PyResult<Py<PyAny>> {
+        Err(crate::pickling::holds_models(
+            "TactipEncoder",
+            None,
+            "tactile.TactipEncoder(model_dir)",
+        ))
+    }
+
     /// Load the encoder in `model_dir` (cae.json + cae.bpk) onto `runtime`
     /// and its estimators: the folders in `estimators`, or every estimator
     /// folder inside `model_dir`.

@@ -16,8 +16,8 @@ use numpy::{
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
-/// Largest frame side accepted, pixels (8K UHD is 7680 wide).
-pub(crate) const MAX_SIDE: usize = 7680;
+/// Largest frame side accepted, pixels (8K UHD is 7680 wide): a dataset's.
+pub(crate) const MAX_SIDE: usize = tactile_core::dataset::MAX_SIDE as usize;
 
 /// Channels a frame must have.
 #[derive(Clone, Copy, PartialEq, Eq)]

@@ -14,6 +14,7 @@ mod export;
 mod frame;
 mod image;
 mod json;
+mod pickling;
 mod pipeline;
 mod pose;
 mod predict;
@@ -46,6 +47,8 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<dataset::PyDataset>()?;
     m.add_class::<source::PyFrameSource>()?;
     m.add_class::<source::PyFrame>()?;
+    m.add_function(wrap_pyfunction!(pickling::frame_result, m)?)?;
+    m.add_function(wrap_pyfunction!(pickling::frame, m)?)?;
     m.add_class::<source::PyVideoDecoder>()?;
     m.add_function(wrap_pyfunction!(source::frames, m)?)?;
     m.add_function(wrap_pyfunction!(source::bag_topics, m)?)?;

@@ -85,14 +85,7 @@ impl PyPipeline {
             *frames += 1;
             Ok(out)
         })?;
-        Ok(FrameResult {
-            record: rec,
-            views,
-            size: (px.width, px.height),
-            mask: OnceLock::new(),
-            depth: OnceLock::new(),
-            indentation: OnceLock::new(),
-        })
+        Ok(FrameResult::new(rec, views, (px.width, px.height)))
     }
 }
 
@@ -279,6 +272,15 @@ impl PyPipeline {
         self.hysteresis
     }
 
+    /// Refused, saying what to send to a worker process instead.
+    fn __reduce__(&self) -> PyResult<Py<PyAny>> {
+        Err(crate::pickling::holds_models(
+            "Pipeline",
+            Some("a stream's hysteresis state"),
+            "tactile.Pipeline(models, threads=1)",
+        ))
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Pipeline(models='{}', runtime='{}', threads={}, hysteresis={:?})",
@@ -300,6 +302,31 @@ pub struct FrameResult {
     mask: OnceLock<Py<PyArray2<bool>>>,
     depth: OnceLock<Option<Py<PyArray2<f32>>>>,
     indentation: OnceLock<Option<Py<PyArray2<f32>>>>,
+}
+
+impl FrameResult {
+    /// A result of `size` (width, height) whose arrays are built from
+    /// `views` on first access.
+    pub(crate) fn new(
+        record: FrameRecord,
+        views: Option<FrameViews>,
+        size: (usize, usize),
+    ) -> Self {
+        Self {
+            record,
+            views,
+            size,
+            mask: OnceLock::new(),
+            depth: OnceLock::new(),
+            indentation: OnceLock::new(),
+        }
+    }
+
+    /// What a pickle keeps: the record, the views and the size, as
+    /// [`crate::pickling::frame_result`] reads them back.
+    pub(crate) fn state(&self) -> (&FrameRecord, Option<&FrameViews>, (usize, usize)) {
+        (&self.record, self.views.as_ref(), self.size)
+    }
 }
 
 #[pymethods]
@@ -509,6 +536,13 @@ impl FrameResult {
     /// object), as a dict.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         crate::json::to_py(py, &self.record)
+    }
+
+    /// Pickled whole (record, mask, depth and indentation as made), so a
+    /// worker process's results come back as they were: `copy`, `pickle`,
+    /// `multiprocessing` and `concurrent.futures` take it.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        crate::pickling::reduce_frame_result(py, self)
     }
 
     fn __repr__(&self) -> String {

@@ -37,6 +37,15 @@ impl PyPoseEstimator {
 
 #[pymethods]
 impl PyPoseEstimator {
+    /// Refused, saying what to make in a worker process instead.
+    fn __reduce__(&self) -> PyResult<Py<PyAny>> {
+        Err(crate::pickling::holds_models(
+            "PoseEstimator",
+            None,
+            "tactile.PoseEstimator(model_dir)",
+        ))
+    }
+
     /// Load the pose network in `model_dir` onto `runtime`.
     #[new]
     #[pyo3(signature = (model_dir, runtime="burn-flex"))]

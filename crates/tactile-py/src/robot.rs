@@ -67,6 +67,15 @@ impl PyMcapWriter {
 
 #[pymethods]
 impl PyMcapWriter {
+    /// Refused: one file has one writer.
+    fn __reduce__(&self) -> PyResult<Py<PyAny>> {
+        Err(crate::pickling::open_stream(
+            "McapWriter",
+            "an MCAP file being written",
+            "Send the results (FrameResult pickles) back to the process that writes the file",
+        ))
+    }
+
     #[new]
     fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let p = path.clone();
@@ -163,6 +172,15 @@ impl PyLiveView {
 
 #[pymethods]
 impl PyLiveView {
+    /// Refused: the server runs in the process that started it.
+    fn __reduce__(&self) -> PyResult<Py<PyAny>> {
+        Err(crate::pickling::open_stream(
+            "LiveView",
+            "a running server",
+            "Send the results (FrameResult pickles) back to the process that serves them",
+        ))
+    }
+
     #[new]
     #[pyo3(signature = (address="127.0.0.1:8765"))]
     fn new(py: Python<'_>, address: &str) -> PyResult<Self> {

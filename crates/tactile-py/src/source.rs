@@ -28,10 +28,60 @@ pub struct PyFrame {
     stamp_ns: Option<i64>,
 }
 
+impl PyFrame {
+    /// A frame of these fields.
+    pub(crate) fn new(
+        image: Py<PyAny>,
+        name: String,
+        sequence: Option<String>,
+        tendon: Option<bool>,
+        age_ms: Option<f64>,
+        stamp_ns: Option<i64>,
+    ) -> Self {
+        Self {
+            image,
+            name,
+            sequence,
+            tendon,
+            age_ms,
+            stamp_ns,
+        }
+    }
+
+    /// Its fields in [`PyFrame::new`]'s order (what a pickle keeps).
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn fields(
+        &self,
+        py: Python<'_>,
+    ) -> (
+        Py<PyAny>,
+        String,
+        Option<String>,
+        Option<bool>,
+        Option<f64>,
+        Option<i64>,
+    ) {
+        (
+            self.image.clone_ref(py),
+            self.name.clone(),
+            self.sequence.clone(),
+            self.tendon,
+            self.age_ms,
+            self.stamp_ns,
+        )
+    }
+}
+
 #[pymethods]
 impl PyFrame {
     fn __repr__(&self) -> String {
         format!("Frame(name={:?})", self.name)
+    }
+
+    /// Pickled whole (image and labels), so frames can be sent to worker
+    /// processes.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        crate::pickling::reduce_frame(py, self)
     }
 }
 
@@ -55,6 +105,15 @@ impl PyFrameSource {
 
 #[pymethods]
 impl PyFrameSource {
+    /// Refused: an open stream stays in the process that opened it.
+    fn __reduce__(&self) -> PyResult<Py<PyAny>> {
+        Err(crate::pickling::open_stream(
+            "FrameSource",
+            "an open stream (a file, camera, bag or pipe being read)",
+            "Send its frames (tactile.Frame pickles), or give each worker a source of its own",
+        ))
+    }
+
     /// What the source is: "dataset", "folder", "video", "stack" (a TIFF of
     /// many pages given alone), "bag", "camera" or "stdin".
     #[getter]
@@ -188,6 +247,15 @@ fn live_frames(
 
 #[pymethods]
 impl PyVideoDecoder {
+    /// Refused: a decoder holds the stream's state so far.
+    fn __reduce__(&self) -> PyResult<Py<PyAny>> {
+        Err(crate::pickling::open_stream(
+            "VideoDecoder",
+            "an open decoder (the stream's packets so far)",
+            "Decode in one process and send the frames (numpy arrays pickle)",
+        ))
+    }
+
     #[new]
     #[pyo3(signature = (format, *, name="video"))]
     fn new(py: Python<'_>, format: &str, name: &str) -> PyResult<Self> {

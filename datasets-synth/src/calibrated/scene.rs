@@ -147,7 +147,7 @@ impl CalibratedScene {
         // One draw sets the press; an object's is at the same place in
         // its own range.
         let press_at = rng.uniform();
-        let at = |r: crate::rng::Range| r.min + (r.max - r.min) * press_at;
+        let at = |r: crate::rng::Range| r.at(press_at);
         let mut optics_gain = [1.0; 3];
         for g in optics_gain.iter_mut() {
             *g = 1.0 + config.optics_jitter * (2.0 * rng.uniform() - 1.0);

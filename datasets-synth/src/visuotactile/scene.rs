@@ -233,10 +233,9 @@ impl SequenceScene {
             let (a, b) = camera.window_radii();
             let k = NOMINAL_DEPTH_MM / camera.fx;
             let support = libm::hypot(a * k * radial.0, b * k * radial.1);
-            let margin = config.out_of_view_margin_w;
             let anchor = scale(
                 radial,
-                support + (margin.min + (margin.max - margin.min) * margin_u) * w,
+                support + config.out_of_view_margin_w.at(margin_u) * w,
             );
             (CentreLine::straight(anchor, tangent), TendonPath::Straight)
         };
