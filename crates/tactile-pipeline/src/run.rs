@@ -25,6 +25,47 @@ pub struct RunOptions {
     pub render: Option<PathBuf>,
 }
 
+/// Most pipelines one run loads (each a copy of the models, run on a
+/// thread of its own).
+pub const MAX_PIPELINES: usize = 64;
+
+/// Whether a run may process frames on `pipelines` copies of the models
+/// at once: 1 to [`MAX_PIPELINES`]; more than one only for a recorded
+/// source (a live one's frames arrive one at a time, and waiting for
+/// several would add their interval to every frame's latency) and without
+/// a hysteresis (which decides each frame after the one before it).
+pub fn check_pipelines(
+    pipelines: usize,
+    hysteresis: Option<(f32, f32)>,
+    source: SourceKind,
+) -> Result<()> {
+    let refuse = |why: String| Err(tactile_core::Error::Invalid(why).into());
+    if !(1..=MAX_PIPELINES).contains(&pipelines) {
+        return refuse(format!(
+            "pipelines: must be 1 to {MAX_PIPELINES}, got {pipelines}"
+        ));
+    }
+    if pipelines > 1 && hysteresis.is_some() {
+        return refuse(format!(
+            "pipelines {pipelines} with a hysteresis: the hysteresis decides each frame after the \
+             one before it, so its frames go through one pipeline: leave pipelines at 1, or the \
+             hysteresis out"
+        ));
+    }
+    if pipelines > 1 && source.is_live() {
+        return refuse(format!(
+            "pipelines {pipelines} on a live source (a {}): its frames arrive one at a time, \
+             and waiting for {pipelines} of them would add their interval to every frame's \
+             latency: leave pipelines at 1 for a camera or standard input",
+            match source {
+                SourceKind::Camera => "camera",
+                _ => "stream on standard input",
+            }
+        ));
+    }
+    Ok(())
+}
+
 /// Median and 95th percentile, ms.
 pub type Spread = [f64; 2];
 
@@ -90,6 +131,9 @@ pub struct RunSummary {
     pub runtime: Runtime,
     /// onnxruntime intra-op threads.
     pub threads: usize,
+    /// Copies of the models that processed frames at once, each on a
+    /// thread of its own.
+    pub pipelines: usize,
     /// Frames per second, decoding included.
     pub fps: f64,
     /// Frames the detector gated out (0 without paper B's models).
@@ -320,12 +364,17 @@ impl Decisions {
 /// `NAME-overlay.png` (a calibrated sensor's frames as
 /// `NAME-indentation.png`), staged and moved in when the run ends; a
 /// render folder that already holds files is refused before any frame.
+///
+/// Several `pipelines` (copies of the same models, [`check_pipelines`])
+/// take the frames of a recorded source a few at a time, one frame each on
+/// a thread of its own; records still reach `sink` in the source's order.
 pub fn run(
-    pipeline: &mut Pipeline,
+    pipelines: &mut [Pipeline],
     source: &mut FrameSource,
     options: &RunOptions,
     sink: &mut dyn FnMut(&RunItem<'_>) -> Result<Flow>,
 ) -> Result<RunSummary> {
+    check_pipelines(pipelines.len(), options.hysteresis, source.kind())?;
     // Overlays go to a staging folder first: an error or an interrupt
     // leaves no half set of them. The folder must be new (absent or
     // empty), as `reconstruct --render` asks: another run's overlays of the
@@ -357,78 +406,92 @@ pub fn run(
     );
     // The previous frame's sequence and decisions, for changes within one.
     let mut prev: Option<(Option<String>, bool, bool, Option<bool>)> = None;
-    while let Some(frame) = source.next_frame()? {
-        let same_sequence = prev.as_ref().is_some_and(|p| p.0 == frame.sequence);
+    let mut batch = Vec::with_capacity(pipelines.len());
+    // Once the source has ended it is not asked again.
+    let mut ended = false;
+    'frames: loop {
+        while !ended && batch.len() < pipelines.len() {
+            match source.next_frame()? {
+                Some(f) => batch.push(f),
+                None => ended = true,
+            }
+        }
+        if batch.is_empty() {
+            break;
+        }
+        // One pipeline: its hysteresis, reset where a sequence begins.
         if let Some(h) = filter.as_mut()
-            && !same_sequence
+            && prev.as_ref().is_none_or(|p| p.0 != batch[0].sequence)
         {
             h.reset();
         }
-        let (mut rec, views) =
-            pipeline.process_filtered(&frame.name, &frame.image, filter.as_mut())?;
-        if let Some(why) = &rec.unreadable {
-            unreadable
-                .get_or_insert_with(|| UnreadableFrames {
-                    frames: 0,
-                    first: why.clone(),
-                })
-                .frames += 1;
-        }
-        rec.latency_ms = frame.arrived.map(|t| 1e3 * t.elapsed().as_secs_f64());
-        rec.stamp_ns = frame.stamp_ns;
-        if let (Some(staged), Some(v)) = (&render, &views) {
-            let stem = stems.next(&frame.name);
-            v.save_pngs(staged.path(), &stem, &frame.image)?;
-        }
-        if let Some(peak) = rec.indentation_peak_mm {
-            contact.peak_mm = contact.peak_mm.max(peak);
-            contact.frames_in_contact += usize::from(rec.contact_area_mm2.unwrap_or(0.0) > 0.0);
-        }
-        let p = prev.as_ref().filter(|_| same_sequence);
-        final_d.add(rec.tendon, frame.tendon, p.map(|p| p.1));
-        raw_d.add(rec.tendon_raw, frame.tendon, p.map(|p| p.2));
-        if let Some(t) = frame.tendon {
-            labels.add(t, None, p.and_then(|p| p.3));
-        }
-        for (r, v) in times.iter_mut().zip([
-            Some(rec.ms_prepare),
-            Some(rec.ms_detect),
-            rec.ms_segment,
-            rec.ms_depth,
-            Some(rec.ms_total),
-            rec.tendon.then_some(rec.ms_total),
-            rec.latency_ms,
-            rec.ms_reconstruct,
-        ]) {
-            if let Some(v) = v {
-                r.push(v);
+        let made = process_batch(pipelines, &batch, filter.as_mut())?;
+        for (frame, (mut rec, views)) in batch.drain(..).zip(made) {
+            let same_sequence = prev.as_ref().is_some_and(|p| p.0 == frame.sequence);
+            if let Some(why) = &rec.unreadable {
+                unreadable
+                    .get_or_insert_with(|| UnreadableFrames {
+                        frames: 0,
+                        first: why.clone(),
+                    })
+                    .frames += 1;
             }
-        }
-        frames += 1;
-        gated += usize::from(!rec.tendon);
-        ood += usize::from(rec.out_of_distribution);
-        if rec.out_of_distribution {
-            // A live run (a camera in another mode) shows it at once on
-            // the bar, not only in the summary when it ends.
-            pb.set_message(match &unreadable {
-                Some(u) => format!("{ood} foreign, {} unreadable: {}", u.frames, u.first),
-                None => format!("{ood} foreign"),
-            });
-        }
-        prev = Some((
-            frame.sequence.clone(),
-            rec.tendon,
-            rec.tendon_raw,
-            frame.tendon,
-        ));
-        pb.inc(1);
-        let item = RunItem {
-            record: &rec,
-            views: views.as_ref(),
-            frame: &frame.image,
-        };
-        if sink(&item)? == Flow::Stop {
-            break;
+            rec.latency_ms = frame.arrived.map(|t| 1e3 * t.elapsed().as_secs_f64());
+            rec.stamp_ns = frame.stamp_ns;
+            if let (Some(staged), Some(v)) = (&render, &views) {
+                let stem = stems.next(&frame.name);
+                v.save_pngs(staged.path(), &stem, &frame.image)?;
+            }
+            if let Some(peak) = rec.indentation_peak_mm {
+                contact.peak_mm = contact.peak_mm.max(peak);
+                contact.frames_in_contact += usize::from(rec.contact_area_mm2.unwrap_or(0.0) > 0.0);
+            }
+            let p = prev.as_ref().filter(|_| same_sequence);
+            final_d.add(rec.tendon, frame.tendon, p.map(|p| p.1));
+            raw_d.add(rec.tendon_raw, frame.tendon, p.map(|p| p.2));
+            if let Some(t) = frame.tendon {
+                labels.add(t, None, p.and_then(|p| p.3));
+            }
+            for (r, v) in times.iter_mut().zip([
+                Some(rec.ms_prepare),
+                Some(rec.ms_detect),
+                rec.ms_segment,
+                rec.ms_depth,
+                Some(rec.ms_total),
+                rec.tendon.then_some(rec.ms_total),
+                rec.latency_ms,
+                rec.ms_reconstruct,
+            ]) {
+                if let Some(v) = v {
+                    r.push(v);
+                }
+            }
+            frames += 1;
+            gated += usize::from(!rec.tendon);
+            ood += usize::from(rec.out_of_distribution);
+            if rec.out_of_distribution {
+                // A live run (a camera in another mode) shows it at once on
+                // the bar, not only in the summary when it ends.
+                pb.set_message(match &unreadable {
+                    Some(u) => format!("{ood} foreign, {} unreadable: {}", u.frames, u.first),
+                    None => format!("{ood} foreign"),
+                });
+            }
+            prev = Some((
+                frame.sequence.clone(),
+                rec.tendon,
+                rec.tendon_raw,
+                frame.tendon,
+            ));
+            pb.inc(1);
+            let item = RunItem {
+                record: &rec,
+                views: views.as_ref(),
+                frame: &frame.image,
+            };
+            if sink(&item)? == Flow::Stop {
+                break 'frames;
+            }
         }
     }
     pb.finish_and_clear();
@@ -446,6 +509,7 @@ pub fn run(
         latency,
         reconstruct,
     ] = times.map(|r| r.median_p95());
+    let pipeline = &pipelines[0];
     let palpation = pipeline.palpation.is_some();
     Ok(RunSummary {
         source: source.kind(),
@@ -456,6 +520,7 @@ pub fn run(
         dropped_frames: source.dropped(),
         runtime: pipeline.runtime,
         threads: pipeline.threads,
+        pipelines: pipelines.len(),
         fps: frames as f64 / wall.max(1e-9),
         // Without paper B's models no detector ran to gate a frame out
         // (and no frame has a tendon: every record stays tendon-free).
@@ -486,6 +551,42 @@ pub fn run(
     })
 }
 
+/// Each frame of `batch` through a pipeline of its own (the first with
+/// `filter`, which a batch of more than one never has), in parallel when
+/// there are several; the results in the batch's order, or the first
+/// frame's error.
+fn process_batch(
+    pipelines: &mut [Pipeline],
+    batch: &[tactile_core::source::Frame],
+    filter: Option<&mut Hysteresis>,
+) -> Result<Vec<(FrameRecord, Option<FrameViews>)>> {
+    if let ([pipeline, ..], [frame]) = (&mut *pipelines, batch) {
+        return Ok(vec![pipeline.process_filtered(
+            &frame.name,
+            &frame.image,
+            filter,
+        )?]);
+    }
+    std::thread::scope(|scope| {
+        let running: Vec<_> = pipelines
+            .iter_mut()
+            .zip(batch)
+            .map(|(p, f)| scope.spawn(move || p.process_filtered(&f.name, &f.image, None)))
+            .collect();
+        running
+            .into_iter()
+            .map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err(tactile_core::Error::Invalid(
+                        "a pipeline's thread failed: the run stops here".into(),
+                    )
+                    .into())
+                })
+            })
+            .collect()
+    })
+}
+
 /// What [`run`] hands its sink per frame: the record, what the models saw
 /// (tendon frames, a calibrated sensor's frames) and the frame itself, so a
 /// sink can write images (MCAP results, a live view) as well as records.
@@ -506,10 +607,15 @@ pub fn run_collect(
     options: &RunOptions,
 ) -> Result<RunOutcome> {
     let mut records = Vec::new();
-    let summary = run(pipeline, source, options, &mut |item| {
-        records.push(item.record.clone());
-        Ok(Flow::Continue)
-    })?;
+    let summary = run(
+        std::slice::from_mut(pipeline),
+        source,
+        options,
+        &mut |item| {
+            records.push(item.record.clone());
+            Ok(Flow::Continue)
+        },
+    )?;
     Ok(RunOutcome { records, summary })
 }
 
@@ -519,4 +625,26 @@ pub struct RunOutcome {
     pub records: Vec<FrameRecord>,
     /// Speed and decisions.
     pub summary: RunSummary,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{SourceKind, check_pipelines};
+
+    #[test]
+    fn several_pipelines_only_on_a_recorded_source_without_a_hysteresis() {
+        for kind in [SourceKind::Dataset, SourceKind::Video, SourceKind::Bag] {
+            check_pipelines(1, None, kind).unwrap();
+            check_pipelines(64, None, kind).unwrap();
+        }
+        check_pipelines(1, Some((0.6, 0.3)), SourceKind::Camera).unwrap();
+        let refused = |n, h, kind| check_pipelines(n, h, kind).unwrap_err().to_string();
+        assert!(refused(0, None, SourceKind::Folder).contains("must be 1 to 64, got 0"));
+        assert!(refused(65, None, SourceKind::Folder).contains("must be 1 to 64, got 65"));
+        assert!(refused(2, Some((0.6, 0.3)), SourceKind::Folder).contains("with a hysteresis"));
+        let live = refused(2, None, SourceKind::Camera);
+        assert!(live.contains("on a live source (a camera)"), "{live}");
+        let live = refused(2, None, SourceKind::Stdin);
+        assert!(live.contains("(a stream on standard input)"), "{live}");
+    }
 }

@@ -1,8 +1,12 @@
-"""Frames per second of paper B's pipeline from Python: one process against
-a pool of worker processes, each with its own pipeline.
+"""Frames per second of paper B's pipeline from Python: one pipeline in one
+thread, against a pipeline per thread (the interpreter lock is released
+while a frame is processed) and a pool of worker processes, each with its
+own pipeline.
 
 The frames are a rendered palpation set (every stage runs on its tendon
-frames). Each way is timed over every frame, in rounds that alternate the
+frames), in memory; the last rows run ``tactile.run`` (``tactile run``) over
+the same set written as a dataset, decoding its PNG frames ahead on another
+thread, with one pipeline and with several (``pipelines=``). Each way is timed over every frame, in rounds that alternate the
 ways so drift hits all alike; the table gives the median round. A pool is
 started once (spawned workers import the package and load the models in
 its initializer: the start-up row) and then fed the frames in chunks; each
@@ -22,8 +26,10 @@ import os
 import pickle
 import platform
 import statistics
+import tempfile
+import threading
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +37,7 @@ import numpy as np
 import tactile
 
 _WORKER: tactile.Pipeline | None = None
+_THREAD = threading.local()
 
 
 def _init(models: str, threads: int) -> None:
@@ -41,6 +48,12 @@ def _init(models: str, threads: int) -> None:
 def _process(frame: np.ndarray) -> tactile.FrameResult:
     assert _WORKER is not None
     return _WORKER.process(frame)
+
+
+def _process_in_thread(frame: np.ndarray, models: str) -> tactile.FrameResult:
+    if not hasattr(_THREAD, "pipe"):
+        _THREAD.pipe = tactile.Pipeline(models, threads=1)
+    return _THREAD.pipe.process(frame)
 
 
 def cpu_name() -> str:
@@ -63,7 +76,12 @@ def main() -> None:
     a = ap.parse_args()
 
     per = 30
-    v = tactile.synth.visuotactile(sequences=-(-a.frames // per), frames_per_sequence=per, seed=11, progress=False)
+    sequences = -(-a.frames // per)
+    v = tactile.synth.visuotactile(sequences=sequences, frames_per_sequence=per, seed=11, progress=False)
+    scratch = tempfile.TemporaryDirectory()
+    dataset = tactile.synth.visuotactile(
+        sequences=sequences, frames_per_sequence=per, seed=11, out=Path(scratch.name) / "set", progress=False
+    )
     frames = list(v["frames"][: a.frames])
     tendon = int(np.asarray(v["tendon"][: a.frames]).sum())
     h, w = frames[0].shape[:2]
@@ -76,19 +94,43 @@ def main() -> None:
     start_s = time.perf_counter() - t0
 
     chunk = max(1, len(frames) // (4 * a.workers))
-    ways = {f"one process, {t} thread(s)": (lambda p=p: [p.process(f) for f in frames]) for t, p in one.items()}
-    ways[f"{a.workers} worker processes, 1 thread each"] = lambda: list(pool.map(_process, frames, chunksize=chunk))
+    threads = ThreadPoolExecutor(a.workers)
+    list(threads.map(lambda f: _process_in_thread(f, a.models), frames[: 4 * a.workers]))
+    ways = {
+        f"one pipeline, {t} onnxruntime thread(s)": (lambda p=p: [p.process(f) for f in frames])
+        for t, p in one.items()
+    }
+    ways[f"one pipeline shared by {a.workers} Python threads"] = lambda: list(
+        threads.map(one[1].process, frames)
+    )
+    ways[f"{a.workers} Python threads, a pipeline each"] = lambda: list(
+        threads.map(lambda f: _process_in_thread(f, a.models), frames)
+    )
+    ways[f"{a.workers} worker processes, a pipeline each"] = lambda: list(pool.map(_process, frames, chunksize=chunk))
+    limit = len(frames)
+    for n in sorted({1, a.workers, a.workers + 1}):
+        ways[f"`tactile.run` over the PNG files, pipelines={n}"] = lambda n=n: tactile.run(
+            dataset, models=a.models, pipelines=n, limit=limit
+        )
     times: dict[str, list[float]] = {k: [] for k in ways}
     results = {}
     for _ in range(a.rounds):
         for k, run in ways.items():
             t = time.perf_counter()
             results[k] = run()
-            times[k].append(time.perf_counter() - t)
+            spent = time.perf_counter() - t
+            if isinstance(results[k], dict):  # the run's own clock: loading the models left out
+                spent = results[k]["frames"] / results[k]["fps"]
+            times[k].append(spent)
     pool.shutdown()
+    threads.shutdown()
     base = next(iter(results.values()))
     for k, rs in results.items():
+        if isinstance(rs, dict):  # tactile.run's summary
+            assert rs["frames"] == len(frames) and rs["tendon_frames"] == sum(r.tendon for r in base), k
+            continue
         assert [r.tendon for r in rs] == [r.tendon for r in base], f"{k}: other decisions"
+    scratch.cleanup()
 
     made = [r for r in base if r.tendon]
     sizes = [len(pickle.dumps(r)) for r in made]
@@ -107,7 +149,10 @@ def main() -> None:
         for k, ts in times.items()
     )
     tail = (
-        f"\nStarting the pool ({a.workers} spawned workers, each importing `tactile` and loading the "
+        "\nEvery pipeline runs onnxruntime on 1 thread but the second row's; `tactile.run`'s "
+        "rows are its summary's `fps`: reading and decoding the frames in, loading the models out. "
+        "Starting the "
+        f"process pool ({a.workers} spawned workers, each importing `tactile` and loading the "
         f"models once): {start_s:.2f} s. A tendon frame's result pickled: "
         f"{statistics.median(sizes) / 1024:.0f} KiB (median), {1e3 * statistics.median(dump):.2f} ms to "
         f"pickle and {1e3 * statistics.median(load):.2f} ms to unpickle (median of {len(dump)} results).\n"

@@ -112,7 +112,7 @@ pub(crate) fn holds_models(class: &str, state: Option<&str>, make: &str) -> PyEr
         "tactile.{class} cannot be pickled: it holds loaded models{state}. For several \
          processes, make one in each worker (in a multiprocessing.Pool or \
          concurrent.futures.ProcessPoolExecutor initializer: {make}) and send it frames; \
-         frames and results pickle (docs/python.md, \"Several processes\")"
+         frames and results pickle (docs/python.md, \"Several threads and processes\")"
     ))
 }
 
@@ -121,6 +121,6 @@ pub(crate) fn holds_models(class: &str, state: Option<&str>, make: &str) -> PyEr
 pub(crate) fn open_stream(class: &str, what: &str, send: &str) -> PyErr {
     PyTypeError::new_err(format!(
         "tactile.{class} cannot be pickled: it is {what}. {send} (docs/python.md, \"Several \
-         processes\")"
+         threads and processes\")"
     ))
 }

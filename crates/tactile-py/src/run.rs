@@ -25,7 +25,7 @@ use crate::work::interruptible;
 #[pyfunction]
 #[pyo3(signature = (
     source=None, *, models=PathBuf::from("models"), runtime="onnx", threads=1,
-    hysteresis=None, out=None, render=None, with_frames=false, view=None,
+    pipelines=1, hysteresis=None, out=None, render=None, with_frames=false, view=None,
     view_wait=0.0, topic=None, stdin_size=None, live_queue=2, limit=None, prefetch=true
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -35,6 +35,7 @@ pub(crate) fn run<'py>(
     models: PathBuf,
     runtime: &str,
     threads: usize,
+    pipelines: usize,
     hysteresis: Option<(f32, f32)>,
     out: Option<PathBuf>,
     render: Option<PathBuf>,
@@ -57,6 +58,7 @@ pub(crate) fn run<'py>(
         },
         runtime: rt,
         threads,
+        pipelines,
         hysteresis,
         out,
         render,

@@ -137,3 +137,54 @@ def test_worker_processes_give_the_results_of_one_process(root, pipeline, palpat
         assert abs(da.pop("score") - db.pop("score")) < 1e-5
         assert da == db
         assert np.array_equal(a.mask, b.mask)
+
+
+def test_a_pipeline_per_thread_gives_the_results_of_one_thread(root, pipeline, palpation_frames):
+    """The threads pattern docs/python.md gives: each thread's own pipeline,
+    the frames processed in parallel (the interpreter lock released)."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    local = threading.local()
+    made: list[tactile.Pipeline] = []
+
+    def process(frame):
+        if not hasattr(local, "pipe"):
+            local.pipe = tactile.Pipeline(root / "models", threads=1)
+            made.append(local.pipe)
+        return local.pipe.process(frame)
+
+    pipeline.reset()
+    here = [pipeline.process(f) for f in palpation_frames]
+    with ThreadPoolExecutor(2) as pool:
+        there = list(pool.map(process, palpation_frames))
+    assert 1 <= len(made) <= 2
+    for a, b in zip(here, there):
+        da, db = decision(a), decision(b)
+        da.pop("frame"), db.pop("frame")  # each pipeline numbers its own frames
+        assert abs(da.pop("score") - db.pop("score")) < 1e-5
+        assert da == db
+        assert np.array_equal(a.mask, b.mask)
+
+
+def test_tactile_run_on_several_pipelines_writes_the_records_of_one(root, tmp_path):
+    def records(path):
+        import json
+
+        return [
+            {k: v for k, v in json.loads(line).items() if not k.startswith("ms_") and k != "latency_ms"}
+            for line in path.read_text().splitlines()
+        ]
+
+    runs = {}
+    for n in (1, 2):
+        out = tmp_path / f"r{n}.jsonl"
+        summary = tactile.run(root / "samples" / "palpation", models=root / "models", pipelines=n, out=out)
+        assert summary["pipelines"] == n and summary["frames"] == 12
+        runs[n] = records(out)
+    assert runs[1] == runs[2]
+    out = tmp_path / "refused.jsonl"
+    with pytest.raises(ValueError, match=r"^pipelines 2 with a hysteresis: "):
+        tactile.run(root / "samples" / "palpation", models=root / "models", pipelines=2,
+                    hysteresis=(0.6, 0.3), out=out)
+    assert not out.exists()

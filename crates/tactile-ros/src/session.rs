@@ -34,6 +34,10 @@ pub struct RunRequest {
     pub runtime: Runtime,
     /// onnxruntime intra-op threads.
     pub threads: usize,
+    /// Copies of the models processing frames at once, each on a thread
+    /// of its own (a recorded source without a hysteresis:
+    /// [`tactile_pipeline::run::check_pipelines`]).
+    pub pipelines: usize,
     /// Two-threshold filter on the detector per sequence: `(on, off)`.
     pub hysteresis: Option<(f32, f32)>,
     /// JSON Lines records (`-`: standard output), or ROS 2 messages for a
@@ -60,6 +64,7 @@ impl RunRequest {
             models: models.into(),
             runtime: Runtime::Onnx,
             threads: 1,
+            pipelines: 1,
             hysteresis: None,
             out: None,
             render: None,
@@ -79,7 +84,8 @@ impl RunRequest {
 /// go over its frames.
 pub struct RunSession {
     source: FrameSource,
-    pipeline: Pipeline,
+    /// The first's warnings stand for all (copies of one folder).
+    pipelines: Vec<Pipeline>,
     options: RunOptions,
     robot: RobotOutputs,
     records: Option<JsonLines>,
@@ -162,9 +168,19 @@ impl RunSession {
             dataset::check_output_dir(dir, &inputs)?;
             tactile_core::io::refuse_folder_with_files(dir)?;
         }
-        let pipeline =
-            Pipeline::load(&request.models, request.runtime, request.threads).map_err(Box::new)?;
+        tactile_pipeline::run::check_pipelines(
+            request.pipelines,
+            request.hysteresis,
+            source.kind(),
+        )
+        .map_err(Box::new)?;
+        let load = || Pipeline::load(&request.models, request.runtime, request.threads);
+        let pipeline = load().map_err(Box::new)?;
         let topics = Topic::written_by(&pipeline, request.with_frames);
+        let mut pipelines = vec![pipeline];
+        for _ in 1..request.pipelines {
+            pipelines.push(load().map_err(Box::new)?);
+        }
         let robot = RobotOutputs {
             mcap: mcap_out
                 .map(|p| McapResults::create(p, &topics))
@@ -183,7 +199,7 @@ impl RunSession {
             .map_err(Box::new)?;
         Ok(Self {
             source,
-            pipeline,
+            pipelines,
             options: RunOptions {
                 hysteresis: request.hysteresis,
                 render: request.render.clone(),
@@ -202,7 +218,7 @@ impl RunSession {
     /// folder that are not frames, gaps in the numbering, one split of a
     /// bag read alone).
     pub fn warnings(&self) -> Vec<String> {
-        let mut w = self.pipeline.warnings.clone();
+        let mut w = self.pipelines[0].warnings.clone();
         w.extend(self.source.warnings());
         w
     }
@@ -228,14 +244,14 @@ impl RunSession {
     pub fn run(self) -> Result<RunReport> {
         let Self {
             mut source,
-            mut pipeline,
+            mut pipelines,
             options,
             mut robot,
             mut records,
             records_file,
             ..
         } = self;
-        let summary = tactile_pipeline::run(&mut pipeline, &mut source, &options, &mut |item| {
+        let summary = tactile_pipeline::run(&mut pipelines, &mut source, &options, &mut |item| {
             robot.handle(item).map_err(tactile_core::Error::from)?;
             records
                 .as_mut()

@@ -49,6 +49,12 @@ pub(crate) struct RunArgs {
     /// decodes the next frames.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=256))]
     threads: u16,
+    /// Copies of the models that process frames at once, each on a thread
+    /// of its own (a recorded source without --hysteresis; records stay in
+    /// the source's order): more frames per second where --threads gives
+    /// fewer (README, "Commands"). At most 64.
+    #[arg(long, default_value_t = 1)]
+    pipelines: usize,
     /// JSON Lines, one record per frame as it is made: a file (it appears
     /// when the run ends) or `-` for standard output, flushed per frame
     /// (the summary then goes to standard error). A name ending in .mcap
@@ -142,6 +148,7 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         },
         runtime: a.runtime,
         threads: a.threads as usize,
+        pipelines: a.pipelines,
         hysteresis,
         out: a.out,
         render: a.render,

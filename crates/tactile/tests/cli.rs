@@ -1574,6 +1574,77 @@ fn run_gates_frames_and_agrees_across_runtimes() {
 }
 
 #[test]
+fn several_pipelines_give_the_records_of_one_in_order() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let models = root.join("models");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("vt");
+    // 14 frames: batches of 3 leave a short one at the end.
+    synth_visuotactile(&data, 2, 7, 63);
+    let run = |pipelines: &str, extra: &[&str], out: &Path| {
+        let mut args = vec![
+            "run",
+            "--data",
+            data.to_str().unwrap(),
+            "--models",
+            models.to_str().unwrap(),
+            "--pipelines",
+            pipelines,
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        tactile(&args)
+    };
+    let records = |out: &Path| -> Vec<serde_json::Value> {
+        std::fs::read_to_string(out)
+            .unwrap()
+            .lines()
+            .map(|l| {
+                let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+                let o = v.as_object_mut().unwrap();
+                o.retain(|k, _| !k.starts_with("ms_") && k != "latency_ms");
+                v
+            })
+            .collect()
+    };
+    let (one, three) = (tmp.path().join("1.jsonl"), tmp.path().join("3.jsonl"));
+    let (ok, msg) = run("1", &[], &one);
+    assert!(ok, "{msg}");
+    let (ok, msg3) = run("3", &[], &three);
+    assert!(ok, "{msg3}");
+    let (a, b) = (records(&one), records(&three));
+    assert_eq!(a.len(), 14);
+    assert!(a.iter().any(|r| r["tendon"] == true) && a.iter().any(|r| r["tendon"] == false));
+    assert_eq!(
+        a, b,
+        "three pipelines must give one's records, in the source's order"
+    );
+    assert_eq!(last_json(&msg)["pipelines"], 1);
+    assert_eq!(last_json(&msg3)["pipelines"], 3);
+    assert_eq!(
+        last_json(&msg)["detector_accuracy"],
+        last_json(&msg3)["detector_accuracy"]
+    );
+    // Refused before any model loads, nothing written: a hysteresis (it
+    // decides each frame after the one before) and a count out of range.
+    for (n, extra, says) in [
+        (
+            "2",
+            &["--hysteresis", "0.6,0.3"][..],
+            "pipelines 2 with a hysteresis: the hysteresis decides each frame after the one before it",
+        ),
+        ("0", &[][..], "pipelines: must be 1 to 64, got 0"),
+        ("65", &[][..], "pipelines: must be 1 to 64, got 65"),
+    ] {
+        let out = tmp.path().join(format!("refused-{n}.jsonl"));
+        let (ok, msg) = run(n, extra, &out);
+        assert!(!ok && msg.contains(says), "{msg}");
+        assert!(!out.exists());
+    }
+}
+
+#[test]
 fn run_on_a_video_folder_with_a_dropped_frame_reports_it() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let tmp = tempfile::tempdir().unwrap();

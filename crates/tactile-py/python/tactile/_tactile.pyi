@@ -165,6 +165,7 @@ def run(
     models: _Path = "models",
     runtime: str = "onnx",
     threads: int = 1,
+    pipelines: int = 1,
     hysteresis: Optional[Tuple[float, float]] = None,
     out: Optional[_Path] = None,
     render: Optional[_Path] = None,
@@ -184,7 +185,9 @@ def run(
     summary the command line prints last, with ``records``, ``mcap``,
     ``mcap_frames``, ``render``, ``live_sent`` and ``live_dropped``. The
     summary's warnings (frames a calibrated sensor cannot read, frames
-    unlike the sensor's) are raised as ``UserWarning``s."""
+    unlike the sensor's) are raised as ``UserWarning``s. ``pipelines`` copies
+    of the models take a recorded source's frames at once, each on a thread
+    of its own (without a hysteresis; records stay in order)."""
 
 class Reconstructor:
     """A calibrated GelSight-like sensor: frames to the skin's indentation."""
