@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 import tactile
+from overhead import cpu_name  # this folder's other bench: the machine named alike
 
 _WORKER: tactile.Pipeline | None = None
 _THREAD = threading.local()
@@ -54,16 +55,6 @@ def _process_in_thread(frame: np.ndarray, models: str) -> tactile.FrameResult:
     if not hasattr(_THREAD, "pipe"):
         _THREAD.pipe = tactile.Pipeline(models, threads=1)
     return _THREAD.pipe.process(frame)
-
-
-def cpu_name() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def main() -> None:
