@@ -52,7 +52,8 @@ pub(crate) struct RunArgs {
     /// Copies of the models that process frames at once, each on a thread
     /// of its own (a recorded source without --hysteresis; records stay in
     /// the source's order): more frames per second where --threads gives
-    /// fewer (README, "Commands"). At most 64.
+    /// fewer, when the models rather than decoding are the slower part
+    /// (README, "Commands"). At most 64.
     #[arg(long, default_value_t = 1)]
     pipelines: usize,
     /// JSON Lines, one record per frame as it is made: a file (it appears
