@@ -15,7 +15,7 @@ MAX_BATCH: int
 MAX_ARRAY_BYTES: int
 
 class FrameResult:
-    """What the pipeline made of one frame."""
+    """What the pipeline made of one frame; pickles whole (record, mask, depth, indentation), so worker processes can return it."""
 
     @property
     def tendon(self) -> bool: ...
@@ -58,7 +58,9 @@ class FrameResult:
     def to_dict(self) -> Dict[str, Any]: ...
 
 class Pipeline:
-    """Paper B's palpation pipeline: detect, then segment, point and reconstruct depth; a calibrated sensor's indentation."""
+    """Paper B's palpation pipeline: detect, then segment, point and reconstruct depth; a calibrated sensor's indentation.
+
+    Not pickled (it holds loaded models): make one per thread or worker process; one per thread runs frames in parallel."""
 
     def __init__(
         self,
@@ -216,7 +218,7 @@ def reconstruct_frames(
 ) -> Dict[str, Any]: ...
 
 class Dataset:
-    """A dataset folder of the documented layout."""
+    """A dataset folder of the documented layout; pickles as its folder, opened and checked again where it is unpickled."""
 
     def __init__(self, path: _Path) -> None: ...
     @staticmethod
@@ -255,7 +257,7 @@ class Dataset:
     def depth_m(self, i: int) -> Optional[npt.NDArray[np.float32]]: ...
 
 class Frame:
-    """One frame of a source: `image` is (H, W, 3) uint8 RGB."""
+    """One frame of a source: `image` is (H, W, 3) uint8 RGB; pickles with its image and labels."""
 
     @property
     def image(self) -> npt.NDArray[np.uint8]: ...
