@@ -44,9 +44,11 @@ pub(crate) struct RunArgs {
     #[arg(long, value_enum, default_value_t = Runtime::Onnx)]
     runtime: Runtime,
     /// onnxruntime intra-op threads. Default 1: these models are small
-    /// enough that a second thread costs more than it gains (measured:
-    /// 159 against 350 frames/s without overlap), and the other core
-    /// decodes the next frames.
+    /// enough that a second thread costs more than it gains (240 rendered
+    /// 640x360 frames on 2 cores, median of 3 runs: 233 frames/s on one
+    /// thread, 214 on two; without overlap 180 and 170), and the other
+    /// core decodes the next frames. For more frames per second, give
+    /// --pipelines.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=256))]
     threads: u16,
     /// Copies of the models that process frames at once, each on a thread
