@@ -187,6 +187,10 @@ impl RunSummary {
         let source = serde_json::to_value(self.source).ok();
         let mut lines = vec![];
         let name = source.as_ref().and_then(|v| v.as_str()).unwrap_or("source");
+        let runtime = match self.pipelines {
+            1 => self.runtime.to_string(),
+            n => format!("{} on {n} pipelines", self.runtime),
+        };
         if self.palpation {
             // Frames the calibration cannot read cost no detector pass.
             let unread = self.unreadable.as_ref().map_or(0, |u| u.frames);
@@ -194,7 +198,7 @@ impl RunSummary {
                 "{} frames from a {name} ({:.1} frames/s, {}, decoding included); {} without a tendon cost one detector pass{}",
                 self.frames,
                 self.fps,
-                self.runtime,
+                runtime,
                 self.gated_out.saturating_sub(unread),
                 match unread {
                     0 => String::new(),
@@ -212,7 +216,7 @@ impl RunSummary {
         } else {
             lines.push(format!(
                 "{} frames from a {name} ({:.1} frames/s, {}, decoding included); a calibrated sensor without palpation models: indentation only",
-                self.frames, self.fps, self.runtime
+                self.frames, self.fps, runtime
             ));
             lines.push(format!(
                 "median / p95: whole frame {}",

@@ -1622,6 +1622,11 @@ fn several_pipelines_give_the_records_of_one_in_order() {
     );
     assert_eq!(last_json(&msg)["pipelines"], 1);
     assert_eq!(last_json(&msg3)["pipelines"], 3);
+    assert!(
+        msg3.contains("frames/s, onnx on 3 pipelines, decoding included"),
+        "{msg3}"
+    );
+    assert!(msg.contains("frames/s, onnx, decoding included"), "{msg}");
     assert_eq!(
         last_json(&msg)["detector_accuracy"],
         last_json(&msg3)["detector_accuracy"]
