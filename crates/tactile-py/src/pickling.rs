@@ -69,7 +69,15 @@ pub(crate) fn frame_result(version: &str, state: &[u8]) -> PyResult<FrameResult>
 
 /// `Frame.__reduce__`: its fields, restored by [`frame`].
 pub(crate) fn reduce_frame<'py>(py: Python<'py>, f: &PyFrame) -> PyResult<Bound<'py, PyAny>> {
-    let args = f.fields(py).into_pyobject(py)?.into_any();
+    let fields = (
+        f.image.clone_ref(py),
+        f.name.clone(),
+        f.sequence.clone(),
+        f.tendon,
+        f.age_ms,
+        f.stamp_ns,
+    );
+    let args = fields.into_pyobject(py)?.into_any();
     Ok(PyTuple::new(py, [restorer(py, "_frame")?, args])?.into_any())
 }
 
@@ -94,14 +102,14 @@ pub(crate) fn frame(
             rgb.shape()
         )));
     }
-    Ok(PyFrame::new(
-        image.unbind(),
+    Ok(PyFrame {
+        image: image.unbind(),
         name,
         sequence,
         tendon,
         age_ms,
         stamp_ns,
-    ))
+    })
 }
 
 /// The refusal to pickle `class`, which holds loaded models (and

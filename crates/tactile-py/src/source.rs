@@ -20,56 +20,12 @@ use crate::errors::PyResultExt;
 /// `stamp_ns` a bag frame's header stamp, nanoseconds since the epoch.
 #[pyclass(module = "tactile", name = "Frame", frozen, get_all)]
 pub struct PyFrame {
-    image: Py<PyAny>,
-    name: String,
-    sequence: Option<String>,
-    tendon: Option<bool>,
-    age_ms: Option<f64>,
-    stamp_ns: Option<i64>,
-}
-
-impl PyFrame {
-    /// A frame of these fields.
-    pub(crate) fn new(
-        image: Py<PyAny>,
-        name: String,
-        sequence: Option<String>,
-        tendon: Option<bool>,
-        age_ms: Option<f64>,
-        stamp_ns: Option<i64>,
-    ) -> Self {
-        Self {
-            image,
-            name,
-            sequence,
-            tendon,
-            age_ms,
-            stamp_ns,
-        }
-    }
-
-    /// Its fields in [`PyFrame::new`]'s order (what a pickle keeps).
-    #[allow(clippy::type_complexity)]
-    pub(crate) fn fields(
-        &self,
-        py: Python<'_>,
-    ) -> (
-        Py<PyAny>,
-        String,
-        Option<String>,
-        Option<bool>,
-        Option<f64>,
-        Option<i64>,
-    ) {
-        (
-            self.image.clone_ref(py),
-            self.name.clone(),
-            self.sequence.clone(),
-            self.tendon,
-            self.age_ms,
-            self.stamp_ns,
-        )
-    }
+    pub(crate) image: Py<PyAny>,
+    pub(crate) name: String,
+    pub(crate) sequence: Option<String>,
+    pub(crate) tendon: Option<bool>,
+    pub(crate) age_ms: Option<f64>,
+    pub(crate) stamp_ns: Option<i64>,
 }
 
 #[pymethods]
