@@ -5,6 +5,7 @@
 //! into numpy arrays, dicts or Python exceptions. The typed Python API,
 //! with its docstrings and stubs, is in `python/tactile/`.
 
+mod args;
 mod calibrate;
 mod dataset;
 mod encoder;

@@ -10,18 +10,14 @@ use pyo3::types::PyDict;
 use tactile_burn::Runtime;
 use tactile_pipeline::{FrameRecord, FrameViews, Hysteresis, Pipeline};
 
+use crate::args::Whole;
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout, each_frame};
 
 /// onnxruntime's intra-op threads as the command line bounds them.
-pub(crate) fn check_threads(threads: usize) -> PyResult<()> {
-    if threads == 0 || threads > tactile_onnx::runtime::MAX_THREADS {
-        return Err(PyValueError::new_err(format!(
-            "threads: must be 1 to {}, got {threads}",
-            tactile_onnx::runtime::MAX_THREADS
-        )));
-    }
-    Ok(())
+pub(crate) fn threads(arg: &Whole) -> PyResult<usize> {
+    let max = tactile_onnx::runtime::MAX_THREADS as u64;
+    Ok(arg.within("threads", 1, max)? as usize)
 }
 
 /// Parse a runtime name as the command line does.
@@ -97,16 +93,19 @@ impl PyPipeline {
     /// onnxruntime's intra-op threads (1 to 256); `hysteresis=(on, off)`
     /// filters the tendon decision over a sequence (see `reset`).
     #[new]
-    #[pyo3(signature = (models=PathBuf::from("models"), runtime="onnx", *, threads=1, hysteresis=None))]
+    #[pyo3(
+        signature = (models=PathBuf::from("models"), runtime="onnx", *, threads=Whole::of(1), hysteresis=None),
+        text_signature = "(models='models', runtime='onnx', *, threads=1, hysteresis=None)"
+    )]
     fn new(
         py: Python<'_>,
         models: PathBuf,
         runtime: &str,
-        threads: usize,
+        threads: Whole,
         hysteresis: Option<(f32, f32)>,
     ) -> PyResult<Self> {
         let rt = crate::pipeline::runtime(runtime)?;
-        check_threads(threads)?;
+        let threads = self::threads(&threads)?;
         let filter = hysteresis
             .map(|(on, off)| Hysteresis::new(on, off))
             .transpose()
@@ -153,18 +152,14 @@ impl PyPipeline {
     /// Time the pipeline inside Rust on `frame`, `repeats` times, without
     /// the Python call around it: milliseconds per run. With the same loop
     /// over `process`, this measures what the binding costs.
-    #[pyo3(signature = (frame, repeats=100))]
+    #[pyo3(signature = (frame, repeats=Whole::of(100)), text_signature = "(self, frame, repeats=100)")]
     fn time_in_rust(
         &self,
         py: Python<'_>,
         frame: &Bound<'_, PyAny>,
-        repeats: usize,
+        repeats: Whole,
     ) -> PyResult<Vec<f64>> {
-        if repeats == 0 || repeats > 1_000_000 {
-            return Err(PyValueError::new_err(format!(
-                "repeats: must be 1 to 1000000, got {repeats}"
-            )));
-        }
+        let repeats = repeats.within("repeats", 1u64, 1_000_000)?;
         let arg = FrameArg::new(frame, Layout::Rgb, "frame")?;
         let px = arg.view();
         crate::work::interruptible(py, || -> PyResult<Vec<f64>> {

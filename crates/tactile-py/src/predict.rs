@@ -11,6 +11,7 @@ use pyo3::types::PyDict;
 use tactile_estimate::Column;
 use tactile_pipeline::tactip::{PredictInput, Predictor};
 
+use crate::args::Whole;
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::work::interruptible;
@@ -32,10 +33,11 @@ pub(crate) fn predict<'py>(
     out: Option<PathBuf>,
     heads: Vec<PathBuf>,
     topic: Option<String>,
-    limit: Option<u64>,
+    limit: Option<Whole>,
     runtime: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let rt = self::runtime(runtime)?;
+    let limit = crate::source::source_limit(limit.as_ref())?;
     let (r, input_warnings) = interruptible(py, || {
         let mut input = PredictInput::open(&data, topic.as_deref(), limit, false).py()?;
         // Taken now: those found while reading come with the estimates.

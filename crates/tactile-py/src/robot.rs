@@ -11,9 +11,16 @@ use pyo3::prelude::*;
 use tactile_ros::live::LiveView;
 use tactile_ros::{FrameMessages, McapResults, Topic};
 
+use crate::args::{Whole, optional};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout};
 use crate::pipeline::FrameResult;
+
+/// `stamp_ns=`: nanoseconds as a ROS 2 stamp's signed 64 bits hold them
+/// (which stamps a message can carry is the library's check).
+fn stamp(arg: Option<&Whole>) -> PyResult<Option<i64>> {
+    optional(arg, "stamp_ns", i64::MIN, i64::MAX)
+}
 
 /// The messages of one result, stamped `stamp_ns` when given, with the
 /// `(H, W, 3)` uint8 `frame` when given.
@@ -98,9 +105,9 @@ impl PyMcapWriter {
         &self,
         result: &FrameResult,
         frame: Option<&Bound<'_, PyAny>>,
-        stamp_ns: Option<i64>,
+        stamp_ns: Option<Whole>,
     ) -> PyResult<()> {
-        let m = encode(result, frame, stamp_ns)?;
+        let m = encode(result, frame, stamp(stamp_ns.as_ref())?)?;
         self.with(|w| w.write(&m).py())
     }
 
@@ -199,8 +206,9 @@ impl PyLiveView {
         &self,
         result: &FrameResult,
         frame: Option<&Bound<'_, PyAny>>,
-        stamp_ns: Option<i64>,
+        stamp_ns: Option<Whole>,
     ) -> PyResult<bool> {
+        let stamp_ns = stamp(stamp_ns.as_ref())?;
         // A stamp no message can hold is refused whether or not a viewer
         // watches, so a script tried without one fails as it would live.
         if let Some(s) = stamp_ns {

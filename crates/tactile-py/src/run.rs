@@ -8,8 +8,10 @@ use std::path::PathBuf;
 use pyo3::prelude::*;
 use tactile_ros::{RunRequest, RunSession};
 
+use crate::args::Whole;
 use crate::errors::PyResultExt;
-use crate::pipeline::{check_threads, runtime};
+use crate::pipeline::runtime;
+use crate::source::source_limit;
 use crate::source::source_spec;
 use crate::work::interruptible;
 
@@ -24,18 +26,20 @@ use crate::work::interruptible;
 /// appears when the run ends; Ctrl-C stops it leaving none.
 #[pyfunction]
 #[pyo3(signature = (
-    source=None, *, models=PathBuf::from("models"), runtime="onnx", threads=1,
-    pipelines=1, hysteresis=None, out=None, render=None, with_frames=false, view=None,
-    view_wait=0.0, topic=None, stdin_size=None, live_queue=2, limit=None, prefetch=true
-))]
+    source=None, *, models=PathBuf::from("models"), runtime="onnx", threads=Whole::of(1),
+    pipelines=Whole::of(1), hysteresis=None, out=None, render=None, with_frames=false, view=None,
+    view_wait=0.0, topic=None, stdin_size=None, live_queue=Whole::of(2), limit=None, prefetch=true
+), text_signature = "(source=None, *, models='models', runtime='onnx', threads=1, pipelines=1, \
+    hysteresis=None, out=None, render=None, with_frames=False, view=None, view_wait=0.0, topic=None, \
+    stdin_size=None, live_queue=2, limit=None, prefetch=True)")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run<'py>(
     py: Python<'py>,
     source: Option<PathBuf>,
     models: PathBuf,
     runtime: &str,
-    threads: usize,
-    pipelines: usize,
+    threads: Whole,
+    pipelines: Whole,
     hysteresis: Option<(f32, f32)>,
     out: Option<PathBuf>,
     render: Option<PathBuf>,
@@ -43,18 +47,20 @@ pub(crate) fn run<'py>(
     view: Option<String>,
     view_wait: f64,
     topic: Option<String>,
-    stdin_size: Option<(usize, usize)>,
-    live_queue: usize,
-    limit: Option<u64>,
+    stdin_size: Option<(Whole, Whole)>,
+    live_queue: Whole,
+    limit: Option<Whole>,
     prefetch: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::runtime(runtime)?;
-    check_threads(threads)?;
+    let threads = crate::pipeline::threads(&threads)?;
+    let max = tactile_pipeline::run::MAX_PIPELINES as u64;
+    let pipelines = pipelines.within("pipelines", 1, max)? as usize;
     let request = RunRequest {
         source_options: tactile_pipeline::SourceOptions {
             overlap: prefetch,
-            live_queue,
-            limit,
+            live_queue: crate::source::live_queue(&live_queue)?,
+            limit: source_limit(limit.as_ref())?,
         },
         runtime: rt,
         threads,

@@ -11,6 +11,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use tactile_pipeline::{FrameSource, SourceOptions, SourceSpec};
 
+use crate::args::{Whole, optional};
 use crate::errors::PyResultExt;
 
 /// One frame of a source: `image` is `(H, W, 3)` uint8 RGB; `name` the
@@ -224,13 +225,14 @@ impl PyVideoDecoder {
     }
 
     /// Give the next packet and its stamp (nanoseconds); the frames ready.
-    #[pyo3(signature = (data, stamp_ns=0))]
+    #[pyo3(signature = (data, stamp_ns=Whole::of(0)), text_signature = "(self, data, stamp_ns=0)")]
     fn decode(
         &self,
         py: Python<'_>,
         data: &Bound<'_, PyAny>,
-        stamp_ns: i64,
+        stamp_ns: Whole,
     ) -> PyResult<Vec<PyFrame>> {
+        let stamp_ns = stamp_ns.within("stamp_ns", i64::MIN, i64::MAX)?;
         let data = message_bytes(py, data, "a packet's data")?
             .as_bytes()
             .to_vec();
@@ -288,22 +290,25 @@ impl PyVideoDecoder {
 /// from standard input (live). Live sources keep at most `live_queue`
 /// frames waiting and drop the oldest when more arrive.
 #[pyfunction]
-#[pyo3(signature = (source=None, *, topic=None, stdin_size=None, live_queue=2, limit=None, prefetch=true))]
+#[pyo3(
+    signature = (source=None, *, topic=None, stdin_size=None, live_queue=Whole::of(2), limit=None, prefetch=true),
+    text_signature = "(source=None, *, topic=None, stdin_size=None, live_queue=2, limit=None, prefetch=True)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn frames(
     py: Python<'_>,
     source: Option<PathBuf>,
     topic: Option<String>,
-    stdin_size: Option<(usize, usize)>,
-    live_queue: usize,
-    limit: Option<u64>,
+    stdin_size: Option<(Whole, Whole)>,
+    live_queue: Whole,
+    limit: Option<Whole>,
     prefetch: bool,
 ) -> PyResult<PyFrameSource> {
     let spec = source_spec(source, topic, stdin_size)?;
     let options = SourceOptions {
         overlap: prefetch,
-        live_queue,
-        limit,
+        live_queue: self::live_queue(&live_queue)?,
+        limit: source_limit(limit.as_ref())?,
     };
     let source = py.detach(move || FrameSource::open(&spec, options)).py()?;
     for w in source.warnings() {
@@ -315,13 +320,37 @@ pub(crate) fn frames(
     })
 }
 
+/// `live_queue=`: frames a live source keeps waiting, as the command line
+/// bounds them.
+pub(crate) fn live_queue(arg: &Whole) -> PyResult<usize> {
+    let max = tactile_core::source::MAX_LIVE_QUEUE as u64;
+    Ok(arg.within("live_queue", 1, max)? as usize)
+}
+
+/// `limit=`: at most this many frames (`None`: all of them).
+pub(crate) fn source_limit(arg: Option<&Whole>) -> PyResult<Option<u64>> {
+    optional(arg, "limit", 1, u64::MAX)
+}
+
 /// The source a path, a bag's topic or a size of raw frames on stdin
 /// names: `tactile.frames`' and `tactile.run`'s first arguments.
 pub(crate) fn source_spec(
     source: Option<PathBuf>,
     topic: Option<String>,
-    stdin_size: Option<(usize, usize)>,
+    stdin_size: Option<(Whole, Whole)>,
 ) -> PyResult<SourceSpec> {
+    // How large a frame may be is the library's check (1 pixel to 8K).
+    let side = |w: &Whole, name| {
+        let n = w.within(name, 1, u64::MAX)?;
+        Ok::<_, PyErr>(usize::try_from(n).unwrap_or(usize::MAX))
+    };
+    let stdin_size = match stdin_size {
+        Some((w, h)) => Some((
+            side(&w, "stdin_size width")?,
+            side(&h, "stdin_size height")?,
+        )),
+        None => None,
+    };
     Ok(match (source, stdin_size) {
         (None, Some(_)) if topic.is_some() => {
             return Err(PyValueError::new_err(

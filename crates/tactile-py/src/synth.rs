@@ -12,6 +12,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use crate::args::{Whole, optional};
 use crate::errors::PyResultExt;
 
 /// Most bytes of arrays one call may return (a bigger set is written to
@@ -29,6 +30,17 @@ fn check_in_memory(count: usize, bytes_per_frame: usize) -> PyResult<()> {
         )));
     }
     Ok(())
+}
+
+/// `count=` or `sequences=`: at least 1 (how many a dataset may hold is
+/// the generator's check).
+fn how_many(arg: Option<&Whole>, name: &str) -> PyResult<Option<usize>> {
+    Ok(optional(arg, name, 1, u64::MAX)?.map(|n| usize::try_from(n).unwrap_or(usize::MAX)))
+}
+
+/// `seed=`: any whole number a `u64` holds.
+fn seed(arg: &Whole) -> PyResult<u64> {
+    arg.within("seed", 0, u64::MAX)
 }
 
 fn write_options(force: bool, progress: bool) -> WriteOptions {
@@ -91,13 +103,15 @@ fn video_arrays<'py, 'a>(
 #[pyo3(signature = (count, seed, out, force, progress, **options))]
 pub(crate) fn synth_tactip(
     py: Python<'_>,
-    count: usize,
-    seed: u64,
+    count: Whole,
+    seed: Whole,
     out: Option<PathBuf>,
     force: bool,
     progress: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
+    let count = how_many(Some(&count), "count")?.unwrap_or_default();
+    let seed = self::seed(&seed)?;
     let cfg: TactipConfig = crate::json::options(py, options)?;
     cfg.validate().py()?;
     if let Some(out) = out {
@@ -154,14 +168,17 @@ pub(crate) fn synth_tactip(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn synth_visuotactile(
     py: Python<'_>,
-    count: Option<usize>,
-    sequences: Option<usize>,
-    seed: u64,
+    count: Option<Whole>,
+    sequences: Option<Whole>,
+    seed: Whole,
     out: Option<PathBuf>,
     force: bool,
     progress: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
+    let count = how_many(count.as_ref(), "count")?;
+    let sequences = how_many(sequences.as_ref(), "sequences")?;
+    let seed = self::seed(&seed)?;
     let cfg: VisuotactileConfig = crate::json::options(py, options)?;
     cfg.validate().py()?;
     let count = cfg.frame_count(count, sequences).py()?;
@@ -248,14 +265,17 @@ pub(crate) fn synth_visuotactile(
 pub(crate) fn synth_gelsight(
     py: Python<'_>,
     sensor: PathBuf,
-    count: Option<usize>,
-    sequences: Option<usize>,
-    seed: u64,
+    count: Option<Whole>,
+    sequences: Option<Whole>,
+    seed: Whole,
     out: Option<PathBuf>,
     force: bool,
     progress: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
+    let count = how_many(count.as_ref(), "count")?;
+    let sequences = how_many(sequences.as_ref(), "sequences")?;
+    let seed = self::seed(&seed)?;
     let cfg: CalibratedConfig = crate::json::options(py, options)?;
     if let Some(out) = out {
         let (path, _) = crate::work::interruptible(py, || {

@@ -164,7 +164,7 @@ def test_a_video_cut_short_gives_its_frames_with_a_warning(root, tmp_path):
 
 def test_limit_and_bad_sources(root, tmp_path):
     assert len(list(tactile.frames(root / "samples" / "palpation", limit=3))) == 3
-    with pytest.raises(ValueError, match="limit: must be at least 1 frame, got 0"):
+    with pytest.raises(ValueError, match="limit: must be at least 1, got 0"):
         tactile.frames(root / "samples" / "palpation", limit=0)
     with pytest.raises(FileNotFoundError, match="missing"):
         tactile.frames(tmp_path / "missing")

@@ -25,17 +25,6 @@ from . import _tactile
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-def _whole(name: str, value: Any) -> int:
-    """A whole number of at least 1, or a ValueError naming the option."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name}: expected a whole number, got {type(value).__name__}")
-    if value < 1:
-        raise ValueError(f"{name}: must be at least 1, got {value}")
-    if value >= 2**63:
-        raise ValueError(f"{name}: {value} is far more frames than a dataset may hold")
-    return int(value)
-
-
 def tactip(
     count: int,
     seed: int = 1234,
@@ -57,7 +46,7 @@ def tactip(
     memory or to disk; Ctrl-C stops the render and keeps nothing.
     """
     r = _tactile.synth_tactip(
-        _whole("count", count), int(seed), None if out is None else os.fspath(out), force, progress,
+        count, seed, None if out is None else os.fspath(out), force, progress,
         **options,
     )
     return Path(r) if out is not None else r
@@ -86,9 +75,9 @@ def visuotactile(
     ``progress`` and Ctrl-C as for :func:`tactip`.
     """
     r = _tactile.synth_visuotactile(
-        None if count is None else _whole("count", count),
-        None if sequences is None else _whole("sequences", sequences),
-        int(seed),
+        count,
+        sequences,
+        seed,
         None if out is None else os.fspath(out),
         force,
         progress,
@@ -125,9 +114,9 @@ def gelsight(
     """
     r = _tactile.synth_gelsight(
         os.fspath(sensor),
-        None if count is None else _whole("count", count),
-        None if sequences is None else _whole("sequences", sequences),
-        int(seed),
+        count,
+        sequences,
+        seed,
         None if out is None else os.fspath(out),
         force,
         progress,

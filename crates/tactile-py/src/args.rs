@@ -1,0 +1,100 @@
+//! Whole-number arguments (threads, pipelines, limits, queues, repeats,
+//! seeds, stamps): taken from any Python integer and checked where they are
+//! used, so a wrong one's error names its keyword and range. PyO3's own
+//! conversion to a Rust integer says only "can't convert negative int to
+//! unsigned" or "'float' object cannot be interpreted as an integer" (the
+//! keyword is a note a traceback shows, not part of the message).
+
+use pyo3::exceptions::{PyOverflowError, PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyBool;
+
+/// A whole-number argument as the caller gave it; [`Whole::within`] makes
+/// it a number or an error naming the keyword.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum Whole {
+    /// An `int`, a numpy integer or anything else with `__index__`.
+    Int(i128),
+    /// An integer beyond 128 bits: `str()` of it, for the message.
+    Huge(String),
+    /// Not a whole number (a float, a string, a bool): its type's name.
+    Not(String),
+}
+
+impl Whole {
+    /// The default of a keyword.
+    pub(crate) const fn of(value: u64) -> Self {
+        Self::Int(value as i128)
+    }
+
+    /// The number, if it is a whole number from `min` to `max`; else a
+    /// `ValueError` ("threads: must be 1 to 64, got -1") or a `TypeError`
+    /// ("threads: expected a whole number, got float") naming `name`.
+    pub(crate) fn within<T>(&self, name: &str, min: T, max: T) -> PyResult<T>
+    where
+        T: Copy + Into<i128> + TryFrom<i128> + std::fmt::Display + PartialEq + Bounded,
+    {
+        // A range open at the top reads "at least 1", unless the number is
+        // past the type's end ("at most 18446744073709551615").
+        let refuse = |too_large: bool, got: &dyn std::fmt::Display| {
+            let range = match (max == T::MAX, too_large) {
+                (false, _) => format!("{min} to {max}"),
+                (true, false) => format!("at least {min}"),
+                (true, true) => format!("at most {max}"),
+            };
+            PyValueError::new_err(format!("{name}: must be {range}, got {got}"))
+        };
+        match self {
+            Self::Int(v) if *v < min.into() => Err(refuse(false, v)),
+            Self::Int(v) => T::try_from(*v)
+                .ok()
+                .filter(|_| *v <= max.into())
+                .ok_or_else(|| refuse(true, v)),
+            Self::Huge(text) => Err(refuse(!text.starts_with('-'), text)),
+            Self::Not(t) => Err(PyTypeError::new_err(format!(
+                "{name}: expected a whole number, got {t}"
+            ))),
+        }
+    }
+}
+
+/// The largest value of an integer type, so a range without an upper
+/// bound reads "at least 1".
+pub(crate) trait Bounded {
+    /// The type's largest value.
+    const MAX: Self;
+}
+
+impl Bounded for u64 {
+    const MAX: Self = u64::MAX;
+}
+
+impl Bounded for i64 {
+    const MAX: Self = i64::MAX;
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        // A bool is an int to Python, and `threads=True` is a mistake.
+        if obj.is_instance_of::<PyBool>() {
+            return Ok(Self::Not("bool".into()));
+        }
+        match obj.extract::<i128>() {
+            Ok(v) => Ok(Self::Int(v)),
+            Err(e) if e.is_instance_of::<PyOverflowError>(obj.py()) => {
+                Ok(Self::Huge(obj.str()?.to_string()))
+            }
+            Err(_) => Ok(Self::Not(obj.get_type().name()?.to_string())),
+        }
+    }
+}
+
+/// An optional whole number (`limit=None`): `None` stays `None`.
+pub(crate) fn optional<T>(arg: Option<&Whole>, name: &str, min: T, max: T) -> PyResult<Option<T>>
+where
+    T: Copy + Into<i128> + TryFrom<i128> + std::fmt::Display + PartialEq + Bounded,
+{
+    arg.map(|w| w.within(name, min, max)).transpose()
+}

@@ -1,0 +1,86 @@
+"""Whole-number keywords: a wrong one is refused naming the keyword and its
+range, before any work; numpy integers are whole numbers too."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+import tactile
+import tactile.synth
+
+
+def _calls(root, pipeline, palpation_frames, tmp_path):
+    """Every whole-number keyword of the package, as one call taking the
+    value, with the name its error must start with."""
+    data = root / "samples" / "palpation"
+    frame = palpation_frames[0]
+    result = pipeline.process(frame)
+    writer = tactile.McapWriter(tmp_path / "out.mcap")
+    view = tactile.LiveView("127.0.0.1:0")
+    decoder = tactile.VideoDecoder("h264")
+    return writer, view, [
+        ("threads", lambda v: tactile.Pipeline(root / "models", threads=v)),
+        ("repeats", lambda v: pipeline.time_in_rust(frame, repeats=v)),
+        ("threads", lambda v: tactile.run(data, models=root / "models", threads=v)),
+        ("pipelines", lambda v: tactile.run(data, models=root / "models", pipelines=v)),
+        ("live_queue", lambda v: tactile.run(data, models=root / "models", live_queue=v)),
+        ("limit", lambda v: tactile.run(data, models=root / "models", limit=v)),
+        ("stdin_size width", lambda v: tactile.run(models=root / "models", stdin_size=(v, 8))),
+        ("stdin_size height", lambda v: tactile.frames(stdin_size=(8, v))),
+        ("live_queue", lambda v: tactile.frames(data, live_queue=v)),
+        ("limit", lambda v: tactile.frames(data, limit=v)),
+        ("limit", lambda v: tactile.predict(root / "models" / "pose-surface", data, limit=v)),
+        ("stamp_ns", lambda v: writer.write(result, stamp_ns=v)),
+        ("stamp_ns", lambda v: view.publish(result, stamp_ns=v)),
+        ("stamp_ns", lambda v: decoder.decode(b"", stamp_ns=v)),
+        ("count", lambda v: tactile.synth.tactip(v)),
+        ("seed", lambda v: tactile.synth.tactip(1, seed=v)),
+        ("count", lambda v: tactile.synth.visuotactile(v)),
+        ("sequences", lambda v: tactile.synth.visuotactile(sequences=v)),
+        ("seed", lambda v: tactile.synth.visuotactile(1, seed=v)),
+    ]
+
+
+def test_a_wrong_whole_number_is_refused_naming_its_keyword(root, pipeline, palpation_frames, tmp_path):
+    writer, view, calls = _calls(root, pipeline, palpation_frames, tmp_path)
+    with writer, view:
+        for name, call in calls:
+            # Before, PyO3's "can't convert negative int to unsigned", "int too
+            # big to convert" and "'float' object cannot be interpreted as an
+            # integer" named no keyword, and synth's seed=2.5 became 2.
+            for value, error in [(-(10**30), ValueError), (10**30, ValueError), ("two", TypeError),
+                                 (2.5, TypeError), (True, TypeError)]:
+                with pytest.raises(error) as e:
+                    call(value)
+                assert str(e.value).startswith(f"{name}: "), (name, value, str(e.value))
+                kind = "expected a whole number, got " if error is TypeError else "must be "
+                assert kind in str(e.value), (name, value, str(e.value))
+        assert writer.frames == 0
+    with pytest.raises(ValueError, match=r"^threads: must be 1 to 256, got -1$"):
+        tactile.Pipeline(root / "models", threads=-1)
+    with pytest.raises(ValueError, match=r"^seed: must be at least 0, got -1$"):
+        tactile.synth.tactip(1, seed=-1)
+    with pytest.raises(ValueError, match=r"^limit: must be at most 18446744073709551615, got 10{30}$"):
+        tactile.frames(root / "samples" / "palpation", limit=10**30)
+
+
+def test_numpy_integers_are_whole_numbers(root, pipeline, palpation_frames):
+    data = root / "samples" / "palpation"
+    assert len(list(tactile.frames(data, limit=np.int64(2), live_queue=np.uint8(2)))) == 2
+    assert tactile.Pipeline(root / "models", threads=np.int32(1)).threads == 1
+    assert len(pipeline.time_in_rust(palpation_frames[0], repeats=np.uint64(2))) == 2
+    a, _ = tactile.synth.tactip(np.int16(2), seed=np.uint64(2**64 - 1), progress=False)
+    b, _ = tactile.synth.tactip(2, seed=2**64 - 1, progress=False)
+    assert a.shape == (2, 300, 300) and np.array_equal(a, b)
+
+
+def test_signatures_show_the_defaults(pipeline):
+    """The keywords' defaults read as numbers in help() and inspect."""
+    assert inspect.signature(tactile.Pipeline).parameters["threads"].default == 1
+    assert inspect.signature(tactile.run).parameters["pipelines"].default == 1
+    assert inspect.signature(tactile.run).parameters["live_queue"].default == 2
+    assert inspect.signature(tactile.frames).parameters["live_queue"].default == 2
+    assert inspect.signature(pipeline.time_in_rust).parameters["repeats"].default == 100
