@@ -376,11 +376,9 @@ impl Dataset {
             .iter()
             .map(|s| s.trim().to_string())
             .collect();
-        // pandas' index, before `file`, is dropped, as the extra columns
-        // after the layout's are kept and ignored.
-        let index_column = header.len() > 1
-            && crate::csv_lines::is_pandas_index(&header[0])
-            && header[1] == "file";
+        // pandas' index (an unnamed first column) is dropped, as columns
+        // the layout does not name are kept and ignored.
+        let index_column = header.len() > 1 && crate::csv_lines::is_pandas_index(&header[0]);
         if index_column {
             header.remove(0);
         }
@@ -395,13 +393,28 @@ impl Dataset {
                 format!("column '{dup}' appears twice (again as column {})", i + 1),
             ));
         }
+        // Cells are read by their column's name, so the layout's columns
+        // may come in any order (a table saved by pandas or a spreadsheet
+        // after its columns were moved); each must be there.
         let required = manifest.kind.columns();
-        if header.len() < required.len() || header[..required.len()] != *required {
+        let missing: Vec<&str> = required
+            .iter()
+            .copied()
+            .filter(|c| !header.iter().any(|h| h == c))
+            .collect();
+        if !missing.is_empty() {
             return Err(Error::dataset(
                 &labels,
                 Some(1),
                 format!(
-                    "header must start with {} (found {}){}",
+                    "no column {} in the header; a {} dataset's labels need {}, in any order \
+                     (found {}){}",
+                    missing
+                        .iter()
+                        .map(|c| format!("'{c}'"))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    manifest.kind.name(),
                     required.join(","),
                     header.join(","),
                     match crate::csv_lines::separator_hint(header.iter().map(String::as_str)) {
@@ -1599,7 +1612,54 @@ mod tests {
         tiny(d.path(), ",shape,file\n0,flat,frames/a.png\n");
         let e = Dataset::open(d.path()).unwrap_err().to_string();
         assert!(
-            e.contains("labels.csv:1") && e.contains("header must start"),
+            e.contains(
+                "labels.csv:1: no column 'x_mm', 'y_mm', 'theta_deg', 'depth_mm', 'force_n'"
+            ),
+            "{e}"
+        );
+    }
+
+    /// A table whose columns were moved (pandas' `df[cols].to_csv`, a
+    /// spreadsheet), with the layout's columns among others: read by name,
+    /// as the same table in the layout's order. Before, refused ("header
+    /// must start with ...").
+    #[test]
+    fn the_layouts_columns_are_read_in_any_order() {
+        let d = tempfile::tempdir().unwrap();
+        let ordered = d.path().join("ordered");
+        tiny(
+            &ordered,
+            &format!("{HEADER}frames/a.png,sphere,1.5,-2,,2,3.4\n"),
+        );
+        let moved = d.path().join("moved");
+        tiny(
+            &moved,
+            ",force_n,split,depth_mm,shape,file,note,theta_deg,y_mm,x_mm\n\
+             0,3.4,val,2,sphere,frames/a.png,\"a, b\",,-2,1.5\n",
+        );
+        let (a, b) = (
+            Dataset::open(&ordered).unwrap(),
+            Dataset::open(&moved).unwrap(),
+        );
+        for t in ["x_mm", "y_mm", "depth_mm", "force_n"] {
+            assert_eq!(a.number(0, t).unwrap(), b.number(0, t).unwrap(), "{t}");
+        }
+        assert_eq!(b.text(0, "shape").unwrap(), "sphere");
+        assert_eq!(b.number_opt(0, "theta_deg").unwrap(), None);
+        assert_eq!(b.load_grey(0, "file").unwrap().width(), 4);
+        assert_eq!(b.split_indices("val"), Some(vec![0]));
+        // A column of the layout missing is named, with the rest of what
+        // the labels need.
+        tiny(
+            &moved,
+            "shape,file,x_mm,y_mm,depth_mm,force_n\nsphere,frames/a.png,1,2,3,4\n",
+        );
+        let e = Dataset::open(&moved).unwrap_err().to_string();
+        assert!(
+            e.contains(
+                "labels.csv:1: no column 'theta_deg' in the header; a tactip dataset's labels \
+                 need file,shape,x_mm,y_mm,theta_deg,depth_mm,force_n, in any order"
+            ),
             "{e}"
         );
     }
