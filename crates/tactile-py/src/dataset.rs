@@ -4,12 +4,13 @@
 use std::path::PathBuf;
 
 use numpy::{IntoPyArray, PyArray1};
-use pyo3::exceptions::{PyIndexError, PyValueError};
+use pyo3::exceptions::{PyIndexError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use tactile_core::dataset::{Dataset, DatasetKind};
 use tactile_core::import::{ImportOptions, import_dataset};
 
+use crate::args::Whole;
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
@@ -22,15 +23,29 @@ pub struct PyDataset {
 }
 
 impl PyDataset {
-    fn index(&self, i: isize) -> PyResult<usize> {
-        let n = self.ds.len() as isize;
-        let j = if i < 0 { i + n } else { i };
-        if !(0..n).contains(&j) {
-            return Err(PyIndexError::new_err(format!(
-                "index {i} out of range for a dataset of {n} frames"
-            )));
+    /// Row `i`, counted from the end when negative, as a list's index:
+    /// past either end (however far) an `IndexError`, not an integer a
+    /// `TypeError`.
+    fn index(&self, i: &Whole) -> PyResult<usize> {
+        let n = self.ds.len() as i128;
+        let out_of_range = |shown: &dyn std::fmt::Display| {
+            PyIndexError::new_err(format!(
+                "index {shown} out of range for a dataset of {n} frames"
+            ))
+        };
+        match i {
+            Whole::Int(i) => {
+                let j = if *i < 0 { i + n } else { *i };
+                if !(0..n).contains(&j) {
+                    return Err(out_of_range(i));
+                }
+                Ok(j as usize)
+            }
+            Whole::Huge(text) => Err(out_of_range(text)),
+            Whole::Not(t) => Err(PyTypeError::new_err(format!(
+                "dataset indices must be integers, not {t}"
+            ))),
         }
-        Ok(j as usize)
     }
 
     fn has(&self, column: &str) -> bool {
@@ -167,8 +182,8 @@ impl PyDataset {
 
     /// Frame `i`: `(H, W)` uint8 grey for TacTip data, `(H, W, 3)` uint8
     /// RGB for visuo-tactile data.
-    fn frame<'py>(&self, py: Python<'py>, i: isize) -> PyResult<Bound<'py, PyAny>> {
-        let i = self.index(i)?;
+    fn frame<'py>(&self, py: Python<'py>, i: Whole) -> PyResult<Bound<'py, PyAny>> {
+        let i = self.index(&i)?;
         let (w, h) = (
             self.ds.manifest.width as usize,
             self.ds.manifest.height as usize,
@@ -188,8 +203,8 @@ impl PyDataset {
     /// Tendon mask of frame `i`, `(H, W)` bool; None without a mask column
     /// or an empty cell (but for a row without a tendon, whose empty cell
     /// is an empty mask).
-    fn mask<'py>(&self, py: Python<'py>, i: isize) -> PyResult<Option<Bound<'py, PyAny>>> {
-        let i = self.index(i)?;
+    fn mask<'py>(&self, py: Python<'py>, i: Whole) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let i = self.index(&i)?;
         if !self.has("mask") || !self.ds.has_mask(i).py()? {
             return Ok(None);
         }
@@ -205,8 +220,8 @@ impl PyDataset {
 
     /// Depth map of frame `i`, `(H, W)` float32 metres; None without a
     /// depth column or an empty cell.
-    fn depth_m<'py>(&self, py: Python<'py>, i: isize) -> PyResult<Option<Bound<'py, PyAny>>> {
-        let i = self.index(i)?;
+    fn depth_m<'py>(&self, py: Python<'py>, i: Whole) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let i = self.index(&i)?;
         if !self.has("depth") || self.ds.text_opt(i, "depth").is_none() {
             return Ok(None);
         }
@@ -217,16 +232,16 @@ impl PyDataset {
     /// Sample `i` as a dict: `frame`, `mask` and `depth_m` where the
     /// dataset has them, and every other label of the row (numbers as
     /// float, empty cells as None; `file` and `depth` stay file names).
-    fn __getitem__<'py>(&self, py: Python<'py>, i: isize) -> PyResult<Bound<'py, PyDict>> {
+    fn __getitem__<'py>(&self, py: Python<'py>, i: Whole) -> PyResult<Bound<'py, PyDict>> {
         let out = PyDict::new(py);
-        out.set_item("frame", self.frame(py, i)?)?;
-        if let Some(m) = self.mask(py, i)? {
+        out.set_item("frame", self.frame(py, i.clone())?)?;
+        if let Some(m) = self.mask(py, i.clone())? {
             out.set_item("mask", m)?;
         }
-        if let Some(d) = self.depth_m(py, i)? {
+        if let Some(d) = self.depth_m(py, i.clone())? {
             out.set_item("depth_m", d)?;
         }
-        let j = self.index(i)?;
+        let j = self.index(&i)?;
         for col in &self.ds.columns {
             // The mask array stands in for its file name.
             if out.contains(col)? {

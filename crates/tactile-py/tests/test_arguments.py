@@ -84,3 +84,22 @@ def test_signatures_show_the_defaults(pipeline):
     assert inspect.signature(tactile.run).parameters["live_queue"].default == 2
     assert inspect.signature(tactile.frames).parameters["live_queue"].default == 2
     assert inspect.signature(pipeline.time_in_rust).parameters["repeats"].default == 100
+
+
+
+def test_a_dataset_index_reads_as_a_list_index(root):
+    """Negative from the end; past either end, however far, an IndexError;
+    not an integer, a TypeError. Before, 10**30 was PyO3's OverflowError."""
+    ds = tactile.Dataset(root / "samples" / "virtual-tactip")
+    n = len(ds)
+    assert np.array_equal(ds[-1]["frame"], ds[n - 1]["frame"])
+    assert np.array_equal(ds.frame(np.int64(0)), ds[0]["frame"])
+    for i in [n, -n - 1, 10**30, -(10**30)]:
+        with pytest.raises(IndexError, match=f"index {i} out of range for a dataset of {n} frames"):
+            ds[i]
+        with pytest.raises(IndexError):
+            ds.frame(i)
+    for i in [1.0, "0", None]:
+        with pytest.raises(TypeError, match="dataset indices must be integers"):
+            ds[i]
+    assert len(list(ds)) == n
