@@ -1157,3 +1157,32 @@ def test_a_calibrated_sensor_writes_its_indentation(tactile_bin, root, tmp_path,
     for m, rec in zip(got["/tactile/result"], records):
         assert m.ros_msg.indentation_peak_mm == pytest.approx(rec["indentation_peak_mm"], rel=1e-6)
         assert not m.ros_msg.tendon
+
+
+def test_a_write_that_fails_part_way_is_an_oserror_and_leaves_nothing(root, pipeline, palpation_frames, tmp_path):
+    """A full disk or a quota (here a 2 KiB file-size limit, its signal
+    ignored, so each write past it fails as a full disk's does): the
+    system's reason as an ``OSError`` naming the file, from ``McapWriter``
+    and ``tactile.run`` alike, and no file left. Before, ``tactile.run``
+    raised a ``ValueError`` whose message hid the reason ("I/O error from
+    writing, or reading a compression stream")."""
+    import resource
+    import signal
+
+    out = tmp_path / "out"
+    out.mkdir()
+    result = pipeline.process(palpation_frames[5])
+    old_limit = resource.getrlimit(resource.RLIMIT_FSIZE)
+    old_handler = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (2048, old_limit[1]))
+    try:
+        with pytest.raises(OSError, match=r"out\.mcap: File too large \(os error 27\)"):
+            with tactile.McapWriter(out / "out.mcap") as w:
+                for _ in range(50):
+                    w.write(result, palpation_frames[5])
+        with pytest.raises(OSError, match=r"run\.mcap: File too large \(os error 27\)"):
+            tactile.run(root / "samples" / "palpation", models=root / "models", out=out / "run.mcap", with_frames=True)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, old_limit)
+        signal.signal(signal.SIGXFSZ, old_handler)
+    assert list(out.iterdir()) == []

@@ -17,10 +17,17 @@ pub(crate) struct McapFile {
 }
 
 impl McapFile {
-    fn fail(path: &Path, e: impl ToString) -> Error {
-        Error::Write {
-            path: path.to_path_buf(),
-            message: e.to_string(),
+    /// The writer's error for `path`: a failed write (a full disk, a lost
+    /// drive) as the system's own error, an `OSError` in Python, whose
+    /// message the MCAP crate's text ("I/O error from writing, or reading
+    /// a compression stream") would hide.
+    fn fail(path: &Path, e: mcap::McapError) -> Error {
+        match e {
+            mcap::McapError::Io(io) => tactile_core::Error::io(path, io).into(),
+            other => Error::Write {
+                path: path.to_path_buf(),
+                message: other.to_string(),
+            },
         }
     }
 
@@ -81,7 +88,7 @@ impl McapFile {
             .writer
             .into_inner()
             .into_inner()
-            .map_err(|e| Self::fail(&path, e.error()))?;
+            .map_err(|e| tactile_core::Error::io(&path, e.into_error()))?;
         tactile_core::io::persist_temp(tmp, &path)?;
         Ok(path)
     }

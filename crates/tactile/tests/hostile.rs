@@ -1308,6 +1308,92 @@ fn pipes_in_place_of_a_file_read_or_written_are_refused_at_once() {
     assert_eq!(msg.matches("(os error").count(), 1, "{msg}");
 }
 
+/// A write that fails part-way (a full disk, a quota; here a file-size
+/// limit of 2 KiB, `ulimit -f`, with its signal ignored so each write past
+/// it fails as a full disk's does): each output names the file and the
+/// system's reason, and nothing of it is left, neither the output nor a
+/// temporary file beside it. Before, a failed MCAP write said only "I/O
+/// error from writing, or reading a compression stream" (the `mcap` crate's
+/// text, hiding the reason), and Python took it for bad input
+/// (`ValueError`) in `tactile.run`.
+#[test]
+fn a_write_that_fails_part_way_names_the_file_and_leaves_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let limited = |args: &[&str]| {
+        let (status, msg) = run(Command::new("bash")
+            .arg("-c")
+            .arg("trap '' XFSZ; ulimit -f 2; exec \"$@\"")
+            .arg("tactile")
+            .arg(bin())
+            .args(args));
+        assert!(
+            status.code().is_some() && !msg.contains("panicked"),
+            "{args:?}: {status:?}\n{msg}"
+        );
+        assert!(!status.success(), "{args:?} passed:\n{msg}");
+        msg
+    };
+    let palpation = root().join("samples/palpation");
+    let models = root().join("models");
+    let (data, models) = (s(&palpation), s(&models));
+    for (name, args) in [
+        (
+            "r.mcap",
+            vec!["run", "--data", data, "--models", models, "--with-frames"],
+        ),
+        ("r.jsonl", vec!["run", "--data", data, "--models", models]),
+    ] {
+        let out = tmp.path().join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        let target = out.join(name);
+        let msg = limited(&[&args[..], &["--out", s(&target)]].concat());
+        assert!(
+            msg.contains(&format!(
+                "{}: File too large (os error 27)",
+                target.display()
+            )),
+            "{name}: {msg}"
+        );
+        let left: Vec<_> = std::fs::read_dir(&out).unwrap().flatten().collect();
+        assert!(left.is_empty(), "{name}: left {left:?}");
+    }
+    // Folders of outputs: the staging folder goes, the folder never appears.
+    let overlays = tmp.path().join("overlays");
+    let msg = limited(&[
+        "run",
+        "--data",
+        data,
+        "--models",
+        models,
+        "--render",
+        s(&overlays),
+    ]);
+    assert!(msg.contains("File too large (os error 27)"), "{msg}");
+    let synth = tmp.path().join("synth");
+    let msg = limited(&[
+        "synth",
+        "visuotactile",
+        "--out",
+        s(&synth),
+        "--sequences",
+        "1",
+    ]);
+    assert!(msg.contains("File too large (os error 27)"), "{msg}");
+    let onnx = tmp.path().join("depth.onnx");
+    let depth = root().join("models/depth");
+    let msg = limited(&["export", "--model", s(&depth), "--out", s(&onnx)]);
+    assert!(
+        msg.contains(&format!("{}: File too large (os error 27)", onnx.display())),
+        "{msg}"
+    );
+    let left: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(left, ["out"], "left beside the outputs");
+}
+
 /// `docs/hard-cases.md` stays true to the tests: every test its last
 /// column names (a backticked `snake_case` name of three or more words)
 /// is a function (`fn` or `def`) or a test file of the repository. A test
