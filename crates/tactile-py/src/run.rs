@@ -11,8 +11,7 @@ use tactile_ros::{RunRequest, RunSession};
 use crate::args::Whole;
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
-use crate::source::source_limit;
-use crate::source::source_spec;
+use crate::source::{source_limit, source_spec};
 use crate::work::interruptible;
 
 /// Run the pipeline of `models` over every frame of `source` (what
