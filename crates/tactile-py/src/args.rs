@@ -83,8 +83,12 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
         }
         match obj.extract::<i128>() {
             Ok(v) => Ok(Self::Int(v)),
+            // Python will not print an int of more than 4300 digits.
             Err(e) if e.is_instance_of::<PyOverflowError>(obj.py()) => {
-                Ok(Self::Huge(obj.str()?.to_string()))
+                Ok(Self::Huge(obj.str().map_or_else(
+                    |_| "an integer of thousands of digits".into(),
+                    |s| s.to_string(),
+                )))
             }
             Err(_) => Ok(Self::Not(obj.get_type().name()?.to_string())),
         }

@@ -65,6 +65,8 @@ def test_a_wrong_whole_number_is_refused_naming_its_keyword(root, pipeline, palp
         tactile.synth.tactip(1, seed=-1)
     with pytest.raises(ValueError, match=r"^limit: must be at most 18446744073709551615, got 10{30}$"):
         tactile.frames(root / "samples" / "palpation", limit=10**30)
+    with pytest.raises(ValueError, match=r"^threads: must be 1 to 256, got an integer of thousands of digits$"):
+        tactile.Pipeline(root / "models", threads=10**5000)
 
 
 def test_numpy_integers_are_whole_numbers(root, pipeline, palpation_frames):
