@@ -178,6 +178,14 @@ CMD[surface_more_frames_fit]="python3 ${MORE_FRAMES[*]} > $OUT/surface-more-fram
 if [ -f "$OUT/surface-more-frames.json" ]; then
     python_step surface_more_frames "$OUT/surface-more-frames-fit.md" python3 "${MORE_FRAMES[@]}"
 fi
+# Each `val` frame read as it is and as four copies moved a few pixels, the
+# estimates averaged, by the CAE route trained on `train` alone (needs a
+# Python with the tactile package, as the half turn does).
+SHIFT_AVERAGE=(scripts/surface-shift-average.py --model models/cae-surface-train --data "$REAL/tactip331-surface" --shifts 4,8,16)
+CMD[surface_shift_average]="python3 ${SHIFT_AVERAGE[*]} > $OUT/surface-shift-average.md"
+if "$PYTHON" -c "import tactile" 2>/dev/null; then
+    python_step surface_shift_average "$OUT/surface-shift-average.md" "$PYTHON" "${SHIFT_AVERAGE[@]}"
+fi
 # Feature sets against each other on the surface split (pin tracking at full
 # resolution over 8,000 frames and k-NN on the raw pixels: most of an hour on
 # 2 cores), only when asked: PAPER_A_SURFACE_COMPARE=1.
@@ -326,6 +334,7 @@ tmp=$(mktemp docs/.paper-a.md.XXXXXX)
         cat "$OUT/surface-more-frames-fit.md"
         echo
     fi
+    surface_section "Shifted copies averaged at test time" surface_shift_average "$OUT/surface-shift-average.md"
     echo "### One encoder for many tasks"
     echo
     echo "\`${CMD[shared]}\`"
