@@ -12,8 +12,10 @@ with black, as outside the tip); the five estimates are averaged. Prints a
 Markdown table of the mean absolute error per target: as it is, one copy
 moved right, and the average of five, per SHIFT.
 
-The model must not have trained on `val`: `models/cae-surface-train` (the
-CAE route's encoder and its five MLPs, trained on `train` alone) is one.
+The model (an encoder folder with its estimators, or a pose network) must
+not have trained on `val`: `models/cae-surface-train` (the CAE route's
+encoder and its five MLPs, trained on `train` alone) is one, and so is
+`data/surface/p64-k9-long` (`SURFACE_STEPS=p64-k9-long bash scripts/surface.sh`).
 
     pip install ./crates/tactile-py
     python3 scripts/surface-shift-average.py --model models/cae-surface-train \\
@@ -55,7 +57,8 @@ def moved(frames: np.ndarray, dx: int, dy: int) -> np.ndarray:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--model", required=True, help="an encoder folder with its estimators, not trained on SPLIT")
+    ap.add_argument("--model", required=True,
+                    help="an encoder folder with its estimators, or a pose network, not trained on SPLIT")
     ap.add_argument("--data", required=True, help="the TacTip-331 surface dataset folder")
     ap.add_argument("--split", default="val", help="the rows to score (default: val)")
     ap.add_argument("--shifts", type=shifts, default=[4, 8, 16], help="pixels, comma-separated")
@@ -77,10 +80,13 @@ def main() -> int:
         paths.append(path)
     truth = np.array([[float(r[t]) for t in TARGETS] for r in rows])
     frames = np.stack([tactile.read_grey(p) for p in paths])
-    encoder = tactile.TactipEncoder(a.model)
+    # An encoder folder (cae.json) reads the frame through its features and
+    # estimators; a pose network or an ensemble of them reads it itself.
+    model = (tactile.TactipEncoder(a.model) if os.path.isfile(os.path.join(a.model, "cae.json"))
+             else tactile.PoseEstimator(a.model))
 
     def estimate(batch: np.ndarray) -> np.ndarray:
-        e = encoder.estimate(batch)
+        e = model.estimate(batch)
         return np.stack([np.asarray(e[t], float) for t in TARGETS], axis=1)
 
     def row(name: str, est: np.ndarray, ms: float) -> str:

@@ -44,3 +44,14 @@ def test_the_script_averages_moved_copies_of_held_out_frames(root, shared_real):
     bad = subprocess.run([sys.executable, script, "--model", "m", "--data", "d", "--shifts", "0,8"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "each shift must be 1 to 64 pixels" in bad.stderr
+
+
+def test_a_pose_network_is_read_through_its_own_estimator(root, shared_real):
+    # The shipped pair trained on every frame, so only that it runs is
+    # asserted here, not its errors.
+    out = subprocess.run(
+        [sys.executable, str(root / "scripts" / "surface-shift-average.py"), "--model", str(root / "models" / "pose-surface"),
+         "--data", str(shared_real / "tactip331-surface"), "--shifts", "4", "--every", "200"],
+        capture_output=True, text=True, check=True,
+    ).stdout
+    assert "10 `val` frames (every 200-th)" in out and "| average of five, 4 px |" in out
