@@ -179,9 +179,12 @@ if [ -f "$OUT/surface-more-frames.json" ]; then
     python_step surface_more_frames "$OUT/surface-more-frames-fit.md" python3 "${MORE_FRAMES[@]}"
 fi
 # Each `val` frame read as it is and as four copies moved a few pixels, the
-# estimates averaged, by the CAE route trained on `train` alone (needs a
-# Python with the tactile package, as the half turn does).
-SHIFT_AVERAGE=(scripts/surface-shift-average.py --model models/cae-surface-train --data "$REAL/tactip331-surface" --shifts 4,8,16)
+# estimates averaged, by the CAE route and the 9 px pose network trained on
+# `train` alone (needs a Python with the tactile package, as the half turn
+# does).
+SHIFT_MODELS=(models/cae-surface-train)
+trained data/surface/p64-k9-long && SHIFT_MODELS+=(data/surface/p64-k9-long)
+SHIFT_AVERAGE=(scripts/surface-shift-average.py --model "${SHIFT_MODELS[@]}" --data "$REAL/tactip331-surface" --shifts 4,8,16)
 CMD[surface_shift_average]="python3 ${SHIFT_AVERAGE[*]} > $OUT/surface-shift-average.md"
 if "$PYTHON" -c "import tactile" 2>/dev/null; then
     python_step surface_shift_average "$OUT/surface-shift-average.md" "$PYTHON" "${SHIFT_AVERAGE[@]}"

@@ -18,7 +18,7 @@ encoder and its five MLPs, trained on `train` alone) is one, and so is
 `data/surface/p64-k9-long` (`SURFACE_STEPS=p64-k9-long bash scripts/surface.sh`).
 
     pip install ./crates/tactile-py
-    python3 scripts/surface-shift-average.py --model models/cae-surface-train \\
+    python3 scripts/surface-shift-average.py --model models/cae-surface-train data/surface/p64-k9-long \\
         --data ../shared/real/tactip331-surface --shifts 4,8,16
 """
 
@@ -57,8 +57,8 @@ def moved(frames: np.ndarray, dx: int, dy: int) -> np.ndarray:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--model", required=True,
-                    help="an encoder folder with its estimators, or a pose network, not trained on SPLIT")
+    ap.add_argument("--model", required=True, nargs="+",
+                    help="encoder folders with their estimators, or pose networks, none trained on SPLIT")
     ap.add_argument("--data", required=True, help="the TacTip-331 surface dataset folder")
     ap.add_argument("--split", default="val", help="the rows to score (default: val)")
     ap.add_argument("--shifts", type=shifts, default=[4, 8, 16], help="pixels, comma-separated")
@@ -80,33 +80,35 @@ def main() -> int:
         paths.append(path)
     truth = np.array([[float(r[t]) for t in TARGETS] for r in rows])
     frames = np.stack([tactile.read_grey(p) for p in paths])
-    # An encoder folder (cae.json) reads the frame through its features and
-    # estimators; a pose network or an ensemble of them reads it itself.
-    model = (tactile.TactipEncoder(a.model) if os.path.isfile(os.path.join(a.model, "cae.json"))
-             else tactile.PoseEstimator(a.model))
-
-    def estimate(batch: np.ndarray) -> np.ndarray:
-        e = model.estimate(batch)
-        return np.stack([np.asarray(e[t], float) for t in TARGETS], axis=1)
-
-    def row(name: str, est: np.ndarray, ms: float) -> str:
-        errors = np.abs(est - truth).mean(axis=0)
-        return f"| {name} | " + " | ".join(f"{e:.3f}" for e in errors) + f" | {ms:.2f} |"
-
-    t0 = time.perf_counter()
-    plain = estimate(frames)
-    ms_one = 1e3 * (time.perf_counter() - t0) / len(frames)
     every = f" (every {a.every}-th)" if a.every > 1 else ""
-    print(f"{len(frames)} `{a.split}` frames{every} of {a.data}; model {a.model}.\n")
-    print("| estimate | " + " | ".join(TARGETS) + " | ms/frame |")
-    print("|---|" + "---|" * (len(TARGETS) + 1))
-    print(row("the frame as it is", plain, ms_one))
-    for s in a.shifts:
+    print(f"{len(frames)} `{a.split}` frames{every} of {a.data}.\n")
+    print("| model | estimate | " + " | ".join(TARGETS) + " | ms/frame |")
+    print("|---|---|" + "---|" * (len(TARGETS) + 1))
+    for path in a.model:
+        # An encoder folder (cae.json) reads the frame through its features
+        # and estimators; a pose network or an ensemble of them reads it itself.
+        model = (tactile.TactipEncoder(path) if os.path.isfile(os.path.join(path, "cae.json"))
+                 else tactile.PoseEstimator(path))
+
+        def estimate(batch: np.ndarray) -> np.ndarray:
+            e = model.estimate(batch)
+            return np.stack([np.asarray(e[t], float) for t in TARGETS], axis=1)
+
+        def row(name: str, est: np.ndarray, ms: float) -> str:
+            errors = np.abs(est - truth).mean(axis=0)
+            return f"| {os.path.basename(os.path.normpath(path))} | {name} | " + " | ".join(
+                f"{e:.3f}" for e in errors) + f" | {ms:.2f} |"
+
         t0 = time.perf_counter()
-        copies = [plain] + [estimate(moved(frames, dx, dy)) for dx, dy in [(s, 0), (-s, 0), (0, s), (0, -s)]]
-        ms = ms_one + 1e3 * (time.perf_counter() - t0) / len(frames)
-        print(row(f"one copy moved {s} px right", copies[1], ms_one))
-        print(row(f"average of five, {s} px", np.mean(copies, axis=0), ms))
+        plain = estimate(frames)
+        ms_one = 1e3 * (time.perf_counter() - t0) / len(frames)
+        print(row("the frame as it is", plain, ms_one))
+        for s in a.shifts:
+            t0 = time.perf_counter()
+            copies = [plain] + [estimate(moved(frames, dx, dy)) for dx, dy in [(s, 0), (-s, 0), (0, s), (0, -s)]]
+            ms = ms_one + 1e3 * (time.perf_counter() - t0) / len(frames)
+            print(row(f"one copy moved {s} px right", copies[1], ms_one))
+            print(row(f"average of five, {s} px", np.mean(copies, axis=0), ms))
     return 0
 
 

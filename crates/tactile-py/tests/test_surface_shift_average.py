@@ -32,8 +32,8 @@ def test_the_script_averages_moved_copies_of_held_out_frames(root, shared_real):
          "--data", str(shared_real / "tactip331-surface"), "--shifts", "8", "--every", "100"],
         capture_output=True, text=True, check=True,
     ).stdout
-    rows = {line.split("|")[1].strip(): [float(v) for v in line.split("|")[2:-1]]
-            for line in out.splitlines() if line.startswith("| ") and not line.startswith("| estimate")}
+    rows = {line.split("|")[2].strip(): [float(v) for v in line.split("|")[3:-1]]
+            for line in out.splitlines() if line.startswith("| cae-surface-train |")}
     assert list(rows) == ["the frame as it is", "one copy moved 8 px right", "average of five, 8 px"]
     assert "20 `val` frames (every 100-th)" in out
     # A model that never saw these frames reads them far better than no
@@ -54,4 +54,4 @@ def test_a_pose_network_is_read_through_its_own_estimator(root, shared_real):
          "--data", str(shared_real / "tactip331-surface"), "--shifts", "4", "--every", "200"],
         capture_output=True, text=True, check=True,
     ).stdout
-    assert "10 `val` frames (every 200-th)" in out and "| average of five, 4 px |" in out
+    assert "10 `val` frames (every 200-th)" in out and "| pose-surface | average of five, 4 px |" in out
