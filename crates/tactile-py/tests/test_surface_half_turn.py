@@ -1,22 +1,16 @@
 """scripts/surface-half-turn.py (issue 34): the half turn, its centre and
 the table it prints."""
 
-import importlib.util
 import subprocess
 import sys
 
 import numpy as np
 
-
-def load_script(root):
-    spec = importlib.util.spec_from_file_location("surface_half_turn", root / "scripts" / "surface-half-turn.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from conftest import script
 
 
-def test_the_half_turn_and_its_centre_are_found(root):
-    ht = load_script(root)
+def test_the_half_turn_and_its_centre_are_found():
+    ht = script("surface-half-turn")
     # Blobs in pairs symmetric about (row 31, column 27.5) of a 60x66
     # picture (its own centre is (29.5, 32.5)), plus a lone blob that breaks
     # the symmetry a little.

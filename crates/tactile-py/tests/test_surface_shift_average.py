@@ -1,22 +1,16 @@
 """scripts/surface-shift-average.py (issue 34): frames moved under the tip,
 and the table of estimates averaged over moved copies."""
 
-import importlib.util
 import subprocess
 import sys
 
 import numpy as np
 
-
-def load_script(root):
-    spec = importlib.util.spec_from_file_location("surface_shift_average", root / "scripts" / "surface-shift-average.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from conftest import script
 
 
-def test_a_moved_frame_keeps_its_pixels_and_fills_the_edge_black(root):
-    sa = load_script(root)
+def test_a_moved_frame_keeps_its_pixels_and_fills_the_edge_black():
+    sa = script("surface-shift-average")
     frames = np.arange(2 * 5 * 7, dtype=np.uint8).reshape(2, 5, 7) + 1
     right = sa.moved(frames, 2, 0)
     assert np.array_equal(right[:, :, 2:], frames[:, :, :5]) and not right[:, :, :2].any()
