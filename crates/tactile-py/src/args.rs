@@ -32,7 +32,7 @@ impl Whole {
     /// ("threads: expected a whole number, got float") naming `name`.
     pub(crate) fn within<T>(&self, name: &str, min: T, max: T) -> PyResult<T>
     where
-        T: Copy + Into<i128> + TryFrom<i128> + std::fmt::Display + PartialEq + Bounded,
+        T: Copy + Bounded + TryFrom<i128> + std::fmt::Display + PartialEq,
     {
         // A range open at the top reads "at least 1", unless the number is
         // past the type's end ("at most 18446744073709551615").
@@ -45,10 +45,10 @@ impl Whole {
             PyValueError::new_err(format!("{name}: must be {range}, got {got}"))
         };
         match self {
-            Self::Int(v) if *v < min.into() => Err(refuse(false, v)),
+            Self::Int(v) if *v < min.wide() => Err(refuse(false, v)),
             Self::Int(v) => T::try_from(*v)
                 .ok()
-                .filter(|_| *v <= max.into())
+                .filter(|_| *v <= max.wide())
                 .ok_or_else(|| refuse(true, v)),
             Self::Huge(text) => Err(refuse(!text.starts_with('-'), text)),
             Self::Not(t) => Err(PyTypeError::new_err(format!(
@@ -58,20 +58,28 @@ impl Whole {
     }
 }
 
-/// The largest value of an integer type, so a range without an upper
-/// bound reads "at least 1".
-pub(crate) trait Bounded {
+/// An integer type a keyword is read into: its largest value, so a range
+/// without an upper bound reads "at least 1", and its values as `i128`s,
+/// which hold every one of them.
+pub(crate) trait Bounded: Sized {
     /// The type's largest value.
     const MAX: Self;
+    /// The value as an `i128`.
+    fn wide(self) -> i128;
 }
 
-impl Bounded for u64 {
-    const MAX: Self = u64::MAX;
+macro_rules! bounded {
+    ($($t:ty),*) => {$(
+        impl Bounded for $t {
+            const MAX: Self = <$t>::MAX;
+            fn wide(self) -> i128 {
+                self as i128
+            }
+        }
+    )*};
 }
 
-impl Bounded for i64 {
-    const MAX: Self = i64::MAX;
-}
+bounded!(u64, i64, usize);
 
 impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
     type Error = PyErr;
@@ -98,7 +106,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
 /// An optional whole number (`limit=None`): `None` stays `None`.
 pub(crate) fn optional<T>(arg: Option<&Whole>, name: &str, min: T, max: T) -> PyResult<Option<T>>
 where
-    T: Copy + Into<i128> + TryFrom<i128> + std::fmt::Display + PartialEq + Bounded,
+    T: Copy + Bounded + TryFrom<i128> + std::fmt::Display + PartialEq,
 {
     arg.map(|w| w.within(name, min, max)).transpose()
 }

@@ -16,8 +16,7 @@ use crate::frame::{FrameArg, Layout, each_frame};
 
 /// onnxruntime's intra-op threads as the command line bounds them.
 pub(crate) fn threads(arg: &Whole) -> PyResult<usize> {
-    let max = tactile_onnx::runtime::MAX_THREADS as u64;
-    Ok(arg.within("threads", 1, max)? as usize)
+    arg.within("threads", 1, tactile_onnx::runtime::MAX_THREADS)
 }
 
 /// Parse a runtime name as the command line does.

@@ -53,8 +53,7 @@ pub(crate) fn run<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let rt = self::runtime(runtime)?;
     let threads = crate::pipeline::threads(&threads)?;
-    let max = tactile_pipeline::run::MAX_PIPELINES as u64;
-    let pipelines = pipelines.within("pipelines", 1, max)? as usize;
+    let pipelines = pipelines.within("pipelines", 1, tactile_pipeline::run::MAX_PIPELINES)?;
     let request = RunRequest {
         source_options: tactile_pipeline::SourceOptions {
             overlap: prefetch,

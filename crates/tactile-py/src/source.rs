@@ -323,8 +323,7 @@ pub(crate) fn frames(
 /// `live_queue=`: frames a live source keeps waiting, as the command line
 /// bounds them.
 pub(crate) fn live_queue(arg: &Whole) -> PyResult<usize> {
-    let max = tactile_core::source::MAX_LIVE_QUEUE as u64;
-    Ok(arg.within("live_queue", 1, max)? as usize)
+    arg.within("live_queue", 1, tactile_core::source::MAX_LIVE_QUEUE)
 }
 
 /// `limit=`: at most this many frames (`None`: all of them).
@@ -340,10 +339,7 @@ pub(crate) fn source_spec(
     stdin_size: Option<(Whole, Whole)>,
 ) -> PyResult<SourceSpec> {
     // How large a frame may be is the library's check (1 pixel to 8K).
-    let side = |w: &Whole, name| {
-        let n = w.within(name, 1, u64::MAX)?;
-        Ok::<_, PyErr>(usize::try_from(n).unwrap_or(usize::MAX))
-    };
+    let side = |w: &Whole, name| w.within(name, 1, usize::MAX);
     let stdin_size = match stdin_size {
         Some((w, h)) => Some((
             side(&w, "stdin_size width")?,

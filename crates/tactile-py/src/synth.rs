@@ -35,7 +35,7 @@ fn check_in_memory(count: usize, bytes_per_frame: usize) -> PyResult<()> {
 /// `count=` or `sequences=`: at least 1 (how many a dataset may hold is
 /// the generator's check).
 fn how_many(arg: Option<&Whole>, name: &str) -> PyResult<Option<usize>> {
-    Ok(optional(arg, name, 1, u64::MAX)?.map(|n| usize::try_from(n).unwrap_or(usize::MAX)))
+    optional(arg, name, 1, usize::MAX)
 }
 
 /// `seed=`: any whole number a `u64` holds.
@@ -110,7 +110,7 @@ pub(crate) fn synth_tactip(
     progress: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
-    let count = how_many(Some(&count), "count")?.unwrap_or_default();
+    let count = count.within("count", 1, usize::MAX)?;
     let seed = self::seed(&seed)?;
     let cfg: TactipConfig = crate::json::options(py, options)?;
     cfg.validate().py()?;
