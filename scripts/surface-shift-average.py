@@ -23,7 +23,6 @@ encoder and its five MLPs, trained on `train` alone) is one, and so is
 """
 
 import argparse
-import csv
 import os
 import sys
 import time
@@ -67,19 +66,17 @@ def main() -> int:
     if a.every < 1:
         ap.error("--every must be at least 1")
 
-    root = os.path.realpath(a.data)
-    with open(os.path.join(root, "labels.csv"), newline="") as f:
-        rows = [r for r in csv.DictReader(f) if r.get("split") == a.split][:: a.every]
+    # The toolkit's own loader: the layout checked, reads kept inside DATA.
+    ds = tactile.Dataset(a.data)
+    labels = ds.labels
+    missing = [t for t in TARGETS + ["split"] if t not in labels]
+    if missing:
+        sys.exit(f"error: {a.data}/labels.csv has no {', '.join(missing)} column")
+    rows = [i for i, s in enumerate(labels["split"]) if s == a.split][:: a.every]
     if not rows:
         sys.exit(f"error: {a.data}/labels.csv has no rows of split {a.split!r}")
-    paths = []
-    for r in rows:
-        path = os.path.realpath(os.path.join(root, r["file"]))
-        if not path.startswith(root + os.sep):
-            sys.exit(f"error: {a.data}/labels.csv: {r['file']} lies outside {a.data}")
-        paths.append(path)
-    truth = np.array([[float(r[t]) for t in TARGETS] for r in rows])
-    frames = np.stack([tactile.read_grey(p) for p in paths])
+    truth = np.stack([np.asarray(labels[t], dtype=np.float64)[rows] for t in TARGETS], axis=1)
+    frames = np.stack([ds.frame(i) for i in rows])
     every = f" (every {a.every}-th)" if a.every > 1 else ""
     print(f"{len(frames)} `{a.split}` frames{every} of {a.data}.\n")
     print("| model | estimate | " + " | ".join(TARGETS) + " | ms/frame |")
