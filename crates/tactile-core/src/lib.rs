@@ -29,13 +29,68 @@ pub mod stack;
 pub mod video;
 
 /// A progress note on stderr. Unlike `eprintln!` it never panics: a note
-/// that cannot be written (stderr closed, a full pipe) is dropped.
+/// that cannot be written (stderr closed, a full pipe) is dropped. What it
+/// quotes of a file is shown [`printable`].
 #[macro_export]
 macro_rules! note {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = writeln!(std::io::stderr(), $($arg)*);
+        let text = format!($($arg)*);
+        let _ = writeln!(std::io::stderr(), "{}", $crate::printable(&text));
     }};
 }
 
+/// `text` as it is safe to show on a terminal: a control character other
+/// than a newline or a tab is written as its escape (`\x1b`, `\x00`,
+/// `\x0d`), and so is a mark that reorders the text around it (`\u{202e}`).
+/// Messages quote what files hold (a cell of a `labels.csv`, a frame's
+/// name); escaped, a hostile one cannot clear the screen, retitle the
+/// window, overwrite the line or show its text backwards, and a stray
+/// byte is seen instead of hidden.
+pub fn printable(text: &str) -> std::borrow::Cow<'_, str> {
+    // Arabic letter mark, the left-to-right and right-to-left marks, the
+    // embeddings and overrides, and the isolates.
+    let reorders = |c: char| {
+        matches!(
+            c,
+            '\u{061c}' | '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}'
+        )
+    };
+    let hidden = |c: char| (c.is_control() && c != '\n' && c != '\t') || reorders(c);
+    if !text.chars().any(hidden) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut shown = String::with_capacity(text.len() + 16);
+    for c in text.chars() {
+        match c {
+            c if !hidden(c) => shown.push(c),
+            c if (c as u32) < 0x100 => shown.push_str(&format!("\\x{:02x}", c as u32)),
+            c => shown.push_str(&format!("\\u{{{:04x}}}", c as u32)),
+        }
+    }
+    std::borrow::Cow::Owned(shown)
+}
+
 pub use error::{Error, Result};
+
+#[cfg(test)]
+mod tests {
+    use super::printable;
+
+    #[test]
+    fn what_a_file_holds_is_printed_escaped_not_obeyed() {
+        // Clear the screen, retitle the window, a NUL, a carriage return
+        // that would overwrite the line, a C1 control, a right-to-left
+        // override.
+        let hostile = "a\u{1b}[2J\u{1b}]0;owned\u{7}b\0c\rd\u{9b}e\u{202e}gnp.exe";
+        let shown = printable(hostile);
+        assert_eq!(
+            shown,
+            "a\\x1b[2J\\x1b]0;owned\\x07b\\x00c\\x0dd\\x9be\\u{202e}gnp.exe"
+        );
+        assert!(!shown.chars().any(|c| c.is_control()));
+        // Lines, tabs and every other character as they are, not copied.
+        let plain = "frames/0001.png\t3.2\nÉté 温度 → ok";
+        assert!(matches!(printable(plain), std::borrow::Cow::Borrowed(p) if p == plain));
+    }
+}

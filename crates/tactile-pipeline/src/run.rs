@@ -477,7 +477,11 @@ pub fn run(
                 // A live run (a camera in another mode) shows it at once on
                 // the bar, not only in the summary when it ends.
                 pb.set_message(match &unreadable {
-                    Some(u) => format!("{ood} foreign, {} unreadable: {}", u.frames, u.first),
+                    Some(u) => format!(
+                        "{ood} foreign, {} unreadable: {}",
+                        u.frames,
+                        tactile_core::printable(&u.first)
+                    ),
                     None => format!("{ood} foreign"),
                 });
             }

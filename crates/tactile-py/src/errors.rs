@@ -209,9 +209,11 @@ impl LibraryError for datasets_synth::Error {
     }
 }
 
-/// The Python exception for a library error.
+/// The Python exception for a library error, what it quotes of a file
+/// shown `tactile_core::printable` (as Python's own `OSError` shows a file
+/// name by its `repr`).
 pub(crate) fn to_py<E: LibraryError>(e: E) -> PyErr {
-    let msg = e.to_string();
+    let msg = tactile_core::printable(&e.to_string()).into_owned();
     match e.kind() {
         Kind::NotFound => PyFileNotFoundError::new_err(msg),
         Kind::Exists => PyFileExistsError::new_err(msg),
@@ -242,7 +244,8 @@ impl<T, E: LibraryError> PyResultExt<T> for Result<T, E> {
 /// without the note's leading `warning: `, which the category says.
 pub(crate) fn user_warning(py: pyo3::Python<'_>, msg: &str) -> pyo3::PyResult<()> {
     let msg = msg.strip_prefix("warning: ").unwrap_or(msg);
-    let text = std::ffi::CString::new(msg.replace('\0', "")).unwrap_or_default();
+    // Escaped, a NUL is no longer one, so the text is always a C string.
+    let text = std::ffi::CString::new(tactile_core::printable(msg).as_bytes()).unwrap_or_default();
     PyErr::warn(
         py,
         py.get_type::<pyo3::exceptions::PyUserWarning>().as_any(),

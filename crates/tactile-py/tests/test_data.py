@@ -249,6 +249,33 @@ def test_dataset_errors_name_the_file(tmp_path):
     assert "labels.csv" in str(e.value) and "not a regular file" in str(e.value)
 
 
+def test_errors_and_warnings_show_what_a_file_holds_escaped(tmp_path, root):
+    """A label cell or a frame name with terminal controls (clear the
+    screen, retitle the window, a bell, a right-to-left override) is quoted
+    escaped in exceptions and warnings, as Python's own OSError shows a
+    file name by its repr: printing the error cannot drive the terminal."""
+    hostile = "\x1b[2J\x1b]0;owned\x07\u202egnp"
+    shown = "\\x1b[2J\\x1b]0;owned\\x07\\u{202e}gnp"
+
+    def obeyed(text: str) -> bool:
+        return any((ord(c) < 32 and c not in "\n\t") or 0x7F <= ord(c) < 0xA0 or c == "\u202e" for c in text)
+
+    out = tactile.synth.tactip(2, seed=1, out=tmp_path / "d", progress=False)
+    labels = out / "labels.csv"
+    labels.write_text(labels.read_text().replace("frames/000001.png", f"frames/{hostile}.png"))
+    with pytest.raises(ValueError) as e:
+        tactile.Dataset(out)
+    assert shown in str(e.value) and not obeyed(str(e.value)), repr(str(e.value))
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    frame = tactile.read_grey(root / "samples/virtual-tactip/frames/000000.png")
+    write_png(folder / f"1{hostile}.png", frame)
+    with pytest.warns(UserWarning) as caught:
+        tactile.predict(root / "models/pose-edge", folder)
+    said = " ".join(str(w.message) for w in caught)
+    assert shown in said and not obeyed(said), repr(said)
+
+
 def test_synth_refuses_bad_counts_and_foreign_folders(tmp_path):
     with pytest.raises(ValueError, match="count"):
         tactile.synth.tactip(0)

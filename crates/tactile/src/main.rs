@@ -2,12 +2,14 @@
 //! parses its arguments, calls the library and prints; none holds logic.
 
 /// `println!` to stdout that ends the program quietly when stdout is
-/// closed (`tactile run ... | head -1`), instead of panicking.
+/// closed (`tactile run ... | head -1`), instead of panicking. What it
+/// quotes of a file is shown `tactile_core::printable`.
 macro_rules! say {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
+        let text = format!($($arg)*);
         let mut out = std::io::stdout().lock();
-        if let Err(e) = writeln!(out, $($arg)*).and_then(|_| out.flush()) {
+        if let Err(e) = writeln!(out, "{}", tactile_core::printable(&text)).and_then(|_| out.flush()) {
             $crate::stdout_failed(e);
         }
     }};
@@ -17,8 +19,9 @@ macro_rules! say {
 macro_rules! say_raw {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
+        let text = format!($($arg)*);
         let mut out = std::io::stdout().lock();
-        if let Err(e) = write!(out, $($arg)*).and_then(|_| out.flush()) {
+        if let Err(e) = write!(out, "{}", tactile_core::printable(&text)).and_then(|_| out.flush()) {
             $crate::stdout_failed(e);
         }
     }};

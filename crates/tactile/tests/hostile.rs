@@ -1391,6 +1391,63 @@ fn a_write_that_fails_part_way_names_the_file_and_leaves_nothing() {
     assert_eq!(left, ["out"], "left beside the outputs");
 }
 
+/// What a file holds is quoted in messages escaped, never obeyed: a frame
+/// name or a label cell with terminal controls (clear the screen, retitle
+/// the window, a bell, a right-to-left override) shows them as `\x1b`,
+/// `\u{202e}`, on standard error and on standard output alike.
+#[test]
+fn messages_show_what_a_file_holds_escaped_not_obeyed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let hostile = "\u{1b}[2J\u{1b}]0;owned\u{7}\u{202e}gnp";
+    let shown = "\\x1b[2J\\x1b]0;owned\\x07\\u{202e}gnp";
+    let obeyed = |msg: &str| {
+        msg.chars()
+            .any(|c| c.is_control() && c != '\n' && c != '\t' || c == '\u{202e}')
+    };
+    // A label cell naming a frame that is not there: the error quotes it.
+    let ds = tmp.path().join("ds");
+    tactip(
+        &ds,
+        1,
+        &[row("frames/0.png"), row(&format!("frames/{hostile}.png"))],
+    );
+    let model = root().join("models/pose-edge");
+    let out = tmp.path().join("e.csv");
+    let (ok, msg) = tactile(&[
+        "predict",
+        "--model",
+        s(&model),
+        "--data",
+        s(&ds),
+        "--out",
+        s(&out),
+    ]);
+    assert!(!ok && msg.contains(&format!("frames/{shown}.png")), "{msg}");
+    assert!(!obeyed(&msg), "{msg:?}");
+    // A frame of that name in a folder: its row of the table printed on
+    // standard output.
+    let folder = tmp.path().join("frames");
+    png(&folder.join("0.png"), 300, 300);
+    png(&folder.join(format!("1{hostile}.png")), 300, 300);
+    let (ok, msg) = tactile(&[
+        "predict",
+        "--model",
+        s(&model),
+        "--data",
+        s(&folder),
+        "--out",
+        s(&out),
+    ]);
+    assert!(ok && msg.contains(&format!("1{shown}.png")), "{msg}");
+    assert!(!obeyed(&msg), "{msg:?}");
+    // One that is not a picture: the refusal on standard error.
+    std::fs::write(folder.join(format!("2{hostile}.png")), "not a picture").unwrap();
+    let models = root().join("models");
+    let (ok, msg) = tactile(&["run", "--models", s(&models), "--data", s(&folder)]);
+    assert!(!ok && msg.contains(&format!("2{shown}.png")), "{msg}");
+    assert!(!obeyed(&msg), "{msg:?}");
+}
+
 /// `docs/hard-cases.md` stays true to the tests: every test its last
 /// column names (a backticked `snake_case` name of three or more words)
 /// is a function (`fn` or `def`) or a test file of the repository. A test
