@@ -1,13 +1,16 @@
 //! Whole-number arguments (threads, pipelines, limits, queues, repeats,
-//! seeds, stamps): taken from any Python integer and checked where they are
-//! used, so a wrong one's error names its keyword and range. PyO3's own
-//! conversion to a Rust integer says only "can't convert negative int to
-//! unsigned" or "'float' object cannot be interpreted as an integer" (the
-//! keyword is a note a traceback shows, not part of the message).
+//! seeds, stamps) and paths: taken as the caller gave them and checked
+//! where they are used, so a wrong one's error names its keyword (and a
+//! number's range). PyO3's own conversions say only "can't convert
+//! negative int to unsigned", "'float' object cannot be interpreted as an
+//! integer" or "expected str, bytes or os.PathLike object, not int": the
+//! keyword is a note a traceback shows from Python 3.11, and nowhere before
+//! it (ROS 2 Humble's Python is 3.10).
 
 use pyo3::exceptions::{PyOverflowError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBool;
+use std::path::PathBuf;
 
 /// A whole-number argument as the caller gave it; [`Whole::within`] makes
 /// it a number or an error naming the keyword.
@@ -110,3 +113,110 @@ where
 {
     arg.map(|w| w.within(name, min, max)).transpose()
 }
+
+/// A path argument (a `str`, `bytes` or `os.PathLike`) as the caller gave
+/// it; [`ReadPath::path`] makes it a path or a `TypeError` naming the
+/// keyword ("data: expected a path (str, bytes or os.PathLike), got
+/// ndarray").
+#[derive(Clone, Debug)]
+pub(crate) struct PathArg(Result<PathBuf, String>);
+
+impl PathArg {
+    /// The default of a keyword.
+    pub(crate) fn of(default: &str) -> Self {
+        Self(Ok(PathBuf::from(default)))
+    }
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for PathArg {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        match obj.extract::<PathBuf>() {
+            Ok(path) => Ok(Self(Ok(path))),
+            // PyO3 reads `str` paths; `bytes` (as `os.listdir(b".")` gives
+            // names) are the file system's own bytes, as Python's `open`
+            // takes them. Anything else is not a path; an `os.PathLike`
+            // whose `__fspath__` fails raises its own error.
+            Err(e) if e.is_instance_of::<PyTypeError>(obj.py()) => {
+                let fspath = obj.py().import("os")?.getattr("fspath")?;
+                match fspath.call1((obj,)) {
+                    Ok(given) => match given.cast::<pyo3::types::PyBytes>() {
+                        Ok(bytes) => {
+                            use std::os::unix::ffi::OsStrExt;
+                            let name = std::ffi::OsStr::from_bytes(bytes.as_bytes());
+                            Ok(Self(Ok(PathBuf::from(name))))
+                        }
+                        Err(_) => Err(e),
+                    },
+                    Err(not) if not.is_instance_of::<PyTypeError>(obj.py()) => {
+                        Ok(Self(Err(obj.get_type().name()?.to_string())))
+                    }
+                    Err(other) => Err(other),
+                }
+            }
+            Err(e) => Err(e),
+        }
+    }
+}
+
+/// A path argument, an optional one (`out=None` stays `None`) or a list
+/// of them, read under its keyword.
+pub(crate) trait ReadPath {
+    /// `PathBuf`, or `Option<PathBuf>`.
+    type Path;
+    /// The path, or a `TypeError` naming `name`.
+    fn path(self, name: &str) -> PyResult<Self::Path>;
+}
+
+impl ReadPath for PathArg {
+    type Path = PathBuf;
+
+    fn path(self, name: &str) -> PyResult<PathBuf> {
+        self.0.map_err(|got| {
+            PyTypeError::new_err(format!(
+                "{name}: expected a path (str, bytes or os.PathLike), got {got}"
+            ))
+        })
+    }
+}
+
+impl ReadPath for Option<PathArg> {
+    type Path = Option<PathBuf>;
+
+    fn path(self, name: &str) -> PyResult<Option<PathBuf>> {
+        self.map(|p| p.path(name)).transpose()
+    }
+}
+
+impl ReadPath for Vec<PathArg> {
+    type Path = Vec<PathBuf>;
+
+    /// Each path, or a `TypeError` naming the first wrong one by its
+    /// place ("members[1]: ...").
+    fn path(self, name: &str) -> PyResult<Vec<PathBuf>> {
+        self.into_iter()
+            .enumerate()
+            .map(|(i, p)| p.path(&format!("{name}[{i}]")))
+            .collect()
+    }
+}
+
+impl ReadPath for Option<Vec<PathArg>> {
+    type Path = Option<Vec<PathBuf>>;
+
+    fn path(self, name: &str) -> PyResult<Option<Vec<PathBuf>>> {
+        self.map(|p| p.path(name)).transpose()
+    }
+}
+
+/// `paths!(data, out)`: each path argument read under its own name
+/// ([`ReadPath::path`]), shadowing it; the first wrong one's error.
+macro_rules! paths {
+    ($($name:ident),+ $(,)?) => {
+        $(
+            let $name = $crate::args::ReadPath::path($name, stringify!($name))?;
+        )+
+    };
+}
+pub(crate) use paths;

@@ -13,6 +13,7 @@ use pyo3::types::PyDict;
 use tactile_gelsight::reconstruct::{ReconstructOptions, SensorCheck};
 use tactile_gelsight::{BallOptions, Reconstructor};
 
+use crate::args::PathArg;
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout};
 use crate::work::interruptible;
@@ -23,10 +24,11 @@ use crate::work::interruptible;
 #[pyo3(signature = (data, out, **options))]
 pub(crate) fn calibrate_ball<'py>(
     py: Python<'py>,
-    data: PathBuf,
-    out: PathBuf,
+    data: PathArg,
+    out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(data, out);
     let o: BallOptions = crate::json::options(py, options)?;
     o.config().py()?;
     let c = interruptible(py, || o.calibrate(&data, &out).py())?;
@@ -49,13 +51,14 @@ pub(crate) fn calibrate_ball<'py>(
 #[pyo3(signature = (model, data, out, *, background=None, render=None, runtime="onnx"))]
 pub(crate) fn reconstruct_frames<'py>(
     py: Python<'py>,
-    model: PathBuf,
-    data: PathBuf,
-    out: PathBuf,
-    background: Option<PathBuf>,
-    render: Option<PathBuf>,
+    model: PathArg,
+    data: PathArg,
+    out: PathArg,
+    background: Option<PathArg>,
+    render: Option<PathArg>,
     runtime: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(model, data, out, background, render);
     let options = ReconstructOptions {
         background,
         render,
@@ -103,10 +106,11 @@ impl PyReconstructor {
     #[pyo3(signature = (model_dir, runtime="onnx", background=None))]
     fn new(
         py: Python<'_>,
-        model_dir: PathBuf,
+        model_dir: PathArg,
         runtime: &str,
-        background: Option<PathBuf>,
+        background: Option<PathArg>,
     ) -> PyResult<Self> {
+        crate::args::paths!(model_dir, background);
         let rt = crate::pipeline::runtime(runtime)?;
         let dir = model_dir.clone();
         let rec = py

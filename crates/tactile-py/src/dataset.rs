@@ -10,7 +10,7 @@ use pyo3::types::{PyDict, PyList};
 use tactile_core::dataset::{Dataset, DatasetKind};
 use tactile_core::import::{ImportOptions, import_dataset};
 
-use crate::args::Whole;
+use crate::args::{PathArg, Whole};
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
@@ -69,7 +69,8 @@ fn array2<T: numpy::Element>(
 impl PyDataset {
     /// Open and check the dataset folder `path`.
     #[new]
-    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    fn new(py: Python<'_>, path: PathArg) -> PyResult<Self> {
+        crate::args::paths!(path);
         let ds = py.detach(move || Dataset::open(&path)).py()?;
         Ok(Self { ds })
     }
@@ -83,14 +84,15 @@ impl PyDataset {
     #[allow(clippy::too_many_arguments)]
     fn from_video(
         py: Python<'_>,
-        video: PathBuf,
-        labels: PathBuf,
+        video: PathArg,
+        labels: PathArg,
         kind: &str,
-        out: PathBuf,
+        out: PathArg,
         topic: Option<String>,
         sensor: String,
         force: bool,
     ) -> PyResult<Self> {
+        crate::args::paths!(video, labels, out);
         let kind = kind.parse::<DatasetKind>().py()?;
         let options = ImportOptions {
             frames: video,

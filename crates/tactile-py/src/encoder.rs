@@ -14,6 +14,7 @@ use tactile_pipeline::tactip::{GivenFrames, TactipPerception};
 use tactile_preprocess::profile::InputProfile;
 use tactile_preprocess::{FrameSizeCheck, PinImage, PreprocessConfig};
 
+use crate::args::PathArg;
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout, Pixels, frame_chunks};
 use crate::work::released;
@@ -143,10 +144,11 @@ impl PyTactipEncoder {
     #[pyo3(signature = (model_dir, runtime="burn-flex", *, estimators=None))]
     fn new(
         py: Python<'_>,
-        model_dir: PathBuf,
+        model_dir: PathArg,
         runtime: &str,
-        estimators: Option<Vec<PathBuf>>,
+        estimators: Option<Vec<PathArg>>,
     ) -> PyResult<Self> {
+        crate::args::paths!(model_dir, estimators);
         let rt = crate::pipeline::runtime(runtime)?;
         let dir = model_dir.clone();
         let named = estimators.unwrap_or_default();

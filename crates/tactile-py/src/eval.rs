@@ -1,13 +1,12 @@
 //! `tactile.eval`: every evaluation of the command line, returning the
 //! dict `tactile eval ...` prints as its last line.
 
-use std::path::PathBuf;
-
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_core::dataset::Dataset;
 use tactile_pipeline::tactip::TactipPerception;
 
+use crate::args::PathArg;
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::work::interruptible;
@@ -18,11 +17,12 @@ use crate::work::interruptible;
 #[pyo3(signature = (model, data, *, runtime="burn-flex", **options))]
 pub(crate) fn eval_detector<'py>(
     py: Python<'py>,
-    model: PathBuf,
-    data: PathBuf,
+    model: PathArg,
+    data: PathArg,
     runtime: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(model, data);
     let rt = self::runtime(runtime)?;
     let o: tactile_detect::eval::EvalOptions = crate::json::options(py, options)?;
     let sc = interruptible(py, || {
@@ -40,10 +40,11 @@ pub(crate) fn eval_detector<'py>(
 #[pyo3(signature = (model, data, *, runtime="burn-flex"))]
 pub(crate) fn eval_segmenter<'py>(
     py: Python<'py>,
-    model: PathBuf,
-    data: PathBuf,
+    model: PathArg,
+    data: PathArg,
     runtime: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(model, data);
     let rt = self::runtime(runtime)?;
     let sc = interruptible(py, || {
         tactile_segment::evaluate_folder(&model, &data, rt).py()
@@ -61,11 +62,12 @@ pub(crate) fn eval_segmenter<'py>(
 #[pyo3(signature = (model, data, *, runtime="burn-flex", **options))]
 pub(crate) fn eval_depth<'py>(
     py: Python<'py>,
-    model: PathBuf,
-    data: PathBuf,
+    model: PathArg,
+    data: PathArg,
     runtime: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(model, data);
     let rt = self::runtime(runtime)?;
     let o: tactile_depth::eval::EvalOptions = crate::json::options(py, options)?;
     let v = interruptible(py, || {
@@ -81,11 +83,12 @@ pub(crate) fn eval_depth<'py>(
 #[pyo3(signature = (encoder, data, *, estimators=None, runtime="burn-flex"))]
 pub(crate) fn eval_tactip<'py>(
     py: Python<'py>,
-    encoder: PathBuf,
-    data: PathBuf,
-    estimators: Option<Vec<PathBuf>>,
+    encoder: PathArg,
+    data: PathArg,
+    estimators: Option<Vec<PathArg>>,
     runtime: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(encoder, data, estimators);
     let rt = self::runtime(runtime)?;
     let named = estimators.unwrap_or_default();
     let v = interruptible(py, || {

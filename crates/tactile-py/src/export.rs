@@ -1,11 +1,10 @@
 //! `tactile.export`: `tactile export` from Python, the same library call.
 
-use std::path::PathBuf;
-
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_pipeline::export::{Part, export_to};
 
+use crate::args::PathArg;
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
@@ -18,11 +17,12 @@ use crate::work::interruptible;
 #[pyo3(signature = (model, out, *, part=None, standalone=false))]
 pub(crate) fn export<'py>(
     py: Python<'py>,
-    model: PathBuf,
-    out: PathBuf,
+    model: PathArg,
+    out: PathArg,
     part: Option<&str>,
     standalone: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
+    crate::args::paths!(model, out);
     let part = part.map(str::parse::<Part>).transpose().py()?;
     let e = interruptible(py, || export_to(&model, &out, part, standalone).py())?;
     let d = PyDict::new(py);

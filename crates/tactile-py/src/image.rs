@@ -1,12 +1,11 @@
 //! Reading frames with the library's own decoder, so a Python program
 //! sees exactly the pixels `tactile run` and `tactile encode` see.
 
-use std::path::PathBuf;
-
 use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+use crate::args::PathArg;
 use crate::errors::PyResultExt;
 
 /// An RGB image as an `(H, W, 3)` uint8 numpy array, its pixels moved,
@@ -25,7 +24,8 @@ pub(crate) fn rgb_array(
 /// A frame file (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM, 8 bits per
 /// channel) as `(H, W, 3)` uint8 RGB (grey is expanded).
 #[pyfunction]
-pub(crate) fn read_rgb(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
+pub(crate) fn read_rgb(py: Python<'_>, path: PathArg) -> PyResult<Bound<'_, PyAny>> {
+    crate::args::paths!(path);
     let img = py
         .detach(move || tactile_core::image_io::load_rgb(&path))
         .py()?;
@@ -35,7 +35,8 @@ pub(crate) fn read_rgb(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAn
 /// A frame file (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM, 8 bits per
 /// channel) as `(H, W)` uint8 grey (RGB converted with OpenCV's weights).
 #[pyfunction]
-pub(crate) fn read_grey(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
+pub(crate) fn read_grey(py: Python<'_>, path: PathArg) -> PyResult<Bound<'_, PyAny>> {
+    crate::args::paths!(path);
     let img = py
         .detach(move || tactile_core::image_io::load_grey(&path))
         .py()?;

@@ -11,6 +11,7 @@ use pyo3::types::PyDict;
 use tactile_pose::PoseEstimator;
 use tactile_preprocess::PinImage;
 
+use crate::args::PathArg;
 use crate::encoder::{pin_image_array, run_on_frames};
 use crate::errors::PyResultExt;
 
@@ -49,7 +50,8 @@ impl PyPoseEstimator {
     /// Load the pose network in `model_dir` onto `runtime`.
     #[new]
     #[pyo3(signature = (model_dir, runtime="burn-flex"))]
-    fn new(py: Python<'_>, model_dir: PathBuf, runtime: &str) -> PyResult<Self> {
+    fn new(py: Python<'_>, model_dir: PathArg, runtime: &str) -> PyResult<Self> {
+        crate::args::paths!(model_dir);
         let rt = crate::pipeline::runtime(runtime)?;
         let dir = model_dir.clone();
         let estimator = py

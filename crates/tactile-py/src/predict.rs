@@ -3,15 +3,13 @@
 //! frames, an image, a video or a ROS 2 bag, optionally written as CSV or
 //! ROS 2 messages in MCAP.
 
-use std::path::PathBuf;
-
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_estimate::Column;
 use tactile_pipeline::tactip::{PredictInput, Predictor};
 
-use crate::args::Whole;
+use crate::args::{PathArg, Whole};
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::work::interruptible;
@@ -28,14 +26,15 @@ use crate::work::interruptible;
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn predict<'py>(
     py: Python<'py>,
-    model: PathBuf,
-    data: PathBuf,
-    out: Option<PathBuf>,
-    heads: Vec<PathBuf>,
+    model: PathArg,
+    data: PathArg,
+    out: Option<PathArg>,
+    heads: Vec<PathArg>,
     topic: Option<String>,
     limit: Option<Whole>,
     runtime: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    crate::args::paths!(model, data, out, heads);
     let rt = self::runtime(runtime)?;
     let limit = crate::source::source_limit(limit.as_ref())?;
     let (r, input_warnings) = interruptible(py, || {

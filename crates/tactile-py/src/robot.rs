@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use tactile_ros::live::LiveView;
 use tactile_ros::{FrameMessages, McapResults, Topic};
 
-use crate::args::{Whole, optional};
+use crate::args::{PathArg, Whole, optional};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout};
 use crate::pipeline::FrameResult;
@@ -84,7 +84,8 @@ impl PyMcapWriter {
     }
 
     #[new]
-    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    fn new(py: Python<'_>, path: PathArg) -> PyResult<Self> {
+        crate::args::paths!(path);
         let p = path.clone();
         // Paper B's pipeline's topics now, so a reader lists them even when
         // no frame had a tendon; the input frame and a sensor's indentation

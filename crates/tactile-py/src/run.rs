@@ -3,12 +3,10 @@
 //! frames, its records written as JSON Lines or ROS 2 messages in MCAP,
 //! overlays rendered, results served live, and the summary returned.
 
-use std::path::PathBuf;
-
 use pyo3::prelude::*;
 use tactile_ros::{RunRequest, RunSession};
 
-use crate::args::Whole;
+use crate::args::{PathArg, Whole};
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::source::{source_limit, source_spec};
@@ -25,7 +23,7 @@ use crate::work::interruptible;
 /// appears when the run ends; Ctrl-C stops it leaving none.
 #[pyfunction]
 #[pyo3(signature = (
-    source=None, *, models=PathBuf::from("models"), runtime="onnx", threads=Whole::of(1),
+    source=None, *, models=PathArg::of("models"), runtime="onnx", threads=Whole::of(1),
     pipelines=Whole::of(1), hysteresis=None, out=None, render=None, with_frames=false, view=None,
     view_wait=0.0, topic=None, stdin_size=None, live_queue=Whole::of(2), limit=None, prefetch=true
 ), text_signature = "(source=None, *, models='models', runtime='onnx', threads=1, pipelines=1, \
@@ -34,14 +32,14 @@ use crate::work::interruptible;
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run<'py>(
     py: Python<'py>,
-    source: Option<PathBuf>,
-    models: PathBuf,
+    source: Option<PathArg>,
+    models: PathArg,
     runtime: &str,
     threads: Whole,
     pipelines: Whole,
     hysteresis: Option<(f32, f32)>,
-    out: Option<PathBuf>,
-    render: Option<PathBuf>,
+    out: Option<PathArg>,
+    render: Option<PathArg>,
     with_frames: bool,
     view: Option<String>,
     view_wait: f64,
@@ -51,6 +49,7 @@ pub(crate) fn run<'py>(
     limit: Option<Whole>,
     prefetch: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(source, models, out, render);
     let rt = self::runtime(runtime)?;
     let threads = crate::pipeline::threads(&threads)?;
     let pipelines = pipelines.within("pipelines", 1, tactile_pipeline::run::MAX_PIPELINES)?;

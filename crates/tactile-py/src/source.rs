@@ -11,7 +11,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use tactile_pipeline::{FrameSource, SourceOptions, SourceSpec};
 
-use crate::args::{Whole, optional};
+use crate::args::{PathArg, Whole, optional};
 use crate::errors::PyResultExt;
 
 /// One frame of a source: `image` is `(H, W, 3)` uint8 RGB; `name` the
@@ -297,13 +297,14 @@ impl PyVideoDecoder {
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn frames(
     py: Python<'_>,
-    source: Option<PathBuf>,
+    source: Option<PathArg>,
     topic: Option<String>,
     stdin_size: Option<(Whole, Whole)>,
     live_queue: Whole,
     limit: Option<Whole>,
     prefetch: bool,
 ) -> PyResult<PyFrameSource> {
+    crate::args::paths!(source);
     let spec = source_spec(source, topic, stdin_size)?;
     let options = SourceOptions {
         overlap: prefetch,
@@ -373,7 +374,8 @@ pub(crate) fn source_spec(
 /// The image topics of a ROS 2 bag (its folder or one MCAP file): a list
 /// of dicts with `topic`, `message_type`, `count` and `rate_hz`.
 #[pyfunction]
-pub(crate) fn bag_topics(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny>>> {
+pub(crate) fn bag_topics(py: Python<'_>, path: PathArg) -> PyResult<Vec<Py<PyAny>>> {
+    crate::args::paths!(path);
     let listing = py
         .detach(move || tactile_core::bag::list_image_topics(&path))
         .py()?;

@@ -1,8 +1,6 @@
 //! `tactile.synth`: the virtual sensors of `sensors.md`, as arrays in
 //! memory or written as a dataset.
 
-use std::path::PathBuf;
-
 use datasets_synth::{
     CalibratedConfig, CalibratedSensor, TactipConfig, TactipLabels, VisuotactileConfig,
     WriteOptions, calibrated, tactip, visuotactile,
@@ -12,7 +10,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::args::{Whole, optional};
+use crate::args::{PathArg, Whole, optional};
 use crate::errors::PyResultExt;
 
 /// Most bytes of arrays one call may return (a bigger set is written to
@@ -105,11 +103,12 @@ pub(crate) fn synth_tactip(
     py: Python<'_>,
     count: Whole,
     seed: Whole,
-    out: Option<PathBuf>,
+    out: Option<PathArg>,
     force: bool,
     progress: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
+    crate::args::paths!(out);
     let count = count.within("count", 1, usize::MAX)?;
     let seed = self::seed(&seed)?;
     let cfg: TactipConfig = crate::json::options(py, options)?;
@@ -171,11 +170,12 @@ pub(crate) fn synth_visuotactile(
     count: Option<Whole>,
     sequences: Option<Whole>,
     seed: Whole,
-    out: Option<PathBuf>,
+    out: Option<PathArg>,
     force: bool,
     progress: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
+    crate::args::paths!(out);
     let count = how_many(count.as_ref(), "count")?;
     let sequences = how_many(sequences.as_ref(), "sequences")?;
     let seed = self::seed(&seed)?;
@@ -264,15 +264,16 @@ pub(crate) fn synth_visuotactile(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn synth_gelsight(
     py: Python<'_>,
-    sensor: PathBuf,
+    sensor: PathArg,
     count: Option<Whole>,
     sequences: Option<Whole>,
     seed: Whole,
-    out: Option<PathBuf>,
+    out: Option<PathArg>,
     force: bool,
     progress: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
+    crate::args::paths!(sensor, out);
     let count = how_many(count.as_ref(), "count")?;
     let sequences = how_many(sequences.as_ref(), "sequences")?;
     let seed = self::seed(&seed)?;
@@ -358,10 +359,11 @@ pub(crate) fn synth_gelsight(
 #[pyo3(signature = (data, out, progress))]
 pub(crate) fn synth_ideal_detector(
     py: Python<'_>,
-    data: PathBuf,
-    out: Option<PathBuf>,
+    data: PathArg,
+    out: Option<PathArg>,
     progress: bool,
 ) -> PyResult<Py<PyAny>> {
+    crate::args::paths!(data, out);
     let bounds = crate::work::interruptible(py, || {
         visuotactile::dataset_bounds(&data, out.as_deref(), progress).py()
     })?;

@@ -17,6 +17,7 @@ use tactile_pipeline::tactip::{FeatureSource, train_head, train_regressor};
 use tactile_pose::PoseOptions;
 use tactile_segment::SegmenterOptions;
 
+use crate::args::PathArg;
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
@@ -68,10 +69,11 @@ where
 #[pyo3(signature = (data, out, **options))]
 pub(crate) fn train_cae<'py>(
     py: Python<'py>,
-    data: PathBuf,
-    out: PathBuf,
+    data: PathArg,
+    out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(data, out);
     train_on_one(
         py,
         data,
@@ -87,10 +89,11 @@ pub(crate) fn train_cae<'py>(
 #[pyo3(signature = (data, out, **options))]
 pub(crate) fn train_pose<'py>(
     py: Python<'py>,
-    data: PathBuf,
-    out: PathBuf,
+    data: PathArg,
+    out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(data, out);
     train_on_one(
         py,
         data,
@@ -107,10 +110,11 @@ pub(crate) fn train_pose<'py>(
 #[pyo3(signature = (data, out, **options))]
 pub(crate) fn train_detector<'py>(
     py: Python<'py>,
-    data: Vec<PathBuf>,
-    out: PathBuf,
+    data: Vec<PathArg>,
+    out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(data, out);
     let options: DetectorOptions = crate::json::options(py, options)?;
     options.config().py()?;
     if data.is_empty() {
@@ -131,10 +135,11 @@ pub(crate) fn train_detector<'py>(
 #[pyo3(signature = (data, out, **options))]
 pub(crate) fn train_segmenter<'py>(
     py: Python<'py>,
-    data: PathBuf,
-    out: PathBuf,
+    data: PathArg,
+    out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(data, out);
     train_on_one(
         py,
         data,
@@ -151,10 +156,11 @@ pub(crate) fn train_segmenter<'py>(
 #[pyo3(signature = (data, out, **options))]
 pub(crate) fn train_depth<'py>(
     py: Python<'py>,
-    data: PathBuf,
-    out: PathBuf,
+    data: PathArg,
+    out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(data, out);
     train_on_one(
         py,
         data,
@@ -189,13 +195,14 @@ fn out_or(encoder: &Option<PathBuf>, out: Option<PathBuf>, name: &str) -> PyResu
 #[pyo3(signature = (data, *, encoder=None, features=None, out=None, test=None, **options))]
 pub(crate) fn train_head_py<'py>(
     py: Python<'py>,
-    data: PathBuf,
-    encoder: Option<PathBuf>,
-    features: Option<PathBuf>,
-    out: Option<PathBuf>,
-    test: Option<PathBuf>,
+    data: PathArg,
+    encoder: Option<PathArg>,
+    features: Option<PathArg>,
+    out: Option<PathArg>,
+    test: Option<PathArg>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(data, encoder, features, out, test);
     let options: HeadOptions = crate::json::options(py, options)?;
     let rt = options.device.runtime();
     let src = source(&encoder, &features)?;
@@ -228,13 +235,14 @@ pub(crate) fn train_head_py<'py>(
 #[pyo3(signature = (data, targets, *, encoder=None, features=None, out=None, **options))]
 pub(crate) fn train_regressor_py<'py>(
     py: Python<'py>,
-    data: PathBuf,
+    data: PathArg,
     targets: Vec<String>,
-    encoder: Option<PathBuf>,
-    features: Option<PathBuf>,
-    out: Option<PathBuf>,
+    encoder: Option<PathArg>,
+    features: Option<PathArg>,
+    out: Option<PathArg>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::paths!(data, encoder, features, out);
     let options: RegressorOptions = crate::json::options(py, options)?;
     let rt = options.device.runtime();
     let plan = options.plan(&targets).py()?;
@@ -277,7 +285,8 @@ pub(crate) fn options<'py>(py: Python<'py>, trainer: &str) -> PyResult<Bound<'py
 /// frame alike, or regressors on one encoder's features trained with other
 /// seeds) in a new ensemble folder; returns what was made, in words.
 #[pyfunction]
-pub(crate) fn train_ensemble(members: Vec<PathBuf>, out: PathBuf) -> PyResult<String> {
+pub(crate) fn train_ensemble(members: Vec<PathArg>, out: PathArg) -> PyResult<String> {
+    crate::args::paths!(members, out);
     tactile_pipeline::ensemble::assemble_ensemble(&members, &out).py()
 }
 
@@ -289,11 +298,12 @@ pub(crate) fn train_ensemble(members: Vec<PathBuf>, out: PathBuf) -> PyResult<St
 #[pyo3(signature = (model, data, split=None, calibration_from=None))]
 pub(crate) fn train_calibrate(
     py: Python<'_>,
-    model: PathBuf,
-    data: Vec<PathBuf>,
+    model: PathArg,
+    data: Vec<PathArg>,
     split: Option<String>,
-    calibration_from: Option<PathBuf>,
+    calibration_from: Option<PathArg>,
 ) -> PyResult<String> {
+    crate::args::paths!(model, data, calibration_from);
     let c = interruptible(py, || {
         let sets = data
             .iter()
@@ -322,10 +332,11 @@ pub(crate) fn train_calibrate(
 #[pyo3(signature = (model, data, split=None))]
 pub(crate) fn train_profile(
     py: Python<'_>,
-    model: PathBuf,
-    data: Vec<PathBuf>,
+    model: PathArg,
+    data: Vec<PathArg>,
     split: Option<String>,
 ) -> PyResult<String> {
+    crate::args::paths!(model, data);
     interruptible(py, || {
         let sets = data
             .iter()

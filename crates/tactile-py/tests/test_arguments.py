@@ -1,9 +1,12 @@
-"""Whole-number keywords: a wrong one is refused naming the keyword and its
-range, before any work; numpy integers are whole numbers too."""
+"""Whole-number and path keywords: a wrong one is refused naming the
+keyword (and a number's range), before any work, on every Python the
+package supports (PyO3 names a keyword only in a note, and only from Python
+3.11); numpy integers are whole numbers, bytes are paths."""
 
 from __future__ import annotations
 
 import inspect
+import os
 
 import numpy as np
 import pytest
@@ -105,3 +108,86 @@ def test_a_dataset_index_reads_as_a_list_index(root):
         with pytest.raises(TypeError, match="dataset indices must be integers"):
             ds[i]
     assert len(list(ds)) == n
+
+
+def _path_calls(root):
+    """Every path keyword of the package, as one call taking the value,
+    with the name its error must start with."""
+    m, d = root / "models", root / "samples" / "palpation"
+    pose = m / "pose-surface"
+    return [
+        ("path", lambda v: tactile.Dataset(v)),
+        ("video", lambda v: tactile.Dataset.from_video(v, "l.csv", "tactip", "o")),
+        ("labels", lambda v: tactile.Dataset.from_video(d, v, "tactip", "o")),
+        ("out", lambda v: tactile.Dataset.from_video(d, "l.csv", "tactip", v)),
+        ("models", lambda v: tactile.Pipeline(v)),
+        ("model_dir", lambda v: tactile.PoseEstimator(v)),
+        ("model_dir", lambda v: tactile.TactipEncoder(v)),
+        ("estimators[1]", lambda v: tactile.TactipEncoder(m / "cae-synth", estimators=["a", v])),
+        ("model_dir", lambda v: tactile.Reconstructor(v)),
+        ("background", lambda v: tactile.Reconstructor(m / "gelsight-r15", background=v)),
+        ("path", lambda v: tactile.McapWriter(v)),
+        ("path", lambda v: tactile.read_rgb(v)),
+        ("path", lambda v: tactile.read_grey(v)),
+        ("path", lambda v: tactile.bag_topics(v)),
+        ("source", lambda v: tactile.frames(v)),
+        ("source", lambda v: tactile.run(v)),
+        ("models", lambda v: tactile.run(d, models=v)),
+        ("out", lambda v: tactile.run(d, out=v)),
+        ("render", lambda v: tactile.run(d, render=v)),
+        ("model", lambda v: tactile.predict(v, d)),
+        ("data", lambda v: tactile.predict(pose, v)),
+        ("out", lambda v: tactile.predict(pose, d, v)),
+        ("heads[0]", lambda v: tactile.predict(pose, d, heads=[v])),
+        ("model", lambda v: tactile.export(v, "x.onnx")),
+        ("out", lambda v: tactile.export(pose, v)),
+        ("data", lambda v: tactile.train.cae(v, "o")),
+        ("out", lambda v: tactile.train.pose(d, v)),
+        ("data[0]", lambda v: tactile.train.detector(v, "o")),
+        ("data[1]", lambda v: tactile.train.detector([d, v], "o")),
+        ("out", lambda v: tactile.train.segmenter(d, v)),
+        ("data", lambda v: tactile.train.depth(v, "o")),
+        ("encoder", lambda v: tactile.train.head(d, encoder=v)),
+        ("test", lambda v: tactile.train.head(d, encoder=m / "cae-synth", test=v)),
+        ("features", lambda v: tactile.train.regressor(d, ["x_mm"], features=v)),
+        ("members[1]", lambda v: tactile.train.ensemble([pose, v], "o")),
+        ("calibration_from", lambda v: tactile.train.calibrate(pose, calibration_from=v)),
+        ("data[0]", lambda v: tactile.train.profile(pose, v)),
+        ("model", lambda v: tactile.eval.detector(v, d)),
+        ("data", lambda v: tactile.eval.segmenter(m / "segmenter", v)),
+        ("model", lambda v: tactile.eval.depth(v, d)),
+        ("estimators[0]", lambda v: tactile.eval.tactip(m / "cae-synth", d, estimators=[v])),
+        ("out", lambda v: tactile.synth.tactip(1, out=v)),
+        ("out", lambda v: tactile.synth.visuotactile(1, out=v)),
+        ("sensor", lambda v: tactile.synth.gelsight(v)),
+        ("data", lambda v: tactile.synth.ideal_detector(v)),
+        ("data", lambda v: tactile.calibrate.ball(v, "o")),
+        ("render", lambda v: tactile.calibrate.reconstruct(m / "gelsight-r15", d, "o", render=v)),
+    ]
+
+
+def test_a_wrong_path_is_refused_naming_its_keyword(root, tmp_path, monkeypatch):
+    # Before, PyO3's "expected str, bytes or os.PathLike object, not int"
+    # (and os.fspath's, in the Python wrappers) named no keyword.
+    monkeypatch.chdir(tmp_path)
+    for name, call in _path_calls(root):
+        for value in [5, 2.5, np.zeros((4, 4), np.uint8), [1.0]]:
+            with pytest.raises(TypeError) as e:
+                call(value)
+            # A keyword taking one path or a list of them reads a list's items.
+            got = type(value[0] if name == "data[0]" and isinstance(value, list) else value).__name__
+            assert str(e.value) == f"{name}: expected a path (str, bytes or os.PathLike), got {got}", (
+                name, str(e.value))
+    assert list(tmp_path.iterdir()) == [], "a refused call wrote something"
+
+
+def test_bytes_and_path_like_objects_are_paths(root):
+    frame = root / "samples" / "virtual-tactip" / "frames" / "000000.png"
+
+    class BytesPath(os.PathLike):
+        def __fspath__(self):
+            return os.fsencode(frame)
+
+    for given in [str(frame), frame, os.fsencode(frame), BytesPath()]:
+        assert tactile.read_grey(given).shape == (300, 300), given
+    assert len(tactile.Dataset(os.fsencode(root / "samples" / "virtual-tactip"))) == 14

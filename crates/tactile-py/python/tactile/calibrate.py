@@ -29,7 +29,7 @@ def ball(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
     """Calibrate a sensor from presses of a ball of known radius into the
     new model folder ``out`` (``widths``, ``kernels``, ``factor``,
     ``height_weight``, ``circles``, ``max_epochs``, ... as keywords)."""
-    return _tactile.calibrate_ball(os.fspath(data), os.fspath(out), **options)
+    return _tactile.calibrate_ball(data, out, **options)
 
 
 def reconstruct(
@@ -51,11 +51,11 @@ def reconstruct(
     ``render`` also writes pictures (frame, shaded skin, indentation with a
     colour bar); ``background`` replaces the calibration's rest frame."""
     return _tactile.reconstruct_frames(
-        os.fspath(model),
-        os.fspath(data),
-        os.fspath(out),
-        background=None if background is None else os.fspath(background),
-        render=None if render is None else os.fspath(render),
+        model,
+        data,
+        out,
+        background=background,
+        render=render,
         runtime=runtime,
     )
 

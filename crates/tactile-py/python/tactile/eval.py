@@ -18,12 +18,12 @@ def detector(
     tendon detector on a labelled visuo-tactile dataset, gated and ungated.
     ``frames=`` (a CSV of every frame's answer) and ``reliability=`` (a
     PNG) as ``tactile eval detector``; see ``eval.pyi``."""
-    return _tactile.eval_detector(os.fspath(model), os.fspath(data), runtime=runtime, **options)
+    return _tactile.eval_detector(model, data, runtime=runtime, **options)
 
 
 def segmenter(model: PathLike, data: PathLike, *, runtime: str = "burn-flex") -> Dict[str, Any]:
     """Mean IoU and direction error per tendon path of a segmenter."""
-    return _tactile.eval_segmenter(os.fspath(model), os.fspath(data), runtime=runtime)
+    return _tactile.eval_segmenter(model, data, runtime=runtime)
 
 
 def depth(
@@ -32,7 +32,7 @@ def depth(
     """MAE (sensing window and tendon), RMSE and SSIM of a depth network,
     mm. ``save_png=`` (a new folder) and ``png_frames=`` write heat maps, as
     ``tactile eval depth``; see ``eval.pyi``."""
-    return _tactile.eval_depth(os.fspath(model), os.fspath(data), runtime=runtime, **options)
+    return _tactile.eval_depth(model, data, runtime=runtime, **options)
 
 
 def tactip(
@@ -44,9 +44,9 @@ def tactip(
 ) -> Dict[str, Any]:
     """Every estimator of an encoder scored on a labelled TacTip dataset."""
     return _tactile.eval_tactip(
-        os.fspath(encoder),
-        os.fspath(data),
-        estimators=None if estimators is None else [os.fspath(e) for e in estimators],
+        encoder,
+        data,
+        estimators=None if estimators is None else list(estimators),
         runtime=runtime,
     )
 

@@ -46,7 +46,7 @@ def tactip(
     memory or to disk; Ctrl-C stops the render and keeps nothing.
     """
     r = _tactile.synth_tactip(
-        count, seed, None if out is None else os.fspath(out), force, progress,
+        count, seed, out, force, progress,
         **options,
     )
     return Path(r) if out is not None else r
@@ -78,7 +78,7 @@ def visuotactile(
         count,
         sequences,
         seed,
-        None if out is None else os.fspath(out),
+        out,
         force,
         progress,
         **options,
@@ -113,11 +113,11 @@ def gelsight(
     for :func:`tactip`.
     """
     r = _tactile.synth_gelsight(
-        os.fspath(sensor),
+        sensor,
         count,
         sequences,
         seed,
-        None if out is None else os.fspath(out),
+        out,
         force,
         progress,
         **options,
@@ -145,7 +145,7 @@ def ideal_detector(
     ``out``, also writes the per-frame CSV there.
     """
     return _tactile.synth_ideal_detector(
-        os.fspath(data), None if out is None else os.fspath(out), progress
+        data, out, progress
     )
 
 

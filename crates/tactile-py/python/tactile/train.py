@@ -23,8 +23,15 @@ from . import _tactile
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-def _path(p: Optional[PathLike]) -> Optional[str]:
-    return None if p is None else os.fspath(p)
+def _listed(paths: Any) -> List[Any]:
+    """One path or an iterable of them as a list; anything else is passed
+    on as one, for the native function to refuse by its keyword."""
+    if isinstance(paths, (str, bytes, os.PathLike)):
+        return [paths]
+    try:
+        return list(paths)
+    except TypeError:
+        return [paths]
 
 
 def cae(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
@@ -40,7 +47,7 @@ def cae(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
     trains on beside ``data``, each with its own ``preprocess``,
     ``joint_targets`` and ``shift``. Every option: ``options("cae")``.
     """
-    return _tactile.train_cae(os.fspath(data), os.fspath(out), **options)
+    return _tactile.train_cae(data, out, **options)
 
 
 def pose(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
@@ -50,7 +57,7 @@ def pose(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
     With ``exclude_test`` the result has the scores on the test frames it
     left out. Every option: ``options("pose")``.
     """
-    return _tactile.train_pose(os.fspath(data), os.fspath(out), **options)
+    return _tactile.train_pose(data, out, **options)
 
 
 def detector(
@@ -62,14 +69,13 @@ def detector(
     threshold chosen on the validation sequences. Every option:
     ``options("detector")``.
     """
-    paths = [data] if isinstance(data, (str, os.PathLike)) else list(data)
-    return _tactile.train_detector([os.fspath(p) for p in paths], os.fspath(out), **options)
+    return _tactile.train_detector(_listed(data), out, **options)
 
 
 def segmenter(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
     """Paper B's U-Net tendon segmenter (``side``: window, a multiple of
     16). Every option: ``options("segmenter")``."""
-    return _tactile.train_segmenter(os.fspath(data), os.fspath(out), **options)
+    return _tactile.train_segmenter(data, out, **options)
 
 
 def depth(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
@@ -77,7 +83,7 @@ def depth(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
     ``input``: (width, height), multiples of 32; ``head``: "conv1x1" or
     "custom"; ``loss``: "l1", "mse" or "l1-grad-ssim"). Every option:
     ``options("depth")``."""
-    return _tactile.train_depth(os.fspath(data), os.fspath(out), **options)
+    return _tactile.train_depth(data, out, **options)
 
 
 def head(
@@ -97,8 +103,7 @@ def head(
     ``encoder``). Every option: ``options("head")``.
     """
     return _tactile.train_head_py(
-        os.fspath(data), encoder=_path(encoder), features=_path(features), out=_path(out),
-        test=_path(test), **options,
+        data, encoder=encoder, features=features, out=out, test=test, **options,
     )
 
 
@@ -118,8 +123,7 @@ def regressor(
     ``options("regressor")``.
     """
     return _tactile.train_regressor_py(
-        os.fspath(data), list(targets), encoder=_path(encoder), features=_path(features),
-        out=_path(out), **options,
+        data, list(targets), encoder=encoder, features=features, out=out, **options,
     )
 
 
@@ -143,7 +147,7 @@ def ensemble(members: Sequence[PathLike], out: PathLike) -> str:
     ``TactipEncoder`` runs (the members' mean).
     Returns what was made, in words.
     """
-    return _tactile.train_ensemble([os.fspath(m) for m in members], os.fspath(out))
+    return _tactile.train_ensemble(_listed(members), out)
 
 
 def calibrate(model: PathLike, data=None, *, split: Optional[str] = None,
@@ -157,14 +161,8 @@ def calibrate(model: PathLike, data=None, *, split: Optional[str] = None,
     ``calibration_from`` for a model trained on every frame. Rewrites the
     model folder; returns what changed, in words.
     """
-    if data is None:
-        sets = []
-    elif isinstance(data, (str, os.PathLike)):
-        sets = [os.fspath(data)]
-    else:
-        sets = [os.fspath(d) for d in data]
-    return _tactile.train_calibrate(os.fspath(model), sets, split,
-                                    None if calibration_from is None else os.fspath(calibration_from))
+    sets = [] if data is None else _listed(data)
+    return _tactile.train_calibrate(model, sets, split, calibration_from)
 
 
 def profile(model: PathLike, data, *, split: Optional[str] = None) -> str:
@@ -177,8 +175,7 @@ def profile(model: PathLike, data, *, split: Optional[str] = None) -> str:
     ``UserWarning``. Models trained now have one already. Returns what was
     saved, in words.
     """
-    sets = [os.fspath(data)] if isinstance(data, (str, os.PathLike)) else [os.fspath(d) for d in data]
-    return _tactile.train_profile(os.fspath(model), sets, split)
+    return _tactile.train_profile(model, _listed(data), split)
 
 
 __all__ = ["cae", "depth", "detector", "ensemble", "head", "options", "pose", "profile",
