@@ -115,7 +115,7 @@ where
 }
 
 /// A path argument (a `str`, `bytes` or `os.PathLike`) as the caller gave
-/// it; [`ReadPath::path`] makes it a path or a `TypeError` naming the
+/// it; [`Keyword::read`] makes it a path or a `TypeError` naming the
 /// keyword ("data: expected a path (str, bytes or os.PathLike), got
 /// ndarray").
 #[derive(Clone, Debug)]
@@ -160,19 +160,20 @@ impl<'a, 'py> FromPyObject<'a, 'py> for PathArg {
     }
 }
 
-/// A path argument, an optional one (`out=None` stays `None`) or a list
-/// of them, read under its keyword.
-pub(crate) trait ReadPath {
-    /// `PathBuf`, or `Option<PathBuf>`.
-    type Path;
-    /// The path, or a `TypeError` naming `name`.
-    fn path(self, name: &str) -> PyResult<Self::Path>;
+/// An argument read under its keyword: a path ([`PathArg`]), any other
+/// value ([`Given`]), an optional one (`None` stays `None`) or a list
+/// (each item named by its place, "heads[1]").
+pub(crate) trait Keyword {
+    /// What the argument holds.
+    type Value;
+    /// The value, or the refusal naming `name`.
+    fn read(self, name: &str) -> PyResult<Self::Value>;
 }
 
-impl ReadPath for PathArg {
-    type Path = PathBuf;
+impl Keyword for PathArg {
+    type Value = PathBuf;
 
-    fn path(self, name: &str) -> PyResult<PathBuf> {
+    fn read(self, name: &str) -> PyResult<PathBuf> {
         self.0.map_err(|got| {
             PyTypeError::new_err(format!(
                 "{name}: expected a path (str, bytes or os.PathLike), got {got}"
@@ -181,42 +182,71 @@ impl ReadPath for PathArg {
     }
 }
 
-impl ReadPath for Option<PathArg> {
-    type Path = Option<PathBuf>;
+impl<K: Keyword> Keyword for Option<K> {
+    type Value = Option<K::Value>;
 
-    fn path(self, name: &str) -> PyResult<Option<PathBuf>> {
-        self.map(|p| p.path(name)).transpose()
+    fn read(self, name: &str) -> PyResult<Self::Value> {
+        self.map(|k| k.read(name)).transpose()
     }
 }
 
-impl ReadPath for Vec<PathArg> {
-    type Path = Vec<PathBuf>;
+impl<K: Keyword> Keyword for Vec<K> {
+    type Value = Vec<K::Value>;
 
-    /// Each path, or a `TypeError` naming the first wrong one by its
-    /// place ("members[1]: ...").
-    fn path(self, name: &str) -> PyResult<Vec<PathBuf>> {
+    fn read(self, name: &str) -> PyResult<Self::Value> {
         self.into_iter()
             .enumerate()
-            .map(|(i, p)| p.path(&format!("{name}[{i}]")))
+            .map(|(i, k)| k.read(&format!("{name}[{i}]")))
             .collect()
     }
 }
 
-impl ReadPath for Option<Vec<PathArg>> {
-    type Path = Option<Vec<PathBuf>>;
+/// Any other argument (a string, a flag, a number, a pair) as PyO3
+/// converts it, a refusal kept for [`Keyword::read`] to name the keyword:
+/// "force: 'int' object is not an instance of 'bool'".
+pub(crate) struct Given<T>(Result<T, PyErr>);
 
-    fn path(self, name: &str) -> PyResult<Option<Vec<PathBuf>>> {
-        self.map(|p| p.path(name)).transpose()
+impl<T> Given<T> {
+    /// The default of a keyword.
+    pub(crate) fn of(default: impl Into<T>) -> Self {
+        Self(Ok(default.into()))
     }
 }
 
-/// `paths!(data, out)`: each path argument read under its own name
-/// ([`ReadPath::path`]), shadowing it; the first wrong one's error.
-macro_rules! paths {
+impl<'a, 'py, T: FromPyObject<'a, 'py>> FromPyObject<'a, 'py> for Given<T> {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        Ok(Self(obj.extract::<T>().map_err(Into::into)))
+    }
+}
+
+impl<T> Keyword for Given<T> {
+    type Value = T;
+
+    fn read(self, name: &str) -> PyResult<T> {
+        self.0.map_err(|e| {
+            Python::attach(|py| {
+                let why = e.value(py).str().map(|s| s.to_string()).unwrap_or_default();
+                if e.is_instance_of::<PyTypeError>(py) {
+                    PyTypeError::new_err(format!("{name}: {why}"))
+                } else if e.is_instance_of::<PyValueError>(py) {
+                    PyValueError::new_err(format!("{name}: {why}"))
+                } else {
+                    e
+                }
+            })
+        })
+    }
+}
+
+/// `keywords!(data, out, runtime)`: each argument read under its own name
+/// ([`Keyword::read`]), shadowing it; the first wrong one's error.
+macro_rules! keywords {
     ($($name:ident),+ $(,)?) => {
         $(
-            let $name = $crate::args::ReadPath::path($name, stringify!($name))?;
+            let $name = $crate::args::Keyword::read($name, stringify!($name))?;
         )+
     };
 }
-pub(crate) use paths;
+pub(crate) use keywords;

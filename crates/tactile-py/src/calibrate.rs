@@ -13,7 +13,7 @@ use pyo3::types::PyDict;
 use tactile_gelsight::reconstruct::{ReconstructOptions, SensorCheck};
 use tactile_gelsight::{BallOptions, Reconstructor};
 
-use crate::args::PathArg;
+use crate::args::{Given, PathArg};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout};
 use crate::work::interruptible;
@@ -28,7 +28,7 @@ pub(crate) fn calibrate_ball<'py>(
     out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(data, out);
+    crate::args::keywords!(data, out);
     let o: BallOptions = crate::json::options(py, options)?;
     o.config().py()?;
     let c = interruptible(py, || o.calibrate(&data, &out).py())?;
@@ -48,7 +48,10 @@ pub(crate) fn calibrate_ball<'py>(
 /// model in `model` into the new folder `out`: what `tactile reconstruct`
 /// prints as its last line.
 #[pyfunction]
-#[pyo3(signature = (model, data, out, *, background=None, render=None, runtime="onnx"))]
+#[pyo3(
+    signature = (model, data, out, *, background=None, render=None, runtime=Given::of("onnx")),
+    text_signature = "(model, data, out, *, background=None, render=None, runtime='onnx')"
+)]
 pub(crate) fn reconstruct_frames<'py>(
     py: Python<'py>,
     model: PathArg,
@@ -56,13 +59,13 @@ pub(crate) fn reconstruct_frames<'py>(
     out: PathArg,
     background: Option<PathArg>,
     render: Option<PathArg>,
-    runtime: &str,
+    runtime: Given<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(model, data, out, background, render);
+    crate::args::keywords!(model, data, out, background, render, runtime);
     let options = ReconstructOptions {
         background,
         render,
-        runtime: crate::pipeline::runtime(runtime)?,
+        runtime: crate::pipeline::runtime(&runtime)?,
     };
     let r = interruptible(py, || {
         tactile_pipeline::reconstruct::reconstruct(&model, &data, &out, &options).py()
@@ -103,15 +106,18 @@ impl PyReconstructor {
     /// `background`, compare against that rest frame (a PNG of the same
     /// size) instead of the calibration's.
     #[new]
-    #[pyo3(signature = (model_dir, runtime="onnx", background=None))]
+    #[pyo3(
+        signature = (model_dir, runtime=Given::of("onnx"), background=None),
+        text_signature = "(model_dir, runtime='onnx', background=None)"
+    )]
     fn new(
         py: Python<'_>,
         model_dir: PathArg,
-        runtime: &str,
+        runtime: Given<String>,
         background: Option<PathArg>,
     ) -> PyResult<Self> {
-        crate::args::paths!(model_dir, background);
-        let rt = crate::pipeline::runtime(runtime)?;
+        crate::args::keywords!(model_dir, background, runtime);
+        let rt = crate::pipeline::runtime(&runtime)?;
         let dir = model_dir.clone();
         let rec = py
             .detach(move || -> tactile_gelsight::Result<Reconstructor> {

@@ -10,7 +10,7 @@ use pyo3::types::{PyDict, PyList};
 use tactile_core::dataset::{Dataset, DatasetKind};
 use tactile_core::import::{ImportOptions, import_dataset};
 
-use crate::args::{PathArg, Whole};
+use crate::args::{Given, PathArg, Whole};
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
@@ -70,7 +70,7 @@ impl PyDataset {
     /// Open and check the dataset folder `path`.
     #[new]
     fn new(py: Python<'_>, path: PathArg) -> PyResult<Self> {
-        crate::args::paths!(path);
+        crate::args::keywords!(path);
         let ds = py.detach(move || Dataset::open(&path)).py()?;
         Ok(Self { ds })
     }
@@ -80,19 +80,22 @@ impl PyDataset {
     /// CSV with a `frame` column) labels, written as a `kind` dataset
     /// ("tactip" or "visuotactile") into the new folder `out`, then opened.
     #[staticmethod]
-    #[pyo3(signature = (video, labels, kind, out, *, topic=None, sensor="real sensor".to_string(), force=false))]
+    #[pyo3(
+        signature = (video, labels, kind, out, *, topic=None, sensor=Given::of("real sensor"), force=Given::of(false)),
+        text_signature = "(video, labels, kind, out, *, topic=None, sensor='real sensor', force=False)"
+    )]
     #[allow(clippy::too_many_arguments)]
     fn from_video(
         py: Python<'_>,
         video: PathArg,
         labels: PathArg,
-        kind: &str,
+        kind: Given<String>,
         out: PathArg,
-        topic: Option<String>,
-        sensor: String,
-        force: bool,
+        topic: Option<Given<String>>,
+        sensor: Given<String>,
+        force: Given<bool>,
     ) -> PyResult<Self> {
-        crate::args::paths!(video, labels, out);
+        crate::args::keywords!(video, labels, out, kind, topic, sensor, force);
         let kind = kind.parse::<DatasetKind>().py()?;
         let options = ImportOptions {
             frames: video,

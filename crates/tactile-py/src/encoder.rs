@@ -14,7 +14,7 @@ use tactile_pipeline::tactip::{GivenFrames, TactipPerception};
 use tactile_preprocess::profile::InputProfile;
 use tactile_preprocess::{FrameSizeCheck, PinImage, PreprocessConfig};
 
-use crate::args::PathArg;
+use crate::args::{Given, PathArg};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout, Pixels, frame_chunks};
 use crate::work::released;
@@ -141,15 +141,18 @@ impl PyTactipEncoder {
     /// and its estimators: the folders in `estimators`, or every estimator
     /// folder inside `model_dir`.
     #[new]
-    #[pyo3(signature = (model_dir, runtime="burn-flex", *, estimators=None))]
+    #[pyo3(
+        signature = (model_dir, runtime=Given::of("burn-flex"), *, estimators=None),
+        text_signature = "(model_dir, runtime='burn-flex', *, estimators=None)"
+    )]
     fn new(
         py: Python<'_>,
         model_dir: PathArg,
-        runtime: &str,
+        runtime: Given<String>,
         estimators: Option<Vec<PathArg>>,
     ) -> PyResult<Self> {
-        crate::args::paths!(model_dir, estimators);
-        let rt = crate::pipeline::runtime(runtime)?;
+        crate::args::keywords!(model_dir, estimators, runtime);
+        let rt = crate::pipeline::runtime(&runtime)?;
         let dir = model_dir.clone();
         let named = estimators.unwrap_or_default();
         let models = py

@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 use tactile_core::dataset::Dataset;
 use tactile_pipeline::tactip::TactipPerception;
 
-use crate::args::PathArg;
+use crate::args::{Given, PathArg};
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::work::interruptible;
@@ -14,16 +14,16 @@ use crate::work::interruptible;
 /// Score a tendon detector on a labelled visuo-tactile dataset; `options`
 /// are [`tactile_detect::eval::EvalOptions`]' (what it writes beside).
 #[pyfunction]
-#[pyo3(signature = (model, data, *, runtime="burn-flex", **options))]
+#[pyo3(signature = (model, data, *, runtime=Given::of("burn-flex"), **options))]
 pub(crate) fn eval_detector<'py>(
     py: Python<'py>,
     model: PathArg,
     data: PathArg,
-    runtime: &str,
+    runtime: Given<String>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(model, data);
-    let rt = self::runtime(runtime)?;
+    crate::args::keywords!(model, data, runtime);
+    let rt = self::runtime(&runtime)?;
     let o: tactile_detect::eval::EvalOptions = crate::json::options(py, options)?;
     let sc = interruptible(py, || {
         tactile_detect::eval::evaluate_folder(&model, &data, rt, &o).py()
@@ -37,15 +37,15 @@ pub(crate) fn eval_detector<'py>(
 
 /// Score a tendon segmenter: IoU and direction error per tendon path.
 #[pyfunction]
-#[pyo3(signature = (model, data, *, runtime="burn-flex"))]
+#[pyo3(signature = (model, data, *, runtime=Given::of("burn-flex")))]
 pub(crate) fn eval_segmenter<'py>(
     py: Python<'py>,
     model: PathArg,
     data: PathArg,
-    runtime: &str,
+    runtime: Given<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(model, data);
-    let rt = self::runtime(runtime)?;
+    crate::args::keywords!(model, data, runtime);
+    let rt = self::runtime(&runtime)?;
     let sc = interruptible(py, || {
         tactile_segment::evaluate_folder(&model, &data, rt).py()
     })?;
@@ -59,16 +59,16 @@ pub(crate) fn eval_segmenter<'py>(
 /// Score a depth network: MAE in the window and over the tendon, RMSE,
 /// SSIM; `options` are [`tactile_depth::eval::EvalOptions`]' (heat maps).
 #[pyfunction]
-#[pyo3(signature = (model, data, *, runtime="burn-flex", **options))]
+#[pyo3(signature = (model, data, *, runtime=Given::of("burn-flex"), **options))]
 pub(crate) fn eval_depth<'py>(
     py: Python<'py>,
     model: PathArg,
     data: PathArg,
-    runtime: &str,
+    runtime: Given<String>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(model, data);
-    let rt = self::runtime(runtime)?;
+    crate::args::keywords!(model, data, runtime);
+    let rt = self::runtime(&runtime)?;
     let o: tactile_depth::eval::EvalOptions = crate::json::options(py, options)?;
     let v = interruptible(py, || {
         tactile_depth::eval::evaluate_folder(&model, &data, rt, &o).py()
@@ -80,16 +80,16 @@ pub(crate) fn eval_depth<'py>(
 /// Score every estimator of an encoder (shape accuracy, pose, depth and
 /// force errors) on a labelled TacTip dataset, as `tactile evaluate` does.
 #[pyfunction]
-#[pyo3(signature = (encoder, data, *, estimators=None, runtime="burn-flex"))]
+#[pyo3(signature = (encoder, data, *, estimators=None, runtime=Given::of("burn-flex")))]
 pub(crate) fn eval_tactip<'py>(
     py: Python<'py>,
     encoder: PathArg,
     data: PathArg,
     estimators: Option<Vec<PathArg>>,
-    runtime: &str,
+    runtime: Given<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(encoder, data, estimators);
-    let rt = self::runtime(runtime)?;
+    crate::args::keywords!(encoder, data, estimators, runtime);
+    let rt = self::runtime(&runtime)?;
     let named = estimators.unwrap_or_default();
     let v = interruptible(py, || {
         let ds = Dataset::open(&data).py()?;

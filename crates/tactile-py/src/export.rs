@@ -4,7 +4,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_pipeline::export::{Part, export_to};
 
-use crate::args::PathArg;
+use crate::args::{Given, PathArg};
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
@@ -14,16 +14,19 @@ use crate::work::interruptible;
 /// `standalone` makes a paper B network's model that stands alone
 /// (docs/onnx.md).
 #[pyfunction]
-#[pyo3(signature = (model, out, *, part=None, standalone=false))]
+#[pyo3(
+    signature = (model, out, *, part=None, standalone=Given::of(false)),
+    text_signature = "(model, out, *, part=None, standalone=False)"
+)]
 pub(crate) fn export<'py>(
     py: Python<'py>,
     model: PathArg,
     out: PathArg,
-    part: Option<&str>,
-    standalone: bool,
+    part: Option<Given<String>>,
+    standalone: Given<bool>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    crate::args::paths!(model, out);
-    let part = part.map(str::parse::<Part>).transpose().py()?;
+    crate::args::keywords!(model, out, part, standalone);
+    let part = part.as_deref().map(str::parse::<Part>).transpose().py()?;
     let e = interruptible(py, || export_to(&model, &out, part, standalone).py())?;
     let d = PyDict::new(py);
     d.set_item("kind", e.kind)?;

@@ -25,7 +25,7 @@ pub(crate) fn rgb_array(
 /// channel) as `(H, W, 3)` uint8 RGB (grey is expanded).
 #[pyfunction]
 pub(crate) fn read_rgb(py: Python<'_>, path: PathArg) -> PyResult<Bound<'_, PyAny>> {
-    crate::args::paths!(path);
+    crate::args::keywords!(path);
     let img = py
         .detach(move || tactile_core::image_io::load_rgb(&path))
         .py()?;
@@ -36,7 +36,7 @@ pub(crate) fn read_rgb(py: Python<'_>, path: PathArg) -> PyResult<Bound<'_, PyAn
 /// channel) as `(H, W)` uint8 grey (RGB converted with OpenCV's weights).
 #[pyfunction]
 pub(crate) fn read_grey(py: Python<'_>, path: PathArg) -> PyResult<Bound<'_, PyAny>> {
-    crate::args::paths!(path);
+    crate::args::keywords!(path);
     let img = py
         .detach(move || tactile_core::image_io::load_grey(&path))
         .py()?;

@@ -10,7 +10,7 @@ use pyo3::types::PyDict;
 use tactile_burn::Runtime;
 use tactile_pipeline::{FrameRecord, FrameViews, Hysteresis, Pipeline};
 
-use crate::args::{PathArg, Whole};
+use crate::args::{Given, PathArg, Whole};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout, each_frame};
 
@@ -93,18 +93,20 @@ impl PyPipeline {
     /// filters the tendon decision over a sequence (see `reset`).
     #[new]
     #[pyo3(
-        signature = (models=PathArg::of("models"), runtime="onnx", *, threads=Whole::of(1), hysteresis=None),
+        signature = (models=PathArg::of("models"), runtime=Given::of("onnx"), *, threads=Whole::of(1), hysteresis=None),
         text_signature = "(models='models', runtime='onnx', *, threads=1, hysteresis=None)"
     )]
     fn new(
         py: Python<'_>,
         models: PathArg,
-        runtime: &str,
+        runtime: Given<String>,
         threads: Whole,
-        hysteresis: Option<(f32, f32)>,
+        hysteresis: Option<Given<[f32; 2]>>,
     ) -> PyResult<Self> {
-        crate::args::paths!(models);
-        let rt = crate::pipeline::runtime(runtime)?;
+        crate::args::keywords!(models, runtime, hysteresis);
+        // A pair as a tuple or a list.
+        let hysteresis = hysteresis.map(|[on, off]| (on, off));
+        let rt = crate::pipeline::runtime(&runtime)?;
         let threads = self::threads(&threads)?;
         let filter = hysteresis
             .map(|(on, off)| Hysteresis::new(on, off))

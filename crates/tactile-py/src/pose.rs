@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 use tactile_pose::PoseEstimator;
 use tactile_preprocess::PinImage;
 
-use crate::args::PathArg;
+use crate::args::{Given, PathArg};
 use crate::encoder::{pin_image_array, run_on_frames};
 use crate::errors::PyResultExt;
 
@@ -49,10 +49,13 @@ impl PyPoseEstimator {
 
     /// Load the pose network in `model_dir` onto `runtime`.
     #[new]
-    #[pyo3(signature = (model_dir, runtime="burn-flex"))]
-    fn new(py: Python<'_>, model_dir: PathArg, runtime: &str) -> PyResult<Self> {
-        crate::args::paths!(model_dir);
-        let rt = crate::pipeline::runtime(runtime)?;
+    #[pyo3(
+        signature = (model_dir, runtime=Given::of("burn-flex")),
+        text_signature = "(model_dir, runtime='burn-flex')"
+    )]
+    fn new(py: Python<'_>, model_dir: PathArg, runtime: Given<String>) -> PyResult<Self> {
+        crate::args::keywords!(model_dir, runtime);
+        let rt = crate::pipeline::runtime(&runtime)?;
         let dir = model_dir.clone();
         let estimator = py
             .detach(move || PoseEstimator::load(&dir, rt, 0))

@@ -9,7 +9,7 @@ use pyo3::types::PyDict;
 use tactile_estimate::Column;
 use tactile_pipeline::tactip::{PredictInput, Predictor};
 
-use crate::args::{PathArg, Whole};
+use crate::args::{Given, PathArg, Whole};
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::work::interruptible;
@@ -22,7 +22,10 @@ use crate::work::interruptible;
 /// and `ms_per_frame`. With `out`, also written there (CSV, or ROS 2
 /// messages for a name ending in `.mcap`), as the command line writes it.
 #[pyfunction]
-#[pyo3(signature = (model, data, out=None, *, heads=Vec::new(), topic=None, limit=None, runtime="burn-flex"))]
+#[pyo3(
+    signature = (model, data, out=None, *, heads=Vec::new(), topic=None, limit=None, runtime=Given::of("burn-flex")),
+    text_signature = "(model, data, out=None, *, heads=(), topic=None, limit=None, runtime='burn-flex')"
+)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn predict<'py>(
     py: Python<'py>,
@@ -30,12 +33,12 @@ pub(crate) fn predict<'py>(
     data: PathArg,
     out: Option<PathArg>,
     heads: Vec<PathArg>,
-    topic: Option<String>,
+    topic: Option<Given<String>>,
     limit: Option<Whole>,
-    runtime: &str,
+    runtime: Given<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    crate::args::paths!(model, data, out, heads);
-    let rt = self::runtime(runtime)?;
+    crate::args::keywords!(model, data, out, heads, topic, runtime);
+    let rt = self::runtime(&runtime)?;
     let limit = crate::source::source_limit(limit.as_ref())?;
     let (r, input_warnings) = interruptible(py, || {
         let mut input = PredictInput::open(&data, topic.as_deref(), limit, false).py()?;

@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use tactile_ros::live::LiveView;
 use tactile_ros::{FrameMessages, McapResults, Topic};
 
-use crate::args::{PathArg, Whole, optional};
+use crate::args::{Given, PathArg, Whole, optional};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout};
 use crate::pipeline::FrameResult;
@@ -85,7 +85,7 @@ impl PyMcapWriter {
 
     #[new]
     fn new(py: Python<'_>, path: PathArg) -> PyResult<Self> {
-        crate::args::paths!(path);
+        crate::args::keywords!(path);
         let p = path.clone();
         // Paper B's pipeline's topics now, so a reader lists them even when
         // no frame had a tendon; the input frame and a sensor's indentation
@@ -190,11 +190,16 @@ impl PyLiveView {
     }
 
     #[new]
-    #[pyo3(signature = (address="127.0.0.1:8765"))]
-    fn new(py: Python<'_>, address: &str) -> PyResult<Self> {
-        let a = address.to_string();
+    #[pyo3(
+        signature = (address=Given::of("127.0.0.1:8765")),
+        text_signature = "(address='127.0.0.1:8765')"
+    )]
+    fn new(py: Python<'_>, address: Given<String>) -> PyResult<Self> {
+        crate::args::keywords!(address);
         // Any pipeline's results may come: every topic.
-        let v = py.detach(move || LiveView::serve(&a, &Topic::ALL)).py()?;
+        let v = py
+            .detach(move || LiveView::serve(&address, &Topic::ALL))
+            .py()?;
         Ok(Self {
             inner: Mutex::new(Some(v)),
         })

@@ -6,7 +6,7 @@
 use pyo3::prelude::*;
 use tactile_ros::{RunRequest, RunSession};
 
-use crate::args::{PathArg, Whole};
+use crate::args::{Given, PathArg, Whole};
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::source::{source_limit, source_spec};
@@ -23,9 +23,10 @@ use crate::work::interruptible;
 /// appears when the run ends; Ctrl-C stops it leaving none.
 #[pyfunction]
 #[pyo3(signature = (
-    source=None, *, models=PathArg::of("models"), runtime="onnx", threads=Whole::of(1),
-    pipelines=Whole::of(1), hysteresis=None, out=None, render=None, with_frames=false, view=None,
-    view_wait=0.0, topic=None, stdin_size=None, live_queue=Whole::of(2), limit=None, prefetch=true
+    source=None, *, models=PathArg::of("models"), runtime=Given::of("onnx"), threads=Whole::of(1),
+    pipelines=Whole::of(1), hysteresis=None, out=None, render=None, with_frames=Given::of(false), view=None,
+    view_wait=Given::of(0.0), topic=None, stdin_size=None, live_queue=Whole::of(2), limit=None,
+    prefetch=Given::of(true)
 ), text_signature = "(source=None, *, models='models', runtime='onnx', threads=1, pipelines=1, \
     hysteresis=None, out=None, render=None, with_frames=False, view=None, view_wait=0.0, topic=None, \
     stdin_size=None, live_queue=2, limit=None, prefetch=True)")]
@@ -34,23 +35,36 @@ pub(crate) fn run<'py>(
     py: Python<'py>,
     source: Option<PathArg>,
     models: PathArg,
-    runtime: &str,
+    runtime: Given<String>,
     threads: Whole,
     pipelines: Whole,
-    hysteresis: Option<(f32, f32)>,
+    hysteresis: Option<Given<[f32; 2]>>,
     out: Option<PathArg>,
     render: Option<PathArg>,
-    with_frames: bool,
-    view: Option<String>,
-    view_wait: f64,
-    topic: Option<String>,
-    stdin_size: Option<(Whole, Whole)>,
+    with_frames: Given<bool>,
+    view: Option<Given<String>>,
+    view_wait: Given<f64>,
+    topic: Option<Given<String>>,
+    stdin_size: Option<Given<[Whole; 2]>>,
     live_queue: Whole,
     limit: Option<Whole>,
-    prefetch: bool,
+    prefetch: Given<bool>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(source, models, out, render);
-    let rt = self::runtime(runtime)?;
+    crate::args::keywords!(
+        source,
+        models,
+        out,
+        render,
+        runtime,
+        hysteresis,
+        with_frames,
+        view,
+        view_wait,
+        topic,
+        stdin_size,
+        prefetch
+    );
+    let rt = self::runtime(&runtime)?;
     let threads = crate::pipeline::threads(&threads)?;
     let pipelines = pipelines.within("pipelines", 1, tactile_pipeline::run::MAX_PIPELINES)?;
     let request = RunRequest {
@@ -62,13 +76,17 @@ pub(crate) fn run<'py>(
         runtime: rt,
         threads,
         pipelines,
-        hysteresis,
+        // A pair as a tuple or a list.
+        hysteresis: hysteresis.map(|[on, off]| (on, off)),
         out,
         render,
         with_frames,
         view,
         view_wait,
-        ..RunRequest::new(source_spec(source, topic, stdin_size)?, models)
+        ..RunRequest::new(
+            source_spec(source, topic, stdin_size.map(|[w, h]| (w, h)))?,
+            models,
+        )
     };
     let session = interruptible(py, || RunSession::open(&request).py())?;
     for w in session.warnings() {

@@ -11,7 +11,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use tactile_pipeline::{FrameSource, SourceOptions, SourceSpec};
 
-use crate::args::{PathArg, Whole, optional};
+use crate::args::{Given, PathArg, Whole, optional};
 use crate::errors::PyResultExt;
 
 /// One frame of a source: `image` is `(H, W, 3)` uint8 RGB; `name` the
@@ -214,10 +214,14 @@ impl PyVideoDecoder {
     }
 
     #[new]
-    #[pyo3(signature = (format, *, name="video"))]
-    fn new(py: Python<'_>, format: &str, name: &str) -> PyResult<Self> {
+    #[pyo3(
+        signature = (format, *, name=Given::of("video")),
+        text_signature = "(format, *, name='video')"
+    )]
+    fn new(py: Python<'_>, format: Given<String>, name: Given<String>) -> PyResult<Self> {
+        crate::args::keywords!(format, name);
         let decoder = py
-            .detach(|| tactile_core::bag::LiveVideo::new(format, name))
+            .detach(|| tactile_core::bag::LiveVideo::new(&format, &name))
             .py()?;
         Ok(Self {
             decoder: Mutex::new(decoder),
@@ -291,21 +295,21 @@ impl PyVideoDecoder {
 /// frames waiting and drop the oldest when more arrive.
 #[pyfunction]
 #[pyo3(
-    signature = (source=None, *, topic=None, stdin_size=None, live_queue=Whole::of(2), limit=None, prefetch=true),
+    signature = (source=None, *, topic=None, stdin_size=None, live_queue=Whole::of(2), limit=None, prefetch=Given::of(true)),
     text_signature = "(source=None, *, topic=None, stdin_size=None, live_queue=2, limit=None, prefetch=True)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn frames(
     py: Python<'_>,
     source: Option<PathArg>,
-    topic: Option<String>,
-    stdin_size: Option<(Whole, Whole)>,
+    topic: Option<Given<String>>,
+    stdin_size: Option<Given<[Whole; 2]>>,
     live_queue: Whole,
     limit: Option<Whole>,
-    prefetch: bool,
+    prefetch: Given<bool>,
 ) -> PyResult<PyFrameSource> {
-    crate::args::paths!(source);
-    let spec = source_spec(source, topic, stdin_size)?;
+    crate::args::keywords!(source, topic, prefetch, stdin_size);
+    let spec = source_spec(source, topic, stdin_size.map(|[w, h]| (w, h)))?;
     let options = SourceOptions {
         overlap: prefetch,
         live_queue: self::live_queue(&live_queue)?,
@@ -375,7 +379,7 @@ pub(crate) fn source_spec(
 /// of dicts with `topic`, `message_type`, `count` and `rate_hz`.
 #[pyfunction]
 pub(crate) fn bag_topics(py: Python<'_>, path: PathArg) -> PyResult<Vec<Py<PyAny>>> {
-    crate::args::paths!(path);
+    crate::args::keywords!(path);
     let listing = py
         .detach(move || tactile_core::bag::list_image_topics(&path))
         .py()?;

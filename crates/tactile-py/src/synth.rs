@@ -10,7 +10,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::args::{PathArg, Whole, optional};
+use crate::args::{Given, PathArg, Whole, optional};
 use crate::errors::PyResultExt;
 
 /// Most bytes of arrays one call may return (a bigger set is written to
@@ -104,11 +104,11 @@ pub(crate) fn synth_tactip(
     count: Whole,
     seed: Whole,
     out: Option<PathArg>,
-    force: bool,
-    progress: bool,
+    force: Given<bool>,
+    progress: Given<bool>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
-    crate::args::paths!(out);
+    crate::args::keywords!(out, force, progress);
     let count = count.within("count", 1, usize::MAX)?;
     let seed = self::seed(&seed)?;
     let cfg: TactipConfig = crate::json::options(py, options)?;
@@ -171,11 +171,11 @@ pub(crate) fn synth_visuotactile(
     sequences: Option<Whole>,
     seed: Whole,
     out: Option<PathArg>,
-    force: bool,
-    progress: bool,
+    force: Given<bool>,
+    progress: Given<bool>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
-    crate::args::paths!(out);
+    crate::args::keywords!(out, force, progress);
     let count = how_many(count.as_ref(), "count")?;
     let sequences = how_many(sequences.as_ref(), "sequences")?;
     let seed = self::seed(&seed)?;
@@ -269,11 +269,11 @@ pub(crate) fn synth_gelsight(
     sequences: Option<Whole>,
     seed: Whole,
     out: Option<PathArg>,
-    force: bool,
-    progress: bool,
+    force: Given<bool>,
+    progress: Given<bool>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
-    crate::args::paths!(sensor, out);
+    crate::args::keywords!(sensor, out, force, progress);
     let count = how_many(count.as_ref(), "count")?;
     let sequences = how_many(sequences.as_ref(), "sequences")?;
     let seed = self::seed(&seed)?;
@@ -361,9 +361,9 @@ pub(crate) fn synth_ideal_detector(
     py: Python<'_>,
     data: PathArg,
     out: Option<PathArg>,
-    progress: bool,
+    progress: Given<bool>,
 ) -> PyResult<Py<PyAny>> {
-    crate::args::paths!(data, out);
+    crate::args::keywords!(data, out, progress);
     let bounds = crate::work::interruptible(py, || {
         visuotactile::dataset_bounds(&data, out.as_deref(), progress).py()
     })?;

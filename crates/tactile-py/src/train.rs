@@ -17,7 +17,7 @@ use tactile_pipeline::tactip::{FeatureSource, train_head, train_regressor};
 use tactile_pose::PoseOptions;
 use tactile_segment::SegmenterOptions;
 
-use crate::args::PathArg;
+use crate::args::{Given, PathArg};
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
@@ -73,7 +73,7 @@ pub(crate) fn train_cae<'py>(
     out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(data, out);
+    crate::args::keywords!(data, out);
     train_on_one(
         py,
         data,
@@ -93,7 +93,7 @@ pub(crate) fn train_pose<'py>(
     out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(data, out);
+    crate::args::keywords!(data, out);
     train_on_one(
         py,
         data,
@@ -114,7 +114,7 @@ pub(crate) fn train_detector<'py>(
     out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(data, out);
+    crate::args::keywords!(data, out);
     let options: DetectorOptions = crate::json::options(py, options)?;
     options.config().py()?;
     if data.is_empty() {
@@ -139,7 +139,7 @@ pub(crate) fn train_segmenter<'py>(
     out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(data, out);
+    crate::args::keywords!(data, out);
     train_on_one(
         py,
         data,
@@ -160,7 +160,7 @@ pub(crate) fn train_depth<'py>(
     out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(data, out);
+    crate::args::keywords!(data, out);
     train_on_one(
         py,
         data,
@@ -202,7 +202,7 @@ pub(crate) fn train_head_py<'py>(
     test: Option<PathArg>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(data, encoder, features, out, test);
+    crate::args::keywords!(data, encoder, features, out, test);
     let options: HeadOptions = crate::json::options(py, options)?;
     let rt = options.device.runtime();
     let src = source(&encoder, &features)?;
@@ -242,7 +242,7 @@ pub(crate) fn train_regressor_py<'py>(
     out: Option<PathArg>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::paths!(data, encoder, features, out);
+    crate::args::keywords!(data, encoder, features, out);
     let options: RegressorOptions = crate::json::options(py, options)?;
     let rt = options.device.runtime();
     let plan = options.plan(&targets).py()?;
@@ -274,8 +274,9 @@ pub(crate) fn train_regressor_py<'py>(
 /// default of each, in flag order, the same the command line's `--help`
 /// shows.
 #[pyfunction]
-pub(crate) fn options<'py>(py: Python<'py>, trainer: &str) -> PyResult<Bound<'py, PyAny>> {
-    let docs = tactile_pipeline::options::trainer(trainer)
+pub(crate) fn options<'py>(py: Python<'py>, trainer: Given<String>) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::keywords!(trainer);
+    let docs = tactile_pipeline::options::trainer(&trainer)
         .and_then(|t| t.docs())
         .py()?;
     crate::json::to_py(py, &docs)
@@ -286,7 +287,7 @@ pub(crate) fn options<'py>(py: Python<'py>, trainer: &str) -> PyResult<Bound<'py
 /// seeds) in a new ensemble folder; returns what was made, in words.
 #[pyfunction]
 pub(crate) fn train_ensemble(members: Vec<PathArg>, out: PathArg) -> PyResult<String> {
-    crate::args::paths!(members, out);
+    crate::args::keywords!(members, out);
     tactile_pipeline::ensemble::assemble_ensemble(&members, &out).py()
 }
 
@@ -300,10 +301,10 @@ pub(crate) fn train_calibrate(
     py: Python<'_>,
     model: PathArg,
     data: Vec<PathArg>,
-    split: Option<String>,
+    split: Option<Given<String>>,
     calibration_from: Option<PathArg>,
 ) -> PyResult<String> {
-    crate::args::paths!(model, data, calibration_from);
+    crate::args::keywords!(model, data, calibration_from, split);
     let c = interruptible(py, || {
         let sets = data
             .iter()
@@ -334,9 +335,9 @@ pub(crate) fn train_profile(
     py: Python<'_>,
     model: PathArg,
     data: Vec<PathArg>,
-    split: Option<String>,
+    split: Option<Given<String>>,
 ) -> PyResult<String> {
-    crate::args::paths!(model, data);
+    crate::args::keywords!(model, data, split);
     interruptible(py, || {
         let sets = data
             .iter()

@@ -1,7 +1,7 @@
-"""Whole-number and path keywords: a wrong one is refused naming the
-keyword (and a number's range), before any work, on every Python the
-package supports (PyO3 names a keyword only in a note, and only from Python
-3.11); numpy integers are whole numbers, bytes are paths."""
+"""Keywords: a wrong one is refused naming the keyword (and a number's
+range), before any work, on every Python the package supports (PyO3 names
+a keyword only in a note, and only from Python 3.11); numpy integers are
+whole numbers, bytes are paths, a pair may be a list."""
 
 from __future__ import annotations
 
@@ -191,3 +191,55 @@ def test_bytes_and_path_like_objects_are_paths(root):
     for given in [str(frame), frame, os.fsencode(frame), BytesPath()]:
         assert tactile.read_grey(given).shape == (300, 300), given
     assert len(tactile.Dataset(os.fsencode(root / "samples" / "virtual-tactip"))) == 14
+
+
+def test_any_other_wrong_keyword_is_refused_naming_it(root, tmp_path, monkeypatch):
+    # Strings, flags, numbers and pairs: before, PyO3's "'int' object is not
+    # an instance of 'bool'" and the like named no keyword.
+    monkeypatch.chdir(tmp_path)
+    m, d = root / "models", root / "samples" / "palpation"
+    pose = m / "pose-surface"
+    calls = [
+        ("runtime", TypeError, lambda: tactile.Pipeline(m, runtime=5)),
+        ("hysteresis", TypeError, lambda: tactile.Pipeline(m, hysteresis=0.5)),
+        ("hysteresis", ValueError, lambda: tactile.Pipeline(m, hysteresis=(0.6, 0.3, 0.1))),
+        ("runtime", TypeError, lambda: tactile.run(d, runtime=None)),
+        ("hysteresis", ValueError, lambda: tactile.run(d, hysteresis="0.6,0.3")),
+        ("with_frames", TypeError, lambda: tactile.run(d, with_frames=1)),
+        ("view", TypeError, lambda: tactile.run(d, view=8765)),
+        ("view_wait", TypeError, lambda: tactile.run(d, view_wait="5")),
+        ("topic", TypeError, lambda: tactile.run(d, topic=3)),
+        ("stdin_size", TypeError, lambda: tactile.run(stdin_size=640)),
+        ("prefetch", TypeError, lambda: tactile.run(d, prefetch="yes")),
+        ("topic", TypeError, lambda: tactile.frames(d, topic=b"/cam")),
+        ("stdin_size", ValueError, lambda: tactile.frames(stdin_size=(640, 360, 3))),
+        ("prefetch", TypeError, lambda: tactile.frames(d, prefetch=0)),
+        ("topic", TypeError, lambda: tactile.predict(pose, d, topic=1)),
+        ("runtime", TypeError, lambda: tactile.predict(pose, d, runtime=1)),
+        ("part", TypeError, lambda: tactile.export(pose, "x.onnx", part=3)),
+        ("standalone", TypeError, lambda: tactile.export(pose, "x.onnx", standalone=1)),
+        ("runtime", TypeError, lambda: tactile.PoseEstimator(pose, runtime=2)),
+        ("runtime", TypeError, lambda: tactile.TactipEncoder(m / "cae-synth", runtime=2)),
+        ("runtime", TypeError, lambda: tactile.Reconstructor(m / "gelsight-r15", runtime=2)),
+        ("kind", TypeError, lambda: tactile.Dataset.from_video(d, "l.csv", 3, "o")),
+        ("sensor", TypeError, lambda: tactile.Dataset.from_video(d, "l.csv", "tactip", "o", sensor=1)),
+        ("force", TypeError, lambda: tactile.Dataset.from_video(d, "l.csv", "tactip", "o", force="no")),
+        ("address", TypeError, lambda: tactile.LiveView(8765)),
+        ("format", TypeError, lambda: tactile.VideoDecoder(264)),
+        ("name", TypeError, lambda: tactile.VideoDecoder("h264", name=1)),
+        ("runtime", TypeError, lambda: tactile.eval.detector(m / "detector", d, runtime=1)),
+        ("runtime", TypeError, lambda: tactile.calibrate.reconstruct(m / "gelsight-r15", d, "o", runtime=1)),
+        ("split", TypeError, lambda: tactile.train.calibrate(pose, d, split=1)),
+        ("force", TypeError, lambda: tactile.synth.tactip(1, out="o", force="yes")),
+        ("progress", TypeError, lambda: tactile.synth.tactip(1, progress=None)),
+    ]
+    for name, error, call in calls:
+        with pytest.raises(error) as e:
+            call()
+        assert str(e.value).startswith(f"{name}: "), (name, str(e.value))
+    assert list(tmp_path.iterdir()) == [], "a refused call wrote something"
+
+
+def test_a_pair_may_be_a_list(root):
+    pipe = tactile.Pipeline(root / "models", hysteresis=[0.6, 0.3])
+    assert pipe.hysteresis == pytest.approx((0.6, 0.3))
