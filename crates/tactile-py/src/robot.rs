@@ -104,11 +104,12 @@ impl PyMcapWriter {
     #[pyo3(signature = (result, frame=None, *, stamp_ns=None))]
     fn write(
         &self,
-        result: &FrameResult,
+        result: Given<PyRef<'_, FrameResult>>,
         frame: Option<&Bound<'_, PyAny>>,
         stamp_ns: Option<Whole>,
     ) -> PyResult<()> {
-        let m = encode(result, frame, stamp(stamp_ns.as_ref())?)?;
+        crate::args::keywords!(result);
+        let m = encode(&result, frame, stamp(stamp_ns.as_ref())?)?;
         self.with(|w| w.write(&m).py())
     }
 
@@ -210,10 +211,11 @@ impl PyLiveView {
     #[pyo3(signature = (result, frame=None, *, stamp_ns=None))]
     fn publish(
         &self,
-        result: &FrameResult,
+        result: Given<PyRef<'_, FrameResult>>,
         frame: Option<&Bound<'_, PyAny>>,
         stamp_ns: Option<Whole>,
     ) -> PyResult<bool> {
+        crate::args::keywords!(result);
         let stamp_ns = stamp(stamp_ns.as_ref())?;
         // A stamp no message can hold is refused whether or not a viewer
         // watches, so a script tried without one fails as it would live.
@@ -223,7 +225,7 @@ impl PyLiveView {
         if !self.with(|v| Ok(v.watched()))? {
             return Ok(false);
         }
-        let m = encode(result, frame, stamp_ns)?;
+        let m = encode(&result, frame, stamp_ns)?;
         self.with(|v| {
             v.publish(m);
             Ok(true)

@@ -243,3 +243,12 @@ def test_any_other_wrong_keyword_is_refused_naming_it(root, tmp_path, monkeypatc
 def test_a_pair_may_be_a_list(root):
     pipe = tactile.Pipeline(root / "models", hysteresis=[0.6, 0.3])
     assert pipe.hysteresis == pytest.approx((0.6, 0.3))
+
+
+def test_a_result_that_is_not_one_is_refused_naming_it(tmp_path):
+    with tactile.McapWriter(tmp_path / "r.mcap") as writer, tactile.LiveView("127.0.0.1:0") as view:
+        for call in [writer.write, view.publish]:
+            with pytest.raises(TypeError) as e:
+                call({"tendon": True})
+            assert str(e.value).startswith("result: "), str(e.value)
+        assert writer.frames == 0

@@ -117,13 +117,15 @@ def regressor(
     **options: Any,
 ) -> Dict[str, Any]:
     """A regressor on an encoder's features: ``targets`` are label columns,
-    angles with their period (e.g. ``["x_mm", "theta_deg:180"]``). Saved in
+    angles with their period (e.g. ``["x_mm", "theta_deg:180"]``, or one
+    string as ``--targets`` takes it: ``"x_mm,theta_deg:180"``). Saved in
     ``out`` (default ``ENCODER/regressor``); returns the test MAE per target.
     ``shapes`` trains it on frames of those shapes only. Every option:
     ``options("regressor")``.
     """
+    # One string is read as the command line's --targets reads it.
     return _tactile.train_regressor_py(
-        data, list(targets), encoder=encoder, features=features, out=out, **options,
+        data, targets.split(",") if isinstance(targets, str) else list(targets), encoder=encoder, features=features, out=out, **options,
     )
 
 
