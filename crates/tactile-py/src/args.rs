@@ -1,11 +1,13 @@
-//! Whole-number arguments (threads, pipelines, limits, queues, repeats,
-//! seeds, stamps) and paths: taken as the caller gave them and checked
-//! where they are used, so a wrong one's error names its keyword (and a
-//! number's range). PyO3's own conversions say only "can't convert
-//! negative int to unsigned", "'float' object cannot be interpreted as an
-//! integer" or "expected str, bytes or os.PathLike object, not int": the
-//! keyword is a note a traceback shows from Python 3.11, and nowhere before
-//! it (ROS 2 Humble's Python is 3.10).
+//! Keywords as the caller gave them, each read under its name where it is
+//! used, so a wrong one's error names it: whole numbers (threads,
+//! pipelines, limits, queues, repeats, seeds, stamps) with their range
+//! ([`Whole::within`]), paths ([`PathArg`]) and any other value ([`Given`])
+//! through [`keywords!`].
+//! PyO3's own conversions say only "can't convert negative int to
+//! unsigned", "'float' object cannot be interpreted as an integer" or
+//! "expected str, bytes or os.PathLike object, not int": the keyword is a
+//! note a traceback shows from Python 3.11, and nowhere before it (ROS 2
+//! Humble's Python is 3.10).
 
 use pyo3::exceptions::{PyOverflowError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -232,6 +234,9 @@ impl<T> Keyword for Given<T> {
                     PyTypeError::new_err(format!("{name}: {why}"))
                 } else if e.is_instance_of::<PyValueError>(py) {
                     PyValueError::new_err(format!("{name}: {why}"))
+                } else if e.is_instance_of::<PyOverflowError>(py) {
+                    // A number past the type's range (`view_wait=10**400`).
+                    PyOverflowError::new_err(format!("{name}: {why}"))
                 } else {
                     e
                 }

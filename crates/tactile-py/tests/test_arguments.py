@@ -208,6 +208,7 @@ def test_any_other_wrong_keyword_is_refused_naming_it(root, tmp_path, monkeypatc
         ("with_frames", TypeError, lambda: tactile.run(d, with_frames=1)),
         ("view", TypeError, lambda: tactile.run(d, view=8765)),
         ("view_wait", TypeError, lambda: tactile.run(d, view_wait="5")),
+        ("view_wait", OverflowError, lambda: tactile.run(d, view_wait=10**400)),
         ("topic", TypeError, lambda: tactile.run(d, topic=3)),
         ("stdin_size", TypeError, lambda: tactile.run(stdin_size=640)),
         ("prefetch", TypeError, lambda: tactile.run(d, prefetch="yes")),
