@@ -162,6 +162,36 @@ impl<'a, 'py> FromPyObject<'a, 'py> for PathArg {
     }
 }
 
+/// Paths given as a list, or one given alone (a list of one).
+pub(crate) struct PathList(Result<Vec<PathArg>, String>);
+
+impl PathList {
+    /// No paths: the default of a keyword.
+    pub(crate) fn none() -> Self {
+        Self(Ok(Vec::new()))
+    }
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for PathList {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        let alone = obj.is_instance_of::<pyo3::types::PyString>()
+            || obj.is_instance_of::<pyo3::types::PyBytes>()
+            || obj.hasattr("__fspath__")?;
+        if alone {
+            return Ok(Self(Ok(vec![obj.extract::<PathArg>()?])));
+        }
+        match obj.extract::<Vec<PathArg>>() {
+            Ok(paths) => Ok(Self(Ok(paths))),
+            Err(e) if e.is_instance_of::<PyTypeError>(obj.py()) => {
+                Ok(Self(Err(obj.get_type().name()?.to_string())))
+            }
+            Err(e) => Err(e),
+        }
+    }
+}
+
 /// An argument read under its keyword: a path ([`PathArg`]), any other
 /// value ([`Given`]), an optional one (`None` stays `None`) or a list
 /// (each item named by its place, "heads[1]").
@@ -181,6 +211,19 @@ impl Keyword for PathArg {
                 "{name}: expected a path (str, bytes or os.PathLike), got {got}"
             ))
         })
+    }
+}
+
+impl Keyword for PathList {
+    type Value = Vec<PathBuf>;
+
+    fn read(self, name: &str) -> PyResult<Vec<PathBuf>> {
+        match self.0 {
+            Ok(paths) => paths.read(name),
+            Err(got) => Err(PyTypeError::new_err(format!(
+                "{name}: expected a path or a list of paths, got {got}"
+            ))),
+        }
     }
 }
 

@@ -14,7 +14,7 @@ use tactile_pipeline::tactip::{GivenFrames, TactipPerception};
 use tactile_preprocess::profile::InputProfile;
 use tactile_preprocess::{FrameSizeCheck, PinImage, PreprocessConfig};
 
-use crate::args::{Given, PathArg};
+use crate::args::{Given, PathArg, PathList};
 use crate::errors::PyResultExt;
 use crate::frame::{FrameArg, Layout, Pixels, frame_chunks};
 use crate::work::released;
@@ -149,7 +149,7 @@ impl PyTactipEncoder {
         py: Python<'_>,
         model_dir: PathArg,
         runtime: Given<String>,
-        estimators: Option<Vec<PathArg>>,
+        estimators: Option<PathList>,
     ) -> PyResult<Self> {
         crate::args::keywords!(model_dir, estimators, runtime);
         let rt = crate::pipeline::runtime(&runtime)?;

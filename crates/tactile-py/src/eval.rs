@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 use tactile_core::dataset::Dataset;
 use tactile_pipeline::tactip::TactipPerception;
 
-use crate::args::{Given, PathArg};
+use crate::args::{Given, PathArg, PathList};
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::work::interruptible;
@@ -85,7 +85,7 @@ pub(crate) fn eval_tactip<'py>(
     py: Python<'py>,
     encoder: PathArg,
     data: PathArg,
-    estimators: Option<Vec<PathArg>>,
+    estimators: Option<PathList>,
     runtime: Given<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
     crate::args::keywords!(encoder, data, estimators, runtime);

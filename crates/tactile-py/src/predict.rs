@@ -9,7 +9,7 @@ use pyo3::types::PyDict;
 use tactile_estimate::Column;
 use tactile_pipeline::tactip::{PredictInput, Predictor};
 
-use crate::args::{Given, PathArg, Whole};
+use crate::args::{Given, PathArg, PathList, Whole};
 use crate::errors::PyResultExt;
 use crate::pipeline::runtime;
 use crate::work::interruptible;
@@ -23,7 +23,7 @@ use crate::work::interruptible;
 /// messages for a name ending in `.mcap`), as the command line writes it.
 #[pyfunction]
 #[pyo3(
-    signature = (model, data, out=None, *, heads=Vec::new(), topic=None, limit=None, runtime=Given::of("burn-flex")),
+    signature = (model, data, out=None, *, heads=PathList::none(), topic=None, limit=None, runtime=Given::of("burn-flex")),
     text_signature = "(model, data, out=None, *, heads=(), topic=None, limit=None, runtime='burn-flex')"
 )]
 #[allow(clippy::too_many_arguments)]
@@ -32,7 +32,7 @@ pub(crate) fn predict<'py>(
     model: PathArg,
     data: PathArg,
     out: Option<PathArg>,
-    heads: Vec<PathArg>,
+    heads: PathList,
     topic: Option<Given<String>>,
     limit: Option<Whole>,
     runtime: Given<String>,

@@ -17,7 +17,7 @@ use tactile_pipeline::tactip::{FeatureSource, train_head, train_regressor};
 use tactile_pose::PoseOptions;
 use tactile_segment::SegmenterOptions;
 
-use crate::args::{Given, PathArg};
+use crate::args::{Given, PathArg, PathList};
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
@@ -110,7 +110,7 @@ pub(crate) fn train_pose<'py>(
 #[pyo3(signature = (data, out, **options))]
 pub(crate) fn train_detector<'py>(
     py: Python<'py>,
-    data: Vec<PathArg>,
+    data: PathList,
     out: PathArg,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -286,7 +286,7 @@ pub(crate) fn options<'py>(py: Python<'py>, trainer: Given<String>) -> PyResult<
 /// frame alike, or regressors on one encoder's features trained with other
 /// seeds) in a new ensemble folder; returns what was made, in words.
 #[pyfunction]
-pub(crate) fn train_ensemble(members: Vec<PathArg>, out: PathArg) -> PyResult<String> {
+pub(crate) fn train_ensemble(members: PathList, out: PathArg) -> PyResult<String> {
     crate::args::keywords!(members, out);
     tactile_pipeline::ensemble::assemble_ensemble(&members, &out).py()
 }
@@ -300,7 +300,7 @@ pub(crate) fn train_ensemble(members: Vec<PathArg>, out: PathArg) -> PyResult<St
 pub(crate) fn train_calibrate(
     py: Python<'_>,
     model: PathArg,
-    data: Vec<PathArg>,
+    data: PathList,
     split: Option<Given<String>>,
     calibration_from: Option<PathArg>,
 ) -> PyResult<String> {
@@ -334,7 +334,7 @@ pub(crate) fn train_calibrate(
 pub(crate) fn train_profile(
     py: Python<'_>,
     model: PathArg,
-    data: Vec<PathArg>,
+    data: PathList,
     split: Option<Given<String>>,
 ) -> PyResult<String> {
     crate::args::keywords!(model, data, split);

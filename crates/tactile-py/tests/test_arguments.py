@@ -143,7 +143,6 @@ def _path_calls(root):
         ("out", lambda v: tactile.export(pose, v)),
         ("data", lambda v: tactile.train.cae(v, "o")),
         ("out", lambda v: tactile.train.pose(d, v)),
-        ("data[0]", lambda v: tactile.train.detector(v, "o")),
         ("data[1]", lambda v: tactile.train.detector([d, v], "o")),
         ("out", lambda v: tactile.train.segmenter(d, v)),
         ("data", lambda v: tactile.train.depth(v, "o")),
@@ -152,7 +151,6 @@ def _path_calls(root):
         ("features", lambda v: tactile.train.regressor(d, ["x_mm"], features=v)),
         ("members[1]", lambda v: tactile.train.ensemble([pose, v], "o")),
         ("calibration_from", lambda v: tactile.train.calibrate(pose, calibration_from=v)),
-        ("data[0]", lambda v: tactile.train.profile(pose, v)),
         ("model", lambda v: tactile.eval.detector(v, d)),
         ("data", lambda v: tactile.eval.segmenter(m / "segmenter", v)),
         ("model", lambda v: tactile.eval.depth(v, d)),
@@ -166,6 +164,21 @@ def _path_calls(root):
     ]
 
 
+def _path_list_calls(root):
+    """Every keyword taking a list of paths or one alone, as one call."""
+    m, d = root / "models", root / "samples" / "palpation"
+    pose = m / "pose-surface"
+    return [
+        ("heads", lambda v: tactile.predict(pose, d, heads=v)),
+        ("estimators", lambda v: tactile.TactipEncoder(m / "cae-synth", estimators=v)),
+        ("estimators", lambda v: tactile.eval.tactip(m / "cae-synth", d, estimators=v)),
+        ("data", lambda v: tactile.train.detector(v, "o")),
+        ("members", lambda v: tactile.train.ensemble(v, "o")),
+        ("data", lambda v: tactile.train.calibrate(pose, v)),
+        ("data", lambda v: tactile.train.profile(pose, v)),
+    ]
+
+
 def test_a_wrong_path_is_refused_naming_its_keyword(root, tmp_path, monkeypatch):
     # Before, PyO3's "expected str, bytes or os.PathLike object, not int"
     # (and os.fspath's, in the Python wrappers) named no keyword.
@@ -174,11 +187,30 @@ def test_a_wrong_path_is_refused_naming_its_keyword(root, tmp_path, monkeypatch)
         for value in [5, 2.5, np.zeros((4, 4), np.uint8), [1.0]]:
             with pytest.raises(TypeError) as e:
                 call(value)
-            # A keyword taking one path or a list of them reads a list's items.
-            got = type(value[0] if name == "data[0]" and isinstance(value, list) else value).__name__
+            got = type(value).__name__
             assert str(e.value) == f"{name}: expected a path (str, bytes or os.PathLike), got {got}", (
                 name, str(e.value))
+    # A list keyword takes one path alone too; its items are named by place.
+    for name, call in _path_list_calls(root):
+        for value, said in [(5, f"{name}: expected a path or a list of paths, got int"),
+                            (2.5, f"{name}: expected a path or a list of paths, got float"),
+                            ([1.0], f"{name}[0]: expected a path (str, bytes or os.PathLike), got float"),
+                            (np.zeros((4, 4), np.uint8),
+                             f"{name}[0]: expected a path (str, bytes or os.PathLike), got ndarray")]:
+            with pytest.raises(TypeError) as e:
+                call(value)
+            assert str(e.value) == said, (name, str(e.value))
     assert list(tmp_path.iterdir()) == [], "a refused call wrote something"
+
+
+def test_one_path_alone_is_a_list_of_one(root):
+    # Before, predict's heads="…" was refused ("Can't extract `str` to
+    # `Vec`") and eval.tactip's estimators="…" read letter by letter.
+    enc = root / "models" / "cae-synth"
+    heads = sorted(p.name for p in enc.iterdir() if (p / "head.json").exists())
+    assert heads, "the shipped encoder has a shape head"
+    one = tactile.TactipEncoder(enc, estimators=enc / heads[0])
+    assert one.estimators == tactile.TactipEncoder(enc, estimators=[enc / heads[0]]).estimators
 
 
 def test_bytes_and_path_like_objects_are_paths(root):

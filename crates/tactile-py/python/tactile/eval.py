@@ -46,7 +46,7 @@ def tactip(
     return _tactile.eval_tactip(
         encoder,
         data,
-        estimators=None if estimators is None else list(estimators),
+        estimators=estimators,
         runtime=runtime,
     )
 

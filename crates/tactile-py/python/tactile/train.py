@@ -23,17 +23,6 @@ from . import _tactile
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-def _listed(paths: Any) -> List[Any]:
-    """One path or an iterable of them as a list; anything else is passed
-    on as one, for the native function to refuse by its keyword."""
-    if isinstance(paths, (str, bytes, os.PathLike)):
-        return [paths]
-    try:
-        return list(paths)
-    except TypeError:
-        return [paths]
-
-
 def cae(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
     """Paper A's convolutional autoencoder on a TacTip dataset.
 
@@ -69,7 +58,7 @@ def detector(
     threshold chosen on the validation sequences. Every option:
     ``options("detector")``.
     """
-    return _tactile.train_detector(_listed(data), out, **options)
+    return _tactile.train_detector(data, out, **options)
 
 
 def segmenter(data: PathLike, out: PathLike, **options: Any) -> Dict[str, Any]:
@@ -149,7 +138,7 @@ def ensemble(members: Sequence[PathLike], out: PathLike) -> str:
     ``TactipEncoder`` runs (the members' mean).
     Returns what was made, in words.
     """
-    return _tactile.train_ensemble(_listed(members), out)
+    return _tactile.train_ensemble(members, out)
 
 
 def calibrate(model: PathLike, data=None, *, split: Optional[str] = None,
@@ -163,8 +152,7 @@ def calibrate(model: PathLike, data=None, *, split: Optional[str] = None,
     ``calibration_from`` for a model trained on every frame. Rewrites the
     model folder; returns what changed, in words.
     """
-    sets = [] if data is None else _listed(data)
-    return _tactile.train_calibrate(model, sets, split, calibration_from)
+    return _tactile.train_calibrate(model, [] if data is None else data, split, calibration_from)
 
 
 def profile(model: PathLike, data, *, split: Optional[str] = None) -> str:
@@ -177,7 +165,7 @@ def profile(model: PathLike, data, *, split: Optional[str] = None) -> str:
     ``UserWarning``. Models trained now have one already. Returns what was
     saved, in words.
     """
-    return _tactile.train_profile(model, _listed(data), split)
+    return _tactile.train_profile(model, data, split)
 
 
 __all__ = ["cae", "depth", "detector", "ensemble", "head", "options", "pose", "profile",
