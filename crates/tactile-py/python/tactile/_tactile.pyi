@@ -100,7 +100,7 @@ class TactipEncoder:
         model_dir: _Path,
         runtime: str = "burn-flex",
         *,
-        estimators: Optional[List[_Path]] = None,
+        estimators: Optional[Union[_Path, Sequence[_Path]]] = None,
     ) -> None: ...
     def preprocess(self, frame: npt.NDArray[np.uint8]) -> npt.NDArray[np.float32]: ...
     def encode(
@@ -139,7 +139,7 @@ def predict(
     data: _Path,
     out: Optional[_Path] = None,
     *,
-    heads: Sequence[_Path] = (),
+    heads: Union[_Path, Sequence[_Path]] = (),
     topic: Optional[str] = None,
     limit: Optional[int] = None,
     runtime: str = "burn-flex",

@@ -39,7 +39,7 @@ def tactip(
     encoder: PathLike,
     data: PathLike,
     *,
-    estimators: Optional[Sequence[PathLike]] = None,
+    estimators: Optional[Union[PathLike, Sequence[PathLike]]] = None,
     runtime: str = "burn-flex",
 ) -> Dict[str, Any]:
     """Every estimator of an encoder scored on a labelled TacTip dataset."""

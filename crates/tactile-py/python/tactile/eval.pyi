@@ -14,7 +14,7 @@ def tactip(
     encoder: _Path,
     data: _Path,
     *,
-    estimators: Optional[Sequence[_Path]] = None,
+    estimators: Optional[Union[_Path, Sequence[_Path]]] = None,
     runtime: str = "burn-flex",
 ) -> Dict[str, Any]:
     """Every estimator of an encoder scored on a labelled TacTip dataset."""
