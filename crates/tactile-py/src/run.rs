@@ -83,10 +83,7 @@ pub(crate) fn run<'py>(
         with_frames,
         view,
         view_wait,
-        ..RunRequest::new(
-            source_spec(source, topic, stdin_size.map(|[w, h]| (w, h)))?,
-            models,
-        )
+        ..RunRequest::new(source_spec(source, topic, stdin_size)?, models)
     };
     let session = interruptible(py, || RunSession::open(&request).py())?;
     for w in session.warnings() {

@@ -309,7 +309,7 @@ pub(crate) fn frames(
     prefetch: Given<bool>,
 ) -> PyResult<PyFrameSource> {
     crate::args::keywords!(source, topic, prefetch, stdin_size);
-    let spec = source_spec(source, topic, stdin_size.map(|[w, h]| (w, h)))?;
+    let spec = source_spec(source, topic, stdin_size)?;
     let options = SourceOptions {
         overlap: prefetch,
         live_queue: self::live_queue(&live_queue)?,
@@ -341,12 +341,12 @@ pub(crate) fn source_limit(arg: Option<&Whole>) -> PyResult<Option<u64>> {
 pub(crate) fn source_spec(
     source: Option<PathBuf>,
     topic: Option<String>,
-    stdin_size: Option<(Whole, Whole)>,
+    stdin_size: Option<[Whole; 2]>,
 ) -> PyResult<SourceSpec> {
     // How large a frame may be is the library's check (1 pixel to 8K).
     let side = |w: &Whole, name| w.within(name, 1, usize::MAX);
     let stdin_size = match stdin_size {
-        Some((w, h)) => Some((
+        Some([w, h]) => Some((
             side(&w, "stdin_size width")?,
             side(&h, "stdin_size height")?,
         )),
