@@ -42,6 +42,13 @@ fn alone<T: DeserializeOwned>(
     serde_json::from_value(Value::Object(one))
 }
 
+/// The items one string gives an option that takes a list: what its
+/// commas separate, each trimmed (`"x_mm, y_mm"` is `x_mm` and `y_mm`), as
+/// Python's keywords and options files may give a list flag's value.
+pub fn list_items(text: &str) -> impl Iterator<Item = &str> {
+    text.split(',').map(str::trim)
+}
+
 /// `value`, or, when it is a string the option does not take as it is but
 /// takes as a list, the list its commas separate (numbers as numbers), as
 /// the flag reads it: `targets="x_mm,y_mm"` as `--targets x_mm,y_mm`.
@@ -56,8 +63,7 @@ fn listed<T>(
         return value.clone();
     }
     let list = Value::Array(
-        s.split(',')
-            .map(str::trim)
+        list_items(s)
             .map(|p| match serde_json::from_str::<Value>(p) {
                 Ok(n @ Value::Number(_)) => n,
                 _ => Value::String(p.to_string()),

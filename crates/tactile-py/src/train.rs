@@ -229,6 +229,28 @@ pub(crate) fn train_head_py<'py>(
     )
 }
 
+/// A regressor's targets: a list of label columns, or one string read as
+/// the trainers' list options read it (`"x_mm,theta_deg:180"`).
+#[derive(FromPyObject)]
+pub(crate) enum Targets {
+    /// One string.
+    Listed(String),
+    /// A list of names.
+    Names(Vec<String>),
+}
+
+impl Targets {
+    /// The target names.
+    fn names(self) -> Vec<String> {
+        match self {
+            Self::Listed(text) => tactile_burn::options::list_items(&text)
+                .map(String::from)
+                .collect(),
+            Self::Names(names) => names,
+        }
+    }
+}
+
 /// Train a regressor (pose, depth, force; angles on the circle) on
 /// features; `options` are [`RegressorOptions`]'.
 #[pyfunction]
@@ -236,13 +258,14 @@ pub(crate) fn train_head_py<'py>(
 pub(crate) fn train_regressor_py<'py>(
     py: Python<'py>,
     data: PathArg,
-    targets: Vec<String>,
+    targets: Given<Targets>,
     encoder: Option<PathArg>,
     features: Option<PathArg>,
     out: Option<PathArg>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::keywords!(data, encoder, features, out);
+    crate::args::keywords!(data, targets, encoder, features, out);
+    let targets = targets.names();
     let options: RegressorOptions = crate::json::options(py, options)?;
     let rt = options.device.runtime();
     let plan = options.plan(&targets).py()?;

@@ -208,9 +208,10 @@ def test_a_sphere_regressor_and_a_turned_head_from_python(root, tmp_path):
     s = tactile.train.regressor(spheres, ["x_mm", "y_mm"], encoder=enc, out=out,
                                 shapes=["sphere"], test_fraction=0.25, loss="l1")
     assert set(s["test_mae"]) == {"x_mm", "y_mm"}
-    # Targets given as one string, as --targets takes them (before, it was
-    # read letter by letter: targets 'x', '_', 'm', 'm', ...).
-    for given, names in [("x_mm", {"x_mm"}), ("x_mm,y_mm", {"x_mm", "y_mm"})]:
+    # Targets given as one string, read as the trainers' list options are
+    # (commas separate, spaces trimmed); before, it was read letter by
+    # letter: targets 'x', '_', 'm', 'm', ...
+    for given, names in [("x_mm", {"x_mm"}), ("x_mm, y_mm", {"x_mm", "y_mm"})]:
         s2 = tactile.train.regressor(spheres, given, encoder=enc, out=tmp_path / given,
                                      shapes=["sphere"], test_fraction=0.25)
         assert set(s2["test_mae"]) == names

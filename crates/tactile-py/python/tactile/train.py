@@ -112,9 +112,9 @@ def regressor(
     ``shapes`` trains it on frames of those shapes only. Every option:
     ``options("regressor")``.
     """
-    # One string is read as the command line's --targets reads it.
     return _tactile.train_regressor_py(
-        data, targets.split(",") if isinstance(targets, str) else list(targets), encoder=encoder, features=features, out=out, **options,
+        data, targets if isinstance(targets, str) else list(targets),
+        encoder=encoder, features=features, out=out, **options,
     )
 
 
