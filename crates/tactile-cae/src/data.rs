@@ -3,6 +3,7 @@
 use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::source::UndecodableFrames;
 use tactile_preprocess::profile::InputProfile;
 use tactile_preprocess::{PinImage, PreprocessConfig, is_flat_frame, preprocess};
 
@@ -86,15 +87,33 @@ impl PinSet {
         rows: &[usize],
         cfgs: &[PreprocessConfig],
     ) -> Result<Vec<Self>> {
+        Self::from_rows_each_or_skip(ds, rows, cfgs, None)
+    }
+
+    /// [`Self::from_rows_each`]; with `undecodable`, a frame that cannot be
+    /// decoded past its header is counted there and left out of the sets
+    /// ([`UndecodableFrames::decoded`]) instead of stopping the pass.
+    fn from_rows_each_or_skip(
+        ds: &Dataset,
+        rows: &[usize],
+        cfgs: &[PreprocessConfig],
+        mut undecodable: Option<&mut UndecodableFrames>,
+    ) -> Result<Vec<Self>> {
         ds.expect_kind(DatasetKind::Tactip)?;
         let files: Vec<String> = rows
             .iter()
             .map(|&i| ds.text(i, "file").map(str::to_string))
             .collect::<tactile_core::Result<_>>()?;
-        let per_frame = rows
+        // Outer: a frame decoded that cannot be preprocessed; inner: a
+        // frame that cannot be read, kept apart so it may be skipped.
+        type Read = Result<tactile_core::Result<(Vec<PinImage>, bool)>>;
+        let per_frame: Vec<Read> = rows
             .par_iter()
             .map(|&i| {
-                let frame = ds.load_grey(i, "file")?;
+                let frame = match ds.load_grey(i, "file") {
+                    Ok(frame) => frame,
+                    Err(e) => return Ok(Err(e)),
+                };
                 let path = ds.path_of(i, "file")?;
                 let flat = cfgs.first().is_some_and(|c| is_flat_frame(&frame, c));
                 let pins = cfgs
@@ -103,26 +122,32 @@ impl PinSet {
                         preprocess(&frame, cfg).map_err(|e| crate::Error::from(e.in_file(&path)))
                     })
                     .collect::<Result<Vec<_>>>()?;
-                Ok((pins, flat))
+                Ok(Ok((pins, flat)))
             })
-            .collect::<Result<Vec<_>>>()?;
-        let flat: Vec<String> = per_frame
-            .iter()
-            .zip(&files)
-            .filter(|((_, flat), _)| *flat)
-            .map(|(_, f)| f.clone())
             .collect();
         let mut sets: Vec<Self> = cfgs
             .iter()
             .map(|_| Self {
-                files: files.clone(),
+                files: Vec::with_capacity(rows.len()),
                 images: Vec::with_capacity(rows.len()),
-                flat: flat.clone(),
+                flat: Vec::new(),
             })
             .collect();
-        for (pins, _) in per_frame {
+        // In row order, so the first frame refused is the first named.
+        for (file, read) in files.into_iter().zip(per_frame) {
+            let read = match undecodable.as_deref_mut() {
+                Some(skipped) => skipped.decoded(read?)?,
+                None => Some(read??),
+            };
+            let Some((pins, flat)) = read else {
+                continue;
+            };
             for (set, pin) in sets.iter_mut().zip(pins) {
                 set.images.push(pin);
+                set.files.push(file.clone());
+                if flat {
+                    set.flat.push(file.clone());
+                }
             }
         }
         Ok(sets)
@@ -148,15 +173,55 @@ impl PinSet {
         rows: &[usize],
         cfgs: &[PreprocessConfig],
         chunk_rows: usize,
-        mut each: impl FnMut(Vec<Self>) -> std::result::Result<(), E>,
+        each: impl FnMut(Vec<Self>) -> std::result::Result<(), E>,
     ) -> std::result::Result<(), E> {
+        Self::chunks(ds, rows, cfgs, chunk_rows, None, each).map(|_| ())
+    }
+
+    /// [`Self::for_each_chunk`] for a pass whose results are kept frame by
+    /// frame (estimates, features): a frame that cannot be decoded past its
+    /// whole header (its pixel data cut short) is left out of its chunk and
+    /// counted, so the other frames keep their results, as `tactile run`
+    /// keeps a folder's: the warning that names the first and counts them
+    /// is returned ([`UndecodableFrames::warning`]). A pass that decodes no
+    /// frame fails with the refusal; any other error (a file gone, a frame
+    /// that cannot be preprocessed) stops it as before.
+    pub fn for_each_chunk_skipping_undecodable<E: From<crate::Error>>(
+        ds: &Dataset,
+        cfgs: &[PreprocessConfig],
+        chunk_rows: usize,
+        each: impl FnMut(Vec<Self>) -> std::result::Result<(), E>,
+    ) -> std::result::Result<Option<String>, E> {
+        let rows: Vec<usize> = ds.every_row();
+        let mut skipped = UndecodableFrames::new(rows.len());
+        let given = Self::chunks(ds, &rows, cfgs, chunk_rows, Some(&mut skipped), each)?;
+        // Taken before `finish`, which hands the first refusal to the error
+        // when no frame was decoded.
+        let warning = skipped.warning();
+        skipped.finish(given).map_err(crate::Error::from)?;
+        Ok(warning)
+    }
+
+    /// The chunked pass, skipping undecodable frames into `undecodable`:
+    /// the frames given to `each`.
+    fn chunks<E: From<crate::Error>>(
+        ds: &Dataset,
+        rows: &[usize],
+        cfgs: &[PreprocessConfig],
+        chunk_rows: usize,
+        mut undecodable: Option<&mut UndecodableFrames>,
+        mut each: impl FnMut(Vec<Self>) -> std::result::Result<(), E>,
+    ) -> std::result::Result<usize, E> {
         ds.expect_kind(DatasetKind::Tactip)
             .map_err(crate::Error::from)?;
         ds.check_frame_headers(rows).map_err(crate::Error::from)?;
+        let mut given = 0;
         for chunk in rows.chunks(chunk_rows.max(1)) {
-            each(Self::from_rows_each(ds, chunk, cfgs)?)?;
+            let sets = Self::from_rows_each_or_skip(ds, chunk, cfgs, undecodable.as_deref_mut())?;
+            given += sets.first().map_or(0, Self::len);
+            each(sets)?;
         }
-        Ok(())
+        Ok(given)
     }
 
     /// Whether each image's frame is flat ([`Self::flat`]), in order.

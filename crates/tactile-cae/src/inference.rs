@@ -82,27 +82,33 @@ impl TactipEncoder {
 
     /// Preprocess and encode every frame of a TacTip dataset, a chunk at a
     /// time ([`PinSet::for_each_chunk`]): each row's `file` label and
-    /// features.
+    /// features. A frame that cannot be decoded stops it: its features
+    /// are kept row by row against the labels.
     pub fn encode_dataset(&mut self, ds: &Dataset) -> Result<(Vec<String>, Vec<Vec<f32>>)> {
         // Only the features are wanted: no frame is scored against the
         // encoder's pin profile.
-        let e = self.encode_rows(ds, None)?;
+        let e = self.encode_rows(ds, None, false)?;
         Ok((e.files, e.features))
     }
 
     /// [`Self::encode_dataset`], also giving the `file` labels of frames
     /// one grey level throughout their crop ([`PinSet::flat`]) and of
-    /// frames unlike its training frames ([`PinSet::foreign`]).
+    /// frames unlike its training frames ([`PinSet::foreign`]); a frame
+    /// that cannot be decoded past its header is left out and named in
+    /// [`EncodedDataset::undecodable`], so the others keep their features
+    /// ([`PinSet::for_each_chunk_skipping_undecodable`]).
     pub fn encode_dataset_flagging(&mut self, ds: &Dataset) -> Result<EncodedDataset> {
         let profile = self.artifact.input_profile.clone();
-        self.encode_rows(ds, profile.as_ref())
+        self.encode_rows(ds, profile.as_ref(), true)
     }
 
-    /// Every row of `ds` encoded, its frames outside `profile` listed.
+    /// Every row of `ds` encoded, its frames outside `profile` listed, its
+    /// undecodable frames skipped when `skip_undecodable`.
     fn encode_rows(
         &mut self,
         ds: &Dataset,
         profile: Option<&InputProfile>,
+        skip_undecodable: bool,
     ) -> Result<EncodedDataset> {
         let cfg = self.artifact.preprocess.clone();
         let mut e = EncodedDataset {
@@ -110,8 +116,10 @@ impl TactipEncoder {
             features: Vec::with_capacity(ds.len()),
             flat: Vec::new(),
             foreign: Vec::new(),
+            undecodable: None,
         };
-        PinSet::for_each_chunk(ds, std::slice::from_ref(&cfg), DATASET_CHUNK, |mut sets| {
+        let cfgs = std::slice::from_ref(&cfg);
+        let each = |mut sets: Vec<PinSet>| {
             let set = sets.swap_remove(0);
             e.features.extend(self.encode(&set.images)?);
             if let Some(p) = profile {
@@ -120,14 +128,22 @@ impl TactipEncoder {
             e.files.extend(set.files);
             e.flat.extend(set.flat);
             Ok::<(), Error>(())
-        })?;
+        };
+        let undecodable = match skip_undecodable {
+            true => PinSet::for_each_chunk_skipping_undecodable(ds, cfgs, DATASET_CHUNK, each)?,
+            false => {
+                PinSet::for_each_chunk(ds, cfgs, DATASET_CHUNK, each)?;
+                None
+            }
+        };
+        e.undecodable = undecodable;
         Ok(e)
     }
 }
 
 /// A dataset's features ([`TactipEncoder::encode_dataset_flagging`]).
 pub struct EncodedDataset {
-    /// Each row's `file` label.
+    /// Each row's `file` label (an undecodable frame's row left out).
     pub files: Vec<String>,
     /// Each row's features.
     pub features: Vec<Vec<f32>>,
@@ -136,6 +152,9 @@ pub struct EncodedDataset {
     /// The frames unlike the encoder's training frames
     /// ([`PinSet::foreign`]; none when it has no pin profile).
     pub foreign: Vec<crate::data::ForeignFrame>,
+    /// The warning naming the first frame that could not be decoded past
+    /// its header and counting them, when any was left out.
+    pub undecodable: Option<String>,
 }
 
 /// Write `file,f0,f1,...` rows atomically (the layout of the authors'

@@ -199,7 +199,10 @@ impl Predictor {
                         &r.flat,
                         &r.foreign,
                         p.artifact.input_profile.as_ref(),
-                    ),
+                    )
+                    .into_iter()
+                    .chain(r.undecodable)
+                    .collect(),
                 }
             }
         };
@@ -897,7 +900,7 @@ impl TactipPerception {
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
         let t0 = std::time::Instant::now();
         let encoded = self.encoder.encode_dataset_flagging(ds)?;
-        let warnings = dataset_frame_warnings(
+        let mut warnings = dataset_frame_warnings(
             &encoded.flat,
             &encoded.foreign,
             self.encoder.artifact.input_profile.as_ref(),
@@ -905,8 +908,10 @@ impl TactipPerception {
         let tactile_cae::inference::EncodedDataset {
             files,
             features: feats,
+            undecodable,
             ..
         } = encoded;
+        warnings.extend(undecodable);
         let ms_encode = 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64;
         let t1 = std::time::Instant::now();
         let estimates = self.estimators.estimate(&feats)?;

@@ -69,6 +69,10 @@ pub struct PoseEstimates {
     /// The frames unlike its training frames
     /// ([`tactile_cae::data::PinSet::foreign`]; none without a pin profile).
     pub foreign: Vec<tactile_cae::data::ForeignFrame>,
+    /// The warning naming the first frame that could not be decoded past
+    /// its header and counting them, when any was left out
+    /// ([`tactile_cae::data::PinSet::for_each_chunk_skipping_undecodable`]).
+    pub undecodable: Option<String>,
 }
 
 impl PoseEstimator {
@@ -263,8 +267,10 @@ impl PoseEstimator {
         Ok((values, Some(std)))
     }
 
-    /// Every frame of a TacTip dataset, a chunk at a time
-    /// ([`tactile_cae::data::PinSet::for_each_chunk`]).
+    /// Every frame of a TacTip dataset, a chunk at a time; a frame that
+    /// cannot be decoded past its header is left out and named in
+    /// [`PoseEstimates::undecodable`], so the others keep their estimates
+    /// ([`tactile_cae::data::PinSet::for_each_chunk_skipping_undecodable`]).
     pub fn predict_dataset(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
         let t0 = std::time::Instant::now();
         let (mut files, mut values) = (Vec::with_capacity(ds.len()), Vec::with_capacity(ds.len()));
@@ -273,7 +279,7 @@ impl PoseEstimator {
         let scales = self.scales.clone();
         // The first member's profile, of the first scale's pin images.
         let profile = self.artifact.input_profile.clone();
-        tactile_cae::data::PinSet::for_each_chunk(ds, &scales, DATASET_CHUNK, |mut sets| {
+        let each = |mut sets: Vec<tactile_cae::data::PinSet>| {
             let views: Vec<&[PinImage]> = sets.iter().map(|s| s.images.as_slice()).collect();
             let (v, s) = self.predict_scales_with_std(&views)?;
             values.extend(v);
@@ -287,7 +293,13 @@ impl PoseEstimator {
             files.extend(first.files);
             flat.extend(first.flat);
             Ok::<(), crate::Error>(())
-        })?;
+        };
+        let undecodable = tactile_cae::data::PinSet::for_each_chunk_skipping_undecodable(
+            ds,
+            &scales,
+            DATASET_CHUNK,
+            each,
+        )?;
         Ok(PoseEstimates {
             files,
             names: self
@@ -301,6 +313,7 @@ impl PoseEstimator {
             ms_per_frame: 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64,
             flat,
             foreign,
+            undecodable,
         })
     }
 

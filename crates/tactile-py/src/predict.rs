@@ -21,6 +21,8 @@ use crate::work::interruptible;
 /// where the model gives a deviation) and a list of names per classifier,
 /// and `ms_per_frame`. With `out`, also written there (CSV, or ROS 2
 /// messages for a name ending in `.mcap`), as the command line writes it.
+/// A frame that cannot be decoded past its header (cut short) is left out
+/// with a `UserWarning` naming it; the other frames keep their estimates.
 #[pyfunction]
 #[pyo3(
     signature = (model, data, out=None, *, heads=PathList::none(), topic=None, limit=None, runtime=Given::of("burn-flex")),

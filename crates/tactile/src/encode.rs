@@ -45,6 +45,9 @@ pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     {
         tactile_core::note!("{w}");
     }
+    if let Some(w) = &encoded.undecodable {
+        tactile_core::note!("{w}");
+    }
     let (files, feats) = (encoded.files, encoded.features);
     write_features_csv(&a.out, &files, &feats)?;
     say!(

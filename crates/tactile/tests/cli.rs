@@ -160,12 +160,31 @@ fn encode_names_corrupt_wrong_size_and_deep_frames_and_writes_nothing() {
     model(&m, &data);
     let out = tmp.path().join("features.csv");
 
-    // A truncated PNG.
+    // A frame cut short behind its whole header (a copy stopped half-way):
+    // found only when decoded, left out and named, the other frame's
+    // features written.
     let bytes = std::fs::read(data.join("frames/1.png")).unwrap();
     std::fs::write(data.join("frames/1.png"), &bytes[..bytes.len() / 3]).unwrap();
     let (ok, msg) = encode(&m, &data, &out);
-    assert!(!ok && msg.contains("frames/1.png"), "{msg}");
+    assert!(
+        ok && msg.contains("1 of the 2 frames could not be decoded")
+            && msg.contains("frames/1.png: cannot decode"),
+        "{msg}"
+    );
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(written.lines().count(), 2, "{written}");
+    assert!(written.lines().nth(1).unwrap().starts_with("frames/0.png,"));
+    std::fs::remove_file(&out).unwrap();
+    // Every frame cut short: nothing decoded, refused naming the first.
+    let first = std::fs::read(data.join("frames/0.png")).unwrap();
+    std::fs::write(data.join("frames/0.png"), &first[..first.len() / 3]).unwrap();
+    let (ok, msg) = encode(&m, &data, &out);
+    assert!(
+        !ok && msg.contains("frames/0.png") && msg.contains("2 of the 2"),
+        "{msg}"
+    );
     assert!(!out.exists(), "partial output left behind");
+    std::fs::write(data.join("frames/0.png"), first).unwrap();
 
     // A frame smaller than the pin image.
     write_png(&data.join("frames/1.png"), 20, 20);

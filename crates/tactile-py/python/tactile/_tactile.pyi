@@ -147,7 +147,9 @@ def predict(
     """``tactile predict``: every estimate of a TacTip model on every frame of a
     dataset, a folder of frames, an image, a video or a ROS 2 bag's image topic
     (``file``, ``stamp_ns`` for a bag, one array per estimate, ``ms_per_frame``),
-    written to ``out`` too when given (CSV, or ROS 2 messages for ``.mcap``)."""
+    written to ``out`` too when given (CSV, or ROS 2 messages for ``.mcap``).
+    A frame that cannot be decoded past its header (cut short) is left out with
+    a ``UserWarning`` naming it; the other frames keep their estimates."""
 
 def export(
     model: _Path,
