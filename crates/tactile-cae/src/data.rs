@@ -218,8 +218,12 @@ impl PinSet {
         let mut given = 0;
         for chunk in rows.chunks(chunk_rows.max(1)) {
             let sets = Self::from_rows_each_or_skip(ds, chunk, cfgs, undecodable.as_deref_mut())?;
-            given += sets.first().map_or(0, Self::len);
-            each(sets)?;
+            let n = sets.first().map_or(0, Self::len);
+            // A chunk whose every frame was skipped gives no batch to run.
+            if n > 0 {
+                given += n;
+                each(sets)?;
+            }
         }
         Ok(given)
     }
