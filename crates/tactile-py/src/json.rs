@@ -57,12 +57,15 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
                             _ => e.to_string(),
                         };
                         PyValueError::new_err(format!(
-                            "invalid configuration: option '{key}' = {}: {why}",
+                            "invalid configuration: option '{}' = {}: {why}",
+                            tactile_core::printable(&key),
                             v.repr().map(|r| r.to_string()).unwrap_or_default()
                         ))
                     })?;
-                let value = serde_json::from_str(&text)
-                    .map_err(|e| PyValueError::new_err(format!("option '{key}': {e}")))?;
+                let value = serde_json::from_str(&text).map_err(|e| {
+                    let key = tactile_core::printable(&key);
+                    PyValueError::new_err(format!("option '{key}': {e}"))
+                })?;
                 map.insert(key, value);
             }
             map

@@ -50,6 +50,8 @@ pub(crate) fn reduce_frame_result<'py>(
 #[pyo3(name = "_frame_result")]
 pub(crate) fn frame_result(version: &str, state: &[u8]) -> PyResult<FrameResult> {
     if version != RESULT_STATE {
+        // What a pickle holds is shown escaped, never obeyed.
+        let version = tactile_core::printable(version);
         return Err(PyValueError::new_err(format!(
             "a FrameResult pickled by {version}, read by {RESULT_STATE}: pickle and unpickle \
              results with one version of tactile"
@@ -57,7 +59,9 @@ pub(crate) fn frame_result(version: &str, state: &[u8]) -> PyResult<FrameResult>
     }
     type State = (FrameRecord, Option<FrameViews>, (usize, usize));
     let (record, views, (w, h)): State = rmp_serde::from_slice(state).map_err(|e| {
-        PyValueError::new_err(format!("a pickled FrameResult that cannot be read: {e}"))
+        let why = e.to_string();
+        let why = tactile_core::printable(&why);
+        PyValueError::new_err(format!("a pickled FrameResult that cannot be read: {why}"))
     })?;
     match &views {
         Some(v) => v.check(w, h),

@@ -111,6 +111,10 @@ def test_a_pickled_result_that_does_not_fit_is_refused(pipeline, palpation_frame
     assert restore is tactile._tactile._frame_result
     with pytest.raises(ValueError, match=r"^a FrameResult pickled by tactile 0\.0\.1, read by tactile \S+: pickle and unpickle results with one version of tactile$"):
         restore("tactile 0.0.1", state)
+    # What a pickle holds is quoted with its terminal controls escaped.
+    with pytest.raises(ValueError, match=r"^a FrameResult pickled by tactile \\x1b\[2J\\x07, read by") as told:
+        restore("tactile \x1b[2J\x07", state)
+    assert "\x1b" not in str(told.value) and "\x07" not in str(told.value)
     with pytest.raises(ValueError, match=r"^a pickled FrameResult that cannot be read: "):
         restore(version, state[: len(state) // 2])
     # The frame's size (MessagePack's [320, 180] last) made 100,000 wide: a
