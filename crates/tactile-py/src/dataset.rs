@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::exceptions::{PyIndexError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyDict, PyList, PySlice};
 use tactile_core::dataset::{Dataset, DatasetKind};
 use tactile_core::import::{ImportOptions, import_dataset};
 
@@ -43,7 +43,7 @@ impl PyDataset {
             }
             Whole::Huge(text) => Err(out_of_range(text)),
             Whole::Not(t) => Err(PyTypeError::new_err(format!(
-                "dataset indices must be integers, not {t}"
+                "dataset indices must be integers or slices, not {t}"
             ))),
         }
     }
@@ -234,10 +234,46 @@ impl PyDataset {
         array2(py, h, w, d).map(Some)
     }
 
+    fn __repr__(&self) -> String {
+        format!(
+            "Dataset('{}', kind='{}', frames={}, size={}x{})",
+            self.ds.root.display(),
+            self.ds.manifest.kind.name(),
+            self.ds.len(),
+            self.ds.manifest.width,
+            self.ds.manifest.height
+        )
+    }
+
     /// Sample `i` as a dict: `frame`, `mask` and `depth_m` where the
     /// dataset has them, and every other label of the row (numbers as
     /// float, empty cells as None; `file` and `depth` stay file names).
-    fn __getitem__<'py>(&self, py: Python<'py>, i: Whole) -> PyResult<Bound<'py, PyDict>> {
+    /// A slice (`ds[:100]`, `ds[::10]`, `ds[-5:]`) gives the list of its
+    /// samples, as a list's slice does.
+    fn __getitem__<'py>(
+        &self,
+        py: Python<'py>,
+        key: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let Ok(slice) = key.cast::<PySlice>() else {
+            return Ok(self.sample(py, key.extract::<Whole>()?)?.into_any());
+        };
+        let len = isize::try_from(self.ds.len())
+            .map_err(|_| PyValueError::new_err("a dataset too long to slice"))?;
+        let at = slice.indices(len)?;
+        let samples = PyList::empty(py);
+        let mut i = at.start;
+        for _ in 0..at.slicelength {
+            samples.append(self.sample(py, Whole::Int(i as i128))?)?;
+            i += at.step;
+        }
+        Ok(samples.into_any())
+    }
+}
+
+impl PyDataset {
+    /// Sample `i` ([`Self::__getitem__`]).
+    fn sample<'py>(&self, py: Python<'py>, i: Whole) -> PyResult<Bound<'py, PyDict>> {
         let out = PyDict::new(py);
         out.set_item("frame", self.frame(py, i.clone())?)?;
         if let Some(m) = self.mask(py, i.clone())? {
@@ -263,16 +299,5 @@ impl PyDataset {
             }
         }
         Ok(out)
-    }
-
-    fn __repr__(&self) -> String {
-        format!(
-            "Dataset('{}', kind='{}', frames={}, size={}x{})",
-            self.ds.root.display(),
-            self.ds.manifest.kind.name(),
-            self.ds.len(),
-            self.ds.manifest.width,
-            self.ds.manifest.height
-        )
     }
 }

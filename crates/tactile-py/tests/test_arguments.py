@@ -105,9 +105,18 @@ def test_a_dataset_index_reads_as_a_list_index(root):
         with pytest.raises(IndexError):
             ds.frame(i)
     for i in [1.0, "0", None]:
-        with pytest.raises(TypeError, match="dataset indices must be integers"):
+        with pytest.raises(TypeError, match="^dataset indices must be integers or slices, not "):
             ds[i]
     assert len(list(ds)) == n
+    # A slice reads as a list's slice: the list of its samples.
+    files = [ds[i]["file"] for i in range(n)]
+    for s in [slice(None, 3), slice(None, None, 5), slice(-4, None), slice(None, None, -3),
+              slice(n + 10, None), slice(-10**30, 10**30, 2)]:
+        got = ds[s]
+        assert isinstance(got, list) and [x["file"] for x in got] == files[s], s
+    assert np.array_equal(ds[2:3][0]["frame"], ds[2]["frame"])
+    with pytest.raises(ValueError, match="slice step cannot be zero"):
+        ds[::0]
 
 
 def _path_calls(root):

@@ -2,7 +2,7 @@
 
 from os import PathLike
 from pathlib import Path
-from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -239,7 +239,10 @@ class Dataset:
         labels, written as a ``"tactip"`` or ``"visuotactile"`` dataset into the
         new folder ``out``, then opened."""
     def __len__(self) -> int: ...
+    @overload
     def __getitem__(self, i: int) -> Dict[str, Any]: ...
+    @overload
+    def __getitem__(self, i: slice) -> List[Dict[str, Any]]: ...
     @property
     def path(self) -> Path: ...
     @property
