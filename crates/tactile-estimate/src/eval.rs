@@ -6,6 +6,7 @@ use tactile_core::dataset::Dataset;
 
 use crate::Result;
 use crate::registry::{Column, Estimator, Estimators};
+use crate::target::Target;
 
 /// A number of frames and a score over them.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -53,6 +54,11 @@ pub struct Scores {
     /// Contact position scored only where a frame shows it, when the
     /// estimators predict both `x_mm` and `y_mm`.
     pub position: Option<PositionScore>,
+    /// Set when the model's notes say it trained on every frame scored
+    /// (`tactile_burn::artifact::scored_on_fitted`): the words saying these are
+    /// not held-out scores, for the front ends to show.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
 }
 
 /// Shallowest contact whose position is scored, mm: at zero depth the
@@ -175,20 +181,8 @@ pub fn position_score(x: &[f64], y: &[f64], ds: &Dataset) -> Result<PositionScor
 /// Frames whose label of a target is empty (theta of a sphere) are left
 /// out of that target; a shape the classifier does not know counts as wrong.
 pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Result<Scores> {
-    let shapes: Vec<Option<&str>> = (0..ds.len()).map(|i| ds.text_opt(i, "shape")).collect();
-    let mut kinds: Vec<&str> = shapes.iter().flatten().copied().collect();
-    kinds.sort_unstable();
-    kinds.dedup();
-    let mut out = Scores {
-        frames: feats.len(),
-        accuracy: None,
-        per_class: Vec::new(),
-        confusion: Vec::new(),
-        classes: Vec::new(),
-        unknown_shapes: Vec::new(),
-        targets: Vec::new(),
-        position: None,
-    };
+    let (shapes, kinds) = shapes_of(ds);
+    let mut out = Scores::of(feats.len());
 
     for (_, e) in &estimators.items {
         match e {
@@ -247,61 +241,15 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
             }
             Estimator::Regressor(r) => {
                 let pred = r.predict(feats)?;
-                // A specialised regressor is scored on frames of its shapes.
                 let only = &r.artifact().shapes;
-                let mine = |i: usize| {
-                    only.is_empty() || shapes[i].is_some_and(|s| only.iter().any(|k| k == s))
-                };
-                for (j, t) in r.targets().iter().enumerate() {
-                    let truth = (0..ds.len())
-                        .map(|i| ds.target_opt(i, &t.name))
-                        .collect::<Result<Vec<_>, _>>()?;
-                    let mae_of = |rows: &mut dyn Iterator<Item = usize>| {
-                        let (mut sum, mut n) = (0.0, 0usize);
-                        for i in rows.filter(|&i| mine(i)) {
-                            if let Some(v) = truth[i] {
-                                sum += t.error(pred[i][j], v);
-                                n += 1;
-                            }
-                        }
-                        (if n > 0 { sum / n as f64 } else { f64::NAN }, n)
-                    };
-                    let (mae, frames) = mae_of(&mut (0..feats.len()));
-                    // A specialised regressor on a set without its shapes
-                    // has nothing to score; a general one, an empty column.
-                    if frames == 0 && !only.is_empty() {
-                        continue;
-                    }
-                    if frames == 0 {
-                        return Err(tactile_core::Error::dataset(
-                            ds.labels_path(),
-                            None,
-                            format!("column '{}' is empty on every frame", t.name),
-                        )
-                        .into());
-                    }
-                    let per_shape = kinds
-                        .iter()
-                        .filter_map(|k| {
-                            let (value, frames) =
-                                mae_of(&mut (0..feats.len()).filter(|&i| shapes[i] == Some(k)));
-                            (frames > 0).then(|| Group {
-                                name: k.to_string(),
-                                frames,
-                                value,
-                            })
-                        })
-                        .collect();
-                    out.targets.push(TargetScore {
-                        target: match only.is_empty() {
-                            true => t.name.clone(),
-                            false => format!("{} ({})", t.name, only.join(", ")),
-                        },
-                        mae,
-                        frames,
-                        per_shape,
-                    });
-                }
+                out.targets.extend(target_scores(
+                    r.targets(),
+                    &pred,
+                    only,
+                    &shapes,
+                    &kinds,
+                    ds,
+                )?);
             }
         }
     }
@@ -313,6 +261,119 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
         out.position = (!p.per_shape.is_empty()).then_some(p);
     }
     Ok(out)
+}
+
+/// Each row's `shape` label, and the shapes there are, sorted.
+fn shapes_of(ds: &Dataset) -> (Vec<Option<&str>>, Vec<&str>) {
+    let shapes: Vec<Option<&str>> = (0..ds.len()).map(|i| ds.text_opt(i, "shape")).collect();
+    let mut kinds: Vec<&str> = shapes.iter().flatten().copied().collect();
+    kinds.sort_unstable();
+    kinds.dedup();
+    (shapes, kinds)
+}
+
+/// Each of `targets` scored: `pred[i][j]` estimates target `j` of row `i`
+/// of `ds`, over the frames of the shapes `only` (every frame when empty)
+/// whose label is not empty; overall and per shape of `kinds`. A target
+/// with no labelled frame is refused, unless `only` names shapes the set
+/// does not hold (nothing to score: left out).
+fn target_scores(
+    targets: &[Target],
+    pred: &[Vec<f64>],
+    only: &[String],
+    shapes: &[Option<&str>],
+    kinds: &[&str],
+    ds: &Dataset,
+) -> Result<Vec<TargetScore>> {
+    let mine = |i: usize| only.is_empty() || shapes[i].is_some_and(|s| only.iter().any(|k| k == s));
+    let mut out = Vec::new();
+    for (j, t) in targets.iter().enumerate() {
+        let truth = (0..ds.len())
+            .map(|i| ds.target_opt(i, &t.name))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mae_of = |rows: &mut dyn Iterator<Item = usize>| {
+            let (mut sum, mut n) = (0.0, 0usize);
+            for i in rows.filter(|&i| mine(i)) {
+                if let Some(v) = truth[i] {
+                    sum += t.error(pred[i][j], v);
+                    n += 1;
+                }
+            }
+            (if n > 0 { sum / n as f64 } else { f64::NAN }, n)
+        };
+        let (mae, frames) = mae_of(&mut (0..pred.len()));
+        // A specialised regressor on a set without its shapes has nothing
+        // to score; a general one, an empty column.
+        if frames == 0 && !only.is_empty() {
+            continue;
+        }
+        if frames == 0 {
+            return Err(tactile_core::Error::dataset(
+                ds.labels_path(),
+                None,
+                format!("column '{}' is empty on every frame", t.name),
+            )
+            .into());
+        }
+        let per_shape = kinds
+            .iter()
+            .filter_map(|k| {
+                let (value, frames) =
+                    mae_of(&mut (0..pred.len()).filter(|&i| shapes[i] == Some(k)));
+                (frames > 0).then(|| Group {
+                    name: k.to_string(),
+                    frames,
+                    value,
+                })
+            })
+            .collect();
+        out.push(TargetScore {
+            target: match only.is_empty() {
+                true => t.name.clone(),
+                false => format!("{} ({})", t.name, only.join(", ")),
+            },
+            mae,
+            frames,
+            per_shape,
+        });
+    }
+    Ok(out)
+}
+
+/// A network that gives its targets itself (a pose network), scored as an
+/// encoder's regressors are: `values[i]` holds one estimate per target for
+/// row `i` of `ds`; each target's error overall and per shape, and the
+/// contact position where it estimates both `x_mm` and `y_mm`.
+pub fn score_targets(targets: &[Target], values: &[Vec<f64>], ds: &Dataset) -> Result<Scores> {
+    let (shapes, kinds) = shapes_of(ds);
+    let mut out = Scores::of(values.len());
+    out.targets = target_scores(targets, values, &[], &shapes, &kinds, ds)?;
+    let column = |name: &str| {
+        let j = targets.iter().position(|t| t.name == name)?;
+        Some(values.iter().map(|v| v[j]).collect::<Vec<f64>>())
+    };
+    if let (Some(x), Some(y)) = (column("x_mm"), column("y_mm")) {
+        let p = position_score(&x, &y, ds)?;
+        out.position = (!p.per_shape.is_empty()).then_some(p);
+    }
+    Ok(out)
+}
+
+impl Scores {
+    /// No score yet, over `frames` frames.
+    fn of(frames: usize) -> Self {
+        Self {
+            frames,
+            accuracy: None,
+            per_class: Vec::new(),
+            confusion: Vec::new(),
+            classes: Vec::new(),
+            unknown_shapes: Vec::new(),
+            targets: Vec::new(),
+            position: None,
+            warning: None,
+        }
+    }
 }
 
 impl Scores {

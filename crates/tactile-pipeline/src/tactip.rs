@@ -210,6 +210,24 @@ impl Predictor {
         Ok(r)
     }
 
+    /// Score the model on a labelled dataset: an encoder's every estimator
+    /// ([`TactipPerception::evaluate`]), or a pose network's every target
+    /// ([`tactile_estimate::eval::score_targets`]): each target's mean
+    /// absolute error overall and per shape (angles the short way round),
+    /// with a warning when its notes say it trained on every frame of `ds`.
+    pub fn evaluate(&mut self, ds: &Dataset) -> Result<Scores> {
+        match self {
+            Self::Encoder(p) => p.evaluate(ds),
+            Self::PoseNetwork(p) => {
+                let r = p.predict_every_row(ds)?;
+                let mut s =
+                    tactile_estimate::eval::score_targets(&p.artifact.targets, &r.values, ds)?;
+                s.warning = p.scored_on_fitted(ds);
+                Ok(s)
+            }
+        }
+    }
+
     /// The same columns as [`Self::perceive`] for grey frames, each
     /// preprocessed as the model's training frames were; a frame that
     /// cannot be is named by `name` of its place among `frames`.

@@ -30,6 +30,8 @@ pub struct PoseEstimator {
     /// An ensemble's own calibration: one factor per target on its
     /// combined deviation (see [`tactile_burn::ensemble::Ensemble::std_scale`]).
     std_factor: Option<Vec<f64>>,
+    /// The folder it was loaded from (an ensemble's own).
+    dir: std::path::PathBuf,
 }
 
 /// One network of an estimator.
@@ -126,7 +128,15 @@ impl PoseEstimator {
             members,
             scales,
             std_factor,
+            dir: dir.to_path_buf(),
         })
+    }
+
+    /// When its notes say it (an ensemble's every member) trained on every
+    /// frame of `ds`, the words saying so: scores on `ds` are on frames it
+    /// fitted ([`tactile_burn::artifact::scored_on_fitted`]).
+    pub fn scored_on_fitted(&self, ds: &Dataset) -> Option<String> {
+        tactile_burn::artifact::scored_on_fitted::<PoseArtifact>(&self.dir, ds)
     }
 
     /// Where it runs.
@@ -272,6 +282,17 @@ impl PoseEstimator {
     /// [`PoseEstimates::undecodable`], so the others keep their estimates
     /// ([`tactile_cae::data::PinSet::for_each_chunk_skipping_undecodable`]).
     pub fn predict_dataset(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
+        self.predict_rows(ds, true)
+    }
+
+    /// Every row of a TacTip dataset, row `i`'s estimates at `i`, for
+    /// scoring against its labels: a frame that cannot be decoded stops it.
+    pub fn predict_every_row(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
+        self.predict_rows(ds, false)
+    }
+
+    /// [`Self::predict_dataset`], its undecodable frames skipped or not.
+    fn predict_rows(&mut self, ds: &Dataset, skip_undecodable: bool) -> Result<PoseEstimates> {
         let t0 = std::time::Instant::now();
         let (mut files, mut values) = (Vec::with_capacity(ds.len()), Vec::with_capacity(ds.len()));
         let mut std: Option<Vec<Vec<f64>>> = None;
@@ -294,12 +315,14 @@ impl PoseEstimator {
             flat.extend(first.flat);
             Ok::<(), crate::Error>(())
         };
-        let undecodable = tactile_cae::data::PinSet::for_each_chunk_skipping_undecodable(
-            ds,
-            &scales,
-            DATASET_CHUNK,
-            each,
-        )?;
+        use tactile_cae::data::PinSet;
+        let undecodable = match skip_undecodable {
+            true => PinSet::for_each_chunk_skipping_undecodable(ds, &scales, DATASET_CHUNK, each)?,
+            false => {
+                PinSet::for_each_chunk(ds, &scales, DATASET_CHUNK, each)?;
+                None
+            }
+        };
         Ok(PoseEstimates {
             files,
             names: self

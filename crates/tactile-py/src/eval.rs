@@ -4,7 +4,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tactile_core::dataset::Dataset;
-use tactile_pipeline::tactip::TactipPerception;
+use tactile_pipeline::tactip::Predictor;
 
 use crate::args::{Given, PathArg, PathList};
 use crate::errors::PyResultExt;
@@ -78,7 +78,8 @@ pub(crate) fn eval_depth<'py>(
 }
 
 /// Score every estimator of an encoder (shape accuracy, pose, depth and
-/// force errors) on a labelled TacTip dataset, as `tactile evaluate` does.
+/// force errors), or every target of a pose network, on a labelled TacTip
+/// dataset, as `tactile evaluate` does.
 #[pyfunction]
 #[pyo3(signature = (encoder, data, *, estimators=None, runtime=Given::of("burn-flex")))]
 pub(crate) fn eval_tactip<'py>(
@@ -93,11 +94,16 @@ pub(crate) fn eval_tactip<'py>(
     let named = estimators.unwrap_or_default();
     let v = interruptible(py, || {
         let ds = Dataset::open(&data).py()?;
-        let mut p = TactipPerception::load(&encoder, &named, rt).py()?;
+        let mut p = Predictor::load(&encoder, &named, rt).py()?;
         let sc = p.evaluate(&ds).py()?;
-        serde_json::to_value(&sc)
-            .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
+        Ok((
+            sc.warning.clone(),
+            serde_json::to_value(&sc)
+                .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?,
+        ))
     })?;
+    let (warning, v) = v;
+    warn(py, &warning)?;
     crate::json::to_py(py, &v)
 }
 

@@ -228,6 +228,23 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
     with pytest.raises(ValueError, match="one of the two"):
         tactile.train.calibrate(model, data, calibration_from=root / "models/pose-surface")
 
+    # Scored as `tactile evaluate` scores it: each target's mean absolute
+    # error of these estimates against the labels, with a warning that the
+    # shipped model trained on these frames.
+    fitted = "the model trained on every one of these 20 frames"
+    with pytest.warns(UserWarning, match=fitted):
+        scores = tactile.eval.tactip(root / "models/pose-surface", data)
+    maes = {s["target"]: s["mae"] for s in scores["targets"]}
+    assert sorted(maes) == sorted(pose.targets) and scores["frames"] == 20
+    for t in pose.targets:
+        assert abs(maes[t] - np.abs(got[t] - truth[t]).mean()) < 1e-4, t
+    said = run_cli(tactile_bin, "evaluate", "--model", "models/pose-surface", "--data", str(data))
+    assert said.startswith("Pose network models/pose-surface on ") and "| **all** |" in said, said
+    cli = json.loads(said.splitlines()[-1])
+    assert cli["warning"].startswith(fitted) and scores["warning"] == cli["warning"]
+    for a, b in zip(cli["targets"], scores["targets"]):
+        assert a["target"] == b["target"] and a["mae"] == pytest.approx(b["mae"], abs=1e-6)
+
     # A frame of the dataset cut short behind its whole header (a copy
     # stopped half-way): left out with one warning naming it, the other 19
     # frames' estimates kept as they were, in Python and the command line.

@@ -1,5 +1,5 @@
-//! `tactile evaluate`: every estimator of an encoder scored on a labelled
-//! dataset, per class and per shape.
+//! `tactile evaluate`: every estimator of an encoder, or every target of a
+//! pose network, scored on a labelled dataset, per class and per shape.
 
 use std::path::PathBuf;
 
@@ -8,14 +8,15 @@ use clap::Args;
 use tactile_burn::DeviceKind;
 use tactile_core::dataset::Dataset;
 use tactile_estimate::eval::scores_markdown;
-use tactile_pipeline::tactip::TactipPerception;
+use tactile_pipeline::tactip::Predictor;
 
 #[derive(Args)]
 pub(crate) struct EvaluateArgs {
-    /// Trained encoder folder.
-    #[arg(long)]
+    /// Trained encoder folder (its estimators scored), or a pose-network
+    /// folder (`tactile train pose`; its every target scored).
+    #[arg(long, visible_alias = "model")]
     encoder: PathBuf,
-    /// Estimator folders (default: every folder in ENCODER with head.json, regressor.json or ensemble.json).
+    /// An encoder's estimator folders (default: every folder in ENCODER with head.json, regressor.json or ensemble.json).
     #[arg(long, num_args = 1..)]
     heads: Vec<PathBuf>,
     /// Labelled dataset (e.g. held-out synthetic frames).
@@ -35,10 +36,17 @@ pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
     if let Some(out) = &a.out {
         tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
-    let mut p = TactipPerception::load(&a.encoder, &a.heads, a.device.runtime())?;
+    let mut p = Predictor::load(&a.encoder, &a.heads, a.device.runtime())?;
     let s = p.evaluate(&ds)?;
+    if let Some(w) = &s.warning {
+        tactile_core::note!("warning: {w}");
+    }
+    let kind = match p {
+        Predictor::Encoder(_) => "Encoder",
+        Predictor::PoseNetwork(_) => "Pose network",
+    };
     let md = format!(
-        "Encoder {} on {} ({} frames).\n\n{}",
+        "{kind} {} on {} ({} frames).\n\n{}",
         a.encoder.display(),
         a.data.display(),
         ds.len(),

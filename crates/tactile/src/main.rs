@@ -81,7 +81,7 @@ enum Command {
     /// Run several estimators on one encoding per frame (paper A's simultaneous deployment); `predict --model DIR` is the same.
     #[command(visible_alias = "predict")]
     Perceive(perceive::PerceiveArgs),
-    /// Score every estimator of an encoder on a labelled dataset: accuracy per class, errors per shape.
+    /// Score every estimator of an encoder, or every target of a pose network, on a labelled dataset: accuracy per class, errors per shape.
     Evaluate(evaluate::EvaluateArgs),
     /// Estimator errors when test frames get more noise, an illumination gradient, a light blob or a rotation.
     Robustness(robustness::RobustnessArgs),

@@ -42,7 +42,8 @@ def tactip(
     estimators: Optional[Union[PathLike, Sequence[PathLike]]] = None,
     runtime: str = "burn-flex",
 ) -> Dict[str, Any]:
-    """Every estimator of an encoder scored on a labelled TacTip dataset."""
+    """Every estimator of an encoder, or every target of a pose network (its
+    folder as ``encoder``), scored on a labelled TacTip dataset."""
     return _tactile.eval_tactip(
         encoder,
         data,
