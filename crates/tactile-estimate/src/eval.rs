@@ -30,6 +30,21 @@ pub struct TargetScore {
     pub frames: usize,
     /// The error per shape.
     pub per_shape: Vec<Group>,
+    /// With uncertainty, how well its deviations hold on these frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coverage: Option<Coverage>,
+}
+
+/// The fraction of the scored frames whose error lies inside the model's
+/// ±1 and ±1.96 standard deviation intervals: 68.3 % and 95 % when its
+/// deviations are calibrated for frames like these (a Laplace-like error
+/// gives nearer 90 % for the second).
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Coverage {
+    /// Inside ±1 deviation.
+    pub within_1_std: f64,
+    /// Inside ±1.96 deviations.
+    pub within_1_96_std: f64,
 }
 
 /// Every estimator's score on one set of frames.
@@ -240,11 +255,15 @@ pub fn score(estimators: &Estimators, feats: &[Vec<f32>], ds: &Dataset) -> Resul
                     .collect();
             }
             Estimator::Regressor(r) => {
-                let pred = r.predict(feats)?;
+                let (pred, std) = r.predict_with_std(feats)?;
                 let only = &r.artifact().shapes;
+                let given = Given {
+                    pred: &pred,
+                    std: std.as_deref(),
+                };
                 out.targets.extend(target_scores(
                     r.targets(),
-                    &pred,
+                    given,
                     only,
                     &shapes,
                     &kinds,
@@ -272,20 +291,32 @@ fn shapes_of(ds: &Dataset) -> (Vec<Option<&str>>, Vec<&str>) {
     (shapes, kinds)
 }
 
-/// Each of `targets` scored: `pred[i][j]` estimates target `j` of row `i`
-/// of `ds`, over the frames of the shapes `only` (every frame when empty)
-/// whose label is not empty; overall and per shape of `kinds`. A target
-/// with no labelled frame is refused, unless `only` names shapes the set
-/// does not hold (nothing to score: left out).
+/// A model's estimates of a dataset's rows: `pred[i][j]` estimates target
+/// `j` of row `i`, `std[i][j]` its standard deviation when it gives one.
+#[derive(Clone, Copy)]
+pub struct Given<'a> {
+    /// The estimates.
+    pub pred: &'a [Vec<f64>],
+    /// Their standard deviations, with uncertainty.
+    pub std: Option<&'a [Vec<f64>]>,
+}
+
+/// Each of `targets` scored on the estimates `given` of the rows of `ds`,
+/// over the frames of the shapes `only` (every frame when empty) whose
+/// label is not empty; overall and per shape of `kinds`, and with
+/// deviations their intervals' coverage. A target with no labelled frame
+/// is refused, unless `only` names shapes the set does not hold (nothing
+/// to score: left out).
 fn target_scores(
     targets: &[Target],
-    pred: &[Vec<f64>],
+    given: Given<'_>,
     only: &[String],
     shapes: &[Option<&str>],
     kinds: &[&str],
     ds: &Dataset,
 ) -> Result<Vec<TargetScore>> {
     let mine = |i: usize| only.is_empty() || shapes[i].is_some_and(|s| only.iter().any(|k| k == s));
+    let pred = given.pred;
     let mut out = Vec::new();
     for (j, t) in targets.iter().enumerate() {
         let truth = (0..ds.len())
@@ -327,6 +358,19 @@ fn target_scores(
                 })
             })
             .collect();
+        // Errors (angles the short way round) and deviations of the scored
+        // frames, one column.
+        let coverage = given.std.map(|std| {
+            let (errors, stds): (Vec<Vec<f64>>, Vec<Vec<f64>>) = (0..pred.len())
+                .filter(|&i| mine(i))
+                .filter_map(|i| truth[i].map(|v| (vec![t.error(pred[i][j], v)], vec![std[i][j]])))
+                .unzip();
+            let within = |z: f64| crate::uncertainty::coverage(&errors, &stds, z)[0];
+            Coverage {
+                within_1_std: within(1.0),
+                within_1_96_std: within(crate::uncertainty::Z95),
+            }
+        });
         out.push(TargetScore {
             target: match only.is_empty() {
                 true => t.name.clone(),
@@ -335,19 +379,22 @@ fn target_scores(
             mae,
             frames,
             per_shape,
+            coverage,
         });
     }
     Ok(out)
 }
 
 /// A network that gives its targets itself (a pose network), scored as an
-/// encoder's regressors are: `values[i]` holds one estimate per target for
-/// row `i` of `ds`; each target's error overall and per shape, and the
-/// contact position where it estimates both `x_mm` and `y_mm`.
-pub fn score_targets(targets: &[Target], values: &[Vec<f64>], ds: &Dataset) -> Result<Scores> {
+/// encoder's regressors are: `given` holds one estimate per target for each
+/// row of `ds`; each target's error overall and per shape (with deviations,
+/// their coverage), and the contact position where it estimates both
+/// `x_mm` and `y_mm`.
+pub fn score_targets(targets: &[Target], given: Given<'_>, ds: &Dataset) -> Result<Scores> {
     let (shapes, kinds) = shapes_of(ds);
+    let values = given.pred;
     let mut out = Scores::of(values.len());
-    out.targets = target_scores(targets, values, &[], &shapes, &kinds, ds)?;
+    out.targets = target_scores(targets, given, &[], &shapes, &kinds, ds)?;
     let column = |name: &str| {
         let j = targets.iter().position(|t| t.name == name)?;
         Some(values.iter().map(|v| v[j]).collect::<Vec<f64>>())
@@ -460,6 +507,23 @@ pub fn scores_markdown(s: &Scores) -> String {
             md.push('\n');
         }
         md.push('\n');
+        let covered: Vec<(&TargetScore, Coverage)> = s
+            .targets
+            .iter()
+            .filter_map(|t| t.coverage.map(|c| (t, c)))
+            .collect();
+        if !covered.is_empty() {
+            md.push_str("Frames whose error lies inside the estimate's ±1 and ±1.96 standard deviations (68.3 % and 95 % when the deviations are calibrated for frames like these; an error with heavier tails than a normal's gives nearer 90 % for the second):\n\n| target | ±1 deviation | ±1.96 deviations |\n|---|---|---|\n");
+            for (t, c) in covered {
+                md.push_str(&format!(
+                    "| {} | {:.1} % | {:.1} % |\n",
+                    t.target,
+                    100.0 * c.within_1_std,
+                    100.0 * c.within_1_96_std
+                ));
+            }
+            md.push('\n');
+        }
     }
     if let Some(p) = &s.position {
         md.push_str(&format!(
@@ -530,5 +594,59 @@ mod tests {
         assert!(by("cylinderR4").xy_mm.is_none());
         assert!((by("edge").across_mm.unwrap() - 0.4).abs() < 1e-9);
         assert!(p.per_shape.iter().all(|g| g.name != "flat"));
+    }
+
+    #[test]
+    fn a_network_giving_its_targets_is_scored_as_regressors_are() {
+        let (_dir, ds) = labels(&[
+            "edge,1.0,,170.0,2.0,1.0",
+            "edge,2.0,,-170.0,2.0,1.0",
+            "sphere,3.0,,,2.0,1.0",
+            "sphere,4.0,,,2.0,1.0",
+            // Unlabelled: left out of both.
+            "flat,,,,2.0,1.0",
+        ]);
+        let targets = [Target::linear("x_mm"), Target::angle("theta_deg", 360.0)];
+        // x off by 0.1, 0.3, 0.5, 2.0; theta off by 20 deg the short way
+        // round across ±180, on the edges alone (the spheres' is empty).
+        let pred = vec![
+            vec![1.1, -170.0],
+            vec![2.3, 170.0],
+            vec![3.5, 0.0],
+            vec![2.0, 0.0],
+        ];
+        let std = vec![
+            vec![0.2, 30.0],
+            vec![0.2, 10.0],
+            vec![0.2, 1.0],
+            vec![1.1, 1.0],
+        ];
+        let given = Given {
+            pred: &pred,
+            std: Some(&std),
+        };
+        let s = score_targets(&targets, given, &ds).unwrap();
+        let (x, theta) = (&s.targets[0], &s.targets[1]);
+        assert!((x.mae - 0.725).abs() < 1e-9 && x.frames == 4, "{x:?}");
+        assert!(
+            (theta.mae - 20.0).abs() < 1e-9 && theta.frames == 2,
+            "{theta:?}"
+        );
+        let sphere = x.per_shape.iter().find(|g| g.name == "sphere").unwrap();
+        assert!((sphere.value - 1.25).abs() < 1e-9);
+        // Inside ±1: x's first (0.1 <= 0.2); inside ±1.96 (0.392, 2.156):
+        // its second and last too. Theta's first in both (20 <= 30), its
+        // second in neither (20 > 19.6).
+        let c = x.coverage.unwrap();
+        assert!((c.within_1_std - 0.25).abs() < 1e-9 && (c.within_1_96_std - 0.75).abs() < 1e-9);
+        let c = theta.coverage.unwrap();
+        assert!((c.within_1_std - 0.5).abs() < 1e-9 && (c.within_1_96_std - 0.5).abs() < 1e-9);
+        // Without deviations, none; without both x and y, no position.
+        let given = Given {
+            pred: &pred,
+            std: None,
+        };
+        let s = score_targets(&targets, given, &ds).unwrap();
+        assert!(s.targets.iter().all(|t| t.coverage.is_none()) && s.position.is_none());
     }
 }

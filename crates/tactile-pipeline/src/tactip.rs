@@ -100,6 +100,8 @@ pub struct TactipPerception {
     pub encoder: TactipEncoder,
     /// Features to shape, pose, depth, force.
     pub estimators: Estimators,
+    /// The encoder's folder.
+    dir: PathBuf,
 }
 
 /// What a TacTip model folder holds: the two kinds `predict` and the pose
@@ -220,8 +222,11 @@ impl Predictor {
             Self::Encoder(p) => p.evaluate(ds),
             Self::PoseNetwork(p) => {
                 let r = p.predict_every_row(ds)?;
-                let mut s =
-                    tactile_estimate::eval::score_targets(&p.artifact.targets, &r.values, ds)?;
+                let given = tactile_estimate::eval::Given {
+                    pred: &r.values,
+                    std: r.std.as_deref(),
+                };
+                let mut s = tactile_estimate::eval::score_targets(&p.artifact.targets, given, ds)?;
                 s.warning = p.scored_on_fitted(ds);
                 Ok(s)
             }
@@ -905,6 +910,7 @@ impl TactipPerception {
         Ok(Self {
             encoder: encoder_net,
             estimators,
+            dir: encoder.to_path_buf(),
         })
     }
 
@@ -944,12 +950,16 @@ impl TactipPerception {
         })
     }
 
-    /// Score every estimator on a labelled dataset.
+    /// Score every estimator on a labelled dataset, with a warning when
+    /// the encoder's notes say it trained on every frame of `ds`
+    /// ([`tactile_burn::artifact::scored_on_fitted`]).
     pub fn evaluate(&mut self, ds: &Dataset) -> Result<Scores> {
         let (_, feats) = self.encoder.encode_dataset(ds)?;
-        Ok(score(&self.estimators, &feats, ds)?)
+        let mut s = score(&self.estimators, &feats, ds)?;
+        s.warning =
+            tactile_burn::artifact::scored_on_fitted::<tactile_cae::CaeArtifact>(&self.dir, ds);
+        Ok(s)
     }
-
     /// Score every estimator on pin images made otherwise (perturbed
     /// frames) and labelled by the rows of `ds`.
     pub fn evaluate_pins(&mut self, pins: &PinSet, ds: &Dataset) -> Result<Scores> {

@@ -238,8 +238,21 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
     assert sorted(maes) == sorted(pose.targets) and scores["frames"] == 20
     for t in pose.targets:
         assert abs(maes[t] - np.abs(got[t] - truth[t]).mean()) < 1e-4, t
+    # With each estimate's deviation, the share of frames inside ±1 and
+    # ±1.96 of them (these frames' errors against the shipped deviations).
+    for sc in scores["targets"]:
+        t, c = sc["target"], sc["coverage"]
+        err, std = np.abs(got[t] - truth[t]), got[t + "_std"]
+        assert c["within_1_std"] == pytest.approx(np.mean(err <= std), abs=1e-9), t
+        assert c["within_1_96_std"] == pytest.approx(np.mean(err <= 1.959964 * std), abs=1e-9), t
+    # An encoder with its estimators (models/cae-surface, trained on this
+    # set too) says so as well.
+    with pytest.warns(UserWarning, match=fitted):
+        cae = tactile.eval.tactip(root / "models/cae-surface", data)
+    assert all(0 <= sc["coverage"]["within_1_std"] <= 1 for sc in cae["targets"])
     said = run_cli(tactile_bin, "evaluate", "--model", "models/pose-surface", "--data", str(data))
     assert said.startswith("Pose network models/pose-surface on ") and "| **all** |" in said, said
+    assert "| shear_theta_deg | " in said.split("±1.96 deviations |")[1], said
     cli = json.loads(said.splitlines()[-1])
     assert cli["warning"].startswith(fitted) and scores["warning"] == cli["warning"]
     for a, b in zip(cli["targets"], scores["targets"]):
