@@ -215,8 +215,16 @@ impl PinSet {
         ds.expect_kind(DatasetKind::Tactip)
             .map_err(crate::Error::from)?;
         ds.check_frame_headers(rows).map_err(crate::Error::from)?;
+        let chunk_rows = chunk_rows.max(1);
+        // On a terminal, a pass of more than one chunk shows its progress
+        // (`predict`, `encode` or `evaluate` over thousands of frames).
+        let bar = tactile_core::progress::progress_bar_if(
+            rows.len() as u64,
+            "frames",
+            rows.len() > chunk_rows,
+        );
         let mut given = 0;
-        for chunk in rows.chunks(chunk_rows.max(1)) {
+        for chunk in rows.chunks(chunk_rows) {
             let sets = Self::from_rows_each_or_skip(ds, chunk, cfgs, undecodable.as_deref_mut())?;
             let n = sets.first().map_or(0, Self::len);
             // A chunk whose every frame was skipped gives no batch to run.
@@ -224,7 +232,9 @@ impl PinSet {
                 given += n;
                 each(sets)?;
             }
+            bar.inc(chunk.len() as u64);
         }
+        bar.finish_and_clear();
         Ok(given)
     }
 
