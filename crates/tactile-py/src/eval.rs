@@ -79,21 +79,27 @@ pub(crate) fn eval_depth<'py>(
 
 /// Score every estimator of an encoder (shape accuracy, pose, depth and
 /// force errors), or every target of a pose network, on a labelled TacTip
-/// dataset, as `tactile evaluate` does.
+/// dataset (the rows of its `split` alone when given), as `tactile
+/// evaluate` does.
 #[pyfunction]
-#[pyo3(signature = (encoder, data, *, estimators=None, runtime=Given::of("burn-flex")))]
+#[pyo3(signature = (encoder, data, *, estimators=None, runtime=Given::of("burn-flex"), split=None))]
 pub(crate) fn eval_tactip<'py>(
     py: Python<'py>,
     encoder: PathArg,
     data: PathArg,
     estimators: Option<PathList>,
     runtime: Given<String>,
+    split: Option<Given<String>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    crate::args::keywords!(encoder, data, estimators, runtime);
+    crate::args::keywords!(encoder, data, estimators, runtime, split);
     let rt = self::runtime(&runtime)?;
     let named = estimators.unwrap_or_default();
     let v = interruptible(py, || {
         let ds = Dataset::open(&data).py()?;
+        let ds = match &split {
+            Some(split) => ds.only_split(split).py()?,
+            None => ds,
+        };
         let mut p = Predictor::load(&encoder, &named, rt).py()?;
         let sc = p.evaluate(&ds).py()?;
         Ok((

@@ -245,6 +245,14 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
         err, std = np.abs(got[t] - truth[t]), got[t + "_std"]
         assert c["within_1_std"] == pytest.approx(np.mean(err <= std), abs=1e-9), t
         assert c["within_1_96_std"] == pytest.approx(np.mean(err <= 1.959964 * std), abs=1e-9), t
+    # One split alone: these 20 rows are all of the authors' `train`.
+    with pytest.warns(UserWarning, match=fitted):
+        train = tactile.eval.tactip(root / "models/pose-surface", data, split="training")
+    assert train["targets"] == scores["targets"]
+    with pytest.raises(ValueError, match=r"labels\.csv: no row of its 'split' column is 'val'"):
+        tactile.eval.tactip(root / "models/pose-surface", data, split="val")
+    with pytest.raises(TypeError, match="^split: "):
+        tactile.eval.tactip(root / "models/pose-surface", data, split=1)
     # An encoder with its estimators (models/cae-surface, trained on this
     # set too) says so as well.
     with pytest.warns(UserWarning, match=fitted):

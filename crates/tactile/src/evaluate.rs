@@ -22,6 +22,10 @@ pub(crate) struct EvaluateArgs {
     /// Labelled dataset (e.g. held-out synthetic frames).
     #[arg(long)]
     data: PathBuf,
+    /// Score only the rows of this split of the dataset's `split` column
+    /// (`val` of the authors' train/val split; `test`).
+    #[arg(long)]
+    split: Option<String>,
     /// Also write the tables to this Markdown file.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -33,6 +37,10 @@ pub(crate) struct EvaluateArgs {
 /// Score every estimator on a dataset; the last line is the scores as JSON.
 pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
+    let ds = match &a.split {
+        Some(split) => ds.only_split(split)?,
+        None => ds,
+    };
     if let Some(out) = &a.out {
         tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
@@ -45,8 +53,12 @@ pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
         Predictor::Encoder(_) => "Encoder",
         Predictor::PoseNetwork(_) => "Pose network",
     };
+    let split = match &a.split {
+        Some(name) => format!("its '{}' split, ", tactile_core::dataset::split_name(name)),
+        None => String::new(),
+    };
     let md = format!(
-        "{kind} {} on {} ({} frames).\n\n{}",
+        "{kind} {} on {} ({split}{} frames).\n\n{}",
         a.encoder.display(),
         a.data.display(),
         ds.len(),

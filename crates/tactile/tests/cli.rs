@@ -2374,6 +2374,78 @@ fn csv_rows(path: &Path) -> Vec<Vec<String>> {
 }
 
 #[test]
+fn evaluate_scores_a_pose_network_on_one_split_of_a_dataset() {
+    // 16 rows of the surface set, every 500th: 12 of its `train` split and
+    // 4 of `val`. `evaluate --split val` scores the 4 alone: each target's
+    // error is the mean of `predict`'s estimates against their labels.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let model = root.join("models/pose-surface");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = real_subset("tactip331-surface", tmp.path(), |_| true, 500, 16);
+    let est = tmp.path().join("estimates.csv");
+    predict(&model, &data, &est, &[]);
+    let (estimates, labels) = (csv_rows(&est), csv_rows(&data.join("labels.csv")));
+    let column = |rows: &[Vec<String>], name: &str| rows[0].iter().position(|c| c == name).unwrap();
+    let split = column(&labels, "split");
+    let val: Vec<usize> = (1..labels.len())
+        .filter(|&i| labels[i][split] == "val")
+        .collect();
+    assert_eq!(val.len(), 4);
+    let scored = |extra: &[&str]| {
+        let mut args = vec!["evaluate", "--model", model.to_str().unwrap()];
+        args.extend_from_slice(&["--data", data.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        tactile(&args)
+    };
+    let (ok, msg) = scored(&["--split", "validation"]);
+    assert!(ok, "{msg}");
+    assert!(msg.contains("(its 'val' split, 4 frames)"), "{msg}");
+    assert!(
+        msg.contains("the model trained on every one of these 4 frames"),
+        "{msg}"
+    );
+    let json = last_json(&msg);
+    assert_eq!(json["frames"], 4);
+    for t in json["targets"].as_array().unwrap() {
+        let name = t["target"].as_str().unwrap();
+        let (e, l) = (column(&estimates, name), column(&labels, name));
+        let mean = val
+            .iter()
+            .map(|&i| {
+                let truth: f64 = labels[i][l].parse().unwrap();
+                (estimates[i][e].parse::<f64>().unwrap() - truth).abs()
+            })
+            .sum::<f64>()
+            / 4.0;
+        // `predict` writes 4 decimals.
+        assert!(
+            (t["mae"].as_f64().unwrap() - mean).abs() < 1e-3,
+            "{name}: {t}"
+        );
+        assert!(t["coverage"]["within_1_std"].as_f64().is_some(), "{t}");
+    }
+    // A split the column does not hold, and a dataset without the column.
+    let (ok, msg) = scored(&["--split", "nope"]);
+    assert!(
+        !ok && msg.contains("labels.csv: no row of its 'split' column is 'nope'"),
+        "{msg}"
+    );
+    let (ok, msg) = tactile(&[
+        "evaluate",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        root.join("samples/virtual-tactip").to_str().unwrap(),
+        "--split",
+        "val",
+    ]);
+    assert!(
+        !ok && msg.contains("no 'split' column to take the 'val' rows from"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
     // A robot records its TacTip as a bag (mono8 Images) or saves frames
     // to a folder: `predict --data` reads both, each frame's estimates the

@@ -836,6 +836,34 @@ impl Dataset {
         })
     }
 
+    /// The dataset of the rows of `split` alone, in order (a scoring of
+    /// one split: `tactile evaluate --split val`); its lines still name
+    /// `labels.csv`'s. A split with no row, or a dataset without a `split`
+    /// column, is an error naming its labels.
+    pub fn only_split(&self, split: &str) -> Result<Dataset> {
+        let rows = self.split_rows(split)?;
+        if rows.is_empty() {
+            return Err(Error::dataset(
+                self.labels_path(),
+                None,
+                format!(
+                    "no row of its 'split' column is '{}'{}",
+                    split_name(split),
+                    self.split_hint()
+                ),
+            ));
+        }
+        Ok(Dataset {
+            root: self.root.clone(),
+            manifest: Manifest {
+                count: rows.len(),
+                ..self.manifest.clone()
+            },
+            columns: self.columns.clone(),
+            rows: rows.iter().map(|&i| self.rows[i].clone()).collect(),
+        })
+    }
+
     /// What a `split` column holds besides `train`, `val` and `test` (its
     /// values and how many rows each), for an error about too few rows to
     /// say why: empty without such values.

@@ -41,14 +41,17 @@ def tactip(
     *,
     estimators: Optional[Union[PathLike, Sequence[PathLike]]] = None,
     runtime: str = "burn-flex",
+    split: Optional[str] = None,
 ) -> Dict[str, Any]:
     """Every estimator of an encoder, or every target of a pose network (its
-    folder as ``encoder``), scored on a labelled TacTip dataset."""
+    folder as ``encoder``), scored on a labelled TacTip dataset: on the rows
+    of its ``split`` column's ``split`` alone when given (``"val"``)."""
     return _tactile.eval_tactip(
         encoder,
         data,
         estimators=estimators,
         runtime=runtime,
+        split=split,
     )
 
 
