@@ -391,6 +391,17 @@ fn target_scores(
 /// their coverage), and the contact position where it estimates both
 /// `x_mm` and `y_mm`.
 pub fn score_targets(targets: &[Target], given: Given<'_>, ds: &Dataset) -> Result<Scores> {
+    // One row of one value per target for each row of `ds`.
+    let fits =
+        |rows: &[Vec<f64>]| rows.len() == ds.len() && rows.iter().all(|r| r.len() == targets.len());
+    if !fits(given.pred) || given.std.is_some_and(|s| !fits(s)) {
+        return Err(tactile_core::Error::shape(
+            "estimates to score",
+            format!("{} rows of {} values", ds.len(), targets.len()),
+            format!("{} rows", given.pred.len()),
+        )
+        .into());
+    }
     let (shapes, kinds) = shapes_of(ds);
     let values = given.pred;
     let mut out = Scores::of(values.len());
@@ -614,12 +625,14 @@ mod tests {
             vec![2.3, 170.0],
             vec![3.5, 0.0],
             vec![2.0, 0.0],
+            vec![9.0, 9.0],
         ];
         let std = vec![
             vec![0.2, 30.0],
             vec![0.2, 10.0],
             vec![0.2, 1.0],
             vec![1.1, 1.0],
+            vec![1.0, 1.0],
         ];
         let given = Given {
             pred: &pred,
@@ -648,5 +661,16 @@ mod tests {
         };
         let s = score_targets(&targets, given, &ds).unwrap();
         assert!(s.targets.iter().all(|t| t.coverage.is_none()) && s.position.is_none());
+        // Estimates that do not fit the rows are refused, not indexed past.
+        let short = Given {
+            pred: &pred[..4],
+            std: None,
+        };
+        assert!(score_targets(&targets, short, &ds).is_err());
+        let narrow = Given {
+            pred: &pred,
+            std: Some(&pred[..3]),
+        };
+        assert!(score_targets(&targets, narrow, &ds).is_err());
     }
 }
