@@ -102,6 +102,13 @@ impl TactipEncoder {
         self.encode_rows(ds, profile.as_ref(), true)
     }
 
+    /// [`Self::encode_dataset_flagging`] for scoring: every row's features at
+    /// its place, a frame that cannot be decoded stopping it.
+    pub fn encode_every_row_flagging(&mut self, ds: &Dataset) -> Result<EncodedDataset> {
+        let profile = self.artifact.input_profile.clone();
+        self.encode_rows(ds, profile.as_ref(), false)
+    }
+
     /// Every row of `ds` encoded, its frames outside `profile` listed, its
     /// undecodable frames skipped when `skip_undecodable`.
     fn encode_rows(

@@ -74,6 +74,11 @@ pub struct Scores {
     /// not held-out scores, for the front ends to show.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub warning: Option<String>,
+    /// What the frames themselves suggest, as `predict` says it: frames
+    /// smaller than the model's crop, blank ones, ones unlike its training
+    /// frames (of another sensor?), which may explain large errors.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub frame_warnings: Vec<String>,
 }
 
 /// Shallowest contact whose position is scored, mm: at zero depth the
@@ -339,12 +344,15 @@ fn target_scores(
             continue;
         }
         if frames == 0 {
-            return Err(tactile_core::Error::dataset(
-                ds.labels_path(),
-                None,
-                format!("column '{}' is empty on every frame", t.name),
-            )
-            .into());
+            let why = match ds.columns.contains(&t.name) {
+                true => format!("column '{}' is empty on every frame", t.name),
+                false => format!(
+                    "no column '{}', a target the model estimates, to score it against (its columns: {})",
+                    t.name,
+                    ds.columns.join(", ")
+                ),
+            };
+            return Err(tactile_core::Error::dataset(ds.labels_path(), None, why).into());
         }
         let per_shape = kinds
             .iter()
@@ -430,6 +438,7 @@ impl Scores {
             targets: Vec::new(),
             position: None,
             warning: None,
+            frame_warnings: Vec::new(),
         }
     }
 }

@@ -216,10 +216,13 @@ impl Predictor {
     /// ([`TactipPerception::evaluate`]), or a pose network's every target
     /// ([`tactile_estimate::eval::score_targets`]): each target's mean
     /// absolute error overall and per shape (angles the short way round),
-    /// with a warning when its notes say it trained on every frame of `ds`.
+    /// with a warning when its notes say it trained on every frame of `ds`,
+    /// and the warnings `predict` gives of the frames (their size against
+    /// the model's crop, blank frames, frames unlike its training frames).
     pub fn evaluate(&mut self, ds: &Dataset) -> Result<Scores> {
-        match self {
-            Self::Encoder(p) => p.evaluate(ds),
+        let mismatch = dataset_frame_warning(ds, self.preprocessings());
+        let mut s = match self {
+            Self::Encoder(p) => p.evaluate(ds)?,
             Self::PoseNetwork(p) => {
                 let r = p.predict_every_row(ds)?;
                 let given = tactile_estimate::eval::Given {
@@ -228,9 +231,13 @@ impl Predictor {
                 };
                 let mut s = tactile_estimate::eval::score_targets(&p.artifact.targets, given, ds)?;
                 s.warning = p.scored_on_fitted(ds);
-                Ok(s)
+                let profile = p.artifact.input_profile.as_ref();
+                s.frame_warnings = dataset_frame_warnings(&r.flat, &r.foreign, profile);
+                s
             }
-        }
+        };
+        s.frame_warnings.splice(0..0, mismatch);
+        Ok(s)
     }
 
     /// The same columns as [`Self::perceive`] for grey frames, each
@@ -952,10 +959,13 @@ impl TactipPerception {
 
     /// Score every estimator on a labelled dataset, with a warning when
     /// the encoder's notes say it trained on every frame of `ds`
-    /// ([`tactile_burn::artifact::scored_on_fitted`]).
+    /// ([`tactile_burn::artifact::scored_on_fitted`]) and those of its
+    /// blank frames and frames unlike its training frames.
     pub fn evaluate(&mut self, ds: &Dataset) -> Result<Scores> {
-        let (_, feats) = self.encoder.encode_dataset(ds)?;
-        let mut s = score(&self.estimators, &feats, ds)?;
+        let encoded = self.encoder.encode_every_row_flagging(ds)?;
+        let mut s = score(&self.estimators, &encoded.features, ds)?;
+        let profile = self.encoder.artifact.input_profile.as_ref();
+        s.frame_warnings = dataset_frame_warnings(&encoded.flat, &encoded.foreign, profile);
         s.warning =
             tactile_burn::artifact::scored_on_fitted::<tactile_cae::CaeArtifact>(&self.dir, ds);
         Ok(s)

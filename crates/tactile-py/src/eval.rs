@@ -102,14 +102,22 @@ pub(crate) fn eval_tactip<'py>(
         };
         let mut p = Predictor::load(&encoder, &named, rt).py()?;
         let sc = p.evaluate(&ds).py()?;
+        let warnings: Vec<String> = sc
+            .frame_warnings
+            .iter()
+            .chain(&sc.warning)
+            .cloned()
+            .collect();
         Ok((
-            sc.warning.clone(),
+            warnings,
             serde_json::to_value(&sc)
                 .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?,
         ))
     })?;
-    let (warning, v) = v;
-    warn(py, &warning)?;
+    let (warnings, v) = v;
+    for w in &warnings {
+        crate::errors::user_warning(py, w)?;
+    }
     crate::json::to_py(py, &v)
 }
 

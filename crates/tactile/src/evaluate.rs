@@ -46,6 +46,9 @@ pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
     }
     let mut p = Predictor::load(&a.encoder, &a.heads, a.device.runtime())?;
     let s = p.evaluate(&ds)?;
+    for w in &s.frame_warnings {
+        tactile_core::note!("{w}");
+    }
     if let Some(w) = &s.warning {
         tactile_core::note!("warning: {w}");
     }

@@ -977,7 +977,9 @@ fn evaluate_and_robustness_score_the_shipped_estimators() {
         msg.contains("4 of these frames are of shapes the classifier does not know (edge, flat, sphere): they count as wrong, and the confusion matrix leaves them out. It knows cuboid, cylinderR4, cylinderR8, prism."),
         "{msg}"
     );
-    let json: serde_json::Value = serde_json::from_str(msg.lines().last().unwrap()).unwrap();
+    // The JSON is the last line of standard output; the notes (these
+    // frames unlike the real set's) come after it on standard error.
+    let json = last_json(&msg);
     assert_eq!(
         json["unknown_shapes"].as_array().unwrap().len(),
         3,
@@ -2441,6 +2443,47 @@ fn evaluate_scores_a_pose_network_on_one_split_of_a_dataset() {
     ]);
     assert!(
         !ok && msg.contains("no 'split' column to take the 'val' rows from"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn evaluate_says_what_predict_says_of_frames_of_another_sensor() {
+    // The real edge set's pose network scored on virtual TacTip frames: its
+    // errors, with the warning `predict` gives that the frames are unlike
+    // its training frames, in the notes and the JSON, for either kind of
+    // model. A target the labels do not hold is refused naming it.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let data = root.join("samples/virtual-tactip");
+    for model in ["models/pose-edge", "models/cae-edge"] {
+        let (ok, msg) = tactile(&[
+            "evaluate",
+            "--model",
+            root.join(model).to_str().unwrap(),
+            "--data",
+            data.to_str().unwrap(),
+        ]);
+        assert!(ok, "{model}: {msg}");
+        assert!(
+            msg.contains("warning: frames/000000.png, frames/000001.png"),
+            "{msg}"
+        );
+        let json = last_json(&msg);
+        let said = json["frame_warnings"][0].as_str().unwrap();
+        assert!(
+            said.contains("pins spaced unlike those of the 3762 frames"),
+            "{json}"
+        );
+    }
+    let (ok, msg) = tactile(&[
+        "evaluate",
+        "--model",
+        root.join("models/pose-surface").to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && msg.contains("labels.csv: no column 'roll_deg', a target the model estimates"),
         "{msg}"
     );
 }
