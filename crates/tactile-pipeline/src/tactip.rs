@@ -118,7 +118,7 @@ impl TactipModelKind {
     /// The kind of TacTip model in `dir`. A path that is no folder, or a
     /// folder of neither kind, is refused naming what it holds (`other`
     /// says what a model of another kind is to the caller: "a model
-    /// `predict` does not run").
+    /// `predict` and `evaluate` do not run").
     pub fn of(dir: &Path, other: &str) -> Result<Self> {
         use tactile_burn::Artifact;
         // A pose network, or an ensemble of them (a detector's ensemble is
@@ -161,7 +161,7 @@ impl Predictor {
     /// encoder with the estimators in `heads` (every estimator folder
     /// inside it when empty).
     pub fn load(dir: &Path, heads: &[PathBuf], runtime: Runtime) -> Result<Self> {
-        if TactipModelKind::of(dir, "a model `predict` does not run")?
+        if TactipModelKind::of(dir, "a model `predict` and `evaluate` do not run")?
             == TactipModelKind::PoseNetwork
         {
             // A pose network gives its targets itself: estimator folders
@@ -1475,7 +1475,7 @@ mod tests {
         std::fs::write(depth.join("depth.json"), "{}").unwrap();
         let e = refusal(&depth);
         assert!(
-            e.contains("it holds depth.json: a model `predict` does not run"),
+            e.contains("it holds depth.json: a model `predict` and `evaluate` do not run"),
             "{e}"
         );
         let det = root.join("detector");
