@@ -66,6 +66,18 @@ impl ForeignFrame {
 /// 64 MiB, where a million rows at once would be 64 GiB.
 pub const DATASET_CHUNK: usize = 1024;
 
+/// What a chunked pass over a dataset does with a frame that cannot be
+/// decoded past its header ([`PinSet::for_each_chunk_with`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Undecodable {
+    /// Stop, naming it: a pass whose outputs are matched to the labels row
+    /// by row (scoring, training).
+    Stop,
+    /// Leave it out with a warning: a pass whose outputs are kept by file
+    /// (estimates, features).
+    Skip,
+}
+
 impl PinSet {
     /// Preprocess every frame of `ds` (in parallel).
     pub fn from_dataset(ds: &Dataset, cfg: &PreprocessConfig) -> Result<Self> {
@@ -178,21 +190,26 @@ impl PinSet {
         Self::chunks(ds, rows, cfgs, chunk_rows, None, each).map(|_| ())
     }
 
-    /// [`Self::for_each_chunk`] for a pass whose results are kept frame by
-    /// frame (estimates, features): a frame that cannot be decoded past its
-    /// whole header (its pixel data cut short) is left out of its chunk and
-    /// counted, so the other frames keep their results, as `tactile run`
+    /// [`Self::for_each_chunk`] with `undecodable` saying what becomes of
+    /// a frame that cannot be decoded past its whole header (its pixel data
+    /// cut short). With [`Undecodable::Skip`] it is left out of its chunk
+    /// and counted, so the other frames keep their results, as `tactile run`
     /// keeps a folder's: the warning that names the first and counts them
-    /// is returned ([`UndecodableFrames::warning`]). A pass that decodes no
-    /// frame fails with the refusal; any other error (a file gone, a frame
-    /// that cannot be preprocessed) stops it as before.
-    pub fn for_each_chunk_skipping_undecodable<E: From<crate::Error>>(
+    /// is returned ([`UndecodableFrames::warning`]), and a pass that decodes
+    /// no frame fails with the refusal. With [`Undecodable::Stop`] it stops
+    /// the pass, as any other error (a file gone, a frame that cannot be
+    /// preprocessed) does either way.
+    pub fn for_each_chunk_with<E: From<crate::Error>>(
         ds: &Dataset,
         cfgs: &[PreprocessConfig],
         chunk_rows: usize,
+        undecodable: Undecodable,
         each: impl FnMut(Vec<Self>) -> std::result::Result<(), E>,
     ) -> std::result::Result<Option<String>, E> {
         let rows: Vec<usize> = ds.every_row();
+        if undecodable == Undecodable::Stop {
+            return Self::chunks(ds, &rows, cfgs, chunk_rows, None, each).map(|_| None);
+        }
         let mut skipped = UndecodableFrames::new(rows.len());
         let given = Self::chunks(ds, &rows, cfgs, chunk_rows, Some(&mut skipped), each)?;
         // Taken before `finish`, which hands the first refusal to the error

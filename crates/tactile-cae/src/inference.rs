@@ -11,7 +11,7 @@ use tactile_preprocess::PinImage;
 use tactile_preprocess::profile::InputProfile;
 
 use crate::artifact::CaeArtifact;
-use crate::data::{DATASET_CHUNK, PinSet};
+use crate::data::{DATASET_CHUNK, PinSet, Undecodable};
 use crate::{Error, Result};
 
 /// Pin images per network call.
@@ -87,7 +87,7 @@ impl TactipEncoder {
     pub fn encode_dataset(&mut self, ds: &Dataset) -> Result<(Vec<String>, Vec<Vec<f32>>)> {
         // Only the features are wanted: no frame is scored against the
         // encoder's pin profile.
-        let e = self.encode_rows(ds, None, false)?;
+        let e = self.encode_rows(ds, None, Undecodable::Stop)?;
         Ok((e.files, e.features))
     }
 
@@ -96,26 +96,26 @@ impl TactipEncoder {
     /// frames unlike its training frames ([`PinSet::foreign`]); a frame
     /// that cannot be decoded past its header is left out and named in
     /// [`EncodedDataset::undecodable`], so the others keep their features
-    /// ([`PinSet::for_each_chunk_skipping_undecodable`]).
+    /// ([`PinSet::for_each_chunk_with`]).
     pub fn encode_dataset_flagging(&mut self, ds: &Dataset) -> Result<EncodedDataset> {
         let profile = self.artifact.input_profile.clone();
-        self.encode_rows(ds, profile.as_ref(), true)
+        self.encode_rows(ds, profile.as_ref(), Undecodable::Skip)
     }
 
     /// [`Self::encode_dataset_flagging`] for scoring: every row's features at
     /// its place, a frame that cannot be decoded stopping it.
     pub fn encode_every_row_flagging(&mut self, ds: &Dataset) -> Result<EncodedDataset> {
         let profile = self.artifact.input_profile.clone();
-        self.encode_rows(ds, profile.as_ref(), false)
+        self.encode_rows(ds, profile.as_ref(), Undecodable::Stop)
     }
 
     /// Every row of `ds` encoded, its frames outside `profile` listed, its
-    /// undecodable frames skipped when `skip_undecodable`.
+    /// undecodable frames stopping the pass or skipped as `undecodable` says.
     fn encode_rows(
         &mut self,
         ds: &Dataset,
         profile: Option<&InputProfile>,
-        skip_undecodable: bool,
+        undecodable: Undecodable,
     ) -> Result<EncodedDataset> {
         let cfg = self.artifact.preprocess.clone();
         let mut e = EncodedDataset {
@@ -136,14 +136,9 @@ impl TactipEncoder {
             e.flat.extend(set.flat);
             Ok::<(), Error>(())
         };
-        let undecodable = match skip_undecodable {
-            true => PinSet::for_each_chunk_skipping_undecodable(ds, cfgs, DATASET_CHUNK, each)?,
-            false => {
-                PinSet::for_each_chunk(ds, cfgs, DATASET_CHUNK, each)?;
-                None
-            }
-        };
-        e.undecodable = undecodable;
+        // `each` holds `e` until the pass ends.
+        let skipped = PinSet::for_each_chunk_with(ds, cfgs, DATASET_CHUNK, undecodable, each)?;
+        e.undecodable = skipped;
         Ok(e)
     }
 }

@@ -14,7 +14,7 @@ use crate::Result;
 use crate::artifact::{PoseArtifact, PoseEnsemble, check_alike};
 use crate::training::PREDICT_BATCH;
 use crate::uncertainty::{Mixture, deviation};
-use tactile_cae::data::DATASET_CHUNK;
+use tactile_cae::data::{DATASET_CHUNK, Undecodable};
 
 /// A loaded pose network with its preprocessing, or an ensemble of them
 /// ([`PoseEnsemble`]) whose estimates are averaged. The members of a
@@ -73,7 +73,7 @@ pub struct PoseEstimates {
     pub foreign: Vec<tactile_cae::data::ForeignFrame>,
     /// The warning naming the first frame that could not be decoded past
     /// its header and counting them, when any was left out
-    /// ([`tactile_cae::data::PinSet::for_each_chunk_skipping_undecodable`]).
+    /// ([`tactile_cae::data::PinSet::for_each_chunk_with`]).
     pub undecodable: Option<String>,
 }
 
@@ -280,19 +280,20 @@ impl PoseEstimator {
     /// Every frame of a TacTip dataset, a chunk at a time; a frame that
     /// cannot be decoded past its header is left out and named in
     /// [`PoseEstimates::undecodable`], so the others keep their estimates
-    /// ([`tactile_cae::data::PinSet::for_each_chunk_skipping_undecodable`]).
+    /// ([`tactile_cae::data::PinSet::for_each_chunk_with`]).
     pub fn predict_dataset(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
-        self.predict_rows(ds, true)
+        self.predict_rows(ds, Undecodable::Skip)
     }
 
     /// Every row of a TacTip dataset, row `i`'s estimates at `i`, for
     /// scoring against its labels: a frame that cannot be decoded stops it.
     pub fn predict_every_row(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
-        self.predict_rows(ds, false)
+        self.predict_rows(ds, Undecodable::Stop)
     }
 
-    /// [`Self::predict_dataset`], its undecodable frames skipped or not.
-    fn predict_rows(&mut self, ds: &Dataset, skip_undecodable: bool) -> Result<PoseEstimates> {
+    /// [`Self::predict_dataset`], its undecodable frames stopping it or
+    /// skipped as `undecodable` says.
+    fn predict_rows(&mut self, ds: &Dataset, undecodable: Undecodable) -> Result<PoseEstimates> {
         let t0 = std::time::Instant::now();
         let (mut files, mut values) = (Vec::with_capacity(ds.len()), Vec::with_capacity(ds.len()));
         let mut std: Option<Vec<Vec<f64>>> = None;
@@ -315,14 +316,13 @@ impl PoseEstimator {
             flat.extend(first.flat);
             Ok::<(), crate::Error>(())
         };
-        use tactile_cae::data::PinSet;
-        let undecodable = match skip_undecodable {
-            true => PinSet::for_each_chunk_skipping_undecodable(ds, &scales, DATASET_CHUNK, each)?,
-            false => {
-                PinSet::for_each_chunk(ds, &scales, DATASET_CHUNK, each)?;
-                None
-            }
-        };
+        let undecodable = tactile_cae::data::PinSet::for_each_chunk_with(
+            ds,
+            &scales,
+            DATASET_CHUNK,
+            undecodable,
+            each,
+        )?;
         Ok(PoseEstimates {
             files,
             names: self
