@@ -426,6 +426,13 @@ pub fn score_targets(targets: &[Target], given: Given<'_>, ds: &Dataset) -> Resu
 }
 
 impl Scores {
+    /// Every warning the front ends show, each starting "warning: ": those
+    /// of the frames, then that the model trained on them.
+    pub fn warnings(&self) -> Vec<String> {
+        let fitted = self.warning.iter().map(|w| format!("warning: {w}"));
+        self.frame_warnings.iter().cloned().chain(fitted).collect()
+    }
+
     /// No score yet, over `frames` frames.
     fn of(frames: usize) -> Self {
         Self {

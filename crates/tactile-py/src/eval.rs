@@ -94,27 +94,14 @@ pub(crate) fn eval_tactip<'py>(
     crate::args::keywords!(encoder, data, estimators, runtime, split);
     let rt = self::runtime(&runtime)?;
     let named = estimators.unwrap_or_default();
-    let v = interruptible(py, || {
-        let ds = Dataset::open(&data).py()?;
-        let ds = match &split {
-            Some(split) => ds.only_split(split).py()?,
-            None => ds,
-        };
+    let (warnings, v) = interruptible(py, || {
+        let ds = Dataset::open_split(&data, split.as_deref()).py()?;
         let mut p = Predictor::load(&encoder, &named, rt).py()?;
         let sc = p.evaluate(&ds).py()?;
-        let warnings: Vec<String> = sc
-            .frame_warnings
-            .iter()
-            .chain(&sc.warning)
-            .cloned()
-            .collect();
-        Ok((
-            warnings,
-            serde_json::to_value(&sc)
-                .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?,
-        ))
+        let v = serde_json::to_value(&sc)
+            .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+        Ok((sc.warnings(), v))
     })?;
-    let (warnings, v) = v;
     for w in &warnings {
         crate::errors::user_warning(py, w)?;
     }

@@ -36,21 +36,14 @@ pub(crate) struct EvaluateArgs {
 
 /// Score every estimator on a dataset; the last line is the scores as JSON.
 pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
-    let ds = Dataset::open(&a.data)?;
-    let ds = match &a.split {
-        Some(split) => ds.only_split(split)?,
-        None => ds,
-    };
+    let ds = Dataset::open_split(&a.data, a.split.as_deref())?;
     if let Some(out) = &a.out {
         tactile_core::dataset::check_output_file(out, &[&ds])?;
     }
     let mut p = Predictor::load(&a.encoder, &a.heads, a.device.runtime())?;
     let s = p.evaluate(&ds)?;
-    for w in &s.frame_warnings {
+    for w in s.warnings() {
         tactile_core::note!("{w}");
-    }
-    if let Some(w) = &s.warning {
-        tactile_core::note!("warning: {w}");
     }
     let kind = match p {
         Predictor::Encoder(_) => "Encoder",

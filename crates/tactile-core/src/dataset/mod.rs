@@ -836,6 +836,16 @@ impl Dataset {
         })
     }
 
+    /// [`Self::open`], then, with `split`, the rows of that split alone
+    /// ([`Self::only_split`]): what a scoring of one split reads.
+    pub fn open_split(root: impl AsRef<Path>, split: Option<&str>) -> Result<Self> {
+        let ds = Self::open(root)?;
+        match split {
+            Some(split) => ds.only_split(split),
+            None => Ok(ds),
+        }
+    }
+
     /// The dataset of the rows of `split` alone, in order (a scoring of
     /// one split: `tactile evaluate --split val`); its lines still name
     /// `labels.csv`'s. A split with no row, or a dataset without a `split`
