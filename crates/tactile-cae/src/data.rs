@@ -13,6 +13,10 @@ use crate::Result;
 pub struct PinSet {
     /// Each frame's `file` label.
     pub files: Vec<String>,
+    /// Each frame's row in its dataset (empty for pin images of no
+    /// dataset): a pass that skips an undecodable frame says which rows
+    /// its results are of, for scoring them against their labels.
+    pub rows: Vec<usize>,
     /// Each frame's pin image.
     pub images: Vec<PinImage>,
     /// The `file` labels of frames one grey level throughout their crop
@@ -141,12 +145,13 @@ impl PinSet {
             .iter()
             .map(|_| Self {
                 files: Vec::with_capacity(rows.len()),
+                rows: Vec::with_capacity(rows.len()),
                 images: Vec::with_capacity(rows.len()),
                 flat: Vec::new(),
             })
             .collect();
         // In row order, so the first frame refused is the first named.
-        for (file, read) in files.into_iter().zip(per_frame) {
+        for ((file, &row), read) in files.into_iter().zip(rows).zip(per_frame) {
             let read = match undecodable.as_deref_mut() {
                 Some(skipped) => skipped.decoded(read?)?,
                 None => Some(read??),
@@ -157,6 +162,7 @@ impl PinSet {
             for (set, pin) in sets.iter_mut().zip(pins) {
                 set.images.push(pin);
                 set.files.push(file.clone());
+                set.rows.push(row);
                 if flat {
                     set.flat.push(file.clone());
                 }
@@ -282,6 +288,7 @@ impl PinSet {
     pub fn from_images(images: Vec<PinImage>) -> Self {
         Self {
             files: Vec::new(),
+            rows: Vec::new(),
             images,
             flat: Vec::new(),
         }

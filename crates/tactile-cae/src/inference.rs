@@ -102,13 +102,6 @@ impl TactipEncoder {
         self.encode_rows(ds, profile.as_ref(), Undecodable::Skip)
     }
 
-    /// [`Self::encode_dataset_flagging`] for scoring: every row's features at
-    /// its place, a frame that cannot be decoded stopping it.
-    pub fn encode_every_row_flagging(&mut self, ds: &Dataset) -> Result<EncodedDataset> {
-        let profile = self.artifact.input_profile.clone();
-        self.encode_rows(ds, profile.as_ref(), Undecodable::Stop)
-    }
-
     /// Every row of `ds` encoded, its frames outside `profile` listed, its
     /// undecodable frames stopping the pass or skipped as `undecodable` says.
     fn encode_rows(
@@ -120,6 +113,7 @@ impl TactipEncoder {
         let cfg = self.artifact.preprocess.clone();
         let mut e = EncodedDataset {
             files: Vec::with_capacity(ds.len()),
+            rows: Vec::with_capacity(ds.len()),
             features: Vec::with_capacity(ds.len()),
             flat: Vec::new(),
             foreign: Vec::new(),
@@ -133,6 +127,7 @@ impl TactipEncoder {
                 e.foreign.extend(set.foreign(p));
             }
             e.files.extend(set.files);
+            e.rows.extend(set.rows);
             e.flat.extend(set.flat);
             Ok::<(), Error>(())
         };
@@ -147,6 +142,9 @@ impl TactipEncoder {
 pub struct EncodedDataset {
     /// Each row's `file` label (an undecodable frame's row left out).
     pub files: Vec<String>,
+    /// Each of those rows' place in the dataset ([`PinSet::rows`]), for
+    /// scoring the features against their labels.
+    pub rows: Vec<usize>,
     /// Each row's features.
     pub features: Vec<Vec<f32>>,
     /// The `file` labels of frames one grey level throughout their crop.

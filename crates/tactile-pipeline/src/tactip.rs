@@ -62,6 +62,18 @@ pub fn encoder_trained_on(dir: &Path, ds: &Dataset, rows: &[usize]) -> Option<St
     ))
 }
 
+/// The rows of `ds` a pass gave results for (`rows`, in order): `ds`
+/// itself when it gave every row, else the dataset of those rows alone
+/// ([`Dataset::only_rows`]), so results are scored against their own
+/// labels when an undecodable frame was left out.
+fn decoded_rows<'a>(ds: &'a Dataset, rows: &[usize]) -> Cow<'a, Dataset> {
+    if rows.len() == ds.len() {
+        Cow::Borrowed(ds)
+    } else {
+        Cow::Owned(ds.only_rows(rows))
+    }
+}
+
 /// How to train an encoder that leaves out the test rows of `ds` that a
 /// split with `test_fraction` and `seed` holds out.
 pub fn holdout_cure(ds: &Dataset, test_fraction: f64, seed: u64) -> String {
@@ -218,21 +230,26 @@ impl Predictor {
     /// absolute error overall and per shape (angles the short way round),
     /// with a warning when its notes say it trained on every frame of `ds`,
     /// and the warnings `predict` gives of the frames (their size against
-    /// the model's crop, blank frames, frames unlike its training frames).
+    /// the model's crop, blank frames, frames unlike its training frames,
+    /// frames that cannot be decoded past their header, which are left
+    /// out of the scores as `predict` leaves them out of its rows).
     pub fn evaluate(&mut self, ds: &Dataset) -> Result<Scores> {
         let mismatch = dataset_frame_warning(ds, self.preprocessings());
         let mut s = match self {
             Self::Encoder(p) => p.evaluate(ds)?,
             Self::PoseNetwork(p) => {
-                let r = p.predict_every_row(ds)?;
+                let r = p.predict_dataset(ds)?;
+                let scored = decoded_rows(ds, &r.rows);
                 let given = tactile_estimate::eval::Given {
                     pred: &r.values,
                     std: r.std.as_deref(),
                 };
-                let mut s = tactile_estimate::eval::score_targets(&p.artifact.targets, given, ds)?;
-                s.warning = p.scored_on_fitted(ds);
+                let targets = &p.artifact.targets;
+                let mut s = tactile_estimate::eval::score_targets(targets, given, &scored)?;
+                s.warning = p.scored_on_fitted(&scored);
                 let profile = p.artifact.input_profile.as_ref();
                 s.frame_warnings = dataset_frame_warnings(&r.flat, &r.foreign, profile);
+                s.frame_warnings.extend(r.undecodable);
                 s
             }
         };
@@ -961,13 +978,18 @@ impl TactipPerception {
     /// the encoder's notes say it trained on every frame of `ds`
     /// ([`tactile_burn::artifact::scored_on_fitted`]) and those of its
     /// blank frames and frames unlike its training frames.
+    /// A frame that cannot be decoded past its header is left out of the
+    /// scores with the warning `predict` gives ([`decoded_rows`]).
     pub fn evaluate(&mut self, ds: &Dataset) -> Result<Scores> {
-        let encoded = self.encoder.encode_every_row_flagging(ds)?;
-        let mut s = score(&self.estimators, &encoded.features, ds)?;
+        let encoded = self.encoder.encode_dataset_flagging(ds)?;
+        let scored = decoded_rows(ds, &encoded.rows);
+        let mut s = score(&self.estimators, &encoded.features, &scored)?;
         let profile = self.encoder.artifact.input_profile.as_ref();
         s.frame_warnings = dataset_frame_warnings(&encoded.flat, &encoded.foreign, profile);
-        s.warning =
-            tactile_burn::artifact::scored_on_fitted::<tactile_cae::CaeArtifact>(&self.dir, ds);
+        s.frame_warnings.extend(encoded.undecodable);
+        s.warning = tactile_burn::artifact::scored_on_fitted::<tactile_cae::CaeArtifact>(
+            &self.dir, &scored,
+        );
         Ok(s)
     }
     /// Score every estimator on pin images made otherwise (perturbed

@@ -256,6 +256,7 @@ mod tests {
         let set = PoseSet {
             pins: PinSet {
                 files: vec!["a".into(); 40],
+                rows: Vec::new(),
                 flat: Vec::new(),
                 images: vec![
                     tactile_preprocess::PinImage {

@@ -56,6 +56,10 @@ pub use tactile_estimate::uncertainty::ValuesWithStd;
 pub struct PoseEstimates {
     /// Each frame's `file` label.
     pub files: Vec<String>,
+    /// Each of those frames' row in the dataset
+    /// ([`tactile_cae::data::PinSet::rows`]), for scoring its estimates
+    /// against its labels.
+    pub rows: Vec<usize>,
     /// Target names, in column order.
     pub names: Vec<String>,
     /// Per frame, one value per target in the labels' units.
@@ -280,22 +284,12 @@ impl PoseEstimator {
     /// Every frame of a TacTip dataset, a chunk at a time; a frame that
     /// cannot be decoded past its header is left out and named in
     /// [`PoseEstimates::undecodable`], so the others keep their estimates
-    /// ([`tactile_cae::data::PinSet::for_each_chunk_with`]).
+    /// ([`tactile_cae::data::PinSet::for_each_chunk_with`]); the others'
+    /// rows are [`PoseEstimates::rows`].
     pub fn predict_dataset(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
-        self.predict_rows(ds, Undecodable::Skip)
-    }
-
-    /// Every row of a TacTip dataset, row `i`'s estimates at `i`, for
-    /// scoring against its labels: a frame that cannot be decoded stops it.
-    pub fn predict_every_row(&mut self, ds: &Dataset) -> Result<PoseEstimates> {
-        self.predict_rows(ds, Undecodable::Stop)
-    }
-
-    /// [`Self::predict_dataset`], its undecodable frames stopping it or
-    /// skipped as `undecodable` says.
-    fn predict_rows(&mut self, ds: &Dataset, undecodable: Undecodable) -> Result<PoseEstimates> {
         let t0 = std::time::Instant::now();
         let (mut files, mut values) = (Vec::with_capacity(ds.len()), Vec::with_capacity(ds.len()));
+        let mut rows = Vec::with_capacity(ds.len());
         let mut std: Option<Vec<Vec<f64>>> = None;
         let (mut flat, mut foreign) = (Vec::new(), Vec::new());
         let scales = self.scales.clone();
@@ -313,6 +307,7 @@ impl PoseEstimator {
                 foreign.extend(first.foreign(p));
             }
             files.extend(first.files);
+            rows.extend(first.rows);
             flat.extend(first.flat);
             Ok::<(), crate::Error>(())
         };
@@ -320,11 +315,12 @@ impl PoseEstimator {
             ds,
             &scales,
             DATASET_CHUNK,
-            undecodable,
+            Undecodable::Skip,
             each,
         )?;
         Ok(PoseEstimates {
             files,
+            rows,
             names: self
                 .artifact
                 .targets

@@ -493,6 +493,7 @@ mod tests {
         let set = PoseSet {
             pins: tactile_cae::data::PinSet {
                 files: vec!["f".into(); 3],
+                rows: Vec::new(),
                 flat: Vec::new(),
                 images: vec![
                     tactile_preprocess::PinImage {

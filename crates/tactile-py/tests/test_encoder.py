@@ -282,6 +282,14 @@ def test_surface_pose_gives_tactile_predicts_estimates_and_deviations(tactile_bi
             "--out", str(out), "--device", "flex")
     with open(out) as f:
         assert [r["file"] for r in csv.DictReader(f)] == kept["file"]
+    # Scored, it is left out too: the other 19 frames' errors, with the
+    # same warning.
+    with pytest.warns(UserWarning, match=told):
+        scored = tactile.eval.tactip(root / "models/pose-surface", data)
+    assert scored["frames"] == 19
+    for sc in scored["targets"]:
+        t = sc["target"]
+        assert sc["mae"] == pytest.approx(np.abs(np.delete(got[t] - truth[t], 7)).mean(), abs=1e-4), t
 
 
 def test_the_surface_cae_route_runs_alike_on_burn_and_onnxruntime(root, shared_real):

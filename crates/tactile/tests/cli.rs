@@ -2448,6 +2448,78 @@ fn evaluate_scores_a_pose_network_on_one_split_of_a_dataset() {
 }
 
 #[test]
+fn evaluate_leaves_a_frame_cut_short_out_of_its_scores() {
+    // 8 rows of the surface set with the 3rd frame cut to half its bytes
+    // behind a whole header (a copy stopped half-way): either kind of model
+    // scores the other 7, each target's error the mean of `predict`'s
+    // estimates of those 7 against their labels, with the warning naming
+    // the frame. Every frame cut: refused, naming the first.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = real_subset("tactip331-surface", tmp.path(), |_| true, 997, 8);
+    let labels = csv_rows(&data.join("labels.csv"));
+    let file = labels[0].iter().position(|c| c == "file").unwrap();
+    let frame = |i: usize| data.join(&labels[i + 1][file]);
+    for model in ["models/pose-surface", "models/cae-surface"] {
+        let model = root.join(model);
+        let est = tmp.path().join("estimates.csv");
+        predict(&model, &data, &est, &[]);
+        let estimates = csv_rows(&est);
+        let whole = std::fs::read(frame(2)).unwrap();
+        std::fs::write(frame(2), &whole[..whole.len() / 2]).unwrap();
+        let (ok, msg) = tactile(&[
+            "evaluate",
+            "--model",
+            model.to_str().unwrap(),
+            "--data",
+            data.to_str().unwrap(),
+        ]);
+        std::fs::write(frame(2), &whole).unwrap();
+        assert!(ok, "{msg}");
+        assert!(
+            msg.contains("1 of the 8 frames could not be decoded past their header"),
+            "{msg}"
+        );
+        assert!(msg.contains(&labels[3][file]), "{msg}");
+        let json = last_json(&msg);
+        assert_eq!(json["frames"], 7, "{json}");
+        let column =
+            |rows: &[Vec<String>], name: &str| rows[0].iter().position(|c| c == name).unwrap();
+        for t in json["targets"].as_array().unwrap() {
+            let name = t["target"].as_str().unwrap();
+            let (e, l) = (column(&estimates, name), column(&labels, name));
+            let mean = [1, 2, 4, 5, 6, 7, 8]
+                .iter()
+                .map(|&i| {
+                    let truth: f64 = labels[i][l].parse().unwrap();
+                    (estimates[i][e].parse::<f64>().unwrap() - truth).abs()
+                })
+                .sum::<f64>()
+                / 7.0;
+            // `predict` writes 4 decimals.
+            assert!(
+                (t["mae"].as_f64().unwrap() - mean).abs() < 1e-3,
+                "{name}: {t}"
+            );
+        }
+    }
+    for i in 0..8 {
+        let whole = std::fs::read(frame(i)).unwrap();
+        std::fs::write(frame(i), &whole[..whole.len() / 2]).unwrap();
+    }
+    let (ok, msg) = tactile(&[
+        "evaluate",
+        "--model",
+        root.join("models/pose-surface").to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+    ]);
+    assert!(!ok, "{msg}");
+    assert!(msg.contains("8 of the 8"), "{msg}");
+    assert!(msg.contains(&labels[1][file]), "{msg}");
+}
+
+#[test]
 fn evaluate_says_what_predict_says_of_frames_of_another_sensor() {
     // The real edge set's pose network scored on virtual TacTip frames: its
     // errors, with the warning `predict` gives that the frames are unlike

@@ -863,15 +863,26 @@ impl Dataset {
                 ),
             ));
         }
-        Ok(Dataset {
+        Ok(self.only_rows(&rows))
+    }
+
+    /// The dataset of `rows` alone, in their order (the rows a pass could
+    /// read, when it left out frames that cannot be decoded); its lines
+    /// still name `labels.csv`'s. A row past the end is left out.
+    pub fn only_rows(&self, rows: &[usize]) -> Dataset {
+        let rows: Vec<LabelRow> = rows
+            .iter()
+            .filter_map(|&i| self.rows.get(i).cloned())
+            .collect();
+        Dataset {
             root: self.root.clone(),
             manifest: Manifest {
                 count: rows.len(),
                 ..self.manifest.clone()
             },
             columns: self.columns.clone(),
-            rows: rows.iter().map(|&i| self.rows[i].clone()).collect(),
-        })
+            rows,
+        }
     }
 
     /// What a `split` column holds besides `train`, `val` and `test` (its
