@@ -235,11 +235,15 @@ pub fn bench_segmenters(b: &ModelBench) -> Result<Table<SegmenterMetrics>> {
         let art = seg.artifact.clone();
         let table: SegmenterScores = tactile_segment::evaluate(&mut seg, &ds)?;
         let sel = match &sel_ds {
-            Some(d) => tactile_segment::evaluate(&mut seg, d)?
-                .path("all")
-                .map_or("-".into(), |r| format!("{:.4}", r.mean_iou)),
+            Some(d) => {
+                let sel = tactile_segment::evaluate(&mut seg, d)?;
+                note_frame_warnings(&sel.frame_warnings);
+                sel.path("all")
+                    .map_or("-".into(), |r| format!("{:.4}", r.mean_iou))
+            }
             None => "-".into(),
         };
+        note_frame_warnings(&table.frame_warnings);
         let side = art.model.side;
         let ms = model_latencies::<SegmenterArtifact>(m, [1, 3, side, side], b.runs)?;
         let iou = |p: &str| {
@@ -308,6 +312,14 @@ pub fn bench_segmenters(b: &ModelBench) -> Result<Table<SegmenterMetrics>> {
     })
 }
 
+/// Note a scoring's frame warnings (frames that could not be decoded past
+/// their header, left out of its numbers) on standard error.
+fn note_frame_warnings<'a>(warnings: impl IntoIterator<Item = &'a String>) {
+    for w in warnings {
+        tactile_core::note!("{w}");
+    }
+}
+
 /// A depth network's errors, for the JSON and the report.
 #[derive(Debug, Clone, Serialize)]
 pub struct DepthMetrics {
@@ -333,14 +345,20 @@ pub fn bench_depth(b: &ModelBench) -> Result<Table<DepthMetrics>> {
     for m in &b.models {
         let mut est = DepthEstimator::load(m, SCORE_RUNTIME, 0)?;
         let art = est.artifact.clone();
-        let (s, _): (DepthScores, f64) = tactile_depth::evaluate(&mut est, &ds)?;
+        let (s, _, skipped): (DepthScores, f64, _) = tactile_depth::evaluate(&mut est, &ds)?;
+        note_frame_warnings(&skipped);
+        let mut scored = |d: &Dataset| -> Result<DepthScores> {
+            let (s, _, skipped) = tactile_depth::evaluate(&mut est, d)?;
+            note_frame_warnings(&skipped);
+            Ok(s)
+        };
         let sel = match &sel_ds {
-            Some(d) => format!("{:.4}", tactile_depth::evaluate(&mut est, d)?.0.mae_mm),
+            Some(d) => format!("{:.4}", scored(d)?.mae_mm),
             None => "-".into(),
         };
         let ext = match &ext_ds {
             Some(d) => {
-                let e = tactile_depth::evaluate(&mut est, d)?.0;
+                let e = scored(d)?;
                 format!(
                     "{:.4} / {} , {:.4}",
                     e.mae_mm,

@@ -242,7 +242,9 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
     let mut seg = tactile_segment::TendonSegmenter::load(m.join("segmenter"), b.runtime, 0)?;
     let segmenter = tactile_segment::eval::evaluate(&mut seg, &test)?;
     let mut depth = DepthEstimator::load(m.join("depth"), b.runtime, 0)?;
-    let (depth_scores, depth_ms) = tactile_depth::eval::evaluate(&mut depth, &test)?;
+    // A frame that cannot be decoded is named below: the reconstruction
+    // reads every frame and stops at it.
+    let (depth_scores, depth_ms, _) = tactile_depth::eval::evaluate(&mut depth, &test)?;
     // The calibration's reconstruction on the same renders.
     let mut rec = Reconstructor::load(m, b.runtime, 0)?;
     let mut errs = Vec::with_capacity(test.len());

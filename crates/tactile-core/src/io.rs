@@ -428,6 +428,15 @@ pub fn ensure_writable_dir(dir: impl AsRef<Path>) -> Result<()> {
         .map_err(|e| refuse(e.kind().to_string()))
 }
 
+/// Every warning of a scoring the front ends show, each starting
+/// "warning: ": what reading the frames found (`frame_warnings`, already
+/// so worded), then that the model trained on them (`fitted`, the words
+/// alone).
+pub fn scoring_warnings(frame_warnings: &[String], fitted: &Option<String>) -> Vec<String> {
+    let fitted = fitted.iter().map(|w| format!("warning: {w}"));
+    frame_warnings.iter().cloned().chain(fitted).collect()
+}
+
 /// A result record as both front ends print it: `model` and `data`, then
 /// every field of the library's `result` (serialised as it is, never picked
 /// field by field, so a new score reaches the command line and Python at

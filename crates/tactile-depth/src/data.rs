@@ -5,6 +5,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::source::UndecodableFrames;
 use tactile_core::spec::DepthMaps;
 use tactile_core::spec::visuotactile as spec;
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_grey};
@@ -132,7 +133,23 @@ impl DepthSet {
     ) -> Result<Self> {
         let progress = Self::start_loading(ds, rows.len(), prior)?;
         ds.check_frame_headers(rows)?;
-        let set = Self::load_rows(ds, rows, size, prior, &progress)?;
+        let set = Self::load_rows(ds, rows, size, prior, &progress, None)?;
+        progress.finish_and_clear();
+        Ok(set)
+    }
+
+    /// [`Self::from_dataset`], a frame that cannot be decoded past its
+    /// header left out and counted in `skipped` instead of stopping it.
+    pub fn from_dataset_skipping(
+        ds: &Dataset,
+        rows: &[usize],
+        size: [usize; 2],
+        prior: Option<&Path>,
+        skipped: &mut UndecodableFrames,
+    ) -> Result<Self> {
+        let progress = Self::start_loading(ds, rows.len(), prior)?;
+        ds.check_frame_headers(rows)?;
+        let set = Self::load_rows(ds, rows, size, prior, &progress, Some(skipped))?;
         progress.finish_and_clear();
         Ok(set)
     }
@@ -150,30 +167,43 @@ impl DepthSet {
     ) -> Result<(Self, Self)> {
         let progress = Self::start_loading(ds, train.len() + val.len(), prior)?;
         ds.check_frame_headers(&[train, val].concat())?;
-        let train_set = Self::load_rows(ds, train, size, prior, &progress)?;
-        let val_set = Self::load_rows(ds, val, size, prior, &progress)?;
+        let train_set = Self::load_rows(ds, train, size, prior, &progress, None)?;
+        let val_set = Self::load_rows(ds, val, size, prior, &progress, None)?;
         progress.finish_and_clear();
         Ok((train_set, val_set))
     }
 
     /// Every row of `ds` loaded as [`DepthSet::from_dataset`] does, a
     /// chunk of `chunk_rows` rows at a time, each chunk handed to `each` in
-    /// order: a dataset of any length in bounded memory.
+    /// order: a dataset of any length in bounded memory. A frame that
+    /// cannot be decoded past its header (its pixel data cut short) is left
+    /// out of its chunk and counted ([`UndecodableFrames`], the rule of
+    /// every reader of frames): the warning naming the first is returned;
+    /// when no frame can be decoded the pass fails with the refusal.
     pub fn for_each_chunk(
         ds: &Dataset,
         size: [usize; 2],
         prior: Option<&Path>,
         chunk_rows: usize,
         mut each: impl FnMut(DepthSet) -> Result<()>,
-    ) -> Result<()> {
+    ) -> Result<Option<String>> {
         let progress = Self::start_loading(ds, ds.len(), prior)?;
         let rows: Vec<usize> = ds.every_row();
         ds.check_frame_headers(&rows)?;
+        let mut skipped = UndecodableFrames::new(rows.len());
+        let mut given = 0;
         for chunk in rows.chunks(chunk_rows.max(1)) {
-            each(Self::load_rows(ds, chunk, size, prior, &progress)?)?;
+            let set = Self::load_rows(ds, chunk, size, prior, &progress, Some(&mut skipped))?;
+            // A chunk whose every frame was skipped gives no batch to run.
+            if !set.is_empty() {
+                given += set.len();
+                each(set)?;
+            }
         }
         progress.finish_and_clear();
-        Ok(())
+        let warning = skipped.warning();
+        skipped.finish(given)?;
+        Ok(warning)
     }
 
     /// Check what every row needs before any is read (the kind of dataset,
@@ -198,21 +228,33 @@ impl DepthSet {
         ))
     }
 
-    /// `rows` of `ds` at `w x h`, counted on `progress`.
+    /// `rows` of `ds` at `w x h`, counted on `progress`; with `skipped`, a
+    /// frame that cannot be decoded past its header is counted there and
+    /// left out instead of stopping the load.
     fn load_rows(
         ds: &Dataset,
         rows: &[usize],
         [w, h]: [usize; 2],
         prior: Option<&Path>,
         progress: &tactile_core::progress::ProgressBar,
+        mut skipped: Option<&mut UndecodableFrames>,
     ) -> Result<Self> {
-        let samples = rows
+        // Outer: a frame decoded whose sample cannot be made; inner: a
+        // frame that cannot be read, kept apart so it may be skipped.
+        type Read = Result<tactile_core::Result<DepthSample>>;
+        let read: Vec<Read> = rows
             .par_iter()
             .with_min_len(32)
             .map_init(
                 || prior.map(|d| PriorSource::load(d, Runtime::BurnFlex, 1)),
-                |source, &i| -> Result<DepthSample> {
-                    let frame = ds.load_rgb(i)?;
+                |source, &i| -> Read {
+                    let frame = match ds.load_rgb(i) {
+                        Ok(frame) => frame,
+                        Err(e) => {
+                            progress.inc(1);
+                            return Ok(Err(e));
+                        }
+                    };
                     let prior_mm = match source {
                         Some(Ok(p)) => Some(p.prior_mm(&frame, &ds.path_of(i, "file")?, [w, h])?),
                         Some(Err(e)) => {
@@ -242,17 +284,26 @@ impl DepthSet {
                         .iter()
                         .map(|&v| v >= 0.5)
                         .collect();
-                    Ok(DepthSample {
+                    Ok(Ok(DepthSample {
                         rgb,
                         depth_mm,
                         mask,
                         tendon: ds.number_opt(i, "tendon")? == Some(1.0),
                         press_mm: ds.number_opt(i, "press_mm")?,
                         prior_mm,
-                    })
+                    }))
                 },
             )
-            .collect::<Result<Vec<_>>>()?;
+            .collect();
+        // In row order, so the first frame refused is the first named.
+        let mut samples = Vec::with_capacity(read.len());
+        for r in read {
+            let sample = match skipped.as_deref_mut() {
+                Some(skipped) => skipped.decoded(r?)?,
+                None => Some(r??),
+            };
+            samples.extend(sample);
+        }
         Ok(Self {
             width: w,
             height: h,

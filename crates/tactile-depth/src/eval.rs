@@ -126,13 +126,20 @@ pub fn predict_mm(estimator: &mut DepthEstimator, data: &DepthSet) -> Result<Vec
 }
 
 /// The frames at `rows` of `ds` as `estimator` reads them (its input
-/// size, and its calibration's reconstruction for a network with a prior).
-fn frames_for(estimator: &DepthEstimator, ds: &Dataset, rows: &[usize]) -> Result<DepthSet> {
-    DepthSet::from_dataset(
+/// size, and its calibration's reconstruction for a network with a prior),
+/// those that cannot be decoded past their header counted in `skipped`.
+fn frames_for(
+    estimator: &DepthEstimator,
+    ds: &Dataset,
+    rows: &[usize],
+    skipped: &mut tactile_core::source::UndecodableFrames,
+) -> Result<DepthSet> {
+    DepthSet::from_dataset_skipping(
         ds,
         rows,
         estimator.artifact.model.input_size,
         estimator.prior_folder(),
+        skipped,
     )
 }
 
@@ -142,8 +149,13 @@ pub const EVAL_CHUNK: usize = 512;
 
 /// Score `estimator` on every frame of `ds`, read [`EVAL_CHUNK`] rows at a
 /// time; also the inference time per frame (batches of [`EVAL_BATCH`],
-/// loading excluded).
-pub fn evaluate(estimator: &mut DepthEstimator, ds: &Dataset) -> Result<(DepthScores, f64)> {
+/// loading excluded), and the warning naming the frames that could not be
+/// decoded past their header, left out of the scores
+/// ([`DepthSet::for_each_chunk`]).
+pub fn evaluate(
+    estimator: &mut DepthEstimator,
+    ds: &Dataset,
+) -> Result<(DepthScores, f64, Option<String>)> {
     evaluate_in_chunks(estimator, ds, EVAL_CHUNK)
 }
 
@@ -153,7 +165,7 @@ pub fn evaluate_in_chunks(
     estimator: &mut DepthEstimator,
     ds: &Dataset,
     chunk_rows: usize,
-) -> Result<(DepthScores, f64)> {
+) -> Result<(DepthScores, f64, Option<String>)> {
     same_maps(estimator, ds)?;
     let mut scorer = DepthScorer::default();
     let mut seconds = 0.0;
@@ -161,14 +173,16 @@ pub fn evaluate_in_chunks(
         estimator.artifact.model.input_size,
         estimator.prior_folder().map(Path::to_path_buf),
     );
-    DepthSet::for_each_chunk(ds, size, prior.as_deref(), chunk_rows, |data| {
+    let undecodable = DepthSet::for_each_chunk(ds, size, prior.as_deref(), chunk_rows, |data| {
         let t0 = std::time::Instant::now();
         let preds = predict_mm(estimator, &data)?;
         seconds += t0.elapsed().as_secs_f64();
         scorer.add_set(&data, &preds);
         Ok(())
     })?;
-    Ok((scorer.finish(), 1e3 * seconds / ds.len().max(1) as f64))
+    let scores = scorer.finish();
+    let ms = 1e3 * seconds / scores.frames.max(1) as f64;
+    Ok((scores, ms, undecodable))
 }
 
 /// Refuse to score a model on maps of another kind (distances against
@@ -240,6 +254,11 @@ pub struct DepthEvaluation {
     /// these are not held-out scores, for the front ends to show.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub warning: Option<String>,
+    /// What reading the frames found, each starting "warning: ": frames
+    /// that could not be decoded past their header, left out of the scores
+    /// and the heat maps.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub frame_warnings: Vec<String>,
 }
 
 /// The depth network in `model` scored on the labelled dataset in `data`,
@@ -282,7 +301,7 @@ pub fn evaluate_folder(
         .map(tactile_core::io::StagedDir::fresh)
         .transpose()?;
     let mut est = DepthEstimator::load(model, runtime, 0)?;
-    let (scores, ms_per_frame) = evaluate(&mut est, &ds)?;
+    let (scores, ms_per_frame, undecodable) = evaluate(&mut est, &ds)?;
     let mut heat_maps = 0;
     if let Some(staged) = staged {
         heat_maps = save_heat_maps(&mut est, &ds, staged.path(), options.png_frames)?;
@@ -295,14 +314,16 @@ pub fn evaluate_folder(
         ms_per_frame,
         heat_maps,
         warning: tactile_burn::artifact::scored_on_fitted::<crate::DepthArtifact>(model, &ds),
+        frame_warnings: undecodable.into_iter().collect(),
     })
 }
 
 /// Heat maps of how far the skin is pushed in, mm (from the rest dome, or
 /// the indentation itself) (truth |
 /// prediction, one colour scale per frame with its colour bar) of the first
-/// `frames` frames of `ds`, as `depth-000.png`, ... in `dir`; returns how
-/// many were written.
+/// `frames` frames of `ds`, as `depth-000.png`, ... in `dir` (a frame that
+/// cannot be decoded past its header left out, as the scores leave it, and
+/// the next frame drawn instead); returns how many were written.
 pub fn save_heat_maps(
     estimator: &mut DepthEstimator,
     ds: &Dataset,
@@ -310,23 +331,30 @@ pub fn save_heat_maps(
     frames: usize,
 ) -> Result<usize> {
     same_maps(estimator, ds)?;
-    let rows: Vec<usize> = (0..ds.len().min(frames)).collect();
-    let data = frames_for(estimator, ds, &rows)?;
-    let preds = predict_mm(estimator, &data)?;
     tactile_core::io::create_dir_all(dir)?;
     let aspect = ds.manifest.width as f64 / ds.manifest.height.max(1) as f64;
-    let (w, h) = (data.width, data.height);
-    for (i, p) in preds.iter().enumerate() {
-        let maps = data.depth_maps;
-        let truth = crate::data::push_mm(&data.samples[i].depth_mm, maps, (w, h), aspect);
-        let pred = crate::data::push_mm(p, maps, (w, h), aspect);
-        tactile_core::plot::heat_maps_with_bar(
-            dir.join(format!("depth-{i:03}.png")),
-            &[&truth, &pred],
-            (w, h),
-            4,
-            "push from rest, mm",
-        )?;
+    // Its warning is the scores' ([`evaluate`], over every frame).
+    let mut skipped = tactile_core::source::UndecodableFrames::new(ds.len());
+    let (mut written, mut next) = (0, 0);
+    // The rows after the first `frames` stand in for those skipped.
+    while written < frames && next < ds.len() {
+        let rows: Vec<usize> = (next..ds.len().min(next + frames - written)).collect();
+        next += rows.len();
+        let data = frames_for(estimator, ds, &rows, &mut skipped)?;
+        let preds = predict_mm(estimator, &data)?;
+        let (w, h, maps) = (data.width, data.height, data.depth_maps);
+        for (sample, p) in data.samples.iter().zip(&preds) {
+            let truth = crate::data::push_mm(&sample.depth_mm, maps, (w, h), aspect);
+            let pred = crate::data::push_mm(p, maps, (w, h), aspect);
+            tactile_core::plot::heat_maps_with_bar(
+                dir.join(format!("depth-{written:03}.png")),
+                &[&truth, &pred],
+                (w, h),
+                4,
+                "push from rest, mm",
+            )?;
+            written += 1;
+        }
     }
-    Ok(preds.len())
+    Ok(written)
 }

@@ -75,7 +75,8 @@ fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
     let whole =
         DepthSet::from_dataset(&ds, &(0..ds.len()).collect::<Vec<_>>(), [64, 32], None).unwrap();
     let preds = predict_mm(&mut est, &whole).unwrap();
-    let (chunked, _) = evaluate_in_chunks(&mut est, &ds, 5).unwrap();
+    let (chunked, _, undecodable) = evaluate_in_chunks(&mut est, &ds, 5).unwrap();
+    assert_eq!(undecodable, None);
     assert_eq!(chunked, score(&whole, &preds));
     assert_eq!(chunked, e.scores);
     // A folder that already holds files is left alone, before any work.

@@ -4,6 +4,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::source::UndecodableFrames;
 use tactile_preprocess::visuo::{ChannelStats, FloatImage};
 
 use crate::{DetectorConfig, Result};
@@ -49,32 +50,54 @@ impl DetectionSet {
     /// chunk of `chunk_rows` rows at a time, each chunk handed to `each` in
     /// order (its labels checked first, on every row): a dataset of any
     /// length in bounded memory. The onset and release frames are those of
-    /// the whole dataset's sequences.
+    /// the whole dataset's sequences. A frame that cannot be decoded past
+    /// its header (its pixel data cut short) is left out of its chunk, its
+    /// labels with it, and counted ([`UndecodableFrames`], the rule of every
+    /// reader of frames): the warning naming the first is returned; when no
+    /// frame can be decoded the pass fails with the refusal.
     pub fn for_each_chunk(
         ds: &Dataset,
         detector: &DetectorConfig,
         chunk_rows: usize,
         mut each: impl FnMut(DetectionSet) -> Result<()>,
-    ) -> Result<()> {
+    ) -> Result<Option<String>> {
         let labels = Self::labels_of(ds, detector)?;
         ds.check_frame_headers(&ds.every_row())?;
+        let mut skipped = UndecodableFrames::new(labels.files.len());
+        let mut given = 0;
         let step = chunk_rows.max(1);
         for start in (0..labels.files.len()).step_by(step) {
             let end = (start + step).min(labels.files.len());
-            let files = labels.files[start..end].to_vec();
-            let frames = load_frames(ds, detector, &files, start)?;
-            each(Self {
+            let read = read_frames(ds, detector, &labels.files[start..end], start)?;
+            let mut part = Self {
                 width: labels.width,
                 height: labels.height,
-                frames,
-                files,
-                tendon: labels.tendon[start..end].to_vec(),
-                transition: labels.transition[start..end].to_vec(),
-                ridge_mm: labels.ridge_mm[start..end].to_vec(),
+                frames: Vec::with_capacity(read.len()),
+                files: Vec::with_capacity(read.len()),
+                tendon: Vec::with_capacity(read.len()),
+                transition: Vec::with_capacity(read.len()),
+                ridge_mm: Vec::with_capacity(read.len()),
                 detector: detector.clone(),
-            })?;
+            };
+            for (i, frame) in (start..end).zip(read) {
+                let Some(frame) = skipped.decoded(frame)? else {
+                    continue;
+                };
+                part.frames.push(frame);
+                part.files.push(labels.files[i].clone());
+                part.tendon.push(labels.tendon[i]);
+                part.transition.push(labels.transition[i]);
+                part.ridge_mm.push(labels.ridge_mm[i]);
+            }
+            // A chunk whose every frame was skipped gives no batch to run.
+            if !part.frames.is_empty() {
+                given += part.frames.len();
+                each(part)?;
+            }
         }
-        Ok(())
+        let warning = skipped.warning();
+        skipped.finish(given)?;
+        Ok(warning)
     }
 
     /// Every row's labels, checked, without its frame.
@@ -326,14 +349,31 @@ fn load_frames(
     files: &[String],
     first: usize,
 ) -> Result<Vec<Vec<u16>>> {
+    read_frames(ds, detector, files, first)?
+        .into_iter()
+        .map(|frame| Ok(frame?))
+        .collect()
+}
+
+/// [`load_frames`], each frame that cannot be read kept apart as its error
+/// (the outer error: a frame read that cannot be resized), so a pass may
+/// skip it.
+fn read_frames(
+    ds: &Dataset,
+    detector: &DetectorConfig,
+    files: &[String],
+    first: usize,
+) -> Result<Vec<tactile_core::Result<Vec<u16>>>> {
     (0..files.len())
         .into_par_iter()
         .map(|k| {
-            detector
-                .frame_levels(&ds.load_rgb(first + k)?)
-                .map_err(|e| {
-                    tactile_core::Error::image(ds.root.join(&files[k]), e.to_string()).into()
-                })
+            let frame = match ds.load_rgb(first + k) {
+                Ok(frame) => frame,
+                Err(e) => return Ok(Err(e)),
+            };
+            detector.frame_levels(&frame).map(Ok).map_err(|e| {
+                tactile_core::Error::image(ds.root.join(&files[k]), e.to_string()).into()
+            })
         })
         .collect()
 }

@@ -53,6 +53,10 @@ pub struct DetectorScores {
     /// these are not held-out scores, for the front ends to show.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub warning: Option<String>,
+    /// What reading the frames found, each starting "warning: ": frames
+    /// that could not be decoded past their header, left out of the scores.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub frame_warnings: Vec<String>,
 }
 
 impl DetectorScores {
@@ -236,6 +240,7 @@ impl FrameAnswers {
             decisions: pred,
             threshold: detector.artifact.threshold,
             warning: None,
+            frame_warnings: Vec::new(),
         }
     }
 }
@@ -263,7 +268,9 @@ pub struct FrameLabels {
 
 /// [`evaluate`] on every row of `ds`, read `chunk_rows` rows at a time (the
 /// scores do not depend on it; [`EVAL_CHUNK`] for a dataset of any length
-/// in bounded memory), with the labels scored against.
+/// in bounded memory), with the labels scored against. A frame that cannot
+/// be decoded past its header is left out with its labels, named in
+/// [`DetectorScores::frame_warnings`] ([`DetectionSet::for_each_chunk`]).
 pub fn evaluate_dataset(
     detector: &mut TendonDetector,
     ds: &Dataset,
@@ -272,14 +279,15 @@ pub fn evaluate_dataset(
     let mut answers = FrameAnswers::default();
     let mut labels = FrameLabels::default();
     let config = detector.artifact.model.clone();
-    DetectionSet::for_each_chunk(ds, &config, chunk_rows, |part| {
+    let undecodable = DetectionSet::for_each_chunk(ds, &config, chunk_rows, |part| {
         answers.add(detector, &part)?;
         labels.files.extend(part.files);
         labels.tendon.extend(part.tendon);
         labels.transition.extend(part.transition);
         Ok(())
     })?;
-    let scores = answers.score(detector, &labels.tendon, &labels.transition);
+    let mut scores = answers.score(detector, &labels.tendon, &labels.transition);
+    scores.frame_warnings.extend(undecodable);
     Ok((scores, labels))
 }
 
@@ -367,6 +375,7 @@ mod tests {
             decisions,
             threshold: 0.5,
             warning: None,
+            frame_warnings: Vec::new(),
         };
         let lines = scores.describe("flex");
         assert_eq!(

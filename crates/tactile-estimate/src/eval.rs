@@ -429,8 +429,7 @@ impl Scores {
     /// Every warning the front ends show, each starting "warning: ": those
     /// of the frames, then that the model trained on them.
     pub fn warnings(&self) -> Vec<String> {
-        let fitted = self.warning.iter().map(|w| format!("warning: {w}"));
-        self.frame_warnings.iter().cloned().chain(fitted).collect()
+        tactile_core::io::scoring_warnings(&self.frame_warnings, &self.warning)
     }
 
     /// No score yet, over `frames` frames.

@@ -28,7 +28,7 @@ pub(crate) fn eval_detector<'py>(
     let sc = interruptible(py, || {
         tactile_detect::eval::evaluate_folder(&model, &data, rt, &o).py()
     })?;
-    warn(py, &sc.warning)?;
+    warn(py, &sc.frame_warnings, &sc.warning)?;
     crate::json::to_py(
         py,
         &tactile_core::io::scored_record(&model, &data, &sc).py()?,
@@ -49,7 +49,7 @@ pub(crate) fn eval_segmenter<'py>(
     let sc = interruptible(py, || {
         tactile_segment::evaluate_folder(&model, &data, rt).py()
     })?;
-    warn(py, &sc.warning)?;
+    warn(py, &sc.frame_warnings, &sc.warning)?;
     crate::json::to_py(
         py,
         &tactile_core::io::scored_record(&model, &data, &sc).py()?,
@@ -73,7 +73,7 @@ pub(crate) fn eval_depth<'py>(
     let v = interruptible(py, || {
         tactile_depth::eval::evaluate_folder(&model, &data, rt, &o).py()
     })?;
-    warn(py, &v.warning)?;
+    warn(py, &v.frame_warnings, &v.warning)?;
     crate::json::to_py(py, &v)
 }
 
@@ -108,11 +108,11 @@ pub(crate) fn eval_tactip<'py>(
     crate::json::to_py(py, &v)
 }
 
-/// Raise an evaluation's warning (scores on frames the model fitted) as a
-/// `UserWarning`.
-fn warn(py: Python<'_>, warning: &Option<String>) -> PyResult<()> {
-    match warning {
-        Some(w) => crate::errors::user_warning(py, w),
-        None => Ok(()),
+/// Raise an evaluation's warnings as `UserWarning`s: what reading the
+/// frames found, then scores on frames the model fitted.
+fn warn(py: Python<'_>, frame_warnings: &[String], fitted: &Option<String>) -> PyResult<()> {
+    for w in tactile_core::io::scoring_warnings(frame_warnings, fitted) {
+        crate::errors::user_warning(py, &w)?;
     }
+    Ok(())
 }

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import os
 
 import numpy as np
@@ -128,6 +129,27 @@ def test_an_empty_mask_cell_on_a_row_without_a_tendon_is_an_empty_mask(tmp_path,
     with pytest.raises(ValueError, match=rf"labels\.csv:{with_one[0] + 1}: column 'mask' is empty"):
         tactile.eval.depth(models / "depth", out)
     assert tactile.Dataset(out).mask(with_one[0] - 1) is None
+
+
+def test_a_frame_cut_short_is_left_out_of_every_paper_b_score(tmp_path, root):
+    """A frame cut short behind its whole header (a copy stopped half-way):
+    `tactile.eval.detector`, `segmenter` and `depth` score the other frames
+    with a `UserWarning` naming it, as `tactile eval` notes it."""
+    out = tactile.synth.visuotactile(count=8, frames_per_sequence=8, width=320, height=180,
+                                     seed=3, out=tmp_path / "vt", progress=False)
+    models = root / "models"
+    labels, rows, without, with_one = _rows_by_tendon(out)
+    frame = rows[with_one[0]][rows[0].index("file")]
+    whole = (out / frame).read_bytes()
+    (out / frame).write_bytes(whole[: len(whole) // 2])
+    told = r"1 of the \d+ frames could not be decoded past their header.*" + re.escape(frame)
+    with pytest.warns(UserWarning, match=told):
+        assert tactile.eval.detector(models / "detector", out)["all"]["frames"] == 7
+    with pytest.warns(UserWarning, match=told):
+        seg = tactile.eval.segmenter(models / "segmenter", out)
+    assert seg["paths"][0]["frames"] == len(with_one) - 1
+    with pytest.warns(UserWarning, match=told):
+        assert tactile.eval.depth(models / "depth", out)["scores"]["frames"] == 7
 
 
 def test_labels_a_shape_has_not_are_not_scored_whatever_was_written(tmp_path, root, tactile_bin):

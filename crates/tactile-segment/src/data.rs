@@ -6,6 +6,7 @@ use crate::Result;
 use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::source::UndecodableFrames;
 use tactile_preprocess::visuo::{ChannelStats, FloatImage, SquareWindow, resize_grey, resize_rgb};
 
 use crate::prepare::cut_frame;
@@ -63,19 +64,53 @@ impl SegmentSet {
         copies: usize,
         seed: u64,
     ) -> Result<Self> {
+        Self::from_rows(ds, rows, window, copies, seed, None)
+    }
+
+    /// [`Self::from_dataset`], a frame that cannot be decoded past its
+    /// header (its pixel data cut short) left out and counted in `skipped`
+    /// instead of stopping it: the frames a scoring reads.
+    pub fn from_dataset_skipping(
+        ds: &Dataset,
+        rows: &[usize],
+        window: SquareWindow,
+        copies: usize,
+        seed: u64,
+        skipped: &mut UndecodableFrames,
+    ) -> Result<Self> {
+        Self::from_rows(ds, rows, window, copies, seed, Some(skipped))
+    }
+
+    /// [`Self::from_dataset`], skipping undecodable frames into `skipped`
+    /// when given.
+    fn from_rows(
+        ds: &Dataset,
+        rows: &[usize],
+        window: SquareWindow,
+        copies: usize,
+        seed: u64,
+        mut skipped: Option<&mut UndecodableFrames>,
+    ) -> Result<Self> {
         ds.expect_kind(DatasetKind::Visuotactile)?;
         let (sw, sh) = window.scaled_size(ds.manifest.width as usize, ds.manifest.height as usize);
-        let windows: Vec<Vec<Window>> = rows
+        // Outer: a frame decoded whose windows cannot be cut; inner: a
+        // frame that cannot be read, kept apart so it may be skipped.
+        type Read = Result<tactile_core::Result<Vec<Window>>>;
+        let read: Vec<Read> = rows
             .par_iter()
-            .map(|&row| -> Result<Vec<Window>> {
-                let frame = resize_rgb(&ds.load_rgb(row)?, sw, sh)
+            .map(|&row| -> Read {
+                let frame = match ds.load_rgb(row) {
+                    Ok(frame) => frame,
+                    Err(e) => return Ok(Err(e)),
+                };
+                let frame = resize_rgb(&frame, sw, sh)
                     .map_err(|e| e.in_file(ds.path_of(row, "file").unwrap_or_default()))?;
                 let m = ds.load_mask(row)?;
                 let mask = resize_grey(&m, sw, sh)
                     .map_err(|e| e.in_file(ds.path_of(row, "mask").unwrap_or_default()))?;
                 let direction_deg = ds.number_opt(row, "direction_deg")?;
                 let path = ds.text_opt(row, "path").map(str::to_string);
-                Ok(rotation_angles(copies, seed, row)
+                Ok(Ok(rotation_angles(copies, seed, row)
                     .into_iter()
                     .map(|deg| {
                         let (pixels, m) = cut_frame(&frame, Some(&mask), window, deg);
@@ -88,13 +123,19 @@ impl SegmentSet {
                             path: path.clone(),
                         }
                     })
-                    .collect())
+                    .collect()))
             })
-            .collect::<Result<_>>()?;
-        Ok(Self {
-            window,
-            windows: windows.into_iter().flatten().collect(),
-        })
+            .collect();
+        // In row order, so the first frame refused is the first named.
+        let mut windows = Vec::with_capacity(read.len() * copies);
+        for r in read {
+            let cut = match skipped.as_deref_mut() {
+                Some(skipped) => skipped.decoded(r?)?,
+                None => Some(r??),
+            };
+            windows.extend(cut.into_iter().flatten());
+        }
+        Ok(Self { window, windows })
     }
 
     /// Windows held.

@@ -84,6 +84,11 @@ pub struct SegmenterScores {
     /// these are not held-out scores, for the front ends to show.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub warning: Option<String>,
+    /// What reading the frames found, each starting "warning: ": tendon
+    /// frames that could not be decoded past their header, left out of the
+    /// scores.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub frame_warnings: Vec<String>,
 }
 
 impl SegmenterScores {
@@ -95,6 +100,12 @@ impl SegmenterScores {
             "|---|---|---|---|---|---|---|".to_string(),
         ];
         for r in &self.paths {
+            // A group without a frame (no curved tendon in the set) has no
+            // score: "-", not an IoU of 0 and NaN degrees.
+            if r.frames == 0 {
+                lines.push(format!("| {} | 0 | - | - | - | - | - |", r.path));
+                continue;
+            }
             let (d, b) = (&r.direction, &r.principal_axis);
             lines.push(format!(
                 "| {} | {} | {:.4} | {:.1} % ({} without) | {:.2} / {:.2} | {:.1} % | {:.2} / {:.2} |",
@@ -173,8 +184,12 @@ pub fn evaluate_in_chunks(
     let mut per: Vec<(String, f64, Option<f64>, Option<f64>)> = Vec::new();
     let mut post = [0.0f64; 2];
     let mut network_seconds = 0.0;
+    // A frame that cannot be decoded past its header is left out, as every
+    // reader of frames leaves it ([`UndecodableFrames`]).
+    let mut skipped = tactile_core::source::UndecodableFrames::new(rows.len());
     for part in rows.chunks(chunk_rows.max(1)) {
-        let set = SegmentSet::from_dataset(ds, part, art.model.window(), 1, 0)?;
+        let window = art.model.window();
+        let set = SegmentSet::from_dataset_skipping(ds, part, window, 1, 0, &mut skipped)?;
         let idx: Vec<usize> = (0..set.len()).collect();
         let t0 = std::time::Instant::now();
         let mut probs = Vec::with_capacity(set.len());
@@ -213,6 +228,8 @@ pub fn evaluate_in_chunks(
             per.push((path, score, e1, e2));
         }
     }
+    let frame_warnings = skipped.warning().into_iter().collect();
+    skipped.finish(per.len())?;
     let windows = per.len().max(1) as f64;
     let mut paths: Vec<String> = per.iter().map(|p| p.0.clone()).collect();
     paths.sort();
@@ -239,5 +256,6 @@ pub fn evaluate_in_chunks(
         ms_per_window: 1e3 * network_seconds / windows,
         ms_postprocess: post.map(|t| 1e3 * t / windows),
         warning: None,
+        frame_warnings,
     })
 }

@@ -57,7 +57,7 @@ pub(crate) fn main(cmd: EvalCmd) -> Result<()> {
 fn detector(a: DetectorArgs) -> Result<()> {
     let (m, o) = (&a.m, &a.options);
     let sc = tactile_detect::eval::evaluate_folder(&m.model, &m.data, m.device.runtime(), o)?;
-    warn(&sc.warning);
+    warn(&sc.frame_warnings, &sc.warning);
     if let Some(path) = &o.frames {
         tactile_core::note!("per-frame decisions in {}", path.display());
     }
@@ -74,7 +74,7 @@ fn detector(a: DetectorArgs) -> Result<()> {
 
 fn segmenter(m: ModelArgs) -> Result<()> {
     let sc = tactile_segment::evaluate_folder(&m.model, &m.data, m.device.runtime())?;
-    warn(&sc.warning);
+    warn(&sc.frame_warnings, &sc.warning);
     sc.describe(m.device).iter().for_each(|l| say!("{l}"));
     say!(
         "{}",
@@ -86,7 +86,7 @@ fn segmenter(m: ModelArgs) -> Result<()> {
 fn depth(a: DepthArgs) -> Result<()> {
     let (m, o) = (&a.m, &a.options);
     let e = tactile_depth::eval::evaluate_folder(&m.model, &m.data, m.device.runtime(), o)?;
-    warn(&e.warning);
+    warn(&e.frame_warnings, &e.warning);
     e.scores
         .describe(e.ms_per_frame, m.device)
         .iter()
@@ -102,10 +102,10 @@ fn depth(a: DepthArgs) -> Result<()> {
     Ok(())
 }
 
-/// Note an evaluation's warning (scores on frames the model fitted) on
-/// standard error.
-fn warn(warning: &Option<String>) {
-    if let Some(w) = warning {
-        tactile_core::note!("warning: {w}");
+/// Note an evaluation's warnings on standard error: what reading the
+/// frames found, then scores on frames the model fitted.
+fn warn(frame_warnings: &[String], fitted: &Option<String>) {
+    for w in tactile_core::io::scoring_warnings(frame_warnings, fitted) {
+        tactile_core::note!("{w}");
     }
 }
