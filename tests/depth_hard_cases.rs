@@ -81,8 +81,34 @@ fn wrong_dtype_or_shape_names_the_file() {
     write_npy(&p, "<f8", &[2, 4], &f64_bytes(&v));
     let e = load_depth_mm(&p, 2, 1).unwrap_err().to_string();
     assert!(e.contains("double.npy") && e.contains("(1, 1)"), "{e}");
+    // Big-endian (`dtype='>f4'` or `'>f8'`): byte-swapped, the same map.
+    let be32: Vec<u8> = [0.015f32; 8].iter().flat_map(|x| x.to_be_bytes()).collect();
+    let be64: Vec<u8> = [0.015f64; 8].iter().flat_map(|x| x.to_be_bytes()).collect();
+    for (descr, bytes) in [(">f4", &be32), (">f8", &be64)] {
+        let p = dir.path().join("big.npy");
+        write_npy(&p, descr, &[2, 4], bytes);
+        assert_eq!(
+            load_depth_mm(&p, 2, 1).unwrap(),
+            load_depth_mm(&want, 2, 1).unwrap(),
+            "{descr}"
+        );
+        // Cut short, or asking for more than 8K: refused before reading.
+        write_npy(&p, descr, &[2, 4], &bytes[..20]);
+        let e = load_depth_mm(&p, 2, 1).unwrap_err().to_string();
+        assert!(
+            e.contains("big.npy") && e.contains("20 bytes follow it"),
+            "{e}"
+        );
+        write_npy(&p, descr, &[100_000, 100_000], &bytes[..20]);
+        let e = load_depth_mm(&p, 2, 1).unwrap_err().to_string();
+        assert!(e.contains("big.npy") && e.contains("at most 8K"), "{e}");
+    }
     // Other dtypes are refused naming the file and what is read.
-    for (descr, bytes) in [("<f2", vec![0u8; 16]), ("<i4", vec![0u8; 32])] {
+    for (descr, bytes) in [
+        ("<f2", vec![0u8; 16]),
+        ("<i4", vec![0u8; 32]),
+        (">f2", vec![0u8; 16]),
+    ] {
         let p = dir.path().join("other.npy");
         write_npy(&p, descr, &[2, 4], &bytes);
         let e = load_depth_mm(&p, 2, 1).unwrap_err().to_string();

@@ -50,6 +50,48 @@ fn header_end(bytes: &[u8]) -> Option<usize> {
     start.checked_add(len).filter(|&end| end <= bytes.len())
 }
 
+/// A big-endian 2-D float32 or float64 map of `bytes` (a whole `.npy`
+/// file whose header [`header_end`] found inside it), byte-swapped, as
+/// `(width, height, values)`: `None` when it is no such map. Its header's
+/// shape is checked against the 8K limit and the bytes there are before
+/// anything is allocated for it.
+fn read_byte_swapped(
+    bytes: &[u8],
+) -> std::result::Result<Option<(usize, usize, Vec<f32>)>, String> {
+    use ndarray_npy::ReadNpyExt;
+    use ndarray_npy::npy::header::Header;
+    let Some(data) = header_end(bytes).map(|end| bytes.len() - end) else {
+        return Ok(None);
+    };
+    let Ok(header) = Header::from_reader(&mut &bytes[..]) else {
+        return Ok(None);
+    };
+    // The dtype as Python writes it, `'>f4'`.
+    let descr = header.type_descriptor.to_string();
+    let value_bytes = match descr.trim_matches(['\'', '"']) {
+        ">f4" => 4,
+        ">f8" => 8,
+        _ => return Ok(None),
+    };
+    let [h, w] = header.shape[..] else {
+        return Ok(None);
+    };
+    check_depth_size(w, h)?;
+    if w * h * value_bytes != data {
+        return Err(format!(
+            "its header says {w}x{h} values of {value_bytes} bytes, and {data} bytes follow it"
+        ));
+    }
+    let read = |e: ndarray_npy::ReadNpyError| format!("cannot read its {descr} values: {e}");
+    Ok(Some(if value_bytes == 4 {
+        let a = Array2::<f32>::read_npy(bytes).map_err(read)?;
+        (w, h, a.iter().copied().collect())
+    } else {
+        let a = Array2::<f64>::read_npy(bytes).map_err(read)?;
+        (w, h, a.iter().map(|&x| x as f32).collect())
+    }))
+}
+
 /// A depth map's size: non-empty and at most 8K.
 fn check_depth_size(w: usize, h: usize) -> std::result::Result<(), String> {
     match w == 0 || h == 0 || w.saturating_mul(h) > MAX_DEPTH_PIXELS {
@@ -66,7 +108,8 @@ pub const PLAUSIBLE_INDENTATION_M: std::ops::RangeInclusive<f32> = -0.005..=0.02
 
 /// Read a depth map: `(width, height, metres)`; names the file on any
 /// problem: not a 2-D float32 array (a float64 one, as `numpy.save` writes
-/// a map computed in double precision, is read to float32), larger than
+/// a map computed in double precision, is read to float32; either, stored
+/// big-endian, is byte-swapped), larger than
 /// 8K, a header that claims more than the file holds, a value that is not
 /// a finite distance between 0 and 1 m (the pixel is named). Every size is checked before anything
 /// is allocated for it.
@@ -125,11 +168,17 @@ pub fn read_depth_npy_of(
                 // value checks below refuse.
                 (w, h, a.iter().map(|&x| x as f32).collect())
             }
-            Err(_) => {
-                return Err(bad(format!(
-                    "not a 2-D float32 (or float64) .npy depth map: {e32}"
-                )));
-            }
+            // Views take the machine's byte order alone: a big-endian map
+            // (`dtype='>f4'`) is read, byte-swapped, once its header is
+            // found to fit the bytes there are.
+            Err(_) => match read_byte_swapped(bytes).map_err(bad)? {
+                Some(read) => read,
+                None => {
+                    return Err(bad(format!(
+                        "not a 2-D float32 (or float64) .npy depth map: {e32}"
+                    )));
+                }
+            },
         },
     };
     if maps == crate::spec::DepthMaps::Indentation {
