@@ -1,5 +1,9 @@
 """Evaluation, as ``tactile eval ...`` and ``tactile evaluate``: each
-returns the dict those commands print as their last line."""
+returns the dict those commands print as their last line. A frame cut
+short behind its header is left out of the scores with a ``UserWarning``
+naming it (the dict's ``frame_warnings``), as ``tactile.predict`` leaves
+it out of its rows; a model that trained on the frames scored is warned of
+too (its ``warning``)."""
 
 from __future__ import annotations
 
