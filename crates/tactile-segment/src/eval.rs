@@ -51,18 +51,32 @@ pub struct DirectionScores {
 }
 
 impl DirectionScores {
-    fn new(frames: usize, errors: &[f64]) -> Self {
+    /// "median / p90" in degrees, or "-" when no frame had both a
+    /// direction and a direction label (a set whose rows leave
+    /// `direction_deg` empty): no error to summarise, not NaN degrees.
+    fn median_p90(&self) -> String {
+        match self.frames {
+            0 => "-".to_string(),
+            _ => format!("{:.2} / {:.2}", self.median_deg, self.p90_deg),
+        }
+    }
+
+    /// Over a group of `frames` frames, those with a direction (`found`),
+    /// each with its error when the frame has a direction label: coverage
+    /// counts every direction, labelled or not.
+    fn new(frames: usize, found: &[Option<f64>]) -> Self {
+        let errors: Vec<f64> = found.iter().flatten().copied().collect();
         let stat = |f: &dyn Fn(&[f64]) -> f64| {
             if errors.is_empty() {
                 f64::NAN
             } else {
-                f(errors)
+                f(&errors)
             }
         };
         Self {
             frames: errors.len(),
-            no_direction: frames - errors.len(),
-            coverage: errors.len() as f64 / frames.max(1) as f64,
+            no_direction: frames - found.len(),
+            coverage: found.len() as f64 / frames.max(1) as f64,
             median_deg: stat(&median),
             p90_deg: stat(&|e| percentile(e, 90.0)),
         }
@@ -108,17 +122,15 @@ impl SegmenterScores {
             }
             let (d, b) = (&r.direction, &r.principal_axis);
             lines.push(format!(
-                "| {} | {} | {:.4} | {:.1} % ({} without) | {:.2} / {:.2} | {:.1} % | {:.2} / {:.2} |",
+                "| {} | {} | {:.4} | {:.1} % ({} without) | {} | {:.1} % | {} |",
                 r.path,
                 r.frames,
                 r.mean_iou,
                 100.0 * d.coverage,
                 d.no_direction,
-                d.median_deg,
-                d.p90_deg,
+                d.median_p90(),
                 100.0 * b.coverage,
-                b.median_deg,
-                b.p90_deg,
+                b.median_p90(),
             ));
         }
         lines.push(format!(
@@ -180,8 +192,10 @@ pub fn evaluate_in_chunks(
         direction: DirectionMethod::PrincipalAxis,
         ..art.postprocess
     };
-    // (path, IoU, error by the artifact's method, error by the baseline)
-    let mut per: Vec<(String, f64, Option<f64>, Option<f64>)> = Vec::new();
+    // (path, IoU, direction by the artifact's method, by the baseline:
+    // each `None` when not found, else its error when labelled)
+    type Found = Option<Option<f64>>;
+    let mut per: Vec<(String, f64, Found, Found)> = Vec::new();
     let mut post = [0.0f64; 2];
     let mut network_seconds = 0.0;
     // A frame that cannot be decoded past its header is left out, as every
@@ -207,16 +221,17 @@ pub fn evaluate_in_chunks(
             let score = iou(&mask.pixels, &w.mask);
             let truth = w.direction_deg;
             let image = set.image(i);
-            let error = |cfg: &PostprocessConfig| -> Result<Option<f64>> {
+            // `None`: no direction found; `Some(None)`: a direction, and no
+            // label to score it against; `Some(Some(error))`.
+            let error = |cfg: &PostprocessConfig| -> Result<Option<Option<f64>>> {
                 let evidence = Evidence {
                     probabilities: Some(p),
                     window: Some(&image),
                 };
                 let t = postprocess(&mask, evidence, cfg)?;
-                Ok(match (t.direction, truth) {
-                    (Ok(d), Some(truth)) => Some(direction_error_deg(d.angle_deg, truth)),
-                    _ => None,
-                })
+                Ok(t.direction
+                    .ok()
+                    .map(|d| truth.map(|truth| direction_error_deg(d.angle_deg, truth))))
             };
             let path = w.path.clone().unwrap_or_else(|| "unknown".into());
             let t1 = std::time::Instant::now();
@@ -236,8 +251,8 @@ pub fn evaluate_in_chunks(
     paths.dedup();
     let summarise = |name: &str, keep: &dyn Fn(&str) -> bool| {
         let sel: Vec<_> = per.iter().filter(|p| keep(&p.0)).collect();
-        let errs: Vec<f64> = sel.iter().filter_map(|p| p.2).collect();
-        let base: Vec<f64> = sel.iter().filter_map(|p| p.3).collect();
+        let errs: Vec<Option<f64>> = sel.iter().filter_map(|p| p.2).collect();
+        let base: Vec<Option<f64>> = sel.iter().filter_map(|p| p.3).collect();
         PathScores {
             path: name.to_string(),
             frames: sel.len(),
@@ -258,4 +273,46 @@ pub fn evaluate_in_chunks(
         warning: None,
         frame_warnings,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A group of frames none of which has a direction label is scored for
+    /// its IoU and how many got a direction, its errors shown as "-" (not
+    /// NaN); a group of no frames has no score at all.
+    #[test]
+    fn groups_without_direction_labels_or_frames_print_no_nan() {
+        let group = |path: &str, frames: usize, found: &[Option<f64>]| PathScores {
+            path: path.into(),
+            frames,
+            mean_iou: if frames == 0 { -0.0 } else { 0.9 },
+            direction: DirectionScores::new(frames, found),
+            principal_axis: DirectionScores::new(frames, found),
+        };
+        let scores = SegmenterScores {
+            paths: vec![
+                group("all", 3, &[None, None]),
+                group(CURVED, 0, &[]),
+                group("straight", 3, &[Some(1.0), Some(2.0), Some(3.0)]),
+            ],
+            ms_per_window: 1.0,
+            ms_postprocess: [0.1, 0.1],
+            warning: None,
+            frame_warnings: Vec::new(),
+        };
+        let lines = scores.describe("flex");
+        // Two of three frames got a direction, neither labelled.
+        assert_eq!(
+            lines[2],
+            "| all | 3 | 0.9000 | 66.7 % (1 without) | - | 66.7 % | - |"
+        );
+        assert_eq!(lines[3], format!("| {CURVED} | 0 | - | - | - | - | - |"));
+        assert_eq!(
+            lines[4],
+            "| straight | 3 | 0.9000 | 100.0 % (0 without) | 2.00 / 2.80 | 100.0 % | 2.00 / 2.80 |"
+        );
+        assert!(lines.iter().all(|l| !l.contains("NaN")), "{lines:?}");
+    }
 }
