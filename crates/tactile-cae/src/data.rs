@@ -152,11 +152,9 @@ impl PinSet {
             .collect();
         // In row order, so the first frame refused is the first named.
         for ((file, &row), read) in files.into_iter().zip(rows).zip(per_frame) {
-            let read = match undecodable.as_deref_mut() {
-                Some(skipped) => skipped.decoded(read?)?,
-                None => Some(read??),
-            };
-            let Some((pins, flat)) = read else {
+            let Some((pins, flat)) =
+                UndecodableFrames::decoded_or_stop(undecodable.as_deref_mut(), read?)?
+            else {
                 continue;
             };
             for (set, pin) in sets.iter_mut().zip(pins) {

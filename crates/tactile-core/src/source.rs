@@ -549,6 +549,17 @@ impl UndecodableFrames {
         }
     }
 
+    /// A frame as its decoder gave it to a pass that may skip: with
+    /// `skipped`, [`Self::decoded`] (an undecodable frame counted there and
+    /// `None`); without, every error returned, so the pass stops at it (a
+    /// training set's frames, fitted whole).
+    pub fn decoded_or_stop<T>(skipped: Option<&mut Self>, frame: Result<T>) -> Result<Option<T>> {
+        match skipped {
+            Some(skipped) => skipped.decoded(frame),
+            None => frame.map(Some),
+        }
+    }
+
     /// The warning naming the first skipped frame and counting them;
     /// `None` while none is.
     pub fn warning(&self) -> Option<String> {

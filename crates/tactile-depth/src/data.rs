@@ -131,11 +131,7 @@ impl DepthSet {
         size: [usize; 2],
         prior: Option<&Path>,
     ) -> Result<Self> {
-        let progress = Self::start_loading(ds, rows.len(), prior)?;
-        ds.check_frame_headers(rows)?;
-        let set = Self::load_rows(ds, rows, size, prior, &progress, None)?;
-        progress.finish_and_clear();
-        Ok(set)
+        Self::from_rows(ds, rows, size, prior, None)
     }
 
     /// [`Self::from_dataset`], a frame that cannot be decoded past its
@@ -147,9 +143,21 @@ impl DepthSet {
         prior: Option<&Path>,
         skipped: &mut UndecodableFrames,
     ) -> Result<Self> {
+        Self::from_rows(ds, rows, size, prior, Some(skipped))
+    }
+
+    /// [`Self::from_dataset`], skipping undecodable frames into `skipped`
+    /// when given.
+    fn from_rows(
+        ds: &Dataset,
+        rows: &[usize],
+        size: [usize; 2],
+        prior: Option<&Path>,
+        skipped: Option<&mut UndecodableFrames>,
+    ) -> Result<Self> {
         let progress = Self::start_loading(ds, rows.len(), prior)?;
         ds.check_frame_headers(rows)?;
-        let set = Self::load_rows(ds, rows, size, prior, &progress, Some(skipped))?;
+        let set = Self::load_rows(ds, rows, size, prior, &progress, skipped)?;
         progress.finish_and_clear();
         Ok(set)
     }
@@ -298,11 +306,10 @@ impl DepthSet {
         // In row order, so the first frame refused is the first named.
         let mut samples = Vec::with_capacity(read.len());
         for r in read {
-            let sample = match skipped.as_deref_mut() {
-                Some(skipped) => skipped.decoded(r?)?,
-                None => Some(r??),
-            };
-            samples.extend(sample);
+            samples.extend(UndecodableFrames::decoded_or_stop(
+                skipped.as_deref_mut(),
+                r?,
+            )?);
         }
         Ok(Self {
             width: w,

@@ -212,11 +212,9 @@ impl Predictor {
                     warnings: dataset_frame_warnings(
                         &r.flat,
                         &r.foreign,
+                        r.undecodable,
                         p.artifact.input_profile.as_ref(),
-                    )
-                    .into_iter()
-                    .chain(r.undecodable)
-                    .collect(),
+                    ),
                 }
             }
         };
@@ -248,8 +246,8 @@ impl Predictor {
                 let mut s = tactile_estimate::eval::score_targets(targets, given, &scored)?;
                 s.warning = p.scored_on_fitted(&scored);
                 let profile = p.artifact.input_profile.as_ref();
-                s.frame_warnings = dataset_frame_warnings(&r.flat, &r.foreign, profile);
-                s.frame_warnings.extend(r.undecodable);
+                s.frame_warnings =
+                    dataset_frame_warnings(&r.flat, &r.foreign, r.undecodable, profile);
                 s
             }
         };
@@ -673,17 +671,20 @@ impl GivenFrames {
     }
 }
 
-/// The warnings of a dataset's frames: its blank frames (`flat`) and its
-/// frames outside the model's pin `profile` (`foreign`), in one warning
-/// each.
+/// The warnings of a dataset pass's frames: its blank frames (`flat`),
+/// its frames outside the model's pin `profile` (`foreign`), in one
+/// warning each, then the pass's own warning of the frames it could not
+/// decode past their header and left out (`undecodable`).
 pub fn dataset_frame_warnings(
     flat: &[String],
     foreign: &[ForeignFrame],
+    undecodable: Option<String>,
     profile: Option<&InputProfile>,
 ) -> Vec<String> {
     flat_frames_warning(flat, false)
         .into_iter()
         .chain(profile.and_then(|p| foreign_frames_warning(foreign, p, Wording::Named)))
+        .chain(undecodable)
         .collect()
 }
 
@@ -947,19 +948,16 @@ impl TactipPerception {
     /// Perceive every frame of a dataset, timing encoding and estimation.
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
         let t0 = std::time::Instant::now();
-        let encoded = self.encoder.encode_dataset_flagging(ds)?;
-        let mut warnings = dataset_frame_warnings(
-            &encoded.flat,
-            &encoded.foreign,
-            self.encoder.artifact.input_profile.as_ref(),
-        );
         let tactile_cae::inference::EncodedDataset {
             files,
             features: feats,
+            flat,
+            foreign,
             undecodable,
             ..
-        } = encoded;
-        warnings.extend(undecodable);
+        } = self.encoder.encode_dataset_flagging(ds)?;
+        let profile = self.encoder.artifact.input_profile.as_ref();
+        let warnings = dataset_frame_warnings(&flat, &foreign, undecodable, profile);
         let ms_encode = 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64;
         let t1 = std::time::Instant::now();
         let estimates = self.estimators.estimate(&feats)?;
@@ -985,8 +983,12 @@ impl TactipPerception {
         let scored = decoded_rows(ds, &encoded.rows);
         let mut s = score(&self.estimators, &encoded.features, &scored)?;
         let profile = self.encoder.artifact.input_profile.as_ref();
-        s.frame_warnings = dataset_frame_warnings(&encoded.flat, &encoded.foreign, profile);
-        s.frame_warnings.extend(encoded.undecodable);
+        s.frame_warnings = dataset_frame_warnings(
+            &encoded.flat,
+            &encoded.foreign,
+            encoded.undecodable,
+            profile,
+        );
         s.warning = tactile_burn::artifact::scored_on_fitted::<tactile_cae::CaeArtifact>(
             &self.dir, &scored,
         );

@@ -129,10 +129,7 @@ impl SegmentSet {
         // In row order, so the first frame refused is the first named.
         let mut windows = Vec::with_capacity(read.len() * copies);
         for r in read {
-            let cut = match skipped.as_deref_mut() {
-                Some(skipped) => skipped.decoded(r?)?,
-                None => Some(r??),
-            };
+            let cut = UndecodableFrames::decoded_or_stop(skipped.as_deref_mut(), r?)?;
             windows.extend(cut.into_iter().flatten());
         }
         Ok(Self { window, windows })

@@ -38,17 +38,19 @@ pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     {
         tactile_core::note!("{w}");
     }
-    let encoded = enc.encode_dataset_flagging(&ds)?;
+    let tactile_cae::inference::EncodedDataset {
+        files,
+        features: feats,
+        flat,
+        foreign,
+        undecodable,
+        ..
+    } = enc.encode_dataset_flagging(&ds)?;
     let profile = enc.artifact.input_profile.as_ref();
-    for w in
-        tactile_pipeline::tactip::dataset_frame_warnings(&encoded.flat, &encoded.foreign, profile)
+    for w in tactile_pipeline::tactip::dataset_frame_warnings(&flat, &foreign, undecodable, profile)
     {
         tactile_core::note!("{w}");
     }
-    if let Some(w) = &encoded.undecodable {
-        tactile_core::note!("{w}");
-    }
-    let (files, feats) = (encoded.files, encoded.features);
     write_features_csv(&a.out, &files, &feats)?;
     say!(
         "{} feature vectors of {} values written to {}",
