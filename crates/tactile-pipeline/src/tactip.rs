@@ -671,6 +671,33 @@ impl GivenFrames {
     }
 }
 
+/// A dataset's features ([`encode_dataset`]).
+pub struct DatasetFeatures {
+    /// Each encoded frame's `file` label.
+    pub files: Vec<String>,
+    /// Each encoded frame's row in the dataset.
+    pub rows: Vec<usize>,
+    /// Each encoded frame's features.
+    pub features: Vec<Vec<f32>>,
+    /// The warnings of its frames ([`dataset_frame_warnings`]).
+    pub warnings: Vec<String>,
+}
+
+/// Every frame of `ds` encoded by `encoder`
+/// ([`TactipEncoder::encode_dataset_flagging`]: a frame that cannot be
+/// decoded past its header left out), with the warnings of its frames: what
+/// `tactile encode` writes, and `predict` and `evaluate` read.
+pub fn encode_dataset(encoder: &mut TactipEncoder, ds: &Dataset) -> Result<DatasetFeatures> {
+    let e = encoder.encode_dataset_flagging(ds)?;
+    let profile = encoder.artifact.input_profile.as_ref();
+    Ok(DatasetFeatures {
+        warnings: dataset_frame_warnings(&e.flat, &e.foreign, e.undecodable, profile),
+        files: e.files,
+        rows: e.rows,
+        features: e.features,
+    })
+}
+
 /// The warnings of a dataset pass's frames: its blank frames (`flat`),
 /// its frames outside the model's pin `profile` (`foreign`), in one
 /// warning each, then the pass's own warning of the frames it could not
@@ -948,16 +975,12 @@ impl TactipPerception {
     /// Perceive every frame of a dataset, timing encoding and estimation.
     pub fn perceive(&mut self, ds: &Dataset) -> Result<Perception> {
         let t0 = std::time::Instant::now();
-        let tactile_cae::inference::EncodedDataset {
+        let DatasetFeatures {
             files,
             features: feats,
-            flat,
-            foreign,
-            undecodable,
+            warnings,
             ..
-        } = self.encoder.encode_dataset_flagging(ds)?;
-        let profile = self.encoder.artifact.input_profile.as_ref();
-        let warnings = dataset_frame_warnings(&flat, &foreign, undecodable, profile);
+        } = encode_dataset(&mut self.encoder, ds)?;
         let ms_encode = 1e3 * t0.elapsed().as_secs_f64() / ds.len().max(1) as f64;
         let t1 = std::time::Instant::now();
         let estimates = self.estimators.estimate(&feats)?;
@@ -979,16 +1002,10 @@ impl TactipPerception {
     /// A frame that cannot be decoded past its header is left out of the
     /// scores with the warning `predict` gives ([`decoded_rows`]).
     pub fn evaluate(&mut self, ds: &Dataset) -> Result<Scores> {
-        let encoded = self.encoder.encode_dataset_flagging(ds)?;
+        let encoded = encode_dataset(&mut self.encoder, ds)?;
         let scored = decoded_rows(ds, &encoded.rows);
         let mut s = score(&self.estimators, &encoded.features, &scored)?;
-        let profile = self.encoder.artifact.input_profile.as_ref();
-        s.frame_warnings = dataset_frame_warnings(
-            &encoded.flat,
-            &encoded.foreign,
-            encoded.undecodable,
-            profile,
-        );
+        s.frame_warnings = encoded.warnings;
         s.warning = tactile_burn::artifact::scored_on_fitted::<tactile_cae::CaeArtifact>(
             &self.dir, &scored,
         );

@@ -38,19 +38,11 @@ pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     {
         tactile_core::note!("{w}");
     }
-    let tactile_cae::inference::EncodedDataset {
-        files,
-        features: feats,
-        flat,
-        foreign,
-        undecodable,
-        ..
-    } = enc.encode_dataset_flagging(&ds)?;
-    let profile = enc.artifact.input_profile.as_ref();
-    for w in tactile_pipeline::tactip::dataset_frame_warnings(&flat, &foreign, undecodable, profile)
-    {
+    let e = tactile_pipeline::tactip::encode_dataset(&mut enc, &ds)?;
+    for w in &e.warnings {
         tactile_core::note!("{w}");
     }
+    let (files, feats) = (e.files, e.features);
     write_features_csv(&a.out, &files, &feats)?;
     say!(
         "{} feature vectors of {} values written to {}",
