@@ -2375,6 +2375,35 @@ fn csv_rows(path: &Path) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// Each target's error in `evaluate`'s `json` is the mean absolute
+/// difference between `predict`'s `estimates` and the `labels` over the CSV
+/// lines `lines` (1 is the first row after the header), to the 4 decimals
+/// `predict` writes.
+fn assert_errors_are_predicts(
+    json: &serde_json::Value,
+    estimates: &[Vec<String>],
+    labels: &[Vec<String>],
+    lines: &[usize],
+) {
+    let column = |rows: &[Vec<String>], name: &str| rows[0].iter().position(|c| c == name).unwrap();
+    for t in json["targets"].as_array().unwrap() {
+        let name = t["target"].as_str().unwrap();
+        let (e, l) = (column(estimates, name), column(labels, name));
+        let mean = lines
+            .iter()
+            .map(|&i| {
+                let truth: f64 = labels[i][l].parse().unwrap();
+                (estimates[i][e].parse::<f64>().unwrap() - truth).abs()
+            })
+            .sum::<f64>()
+            / lines.len() as f64;
+        assert!(
+            (t["mae"].as_f64().unwrap() - mean).abs() < 1e-3,
+            "{name}: {t}"
+        );
+    }
+}
+
 #[test]
 fn evaluate_scores_a_pose_network_on_one_split_of_a_dataset() {
     // 16 rows of the surface set, every 500th: 12 of its `train` split and
@@ -2408,22 +2437,8 @@ fn evaluate_scores_a_pose_network_on_one_split_of_a_dataset() {
     );
     let json = last_json(&msg);
     assert_eq!(json["frames"], 4);
+    assert_errors_are_predicts(&json, &estimates, &labels, &val);
     for t in json["targets"].as_array().unwrap() {
-        let name = t["target"].as_str().unwrap();
-        let (e, l) = (column(&estimates, name), column(&labels, name));
-        let mean = val
-            .iter()
-            .map(|&i| {
-                let truth: f64 = labels[i][l].parse().unwrap();
-                (estimates[i][e].parse::<f64>().unwrap() - truth).abs()
-            })
-            .sum::<f64>()
-            / 4.0;
-        // `predict` writes 4 decimals.
-        assert!(
-            (t["mae"].as_f64().unwrap() - mean).abs() < 1e-3,
-            "{name}: {t}"
-        );
         assert!(t["coverage"]["within_1_std"].as_f64().is_some(), "{t}");
     }
     // A split the column does not hold, and a dataset without the column.
@@ -2483,25 +2498,7 @@ fn evaluate_leaves_a_frame_cut_short_out_of_its_scores() {
         assert!(msg.contains(&labels[3][file]), "{msg}");
         let json = last_json(&msg);
         assert_eq!(json["frames"], 7, "{json}");
-        let column =
-            |rows: &[Vec<String>], name: &str| rows[0].iter().position(|c| c == name).unwrap();
-        for t in json["targets"].as_array().unwrap() {
-            let name = t["target"].as_str().unwrap();
-            let (e, l) = (column(&estimates, name), column(&labels, name));
-            let mean = [1, 2, 4, 5, 6, 7, 8]
-                .iter()
-                .map(|&i| {
-                    let truth: f64 = labels[i][l].parse().unwrap();
-                    (estimates[i][e].parse::<f64>().unwrap() - truth).abs()
-                })
-                .sum::<f64>()
-                / 7.0;
-            // `predict` writes 4 decimals.
-            assert!(
-                (t["mae"].as_f64().unwrap() - mean).abs() < 1e-3,
-                "{name}: {t}"
-            );
-        }
+        assert_errors_are_predicts(&json, &estimates, &labels, &[1, 2, 4, 5, 6, 7, 8]);
     }
     for i in 0..8 {
         let whole = std::fs::read(frame(i)).unwrap();
