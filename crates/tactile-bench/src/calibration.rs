@@ -16,6 +16,50 @@ use tactile_gelsight::{BallPresses, CalibrationConfig};
 
 use crate::Result;
 
+/// `tactile bench calibration`'s flags: the folder, the split, the
+/// robustness and timing settings, and the shipped recipe the candidates
+/// are built from ([`Self::bench`] makes the [`CalibrationBench`]).
+#[derive(Debug, Clone, clap::Args)]
+pub struct CalibrationRequest {
+    /// Calibration folder (docs/datasets.md: the calibration layout).
+    #[arg(long, default_value = "../shared/real/gelsight-ball")]
+    pub data: PathBuf,
+    /// Folds of the leave-presses-out split (press i in fold i mod folds).
+    #[arg(long, default_value_t = 8)]
+    pub folds: usize,
+    /// Exposure change of the robustness rows (0.15: +-15 %).
+    #[arg(long, default_value_t = 0.15)]
+    pub exposure: f64,
+    /// Frames timed per runtime (median reported).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub runs: u32,
+    /// Only these candidates (lookup, mlp, conv-slopes, shipped); all by default.
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    pub candidates: Vec<String>,
+    /// The shipped recipe the candidates are built from.
+    #[command(flatten)]
+    pub recipe: tactile_gelsight::BallOptions,
+}
+
+impl CalibrationRequest {
+    /// The bench these flags ask for, its recipe checked
+    /// ([`tactile_gelsight::BallOptions::config`]); progress is shown.
+    pub fn bench(self) -> Result<CalibrationBench> {
+        Ok(CalibrationBench {
+            base: self.recipe.config()?,
+            options: BenchOptions {
+                folds: self.folds,
+                exposure: self.exposure,
+                runs: self.runs as usize,
+                device: self.recipe.schedule.device,
+                progress: true,
+            },
+            data: self.data,
+            only: self.candidates,
+        })
+    }
+}
+
 /// What the page is made from.
 #[derive(Debug, Clone)]
 pub struct CalibrationBench {

@@ -56,6 +56,31 @@ pub struct Cell {
     pub saw_test_frames: bool,
 }
 
+/// `tactile bench shared-encoder`'s flags: the encoders and the tasks.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SharedEncoderBench {
+    /// Encoder folders, each run on every task.
+    #[arg(long, num_args = 1.., required = true)]
+    pub encoders: Vec<PathBuf>,
+    /// The tasks: a JSON list of {task, data, preprocess, targets or classify, own}.
+    #[arg(long, default_value = "configs/bench/shared-encoder.json")]
+    pub tasks: PathBuf,
+    /// Folder the tasks' datasets are in.
+    #[arg(long, default_value = "../shared/real")]
+    pub real: PathBuf,
+}
+
+impl SharedEncoderBench {
+    /// Every encoder on every task: the cells and their table
+    /// ([`read_tasks`], [`shared_encoders`], [`shared_markdown`]).
+    pub fn run(&self) -> Result<(Vec<Cell>, String)> {
+        let tasks = read_tasks(&self.tasks)?;
+        let cells = shared_encoders(&self.encoders, &tasks, &self.real)?;
+        let md = shared_markdown(&cells, &self.encoders, &tasks);
+        Ok((cells, md))
+    }
+}
+
 /// Read and check a task list.
 pub fn read_tasks(path: &Path) -> Result<Vec<Task>> {
     let tasks: Vec<Task> = tactile_core::io::read_json(path)?;

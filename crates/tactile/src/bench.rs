@@ -50,7 +50,7 @@ pub(crate) enum BenchCmd {
     /// One encoder for many tasks: every encoder on every task of a list
     /// (configs/bench/shared-encoder.json), an MLP per task, beside each
     /// task's own encoder.
-    SharedEncoder(SharedEncoderArgs),
+    SharedEncoder(Paged<tactile_bench::shared::SharedEncoderBench>),
     /// Ball-press calibration: sensor models cross-validated by press
     /// (lookup table, per-pixel MLP, the toolkit's networks), speed and
     /// robustness; writes docs/calibration.md.
@@ -59,22 +59,6 @@ pub(crate) enum BenchCmd {
     /// held-out renders, the real ball presses, frames of other sensors and
     /// the loop's times; writes docs/own-sensor.md.
     OwnSensor(OwnSensorArgs),
-}
-
-#[derive(Args)]
-pub(crate) struct SharedEncoderArgs {
-    /// Encoder folders, each run on every task.
-    #[arg(long, num_args = 1.., required = true)]
-    encoders: Vec<PathBuf>,
-    /// The tasks: a JSON list of {task, data, preprocess, targets or classify, own}.
-    #[arg(long, default_value = "configs/bench/shared-encoder.json")]
-    tasks: PathBuf,
-    /// Folder the tasks' datasets are in.
-    #[arg(long, default_value = "../shared/real")]
-    real: PathBuf,
-    /// Also write the table (and its rows as JSON beside it).
-    #[arg(long)]
-    out: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -88,27 +72,11 @@ pub(crate) struct OwnSensorArgs {
 
 #[derive(Args)]
 pub(crate) struct CalibrationArgs {
-    /// Calibration folder (docs/datasets.md: the calibration layout).
-    #[arg(long, default_value = "../shared/real/gelsight-ball")]
-    data: PathBuf,
-    /// Folds of the leave-presses-out split (press i in fold i mod folds).
-    #[arg(long, default_value_t = 8)]
-    folds: usize,
-    /// Exposure change of the robustness rows (0.15: +-15 %).
-    #[arg(long, default_value_t = 0.15)]
-    exposure: f64,
-    /// Frames timed per runtime (median reported).
-    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
-    runs: u32,
+    #[command(flatten)]
+    bench: tactile_bench::calibration::CalibrationRequest,
     /// The page; its plots and numbers (JSON) go beside it.
     #[arg(long, default_value = "docs/calibration.md")]
     out: PathBuf,
-    /// Only these candidates (lookup, mlp, conv-slopes, shipped); all by default.
-    #[arg(long, value_delimiter = ',', num_args = 1..)]
-    candidates: Vec<String>,
-    /// The shipped recipe the candidates are built from.
-    #[command(flatten)]
-    recipe: tactile_gelsight::BallOptions,
 }
 
 #[derive(Args)]
@@ -232,9 +200,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
         BenchCmd::Depth(a) => show(a, bench_depth)?,
         BenchCmd::Pose(a) => show(a, tactile_bench::pose::bench_pose)?,
         BenchCmd::SharedEncoder(a) => {
-            let tasks = tactile_bench::shared::read_tasks(&a.tasks)?;
-            let cells = tactile_bench::shared::shared_encoders(&a.encoders, &tasks, &a.real)?;
-            let md = tactile_bench::shared::shared_markdown(&cells, &a.encoders, &tasks);
+            let (cells, md) = a.bench.run()?;
             say_raw!("{md}");
             if let Some(out) = &a.out {
                 write_markdown_and_json(out, &md, &cells)?;
@@ -254,18 +220,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             say_raw!("{md}");
         }
         BenchCmd::Calibration(a) => {
-            let b = tactile_bench::calibration::CalibrationBench {
-                data: a.data,
-                base: a.recipe.config()?,
-                options: tactile_gelsight::bench::BenchOptions {
-                    folds: a.folds,
-                    exposure: a.exposure,
-                    runs: a.runs as usize,
-                    device: a.recipe.schedule.device,
-                    progress: true,
-                },
-                only: a.candidates,
-            };
+            let b = a.bench.bench()?;
             let r = tactile_bench::calibration::bench_calibration(&b)?;
             let command: Vec<String> = std::env::args().skip(1).collect();
             let md = r.write(&b, &format!("tactile {}", command.join(" ")), &a.out)?;
