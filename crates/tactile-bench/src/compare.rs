@@ -5,6 +5,8 @@
 
 use std::path::PathBuf;
 
+use serde::Serialize;
+
 use burn::tensor::Device;
 use rayon::prelude::*;
 use tactile_burn::{Artifact, DeviceKind, Runtime};
@@ -19,9 +21,12 @@ use tactile_estimate::{
 use tactile_pipeline::tactip::{classes_of, encoder_trained_on, holdout_cure};
 use tactile_preprocess::NamedPreprocess;
 
+pub use tactile_pipeline::options::CompareOptions;
+
 use crate::{Error, Result};
 
-/// What is compared (`tactile compare`'s flags).
+/// What is compared (`tactile compare`'s flags; Python's
+/// `tactile.study.compare(encoder, data, **options)`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct Compare {
     /// Trained encoder (its preprocessing also makes the pixel baselines).
@@ -30,28 +35,49 @@ pub struct Compare {
     /// Dataset with the target labels.
     #[arg(long)]
     pub data: PathBuf,
-    /// Regression targets, e.g. x_mm,theta_deg:180,depth_mm.
-    #[arg(long, value_delimiter = ',', num_args = 1.., required_unless_present = "classify")]
-    pub targets: Vec<Target>,
-    /// A class column to classify too (e.g. shape).
-    #[arg(long)]
-    pub classify: Option<String>,
-    /// Without a `split` column: fraction of frames held out for testing.
-    #[arg(long, default_value_t = 0.2)]
-    pub test_fraction: f64,
-    /// Fraction of the training frames for early stopping.
-    #[arg(long, default_value_t = 0.2)]
-    pub val_fraction: f64,
-    /// Split and weight seed.
-    #[arg(long, default_value_t = tactile_core::dataset::DEFAULT_SPLIT_SEED)]
-    pub seed: u64,
-    /// Preprocess with this preset or JSON file instead of the encoder's
-    /// own (an encoder trained on one dataset applied to another).
-    #[arg(long)]
-    pub preprocess: Option<NamedPreprocess>,
-    /// Hidden widths of the regression MLP (the same for every feature set).
-    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = [256, 128])]
-    pub hidden: Vec<usize>,
+    /// The targets, the split and the estimators.
+    #[command(flatten)]
+    pub options: CompareOptions,
+}
+
+/// One estimator on one feature set: its test errors or accuracy.
+#[derive(Debug, Clone, Serialize)]
+pub struct CompareRow {
+    /// The feature set (`CAE-32`, `PCA-16`, `raw 56x56`, `pin tracking (314 pins)`).
+    pub features: String,
+    /// The estimator.
+    pub estimator: String,
+    /// Regression: each target's mean absolute error on the test frames,
+    /// in its label's units; classification: `accuracy` (0 to 1).
+    pub values: Vec<(String, f64)>,
+    /// Seconds to fit and predict.
+    pub seconds: f64,
+}
+
+/// The comparison: its page and its rows.
+#[derive(Debug, Clone, Serialize)]
+pub struct CompareResult {
+    /// The page (Markdown).
+    pub markdown: String,
+    /// Every regression row, in the table's order.
+    pub regression: Vec<CompareRow>,
+    /// Every classification row, in the table's order.
+    pub classification: Vec<CompareRow>,
+    /// What the page says under its title: the encoder fitted test frames,
+    /// a feature set or estimator left out for a split too small.
+    pub warnings: Vec<String>,
+}
+
+impl CompareResult {
+    /// Its rows and warnings without the page, as JSON: what is written
+    /// beside the page and what Python returns beside `markdown`.
+    pub fn rows(&self) -> serde_json::Value {
+        serde_json::json!({
+            "regression": self.regression,
+            "classification": self.classification,
+            "warnings": self.warnings,
+        })
+    }
 }
 
 /// What to tell a reader when the encoder fitted some of the `test` rows
@@ -60,18 +86,41 @@ pub struct Compare {
 /// the training frames only.
 fn encoder_saw_test(c: &Compare, ds: &Dataset, test: &[usize]) -> Option<String> {
     let saw = encoder_trained_on(&c.encoder, ds, test)?;
+    let c_options = &c.options;
     Some(format!(
         "The encoder {saw}, so its row scores frames its features fitted, unlike the other rows: for a held-out comparison train it {}, or on another recording.",
-        holdout_cure(ds, c.test_fraction, c.seed)
+        holdout_cure(ds, c_options.test_fraction, c_options.seed)
     ))
 }
 
 /// The comparison's Markdown.
-pub fn compare(c: &Compare) -> Result<String> {
+pub fn compare(c: &Compare) -> Result<CompareResult> {
+    let o = &c.options;
+    if o.targets.is_empty() && o.classify.is_none() {
+        return Err(tactile_core::Error::Config(
+            "compare: give regression targets (--targets, targets=), a class column (--classify, classify=), or both".into(),
+        )
+        .into());
+    }
+    let targets = o
+        .targets
+        .iter()
+        .map(|t| t.parse::<Target>())
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    // The MLP's layers are checked before any frame is read (the features'
+    // count, its inputs, is known only once they are made).
+    let hidden: Vec<(usize, Activation)> =
+        o.hidden.iter().map(|&w| (w, Activation::Relu)).collect();
+    tactile_estimate::mlp::check_sizes(1, &hidden, targets.len().max(1))?;
+    let preprocess = o
+        .preprocess
+        .as_deref()
+        .map(str::parse::<NamedPreprocess>)
+        .transpose()?;
     let ds = Dataset::open(&c.data)?;
     let labels = (0..ds.len())
         .map(|i| {
-            c.targets
+            targets
                 .iter()
                 .map(|t| ds.target(i, &t.name))
                 .collect::<tactile_core::Result<Vec<f64>>>()
@@ -79,11 +128,11 @@ pub fn compare(c: &Compare) -> Result<String> {
         .collect::<tactile_core::Result<Vec<_>>>()?;
     // Split first: a split the dataset cannot give fails before any frame
     // is read.
-    let split = ds.three_way_split(c.test_fraction, c.val_fraction, c.seed)?;
+    let split = ds.three_way_split(o.test_fraction, o.val_fraction, o.seed)?;
     let (train, val, test) = (&split.train, &split.val, &split.test);
     let dev = DeviceKind::Flex.device();
     let mut art = CaeArtifact::read(&c.encoder)?;
-    if let Some(p) = &c.preprocess {
+    if let Some(p) = &preprocess {
         art.preprocess = p.config.clone();
     }
     let (_, net) = tactile_onnx::load_network::<CaeArtifact>(&c.encoder, Runtime::BurnFlex, 0)?;
@@ -155,31 +204,36 @@ pub fn compare(c: &Compare) -> Result<String> {
         train.len(),
         val.len(),
         test.len(),
-        c.seed,
+        o.seed,
         c.encoder.display(),
         match Provenance::read(&art.notes).names() {
             d if d.is_empty() => "unknown data".to_string(),
             d => d,
         },
-        c.preprocess
+        preprocess
             .as_ref()
             .map_or("the encoder's own", |p| p.name.as_str()),
     );
+    let mut warnings = Vec::new();
     if let Some(w) = encoder_saw_test(c, &ds, test) {
         tactile_core::note!("warning: {w}");
         md.push_str(&format!("**{w}**\n\n"));
+        warnings.push(w);
     }
     md.push_str(&left_out_notes(&left_out));
-    if !c.targets.is_empty() {
+    let mut regression = Vec::new();
+    if !targets.is_empty() {
         md.push_str(&regression_table(
             &sets,
-            &c.targets,
+            &targets,
             (&ty, &vy, &sy),
-            (&c.hidden, c.seed),
+            (&o.hidden, o.seed),
             &dev,
+            (&mut regression, &mut left_out),
         )?);
     }
-    if let Some(col) = &c.classify {
+    let mut classification = Vec::new();
+    if let Some(col) = &o.classify {
         let (classes, y) = classes_of(&ds, col)?;
         let pick = |idx: &[usize]| -> Vec<usize> { idx.iter().map(|&i| y[i]).collect() };
         // The frame of each train and validation row, for the MLP's folds.
@@ -189,11 +243,18 @@ pub fn compare(c: &Compare) -> Result<String> {
             &classes,
             (&pick(train), &pick(val), &pick(test)),
             &frames,
-            c.seed,
+            o.seed,
             &dev,
+            (&mut classification, &mut left_out),
         )?);
     }
-    Ok(md)
+    warnings.extend(left_out);
+    Ok(CompareResult {
+        markdown: md,
+        regression,
+        classification,
+        warnings,
+    })
 }
 
 /// `fit`'s result, or `None` when its split has too few frames for it:
@@ -262,6 +323,7 @@ fn regression_table(
     (ty, vy, sy): SplitLabels<'_, Vec<f64>>,
     (hidden, seed): (&[usize], u64),
     dev: &Device,
+    (rows, notes): (&mut Vec<CompareRow>, &mut Vec<String>),
 ) -> Result<String> {
     let mlp = format!(
         "MLP {}",
@@ -302,18 +364,23 @@ fn regression_table(
                 continue;
             };
             let secs = t0.elapsed().as_secs_f64();
-            let errs: Vec<String> = target_mae(targets, &pred, sy)
-                .iter()
-                .map(|e| format!("{e:.3}"))
-                .collect();
+            let maes = target_mae(targets, &pred, sy);
+            let errs: Vec<String> = maes.iter().map(|e| format!("{e:.3}")).collect();
             md.push_str(&format!(
                 "| {name} | {est} | {} | {secs:.1} |\n",
                 errs.join(" | ")
             ));
+            rows.push(CompareRow {
+                features: name.clone(),
+                estimator: est.to_string(),
+                values: targets.iter().map(|t| t.name.clone()).zip(maes).collect(),
+                seconds: secs,
+            });
         }
     }
     md.push('\n');
     md.push_str(&left_out_notes(&left_out));
+    notes.extend(left_out);
     Ok(md)
 }
 
@@ -324,6 +391,7 @@ fn classification_table(
     frames: &[usize],
     seed: u64,
     dev: &Device,
+    (rows, notes): (&mut Vec<CompareRow>, &mut Vec<String>),
 ) -> Result<String> {
     let mut md = format!(
         "Classification of {} classes ({}): accuracy on the test frames.\n\n| features | estimator | accuracy | fit + predict (s) |\n|---|---|---|---|\n",
@@ -359,9 +427,16 @@ fn classification_table(
                 "| {name} | {est} | {:.1} % | {secs:.1} |\n",
                 100.0 * acc
             ));
+            rows.push(CompareRow {
+                features: name.clone(),
+                estimator: est.to_string(),
+                values: vec![("accuracy".to_string(), acc)],
+                seconds: secs,
+            });
         }
     }
     md.push('\n');
     md.push_str(&left_out_notes(&left_out));
+    notes.extend(left_out);
     Ok(md)
 }

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
+use serde::Serialize;
 use tactile_burn::Runtime;
 use tactile_cae::data::PinSet;
 use tactile_core::dataset::Dataset;
@@ -15,33 +16,30 @@ use tactile_estimate::eval::Scores;
 use tactile_pipeline::tactip::TactipPerception;
 use tactile_preprocess::perturb::Perturbation;
 
+pub use tactile_pipeline::options::RobustnessOptions;
+
 use crate::Result;
 
-/// What the study runs on (`tactile robustness`'s flags).
+/// What the study runs on (`tactile robustness`'s flags; Python's
+/// `tactile.study.robustness(encoder, data, **options)`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct Robustness {
     /// Trained encoder folder.
     #[arg(long)]
     pub encoder: PathBuf,
-    /// Estimator folders (default: every folder in ENCODER with head.json, regressor.json or ensemble.json).
-    #[arg(long, num_args = 1..)]
-    pub heads: Vec<PathBuf>,
     /// Labelled dataset of raw frames (held-out synthetic TacTip frames).
     #[arg(long)]
     pub data: PathBuf,
-    /// Use at most this many frames (the first ones).
-    #[arg(long)]
-    pub limit: Option<usize>,
-    /// Seed of the perturbations.
-    #[arg(long, default_value_t = 11)]
-    pub seed: u64,
+    /// The estimators, the frames and the seed.
+    #[command(flatten)]
+    pub options: RobustnessOptions,
 }
 
 /// Errors of every estimator on clean frames and on perturbed copies.
 pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
-    tactile_core::source::check_limit(r.limit.map(|n| n as u64))?;
+    tactile_core::source::check_limit(r.options.limit.map(|n| n as u64))?;
     let ds = Dataset::open(&r.data)?;
-    let n = r.limit.unwrap_or(ds.len()).min(ds.len());
+    let n = r.options.limit.unwrap_or(ds.len()).min(ds.len());
     if n == 0 {
         return Err(tactile_core::Error::Invalid(format!(
             "{}: no frames to perturb",
@@ -49,7 +47,7 @@ pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
         ))
         .into());
     }
-    let mut perception = TactipPerception::load(&r.encoder, &r.heads, Runtime::BurnFlex)?;
+    let mut perception = TactipPerception::load(&r.encoder, &r.options.heads, Runtime::BurnFlex)?;
     let preprocess = perception.encoder.artifact.preprocess.clone();
     let estimators = perception.estimators.len();
     let frames = (0..n)
@@ -62,7 +60,7 @@ pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
             .enumerate()
             .map(|(i, f)| {
                 let img = match p {
-                    Some(p) => p.apply(f, &mut SampleRng::new(r.seed, stream, i as u64))?,
+                    Some(p) => p.apply(f, &mut SampleRng::new(r.options.seed, stream, i as u64))?,
                     None => f.clone(),
                 };
                 tactile_preprocess::preprocess(&img, &preprocess)
@@ -90,7 +88,7 @@ pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
         r.encoder.display(),
         estimators,
         r.data.display(),
-        r.seed
+        r.options.seed
     );
     for (name, _) in &header {
         md.push_str(&format!(" {name} |"));
@@ -98,8 +96,13 @@ pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
     md.push_str("\n|---|");
     md.push_str(&"---|".repeat(header.len()));
     md.push('\n');
-    let row = |md: &mut String, label: &str, s: &Scores| {
+    let mut rows = Vec::new();
+    let mut row = |md: &mut String, label: &str, s: &Scores| {
         md.push_str(&format!("| {label} |"));
+        rows.push(RobustnessRow {
+            condition: label.to_string(),
+            values: columns(s),
+        });
         for (name, v) in columns(s) {
             if name == "shape accuracy" {
                 md.push_str(&format!(" {v:.1} % |"));
@@ -147,15 +150,30 @@ pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
     md.push_str("\nThe plot shows each error (shape error rate, target MAEs) divided by its clean value, averaged over the estimators' outputs, against the strength step (0 = clean, 1-3 = the rows above, in order).\n");
     Ok(RobustnessResult {
         markdown: md,
+        rows,
         series,
     })
 }
 
-/// The table and the plot's series.
+/// One condition's errors.
+#[derive(Debug, Clone, Serialize)]
+pub struct RobustnessRow {
+    /// `clean`, or the perturbation and its strength.
+    pub condition: String,
+    /// Each output's score: `shape accuracy` in percent, `NAME MAE` in
+    /// the target's units.
+    pub values: Vec<(String, f64)>,
+}
+
+/// The table, its rows and the plot's series.
+#[derive(Serialize)]
 pub struct RobustnessResult {
     /// Markdown, without the plot's link.
     pub markdown: String,
+    /// Each condition's row, in the table's order.
+    pub rows: Vec<RobustnessRow>,
     /// Error growth per perturbation kind.
+    #[serde(skip)]
     pub series: Vec<Series>,
 }
 

@@ -5,6 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
+use serde::Serialize;
+
 use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_cae::data::PinSet;
 use tactile_cae::eval::reconstruction_bce;
@@ -15,11 +17,14 @@ use tactile_core::plot::{Series, line_plot};
 use tactile_estimate::{ClassifierHead, HeadConfig};
 use tactile_pipeline::tactip::{classes_of, encoder_trained_on};
 
+pub use tactile_pipeline::options::SweepOptions;
+
 use crate::Result;
 use crate::cae::measure_encoder;
 use crate::output::folder_name;
 
-/// What the sweep compares (`tactile sweep`'s flags).
+/// What the sweep compares (`tactile sweep`'s flags; Python's
+/// `tactile.study.sweep(encoders, data, **options)`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct Sweep {
     /// Trained encoders to compare (e.g. 8, 16, 32 and 64 features).
@@ -28,19 +33,13 @@ pub struct Sweep {
     /// Dataset with a class column (its split column when present).
     #[arg(long)]
     pub data: PathBuf,
-    /// Class column for the accuracy.
-    #[arg(long, default_value = "shape")]
-    pub classify: String,
-    /// Split and head seed.
-    #[arg(long, default_value_t = tactile_core::dataset::DEFAULT_SPLIT_SEED)]
-    pub seed: u64,
-    /// Timed runs per latency measurement.
-    #[arg(long, default_value_t = 30)]
-    pub runs: usize,
+    /// The class column, the seed and the timing.
+    #[command(flatten)]
+    pub options: SweepOptions,
 }
 
 /// One encoder's row.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize)]
 pub struct SweepRow {
     /// Folder name.
     pub name: String,
@@ -58,21 +57,23 @@ pub struct SweepRow {
 }
 
 /// The table and its rows.
+#[derive(Debug, Clone, Serialize)]
 pub struct SweepResult {
     /// Markdown.
     pub markdown: String,
     /// Rows, by feature count.
     pub rows: Vec<SweepRow>,
+    #[serde(skip)]
     classify: String,
 }
 
 /// Run the sweep.
 pub fn sweep(s: &Sweep) -> Result<SweepResult> {
-    tactile_core::bench::check_runs(s.runs)?;
+    tactile_core::bench::check_runs(s.options.runs)?;
     let ds = Dataset::open(&s.data)?;
-    let split = ds.three_way_split(0.2, 0.2, s.seed)?;
+    let split = ds.three_way_split(0.2, 0.2, s.options.seed)?;
     let (train, test) = ([split.train, split.val].concat(), split.test);
-    let (classes, y) = classes_of(&ds, &s.classify)?;
+    let (classes, y) = classes_of(&ds, &s.options.classify)?;
     // The frame of each training row, so a frame's rows share a fold.
     let frames = ds.frame_of_rows(&train);
     let dev = DeviceKind::Flex.device();
@@ -93,10 +94,10 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
         let (tx, ty) = pick(&train);
         let (sx, sy) = pick(&test);
         let mut cfg = HeadConfig::new(art.model.feature_count(), classes.clone()).with_repeats(1);
-        cfg.schedule.seed = s.seed;
+        cfg.schedule.seed = s.options.seed;
         let head = ClassifierHead::train_by_frame(cfg, &tx, &ty, &frames, &dev)?;
         let acc = accuracy(&head.predict(&sx)?, &sy);
-        let speed = measure_encoder(enc, &pins, 256, s.runs)?
+        let speed = measure_encoder(enc, &pins, 256, s.options.runs)?
             .into_iter()
             .map(|sp| (sp.runtime, sp.batch1_s * 1e3, sp.fps))
             .collect();
@@ -120,7 +121,7 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
         s.data.display(),
         train.len(),
         test.len(),
-        s.classify,
+        s.options.classify,
         runtimes
             .iter()
             .map(|r| format!("{r} ms, frames/s"))
@@ -153,7 +154,7 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
     Ok(SweepResult {
         markdown: md,
         rows,
-        classify: s.classify.clone(),
+        classify: s.options.classify.clone(),
     })
 }
 

@@ -371,6 +371,103 @@ pub const TRAINERS: &[Trainer] = &[
     ),
 ];
 
+/// `tactile compare`'s and `tactile.study.compare`'s options (the study
+/// itself is `tactile_bench::compare`'s): the targets, the split and the
+/// estimators.
+#[derive(Debug, Clone, clap::Args, Serialize, Deserialize)]
+pub struct CompareOptions {
+    /// Regression targets, e.g. x_mm,theta_deg:180,depth_mm (give these, a class column, or both).
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    pub targets: Vec<String>,
+    /// A class column to classify too (e.g. shape).
+    #[arg(long)]
+    pub classify: Option<String>,
+    /// Without a `split` column: fraction of frames held out for testing.
+    #[arg(long, default_value_t = 0.2)]
+    pub test_fraction: f64,
+    /// Fraction of the training frames for early stopping.
+    #[arg(long, default_value_t = 0.2)]
+    pub val_fraction: f64,
+    /// Split and weight seed.
+    #[arg(long, default_value_t = tactile_core::dataset::DEFAULT_SPLIT_SEED)]
+    pub seed: u64,
+    /// Preprocess with this preset or JSON file instead of the encoder's
+    /// own (an encoder trained on one dataset applied to another).
+    #[arg(long)]
+    pub preprocess: Option<String>,
+    /// Hidden widths of the regression MLP (the same for every feature set).
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = [256, 128])]
+    pub hidden: Vec<usize>,
+}
+
+/// `tactile sweep`'s and `tactile.study.sweep`'s options (the study is
+/// `tactile_bench::sweep`'s).
+#[derive(Debug, Clone, clap::Args, Serialize, Deserialize)]
+pub struct SweepOptions {
+    /// Class column for the accuracy.
+    #[arg(long, default_value = "shape")]
+    pub classify: String,
+    /// Split and head seed.
+    #[arg(long, default_value_t = tactile_core::dataset::DEFAULT_SPLIT_SEED)]
+    pub seed: u64,
+    /// Timed runs per latency measurement.
+    #[arg(long, default_value_t = 30)]
+    pub runs: usize,
+}
+
+/// `tactile robustness`'s and `tactile.study.robustness`'s options (the
+/// study is `tactile_bench::robustness`'s).
+#[derive(Debug, Clone, clap::Args, Serialize, Deserialize)]
+pub struct RobustnessOptions {
+    /// Estimator folders (default: every folder in ENCODER with head.json, regressor.json or ensemble.json).
+    #[arg(long, num_args = 1..)]
+    pub heads: Vec<std::path::PathBuf>,
+    /// Use at most this many frames (the first ones).
+    #[arg(long)]
+    pub limit: Option<usize>,
+    /// Seed of the perturbations.
+    #[arg(long, default_value_t = 11)]
+    pub seed: u64,
+}
+
+/// Paper A's studies of an encoder (`tactile compare|sweep|robustness`,
+/// `tactile.study.NAME(...)`), each returning its page and rows.
+pub const STUDIES: &[Trainer] = &[
+    Trainer::of::<CompareOptions>(
+        "compare",
+        "study_compare",
+        &[
+            "encoder: _Path",
+            "data: _Path",
+            "*",
+            "out: Optional[_Path] = None",
+        ],
+        "Feature sets (the encoder's, PCA, raw pixels, pin tracking) against estimators on one split: the page (markdown), its regression and classification rows, and its warnings.",
+    ),
+    Trainer::of::<SweepOptions>(
+        "sweep",
+        "study_sweep",
+        &[
+            "encoders: Union[_Path, Sequence[_Path]]",
+            "data: _Path",
+            "*",
+            "out: Optional[_Path] = None",
+        ],
+        "Paper A's feature-count search: each encoder's reconstruction error, shape accuracy and speed per runtime (the page and its rows).",
+    ),
+    Trainer::of::<RobustnessOptions>(
+        "robustness",
+        "study_robustness",
+        &[
+            "encoder: _Path",
+            "data: _Path",
+            "*",
+            "out: Optional[_Path] = None",
+        ],
+        "Every estimator's errors on clean frames and on copies with more noise, an illumination gradient, a light blob or a rotation (the page and its rows).",
+    ),
+];
+
 /// Every evaluation with options (`tactile eval NAME`,
 /// `tactile.eval.NAME(...)`): what each writes beside its scores.
 pub const EVALUATORS: &[Trainer] = &[
@@ -435,6 +532,8 @@ pub struct PythonStubs {
     pub eval: String,
     /// The typed calibrations of `tactile/calibrate.pyi`.
     pub calibrate: String,
+    /// The typed studies of `tactile/study.pyi`.
+    pub study: String,
 }
 
 /// The generated parts of the Python stubs ([`PythonStubs`]).
@@ -444,11 +543,13 @@ pub fn python_stubs() -> Result<PythonStubs> {
     let mut synth = format!("{STUB_BEGIN}\n");
     let mut eval = format!("{STUB_BEGIN}\n");
     let mut calibrate = format!("{STUB_BEGIN}\n");
+    let mut study = format!("{STUB_BEGIN}\n");
     for (entries, own) in [
         (TRAINERS, &mut train),
         (GENERATORS, &mut synth),
         (EVALUATORS, &mut eval),
         (CALIBRATORS, &mut calibrate),
+        (STUDIES, &mut study),
     ] {
         for t in entries {
             native.push_str(&t.native_def()?);
@@ -463,6 +564,7 @@ pub fn python_stubs() -> Result<PythonStubs> {
         &mut synth,
         &mut eval,
         &mut calibrate,
+        &mut study,
     ] {
         part.push_str(STUB_END);
         part.push('\n');
@@ -473,5 +575,6 @@ pub fn python_stubs() -> Result<PythonStubs> {
         synth,
         eval,
         calibrate,
+        study,
     })
 }

@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use serde_json::{Value, json};
 use tactile_burn::options::Options;
 use tactile_pipeline::options::{
-    CALIBRATORS, EVALUATORS, GENERATORS, STUB_BEGIN, STUB_END, TRAINERS, python_stubs, trainer,
+    CALIBRATORS, EVALUATORS, GENERATORS, STUB_BEGIN, STUB_END, STUDIES, TRAINERS, python_stubs,
+    trainer,
 };
 
 fn stub(name: &str) -> PathBuf {
@@ -42,6 +43,7 @@ fn the_python_stubs_type_every_option_as_the_library_defines_it() {
         ("synth.pyi", &stubs.synth),
         ("eval.pyi", &stubs.eval),
         ("calibrate.pyi", &stubs.calibrate),
+        ("study.pyi", &stubs.study),
     ] {
         let path = stub(file);
         let text = std::fs::read_to_string(&path).unwrap();
@@ -101,6 +103,15 @@ fn the_python_stubs_type_every_option_as_the_library_defines_it() {
             stubs.calibrate
         );
     }
+    // A study's options are keywords after its inputs and `out`, as flags.
+    for want in [
+        "def compare(\n    encoder: _Path,\n    data: _Path,\n    *,\n    out: Optional[_Path] = None,\n    config: Optional[_Path] = None,\n    targets: Sequence[str] = (),\n    classify: Optional[str] = None,",
+        "hidden: Sequence[int] = (256, 128)",
+        "def sweep(\n    encoders: Union[_Path, Sequence[_Path]],",
+        "heads: Sequence[str] = ()",
+    ] {
+        assert!(stubs.study.contains(want), "{want} not in\n{}", stubs.study);
+    }
 }
 
 #[test]
@@ -122,10 +133,13 @@ fn every_option_of_every_trainer_is_a_flag_and_a_keyword() {
         .chain(GENERATORS)
         .chain(EVALUATORS)
         .chain(CALIBRATORS)
+        .chain(STUDIES)
     {
         let docs = t.docs().unwrap();
         let least = if EVALUATORS.iter().any(|e| e.native == t.native) {
             2
+        } else if STUDIES.iter().any(|e| e.native == t.native) {
+            3
         } else {
             4
         };

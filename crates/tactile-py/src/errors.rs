@@ -198,6 +198,18 @@ impl LibraryError for tactile_pipeline::Error {
     }
 }
 
+impl LibraryError for tactile_bench::Error {
+    fn kind(&self) -> Kind {
+        use tactile_bench::Error as E;
+        match self {
+            E::Pipeline(e) => e.kind(),
+            E::Core(c) => core_kind(c),
+            E::Gelsight(e) => e.kind(),
+            E::Synth(e) => e.kind(),
+        }
+    }
+}
+
 impl LibraryError for datasets_synth::Error {
     fn kind(&self) -> Kind {
         use datasets_synth::Error as E;

@@ -22,6 +22,7 @@ mod predict;
 mod robot;
 mod run;
 mod source;
+mod study;
 mod synth;
 mod train;
 mod work;
@@ -77,5 +78,8 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(eval::eval_segmenter, m)?)?;
     m.add_function(wrap_pyfunction!(eval::eval_depth, m)?)?;
     m.add_function(wrap_pyfunction!(eval::eval_tactip, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_compare, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_robustness, m)?)?;
     Ok(())
 }

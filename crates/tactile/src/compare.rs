@@ -8,12 +8,12 @@ pub(crate) type CompareArgs = crate::args::Paged<Compare>;
 pub(crate) fn main(a: CompareArgs) -> Result<()> {
     if let Some(out) = &a.out {
         let ds = tactile_core::dataset::Dataset::open(&a.bench.data)?;
-        tactile_core::dataset::check_output_file(out, &[&ds])?;
+        tactile_bench::output::check_page(out, &[&ds])?;
     }
-    let md = compare(&a.bench)?;
-    say_raw!("{md}");
+    let r = compare(&a.bench)?;
+    say_raw!("{}", r.markdown);
     if let Some(out) = &a.out {
-        tactile_core::io::write_atomic(out, md.as_bytes())?;
+        tactile_bench::output::write_markdown_and_json(out, &r.markdown, &r.rows())?;
     }
     Ok(())
 }

@@ -1099,6 +1099,35 @@ fn compare_writes_a_table_of_every_feature_set_and_estimator() {
             && table.contains("raw 28x28")
             && table.contains("pin tracking")
     );
+    // Its rows are written beside it (what `tactile.study.compare` returns),
+    // the same numbers as the table's cells.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap())
+            .unwrap();
+    let regression = json["regression"].as_array().unwrap();
+    assert_eq!(regression.len(), 15, "{json}");
+    assert_eq!(json["classification"].as_array().unwrap().len(), 15);
+    for (row, line) in regression.iter().zip(reg) {
+        let depth = row["values"][0][1].as_f64().unwrap();
+        assert_eq!(row["values"][0][0], "depth_mm");
+        assert_eq!(format!("{depth:.3}"), format!("{:.3}", cell(line, 3)));
+    }
+    // An MLP layer of width 0 is refused before any frame is read.
+    let (ok, msg) = tactile(&[
+        "compare",
+        "--encoder",
+        m.to_str().unwrap(),
+        "--data",
+        d,
+        "--targets",
+        "depth_mm",
+        "--hidden",
+        "64,0",
+    ]);
+    assert!(
+        !ok && msg.contains("hidden width 0: must be 1 to 4096") && !msg.contains("preprocessing"),
+        "{msg}"
+    );
 }
 
 #[test]

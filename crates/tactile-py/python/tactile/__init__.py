@@ -106,7 +106,7 @@ from ._tactile import (  # noqa: E402
     ros_image_to_rgb,
     run,
 )
-from . import calibrate, eval, synth, train  # noqa: E402
+from . import calibrate, eval, study, synth, train  # noqa: E402
 
 __all__ = [
     "Dataset",
@@ -134,6 +134,7 @@ __all__ = [
     "read_rgb",
     "ros_image_to_rgb",
     "run",
+    "study",
     "synth",
     "train",
 ]

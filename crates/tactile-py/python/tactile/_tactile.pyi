@@ -658,6 +658,40 @@ def calibrate_ball(
     device: str = "flex",
     resume: bool = False,
 ) -> Dict[str, Any]: ...
+def study_compare(
+    encoder: _Path,
+    data: _Path,
+    *,
+    out: Optional[_Path] = None,
+    config: Optional[_Path] = None,
+    targets: Sequence[str] = (),
+    classify: Optional[str] = None,
+    test_fraction: float = 0.2,
+    val_fraction: float = 0.2,
+    seed: int = 7,
+    preprocess: Optional[str] = None,
+    hidden: Sequence[int] = (256, 128),
+) -> Dict[str, Any]: ...
+def study_sweep(
+    encoders: Union[_Path, Sequence[_Path]],
+    data: _Path,
+    *,
+    out: Optional[_Path] = None,
+    config: Optional[_Path] = None,
+    classify: str = "shape",
+    seed: int = 7,
+    runs: int = 30,
+) -> Dict[str, Any]: ...
+def study_robustness(
+    encoder: _Path,
+    data: _Path,
+    *,
+    out: Optional[_Path] = None,
+    config: Optional[_Path] = None,
+    heads: Sequence[str] = (),
+    limit: Optional[int] = None,
+    seed: int = 11,
+) -> Dict[str, Any]: ...
 # --- end of generated part ---
 def options(trainer: str) -> List[Dict[str, Any]]: ...
 def synth_ideal_detector(data: str, out: Optional[str], progress: bool) -> Dict[str, Any]: ...

@@ -1,0 +1,124 @@
+//! `tactile.study`: paper A's studies of an encoder, as `tactile compare`,
+//! `tactile sweep` and `tactile robustness` run them: each returns its page
+//! (`markdown`) with its rows, and with `out=` writes the page (and its
+//! rows and plots beside it) as the command's `--out` does.
+
+use std::path::Path;
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use tactile_bench::compare::Compare;
+use tactile_bench::robustness::Robustness;
+use tactile_bench::sweep::Sweep;
+use tactile_core::dataset::Dataset;
+
+use crate::args::{PathArg, PathList};
+use crate::errors::PyResultExt;
+use crate::work::interruptible;
+
+/// Before a study runs: its page `out` can be written beside `data`
+/// ([`tactile_bench::output::check_page`]), as the command checks it.
+fn check_out(out: Option<&Path>, data: &Path) -> PyResult<()> {
+    if let Some(out) = out {
+        let ds = Dataset::open(data).py()?;
+        tactile_bench::output::check_page(out, &[&ds]).py()?;
+    }
+    Ok(())
+}
+
+/// Feature sets (the encoder's, PCA, raw pixels, pin tracking) against
+/// estimators on one split; `options` are
+/// [`tactile_bench::compare::CompareOptions`]'.
+#[pyfunction]
+#[pyo3(signature = (encoder, data, *, out=None, **options))]
+pub(crate) fn study_compare<'py>(
+    py: Python<'py>,
+    encoder: PathArg,
+    data: PathArg,
+    out: Option<PathArg>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::keywords!(encoder, data, out);
+    let c = Compare {
+        encoder,
+        data,
+        options: crate::json::options(py, options)?,
+    };
+    let r = interruptible(py, || {
+        check_out(out.as_deref(), &c.data)?;
+        let r = tactile_bench::compare::compare(&c).py()?;
+        if let Some(out) = &out {
+            tactile_bench::output::write_markdown_and_json(out, &r.markdown, &r.rows()).py()?;
+        }
+        Ok(r)
+    })?;
+    for w in &r.warnings {
+        crate::errors::user_warning(py, w)?;
+    }
+    let mut v = r.rows();
+    v["markdown"] = r.markdown.into();
+    crate::json::to_py(py, &v)
+}
+
+/// Paper A's feature-count search: each encoder's reconstruction error,
+/// shape accuracy and speed; `options` are
+/// [`tactile_bench::sweep::SweepOptions`]'.
+#[pyfunction]
+#[pyo3(signature = (encoders, data, *, out=None, **options))]
+pub(crate) fn study_sweep<'py>(
+    py: Python<'py>,
+    encoders: PathList,
+    data: PathArg,
+    out: Option<PathArg>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::keywords!(encoders, data, out);
+    if encoders.is_empty() {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "encoders: give at least one encoder folder",
+        ));
+    }
+    let s = Sweep {
+        encoders,
+        data,
+        options: crate::json::options(py, options)?,
+    };
+    let r = interruptible(py, || {
+        check_out(out.as_deref(), &s.data)?;
+        let r = tactile_bench::sweep::sweep(&s).py()?;
+        if let Some(out) = &out {
+            r.write(out).py()?;
+        }
+        Ok(r)
+    })?;
+    crate::json::to_py(py, &r)
+}
+
+/// Every estimator's errors on clean frames and on copies with more
+/// noise, an illumination gradient, a light blob or a rotation; `options`
+/// are [`tactile_bench::robustness::RobustnessOptions`]'.
+#[pyfunction]
+#[pyo3(signature = (encoder, data, *, out=None, **options))]
+pub(crate) fn study_robustness<'py>(
+    py: Python<'py>,
+    encoder: PathArg,
+    data: PathArg,
+    out: Option<PathArg>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    crate::args::keywords!(encoder, data, out);
+    let r = Robustness {
+        encoder,
+        data,
+        options: crate::json::options(py, options)?,
+    };
+    let result = interruptible(py, || {
+        check_out(out.as_deref(), &r.data)?;
+        let result = tactile_bench::robustness::robustness(&r).py()?;
+        if let Some(out) = &out {
+            result.write(out).py()?;
+        }
+        Ok(result)
+    })?;
+    crate::json::to_py(py, &result)
+}
