@@ -74,6 +74,7 @@ fn _tactile(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(train::train_ensemble, m)?)?;
     m.add_function(wrap_pyfunction!(train::train_calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(train::train_profile, m)?)?;
+    m.add_function(wrap_pyfunction!(train::train_align, m)?)?;
     m.add_function(wrap_pyfunction!(eval::eval_detector, m)?)?;
     m.add_function(wrap_pyfunction!(eval::eval_segmenter, m)?)?;
     m.add_function(wrap_pyfunction!(eval::eval_depth, m)?)?;

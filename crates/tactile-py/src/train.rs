@@ -372,3 +372,22 @@ pub(crate) fn train_profile(
         Ok(format!("{} saved in {}", p.describe(), model.display()))
     })
 }
+
+/// Measure the pin lattice's orientation on an encoder's training frames
+/// (`data`: every frame of each dataset) and save it with the encoder, so
+/// frames of a sensor mounted turned are turned back before encoding, as
+/// `tactile train align` does. Returns what was saved, in words.
+#[pyfunction]
+#[pyo3(signature = (model, data))]
+pub(crate) fn train_align(py: Python<'_>, model: PathArg, data: PathList) -> PyResult<String> {
+    crate::args::keywords!(model, data);
+    interruptible(py, || {
+        let sets = data
+            .iter()
+            .map(Dataset::open)
+            .collect::<Result<Vec<_>, _>>()
+            .py()?;
+        let (p, n) = tactile_cae::artifact::add_pin_alignment(&model, &sets).py()?;
+        Ok(p.describe(n))
+    })
+}

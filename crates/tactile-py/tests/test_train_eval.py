@@ -449,3 +449,30 @@ def test_eval_depth_scores_the_shipped_network_and_draws_heat_maps(root, small_v
     # A count of heat maps with no folder for them is refused, not ignored.
     with pytest.raises(ValueError, match="png_frames 3: the heat maps save_png writes, and no save_png"):
         tactile.eval.depth(root / "models/depth", small_vt, png_frames=3)
+
+
+def test_align_saves_the_lattice_as_tactile_train_align_does(root, tmp_path, tactile_bin):
+    """tactile.train.align measures an encoder's pin lattice on its frames
+    and saves it in the encoder's config, exactly as the command line does;
+    a dataset of another kind is refused naming it, the config kept."""
+    data = tmp_path / "tt"
+    tactile.synth.tactip(16, seed=5, out=data)
+    mine, theirs = tmp_path / "py", tmp_path / "cli"
+    for copy in (mine, theirs):
+        shutil.copytree(root / "models/cae-synth", copy)
+        config = json.loads((copy / "cae.json").read_text())
+        del config["preprocess"]["align"]
+        (copy / "cae.json").write_text(json.dumps(config))
+    said = tactile.train.align(mine, [data])
+    assert said.startswith("pin lattice at ") and "over 16 frames" in said, said
+    run_cli(tactile_bin, "train", "align", "--model", str(theirs), "--data", str(data))
+    saved = json.loads((mine / "cae.json").read_text())["preprocess"]["align"]
+    assert saved == json.loads((theirs / "cae.json").read_text())["preprocess"]["align"]
+    # The virtual TacTip's lattice is upright.
+    assert abs(saved["reference_deg"]) < 1.0
+    before = (mine / "cae.json").read_bytes()
+    vt = tactile.synth.visuotactile(sequences=1, frames_per_sequence=2, width=160, height=90,
+                                    seed=1, out=tmp_path / "vt", progress=False)
+    with pytest.raises(ValueError, match="vt"):
+        tactile.train.align(mine, vt)
+    assert (mine / "cae.json").read_bytes() == before

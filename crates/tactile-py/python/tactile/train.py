@@ -168,5 +168,16 @@ def profile(model: PathLike, data, *, split: Optional[str] = None) -> str:
     return _tactile.train_profile(model, data, split)
 
 
-__all__ = ["cae", "depth", "detector", "ensemble", "head", "options", "pose", "profile",
+def align(model: PathLike, data) -> str:
+    """Measure the pin lattice's orientation on an encoder's training frames
+    (``data``: a dataset or a list of them, every frame measured) and save it
+    in the encoder's config (the CLI's ``tactile train align``): frames of a
+    sensor mounted turned are then turned back before encoding, by
+    ``TactipEncoder``, ``predict`` and the CLI alike. Returns what was saved,
+    in words.
+    """
+    return _tactile.train_align(model, data)
+
+
+__all__ = ["align", "cae", "calibrate", "depth", "detector", "ensemble", "head", "options", "pose", "profile",
            "regressor", "segmenter"]
