@@ -16,14 +16,27 @@ use crate::args::{PathArg, PathList};
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
-/// Before a study runs: its page `out` can be written beside `data`
-/// ([`tactile_bench::output::check_page`]), as the command checks it.
-fn check_out(out: Option<&Path>, data: &Path) -> PyResult<()> {
-    if let Some(out) = out {
-        let ds = Dataset::open(data).py()?;
-        tactile_bench::output::check_page(out, &[&ds]).py()?;
-    }
-    Ok(())
+/// A study run off the interpreter (Ctrl-C stops it): its page `out`
+/// checked beside `data` first, as the command checks it
+/// ([`tactile_bench::output::check_page`]), then `run`, then the page
+/// written with `write` when `out` is given.
+fn study<R: Send>(
+    py: Python<'_>,
+    (data, out): (&Path, Option<&Path>),
+    run: impl FnOnce() -> tactile_bench::Result<R> + Send,
+    write: impl FnOnce(&R, &Path) -> tactile_bench::Result<()> + Send,
+) -> PyResult<R> {
+    interruptible(py, || {
+        if let Some(out) = out {
+            let ds = Dataset::open(data).py()?;
+            tactile_bench::output::check_page(out, &[&ds]).py()?;
+        }
+        let r = run().py()?;
+        if let Some(out) = out {
+            write(&r, out).py()?;
+        }
+        Ok(r)
+    })
 }
 
 /// Feature sets (the encoder's, PCA, raw pixels, pin tracking) against
@@ -44,14 +57,12 @@ pub(crate) fn study_compare<'py>(
         data,
         options: crate::json::options(py, options)?,
     };
-    let r = interruptible(py, || {
-        check_out(out.as_deref(), &c.data)?;
-        let r = tactile_bench::compare::compare(&c).py()?;
-        if let Some(out) = &out {
-            tactile_bench::output::write_markdown_and_json(out, &r.markdown, &r.rows()).py()?;
-        }
-        Ok(r)
-    })?;
+    let r = study(
+        py,
+        (&c.data, out.as_deref()),
+        || tactile_bench::compare::compare(&c),
+        |r, out| tactile_bench::output::write_markdown_and_json(out, &r.markdown, &r.rows()),
+    )?;
     for w in &r.warnings {
         crate::errors::user_warning(py, w)?;
     }
@@ -83,14 +94,12 @@ pub(crate) fn study_sweep<'py>(
         data,
         options: crate::json::options(py, options)?,
     };
-    let r = interruptible(py, || {
-        check_out(out.as_deref(), &s.data)?;
-        let r = tactile_bench::sweep::sweep(&s).py()?;
-        if let Some(out) = &out {
-            r.write(out).py()?;
-        }
-        Ok(r)
-    })?;
+    let r = study(
+        py,
+        (&s.data, out.as_deref()),
+        || tactile_bench::sweep::sweep(&s),
+        |r, out| r.write(out),
+    )?;
     crate::json::to_py(py, &r)
 }
 
@@ -112,13 +121,11 @@ pub(crate) fn study_robustness<'py>(
         data,
         options: crate::json::options(py, options)?,
     };
-    let result = interruptible(py, || {
-        check_out(out.as_deref(), &r.data)?;
-        let result = tactile_bench::robustness::robustness(&r).py()?;
-        if let Some(out) = &out {
-            result.write(out).py()?;
-        }
-        Ok(result)
-    })?;
+    let result = study(
+        py,
+        (&r.data, out.as_deref()),
+        || tactile_bench::robustness::robustness(&r),
+        |result, out| result.write(out),
+    )?;
     crate::json::to_py(py, &result)
 }

@@ -329,11 +329,7 @@ pub(crate) fn train_calibrate(
 ) -> PyResult<String> {
     crate::args::keywords!(model, data, calibration_from, split);
     let c = interruptible(py, || {
-        let sets = data
-            .iter()
-            .map(Dataset::open)
-            .collect::<Result<Vec<_>, _>>()
-            .py()?;
+        let sets = Dataset::open_all(&data).py()?;
         tactile_pipeline::calibrate::calibrate_model(
             &model,
             &sets,
@@ -362,11 +358,7 @@ pub(crate) fn train_profile(
 ) -> PyResult<String> {
     crate::args::keywords!(model, data, split);
     interruptible(py, || {
-        let sets = data
-            .iter()
-            .map(Dataset::open)
-            .collect::<Result<Vec<_>, _>>()
-            .py()?;
+        let sets = Dataset::open_all(&data).py()?;
         let p =
             tactile_pipeline::profile::add_input_profile(&model, &sets, split.as_deref()).py()?;
         Ok(format!("{} saved in {}", p.describe(), model.display()))
@@ -382,11 +374,7 @@ pub(crate) fn train_profile(
 pub(crate) fn train_align(py: Python<'_>, model: PathArg, data: PathList) -> PyResult<String> {
     crate::args::keywords!(model, data);
     interruptible(py, || {
-        let sets = data
-            .iter()
-            .map(Dataset::open)
-            .collect::<Result<Vec<_>, _>>()
-            .py()?;
+        let sets = Dataset::open_all(&data).py()?;
         let (p, n) = tactile_cae::artifact::add_pin_alignment(&model, &sets).py()?;
         Ok(p.describe(n))
     })

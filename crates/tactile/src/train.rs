@@ -265,7 +265,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
         }
         TrainCmd::Detector(a) => {
             let options = a.config.resolve(a.options)?;
-            let datasets: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
+            let datasets = Dataset::open_all(&a.data)?;
             let fit = options.train(&datasets, &a.out)?;
             say!("{}; model in {}", fit.describe(), a.out.display());
         }
@@ -276,7 +276,7 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             say!("{}; model in {}", fit.describe("mean IoU"), a.out.display());
         }
         TrainCmd::Profile(a) => {
-            let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
+            let data = Dataset::open_all(&a.data)?;
             let p =
                 tactile_pipeline::profile::add_input_profile(&a.model, &data, a.split.as_deref())?;
             say!("{} saved in {}", p.describe(), a.model.display());
@@ -288,12 +288,12 @@ pub(crate) fn main(cmd: TrainCmd) -> Result<()> {
             );
         }
         TrainCmd::Align(a) => {
-            let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
+            let data = Dataset::open_all(&a.data)?;
             let (p, n) = tactile_cae::artifact::add_pin_alignment(&a.model, &data)?;
             say!("{}", p.describe(n));
         }
         TrainCmd::Calibrate(a) => {
-            let data: Vec<_> = a.data.iter().map(Dataset::open).collect::<Result<_, _>>()?;
+            let data = Dataset::open_all(&a.data)?;
             let c = tactile_pipeline::calibrate::calibrate_model(
                 &a.model,
                 &data,

@@ -318,6 +318,12 @@ pub fn expect_manifest_size(
 }
 
 impl Dataset {
+    /// [`Self::open`] each of several folders (a model's training sets),
+    /// stopping at the first that cannot be opened.
+    pub fn open_all(roots: &[impl AsRef<Path>]) -> Result<Vec<Self>> {
+        roots.iter().map(Self::open).collect()
+    }
+
     /// Open and check a dataset folder: the manifest parses and has the
     /// right format, `labels.csv` has the kind's columns in order, every
     /// number parses and is finite, and every referenced file exists.
