@@ -698,6 +698,33 @@ pub fn encode_dataset(encoder: &mut TactipEncoder, ds: &Dataset) -> Result<Datas
     })
 }
 
+/// `tactile encode`'s and Python's `TactipEncoder.encode_dataset`'s pass:
+/// every frame of `ds` encoded ([`encode_dataset`]), its warnings led by the
+/// dataset's frame size when the encoder's preprocessing was not made for
+/// it ([`dataset_frame_warning`]); with `out`, a feature CSV
+/// (`file,f0,f1,...`) checked before any frame is read (no file of the
+/// dataset, no other format's name) and written after.
+pub fn encode_dataset_to(
+    encoder: &mut TactipEncoder,
+    ds: &Dataset,
+    out: Option<&Path>,
+) -> Result<DatasetFeatures> {
+    if let Some(out) = out {
+        tactile_core::dataset::check_output_file(out, &[ds])?;
+        tactile_core::dataset::refuse_misnamed_results(
+            out,
+            tactile_core::dataset::ResultsFormat::Csv,
+        )?;
+    }
+    let size = dataset_frame_warning(ds, [&encoder.artifact.preprocess]);
+    let mut e = encode_dataset(encoder, ds)?;
+    e.warnings.splice(0..0, size);
+    if let Some(out) = out {
+        tactile_cae::inference::write_features_csv(out, &e.files, &e.features)?;
+    }
+    Ok(e)
+}
+
 /// The warnings of a dataset pass's frames: its blank frames (`flat`),
 /// its frames outside the model's pin `profile` (`foreign`), in one
 /// warning each, then the pass's own warning of the frames it could not

@@ -223,6 +223,41 @@ impl PyTactipEncoder {
         Ok(arr.into_pyarray(py))
     }
 
+    /// Every frame of a TacTip dataset folder encoded, as `tactile encode`
+    /// does: `{"file": [...], "row": (N,) int64, "features": (N, F)
+    /// float32}`, a frame that cannot be decoded past its header left out
+    /// (its row too) with a `UserWarning`, as are blank frames, frames
+    /// outside the encoder's pin profile and a frame size its preprocessing
+    /// was not made for. With `out`, the same feature CSV as `tactile
+    /// encode --out` (checked before any frame is read).
+    #[pyo3(signature = (data, *, out=None))]
+    fn encode_dataset<'py>(
+        &self,
+        py: Python<'py>,
+        data: PathArg,
+        out: Option<PathArg>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        crate::args::keywords!(data, out);
+        let e = crate::work::interruptible(py, || {
+            let ds = tactile_core::dataset::Dataset::open(&data).py()?;
+            let mut models = self.lock()?;
+            tactile_pipeline::tactip::encode_dataset_to(&mut models.encoder, &ds, out.as_deref())
+                .py()
+        })?;
+        for w in &e.warnings {
+            crate::errors::user_warning(py, w)?;
+        }
+        let k = self.feature_count;
+        let features = ndarray::Array2::from_shape_vec((e.features.len(), k), e.features.concat())
+            .map_err(|err| PyValueError::new_err(err.to_string()))?;
+        let rows: Vec<i64> = e.rows.iter().map(|&r| r as i64).collect();
+        let d = PyDict::new(py);
+        d.set_item("file", e.files)?;
+        d.set_item("row", rows.into_pyarray(py))?;
+        d.set_item("features", features.into_pyarray(py))?;
+        Ok(d)
+    }
+
     /// Every estimator of the encoder on one encoding of each frame
     /// (paper A's simultaneous deployment): estimator output name to an
     /// array with one value per frame (class names for the shape head).

@@ -562,3 +562,45 @@ def test_a_long_batch_of_copied_frames_is_held_a_chunk_at_a_time(root):
     )], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert int(r.stdout) < 1024, f"peak {r.stdout.strip()} MB"
+
+
+def test_encode_dataset_is_tactile_encode_and_leaves_out_a_frame_cut_short(tactile_bin, root, tmp_path):
+    """TacTip's dataset pass from Python: the CSV and features of `tactile
+    encode`, a frame cut short behind its header left out with its row and
+    a UserWarning naming it, and the output checked before any frame is
+    read."""
+    data = tmp_path / "ds"
+    shutil.copytree(root / "samples/virtual-tactip", data)
+    ds = tactile.Dataset(data)
+    cut = data / ds.labels["file"][3]
+    whole = _frames(ds)
+    cut.write_bytes(cut.read_bytes()[: len(cut.read_bytes()) // 2])
+    enc = tactile.TactipEncoder(root / "models/cae-synth", "burn-flex")
+    mine = tmp_path / "py.csv"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = enc.encode_dataset(data, out=mine)
+    said = [str(w.message) for w in caught if w.category is UserWarning]
+    assert any(f"1 of the {len(ds)} frames could not be decoded" in w and cut.name in w
+               for w in said), said
+    kept = [i for i in range(len(ds)) if i != 3]
+    assert list(got["row"]) == kept
+    assert got["file"] == [ds.labels["file"][i] for i in kept]
+    assert got["features"].dtype == np.float32
+    assert got["features"].shape == (len(kept), enc.feature_count)
+    # The same features as the frames encoded one call at a time.
+    assert np.array_equal(got["features"], enc.encode(whole[kept]))
+    # The same CSV as the command line writes.
+    theirs = tmp_path / "cli.csv"
+    run_cli(tactile_bin, "encode", "--model", str(root / "models/cae-synth"), "--data",
+            str(data), "--out", str(theirs))
+    assert mine.read_text() == theirs.read_text()
+    # A CSV over the dataset's labels is refused before any frame is read.
+    labels = (data / "labels.csv").read_bytes()
+    with pytest.raises(ValueError, match="part of the input dataset"):
+        enc.encode_dataset(data, out=data / "labels.csv")
+    assert (data / "labels.csv").read_bytes() == labels
+    with pytest.raises(ValueError, match="not a TacTip dataset"):
+        vt = tactile.synth.visuotactile(sequences=1, frames_per_sequence=2, width=160,
+                                        height=90, seed=1, out=tmp_path / "vt", progress=False)
+        enc.encode_dataset(vt)

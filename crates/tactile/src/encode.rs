@@ -6,7 +6,6 @@ use anyhow::Result;
 use clap::Args;
 use tactile_burn::DeviceKind;
 use tactile_cae::TactipEncoder;
-use tactile_cae::inference::write_features_csv;
 use tactile_core::dataset::Dataset;
 
 #[derive(Args)]
@@ -27,26 +26,14 @@ pub(crate) struct EncodeArgs {
 
 pub(crate) fn main(a: EncodeArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
-    tactile_core::dataset::check_output_file(&a.out, &[&ds])?;
-    tactile_core::dataset::refuse_misnamed_results(
-        &a.out,
-        tactile_core::dataset::ResultsFormat::Csv,
-    )?;
     let mut enc = TactipEncoder::load(&a.model, a.device.runtime(), 0)?;
-    if let Some(w) =
-        tactile_pipeline::tactip::dataset_frame_warning(&ds, [&enc.artifact.preprocess])
-    {
-        tactile_core::note!("{w}");
-    }
-    let e = tactile_pipeline::tactip::encode_dataset(&mut enc, &ds)?;
+    let e = tactile_pipeline::tactip::encode_dataset_to(&mut enc, &ds, Some(&a.out))?;
     for w in &e.warnings {
         tactile_core::note!("{w}");
     }
-    let (files, feats) = (e.files, e.features);
-    write_features_csv(&a.out, &files, &feats)?;
     say!(
         "{} feature vectors of {} values written to {}",
-        feats.len(),
+        e.features.len(),
         enc.feature_count(),
         a.out.display()
     );

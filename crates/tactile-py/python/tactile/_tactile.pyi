@@ -106,6 +106,9 @@ class TactipEncoder:
     def encode(
         self, frames: Union[npt.NDArray[np.uint8], Iterable[npt.NDArray[np.uint8]]]
     ) -> npt.NDArray[np.float32]: ...
+    def encode_dataset(
+        self, data: _Path, *, out: Optional[_Path] = None
+    ) -> Dict[str, Any]: ...
     def estimate(
         self, frames: Union[npt.NDArray[np.uint8], Iterable[npt.NDArray[np.uint8]]]
     ) -> Dict[str, npt.NDArray[Any]]: ...
