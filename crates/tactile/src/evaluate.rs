@@ -53,11 +53,15 @@ pub(crate) fn main(a: EvaluateArgs) -> Result<()> {
         Some(name) => format!("its '{}' split, ", tactile_core::dataset::split_name(name)),
         None => String::new(),
     };
+    // Frames left out (cut short behind their header) are said here too.
+    let frames = match s.frames {
+        n if n == ds.len() => format!("{n} frames"),
+        n => format!("{n} of its {} frames scored", ds.len()),
+    };
     let md = format!(
-        "{kind} {} on {} ({split}{} frames).\n\n{}",
+        "{kind} {} on {} ({split}{frames}).\n\n{}",
         a.encoder.display(),
         a.data.display(),
-        ds.len(),
         scores_markdown(&s)
     );
     say_raw!("{md}");

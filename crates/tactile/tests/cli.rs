@@ -2527,6 +2527,8 @@ fn evaluate_leaves_a_frame_cut_short_out_of_its_scores() {
         assert!(msg.contains(&labels[3][file]), "{msg}");
         let json = last_json(&msg);
         assert_eq!(json["frames"], 7, "{json}");
+        // The title says so too (it said "8 frames" over tables of 7).
+        assert!(msg.contains(" (7 of its 8 frames scored)."), "{msg}");
         assert_errors_are_predicts(&json, &estimates, &labels, &[1, 2, 4, 5, 6, 7, 8]);
     }
     for i in 0..8 {
