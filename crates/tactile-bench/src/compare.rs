@@ -86,14 +86,14 @@ impl CompareResult {
 /// the training frames only.
 fn encoder_saw_test(c: &Compare, ds: &Dataset, test: &[usize]) -> Option<String> {
     let saw = encoder_trained_on(&c.encoder, ds, test)?;
-    let c_options = &c.options;
     Some(format!(
         "The encoder {saw}, so its row scores frames its features fitted, unlike the other rows: for a held-out comparison train it {}, or on another recording.",
-        holdout_cure(ds, c_options.test_fraction, c_options.seed)
+        holdout_cure(ds, c.options.test_fraction, c.options.seed)
     ))
 }
 
-/// The comparison's Markdown.
+/// The comparison: its page, its rows and its warnings. Targets, the
+/// preprocessing and the MLP's widths are checked before any frame is read.
 pub fn compare(c: &Compare) -> Result<CompareResult> {
     let o = &c.options;
     if o.targets.is_empty() && o.classify.is_none() {

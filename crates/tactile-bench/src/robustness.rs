@@ -178,7 +178,8 @@ pub struct RobustnessResult {
 }
 
 impl RobustnessResult {
-    /// Write the table to `out` and its plot beside it (`NAME.png`).
+    /// Write the table to `out`, its rows (`NAME.json`) and its plot
+    /// (`NAME.png`) beside it.
     pub fn write(&self, out: &Path) -> Result<()> {
         let _page = crate::output::lock_page(out)?;
         let png = out.with_extension("png");
@@ -192,7 +193,6 @@ impl RobustnessResult {
         )?;
         let name = png.file_name().unwrap_or_default().to_string_lossy();
         let md = format!("{}\n![robustness]({name})\n", self.markdown);
-        tactile_core::io::write_atomic(out, md.as_bytes())?;
-        Ok(())
+        crate::output::markdown_and_json(out, &md, &self.rows)
     }
 }

@@ -159,11 +159,11 @@ pub fn sweep(s: &Sweep) -> Result<SweepResult> {
 }
 
 impl SweepResult {
-    /// Write the table to `out` and the plots beside it
-    /// (`NAME-features.png`, `NAME-latency.png`).
+    /// Write the table to `out`, its rows (`NAME.json`) and the plots
+    /// beside it (`NAME-features.png`, `NAME-latency.png`).
     pub fn write(&self, out: &Path) -> Result<()> {
         let _page = crate::output::lock_page(out)?;
-        tactile_core::io::write_atomic(out, self.markdown.as_bytes())?;
+        crate::output::markdown_and_json(out, &self.markdown, &self.rows)?;
         let stem = out.with_extension("");
         let name = stem.file_name().unwrap_or_default().to_string_lossy();
         let err = |r: &SweepRow| 100.0 * (1.0 - r.accuracy);

@@ -93,7 +93,9 @@ def test_sweep_and_robustness_give_their_rows(root, tactip_set, tmp_path):
     assert 0.0 < row["bce"] < 1.0 and 2 / 7 < row["accuracy"] <= 1.0
     assert {runtime for runtime, _, _ in row["speed"]} >= {"burn flex"}
     assert all(ms > 0 and fps > 0 for _, ms, fps in row["speed"])
-    assert (tmp_path / "sweep.md").read_text().startswith(s["markdown"].split("\n")[0])
+    assert (tmp_path / "sweep.md").read_text() == s["markdown"]
+    assert json.loads((tmp_path / "sweep.json").read_text()) == s["rows"]
+    assert (tmp_path / "sweep-features.png").is_file()
 
     r = tactile.study.robustness(encoder, tactip_set, limit=12, out=tmp_path / "robust.md")
     conditions = [row["condition"] for row in r["rows"]]
@@ -105,6 +107,7 @@ def test_sweep_and_robustness_give_their_rows(root, tactip_set, tmp_path):
         assert [name for name, _ in row["values"]] == names
         assert f"| {row['condition']} |" in r["markdown"]
     assert (tmp_path / "robust.png").is_file()
+    assert json.loads((tmp_path / "robust.json").read_text()) == r["rows"]
 
 
 def test_study_options_are_refused_before_any_work(root, tactip_set):
