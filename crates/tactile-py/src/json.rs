@@ -14,6 +14,29 @@ pub(crate) fn to_py<'py, T: serde::Serialize + ?Sized>(
     py.import("json")?.call_method1("loads", (text,))
 }
 
+/// What `json.dumps` makes of a value inside a keyword's list or dict
+/// that JSON has no type for: a path (`heads=[Path(...)]`) its string,
+/// a numpy value the Python one, anything else the `TypeError` `json`
+/// itself gives.
+#[pyfunction]
+fn json_default<'py>(value: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    let py = value.py();
+    let os = py.import("os")?;
+    if value.is_instance(&os.getattr("PathLike")?)? {
+        return os.call_method1("fspath", (value,));
+    }
+    let numpy = py.import("numpy")?;
+    if value.is_instance(&numpy.getattr("ndarray")?)?
+        || value.is_instance(&numpy.getattr("generic")?)?
+    {
+        return value.call_method0("tolist");
+    }
+    Err(pyo3::exceptions::PyTypeError::new_err(format!(
+        "Object of type {} is not JSON serializable",
+        value.get_type().name()?
+    )))
+}
+
 /// Keyword arguments onto an options type of the library
 /// ([`tactile_burn::options::Options`]): through JSON, so a tuple is a
 /// list and None keeps the default; `config=` names an options file the
@@ -34,6 +57,7 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
             let json = py.import("json")?;
             let kwargs = pyo3::types::PyDict::new(py);
             kwargs.set_item("allow_nan", false)?;
+            kwargs.set_item("default", wrap_pyfunction!(json_default, py)?)?;
             let mut map = serde_json::Map::new();
             for (k, v) in d.iter() {
                 let key: String = k.extract()?;

@@ -97,12 +97,16 @@ def test_sweep_and_robustness_give_their_rows(root, tactip_set, tmp_path):
     assert json.loads((tmp_path / "sweep.json").read_text()) == s["rows"]
     assert (tmp_path / "sweep-features.png").is_file()
 
-    r = tactile.study.robustness(encoder, tactip_set, limit=12, out=tmp_path / "robust.md")
+    # Estimators named as paths in a list, as pathlib gives them.
+    heads = [encoder / "head", encoder / "regressor"]
+    r = tactile.study.robustness(encoder, tactip_set, heads=heads, limit=12,
+                                 out=tmp_path / "robust.md")
     conditions = [row["condition"] for row in r["rows"]]
     # Clean, then four perturbations at three strengths each.
     assert conditions[0] == "clean" and len(conditions) == 13
     names = [name for name, _ in r["rows"][0]["values"]]
     assert names[0] == "shape accuracy" and "depth_mm MAE" in names
+    assert "with 2 estimator(s)" in r["markdown"]
     for row in r["rows"]:
         assert [name for name, _ in row["values"]] == names
         assert f"| {row['condition']} |" in r["markdown"]
