@@ -41,7 +41,7 @@ def test_stub_lists_every_export_and_member():
 
 
 def test_everything_public_has_a_docstring():
-    for mod in (tactile, tactile.synth, tactile.train, tactile.eval, tactile.calibrate):
+    for mod in (tactile, tactile.synth, tactile.train, tactile.eval, tactile.calibrate, tactile.study):
         assert mod.__doc__
         for name in getattr(mod, "__all__", []):
             obj = getattr(mod, name)
