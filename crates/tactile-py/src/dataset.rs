@@ -130,6 +130,13 @@ impl PyDataset {
         self.ds.root.clone()
     }
 
+    /// The folder, so a dataset is an `os.PathLike`: every function that
+    /// takes a dataset's path takes the dataset itself
+    /// (`tactile.eval.tactip(model, ds)`), as the folder it was opened from.
+    fn __fspath__(&self) -> std::ffi::OsString {
+        self.ds.root.clone().into_os_string()
+    }
+
     /// "tactip" or "visuotactile".
     #[getter]
     fn kind(&self) -> &'static str {

@@ -328,6 +328,23 @@ def test_manifest_and_columns(root):
     json.dumps(ds.manifest)
 
 
+def test_a_dataset_is_taken_wherever_its_folder_is(root, tmp_path):
+    """A dataset is an os.PathLike of its folder: the functions that take a
+    dataset's path take the opened dataset, with the same results."""
+    ds = tactile.Dataset(root / "samples/virtual-tactip")
+    assert isinstance(ds, os.PathLike) and os.fspath(ds) == str(ds.path)
+    by_path = tactile.eval.tactip(root / "models/cae-synth", ds.path)
+    assert tactile.eval.tactip(root / "models/cae-synth", ds) == by_path
+    enc = tactile.TactipEncoder(root / "models/cae-synth")
+    got = enc.encode_dataset(ds)
+    assert got["file"] == ds.labels["file"]
+    assert np.array_equal(got["features"], enc.encode_dataset(ds.path)["features"])
+    assert [f.name for f in tactile.frames(ds)] == [f.name for f in tactile.frames(ds.path)]
+    # `predict` reads it as its folder (a dataset), not as a source of frames alone.
+    est = tactile.predict(root / "models/cae-synth", ds, tmp_path / "e.csv")
+    assert list(est["file"]) == ds.labels["file"]
+
+
 def test_a_folder_of_frames_and_labels_become_a_dataset(root, tmp_path, palpation_frames):
     # Frames 2-9 of the sample video press on the tendon; frame 11 is unlabelled.
     rows = ["frame,tendon,direction_deg,sequence"]
