@@ -3,7 +3,7 @@
 //! MLP, ridge and k-NN (regression) or an MLP head, Gaussian naive Bayes and
 //! k-NN (classification).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
@@ -77,6 +77,11 @@ impl CompareResult {
             "classification": self.classification,
             "warnings": self.warnings,
         })
+    }
+
+    /// Write the page to `out` and its rows beside it (`NAME.json`).
+    pub fn write(&self, out: &Path) -> Result<()> {
+        crate::output::write_markdown_and_json(out, &self.markdown, &self.rows())
     }
 }
 

@@ -103,6 +103,27 @@ pub fn check_page(out: &Path, datasets: &[&tactile_core::dataset::Dataset]) -> R
     Ok(())
 }
 
+/// A study that may write a page: `out` checked against the dataset at
+/// `data` before `run` ([`check_page`]: its rows and plot beside it too),
+/// then written by `write`. The one sequence of `tactile compare|sweep|
+/// robustness --out` and Python's `tactile.study.NAME(..., out=)`.
+pub fn with_page<R>(
+    data: &Path,
+    out: Option<&Path>,
+    run: impl FnOnce() -> Result<R>,
+    write: impl FnOnce(&R, &Path) -> Result<()>,
+) -> Result<R> {
+    if let Some(out) = out {
+        let ds = tactile_core::dataset::Dataset::open(data)?;
+        check_page(out, &[&ds])?;
+    }
+    let r = run()?;
+    if let Some(out) = out {
+        write(&r, out)?;
+    }
+    Ok(r)
+}
+
 /// The folder of a page locked while its files are written, and a second
 /// Ctrl-C held off until they all are.
 pub struct PageLock {

@@ -14,27 +14,38 @@ pub(crate) fn to_py<'py, T: serde::Serialize + ?Sized>(
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// What `json.dumps` makes of a value inside a keyword's list or dict
-/// that JSON has no type for: a path (`heads=[Path(...)]`) its string,
-/// a numpy value the Python one, anything else the `TypeError` `json`
-/// itself gives.
-#[pyfunction]
-fn json_default<'py>(value: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+/// A value JSON has no type for as the one it stands for: a path
+/// (`data=Path(...)`, `heads=[Path(...)]`) its string, a numpy value the
+/// Python one; `None` for any other value.
+fn as_plain<'py>(value: &Bound<'py, PyAny>) -> PyResult<Option<Bound<'py, PyAny>>> {
     let py = value.py();
     let os = py.import("os")?;
     if value.is_instance(&os.getattr("PathLike")?)? {
-        return os.call_method1("fspath", (value,));
+        return os.call_method1("fspath", (value,)).map(Some);
     }
     let numpy = py.import("numpy")?;
     if value.is_instance(&numpy.getattr("ndarray")?)?
         || value.is_instance(&numpy.getattr("generic")?)?
     {
-        return value.call_method0("tolist");
+        return value.call_method0("tolist").map(Some);
     }
-    Err(pyo3::exceptions::PyTypeError::new_err(format!(
-        "Object of type {} is not JSON serializable",
-        value.get_type().name()?
-    )))
+    Ok(None)
+}
+
+/// `json.dumps`'s `default` for a value inside a keyword's list or dict
+/// ([`as_plain`]); anything else gets the `TypeError` `json` itself gives.
+#[pyfunction]
+fn json_default<'py>(value: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    as_plain(value)?.ok_or_else(|| {
+        let name = value
+            .get_type()
+            .name()
+            .map(|n| n.to_string())
+            .unwrap_or_default();
+        pyo3::exceptions::PyTypeError::new_err(format!(
+            "Object of type {name} is not JSON serializable"
+        ))
+    })
 }
 
 /// Keyword arguments onto an options type of the library
@@ -49,11 +60,6 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
     let mut map: serde_json::Map<String, serde_json::Value> = match kwargs {
         None => serde_json::Map::new(),
         Some(d) => {
-            let os = py.import("os")?;
-            let path_like = os.getattr("PathLike")?;
-            let numpy = py.import("numpy")?;
-            let (numpy_value, numpy_scalar) =
-                (numpy.getattr("ndarray")?, numpy.getattr("generic")?);
             let json = py.import("json")?;
             let kwargs = pyo3::types::PyDict::new(py);
             kwargs.set_item("allow_nan", false)?;
@@ -63,13 +69,7 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
                 let key: String = k.extract()?;
                 // Paths become strings, numpy values Python ones, as JSON
                 // has them.
-                let v = if v.is_instance(&path_like)? {
-                    os.call_method1("fspath", (v,))?
-                } else if v.is_instance(&numpy_value)? || v.is_instance(&numpy_scalar)? {
-                    v.call_method0("tolist")?
-                } else {
-                    v
-                };
+                let v = as_plain(&v)?.unwrap_or(v);
                 // Each value alone, so a bad one is named: NaN and
                 // infinities are refused (JSON has none).
                 let text: String = json

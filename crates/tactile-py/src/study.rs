@@ -7,19 +7,17 @@ use std::path::Path;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use tactile_bench::compare::Compare;
-use tactile_bench::robustness::Robustness;
-use tactile_bench::sweep::Sweep;
-use tactile_core::dataset::Dataset;
+use tactile_bench::compare::{Compare, CompareResult};
+use tactile_bench::robustness::{Robustness, RobustnessResult};
+use tactile_bench::sweep::{Sweep, SweepResult};
 
 use crate::args::{PathArg, PathList};
 use crate::errors::PyResultExt;
 use crate::work::interruptible;
 
-/// A study run off the interpreter (Ctrl-C stops it): its page `out`
-/// checked beside `data` first, as the command checks it
-/// ([`tactile_bench::output::check_page`]), then `run`, then the page
-/// written with `write` when `out` is given.
+/// A study run off the interpreter (Ctrl-C stops it), its page `out`
+/// checked before and written after as the command does
+/// ([`tactile_bench::output::with_page`]).
 fn study<R: Send>(
     py: Python<'_>,
     (data, out): (&Path, Option<&Path>),
@@ -27,15 +25,7 @@ fn study<R: Send>(
     write: impl FnOnce(&R, &Path) -> tactile_bench::Result<()> + Send,
 ) -> PyResult<R> {
     interruptible(py, || {
-        if let Some(out) = out {
-            let ds = Dataset::open(data).py()?;
-            tactile_bench::output::check_page(out, &[&ds]).py()?;
-        }
-        let r = run().py()?;
-        if let Some(out) = out {
-            write(&r, out).py()?;
-        }
-        Ok(r)
+        tactile_bench::output::with_page(data, out, run, write).py()
     })
 }
 
@@ -61,7 +51,7 @@ pub(crate) fn study_compare<'py>(
         py,
         (&c.data, out.as_deref()),
         || tactile_bench::compare::compare(&c),
-        |r, out| tactile_bench::output::write_markdown_and_json(out, &r.markdown, &r.rows()),
+        CompareResult::write,
     )?;
     for w in &r.warnings {
         crate::errors::user_warning(py, w)?;
@@ -98,7 +88,7 @@ pub(crate) fn study_sweep<'py>(
         py,
         (&s.data, out.as_deref()),
         || tactile_bench::sweep::sweep(&s),
-        |r, out| r.write(out),
+        SweepResult::write,
     )?;
     crate::json::to_py(py, &r)
 }
@@ -125,7 +115,7 @@ pub(crate) fn study_robustness<'py>(
         py,
         (&r.data, out.as_deref()),
         || tactile_bench::robustness::robustness(&r),
-        |result, out| result.write(out),
+        RobustnessResult::write,
     )?;
     crate::json::to_py(py, &result)
 }

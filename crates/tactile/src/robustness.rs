@@ -1,19 +1,23 @@
 //! `tactile robustness`: estimator errors under perturbed camera conditions.
 
 use anyhow::Result;
-use tactile_bench::robustness::{Robustness, robustness};
+use tactile_bench::output::with_page;
+use tactile_bench::robustness::{Robustness, RobustnessResult, robustness};
 
 pub(crate) type RobustnessArgs = crate::args::Paged<Robustness>;
 
 pub(crate) fn main(a: RobustnessArgs) -> Result<()> {
+    with_page(
+        &a.bench.data,
+        a.out.as_deref(),
+        || {
+            let r = robustness(&a.bench)?;
+            say_raw!("{}", r.markdown);
+            Ok(r)
+        },
+        RobustnessResult::write,
+    )?;
     if let Some(out) = &a.out {
-        let ds = tactile_core::dataset::Dataset::open(&a.bench.data)?;
-        tactile_bench::output::check_page(out, &[&ds])?;
-    }
-    let r = robustness(&a.bench)?;
-    say_raw!("{}", r.markdown);
-    if let Some(out) = &a.out {
-        r.write(out)?;
         tactile_core::note!("wrote {} and its plot", out.display());
     }
     Ok(())

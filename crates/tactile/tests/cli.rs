@@ -1259,6 +1259,24 @@ fn sweep_tabulates_and_plots_every_encoder() {
     );
     assert!(tmp.path().join("sweep-features.png").is_file());
     assert!(tmp.path().join("sweep-latency.png").is_file());
+    // Its rows go beside it, so a page named as its own rows is refused
+    // before any encoder is run, as every page is (it was written, then
+    // replaced by the rows).
+    let page = tmp.path().join("page.json");
+    let mut args = vec![
+        "sweep",
+        "--data",
+        d,
+        "--runs",
+        "2",
+        "--out",
+        page.to_str().unwrap(),
+        "--encoders",
+    ];
+    args.extend(encoders.iter().map(String::as_str));
+    let (ok, msg) = tactile(&args);
+    assert!(!ok && msg.contains("a page is Markdown"), "{msg}");
+    assert!(!page.exists());
 }
 
 #[test]
