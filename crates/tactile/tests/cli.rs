@@ -1236,19 +1236,22 @@ fn sweep_tabulates_and_plots_every_encoder() {
         assert!(ok, "{msg}");
         encoders.push(m.to_str().unwrap().to_string());
     }
+    let sweep = |out: &Path| {
+        let mut args = vec![
+            "sweep",
+            "--data",
+            d,
+            "--runs",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+            "--encoders",
+        ];
+        args.extend(encoders.iter().map(String::as_str));
+        tactile(&args)
+    };
     let out = tmp.path().join("sweep.md");
-    let mut args = vec![
-        "sweep",
-        "--data",
-        d,
-        "--runs",
-        "2",
-        "--out",
-        out.to_str().unwrap(),
-        "--encoders",
-    ];
-    args.extend(encoders.iter().map(String::as_str));
-    let (ok, msg) = tactile(&args);
+    let (ok, msg) = sweep(&out);
     assert!(ok, "{msg}");
     let table = std::fs::read_to_string(&out).unwrap();
     assert!(
@@ -1263,18 +1266,7 @@ fn sweep_tabulates_and_plots_every_encoder() {
     // before any encoder is run, as every page is (it was written, then
     // replaced by the rows).
     let page = tmp.path().join("page.json");
-    let mut args = vec![
-        "sweep",
-        "--data",
-        d,
-        "--runs",
-        "2",
-        "--out",
-        page.to_str().unwrap(),
-        "--encoders",
-    ];
-    args.extend(encoders.iter().map(String::as_str));
-    let (ok, msg) = tactile(&args);
+    let (ok, msg) = sweep(&page);
     assert!(!ok && msg.contains("a page is Markdown"), "{msg}");
     assert!(!page.exists());
 }
