@@ -12,6 +12,7 @@ use tactile_core::dataset::Dataset;
 use tactile_core::image_io::GreyImage;
 use tactile_core::plot::{Series, line_plot};
 use tactile_core::rng::SampleRng;
+use tactile_core::source::UndecodableFrames;
 use tactile_estimate::eval::Scores;
 use tactile_pipeline::tactip::TactipPerception;
 use tactile_preprocess::perturb::Perturbation;
@@ -50,10 +51,12 @@ pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
     let mut perception = TactipPerception::load(&r.encoder, &r.options.heads, Runtime::BurnFlex)?;
     let preprocess = perception.encoder.artifact.preprocess.clone();
     let estimators = perception.estimators.len();
-    let frames = (0..n)
-        .into_par_iter()
-        .map(|i| Ok(ds.load_grey(i, "file")?))
-        .collect::<Result<Vec<GreyImage>>>()?;
+    let (frames, ds, warnings) = clean_frames(&ds, n)?;
+    // Frames left out (cut short behind their header) are said here too.
+    let scored = match frames.len() {
+        k if k == n => format!("the first {n} frames"),
+        k => format!("{k} of the first {n} frames"),
+    };
     let mut run = |p: Option<Perturbation>, stream: u64| -> Result<Scores> {
         let images = frames
             .par_iter()
@@ -84,11 +87,15 @@ pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
     };
     let header = columns(&clean);
     let mut md = format!(
-        "Encoder {} with {} estimator(s) on the first {n} frames of {}; each perturbation is applied to the raw frames before preprocessing (seed {}).\n\n| condition |",
+        "Encoder {} with {} estimator(s) on {scored} of {}; each perturbation is applied to the raw frames before preprocessing (seed {}).\n\n{}| condition |",
         r.encoder.display(),
         estimators,
         r.data.display(),
-        r.options.seed
+        r.options.seed,
+        warnings
+            .iter()
+            .map(|w| format!("**{w}**\n\n"))
+            .collect::<String>()
     );
     for (name, _) in &header {
         md.push_str(&format!(" {name} |"));
@@ -151,6 +158,7 @@ pub fn robustness(r: &Robustness) -> Result<RobustnessResult> {
     Ok(RobustnessResult {
         markdown: md,
         rows,
+        warnings,
         series,
     })
 }
@@ -165,6 +173,33 @@ pub struct RobustnessRow {
     pub values: Vec<(String, f64)>,
 }
 
+/// The first `n` frames of `ds` as recorded, with the dataset of their
+/// rows and the warnings of the pass. Every header is read first, so a
+/// frame no reader takes stops the study before any is decoded; a frame
+/// cut short behind a whole header is then left out with its labels and
+/// named in the warnings, as `evaluate` leaves it out
+/// ([`UndecodableFrames`], the one rule); when none can be decoded, the
+/// study fails with the refusal.
+fn clean_frames(ds: &Dataset, n: usize) -> Result<(Vec<GreyImage>, Dataset, Vec<String>)> {
+    let rows: Vec<usize> = (0..n).collect();
+    ds.check_frame_headers(&rows)?;
+    let loaded: Vec<_> = rows.par_iter().map(|&i| ds.load_grey(i, "file")).collect();
+    let mut skipped = UndecodableFrames::new(n);
+    let (mut kept, mut frames) = (Vec::new(), Vec::new());
+    for (i, frame) in loaded.into_iter().enumerate() {
+        if let Some(frame) = skipped.decoded(frame)? {
+            kept.push(i);
+            frames.push(frame);
+        }
+    }
+    // Without the "warning: " the CLI prints before it, as compare's.
+    let warnings = (skipped.warning().into_iter())
+        .map(|w| w.strip_prefix("warning: ").unwrap_or(&w).to_string())
+        .collect();
+    skipped.finish(frames.len())?;
+    Ok((frames, ds.only_rows(&kept), warnings))
+}
+
 /// The table, its rows and the plot's series.
 #[derive(Serialize)]
 pub struct RobustnessResult {
@@ -172,6 +207,10 @@ pub struct RobustnessResult {
     pub markdown: String,
     /// Each condition's row, in the table's order.
     pub rows: Vec<RobustnessRow>,
+    /// What the pass left out: a frame cut short behind its header, named
+    /// (also in bold on the page), without the `warning: ` the CLI puts
+    /// before it.
+    pub warnings: Vec<String>,
     /// Error growth per perturbation kind.
     #[serde(skip)]
     pub series: Vec<Series>,

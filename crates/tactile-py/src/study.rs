@@ -117,5 +117,8 @@ pub(crate) fn study_robustness<'py>(
         || tactile_bench::robustness::robustness(&r),
         RobustnessResult::write,
     )?;
+    for w in &result.warnings {
+        crate::errors::user_warning(py, w)?;
+    }
     crate::json::to_py(py, &result)
 }

@@ -134,3 +134,26 @@ def test_study_options_are_refused_before_any_work(root, tactip_set):
     with pytest.raises(ValueError, match="part of the input dataset"):
         tactile.study.robustness(encoder, tactip_set, out=tactip_set / "labels.csv")
     assert (tactip_set / "labels.csv").read_bytes() == labels
+
+
+def test_robustness_leaves_out_a_frame_cut_short_with_a_warning(root, tactip_set, tmp_path):
+    # A copy of the set with its 3rd frame cut to half its bytes behind a
+    # whole header: the study scores the other frames, as tactile.eval.tactip
+    # does, and warns naming it (before, it stopped at the frame).
+    import shutil
+
+    data = tmp_path / "ds"
+    shutil.copytree(tactip_set, data)
+    first = (data / "labels.csv").read_text().splitlines()[1:4]
+    name = first[2].split(",")[0]
+    whole = (data / name).read_bytes()
+    (data / name).write_bytes(whole[: len(whole) // 2])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = tactile.study.robustness(root / "models/cae-synth", data, limit=6)
+    told = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+    assert len(told) == 1 and told == r["warnings"], told
+    assert "1 of the 6 frames could not be decoded past their header" in told[0]
+    assert name in told[0]
+    assert " on 5 of the first 6 frames of " in r["markdown"]
+    assert len(r["rows"]) == 13

@@ -12,6 +12,9 @@ pub(crate) fn main(a: RobustnessArgs) -> Result<()> {
         a.out.as_deref(),
         || {
             let r = robustness(&a.bench)?;
+            for w in &r.warnings {
+                tactile_core::note!("warning: {w}");
+            }
             say_raw!("{}", r.markdown);
             Ok(r)
         },

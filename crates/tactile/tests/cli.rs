@@ -1023,6 +1023,96 @@ fn evaluate_and_robustness_score_the_shipped_estimators() {
 }
 
 #[test]
+fn robustness_leaves_a_frame_cut_short_out_as_evaluate_does() {
+    // The 14 sample frames with the 4th cut to half its bytes behind a
+    // whole header (a copy stopped half-way): the study scores the other
+    // 13 under every condition, exactly as on the set without that row,
+    // and says so. Before, it stopped at the frame. Every frame cut:
+    // refused, naming the first, and no page written.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let enc = root.join("models/cae-synth");
+    let sample = root.join("samples/virtual-tactip");
+    let tmp = tempfile::tempdir().unwrap();
+    let labels = std::fs::read_to_string(sample.join("labels.csv")).unwrap();
+    let lines: Vec<&str> = labels.lines().collect();
+    // The sample's frames, with the labels' rows `keep` keeps.
+    let copy = |name: &str, keep: &dyn Fn(usize) -> bool| {
+        let data = tmp.path().join(name);
+        std::fs::create_dir_all(data.join("frames")).unwrap();
+        let mut text = format!("{}\n", lines[0]);
+        let mut count = 0;
+        for (_, l) in lines[1..].iter().enumerate().filter(|(i, _)| keep(*i)) {
+            let file = l.split(',').next().unwrap();
+            std::fs::copy(sample.join(file), data.join(file)).unwrap();
+            text += &format!("{l}\n");
+            count += 1;
+        }
+        std::fs::write(data.join("labels.csv"), text).unwrap();
+        let manifest = std::fs::read_to_string(sample.join("manifest.json")).unwrap();
+        let manifest = manifest.replace("\"count\": 14", &format!("\"count\": {count}"));
+        std::fs::write(data.join("manifest.json"), manifest).unwrap();
+        data
+    };
+    let cut = copy("cut", &|_| true);
+    let less = copy("less", &|i| i != 3);
+    let file = |i: usize| lines[i + 1].split(',').next().unwrap().to_string();
+    let cut_frame = |i: usize| {
+        let path = cut.join(file(i));
+        let whole = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &whole[..whole.len() / 2]).unwrap();
+    };
+    cut_frame(3);
+    let study = |data: &Path, out: &Path| {
+        tactile(&[
+            "robustness",
+            "--encoder",
+            enc.to_str().unwrap(),
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let table = |page: &str| -> Vec<String> {
+        page.lines()
+            .filter(|l| l.starts_with("| "))
+            .map(str::to_string)
+            .collect()
+    };
+    let (ok, msg) = study(&cut, &tmp.path().join("cut.md"));
+    assert!(ok, "{msg}");
+    assert!(
+        msg.contains("1 of the 14 frames could not be decoded past their header"),
+        "{msg}"
+    );
+    assert!(msg.contains(&file(3)), "{msg}");
+    let page = std::fs::read_to_string(tmp.path().join("cut.md")).unwrap();
+    assert!(page.contains(" on 13 of the first 14 frames of "), "{page}");
+    assert!(
+        page.contains("could not be decoded past their header"),
+        "{page}"
+    );
+    let (ok, msg) = study(&less, &tmp.path().join("less.md"));
+    assert!(ok, "{msg}");
+    let whole = std::fs::read_to_string(tmp.path().join("less.md")).unwrap();
+    assert!(whole.contains(" on the first 13 frames of "), "{whole}");
+    assert_eq!(table(&page), table(&whole));
+    assert_eq!(table(&page).len(), 14, "{page}");
+
+    for i in 0..14 {
+        if i != 3 {
+            cut_frame(i);
+        }
+    }
+    let out = tmp.path().join("none.md");
+    let (ok, msg) = study(&cut, &out);
+    assert!(!ok, "{msg}");
+    assert!(msg.contains("14 of the 14"), "{msg}");
+    assert!(msg.contains(&file(0)), "{msg}");
+    assert!(!out.exists() && !out.with_extension("json").exists());
+}
+
+#[test]
 fn compare_writes_a_table_of_every_feature_set_and_estimator() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("tt");

@@ -17,7 +17,10 @@ rows, numbers rather than text, so they can be plotted or tabulated:
   accuracy and speed per runtime (``rows``).
 - ``robustness(encoder, data)``: every estimator's errors on clean frames
   and on copies with more noise, an illumination gradient, a light blob or
-  a rotation (``rows``: ``condition`` and its ``values``).
+  a rotation (``rows``: ``condition`` and its ``values``); ``warnings``
+  (also raised as ``UserWarning``) names a frame cut short behind its
+  header, left out of every condition as ``tactile.eval.tactip`` leaves it
+  out.
 
 With ``out=`` the page is written too, its rows (``NAME.json``) and plots
 beside it, as the command's ``--out`` writes them.
