@@ -224,7 +224,15 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
     if !out.status.success() {
         let why = String::from_utf8_lossy(&out.stderr);
         let why = why.lines().last().unwrap_or("ffprobe failed").trim();
-        return Err(Error::image(path, format!("cannot read as video: {why}")));
+        // A device is read as a camera: one that is none (`/dev/null`, a
+        // serial port) is said to be no camera, not no video file.
+        let what = match input {
+            VideoInput::File(_) => "cannot read as video",
+            VideoInput::Camera(_) => {
+                "cannot read as a camera (a device is read as a V4L2 camera, such as /dev/video0)"
+            }
+        };
+        return Err(Error::image(path, format!("{what}: {why}")));
     }
     #[derive(serde::Deserialize)]
     struct Probe {

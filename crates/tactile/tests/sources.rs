@@ -463,6 +463,18 @@ fn a_file_that_is_not_a_video_is_an_error_naming_it() {
             && err.contains(&format!("pass the dataset's folder {}", ds.display())),
         "{err}"
     );
+    // A device that is no camera: said to be read as one. Before, "cannot
+    // read as video: /dev/null: Inappropriate ioctl for device".
+    let out = tactile()
+        .args(["run", "--models", MODELS, "--data", "/dev/null"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("/dev/null: cannot read as a camera (a device is read as a V4L2 camera, such as /dev/video0)"),
+        "{err}"
+    );
 }
 
 #[test]
