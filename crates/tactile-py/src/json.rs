@@ -70,6 +70,19 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
                 // Paths become strings, numpy values Python ones, as JSON
                 // has them.
                 let v = as_plain(&v)?.unwrap_or(v);
+                // JSON would read a whole number past 64 bits as a float
+                // ("invalid type: floating point"): said as what it is.
+                if v.is_instance_of::<pyo3::types::PyInt>()
+                    && !v.is_instance_of::<pyo3::types::PyBool>()
+                    && v.extract::<i64>().is_err()
+                    && v.extract::<u64>().is_err()
+                {
+                    return Err(PyValueError::new_err(format!(
+                        "invalid configuration: option '{}' = {}: a whole number beyond 64 bits",
+                        tactile_core::printable(&key),
+                        v.repr().map(|r| r.to_string()).unwrap_or_default()
+                    )));
+                }
                 // Each value alone, so a bad one is named: NaN and
                 // infinities are refused (JSON has none).
                 let text: String = json

@@ -128,6 +128,10 @@ def test_study_options_are_refused_before_any_work(root, tactip_set):
         tactile.study.sweep([], tactip_set)
     with pytest.raises(ValueError, match="unknown option 'runz'"):
         tactile.study.sweep(encoder, tactip_set, runz=3)
+    # A whole number past 64 bits is said as one (it was "invalid type:
+    # floating point `1.1805916207174113e+21`, expected u64").
+    with pytest.raises(ValueError, match=r"option 'seed' = 1180591620717411303424: a whole number beyond 64 bits"):
+        tactile.study.robustness(encoder, tactip_set, seed=2**70)
     # A page over a file of the dataset it studies is refused before the
     # study runs; the file is kept.
     labels = (tactip_set / "labels.csv").read_bytes()
