@@ -48,6 +48,29 @@ fn json_default<'py>(value: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
     })
 }
 
+/// Whether `value`, or a value in it (a list's, a tuple's, a dict's), is a
+/// whole number past 64 bits, which JSON would read as a float ("invalid
+/// type: floating point"), so it is said as what it is.
+fn past_64_bits(value: &Bound<'_, PyAny>) -> PyResult<bool> {
+    use pyo3::types::{PyBool, PyDict, PyInt, PyList, PyTuple};
+    if value.is_instance_of::<PyInt>() && !value.is_instance_of::<PyBool>() {
+        return Ok(value.extract::<i64>().is_err() && value.extract::<u64>().is_err());
+    }
+    let items = if let Ok(d) = value.cast::<PyDict>() {
+        d.values().into_any()
+    } else if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        value.clone()
+    } else {
+        return Ok(false);
+    };
+    for item in items.try_iter()? {
+        if past_64_bits(&item?)? {
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
 /// Keyword arguments onto an options type of the library
 /// ([`tactile_burn::options::Options`]): through JSON, so a tuple is a
 /// list and None keeps the default; `config=` names an options file the
@@ -70,34 +93,24 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
                 // Paths become strings, numpy values Python ones, as JSON
                 // has them.
                 let v = as_plain(&v)?.unwrap_or(v);
-                // JSON would read a whole number past 64 bits as a float
-                // ("invalid type: floating point"): said as what it is.
-                if v.is_instance_of::<pyo3::types::PyInt>()
-                    && !v.is_instance_of::<pyo3::types::PyBool>()
-                    && v.extract::<i64>().is_err()
-                    && v.extract::<u64>().is_err()
-                {
-                    return Err(PyValueError::new_err(format!(
-                        "invalid configuration: option '{}' = {}: a whole number beyond 64 bits",
+                let refuse = |why: &str| {
+                    PyValueError::new_err(format!(
+                        "invalid configuration: option '{}' = {}: {why}",
                         tactile_core::printable(&key),
                         v.repr().map(|r| r.to_string()).unwrap_or_default()
-                    )));
+                    ))
+                };
+                if past_64_bits(&v)? {
+                    return Err(refuse("a whole number beyond 64 bits"));
                 }
                 // Each value alone, so a bad one is named: NaN and
                 // infinities are refused (JSON has none).
                 let text: String = json
                     .call_method("dumps", (&v,), Some(&kwargs))
                     .and_then(|t| t.extract())
-                    .map_err(|e| {
-                        let why = match v.extract::<f64>() {
-                            Ok(x) if !x.is_finite() => "not a finite number".to_string(),
-                            _ => e.to_string(),
-                        };
-                        PyValueError::new_err(format!(
-                            "invalid configuration: option '{}' = {}: {why}",
-                            tactile_core::printable(&key),
-                            v.repr().map(|r| r.to_string()).unwrap_or_default()
-                        ))
+                    .map_err(|e| match v.extract::<f64>() {
+                        Ok(x) if !x.is_finite() => refuse("not a finite number"),
+                        _ => refuse(&e.to_string()),
                     })?;
                 let value = serde_json::from_str(&text).map_err(|e| {
                     let key = tactile_core::printable(&key);

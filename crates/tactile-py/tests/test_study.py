@@ -132,6 +132,9 @@ def test_study_options_are_refused_before_any_work(root, tactip_set):
     # floating point `1.1805916207174113e+21`, expected u64").
     with pytest.raises(ValueError, match=r"option 'seed' = 1180591620717411303424: a whole number beyond 64 bits"):
         tactile.study.robustness(encoder, tactip_set, seed=2**70)
+    # So inside a list.
+    with pytest.raises(ValueError, match=r"option 'hidden' = \[64, 1180591620717411303424\]: a whole number beyond 64 bits"):
+        tactile.study.compare(encoder, tactip_set, targets=["depth_mm"], hidden=[64, 2**70])
     # A page over a file of the dataset it studies is refused before the
     # study runs; the file is kept.
     labels = (tactip_set / "labels.csv").read_bytes()
