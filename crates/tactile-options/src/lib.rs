@@ -77,6 +77,30 @@ fn listed<T>(
     }
 }
 
+/// How a whole number that no 64-bit integer holds is refused, by both
+/// front ends: JSON reads it as a float, whose own wording ("invalid type:
+/// floating point `1.1805916207174113e21`, expected u64") names a number
+/// the user never wrote.
+pub const BEYOND_64_BITS: &str = "a whole number beyond 64 bits";
+
+/// Whether `value`, or a value in it (a list's, an object's), is a whole
+/// number outside both `i64` and `u64`: what JSON makes of such a number
+/// written in an options file (a float, as it makes of `1e30`).
+fn beyond_64_bits(value: &Value) -> bool {
+    // 2^63 and 2^64, exact as floats.
+    const I64_MIN: f64 = -9_223_372_036_854_775_808.0;
+    const U64_END: f64 = 18_446_744_073_709_551_616.0;
+    match value {
+        Value::Number(n) => n
+            .as_f64()
+            .filter(|_| n.is_f64())
+            .is_some_and(|x| x.is_finite() && x.fract() == 0.0 && !(I64_MIN..U64_END).contains(&x)),
+        Value::Array(items) => items.iter().any(beyond_64_bits),
+        Value::Object(m) => m.values().any(beyond_64_bits),
+        _ => false,
+    }
+}
+
 /// A set of options both front ends fill: clap flags on the command line,
 /// keyword arguments in Python. Implemented for every `clap::Args` type
 /// whose fields all have defaults and that serialises with the same names.
@@ -159,7 +183,11 @@ pub trait Options: clap::Args + clap::FromArgMatches + Serialize + DeserializeOw
                     // option again, as the file would be wrong the next
                     // time it is used.
                     if let Err(e) = alone::<Self>(&defaults, k, &value) {
-                        return Err(Error::Config(format!("{at}option '{k}' = {value}: {e}")));
+                        let why = match beyond_64_bits(&value) {
+                            true => BEYOND_64_BITS.to_string(),
+                            false => e.to_string(),
+                        };
+                        return Err(Error::Config(format!("{at}option '{k}' = {value}: {why}")));
                     }
                     merged.insert(k.clone(), value);
                 }

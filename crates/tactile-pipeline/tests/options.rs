@@ -222,6 +222,31 @@ fn keywords_and_config_files_reach_the_training_config() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("p.json") && e.contains("option 'hidden'"), "{e}");
+    // A whole number past 64 bits in a file is said as one, alone or in a
+    // list (JSON reads it as a float: "invalid type: floating point").
+    for (text, option) in [
+        (r#"{"max_epochs": 1180591620717411303424}"#, "max_epochs"),
+        (r#"{"widths": [16, 32, 1180591620717411303424]}"#, "widths"),
+        (r#"{"hidden": -1e30}"#, "hidden"),
+    ] {
+        std::fs::write(&file, text).unwrap();
+        let e = PoseOptions::resolve(Some(&file), &Default::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("p.json")
+                && e.contains(&format!("option '{option}'"))
+                && e.ends_with(": a whole number beyond 64 bits")
+                && !e.contains("floating point"),
+            "{e}"
+        );
+    }
+    // A fraction keeps its own wording.
+    std::fs::write(&file, r#"{"max_epochs": 2.5}"#).unwrap();
+    let e = PoseOptions::resolve(Some(&file), &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("floating point `2.5`"), "{e}");
     // Two bad values: the first is named with its own error, not the
     // other's.
     let two = json!({"max_epochs": "one", "widths": "wide"});

@@ -101,7 +101,7 @@ pub(crate) fn options<'py, T: tactile_burn::options::Options>(
                     ))
                 };
                 if past_64_bits(&v)? {
-                    return Err(refuse("a whole number beyond 64 bits"));
+                    return Err(refuse(tactile_burn::options::BEYOND_64_BITS));
                 }
                 // Each value alone, so a bad one is named: NaN and
                 // infinities are refused (JSON has none).
