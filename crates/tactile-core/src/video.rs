@@ -153,6 +153,11 @@ pub struct VideoInfo {
     /// How far the stream's display matrix turns its frames clockwise to
     /// show them, whole degrees in [0, 360) (0: shown as stored).
     pub turn_deg: u16,
+    /// Whether the display matrix also mirrors them (a reflection: its
+    /// determinant is negative, as a front camera's or a mirror rig's
+    /// recording may say), shown mirrored as FFmpeg's command line shows
+    /// them.
+    pub mirrored: bool,
     /// Frames per second, when the container says.
     pub fps: Option<f64>,
     /// The stream's length in seconds, when the container says (the
@@ -176,19 +181,45 @@ fn clockwise_turn(rotation_deg: f64) -> u16 {
     }
 }
 
+/// Whether a display matrix, as `ffprobe` prints it (three lines of three
+/// whole numbers, each line led by its offset and a colon), reflects the
+/// frames: the determinant of its 2x2 part is negative. `false` when the
+/// text is not such a matrix.
+fn reflects(display_matrix: &str) -> bool {
+    let numbers: Option<Vec<i64>> = display_matrix
+        .lines()
+        .filter_map(|line| line.split_once(':'))
+        .flat_map(|(_, row)| row.split_whitespace())
+        .map(|n| n.parse::<i32>().ok().map(i64::from))
+        .collect();
+    match numbers.as_deref() {
+        // 16.16 fixed point in 32 bits: each product fits in i64.
+        Some([a, b, _, c, d, _, _, _, _]) => a * d - b * c < 0,
+        _ => false,
+    }
+}
+
 impl VideoInfo {
-    /// The FFmpeg filter that turns a decoded frame to be shown, as
-    /// FFmpeg's command line and OpenCV's `VideoCapture` turn it (flips of
-    /// a mirrored matrix aside): a quarter or half turn exactly, another
-    /// angle by `rotate`, which keeps the size. `None` when none is needed.
+    /// The FFmpeg filter that turns (and mirrors) a decoded frame to be
+    /// shown, as FFmpeg's command line does: a quarter or half turn
+    /// exactly, with its flip when the matrix mirrors (`transpose`'s
+    /// `_flip` directions; `hflip` alone for a half turn, `vflip` for
+    /// none), another angle by `rotate`, which keeps the size (a mirror
+    /// there is left, as FFmpeg leaves it). OpenCV's `VideoCapture` turns
+    /// alike but leaves every mirror. `None` when none is needed.
     fn turn_filter(&self) -> Option<String> {
-        match self.turn_deg {
-            0 => None,
-            90 => Some("transpose=clock".into()),
-            180 => Some("hflip,vflip".into()),
-            270 => Some("transpose=cclock".into()),
-            turn => Some(format!("rotate={turn}*PI/180")),
-        }
+        let filter = match (self.turn_deg, self.mirrored) {
+            (0, false) => return None,
+            (0, true) => "vflip",
+            (90, false) => "transpose=clock",
+            (90, true) => "transpose=cclock_flip",
+            (180, false) => "hflip,vflip",
+            (180, true) => "hflip",
+            (270, false) => "transpose=cclock",
+            (270, true) => "transpose=clock_flip",
+            (turn, _) => return Some(format!("rotate={turn}*PI/180")),
+        };
+        Some(filter.into())
     }
 }
 
@@ -253,6 +284,8 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
     struct SideData {
         /// A display matrix's turn, degrees counterclockwise.
         rotation: Option<serde_json::Value>,
+        /// The matrix itself, as text: whether it mirrors.
+        displaymatrix: Option<String>,
     }
     #[derive(serde::Deserialize)]
     struct Format {
@@ -283,11 +316,18 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
     };
     let duration_s = seconds(s.duration.as_ref())
         .or_else(|| seconds(probe.format.as_ref().and_then(|f| f.duration.as_ref())));
-    let turn_deg = s
+    // The display matrix's side data: its turn, and its text for a mirror.
+    let (turn_deg, mirrored) = s
         .side_data_list
         .iter()
-        .find_map(|d| d.rotation.as_ref().and_then(serde_json::Value::as_f64))
-        .map_or(0, clockwise_turn);
+        .find_map(|d| {
+            let rotation = d.rotation.as_ref().and_then(serde_json::Value::as_f64)?;
+            Some((
+                clockwise_turn(rotation),
+                d.displaymatrix.as_deref().is_some_and(reflects),
+            ))
+        })
+        .unwrap_or((0, false));
     let (w, h) = if turned_sideways(turn_deg) {
         (h, w)
     } else {
@@ -297,6 +337,7 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
         width: w as usize,
         height: h as usize,
         turn_deg,
+        mirrored,
         fps,
         duration_s,
     })
@@ -754,6 +795,66 @@ mod tests {
             assert_eq!(shown.as_slice(), &cli[..], "{tag}");
             assert_ne!(shown.as_slice(), stored.as_slice(), "{tag}");
         }
+        // A display matrix that mirrors (a reflection: a front camera's, a
+        // mirror rig's), written into the file's track header: shown
+        // mirrored as FFmpeg's command line shows it. Before, a mirror was
+        // read as the turn ffprobe gives it (a horizontal flip as a half
+        // turn: the frame upside down).
+        let video = std::fs::read(&plain).unwrap();
+        let tkhd = video.windows(4).position(|w| w == b"tkhd").unwrap();
+        // The matrix follows the times, track id and duration (8 bytes
+        // each in version 1, else 4), then layer, group and volume.
+        let at = tkhd + if video[tkhd + 4] == 1 { 56 } else { 44 };
+        let one = 1 << 16;
+        for (name, [a, b, c, d], shown_size) in [
+            ("horizontal flip", [-one, 0, 0, one], (64, 32)),
+            ("vertical flip", [one, 0, 0, -one], (64, 32)),
+            ("main diagonal", [0, one, one, 0], (32, 64)),
+            ("other diagonal", [0, -one, -one, 0], (32, 64)),
+        ] {
+            let mut mirrored = video.clone();
+            let matrix: [i32; 9] = [a, b, 0, c, d, 0, 0, 0, 1 << 30];
+            for (i, v) in matrix.iter().enumerate() {
+                mirrored[at + 4 * i..at + 4 * i + 4].copy_from_slice(&v.to_be_bytes());
+            }
+            std::fs::write(&turned, &mirrored).unwrap();
+            let info = probe(&VideoInput::File(turned.clone())).unwrap();
+            assert!(info.mirrored, "{name}: {info:?}");
+            let shown = first_frame(&turned);
+            assert_eq!((shown.width(), shown.height()), shown_size, "{name}");
+            let cli = ffmpeg(&[
+                "-i",
+                turned.to_str().unwrap(),
+                "-frames:v",
+                "1",
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                "rgb24",
+                "-",
+            ]);
+            assert!(
+                shown.as_slice() == &cli[..],
+                "{name}: not as FFmpeg shows it"
+            );
+            assert!(shown.as_slice() != stored.as_slice(), "{name}: as stored");
+        }
+        // ffprobe's text of a matrix: mirrors when its determinant is
+        // negative; a turn alone, or text that is no matrix, does not.
+        let text = |m: [i32; 9]| {
+            m.chunks(3)
+                .enumerate()
+                .map(|(i, r)| format!("\n{i:08x}: {:>11} {:>11} {:>11}", r[0], r[1], r[2]))
+                .collect::<String>()
+                + "\n"
+        };
+        assert!(reflects(&text([-one, 0, 0, 0, one, 0, 0, 0, 1 << 30])));
+        assert!(!reflects(&text([0, one, 0, -one, 0, 0, 0, 0, 1 << 30])));
+        assert!(!reflects(&text([-one, 0, 0, 0, -one, 0, 0, 0, 1 << 30])));
+        assert!(!reflects("\n00000000: 1 2\n"));
+        assert!(!reflects(
+            "\n00000000: 99999999999 0 0\n00000001: 0 -1 0\n00000002: 0 0 1\n"
+        ));
         // ffprobe's rotation (counterclockwise) read as FFmpeg reads it.
         for (rotation, turn, sideways) in [
             (90.0, 270, true),
