@@ -764,6 +764,20 @@ mod tests {
             assert_eq!(frames.len(), 5);
             frames.swap_remove(0)
         };
+        // The first frame as FFmpeg's command line shows the file.
+        let shown_by_ffmpeg = |video: &Path| {
+            ffmpeg(&[
+                "-i",
+                video.to_str().unwrap(),
+                "-frames:v",
+                "1",
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                "rgb24",
+                "-",
+            ])
+        };
         let stored = first_frame(&plain);
         assert_eq!((stored.width(), stored.height()), (64, 32));
         for (tag, shown_size) in [("90", (32, 64)), ("180", (64, 32)), ("270", (32, 64))] {
@@ -781,17 +795,7 @@ mod tests {
             let shown = first_frame(&turned);
             assert_eq!((shown.width(), shown.height()), shown_size, "{tag}");
             // Pixel for pixel as FFmpeg's command line shows the file.
-            let cli = ffmpeg(&[
-                "-i",
-                turned.to_str().unwrap(),
-                "-frames:v",
-                "1",
-                "-f",
-                "rawvideo",
-                "-pix_fmt",
-                "rgb24",
-                "-",
-            ]);
+            let cli = shown_by_ffmpeg(&turned);
             assert_eq!(shown.as_slice(), &cli[..], "{tag}");
             assert_ne!(shown.as_slice(), stored.as_slice(), "{tag}");
         }
@@ -822,17 +826,7 @@ mod tests {
             assert!(info.mirrored, "{name}: {info:?}");
             let shown = first_frame(&turned);
             assert_eq!((shown.width(), shown.height()), shown_size, "{name}");
-            let cli = ffmpeg(&[
-                "-i",
-                turned.to_str().unwrap(),
-                "-frames:v",
-                "1",
-                "-f",
-                "rawvideo",
-                "-pix_fmt",
-                "rgb24",
-                "-",
-            ]);
+            let cli = shown_by_ffmpeg(&turned);
             assert!(
                 shown.as_slice() == &cli[..],
                 "{name}: not as FFmpeg shows it"
