@@ -49,14 +49,28 @@ pub(crate) fn py_shape(shape: &[usize]) -> String {
     }
 }
 
-/// How to mend a frame whose channels are not what `layout` reads: grey
-/// (with or without alpha) where only RGB is read.
-fn channel_hint(shape: &[usize], layout: Layout) -> &'static str {
+/// How to mend a frame whose shape is not what `layout` reads: grey (with
+/// or without alpha) where only RGB is read, channels first (as
+/// torchvision's `read_image` and a CHW tensor's `.numpy()` give a frame),
+/// or a batch where one frame is read.
+fn channel_hint(shape: &[usize], layout: Layout) -> String {
+    // A side of 1 to 4 is a channel axis, not a frame's width or height.
+    let channels = |c: usize| (1..=4).contains(&c);
     match (shape, layout) {
         (&[_, _, 1 | 2] | &[_, _], Layout::Rgb) => {
-            " (a grey frame: repeat it to RGB with numpy.dstack([frame] * 3) if the sensor's frames are grey; a colour sensor's frames must stay in colour)"
+            " (a grey frame: repeat it to RGB with numpy.dstack([frame] * 3) if the sensor's frames are grey; a colour sensor's frames must stay in colour)".into()
         }
-        _ => "",
+        (&[c, _, w], _) if channels(c) && !channels(w) => {
+            " (channels first, as a torch tensor has them: numpy.transpose(frame, (1, 2, 0)) puts them last)".into()
+        }
+        (&[1, _, _, c], _) if channels(c) => " (a batch of one frame: pass frame[0])".into(),
+        (&[n, _, _, c], _) if channels(c) => {
+            format!(" (a stack of {n} frames: pass one at a time, frames[i])")
+        }
+        (&[_, c, _, w], _) if channels(c) && !channels(w) => {
+            " (a batch of channels-first frames: numpy.transpose(frames[i], (1, 2, 0)) is one frame with its channels last)".into()
+        }
+        _ => String::new(),
     }
 }
 

@@ -210,6 +210,9 @@ def test_non_contiguous_and_batched_input(pipeline, palpation_frames):
         pipeline.process_many(frame[:, :, 0])
     with pytest.raises(ValueError, match=r"^frames\[1\]: .*got shape \(5, 5\)"):
         pipeline.process_many([frame, np.zeros((5, 5), np.uint8)])
+    # A batch of channels-first frames (torch's NCHW) names its first frame.
+    with pytest.raises(ValueError, match=r"^frames\[0\]: .*\(channels first, .*numpy.transpose"):
+        pipeline.process_many(np.stack([frame, frame]).transpose(0, 3, 1, 2))
 
 
 def test_every_layout_of_a_frame_reads_as_its_c_ordered_copy(root, pipeline, palpation_frames):
@@ -263,6 +266,13 @@ def test_hysteresis_and_reset(root, palpation_frames):
         (np.zeros((180, 320, 2), np.uint8), ValueError, "(180, 320, 2) (a grey frame: repeat it to RGB"),
         (np.zeros((180, 320), np.uint8), ValueError, "(180, 320) (a grey frame: repeat it to RGB"),
         (np.zeros((180, 320, 1), np.uint8), ValueError, "(180, 320, 1) (a grey frame: repeat it to RGB"),
+        # Channels first (torchvision's read_image) or a batch, where one
+        # frame is read: the shape says how to make it one frame.
+        (np.zeros((3, 180, 320), np.uint8), ValueError,
+         "(3, 180, 320) (channels first, as a torch tensor has them: numpy.transpose(frame, (1, 2, 0))"),
+        (np.zeros((1, 180, 320, 3), np.uint8), ValueError, "(1, 180, 320, 3) (a batch of one frame: pass frame[0])"),
+        (np.zeros((5, 180, 320, 3), np.uint8), ValueError, "(a stack of 5 frames: pass one at a time, frames[i])"),
+        (np.zeros((2, 3, 180, 320), np.uint8), ValueError, "(a batch of channels-first frames: numpy.transpose(frames[i], (1, 2, 0))"),
         (None, TypeError, "got a NoneType"),
         (np.zeros((0, 320, 3), np.uint8), ValueError, "320x0"),
         (np.zeros((9000, 2, 3), np.uint8), ValueError, "7680"),
