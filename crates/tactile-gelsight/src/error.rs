@@ -55,6 +55,17 @@ pub enum Error {
         /// The frame's size.
         found: (usize, usize),
     },
+    /// A frame of one colour (black, saturated, a covered lens or its
+    /// light off): no skin to read, whatever the sensor.
+    #[error(
+        "{path}: a blank frame (every pixel of one colour, {level}): the camera shows no skin (its lens covered, its light off, or its exposure at an end)"
+    )]
+    BlankFrame {
+        /// The frame.
+        path: PathBuf,
+        /// Its colour as `RGB (r, g, b)`.
+        level: String,
+    },
     /// A grey frame (or rest frame) given to a sensor calibrated on colour
     /// frames, whose colours are what its slopes are read from.
     #[error(
@@ -94,8 +105,8 @@ pub enum Error {
 
 impl Error {
     /// Whether this is [`Reconstructor::check_frame`]'s refusal of a frame
-    /// the sensor cannot read (another size than its calibration's, grey
-    /// for a sensor calibrated in colour, colour for a grey one): the
+    /// the sensor cannot read (another size than its calibration's, blank,
+    /// grey for a sensor calibrated in colour, colour for a grey one): the
     /// frame's fault, not the calibration's or the machine's. A pipeline
     /// gives such a frame nothing and goes on; any other error stops it.
     ///
@@ -103,7 +114,10 @@ impl Error {
     pub fn is_frame_refusal(&self) -> bool {
         matches!(
             self,
-            Error::FrameSize { .. } | Error::GreyFrame { .. } | Error::ColourFrame { .. }
+            Error::FrameSize { .. }
+                | Error::BlankFrame { .. }
+                | Error::GreyFrame { .. }
+                | Error::ColourFrame { .. }
         )
     }
 

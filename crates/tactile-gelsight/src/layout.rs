@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::{RgbImage, load_rgb};
 
-use crate::prepare::{check_colour, is_colour_background};
+use crate::prepare::{check_colour, check_not_blank, is_colour_background};
 use crate::{Error, Result};
 
 /// Most presses one calibration reads.
@@ -242,6 +242,9 @@ impl BallPresses {
             });
         }
         let background = load_rgb(&bg_path)?;
+        // A blank rest frame would make every press's colour change its
+        // own picture, and the sensor grey whatever the camera.
+        check_not_blank(&bg_path, &background)?;
         let csv_path = root.join("presses.csv");
         let (presses, warnings) = if csv_path.exists() {
             let size = (background.width(), background.height());

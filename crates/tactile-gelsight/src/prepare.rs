@@ -49,13 +49,32 @@ pub fn is_colour_background(background: &RgbImage) -> bool {
 /// its background is, stay below it.
 pub const COLOUR_FRAME_SPREAD: f32 = 2.0 * COLOUR_SPREAD;
 
-/// Refuse a grey `frame` (named `path`) for a sensor calibrated on colour
+/// Refuse a blank `frame` (named `path`): one colour (black, saturated),
+/// by the rule the detector's blank gate keeps
+/// ([`tactile_preprocess::visuo::is_blank_levels`]). Such a frame is grey,
+/// or a colour, by accident, and is named for what it is.
+pub fn check_not_blank(path: &std::path::Path, frame: &RgbImage) -> Result<()> {
+    if !tactile_preprocess::visuo::is_blank_levels(frame.as_slice(), 3) {
+        return Ok(());
+    }
+    let level = match frame.as_slice() {
+        [r, g, b, ..] => format!("RGB ({r}, {g}, {b})"),
+        _ => "no pixel".into(),
+    };
+    Err(crate::Error::BlankFrame {
+        path: path.to_path_buf(),
+        level,
+    })
+}
+
+/// Refuse a blank `frame` (named `path`, [`check_not_blank`]), a grey one for a sensor calibrated on colour
 /// frames (`colour`): its colour change would be read as slopes that are
 /// not there, a depth of nothing. Refuse a colour frame for a sensor whose
 /// background is grey too: the background is then not this camera's rest
 /// frame as it records it (a grey copy), or the frame is another sensor's,
 /// and every colour change would be read against the wrong rest.
 pub fn check_colour(path: &std::path::Path, frame: &RgbImage, colour: bool) -> Result<()> {
+    check_not_blank(path, frame)?;
     let spread = colour_spread(frame);
     if colour && spread < GREY_SPREAD {
         return Err(crate::Error::GreyFrame {

@@ -267,6 +267,32 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
         e.contains("press_01.png") && e.contains("the sensor's background is grey"),
         "{e}"
     );
+    // A blank background (the light off, the lens covered) or a blank
+    // press is named as blank, not as grey or another sensor's colour
+    // (before, the presses were refused as "a colour frame ... the
+    // sensor's background is grey", and a black press as greyscale).
+    let d = tmp.path().join("blank");
+    subset(&d, 2, str::to_string);
+    let black = vec![0u8; 640 * 480 * 3];
+    tactile_core::image_io::save_rgb_png(d.join("background.png"), 640, 480, &black).unwrap();
+    let e = BallPresses::open(&d).err().unwrap();
+    assert!(matches!(e, Error::BlankFrame { .. }), "{e}");
+    assert!(
+        e.to_string()
+            .contains("background.png: a blank frame (every pixel of one colour, RGB (0, 0, 0))"),
+        "{e}"
+    );
+    subset(&d, 2, str::to_string);
+    let white = vec![255u8; 640 * 480 * 3];
+    tactile_core::image_io::save_rgb_png(d.join("frames/press_02.png"), 640, 480, &white).unwrap();
+    let ds = BallPresses::open(&d).unwrap();
+    assert!(ds.frame(0).is_ok());
+    let e = ds.frame(1).err().unwrap();
+    assert!(
+        matches!(e, Error::BlankFrame { .. }) && e.is_frame_refusal(),
+        "{e}"
+    );
+    assert!(e.to_string().contains("press_02.png: a blank frame"), "{e}");
     // Too few presses: refused before anything is written.
     let d = tmp.path().join("few");
     subset(&d, 3, str::to_string);
@@ -723,6 +749,21 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     let e = reconstruct_folder(&model, &d.join("frames"), &out, &o, None).unwrap_err();
     assert!(
         matches!(e, Error::GreyFrame { .. }) && e.to_string().contains("rest.png"),
+        "{e}"
+    );
+    assert!(!out.exists());
+    // A blank rest frame (the light off when it was taken) is named blank.
+    let dark = grey.join("dark.png");
+    tactile_core::image_io::save_rgb_png(&dark, 640, 480, &vec![3u8; 640 * 480 * 3]).unwrap();
+    let o = ReconstructOptions {
+        background: Some(dark),
+        ..o
+    };
+    let e = reconstruct_folder(&model, &d.join("frames"), &out, &o, None).unwrap_err();
+    assert!(
+        matches!(e, Error::BlankFrame { .. })
+            && e.to_string()
+                .contains("dark.png: a blank frame (every pixel of one colour, RGB (3, 3, 3))"),
         "{e}"
     );
     assert!(!out.exists());

@@ -267,7 +267,7 @@ impl RunSummary {
         let mut unlike_frames = self.out_of_distribution;
         if let Some(u) = &self.unreadable {
             warnings.push(format!(
-                "warning: {} of {} frames cannot be read by this calibrated sensor (frames of another sensor or camera mode): they got no {left_out}. The first: {}",
+                "warning: {} of {} frames cannot be read by this calibrated sensor (blank, or frames of another sensor or camera mode): they got no {left_out}. The first: {}",
                 u.frames, self.frames, u.first
             ));
             unlike_frames = unlike_frames.saturating_sub(u.frames);

@@ -335,6 +335,29 @@ pub fn is_blank(img: &FloatImage) -> bool {
     })
 }
 
+/// [`is_blank`] of interleaved 8-bit levels of `channels` channels (a
+/// camera frame before any conversion): the same rule, one level being
+/// 1/255.
+pub fn is_blank_levels(levels: &[u8], channels: usize) -> bool {
+    // Whole-number sums (exact, and a quarter of the float pass's time on
+    // a VGA frame): it runs on every frame a calibrated sensor reads.
+    let c = channels.clamp(1, 4);
+    let (mut sum, mut squares) = ([0u64; 4], [0u64; 4]);
+    for pixel in levels.chunks_exact(c) {
+        for (ch, &v) in pixel.iter().enumerate() {
+            sum[ch] += u64::from(v);
+            squares[ch] += u64::from(v) * u64::from(v);
+        }
+    }
+    let n = (levels.len() / c).max(1) as f64;
+    let limit = f64::from(BLANK_FRAME_STD) * 255.0;
+    (0..c).all(|ch| {
+        let mean = sum[ch] as f64 / n;
+        let var = (squares[ch] as f64 / n - mean * mean).max(0.0);
+        var.sqrt() < limit
+    })
+}
+
 /// Grey level of a flat skin at rest under the spec's lights (albedo 0.8
 /// times 0.25 + sin 30 deg): what [`normalise_exposure`] maps each
 /// channel's typical window level to.
@@ -679,6 +702,18 @@ mod tests {
         img.data[3 * 5 + 1] += 1.0 / 255.0 * 16.0;
         assert!(!is_blank(&img));
         assert!(!is_blank(&ramp(16, 4)));
+        // The same rule on a camera's 8-bit levels: one colour of any hue
+        // is blank, and stays blank with one pixel a level off; a pixel far
+        // off in one channel, or half the pixels two levels off, is not.
+        let mut levels: Vec<u8> = [40u8, 200, 90].repeat(64);
+        assert!(is_blank_levels(&levels, 3));
+        levels[3 * 33 + 1] = 201;
+        assert!(is_blank_levels(&levels, 3));
+        levels[3 * 33 + 1] = 91;
+        assert!(!is_blank_levels(&levels, 3));
+        let mut dither: Vec<u8> = [40u8, 200, 90].repeat(64);
+        dither.iter_mut().step_by(6).for_each(|v| *v += 2);
+        assert!(!is_blank_levels(&dither, 3));
     }
 
     #[test]

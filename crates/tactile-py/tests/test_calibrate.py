@@ -105,6 +105,11 @@ def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
     grey = rest.mean(axis=2).astype(np.uint8)
     with pytest.raises(ValueError, match="greyscale frame.*calibrated on colour"):
         rec.reconstruct(np.repeat(grey[:, :, None], 3, axis=2))
+    # A blank frame (a covered lens, the light off) is named as such, not as
+    # grey or another sensor's colour.
+    for level in [(0, 0, 0), (255, 255, 255), (40, 200, 90)]:
+        with pytest.raises(ValueError, match=r"a blank frame \(every pixel of one colour, RGB \(%d, %d, %d\)\)" % level):
+            rec.reconstruct(np.full((480, 640, 3), level, np.uint8))
     with pytest.raises(ValueError, match="colour_jitter"):
         tactile.calibrate.ball(presses, tmp_path / "m", colour_jitter=0.9)
     with pytest.raises(ValueError, match="no_such_option"):
@@ -166,6 +171,9 @@ def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path
     assert grey.out_of_distribution and grey.indentation_peak_mm is None
     assert "greyscale frame" in grey.unreadable and grey.to_dict()["unreadable"] == grey.unreadable
     assert "unreadable" not in rest.to_dict()
+    black = pipe.process(np.zeros((480, 640, 3), np.uint8))
+    assert black.out_of_distribution and black.indentation_m is None
+    assert "a blank frame" in black.unreadable, black.unreadable
     with pytest.raises(ValueError, match="no detector"):
         pipe.detector_frame(frame)
     # A whole run of the sensor alone: every press in contact, and no frame

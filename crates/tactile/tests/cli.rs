@@ -3826,7 +3826,7 @@ fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
         "{msg}"
     );
     assert!(
-        msg.contains("warning: 1 of 2 frames cannot be read by this calibrated sensor (frames of another sensor or camera mode): they got no indentation. The first: small.png: frame is (320, 240)"),
+        msg.contains("warning: 1 of 2 frames cannot be read by this calibrated sensor (blank, or frames of another sensor or camera mode): they got no indentation. The first: small.png: frame is (320, 240)"),
         "{msg}"
     );
     assert_eq!(last_json(&msg)["unreadable"]["frames"], 1, "{msg}");
