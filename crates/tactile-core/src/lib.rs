@@ -48,6 +48,20 @@ macro_rules! note {
 /// window, overwrite the line or show its text backwards, and a stray
 /// byte is seen instead of hidden.
 pub fn printable(text: &str) -> std::borrow::Cow<'_, str> {
+    escaped(text, |c| c == '\n' || c == '\t')
+}
+
+/// [`printable`] for one cell of a line (a frame's name in a table of
+/// tab-separated columns, a label, a topic): a newline or a tab is
+/// escaped too, so a name that holds one cannot break the row or shift
+/// its columns.
+pub fn one_cell(text: &str) -> std::borrow::Cow<'_, str> {
+    escaped(text, |_| false)
+}
+
+/// `text` with every control character but those `kept` escaped, and
+/// every mark that reorders text.
+fn escaped(text: &str, kept: impl Fn(char) -> bool) -> std::borrow::Cow<'_, str> {
     // Arabic letter mark, the left-to-right and right-to-left marks, the
     // embeddings and overrides, and the isolates.
     let reorders = |c: char| {
@@ -56,7 +70,7 @@ pub fn printable(text: &str) -> std::borrow::Cow<'_, str> {
             '\u{061c}' | '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}'
         )
     };
-    let hidden = |c: char| (c.is_control() && c != '\n' && c != '\t') || reorders(c);
+    let hidden = |c: char| (c.is_control() && !kept(c)) || reorders(c);
     if !text.chars().any(hidden) {
         return std::borrow::Cow::Borrowed(text);
     }
@@ -75,7 +89,7 @@ pub use error::{Error, Result};
 
 #[cfg(test)]
 mod tests {
-    use super::printable;
+    use super::{one_cell, printable};
 
     #[test]
     fn what_a_file_holds_is_printed_escaped_not_obeyed() {
@@ -92,5 +106,8 @@ mod tests {
         // Lines, tabs and every other character as they are, not copied.
         let plain = "frames/0001.png\t3.2\nÉté 温度 → ok";
         assert!(matches!(printable(plain), std::borrow::Cow::Borrowed(p) if p == plain));
+        // One cell of a row escapes them too.
+        assert_eq!(one_cell(plain), "frames/0001.png\\x093.2\\x0aÉté 温度 → ok");
+        assert_eq!(one_cell(hostile), shown);
     }
 }

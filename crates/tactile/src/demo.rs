@@ -40,9 +40,9 @@ pub(crate) fn main(a: DemoArgs) -> Result<()> {
         let fs: Vec<String> = f.features.iter().map(|v| format!("{v:.2}")).collect();
         say!(
             "{:<28} true {:<11} predicted {:<11} features [{}]",
-            f.file,
-            f.truth,
-            f.predicted,
+            tactile_core::one_cell(&f.file),
+            tactile_core::one_cell(&f.truth),
+            tactile_core::one_cell(&f.predicted),
             fs.join(" ")
         );
     }

@@ -80,9 +80,15 @@ pub(crate) fn main(a: PerceiveArgs) -> Result<()> {
         tactile_core::note!("{w}");
     }
     let frames = r.files.len();
-    say!("{}", r.header().join("\t"));
+    // A cell holding a tab or a newline (a frame named so, a label) is
+    // escaped, so every row stays one line of the header's columns.
+    let row = |cells: Vec<String>| {
+        let cells: Vec<_> = cells.iter().map(|c| tactile_core::one_cell(c)).collect();
+        cells.join("\t")
+    };
+    say!("{}", row(r.header()));
     for i in 0..frames.min(a.show) {
-        say!("{}", r.row(i).join("\t"));
+        say!("{}", row(r.row(i)));
     }
     match &p {
         // A source's frames are decoded on another thread as they run.

@@ -126,8 +126,8 @@ pub(crate) fn main(a: RunArgs) -> Result<()> {
         for t in &topics {
             say!(
                 "{}  {}  {} messages  {:.1} Hz",
-                t.topic,
-                t.message_type,
+                tactile_core::one_cell(&t.topic),
+                tactile_core::one_cell(&t.message_type),
                 t.count,
                 t.rate_hz
             );

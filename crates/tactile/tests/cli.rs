@@ -2860,6 +2860,44 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
     predict(&model, &data.join("frames"), &out, &[]);
     let (header, got) = by_file(csv_rows(&out));
     same("folder", &header, &got);
+    // A frame named with a tab and a newline: the CSV keeps its name, and
+    // the table printed keeps one line per frame, every line the header's
+    // columns (before, the name broke its row in two).
+    let odd = tmp.path().join("odd");
+    std::fs::create_dir(&odd).unwrap();
+    let first = std::fs::read_dir(data.join("frames"))
+        .unwrap()
+        .next()
+        .unwrap();
+    let first = first.unwrap().path();
+    std::fs::copy(&first, odd.join("a\tb\nc.png")).unwrap();
+    std::fs::copy(&first, odd.join("plain.png")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_tactile"))
+        .args(["predict", "--model", model.to_str().unwrap(), "--data"])
+        .args([odd.to_str().unwrap(), "--out"])
+        .arg(tmp.path().join("odd.csv"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    let rows: Vec<&str> = table.lines().take(3).collect();
+    assert!(
+        rows[1].starts_with("a\\x09b\\x0ac.png\t") && rows[2].starts_with("plain.png\t"),
+        "{table}"
+    );
+    for r in &rows {
+        assert_eq!(r.split('\t').count(), header.len(), "{table}");
+    }
+    // (quoted by the CSV's rules)
+    let csv = std::fs::read_to_string(tmp.path().join("odd.csv")).unwrap();
+    assert!(
+        csv.contains("\n\"a\tb\nc.png\",") && csv.contains("\nplain.png,"),
+        "{csv}"
+    );
     // Streamed (`--out -`): one JSON object per frame on stdout, as it is
     // estimated, the same values; `--limit` keeps the first frames.
     let out = Command::new(env!("CARGO_BIN_EXE_tactile"))
