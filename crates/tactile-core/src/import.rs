@@ -18,7 +18,7 @@ use crate::dataset::{Dataset, DatasetKind, DatasetWriter, FORMAT, MAX_ROWS, Mani
 use crate::io::StagedDir;
 use crate::{Error, Result};
 
-use crate::source::{FrameSource, SourceOptions, SourceSpec};
+use crate::source::{FrameList, FrameSource, SourceOptions, SourceSpec};
 
 /// What to import (`tactile dataset from-video`'s flags).
 #[derive(Debug, Clone)]
@@ -82,8 +82,11 @@ impl ImportSummary {
 /// The labels CSV: its header and, per frame key, the line and the cells.
 struct Labels {
     header: Vec<String>,
-    rows: BTreeMap<FrameKey, (usize, Vec<String>)>,
+    rows: LabelRows,
 }
+
+/// Each labelled frame's line of the CSV and cells.
+type LabelRows = BTreeMap<FrameKey, (usize, Vec<String>)>;
 
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
 enum FrameKey {
@@ -109,6 +112,77 @@ fn frame_key(cell: &str) -> FrameKey {
         Ok(n) if whole.bytes().all(|b| b.is_ascii_digit()) => FrameKey::Number(n),
         _ => FrameKey::Name(cell.to_string()),
     }
+}
+
+/// Rekey each frame of `rows` named by a path (`frames/0001.png`, `./0001.png`,
+/// an absolute path: a CSV that lists paths, as the dataset layout's
+/// own `file` column does) by the name of the listed frame it is, the
+/// path read from the CSV's folder `labels_dir`, then from the frames'
+/// folder `frames_dir`. A path that is no listed frame is refused,
+/// naming its line (`labels` is the CSV).
+fn name_paths(
+    rows: &mut LabelRows,
+    list: &FrameList,
+    labels_dir: &Path,
+    frames_dir: &Path,
+    labels: &Path,
+) -> Result<()> {
+    let is_path = |s: &str| s.contains(['/', '\\']);
+    if !rows
+        .keys()
+        .any(|k| matches!(k, FrameKey::Name(s) if is_path(s)))
+    {
+        return Ok(());
+    }
+    // Each listed frame by where it is (links and `..` resolved).
+    let frames: BTreeMap<PathBuf, String> = list
+        .frames
+        .iter()
+        .filter_map(|e| {
+            let name = e.path.file_name()?.to_string_lossy().into_owned();
+            Some((std::fs::canonicalize(&e.path).ok()?, name))
+        })
+        .collect();
+    for (key, (line, cells)) in std::mem::take(rows) {
+        let key = match key {
+            FrameKey::Name(path) if is_path(&path) => {
+                // A Windows tool's `frames\\0001.png` too.
+                let given = Path::new(&path).to_path_buf();
+                let slashed = PathBuf::from(path.replace('\\', "/"));
+                let found = [given, slashed]
+                    .iter()
+                    .flat_map(|p| [labels_dir.join(p), frames_dir.join(p)])
+                    .filter_map(|p| std::fs::canonicalize(p).ok())
+                    .find_map(|p| frames.get(&p).cloned());
+                match found {
+                    Some(name) => FrameKey::Name(name),
+                    None => {
+                        return Err(Error::Dataset {
+                            path: labels.to_path_buf(),
+                            line: Some(line),
+                            message: format!(
+                                "frame {path:?} is not a frame of {} (a path is read from \
+                                     the labels' folder, then from the frames' folder); name a \
+                                     frame by its file name or its number",
+                                frames_dir.display()
+                            ),
+                        });
+                    }
+                }
+            }
+            key => key,
+        };
+        if let Some((first, _)) = rows.get(&key) {
+            let (first, second) = (line.min(*first), line.max(*first));
+            return Err(Error::Dataset {
+                path: labels.to_path_buf(),
+                line: Some(second),
+                message: format!("frame {key} is labelled twice (also on line {first})"),
+            });
+        }
+        rows.insert(key, (line, cells));
+    }
+    Ok(())
 }
 
 fn read_labels(path: &Path) -> Result<Labels> {
@@ -193,7 +267,7 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
             out.display()
         )));
     }
-    let labels = read_labels(&options.labels)?;
+    let mut labels = read_labels(&options.labels)?;
     let parent = match options.labels.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -218,6 +292,20 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
     let mut source = FrameSource::open(&spec, SourceOptions::default())?;
     // Files (a folder, an image) can be labelled by name; stream frames by number.
     let is_folder = source.list().is_some();
+    if let Some(list) = source.list() {
+        // A single picture's folder is where its name is read from.
+        let frames_dir = match options.frames.is_dir() {
+            true => options.frames.as_path(),
+            false => options.frames.parent().unwrap_or(Path::new(".")),
+        };
+        name_paths(
+            &mut labels.rows,
+            list,
+            &labels_dir,
+            frames_dir,
+            &options.labels,
+        )?;
+    }
     let staged = StagedDir::new(&options.out)?;
     let root = staged.path().to_path_buf();
     let mut writer = DatasetWriter::create(&root, options.kind, &extra, true)?;
@@ -337,12 +425,24 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
     }
     pb.finish_and_clear();
     if let Some((key, (line, _))) = labels.rows.iter().find(|(k, _)| !done.contains(*k)) {
+        // A name that differs from a frame's only in case (a CSV typed by
+        // hand, or made on a system whose names ignore case).
+        let other_case = match (key, source.list()) {
+            (FrameKey::Name(name), Some(list)) => list
+                .frames
+                .iter()
+                .filter_map(|e| e.path.file_name()?.to_str())
+                .find(|f| f.eq_ignore_ascii_case(name))
+                .map(|f| format!(" (the folder has {f:?}: names differ by case)")),
+            _ => None,
+        };
         return Err(Error::Dataset {
             path: options.labels.clone(),
             line: Some(*line),
             message: format!(
-                "frame {key} is not in {} ({read} frames read){}",
+                "frame {key} is not in {} ({read} frames read){}{}",
                 options.frames.display(),
+                other_case.unwrap_or_default(),
                 source
                     .late_warnings()
                     .iter()

@@ -85,6 +85,34 @@ pub const FRAME_EXTENSIONS: [&str; 9] = [
 /// The frame formats, as messages and help name them.
 pub const FRAME_FORMATS: &str = "PNG, JPEG, BMP, TIFF, WebP or PGM/PPM";
 
+/// The error of a source path that names nothing: how to read standard
+/// input when it is `-` (the shell's name for it), how to read a stream
+/// when it is a URL (an IP camera's `rtsp://`), else that it does not exist.
+fn not_found(path: &Path) -> Error {
+    let text = path.to_string_lossy();
+    if text == "-" {
+        return Error::Invalid(
+            "-: no file of that name; standard input is read as raw rgb24 frames with \
+             `--stdin --size WxH` (Python: `tactile.frames(stdin_size=(w, h))`)"
+                .into(),
+        );
+    }
+    if let Some((scheme, _)) = text.split_once("://")
+        && !scheme.is_empty()
+        && scheme
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'+')
+    {
+        return Error::Invalid(format!(
+            "{}: a URL, not a file; a stream is read through FFmpeg on standard input: \
+             `ffmpeg -i URL -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size WxH` \
+             (Python: `tactile.frames(stdin_size=(w, h))`)",
+            crate::printable(&text)
+        ));
+    }
+    Error::not_found(path, "input")
+}
+
 /// True for a file named like a frame ([`FRAME_EXTENSIONS`]).
 pub fn is_frame_file(p: &Path) -> bool {
     p.extension()
@@ -964,7 +992,7 @@ impl FrameSource {
             }
             SourceSpec::Path(path) => {
                 let meta = std::fs::metadata(path).map_err(|e| match e.kind() {
-                    std::io::ErrorKind::NotFound => Error::not_found(path, "input"),
+                    std::io::ErrorKind::NotFound => not_found(path),
                     _ => Error::io(path, e),
                 })?;
                 use std::os::unix::fs::FileTypeExt;

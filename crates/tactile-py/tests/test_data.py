@@ -368,7 +368,17 @@ def test_a_folder_of_frames_and_labels_become_a_dataset(root, tmp_path, palpatio
         tactile.Dataset.from_video(root / "samples/palpation", bad, "visuotactile", tmp_path / "ds2")
     with pytest.raises(ValueError, match="unknown dataset kind 'gelsight': expected tactip or visuotactile"):
         tactile.Dataset.from_video(root / "samples/palpation", labels, "gelsight", tmp_path / "ds3")
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "ds", "labels.csv"]
+    # Frames named by their paths (absolute, or as a dataset's `file`
+    # column has them) are those frames; a path to no frame is refused.
+    folder = (root / "samples/palpation").resolve()
+    bad.write_text(f"frame,tendon\n{folder / '000003.png'},1\n./000000.png,0\n")
+    by_path = tactile.Dataset.from_video(folder, bad, "visuotactile", tmp_path / "by-path")
+    assert by_path.labels["tendon"].tolist() == [0, 1]
+    assert np.array_equal(by_path.frame(1), palpation_frames[3])
+    bad.write_text("frame,tendon\nnowhere/000003.png,1\n")
+    with pytest.raises(ValueError, match=r'bad.csv:2: frame "nowhere/000003.png" is not a frame of'):
+        tactile.Dataset.from_video(folder, bad, "visuotactile", tmp_path / "ds4")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "by-path", "ds", "labels.csv"]
 
 
 def test_generator_options_left_out_of_manifests_are_keywords(tmp_path):

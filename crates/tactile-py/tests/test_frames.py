@@ -174,6 +174,12 @@ def test_limit_and_bad_sources(root, tmp_path):
         tactile.frames(bad)
     with pytest.raises(ValueError, match="stdin_size"):
         tactile.frames()
+    # "-" (the shell's name for standard input) and a camera's URL say how
+    # they are read.
+    with pytest.raises(ValueError, match=r"-: no file of that name; .*tactile.frames\(stdin_size=\(w, h\)\)"):
+        tactile.frames("-")
+    with pytest.raises(ValueError, match=r"http://cam.local/video: a URL, not a file; .*ffmpeg -i URL"):
+        tactile.frames("http://cam.local/video")
     # A live queue for a recorded folder would be ignored: refused.
     with pytest.raises(ValueError, match="live_queue 8: .* and this folder source is recorded"):
         tactile.frames(root / "samples" / "palpation", live_queue=8)

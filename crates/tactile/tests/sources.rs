@@ -260,6 +260,23 @@ fn an_option_of_the_other_kind_of_source_is_refused() {
             ][..],
             "and this stdin source is live (read as frames arrive): leave it out",
         ),
+        // `--data -` (the shell's name for standard input) and an IP
+        // camera's URL say how they are read; before, "-: input does not
+        // exist".
+        (
+            &["run", "--models", MODELS, "--data", "-"][..],
+            "-: no file of that name; standard input is read as raw rgb24 frames with `--stdin --size WxH`",
+        ),
+        (
+            &[
+                "run",
+                "--models",
+                MODELS,
+                "--data",
+                "rtsp://192.168.1.20:554/stream",
+            ][..],
+            "rtsp://192.168.1.20:554/stream: a URL, not a file; a stream is read through FFmpeg on standard input: `ffmpeg -i URL -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size WxH`",
+        ),
     ] {
         let out = tactile().args(args).stdin(Stdio::null()).output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
@@ -591,6 +608,52 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
     let err = refused(&folder, "frame,tendon\n1,1\n000001.png,0\n");
     assert!(
         err.contains("bad.csv:3: frame 1 (\"000001.png\") is labelled twice, by its number and by its name (also on line 2)"),
+        "{err}"
+    );
+    // Frames named by paths (as a dataset's own `file` column, a Windows
+    // tool's backslashes, `./`, absolute), read from the labels' folder or
+    // the frames' folder, are the frames they name; a path to no frame of
+    // the folder is refused at its line (before, every path was "not in"
+    // the folder, as a name no frame has).
+    let absolute = folder.join("000000.png");
+    let csv = format!(
+        "frame,tendon\nframes/000001.png,1\n./000002.png,0\n{},1\n",
+        absolute.display()
+    );
+    std::fs::write(&bad, &csv).unwrap();
+    let by_path = dir.path().join("by-path");
+    let r = import(&folder, &bad, &by_path);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let ds = tactile_core::dataset::Dataset::open(&by_path).unwrap();
+    let tendons: Vec<_> = (0..ds.len())
+        .map(|i| ds.number_opt(i, "tendon").unwrap())
+        .collect();
+    assert_eq!(tendons, [Some(1.0), Some(1.0), Some(0.0)]);
+    let r = import(
+        &folder,
+        &{
+            std::fs::write(&bad, "frame,tendon\nframes\\000001.png,1\n").unwrap();
+            bad.clone()
+        },
+        &dir.path().join("backslash"),
+    );
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let err = refused(&folder, "frame,tendon\n0,1\nelsewhere/000001.png,1\n");
+    assert!(
+        err.contains("bad.csv:3: frame \"elsewhere/000001.png\" is not a frame of")
+            && err.contains("name a frame by its file name or its number"),
+        "{err}"
+    );
+    let err = refused(&folder, "frame,tendon\n000001.PNG,1\n");
+    assert!(
+        err.contains("bad.csv:2: frame \"000001.PNG\" is not in")
+            && err
+                .contains("(3 frames read) (the folder has \"000001.png\": names differ by case)"),
+        "{err}"
+    );
+    let err = refused(&folder, "frame,tendon\n000001.png,1\nframes/000001.png,0\n");
+    assert!(
+        err.contains("bad.csv:3: frame \"000001.png\" is labelled twice (also on line 2)"),
         "{err}"
     );
     // A labelled frame cut short behind its header is skipped by the
