@@ -2872,18 +2872,18 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
     let first = first.unwrap().path();
     std::fs::copy(&first, odd.join("a\tb\nc.png")).unwrap();
     std::fs::copy(&first, odd.join("plain.png")).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_tactile"))
-        .args(["predict", "--model", model.to_str().unwrap(), "--data"])
-        .args([odd.to_str().unwrap(), "--out"])
-        .arg(tmp.path().join("odd.csv"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let table = String::from_utf8_lossy(&out.stdout);
+    // What `predict` prints of `data` with `--out out` and `extra`.
+    let printed = |data: &Path, out: &Path, extra: &[&str]| {
+        let r = Command::new(env!("CARGO_BIN_EXE_tactile"))
+            .args(["predict", "--model", model.to_str().unwrap(), "--data"])
+            .args([data, Path::new("--out"), out])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        String::from_utf8_lossy(&r.stdout).into_owned()
+    };
+    let table = printed(&odd, &tmp.path().join("odd.csv"), &[]);
     let rows: Vec<&str> = table.lines().take(3).collect();
     assert!(
         rows[1].starts_with("a\\x09b\\x0ac.png\t") && rows[2].starts_with("plain.png\t"),
@@ -2900,26 +2900,11 @@ fn predict_reads_a_folder_of_frames_and_a_ros_bag_as_it_reads_a_dataset() {
     );
     // Streamed (`--out -`): one JSON object per frame on stdout, as it is
     // estimated, the same values; `--limit` keeps the first frames.
-    let out = Command::new(env!("CARGO_BIN_EXE_tactile"))
-        .args(["predict", "--model", model.to_str().unwrap(), "--data"])
-        .args([
-            data.join("frames").to_str().unwrap(),
-            "--out",
-            "-",
-            "--limit",
-            "5",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines: Vec<serde_json::Value> =
+        printed(&data.join("frames"), Path::new("-"), &["--limit", "5"])
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
     assert_eq!(lines.len(), 5);
     for v in &lines {
         let file = v["file"].as_str().unwrap();
