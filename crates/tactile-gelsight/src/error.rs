@@ -66,6 +66,20 @@ pub enum Error {
         /// Its colour as `RGB (r, g, b)`.
         level: String,
     },
+    /// A frame (or rest frame) in BGR order: its red and blue swapped
+    /// back, it is much nearer the sensor's rest frame
+    /// ([`crate::prepare::PreparedBackground::swapped_channels`]).
+    #[error(
+        "{path}: red and blue look swapped (BGR order, as OpenCV's imread and VideoCapture give frames): swapped back, its colours change from this sensor's rest frame by {swapped:.3}, as given by {given:.3} (the median RGB distance on a 0-1 scale); give it in RGB order (numpy: frame[..., ::-1])"
+    )]
+    SwappedChannels {
+        /// The frame.
+        path: PathBuf,
+        /// Its median colour change as given.
+        given: f32,
+        /// The same with red and blue swapped back.
+        swapped: f32,
+    },
     /// A grey frame (or rest frame) given to a sensor calibrated on colour
     /// frames, whose colours are what its slopes are read from.
     #[error(
@@ -106,7 +120,7 @@ pub enum Error {
 impl Error {
     /// Whether this is [`Reconstructor::check_frame`]'s refusal of a frame
     /// the sensor cannot read (another size than its calibration's, blank,
-    /// grey for a sensor calibrated in colour, colour for a grey one): the
+    /// in BGR order, grey for a sensor calibrated in colour, colour for a grey one): the
     /// frame's fault, not the calibration's or the machine's. A pipeline
     /// gives such a frame nothing and goes on; any other error stops it.
     ///
@@ -116,6 +130,7 @@ impl Error {
             self,
             Error::FrameSize { .. }
                 | Error::BlankFrame { .. }
+                | Error::SwappedChannels { .. }
                 | Error::GreyFrame { .. }
                 | Error::ColourFrame { .. }
         )

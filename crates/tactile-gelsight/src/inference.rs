@@ -215,6 +215,8 @@ impl Reconstructor {
             frame_size(background),
         )?;
         check_colour(path, background, self.background.colour)?;
+        // A rest frame in BGR order against a calibration in RGB.
+        self.check_working(&self.background.matched(background)?, path)?;
         self.background = PreparedBackground {
             colour: self.background.colour,
             ..PreparedBackground::new(background, g)?
@@ -348,7 +350,23 @@ impl Reconstructor {
     /// ([`PreparedBackground::median_change`]) with it.
     pub fn working_frame(&self, frame: &RgbImage, path: &Path) -> Result<WorkingImage> {
         self.check_frame(frame, path)?;
-        self.background.matched(frame)
+        let working = self.background.matched(frame)?;
+        self.check_working(&working, path)?;
+        Ok(working)
+    }
+
+    /// Refuse a frame's exposure-matched `working` image (the frame named
+    /// `path`) in BGR order ([`Error::SwappedChannels`]): its colours would
+    /// be read as slopes mirrored, a wrong skin without a word.
+    pub fn check_working(&self, working: &WorkingImage, path: &Path) -> Result<()> {
+        match self.background.swapped_channels(working) {
+            Some((given, swapped)) => Err(Error::SwappedChannels {
+                path: path.to_path_buf(),
+                given,
+                swapped,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// [`Self::reconstruct`] of a frame's working image.

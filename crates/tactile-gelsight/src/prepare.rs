@@ -90,6 +90,12 @@ pub fn check_colour(path: &std::path::Path, frame: &RgbImage, colour: bool) -> R
     Ok(())
 }
 
+/// A frame whose median colour change from the background, its red and
+/// blue swapped back, is below this fraction of its change as given is in
+/// BGR order ([`PreparedBackground::swapped_channels`]): the R1.5's
+/// presses are 2.9-6.8 times nearer as given, in either order.
+pub const SWAPPED_CHANGE_RATIO: f32 = 0.5;
+
 /// The working resolution of a sensor of `width x height` frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct WorkingGrid {
@@ -266,6 +272,26 @@ impl PreparedBackground {
         upper_median(self.change(frame))
     }
 
+    /// The median colour changes of an exposure-matched `frame` as given
+    /// and with its red and blue swapped back, when swapped back it lies
+    /// much nearer this background ([`SWAPPED_CHANGE_RATIO`]): a frame in
+    /// BGR order (OpenCV's `imread` and `VideoCapture` give frames so),
+    /// whose colours the model would read as slopes mirrored. A GelSight's
+    /// lights colour each side of the picture differently, so a swap
+    /// changes its colours throughout; the 32 presses of the R1.5 change
+    /// 0.012-0.030 as given and 0.069-0.101 swapped. `None` for a grey
+    /// sensor, or a frame nearer as given.
+    pub fn swapped_channels(&self, frame: &WorkingImage) -> Option<(f32, f32)> {
+        if !self.colour {
+            return None;
+        }
+        let given = self.median_change(frame);
+        let mut back = frame.clone();
+        back.rgb.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
+        let back = self.median_change(&back.matched_to(self.medians));
+        (back < SWAPPED_CHANGE_RATIO * given).then_some((given, back))
+    }
+
     /// The colour change's size per working pixel (the circle finder's
     /// evidence of contact).
     pub fn change(&self, frame: &WorkingImage) -> Vec<f32> {
@@ -327,5 +353,41 @@ mod tests {
             [v, v, v]
         });
         assert!(change(&other) > REST_CHANGE_LIMIT, "{}", change(&other));
+    }
+
+    #[test]
+    fn a_frame_in_bgr_order_is_told_from_its_colours() {
+        let grid = WorkingGrid {
+            frame_width: 64,
+            frame_height: 48,
+            factor: 4,
+        };
+        // Red from the left, blue from the right, as a GelSight's lights.
+        let lit = |x: usize, y: usize| [90 + x as u8, 120 + y as u8, 200 - x as u8];
+        let bg = PreparedBackground::new(&frame(lit), grid).unwrap();
+        let swapped = |f: &RgbImage| bg.swapped_channels(&bg.matched(f).unwrap());
+        let bgr = |f: &RgbImage| {
+            let mut v = f.as_slice().to_vec();
+            v.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
+            rgb_image(f.width(), f.height(), v).unwrap()
+        };
+        // A pressed frame at another exposure as given: not swapped; the
+        // same in BGR order: swapped, far nearer once swapped back.
+        let pressed = frame(|x, y| {
+            lit(x, y).map(|v| match x < 22 && y < 24 {
+                true => (v as f32 * 0.8) as u8 + 30,
+                false => (v as f32 * 0.8) as u8,
+            })
+        });
+        assert_eq!(swapped(&pressed), None);
+        let (given, back) = swapped(&bgr(&pressed)).unwrap();
+        assert!(back < SWAPPED_CHANGE_RATIO * given, "{back} {given}");
+        // A grey sensor has no order to tell.
+        let grey = PreparedBackground::new(&frame(|x, _| [x as u8 * 3; 3]), grid).unwrap();
+        assert!(!grey.colour);
+        assert_eq!(
+            grey.swapped_channels(&grey.matched(&bgr(&pressed)).unwrap()),
+            None
+        );
     }
 }

@@ -752,6 +752,43 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
         "{e}"
     );
     assert!(!out.exists());
+    // A frame, or a rest frame, in BGR order (as OpenCV saves what it
+    // read) is named, not read as a skin mirrored; before, it was
+    // reconstructed without a word (a 0.27 mm peak and a -0.72 mm pit
+    // where its press is 0.68 mm deep).
+    let bgr_dir = tmp.path().join("bgr");
+    std::fs::create_dir_all(&bgr_dir).unwrap();
+    let bgr_copy = |from: &Path, to: &Path| {
+        let rgb = load_rgb(from).unwrap();
+        let mut v = rgb.as_slice().to_vec();
+        v.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
+        tactile_core::image_io::save_rgb_png(to, rgb.width(), rgb.height(), &v).unwrap();
+    };
+    bgr_copy(
+        &d.join("frames/press_01.png"),
+        &bgr_dir.join("press_01.png"),
+    );
+    let e = reconstruct_folder(&model, &bgr_dir, &out, &no_background, None).unwrap_err();
+    assert!(
+        matches!(e, Error::SwappedChannels { .. }) && e.is_frame_refusal(),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .contains("press_01.png: red and blue look swapped (BGR order"),
+        "{e}"
+    );
+    bgr_copy(&d.join("background.png"), &bgr_dir.join("rest.png"));
+    let o = ReconstructOptions {
+        background: Some(bgr_dir.join("rest.png")),
+        ..o
+    };
+    let e = reconstruct_folder(&model, &d.join("frames"), &out, &o, None).unwrap_err();
+    assert!(
+        matches!(e, Error::SwappedChannels { .. }) && e.to_string().contains("rest.png"),
+        "{e}"
+    );
+    assert!(!out.exists());
     // A blank rest frame (the light off when it was taken) is named blank.
     let dark = grey.join("dark.png");
     tactile_core::image_io::save_rgb_png(&dark, 640, 480, &vec![3u8; 640 * 480 * 3]).unwrap();

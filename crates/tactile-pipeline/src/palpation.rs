@@ -392,6 +392,18 @@ impl Pipeline {
             // The frame passed the calibration's check above
             // (`Self::unreadable`): shrink and match it without asking again.
             let working = sensor.background().matched(frame)?;
+            // A frame in BGR order is refused as a frame the sensor cannot
+            // read (`Self::unreadable`'s other refusals), not reconstructed.
+            if let Err(e) = sensor.check_working(&working, Path::new(name)) {
+                if let Some(h) = filter {
+                    h.update(0.0);
+                }
+                rec.unreadable = Some(e.to_string());
+                rec.out_of_distribution = true;
+                rec.gate = Some(tactile_detect::Gate::Foreign);
+                rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+                return Ok((rec, None));
+            }
             if let Some(check) = self.sensor_check.as_mut()
                 && check
                     .unlike(frame, &working, sensor.background())?

@@ -105,6 +105,11 @@ def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
     grey = rest.mean(axis=2).astype(np.uint8)
     with pytest.raises(ValueError, match="greyscale frame.*calibrated on colour"):
         rec.reconstruct(np.repeat(grey[:, :, None], 3, axis=2))
+    # A frame in BGR order (as OpenCV's imread gives it) is named, not read
+    # as a skin mirrored.
+    press = tactile.read_rgb(sorted((presses / "frames").glob("*.png"))[0])
+    with pytest.raises(ValueError, match=r"frame: red and blue look swapped \(BGR order.*frame\[\.\.\., ::-1\]"):
+        rec.reconstruct(press[..., ::-1])
     # A blank frame (a covered lens, the light off) is named as such, not as
     # grey or another sensor's colour.
     for level in [(0, 0, 0), (255, 255, 255), (40, 200, 90)]:
@@ -171,6 +176,9 @@ def test_the_pipeline_on_a_calibrated_sensor_gives_its_indentation(presses: Path
     assert grey.out_of_distribution and grey.indentation_peak_mm is None
     assert "greyscale frame" in grey.unreadable and grey.to_dict()["unreadable"] == grey.unreadable
     assert "unreadable" not in rest.to_dict()
+    bgr = pipe.process(frame[..., ::-1])
+    assert bgr.out_of_distribution and bgr.indentation_m is None
+    assert "red and blue look swapped" in bgr.unreadable, bgr.unreadable
     black = pipe.process(np.zeros((480, 640, 3), np.uint8))
     assert black.out_of_distribution and black.indentation_m is None
     assert "a blank frame" in black.unreadable, black.unreadable
