@@ -16,7 +16,9 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use tactile_core::image_io::{RgbImage, load_rgb};
 
-use crate::prepare::{check_colour, check_not_blank, is_colour_background};
+use crate::prepare::{
+    PreparedBackground, WorkingGrid, check_colour, check_not_blank, is_colour_background,
+};
 use crate::{Error, Result};
 
 /// Most presses one calibration reads.
@@ -282,6 +284,25 @@ impl BallPresses {
             });
         }
         check_colour(&path, &img, self.colour)?;
+        // A press in BGR order beside a background in RGB (saved by
+        // another tool) would be fitted as a skin mirrored.
+        if self.colour {
+            let (w, h) = found;
+            let factor = if w.min(h) >= 32 { 4 } else { 1 };
+            let grid = WorkingGrid {
+                frame_width: w,
+                frame_height: h,
+                factor,
+            };
+            let bg = PreparedBackground::new(&self.background, grid)?;
+            if let Some((given, swapped)) = bg.swapped_channels(&bg.matched(&img)?) {
+                return Err(Error::SwappedChannels {
+                    path,
+                    given,
+                    swapped,
+                });
+            }
+        }
         Ok(img)
     }
 

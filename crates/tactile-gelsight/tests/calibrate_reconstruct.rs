@@ -293,6 +293,24 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
         "{e}"
     );
     assert!(e.to_string().contains("press_02.png: a blank frame"), "{e}");
+    // A press saved in BGR order beside the background in RGB is named,
+    // not fitted as a skin mirrored.
+    let d = tmp.path().join("bgr");
+    subset(&d, 2, str::to_string);
+    let press = d.join("frames/press_02.png");
+    let rgb = load_rgb(&press).unwrap();
+    let mut v = rgb.as_slice().to_vec();
+    v.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
+    tactile_core::image_io::save_rgb_png(&press, 640, 480, &v).unwrap();
+    let ds = BallPresses::open(&d).unwrap();
+    assert!(ds.frame(0).is_ok());
+    let e = ds.frame(1).err().unwrap();
+    assert!(matches!(e, Error::SwappedChannels { .. }), "{e}");
+    assert!(
+        e.to_string()
+            .contains("press_02.png: red and blue look swapped"),
+        "{e}"
+    );
     // Too few presses: refused before anything is written.
     let d = tmp.path().join("few");
     subset(&d, 3, str::to_string);
