@@ -94,6 +94,48 @@ fn other_sizes_are_resized_and_still_detected() {
 }
 
 #[test]
+fn a_portrait_frame_keeps_its_tendon_direction() {
+    // A camera mounted upright gives the frame transposed: the tendon's
+    // direction is the landscape frame's mirrored about the diagonal,
+    // 90 - theta. The segmenter's window keeps the frame's aspect either
+    // way (before, a portrait frame was stretched square: 9 degrees off).
+    let mut seg = segmenter();
+    let mut checked = 0;
+    for s in 0..20 {
+        let (img, tendon) = virtual_frame(902, s, 12);
+        let Ok(d) = seg.segment(&img).unwrap().tendon.direction else {
+            continue;
+        };
+        if !tendon {
+            continue;
+        }
+        let (w, h) = (img.width(), img.height());
+        let px = img.as_slice();
+        let t: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let (x, y) = (i / h, i % h);
+                let at = (y * w + x) * 3;
+                [px[at], px[at + 1], px[at + 2]]
+            })
+            .collect();
+        let portrait = rgb_image(h, w, t).unwrap();
+        let dp = seg.segment(&portrait).unwrap().tendon.direction.unwrap();
+        let want = (90.0 - d.angle_deg).rem_euclid(180.0);
+        let off = tactile_rs::segment::postprocess::direction_error_deg(dp.angle_deg, want);
+        assert!(
+            off < 2.0,
+            "sequence {s}: {} for {want} ({off} off)",
+            dp.angle_deg
+        );
+        checked += 1;
+        if checked == 3 {
+            break;
+        }
+    }
+    assert_eq!(checked, 3);
+}
+
+#[test]
 fn wrong_channel_counts_are_converted_or_rejected_naming_the_file() {
     let mut det = detector();
     let dir = tempfile::tempdir().unwrap();

@@ -257,16 +257,29 @@ pub struct SquareWindow {
 }
 
 impl SquareWindow {
-    /// Size the frame is scaled to before the cut, for a `w x h` frame.
+    /// Size the frame is scaled to before the cut, for a `w x h` frame:
+    /// its shorter side to the window's diagonal, its aspect kept, so a
+    /// direction in the window is the direction in the frame (a portrait
+    /// frame too; before, it was stretched square).
     pub fn scaled_size(&self, w: usize, h: usize) -> (usize, usize) {
-        let sh = (self.side as f64 * std::f64::consts::SQRT_2).ceil() as usize;
-        let sw = ((w as f64 * sh as f64 / h.max(1) as f64).round() as usize).max(sh);
-        (sw, sh)
+        let short = (self.side as f64 * std::f64::consts::SQRT_2).ceil() as usize;
+        let long = |a: usize, b: usize| {
+            ((a as f64 * short as f64 / b.max(1) as f64).round() as usize).max(short)
+        };
+        match w >= h {
+            true => (long(w, h), short),
+            false => (short, long(h, w)),
+        }
     }
 
     /// Scale factor from frame pixels to window pixels.
-    pub fn scale(&self, h: usize) -> f64 {
-        self.scaled_size(1, h).1 as f64 / h.max(1) as f64
+    pub fn scale(&self, w: usize, h: usize) -> f64 {
+        let (sw, sh) = self.scaled_size(w, h);
+        // The shorter side's, scaled exactly (the longer is rounded).
+        match w >= h {
+            true => sh as f64 / h.max(1) as f64,
+            false => sw as f64 / w.max(1) as f64,
+        }
     }
 
     /// Where the centre of pixel `(u, v)` of a `w x h` frame falls in the
@@ -661,6 +674,9 @@ mod tests {
         let (sw, sh) = win.scaled_size(640, 360);
         assert_eq!(sh, 57);
         assert!(sw > sh);
+        // A portrait frame keeps its aspect too, its shorter side the same.
+        assert_eq!(win.scaled_size(360, 640), (sh, sw));
+        assert_eq!(win.scale(360, 640), win.scale(640, 360));
         let img = FloatImage {
             width: sw,
             height: sh,
