@@ -63,6 +63,9 @@ pub struct ImportSummary {
     pub frames_read: u64,
     /// Frame width and height.
     pub size: (usize, usize),
+    /// What the user should know of the labels, each beginning
+    /// `warning: ` ([`one_based_warning`]).
+    pub warnings: Vec<String>,
 }
 
 impl ImportSummary {
@@ -292,6 +295,13 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
     let mut source = FrameSource::open(&spec, SourceOptions::default())?;
     // Files (a folder, an image) can be labelled by name; stream frames by number.
     let is_folder = source.list().is_some();
+    // Frames labelled by number in a folder whose files count from 1.
+    let one_based = match source.list() {
+        Some(list) if labels.rows.keys().any(|k| matches!(k, FrameKey::Number(_))) => {
+            one_based_warning(list, &options.labels)
+        }
+        _ => None,
+    };
     if let Some(list) = source.list() {
         // A single picture's folder is where its name is read from.
         let frames_dir = match options.frames.is_dir() {
@@ -440,9 +450,13 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
             path: options.labels.clone(),
             line: Some(*line),
             message: format!(
-                "frame {key} is not in {} ({read} frames read){}{}",
+                "frame {key} is not in {} ({read} frames read){}{}{}",
                 options.frames.display(),
                 other_case.unwrap_or_default(),
+                one_based
+                    .as_deref()
+                    .map(|w| format!("; {}", w.trim_start_matches("warning: ")))
+                    .unwrap_or_default(),
                 source
                     .late_warnings()
                     .iter()
@@ -495,7 +509,47 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
         frames: written,
         frames_read: read,
         size: (w, h),
+        warnings: one_based.into_iter().collect(),
     })
+}
+
+/// The warning for a labels CSV (`labels`) that gives frames of `list` by
+/// number when the files are numbered from 1 (`img_1.png`, `img_2.png`,
+/// ..., each file's last number its place plus one): a frame's number is
+/// its place from 0, so a column holding the files' own numbers would
+/// put every label one frame off without an error. `None` when the names
+/// do not count so.
+fn one_based_warning(list: &FrameList, labels: &Path) -> Option<String> {
+    // The last run of digits in a file's stem.
+    let number = |p: &Path| -> Option<u64> {
+        let stem = p.file_stem()?.to_str()?;
+        let end = stem.rfind(|c: char| c.is_ascii_digit())? + 1;
+        let start = stem[..end]
+            .rfind(|c: char| !c.is_ascii_digit())
+            .map_or(0, |i| i + 1);
+        stem[start..end].parse().ok()
+    };
+    let names: Vec<&Path> = list.frames.iter().map(|e| e.path.as_path()).collect();
+    let counted_from_1 = list.dataset.is_none()
+        && names.len() >= 2
+        && names
+            .iter()
+            .enumerate()
+            .all(|(i, p)| number(p) == Some(i as u64 + 1));
+    if !counted_from_1 {
+        return None;
+    }
+    let name = |i: usize| names[i].file_name().unwrap_or_default().to_string_lossy();
+    Some(format!(
+        "warning: {}: a `frame` number is the frame's place in the folder counted from 0 \
+         (frame 0 is {}, frame 1 is {}), and the files are numbered from 1: if the column \
+         holds the files' own numbers, every label is one frame off; give the file names \
+         ({}, ...) to be sure",
+        labels.display(),
+        name(0),
+        name(1),
+        name(0)
+    ))
 }
 
 #[cfg(test)]

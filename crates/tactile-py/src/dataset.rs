@@ -107,6 +107,9 @@ impl PyDataset {
             force,
         };
         let summary = interruptible(py, || import_dataset(&options).py())?;
+        for w in &summary.warnings {
+            crate::errors::user_warning(py, w)?;
+        }
         let ds = py.detach(move || Dataset::open(&summary.out)).py()?;
         Ok(Self { ds })
     }

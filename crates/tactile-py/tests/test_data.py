@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 import re
 import os
 
@@ -378,7 +379,16 @@ def test_a_folder_of_frames_and_labels_become_a_dataset(root, tmp_path, palpatio
     bad.write_text("frame,tendon\nnowhere/000003.png,1\n")
     with pytest.raises(ValueError, match=r'bad.csv:2: frame "nowhere/000003.png" is not a frame of'):
         tactile.Dataset.from_video(folder, bad, "visuotactile", tmp_path / "ds4")
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "by-path", "ds", "labels.csv"]
+    # Files numbered from 1 labelled by number: warned that a column of the
+    # files' own numbers would be one frame off.
+    from_1 = tmp_path / "from-1"
+    from_1.mkdir()
+    for i in range(3):
+        shutil.copy(folder / f"{i:06}.png", from_1 / f"img_{i + 1}.png")
+    bad.write_text("frame,tendon\n1,1\n")
+    with pytest.warns(UserWarning, match=r"frame 0 is img_1.png, frame 1 is img_2.png\), and the files are numbered from 1"):
+        tactile.Dataset.from_video(from_1, bad, "visuotactile", tmp_path / "ds5")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "by-path", "ds", "ds5", "from-1", "labels.csv"]
 
 
 def test_generator_options_left_out_of_manifests_are_keywords(tmp_path):

@@ -15,7 +15,13 @@ pub(crate) enum DatasetCmd {
 
 pub(crate) fn main(cmd: DatasetCmd) -> Result<()> {
     match cmd {
-        DatasetCmd::FromVideo(a) => say!("{}", import_dataset(&a)?.describe()),
+        DatasetCmd::FromVideo(a) => {
+            let summary = import_dataset(&a)?;
+            for w in &summary.warnings {
+                tactile_core::note!("{w}");
+            }
+            say!("{}", summary.describe())
+        }
     }
     Ok(())
 }

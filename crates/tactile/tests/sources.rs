@@ -644,6 +644,39 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
             && err.contains("name a frame by its file name or its number"),
         "{err}"
     );
+    // Files numbered from 1 (img_1.png, ...) labelled by number: a frame's
+    // number is its place from 0, so the import warns that a column of the
+    // files' own numbers would be one frame off, and says so in the error
+    // of a number past the end (before, both said nothing of it).
+    let from_1 = dir.path().join("from-1");
+    std::fs::create_dir(&from_1).unwrap();
+    for i in 0..3 {
+        std::fs::copy(
+            folder.join(format!("{i:06}.png")),
+            from_1.join(format!("img_{}.png", i + 1)),
+        )
+        .unwrap();
+    }
+    std::fs::write(&bad, "frame,tendon\n1,1\n2,0\n").unwrap();
+    let r = import(&from_1, &bad, &dir.path().join("from-1-ds"));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(
+        err.contains("warning: ")
+            && err.contains("bad.csv: a `frame` number is the frame's place in the folder counted from 0 (frame 0 is img_1.png, frame 1 is img_2.png), and the files are numbered from 1"),
+        "{err}"
+    );
+    let err = refused(&from_1, "frame,tendon\n3,1\n");
+    assert!(
+        err.contains("bad.csv:2: frame 3 is not in")
+            && err.contains("(3 frames read); ")
+            && err.contains("and the files are numbered from 1"),
+        "{err}"
+    );
+    // By name, or from files counted from 0, nothing to warn of.
+    std::fs::write(&bad, "frame,tendon\nimg_1.png,1\n").unwrap();
+    let r = import(&from_1, &bad, &dir.path().join("from-1-names"));
+    assert!(r.status.success() && !String::from_utf8_lossy(&r.stderr).contains("numbered from 1"));
     let err = refused(&folder, "frame,tendon\n000001.PNG,1\n");
     assert!(
         err.contains("bad.csv:2: frame \"000001.PNG\" is not in")
