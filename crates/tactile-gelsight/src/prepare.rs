@@ -319,15 +319,22 @@ mod tests {
         rgb_image(w, h, data).unwrap()
     }
 
+    /// The 64x48 frames' working grid.
+    const GRID: WorkingGrid = WorkingGrid {
+        frame_width: 64,
+        frame_height: 48,
+        factor: 4,
+    };
+
+    /// A rest frame lit red from the left and blue from the right, as a
+    /// GelSight's lights colour its sides.
+    fn lit(x: usize, y: usize) -> [u8; 3] {
+        [90 + x as u8, 120 + y as u8, 200 - x as u8]
+    }
+
     #[test]
     fn only_a_frame_changed_over_half_its_picture_is_far_from_the_rest_frame() {
-        let grid = WorkingGrid {
-            frame_width: 64,
-            frame_height: 48,
-            factor: 4,
-        };
-        let lit = |x: usize, y: usize| [90 + x as u8, 120 + y as u8, 200 - x as u8];
-        let bg = PreparedBackground::new(&frame(lit), grid).unwrap();
+        let bg = PreparedBackground::new(&frame(lit), GRID).unwrap();
         let change = |f: &RgbImage| bg.median_change(&bg.matched(f).unwrap());
         // At rest, at another exposure, and pressed over a third of the
         // picture (a big contact: lit on the side facing one light, shaded
@@ -357,14 +364,7 @@ mod tests {
 
     #[test]
     fn a_frame_in_bgr_order_is_told_from_its_colours() {
-        let grid = WorkingGrid {
-            frame_width: 64,
-            frame_height: 48,
-            factor: 4,
-        };
-        // Red from the left, blue from the right, as a GelSight's lights.
-        let lit = |x: usize, y: usize| [90 + x as u8, 120 + y as u8, 200 - x as u8];
-        let bg = PreparedBackground::new(&frame(lit), grid).unwrap();
+        let bg = PreparedBackground::new(&frame(lit), GRID).unwrap();
         let swapped = |f: &RgbImage| bg.swapped_channels(&bg.matched(f).unwrap());
         let bgr = |f: &RgbImage| {
             let mut v = f.as_slice().to_vec();
@@ -383,7 +383,7 @@ mod tests {
         let (given, back) = swapped(&bgr(&pressed)).unwrap();
         assert!(back < SWAPPED_CHANGE_RATIO * given, "{back} {given}");
         // A grey sensor has no order to tell.
-        let grey = PreparedBackground::new(&frame(|x, _| [x as u8 * 3; 3]), grid).unwrap();
+        let grey = PreparedBackground::new(&frame(|x, _| [x as u8 * 3; 3]), GRID).unwrap();
         assert!(!grey.colour);
         assert_eq!(
             grey.swapped_channels(&grey.matched(&bgr(&pressed)).unwrap()),

@@ -298,10 +298,7 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     let d = tmp.path().join("bgr");
     subset(&d, 2, str::to_string);
     let press = d.join("frames/press_02.png");
-    let rgb = load_rgb(&press).unwrap();
-    let mut v = rgb.as_slice().to_vec();
-    v.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
-    tactile_core::image_io::save_rgb_png(&press, 640, 480, &v).unwrap();
+    save_bgr_copy(&press, &press);
     let ds = BallPresses::open(&d).unwrap();
     assert!(ds.frame(0).is_ok());
     let e = ds.frame(1).err().unwrap();
@@ -776,13 +773,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     // where its press is 0.68 mm deep).
     let bgr_dir = tmp.path().join("bgr");
     std::fs::create_dir_all(&bgr_dir).unwrap();
-    let bgr_copy = |from: &Path, to: &Path| {
-        let rgb = load_rgb(from).unwrap();
-        let mut v = rgb.as_slice().to_vec();
-        v.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
-        tactile_core::image_io::save_rgb_png(to, rgb.width(), rgb.height(), &v).unwrap();
-    };
-    bgr_copy(
+    save_bgr_copy(
         &d.join("frames/press_01.png"),
         &bgr_dir.join("press_01.png"),
     );
@@ -796,7 +787,7 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
             .contains("press_01.png: red and blue look swapped (BGR order"),
         "{e}"
     );
-    bgr_copy(&d.join("background.png"), &bgr_dir.join("rest.png"));
+    save_bgr_copy(&d.join("background.png"), &bgr_dir.join("rest.png"));
     let o = ReconstructOptions {
         background: Some(bgr_dir.join("rest.png")),
         ..o
@@ -822,6 +813,15 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
         "{e}"
     );
     assert!(!out.exists());
+}
+
+/// Save the colour PNG `from` at `to` in BGR order (as a tool that saved
+/// what OpenCV read would).
+fn save_bgr_copy(from: &Path, to: &Path) {
+    let rgb = load_rgb(from).unwrap();
+    let mut v = rgb.as_slice().to_vec();
+    v.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
+    tactile_core::image_io::save_rgb_png(to, rgb.width(), rgb.height(), &v).unwrap();
 }
 
 /// Overwrite the colour PNG `path` with its grey version, as RGB (the

@@ -352,8 +352,8 @@ pub fn is_blank(img: &FloatImage) -> bool {
 /// camera frame before any conversion): the same rule, one level being
 /// 1/255.
 pub fn is_blank_levels(levels: &[u8], channels: usize) -> bool {
-    // Whole-number sums (exact, and a quarter of the float pass's time on
-    // a VGA frame): it runs on every frame a calibrated sensor reads.
+    // Whole-number sums in one pass over the bytes (exact): it runs on
+    // every frame a calibrated sensor reads.
     let c = channels.clamp(1, 4);
     let (mut sum, mut squares) = ([0u64; 4], [0u64; 4]);
     for pixel in levels.chunks_exact(c) {
