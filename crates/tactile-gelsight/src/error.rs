@@ -118,11 +118,12 @@ pub enum Error {
 }
 
 impl Error {
-    /// Whether this is [`Reconstructor::check_frame`]'s refusal of a frame
-    /// the sensor cannot read (another size than its calibration's, blank,
-    /// in BGR order, grey for a sensor calibrated in colour, colour for a grey one): the
-    /// frame's fault, not the calibration's or the machine's. A pipeline
-    /// gives such a frame nothing and goes on; any other error stops it.
+    /// Whether this is [`Reconstructor::check_frame`]'s (or
+    /// `check_working`'s) refusal of a frame the sensor cannot read
+    /// (another size than its calibration's, blank, in BGR order, grey for
+    /// a sensor calibrated in colour, colour for a grey one): the frame's
+    /// fault, not the calibration's or the machine's. A pipeline gives
+    /// such a frame nothing and goes on; any other error stops it.
     ///
     /// [`Reconstructor::check_frame`]: crate::Reconstructor::check_frame
     pub fn is_frame_refusal(&self) -> bool {
