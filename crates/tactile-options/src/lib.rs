@@ -91,10 +91,12 @@ fn beyond_64_bits(value: &Value) -> bool {
     const I64_MIN: f64 = -9_223_372_036_854_775_808.0;
     const U64_END: f64 = 18_446_744_073_709_551_616.0;
     match value {
-        Value::Number(n) => n
-            .as_f64()
-            .filter(|_| n.is_f64())
-            .is_some_and(|x| x.is_finite() && x.fract() == 0.0 && !(I64_MIN..U64_END).contains(&x)),
+        Value::Number(n) => {
+            n.is_f64()
+                && n.as_f64().is_some_and(|x| {
+                    x.is_finite() && x.fract() == 0.0 && !(I64_MIN..U64_END).contains(&x)
+                })
+        }
         Value::Array(items) => items.iter().any(beyond_64_bits),
         Value::Object(m) => m.values().any(beyond_64_bits),
         _ => false,

@@ -17,6 +17,7 @@ use tactile_detect::TendonDetector;
 use tactile_segment::TendonSegmenter;
 
 use tactile_burn::Artifact;
+use tactile_gelsight::prepare::WorkingImage;
 use tactile_gelsight::reconstruct::{CheckBasis, SensorCheck};
 use tactile_gelsight::{GelsightArtifact, Reconstructor};
 
@@ -272,18 +273,23 @@ impl Pipeline {
         })
     }
 
-    /// Why a calibrated sensor cannot read `frame` (named `name`), when it
-    /// cannot: another size than its calibration's, or grey for a sensor
-    /// calibrated in colour ([`Reconstructor::check_frame`]'s refusal).
+    /// A calibrated sensor's exposure-matched working image of `frame`
+    /// (named `name`), or why it cannot read it: another size than its
+    /// calibration's, blank, in BGR order, or grey for a sensor calibrated
+    /// in colour ([`Reconstructor::working_frame`]'s refusals), as `Err`.
     /// [`Self::process`] gives such a frame nothing; without a calibration
-    /// the networks take frames of any size, and this is `None`.
-    fn unreadable(&self, name: &str, frame: &RgbImage) -> Result<Option<String>> {
+    /// the networks take frames of any size, and this is `Ok(None)`.
+    fn sensor_working(
+        &self,
+        name: &str,
+        frame: &RgbImage,
+    ) -> Result<std::result::Result<Option<WorkingImage>, String>> {
         let Some(sensor) = self.sensor.as_ref() else {
-            return Ok(None);
+            return Ok(Ok(None));
         };
-        match sensor.check_frame(frame, Path::new(name)) {
-            Ok(()) => Ok(None),
-            Err(e) if e.is_frame_refusal() => Ok(Some(e.to_string())),
+        match sensor.working_frame(frame, Path::new(name)) {
+            Ok(working) => Ok(Ok(Some(working))),
+            Err(e) if e.is_frame_refusal() => Ok(Err(e.to_string())),
             Err(e) => Err(e.into()),
         }
     }
@@ -332,21 +338,27 @@ impl Pipeline {
         let t0 = Instant::now();
         let mut rec = FrameRecord::empty(name);
         let mut views = FrameViews::default();
-        // A frame a calibrated sensor cannot read (another size, grey for
-        // a colour calibration) is another sensor's or another camera
-        // mode's: foreign, with or without palpation models, so one such
-        // frame does not stop a run. A sequence's filter hears it as a
-        // score of 0, as it does the gate's foreign frames.
-        if let Some(why) = self.unreadable(name, frame)? {
-            if let Some(h) = filter {
-                h.update(0.0);
+        // A frame a calibrated sensor cannot read (another size, blank, in
+        // BGR order, grey for a colour calibration) is another sensor's or
+        // another camera mode's: foreign, with or without palpation
+        // models, so one such frame does not stop a run. A sequence's
+        // filter hears it as a score of 0, as it does the gate's foreign
+        // frames. The working image the check made is the one reconstructed.
+        let t_sensor = Instant::now();
+        let sensor_working = match self.sensor_working(name, frame)? {
+            Ok(working) => working,
+            Err(why) => {
+                if let Some(h) = filter {
+                    h.update(0.0);
+                }
+                rec.unreadable = Some(why);
+                rec.out_of_distribution = true;
+                rec.gate = Some(tactile_detect::Gate::Foreign);
+                rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
+                return Ok((rec, None));
             }
-            rec.unreadable = Some(why);
-            rec.out_of_distribution = true;
-            rec.gate = Some(tactile_detect::Gate::Foreign);
-            rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
-            return Ok((rec, None));
-        }
+        };
+        let ms_sensor_prepare = 1e3 * t_sensor.elapsed().as_secs_f64();
         // With palpation models, the detector's gate is asked first: a
         // frame of another sensor (input statistics far from the
         // detector's training frames') gets no tendon, no direction, no
@@ -387,23 +399,8 @@ impl Pipeline {
         // asks its check instead of the gate (the detector's profile or
         // the rest frame, as `tactile reconstruct` does): a frame unlike
         // the sensor's gets no indentation.
-        if let Some(sensor) = self.sensor.as_mut() {
+        if let (Some(sensor), Some(working)) = (self.sensor.as_mut(), sensor_working) {
             let t = Instant::now();
-            // The frame passed the calibration's check above
-            // (`Self::unreadable`): shrink and match it without asking again.
-            let working = sensor.background().matched(frame)?;
-            // A frame in BGR order is refused as a frame the sensor cannot
-            // read (`Self::unreadable`'s other refusals), not reconstructed.
-            if let Err(e) = sensor.check_working(&working, Path::new(name)) {
-                if let Some(h) = filter {
-                    h.update(0.0);
-                }
-                rec.unreadable = Some(e.to_string());
-                rec.out_of_distribution = true;
-                rec.gate = Some(tactile_detect::Gate::Foreign);
-                rec.ms_total = 1e3 * t0.elapsed().as_secs_f64();
-                return Ok((rec, None));
-            }
             if let Some(check) = self.sensor_check.as_mut()
                 && check
                     .unlike(frame, &working, sensor.background())?
@@ -415,7 +412,9 @@ impl Pipeline {
                 return Ok((rec, None));
             }
             let map = sensor.reconstruct_working(&working)?;
-            rec.ms_reconstruct = Some(1e3 * t.elapsed().as_secs_f64());
+            // Shrinking and matching the frame (made by the check) counts
+            // as the reconstruction's, as before.
+            rec.ms_reconstruct = Some(ms_sensor_prepare + 1e3 * t.elapsed().as_secs_f64());
             rec.indentation_peak_mm = Some(map.peak_mm());
             rec.contact_area_mm2 = Some(map.contact_area_mm2(sensor.mm_per_px()));
             views.indentation = Some(SensorView {
