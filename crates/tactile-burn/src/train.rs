@@ -285,6 +285,11 @@ pub struct FitSummary {
     /// Validation items.
     #[serde(default)]
     pub val_items: usize,
+    /// What the trainer found in its data that a user must know (a target
+    /// labelled with one value on every frame it fits): noted on standard
+    /// error when found, raised as `UserWarning`s by Python.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 impl FitSummary {
@@ -448,6 +453,7 @@ pub fn fit<M: burn::module::Module, E: From<Error>>(
         seconds: state.elapsed_s + start.elapsed().as_secs_f64(),
         train_items: train.len(),
         val_items,
+        warnings: Vec::new(),
     };
     Ok((model, summary))
 }
@@ -585,6 +591,7 @@ mod tests {
             seconds: 1.0,
             train_items: 10,
             val_items: 2,
+            warnings: Vec::new(),
         };
         assert!(
             fit.describe("").starts_with("best epoch 60 of 60:"),

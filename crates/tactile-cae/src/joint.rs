@@ -161,6 +161,9 @@ pub struct JointLabels {
     pub columns: Vec<Option<Vec<f32>>>,
     /// The standardisation.
     pub scaler: Scaler,
+    /// A warning for each target one value labels on every fitted row
+    /// ([`tactile_estimate::target::unvarying_targets`]).
+    pub warnings: Vec<String>,
 }
 
 impl JointLabels {
@@ -197,11 +200,20 @@ impl JointLabels {
             .into());
         }
         let scaler = output_scaler(&joint.targets, &encode(&joint.targets, &fit));
+        let warnings = tactile_estimate::target::unvarying_targets(
+            &joint.targets,
+            &fit,
+            &ds.labels_path().display().to_string(),
+        );
         let columns = raw
             .into_iter()
             .map(|r| r.map(|r| scaler.apply(&encode(&joint.targets, &[r]))))
             .collect();
-        Ok(Self { columns, scaler })
+        Ok(Self {
+            columns,
+            scaler,
+            warnings,
+        })
     }
 
     /// These labels as rows `offset..` of `total` rows, the others
@@ -210,10 +222,7 @@ impl JointLabels {
         let mut columns = vec![None; offset];
         columns.append(&mut self.columns);
         columns.resize(total.max(columns.len()), None);
-        Self {
-            columns,
-            scaler: self.scaler,
-        }
+        Self { columns, ..self }
     }
 
     /// How many of `rows` are labelled.
@@ -312,6 +321,7 @@ mod tests {
                 mean: vec![0.0; 2],
                 std: vec![1.0; 2],
             },
+            warnings: Vec::new(),
         };
         let pred = Tensor::<2>::from_data(
             TensorData::new(vec![1.0f32, 1.0, 50.0, 50.0, 1.0, 3.0], [3, 2]),

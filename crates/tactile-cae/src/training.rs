@@ -144,8 +144,11 @@ impl Rows {
             );
             let pins = PinSet::from_dataset(s.ds, s.preprocess)?;
             if let Some(j) = s.joint {
-                rows.labels
-                    .push(JointLabels::read(s.ds, j, &train)?.placed(offset, total));
+                let labels = JointLabels::read(s.ds, j, &train)?;
+                for w in &labels.warnings {
+                    tactile_core::note!("warning: {w}");
+                }
+                rows.labels.push(labels.placed(offset, total));
             }
             // Per training row, its turned copies (none without augmentation).
             if let Some(aug) = &config.rotation {
@@ -261,7 +264,8 @@ pub fn train(
         .with_checkpoint_every(25)
         .with_run_id(tactile_burn::artifact::run_fingerprint(config, &datasets)?);
     let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
-    let (_, summary) = fit::<_, crate::Error>(
+    let warnings: Vec<String> = labels.iter().flat_map(|l| l.warnings.clone()).collect();
+    let (_, mut summary) = fit::<_, crate::Error>(
         &fit_cfg,
         model,
         optim,
@@ -312,6 +316,7 @@ pub fn train(
         },
         |m| Ok(artifact.save(&m.cae, out)?),
     )?;
+    summary.warnings = warnings;
     tactile_burn::artifact::write_training_record(
         out,
         config,

@@ -129,6 +129,35 @@ impl Target {
     }
 }
 
+/// A warning for each of `targets` that one value labels on every one of
+/// `rows` (label rows in `targets` order, the frames a model fits; an angle
+/// counts as one value whole turns apart): a network learns nothing of such
+/// a target and estimates that value for every frame, so its error on other
+/// frames is the spread of their labels. `labels` is the file the rows
+/// come from. Fewer than two rows warn of nothing.
+pub fn unvarying_targets(targets: &[Target], rows: &[Vec<f64>], labels: &str) -> Vec<String> {
+    if rows.len() < 2 {
+        return Vec::new();
+    }
+    targets
+        .iter()
+        .enumerate()
+        .filter_map(|(j, t)| {
+            let first = *rows[0].get(j)?;
+            let tolerance = 1e-9 * (1.0 + first.abs());
+            rows.iter()
+                .all(|r| r.get(j).is_some_and(|&v| t.error(v, first) <= tolerance))
+                .then(|| {
+                    format!(
+                        "{labels}: {name} is {first} on every one of the {n} frames this model fits: it learns nothing of a value that never changes and will estimate {first} for every frame; label {name} where it varies, or leave it out of the targets",
+                        name = t.name,
+                        n = rows.len()
+                    )
+                })
+        })
+        .collect()
+}
+
 impl std::str::FromStr for Target {
     type Err = crate::Error;
     fn from_str(s: &str) -> Result<Self> {
@@ -139,6 +168,37 @@ impl std::str::FromStr for Target {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_target_of_one_value_throughout_is_named() {
+        let targets = [
+            Target::linear("depth_mm"),
+            Target::linear("shear_x_mm"),
+            Target::angle("theta_deg", 180.0),
+        ];
+        // shear_x_mm never changes; theta_deg is one axis (0 and 180 alike).
+        let rows = vec![
+            vec![1.0, 0.0, 0.0],
+            vec![2.0, 0.0, 180.0],
+            vec![3.0, 0.0, -180.0],
+        ];
+        let w = unvarying_targets(&targets, &rows, "labels.csv");
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(
+            w[0].starts_with("labels.csv: shear_x_mm is 0 on every one of the 3 frames"),
+            "{}",
+            w[0]
+        );
+        assert!(w[1].contains("theta_deg is 0"), "{}", w[1]);
+        // A target that varies anywhere, and one frame alone, warn of nothing.
+        let rows = vec![vec![1.0, 0.0, 0.0], vec![1.0, 0.5, 10.0]];
+        assert!(
+            unvarying_targets(&targets, &rows, "l")
+                .iter()
+                .all(|w| w.contains("depth_mm"))
+        );
+        assert!(unvarying_targets(&targets, &rows[..1], "l").is_empty());
+    }
 
     #[test]
     fn angles_wrap_and_round_trip() {

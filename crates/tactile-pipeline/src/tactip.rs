@@ -1347,8 +1347,9 @@ pub struct RegressorFit {
     /// Mean absolute error per target on the test frames (empty with no
     /// test frames).
     pub test_mae: Vec<f64>,
-    /// What a reader of the test error must know: the encoder trained on
-    /// test frames. The CLI notes them on standard error; Python raises
+    /// What a reader of the model and its test error must know: a target
+    /// labelled with one value on every training frame, the encoder trained
+    /// on test frames. The CLI notes them on standard error; Python raises
     /// them as `UserWarning`s.
     pub warnings: Vec<String>,
 }
@@ -1502,11 +1503,16 @@ pub fn train_regressor(
         }
         _ => None,
     };
+    let unvarying = tactile_estimate::target::unvarying_targets(
+        &plan.targets,
+        &ty,
+        &ds.labels_path().display().to_string(),
+    );
     Ok(RegressorFit {
         regressor,
         frames: [tx.len(), vx.len(), sx.len()],
         test_mae,
-        warnings: warnings.into_iter().collect(),
+        warnings: unvarying.into_iter().chain(warnings).collect(),
     })
 }
 

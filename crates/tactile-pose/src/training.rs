@@ -194,7 +194,16 @@ pub fn train(
     } else {
         data.hold_out(rows, config.val_fraction, config.schedule.seed)?
     };
-    let encoded = encode(&config.targets, &set.label_rows(&train));
+    let train_labels = set.label_rows(&train);
+    let warnings = tactile_estimate::target::unvarying_targets(
+        &config.targets,
+        &train_labels,
+        &data.labels_path().display().to_string(),
+    );
+    for w in &warnings {
+        tactile_core::note!("warning: {w}");
+    }
+    let encoded = encode(&config.targets, &train_labels);
     let outputs = output_scaler(&config.targets, &encoded);
     let k = config.model.outputs;
     // Standardised target columns of every row, for the loss.
@@ -259,7 +268,7 @@ pub fn train(
     let seed = config.schedule.seed;
     let last_mae = std::cell::RefCell::new(Vec::new());
     let last_scale = std::cell::RefCell::new(None::<Vec<f64>>);
-    let (_, summary) = fit::<_, Error>(
+    let (_, mut summary) = fit::<_, Error>(
         &fit_cfg,
         model,
         burn::optim::AdamConfig::new().init(),
@@ -358,6 +367,7 @@ pub fn train(
         .get("validation_mae")
         .and_then(|v| serde_json::from_value(v.clone()).ok())
         .unwrap_or_default();
+    summary.warnings = warnings;
     tactile_burn::artifact::write_training_record(
         out,
         config,

@@ -25,13 +25,25 @@ fn open(py: Python<'_>, path: PathBuf) -> PyResult<Dataset> {
     py.detach(move || Dataset::open(&path)).py()
 }
 
-/// A library result as the dict Python gets, with the output folder.
+/// A library result as the dict Python gets, with the output folder; its
+/// warnings raised as `UserWarning`s.
 fn result<'py, T: serde::Serialize>(
     py: Python<'py>,
     value: &T,
     out: &std::path::Path,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut v = serde_json::to_value(value).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    // The run's warnings (a summary's, at the top or one level down, as a
+    // pose network's `fit`), which the command line noted as it found them.
+    let summaries = std::iter::once(&v).chain(v.as_object().into_iter().flat_map(|m| m.values()));
+    let warnings: Vec<String> = summaries
+        .filter_map(|s| s.get("warnings")?.as_array())
+        .flatten()
+        .filter_map(|w| w.as_str().map(String::from))
+        .collect();
+    for w in &warnings {
+        crate::errors::user_warning(py, w)?;
+    }
     if let Some(m) = v.as_object_mut() {
         m.insert("out".into(), out.display().to_string().into());
     }

@@ -431,6 +431,23 @@ def test_a_pose_network_trains_from_python_as_from_the_cli(root, tmp_path, tacti
     assert not (tmp_path / "bad").exists()
 
 
+def test_a_target_labelled_alike_on_every_frame_is_a_warning(root, tmp_path):
+    data = tmp_path / "d"
+    shutil.copytree(root / "samples/virtual-tactip", data)
+    rows = [line.split(",") for line in (data / "labels.csv").read_text().splitlines()]
+    for cells in rows[1:]:
+        if cells[3]:  # y_mm, 0 on every frame that has one (a flat has none)
+            cells[3] = "0.0000"
+    (data / "labels.csv").write_text("\n".join(",".join(c) for c in rows) + "\n")
+    with pytest.warns(UserWarning, match="y_mm is 0 on every one of the 10 frames this model fits"):
+        s = tactile.train.pose(data, tmp_path / "pose", targets=["x_mm", "y_mm"], input_px=32,
+                               max_epochs=1)
+    assert len(s["warnings"]) == 1 and "never changes" in s["warnings"][0]
+    with pytest.warns(UserWarning, match="y_mm is 0 on every one of the"):
+        tactile.train.regressor(data, ["x_mm", "y_mm"], encoder=root / "models/cae-synth",
+                                out=tmp_path / "reg", only_labelled=True, val_fraction=0.25)
+
+
 def test_eval_depth_scores_the_shipped_network_and_draws_heat_maps(root, small_vt, tmp_path):
     maps = tmp_path / "maps"
     e = tactile.eval.depth(root / "models/depth", small_vt, save_png=maps, png_frames=2)

@@ -4511,3 +4511,102 @@ fn trainers_find_frames_that_cannot_be_read_before_loading_any() {
         assert!(!out.exists(), "{kind}: a model folder was left");
     }
 }
+
+/// A label column that holds one value on every frame a model fits (a
+/// column the rig never varied, or one filled with zeros for want of a
+/// sensor) teaches nothing: every trainer of targets names it, the pose
+/// network as it starts and in its record, the regressor and a CAE's joint
+/// head alike; a target that varies is not named.
+#[test]
+fn a_target_labelled_alike_on_every_frame_is_named_by_every_trainer() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("d");
+    copy_model(&root.join("samples/virtual-tactip"), &data);
+    // y_mm (column 3) is 0 on every frame that has one (a flat has none).
+    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
+    let mut rows: Vec<String> = Vec::new();
+    for (i, line) in labels.lines().enumerate() {
+        let mut cells: Vec<&str> = line.split(',').collect();
+        if i > 0 && !cells[3].is_empty() {
+            cells[3] = "0.0000";
+        }
+        rows.push(cells.join(","));
+    }
+    std::fs::write(data.join("labels.csv"), rows.join("\n") + "\n").unwrap();
+    let d = data.to_str().unwrap();
+    let said = |msg: &str| {
+        msg.contains("y_mm is 0 on every one of the")
+            && msg.contains("learns nothing of a value that never changes")
+    };
+    let pose = tmp.path().join("pose");
+    let (ok, msg) = tactile(&[
+        "train",
+        "pose",
+        "--data",
+        d,
+        "--out",
+        pose.to_str().unwrap(),
+        "--targets",
+        "x_mm,y_mm",
+        "--input-px",
+        "32",
+        "--max-epochs",
+        "1",
+    ]);
+    assert!(ok && said(&msg) && !msg.contains("x_mm is"), "{msg}");
+    // Said (on standard error, after the summary's stdout here) before the
+    // first epoch, and kept in the training record.
+    assert!(
+        msg.find("y_mm is 0").unwrap() < msg.find("Pose network training").unwrap(),
+        "{msg}"
+    );
+    let record = std::fs::read_to_string(pose.join("training.json")).unwrap();
+    assert!(record.contains("y_mm is 0 on every one of the"), "{record}");
+    let (ok, msg) = tactile(&[
+        "train",
+        "regressor",
+        "--encoder",
+        root.join("models/cae-synth").to_str().unwrap(),
+        "--data",
+        d,
+        "--targets",
+        "y_mm,x_mm",
+        "--val-fraction",
+        "0.25",
+        "--only-labelled",
+        "--out",
+        tmp.path().join("reg").to_str().unwrap(),
+    ]);
+    assert!(ok && said(&msg) && msg.contains("warning: "), "{msg}");
+    let (ok, msg) = tactile(&[
+        "train",
+        "cae",
+        "--data",
+        d,
+        "--out",
+        tmp.path().join("cae").to_str().unwrap(),
+        "--max-epochs",
+        "1",
+        "--joint-targets",
+        "x_mm,y_mm",
+    ]);
+    assert!(ok && said(&msg), "{msg}");
+    // The column as the samples have it varies: nothing to say.
+    let (ok, msg) = tactile(&[
+        "train",
+        "regressor",
+        "--encoder",
+        root.join("models/cae-synth").to_str().unwrap(),
+        "--data",
+        root.join("samples/virtual-tactip").to_str().unwrap(),
+        "--targets",
+        "y_mm",
+        "--val-fraction",
+        "0.25",
+        "--only-labelled",
+        "--out",
+        tmp.path().join("reg2").to_str().unwrap(),
+    ]);
+    assert!(ok && !msg.contains("never changes"), "{msg}");
+}
