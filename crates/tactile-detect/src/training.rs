@@ -50,6 +50,30 @@ pub fn class_weights(labels: &[bool]) -> (f32, f32) {
     (w(neg), w(pos))
 }
 
+/// Refuse training rows of one class: a detector that sees no frame
+/// with a tendon (or none without) learns to give that answer for every
+/// frame, and its validation accuracy on such frames would say nothing.
+fn check_both_classes(datasets: &[Dataset], tendon: &[bool], train: &[usize]) -> Result<()> {
+    let positives = train.iter().filter(|&&i| tendon[i]).count();
+    if positives > 0 && positives < train.len() {
+        return Ok(());
+    }
+    let (value, meaning, missing) = match positives {
+        0 => (0, "no tendon", "with a tendon"),
+        _ => (1, "a tendon", "without one"),
+    };
+    let files: Vec<String> = datasets
+        .iter()
+        .map(|d| d.labels_path().display().to_string())
+        .collect();
+    Err(tactile_core::Error::Invalid(format!(
+        "{}: every one of the {} training frames is labelled tendon = {value} ({meaning}): a detector learns nothing from one class and would say {meaning} for every frame; give frames {missing} too",
+        files.join(", "),
+        train.len()
+    ))
+    .into())
+}
+
 /// Class-weighted mean BCE of logits `[N, 1]`.
 fn weighted_bce(logits: Tensor<2>, targets: Tensor<2>, (wn, wp): (f32, f32)) -> Tensor<1> {
     let w = targets.clone().mul_scalar(wp - wn).add_scalar(wn);
@@ -184,6 +208,7 @@ pub fn train(
         ))
         .into());
     }
+    check_both_classes(datasets, &data.tendon, &train)?;
     if (data.width, data.height) != (w, h) {
         return Err(Error::InputSize {
             expected: [w, h],

@@ -126,6 +126,17 @@ def test_training_errors(small_vt, tmp_path):
         tactile.train.detector(small_vt, tmp_path / "d", batch_size=0, max_epochs=1)
     with pytest.raises(ValueError, match="device"):
         tactile.train.depth(small_vt, tmp_path / "dp", device="cuda")
+    # Frames of one class: a detector learns nothing from them.
+    one = tmp_path / "one-class"
+    shutil.copytree(small_vt, one)
+    rows = [line.split(",") for line in (one / "labels.csv").read_text().splitlines()]
+    column = rows[0].index("tendon")
+    for cells in rows[1:]:
+        cells[column] = "0"
+    (one / "labels.csv").write_text("\n".join(",".join(c) for c in rows) + "\n")
+    with pytest.raises(ValueError, match=r"training frames is labelled tendon = 0 \(no tendon\)"):
+        tactile.train.detector(one, tmp_path / "d1", input=(64, 48), max_epochs=1)
+    assert not (tmp_path / "d1").exists()
 
 
 def test_eval_on_the_wrong_kind_of_model(root, small_vt):

@@ -1611,6 +1611,58 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
         );
     }
     assert!(!Path::new(trained).exists());
+    // Frames of one class (a researcher's presses, none over a tendon):
+    // refused before any epoch, naming the labels; no folder made. Before,
+    // it trained to say "no tendon" to every frame, at accuracy 1.
+    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
+    let column = labels
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|c| c == "tendon")
+        .unwrap();
+    for (value, said) in [
+        ("0", "tendon = 0 (no tendon)"),
+        ("1", "tendon = 1 (a tendon)"),
+    ] {
+        let one = tmp.path().join(format!("one-class-{value}"));
+        copy_model(&data, &one);
+        let rows: Vec<String> = labels
+            .lines()
+            .enumerate()
+            .map(|(i, l)| {
+                let mut cells: Vec<&str> = l.split(',').collect();
+                if i > 0 {
+                    cells[column] = value;
+                }
+                cells.join(",")
+            })
+            .collect();
+        std::fs::write(one.join("labels.csv"), rows.join("\n") + "\n").unwrap();
+        let out = tmp.path().join(format!("det-{value}"));
+        let (ok, msg) = tactile(&[
+            "train",
+            "detector",
+            "--data",
+            one.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--width",
+            "0.25",
+            "--input",
+            "64x48",
+            "--max-epochs",
+            "1",
+        ]);
+        assert!(
+            !ok && msg.contains("labels.csv: every one of the 24 training frames is labelled ")
+                && msg.contains(said)
+                && msg.contains("a detector learns nothing from one class"),
+            "{msg}"
+        );
+        assert!(!out.exists());
+    }
 }
 
 #[test]
