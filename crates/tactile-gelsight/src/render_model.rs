@@ -20,12 +20,12 @@ use datasets_synth::calibrated::{
 use serde::Serialize;
 use tactile_core::image_io::RgbImage;
 
-use crate::Result;
 use crate::geometry::{FAR_FIELD_RADII, INNER_FRACTION};
 use crate::inference::Reconstructor;
 use crate::layout::BallPresses;
 use crate::prepare::{PreparedBackground, WorkingImage};
 use crate::training::PreparedPress;
+use crate::{Error, Result};
 
 /// Slope bins per axis of the optics table.
 pub const OPTICS_BINS: usize = 25;
@@ -50,7 +50,18 @@ pub struct RenderFit {
     /// The same for the background itself (no press rendered): what a
     /// render with no model of the press would score.
     pub colour_error_unpressed_levels: f64,
+    /// Said when the rendered presses are hardly closer to the real ones
+    /// than the bare background ([`BARELY_EXPLAINED`]): the geometry of
+    /// `sensor.json` is likely wrong.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
 }
+
+/// A render model whose presses differ from the real ones by more than
+/// this share of the bare background's difference barely explains them.
+/// The shared R1.5 gives 0.44 (6.4 against 14.5 levels); its presses with
+/// the scale or the ball mistyped tenfold give 0.84-0.86.
+pub const BARELY_EXPLAINED: f64 = 0.7;
 
 /// Each channel's gain that brings `frame` to the background's exposure
 /// (the sensor model's exposure matching).
@@ -100,6 +111,36 @@ fn radial_profile(
         .filter(|&b| n[b] > 0)
         .map(|b| ((b as f64 + 0.5) * PROFILE_STEP_MM, sum[b] / n[b] as f64))
         .collect()
+}
+
+/// The presses as `sensor.json` makes them: the widest contact circle in
+/// mm and how deep the ball sank there (its cap's height), in words that
+/// name the two values a user may have mistyped (0.00295 for 0.0295 mm
+/// per pixel, a 40 mm ball for 4).
+fn press_geometry(ds: &BallPresses, profiles: &[(f64, Vec<(f64, f64)>)]) -> String {
+    let ball_mm = ds.sensor.ball_diameter_mm / 2.0;
+    let contact_mm = profiles.iter().map(|p| p.0).fold(0f64, f64::max);
+    let cap_mm = ball_mm
+        - (ball_mm * ball_mm - contact_mm * contact_mm)
+            .max(0.0)
+            .sqrt();
+    format!(
+        "as sensor.json gives them (a {ball_d} mm ball, {mm} mm per pixel), the widest contact circle is {contact_mm:.3} mm in radius and the ball sank {cap_mm:.4} mm at most; check ball_diameter_mm and mm_per_px, which scale every press",
+        ball_d = ds.sensor.ball_diameter_mm,
+        mm = ds.sensor.mm_per_px,
+    )
+}
+
+/// No gel response reproduces the presses (a contact past every approach
+/// of the render model's sweep).
+fn unfitted_gel(ds: &BallPresses, profiles: &[(f64, Vec<(f64, f64)>)]) -> Error {
+    Error::Layout {
+        path: ds.root.join("sensor.json"),
+        why: format!(
+            "no gel response presses a ball into the skin as these presses show: {}",
+            press_geometry(ds, profiles)
+        ),
+    }
 }
 
 /// Fit the render model of the sensor of `ds` from its prepared presses
@@ -175,7 +216,11 @@ pub fn fit_render_model(
     }
     let optics = SensorOptics::fit((w, h), OPTICS_BINS, OPTICS_MAX_SLOPE, &samples)?;
     let ball_mm = ds.sensor.ball_diameter_mm / 2.0;
-    let (gel, gel_profile_error_mm) = GelResponse::fit(ball_mm, &profiles)?;
+    let (gel, gel_profile_error_mm) =
+        GelResponse::fit(ball_mm, &profiles).map_err(|e| match profiles.is_empty() {
+            true => e.into(),
+            false => unfitted_gel(ds, &profiles),
+        })?;
     let model = RenderModel {
         sensor: sensor.to_string(),
         mm_per_px: mm,
@@ -185,12 +230,20 @@ pub fn fit_render_model(
     };
     let (colour_error_levels, colour_error_unpressed_levels) =
         colour_error(ds, bg, presses, &model)?;
+    let warning = (colour_error_levels > BARELY_EXPLAINED * colour_error_unpressed_levels).then(|| {
+        format!(
+            "warning: {}: the presses rendered back from this calibration differ from the real ones by {colour_error_levels:.1} grey levels, near the {colour_error_unpressed_levels:.1} of the skin at rest: its render model barely explains them (the shared GelSight R1.5 gives 6.4 against 14.5), and the frames it renders to train a detector would be unlike this sensor's; {}",
+            ds.root.join("sensor.json").display(),
+            press_geometry(ds, &profiles)
+        )
+    });
     let fit = RenderFit {
         optics_samples: samples.len(),
         gel,
         gel_profile_error_mm,
         colour_error_levels,
         colour_error_unpressed_levels,
+        warning,
     };
     let model = RenderModel {
         fit: serde_json::to_value(&fit).unwrap_or_default(),

@@ -445,7 +445,8 @@ pub struct Calibration {
     /// The render model (optics and gel) fitted beside the sensor model.
     pub render: crate::render_model::RenderFit,
     /// What a user should know about the calibration folder (files in
-    /// `frames/` that were not read as presses).
+    /// `frames/` that were not read as presses) and its fit (a render
+    /// model that barely explains the presses).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
 }
@@ -571,7 +572,7 @@ pub fn calibrate(
         train_presses: train.len(),
         val_presses: val.len(),
         validation,
+        warnings: ds.warnings.iter().chain(&render.warning).cloned().collect(),
         render,
-        warnings: ds.warnings.clone(),
     })
 }

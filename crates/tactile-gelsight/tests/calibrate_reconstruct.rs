@@ -393,6 +393,59 @@ fn a_folder_without_presses_csv_reads_png_and_jpeg_presses_and_names_the_rest() 
     assert!(BallPresses::open(&d).unwrap().warnings.is_empty());
 }
 
+/// A scale or ball mistyped tenfold (0.00295 for 0.0295 mm per pixel, a
+/// 40 mm ball for 4) makes every press a cap a few hundredths of a
+/// millimetre deep. The calibration runs (a large ball pressed shallow
+/// is such a cap too), and says that its render model barely explains
+/// the presses, naming sensor.json and the two values. Before, it failed
+/// after fitting, with "gel: no spread reaches the presses' contact radii".
+#[test]
+fn a_scale_mistyped_tenfold_is_named_after_calibrating() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (field, value, said) in [
+        (
+            "mm_per_px",
+            "0.00295",
+            "(a 4 mm ball, 0.00295 mm per pixel)",
+        ),
+        (
+            "ball_diameter_mm",
+            "40",
+            "(a 40 mm ball, 0.0295 mm per pixel)",
+        ),
+    ] {
+        let d = tmp.path().join(field);
+        subset(&d, 6, str::to_string);
+        let sensor = std::fs::read_to_string(d.join("sensor.json")).unwrap();
+        let mut json: serde_json::Value = serde_json::from_str(&sensor).unwrap();
+        json[field] = serde_json::from_str(value).unwrap();
+        std::fs::write(d.join("sensor.json"), json.to_string()).unwrap();
+        let ds = BallPresses::open(&d).unwrap();
+        let mut cfg = CalibrationConfig::new().with_factor(8).with_val_presses(2);
+        cfg.schedule.max_epochs = 2;
+        let cal = calibrate(
+            &cfg,
+            &ds,
+            &tmp.path().join(format!("{field}-model")),
+            DeviceKind::Flex,
+        )
+        .unwrap();
+        let r = &cal.render;
+        assert!(
+            r.colour_error_levels > 0.7 * r.colour_error_unpressed_levels,
+            "{r:?}"
+        );
+        let w = cal.warnings.join("\n");
+        assert!(
+            w.contains("sensor.json: the presses rendered back from this calibration")
+                && w.contains("its render model barely explains them")
+                && w.contains(said)
+                && w.contains("check ball_diameter_mm and mm_per_px"),
+            "{w}"
+        );
+    }
+}
+
 #[test]
 fn a_calibration_reconstructs_held_out_presses_and_rest() {
     let tmp = tempfile::tempdir().unwrap();
@@ -404,6 +457,7 @@ fn a_calibration_reconstructs_held_out_presses_and_rest() {
     let out = tmp.path().join("model");
     let cal = calibrate(&cfg, &ds, &out, DeviceKind::Flex).unwrap();
     assert_eq!((cal.train_presses, cal.val_presses), (8, 2));
+    assert!(cal.warnings.is_empty(), "{:?}", cal.warnings);
     for f in [
         "gelsight.json",
         "gelsight.bpk",

@@ -93,6 +93,18 @@ def test_a_folder_without_presses_csv_warns_of_files_that_are_no_presses(presses
     assert any("notes.txt" in w for w in r["warnings"])
 
 
+def test_a_scale_mistyped_tenfold_is_a_warning(presses: Path, tmp_path: Path):
+    d = tmp_path / "tenfold"
+    shutil.copytree(presses, d)
+    sensor = json.loads((d / "sensor.json").read_text())
+    sensor["mm_per_px"] = 0.00295
+    (d / "sensor.json").write_text(json.dumps(sensor))
+    with pytest.warns(UserWarning, match="its render model barely explains them"):
+        r = tactile.calibrate.ball(d, tmp_path / "m", factor=8, val_presses=2, max_epochs=1, kernels=[3, 1, 1])
+    assert any("0.00295 mm per pixel" in w and "check ball_diameter_mm and mm_per_px" in w
+               for w in r["warnings"])
+
+
 def test_refusals_name_the_problem(presses: Path, model: Path, tmp_path: Path):
     rec = tactile.Reconstructor(model, "burn-flex")
     with pytest.raises(ValueError, match=r"frame.*\(320, 240\).*\(640, 480\)"):

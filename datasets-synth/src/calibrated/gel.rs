@@ -175,6 +175,9 @@ fn smooth(plane: Vec<f32>, (w, h): (usize, usize), sigma_px: f64) -> Vec<f32> {
     resize(&small, w as u32, h as u32, FilterType::Triangle).into_raw()
 }
 
+/// Approaches below a 48th of the ball's radius, each half the last.
+const SHALLOW_HALVINGS: i32 = 8;
+
 /// A ball pressed at a sweep of approaches, each approach's smoothed
 /// overlap along a radius: every gain's contact and profile follow from
 /// it without blurring again.
@@ -194,7 +197,14 @@ impl BallSweep {
         let half = (extent / step_mm).ceil() as usize;
         let side = 2 * half + 1;
         let height = |r: f64| (r < ball_mm).then(|| ball_mm - (ball_mm * ball_mm - r * r).sqrt());
-        let approaches: Vec<f64> = (1..=48).map(|k| ball_mm * k as f64 / 48.0).collect();
+        // Every 48th of the ball's radius, and below the first halvings of
+        // it down to a 12288th: a large ball pressed shallow (12.5 mm,
+        // 0.1 mm deep) touches within a 48th.
+        let approaches: Vec<f64> = (1..=SHALLOW_HALVINGS)
+            .rev()
+            .map(|j| ball_mm / 48.0 * 0.5f64.powi(j))
+            .chain((1..=48).map(|k| ball_mm * k as f64 / 48.0))
+            .collect();
         let blurred = approaches
             .iter()
             .map(|&d| {
@@ -318,6 +328,24 @@ mod tests {
             .collect();
         let (fit, err) = GelResponse::fit(2.0, &presses).unwrap();
         assert!(err < 0.03, "{err}");
+        assert!(
+            (fit.sigma_mm - 0.6).abs() < 0.2 && (fit.gain - 0.7).abs() < 0.15,
+            "{fit:?}"
+        );
+        // A large ball pressed shallow (25 mm, 0.09-0.16 mm deep: within a
+        // 48th of its radius) is reached and fitted too; before, no
+        // approach of the sweep was that shallow and the fit failed.
+        let radii: Vec<f64> = (0..=40).map(|k| k as f64 * 0.15).collect();
+        let presses: Vec<(f64, Vec<(f64, f64)>)> = [1.5, 2.0]
+            .iter()
+            .map(|&a| {
+                let (approach, prof) = gel.ball_profile(12.5, a, &radii).unwrap();
+                assert!(approach < 12.5 / 48.0, "{approach}");
+                (a, radii.iter().copied().zip(prof).collect())
+            })
+            .collect();
+        let (fit, err) = GelResponse::fit(12.5, &presses).unwrap();
+        assert!(err < 0.01, "{err}");
         assert!(
             (fit.sigma_mm - 0.6).abs() < 0.2 && (fit.gain - 0.7).abs() < 0.15,
             "{fit:?}"
