@@ -50,28 +50,54 @@ pub fn class_weights(labels: &[bool]) -> (f32, f32) {
     (w(neg), w(pos))
 }
 
+/// The one class `truth` holds, when it holds one (and a frame): the
+/// label's value, what it means and what the other class is.
+fn one_class(truth: &[bool]) -> Option<(u8, &'static str, &'static str)> {
+    let first = *truth.first()?;
+    truth.iter().all(|&t| t == first).then_some(match first {
+        false => (0, "no tendon", "with a tendon"),
+        true => (1, "a tendon", "without one"),
+    })
+}
+
+/// The labels files of `datasets`, for a message.
+fn labels_files(datasets: &[Dataset]) -> String {
+    datasets
+        .iter()
+        .map(|d| d.labels_path().display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Refuse training rows of one class: a detector that sees no frame
 /// with a tendon (or none without) learns to give that answer for every
 /// frame, and its validation accuracy on such frames would say nothing.
 fn check_both_classes(datasets: &[Dataset], tendon: &[bool], train: &[usize]) -> Result<()> {
-    let positives = train.iter().filter(|&&i| tendon[i]).count();
-    if positives > 0 && positives < train.len() {
+    let truth: Vec<bool> = train.iter().map(|&i| tendon[i]).collect();
+    let Some((value, meaning, missing)) = one_class(&truth) else {
         return Ok(());
-    }
-    let (value, meaning, missing) = match positives {
-        0 => (0, "no tendon", "with a tendon"),
-        _ => (1, "a tendon", "without one"),
     };
-    let files: Vec<String> = datasets
-        .iter()
-        .map(|d| d.labels_path().display().to_string())
-        .collect();
     Err(tactile_core::Error::Invalid(format!(
         "{}: every one of the {} training frames is labelled tendon = {value} ({meaning}): a detector learns nothing from one class and would say {meaning} for every frame; give frames {missing} too",
-        files.join(", "),
+        labels_files(datasets),
         train.len()
     ))
     .into())
+}
+
+/// A warning when the validation frames are of one class (whole
+/// sequences go to validation, and a recording of presses without a
+/// tendon is one): the threshold is not tuned on them
+/// ([`best_threshold`]), and their accuracy says nothing of the other
+/// class.
+fn one_class_validation(datasets: &[Dataset], tendon: &[bool], val: &[usize]) -> Option<String> {
+    let truth: Vec<bool> = val.iter().map(|&i| tendon[i]).collect();
+    let (value, meaning, missing) = one_class(&truth)?;
+    Some(format!(
+        "{}: every one of the {} validation frames (whole sequences, split by `sequence`) is labelled tendon = {value} ({meaning}): the threshold stays at 0.5, as frames of one class cannot tune it, and the validation accuracy says nothing of frames {missing}; give validation sequences of both (another --seed or --val-fraction, or sequences that hold both)",
+        labels_files(datasets),
+        val.len()
+    ))
 }
 
 /// Class-weighted mean BCE of logits `[N, 1]`.
@@ -102,8 +128,18 @@ pub(crate) fn predict(
 }
 
 /// The probability threshold (0.05 to 0.95 in steps of 0.05) with the
-/// best accuracy on `val`; ties go to the one nearest 0.5.
+/// best accuracy on `val`; ties go to the one nearest 0.5. Frames of one
+/// class keep 0.5.
 pub fn best_threshold(probs: &[f32], truth: &[bool]) -> (f64, f64) {
+    if one_class(truth).is_some() {
+        // Frames of one class can only push the threshold away from it,
+        // trading away the other class, which no frame here measures.
+        let pred: Vec<bool> = probs.iter().map(|&p| p as f64 >= 0.5).collect();
+        return (
+            0.5,
+            tactile_core::metrics::binary_scores(&pred, truth).accuracy,
+        );
+    }
     let mut best: (f64, f64) = (0.5, -1.0);
     for k in 1..20 {
         let t = k as f64 * 0.05;
@@ -209,6 +245,12 @@ pub fn train(
         .into());
     }
     check_both_classes(datasets, &data.tendon, &train)?;
+    let warnings: Vec<String> = one_class_validation(datasets, &data.tendon, &val)
+        .into_iter()
+        .collect();
+    for w in &warnings {
+        tactile_core::note!("warning: {w}");
+    }
     if (data.width, data.height) != (w, h) {
         return Err(Error::InputSize {
             expected: [w, h],
@@ -247,7 +289,7 @@ pub fn train(
         .with_run_id(tactile_burn::artifact::run_fingerprint(config, &ds_refs)?);
     let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
     let val_truth: Vec<bool> = val.iter().map(|&i| data.tendon[i]).collect();
-    let (_, summary) = fit::<_, Error>(
+    let (_, mut summary) = fit::<_, Error>(
         &fit_cfg,
         model,
         burn::optim::AdamConfig::new().init(),
@@ -288,6 +330,7 @@ pub fn train(
         },
         |m| Ok(artifact.save(m, out)?),
     )?;
+    summary.warnings = warnings;
     tactile_burn::artifact::write_training_record(
         out,
         config,
@@ -301,4 +344,22 @@ pub fn train(
         threshold,
         val_accuracy,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_threshold_is_tuned_on_both_classes_and_kept_at_a_half_on_one() {
+        // Both classes: the threshold that separates them.
+        let (t, acc) = best_threshold(&[0.2, 0.6, 0.7, 0.9], &[false, false, true, true]);
+        assert!((t - 0.65).abs() < 1e-9 && acc == 1.0, "{t} {acc}");
+        // One class: before, 0.75 (every frame right, at the other class's
+        // cost, which no frame measured); now a half.
+        let (t, acc) = best_threshold(&[0.6, 0.2, 0.7], &[false; 3]);
+        assert!(t == 0.5 && (acc - 1.0 / 3.0).abs() < 1e-9, "{t} {acc}");
+        assert_eq!(one_class(&[true, true]).map(|c| c.0), Some(1));
+        assert!(one_class(&[true, false]).is_none() && one_class(&[]).is_none());
+    }
 }

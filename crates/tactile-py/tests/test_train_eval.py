@@ -137,6 +137,19 @@ def test_training_errors(small_vt, tmp_path):
     with pytest.raises(ValueError, match=r"training frames is labelled tendon = 0 \(no tendon\)"):
         tactile.train.detector(one, tmp_path / "d1", input=(64, 48), max_epochs=1)
     assert not (tmp_path / "d1").exists()
+    # Sequences of one class each: the validation sequence is of one
+    # class, a warning, and the threshold stays at a half.
+    apart = tmp_path / "apart"
+    shutil.copytree(small_vt, apart)
+    rows = [line.split(",") for line in (apart / "labels.csv").read_text().splitlines()]
+    seq = rows[0].index("sequence")
+    for cells in rows[1:]:
+        cells[column] = "1" if int(cells[seq]) < 2 else "0"
+    (apart / "labels.csv").write_text("\n".join(",".join(c) for c in rows) + "\n")
+    with pytest.warns(UserWarning, match="the threshold stays at 0.5"):
+        s = tactile.train.detector(apart, tmp_path / "d2", input=(64, 48), max_epochs=1,
+                                   val_fraction=0.25)
+    assert s["threshold"] == 0.5 and len(s["warnings"]) == 1
 
 
 def test_eval_on_the_wrong_kind_of_model(root, small_vt):

@@ -1663,6 +1663,58 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
         );
         assert!(!out.exists());
     }
+    // Sequences of one class each (recordings over a tendon and beside
+    // it): the validation sequence is of one class. Trained, with a
+    // warning, and the threshold stays at a half.
+    let seq = labels
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|c| c == "sequence")
+        .unwrap();
+    let apart = tmp.path().join("apart");
+    copy_model(&data, &apart);
+    let rows: Vec<String> = labels
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            let mut cells: Vec<&str> = l.split(',').collect();
+            if i > 0 {
+                cells[column] = if cells[seq] < "2" { "1" } else { "0" };
+            }
+            cells.join(",")
+        })
+        .collect();
+    std::fs::write(apart.join("labels.csv"), rows.join("\n") + "\n").unwrap();
+    let out = tmp.path().join("det-apart");
+    let (ok, msg) = tactile(&[
+        "train",
+        "detector",
+        "--data",
+        apart.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--width",
+        "0.25",
+        "--input",
+        "64x48",
+        "--max-epochs",
+        "1",
+        "--val-fraction",
+        "0.25",
+    ]);
+    assert!(
+        ok && msg.contains("warning: ")
+            && msg.contains(
+                "validation frames (whole sequences, split by `sequence`) is labelled tendon = "
+            )
+            && msg.contains("the threshold stays at 0.5")
+            && msg.contains("at the chosen threshold 0.50"),
+        "{msg}"
+    );
+    let record = std::fs::read_to_string(out.join("training.json")).unwrap();
+    assert!(record.contains("the threshold stays at 0.5"), "{record}");
 }
 
 #[test]
