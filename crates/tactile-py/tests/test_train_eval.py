@@ -18,6 +18,20 @@ import tactile
 from conftest import interrupt, interrupt_after, run_cli, run_python
 
 
+def copy_relabelled(src, dst, edit):
+    """A copy of the dataset `src` at `dst` whose label rows are edited in
+    place by `edit(row)`, a dict of the header's columns."""
+    shutil.copytree(src, dst)
+    lines = (dst / "labels.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    out = [lines[0]]
+    for line in lines[1:]:
+        row = dict(zip(header, line.split(",")))
+        edit(row)
+        out.append(",".join(row[c] for c in header))
+    (dst / "labels.csv").write_text("\n".join(out) + "\n")
+
+
 @pytest.fixture(scope="module")
 def small_vt(tmp_path_factory):
     out = tmp_path_factory.mktemp("vt") / "vt"
@@ -128,24 +142,15 @@ def test_training_errors(small_vt, tmp_path):
         tactile.train.depth(small_vt, tmp_path / "dp", device="cuda")
     # Frames of one class: a detector learns nothing from them.
     one = tmp_path / "one-class"
-    shutil.copytree(small_vt, one)
-    rows = [line.split(",") for line in (one / "labels.csv").read_text().splitlines()]
-    column = rows[0].index("tendon")
-    for cells in rows[1:]:
-        cells[column] = "0"
-    (one / "labels.csv").write_text("\n".join(",".join(c) for c in rows) + "\n")
+    copy_relabelled(small_vt, one, lambda row: row.update(tendon="0"))
     with pytest.raises(ValueError, match=r"training frames is labelled tendon = 0 \(no tendon\)"):
         tactile.train.detector(one, tmp_path / "d1", input=(64, 48), max_epochs=1)
     assert not (tmp_path / "d1").exists()
     # Sequences of one class each: the validation sequence is of one
     # class, a warning, and the threshold stays at a half.
     apart = tmp_path / "apart"
-    shutil.copytree(small_vt, apart)
-    rows = [line.split(",") for line in (apart / "labels.csv").read_text().splitlines()]
-    seq = rows[0].index("sequence")
-    for cells in rows[1:]:
-        cells[column] = "1" if int(cells[seq]) < 2 else "0"
-    (apart / "labels.csv").write_text("\n".join(",".join(c) for c in rows) + "\n")
+    copy_relabelled(small_vt, apart,
+                    lambda row: row.update(tendon="1" if int(row["sequence"]) < 2 else "0"))
     with pytest.warns(UserWarning, match="the threshold stays at 0.5"):
         s = tactile.train.detector(apart, tmp_path / "d2", input=(64, 48), max_epochs=1,
                                    val_fraction=0.25)
@@ -457,12 +462,9 @@ def test_a_pose_network_trains_from_python_as_from_the_cli(root, tmp_path, tacti
 
 def test_a_target_labelled_alike_on_every_frame_is_a_warning(root, tmp_path):
     data = tmp_path / "d"
-    shutil.copytree(root / "samples/virtual-tactip", data)
-    rows = [line.split(",") for line in (data / "labels.csv").read_text().splitlines()]
-    for cells in rows[1:]:
-        if cells[3]:  # y_mm, 0 on every frame that has one (a flat has none)
-            cells[3] = "0.0000"
-    (data / "labels.csv").write_text("\n".join(",".join(c) for c in rows) + "\n")
+    # y_mm is 0 on every frame that has one (a flat has none).
+    copy_relabelled(root / "samples/virtual-tactip", data,
+                    lambda row: row.update(y_mm="0.0000" if row["y_mm"] else ""))
     with pytest.warns(UserWarning, match="y_mm is 0 on every one of the 10 frames this model fits"):
         s = tactile.train.pose(data, tmp_path / "pose", targets=["x_mm", "y_mm"], input_px=32,
                                max_epochs=1)

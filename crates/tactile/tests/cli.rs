@@ -57,6 +57,27 @@ fn copy_model(from: &Path, to: &Path) {
     }
 }
 
+/// A copy of the dataset `from` at `to` whose label rows are edited by
+/// `edit`, given the header's column names and a row's cells.
+fn copy_relabelled(from: &Path, to: &Path, edit: impl Fn(&[&str], &mut Vec<&str>)) {
+    copy_model(from, to);
+    let labels = std::fs::read_to_string(from.join("labels.csv")).unwrap();
+    let mut lines = labels.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut out = vec![header.join(",")];
+    for line in lines {
+        let mut cells: Vec<&str> = line.split(',').collect();
+        edit(&header, &mut cells);
+        out.push(cells.join(","));
+    }
+    std::fs::write(to.join("labels.csv"), out.join("\n") + "\n").unwrap();
+}
+
+/// The place of the column `name` in `header`.
+fn col(header: &[&str], name: &str) -> usize {
+    header.iter().position(|&c| c == name).unwrap()
+}
+
 fn write_png(path: &Path, w: u32, h: u32) {
     image::GrayImage::from_pixel(w, h, image::Luma([0u8]))
         .save(path)
@@ -1614,32 +1635,12 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
     // Frames of one class (a researcher's presses, none over a tendon):
     // refused before any epoch, naming the labels; no folder made. Before,
     // it trained to say "no tendon" to every frame, at accuracy 1.
-    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
-    let column = labels
-        .lines()
-        .next()
-        .unwrap()
-        .split(',')
-        .position(|c| c == "tendon")
-        .unwrap();
     for (value, said) in [
         ("0", "tendon = 0 (no tendon)"),
         ("1", "tendon = 1 (a tendon)"),
     ] {
         let one = tmp.path().join(format!("one-class-{value}"));
-        copy_model(&data, &one);
-        let rows: Vec<String> = labels
-            .lines()
-            .enumerate()
-            .map(|(i, l)| {
-                let mut cells: Vec<&str> = l.split(',').collect();
-                if i > 0 {
-                    cells[column] = value;
-                }
-                cells.join(",")
-            })
-            .collect();
-        std::fs::write(one.join("labels.csv"), rows.join("\n") + "\n").unwrap();
+        copy_relabelled(&data, &one, |h, cells| cells[col(h, "tendon")] = value);
         let out = tmp.path().join(format!("det-{value}"));
         let (ok, msg) = tactile(&[
             "train",
@@ -1666,27 +1667,14 @@ fn detector_and_segmenter_train_resume_and_evaluate_on_tiny_data() {
     // Sequences of one class each (recordings over a tendon and beside
     // it): the validation sequence is of one class. Trained, with a
     // warning, and the threshold stays at a half.
-    let seq = labels
-        .lines()
-        .next()
-        .unwrap()
-        .split(',')
-        .position(|c| c == "sequence")
-        .unwrap();
     let apart = tmp.path().join("apart");
-    copy_model(&data, &apart);
-    let rows: Vec<String> = labels
-        .lines()
-        .enumerate()
-        .map(|(i, l)| {
-            let mut cells: Vec<&str> = l.split(',').collect();
-            if i > 0 {
-                cells[column] = if cells[seq] < "2" { "1" } else { "0" };
-            }
-            cells.join(",")
-        })
-        .collect();
-    std::fs::write(apart.join("labels.csv"), rows.join("\n") + "\n").unwrap();
+    copy_relabelled(&data, &apart, |h, cells| {
+        cells[col(h, "tendon")] = if cells[col(h, "sequence")] < "2" {
+            "1"
+        } else {
+            "0"
+        };
+    });
     let out = tmp.path().join("det-apart");
     let (ok, msg) = tactile(&[
         "train",
@@ -4626,18 +4614,13 @@ fn a_target_labelled_alike_on_every_frame_is_named_by_every_trainer() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("d");
-    copy_model(&root.join("samples/virtual-tactip"), &data);
-    // y_mm (column 3) is 0 on every frame that has one (a flat has none).
-    let labels = std::fs::read_to_string(data.join("labels.csv")).unwrap();
-    let mut rows: Vec<String> = Vec::new();
-    for (i, line) in labels.lines().enumerate() {
-        let mut cells: Vec<&str> = line.split(',').collect();
-        if i > 0 && !cells[3].is_empty() {
-            cells[3] = "0.0000";
+    // y_mm is 0 on every frame that has one (a flat has none).
+    copy_relabelled(&root.join("samples/virtual-tactip"), &data, |h, cells| {
+        let y = col(h, "y_mm");
+        if !cells[y].is_empty() {
+            cells[y] = "0.0000";
         }
-        rows.push(cells.join(","));
-    }
-    std::fs::write(data.join("labels.csv"), rows.join("\n") + "\n").unwrap();
+    });
     let d = data.to_str().unwrap();
     let said = |msg: &str| {
         msg.contains("y_mm is 0 on every one of the")
