@@ -37,6 +37,14 @@ fn subset(dir: &Path, n: usize, edit: impl Fn(&str) -> String) {
     std::fs::write(dir.join("presses.csv"), csv).unwrap();
 }
 
+/// Set `field` of the folder's `sensor.json` to `value` (JSON text).
+fn set_sensor_value(dir: &Path, field: &str, value: &str) {
+    let sensor = std::fs::read_to_string(dir.join("sensor.json")).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&sensor).unwrap();
+    json[field] = serde_json::from_str(value).unwrap();
+    std::fs::write(dir.join("sensor.json"), json.to_string()).unwrap();
+}
+
 #[test]
 fn the_circle_finder_agrees_with_the_annotations() {
     let ds = BallPresses::open(shared()).unwrap();
@@ -72,10 +80,7 @@ fn a_scale_far_out_of_range_is_named_in_a_few_characters() {
     ] {
         let d = tmp.path().join(format!("{field}-{value}"));
         subset(&d, 3, str::to_string);
-        let sensor = std::fs::read_to_string(d.join("sensor.json")).unwrap();
-        let mut json: serde_json::Value = serde_json::from_str(&sensor).unwrap();
-        json[field] = serde_json::from_str(value).unwrap();
-        std::fs::write(d.join("sensor.json"), json.to_string()).unwrap();
+        set_sensor_value(&d, field, value);
         let e = BallPresses::open(&d).unwrap_err().to_string();
         assert!(e.contains(want) && e.len() < 300, "{e}");
     }
@@ -416,10 +421,7 @@ fn a_scale_mistyped_tenfold_is_named_after_calibrating() {
     ] {
         let d = tmp.path().join(field);
         subset(&d, 6, str::to_string);
-        let sensor = std::fs::read_to_string(d.join("sensor.json")).unwrap();
-        let mut json: serde_json::Value = serde_json::from_str(&sensor).unwrap();
-        json[field] = serde_json::from_str(value).unwrap();
-        std::fs::write(d.join("sensor.json"), json.to_string()).unwrap();
+        set_sensor_value(&d, field, value);
         let ds = BallPresses::open(&d).unwrap();
         let mut cfg = CalibrationConfig::new().with_factor(8).with_val_presses(2);
         cfg.schedule.max_epochs = 2;

@@ -318,38 +318,30 @@ mod tests {
         assert!(rim > 0.1 && rim < approach, "{rim}");
         assert!(p[40] < 0.05 * approach, "{}", p[40]);
         assert!(p.windows(2).all(|w| w[1] <= w[0] + 1e-6));
-        // The fit recovers the response that made a set of profiles.
-        let presses: Vec<(f64, Vec<(f64, f64)>)> = [1.6, 1.8]
-            .iter()
-            .map(|&a| {
-                let (_, prof) = gel.ball_profile(2.0, a, &radii).unwrap();
-                (a, radii.iter().copied().zip(prof).collect())
-            })
-            .collect();
-        let (fit, err) = GelResponse::fit(2.0, &presses).unwrap();
-        assert!(err < 0.03, "{err}");
-        assert!(
-            (fit.sigma_mm - 0.6).abs() < 0.2 && (fit.gain - 0.7).abs() < 0.15,
-            "{fit:?}"
-        );
+        // The fit recovers the response that made a set of profiles, of
+        // presses of a ball of `ball_mm` to `contacts`, each reached at an
+        // approach below `deepest`.
+        let recovers = |ball_mm: f64, contacts: [f64; 2], deepest: f64, within: f64| {
+            let presses: Vec<(f64, Vec<(f64, f64)>)> = contacts
+                .iter()
+                .map(|&a| {
+                    let (approach, prof) = gel.ball_profile(ball_mm, a, &radii).unwrap();
+                    assert!(approach < deepest, "{approach}");
+                    (a, radii.iter().copied().zip(prof).collect())
+                })
+                .collect();
+            let (fit, err) = GelResponse::fit(ball_mm, &presses).unwrap();
+            assert!(err < within, "{err}");
+            assert!(
+                (fit.sigma_mm - 0.6).abs() < 0.2 && (fit.gain - 0.7).abs() < 0.15,
+                "{fit:?}"
+            );
+        };
+        recovers(2.0, [1.6, 1.8], 2.0, 0.03);
         // A large ball pressed shallow (25 mm, 0.09-0.16 mm deep: within a
         // 48th of its radius) is reached and fitted too; before, no
         // approach of the sweep was that shallow and the fit failed.
-        let radii: Vec<f64> = (0..=40).map(|k| k as f64 * 0.15).collect();
-        let presses: Vec<(f64, Vec<(f64, f64)>)> = [1.5, 2.0]
-            .iter()
-            .map(|&a| {
-                let (approach, prof) = gel.ball_profile(12.5, a, &radii).unwrap();
-                assert!(approach < 12.5 / 48.0, "{approach}");
-                (a, radii.iter().copied().zip(prof).collect())
-            })
-            .collect();
-        let (fit, err) = GelResponse::fit(12.5, &presses).unwrap();
-        assert!(err < 0.01, "{err}");
-        assert!(
-            (fit.sigma_mm - 0.6).abs() < 0.2 && (fit.gain - 0.7).abs() < 0.15,
-            "{fit:?}"
-        );
+        recovers(12.5, [1.5, 2.0], 12.5 / 48.0, 0.01);
         assert!(
             GelResponse {
                 sigma_mm: -1.0,
