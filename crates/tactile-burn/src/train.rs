@@ -286,8 +286,9 @@ pub struct FitSummary {
     #[serde(default)]
     pub val_items: usize,
     /// What the trainer found in its data that a user must know (a target
-    /// labelled with one value on every frame it fits): noted on standard
-    /// error when found, raised as `UserWarning`s by Python.
+    /// labelled with one value on every frame it fits, validation frames of
+    /// one class): noted on standard error when found, raised as
+    /// `UserWarning`s by Python.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
 }

@@ -33,11 +33,12 @@ fn result<'py, T: serde::Serialize>(
     out: &std::path::Path,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut v = serde_json::to_value(value).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    // The run's warnings (a summary's, at the top or one level down, as a
-    // pose network's `fit`), which the command line noted as it found them.
-    let summaries = std::iter::once(&v).chain(v.as_object().into_iter().flat_map(|m| m.values()));
-    let warnings: Vec<String> = summaries
-        .filter_map(|s| s.get("warnings")?.as_array())
+    // The run's warnings (its summary's, which every trainer's result
+    // holds or flattens), which the command line noted as it found them.
+    let warnings: Vec<String> = v
+        .get("warnings")
+        .and_then(|w| w.as_array())
+        .into_iter()
         .flatten()
         .filter_map(|w| w.as_str().map(String::from))
         .collect();
