@@ -49,6 +49,30 @@ impl CalibrationPrior {
     }
 }
 
+/// A warning when `data` was rendered from the calibration of another
+/// sensor than `dir`'s (its manifest's `calibration`, as `tactile synth
+/// gelsight` writes it): a network with that prior would learn to correct
+/// another sensor's reconstruction of these frames. The same folder, or a
+/// calibration of a sensor of the same name (one recalibrated), says
+/// nothing; so does a dataset that names no calibration.
+pub fn other_sensor_warning(data: &tactile_core::dataset::Dataset, dir: &Path) -> Option<String> {
+    let rendered = data.manifest.extra.get("calibration")?;
+    let folder = rendered.get("folder")?.as_str()?;
+    let canonical = |p: &Path| std::fs::canonicalize(p).ok();
+    if canonical(Path::new(folder)).is_some_and(|f| Some(f) == canonical(dir)) {
+        return None;
+    }
+    let theirs = rendered.get("sensor")?.as_str()?;
+    let ours = tactile_gelsight::render_model::rendered_sensor(dir)?;
+    (theirs != ours).then(|| {
+        format!(
+            "{}: these frames were rendered from the calibration of {theirs:?} ({folder}), and the prior is the calibration of {ours:?} ({}): a network would learn to correct another sensor's reconstruction of them; give --prior-calibration the calibration they were rendered from",
+            data.root.join("manifest.json").display(),
+            dir.display()
+        )
+    })
+}
+
 /// The calibration's reconstruction at a depth network's input size.
 pub struct PriorSource {
     reconstructor: Reconstructor,

@@ -151,6 +151,14 @@ pub fn train(
         .into());
     }
     <crate::DepthArtifact as tactile_burn::Artifact>::check_out_dir(out, &[data])?;
+    let warnings: Vec<String> = prior_dir
+        .as_deref()
+        .and_then(|dir| crate::prior::other_sensor_warning(data, dir))
+        .into_iter()
+        .collect();
+    for w in &warnings {
+        tactile_core::note!("warning: {w}");
+    }
     let (train, val) = data.split_by_sequence(config.val_fraction, config.schedule.seed)?;
     let [w, h] = net.input_size;
     tactile_core::note!(
@@ -238,7 +246,7 @@ pub fn train(
     .with_run_id(tactile_burn::artifact::run_fingerprint(config, &[data])?);
     let unfinished = tactile_burn::artifact::Unfinished::begin(out)?;
     let train_idx: Vec<usize> = (0..train_set.len()).collect();
-    let (_, summary) = fit::<_, Error>(
+    let (_, mut summary) = fit::<_, Error>(
         &fit_cfg,
         model,
         burn::optim::AdamConfig::new().init(),
@@ -260,6 +268,7 @@ pub fn train(
         },
         |m| Ok(artifact.save(m, out)?),
     )?;
+    summary.warnings = warnings;
     tactile_burn::artifact::write_training_record(
         out,
         config,

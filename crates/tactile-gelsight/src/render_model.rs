@@ -143,6 +143,15 @@ fn unfitted_gel(ds: &BallPresses, profiles: &[(f64, Vec<(f64, f64)>)]) -> Error 
     }
 }
 
+/// The sensor a calibration folder `dir` renders, as its render model
+/// names it (what `tactile synth gelsight` writes in a dataset's manifest);
+/// `None` when the folder has no readable render model.
+pub fn rendered_sensor(dir: &std::path::Path) -> Option<String> {
+    let file = dir.join(datasets_synth::calibrated::RENDER_MODEL_FILE);
+    let model: serde_json::Value = tactile_core::io::read_json(file).ok()?;
+    Some(model.get("sensor")?.as_str()?.to_string())
+}
+
 /// Fit the render model of the sensor of `ds` from its prepared presses
 /// and its calibrated reconstruction `rec`; `sensor` names the sensor.
 pub fn fit_render_model(

@@ -4081,22 +4081,49 @@ fn a_calibrated_sensor_trains_and_runs_its_own_pipeline() {
         "--max-epochs",
         "1",
     ]);
-    run(&[
-        "train",
-        "depth",
-        "--data",
-        &s(&data),
-        "--out",
-        &s(&m.join("depth")),
-        "--encoder",
-        "small",
-        "--input",
-        "64x32",
-        "--max-epochs",
-        "1",
-        "--prior-calibration",
-        &s(&m),
-    ]);
+    let depth_args = |out: &Path, prior: &Path| {
+        [
+            "train",
+            "depth",
+            "--data",
+            &s(&data),
+            "--out",
+            &s(out),
+            "--encoder",
+            "small",
+            "--input",
+            "64x32",
+            "--max-epochs",
+            "1",
+            "--prior-calibration",
+            &s(prior),
+        ]
+        .map(String::from)
+    };
+    let said = "a network would learn to correct another sensor's reconstruction of them";
+    let msg = run(&depth_args(&m.join("depth"), &m)
+        .each_ref()
+        .map(String::as_str));
+    assert!(!msg.contains(said), "{msg}");
+    // The prior of another sensor (a calibration whose render model names
+    // another unit): said before the first epoch, kept in the record.
+    let other = tmp.path().join("other-sensor");
+    copy_model(&m, &other);
+    let optics = other.join("optics.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&optics).unwrap()).unwrap();
+    v["sensor"] = "another unit".into();
+    std::fs::write(&optics, v.to_string()).unwrap();
+    let out = tmp.path().join("depth-other");
+    let msg = run(&depth_args(&out, &other).each_ref().map(String::as_str));
+    assert!(
+        msg.contains("warning: ")
+            && msg.contains(said)
+            && msg.contains("and the prior is the calibration of \"another unit\""),
+        "{msg}"
+    );
+    let record = std::fs::read_to_string(out.join("training.json")).unwrap();
+    assert!(record.contains(said), "{record}");
     // The depth network corrects the calibration's reconstruction, found
     // beside it (`..`), so the folder can move.
     let depth = std::fs::read_to_string(m.join("depth/depth.json")).unwrap();
