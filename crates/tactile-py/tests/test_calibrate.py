@@ -387,3 +387,14 @@ def test_a_depth_network_learns_a_correction_to_its_calibration(model: Path, tmp
     with pytest.raises(ValueError, match="not both"):
         tactile.train.depth(data, tmp_path / "x", prior_calibration=str(sensor), with_mask=True)
     assert not (tmp_path / "x").exists()
+    # A prior of another sensor than the frames were rendered from: said.
+    other = tmp_path / "other"
+    shutil.copytree(model, other)
+    optics = json.loads((other / "optics.json").read_text())
+    optics["sensor"] = "another unit"
+    (other / "optics.json").write_text(json.dumps(optics))
+    with pytest.warns(UserWarning, match="the prior is the calibration of \"another unit\""):
+        r = tactile.train.depth(data, tmp_path / "d-other", encoder="tiny", input=(64, 32),
+                                decoder_width=16, max_epochs=1, val_fraction=0.5,
+                                prior_calibration=str(other))
+    assert len(r["warnings"]) == 1
