@@ -416,7 +416,7 @@ impl OwnSensorReport {
         md.push_str(&b.ball.display().to_string());
         md.push_str("`: 32 presses of a 4 mm ball) is calibrated (`tactile calibrate ball`: the sensor model that reconstructs its skin, and its render model: colour change by slope and place, and the gel's spread around a contact, both fitted on the presses). Its own palpation videos are then rendered through that calibration over its own background (`tactile synth gelsight`: tendons of 1.5-3.5 mm on straight and curved lines pressed 0.05-1.5 mm at any angle and offset; spheres, punches and plate edges pressed 0.05-2.5 mm as negatives; frames without contact; exposure, noise, blur, optics and gel varied per video), with exact masks, directions and indentation maps, and paper B's three models are trained on them with the toolkit's trainers and exported to ONNX. ");
         if self.depth_prior {
-            md.push_str("The depth network does not read the frame alone: it takes the calibration's own reconstruction of the frame as a fourth channel and learns a correction to it (`tactile train depth --prior-calibration`), so on real frames it starts from what the calibration sees there. ");
+            md.push_str("The depth network does not read the frame alone: it takes the calibration's own reconstruction of the frame as a fourth channel and learns a correction to it (`tactile train depth --prior-calibration`), so on real frames it starts from what the calibration sees there (given the calibration of another sensor than the one the frames were rendered from, it says so before training). ");
         }
         md.push_str("The folder `");
         md.push_str(&b.models.display().to_string());
