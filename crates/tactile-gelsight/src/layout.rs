@@ -135,6 +135,15 @@ pub struct Circle {
     pub radius_px: f64,
 }
 
+impl Circle {
+    /// Whether the edge of a `(w, h)` frame cuts the circle (a press near
+    /// the edge, its contact seen in part).
+    pub fn cut_by_edge(&self, (w, h): (usize, usize)) -> bool {
+        let (x, y, r) = (self.centre_x_px, self.centre_y_px, self.radius_px);
+        x - r < 0.0 || y - r < 0.0 || x + r > w as f64 || y + r > h as f64
+    }
+}
+
 /// One press: its frame file and, when `presses.csv` gives one, the
 /// annotated circle.
 #[derive(Debug, Clone)]
@@ -306,7 +315,7 @@ impl BallPresses {
         Ok(img)
     }
 
-    /// Refuse a circle that leaves the frame or is wider than the ball.
+    /// Refuse a circle centred off the frame or wider than the ball.
     pub fn check_circle(&self, path: &Path, c: &Circle) -> Result<()> {
         match circle_problem(&self.sensor, self.size(), c) {
             None => Ok(()),
@@ -319,7 +328,8 @@ impl BallPresses {
 }
 
 /// What makes `c` no contact circle of a ball on a `(w, h)` frame: not a
-/// finite number, too small, wider than the ball, or leaving the frame.
+/// finite number, too small, wider than the ball, or centred off the frame
+/// (a circle the frame's edge cuts is a press near the edge, and is read).
 fn circle_problem(sensor: &SensorInfo, (w, h): (usize, usize), c: &Circle) -> Option<String> {
     let (x, y, r) = (c.centre_x_px, c.centre_y_px, c.radius_px);
     if !(x.is_finite() && y.is_finite() && r.is_finite()) {
@@ -338,9 +348,11 @@ fn circle_problem(sensor: &SensorInfo, (w, h): (usize, usize), c: &Circle) -> Op
             sensor.mm_per_px
         ));
     }
-    if x - r < 0.0 || y - r < 0.0 || x + r > w as f64 || y + r > h as f64 {
+    // A press near the edge keeps the part of its contact the frame shows:
+    // every target and score is taken pixel by pixel over the frame.
+    if !(0.0..w as f64).contains(&x) || !(0.0..h as f64).contains(&y) {
         return Some(format!(
-            "contact circle at ({x:?}, {y:?}) radius {r:?} px is not inside the {w}x{h} frame"
+            "contact circle at ({x:?}, {y:?}) radius {r:?} px: its centre is off the {w}x{h} frame"
         ));
     }
     None

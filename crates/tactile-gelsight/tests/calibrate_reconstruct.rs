@@ -158,14 +158,14 @@ fn the_layout_refuses_what_it_cannot_calibrate_from_naming_the_file() {
     let e = BallPresses::open(&d).unwrap_err().to_string();
     assert!(e.contains("background.png") && e.contains("missing"), "{e}");
     // Annotated circles that cannot be a ball's contact, each named by
-    // its line of presses.csv (where it is mended) and its frame: off the
-    // frame, wider than the ball (radius 2 mm = 67.8 px), too small, and
+    // its line of presses.csv (where it is mended) and its frame: centred
+    // off the frame, wider than the ball (radius 2 mm = 67.8 px), too small, and
     // not a finite number.
     for (name, edit, why) in [
         (
             "off",
-            (",299,220,", ",630,220,"),
-            "not inside the 640x480 frame",
+            (",299,220,", ",650,220,"),
+            "its centre is off the 640x480 frame",
         ),
         ("wide", (",63", ",70"), "ball's radius"),
         ("small", (",63", ",1"), "no contact"),
@@ -446,6 +446,52 @@ fn a_scale_mistyped_tenfold_is_named_after_calibrating() {
             "{w}"
         );
     }
+}
+
+/// Presses near the frame's edge: the first six presses with every frame
+/// (and the background) cropped to its columns from 250 on, so presses 1
+/// and 2 (centres at columns 49 and 50, radii 61-63 px) run off the left
+/// edge. Their annotated circles are read and calibrate; before, the
+/// folder was refused ("not inside the 390x480 frame"). Found, not
+/// annotated, such circles are named in a warning.
+#[test]
+fn presses_near_the_edge_calibrate_and_found_circles_there_are_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("cropped");
+    subset(&d, 6, |line| {
+        let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+        cells[1] = (cells[1].parse::<i32>().unwrap() - 250).to_string();
+        cells.join(",")
+    });
+    let mut files = vec![d.join("background.png")];
+    files.extend(
+        std::fs::read_dir(d.join("frames"))
+            .unwrap()
+            .map(|e| e.unwrap().path()),
+    );
+    for f in files {
+        let rgb = image::open(&f).unwrap().to_rgb8();
+        image::imageops::crop_imm(&rgb, 250, 0, 390, 480)
+            .to_image()
+            .save(&f)
+            .unwrap();
+    }
+    let calibrated = |d: &Path, name: &str| {
+        let ds = BallPresses::open(d).unwrap();
+        let mut cfg = CalibrationConfig::new().with_factor(8).with_val_presses(2);
+        cfg.schedule.max_epochs = 2;
+        calibrate(&cfg, &ds, &tmp.path().join(name), DeviceKind::Flex).unwrap()
+    };
+    let cal = calibrated(&d, "annotated");
+    assert!(cal.warnings.is_empty(), "{:?}", cal.warnings);
+    std::fs::remove_file(d.join("presses.csv")).unwrap();
+    let cal = calibrated(&d, "found");
+    let w = cal.warnings.join("\n");
+    assert!(
+        w.contains("of the 6 presses run off the frame's edge, and their contact circles were found, not annotated (the first: frames/press_01.png")
+            && w.contains("give their circles in presses.csv"),
+        "{w}"
+    );
 }
 
 #[test]
