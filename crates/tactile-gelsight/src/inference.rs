@@ -359,14 +359,7 @@ impl Reconstructor {
     /// `path`) in BGR order ([`Error::SwappedChannels`]): its colours would
     /// be read as slopes mirrored, a wrong skin without a word.
     pub fn check_working(&self, working: &WorkingImage, path: &Path) -> Result<()> {
-        match self.background.swapped_channels(working) {
-            Some((given, swapped)) => Err(Error::SwappedChannels {
-                path: path.to_path_buf(),
-                given,
-                swapped,
-            }),
-            None => Ok(()),
-        }
+        self.background.check_channel_order(working, path)
     }
 
     /// [`Self::reconstruct`] of a frame's working image.

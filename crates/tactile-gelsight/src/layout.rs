@@ -304,13 +304,7 @@ impl BallPresses {
                 factor,
             };
             let bg = PreparedBackground::new(&self.background, grid)?;
-            if let Some((given, swapped)) = bg.swapped_channels(&bg.matched(&img)?) {
-                return Err(Error::SwappedChannels {
-                    path,
-                    given,
-                    swapped,
-                });
-            }
+            bg.check_channel_order(&bg.matched(&img)?, &path)?;
         }
         Ok(img)
     }

@@ -292,6 +292,20 @@ impl PreparedBackground {
         (back < SWAPPED_CHANGE_RATIO * given).then_some((given, back))
     }
 
+    /// Refuse an exposure-matched `frame` (named `path`) in BGR order
+    /// ([`Self::swapped_channels`]): its colours would be read as slopes
+    /// mirrored, a wrong skin without a word.
+    pub fn check_channel_order(&self, frame: &WorkingImage, path: &std::path::Path) -> Result<()> {
+        match self.swapped_channels(frame) {
+            Some((given, swapped)) => Err(crate::Error::SwappedChannels {
+                path: path.to_path_buf(),
+                given,
+                swapped,
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// The colour change's size per working pixel (the circle finder's
     /// evidence of contact).
     pub fn change(&self, frame: &WorkingImage) -> Vec<f32> {
