@@ -175,16 +175,29 @@ fn name_paths(
             }
             key => key,
         };
-        if let Some((first, _)) = rows.get(&key) {
-            let (first, second) = (line.min(*first), line.max(*first));
-            return Err(Error::Dataset {
-                path: labels.to_path_buf(),
-                line: Some(second),
-                message: format!("frame {key} is labelled twice (also on line {first})"),
-            });
-        }
-        rows.insert(key, (line, cells));
+        insert_label(rows, key, (line, cells), labels)?;
     }
+    Ok(())
+}
+
+/// Add a frame's row (its line of the CSV `labels` and its cells) to
+/// `rows`, refusing a frame labelled on another line already: the later
+/// line is named, and the earlier one.
+fn insert_label(
+    rows: &mut LabelRows,
+    key: FrameKey,
+    (line, cells): (usize, Vec<String>),
+    labels: &Path,
+) -> Result<()> {
+    if let Some((first, _)) = rows.get(&key) {
+        let (first, second) = (line.min(*first), line.max(*first));
+        return Err(Error::Dataset {
+            path: labels.to_path_buf(),
+            line: Some(second),
+            message: format!("frame {key} is labelled twice (also on line {first})"),
+        });
+    }
+    rows.insert(key, (line, cells));
     Ok(())
 }
 
@@ -244,14 +257,7 @@ fn read_labels(path: &Path) -> Result<Labels> {
         if key.is_empty() {
             return Err(bad(line, "empty `frame`".into()));
         }
-        let key = frame_key(key);
-        if let Some((first, _)) = rows.get(&key) {
-            return Err(bad(
-                line,
-                format!("frame {key} is labelled twice (also on line {first})"),
-            ));
-        }
-        rows.insert(key, (line, cells));
+        insert_label(&mut rows, frame_key(key), (line, cells), path)?;
     }
     if rows.is_empty() {
         return Err(bad(2, "no labelled frames".into()));
