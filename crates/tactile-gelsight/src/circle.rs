@@ -1,7 +1,11 @@
 //! Finding a ball's contact circle in a press: the colour change from the
 //! background (exposure matched, at the working resolution), an Otsu
 //! threshold, the largest connected region (kornia), and the circle of
-//! the region's centroid and area, refined on the change's edge.
+//! the region's centroid and area, refined on the change's edge: where
+//! the change peaks along rays from the centre, rays the frame's edge cuts
+//! first left out, a circle fitted to the rest and refitted without those
+//! far from it. Every step is in pixels of the frame's own scale, so a
+//! 240x180 sensor's presses are found as a 1280x960 one's are.
 
 use kornia_image::{Image, ImageSize};
 use kornia_imgproc::connected_components::{Connectivity, connected_components};
@@ -105,6 +109,8 @@ pub fn find_contact(
     }
     let mut c = (sx / size as f64, sy / size as f64);
     let mut r = (size as f64 / std::f64::consts::PI).sqrt();
+    let inside =
+        |x: f64, y: f64| (0.0..=(w - 1) as f64).contains(&x) && (0.0..=(h - 1) as f64).contains(&y);
     let sample = |x: f64, y: f64| -> f64 {
         let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (h - 1) as f64));
         let (x0, y0) = (x.floor() as usize, y.floor() as usize);
@@ -119,33 +125,37 @@ pub fn find_contact(
         for k in 0..RAYS {
             let t = k as f64 * std::f64::consts::TAU / RAYS as f64;
             let (dx, dy) = (t.cos(), t.sin());
-            let (mut best_d, mut best_drop) = (r, f64::MIN);
+            let (mut best_d, mut best_drop, mut last_d) = (r, f64::MIN, None);
             let steps = 60;
             for s in 0..=steps {
                 let d = r * (0.5 + 1.5 * s as f64 / steps as f64);
-                let drop = sample(c.0 + dx * d, c.1 + dy * d);
+                let (x, y) = (c.0 + dx * d, c.1 + dy * d);
+                if !inside(x, y) {
+                    break;
+                }
+                last_d = Some(d);
+                let drop = sample(x, y);
                 if drop > best_drop {
                     best_drop = drop;
                     best_d = d;
                 }
             }
-            points.push((c.0 + dx * best_d, c.1 + dy * best_d));
+            // A ray the frame's edge cuts before the change peaks (a press
+            // near the edge) holds no edge of the contact.
+            let cut = last_d.is_some_and(|l| l < 2.0 * r && best_d == l);
+            if last_d.is_some() && !cut {
+                points.push((c.0 + dx * best_d, c.1 + dy * best_d));
+            }
         }
         // Rays that caught something else (a scratch, the housing's glare)
-        // are left out: those far from the median distance.
-        let mut dist: Vec<f64> = points
-            .iter()
-            .map(|p| (p.0 - c.0).hypot(p.1 - c.1))
-            .collect();
-        dist.sort_by(f64::total_cmp);
-        let med = dist[dist.len() / 2];
-        let kept: Vec<(f64, f64)> = points
-            .into_iter()
-            .filter(|p| ((p.0 - c.0).hypot(p.1 - c.1) - med).abs() < 0.15 * med)
-            .collect();
-        if kept.len() < RAYS / 3 {
+        // are left out: those far from a circle fitted to them all. Their
+        // distance from the start is no test, as the start may be off the
+        // contact's centre (the region's centroid, pulled by the change
+        // around the contact): there the edge's distance varies around
+        // the rays by twice the offset.
+        let Some(kept) = inliers(&points) else {
             break;
-        }
+        };
         match fit_circle(&kept) {
             Some((cx, cy, rr)) if rr.is_finite() && rr > 1.0 => {
                 c = (cx, cy);
@@ -164,6 +174,36 @@ pub fn find_contact(
 
 /// Rays along which the contact's edge is sought.
 const RAYS: usize = 48;
+
+/// Of `points` (the edge along each ray), those within 15 % of its radius
+/// of a circle fitted to them, refitted to the points kept until none is
+/// left out; `None` when fewer than a third of the rays are kept.
+fn inliers(points: &[(f64, f64)]) -> Option<Vec<(f64, f64)>> {
+    if points.len() < RAYS / 3 {
+        return None;
+    }
+    let mut kept = points.to_vec();
+    // Each round leaves out at least one point, or ends.
+    for _ in 0..points.len() {
+        let (cx, cy, r) = fit_circle(&kept).filter(|f| f.2.is_finite())?;
+        let off = |p: &(f64, f64)| ((p.0 - cx).hypot(p.1 - cy) - r).abs();
+        // The worst point goes first, so one far outlier does not drag
+        // the circle off the rest.
+        let (worst, far) = kept
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (i, off(p)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        if far < 0.15 * r {
+            break;
+        }
+        kept.swap_remove(worst);
+        if kept.len() < RAYS / 3 {
+            return None;
+        }
+    }
+    Some(kept)
+}
 
 /// The least-squares circle through `points` (Kasa's algebraic fit):
 /// centre and radius, or `None` when they are degenerate.

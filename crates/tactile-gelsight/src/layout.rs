@@ -319,6 +319,32 @@ impl BallPresses {
             }),
         }
     }
+
+    /// [`Self::check_circle`] of a circle the toolkit found, not one a
+    /// user wrote: said to a tenth of a pixel, and with what to do (the
+    /// finder mistook the contact, or `sensor.json` scales every press).
+    pub fn check_found_circle(&self, path: &Path, c: &Circle) -> Result<()> {
+        let Some(mut why) = circle_problem(&self.sensor, self.size(), c) else {
+            return Ok(());
+        };
+        let tenth = |v: f64| (v * 10.0).round() / 10.0;
+        let said = Circle {
+            centre_x_px: tenth(c.centre_x_px),
+            centre_y_px: tenth(c.centre_y_px),
+            radius_px: tenth(c.radius_px),
+        };
+        if let Some(rounded) = circle_problem(&self.sensor, self.size(), &said) {
+            why = rounded;
+        }
+        Err(Error::Press {
+            path: path.to_path_buf(),
+            why: format!(
+                "the contact circle found in it: {why}; give the press's circle in presses.csv \
+                 (centre_x_px, centre_y_px, contact_radius_px), or check ball_diameter_mm and \
+                 mm_per_px in sensor.json, which scale every press"
+            ),
+        })
+    }
 }
 
 /// What makes `c` no contact circle of a ball on a `(w, h)` frame: not a

@@ -155,8 +155,14 @@ pub fn prepare_presses(
         let frame = bg.matched(&full)?;
         let found = find_contact(&fine, &fine.matched(&full)?, &path)?;
         let circle = match (circles, p.annotated) {
-            (CircleSource::Found, _) | (CircleSource::Auto, None) => found,
-            (_, Some(a)) => a,
+            (CircleSource::Found, _) | (CircleSource::Auto, None) => {
+                ds.check_found_circle(&path, &found)?;
+                found
+            }
+            (_, Some(a)) => {
+                ds.check_circle(&path, &a)?;
+                a
+            }
             (CircleSource::Annotated, None) => {
                 return Err(Error::Press {
                     path,
@@ -164,7 +170,6 @@ pub fn prepare_presses(
                 });
             }
         };
-        ds.check_circle(&path, &circle)?;
         let cap = Cap {
             circle,
             ball_radius_px: ds.sensor.ball_radius_px(),
