@@ -89,6 +89,14 @@ pub fn check_preview_frames(n: usize) -> Result<()> {
     Ok(())
 }
 
+/// Frame pixels per thumbnail pixel for frames `w` wide: thumbnails about
+/// 240 px wide, and at least 200 where the frame is (a caption such as
+/// "s29 f2 press 0.2 straight 125°" takes 200; a 320x240 sensor's frames
+/// halved would write it across the next thumbnail).
+fn shrink_factor(w: usize) -> usize {
+    (w / 200).clamp(1, w.div_ceil(240).max(1))
+}
+
 /// Write a contact sheet of up to `n` frames (1 to [`MAX_PREVIEW_FRAMES`])
 /// of the dataset at `data` to `out`.
 pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
@@ -102,7 +110,7 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
     }
     let rows = pick(ds.len(), n);
     let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
-    let k = w.div_ceil(240).max(1);
+    let k = shrink_factor(w);
     let (tw, th) = (w / k, h / k);
     let cols = COLUMNS.min(rows.len());
     let lines = rows.len().div_ceil(cols);
@@ -213,4 +221,21 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
     }
     draw_marks(&mut sheet, sw, sh, &marks)?;
     save_rgb_png(out, sw, sh, &sheet).map_err(|e| Error::Invalid(format!("writing preview: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shrink_factor;
+
+    #[test]
+    fn thumbnails_are_wide_enough_for_their_captions() {
+        for w in [200, 240, 320, 400, 480, 640, 1280, 1920, 3840] {
+            let k = shrink_factor(w);
+            assert!((200..=320).contains(&(w / k)), "{w} px wide: shrunk by {k}");
+        }
+        // Frames narrower than a caption are shown as they are.
+        assert_eq!(shrink_factor(120), 1);
+        // The sizes of the shipped sheets keep their thumbnails.
+        assert_eq!((shrink_factor(640), shrink_factor(1920)), (3, 8));
+    }
 }
