@@ -4,11 +4,12 @@
 //! the region's centroid and area, refined on the change's edge: where
 //! the change peaks along rays from the centre, rays the frame's edge cuts
 //! first left out, a circle fitted to the rest and refitted without those
-//! far from it. Every step is in pixels of the frame's own scale, so a
-//! 240x180 sensor's presses are found as a 1280x960 one's are.
+//! far from it. Every distance is taken relative to the contact's own
+//! size, so a 240x180 sensor's presses are found as a 1280x960 one's are.
 
 use kornia_image::{Image, ImageSize};
 use kornia_imgproc::connected_components::{Connectivity, connected_components};
+use kornia_imgproc::filter::median_blur;
 
 use crate::layout::Circle;
 use crate::prepare::{PreparedBackground, WorkingImage};
@@ -60,7 +61,8 @@ pub fn find_contact(
 ) -> Result<Circle> {
     let g = frame.grid;
     let (w, h) = (g.width(), g.height());
-    let change = background.change(frame);
+    let raw = background.change(frame);
+    let change = despeckled(&raw, w, h)?;
     let t = otsu(&change);
     let mask: Vec<u8> = change.iter().map(|&v| u8::from(v > t)).collect();
     let src = Image::<u8, 1>::new(
@@ -111,16 +113,25 @@ pub fn find_contact(
     let mut r = (size as f64 / std::f64::consts::PI).sqrt();
     let inside =
         |x: f64, y: f64| (0.0..=(w - 1) as f64).contains(&x) && (0.0..=(h - 1) as f64).contains(&y);
-    let sample = |x: f64, y: f64| -> f64 {
+    let sample = |map: &[f32], x: f64, y: f64| -> f64 {
         let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (h - 1) as f64));
         let (x0, y0) = (x.floor() as usize, y.floor() as usize);
         let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
         let (fx, fy) = (x - x0 as f64, y - y0 as f64);
-        let v = |xx: usize, yy: usize| change[yy * w + xx] as f64;
+        let v = |xx: usize, yy: usize| map[yy * w + xx] as f64;
         (v(x0, y0) * (1.0 - fx) + v(x1, y0) * fx) * (1.0 - fy)
             + (v(x0, y1) * (1.0 - fx) + v(x1, y1) * fx) * fy
     };
-    for _ in 0..3 {
+    // Three passes on the median's change find the contact wherever the
+    // start was. A last one on the change itself, within 15 % of that
+    // radius, sets the radius alone: the median rounds the change's narrow
+    // peak off inwards (at 240x180, 1.5 px of the 640x480 frame's), and a
+    // marker there is one ray the fit leaves out.
+    for pass in 0..4 {
+        let (map, (from, to)) = match pass {
+            3 => (&raw[..], (0.85, 1.15)),
+            _ => (&change[..], (0.5, 2.0)),
+        };
         let mut points = Vec::with_capacity(RAYS);
         for k in 0..RAYS {
             let t = k as f64 * std::f64::consts::TAU / RAYS as f64;
@@ -128,13 +139,13 @@ pub fn find_contact(
             let (mut best_d, mut best_drop, mut last_d) = (r, f64::MIN, None);
             let steps = 60;
             for s in 0..=steps {
-                let d = r * (0.5 + 1.5 * s as f64 / steps as f64);
+                let d = r * (from + (to - from) * s as f64 / steps as f64);
                 let (x, y) = (c.0 + dx * d, c.1 + dy * d);
                 if !inside(x, y) {
                     break;
                 }
                 last_d = Some(d);
-                let drop = sample(x, y);
+                let drop = sample(map, x, y);
                 if drop > best_drop {
                     best_drop = drop;
                     best_d = d;
@@ -142,7 +153,7 @@ pub fn find_contact(
             }
             // A ray the frame's edge cuts before the change peaks (a press
             // near the edge) holds no edge of the contact.
-            let cut = last_d.is_some_and(|l| l < 2.0 * r && best_d == l);
+            let cut = last_d.is_some_and(|l| l < to * r && best_d == l);
             if last_d.is_some() && !cut {
                 points.push((c.0 + dx * best_d, c.1 + dy * best_d));
             }
@@ -158,7 +169,9 @@ pub fn find_contact(
         };
         match fit_circle(&kept) {
             Some((cx, cy, rr)) if rr.is_finite() && rr > 1.0 => {
-                c = (cx, cy);
+                if pass < 3 {
+                    c = (cx, cy);
+                }
                 r = rr;
             }
             _ => break,
@@ -172,12 +185,42 @@ pub fn find_contact(
     })
 }
 
+/// `change` (`w` x `h`) through a 5x5 median: printed markers (a grid of
+/// dark dots on many gels) move with the skin, and each moved dot changes
+/// the colour strongly over a few pixels, which the threshold's region
+/// and the rays would take for the contact; the median keeps the
+/// contact's broad change and drops such specks. Quantised to 256 levels
+/// of the largest change, as the threshold's histogram is.
+fn despeckled(change: &[f32], w: usize, h: usize) -> Result<Vec<f32>> {
+    let top = change.iter().copied().fold(0f32, f32::max);
+    if !(top > 0.0 && top.is_finite()) {
+        return Ok(change.to_vec());
+    }
+    let size = ImageSize {
+        width: w,
+        height: h,
+    };
+    let levels: Vec<u8> = change
+        .iter()
+        .map(|&v| (v / top * 255.0).round().clamp(0.0, 255.0) as u8)
+        .collect();
+    let src = Image::<u8, 1>::new(size, levels)?;
+    let mut dst = Image::<u8, 1>::from_size_val(size, 0)?;
+    median_blur(&src, &mut dst, if w >= 240 { 5 } else { 3 })?;
+    Ok(dst
+        .as_slice()
+        .iter()
+        .map(|&v| f32::from(v) / 255.0 * top)
+        .collect())
+}
+
 /// Rays along which the contact's edge is sought.
 const RAYS: usize = 48;
 
 /// Of `points` (the edge along each ray), those within 15 % of its radius
-/// of a circle fitted to them, refitted to the points kept until none is
-/// left out; `None` when fewer than a third of the rays are kept.
+/// of a circle fitted to them: the farthest is left out and the circle
+/// refitted until every point left is that close; `None` when fewer than
+/// a third of the rays are kept.
 fn inliers(points: &[(f64, f64)]) -> Option<Vec<(f64, f64)>> {
     if points.len() < RAYS / 3 {
         return None;

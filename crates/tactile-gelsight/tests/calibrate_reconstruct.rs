@@ -146,6 +146,65 @@ fn the_circle_finder_finds_every_press_at_any_frame_size() {
     );
 }
 
+/// Dark dots 3 px in radius on a 28 px grid over `rgb` (a gel's printed
+/// markers), each pushed out from the contact `(cx, cy, r)` by the skin's
+/// stretch (up to 2.5 px at the contact's rim; none without a contact).
+fn with_markers(rgb: &mut image::RgbImage, contact: Option<(f64, f64, f64)>) {
+    let (w, h) = (rgb.width() as f64, rgb.height() as f64);
+    for gy in (12..h as u32).step_by(28) {
+        for gx in (12..w as u32).step_by(28) {
+            let (mut x, mut y) = (f64::from(gx), f64::from(gy));
+            if let Some((cx, cy, r)) = contact {
+                let d = (x - cx).hypot(y - cy);
+                if d > 1e-6 && d < 2.5 * r {
+                    let stretch = 2.5 * (-((d - r) / r).powi(2)).exp();
+                    (x, y) = (x + (x - cx) / d * stretch, y + (y - cy) / d * stretch);
+                }
+            }
+            for py in (y - 4.0).max(0.0) as u32..((y + 5.0).min(h) as u32) {
+                for px in (x - 4.0).max(0.0) as u32..((x + 5.0).min(w) as u32) {
+                    if (f64::from(px) - x).hypot(f64::from(py) - y) <= 3.0 {
+                        let p = rgb.get_pixel_mut(px, py);
+                        p.0 = p.0.map(|v| v / 4);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_circle_finder_finds_presses_on_a_gel_with_markers() {
+    // Many GelSight-like gels carry printed markers that move with the
+    // skin. The shared presses with a grid of such dots, pushed out around
+    // each contact: the circles are found as on the bare gel. Before, each
+    // moved dot's strong change drew the threshold's region and the rays
+    // off the contact: press 1 was found 76 px in radius, wider than the
+    // ball's 68, so a calibration without annotations was refused.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("markers");
+    subset(&d, 32, str::to_string);
+    let ds = BallPresses::open(&d).unwrap();
+    let mut bg = image::open(d.join("background.png")).unwrap().to_rgb8();
+    with_markers(&mut bg, None);
+    bg.save(d.join("background.png")).unwrap();
+    for p in &ds.presses {
+        let a = p.annotated.unwrap();
+        let f = d.join(&p.file);
+        let mut rgb = image::open(&f).unwrap().to_rgb8();
+        with_markers(&mut rgb, Some((a.centre_x_px, a.centre_y_px, a.radius_px)));
+        rgb.save(&f).unwrap();
+    }
+    let ds = BallPresses::open(&d).unwrap();
+    let (_, presses) = prepare_presses(&ds, 4, CircleSource::Found).unwrap();
+    let c = tactile_gelsight::eval::CircleAgreement::of(&presses).unwrap();
+    assert!(
+        c.centre_error_px < 3.5 && c.max_centre_error_px < 8.0 && c.radius_error_px < 4.5,
+        "{}",
+        c.describe()
+    );
+}
+
 #[test]
 fn a_scale_far_out_of_range_is_named_in_a_few_characters() {
     // A sensor.json value far out of range is refused in the form it was
@@ -557,7 +616,7 @@ fn presses_near_the_edge_calibrate_and_found_circles_there_are_named() {
     let cal = short_calibration(&d, &tmp.path().join("annotated"));
     assert!(cal.warnings.is_empty(), "{:?}", cal.warnings);
     // The finder takes no ray the edge cuts for the contact's edge: press
-    // 4, its centre 6 px from the edge, is found 7.5 px from its
+    // 4, its centre 6 px from the edge, is found 6.8 px from its
     // annotation (before, 37 px; whole presses stay under 6 px).
     let (_, presses) =
         prepare_presses(&BallPresses::open(&d).unwrap(), 4, CircleSource::Found).unwrap();
