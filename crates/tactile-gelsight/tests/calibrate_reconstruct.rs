@@ -206,6 +206,33 @@ fn the_circle_finder_finds_presses_on_a_gel_with_markers() {
 }
 
 #[test]
+fn an_annotation_far_from_the_contact_found_is_named() {
+    // A mistyped line of presses.csv: press 2's column and row swapped
+    // (300, 169 given as 169, 300), press 5's radius missing a digit (6
+    // for 61). Each is still a circle on the frame, so the calibration
+    // fits the sensor model to balls that were not there; the finder,
+    // which lands within 0.13 of a radius of every annotation measured,
+    // names them. Before, nothing was said.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("presses");
+    subset(&d, 6, |line| match line.split(',').next() {
+        Some("frames/press_02.png") => "frames/press_02.png,169,300,61".into(),
+        Some("frames/press_05.png") => line.replace(",61", ",6"),
+        _ => line.to_string(),
+    });
+    let csv = std::fs::read_to_string(d.join("presses.csv")).unwrap();
+    assert!(csv.contains("frames/press_05.png,356,360,6\n"), "{csv}");
+    let cal = short_calibration(&d, &tmp.path().join("model"));
+    let w = cal.warnings.join("\n");
+    assert!(
+        w.contains("the annotated contact circles of 2 of the 6 presses lie far from the contacts the toolkit finds")
+            && w.contains("(the first: frames/press_02.png, annotated at (169.0, 300.0) of radius 61.0 px, found at (299.7, 168.4) of radius 58.3 px)")
+            && w.contains("centre_x_px is the column"),
+        "{w}"
+    );
+}
+
+#[test]
 fn a_scale_far_out_of_range_is_named_in_a_few_characters() {
     // A sensor.json value far out of range is refused in the form it was
     // written. Before, "ball_diameter_mm = 1000…000 is no ball" printed
