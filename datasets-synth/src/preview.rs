@@ -93,7 +93,7 @@ pub fn check_preview_frames(n: usize) -> Result<()> {
 /// 240 px wide, and at least 200 where the frame is (a caption such as
 /// "s29 f2 press 0.2 straight 125°" takes 200; a 320x240 sensor's frames
 /// halved would write it across the next thumbnail).
-fn shrink_factor(w: usize) -> usize {
+pub fn shrink_factor(w: usize) -> usize {
     (w / 200).clamp(1, w.div_ceil(240).max(1))
 }
 

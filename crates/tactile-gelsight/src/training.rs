@@ -533,6 +533,10 @@ impl Calibration {
             out.display()
         )];
         lines.extend(self.circles.as_ref().map(|c| c.describe()));
+        lines.push(format!(
+            "circles: {} (green: the circle each press's targets use; yellow: the one found, where that is another)",
+            out.join(crate::eval::CIRCLES_PICTURE).display()
+        ));
         let r = &self.render;
         lines.push(format!(
             "render model (optics.json): optics on {} pixels; gel spread {:.2} mm, gain {:.2} (profile error {:.3} mm); ball presses rendered back: colour error {:.1} levels (the bare background: {:.1})",
@@ -581,6 +585,11 @@ pub fn calibrate(
     }
     let cut = found_circles_cut_by_edge(&presses, ds.size());
     let mistyped = annotations_far_from_found(&presses);
+    crate::eval::circles_picture(
+        ds,
+        &presses,
+        &staged.path().join(crate::eval::CIRCLES_PICTURE),
+    )?;
     let val = spread(n, config.val_presses);
     let train: Vec<usize> = (0..n).filter(|i| !val.contains(i)).collect();
     let dir = staged.path();

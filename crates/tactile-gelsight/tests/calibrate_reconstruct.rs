@@ -677,9 +677,22 @@ fn a_calibration_reconstructs_held_out_presses_and_rest() {
         "background.png",
         "training.json",
         "optics.json",
+        "circles.png",
     ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    // The presses at a third of their size, four to a line under their
+    // captions, each with its annotated circle in green: at the rightmost
+    // point of the first press's circle (column and row, in the frame).
+    let picture = image::open(out.join("circles.png")).unwrap().to_rgb8();
+    assert_eq!(picture.dimensions(), (4 * 213, 3 * (160 + 22)));
+    let a = ds.presses[0].annotated.unwrap();
+    let at = |v: f64| ((v + 0.5) / 3.0 - 0.5).round() as u32;
+    let (x, y) = (at(a.centre_x_px + a.radius_px), at(a.centre_y_px));
+    let green = (x - 1..=x + 1)
+        .flat_map(|x| (y - 1..=y + 1).map(move |y| (x, y)))
+        .any(|(x, y)| picture.get_pixel(x, y).0 == [40, 230, 60]);
+    assert!(green, "no green ring at ({x}, {y})");
     // The render model reproduces the presses better than the bare
     // background does, and loads as the renderer reads it.
     let r = &cal.render;

@@ -46,6 +46,11 @@ def model(presses: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     assert r["out"] == str(out)
     assert r["train_presses"] == 4 and r["val_presses"] == 2
     assert r["circles"]["presses"] == 6 and r["circles"]["centre_error_px"] < 8
+    # The presses with their circles, to look at: a PNG of two lines of
+    # thumbnails a third of the frame's size, under their captions.
+    png = (out / "circles.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    assert int.from_bytes(png[16:20], "big") == 4 * 213 and int.from_bytes(png[20:24], "big") == 2 * (160 + 22)
 
     cfg = json.loads((out / "gelsight.json").read_text())
     assert cfg["grid"]["factor"] == 8 and cfg["model"]["kernels"] == [3, 1, 1]
