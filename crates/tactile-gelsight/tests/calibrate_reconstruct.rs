@@ -78,9 +78,9 @@ fn the_circle_finder_finds_every_press_at_any_frame_size() {
     // Before, the finder kept its first guess (the changed region's area,
     // half as wide again as the contact) whenever a third of its rays
     // disagreed with their median from a start off the centre: at 240x180
-    // and 320x240 presses 1 and 11 came out wider than the ball, so the
-    // calibration was refused without annotations, and at 1280x960 press
-    // 32 was found 25 px off.
+    // and 320x240 presses 1 and 11, and at 1280x960 press 32, came out
+    // wider than the ball, so the calibration was refused without
+    // annotations.
     let tmp = tempfile::tempdir().unwrap();
     for (w, h) in [(240u32, 180u32), (320, 240), (1280, 960)] {
         let s = f64::from(w) / 640.0;
