@@ -97,6 +97,80 @@ pub fn shrink_factor(w: usize) -> usize {
     (w / 200).clamp(1, w.div_ceil(240).max(1))
 }
 
+/// A contact sheet being drawn: thumbnails of frames of one size, four to
+/// a line, each over its caption, with marks drawn over them when saved.
+/// Shared by the datasets' previews and a calibration's `circles.png`.
+pub struct Sheet {
+    /// Frame pixels per thumbnail pixel ([`shrink_factor`]).
+    pub shrink: usize,
+    /// A thumbnail's size, pixels.
+    pub tile: (usize, usize),
+    columns: usize,
+    width: usize,
+    height: usize,
+    rgb: Vec<u8>,
+    marks: Vec<Mark>,
+}
+
+impl Sheet {
+    /// A sheet of `count` (at least 1) thumbnails of `w` x `h` frames.
+    pub fn new(count: usize, (w, h): (usize, usize)) -> Self {
+        let shrink = shrink_factor(w);
+        let (tw, th) = (w / shrink, h / shrink);
+        let columns = COLUMNS.min(count.max(1));
+        let (width, height) = (
+            columns * tw,
+            count.max(1).div_ceil(columns) * (th + CAPTION_PX),
+        );
+        Self {
+            shrink,
+            tile: (tw, th),
+            columns,
+            width,
+            height,
+            rgb: vec![0; width * height * 3],
+            marks: Vec::new(),
+        }
+    }
+
+    /// The sheet pixel of thumbnail `slot`'s top-left corner.
+    pub fn origin(&self, slot: usize) -> (usize, usize) {
+        (
+            (slot % self.columns) * self.tile.0,
+            (slot / self.columns) * (self.tile.1 + CAPTION_PX),
+        )
+    }
+
+    /// Put `thumbnail` (interleaved RGB of [`Self::tile`]'s size) at
+    /// `slot`, captioned `caption`.
+    pub fn place(&mut self, slot: usize, thumbnail: &[u8], caption: String) {
+        let (ox, oy) = self.origin(slot);
+        let (tw, th) = self.tile;
+        for y in 0..th {
+            let dst = ((oy + y) * self.width + ox) * 3;
+            self.rgb[dst..dst + tw * 3].copy_from_slice(&thumbnail[y * tw * 3..(y + 1) * tw * 3]);
+        }
+        self.marks.push(Mark::Text {
+            at: (ox as i32 + 4, (oy + th + 3) as i32),
+            text: caption,
+            size: 13,
+            colour: WHITE,
+        });
+    }
+
+    /// Marks to draw over the thumbnails, in sheet pixels.
+    pub fn mark(&mut self, marks: impl IntoIterator<Item = Mark>) {
+        self.marks.extend(marks);
+    }
+
+    /// Draw the marks and write the sheet as a PNG.
+    pub fn save(mut self, out: &Path) -> Result<()> {
+        draw_marks(&mut self.rgb, self.width, self.height, &self.marks)?;
+        save_rgb_png(out, self.width, self.height, &self.rgb)
+            .map_err(|e| Error::Invalid(format!("writing {}: {e}", out.display())))
+    }
+}
+
 /// Write a contact sheet of up to `n` frames (1 to [`MAX_PREVIEW_FRAMES`])
 /// of the dataset at `data` to `out`.
 pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
@@ -110,15 +184,11 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
     }
     let rows = pick(ds.len(), n);
     let (w, h) = (ds.manifest.width as usize, ds.manifest.height as usize);
-    let k = shrink_factor(w);
-    let (tw, th) = (w / k, h / k);
-    let cols = COLUMNS.min(rows.len());
-    let lines = rows.len().div_ceil(cols);
-    let (sw, sh) = (cols * tw, lines * (th + CAPTION_PX));
-    let mut sheet = vec![0u8; sw * sh * 3];
+    let mut sheet = Sheet::new(rows.len(), (w, h));
+    let (k, (tw, th)) = (sheet.shrink, sheet.tile);
     let mut marks = Vec::new();
     for (slot, &row) in rows.iter().enumerate() {
-        let (ox, oy) = ((slot % cols) * tw, (slot / cols) * (th + CAPTION_PX));
+        let (ox, oy) = sheet.origin(slot);
         let frame_path = ds.path_of(row, "file")?;
         let mut rgb = match ds.manifest.kind {
             DatasetKind::Tactip => {
@@ -207,20 +277,10 @@ pub fn contact_sheet(data: &Path, out: &Path, n: usize) -> Result<()> {
             }
         }
         let (small, _, _) = downscale(&rgb, w, h, k);
-        for y in 0..th {
-            let src = &small[y * tw * 3..(y + 1) * tw * 3];
-            let dst = ((oy + y) * sw + ox) * 3;
-            sheet[dst..dst + tw * 3].copy_from_slice(src);
-        }
-        marks.push(Mark::Text {
-            at: (ox as i32 + 4, (oy + th + 3) as i32),
-            text: caption,
-            size: 13,
-            colour: WHITE,
-        });
+        sheet.place(slot, &small, caption);
     }
-    draw_marks(&mut sheet, sw, sh, &marks)?;
-    save_rgb_png(out, sw, sh, &sheet).map_err(|e| Error::Invalid(format!("writing preview: {e}")))
+    sheet.mark(marks);
+    sheet.save(out)
 }
 
 #[cfg(test)]

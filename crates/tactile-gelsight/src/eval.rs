@@ -86,12 +86,6 @@ pub const MAX_PICTURED_PRESSES: usize = 48;
 /// The picture's name in a calibrated sensor's folder.
 pub const CIRCLES_PICTURE: &str = "circles.png";
 
-/// Thumbnails a line of [`circles_picture`].
-const PICTURE_COLUMNS: usize = 4;
-
-/// Height of a thumbnail's caption, pixels.
-const CAPTION_PX: usize = 22;
-
 /// A contact sheet of the presses of `ds` (up to [`MAX_PICTURED_PRESSES`]):
 /// each with the contact circle its targets use (green) and, where that is
 /// an annotation, the circle the toolkit finds (yellow), captioned with how
@@ -103,63 +97,50 @@ pub fn circles_picture(
     presses: &[PreparedPress],
     path: &std::path::Path,
 ) -> crate::Result<()> {
-    use tactile_core::plot::{Mark, draw_marks};
+    use tactile_core::plot::Mark;
     const GREEN: [u8; 3] = [40, 230, 60];
     const YELLOW: [u8; 3] = [255, 220, 0];
-    const WHITE: [u8; 3] = [255, 255, 255];
-    let (w, h) = ds.size();
-    let k = datasets_synth::preview::shrink_factor(w);
-    let (tw, th) = (w / k, h / k);
     let n = presses.len().min(MAX_PICTURED_PRESSES);
     if n == 0 {
         return Ok(());
     }
-    let cols = PICTURE_COLUMNS.min(n);
-    let (sw, sh) = (cols * tw, n.div_ceil(cols) * (th + CAPTION_PX));
-    let mut sheet = vec![0u8; sw * sh * 3];
-    let mut marks = Vec::new();
+    let (w, h) = ds.size();
+    let mut sheet = datasets_synth::preview::Sheet::new(n, (w, h));
+    let k = sheet.shrink as f64;
     for (i, p) in presses.iter().take(n).enumerate() {
-        let (ox, oy) = ((i % cols) * tw, (i / cols) * (th + CAPTION_PX));
+        let (ox, oy) = sheet.origin(i);
         let frame = ds.frame(i)?;
-        let small = tactile_preprocess::shrink_rgb_by(frame.as_slice(), (w, h), k)?;
-        for y in 0..th {
-            for x in 0..tw {
-                let (s, d) = ((y * tw + x) * 3, ((oy + y) * sw + ox + x) * 3);
-                for c in 0..3 {
-                    sheet[d + c] = (small[s + c] * 255.0).round().clamp(0.0, 255.0) as u8;
-                }
-            }
-        }
+        let small: Vec<u8> =
+            tactile_preprocess::shrink_rgb_by(frame.as_slice(), (w, h), sheet.shrink)?
+                .iter()
+                .map(|v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
+                .collect();
         // A circle as 48 chords, in the thumbnail's pixels.
-        let ring = |c: &Circle, colour: [u8; 3], width: u32| {
-            let at = |t: f64| {
+        let ring = |c: Circle, colour: [u8; 3], width: u32| {
+            let at = move |s: usize| {
+                let t = s as f64 * std::f64::consts::TAU / 48.0;
                 let (x, y) = (
                     c.centre_x_px + c.radius_px * t.cos(),
                     c.centre_y_px + c.radius_px * t.sin(),
                 );
                 (
-                    (ox as f64 + (x + 0.5) / k as f64 - 0.5).round() as i32,
-                    (oy as f64 + (y + 0.5) / k as f64 - 0.5).round() as i32,
+                    (ox as f64 + (x + 0.5) / k - 0.5).round() as i32,
+                    (oy as f64 + (y + 0.5) / k - 0.5).round() as i32,
                 )
             };
-            (0..48)
-                .map(|s| {
-                    let t = |s: usize| s as f64 * std::f64::consts::TAU / 48.0;
-                    Mark::Line {
-                        from: at(t(s)),
-                        to: at(t(s + 1)),
-                        colour,
-                        width,
-                    }
-                })
-                .collect::<Vec<_>>()
+            (0..48).map(move |s| Mark::Line {
+                from: at(s),
+                to: at(s + 1),
+                colour,
+                width,
+            })
         };
         let name = std::path::Path::new(&p.file)
             .file_name()
             .map_or(p.file.clone(), |f| f.to_string_lossy().into_owned());
         let caption = match p.annotated.filter(|a| *a == p.circle) {
             Some(a) => {
-                marks.extend(ring(&p.found, YELLOW, 1));
+                sheet.mark(ring(p.found, YELLOW, 1));
                 let apart = (p.found.centre_x_px - a.centre_x_px)
                     .hypot(p.found.centre_y_px - a.centre_y_px);
                 format!(
@@ -169,16 +150,10 @@ pub fn circles_picture(
             }
             None => format!("{name}: found"),
         };
-        marks.extend(ring(&p.circle, GREEN, 2));
-        marks.push(Mark::Text {
-            at: (ox as i32 + 4, (oy + th + 3) as i32),
-            text: caption,
-            size: 13,
-            colour: WHITE,
-        });
+        sheet.mark(ring(p.circle, GREEN, 2));
+        sheet.place(i, &small, caption);
     }
-    draw_marks(&mut sheet, sw, sh, &marks)?;
-    Ok(tactile_core::image_io::save_rgb_png(path, sw, sh, &sheet)?)
+    Ok(sheet.save(path)?)
 }
 
 /// The circle finder against annotated circles.
