@@ -113,8 +113,8 @@ pub fn find_contact(
     let mut r = (size as f64 / std::f64::consts::PI).sqrt();
     let inside =
         |x: f64, y: f64| (0.0..=(w - 1) as f64).contains(&x) && (0.0..=(h - 1) as f64).contains(&y);
+    // Bilinear, at a point `inside` the grid.
     let sample = |map: &[f32], x: f64, y: f64| -> f64 {
-        let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (h - 1) as f64));
         let (x0, y0) = (x.floor() as usize, y.floor() as usize);
         let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
         let (fx, fy) = (x - x0 as f64, y - y0 as f64);
@@ -164,11 +164,8 @@ pub fn find_contact(
         // contact's centre (the region's centroid, pulled by the change
         // around the contact): there the edge's distance varies around
         // the rays by twice the offset.
-        let Some(kept) = inliers(&points) else {
-            break;
-        };
-        match fit_circle(&kept) {
-            Some((cx, cy, rr)) if rr.is_finite() && rr > 1.0 => {
+        match robust_circle(&points) {
+            Some((cx, cy, rr)) if rr > 1.0 => {
                 if pass < 3 {
                     c = (cx, cy);
                 }
@@ -217,17 +214,15 @@ fn despeckled(change: &[f32], w: usize, h: usize) -> Result<Vec<f32>> {
 /// Rays along which the contact's edge is sought.
 const RAYS: usize = 48;
 
-/// Of `points` (the edge along each ray), those within 15 % of its radius
-/// of a circle fitted to them: the farthest is left out and the circle
-/// refitted until every point left is that close; `None` when fewer than
-/// a third of the rays are kept.
-fn inliers(points: &[(f64, f64)]) -> Option<Vec<(f64, f64)>> {
-    if points.len() < RAYS / 3 {
-        return None;
-    }
+/// The circle (centre and radius) of `points` (the edge along each ray)
+/// once those far from it are left out: the circle is fitted to them all,
+/// the farthest point left out and the circle refitted, until every point
+/// left lies within 15 % of its radius; `None` when fewer than a third of
+/// the rays are left, or the fit is degenerate.
+fn robust_circle(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     let mut kept = points.to_vec();
-    // Each round leaves out at least one point, or ends.
-    for _ in 0..points.len() {
+    // Each round leaves out one point, or ends.
+    while kept.len() >= RAYS / 3 {
         let (cx, cy, r) = fit_circle(&kept).filter(|f| f.2.is_finite())?;
         let off = |p: &(f64, f64)| ((p.0 - cx).hypot(p.1 - cy) - r).abs();
         // The worst point goes first, so one far outlier does not drag
@@ -238,14 +233,11 @@ fn inliers(points: &[(f64, f64)]) -> Option<Vec<(f64, f64)>> {
             .map(|(i, p)| (i, off(p)))
             .max_by(|a, b| a.1.total_cmp(&b.1))?;
         if far < 0.15 * r {
-            break;
+            return Some((cx, cy, r));
         }
         kept.swap_remove(worst);
-        if kept.len() < RAYS / 3 {
-            return None;
-        }
     }
-    Some(kept)
+    None
 }
 
 /// The least-squares circle through `points` (Kasa's algebraic fit):

@@ -109,7 +109,9 @@ pub fn circles_picture(
     let k = sheet.shrink as f64;
     for (i, p) in presses.iter().take(n).enumerate() {
         let (ox, oy) = sheet.origin(i);
-        let frame = ds.frame(i)?;
+        // Read as it was when prepared (checked there: its size, colour
+        // and channel order).
+        let frame = tactile_core::image_io::load_rgb(ds.root.join(&p.file))?;
         let small: Vec<u8> =
             tactile_preprocess::shrink_rgb_by(frame.as_slice(), (w, h), sheet.shrink)?
                 .iter()

@@ -54,12 +54,32 @@ fn set_sensor_value(dir: &Path, field: &str, value: &str) {
     std::fs::write(dir.join("sensor.json"), json.to_string()).unwrap();
 }
 
+/// Every picture of the folder `dir` (its background and frames) replaced
+/// by `edit` of it.
+fn edit_pictures(dir: &Path, edit: impl Fn(image::RgbImage) -> image::RgbImage) {
+    let mut files = vec![dir.join("background.png")];
+    files.extend(
+        std::fs::read_dir(dir.join("frames"))
+            .unwrap()
+            .map(|e| e.unwrap().path()),
+    );
+    for f in files {
+        edit(image::open(&f).unwrap().to_rgb8()).save(&f).unwrap();
+    }
+}
+
+/// The circles the toolkit finds in the presses of `dir`, against their
+/// annotations.
+fn found_against_annotated(dir: &Path) -> tactile_gelsight::eval::CircleAgreement {
+    let ds = BallPresses::open(dir).unwrap();
+    let (_, presses) = prepare_presses(&ds, 4, CircleSource::Found)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+    tactile_gelsight::eval::CircleAgreement::of(&presses).unwrap()
+}
+
 #[test]
 fn the_circle_finder_agrees_with_the_annotations() {
-    let ds = BallPresses::open(shared()).unwrap();
-    assert_eq!(ds.presses.len(), 32);
-    let (_, presses) = prepare_presses(&ds, 4, CircleSource::Found).unwrap();
-    let c = tactile_gelsight::eval::CircleAgreement::of(&presses).unwrap();
+    let c = found_against_annotated(&shared());
     assert_eq!(c.presses, 32);
     assert!(
         c.centre_error_px < 3.0 && c.radius_error_px < 4.0,
@@ -93,22 +113,10 @@ fn the_circle_finder_finds_every_press_at_any_frame_size() {
             format!("{},{:.2},{:.2},{:.2}", cells[0], at(1), at(2), v(3) * s)
         });
         set_sensor_value(&d, "mm_per_px", &(0.0295 / s).to_string());
-        let mut files = vec![d.join("background.png")];
-        files.extend(
-            std::fs::read_dir(d.join("frames"))
-                .unwrap()
-                .map(|e| e.unwrap().path()),
-        );
-        for f in files {
-            let rgb = image::open(&f).unwrap().to_rgb8();
+        edit_pictures(&d, |rgb| {
             image::imageops::resize(&rgb, w, h, image::imageops::FilterType::Triangle)
-                .save(&f)
-                .unwrap();
-        }
-        let ds = BallPresses::open(&d).unwrap();
-        let (_, presses) =
-            prepare_presses(&ds, 4, CircleSource::Found).unwrap_or_else(|e| panic!("{w}x{h}: {e}"));
-        let c = tactile_gelsight::eval::CircleAgreement::of(&presses).unwrap();
+        });
+        let c = found_against_annotated(&d);
         assert_eq!(c.presses, 32);
         assert!(
             c.centre_error_px / s < 3.0
@@ -195,9 +203,7 @@ fn the_circle_finder_finds_presses_on_a_gel_with_markers() {
         with_markers(&mut rgb, Some((a.centre_x_px, a.centre_y_px, a.radius_px)));
         rgb.save(&f).unwrap();
     }
-    let ds = BallPresses::open(&d).unwrap();
-    let (_, presses) = prepare_presses(&ds, 4, CircleSource::Found).unwrap();
-    let c = tactile_gelsight::eval::CircleAgreement::of(&presses).unwrap();
+    let c = found_against_annotated(&d);
     assert!(
         c.centre_error_px < 3.5 && c.max_centre_error_px < 8.0 && c.radius_error_px < 4.5,
         "{}",
@@ -627,27 +633,15 @@ fn presses_near_the_edge_calibrate_and_found_circles_there_are_named() {
         cells[1] = (cells[1].parse::<i32>().unwrap() - 250).to_string();
         cells.join(",")
     });
-    let mut files = vec![d.join("background.png")];
-    files.extend(
-        std::fs::read_dir(d.join("frames"))
-            .unwrap()
-            .map(|e| e.unwrap().path()),
-    );
-    for f in files {
-        let rgb = image::open(&f).unwrap().to_rgb8();
-        image::imageops::crop_imm(&rgb, 250, 0, 390, 480)
-            .to_image()
-            .save(&f)
-            .unwrap();
-    }
+    edit_pictures(&d, |rgb| {
+        image::imageops::crop_imm(&rgb, 250, 0, 390, 480).to_image()
+    });
     let cal = short_calibration(&d, &tmp.path().join("annotated"));
     assert!(cal.warnings.is_empty(), "{:?}", cal.warnings);
     // The finder takes no ray the edge cuts for the contact's edge: press
     // 4, its centre 6 px from the edge, is found 6.8 px from its
     // annotation (before, 37 px; whole presses stay under 6 px).
-    let (_, presses) =
-        prepare_presses(&BallPresses::open(&d).unwrap(), 4, CircleSource::Found).unwrap();
-    let found = tactile_gelsight::eval::CircleAgreement::of(&presses).unwrap();
+    let found = found_against_annotated(&d);
     assert!(found.max_centre_error_px < 10.0, "{}", found.describe());
     std::fs::remove_file(d.join("presses.csv")).unwrap();
     let cal = short_calibration(&d, &tmp.path().join("found"));
