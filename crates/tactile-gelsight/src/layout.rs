@@ -10,6 +10,8 @@
 //!                   (annotated circles, to score the circle finder)
 //! ```
 //! Every path stays inside `DIR`; sizes are checked before pixels are read.
+//! gs_sdk's own calibration folder (`catalog.csv`, a folder per press with
+//! its `label.npz`) is read as it is ([`crate::gs_sdk`]).
 
 use std::path::{Path, PathBuf};
 
@@ -144,6 +146,55 @@ impl Circle {
     }
 }
 
+/// Where a folder's annotated circles are written, for messages that say
+/// where to mend or add one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Annotations {
+    /// The toolkit's `presses.csv`, a line per press.
+    PressesCsv,
+    /// gs_sdk's `label.npz` beside each press's `gelsight.png`.
+    LabelNpz,
+}
+
+impl Annotations {
+    /// The file that holds them.
+    pub fn file(self) -> &'static str {
+        match self {
+            Self::PressesCsv => "presses.csv",
+            Self::LabelNpz => "label.npz",
+        }
+    }
+
+    /// How a user gives a press its circle (`many`: several presses').
+    pub fn how_to_give(self, many: bool) -> String {
+        let which = match many {
+            true => "their circles",
+            false => "the press's circle",
+        };
+        match self {
+            Self::PressesCsv => {
+                format!("give {which} in presses.csv (centre_x_px, centre_y_px, contact_radius_px)")
+            }
+            Self::LabelNpz => format!(
+                "label {which} with gs_sdk's label_data.py (a label.npz beside each gelsight.png)"
+            ),
+        }
+    }
+
+    /// What most likely put an annotation far from its contact, and how to
+    /// mend it.
+    pub fn how_to_mend(self) -> &'static str {
+        match self {
+            Self::PressesCsv => {
+                "a mistyped line (centre_x_px is the column, centre_y_px the row)? Correct it, remove the press's line"
+            }
+            Self::LabelNpz => {
+                "a circle saved before it was moved onto the contact? Label the press again, remove its label.npz"
+            }
+        }
+    }
+}
+
 /// One press: its frame file and, when `presses.csv` gives one, the
 /// annotated circle.
 #[derive(Debug, Clone)]
@@ -172,6 +223,8 @@ pub struct BallPresses {
     /// The background is a colour sensor's ([`is_colour_background`]):
     /// grey presses are refused. Told once, when the folder is opened.
     pub colour: bool,
+    /// Where the annotated circles are written.
+    pub annotations: Annotations,
 }
 
 impl std::fmt::Debug for BallPresses {
@@ -185,7 +238,9 @@ impl std::fmt::Debug for BallPresses {
     }
 }
 
-fn read_limited(path: &Path, limit: u64) -> Result<String> {
+/// The UTF-8 text of `path`, at most `limit` bytes (a byte-order mark
+/// dropped).
+pub(crate) fn read_text(path: &Path, limit: u64) -> Result<String> {
     let bytes = tactile_core::io::read_limited(path, limit)?;
     let text = tactile_core::io::without_byte_order_mark(&bytes);
     String::from_utf8(text.to_vec()).map_err(|_| Error::Layout {
@@ -198,7 +253,7 @@ fn read_limited(path: &Path, limit: u64) -> Result<String> {
 /// to tell a file listed twice); refused (with the reason) when it leaves
 /// `root` by its name or through a symbolic link (`canonical` is `root`'s
 /// canonical path, resolved once per folder).
-fn inside(
+pub(crate) fn inside(
     root: &Path,
     canonical: &Path,
     rel: &str,
@@ -227,17 +282,23 @@ impl BallPresses {
         let root = root.as_ref().to_path_buf();
         tactile_core::io::expect_folder(&root, "calibration folder")?;
         let sensor_file = root.join("sensor.json");
-        if !sensor_file.exists() {
-            return Err(Error::Layout {
-                path: sensor_file,
-                why: "missing: a calibration folder has sensor.json (ball_diameter_mm, mm_per_px)"
-                    .into(),
-            });
-        }
-        let sensor = SensorInfo::parse(
-            &read_limited(&sensor_file, MAX_SENSOR_FILE_BYTES)?,
-            &sensor_file,
-        )?;
+        let (sensor, catalog) = match crate::gs_sdk::is_gs_sdk_folder(&root) {
+            true => {
+                let (sensor, catalog) = crate::gs_sdk::sensor_and_catalog(&root)?;
+                (sensor, Some(catalog))
+            }
+            false if !sensor_file.exists() => {
+                return Err(Error::Layout {
+                    path: sensor_file,
+                    why: "missing: a calibration folder has sensor.json (ball_diameter_mm, mm_per_px)"
+                        .into(),
+                });
+            }
+            false => {
+                let text = read_text(&sensor_file, MAX_SENSOR_FILE_BYTES)?;
+                (SensorInfo::parse(&text, &sensor_file)?, None)
+            }
+        };
         let canonical = root
             .canonicalize()
             .map_err(|e| tactile_core::Error::io(&root, e))?;
@@ -257,8 +318,14 @@ impl BallPresses {
         // own picture, and the sensor grey whatever the camera.
         check_not_blank(&bg_path, &background)?;
         let csv_path = root.join("presses.csv");
-        let (presses, warnings) = if csv_path.exists() {
-            let size = (background.width(), background.height());
+        let size = (background.width(), background.height());
+        let annotations = match catalog {
+            Some(_) => Annotations::LabelNpz,
+            None => Annotations::PressesCsv,
+        };
+        let (presses, warnings) = if let Some(catalog) = catalog {
+            catalog.presses(&root, &canonical, &sensor, size)?
+        } else if csv_path.exists() {
             let (presses, listed) = read_presses_csv(&root, &canonical, &csv_path, &sensor, size)?;
             (presses, unlisted_frames_warning(&root, &listed))
         } else {
@@ -271,6 +338,7 @@ impl BallPresses {
             background,
             presses,
             warnings,
+            annotations,
         })
     }
 
@@ -339,9 +407,9 @@ impl BallPresses {
         Err(Error::Press {
             path: path.to_path_buf(),
             why: format!(
-                "the contact circle found in it: {why}; give the press's circle in presses.csv \
-                 (centre_x_px, centre_y_px, contact_radius_px), or check ball_diameter_mm and \
-                 mm_per_px in sensor.json, which scale every press"
+                "the contact circle found in it: {why}; {}, or check ball_diameter_mm and \
+                 mm_per_px in sensor.json, which scale every press",
+                self.annotations.how_to_give(false)
             ),
         })
     }
@@ -350,7 +418,11 @@ impl BallPresses {
 /// What makes `c` no contact circle of a ball on a `(w, h)` frame: not a
 /// finite number, too small, wider than the ball, or centred off the frame
 /// (a circle the frame's edge cuts is a press near the edge, and is read).
-fn circle_problem(sensor: &SensorInfo, (w, h): (usize, usize), c: &Circle) -> Option<String> {
+pub(crate) fn circle_problem(
+    sensor: &SensorInfo,
+    (w, h): (usize, usize),
+    c: &Circle,
+) -> Option<String> {
     let (x, y, r) = (c.centre_x_px, c.centre_y_px, c.radius_px);
     if !(x.is_finite() && y.is_finite() && r.is_finite()) {
         return Some(format!(
@@ -387,7 +459,7 @@ fn read_presses_csv(
     sensor: &SensorInfo,
     frame_size: (usize, usize),
 ) -> Result<(Vec<Press>, std::collections::HashSet<PathBuf>)> {
-    let text = read_limited(path, MAX_PRESSES_FILE_BYTES)?;
+    let text = read_text(path, MAX_PRESSES_FILE_BYTES)?;
     let mut rd = tactile_core::csv_lines::reader(&csv::ReaderBuilder::new(), text.as_bytes());
     let headers = rd
         .headers()

@@ -19,6 +19,7 @@ pub mod circle;
 mod error;
 pub mod eval;
 pub mod geometry;
+pub mod gs_sdk;
 pub mod inference;
 pub mod layout;
 pub mod lookup;

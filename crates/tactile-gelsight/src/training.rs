@@ -17,7 +17,7 @@ use crate::artifact::{BACKGROUND_FILE, GelsightArtifact};
 use crate::circle::find_contact;
 use crate::eval::{PressScore, score_map};
 use crate::geometry::{Cap, GradientTargets};
-use crate::layout::{BallPresses, Circle};
+use crate::layout::{Annotations, BallPresses, Circle};
 use crate::model::{GradientNet, GradientNetConfig};
 use crate::poisson::{PoissonLayer, PoissonSolver};
 use crate::prepare::{FEATURES, PreparedBackground, WorkingGrid, WorkingImage};
@@ -107,7 +107,10 @@ pub const ANNOTATION_DISAGREES: f64 = 0.35;
 /// ([`ANNOTATION_DISAGREES`]): most likely a mistyped line of
 /// `presses.csv`, which would fit the sensor model to a ball that was not
 /// there.
-fn annotations_far_from_found(presses: &[PreparedPress]) -> Option<String> {
+fn annotations_far_from_found(
+    presses: &[PreparedPress],
+    annotations: Annotations,
+) -> Option<String> {
     let far: Vec<(&PreparedPress, Circle)> = presses
         .iter()
         .filter_map(|p| {
@@ -121,7 +124,8 @@ fn annotations_far_from_found(presses: &[PreparedPress]) -> Option<String> {
     let (first, a) = far.first()?;
     let f = first.found;
     Some(format!(
-        "warning: presses.csv: the annotated contact circles of {} of the {} presses lie far from the contacts the toolkit finds in their frames (the first: {}, annotated at ({:.1}, {:.1}) of radius {:.1} px, found at ({:.1}, {:.1}) of radius {:.1} px), and their targets follow the annotations: a mistyped line (centre_x_px is the column, centre_y_px the row)? Correct it, remove the press's line, or calibrate with --circles found",
+        "warning: {}: the annotated contact circles of {} of the {} presses lie far from the contacts the toolkit finds in their frames (the first: {}, annotated at ({:.1}, {:.1}) of radius {:.1} px, found at ({:.1}, {:.1}) of radius {:.1} px), and their targets follow the annotations: {}, or calibrate with --circles found",
+        annotations.file(),
         far.len(),
         presses.len(),
         first.file,
@@ -130,7 +134,8 @@ fn annotations_far_from_found(presses: &[PreparedPress]) -> Option<String> {
         a.radius_px,
         f.centre_x_px,
         f.centre_y_px,
-        f.radius_px
+        f.radius_px,
+        annotations.how_to_mend()
     ))
 }
 
@@ -139,7 +144,11 @@ fn annotations_far_from_found(presses: &[PreparedPress]) -> Option<String> {
 /// such a contact in part, and lands farther from it (on 12 presses of the
 /// R1.5 cropped so, 4 of them cut, 3.3 px on average and 6.8 at most,
 /// against 2.9 and 5.2 on whole presses).
-fn found_circles_cut_by_edge(presses: &[PreparedPress], size: (usize, usize)) -> Option<String> {
+fn found_circles_cut_by_edge(
+    presses: &[PreparedPress],
+    size: (usize, usize),
+    annotations: Annotations,
+) -> Option<String> {
     let cut: Vec<&PreparedPress> = presses
         .iter()
         .filter(|p| p.circle == p.found && p.circle.cut_by_edge(size))
@@ -147,13 +156,14 @@ fn found_circles_cut_by_edge(presses: &[PreparedPress], size: (usize, usize)) ->
     let first = cut.first()?;
     let c = first.circle;
     Some(format!(
-        "warning: {} of the {} presses run off the frame's edge, and their contact circles were found, not annotated (the first: {}, a circle at ({:.1}, {:.1}) of radius {:.1} px): the finder sees such a contact in part and is least sure of it; give their circles in presses.csv (centre_x_px, centre_y_px, contact_radius_px), or leave them out",
+        "warning: {} of the {} presses run off the frame's edge, and their contact circles were found, not annotated (the first: {}, a circle at ({:.1}, {:.1}) of radius {:.1} px): the finder sees such a contact in part and is least sure of it; {}, or leave them out",
         cut.len(),
         presses.len(),
         first.file,
         c.centre_x_px,
         c.centre_y_px,
-        c.radius_px
+        c.radius_px,
+        annotations.how_to_give(true)
     ))
 }
 
@@ -209,7 +219,10 @@ pub fn prepare_presses(
             (CircleSource::Annotated, None) => {
                 return Err(Error::Press {
                     path,
-                    why: "no annotated circle in presses.csv (circles = annotated)".into(),
+                    why: format!(
+                        "no annotated circle in {} (circles = annotated)",
+                        ds.annotations.file()
+                    ),
                 });
             }
         };
@@ -584,8 +597,8 @@ pub fn calibrate(
     if let Some(c) = &circles {
         tactile_core::note!("{}", c.describe());
     }
-    let cut = found_circles_cut_by_edge(&presses, ds.size());
-    let mistyped = annotations_far_from_found(&presses);
+    let cut = found_circles_cut_by_edge(&presses, ds.size(), ds.annotations);
+    let mistyped = annotations_far_from_found(&presses, ds.annotations);
     crate::eval::circles_picture(
         ds,
         &presses,

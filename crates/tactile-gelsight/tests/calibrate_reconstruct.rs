@@ -238,6 +238,228 @@ fn an_annotation_far_from_the_contact_found_is_named() {
     );
 }
 
+/// A NumPy `.npz` archive as `numpy.savez` (stored) or
+/// `savez_compressed` (deflated) writes it: one `.npy` per array.
+fn write_label_npz(path: &Path, centre: [f64; 2], radius: i64, method: zip::CompressionMethod) {
+    use ndarray_npy::WriteNpyExt;
+    let mut z = zip::ZipWriter::new(std::fs::File::create(path).unwrap());
+    let opts = zip::write::SimpleFileOptions::default().compression_method(method);
+    z.start_file("center.npy", opts).unwrap();
+    ndarray::arr1(&centre).write_npy(&mut z).unwrap();
+    z.start_file("radius.npy", opts).unwrap();
+    ndarray::arr0(radius).write_npy(&mut z).unwrap();
+    z.finish().unwrap();
+}
+
+/// The first `n` shared presses as gs_sdk's calibration folder holds
+/// them: `catalog.csv`, `4.000mm/<i>/gelsight.png` and its `label.npz`
+/// (the annotated circle), `background.png`, and a `sensor.json` giving
+/// only the scale (gs_sdk keeps it in the sensor's config).
+fn gs_sdk_folder(dir: &Path, n: usize) {
+    let src = shared();
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::copy(src.join("background.png"), dir.join("background.png")).unwrap();
+    std::fs::write(dir.join("sensor.json"), r#"{"mm_per_px": 0.0295}"#).unwrap();
+    let text = std::fs::read_to_string(src.join("presses.csv")).unwrap();
+    let mut catalog = String::from("experiment_reldir,diameter(mm)\n");
+    for (i, l) in text.lines().skip(1).take(n).enumerate() {
+        let v: Vec<&str> = l.split(',').collect();
+        let press = dir.join(format!("4.000mm/{i}"));
+        std::fs::create_dir_all(&press).unwrap();
+        std::fs::copy(src.join(v[0]), press.join("gelsight.png")).unwrap();
+        let method = match i % 2 {
+            0 => zip::CompressionMethod::Stored,
+            _ => zip::CompressionMethod::Deflated,
+        };
+        let (x, y, r) = (
+            v[1].parse().unwrap(),
+            v[2].parse().unwrap(),
+            v[3].parse().unwrap(),
+        );
+        write_label_npz(&press.join("label.npz"), [x, y], r, method);
+        catalog.push_str(&format!("4.000mm/{i},4.000\n"));
+    }
+    std::fs::write(dir.join("catalog.csv"), catalog).unwrap();
+}
+
+#[test]
+fn a_gs_sdk_calibration_folder_calibrates_as_it_is() {
+    // A researcher who collected and labelled presses with gs_sdk (or the
+    // Taxim code it rewrites) has catalog.csv, a folder per press and its
+    // label.npz. Before, the toolkit asked for frames/ and presses.csv and
+    // every press had to be retyped by hand.
+    let tmp = tempfile::tempdir().unwrap();
+    let (gs, ours) = (tmp.path().join("gs"), tmp.path().join("ours"));
+    gs_sdk_folder(&gs, 6);
+    subset(&ours, 6, str::to_string);
+    let (a, b) = (
+        BallPresses::open(&gs).unwrap(),
+        BallPresses::open(&ours).unwrap(),
+    );
+    assert_eq!(a.sensor.ball_diameter_mm, 4.0, "the ball from catalog.csv");
+    assert_eq!(
+        a.annotations,
+        tactile_gelsight::layout::Annotations::LabelNpz
+    );
+    assert!(a.warnings.is_empty(), "{:?}", a.warnings);
+    let files: Vec<_> = a.presses.iter().map(|p| p.file.as_str()).collect();
+    assert_eq!(
+        files[..2],
+        ["4.000mm/0/gelsight.png", "4.000mm/1/gelsight.png"]
+    );
+    let circles = |ds: &BallPresses| {
+        ds.presses
+            .iter()
+            .map(|p| p.annotated.unwrap())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(circles(&a), circles(&b), "stored and deflated labels");
+    // A label saved before its circle was moved onto the contact is named
+    // with gs_sdk's own mend.
+    write_label_npz(
+        &gs.join("4.000mm/1/label.npz"),
+        [160.0, 120.0],
+        40,
+        zip::CompressionMethod::Stored,
+    );
+    let cal = short_calibration(&gs, &tmp.path().join("model"));
+    assert_eq!((cal.train_presses, cal.val_presses), (4, 2));
+    let w = cal.warnings.join("\n");
+    assert!(
+        w.contains("label.npz: the annotated contact circles of 1 of the 6 presses")
+            && w.contains("(the first: 4.000mm/1/gelsight.png, annotated at (160.0, 120.0)")
+            && w.contains("Label the press again"),
+        "{w}"
+    );
+}
+
+#[test]
+fn a_gs_sdk_folder_names_what_it_cannot_read() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("gs");
+    gs_sdk_folder(&d, 3);
+    let open = || BallPresses::open(&d).map(|_| ()).unwrap_err().to_string();
+    let write = |file: &str, text: &str| std::fs::write(d.join(file), text).unwrap();
+    // No scale: gs_sdk keeps it in the sensor's config.
+    std::fs::remove_file(d.join("sensor.json")).unwrap();
+    let e = open();
+    assert!(
+        e.contains("sensor.json: missing") && e.contains("ppmm"),
+        "{e}"
+    );
+    write("sensor.json", r#"{"mm_per_px": 0.0295}"#);
+    // Presses of two balls: a calibration fits one, named in sensor.json.
+    let catalog = std::fs::read_to_string(d.join("catalog.csv")).unwrap();
+    std::fs::create_dir_all(d.join("6.000mm/0")).unwrap();
+    std::fs::copy(
+        d.join("4.000mm/0/gelsight.png"),
+        d.join("6.000mm/0/gelsight.png"),
+    )
+    .unwrap();
+    write("catalog.csv", &format!("{catalog}6.000mm/0,6.000\n"));
+    let e = open();
+    assert!(
+        e.contains("catalog.csv: lists presses of more than one ball (4.000 mm: 3 presses, 6.000 mm: 1 press)")
+            && e.contains("ball_diameter_mm"),
+        "{e}"
+    );
+    write(
+        "sensor.json",
+        r#"{"mm_per_px": 0.0295, "ball_diameter_mm": 4}"#,
+    );
+    let ds = BallPresses::open(&d).unwrap();
+    assert_eq!(ds.presses.len(), 3);
+    assert!(
+        ds.warnings.len() == 1
+            && ds.warnings[0].contains("other balls are left out (6.000 mm: 1 press)"),
+        "{:?}",
+        ds.warnings
+    );
+    write(
+        "sensor.json",
+        r#"{"mm_per_px": 0.0295, "ball_diameter_mm": 5}"#,
+    );
+    let e = open();
+    assert!(e.contains("lists no press of a 5 mm ball"), "{e}");
+    write("sensor.json", r#"{"mm_per_px": 0.0295}"#);
+    write("catalog.csv", &catalog);
+    // A press folder the catalog does not list is named.
+    std::fs::create_dir_all(d.join("4.000mm/7")).unwrap();
+    std::fs::copy(
+        d.join("4.000mm/0/gelsight.png"),
+        d.join("4.000mm/7/gelsight.png"),
+    )
+    .unwrap();
+    let w = BallPresses::open(&d).unwrap().warnings.join("\n");
+    assert!(
+        w.contains("1 press folders hold a gelsight.png and are not listed")
+            && w.contains("4.000mm/7"),
+        "{w}"
+    );
+    // Rows naming no press, or a folder outside, by their line.
+    for (row, said) in [
+        (
+            "4.000mm/9,4.000",
+            "line 5: press folder '4.000mm/9' has no gelsight.png",
+        ),
+        (
+            "../elsewhere,4.000",
+            "line 5: '../elsewhere/gelsight.png' is not a path inside",
+        ),
+        (
+            "4.000mm/0,4.000",
+            "line 5: press folder '4.000mm/0' is listed already on line 2",
+        ),
+        (
+            "4.000mm/7,four",
+            "line 5: 'four' in diameter(mm) is not a number",
+        ),
+    ] {
+        write("catalog.csv", &format!("{catalog}{row}\n"));
+        let e = open();
+        assert!(e.contains("catalog.csv") && e.contains(said), "{row}: {e}");
+    }
+    write("catalog.csv", "file,centre_x_px\n");
+    let e = open();
+    assert!(e.contains("not gs_sdk's ball catalog"), "{e}");
+    write("catalog.csv", &catalog);
+    // Labels that are no circle, each named by its file.
+    let label = d.join("4.000mm/2/label.npz");
+    std::fs::write(&label, "center,radius\n300,220,60\n").unwrap();
+    let e = open();
+    assert!(
+        e.contains("4.000mm/2/label.npz") && e.contains("not a NumPy .npz archive"),
+        "{e}"
+    );
+    {
+        use ndarray_npy::WriteNpyExt;
+        let mut z = zip::ZipWriter::new(std::fs::File::create(&label).unwrap());
+        let opts = zip::write::SimpleFileOptions::default();
+        z.start_file("center.npy", opts).unwrap();
+        ndarray::arr1(&[300.0f32, 220.0]).write_npy(&mut z).unwrap();
+        z.start_file("radius.npy", opts).unwrap();
+        ndarray::arr1(&[60i32, 61, 62]).write_npy(&mut z).unwrap();
+        z.finish().unwrap();
+    }
+    let e = open();
+    assert!(
+        e.contains("label.npz: its 'radius': holds 3 numbers (shape [3]), not 1"),
+        "{e}"
+    );
+    write_label_npz(&label, [300.0, 220.0], 90, zip::CompressionMethod::Stored);
+    let e = open();
+    assert!(
+        e.contains(
+            "4.000mm/2/label.npz: contact radius 90.0 px is not smaller than the ball's radius"
+        ),
+        "{e}"
+    );
+    // A press left unlabelled has its circle found.
+    std::fs::remove_file(&label).unwrap();
+    let ds = BallPresses::open(&d).unwrap();
+    assert!(ds.presses[2].annotated.is_none() && ds.presses[1].annotated.is_some());
+}
+
 #[test]
 fn a_scale_far_out_of_range_is_named_in_a_few_characters() {
     // A sensor.json value far out of range is refused in the form it was

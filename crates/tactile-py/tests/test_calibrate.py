@@ -98,6 +98,39 @@ def test_a_folder_without_presses_csv_warns_of_files_that_are_no_presses(presses
     assert any("notes.txt" in w for w in r["warnings"])
 
 
+def test_a_gs_sdk_calibration_folder_calibrates_as_it_is(presses: Path, tmp_path: Path):
+    """gs_sdk's folder, its labels written by numpy itself (savez as
+    label_data.py does, and savez_compressed), with the presses of a second
+    ball that the calibration leaves out."""
+    d = tmp_path / "gs_sdk"
+    d.mkdir()
+    shutil.copy(presses / "background.png", d / "background.png")
+    (d / "sensor.json").write_text(json.dumps({"mm_per_px": 0.0295, "ball_diameter_mm": 4.0}))
+    with open(presses / "presses.csv") as src:
+        rows = list(csv.reader(src))[1:]
+    catalog = ["experiment_reldir,diameter(mm)"]
+    for i, (file, x, y, r) in enumerate(rows):
+        press = d / "4.000mm" / str(i)
+        press.mkdir(parents=True)
+        shutil.copy(presses / file, press / "gelsight.png")
+        save = np.savez if i % 2 == 0 else np.savez_compressed
+        save(press / "label.npz", center=[float(x), float(y)], radius=int(r))
+        catalog.append(f"4.000mm/{i},4.000")
+    other = d / "6.000mm" / "0"
+    other.mkdir(parents=True)
+    shutil.copy(presses / rows[0][0], other / "gelsight.png")
+    catalog.append("6.000mm/0,6.000")
+    (d / "catalog.csv").write_text("\n".join(catalog) + "\n")
+    with pytest.warns(UserWarning, match="other balls are left out"):
+        r = tactile.calibrate.ball(d, tmp_path / "m", factor=8, val_presses=2, max_epochs=1, kernels=[3, 1, 1])
+    assert r["train_presses"] == 4 and r["val_presses"] == 2
+    # Every label read: the circles found are scored against all six.
+    assert r["circles"]["presses"] == 6 and r["circles"]["centre_error_px"] < 8
+    (d / "sensor.json").unlink()
+    with pytest.raises(ValueError, match="sensor.json: missing.*ppmm"):
+        tactile.calibrate.ball(d, tmp_path / "m2", max_epochs=1)
+
+
 def test_a_scale_mistyped_tenfold_is_a_warning(presses: Path, tmp_path: Path):
     d = tmp_path / "tenfold"
     shutil.copytree(presses, d)

@@ -1,0 +1,419 @@
+//! gs_sdk's calibration folder, read as it is.
+//!
+//! gs_sdk (and the Taxim code it rewrites) collects and labels ball presses
+//! so:
+//!
+//! ```text
+//! DIR/
+//!   background.png            the skin at rest
+//!   catalog.csv               experiment_reldir,diameter(mm)
+//!                             4.000mm/0,4.000
+//!   4.000mm/0/gelsight.png    one press
+//!   4.000mm/0/label.npz       its circle, from label_data.py: center [x, y]
+//!                             and radius, in pixels (optional)
+//!   sensor.json               written by hand: {"mm_per_px": 0.0634}
+//! ```
+//!
+//! gs_sdk keeps the scale in the sensor's config (`ppmm`, millimetres per
+//! pixel despite its name), not in the folder, so `sensor.json` gives it;
+//! the ball's diameter is read from `catalog.csv` unless `sensor.json`
+//! names one. A catalog may list presses of several balls; a calibration
+//! fits one, so the others are left out, named in a warning.
+
+use std::collections::{BTreeMap, HashSet};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use crate::layout::{Circle, MAX_PRESSES, MAX_PRESSES_FILE_BYTES, Press, SensorInfo};
+use crate::{Error, Result};
+
+/// gs_sdk's list of presses.
+pub const CATALOG_FILE: &str = "catalog.csv";
+/// Each press's frame, in its own folder.
+pub const FRAME_FILE: &str = "gelsight.png";
+/// Each press's labelled circle, beside its frame.
+pub const LABEL_FILE: &str = "label.npz";
+/// Largest `label.npz` read, bytes (gs_sdk's are under 1 KB).
+pub const MAX_LABEL_FILE_BYTES: u64 = 64 << 10;
+/// Largest array read from a `label.npz`, bytes.
+const MAX_LABEL_ARRAY_BYTES: u64 = 4 << 10;
+/// Diameters in `catalog.csv` are written to a thousandth of a millimetre.
+const SAME_BALL_MM: f64 = 5e-4;
+
+/// Whether `root` is a gs_sdk calibration folder: `catalog.csv` and none
+/// of the toolkit's own `presses.csv` or `frames/`.
+pub fn is_gs_sdk_folder(root: &Path) -> bool {
+    root.join(CATALOG_FILE).is_file()
+        && !root.join("presses.csv").exists()
+        && !root.join("frames").exists()
+}
+
+/// One row of `catalog.csv`.
+#[derive(Debug, Clone)]
+struct CatalogRow {
+    /// Its line in the file.
+    line: usize,
+    /// The press's folder, relative to the calibration folder, with `/`.
+    folder: String,
+    /// The ball's diameter, mm.
+    diameter_mm: f64,
+}
+
+/// The presses of one ball, chosen from the catalog.
+#[derive(Debug)]
+pub(crate) struct Catalog {
+    path: PathBuf,
+    rows: Vec<CatalogRow>,
+    /// Every press folder the catalog lists, of any ball.
+    listed: Vec<String>,
+    /// Presses of other balls left out.
+    pub(crate) warnings: Vec<String>,
+}
+
+fn layout_error(path: &Path, why: impl Into<String>) -> Error {
+    Error::Layout {
+        path: path.to_path_buf(),
+        why: why.into(),
+    }
+}
+
+/// `4.000 mm: 30 presses, 6.000 mm: 25` of `rows`.
+fn balls(rows: &[&CatalogRow]) -> String {
+    let mut count: BTreeMap<i64, usize> = BTreeMap::new();
+    for r in rows {
+        *count
+            .entry((r.diameter_mm * 1e3).round() as i64)
+            .or_default() += 1;
+    }
+    count
+        .iter()
+        .map(|(d, n)| {
+            let s = if *n == 1 { "" } else { "es" };
+            format!("{:.3} mm: {n} press{s}", *d as f64 / 1e3)
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Read `catalog.csv`; every row checked (its folder a path inside the
+/// calibration folder, its diameter a ball's).
+fn read_catalog(path: &Path) -> Result<Vec<CatalogRow>> {
+    let text = crate::layout::read_text(path, MAX_PRESSES_FILE_BYTES)?;
+    let mut rd = tactile_core::csv_lines::reader(&csv::ReaderBuilder::new(), text.as_bytes());
+    let headers = rd
+        .headers()
+        .map_err(|e| layout_error(path, format!("cannot read the header: {e}")))?
+        .clone();
+    let col = |name: &str| headers.iter().position(|h| h.trim() == name);
+    let (Some(folder_col), Some(diameter_col)) = (col("experiment_reldir"), col("diameter(mm)"))
+    else {
+        return Err(layout_error(
+            path,
+            format!(
+                "not gs_sdk's ball catalog: it has the columns experiment_reldir and diameter(mm) \
+                 (gs_sdk's collect_data.py writes them); found {}{}",
+                headers.iter().collect::<Vec<_>>().join(", "),
+                tactile_core::csv_lines::separator_hint(headers.iter())
+            ),
+        ));
+    };
+    let mut rows = Vec::new();
+    for item in tactile_core::csv_lines::records(&mut rd) {
+        let (line, rec) =
+            item.map_err(|(line, why)| layout_error(path, format!("line {line}: {why}")))?;
+        if rows.len() >= MAX_PRESSES {
+            return Err(layout_error(
+                path,
+                format!("more than {MAX_PRESSES} presses"),
+            ));
+        }
+        // gs_sdk joins the folder with os.path.join: backslashes on Windows.
+        let folder = rec.get(folder_col).unwrap_or("").trim().replace('\\', "/");
+        let folder = folder.trim_end_matches('/').to_string();
+        let d = rec.get(diameter_col).unwrap_or("").trim();
+        let diameter_mm = d.parse::<f64>().map_err(|_| {
+            layout_error(
+                path,
+                format!("line {line}: '{d}' in diameter(mm) is not a number"),
+            )
+        })?;
+        if !(diameter_mm.is_finite() && (0.1..=100.0).contains(&diameter_mm)) {
+            return Err(layout_error(
+                path,
+                format!("line {line}: diameter(mm) = {d} is no ball of 0.1-100 mm"),
+            ));
+        }
+        rows.push(CatalogRow {
+            line,
+            folder,
+            diameter_mm,
+        });
+    }
+    if rows.is_empty() {
+        return Err(layout_error(path, "lists no press"));
+    }
+    Ok(rows)
+}
+
+/// `sensor.json` of a gs_sdk folder, its ball taken from `catalog.csv`
+/// where it names none, and the catalog's presses of that ball.
+pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
+    let catalog_path = root.join(CATALOG_FILE);
+    let rows = read_catalog(&catalog_path)?;
+    let sensor_file = root.join("sensor.json");
+    if !sensor_file.exists() {
+        return Err(layout_error(
+            &sensor_file,
+            "missing: gs_sdk keeps the sensor's scale in its config file, not in the \
+             calibration folder; write sensor.json here with it, such as {\"mm_per_px\": 0.0634} \
+             (the config's ppmm, millimetres per pixel: 0.0634 is gs_sdk's GelSight Mini at \
+             320x240). The ball's diameter is read from catalog.csv",
+        ));
+    }
+    let text = crate::layout::read_text(&sensor_file, crate::layout::MAX_SENSOR_FILE_BYTES)?;
+    let all: Vec<&CatalogRow> = rows.iter().collect();
+    let mut map = serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&text)
+        .unwrap_or_default();
+    let text = if map.is_empty() || map.contains_key("ball_diameter_mm") {
+        text
+    } else {
+        let first = rows[0].diameter_mm;
+        if rows
+            .iter()
+            .any(|r| (r.diameter_mm - first).abs() > SAME_BALL_MM)
+        {
+            return Err(layout_error(
+                &catalog_path,
+                format!(
+                    "lists presses of more than one ball ({}): a calibration fits one; name it \
+                     in sensor.json (\"ball_diameter_mm\")",
+                    balls(&all)
+                ),
+            ));
+        }
+        map.insert("ball_diameter_mm".into(), first.into());
+        serde_json::Value::Object(map).to_string()
+    };
+    let sensor = SensorInfo::parse(&text, &sensor_file)?;
+    let (mine, others): (Vec<&CatalogRow>, Vec<&CatalogRow>) = rows
+        .iter()
+        .partition(|r| (r.diameter_mm - sensor.ball_diameter_mm).abs() <= SAME_BALL_MM);
+    if mine.is_empty() {
+        return Err(layout_error(
+            &catalog_path,
+            format!(
+                "lists no press of a {} mm ball (sensor.json's ball_diameter_mm), only {}",
+                sensor.ball_diameter_mm,
+                balls(&all)
+            ),
+        ));
+    }
+    let warnings = match others.is_empty() {
+        true => Vec::new(),
+        false => vec![format!(
+            "warning: {}: the presses of other balls are left out ({}): a calibration fits one \
+             ball, the {} mm of sensor.json's ball_diameter_mm",
+            catalog_path.display(),
+            balls(&others),
+            sensor.ball_diameter_mm
+        )],
+    };
+    let catalog = Catalog {
+        listed: rows.iter().map(|r| r.folder.clone()).collect(),
+        rows: mine.into_iter().cloned().collect(),
+        path: catalog_path,
+        warnings,
+    };
+    Ok((sensor, catalog))
+}
+
+impl Catalog {
+    /// The presses: each frame checked to exist inside `root`
+    /// (`canonical`, its canonical path), each `label.npz` read and its
+    /// circle checked against the `sensor` and the frame's `size`; and
+    /// the warnings (presses of other balls; press folders not listed).
+    pub(crate) fn presses(
+        self,
+        root: &Path,
+        canonical: &Path,
+        sensor: &SensorInfo,
+        size: (usize, usize),
+    ) -> Result<(Vec<Press>, Vec<String>)> {
+        let path = &self.path;
+        let mut out = Vec::with_capacity(self.rows.len());
+        let mut seen: BTreeMap<PathBuf, usize> = BTreeMap::new();
+        for row in &self.rows {
+            let line = row.line;
+            let file = format!("{}/{FRAME_FILE}", row.folder);
+            let (frame, resolved) = crate::layout::inside(root, canonical, &file)
+                .map_err(|why| layout_error(path, format!("line {line}: {why}")))?;
+            if !frame.is_file() {
+                return Err(layout_error(
+                    path,
+                    format!(
+                        "line {line}: press folder '{}' has no {FRAME_FILE}",
+                        row.folder
+                    ),
+                ));
+            }
+            if let Some(first) = seen.insert(resolved, line) {
+                return Err(layout_error(
+                    path,
+                    format!(
+                        "line {line}: press folder '{}' is listed already on line {first}: a \
+                         press is one row (delete one of the two)",
+                        row.folder
+                    ),
+                ));
+            }
+            let label_rel = format!("{}/{LABEL_FILE}", row.folder);
+            let (label, _) = crate::layout::inside(root, canonical, &label_rel)
+                .map_err(|why| layout_error(path, format!("line {line}: {why}")))?;
+            let annotated = match label.exists() {
+                false => None,
+                true => {
+                    let c = read_label(&label)?;
+                    if let Some(why) = crate::layout::circle_problem(sensor, size, &c) {
+                        return Err(layout_error(&label, why));
+                    }
+                    Some(c)
+                }
+            };
+            out.push(Press { file, annotated });
+        }
+        let mut warnings = self.warnings.clone();
+        warnings.extend(self.unlisted_warning(root));
+        Ok((out, warnings))
+    }
+
+    /// The warning naming press folders beside the listed ones that hold a
+    /// frame and are not in the catalog: they are no presses, and a press
+    /// whose row was lost would otherwise be left out without a word.
+    fn unlisted_warning(&self, root: &Path) -> Option<String> {
+        let listed: HashSet<&str> = self.listed.iter().map(String::as_str).collect();
+        let parents: HashSet<&str> = (self.listed.iter())
+            .filter_map(|f| f.rsplit_once('/').map(|(p, _)| p))
+            .collect();
+        let mut unlisted = Vec::new();
+        for parent in parents {
+            let Ok(entries) = std::fs::read_dir(root.join(parent)) else {
+                continue;
+            };
+            // A press folder per press: as many as a catalog may list.
+            for entry in entries.flatten().take(MAX_PRESSES * 4) {
+                let name = entry.file_name().to_string_lossy().into_owned();
+                let folder = format!("{parent}/{name}");
+                if !listed.contains(folder.as_str()) && entry.path().join(FRAME_FILE).is_file() {
+                    unlisted.push(folder);
+                }
+            }
+        }
+        if unlisted.is_empty() {
+            return None;
+        }
+        unlisted.sort_by(|a, b| alphanumeric_order(a, b));
+        let (named, _) = tactile_core::source::named_frames(&unlisted);
+        Some(format!(
+            "warning: {}: {} press folders hold a {FRAME_FILE} and are not listed, so they are \
+             no presses and are not fitted ({named}): add a row for each, or move them out",
+            self.path.display(),
+            unlisted.len(),
+        ))
+    }
+}
+
+fn alphanumeric_order(a: &str, b: &str) -> std::cmp::Ordering {
+    let key = |s: &str| {
+        s.rsplit_once('/')
+            .and_then(|(p, n)| n.parse::<u64>().ok().map(|n| (p.to_string(), n)))
+    };
+    match (key(a), key(b)) {
+        (Some(x), Some(y)) => x.cmp(&y),
+        _ => a.cmp(b),
+    }
+}
+
+/// The circle gs_sdk's `label_data.py` saved in `path`: `center` (x, y)
+/// and `radius`, pixels, as numbers of any NumPy dtype; an archive stored
+/// (`numpy.savez`) or deflated (`savez_compressed`). Each array's size is
+/// checked before it is read.
+pub fn read_label(path: &Path) -> Result<Circle> {
+    let bytes = tactile_core::io::read_limited(path, MAX_LABEL_FILE_BYTES)?;
+    let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| {
+        layout_error(
+            path,
+            format!("not a NumPy .npz archive (a zip of .npy arrays): {e}"),
+        )
+    })?;
+    let mut numbers = |name: &str, count: usize| {
+        npz_numbers(&mut archive, name, count)
+            .map_err(|why| layout_error(path, format!("its '{name}': {why}")))
+    };
+    let centre = numbers("center", 2)?;
+    let radius = numbers("radius", 1)?;
+    Ok(Circle {
+        centre_x_px: centre[0],
+        centre_y_px: centre[1],
+        radius_px: radius[0],
+    })
+}
+
+/// The numbers of a `.npy` array of `T`, if it is one.
+fn read_as<T: ndarray_npy::ReadableElement>(bytes: &[u8], to: fn(&T) -> f64) -> Option<Vec<f64>> {
+    use ndarray_npy::ReadNpyExt;
+    let a = ndarray::ArrayD::<T>::read_npy(bytes).ok()?;
+    Some(a.iter().map(to).collect())
+}
+
+/// The `count` numbers of the array `name` in an `.npz` archive.
+fn npz_numbers<R: Read + std::io::Seek>(
+    archive: &mut zip::ZipArchive<R>,
+    name: &str,
+    count: usize,
+) -> std::result::Result<Vec<f64>, String> {
+    use ndarray_npy::npy::header::Header;
+    let mut entry = archive.by_name(&format!("{name}.npy")).map_err(|_| {
+        "missing: gs_sdk's label_data.py saves the contact circle as center (x, y) and radius"
+            .to_string()
+    })?;
+    if entry.size() > MAX_LABEL_ARRAY_BYTES {
+        return Err(format!(
+            "{} bytes: no circle's numbers ({MAX_LABEL_ARRAY_BYTES} bytes at most)",
+            entry.size()
+        ));
+    }
+    let mut bytes = Vec::new();
+    (&mut entry)
+        .take(MAX_LABEL_ARRAY_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot read it: {e}"))?;
+    if bytes.len() as u64 > MAX_LABEL_ARRAY_BYTES {
+        return Err(format!(
+            "no circle's numbers ({MAX_LABEL_ARRAY_BYTES} bytes at most)"
+        ));
+    }
+    let header =
+        Header::from_reader(&mut &bytes[..]).map_err(|e| format!("not a .npy array: {e}"))?;
+    let found: usize = header.shape.iter().product();
+    if found != count {
+        return Err(format!(
+            "holds {found} numbers (shape {:?}), not {count}",
+            header.shape
+        ));
+    }
+    let values = read_as::<f64>(&bytes, |v| *v)
+        .or_else(|| read_as::<f32>(&bytes, |v| f64::from(*v)))
+        .or_else(|| read_as::<i64>(&bytes, |v| *v as f64))
+        .or_else(|| read_as::<i32>(&bytes, |v| f64::from(*v)))
+        .or_else(|| read_as::<u64>(&bytes, |v| *v as f64))
+        .or_else(|| read_as::<u32>(&bytes, |v| f64::from(*v)))
+        .or_else(|| read_as::<i16>(&bytes, |v| f64::from(*v)))
+        .or_else(|| read_as::<u16>(&bytes, |v| f64::from(*v)))
+        .or_else(|| read_as::<u8>(&bytes, |v| f64::from(*v)));
+    values.ok_or_else(|| {
+        format!(
+            "its dtype {} is no number this reads (floats or integers)",
+            header.type_descriptor
+        )
+    })
+}
