@@ -145,10 +145,10 @@ impl CalibrationReport {
             crate::latency::threads()
         ));
         md.push_str(&format!(
-            "Data: `{}` ({} presses of a {:.2} mm ball, {:.4} mm per pixel). Leave-presses-out: press i is in fold i mod {}; each fold's presses are reconstructed by a model calibrated on the other {} folds (networks stop early on 4 of those, spread over the recording) and scored at the frame's size against the ball's geometry: the shape inside the contact circle (mean |error| once the median offset, the unknown sink of the rim, is removed), the far field (mean |indentation| beyond 3 contact radii, where the skin is at rest), the mean |slope error| inside the contact (working grid), and the reconstructed rim sink and peak. Circles, targets and every model are the toolkit's (`tactile calibrate ball`); the recipe is the shipped one with the changes the row names.\n\n",
+            "Data: `{}` ({} presses of {}, {:.4} mm per pixel). Leave-presses-out: press i is in fold i mod {}; each fold's presses are reconstructed by a model calibrated on the other {} folds (networks stop early on 4 of those, spread over the recording) and scored at the frame's size against the ball's geometry: the shape inside the contact circle (mean |error| once the median offset, the unknown sink of the rim, is removed), the far field (mean |indentation| beyond 3 contact radii, where the skin is at rest), the mean |slope error| inside the contact (working grid), and the reconstructed rim sink and peak. Circles, targets and every model are the toolkit's (`tactile calibrate ball`); the recipe is the shipped one with the changes the row names.\n\n",
             b.data.display(),
             self.presses,
-            ds.sensor.ball_diameter_mm,
+            ds.describe_balls(),
             ds.sensor.mm_per_px,
             self.folds,
             self.folds - 1

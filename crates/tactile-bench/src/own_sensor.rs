@@ -495,19 +495,15 @@ fn press_figure(b: &OwnSensorBench, path: &Path) -> Result<()> {
     let presses = BallPresses::open(&b.ball)?;
     let unit = datasets_synth::calibrated::CalibratedSensor::load(&b.models)?;
     let picked: Vec<usize> = (0..presses.presses.len().min(3)).collect();
-    let circles: Vec<_> = picked
+    use tactile_gelsight::render_model::{BallPress, render_presses};
+    let pressed: Vec<BallPress> = picked
         .iter()
-        .filter_map(|&i| presses.presses[i].annotated)
+        .filter_map(|&i| Some(BallPress::of(&presses, i, presses.presses[i].annotated?)))
         .collect();
-    if circles.len() != picked.len() {
+    if pressed.len() != picked.len() {
         return Ok(());
     }
-    let rendered = tactile_gelsight::render_model::render_presses(
-        &unit.model,
-        &presses.background,
-        presses.sensor.ball_diameter_mm / 2.0,
-        &circles,
-    );
+    let rendered = render_presses(&unit.model, &presses.background, &pressed);
     let (w, h) = presses.size();
     let (hw, hh) = (w / 2, h / 2);
     let mut out = vec![255u8; 3 * hw * 2 * hh * 3];

@@ -15,10 +15,11 @@
 //! ```
 //!
 //! gs_sdk keeps the scale in the sensor's config (`ppmm`, millimetres per
-//! pixel despite its name), not in the folder, so `sensor.json` gives it;
-//! the ball's diameter is read from `catalog.csv` unless `sensor.json`
-//! names one. A catalog may list presses of several balls; a calibration
-//! fits one, so the others are left out, named in a warning.
+//! pixel despite its name), not in the folder, so `sensor.json` gives it.
+//! Each press's ball is read from `catalog.csv`: a catalog may list presses
+//! of several balls, and each press is fitted with its own. A
+//! `ball_diameter_mm` in `sensor.json` chooses one ball: the presses of the
+//! others are left out, named in a warning.
 
 use std::collections::{BTreeMap, HashSet};
 use std::io::Read;
@@ -155,8 +156,9 @@ fn read_catalog(path: &Path) -> Result<Vec<CatalogRow>> {
     Ok(rows)
 }
 
-/// `sensor.json` of a gs_sdk folder, its ball taken from `catalog.csv`
-/// where it names none, and the catalog's presses of that ball.
+/// `sensor.json` of a gs_sdk folder, its ball the first press's where it
+/// names none, and the catalog's presses: all of them, or those of the
+/// ball it names.
 pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
     let catalog_path = root.join(CATALOG_FILE);
     let rows = read_catalog(&catalog_path)?;
@@ -174,30 +176,18 @@ pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
     let all: Vec<&CatalogRow> = rows.iter().collect();
     let mut map = serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&text)
         .unwrap_or_default();
-    let text = if map.is_empty() || map.contains_key("ball_diameter_mm") {
-        text
-    } else {
-        let first = rows[0].diameter_mm;
-        if rows
-            .iter()
-            .any(|r| (r.diameter_mm - first).abs() > SAME_BALL_MM)
-        {
-            return Err(layout_error(
-                &catalog_path,
-                format!(
-                    "lists presses of more than one ball ({}): a calibration fits one; name it \
-                     in sensor.json (\"ball_diameter_mm\")",
-                    balls(&all)
-                ),
-            ));
+    let chosen = map.is_empty() || map.contains_key("ball_diameter_mm");
+    let text = match chosen {
+        true => text,
+        false => {
+            map.insert("ball_diameter_mm".into(), rows[0].diameter_mm.into());
+            serde_json::Value::Object(map).to_string()
         }
-        map.insert("ball_diameter_mm".into(), first.into());
-        serde_json::Value::Object(map).to_string()
     };
     let sensor = SensorInfo::parse(&text, &sensor_file)?;
     let (mine, others): (Vec<&CatalogRow>, Vec<&CatalogRow>) = rows
         .iter()
-        .partition(|r| (r.diameter_mm - sensor.ball_diameter_mm).abs() <= SAME_BALL_MM);
+        .partition(|r| !chosen || (r.diameter_mm - sensor.ball_diameter_mm).abs() <= SAME_BALL_MM);
     if mine.is_empty() {
         return Err(layout_error(
             &catalog_path,
@@ -211,8 +201,9 @@ pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
     let warnings = match others.is_empty() {
         true => Vec::new(),
         false => vec![format!(
-            "warning: {}: the presses of other balls are left out ({}): a calibration fits one \
-             ball, the {} mm of sensor.json's ball_diameter_mm",
+            "warning: {}: the presses of other balls are left out ({}): sensor.json's \
+             ball_diameter_mm chooses the {} mm ball (without it, every press is fitted with \
+             its own ball)",
             catalog_path.display(),
             balls(&others),
             sensor.ball_diameter_mm
@@ -273,13 +264,19 @@ impl Catalog {
                 false => None,
                 true => {
                     let c = read_label(&label)?;
-                    if let Some(why) = crate::layout::circle_problem(sensor, size, &c) {
+                    if let Some(why) =
+                        crate::layout::circle_problem(sensor, row.diameter_mm, size, &c)
+                    {
                         return Err(layout_error(&label, why));
                     }
                     Some(c)
                 }
             };
-            out.push(Press { file, annotated });
+            out.push(Press {
+                file,
+                annotated,
+                ball_diameter_mm: Some(row.diameter_mm),
+            });
         }
         let mut warnings = self.warnings.clone();
         warnings.extend(self.unlisted_warning(root));

@@ -7,7 +7,8 @@
 //!   background.png  the skin at rest (no contact), 8-bit RGB
 //!   frames/*.png    one press of the ball each, same size (PNG, JPEG, BMP, TIFF, WebP, PGM/PPM)
 //!   presses.csv     optional: file,centre_x_px,centre_y_px,contact_radius_px
-//!                   (annotated circles, to score the circle finder)
+//!                   (annotated circles, to score the circle finder),
+//!                   and optionally ball_diameter_mm (a press of another ball)
 //! ```
 //! Every path stays inside `DIR`; sizes are checked before pixels are read.
 //! gs_sdk's own calibration folder (`catalog.csv`, a folder per press with
@@ -203,6 +204,10 @@ pub struct Press {
     pub file: String,
     /// The annotated contact circle.
     pub annotated: Option<Circle>,
+    /// The ball pressed, mm, where it is not `sensor.json`'s: a folder may
+    /// hold presses of several balls (`presses.csv`'s `ball_diameter_mm`,
+    /// gs_sdk's catalog).
+    pub ball_diameter_mm: Option<f64>,
 }
 
 /// A calibration folder, read and checked.
@@ -377,9 +382,46 @@ impl BallPresses {
         Ok(img)
     }
 
-    /// Refuse a circle centred off the frame or wider than the ball.
-    pub fn check_circle(&self, path: &Path, c: &Circle) -> Result<()> {
-        match circle_problem(&self.sensor, self.size(), c) {
+    /// The diameter of the ball of press `i`, mm.
+    pub fn ball_diameter_mm(&self, i: usize) -> f64 {
+        (self.presses.get(i))
+            .and_then(|p| p.ball_diameter_mm)
+            .unwrap_or(self.sensor.ball_diameter_mm)
+    }
+
+    /// The radius of the ball of press `i`, pixels.
+    pub fn ball_radius_px(&self, i: usize) -> f64 {
+        self.ball_diameter_mm(i) / 2.0 / self.sensor.mm_per_px
+    }
+
+    /// The balls pressed, mm, smallest first.
+    pub fn balls_mm(&self) -> Vec<f64> {
+        let mut balls: Vec<f64> = (0..self.presses.len().max(1))
+            .map(|i| self.ball_diameter_mm(i))
+            .collect();
+        balls.sort_by(f64::total_cmp);
+        balls.dedup();
+        balls
+    }
+
+    /// The balls in words: `a 4 mm ball`, `balls of 4, 6 mm`.
+    pub fn describe_balls(&self) -> String {
+        match self.balls_mm()[..] {
+            [one] => format!("a {one} mm ball"),
+            ref many => format!(
+                "balls of {} mm",
+                many.iter()
+                    .map(f64::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }
+    }
+
+    /// Refuse a circle of press `i` centred off the frame or wider than
+    /// its ball.
+    pub fn check_circle(&self, i: usize, path: &Path, c: &Circle) -> Result<()> {
+        match circle_problem(&self.sensor, self.ball_diameter_mm(i), self.size(), c) {
             None => Ok(()),
             Some(why) => Err(Error::Press {
                 path: path.to_path_buf(),
@@ -391,8 +433,9 @@ impl BallPresses {
     /// [`Self::check_circle`] of a circle the toolkit found, not one a
     /// user wrote: said to a tenth of a pixel, and with what to do (the
     /// finder mistook the contact, or `sensor.json` scales every press).
-    pub fn check_found_circle(&self, path: &Path, c: &Circle) -> Result<()> {
-        let Some(mut why) = circle_problem(&self.sensor, self.size(), c) else {
+    pub fn check_found_circle(&self, i: usize, path: &Path, c: &Circle) -> Result<()> {
+        let ball = self.ball_diameter_mm(i);
+        let Some(mut why) = circle_problem(&self.sensor, ball, self.size(), c) else {
             return Ok(());
         };
         let tenth = |v: f64| (v * 10.0).round() / 10.0;
@@ -401,7 +444,7 @@ impl BallPresses {
             centre_y_px: tenth(c.centre_y_px),
             radius_px: tenth(c.radius_px),
         };
-        if let Some(rounded) = circle_problem(&self.sensor, self.size(), &said) {
+        if let Some(rounded) = circle_problem(&self.sensor, ball, self.size(), &said) {
             why = rounded;
         }
         Err(Error::Press {
@@ -415,11 +458,13 @@ impl BallPresses {
     }
 }
 
-/// What makes `c` no contact circle of a ball on a `(w, h)` frame: not a
-/// finite number, too small, wider than the ball, or centred off the frame
-/// (a circle the frame's edge cuts is a press near the edge, and is read).
+/// What makes `c` no contact circle of a ball of `ball_diameter_mm` on a
+/// `(w, h)` frame of `sensor`: not a finite number, too small, wider than
+/// the ball, or centred off the frame (a circle the frame's edge cuts is a
+/// press near the edge, and is read).
 pub(crate) fn circle_problem(
     sensor: &SensorInfo,
+    ball_diameter_mm: f64,
     (w, h): (usize, usize),
     c: &Circle,
 ) -> Option<String> {
@@ -432,11 +477,11 @@ pub(crate) fn circle_problem(
     if r < 2.0 {
         return Some(format!("contact radius {r:?} px is no contact"));
     }
-    if r >= sensor.ball_radius_px() {
+    let ball_radius_px = ball_diameter_mm / 2.0 / sensor.mm_per_px;
+    if r >= ball_radius_px {
         return Some(format!(
-            "contact radius {r:?} px is not smaller than the ball's radius {:.1} px ({} mm at {} mm/px): a ball cannot touch wider than itself",
-            sensor.ball_radius_px(),
-            sensor.ball_diameter_mm / 2.0,
+            "contact radius {r:?} px is not smaller than the ball's radius {ball_radius_px:.1} px ({} mm at {} mm/px): a ball cannot touch wider than itself",
+            ball_diameter_mm / 2.0,
             sensor.mm_per_px
         ));
     }
@@ -490,6 +535,7 @@ fn read_presses_csv(
             });
         }
     };
+    let ball_col = col("ball_diameter_mm");
     let mut out = Vec::new();
     // The line each frame is listed on: a press listed twice would be
     // fitted twice, and could be fitted and held out at once.
@@ -528,6 +574,26 @@ fn read_presses_csv(
                 ),
             });
         }
+        // A press of another ball than sensor.json's names it; an empty cell
+        // is sensor.json's.
+        let ball_diameter_mm = match ball_col.map(|c| rec.get(c).unwrap_or("").trim()) {
+            None | Some("") => None,
+            Some(d) => {
+                let bad = |why: String| Error::Layout {
+                    path: path.to_path_buf(),
+                    why: format!("line {line}: {why}"),
+                };
+                let v = (d.parse::<f64>())
+                    .map_err(|_| bad(format!("'{d}' in ball_diameter_mm is not a number")))?;
+                if !(v.is_finite() && (0.1..=100.0).contains(&v)) {
+                    return Err(bad(format!(
+                        "ball_diameter_mm = {d} is no ball of 0.1-100 mm"
+                    )));
+                }
+                Some(v)
+            }
+        };
+        let ball = ball_diameter_mm.unwrap_or(sensor.ball_diameter_mm);
         let annotated = match circle_cols {
             None => None,
             Some(cols) => {
@@ -544,7 +610,7 @@ fn read_presses_csv(
                     centre_y_px: v[1],
                     radius_px: v[2],
                 };
-                if let Some(why) = circle_problem(sensor, frame_size, &c) {
+                if let Some(why) = circle_problem(sensor, ball, frame_size, &c) {
                     return Err(Error::Layout {
                         path: path.to_path_buf(),
                         why: format!("line {line}: {file}: {why}"),
@@ -553,7 +619,11 @@ fn read_presses_csv(
                 Some(c)
             }
         };
-        out.push(Press { file, annotated });
+        out.push(Press {
+            file,
+            annotated,
+            ball_diameter_mm,
+        });
     }
     Ok((out, listed.into_keys().collect()))
 }
@@ -623,6 +693,7 @@ fn list_frames(root: &Path) -> Result<(Vec<Press>, Vec<String>)> {
                 f.path.file_name().unwrap_or_default().to_string_lossy()
             ),
             annotated: None,
+            ball_diameter_mm: None,
         })
         .collect();
     Ok((presses, list.ignored_warning().into_iter().collect()))

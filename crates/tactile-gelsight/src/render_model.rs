@@ -14,8 +14,8 @@
 //! the real frame: the colour error says how close the rendered sensor is.
 
 use datasets_synth::calibrated::{
-    CalibratedConfig, CalibratedScene, CalibratedSensor, Contact, GelResponse, OpticsSample,
-    RenderModel, SensorOptics, render,
+    BallProfile, CalibratedConfig, CalibratedScene, CalibratedSensor, Contact, GelResponse,
+    OpticsSample, RenderModel, SensorOptics, render,
 };
 use serde::Serialize;
 use tactile_core::image_io::RgbImage;
@@ -117,23 +117,21 @@ fn radial_profile(
 /// mm and how deep the ball sank there (its cap's height), in words that
 /// name the two values a user may have mistyped (0.00295 for 0.0295 mm
 /// per pixel, a 40 mm ball for 4).
-fn press_geometry(ds: &BallPresses, profiles: &[(f64, Vec<(f64, f64)>)]) -> String {
-    let ball_mm = ds.sensor.ball_diameter_mm / 2.0;
-    let contact_mm = profiles.iter().map(|p| p.0).fold(0f64, f64::max);
-    let cap_mm = ball_mm
-        - (ball_mm * ball_mm - contact_mm * contact_mm)
-            .max(0.0)
-            .sqrt();
+fn press_geometry(ds: &BallPresses, profiles: &[BallProfile]) -> String {
+    let contact_mm = profiles.iter().map(|p| p.contact_mm).fold(0f64, f64::max);
+    let cap_mm = (profiles.iter())
+        .map(|p| p.ball_mm - (p.ball_mm.powi(2) - p.contact_mm.powi(2)).max(0.0).sqrt())
+        .fold(0f64, f64::max);
+    let balls = ds.describe_balls();
     format!(
-        "as sensor.json gives them (a {ball_d} mm ball, {mm} mm per pixel), the widest contact circle is {contact_mm:.3} mm in radius and the ball sank {cap_mm:.4} mm at most; check ball_diameter_mm and mm_per_px, which scale every press",
-        ball_d = ds.sensor.ball_diameter_mm,
+        "as sensor.json gives them ({balls}, {mm} mm per pixel), the widest contact circle is {contact_mm:.3} mm in radius and the ball sank {cap_mm:.4} mm at most; check ball_diameter_mm and mm_per_px, which scale every press",
         mm = ds.sensor.mm_per_px,
     )
 }
 
 /// No gel response reproduces the presses (a contact past every approach
 /// of the render model's sweep).
-fn unfitted_gel(ds: &BallPresses, profiles: &[(f64, Vec<(f64, f64)>)]) -> Error {
+fn unfitted_gel(ds: &BallPresses, profiles: &[BallProfile]) -> Error {
     Error::Layout {
         path: ds.root.join("sensor.json"),
         why: format!(
@@ -212,21 +210,21 @@ pub fn fit_render_model(
                 }
             }
         }
-        profiles.push((
-            a * mm,
-            radial_profile(
+        profiles.push(BallProfile {
+            ball_mm: cap.ball_radius_px * mm,
+            contact_mm: a * mm,
+            profile: radial_profile(
                 &map.indentation_m,
                 (w, h),
                 (cx, cy),
                 mm,
                 FAR_FIELD_RADII * a * mm,
             ),
-        ));
+        });
     }
     let optics = SensorOptics::fit((w, h), OPTICS_BINS, OPTICS_MAX_SLOPE, &samples)?;
-    let ball_mm = ds.sensor.ball_diameter_mm / 2.0;
     let (gel, gel_profile_error_mm) =
-        GelResponse::fit(ball_mm, &profiles).map_err(|e| match profiles.is_empty() {
+        GelResponse::fit(&profiles).map_err(|e| match profiles.is_empty() {
             true => e.into(),
             false => unfitted_gel(ds, &profiles),
         })?;
@@ -261,15 +259,32 @@ pub fn fit_render_model(
     Ok((model, fit))
 }
 
-/// Each of `circles` (a ball of the calibration's radius pressed to that
-/// contact) rendered through `model` over `background`, without noise or
-/// jitter: what the sensor would show, as RGB bytes of the frame's size
-/// (`None` where the gel cannot reach that contact).
+/// A ball pressed to a contact circle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BallPress {
+    /// The contact circle, frame pixels.
+    pub circle: crate::layout::Circle,
+    /// The ball's radius, mm.
+    pub ball_mm: f64,
+}
+
+impl BallPress {
+    /// Press `i` of `ds` with its `circle`.
+    pub fn of(ds: &BallPresses, i: usize, circle: crate::layout::Circle) -> Self {
+        Self {
+            circle,
+            ball_mm: ds.ball_diameter_mm(i) / 2.0,
+        }
+    }
+}
+
+/// Each of `presses` rendered through `model` over `background`, without
+/// noise or jitter: what the sensor would show, as RGB bytes of the
+/// frame's size (`None` where the gel cannot reach that contact).
 pub fn render_presses(
     model: &RenderModel,
     background: &RgbImage,
-    ball_mm: f64,
-    circles: &[crate::layout::Circle],
+    presses: &[BallPress],
 ) -> Vec<Option<Vec<u8>>> {
     let (w, h) = (background.width(), background.height());
     let sensor = CalibratedSensor {
@@ -284,17 +299,35 @@ pub fn render_presses(
     };
     let mm = model.mm_per_px;
     let (cx0, cy0) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
-    let contacts: Vec<f64> = circles.iter().map(|c| c.radius_px * mm).collect();
-    let approaches = model.gel.ball_approaches(ball_mm, &contacts);
-    circles
+    // One sweep of approaches per ball.
+    let mut approaches = vec![None; presses.len()];
+    let mut balls: Vec<f64> = presses.iter().map(|p| p.ball_mm).collect();
+    balls.sort_by(f64::total_cmp);
+    balls.dedup();
+    for ball_mm in balls {
+        let these: Vec<usize> = (0..presses.len())
+            .filter(|&i| presses[i].ball_mm == ball_mm)
+            .collect();
+        let contacts: Vec<f64> = (these.iter())
+            .map(|&i| presses[i].circle.radius_px * mm)
+            .collect();
+        for (&i, a) in these
+            .iter()
+            .zip(model.gel.ball_approaches(ball_mm, &contacts))
+        {
+            approaches[i] = a;
+        }
+    }
+    presses
         .iter()
         .zip(approaches)
         .enumerate()
-        .map(|(i, (c, approach))| {
+        .map(|(i, (p, approach))| {
             let approach = approach?;
+            let c = p.circle;
             let scene = CalibratedScene {
                 contact: Contact::Sphere {
-                    radius_mm: ball_mm,
+                    radius_mm: p.ball_mm,
                     centre: ((c.centre_x_px - cx0) * mm, (c.centre_y_px - cy0) * mm),
                 },
                 peak_press_mm: approach,
@@ -321,12 +354,13 @@ fn colour_error(
 ) -> Result<(f64, f64)> {
     let (w, h) = ds.size();
     let circles: Vec<_> = presses.iter().map(|p| p.circle).collect();
-    let rendered = render_presses(
-        model,
-        &ds.background,
-        ds.sensor.ball_diameter_mm / 2.0,
-        &circles,
-    );
+    let pressed: Vec<BallPress> = (presses.iter())
+        .map(|p| BallPress {
+            circle: p.circle,
+            ball_mm: p.ball_radius_px * ds.sensor.mm_per_px,
+        })
+        .collect();
+    let rendered = render_presses(model, &ds.background, &pressed);
     let (mut sum, mut bare, mut n) = (0f64, 0f64, 0usize);
     for (i, (c, out)) in circles.iter().zip(rendered).enumerate() {
         let Some(out) = out else { continue };

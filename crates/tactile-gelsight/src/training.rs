@@ -86,6 +86,8 @@ pub struct PreparedPress {
     pub annotated: Option<Circle>,
     /// The circle its targets use.
     pub circle: Circle,
+    /// The radius of the ball pressed, pixels.
+    pub ball_radius_px: f64,
     /// The frame at the working resolution, exposure matched.
     pub frame: WorkingImage,
     /// Slope targets and weights.
@@ -172,7 +174,7 @@ impl PreparedPress {
     pub fn cap(&self, ds: &BallPresses) -> Cap {
         Cap {
             circle: self.circle,
-            ball_radius_px: ds.sensor.ball_radius_px(),
+            ball_radius_px: self.ball_radius_px,
             mm_per_px: ds.sensor.mm_per_px,
         }
     }
@@ -209,11 +211,11 @@ pub fn prepare_presses(
         let found = find_contact(&fine, &fine.matched(&full)?, &path)?;
         let circle = match (circles, p.annotated) {
             (CircleSource::Found, _) | (CircleSource::Auto, None) => {
-                ds.check_found_circle(&path, &found)?;
+                ds.check_found_circle(i, &path, &found)?;
                 found
             }
             (_, Some(a)) => {
-                ds.check_circle(&path, &a)?;
+                ds.check_circle(i, &path, &a)?;
                 a
             }
             (CircleSource::Annotated, None) => {
@@ -228,7 +230,7 @@ pub fn prepare_presses(
         };
         let cap = Cap {
             circle,
-            ball_radius_px: ds.sensor.ball_radius_px(),
+            ball_radius_px: ds.ball_radius_px(i),
             mm_per_px: ds.sensor.mm_per_px,
         };
         out.push(PreparedPress {
@@ -236,6 +238,7 @@ pub fn prepare_presses(
             found,
             annotated: p.annotated,
             circle,
+            ball_radius_px: cap.ball_radius_px,
             targets: GradientTargets::of(&cap, grid),
             frame,
         });

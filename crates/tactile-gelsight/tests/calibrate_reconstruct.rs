@@ -348,7 +348,8 @@ fn a_gs_sdk_folder_names_what_it_cannot_read() {
         "{e}"
     );
     write("sensor.json", r#"{"mm_per_px": 0.0295}"#);
-    // Presses of two balls: a calibration fits one, named in sensor.json.
+    // Presses of two balls: each press is fitted with its own, unless
+    // sensor.json chooses one.
     let catalog = std::fs::read_to_string(d.join("catalog.csv")).unwrap();
     std::fs::create_dir_all(d.join("6.000mm/0")).unwrap();
     std::fs::copy(
@@ -357,12 +358,10 @@ fn a_gs_sdk_folder_names_what_it_cannot_read() {
     )
     .unwrap();
     write("catalog.csv", &format!("{catalog}6.000mm/0,6.000\n"));
-    let e = open();
-    assert!(
-        e.contains("catalog.csv: lists presses of more than one ball (4.000 mm: 3 presses, 6.000 mm: 1 press)")
-            && e.contains("ball_diameter_mm"),
-        "{e}"
-    );
+    let ds = BallPresses::open(&d).unwrap();
+    assert_eq!(ds.presses.len(), 4);
+    assert_eq!((ds.ball_diameter_mm(0), ds.ball_diameter_mm(3)), (4.0, 6.0));
+    assert_eq!(ds.describe_balls(), "balls of 4, 6 mm");
     write(
         "sensor.json",
         r#"{"mm_per_px": 0.0295, "ball_diameter_mm": 4}"#,
@@ -872,6 +871,97 @@ fn presses_near_the_edge_calibrate_and_found_circles_there_are_named() {
         w.contains("of the 6 presses run off the frame's edge, and their contact circles were found, not annotated (the first: frames/press_01.png")
             && w.contains("give their circles in presses.csv"),
         "{w}"
+    );
+}
+
+/// Six real presses of the R1.5's 4 mm ball and four of a 6 mm ball that
+/// the shipped R1.5 calibration's render model renders (contact radius 60
+/// px, as the real ones), in `presses.csv` with a `ball_diameter_mm`
+/// column: 6 for the rendered presses, or `rendered_as` where given.
+fn two_ball_folder(dir: &Path, rendered_as: Option<&str>) {
+    use tactile_gelsight::render_model::{BallPress, render_presses};
+    subset(dir, 6, |l| format!("{l},"));
+    let csv = std::fs::read_to_string(dir.join("presses.csv")).unwrap();
+    let mut csv = csv.replacen("contact_radius_px", "contact_radius_px,ball_diameter_mm", 1);
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/gelsight-r15");
+    let unit = datasets_synth::calibrated::CalibratedSensor::load(&models).unwrap();
+    let background = load_rgb(dir.join("background.png")).unwrap();
+    let pressed: Vec<BallPress> = [
+        (220.0, 190.0),
+        (420.0, 190.0),
+        (220.0, 300.0),
+        (420.0, 300.0),
+    ]
+    .iter()
+    .map(|&(x, y)| BallPress {
+        circle: tactile_gelsight::Circle {
+            centre_x_px: x,
+            centre_y_px: y,
+            radius_px: 60.0,
+        },
+        ball_mm: 3.0,
+    })
+    .collect();
+    for (k, (p, rgb)) in pressed
+        .iter()
+        .zip(render_presses(&unit.model, &background, &pressed))
+        .enumerate()
+    {
+        let file = format!("frames/ball6_{k}.png");
+        image::RgbImage::from_raw(640, 480, rgb.unwrap())
+            .unwrap()
+            .save(dir.join(&file))
+            .unwrap();
+        let c = p.circle;
+        csv.push_str(&format!(
+            "{file},{},{},{},{}\n",
+            c.centre_x_px,
+            c.centre_y_px,
+            c.radius_px,
+            rendered_as.unwrap_or("6")
+        ));
+    }
+    std::fs::write(dir.join("presses.csv"), csv).unwrap();
+}
+
+#[test]
+fn presses_of_several_balls_are_each_fitted_with_their_own() {
+    // gs_sdk has a researcher press balls of several sizes into one
+    // catalog. A press of a 6 mm ball touching 1.8 mm wide is a cap 0.6 mm
+    // deep; taken for the 4 mm ball, 1.1 mm. Each press is now fitted with
+    // its own ball; before, one ball was assumed for all of them.
+    let tmp = tempfile::tempdir().unwrap();
+    let (both, one) = (tmp.path().join("both"), tmp.path().join("one"));
+    two_ball_folder(&both, None);
+    two_ball_folder(&one, Some(""));
+    let ds = BallPresses::open(&both).unwrap();
+    assert_eq!(ds.describe_balls(), "balls of 4, 6 mm");
+    let (_, prepared) = prepare_presses(&ds, 8, CircleSource::Annotated).unwrap();
+    assert!((prepared[9].ball_radius_px - 3.0 / 0.0295).abs() < 1e-9);
+    assert!((prepared[0].ball_radius_px - 2.0 / 0.0295).abs() < 1e-9);
+    // The render model fitted on the presses renders them back nearer the
+    // real ones when each has its own ball.
+    let colour = |dir: &Path, out: &str| {
+        let cal = short_calibration(dir, &tmp.path().join(out));
+        (
+            cal.render.colour_error_levels,
+            cal.render.gel_profile_error_mm,
+        )
+    };
+    let (right, wrong) = (colour(&both, "m-both"), colour(&one, "m-one"));
+    eprintln!("each its own ball: {right:?}; all taken for the 4 mm ball: {wrong:?}");
+    assert!(right.1 < wrong.1, "{right:?} {wrong:?}");
+    // A ball that is no ball is refused by its line.
+    let csv = std::fs::read_to_string(both.join("presses.csv")).unwrap();
+    std::fs::write(
+        both.join("presses.csv"),
+        csv.replacen(",300,60,6\n", ",300,60,-6\n", 1),
+    )
+    .unwrap();
+    let e = BallPresses::open(&both).unwrap_err().to_string();
+    assert!(
+        e.contains("presses.csv: line 10: ball_diameter_mm = -6 is no ball"),
+        "{e}"
     );
 }
 

@@ -94,34 +94,45 @@ impl GelResponse {
             .collect()
     }
 
-    /// The response whose ball presses best match reconstructed ones:
-    /// each of `presses` gives the contact radius and the reconstruction's
-    /// radial profile (`(r_mm, indentation_mm)` pairs out to a few contact
-    /// radii) of a ball of radius `ball_mm`. A grid search over width and
+    /// The response whose ball presses best match reconstructed ones
+    /// (each of `presses`: a ball, its contact radius and the
+    /// reconstruction's radial profile out to a few contact radii; the
+    /// presses may be of several balls). A grid search over width and
     /// gain; returns the response and its mean |profile error|, mm.
-    pub fn fit(ball_mm: f64, presses: &[(f64, Vec<(f64, f64)>)]) -> Result<(Self, f64)> {
+    pub fn fit(presses: &[BallProfile]) -> Result<(Self, f64)> {
         if presses.is_empty() {
             return Err(Error::Config("gel: no presses to fit the spread on".into()));
         }
-        let reach = presses
-            .iter()
-            .flat_map(|(a, p)| p.iter().map(|q| q.0).chain(std::iter::once(*a)))
-            .fold(0f64, f64::max);
+        // The balls pressed, each with how far its presses reach.
+        let mut balls: Vec<(f64, f64)> = Vec::new();
+        for p in presses {
+            let reach = (p.profile.iter().map(|q| q.0)).fold(p.contact_mm, f64::max);
+            match balls.iter_mut().find(|b| b.0 == p.ball_mm) {
+                Some(b) => b.1 = b.1.max(reach),
+                None => balls.push((p.ball_mm, reach)),
+            }
+        }
         let mut best: Option<(Self, f64)> = None;
         for si in 0..14 {
             let sigma_mm = 0.1 * 1.25f64.powi(si);
-            // One sweep of approaches per width serves every gain.
-            let sweep = BallSweep::new(ball_mm, reach, sigma_mm);
+            // One sweep of approaches per ball and width serves every gain.
+            let sweeps: Vec<(f64, BallSweep)> = (balls.iter())
+                .map(|&(ball_mm, reach)| (ball_mm, BallSweep::new(ball_mm, reach, sigma_mm)))
+                .collect();
             for gi in 1..=20 {
                 let gain = 0.05 * gi as f64;
                 let (mut sum, mut n, mut ok) = (0.0, 0usize, true);
-                for (a, profile) in presses {
-                    let radii: Vec<f64> = profile.iter().map(|p| p.0).collect();
-                    let Some((_, model)) = sweep.profile(gain, *a, &radii) else {
+                for p in presses {
+                    let Some((_, sweep)) = sweeps.iter().find(|s| s.0 == p.ball_mm) else {
                         ok = false;
                         break;
                     };
-                    for (m, (_, t)) in model.iter().zip(profile) {
+                    let radii: Vec<f64> = p.profile.iter().map(|q| q.0).collect();
+                    let Some((_, model)) = sweep.profile(gain, p.contact_mm, &radii) else {
+                        ok = false;
+                        break;
+                    };
+                    for (m, (_, t)) in model.iter().zip(&p.profile) {
                         sum += (m - t).abs();
                         n += 1;
                     }
@@ -139,6 +150,17 @@ impl GelResponse {
             Error::Config("gel: no spread reaches the presses' contact radii".into())
         })
     }
+}
+
+/// A ball press as the gel's fit reads it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BallProfile {
+    /// The ball's radius, mm.
+    pub ball_mm: f64,
+    /// The contact circle's radius, mm.
+    pub contact_mm: f64,
+    /// The indentation's radial profile, `(r_mm, indentation_mm)` pairs.
+    pub profile: Vec<(f64, f64)>,
 }
 
 /// A Gaussian blur of width `sigma_px` (zeros beyond the edges); a wide one
@@ -321,27 +343,32 @@ mod tests {
         // The fit recovers the response that made a set of profiles, of
         // presses of a ball of `ball_mm` to `contacts`, each reached at an
         // approach below `deepest`.
-        let recovers = |ball_mm: f64, contacts: [f64; 2], deepest: f64, within: f64| {
-            let presses: Vec<(f64, Vec<(f64, f64)>)> = contacts
-                .iter()
-                .map(|&a| {
+        let recovers = |balls_mm: [f64; 2], contacts: [f64; 2], deepest: f64, within: f64| {
+            let presses: Vec<BallProfile> = (balls_mm.iter().zip(contacts))
+                .map(|(&ball_mm, a)| {
                     let (approach, prof) = gel.ball_profile(ball_mm, a, &radii).unwrap();
                     assert!(approach < deepest, "{approach}");
-                    (a, radii.iter().copied().zip(prof).collect())
+                    BallProfile {
+                        ball_mm,
+                        contact_mm: a,
+                        profile: radii.iter().copied().zip(prof).collect(),
+                    }
                 })
                 .collect();
-            let (fit, err) = GelResponse::fit(ball_mm, &presses).unwrap();
+            let (fit, err) = GelResponse::fit(&presses).unwrap();
             assert!(err < within, "{err}");
             assert!(
                 (fit.sigma_mm - 0.6).abs() < 0.2 && (fit.gain - 0.7).abs() < 0.15,
                 "{fit:?}"
             );
         };
-        recovers(2.0, [1.6, 1.8], 2.0, 0.03);
+        recovers([2.0; 2], [1.6, 1.8], 2.0, 0.03);
         // A large ball pressed shallow (25 mm, 0.09-0.16 mm deep: within a
         // 48th of its radius) is reached and fitted too; before, no
         // approach of the sweep was that shallow and the fit failed.
-        recovers(12.5, [1.5, 2.0], 12.5 / 48.0, 0.01);
+        recovers([12.5; 2], [1.5, 2.0], 12.5 / 48.0, 0.01);
+        // Presses of two balls, each profile its own ball's.
+        recovers([2.0, 3.0], [1.6, 1.8], 2.0, 0.03);
         assert!(
             GelResponse {
                 sigma_mm: -1.0,

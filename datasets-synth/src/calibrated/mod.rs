@@ -24,7 +24,7 @@ use tactile_core::{Error, Result};
 use crate::rng::{Range, SampleRng};
 use crate::visuotactile::{TendonPath, press_profile};
 
-pub use gel::GelResponse;
+pub use gel::{BallProfile, GelResponse};
 pub use optics::{OPTICS_FORMAT, OpticsSample, SensorOptics};
 pub use real::{MAX_COPIES, MAX_REAL_FRAMES, RealFrame, RealFrames, RealFramesRecord};
 pub use render::{CalibratedFrame, indentation_mm, render};
