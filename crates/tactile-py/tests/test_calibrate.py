@@ -126,6 +126,12 @@ def test_a_gs_sdk_calibration_folder_calibrates_as_it_is(presses: Path, tmp_path
     assert r["train_presses"] == 4 and r["val_presses"] == 2
     # Every label read: the circles found are scored against all six.
     assert r["circles"]["presses"] == 6 and r["circles"]["centre_error_px"] < 8
+    # With no ball chosen, every press is fitted with its own ball.
+    (d / "sensor.json").write_text(json.dumps({"mm_per_px": 0.0295}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = tactile.calibrate.ball(d, tmp_path / "m1", factor=8, val_presses=2, max_epochs=1, kernels=[3, 1, 1])
+    assert r["train_presses"] + r["val_presses"] == 7
     (d / "sensor.json").unlink()
     with pytest.raises(ValueError, match="sensor.json: missing.*ppmm"):
         tactile.calibrate.ball(d, tmp_path / "m2", max_epochs=1)
