@@ -137,9 +137,7 @@ pub fn circles_picture(
                 width,
             })
         };
-        let name = std::path::Path::new(&p.file)
-            .file_name()
-            .map_or(p.file.clone(), |f| f.to_string_lossy().into_owned());
+        let name = ds.press_name(i);
         let caption = match p.annotated.filter(|a| *a == p.circle) {
             Some(a) => {
                 sheet.mark(ring(p.found, YELLOW, 1));

@@ -404,6 +404,27 @@ impl BallPresses {
         balls
     }
 
+    /// Press `i` in a few characters, for captions: its file's name
+    /// (`press_01.png`), or where every press has the same name (gs_sdk's
+    /// `gelsight.png`) the folder that tells it (`4.000mm/3`).
+    pub fn press_name(&self, i: usize) -> String {
+        let Some(p) = self.presses.get(i) else {
+            return String::new();
+        };
+        let path = Path::new(&p.file);
+        let name = path.file_name().map(|f| f.to_string_lossy().into_owned());
+        let name = name.unwrap_or_else(|| p.file.clone());
+        let shared = (self.presses.iter())
+            .filter(|q| Path::new(&q.file).file_name() == path.file_name())
+            .take(2)
+            .count()
+            > 1;
+        match (shared, path.parent()) {
+            (true, Some(dir)) if !dir.as_os_str().is_empty() => dir.to_string_lossy().into_owned(),
+            _ => name,
+        }
+    }
+
     /// The balls in words: `a 4 mm ball`, `balls of 4, 6 mm`.
     pub fn describe_balls(&self) -> String {
         match self.balls_mm()[..] {

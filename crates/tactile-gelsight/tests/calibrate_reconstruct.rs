@@ -314,6 +314,12 @@ fn a_gs_sdk_calibration_folder_calibrates_as_it_is() {
             .collect::<Vec<_>>()
     };
     assert_eq!(circles(&a), circles(&b), "stored and deflated labels");
+    // circles.png captions each press by its folder: every frame is
+    // gelsight.png.
+    assert_eq!(
+        (a.press_name(1), b.press_name(1)),
+        ("4.000mm/1".to_string(), "press_02.png".to_string())
+    );
     // A label saved before its circle was moved onto the contact is named
     // with gs_sdk's own mend.
     write_label_npz(
