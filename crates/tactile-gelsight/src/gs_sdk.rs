@@ -391,8 +391,9 @@ fn npz_numbers<R: Read + std::io::Seek>(
     }
     let header =
         Header::from_reader(&mut &bytes[..]).map_err(|e| format!("not a .npy array: {e}"))?;
-    let found: usize = header.shape.iter().product();
-    if found != count {
+    let found = (header.shape.iter()).try_fold(1usize, |n, &d| n.checked_mul(d));
+    if found != Some(count) {
+        let found = found.map_or("more".to_string(), |n| n.to_string());
         return Err(format!(
             "holds {found} numbers (shape {:?}), not {count}",
             header.shape

@@ -448,6 +448,95 @@ fn every_size_is_bounded_before_anything_is_allocated() {
 }
 
 #[test]
+fn a_gs_sdk_label_claiming_more_than_it_holds_is_refused_before_it_is_read() {
+    // gs_sdk's calibration folder with each press's label.npz (a zip of
+    // .npy arrays) crafted: a zip end record claiming a billion entries at
+    // a terabyte's offset, an array that inflates to 60 MB, an array whose
+    // header claims 2^62 x 2^62 values. Each is refused naming the label
+    // (zip's and the array's sizes checked before anything is allocated),
+    // and no model folder is made.
+    use std::io::Write;
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("gs");
+    let ball = shared_real().join("gelsight-ball");
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::copy(ball.join("background.png"), d.join("background.png")).unwrap();
+    std::fs::write(d.join("sensor.json"), r#"{"mm_per_px": 0.0295}"#).unwrap();
+    let mut catalog = String::from("experiment_reldir,diameter(mm)\n");
+    let mut frames: Vec<PathBuf> = std::fs::read_dir(ball.join("frames"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    frames.sort();
+    for (i, frame) in frames.iter().take(6).enumerate() {
+        let press = d.join(format!("4.000mm/{i}"));
+        std::fs::create_dir_all(&press).unwrap();
+        std::fs::copy(frame, press.join("gelsight.png")).unwrap();
+        catalog.push_str(&format!("4.000mm/{i},4.000\n"));
+    }
+    std::fs::write(d.join("catalog.csv"), catalog).unwrap();
+    let label = d.join("4.000mm/2/label.npz");
+    let mut zip64_end = Vec::new();
+    for (v, n) in [
+        (0x0606_4b50u64, 4),
+        (44, 8),
+        (45, 2),
+        (45, 2),
+        (0, 4),
+        (0, 4),
+        (1_000_000_000, 8),
+        (1_000_000_000, 8),
+        (1_000_000, 8),
+        (1_000_000_000_000, 8),
+        (0x0706_4b50, 4),
+        (0, 4),
+        (0, 8),
+        (1, 4),
+        (0x0605_4b50, 4),
+        (0, 2),
+        (0, 2),
+        (0xFFFF, 2),
+        (0xFFFF, 2),
+        (0xFFFF_FFFF, 4),
+        (0xFFFF_FFFF, 4),
+        (0, 2),
+    ] {
+        zip64_end.extend(&v.to_le_bytes()[..n]);
+    }
+    // An archive whose `center` is `bytes` (its `radius` one zero).
+    let array = |method, bytes: &[u8]| {
+        let mut z = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let opts = zip::write::SimpleFileOptions::default().compression_method(method);
+        z.start_file("center.npy", opts).unwrap();
+        z.write_all(bytes).unwrap();
+        z.start_file("radius.npy", opts).unwrap();
+        z.write_all(&[0]).unwrap();
+        z.finish().unwrap().into_inner()
+    };
+    let mut huge = npy_header("(4611686018427387904, 4611686018427387904)");
+    huge.extend([0u8; 16]);
+    let inflating = array(zip::CompressionMethod::Deflated, &vec![0u8; 60 << 20]);
+    assert!(inflating.len() < 64 << 10, "{}", inflating.len());
+    let out = tmp.path().join("model");
+    for (bytes, said) in [
+        (zip64_end, "not a NumPy .npz archive"),
+        (inflating, "its 'center':"),
+        (
+            array(zip::CompressionMethod::Stored, &huge),
+            "its 'center': holds more numbers",
+        ),
+    ] {
+        std::fs::write(&label, bytes).unwrap();
+        let (ok, msg) = tactile(&["calibrate", "ball", "--data", s(&d), "--out", s(&out)]);
+        assert!(
+            !ok && msg.contains("4.000mm/2/label.npz") && msg.contains(said),
+            "{said}: {msg}"
+        );
+        assert!(!out.exists());
+    }
+}
+
+#[test]
 fn nothing_panics_on_empty_datasets_bad_configs_or_a_closed_stdout() {
     let tmp = tempfile::tempdir().unwrap();
     let empty = tmp.path().join("empty");
