@@ -80,34 +80,62 @@ pub fn score_full(map: &IndentationMap, cap: &Cap, file: &str) -> PressScore {
     score_map(&mm, (map.width, map.height), |i| i as f64, cap, file)
 }
 
-/// Most presses [`circles_picture`] shows: the first in the folder's order.
+/// Most presses one picture of [`circles_pictures`] shows.
 pub const MAX_PICTURED_PRESSES: usize = 48;
 
-/// The picture's name in a calibrated sensor's folder.
+/// The first picture's name in a calibrated sensor's folder; the next are
+/// `circles-2.png`, `circles-3.png`, ...
 pub const CIRCLES_PICTURE: &str = "circles.png";
 
-/// A contact sheet of the presses of `ds` (up to [`MAX_PICTURED_PRESSES`]):
-/// each with the contact circle its targets use (green) and, where that is
-/// an annotation, the circle the toolkit finds (yellow), captioned with how
+/// The name of picture `page` (0 the first) of [`circles_pictures`].
+pub fn circles_picture_name(page: usize) -> String {
+    match page {
+        0 => CIRCLES_PICTURE.to_string(),
+        _ => format!("circles-{}.png", page + 1),
+    }
+}
+
+/// Contact sheets of every press of `ds`, [`MAX_PICTURED_PRESSES`] to a
+/// picture, in the folder's order, written into `dir`: each press with
+/// the contact circle its targets use (green) and, where that is an
+/// annotation, the circle the toolkit finds (yellow), captioned with how
 /// far apart their centres are and the two radii (found/annotated). What a
 /// calibration fitted, to look at: a mistyped line or a press the finder
-/// mistook shows at a glance.
-pub fn circles_picture(
+/// mistook shows at a glance. Returns the pictures' names.
+pub fn circles_pictures(
     ds: &BallPresses,
     presses: &[PreparedPress],
+    dir: &std::path::Path,
+) -> crate::Result<Vec<String>> {
+    let mut names = Vec::new();
+    for (page, first) in (0..presses.len()).step_by(MAX_PICTURED_PRESSES).enumerate() {
+        let name = circles_picture_name(page);
+        let last = (first + MAX_PICTURED_PRESSES).min(presses.len());
+        circles_picture(ds, presses, first..last, &dir.join(&name))?;
+        names.push(name);
+    }
+    Ok(names)
+}
+
+/// One picture of [`circles_pictures`]: the presses `range`.
+fn circles_picture(
+    ds: &BallPresses,
+    presses: &[PreparedPress],
+    range: std::ops::Range<usize>,
     path: &std::path::Path,
 ) -> crate::Result<()> {
     use tactile_core::plot::Mark;
     const GREEN: [u8; 3] = [40, 230, 60];
     const YELLOW: [u8; 3] = [255, 220, 0];
-    let n = presses.len().min(MAX_PICTURED_PRESSES);
+    let n = range.len();
     if n == 0 {
         return Ok(());
     }
     let (w, h) = ds.size();
     let mut sheet = datasets_synth::preview::Sheet::new(n, (w, h));
     let k = sheet.shrink as f64;
-    for (i, p) in presses.iter().take(n).enumerate() {
+    for (i, at) in range.enumerate() {
+        let p = &presses[at];
         let (ox, oy) = sheet.origin(i);
         // Read as it was when prepared (checked there: its size, colour
         // and channel order).
@@ -137,7 +165,7 @@ pub fn circles_picture(
                 width,
             })
         };
-        let name = ds.press_name(i);
+        let name = ds.press_name(at);
         let caption = match p.annotated.filter(|a| *a == p.circle) {
             Some(a) => {
                 sheet.mark(ring(p.found, YELLOW, 1));

@@ -535,6 +535,9 @@ pub struct Calibration {
     /// model that barely explains the presses).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// The pictures of the presses with their circles, in the model
+    /// folder (`circles.png`, then `circles-2.png`, ... for every 48).
+    pub circle_pictures: Vec<String>,
 }
 
 impl Calibration {
@@ -550,8 +553,13 @@ impl Calibration {
             out.display()
         )];
         lines.extend(self.circles.as_ref().map(|c| c.describe()));
+        let more = match &self.circle_pictures[..] {
+            [] | [_] => String::new(),
+            [_, next] => format!(" and {next}"),
+            [_, next, .., last] => format!(" and {next} to {last}"),
+        };
         lines.push(format!(
-            "circles: {} (green: the circle each press's targets use; yellow: the one found, where that is another)",
+            "circles: {}{more} (green: the circle each press's targets use; yellow: the one found, where that is another)",
             out.join(crate::eval::CIRCLES_PICTURE).display()
         ));
         let r = &self.render;
@@ -602,11 +610,7 @@ pub fn calibrate(
     }
     let cut = found_circles_cut_by_edge(&presses, ds.size(), ds.annotations);
     let mistyped = annotations_far_from_found(&presses, ds.annotations);
-    crate::eval::circles_picture(
-        ds,
-        &presses,
-        &staged.path().join(crate::eval::CIRCLES_PICTURE),
-    )?;
+    let circle_pictures = crate::eval::circles_pictures(ds, &presses, staged.path())?;
     let val = spread(n, config.val_presses);
     let train: Vec<usize> = (0..n).filter(|i| !val.contains(i)).collect();
     let dir = staged.path();
@@ -669,6 +673,7 @@ pub fn calibrate(
         train_presses: train.len(),
         val_presses: val.len(),
         validation,
+        circle_pictures,
         warnings: ds
             .warnings
             .iter()
