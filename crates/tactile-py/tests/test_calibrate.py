@@ -48,6 +48,7 @@ def model(presses: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     assert r["circles"]["presses"] == 6 and r["circles"]["centre_error_px"] < 8
     # The presses with their circles, to look at: a PNG of two lines of
     # thumbnails a third of the frame's size, under their captions.
+    assert r["circle_pictures"] == ["circles.png"]
     png = (out / "circles.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
     assert int.from_bytes(png[16:20], "big") == 4 * 213 and int.from_bytes(png[20:24], "big") == 2 * (160 + 22)
