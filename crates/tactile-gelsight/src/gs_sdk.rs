@@ -60,7 +60,8 @@ struct CatalogRow {
     diameter_mm: f64,
 }
 
-/// The presses of one ball, chosen from the catalog.
+/// The catalog's presses to calibrate: all, or those of the ball
+/// `sensor.json` chooses.
 #[derive(Debug)]
 pub(crate) struct Catalog {
     path: PathBuf,
@@ -297,10 +298,15 @@ impl Catalog {
                 continue;
             };
             // A press folder per press: as many as a catalog may list.
+            // Folders only, not links, so nothing outside is looked at.
             for entry in entries.flatten().take(MAX_PRESSES * 4) {
                 let name = entry.file_name().to_string_lossy().into_owned();
                 let folder = format!("{parent}/{name}");
-                if !listed.contains(folder.as_str()) && entry.path().join(FRAME_FILE).is_file() {
+                let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+                if is_dir
+                    && !listed.contains(folder.as_str())
+                    && entry.path().join(FRAME_FILE).is_file()
+                {
                     unlisted.push(folder);
                 }
             }
@@ -308,7 +314,7 @@ impl Catalog {
         if unlisted.is_empty() {
             return None;
         }
-        unlisted.sort_by(|a, b| alphanumeric_order(a, b));
+        alphanumeric_sort::sort_str_slice(&mut unlisted);
         let (named, _) = tactile_core::source::named_frames(&unlisted);
         Some(format!(
             "warning: {}: {} press folders hold a {FRAME_FILE} and are not listed, so they are \
@@ -316,17 +322,6 @@ impl Catalog {
             self.path.display(),
             unlisted.len(),
         ))
-    }
-}
-
-fn alphanumeric_order(a: &str, b: &str) -> std::cmp::Ordering {
-    let key = |s: &str| {
-        s.rsplit_once('/')
-            .and_then(|(p, n)| n.parse::<u64>().ok().map(|n| (p.to_string(), n)))
-    };
-    match (key(a), key(b)) {
-        (Some(x), Some(y)) => x.cmp(&y),
-        _ => a.cmp(b),
     }
 }
 

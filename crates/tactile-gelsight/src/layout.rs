@@ -86,11 +86,6 @@ impl SensorInfo {
         Ok(sensor)
     }
 
-    /// The ball's radius in pixels.
-    pub fn ball_radius_px(&self) -> f64 {
-        self.ball_diameter_mm / 2.0 / self.mm_per_px
-    }
-
     fn check(&self, file: &Path) -> Result<()> {
         match self.problem() {
             Some(why) => Err(Error::Layout {

@@ -354,11 +354,8 @@ fn colour_error(
 ) -> Result<(f64, f64)> {
     let (w, h) = ds.size();
     let circles: Vec<_> = presses.iter().map(|p| p.circle).collect();
-    let pressed: Vec<BallPress> = (presses.iter())
-        .map(|p| BallPress {
-            circle: p.circle,
-            ball_mm: p.ball_radius_px * ds.sensor.mm_per_px,
-        })
+    let pressed: Vec<BallPress> = (presses.iter().enumerate())
+        .map(|(i, p)| BallPress::of(ds, i, p.circle))
         .collect();
     let rendered = render_presses(model, &ds.background, &pressed);
     let (mut sum, mut bare, mut n) = (0f64, 0f64, 0usize);
