@@ -420,6 +420,24 @@ impl BallPresses {
         }
     }
 
+    /// Where press `i`'s ball and the scale are written, for a message
+    /// that asks to check them.
+    fn where_the_scale_is(&self, i: usize) -> &'static str {
+        let own = self
+            .presses
+            .get(i)
+            .is_some_and(|p| p.ball_diameter_mm.is_some());
+        match (own, self.annotations) {
+            (false, _) => "ball_diameter_mm and mm_per_px in sensor.json",
+            (true, Annotations::PressesCsv) => {
+                "the press's ball_diameter_mm in presses.csv and mm_per_px in sensor.json"
+            }
+            (true, Annotations::LabelNpz) => {
+                "the press's diameter(mm) in catalog.csv and mm_per_px in sensor.json"
+            }
+        }
+    }
+
     /// The balls in words: `a 4 mm ball`, `balls of 4, 6 mm`.
     pub fn describe_balls(&self) -> String {
         match self.balls_mm()[..] {
@@ -466,9 +484,9 @@ impl BallPresses {
         Err(Error::Press {
             path: path.to_path_buf(),
             why: format!(
-                "the contact circle found in it: {why}; {}, or check ball_diameter_mm and \
-                 mm_per_px in sensor.json, which scale every press",
-                self.annotations.how_to_give(false)
+                "the contact circle found in it: {why}; {}, or check {}, which scale every press",
+                self.annotations.how_to_give(false),
+                self.where_the_scale_is(i)
             ),
         })
     }

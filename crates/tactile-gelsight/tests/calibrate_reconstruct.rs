@@ -463,6 +463,24 @@ fn a_gs_sdk_folder_names_what_it_cannot_read() {
     std::fs::remove_file(&label).unwrap();
     let ds = BallPresses::open(&d).unwrap();
     assert!(ds.presses[2].annotated.is_none() && ds.presses[1].annotated.is_some());
+    // Its ball mistyped (0.5 mm for 4): the circle found is wider than the
+    // ball, and the message names where its diameter is written.
+    write(
+        "catalog.csv",
+        &catalog.replace("4.000mm/2,4.000", "4.000mm/2,0.500"),
+    );
+    let ds = BallPresses::open(&d).unwrap();
+    let e = prepare_presses(&ds, 8, CircleSource::Auto)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("4.000mm/2/gelsight.png: the contact circle found in it")
+            && e.contains("label the press's circle with gs_sdk's label_data.py")
+            && e.contains(
+                "check the press's diameter(mm) in catalog.csv and mm_per_px in sensor.json"
+            ),
+        "{e}"
+    );
 }
 
 #[test]
