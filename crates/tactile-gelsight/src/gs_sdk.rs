@@ -1,7 +1,7 @@
 //! gs_sdk's calibration folder, read as it is.
 //!
-//! gs_sdk (and the Taxim code it rewrites) collects and labels ball presses
-//! so:
+//! gs_sdk's `collect_data.py` and `label_data.py` (the latter rewritten
+//! from Taxim's labelling tool) keep ball presses so:
 //!
 //! ```text
 //! DIR/
