@@ -155,12 +155,13 @@ impl CalibrationReport {
         ));
         if let Some(c) = &self.circles {
             md.push_str(&format!(
-                "Contact circles found by the toolkit against the annotations ({} presses): centre error {:.2} px (largest {:.2}), radius error {:.2} px (bias {:+.2}). Targets use the annotated circles where `presses.csv` gives them. Finding circles and building targets for all presses: {:.1} s.\n\n",
+                "Contact circles found by the toolkit against the annotations ({} presses): centre error {:.2} px (largest {:.2}), radius error {:.2} px (bias {:+.2}). Targets use the annotated circles where `{}` gives them. Finding circles and building targets for all presses: {:.1} s.\n\n",
                 c.presses,
                 c.centre_error_px,
                 c.max_centre_error_px,
                 c.radius_error_px,
                 c.radius_bias_px,
+                ds.annotations.file(),
                 self.prepare_s
             ));
         }

@@ -438,6 +438,24 @@ impl BallPresses {
         }
     }
 
+    /// Where the presses' balls and the scale are written, for messages on
+    /// them all: `("sensor.json gives", "ball_diameter_mm and mm_per_px")`
+    /// where every press has `sensor.json`'s ball.
+    pub fn where_the_balls_are(&self) -> (&'static str, &'static str) {
+        let own = self.presses.iter().any(|p| p.ball_diameter_mm.is_some());
+        match (own, self.annotations) {
+            (false, _) => ("sensor.json gives", "ball_diameter_mm and mm_per_px"),
+            (true, Annotations::PressesCsv) => (
+                "sensor.json and presses.csv give",
+                "presses.csv's ball_diameter_mm and sensor.json's mm_per_px",
+            ),
+            (true, Annotations::LabelNpz) => (
+                "sensor.json and catalog.csv give",
+                "catalog.csv's diameter(mm) and sensor.json's mm_per_px",
+            ),
+        }
+    }
+
     /// The balls in words: `a 4 mm ball`, `balls of 4, 6 mm`.
     pub fn describe_balls(&self) -> String {
         match self.balls_mm()[..] {

@@ -123,8 +123,9 @@ fn press_geometry(ds: &BallPresses, profiles: &[BallProfile]) -> String {
         .map(|p| p.ball_mm - (p.ball_mm.powi(2) - p.contact_mm.powi(2)).max(0.0).sqrt())
         .fold(0f64, f64::max);
     let balls = ds.describe_balls();
+    let (given, check) = ds.where_the_balls_are();
     format!(
-        "as sensor.json gives them ({balls}, {mm} mm per pixel), the widest contact circle is {contact_mm:.3} mm in radius and the ball sank {cap_mm:.4} mm at most; check ball_diameter_mm and mm_per_px, which scale every press",
+        "as {given} them ({balls}, {mm} mm per pixel), the widest contact circle is {contact_mm:.3} mm in radius and the ball sank {cap_mm:.4} mm at most; check {check}, which scale every press",
         mm = ds.sensor.mm_per_px,
     )
 }

@@ -861,6 +861,18 @@ fn a_scale_mistyped_tenfold_is_named_after_calibrating() {
             "{w}"
         );
     }
+    // A gs_sdk folder: the balls are catalog.csv's, and the warning says so.
+    let d = tmp.path().join("gs");
+    gs_sdk_folder(&d, 6);
+    std::fs::write(d.join("sensor.json"), r#"{"mm_per_px": 0.00295}"#).unwrap();
+    let w = short_calibration(&d, &tmp.path().join("gs-model"))
+        .warnings
+        .join("\n");
+    assert!(
+        w.contains("as sensor.json and catalog.csv give them (a 4 mm ball, 0.00295 mm per pixel)")
+            && w.contains("check catalog.csv's diameter(mm) and sensor.json's mm_per_px"),
+        "{w}"
+    );
 }
 
 /// Presses near the frame's edge: the first six presses with every frame
