@@ -427,24 +427,24 @@ impl BallPresses {
             .presses
             .get(i)
             .is_some_and(|p| p.ball_diameter_mm.is_some());
-        match (own, self.annotations) {
-            (false, _) => "ball_diameter_mm and mm_per_px in sensor.json",
-            (true, Annotations::PressesCsv) => {
-                "the press's ball_diameter_mm in presses.csv and mm_per_px in sensor.json"
-            }
-            (true, Annotations::LabelNpz) => {
-                "the press's diameter(mm) in catalog.csv and mm_per_px in sensor.json"
-            }
-        }
+        self.ball_words(own).1
     }
 
     /// Where the presses' balls and the scale are written, for messages on
-    /// them all: `("sensor.json gives", "ball_diameter_mm and mm_per_px")`
-    /// where every press has `sensor.json`'s ball.
+    /// them all: `("sensor.json gives", "ball_diameter_mm and mm_per_px in
+    /// sensor.json")` where every press has `sensor.json`'s ball.
     pub fn where_the_balls_are(&self) -> (&'static str, &'static str) {
-        let own = self.presses.iter().any(|p| p.ball_diameter_mm.is_some());
+        self.ball_words(self.presses.iter().any(|p| p.ball_diameter_mm.is_some()))
+    }
+
+    /// [`Self::where_the_balls_are`] of presses with balls of their own
+    /// (`own`) or `sensor.json`'s.
+    fn ball_words(&self, own: bool) -> (&'static str, &'static str) {
         match (own, self.annotations) {
-            (false, _) => ("sensor.json gives", "ball_diameter_mm and mm_per_px"),
+            (false, _) => (
+                "sensor.json gives",
+                "ball_diameter_mm and mm_per_px in sensor.json",
+            ),
             (true, Annotations::PressesCsv) => (
                 "sensor.json and presses.csv give",
                 "presses.csv's ball_diameter_mm and sensor.json's mm_per_px",

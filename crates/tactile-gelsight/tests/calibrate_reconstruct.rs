@@ -476,9 +476,7 @@ fn a_gs_sdk_folder_names_what_it_cannot_read() {
     assert!(
         e.contains("4.000mm/2/gelsight.png: the contact circle found in it")
             && e.contains("label the press's circle with gs_sdk's label_data.py")
-            && e.contains(
-                "check the press's diameter(mm) in catalog.csv and mm_per_px in sensor.json"
-            ),
+            && e.contains("check catalog.csv's diameter(mm) and sensor.json's mm_per_px"),
         "{e}"
     );
 }
