@@ -154,13 +154,23 @@ fn the_circle_finder_finds_every_press_at_any_frame_size() {
     );
 }
 
-/// Dark dots 3 px in radius on a 28 px grid over `rgb` (a gel's printed
-/// markers), each pushed out from the contact `(cx, cy, r)` by the skin's
-/// stretch (up to 2.5 px at the contact's rim; none without a contact).
-fn with_markers(rgb: &mut image::RgbImage, contact: Option<(f64, f64, f64)>) {
+/// Printed markers on a gel, as dark dots.
+#[derive(Clone, Copy)]
+struct Markers {
+    /// Each dot's radius, pixels.
+    radius_px: f64,
+    /// The grid's pitch, pixels.
+    pitch_px: usize,
+}
+
+/// `markers` over `rgb`, each pushed out from the contact `(cx, cy, r)`
+/// by the skin's stretch (up to 2.5 px at the contact's rim; none without
+/// a contact).
+fn with_markers(rgb: &mut image::RgbImage, contact: Option<(f64, f64, f64)>, markers: Markers) {
     let (w, h) = (rgb.width() as f64, rgb.height() as f64);
-    for gy in (12..h as u32).step_by(28) {
-        for gx in (12..w as u32).step_by(28) {
+    let (dot, reach) = (markers.radius_px, markers.radius_px + 1.0);
+    for gy in (12..h as u32).step_by(markers.pitch_px) {
+        for gx in (12..w as u32).step_by(markers.pitch_px) {
             let (mut x, mut y) = (f64::from(gx), f64::from(gy));
             if let Some((cx, cy, r)) = contact {
                 let d = (x - cx).hypot(y - cy);
@@ -169,9 +179,9 @@ fn with_markers(rgb: &mut image::RgbImage, contact: Option<(f64, f64, f64)>) {
                     (x, y) = (x + (x - cx) / d * stretch, y + (y - cy) / d * stretch);
                 }
             }
-            for py in (y - 4.0).max(0.0) as u32..((y + 5.0).min(h) as u32) {
-                for px in (x - 4.0).max(0.0) as u32..((x + 5.0).min(w) as u32) {
-                    if (f64::from(px) - x).hypot(f64::from(py) - y) <= 3.0 {
+            for py in (y - reach).max(0.0) as u32..((y + reach + 1.0).min(h) as u32) {
+                for px in (x - reach).max(0.0) as u32..((x + reach + 1.0).min(w) as u32) {
+                    if (f64::from(px) - x).hypot(f64::from(py) - y) <= dot {
                         let p = rgb.get_pixel_mut(px, py);
                         p.0 = p.0.map(|v| v / 4);
                     }
@@ -188,27 +198,42 @@ fn the_circle_finder_finds_presses_on_a_gel_with_markers() {
     // each contact: the circles are found as on the bare gel. Before, each
     // moved dot's strong change drew the threshold's region and the rays
     // off the contact: press 1 was found 76 px in radius, wider than the
-    // ball's 68, so a calibration without annotations was refused.
-    let tmp = tempfile::tempdir().unwrap();
-    let d = tmp.path().join("markers");
-    subset(&d, 32, str::to_string);
-    let ds = BallPresses::open(&d).unwrap();
-    let mut bg = image::open(d.join("background.png")).unwrap().to_rgb8();
-    with_markers(&mut bg, None);
-    bg.save(d.join("background.png")).unwrap();
-    for p in &ds.presses {
-        let a = p.annotated.unwrap();
-        let f = d.join(&p.file);
-        let mut rgb = image::open(&f).unwrap().to_rgb8();
-        with_markers(&mut rgb, Some((a.centre_x_px, a.centre_y_px, a.radius_px)));
-        rgb.save(&f).unwrap();
+    // ball's 68, so a calibration without annotations was refused. Dots of
+    // 3 px every 28 px, and of 8 px every 37 (0.5 mm dots 1.1 mm apart at
+    // the R1.5's 0.0295 mm per pixel, wider than the finder's median).
+    for markers in [
+        Markers {
+            radius_px: 3.0,
+            pitch_px: 28,
+        },
+        Markers {
+            radius_px: 8.0,
+            pitch_px: 37,
+        },
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path().join("markers");
+        subset(&d, 32, str::to_string);
+        let ds = BallPresses::open(&d).unwrap();
+        let mut bg = image::open(d.join("background.png")).unwrap().to_rgb8();
+        with_markers(&mut bg, None, markers);
+        bg.save(d.join("background.png")).unwrap();
+        for p in &ds.presses {
+            let a = p.annotated.unwrap();
+            let f = d.join(&p.file);
+            let mut rgb = image::open(&f).unwrap().to_rgb8();
+            let contact = (a.centre_x_px, a.centre_y_px, a.radius_px);
+            with_markers(&mut rgb, Some(contact), markers);
+            rgb.save(&f).unwrap();
+        }
+        let c = found_against_annotated(&d);
+        assert!(
+            c.centre_error_px < 3.5 && c.max_centre_error_px < 8.0 && c.radius_error_px < 4.5,
+            "dots of {} px: {}",
+            markers.radius_px,
+            c.describe()
+        );
     }
-    let c = found_against_annotated(&d);
-    assert!(
-        c.centre_error_px < 3.5 && c.max_centre_error_px < 8.0 && c.radius_error_px < 4.5,
-        "{}",
-        c.describe()
-    );
 }
 
 #[test]
