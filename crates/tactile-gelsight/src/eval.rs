@@ -117,7 +117,7 @@ pub fn circles_pictures(
     Ok(names)
 }
 
-/// One picture of [`circles_pictures`]: the presses `range`.
+/// One picture of [`circles_pictures`]: the presses `range` (not empty).
 fn circles_picture(
     ds: &BallPresses,
     presses: &[PreparedPress],
@@ -127,16 +127,12 @@ fn circles_picture(
     use tactile_core::plot::Mark;
     const GREEN: [u8; 3] = [40, 230, 60];
     const YELLOW: [u8; 3] = [255, 220, 0];
-    let n = range.len();
-    if n == 0 {
-        return Ok(());
-    }
     let (w, h) = ds.size();
-    let mut sheet = datasets_synth::preview::Sheet::new(n, (w, h));
+    let mut sheet = datasets_synth::preview::Sheet::new(range.len(), (w, h));
     let k = sheet.shrink as f64;
-    for (i, at) in range.enumerate() {
-        let p = &presses[at];
-        let (ox, oy) = sheet.origin(i);
+    for (slot, press) in range.enumerate() {
+        let p = &presses[press];
+        let (ox, oy) = sheet.origin(slot);
         // Read as it was when prepared (checked there: its size, colour
         // and channel order).
         let frame = tactile_core::image_io::load_rgb(ds.root.join(&p.file))?;
@@ -165,7 +161,7 @@ fn circles_picture(
                 width,
             })
         };
-        let name = ds.press_name(at);
+        let name = ds.press_name(press);
         let caption = match p.annotated.filter(|a| *a == p.circle) {
             Some(a) => {
                 sheet.mark(ring(p.found, YELLOW, 1));
@@ -179,7 +175,7 @@ fn circles_picture(
             None => format!("{name}: found"),
         };
         sheet.mark(ring(p.circle, GREEN, 2));
-        sheet.place(i, &small, caption);
+        sheet.place(slot, &small, caption);
     }
     Ok(sheet.save(path)?)
 }

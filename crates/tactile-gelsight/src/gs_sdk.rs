@@ -21,7 +21,7 @@
 //! `ball_diameter_mm` in `sensor.json` chooses one ball: the presses of the
 //! others are left out, named in a warning.
 
-use std::collections::{BTreeMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -139,7 +139,7 @@ fn read_catalog(path: &Path) -> Result<Vec<CatalogRow>> {
                 format!("line {line}: '{d}' in diameter(mm) is not a number"),
             )
         })?;
-        if !(diameter_mm.is_finite() && (0.1..=100.0).contains(&diameter_mm)) {
+        if !crate::layout::is_ball_diameter(diameter_mm) {
             return Err(layout_error(
                 path,
                 format!("line {line}: diameter(mm) = {d} is no ball of 0.1-100 mm"),
@@ -233,7 +233,7 @@ impl Catalog {
     ) -> Result<(Vec<Press>, Vec<String>)> {
         let path = &self.path;
         let mut out = Vec::with_capacity(self.rows.len());
-        let mut seen: BTreeMap<PathBuf, usize> = BTreeMap::new();
+        let mut listed = HashMap::new();
         for row in &self.rows {
             let line = row.line;
             let file = format!("{}/{FRAME_FILE}", row.folder);
@@ -248,16 +248,9 @@ impl Catalog {
                     ),
                 ));
             }
-            if let Some(first) = seen.insert(resolved, line) {
-                return Err(layout_error(
-                    path,
-                    format!(
-                        "line {line}: press folder '{}' is listed already on line {first}: a \
-                         press is one row (delete one of the two)",
-                        row.folder
-                    ),
-                ));
-            }
+            let what = format!("press folder '{}'", row.folder);
+            crate::layout::listed_once(&mut listed, resolved, line, &what)
+                .map_err(|why| layout_error(path, why))?;
             let label_rel = format!("{}/{LABEL_FILE}", row.folder);
             let (label, _) = crate::layout::inside(root, canonical, &label_rel)
                 .map_err(|why| layout_error(path, format!("line {line}: {why}")))?;
@@ -279,8 +272,9 @@ impl Catalog {
                 ball_diameter_mm: Some(row.diameter_mm),
             });
         }
-        let mut warnings = self.warnings.clone();
-        warnings.extend(self.unlisted_warning(root));
+        let unlisted = self.unlisted_warning(root);
+        let mut warnings = self.warnings;
+        warnings.extend(unlisted);
         Ok((out, warnings))
     }
 

@@ -106,7 +106,7 @@ impl SensorInfo {
 
     /// What is wrong with the ball or the scale, if anything.
     fn problem(&self) -> Option<String> {
-        if !(self.ball_diameter_mm.is_finite() && (0.1..=100.0).contains(&self.ball_diameter_mm)) {
+        if !is_ball_diameter(self.ball_diameter_mm) {
             return Some(format!(
                 "ball_diameter_mm = {:?} is no ball of 0.1-100 mm",
                 self.ball_diameter_mm
@@ -510,6 +510,31 @@ impl BallPresses {
     }
 }
 
+/// Whether `d` is a ball's diameter, mm (0.1-100), as `sensor.json`, a
+/// column of `presses.csv` or gs_sdk's catalog gives it.
+pub(crate) fn is_ball_diameter(d: f64) -> bool {
+    d.is_finite() && (0.1..=100.0).contains(&d)
+}
+
+/// Record that the press `what` (the file it names, `resolved`) is listed
+/// on `line` of its list; refused when an earlier line listed it: a press
+/// listed twice would be fitted twice, and could be fitted and held out at
+/// once.
+pub(crate) fn listed_once(
+    listed: &mut std::collections::HashMap<PathBuf, usize>,
+    resolved: PathBuf,
+    line: usize,
+    what: &str,
+) -> std::result::Result<(), String> {
+    match listed.insert(resolved, line) {
+        Some(first) => Err(format!(
+            "line {line}: {what} is listed already on line {first}: a press is one row \
+             (delete one of the two)"
+        )),
+        None => Ok(()),
+    }
+}
+
 /// What makes `c` no contact circle of a ball of `ball_diameter_mm` on a
 /// `(w, h)` frame of `sensor`: not a finite number, too small, wider than
 /// the ball, or centred off the frame (a circle the frame's edge cuts is a
@@ -589,8 +614,7 @@ fn read_presses_csv(
     };
     let ball_col = col("ball_diameter_mm");
     let mut out = Vec::new();
-    // The line each frame is listed on: a press listed twice would be
-    // fitted twice, and could be fitted and held out at once.
+    // The line each frame is listed on ([`listed_once`]).
     let mut listed: std::collections::HashMap<PathBuf, usize> = Default::default();
     for item in tactile_core::csv_lines::records(&mut rd) {
         let (line, rec) = item.map_err(|(line, why)| Error::Layout {
@@ -617,15 +641,12 @@ fn read_presses_csv(
                 ),
             });
         }
-        if let Some(first) = listed.insert(the_file, line) {
-            return Err(Error::Layout {
+        listed_once(&mut listed, the_file, line, &format!("frame '{file}'")).map_err(|why| {
+            Error::Layout {
                 path: path.to_path_buf(),
-                why: format!(
-                    "line {line}: frame '{file}' is listed already on line {first}: \
-                     a press is one row (delete one of the two)"
-                ),
-            });
-        }
+                why,
+            }
+        })?;
         // A press of another ball than sensor.json's names it; an empty cell
         // is sensor.json's.
         let ball_diameter_mm = match ball_col.map(|c| rec.get(c).unwrap_or("").trim()) {
@@ -637,7 +658,7 @@ fn read_presses_csv(
                 };
                 let v = (d.parse::<f64>())
                     .map_err(|_| bad(format!("'{d}' in ball_diameter_mm is not a number")))?;
-                if !(v.is_finite() && (0.1..=100.0).contains(&v)) {
+                if !is_ball_diameter(v) {
                     return Err(bad(format!(
                         "ball_diameter_mm = {d} is no ball of 0.1-100 mm"
                     )));
