@@ -103,32 +103,35 @@ impl GelResponse {
         if presses.is_empty() {
             return Err(Error::Config("gel: no presses to fit the spread on".into()));
         }
-        // The balls pressed, each with how far its presses reach.
+        // The balls pressed, each with how far its presses reach, and each
+        // press's ball among them and the radii of its profile.
         let mut balls: Vec<(f64, f64)> = Vec::new();
+        let mut reads: Vec<(usize, Vec<f64>)> = Vec::with_capacity(presses.len());
         for p in presses {
-            let reach = (p.profile.iter().map(|q| q.0)).fold(p.contact_mm, f64::max);
-            match balls.iter_mut().find(|b| b.0 == p.ball_mm) {
-                Some(b) => b.1 = b.1.max(reach),
-                None => balls.push((p.ball_mm, reach)),
-            }
+            let radii: Vec<f64> = p.profile.iter().map(|q| q.0).collect();
+            let reach = radii.iter().copied().fold(p.contact_mm, f64::max);
+            let ball = match balls.iter().position(|b| b.0 == p.ball_mm) {
+                Some(b) => b,
+                None => {
+                    balls.push((p.ball_mm, 0.0));
+                    balls.len() - 1
+                }
+            };
+            balls[ball].1 = balls[ball].1.max(reach);
+            reads.push((ball, radii));
         }
         let mut best: Option<(Self, f64)> = None;
         for si in 0..14 {
             let sigma_mm = 0.1 * 1.25f64.powi(si);
             // One sweep of approaches per ball and width serves every gain.
-            let sweeps: Vec<(f64, BallSweep)> = (balls.iter())
-                .map(|&(ball_mm, reach)| (ball_mm, BallSweep::new(ball_mm, reach, sigma_mm)))
+            let sweeps: Vec<BallSweep> = (balls.iter())
+                .map(|&(ball_mm, reach)| BallSweep::new(ball_mm, reach, sigma_mm))
                 .collect();
             for gi in 1..=20 {
                 let gain = 0.05 * gi as f64;
                 let (mut sum, mut n, mut ok) = (0.0, 0usize, true);
-                for p in presses {
-                    let Some((_, sweep)) = sweeps.iter().find(|s| s.0 == p.ball_mm) else {
-                        ok = false;
-                        break;
-                    };
-                    let radii: Vec<f64> = p.profile.iter().map(|q| q.0).collect();
-                    let Some((_, model)) = sweep.profile(gain, p.contact_mm, &radii) else {
+                for (p, (ball, radii)) in presses.iter().zip(&reads) {
+                    let Some((_, model)) = sweeps[*ball].profile(gain, p.contact_mm, radii) else {
                         ok = false;
                         break;
                     };
