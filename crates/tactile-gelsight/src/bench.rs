@@ -271,7 +271,7 @@ pub fn cross_validate(
     let n = presses.len();
     options.check(n, &ds.root)?;
     let grid = bg.image.grid;
-    let bg_path = ds.root.join(&ds.sensor.background);
+    let bg_path = ds.background_path();
     let mut result = CandidateResult {
         name: name.to_string(),
         presses: vec![],
@@ -398,7 +398,7 @@ fn time_candidate(
     grid: crate::prepare::WorkingGrid,
     options: &BenchOptions,
 ) -> Result<(f64, Option<f64>)> {
-    let bg_path = ds.root.join(&ds.sensor.background);
+    let bg_path = ds.background_path();
     // Timed with a gate, as calibrated models run (its thresholds do not
     // change the time).
     let gate = Some(crate::inference::ContactGate {

@@ -135,7 +135,7 @@ fn circles_picture(
         let (ox, oy) = sheet.origin(slot);
         // Read as it was when prepared (checked there: its size, colour
         // and channel order).
-        let frame = tactile_core::image_io::load_rgb(ds.root.join(&p.file))?;
+        let frame = ds.frame_as_saved(press)?;
         let small: Vec<u8> =
             tactile_preprocess::shrink_rgb_by(frame.as_slice(), (w, h), sheet.shrink)?
                 .iter()

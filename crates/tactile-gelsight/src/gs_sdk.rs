@@ -22,7 +22,6 @@
 //! others are left out, named in a warning.
 
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use crate::layout::{Circle, MAX_PRESSES, MAX_PRESSES_FILE_BYTES, Press, SensorInfo};
@@ -325,14 +324,12 @@ impl Catalog {
 /// checked before it is read.
 pub fn read_label(path: &Path) -> Result<Circle> {
     let bytes = tactile_core::io::read_limited(path, MAX_LABEL_FILE_BYTES)?;
-    let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| {
-        layout_error(
-            path,
-            format!("not a NumPy .npz archive (a zip of .npy arrays): {e}"),
-        )
-    })?;
+    let mut npz =
+        crate::npz::Npz::new(std::io::Cursor::new(bytes)).map_err(|why| layout_error(path, why))?;
+    let missing =
+        "missing: gs_sdk's label_data.py saves the contact circle as center (x, y) and radius";
     let mut numbers = |name: &str, count: usize| {
-        npz_numbers(&mut archive, name, count)
+        npz.numbers(name, count, MAX_LABEL_ARRAY_BYTES, missing)
             .map_err(|why| layout_error(path, format!("its '{name}': {why}")))
     };
     let centre = numbers("center", 2)?;
@@ -341,66 +338,5 @@ pub fn read_label(path: &Path) -> Result<Circle> {
         centre_x_px: centre[0],
         centre_y_px: centre[1],
         radius_px: radius[0],
-    })
-}
-
-/// The numbers of a `.npy` array of `T`, if it is one.
-fn read_as<T: ndarray_npy::ReadableElement>(bytes: &[u8], to: fn(&T) -> f64) -> Option<Vec<f64>> {
-    use ndarray_npy::ReadNpyExt;
-    let a = ndarray::ArrayD::<T>::read_npy(bytes).ok()?;
-    Some(a.iter().map(to).collect())
-}
-
-/// The `count` numbers of the array `name` in an `.npz` archive.
-fn npz_numbers<R: Read + std::io::Seek>(
-    archive: &mut zip::ZipArchive<R>,
-    name: &str,
-    count: usize,
-) -> std::result::Result<Vec<f64>, String> {
-    use ndarray_npy::npy::header::Header;
-    let mut entry = archive.by_name(&format!("{name}.npy")).map_err(|_| {
-        "missing: gs_sdk's label_data.py saves the contact circle as center (x, y) and radius"
-            .to_string()
-    })?;
-    if entry.size() > MAX_LABEL_ARRAY_BYTES {
-        return Err(format!(
-            "{} bytes: no circle's numbers ({MAX_LABEL_ARRAY_BYTES} bytes at most)",
-            entry.size()
-        ));
-    }
-    let mut bytes = Vec::new();
-    (&mut entry)
-        .take(MAX_LABEL_ARRAY_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| format!("cannot read it: {e}"))?;
-    if bytes.len() as u64 > MAX_LABEL_ARRAY_BYTES {
-        return Err(format!(
-            "no circle's numbers ({MAX_LABEL_ARRAY_BYTES} bytes at most)"
-        ));
-    }
-    let header =
-        Header::from_reader(&mut &bytes[..]).map_err(|e| format!("not a .npy array: {e}"))?;
-    let found = (header.shape.iter()).try_fold(1usize, |n, &d| n.checked_mul(d));
-    if found != Some(count) {
-        let found = found.map_or("more".to_string(), |n| n.to_string());
-        return Err(format!(
-            "holds {found} numbers (shape {:?}), not {count}",
-            header.shape
-        ));
-    }
-    let values = read_as::<f64>(&bytes, |v| *v)
-        .or_else(|| read_as::<f32>(&bytes, |v| f64::from(*v)))
-        .or_else(|| read_as::<i64>(&bytes, |v| *v as f64))
-        .or_else(|| read_as::<i32>(&bytes, |v| f64::from(*v)))
-        .or_else(|| read_as::<u64>(&bytes, |v| *v as f64))
-        .or_else(|| read_as::<u32>(&bytes, |v| f64::from(*v)))
-        .or_else(|| read_as::<i16>(&bytes, |v| f64::from(*v)))
-        .or_else(|| read_as::<u16>(&bytes, |v| f64::from(*v)))
-        .or_else(|| read_as::<u8>(&bytes, |v| f64::from(*v)));
-    values.ok_or_else(|| {
-        format!(
-            "its dtype {} is no number this reads (floats or integers)",
-            header.type_descriptor
-        )
     })
 }

@@ -150,6 +150,8 @@ pub enum Annotations {
     PressesCsv,
     /// gs_sdk's `label.npz` beside each press's `gelsight.png`.
     LabelNpz,
+    /// Taxim's `dataPack.npz`, its `touch_center` and `touch_radius`.
+    DataPack,
 }
 
 impl Annotations {
@@ -158,6 +160,7 @@ impl Annotations {
         match self {
             Self::PressesCsv => "presses.csv",
             Self::LabelNpz => "label.npz",
+            Self::DataPack => crate::taxim::PACK_FILE,
         }
     }
 
@@ -174,6 +177,10 @@ impl Annotations {
             Self::LabelNpz => format!(
                 "label {which} with gs_sdk's label_data.py (a label.npz beside each gelsight.png)"
             ),
+            Self::DataPack => format!(
+                "label {which} with Taxim's generateDataPack.py (touch_center and touch_radius in \
+                 dataPack.npz)"
+            ),
         }
     }
 
@@ -186,6 +193,9 @@ impl Annotations {
             }
             Self::LabelNpz => {
                 "a circle saved before it was moved onto the contact? Label the press again, remove its label.npz"
+            }
+            Self::DataPack => {
+                "a circle saved before it was moved onto the contact? Label the presses again with Taxim's generateDataPack.py"
             }
         }
     }
@@ -225,6 +235,9 @@ pub struct BallPresses {
     pub colour: bool,
     /// Where the annotated circles are written.
     pub annotations: Annotations,
+    /// The presses' frames where the folder holds them in one file (Taxim's
+    /// `dataPack.npz`), by press; `None` where each press is a file.
+    pub held: Option<std::sync::Arc<Vec<RgbImage>>>,
 }
 
 impl std::fmt::Debug for BallPresses {
@@ -277,10 +290,28 @@ pub(crate) fn inside(
 impl BallPresses {
     /// Read the folder `root`: `sensor.json`, the background, the presses
     /// (from `presses.csv` when there is one, else every frame file in
-    /// `frames/`).
+    /// `frames/`); or gs_sdk's folder ([`crate::gs_sdk`]); or Taxim's
+    /// folder, or its pack itself (`root` a `.npz` file:
+    /// [`crate::taxim`]).
     pub fn open(root: impl AsRef<Path>) -> Result<Self> {
         let root = root.as_ref().to_path_buf();
+        if root.is_file()
+            && root
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("npz"))
+        {
+            let pack = root
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
+            let dir = tactile_core::io::folder_of(&root).to_path_buf();
+            return crate::taxim::open(dir, &pack);
+        }
         tactile_core::io::expect_folder(&root, "calibration folder")?;
+        if crate::taxim::is_taxim_folder(&root) {
+            return crate::taxim::open(root, crate::taxim::PACK_FILE);
+        }
         let sensor_file = root.join("sensor.json");
         let (sensor, catalog) = match crate::gs_sdk::is_gs_sdk_folder(&root) {
             true => {
@@ -339,6 +370,7 @@ impl BallPresses {
             presses,
             warnings,
             annotations,
+            held: None,
         })
     }
 
@@ -350,8 +382,8 @@ impl BallPresses {
     /// The frame of press `i`, its size checked against the background's,
     /// and in colour when the background is.
     pub fn frame(&self, i: usize) -> Result<RgbImage> {
-        let path = self.root.join(&self.presses[i].file);
-        let img = load_rgb(&path)?;
+        let path = self.press_path(i);
+        let img = self.frame_as_saved(i)?;
         let found = (img.width(), img.height());
         if found != self.size() {
             return Err(Error::FrameSize {
@@ -375,6 +407,53 @@ impl BallPresses {
             bg.check_channel_order(&bg.matched(&img)?, &path)?;
         }
         Ok(img)
+    }
+
+    /// The frame of press `i` as its file (or the pack) holds it,
+    /// unchecked: [`Self::frame`] checks it.
+    pub fn frame_as_saved(&self, i: usize) -> Result<RgbImage> {
+        match &self.held {
+            Some(frames) => frames.get(i).cloned().ok_or_else(|| {
+                Error::from(tactile_core::Error::Invalid(format!(
+                    "press {i}: the folder holds {} presses",
+                    frames.len()
+                )))
+            }),
+            None => Ok(load_rgb(self.press_path(i))?),
+        }
+    }
+
+    /// Press `i`'s frame file, to name it (a press held in a pack:
+    /// `DIR/dataPack.npz:<name>`).
+    pub fn press_path(&self, i: usize) -> PathBuf {
+        let file = self.presses.get(i).map_or("", |p| p.file.as_str());
+        self.root.join(file)
+    }
+
+    /// The background's file, to name it (in a pack: `DIR/dataPack.npz:f0`).
+    pub fn background_path(&self) -> PathBuf {
+        self.root.join(&self.sensor.background)
+    }
+
+    /// Write the background to `to` as a model keeps it: its file's bytes,
+    /// or a PNG of the frame a pack holds.
+    pub fn save_background(&self, to: &Path) -> Result<()> {
+        match self.held {
+            Some(_) => {
+                let (w, h) = self.size();
+                tactile_core::image_io::save_rgb_png(to, w, h, self.background.as_slice())?;
+            }
+            None => {
+                // Copied as bytes: the folder's own file, writable
+                // whatever the source's permissions.
+                let bytes = tactile_core::io::read_limited(
+                    self.background_path(),
+                    tactile_core::image_io::MAX_IMAGE_FILE_BYTES,
+                )?;
+                tactile_core::io::write_atomic(to, &bytes)?;
+            }
+        }
+        Ok(())
     }
 
     /// The diameter of the ball of press `i`, mm.
@@ -406,6 +485,9 @@ impl BallPresses {
         let Some(p) = self.presses.get(i) else {
             return String::new();
         };
+        if let Some(name) = crate::taxim::held_press_name(&p.file) {
+            return name.to_string();
+        }
         let path = Path::new(&p.file);
         let name = path.file_name().map(|f| f.to_string_lossy().into_owned());
         let name = name.unwrap_or_else(|| p.file.clone());
@@ -441,7 +523,8 @@ impl BallPresses {
     /// (`own`) or `sensor.json`'s.
     fn ball_words(&self, own: bool) -> (&'static str, &'static str) {
         match (own, self.annotations) {
-            (false, _) => (
+            // A pack's presses are all of sensor.json's ball.
+            (false, _) | (_, Annotations::DataPack) => (
                 "sensor.json gives",
                 "ball_diameter_mm and mm_per_px in sensor.json",
             ),

@@ -25,11 +25,13 @@ pub mod layout;
 pub mod lookup;
 pub mod model;
 pub mod negatives;
+mod npz;
 pub mod options;
 pub mod poisson;
 pub mod prepare;
 pub mod reconstruct;
 pub mod render_model;
+pub mod taxim;
 pub mod training;
 
 pub use artifact::GelsightArtifact;

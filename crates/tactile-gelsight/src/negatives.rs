@@ -52,10 +52,7 @@ pub fn real_frames(config: &CalibratedConfig, sensor: &Path) -> Result<RealFrame
         });
     }
     let mut rec = Reconstructor::load(sensor, Runtime::BurnNdarray, 0)?;
-    rec.set_background(
-        &presses.background,
-        &presses.root.join(&presses.sensor.background),
-    )?;
+    rec.set_background(&presses.background, &presses.background_path())?;
     let used = n - config.real_held_out;
     let mut frames = Vec::with_capacity(used);
     for (i, p) in presses.presses.iter().enumerate().take(used) {

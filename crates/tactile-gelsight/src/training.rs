@@ -627,12 +627,7 @@ pub fn calibrate(
         }),
     };
     artifact.save(&fitted.net, dir)?;
-    // Copied as bytes: the folder's own file, writable whatever the
-    // source's permissions.
-    let bg_file = ds.root.join(&ds.sensor.background);
-    let bytes =
-        tactile_core::io::read_limited(&bg_file, tactile_core::image_io::MAX_IMAGE_FILE_BYTES)?;
-    tactile_core::io::write_atomic(dir.join(BACKGROUND_FILE), &bytes)?;
+    ds.save_background(&dir.join(BACKGROUND_FILE))?;
     let mut rec = crate::inference::Reconstructor::new(
         artifact.grid,
         artifact.sensor.mm_per_px,
@@ -640,7 +635,7 @@ pub fn calibrate(
             fitted.net, device,
         ))),
         &ds.background,
-        &ds.root.join(&ds.sensor.background),
+        &ds.background_path(),
     )?
     .with_gate(fitted.gate);
     let sensor_name = match ds.sensor.sensor.is_empty() {

@@ -506,6 +506,286 @@ fn a_gs_sdk_folder_names_what_it_cannot_read() {
     );
 }
 
+/// One array of a pack: `.npy` bytes.
+enum PackArray {
+    /// Written by `ndarray-npy`.
+    Npy(Vec<u8>),
+}
+
+/// The `.npy` bytes of `a`.
+fn npy<A: ndarray_npy::WritableElement, D: ndarray::Dimension>(
+    a: ndarray::Array<A, D>,
+) -> PackArray {
+    use ndarray_npy::WriteNpyExt;
+    let mut bytes = Vec::new();
+    a.write_npy(&mut bytes).unwrap();
+    PackArray::Npy(bytes)
+}
+
+/// The `.npy` bytes of `texts` as NumPy keeps a list of `str` (`<U`,
+/// UTF-32), which `ndarray-npy` does not write.
+fn npy_strings(texts: &[&str]) -> PackArray {
+    let width = texts
+        .iter()
+        .map(|t| t.chars().count())
+        .max()
+        .unwrap_or(1)
+        .max(1);
+    let dict = format!(
+        "{{'descr': '<U{width}', 'fortran_order': False, 'shape': ({},), }}",
+        texts.len()
+    );
+    let mut header = dict.into_bytes();
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(b' ');
+    }
+    header.push(b'\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(&header);
+    for t in texts {
+        let mut chars: Vec<u32> = t.chars().map(u32::from).collect();
+        chars.resize(width, 0);
+        chars
+            .iter()
+            .for_each(|c| bytes.extend_from_slice(&c.to_le_bytes()));
+    }
+    PackArray::Npy(bytes)
+}
+
+/// A `.npz` archive of `arrays` at `path`, as `numpy.savez` (stored) or
+/// `savez_compressed` writes it.
+fn write_npz(path: &Path, arrays: Vec<(&str, PackArray)>, method: zip::CompressionMethod) {
+    use std::io::Write;
+    let mut z = zip::ZipWriter::new(std::fs::File::create(path).unwrap());
+    let opts = zip::write::SimpleFileOptions::default()
+        .compression_method(method)
+        .large_file(true);
+    for (name, PackArray::Npy(bytes)) in arrays {
+        z.start_file(format!("{name}.npy"), opts).unwrap();
+        z.write_all(&bytes).unwrap();
+    }
+    z.finish().unwrap();
+}
+
+/// `img` as an `H x W x 3` array in OpenCV's order (BGR).
+fn bgr_array(img: &tactile_core::image_io::RgbImage) -> ndarray::Array3<u8> {
+    let (w, h) = (img.width(), img.height());
+    let mut a = ndarray::Array3::from_shape_vec((h, w, 3), img.as_slice().to_vec()).unwrap();
+    a.lanes_mut(ndarray::Axis(2))
+        .into_iter()
+        .for_each(|mut px| px.swap(0, 2));
+    a
+}
+
+/// The first `n` shared presses as Taxim's `generateDataPack.py` saves
+/// them: `dataPack.npz` holding `f0` and `imgs` (BGR, as OpenCV read
+/// them), `touch_center` ([x, y]) and `touch_radius` as its labelling tool
+/// leaves them, the frames' `names` and `img_size`; and a `sensor.json`
+/// giving what Taxim keeps in `sensorParams.py`. `edit` changes the
+/// arrays before they are written.
+fn taxim_folder(dir: &Path, n: usize, edit: impl FnOnce(&mut Vec<(&'static str, PackArray)>)) {
+    let src = shared();
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(
+        dir.join("sensor.json"),
+        r#"{"ball_diameter_mm": 4.0, "mm_per_px": 0.0295}"#,
+    )
+    .unwrap();
+    let bg = load_rgb(src.join("background.png")).unwrap();
+    let text = std::fs::read_to_string(src.join("presses.csv")).unwrap();
+    let rows: Vec<Vec<String>> = (text.lines().skip(1).take(n))
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    let (h, w) = (bg.height(), bg.width());
+    let mut imgs = ndarray::Array4::<u8>::zeros((n, h, w, 3));
+    for (i, r) in rows.iter().enumerate() {
+        let frame = load_rgb(src.join(&r[0])).unwrap();
+        imgs.index_axis_mut(ndarray::Axis(0), i)
+            .assign(&bgr_array(&frame));
+    }
+    let centres: Vec<f64> = (rows.iter())
+        .flat_map(|r| [r[1].parse().unwrap(), r[2].parse().unwrap()])
+        .collect();
+    let radii: Vec<i64> = rows.iter().map(|r| r[3].parse().unwrap()).collect();
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r[0].trim_start_matches("frames/"))
+        .collect();
+    let mut arrays = vec![
+        ("f0", npy(bgr_array(&bg))),
+        ("imgs", npy(imgs)),
+        (
+            "touch_center",
+            npy(ndarray::Array2::from_shape_vec((n, 2), centres).unwrap()),
+        ),
+        ("touch_radius", npy(ndarray::Array1::from(radii))),
+        ("names", npy_strings(&names)),
+        ("img_size", npy(ndarray::arr1(&[h as i64, w as i64, 3]))),
+    ];
+    edit(&mut arrays);
+    write_npz(
+        &dir.join("dataPack.npz"),
+        arrays,
+        zip::CompressionMethod::Stored,
+    );
+}
+
+#[test]
+fn a_taxim_data_pack_calibrates_as_it_is() {
+    // A researcher who labelled presses with Taxim (or a tool built on it)
+    // has one dataPack.npz: the background, the presses and their circles.
+    // Before, the toolkit asked for sensor.json, background.png, frames/
+    // and presses.csv, and the folder was refused ("sensor.json: missing",
+    // then "frames/: missing").
+    let tmp = tempfile::tempdir().unwrap();
+    let (taxim, ours) = (tmp.path().join("taxim"), tmp.path().join("ours"));
+    taxim_folder(&taxim, 6, |_| {});
+    subset(&ours, 6, str::to_string);
+    let (a, b) = (
+        BallPresses::open(&taxim).unwrap(),
+        BallPresses::open(&ours).unwrap(),
+    );
+    assert_eq!(
+        a.annotations,
+        tactile_gelsight::layout::Annotations::DataPack
+    );
+    assert_eq!(
+        (a.sensor.ball_diameter_mm, a.sensor.mm_per_px),
+        (4.0, 0.0295)
+    );
+    assert!(a.warnings.is_empty(), "{:?}", a.warnings);
+    assert_eq!(a.presses[1].file, "dataPack.npz:press_02.png");
+    assert_eq!(a.press_name(1), "press_02.png");
+    // The same pixels, in the same order (the pack's BGR turned to RGB),
+    // and the same circles.
+    assert_eq!(a.background.as_slice(), b.background.as_slice());
+    for i in 0..6 {
+        assert_eq!(
+            a.frame(i).unwrap().as_slice(),
+            b.frame(i).unwrap().as_slice()
+        );
+        assert_eq!(a.presses[i].annotated, b.presses[i].annotated);
+    }
+    // The pack itself may be given, under any name (Taxim's repository
+    // ships dataPack_small.npz), with sensor.json beside it.
+    std::fs::rename(taxim.join("dataPack.npz"), taxim.join("dataPack_small.npz")).unwrap();
+    let c = BallPresses::open(taxim.join("dataPack_small.npz")).unwrap();
+    assert_eq!(c.presses.len(), 6);
+    assert_eq!(
+        c.press_path(0),
+        taxim.join("dataPack_small.npz:press_01.png")
+    );
+    std::fs::rename(taxim.join("dataPack_small.npz"), taxim.join("dataPack.npz")).unwrap();
+    // It calibrates, and the model keeps the pack's background as a PNG
+    // of the same pixels.
+    let model = tmp.path().join("model");
+    let cal = short_calibration(&taxim, &model);
+    assert_eq!((cal.train_presses, cal.val_presses), (4, 2));
+    let kept = load_rgb(model.join("background.png")).unwrap();
+    assert_eq!(kept.as_slice(), b.background.as_slice());
+    assert!(
+        cal.validation
+            .iter()
+            .all(|v| v.file.starts_with("dataPack.npz:press_")),
+        "{:?}",
+        cal.validation.iter().map(|v| &v.file).collect::<Vec<_>>()
+    );
+    let mut rec = Reconstructor::load(&model, Runtime::BurnNdarray, 0).unwrap();
+    let map = rec
+        .reconstruct(&b.frame(0).unwrap(), &ours.join("x.png"))
+        .unwrap();
+    assert!(map.indentation_m.iter().any(|v| *v > 1e-4));
+}
+
+#[test]
+fn a_taxim_pack_names_what_it_cannot_read() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("taxim");
+    let open = |d: &Path| BallPresses::open(d).map(|_| ()).unwrap_err().to_string();
+    // No ball or scale: Taxim keeps them in its code.
+    taxim_folder(&d, 3, |_| {});
+    std::fs::remove_file(d.join("sensor.json")).unwrap();
+    let e = open(&d);
+    assert!(
+        e.contains("sensor.json: missing") && e.contains("sensorParams.py") && e.contains("pixmm"),
+        "{e}"
+    );
+    // A background named beside the pack's own.
+    std::fs::write(
+        d.join("sensor.json"),
+        r#"{"ball_diameter_mm": 4.0, "mm_per_px": 0.0295, "background": "bg.png"}"#,
+    )
+    .unwrap();
+    let e = open(&d);
+    assert!(
+        e.contains("names a background, but dataPack.npz holds its own (f0)"),
+        "{e}"
+    );
+    // Each refusal names the pack and the array.
+    let cases: Vec<(&str, Box<dyn FnOnce(&mut Vec<(&'static str, PackArray)>)>)> = vec![
+        (
+            "its 'f0': missing: Taxim's generateDataPack.py saves the background",
+            Box::new(|a| a.retain(|(n, _)| *n != "f0")),
+        ),
+        (
+            "its 'imgs': its dtype is '<f4', not uint8",
+            Box::new(|a| a[1].1 = npy(ndarray::Array4::<f32>::zeros((3, 480, 640, 3)))),
+        ),
+        (
+            "its 'imgs': frames of 320x240, the background (f0) is 640x480",
+            Box::new(|a| a[1].1 = npy(ndarray::Array4::<u8>::zeros((3, 240, 320, 3)))),
+        ),
+        (
+            "its 'imgs': has shape [3, 480, 640], not N x height x width x 3",
+            Box::new(|a| a[1].1 = npy(ndarray::Array3::<u8>::zeros((3, 480, 640)))),
+        ),
+        (
+            "its 'touch_radius': holds 2 numbers (shape [2]), not 3",
+            Box::new(|a| a[3].1 = npy(ndarray::arr1(&[60i64, 61]))),
+        ),
+        (
+            "holds one of touch_center and touch_radius without the other",
+            Box::new(|a| a.retain(|(n, _)| *n != "touch_radius")),
+        ),
+        (
+            // Taxim's labelling tool starts every circle at radius 75: one
+            // saved unmoved is wider than a 4 mm ball at 0.0295 mm/px.
+            "press 1 (press_02.png): its touch_center and touch_radius: contact radius 75.0 px is not smaller than the ball's radius 67.8 px",
+            Box::new(|a| a[3].1 = npy(ndarray::arr1(&[63i64, 75, 61]))),
+        ),
+    ];
+    std::fs::write(
+        d.join("sensor.json"),
+        r#"{"ball_diameter_mm": 4.0, "mm_per_px": 0.0295}"#,
+    )
+    .unwrap();
+    for (k, (want, edit)) in cases.into_iter().enumerate() {
+        let d = tmp.path().join(format!("case{k}"));
+        taxim_folder(&d, 3, edit);
+        let e = open(&d);
+        assert!(
+            e.contains("dataPack.npz: ") && e.contains(want),
+            "{want}\n{e}"
+        );
+    }
+    // Without names, presses are named by their place in the pack; without
+    // circles, each is found; a pack saying its colours are RGB is read so.
+    let d = tmp.path().join("plain");
+    taxim_folder(&d, 3, |a| {
+        a.retain(|(n, _)| !matches!(*n, "names" | "touch_center" | "touch_radius"));
+        a.push(("color_order", npy_strings(&["RGB"])));
+    });
+    let ds = BallPresses::open(&d).unwrap();
+    assert_eq!(ds.press_name(2), "#2");
+    assert!(ds.presses.iter().all(|p| p.annotated.is_none()));
+    let rgb = load_rgb(shared().join("background.png")).unwrap();
+    let swapped: Vec<u8> = (rgb.as_slice().chunks_exact(3))
+        .flat_map(|p| [p[2], p[1], p[0]])
+        .collect();
+    assert_eq!(ds.background.as_slice(), &swapped[..]);
+}
+
 #[test]
 fn a_scale_far_out_of_range_is_named_in_a_few_characters() {
     // A sensor.json value far out of range is refused in the form it was

@@ -138,6 +138,43 @@ def test_a_gs_sdk_calibration_folder_calibrates_as_it_is(presses: Path, tmp_path
         tactile.calibrate.ball(d, tmp_path / "m2", max_epochs=1)
 
 
+def test_a_taxim_data_pack_calibrates_as_it_is(presses: Path, tmp_path: Path):
+    """Taxim's dataPack.npz, saved by numpy as its generateDataPack.py saves
+    it: the background and presses as OpenCV reads them (BGR), the circles
+    as its labelling tool keeps them ([x, y] and a radius), the frames'
+    names; the ball and scale, which Taxim keeps in its code, in sensor.json."""
+    d = tmp_path / "taxim"
+    d.mkdir()
+    with open(presses / "presses.csv") as src:
+        rows = list(csv.reader(src))[1:]
+    bgr = lambda f: tactile.read_rgb(presses / f)[..., ::-1]  # noqa: E731
+    f0 = bgr("background.png")
+    np.savez(
+        d / "dataPack.npz",
+        f0=f0,
+        imgs=[bgr(file) for file, *_ in rows],
+        touch_center=[[float(x), float(y)] for _, x, y, _ in rows],
+        touch_radius=[int(r) for *_, r in rows],
+        names=[Path(file).name for file, *_ in rows],
+        img_size=f0.shape,
+    )
+    (d / "sensor.json").write_text(json.dumps({"ball_diameter_mm": 4.0, "mm_per_px": 0.0295}))
+    r = tactile.calibrate.ball(d, tmp_path / "m", factor=8, val_presses=2, max_epochs=1, kernels=[3, 1, 1])
+    assert r["train_presses"] == 4 and r["val_presses"] == 2
+    # Every circle read: the circles found are scored against all six.
+    assert r["circles"]["presses"] == 6 and r["circles"]["centre_error_px"] < 8
+    assert [v["file"] for v in r["validation"]][0].startswith("dataPack.npz:press_")
+    # The model keeps the pack's background, in RGB.
+    assert np.array_equal(tactile.read_rgb(tmp_path / "m" / "background.png"), f0[..., ::-1])
+    # The pack itself may be given.
+    r = tactile.calibrate.ball(d / "dataPack.npz", tmp_path / "m1", factor=8, val_presses=2, max_epochs=1,
+                               kernels=[3, 1, 1])
+    assert r["train_presses"] == 4
+    (d / "sensor.json").unlink()
+    with pytest.raises(ValueError, match="sensor.json: missing.*sensorParams.py"):
+        tactile.calibrate.ball(d, tmp_path / "m2", max_epochs=1)
+
+
 def test_a_scale_mistyped_tenfold_is_a_warning(presses: Path, tmp_path: Path):
     d = tmp_path / "tenfold"
     shutil.copytree(presses, d)

@@ -284,7 +284,12 @@ fn what_a_dataset_says_must_agree_with_what_it_holds() {
 
 /// An `.npy` header for a float32 array of `shape`, version 1.
 fn npy_header(shape: &str) -> Vec<u8> {
-    let mut h = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {shape}, }}");
+    npy_header_of("<f4", shape)
+}
+
+/// The same of `descr` values (`|u1`: bytes).
+fn npy_header_of(descr: &str, shape: &str) -> Vec<u8> {
+    let mut h = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
     while (10 + h.len() + 1) % 64 != 0 {
         h.push(' ');
     }
@@ -530,6 +535,124 @@ fn a_gs_sdk_label_claiming_more_than_it_holds_is_refused_before_it_is_read() {
         let (ok, msg) = tactile(&["calibrate", "ball", "--data", s(&d), "--out", s(&out)]);
         assert!(
             !ok && msg.contains("4.000mm/2/label.npz") && msg.contains(said),
+            "{said}: {msg}"
+        );
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn a_taxim_pack_claiming_more_than_it_holds_is_refused_before_it_is_read() {
+    // Taxim's dataPack.npz crafted: presses claimed by the terabyte, frames
+    // of 12 GB in all, a header claiming 4 GB of itself, frames cut short,
+    // a zip end record claiming a billion entries, circles inflating to
+    // 60 MB. Each is refused naming the pack (every size checked before
+    // anything is allocated), and no model folder is made.
+    use std::io::Write;
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("taxim");
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(
+        d.join("sensor.json"),
+        r#"{"ball_diameter_mm": 4.0, "mm_per_px": 0.0295}"#,
+    )
+    .unwrap();
+    let bg = image::open(shared_real().join("gelsight-ball/background.png"))
+        .unwrap()
+        .to_rgb8();
+    let f0 = |w: u32, h: u32| {
+        let mut v = npy_header_of("|u1", &format!("({h}, {w}, 3)"));
+        let scaled = image::imageops::resize(&bg, w, h, image::imageops::FilterType::Triangle);
+        v.extend(scaled.into_raw());
+        v
+    };
+    let pack = |arrays: Vec<(&str, Vec<u8>)>| {
+        let mut z = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let opts = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Deflated);
+        for (name, bytes) in arrays {
+            z.start_file(format!("{name}.npy"), opts).unwrap();
+            z.write_all(&bytes).unwrap();
+        }
+        z.finish().unwrap().into_inner()
+    };
+    let imgs = |shape: &str, frames: usize| {
+        let mut v = npy_header_of("|u1", shape);
+        v.extend(vec![128u8; frames * 640 * 480 * 3]);
+        v
+    };
+    let mut wide_header = b"\x93NUMPY\x02\x00".to_vec();
+    wide_header.extend(u32::MAX.to_le_bytes());
+    let mut zip64_end = Vec::new();
+    for (v, n) in [
+        (0x0606_4b50u64, 4),
+        (44, 8),
+        (45, 2),
+        (45, 2),
+        (0, 4),
+        (0, 4),
+        (1_000_000_000, 8),
+        (1_000_000_000, 8),
+        (1_000_000, 8),
+        (1_000_000_000_000, 8),
+        (0x0706_4b50, 4),
+        (0, 4),
+        (0, 8),
+        (1, 4),
+        (0x0605_4b50, 4),
+        (0, 2),
+        (0, 2),
+        (0xFFFF, 2),
+        (0xFFFF, 2),
+        (0xFFFF_FFFF, 4),
+        (0xFFFF_FFFF, 4),
+        (0, 2),
+    ] {
+        zip64_end.extend(&v.to_le_bytes()[..n]);
+    }
+    let cases: Vec<(Vec<u8>, &str)> = vec![
+        (
+            pack(vec![
+                ("f0", f0(640, 480)),
+                ("imgs", imgs("(1099511627776, 480, 640, 3)", 0)),
+            ]),
+            "its 'imgs': holds 1099511627776 presses, more than 2000",
+        ),
+        (
+            pack(vec![
+                ("f0", f0(1920, 1080)),
+                ("imgs", npy_header_of("|u1", "(1000, 1080, 1920, 3)")),
+            ]),
+            "its 'imgs': holds 1000 frames of 1920x1080: more than 2 GB of presses",
+        ),
+        (
+            pack(vec![("f0", f0(640, 480)), ("imgs", wide_header)]),
+            "its 'imgs': its .npy header claims 4294967295 bytes",
+        ),
+        (
+            pack(vec![
+                ("f0", f0(640, 480)),
+                ("imgs", imgs("(10, 480, 640, 3)", 2)),
+            ]),
+            "its 'imgs': ends after 2 of its 10 frames",
+        ),
+        (zip64_end, "not a NumPy .npz archive"),
+        (
+            pack(vec![
+                ("f0", f0(640, 480)),
+                ("imgs", imgs("(1, 480, 640, 3)", 1)),
+                ("touch_center", vec![0u8; 60 << 20]),
+                ("touch_radius", vec![0u8; 8]),
+            ]),
+            "its 'touch_center': 62914560 bytes: far more than 2 numbers",
+        ),
+    ];
+    let out = tmp.path().join("model");
+    for (bytes, said) in cases {
+        std::fs::write(d.join("dataPack.npz"), bytes).unwrap();
+        let (ok, msg) = tactile(&["calibrate", "ball", "--data", s(&d), "--out", s(&out)]);
+        assert!(
+            !ok && msg.contains("taxim/dataPack.npz") && msg.contains(said),
             "{said}: {msg}"
         );
         assert!(!out.exists());

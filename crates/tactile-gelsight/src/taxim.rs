@@ -1,0 +1,285 @@
+//! Taxim's calibration pack, read as it is.
+//!
+//! Taxim's `generateDataPack.py` (and the tools built on it) keeps the
+//! presses, the background and the hand-labelled circles in one NumPy
+//! archive; the ball and the scale stay in its `Basics/sensorParams.py`:
+//!
+//! ```text
+//! DIR/
+//!   dataPack.npz   f0            the skin at rest, H x W x 3 uint8, BGR (as OpenCV reads it)
+//!                  imgs          the presses, N x H x W x 3 uint8, BGR
+//!                  touch_center  N x 2, each press's contact centre [x, y], pixels
+//!                  touch_radius  N, its contact radius, pixels
+//!                  names         N file names (optional; captions)
+//!   sensor.json    written by hand: {"ball_diameter_mm": 4.0, "mm_per_px": 0.0295}
+//!                  (twice sensorParams.py's ball_radius, and its pixmm)
+//! ```
+//!
+//! The presses are held in memory (their size checked before any is
+//! read): a press is named `dataPack.npz:<name>` in messages and reports.
+
+use std::path::{Path, PathBuf};
+
+use tactile_core::image_io::{MAX_IMAGE_PIXELS, RgbImage, rgb_image};
+
+use crate::layout::{Annotations, BallPresses, Circle, MAX_PRESSES, Press, SensorInfo};
+use crate::npz::{Npz, element_count};
+use crate::{Error, Result};
+
+/// The pack Taxim's `generateDataPack.py` saves in its data folder.
+pub const PACK_FILE: &str = "dataPack.npz";
+/// Most bytes of presses a pack may hold: they are held in memory (2,000
+/// presses of 640x480 are 1.8 GB).
+pub const MAX_PACK_FRAME_BYTES: u64 = 2 << 30;
+/// Largest `touch_center`, `touch_radius` or `names` entry read, bytes.
+const MAX_LABEL_BYTES: u64 = 1 << 20;
+/// Longest press name kept, characters.
+const MAX_NAME_CHARS: usize = 64;
+
+/// Whether `root` is Taxim's data folder: `dataPack.npz` and none of the
+/// toolkit's `presses.csv` or `frames/`, nor gs_sdk's `catalog.csv`.
+pub fn is_taxim_folder(root: &Path) -> bool {
+    root.join(PACK_FILE).is_file()
+        && !root.join("presses.csv").exists()
+        && !root.join("frames").exists()
+        && !root.join(crate::gs_sdk::CATALOG_FILE).exists()
+}
+
+fn layout_error(path: &Path, why: impl Into<String>) -> Error {
+    Error::Layout {
+        path: path.to_path_buf(),
+        why: why.into(),
+    }
+}
+
+/// `sensor.json` beside a pack: the ball and the scale, which Taxim keeps
+/// in its code. The background is the pack's own.
+fn sensor(root: &Path, pack: &str) -> Result<SensorInfo> {
+    let file = root.join("sensor.json");
+    if !file.exists() {
+        return Err(layout_error(
+            &file,
+            "missing: Taxim keeps the ball and the scale in Basics/sensorParams.py, not in \
+             dataPack.npz; write sensor.json beside it, such as {\"ball_diameter_mm\": 4.0, \
+             \"mm_per_px\": 0.0295} (twice its ball_radius, and its pixmm: those are Taxim's \
+             GelSight R1.5 at 640x480)",
+        ));
+    }
+    let text = crate::layout::read_text(&file, crate::layout::MAX_SENSOR_FILE_BYTES)?;
+    let keys = serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&text)
+        .unwrap_or_default();
+    if keys.contains_key("background") {
+        return Err(layout_error(
+            &file,
+            format!(
+                "names a background, but {pack} holds its own (f0): remove \"background\", or \
+                 lay the presses out as frames/ and presses.csv to calibrate against another"
+            ),
+        ));
+    }
+    let mut sensor = SensorInfo::parse(&text, &file)?;
+    sensor.background = format!("{pack}:f0");
+    Ok(sensor)
+}
+
+/// The pack's frame `name` (`f0` or `imgs`), `N x H x W x 3` or `H x W x
+/// 3` uint8, as RGB images (`bgr`: its channels in OpenCV's order), its
+/// size checked before any pixel is read: `(w, h)` where a size is known.
+fn frames<R: std::io::Read + std::io::Seek>(
+    npz: &mut Npz<R>,
+    name: &str,
+    size: Option<(usize, usize)>,
+    bgr: bool,
+) -> std::result::Result<Vec<RgbImage>, String> {
+    let many = name == "imgs";
+    let check = |shape: &[usize]| -> std::result::Result<(), String> {
+        let (n, rest) = match (many, shape) {
+            (true, [n, rest @ ..]) => (*n, rest),
+            (false, rest) => (1, rest),
+            (true, []) => return Err("is a single number, not N frames".into()),
+        };
+        let [h, w, 3] = rest else {
+            let want = if many {
+                "N x height x width x 3"
+            } else {
+                "height x width x 3"
+            };
+            return Err(format!(
+                "has shape {shape:?}, not {want} (8-bit colour frames, as Taxim saves them)"
+            ));
+        };
+        if (*w as u64).saturating_mul(*h as u64) > MAX_IMAGE_PIXELS || *w < 8 || *h < 8 {
+            return Err(format!(
+                "frames of {w}x{h}: no camera's (8x8 to 8K, {MAX_IMAGE_PIXELS} pixels)"
+            ));
+        }
+        if let Some((bw, bh)) = size
+            && (*w, *h) != (bw, bh)
+        {
+            return Err(format!(
+                "frames of {w}x{h}, the background (f0) is {bw}x{bh}: every press is a frame of \
+                 the same camera"
+            ));
+        }
+        if many && n == 0 {
+            return Err("holds no press".into());
+        }
+        if n > MAX_PRESSES {
+            return Err(format!("holds {n} presses, more than {MAX_PRESSES}"));
+        }
+        let bytes = element_count(shape).map(|b| b as u64);
+        if bytes.is_none_or(|b| b > MAX_PACK_FRAME_BYTES) {
+            return Err(format!(
+                "holds {n} frames of {w}x{h}: more than {} GB of presses, which are held in \
+                 memory; calibrate with fewer",
+                MAX_PACK_FRAME_BYTES >> 30
+            ));
+        }
+        Ok(())
+    };
+    let read = |shape: &[usize], r: &mut dyn std::io::Read| {
+        let (n, h, w) = match shape {
+            [n, h, w, _] => (*n, *h, *w),
+            [h, w, _] => (1, *h, *w),
+            _ => return Err("has no frame's shape".to_string()),
+        };
+        let mut out = Vec::with_capacity(n);
+        for k in 0..n {
+            let mut px = vec![0u8; w * h * 3];
+            r.read_exact(&mut px).map_err(|e| {
+                format!("ends after {k} of its {n} frames ({e}): the archive is cut short")
+            })?;
+            if bgr {
+                px.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
+            }
+            out.push(rgb_image(w, h, px).map_err(|e| e.to_string())?);
+        }
+        Ok(out)
+    };
+    let missing = match many {
+        true => "missing: Taxim's generateDataPack.py saves the presses as imgs",
+        false => {
+            "missing: Taxim's generateDataPack.py saves the background (the skin at rest) as f0"
+        }
+    };
+    npz.with_bytes(name, missing, check, read)
+}
+
+/// The press names of a pack: its `names` where each is a file's name and
+/// they differ, else the presses' places in it (`#0`, `#1`, ...).
+fn press_names<R: std::io::Read + std::io::Seek>(npz: &mut Npz<R>, n: usize) -> Vec<String> {
+    let by_place = || (0..n).map(|i| format!("#{i}")).collect();
+    let Some(names) = npz.strings("names", n, MAX_LABEL_BYTES) else {
+        return by_place();
+    };
+    let names: Vec<String> = (names.iter())
+        .map(|s| {
+            let base = s.rsplit(['/', '\\']).next().unwrap_or("").trim();
+            base.chars()
+                .filter(|c| !c.is_control())
+                .take(MAX_NAME_CHARS)
+                .collect()
+        })
+        .collect();
+    let distinct: std::collections::HashSet<&String> = names.iter().collect();
+    match distinct.len() == n && names.iter().all(|s| !s.is_empty() && !s.starts_with('#')) {
+        true => names,
+        false => by_place(),
+    }
+}
+
+/// Read Taxim's pack `pack` in the folder `root`, with the `sensor.json`
+/// beside it.
+pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
+    let sensor = sensor(&root, pack)?;
+    let path = root.join(pack);
+    let file = tactile_core::io::open_regular(&path)?;
+    let mut npz =
+        Npz::new(std::io::BufReader::new(file)).map_err(|why| layout_error(&path, why))?;
+    let named = |name: &str| {
+        let path = path.clone();
+        let name = name.to_string();
+        move |why: String| layout_error(&path, format!("its '{name}': {why}"))
+    };
+    // Taxim saves what OpenCV read: BGR. Packs of other tools may say
+    // otherwise in `color_order`.
+    let bgr = match npz.strings("color_order", 1, 1 << 10).as_deref() {
+        Some([order]) if order.eq_ignore_ascii_case("rgb") => false,
+        _ => true,
+    };
+    let mut f0 = frames(&mut npz, "f0", None, bgr).map_err(named("f0"))?;
+    let background = f0
+        .pop()
+        .ok_or_else(|| layout_error(&path, "its 'f0' holds no frame"))?;
+    let size = (background.width(), background.height());
+    let bg_path = root.join(&sensor.background);
+    crate::prepare::check_not_blank(&bg_path, &background)?;
+    let imgs = frames(&mut npz, "imgs", Some(size), bgr).map_err(named("imgs"))?;
+    let n = imgs.len();
+    let circles = match (npz.has("touch_center"), npz.has("touch_radius")) {
+        (false, false) => None,
+        (true, true) => {
+            let c = npz
+                .numbers("touch_center", n * 2, MAX_LABEL_BYTES, "missing")
+                .map_err(named("touch_center"))?;
+            let r = npz
+                .numbers("touch_radius", n, MAX_LABEL_BYTES, "missing")
+                .map_err(named("touch_radius"))?;
+            Some((c, r))
+        }
+        _ => {
+            return Err(layout_error(
+                &path,
+                "holds one of touch_center and touch_radius without the other: a labelled \
+                 circle is both (or neither, to have each press's circle found)",
+            ));
+        }
+    };
+    let names = press_names(&mut npz, n);
+    let mut presses = Vec::with_capacity(n);
+    for (i, name) in names.iter().enumerate() {
+        let annotated = match &circles {
+            None => None,
+            Some((c, r)) => {
+                let circle = Circle {
+                    centre_x_px: c[2 * i],
+                    centre_y_px: c[2 * i + 1],
+                    radius_px: r[i],
+                };
+                let problem =
+                    crate::layout::circle_problem(&sensor, sensor.ball_diameter_mm, size, &circle);
+                if let Some(why) = problem {
+                    return Err(layout_error(
+                        &path,
+                        format!(
+                            "press {i} ({name}): its touch_center and touch_radius: {why}; label \
+                             it again, or check ball_diameter_mm and mm_per_px in sensor.json"
+                        ),
+                    ));
+                }
+                Some(circle)
+            }
+        };
+        presses.push(Press {
+            file: format!("{pack}:{name}"),
+            annotated,
+            ball_diameter_mm: None,
+        });
+    }
+    Ok(BallPresses {
+        root,
+        sensor,
+        colour: crate::prepare::is_colour_background(&background),
+        background,
+        presses,
+        warnings: Vec::new(),
+        annotations: Annotations::DataPack,
+        held: Some(std::sync::Arc::new(imgs)),
+    })
+}
+
+/// The name of a press held in a pack (`frame_3.jpg` of
+/// `dataPack.npz:frame_3.jpg`).
+pub(crate) fn held_press_name(file: &str) -> Option<&str> {
+    file.split_once(".npz:").map(|(_, name)| name)
+}
