@@ -203,10 +203,10 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
     };
     // Taxim saves what OpenCV read: BGR. Packs of other tools may say
     // otherwise in `color_order`.
-    let bgr = match npz.strings("color_order", 1, 1 << 10).as_deref() {
-        Some([order]) if order.eq_ignore_ascii_case("rgb") => false,
-        _ => true,
-    };
+    let bgr = !matches!(
+        npz.strings("color_order", 1, 1 << 10).as_deref(),
+        Some([order]) if order.eq_ignore_ascii_case("rgb")
+    );
     let mut f0 = frames(&mut npz, "f0", None, bgr).map_err(named("f0"))?;
     let background = f0
         .pop()

@@ -506,25 +506,26 @@ fn a_gs_sdk_folder_names_what_it_cannot_read() {
     );
 }
 
-/// One array of a pack: `.npy` bytes.
-enum PackArray {
-    /// Written by `ndarray-npy`.
-    Npy(Vec<u8>),
-}
+/// One array of a pack: its `.npy` bytes.
+struct Npy(Vec<u8>);
+
+/// A pack's arrays by name, in the order written.
+type PackArrays = Vec<(&'static str, Npy)>;
+
+/// A change to a pack's arrays.
+type PackEdit = Box<dyn FnOnce(&mut PackArrays)>;
 
 /// The `.npy` bytes of `a`.
-fn npy<A: ndarray_npy::WritableElement, D: ndarray::Dimension>(
-    a: ndarray::Array<A, D>,
-) -> PackArray {
+fn npy<A: ndarray_npy::WritableElement, D: ndarray::Dimension>(a: ndarray::Array<A, D>) -> Npy {
     use ndarray_npy::WriteNpyExt;
     let mut bytes = Vec::new();
     a.write_npy(&mut bytes).unwrap();
-    PackArray::Npy(bytes)
+    Npy(bytes)
 }
 
 /// The `.npy` bytes of `texts` as NumPy keeps a list of `str` (`<U`,
 /// UTF-32), which `ndarray-npy` does not write.
-fn npy_strings(texts: &[&str]) -> PackArray {
+fn npy_strings(texts: &[&str]) -> Npy {
     let width = texts
         .iter()
         .map(|t| t.chars().count())
@@ -550,18 +551,18 @@ fn npy_strings(texts: &[&str]) -> PackArray {
             .iter()
             .for_each(|c| bytes.extend_from_slice(&c.to_le_bytes()));
     }
-    PackArray::Npy(bytes)
+    Npy(bytes)
 }
 
 /// A `.npz` archive of `arrays` at `path`, as `numpy.savez` (stored) or
 /// `savez_compressed` writes it.
-fn write_npz(path: &Path, arrays: Vec<(&str, PackArray)>, method: zip::CompressionMethod) {
+fn write_npz(path: &Path, arrays: Vec<(&str, Npy)>, method: zip::CompressionMethod) {
     use std::io::Write;
     let mut z = zip::ZipWriter::new(std::fs::File::create(path).unwrap());
     let opts = zip::write::SimpleFileOptions::default()
         .compression_method(method)
         .large_file(true);
-    for (name, PackArray::Npy(bytes)) in arrays {
+    for (name, Npy(bytes)) in arrays {
         z.start_file(format!("{name}.npy"), opts).unwrap();
         z.write_all(&bytes).unwrap();
     }
@@ -584,7 +585,7 @@ fn bgr_array(img: &tactile_core::image_io::RgbImage) -> ndarray::Array3<u8> {
 /// leaves them, the frames' `names` and `img_size`; and a `sensor.json`
 /// giving what Taxim keeps in `sensorParams.py`. `edit` changes the
 /// arrays before they are written.
-fn taxim_folder(dir: &Path, n: usize, edit: impl FnOnce(&mut Vec<(&'static str, PackArray)>)) {
+fn taxim_folder(dir: &Path, n: usize, edit: impl FnOnce(&mut PackArrays)) {
     let src = shared();
     std::fs::create_dir_all(dir).unwrap();
     std::fs::write(
@@ -723,7 +724,7 @@ fn a_taxim_pack_names_what_it_cannot_read() {
         "{e}"
     );
     // Each refusal names the pack and the array.
-    let cases: Vec<(&str, Box<dyn FnOnce(&mut Vec<(&'static str, PackArray)>)>)> = vec![
+    let cases: Vec<(&str, PackEdit)> = vec![
         (
             "its 'f0': missing: Taxim's generateDataPack.py saves the background",
             Box::new(|a| a.retain(|(n, _)| *n != "f0")),
