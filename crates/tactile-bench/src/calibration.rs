@@ -93,7 +93,7 @@ pub fn bench_calibration(b: &CalibrationBench) -> Result<CalibrationReport> {
     let ds = BallPresses::open(&b.data)?;
     b.options.check(ds.presses.len(), &ds.root)?;
     let t0 = std::time::Instant::now();
-    let (bg, presses) = prepare_presses(&ds, b.base.factor, b.base.circles)?;
+    let (bg, presses) = prepare_presses(&ds, b.base.working_factor(&ds), b.base.circles)?;
     let prepare_s = t0.elapsed().as_secs_f64();
     let circles = CircleAgreement::of(&presses);
     if let Some(bad) = b
@@ -239,7 +239,7 @@ impl CalibrationReport {
         if let Some(p) = first
             && let Some(i) = ds.presses.iter().position(|q| q.file == p.file)
         {
-            let (_, prepared) = prepare_presses(&ds, b.base.factor, b.base.circles)?;
+            let (_, prepared) = prepare_presses(&ds, b.base.working_factor(&ds), b.base.circles)?;
             let cap: Cap = prepared[i].cap(&ds);
             let a = cap.circle.radius_px;
             profiles.push(Series {

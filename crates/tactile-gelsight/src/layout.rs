@@ -195,7 +195,7 @@ impl Annotations {
                 "a circle saved before it was moved onto the contact? Label the press again, remove its label.npz"
             }
             Self::DataPack => {
-                "a circle saved before it was moved onto the contact? Label the presses again with Taxim's generateDataPack.py"
+                "touch_center saved as [row, column] (Taxim's is [x, y]), or a circle saved before it was moved onto the contact? Save touch_center as [x, y] or label the presses again with Taxim's generateDataPack.py"
             }
         }
     }
@@ -321,8 +321,11 @@ impl BallPresses {
             false if !sensor_file.exists() => {
                 return Err(Error::Layout {
                     path: sensor_file,
-                    why: "missing: a calibration folder has sensor.json (ball_diameter_mm, mm_per_px)"
-                        .into(),
+                    why: format!(
+                        "missing: a calibration folder has sensor.json (ball_diameter_mm, \
+                         mm_per_px){}",
+                        crate::taxim::pack_hint(&root)
+                    ),
                 });
             }
             false => {
@@ -341,7 +344,10 @@ impl BallPresses {
         if !bg_path.exists() {
             return Err(Error::Layout {
                 path: bg_path,
-                why: "missing: the background frame (the skin at rest, no contact)".into(),
+                why: format!(
+                    "missing: the background frame (the skin at rest, no contact){}",
+                    crate::taxim::pack_hint(&root)
+                ),
             });
         }
         let background = load_rgb(&bg_path)?;
@@ -830,7 +836,10 @@ fn list_frames(root: &Path) -> Result<(Vec<Press>, Vec<String>)> {
     if !dir.is_dir() {
         return Err(Error::Layout {
             path: dir,
-            why: "missing: a calibration folder has frames/ with one frame file per press".into(),
+            why: format!(
+                "missing: a calibration folder has frames/ with one frame file per press{}",
+                crate::taxim::pack_hint(root)
+            ),
         });
     }
     let list = tactile_core::source::FrameList::open(&dir)?;

@@ -22,9 +22,9 @@ pub struct BallOptions {
     /// Each layer's odd kernel size, the output layer last (all 1: GelSight's per-pixel MLP).
     #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = CalibrationConfig::new().model.kernels)]
     pub kernels: Vec<usize>,
-    /// Frame pixels per working pixel (the grid the model and the Poisson solve run on).
-    #[arg(long, default_value_t = CalibrationConfig::new().factor)]
-    pub factor: usize,
+    /// Frame pixels per working pixel (the grid the model and the Poisson solve run on); default: the scale's, a working pixel of about 0.118 mm (4 at the R1.5's 0.0295 mm per pixel, 2 for a GelSight Mini at 320x240).
+    #[arg(long)]
+    pub factor: Option<usize>,
     /// Presses held out to choose the epoch, spread over the recording (0: all presses fit; the epoch is chosen on four of them).
     #[arg(long, default_value_t = CalibrationConfig::new().val_presses)]
     pub val_presses: usize,

@@ -249,11 +249,20 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
                 let problem =
                     crate::layout::circle_problem(&sensor, sensor.ball_diameter_mm, size, &circle);
                 if let Some(why) = problem {
+                    // Some tools built on Taxim save [row, column].
+                    let (w, h) = (size.0 as f64, size.1 as f64);
+                    let (x, y) = (circle.centre_x_px, circle.centre_y_px);
+                    let on = |x: f64, y: f64| (0.0..w).contains(&x) && (0.0..h).contains(&y);
+                    let order = match !on(x, y) && on(y, x) {
+                        true => " (saved as [row, column]? Taxim's touch_center is [x, y])",
+                        false => "",
+                    };
                     return Err(layout_error(
                         &path,
                         format!(
-                            "press {i} ({name}): its touch_center and touch_radius: {why}; label \
-                             it again, or check ball_diameter_mm and mm_per_px in sensor.json"
+                            "press {i} ({name}): its touch_center and touch_radius: {why}{order}; \
+                             label it again, or check ball_diameter_mm and mm_per_px in \
+                             sensor.json"
                         ),
                     ));
                 }
@@ -276,6 +285,26 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
         annotations: Annotations::DataPack,
         held: Some(std::sync::Arc::new(imgs)),
     })
+}
+
+/// Where `root` holds an archive that may be Taxim's pack under another
+/// name than `dataPack.npz` (Taxim's repository ships
+/// `dataPack_small.npz`), how to give it: read as a folder, it is not.
+pub(crate) fn pack_hint(root: &Path) -> String {
+    let Ok(entries) = std::fs::read_dir(root) else {
+        return String::new();
+    };
+    let pack = (entries.flatten().take(10_000))
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .find(|n| n.to_ascii_lowercase().ends_with(".npz"));
+    match pack {
+        Some(name) => format!(
+            "; if {name} here is Taxim's calibration pack, give it itself (--data {}) with \
+             sensor.json beside it",
+            root.join(&name).display()
+        ),
+        None => String::new(),
+    }
 }
 
 /// The name of a press held in a pack (`frame_3.jpg` of

@@ -25,6 +25,26 @@ use crate::prepare::{FEATURES, PreparedBackground, WorkingGrid, WorkingImage};
 /// Frame pixels per pixel of the grid the circle finder works on.
 pub const FINDER_FACTOR: usize = 2;
 
+/// The working pixel a calibration's default grid aims at, mm: the
+/// R1.5's at the factor its recipe was chosen at (4 x 0.0295 mm). A
+/// sensor of another scale gets the same skin per working pixel, so the
+/// network's kernels and the Poisson solve see a contact as on the R1.5.
+pub const WORKING_PIXEL_MM: f64 = 0.118;
+
+/// Frame pixels per working pixel for a sensor of `mm_per_px` whose
+/// frames are `(w, h)`: [`WORKING_PIXEL_MM`]'s (4 on the R1.5, 2 on a
+/// GelSight Mini at 320x240, 12 on a camera of 0.0098 mm per pixel),
+/// within 1-[`crate::prepare::MAX_FACTOR`] and leaving at least 16
+/// working pixels across the frame.
+pub fn factor_for_scale(mm_per_px: f64, (w, h): (usize, usize)) -> usize {
+    let wanted = (WORKING_PIXEL_MM / mm_per_px).round();
+    let most = (w.min(h) / 16).clamp(1, crate::prepare::MAX_FACTOR);
+    match wanted.is_finite() {
+        true => (wanted.max(1.0) as usize).min(most),
+        false => most.min(4),
+    }
+}
+
 /// Fewest presses a calibration fits on (after the validation presses).
 pub const MIN_TRAIN_PRESSES: usize = 4;
 
@@ -47,9 +67,9 @@ pub struct CalibrationConfig {
     /// The network.
     #[config(default = "GradientNetConfig::new()")]
     pub model: GradientNetConfig,
-    /// Frame pixels per working pixel.
-    #[config(default = 4)]
-    pub factor: usize,
+    /// Frame pixels per working pixel; `None`: the scale's
+    /// ([`factor_for_scale`]).
+    pub factor: Option<usize>,
     /// Epochs, batches, learning rate, seed.
     #[config(default = "Schedule::new(4, 48, 20, 5e-3).with_lr_decay(0.97)")]
     pub schedule: Schedule,
@@ -72,6 +92,14 @@ pub struct CalibrationConfig {
     /// field, a little more shape error).
     #[config(default = false)]
     pub contact_gate: bool,
+}
+
+impl CalibrationConfig {
+    /// Frame pixels per working pixel for the presses `ds`: the config's
+    /// `factor`, else the scale's ([`factor_for_scale`]).
+    pub fn working_factor(&self, ds: &BallPresses) -> usize {
+        (self.factor).unwrap_or_else(|| factor_for_scale(ds.sensor.mm_per_px, ds.size()))
+    }
 }
 
 /// One press made ready: its circles, its exposure-matched working frame
@@ -538,6 +566,10 @@ pub struct Calibration {
     /// The pictures of the presses with their circles, in the model
     /// folder (`circles.png`, then `circles-2.png`, ... for every 48).
     pub circle_pictures: Vec<String>,
+    /// The grid the sensor model and the Poisson solve run on.
+    pub working_grid: WorkingGrid,
+    /// Millimetres of skin per working pixel.
+    pub working_pixel_mm: f64,
 }
 
 impl Calibration {
@@ -552,6 +584,14 @@ impl Calibration {
             self.val_presses,
             out.display()
         )];
+        let g = &self.working_grid;
+        lines.push(format!(
+            "working grid {}x{}: {} frame pixels, {:.3} mm of skin, per working pixel (--factor)",
+            g.width(),
+            g.height(),
+            g.factor,
+            self.working_pixel_mm
+        ));
         lines.extend(self.circles.as_ref().map(|c| c.describe()));
         let more = match &self.circle_pictures[..] {
             [] | [_] => String::new(),
@@ -603,7 +643,7 @@ pub fn calibrate(
         });
     }
     let staged = tactile_core::io::StagedDir::fresh(out)?;
-    let (bg, presses) = prepare_presses(ds, config.factor, config.circles)?;
+    let (bg, presses) = prepare_presses(ds, config.working_factor(ds), config.circles)?;
     let circles = crate::eval::CircleAgreement::of(&presses);
     if let Some(c) = &circles {
         tactile_core::note!("{}", c.describe());
@@ -669,6 +709,8 @@ pub fn calibrate(
         val_presses: val.len(),
         validation,
         circle_pictures,
+        working_grid: bg.image.grid,
+        working_pixel_mm: bg.image.grid.factor as f64 * ds.sensor.mm_per_px,
         warnings: ds
             .warnings
             .iter()

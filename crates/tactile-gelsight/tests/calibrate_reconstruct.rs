@@ -41,7 +41,9 @@ fn subset(dir: &Path, n: usize, edit: impl Fn(&str) -> String) {
 /// coarse model, two presses held out: enough to see what it says.
 fn short_calibration(dir: &Path, out: &Path) -> tactile_gelsight::training::Calibration {
     let ds = BallPresses::open(dir).unwrap();
-    let mut cfg = CalibrationConfig::new().with_factor(8).with_val_presses(2);
+    let mut cfg = CalibrationConfig::new()
+        .with_factor(Some(8))
+        .with_val_presses(2);
     cfg.schedule.max_epochs = 2;
     calibrate(&cfg, &ds, out, DeviceKind::Flex).unwrap()
 }
@@ -152,6 +154,58 @@ fn the_circle_finder_finds_every_press_at_any_frame_size() {
             && e.contains("check ball_diameter_mm and mm_per_px in sensor.json"),
         "{e}"
     );
+}
+
+#[test]
+fn a_sensor_of_another_scale_works_on_the_r15s_working_pixel() {
+    use tactile_gelsight::training::factor_for_scale;
+    // The recipe was chosen on the R1.5 at 4 frame pixels (0.118 mm) per
+    // working pixel. A camera of three times the resolution calibrated at
+    // 4 took 20 s an epoch (16 min) for the same held-out shape errors as
+    // at 12; a GelSight Mini at 320x240 (0.0634 mm per pixel) calibrated
+    // at 4 works on 0.25 mm. Each now gets the R1.5's working pixel.
+    assert_eq!(factor_for_scale(0.0295, (640, 480)), 4);
+    assert_eq!(factor_for_scale(0.0634, (320, 240)), 2);
+    assert_eq!(factor_for_scale(0.0295 / 3.0, (1920, 1440)), 12);
+    assert_eq!(factor_for_scale(0.5, (640, 480)), 1);
+    // Within the grid's limits: 16 at most, 16 working pixels across.
+    assert_eq!(factor_for_scale(1e-4, (7680, 4320)), 16);
+    assert_eq!(factor_for_scale(0.001, (200, 150)), 9);
+    // The R1.5's presses at twice the resolution, calibrated with the
+    // defaults: a grid of 160x120 as at 640x480.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("1280x960");
+    subset(&d, 6, |line| {
+        let cells: Vec<&str> = line.split(',').collect();
+        let v = |i: usize| cells[i].parse::<f64>().unwrap();
+        let at = |i: usize| (v(i) + 0.5) * 2.0 - 0.5;
+        format!("{},{:.2},{:.2},{:.2}", cells[0], at(1), at(2), v(3) * 2.0)
+    });
+    set_sensor_value(&d, "mm_per_px", "0.01475");
+    edit_pictures(&d, |rgb| {
+        image::imageops::resize(&rgb, 1280, 960, image::imageops::FilterType::Triangle)
+    });
+    let ds = BallPresses::open(&d).unwrap();
+    let mut cfg = CalibrationConfig::new().with_val_presses(2);
+    cfg.schedule.max_epochs = 1;
+    let cal = calibrate(&cfg, &ds, &tmp.path().join("m"), DeviceKind::Flex).unwrap();
+    let g = cal.working_grid;
+    assert_eq!((g.factor, g.width(), g.height()), (8, 160, 120));
+    assert!((cal.working_pixel_mm - 0.118).abs() < 1e-9);
+    let line = cal.describe(&tmp.path().join("m")).join("\n");
+    assert!(
+        line.contains("working grid 160x120: 8 frame pixels, 0.118 mm of skin, per working pixel"),
+        "{line}"
+    );
+    // --factor still sets it.
+    let cal = calibrate(
+        &cfg.clone().with_factor(Some(16)),
+        &ds,
+        &tmp.path().join("m16"),
+        DeviceKind::Flex,
+    )
+    .unwrap();
+    assert_eq!(cal.working_grid.width(), 80);
 }
 
 /// Printed markers on a gel, as dark dots.
@@ -723,6 +777,18 @@ fn a_taxim_pack_names_what_it_cannot_read() {
         e.contains("names a background, but dataPack.npz holds its own (f0)"),
         "{e}"
     );
+    // A pack under another name, its folder given: read as a folder, it
+    // is not, and the message says how to give it.
+    let other = tmp.path().join("other");
+    taxim_folder(&other, 3, |_| {});
+    std::fs::rename(other.join("dataPack.npz"), other.join("dataPack_small.npz")).unwrap();
+    let e = open(&other);
+    assert!(
+        e.contains(
+            "if dataPack_small.npz here is Taxim's calibration pack, give it itself (--data"
+        ) && e.contains("other/dataPack_small.npz)"),
+        "{e}"
+    );
     // Each refusal names the pack and the array.
     let cases: Vec<(&str, PackEdit)> = vec![
         (
@@ -754,6 +820,14 @@ fn a_taxim_pack_names_what_it_cannot_read() {
             // saved unmoved is wider than a 4 mm ball at 0.0295 mm/px.
             "press 1 (press_02.png): its touch_center and touch_radius: contact radius 75.0 px is not smaller than the ball's radius 67.8 px",
             Box::new(|a| a[3].1 = npy(ndarray::arr1(&[63i64, 75, 61]))),
+        ),
+        (
+            // Some tools built on Taxim save [row, column].
+            "press 0 (press_01.png): its touch_center and touch_radius: contact circle at (220.0, 560.0) radius 63.0 px: its centre is off the 640x480 frame (saved as [row, column]? Taxim's touch_center is [x, y])",
+            Box::new(|a| {
+                let c = [220.0, 560.0, 300.0, 169.0, 256.0, 332.0];
+                a[2].1 = npy(ndarray::Array2::from_shape_vec((3, 2), c.to_vec()).unwrap());
+            }),
         ),
     ];
     std::fs::write(
@@ -1341,7 +1415,9 @@ fn a_calibration_reconstructs_held_out_presses_and_rest() {
     let d = tmp.path().join("presses");
     subset(&d, 10, str::to_string);
     let ds = BallPresses::open(&d).unwrap();
-    let mut cfg = CalibrationConfig::new().with_factor(8).with_val_presses(2);
+    let mut cfg = CalibrationConfig::new()
+        .with_factor(Some(8))
+        .with_val_presses(2);
     cfg.schedule.max_epochs = 40;
     let out = tmp.path().join("model");
     let cal = calibrate(&cfg, &ds, &out, DeviceKind::Flex).unwrap();
@@ -1498,7 +1574,9 @@ fn the_lookup_anchor_cross_validates_and_the_folder_reconstruction_refuses_bad_i
     }
 
     // A model folder to reconstruct with (a short fit is enough here).
-    let mut cfg = CalibrationConfig::new().with_factor(8).with_val_presses(2);
+    let mut cfg = CalibrationConfig::new()
+        .with_factor(Some(8))
+        .with_val_presses(2);
     cfg.schedule.max_epochs = 2;
     let model = tmp.path().join("model");
     calibrate(&cfg, &ds, &model, DeviceKind::Flex).unwrap();

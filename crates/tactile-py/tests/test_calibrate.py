@@ -166,10 +166,12 @@ def test_a_taxim_data_pack_calibrates_as_it_is(presses: Path, tmp_path: Path):
     assert [v["file"] for v in r["validation"]][0].startswith("dataPack.npz:press_")
     # The model keeps the pack's background, in RGB.
     assert np.array_equal(tactile.read_rgb(tmp_path / "m" / "background.png"), f0[..., ::-1])
-    # The pack itself may be given.
-    r = tactile.calibrate.ball(d / "dataPack.npz", tmp_path / "m1", factor=8, val_presses=2, max_epochs=1,
-                               kernels=[3, 1, 1])
+    assert r["working_grid"]["factor"] == 8
+    # The pack itself may be given; without a factor, the grid is the
+    # scale's: 0.118 mm per working pixel, 4 frame pixels on the R1.5.
+    r = tactile.calibrate.ball(d / "dataPack.npz", tmp_path / "m1", val_presses=2, max_epochs=1, kernels=[3, 1, 1])
     assert r["train_presses"] == 4
+    assert r["working_grid"]["factor"] == 4 and abs(r["working_pixel_mm"] - 0.118) < 1e-9
     (d / "sensor.json").unlink()
     with pytest.raises(ValueError, match="sensor.json: missing.*sensorParams.py"):
         tactile.calibrate.ball(d, tmp_path / "m2", max_epochs=1)
