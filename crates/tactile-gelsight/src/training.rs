@@ -633,6 +633,8 @@ pub fn calibrate(
 ) -> crate::Result<Calibration> {
     config.model.check()?;
     config.schedule.check()?;
+    // The factor used is the one recorded in training.json.
+    let config = &(config.clone()).with_factor(Some(config.working_factor(ds)));
     let n = ds.presses.len();
     if n < MIN_TRAIN_PRESSES + config.val_presses {
         return Err(Error::TooFewPresses {

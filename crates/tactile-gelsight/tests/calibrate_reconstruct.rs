@@ -192,6 +192,8 @@ fn a_sensor_of_another_scale_works_on_the_r15s_working_pixel() {
     let g = cal.working_grid;
     assert_eq!((g.factor, g.width(), g.height()), (8, 160, 120));
     assert!((cal.working_pixel_mm - 0.118).abs() < 1e-9);
+    let record = std::fs::read_to_string(tmp.path().join("m/training.json")).unwrap();
+    assert!(record.contains("\"factor\": 8"), "{record}");
     let line = cal.describe(&tmp.path().join("m")).join("\n");
     assert!(
         line.contains("working grid 160x120: 8 frame pixels, 0.118 mm of skin, per working pixel"),
