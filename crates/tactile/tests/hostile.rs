@@ -452,6 +452,39 @@ fn every_size_is_bounded_before_anything_is_allocated() {
     assert!(t0.elapsed() < Duration::from_secs(60));
 }
 
+/// A zip's end records alone, claiming a billion entries at a terabyte's
+/// offset.
+fn zip_claiming_a_billion_entries() -> Vec<u8> {
+    let mut zip64_end = Vec::new();
+    for (v, n) in [
+        (0x0606_4b50u64, 4),
+        (44, 8),
+        (45, 2),
+        (45, 2),
+        (0, 4),
+        (0, 4),
+        (1_000_000_000, 8),
+        (1_000_000_000, 8),
+        (1_000_000, 8),
+        (1_000_000_000_000, 8),
+        (0x0706_4b50, 4),
+        (0, 4),
+        (0, 8),
+        (1, 4),
+        (0x0605_4b50, 4),
+        (0, 2),
+        (0, 2),
+        (0xFFFF, 2),
+        (0xFFFF, 2),
+        (0xFFFF_FFFF, 4),
+        (0xFFFF_FFFF, 4),
+        (0, 2),
+    ] {
+        zip64_end.extend(&v.to_le_bytes()[..n]);
+    }
+    zip64_end
+}
+
 #[test]
 fn a_gs_sdk_label_claiming_more_than_it_holds_is_refused_before_it_is_read() {
     // gs_sdk's calibration folder with each press's label.npz (a zip of
@@ -481,33 +514,7 @@ fn a_gs_sdk_label_claiming_more_than_it_holds_is_refused_before_it_is_read() {
     }
     std::fs::write(d.join("catalog.csv"), catalog).unwrap();
     let label = d.join("4.000mm/2/label.npz");
-    let mut zip64_end = Vec::new();
-    for (v, n) in [
-        (0x0606_4b50u64, 4),
-        (44, 8),
-        (45, 2),
-        (45, 2),
-        (0, 4),
-        (0, 4),
-        (1_000_000_000, 8),
-        (1_000_000_000, 8),
-        (1_000_000, 8),
-        (1_000_000_000_000, 8),
-        (0x0706_4b50, 4),
-        (0, 4),
-        (0, 8),
-        (1, 4),
-        (0x0605_4b50, 4),
-        (0, 2),
-        (0, 2),
-        (0xFFFF, 2),
-        (0xFFFF, 2),
-        (0xFFFF_FFFF, 4),
-        (0xFFFF_FFFF, 4),
-        (0, 2),
-    ] {
-        zip64_end.extend(&v.to_le_bytes()[..n]);
-    }
+    let zip64_end = zip_claiming_a_billion_entries();
     // An archive whose `center` is `bytes` (its `radius` one zero).
     let array = |method, bytes: &[u8]| {
         let mut z = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
@@ -583,33 +590,7 @@ fn a_taxim_pack_claiming_more_than_it_holds_is_refused_before_it_is_read() {
     };
     let mut wide_header = b"\x93NUMPY\x02\x00".to_vec();
     wide_header.extend(u32::MAX.to_le_bytes());
-    let mut zip64_end = Vec::new();
-    for (v, n) in [
-        (0x0606_4b50u64, 4),
-        (44, 8),
-        (45, 2),
-        (45, 2),
-        (0, 4),
-        (0, 4),
-        (1_000_000_000, 8),
-        (1_000_000_000, 8),
-        (1_000_000, 8),
-        (1_000_000_000_000, 8),
-        (0x0706_4b50, 4),
-        (0, 4),
-        (0, 8),
-        (1, 4),
-        (0x0605_4b50, 4),
-        (0, 2),
-        (0, 2),
-        (0xFFFF, 2),
-        (0xFFFF, 2),
-        (0xFFFF_FFFF, 4),
-        (0xFFFF_FFFF, 4),
-        (0, 2),
-    ] {
-        zip64_end.extend(&v.to_le_bytes()[..n]);
-    }
+    let zip64_end = zip_claiming_a_billion_entries();
     let cases: Vec<(Vec<u8>, &str)> = vec![
         (
             pack(vec![
