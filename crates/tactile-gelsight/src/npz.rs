@@ -116,7 +116,19 @@ impl<R: Read + Seek> Npz<R> {
             );
         }
         check(&header.shape)?;
-        read(&header.shape, &mut entry)
+        let values = read(&header.shape, &mut entry)?;
+        // Read to its end, so the zip's checksum of it is compared: a
+        // stored array damaged on disk would otherwise be read as pixels.
+        match entry.read(&mut [0u8; 1]) {
+            Ok(0) => Ok(values),
+            Ok(_) => Err(format!(
+                "holds more bytes than its shape {:?} says: not one .npy array",
+                header.shape
+            )),
+            Err(e) => Err(format!(
+                "is damaged ({e}): its bytes do not match the archive's checksum of them"
+            )),
+        }
     }
 
     /// The strings of the array `name` when it holds `count` of them as

@@ -846,6 +846,19 @@ fn a_taxim_pack_names_what_it_cannot_read() {
             "{want}\n{e}"
         );
     }
+    // A pack damaged on disk: a pixel flipped in a stored press.
+    let d = tmp.path().join("damaged");
+    taxim_folder(&d, 3, |_| {});
+    let mut bytes = std::fs::read(d.join("dataPack.npz")).unwrap();
+    let at = bytes.len() / 2;
+    bytes[at] ^= 0x40;
+    std::fs::write(d.join("dataPack.npz"), bytes).unwrap();
+    let e = open(&d);
+    assert!(
+        e.contains("dataPack.npz: its 'imgs': is damaged")
+            && e.contains("do not match the archive's checksum"),
+        "{e}"
+    );
     // Without names, presses are named by their place in the pack; without
     // circles, each is found; a pack saying its colours are RGB is read so.
     let d = tmp.path().join("plain");

@@ -647,7 +647,7 @@ def calibrate_ball(
     config: Optional[_Path] = None,
     widths: Sequence[int] = (32, 32),
     kernels: Sequence[int] = (3, 3, 1),
-    factor: int = 4,
+    factor: Optional[int] = None,
     val_presses: int = 4,
     colour_jitter: float = 0.03,
     height_weight: float = 4.0,
