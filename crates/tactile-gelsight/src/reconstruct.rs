@@ -222,8 +222,8 @@ pub fn unlike_warning(
     })
 }
 
-/// The frames a reconstruction reads: a folder's files (or one file), or
-/// the pages of a TIFF stack given alone.
+/// The frames a reconstruction reads: a folder's files (or one file), the
+/// pages of a TIFF stack given alone, or the presses of Taxim's pack.
 enum FramesToRead {
     Files(Vec<PathBuf>),
     Stack {
@@ -231,6 +231,27 @@ enum FramesToRead {
         /// The stack file.
         path: PathBuf,
     },
+    Pack {
+        /// Its presses and their names.
+        frames: crate::taxim::PackFrames,
+        /// The pack file.
+        path: PathBuf,
+        /// Each press's outputs' name.
+        stems: Vec<String>,
+    },
+}
+
+/// Whether `data` is Taxim's pack (a `.npz` file) or its folder, and the
+/// pack's path.
+fn taxim_pack(data: &Path) -> Option<PathBuf> {
+    let npz = data
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npz"));
+    match (data.is_file() && npz, crate::taxim::is_taxim_folder(data)) {
+        (true, _) => Some(data.to_path_buf()),
+        (false, true) => Some(data.join(crate::taxim::PACK_FILE)),
+        _ => None,
+    }
 }
 
 impl FramesToRead {
@@ -239,6 +260,35 @@ impl FramesToRead {
     fn of(data: &Path) -> Result<(Self, Vec<String>)> {
         // One page past the bound is read to tell a stack too long.
         let past_bound = Some(MAX_FRAMES as u64 + 1);
+        if let Some(path) = taxim_pack(data) {
+            let frames = crate::taxim::read_frames(&path)?;
+            let pack_stem = (path.file_stem()).map_or("pack".into(), |s| s.to_string_lossy());
+            // Each press's name's stem (press_01), or its place in the pack
+            // (dataPack-000003) where the names are none or share a stem.
+            let mut stems: Vec<String> = (frames.names.iter())
+                .map(|n| {
+                    Path::new(n)
+                        .file_stem()
+                        .map_or(String::new(), |s| s.to_string_lossy().into_owned())
+                })
+                .collect();
+            let distinct: std::collections::HashSet<&String> = stems.iter().collect();
+            if distinct.len() < stems.len()
+                || stems.iter().any(|s| s.is_empty() || s.starts_with('#'))
+            {
+                stems = (0..stems.len())
+                    .map(|i| format!("{pack_stem}-{i:06}"))
+                    .collect();
+            }
+            return Ok((
+                Self::Pack {
+                    frames,
+                    path,
+                    stems,
+                },
+                Vec::new(),
+            ));
+        }
         if data.is_file()
             && tactile_core::dataset::file_of_a_dataset(data).is_none()
             && let Some(stack) = tactile_core::stack::StackFrames::open(data, past_bound)?
@@ -264,6 +314,7 @@ impl FramesToRead {
         match self {
             Self::Files(files) => files.len(),
             Self::Stack { stack, .. } => stack.len(),
+            Self::Pack { frames, .. } => frames.presses.len(),
         }
     }
 
@@ -273,6 +324,9 @@ impl FramesToRead {
             Self::Files(files) => files[i].clone(),
             Self::Stack { path, .. } => {
                 PathBuf::from(format!("{}, frame {i:06} of the stack", path.display()))
+            }
+            Self::Pack { frames, path, .. } => {
+                PathBuf::from(format!("{}:{}", path.display(), frames.names[i]))
             }
         }
     }
@@ -288,6 +342,7 @@ impl FramesToRead {
         match self {
             Self::Files(files) => stem(&files[i]),
             Self::Stack { path, .. } => format!("{}-{i:06}", stem(path)),
+            Self::Pack { stems, .. } => stems[i].clone(),
         }
     }
 
@@ -295,6 +350,7 @@ impl FramesToRead {
         match self {
             Self::Files(files) => load_rgb(&files[i]),
             Self::Stack { stack, .. } => stack.load(i),
+            Self::Pack { frames, .. } => Ok(frames.presses[i].clone()),
         }
     }
 
@@ -311,6 +367,11 @@ impl FramesToRead {
                     Ok((self.label(i), header))
                 })
             }
+            // One size and colour for every press (checked as it was read).
+            Self::Pack { frames, .. } => match frames.presses.first() {
+                Some(first) => rec.check_frame(first, &self.label(0)),
+                None => Ok(()),
+            },
         }
     }
 }

@@ -190,41 +190,79 @@ fn press_names<R: std::io::Read + std::io::Seek>(npz: &mut Npz<R>, n: usize) -> 
 
 /// Read Taxim's pack `pack` in the folder `root`, with the `sensor.json`
 /// beside it.
-pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
-    let sensor = sensor(&root, pack)?;
-    let path = root.join(pack);
-    let file = tactile_core::io::open_regular(&path)?;
-    let mut npz =
-        Npz::new(std::io::BufReader::new(file)).map_err(|why| layout_error(&path, why))?;
-    let named = |name: &str| {
-        let path = path.clone();
-        let name = name.to_string();
-        move |why: String| layout_error(&path, format!("its '{name}': {why}"))
-    };
+/// The frames of a pack, in RGB: its background and its presses, and the
+/// presses' names ([`press_names`]).
+pub struct PackFrames {
+    /// `f0`: the skin at rest.
+    pub background: RgbImage,
+    /// `imgs`: the presses.
+    pub presses: Vec<RgbImage>,
+    /// Each press's name: its `names` entry, or its place (`#3`).
+    pub names: Vec<String>,
+}
+
+/// The error of the array `name` of the pack `path`.
+fn named(path: &Path, name: &str) -> impl Fn(String) -> Error + use<> {
+    let (path, name) = (path.to_path_buf(), name.to_string());
+    move |why: String| layout_error(&path, format!("its '{name}': {why}"))
+}
+
+/// The frames of the pack at `path`, and the archive, to read its circles.
+fn read_pack(path: &Path) -> Result<(PackFrames, Npz<std::io::BufReader<std::fs::File>>)> {
+    let file = tactile_core::io::open_regular(path)?;
+    let mut npz = Npz::new(std::io::BufReader::new(file)).map_err(|why| layout_error(path, why))?;
     // Taxim saves what OpenCV read: BGR. Packs of other tools may say
     // otherwise in `color_order`.
     let bgr = !matches!(
         npz.strings("color_order", 1, 1 << 10).as_deref(),
         Some([order]) if order.eq_ignore_ascii_case("rgb")
     );
-    let mut f0 = frames(&mut npz, "f0", None, bgr).map_err(named("f0"))?;
+    let mut f0 = frames(&mut npz, "f0", None, bgr).map_err(named(path, "f0"))?;
     let background = f0
         .pop()
-        .ok_or_else(|| layout_error(&path, "its 'f0' holds no frame"))?;
+        .ok_or_else(|| layout_error(path, "its 'f0' holds no frame"))?;
+    let size = (background.width(), background.height());
+    let presses = frames(&mut npz, "imgs", Some(size), bgr).map_err(named(path, "imgs"))?;
+    let names = press_names(&mut npz, presses.len());
+    let pack = PackFrames {
+        background,
+        presses,
+        names,
+    };
+    Ok((pack, npz))
+}
+
+/// The frames of Taxim's pack at `path`, every size checked before it is
+/// read; its circles and `sensor.json` are not read (`tactile reconstruct`
+/// of a pack's presses).
+pub fn read_frames(path: &Path) -> Result<PackFrames> {
+    Ok(read_pack(path)?.0)
+}
+
+pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
+    let sensor = sensor(&root, pack)?;
+    let path = root.join(pack);
+    let (
+        PackFrames {
+            background,
+            presses: imgs,
+            names,
+        },
+        mut npz,
+    ) = read_pack(&path)?;
     let size = (background.width(), background.height());
     let bg_path = root.join(&sensor.background);
     crate::prepare::check_not_blank(&bg_path, &background)?;
-    let imgs = frames(&mut npz, "imgs", Some(size), bgr).map_err(named("imgs"))?;
     let n = imgs.len();
     let circles = match (npz.has("touch_center"), npz.has("touch_radius")) {
         (false, false) => None,
         (true, true) => {
             let c = npz
                 .numbers("touch_center", n * 2, MAX_LABEL_BYTES, "missing")
-                .map_err(named("touch_center"))?;
+                .map_err(named(&path, "touch_center"))?;
             let r = npz
                 .numbers("touch_radius", n, MAX_LABEL_BYTES, "missing")
-                .map_err(named("touch_radius"))?;
+                .map_err(named(&path, "touch_radius"))?;
             Some((c, r))
         }
         _ => {
@@ -235,7 +273,6 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
             ));
         }
     };
-    let names = press_names(&mut npz, n);
     let mut presses = Vec::with_capacity(n);
     for (i, name) in names.iter().enumerate() {
         let annotated = match &circles {

@@ -756,6 +756,60 @@ fn a_taxim_data_pack_calibrates_as_it_is() {
 }
 
 #[test]
+fn a_taxim_packs_presses_are_reconstructed_as_their_files_are() {
+    // A Taxim user's presses are only in the pack: `tactile reconstruct`
+    // takes it (the file, or its folder) as it takes a folder of frames,
+    // each press's map named by its frame (press_01.npy), or by its place
+    // in the pack where it has no names.
+    use tactile_gelsight::reconstruct::{ReconstructOptions, reconstruct_folder};
+    let tmp = tempfile::tempdir().unwrap();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/gelsight-r15");
+    let (taxim, ours) = (tmp.path().join("taxim"), tmp.path().join("ours"));
+    taxim_folder(&taxim, 3, |_| {});
+    subset(&ours, 3, str::to_string);
+    let o = ReconstructOptions {
+        background: None,
+        render: None,
+        runtime: Runtime::BurnFlex,
+    };
+    let run = |data: &Path, out: &str| {
+        let out = tmp.path().join(out);
+        reconstruct_folder(&model, data, &out, &o, None).unwrap();
+        out
+    };
+    let files = run(&ours.join("frames"), "files");
+    for pack in [
+        run(&taxim.join("dataPack.npz"), "pack"),
+        run(&taxim, "folder"),
+    ] {
+        for name in ["press_01.npy", "press_02.npy", "press_04.npy"] {
+            assert_eq!(
+                std::fs::read(pack.join(name)).unwrap(),
+                std::fs::read(files.join(name)).unwrap(),
+                "{name}"
+            );
+        }
+    }
+    let plain = tmp.path().join("plain");
+    taxim_folder(&plain, 2, |a| a.retain(|(n, _)| *n != "names"));
+    let out = run(&plain.join("dataPack.npz"), "plain-out");
+    assert!(out.join("dataPack-000001.npy").is_file());
+    // A pack of another sensor's size is refused, naming its first press.
+    let small = tmp.path().join("small");
+    taxim_folder(&small, 2, |a| {
+        a[0].1 = npy(ndarray::Array3::<u8>::from_elem((240, 320, 3), 90));
+        a[1].1 = npy(ndarray::Array4::<u8>::from_elem((2, 240, 320, 3), 90));
+    });
+    let e = reconstruct_folder(&model, &small, &tmp.path().join("s"), &o, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("small/dataPack.npz:press_01.png: frame is (320, 240)"),
+        "{e}"
+    );
+}
+
+#[test]
 fn a_taxim_pack_names_what_it_cannot_read() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path().join("taxim");

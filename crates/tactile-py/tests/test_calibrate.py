@@ -166,6 +166,10 @@ def test_a_taxim_data_pack_calibrates_as_it_is(presses: Path, tmp_path: Path):
     assert [v["file"] for v in r["validation"]][0].startswith("dataPack.npz:press_")
     # The model keeps the pack's background, in RGB.
     assert np.array_equal(tactile.read_rgb(tmp_path / "m" / "background.png"), f0[..., ::-1])
+    # The pack's presses are reconstructed as a folder of frames is.
+    rec = tactile.calibrate.reconstruct(tmp_path / "m", d / "dataPack.npz", tmp_path / "maps")
+    assert rec["frames"] == 6
+    assert np.load(tmp_path / "maps" / "press_01.npy").shape == (480, 640)
     assert r["working_grid"]["factor"] == 8
     # The pack itself may be given; without a factor, the grid is the
     # scale's: 0.118 mm per working pixel, 4 frame pixels on the R1.5.

@@ -49,8 +49,8 @@ pub(crate) struct ReconstructArgs {
     #[arg(long)]
     model: PathBuf,
     /// A frame, a folder of frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM) of that sensor, a
-    /// TIFF of many pages (a stack: <stack stem>-000000.npy, ... per page), or a dataset folder
-    /// (its rows' frames).
+    /// TIFF of many pages (a stack: <stack stem>-000000.npy, ... per page), a dataset folder
+    /// (its rows' frames), or Taxim's dataPack.npz or its folder (its presses: <name stem>.npy).
     #[arg(long)]
     data: PathBuf,
     /// Output folder (new): <frame stem>.npy per frame, float32 H x W, the skin's indentation in metres (toward the camera; 0 at rest).

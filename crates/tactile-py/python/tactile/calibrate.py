@@ -47,7 +47,8 @@ def reconstruct(
 ) -> Dict[str, Any]:
     """Every frame of ``data`` (a frame, a folder of frames: PNG, JPEG, BMP,
     TIFF, WebP or PGM/PPM, a TIFF stack: ``<stack stem>-000000.npy``, ... per
-    page, or a dataset folder) to ``out/<stem>.npy``; files that are not frames, and
+    page, a dataset folder, or Taxim's ``dataPack.npz``: its presses) to
+    ``out/<stem>.npy``; files that are not frames, and
     frames unlike the sensor's (by the profile of the detector beside the
     calibration, when the folder has ``detector/``, else by the rest frame:
     changed in colour over half the picture), are named in a
