@@ -11,7 +11,10 @@
 # MODELS_DIR (default models/gelsight-r15) is built in a staging folder and
 # moved into place when every step has finished; DATA_DIR (default
 # data/own-sensor) holds the rendered sets. Step times go to
-# DATA_DIR/times.json, the page to docs/own-sensor.md.
+# DATA_DIR/times.json, the page to docs/own-sensor.md. TACTILE_BALL (default
+# ../shared/real/gelsight-ball) names the sensor's ball presses: the
+# calibration layout of docs/datasets.md, gs_sdk's folder, or Taxim's
+# dataPack.npz (the file or its folder).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 models="${1:-models/gelsight-r15}"

@@ -13,7 +13,7 @@ use tactile_core::dataset::Dataset;
 use tactile_core::image_io::{RgbImage, rgb_image};
 use tactile_depth::DepthEstimator;
 use tactile_gelsight::eval::{PressScore, score_full};
-use tactile_gelsight::training::{CircleSource, prepare_presses};
+use tactile_gelsight::training::{CalibrationConfig, CircleSource, prepare_presses};
 use tactile_gelsight::{BallPresses, IndentationMap, Reconstructor};
 use tactile_pipeline::palpation::Pipeline;
 
@@ -97,6 +97,8 @@ pub struct OwnSensorReport {
     pub reconstruction_mae_mm: f64,
     /// Every real ball press.
     pub ball: Vec<BallRow>,
+    /// The presses in words: `32 presses of a 4 mm ball`.
+    pub ball_presses: String,
     /// The pipeline's rate over the held-out renders, frames/s.
     pub pipeline_fps: f64,
     /// Frames of this and other sensors.
@@ -264,7 +266,9 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
     // The real ball presses.
     tactile_core::note!("the real ball presses in {}", b.ball.display());
     let presses = BallPresses::open(&b.ball)?;
-    let (_, prepared) = prepare_presses(&presses, 4, CircleSource::Auto)?;
+    // On the grid a calibration with the defaults works on.
+    let factor = CalibrationConfig::new().working_factor(&presses);
+    let (_, prepared) = prepare_presses(&presses, factor, CircleSource::Auto)?;
     let mut pipeline = Pipeline::load(m, b.runtime, 1)?;
     let trained: Vec<String> = match &b.train {
         Some(t) => Dataset::open(t)?
@@ -395,6 +399,11 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
         depth_ms,
         reconstruction_mae_mm,
         depth_prior: depth.artifact.prior.is_some(),
+        ball_presses: format!(
+            "{} presses of {}",
+            presses.presses.len(),
+            presses.describe_balls()
+        ),
         ball,
         pipeline_fps,
         foreign,
@@ -412,9 +421,11 @@ impl OwnSensorReport {
             tactile_core::bench::Machine::detect().describe(),
             b.runtime
         ));
-        md.push_str("A real GelSight R1.5 (`");
+        md.push_str("A real GelSight-like sensor (`");
         md.push_str(&b.ball.display().to_string());
-        md.push_str("`: 32 presses of a 4 mm ball) is calibrated (`tactile calibrate ball`: the sensor model that reconstructs its skin, and its render model: colour change by slope and place, and the gel's spread around a contact, both fitted on the presses). Its own palpation videos are then rendered through that calibration over its own background (`tactile synth gelsight`: tendons of 1.5-3.5 mm on straight and curved lines pressed 0.05-1.5 mm at any angle and offset; spheres, punches and plate edges pressed 0.05-2.5 mm as negatives; frames without contact; exposure, noise, blur, optics and gel varied per video), with exact masks, directions and indentation maps, and paper B's three models are trained on them with the toolkit's trainers and exported to ONNX. ");
+        md.push_str("`: ");
+        md.push_str(&self.ball_presses);
+        md.push_str(") is calibrated (`tactile calibrate ball`: the sensor model that reconstructs its skin, and its render model: colour change by slope and place, and the gel's spread around a contact, both fitted on the presses). Its own palpation videos are then rendered through that calibration over its own background (`tactile synth gelsight`: tendons of 1.5-3.5 mm on straight and curved lines pressed 0.05-1.5 mm at any angle and offset; spheres, punches and plate edges pressed 0.05-2.5 mm as negatives; frames without contact; exposure, noise, blur, optics and gel varied per video), with exact masks, directions and indentation maps, and paper B's three models are trained on them with the toolkit's trainers and exported to ONNX. ");
         if self.depth_prior {
             md.push_str("The depth network does not read the frame alone: it takes the calibration's own reconstruction of the frame as a fourth channel and learns a correction to it (`tactile train depth --prior-calibration`), so on real frames it starts from what the calibration sees there (given the calibration of another sensor than the one the frames were rendered from, it says so before training). ");
         }
