@@ -291,7 +291,7 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
         let cap = p.cap(&presses);
         let r = pipeline.process(&p.file, &frame)?;
         let net = network_map(&mut depth, &frame)?;
-        let cal = rec.reconstruct(&frame, &presses.root.join(&p.file))?;
+        let cal = rec.reconstruct(&frame, &presses.press_path(i))?;
         ball.push(BallRow {
             file: p.file.clone(),
             tendon: r.tendon,

@@ -334,7 +334,7 @@ pub fn cross_validate(
         for &i in &test {
             let p = &presses[i];
             let frame = ds.frame(i)?;
-            let path = ds.root.join(&p.file);
+            let path = ds.press_path(i);
             let cap = p.cap(ds);
             let map = rec.reconstruct(&frame, &path)?;
             let s = score_full(&map, &cap, &p.file);
@@ -455,7 +455,7 @@ fn time_frames(rec: &mut Reconstructor, ds: &BallPresses, runs: usize) -> Result
     let frames: Vec<RgbImage> = (0..ds.presses.len().min(4))
         .map(|i| ds.frame(i))
         .collect::<Result<_>>()?;
-    let path = ds.root.join(&ds.presses[0].file);
+    let path = ds.press_path(0);
     // One untimed run warms the runtime.
     rec.reconstruct(&frames[0], &path)?;
     for k in 0..runs.max(1) {

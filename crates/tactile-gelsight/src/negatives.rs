@@ -58,7 +58,7 @@ pub fn real_frames(config: &CalibratedConfig, sensor: &Path) -> Result<RealFrame
     for (i, p) in presses.presses.iter().enumerate().take(used) {
         tactile_core::interrupt::check()?;
         let rgb = presses.frame(i)?;
-        let map = rec.reconstruct(&rgb, &presses.root.join(&p.file))?;
+        let map = rec.reconstruct(&rgb, &presses.press_path(i))?;
         frames.push(RealFrame {
             file: p.file.clone(),
             rgb: rgb.as_slice().to_vec(),

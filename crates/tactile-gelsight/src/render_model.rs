@@ -168,7 +168,7 @@ pub fn fit_render_model(
     for (i, p) in presses.iter().enumerate() {
         let frame = ds.frame(i)?;
         let gain = exposure_gain(bg, &frame)?;
-        let map = rec.reconstruct(&frame, &ds.root.join(&p.file))?;
+        let map = rec.reconstruct(&frame, &ds.press_path(i))?;
         let cap = p.cap(ds);
         let (cx, cy, a) = (
             cap.circle.centre_x_px,
@@ -354,14 +354,14 @@ fn colour_error(
     model: &RenderModel,
 ) -> Result<(f64, f64)> {
     let (w, h) = ds.size();
-    let circles: Vec<_> = presses.iter().map(|p| p.circle).collect();
     let pressed: Vec<BallPress> = (presses.iter().enumerate())
         .map(|(i, p)| BallPress::of(ds, i, p.circle))
         .collect();
     let rendered = render_presses(model, &ds.background, &pressed);
     let (mut sum, mut bare, mut n) = (0f64, 0f64, 0usize);
-    for (i, (c, out)) in circles.iter().zip(rendered).enumerate() {
+    for (i, (press, out)) in pressed.iter().zip(rendered).enumerate() {
         let Some(out) = out else { continue };
+        let c = press.circle;
         let frame = ds.frame(i)?;
         let gain = exposure_gain(bg, &frame)?;
         let real = frame.as_slice();

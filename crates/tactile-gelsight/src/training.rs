@@ -233,7 +233,7 @@ pub fn prepare_presses(
     )?;
     let mut out = Vec::with_capacity(ds.presses.len());
     for (i, p) in ds.presses.iter().enumerate() {
-        let path = ds.root.join(&p.file);
+        let path = ds.press_path(i);
         let full = ds.frame(i)?;
         let frame = bg.matched(&full)?;
         let found = find_contact(&fine, &fine.matched(&full)?, &path)?;
@@ -693,8 +693,7 @@ pub fn calibrate(
     let mut validation = Vec::new();
     for &i in &val {
         let p = &presses[i];
-        let path = ds.root.join(&p.file);
-        let map = rec.reconstruct(&ds.frame(i)?, &path)?;
+        let map = rec.reconstruct(&ds.frame(i)?, &ds.press_path(i))?;
         validation.push(crate::eval::score_full(&map, &p.cap(ds), &p.file));
     }
     tactile_burn::artifact::write_training_record(
