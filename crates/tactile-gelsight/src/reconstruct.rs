@@ -265,21 +265,26 @@ impl FramesToRead {
             let pack_stem = (path.file_stem()).map_or("pack".into(), |s| s.to_string_lossy());
             // Each press's name's stem (press_01), or its place in the pack
             // (dataPack-000003) where the names are none or share a stem.
-            let mut stems: Vec<String> = (frames.names.iter())
-                .map(|n| {
-                    Path::new(n)
-                        .file_stem()
-                        .map_or(String::new(), |s| s.to_string_lossy().into_owned())
-                })
-                .collect();
-            let distinct: std::collections::HashSet<&String> = stems.iter().collect();
-            if distinct.len() < stems.len()
-                || stems.iter().any(|s| s.is_empty() || s.starts_with('#'))
-            {
-                stems = (0..stems.len())
+            let by_name: Option<Vec<String>> = frames.names.as_ref().and_then(|names| {
+                (names.iter())
+                    .map(|n| {
+                        Path::new(n)
+                            .file_stem()
+                            .map(|s| s.to_string_lossy().into_owned())
+                    })
+                    .collect()
+            });
+            let stems = match by_name {
+                Some(stems)
+                    if stems.iter().collect::<std::collections::HashSet<_>>().len()
+                        == stems.len() =>
+                {
+                    stems
+                }
+                _ => (0..frames.presses.len())
                     .map(|i| format!("{pack_stem}-{i:06}"))
-                    .collect();
-            }
+                    .collect(),
+            };
             return Ok((
                 Self::Pack {
                     frames,
@@ -326,7 +331,8 @@ impl FramesToRead {
                 PathBuf::from(format!("{}, frame {i:06} of the stack", path.display()))
             }
             Self::Pack { frames, path, .. } => {
-                PathBuf::from(format!("{}:{}", path.display(), frames.names[i]))
+                let pack = path.display().to_string();
+                PathBuf::from(crate::taxim::press_file(&pack, &frames.name(i)))
             }
         }
     }

@@ -166,12 +166,12 @@ fn frames<R: std::io::Read + std::io::Seek>(
 }
 
 /// The press names of a pack: its `names` where each is a file's name and
-/// they differ, else the presses' places in it (`#0`, `#1`, ...).
-fn press_names<R: std::io::Read + std::io::Seek>(npz: &mut Npz<R>, n: usize) -> Vec<String> {
-    let by_place = || (0..n).map(|i| format!("#{i}")).collect();
-    let Some(names) = npz.strings("names", n, MAX_LABEL_BYTES) else {
-        return by_place();
-    };
+/// they differ (`None` else: [`PackFrames::name`] names them by place).
+fn press_names<R: std::io::Read + std::io::Seek>(
+    npz: &mut Npz<R>,
+    n: usize,
+) -> Option<Vec<String>> {
+    let names = npz.strings("names", n, MAX_LABEL_BYTES)?;
     let names: Vec<String> = (names.iter())
         .map(|s| {
             let base = s.rsplit(['/', '\\']).next().unwrap_or("").trim();
@@ -182,14 +182,10 @@ fn press_names<R: std::io::Read + std::io::Seek>(npz: &mut Npz<R>, n: usize) -> 
         })
         .collect();
     let distinct: std::collections::HashSet<&String> = names.iter().collect();
-    match distinct.len() == n && names.iter().all(|s| !s.is_empty() && !s.starts_with('#')) {
-        true => names,
-        false => by_place(),
-    }
+    let usable = distinct.len() == n && names.iter().all(|s| !s.is_empty() && !s.starts_with('#'));
+    usable.then_some(names)
 }
 
-/// Read Taxim's pack `pack` in the folder `root`, with the `sensor.json`
-/// beside it.
 /// The frames of a pack, in RGB: its background and its presses, and the
 /// presses' names ([`press_names`]).
 pub struct PackFrames {
@@ -197,8 +193,24 @@ pub struct PackFrames {
     pub background: RgbImage,
     /// `imgs`: the presses.
     pub presses: Vec<RgbImage>,
-    /// Each press's name: its `names` entry, or its place (`#3`).
-    pub names: Vec<String>,
+    /// Each press's `names` entry, where the pack names them usably.
+    pub names: Option<Vec<String>>,
+}
+
+impl PackFrames {
+    /// Press `i`'s name: its `names` entry, or its place (`#3`).
+    pub fn name(&self, i: usize) -> String {
+        match &self.names {
+            Some(names) => names[i].clone(),
+            None => format!("#{i}"),
+        }
+    }
+}
+
+/// A press of the pack `pack` named `name`, as messages and reports name
+/// it (`dataPack.npz:press_02.png`; [`held_press_name`] reads it back).
+pub(crate) fn press_file(pack: &str, name: &str) -> String {
+    format!("{pack}:{name}")
 }
 
 /// The error of the array `name` of the pack `path`.
@@ -239,21 +251,16 @@ pub fn read_frames(path: &Path) -> Result<PackFrames> {
     Ok(read_pack(path)?.0)
 }
 
+/// Read Taxim's pack `pack` in the folder `root`, with the `sensor.json`
+/// beside it.
 pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
     let sensor = sensor(&root, pack)?;
     let path = root.join(pack);
-    let (
-        PackFrames {
-            background,
-            presses: imgs,
-            names,
-        },
-        mut npz,
-    ) = read_pack(&path)?;
-    let size = (background.width(), background.height());
+    let (frames, mut npz) = read_pack(&path)?;
+    let size = (frames.background.width(), frames.background.height());
     let bg_path = root.join(&sensor.background);
-    crate::prepare::check_not_blank(&bg_path, &background)?;
-    let n = imgs.len();
+    crate::prepare::check_not_blank(&bg_path, &frames.background)?;
+    let n = frames.presses.len();
     let circles = match (npz.has("touch_center"), npz.has("touch_radius")) {
         (false, false) => None,
         (true, true) => {
@@ -274,7 +281,8 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
         }
     };
     let mut presses = Vec::with_capacity(n);
-    for (i, name) in names.iter().enumerate() {
+    for i in 0..n {
+        let name = frames.name(i);
         let annotated = match &circles {
             None => None,
             Some((c, r)) => {
@@ -307,7 +315,7 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
             }
         };
         presses.push(Press {
-            file: format!("{pack}:{name}"),
+            file: press_file(pack, &name),
             annotated,
             ball_diameter_mm: None,
         });
@@ -315,12 +323,12 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
     Ok(BallPresses {
         root,
         sensor,
-        colour: crate::prepare::is_colour_background(&background),
-        background,
+        colour: crate::prepare::is_colour_background(&frames.background),
+        background: frames.background,
         presses,
         warnings: Vec::new(),
         annotations: Annotations::DataPack,
-        held: Some(std::sync::Arc::new(imgs)),
+        held: Some(std::sync::Arc::new(frames.presses)),
     })
 }
 
