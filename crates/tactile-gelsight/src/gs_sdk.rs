@@ -24,6 +24,7 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
+use crate::gs_sdk_config::{ConfigsFound, GsSdkConfig};
 use crate::layout::{Circle, MAX_PRESSES, MAX_PRESSES_FILE_BYTES, Press, SensorInfo};
 use crate::{Error, Result};
 
@@ -69,6 +70,10 @@ pub(crate) struct Catalog {
     listed: Vec<String>,
     /// Presses of other balls left out.
     pub(crate) warnings: Vec<String>,
+    /// gs_sdk's config copied into the folder, if one is.
+    config: Option<GsSdkConfig>,
+    /// Whether the scale is the config's (no `sensor.json`).
+    scale_from_config: bool,
 }
 
 fn layout_error(path: &Path, why: impl Into<String>) -> Error {
@@ -163,16 +168,49 @@ pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
     let catalog_path = root.join(CATALOG_FILE);
     let rows = read_catalog(&catalog_path)?;
     let sensor_file = root.join("sensor.json");
-    if !sensor_file.exists() {
-        return Err(layout_error(
-            &sensor_file,
-            "missing: gs_sdk keeps the sensor's scale in its config file, not in the \
-             calibration folder; write sensor.json here with it, such as {\"mm_per_px\": 0.0634} \
-             (the config's ppmm, millimetres per pixel: 0.0634 is gs_sdk's GelSight Mini at \
-             320x240). The ball's diameter is read from catalog.csv",
-        ));
-    }
-    let text = crate::layout::read_text(&sensor_file, crate::layout::MAX_SENSOR_FILE_BYTES)?;
+    let has_sensor_file = sensor_file.exists();
+    let found = crate::gs_sdk_config::config_in(root, !has_sensor_file)?;
+    let (text, scale_from, config) = match (has_sensor_file, found) {
+        (true, found) => {
+            let text =
+                crate::layout::read_text(&sensor_file, crate::layout::MAX_SENSOR_FILE_BYTES)?;
+            let config = match found {
+                ConfigsFound::One(c) => Some(c),
+                ConfigsFound::None(_) => None,
+            };
+            (text, sensor_file.clone(), config)
+        }
+        (false, ConfigsFound::One(c)) => {
+            let mut map = serde_json::Map::new();
+            map.insert("mm_per_px".into(), c.mm_per_px.into());
+            if let Some(name) = &c.device_name {
+                map.insert("sensor".into(), name.clone().into());
+            }
+            let text = serde_json::Value::Object(map).to_string();
+            (text, c.path.clone(), Some(c))
+        }
+        (false, ConfigsFound::None(others)) => {
+            let beside = match &others[..] {
+                [] => String::new(),
+                names => format!(
+                    " ({} here {} no ppmm)",
+                    names.join(", "),
+                    if names.len() == 1 { "has" } else { "have" }
+                ),
+            };
+            return Err(layout_error(
+                &sensor_file,
+                format!(
+                    "missing: gs_sdk keeps the sensor's scale in its config file, not in the \
+                     calibration folder; copy that config here (such as gs_sdk's \
+                     examples/configs/gsmini.yaml: its ppmm and imgw x imgh are read){beside}, \
+                     or write sensor.json here with the scale, such as {{\"mm_per_px\": 0.0634}} \
+                     (the config's ppmm, millimetres per pixel: 0.0634 is gs_sdk's GelSight Mini \
+                     at 320x240). The ball's diameter is read from catalog.csv"
+                ),
+            ));
+        }
+    };
     let all: Vec<&CatalogRow> = rows.iter().collect();
     let mut map = serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&text)
         .unwrap_or_default();
@@ -184,7 +222,7 @@ pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
             serde_json::Value::Object(map).to_string()
         }
     };
-    let sensor = SensorInfo::parse(&text, &sensor_file)?;
+    let sensor = SensorInfo::parse(&text, &scale_from)?;
     let (mine, others): (Vec<&CatalogRow>, Vec<&CatalogRow>) = rows
         .iter()
         .partition(|r| !chosen || (r.diameter_mm - sensor.ball_diameter_mm).abs() <= SAME_BALL_MM);
@@ -214,11 +252,64 @@ pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
         rows: mine.into_iter().cloned().collect(),
         path: catalog_path,
         warnings,
+        scale_from_config: !has_sensor_file,
+        config,
     };
     Ok((sensor, catalog))
 }
 
 impl Catalog {
+    /// The file the scale was read from: `sensor.json`, or the config.
+    pub(crate) fn scale_file(&self) -> PathBuf {
+        match (&self.config, self.scale_from_config) {
+            (Some(c), true) => c.path.clone(),
+            _ => self.path.with_file_name("sensor.json"),
+        }
+    }
+
+    /// The config's scale checked against the frames' `size` (the
+    /// background's, at `background`): refused where the scale is the
+    /// config's and its `imgw` x `imgh` is another size; a warning where
+    /// `sensor.json`'s scale is not the config's (at the frames' size).
+    pub(crate) fn check_scale(
+        &mut self,
+        sensor: &SensorInfo,
+        background: &Path,
+        (w, h): (usize, usize),
+    ) -> Result<()> {
+        let Some(c) = &self.config else {
+            return Ok(());
+        };
+        let name = c.file_name();
+        let at_frames = match c.size {
+            Some((cw, _)) => c.mm_per_px * cw as f64 / w as f64,
+            None => c.mm_per_px,
+        };
+        match (self.scale_from_config, c.size) {
+            (true, Some(size)) if size != (w, h) => Err(layout_error(
+                background,
+                format!(
+                    "{w}x{h}, but {name}'s ppmm {} is the scale of frames of {}x{} (its imgw x \
+                     imgh): copy in the config these presses were collected with, or write \
+                     sensor.json with their scale (if they are the config's frames resized, \
+                     {{\"mm_per_px\": {:.5}}})",
+                    c.mm_per_px, size.0, size.1, at_frames
+                ),
+            )),
+            (false, _) if (sensor.mm_per_px / at_frames - 1.0).abs() > 0.02 => {
+                self.warnings.push(format!(
+                    "warning: sensor.json's mm_per_px {} is not the scale gs_sdk's config {} \
+                     gives these {w}x{h} frames ({at_frames:.5} mm per pixel): sensor.json's is \
+                     used; remove the one that is not this sensor's",
+                    sensor.mm_per_px,
+                    c.path.display()
+                ));
+                Ok(())
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// The presses: each frame checked to exist inside `root`
     /// (`canonical`, its canonical path), each `label.npz` read and its
     /// circle checked against the `sensor` and the frame's `size`; and

@@ -222,6 +222,9 @@ pub struct BallPresses {
     pub root: PathBuf,
     /// `sensor.json`.
     pub sensor: SensorInfo,
+    /// The file the scale was read from: `sensor.json`, or gs_sdk's config
+    /// copied into the folder.
+    pub scale_file: PathBuf,
     /// The skin at rest.
     pub background: RgbImage,
     /// Every press, in file order.
@@ -313,9 +316,11 @@ impl BallPresses {
             return crate::taxim::open(root, crate::taxim::PACK_FILE);
         }
         let sensor_file = root.join("sensor.json");
+        let mut scale_file = sensor_file.clone();
         let (sensor, catalog) = match crate::gs_sdk::is_gs_sdk_folder(&root) {
             true => {
                 let (sensor, catalog) = crate::gs_sdk::sensor_and_catalog(&root)?;
+                scale_file = catalog.scale_file();
                 (sensor, Some(catalog))
             }
             false if !sensor_file.exists() => {
@@ -360,7 +365,8 @@ impl BallPresses {
             Some(_) => Annotations::LabelNpz,
             None => Annotations::PressesCsv,
         };
-        let (presses, warnings) = if let Some(catalog) = catalog {
+        let (presses, warnings) = if let Some(mut catalog) = catalog {
+            catalog.check_scale(&sensor, &bg_path, size)?;
             catalog.presses(&root, &canonical, &sensor, size)?
         } else if csv_path.exists() {
             let (presses, listed) = read_presses_csv(&root, &canonical, &csv_path, &sensor, size)?;
@@ -371,6 +377,7 @@ impl BallPresses {
         Ok(Self {
             root,
             sensor,
+            scale_file,
             colour: is_colour_background(&background),
             background,
             presses,

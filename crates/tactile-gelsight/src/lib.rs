@@ -20,6 +20,7 @@ mod error;
 pub mod eval;
 pub mod geometry;
 pub mod gs_sdk;
+pub mod gs_sdk_config;
 pub mod inference;
 pub mod layout;
 pub mod lookup;

@@ -321,6 +321,7 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
         });
     }
     Ok(BallPresses {
+        scale_file: root.join("sensor.json"),
         root,
         sensor,
         colour: crate::prepare::is_colour_background(&frames.background),

@@ -570,6 +570,11 @@ pub struct Calibration {
     pub working_grid: WorkingGrid,
     /// Millimetres of skin per working pixel.
     pub working_pixel_mm: f64,
+    /// Millimetres of skin per frame pixel.
+    pub mm_per_px: f64,
+    /// The file the scale was read from (`sensor.json`, or gs_sdk's
+    /// config copied into the folder).
+    pub scale_from: String,
 }
 
 impl Calibration {
@@ -586,11 +591,13 @@ impl Calibration {
         )];
         let g = &self.working_grid;
         lines.push(format!(
-            "working grid {}x{}: {} frame pixels, {:.3} mm of skin, per working pixel (--factor)",
+            "working grid {}x{}: {} frame pixels, {:.3} mm of skin, per working pixel (--factor; the frames' scale {} mm per pixel, from {})",
             g.width(),
             g.height(),
             g.factor,
-            self.working_pixel_mm
+            self.working_pixel_mm,
+            self.mm_per_px,
+            self.scale_from
         ));
         lines.extend(self.circles.as_ref().map(|c| c.describe()));
         let more = match &self.circle_pictures[..] {
@@ -712,6 +719,13 @@ pub fn calibrate(
         circle_pictures,
         working_grid: bg.image.grid,
         working_pixel_mm: bg.image.grid.factor as f64 * ds.sensor.mm_per_px,
+        mm_per_px: ds.sensor.mm_per_px,
+        scale_from: ds
+            .scale_file
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned(),
         warnings: ds
             .warnings
             .iter()

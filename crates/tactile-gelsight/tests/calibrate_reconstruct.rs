@@ -420,6 +420,176 @@ fn a_gs_sdk_calibration_folder_calibrates_as_it_is() {
     );
 }
 
+/// gs_sdk's config for the shared R1.5 presses, as gs_sdk writes its own
+/// (`examples/configs/gsmini.yaml`), with `edit` applied.
+fn gs_sdk_config(edit: impl Fn(&str) -> String) -> String {
+    edit(
+        "# Device Name\n\
+         device_name: \"GelSight R1.5\"\n\
+         # Pixel Per Millimeter\n\
+         ppmm: 0.0295\n\
+         # Desired Image Width and Height\n\
+         imgh: 480\n\
+         imgw: 640\n\
+         # Raw image width, height, and framerate\n\
+         raw_imgh: 2464\n\
+         raw_imgw: 3280\n\
+         framerate: 25\n",
+    )
+}
+
+#[test]
+fn a_gs_sdk_config_copied_in_gives_the_scale() {
+    // gs_sdk keeps the scale in the sensor's YAML config, which each of
+    // its scripts is given. Before, the researcher wrote sensor.json by
+    // hand from it; now the config copied beside catalog.csv gives it.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("gs");
+    gs_sdk_folder(&d, 3);
+    std::fs::remove_file(d.join("sensor.json")).unwrap();
+    let write = |file: &str, text: &str| std::fs::write(d.join(file), text).unwrap();
+    let open = || BallPresses::open(&d).map(|_| ()).unwrap_err().to_string();
+    write("gsmini.yaml", &gs_sdk_config(str::to_string));
+    let ds = BallPresses::open(&d).unwrap();
+    assert_eq!(
+        (ds.sensor.mm_per_px, ds.sensor.ball_diameter_mm),
+        (0.0295, 4.0),
+        "the scale from the config, the ball from catalog.csv"
+    );
+    assert_eq!(ds.sensor.sensor, "GelSight R1.5");
+    assert!(ds.warnings.is_empty(), "{:?}", ds.warnings);
+    // The same presses as with sensor.json.
+    let with_json = tmp.path().join("json");
+    gs_sdk_folder(&with_json, 3);
+    let b = BallPresses::open(&with_json).unwrap();
+    assert_eq!(ds.presses.len(), b.presses.len());
+    assert!(ds.frame(2).unwrap().as_slice() == b.frame(2).unwrap().as_slice());
+    // A config of another frame size: its ppmm is not these frames' scale.
+    write(
+        "gsmini.yaml",
+        &gs_sdk_config(|t| t.replace("480", "240").replace("640", "320")),
+    );
+    let e = open();
+    assert!(
+        e.contains("background.png: 640x480, but gsmini.yaml's ppmm 0.0295 is the scale of frames of 320x240")
+            && e.contains("{\"mm_per_px\": 0.01475}"),
+        "{e}"
+    );
+    // What is wrong in a config, by its line.
+    for (edit, said) in [
+        (
+            ("ppmm: 0.0295", "ppmm: 33.9"),
+            "line 4: ppmm = 33.9 is not a scale of 0.0001-1 mm per pixel (gs_sdk's ppmm is millimetres per pixel",
+        ),
+        (
+            ("ppmm: 0.0295", "ppmm: \"0.0295\""),
+            "line 4: ppmm is the text \"0.0295\", not a number",
+        ),
+        (
+            ("ppmm: 0.0295", "ppmm: [0.0295]"),
+            "line 4: ppmm is a list or keys, not a number",
+        ),
+        (("imgh: 480\n", ""), "line 6: gives imgw without imgh"),
+        (
+            ("imgw: 640", "imgw: 640.5"),
+            "line 7: imgw = 640.5 is no frame side of 1-8192 pixels",
+        ),
+        (
+            ("framerate: 25", "ppmm: 0.03"),
+            "line 11: key ppmm a second time (first on line 4)",
+        ),
+        (("imgw: 640", "imgw: [640"), "is not YAML"),
+    ] {
+        write(
+            "gsmini.yaml",
+            &gs_sdk_config(|t| t.replacen(edit.0, edit.1, 1)),
+        );
+        let e = open();
+        assert!(
+            e.contains("gsmini.yaml") && e.contains(said),
+            "{edit:?}: {e}"
+        );
+    }
+    // Aliases are refused: a few hundred bytes of them would stand for
+    // gigabytes where a document loader copies each.
+    let mut laughs = String::from("a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n");
+    for i in 1..12u8 {
+        let (p, q) = ((b'a' + i - 1) as char, (b'a' + i) as char);
+        laughs.push_str(&format!(
+            "{q}: &{q} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]\n"
+        ));
+    }
+    write("gsmini.yaml", &format!("ppmm: 0.0295\n{laughs}"));
+    let e = open();
+    assert!(e.contains("gsmini.yaml: line 3: uses a YAML alias"), "{e}");
+    // A config too large for one is refused before it is parsed.
+    write(
+        "gsmini.yaml",
+        &format!("ppmm: 0.0295\nnote: \"{}\"\n", "x".repeat(70_000)),
+    );
+    let e = open();
+    assert!(
+        e.contains("gsmini.yaml: 70022 bytes is too large (at most 65536)"),
+        "{e}"
+    );
+    // Two sensors' configs: which made the presses is not known.
+    write("gsmini.yaml", &gs_sdk_config(str::to_string));
+    write(
+        "digit.yaml",
+        "device_name: \"DIGIT\"\nppmm: 0.0655\nimgh: 240\nimgw: 320\n",
+    );
+    let e = open();
+    assert!(
+        e.contains("holds 2 gs_sdk configs (digit.yaml, gsmini.yaml)"),
+        "{e}"
+    );
+    // YAML that is no config is named where the scale is missing.
+    std::fs::remove_file(d.join("gsmini.yaml")).unwrap();
+    write("digit.yaml", "shading: true\n");
+    let e = open();
+    assert!(
+        e.contains("sensor.json: missing")
+            && e.contains("copy that config here")
+            && e.contains("(digit.yaml here has no ppmm)"),
+        "{e}"
+    );
+    std::fs::remove_file(d.join("digit.yaml")).unwrap();
+    // A config linked from outside the folder is not read.
+    #[cfg(unix)]
+    {
+        let outside = tmp.path().join("gsmini.yaml");
+        std::fs::write(&outside, gs_sdk_config(str::to_string)).unwrap();
+        std::os::unix::fs::symlink(&outside, d.join("gsmini.yaml")).unwrap();
+        let e = open();
+        assert!(e.contains("sensor.json: missing"), "{e}");
+        std::fs::remove_file(d.join("gsmini.yaml")).unwrap();
+    }
+    // Beside sensor.json, the config is a check: a scale unlike it is
+    // named, sensor.json's used.
+    write("gsmini.yaml", &gs_sdk_config(str::to_string));
+    write("sensor.json", r#"{"mm_per_px": 0.031}"#);
+    let ds = BallPresses::open(&d).unwrap();
+    assert_eq!(ds.sensor.mm_per_px, 0.031);
+    let w = ds.warnings.join("\n");
+    assert!(
+        w.contains("sensor.json's mm_per_px 0.031 is not the scale gs_sdk's config")
+            && w.contains("(0.02950 mm per pixel)"),
+        "{w}"
+    );
+    // ... and agreeing, or the config of the frames at another size, none.
+    write("sensor.json", r#"{"mm_per_px": 0.0295}"#);
+    assert!(BallPresses::open(&d).unwrap().warnings.is_empty());
+    write(
+        "gsmini.yaml",
+        &gs_sdk_config(|t| {
+            t.replace("480", "240")
+                .replace("640", "320")
+                .replace("0.0295", "0.059")
+        }),
+    );
+    assert!(BallPresses::open(&d).unwrap().warnings.is_empty());
+}
+
 #[test]
 fn a_gs_sdk_folder_names_what_it_cannot_read() {
     let tmp = tempfile::tempdir().unwrap();

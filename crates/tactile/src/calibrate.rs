@@ -16,7 +16,7 @@ pub(crate) enum CalibrateCmd {
 
 #[derive(Args)]
 pub(crate) struct BallArgs {
-    /// Calibration folder: sensor.json, background.png, frames/ (a frame per press: PNG, JPEG, BMP, TIFF, WebP or PGM/PPM), optional presses.csv (and its ball_diameter_mm column for presses of other balls); or gs_sdk's folder as it is (catalog.csv, <d>mm/<n>/gelsight.png and label.npz) with a sensor.json giving mm_per_px; or Taxim's dataPack.npz (its folder or the file) with a sensor.json giving ball_diameter_mm and mm_per_px.
+    /// Calibration folder: sensor.json, background.png, frames/ (a frame per press: PNG, JPEG, BMP, TIFF, WebP or PGM/PPM), optional presses.csv (and its ball_diameter_mm column for presses of other balls); or gs_sdk's folder as it is (catalog.csv, <d>mm/<n>/gelsight.png and label.npz) with gs_sdk's config of the sensor copied in (gsmini.yaml: ppmm, imgw, imgh) or a sensor.json giving mm_per_px; or Taxim's dataPack.npz (its folder or the file) with a sensor.json giving ball_diameter_mm and mm_per_px.
     #[arg(long)]
     data: PathBuf,
     /// Output model folder (new).

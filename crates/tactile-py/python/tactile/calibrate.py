@@ -5,11 +5,13 @@ of ``tactile calibrate ball``, and reconstructing its frames.
 docs/datasets.md: ``sensor.json``, ``background.png``, ``frames/`` (a frame
 file per press: PNG, JPEG, BMP, TIFF, WebP or PGM/PPM), optionally ``presses.csv``;
 or gs_sdk's folder as it is: ``catalog.csv``, ``<d>mm/<n>/gelsight.png`` and
-``label.npz``, with a ``sensor.json`` giving ``mm_per_px``; or Taxim's
+``label.npz``, with gs_sdk's config of the sensor copied in (``gsmini.yaml``:
+``ppmm``, ``imgw``, ``imgh``) or a ``sensor.json`` giving ``mm_per_px``; or Taxim's
 ``dataPack.npz``, its folder or the file, with a ``sensor.json`` giving
 ``ball_diameter_mm`` and ``mm_per_px``), finds each contact
 circle, fits the sensor model and writes a new model folder; it returns
 the summary ``tactile calibrate ball`` prints (circle agreement, the
+frames' scale and the file it came from, the
 held-out presses' scores; files in ``frames/`` that are no frames come as
 a ``UserWarning``). Options are keywords named as the flags
 (``max_epochs=...``), each defined once in the library;

@@ -1,0 +1,339 @@
+//! gs_sdk's sensor config, copied into a calibration folder.
+//!
+//! gs_sdk keeps a sensor's scale in a YAML file of its own
+//! (`examples/configs/gsmini.yaml`), which every one of its calibration
+//! scripts is given (`-c`):
+//!
+//! ```yaml
+//! device_name: "GelSight Mini"
+//! ppmm: 0.0634        # millimetres per pixel, despite its name
+//! imgh: 240
+//! imgw: 320
+//! ```
+//!
+//! Copied beside `catalog.csv`, it gives the scale in place of a
+//! `sensor.json`, and the frame size that scale is of. Only the top-level
+//! keys are read, through `yaml-rust2`'s event parser: aliases (which its
+//! document loader copies, so a few kilobytes can stand for gigabytes) are
+//! refused, and nesting is cut off.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use yaml_rust2::Yaml;
+use yaml_rust2::parser::{Event, Parser};
+use yaml_rust2::scanner::TScalarStyle;
+
+use crate::{Error, Result};
+
+/// Largest config read, bytes (gs_sdk's are under 1 KB).
+pub const MAX_CONFIG_FILE_BYTES: u64 = 64 << 10;
+/// Deepest nesting read (gs_sdk's configs are flat).
+const MAX_CONFIG_DEPTH: usize = 16;
+/// Largest `imgw` or `imgh` taken (8K).
+const MAX_CONFIG_SIDE_PX: i64 = 8192;
+
+/// The scale a gs_sdk config gives.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GsSdkConfig {
+    /// The file it was read from.
+    pub path: PathBuf,
+    /// Its `device_name`, if any.
+    pub device_name: Option<String>,
+    /// Its `ppmm`: millimetres per pixel on the skin.
+    pub mm_per_px: f64,
+    /// Its `imgw` x `imgh`: the frames that scale is of, if it says.
+    pub size: Option<(usize, usize)>,
+}
+
+impl GsSdkConfig {
+    /// Its file's name (`gsmini.yaml`), for messages.
+    pub fn file_name(&self) -> String {
+        self.path
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned()
+    }
+}
+
+/// A top-level value: its text (`None` for a list or a mapping), whether
+/// it was quoted, and its line.
+struct TopValue {
+    text: Option<String>,
+    quoted: bool,
+    line: usize,
+}
+
+fn bad(path: &Path, why: impl Into<String>) -> Error {
+    Error::Layout {
+        path: path.to_path_buf(),
+        why: why.into(),
+    }
+}
+
+/// The top-level keys of the YAML mapping `text` and their values.
+fn top_level(path: &Path, text: &str) -> Result<HashMap<String, TopValue>> {
+    let mut parser = Parser::new_from_str(text);
+    let mut values: HashMap<String, TopValue> = HashMap::new();
+    let mut depth = 0usize;
+    // At depth 1: whether the next node is a key, the key read, and
+    // whether a list or mapping opened at depth 1 was a key.
+    let mut expect_key = true;
+    let mut key: Option<(String, usize)> = None;
+    let mut compound_was_key = false;
+    let mut seen_mapping = false;
+    loop {
+        let (event, mark) = parser
+            .next_token()
+            .map_err(|e| bad(path, format!("is not YAML: {e}")))?;
+        let line = mark.line();
+        match event {
+            Event::StreamEnd | Event::DocumentEnd => break,
+            Event::Alias(_) => {
+                return Err(bad(
+                    path,
+                    format!(
+                        "line {line}: uses a YAML alias (*name), which a sensor config has no \
+                         need of and which is not read"
+                    ),
+                ));
+            }
+            Event::MappingStart(..) | Event::SequenceStart(..) => {
+                if depth == 0 {
+                    if !matches!(event, Event::MappingStart(..)) {
+                        return Err(bad(
+                            path,
+                            "is not a gs_sdk config: a list, not keys and values",
+                        ));
+                    }
+                    seen_mapping = true;
+                } else if depth == 1 {
+                    compound_was_key = expect_key;
+                    if let (false, Some((k, l))) = (expect_key, key.take()) {
+                        insert(path, &mut values, k, None, false, l)?;
+                    }
+                }
+                depth += 1;
+                if depth > MAX_CONFIG_DEPTH {
+                    return Err(bad(
+                        path,
+                        format!("line {line}: nested more than {MAX_CONFIG_DEPTH} deep"),
+                    ));
+                }
+            }
+            Event::MappingEnd | Event::SequenceEnd => {
+                depth = depth.saturating_sub(1);
+                if depth == 1 {
+                    // A compound key is followed by its value; a
+                    // compound value by the next key.
+                    expect_key = !compound_was_key;
+                }
+            }
+            Event::Scalar(..) if depth == 0 => {
+                return Err(bad(
+                    path,
+                    "is not a gs_sdk config: one value, not keys and values",
+                ));
+            }
+            Event::Scalar(v, style, ..) if depth == 1 => {
+                if expect_key {
+                    key = Some((v, line));
+                } else if let Some((k, l)) = key.take() {
+                    insert(
+                        path,
+                        &mut values,
+                        k,
+                        Some(v),
+                        !matches!(style, TScalarStyle::Plain),
+                        l,
+                    )?;
+                }
+                expect_key = !expect_key;
+            }
+            _ => {}
+        }
+    }
+    if !seen_mapping {
+        return Err(bad(path, "is not a gs_sdk config: it is empty"));
+    }
+    Ok(values)
+}
+
+fn insert(
+    path: &Path,
+    values: &mut HashMap<String, TopValue>,
+    key: String,
+    text: Option<String>,
+    quoted: bool,
+    line: usize,
+) -> Result<()> {
+    if let Some(first) = values.get(&key) {
+        return Err(bad(
+            path,
+            format!(
+                "line {line}: key {key} a second time (first on line {})",
+                first.line
+            ),
+        ));
+    }
+    values.insert(key, TopValue { text, quoted, line });
+    Ok(())
+}
+
+/// The number `key` holds, if it is there.
+fn number(path: &Path, values: &HashMap<String, TopValue>, key: &str) -> Result<Option<f64>> {
+    let Some(v) = values.get(key) else {
+        return Ok(None);
+    };
+    let not_number = |what: &str| {
+        bad(
+            path,
+            format!("line {}: {key} is {what}, not a number", v.line),
+        )
+    };
+    let text = v
+        .text
+        .as_deref()
+        .ok_or_else(|| not_number("a list or keys"))?;
+    if v.quoted {
+        return Err(not_number(&format!("the text {text:?}")));
+    }
+    match Yaml::from_str(text) {
+        Yaml::Real(_) => Yaml::from_str(text)
+            .as_f64()
+            .map(Some)
+            .ok_or_else(|| not_number(&format!("{text:?}"))),
+        Yaml::Integer(i) => Ok(Some(i as f64)),
+        _ => Err(not_number(&format!("{text:?}"))),
+    }
+}
+
+/// Read gs_sdk's config at `path`: `ppmm` (required, checked as a scale),
+/// `imgw` and `imgh` (both or neither), `device_name`. `Ok(None)` where the
+/// file is YAML without `ppmm` (some other file).
+pub fn read_config(path: &Path) -> Result<Option<GsSdkConfig>> {
+    let text = crate::layout::read_text(path, MAX_CONFIG_FILE_BYTES)?;
+    let values = top_level(path, &text)?;
+    let Some(mm_per_px) = number(path, &values, "ppmm")? else {
+        return Ok(None);
+    };
+    let line = values["ppmm"].line;
+    if !(mm_per_px.is_finite() && (1e-4..=1.0).contains(&mm_per_px)) {
+        return Err(bad(
+            path,
+            format!(
+                "line {line}: ppmm = {mm_per_px} is not a scale of 0.0001-1 mm per pixel \
+                 (gs_sdk's ppmm is millimetres per pixel despite its name: 0.0634 for a \
+                 GelSight Mini at 320x240)"
+            ),
+        ));
+    }
+    let side = |key: &str| -> Result<Option<usize>> {
+        match number(path, &values, key)? {
+            None => Ok(None),
+            Some(v) if v.fract() == 0.0 && (1.0..=MAX_CONFIG_SIDE_PX as f64).contains(&v) => {
+                Ok(Some(v as usize))
+            }
+            Some(v) => Err(bad(
+                path,
+                format!(
+                    "line {}: {key} = {v} is no frame side of 1-{MAX_CONFIG_SIDE_PX} pixels",
+                    values[key].line
+                ),
+            )),
+        }
+    };
+    let size = match (side("imgw")?, side("imgh")?) {
+        (Some(w), Some(h)) => Some((w, h)),
+        (None, None) => None,
+        (w, _) => {
+            let (has, lacks) = match w {
+                Some(_) => ("imgw", "imgh"),
+                None => ("imgh", "imgw"),
+            };
+            return Err(bad(
+                path,
+                format!(
+                    "line {}: gives {has} without {lacks}: the frame size its ppmm is of needs both",
+                    values[has].line
+                ),
+            ));
+        }
+    };
+    let device_name = values
+        .get("device_name")
+        .and_then(|v| v.text.clone())
+        .map(|s| s.chars().take(200).collect());
+    Ok(Some(GsSdkConfig {
+        path: path.to_path_buf(),
+        device_name,
+        mm_per_px,
+        size,
+    }))
+}
+
+/// The YAML files directly in `root` (regular files, not links), sorted.
+fn yaml_files(root: &Path) -> Result<Vec<PathBuf>> {
+    let entries = std::fs::read_dir(root).map_err(|e| tactile_core::Error::io(root, e))?;
+    let mut files = Vec::new();
+    for entry in entries {
+        let entry = entry.map_err(|e| tactile_core::Error::io(root, e))?;
+        let path = entry.path();
+        let is_yaml = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"));
+        if is_yaml && entry.file_type().is_ok_and(|t| t.is_file()) {
+            files.push(path);
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+/// What the YAML files in `root` say of the sensor.
+pub(crate) enum ConfigsFound {
+    /// None is a gs_sdk config (the names of YAML files without `ppmm`).
+    None(Vec<String>),
+    /// One is.
+    One(GsSdkConfig),
+}
+
+/// gs_sdk's config copied into `root`: the one YAML file there with a
+/// `ppmm`. Two such files are refused (which sensor made the presses is
+/// not known); a YAML file that cannot be read is refused only where
+/// `needed` (no `sensor.json` gives the scale), else left alone.
+pub(crate) fn config_in(root: &Path, needed: bool) -> Result<ConfigsFound> {
+    let mut configs = Vec::new();
+    let mut others = Vec::new();
+    for path in yaml_files(root)? {
+        match read_config(&path) {
+            Ok(Some(c)) => configs.push(c),
+            Ok(None) => others.push(
+                path.file_name()
+                    .unwrap_or_default()
+                    .to_string_lossy()
+                    .into_owned(),
+            ),
+            Err(e) if needed => return Err(e),
+            Err(_) => {}
+        }
+    }
+    match configs.len() {
+        0 => Ok(ConfigsFound::None(others)),
+        1 => Ok(ConfigsFound::One(configs.remove(0))),
+        _ if !needed => Ok(ConfigsFound::None(Vec::new())),
+        _ => {
+            let names: Vec<String> = configs.iter().map(GsSdkConfig::file_name).collect();
+            Err(bad(
+                root,
+                format!(
+                    "holds {} gs_sdk configs ({}): keep the one of the sensor that made these \
+                     presses, or write sensor.json with its scale",
+                    names.len(),
+                    names.join(", ")
+                ),
+            ))
+        }
+    }
+}
