@@ -337,3 +337,83 @@ pub(crate) fn config_in(root: &Path, needed: bool) -> Result<ConfigsFound> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tactile_core::rng::SampleRng;
+
+    const CONFIG: &str = "# Device Name\ndevice_name: \"GelSight Mini\"\n# Pixel Per Millimeter\nppmm: 0.0634\nimgh: 240\nimgw: 320\nraw_imgh: 2464\nraw_imgw: 3280\nframerate: 25\n";
+
+    #[test]
+    fn a_config_damaged_anywhere_is_read_or_refused_never_a_panic() {
+        // Bytes flipped, dropped, repeated and YAML's own punctuation
+        // thrown in: each read gives a config or an error naming the file.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("gsmini.yaml");
+        let punctuation = b"&*!|>'\"{}[],:-?#%@` \n\t";
+        let runs: usize = std::env::var("TACTILE_FUZZ_RUNS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(3000);
+        let (mut read, mut refused) = (0, 0);
+        for k in 0..runs {
+            let mut rng = SampleRng::new(11, 0, k as u64);
+            let mut bytes = CONFIG.as_bytes().to_vec();
+            for _ in 0..1 + rng.index(6) {
+                let at = rng
+                    .index(bytes.len() + 1)
+                    .min(bytes.len().saturating_sub(1));
+                match rng.index(4) {
+                    0 => bytes[at] = rng.index(256) as u8,
+                    1 => {
+                        bytes.remove(at);
+                    }
+                    2 => bytes.insert(at, punctuation[rng.index(punctuation.len())]),
+                    _ => {
+                        let end = (at + 1 + rng.index(40)).min(bytes.len());
+                        let copy = bytes[at..end].to_vec();
+                        bytes.splice(at..at, copy.iter().cycle().take(copy.len() * 50).copied());
+                    }
+                }
+            }
+            std::fs::write(&path, &bytes).unwrap();
+            match read_config(&path) {
+                Ok(_) => read += 1,
+                Err(e) => {
+                    assert!(e.to_string().contains("gsmini.yaml"), "{e}");
+                    refused += 1;
+                }
+            }
+        }
+        assert!(read > 0 && refused > 0, "{read} read, {refused} refused");
+        // Nests 30,000 deep, of either kind, and numbers past any type.
+        for text in [
+            format!("ppmm: 0.0634\nx: {}", "[".repeat(30_000)),
+            format!("ppmm: 0.0634\nx: {}", "{a: ".repeat(10_000)),
+            (1..300).map(|i| format!("{}k:\n", " ".repeat(i))).collect(),
+        ] {
+            std::fs::write(&path, text).unwrap();
+            let e = read_config(&path).unwrap_err().to_string();
+            assert!(
+                e.contains("nested more than 16 deep") || e.contains("not YAML"),
+                "{e}"
+            );
+        }
+        for (value, said) in [
+            ("99999999999999999999999", None),
+            ("1e400", Some("is not a scale")),
+            (".nan", Some("is not a scale")),
+            ("-0.0634", Some("is not a scale")),
+            ("0x10", Some("is not a scale")),
+            ("~", Some("not a number")),
+        ] {
+            std::fs::write(&path, format!("ppmm: {value}\n")).unwrap();
+            match (read_config(&path), said) {
+                (Err(e), Some(said)) => assert!(e.to_string().contains(said), "{value}: {e}"),
+                (Err(e), None) => assert!(e.to_string().contains("gsmini.yaml"), "{value}: {e}"),
+                (Ok(c), _) => panic!("{value}: read as {c:?}"),
+            }
+        }
+    }
+}
