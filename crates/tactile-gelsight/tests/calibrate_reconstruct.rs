@@ -980,6 +980,74 @@ fn a_taxim_packs_presses_are_reconstructed_as_their_files_are() {
 }
 
 #[test]
+fn a_damaged_pack_or_label_is_read_or_refused_naming_it_never_a_panic() {
+    // Seeded damage where the archives' structure is (zip headers, the
+    // central directory, each .npy header), and anywhere: each read gives
+    // presses or an error naming the file.
+    use tactile_core::rng::SampleRng;
+    let tmp = tempfile::tempdir().unwrap();
+    let (taxim, gs) = (tmp.path().join("taxim"), tmp.path().join("gs"));
+    taxim_folder(&taxim, 2, |_| {});
+    gs_sdk_folder(&gs, 2);
+    let pack = taxim.join("dataPack.npz");
+    let label = gs.join("4.000mm/1/label.npz");
+    let runs: u64 = std::env::var("TACTILE_FUZZ_RUNS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(150);
+    for (file, name) in [(&pack, "dataPack.npz"), (&label, "label.npz")] {
+        let clean = std::fs::read(file).unwrap();
+        // Where the structure is: 96 bytes after each signature.
+        let marks: Vec<usize> = (0..clean.len().saturating_sub(4))
+            .filter(|&i| {
+                [&b"PK\x03\x04"[..], b"PK\x01\x02", b"PK\x05\x06", b"\x93NUM"]
+                    .contains(&&clean[i..i + 4])
+            })
+            .collect();
+        let (mut read, mut refused) = (0, 0);
+        for k in 0..runs {
+            let mut rng = SampleRng::new(23, 0, k);
+            let mut bytes = clean.clone();
+            for _ in 0..1 + rng.index(4) {
+                if bytes.len() < 2 {
+                    break;
+                }
+                let at = match rng.chance(0.8) {
+                    true => (marks[rng.index(marks.len())] + rng.index(96)).min(bytes.len() - 1),
+                    false => rng.index(bytes.len()),
+                };
+                match rng.index(5) {
+                    0 => bytes[at] ^= 1 << rng.index(8),
+                    1 => bytes[at] = [0, 0xff, b'9', b'(', b','][rng.index(5)],
+                    2 => {
+                        bytes.remove(at);
+                    }
+                    3 => bytes.insert(at, rng.index(256) as u8),
+                    _ => bytes.truncate(at.max(1)),
+                }
+            }
+            std::fs::write(file, &bytes).unwrap();
+            let outcome = BallPresses::open(if name == "label.npz" { &gs } else { &pack })
+                .and_then(|ds| (0..ds.presses.len()).try_for_each(|i| ds.frame(i).map(|_| ())))
+                .and_then(|()| match name {
+                    "dataPack.npz" => tactile_gelsight::taxim::read_frames(&pack).map(|_| ()),
+                    _ => Ok(()),
+                });
+            match outcome {
+                Ok(()) => read += 1,
+                Err(e) => {
+                    let e = e.to_string();
+                    assert!(e.contains(name), "run {k}: {e}");
+                    refused += 1;
+                }
+            }
+        }
+        std::fs::write(file, &clean).unwrap();
+        assert!(refused > runs / 2, "{name}: {read} read, {refused} refused");
+    }
+}
+
+#[test]
 fn a_taxim_pack_names_what_it_cannot_read() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path().join("taxim");
