@@ -659,9 +659,30 @@ pub fn calibrate(
     }
     let cut = found_circles_cut_by_edge(&presses, ds.size(), ds.annotations);
     let mistyped = annotations_far_from_found(&presses, ds.annotations);
+    // What the folder and its circles tell is said before the minute of
+    // training, not only in the summary after it.
+    for w in ds.warnings.iter().chain(&cut).chain(&mistyped) {
+        tactile_core::note!("{w}");
+    }
     let circle_pictures = crate::eval::circles_pictures(ds, &presses, staged.path())?;
     let val = spread(n, config.val_presses);
     let train: Vec<usize> = (0..n).filter(|i| !val.contains(i)).collect();
+    let held = match val.len() {
+        0 => "every press fitted, the epoch chosen on four of them".to_string(),
+        k => format!("{k} held out to choose the epoch"),
+    };
+    tactile_core::note!(
+        "calibrating on {} presses ({held}): {}, {} mm per pixel (from {}), working grid {}x{}",
+        train.len(),
+        ds.describe_balls(),
+        ds.sensor.mm_per_px,
+        ds.scale_file
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy(),
+        bg.image.grid.width(),
+        bg.image.grid.height()
+    );
     let dir = staged.path();
     let fitted = fit_presses(config, ds, &bg, &presses, (&train, &val), device, true)?;
     let artifact = GelsightArtifact {

@@ -3790,6 +3790,45 @@ fn ball_subset(dir: &Path) {
 }
 
 #[test]
+fn a_calibration_says_what_its_folder_holds_before_it_trains() {
+    // A warning about the folder (here a frame presses.csv does not list)
+    // and what is being calibrated come before the epochs, not only in the
+    // summary a minute later.
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("presses");
+    ball_subset(&data);
+    std::fs::copy(
+        data.join("frames/press_01.png"),
+        data.join("frames/press_99.png"),
+    )
+    .unwrap();
+    let model = tmp.path().join("model");
+    let out = Command::new(env!("CARGO_BIN_EXE_tactile"))
+        .args(["calibrate", "ball", "--data"])
+        .arg(&data)
+        .arg("--out")
+        .arg(&model)
+        .args(["--factor", "8", "--val-presses", "2", "--max-epochs", "1"])
+        .args(["--kernels", "3,1,1"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let at = |text: &str| {
+        stderr
+            .find(text)
+            .unwrap_or_else(|| panic!("{text:?} not in {stderr}"))
+    };
+    let first_epoch = at("epoch 1/1");
+    assert!(at("1 of its 7 frames are not listed in presses.csv") < first_epoch);
+    assert!(
+        at(
+            "calibrating on 4 presses (2 held out to choose the epoch): a 4 mm ball, 0.0295 mm per pixel (from sensor.json), working grid 80x60"
+        ) < first_epoch
+    );
+}
+
+#[test]
 fn a_calibrated_sensor_runs_through_calibrate_reconstruct_and_run() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("presses");
