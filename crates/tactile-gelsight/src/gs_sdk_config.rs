@@ -30,6 +30,9 @@ use crate::{Error, Result};
 pub const MAX_CONFIG_FILE_BYTES: u64 = 64 << 10;
 /// Deepest nesting read (gs_sdk's configs are flat).
 const MAX_CONFIG_DEPTH: usize = 16;
+/// Most YAML files a calibration folder's are looked through for the
+/// config (gs_sdk's folder has none of its own).
+const MAX_YAML_FILES: usize = 32;
 /// Largest `imgw` or `imgh` taken (8K).
 const MAX_CONFIG_SIDE_PX: i64 = 8192;
 
@@ -306,7 +309,22 @@ pub(crate) enum ConfigsFound {
 pub(crate) fn config_in(root: &Path, needed: bool) -> Result<ConfigsFound> {
     let mut configs = Vec::new();
     let mut others = Vec::new();
-    for path in yaml_files(root)? {
+    let files = yaml_files(root)?;
+    if files.len() > MAX_YAML_FILES {
+        return match needed {
+            true => Err(bad(
+                root,
+                format!(
+                    "holds {} YAML files, more than the {MAX_YAML_FILES} looked through for \
+                     gs_sdk's config: keep its config here and move the others out, or write \
+                     sensor.json",
+                    files.len()
+                ),
+            )),
+            false => Ok(ConfigsFound::None(Vec::new())),
+        };
+    }
+    for path in files {
         match read_config(&path) {
             Ok(Some(c)) => configs.push(c),
             Ok(None) => others.push(

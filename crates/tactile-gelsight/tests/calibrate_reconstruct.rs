@@ -543,6 +543,18 @@ fn a_gs_sdk_config_copied_in_gives_the_scale() {
         e.contains("holds 2 gs_sdk configs (digit.yaml, gsmini.yaml)"),
         "{e}"
     );
+    // A folder of many YAML files is not read through.
+    for i in 0..40 {
+        write(&format!("notes-{i:02}.yml"), "shading: true\n");
+    }
+    let e = open();
+    assert!(
+        e.contains("holds 42 YAML files, more than the 32 looked through"),
+        "{e}"
+    );
+    for i in 0..40 {
+        std::fs::remove_file(d.join(format!("notes-{i:02}.yml"))).unwrap();
+    }
     // YAML that is no config is named where the scale is missing.
     std::fs::remove_file(d.join("gsmini.yaml")).unwrap();
     write("digit.yaml", "shading: true\n");
