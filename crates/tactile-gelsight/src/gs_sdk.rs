@@ -259,6 +259,11 @@ pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
 }
 
 impl Catalog {
+    /// gs_sdk's config copied into the folder, if one is.
+    pub(crate) fn config(&self) -> Option<&GsSdkConfig> {
+        self.config.as_ref()
+    }
+
     /// The file the scale was read from: `sensor.json`, or the config.
     pub(crate) fn scale_file(&self) -> PathBuf {
         match (&self.config, self.scale_from_config) {

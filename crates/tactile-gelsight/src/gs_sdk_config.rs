@@ -47,6 +47,71 @@ pub struct GsSdkConfig {
     pub mm_per_px: f64,
     /// Its `imgw` x `imgh`: the frames that scale is of, if it says.
     pub size: Option<(usize, usize)>,
+    /// Its `raw_imgw` x `raw_imgh`: the camera's frames, which gs_sdk cuts
+    /// and resizes to `size`, if it says.
+    pub raw_size: Option<(usize, usize)>,
+}
+
+/// How gs_sdk turns the camera's frames into the sensor's (its
+/// `resize_crop`): a seventh of the frame cut from each side, a row or
+/// column more from the top or left to keep the sensor's aspect, then a
+/// bilinear resize.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct CameraCut {
+    /// The camera's frames, `(width, height)`.
+    pub camera: (usize, usize),
+    /// The part kept, `(width, height, left, top)`.
+    pub crop: (usize, usize, usize, usize),
+    /// The sensor's frames, `(width, height)`.
+    pub size: (usize, usize),
+}
+
+impl CameraCut {
+    /// gs_sdk's cut of `camera` frames to `size` ones; `None` where it
+    /// leaves nothing.
+    pub fn of(camera: (usize, usize), size: (usize, usize)) -> Option<Self> {
+        let ((cw, ch), (w, h)) = (camera, size);
+        // resize_crop: int(rows / 7) and floor(columns / 7).
+        let (border_rows, border_cols) = (ch / 7, cw / 7);
+        let (rows, cols) = (ch - 2 * border_rows, cw - 2 * border_cols);
+        let (rows_f, cols_f) = (rows as f64, cols as f64);
+        let aspect = w as f64 / h as f64;
+        let (extra_rows, extra_cols) = if rows_f * aspect > cols_f + 1e-8 {
+            ((rows_f - cols_f / aspect) as usize, 0)
+        } else if rows_f * aspect < cols_f - 1e-8 {
+            (0, (cols_f - rows_f * aspect) as usize)
+        } else {
+            (0, 0)
+        };
+        let (top, left) = (border_rows + extra_rows, border_cols + extra_cols);
+        let (kept_h, kept_w) = (
+            ch.checked_sub(border_rows + top)?,
+            cw.checked_sub(border_cols + left)?,
+        );
+        (kept_h > 0 && kept_w > 0).then_some(Self {
+            camera,
+            crop: (kept_w, kept_h, left, top),
+            size,
+        })
+    }
+
+    /// The FFmpeg line that streams a V4L2 camera's frames so cut to
+    /// `tactile run` on the model folder `model`.
+    pub fn ffmpeg_command(&self, model: &Path) -> String {
+        let ((cw, ch), (kw, kh, x, y), (w, h)) = (self.camera, self.crop, self.size);
+        format!(
+            "ffmpeg -f v4l2 -video_size {cw}x{ch} -i /dev/video0 -vf crop={kw}:{kh}:{x}:{y},scale={w}:{h}:flags=bilinear -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size {w}x{h} --models {}",
+            model.display()
+        )
+    }
+}
+
+impl GsSdkConfig {
+    /// How gs_sdk cuts the camera's frames to the sensor's, where the
+    /// config gives both sizes.
+    pub fn camera_cut(&self) -> Option<CameraCut> {
+        CameraCut::of(self.raw_size?, self.size?)
+    }
 }
 
 impl GsSdkConfig {
@@ -247,23 +312,27 @@ pub fn read_config(path: &Path) -> Result<Option<GsSdkConfig>> {
             )),
         }
     };
-    let size = match (side("imgw")?, side("imgh")?) {
-        (Some(w), Some(h)) => Some((w, h)),
-        (None, None) => None,
-        (w, _) => {
-            let (has, lacks) = match w {
-                Some(_) => ("imgw", "imgh"),
-                None => ("imgh", "imgw"),
-            };
-            return Err(bad(
-                path,
-                format!(
-                    "line {}: gives {has} without {lacks}: the frame size its ppmm is of needs both",
-                    values[has].line
-                ),
-            ));
+    let pair = |w_key: &str, h_key: &str, what: &str| -> Result<Option<(usize, usize)>> {
+        match (side(w_key)?, side(h_key)?) {
+            (Some(w), Some(h)) => Ok(Some((w, h))),
+            (None, None) => Ok(None),
+            (w, _) => {
+                let (has, lacks) = match w {
+                    Some(_) => (w_key, h_key),
+                    None => (h_key, w_key),
+                };
+                Err(bad(
+                    path,
+                    format!(
+                        "line {}: gives {has} without {lacks}: {what} needs both",
+                        values[has].line
+                    ),
+                ))
+            }
         }
     };
+    let size = pair("imgw", "imgh", "the frame size its ppmm is of")?;
+    let raw_size = pair("raw_imgw", "raw_imgh", "the camera's frame size")?;
     let device_name = values
         .get("device_name")
         .and_then(|v| v.text.clone())
@@ -273,6 +342,7 @@ pub fn read_config(path: &Path) -> Result<Option<GsSdkConfig>> {
         device_name,
         mm_per_px,
         size,
+        raw_size,
     }))
 }
 
@@ -362,6 +432,29 @@ mod tests {
     use tactile_core::rng::SampleRng;
 
     const CONFIG: &str = "# Device Name\ndevice_name: \"GelSight Mini\"\n# Pixel Per Millimeter\nppmm: 0.0634\nimgh: 240\nimgw: 320\nraw_imgh: 2464\nraw_imgw: 3280\nframerate: 25\n";
+
+    #[test]
+    fn the_camera_is_cut_as_gs_sdk_cuts_it() {
+        // gs_sdk's resize_crop worked by hand: the GelSight Mini's 3280x2464
+        // to 320x240 (rows 352 + 2 extra to 2112, columns 468 to 2812), its
+        // DIGIT's 640x480 to 320x240 (rows 68 to 412, columns 91 to 549).
+        let cut = |c, s| CameraCut::of(c, s).map(|c| c.crop);
+        assert_eq!(cut((3280, 2464), (320, 240)), Some((2344, 1758, 468, 354)));
+        assert_eq!(cut((640, 480), (320, 240)), Some((458, 344, 91, 68)));
+        // A wide camera to a square sensor: columns cut for the aspect.
+        // (rows 154 to 926; columns 274 + 600 to 1646).
+        assert_eq!(cut((1920, 1080), (240, 240)), Some((772, 772, 874, 154)));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("gsmini.yaml");
+        std::fs::write(&path, CONFIG).unwrap();
+        let c = read_config(&path).unwrap().unwrap();
+        assert_eq!(
+            c.camera_cut()
+                .unwrap()
+                .ffmpeg_command(Path::new("models/mini")),
+            "ffmpeg -f v4l2 -video_size 3280x2464 -i /dev/video0 -vf crop=2344:1758:468:354,scale=320:240:flags=bilinear -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size 320x240 --models models/mini"
+        );
+    }
 
     #[test]
     fn a_config_damaged_anywhere_is_read_or_refused_never_a_panic() {

@@ -225,6 +225,9 @@ pub struct BallPresses {
     /// The file the scale was read from: `sensor.json`, or gs_sdk's config
     /// copied into the folder.
     pub scale_file: PathBuf,
+    /// gs_sdk's config copied into the folder, if one is (its scale, or a
+    /// check of `sensor.json`'s; how its camera's frames are cut).
+    pub gs_sdk_config: Option<crate::gs_sdk_config::GsSdkConfig>,
     /// The skin at rest.
     pub background: RgbImage,
     /// Every press, in file order.
@@ -317,10 +320,12 @@ impl BallPresses {
         }
         let sensor_file = root.join("sensor.json");
         let mut scale_file = sensor_file.clone();
+        let mut gs_sdk_config = None;
         let (sensor, catalog) = match crate::gs_sdk::is_gs_sdk_folder(&root) {
             true => {
                 let (sensor, catalog) = crate::gs_sdk::sensor_and_catalog(&root)?;
                 scale_file = catalog.scale_file();
+                gs_sdk_config = catalog.config().cloned();
                 (sensor, Some(catalog))
             }
             false if !sensor_file.exists() => {
@@ -378,6 +383,7 @@ impl BallPresses {
             root,
             sensor,
             scale_file,
+            gs_sdk_config,
             colour: is_colour_background(&background),
             background,
             presses,

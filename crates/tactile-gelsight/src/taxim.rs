@@ -322,6 +322,7 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
     }
     Ok(BallPresses {
         scale_file: root.join("sensor.json"),
+        gs_sdk_config: None,
         root,
         sensor,
         colour: crate::prepare::is_colour_background(&frames.background),

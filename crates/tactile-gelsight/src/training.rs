@@ -575,6 +575,11 @@ pub struct Calibration {
     /// The file the scale was read from (`sensor.json`, or gs_sdk's
     /// config copied into the folder).
     pub scale_from: String,
+    /// How gs_sdk cuts the camera's frames to the sensor's, where its
+    /// config gives the camera's size (`raw_imgw` x `raw_imgh`) and the
+    /// presses are its `imgw` x `imgh`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub camera: Option<crate::gs_sdk_config::CameraCut>,
 }
 
 impl Calibration {
@@ -599,6 +604,13 @@ impl Calibration {
             self.mm_per_px,
             self.scale_from
         ));
+        if let Some(cut) = &self.camera {
+            let ((cw, ch), (w, h)) = (cut.camera, cut.size);
+            lines.push(format!(
+                "camera: gs_sdk cuts the camera's {cw}x{ch} frames (its config's raw_imgw x raw_imgh) to these {w}x{h}; to run on the camera, cut as gs_sdk does (FFmpeg's resize, not OpenCV's): {}",
+                cut.ffmpeg_command(out)
+            ));
+        }
         lines.extend(self.circles.as_ref().map(|c| c.describe()));
         let more = match &self.circle_pictures[..] {
             [] | [_] => String::new(),
@@ -747,6 +759,11 @@ pub fn calibrate(
             .unwrap_or_default()
             .to_string_lossy()
             .into_owned(),
+        camera: ds
+            .gs_sdk_config
+            .as_ref()
+            .filter(|c| c.size == Some(ds.size()))
+            .and_then(|c| c.camera_cut()),
         warnings: ds
             .warnings
             .iter()

@@ -458,6 +458,12 @@ fn a_gs_sdk_config_copied_in_gives_the_scale() {
     );
     assert_eq!(ds.sensor.sensor, "GelSight R1.5");
     assert!(ds.warnings.is_empty(), "{:?}", ds.warnings);
+    // The camera's frames cut as gs_sdk's resize_crop cuts them.
+    let cut = ds.gs_sdk_config.as_ref().unwrap().camera_cut().unwrap();
+    assert_eq!(
+        (cut.camera, cut.crop, cut.size),
+        ((3280, 2464), (2344, 1758, 468, 354), (640, 480))
+    );
     // The same presses as with sensor.json.
     let with_json = tmp.path().join("json");
     gs_sdk_folder(&with_json, 3);

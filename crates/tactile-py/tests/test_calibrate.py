@@ -137,10 +137,12 @@ def test_a_gs_sdk_calibration_folder_calibrates_as_it_is(presses: Path, tmp_path
     with pytest.raises(ValueError, match="sensor.json: missing.*copy that config here.*ppmm"):
         tactile.calibrate.ball(d, tmp_path / "m2", max_epochs=1)
     # gs_sdk's config copied in gives the scale (and the frames' size it is of).
-    config = 'device_name: "GelSight R1.5"\nppmm: 0.0295  # mm per pixel\nimgh: 480\nimgw: 640\nframerate: 25\n'
+    config = 'device_name: "GelSight R1.5"\nppmm: 0.0295  # mm per pixel\nimgh: 480\nimgw: 640\nraw_imgh: 2464\nraw_imgw: 3280\n'
     (d / "r15.yaml").write_text(config)
     r = tactile.calibrate.ball(d, tmp_path / "m3", factor=8, val_presses=2, max_epochs=1, kernels=[3, 1, 1])
     assert r["mm_per_px"] == 0.0295 and r["scale_from"] == "r15.yaml"
+    # How gs_sdk cuts the camera's frames to the presses' (its resize_crop).
+    assert r["camera"] == {"camera": [3280, 2464], "crop": [2344, 1758, 468, 354], "size": [640, 480]}
     assert r["train_presses"] + r["val_presses"] == 7
     (d / "r15.yaml").write_text(config.replace("480", "240").replace("640", "320"))
     with pytest.raises(ValueError, match="background.png: 640x480, but r15.yaml's ppmm 0.0295 is the scale of frames of 320x240"):
