@@ -96,12 +96,14 @@ impl CameraCut {
     }
 
     /// The FFmpeg line that streams a V4L2 camera's frames so cut to
-    /// `tactile run` on the model folder `model`.
+    /// `tactile run` on the model folder `model` (its path quoted for the
+    /// shell where it needs to be).
     pub fn ffmpeg_command(&self, model: &Path) -> String {
         let ((cw, ch), (kw, kh, x, y), (w, h)) = (self.camera, self.crop, self.size);
+        let model = model.to_string_lossy();
+        let model = shlex::try_quote(&model).unwrap_or_else(|_| model.replace('\0', "").into());
         format!(
-            "ffmpeg -f v4l2 -video_size {cw}x{ch} -i /dev/video0 -vf crop={kw}:{kh}:{x}:{y},scale={w}:{h}:flags=bilinear -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size {w}x{h} --models {}",
-            model.display()
+            "ffmpeg -f v4l2 -video_size {cw}x{ch} -i /dev/video0 -vf crop={kw}:{kh}:{x}:{y},scale={w}:{h}:flags=bilinear -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size {w}x{h} --models {model}"
         )
     }
 }
@@ -453,6 +455,20 @@ mod tests {
                 .unwrap()
                 .ffmpeg_command(Path::new("models/mini")),
             "ffmpeg -f v4l2 -video_size 3280x2464 -i /dev/video0 -vf crop=2344:1758:468:354,scale=320:240:flags=bilinear -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size 320x240 --models models/mini"
+        );
+        // A folder whose name the shell would split or expand.
+        let line = c
+            .camera_cut()
+            .unwrap()
+            .ffmpeg_command(Path::new("my models/it's $HOME"));
+        let quoted = line.split_once("--models ").unwrap().1;
+        let said = std::process::Command::new("sh")
+            .args(["-c", &format!("printf %s {quoted}")])
+            .output()
+            .unwrap();
+        assert_eq!(
+            String::from_utf8_lossy(&said.stdout),
+            "my models/it's $HOME"
         );
     }
 
