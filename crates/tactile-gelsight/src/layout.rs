@@ -393,6 +393,15 @@ impl BallPresses {
         })
     }
 
+    /// The name of the file the scale was read from (`sensor.json`,
+    /// `gsmini.yaml`), for reports.
+    pub fn scale_from(&self) -> String {
+        (self.scale_file.file_name())
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned()
+    }
+
     /// `(width, height)` of the sensor's frames.
     pub fn size(&self) -> (usize, usize) {
         (self.background.width(), self.background.height())

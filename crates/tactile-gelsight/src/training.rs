@@ -688,10 +688,7 @@ pub fn calibrate(
         train.len(),
         ds.describe_balls(),
         ds.sensor.mm_per_px,
-        ds.scale_file
-            .file_name()
-            .unwrap_or_default()
-            .to_string_lossy(),
+        ds.scale_from(),
         bg.image.grid.width(),
         bg.image.grid.height()
     );
@@ -753,12 +750,7 @@ pub fn calibrate(
         working_grid: bg.image.grid,
         working_pixel_mm: bg.image.grid.factor as f64 * ds.sensor.mm_per_px,
         mm_per_px: ds.sensor.mm_per_px,
-        scale_from: ds
-            .scale_file
-            .file_name()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned(),
+        scale_from: ds.scale_from(),
         camera: ds
             .gs_sdk_config
             .as_ref()
