@@ -532,7 +532,7 @@ impl BallPresses {
 
     /// Where press `i`'s ball and the scale are written, for a message
     /// that asks to check them.
-    fn where_the_scale_is(&self, i: usize) -> &'static str {
+    fn where_the_scale_is(&self, i: usize) -> String {
         let own = self
             .presses
             .get(i)
@@ -542,27 +542,33 @@ impl BallPresses {
 
     /// Where the presses' balls and the scale are written, for messages on
     /// them all: `("sensor.json gives", "ball_diameter_mm and mm_per_px in
-    /// sensor.json")` where every press has `sensor.json`'s ball.
-    pub fn where_the_balls_are(&self) -> (&'static str, &'static str) {
+    /// sensor.json")` where every press has `sensor.json`'s ball;
+    /// `gsmini.yaml's ppmm` where gs_sdk's config gave the scale.
+    pub fn where_the_balls_are(&self) -> (String, String) {
         self.ball_words(self.presses.iter().any(|p| p.ball_diameter_mm.is_some()))
     }
 
     /// [`Self::where_the_balls_are`] of presses with balls of their own
     /// (`own`) or `sensor.json`'s.
-    fn ball_words(&self, own: bool) -> (&'static str, &'static str) {
+    fn ball_words(&self, own: bool) -> (String, String) {
+        let from = self.scale_from();
+        let scale = match from.as_str() {
+            "sensor.json" => "sensor.json's mm_per_px".to_string(),
+            config => format!("{config}'s ppmm"),
+        };
         match (own, self.annotations) {
             // A pack's presses are all of sensor.json's ball.
             (false, _) | (_, Annotations::DataPack) => (
-                "sensor.json gives",
-                "ball_diameter_mm and mm_per_px in sensor.json",
+                format!("{from} gives"),
+                "ball_diameter_mm and mm_per_px in sensor.json".to_string(),
             ),
             (true, Annotations::PressesCsv) => (
-                "sensor.json and presses.csv give",
-                "presses.csv's ball_diameter_mm and sensor.json's mm_per_px",
+                format!("{from} and presses.csv give"),
+                format!("presses.csv's ball_diameter_mm and {scale}"),
             ),
             (true, Annotations::LabelNpz) => (
-                "sensor.json and catalog.csv give",
-                "catalog.csv's diameter(mm) and sensor.json's mm_per_px",
+                format!("{from} and catalog.csv give"),
+                format!("catalog.csv's diameter(mm) and {scale}"),
             ),
         }
     }

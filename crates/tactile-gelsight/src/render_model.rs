@@ -134,7 +134,7 @@ fn press_geometry(ds: &BallPresses, profiles: &[BallProfile]) -> String {
 /// of the render model's sweep).
 fn unfitted_gel(ds: &BallPresses, profiles: &[BallProfile]) -> Error {
     Error::Layout {
-        path: ds.root.join("sensor.json"),
+        path: ds.scale_file.clone(),
         why: format!(
             "no gel response presses a ball into the skin as these presses show: {}",
             press_geometry(ds, profiles)
@@ -241,7 +241,7 @@ pub fn fit_render_model(
     let warning = (colour_error_levels > BARELY_EXPLAINED * colour_error_unpressed_levels).then(|| {
         format!(
             "warning: {}: the presses rendered back from this calibration differ from the real ones by {colour_error_levels:.1} grey levels, near the {colour_error_unpressed_levels:.1} of the skin at rest: its render model barely explains them (the shared GelSight R1.5 gives 6.4 against 14.5), and the frames it renders to train a detector would be unlike this sensor's; {}",
-            ds.root.join("sensor.json").display(),
+            ds.scale_file.display(),
             press_geometry(ds, &profiles)
         )
     });

@@ -470,6 +470,26 @@ fn a_gs_sdk_config_copied_in_gives_the_scale() {
     let b = BallPresses::open(&with_json).unwrap();
     assert_eq!(ds.presses.len(), b.presses.len());
     assert!(ds.frame(2).unwrap().as_slice() == b.frame(2).unwrap().as_slice());
+    // Messages that ask to check the scale name the config, not a
+    // sensor.json there is none of (an unlabelled press whose ball is
+    // mistyped: its circle is found wider than the ball).
+    let catalog = std::fs::read_to_string(d.join("catalog.csv")).unwrap();
+    write(
+        "catalog.csv",
+        &catalog.replace("4.000mm/2,4.000", "4.000mm/2,0.500"),
+    );
+    let label = d.join("4.000mm/2/label.npz");
+    let kept = std::fs::read(&label).unwrap();
+    std::fs::remove_file(&label).unwrap();
+    let e = prepare_presses(&BallPresses::open(&d).unwrap(), 8, CircleSource::Auto)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("check catalog.csv's diameter(mm) and gsmini.yaml's ppmm"),
+        "{e}"
+    );
+    write("catalog.csv", &catalog);
+    std::fs::write(&label, kept).unwrap();
     // A config of another frame size: its ppmm is not these frames' scale.
     write(
         "gsmini.yaml",
