@@ -114,9 +114,7 @@ impl GsSdkConfig {
     pub fn camera_cut(&self) -> Option<CameraCut> {
         CameraCut::of(self.raw_size?, self.size?)
     }
-}
 
-impl GsSdkConfig {
     /// Its file's name (`gsmini.yaml`), for messages.
     pub fn file_name(&self) -> String {
         self.path
@@ -376,11 +374,10 @@ pub(crate) enum ConfigsFound {
 
 /// gs_sdk's config copied into `root`: the one YAML file there with a
 /// `ppmm`. Two such files are refused (which sensor made the presses is
-/// not known); a YAML file that cannot be read is refused only where
-/// `needed` (no `sensor.json` gives the scale), else left alone.
+/// not known). YAML files that cannot be read are left alone beside the
+/// one config; without one, the first is refused where the config is
+/// `needed` (no `sensor.json` gives the scale): it may be the config.
 pub(crate) fn config_in(root: &Path, needed: bool) -> Result<ConfigsFound> {
-    let mut configs = Vec::new();
-    let mut others = Vec::new();
     let files = yaml_files(root)?;
     if files.len() > MAX_YAML_FILES {
         return match needed {
@@ -396,6 +393,7 @@ pub(crate) fn config_in(root: &Path, needed: bool) -> Result<ConfigsFound> {
             false => Ok(ConfigsFound::None(Vec::new())),
         };
     }
+    let (mut configs, mut others, mut unread) = (Vec::new(), Vec::new(), Vec::new());
     for path in files {
         match read_config(&path) {
             Ok(Some(c)) => configs.push(c),
@@ -405,15 +403,15 @@ pub(crate) fn config_in(root: &Path, needed: bool) -> Result<ConfigsFound> {
                     .to_string_lossy()
                     .into_owned(),
             ),
-            Err(e) if needed => return Err(e),
-            Err(_) => {}
+            Err(e) => unread.push(e),
         }
     }
-    match configs.len() {
-        0 => Ok(ConfigsFound::None(others)),
-        1 => Ok(ConfigsFound::One(configs.remove(0))),
-        _ if !needed => Ok(ConfigsFound::None(Vec::new())),
-        _ => {
+    match (configs.len(), needed) {
+        (1, _) => Ok(ConfigsFound::One(configs.remove(0))),
+        (0, true) if !unread.is_empty() => Err(unread.remove(0)),
+        (0, _) => Ok(ConfigsFound::None(others)),
+        (_, false) => Ok(ConfigsFound::None(Vec::new())),
+        (_, true) => {
             let names: Vec<String> = configs.iter().map(GsSdkConfig::file_name).collect();
             Err(bad(
                 root,

@@ -558,6 +558,13 @@ fn a_gs_sdk_config_copied_in_gives_the_scale() {
         e.contains("gsmini.yaml: 70022 bytes is too large (at most 65536)"),
         "{e}"
     );
+    // A YAML file that cannot be read beside the config is left alone.
+    write("gsmini.yaml", &gs_sdk_config(str::to_string));
+    write("notes.yaml", "# to do\n");
+    write("broken.yml", "a: [1\n");
+    assert_eq!(BallPresses::open(&d).unwrap().sensor.mm_per_px, 0.0295);
+    std::fs::remove_file(d.join("notes.yaml")).unwrap();
+    std::fs::remove_file(d.join("broken.yml")).unwrap();
     // Two sensors' configs: which made the presses is not known.
     write("gsmini.yaml", &gs_sdk_config(str::to_string));
     write(
