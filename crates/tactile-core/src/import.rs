@@ -64,7 +64,7 @@ pub struct ImportSummary {
     /// Frame width and height.
     pub size: (usize, usize),
     /// What the user should know of the labels, each beginning
-    /// `warning: ` ([`one_based_warning`]).
+    /// `warning: ` (`one_based_warning`).
     pub warnings: Vec<String>,
 }
 

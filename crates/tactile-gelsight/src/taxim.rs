@@ -187,7 +187,7 @@ fn press_names<R: std::io::Read + std::io::Seek>(
 }
 
 /// The frames of a pack, in RGB: its background and its presses, and the
-/// presses' names ([`press_names`]).
+/// presses' names (`press_names`).
 pub struct PackFrames {
     /// `f0`: the skin at rest.
     pub background: RgbImage,

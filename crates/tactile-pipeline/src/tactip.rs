@@ -1027,7 +1027,7 @@ impl TactipPerception {
     /// ([`tactile_burn::artifact::scored_on_fitted`]) and those of its
     /// blank frames and frames unlike its training frames.
     /// A frame that cannot be decoded past its header is left out of the
-    /// scores with the warning `predict` gives ([`decoded_rows`]).
+    /// scores with the warning `predict` gives (`decoded_rows`).
     pub fn evaluate(&mut self, ds: &Dataset) -> Result<Scores> {
         let encoded = encode_dataset(&mut self.encoder, ds)?;
         let scored = decoded_rows(ds, &encoded.rows);
