@@ -118,6 +118,14 @@ pub enum Error {
 }
 
 impl Error {
+    /// A [`Error::Layout`] refusal of the calibration folder's `path`.
+    pub(crate) fn layout(path: &std::path::Path, why: impl Into<String>) -> Self {
+        Self::Layout {
+            path: path.to_path_buf(),
+            why: why.into(),
+        }
+    }
+
     /// Whether this is [`Reconstructor::check_frame`]'s (or
     /// `check_working`'s) refusal of a frame the sensor cannot read
     /// (another size than its calibration's, blank, in BGR order, grey for

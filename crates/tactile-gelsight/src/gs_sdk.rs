@@ -76,13 +76,6 @@ pub(crate) struct Catalog {
     scale_from_config: bool,
 }
 
-fn layout_error(path: &Path, why: impl Into<String>) -> Error {
-    Error::Layout {
-        path: path.to_path_buf(),
-        why: why.into(),
-    }
-}
-
 /// `4.000 mm: 30 presses, 6.000 mm: 25` of `rows`.
 fn balls(rows: &[&CatalogRow]) -> String {
     let mut count: BTreeMap<i64, usize> = BTreeMap::new();
@@ -108,12 +101,12 @@ fn read_catalog(path: &Path) -> Result<Vec<CatalogRow>> {
     let mut rd = tactile_core::csv_lines::reader(&csv::ReaderBuilder::new(), text.as_bytes());
     let headers = rd
         .headers()
-        .map_err(|e| layout_error(path, format!("cannot read the header: {e}")))?
+        .map_err(|e| Error::layout(path, format!("cannot read the header: {e}")))?
         .clone();
     let col = |name: &str| headers.iter().position(|h| h.trim() == name);
     let (Some(folder_col), Some(diameter_col)) = (col("experiment_reldir"), col("diameter(mm)"))
     else {
-        return Err(layout_error(
+        return Err(Error::layout(
             path,
             format!(
                 "not gs_sdk's ball catalog: it has the columns experiment_reldir and diameter(mm) \
@@ -126,9 +119,9 @@ fn read_catalog(path: &Path) -> Result<Vec<CatalogRow>> {
     let mut rows = Vec::new();
     for item in tactile_core::csv_lines::records(&mut rd) {
         let (line, rec) =
-            item.map_err(|(line, why)| layout_error(path, format!("line {line}: {why}")))?;
+            item.map_err(|(line, why)| Error::layout(path, format!("line {line}: {why}")))?;
         if rows.len() >= MAX_PRESSES {
-            return Err(layout_error(
+            return Err(Error::layout(
                 path,
                 format!("more than {MAX_PRESSES} presses"),
             ));
@@ -138,13 +131,13 @@ fn read_catalog(path: &Path) -> Result<Vec<CatalogRow>> {
         let folder = folder.trim_end_matches('/').to_string();
         let d = rec.get(diameter_col).unwrap_or("").trim();
         let diameter_mm = d.parse::<f64>().map_err(|_| {
-            layout_error(
+            Error::layout(
                 path,
                 format!("line {line}: '{d}' in diameter(mm) is not a number"),
             )
         })?;
         if !crate::layout::is_ball_diameter(diameter_mm) {
-            return Err(layout_error(
+            return Err(Error::layout(
                 path,
                 format!("line {line}: diameter(mm) = {d} is no ball of 0.1-100 mm"),
             ));
@@ -156,7 +149,7 @@ fn read_catalog(path: &Path) -> Result<Vec<CatalogRow>> {
         });
     }
     if rows.is_empty() {
-        return Err(layout_error(path, "lists no press"));
+        return Err(Error::layout(path, "lists no press"));
     }
     Ok(rows)
 }
@@ -198,7 +191,7 @@ pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
                     if names.len() == 1 { "has" } else { "have" }
                 ),
             };
-            return Err(layout_error(
+            return Err(Error::layout(
                 &sensor_file,
                 format!(
                     "missing: gs_sdk keeps the sensor's scale in its config file, not in the \
@@ -227,7 +220,7 @@ pub(crate) fn sensor_and_catalog(root: &Path) -> Result<(SensorInfo, Catalog)> {
         .iter()
         .partition(|r| !chosen || (r.diameter_mm - sensor.ball_diameter_mm).abs() <= SAME_BALL_MM);
     if mine.is_empty() {
-        return Err(layout_error(
+        return Err(Error::layout(
             &catalog_path,
             format!(
                 "lists no press of a {} mm ball (sensor.json's ball_diameter_mm), only {}",
@@ -291,7 +284,7 @@ impl Catalog {
             None => c.mm_per_px,
         };
         match (self.scale_from_config, c.size) {
-            (true, Some(size)) if size != (w, h) => Err(layout_error(
+            (true, Some(size)) if size != (w, h) => Err(Error::layout(
                 background,
                 format!(
                     "{w}x{h}, but {name}'s ppmm {} is the scale of frames of {}x{} (its imgw x \
@@ -333,9 +326,9 @@ impl Catalog {
             let line = row.line;
             let file = format!("{}/{FRAME_FILE}", row.folder);
             let (frame, resolved) = crate::layout::inside(root, canonical, &file)
-                .map_err(|why| layout_error(path, format!("line {line}: {why}")))?;
+                .map_err(|why| Error::layout(path, format!("line {line}: {why}")))?;
             if !frame.is_file() {
-                return Err(layout_error(
+                return Err(Error::layout(
                     path,
                     format!(
                         "line {line}: press folder '{}' has no {FRAME_FILE}",
@@ -345,10 +338,10 @@ impl Catalog {
             }
             let what = format!("press folder '{}'", row.folder);
             crate::layout::listed_once(&mut listed, resolved, line, &what)
-                .map_err(|why| layout_error(path, why))?;
+                .map_err(|why| Error::layout(path, why))?;
             let label_rel = format!("{}/{LABEL_FILE}", row.folder);
             let (label, _) = crate::layout::inside(root, canonical, &label_rel)
-                .map_err(|why| layout_error(path, format!("line {line}: {why}")))?;
+                .map_err(|why| Error::layout(path, format!("line {line}: {why}")))?;
             let annotated = match label.exists() {
                 false => None,
                 true => {
@@ -356,7 +349,7 @@ impl Catalog {
                     if let Some(why) =
                         crate::layout::circle_problem(sensor, row.diameter_mm, size, &c)
                     {
-                        return Err(layout_error(&label, why));
+                        return Err(Error::layout(&label, why));
                     }
                     Some(c)
                 }
@@ -420,13 +413,13 @@ impl Catalog {
 /// checked before it is read.
 pub fn read_label(path: &Path) -> Result<Circle> {
     let bytes = tactile_core::io::read_limited(path, MAX_LABEL_FILE_BYTES)?;
-    let mut npz =
-        crate::npz::Npz::new(std::io::Cursor::new(bytes)).map_err(|why| layout_error(path, why))?;
+    let mut npz = crate::npz::Npz::new(std::io::Cursor::new(bytes))
+        .map_err(|why| Error::layout(path, why))?;
     let missing =
         "missing: gs_sdk's label_data.py saves the contact circle as center (x, y) and radius";
     let mut numbers = |name: &str, count: usize| {
         npz.numbers(name, count, MAX_LABEL_ARRAY_BYTES, missing)
-            .map_err(|why| layout_error(path, format!("its '{name}': {why}")))
+            .map_err(|why| Error::layout(path, format!("its '{name}': {why}")))
     };
     let centre = numbers("center", 2)?;
     let radius = numbers("radius", 1)?;

@@ -117,11 +117,7 @@ impl GsSdkConfig {
 
     /// Its file's name (`gsmini.yaml`), for messages.
     pub fn file_name(&self) -> String {
-        self.path
-            .file_name()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned()
+        crate::layout::file_name_of(&self.path)
     }
 }
 
@@ -131,13 +127,6 @@ struct TopValue {
     text: Option<String>,
     quoted: bool,
     line: usize,
-}
-
-fn bad(path: &Path, why: impl Into<String>) -> Error {
-    Error::Layout {
-        path: path.to_path_buf(),
-        why: why.into(),
-    }
 }
 
 /// The top-level keys of the YAML mapping `text` and their values.
@@ -154,12 +143,12 @@ fn top_level(path: &Path, text: &str) -> Result<HashMap<String, TopValue>> {
     loop {
         let (event, mark) = parser
             .next_token()
-            .map_err(|e| bad(path, format!("is not YAML: {e}")))?;
+            .map_err(|e| Error::layout(path, format!("is not YAML: {e}")))?;
         let line = mark.line();
         match event {
             Event::StreamEnd | Event::DocumentEnd => break,
             Event::Alias(_) => {
-                return Err(bad(
+                return Err(Error::layout(
                     path,
                     format!(
                         "line {line}: uses a YAML alias (*name), which a sensor config has no \
@@ -170,7 +159,7 @@ fn top_level(path: &Path, text: &str) -> Result<HashMap<String, TopValue>> {
             Event::MappingStart(..) | Event::SequenceStart(..) => {
                 if depth == 0 {
                     if !matches!(event, Event::MappingStart(..)) {
-                        return Err(bad(
+                        return Err(Error::layout(
                             path,
                             "is not a gs_sdk config: a list, not keys and values",
                         ));
@@ -184,7 +173,7 @@ fn top_level(path: &Path, text: &str) -> Result<HashMap<String, TopValue>> {
                 }
                 depth += 1;
                 if depth > MAX_CONFIG_DEPTH {
-                    return Err(bad(
+                    return Err(Error::layout(
                         path,
                         format!("line {line}: nested more than {MAX_CONFIG_DEPTH} deep"),
                     ));
@@ -199,7 +188,7 @@ fn top_level(path: &Path, text: &str) -> Result<HashMap<String, TopValue>> {
                 }
             }
             Event::Scalar(..) if depth == 0 => {
-                return Err(bad(
+                return Err(Error::layout(
                     path,
                     "is not a gs_sdk config: one value, not keys and values",
                 ));
@@ -223,7 +212,7 @@ fn top_level(path: &Path, text: &str) -> Result<HashMap<String, TopValue>> {
         }
     }
     if !seen_mapping {
-        return Err(bad(path, "is not a gs_sdk config: it is empty"));
+        return Err(Error::layout(path, "is not a gs_sdk config: it is empty"));
     }
     Ok(values)
 }
@@ -237,7 +226,7 @@ fn insert(
     line: usize,
 ) -> Result<()> {
     if let Some(first) = values.get(&key) {
-        return Err(bad(
+        return Err(Error::layout(
             path,
             format!(
                 "line {line}: key {key} a second time (first on line {})",
@@ -255,7 +244,7 @@ fn number(path: &Path, values: &HashMap<String, TopValue>, key: &str) -> Result<
         return Ok(None);
     };
     let not_number = |what: &str| {
-        bad(
+        Error::layout(
             path,
             format!("line {}: {key} is {what}, not a number", v.line),
         )
@@ -288,7 +277,7 @@ pub fn read_config(path: &Path) -> Result<Option<GsSdkConfig>> {
     };
     let line = values["ppmm"].line;
     if !(mm_per_px.is_finite() && (1e-4..=1.0).contains(&mm_per_px)) {
-        return Err(bad(
+        return Err(Error::layout(
             path,
             format!(
                 "line {line}: ppmm = {mm_per_px} is not a scale of 0.0001-1 mm per pixel \
@@ -303,7 +292,7 @@ pub fn read_config(path: &Path) -> Result<Option<GsSdkConfig>> {
             Some(v) if v.fract() == 0.0 && (1.0..=MAX_CONFIG_SIDE_PX as f64).contains(&v) => {
                 Ok(Some(v as usize))
             }
-            Some(v) => Err(bad(
+            Some(v) => Err(Error::layout(
                 path,
                 format!(
                     "line {}: {key} = {v} is no frame side of 1-{MAX_CONFIG_SIDE_PX} pixels",
@@ -321,7 +310,7 @@ pub fn read_config(path: &Path) -> Result<Option<GsSdkConfig>> {
                     Some(_) => (w_key, h_key),
                     None => (h_key, w_key),
                 };
-                Err(bad(
+                Err(Error::layout(
                     path,
                     format!(
                         "line {}: gives {has} without {lacks}: {what} needs both",
@@ -381,7 +370,7 @@ pub(crate) fn config_in(root: &Path, needed: bool) -> Result<ConfigsFound> {
     let files = yaml_files(root)?;
     if files.len() > MAX_YAML_FILES {
         return match needed {
-            true => Err(bad(
+            true => Err(Error::layout(
                 root,
                 format!(
                     "holds {} YAML files, more than the {MAX_YAML_FILES} looked through for \
@@ -397,12 +386,7 @@ pub(crate) fn config_in(root: &Path, needed: bool) -> Result<ConfigsFound> {
     for path in files {
         match read_config(&path) {
             Ok(Some(c)) => configs.push(c),
-            Ok(None) => others.push(
-                path.file_name()
-                    .unwrap_or_default()
-                    .to_string_lossy()
-                    .into_owned(),
-            ),
+            Ok(None) => others.push(crate::layout::file_name_of(&path)),
             Err(e) => unread.push(e),
         }
     }
@@ -413,7 +397,7 @@ pub(crate) fn config_in(root: &Path, needed: bool) -> Result<ConfigsFound> {
         (_, false) => Ok(ConfigsFound::None(Vec::new())),
         (_, true) => {
             let names: Vec<String> = configs.iter().map(GsSdkConfig::file_name).collect();
-            Err(bad(
+            Err(Error::layout(
                 root,
                 format!(
                     "holds {} gs_sdk configs ({}): keep the one of the sensor that made these \

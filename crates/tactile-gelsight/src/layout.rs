@@ -257,6 +257,14 @@ impl std::fmt::Debug for BallPresses {
     }
 }
 
+/// The last part of `path` as text (`gsmini.yaml`), for messages.
+pub(crate) fn file_name_of(path: &Path) -> String {
+    path.file_name()
+        .unwrap_or_default()
+        .to_string_lossy()
+        .into_owned()
+}
+
 /// The UTF-8 text of `path`, at most `limit` bytes (a byte-order mark
 /// dropped).
 pub(crate) fn read_text(path: &Path, limit: u64) -> Result<String> {
@@ -306,11 +314,7 @@ impl BallPresses {
                 .extension()
                 .is_some_and(|e| e.eq_ignore_ascii_case("npz"))
         {
-            let pack = root
-                .file_name()
-                .unwrap_or_default()
-                .to_string_lossy()
-                .into_owned();
+            let pack = file_name_of(&root);
             let dir = tactile_core::io::folder_of(&root).to_path_buf();
             return crate::taxim::open(dir, &pack);
         }
@@ -396,10 +400,7 @@ impl BallPresses {
     /// The name of the file the scale was read from (`sensor.json`,
     /// `gsmini.yaml`), for reports.
     pub fn scale_from(&self) -> String {
-        (self.scale_file.file_name())
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned()
+        file_name_of(&self.scale_file)
     }
 
     /// `(width, height)` of the sensor's frames.
@@ -832,13 +833,7 @@ fn unlisted_frames_warning(
     };
     let unlisted: Vec<String> = (list.frames.iter())
         .filter(|f| (f.path.canonicalize()).is_ok_and(|p| !listed.contains(&p)))
-        .map(|f| {
-            f.path
-                .file_name()
-                .unwrap_or_default()
-                .to_string_lossy()
-                .into_owned()
-        })
+        .map(|f| file_name_of(&f.path))
         .collect();
     if unlisted.is_empty() {
         return Vec::new();

@@ -45,19 +45,12 @@ pub fn is_taxim_folder(root: &Path) -> bool {
         && !root.join(crate::gs_sdk::CATALOG_FILE).exists()
 }
 
-fn layout_error(path: &Path, why: impl Into<String>) -> Error {
-    Error::Layout {
-        path: path.to_path_buf(),
-        why: why.into(),
-    }
-}
-
 /// `sensor.json` beside a pack: the ball and the scale, which Taxim keeps
 /// in its code. The background is the pack's own.
 fn sensor(root: &Path, pack: &str) -> Result<SensorInfo> {
     let file = root.join("sensor.json");
     if !file.exists() {
-        return Err(layout_error(
+        return Err(Error::layout(
             &file,
             "missing: Taxim keeps the ball and the scale in Basics/sensorParams.py, not in \
              dataPack.npz; write sensor.json beside it, such as {\"ball_diameter_mm\": 4.0, \
@@ -69,7 +62,7 @@ fn sensor(root: &Path, pack: &str) -> Result<SensorInfo> {
     let keys = serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&text)
         .unwrap_or_default();
     if keys.contains_key("background") {
-        return Err(layout_error(
+        return Err(Error::layout(
             &file,
             format!(
                 "names a background, but {pack} holds its own (f0): remove \"background\", or \
@@ -216,13 +209,14 @@ pub(crate) fn press_file(pack: &str, name: &str) -> String {
 /// The error of the array `name` of the pack `path`.
 fn named(path: &Path, name: &str) -> impl Fn(String) -> Error + use<> {
     let (path, name) = (path.to_path_buf(), name.to_string());
-    move |why: String| layout_error(&path, format!("its '{name}': {why}"))
+    move |why: String| Error::layout(&path, format!("its '{name}': {why}"))
 }
 
 /// The frames of the pack at `path`, and the archive, to read its circles.
 fn read_pack(path: &Path) -> Result<(PackFrames, Npz<std::io::BufReader<std::fs::File>>)> {
     let file = tactile_core::io::open_regular(path)?;
-    let mut npz = Npz::new(std::io::BufReader::new(file)).map_err(|why| layout_error(path, why))?;
+    let mut npz =
+        Npz::new(std::io::BufReader::new(file)).map_err(|why| Error::layout(path, why))?;
     // Taxim saves what OpenCV read: BGR. Packs of other tools may say
     // otherwise in `color_order`.
     let bgr = !matches!(
@@ -232,7 +226,7 @@ fn read_pack(path: &Path) -> Result<(PackFrames, Npz<std::io::BufReader<std::fs:
     let mut f0 = frames(&mut npz, "f0", None, bgr).map_err(named(path, "f0"))?;
     let background = f0
         .pop()
-        .ok_or_else(|| layout_error(path, "its 'f0' holds no frame"))?;
+        .ok_or_else(|| Error::layout(path, "its 'f0' holds no frame"))?;
     let size = (background.width(), background.height());
     let presses = frames(&mut npz, "imgs", Some(size), bgr).map_err(named(path, "imgs"))?;
     let names = press_names(&mut npz, presses.len());
@@ -273,7 +267,7 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
             Some((c, r))
         }
         _ => {
-            return Err(layout_error(
+            return Err(Error::layout(
                 &path,
                 "holds one of touch_center and touch_radius without the other: a labelled \
                  circle is both (or neither, to have each press's circle found)",
@@ -302,7 +296,7 @@ pub(crate) fn open(root: PathBuf, pack: &str) -> Result<BallPresses> {
                         true => " (saved as [row, column]? Taxim's touch_center is [x, y])",
                         false => "",
                     };
-                    return Err(layout_error(
+                    return Err(Error::layout(
                         &path,
                         format!(
                             "press {i} ({name}): its touch_center and touch_radius: {why}{order}; \
