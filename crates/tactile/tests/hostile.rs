@@ -529,19 +529,31 @@ fn a_gs_sdk_label_claiming_more_than_it_holds_is_refused_before_it_is_read() {
     huge.extend([0u8; 16]);
     let inflating = array(zip::CompressionMethod::Deflated, &vec![0u8; 60 << 20]);
     assert!(inflating.len() < 64 << 10, "{}", inflating.len());
-    let out = tmp.path().join("model");
-    for (bytes, said) in [
-        (zip64_end, "not a NumPy .npz archive"),
-        (inflating, "its 'center':"),
-        (
-            array(zip::CompressionMethod::Stored, &huge),
-            "its 'center': holds more numbers",
-        ),
-    ] {
-        std::fs::write(&label, bytes).unwrap();
-        let (ok, msg) = tactile(&["calibrate", "ball", "--data", s(&d), "--out", s(&out)]);
+    calibration_refuses(
+        &d,
+        &label,
+        "4.000mm/2/label.npz",
+        vec![
+            (zip64_end, "not a NumPy .npz archive"),
+            (inflating, "its 'center':"),
+            (
+                array(zip::CompressionMethod::Stored, &huge),
+                "its 'center': holds more numbers",
+            ),
+        ],
+    );
+}
+
+/// `tactile calibrate ball --data data` with `file` holding each case's
+/// bytes in turn: refused, naming `named` and saying the case's words, and
+/// no model folder made.
+fn calibration_refuses(data: &Path, file: &Path, named: &str, cases: Vec<(Vec<u8>, &str)>) {
+    let out = data.with_file_name("model");
+    for (bytes, said) in cases {
+        std::fs::write(file, bytes).unwrap();
+        let (ok, msg) = tactile(&["calibrate", "ball", "--data", s(data), "--out", s(&out)]);
         assert!(
-            !ok && msg.contains("4.000mm/2/label.npz") && msg.contains(said),
+            !ok && msg.contains(named) && msg.contains(said),
             "{said}: {msg}"
         );
         assert!(!out.exists());
@@ -628,16 +640,7 @@ fn a_taxim_pack_claiming_more_than_it_holds_is_refused_before_it_is_read() {
             "its 'touch_center': 62914560 bytes: far more than 2 numbers",
         ),
     ];
-    let out = tmp.path().join("model");
-    for (bytes, said) in cases {
-        std::fs::write(d.join("dataPack.npz"), bytes).unwrap();
-        let (ok, msg) = tactile(&["calibrate", "ball", "--data", s(&d), "--out", s(&out)]);
-        assert!(
-            !ok && msg.contains("taxim/dataPack.npz") && msg.contains(said),
-            "{said}: {msg}"
-        );
-        assert!(!out.exists());
-    }
+    calibration_refuses(&d, &d.join("dataPack.npz"), "taxim/dataPack.npz", cases);
 }
 
 #[test]
