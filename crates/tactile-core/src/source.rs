@@ -1,11 +1,12 @@
 //! Where frames come from: a dataset (frames in `labels.csv` order, with
 //! their sequences and labels), a folder of frame files, a video
 //! file, an image topic of a ROS 2 bag (with each frame's header stamp), a
-//! V4L2 camera, or raw RGB frames on stdin ([`FrameSource`]).
+//! V4L2 camera, a network stream's URL, or raw RGB frames on stdin
+//! ([`FrameSource`]).
 //!
-//! Recorded sources (datasets, folders, files) give every frame, decoded
-//! on a second thread ahead of the models when asked. Live sources (a
-//! camera, stdin) are read as frames arrive into a small queue; when the
+//! Recorded sources (datasets, folders, files, a file served over HTTP)
+//! give every frame, decoded on a second thread ahead of the models when
+//! asked. Live sources (a camera, an IP camera's stream, stdin) are read as frames arrive into a small queue; when the
 //! models fall behind, the oldest waiting frame is dropped and counted, so
 //! memory stays bounded and results stay current. Each live frame carries
 //! its arrival time, from which a record's latency is measured.
@@ -86,8 +87,8 @@ pub const FRAME_EXTENSIONS: [&str; 9] = [
 pub const FRAME_FORMATS: &str = "PNG, JPEG, BMP, TIFF, WebP or PGM/PPM";
 
 /// The error of a source path that names nothing: how to read standard
-/// input when it is `-` (the shell's name for it), how to read a stream
-/// when it is a URL (an IP camera's `rtsp://`), else that it does not exist.
+/// input when it is `-` (the shell's name for it), else that it does not
+/// exist (a URL is a stream: [`stream_url`]).
 fn not_found(path: &Path) -> Error {
     let text = path.to_string_lossy();
     if text == "-" {
@@ -96,19 +97,6 @@ fn not_found(path: &Path) -> Error {
              `--stdin --size WxH` (Python: `tactile.frames(stdin_size=(w, h))`)"
                 .into(),
         );
-    }
-    if let Some((scheme, _)) = text.split_once("://")
-        && !scheme.is_empty()
-        && scheme
-            .bytes()
-            .all(|b| b.is_ascii_alphanumeric() || b == b'+')
-    {
-        return Error::Invalid(format!(
-            "{}: a URL, not a file; a stream is read through FFmpeg on standard input: \
-             `ffmpeg -i URL -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size WxH` \
-             (Python: `tactile.frames(stdin_size=(w, h))`)",
-            crate::printable(&text)
-        ));
     }
     Error::not_found(path, "input")
 }
@@ -426,6 +414,9 @@ pub enum SourceKind {
     Bag,
     /// A V4L2 camera, live.
     Camera,
+    /// A network stream without a length (an IP camera's `rtsp://…`),
+    /// live. A served file with a length is a [`SourceKind::Video`].
+    Stream,
     /// Raw rgb24 frames on stdin, live.
     Stdin,
 }
@@ -433,7 +424,10 @@ pub enum SourceKind {
 impl SourceKind {
     /// True for sources read as frames arrive.
     pub fn is_live(self) -> bool {
-        matches!(self, SourceKind::Camera | SourceKind::Stdin)
+        matches!(
+            self,
+            SourceKind::Camera | SourceKind::Stream | SourceKind::Stdin
+        )
     }
 }
 
@@ -460,8 +454,9 @@ impl Frame {
 /// Where to read frames from.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum SourceSpec {
-    /// A dataset, a folder of frames, one image, a video file or a camera
-    /// device (`/dev/videoN`), told apart by what the path is.
+    /// A dataset, a folder of frames, one image, a video file, a camera
+    /// device (`/dev/videoN`) or, when no file has that name, a network
+    /// stream's URL (`rtsp://…`), told apart by what the path is.
     Path(PathBuf),
     /// An image topic of a ROS 2 bag (a bag folder holding `metadata.yaml`,
     /// or one `.mcap` file); `None` reads its only image topic (a bag with
@@ -807,6 +802,66 @@ type Opened = (
     Option<crate::video::VideoStopper>,
 );
 
+/// A video file, a camera or a network stream, decoded by FFmpeg. A
+/// stream with a length (a file served over HTTP) is recorded, every frame
+/// given; one without (an IP camera) is live.
+fn open_video(input: crate::video::VideoInput, late: &LateWarnings) -> Result<Opened> {
+    use crate::video::{DecodeOptions, VideoInput, VideoReader};
+    let mut v = VideoReader::open(&input, DecodeOptions::default())?;
+    let info = v.info();
+    let kind = match input {
+        VideoInput::File(_) => SourceKind::Video,
+        VideoInput::Camera(_) => SourceKind::Camera,
+        VideoInput::Stream(_) if info.duration_s.is_some() => SourceKind::Video,
+        VideoInput::Stream(_) => SourceKind::Stream,
+    };
+    let stopper = v.stopper();
+    let late = Arc::clone(late);
+    let r = StreamReader {
+        read: move || {
+            let frame = v.next_frame()?;
+            if frame.is_none()
+                && let Some(w) = v.take_shortfall_warning()
+                && let Ok(mut late) = late.lock()
+            {
+                late.push(w);
+            }
+            Ok(frame)
+        },
+        number: 0,
+        live: kind.is_live(),
+    };
+    let size = Some((info.width, info.height));
+    Ok((
+        kind,
+        None,
+        Box::new(r) as Box<dyn Reader>,
+        size,
+        Some(stopper),
+    ))
+}
+
+/// The stream a source path names when it is a URL that names no file
+/// (a file of that name is read as a file).
+fn stream_url(path: &Path) -> Result<Option<crate::video::StreamUrl>> {
+    let Some(text) = path.to_str() else {
+        return Ok(None);
+    };
+    match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => crate::video::StreamUrl::parse(text),
+        _ => Ok(None),
+    }
+}
+
+/// A source's path as messages show it: a stream's URL with its password
+/// hidden, anything else as it is.
+pub fn shown(path: &Path) -> String {
+    match stream_url(path) {
+        Ok(Some(url)) => url.shown().display().to_string(),
+        _ => path.display().to_string(),
+    }
+}
+
 /// A bag's image topic (its only one when `topic` is `None`).
 fn open_bag(path: &Path, topic: Option<String>, late: &LateWarnings) -> Result<Opened> {
     let topic = match topic {
@@ -953,7 +1008,8 @@ impl FrameSource {
     /// rosbag2's metadata.yaml, else its frame files), one frame
     /// file, an `.mcap` (or `.mcap.zstd`) file as a ROS 2 bag, a character
     /// device (a V4L2 camera, live), any other file as a video through
-    /// FFmpeg, or stdin (live).
+    /// FFmpeg, a URL that names no file as a network stream through FFmpeg
+    /// (live unless it has a length), or stdin (live).
     pub fn open(spec: &SourceSpec, options: SourceOptions) -> Result<Self> {
         check_limit(options.limit)?;
         if options.live_queue == 0 || options.live_queue > MAX_LIVE_QUEUE {
@@ -962,14 +1018,20 @@ impl FrameSource {
                 options.live_queue
             )));
         }
-        use crate::video::{DecodeOptions, VideoInput, VideoReader};
+        use crate::video::VideoInput;
         let late = LateWarnings::default();
         let undecodable = Arc::<AtomicU64>::default();
         // A stack's pages, known from its header pass.
         let mut stack_pages = None;
-        let (kind, list, reader, size, stopper): Opened = match spec {
-            SourceSpec::Bag { path, topic } => open_bag(path, topic.clone(), &late)?,
-            SourceSpec::Stdin { width, height } => {
+        // A path that names no file but a URL is a network stream.
+        let stream = match spec {
+            SourceSpec::Path(path) => stream_url(path)?,
+            _ => None,
+        };
+        let (kind, list, reader, size, stopper): Opened = match (spec, stream) {
+            (_, Some(url)) => open_video(VideoInput::Stream(url), &late)?,
+            (SourceSpec::Bag { path, topic }, None) => open_bag(path, topic.clone(), &late)?,
+            (SourceSpec::Stdin { width, height }, None) => {
                 let (w, h) = (*width, *height);
                 if w == 0 || h == 0 || (w as u64).saturating_mul(h as u64) > MAX_IMAGE_PIXELS {
                     return Err(Error::Config(format!(
@@ -990,7 +1052,7 @@ impl FrameSource {
                     None,
                 )
             }
-            SourceSpec::Path(path) => {
+            (SourceSpec::Path(path), None) => {
                 let meta = std::fs::metadata(path).map_err(|e| match e.kind() {
                     std::io::ErrorKind::NotFound => not_found(path),
                     _ => Error::io(path, e),
@@ -1058,40 +1120,15 @@ impl FrameSource {
                     return Err(e);
                 } else if meta.file_type().is_char_device() || meta.is_file() {
                     // A character device is a camera, read live; a file a video.
-                    let (input, kind) = match meta.is_file() {
-                        true => (VideoInput::File(path.clone()), SourceKind::Video),
-                        false => (VideoInput::Camera(path.clone()), SourceKind::Camera),
-                    };
-                    let mut v = VideoReader::open(&input, DecodeOptions::default())?;
-                    let info = v.info();
-                    let stopper = v.stopper();
-                    let late = Arc::clone(&late);
-                    let r = StreamReader {
-                        read: move || {
-                            let frame = v.next_frame()?;
-                            if frame.is_none()
-                                && let Some(w) = v.take_shortfall_warning()
-                                && let Ok(mut late) = late.lock()
-                            {
-                                late.push(w);
-                            }
-                            Ok(frame)
-                        },
-                        number: 0,
-                        live: kind.is_live(),
-                    };
-                    let size = Some((info.width, info.height));
-                    (
-                        kind,
-                        None,
-                        Box::new(r) as Box<dyn Reader>,
-                        size,
-                        Some(stopper),
-                    )
+                    match meta.is_file() {
+                        true => open_video(VideoInput::File(path.clone()), &late)?,
+                        false => open_video(VideoInput::Camera(path.clone()), &late)?,
+                    }
                 } else {
                     return Err(Error::image(
                         path,
-                        "is a pipe or a socket; give a file, a folder, a camera device or --stdin",
+                        "is a pipe or a socket; give a file, a folder, a camera device, a \
+                         stream's URL or --stdin",
                     ));
                 }
             }
@@ -1102,7 +1139,7 @@ impl FrameSource {
         let what = format!("{kind:?}").to_lowercase();
         if !kind.is_live() && options.live_queue != defaults.live_queue {
             return Err(Error::Config(format!(
-                "live_queue {}: the frames a live source (a camera, stdin) may hold while the \
+                "live_queue {}: the frames a live source (a camera, a stream, stdin) may hold while the \
                  models run, and this {what} source is recorded (every frame is kept): leave \
                  live_queue out",
                 options.live_queue

@@ -10,7 +10,8 @@
 //! `VideoCapture` apply it, and as a frame file's EXIF orientation is
 //! ([`crate::image_io`]). Inputs are
 //! passed as `file:` URLs, so a file name is never taken for an option or
-//! another protocol.
+//! another protocol; a network stream's URL ([`StreamUrl`]) is opened with
+//! only network protocols allowed, so nothing it leads to reads a file.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -111,26 +112,156 @@ fn file_url(path: &Path) -> Result<String> {
     Ok(format!("file:{s}"))
 }
 
-/// Where frames come from: a file, or a V4L2 camera device.
+/// The URL schemes read as a network stream: an IP camera's RTSP, a
+/// camera served over HTTP (an MJPEG server on the robot's computer, an
+/// HLS playlist), RTMP, SRT, or raw UDP, RTP or TCP.
+pub const STREAM_SCHEMES: [&str; 10] = [
+    "rtsp", "rtsps", "http", "https", "rtmp", "rtmps", "srt", "udp", "rtp", "tcp",
+];
+
+/// The protocols FFmpeg may open for a stream (`-protocol_whitelist`):
+/// those of [`STREAM_SCHEMES`] and what they run on. A playlist or a
+/// session that points at `file:`, `concat:` or `pipe:` is refused by
+/// FFmpeg, so a URL never reads a file of this machine.
+const STREAM_PROTOCOLS: &str =
+    "rtsp,rtsps,http,https,httpproxy,rtmp,rtmps,rtmpt,rtmpts,srt,udp,rtp,srtp,tcp,tls,crypto";
+
+/// How long a stream may send nothing before FFmpeg gives up, µs.
+const STREAM_SILENCE_US: &str = "10000000";
+
+/// How long a stream's probe may take before it is given up.
+const STREAM_PROBE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(30);
+
+/// A network stream's URL, and the same URL as messages show it: with its
+/// password, if it has one, hidden (`rtsp://admin:***@cam/stream`), as a
+/// message may be pasted into an issue.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StreamUrl {
+    url: String,
+    shown: PathBuf,
+}
+
+impl StreamUrl {
+    /// `text` as a stream's URL: `Ok(None)` when it is no URL
+    /// (`scheme://…`), an error saying what is read when its scheme is
+    /// not one of [`STREAM_SCHEMES`] (`file://`, `ftp://`).
+    pub fn parse(text: &str) -> Result<Option<Self>> {
+        let Some((scheme, rest)) = text.split_once("://") else {
+            return Ok(None);
+        };
+        let is_scheme = scheme
+            .bytes()
+            .next()
+            .is_some_and(|b| b.is_ascii_alphabetic())
+            && scheme
+                .bytes()
+                .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'+' | b'-' | b'.'));
+        if !is_scheme {
+            return Ok(None);
+        }
+        let shown = hide_password(scheme, rest);
+        if !STREAM_SCHEMES
+            .iter()
+            .any(|s| s.eq_ignore_ascii_case(scheme))
+        {
+            let what = match scheme.eq_ignore_ascii_case("file") {
+                true => "give the file's path itself".to_string(),
+                false => format!(
+                    "a stream is read from {} URLs (through FFmpeg); fetch anything else first",
+                    STREAM_SCHEMES.map(|s| format!("{s}://")).join(", ")
+                ),
+            };
+            return Err(Error::Invalid(format!(
+                "{}: {scheme}:// URLs are not read: {what}",
+                crate::printable(&shown)
+            )));
+        }
+        if text.chars().any(char::is_control) || text.chars().any(char::is_whitespace) {
+            return Err(Error::Invalid(format!(
+                "{}: a URL holds no spaces or control characters (write a space as %20)",
+                crate::printable(&shown)
+            )));
+        }
+        Ok(Some(Self {
+            url: text.to_string(),
+            shown: PathBuf::from(shown),
+        }))
+    }
+
+    /// The URL as messages show it (its password hidden).
+    pub fn shown(&self) -> &Path {
+        &self.shown
+    }
+
+    /// FFmpeg's words with the URL in them shown as messages show it.
+    fn hide_in(&self, words: &str) -> String {
+        words.replace(&self.url, &self.shown.to_string_lossy())
+    }
+
+    /// FFmpeg's options for it: only network protocols, and a silence
+    /// after which it gives up: every protocol's `-rw_timeout`, and the
+    /// `-timeout` of those that read it as one (RTSP's demuxer, UDP, RTP,
+    /// SRT and TCP, which ignore the other; RTMP's `-timeout` would make it
+    /// listen instead, HTTP has none).
+    fn input_args(&self) -> Vec<String> {
+        let scheme = self
+            .url
+            .split_once("://")
+            .map_or(String::new(), |(s, _)| s.to_ascii_lowercase());
+        let mut args = vec![
+            "-protocol_whitelist".to_string(),
+            STREAM_PROTOCOLS.into(),
+            "-rw_timeout".into(),
+            STREAM_SILENCE_US.into(),
+        ];
+        if ["rtsp", "rtsps", "udp", "rtp", "srt", "tcp"].contains(&scheme.as_str()) {
+            args.extend(["-timeout".into(), STREAM_SILENCE_US.into()]);
+        }
+        args.extend(["-i".into(), self.url.clone()]);
+        args
+    }
+}
+
+/// `scheme://rest` with the password of its user part, if any, as `***`.
+fn hide_password(scheme: &str, rest: &str) -> String {
+    let authority_end = rest.find(['/', '?', '#']).unwrap_or(rest.len());
+    let (authority, tail) = rest.split_at(authority_end);
+    let shown = match authority.rsplit_once('@') {
+        Some((user, host)) => match user.split_once(':') {
+            Some((name, _)) => format!("{name}:***@{host}"),
+            None => authority.to_string(),
+        },
+        None => authority.to_string(),
+    };
+    format!("{scheme}://{shown}{tail}")
+}
+
+/// Where frames come from: a file, a V4L2 camera device or a network
+/// stream.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum VideoInput {
     /// A video file (mp4, mkv, avi, ...).
     File(PathBuf),
     /// A V4L2 camera (`/dev/videoN`), read live.
     Camera(PathBuf),
+    /// A network stream (an IP camera's `rtsp://…`, `http://…`).
+    Stream(StreamUrl),
 }
 
 impl VideoInput {
-    /// The file or device.
+    /// The file or device, or the stream's URL as messages show it.
     pub fn path(&self) -> &Path {
         match self {
             VideoInput::File(p) | VideoInput::Camera(p) => p,
+            VideoInput::Stream(url) => url.shown(),
         }
     }
 
+    /// The input as FFmpeg's and ffprobe's options.
     fn input_args(&self) -> Result<Vec<String>> {
         Ok(match self {
             VideoInput::File(p) => vec!["-i".into(), file_url(p)?],
+            VideoInput::Stream(url) => url.input_args(),
             VideoInput::Camera(p) => vec![
                 "-f".into(),
                 "v4l2".into(),
@@ -141,6 +272,70 @@ impl VideoInput {
             ],
         })
     }
+}
+
+/// `cmd`'s output, its run given up when Ctrl-C asks to stop or when
+/// `deadline` passes (a stream whose server accepts and says nothing).
+fn output_within(
+    mut cmd: Command,
+    path: &Path,
+    deadline: Option<std::time::Duration>,
+) -> Result<std::process::Output> {
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| spawn_error(path, e))?;
+    let drain = |pipe: Option<Box<dyn Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            if let Some(mut pipe) = pipe {
+                // At most 1 MiB: ffprobe's answer is a few hundred bytes.
+                let _ = pipe.by_ref().take(1 << 20).read_to_end(&mut bytes);
+                let _ = std::io::copy(&mut pipe, &mut std::io::sink());
+            }
+            bytes
+        })
+    };
+    let stdout = drain(
+        child
+            .stdout
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
+    let stderr = drain(
+        child
+            .stderr
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
+    let started = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().map_err(|e| Error::io(path, e))? {
+            break status;
+        }
+        let late = deadline.filter(|d| started.elapsed() > *d);
+        if late.is_some() || crate::interrupt::requested() {
+            let _ = child.kill();
+            let _ = child.wait();
+            crate::interrupt::check()?;
+            return Err(Error::image(
+                path,
+                format!(
+                    "no frames came in {} s: is the camera on and the URL right?",
+                    late.map_or(0, |d| d.as_secs())
+                ),
+            ));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let joined = |t: std::thread::JoinHandle<Vec<u8>>| t.join().unwrap_or_default();
+    Ok(std::process::Output {
+        status,
+        stdout: joined(stdout),
+        stderr: joined(stderr),
+    })
 }
 
 /// The first video stream's size (as shown) and rate, from `ffprobe`.
@@ -241,20 +436,16 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
             "stream=width,height,avg_frame_rate,duration:stream_side_data:format=duration",
         ])
         .args(["-of", "json"]);
-    if let VideoInput::Camera(_) = input {
-        cmd.args(["-f", "v4l2"]);
-    }
-    let out = cmd
-        .arg(match input {
-            VideoInput::File(p) => file_url(p)?,
-            VideoInput::Camera(p) => p.to_string_lossy().into_owned(),
-        })
-        .stdin(Stdio::null())
-        .output()
-        .map_err(|e| spawn_error(path, e))?;
+    cmd.args(input.input_args()?);
+    let deadline = matches!(input, VideoInput::Stream(_)).then_some(STREAM_PROBE_TIMEOUT);
+    let out = output_within(cmd, path, deadline)?;
     if !out.status.success() {
         let why = String::from_utf8_lossy(&out.stderr);
         let why = why.lines().last().unwrap_or("ffprobe failed").trim();
+        let why = match input {
+            VideoInput::Stream(url) => url.hide_in(why),
+            _ => why.to_string(),
+        };
         // A device is read as a camera: one that is none (`/dev/null`, a
         // serial port) is said to be no camera, not no video file.
         let what = match input {
@@ -262,6 +453,7 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
             VideoInput::Camera(_) => {
                 "cannot read as a camera (a device is read as a V4L2 camera, such as /dev/video0)"
             }
+            VideoInput::Stream(_) => "cannot read the stream",
         };
         return Err(Error::image(path, format!("{what}: {why}")));
     }
@@ -438,8 +630,11 @@ impl VideoReader {
     /// [`Self::take_shortfall_warning`]'s warning, judged at the end of
     /// the stream.
     fn judge_shortfall(&self) -> Option<String> {
-        let VideoInput::File(path) = &self.input else {
-            return None;
+        // A camera's stream has no length; a served file may.
+        let path = match &self.input {
+            VideoInput::File(p) => p.as_path(),
+            VideoInput::Stream(url) => url.shown(),
+            VideoInput::Camera(_) => return None,
         };
         let (duration_s, fps) = (self.info.duration_s?, self.info.fps?);
         let promised = (duration_s * fps).round();
@@ -490,6 +685,10 @@ impl VideoReader {
             .map_err(|e| Error::io(self.input.path(), e))?;
         crate::interrupt::check()?;
         let last = last_words(self.stderr.take());
+        let last = match &self.input {
+            VideoInput::Stream(url) => url.hide_in(&last),
+            _ => last,
+        };
         if !status.success() {
             return Err(Error::image(
                 self.input.path(),
@@ -891,6 +1090,84 @@ mod tests {
             ("something else", None),
         ] {
             assert_eq!(release_of(line), release, "{line}");
+        }
+    }
+
+    #[test]
+    fn a_streams_url_is_told_from_a_path_and_its_password_is_never_shown() {
+        let shown = |text: &str| {
+            StreamUrl::parse(text)
+                .unwrap()
+                .map(|u| u.shown().display().to_string())
+        };
+        for (text, want) in [
+            (
+                "rtsp://192.168.1.20:554/stream",
+                "rtsp://192.168.1.20:554/stream",
+            ),
+            (
+                "rtsp://admin:pa:ss@cam.local/h264?channel=1",
+                "rtsp://admin:***@cam.local/h264?channel=1",
+            ),
+            ("HTTP://u:p@a@host:8080", "HTTP://u:***@host:8080"),
+            ("http://user@host/x?to=a:b@c", "http://user@host/x?to=a:b@c"),
+            ("srt://host:9000?mode=caller", "srt://host:9000?mode=caller"),
+        ] {
+            assert_eq!(shown(text).as_deref(), Some(want), "{text}");
+        }
+        // Paths, not URLs: read as files.
+        for text in [
+            "clip.mp4",
+            "./rtsp:/x",
+            "1://x",
+            "a b://x",
+            "://x",
+            "/data/x://y",
+        ] {
+            assert_eq!(shown(text), None, "{text}");
+        }
+        for (text, want) in [
+            ("file:///tmp/a.mkv", "give the file's path itself"),
+            (
+                "ftp://u:secret@lab/a.mkv",
+                "ftp://u:***@lab/a.mkv: ftp:// URLs are not read",
+            ),
+            ("concat://a|b", "concat:// URLs are not read"),
+            (
+                "rtsp://cam/a b",
+                "a URL holds no spaces or control characters",
+            ),
+            (
+                "rtsp://cam/\u{1b}[2J",
+                "rtsp://cam/\\x1b[2J: a URL holds no spaces",
+            ),
+        ] {
+            let err = StreamUrl::parse(text).unwrap_err().to_string();
+            assert!(
+                err.contains(want) && !err.contains("secret"),
+                "{text}: {err}"
+            );
+        }
+        // Only network protocols, and a silence after which FFmpeg gives
+        // up that the protocol reads as one.
+        let args = |text: &str| StreamUrl::parse(text).unwrap().unwrap().input_args();
+        let rtmp = args("rtmp://host/live");
+        assert!(rtmp.contains(&"-rw_timeout".to_string()));
+        assert!(
+            !rtmp.contains(&"-timeout".to_string()),
+            "RTMP's -timeout listens"
+        );
+        assert!(args("rtsp://cam/s").contains(&"-timeout".to_string()));
+        let list = &rtmp[rtmp
+            .iter()
+            .position(|a| a == "-protocol_whitelist")
+            .unwrap()
+            + 1];
+        for p in list.split(',') {
+            assert!(
+                !["file", "pipe", "concat", "subfile", "data"].contains(&p),
+                "{p}"
+            );
         }
     }
 }

@@ -56,9 +56,10 @@ pub fn check_pipelines(
         return refuse(format!(
             "pipelines {pipelines} on a live source (a {}): its frames arrive one at a time, \
              and waiting for {pipelines} of them would add their interval to every frame's \
-             latency: leave pipelines at 1 for a camera or standard input",
+             latency: leave pipelines at 1 for a camera, a stream or standard input",
             match source {
                 SourceKind::Camera => "camera",
+                SourceKind::Stream => "network stream",
                 _ => "stream on standard input",
             }
         ));

@@ -814,10 +814,14 @@ impl PredictInput {
         let source = FrameSource::open(&spec, options)?;
         if source.kind().is_live() && limit.is_none() && !streamed {
             return Err(tactile_core::Error::Config(format!(
-                "{} is a live camera: give a frame limit (the estimates are written when the frames end), \
-                 or stream each frame's estimates as it comes (`tactile predict --out -`; Python: \
-                 tactile.frames with tactile.PoseEstimator)",
-                data.display()
+                "{} is a live {}: give a frame limit (the estimates are written when the frames \
+                 end), or stream each frame's estimates as it comes (`tactile predict --out -`; \
+                 Python: tactile.frames with tactile.PoseEstimator)",
+                tactile_core::source::shown(data),
+                match source.kind() {
+                    tactile_core::source::SourceKind::Stream => "stream",
+                    _ => "camera",
+                }
             ))
             .into());
         }

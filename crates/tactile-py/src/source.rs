@@ -72,7 +72,9 @@ impl PyFrameSource {
     }
 
     /// What the source is: "dataset", "folder", "video", "stack" (a TIFF of
-    /// many pages given alone), "bag", "camera" or "stdin".
+    /// many pages given alone), "bag", "camera", "stream" (a network
+    /// stream without a length; a served file with one is "video") or
+    /// "stdin".
     #[getter]
     fn kind(&self) -> PyResult<String> {
         let k = self.lock()?.kind();
@@ -288,8 +290,10 @@ impl PyVideoDecoder {
 /// (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM), an image, a TIFF of many pages
 /// (a stack, read page by page), a video file (decoded by the system's FFmpeg,
 /// every frame), a ROS 2 bag (its folder or one ".mcap"; `topic` names its
-/// image topic, else its only one is read) or a camera device such as
-/// "/dev/video0" (live); or give
+/// image topic, else its only one is read), a camera device such as
+/// "/dev/video0" (live) or a network stream's URL such as
+/// "rtsp://192.168.1.20/stream" (live; a file served with a length, every
+/// frame); or give
 /// `stdin_size=(width, height)` (and no source) to read raw rgb24 frames
 /// from standard input (live). Live sources keep at most `live_queue`
 /// frames waiting and drop the oldest when more arrive.

@@ -174,12 +174,12 @@ def test_limit_and_bad_sources(root, tmp_path):
         tactile.frames(bad)
     with pytest.raises(ValueError, match="stdin_size"):
         tactile.frames()
-    # "-" (the shell's name for standard input) and a camera's URL say how
-    # they are read.
+    # "-" (the shell's name for standard input) says how it is read; a URL
+    # of a protocol that is no stream's says what is read.
     with pytest.raises(ValueError, match=r"-: no file of that name; .*tactile.frames\(stdin_size=\(w, h\)\)"):
         tactile.frames("-")
-    with pytest.raises(ValueError, match=r"http://cam.local/video: a URL, not a file; .*ffmpeg -i URL"):
-        tactile.frames("http://cam.local/video")
+    with pytest.raises(ValueError, match=r"ftp://lab/video.mkv: ftp:// URLs are not read: a stream is read from rtsp://"):
+        tactile.frames("ftp://lab/video.mkv")
     # A live queue for a recorded folder would be ignored: refused.
     with pytest.raises(ValueError, match="live_queue 8: .* and this folder source is recorded"):
         tactile.frames(root / "samples" / "palpation", live_queue=8)
@@ -256,3 +256,62 @@ def test_ctrl_c_stops_a_wait_for_the_next_live_frame(palpation_frames):
         if p.poll() is None:
             p.kill()
         p.stdin.close()
+
+
+@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
+def test_a_streams_url_gives_its_frames(root, tmp_path, palpation_frames):
+    # A file served over HTTP (a length: every frame, as the file's) and a
+    # camera's MJPEG stream (no length: live). Before, a URL was refused.
+    import http.server
+    import threading
+
+    clip = tmp_path / "clip.mkv"
+    subprocess.run(
+        ["ffmpeg", "-nostdin", "-loglevel", "error", "-framerate", "30",
+         "-i", str(root / "samples" / "palpation" / "%06d.png"),
+         "-c:v", "libx264rgb", "-qp", "0", str(clip)],
+        check=True,
+    )
+    live = subprocess.run(
+        ["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(clip),
+         "-c:v", "mjpeg", "-q:v", "2", "-f", "mpjpeg", "-"],
+        check=True, capture_output=True,
+    ).stdout
+
+    class Handler(http.server.SimpleHTTPRequestHandler):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, directory=str(tmp_path), **kwargs)
+
+        def do_GET(self):
+            if self.path != "/live.mjpg":
+                return super().do_GET()
+            self.send_response(200)
+            self.send_header("Content-Type", "multipart/x-mixed-replace;boundary=ffmpeg")
+            self.end_headers()
+            self.wfile.write(live)
+
+        def log_message(self, *args):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    base = f"http://127.0.0.1:{server.server_address[1]}"
+    try:
+        src = tactile.frames(f"{base}/clip.mkv")
+        assert src.kind == "video" and src.size == (320, 180)
+        got = list(src)
+        assert len(got) == len(palpation_frames)
+        for f, expected in zip(got, palpation_frames):
+            assert np.array_equal(f.image, expected)
+
+        src = tactile.frames(f"{base}/live.mjpg")
+        assert src.kind == "stream"
+        got = list(src)
+        assert 1 <= len(got) <= len(palpation_frames)
+        assert all(f.age_ms is not None for f in got)
+
+        with pytest.raises(ValueError, match=r"http://robot:\*\*\*@127\.0\.0\.1:\d+/none\.mkv: cannot read the stream") as e:
+            tactile.frames(f"http://robot:s3cret@{base[len('http://'):]}/none.mkv")
+        assert "s3cret" not in str(e.value)
+    finally:
+        server.shutdown()

@@ -1,6 +1,7 @@
 #![allow(clippy::unwrap_used)]
 //! Every source `tactile run` reads: a video file (H.264 and MJPEG, decoded
-//! by FFmpeg), raw frames on stdin, a folder of JPEG frames, and the live
+//! by FFmpeg), a network stream's URL, raw frames on stdin, a folder of
+//! JPEG frames, and the live
 //! queue that drops the oldest frames when the models fall behind. Each is
 //! checked against the run over the shipped PNG frames.
 
@@ -246,7 +247,7 @@ fn an_option_of_the_other_kind_of_source_is_refused() {
                 "--live-queue",
                 "8",
             ][..],
-            "live_queue 8: the frames a live source (a camera, stdin) may hold while the models run, and this folder source is recorded",
+            "live_queue 8: the frames a live source (a camera, a stream, stdin) may hold while the models run, and this folder source is recorded",
         ),
         (
             &[
@@ -260,22 +261,11 @@ fn an_option_of_the_other_kind_of_source_is_refused() {
             ][..],
             "and this stdin source is live (read as frames arrive): leave it out",
         ),
-        // `--data -` (the shell's name for standard input) and an IP
-        // camera's URL say how they are read; before, "-: input does not
-        // exist".
+        // `--data -` (the shell's name for standard input) says how it
+        // is read; before, "-: input does not exist".
         (
             &["run", "--models", MODELS, "--data", "-"][..],
             "-: no file of that name; standard input is read as raw rgb24 frames with `--stdin --size WxH`",
-        ),
-        (
-            &[
-                "run",
-                "--models",
-                MODELS,
-                "--data",
-                "rtsp://192.168.1.20:554/stream",
-            ][..],
-            "rtsp://192.168.1.20:554/stream: a URL, not a file; a stream is read through FFmpeg on standard input: `ffmpeg -i URL -f rawvideo -pix_fmt rgb24 - | tactile run --stdin --size WxH`",
         ),
     ] {
         let out = tactile().args(args).stdin(Stdio::null()).output().unwrap();
@@ -730,4 +720,166 @@ fn a_video_and_a_labels_csv_become_a_dataset_every_command_reads() {
         !dir.path().join("ds2").exists(),
         "nothing left by a failed import"
     );
+}
+
+/// A file an HTTP server in this test serves: its path, content type,
+/// bytes, and whether it says its length (a file) or not (a camera's
+/// endless MJPEG stream, sent then closed).
+struct Served {
+    path: &'static str,
+    content_type: &'static str,
+    body: Vec<u8>,
+    with_length: bool,
+}
+
+/// An HTTP server on a free port of 127.0.0.1 serving `files` (anything
+/// else 404), each request on its own thread, for the rest of the test
+/// process. Returns the port.
+fn serve(files: Vec<Served>) -> u16 {
+    use std::io::Read;
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let files = std::sync::Arc::new(files);
+    std::thread::spawn(move || {
+        for conn in listener.incoming() {
+            let Ok(mut conn) = conn else { continue };
+            let files = std::sync::Arc::clone(&files);
+            std::thread::spawn(move || {
+                let mut request = Vec::new();
+                let mut buf = [0u8; 1024];
+                while !request.windows(4).any(|w| w == b"\r\n\r\n") && request.len() < 16384 {
+                    match conn.read(&mut buf) {
+                        Ok(0) | Err(_) => return,
+                        Ok(n) => request.extend_from_slice(&buf[..n]),
+                    }
+                }
+                let request = String::from_utf8_lossy(&request);
+                let path = request.split(' ').nth(1).unwrap_or("");
+                let reply = match files.iter().find(|f| f.path == path) {
+                    Some(f) if f.with_length => format!(
+                        "HTTP/1.1 200 OK\r\nContent-Type: {}\r\nContent-Length: {}\r\nConnection: close\r\n\r\n",
+                        f.content_type,
+                        f.body.len()
+                    ),
+                    Some(f) => format!(
+                        "HTTP/1.0 200 OK\r\nContent-Type: {}\r\nConnection: close\r\n\r\n",
+                        f.content_type
+                    ),
+                    None => {
+                        "HTTP/1.1 404 Not Found\r\nContent-Length: 0\r\nConnection: close\r\n\r\n"
+                            .to_string()
+                    }
+                };
+                let _ = conn.write_all(reply.as_bytes());
+                if let Some(f) = files.iter().find(|f| f.path == path) {
+                    let _ = conn.write_all(&f.body);
+                }
+            });
+        }
+    });
+    port
+}
+
+#[test]
+fn a_streams_url_is_read_through_ffmpeg_every_frame_when_it_has_a_length() {
+    // Before, a URL was refused ("a URL, not a file; … through FFmpeg on
+    // standard input").
+    use tactile_core::video::{VideoCodec, encode};
+    let dir = tempfile::tempdir().unwrap();
+    let imgs = images();
+    let refs: Vec<_> = imgs.iter().collect();
+    let clip = dir.path().join("clip.mkv");
+    encode(&refs, 30, VideoCodec::H264LosslessRgb, &clip).unwrap();
+    // A camera's MJPEG over HTTP (mjpg-streamer's, FFmpeg's `mpjpeg`): no
+    // length, so live.
+    let live = dir.path().join("live.mjpg");
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(&clip)
+        .args(["-c:v", "mjpeg", "-q:v", "2", "-f", "mpjpeg"])
+        .arg(&live)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    // A playlist that points at a file of this machine.
+    let sneaky = format!(
+        "#EXTM3U\n#EXT-X-TARGETDURATION:2\n#EXTINF:2,\nfile://{}\n#EXT-X-ENDLIST\n",
+        clip.display()
+    );
+    let port = serve(vec![
+        Served {
+            path: "/clip.mkv",
+            content_type: "video/x-matroska",
+            body: std::fs::read(&clip).unwrap(),
+            with_length: true,
+        },
+        Served {
+            path: "/live.mjpg",
+            content_type: "multipart/x-mixed-replace;boundary=ffmpeg",
+            body: std::fs::read(&live).unwrap(),
+            with_length: false,
+        },
+        Served {
+            path: "/list.m3u8",
+            content_type: "application/vnd.apple.mpegurl",
+            body: sneaky.into_bytes(),
+            with_length: true,
+        },
+    ]);
+    let url = |path: &str| format!("http://127.0.0.1:{port}{path}");
+    let expected = reference();
+
+    // A file served over HTTP: recorded, every frame, the same records.
+    let (records, summary, _) = run(&["--data", &url("/clip.mkv")], None);
+    assert_eq!(summary["source"], "video");
+    assert_eq!(summary["frames"], imgs.len() as u64, "every frame");
+    assert_agree(&expected, &records, 0.0);
+
+    // A camera's stream: live, each frame given or counted as dropped,
+    // each given one decided as its own frame was.
+    let (records, summary, _) = run(&["--data", &url("/live.mjpg")], None);
+    assert_eq!(summary["source"], "stream");
+    let given = summary["frames"].as_u64().unwrap();
+    let dropped = summary["dropped_frames"].as_u64().unwrap();
+    assert!(
+        given >= 1 && given + dropped == imgs.len() as u64,
+        "{summary}"
+    );
+    for r in &records {
+        let i: usize = r["frame"].as_str().unwrap().parse().unwrap();
+        assert_eq!(r["tendon"], expected[i]["tendon"], "frame {i}");
+    }
+
+    // Refused, naming the URL with its password hidden, FFmpeg's words
+    // included; a playlist that leads to a file reads nothing.
+    for (data, want) in [
+        (
+            format!("http://robot:s3cret@127.0.0.1:{port}/none.mkv"),
+            format!("http://robot:***@127.0.0.1:{port}/none.mkv: cannot read the stream"),
+        ),
+        (url("/list.m3u8"), format!("{}: cannot read the stream", url("/list.m3u8"))),
+        (
+            "file:///tmp/frames.mkv".into(),
+            "file:///tmp/frames.mkv: file:// URLs are not read: give the file's path itself".into(),
+        ),
+        (
+            "ftp://lab/frames.mkv".into(),
+            "ftp://lab/frames.mkv: ftp:// URLs are not read: a stream is read from rtsp://, rtsps://, http://".into(),
+        ),
+        (
+            "rtsp://127.0.0.1:1/stream".into(),
+            "rtsp://127.0.0.1:1/stream: cannot read the stream".into(),
+        ),
+    ] {
+        let out = tactile()
+            .args(["run", "--models", MODELS, "--out", "-", "--data", &data])
+            .stdin(Stdio::null())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{data}: {err}");
+        assert!(out.stdout.is_empty(), "{data}: no records");
+        assert!(err.contains(&want), "{data}: {err}");
+        assert!(!err.contains("s3cret"), "{data}: {err}");
+    }
 }

@@ -302,7 +302,7 @@ def frames(
     limit: Optional[int] = None,
     prefetch: bool = True,
 ) -> FrameSource:
-    """Open a source of frames (a dataset, a folder, an image, a TIFF of many pages read page by page, a video file, a ROS 2 bag's image topic, a camera, or stdin)."""
+    """Open a source of frames (a dataset, a folder, an image, a TIFF of many pages read page by page, a video file, a ROS 2 bag's image topic, a camera, a network stream's URL, or stdin)."""
 
 def bag_topics(path: _Path) -> List[Dict[str, Any]]:
     """The image topics of a ROS 2 bag (its folder or one MCAP file, also one the Foxglove SDK recorded; video topics too): topic, message_type, count, rate_hz."""
