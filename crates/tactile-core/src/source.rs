@@ -228,7 +228,7 @@ impl FrameList {
                     // A bag folder holds metadata.yaml; without it, each
                     // MCAP file is a bag of its own.
                     (None, Some(bag)) => format!(
-                        "; it holds MCAP files without the metadata.yaml of a ROS 2 bag folder: pass one, as {}",
+                        "; it holds bag files (MCAP or SQLite) without the metadata.yaml of a ROS 2 bag folder: pass one, as {}",
                         bag.display()
                     ),
                     (None, None) => String::new(),

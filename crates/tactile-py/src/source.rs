@@ -289,7 +289,7 @@ impl PyVideoDecoder {
 /// Open a source of frames: `source` is a dataset folder, a folder of frames
 /// (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM), an image, a TIFF of many pages
 /// (a stack, read page by page), a video file (decoded by the system's FFmpeg,
-/// every frame), a ROS 2 bag (its folder or one ".mcap"; `topic` names its
+/// every frame), a ROS 2 bag (its folder, or one ".mcap" or ".db3"; `topic` names its
 /// image topic, else its only one is read), a camera device such as
 /// "/dev/video0" (live) or a network stream's URL such as
 /// "rtsp://192.168.1.20/stream" (live; a file served with a length, every
@@ -379,7 +379,8 @@ pub(crate) fn source_spec(
     })
 }
 
-/// The image topics of a ROS 2 bag (its folder or one MCAP file): a list
+/// The image topics of a ROS 2 bag (its folder, or one MCAP or SQLite
+/// `.db3` file): a list
 /// of dicts with `topic`, `message_type`, `count` and `rate_hz`.
 #[pyfunction]
 pub(crate) fn bag_topics(py: Python<'_>, path: PathArg) -> PyResult<Vec<Py<PyAny>>> {

@@ -172,13 +172,15 @@ def test_bags_as_ros2_bag_record_leaves_them(rosbags_bag, tmp_path, palpation_fr
         assert_the_sample_frames(bag, topic, palpation_frames, str(bag))
 
 
-def test_sqlite_and_ros1_bags_name_the_command_that_converts_them(tmp_path, palpation_frames):
-    """What `ros2 bag record` left before Iron (SQLite), and a ROS 1 bag:
-    refused with a `rosbags-convert` command, which gives a bag that reads
-    as the frames."""
+def test_sqlite_bags_are_read_and_ros1_bags_name_the_command_that_converts_them(tmp_path, palpation_frames):
+    """What `ros2 bag record` leaves on Humble and before (SQLite storage,
+    rosbag2's schema versions 8 and 9 as `rosbags` writes them) is read as
+    its frames, the folder and its .db3 alike; a ROS 1 bag is refused with a
+    `rosbags-convert` command, which gives a bag that reads as the frames."""
     ts2, ts1 = get_typestore(Stores.ROS2_HUMBLE), get_typestore(Stores.ROS1_NOETIC)
-    sqlite, ros1 = tmp_path / "humble", tmp_path / "noetic.bag"
-    for ts, make in [(ts2, lambda: RosbagsWriter(sqlite, version=8, storage_plugin=StoragePlugin.SQLITE3)),
+    humble, jazzy, ros1 = tmp_path / "humble", tmp_path / "jazzy", tmp_path / "noetic.bag"
+    for ts, make in [(ts2, lambda: RosbagsWriter(humble, version=8, storage_plugin=StoragePlugin.SQLITE3)),
+                     (ts2, lambda: RosbagsWriter(jazzy, version=9, storage_plugin=StoragePlugin.SQLITE3)),
                      (ts1, lambda: Ros1Writer(ros1))]:
         Image, Header, Time = (ts.types[t] for t in
                                ["sensor_msgs/msg/Image", "std_msgs/msg/Header", "builtin_interfaces/msg/Time"])
@@ -193,17 +195,17 @@ def test_sqlite_and_ros1_bags_name_the_command_that_converts_them(tmp_path, palp
                             step=width * 3, data=np.ascontiguousarray(rgb).reshape(-1))
                 data = ts.serialize_ros1(msg, Image.__msgtype__) if ts is ts1 else ts.serialize_cdr(msg, Image.__msgtype__)
                 w.write(c, t, data)
-    (db3,) = sqlite.glob("*.db3")
-    for given, src, what in [(sqlite, sqlite, "SQLite storage"), (db3, sqlite, "SQLite storage"),
-                             (ros1, ros1, "a ROS 1 bag")]:
-        hint = f"rosbags-convert --src {src} --dst NEW_FOLDER --dst-storage mcap"
-        for read in [lambda: list(tactile.frames(given)), lambda: tactile.bag_topics(given)]:
-            with pytest.raises(ValueError) as e:
-                read()
-            assert what in str(e.value) and hint in str(e.value), str(e.value)
-        if given is not db3:
-            converted = rosbags_convert(src, tmp_path / f"{src.stem}-mcap")
-            assert_the_sample_frames(converted, "/cam/image_raw", palpation_frames, what)
+    for folder in [humble, jazzy]:
+        (db3,) = folder.glob("*.db3")
+        for given in [folder, db3]:
+            assert_the_sample_frames(given, "/cam/image_raw", palpation_frames, str(given))
+    hint = f"rosbags-convert --src {ros1} --dst NEW_FOLDER --dst-storage mcap"
+    for read in [lambda: list(tactile.frames(ros1)), lambda: tactile.bag_topics(ros1)]:
+        with pytest.raises(ValueError) as e:
+            read()
+        assert "a ROS 1 bag" in str(e.value) and hint in str(e.value), str(e.value)
+    converted = rosbags_convert(ros1, tmp_path / "noetic-mcap")
+    assert_the_sample_frames(converted, "/cam/image_raw", palpation_frames, "a ROS 1 bag")
 
 
 def rgb8_bag(path: Path, frames: list[np.ndarray], **writer_options) -> None:

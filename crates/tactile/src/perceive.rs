@@ -25,7 +25,7 @@ pub(crate) struct PerceiveArgs {
     /// WebP or PGM/PPM; by the
     /// numbers in their names), one image, a TIFF of many pages (a stack,
     /// page by page), a video file (decoded by
-    /// FFmpeg), a ROS 2 bag (its folder or one .mcap; see --topic) or a
+    /// FFmpeg), a ROS 2 bag (its folder, or one .mcap or .db3; see --topic) or a
     /// V4L2 camera (with --limit, or streamed with `--out -`).
     #[arg(long)]
     data: PathBuf,

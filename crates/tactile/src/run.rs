@@ -16,7 +16,7 @@ pub(crate) struct RunArgs {
     /// folder of frames (PNG, JPEG, BMP, TIFF, WebP or PGM/PPM; by the
     /// numbers in their names), one image, a TIFF of many pages (a stack,
     /// page by page), a video file (mp4, mkv, avi; decoded by FFmpeg, every frame),
-    /// a ROS 2 bag (its folder or one .mcap; see --topic), a V4L2 camera
+    /// a ROS 2 bag (its folder, or one .mcap or .db3; see --topic), a V4L2 camera
     /// such as /dev/video0 (live) or a network stream's URL (rtsp://,
     /// http://, rtmp://, srt://, udp://, rtp://, tcp://; live, or every
     /// frame when it has a length, as a file served over HTTP).

@@ -353,28 +353,14 @@ fn a_split_bag_folder_is_read_in_the_order_of_its_files() {
 #[test]
 fn bags_this_toolkit_does_not_read_are_refused_with_the_command_that_converts_them() {
     let dir = tempfile::tempdir().unwrap();
-    // What `ros2 bag record` leaves before ROS 2 Iron: SQLite storage.
-    let sqlite = dir.path().join("humble");
-    bag_folder(&sqlite);
-    let db3 = sqlite.join("humble_0.db3");
-    std::fs::write(&db3, b"SQLite format 3\0 and the rest of a database").unwrap();
     // A ROS 1 bag, whatever its name.
     let ros1 = dir.path().join("noetic.bin");
     std::fs::write(&ros1, b"#ROSBAG V2.0\n and its records").unwrap();
-    let sqlite_s = sqlite.to_str().unwrap().to_string();
-    let cases = [
-        (sqlite_s.clone(), "SQLite storage", sqlite_s.clone()),
-        (
-            db3.to_str().unwrap().to_string(),
-            "SQLite storage",
-            sqlite_s.clone(),
-        ),
-        (
-            ros1.to_str().unwrap().to_string(),
-            "a ROS 1 bag",
-            ros1.to_str().unwrap().to_string(),
-        ),
-    ];
+    let cases = [(
+        ros1.to_str().unwrap().to_string(),
+        "a ROS 1 bag",
+        ros1.to_str().unwrap().to_string(),
+    )];
     for (data, what, src) in &cases {
         for extra in [&[][..], &["--list-topics"][..]] {
             let mut args = vec!["run", "--models", MODELS, "--data", data.as_str()];
@@ -699,4 +685,194 @@ fn a_results_file_declares_only_the_topics_its_run_can_write() {
         run(shipped.to_str().unwrap(), rest, &out("g.mcap"), &[]),
         both
     );
+}
+
+/// rosbag2's SQLite schema, as `ros2 bag record` creates it on Humble.
+const ROSBAG2_SQLITE_SCHEMA: &str = "
+CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);
+CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL, metadata TEXT NOT NULL);
+CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
+    serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
+CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,
+    timestamp INTEGER NOT NULL, data BLOB NOT NULL);
+CREATE INDEX timestamp_idx ON messages (timestamp ASC);
+INSERT INTO schema VALUES (3, 'humble');
+";
+
+/// A ROS 2 bag in SQLite storage as `ros2 bag record` leaves it on Humble:
+/// `metadata.yaml` and `rec_0.db3`, `rec_1.db3`, the sample frames as
+/// rgb8 Images on `/cam/image_raw` at 20 Hz split between them, topic ids
+/// 7 (`/chatter`, a String before each frame) and 3, and each file's
+/// messages inserted last first (rosbag2 reads them by their timestamp).
+fn write_sqlite_bag(folder: &Path) {
+    use tactile_core::bag::messages::Time;
+    bag_folder(folder);
+    let frames = frames();
+    for (part, chunk) in frames.chunks(frames.len() / 2).enumerate() {
+        let db = rusqlite::Connection::open(folder.join(format!("rec_{part}.db3"))).unwrap();
+        db.execute_batch(ROSBAG2_SQLITE_SCHEMA).unwrap();
+        db.execute_batch(
+            "INSERT INTO topics VALUES (7, '/chatter', 'std_msgs/msg/String', 'cdr', '');
+             INSERT INTO topics VALUES (3, '/cam/image_raw', 'sensor_msgs/msg/Image', 'cdr', '');",
+        )
+        .unwrap();
+        for (k, (width, height, px)) in chunk.iter().enumerate().rev() {
+            let i = part * (frames.len() / 2) + k;
+            let t = T0 + i as i64 * 50_000_000;
+            let msg = Image {
+                header: Header {
+                    stamp: Time::from_nanos(t),
+                    frame_id: "cam".into(),
+                },
+                height: *height,
+                width: *width,
+                encoding: "rgb8".into(),
+                is_bigendian: 0,
+                step: width * 3,
+                data: px,
+            };
+            let hello = [0u8, 1, 0, 0, 6, 0, 0, 0, b'h', b'e', b'l', b'l', b'o', 0];
+            let insert = "INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)";
+            db.execute(insert, rusqlite::params![3, t, to_cdr(&msg).unwrap()])
+                .unwrap();
+            db.execute(insert, rusqlite::params![7, t - 1, hello.to_vec()])
+                .unwrap();
+        }
+    }
+}
+
+#[test]
+fn a_bag_in_sqlite_storage_is_listed_and_decided_as_its_png_frames() {
+    // Before, a .db3 bag (ROS 2 Humble's default) was refused with the
+    // command that converts it to MCAP.
+    let dir = tempfile::tempdir().unwrap();
+    let bag = dir.path().join("humble");
+    write_sqlite_bag(&bag);
+    let data = bag.to_str().unwrap();
+    let out = tactile(&["run", "--data", data, "--list-topics"]);
+    let listed = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success()
+            && listed.contains("/cam/image_raw  sensor_msgs/msg/Image  12 messages  20.0 Hz"),
+        "{listed}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (a, b) = (dir.path().join("bag.jsonl"), dir.path().join("png.jsonl"));
+    run_ok(data, &a);
+    run_ok(SAMPLES, &b);
+    assert_eq!(decisions(&a), decisions(&b));
+    let stamps: Vec<i64> = std::fs::read_to_string(&a)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["stamp_ns"]
+                .as_i64()
+                .unwrap()
+        })
+        .collect();
+    let want: Vec<i64> = (0..12).map(|i| T0 + i * 50_000_000).collect();
+    assert_eq!(stamps, want, "in log-time order, file after file");
+    // One file of the folder: its own frames.
+    let one = bag.join("rec_1.db3");
+    run_ok(one.to_str().unwrap(), &a);
+    assert_eq!(decisions(&a), decisions(&b)[6..]);
+}
+
+#[test]
+fn hostile_sqlite_bags_are_refused_naming_the_file_and_damage_keeps_the_frames_before_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("good");
+    write_sqlite_bag(&good);
+    let db3 = good.join("rec_0.db3");
+    let copy = |name: &str, sql: &str| {
+        let p = dir.path().join(name);
+        std::fs::copy(&db3, &p).unwrap();
+        if !sql.is_empty() {
+            rusqlite::Connection::open(&p)
+                .unwrap()
+                .execute_batch(sql)
+                .unwrap();
+        }
+        p
+    };
+    let other = dir.path().join("other.db3");
+    rusqlite::Connection::open(&other)
+        .unwrap()
+        .execute_batch("CREATE TABLE x(a);")
+        .unwrap();
+    let not_sqlite = dir.path().join("junk.db3");
+    std::fs::write(&not_sqlite, b"SQLite format 3\0 and the rest of a database").unwrap();
+    let zstd_folder = dir.path().join("zstd");
+    bag_folder(&zstd_folder);
+    std::fs::write(zstd_folder.join("rec_0.db3.zstd"), b"(\xb5/\xfd").unwrap();
+    let cases: Vec<(PathBuf, &str)> = vec![
+        (
+            other.clone(),
+            "other.db3: not a readable ROS 2 bag in SQLite storage: no such table: topics (rosbag2 keeps its topics in a table `topics`",
+        ),
+        (
+            not_sqlite,
+            "junk.db3: not a readable ROS 2 bag in SQLite storage: file is not a database",
+        ),
+        (
+            copy("renamed.sqlite", ""),
+            "renamed.sqlite: an SQLite database: a ROS 2 bag in SQLite storage is read as rosbag2 names it (a .db3 file, or its bag folder)",
+        ),
+        (
+            copy(
+                "stray.db3",
+                "UPDATE messages SET topic_id = 99 WHERE topic_id = 3;",
+            ),
+            "stray.db3: not a readable ROS 2 bag in SQLite storage: message id 11 is on topic id 99, which `topics` does not list",
+        ),
+        (
+            copy(
+                "text.db3",
+                "UPDATE messages SET data = 'pixels' WHERE topic_id = 3;",
+            ),
+            "text.db3: not a readable ROS 2 bag in SQLite storage: message id 11: Invalid column type Text",
+        ),
+        (
+            copy(
+                "early.db3",
+                "UPDATE messages SET timestamp = -5 WHERE id = 1;",
+            ),
+            "early.db3: not a readable ROS 2 bag in SQLite storage: message id 1 has a negative timestamp -5",
+        ),
+        (
+            zstd_folder,
+            "rec_0.db3.zstd: an SQLite bag file rosbag2 compressed whole, which SQLite cannot read in place: decompress it first",
+        ),
+    ];
+    for (path, want) in &cases {
+        let out = dir.path().join("out.mcap");
+        let o = run_to(path.to_str().unwrap(), &out);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(want),
+            "{}: {err}",
+            path.display()
+        );
+        assert!(!out.exists(), "{}: no results", path.display());
+    }
+    // Pages of later messages zeroed, as damage leaves them: the frames
+    // before it are run, and the damage said.
+    let damaged = copy("damaged.db3", "");
+    let mut bytes = std::fs::read(&damaged).unwrap();
+    let len = bytes.len();
+    bytes[len * 3 / 4..len * 3 / 4 + 32768].fill(0);
+    std::fs::write(&damaged, bytes).unwrap();
+    let out = dir.path().join("damaged.jsonl");
+    let o = run_to(damaged.to_str().unwrap(), &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("damaged.db3 is damaged past some of its messages (SQLite: database disk image is malformed), as a recording cut short leaves it"),
+        "{err}"
+    );
+    let kept = decisions(&out);
+    assert!(!kept.is_empty() && kept.len() < 6, "{}", kept.len());
+    let png = dir.path().join("png.jsonl");
+    run_ok(SAMPLES, &png);
+    assert_eq!(kept, decisions(&png)[..kept.len()]);
 }

@@ -19,8 +19,10 @@
 //! `metadata.yaml` and one or more `.mcap` files, split ones read in the
 //! order of their numbers) or as one `.mcap` file. rosbag2's zstd
 //! compression of whole files (`.mcap.zstd`) and of single messages is
-//! undone by the `zstd` crate. Bags this toolkit does not read (SQLite
-//! `.db3`, ROS 1 `.bag`) are refused with the command that converts them.
+//! undone by the `zstd` crate. rosbag2's SQLite storage (`.db3`, the
+//! default of ROS 2 Humble and earlier) is read through SQLite in
+//! `sqlite`, its messages the same CDR. ROS 1 bags are refused with the
+//! command that converts them.
 //!
 //! The file is read a record at a time through `mcap`'s sans-I/O reader
 //! (bounded memory whatever the bag's size); schemas and channels are kept
@@ -29,6 +31,7 @@
 //! indexes) instead, when it has a whole one.
 
 pub mod messages;
+mod sqlite;
 mod video;
 
 pub use video::{LiveFrame, LiveVideo};
@@ -117,8 +120,8 @@ struct Records {
     path: PathBuf,
     /// The files still to read.
     rest: VecDeque<PathBuf>,
-    file: Box<dyn Read + Send>,
-    reader: LinearReader,
+    /// The file being read, as its storage reads it.
+    storage: Storage,
     /// The current file's schemas and channels (their ids are per file).
     schemas: BTreeMap<u16, String>,
     channels: BTreeMap<u16, ChannelInfo>,
@@ -130,6 +133,16 @@ struct Records {
     cut_short: Vec<PathBuf>,
     /// Messages met so far, in any file.
     messages: u64,
+}
+
+/// One storage file being read: an MCAP file record by record, or
+/// rosbag2's SQLite storage message by message.
+enum Storage {
+    Mcap {
+        file: Box<dyn Read + Send>,
+        reader: Box<LinearReader>,
+    },
+    Sqlite(sqlite::SqliteFile),
 }
 
 /// What [`Records::next`] found.
@@ -146,15 +159,24 @@ enum Item {
 /// never begins with.
 const ZSTD_MAGIC: [u8; 4] = [0x28, 0xb5, 0x2f, 0xfd];
 
-/// One storage file: its bytes, decompressed when rosbag2 compressed the
-/// whole file (`.mcap.zstd`).
-fn open_storage(path: &Path) -> Result<Box<dyn Read + Send>> {
-    let file = crate::io::open_regular(path)?;
-    if !has_suffix(path, ".zstd") {
-        return Ok(Box::new(file));
+/// One storage file: an MCAP file's bytes, decompressed when rosbag2
+/// compressed the whole file (`.mcap.zstd`); or an SQLite database, with
+/// its topics as channels.
+fn open_storage(path: &Path) -> Result<(Storage, BTreeMap<u16, ChannelInfo>)> {
+    if sqlite::is_sqlite(path) || has_suffix(path, ".db3") {
+        let (db, channels) = sqlite::SqliteFile::open(path)?;
+        return Ok((Storage::Sqlite(db), channels));
     }
-    let z = zstd::stream::read::Decoder::new(file).map_err(|e| Error::io(path, e))?;
-    Ok(Box::new(z))
+    let file = crate::io::open_regular(path)?;
+    let file: Box<dyn Read + Send> = match has_suffix(path, ".zstd") {
+        false => Box::new(file),
+        true => Box::new(zstd::stream::read::Decoder::new(file).map_err(|e| Error::io(path, e))?),
+    };
+    let storage = Storage::Mcap {
+        file,
+        reader: Box::new(new_reader()),
+    };
+    Ok((storage, BTreeMap::new()))
 }
 
 fn new_reader() -> LinearReader {
@@ -179,14 +201,15 @@ impl Records {
                 message: "a bag without storage files".into(),
             });
         };
+        let (storage, channels) = open_storage(&first)?;
+        let topics = topics_of(&channels);
         Ok(Self {
-            file: open_storage(&first)?,
+            storage,
             path: first,
             rest,
-            reader: new_reader(),
             schemas: BTreeMap::new(),
-            channels: BTreeMap::new(),
-            topics: BTreeMap::new(),
+            channels,
+            topics,
             cut_short: Vec::new(),
             messages: 0,
         })
@@ -197,11 +220,14 @@ impl Records {
         let Some(next) = self.rest.pop_front() else {
             return Ok(false);
         };
-        self.file = open_storage(&next)?;
+        let (storage, channels) = open_storage(&next)?;
+        for (topic, message_type) in topics_of(&channels) {
+            self.topics.entry(topic).or_insert(message_type);
+        }
+        self.storage = storage;
         self.path = next;
-        self.reader = new_reader();
         self.schemas.clear();
-        self.channels.clear();
+        self.channels = channels;
         Ok(true)
     }
 
@@ -214,7 +240,39 @@ impl Records {
     /// place: listing a bag copies nothing).
     fn next(&mut self, topic: Option<&str>) -> Result<Option<Item>> {
         loop {
-            let Some(event) = self.reader.next_event() else {
+            let (file, reader) = match &mut self.storage {
+                Storage::Sqlite(db) => {
+                    let wanted: Vec<u16> = self
+                        .channels
+                        .iter()
+                        .filter(|(_, c)| topic == Some(c.topic.as_str()))
+                        .map(|(id, _)| *id)
+                        .collect();
+                    let next = match db.next(&self.path, &wanted) {
+                        // Damage after messages were read: the end of a
+                        // recording cut short, as an MCAP file's.
+                        Err(_) if db.damaged() && self.messages > 0 => {
+                            self.cut_short.push(self.path.clone());
+                            None
+                        }
+                        next => next?,
+                    };
+                    match next {
+                        Some((channel, log_time, data)) => {
+                            self.messages += 1;
+                            return Ok(Some(Item::Message {
+                                channel,
+                                log_time,
+                                data,
+                            }));
+                        }
+                        None if self.next_file()? => continue,
+                        None => return Ok(None),
+                    }
+                }
+                Storage::Mcap { file, reader } => (file, reader),
+            };
+            let Some(event) = reader.next_event() else {
                 if self.next_file()? {
                     continue;
                 }
@@ -243,15 +301,15 @@ impl Records {
             };
             match event {
                 LinearReadEvent::ReadRequest(need) => {
-                    let buf = self.reader.insert(need);
-                    let n = self.file.read(buf).map_err(|e| match e.kind() {
+                    let buf = reader.insert(need);
+                    let n = file.read(buf).map_err(|e| match e.kind() {
                         // A damaged `.mcap.zstd`: its decompressor's reason.
                         std::io::ErrorKind::InvalidData | std::io::ErrorKind::Other => {
                             container_error(&self.path, e)
                         }
                         _ => Error::io(&self.path, e),
                     })?;
-                    self.reader.notify_read(n);
+                    reader.notify_read(n);
                 }
                 LinearReadEvent::Record { opcode, data } => {
                     let record = mcap::parse_record(opcode, data)
@@ -380,10 +438,11 @@ pub fn is_bag_file(p: &Path) -> bool {
     has_suffix(p, ".mcap")
 }
 
-/// True for a bag file read: an MCAP file, or one rosbag2 compressed
-/// whole (`.mcap.zstd`). Outputs are never written compressed.
+/// True for a bag file read: an MCAP file, one rosbag2 compressed whole
+/// (`.mcap.zstd`), or rosbag2's SQLite storage (`.db3`). Outputs are
+/// never written compressed or in SQLite.
 pub fn is_bag_input_file(p: &Path) -> bool {
-    is_bag_file(p) || has_suffix(p, ".mcap.zstd")
+    is_bag_file(p) || has_suffix(p, ".mcap.zstd") || has_suffix(p, ".db3")
 }
 
 /// True for a ROS 2 bag folder as `ros2 bag record` leaves it: a folder
@@ -405,9 +464,6 @@ pub fn is_bag_folder(p: &Path) -> bool {
 /// Most storage files one bag folder may hold.
 const MAX_BAG_FILES: usize = 100_000;
 
-/// What a SQLite bag is, in the error refusing one.
-const SQLITE_BAG: &str = "a ROS 2 bag in SQLite storage (.db3, the default before ROS 2 Iron)";
-
 /// The error refusing `path`, `what` (a bag this toolkit does not read),
 /// with the command that converts `src` to MCAP without ROS.
 fn foreign_bag_error(path: &Path, what: &str, src: &Path) -> Error {
@@ -422,29 +478,44 @@ fn foreign_bag_error(path: &Path, what: &str, src: &Path) -> Error {
     )
 }
 
-/// The commands that convert the bag `src` (a SQLite or ROS 1 bag) to a
-/// ROS 2 bag in MCAP storage without ROS.
+/// The commands that convert the bag `src` (a ROS 1 bag) to a ROS 2 bag
+/// in MCAP storage without ROS.
 fn convert_command(src: &str) -> String {
     format!(
         "`pip install rosbags`, then `rosbags-convert --src {src} --dst NEW_FOLDER --dst-storage mcap`"
     )
 }
 
-/// A bag in a format this toolkit does not read (SQLite `.db3`, ROS 1
-/// `.bag`), told by its first bytes: the error saying how to convert it.
-/// `None` for any other file.
+/// The error of an SQLite bag file rosbag2 compressed whole.
+fn db3_zstd_error(path: &Path) -> Error {
+    bag_error(
+        path,
+        None,
+        None,
+        "an SQLite bag file rosbag2 compressed whole, which SQLite cannot read in place: \
+         decompress it first (`zstd -d FILE`, beside it), then give the .db3 or its folder",
+    )
+}
+
+/// A file told by its first bytes to be a bag this toolkit does not read
+/// (a ROS 1 `.bag`: the error saying how to convert it), or a bag it reads
+/// under another name (an SQLite database not named `.db3`: the error
+/// saying how it is read). `None` for any other file.
 pub fn other_bag_format(path: &Path) -> Option<Error> {
     let mut head = [0u8; 16];
     let mut file = crate::io::open_regular(path).ok()?;
     let n = crate::video::read_full(&mut file, &mut head).ok()?;
     let head = &head[..n];
-    if head.starts_with(b"SQLite format 3\0") {
-        // rosbag2's converters take the bag folder, not its .db3.
-        let src = match path.parent() {
-            Some(d) if is_bag_folder(d) => d,
-            _ => path,
-        };
-        Some(foreign_bag_error(path, SQLITE_BAG, src))
+    if has_suffix(path, ".db3.zstd") {
+        Some(db3_zstd_error(path))
+    } else if head == sqlite::SQLITE_MAGIC && !has_suffix(path, ".db3") {
+        Some(bag_error(
+            path,
+            None,
+            None,
+            "an SQLite database: a ROS 2 bag in SQLite storage is read as rosbag2 names it \
+             (a .db3 file, or its bag folder)",
+        ))
     } else if head.starts_with(b"#ROSBAG V") {
         Some(foreign_bag_error(path, "a ROS 1 bag", path))
     } else {
@@ -469,6 +540,17 @@ pub fn split_read_alone(path: &Path) -> Option<String> {
     })
 }
 
+/// The topics (name and message type) of a file's channels.
+fn topics_of(channels: &BTreeMap<u16, ChannelInfo>) -> BTreeMap<String, String> {
+    let mut topics = BTreeMap::new();
+    for c in channels.values() {
+        topics
+            .entry(c.topic.clone())
+            .or_insert_with(|| c.message_type.clone());
+    }
+    topics
+}
+
 /// The files of the bag at `path`, in the order they are read: the file
 /// itself, or a bag folder's `.mcap` (and `.mcap.zstd`) files in the order
 /// of the numbers in their names (`rec_0`, `rec_1`, …, `rec_10`), as
@@ -486,7 +568,7 @@ fn storage_files(path: &Path) -> Result<Vec<PathBuf>> {
             path,
             None,
             None,
-            "a folder without the metadata.yaml of a ROS 2 bag folder (rosbag2_bagfile_information); a topic is read from a ROS 2 bag: give its folder or one .mcap file",
+            "a folder without the metadata.yaml of a ROS 2 bag folder (rosbag2_bagfile_information); a topic is read from a ROS 2 bag: give its folder or one .mcap or .db3 file",
         ));
     }
     let entries: Vec<PathBuf> = std::fs::read_dir(path)
@@ -503,8 +585,8 @@ fn storage_files(path: &Path) -> Result<Vec<PathBuf>> {
             format!("more than {MAX_BAG_FILES} files; a bag folder holds at most that many"),
         ));
     }
-    if entries.iter().any(|p| has_suffix(p, ".db3")) {
-        return Err(foreign_bag_error(path, SQLITE_BAG, path));
+    if let Some(z) = entries.iter().find(|p| has_suffix(p, ".db3.zstd")) {
+        return Err(db3_zstd_error(z));
     }
     let mut files: Vec<PathBuf> = entries
         .into_iter()
@@ -515,7 +597,7 @@ fn storage_files(path: &Path) -> Result<Vec<PathBuf>> {
             path,
             None,
             None,
-            "a ROS 2 bag folder (it holds metadata.yaml) without an .mcap file",
+            "a ROS 2 bag folder (it holds metadata.yaml) without an .mcap or .db3 file",
         ));
     }
     for f in &files {
@@ -673,8 +755,12 @@ fn indexed_tallies(path: &Path) -> Option<Tallies> {
 /// The warning that `file` ended without its footer, `what` of it was
 /// read, and the rest is lost.
 fn cut_short_warning(file: &Path, what: &str) -> String {
+    let how = match sqlite::is_sqlite(file) {
+        true => "is damaged past some of its messages (SQLite: database disk image is malformed)",
+        false => "ends without its MCAP footer",
+    };
     format!(
-        "warning: {} ends without its MCAP footer, as a recording cut short leaves it (the recorder killed or the power lost): {what}, what it held after them is lost",
+        "warning: {} {how}, as a recording cut short leaves it (the recorder killed or the power lost): {what}, what it held after them is lost",
         file.display()
     )
 }
@@ -732,7 +818,13 @@ pub fn list_image_topics(path: &Path) -> Result<BagListing> {
     let mut bag = Tallies::new();
     let mut warnings = Vec::new();
     for file in storage_files(path)? {
-        let tallies = match indexed_tallies(&file) {
+        // An SQLite file is counted by SQLite, or, when it is damaged
+        // (a recording cut short), read through up to the damage.
+        let indexed = match sqlite::is_sqlite(&file) {
+            true => sqlite::tallies(&file).ok(),
+            false => indexed_tallies(&file),
+        };
+        let tallies = match indexed {
             Some(t) => t,
             None => {
                 let (t, cut) = scanned_tallies(&file, bag.values().map(|t| t.count).sum())?;
@@ -1488,7 +1580,18 @@ mod tests {
         std::fs::write(&f, b"SQLite format 3\0...").unwrap();
         let e = other_bag_format(&f).unwrap().to_string();
         assert!(
-            e.contains("SQLite storage") && e.contains(&format!("--src {}", f.display())),
+            e.contains(
+                "an SQLite database: a ROS 2 bag in SQLite storage is read as rosbag2 names it"
+            ),
+            "{e}"
+        );
+        let db3 = dir.path().join("x.db3");
+        std::fs::write(&db3, b"SQLite format 3\0...").unwrap();
+        assert!(other_bag_format(&db3).is_none(), "read as a bag");
+        std::fs::write(&f, b"#ROSBAG V2.0\n").unwrap();
+        let e = other_bag_format(&f).unwrap().to_string();
+        assert!(
+            e.contains("a ROS 1 bag") && e.contains(&format!("--src {}", f.display())),
             "{e}"
         );
         std::fs::write(&f, b"\x89MCAP0\r\n").unwrap();

@@ -305,7 +305,7 @@ def frames(
     """Open a source of frames (a dataset, a folder, an image, a TIFF of many pages read page by page, a video file, a ROS 2 bag's image topic, a camera, a network stream's URL, or stdin)."""
 
 def bag_topics(path: _Path) -> List[Dict[str, Any]]:
-    """The image topics of a ROS 2 bag (its folder or one MCAP file, also one the Foxglove SDK recorded; video topics too): topic, message_type, count, rate_hz."""
+    """The image topics of a ROS 2 bag (its folder, or one MCAP or SQLite .db3 file, also an MCAP the Foxglove SDK recorded; video topics too): topic, message_type, count, rate_hz."""
 
 def ros_image_to_rgb(msg: Any) -> np.ndarray:
     """A sensor_msgs/msg/Image or CompressedImage (an rclpy message, or any object with its fields) as (H, W, 3) uint8 RGB, as `tactile run` reads a bag's frames."""
