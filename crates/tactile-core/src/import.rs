@@ -24,8 +24,8 @@ use crate::source::{FrameList, FrameSource, SourceOptions, SourceSpec};
 #[derive(Debug, Clone)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ImportOptions {
-    /// The video file (anything FFmpeg decodes), a ROS 2 bag (its folder or
-    /// one .mcap; a frame's number is its index on --topic) or a folder of
+    /// The video file (anything FFmpeg decodes), a ROS 2 bag (its folder, or
+    /// one .mcap or .db3; a frame's number is its index on --topic) or a folder of
     /// frames (a frame's number is its place when ordered by the numbers in
     /// the names), or a TIFF of many pages (a stack: a frame's number is its
     /// page's).
@@ -299,6 +299,16 @@ pub fn import_dataset(options: &ImportOptions) -> Result<ImportSummary> {
         None => SourceSpec::Path(options.frames.clone()),
     };
     let mut source = FrameSource::open(&spec, SourceOptions::default())?;
+    // A live source drops frames when the work falls behind, so a label's
+    // frame number would name another frame.
+    if source.kind().is_live() {
+        return Err(Error::Invalid(format!(
+            "{}: a live source (a camera or a network stream), whose frames are dropped when \
+             the work falls behind, so the labels' frame numbers would not name them: record \
+             it to a file first (`ffmpeg -i SOURCE -c copy recording.mkv`), then give the file",
+            crate::source::shown(&options.frames)
+        )));
+    }
     // Files (a folder, an image) can be labelled by name; stream frames by number.
     let is_folder = source.list().is_some();
     // Frames labelled by number in a folder whose files count from 1.

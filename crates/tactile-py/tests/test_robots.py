@@ -23,7 +23,7 @@ from mcap_ros2.reader import read_ros2_messages
 from mcap_ros2.writer import Writer as Ros2McapWriter
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Writer as Ros1Writer
-from rosbags.rosbag2 import StoragePlugin, Writer as RosbagsWriter
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer as RosbagsWriter
 from rosbags.typesys import Stores, get_typestore
 
 import tactile
@@ -174,13 +174,24 @@ def test_bags_as_ros2_bag_record_leaves_them(rosbags_bag, tmp_path, palpation_fr
 
 def test_sqlite_bags_are_read_and_ros1_bags_name_the_command_that_converts_them(tmp_path, palpation_frames):
     """What `ros2 bag record` leaves on Humble and before (SQLite storage,
-    rosbag2's schema versions 8 and 9 as `rosbags` writes them) is read as
-    its frames, the folder and its .db3 alike; a ROS 1 bag is refused with a
-    `rosbags-convert` command, which gives a bag that reads as the frames."""
+    rosbag2's schema versions 8 and 9 as `rosbags` writes them, and its
+    zstd compression of single messages) is read as its frames, the folder
+    and its .db3 alike; a .db3 compressed whole is refused saying to
+    decompress it; a ROS 1 bag is refused with a `rosbags-convert` command,
+    which gives a bag that reads as the frames."""
     ts2, ts1 = get_typestore(Stores.ROS2_HUMBLE), get_typestore(Stores.ROS1_NOETIC)
     humble, jazzy, ros1 = tmp_path / "humble", tmp_path / "jazzy", tmp_path / "noetic.bag"
+    per_message, whole = tmp_path / "per-message", tmp_path / "whole"
+
+    def compressed(path: Path, mode: CompressionMode) -> RosbagsWriter:
+        w = RosbagsWriter(path, version=8, storage_plugin=StoragePlugin.SQLITE3)
+        w.set_compression(mode, CompressionFormat.ZSTD)
+        return w
+
     for ts, make in [(ts2, lambda: RosbagsWriter(humble, version=8, storage_plugin=StoragePlugin.SQLITE3)),
                      (ts2, lambda: RosbagsWriter(jazzy, version=9, storage_plugin=StoragePlugin.SQLITE3)),
+                     (ts2, lambda: compressed(per_message, CompressionMode.MESSAGE)),
+                     (ts2, lambda: compressed(whole, CompressionMode.FILE)),
                      (ts1, lambda: Ros1Writer(ros1))]:
         Image, Header, Time = (ts.types[t] for t in
                                ["sensor_msgs/msg/Image", "std_msgs/msg/Header", "builtin_interfaces/msg/Time"])
@@ -195,10 +206,14 @@ def test_sqlite_bags_are_read_and_ros1_bags_name_the_command_that_converts_them(
                             step=width * 3, data=np.ascontiguousarray(rgb).reshape(-1))
                 data = ts.serialize_ros1(msg, Image.__msgtype__) if ts is ts1 else ts.serialize_cdr(msg, Image.__msgtype__)
                 w.write(c, t, data)
-    for folder in [humble, jazzy]:
+    for folder in [humble, jazzy, per_message]:
         (db3,) = folder.glob("*.db3")
         for given in [folder, db3]:
             assert_the_sample_frames(given, "/cam/image_raw", palpation_frames, str(given))
+    (zst,) = whole.glob("*.db3.zstd")
+    for given in [whole, zst]:
+        with pytest.raises(ValueError, match=r"whole\.db3\.zstd: an SQLite bag file rosbag2 compressed whole, .*decompress it first"):
+            list(tactile.frames(given))
     hint = f"rosbags-convert --src {ros1} --dst NEW_FOLDER --dst-storage mcap"
     for read in [lambda: list(tactile.frames(ros1)), lambda: tactile.bag_topics(ros1)]:
         with pytest.raises(ValueError) as e:

@@ -92,6 +92,19 @@ fn decisions(jsonl: &Path) -> Vec<(bool, String)> {
         .collect()
 }
 
+/// Each record's `stamp_ns` in a run's records.
+fn stamps(jsonl: &Path) -> Vec<i64> {
+    std::fs::read_to_string(jsonl)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["stamp_ns"]
+                .as_i64()
+                .unwrap()
+        })
+        .collect()
+}
+
 #[test]
 fn a_bag_is_listed_and_decided_as_its_png_frames() {
     let dir = tempfile::tempdir().unwrap();
@@ -311,17 +324,8 @@ fn a_split_bag_folder_is_read_in_the_order_of_its_files() {
     run_ok(SAMPLES, &b);
     assert_eq!(decisions(&a), decisions(&b));
     // rec_2 … rec_9 before rec_10: the stamps go in time.
-    let stamps: Vec<i64> = std::fs::read_to_string(&a)
-        .unwrap()
-        .lines()
-        .map(|l| {
-            serde_json::from_str::<serde_json::Value>(l).unwrap()["stamp_ns"]
-                .as_i64()
-                .unwrap()
-        })
-        .collect();
     let want: Vec<i64> = (0..12).map(|i| T0 + i * 50_000_000).collect();
-    assert_eq!(stamps, want);
+    assert_eq!(stamps(&a), want);
     // Results written into the bag folder would join the bag.
     let inside = folder.join("results.mcap");
     let o = run_to(data, &inside);
@@ -761,17 +765,8 @@ fn a_bag_in_sqlite_storage_is_listed_and_decided_as_its_png_frames() {
     run_ok(data, &a);
     run_ok(SAMPLES, &b);
     assert_eq!(decisions(&a), decisions(&b));
-    let stamps: Vec<i64> = std::fs::read_to_string(&a)
-        .unwrap()
-        .lines()
-        .map(|l| {
-            serde_json::from_str::<serde_json::Value>(l).unwrap()["stamp_ns"]
-                .as_i64()
-                .unwrap()
-        })
-        .collect();
     let want: Vec<i64> = (0..12).map(|i| T0 + i * 50_000_000).collect();
-    assert_eq!(stamps, want, "in log-time order, file after file");
+    assert_eq!(stamps(&a), want, "in log-time order, file after file");
     // One file of the folder: its own frames.
     let one = bag.join("rec_1.db3");
     run_ok(one.to_str().unwrap(), &a);
@@ -830,7 +825,7 @@ fn hostile_sqlite_bags_are_refused_naming_the_file_and_damage_keeps_the_frames_b
                 "text.db3",
                 "UPDATE messages SET data = 'pixels' WHERE topic_id = 3;",
             ),
-            "text.db3: not a readable ROS 2 bag in SQLite storage: message id 11: Invalid column type Text",
+            "text.db3: not a readable ROS 2 bag in SQLite storage: message id 11: its data is Text, not the bytes of a message",
         ),
         (
             copy(

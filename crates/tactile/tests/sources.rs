@@ -850,6 +850,29 @@ fn a_streams_url_is_read_through_ffmpeg_every_frame_when_it_has_a_length() {
         assert_eq!(r["tendon"], expected[i]["tendon"], "frame {i}");
     }
 
+    // A live stream cannot become a dataset: its dropped frames would
+    // shift the labels' frame numbers.
+    let labels = dir.path().join("labels.csv");
+    std::fs::write(&labels, "frame,tendon\n0,1\n").unwrap();
+    let ds = dir.path().join("ds");
+    let out = tactile()
+        .args(["dataset", "from-video", "--kind", "visuotactile", "--video"])
+        .arg(url("/live.mjpg"))
+        .arg("--labels")
+        .arg(&labels)
+        .arg("--out")
+        .arg(&ds)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success()
+            && err
+                .contains("a live source (a camera or a network stream), whose frames are dropped")
+            && !ds.exists(),
+        "{err}"
+    );
+
     // Refused, naming the URL with its password hidden, FFmpeg's words
     // included; a playlist that leads to a file reads nothing.
     for (data, want) in [

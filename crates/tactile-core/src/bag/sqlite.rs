@@ -163,7 +163,13 @@ impl SqliteFile {
             })
             .map_err(|e| {
                 self.damaged |= is_damage(&e);
-                sqlite_error(path, format!("message id {}: {e}", m.id))
+                let why = match e {
+                    rusqlite::Error::InvalidColumnType(_, _, kind) => {
+                        format!("its data is {kind}, not the bytes of a message")
+                    }
+                    e => e.to_string(),
+                };
+                sqlite_error(path, format!("message id {}: {why}", m.id))
             })?;
         Ok(Some((m.channel, log_time, data)))
     }
