@@ -771,6 +771,23 @@ fn a_bag_in_sqlite_storage_is_listed_and_decided_as_its_png_frames() {
     let one = bag.join("rec_1.db3");
     run_ok(one.to_str().unwrap(), &a);
     assert_eq!(decisions(&a), decisions(&b)[6..]);
+    // In WAL mode (rosbag2's `resilient` preset), closed by its writer: read
+    // with nothing added beside it (SQLite left a -shm and a -wal before).
+    rusqlite::Connection::open(&one)
+        .unwrap()
+        .pragma_update(None, "journal_mode", "WAL")
+        .unwrap();
+    let before: Vec<_> = std::fs::read_dir(&bag)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    run_ok(data, &a);
+    assert_eq!(decisions(&a), decisions(&b));
+    let after: Vec<_> = std::fs::read_dir(&bag)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(before.len(), after.len(), "{after:?}");
 }
 
 #[test]

@@ -74,7 +74,13 @@ impl SqliteFile {
     /// 1, in their ids' order).
     pub(super) fn open(path: &Path) -> Result<(Self, BTreeMap<u16, ChannelInfo>)> {
         let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
-        let db = Connection::open_with_flags(path, flags).map_err(|e| sqlite_error(path, e))?;
+        let db = match written_whole(path) {
+            // Nothing beside it to read: opened as a file that cannot
+            // change, so SQLite adds no `-shm` or `-wal` to the folder.
+            Some(uri) => Connection::open_with_flags(uri, flags | OpenFlags::SQLITE_OPEN_URI),
+            None => Connection::open_with_flags(path, flags),
+        }
+        .map_err(|e| sqlite_error(path, e))?;
         let topics = read_topics(&db).map_err(|e| match &e {
             rusqlite::Error::SqliteFailure(_, Some(why)) if why.starts_with("no such") => {
                 sqlite_error(
@@ -281,6 +287,34 @@ pub(super) fn tallies(path: &Path) -> Result<BTreeMap<String, TopicTally>> {
         }
     }
     Ok(tallies)
+}
+
+/// The `file:` URI that opens `path` immutable, when it is in WAL mode
+/// (rosbag2's `resilient` preset) with no `-wal` file beside it: its
+/// writer closed it, so all of it is in the file. SQLite would otherwise
+/// add a `-shm` and a `-wal` beside it to read it, and leave them; a file
+/// in the usual rollback mode is read without either. `None` for any
+/// other file, opened as it is (a WAL file with its `-wal`, a recording
+/// under way or cut short, is read with it, as SQLite reads it).
+fn written_whole(path: &Path) -> Option<String> {
+    let mut head = [0u8; 20];
+    let mut f = crate::io::open_regular(path).ok()?;
+    let n = crate::video::read_full(&mut f, &mut head).ok()?;
+    // Bytes 18 and 19 of the header: 2 for WAL mode.
+    let wal_mode = n == 20 && head[18] == 2 && head[19] == 2;
+    let mut wal = path.as_os_str().to_owned();
+    wal.push("-wal");
+    if !wal_mode || Path::new(&wal).exists() {
+        return None;
+    }
+    let abs = std::path::absolute(path).ok()?;
+    let text = abs.to_str()?;
+    // A path's `%`, `?` and `#` would be read as the URI's own.
+    let escaped = text
+        .replace('%', "%25")
+        .replace('?', "%3f")
+        .replace('#', "%23");
+    Some(format!("file:{escaped}?immutable=1"))
 }
 
 /// True for a file that starts as an SQLite database does.
