@@ -823,6 +823,10 @@ fn hostile_sqlite_bags_are_refused_naming_the_file_and_damage_keeps_the_frames_b
             "other.db3: not a readable ROS 2 bag in SQLite storage: no such table: topics (rosbag2 keeps its topics in a table `topics`",
         ),
         (
+            copy("nomessages.db3", "DROP TABLE messages;"),
+            "nomessages.db3: not a readable ROS 2 bag in SQLite storage: no such table: messages (rosbag2 keeps",
+        ),
+        (
             not_sqlite,
             "junk.db3: not a readable ROS 2 bag in SQLite storage: file is not a database",
         ),

@@ -81,18 +81,22 @@ impl SqliteFile {
             None => Connection::open_with_flags(path, flags),
         }
         .map_err(|e| sqlite_error(path, e))?;
-        let topics = read_topics(&db).map_err(|e| match &e {
+        // A table or column rosbag2 writes that is not there is named
+        // with what rosbag2 keeps where.
+        let schema_error = |e: rusqlite::Error| match &e {
             rusqlite::Error::SqliteFailure(_, Some(why)) if why.starts_with("no such") => {
                 sqlite_error(
                     path,
                     format!(
                         "{e} (rosbag2 keeps its topics in a table `topics` with the columns id, \
-                         name, type and serialization_format, and its messages in `messages`)"
+                         name, type and serialization_format, and its messages in `messages` \
+                         with id, topic_id, timestamp and data)"
                     ),
                 )
             }
-            e => sqlite_error(path, e),
-        })?;
+            _ => sqlite_error(path, e),
+        };
+        let topics = read_topics(&db).map_err(schema_error)?;
         if topics.len() > MAX_TOPICS {
             return Err(sqlite_error(path, format!("more than {MAX_TOPICS} topics")));
         }
@@ -105,7 +109,7 @@ impl SqliteFile {
         }
         // The messages table is read as rosbag2 writes it, or named.
         db.prepare("SELECT id, topic_id, timestamp, length(data) FROM messages LIMIT 0")
-            .map_err(|e| sqlite_error(path, e))?;
+            .map_err(schema_error)?;
         Ok((
             Self {
                 db,
