@@ -3,7 +3,8 @@
 //! plain; ROS 2 Image and CompressedImage and Foxglove RawImage topics)
 //! with its bytes flipped, cut, or its length fields set huge, is
 //! read through every image topic. Each read ends in frames or an error
-//! naming the file; none panics or allocates what a header claims. (The
+//! naming the file; none panics or allocates what a header claims. So is
+//! an SQLite bag (`.db3`) with its bytes set, cut or zeroed. (The
 //! libFuzzer target `fuzz/fuzz_targets/bag.rs` explores further.)
 
 use std::collections::BTreeMap;
@@ -171,4 +172,104 @@ fn mutated_bags_give_frames_or_errors_naming_the_file() {
             read_all(&path);
         }
     }
+}
+
+/// The same frames in rosbag2's SQLite storage: `/raw` Images and `/png`
+/// CompressedImages, as `ros2 bag record` writes a `.db3` on Humble.
+fn sqlite_bag_bytes(dir: &Path) -> Vec<u8> {
+    let path = dir.join("good.db3");
+    let db = rusqlite::Connection::open(&path).unwrap();
+    db.execute_batch(
+        "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
+             serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
+         CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,
+             timestamp INTEGER NOT NULL, data BLOB NOT NULL);
+         CREATE INDEX timestamp_idx ON messages (timestamp ASC);
+         INSERT INTO topics VALUES (1, '/raw', 'sensor_msgs/msg/Image', 'cdr', '');
+         INSERT INTO topics VALUES (2, '/png', 'sensor_msgs/msg/CompressedImage', 'cdr', '');",
+    )
+    .unwrap();
+    let px: Vec<u8> = (0..16 * 8 * 3).map(|i| (i * 7 % 251) as u8).collect();
+    let mut png = Vec::new();
+    image::RgbImage::from_raw(16, 8, px.clone())
+        .unwrap()
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    for i in 0..3u32 {
+        let header = Header {
+            stamp: Time {
+                sec: 10 + i as i32,
+                nanosec: i,
+            },
+            frame_id: "cam".into(),
+        };
+        let img = Image {
+            header: header.clone(),
+            height: 8,
+            width: 16,
+            encoding: "rgb8".into(),
+            is_bigendian: 0,
+            step: 48,
+            data: &px,
+        };
+        let c = CompressedImage {
+            header,
+            format: "png".into(),
+            data: &png,
+        };
+        for (topic, data) in [(1, to_cdr(&img).unwrap()), (2, to_cdr(&c).unwrap())] {
+            db.execute(
+                "INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)",
+                rusqlite::params![topic, i64::from(i), data],
+            )
+            .unwrap();
+        }
+    }
+    drop(db);
+    std::fs::read(&path).unwrap()
+}
+
+#[test]
+fn mutated_sqlite_bags_give_frames_or_errors_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = sqlite_bag_bytes(dir.path());
+    let path = dir.path().join("mutated.db3");
+    std::fs::write(&path, &good).unwrap();
+    assert_eq!(read_all(&path), 6, "the unmutated bag");
+    let mut rng = SampleRng::new(36, 0, 0);
+    let mut pick = |n: usize| ((rng.uniform() * n as f64) as usize).min(n - 1);
+    let rounds = std::env::var("TACTILE_FUZZ_RUNS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(600);
+    for round in 0..rounds {
+        let mut b = good.clone();
+        match round % 4 {
+            // A few random bytes, half of them in the header and schema
+            // (the first page).
+            0 | 1 => {
+                for _ in 0..1 + pick(4) {
+                    let within = match pick(2) {
+                        0 => b.len().min(4096),
+                        _ => b.len(),
+                    };
+                    let i = pick(within);
+                    b[i] = pick(256) as u8;
+                }
+            }
+            // Cut anywhere.
+            2 => b.truncate(pick(b.len())),
+            // A run of zeros, as damage leaves a page.
+            _ => {
+                let i = pick(b.len());
+                let end = (i + 1 + pick(4096)).min(b.len());
+                b[i..end].fill(0);
+            }
+        }
+        std::fs::write(&path, &b).unwrap();
+        read_all(&path);
+    }
+    // Nothing was written beside the bag.
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(names.len(), 2, "good.db3 and mutated.db3 alone");
 }
