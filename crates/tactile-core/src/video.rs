@@ -182,8 +182,10 @@ impl StreamUrl {
                 crate::printable(&shown)
             )));
         }
+        // A scheme is read in any case (RFC 3986); FFmpeg knows its
+        // protocols in lower case alone.
         Ok(Some(Self {
-            url: text.to_string(),
+            url: format!("{}://{rest}", scheme.to_ascii_lowercase()),
             shown: PathBuf::from(shown),
         }))
     }
@@ -1151,6 +1153,8 @@ mod tests {
         // Only network protocols, and a silence after which FFmpeg gives
         // up that the protocol reads as one.
         let args = |text: &str| StreamUrl::parse(text).unwrap().unwrap().input_args();
+        // Given in capitals, the scheme reaches FFmpeg in lower case.
+        assert!(args("RTSP://cam/s").contains(&"rtsp://cam/s".to_string()));
         let rtmp = args("rtmp://host/live");
         assert!(rtmp.contains(&"-rw_timeout".to_string()));
         assert!(
