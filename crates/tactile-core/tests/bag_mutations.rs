@@ -14,13 +14,50 @@ use tactile_core::bag::messages::{CompressedImage, Header, Image, Time, to_cdr};
 use tactile_core::bag::{BagImages, image_topics};
 use tactile_core::rng::SampleRng;
 
-fn bag_bytes(chunked: bool) -> Vec<u8> {
+/// One message's frame as an Image and as a PNG CompressedImage, in CDR.
+type ImageAndPng = (Vec<u8>, Vec<u8>);
+
+/// The test frame's pixels (16x8 rgb8), and for each of the three
+/// messages `i` (stamped 10 + i s and i ns) the CDR of its Image and of
+/// its PNG CompressedImage.
+fn frames_and_cdr() -> (Vec<u8>, Vec<ImageAndPng>) {
     let px: Vec<u8> = (0..16 * 8 * 3).map(|i| (i * 7 % 251) as u8).collect();
     let mut png = Vec::new();
     image::RgbImage::from_raw(16, 8, px.clone())
         .unwrap()
         .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
         .unwrap();
+    let messages = (0..3u32)
+        .map(|i| {
+            let header = Header {
+                stamp: Time {
+                    sec: 10 + i as i32,
+                    nanosec: i,
+                },
+                frame_id: "cam".into(),
+            };
+            let img = Image {
+                header: header.clone(),
+                height: 8,
+                width: 16,
+                encoding: "rgb8".into(),
+                is_bigendian: 0,
+                step: 48,
+                data: &px,
+            };
+            let c = CompressedImage {
+                header,
+                format: "png".into(),
+                data: &png,
+            };
+            (to_cdr(&img).unwrap(), to_cdr(&c).unwrap())
+        })
+        .collect();
+    (px, messages)
+}
+
+fn bag_bytes(chunked: bool) -> Vec<u8> {
+    let (px, messages) = frames_and_cdr();
     let mut out = std::io::Cursor::new(Vec::new());
     {
         let mut w = mcap::WriteOptions::new()
@@ -44,28 +81,7 @@ fn bag_bytes(chunked: bool) -> Vec<u8> {
         let fox = w
             .add_channel(s_fox, "/fox", "protobuf", &BTreeMap::new())
             .unwrap();
-        for i in 0..3u32 {
-            let header = Header {
-                stamp: Time {
-                    sec: 10 + i as i32,
-                    nanosec: i,
-                },
-                frame_id: "cam".into(),
-            };
-            let img = Image {
-                header: header.clone(),
-                height: 8,
-                width: 16,
-                encoding: "rgb8".into(),
-                is_bigendian: 0,
-                step: 48,
-                data: &px,
-            };
-            let c = CompressedImage {
-                header,
-                format: "png".into(),
-                data: &png,
-            };
+        for (i, (img, png)) in (0u32..).zip(messages) {
             let f = foxglove::messages::RawImage {
                 timestamp: Some(foxglove::messages::Timestamp::new(10 + i, i)),
                 frame_id: "cam".into(),
@@ -77,11 +93,7 @@ fn bag_bytes(chunked: bool) -> Vec<u8> {
             };
             let mut fox_bytes = Vec::new();
             foxglove::Encode::encode(&f, &mut fox_bytes).unwrap();
-            for (channel, data) in [
-                (raw, to_cdr(&img).unwrap()),
-                (cmp, to_cdr(&c).unwrap()),
-                (fox, fox_bytes),
-            ] {
+            for (channel, data) in [(raw, img), (cmp, png), (fox, fox_bytes)] {
                 let h = mcap::records::MessageHeader {
                     channel_id: channel,
                     sequence: i,
@@ -189,35 +201,9 @@ fn sqlite_bag_bytes(dir: &Path) -> Vec<u8> {
          INSERT INTO topics VALUES (2, '/png', 'sensor_msgs/msg/CompressedImage', 'cdr', '');",
     )
     .unwrap();
-    let px: Vec<u8> = (0..16 * 8 * 3).map(|i| (i * 7 % 251) as u8).collect();
-    let mut png = Vec::new();
-    image::RgbImage::from_raw(16, 8, px.clone())
-        .unwrap()
-        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-        .unwrap();
-    for i in 0..3u32 {
-        let header = Header {
-            stamp: Time {
-                sec: 10 + i as i32,
-                nanosec: i,
-            },
-            frame_id: "cam".into(),
-        };
-        let img = Image {
-            header: header.clone(),
-            height: 8,
-            width: 16,
-            encoding: "rgb8".into(),
-            is_bigendian: 0,
-            step: 48,
-            data: &px,
-        };
-        let c = CompressedImage {
-            header,
-            format: "png".into(),
-            data: &png,
-        };
-        for (topic, data) in [(1, to_cdr(&img).unwrap()), (2, to_cdr(&c).unwrap())] {
+    let (_, messages) = frames_and_cdr();
+    for (i, (img, png)) in (0u32..).zip(messages) {
+        for (topic, data) in [(1, img), (2, png)] {
             db.execute(
                 "INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)",
                 rusqlite::params![topic, i64::from(i), data],
