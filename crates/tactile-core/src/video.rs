@@ -176,7 +176,7 @@ impl StreamUrl {
                 crate::printable(&shown)
             )));
         }
-        if text.chars().any(char::is_control) || text.chars().any(char::is_whitespace) {
+        if text.chars().any(|c| c.is_control() || c.is_whitespace()) {
             return Err(Error::Invalid(format!(
                 "{}: a URL holds no spaces or control characters (write a space as %20)",
                 crate::printable(&shown)
@@ -276,42 +276,31 @@ impl VideoInput {
     }
 }
 
-/// `cmd`'s output, its run given up when Ctrl-C asks to stop or when
-/// `deadline` passes (a stream whose server accepts and says nothing).
-fn output_within(
+/// `cmd`'s exit status, its standard output (at most 1 MiB: ffprobe's
+/// answer is a few hundred bytes) and its last words on standard error
+/// ([`stderr_tail`], [`last_words`]), its run given up when Ctrl-C asks to
+/// stop or when `deadline` passes (a stream whose server accepts and says
+/// nothing).
+fn run_within(
     mut cmd: Command,
     path: &Path,
     deadline: Option<std::time::Duration>,
-) -> Result<std::process::Output> {
+) -> Result<(std::process::ExitStatus, Vec<u8>, String)> {
     let mut child = cmd
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .map_err(|e| spawn_error(path, e))?;
-    let drain = |pipe: Option<Box<dyn Read + Send>>| {
+    let stdout = child.stdout.take().map(|mut out| {
         std::thread::spawn(move || {
             let mut bytes = Vec::new();
-            if let Some(mut pipe) = pipe {
-                // At most 1 MiB: ffprobe's answer is a few hundred bytes.
-                let _ = pipe.by_ref().take(1 << 20).read_to_end(&mut bytes);
-                let _ = std::io::copy(&mut pipe, &mut std::io::sink());
-            }
+            let _ = out.by_ref().take(1 << 20).read_to_end(&mut bytes);
+            let _ = std::io::copy(&mut out, &mut std::io::sink());
             bytes
         })
-    };
-    let stdout = drain(
-        child
-            .stdout
-            .take()
-            .map(|p| Box::new(p) as Box<dyn Read + Send>),
-    );
-    let stderr = drain(
-        child
-            .stderr
-            .take()
-            .map(|p| Box::new(p) as Box<dyn Read + Send>),
-    );
+    });
+    let stderr = stderr_tail(&mut child);
     let started = std::time::Instant::now();
     let status = loop {
         if let Some(status) = child.try_wait().map_err(|e| Error::io(path, e))? {
@@ -332,12 +321,8 @@ fn output_within(
         }
         std::thread::sleep(std::time::Duration::from_millis(20));
     };
-    let joined = |t: std::thread::JoinHandle<Vec<u8>>| t.join().unwrap_or_default();
-    Ok(std::process::Output {
-        status,
-        stdout: joined(stdout),
-        stderr: joined(stderr),
-    })
+    let stdout = stdout.and_then(|t| t.join().ok()).unwrap_or_default();
+    Ok((status, stdout, last_words(stderr)))
 }
 
 /// The first video stream's size (as shown) and rate, from `ffprobe`.
@@ -440,10 +425,12 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
         .args(["-of", "json"]);
     cmd.args(input.input_args()?);
     let deadline = matches!(input, VideoInput::Stream(_)).then_some(STREAM_PROBE_TIMEOUT);
-    let out = output_within(cmd, path, deadline)?;
-    if !out.status.success() {
-        let why = String::from_utf8_lossy(&out.stderr);
-        let why = why.lines().last().unwrap_or("ffprobe failed").trim();
+    let (status, stdout, last) = run_within(cmd, path, deadline)?;
+    if !status.success() {
+        let why = match last.trim() {
+            "" => "ffprobe failed",
+            words => words,
+        };
         let why = match input {
             VideoInput::Stream(url) => url.hide_in(why),
             _ => why.to_string(),
@@ -485,7 +472,7 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
     struct Format {
         duration: Option<String>,
     }
-    let probe: Probe = serde_json::from_slice(&out.stdout)
+    let probe: Probe = serde_json::from_slice(&stdout)
         .map_err(|e| Error::image(path, format!("unreadable ffprobe output: {e}")))?;
     let Some(s) = probe.streams.first() else {
         return Err(Error::image(path, "has no video stream"));
