@@ -6,9 +6,10 @@
 //!
 //! Recorded sources (datasets, folders, files, a file served over HTTP)
 //! give every frame, decoded on a second thread ahead of the models when
-//! asked. Live sources (a camera, an IP camera's stream, stdin) are read as frames arrive into a small queue; when the
-//! models fall behind, the oldest waiting frame is dropped and counted, so
-//! memory stays bounded and results stay current. Each live frame carries
+//! asked. Live sources (a camera, an IP camera's stream, stdin) are read
+//! as frames arrive into a small queue; when the models fall behind, the
+//! oldest waiting frame is dropped and counted, so memory stays bounded
+//! and results stay current. Each live frame carries
 //! its arrival time, from which a record's latency is measured.
 
 use std::collections::VecDeque;

@@ -202,17 +202,28 @@ impl Records {
             });
         };
         let (storage, channels) = open_storage(&first)?;
-        let topics = topics_of(&channels);
-        Ok(Self {
+        let mut records = Self {
             storage,
             path: first,
             rest,
             schemas: BTreeMap::new(),
             channels,
-            topics,
+            topics: BTreeMap::new(),
             cut_short: Vec::new(),
             messages: 0,
-        })
+        };
+        records.note_topics();
+        Ok(records)
+    }
+
+    /// Add the topics of the file's channels known when it opens (an
+    /// SQLite file's; an MCAP file's come with its Channel records).
+    fn note_topics(&mut self) {
+        for c in self.channels.values() {
+            self.topics
+                .entry(c.topic.clone())
+                .or_insert_with(|| c.message_type.clone());
+        }
     }
 
     /// On to the next file of a split bag; false after the last.
@@ -221,13 +232,11 @@ impl Records {
             return Ok(false);
         };
         let (storage, channels) = open_storage(&next)?;
-        for (topic, message_type) in topics_of(&channels) {
-            self.topics.entry(topic).or_insert(message_type);
-        }
         self.storage = storage;
         self.path = next;
         self.schemas.clear();
         self.channels = channels;
+        self.note_topics();
         Ok(true)
     }
 
@@ -538,17 +547,6 @@ pub fn split_read_alone(path: &Path) -> Option<String> {
             folder.display()
         )
     })
-}
-
-/// The topics (name and message type) of a file's channels.
-fn topics_of(channels: &BTreeMap<u16, ChannelInfo>) -> BTreeMap<String, String> {
-    let mut topics = BTreeMap::new();
-    for c in channels.values() {
-        topics
-            .entry(c.topic.clone())
-            .or_insert_with(|| c.message_type.clone());
-    }
-    topics
 }
 
 /// The files of the bag at `path`, in the order they are read: the file

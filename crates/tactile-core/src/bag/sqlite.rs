@@ -50,8 +50,9 @@ pub(super) struct SqliteFile {
     db: Connection,
     /// Topic ids as channel numbers.
     channels: BTreeMap<i64, u16>,
-    /// The last message listed: the pass goes on after it.
-    after: Option<(i64, i64)>,
+    /// The (timestamp, id) of the last message listed: the pass goes on
+    /// after it.
+    after: (i64, i64),
     /// Messages listed, not yet given.
     listed: VecDeque<Listed>,
     /// The pass has listed every message.
@@ -114,7 +115,7 @@ impl SqliteFile {
             Self {
                 db,
                 channels,
-                after: None,
+                after: (i64::MIN, i64::MIN),
                 listed: VecDeque::new(),
                 done: false,
                 damaged: false,
@@ -187,14 +188,14 @@ impl SqliteFile {
     /// The next page of messages in (timestamp, id) order.
     fn list_page(&mut self, path: &Path) -> Result<()> {
         crate::interrupt::check()?;
-        let page = self.page_after(self.after.unwrap_or((i64::MIN, i64::MIN)));
+        let page = self.page_after(self.after);
         let page = page.map_err(|e| {
             self.damaged |= is_damage(&e);
             sqlite_error(path, e)
         })?;
         self.done = page.len() < PAGE as usize;
         for (id, topic, timestamp, len) in page {
-            self.after = Some((timestamp, id));
+            self.after = (timestamp, id);
             let Some(&channel) = self.channels.get(&topic) else {
                 return Err(sqlite_error(
                     path,
