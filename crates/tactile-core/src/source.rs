@@ -848,8 +848,18 @@ fn stream_url(path: &Path) -> Result<Option<crate::video::StreamUrl>> {
     let Some(text) = path.to_str() else {
         return Ok(None);
     };
+    use std::io::ErrorKind;
     match std::fs::symlink_metadata(path) {
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => crate::video::StreamUrl::parse(text),
+        // A part longer than a file name may be (a camera's token of 300
+        // characters), or under a file, names no file either.
+        Err(e)
+            if matches!(
+                e.kind(),
+                ErrorKind::NotFound | ErrorKind::InvalidFilename | ErrorKind::NotADirectory
+            ) =>
+        {
+            crate::video::StreamUrl::parse(text)
+        }
         _ => Ok(None),
     }
 }

@@ -129,6 +129,10 @@ const STREAM_PROTOCOLS: &str =
 /// How long a stream may send nothing before FFmpeg gives up, µs.
 const STREAM_SILENCE_US: &str = "10000000";
 
+/// The longest URL read, bytes: a signed URL with its tokens is a few
+/// kilobytes; web servers refuse request lines past 8 KiB.
+pub const MAX_URL_BYTES: usize = 16 * 1024;
+
 /// How long a stream's probe may take before it is given up.
 const STREAM_PROBE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(30);
 
@@ -174,6 +178,14 @@ impl StreamUrl {
             return Err(Error::Invalid(format!(
                 "{}: {scheme}:// URLs are not read: {what}",
                 crate::printable(&shown)
+            )));
+        }
+        if text.len() > MAX_URL_BYTES {
+            let start: String = shown.chars().take(60).collect();
+            return Err(Error::Invalid(format!(
+                "{}…: a URL of {} bytes; at most {MAX_URL_BYTES} are read",
+                crate::printable(&start),
+                text.len()
             )));
         }
         if text.chars().any(|c| c.is_control() || c.is_whitespace()) {
@@ -1137,6 +1149,15 @@ mod tests {
                 "{text}: {err}"
             );
         }
+        // A URL past the limit is refused before FFmpeg sees it, its
+        // start shown with the password hidden however long the user part.
+        let long = format!("rtsp://admin:{}@cam/s", "p".repeat(MAX_URL_BYTES));
+        let err = StreamUrl::parse(&long).unwrap_err().to_string();
+        assert!(
+            err.starts_with("rtsp://admin:***@cam/s…: a URL of 16403 bytes; at most 16384")
+                && !err.contains("pp"),
+            "{err}"
+        );
         // Only network protocols, and a silence after which FFmpeg gives
         // up that the protocol reads as one.
         let args = |text: &str| StreamUrl::parse(text).unwrap().unwrap().input_args();
