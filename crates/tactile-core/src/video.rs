@@ -691,9 +691,21 @@ impl VideoReader {
             _ => last,
         };
         if !status.success() {
+            let again = match &self.input {
+                // The probe read it, so the server let one client in and
+                // not the decoder after it.
+                VideoInput::Stream(_) if self.decoded == 0 => format!(
+                    "; the stream answered ffprobe but not FFmpeg after it: a server that serves \
+                     one client once (`ffmpeg … tcp://…?listen`) is read through standard input \
+                     instead: `ffmpeg -i URL -f rawvideo -pix_fmt rgb24 - | tactile run --stdin \
+                     --size {}x{}`",
+                    self.info.width, self.info.height
+                ),
+                _ => String::new(),
+            };
             return Err(Error::image(
                 self.input.path(),
-                format!("FFmpeg could not decode it ({status}): {last}"),
+                format!("FFmpeg could not decode it ({status}): {last}{again}"),
             ));
         }
         if got > 0 {

@@ -783,6 +783,44 @@ fn serve(files: Vec<Served>) -> u16 {
 }
 
 #[test]
+fn a_stream_served_to_one_client_once_is_refused_saying_how_to_read_it() {
+    // ffprobe reads the stream for its size, and FFmpeg opens it again to
+    // decode: a server that lets one client in (`ffmpeg … ?listen`) refuses
+    // the second. Before, the error said only "Connection refused".
+    use tactile_core::video::{VideoCodec, encode};
+    let dir = tempfile::tempdir().unwrap();
+    let imgs = images();
+    let refs: Vec<_> = imgs.iter().collect();
+    let clip = dir.path().join("clip.mkv");
+    encode(&refs, 30, VideoCodec::Mjpeg, &clip).unwrap();
+    let bytes = std::fs::read(&clip).unwrap();
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    std::thread::spawn(move || {
+        let conn = listener.accept();
+        // Closed before the first client is served: the next is refused.
+        drop(listener);
+        if let Ok((mut conn, _)) = conn {
+            let _ = conn.write_all(&bytes);
+        }
+    });
+    let out = tactile()
+        .args(["run", "--models", MODELS, "--out", "-", "--data"])
+        .arg(format!("tcp://127.0.0.1:{port}"))
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    let (w, h) = (imgs[0].width(), imgs[0].height());
+    assert!(!out.status.success() && out.stdout.is_empty(), "{err}");
+    assert!(
+        err.contains("the stream answered ffprobe but not FFmpeg after it")
+            && err.contains(&format!("tactile run --stdin --size {w}x{h}")),
+        "{err}"
+    );
+}
+
+#[test]
 fn a_streams_url_is_read_through_ffmpeg_every_frame_when_it_has_a_length() {
     // Before, a URL was refused ("a URL, not a file; … through FFmpeg on
     // standard input").
