@@ -99,7 +99,7 @@ fn not_found(path: &Path) -> Error {
                 .into(),
         );
     }
-    Error::not_found(path, "input")
+    crate::video::collapsed_url_error(&text).unwrap_or_else(|| Error::not_found(path, "input"))
 }
 
 /// True for a file named like a frame ([`FRAME_EXTENSIONS`]).

@@ -236,6 +236,24 @@ impl StreamUrl {
     }
 }
 
+/// The error of a path that names nothing and is a stream's URL with a
+/// slash of its `//` lost (`rtsp:/cam/stream`): Python's `pathlib.Path`,
+/// and so argparse's `type=Path`, collapse `//`. `None` for any other.
+pub(crate) fn collapsed_url_error(text: &str) -> Option<Error> {
+    let (scheme, rest) = text.split_once(":/")?;
+    let is_stream = STREAM_SCHEMES
+        .iter()
+        .any(|s| s.eq_ignore_ascii_case(scheme));
+    if !is_stream || rest.is_empty() || rest.starts_with('/') {
+        return None;
+    }
+    Some(Error::Invalid(format!(
+        "{}: no file of that name, and as a URL a slash of its `{scheme}://` was lost (Python's \
+         pathlib.Path, and argparse's `type=Path`, collapse `//`): give the URL as a str",
+        crate::printable(&hide_password(scheme, rest).replacen("://", ":/", 1))
+    )))
+}
+
 /// `scheme://rest` with the password of its user part, if any, as `***`.
 fn hide_password(scheme: &str, rest: &str) -> String {
     let authority_end = rest.find(['/', '?', '#']).unwrap_or(rest.len());
@@ -1170,6 +1188,18 @@ mod tests {
                 && !err.contains("pp"),
             "{err}"
         );
+        // A URL that went through Python's pathlib.Path lost a slash.
+        let err = collapsed_url_error("rtsp:/admin:secret@cam/s")
+            .unwrap()
+            .to_string();
+        assert!(
+            err.starts_with("rtsp:/admin:***@cam/s: no file of that name, and as a URL a slash")
+                && err.contains("give the URL as a str"),
+            "{err}"
+        );
+        for text in ["rtsp://cam/s", "frames/rtsp:/x", "ftp:/x", "http:/"] {
+            assert!(collapsed_url_error(text).is_none(), "{text}");
+        }
         // Only network protocols, and a silence after which FFmpeg gives
         // up that the protocol reads as one.
         let args = |text: &str| StreamUrl::parse(text).unwrap().unwrap().input_args();

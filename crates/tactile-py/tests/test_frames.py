@@ -313,5 +313,13 @@ def test_a_streams_url_gives_its_frames(root, tmp_path, palpation_frames):
         with pytest.raises(ValueError, match=r"http://robot:\*\*\*@127\.0\.0\.1:\d+/none\.mkv: cannot read the stream") as e:
             tactile.frames(f"http://robot:s3cret@{base[len('http://'):]}/none.mkv")
         assert "s3cret" not in str(e.value)
+
+        # Through pathlib (argparse's type=Path) a URL loses a slash of its
+        # `//`: said so, not "does not exist".
+        mangled = Path(f"http://robot:s3cret@{base[len('http://'):]}/clip.mkv")
+        assert str(mangled).startswith("http:/robot")
+        with pytest.raises(ValueError, match=r"http:/robot:\*\*\*@.*a slash of its `http://` was lost .*give the URL as a str") as e:
+            tactile.frames(mangled)
+        assert "s3cret" not in str(e.value)
     finally:
         server.shutdown()
