@@ -24,3 +24,15 @@ pub fn progress_bar(len: u64, what: &str) -> ProgressBar {
     pb.set_prefix(what.to_string());
     pb
 }
+
+/// A spinner saying what is waited for (drawn only on a terminal), for a
+/// wait of unknown length: a network camera's first answer.
+pub fn spinner(what: &str) -> ProgressBar {
+    let pb = ProgressBar::new_spinner();
+    let style = ProgressStyle::with_template("{spinner} {msg} [{elapsed}]")
+        .unwrap_or_else(|_| ProgressStyle::default_spinner());
+    pb.set_style(style);
+    pb.set_message(crate::printable(what).into_owned());
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    pb
+}

@@ -455,7 +455,20 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
         .args(["-of", "json"]);
     cmd.args(input.input_args()?);
     let deadline = matches!(input, VideoInput::Stream(_)).then_some(STREAM_PROBE_TIMEOUT);
-    let (status, stdout, last) = run_within(cmd, path, deadline)?;
+    // A camera on the network may take seconds to answer: said on a
+    // terminal, so a wait is not taken for a hang.
+    let waiting = deadline.map(|d| {
+        crate::progress::spinner(&format!(
+            "opening {} (given up after {} s)",
+            path.display(),
+            d.as_secs()
+        ))
+    });
+    let probed = run_within(cmd, path, deadline);
+    if let Some(w) = waiting {
+        w.finish_and_clear();
+    }
+    let (status, stdout, last) = probed?;
     if !status.success() {
         let why = match last.trim() {
             "" => "ffprobe failed",
