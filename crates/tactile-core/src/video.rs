@@ -164,10 +164,7 @@ impl StreamUrl {
             return Ok(None);
         }
         let shown = hide_password(scheme, rest);
-        if !STREAM_SCHEMES
-            .iter()
-            .any(|s| s.eq_ignore_ascii_case(scheme))
-        {
+        if !is_stream_scheme(scheme) {
             let what = match scheme.eq_ignore_ascii_case("file") {
                 true => "give the file's path itself".to_string(),
                 false => format!(
@@ -218,17 +215,15 @@ impl StreamUrl {
     /// SRT and TCP, which ignore the other; RTMP's `-timeout` would make it
     /// listen instead, HTTP has none).
     fn input_args(&self) -> Vec<String> {
-        let scheme = self
-            .url
-            .split_once("://")
-            .map_or(String::new(), |(s, _)| s.to_ascii_lowercase());
+        // Lower case since `parse`.
+        let scheme = self.url.split_once("://").map_or("", |(s, _)| s);
         let mut args = vec![
             "-protocol_whitelist".to_string(),
             STREAM_PROTOCOLS.into(),
             "-rw_timeout".into(),
             STREAM_SILENCE_US.into(),
         ];
-        if ["rtsp", "rtsps", "udp", "rtp", "srt", "tcp"].contains(&scheme.as_str()) {
+        if ["rtsp", "rtsps", "udp", "rtp", "srt", "tcp"].contains(&scheme) {
             args.extend(["-timeout".into(), STREAM_SILENCE_US.into()]);
         }
         args.extend(["-i".into(), self.url.clone()]);
@@ -241,10 +236,7 @@ impl StreamUrl {
 /// and so argparse's `type=Path`, collapse `//`. `None` for any other.
 pub(crate) fn collapsed_url_error(text: &str) -> Option<Error> {
     let (scheme, rest) = text.split_once(":/")?;
-    let is_stream = STREAM_SCHEMES
-        .iter()
-        .any(|s| s.eq_ignore_ascii_case(scheme));
-    if !is_stream || rest.is_empty() || rest.starts_with('/') {
+    if !is_stream_scheme(scheme) || rest.is_empty() || rest.starts_with('/') {
         return None;
     }
     Some(Error::Invalid(format!(
@@ -252,6 +244,13 @@ pub(crate) fn collapsed_url_error(text: &str) -> Option<Error> {
          pathlib.Path, and argparse's `type=Path`, collapse `//`): give the URL as a str",
         crate::printable(&hide_password(scheme, rest).replacen("://", ":/", 1))
     )))
+}
+
+/// True for one of [`STREAM_SCHEMES`], in any case (RFC 3986).
+fn is_stream_scheme(scheme: &str) -> bool {
+    STREAM_SCHEMES
+        .iter()
+        .any(|s| s.eq_ignore_ascii_case(scheme))
 }
 
 /// `scheme://rest` with the password of its user part, if any, as `***`.
@@ -286,6 +285,15 @@ impl VideoInput {
         match self {
             VideoInput::File(p) | VideoInput::Camera(p) => p,
             VideoInput::Stream(url) => url.shown(),
+        }
+    }
+
+    /// FFmpeg's words about it as messages show them: a stream's
+    /// password hidden.
+    fn hide_in(&self, words: &str) -> String {
+        match self {
+            VideoInput::Stream(url) => url.hide_in(words),
+            _ => words.to_string(),
         }
     }
 
@@ -470,14 +478,10 @@ pub fn probe(input: &VideoInput) -> Result<VideoInfo> {
     }
     let (status, stdout, last) = probed?;
     if !status.success() {
-        let why = match last.trim() {
+        let why = input.hide_in(match last.trim() {
             "" => "ffprobe failed",
             words => words,
-        };
-        let why = match input {
-            VideoInput::Stream(url) => url.hide_in(why),
-            _ => why.to_string(),
-        };
+        });
         // A device is read as a camera: one that is none (`/dev/null`, a
         // serial port) is said to be no camera, not no video file.
         let what = match input {
@@ -716,11 +720,7 @@ impl VideoReader {
             .wait()
             .map_err(|e| Error::io(self.input.path(), e))?;
         crate::interrupt::check()?;
-        let last = last_words(self.stderr.take());
-        let last = match &self.input {
-            VideoInput::Stream(url) => url.hide_in(&last),
-            _ => last,
-        };
+        let last = self.input.hide_in(&last_words(self.stderr.take()));
         if !status.success() {
             let again = match &self.input {
                 // The probe read it, so the server let one client in and
