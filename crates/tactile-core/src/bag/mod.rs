@@ -251,13 +251,13 @@ impl Records {
         loop {
             let (file, reader) = match &mut self.storage {
                 Storage::Sqlite(db) => {
-                    let wanted: Vec<u16> = self
-                        .channels
-                        .iter()
-                        .filter(|(_, c)| topic == Some(c.topic.as_str()))
-                        .map(|(id, _)| *id)
-                        .collect();
-                    let next = match db.next(&self.path, &wanted) {
+                    let channels = &self.channels;
+                    let wanted = |channel: u16| {
+                        channels
+                            .get(&channel)
+                            .is_some_and(|c| topic == Some(c.topic.as_str()))
+                    };
+                    let next = match db.next(&self.path, wanted) {
                         // Damage after messages were read: the end of a
                         // recording cut short, as an MCAP file's.
                         Err(_) if db.damaged() && self.messages > 0 => {

@@ -131,12 +131,12 @@ impl SqliteFile {
     }
 
     /// The next message: its channel, log time and bytes (the bytes only
-    /// when its channel is one of `wanted`, else empty); `None` after the
+    /// when `wanted` says its channel is, else empty); `None` after the
     /// last.
     pub(super) fn next(
         &mut self,
         path: &Path,
-        wanted: &[u16],
+        wanted: impl Fn(u16) -> bool,
     ) -> Result<Option<(u16, u64, Vec<u8>)>> {
         if self.listed.is_empty() && !self.done {
             self.list_page(path)?;
@@ -153,7 +153,7 @@ impl SqliteFile {
                 ),
             )
         })?;
-        if !wanted.contains(&m.channel) {
+        if !wanted(m.channel) {
             return Ok(Some((m.channel, log_time, Vec::new())));
         }
         if m.len > super::MAX_RECORD_BYTES as i64 {
