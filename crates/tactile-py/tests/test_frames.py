@@ -123,15 +123,21 @@ def test_a_tiff_stack_is_read_page_by_page_alone_and_refused_as_one_frame(tmp_pa
         assert np.array_equal(f.image, expected)
 
 
-@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
-def test_lossless_video_gives_the_pipeline_the_same_frames(root, tmp_path, pipeline, palpation_frames):
-    video = tmp_path / "palpation.mp4"
+def lossless_palpation_clip(root: Path, out: Path) -> Path:
+    """The sample palpation frames as a lossless RGB H.264 video at `out`:
+    decoded, the same pixels."""
     subprocess.run(
         ["ffmpeg", "-nostdin", "-loglevel", "error", "-framerate", "30",
          "-i", str(root / "samples" / "palpation" / "%06d.png"),
-         "-c:v", "libx264rgb", "-qp", "0", str(video)],
+         "-c:v", "libx264rgb", "-qp", "0", str(out)],
         check=True,
     )
+    return out
+
+
+@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="FFmpeg is installed by scripts/test.sh")
+def test_lossless_video_gives_the_pipeline_the_same_frames(root, tmp_path, pipeline, palpation_frames):
+    video = lossless_palpation_clip(root, tmp_path / "palpation.mp4")
     src = tactile.frames(video)
     assert src.kind == "video" and src.size == (320, 180)
     got = list(src)
@@ -265,13 +271,7 @@ def test_a_streams_url_gives_its_frames(root, tmp_path, palpation_frames):
     import http.server
     import threading
 
-    clip = tmp_path / "clip.mkv"
-    subprocess.run(
-        ["ffmpeg", "-nostdin", "-loglevel", "error", "-framerate", "30",
-         "-i", str(root / "samples" / "palpation" / "%06d.png"),
-         "-c:v", "libx264rgb", "-qp", "0", str(clip)],
-        check=True,
-    )
+    clip = lossless_palpation_clip(root, tmp_path / "clip.mkv")
     live = subprocess.run(
         ["ffmpeg", "-nostdin", "-loglevel", "error", "-i", str(clip),
          "-c:v", "mjpeg", "-q:v", "2", "-f", "mpjpeg", "-"],
