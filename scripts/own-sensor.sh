@@ -51,8 +51,13 @@ sequences=3000
 step render "$tactile" synth gelsight --sensor "$stage" --sequences $sequences --frames-per-sequence 5 \
     --flat-share 0.1 --seed 100 --out "$data/train" --preview "$data/train.png" \
     --real-presses "$ball" --real-copies 15 --real-held-out 8
+# Photometric augmentation (--augment: exposure, LED balance, blur, noise,
+# glare, JPEG) keeps the detector from taking a camera's compression or
+# noise for a light press: without it, the real frames recorded as Motion
+# JPEG or H.264 gave false tendons and held-out renders so recorded fell to
+# 53-79 % (docs/own-sensor.md, "Recorded through a camera or a recorder").
 step detector "$tactile" train detector --data "$data/train" --out "$stage/detector" \
-    --input 80x60 --input-bits 16 --soft-labels 0.2 --max-epochs 12 --patience 4
+    --input 80x60 --input-bits 16 --soft-labels 0.2 --max-epochs 12 --patience 4 --augment
 step segmenter "$tactile" train segmenter --data "$data/train" --out "$stage/segmenter" \
     --copies 1 --max-epochs 4 --patience 2
 # The depth network corrects the calibration's own reconstruction (its

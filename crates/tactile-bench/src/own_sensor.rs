@@ -77,6 +77,30 @@ pub struct ForeignRow {
     pub tendon: usize,
 }
 
+/// The sensor's frames recorded one way (as they are, through a codec, or
+/// with a noisier camera's noise).
+#[derive(Debug, Clone, Serialize)]
+pub struct RecordingRow {
+    /// How the frames were recorded.
+    pub recording: String,
+    /// Real frames: the rest frame and every press.
+    pub real_frames: usize,
+    /// Of those, reported as showing a tendon.
+    pub real_tendon: usize,
+    /// The largest tendon probability among them.
+    pub real_probability: f32,
+    /// The calibration's reconstruction of the presses against the ball:
+    /// mean shape and far-field errors, mm.
+    pub calibration_mm: (f64, f64),
+    /// Each press's contact area (indentation past the contact threshold)
+    /// over its area as recorded: the median.
+    pub contact_area_ratio: f64,
+    /// Held-out renders through the same recording.
+    pub renders: usize,
+    /// The detector's accuracy on them.
+    pub render_accuracy: f64,
+}
+
 /// The page's numbers.
 #[derive(Debug, Clone, Serialize)]
 pub struct OwnSensorReport {
@@ -103,6 +127,12 @@ pub struct OwnSensorReport {
     pub pipeline_fps: f64,
     /// Frames of this and other sensors.
     pub foreign: Vec<ForeignRow>,
+    /// The real presses and held-out renders as a camera or recorder
+    /// compresses them, and with a noisier camera's noise.
+    pub recordings: Vec<RecordingRow>,
+    /// The detector trained with photometric augmentation (`--augment`),
+    /// as its training record says (`None`: no record).
+    pub detector_augmented: Option<bool>,
     /// The depth network corrects the calibration's reconstruction (it
     /// takes it as a fourth channel) rather than reading the frame alone.
     pub depth_prior: bool,
@@ -154,6 +184,42 @@ impl OwnSensorReport {
             ));
         }
         md.push('\n');
+        md
+    }
+
+    /// The page's section on recordings: the real frames and held-out
+    /// renders as cameras and recorders compress them.
+    fn recordings_section(&self) -> String {
+        let Some(first) = self.recordings.first() else {
+            return String::new();
+        };
+        let mut md = format!(
+            "\n## Recorded through a camera or a recorder\n\nA real sensor's frames rarely reach the toolkit as they left its camera's chip: a USB camera (a GelSight Mini's) sends Motion JPEG, and a recording (`ffmpeg -i /dev/video0 rec.mp4`, a phone, a ROS 2 bag of `ffmpeg_image_transport`) stores H.264 with half the colour resolution. Here the {} real frames (the rest frame and every press) and the first {} held-out renders go through FFmpeg each way (each set one video, in its order) and back, then through the pipeline; last, with a noisier camera's noise instead. A tendon on a real frame is a false alarm: none shows one. The calibration's reconstruction is scored against the ball as above, and each press's contact area (indentation past {} mm) is compared with its area as recorded. {}\n\n| recording | real frames reported as a tendon | largest tendon probability | calibration shape / far field (mm) | contact area against as recorded (median) | detector accuracy on the renders |\n|---|---|---|---|---|---|\n",
+            first.real_frames,
+            first.renders,
+            tactile_core::spec::calibrated::CONTACT_MIN_INDENTATION_MM,
+            match self.detector_augmented {
+                Some(true) =>
+                    "The detector trained with photometric augmentation (`tactile train detector --augment`: exposure, LED balance, blur, noise, glare and JPEG at its input size), which is what holds it here: trained without it on the same renders, it took the compression for light presses.",
+                Some(false) =>
+                    "The detector trained without photometric augmentation (`tactile train detector --augment`).",
+                None => "",
+            }
+        );
+        for r in &self.recordings {
+            md.push_str(&format!(
+                "| {} | {} of {} | {:.3} | {:.3} / {:.4} | {:.2}x | {:.4} |\n",
+                r.recording,
+                r.real_tendon,
+                r.real_frames,
+                r.real_probability,
+                r.calibration_mm.0,
+                r.calibration_mm.1,
+                r.contact_area_ratio,
+                r.render_accuracy
+            ));
+        }
+        md.push_str("\nThe calibration's shape inside the contact holds under every recording. H.264's halved colour resolution adds a little indentation about the contact's edge, so the area past the threshold grows by the factor shown: a contact area compares between frames recorded one way, and a sensor whose frames will be recorded compressed is best calibrated from presses recorded the same way.\n");
         md
     }
 
@@ -390,6 +456,17 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
             tendon,
         });
     }
+    tactile_core::note!("the presses and renders as cameras and recorders compress them");
+    let labels = (0..own.len())
+        .map(|i| Ok(test.number(i, "tendon")? > 0.5))
+        .collect::<Result<Vec<bool>>>()?;
+    let recordings = recordings(
+        &mut pipeline,
+        &mut rec,
+        &presses,
+        &prepared,
+        (&own, &labels),
+    )?;
     Ok(OwnSensorReport {
         times,
         frames,
@@ -407,7 +484,140 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
         ball,
         pipeline_fps,
         foreign,
+        recordings,
+        detector_augmented: tactile_core::io::read_json::<serde_json::Value>(
+            m.join("detector").join("training.json"),
+        )
+        .ok()
+        .map(|v| !v["config"]["augment"].is_null()),
     })
+}
+
+/// How the sensor's frames are recorded on the page: as they are, as a USB
+/// camera's Motion JPEG and a recorder's H.264 compress them, and with a
+/// noisier camera's noise.
+fn recording_ways() -> Vec<(String, Option<tactile_core::video::VideoCodec>)> {
+    use tactile_core::video::VideoCodec::{H264Yuv420, MjpegYuv422};
+    let mut ways = vec![("as recorded (PNG)".to_string(), None)];
+    for q in [2, 5] {
+        ways.push((
+            format!("Motion JPEG as a USB camera sends it (FFmpeg `-q:v {q}`, 4:2:2)"),
+            Some(MjpegYuv422 { q }),
+        ));
+    }
+    for crf in [18, 23, 28] {
+        let default = if crf == 23 { ", FFmpeg's default" } else { "" };
+        ways.push((
+            format!("H.264 as a recorder stores it (libx264 `-crf {crf}`{default}, 4:2:0)"),
+            Some(H264Yuv420 { crf }),
+        ));
+    }
+    ways
+}
+
+/// Gaussian noise of this many grey levels added to every channel of
+/// every pixel: a cheap camera in dim light.
+const CAMERA_NOISE_LEVELS: f64 = 4.0;
+
+/// `frames` with [`CAMERA_NOISE_LEVELS`] of noise (seeded: the page is
+/// the same each time).
+fn noisy(frames: &[RgbImage]) -> Result<Vec<RgbImage>> {
+    frames
+        .iter()
+        .enumerate()
+        .map(|(i, img)| {
+            let mut rng = tactile_core::rng::SampleRng::new(7, 0, i as u64);
+            let px = img
+                .as_slice()
+                .iter()
+                .map(|&v| {
+                    (v as f64 + CAMERA_NOISE_LEVELS * rng.normal())
+                        .round()
+                        .clamp(0.0, 255.0) as u8
+                })
+                .collect();
+            Ok(rgb_image(img.width(), img.height(), px)?)
+        })
+        .collect()
+}
+
+/// The real frames (the rest frame, then every press) and held-out renders
+/// `(frames, tendon labels)` recorded each way of [`recording_ways`] and
+/// with a noisier camera: what the pipeline reports on them.
+fn recordings(
+    pipeline: &mut Pipeline,
+    rec: &mut Reconstructor,
+    presses: &BallPresses,
+    prepared: &[tactile_gelsight::training::PreparedPress],
+    (renders, labels): (&[RgbImage], &[bool]),
+) -> Result<Vec<RecordingRow>> {
+    let mut real = vec![presses.background.clone()];
+    for i in 0..presses.presses.len() {
+        real.push(presses.frame(i)?);
+    }
+    let mut ways: Vec<(String, Vec<RgbImage>, Vec<RgbImage>)> = Vec::new();
+    for (name, codec) in recording_ways() {
+        let through = |frames: &[RgbImage]| -> Result<Vec<RgbImage>> {
+            match codec {
+                None => Ok(frames.to_vec()),
+                Some(c) => Ok(tactile_core::video::round_trip(
+                    &frames.iter().collect::<Vec<_>>(),
+                    c,
+                )?),
+            }
+        };
+        ways.push((name, through(&real)?, through(renders)?));
+    }
+    ways.push((
+        format!("camera noise: {CAMERA_NOISE_LEVELS} grey levels per pixel (Gaussian)"),
+        noisy(&real)?,
+        noisy(renders)?,
+    ));
+    let mut rows = Vec::new();
+    let mut recorded_area: Vec<f64> = Vec::new();
+    for (recording, real, renders) in ways {
+        tactile_core::interrupt::check()?;
+        let (mut real_tendon, mut real_probability) = (0, 0f32);
+        for f in &real {
+            let r = pipeline.process("frame", f)?;
+            real_tendon += usize::from(r.tendon);
+            real_probability = real_probability.max(r.score);
+        }
+        let (mut shape, mut far, mut areas) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, p) in prepared.iter().enumerate() {
+            let map = rec.reconstruct(&real[i + 1], &presses.press_path(i))?;
+            let score = score_full(&map, &p.cap(presses), &p.file);
+            shape.push(score.shape_mae_mm);
+            far.push(score.far_field_mm);
+            areas.push(map.contact_area_mm2(rec.mm_per_px()) as f64);
+        }
+        if recorded_area.is_empty() {
+            recorded_area = areas.clone();
+        }
+        let mut ratios: Vec<f64> = areas
+            .iter()
+            .zip(&recorded_area)
+            .map(|(a, b)| a / b.max(1e-9))
+            .collect();
+        ratios.sort_by(f64::total_cmp);
+        let correct = renders
+            .iter()
+            .zip(labels)
+            .map(|(f, &t)| Ok(pipeline.process("frame", f)?.tendon == t))
+            .collect::<Result<Vec<bool>>>()?;
+        rows.push(RecordingRow {
+            recording,
+            real_frames: real.len(),
+            real_tendon,
+            real_probability,
+            calibration_mm: (mean(shape.into_iter()), mean(far.into_iter())),
+            contact_area_ratio: ratios.get(ratios.len() / 2).copied().unwrap_or(f64::NAN),
+            renders: correct.len(),
+            render_accuracy: correct.iter().filter(|&&c| c).count() as f64
+                / correct.len().max(1) as f64,
+        });
+    }
+    Ok(rows)
 }
 
 impl OwnSensorReport {
@@ -486,6 +696,7 @@ impl OwnSensorReport {
                 r.tendon
             ));
         }
+        md.push_str(&self.recordings_section());
         // Pictures: real presses beside the same presses rendered through
         // the calibration, and held-out renders with their labels.
         let (press_path, press_png) = crate::output::picture_beside(out, "presses");
