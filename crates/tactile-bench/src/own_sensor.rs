@@ -498,7 +498,7 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
 /// noisier camera's noise.
 fn recording_ways() -> Vec<(String, Option<tactile_core::video::VideoCodec>)> {
     use tactile_core::video::VideoCodec::{H264Yuv420, MjpegYuv422};
-    let mut ways = vec![("as recorded (PNG)".to_string(), None)];
+    let mut ways = vec![("as stored (the frame files)".to_string(), None)];
     for q in [2, 5] {
         ways.push((
             format!("Motion JPEG as a USB camera sends it (FFmpeg `-q:v {q}`, 4:2:2)"),

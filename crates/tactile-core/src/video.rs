@@ -838,18 +838,24 @@ pub enum VideoCodec {
     Mjpeg,
     /// H.264 as cameras, phones and recorders store it: libx264 with 4:2:0
     /// chroma (half the colour resolution each way) at a constant rate
-    /// factor.
+    /// factor. A frame of odd width or height is padded to even.
     H264Yuv420 {
         /// libx264's `-crf`, 0 to 51 (23 is FFmpeg's default).
         crf: u8,
     },
     /// Motion JPEG as a USB (UVC) camera sends it: 4:2:2 chroma at
-    /// FFmpeg's quality scale.
+    /// FFmpeg's quality scale. A frame of odd width or height is padded to
+    /// even.
     MjpegYuv422 {
         /// FFmpeg's `-q:v`, 2 (best) to 31.
         q: u8,
     },
 }
+
+/// FFmpeg's filter padding a frame of odd width or height by one black
+/// column or row, as chroma at half resolution needs (the 4:2:0 and 4:2:2
+/// codecs; [`round_trip`] crops it off again).
+const EVEN_PAD: &str = "pad=ceil(iw/2)*2:ceil(ih/2)*2";
 
 impl VideoCodec {
     fn args(self) -> Vec<String> {
@@ -874,6 +880,8 @@ impl VideoCodec {
                 "yuvj444p".into(),
             ],
             VideoCodec::H264Yuv420 { crf } => vec![
+                "-vf".into(),
+                EVEN_PAD.into(),
                 "-c:v".into(),
                 "libx264".into(),
                 "-crf".into(),
@@ -882,6 +890,8 @@ impl VideoCodec {
                 "yuv420p".into(),
             ],
             VideoCodec::MjpegYuv422 { q } => vec![
+                "-vf".into(),
+                EVEN_PAD.into(),
                 "-c:v".into(),
                 "mjpeg".into(),
                 "-q:v".into(),
@@ -903,8 +913,9 @@ pub fn encode(frames: &[&RgbImage], fps: u32, codec: VideoCodec, out: &Path) -> 
 }
 
 /// `frames` as a recording holds them: encoded with `codec` in a
-/// temporary file and decoded back, one frame each (for measuring what a
-/// camera's or recorder's compression does to a model's answers).
+/// temporary file and decoded back, one frame each at its own size (for
+/// measuring what a camera's or recorder's compression does to a model's
+/// answers).
 pub fn round_trip(frames: &[&RgbImage], codec: VideoCodec) -> Result<Vec<RgbImage>> {
     let dir = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
     let ext = match codec {
@@ -916,7 +927,29 @@ pub fn round_trip(frames: &[&RgbImage], codec: VideoCodec) -> Result<Vec<RgbImag
     let mut reader = VideoReader::open(&VideoInput::File(path.clone()), DecodeOptions::default())?;
     let mut out = Vec::with_capacity(frames.len());
     while let Some(f) = reader.next_frame()? {
-        out.push(f);
+        // What padding to an even size added is cropped off.
+        let (w, h) = frames.first().map_or((0, 0), |f| (f.width(), f.height()));
+        if (f.width(), f.height()) == (w, h) {
+            out.push(f);
+            continue;
+        }
+        if f.width() < w || f.height() < h {
+            return Err(Error::image(
+                &path,
+                format!(
+                    "encoded at {w}x{h}, decoded at {}x{}",
+                    f.width(),
+                    f.height()
+                ),
+            ));
+        }
+        let data = f
+            .as_slice()
+            .chunks_exact(f.width() * 3)
+            .take(h)
+            .flat_map(|row| row[..w * 3].iter().copied())
+            .collect();
+        out.push(crate::image_io::rgb_image(w, h, data)?);
     }
     if out.len() != frames.len() {
         return Err(Error::image(
@@ -1032,6 +1065,15 @@ mod tests {
             assert!(e > 0.0 && e < 6.0, "{mjpeg} {good} {poor}");
         }
         assert!(poor > good, "crf 40 {poor} against crf 18 {good}");
+        // A frame of odd size comes back at its own size, not padded.
+        let odd = crate::image_io::rgb_image(63, 47, vec![128; 63 * 47 * 3]).unwrap();
+        for codec in [
+            VideoCodec::MjpegYuv422 { q: 5 },
+            VideoCodec::H264Yuv420 { crf: 23 },
+        ] {
+            let back = round_trip(&[&odd], codec).unwrap();
+            assert_eq!((back[0].width(), back[0].height()), (63, 47), "{codec:?}");
+        }
     }
 
     #[test]
