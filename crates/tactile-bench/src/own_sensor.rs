@@ -219,6 +219,9 @@ impl OwnSensorReport {
                 r.render_accuracy
             ));
         }
+        if self.recordings.len() < recording_ways().len() + 1 {
+            md.push_str("\nFFmpeg was not found, so the Motion JPEG and H.264 rows are left out: `bash scripts/install-ffmpeg.sh` installs it, then run this page's command again.\n");
+        }
         md.push_str("\nThe calibration's shape inside the contact holds under every recording. H.264's halved colour resolution adds a little indentation about the contact's edge, so the area past the threshold grows by the factor shown: a contact area compares between frames recorded one way, and a sensor whose frames will be recorded compressed is best calibrated from presses recorded the same way.\n");
         md
     }
@@ -556,7 +559,12 @@ fn recordings(
         real.push(presses.frame(i)?);
     }
     let mut ways: Vec<(String, Vec<RgbImage>, Vec<RgbImage>)> = Vec::new();
-    for (name, codec) in recording_ways() {
+    // Without FFmpeg the codecs' rows are left out (the page says so).
+    let ffmpeg = tactile_core::video::ffmpeg_available();
+    for (name, codec) in recording_ways()
+        .into_iter()
+        .filter(|(_, c)| ffmpeg || c.is_none())
+    {
         let through = |frames: &[RgbImage]| -> Result<Vec<RgbImage>> {
             match codec {
                 None => Ok(frames.to_vec()),
