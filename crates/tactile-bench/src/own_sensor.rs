@@ -408,7 +408,11 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
     let sample: Vec<RgbImage> = own.iter().step_by(5).cloned().collect();
     let sets: Vec<(String, bool, Vec<RgbImage>)> = vec![
         ("held-out renders of this sensor".into(), true, own.clone()),
-        ("the real ball presses (this sensor)".into(), true, real),
+        (
+            "the real ball presses (this sensor)".into(),
+            true,
+            real.clone(),
+        ),
         (
             "virtual visuo-tactile sensor, 640x360".into(),
             false,
@@ -466,8 +470,7 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
     let recordings = recordings(
         &mut pipeline,
         &mut rec,
-        &presses,
-        &prepared,
+        (&presses, &prepared, &real),
         (&own, &labels),
     )?;
     Ok(OwnSensorReport {
@@ -530,34 +533,32 @@ fn noisy(frames: &[RgbImage]) -> Result<Vec<RgbImage>> {
         .enumerate()
         .map(|(i, img)| {
             let mut rng = tactile_core::rng::SampleRng::new(7, 0, i as u64);
-            let px = img
-                .as_slice()
-                .iter()
-                .map(|&v| {
-                    (v as f64 + CAMERA_NOISE_LEVELS * rng.normal())
-                        .round()
-                        .clamp(0.0, 255.0) as u8
-                })
-                .collect();
+            let px = tactile_preprocess::perturb::add_noise(
+                img.as_slice(),
+                CAMERA_NOISE_LEVELS,
+                &mut rng,
+            );
             Ok(rgb_image(img.width(), img.height(), px)?)
         })
         .collect()
 }
 
-/// The real frames (the rest frame, then every press) and held-out renders
-/// `(frames, tendon labels)` recorded each way of [`recording_ways`] and
-/// with a noisier camera: what the pipeline reports on them.
+/// The real frames (the rest frame, then every press: `(presses, their
+/// prepared circles, their frames)`) and held-out renders `(frames, tendon
+/// labels)` recorded each way of [`recording_ways`] and with a noisier
+/// camera: what the pipeline reports on them.
 fn recordings(
     pipeline: &mut Pipeline,
     rec: &mut Reconstructor,
-    presses: &BallPresses,
-    prepared: &[tactile_gelsight::training::PreparedPress],
+    (presses, prepared, press_frames): (
+        &BallPresses,
+        &[tactile_gelsight::training::PreparedPress],
+        &[RgbImage],
+    ),
     (renders, labels): (&[RgbImage], &[bool]),
 ) -> Result<Vec<RecordingRow>> {
     let mut real = vec![presses.background.clone()];
-    for i in 0..presses.presses.len() {
-        real.push(presses.frame(i)?);
-    }
+    real.extend_from_slice(press_frames);
     let mut ways: Vec<(String, Vec<RgbImage>, Vec<RgbImage>)> = Vec::new();
     // Without FFmpeg the codecs' rows are left out (the page says so).
     let ffmpeg = tactile_core::video::ffmpeg_available();

@@ -8,6 +8,17 @@ use tactile_core::rng::SampleRng;
 
 use crate::Result;
 
+/// `levels` (grey levels, or a colour frame's channels) with Gaussian
+/// sensor noise of `sigma` levels, one draw each in order, rounded and
+/// kept in 0-255: [`Perturbation::Noise`], and the noisier camera of
+/// `tactile bench own-sensor`.
+pub fn add_noise(levels: &[u8], sigma: f64, rng: &mut SampleRng) -> Vec<u8> {
+    levels
+        .iter()
+        .map(|&s| (s as f64 + sigma * rng.normal()).round().clamp(0.0, 255.0) as u8)
+        .collect()
+}
+
 /// A change of camera conditions applied to raw frames.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Perturbation {
@@ -80,11 +91,7 @@ impl Perturbation {
         let half = cu.max(cv).max(1.0);
         let mut out = vec![0u8; w * h];
         match *self {
-            Self::Noise { sigma } => {
-                for (o, &s) in out.iter_mut().zip(src) {
-                    *o = (s as f64 + sigma * rng.normal()).round().clamp(0.0, 255.0) as u8;
-                }
-            }
+            Self::Noise { sigma } => out = add_noise(src, sigma, rng),
             Self::Gradient { slope } => {
                 let a = 2.0 * std::f64::consts::PI * rng.uniform();
                 let (du, dv) = (a.cos(), a.sin());
