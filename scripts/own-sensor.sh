@@ -56,6 +56,9 @@ step render "$tactile" synth gelsight --sensor "$stage" --sequences $sequences -
 # noise for a light press: without it, the real frames recorded as Motion
 # JPEG or H.264 gave false tendons and held-out renders so recorded fell to
 # 53-79 % (docs/own-sensor.md, "Recorded through a camera or a recorder").
+# With --input-bits 16 it adds only a camera's noise averaged down to the
+# input, which keeps a light press's sub-level shading
+# (PhotometricAugment::recording).
 step detector "$tactile" train detector --data "$data/train" --out "$stage/detector" \
     --input 80x60 --input-bits 16 --soft-labels 0.2 --max-epochs 12 --patience 4 --augment
 step segmenter "$tactile" train segmenter --data "$data/train" --out "$stage/segmenter" \

@@ -133,6 +133,9 @@ pub struct OwnSensorReport {
     /// The detector trained with photometric augmentation (`--augment`),
     /// as its training record says (`None`: no record).
     pub detector_augmented: Option<bool>,
+    /// What that augmentation changed, in words (`None`: none, or no
+    /// record).
+    pub detector_augmentation: Option<String>,
     /// The depth network corrects the calibration's reconstruction (it
     /// takes it as a fourth channel) rather than reading the frame alone.
     pub depth_prior: bool,
@@ -194,16 +197,22 @@ impl OwnSensorReport {
             return String::new();
         };
         let mut md = format!(
-            "\n## Recorded through a camera or a recorder\n\nA real sensor's frames rarely reach the toolkit as they left its camera's chip: a USB camera (a GelSight Mini's) sends Motion JPEG, and a recording (`ffmpeg -i /dev/video0 rec.mp4`, a phone, a ROS 2 bag of `ffmpeg_image_transport`) stores H.264 with half the colour resolution. Here the {} real frames (the rest frame and every press) and the first {} held-out renders go through FFmpeg each way (each set one video, in its order) and back, then through the pipeline; last, with a noisier camera's noise instead. A tendon on a real frame is a false alarm: none shows one. The calibration's reconstruction is scored against the ball as above, and each press's contact area (indentation past {} mm) is compared with its area as recorded. {}\n\n| recording | real frames reported as a tendon | largest tendon probability | calibration shape / far field (mm) | contact area against as recorded (median) | detector accuracy on the renders |\n|---|---|---|---|---|---|\n",
+            "\n## Recorded through a camera or a recorder\n\nA real sensor's frames rarely reach the toolkit as they left its camera's chip: a USB camera (a GelSight Mini's) sends Motion JPEG, and a recording (`ffmpeg -i /dev/video0 rec.mp4`, a phone, a ROS 2 bag of `ffmpeg_image_transport`) stores H.264 with half the colour resolution. Here the {} real frames (the rest frame and every press) and the first {} held-out renders go through FFmpeg each way (each set one video, in its order) and back, then through the pipeline; last, with a noisier camera's noise instead. A tendon on a real frame is a false alarm: {} The calibration's reconstruction is scored against the ball as above, and each press's contact area (indentation past {} mm) is compared with its area as recorded. {}\n\n| recording | real frames reported as a tendon | largest tendon probability | calibration shape / far field (mm) | contact area against as recorded (median) | detector accuracy on the renders |\n|---|---|---|---|---|---|\n",
             first.real_frames,
             first.renders,
+            match self.recordings.iter().filter(|r| r.real_tendon > 0).count() {
+                0 => "none shows one.".to_string(),
+                n => format!("{n} of the {} recordings show one.", self.recordings.len()),
+            },
             tactile_core::spec::calibrated::CONTACT_MIN_INDENTATION_MM,
             match self.detector_augmented {
-                Some(true) =>
-                    "The detector trained with photometric augmentation (`tactile train detector --augment`: exposure, LED balance, blur, noise, glare and JPEG at its input size), which is what holds it here: trained without it on the same renders, it took the compression for light presses.",
+                Some(true) => format!(
+                    "The detector trained with photometric augmentation (`tactile train detector --augment`, at its input size: {}), which is what holds it here: trained without it on the same renders, it took the compression for light presses.",
+                    self.detector_augmentation.as_deref().unwrap_or("as its record says")
+                ),
                 Some(false) =>
-                    "The detector trained without photometric augmentation (`tactile train detector --augment`).",
-                None => "",
+                    "The detector trained without photometric augmentation (`tactile train detector --augment`).".into(),
+                None => String::new(),
             }
         );
         for r in &self.recordings {
@@ -473,6 +482,9 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
         (&presses, &prepared, &real),
         (&own, &labels),
     )?;
+    let training =
+        tactile_core::io::read_json::<serde_json::Value>(m.join("detector").join("training.json"))
+            .ok();
     Ok(OwnSensorReport {
         times,
         frames,
@@ -491,11 +503,10 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
         pipeline_fps,
         foreign,
         recordings,
-        detector_augmented: tactile_core::io::read_json::<serde_json::Value>(
-            m.join("detector").join("training.json"),
-        )
-        .ok()
-        .map(|v| !v["config"]["augment"].is_null()),
+        detector_augmented: training.as_ref().map(|v| !v["config"]["augment"].is_null()),
+        detector_augmentation: training
+            .and_then(|v| serde_json::from_value(v["config"]["augment"].clone()).ok())
+            .map(|a: tactile_detect::augment::PhotometricAugment| a.describe()),
     })
 }
 

@@ -36,7 +36,7 @@ pub struct DetectorOptions {
     /// Train toward soft targets from each frame's ridge amplitude (`ridge_mm`): sigmoid(ln(A / threshold) / WIDTH) about the spec's tendon threshold. Suggested width: 0.2.
     #[arg(long, value_name = "WIDTH")]
     pub soft_labels: Option<f64>,
-    /// Photometric augmentation of the training frames (exposure, LED balance, blur, noise, glare, JPEG; see PhotometricAugment).
+    /// Photometric augmentation of the training frames (exposure, LED balance, blur, noise, glare, JPEG; see PhotometricAugment). With 16-bit inputs only the noise a camera and its compression leave at the input size (PhotometricAugment::recording), so a light press's shading stays readable.
     #[arg(long)]
     pub augment: bool,
     /// Only re-choose the threshold of the model already in the output folder on the validation sequences (training ends with this step anyway).
@@ -68,7 +68,10 @@ impl DetectorOptions {
             .with_schedule(self.schedule.schedule(d.schedule.learning_rate))
             .with_val_fraction(self.val_fraction)
             .with_soft_labels(soft_labels)
-            .with_augment(self.augment.then(PhotometricAugment::new));
+            .with_augment(
+                self.augment
+                    .then(|| PhotometricAugment::for_input_bits(self.input_bits)),
+            );
         config.model.check()?;
         Ok(config)
     }
