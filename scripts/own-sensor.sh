@@ -61,8 +61,11 @@ step render "$tactile" synth gelsight --sensor "$stage" --sequences $sequences -
 # (PhotometricAugment::recording).
 step detector "$tactile" train detector --data "$data/train" --out "$stage/detector" \
     --input 80x60 --input-bits 16 --soft-labels 0.2 --max-epochs 12 --patience 4 --augment
+# The segmenter keeps the sensor's rest frame (--rest): a tendon's direction
+# is read from the window's shading against it, so the gel's own texture
+# (the R1.5's streaks of paint) does not pull the angle.
 step segmenter "$tactile" train segmenter --data "$data/train" --out "$stage/segmenter" \
-    --copies 1 --max-epochs 4 --patience 2
+    --copies 1 --max-epochs 4 --patience 2 --rest "$stage/background.png"
 # The depth network corrects the calibration's own reconstruction (its
 # fourth channel), which carries over to the real sensor's frames.
 step depth "$tactile" train depth --data "$data/train" --out "$stage/depth" \

@@ -139,6 +139,10 @@ pub struct OwnSensorReport {
     /// The depth network corrects the calibration's reconstruction (it
     /// takes it as a fourth channel) rather than reading the frame alone.
     pub depth_prior: bool,
+    /// The segmenter reads directions against the sensor's rest frame
+    /// (`segmenter/rest.png`).
+    #[serde(default)]
+    pub segmenter_rest: bool,
 }
 
 fn mean(v: impl Iterator<Item = f64>) -> f64 {
@@ -321,6 +325,7 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
     let test = Dataset::open(&b.test)?;
     let mut seg = tactile_segment::TendonSegmenter::load(m.join("segmenter"), b.runtime, 0)?;
     let segmenter = tactile_segment::eval::evaluate(&mut seg, &test)?;
+    let segmenter_rest = seg.rest().is_some();
     let mut depth = DepthEstimator::load(m.join("depth"), b.runtime, 0)?;
     // A frame that cannot be decoded is named below: the reconstruction
     // reads every frame and stops at it.
@@ -490,6 +495,7 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
         frames,
         detector,
         segmenter,
+        segmenter_rest,
         depth: depth_scores,
         depth_ms,
         reconstruction_mae_mm,
@@ -658,6 +664,9 @@ impl OwnSensorReport {
         md.push_str(") is calibrated (`tactile calibrate ball`: the sensor model that reconstructs its skin, and its render model: colour change by slope and place, and the gel's spread around a contact, both fitted on the presses). Its own palpation videos are then rendered through that calibration over its own background (`tactile synth gelsight`: tendons of 1.5-3.5 mm on straight and curved lines pressed 0.05-1.5 mm at any angle and offset; spheres, punches and plate edges pressed 0.05-2.5 mm as negatives; frames without contact; exposure, noise, blur, optics and gel varied per video), with exact masks, directions and indentation maps, and paper B's three models are trained on them with the toolkit's trainers and exported to ONNX. ");
         if self.depth_prior {
             md.push_str("The depth network does not read the frame alone: it takes the calibration's own reconstruction of the frame as a fourth channel and learns a correction to it (`tactile train depth --prior-calibration`), so on real frames it starts from what the calibration sees there (given the calibration of another sensor than the one the frames were rendered from, it says so before training). ");
+        }
+        if self.segmenter_rest {
+            md.push_str("The segmenter keeps the sensor's rest frame (`tactile train segmenter --rest`): it reads a tendon's direction from the window's shading against it, so the gel's own texture (scratches, streaks of its paint) does not pull the angle. ");
         }
         md.push_str("The folder `");
         md.push_str(&b.models.display().to_string());

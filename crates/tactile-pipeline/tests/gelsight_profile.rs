@@ -342,3 +342,56 @@ fn real_frames_recorded_through_a_camera_or_a_recorder_show_no_tendon() {
         }
     }
 }
+
+/// A real gel's own texture (the R1.5's rest frame has streaks of its
+/// paint) shades every frame alike; the segmenter reads the tendon's
+/// direction from the window's shading, so it must read it against the
+/// rest frame (`segmenter/rest.png`), or the texture pulls the angle.
+#[test]
+fn directions_read_against_the_rest_frame_are_not_pulled_by_the_gels_texture() {
+    let model = root().join("models/gelsight-r15");
+    let sensor = datasets_synth::CalibratedSensor::load(&model).unwrap();
+    let config = datasets_synth::CalibratedConfig {
+        frames_per_sequence: 5,
+        ..Default::default()
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("renders");
+    datasets_synth::write_calibrated(
+        &sensor,
+        &config,
+        150,
+        500,
+        &out,
+        datasets_synth::WriteOptions::default(),
+        &Default::default(),
+    )
+    .unwrap();
+    let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
+    let mut seg =
+        tactile_segment::TendonSegmenter::load(model.join("segmenter"), Runtime::BurnFlex, 0)
+            .unwrap();
+    assert!(
+        seg.rest().is_some(),
+        "the shipped segmenter keeps its rest frame"
+    );
+    let all = |seg: &mut tactile_segment::TendonSegmenter| {
+        let scores = tactile_segment::evaluate(seg, &ds).unwrap();
+        let all = scores.paths.into_iter().find(|p| p.path == "all").unwrap();
+        (all.frames, all.direction)
+    };
+    let (frames, against_rest) = all(&mut seg);
+    seg.set_rest(None);
+    let (_, own_shading) = all(&mut seg);
+    assert!(frames >= 30, "{frames} tendon frames");
+    assert!(
+        against_rest.coverage >= 0.95
+            && against_rest.median_deg <= 1.0
+            && against_rest.p90_deg <= 3.0,
+        "against the rest frame: {against_rest:?}"
+    );
+    assert!(
+        own_shading.p90_deg > 1.5 * against_rest.p90_deg,
+        "the texture no longer pulls: {own_shading:?} against {against_rest:?}"
+    );
+}

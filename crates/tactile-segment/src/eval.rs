@@ -179,6 +179,7 @@ pub fn evaluate_in_chunks(
     chunk_rows: usize,
 ) -> Result<SegmenterScores> {
     let art = segmenter.artifact.clone();
+    let frame_size = (ds.manifest.width as usize, ds.manifest.height as usize);
     let rows = ds.tendon_rows(&(0..ds.len()).collect::<Vec<_>>())?;
     if rows.is_empty() {
         return Err(Error::NoTendonFrames {
@@ -220,7 +221,9 @@ pub fn evaluate_in_chunks(
             let mask = TendonMask::from_probabilities(s, s, p, art.threshold)?;
             let score = iou(&mask.pixels, &w.mask);
             let truth = w.direction_deg;
-            let image = set.image(i);
+            let window = set.image(i);
+            let shading = segmenter.shading_window(&window, frame_size);
+            let image = shading.unwrap_or(window);
             // `None`: no direction found; `Some(None)`: a direction, and no
             // label to score it against; `Some(Some(error))`.
             let error = |cfg: &PostprocessConfig| -> Result<Option<Option<f64>>> {

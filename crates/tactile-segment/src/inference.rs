@@ -14,11 +14,31 @@ use crate::Result;
 use crate::artifact::SegmenterArtifact;
 use crate::postprocess::Tendon;
 
+/// The file of a segmenter folder that holds its sensor's rest frame
+/// (`tactile train segmenter --rest`).
+pub const REST_FILE: &str = "rest.png";
+
 /// A loaded segmenter with its post-processing, ready for frames of any size.
 pub struct TendonSegmenter {
     /// Window, statistics, threshold and post-processing.
     pub artifact: SegmenterArtifact,
     net: Box<dyn Network>,
+    rest: Option<RestFrame>,
+}
+
+/// A sensor's frame with nothing touching it, as the segmenter's
+/// direction reads it: a real gel's own texture (scratches, streaks of its
+/// paint) shades every frame alike, and read against the rest frame it
+/// no longer pulls the tendon's direction toward its own.
+#[derive(Debug, Clone)]
+pub struct RestFrame {
+    /// Frame width, pixels: frames of this size (or scaled from it) are
+    /// read against it.
+    pub width: usize,
+    /// Frame height, pixels.
+    pub height: usize,
+    /// Its window, as the segmenter cuts a frame's.
+    window: FloatImage,
 }
 
 /// What the segmenter made of one frame.
@@ -38,7 +58,57 @@ impl TendonSegmenter {
     pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
         let (artifact, net) =
             tactile_onnx::load_network::<SegmenterArtifact>(dir.as_ref(), runtime, threads)?;
-        Ok(Self { artifact, net })
+        let rest_file = dir.as_ref().join(REST_FILE);
+        let rest = match rest_file.exists() {
+            true => Some(RestFrame::of(
+                &artifact,
+                &tactile_core::image_io::load_rgb(&rest_file)?,
+            )?),
+            false => None,
+        };
+        Ok(Self {
+            artifact,
+            net,
+            rest,
+        })
+    }
+
+    /// The sensor's rest frame its directions read shading against, when
+    /// its folder has one ([`REST_FILE`]).
+    pub fn rest(&self) -> Option<&RestFrame> {
+        self.rest.as_ref()
+    }
+
+    /// Read directions against `rest` from now on (`None`: each window's
+    /// own shading).
+    pub fn set_rest(&mut self, rest: Option<RestFrame>) {
+        self.rest = rest;
+    }
+
+    /// The window whose shading gives the direction of a frame of
+    /// `frame_size`: `window` less the rest frame's window (plus one half),
+    /// when the segmenter has a rest frame of that size (or of its shape,
+    /// scaled alike); `None`: the window's own shading.
+    pub fn shading_window(
+        &self,
+        window: &FloatImage,
+        frame_size: (usize, usize),
+    ) -> Option<FloatImage> {
+        let rest = self.rest.as_ref()?;
+        // Frames that scale to the same size before the window is cut (the
+        // rest frame's size, or the pipeline's working frame of it) share
+        // its window.
+        let scaled = |(w, h)| self.artifact.model.window().scaled_size(w, h);
+        if scaled(frame_size) != scaled((rest.width, rest.height))
+            || rest.window.data.len() != window.data.len()
+        {
+            return None;
+        }
+        let mut relative = window.clone();
+        for (v, r) in relative.data.iter_mut().zip(&rest.window.data) {
+            *v = *v - *r + 0.5;
+        }
+        Some(relative)
     }
 
     /// Where the network runs.
@@ -59,7 +129,19 @@ impl TendonSegmenter {
     /// Segment a window already cut (see
     /// [`UNetConfig::frame_window`](crate::UNetConfig::frame_window)). A blank window (see
     /// [`is_blank`]) gives an empty mask without running the network.
+    /// Its direction reads the window's own shading (see
+    /// [`Self::segment`]).
     pub fn segment_window(&mut self, window: FloatImage) -> Result<Segmentation> {
+        self.segment_window_against(window, None)
+    }
+
+    /// [`Self::segment_window`], the direction read from `shading` when
+    /// given ([`Self::shading_window`]).
+    fn segment_window_against(
+        &mut self,
+        window: FloatImage,
+        shading: Option<FloatImage>,
+    ) -> Result<Segmentation> {
         let probabilities = if is_blank(&window) {
             None
         } else {
@@ -73,7 +155,7 @@ impl TendonSegmenter {
         let tendon = crate::postprocess::window_tendon(
             a.model.side,
             probabilities.as_deref(),
-            &window,
+            shading.as_ref().unwrap_or(&window),
             a.threshold,
             &a.postprocess,
         )?;
@@ -85,10 +167,12 @@ impl TendonSegmenter {
     }
 
     /// Segment the window of an RGB frame of any size: the kept region and
-    /// its direction (or why there is none).
+    /// its direction (or why there is none), read against the sensor's
+    /// rest frame when the segmenter has one of the frame's size.
     pub fn segment(&mut self, frame: &RgbImage) -> Result<Segmentation> {
         let window = self.artifact.model.frame_window(frame)?;
-        self.segment_window(window)
+        let shading = self.shading_window(&window, (frame.width(), frame.height()));
+        self.segment_window_against(window, shading)
     }
 
     /// [`Self::segment`] of a frame file; errors name the file.
@@ -97,5 +181,16 @@ impl TendonSegmenter {
         let frame = tactile_core::image_io::load_rgb(path)?;
         self.segment(&frame)
             .map_err(|e| tactile_core::Error::image(path, e.to_string()).into())
+    }
+}
+
+impl RestFrame {
+    /// The rest frame `frame` as the segmenter of `artifact` reads it.
+    pub fn of(artifact: &SegmenterArtifact, frame: &RgbImage) -> Result<Self> {
+        Ok(Self {
+            width: frame.width(),
+            height: frame.height(),
+            window: artifact.model.frame_window(frame)?,
+        })
     }
 }

@@ -62,4 +62,36 @@ fn the_segmenter_trains_resumes_and_evaluates() {
         serde_json::to_value(&chunked.paths).unwrap(),
         serde_json::to_value(&scores.paths).unwrap()
     );
+    assert!(seg.rest().is_none(), "no rest frame was given");
+
+    // The sensor's rest frame: one of another size is refused before
+    // training, naming it; one of the frames' size is kept as rest.png and
+    // read back with the model.
+    let with_rest = |rest: &std::path::Path| {
+        let kw = json!({ "side": 32, "max_epochs": 1, "rest": rest });
+        SegmenterOptions::with_overrides(kw.as_object().unwrap()).unwrap()
+    };
+    let small = tmp.path().join("small-rest.png");
+    tactile_core::image_io::save_rgb_png(&small, 160, 90, &vec![128; 160 * 90 * 3]).unwrap();
+    let rested = tmp.path().join("seg-rest");
+    let e = with_rest(&small)
+        .train(&ds, &rested)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("small-rest.png") && e.contains("160x90") && e.contains("320x180"),
+        "{e}"
+    );
+    assert!(!rested.exists(), "nothing written for a refused rest frame");
+    let rest = ds.path_of(0, "file").unwrap();
+    with_rest(&rest).train(&ds, &rested).unwrap();
+    let seg = TendonSegmenter::load(&rested, Runtime::BurnFlex, 0).unwrap();
+    let kept = seg.rest().unwrap();
+    assert_eq!((kept.width, kept.height), (320, 180));
+    assert_eq!(
+        tactile_core::image_io::load_rgb(rested.join(tactile_segment::REST_FILE))
+            .unwrap()
+            .as_slice(),
+        tactile_core::image_io::load_rgb(&rest).unwrap().as_slice()
+    );
 }

@@ -505,6 +505,7 @@ def train_segmenter(
     base: int = 8,
     copies: int = 4,
     val_fraction: float = 0.2,
+    rest: Optional[str] = None,
     max_epochs: int = 15,
     patience: int = 4,
     batch_size: int = 16,
