@@ -8,7 +8,6 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use tactile_burn::train::FitSummary;
 use tactile_core::dataset::Dataset;
-
 use tactile_core::image_io::RgbImage;
 
 use crate::inference::REST_FILE;
