@@ -59,6 +59,12 @@ impl SegmenterOptions {
             Some(path) => Some((path, rest_frame(path, data)?)),
             None => None,
         };
+        if rest.is_none() && out.join(REST_FILE).is_file() {
+            tactile_core::note!(
+                "{} is kept from an earlier training: the directions read against it (give --rest to replace it, or delete it to read each window's own shading)",
+                out.join(REST_FILE).display()
+            );
+        }
         let s = &self.schedule;
         let fit = crate::training::train(&self.config(), data, out, s.device, s.resume)?;
         if let Some((path, frame)) = rest {

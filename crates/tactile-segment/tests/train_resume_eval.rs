@@ -94,4 +94,9 @@ fn the_segmenter_trains_resumes_and_evaluates() {
             .as_slice(),
         tactile_core::image_io::load_rgb(&rest).unwrap().as_slice()
     );
+    // Trained again into the folder without --rest, the sensor's rest frame
+    // stays (the trainer says so).
+    options(1, false).train(&ds, &rested).unwrap();
+    let seg = TendonSegmenter::load(&rested, Runtime::BurnFlex, 0).unwrap();
+    assert!(seg.rest().is_some());
 }
