@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -390,6 +391,22 @@ def test_one_cae_trains_on_two_datasets_each_with_its_own_head(root, tmp_path):
     with pytest.raises(ValueError, match="tasks.json.*56 px"):
         tactile.train.cae(data, tmp_path / "bad", also_tasks=tasks, max_epochs=1)
     assert not (tmp_path / "bad" / "cae.json").exists()
+
+def test_a_segmenter_keeps_its_sensors_rest_frame(root, small_vt, tmp_path):
+    # rest= (the CLI's --rest): a frame of the dataset's size is kept as
+    # rest.png, the frame directions are read against; another size is
+    # refused before training, naming the file, and nothing is written.
+    rest = sorted((Path(small_vt) / "frames").glob("*.png"))[0]
+    out = tmp_path / "seg"
+    s = tactile.train.segmenter(small_vt, out, side=32, max_epochs=1, rest=rest)
+    assert s["epochs_run"] == 1
+    assert (out / "rest.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert np.array_equal(tactile.read_rgb(out / "rest.png"), tactile.read_rgb(rest))
+    other = root / "samples/virtual-tactip/frames/000000.png"
+    with pytest.raises(ValueError, match=r"000000\.png.*the rest frame is .* 320x180"):
+        tactile.train.segmenter(small_vt, tmp_path / "other", side=32, max_epochs=1, rest=other)
+    assert not (tmp_path / "other").exists()
+
 
 TRAINERS = ["cae", "head", "regressor", "pose", "detector", "segmenter", "depth"]
 
