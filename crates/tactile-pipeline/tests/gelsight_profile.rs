@@ -383,6 +383,24 @@ fn directions_read_against_the_rest_frame_are_not_pulled_by_the_gels_texture() {
     let (frames, against_rest) = all(&mut seg);
     seg.set_rest(None);
     let (_, own_shading) = all(&mut seg);
+    // Another gel's rest frame (this one mirrored: the same look, its
+    // texture elsewhere), as a stale rest.png would be after the gel was
+    // replaced.
+    let rest = load_rgb(model.join("background.png")).unwrap();
+    let (w, h) = (rest.width(), rest.height());
+    let px = rest.as_slice();
+    let mirrored: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            let (u, v) = (i % w, i / w);
+            let j = 3 * (v * w + (w - 1 - u));
+            [px[j], px[j + 1], px[j + 2]]
+        })
+        .collect();
+    let mirrored = rgb_image(w, h, mirrored).unwrap();
+    seg.set_rest(Some(
+        tactile_segment::RestFrame::of(&seg.artifact, &mirrored).unwrap(),
+    ));
+    let (_, other_gel) = all(&mut seg);
     assert!(frames >= 30, "{frames} tendon frames");
     assert!(
         against_rest.coverage >= 0.95
@@ -393,5 +411,12 @@ fn directions_read_against_the_rest_frame_are_not_pulled_by_the_gels_texture() {
     assert!(
         own_shading.p90_deg > 1.5 * against_rest.p90_deg,
         "the texture no longer pulls: {own_shading:?} against {against_rest:?}"
+    );
+    // Against another gel's rest frame its texture would be added (p90 9.2
+    // deg): the frames share none of it, so each reads its own shading.
+    assert_eq!(
+        format!("{other_gel:?}"),
+        format!("{own_shading:?}"),
+        "a rest frame of another gel is not read against"
     );
 }

@@ -39,7 +39,18 @@ pub struct RestFrame {
     pub height: usize,
     /// Its window, as the segmenter cuts a frame's.
     window: FloatImage,
+    /// The window's fine texture ([`detail`]).
+    detail: Vec<f32>,
 }
+
+/// The least correlation of a window's fine texture with its rest frame's
+/// for the direction to read against the rest frame. A frame of the gel
+/// the rest frame was taken of shares its texture (0.15-0.99 on the
+/// calibrated R1.5's renders, noise lowering it); another gel's, or the
+/// same gel moved, shares none (at most 0.01 against the R1.5's rest frame
+/// mirrored), and read against that rest frame its texture would be added
+/// rather than taken away.
+pub const MIN_SHARED_TEXTURE: f64 = 0.08;
 
 /// What the segmenter made of one frame.
 #[derive(Debug, Clone)]
@@ -88,7 +99,8 @@ impl TendonSegmenter {
     /// The window whose shading gives the direction of a frame of
     /// `frame_size`: `window` less the rest frame's window (plus one half),
     /// when the segmenter has a rest frame of that size (or of its shape,
-    /// scaled alike); `None`: the window's own shading.
+    /// scaled alike) whose fine texture the window shares
+    /// ([`MIN_SHARED_TEXTURE`]); `None`: the window's own shading.
     pub fn shading_window(
         &self,
         window: &FloatImage,
@@ -102,6 +114,9 @@ impl TendonSegmenter {
         if scaled(frame_size) != scaled((rest.width, rest.height))
             || rest.window.data.len() != window.data.len()
         {
+            return None;
+        }
+        if correlation(&detail(window), &rest.detail) < MIN_SHARED_TEXTURE {
             return None;
         }
         let mut relative = window.clone();
@@ -187,10 +202,58 @@ impl TendonSegmenter {
 impl RestFrame {
     /// The rest frame `frame` as the segmenter of `artifact` reads it.
     pub fn of(artifact: &SegmenterArtifact, frame: &RgbImage) -> Result<Self> {
+        let window = artifact.model.frame_window(frame)?;
         Ok(Self {
             width: frame.width(),
             height: frame.height(),
-            window: artifact.model.frame_window(frame)?,
+            detail: detail(&window),
+            window,
         })
+    }
+}
+
+/// A window's fine texture: each value less the mean of its 3 x 3
+/// neighbourhood (edges clamped), channel by channel.
+fn detail(img: &FloatImage) -> Vec<f32> {
+    let (w, h, c) = (img.width, img.height, img.channels);
+    let at = |u: isize, v: isize, k: usize| {
+        let (u, v) = (u.clamp(0, w as isize - 1), v.clamp(0, h as isize - 1));
+        img.data[(v as usize * w + u as usize) * c + k]
+    };
+    let mut out = Vec::with_capacity(img.data.len());
+    for v in 0..h as isize {
+        for u in 0..w as isize {
+            for k in 0..c {
+                let mut sum = 0.0;
+                for dv in -1..=1 {
+                    for du in -1..=1 {
+                        sum += at(u + du, v + dv, k);
+                    }
+                }
+                out.push(at(u, v, k) - sum / 9.0);
+            }
+        }
+    }
+    out
+}
+
+/// Pearson's correlation of `a` and `b` (0 when either is flat).
+fn correlation(a: &[f32], b: &[f32]) -> f64 {
+    let n = a.len().min(b.len());
+    if n == 0 {
+        return 0.0;
+    }
+    let mean = |x: &[f32]| x[..n].iter().map(|&v| v as f64).sum::<f64>() / n as f64;
+    let (ma, mb) = (mean(a), mean(b));
+    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+    for (&x, &y) in a[..n].iter().zip(&b[..n]) {
+        let (x, y) = (x as f64 - ma, y as f64 - mb);
+        ab += x * y;
+        aa += x * x;
+        bb += y * y;
+    }
+    match aa * bb > 0.0 {
+        true => ab / (aa * bb).sqrt(),
+        false => 0.0,
     }
 }

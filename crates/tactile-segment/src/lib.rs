@@ -19,7 +19,7 @@ pub use artifact::SegmenterArtifact;
 pub use data::SegmentSet;
 pub use error::{Error, Result};
 pub use eval::{DirectionScores, PathScores, SegmenterScores, evaluate, evaluate_folder};
-pub use inference::{REST_FILE, RestFrame, Segmentation, TendonSegmenter};
+pub use inference::{MIN_SHARED_TEXTURE, REST_FILE, RestFrame, Segmentation, TendonSegmenter};
 pub use model::{UNet, UNetConfig};
 pub use options::SegmenterOptions;
 pub use postprocess::{
