@@ -40,7 +40,7 @@ pub struct RestFrame {
     /// Its window, as the segmenter cuts a frame's.
     window: FloatImage,
     /// The window's fine texture ([`detail`]).
-    detail: Vec<f32>,
+    detail: Vec<f64>,
 }
 
 /// The least correlation of a window's fine texture with its rest frame's
@@ -116,7 +116,9 @@ impl TendonSegmenter {
         {
             return None;
         }
-        if correlation(&detail(window), &rest.detail) < MIN_SHARED_TEXTURE {
+        // NaN (a flat window) shares nothing either.
+        let shared = tactile_core::metrics::correlation(&detail(window), &rest.detail);
+        if shared.is_nan() || shared < MIN_SHARED_TEXTURE {
             return None;
         }
         let mut relative = window.clone();
@@ -214,7 +216,7 @@ impl RestFrame {
 
 /// A window's fine texture: each value less the mean of its 3 x 3
 /// neighbourhood (edges clamped), channel by channel.
-fn detail(img: &FloatImage) -> Vec<f32> {
+fn detail(img: &FloatImage) -> Vec<f64> {
     let (w, h, c) = (img.width, img.height, img.channels);
     let at = |u: isize, v: isize, k: usize| {
         let (u, v) = (u.clamp(0, w as isize - 1), v.clamp(0, h as isize - 1));
@@ -230,30 +232,9 @@ fn detail(img: &FloatImage) -> Vec<f32> {
                         sum += at(u + du, v + dv, k);
                     }
                 }
-                out.push(at(u, v, k) - sum / 9.0);
+                out.push(f64::from(at(u, v, k) - sum / 9.0));
             }
         }
     }
     out
-}
-
-/// Pearson's correlation of `a` and `b` (0 when either is flat).
-fn correlation(a: &[f32], b: &[f32]) -> f64 {
-    let n = a.len().min(b.len());
-    if n == 0 {
-        return 0.0;
-    }
-    let mean = |x: &[f32]| x[..n].iter().map(|&v| v as f64).sum::<f64>() / n as f64;
-    let (ma, mb) = (mean(a), mean(b));
-    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
-    for (&x, &y) in a[..n].iter().zip(&b[..n]) {
-        let (x, y) = (x as f64 - ma, y as f64 - mb);
-        ab += x * y;
-        aa += x * x;
-        bb += y * y;
-    }
-    match aa * bb > 0.0 {
-        true => ab / (aa * bb).sqrt(),
-        false => 0.0,
-    }
 }
