@@ -926,9 +926,9 @@ pub fn round_trip(frames: &[&RgbImage], codec: VideoCodec) -> Result<Vec<RgbImag
     encode(frames, 10, codec, &path)?;
     let mut reader = VideoReader::open(&VideoInput::File(path.clone()), DecodeOptions::default())?;
     let mut out = Vec::with_capacity(frames.len());
+    let (w, h) = frames.first().map_or((0, 0), |f| (f.width(), f.height()));
     while let Some(f) = reader.next_frame()? {
         // What padding to an even size added is cropped off.
-        let (w, h) = frames.first().map_or((0, 0), |f| (f.width(), f.height()));
         if (f.width(), f.height()) == (w, h) {
             out.push(f);
             continue;

@@ -215,7 +215,10 @@ impl RestFrame {
 }
 
 /// A window's fine texture: each value less the mean of its 3 x 3
-/// neighbourhood (edges clamped), channel by channel.
+/// neighbourhood (edges clamped), channel by channel. Not kornia's
+/// `box_blur`: it pads with zeros, and the border that leaves is the same
+/// in every window, so any two windows would share texture there (another
+/// gel's rest frame then passed [`MIN_SHARED_TEXTURE`] in the test).
 fn detail(img: &FloatImage) -> Vec<f64> {
     let (w, h, c) = (img.width, img.height, img.channels);
     let at = |u: isize, v: isize, k: usize| {
