@@ -29,7 +29,8 @@ echo "Python package: building into a fresh virtual environment ($venv)" >&2
 python3 -m venv "$venv"
 export PATH="$venv/bin:$PATH" VIRTUAL_ENV="$venv"
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
-"${pip[@]}" install "maturin>=1.16,<2" "numpy>=1.21" "pytest>=7"
+# (Pillow: scripts/gelsight_independent.py reads the real ball presses.)
+"${pip[@]}" install "maturin>=1.16,<2" "numpy>=1.21" "pytest>=7" "pillow>=10"
 # Independent readers and writers of ROS 2 bags, the Foxglove SDK (its MCAP
 # recordings) and a WebSocket client, for
 # the robot I/O checks (tests/test_robots.py).

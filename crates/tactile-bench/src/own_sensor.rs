@@ -41,6 +41,127 @@ pub struct OwnSensorBench {
     /// `real_frames` says which): those presses are scored apart from the held-out ones.
     #[arg(long)]
     pub train: Option<PathBuf>,
+    /// Other renders of the sensor, scored as the held-out ones are (one
+    /// row each): another simulator's (scripts/gelsight_independent.py), or
+    /// this one's with other settings.
+    #[arg(long = "other-renders", num_args = 1..)]
+    pub other_renders: Vec<PathBuf>,
+}
+
+/// A press this deep or less is light: a punch's rim or a plate's edge then
+/// shades a line as a light tendon does.
+pub const LIGHT_PRESS_MM: f64 = 0.3;
+
+/// The detector's answers on one kind of frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct KindRow {
+    /// What the frames show, from their labels ([`frame_kind`]).
+    pub kind: String,
+    /// Frames of that kind.
+    pub frames: usize,
+    /// Of those, answered as labelled.
+    pub correct: usize,
+}
+
+/// A set of the sensor's renders through its three networks.
+#[derive(Debug, Clone, Serialize)]
+pub struct RenderScores {
+    /// The set's folder.
+    pub set: String,
+    /// The detector on every frame.
+    pub detector: tactile_detect::DetectorScores,
+    /// The detector by kind of frame, in [`KINDS`] order.
+    pub kinds: Vec<KindRow>,
+    /// The segmenter on the tendon frames.
+    pub segmenter: tactile_segment::eval::SegmenterScores,
+    /// The depth network (indentation over the whole frame).
+    pub depth: tactile_depth::eval::DepthScores,
+    /// Its ms per frame.
+    pub depth_ms: f64,
+}
+
+/// The kinds of frame [`frame_kind`] tells, in the page's order.
+pub const KINDS: [&str; 10] = [
+    "no contact",
+    "tendon, light press",
+    "tendon, deeper press",
+    "touching a tendon, under the mask's threshold",
+    "sphere, light press",
+    "sphere, deeper press",
+    "punch, light press",
+    "punch, deeper press",
+    "plate edge, light press",
+    "plate edge, deeper press",
+];
+
+/// What row `i` of a calibrated sensor's renders shows, from its `tendon`,
+/// `path` and `press_mm` (light: at most [`LIGHT_PRESS_MM`]); `None` for
+/// rows the kinds do not cover (a real press, an unknown path).
+pub fn frame_kind(ds: &Dataset, i: usize) -> Result<Option<&'static str>> {
+    let press = ds.number_opt(i, "press_mm")?.unwrap_or(0.0);
+    let light = press <= LIGHT_PRESS_MM;
+    let pick = |l: &'static str, d: &'static str| Some(if light { l } else { d });
+    Ok(match ds.text_opt(i, "path").unwrap_or("") {
+        _ if press <= 0.0 => Some(KINDS[0]),
+        "none" => Some(KINDS[0]),
+        "straight" | "arc" | "s-curve" if ds.number(i, "tendon")? > 0.5 => pick(KINDS[1], KINDS[2]),
+        "straight" | "arc" | "s-curve" => Some(KINDS[3]),
+        "sphere" => pick(KINDS[4], KINDS[5]),
+        "punch" => pick(KINDS[6], KINDS[7]),
+        "flat" => pick(KINDS[8], KINDS[9]),
+        _ => None,
+    })
+}
+
+/// The detector, segmenter and depth network of `models` on the renders in
+/// `set`, the detector also by kind of frame.
+pub fn score_renders(models: &Path, set: &Path, runtime: Runtime) -> Result<RenderScores> {
+    tactile_core::note!("detector, segmenter and depth network on {}", set.display());
+    let ds = Dataset::open(set)?;
+    let mut det = tactile_detect::TendonDetector::load(models.join("detector"), runtime, 0)?;
+    let (detector, labels) =
+        tactile_detect::eval::evaluate_dataset(&mut det, &ds, tactile_detect::eval::EVAL_CHUNK)?;
+    let mut kind_of = std::collections::HashMap::new();
+    for i in 0..ds.len() {
+        if let Some(k) = frame_kind(&ds, i)? {
+            kind_of.insert(ds.text(i, "file")?.to_string(), k);
+        }
+    }
+    let mut kinds: Vec<KindRow> = KINDS
+        .iter()
+        .map(|k| KindRow {
+            kind: k.to_string(),
+            frames: 0,
+            correct: 0,
+        })
+        .collect();
+    for ((file, truth), said) in labels
+        .files
+        .iter()
+        .zip(&labels.tendon)
+        .zip(&detector.decisions)
+    {
+        if let Some(k) = kind_of.get(file) {
+            let row = kinds
+                .iter_mut()
+                .find(|r| r.kind == *k)
+                .expect("a kind of KINDS");
+            row.frames += 1;
+            row.correct += usize::from(truth == said);
+        }
+    }
+    let mut seg = tactile_segment::TendonSegmenter::load(models.join("segmenter"), runtime, 0)?;
+    let segmenter = tactile_segment::eval::evaluate(&mut seg, &ds)?;
+    let mut depth = DepthEstimator::load(models.join("depth"), runtime, 0)?;
+    let (depth, depth_ms, _) = tactile_depth::eval::evaluate(&mut depth, &ds)?;
+    Ok(RenderScores {
+        set: set.display().to_string(),
+        detector,
+        kinds,
+        segmenter,
+        depth,
+        depth_ms,
+    })
 }
 
 /// One real ball press.
@@ -108,14 +229,10 @@ pub struct OwnSensorReport {
     pub times: Vec<(String, f64)>,
     /// Frames rendered for training (from the times file).
     pub frames: Option<u64>,
-    /// The detector on the held-out renders.
-    pub detector: tactile_detect::DetectorScores,
-    /// The segmenter on their tendon frames.
-    pub segmenter: tactile_segment::eval::SegmenterScores,
-    /// The depth network on them (indentation over the whole frame).
-    pub depth: tactile_depth::eval::DepthScores,
-    /// Its ms per frame.
-    pub depth_ms: f64,
+    /// The three networks on the held-out renders.
+    pub test: RenderScores,
+    /// The same on each `--other-renders` set.
+    pub other_renders: Vec<RenderScores>,
     /// The calibration's own reconstruction on the same renders: mean
     /// |error| over the frame, mm.
     pub reconstruction_mae_mm: f64,
@@ -240,6 +357,68 @@ impl OwnSensorReport {
     }
 
     /// The same over `b`.
+    /// Each `--other-renders` set's scores, one row each.
+    fn other_renders_section(&self) -> String {
+        if self.other_renders.is_empty() {
+            return String::new();
+        }
+        let mut md = String::from(
+            "## On renders of other simulators\n\nThe same networks on renders no choice was made on, from another simulator of this sensor (`scripts/gelsight_independent.py`: Taxim's recipe, its colour change a lookup of the slope alone fitted on the same ball presses, its own gel spread, objects and camera) or from this one with other settings. No frame of these sets is the held-out set's. Flagged: frames the input profile took for another sensor's.\n\n| set | frames (tendon) | detector accuracy | flagged | segmenter IoU / direction median / p90 / coverage | depth MAE over the frame |\n|---|---|---|---|---|---|\n",
+        );
+        for r in &self.other_renders {
+            let d = &r.detector.all;
+            let seg = r.segmenter.paths.first();
+            md.push_str(&format!(
+                "| `{}` | {} ({}) | {:.4} | {} | {} | {:.4} mm |\n",
+                r.set,
+                d.frames,
+                d.true_pos + d.false_neg,
+                d.accuracy,
+                r.detector.gated_foreign,
+                seg.map_or("-".into(), |p| format!(
+                    "{:.3} / {:.2} deg / {:.2} deg / {:.1} %",
+                    p.mean_iou,
+                    p.direction.median_deg,
+                    p.direction.p90_deg,
+                    100.0 * p.direction.coverage
+                )),
+                r.depth.mae_mm
+            ));
+        }
+        md.push('\n');
+        md
+    }
+
+    /// The detector's accuracy by kind of frame on every set of renders.
+    fn kinds_section(&self) -> String {
+        let sets: Vec<&RenderScores> = std::iter::once(&self.test)
+            .chain(&self.other_renders)
+            .collect();
+        let mut md = format!(
+            "### By kind of frame\n\nThe detector's accuracy (frames) by what the labels say a frame shows; a press of {LIGHT_PRESS_MM} mm or less is light. At a light press a punch's rim or a plate's edge shades a line as a tendon does.\n\n| kind of frame |"
+        );
+        for r in &sets {
+            md.push_str(&format!(" `{}` |", r.set));
+        }
+        md.push_str(&format!("\n|---|{}\n", "---|".repeat(sets.len())));
+        for (k, kind) in KINDS.iter().enumerate() {
+            if sets.iter().all(|r| r.kinds[k].frames == 0) {
+                continue;
+            }
+            md.push_str(&format!("| {kind} |"));
+            for r in &sets {
+                let row = &r.kinds[k];
+                match row.frames {
+                    0 => md.push_str(" - |"),
+                    n => md.push_str(&format!(" {:.3} ({n}) |", row.correct as f64 / n as f64)),
+                }
+            }
+            md.push('\n');
+        }
+        md.push('\n');
+        md
+    }
+
     fn errors_of(b: &[&BallRow]) -> ((f64, f64), (f64, f64)) {
         (
             (
@@ -312,24 +491,19 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
         None => None,
     };
     let m = &b.models;
-    tactile_core::note!(
-        "detector, segmenter and depth network on {}",
-        b.test.display()
-    );
-    let detector = tactile_detect::eval::evaluate_folder(
-        &m.join("detector"),
-        &b.test,
-        b.runtime,
-        &Default::default(),
-    )?;
+    let test_scores = score_renders(m, &b.test, b.runtime)?;
+    let other_renders = b
+        .other_renders
+        .iter()
+        .map(|set| score_renders(m, set, b.runtime))
+        .collect::<Result<Vec<_>>>()?;
     let test = Dataset::open(&b.test)?;
-    let mut seg = tactile_segment::TendonSegmenter::load(m.join("segmenter"), b.runtime, 0)?;
-    let segmenter = tactile_segment::eval::evaluate(&mut seg, &test)?;
-    let segmenter_rest = seg.rest().is_some();
-    let mut depth = DepthEstimator::load(m.join("depth"), b.runtime, 0)?;
+    let segmenter_rest = tactile_segment::TendonSegmenter::load(m.join("segmenter"), b.runtime, 0)?
+        .rest()
+        .is_some();
     // A frame that cannot be decoded is named below: the reconstruction
     // reads every frame and stops at it.
-    let (depth_scores, depth_ms, _) = tactile_depth::eval::evaluate(&mut depth, &test)?;
+    let mut depth = DepthEstimator::load(m.join("depth"), b.runtime, 0)?;
     // The calibration's reconstruction on the same renders.
     let mut rec = Reconstructor::load(m, b.runtime, 0)?;
     let mut errs = Vec::with_capacity(test.len());
@@ -493,11 +667,9 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
     Ok(OwnSensorReport {
         times,
         frames,
-        detector,
-        segmenter,
+        test: test_scores,
+        other_renders,
         segmenter_rest,
-        depth: depth_scores,
-        depth_ms,
         reconstruction_mae_mm,
         depth_prior: depth.artifact.prior.is_some(),
         ball_presses: format!(
@@ -682,7 +854,8 @@ impl OwnSensorReport {
         if let Some(n) = self.frames {
             md.push_str(&format!("{n} frames were rendered for training.\n\n"));
         }
-        let d = &self.detector.all;
+        let t = &self.test;
+        let d = &t.detector.all;
         md.push_str(&format!(
             "## On renders no training used\n\n`{}`: {} frames ({} with a tendon).\n\n| model | measure | value |\n|---|---|---|\n| detector | accuracy | {:.4} |\n| detector | precision / recall | {:.4} / {:.4} |\n| detector | onset and release frames: accuracy | {:.4} |\n",
             b.test.display(),
@@ -691,9 +864,9 @@ impl OwnSensorReport {
             d.accuracy,
             d.precision,
             d.recall,
-            self.detector.onset_release.accuracy
+            t.detector.onset_release.accuracy
         ));
-        for p in &self.segmenter.paths {
+        for p in &t.segmenter.paths {
             md.push_str(&format!(
                 "| segmenter, {} ({} frames) | IoU / direction median / p90 / coverage | {:.3} / {:.2} deg / {:.2} deg / {:.1} % |\n",
                 p.path,
@@ -706,13 +879,15 @@ impl OwnSensorReport {
         }
         md.push_str(&format!(
             "| depth network | indentation MAE over the frame / over the tendon | {:.4} mm / {} |\n| calibration's reconstruction (photometric, Poisson) | indentation MAE over the frame | {:.4} mm |\n| pipeline | frames/s over these frames (decoding excluded) | {:.1} |\n\n",
-            self.depth.mae_mm,
-            self.depth
+            t.depth.mae_mm,
+            t.depth
                 .mae_tendon_mm
                 .map_or("-".into(), |v| format!("{v:.4} mm")),
             self.reconstruction_mae_mm,
             self.pipeline_fps
         ));
+        md.push_str(&self.other_renders_section());
+        md.push_str(&self.kinds_section());
         md.push_str(&self.ball_section());
         md.push_str("## Frames of other sensors\n\nThe detector's input profile (its training frames' statistics) flags frames that are not this sensor's; they get no tendon, direction or depth, nor the calibration's indentation (the gate is asked before the reconstruction). It also keeps its training frames' camera mode: trained on a colour sensor's frames, it flags a grey one (the camera switched to a mono mode, a bag of `mono8` Images); trained on a mono camera's, it flags colour ones. `tactile reconstruct`, `Reconstructor.reconstruct` and `tactile.calibrate.reconstruct`, which reconstruct what they are given, ask the same profile and name such frames in a warning. The 32 real presses score 0.9-2.7 against its threshold of 6.7; a 331-pin TacTip frame and a 127-pin one scaled to 640x480 and tinted (`ffmpeg -i F -vf scale=640:480,format=rgb24,colorchannelmixer=rr=1:gg=0.9:bb=0.8`, and `rr=0.9:gg=1:bb=1.1` for the 127-pin one) score 66.6 and 73.3 (`tactile run --models models/gelsight-r15 --data D --out r.jsonl`, the records' `input_score`). Besides the frame's global statistics it keeps the training frames' colour layout (each channel's level on a 16 x 12 grid, relative to the channel's mean): another unit of the same design differs there, in where each colour is bright (the residual) or in how strongly (the contrast), even when its global statistics match. Other units are stood in for by this sensor's held-out renders with another LED order, another light, or a flatter gel. `tactile train detector` fits the profile on its training frames; `tactile train profile` refits it on a detector trained before. Before a detector is trained, the calibration alone compares each frame with its rest frame (median colour change once exposure is matched, above 0.20 named): the real presses stay below 0.03, its renders below 0.04 (and below 0.07 under spheres of 15-40 mm pressing half the gel or more), TacTip frames on its canvas score 0.84 and 0.90; the other units below are not told that way (they stay below 0.17; the flatter gel, its exposure matched, below 0.05). `docs/hard-cases.md` has the commands. A frame the calibration cannot read at all (another size than its frames', or grey) is foreign too, with or without the detector, its record's `unreadable` saying why; `tactile reconstruct` refuses a folder holding such frames before it reconstructs any.\n\n| frames | own sensor | frames | flagged | tendon reported |\n|---|---|---|---|---|\n");
         for r in &self.foreign {
