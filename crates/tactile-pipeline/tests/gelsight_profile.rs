@@ -347,27 +347,39 @@ fn real_frames_recorded_through_a_camera_or_a_recorder_show_no_tendon() {
 /// paint) shades every frame alike; the segmenter reads the tendon's
 /// direction from the window's shading, so it must read it against the
 /// rest frame (`segmenter/rest.png`), or the texture pulls the angle.
-#[test]
-fn directions_read_against_the_rest_frame_are_not_pulled_by_the_gels_texture() {
-    let model = root().join("models/gelsight-r15");
-    let sensor = datasets_synth::CalibratedSensor::load(&model).unwrap();
-    let config = datasets_synth::CalibratedConfig {
-        frames_per_sequence: 5,
-        ..Default::default()
-    };
+/// `count` frames rendered through the calibration in `model` (seed
+/// `seed`), in a folder that lasts as long as the returned guard.
+fn renders(
+    model: &Path,
+    config: &datasets_synth::CalibratedConfig,
+    count: usize,
+    seed: u64,
+) -> (tempfile::TempDir, tactile_core::dataset::Dataset) {
+    let sensor = datasets_synth::CalibratedSensor::load(model).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("renders");
     datasets_synth::write_calibrated(
         &sensor,
-        &config,
-        150,
-        500,
+        config,
+        count,
+        seed,
         &out,
         datasets_synth::WriteOptions::default(),
         &Default::default(),
     )
     .unwrap();
     let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
+    (tmp, ds)
+}
+
+#[test]
+fn directions_read_against_the_rest_frame_are_not_pulled_by_the_gels_texture() {
+    let model = root().join("models/gelsight-r15");
+    let config = datasets_synth::CalibratedConfig {
+        frames_per_sequence: 5,
+        ..Default::default()
+    };
+    let (_tmp, ds) = renders(&model, &config, 150, 500);
     let mut seg =
         tactile_segment::TendonSegmenter::load(model.join("segmenter"), Runtime::BurnFlex, 0)
             .unwrap();
@@ -431,7 +443,6 @@ fn directions_read_against_the_rest_frame_are_not_pulled_by_the_gels_texture() {
 #[test]
 fn light_plate_edges_and_punches_are_no_tendon() {
     let model = root().join("models/gelsight-r15");
-    let sensor = datasets_synth::CalibratedSensor::load(&model).unwrap();
     let config = datasets_synth::CalibratedConfig {
         frames_per_sequence: 5,
         press_mm: datasets_synth::Range::new(0.05, 0.3),
@@ -443,19 +454,7 @@ fn light_plate_edges_and_punches_are_no_tendon() {
         nothing_share: 0.0,
         ..Default::default()
     };
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("light");
-    datasets_synth::write_calibrated(
-        &sensor,
-        &config,
-        300,
-        700,
-        &out,
-        datasets_synth::WriteOptions::default(),
-        &Default::default(),
-    )
-    .unwrap();
-    let ds = tactile_core::dataset::Dataset::open(&out).unwrap();
+    let (_tmp, ds) = renders(&model, &config, 300, 700);
     let mut det = TendonDetector::load(model.join("detector"), Runtime::BurnFlex, 0).unwrap();
     let (scores, labels) = tactile_detect::eval::evaluate_dataset(&mut det, &ds, 64).unwrap();
     let path: std::collections::HashMap<String, String> = (0..ds.len())
