@@ -123,7 +123,7 @@ pub fn score_renders(models: &Path, set: &Path, runtime: Runtime) -> Result<Rend
         tactile_detect::eval::evaluate_dataset(&mut det, &ds, tactile_detect::eval::EVAL_CHUNK)?;
     let mut kind_of = std::collections::HashMap::new();
     for i in 0..ds.len() {
-        if let Some(k) = frame_kind(&ds, i)? {
+        if let Some(k) = frame_kind(&ds, i)?.and_then(|k| KINDS.iter().position(|x| *x == k)) {
             kind_of.insert(ds.text(i, "file")?.to_string(), k);
         }
     }
@@ -141,13 +141,9 @@ pub fn score_renders(models: &Path, set: &Path, runtime: Runtime) -> Result<Rend
         .zip(&labels.tendon)
         .zip(&detector.decisions)
     {
-        if let Some(k) = kind_of.get(file) {
-            let row = kinds
-                .iter_mut()
-                .find(|r| r.kind == *k)
-                .expect("a kind of KINDS");
-            row.frames += 1;
-            row.correct += usize::from(truth == said);
+        if let Some(&k) = kind_of.get(file) {
+            kinds[k].frames += 1;
+            kinds[k].correct += usize::from(truth == said);
         }
     }
     let mut seg = tactile_segment::TendonSegmenter::load(models.join("segmenter"), runtime, 0)?;
@@ -363,7 +359,7 @@ impl OwnSensorReport {
             return String::new();
         }
         let mut md = String::from(
-            "## On renders of other simulators\n\nThe same networks on renders no choice was made on, from another simulator of this sensor (`scripts/gelsight_independent.py`: Taxim's recipe, its colour change a lookup of the slope alone fitted on the same ball presses, its own gel spread, objects and camera) or from this one with other settings. No frame of these sets is the held-out set's. Flagged: frames the input profile took for another sensor's.\n\n| set | frames (tendon) | detector accuracy | flagged | segmenter IoU / direction median / p90 / coverage | depth MAE over the frame |\n|---|---|---|---|---|---|\n",
+            "## On renders of other simulators\n\nThe same networks on renders no choice was made on, from another simulator of this sensor (`scripts/gelsight_independent.py`: Taxim's recipe, its colour change a lookup of the slope alone fitted on the same ball presses, its own gel spread, objects and camera) or from this one with other settings. Flagged: frames the input profile took for another sensor's.\n\n| set | frames (tendon) | detector accuracy | flagged | segmenter IoU / direction median / p90 / coverage | depth MAE over the frame |\n|---|---|---|---|---|---|\n",
         );
         for r in &self.other_renders {
             let d = &r.detector.all;
