@@ -96,9 +96,12 @@ pub const KINDS: [&str; 10] = [
 
 /// What row `i` of a calibrated sensor's renders shows, from its `tendon`,
 /// `path` and `press_mm` (light: at most [`LIGHT_PRESS_MM`]); `None` for
-/// rows the kinds do not cover (a real press, an unknown path).
+/// rows the kinds do not cover (a real press, an unknown path, no press
+/// recorded).
 pub fn frame_kind(ds: &Dataset, i: usize) -> Result<Option<&'static str>> {
-    let press = ds.number_opt(i, "press_mm")?.unwrap_or(0.0);
+    let Some(press) = ds.number_opt(i, "press_mm")? else {
+        return Ok(None);
+    };
     let light = press <= LIGHT_PRESS_MM;
     let pick = |l: &'static str, d: &'static str| Some(if light { l } else { d });
     Ok(match ds.text_opt(i, "path").unwrap_or("") {
