@@ -60,33 +60,63 @@ def read_rgb(path):
         return np.asarray(im.convert("RGB"), dtype=np.float64)
 
 
+def positive(meta, key, path):
+    """`meta[key]` as a positive number, or an error naming the file."""
+    try:
+        value = float(meta[key])
+    except (KeyError, TypeError, ValueError):
+        raise ValueError(f"{path}: '{key}' must be a number, got {meta.get(key)!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{path}: '{key}' must be above 0, got {value}")
+    return value
+
+
+def presses(ball, shape):
+    """Each press of `ball/presses.csv` with its line and frame, or an error
+    naming the line (a missing column, a circle that is no number, a frame
+    of another size than the rest frame)."""
+    path = os.path.join(ball, "presses.csv")
+    with open(path) as f:
+        for line, row in enumerate(csv.DictReader(f), start=2):
+            try:
+                file = row["file"]
+                [float(row[k]) for k in ("centre_x_px", "centre_y_px", "contact_radius_px")]
+            except (KeyError, TypeError, ValueError) as e:
+                raise ValueError(f"{path}:{line}: needs file, centre_x_px, centre_y_px and contact_radius_px "
+                                 f"({type(e).__name__}: {e})") from None
+            frame = read_rgb(os.path.join(ball, file))
+            if frame.shape != shape:
+                raise ValueError(f"{path}:{line}: {file} is {frame.shape[1]}x{frame.shape[0]}, "
+                                 f"the rest frame {shape[1]}x{shape[0]}")
+            yield line, row, frame
+
+
 class Sensor:
     """The sensor as its ball presses show it: the rest frame, the scale and
     the colour change by slope."""
 
     def __init__(self, ball):
-        with open(os.path.join(ball, "sensor.json")) as f:
+        meta_path = os.path.join(ball, "sensor.json")
+        with open(meta_path) as f:
             meta = json.load(f)
-        self.mm_per_px = float(meta["mm_per_px"])
-        radius_px = float(meta["ball_diameter_mm"]) / 2 / self.mm_per_px
+        self.mm_per_px = positive(meta, "mm_per_px", meta_path)
+        radius_px = positive(meta, "ball_diameter_mm", meta_path) / 2 / self.mm_per_px
         self.background = read_rgb(os.path.join(ball, meta.get("background", "background.png")))
         self.h, self.w = self.background.shape[:2]
         sums = np.zeros((MAG_BINS, AZ_BINS, 3))
         counts = np.zeros((MAG_BINS, AZ_BINS))
         v, u = np.mgrid[0:self.h, 0:self.w]
-        with open(os.path.join(ball, "presses.csv")) as f:
-            for row in csv.DictReader(f):
-                frame = read_rgb(os.path.join(ball, row["file"]))
-                cx, cy, a = (float(row[k]) for k in ("centre_x_px", "centre_y_px", "contact_radius_px"))
-                du, dv = u - cx, v - cy
-                r = np.hypot(du, dv)
-                inside = r < 0.92 * a
-                # the ball's surface slope (mm per mm), pointing away from its centre
-                slope = r / np.sqrt(np.maximum(radius_px**2 - r**2, 1e-9))
-                mag, az = slope[inside], np.arctan2(dv, du)[inside]
-                mi, ai = self.bins(mag, az)
-                np.add.at(sums, (mi, ai), frame[inside] - self.background[inside])
-                np.add.at(counts, (mi, ai), 1)
+        for line, row, frame in presses(ball, self.background.shape):
+            cx, cy, a = (float(row[k]) for k in ("centre_x_px", "centre_y_px", "contact_radius_px"))
+            du, dv = u - cx, v - cy
+            r = np.hypot(du, dv)
+            inside = r < 0.92 * a
+            # the ball's surface slope (mm per mm), pointing away from its centre
+            slope = r / np.sqrt(np.maximum(radius_px**2 - r**2, 1e-9))
+            mag, az = slope[inside], np.arctan2(dv, du)[inside]
+            mi, ai = self.bins(mag, az)
+            np.add.at(sums, (mi, ai), frame[inside] - self.background[inside])
+            np.add.at(counts, (mi, ai), 1)
         filled = counts >= 5
         table = np.where(filled[..., None], sums / np.maximum(counts, 1)[..., None], np.nan)
         # Bins the presses left empty take the nearest filled bin along the
@@ -108,23 +138,23 @@ class Sensor:
         rendered presses best match every fourth real press's colour change
         between one and three contact radii (the ball pressed to its
         annotated contact)."""
-        with open(os.path.join(ball, "presses.csv")) as f:
-            rows = list(csv.DictReader(f))[::4]
         v, u = np.mgrid[0:self.h, 0:self.w]
-        presses = []
-        for row in rows:
-            change = read_rgb(os.path.join(ball, row["file"])) - self.background
+        pressed = []
+        for line, row, frame in presses(ball, self.background.shape):
+            if line % 4 != 2:  # every fourth, from the first
+                continue
+            change = frame - self.background
             cx, cy, a = (float(row[k]) for k in ("centre_x_px", "centre_y_px", "contact_radius_px"))
             r = np.hypot(u - cx, v - cy) * self.mm_per_px
             a *= self.mm_per_px
             press = radius_mm - np.sqrt(radius_mm**2 - a**2)
             ball_pen = np.maximum(press - radius_mm + np.sqrt(np.maximum(radius_mm**2 - r**2, 0.0)), 0.0)
-            presses.append((ball_pen, change, (r > 1.05 * a) & (r < 3 * a)))
+            pressed.append((ball_pen, change, (r > 1.05 * a) & (r < 3 * a)))
         best = None
         for gain in SPREAD_GAINS:
             for width in SPREAD_WIDTHS:
                 self.gain, self.width = gain, width
-                err = np.mean([np.abs(self.shade(self.spread(p)) - c)[ring].mean() for p, c, ring in presses])
+                err = np.mean([np.abs(self.shade(self.spread(p)) - c)[ring].mean() for p, c, ring in pressed])
                 if best is None or err < best[0]:
                     best = (err, gain, width)
         return best[1], best[2]

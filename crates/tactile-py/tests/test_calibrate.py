@@ -524,3 +524,30 @@ def test_the_own_sensor_pipeline_reads_another_simulators_renders(root: Path, tm
     everything = seg["paths"][0]
     assert everything["path"] == "all" and everything["frames"] >= 15, everything
     assert everything["direction"]["median_deg"] <= 3.0, everything
+
+
+def test_the_other_simulator_names_what_it_cannot_read(tmp_path: Path):
+    """scripts/gelsight_independent.py on a calibration folder it cannot
+    read names the file and line, and writes nothing."""
+    independent = script("gelsight_independent")
+    ball = tmp_path / "ball"
+    (ball / "frames").mkdir(parents=True)
+    shutil.copy(BALL / "background.png", ball / "background.png")
+    with open(BALL / "presses.csv") as f:
+        rows = list(csv.reader(f))
+    for r in rows[1:3]:
+        shutil.copy(BALL / r[0], ball / r[0])
+    meta = json.loads((BALL / "sensor.json").read_text())
+    cases = [
+        ({**meta, "mm_per_px": "thin"}, rows[:3], r"sensor\.json: 'mm_per_px' must be a number, got 'thin'"),
+        ({**meta, "ball_diameter_mm": -4}, rows[:3], r"sensor\.json: 'ball_diameter_mm' must be above 0"),
+        (meta, rows[:2] + [[rows[2][0], "", "", ""]], r"presses\.csv:3: needs file, centre_x_px"),
+    ]
+    for i, (m, lines, said) in enumerate(cases):
+        (ball / "sensor.json").write_text(json.dumps(m))
+        with open(ball / "presses.csv", "w", newline="") as f:
+            csv.writer(f).writerows(lines)
+        out = tmp_path / f"out{i}"
+        with pytest.raises(ValueError, match=said):
+            independent.main(str(out), 1, 1, str(ball))
+        assert not out.exists() and not list(tmp_path.glob(".gelsight-independent-*")), i
