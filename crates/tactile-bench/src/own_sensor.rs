@@ -116,17 +116,47 @@ pub fn frame_kind(ds: &Dataset, i: usize) -> Result<Option<&'static str>> {
     })
 }
 
-/// The detector, segmenter and depth network of `models` on the renders in
-/// `set`, the detector also by kind of frame.
-pub fn score_renders(models: &Path, set: &Path, runtime: Runtime) -> Result<RenderScores> {
-    tactile_core::note!("detector, segmenter and depth network on {}", set.display());
-    let ds = Dataset::open(set)?;
-    let mut det = tactile_detect::TendonDetector::load(models.join("detector"), runtime, 0)?;
-    let (detector, labels) =
-        tactile_detect::eval::evaluate_dataset(&mut det, &ds, tactile_detect::eval::EVAL_CHUNK)?;
+/// A calibrated sensor's three palpation networks, loaded once for every
+/// set the page scores.
+pub struct PalpationNetworks {
+    /// `detector/`.
+    pub detector: tactile_detect::TendonDetector,
+    /// `segmenter/`, with its rest frame when it keeps one.
+    pub segmenter: tactile_segment::TendonSegmenter,
+    /// `depth/`.
+    pub depth: DepthEstimator,
+}
+
+impl PalpationNetworks {
+    /// The networks beside the calibration in `models`, on `runtime`.
+    pub fn load(models: &Path, runtime: Runtime) -> Result<Self> {
+        Ok(Self {
+            detector: tactile_detect::TendonDetector::load(models.join("detector"), runtime, 0)?,
+            segmenter: tactile_segment::TendonSegmenter::load(
+                models.join("segmenter"),
+                runtime,
+                0,
+            )?,
+            depth: DepthEstimator::load(models.join("depth"), runtime, 0)?,
+        })
+    }
+}
+
+/// The three networks on the renders `ds`, the detector also by kind of
+/// frame.
+pub fn score_renders(nets: &mut PalpationNetworks, ds: &Dataset) -> Result<RenderScores> {
+    tactile_core::note!(
+        "detector, segmenter and depth network on {}",
+        ds.root.display()
+    );
+    let (detector, labels) = tactile_detect::eval::evaluate_dataset(
+        &mut nets.detector,
+        ds,
+        tactile_detect::eval::EVAL_CHUNK,
+    )?;
     let mut kind_of = std::collections::HashMap::new();
     for i in 0..ds.len() {
-        if let Some(k) = frame_kind(&ds, i)?.and_then(|k| KINDS.iter().position(|x| *x == k)) {
+        if let Some(k) = frame_kind(ds, i)?.and_then(|k| KINDS.iter().position(|x| *x == k)) {
             kind_of.insert(ds.text(i, "file")?.to_string(), k);
         }
     }
@@ -149,12 +179,10 @@ pub fn score_renders(models: &Path, set: &Path, runtime: Runtime) -> Result<Rend
             kinds[k].correct += usize::from(truth == said);
         }
     }
-    let mut seg = tactile_segment::TendonSegmenter::load(models.join("segmenter"), runtime, 0)?;
-    let segmenter = tactile_segment::eval::evaluate(&mut seg, &ds)?;
-    let mut depth = DepthEstimator::load(models.join("depth"), runtime, 0)?;
-    let (depth, depth_ms, _) = tactile_depth::eval::evaluate(&mut depth, &ds)?;
+    let segmenter = tactile_segment::eval::evaluate(&mut nets.segmenter, ds)?;
+    let (depth, depth_ms, _) = tactile_depth::eval::evaluate(&mut nets.depth, ds)?;
     Ok(RenderScores {
-        set: set.display().to_string(),
+        set: ds.root.display().to_string(),
         detector,
         kinds,
         segmenter,
@@ -490,19 +518,29 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
         None => None,
     };
     let m = &b.models;
-    let test_scores = score_renders(m, &b.test, b.runtime)?;
-    let other_renders = b
+    let mut nets = PalpationNetworks::load(m, b.runtime)?;
+    // Every set is opened and checked to be visuo-tactile before any is
+    // scored.
+    let open = |set: &PathBuf| -> Result<Dataset> {
+        let ds = Dataset::open(set)?;
+        ds.expect_kind(tactile_core::dataset::DatasetKind::Visuotactile)?;
+        Ok(ds)
+    };
+    let test = open(&b.test)?;
+    let others = b
         .other_renders
         .iter()
-        .map(|set| score_renders(m, set, b.runtime))
+        .map(open)
         .collect::<Result<Vec<_>>>()?;
-    let test = Dataset::open(&b.test)?;
-    let segmenter_rest = tactile_segment::TendonSegmenter::load(m.join("segmenter"), b.runtime, 0)?
-        .rest()
-        .is_some();
     // A frame that cannot be decoded is named below: the reconstruction
     // reads every frame and stops at it.
-    let mut depth = DepthEstimator::load(m.join("depth"), b.runtime, 0)?;
+    let test_scores = score_renders(&mut nets, &test)?;
+    let other_renders = others
+        .iter()
+        .map(|ds| score_renders(&mut nets, ds))
+        .collect::<Result<Vec<_>>>()?;
+    let segmenter_rest = nets.segmenter.rest().is_some();
+    let depth = &mut nets.depth;
     // The calibration's reconstruction on the same renders.
     let mut rec = Reconstructor::load(m, b.runtime, 0)?;
     let mut errs = Vec::with_capacity(test.len());
@@ -546,7 +584,7 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
         let frame = presses.frame(i)?;
         let cap = p.cap(&presses);
         let r = pipeline.process(&p.file, &frame)?;
-        let net = network_map(&mut depth, &frame)?;
+        let net = network_map(depth, &frame)?;
         let cal = rec.reconstruct(&frame, &presses.press_path(i))?;
         ball.push(BallRow {
             file: p.file.clone(),
