@@ -71,13 +71,15 @@ def positive(meta, key, path):
     return value
 
 
-def presses(ball, shape):
-    """Each press of `ball/presses.csv` with its line and frame, or an error
-    naming the line (a missing column, a circle that is no number, a frame
-    of another size than the rest frame)."""
+def presses(ball, shape, every=1):
+    """Every `every`-th press of `ball/presses.csv` from the first, with its
+    line and frame, or an error naming the line (a missing column, a circle
+    that is no number, a frame of another size than the rest frame)."""
     path = os.path.join(ball, "presses.csv")
     with open(path) as f:
         for line, row in enumerate(csv.DictReader(f), start=2):
+            if (line - 2) % every:
+                continue
             try:
                 file = row["file"]
                 [float(row[k]) for k in ("centre_x_px", "centre_y_px", "contact_radius_px")]
@@ -106,7 +108,7 @@ class Sensor:
         sums = np.zeros((MAG_BINS, AZ_BINS, 3))
         counts = np.zeros((MAG_BINS, AZ_BINS))
         v, u = np.mgrid[0:self.h, 0:self.w]
-        for line, row, frame in presses(ball, self.background.shape):
+        for _, row, frame in presses(ball, self.background.shape):
             cx, cy, a = (float(row[k]) for k in ("centre_x_px", "centre_y_px", "contact_radius_px"))
             du, dv = u - cx, v - cy
             r = np.hypot(du, dv)
@@ -140,9 +142,7 @@ class Sensor:
         annotated contact)."""
         v, u = np.mgrid[0:self.h, 0:self.w]
         pressed = []
-        for line, row, frame in presses(ball, self.background.shape):
-            if line % 4 != 2:  # every fourth, from the first
-                continue
+        for _, row, frame in presses(ball, self.background.shape, every=4):
             change = frame - self.background
             cx, cy, a = (float(row[k]) for k in ("centre_x_px", "centre_y_px", "contact_radius_px"))
             r = np.hypot(u - cx, v - cy) * self.mm_per_px
