@@ -159,6 +159,91 @@ fn objects_are_pressed_over_their_own_range_tendons_over_theirs() {
     assert!(e.contains("object_press_mm"), "{e}");
 }
 
+/// By default a plate covers the frame's centre; `plate_edge_reach` puts
+/// its edge line where asked along its normal, past the centre too, so the
+/// plate may only clip the frame; `punch_fillet` sets a punch's rim.
+#[test]
+fn plates_reach_where_asked_and_punch_rims_are_as_sharp_as_asked() {
+    let s = sensor();
+    let (hw, hh) = s.half_mm();
+    let only = |kind: &str| CalibratedConfig {
+        tendon_share: 0.0,
+        sphere_share: 0.0,
+        nothing_share: 0.0,
+        punch_share: if kind == "punch" { 1.0 } else { 0.0 },
+        flat_share: if kind == "flat" { 1.0 } else { 0.0 },
+        ..config()
+    };
+    // The edge line's place along the plate's normal (positive: past the
+    // centre, which is then off the plate), and the way to the border.
+    let edges = |c: &CalibratedConfig| -> Vec<(f64, f64)> {
+        (0..80u64)
+            .map(|seq| match sample(&s, c, 5, seq, 0).0.contact {
+                Contact::Edge { point, normal, .. } => (
+                    point.0 * normal.0 + point.1 * normal.1,
+                    normal.0.abs() * hw + normal.1.abs() * hh,
+                ),
+                other => panic!("a plate was asked for, got {}", other.name()),
+            })
+            .collect()
+    };
+    for (d, _) in edges(&only("flat")) {
+        assert!(
+            (-0.5 * hh - 1e-9..=1e-9).contains(&d),
+            "default edge at {d} mm"
+        );
+    }
+    let reach = CalibratedConfig {
+        plate_edge_reach: Some(datasets_synth::Range::new(-0.75, 0.75)),
+        ..only("flat")
+    };
+    let placed = edges(&reach);
+    for &(d, border) in &placed {
+        assert!(
+            d.abs() <= 0.75 * border + 1e-9,
+            "edge at {d} of {border} mm"
+        );
+    }
+    let clipping = placed.iter().filter(|(d, b)| *d > 0.25 * b).count();
+    assert!(
+        clipping >= 15,
+        "{clipping} of 80 plates only clip the frame"
+    );
+    let sharp = CalibratedConfig {
+        punch_fillet: datasets_synth::Range::new(0.05, 0.05),
+        ..only("punch")
+    };
+    for seq in 0..20u64 {
+        match sample(&s, &sharp, 5, seq, 0).0.contact {
+            Contact::Punch {
+                radius_mm,
+                fillet_mm,
+                ..
+            } => assert!((fillet_mm - 0.05 * radius_mm).abs() < 1e-12),
+            other => panic!("a punch was asked for, got {}", other.name()),
+        }
+    }
+    for (bad, key) in [
+        (
+            CalibratedConfig {
+                plate_edge_reach: Some(datasets_synth::Range::new(-2.0, 0.5)),
+                ..config()
+            },
+            "plate_edge_reach",
+        ),
+        (
+            CalibratedConfig {
+                punch_fillet: datasets_synth::Range::new(0.0, 0.5),
+                ..config()
+            },
+            "punch_fillet",
+        ),
+    ] {
+        let e = bad.validate().unwrap_err().to_string();
+        assert!(e.contains(key), "{e}");
+    }
+}
+
 #[test]
 fn a_dataset_says_its_depth_maps_are_indentation() {
     let s = sensor();

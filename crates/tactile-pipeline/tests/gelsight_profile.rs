@@ -433,16 +433,66 @@ fn directions_read_against_the_rest_frame_are_not_pulled_by_the_gels_texture() {
     );
 }
 
+/// The shipped detector on `count` renders of `config` (seed `seed`):
+/// punches and plate edges told no tendon (share, frames; with `pressed`
+/// only those pressed, not their videos' frames before first touch) and
+/// tendons found (share, frames).
+fn objects_and_tendons(
+    config: &datasets_synth::CalibratedConfig,
+    count: usize,
+    seed: u64,
+    pressed: bool,
+) -> ((f64, usize), (f64, usize)) {
+    let model = root().join("models/gelsight-r15");
+    let (_tmp, ds) = renders(&model, config, count, seed);
+    let mut det = TendonDetector::load(model.join("detector"), Runtime::BurnFlex, 0).unwrap();
+    let (scores, labels) = tactile_detect::eval::evaluate_dataset(&mut det, &ds, 64).unwrap();
+    assert_eq!(scores.gated_foreign, 0, "the sensor's own renders");
+    let kind: std::collections::HashMap<String, (String, f64)> = (0..ds.len())
+        .map(|i| {
+            let press_mm: f64 = ds.text(i, "press_mm").unwrap().parse().unwrap();
+            (
+                ds.text(i, "file").unwrap().to_string(),
+                (ds.text(i, "path").unwrap().to_string(), press_mm),
+            )
+        })
+        .collect();
+    let (mut objects, mut objects_right, mut tendons, mut found) = (0, 0, 0, 0);
+    for ((file, truth), said) in labels
+        .files
+        .iter()
+        .zip(&labels.tendon)
+        .zip(&scores.decisions)
+    {
+        let (path, press_mm) = &kind[file];
+        if matches!(path.as_str(), "punch" | "flat") {
+            if pressed && *press_mm <= 0.0 {
+                continue;
+            }
+            objects += 1;
+            objects_right += usize::from(!said);
+        } else if *truth {
+            tendons += 1;
+            found += usize::from(*said);
+        }
+    }
+    let share = |a: usize, n: usize| a as f64 / n.max(1) as f64;
+    (
+        (share(objects_right, objects), objects),
+        (share(found, tendons), tendons),
+    )
+}
+
 /// At a light press a punch's rim or a plate's edge shades a line as a
 /// light tendon does: the shipped detector, trained with the loop's light
 /// presses beside its default distribution, tells them apart on renders of
-/// a seed no training used (0.914 of 210 here) and still finds the light
-/// tendons (42 of 44). Trained on the default distribution alone (its
+/// a seed no training used (0.952 of 210 here; 0.914 before the loop's
+/// plate edges and punches at every press) and still finds the light
+/// tendons (40 of 44). Trained on the default distribution alone (its
 /// objects pressed to 2.5 mm) it took a quarter of them for tendons
 /// (0.733).
 #[test]
 fn light_plate_edges_and_punches_are_no_tendon() {
-    let model = root().join("models/gelsight-r15");
     let config = datasets_synth::CalibratedConfig {
         frames_per_sequence: 5,
         press_mm: datasets_synth::Range::new(0.05, 0.3),
@@ -454,41 +504,44 @@ fn light_plate_edges_and_punches_are_no_tendon() {
         nothing_share: 0.0,
         ..Default::default()
     };
-    let (_tmp, ds) = renders(&model, &config, 300, 700);
-    let mut det = TendonDetector::load(model.join("detector"), Runtime::BurnFlex, 0).unwrap();
-    let (scores, labels) = tactile_detect::eval::evaluate_dataset(&mut det, &ds, 64).unwrap();
-    let path: std::collections::HashMap<String, String> = (0..ds.len())
-        .map(|i| {
-            (
-                ds.text(i, "file").unwrap().to_string(),
-                ds.text(i, "path").unwrap().to_string(),
-            )
-        })
-        .collect();
-    let (mut objects, mut objects_right, mut tendons, mut found) = (0, 0, 0, 0);
-    for ((file, truth), said) in labels
-        .files
-        .iter()
-        .zip(&labels.tendon)
-        .zip(&scores.decisions)
-    {
-        if matches!(path[file].as_str(), "punch" | "flat") {
-            objects += 1;
-            objects_right += usize::from(!said);
-        } else if *truth {
-            tendons += 1;
-            found += usize::from(*said);
-        }
-    }
-    assert_eq!(scores.gated_foreign, 0, "the sensor's own renders");
+    let ((objects_acc, objects), (recall, tendons)) = objects_and_tendons(&config, 300, 700, false);
     assert!(
         objects >= 150 && tendons >= 30,
         "{objects} objects, {tendons} tendons"
     );
-    let objects_acc = objects_right as f64 / objects as f64;
-    let recall = found as f64 / tendons as f64;
     assert!(
         objects_acc >= 0.88 && recall >= 0.9,
         "light punches and plate edges: {objects_acc:.3} of {objects} no tendon; light tendons: {recall:.3} of {tendons} found"
+    );
+}
+
+/// A plate's edge shades one band, as one side of a tendon does, at every
+/// press, and more so where the plate only clips the frame: the shipped
+/// detector, trained with the loop's plate edges and punches beside
+/// tendons (`render-objects`), tells the pressed ones apart on renders of
+/// a seed no training used (0.935 of 138 here) and still finds the
+/// tendons (42 of 42). Trained without them it took a fifth of them for
+/// tendons (0.790).
+#[test]
+fn plate_edges_and_punches_at_every_press_are_no_tendon() {
+    let config = datasets_synth::CalibratedConfig {
+        frames_per_sequence: 5,
+        tendon_share: 0.3,
+        sphere_share: 0.0,
+        punch_share: 0.2,
+        flat_share: 0.5,
+        nothing_share: 0.0,
+        plate_edge_reach: Some(datasets_synth::Range::new(-0.75, 0.75)),
+        punch_fillet: datasets_synth::Range::new(0.05, 0.5),
+        ..Default::default()
+    };
+    let ((objects_acc, objects), (recall, tendons)) = objects_and_tendons(&config, 300, 710, true);
+    assert!(
+        objects >= 120 && tendons >= 30,
+        "{objects} objects, {tendons} tendons"
+    );
+    assert!(
+        objects_acc >= 0.9 && recall >= 0.9,
+        "punches and plate edges: {objects_acc:.3} of {objects} no tendon; tendons: {recall:.3} of {tendons} found"
     );
 }

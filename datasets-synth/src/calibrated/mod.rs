@@ -188,6 +188,18 @@ pub struct CalibratedConfig {
     /// Punch radius, mm.
     #[arg(long, default_value_t = CalibratedConfig::default().punch_radius_mm)]
     pub punch_radius_mm: Range,
+    /// A punch's edge fillet, as a fraction of its radius (0.05: a nearly
+    /// sharp rim, which shades a thin ring).
+    #[arg(long, default_value_t = CalibratedConfig::default().punch_fillet)]
+    pub punch_fillet: Range,
+    /// Where a plate's edge line lies along the plate's normal, as a
+    /// fraction of the way from the frame's centre to its border: negative,
+    /// the plate covers the centre; positive, it only clips the frame in a
+    /// band along one side, which shades a lone band as one side of a
+    /// tendon does. Unset: the plate covers the centre and its edge lies
+    /// within half the frame's half-height of it.
+    #[arg(long)]
+    pub plate_edge_reach: Option<Range>,
     /// Per-video gain on each channel's colour change: 1 +- this.
     #[arg(long, default_value_t = CalibratedConfig::default().optics_jitter)]
     pub optics_jitter: f64,
@@ -240,6 +252,8 @@ impl Default for CalibratedConfig {
             nothing_share: 0.1,
             sphere_radius_mm: Range::new(2.0, 6.0),
             punch_radius_mm: Range::new(1.0, 3.0),
+            punch_fillet: Range::new(0.15, 0.5),
+            plate_edge_reach: None,
             optics_jitter: 0.15,
             gel_jitter: 0.25,
             blur_px: Range::new(0.0, 1.2),
@@ -275,6 +289,10 @@ impl CalibratedConfig {
         self.object_press_mm.check("object_press_mm", 0.0, 5.0)?;
         self.sphere_radius_mm.check("sphere_radius_mm", 0.2, 50.0)?;
         self.punch_radius_mm.check("punch_radius_mm", 0.2, 50.0)?;
+        self.punch_fillet.check("punch_fillet", 0.01, 1.0)?;
+        if let Some(r) = self.plate_edge_reach {
+            r.check("plate_edge_reach", -1.0, 1.0)?;
+        }
         for (name, v) in [
             ("centre_fraction", self.centre_fraction),
             ("out_of_view_fraction", self.out_of_view_fraction),

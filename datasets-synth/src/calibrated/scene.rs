@@ -209,12 +209,20 @@ impl CalibratedScene {
             let radius_mm = rng.draw(config.punch_radius_mm);
             Contact::Punch {
                 radius_mm,
-                fillet_mm: (0.15 + 0.35 * rng.uniform()) * radius_mm,
+                fillet_mm: config.punch_fillet.at(rng.uniform()) * radius_mm,
                 centre: place(rng, 0.6),
             }
         } else if kind < t + sp + pu + ed {
             let normal = unit_at(rng.uniform() * 2.0 * PI);
-            let point = scale(normal, -0.5 * half_mm.1 * rng.uniform());
+            let u = rng.uniform();
+            let point = match config.plate_edge_reach {
+                // The way to the frame's border along the normal.
+                Some(r) => {
+                    let border = normal.0.abs() * half_mm.0 + normal.1.abs() * half_mm.1;
+                    scale(normal, r.at(u) * border)
+                }
+                None => scale(normal, -0.5 * half_mm.1 * u),
+            };
             Contact::Edge {
                 point,
                 normal,

@@ -612,6 +612,8 @@ def synth_gelsight(
     nothing_share: float = 0.1,
     sphere_radius_mm: Tuple[float, float] = (2.0, 6.0),
     punch_radius_mm: Tuple[float, float] = (1.0, 3.0),
+    punch_fillet: Tuple[float, float] = (0.15, 0.5),
+    plate_edge_reach: Optional[Tuple[float, float]] = None,
     optics_jitter: float = 0.15,
     gel_jitter: float = 0.25,
     blur_px: Tuple[float, float] = (0.0, 1.2),
