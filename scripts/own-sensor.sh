@@ -68,8 +68,8 @@ step render-light "$tactile" synth gelsight --sensor "$stage" --sequences 600 "$
 # trained without these took 28 % of deep plate edges and 17 % of light
 # ones for tendons on renders of a fresh seed (seed 301 below; before,
 # 7 % and 30 % with the plate always over the frame's centre, and on
-# another simulator's renders, whose plates often only clip the frame,
-# 54 % and 72 %). The same settings, another seed, test it after.
+# scripts/gelsight_independent.py's renders, whose plates often only clip
+# the frame, 34 % and 64 %). The same settings, another seed, test it after.
 objects=(--frames-per-sequence 5 --tendon-share 0.4 --sphere-share 0 --punch-share 0.2 --flat-share 0.4
     --nothing-share 0 --plate-edge-reach -0.75,0.75 --punch-fillet 0.05,0.5)
 step render-objects "$tactile" synth gelsight --sensor "$stage" --sequences 600 "${objects[@]}" \
