@@ -68,9 +68,9 @@ train-turned-head out="data/cae-synth-turned-head": synth-tactip
     bash scripts/cae-synth-unaligned.sh
     cargo run --release -p tactile -- train head --encoder data/cae-synth-unaligned --data data/synth-tactip-train --test data/synth-tactip-test --rotate-copies 4 --rotate-deg 6 --out {{out}}
 
-# Frames/s of both virtual sensors; writes docs/bench-synth.md.
+# Frames/s of both virtual sensors and of the shipped calibrated sensor's renderer; writes docs/bench-synth.md.
 bench-synth:
-    cargo run --release -p tactile -- bench synth --out docs/bench-synth.md
+    cargo run --release -p tactile -- bench synth --sensor models/gelsight-r15 --out docs/bench-synth.md
 
 # Paper A on the real 127-pin edge set: the grey-level CAE (never sees the frames `compare --seed 7` tests on) and the binary one of the paper.
 train-cae-edge:

@@ -40,16 +40,24 @@ fn write_rate(
 /// Frames one measurement of [`bench_synth`] renders and writes.
 pub const MAX_SYNTH_BENCH_FRAMES: usize = 10_000;
 
-/// Frames/s of both virtual sensors: render (one thread) and write (all
-/// threads), `frames` per measurement (fewer at 1920x1080); the Markdown.
-pub fn bench_synth(frames: usize) -> Result<String> {
+/// Frames/s of both virtual sensors, and of a calibrated sensor's renderer
+/// when `sensor` names its calibration folder (`tactile calibrate ball`'s,
+/// with the default scene mix the own-sensor loop renders): render (one
+/// thread) and write (all threads), `frames` per measurement (fewer at
+/// 1920x1080); the Markdown.
+pub fn bench_synth(frames: usize, sensor: Option<&std::path::Path>) -> Result<String> {
     if !(1..=MAX_SYNTH_BENCH_FRAMES).contains(&frames) {
         return Err(tactile_core::Error::Config(format!(
             "frames: must be 1 to {MAX_SYNTH_BENCH_FRAMES} per measurement (each written to disk), got {frames}"
         ))
         .into());
     }
-    use datasets_synth::{TactipConfig, VisuotactileConfig, WriteOptions, tactip, visuotactile};
+    use datasets_synth::{
+        CalibratedConfig, CalibratedSensor, TactipConfig, VisuotactileConfig, WriteOptions, tactip,
+        visuotactile,
+    };
+    // Loaded before any measurement, so a bad folder is named at once.
+    let calibrated = sensor.map(CalibratedSensor::load).transpose()?;
     let threads = rayon::current_num_threads();
     let opts = WriteOptions::default();
     let mut rows = Vec::new();
@@ -77,6 +85,20 @@ pub fn bench_synth(frames: usize) -> Result<String> {
             datasets_synth::write_visuotactile(&vc, n, 1, out, opts)
         })?;
         rows.push(("virtual visuo-tactile", format!("{wd}x{ht}"), t1, w));
+    }
+    if let Some(cs) = &calibrated {
+        let (wd, ht) = (cs.width(), cs.height());
+        tactile_core::note!("calibrated sensor {} {wd}x{ht}", cs.dir.display());
+        let cc = CalibratedConfig::default();
+        let f = cc.frames_per_sequence;
+        let t1 = median_render(frames, |i| {
+            let _ = datasets_synth::calibrated::sample(cs, &cc, 1, (i / f) as u64, i % f);
+        });
+        let none = datasets_synth::calibrated::RealFrames::default();
+        let w = write_rate(frames, |out| {
+            datasets_synth::write_calibrated(cs, &cc, frames, 1, out, opts, &none)
+        })?;
+        rows.push(("calibrated sensor", format!("{wd}x{ht}"), t1, w));
     }
     let mut md = format!(
         "Machine: {}\n\nRender: one frame with its labels in memory, one thread, median over distinct samples. \

@@ -116,6 +116,11 @@ pub(crate) struct SynthArgs {
     /// Frames per measurement at default sizes (fewer at 1920x1080).
     #[arg(long, default_value_t = 64)]
     frames: usize,
+    /// Also measure the renderer of this calibrated sensor (a folder of
+    /// `tactile calibrate ball`, e.g. models/gelsight-r15), with the scene
+    /// mix of `tactile synth gelsight`'s defaults.
+    #[arg(long, value_name = "DIR")]
+    sensor: Option<PathBuf>,
     /// Also write the table to this Markdown file.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -149,7 +154,7 @@ pub(crate) fn main(cmd: BenchCmd) -> Result<()> {
             }
         }
         BenchCmd::Synth(a) => {
-            let md = tactile_bench::synth::bench_synth(a.frames)?;
+            let md = tactile_bench::synth::bench_synth(a.frames, a.sensor.as_deref())?;
             say_raw!("{md}");
             if let Some(out) = &a.out {
                 tactile_core::io::write_atomic(out, md.as_bytes())?;

@@ -430,6 +430,20 @@ fn every_size_is_bounded_before_anything_is_allocated() {
             vec!["bench", "synth", "--frames", "1000000000000"],
             "frames: must be 1 to 10000",
         ),
+        // A folder that is no calibration is named before any measurement.
+        (
+            vec![
+                "bench",
+                "synth",
+                "--frames",
+                "2",
+                "--sensor",
+                s(&vt),
+                "--out",
+                s(&page),
+            ],
+            "optics.json: no render model here",
+        ),
         (
             vec!["report", "--runs", "1000000000000", "--out", s(&page)],
             "timed runs: must be 1 to 100000",
