@@ -352,7 +352,7 @@ def test_plates_only_clip_the_frame_and_punch_rims_sharpen_when_asked(model: Pat
     """plate_edge_reach and punch_fillet reach the renderer from Python as
     --plate-edge-reach and --punch-fillet do from the command line."""
     plates = dict(count=12, seed=4, frames_per_sequence=1, tendon_share=0.0, sphere_share=0.0, punch_share=0.0,
-                  nothing_share=0.0, flat_share=1.0, object_press_mm=(1.0, 2.0), progress=False)
+                  nothing_share=0.0, flat_share=1.0, object_press_mm=(0.5, 1.0), progress=False)
 
     def pushed(**kw):
         ind = tactile.synth.gelsight(model, **plates, **kw)["indentation_m"] > 0.03e-3
@@ -360,11 +360,14 @@ def test_plates_only_clip_the_frame_and_punch_rims_sharpen_when_asked(model: Pat
         return ind[:, h // 2, w // 2], ind.mean(axis=(1, 2))
 
     # By default every plate covers the frame's centre.
-    centre, area = pushed()
-    assert centre.all() and (area > 0.4).all(), area
-    # Its edge past the centre: the plate only clips the frame, in a band.
-    centre, area = pushed(plate_edge_reach=(0.3, 0.75))
-    assert not centre.any() and (area < 0.4).all() and (area > 0).all(), area
+    centre, covering = pushed()
+    assert centre.all(), covering
+    # Its edge well past the centre (the gel's spread carries the push a
+    # little beyond it): the plate only clips the frame, in a band smaller
+    # than any plate that covers the centre.
+    centre, clipping = pushed(plate_edge_reach=(0.5, 0.75))
+    assert not centre.any() and (clipping > 0).all(), clipping
+    assert clipping.max() < covering.min(), (clipping, covering)
     # A sharper punch rim pushes a wider flat: more of the frame at the same press.
     punches = {**plates, "flat_share": 0.0, "punch_share": 1.0}
     areas = [
