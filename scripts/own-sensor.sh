@@ -91,8 +91,10 @@ step segmenter "$tactile" train segmenter --data "$data/train" --out "$stage/seg
     --copies 1 --max-epochs 4 --patience 2 --rest "$stage/background.png"
 # The depth network corrects the calibration's own reconstruction (its
 # fourth channel), which carries over to the real sensor's frames.
+# shellcheck source=scripts/own-sensor-depth.env
+source scripts/own-sensor-depth.env
 step depth "$tactile" train depth --data "$data/train" --out "$stage/depth" \
-    --encoder small --input 128x96 --max-epochs 2 --patience 2 --prior-calibration "$stage"
+    "${depth_recipe[@]}" --prior-calibration "$stage"
 step export bash -c "for m in detector segmenter depth; do '$tactile' export --model '$stage/'\$m --out '$stage/'\$m/\$m.onnx; done && '$tactile' export --model '$stage' --out '$stage/gelsight.onnx'"
 echo "  \"frames\": $((sequences * 5))" >> "$times"
 echo "}" >> "$times"

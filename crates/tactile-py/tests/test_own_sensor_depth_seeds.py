@@ -1,0 +1,70 @@
+"""scripts/own_sensor_depth_seeds.py: the page of the own-sensor depth
+network over training runs, every number read from the runs' files."""
+
+import json
+import subprocess
+import sys
+
+
+def run(root, *args):
+    return subprocess.run([sys.executable, str(root / "scripts" / "own_sensor_depth_seeds.py"), *map(str, args)],
+                          capture_output=True, text=True)
+
+
+def write_run(folder, seed, loss, independent, network_shape, held_out_shape):
+    """A depth network's training record and its page: two presses, the
+    second never in training, each with the calibration's shape 0.04 mm."""
+    (folder / "models" / "depth").mkdir(parents=True)
+    (folder / "models" / "depth" / "training.json").write_text(json.dumps(
+        {"config": {"schedule": {"seed": seed}}, "summary": {"best_val_loss": loss}}))
+    press = lambda shape, trained: {  # noqa: E731
+        "in_training": trained,
+        "network": {"shape_mae_mm": shape, "far_field_mm": 0.01, "peak_mm": 1.9},
+        "calibration": {"shape_mae_mm": 0.04, "far_field_mm": 0.012, "peak_mm": 1.88},
+    }
+    page = {
+        "test": {"depth": {"mae_mm": 0.0176, "mae_tendon_mm": 0.048}},
+        "other_renders": [{"set": "data/own-sensor/light-test", "depth": {"mae_mm": 0.017}},
+                          {"set": "data/own-sensor/independent/", "depth": {"mae_mm": independent}}],
+        "ball": [press(network_shape, True), press(held_out_shape, False)],
+    }
+    (folder / "page.json").write_text(json.dumps(page))
+    return folder
+
+
+def test_each_run_is_a_row_and_the_spread_of_every_column_is_given(root, tmp_path):
+    shipped = write_run(tmp_path / "shipped", 42, 0.0245, 0.068, 0.04, 0.044)
+    other = write_run(tmp_path / "43", 43, 0.0274, 0.136, 0.048, 0.06)
+    out = tmp_path / "seeds.md"
+    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", other)
+    assert r.returncode == 0, r.stderr
+    lines = [line for line in out.read_text().splitlines() if line.startswith("| ")]
+    header, rows = lines[0], lines[1:]
+    assert "`light-test` | `independent`" in header
+    cells = [row.strip("| ").split(" | ") for row in rows]
+    assert [c[1] for c in cells[:2]] == ["42", "43"]
+    # The shipped row; the run's shape against the calibration's over both
+    # presses (0.054 / 0.04) and the held-out one alone (0.06 / 0.04).
+    assert cells[0][2:6] == ["0.0245", "0.0176 / 0.0480", "0.0170", "0.0680"]
+    assert cells[1][7] == "1.35x / 1.50x", cells[1]
+    # Largest over smallest: the other simulator's error doubled.
+    assert cells[2][0] == "**largest over smallest**" and cells[2][5] == "2.00", cells[2]
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_a_file_that_is_no_run_is_named(root, tmp_path):
+    shipped = write_run(tmp_path / "shipped", 42, 0.0245, 0.068, 0.04, 0.044)
+    out = tmp_path / "seeds.md"
+    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", tmp_path / "missing")
+    assert r.returncode != 0 and str(tmp_path / "missing") in r.stderr and "training.json" in r.stderr
+    record = shipped / "models" / "depth" / "training.json"
+    record.write_text(json.dumps({"config": {}}))
+    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", tmp_path / "missing")
+    assert r.returncode != 0 and f"{record}: no 'schedule'" in r.stderr, r.stderr
+    shipped = write_run(tmp_path / "shipped-again", 42, 0.0245, 0.068, 0.04, 0.044)
+    (tmp_path / "bad").mkdir()
+    bad = write_run(tmp_path / "bad" / "run", 44, 0.03, 0.1, 0.04, 0.04)
+    (bad / "page.json").write_text(json.dumps({"test": {}}))
+    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", bad)
+    assert r.returncode != 0 and str(bad / "page.json") in r.stderr and "'other_renders'" in r.stderr, r.stderr
+    assert not out.exists()

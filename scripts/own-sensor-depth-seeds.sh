@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# The own-sensor depth network over training runs (docs/own-sensor-depth-
+# seeds.md): the loop's depth step again with other seeds, each network
+# scored by `tactile bench own-sensor` beside the shipped calibration,
+# detector and segmenter, as docs/own-sensor.md scores the shipped one.
+#
+#   SEEDS="43 44 45" bash scripts/own-sensor-depth-seeds.sh [MODELS_DIR] [DATA_DIR]
+#
+# after scripts/own-sensor.sh (its rendered sets in DATA_DIR, default
+# data/own-sensor; MODELS_DIR, default models/gelsight-r15). Each run is
+# built in a staging folder and moved to DATA_DIR/depth-seeds/SEED when
+# its page is written; a seed whose run is there already is kept (set
+# RETRAIN=1 to train it again, after the loop rendered new sets). The
+# shipped models are read, never changed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+models="${1:-models/gelsight-r15}"
+data="${2:-data/own-sensor}"
+ball="${TACTILE_BALL:-../shared/real/gelsight-ball}"
+seeds="${SEEDS:-43 44 45}"
+python="${PYTHON:-python3}"
+for need in "$models/optics.json" "$models/depth/training.json" "$data/train/manifest.json" \
+    "$data/test/manifest.json" "$data/times.json" docs/own-sensor.json; do
+    if [ ! -e "$need" ]; then
+        echo "error: $need is missing: run scripts/own-sensor.sh first" >&2
+        exit 1
+    fi
+done
+if [ -z "${ORT_DYLIB_PATH:-}" ]; then
+    eval "$(bash scripts/install-ort.sh)"
+    export ORT_DYLIB_PATH
+fi
+cargo build --release -p tactile
+tactile="${CARGO_TARGET_DIR:-target}/release/tactile"
+# shellcheck source=scripts/own-sensor-depth.env
+source scripts/own-sensor-depth.env
+others=()
+for set in light-test objects-test independent; do
+    if [ -e "$data/$set/manifest.json" ]; then others+=("$data/$set"); fi
+done
+runs=()
+for seed in $seeds; do
+    case "$seed" in
+        '' | *[!0-9]*) echo "error: SEEDS: $seed is not a whole number" >&2; exit 1 ;;
+    esac
+    run="$data/depth-seeds/$seed"
+    if [ -f "$run/page.json" ] && [ -z "${RETRAIN:-}" ]; then
+        echo "== seed $seed: kept $run (RETRAIN=1 trains it again)" >&2
+        runs+=("$run")
+        continue
+    fi
+    stage="$data/depth-seeds/.$seed.new.$$"
+    trap 'rm -rf "$stage"' EXIT
+    mkdir -p "$stage/models"
+    # The shipped calibration, detector and segmenter; a depth network of its own.
+    for f in "$models"/*; do
+        if [ "$(basename "$f")" != depth ]; then cp -r "$f" "$stage/models/"; fi
+    done
+    echo "== seed $seed: tactile train depth" >&2
+    "$tactile" train depth --data "$data/train" --out "$stage/models/depth" \
+        "${depth_recipe[@]}" --prior-calibration "$stage/models" --seed "$seed"
+    echo "== seed $seed: tactile bench own-sensor" >&2
+    "$tactile" bench own-sensor --models "$stage/models" --test "$data/test" --ball "$ball" \
+        --times "$data/times.json" --train "$data/train" --other-renders "${others[@]}" \
+        --out "$stage/page.md"
+    rm -rf "$run"
+    mv "$stage" "$run"
+    trap - EXIT
+    runs+=("$run")
+done
+"$python" scripts/own_sensor_depth_seeds.py docs/own-sensor-depth-seeds.md "$models/depth" docs/own-sensor.json "${runs[@]}"
+echo "wrote docs/own-sensor-depth-seeds.md" >&2
