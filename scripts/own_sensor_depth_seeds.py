@@ -75,27 +75,16 @@ def fmt(x, spec):
     return "-" if x is None else format(x, spec)
 
 
-def cells(v, n):
-    """A row's cells: the ratio columns as `x`, pairs joined by ` / `."""
+def cells(v, n, value=".4f", times="x"):
+    """A row's cells (`v` in the columns' order, `n` other sets): pairs
+    joined by ` / `, the shape ratios marked `times`."""
     return [
-        fmt(v[0], ".4f"),
-        f"{fmt(v[1], '.4f')} / {fmt(v[2], '.4f')}",
-        *(fmt(x, ".4f") for x in v[3:3 + n]),
-        fmt(v[3 + n], ".4f"),
-        f"{fmt(v[4 + n], '.2f')}x / {fmt(v[5 + n], '.2f')}x",
+        fmt(v[0], value),
+        f"{fmt(v[1], value)} / {fmt(v[2], value)}",
+        *(fmt(x, value) for x in v[3:3 + n]),
+        fmt(v[3 + n], value),
+        f"{fmt(v[4 + n], '.2f')}{times} / {fmt(v[5 + n], '.2f')}{times}",
         fmt(v[6 + n], ".2f"),
-    ]
-
-
-def spread_cells(s, n):
-    """The largest over the smallest of each column, laid out as `cells`."""
-    return [
-        fmt(s[0], ".2f"),
-        f"{fmt(s[1], '.2f')} / {fmt(s[2], '.2f')}",
-        *(fmt(x, ".2f") for x in s[3:3 + n]),
-        fmt(s[3 + n], ".2f"),
-        f"{fmt(s[4 + n], '.2f')} / {fmt(s[5 + n], '.2f')}",
-        fmt(s[6 + n], ".2f"),
     ]
 
 
@@ -131,7 +120,7 @@ def main(argv):
         + " | real presses: far field | real presses: shape, all / held out | real presses: deepest point |",
         "|---" * (7 + n) + "|",
         *("| " + " | ".join([name, str(seed), *cells(v, n)]) + " |" for name, seed, v in table),
-        "| **largest over smallest** | - | " + " | ".join(spread_cells(spread, n)) + " |",
+        "| **largest over smallest** | - | " + " | ".join(cells(spread, n, value=".2f", times="")) + " |",
         "",
         "Each network corrects the calibration's reconstruction, and its training loss is measured on renders of this "
         "simulator only: where frames are unlike them (another simulator's, the real presses) the correction is what "
