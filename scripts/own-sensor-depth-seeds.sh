@@ -10,7 +10,8 @@
 # data/own-sensor; MODELS_DIR, default models/gelsight-r15). Each run is
 # built in a staging folder and moved to DATA_DIR/depth-seeds/SEED when
 # its page is written; a seed whose run is there already is kept (set
-# RETRAIN=1 to train it again, after the loop rendered new sets). The
+# RETRAIN=1 to train it again, after the loop rendered new sets, or
+# REBENCH=1 to score its network again, after the bench changed). The
 # shipped models are read, never changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -38,6 +39,12 @@ others=()
 for set in light-test objects-test independent; do
     if [ -e "$data/$set/manifest.json" ]; then others+=("$data/$set"); fi
 done
+# Scores the networks in MODELS beside the shipped ones; the page to OUT.
+bench() {
+    "$tactile" bench own-sensor --models "$1" --test "$data/test" --ball "$ball" \
+        --times "$data/times.json" --train "$data/train" --other-renders "${others[@]}" \
+        --out "$2"
+}
 runs=()
 for seed in $seeds; do
     case "$seed" in
@@ -45,7 +52,18 @@ for seed in $seeds; do
     esac
     run="$data/depth-seeds/$seed"
     if [ -f "$run/page.json" ] && [ -z "${RETRAIN:-}" ]; then
-        echo "== seed $seed: kept $run (RETRAIN=1 trains it again)" >&2
+        if [ -n "${REBENCH:-}" ]; then
+            echo "== seed $seed: tactile bench own-sensor on the kept $run" >&2
+            stage="$data/depth-seeds/.$seed.page.$$"
+            trap 'rm -rf "$stage"' EXIT
+            mkdir -p "$stage"
+            bench "$run/models" "$stage/page.md"
+            for f in "$stage"/*; do mv "$f" "$run/"; done
+            rmdir "$stage"
+            trap - EXIT
+        else
+            echo "== seed $seed: kept $run (RETRAIN=1 trains it again, REBENCH=1 scores it again)" >&2
+        fi
         runs+=("$run")
         continue
     fi
@@ -60,9 +78,7 @@ for seed in $seeds; do
     "$tactile" train depth --data "$data/train" --out "$stage/models/depth" \
         "${depth_recipe[@]}" --prior-calibration "$stage/models" --seed "$seed"
     echo "== seed $seed: tactile bench own-sensor" >&2
-    "$tactile" bench own-sensor --models "$stage/models" --test "$data/test" --ball "$ball" \
-        --times "$data/times.json" --train "$data/train" --other-renders "${others[@]}" \
-        --out "$stage/page.md"
+    bench "$stage/models" "$stage/page.md"
     rm -rf "$run"
     mv "$stage" "$run"
     trap - EXIT

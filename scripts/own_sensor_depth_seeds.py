@@ -22,36 +22,32 @@ def load(path):
         sys.exit(f"{path}: {e}")
 
 
-def mean(values):
-    values = list(values)
-    return sum(values) / len(values) if values else float("nan")
-
-
 def other_sets(page):
     """The page's other renders, by folder name, in its order."""
     return [(os.path.basename(os.path.normpath(o["set"])), o["depth"]["mae_mm"]) for o in page["other_renders"]]
 
 
+def ball_summaries(page):
+    """The page's summaries of the real presses by name (`all`, and
+    `held-out` when some joined training): `tactile bench own-sensor` takes
+    the means, this page only reads them."""
+    return {b["presses"]: b for b in page["ball_summary"]}
+
+
 def values(loss, page, sets):
     """A run's numbers, in the columns' order (None where its page lacks a set)."""
     by_set = dict(other_sets(page))
-    ball = page["ball"]
-    held = [b for b in ball if not b["in_training"]]
-
-    def ratio(rows):
-        if not rows:
-            return None
-        return mean(b["network"]["shape_mae_mm"] for b in rows) / mean(b["calibration"]["shape_mae_mm"] for b in rows)
-
+    ball = ball_summaries(page)
+    every = ball["all"]
     return [
         loss,
         page["test"]["depth"]["mae_mm"],
         page["test"]["depth"]["mae_tendon_mm"],
         *(by_set.get(s) for s in sets),
-        mean(b["network"]["far_field_mm"] for b in ball),
-        ratio(ball),
-        ratio(held),
-        mean(b["network"]["peak_mm"] for b in ball),
+        every["network_far_field_mm"],
+        every["shape_ratio"],
+        ball["held-out"]["shape_ratio"] if "held-out" in ball else None,
+        every["network_peak_mm"],
     ]
 
 
@@ -68,6 +64,10 @@ def run_values(training_path, page_path, sets=None):
         sets = sets if sets is not None else [s for s, _ in other_sets(page)]
         return seed, values(loss, page, sets), sets, page
     except (KeyError, TypeError) as e:
+        if isinstance(page, dict) and "ball" in page and "ball_summary" not in page:
+            sys.exit(f"{page_path}: no 'ball_summary' (written by an older `tactile bench own-sensor`: "
+                     "run it again as the page says; REBENCH=1 bash scripts/own-sensor-depth-seeds.sh "
+                     "does so for its runs)")
         sys.exit(f"{page_path}: no {e} (not a page of `tactile bench own-sensor`?)")
 
 
@@ -98,7 +98,7 @@ def main(argv):
         seed, v, _, _ = run_values(os.path.join(run, "models", "depth", "training.json"),
                                    os.path.join(run, "page.json"), sets)
         table.append((f"`{run}`", seed, v))
-    calibration_peak = mean(b["calibration"]["peak_mm"] for b in page["ball"])
+    calibration_peak = ball_summaries(page)["all"]["calibration_peak_mm"]
     spread = []
     for k in range(len(table[0][2])):
         col = [v[k] for _, _, v in table if v[k] is not None]

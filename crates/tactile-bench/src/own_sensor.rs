@@ -210,6 +210,76 @@ pub struct BallRow {
     pub calibration: PressScore,
 }
 
+/// Real ball presses summed up: one row of the page's table, and what
+/// `scripts/own_sensor_depth_seeds.py` reads of a run's page (so the means
+/// are taken once, here).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BallSummary {
+    /// Which presses: `all`, or `held-out` (those that never joined
+    /// training).
+    pub presses: String,
+    /// How many.
+    pub count: usize,
+    /// Reported as showing a tendon.
+    pub tendon: usize,
+    /// Flagged as foreign.
+    pub foreign: usize,
+    /// The largest tendon probability among them.
+    pub max_probability: f32,
+    /// The depth network's mean shape error inside the contact, mm.
+    pub network_shape_mm: f64,
+    /// The depth network's mean far field, mm.
+    pub network_far_field_mm: f64,
+    /// The calibration's mean shape error inside the contact, mm.
+    pub calibration_shape_mm: f64,
+    /// The calibration's mean far field, mm.
+    pub calibration_far_field_mm: f64,
+    /// The network's shape error over the calibration's.
+    pub shape_ratio: f64,
+    /// How deep the network says the ball went, mean over the presses, mm.
+    pub network_peak_mm: f64,
+    /// How deep the calibration says it went, mm.
+    pub calibration_peak_mm: f64,
+}
+
+impl BallSummary {
+    /// The summary of `rows` under the name `presses` (`None`: no rows).
+    pub fn of(presses: &str, rows: &[&BallRow]) -> Option<Self> {
+        if rows.is_empty() {
+            return None;
+        }
+        let m = |f: fn(&BallRow) -> f64| mean(rows.iter().map(|r| f(r)));
+        let network_shape_mm = m(|r| r.network.shape_mae_mm);
+        let calibration_shape_mm = m(|r| r.calibration.shape_mae_mm);
+        Some(Self {
+            presses: presses.into(),
+            count: rows.len(),
+            tendon: rows.iter().filter(|r| r.tendon).count(),
+            foreign: rows.iter().filter(|r| r.foreign).count(),
+            max_probability: rows.iter().map(|r| r.probability).fold(0f32, f32::max),
+            network_shape_mm,
+            network_far_field_mm: m(|r| r.network.far_field_mm),
+            calibration_shape_mm,
+            calibration_far_field_mm: m(|r| r.calibration.far_field_mm),
+            shape_ratio: network_shape_mm / calibration_shape_mm.max(1e-9),
+            network_peak_mm: m(|r| r.network.peak_mm),
+            calibration_peak_mm: m(|r| r.calibration.peak_mm),
+        })
+    }
+
+    /// The summaries a page shows: every press, and apart those that never
+    /// joined training when some did.
+    pub fn of_presses(ball: &[BallRow]) -> Vec<Self> {
+        let all: Vec<&BallRow> = ball.iter().collect();
+        let held: Vec<&BallRow> = ball.iter().filter(|r| !r.in_training).collect();
+        let mut out: Vec<Self> = Self::of("all", &all).into_iter().collect();
+        if held.len() < all.len() {
+            out.extend(Self::of("held-out", &held));
+        }
+        out
+    }
+}
+
 /// One set of frames through the pipeline.
 #[derive(Debug, Clone, Serialize)]
 pub struct ForeignRow {
@@ -265,6 +335,8 @@ pub struct OwnSensorReport {
     pub reconstruction_mae_mm: f64,
     /// Every real ball press.
     pub ball: Vec<BallRow>,
+    /// The presses summed up ([`BallSummary::of_presses`]).
+    pub ball_summary: Vec<BallSummary>,
     /// The presses in words: `32 presses of a 4 mm ball`.
     pub ball_presses: String,
     /// The pipeline's rate over the held-out renders, frames/s.
@@ -295,43 +367,39 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
 }
 
 impl OwnSensorReport {
-    /// Mean shape and far-field errors over the ball presses: (network,
-    /// calibration), each `(shape, far)`.
-    pub fn ball_errors(&self) -> ((f64, f64), (f64, f64)) {
-        Self::errors_of(&self.ball.iter().collect::<Vec<_>>())
-    }
-
     /// The page's section on the real presses: every press, and apart
     /// those that never joined training when some did.
     fn ball_section(&self) -> String {
-        let all: Vec<&BallRow> = self.ball.iter().collect();
-        let held: Vec<&BallRow> = self.ball.iter().filter(|r| !r.in_training).collect();
-        let joined = all.len() - held.len();
+        let (all, held) = (
+            self.ball.len(),
+            self.ball.iter().filter(|r| !r.in_training).count(),
+        );
+        let joined = all - held;
         let mut md = String::from("## On the real ball presses\n\n");
         md.push_str(&if joined > 0 {
-            format!("{joined} of the {} presses joined the training set as real negatives (as copies under the renders' exposure and noise, labelled with the calibration's reconstruction; `tactile synth gelsight --real-presses`); the other {} never did and are the held-out check. ", all.len(), held.len())
+            format!("{joined} of the {all} presses joined the training set as real negatives (as copies under the renders' exposure and noise, labelled with the calibration's reconstruction; `tactile synth gelsight --real-presses`); the other {held} never did and are the held-out check. ")
         } else {
             "No real frame joined training: the networks saw renders only. ".into()
         });
         md.push_str("Each press goes through the pipeline; the depth network and the calibration's reconstruction are scored against the ball as in `docs/calibration.md` (shape inside the contact with its median offset removed, and the far field beyond three contact radii). The calibration was fitted on all of these presses. The last column compares how deep each one says the ball went (a network of the frame alone stopped at 1.15 mm against the calibration's 1.88 mm, 4.9x its shape error: what it learnt of the renders' look did not carry over to the real frames at the deepest presses; correcting the calibration's reconstruction instead, which was fitted on this sensor's frames, starts from what carries over).\n\n| presses | count | reported as a tendon | flagged foreign | largest tendon probability | depth network shape / far field (mm) | calibration shape / far field (mm) | ratio (shape) | deepest point, network / calibration (mm, mean) |\n|---|---|---|---|---|---|---|---|---|\n");
-        let mut rows = vec![("all", &all)];
-        if joined > 0 {
-            rows.push(("held out (never in training)", &held));
-        }
-        for (name, set) in rows {
-            if set.is_empty() {
-                continue;
-            }
-            let ((ns, nf), (cs, cf)) = Self::errors_of(set);
+        for b in &self.ball_summary {
+            let name = match b.presses.as_str() {
+                "held-out" => "held out (never in training)",
+                other => other,
+            };
             md.push_str(&format!(
-                "| {name} | {} | {} | {} | {:.3} | {ns:.3} / {nf:.4} | {cs:.3} / {cf:.4} | {:.2}x | {:.2} / {:.2} |\n",
-                set.len(),
-                set.iter().filter(|r| r.tendon).count(),
-                set.iter().filter(|r| r.foreign).count(),
-                set.iter().map(|r| r.probability).fold(0f32, f32::max),
-                ns / cs.max(1e-9),
-                mean(set.iter().map(|r| r.network.peak_mm)),
-                mean(set.iter().map(|r| r.calibration.peak_mm)),
+                "| {name} | {} | {} | {} | {:.3} | {:.3} / {:.4} | {:.3} / {:.4} | {:.2}x | {:.2} / {:.2} |\n",
+                b.count,
+                b.tendon,
+                b.foreign,
+                b.max_probability,
+                b.network_shape_mm,
+                b.network_far_field_mm,
+                b.calibration_shape_mm,
+                b.calibration_far_field_mm,
+                b.shape_ratio,
+                b.network_peak_mm,
+                b.calibration_peak_mm,
             ));
         }
         md.push('\n');
@@ -444,19 +512,6 @@ impl OwnSensorReport {
         }
         md.push('\n');
         md
-    }
-
-    fn errors_of(b: &[&BallRow]) -> ((f64, f64), (f64, f64)) {
-        (
-            (
-                mean(b.iter().map(|r| r.network.shape_mae_mm)),
-                mean(b.iter().map(|r| r.network.far_field_mm)),
-            ),
-            (
-                mean(b.iter().map(|r| r.calibration.shape_mae_mm)),
-                mean(b.iter().map(|r| r.calibration.far_field_mm)),
-            ),
-        )
     }
 }
 
@@ -714,6 +769,7 @@ pub fn bench_own_sensor(b: &OwnSensorBench) -> Result<OwnSensorReport> {
             presses.presses.len(),
             presses.describe_balls()
         ),
+        ball_summary: BallSummary::of_presses(&ball),
         ball,
         pipeline_fps,
         foreign,

@@ -1,10 +1,13 @@
 //! The own-sensor page's scoring of a set of renders: the detector's
 //! answers by kind of frame add up to its answers on the whole set, and a
-//! set whose press is unknown (its press_mm left empty) is of no kind.
+//! set whose press is unknown (its press_mm left empty) is of no kind; the
+//! real presses' summaries, which the page and the depth-seeds page read.
 
 use std::path::{Path, PathBuf};
 
-use tactile_bench::own_sensor::{KINDS, PalpationNetworks, frame_kind, score_renders};
+use tactile_bench::own_sensor::{
+    BallRow, BallSummary, KINDS, PalpationNetworks, frame_kind, score_renders,
+};
 use tactile_burn::Runtime;
 use tactile_core::dataset::Dataset;
 
@@ -70,4 +73,53 @@ fn the_kinds_of_frame_add_up_to_the_whole_set() {
     for i in 0..ds.len() {
         assert_eq!(frame_kind(&ds, i).unwrap(), None, "row {i}");
     }
+}
+
+fn press(file: &str, in_training: bool, network_shape_mm: f64, probability: f32) -> BallRow {
+    let score = |shape_mae_mm, peak_mm| tactile_gelsight::eval::PressScore {
+        file: file.into(),
+        shape_mae_mm,
+        far_field_mm: 0.01,
+        rim_sink_mm: 0.0,
+        peak_mm,
+    };
+    BallRow {
+        file: file.into(),
+        tendon: probability > 0.5,
+        probability,
+        foreign: false,
+        in_training,
+        network: score(network_shape_mm, 1.9),
+        calibration: score(0.04, 1.8),
+    }
+}
+
+#[test]
+fn the_presses_are_summed_up_over_all_and_over_those_never_trained_on() {
+    let ball = [
+        press("a.png", true, 0.04, 0.1),
+        press("b.png", true, 0.05, 0.7),
+        press("c.png", false, 0.06, 0.2),
+    ];
+    let s = BallSummary::of_presses(&ball);
+    assert_eq!(
+        s.iter().map(|b| b.presses.as_str()).collect::<Vec<_>>(),
+        ["all", "held-out"]
+    );
+    assert_eq!((s[0].count, s[0].tendon), (3, 1));
+    assert!((s[0].shape_ratio - 1.25).abs() < 1e-9, "{:?}", s[0]);
+    assert!((s[1].shape_ratio - 1.5).abs() < 1e-9, "{:?}", s[1]);
+    assert_eq!(s[1].max_probability, 0.2);
+    assert!((s[0].network_peak_mm - 1.9).abs() < 1e-12);
+    // No press joined training: one row, not the same one twice.
+    let none: Vec<BallRow> = ball
+        .iter()
+        .cloned()
+        .map(|b| BallRow {
+            in_training: false,
+            ..b
+        })
+        .collect();
+    assert_eq!(BallSummary::of_presses(&none).len(), 1);
+    assert!(BallSummary::of_presses(&[]).is_empty());
 }

@@ -13,20 +13,27 @@ def run(root, *args):
 
 def write_run(folder, seed, loss, independent, network_shape, held_out_shape):
     """A depth network's training record and its page: two presses, the
-    second never in training, each with the calibration's shape 0.04 mm."""
+    second never in training, each with the calibration's shape 0.04 mm
+    (summed up as `tactile bench own-sensor` does)."""
     (folder / "models" / "depth").mkdir(parents=True)
     (folder / "models" / "depth" / "training.json").write_text(json.dumps(
         {"config": {"schedule": {"seed": seed}}, "summary": {"best_val_loss": loss}}))
-    press = lambda shape, trained: {  # noqa: E731
-        "in_training": trained,
-        "network": {"shape_mae_mm": shape, "far_field_mm": 0.01, "peak_mm": 1.9},
-        "calibration": {"shape_mae_mm": 0.04, "far_field_mm": 0.012, "peak_mm": 1.88},
+    summary = lambda presses, shapes: {  # noqa: E731
+        "presses": presses,
+        "network_shape_mm": sum(shapes) / len(shapes),
+        "network_far_field_mm": 0.01,
+        "calibration_shape_mm": 0.04,
+        "shape_ratio": sum(shapes) / len(shapes) / 0.04,
+        "network_peak_mm": 1.9,
+        "calibration_peak_mm": 1.88,
     }
     page = {
         "test": {"depth": {"mae_mm": 0.0176, "mae_tendon_mm": 0.048}},
         "other_renders": [{"set": "data/own-sensor/light-test", "depth": {"mae_mm": 0.017}},
                           {"set": "data/own-sensor/independent/", "depth": {"mae_mm": independent}}],
-        "ball": [press(network_shape, True), press(held_out_shape, False)],
+        "ball": [{"in_training": True}, {"in_training": False}],
+        "ball_summary": [summary("all", [network_shape, held_out_shape]),
+                         summary("held-out", [held_out_shape])],
     }
     (folder / "page.json").write_text(json.dumps(page))
     return folder
@@ -68,3 +75,15 @@ def test_a_file_that_is_no_run_is_named(root, tmp_path):
     r = run(root, out, shipped / "models" / "depth", shipped / "page.json", bad)
     assert r.returncode != 0 and str(bad / "page.json") in r.stderr and "'other_renders'" in r.stderr, r.stderr
     assert not out.exists()
+
+
+def test_a_page_of_an_older_bench_is_named_with_how_to_score_it_again(root, tmp_path):
+    shipped = write_run(tmp_path / "shipped", 42, 0.0245, 0.068, 0.04, 0.044)
+    old = write_run(tmp_path / "43", 43, 0.0274, 0.136, 0.048, 0.06)
+    page = json.loads((old / "page.json").read_text())
+    del page["ball_summary"]
+    (old / "page.json").write_text(json.dumps(page))
+    out = tmp_path / "seeds.md"
+    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", old)
+    assert r.returncode != 0 and f"{old / 'page.json'}: no 'ball_summary'" in r.stderr, r.stderr
+    assert "REBENCH=1" in r.stderr and not out.exists()
