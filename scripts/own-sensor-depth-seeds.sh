@@ -11,7 +11,9 @@
 # built in a staging folder and moved to DATA_DIR/depth-seeds/SEED when
 # its page is written; a seed whose run is there already is kept (set
 # RETRAIN=1 to train it again, after the loop rendered new sets, or
-# REBENCH=1 to score its network again, after the bench changed). The
+# REBENCH=1 to score its network again, after the bench changed), unless
+# it was trained with another recipe than scripts/own-sensor-depth.env's
+# (each run keeps its recipe in `recipe`): then it is trained again. The
 # shipped models are read, never changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -51,7 +53,10 @@ for seed in $seeds; do
         '' | *[!0-9]*) echo "error: SEEDS: $seed is not a whole number" >&2; exit 1 ;;
     esac
     run="$data/depth-seeds/$seed"
-    if [ -f "$run/page.json" ] && [ -z "${RETRAIN:-}" ]; then
+    recipe="${depth_recipe[*]}"
+    if [ -f "$run/page.json" ] && [ "$(cat "$run/recipe" 2>/dev/null)" != "$recipe" ]; then
+        echo "== seed $seed: $run was trained with another recipe ($(cat "$run/recipe" 2>/dev/null || echo "none recorded")) than scripts/own-sensor-depth.env's ($recipe): training it again" >&2
+    elif [ -f "$run/page.json" ] && [ -z "${RETRAIN:-}" ]; then
         if [ -n "${REBENCH:-}" ]; then
             echo "== seed $seed: tactile bench own-sensor on the kept $run" >&2
             stage="$data/depth-seeds/.$seed.page.$$"
@@ -79,6 +84,7 @@ for seed in $seeds; do
         "${depth_recipe[@]}" --prior-calibration "$stage/models" --seed "$seed"
     echo "== seed $seed: tactile bench own-sensor" >&2
     bench "$stage/models" "$stage/page.md"
+    printf '%s\n' "$recipe" > "$stage/recipe"
     rm -rf "$run"
     mv "$stage" "$run"
     trap - EXIT

@@ -5,6 +5,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 use tactile_core::Error;
 use tactile_core::dataset::{Dataset, DatasetKind};
+use tactile_core::rng::SampleRng;
 use tactile_core::source::UndecodableFrames;
 use tactile_core::spec::DepthMaps;
 use tactile_core::spec::visuotactile as spec;
@@ -13,6 +14,7 @@ use tactile_preprocess::visuo::{ChannelStats, FloatImage, resize_grey};
 use std::path::Path;
 
 use tactile_burn::Runtime;
+use tactile_detect::augment::PhotometricAugment;
 
 use crate::prepare::FourthChannel;
 use crate::prior::PriorSource;
@@ -346,6 +348,20 @@ impl DepthSet {
         model: &DepthNetConfig,
         scale: &DepthScale,
     ) -> Result<Vec<f32>> {
+        self.inputs_of(idx, stats, model, scale, None)
+    }
+
+    /// [`Self::inputs`], each frame's colour channels changed by `augment`
+    /// when given (drawn from its seed, round and the frame's index); the
+    /// fourth channel stays as the frame was recorded.
+    fn inputs_of(
+        &self,
+        idx: &[usize],
+        stats: &ChannelStats,
+        model: &DepthNetConfig,
+        scale: &DepthScale,
+        augment: Option<(&PhotometricAugment, (u64, u64))>,
+    ) -> Result<Vec<f32>> {
         let c = model.in_channels;
         let mut x = Vec::with_capacity(idx.len() * c * self.width * self.height);
         for &i in idx {
@@ -360,7 +376,11 @@ impl DepthSet {
                 (false, true, _) => FourthChannel::Mask(&s.mask),
                 _ => FourthChannel::Nothing,
             };
-            x.extend(model.network_input(&self.image(i), stats, fourth)?);
+            let mut img = self.image(i);
+            if let Some((a, (seed, round))) = augment {
+                a.apply(&mut img, &mut SampleRng::new(seed, round, i as u64));
+            }
+            x.extend(model.network_input(&img, stats, fourth)?);
         }
         Ok(x)
     }
@@ -375,9 +395,36 @@ impl DepthSet {
         model: &DepthNetConfig,
         device: &Device,
     ) -> Result<(Tensor<4>, Tensor<4>)> {
+        self.batch_of(idx, stats, scale, model, None, device)
+    }
+
+    /// [`Self::batch`] with the frames' colour channels changed by
+    /// `augment`, drawn from its `(seed, round)` (the round: the epoch);
+    /// the prior or mask channel and the targets as recorded.
+    pub fn augmented_batch(
+        &self,
+        idx: &[usize],
+        stats: &ChannelStats,
+        scale: &DepthScale,
+        model: &DepthNetConfig,
+        augment: (&PhotometricAugment, (u64, u64)),
+        device: &Device,
+    ) -> Result<(Tensor<4>, Tensor<4>)> {
+        self.batch_of(idx, stats, scale, model, Some(augment), device)
+    }
+
+    fn batch_of(
+        &self,
+        idx: &[usize],
+        stats: &ChannelStats,
+        scale: &DepthScale,
+        model: &DepthNetConfig,
+        augment: Option<(&PhotometricAugment, (u64, u64))>,
+        device: &Device,
+    ) -> Result<(Tensor<4>, Tensor<4>)> {
         let (w, h) = (self.width, self.height);
         let c = model.in_channels;
-        let x = self.inputs(idx, stats, model, scale)?;
+        let x = self.inputs_of(idx, stats, model, scale, augment)?;
         let mut y = Vec::with_capacity(idx.len() * w * h);
         for &i in idx {
             y.extend(self.samples[i].depth_mm.iter().map(|&d| scale.to_model(d)));

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use tactile_burn::options::Size;
 use tactile_burn::train::FitSummary;
 use tactile_core::dataset::Dataset;
+use tactile_detect::augment::PhotometricAugment;
 
 use crate::{DenseNetPreset, DepthNetConfig, DepthTrainingConfig, HeadKind, LossKind, Result};
 
@@ -44,6 +45,9 @@ pub struct DepthOptions {
     /// A sensor calibration folder (`tactile calibrate ball`): the network takes its reconstruction of each frame as a fourth channel and learns a correction to it, so it starts from what the calibration sees on the real sensor (save the network in that folder's `depth/`).
     #[arg(long, value_name = "DIR")]
     pub prior_calibration: Option<PathBuf>,
+    /// Photometric augmentation of the training frames' colour channels (exposure, LED balance, offset, blur, noise, glare, JPEG; see PhotometricAugment). The prior or mask channel is left as recorded, so with --prior-calibration the network learns to lean on the calibration where the colours differ.
+    #[arg(long)]
+    pub augment: bool,
     /// torchvision DenseNet weights as safetensors (key mapping: the tactile-depth `torchvision` module docs); the preset must match.
     #[arg(long)]
     pub pretrained: Option<PathBuf>,
@@ -78,6 +82,7 @@ impl DepthOptions {
             .with_freeze_encoder(self.freeze_encoder)
             .with_pretrained(self.pretrained.as_ref().map(|p| p.display().to_string()))
             .with_val_fraction(self.val_fraction)
+            .with_augment(self.augment.then(PhotometricAugment::new))
             .with_prior_calibration(
                 self.prior_calibration
                     .as_ref()

@@ -13,6 +13,7 @@ use tactile_burn::nn::{gradient_loss, l1_loss, mse_loss, ssim_loss};
 use tactile_burn::train::{FitConfig, FitSummary, Schedule, fit};
 use tactile_burn::{Artifact, DeviceKind};
 use tactile_core::dataset::{Dataset, Provenance};
+use tactile_detect::augment::PhotometricAugment;
 use tactile_preprocess::visuo::ChannelStats;
 
 use crate::artifact::{DepthArtifact, DepthScale};
@@ -80,6 +81,12 @@ pub struct DepthTrainingConfig {
     /// ([`crate::prior`]).
     #[config(default = "None")]
     pub prior_calibration: Option<String>,
+    /// Photometric augmentation of the training frames' colour channels
+    /// (None: off). A prior or mask channel is not changed, so with a
+    /// calibration prior the network learns to lean on it where the colours
+    /// differ from the renders'.
+    #[config(default = "None")]
+    pub augment: Option<PhotometricAugment>,
 }
 
 /// The loss of `kind` on model-unit depth maps.
@@ -129,6 +136,9 @@ pub fn train(
     resume: bool,
 ) -> Result<FitSummary> {
     config.schedule.check()?;
+    if let Some(a) = &config.augment {
+        a.check()?;
+    }
     let prior_dir = config
         .prior_calibration
         .as_ref()
@@ -251,8 +261,18 @@ pub fn train(
         model,
         burn::optim::AdamConfig::new().init(),
         (&train_idx, val_set.len()),
-        |m: &DepthNet, batch, _| {
-            let (x, y) = train_set.batch(batch, &stats, &scale, &net, &ad)?;
+        |m: &DepthNet, batch, epoch| {
+            let (x, y) = match &config.augment {
+                Some(a) => train_set.augmented_batch(
+                    batch,
+                    &stats,
+                    &scale,
+                    &net,
+                    (a, (config.schedule.seed, epoch as u64 + 1)),
+                    &ad,
+                )?,
+                None => train_set.batch(batch, &stats, &scale, &net, &ad)?,
+            };
             Ok(depth_loss(config.loss, m.forward(x), y, range))
         },
         |m| {

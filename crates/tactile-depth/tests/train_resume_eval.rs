@@ -1,7 +1,7 @@
 #![allow(clippy::unwrap_used)]
 //! The depth network's library path on tiny data, without the command
 //! line: options -> training (refusing metres) -> resume -> evaluation
-//! with heat maps.
+//! with heat maps; the photometric augmentation of its training frames.
 
 use serde_json::json;
 use tactile_burn::Runtime;
@@ -11,6 +11,7 @@ use tactile_depth::DepthEstimator;
 use tactile_depth::DepthOptions;
 use tactile_depth::data::DepthSet;
 use tactile_depth::eval::{EvalOptions, evaluate_folder, evaluate_in_chunks, predict_mm, score};
+use tactile_detect::augment::PhotometricAugment;
 
 fn options(extra: serde_json::Value) -> DepthOptions {
     let mut kw = json!({
@@ -45,9 +46,17 @@ fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
     assert!(e.contains("stall") && e.contains("millimetres"), "{e}");
     assert!(!out.join("depth.bpk").exists());
 
-    let recipe = json!({ "loss": "l1-grad-ssim", "head": "custom", "with_mask": true });
+    let recipe =
+        json!({ "loss": "l1-grad-ssim", "head": "custom", "with_mask": true, "augment": true });
     let first = options(recipe.clone()).train(&ds, &out).unwrap();
     assert_eq!(first.epochs_run, 1);
+    // The augmentation is in the training record, as trained.
+    let record = std::fs::read_to_string(out.join("training.json")).unwrap();
+    let record: serde_json::Value = serde_json::from_str(&record).unwrap();
+    assert!(
+        record["config"]["augment"]["exposure"].as_f64().unwrap() > 0.0,
+        "{record}"
+    );
     let mut more = recipe.clone();
     more.as_object_mut().unwrap().extend(
         json!({ "max_epochs": 2, "resume": true })
@@ -125,4 +134,67 @@ fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
         e.contains("png_frames 3: the heat maps save_png writes, and no save_png folder is given"),
         "{e}"
     );
+}
+
+/// `--augment` changes what the network sees of a frame's colours, drawn
+/// again each round, and nothing of its fourth channel or its targets: a
+/// network given the mask or the calibration's reconstruction learns to
+/// lean on that where the colours differ.
+#[test]
+fn augmentation_changes_the_colours_alone_and_is_drawn_again_each_round() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("vt");
+    let cfg = datasets_synth::VisuotactileConfig {
+        width: 320,
+        height: 180,
+        frames_per_sequence: 3,
+        ..Default::default()
+    };
+    datasets_synth::write_visuotactile(&cfg, 3, 3, &data, Default::default()).unwrap();
+    let ds = Dataset::open(&data).unwrap();
+    let set = DepthSet::from_dataset(&ds, &[0, 1, 2], [64, 32], None).unwrap();
+    let o = options(json!({ "with_mask": true, "augment": true }));
+    let config = o.config();
+    let a = config.augment.clone().unwrap();
+    assert_eq!(a, PhotometricAugment::new());
+    assert!(options(json!({})).config().augment.is_none());
+    let mut model = config.model.clone();
+    model.in_channels = 4;
+    let images: Vec<_> = (0..set.len()).map(|i| set.image(i)).collect();
+    let stats = tactile_preprocess::visuo::ChannelStats::from_images(images.iter()).unwrap();
+    let scale = tactile_depth::DepthScale {
+        offset_mm: 0.0,
+        unit_mm: 1.0,
+    };
+    let dev = tactile_burn::DeviceKind::Flex.device();
+    let idx = [0, 1, 2];
+    let values = |t: burn::tensor::Tensor<4>| t.into_data().try_to_vec::<f32>().unwrap();
+    let (x, y) = set.batch(&idx, &stats, &scale, &model, &dev).unwrap();
+    let (x, y) = (values(x), values(y));
+    let augmented = |round| {
+        let (x, y) = set
+            .augmented_batch(&idx, &stats, &scale, &model, (&a, (7, round)), &dev)
+            .unwrap();
+        (values(x), values(y))
+    };
+    let (x1, y1) = augmented(1);
+    let hw = 64 * 32;
+    let per_frame =
+        |x: &[f32], f: usize, c: usize| x[(f * 4 + c) * hw..(f * 4 + c + 1) * hw].to_vec();
+    for f in 0..idx.len() {
+        let moved = per_frame(&x, f, 0)
+            .iter()
+            .zip(per_frame(&x1, f, 0))
+            .map(|(a, b)| (a - b).abs())
+            .fold(0f32, f32::max);
+        assert!(moved > 1e-3, "frame {f}: colours unchanged ({moved})");
+        assert_eq!(
+            per_frame(&x, f, 3),
+            per_frame(&x1, f, 3),
+            "frame {f}: mask changed"
+        );
+    }
+    assert_eq!(y, y1, "targets changed");
+    assert_eq!(augmented(1), (x1.clone(), y1), "the same draw twice");
+    assert_ne!(augmented(2).0, x1, "another round, another draw");
 }

@@ -512,8 +512,11 @@ def test_a_depth_network_learns_a_correction_to_its_calibration(model: Path, tmp
     sensor = tmp_path / "sensor"
     shutil.copytree(model, sensor)
     tactile.train.depth(data, sensor / "depth", encoder="tiny", input=(64, 32), decoder_width=16,
-                        max_epochs=1, val_fraction=0.5, prior_calibration=str(sensor))
+                        max_epochs=1, val_fraction=0.5, prior_calibration=str(sensor), augment=True)
     art = json.loads((sensor / "depth" / "depth.json").read_text())
+    # Its frames' colours were augmented, its prior left as reconstructed.
+    record = json.loads((sensor / "depth" / "training.json").read_text())
+    assert record["config"]["augment"]["exposure"] > 0, record["config"]
     # The reconstruction is its fourth channel, found beside it.
     assert art["prior"] == {"calibration": ".."} and art["model"]["in_channels"] == 4
     assert art["model"]["residual_channel"] == 3

@@ -11,13 +11,15 @@ def run(root, *args):
                           capture_output=True, text=True)
 
 
-def write_run(folder, seed, loss, independent, network_shape, held_out_shape):
+def write_run(folder, seed, loss, independent, network_shape, held_out_shape, augment=False):
     """A depth network's training record and its page: two presses, the
     second never in training, each with the calibration's shape 0.04 mm
     (summed up as `tactile bench own-sensor` does)."""
     (folder / "models" / "depth").mkdir(parents=True)
     (folder / "models" / "depth" / "training.json").write_text(json.dumps(
-        {"config": {"schedule": {"seed": seed}}, "summary": {"best_val_loss": loss}}))
+        {"config": {"schedule": {"seed": seed, "max_epochs": 2}, "model": {"input_size": [128, 96]},
+                    "augment": {"exposure": 0.25} if augment else None},
+         "summary": {"best_val_loss": loss}}))
     summary = lambda presses, shapes: {  # noqa: E731
         "presses": presses,
         "network_shape_mm": sum(shapes) / len(shapes),
@@ -41,7 +43,7 @@ def write_run(folder, seed, loss, independent, network_shape, held_out_shape):
 
 def test_each_run_is_a_row_and_the_spread_of_every_column_is_given(root, tmp_path):
     shipped = write_run(tmp_path / "shipped", 42, 0.0245, 0.068, 0.04, 0.044)
-    other = write_run(tmp_path / "43", 43, 0.0274, 0.136, 0.048, 0.06)
+    other = write_run(tmp_path / "43", 43, 0.0274, 0.136, 0.048, 0.06, augment=True)
     out = tmp_path / "seeds.md"
     r = run(root, out, shipped / "models" / "depth", shipped / "page.json", other)
     assert r.returncode == 0, r.stderr
@@ -50,12 +52,14 @@ def test_each_run_is_a_row_and_the_spread_of_every_column_is_given(root, tmp_pat
     assert "`light-test` | `independent`" in header
     cells = [row.strip("| ").split(" | ") for row in rows]
     assert [c[1] for c in cells[:2]] == ["42", "43"]
+    # Each row's recipe, from its training record.
+    assert [c[2] for c in cells[:2]] == ["128x96, 2 epochs", "128x96, 2 epochs, `--augment`"]
     # The shipped row; the run's shape against the calibration's over both
     # presses (0.054 / 0.04) and the held-out one alone (0.06 / 0.04).
-    assert cells[0][2:6] == ["0.0245", "0.0176 / 0.0480", "0.0170", "0.0680"]
-    assert cells[1][7] == "1.35x / 1.50x", cells[1]
+    assert cells[0][3:7] == ["0.0245", "0.0176 / 0.0480", "0.0170", "0.0680"]
+    assert cells[1][8] == "1.35x / 1.50x", cells[1]
     # Largest over smallest: the other simulator's error doubled.
-    assert cells[2][0] == "**largest over smallest**" and cells[2][5] == "2.00", cells[2]
+    assert cells[2][0] == "**largest over smallest**" and cells[2][6] == "2.00", cells[2]
     assert not list(tmp_path.glob("*.tmp"))
 
 

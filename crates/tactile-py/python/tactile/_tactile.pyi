@@ -527,6 +527,7 @@ def train_depth(
     with_mask: bool = False,
     freeze_encoder: bool = False,
     prior_calibration: Optional[str] = None,
+    augment: bool = False,
     pretrained: Optional[str] = None,
     unit_mm: float = 1.0,
     decoder_width: int = 64,

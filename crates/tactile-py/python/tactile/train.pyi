@@ -198,6 +198,7 @@ def depth(
     with_mask: bool = False,
     freeze_encoder: bool = False,
     prior_calibration: Optional[str] = None,
+    augment: bool = False,
     pretrained: Optional[str] = None,
     unit_mm: float = 1.0,
     decoder_width: int = 64,
