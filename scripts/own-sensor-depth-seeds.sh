@@ -1,26 +1,29 @@
 #!/usr/bin/env bash
 # The own-sensor depth network over training runs (docs/own-sensor-depth-
-# seeds.md): the loop's depth step again with other seeds, each network
+# seeds.md): the loop's depth step again with other seeds, and with the
+# frames' colours augmented (`tactile train depth --augment`), each network
 # scored by `tactile bench own-sensor` beside the shipped calibration,
 # detector and segmenter, as docs/own-sensor.md scores the shipped one.
 #
-#   SEEDS="43 44 45" bash scripts/own-sensor-depth-seeds.sh [MODELS_DIR] [DATA_DIR]
+#   SEEDS="43 44 45" AUGMENTED_SEEDS="42 43" bash scripts/own-sensor-depth-seeds.sh [MODELS_DIR] [DATA_DIR]
 #
 # after scripts/own-sensor.sh (its rendered sets in DATA_DIR, default
 # data/own-sensor; MODELS_DIR, default models/gelsight-r15). Each run is
-# built in a staging folder and moved to DATA_DIR/depth-seeds/SEED when
-# its page is written; a seed whose run is there already is kept (set
-# RETRAIN=1 to train it again, after the loop rendered new sets, or
-# REBENCH=1 to score its network again, after the bench changed), unless
-# it was trained with another recipe than scripts/own-sensor-depth.env's
-# (each run keeps its recipe in `recipe`): then it is trained again. The
-# shipped models are read, never changed.
+# built in a staging folder and moved to DATA_DIR/depth-seeds/SEED (with
+# --augment: DATA_DIR/depth-seeds/augment/SEED) when its page is written;
+# a run that is there already is kept (set RETRAIN=1 to train it again,
+# after the loop rendered new sets, or REBENCH=1 to score its network
+# again, after the bench changed), unless it was trained with another
+# recipe than scripts/own-sensor-depth.env's (each run keeps its recipe in
+# `recipe`): then it is trained again. The shipped models are read, never
+# changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 models="${1:-models/gelsight-r15}"
 data="${2:-data/own-sensor}"
 ball="${TACTILE_BALL:-../shared/real/gelsight-ball}"
 seeds="${SEEDS:-43 44 45}"
+augmented_seeds="${AUGMENTED_SEEDS-42 43}"
 python="${PYTHON:-python3}"
 for need in "$models/optics.json" "$models/depth/training.json" "$data/train/manifest.json" \
     "$data/test/manifest.json" "$data/times.json" docs/own-sensor.json; do
@@ -48,18 +51,21 @@ bench() {
         --out "$2"
 }
 runs=()
-for seed in $seeds; do
+# One run: SEED into DIR, the recipe with FLAGS... added.
+one_run() {
+    local seed="$1" run="$2"
+    shift 2
     case "$seed" in
-        '' | *[!0-9]*) echo "error: SEEDS: $seed is not a whole number" >&2; exit 1 ;;
+        '' | *[!0-9]*) echo "error: $seed is not a whole number (SEEDS, AUGMENTED_SEEDS)" >&2; exit 1 ;;
     esac
-    run="$data/depth-seeds/$seed"
-    recipe="${depth_recipe[*]}"
+    local flags=("${depth_recipe[@]}" "$@")
+    local recipe="${flags[*]}"
     if [ -f "$run/page.json" ] && [ "$(cat "$run/recipe" 2>/dev/null)" != "$recipe" ]; then
-        echo "== seed $seed: $run was trained with another recipe ($(cat "$run/recipe" 2>/dev/null || echo "none recorded")) than scripts/own-sensor-depth.env's ($recipe): training it again" >&2
+        echo "== seed $seed: $run was trained with another recipe ($(cat "$run/recipe" 2>/dev/null || echo "none recorded")) than $recipe: training it again" >&2
     elif [ -f "$run/page.json" ] && [ -z "${RETRAIN:-}" ]; then
         if [ -n "${REBENCH:-}" ]; then
             echo "== seed $seed: tactile bench own-sensor on the kept $run" >&2
-            stage="$data/depth-seeds/.$seed.page.$$"
+            stage="$(dirname "$run")/.$seed.page.$$"
             trap 'rm -rf "$stage"' EXIT
             mkdir -p "$stage"
             bench "$run/models" "$stage/page.md"
@@ -70,18 +76,18 @@ for seed in $seeds; do
             echo "== seed $seed: kept $run (RETRAIN=1 trains it again, REBENCH=1 scores it again)" >&2
         fi
         runs+=("$run")
-        continue
+        return
     fi
-    stage="$data/depth-seeds/.$seed.new.$$"
+    stage="$(dirname "$run")/.$seed.new.$$"
     trap 'rm -rf "$stage"' EXIT
     mkdir -p "$stage/models"
     # The shipped calibration, detector and segmenter; a depth network of its own.
     for f in "$models"/*; do
         if [ "$(basename "$f")" != depth ]; then cp -r "$f" "$stage/models/"; fi
     done
-    echo "== seed $seed: tactile train depth" >&2
+    echo "== seed $seed: tactile train depth $recipe" >&2
     "$tactile" train depth --data "$data/train" --out "$stage/models/depth" \
-        "${depth_recipe[@]}" --prior-calibration "$stage/models" --seed "$seed"
+        "${flags[@]}" --prior-calibration "$stage/models" --seed "$seed"
     echo "== seed $seed: tactile bench own-sensor" >&2
     bench "$stage/models" "$stage/page.md"
     printf '%s\n' "$recipe" > "$stage/recipe"
@@ -89,6 +95,12 @@ for seed in $seeds; do
     mv "$stage" "$run"
     trap - EXIT
     runs+=("$run")
+}
+for seed in $seeds; do
+    one_run "$seed" "$data/depth-seeds/$seed"
+done
+for seed in $augmented_seeds; do
+    one_run "$seed" "$data/depth-seeds/augment/$seed" --augment
 done
 "$python" scripts/own_sensor_depth_seeds.py docs/own-sensor-depth-seeds.md "$models/depth" docs/own-sensor.json "${runs[@]}"
 echo "wrote docs/own-sensor-depth-seeds.md" >&2

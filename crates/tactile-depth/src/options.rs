@@ -45,7 +45,7 @@ pub struct DepthOptions {
     /// A sensor calibration folder (`tactile calibrate ball`): the network takes its reconstruction of each frame as a fourth channel and learns a correction to it, so it starts from what the calibration sees on the real sensor (save the network in that folder's `depth/`).
     #[arg(long, value_name = "DIR")]
     pub prior_calibration: Option<PathBuf>,
-    /// Photometric augmentation of the training frames' colour channels (exposure, LED balance, offset, blur, noise, glare, JPEG; see PhotometricAugment). The prior or mask channel is left as recorded, so with --prior-calibration the network learns to lean on the calibration where the colours differ.
+    /// Photometric augmentation of the training frames' colour channels (exposure, LED balance, offset, blur, noise, glare, JPEG; see PhotometricAugment), drawn again each epoch; the prior or mask channel is left as recorded. On a calibrated sensor's renders it did not make training runs agree on frames unlike them (docs/own-sensor-depth-seeds.md).
     #[arg(long)]
     pub augment: bool,
     /// torchvision DenseNet weights as safetensors (key mapping: the tactile-depth `torchvision` module docs); the preset must match.

@@ -82,9 +82,8 @@ pub struct DepthTrainingConfig {
     #[config(default = "None")]
     pub prior_calibration: Option<String>,
     /// Photometric augmentation of the training frames' colour channels
-    /// (None: off). A prior or mask channel is not changed, so with a
-    /// calibration prior the network learns to lean on it where the colours
-    /// differ from the renders'.
+    /// (None: off). A prior or mask channel is not changed: the colours
+    /// vary, what the calibration reconstructed of the frame does not.
     #[config(default = "None")]
     pub augment: Option<PhotometricAugment>,
 }

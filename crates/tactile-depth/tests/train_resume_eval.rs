@@ -137,9 +137,8 @@ fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
 }
 
 /// `--augment` changes what the network sees of a frame's colours, drawn
-/// again each round, and nothing of its fourth channel or its targets: a
-/// network given the mask or the calibration's reconstruction learns to
-/// lean on that where the colours differ.
+/// again each round, and nothing of its fourth channel or its targets (the
+/// mask, or the calibration's reconstruction of the frame as recorded).
 #[test]
 fn augmentation_changes_the_colours_alone_and_is_drawn_again_each_round() {
     let tmp = tempfile::tempdir().unwrap();

@@ -43,23 +43,28 @@ def write_run(folder, seed, loss, independent, network_shape, held_out_shape, au
 
 def test_each_run_is_a_row_and_the_spread_of_every_column_is_given(root, tmp_path):
     shipped = write_run(tmp_path / "shipped", 42, 0.0245, 0.068, 0.04, 0.044)
-    other = write_run(tmp_path / "43", 43, 0.0274, 0.136, 0.048, 0.06, augment=True)
+    other = write_run(tmp_path / "43", 43, 0.0274, 0.136, 0.048, 0.06)
+    augmented = write_run(tmp_path / "augment-42", 42, 0.0278, 0.5, 0.05, 0.05, augment=True)
     out = tmp_path / "seeds.md"
-    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", other)
+    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", other, augmented)
     assert r.returncode == 0, r.stderr
     lines = [line for line in out.read_text().splitlines() if line.startswith("| ")]
     header, rows = lines[0], lines[1:]
     assert "`light-test` | `independent`" in header
     cells = [row.strip("| ").split(" | ") for row in rows]
-    assert [c[1] for c in cells[:2]] == ["42", "43"]
+    assert [c[1] for c in cells[:3]] == ["42", "43", "42"]
     # Each row's recipe, from its training record.
-    assert [c[2] for c in cells[:2]] == ["128x96, 2 epochs", "128x96, 2 epochs, `--augment`"]
+    assert [c[2] for c in cells[:3]] == ["128x96, 2 epochs"] * 2 + ["128x96, 2 epochs, `--augment`"]
     # The shipped row; the run's shape against the calibration's over both
     # presses (0.054 / 0.04) and the held-out one alone (0.06 / 0.04).
     assert cells[0][3:7] == ["0.0245", "0.0176 / 0.0480", "0.0170", "0.0680"]
     assert cells[1][8] == "1.35x / 1.50x", cells[1]
-    # Largest over smallest: the other simulator's error doubled.
-    assert cells[2][0] == "**largest over smallest**" and cells[2][6] == "2.00", cells[2]
+    # Largest over smallest, over the runs of one recipe: the other
+    # simulator's error doubled (the augmented run's 0.5 is not in it); a
+    # recipe of one run has no spread.
+    assert len(cells) == 4, cells
+    assert cells[3][0] == "**largest over smallest**" and cells[3][2] == "128x96, 2 epochs", cells[3]
+    assert cells[3][6] == "2.00", cells[3]
     assert not list(tmp_path.glob("*.tmp"))
 
 
