@@ -24,18 +24,24 @@ fn options(extra: serde_json::Value) -> DepthOptions {
     DepthOptions::with_overrides(kw.as_object().unwrap()).unwrap()
 }
 
+/// `frames` visuo-tactile frames of 320x180, `per_sequence` to a video,
+/// written into `dir` from `seed`.
+fn small_set(dir: &std::path::Path, frames: usize, per_sequence: usize, seed: u64) -> Dataset {
+    let cfg = datasets_synth::VisuotactileConfig {
+        width: 320,
+        height: 180,
+        frames_per_sequence: per_sequence,
+        ..Default::default()
+    };
+    datasets_synth::write_visuotactile(&cfg, frames, seed, dir, Default::default()).unwrap();
+    Dataset::open(dir).unwrap()
+}
+
 #[test]
 fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("vt");
-    let cfg = datasets_synth::VisuotactileConfig {
-        width: 320,
-        height: 180,
-        frames_per_sequence: 6,
-        ..Default::default()
-    };
-    datasets_synth::write_visuotactile(&cfg, 18, 8, &data, Default::default()).unwrap();
-    let ds = Dataset::open(&data).unwrap();
+    let ds = small_set(&data, 18, 6, 8);
     let out = tmp.path().join("depth");
 
     // Metres: the targets barely vary; refused before training, and why.
@@ -142,15 +148,7 @@ fn depth_trains_in_millimetres_resumes_and_evaluates_with_heat_maps() {
 #[test]
 fn augmentation_changes_the_colours_alone_and_is_drawn_again_each_round() {
     let tmp = tempfile::tempdir().unwrap();
-    let data = tmp.path().join("vt");
-    let cfg = datasets_synth::VisuotactileConfig {
-        width: 320,
-        height: 180,
-        frames_per_sequence: 3,
-        ..Default::default()
-    };
-    datasets_synth::write_visuotactile(&cfg, 3, 3, &data, Default::default()).unwrap();
-    let ds = Dataset::open(&data).unwrap();
+    let ds = small_set(&tmp.path().join("vt"), 3, 3, 3);
     let set = DepthSet::from_dataset(&ds, &[0, 1, 2], [64, 32], None).unwrap();
     let o = options(json!({ "with_mask": true, "augment": true }));
     let config = o.config();
