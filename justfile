@@ -101,9 +101,9 @@ ship-cae-edge:
 own-sensor:
     bash scripts/own-sensor.sh
 
-# The own-sensor depth network over training runs: the loop's depth step again with seeds 43, 44 and 45, and with --augment at seeds 42 and 43, each scored as docs/own-sensor.md scores the shipped one (after `just own-sensor`); writes docs/own-sensor-depth-seeds.md.
+# The own-sensor depth network over training runs: the loop's depth step again with seeds 43, 44 and 45, and the other recipes of scripts/own-sensor-depth.env (--augment; 4 epochs), each scored as docs/own-sensor.md scores the shipped one (after `just own-sensor`); writes docs/own-sensor-depth-seeds.md.
 own-sensor-depth-seeds:
-    SEEDS="43 44 45" AUGMENTED_SEEDS="42 43" bash scripts/own-sensor-depth-seeds.sh
+    SEEDS="43 44 45" bash scripts/own-sensor-depth-seeds.sh
 
 # Surface pose and shear on the real 331-pin set (issue 34): the candidates on the authors' train split, the shipped models/pose-surface (all 8,000 frames) and models/cae-surface; then `PAPER_A_ONLY='surface|surface_compare|shared' bash scripts/paper-a.sh` scores them into docs/paper-a.md.
 surface:

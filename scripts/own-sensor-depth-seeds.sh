@@ -1,16 +1,18 @@
 #!/usr/bin/env bash
 # The own-sensor depth network over training runs (docs/own-sensor-depth-
-# seeds.md): the loop's depth step again with other seeds, and with the
-# frames' colours augmented (`tactile train depth --augment`), each network
-# scored by `tactile bench own-sensor` beside the shipped calibration,
-# detector and segmenter, as docs/own-sensor.md scores the shipped one.
+# seeds.md): the loop's depth step again with other seeds, and the other
+# recipes of scripts/own-sensor-depth.env (`depth_variants`: the frames'
+# colours augmented, more epochs), each network scored by `tactile bench
+# own-sensor` beside the shipped calibration, detector and segmenter, as
+# docs/own-sensor.md scores the shipped one.
 #
-#   SEEDS="43 44 45" AUGMENTED_SEEDS="42 43" bash scripts/own-sensor-depth-seeds.sh [MODELS_DIR] [DATA_DIR]
+#   SEEDS="43 44 45" bash scripts/own-sensor-depth-seeds.sh [MODELS_DIR] [DATA_DIR]
 #
 # after scripts/own-sensor.sh (its rendered sets in DATA_DIR, default
-# data/own-sensor; MODELS_DIR, default models/gelsight-r15). Each run is
-# built in a staging folder and moved to DATA_DIR/depth-seeds/SEED (with
-# --augment: DATA_DIR/depth-seeds/augment/SEED) when its page is written;
+# data/own-sensor; MODELS_DIR, default models/gelsight-r15); VARIANTS="..."
+# names the other recipes to run (default all, "" none). Each run is built
+# in a staging folder and moved to DATA_DIR/depth-seeds/SEED (another
+# recipe's: DATA_DIR/depth-seeds/NAME/SEED) when its page is written;
 # a run that is there already is kept (set RETRAIN=1 to train it again,
 # after the loop rendered new sets, or REBENCH=1 to score its network
 # again, after the bench changed), unless it was trained with another
@@ -23,7 +25,6 @@ models="${1:-models/gelsight-r15}"
 data="${2:-data/own-sensor}"
 ball="${TACTILE_BALL:-../shared/real/gelsight-ball}"
 seeds="${SEEDS:-43 44 45}"
-augmented_seeds="${AUGMENTED_SEEDS-42 43}"
 python="${PYTHON:-python3}"
 for need in "$models/optics.json" "$models/depth/training.json" "$data/train/manifest.json" \
     "$data/test/manifest.json" "$data/times.json" docs/own-sensor.json; do
@@ -51,14 +52,14 @@ bench() {
         --out "$2"
 }
 runs=()
-# One run: SEED into DIR, the recipe with FLAGS... added.
+# One run: SEED into DIR, trained with the recipe FLAGS...
 one_run() {
     local seed="$1" run="$2"
     shift 2
     case "$seed" in
-        '' | *[!0-9]*) echo "error: $seed is not a whole number (SEEDS, AUGMENTED_SEEDS)" >&2; exit 1 ;;
+        '' | *[!0-9]*) echo "error: $seed is not a whole number (SEEDS, depth_variants)" >&2; exit 1 ;;
     esac
-    local flags=("${depth_recipe[@]}" "$@")
+    local flags=("$@")
     local recipe="${flags[*]}"
     if [ -f "$run/page.json" ] && [ "$(cat "$run/recipe" 2>/dev/null)" != "$recipe" ]; then
         echo "== seed $seed: $run was trained with another recipe ($(cat "$run/recipe" 2>/dev/null || echo "none recorded")) than $recipe: training it again" >&2
@@ -97,10 +98,18 @@ one_run() {
     runs+=("$run")
 }
 for seed in $seeds; do
-    one_run "$seed" "$data/depth-seeds/$seed"
+    one_run "$seed" "$data/depth-seeds/$seed" "${depth_recipe[@]}"
 done
-for seed in $augmented_seeds; do
-    one_run "$seed" "$data/depth-seeds/augment/$seed" --augment
+for variant in "${depth_variants[@]}"; do
+    IFS=';' read -r name variant_seeds variant_flags <<< "$variant"
+    case " ${VARIANTS-$name} " in
+        *" $name "*) ;;
+        *) continue ;;
+    esac
+    read -ra flags <<< "$variant_flags"
+    for seed in $variant_seeds; do
+        one_run "$seed" "$data/depth-seeds/$name/$seed" "${flags[@]}"
+    done
 done
 "$python" scripts/own_sensor_depth_seeds.py docs/own-sensor-depth-seeds.md "$models/depth" docs/own-sensor.json "${runs[@]}"
 echo "wrote docs/own-sensor-depth-seeds.md" >&2
