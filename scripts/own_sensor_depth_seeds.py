@@ -51,10 +51,18 @@ def values(loss, page, sets):
     ]
 
 
+def same_recipe(config):
+    """What makes two runs the same recipe: their whole training config but
+    the seed and the prior's folder (each run's own)."""
+    rest = {k: v for k, v in config.items() if k != "prior_calibration"}
+    rest["schedule"] = {k: v for k, v in config["schedule"].items() if k != "seed"}
+    return json.dumps(rest, sort_keys=True)
+
+
 def run_values(training_path, page_path, sets=None):
-    """The seed, recipe and numbers of the network in `training_path`
-    scored in `page_path` (and the page's sets, and the page); a file
-    without a field the page needs is named."""
+    """The seed, recipe (in words, and as `same_recipe`'s key) and numbers
+    of the network in `training_path` scored in `page_path` (and the page's
+    sets, and the page); a file without a field the page needs is named."""
     training, page = load(training_path), load(page_path)
     try:
         config = training["config"]
@@ -63,11 +71,12 @@ def run_values(training_path, page_path, sets=None):
         recipe = f"{w}x{h}, {config['schedule']['max_epochs']} epochs"
         if config.get("augment") is not None:
             recipe += ", `--augment`"
+        key = same_recipe(config)
     except (KeyError, TypeError, ValueError) as e:
         sys.exit(f"{training_path}: no {e} (not a depth network's training record?)")
     try:
         sets = sets if sets is not None else [s for s, _ in other_sets(page)]
-        return (seed, recipe), values(loss, page, sets), sets, page
+        return (seed, recipe, key), values(loss, page, sets), sets, page
     except (KeyError, TypeError) as e:
         if isinstance(page, dict) and "ball" in page and "ball_summary" not in page:
             sys.exit(f"{page_path}: no 'ball_summary' (written by an older `tactile bench own-sensor`: "
@@ -104,10 +113,11 @@ def main(argv):
                                    os.path.join(run, "page.json"), sets)
         table.append((f"`{run}`", seed, v))
     calibration_peak = ball_summaries(page)["all"]["calibration_peak_mm"]
-    recipes = list(dict.fromkeys(recipe for _, (_, recipe), _ in table))
+    # The spread over the runs of one recipe, named by its words.
+    recipes = dict((key, recipe) for _, (_, recipe, key), _ in table)
     spreads = []
-    for recipe in recipes:
-        rows = [v for _, (_, r), v in table if r == recipe]
+    for key, recipe in recipes.items():
+        rows = [v for _, (_, _, k), v in table if k == key]
         if len(rows) < 2:
             continue
         spread = []
@@ -134,7 +144,7 @@ def main(argv):
         + " | ".join(f"`{s}`" for s in sets)
         + " | real presses: far field | real presses: shape, all / held out | real presses: deepest point |",
         "|---" * (8 + n) + "|",
-        *("| " + " | ".join([name, str(seed), recipe, *cells(v, n)]) + " |" for name, (seed, recipe), v in table),
+        *("| " + " | ".join([name, str(seed), recipe, *cells(v, n)]) + " |" for name, (seed, recipe, _), v in table),
         *(f"| **largest over smallest** | - | {recipe} | " + " | ".join(cells(spread, n, value=".2f", times="")) + " |"
           for recipe, spread in spreads),
         "",

@@ -96,3 +96,20 @@ def test_a_page_of_an_older_bench_is_named_with_how_to_score_it_again(root, tmp_
     r = run(root, out, shipped / "models" / "depth", shipped / "page.json", old)
     assert r.returncode != 0 and f"{old / 'page.json'}: no 'ball_summary'" in r.stderr, r.stderr
     assert "REBENCH=1" in r.stderr and not out.exists()
+
+
+def test_runs_are_one_recipe_only_when_their_whole_training_config_is(root, tmp_path):
+    shipped = write_run(tmp_path / "shipped", 42, 0.0245, 0.068, 0.04, 0.044)
+    other = write_run(tmp_path / "43", 43, 0.0274, 0.136, 0.048, 0.06)
+    # The same words in the recipe column, another patience: no spread with
+    # the shipped network's runs.
+    patient = write_run(tmp_path / "44", 44, 0.03, 0.5, 0.05, 0.05)
+    record = patient / "models" / "depth" / "training.json"
+    training = json.loads(record.read_text())
+    training["config"]["schedule"]["patience"] = 5
+    record.write_text(json.dumps(training))
+    out = tmp_path / "seeds.md"
+    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", other, patient)
+    assert r.returncode == 0, r.stderr
+    spread = [line for line in out.read_text().splitlines() if line.startswith("| **largest")]
+    assert len(spread) == 1 and " | 2.00 | " in spread[0], spread
