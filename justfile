@@ -101,7 +101,7 @@ ship-cae-edge:
 own-sensor:
     bash scripts/own-sensor.sh
 
-# The own-sensor depth network over training runs: the loop's depth step again with seeds 43, 44 and 45, and the other recipes of scripts/own-sensor-depth.env (--augment; 4 epochs), each scored as docs/own-sensor.md scores the shipped one (after `just own-sensor`); writes docs/own-sensor-depth-seeds.md.
+# The own-sensor depth network over training runs: the loop's depth step again with seeds 43, 44 and 45, and the other recipes of scripts/own-sensor-depth.env (2 epochs; 2 epochs with --augment), each scored as docs/own-sensor.md scores the shipped one (after `just own-sensor`); writes docs/own-sensor-depth-seeds.md.
 own-sensor-depth-seeds:
     SEEDS="43 44 45" bash scripts/own-sensor-depth-seeds.sh
 

@@ -2,7 +2,7 @@
 # The own-sensor depth network over training runs (docs/own-sensor-depth-
 # seeds.md): the loop's depth step again with other seeds, and the other
 # recipes of scripts/own-sensor-depth.env (`depth_variants`: the frames'
-# colours augmented, more epochs), each network scored by `tactile bench
+# colours augmented, fewer epochs), each network scored by `tactile bench
 # own-sensor` beside the shipped calibration, detector and segmenter, as
 # docs/own-sensor.md scores the shipped one.
 #

@@ -134,7 +134,7 @@ def main(argv):
         "epochs, photometric augmentation as each row's training record says) again with other seeds (which draw the weights, "
         "the shuffles and the validation videos), and with the other recipes of that file (`depth_variants`: the "
         "training frames' colours augmented with `--augment`, the detector's photometric augmentation with the prior "
-        "left as reconstructed; more epochs), each network scored by `tactile bench own-sensor` beside the shipped "
+        "left as reconstructed; fewer epochs), each network scored by `tactile bench own-sensor` beside the shipped "
         "calibration, detector and segmenter, as `docs/own-sensor.md` scores the shipped one. Mean absolute errors "
         "of the indentation over the frame, mm; on the real presses, the network's shape error inside the contact "
         "against the calibration's, its far field, and how deep it says the ball went (the calibration: "
