@@ -53,8 +53,9 @@ def values(loss, page, sets):
 
 def same_recipe(config):
     """What makes two runs the same recipe: their whole training config but
-    the seed and the prior's folder (each run's own)."""
-    rest = {k: v for k, v in config.items() if k != "prior_calibration"}
+    the seed and the prior's folder (each run's own). A field an older
+    record lacks is read as its default, none (`augment`)."""
+    rest = {k: v for k, v in config.items() if k != "prior_calibration" and v is not None}
     rest["schedule"] = {k: v for k, v in config["schedule"].items() if k != "seed"}
     return json.dumps(rest, sort_keys=True)
 

@@ -108,8 +108,15 @@ def test_runs_are_one_recipe_only_when_their_whole_training_config_is(root, tmp_
     training = json.loads(record.read_text())
     training["config"]["schedule"]["patience"] = 5
     record.write_text(json.dumps(training))
+    # A record written before `augment` was a field: the same recipe as one
+    # whose `augment` is none.
+    older = write_run(tmp_path / "45", 45, 0.0309, 0.034, 0.04, 0.04)
+    record = older / "models" / "depth" / "training.json"
+    training = json.loads(record.read_text())
+    del training["config"]["augment"]
+    record.write_text(json.dumps(training))
     out = tmp_path / "seeds.md"
-    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", other, patient)
+    r = run(root, out, shipped / "models" / "depth", shipped / "page.json", other, patient, older)
     assert r.returncode == 0, r.stderr
     spread = [line for line in out.read_text().splitlines() if line.startswith("| **largest")]
-    assert len(spread) == 1 and " | 2.00 | " in spread[0], spread
+    assert len(spread) == 1 and " | 4.00 | " in spread[0], spread
