@@ -2,6 +2,8 @@
 network over training runs, every number read from the runs' files."""
 
 import json
+import os
+import shutil
 import subprocess
 import sys
 
@@ -120,3 +122,105 @@ def test_runs_are_one_recipe_only_when_their_whole_training_config_is(root, tmp_
     assert r.returncode == 0, r.stderr
     spread = [line for line in out.read_text().splitlines() if line.startswith("| **largest")]
     assert len(spread) == 1 and " | 4.00 | " in spread[0], spread
+
+
+FAKE_TACTILE = '''#!PYTHON
+"""A stand-in for the tactile binary: `train depth` writes a training record
+of its flags, `bench own-sensor` a page; each call is logged."""
+import json, os, sys
+args = sys.argv[1:]
+with open(os.environ["FAKE_LOG"], "a") as f:
+    f.write(" ".join(args) + "\\n")
+def flag(name):
+    return args[args.index(name) + 1]
+if args[:2] == ["train", "depth"]:
+    if os.environ.get("FAKE_FAIL"):
+        sys.exit("error: training failed")
+    out = flag("--out")
+    os.makedirs(out)
+    config = {"schedule": {"seed": int(flag("--seed")), "max_epochs": int(flag("--max-epochs")),
+                           "patience": int(flag("--patience"))},
+              "model": {"input_size": [128, 96]}, "augment": {} if "--augment" in args else None,
+              "prior_calibration": flag("--prior-calibration")}
+    with open(os.path.join(out, "training.json"), "w") as f:
+        json.dump({"config": config, "summary": {"best_val_loss": 0.02}}, f)
+elif args[:2] == ["bench", "own-sensor"]:
+    out = flag("--out")
+    with open(os.environ["FAKE_PAGE"]) as f:
+        page = f.read()
+    with open(out[:-3] + ".json", "w") as f:
+        f.write(page)
+    with open(out, "w") as f:
+        f.write("# page\\n")
+'''
+
+
+def seeds_sandbox(root, tmp_path, recipe):
+    """A copy of the seeds script and what it reads, with `tactile` and
+    `cargo` stood in for; `recipe` is the loop's depth recipe."""
+    box = tmp_path / "box"
+    (box / "scripts").mkdir(parents=True)
+    for f in ["own-sensor-depth-seeds.sh", "own_sensor_depth_seeds.py"]:
+        shutil.copy(root / "scripts" / f, box / "scripts" / f)
+    (box / "scripts" / "own-sensor-depth.env").write_text(
+        f"depth_recipe=({recipe})\ndepth_variants=(\"more;7;{recipe} --augment\")\n")
+    (box / "docs").mkdir()
+    shutil.copy(root / "docs" / "own-sensor.json", box / "docs" / "own-sensor.json")
+    models, data = box / "models", box / "data"
+    (models / "depth").mkdir(parents=True)
+    (models / "optics.json").write_text("{}")
+    shutil.copy(root / "models" / "gelsight-r15" / "depth" / "training.json", models / "depth" / "training.json")
+    for d in ["train", "test"]:
+        (data / d).mkdir(parents=True)
+        (data / d / "manifest.json").write_text("{}")
+    (data / "times.json").write_text("{}")
+    bin_dir, release = box / "bin", box / "target" / "release"
+    bin_dir.mkdir()
+    release.mkdir(parents=True)
+    (bin_dir / "cargo").write_text("#!/bin/sh\nexit 0\n")
+    (release / "tactile").write_text(FAKE_TACTILE.replace("PYTHON", sys.executable))
+    for f in [bin_dir / "cargo", release / "tactile"]:
+        f.chmod(0o755)
+    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", CARGO_TARGET_DIR=str(box / "target"),
+               ORT_DYLIB_PATH="unused", PYTHON=sys.executable, FAKE_LOG=str(box / "log"),
+               FAKE_PAGE=str(root / "docs" / "own-sensor.json"), SEEDS="43", TACTILE_BALL="unused")
+    return box, env
+
+
+def seeds_run(box, env, **more):
+    return subprocess.run(["bash", str(box / "scripts" / "own-sensor-depth-seeds.sh"), "models", "data"],
+                          cwd=box, env=dict(env, **more), capture_output=True, text=True)
+
+
+def test_the_seeds_script_keeps_a_run_retrains_one_of_another_recipe_and_loses_nothing_on_failure(root, tmp_path):
+    box, env = seeds_sandbox(root, tmp_path, "--max-epochs 2 --patience 2")
+    runs = box / "data" / "depth-seeds"
+    r = seeds_run(box, env)
+    assert r.returncode == 0, r.stderr
+    assert (runs / "43" / "recipe").read_text() == "--max-epochs 2 --patience 2\n"
+    assert (runs / "more" / "7" / "recipe").read_text() == "--max-epochs 2 --patience 2 --augment\n"
+    page = (box / "docs" / "own-sensor-depth-seeds.md").read_text()
+    assert "`data/depth-seeds/43`" in page and "`data/depth-seeds/more/7`" in page, page
+    trained = [line for line in (box / "log").read_text().splitlines() if line.startswith("train depth")]
+    assert len(trained) == 2, trained
+    # Run again: both are kept, nothing is trained.
+    r = seeds_run(box, env)
+    assert r.returncode == 0 and r.stderr.count("kept") == 2, r.stderr
+    assert sum(line.startswith("train depth") for line in (box / "log").read_text().splitlines()) == 2
+    # The loop's recipe changes: its run is trained again, with the new
+    # recipe recorded; the variant, whose recipe is its own, is too.
+    env_file = box / "scripts" / "own-sensor-depth.env"
+    env_file.write_text(env_file.read_text().replace("--max-epochs 2", "--max-epochs 4"))
+    r = seeds_run(box, env)
+    assert r.returncode == 0, r.stderr
+    assert "trained with another recipe (--max-epochs 2 --patience 2)" in r.stderr, r.stderr
+    assert (runs / "43" / "recipe").read_text() == "--max-epochs 4 --patience 2\n"
+    record = json.loads((runs / "43" / "models" / "depth" / "training.json").read_text())
+    assert record["config"]["schedule"]["max_epochs"] == 4
+    # A training that fails leaves the kept run as it was and no staging
+    # folder behind.
+    env_file.write_text(env_file.read_text().replace("--max-epochs 4", "--max-epochs 6"))
+    r = seeds_run(box, env, FAKE_FAIL="1")
+    assert r.returncode != 0 and "training failed" in r.stderr, r.stderr
+    assert (runs / "43" / "recipe").read_text() == "--max-epochs 4 --patience 2\n"
+    assert sorted(p.name for p in runs.iterdir()) == ["43", "more"]
