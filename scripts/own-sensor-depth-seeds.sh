@@ -56,9 +56,6 @@ runs=()
 one_run() {
     local seed="$1" run="$2"
     shift 2
-    case "$seed" in
-        '' | *[!0-9]*) echo "error: $seed is not a whole number (SEEDS, depth_variants)" >&2; exit 1 ;;
-    esac
     local flags=("$@")
     local recipe="${flags[*]}"
     if [ -f "$run/page.json" ] && [ "$(cat "$run/recipe" 2>/dev/null)" != "$recipe" ]; then
@@ -97,7 +94,36 @@ one_run() {
     trap - EXIT
     runs+=("$run")
 }
-for seed in $seeds; do
+# SEEDS and every entry of depth_variants are checked before any run trains.
+# Each of SEEDS... is a whole number, else WHERE is named.
+check_seeds() {
+    local where="$1" seed
+    shift
+    for seed in "$@"; do
+        case "$seed" in
+            *[!0-9]*) echo "error: $where: $seed is not a whole number" >&2; exit 1 ;;
+        esac
+    done
+}
+# The seeds as words (not globbed).
+read -ra seed_list <<< "$seeds"
+check_seeds SEEDS "${seed_list[@]}"
+for variant in "${depth_variants[@]}"; do
+    IFS=';' read -r name variant_seeds variant_flags <<< "$variant"
+    # Its runs go to depth-seeds/NAME: a name of one path component, and
+    # seeds and flags given (else the entry would run nothing, or the
+    # command's defaults rather than a recipe).
+    case "$name" in
+        '' | *[!A-Za-z0-9_-]*) echo "error: scripts/own-sensor-depth.env: depth_variants entry \"$variant\": its NAME \"$name\" is not letters, digits, - and _ (the form is NAME;SEEDS;FLAGS)" >&2; exit 1 ;;
+    esac
+    if [ -z "${variant_seeds// /}" ] || [ -z "${variant_flags// /}" ]; then
+        echo "error: scripts/own-sensor-depth.env: depth_variants entry \"$variant\" has no SEEDS or no FLAGS (the form is NAME;SEEDS;FLAGS)" >&2
+        exit 1
+    fi
+    read -ra variant_seed_list <<< "$variant_seeds"
+    check_seeds "scripts/own-sensor-depth.env: depth_variants entry \"$variant\"" "${variant_seed_list[@]}"
+done
+for seed in "${seed_list[@]}"; do
     one_run "$seed" "$data/depth-seeds/$seed" "${depth_recipe[@]}"
 done
 for variant in "${depth_variants[@]}"; do
@@ -107,7 +133,8 @@ for variant in "${depth_variants[@]}"; do
         *) continue ;;
     esac
     read -ra flags <<< "$variant_flags"
-    for seed in $variant_seeds; do
+    read -ra variant_seed_list <<< "$variant_seeds"
+    for seed in "${variant_seed_list[@]}"; do
         one_run "$seed" "$data/depth-seeds/$name/$seed" "${flags[@]}"
     done
 done

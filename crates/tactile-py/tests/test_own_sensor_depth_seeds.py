@@ -224,3 +224,24 @@ def test_the_seeds_script_keeps_a_run_retrains_one_of_another_recipe_and_loses_n
     assert r.returncode != 0 and "training failed" in r.stderr, r.stderr
     assert (runs / "43" / "recipe").read_text() == "--max-epochs 4 --patience 2\n"
     assert sorted(p.name for p in runs.iterdir()) == ["43", "more"]
+
+
+def test_the_seeds_script_names_a_bad_seed_or_variant_before_it_trains_anything(root, tmp_path):
+    box, env = seeds_sandbox(root, tmp_path, "--max-epochs 2 --patience 2")
+    env_file = box / "scripts" / "own-sensor-depth.env"
+    recipe = env_file.read_text().splitlines()[0]
+    cases = [
+        ({"SEEDS": "43 4a"}, None, "SEEDS: 4a is not a whole number"),
+        ({"SEEDS": "*"}, None, "SEEDS: * is not a whole number"),
+        ({}, "../up;7;--max-epochs 2", 'its NAME "../up" is not letters'),
+        ({}, "none;;--max-epochs 2", "has no SEEDS or no FLAGS"),
+        ({}, "bare;7;", "has no SEEDS or no FLAGS"),
+        ({}, "odd;7 x;--max-epochs 2", '"odd;7 x;--max-epochs 2": x is not a whole number'),
+    ]
+    for more, variant, message in cases:
+        if variant is not None:
+            env_file.write_text(f'{recipe}\ndepth_variants=("{variant}")\n')
+        r = seeds_run(box, env, **more)
+        assert r.returncode != 0 and message in r.stderr, (more, variant, r.stderr)
+        assert not (box / "log").exists() and not (box / "data" / "depth-seeds").exists(), (more, variant)
+        assert not (box / "docs" / "own-sensor-depth-seeds.md").exists()
