@@ -222,7 +222,7 @@ pub fn bench_devices(models: &Path, runs: usize) -> Result<Vec<DeviceRow>> {
     let s_dir = models.join("segmenter");
     let s = SegmenterArtifact::read(&s_dir)?.model.side;
     let z_dir = models.join("depth");
-    let dep = DepthArtifact::read(&z_dir)?;
+    let dep = tactile_depth::ensemble::read_config(&z_dir)?;
     let [zw, zh] = dep.model.input_size;
     let zc = dep.model.in_channels;
     Ok(vec![
@@ -232,7 +232,11 @@ pub fn bench_devices(models: &Path, runs: usize) -> Result<Vec<DeviceRow>> {
             row::<DetectorArtifact>("detector", &d, [1, 3, h, w], runs)?
         },
         row::<SegmenterArtifact>("segmenter", &s_dir, [1, 3, s, s], runs)?,
-        row::<DepthArtifact>("depth", &z_dir, [1, zc, zh, zw], runs)?,
+        if tactile_depth::DepthEnsembleArtifact::is_in(&z_dir) {
+            row::<tactile_depth::DepthEnsembleArtifact>("depth", &z_dir, [1, zc, zh, zw], runs)?
+        } else {
+            row::<DepthArtifact>("depth", &z_dir, [1, zc, zh, zw], runs)?
+        },
     ])
 }
 

@@ -8,7 +8,7 @@ use burn::module::Module;
 use serde::Serialize;
 use tactile_burn::{Artifact, DeviceKind, Runtime};
 use tactile_core::dataset::Dataset;
-use tactile_depth::{DepthArtifact, DepthEstimator, DepthScores};
+use tactile_depth::{DepthArtifact, DepthEnsembleArtifact, DepthEstimator, DepthScores};
 use tactile_detect::{DetectionSet, DetectorArtifact, DetectorEnsembleArtifact, TendonDetector};
 use tactile_segment::eval::CURVED;
 use tactile_segment::{SegmenterArtifact, SegmenterScores, TendonSegmenter};
@@ -369,9 +369,26 @@ pub fn bench_depth(b: &ModelBench) -> Result<Table<DepthMetrics>> {
             None => "-".into(),
         };
         let [w, h] = art.model.input_size;
-        let ms = model_latencies::<DepthArtifact>(m, [1, art.model.in_channels, h, w], b.runs)?;
-        let training: serde_json::Value =
-            tactile_core::io::read_json(m.join("training.json")).unwrap_or_default();
+        let shape = [1, art.model.in_channels, h, w];
+        // An ensemble: its first member's training record (its recipe).
+        let ensemble = DepthEnsembleArtifact::is_in(m);
+        let (ms, params, record) = match ensemble {
+            true => (
+                model_latencies::<DepthEnsembleArtifact>(m, shape, b.runs)?,
+                parameters::<DepthEnsembleArtifact>(m)?,
+                (DepthEnsembleArtifact::read(m)?.ensemble.member_dirs(m))
+                    .into_iter()
+                    .next()
+                    .unwrap_or_default()
+                    .join("training.json"),
+            ),
+            false => (
+                model_latencies::<DepthArtifact>(m, shape, b.runs)?,
+                parameters::<DepthArtifact>(m)?,
+                m.join("training.json"),
+            ),
+        };
+        let training: serde_json::Value = tactile_core::io::read_json(record).unwrap_or_default();
         md.push_str(&format!(
             "| {} | {} | {w}x{h} | {:?} | {} | {} | {} | {sel} | {:.4} | {} | {:.4} | {:.4} | {ext} | {} | {} | {} |\n",
             folder_name(m),
@@ -379,7 +396,7 @@ pub fn bench_depth(b: &ModelBench) -> Result<Table<DepthMetrics>> {
             art.model.head,
             training["config"]["loss"].as_str().unwrap_or("?"),
             if art.with_mask { "yes" } else { "no" },
-            parameters::<DepthArtifact>(m)?,
+            params,
             s.mae_mm,
             s.mae_tendon_mm.map_or("-".into(), |v| format!("{v:.4}")),
             s.rmse_mm,

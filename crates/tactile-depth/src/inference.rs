@@ -1,17 +1,18 @@
-//! The depth network at work: a frame of any size in, the camera-to-skin
+//! The depth network (one, or an ensemble) at work: a frame of any size in, the camera-to-skin
 //! distance of every pixel out (millimetres, at the network's input size),
 //! on any runtime. `tactile run`, `tactile eval depth`, the Python package
 //! and the benches all go through [`DepthEstimator`].
 
 use std::path::{Path, PathBuf};
 
-use tactile_burn::{Network, Runtime};
+use tactile_burn::{Artifact, Network, Runtime};
 use tactile_core::image_io::RgbImage;
 
 use tactile_gelsight::IndentationMap;
 
 use crate::Result;
 use crate::artifact::DepthArtifact;
+use crate::ensemble::DepthEnsembleArtifact;
 use crate::prepare::FourthChannel;
 use crate::prior::PriorSource;
 
@@ -25,11 +26,18 @@ pub struct DepthEstimator {
 }
 
 impl DepthEstimator {
-    /// Load the depth network in `dir` onto `runtime` (`threads` intra-op
-    /// threads for onnxruntime; 0 = its default).
+    /// Load the depth network in `dir` (one, or an ensemble of them:
+    /// [`crate::ensemble`]) onto `runtime` (`threads` intra-op threads for
+    /// onnxruntime; 0 = its default).
     pub fn load(dir: impl AsRef<Path>, runtime: Runtime, threads: usize) -> Result<Self> {
         let dir = dir.as_ref();
-        let (artifact, net) = tactile_onnx::load_network::<DepthArtifact>(dir, runtime, threads)?;
+        let (artifact, net) = if DepthEnsembleArtifact::is_in(dir) {
+            let (e, net) =
+                tactile_onnx::load_network::<DepthEnsembleArtifact>(dir, runtime, threads)?;
+            (e.lead()?, net)
+        } else {
+            tactile_onnx::load_network::<DepthArtifact>(dir, runtime, threads)?
+        };
         let prior = match &artifact.prior {
             Some(p) => {
                 let folder = p.folder(dir);

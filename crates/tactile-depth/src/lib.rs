@@ -7,6 +7,7 @@
 
 pub mod artifact;
 pub mod data;
+pub mod ensemble;
 mod error;
 pub mod eval;
 pub mod inference;
@@ -19,6 +20,7 @@ pub mod training;
 
 pub use artifact::{DepthArtifact, DepthScale};
 pub use data::DepthSet;
+pub use ensemble::{DepthEnsemble, DepthEnsembleArtifact};
 pub use error::{Error, Result};
 pub use eval::{DEPTH_RANGE_MM, DepthScorer, DepthScores, evaluate};
 pub use inference::DepthEstimator;

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use tactile_burn::Artifact;
+use tactile_depth::{DepthArtifact, DepthEnsembleArtifact};
 use tactile_detect::{DetectorArtifact, DetectorEnsembleArtifact};
 use tactile_estimate::RegressorEnsemble;
 use tactile_estimate::regressor::RegressorArtifact;
@@ -11,8 +12,8 @@ use tactile_pose::{PoseArtifact, PoseEnsemble};
 
 use crate::Result;
 
-/// Copy the member folders (pose networks, detectors or regressors on one
-/// encoder's features, all of one kind)
+/// Copy the member folders (pose networks, detectors, depth networks or
+/// regressors on one encoder's features, all of one kind)
 /// into a new ensemble folder `out` (staged; an existing `out` is left
 /// alone) that every front end loads as one model; returns one line saying
 /// what was made.
@@ -28,6 +29,9 @@ pub fn assemble_ensemble(members: &[PathBuf], out: &Path) -> Result<String> {
     } else if PoseArtifact::is_in(first) {
         let e = PoseEnsemble::assemble(members, out)?;
         Ok(e.describe(out, "pose networks"))
+    } else if DepthArtifact::is_in(first) {
+        let e = DepthEnsembleArtifact::assemble(members, out)?;
+        Ok(e.describe(out, "depth networks"))
     } else if RegressorArtifact::is_in(first) {
         let e = RegressorEnsemble::assemble(members, out)?;
         Ok(e.describe(out, "regressors"))
@@ -47,8 +51,8 @@ pub fn assemble_ensemble(members: &[PathBuf], out: &Path) -> Result<String> {
     } else {
         Err(tactile_core::Error::wrong_kind(
             first,
-            "detector, pose-network or regressor folder",
-            "no detector.json, pose.json or regressor.json",
+            "detector, pose-network, depth-network or regressor folder",
+            "no detector.json, pose.json, depth.json or regressor.json",
         )
         .into())
     }

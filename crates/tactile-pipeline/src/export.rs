@@ -5,7 +5,7 @@ use std::path::Path;
 
 use tactile_burn::{Artifact, DeviceKind};
 use tactile_cae::CaeArtifact;
-use tactile_depth::DepthArtifact;
+use tactile_depth::ensemble::{depth_onnx, is_depth};
 use tactile_detect::ensemble::{detector_onnx, is_detector};
 use tactile_onnx::Exportable;
 use tactile_segment::SegmenterArtifact;
@@ -99,8 +99,8 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
         ("detector", detector_onnx(dir)?.1)
     } else if SegmenterArtifact::is_in(dir) {
         ("segmenter", export::<SegmenterArtifact>(dir)?)
-    } else if DepthArtifact::is_in(dir) {
-        ("depth network", export::<DepthArtifact>(dir)?)
+    } else if is_depth(dir) {
+        ("depth network", depth_onnx(dir)?.1)
     } else if tactile_gelsight::GelsightArtifact::is_in(dir) {
         (
             "calibrated sensor model",
@@ -121,7 +121,7 @@ pub fn export_model(dir: &Path, part: Part) -> Result<Exported> {
         let exportable = |d: &Path| {
             is_detector(d)
                 || SegmenterArtifact::is_in(d)
-                || DepthArtifact::is_in(d)
+                || is_depth(d)
                 || tactile_gelsight::GelsightArtifact::is_in(d)
                 || tactile_pose::PoseArtifact::is_in(d)
                 || CaeArtifact::is_in(d)
@@ -256,9 +256,8 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
             gates: None,
         };
         ("segmenter", make_standalone(&a.onnx(&l.model)?, &spec)?)
-    } else if DepthArtifact::is_in(dir) {
-        let l = DepthArtifact::load(dir, &device)?;
-        let a = &l.artifact;
+    } else if is_depth(dir) {
+        let a = &tactile_depth::ensemble::read_config(dir)?;
         if a.with_mask || a.prior.is_some() {
             return Err(tactile_core::Error::Invalid(format!(
                 "{}: this depth network also takes a {} channel; a standalone export takes the frame only (export it with `tactile export` and feed the fourth channel)",
@@ -288,7 +287,10 @@ pub fn export_standalone(dir: &Path) -> Result<Exported> {
             exposure_level: None,
             gates: None,
         };
-        ("depth network", make_standalone(&a.onnx(&l.model)?, &spec)?)
+        (
+            "depth network",
+            make_standalone(&depth_onnx(dir)?.1, &spec)?,
+        )
     } else {
         return Err(tactile_core::Error::wrong_kind(
             dir,

@@ -77,7 +77,7 @@ pub(crate) struct CalibrateArgs {
 
 #[derive(Args)]
 pub(crate) struct EnsembleArgs {
-    /// The member folders, 2 to 8 (pose networks, detectors or regressors; single models, not ensembles).
+    /// The member folders, 2 to 8 (pose networks, detectors, depth networks or regressors; single models, not ensembles).
     #[arg(long, num_args = 1.., required = true)]
     members: Vec<PathBuf>,
     /// The new ensemble folder (an existing one is left alone).

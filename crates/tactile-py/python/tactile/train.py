@@ -129,11 +129,14 @@ def options(trainer: str) -> List[Dict[str, Any]]:
 def ensemble(members: Sequence[PathLike], out: PathLike) -> str:
     """Average 2 to 8 models trained apart: pose networks, detectors that
     read a frame alike (input size, bits, exposure normalisation,
-    threshold), or regressors on one encoder's features trained with other
-    seeds (single models: an ensemble's members, not the ensemble).
+    threshold), depth networks that read a frame alike (input size,
+    channels, the same mask or calibration as fourth channel), or
+    regressors on one encoder's features trained with other seeds (single
+    models: an ensemble's members, not the ensemble).
     Copies them into the new folder ``out`` (an existing one is left alone)
     that ``PoseEstimator``, ``Pipeline`` and ``tactile.eval`` load as one
-    model; a detector ensemble is one network (the members' mean logit); a
+    model; a detector ensemble is one network (the members' mean logit), a
+    depth ensemble one network (the members' mean map); a
     regressor ensemble inside an encoder folder is one of the estimators
     ``TactipEncoder`` runs (the members' mean).
     Returns what was made, in words.
