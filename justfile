@@ -97,13 +97,13 @@ ship-cae-edge:
     rm -rf models/.cae-edge-new && mkdir -p models/.cae-edge-new/pose && cp data/cae-edge-112-all/cae.* data/cae-edge-112-all/curves.* data/cae-edge-112-all/training.json models/.cae-edge-new/ && cp data/cae-edge-112-all/pose/regressor.* models/.cae-edge-new/pose/
     rm -rf models/cae-edge && mv models/.cae-edge-new models/cae-edge
 
-# The own-sensor loop (issue 33): calibrate the shared GelSight from its ball presses, render its palpation videos, train and export its pipeline into models/gelsight-r15, then write docs/own-sensor.md.
+# The own-sensor loop (issue 33): calibrate the shared GelSight from its ball presses, render its palpation videos, train and export its pipeline into models/gelsight-r15 (its depth the mean of four networks; DEPTH_SEEDS=42 trains one), then write docs/own-sensor.md.
 own-sensor:
     bash scripts/own-sensor.sh
 
-# The own-sensor depth network over training runs: the loop's depth step again with seeds 43, 44 and 45, and the other recipes of scripts/own-sensor-depth.env (2 epochs; 2 epochs with --augment), each scored as docs/own-sensor.md scores the shipped one (after `just own-sensor`); writes docs/own-sensor-depth-seeds.md.
+# The own-sensor depth network over training runs: each of the networks whose mean the loop ships (seeds 42-45 of scripts/own-sensor-depth.env) alone, and the file's other recipes (2 epochs; 2 epochs with --augment), each scored as docs/own-sensor.md scores the shipped mean (after `just own-sensor`); writes docs/own-sensor-depth-seeds.md.
 own-sensor-depth-seeds:
-    SEEDS="43 44 45" bash scripts/own-sensor-depth-seeds.sh
+    bash scripts/own-sensor-depth-seeds.sh
 
 # Surface pose and shear on the real 331-pin set (issue 34): the candidates on the authors' train split, the shipped models/pose-surface (all 8,000 frames) and models/cae-surface; then `PAPER_A_ONLY='surface|surface_compare|shared' bash scripts/paper-a.sh` scores them into docs/paper-a.md.
 surface:

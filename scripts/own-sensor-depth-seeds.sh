@@ -1,15 +1,18 @@
 #!/usr/bin/env bash
 # The own-sensor depth network over training runs (docs/own-sensor-depth-
-# seeds.md): the loop's depth step again with other seeds, and the other
+# seeds.md): the loop's depth recipe trained alone per seed (the networks
+# whose mean it ships, each on its own, and other seeds), and the other
 # recipes of scripts/own-sensor-depth.env (`depth_variants`: the frames'
 # colours augmented, fewer epochs), each network scored by `tactile bench
 # own-sensor` beside the shipped calibration, detector and segmenter, as
 # docs/own-sensor.md scores the shipped one.
 #
-#   SEEDS="43 44 45" bash scripts/own-sensor-depth-seeds.sh [MODELS_DIR] [DATA_DIR]
+#   SEEDS="42 43 44 45" bash scripts/own-sensor-depth-seeds.sh [MODELS_DIR] [DATA_DIR]
 #
 # after scripts/own-sensor.sh (its rendered sets in DATA_DIR, default
-# data/own-sensor; MODELS_DIR, default models/gelsight-r15); VARIANTS="..."
+# data/own-sensor; MODELS_DIR, default models/gelsight-r15). SEEDS defaults
+# to the env file's depth_seeds, the seeds whose mean the loop ships: the
+# page sets each of its networks alone beside their mean. VARIANTS="..."
 # names the other recipes to run (default all, "" none). Each run is built
 # in a staging folder and moved to DATA_DIR/depth-seeds/SEED (another
 # recipe's: DATA_DIR/depth-seeds/NAME/SEED) when its page is written;
@@ -24,15 +27,19 @@ cd "$(dirname "$0")/.."
 models="${1:-models/gelsight-r15}"
 data="${2:-data/own-sensor}"
 ball="${TACTILE_BALL:-../shared/real/gelsight-ball}"
-seeds="${SEEDS:-43 44 45}"
 python="${PYTHON:-python3}"
-for need in "$models/optics.json" "$models/depth/training.json" "$data/train/manifest.json" \
+for need in "$models/optics.json" "$data/train/manifest.json" \
     "$data/test/manifest.json" "$data/times.json" docs/own-sensor.json; do
     if [ ! -e "$need" ]; then
         echo "error: $need is missing: run scripts/own-sensor.sh first" >&2
         exit 1
     fi
 done
+# The shipped depth network: one (its training record) or an ensemble.
+if [ ! -e "$models/depth/training.json" ] && [ ! -e "$models/depth/ensemble.json" ]; then
+    echo "error: $models/depth holds neither training.json nor ensemble.json: run scripts/own-sensor.sh first" >&2
+    exit 1
+fi
 if [ -z "${ORT_DYLIB_PATH:-}" ]; then
     eval "$(bash scripts/install-ort.sh)"
     export ORT_DYLIB_PATH
@@ -41,6 +48,7 @@ cargo build --release -p tactile
 tactile="${CARGO_TARGET_DIR:-target}/release/tactile"
 # shellcheck source=scripts/own-sensor-depth.env
 source scripts/own-sensor-depth.env
+seeds="${SEEDS:-${depth_seeds[*]}}"
 others=()
 for set in light-test objects-test independent; do
     if [ -e "$data/$set/manifest.json" ]; then others+=("$data/$set"); fi

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The own-sensor loop (docs/own-sensor.md): a real GelSight calibrated from
 # its ball presses, its own palpation videos rendered through that
-# calibration, the detector, segmenter and depth network trained on them,
-# each exported to ONNX; then the page measures everything (held-out
+# calibration, the detector, segmenter and depth network (the mean of one
+# per seed of scripts/own-sensor-depth.env) trained on them, each exported
+# to ONNX; then the page measures everything (held-out
 # renders, the real ball presses, frames of other sensors) with each
 # step's time.
 #
@@ -14,7 +15,9 @@
 # DATA_DIR/times.json, the page to docs/own-sensor.md. TACTILE_BALL (default
 # ../shared/real/gelsight-ball) names the sensor's ball presses: the
 # calibration layout of docs/datasets.md, gs_sdk's folder, or Taxim's
-# dataPack.npz (the file or its folder).
+# dataPack.npz (the file or its folder). DEPTH_SEEDS (default the env
+# file's depth_seeds, 42 43 44 45) trains one depth network per seed and
+# ships their mean; one seed ships one network.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 models="${1:-models/gelsight-r15}"
@@ -23,6 +26,22 @@ ball="${TACTILE_BALL:-../shared/real/gelsight-ball}"
 if [ -z "${ORT_DYLIB_PATH:-}" ]; then
     eval "$(bash scripts/install-ort.sh)"
     export ORT_DYLIB_PATH
+fi
+# shellcheck source=scripts/own-sensor-depth.env
+source scripts/own-sensor-depth.env
+read -ra depth_seed_list <<< "${DEPTH_SEEDS-${depth_seeds[*]}}"
+if [ "${#depth_seed_list[@]}" -eq 0 ] || [ "${#depth_seed_list[@]}" -gt 8 ]; then
+    echo "error: DEPTH_SEEDS: 1 to 8 seeds (an ensemble averages at most 8 networks), got ${#depth_seed_list[@]}" >&2
+    exit 1
+fi
+for seed in "${depth_seed_list[@]}"; do
+    case "$seed" in
+        *[!0-9]*) echo "error: DEPTH_SEEDS: $seed is not a whole number" >&2; exit 1 ;;
+    esac
+done
+if [ "$(printf '%s\n' "${depth_seed_list[@]}" | sort -nu | wc -l)" -ne "${#depth_seed_list[@]}" ]; then
+    echo "error: DEPTH_SEEDS: a seed given twice (${depth_seed_list[*]}): one seed trains one network" >&2
+    exit 1
 fi
 cargo build --release -p tactile
 target="${CARGO_TARGET_DIR:-target}"
@@ -37,10 +56,12 @@ step() {
     local name="$1"
     shift
     echo "== $name: $*" >&2
-    local t0
-    t0=$(date +%s.%N)
+    local t0 cs
+    t0=$(date +%s%N)
     "$@"
-    printf '  "%s": %.2f,\n' "$name" "$(echo "$(date +%s.%N) - $t0" | bc)" >> "$times"
+    # Hundredths of a second, in the shell's integers (no bc needed).
+    cs=$(( ($(date +%s%N) - t0) / 10000000 ))
+    printf '  "%s": %d.%02d,\n' "$name" $((cs / 100)) $((cs % 100)) >> "$times"
 }
 step calibrate "$tactile" calibrate ball --data "$ball" --out "$stage" --val-presses 0
 # Many short videos: the detector generalises with the number of scenes
@@ -90,11 +111,27 @@ step detector "$tactile" train detector --data "$data/train" "$data/light" "$dat
 step segmenter "$tactile" train segmenter --data "$data/train" --out "$stage/segmenter" \
     --copies 1 --max-epochs 4 --patience 2 --rest "$stage/background.png"
 # The depth network corrects the calibration's own reconstruction (its
-# fourth channel), which carries over to the real sensor's frames.
-# shellcheck source=scripts/own-sensor-depth.env
-source scripts/own-sensor-depth.env
-step depth "$tactile" train depth --data "$data/train" --out "$stage/depth" \
-    "${depth_recipe[@]}" --prior-calibration "$stage"
+# fourth channel), which carries over to the real sensor's frames. One
+# network per seed of depth_seeds (DEPTH_SEEDS overrides), their mean
+# shipped as one (an ensemble folder) when there are several.
+depth_networks() {
+    local seed
+    if [ "${#depth_seed_list[@]}" -eq 1 ]; then
+        "$tactile" train depth --data "$data/train" --out "$stage/depth" \
+            "${depth_recipe[@]}" --prior-calibration "$stage" --seed "${depth_seed_list[0]}"
+        return
+    fi
+    local members=()
+    for seed in "${depth_seed_list[@]}"; do
+        echo "== depth: seed $seed" >&2
+        "$tactile" train depth --data "$data/train" --out "$stage/depth-runs/$seed" \
+            "${depth_recipe[@]}" --prior-calibration "$stage" --seed "$seed"
+        members+=("$stage/depth-runs/$seed")
+    done
+    "$tactile" train ensemble --members "${members[@]}" --out "$stage/depth"
+    rm -rf "$stage/depth-runs"
+}
+step depth depth_networks
 step export bash -c "for m in detector segmenter depth; do '$tactile' export --model '$stage/'\$m --out '$stage/'\$m/\$m.onnx; done && '$tactile' export --model '$stage' --out '$stage/gelsight.onnx'"
 echo "  \"frames\": $((sequences * 5))" >> "$times"
 echo "}" >> "$times"

@@ -36,12 +36,19 @@ fn a_depth_ensemble_gives_its_members_mean_map_on_every_runtime_and_refuses_unli
     // Member a: the shipped network, beside its own copy of the calibration.
     let a_sensor = t.join("a-sensor");
     calibration_copy(&a_sensor);
+    // (The shipped depth folder is an ensemble: its first member.)
     let shipped = root().join("models/gelsight-r15/depth");
+    let shipped = match DepthEnsembleArtifact::is_in(&shipped) {
+        true => shipped.join("member-0"),
+        false => shipped,
+    };
     let a = a_sensor.join("depth");
     std::fs::create_dir_all(&a).unwrap();
-    for f in ["depth.json", "depth.bpk"] {
-        std::fs::copy(shipped.join(f), a.join(f)).unwrap();
-    }
+    std::fs::copy(shipped.join("depth.bpk"), a.join("depth.bpk")).unwrap();
+    let mut art = DepthArtifact::read(&shipped).unwrap();
+    art.prior = Some(CalibrationPrior::of(&a_sensor, &a));
+    assert_eq!(art.prior.as_ref().unwrap().calibration, "..");
+    tactile_core::io::write_json_atomic(a.join("depth.json"), &art).unwrap();
     // Member b: fresh weights, other channel statistics and another depth
     // scale, its prior an absolute path to another copy of the calibration:
     // the graph converts its input and output to the first member's.

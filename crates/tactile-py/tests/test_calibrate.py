@@ -528,6 +528,20 @@ def test_a_depth_network_learns_a_correction_to_its_calibration(model: Path, tmp
     with pytest.raises(ValueError, match="not both"):
         tactile.train.depth(data, tmp_path / "x", prior_calibration=str(sensor), with_mask=True)
     assert not (tmp_path / "x").exists()
+    # A second run (another seed) and the two averaged as one network in
+    # the sensor's folder: the mean map errs by no more than the members'
+    # mean error (the triangle inequality), so a mean in the wrong units fails.
+    tactile.train.depth(data, tmp_path / "second", encoder="tiny", input=(64, 32), decoder_width=16,
+                        max_epochs=1, val_fraction=0.5, prior_calibration=str(sensor), seed=7)
+    said = tactile.train.ensemble([sensor / "depth", tmp_path / "second"], sensor / "depth-mean")
+    assert said.startswith("2 depth networks averaged in"), said
+    member = json.loads((sensor / "depth-mean" / "member-1" / "depth.json").read_text())
+    assert member["prior"] == {"calibration": "../.."}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        mae = [tactile.eval.depth(m, data)["scores"]["mae_mm"]
+               for m in (sensor / "depth", tmp_path / "second", sensor / "depth-mean")]
+    assert mae[0] != mae[1] and mae[2] <= (mae[0] + mae[1]) / 2 + 1e-6, mae
     # A prior of another sensor than the frames were rendered from: said.
     other = tmp_path / "other"
     shutil.copytree(model, other)

@@ -124,6 +124,34 @@ def test_runs_are_one_recipe_only_when_their_whole_training_config_is(root, tmp_
     assert len(spread) == 1 and " | 4.00 | " in spread[0], spread
 
 
+def test_a_shipped_ensemble_is_its_members_mean_and_joins_no_spread_of_single_runs(root, tmp_path):
+    # The loop's ensemble of seeds 42 and 43, scored on its page as a whole.
+    shipped = tmp_path / "shipped"
+    for k, seed in enumerate([42, 43]):
+        member = write_run(tmp_path / f"m{k}", seed, 0.02, 0.06, 0.04, 0.04)
+        (shipped / "depth" / f"member-{k}").mkdir(parents=True)
+        shutil.copy(member / "models" / "depth" / "training.json", shipped / "depth" / f"member-{k}" / "training.json")
+    (shipped / "depth" / "ensemble.json").write_text(json.dumps({"members": ["member-0", "member-1"]}))
+    page = write_run(tmp_path / "page", 1, 0.0, 0.05, 0.036, 0.036) / "page.json"
+    # Each member alone, as the seeds script trains them.
+    alone = [write_run(tmp_path / str(seed), seed, 0.02, independent, 0.04, 0.04)
+             for seed, independent in [(42, 0.047), (43, 0.113)]]
+    out = tmp_path / "seeds.md"
+    r = run(root, out, shipped / "depth", page, *alone)
+    assert r.returncode == 0, r.stderr
+    cells = [line.strip("| ").split(" | ") for line in out.read_text().splitlines() if line.startswith("| ")][1:]
+    assert cells[0][1:4] == ["42, 43", "mean of 2: 128x96, 2 epochs", "-"], cells[0]
+    assert cells[0][6] == "0.0500", cells[0]
+    # The spread is over the single runs only: 0.113 / 0.047, not the mean's 0.05.
+    spread = [c for c in cells if c[0] == "**largest over smallest**"]
+    assert len(spread) == 1 and spread[0][6] == "2.40", spread
+    # An ensemble.json whose members are not folder names inside it is named.
+    (shipped / "depth" / "ensemble.json").write_text(json.dumps({"members": ["../m0"]}))
+    r = run(root, tmp_path / "again.md", shipped / "depth", page, *alone)
+    assert r.returncode != 0 and "ensemble.json: 'members' is not a list of member folder names" in r.stderr
+    assert not (tmp_path / "again.md").exists()
+
+
 FAKE_TACTILE = '''#!PYTHON
 """A stand-in for the tactile binary: `train depth` writes a training record
 of its flags, `bench own-sensor` a page; each call is logged."""
@@ -169,7 +197,11 @@ def seeds_sandbox(root, tmp_path, recipe):
     models, data = box / "models", box / "data"
     (models / "depth").mkdir(parents=True)
     (models / "optics.json").write_text("{}")
-    shutil.copy(root / "models" / "gelsight-r15" / "depth" / "training.json", models / "depth" / "training.json")
+    # The shipped depth network as the loop ships it: an ensemble.
+    shipped = root / "models" / "gelsight-r15" / "depth"
+    (models / "depth" / "member-0").mkdir()
+    (models / "depth" / "ensemble.json").write_text(json.dumps({"members": ["member-0"]}))
+    shutil.copy(shipped / "member-0" / "training.json", models / "depth" / "member-0" / "training.json")
     for d in ["train", "test"]:
         (data / d).mkdir(parents=True)
         (data / d / "manifest.json").write_text("{}")
