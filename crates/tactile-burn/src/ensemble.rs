@@ -139,6 +139,46 @@ impl Ensemble {
         self.members.iter().map(|m| dir.join(m)).collect()
     }
 
+    /// The members' networks with fresh weights (the shapes their saved
+    /// weights fill), from their configs; none is refused, naming `what`.
+    pub fn init_members<A: Artifact>(
+        members: &[A],
+        device: &burn::tensor::Device,
+        what: &str,
+    ) -> Result<Vec<A::Model>> {
+        if members.is_empty() {
+            return Err(Error::Invalid(format!("a {what} without members")));
+        }
+        members.iter().map(|m| m.init(device)).collect()
+    }
+
+    /// The members' networks, each loaded (and checked) from its folder
+    /// inside the ensemble's folder `dir`.
+    pub fn load_members<A: Artifact>(
+        &self,
+        dir: &Path,
+        device: &burn::tensor::Device,
+    ) -> Result<Vec<A::Model>> {
+        self.member_dirs(dir)
+            .iter()
+            .map(|d| Ok(A::load(d, device)?.model))
+            .collect()
+    }
+
+    /// Every member into its folder inside `dir` (weights, then config),
+    /// then `ensemble.json`, each atomically.
+    pub fn save_members<A: Artifact>(
+        &self,
+        members: &[A],
+        models: &[A::Model],
+        dir: &Path,
+    ) -> Result<()> {
+        for ((m, net), d) in members.iter().zip(models).zip(self.member_dirs(dir)) {
+            m.save(net, &d)?;
+        }
+        tactile_core::io::write_json_atomic(dir.join(Self::FILE), self)
+    }
+
     /// Copy the `A` folders `members` (config, weights and the training
     /// record when there is one) into a new
     /// ensemble folder `out` as `member-0`, `member-1`, ... (staged, then

@@ -364,18 +364,8 @@ impl Artifact for DepthEnsembleArtifact {
     const WEIGHTS_FILE: &'static str = DepthArtifact::WEIGHTS_FILE;
 
     fn init(&self, device: &Device) -> tactile_core::Result<DepthEnsemble> {
-        let members = self
-            .members
-            .iter()
-            .map(|m| m.init(device))
-            .collect::<tactile_core::Result<Vec<_>>>()?;
-        if members.is_empty() {
-            return Err(tactile_core::Error::Invalid(
-                "a depth ensemble without members".into(),
-            ));
-        }
         Ok(DepthEnsemble {
-            members,
+            members: Ensemble::init_members(&self.members, device, Self::KIND)?,
             units: self.units(device),
         })
     }
@@ -411,10 +401,7 @@ impl Artifact for DepthEnsembleArtifact {
         let artifact = Self::read_unfinished(dir)?;
         let members = artifact
             .ensemble
-            .member_dirs(dir)
-            .iter()
-            .map(|d| Ok(DepthArtifact::load(d, device)?.model))
-            .collect::<tactile_core::Result<Vec<_>>>()?;
+            .load_members::<DepthArtifact>(dir, device)?;
         let model = DepthEnsemble {
             members,
             units: artifact.units(device),
@@ -430,15 +417,8 @@ impl Artifact for DepthEnsembleArtifact {
     /// Every member into its folder (weights, then config), then
     /// `ensemble.json`, each atomically.
     fn save(&self, model: &DepthEnsemble, dir: &Path) -> tactile_core::Result<()> {
-        for ((m, net), d) in self
-            .members
-            .iter()
-            .zip(&model.members)
-            .zip(self.ensemble.member_dirs(dir))
-        {
-            m.save(net, &d)?;
-        }
-        tactile_core::io::write_json_atomic(dir.join(Self::CONFIG_FILE), &self.ensemble)
+        self.ensemble
+            .save_members(&self.members, &model.members, dir)
     }
 }
 

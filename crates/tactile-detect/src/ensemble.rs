@@ -213,18 +213,8 @@ impl Artifact for DetectorEnsembleArtifact {
     const WEIGHTS_FILE: &'static str = DetectorArtifact::WEIGHTS_FILE;
 
     fn init(&self, device: &Device) -> tactile_core::Result<DetectorEnsemble> {
-        let members = self
-            .members
-            .iter()
-            .map(|m| m.init(device))
-            .collect::<tactile_core::Result<Vec<_>>>()?;
-        if members.is_empty() {
-            return Err(tactile_core::Error::Invalid(
-                "a detector ensemble without members".into(),
-            ));
-        }
         Ok(DetectorEnsemble {
-            members,
+            members: Ensemble::init_members(&self.members, device, Self::KIND)?,
             renormalise: self.renormalise(device),
         })
     }
@@ -252,10 +242,7 @@ impl Artifact for DetectorEnsembleArtifact {
         let artifact = Self::read_unfinished(dir)?;
         let members = artifact
             .ensemble
-            .member_dirs(dir)
-            .iter()
-            .map(|d| Ok(DetectorArtifact::load(d, device)?.model))
-            .collect::<tactile_core::Result<Vec<_>>>()?;
+            .load_members::<DetectorArtifact>(dir, device)?;
         let model = DetectorEnsemble {
             members,
             renormalise: artifact.renormalise(device),
@@ -271,15 +258,8 @@ impl Artifact for DetectorEnsembleArtifact {
     /// Every member into its folder (weights, then config), then
     /// `ensemble.json`, each atomically.
     fn save(&self, model: &DetectorEnsemble, dir: &Path) -> tactile_core::Result<()> {
-        for ((m, net), d) in self
-            .members
-            .iter()
-            .zip(&model.members)
-            .zip(self.ensemble.member_dirs(dir))
-        {
-            m.save(net, &d)?;
-        }
-        tactile_core::io::write_json_atomic(dir.join(Self::CONFIG_FILE), &self.ensemble)
+        self.ensemble
+            .save_members(&self.members, &model.members, dir)
     }
 }
 

@@ -135,3 +135,19 @@ def script(name: str):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def stand_in_tools(box: Path, fake_tactile: str, **env: str) -> dict:
+    """The environment in which a script of `scripts/` run in the sandbox
+    `box` finds `fake_tactile` (a Python program's text, its first line
+    `#!PYTHON`) as its release `tactile` and a `cargo` that builds nothing,
+    each call logged to `box/log` by the stand-in; `env` adds variables."""
+    bin_dir, release = box / "bin", box / "target" / "release"
+    bin_dir.mkdir()
+    release.mkdir(parents=True)
+    (bin_dir / "cargo").write_text("#!/bin/sh\nexit 0\n")
+    (release / "tactile").write_text(fake_tactile.replace("PYTHON", sys.executable, 1))
+    for f in [bin_dir / "cargo", release / "tactile"]:
+        f.chmod(0o755)
+    return dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", CARGO_TARGET_DIR=str(box / "target"),
+                ORT_DYLIB_PATH="unused", PYTHON=sys.executable, FAKE_LOG=str(box / "log"), **env)

@@ -2,10 +2,11 @@
 network over training runs, every number read from the runs' files."""
 
 import json
-import os
 import shutil
 import subprocess
 import sys
+
+from conftest import stand_in_tools
 
 
 def run(root, *args):
@@ -206,16 +207,8 @@ def seeds_sandbox(root, tmp_path, recipe):
         (data / d).mkdir(parents=True)
         (data / d / "manifest.json").write_text("{}")
     (data / "times.json").write_text("{}")
-    bin_dir, release = box / "bin", box / "target" / "release"
-    bin_dir.mkdir()
-    release.mkdir(parents=True)
-    (bin_dir / "cargo").write_text("#!/bin/sh\nexit 0\n")
-    (release / "tactile").write_text(FAKE_TACTILE.replace("PYTHON", sys.executable))
-    for f in [bin_dir / "cargo", release / "tactile"]:
-        f.chmod(0o755)
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", CARGO_TARGET_DIR=str(box / "target"),
-               ORT_DYLIB_PATH="unused", PYTHON=sys.executable, FAKE_LOG=str(box / "log"),
-               FAKE_PAGE=str(root / "docs" / "own-sensor.json"), SEEDS="43", TACTILE_BALL="unused")
+    env = stand_in_tools(box, FAKE_TACTILE, FAKE_PAGE=str(root / "docs" / "own-sensor.json"), SEEDS="43",
+                         TACTILE_BALL="unused")
     return box, env
 
 

@@ -7,7 +7,8 @@ import json
 import os
 import shutil
 import subprocess
-import sys
+
+from conftest import stand_in_tools
 
 FAKE_TACTILE = '''#!PYTHON
 """A stand-in for the tactile binary: every command makes its --out (a
@@ -50,16 +51,7 @@ def loop_sandbox(root, tmp_path):
     (box / "docs").mkdir()
     (box / "models").mkdir()
     (box / "ball").mkdir()
-    bin_dir, release = box / "bin", box / "target" / "release"
-    bin_dir.mkdir()
-    release.mkdir(parents=True)
-    (bin_dir / "cargo").write_text("#!/bin/sh\nexit 0\n")
-    (release / "tactile").write_text(FAKE_TACTILE.replace("PYTHON", sys.executable))
-    for f in [bin_dir / "cargo", release / "tactile"]:
-        f.chmod(0o755)
-    env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", CARGO_TARGET_DIR=str(box / "target"),
-               ORT_DYLIB_PATH="unused", PYTHON=sys.executable, FAKE_LOG=str(box / "log"),
-               TACTILE_BALL=str(box / "ball"))
+    env = stand_in_tools(box, FAKE_TACTILE, TACTILE_BALL=str(box / "ball"))
     env.pop("DEPTH_SEEDS", None)
     return box, env
 
