@@ -139,6 +139,19 @@ impl Ensemble {
         self.members.iter().map(|m| dir.join(m)).collect()
     }
 
+    /// The ensemble in `dir` (a `what` folder; `ensemble.json` checked by
+    /// [`Self::read`]) and every member's config, in order.
+    pub fn read_with_configs<A: Artifact>(dir: &Path, what: &str) -> Result<(Self, Vec<A>)> {
+        tactile_core::io::expect_folder(dir, &format!("{what} folder"))?;
+        let e = Self::read::<A>(dir)?;
+        let configs = e
+            .member_dirs(dir)
+            .iter()
+            .map(|d| A::read(d))
+            .collect::<Result<Vec<_>>>()?;
+        Ok((e, configs))
+    }
+
     /// The members' networks with fresh weights (the shapes their saved
     /// weights fill), from their configs; none is refused, naming `what`.
     pub fn init_members<A: Artifact>(

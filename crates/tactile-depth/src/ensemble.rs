@@ -373,13 +373,8 @@ impl Artifact for DepthEnsembleArtifact {
     /// `ensemble.json` (checked by [`Ensemble::read`]) and every member's
     /// config, which must read a frame as the first's does.
     fn read_unfinished(dir: &Path) -> tactile_core::Result<Self> {
-        tactile_core::io::expect_folder(dir, "depth ensemble folder")?;
-        let ensemble = Ensemble::read::<DepthArtifact>(dir)?;
+        let (ensemble, members) = Ensemble::read_with_configs::<DepthArtifact>(dir, Self::KIND)?;
         let dirs = ensemble.member_dirs(dir);
-        let members = dirs
-            .iter()
-            .map(|d| DepthArtifact::read(d))
-            .collect::<tactile_core::Result<Vec<_>>>()?;
         let priors = members
             .iter()
             .zip(&dirs)

@@ -222,13 +222,7 @@ impl Artifact for DetectorEnsembleArtifact {
     /// `ensemble.json` (checked by [`Ensemble::read`]) and every member's
     /// config, which must agree with the first's.
     fn read_unfinished(dir: &Path) -> tactile_core::Result<Self> {
-        tactile_core::io::expect_folder(dir, "detector ensemble folder")?;
-        let ensemble = Ensemble::read::<DetectorArtifact>(dir)?;
-        let members = ensemble
-            .member_dirs(dir)
-            .iter()
-            .map(|d| DetectorArtifact::read(d))
-            .collect::<tactile_core::Result<Vec<_>>>()?;
+        let (ensemble, members) = Ensemble::read_with_configs::<DetectorArtifact>(dir, Self::KIND)?;
         for (d, m) in ensemble.member_dirs(dir).iter().zip(&members).skip(1) {
             check_alike(&members[0], m, d)?;
         }
