@@ -983,11 +983,17 @@ impl OwnSensorReport {
             ));
         }
         md.push_str(&format!(
-            "| depth network | indentation MAE over the frame / over the tendon | {:.4} mm / {} |\n| calibration's reconstruction (photometric, Poisson) | indentation MAE over the frame | {:.4} mm |\n| pipeline | frames/s over these frames (decoding excluded) | {:.1} |\n\n",
+            "| depth network | indentation MAE over the frame / over the tendon | {:.4} mm / {} |\n| depth network{} | ms per frame (the network alone, in batches of {}, on the runtime above) | {:.2} |\n| calibration's reconstruction (photometric, Poisson) | indentation MAE over the frame | {:.4} mm |\n| pipeline | frames/s over these frames (decoding excluded) | {:.1} |\n\n",
             t.depth.mae_mm,
             t.depth
                 .mae_tendon_mm
                 .map_or("-".into(), |v| format!("{v:.4} mm")),
+            match self.depth_networks {
+                1 => String::new(),
+                n => format!(" ({n} averaged)"),
+            },
+            tactile_depth::eval::EVAL_BATCH,
+            t.depth_ms,
             self.reconstruction_mae_mm,
             self.pipeline_fps
         ));
