@@ -306,7 +306,9 @@ impl DepthEnsembleArtifact {
 
     /// Per member, from the first member's input and units to its own.
     fn units(&self, device: &Device) -> Vec<MemberUnits> {
-        let lead = &self.members[0];
+        let Some(lead) = self.members.first() else {
+            return Vec::new();
+        };
         let t = |v: Vec<f32>, c: usize| {
             Param::from_tensor(Tensor::from_data(TensorData::new(v, [1, c, 1, 1]), device))
         };
@@ -345,12 +347,12 @@ impl DepthEnsembleArtifact {
 
     fn alike_all(&self, dir: &Path) -> tactile_core::Result<()> {
         let dirs = self.ensemble.member_dirs(dir);
-        for ((d, m), p) in dirs.iter().zip(&self.members).zip(&self.priors).skip(1) {
-            check_alike(
-                (&self.members[0], self.priors[0].as_deref()),
-                (m, p.as_deref()),
-                d,
-            )?;
+        let mut all = dirs.iter().zip(&self.members).zip(&self.priors);
+        let Some(((_, first), first_prior)) = all.next() else {
+            return Ok(());
+        };
+        for ((d, m), p) in all {
+            check_alike((first, first_prior.as_deref()), (m, p.as_deref()), d)?;
         }
         Ok(())
     }

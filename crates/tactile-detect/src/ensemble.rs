@@ -182,7 +182,9 @@ impl DetectorEnsembleArtifact {
     }
 
     fn renormalise(&self, device: &Device) -> Vec<Renormalise> {
-        let lead = &self.members[0].stats;
+        let Some(lead) = self.members.first().map(|m| &m.stats) else {
+            return Vec::new();
+        };
         let t = |v: Vec<f32>| {
             Param::from_tensor(Tensor::from_data(TensorData::new(v, [1, 3, 1, 1]), device))
         };
