@@ -174,7 +174,7 @@ fn check_alike(
     let describe = |m: &DepthArtifact, p: Option<&Path>| {
         let fourth = match (m.with_mask, p) {
             (true, _) => "the tendon mask".to_string(),
-            (false, Some(p)) => format!("the calibration in {}", p.display()),
+            (false, Some(p)) => format!("the calibration in {}", resolved(p).display()),
             (false, None) => "nothing".to_string(),
         };
         format!(
