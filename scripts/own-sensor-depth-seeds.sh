@@ -16,6 +16,8 @@
 # names the other recipes to run (default all, "" none). Each run is built
 # in a staging folder and moved to DATA_DIR/depth-seeds/SEED (another
 # recipe's: DATA_DIR/depth-seeds/NAME/SEED) when its page is written;
+# then the means of the first 2, 3, ... seeds' networks (short of all of
+# them) go to DATA_DIR/depth-seeds/mean-K;
 # a run that is there already is kept (set RETRAIN=1 to train it again,
 # after the loop rendered new sets, or REBENCH=1 to score its network
 # again, after the bench changed), unless it was trained with another
@@ -102,6 +104,38 @@ one_run() {
     trap - EXIT
     runs+=("$run")
 }
+# The mean of the plain runs RUN... (the first K seeds') as one network in
+# DIR, scored as the runs are: what each added network buys. Kept while
+# its members are the same networks (their paths and weights' digests are
+# its `recipe`).
+mean_run() {
+    local k="$1" run="$2"
+    shift 2
+    local members=() recipe="mean of" m f
+    for m in "$@"; do
+        members+=("$m/models/depth")
+        recipe+=" $m $(sha256sum "$m/models/depth/depth.bpk" | cut -d' ' -f1)"
+    done
+    if [ -f "$run/page.json" ] && [ "$(cat "$run/recipe" 2>/dev/null)" = "$recipe" ] && [ -z "${REBENCH:-}" ]; then
+        echo "== mean of $k: kept $run (its members are the same networks)" >&2
+        runs+=("$run")
+        return
+    fi
+    stage="$(dirname "$run")/.mean-$k.new.$$"
+    trap 'rm -rf "$stage"' EXIT
+    mkdir -p "$stage/models"
+    for f in "$models"/*; do
+        if [ "$(basename "$f")" != depth ]; then cp -r "$f" "$stage/models/"; fi
+    done
+    echo "== mean of $k: tactile train ensemble, tactile bench own-sensor" >&2
+    "$tactile" train ensemble --members "${members[@]}" --out "$stage/models/depth"
+    bench "$stage/models" "$stage/page.md"
+    printf '%s\n' "$recipe" > "$stage/recipe"
+    rm -rf "$run"
+    mv "$stage" "$run"
+    trap - EXIT
+    runs+=("$run")
+}
 # SEEDS and every entry of depth_variants are checked before any run trains.
 # Each of SEEDS... is a whole number, else WHERE is named.
 check_seeds() {
@@ -133,6 +167,12 @@ for variant in "${depth_variants[@]}"; do
 done
 for seed in "${seed_list[@]}"; do
     one_run "$seed" "$data/depth-seeds/$seed" "${depth_recipe[@]}"
+done
+# The means of the first 2, 3, ... of them, short of all (with SEEDS the
+# loop's depth_seeds, all of them is the shipped network).
+plain_runs=("${runs[@]}")
+for ((k = 2; k < ${#plain_runs[@]}; k++)); do
+    mean_run "$k" "$data/depth-seeds/mean-$k" "${plain_runs[@]:0:k}"
 done
 for variant in "${depth_variants[@]}"; do
     IFS=';' read -r name variant_seeds variant_flags <<< "$variant"

@@ -6,7 +6,8 @@ SHIPPED_DEPTH is the loop's depth network (`models/gelsight-r15/depth`:
 its `training.json`, or an ensemble's `ensemble.json` and its members'
 records) and SHIPPED_PAGE the page that scored it
 (`docs/own-sensor.json`); each RUN is a run of
-`scripts/own-sensor-depth-seeds.sh`: `models/depth/training.json` and the
+`scripts/own-sensor-depth-seeds.sh`: `models/depth/training.json` (or a
+mean's `models/depth/ensemble.json` and its members' records) and the
 `page.json` that `tactile bench own-sensor` wrote for it. Every number on
 the page is read from those files.
 """
@@ -87,25 +88,26 @@ def run_values(training_path, page_path, sets=None):
         sys.exit(f"{page_path}: no {e} (not a page of `tactile bench own-sensor`?)")
 
 
-def shipped_row(shipped, shipped_page):
-    """The shipped network's row: one network's, or an ensemble's (its
-    members' seeds and recipe, no validation loss of its own; its recipe
-    key its own, so that its row joins no spread of single runs)."""
-    ensemble = os.path.join(shipped, "ensemble.json")
+def depth_row(depth, page_path, sets=None):
+    """The row of the depth network in the folder `depth` scored in
+    `page_path`: one network's, or an ensemble's (its members' seeds and
+    recipe, no validation loss of its own; its recipe key its own and its
+    size's, so that its row joins no spread of single runs)."""
+    ensemble = os.path.join(depth, "ensemble.json")
     if not os.path.exists(ensemble):
-        return run_values(os.path.join(shipped, "training.json"), shipped_page)
+        return run_values(os.path.join(depth, "training.json"), page_path, sets)
     e = load(ensemble)
     members = e.get("members") if isinstance(e, dict) else None
     if not isinstance(members, list) or not members or not all(
             isinstance(m, str) and m and os.sep not in m and m not in (".", "..") for m in members):
         sys.exit(f"{ensemble}: 'members' is not a list of member folder names")
-    per = [run_values(os.path.join(shipped, m, "training.json"), shipped_page) for m in members]
-    (_, recipe, key), v, sets, page = per[0]
+    per = [run_values(os.path.join(depth, m, "training.json"), page_path, sets) for m in members]
+    _, v, sets, page = per[0]
     words = sorted({r for (_, r, _), _, _, _ in per})
     recipe = f"mean of {len(per)}: {'; '.join(words)}"
     keys = sorted({k for (_, _, k), _, _, _ in per})
     seeds = ", ".join(str(s) for (s, _, _), _, _, _ in per)
-    return (seeds, recipe, "ensemble " + " ".join(keys)), [None, *v[1:]], sets, page
+    return (seeds, recipe, f"ensemble of {len(per)} " + " ".join(keys)), [None, *v[1:]], sets, page
 
 
 def fmt(x, spec):
@@ -129,11 +131,10 @@ def main(argv):
     if len(argv) < 4:
         sys.exit(__doc__)
     out, shipped, shipped_page, runs = argv[0], argv[1], argv[2], argv[3:]
-    seed, v, sets, page = shipped_row(shipped, shipped_page)
+    seed, v, sets, page = depth_row(shipped, shipped_page)
     table = [("shipped (`scripts/own-sensor.sh`)", seed, v)]
     for run in runs:
-        seed, v, _, _ = run_values(os.path.join(run, "models", "depth", "training.json"),
-                                   os.path.join(run, "page.json"), sets)
+        seed, v, _, _ = depth_row(os.path.join(run, "models", "depth"), os.path.join(run, "page.json"), sets)
         table.append((f"`{run}`", seed, v))
     calibration_peak = ball_summaries(page)["all"]["calibration_peak_mm"]
     # The spread over the runs of one recipe, named by its words.
@@ -156,7 +157,8 @@ def main(argv):
         "(`tactile train depth ... --prior-calibration` with the recipe of `scripts/own-sensor-depth.env`: input size, "
         "epochs, photometric augmentation as each row's training record says) alone per seed (which draws the weights, "
         "the shuffles and the validation videos; the loop ships the mean of the networks of its seeds, `depth_seeds`, "
-        "as one, `tactile train ensemble`, and its row is that mean), and with the other recipes of that file (`depth_variants`: the "
+        "as one, `tactile train ensemble`, and its row is that mean; the rows `mean-K` are the means of the first K seeds' "
+        "networks, what each added network buys), and with the other recipes of that file (`depth_variants`: the "
         "training frames' colours augmented with `--augment`, the detector's photometric augmentation with the prior "
         "left as reconstructed; fewer epochs), each network scored by `tactile bench own-sensor` beside the shipped "
         "calibration, detector and segmenter, as `docs/own-sensor.md` scores the shipped one. Mean absolute errors "

@@ -173,6 +173,19 @@ if args[:2] == ["train", "depth"]:
               "prior_calibration": flag("--prior-calibration")}
     with open(os.path.join(out, "training.json"), "w") as f:
         json.dump({"config": config, "summary": {"best_val_loss": 0.02}}, f)
+    # Weights that differ with the seed and the flags.
+    with open(os.path.join(out, "depth.bpk"), "w") as f:
+        f.write(" ".join(a for a in args if "/" not in a))
+elif args[:2] == ["train", "ensemble"]:
+    members = args[args.index("--members") + 1:args.index("--out")]
+    out = flag("--out")
+    for k, m in enumerate(members):
+        os.makedirs(os.path.join(out, f"member-{k}"))
+        with open(os.path.join(m, "training.json")) as f, \
+                open(os.path.join(out, f"member-{k}", "training.json"), "w") as g:
+            g.write(f.read())
+    with open(os.path.join(out, "ensemble.json"), "w") as f:
+        json.dump({"members": [f"member-{k}" for k in range(len(members))]}, f)
 elif args[:2] == ["bench", "own-sensor"]:
     out = flag("--out")
     with open(os.environ["FAKE_PAGE"]) as f:
@@ -249,6 +262,29 @@ def test_the_seeds_script_keeps_a_run_retrains_one_of_another_recipe_and_loses_n
     assert r.returncode != 0 and "training failed" in r.stderr, r.stderr
     assert (runs / "43" / "recipe").read_text() == "--max-epochs 4 --patience 2\n"
     assert sorted(p.name for p in runs.iterdir()) == ["43", "more"]
+
+
+def test_the_seeds_script_scores_the_mean_of_the_first_seeds_and_builds_it_again_when_a_member_changes(root, tmp_path):
+    box, env = seeds_sandbox(root, tmp_path, "--max-epochs 2 --patience 2")
+    env["SEEDS"], env["VARIANTS"] = "43 44 45", ""
+    r = seeds_run(box, env)
+    assert r.returncode == 0, r.stderr
+    # The mean of the first two (all three would be the loop's own).
+    [made] = [line for line in (box / "log").read_text().splitlines() if line.startswith("train ensemble")]
+    assert made.startswith("train ensemble --members data/depth-seeds/43/models/depth data/depth-seeds/44/models/depth "), made
+    assert not (box / "data" / "depth-seeds" / "mean-3").exists()
+    rows = [line for line in (box / "docs" / "own-sensor-depth-seeds.md").read_text().splitlines()
+            if line.startswith("| `data/depth-seeds/mean-2`")]
+    assert len(rows) == 1 and "| 43, 44 | mean of 2: 128x96, 2 epochs | - |" in rows[0], rows
+    # Run again: kept. Retrained members (another recipe): built again.
+    r = seeds_run(box, env)
+    assert r.returncode == 0 and "mean of 2: kept" in r.stderr, r.stderr
+    env_file = box / "scripts" / "own-sensor-depth.env"
+    env_file.write_text(env_file.read_text().replace("--max-epochs 2", "--max-epochs 4"))
+    r = seeds_run(box, env)
+    assert r.returncode == 0 and "mean of 2: kept" not in r.stderr, r.stderr
+    assert sum(line.startswith("train ensemble") for line in (box / "log").read_text().splitlines()) == 2
+    assert "mean of 2: 128x96, 4 epochs" in (box / "docs" / "own-sensor-depth-seeds.md").read_text()
 
 
 def test_the_seeds_script_names_a_bad_seed_or_variant_before_it_trains_anything(root, tmp_path):
