@@ -62,6 +62,28 @@ bench() {
         --out "$2"
 }
 runs=()
+# A staging folder STAGE for a run: the shipped calibration, detector and
+# segmenter in STAGE/models, for a depth network of its own (removed on
+# exit unless finish_run moves it into place).
+begin_run() {
+    stage="$1"
+    trap 'rm -rf "$stage"' EXIT
+    mkdir -p "$stage/models"
+    local f
+    for f in "$models"/*; do
+        if [ "$(basename "$f")" != depth ]; then cp -r "$f" "$stage/models/"; fi
+    done
+}
+# The staged run scored, its RECIPE recorded, and moved to RUN.
+finish_run() {
+    local run="$1" recipe="$2"
+    bench "$stage/models" "$stage/page.md"
+    printf '%s\n' "$recipe" > "$stage/recipe"
+    rm -rf "$run"
+    mv "$stage" "$run"
+    trap - EXIT
+    runs+=("$run")
+}
 # One run: SEED into DIR, trained with the recipe FLAGS...
 one_run() {
     local seed="$1" run="$2"
@@ -86,23 +108,12 @@ one_run() {
         runs+=("$run")
         return
     fi
-    stage="$(dirname "$run")/.$seed.new.$$"
-    trap 'rm -rf "$stage"' EXIT
-    mkdir -p "$stage/models"
-    # The shipped calibration, detector and segmenter; a depth network of its own.
-    for f in "$models"/*; do
-        if [ "$(basename "$f")" != depth ]; then cp -r "$f" "$stage/models/"; fi
-    done
+    begin_run "$(dirname "$run")/.$seed.new.$$"
     echo "== seed $seed: tactile train depth $recipe" >&2
     "$tactile" train depth --data "$data/train" --out "$stage/models/depth" \
         "${flags[@]}" --prior-calibration "$stage/models" --seed "$seed"
     echo "== seed $seed: tactile bench own-sensor" >&2
-    bench "$stage/models" "$stage/page.md"
-    printf '%s\n' "$recipe" > "$stage/recipe"
-    rm -rf "$run"
-    mv "$stage" "$run"
-    trap - EXIT
-    runs+=("$run")
+    finish_run "$run" "$recipe"
 }
 # The mean of the plain runs RUN... (the first K seeds') as one network in
 # DIR, scored as the runs are: what each added network buys. Kept while
@@ -111,7 +122,7 @@ one_run() {
 mean_run() {
     local k="$1" run="$2"
     shift 2
-    local members=() recipe="mean of" m f
+    local members=() recipe="mean of" m
     for m in "$@"; do
         members+=("$m/models/depth")
         recipe+=" $m $(sha256sum "$m/models/depth/depth.bpk" | cut -d' ' -f1)"
@@ -121,20 +132,10 @@ mean_run() {
         runs+=("$run")
         return
     fi
-    stage="$(dirname "$run")/.mean-$k.new.$$"
-    trap 'rm -rf "$stage"' EXIT
-    mkdir -p "$stage/models"
-    for f in "$models"/*; do
-        if [ "$(basename "$f")" != depth ]; then cp -r "$f" "$stage/models/"; fi
-    done
+    begin_run "$(dirname "$run")/.mean-$k.new.$$"
     echo "== mean of $k: tactile train ensemble, tactile bench own-sensor" >&2
     "$tactile" train ensemble --members "${members[@]}" --out "$stage/models/depth"
-    bench "$stage/models" "$stage/page.md"
-    printf '%s\n' "$recipe" > "$stage/recipe"
-    rm -rf "$run"
-    mv "$stage" "$run"
-    trap - EXIT
-    runs+=("$run")
+    finish_run "$run" "$recipe"
 }
 # SEEDS and every entry of depth_variants are checked before any run trains.
 # Each of SEEDS... is a whole number, else WHERE is named.
